@@ -1,0 +1,197 @@
+/* cli.c - option parsing shared by the trac0r subcommands. */
+#include "cli.h"
+
+#include <errno.h>
+#include <inttypes.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+const char cli_common_help[] =
+    "  --scene SCENE        scene to render: builtin:cornell (the thesis's Cornell box,\n"
+    "                       the default)\n"
+    "  --width W            image width in pixels, 1..16384 (default 800)\n"
+    "  --height H           image height in pixels, 1..16384 (default 600);\n"
+    "                       at most 67108864 pixels in all\n"
+    "  --max-depth D        path length limit of the integrator, 1..1024 (default 8; the\n"
+    "                       naive integrator's Russian roulette reaches at most D-2 surfaces)\n"
+    "  --seed S             random seed, 0..2^64-1 (default 0); the same seed gives the\n"
+    "                       same image for any thread count\n"
+    "  --threads T          CPU threads, 0..1024 (default 0: one per core)\n"
+    "  --integrator NAME    naive: the thesis's path tracer (the default and only one)\n";
+
+void cli_common_default(cli_common *c) {
+    c->scene = "builtin:cornell";
+    c->width = 800;
+    c->height = 600;
+    c->max_depth = 8;
+    c->seed = 0;
+    c->threads = 0;
+    c->integrator = TR_INTEGRATOR_NAIVE;
+}
+
+int cli_error(const cli_args *a, const char *fmt, ...) {
+    fprintf(stderr, "trac0r %s: ", a->cmd);
+    va_list ap;
+    va_start(ap, fmt);
+    vfprintf(stderr, fmt, ap);
+    va_end(ap);
+    fputc('\n', stderr);
+    return CLI_USAGE;
+}
+
+int cli_next(cli_args *a) {
+    if (++a->i >= a->argc) {
+        return 0;
+    }
+    const char *arg = a->argv[a->i];
+    const char *eq = strncmp(arg, "--", 2) == 0 ? strchr(arg, '=') : NULL;
+    if (eq && (size_t)(eq - arg) < sizeof a->optbuf) {
+        memcpy(a->optbuf, arg, (size_t)(eq - arg));
+        a->optbuf[eq - arg] = '\0';
+        a->opt = a->optbuf;
+        a->value = eq + 1;
+    } else {
+        a->opt = arg;
+        a->value = NULL;
+    }
+    return 1;
+}
+
+int cli_is(const cli_args *a, const char *name) {
+    return strcmp(a->opt, name) == 0;
+}
+
+int cli_value(cli_args *a) {
+    if (a->value) {
+        return CLI_OK;
+    }
+    if (a->i + 1 >= a->argc) {
+        return cli_error(a, "%s: missing value", a->opt);
+    }
+    a->value = a->argv[++a->i];
+    return CLI_OK;
+}
+
+/* Parses a whole decimal integer (no sign for unsigned ranges, no trailing text). */
+static int parse_integer(cli_args *a, long long lo, long long hi, long long *out) {
+    if (cli_value(a) != CLI_OK) {
+        return CLI_USAGE;
+    }
+    const char *v = a->value;
+    char *end;
+    errno = 0;
+    long long x = strtoll(v, &end, 10);
+    if (*v == '\0' || *end != '\0' || errno == ERANGE || x < lo || x > hi) {
+        return cli_error(a, "%s: expected an integer in %lld..%lld, got '%s'", a->opt, lo, hi, v);
+    }
+    *out = x;
+    return CLI_OK;
+}
+
+int cli_parse_u32(cli_args *a, uint32_t lo, uint32_t hi, uint32_t *out) {
+    long long x = 0;
+    if (parse_integer(a, lo, hi, &x) != CLI_OK) {
+        return CLI_USAGE;
+    }
+    *out = (uint32_t)x;
+    return CLI_OK;
+}
+
+int cli_parse_int(cli_args *a, int lo, int hi, int *out) {
+    long long x = 0;
+    if (parse_integer(a, lo, hi, &x) != CLI_OK) {
+        return CLI_USAGE;
+    }
+    *out = (int)x;
+    return CLI_OK;
+}
+
+int cli_parse_u64(cli_args *a, uint64_t *out) {
+    if (cli_value(a) != CLI_OK) {
+        return CLI_USAGE;
+    }
+    const char *v = a->value;
+    char *end;
+    errno = 0;
+    unsigned long long x = strtoull(v, &end, 10);
+    if (*v < '0' || *v > '9' || *end != '\0' || errno == ERANGE) {
+        return cli_error(a, "%s: expected an integer in 0..%" PRIu64 ", got '%s'", a->opt,
+                         UINT64_MAX, v);
+    }
+    *out = (uint64_t)x;
+    return CLI_OK;
+}
+
+int cli_parse_float(cli_args *a, float lo, float hi, float *out) {
+    if (cli_value(a) != CLI_OK) {
+        return CLI_USAGE;
+    }
+    const char *v = a->value;
+    char *end;
+    errno = 0;
+    double x = strtod(v, &end);
+    if (*v == '\0' || *end != '\0' || errno == ERANGE || !isfinite(x) || x < lo || x > hi) {
+        return cli_error(a, "%s: expected a number in %g..%g, got '%s'", a->opt, (double)lo,
+                         (double)hi, v);
+    }
+    *out = (float)x;
+    return CLI_OK;
+}
+
+int cli_common_option(cli_args *a, cli_common *c) {
+    if (cli_is(a, "--scene")) {
+        if (cli_value(a) != CLI_OK) {
+            return CLI_USAGE;
+        }
+        c->scene = a->value;
+        return CLI_OK;
+    }
+    if (cli_is(a, "--width")) {
+        return cli_parse_u32(a, 1, TR_FILM_MAX_SIDE, &c->width);
+    }
+    if (cli_is(a, "--height")) {
+        return cli_parse_u32(a, 1, TR_FILM_MAX_SIDE, &c->height);
+    }
+    if (cli_is(a, "--max-depth")) {
+        return cli_parse_int(a, 1, TR_MAX_DEPTH_LIMIT, &c->max_depth);
+    }
+    if (cli_is(a, "--seed")) {
+        return cli_parse_u64(a, &c->seed);
+    }
+    if (cli_is(a, "--threads")) {
+        return cli_parse_int(a, 0, 1024, &c->threads);
+    }
+    if (cli_is(a, "--integrator")) {
+        if (cli_value(a) != CLI_OK) {
+            return CLI_USAGE;
+        }
+        if (strcmp(a->value, "naive") == 0) {
+            c->integrator = TR_INTEGRATOR_NAIVE;
+            return CLI_OK;
+        }
+        return cli_error(a, "--integrator: unknown integrator '%s' (available: naive)", a->value);
+    }
+    return -1;
+}
+
+int cli_load_scene(const cli_args *a, const cli_common *c, tr_scene *scene) {
+    if ((uint64_t)c->width * c->height > TR_FILM_MAX_PIXELS) {
+        return cli_error(a, "--width/--height: %ux%u is more than %u pixels", c->width, c->height,
+                         TR_FILM_MAX_PIXELS);
+    }
+    const char *prefix = "builtin:";
+    if (strncmp(c->scene, prefix, strlen(prefix)) != 0) {
+        return cli_error(a,
+                         "--scene: '%s' is not a built-in scene (available: builtin:cornell); "
+                         "this version cannot load scene files",
+                         c->scene);
+    }
+    tr_error err;
+    if (tr_scene_builtin(scene, c->scene + strlen(prefix), c->width, c->height, &err) != TR_OK) {
+        return cli_error(a, "--scene: %s", err.msg);
+    }
+    return CLI_OK;
+}

@@ -1,0 +1,64 @@
+/* cli.h - option parsing shared by the trac0r subcommands.
+ *
+ * Every parse error prints one line naming the command, the option and the value at
+ * fault, and the caller exits with status 2 (CLI_USAGE). */
+#ifndef TRAC0R_CLI_H
+#define TRAC0R_CLI_H
+
+#include <stdint.h>
+
+#include "trac0r/trac0r.h"
+
+#define CLI_OK 0
+#define CLI_USAGE 2   /* bad command line */
+#define CLI_FAILURE 1 /* the work itself failed (I/O, out of memory) */
+
+/* Options that render, view and bench share. */
+typedef struct cli_common {
+    const char *scene; /* "builtin:cornell" */
+    uint32_t width, height;
+    int max_depth;
+    uint64_t seed;
+    int threads;
+    int integrator;
+} cli_common;
+
+/* Cursor over argv for one subcommand. */
+typedef struct cli_args {
+    const char *cmd; /* "render", "bench frame", ... for messages */
+    int argc;
+    char **argv;
+    int i;
+    const char *opt;   /* the option being parsed, without any "=value" */
+    const char *value; /* its value, once cli_value() has fetched it */
+    char optbuf[64];
+} cli_args;
+
+void cli_common_default(cli_common *c);
+
+/* Prints "trac0r CMD: message" to stderr and returns CLI_USAGE. */
+int cli_error(const cli_args *a, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+
+/* Advances to the next argument; returns 0 at the end. Splits "--opt=value". */
+int cli_next(cli_args *a);
+/* True when the current argument is the option `name` (e.g. "--width"). */
+int cli_is(const cli_args *a, const char *name);
+/* Fetches the current option's value into a->value; CLI_USAGE when missing. */
+int cli_value(cli_args *a);
+
+int cli_parse_u32(cli_args *a, uint32_t lo, uint32_t hi, uint32_t *out);
+int cli_parse_int(cli_args *a, int lo, int hi, int *out);
+int cli_parse_u64(cli_args *a, uint64_t *out);
+int cli_parse_float(cli_args *a, float lo, float hi, float *out);
+
+/* Handles an option of cli_common. Returns CLI_OK if handled, CLI_USAGE on a bad value,
+ * and -1 if the option is not a common one. */
+int cli_common_option(cli_args *a, cli_common *c);
+
+/* Builds the scene named by c->scene for c->width x c->height. */
+int cli_load_scene(const cli_args *a, const cli_common *c, tr_scene *scene);
+
+/* The help text of the common options. */
+extern const char cli_common_help[];
+
+#endif

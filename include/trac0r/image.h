@@ -1,0 +1,46 @@
+/* image.h - writing films out, and reading float images back.
+ *
+ * Every writer writes to a temporary file next to the target and renames it into
+ * place, so a failure never leaves a partial image behind. */
+#ifndef TRAC0R_IMAGE_H
+#define TRAC0R_IMAGE_H
+
+#include <stdint.h>
+
+#include "trac0r/error.h"
+#include "trac0r/film.h"
+
+typedef enum tr_image_format {
+    TR_IMAGE_UNKNOWN = 0,
+    TR_IMAGE_PNG = 1, /* 8-bit sRGB, tonemapped */
+    TR_IMAGE_PFM = 2, /* 32-bit float linear RGB */
+} tr_image_format;
+
+/* The format named by a path's extension (case-insensitive), or TR_IMAGE_UNKNOWN. */
+tr_image_format tr_image_format_from_path(const char *path);
+
+/* Tonemaps one linear value: scale by 2^exposure, clamp to [0,1], sRGB transfer, 8 bits. */
+uint8_t tr_tonemap_srgb8(float linear, float exposure);
+
+/* Writes the film's mean radiance as PNG (tonemapped with `exposure` stops) or PFM,
+ * chosen by the path's extension. */
+int tr_film_write(const tr_film *f, const char *path, float exposure, tr_error *err);
+int tr_film_write_png(const tr_film *f, const char *path, float exposure, tr_error *err);
+int tr_film_write_pfm(const tr_film *f, const char *path, tr_error *err);
+
+/* Checks, without leaving anything behind, that a file can be created at path's
+ * directory (so a long render is not wasted on an unwritable target). */
+int tr_image_check_writable(const char *path, tr_error *err);
+
+/* A float RGB image read back from disk (top row first). */
+typedef struct tr_image {
+    uint32_t width, height;
+    float *rgb;
+} tr_image;
+
+int tr_image_read_pfm(tr_image *img, const char *path, tr_error *err);
+/* Reads an 8-bit PNG as values in [0,1] (no inverse transfer applied). */
+int tr_image_read_png(tr_image *img, const char *path, tr_error *err);
+void tr_image_free(tr_image *img);
+
+#endif

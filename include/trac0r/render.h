@@ -1,0 +1,43 @@
+/* render.h - rendering frames into a film on the CPU backend. */
+#ifndef TRAC0R_RENDER_H
+#define TRAC0R_RENDER_H
+
+#include <stdint.h>
+
+#include "kernel/kernel.h"
+#include "trac0r/error.h"
+#include "trac0r/film.h"
+#include "trac0r/scene.h"
+
+#define TR_MAX_DEPTH_LIMIT 1024
+
+typedef struct tr_render_config {
+    int max_depth;  /* the naive integrator's max_depth (default 8) */
+    uint64_t seed;  /* random streams are keyed by (seed, pixel, sample) */
+    int threads;    /* OpenMP threads; 0 = all the machine has */
+    int integrator; /* TR_INTEGRATOR_* */
+    int stride;     /* preview: trace every stride-th pixel, fill stride x stride blocks */
+    uint32_t tile;  /* tile side in pixels (default 16) */
+} tr_render_config;
+
+typedef struct tr_render_stats {
+    uint64_t rays;  /* intersection queries made */
+    double seconds; /* wall time of the call */
+} tr_render_stats;
+
+tr_render_config tr_render_config_default(void);
+
+/* Adds one sample per pixel (sample number `sample`) to the film, tracing `scene` from
+ * `cam`, whose screen size must equal the film's. Deterministic: the result depends on
+ * the scene, camera, config (except threads and tile) and sample number only.
+ * stats may be NULL. */
+int tr_render_frame(const tr_scene *scene, const tr_camera *cam, const tr_render_config *cfg,
+                    tr_film *film, uint32_t sample, tr_render_stats *stats, tr_error *err);
+
+/* The number of threads a config with threads = 0 uses. */
+int tr_default_threads(void);
+
+/* Monotonic wall clock in seconds. */
+double tr_time_now(void);
+
+#endif

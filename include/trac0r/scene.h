@@ -1,0 +1,93 @@
+/* scene.h - a scene: materials, triangles grouped into shapes, and a camera.
+ *
+ * The scene owns flat arrays indexed by integers, exactly as the kernels read them
+ * (src/kernel/types.h). Shapes are generators of triangles (the thesis's
+ * Shape::make_*): each call appends its triangles and the shape's bounding box.
+ *
+ *     tr_scene s;
+ *     tr_scene_init(&s);
+ *     uint32_t white;
+ *     tr_scene_add_material(&s, tr_material_diffuse(v3(0.7f, 0.7f, 0.7f)), &white, &err);
+ *     tr_shape_desc box = tr_shape_desc_default(TR_SHAPE_BOX);
+ *     box.material = white;
+ *     tr_scene_add_shape(&s, &box, &err);
+ *     ...
+ *     tr_scene_free(&s);
+ */
+#ifndef TRAC0R_SCENE_H
+#define TRAC0R_SCENE_H
+
+#include <stdint.h>
+
+#include "kernel/scene_view.h"
+#include "kernel/types.h"
+#include "trac0r/error.h"
+
+/* Icospheres are limited to this many subdivisions: 20 * 4^9 = 5 242 880 triangles. */
+#define TR_ICOSPHERE_MAX_SUBDIVISIONS 9
+
+typedef enum tr_shape_type {
+    TR_SHAPE_PLANE = 1,     /* unit square in the xz plane, normal +y */
+    TR_SHAPE_BOX = 2,       /* unit cube centred on the origin, normals outward */
+    TR_SHAPE_ICOSPHERE = 3, /* unit sphere from a subdivided icosahedron */
+} tr_shape_type;
+
+/* Where a shape's unit geometry goes: scaled, then rotated about x, then y, then z
+ * (R = Rz * Ry * Rx, angles in radians, right-handed), then translated. */
+typedef struct tr_transform {
+    tr_vec3 position;
+    tr_vec3 orientation; /* Euler angles, radians */
+    tr_vec3 scale;       /* plane: (size x, 1, size z); box: size; icosphere: radius */
+} tr_transform;
+
+typedef struct tr_shape_desc {
+    tr_shape_type type;
+    tr_transform transform;
+    uint32_t subdivisions; /* icosphere only: 20 * 4^n triangles */
+    uint32_t material;     /* index returned by tr_scene_add_material */
+} tr_shape_desc;
+
+typedef struct tr_scene {
+    tr_material *materials;
+    uint32_t material_count, material_capacity;
+    tr_triangle *triangles;
+    uint32_t triangle_count, triangle_capacity;
+    tr_flat_node *shapes; /* one box + triangle run per shape: the thesis's flat structure */
+    uint32_t shape_count, shape_capacity;
+    tr_camera camera;
+} tr_scene;
+
+/* A shape of the given type at the origin, unrotated, unit scale, material 0. */
+tr_shape_desc tr_shape_desc_default(tr_shape_type type);
+
+tr_material tr_material_emitter(tr_vec3 color, float emittance);
+tr_material tr_material_diffuse(tr_vec3 color);
+tr_material tr_material_glass(tr_vec3 color, float ior);
+tr_material tr_material_glossy(tr_vec3 color, float roughness);
+
+/* An empty scene (no allocation). */
+void tr_scene_init(tr_scene *s);
+/* Releases everything the scene owns and leaves it empty. */
+void tr_scene_free(tr_scene *s);
+/* Appends a material and returns its index in *index. Rejects non-finite or negative
+ * values and unknown types. */
+int tr_scene_add_material(tr_scene *s, tr_material m, uint32_t *index, tr_error *err);
+/* Appends a shape's triangles and its bounding box. */
+int tr_scene_add_shape(tr_scene *s, const tr_shape_desc *desc, tr_error *err);
+/* Number of triangles a shape description generates (0 for an invalid one). */
+uint64_t tr_shape_triangle_count(const tr_shape_desc *desc);
+
+/* Fills a triangle's normal, centroid and area from its vertices (normal and area are
+ * zero for degenerate ones). */
+void tr_triangle_finish(tr_triangle *t);
+/* The bounding box of n triangles. */
+tr_aabb tr_triangles_bounds(const tr_triangle *t, uint32_t n);
+
+/* Builds a built-in scene by name ("cornell": the thesis's listing 16) with its camera
+ * set up for a width x height image. */
+int tr_scene_builtin(tr_scene *s, const char *name, uint32_t width, uint32_t height, tr_error *err);
+
+/* The view the kernels trace against; valid while the scene is not modified. */
+tr_scene_view tr_scene_view_of(const tr_scene *s);
+
+#endif

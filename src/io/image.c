@@ -1,0 +1,303 @@
+/* image.c - PNG (libpng) and PFM output, written to a temporary file and renamed. */
+#define _POSIX_C_SOURCE 200809L
+#include <ctype.h>
+#include <errno.h>
+#include <math.h>
+#include <png.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+#include <unistd.h>
+
+#include "trac0r/image.h"
+
+tr_image_format tr_image_format_from_path(const char *path) {
+    const char *dot = strrchr(path, '.');
+    const char *slash = strrchr(path, '/');
+    if (!dot || (slash && dot < slash)) {
+        return TR_IMAGE_UNKNOWN;
+    }
+    if (strcasecmp(dot, ".png") == 0) {
+        return TR_IMAGE_PNG;
+    }
+    if (strcasecmp(dot, ".pfm") == 0) {
+        return TR_IMAGE_PFM;
+    }
+    return TR_IMAGE_UNKNOWN;
+}
+
+uint8_t tr_tonemap_srgb8(float linear, float exposure) {
+    float v = linear * exp2f(exposure);
+    if (!(v > 0.0f)) { /* also catches NaN */
+        return 0;
+    }
+    if (v >= 1.0f) {
+        return 255;
+    }
+    /* The sRGB transfer function (IEC 61966-2-1). */
+    float s = v <= 0.0031308f ? 12.92f * v : 1.055f * powf(v, 1.0f / 2.4f) - 0.055f;
+    return (uint8_t)(s * 255.0f + 0.5f);
+}
+
+/* A temporary file next to `path`, so that rename() stays on one file system. */
+typedef struct tmpfile_t {
+    char name[4096];
+    FILE *fp;
+} tmpfile_t;
+
+static int tmp_open(tmpfile_t *t, const char *path, tr_error *err) {
+    int n = snprintf(t->name, sizeof t->name, "%s.tmp.XXXXXX", path);
+    if (n < 0 || (size_t)n >= sizeof t->name) {
+        return tr_error_set(err, "%s: path too long", path);
+    }
+    int fd = mkstemp(t->name);
+    if (fd < 0) {
+        return tr_error_set(err, "%s: cannot create file: %s", path, strerror(errno));
+    }
+    t->fp = fdopen(fd, "wb");
+    if (!t->fp) {
+        int e = errno;
+        close(fd);
+        unlink(t->name);
+        return tr_error_set(err, "%s: cannot open file: %s", path, strerror(e));
+    }
+    return TR_OK;
+}
+
+/* Closes the temporary file and renames it onto path, or removes it if `ok` is false
+ * or anything fails on the way. */
+static int tmp_finish(tmpfile_t *t, const char *path, int ok, tr_error *err) {
+    int rc = ok ? TR_OK : TR_ERR;
+    if (ok && (fflush(t->fp) != 0 || ferror(t->fp))) {
+        rc = tr_error_set(err, "%s: write failed: %s", path, strerror(errno));
+    }
+    if (fclose(t->fp) != 0 && rc == TR_OK) {
+        rc = tr_error_set(err, "%s: write failed: %s", path, strerror(errno));
+    }
+    if (rc == TR_OK && rename(t->name, path) != 0) {
+        rc = tr_error_set(err, "%s: cannot rename the finished file into place: %s", path,
+                          strerror(errno));
+    }
+    if (rc != TR_OK) {
+        unlink(t->name);
+    }
+    return rc;
+}
+
+int tr_image_check_writable(const char *path, tr_error *err) {
+    tmpfile_t t;
+    if (tmp_open(&t, path, err) != TR_OK) {
+        return TR_ERR;
+    }
+    fclose(t.fp);
+    unlink(t.name);
+    return TR_OK;
+}
+
+static int write_png_rows(FILE *fp, const tr_film *f, float exposure, uint8_t *row) {
+    png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, NULL, NULL, NULL);
+    if (!png) {
+        return TR_ERR;
+    }
+    png_infop info = png_create_info_struct(png);
+    if (!info || setjmp(png_jmpbuf(png))) {
+        png_destroy_write_struct(&png, &info);
+        return TR_ERR;
+    }
+    png_init_io(png, fp);
+    png_set_IHDR(png, info, f->width, f->height, 8, PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE,
+                 PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+    png_set_sRGB_gAMA_and_cHRM(png, info, PNG_sRGB_INTENT_PERCEPTUAL);
+    png_write_info(png, info);
+    for (uint32_t y = 0; y < f->height; ++y) {
+        for (uint32_t x = 0; x < f->width; ++x) {
+            tr_vec3 c = tr_film_pixel(f, x, y);
+            row[3 * x] = tr_tonemap_srgb8(c.x, exposure);
+            row[3 * x + 1] = tr_tonemap_srgb8(c.y, exposure);
+            row[3 * x + 2] = tr_tonemap_srgb8(c.z, exposure);
+        }
+        png_write_row(png, row);
+    }
+    png_write_end(png, NULL);
+    png_destroy_write_struct(&png, &info);
+    return TR_OK;
+}
+
+int tr_film_write_png(const tr_film *f, const char *path, float exposure, tr_error *err) {
+    uint8_t *row = malloc((size_t)f->width * 3);
+    if (!row) {
+        return tr_error_set(err, "%s: out of memory", path);
+    }
+    tmpfile_t t;
+    if (tmp_open(&t, path, err) != TR_OK) {
+        free(row);
+        return TR_ERR;
+    }
+    int ok = write_png_rows(t.fp, f, exposure, row) == TR_OK;
+    free(row);
+    if (!ok) {
+        tr_error_set(err, "%s: PNG encoding failed", path);
+    }
+    return tmp_finish(&t, path, ok, err);
+}
+
+int tr_film_write_pfm(const tr_film *f, const char *path, tr_error *err) {
+    float *row = malloc((size_t)f->width * 3 * sizeof *row);
+    if (!row) {
+        return tr_error_set(err, "%s: out of memory", path);
+    }
+    tmpfile_t t;
+    if (tmp_open(&t, path, err) != TR_OK) {
+        free(row);
+        return TR_ERR;
+    }
+    /* A negative scale marks little-endian data; rows go bottom to top. */
+    int ok = fprintf(t.fp, "PF\n%u %u\n-1.0\n", f->width, f->height) > 0;
+    for (uint32_t yy = 0; ok && yy < f->height; ++yy) {
+        uint32_t y = f->height - 1 - yy;
+        for (uint32_t x = 0; x < f->width; ++x) {
+            tr_vec3 c = tr_film_pixel(f, x, y);
+            row[3 * x] = c.x;
+            row[3 * x + 1] = c.y;
+            row[3 * x + 2] = c.z;
+        }
+        ok = fwrite(row, sizeof *row, (size_t)f->width * 3, t.fp) == (size_t)f->width * 3;
+    }
+    free(row);
+    if (!ok) {
+        tr_error_set(err, "%s: write failed: %s", path, strerror(errno));
+    }
+    return tmp_finish(&t, path, ok, err);
+}
+
+int tr_film_write(const tr_film *f, const char *path, float exposure, tr_error *err) {
+    switch (tr_image_format_from_path(path)) {
+    case TR_IMAGE_PNG:
+        return tr_film_write_png(f, path, exposure, err);
+    case TR_IMAGE_PFM:
+        return tr_film_write_pfm(f, path, err);
+    default:
+        return tr_error_set(err, "%s: unknown image extension (expected .png or .pfm)", path);
+    }
+}
+
+void tr_image_free(tr_image *img) {
+    free(img->rgb);
+    memset(img, 0, sizeof *img);
+}
+
+/* Reads one whitespace-delimited header token of at most n-1 characters. */
+static int pfm_token(FILE *fp, char *buf, size_t n) {
+    int c;
+    do {
+        c = fgetc(fp);
+    } while (c != EOF && isspace(c));
+    size_t len = 0;
+    while (c != EOF && !isspace(c) && len + 1 < n) {
+        buf[len++] = (char)c;
+        c = fgetc(fp);
+    }
+    buf[len] = '\0';
+    /* Exactly one whitespace byte separates the header from the data; it was consumed. */
+    return len > 0 && c != EOF && isspace(c) ? TR_OK : TR_ERR;
+}
+
+int tr_image_read_pfm(tr_image *img, const char *path, tr_error *err) {
+    memset(img, 0, sizeof *img);
+    FILE *fp = fopen(path, "rb");
+    if (!fp) {
+        return tr_error_set(err, "%s: cannot open: %s", path, strerror(errno));
+    }
+    char magic[8], ws[32], hs[32], ss[64];
+    if (pfm_token(fp, magic, sizeof magic) || pfm_token(fp, ws, sizeof ws) ||
+        pfm_token(fp, hs, sizeof hs) || pfm_token(fp, ss, sizeof ss)) {
+        fclose(fp);
+        return tr_error_set(err, "%s: not a PFM file (truncated header)", path);
+    }
+    int channels = strcmp(magic, "PF") == 0 ? 3 : strcmp(magic, "Pf") == 0 ? 1 : 0;
+    char *end;
+    long w = strtol(ws, &end, 10);
+    int bad = *end != '\0';
+    long h = strtol(hs, &end, 10);
+    bad |= *end != '\0';
+    double scale = strtod(ss, &end);
+    bad |= *end != '\0' || scale == 0.0 || !isfinite(scale);
+    if (!channels || bad || w <= 0 || h <= 0 || w > (long)TR_FILM_MAX_SIDE ||
+        h > (long)TR_FILM_MAX_SIDE || (uint64_t)w * (uint64_t)h > TR_FILM_MAX_PIXELS) {
+        fclose(fp);
+        return tr_error_set(err, "%s: not a supported PFM file (header '%s %s %s %s')", path, magic,
+                            ws, hs, ss);
+    }
+    if (scale > 0.0) {
+        fclose(fp);
+        return tr_error_set(err, "%s: big-endian PFM files are not supported", path);
+    }
+    size_t n = (size_t)w * (size_t)h;
+    float *data = malloc(n * (size_t)channels * sizeof *data);
+    img->rgb = malloc(n * 3 * sizeof *img->rgb);
+    if (!data || !img->rgb) {
+        free(data);
+        fclose(fp);
+        tr_image_free(img);
+        return tr_error_set(err, "%s: out of memory", path);
+    }
+    size_t got = fread(data, sizeof *data, n * (size_t)channels, fp);
+    fclose(fp);
+    if (got != n * (size_t)channels) {
+        free(data);
+        tr_image_free(img);
+        return tr_error_set(err, "%s: truncated PFM data (%zu of %zu floats)", path, got,
+                            n * (size_t)channels);
+    }
+    img->width = (uint32_t)w;
+    img->height = (uint32_t)h;
+    for (size_t y = 0; y < (size_t)h; ++y) {
+        const float *src = data + ((size_t)h - 1 - y) * (size_t)w * (size_t)channels;
+        for (size_t x = 0; x < (size_t)w; ++x) {
+            for (int c = 0; c < 3; ++c) {
+                img->rgb[(y * (size_t)w + x) * 3 + (size_t)c] =
+                    src[x * (size_t)channels + (channels == 3 ? (size_t)c : 0)];
+            }
+        }
+    }
+    free(data);
+    return TR_OK;
+}
+
+int tr_image_read_png(tr_image *img, const char *path, tr_error *err) {
+    memset(img, 0, sizeof *img);
+    png_image p;
+    memset(&p, 0, sizeof p);
+    p.version = PNG_IMAGE_VERSION;
+    if (!png_image_begin_read_from_file(&p, path)) {
+        return tr_error_set(err, "%s: cannot read PNG: %s", path, p.message);
+    }
+    p.format = PNG_FORMAT_RGB;
+    if (p.width == 0 || p.height == 0 || p.width > TR_FILM_MAX_SIDE ||
+        p.height > TR_FILM_MAX_SIDE) {
+        png_image_free(&p);
+        return tr_error_set(err, "%s: PNG size %ux%u is not supported", path, p.width, p.height);
+    }
+    size_t n = (size_t)p.width * p.height;
+    uint8_t *buf = malloc(PNG_IMAGE_SIZE(p));
+    img->rgb = malloc(n * 3 * sizeof *img->rgb);
+    if (!buf || !img->rgb) {
+        free(buf);
+        png_image_free(&p);
+        tr_image_free(img);
+        return tr_error_set(err, "%s: out of memory", path);
+    }
+    if (!png_image_finish_read(&p, NULL, buf, 0, NULL)) {
+        free(buf);
+        tr_image_free(img);
+        return tr_error_set(err, "%s: cannot decode PNG: %s", path, p.message);
+    }
+    img->width = p.width;
+    img->height = p.height;
+    for (size_t i = 0; i < 3 * n; ++i) {
+        img->rgb[i] = (float)buf[i] / 255.0f;
+    }
+    free(buf);
+    return TR_OK;
+}

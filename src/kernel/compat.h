@@ -1,0 +1,54 @@
+/* compat.h - the only file of the kernel that differs between the CPU and OpenCL C.
+ *
+ * Everything under src/kernel/ is written in a C99 subset that also compiles as
+ * OpenCL C 1.2: no recursion, no function pointers, no dynamic memory, no libc
+ * beyond the math functions mapped below. Host code includes the kernel headers
+ * directly; the OpenCL backend hands the same text to the device compiler. */
+#ifndef TR_KERNEL_COMPAT_H
+#define TR_KERNEL_COMPAT_H
+
+#ifdef __OPENCL_VERSION__
+/* ---- OpenCL C --------------------------------------------------------- */
+typedef uint uint32_t;
+typedef int int32_t;
+typedef ulong uint64_t;
+#define TR_FN static inline
+#define TR_GLOBAL __global
+#define TR_CONST_GLOBAL __global const
+#define tr_sqrtf(x) sqrt(x)
+#define tr_sinf(x) sin(x)
+#define tr_cosf(x) cos(x)
+#define tr_tanf(x) tan(x)
+#define tr_powf(x, y) pow((x), (y))
+#define tr_fabsf(x) fabs(x)
+#define tr_fminf(a, b) fmin((a), (b))
+#define tr_fmaxf(a, b) fmax((a), (b))
+#define tr_isfinite(x) isfinite(x)
+#define TR_INFINITY INFINITY
+#define TR_STATIC_ASSERT(cond, msg)
+#else
+/* ---- C11 on the host -------------------------------------------------- */
+#include <math.h>
+#include <stdint.h>
+#define TR_FN static inline
+#define TR_GLOBAL
+#define TR_CONST_GLOBAL const
+#define tr_sqrtf(x) sqrtf(x)
+#define tr_sinf(x) sinf(x)
+#define tr_cosf(x) cosf(x)
+#define tr_tanf(x) tanf(x)
+#define tr_powf(x, y) powf((x), (y))
+#define tr_fabsf(x) fabsf(x)
+#define tr_fminf(a, b) fminf((a), (b))
+#define tr_fmaxf(a, b) fmaxf((a), (b))
+#define tr_isfinite(x) isfinite(x)
+#define TR_INFINITY INFINITY
+#define TR_STATIC_ASSERT(cond, msg) _Static_assert(cond, msg)
+#endif
+
+#define TR_PI 3.14159265358979323846f
+#define TR_TWO_PI 6.28318530717958647692f
+#define TR_HALF_PI 1.57079632679489661923f
+#define TR_INV_PI 0.31830988618379067154f
+
+#endif

@@ -1,0 +1,63 @@
+/* integrator_naive.h - the thesis's integrator (listing 19) with its depth-based
+ * Russian roulette (listing 15). */
+#ifndef TR_KERNEL_INTEGRATOR_NAIVE_H
+#define TR_KERNEL_INTEGRATOR_NAIVE_H
+
+#include "compat.h"
+#include "material.h"
+#include "rng.h"
+#include "scene_view.h"
+#include "types.h"
+#include "vec.h"
+
+/* Radiance arriving along `ray`. Before each intersection the path continues with
+ * probability p = 1 - 1/(max_depth - depth) (depth counts from 1) and its energy is
+ * divided by p, so the estimate stays unbiased up to the truncation at depth
+ * max_depth - 1 where p reaches 0: a path meets at most max_depth - 2 surfaces.
+ * Emission is added wherever a material has emittance (the thesis's emitters, which
+ * also end the path); the thesis divided only the final emission by the last p,
+ * we divide the throughput at every step, which is what keeps the mean right.
+ * *rays counts the intersection queries made. */
+TR_FN tr_vec3 tr_trace_naive(const tr_scene_view *s, tr_ray ray, int max_depth, tr_rng *rng,
+                             uint32_t *rays) {
+    tr_vec3 radiance = v3s(0.0f);
+    tr_vec3 throughput = v3s(1.0f);
+    int depth = 0;
+    for (;;) {
+        ++depth;
+        int remaining = max_depth - depth;
+        if (remaining <= 1) {
+            break; /* p <= 0 */
+        }
+        float p = 1.0f - 1.0f / (float)remaining;
+        if (tr_rng_float(rng) >= p) {
+            break;
+        }
+        throughput = v3_scale(throughput, 1.0f / p);
+
+        tr_hit hit;
+        *rays += 1;
+        if (!tr_intersect_scene(s, &ray, &hit)) {
+            break;
+        }
+        TR_CONST_GLOBAL tr_triangle *tri = &s->triangles[hit.triangle];
+        TR_CONST_GLOBAL tr_material *m = &s->materials[tri->material];
+        if (m->emittance > 0.0f) {
+            radiance = v3_add(radiance, v3_scale(v3_mul(throughput, m->color), m->emittance));
+        }
+        if (m->type == TR_MATERIAL_EMITTER) {
+            break;
+        }
+        tr_vec3 p_hit = v3_madd(ray.origin, ray.dir, hit.t);
+        tr_vec3 origin, dir, weight;
+        if (tr_material_scatter_naive(m, ray.dir, p_hit, tri->normal, rng, &origin, &dir,
+                                      &weight) != TR_SCATTER_CONTINUE) {
+            break;
+        }
+        throughput = v3_mul(throughput, weight);
+        ray = tr_ray_make(origin, dir, 0.0f, TR_INFINITY);
+    }
+    return radiance;
+}
+
+#endif

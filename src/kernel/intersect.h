@@ -1,0 +1,80 @@
+/* intersect.h - ray/triangle and ray/AABB intersection. */
+#ifndef TR_KERNEL_INTERSECT_H
+#define TR_KERNEL_INTERSECT_H
+
+#include "compat.h"
+#include "types.h"
+#include "vec.h"
+
+TR_FN tr_ray tr_ray_make(tr_vec3 origin, tr_vec3 dir, float tmin, float tmax) {
+    tr_ray r;
+    r.origin = origin;
+    r.dir = dir;
+    /* IEEE division gives +-inf for a zero component, which the slab test relies on. */
+    r.inv_dir = v3(1.0f / dir.x, 1.0f / dir.y, 1.0f / dir.z);
+    r.tmin = tmin;
+    r.tmax = tmax;
+    return r;
+}
+
+/* Moller-Trumbore ("Fast, minimum storage ray/triangle intersection", JGT 1997).
+ * Two-sided. Returns 1 and sets *t, *u, *v when the ray meets the triangle at a
+ * distance in (tmin, tmax). Edges and vertices count as inside (u, v >= 0,
+ * u + v <= 1); rays parallel to the plane and degenerate triangles never hit. */
+TR_FN int tr_intersect_triangle(const tr_ray *ray, tr_vec3 v0, tr_vec3 v1, tr_vec3 v2, float *t,
+                                float *u, float *v) {
+    tr_vec3 e1 = v3_sub(v1, v0);
+    tr_vec3 e2 = v3_sub(v2, v0);
+    tr_vec3 p = v3_cross(ray->dir, e2);
+    float det = v3_dot(e1, p);
+    /* Parallel ray or zero-area triangle; a NaN det also fails this test. */
+    if (!(tr_fabsf(det) > 1e-12f)) {
+        return 0;
+    }
+    float inv_det = 1.0f / det;
+    tr_vec3 s = v3_sub(ray->origin, v0);
+    float uu = v3_dot(s, p) * inv_det;
+    if (!(uu >= 0.0f && uu <= 1.0f)) {
+        return 0;
+    }
+    tr_vec3 q = v3_cross(s, e1);
+    float vv = v3_dot(ray->dir, q) * inv_det;
+    if (!(vv >= 0.0f && uu + vv <= 1.0f)) {
+        return 0;
+    }
+    float tt = v3_dot(e2, q) * inv_det;
+    if (!(tt > ray->tmin && tt < ray->tmax)) {
+        return 0;
+    }
+    *t = tt;
+    *u = uu;
+    *v = vv;
+    return 1;
+}
+
+/* Slab test (Kay and Kajiya 1986; the robust form of Williams et al. 2005). Returns 1
+ * when the ray's segment (tmin, tmax) overlaps the box, and the entry distance in
+ * *tnear. Axis-parallel rays use the infinite reciprocal; an origin inside the box
+ * gives a negative entry and is a hit. Boxes are closed (a flat box of zero thickness
+ * is hit by rays crossing it); the measure-zero case of a ray lying exactly in a slab
+ * plane and parallel to it (0 * inf = NaN) counts as a miss. */
+TR_FN int tr_intersect_aabb(const tr_ray *ray, tr_aabb box, float *tnear) {
+    float tx1 = (box.min.x - ray->origin.x) * ray->inv_dir.x;
+    float tx2 = (box.max.x - ray->origin.x) * ray->inv_dir.x;
+    float t0 = tr_fminf(tx1, tx2);
+    float t1 = tr_fmaxf(tx1, tx2);
+    float ty1 = (box.min.y - ray->origin.y) * ray->inv_dir.y;
+    float ty2 = (box.max.y - ray->origin.y) * ray->inv_dir.y;
+    t0 = tr_fmaxf(t0, tr_fminf(ty1, ty2));
+    t1 = tr_fminf(t1, tr_fmaxf(ty1, ty2));
+    float tz1 = (box.min.z - ray->origin.z) * ray->inv_dir.z;
+    float tz2 = (box.max.z - ray->origin.z) * ray->inv_dir.z;
+    t0 = tr_fmaxf(t0, tr_fminf(tz1, tz2));
+    t1 = tr_fminf(t1, tr_fmaxf(tz1, tz2));
+    t0 = tr_fmaxf(t0, ray->tmin);
+    t1 = tr_fminf(t1, ray->tmax);
+    *tnear = t0;
+    return t0 <= t1;
+}
+
+#endif

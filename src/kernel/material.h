@@ -1,0 +1,100 @@
+/* material.h - the thesis's four materials (section 3.1.2) as used by the naive
+ * integrator: each turns an incoming ray at a hit into the next ray and a colour
+ * factor for the path's throughput. Dispatch is a switch on the material type. */
+#ifndef TR_KERNEL_MATERIAL_H
+#define TR_KERNEL_MATERIAL_H
+
+#include "compat.h"
+#include "rng.h"
+#include "sampling.h"
+#include "types.h"
+#include "vec.h"
+
+/* Unpolarised Fresnel reflectance of a smooth dielectric boundary, for light arriving
+ * from the side of index n1 onto the side of index n2 with cos(theta_i) = cos_i >= 0.
+ * Returns 1 on total internal reflection. The average of the s and p reflectances is
+ * (Rs + Rp) / 2 - the thesis's code divided only Rp by two (the mis-parenthesised
+ * average the issue mentions); this is the physical quantity.
+ * *cos_t receives cos(theta_t) (0 on total internal reflection). */
+TR_FN float tr_fresnel_dielectric(float cos_i, float n1, float n2, float *cos_t) {
+    float eta = n1 / n2;
+    float sin2_t = eta * eta * tr_fmaxf(0.0f, 1.0f - cos_i * cos_i);
+    if (sin2_t >= 1.0f) {
+        *cos_t = 0.0f;
+        return 1.0f;
+    }
+    float ct = tr_sqrtf(1.0f - sin2_t);
+    float rs = (n1 * cos_i - n2 * ct) / (n1 * cos_i + n2 * ct);
+    float rp = (n2 * cos_i - n1 * ct) / (n2 * cos_i + n1 * ct);
+    *cos_t = ct;
+    return 0.5f * (rs * rs + rp * rp);
+}
+
+/* Moves a surface point off the surface along n, relative to its magnitude, so that the
+ * next ray does not hit the triangle it starts on. */
+TR_FN tr_vec3 tr_offset_origin(tr_vec3 p, tr_vec3 n) {
+    float scale = tr_fmaxf(1.0f, v3_max_component(v3(tr_fabsf(p.x), tr_fabsf(p.y), tr_fabsf(p.z))));
+    return v3_madd(p, n, 1e-4f * scale);
+}
+
+#define TR_SCATTER_ABSORBED 0
+#define TR_SCATTER_CONTINUE 1
+
+/* Scatters the ray arriving along unit direction `dir` at point p of a surface with
+ * geometric normal n (either orientation) and material m. On TR_SCATTER_CONTINUE,
+ * *next_origin / *next_dir hold the new ray and *weight the factor to multiply the
+ * throughput by. Emitters do not scatter (the caller ends the path there). */
+TR_FN int tr_material_scatter_naive(TR_CONST_GLOBAL tr_material *m, tr_vec3 dir, tr_vec3 p,
+                                    tr_vec3 n, tr_rng *rng, tr_vec3 *next_origin, tr_vec3 *next_dir,
+                                    tr_vec3 *weight) {
+    float cos_dn = v3_dot(dir, n);
+    /* The normal on the side the ray came from. */
+    tr_vec3 nf = cos_dn > 0.0f ? v3_neg(n) : n;
+    *weight = m->color;
+    switch (m->type) {
+    case TR_MATERIAL_DIFFUSE: {
+        /* Cosine-weighted sampling: the cosine and 1/pi of the Lambertian BRDF cancel
+         * against the pdf, leaving the albedo as the weight. */
+        *next_dir = tr_sample_cosine_hemisphere(rng, nf);
+        *next_origin = tr_offset_origin(p, nf);
+        return TR_SCATTER_CONTINUE;
+    }
+    case TR_MATERIAL_GLASS: {
+        /* Entering when the ray meets the front of the normal, leaving otherwise. */
+        int entering = cos_dn < 0.0f;
+        float n1 = entering ? 1.0f : m->ior;
+        float n2 = entering ? m->ior : 1.0f;
+        float cos_i = tr_fabsf(cos_dn);
+        float cos_t;
+        float r = tr_fresnel_dielectric(cos_i, n1, n2, &cos_t);
+        if (tr_rng_float(rng) < r) {
+            *next_dir = v3_reflect(dir, nf);
+            *next_origin = tr_offset_origin(p, nf);
+        } else {
+            float eta = n1 / n2;
+            /* Snell's law in vector form: t = eta d + (eta cos_i - cos_t) n. */
+            *next_dir = v3_normalize(v3_add(v3_scale(dir, eta), v3_scale(nf, eta * cos_i - cos_t)));
+            *next_origin = tr_offset_origin(p, v3_neg(nf));
+        }
+        return TR_SCATTER_CONTINUE;
+    }
+    case TR_MATERIAL_GLOSSY: {
+        /* A cosine-weighted cone around the mirror direction, half-angle roughness*pi/2
+         * (roughness 0: a perfect mirror). Directions that fall below the surface are
+         * absorbed. */
+        tr_vec3 mirror = v3_reflect(dir, nf);
+        float angle = tr_fminf(tr_fmaxf(m->roughness, 0.0f), 1.0f) * TR_HALF_PI;
+        tr_vec3 d = angle > 0.0f ? tr_sample_cosine_cone(rng, mirror, angle) : mirror;
+        if (v3_dot(d, nf) <= 0.0f) {
+            return TR_SCATTER_ABSORBED;
+        }
+        *next_dir = d;
+        *next_origin = tr_offset_origin(p, nf);
+        return TR_SCATTER_CONTINUE;
+    }
+    default:
+        return TR_SCATTER_ABSORBED;
+    }
+}
+
+#endif

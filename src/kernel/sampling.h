@@ -1,0 +1,82 @@
+/* sampling.h - direction sampling (thesis section 3.1.6) and pixel jitter.
+ *
+ * Every sampler takes its uniform numbers from the caller's stream and returns a
+ * unit vector. The pdfs are with respect to solid angle. */
+#ifndef TR_KERNEL_SAMPLING_H
+#define TR_KERNEL_SAMPLING_H
+
+#include "compat.h"
+#include "rng.h"
+#include "vec.h"
+
+/* Uniform on the unit sphere, pdf 1/(4 pi). The thesis normalised a point of the cube
+ * [-1,1]^3, which is not uniform; we invert the area CDF instead (z uniform in [-1,1]). */
+TR_FN tr_vec3 tr_sample_uniform_sphere(tr_rng *r) {
+    float z = 1.0f - 2.0f * tr_rng_float(r);
+    float phi = TR_TWO_PI * tr_rng_float(r);
+    float s = tr_sqrtf(tr_fmaxf(0.0f, 1.0f - z * z));
+    return v3(s * tr_cosf(phi), s * tr_sinf(phi), z);
+}
+
+TR_FN float tr_pdf_uniform_sphere(void) {
+    return 1.0f / (4.0f * TR_PI);
+}
+
+/* Local-frame sample of the power-cosine lobe cos^power(theta), restricted to the cone
+ * theta <= angle (0 < angle <= pi/2), around +z.
+ *
+ * Invert the CDF of z = cos(theta): p(z) ~ z^power on [cos(angle), 1], so
+ * z = (c + u (1 - c))^(1/(power+1)) with c = cos(angle)^(power+1).
+ * The thesis's listing 12 drew u from [cos(angle), 1] instead of [cos(angle)^(power+1), 1],
+ * which for power = 1 narrows the cone to acos(sqrt(cos(angle))); we sample the cone the
+ * documentation describes. power = 0: uniform, power = 1: cosine-weighted. */
+TR_FN tr_vec3 tr_sample_cone_local(tr_rng *r, float power, float angle) {
+    float e = power + 1.0f;
+    float cmin = tr_powf(tr_fmaxf(tr_cosf(angle), 0.0f), e);
+    float u = tr_rng_float(r);
+    float phi = TR_TWO_PI * tr_rng_float(r);
+    float z = tr_powf(cmin + u * (1.0f - cmin), 1.0f / e);
+    float s = tr_sqrtf(tr_fmaxf(0.0f, 1.0f - z * z));
+    return v3(s * tr_cosf(phi), s * tr_sinf(phi), z);
+}
+
+/* Pdf (solid angle) of tr_sample_cone_local for a direction with cos(theta) = z. */
+TR_FN float tr_pdf_cone(float power, float angle, float z) {
+    float e = power + 1.0f;
+    float cmin = tr_powf(tr_fmaxf(tr_cosf(angle), 0.0f), e);
+    if (z < tr_cosf(angle) || z > 1.0f) {
+        return 0.0f;
+    }
+    return e * tr_powf(tr_fmaxf(z, 0.0f), power) / (TR_TWO_PI * (1.0f - cmin));
+}
+
+/* The thesis's sample_hemisphere(dir, power, angle): the lobe above around dir. */
+TR_FN tr_vec3 tr_sample_hemisphere(tr_rng *r, tr_vec3 dir, float power, float angle) {
+    tr_vec3 t, b;
+    v3_basis(dir, &t, &b);
+    tr_vec3 l = tr_sample_cone_local(r, power, angle);
+    return v3_normalize(v3_add(v3_add(v3_scale(t, l.x), v3_scale(b, l.y)), v3_scale(dir, l.z)));
+}
+
+/* Uniform on the hemisphere around dir, pdf 1/(2 pi). */
+TR_FN tr_vec3 tr_sample_uniform_hemisphere(tr_rng *r, tr_vec3 dir) {
+    return tr_sample_hemisphere(r, dir, 0.0f, TR_HALF_PI);
+}
+
+/* Cosine-weighted on the hemisphere around dir, pdf cos(theta)/pi. */
+TR_FN tr_vec3 tr_sample_cosine_hemisphere(tr_rng *r, tr_vec3 dir) {
+    return tr_sample_hemisphere(r, dir, 1.0f, TR_HALF_PI);
+}
+
+/* Cosine-weighted inside the cone of half-angle `angle` around dir. */
+TR_FN tr_vec3 tr_sample_cosine_cone(tr_rng *r, tr_vec3 dir, float angle) {
+    return tr_sample_hemisphere(r, dir, 1.0f, angle);
+}
+
+/* Sub-pixel jitter for anti-aliasing: a uniform offset in [0,1)^2. */
+TR_FN void tr_sample_pixel_jitter(tr_rng *r, float *dx, float *dy) {
+    *dx = tr_rng_float(r);
+    *dy = tr_rng_float(r);
+}
+
+#endif

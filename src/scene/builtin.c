@@ -1,0 +1,76 @@
+/* builtin.c - scenes compiled into the program. */
+#include <string.h>
+
+#include "trac0r/camera.h"
+#include "trac0r/scene.h"
+
+typedef struct shape_spec {
+    tr_shape_type type;
+    float pos[3], rot[3], scale[3];
+    uint32_t subdivisions;
+    int material;
+} shape_spec;
+
+/* The thesis's listing 16, number for number: a Cornell-like box with a red left wall,
+ * a green right wall, a glossy and a white box, a glass and a glossy icosphere and a
+ * plane emitter under the ceiling. Plane sizes are (x, z) extents, box sizes full
+ * extents, icosphere scales the radius. */
+static int build_cornell(tr_scene *s, uint32_t width, uint32_t height, tr_error *err) {
+    enum { EMISSIVE, WHITE, RED, GREEN, GLASS, GLOSSY, MATERIAL_COUNT };
+    const tr_material materials[MATERIAL_COUNT] = {
+        [EMISSIVE] = tr_material_emitter(v3(1.0f, 0.93f, 0.85f), 15.0f),
+        [WHITE] = tr_material_diffuse(v3(0.740063f, 0.742313f, 0.733934f)),
+        [RED] = tr_material_diffuse(v3(0.366046f, 0.0371827f, 0.0416385f)),
+        [GREEN] = tr_material_diffuse(v3(0.162928f, 0.408903f, 0.0833759f)),
+        [GLASS] = tr_material_glass(v3(0.5f, 0.5f, 0.9f), 1.51714f),
+        [GLOSSY] = tr_material_glossy(v3(1.0f, 1.0f, 1.0f), 0.09f),
+    };
+    const float hp = TR_HALF_PI, pi = TR_PI;
+    const shape_spec shapes[] = {
+        {TR_SHAPE_PLANE, {-0.5f, 0.4f, 0}, {0, 0, -hp}, {1, 1, 1}, 0, RED},  /* wall_left */
+        {TR_SHAPE_PLANE, {0.5f, 0.4f, 0}, {0, 0, hp}, {1, 1, 1}, 0, GREEN},  /* wall_right */
+        {TR_SHAPE_PLANE, {0, 0.4f, 0.5f}, {-hp, 0, 0}, {1, 1, 1}, 0, WHITE}, /* wall_back */
+        {TR_SHAPE_PLANE, {0, 0.9f, 0}, {pi, 0, 0}, {1, 1, 1}, 0, WHITE},     /* wall_top */
+        {TR_SHAPE_PLANE, {0, -0.1f, 0}, {0, 0, 0}, {1, 1, 1}, 0, WHITE},     /* wall_bottom */
+        {TR_SHAPE_PLANE, {0, 0.85f, -0.1f}, {0, 0, 0}, {0.4f, 1, 0.4f}, 0, EMISSIVE},   /* lamp */
+        {TR_SHAPE_BOX, {0.3f, 0.1f, 0.1f}, {0, 0.6f, 0}, {0.2f, 0.5f, 0.2f}, 0, WHITE}, /* box1 */
+        {TR_SHAPE_BOX, {-0.2f, 0.15f, 0.1f}, {0, -0.5f, 0}, {0.3f, 0.6f, 0.3f}, 0, GLOSSY},
+        {TR_SHAPE_ICOSPHERE, {0, 0.1f, -0.3f}, {0, 0, 0}, {0.15f, 0.15f, 0.15f}, 2, GLASS},
+        {TR_SHAPE_ICOSPHERE, {0.3f, 0.45f, 0.1f}, {0, 0, 0}, {0.15f, 0.15f, 0.15f}, 2, GLOSSY},
+    };
+    uint32_t index[MATERIAL_COUNT];
+    for (int i = 0; i < MATERIAL_COUNT; ++i) {
+        if (tr_scene_add_material(s, materials[i], &index[i], err) != TR_OK) {
+            return TR_ERR;
+        }
+    }
+    for (size_t i = 0; i < sizeof shapes / sizeof shapes[0]; ++i) {
+        const shape_spec *sp = &shapes[i];
+        tr_shape_desc d = tr_shape_desc_default(sp->type);
+        d.transform.position = v3(sp->pos[0], sp->pos[1], sp->pos[2]);
+        d.transform.orientation = v3(sp->rot[0], sp->rot[1], sp->rot[2]);
+        d.transform.scale = v3(sp->scale[0], sp->scale[1], sp->scale[2]);
+        d.subdivisions = sp->subdivisions;
+        d.material = index[sp->material];
+        if (tr_scene_add_shape(s, &d, err) != TR_OK) {
+            return TR_ERR;
+        }
+    }
+    return tr_camera_make(&s->camera, v3(0.0f, 0.31f, -1.2f), v3(0.0f, 0.0f, 1.0f),
+                          v3(0.0f, 1.0f, 0.0f), 90.0f, 0.001f, 100.0f, width, height, err);
+}
+
+int tr_scene_builtin(tr_scene *s, const char *name, uint32_t width, uint32_t height,
+                     tr_error *err) {
+    tr_scene_init(s);
+    int rc;
+    if (strcmp(name, "cornell") == 0) {
+        rc = build_cornell(s, width, height, err);
+    } else {
+        return tr_error_set(err, "unknown built-in scene '%s' (available: cornell)", name);
+    }
+    if (rc != TR_OK) {
+        tr_scene_free(s);
+    }
+    return rc;
+}
