@@ -7,7 +7,7 @@
 
 tr_render_config tr_render_config_default(void) {
     tr_render_config c;
-    c.max_depth = 5;
+    c.max_depth = 8;
     c.seed = 0;
     c.threads = 0;
     c.integrator = TR_INTEGRATOR_NAIVE;

@@ -1,0 +1,101 @@
+#!/bin/sh
+# Drives `trac0r render` and `trac0r bench` from the outside: bad input must give one
+# clear line naming the option and value, exit status 2 and no file; good input must
+# give a complete image and no leftovers.
+# Usage: cli_render.sh TRAC0R_BINARY SCRATCH_DIR
+set -u
+BIN=$1
+DIR=$2
+rm -rf "$DIR"
+mkdir -p "$DIR"
+cd "$DIR" || exit 1
+failures=0
+
+fail() {
+    echo "FAIL: $*" >&2
+    failures=$((failures + 1))
+}
+
+# expect_usage_error WHAT_STDERR_MUST_CONTAIN ARGS... : exit 2, one stderr line naming
+# the fault, nothing written to the scratch directory.
+expect_usage_error() {
+    needle=$1
+    shift
+    "$BIN" "$@" >out.txt 2>err.txt
+    rc=$?
+    [ "$rc" -eq 2 ] || fail "trac0r $*: exit $rc, expected 2"
+    lines=$(wc -l <err.txt)
+    [ "$lines" -eq 1 ] || fail "trac0r $*: $lines stderr lines, expected 1: $(cat err.txt)"
+    grep -qF -- "$needle" err.txt || fail "trac0r $*: stderr lacks '$needle': $(cat err.txt)"
+    leftovers=$(ls -A | grep -v -e '^out.txt$' -e '^err.txt$' -e '^afile$')
+    [ -z "$leftovers" ] || fail "trac0r $*: left files behind: $leftovers"
+    rm -f out.txt err.txt
+}
+
+R="render --width 8 --height 6 --spp 1 --out x.png"
+expect_usage_error "'--bogus'" $R --bogus
+expect_usage_error "--width: expected an integer in 1..16384, got 'abc'" $R --width abc
+expect_usage_error "--width: expected an integer in 1..16384, got '0'" $R --width 0
+expect_usage_error "got '-5'" $R --width -5
+expect_usage_error "--height: expected an integer in 1..16384, got '100000'" $R --height 100000
+expect_usage_error "--height: expected an integer" $R --height 99999999999999999999999
+expect_usage_error "more than 67108864 pixels" $R --width 16384 --height 16384
+expect_usage_error "--spp: expected an integer in 1..1000000, got '0'" $R --spp 0
+expect_usage_error "--spp: expected an integer" $R --spp 1.5
+expect_usage_error "--max-depth: expected an integer in 1..1024, got '0'" $R --max-depth 0
+expect_usage_error "--threads: expected an integer in 0..1024, got '-1'" $R --threads -1
+expect_usage_error "--seed: expected an integer" $R --seed -1
+expect_usage_error "--seed: expected an integer" $R --seed 18446744073709551616
+expect_usage_error "--exposure: expected a number in -20..20, got 'nan'" $R --exposure nan
+expect_usage_error "--stride: expected an integer in 1..64, got '0'" $R --stride 0
+expect_usage_error "--integrator: unknown integrator 'magic'" $R --integrator magic
+expect_usage_error "--spp: missing value" $R --spp
+expect_usage_error "--out: 'x.jpg' has an unknown extension" $R --out x.jpg
+expect_usage_error "--out: 'noext' has an unknown extension" $R --out noext
+expect_usage_error "--out: missing/dir/x.png: cannot create file" $R --out missing/dir/x.png
+touch afile
+expect_usage_error "--out: afile/x.png: cannot create file" $R --out afile/x.png
+rm -f afile
+expect_usage_error "--scene: 'scene.json' is not a built-in scene" $R --scene scene.json
+expect_usage_error "unknown built-in scene 'nope'" $R --scene builtin:nope
+expect_usage_error "unknown command 'paint'" paint
+expect_usage_error "--frames: expected an integer in 1..100000, got '0'" bench frame --frames 0
+expect_usage_error "unknown benchmark 'nope'" bench nope
+
+# --help documents every option it accepts.
+"$BIN" render --help >help.txt 2>&1 || fail "render --help exited non-zero"
+for opt in --scene --width --height --spp --max-depth --seed --threads --integrator --out \
+    --stride --exposure; do
+    grep -q -- "$opt" help.txt || fail "render --help does not mention $opt"
+done
+rm -f help.txt
+
+# Good renders: a complete PNG and PFM with the right size, and no temporary files.
+if "$BIN" render --width 16 --height 12 --spp 2 --out ok.png 2>err.txt; then
+    sig=$(od -An -tx1 -N8 ok.png | tr -d ' \n')
+    [ "$sig" = "89504e470d0a1a0a" ] || fail "ok.png is not a PNG (signature $sig)"
+    grep -q "16x12, 2 spp" err.txt || fail "render summary line missing: $(cat err.txt)"
+else
+    fail "a good render failed: $(cat err.txt)"
+fi
+if "$BIN" render --width 16 --height 12 --spp 2 --out ok.pfm 2>/dev/null; then
+    head=$(head -c 14 ok.pfm | tr '\n' ' ')
+    [ "$head" = "PF 16 12 -1.0 " ] || fail "ok.pfm header is '$head'"
+    size=$(wc -c <ok.pfm)
+    [ "$size" -eq $((14 + 16 * 12 * 3 * 4)) ] || fail "ok.pfm has $size bytes"
+else
+    fail "a good PFM render failed"
+fi
+leftovers=$(ls -A | grep -v -e '^ok.png$' -e '^ok.pfm$' -e '^err.txt$')
+[ -z "$leftovers" ] || fail "temporary files left behind: $leftovers"
+
+# A file that exists already is replaced only by a complete image.
+"$BIN" render --width 8 --height 6 --spp 1 --out ok.png --width 0 2>/dev/null
+sig=$(od -An -tx1 -N8 ok.png | tr -d ' \n')
+[ "$sig" = "89504e470d0a1a0a" ] || fail "a failed run damaged the existing ok.png"
+
+if [ "$failures" -ne 0 ]; then
+    echo "cli_render: $failures failures" >&2
+    exit 1
+fi
+echo "cli_render: all checks passed"
