@@ -7,7 +7,7 @@
 #ifndef TR_KERNEL_COMPAT_H
 #define TR_KERNEL_COMPAT_H
 
-#ifdef __OPENCL_VERSION__
+#if defined(__OPENCL_C_VERSION__) || defined(__OPENCL_VERSION__)
 /* ---- OpenCL C --------------------------------------------------------- */
 typedef uint uint32_t;
 typedef int int32_t;

@@ -1,0 +1,25 @@
+/* Compiled as OpenCL C 1.2 by CTest (clang -x cl -fsyntax-only) to prove that the
+ * single-source kernel stays inside the subset both languages share. */
+#include "kernel/kernel.h"
+
+__kernel void tr_check_render(__global const tr_triangle *triangles,
+                              __global const tr_material *materials,
+                              __global const tr_flat_node *nodes, uint triangle_count,
+                              uint material_count, uint node_count, tr_camera cam, ulong seed,
+                              uint sample, int max_depth, __global float *out) {
+    tr_scene_view s;
+    s.triangles = triangles;
+    s.materials = materials;
+    s.flat_nodes = nodes;
+    s.triangle_count = triangle_count;
+    s.material_count = material_count;
+    s.flat_node_count = node_count;
+    uint x = get_global_id(0), y = get_global_id(1);
+    uint rays = 0;
+    tr_vec3 c = tr_render_sample(&s, &cam, x, y, sample, seed, max_depth, TR_INTEGRATOR_NAIVE,
+                                 &rays);
+    size_t i = (size_t)y * cam.screen_width + x;
+    out[3 * i] = c.x;
+    out[3 * i + 1] = c.y;
+    out[3 * i + 2] = c.z;
+}
