@@ -1,4 +1,5 @@
 /* cpu.c - the CPU backend: the kernel run by OpenMP threads over screen tiles. */
+#define _POSIX_C_SOURCE 200809L
 #include <omp.h>
 #include <time.h>
 

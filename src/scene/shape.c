@@ -88,7 +88,7 @@ static uint32_t gen_box(tr_triangle *out) {
         for (int side = -1; side <= 1; side += 2) {
             /* Face with outward normal side * e_axis; (u, v) span it so that u x v = normal. */
             float h = 0.5f * (float)side;
-            tr_vec3 nrm = v3s(0.0f), u = v3s(0.0f), v = v3s(0.0f);
+            tr_vec3 nrm, u, v;
             if (axis == 0) {
                 nrm = v3(h, 0, 0), u = v3(0, 0.5f, 0), v = v3(0, 0, 0.5f);
             } else if (axis == 1) {
