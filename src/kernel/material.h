@@ -41,7 +41,9 @@ TR_FN tr_vec3 tr_offset_origin(tr_vec3 p, tr_vec3 n) {
 #define TR_SCATTER_CONTINUE 1
 
 /* Scatters the ray arriving along unit direction `dir` at point p of a surface with
- * geometric normal n (either orientation) and material m. On TR_SCATTER_CONTINUE,
+ * geometric normal n and material m. Diffuse and glossy surfaces are two-sided; for
+ * glass, n must point to the outside (the side of index 1): it decides whether the ray
+ * enters or leaves, so closed glass shapes need outward-facing normals. On TR_SCATTER_CONTINUE,
  * *next_origin / *next_dir hold the new ray and *weight the factor to multiply the
  * throughput by. Emitters do not scatter (the caller ends the path there). */
 TR_FN int tr_material_scatter_naive(TR_CONST_GLOBAL tr_material *m, tr_vec3 dir, tr_vec3 p,
