@@ -53,11 +53,12 @@ TR_FN int tr_intersect_triangle(const tr_ray *ray, tr_vec3 v0, tr_vec3 v1, tr_ve
 }
 
 /* Slab test (Kay and Kajiya 1986; the robust form of Williams et al. 2005). Returns 1
- * when the ray's segment (tmin, tmax) overlaps the box, and the entry distance in
- * *tnear. Axis-parallel rays use the infinite reciprocal; an origin inside the box
- * gives a negative entry and is a hit. Boxes are closed (a flat box of zero thickness
- * is hit by rays crossing it); the measure-zero case of a ray lying exactly in a slab
- * plane and parallel to it (0 * inf = NaN) counts as a miss. */
+ * when the closed segment [tmin, tmax] of the ray overlaps the closed box, and the
+ * entry distance clamped to tmin in *tnear (so an origin inside the box gives tmin).
+ * Axis-parallel rays use the infinite reciprocal. A ray lying in a slab plane gives
+ * 0 * inf = NaN there, which fminf/fmaxf drop: a flat box is hit by a ray in its
+ * plane, and crossed by rays through it. A direction so small that every reciprocal
+ * overflows would put the entry at +inf; that never counts as a hit. */
 TR_FN int tr_intersect_aabb(const tr_ray *ray, tr_aabb box, float *tnear) {
     float tx1 = (box.min.x - ray->origin.x) * ray->inv_dir.x;
     float tx2 = (box.max.x - ray->origin.x) * ray->inv_dir.x;
@@ -74,7 +75,7 @@ TR_FN int tr_intersect_aabb(const tr_ray *ray, tr_aabb box, float *tnear) {
     t0 = tr_fmaxf(t0, ray->tmin);
     t1 = tr_fminf(t1, ray->tmax);
     *tnear = t0;
-    return t0 <= t1;
+    return t0 <= t1 && t0 < TR_INFINITY;
 }
 
 #endif

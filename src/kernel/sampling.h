@@ -22,32 +22,44 @@ TR_FN float tr_pdf_uniform_sphere(void) {
     return 1.0f / (4.0f * TR_PI);
 }
 
+/* 1 - cos(angle)^(power+1), the lobe's normalisation, without the cancellation that
+ * makes narrow cones collapse onto their axis in float. */
+TR_FN float tr_cone_one_minus_cmin(float power, float angle) {
+    float c = tr_cosf(angle);
+    if (c <= 0.0f) {
+        return 1.0f;
+    }
+    return -tr_expm1f((power + 1.0f) * tr_logf(c));
+}
+
 /* Local-frame sample of the power-cosine lobe cos^power(theta), restricted to the cone
  * theta <= angle (0 < angle <= pi/2), around +z.
  *
  * Invert the CDF of z = cos(theta): p(z) ~ z^power on [cos(angle), 1], so
- * z = (c + u (1 - c))^(1/(power+1)) with c = cos(angle)^(power+1).
+ * z^(power+1) = 1 - (1 - u) (1 - cos(angle)^(power+1)).
  * The thesis's listing 12 drew u from [cos(angle), 1] instead of [cos(angle)^(power+1), 1],
  * which for power = 1 narrows the cone to acos(sqrt(cos(angle))); we sample the cone the
- * documentation describes. power = 0: uniform, power = 1: cosine-weighted. */
+ * documentation describes. power = 0: uniform, power = 1: cosine-weighted. z and
+ * sin(theta) both come from log1p/expm1 so that narrow cones keep their spread. */
 TR_FN tr_vec3 tr_sample_cone_local(tr_rng *r, float power, float angle) {
     float e = power + 1.0f;
-    float cmin = tr_powf(tr_fmaxf(tr_cosf(angle), 0.0f), e);
+    float omc = tr_cone_one_minus_cmin(power, angle);
     float u = tr_rng_float(r);
     float phi = TR_TWO_PI * tr_rng_float(r);
-    float z = tr_powf(cmin + u * (1.0f - cmin), 1.0f / e);
-    float s = tr_sqrtf(tr_fmaxf(0.0f, 1.0f - z * z));
+    float lz = tr_log1pf(-(1.0f - u) * omc) / e; /* log(z), <= 0 */
+    float z = tr_expf(lz);
+    float s = tr_sqrtf(tr_fmaxf(0.0f, -tr_expm1f(2.0f * lz)));
     return v3(s * tr_cosf(phi), s * tr_sinf(phi), z);
 }
 
 /* Pdf (solid angle) of tr_sample_cone_local for a direction with cos(theta) = z. */
 TR_FN float tr_pdf_cone(float power, float angle, float z) {
-    float e = power + 1.0f;
-    float cmin = tr_powf(tr_fmaxf(tr_cosf(angle), 0.0f), e);
     if (z < tr_cosf(angle) || z > 1.0f) {
         return 0.0f;
     }
-    return e * tr_powf(tr_fmaxf(z, 0.0f), power) / (TR_TWO_PI * (1.0f - cmin));
+    float e = power + 1.0f;
+    return e * tr_powf(tr_fmaxf(z, 0.0f), power) /
+           (TR_TWO_PI * tr_cone_one_minus_cmin(power, angle));
 }
 
 /* The thesis's sample_hemisphere(dir, power, angle): the lobe above around dir. */
