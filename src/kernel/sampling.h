@@ -25,11 +25,13 @@ TR_FN float tr_pdf_uniform_sphere(void) {
 /* 1 - cos(angle)^(power+1), the lobe's normalisation, without the cancellation that
  * makes narrow cones collapse onto their axis in float. */
 TR_FN float tr_cone_one_minus_cmin(float power, float angle) {
-    float c = tr_cosf(angle);
-    if (c <= 0.0f) {
+    if (angle >= TR_HALF_PI) {
         return 1.0f;
     }
-    return -tr_expm1f((power + 1.0f) * tr_logf(c));
+    /* log(cos a) from sin a: cos a rounds to 1 in float long before sin a loses digits. */
+    float sa = tr_sinf(angle);
+    float log_c = 0.5f * tr_log1pf(-sa * sa);
+    return -tr_expm1f((power + 1.0f) * log_c);
 }
 
 /* Local-frame sample of the power-cosine lobe cos^power(theta), restricted to the cone
