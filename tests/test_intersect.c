@@ -6,6 +6,7 @@
  * (Cramer's rule for triangles, Liang-Barsky plane clipping for boxes), skipping only
  * rays whose answer would change under a tiny perturbation of the geometry. */
 #include "check.h"
+#include "dvec.h"
 #include "kernel/intersect.h"
 #include "kernel/rng.h"
 
@@ -208,18 +209,6 @@ static void test_triangle_degenerate(void) {
     }
 }
 
-typedef struct dvec {
-    double x, y, z;
-} dvec;
-
-static dvec dv(tr_vec3 a) {
-    dvec r = {a.x, a.y, a.z};
-    return r;
-}
-static dvec dsub(dvec a, dvec b) {
-    dvec r = {a.x - b.x, a.y - b.y, a.z - b.z};
-    return r;
-}
 /* det [a b c] with a, b, c as columns. */
 static double det3(dvec a, dvec b, dvec c) {
     return a.x * (b.y * c.z - b.z * c.y) - b.x * (a.y * c.z - a.z * c.y) +

@@ -12,6 +12,7 @@
  * distribution of its statistic (chi-square quantile at p = 1e-4, or 5 standard
  * errors), not from the values one run happened to produce. */
 #include "check.h"
+#include "dvec.h"
 #include "kernel/sampling.h"
 
 #include <stdint.h>
@@ -28,27 +29,6 @@ static double chi2_uniform(const long *counts, int bins, long total) {
         chi2 += d * d / expected;
     }
     return chi2;
-}
-
-typedef struct dvec {
-    double x, y, z;
-} dvec;
-
-static dvec dv(tr_vec3 a) {
-    dvec r = {a.x, a.y, a.z};
-    return r;
-}
-static double ddot(dvec a, dvec b) {
-    return a.x * b.x + a.y * b.y + a.z * b.z;
-}
-static dvec dnormalize(dvec a) {
-    double l = sqrt(ddot(a, a));
-    dvec r = {a.x / l, a.y / l, a.z / l};
-    return r;
-}
-static dvec dcross(dvec a, dvec b) {
-    dvec r = {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
-    return r;
 }
 
 /* A frame around n built independently of v3_basis, so that the phi test also checks

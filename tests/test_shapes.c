@@ -5,6 +5,7 @@
  * that the tolerances below only have to cover float rounding of the generator:
  * a handful of ulps (FLT_EPSILON ~ 1.2e-7) per operation on values of order one. */
 #include "check.h"
+#include "dvec.h"
 #include "trac0r/trac0r.h"
 
 #include <float.h>
@@ -15,28 +16,6 @@
 
 #define PI_D 3.14159265358979323846
 
-typedef struct dvec {
-    double x, y, z;
-} dvec;
-
-static dvec dv(tr_vec3 a) {
-    dvec r = {a.x, a.y, a.z};
-    return r;
-}
-static dvec dsub(dvec a, dvec b) {
-    dvec r = {a.x - b.x, a.y - b.y, a.z - b.z};
-    return r;
-}
-static double ddot(dvec a, dvec b) {
-    return a.x * b.x + a.y * b.y + a.z * b.z;
-}
-static dvec dcross(dvec a, dvec b) {
-    dvec r = {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
-    return r;
-}
-static double dlen(dvec a) {
-    return sqrt(ddot(a, a));
-}
 static double fcomp(tr_vec3 a, int axis) {
     return axis == 0 ? a.x : axis == 1 ? a.y : a.z;
 }
