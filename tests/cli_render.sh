@@ -50,6 +50,7 @@ expect_usage_error "--exposure: expected a number in -20..20, got 'nan'" $R --ex
 expect_usage_error "--stride: expected an integer in 1..64, got '0'" $R --stride 0
 expect_usage_error "--integrator: unknown integrator 'magic'" $R --integrator magic
 expect_usage_error "--spp: missing value" $R --spp
+expect_usage_error "--accel: unknown acceleration structure 'kd'" $R --accel kd
 expect_usage_error "--out: 'x.jpg' has an unknown extension" $R --out x.jpg
 expect_usage_error "--out: 'noext' has an unknown extension" $R --out noext
 expect_usage_error "--out: missing/dir/x.png: cannot create file" $R --out missing/dir/x.png
@@ -65,7 +66,7 @@ expect_usage_error "unknown benchmark 'nope'" bench nope
 # --help documents every option it accepts.
 "$BIN" render --help >help.txt 2>&1 || fail "render --help exited non-zero"
 for opt in --scene --width --height --spp --max-depth --seed --threads --integrator --out \
-    --stride --exposure; do
+    --stride --exposure --accel; do
     grep -q -- "$opt" help.txt || fail "render --help does not mention $opt"
 done
 rm -f help.txt

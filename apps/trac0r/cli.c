@@ -2,6 +2,7 @@
 #include "cli.h"
 
 #include <errno.h>
+#include <stdio.h>
 #include <inttypes.h>
 #include <math.h>
 #include <stdarg.h>
@@ -20,7 +21,9 @@ const char cli_common_help[] =
     "  --seed S             random seed, 0..2^64-1 (default 0); the same seed gives the\n"
     "                       same image for any thread count\n"
     "  --threads T          CPU threads, 0..1024 (default 0: one per core)\n"
-    "  --integrator NAME    naive: the thesis's path tracer (the default and only one)\n";
+    "  --integrator NAME    naive: the thesis's path tracer (the default and only one)\n"
+    "  --accel NAME         acceleration structure: bvh (binned-SAH BVH, the default) or\n"
+    "                       flat (the thesis's list of per-shape boxes)\n";
 
 void cli_common_default(cli_common *c) {
     c->scene = "builtin:cornell";
@@ -30,6 +33,7 @@ void cli_common_default(cli_common *c) {
     c->seed = 0;
     c->threads = 0;
     c->integrator = TR_INTEGRATOR_NAIVE;
+    c->accel = TR_ACCEL_TYPE_BVH;
 }
 
 int cli_error(const cli_args *a, const char *fmt, ...) {
@@ -174,6 +178,18 @@ int cli_common_option(cli_args *a, cli_common *c) {
         }
         return cli_error(a, "--integrator: unknown integrator '%s' (available: naive)", a->value);
     }
+    if (cli_is(a, "--accel")) {
+        if (cli_value(a) != CLI_OK) {
+            return CLI_USAGE;
+        }
+        int accel = tr_accel_from_name(a->value);
+        if (accel < 0) {
+            return cli_error(
+                a, "--accel: unknown acceleration structure '%s' (available: bvh, flat)", a->value);
+        }
+        c->accel = (tr_accel_type)accel;
+        return CLI_OK;
+    }
     return -1;
 }
 
@@ -193,5 +209,19 @@ int cli_load_scene(const cli_args *a, const cli_common *c, tr_scene *scene) {
     if (tr_scene_builtin(scene, c->scene + strlen(prefix), c->width, c->height, &err) != TR_OK) {
         return cli_error(a, "--scene: %s", err.msg);
     }
+    if (tr_scene_commit(scene, c->accel, &err) != TR_OK) {
+        fprintf(stderr, "trac0r %s: %s\n", a->cmd, err.msg);
+        tr_scene_free(scene);
+        return CLI_FAILURE;
+    }
     return CLI_OK;
+}
+
+void cli_describe_accel(char *buf, size_t n, const tr_scene *s) {
+    if (s->accel == TR_ACCEL_TYPE_BVH) {
+        snprintf(buf, n, "bvh (%u nodes, %u leaves, depth %u, built in %.1f ms)", s->bvh.node_count,
+                 s->bvh.leaf_count, s->bvh.depth, s->bvh.build_seconds * 1e3);
+    } else {
+        snprintf(buf, n, "flat (%u shape boxes)", s->shape_count);
+    }
 }

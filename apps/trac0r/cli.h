@@ -5,6 +5,7 @@
 #ifndef TRAC0R_CLI_H
 #define TRAC0R_CLI_H
 
+#include <stddef.h>
 #include <stdint.h>
 
 #include "trac0r/trac0r.h"
@@ -21,6 +22,7 @@ typedef struct cli_common {
     uint64_t seed;
     int threads;
     int integrator;
+    tr_accel_type accel;
 } cli_common;
 
 /* Cursor over argv for one subcommand. */
@@ -55,8 +57,12 @@ int cli_parse_float(cli_args *a, float lo, float hi, float *out);
  * and -1 if the option is not a common one. */
 int cli_common_option(cli_args *a, cli_common *c);
 
-/* Builds the scene named by c->scene for c->width x c->height. */
+/* Builds the scene named by c->scene for c->width x c->height and commits it with
+ * c->accel. */
 int cli_load_scene(const cli_args *a, const cli_common *c, tr_scene *scene);
+
+/* One phrase describing the scene's committed acceleration structure and its build. */
+void cli_describe_accel(char *buf, size_t n, const tr_scene *s);
 
 /* The help text of the common options. */
 extern const char cli_common_help[];

@@ -39,7 +39,7 @@ int main(int argc, char **argv) {
         printf("trac0r %s\n", TRAC0R_VERSION);
         return CLI_OK;
     }
-    fprintf(stderr, "trac0r: unknown command '%s' (expected render or bench; see 'trac0r --help')\n",
-            cmd);
+    fprintf(stderr,
+            "trac0r: unknown command '%s' (expected render or bench; see 'trac0r --help')\n", cmd);
     return CLI_USAGE;
 }

@@ -125,10 +125,12 @@ int cmd_render(int argc, char **argv) {
         rc = CLI_FAILURE;
     }
     if (rc == CLI_OK) {
+        const int threads = cfg.threads ? cfg.threads : tr_default_threads();
+        char accel[160];
+        cli_describe_accel(accel, sizeof accel, &scene);
         fprintf(stderr,
-                "trac0r render: %s %ux%u, %u spp, %d thread%s: %.2f s, %.2f Mrays/s -> %s\n",
-                c.scene, c.width, c.height, spp, cfg.threads ? cfg.threads : tr_default_threads(),
-                (cfg.threads ? cfg.threads : tr_default_threads()) == 1 ? "" : "s", elapsed,
+                "trac0r render: %s %ux%u, %u spp, %d thread%s, %s: %.2f s, %.2f Mrays/s -> %s\n",
+                c.scene, c.width, c.height, spp, threads, threads == 1 ? "" : "s", accel, elapsed,
                 elapsed > 0 ? (double)rays / elapsed * 1e-6 : 0.0, out);
     }
     tr_film_free(&film);

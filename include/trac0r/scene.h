@@ -21,6 +21,7 @@
 
 #include "kernel/scene_view.h"
 #include "kernel/types.h"
+#include "trac0r/accel.h"
 #include "trac0r/error.h"
 
 /* Icospheres are limited to this many subdivisions: 20 * 4^9 = 5 242 880 triangles. */
@@ -55,6 +56,10 @@ typedef struct tr_scene {
     tr_flat_node *shapes; /* one box + triangle run per shape: the thesis's flat structure */
     uint32_t shape_count, shape_capacity;
     tr_camera camera;
+    /* Set by tr_scene_commit: the structure rays are traced through. */
+    tr_accel_type accel;
+    tr_bvh bvh;
+    uint32_t committed_triangles; /* triangle count when the BVH was built */
 } tr_scene;
 
 /* A shape of the given type at the origin, unrotated, unit scale, material 0. */
@@ -86,6 +91,13 @@ tr_aabb tr_triangles_bounds(const tr_triangle *t, uint32_t n);
 /* Builds a built-in scene by name ("cornell": the thesis's listing 16) with its camera
  * set up for a width x height image. */
 int tr_scene_builtin(tr_scene *s, const char *name, uint32_t width, uint32_t height, tr_error *err);
+
+/* Builds the acceleration structure rays will be traced through (the thesis's flat
+ * structure needs no build). Call again after adding shapes; rendering a scene whose
+ * BVH is older than its triangles fails. */
+int tr_scene_commit(tr_scene *s, tr_accel_type accel, tr_error *err);
+/* Whether the committed structure covers the scene's current triangles. */
+int tr_scene_is_committed(const tr_scene *s);
 
 /* The view the kernels trace against; valid while the scene is not modified. */
 tr_scene_view tr_scene_view_of(const tr_scene *s);

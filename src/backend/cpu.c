@@ -34,6 +34,10 @@ int tr_render_frame(const tr_scene *scene, const tr_camera *cam, const tr_render
         return tr_error_set(err, "camera is %ux%u but the film is %ux%u", cam->screen_width,
                             cam->screen_height, film->width, film->height);
     }
+    if (!tr_scene_is_committed(scene)) {
+        return tr_error_set(err, "the scene changed since tr_scene_commit built its %s",
+                            tr_accel_name(scene->accel));
+    }
     if (cfg->max_depth < 1 || cfg->max_depth > TR_MAX_DEPTH_LIMIT) {
         return tr_error_set(err, "max depth %d must be in 1..%d", cfg->max_depth,
                             TR_MAX_DEPTH_LIMIT);

@@ -48,9 +48,16 @@ TR_FN tr_vec3 tr_sample_cone_local(tr_rng *r, float power, float angle) {
     float omc = tr_cone_one_minus_cmin(power, angle);
     float u = tr_rng_float(r);
     float phi = TR_TWO_PI * tr_rng_float(r);
-    float lz = tr_log1pf(-(1.0f - u) * omc) / e; /* log(z), <= 0 */
-    float z = tr_expf(lz);
-    float s = tr_sqrtf(tr_fmaxf(0.0f, -tr_expm1f(2.0f * lz)));
+    float z, s;
+    if (power == 1.0f && omc == 1.0f) {
+        /* The cosine-weighted hemisphere, every diffuse bounce: z^2 = u exactly. */
+        z = tr_sqrtf(u);
+        s = tr_sqrtf(1.0f - u);
+    } else {
+        float lz = tr_log1pf(-(1.0f - u) * omc) / e; /* log(z), <= 0 */
+        z = tr_expf(lz);
+        s = tr_sqrtf(tr_fmaxf(0.0f, -tr_expm1f(2.0f * lz)));
+    }
     return v3(s * tr_cosf(phi), s * tr_sinf(phi), z);
 }
 

@@ -13,9 +13,13 @@ typedef struct tr_scene_view {
     TR_CONST_GLOBAL tr_triangle *triangles;
     TR_CONST_GLOBAL tr_material *materials;
     TR_CONST_GLOBAL tr_flat_node *flat_nodes;
+    TR_CONST_GLOBAL tr_bvh_node *bvh_nodes;
+    TR_CONST_GLOBAL uint32_t *bvh_indices;
     uint32_t triangle_count;
     uint32_t material_count;
     uint32_t flat_node_count;
+    uint32_t bvh_node_count; /* 0 for an empty scene */
+    uint32_t accel;          /* TR_ACCEL_*: which structure tr_intersect_scene walks */
 } tr_scene_view;
 
 /* The thesis's flat structure (listing 18): test every shape's box, and the triangles
@@ -46,9 +50,98 @@ TR_FN int tr_intersect_flat(const tr_scene_view *s, const tr_ray *ray, tr_hit *h
     return found;
 }
 
+/* Tests the triangles bvh_indices[first .. first+count) and keeps the closest hit. */
+TR_FN int tr_intersect_bvh_leaf(const tr_scene_view *s, tr_ray *r, uint32_t first, uint32_t count,
+                                tr_hit *hit) {
+    int found = 0;
+    for (uint32_t k = first; k < first + count; ++k) {
+        uint32_t i = s->bvh_indices[k];
+        TR_CONST_GLOBAL tr_triangle *tri = &s->triangles[i];
+        float t, u, v;
+        if (tr_intersect_triangle(r, tri->v0, tri->v1, tri->v2, &t, &u, &v)) {
+            r->tmax = t;
+            hit->t = t;
+            hit->triangle = i;
+            hit->u = u;
+            hit->v = v;
+            found = 1;
+        }
+    }
+    return found;
+}
+
+/* Closest hit through the binary BVH: children visited near-first, the far one pushed
+ * on a fixed-size stack, subtrees skipped once they start beyond the closest hit. With
+ * any_hit set it returns at the first hit in (tmin, tmax), for shadow rays. */
+TR_FN int tr_traverse_bvh(const tr_scene_view *s, const tr_ray *ray, tr_hit *hit, int any_hit) {
+    tr_ray r = *ray;
+    int found = 0;
+    float tn;
+    if (s->bvh_node_count == 0 || !tr_intersect_aabb(&r, s->bvh_nodes[0].box, &tn)) {
+        return 0;
+    }
+    uint32_t stack[TR_BVH_STACK_SIZE];
+    float stack_t[TR_BVH_STACK_SIZE]; /* entry distance of each pushed subtree */
+    int top = 0;
+    uint32_t node = 0;
+    for (;;) {
+        TR_CONST_GLOBAL tr_bvh_node *n = &s->bvh_nodes[node];
+        if (n->count > 0) {
+            if (tr_intersect_bvh_leaf(s, &r, n->left_first, n->count, hit)) {
+                found = 1;
+                if (any_hit) {
+                    return 1;
+                }
+            }
+        } else {
+            uint32_t a = n->left_first, b = a + 1;
+            float ta, tb;
+            int ha = tr_intersect_aabb(&r, s->bvh_nodes[a].box, &ta);
+            int hb = tr_intersect_aabb(&r, s->bvh_nodes[b].box, &tb);
+            if (ha && hb) {
+                if (tb < ta) {
+                    uint32_t x = a;
+                    a = b;
+                    b = x;
+                    tb = ta;
+                }
+                stack[top] = b;
+                stack_t[top] = tb;
+                ++top;
+                node = a;
+                continue;
+            }
+            if (ha || hb) {
+                node = ha ? a : b;
+                continue;
+            }
+        }
+        /* Pop the next subtree that starts before the closest hit found since. */
+        do {
+            if (top == 0) {
+                return found;
+            }
+            --top;
+        } while (stack_t[top] > r.tmax);
+        node = stack[top];
+    }
+}
+
 /* Closest hit against whichever structure the view holds. */
 TR_FN int tr_intersect_scene(const tr_scene_view *s, const tr_ray *ray, tr_hit *hit) {
+    if (s->accel == TR_ACCEL_BVH) {
+        return tr_traverse_bvh(s, ray, hit, 0);
+    }
     return tr_intersect_flat(s, ray, hit);
+}
+
+/* Whether anything lies on the ray's segment (tmin, tmax): the shadow-ray query. */
+TR_FN int tr_occluded_scene(const tr_scene_view *s, const tr_ray *ray) {
+    tr_hit hit;
+    if (s->accel == TR_ACCEL_BVH) {
+        return tr_traverse_bvh(s, ray, &hit, 1);
+    }
+    return tr_intersect_flat(s, ray, &hit);
 }
 
 #endif

@@ -51,6 +51,24 @@ typedef struct tr_flat_node {
 } tr_flat_node;
 TR_STATIC_ASSERT(sizeof(tr_flat_node) == 32, "tr_flat_node layout");
 
+/* Acceleration structures a scene view can hold. */
+#define TR_ACCEL_FLAT 0u /* the thesis's list of shape boxes */
+#define TR_ACCEL_BVH 1u  /* binary SAH BVH (src/accel/bvh.c) */
+
+/* A node of the binary BVH, 32 bytes. Interior nodes (count == 0) have their two
+ * children at left_first and left_first + 1; leaves hold `count` entries of the BVH's
+ * triangle index array starting at left_first. Node 0 is the root. */
+typedef struct tr_bvh_node {
+    tr_aabb box;
+    uint32_t left_first;
+    uint32_t count;
+} tr_bvh_node;
+TR_STATIC_ASSERT(sizeof(tr_bvh_node) == 32, "tr_bvh_node layout");
+
+/* The BVH's depth never exceeds this (the builder switches to median splits well before),
+ * so a traversal stack of this size cannot overflow. */
+#define TR_BVH_STACK_SIZE 64
+
 /* The camera as the kernel sees it (listing 6); built by tr_camera_make() on the host. */
 typedef struct tr_camera {
     tr_vec3 pos;

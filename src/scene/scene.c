@@ -37,6 +37,7 @@ void tr_scene_free(tr_scene *s) {
     free(s->materials);
     free(s->triangles);
     free(s->shapes);
+    tr_bvh_free(&s->bvh);
     tr_scene_init(s);
 }
 
@@ -75,13 +76,39 @@ int tr_scene_add_material(tr_scene *s, tr_material m, uint32_t *index, tr_error 
     return TR_OK;
 }
 
+int tr_scene_commit(tr_scene *s, tr_accel_type accel, tr_error *err) {
+    tr_bvh_free(&s->bvh);
+    s->accel = TR_ACCEL_TYPE_FLAT;
+    s->committed_triangles = 0;
+    switch (accel) {
+    case TR_ACCEL_TYPE_FLAT:
+        return TR_OK;
+    case TR_ACCEL_TYPE_BVH:
+        if (tr_bvh_build(&s->bvh, s->triangles, s->triangle_count, err) != TR_OK) {
+            return TR_ERR;
+        }
+        s->accel = accel;
+        s->committed_triangles = s->triangle_count;
+        return TR_OK;
+    }
+    return tr_error_set(err, "unknown acceleration structure %d", (int)accel);
+}
+
+int tr_scene_is_committed(const tr_scene *s) {
+    return s->accel == TR_ACCEL_TYPE_FLAT || s->committed_triangles == s->triangle_count;
+}
+
 tr_scene_view tr_scene_view_of(const tr_scene *s) {
     tr_scene_view v;
     v.triangles = s->triangles;
     v.materials = s->materials;
     v.flat_nodes = s->shapes;
+    v.bvh_nodes = s->bvh.nodes;
+    v.bvh_indices = s->bvh.indices;
     v.triangle_count = s->triangle_count;
     v.material_count = s->material_count;
     v.flat_node_count = s->shape_count;
+    v.bvh_node_count = s->bvh.node_count;
+    v.accel = (uint32_t)s->accel;
     return v;
 }

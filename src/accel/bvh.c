@@ -1,0 +1,325 @@
+/* bvh.c - binned-SAH binary BVH build and refit. */
+#include <stdlib.h>
+#include <string.h>
+
+#include "trac0r/accel.h"
+#include "trac0r/render.h"
+
+enum {
+    BINS = 16,       /* SAH bins per axis */
+    MAX_LEAF = 8,    /* a node this small may become a leaf when the SAH says so */
+    FORCED_LEAF = 2, /* a node this small always becomes a leaf */
+    SAH_DEPTH = 32,  /* below this depth, split at the object median to bound depth */
+};
+/* Relative cost of visiting an interior node versus testing one triangle. */
+#define TRAVERSAL_COST 1.0f
+
+/* Past SAH_DEPTH every split halves its node, so a tree over at most 2^31 triangles is
+ * no deeper than SAH_DEPTH + 31 and the kernel's traversal stack cannot overflow. */
+_Static_assert(SAH_DEPTH + 31 < TR_BVH_STACK_SIZE, "BVH depth must fit the traversal stack");
+
+static tr_aabb box_empty(void) {
+    tr_aabb b = {v3s(INFINITY), v3s(-INFINITY)};
+    return b;
+}
+
+static tr_aabb box_union(tr_aabb a, tr_aabb b) {
+    tr_aabb r = {v3_min(a.min, b.min), v3_max(a.max, b.max)};
+    return r;
+}
+
+static float box_area(tr_aabb b) {
+    tr_vec3 d = v3_sub(b.max, b.min);
+    if (!(d.x >= 0.0f && d.y >= 0.0f && d.z >= 0.0f)) {
+        return 0.0f; /* empty */
+    }
+    return 2.0f * (d.x * d.y + d.y * d.z + d.z * d.x);
+}
+
+static float axis_of(tr_vec3 v, int axis) {
+    return axis == 0 ? v.x : axis == 1 ? v.y : v.z;
+}
+
+static tr_aabb tri_box(const tr_triangle *t) {
+    tr_aabb b = {v3_min(t->v0, v3_min(t->v1, t->v2)), v3_max(t->v0, v3_max(t->v1, t->v2))};
+    return b;
+}
+
+typedef struct builder {
+    const tr_triangle *tris;
+    tr_aabb *boxes;     /* per triangle */
+    tr_vec3 *centroids; /* per triangle */
+    uint32_t *indices;
+    tr_bvh_node *nodes;
+    uint32_t node_count;
+} builder;
+
+typedef struct bin {
+    tr_aabb box;
+    uint32_t count;
+} bin;
+
+/* The best SAH split of indices[first, first+count): returns its cost (relative to
+ * testing all triangles in one leaf, in units of triangle tests) and sets the axis and
+ * the bin boundary; INFINITY when no axis has any extent. */
+static float find_split(const builder *b, uint32_t first, uint32_t count, tr_aabb cbox,
+                        float node_area, int *best_axis, int *best_bin) {
+    float best = INFINITY;
+    for (int axis = 0; axis < 3; ++axis) {
+        float lo = axis_of(cbox.min, axis), hi = axis_of(cbox.max, axis);
+        if (!(hi > lo)) {
+            continue;
+        }
+        bin bins[BINS];
+        for (int i = 0; i < BINS; ++i) {
+            bins[i].box = box_empty();
+            bins[i].count = 0;
+        }
+        float scale = (float)BINS / (hi - lo);
+        for (uint32_t k = first; k < first + count; ++k) {
+            uint32_t t = b->indices[k];
+            int i = (int)((axis_of(b->centroids[t], axis) - lo) * scale);
+            i = i < 0 ? 0 : i >= BINS ? BINS - 1 : i;
+            bins[i].box = box_union(bins[i].box, b->boxes[t]);
+            bins[i].count++;
+        }
+        /* Sweep from the right, then from the left, evaluating each of the BINS-1 planes. */
+        float right_cost[BINS];
+        tr_aabb acc = box_empty();
+        uint32_t n = 0;
+        for (int i = BINS - 1; i > 0; --i) {
+            acc = box_union(acc, bins[i].box);
+            n += bins[i].count;
+            right_cost[i] = box_area(acc) * (float)n;
+        }
+        acc = box_empty();
+        n = 0;
+        for (int i = 0; i < BINS - 1; ++i) {
+            acc = box_union(acc, bins[i].box);
+            n += bins[i].count;
+            if (n == 0 || n == count) {
+                continue;
+            }
+            float cost =
+                TRAVERSAL_COST + (box_area(acc) * (float)n + right_cost[i + 1]) / node_area;
+            if (cost < best) {
+                best = cost;
+                *best_axis = axis;
+                *best_bin = i;
+            }
+        }
+    }
+    return best;
+}
+
+/* Moves the indices whose key on `axis` is below the k-th smallest to the front
+ * (quickselect; keys are centroids). */
+static void select_median(builder *b, uint32_t first, uint32_t count, int axis, uint32_t k) {
+    uint32_t lo = first, hi = first + count - 1, target = first + k;
+    while (lo < hi) {
+        float pivot = axis_of(b->centroids[b->indices[(lo + hi) / 2]], axis);
+        uint32_t i = lo, j = hi;
+        while (i <= j) {
+            while (axis_of(b->centroids[b->indices[i]], axis) < pivot) {
+                ++i;
+            }
+            while (axis_of(b->centroids[b->indices[j]], axis) > pivot) {
+                --j;
+            }
+            if (i <= j) {
+                uint32_t t = b->indices[i];
+                b->indices[i] = b->indices[j];
+                b->indices[j] = t;
+                ++i;
+                if (j == 0) {
+                    break;
+                }
+                --j;
+            }
+        }
+        if (target <= j) {
+            hi = j;
+        } else if (target >= i) {
+            lo = i;
+        } else {
+            break;
+        }
+    }
+}
+
+typedef struct task {
+    uint32_t node, first, count, depth;
+} task;
+
+static uint32_t build_tree(builder *b, uint32_t n, task *stack) {
+    uint32_t top = 0, leaves = 0;
+    b->node_count = 1;
+    stack[top++] = (task){0, 0, n, 0};
+    while (top > 0) {
+        task t = stack[--top];
+        tr_aabb box = box_empty(), cbox = box_empty();
+        for (uint32_t k = t.first; k < t.first + t.count; ++k) {
+            uint32_t i = b->indices[k];
+            box = box_union(box, b->boxes[i]);
+            cbox.min = v3_min(cbox.min, b->centroids[i]);
+            cbox.max = v3_max(cbox.max, b->centroids[i]);
+        }
+        tr_bvh_node *node = &b->nodes[t.node];
+        node->box = box;
+        node->left_first = t.first;
+        node->count = t.count;
+
+        uint32_t left_count = 0;
+        if (t.count > FORCED_LEAF) {
+            int axis = 0, split_bin = 0;
+            float cost = INFINITY;
+            if (t.depth < SAH_DEPTH) {
+                cost = find_split(b, t.first, t.count, cbox, box_area(box), &axis, &split_bin);
+            }
+            if (cost < INFINITY && (cost < (float)t.count || t.count > MAX_LEAF)) {
+                /* Partition by the chosen bin plane, binning exactly as find_split did. */
+                float lo = axis_of(cbox.min, axis);
+                float scale = (float)BINS / (axis_of(cbox.max, axis) - lo);
+                uint32_t i = t.first, j = t.first + t.count;
+                while (i < j) {
+                    int bi = (int)((axis_of(b->centroids[b->indices[i]], axis) - lo) * scale);
+                    bi = bi < 0 ? 0 : bi >= BINS ? BINS - 1 : bi;
+                    if (bi <= split_bin) {
+                        ++i;
+                    } else {
+                        uint32_t x = b->indices[i];
+                        b->indices[i] = b->indices[--j];
+                        b->indices[j] = x;
+                    }
+                }
+                left_count = i - t.first;
+            } else if (t.count > MAX_LEAF) {
+                /* No useful SAH split (coincident centroids, or too deep): halve the
+                 * node at the median of its widest centroid axis, which bounds depth. */
+                tr_vec3 d = v3_sub(cbox.max, cbox.min);
+                axis = d.x >= d.y && d.x >= d.z ? 0 : d.y >= d.z ? 1 : 2;
+                left_count = t.count / 2;
+                select_median(b, t.first, t.count, axis, left_count);
+            }
+        }
+        if (left_count == 0 || left_count == t.count) {
+            leaves++;
+            continue;
+        }
+        uint32_t l = b->node_count;
+        b->node_count += 2;
+        node->left_first = l;
+        node->count = 0;
+        stack[top++] = (task){l + 1, t.first + left_count, t.count - left_count, t.depth + 1};
+        stack[top++] = (task){l, t.first, left_count, t.depth + 1};
+    }
+    return leaves;
+}
+
+static uint32_t tree_depth(const tr_bvh_node *nodes, uint32_t count) {
+    /* Children always come after their parent, so one forward pass gives each depth. */
+    uint32_t *depth = calloc(count ? count : 1, sizeof *depth);
+    uint32_t deepest = 0;
+    if (!depth) {
+        return 0;
+    }
+    for (uint32_t i = 0; i < count; ++i) {
+        if (nodes[i].count == 0) {
+            depth[nodes[i].left_first] = depth[nodes[i].left_first + 1] = depth[i] + 1;
+        } else if (depth[i] > deepest) {
+            deepest = depth[i];
+        }
+    }
+    free(depth);
+    return deepest;
+}
+
+int tr_bvh_build(tr_bvh *bvh, const tr_triangle *tris, uint32_t n, tr_error *err) {
+    double t0 = tr_time_now();
+    memset(bvh, 0, sizeof *bvh);
+    builder b;
+    memset(&b, 0, sizeof b);
+    b.tris = tris;
+    b.boxes = malloc((size_t)(n ? n : 1) * sizeof *b.boxes);
+    b.centroids = malloc((size_t)(n ? n : 1) * sizeof *b.centroids);
+    b.indices = malloc((size_t)(n ? n : 1) * sizeof *b.indices);
+    /* A binary tree over m leaves of >= 1 triangle has at most 2m - 1 nodes. */
+    b.nodes = malloc((size_t)(2 * (uint64_t)(n ? n : 1)) * sizeof *b.nodes);
+    task *stack = malloc((size_t)(2 * (uint64_t)(n ? n : 1) + 2) * sizeof *stack);
+    if (!b.boxes || !b.centroids || !b.indices || !b.nodes || !stack) {
+        free(b.boxes);
+        free(b.centroids);
+        free(b.indices);
+        free(b.nodes);
+        free(stack);
+        return tr_error_set(err, "out of memory building a BVH over %u triangles", n);
+    }
+    uint32_t m = 0;
+    for (uint32_t i = 0; i < n; ++i) {
+        const tr_triangle *t = &tris[i];
+        if (!(t->area > 0.0f) || !v3_is_finite(t->v0) || !v3_is_finite(t->v1) ||
+            !v3_is_finite(t->v2)) {
+            continue; /* can never be hit */
+        }
+        b.boxes[i] = tri_box(t);
+        b.centroids[i] = v3_scale(v3_add(b.boxes[i].min, b.boxes[i].max), 0.5f);
+        b.indices[m++] = i;
+    }
+    uint32_t leaves = 0;
+    if (m > 0) {
+        leaves = build_tree(&b, m, stack);
+    }
+    free(b.boxes);
+    free(b.centroids);
+    free(stack);
+    bvh->nodes = b.nodes;
+    bvh->node_count = m > 0 ? b.node_count : 0;
+    bvh->indices = b.indices;
+    bvh->index_count = m;
+    bvh->leaf_count = leaves;
+    bvh->depth = tree_depth(bvh->nodes, bvh->node_count);
+    bvh->skipped = n - m;
+    /* Give back what the worst-case allocation did not use. */
+    tr_bvh_node *shrunk =
+        realloc(bvh->nodes, (size_t)(bvh->node_count ? bvh->node_count : 1) * sizeof *bvh->nodes);
+    if (shrunk) {
+        bvh->nodes = shrunk;
+    }
+    bvh->build_seconds = tr_time_now() - t0;
+    return TR_OK;
+}
+
+void tr_bvh_refit(tr_bvh *bvh, const tr_triangle *tris) {
+    for (uint32_t i = bvh->node_count; i-- > 0;) {
+        tr_bvh_node *n = &bvh->nodes[i];
+        if (n->count > 0) {
+            tr_aabb box = box_empty();
+            for (uint32_t k = n->left_first; k < n->left_first + n->count; ++k) {
+                box = box_union(box, tri_box(&tris[bvh->indices[k]]));
+            }
+            n->box = box;
+        } else {
+            n->box = box_union(bvh->nodes[n->left_first].box, bvh->nodes[n->left_first + 1].box);
+        }
+    }
+}
+
+void tr_bvh_free(tr_bvh *bvh) {
+    free(bvh->nodes);
+    free(bvh->indices);
+    memset(bvh, 0, sizeof *bvh);
+}
+
+int tr_accel_from_name(const char *name) {
+    if (strcmp(name, "flat") == 0) {
+        return TR_ACCEL_TYPE_FLAT;
+    }
+    if (strcmp(name, "bvh") == 0) {
+        return TR_ACCEL_TYPE_BVH;
+    }
+    return -1;
+}
+
+const char *tr_accel_name(tr_accel_type type) {
+    return type == TR_ACCEL_TYPE_BVH ? "bvh" : "flat";
+}
