@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "cli.h"
+#include "bench.h"
 #include "commands.h"
 
 static int cmp_double(const void *a, const void *b) {
@@ -14,7 +15,7 @@ static int cmp_double(const void *a, const void *b) {
     return (x > y) - (x < y);
 }
 
-static double median(double *v, int n) {
+double bench_median(double *v, int n) {
     qsort(v, (size_t)n, sizeof *v, cmp_double);
     return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
@@ -105,7 +106,7 @@ static int bench_frame(int argc, char **argv) {
     }
     if (rc == CLI_OK) {
         double mrays = (double)rays / total * 1e-6;
-        double med = median(times, frames);
+        double med = bench_median(times, frames);
         printf("frames %d  median %.2f ms  min %.2f ms  max %.2f ms\n", frames, med * 1e3,
                times[0] * 1e3, times[frames - 1] * 1e3);
         printf("fps %.2f (median)  Mrays/s %.2f (mean)\n", 1.0 / med, mrays);
@@ -118,11 +119,263 @@ static int bench_frame(int argc, char **argv) {
     return rc;
 }
 
+int bench_parse_accels(cli_args *a, accel_set *set) {
+    if (cli_value(a) != CLI_OK) {
+        return CLI_USAGE;
+    }
+    set->count = 0;
+    char buf[128];
+    snprintf(buf, sizeof buf, "%s", a->value);
+    for (char *save = NULL, *tok = strtok_r(buf, ",", &save); tok;
+         tok = strtok_r(NULL, ",", &save)) {
+        int t = tr_accel_from_name(tok);
+        if (t < 0 || set->count == 4) {
+            return cli_error(a, "%s: unknown acceleration structure '%s' in '%s'", a->opt, tok,
+                             a->value);
+        }
+        if (!tr_accel_available((tr_accel_type)t)) {
+            return cli_error(a, "%s: '%s' is not available in this build", a->opt, tok);
+        }
+        set->type[set->count++] = (tr_accel_type)t;
+    }
+    if (set->count == 0) {
+        return cli_error(a, "%s: expected a list such as 'flat,bvh,embree', got '%s'", a->opt,
+                         a->value);
+    }
+    return CLI_OK;
+}
+
+void bench_accels_all(accel_set *set, int with_flat) {
+    const tr_accel_type all[] = {TR_ACCEL_TYPE_FLAT, TR_ACCEL_TYPE_BVH, TR_ACCEL_TYPE_EMBREE};
+    set->count = 0;
+    for (int i = with_flat ? 0 : 1; i < 3; ++i) {
+        if (tr_accel_available(all[i])) {
+            set->type[set->count++] = all[i];
+        }
+    }
+}
+
+double bench_build_seconds(const tr_scene *s) {
+    return s->accel == TR_ACCEL_TYPE_BVH      ? s->bvh.build_seconds
+           : s->accel == TR_ACCEL_TYPE_EMBREE ? tr_scene_embree_build_seconds(s)
+                                              : 0.0;
+}
+
+int bench_plot_png(const char *script, const char *png) {
+    char tmp[4096];
+    if (snprintf(tmp, sizeof tmp, "%s.tmp.png", png) >= (int)sizeof tmp) {
+        return 0;
+    }
+    FILE *gp = popen("gnuplot 2>/dev/null", "w");
+    if (!gp) {
+        return 0;
+    }
+    fprintf(gp, "set terminal pngcairo size 900,600 noenhanced\nset output '%s'\n%s\n", tmp,
+            script);
+    int rc = pclose(gp);
+    if (rc != 0 || rename(tmp, png) != 0) {
+        remove(tmp);
+        return 0;
+    }
+    return 1;
+}
+
+static void bench_complexity_help(void) {
+    printf("Usage: trac0r bench complexity [options]\n"
+           "\n"
+           "The thesis's figure 3.5: frames per second against triangle count for the Cornell\n"
+           "scene with one (glass) icosphere subdivided 0..L times (builtin:cornell-ico-N),\n"
+           "1 spp per frame, naive integrator, for each acceleration structure. A structure\n"
+           "is dropped for the higher levels once one of its frames takes longer than the\n"
+           "limit. Prints the table and writes PREFIX.csv and PREFIX.png (gnuplot).\n"
+           "\n"
+           "Options:\n"
+           "  --width W, --height H, --max-depth D, --seed S, --threads T   as for render\n"
+           "                       (default 800x600)\n"
+           "  --max-level L        highest subdivision level, 0..%d (default 8)\n"
+           "  --frames N           timed frames per point after one warm-up, 1..1000\n"
+           "                       (default 5); the median is reported\n"
+           "  --accels LIST        structures to compare (default: flat,bvh,embree, those\n"
+           "                       this build has)\n"
+           "  --limit SECONDS      drop a structure after a frame slower than this (default 10)\n"
+           "  --out PREFIX         output file prefix (default complexity)\n"
+           "  -h, --help           show this help\n",
+           TR_ICOSPHERE_MAX_SUBDIVISIONS);
+}
+
+static int bench_complexity(int argc, char **argv) {
+    cli_args a = {.cmd = "bench complexity", .argc = argc, .argv = argv, .i = 0};
+    cli_common c;
+    cli_common_default(&c);
+    int frames = 5, max_level = 8;
+    float limit = 10.0f;
+    const char *prefix = "complexity";
+    accel_set set;
+    bench_accels_all(&set, 1);
+    while (cli_next(&a)) {
+        int rc = cli_common_option(&a, &c);
+        if (rc == CLI_OK && (cli_is(&a, "--scene") || cli_is(&a, "--accel"))) {
+            return cli_error(&a, "%s: not an option of this benchmark", a.opt);
+        }
+        if (rc == CLI_OK) {
+            continue;
+        }
+        if (rc == CLI_USAGE) {
+            return CLI_USAGE;
+        }
+        if (cli_is(&a, "-h") || cli_is(&a, "--help")) {
+            bench_complexity_help();
+            return CLI_OK;
+        } else if (cli_is(&a, "--frames")) {
+            rc = cli_parse_int(&a, 1, 1000, &frames);
+        } else if (cli_is(&a, "--max-level")) {
+            rc = cli_parse_int(&a, 0, TR_ICOSPHERE_MAX_SUBDIVISIONS, &max_level);
+        } else if (cli_is(&a, "--limit")) {
+            rc = cli_parse_float(&a, 0.001f, 1e6f, &limit);
+        } else if (cli_is(&a, "--accels")) {
+            rc = bench_parse_accels(&a, &set);
+        } else if (cli_is(&a, "--out")) {
+            rc = cli_value(&a);
+            prefix = a.value;
+        } else {
+            return cli_error(&a, "unknown option '%s' (see 'trac0r bench complexity --help')",
+                             a.opt);
+        }
+        if (rc != CLI_OK) {
+            return CLI_USAGE;
+        }
+    }
+    char csv_path[4096], png_path[4096];
+    snprintf(csv_path, sizeof csv_path, "%s.csv", prefix);
+    snprintf(png_path, sizeof png_path, "%s.png", prefix);
+    tr_error err;
+    if (tr_image_check_writable(csv_path, &err) != TR_OK) {
+        return cli_error(&a, "--out: %s", err.msg);
+    }
+    double *times = malloc((size_t)frames * sizeof *times);
+    tr_film film;
+    if (!times || tr_film_init(&film, c.width, c.height, &err) != TR_OK) {
+        free(times);
+        return cli_error(&a, "--width/--height: %s", times ? err.msg : "out of memory");
+    }
+    tr_render_config cfg = tr_render_config_default();
+    cfg.max_depth = c.max_depth;
+    cfg.seed = c.seed;
+    cfg.threads = c.threads;
+    const int threads = cfg.threads ? cfg.threads : tr_default_threads();
+    printf("bench complexity: %ux%u, 1 spp/frame, naive, max depth %d, %d thread%s, median of %d "
+           "frames\n",
+           c.width, c.height, c.max_depth, threads, threads == 1 ? "" : "s", frames);
+    printf("%5s %10s %-7s %10s %12s %9s\n", "level", "triangles", "accel", "build ms", "frame ms",
+           "fps");
+    /* Results, for the CSV and plot: fps[level][accel] (0 = not measured). */
+    double fps[TR_ICOSPHERE_MAX_SUBDIVISIONS + 1][4] = {{0}};
+    uint32_t tris[TR_ICOSPHERE_MAX_SUBDIVISIONS + 1] = {0};
+    double build_ms[TR_ICOSPHERE_MAX_SUBDIVISIONS + 1][4] = {{0}};
+    int dropped[4] = {0};
+    int rc = CLI_OK;
+    for (int level = 0; level <= max_level && rc == CLI_OK; ++level) {
+        char name[32];
+        snprintf(name, sizeof name, "cornell-ico-%d", level);
+        tr_scene scene;
+        if (tr_scene_builtin(&scene, name, c.width, c.height, &err) != TR_OK) {
+            fprintf(stderr, "trac0r bench complexity: %s\n", err.msg);
+            rc = CLI_FAILURE;
+            break;
+        }
+        tris[level] = scene.triangle_count;
+        for (int k = 0; k < set.count && rc == CLI_OK; ++k) {
+            if (dropped[k]) {
+                continue;
+            }
+            if (tr_scene_commit(&scene, set.type[k], &err) != TR_OK) {
+                fprintf(stderr, "trac0r bench complexity: %s\n", err.msg);
+                rc = CLI_FAILURE;
+                break;
+            }
+            build_ms[level][k] = bench_build_seconds(&scene) * 1e3;
+            tr_film_clear(&film);
+            int n = 0;
+            for (int f = 0; f <= frames; ++f) {
+                tr_render_stats st;
+                if (tr_render_frame(&scene, &scene.camera, &cfg, &film, (uint32_t)f, &st, &err) !=
+                    TR_OK) {
+                    fprintf(stderr, "trac0r bench complexity: %s\n", err.msg);
+                    rc = CLI_FAILURE;
+                    break;
+                }
+                if (st.seconds > limit) {
+                    /* Too slow to repeat: this frame is the measurement, and the
+                     * structure sits out the larger scenes. */
+                    times[0] = st.seconds;
+                    n = 1;
+                    dropped[k] = 1;
+                    break;
+                }
+                if (f > 0) {
+                    times[n++] = st.seconds;
+                }
+            }
+            if (rc != CLI_OK) {
+                break;
+            }
+            double med = bench_median(times, n);
+            fps[level][k] = 1.0 / med;
+            printf("%5d %10u %-7s %10.1f %12.2f %9.3f%s\n", level, scene.triangle_count,
+                   tr_accel_name(set.type[k]), build_ms[level][k], med * 1e3, 1.0 / med,
+                   dropped[k] ? "  (slower than the limit: dropped for higher levels)" : "");
+            fflush(stdout);
+        }
+        tr_scene_free(&scene);
+    }
+    free(times);
+    tr_film_free(&film);
+    if (rc != CLI_OK) {
+        return rc;
+    }
+    /* CSV: one row per (level, structure) measured. */
+    FILE *fp = fopen(csv_path, "w");
+    if (!fp) {
+        fprintf(stderr, "trac0r bench complexity: %s: cannot write\n", csv_path);
+        return CLI_FAILURE;
+    }
+    fprintf(fp, "level,triangles,accel,build_ms,fps\n");
+    for (int level = 0; level <= max_level; ++level) {
+        for (int k = 0; k < set.count; ++k) {
+            if (fps[level][k] > 0.0) {
+                fprintf(fp, "%d,%u,%s,%.3f,%.5f\n", level, tris[level], tr_accel_name(set.type[k]),
+                        build_ms[level][k], fps[level][k]);
+            }
+        }
+    }
+    fclose(fp);
+    char script[2048];
+    int len =
+        snprintf(script, sizeof script,
+                 "set datafile separator ','\nset logscale xy\nset grid\n"
+                 "set xlabel 'triangles'\nset ylabel 'frames per second (800x600, 1 spp)'\n"
+                 "set title 'trac0r bench complexity (thesis figure 3.5)'\nset key top right\n"
+                 "plot ");
+    for (int k = 0; k < set.count; ++k) {
+        len += snprintf(script + len, sizeof script - (size_t)len,
+                        "%s'%s' using 2:($3 eq '%s' ? $5 : 1/0) with linespoints title '%s'",
+                        k ? ", " : "", csv_path, tr_accel_name(set.type[k]),
+                        tr_accel_name(set.type[k]));
+    }
+    int plotted = bench_plot_png(script, png_path);
+    printf("wrote %s%s%s\n", csv_path, plotted ? " and " : " (gnuplot failed: no plot)",
+           plotted ? png_path : "");
+    return CLI_OK;
+}
+
 static void bench_help(FILE *fp) {
     fprintf(fp, "Usage: trac0r bench BENCHMARK [options]\n"
                 "\n"
                 "Benchmarks:\n"
-                "  frame    median frame time, FPS and Mrays/s of the built-in scene\n"
+                "  frame        median frame time, FPS and Mrays/s of one scene\n"
+                "  complexity   FPS against triangle count per acceleration structure\n"
+                "               (the thesis's figure 3.5)\n"
+                "  rays         Mrays/s of primary, diffuse and shadow rays per structure\n"
                 "\n"
                 "Run 'trac0r bench BENCHMARK --help' for its options.\n");
 }
@@ -135,10 +388,17 @@ int cmd_bench(int argc, char **argv) {
     if (strcmp(argv[1], "frame") == 0) {
         return bench_frame(argc - 1, argv + 1);
     }
+    if (strcmp(argv[1], "complexity") == 0) {
+        return bench_complexity(argc - 1, argv + 1);
+    }
+    if (strcmp(argv[1], "rays") == 0) {
+        return bench_rays(argc - 1, argv + 1);
+    }
     if (strcmp(argv[1], "-h") == 0 || strcmp(argv[1], "--help") == 0) {
         bench_help(stdout);
         return CLI_OK;
     }
-    fprintf(stderr, "trac0r bench: unknown benchmark '%s' (available: frame)\n", argv[1]);
+    fprintf(stderr, "trac0r bench: unknown benchmark '%s' (available: frame, complexity, rays)\n",
+            argv[1]);
     return CLI_USAGE;
 }

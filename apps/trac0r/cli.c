@@ -22,8 +22,9 @@ const char cli_common_help[] =
     "                       same image for any thread count\n"
     "  --threads T          CPU threads, 0..1024 (default 0: one per core)\n"
     "  --integrator NAME    naive: the thesis's path tracer (the default and only one)\n"
-    "  --accel NAME         acceleration structure: bvh (binned-SAH BVH, the default) or\n"
-    "                       flat (the thesis's list of per-shape boxes)\n";
+    "  --accel NAME         acceleration structure: bvh (binned-SAH BVH, the default),\n"
+    "                       flat (the thesis's list of per-shape boxes) or embree (Intel\n"
+    "                       Embree 3, in builds that found it)\n";
 
 void cli_common_default(cli_common *c) {
     c->scene = "builtin:cornell";
@@ -185,7 +186,14 @@ int cli_common_option(cli_args *a, cli_common *c) {
         int accel = tr_accel_from_name(a->value);
         if (accel < 0) {
             return cli_error(
-                a, "--accel: unknown acceleration structure '%s' (available: bvh, flat)", a->value);
+                a, "--accel: unknown acceleration structure '%s' (available: %s)", a->value,
+                tr_accel_available(TR_ACCEL_TYPE_EMBREE) ? "bvh, flat, embree" : "bvh, flat");
+        }
+        if (!tr_accel_available((tr_accel_type)accel)) {
+            return cli_error(a,
+                             "--accel: '%s' is not available: this build of trac0r has no "
+                             "Embree support",
+                             a->value);
         }
         c->accel = (tr_accel_type)accel;
         return CLI_OK;
@@ -221,6 +229,8 @@ void cli_describe_accel(char *buf, size_t n, const tr_scene *s) {
     if (s->accel == TR_ACCEL_TYPE_BVH) {
         snprintf(buf, n, "bvh (%u nodes, %u leaves, depth %u, built in %.1f ms)", s->bvh.node_count,
                  s->bvh.leaf_count, s->bvh.depth, s->bvh.build_seconds * 1e3);
+    } else if (s->accel == TR_ACCEL_TYPE_EMBREE) {
+        snprintf(buf, n, "embree (built in %.1f ms)", tr_scene_embree_build_seconds(s) * 1e3);
     } else {
         snprintf(buf, n, "flat (%u shape boxes)", s->shape_count);
     }

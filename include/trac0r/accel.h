@@ -2,7 +2,8 @@
  *
  * A BVH is built once per scene change (tr_scene_commit) into flat arrays with no
  * pointers: the node array (tr_bvh_node, 32 bytes each) and a triangle index array,
- * which upload to a device unchanged. */
+ * which upload to a device unchanged. Builds configured with Embree 3 also offer an
+ * Embree scene (host only), the speed reference the BVH is measured against. */
 #ifndef TRAC0R_ACCEL_H
 #define TRAC0R_ACCEL_H
 
@@ -12,8 +13,9 @@
 #include "trac0r/error.h"
 
 typedef enum tr_accel_type {
-    TR_ACCEL_TYPE_FLAT = TR_ACCEL_FLAT, /* the thesis's flat list of shape boxes */
-    TR_ACCEL_TYPE_BVH = TR_ACCEL_BVH,   /* binned-SAH binary BVH */
+    TR_ACCEL_TYPE_FLAT = TR_ACCEL_FLAT,     /* the thesis's flat list of shape boxes */
+    TR_ACCEL_TYPE_BVH = TR_ACCEL_BVH,       /* binned-SAH binary BVH */
+    TR_ACCEL_TYPE_EMBREE = TR_ACCEL_EMBREE, /* Intel Embree 3 (CPU only; see tr_accel_available) */
 } tr_accel_type;
 
 typedef struct tr_bvh {
@@ -36,8 +38,36 @@ int tr_bvh_build(tr_bvh *bvh, const tr_triangle *tris, uint32_t n, tr_error *err
 void tr_bvh_refit(tr_bvh *bvh, const tr_triangle *tris);
 void tr_bvh_free(tr_bvh *bvh);
 
-/* "flat" / "bvh" <-> tr_accel_type; returns -1 for an unknown name. */
+/* An Embree 3 scene over a scene's triangles (src/accel/embree.c): one triangle
+ * geometry holding every triangle in the scene's order, so that Embree's primID is the
+ * index into the scene's triangle array. The handles are opaque so that this header
+ * does not need Embree's. Each tr_embree owns its own RTCDevice (creating one costs
+ * well under a millisecond next to the build). */
+struct tr_embree_state; /* device, scene and the device's error message */
+typedef struct tr_embree {
+    struct tr_embree_state *state; /* NULL when nothing is built */
+    const void *scene;             /* the RTCScene rays are traced through, or NULL */
+    uint32_t triangle_count;       /* triangles handed to Embree */
+    double build_seconds;          /* device creation, vertex copy and rtcCommitScene; the
+                                      first build in a process also starts Embree's threads
+                                      (a few ms) */
+} tr_embree;
+
+/* Builds an Embree scene over n triangles into *e, which it overwrites (free a previous
+ * one first). Fails with a message, leaving *e zeroed, when this build of trac0r has no
+ * Embree (tr_accel_available(TR_ACCEL_TYPE_EMBREE) == 0) or when Embree reports an
+ * error. Degenerate triangles are handed over too (Embree never hits them). The Embree
+ * scene holds a copy of the vertices: moving triangles needs a new build. */
+int tr_embree_build(tr_embree *e, const tr_triangle *tris, uint32_t n, tr_error *err);
+/* Releases the Embree scene and device; safe on a zeroed or already freed tr_embree. */
+void tr_embree_free(tr_embree *e);
+
+/* "flat" / "bvh" / "embree" <-> tr_accel_type; returns -1 for an unknown name.
+ * tr_accel_from_name knows "embree" even where it is not available. */
 int tr_accel_from_name(const char *name);
 const char *tr_accel_name(tr_accel_type type);
+/* 1 when tr_scene_commit can build this structure: flat and bvh always, embree only
+ * in builds configured with Embree 3 (TRAC0R_HAVE_EMBREE). */
+int tr_accel_available(tr_accel_type type);
 
 #endif

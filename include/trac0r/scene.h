@@ -59,7 +59,8 @@ typedef struct tr_scene {
     /* Set by tr_scene_commit: the structure rays are traced through. */
     tr_accel_type accel;
     tr_bvh bvh;
-    uint32_t committed_triangles; /* triangle count when the BVH was built */
+    tr_embree embree;             /* built for TR_ACCEL_TYPE_EMBREE only */
+    uint32_t committed_triangles; /* triangle count when the BVH or Embree scene was built */
 } tr_scene;
 
 /* A shape of the given type at the origin, unrotated, unit scale, material 0. */
@@ -88,16 +89,23 @@ void tr_triangle_finish(tr_triangle *t);
 /* The bounding box of n triangles. */
 tr_aabb tr_triangles_bounds(const tr_triangle *t, uint32_t n);
 
-/* Builds a built-in scene by name ("cornell": the thesis's listing 16) with its camera
- * set up for a width x height image. */
+/* Builds a built-in scene by name with its camera set up for a width x height image:
+ * "cornell" is the thesis's listing 16; "cornell-ico-N" is the scene of the thesis's
+ * complexity benchmark (figure 3.5): the same room with only the glass icosphere, at
+ * N = 0..TR_ICOSPHERE_MAX_SUBDIVISIONS subdivisions (20 * 4^N triangles). */
 int tr_scene_builtin(tr_scene *s, const char *name, uint32_t width, uint32_t height, tr_error *err);
 
 /* Builds the acceleration structure rays will be traced through (the thesis's flat
- * structure needs no build). Call again after adding shapes; rendering a scene whose
- * BVH is older than its triangles fails. */
+ * structure needs no build), releasing the one built before. Call again after adding
+ * shapes; rendering a scene whose BVH or Embree scene is older than its triangles
+ * fails. TR_ACCEL_TYPE_EMBREE fails with "this build of trac0r has no Embree support"
+ * where tr_accel_available says so. On failure the scene is left on the flat structure. */
 int tr_scene_commit(tr_scene *s, tr_accel_type accel, tr_error *err);
 /* Whether the committed structure covers the scene's current triangles. */
 int tr_scene_is_committed(const tr_scene *s);
+/* Seconds tr_scene_commit took to build the Embree scene (0 unless the scene is
+ * committed to TR_ACCEL_TYPE_EMBREE). */
+double tr_scene_embree_build_seconds(const tr_scene *s);
 
 /* The view the kernels trace against; valid while the scene is not modified. */
 tr_scene_view tr_scene_view_of(const tr_scene *s);

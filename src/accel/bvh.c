@@ -67,7 +67,9 @@ static float find_split(const builder *b, uint32_t first, uint32_t count, tr_aab
     float best = INFINITY;
     for (int axis = 0; axis < 3; ++axis) {
         float lo = axis_of(cbox.min, axis), hi = axis_of(cbox.max, axis);
-        if (!(hi > lo)) {
+        float scale = (float)BINS / (hi - lo);
+        /* No extent, or one so small (or large) that binning would overflow. */
+        if (!(hi > lo) || !(scale > 0.0f && scale < INFINITY)) {
             continue;
         }
         bin bins[BINS];
@@ -75,7 +77,6 @@ static float find_split(const builder *b, uint32_t first, uint32_t count, tr_aab
             bins[i].box = box_empty();
             bins[i].count = 0;
         }
-        float scale = (float)BINS / (hi - lo);
         for (uint32_t k = first; k < first + count; ++k) {
             uint32_t t = b->indices[k];
             int i = (int)((axis_of(b->centroids[t], axis) - lo) * scale);
@@ -221,7 +222,7 @@ static uint32_t tree_depth(const tr_bvh_node *nodes, uint32_t count) {
     uint32_t *depth = calloc(count ? count : 1, sizeof *depth);
     uint32_t deepest = 0;
     if (!depth) {
-        return 0;
+        return UINT32_MAX; /* unknown */
     }
     for (uint32_t i = 0; i < count; ++i) {
         if (nodes[i].count == 0) {
@@ -317,9 +318,35 @@ int tr_accel_from_name(const char *name) {
     if (strcmp(name, "bvh") == 0) {
         return TR_ACCEL_TYPE_BVH;
     }
+    if (strcmp(name, "embree") == 0) {
+        return TR_ACCEL_TYPE_EMBREE;
+    }
     return -1;
 }
 
 const char *tr_accel_name(tr_accel_type type) {
-    return type == TR_ACCEL_TYPE_BVH ? "bvh" : "flat";
+    switch (type) {
+    case TR_ACCEL_TYPE_FLAT:
+        return "flat";
+    case TR_ACCEL_TYPE_BVH:
+        return "bvh";
+    case TR_ACCEL_TYPE_EMBREE:
+        return "embree";
+    }
+    return "unknown";
+}
+
+int tr_accel_available(tr_accel_type type) {
+    switch (type) {
+    case TR_ACCEL_TYPE_FLAT:
+    case TR_ACCEL_TYPE_BVH:
+        return 1;
+    case TR_ACCEL_TYPE_EMBREE:
+#ifdef TRAC0R_HAVE_EMBREE
+        return 1;
+#else
+        return 0;
+#endif
+    }
+    return 0;
 }

@@ -55,25 +55,26 @@ TR_FN int tr_intersect_triangle(const tr_ray *ray, tr_vec3 v0, tr_vec3 v1, tr_ve
 /* Slab test (Kay and Kajiya 1986; the robust form of Williams et al. 2005). Returns 1
  * when the closed segment [tmin, tmax] of the ray overlaps the closed box, and the
  * entry distance clamped to tmin in *tnear (so an origin inside the box gives tmin).
- * Axis-parallel rays use the infinite reciprocal. A ray lying in a slab plane gives
- * 0 * inf = NaN there, which fminf/fmaxf drop: a flat box is hit by a ray in its
- * plane, and crossed by rays through it. A direction so small that every reciprocal
- * overflows would put the entry at +inf; that never counts as a hit. */
+ * Axis-parallel rays use the infinite reciprocal. A ray lying in one of a slab's planes
+ * (direction component 0, origin on the plane) gives 0 * inf = NaN there: such a ray
+ * lies in the closed slab for every t, so that axis puts no limit on the segment.
+ * A direction so small that every reciprocal overflows would put the entry at +inf;
+ * that never counts as a hit. */
+TR_FN void tr_slab(float lo_plane, float hi_plane, float o, float inv, float *t0, float *t1) {
+    float ta = (lo_plane - o) * inv;
+    float tb = (hi_plane - o) * inv;
+    int in_plane = (ta != ta) | (tb != tb);
+    float lo = in_plane ? -TR_INFINITY : tr_fminf(ta, tb);
+    float hi = in_plane ? TR_INFINITY : tr_fmaxf(ta, tb);
+    *t0 = tr_fmaxf(*t0, lo);
+    *t1 = tr_fminf(*t1, hi);
+}
+
 TR_FN int tr_intersect_aabb(const tr_ray *ray, tr_aabb box, float *tnear) {
-    float tx1 = (box.min.x - ray->origin.x) * ray->inv_dir.x;
-    float tx2 = (box.max.x - ray->origin.x) * ray->inv_dir.x;
-    float t0 = tr_fminf(tx1, tx2);
-    float t1 = tr_fmaxf(tx1, tx2);
-    float ty1 = (box.min.y - ray->origin.y) * ray->inv_dir.y;
-    float ty2 = (box.max.y - ray->origin.y) * ray->inv_dir.y;
-    t0 = tr_fmaxf(t0, tr_fminf(ty1, ty2));
-    t1 = tr_fminf(t1, tr_fmaxf(ty1, ty2));
-    float tz1 = (box.min.z - ray->origin.z) * ray->inv_dir.z;
-    float tz2 = (box.max.z - ray->origin.z) * ray->inv_dir.z;
-    t0 = tr_fmaxf(t0, tr_fminf(tz1, tz2));
-    t1 = tr_fminf(t1, tr_fmaxf(tz1, tz2));
-    t0 = tr_fmaxf(t0, ray->tmin);
-    t1 = tr_fminf(t1, ray->tmax);
+    float t0 = ray->tmin, t1 = ray->tmax;
+    tr_slab(box.min.x, box.max.x, ray->origin.x, ray->inv_dir.x, &t0, &t1);
+    tr_slab(box.min.y, box.max.y, ray->origin.y, ray->inv_dir.y, &t0, &t1);
+    tr_slab(box.min.z, box.max.z, ray->origin.z, ray->inv_dir.z, &t0, &t1);
     *tnear = t0;
     return t0 <= t1 && t0 < TR_INFINITY;
 }

@@ -9,6 +9,17 @@
 #include "intersect.h"
 #include "types.h"
 
+/* Embree (TR_ACCEL_EMBREE) is a host library: only host builds configured with it
+ * (CMake defines TRAC0R_HAVE_EMBREE for libtrac0r and everything linking it) see the
+ * Embree member and dispatch below; OpenCL C never does. */
+#if !defined(__OPENCL_C_VERSION__) && !defined(__OPENCL_VERSION__) && defined(TRAC0R_HAVE_EMBREE)
+#define TR_SCENE_VIEW_EMBREE 1
+/* Closest hit / any hit in (ray->tmin, ray->tmax) through an RTCScene built by
+ * tr_embree_build (src/accel/embree.c), with the flat structure's conventions. */
+int tr_embree_intersect(const void *scene, const tr_ray *ray, tr_hit *hit);
+int tr_embree_occluded(const void *scene, const tr_ray *ray);
+#endif
+
 typedef struct tr_scene_view {
     TR_CONST_GLOBAL tr_triangle *triangles;
     TR_CONST_GLOBAL tr_material *materials;
@@ -20,6 +31,9 @@ typedef struct tr_scene_view {
     uint32_t flat_node_count;
     uint32_t bvh_node_count; /* 0 for an empty scene */
     uint32_t accel;          /* TR_ACCEL_*: which structure tr_intersect_scene walks */
+#ifdef TR_SCENE_VIEW_EMBREE
+    const void *embree_scene; /* RTCScene, for TR_ACCEL_EMBREE */
+#endif
 } tr_scene_view;
 
 /* The thesis's flat structure (listing 18): test every shape's box, and the triangles
@@ -37,7 +51,10 @@ TR_FN int tr_intersect_flat(const tr_scene_view *s, const tr_ray *ray, tr_hit *h
         for (uint32_t i = s->flat_nodes[n].first; i < end; ++i) {
             TR_CONST_GLOBAL tr_triangle *tri = &s->triangles[i];
             float t, u, v;
-            if (tr_intersect_triangle(&r, tri->v0, tri->v1, tri->v2, &t, &u, &v)) {
+            /* Zero-area triangles are skipped as the BVH leaves them out: Moller-Trumbore's
+             * determinant of a degenerate triangle is rounding noise, not zero. */
+            if (tri->area > 0.0f &&
+                tr_intersect_triangle(&r, tri->v0, tri->v1, tri->v2, &t, &u, &v)) {
                 r.tmax = t; /* only closer hits from here on */
                 hit->t = t;
                 hit->triangle = i;
@@ -129,6 +146,11 @@ TR_FN int tr_traverse_bvh(const tr_scene_view *s, const tr_ray *ray, tr_hit *hit
 
 /* Closest hit against whichever structure the view holds. */
 TR_FN int tr_intersect_scene(const tr_scene_view *s, const tr_ray *ray, tr_hit *hit) {
+#ifdef TR_SCENE_VIEW_EMBREE
+    if (s->accel == TR_ACCEL_EMBREE) {
+        return tr_embree_intersect(s->embree_scene, ray, hit);
+    }
+#endif
     if (s->accel == TR_ACCEL_BVH) {
         return tr_traverse_bvh(s, ray, hit, 0);
     }
@@ -138,6 +160,11 @@ TR_FN int tr_intersect_scene(const tr_scene_view *s, const tr_ray *ray, tr_hit *
 /* Whether anything lies on the ray's segment (tmin, tmax): the shadow-ray query. */
 TR_FN int tr_occluded_scene(const tr_scene_view *s, const tr_ray *ray) {
     tr_hit hit;
+#ifdef TR_SCENE_VIEW_EMBREE
+    if (s->accel == TR_ACCEL_EMBREE) {
+        return tr_embree_occluded(s->embree_scene, ray);
+    }
+#endif
     if (s->accel == TR_ACCEL_BVH) {
         return tr_traverse_bvh(s, ray, &hit, 1);
     }

@@ -52,8 +52,9 @@ typedef struct tr_flat_node {
 TR_STATIC_ASSERT(sizeof(tr_flat_node) == 32, "tr_flat_node layout");
 
 /* Acceleration structures a scene view can hold. */
-#define TR_ACCEL_FLAT 0u /* the thesis's list of shape boxes */
-#define TR_ACCEL_BVH 1u  /* binary SAH BVH (src/accel/bvh.c) */
+#define TR_ACCEL_FLAT 0u   /* the thesis's list of shape boxes */
+#define TR_ACCEL_BVH 1u    /* binary SAH BVH (src/accel/bvh.c) */
+#define TR_ACCEL_EMBREE 2u /* Intel Embree 3, host only (src/accel/embree.c) */
 
 /* A node of the binary BVH, 32 bytes. Interior nodes (count == 0) have their two
  * children at left_first and left_first + 1; leaves hold `count` entries of the BVH's

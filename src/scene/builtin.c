@@ -1,4 +1,5 @@
 /* builtin.c - scenes compiled into the program. */
+#include <stdlib.h>
 #include <string.h>
 
 #include "trac0r/camera.h"
@@ -15,7 +16,8 @@ typedef struct shape_spec {
  * a green right wall, a glossy and a white box, a glass and a glossy icosphere and a
  * plane emitter under the ceiling. Plane sizes are (x, z) extents, box sizes full
  * extents, icosphere scales the radius. */
-static int build_cornell(tr_scene *s, uint32_t width, uint32_t height, tr_error *err) {
+static int build_cornell(tr_scene *s, uint32_t width, uint32_t height, int ico_level,
+                         tr_error *err) {
     enum { EMISSIVE, WHITE, RED, GREEN, GLASS, GLOSSY, MATERIAL_COUNT };
     const tr_material materials[MATERIAL_COUNT] = {
         [EMISSIVE] = tr_material_emitter(v3(1.0f, 0.93f, 0.85f), 15.0f),
@@ -38,14 +40,23 @@ static int build_cornell(tr_scene *s, uint32_t width, uint32_t height, tr_error 
         {TR_SHAPE_ICOSPHERE, {0, 0.1f, -0.3f}, {0, 0, 0}, {0.15f, 0.15f, 0.15f}, 2, GLASS},
         {TR_SHAPE_ICOSPHERE, {0.3f, 0.45f, 0.1f}, {0, 0, 0}, {0.15f, 0.15f, 0.15f}, 2, GLOSSY},
     };
+    size_t shape_count = sizeof shapes / sizeof shapes[0];
+    shape_spec varied;
+    if (ico_level >= 0) {
+        /* The complexity scene (thesis figure 3.5): one icosphere, the glass one, whose
+         * subdivision varies; the glossy icosphere is left out. */
+        varied = shapes[8];
+        varied.subdivisions = (uint32_t)ico_level;
+        shape_count = 8;
+    }
     uint32_t index[MATERIAL_COUNT];
     for (int i = 0; i < MATERIAL_COUNT; ++i) {
         if (tr_scene_add_material(s, materials[i], &index[i], err) != TR_OK) {
             return TR_ERR;
         }
     }
-    for (size_t i = 0; i < sizeof shapes / sizeof shapes[0]; ++i) {
-        const shape_spec *sp = &shapes[i];
+    for (size_t i = 0; i < shape_count + (ico_level >= 0); ++i) {
+        const shape_spec *sp = i < shape_count ? &shapes[i] : &varied;
         tr_shape_desc d = tr_shape_desc_default(sp->type);
         d.transform.position = v3(sp->pos[0], sp->pos[1], sp->pos[2]);
         d.transform.orientation = v3(sp->rot[0], sp->rot[1], sp->rot[2]);
@@ -64,10 +75,22 @@ int tr_scene_builtin(tr_scene *s, const char *name, uint32_t width, uint32_t hei
                      tr_error *err) {
     tr_scene_init(s);
     int rc;
+    const char *ico = "cornell-ico-";
+    char *end = NULL;
+    long level = -1;
+    if (strncmp(name, ico, strlen(ico)) == 0) {
+        level = strtol(name + strlen(ico), &end, 10);
+    }
     if (strcmp(name, "cornell") == 0) {
-        rc = build_cornell(s, width, height, err);
+        rc = build_cornell(s, width, height, -1, err);
+    } else if (end && *end == '\0' && end != name + strlen(ico) && level >= 0 &&
+               level <= TR_ICOSPHERE_MAX_SUBDIVISIONS) {
+        rc = build_cornell(s, width, height, (int)level, err);
     } else {
-        return tr_error_set(err, "unknown built-in scene '%s' (available: cornell)", name);
+        return tr_error_set(err,
+                            "unknown built-in scene '%s' (available: cornell, cornell-ico-N with "
+                            "N = 0..%d)",
+                            name, TR_ICOSPHERE_MAX_SUBDIVISIONS);
     }
     if (rc != TR_OK) {
         tr_scene_free(s);

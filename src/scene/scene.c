@@ -38,6 +38,7 @@ void tr_scene_free(tr_scene *s) {
     free(s->triangles);
     free(s->shapes);
     tr_bvh_free(&s->bvh);
+    tr_embree_free(&s->embree);
     tr_scene_init(s);
 }
 
@@ -78,6 +79,7 @@ int tr_scene_add_material(tr_scene *s, tr_material m, uint32_t *index, tr_error 
 
 int tr_scene_commit(tr_scene *s, tr_accel_type accel, tr_error *err) {
     tr_bvh_free(&s->bvh);
+    tr_embree_free(&s->embree);
     s->accel = TR_ACCEL_TYPE_FLAT;
     s->committed_triangles = 0;
     switch (accel) {
@@ -90,12 +92,23 @@ int tr_scene_commit(tr_scene *s, tr_accel_type accel, tr_error *err) {
         s->accel = accel;
         s->committed_triangles = s->triangle_count;
         return TR_OK;
+    case TR_ACCEL_TYPE_EMBREE:
+        if (tr_embree_build(&s->embree, s->triangles, s->triangle_count, err) != TR_OK) {
+            return TR_ERR;
+        }
+        s->accel = accel;
+        s->committed_triangles = s->triangle_count;
+        return TR_OK;
     }
     return tr_error_set(err, "unknown acceleration structure %d", (int)accel);
 }
 
 int tr_scene_is_committed(const tr_scene *s) {
     return s->accel == TR_ACCEL_TYPE_FLAT || s->committed_triangles == s->triangle_count;
+}
+
+double tr_scene_embree_build_seconds(const tr_scene *s) {
+    return s->accel == TR_ACCEL_TYPE_EMBREE ? s->embree.build_seconds : 0.0;
 }
 
 tr_scene_view tr_scene_view_of(const tr_scene *s) {
@@ -110,5 +123,8 @@ tr_scene_view tr_scene_view_of(const tr_scene *s) {
     v.flat_node_count = s->shape_count;
     v.bvh_node_count = s->bvh.node_count;
     v.accel = (uint32_t)s->accel;
+#ifdef TR_SCENE_VIEW_EMBREE
+    v.embree_scene = s->embree.scene;
+#endif
     return v;
 }

@@ -14,11 +14,16 @@ tr_shape_desc tr_shape_desc_default(tr_shape_type type) {
 
 void tr_triangle_finish(tr_triangle *t) {
     t->centroid = v3_scale(v3_add(v3_add(t->v0, t->v1), t->v2), 1.0f / 3.0f);
-    tr_vec3 c = v3_cross(v3_sub(t->v1, t->v0), v3_sub(t->v2, t->v0));
-    float len = v3_length(c);
-    if (len > 0.0f && isfinite(len)) {
-        t->normal = v3_scale(c, 1.0f / len);
-        t->area = 0.5f * len;
+    /* In double: the squared length of a float cross product overflows for edges
+     * beyond about 4e9, which would mark large triangles degenerate. */
+    double ax = (double)t->v1.x - t->v0.x, ay = (double)t->v1.y - t->v0.y;
+    double az = (double)t->v1.z - t->v0.z, bx = (double)t->v2.x - t->v0.x;
+    double by = (double)t->v2.y - t->v0.y, bz = (double)t->v2.z - t->v0.z;
+    double cx = ay * bz - az * by, cy = az * bx - ax * bz, cz = ax * by - ay * bx;
+    double len = sqrt(cx * cx + cy * cy + cz * cz);
+    if (len > 0.0 && isfinite(len)) {
+        t->normal = v3((float)(cx / len), (float)(cy / len), (float)(cz / len));
+        t->area = (float)(0.5 * len);
     } else {
         t->normal = v3s(0.0f);
         t->area = 0.0f;

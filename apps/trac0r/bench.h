@@ -1,0 +1,27 @@
+/* bench.h - helpers shared by the `trac0r bench` benchmarks. */
+#ifndef TRAC0R_BENCH_H
+#define TRAC0R_BENCH_H
+
+#include "cli.h"
+
+/* The acceleration structures a benchmark compares. */
+typedef struct accel_set {
+    tr_accel_type type[4];
+    int count;
+} accel_set;
+
+/* The median of n values (sorts them). */
+double bench_median(double *v, int n);
+/* Parses the current option's value, a list such as "bvh,embree". */
+int bench_parse_accels(cli_args *a, accel_set *set);
+/* Every structure this build has, in the order flat (if with_flat), bvh, embree. */
+void bench_accels_all(accel_set *set, int with_flat);
+/* The build time of the scene's committed structure (0 for flat). */
+double bench_build_seconds(const tr_scene *s);
+/* Runs a gnuplot script with its output going to `png` (through a temporary file that
+ * is renamed); returns 0 when gnuplot is missing or fails. */
+int bench_plot_png(const char *script, const char *png);
+
+int bench_rays(int argc, char **argv);
+
+#endif
