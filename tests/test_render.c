@@ -124,6 +124,20 @@ static void test_determinism(void) {
     CHECK(films_equal(&a, &b), "1 and 2 threads differ");
     CHECK(render(&s, &b, 2, 5, 1, 42, 4), "render");
     CHECK(films_equal(&a, &b), "tile sizes 16 and 5 differ");
+    for (int accel = TR_ACCEL_TYPE_BVH; accel <= TR_ACCEL_TYPE_EMBREE; ++accel) {
+        if (!tr_accel_available((tr_accel_type)accel)) {
+            continue;
+        }
+        CHECK(tr_scene_commit(&s, (tr_accel_type)accel, &err) == TR_OK, "%s", err.msg);
+        CHECK(render(&s, &b, 1, 16, 1, 42, 4), "render");
+        tr_film c;
+        CHECK(tr_film_init(&c, 67, 41, &err) == TR_OK, "%s", err.msg);
+        CHECK(render(&s, &c, 2, 7, 1, 42, 4), "render");
+        CHECK(films_equal(&b, &c), "%s: 1 and 2 threads differ",
+              tr_accel_name((tr_accel_type)accel));
+        tr_film_free(&c);
+    }
+    CHECK(tr_scene_commit(&s, TR_ACCEL_TYPE_FLAT, &err) == TR_OK, "%s", err.msg);
     CHECK(render(&s, &b, 2, 16, 1, 43, 4), "render");
     CHECK(!films_equal(&a, &b), "seeds 42 and 43 give the same image");
     CHECK(render(&s, &a, 1, 16, 3, 42, 2) && render(&s, &b, 2, 7, 3, 42, 2), "render");

@@ -152,69 +152,139 @@ typedef struct task {
     uint32_t node, first, count, depth;
 } task;
 
-static uint32_t build_tree(builder *b, uint32_t n, task *stack) {
+/* Sets the node's box and decides its split: returns how many of its triangles go to
+ * the left child (the indices are partitioned accordingly), or 0 for a leaf. */
+static uint32_t split_node(builder *b, const task *t, tr_bvh_node *node) {
+    tr_aabb box = box_empty(), cbox = box_empty();
+    for (uint32_t k = t->first; k < t->first + t->count; ++k) {
+        uint32_t i = b->indices[k];
+        box = box_union(box, b->boxes[i]);
+        cbox.min = v3_min(cbox.min, b->centroids[i]);
+        cbox.max = v3_max(cbox.max, b->centroids[i]);
+    }
+    node->box = box;
+    node->left_first = t->first;
+    node->count = t->count;
+    if (t->count <= FORCED_LEAF) {
+        return 0;
+    }
+    int axis = 0, split_bin = 0;
+    float cost = INFINITY;
+    if (t->depth < SAH_DEPTH) {
+        cost = find_split(b, t->first, t->count, cbox, box_area(box), &axis, &split_bin);
+    }
+    if (cost < INFINITY && (cost < (float)t->count || t->count > MAX_LEAF)) {
+        /* Partition by the chosen bin plane, binning exactly as find_split did. */
+        float lo = axis_of(cbox.min, axis);
+        float scale = (float)BINS / (axis_of(cbox.max, axis) - lo);
+        uint32_t i = t->first, j = t->first + t->count;
+        while (i < j) {
+            int bi = (int)((axis_of(b->centroids[b->indices[i]], axis) - lo) * scale);
+            bi = bi < 0 ? 0 : bi >= BINS ? BINS - 1 : bi;
+            if (bi <= split_bin) {
+                ++i;
+            } else {
+                uint32_t x = b->indices[i];
+                b->indices[i] = b->indices[--j];
+                b->indices[j] = x;
+            }
+        }
+        return i - t->first;
+    }
+    if (t->count > MAX_LEAF) {
+        /* No useful SAH split (coincident centroids, or too deep): halve the node at
+         * the median of its widest centroid axis, which bounds the depth. */
+        tr_vec3 d = v3_sub(cbox.max, cbox.min);
+        axis = d.x >= d.y && d.x >= d.z ? 0 : d.y >= d.z ? 1 : 2;
+        select_median(b, t->first, t->count, axis, t->count / 2);
+        return t->count / 2;
+    }
+    return 0;
+}
+
+/* Builds the subtree of `root` into nodes[], root first, children always after their
+ * parent; sets *node_count and returns the number of leaves. With `cut` non-NULL, nodes
+ * at depth cut_depth are not built but recorded in cut[] (their slot is reserved), to
+ * be built separately. */
+static uint32_t build_nodes(builder *b, task root, tr_bvh_node *nodes, uint32_t *node_count,
+                            uint32_t cut_depth, task *cut, uint32_t *cut_count) {
+    /* Depth-first with the left child popped first: at most one pending sibling per
+     * level, and the depth is below TR_BVH_STACK_SIZE. */
+    task stack[2 * TR_BVH_STACK_SIZE + 2];
     uint32_t top = 0, leaves = 0;
-    b->node_count = 1;
-    stack[top++] = (task){0, 0, n, 0};
+    *node_count = 1;
+    root.node = 0;
+    stack[top++] = root;
     while (top > 0) {
         task t = stack[--top];
-        tr_aabb box = box_empty(), cbox = box_empty();
-        for (uint32_t k = t.first; k < t.first + t.count; ++k) {
-            uint32_t i = b->indices[k];
-            box = box_union(box, b->boxes[i]);
-            cbox.min = v3_min(cbox.min, b->centroids[i]);
-            cbox.max = v3_max(cbox.max, b->centroids[i]);
+        if (cut && t.depth == cut_depth) {
+            cut[(*cut_count)++] = t;
+            continue;
         }
-        tr_bvh_node *node = &b->nodes[t.node];
-        node->box = box;
-        node->left_first = t.first;
-        node->count = t.count;
-
-        uint32_t left_count = 0;
-        if (t.count > FORCED_LEAF) {
-            int axis = 0, split_bin = 0;
-            float cost = INFINITY;
-            if (t.depth < SAH_DEPTH) {
-                cost = find_split(b, t.first, t.count, cbox, box_area(box), &axis, &split_bin);
-            }
-            if (cost < INFINITY && (cost < (float)t.count || t.count > MAX_LEAF)) {
-                /* Partition by the chosen bin plane, binning exactly as find_split did. */
-                float lo = axis_of(cbox.min, axis);
-                float scale = (float)BINS / (axis_of(cbox.max, axis) - lo);
-                uint32_t i = t.first, j = t.first + t.count;
-                while (i < j) {
-                    int bi = (int)((axis_of(b->centroids[b->indices[i]], axis) - lo) * scale);
-                    bi = bi < 0 ? 0 : bi >= BINS ? BINS - 1 : bi;
-                    if (bi <= split_bin) {
-                        ++i;
-                    } else {
-                        uint32_t x = b->indices[i];
-                        b->indices[i] = b->indices[--j];
-                        b->indices[j] = x;
-                    }
-                }
-                left_count = i - t.first;
-            } else if (t.count > MAX_LEAF) {
-                /* No useful SAH split (coincident centroids, or too deep): halve the
-                 * node at the median of its widest centroid axis, which bounds depth. */
-                tr_vec3 d = v3_sub(cbox.max, cbox.min);
-                axis = d.x >= d.y && d.x >= d.z ? 0 : d.y >= d.z ? 1 : 2;
-                left_count = t.count / 2;
-                select_median(b, t.first, t.count, axis, left_count);
-            }
-        }
-        if (left_count == 0 || left_count == t.count) {
+        tr_bvh_node *node = &nodes[t.node];
+        uint32_t left = split_node(b, &t, node);
+        if (left == 0) {
             leaves++;
             continue;
         }
-        uint32_t l = b->node_count;
-        b->node_count += 2;
+        uint32_t l = *node_count;
+        *node_count += 2;
         node->left_first = l;
         node->count = 0;
-        stack[top++] = (task){l + 1, t.first + left_count, t.count - left_count, t.depth + 1};
-        stack[top++] = (task){l, t.first, left_count, t.depth + 1};
+        stack[top++] = (task){l + 1, t.first + left, t.count - left, t.depth + 1};
+        stack[top++] = (task){l, t.first, left, t.depth + 1};
     }
     return leaves;
+}
+
+enum {
+    PARALLEL_MIN = 1u << 16, /* fewer triangles than this build on one thread */
+    CUT_DEPTH = 4,           /* the top levels are built serially, up to 16 subtrees after */
+};
+
+/* Builds the tree over indices[0, n) into b->nodes. Large trees are built in two
+ * phases: the top CUT_DEPTH levels serially, then the subtrees below them in parallel,
+ * each into its own array, appended in a fixed order. The result does not depend on the
+ * thread count, so neither does any image rendered through it. */
+static int build_tree(builder *b, uint32_t n, uint32_t *leaves_out) {
+    task root = {0, 0, n, 0};
+    task cut[1u << CUT_DEPTH];
+    uint32_t cuts = 0, count = 0;
+    int parallel = n >= PARALLEL_MIN;
+    uint32_t leaves =
+        build_nodes(b, root, b->nodes, &count, CUT_DEPTH, parallel ? cut : NULL, &cuts);
+    tr_bvh_node *sub[1u << CUT_DEPTH] = {0};
+    uint32_t sub_count[1u << CUT_DEPTH] = {0}, sub_leaves[1u << CUT_DEPTH] = {0};
+    int failed = 0;
+#pragma omp parallel for schedule(dynamic, 1) reduction(| : failed)
+    for (int k = 0; k < (int)cuts; ++k) {
+        sub[k] = malloc((size_t)(2 * (uint64_t)cut[k].count) * sizeof *sub[k]);
+        if (!sub[k]) {
+            failed = 1;
+            continue;
+        }
+        sub_leaves[k] = build_nodes(b, cut[k], sub[k], &sub_count[k], 0, NULL, NULL);
+    }
+    for (uint32_t k = 0; k < cuts && !failed; ++k) {
+        /* The subtree's root takes the reserved slot; the rest goes to the end, with
+         * child links moved from local index c >= 1 to count + c - 1. */
+        uint32_t offset = count - 1;
+        for (uint32_t i = 0; i < sub_count[k]; ++i) {
+            tr_bvh_node nd = sub[k][i];
+            if (nd.count == 0) {
+                nd.left_first += offset;
+            }
+            b->nodes[i == 0 ? cut[k].node : offset + i] = nd;
+        }
+        count += sub_count[k] - 1;
+        leaves += sub_leaves[k];
+    }
+    for (uint32_t k = 0; k < cuts; ++k) {
+        free(sub[k]);
+    }
+    b->node_count = count;
+    *leaves_out = leaves;
+    return failed ? TR_ERR : TR_OK;
 }
 
 static uint32_t tree_depth(const tr_bvh_node *nodes, uint32_t count) {
@@ -246,13 +316,11 @@ int tr_bvh_build(tr_bvh *bvh, const tr_triangle *tris, uint32_t n, tr_error *err
     b.indices = malloc((size_t)(n ? n : 1) * sizeof *b.indices);
     /* A binary tree over m leaves of >= 1 triangle has at most 2m - 1 nodes. */
     b.nodes = malloc((size_t)(2 * (uint64_t)(n ? n : 1)) * sizeof *b.nodes);
-    task *stack = malloc((size_t)(2 * (uint64_t)(n ? n : 1) + 2) * sizeof *stack);
-    if (!b.boxes || !b.centroids || !b.indices || !b.nodes || !stack) {
+    if (!b.boxes || !b.centroids || !b.indices || !b.nodes) {
         free(b.boxes);
         free(b.centroids);
         free(b.indices);
         free(b.nodes);
-        free(stack);
         return tr_error_set(err, "out of memory building a BVH over %u triangles", n);
     }
     uint32_t m = 0;
@@ -267,12 +335,14 @@ int tr_bvh_build(tr_bvh *bvh, const tr_triangle *tris, uint32_t n, tr_error *err
         b.indices[m++] = i;
     }
     uint32_t leaves = 0;
-    if (m > 0) {
-        leaves = build_tree(&b, m, stack);
-    }
+    int rc = m > 0 ? build_tree(&b, m, &leaves) : TR_OK;
     free(b.boxes);
     free(b.centroids);
-    free(stack);
+    if (rc != TR_OK) {
+        free(b.nodes);
+        free(b.indices);
+        return tr_error_set(err, "out of memory building a BVH over %u triangles", n);
+    }
     bvh->nodes = b.nodes;
     bvh->node_count = m > 0 ? b.node_count : 0;
     bvh->indices = b.indices;
