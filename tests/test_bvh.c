@@ -10,6 +10,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include <omp.h>
+
 #include "check.h"
 #include "trac0r/trac0r.h"
 
@@ -1036,8 +1038,36 @@ static void test_render(void) {
     tr_scene_free(&s);
 }
 
+/* The parallel build must give the same arrays whatever the thread count, or images
+ * could differ where two triangles tie. Level 6 (81 920 triangles) is large enough for
+ * the builder's parallel phase. */
+static void test_parallel_build_deterministic(void) {
+    tr_error err;
+    tr_scene s;
+    tr_scene_init(&s);
+    uint32_t m;
+    CHECK(tr_scene_add_material(&s, tr_material_diffuse(v3s(0.5f)), &m, &err) == TR_OK, "%s",
+          err.msg);
+    tr_shape_desc d = tr_shape_desc_default(TR_SHAPE_ICOSPHERE);
+    d.subdivisions = 6;
+    CHECK(tr_scene_add_shape(&s, &d, &err) == TR_OK, "%s", err.msg);
+    tr_bvh one, two;
+    omp_set_num_threads(1);
+    CHECK(tr_bvh_build(&one, s.triangles, s.triangle_count, &err) == TR_OK, "%s", err.msg);
+    omp_set_num_threads(2);
+    CHECK(tr_bvh_build(&two, s.triangles, s.triangle_count, &err) == TR_OK, "%s", err.msg);
+    CHECK(one.node_count == two.node_count && one.index_count == two.index_count &&
+              memcmp(one.nodes, two.nodes, one.node_count * sizeof *one.nodes) == 0 &&
+              memcmp(one.indices, two.indices, one.index_count * sizeof *one.indices) == 0,
+          "BVH built with 1 and 2 threads differs");
+    tr_bvh_free(&one);
+    tr_bvh_free(&two);
+    tr_scene_free(&s);
+}
+
 int main(void) {
     double t0 = tr_time_now();
+    test_parallel_build_deterministic();
     test_meshes();
     test_stress();
     test_degenerate();
