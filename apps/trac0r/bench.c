@@ -358,7 +358,7 @@ static int bench_complexity(int argc, char **argv) {
                  "plot ");
     for (int k = 0; k < set.count; ++k) {
         len += snprintf(script + len, sizeof script - (size_t)len,
-                        "%s'%s' using 2:($3 eq '%s' ? $5 : 1/0) with linespoints title '%s'",
+                        "%s'%s' skip 1 using 2:(strcol(3) eq '%s' ? $5 : 1/0) with linespoints title '%s'",
                         k ? ", " : "", csv_path, tr_accel_name(set.type[k]),
                         tr_accel_name(set.type[k]));
     }
