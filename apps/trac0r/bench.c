@@ -349,17 +349,28 @@ static int bench_complexity(int argc, char **argv) {
         }
     }
     fclose(fp);
-    char script[2048];
-    int len =
-        snprintf(script, sizeof script,
-                 "set datafile separator ','\nset logscale xy\nset grid\n"
-                 "set xlabel 'triangles'\nset ylabel 'frames per second (800x600, 1 spp)'\n"
-                 "set title 'trac0r bench complexity (thesis figure 3.5)'\nset key top right\n"
-                 "plot ");
+    /* One inline data block per structure, so each draws as one connected line. */
+    char script[8192];
+    int len = 0;
+    for (int k = 0; k < set.count; ++k) {
+        len += snprintf(script + len, sizeof script - (size_t)len, "$d%d << EOD\n", k);
+        for (int level = 0; level <= max_level; ++level) {
+            if (fps[level][k] > 0.0) {
+                len += snprintf(script + len, sizeof script - (size_t)len, "%u %.5f\n", tris[level],
+                                fps[level][k]);
+            }
+        }
+        len += snprintf(script + len, sizeof script - (size_t)len, "EOD\n");
+    }
+    len += snprintf(script + len, sizeof script - (size_t)len,
+                    "set logscale xy\nset grid\nset xlabel 'triangles'\n"
+                    "set ylabel 'frames per second (%ux%u, 1 spp)'\n"
+                    "set title 'trac0r bench complexity (thesis figure 3.5)'\n"
+                    "set key top right\nplot ",
+                    c.width, c.height);
     for (int k = 0; k < set.count; ++k) {
         len += snprintf(script + len, sizeof script - (size_t)len,
-                        "%s'%s' skip 1 using 2:(strcol(3) eq '%s' ? $5 : 1/0) with linespoints title '%s'",
-                        k ? ", " : "", csv_path, tr_accel_name(set.type[k]),
+                        "%s$d%d with linespoints lw 2 title '%s'", k ? ", " : "", k,
                         tr_accel_name(set.type[k]));
     }
     int plotted = bench_plot_png(script, png_path);
