@@ -6,7 +6,7 @@ __kernel void tr_check_render(__global const tr_triangle *triangles,
                               __global const tr_material *materials,
                               __global const tr_flat_node *nodes,
                               __global const tr_bvh_node *bvh_nodes,
-                              __global const uint *bvh_indices, uint triangle_count,
+                              __global const tr_bvh_tri *bvh_tris, uint triangle_count,
                               uint material_count, uint node_count, uint bvh_node_count,
                               uint accel, tr_camera cam, ulong seed, uint sample, int max_depth,
                               __global float *out) {
@@ -18,7 +18,7 @@ __kernel void tr_check_render(__global const tr_triangle *triangles,
     s.material_count = material_count;
     s.flat_node_count = node_count;
     s.bvh_nodes = bvh_nodes;
-    s.bvh_indices = bvh_indices;
+    s.bvh_tris = bvh_tris;
     s.bvh_node_count = bvh_node_count;
     s.accel = accel;
     uint x = get_global_id(0), y = get_global_id(1);

@@ -22,6 +22,7 @@ typedef struct tr_bvh {
     tr_bvh_node *nodes;
     uint32_t node_count;
     uint32_t *indices; /* triangle indices, leaf by leaf */
+    tr_bvh_tri *tris;  /* the same triangles, as the traversal reads them */
     uint32_t index_count;
     uint32_t leaf_count;
     uint32_t depth;   /* deepest leaf, root = 0 */

@@ -287,6 +287,17 @@ static int build_tree(builder *b, uint32_t n, uint32_t *leaves_out) {
     return failed ? TR_ERR : TR_OK;
 }
 
+/* The leaf-order triangle copy the traversal reads. */
+static void bvh_fill_tris(tr_bvh *bvh, const tr_triangle *tris) {
+    for (uint32_t k = 0; k < bvh->index_count; ++k) {
+        const tr_triangle *t = &tris[bvh->indices[k]];
+        bvh->tris[k].v0 = t->v0;
+        bvh->tris[k].e1 = v3_sub(t->v1, t->v0);
+        bvh->tris[k].e2 = v3_sub(t->v2, t->v0);
+        bvh->tris[k].index = bvh->indices[k];
+    }
+}
+
 static uint32_t tree_depth(const tr_bvh_node *nodes, uint32_t count) {
     /* Children always come after their parent, so one forward pass gives each depth. */
     uint32_t *depth = calloc(count ? count : 1, sizeof *depth);
@@ -356,11 +367,18 @@ int tr_bvh_build(tr_bvh *bvh, const tr_triangle *tris, uint32_t n, tr_error *err
     if (shrunk) {
         bvh->nodes = shrunk;
     }
+    bvh->tris = malloc((size_t)(m ? m : 1) * sizeof *bvh->tris);
+    if (!bvh->tris) {
+        tr_bvh_free(bvh);
+        return tr_error_set(err, "out of memory building a BVH over %u triangles", n);
+    }
+    bvh_fill_tris(bvh, tris);
     bvh->build_seconds = tr_time_now() - t0;
     return TR_OK;
 }
 
 void tr_bvh_refit(tr_bvh *bvh, const tr_triangle *tris) {
+    bvh_fill_tris(bvh, tris);
     for (uint32_t i = bvh->node_count; i-- > 0;) {
         tr_bvh_node *n = &bvh->nodes[i];
         if (n->count > 0) {
@@ -378,6 +396,7 @@ void tr_bvh_refit(tr_bvh *bvh, const tr_triangle *tris) {
 void tr_bvh_free(tr_bvh *bvh) {
     free(bvh->nodes);
     free(bvh->indices);
+    free(bvh->tris);
     memset(bvh, 0, sizeof *bvh);
 }
 

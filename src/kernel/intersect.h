@@ -21,10 +21,8 @@ TR_FN tr_ray tr_ray_make(tr_vec3 origin, tr_vec3 dir, float tmin, float tmax) {
  * Two-sided. Returns 1 and sets *t, *u, *v when the ray meets the triangle at a
  * distance in (tmin, tmax). Edges and vertices count as inside (u, v >= 0,
  * u + v <= 1); rays parallel to the plane and degenerate triangles never hit. */
-TR_FN int tr_intersect_triangle(const tr_ray *ray, tr_vec3 v0, tr_vec3 v1, tr_vec3 v2, float *t,
-                                float *u, float *v) {
-    tr_vec3 e1 = v3_sub(v1, v0);
-    tr_vec3 e2 = v3_sub(v2, v0);
+TR_FN int tr_intersect_triangle_edges(const tr_ray *ray, tr_vec3 v0, tr_vec3 e1, tr_vec3 e2,
+                                      float *t, float *u, float *v) {
     tr_vec3 p = v3_cross(ray->dir, e2);
     float det = v3_dot(e1, p);
     /* Parallel ray or zero-area triangle; a NaN det also fails this test. */
@@ -50,6 +48,13 @@ TR_FN int tr_intersect_triangle(const tr_ray *ray, tr_vec3 v0, tr_vec3 v1, tr_ve
     *u = uu;
     *v = vv;
     return 1;
+}
+
+/* The same test for a triangle given by v0 and its edges e1 = v1 - v0, e2 = v2 - v0
+ * (as the BVH stores its triangles); both give bit-identical results. */
+TR_FN int tr_intersect_triangle(const tr_ray *ray, tr_vec3 v0, tr_vec3 v1, tr_vec3 v2, float *t,
+                                float *u, float *v) {
+    return tr_intersect_triangle_edges(ray, v0, v3_sub(v1, v0), v3_sub(v2, v0), t, u, v);
 }
 
 /* Slab test (Kay and Kajiya 1986; the robust form of Williams et al. 2005). Returns 1

@@ -25,7 +25,7 @@ typedef struct tr_scene_view {
     TR_CONST_GLOBAL tr_material *materials;
     TR_CONST_GLOBAL tr_flat_node *flat_nodes;
     TR_CONST_GLOBAL tr_bvh_node *bvh_nodes;
-    TR_CONST_GLOBAL uint32_t *bvh_indices;
+    TR_CONST_GLOBAL tr_bvh_tri *bvh_tris; /* leaf triangles, in tr_bvh.indices order */
     uint32_t triangle_count;
     uint32_t material_count;
     uint32_t flat_node_count;
@@ -67,18 +67,17 @@ TR_FN int tr_intersect_flat(const tr_scene_view *s, const tr_ray *ray, tr_hit *h
     return found;
 }
 
-/* Tests the triangles bvh_indices[first .. first+count) and keeps the closest hit. */
+/* Tests the leaf triangles bvh_tris[first .. first+count) and keeps the closest hit. */
 TR_FN int tr_intersect_bvh_leaf(const tr_scene_view *s, tr_ray *r, uint32_t first, uint32_t count,
                                 tr_hit *hit) {
     int found = 0;
     for (uint32_t k = first; k < first + count; ++k) {
-        uint32_t i = s->bvh_indices[k];
-        TR_CONST_GLOBAL tr_triangle *tri = &s->triangles[i];
+        TR_CONST_GLOBAL tr_bvh_tri *tri = &s->bvh_tris[k];
         float t, u, v;
-        if (tr_intersect_triangle(r, tri->v0, tri->v1, tri->v2, &t, &u, &v)) {
+        if (tr_intersect_triangle_edges(r, tri->v0, tri->e1, tri->e2, &t, &u, &v)) {
             r->tmax = t;
             hit->t = t;
-            hit->triangle = i;
+            hit->triangle = tri->index;
             hit->u = u;
             hit->v = v;
             found = 1;

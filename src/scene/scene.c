@@ -117,7 +117,7 @@ tr_scene_view tr_scene_view_of(const tr_scene *s) {
     v.materials = s->materials;
     v.flat_nodes = s->shapes;
     v.bvh_nodes = s->bvh.nodes;
-    v.bvh_indices = s->bvh.indices;
+    v.bvh_tris = s->bvh.tris;
     v.triangle_count = s->triangle_count;
     v.material_count = s->material_count;
     v.flat_node_count = s->shape_count;
