@@ -203,11 +203,12 @@ static uint32_t split_node(builder *b, const task *t, tr_bvh_node *node) {
 }
 
 /* Builds the subtree of `root` into nodes[], root first, children always after their
- * parent; sets *node_count and returns the number of leaves. With `cut` non-NULL, nodes
+ * parent; sets *node_count, raises *deepest to the deepest leaf's depth and returns the
+ * number of leaves. With `cut` non-NULL, nodes
  * at depth cut_depth are not built but recorded in cut[] (their slot is reserved), to
  * be built separately. */
 static uint32_t build_nodes(builder *b, task root, tr_bvh_node *nodes, uint32_t *node_count,
-                            uint32_t cut_depth, task *cut, uint32_t *cut_count) {
+                            uint32_t cut_depth, task *cut, uint32_t *cut_count, uint32_t *deepest) {
     /* Depth-first with the left child popped first: at most one pending sibling per
      * level, and the depth is below TR_BVH_STACK_SIZE. */
     task stack[2 * TR_BVH_STACK_SIZE + 2];
@@ -225,6 +226,7 @@ static uint32_t build_nodes(builder *b, task root, tr_bvh_node *nodes, uint32_t 
         uint32_t left = split_node(b, &t, node);
         if (left == 0) {
             leaves++;
+            *deepest = t.depth > *deepest ? t.depth : *deepest;
             continue;
         }
         uint32_t l = *node_count;
@@ -246,15 +248,16 @@ enum {
  * phases: the top CUT_DEPTH levels serially, then the subtrees below them in parallel,
  * each into its own array, appended in a fixed order. The result does not depend on the
  * thread count, so neither does any image rendered through it. */
-static int build_tree(builder *b, uint32_t n, uint32_t *leaves_out) {
+static int build_tree(builder *b, uint32_t n, uint32_t *leaves_out, uint32_t *depth_out) {
     task root = {0, 0, n, 0};
     task cut[1u << CUT_DEPTH];
-    uint32_t cuts = 0, count = 0;
+    uint32_t cuts = 0, count = 0, deepest = 0;
     int parallel = n >= PARALLEL_MIN;
     uint32_t leaves =
-        build_nodes(b, root, b->nodes, &count, CUT_DEPTH, parallel ? cut : NULL, &cuts);
+        build_nodes(b, root, b->nodes, &count, CUT_DEPTH, parallel ? cut : NULL, &cuts, &deepest);
     tr_bvh_node *sub[1u << CUT_DEPTH] = {0};
     uint32_t sub_count[1u << CUT_DEPTH] = {0}, sub_leaves[1u << CUT_DEPTH] = {0};
+    uint32_t sub_depth[1u << CUT_DEPTH] = {0};
     int failed = 0;
 #pragma omp parallel for schedule(dynamic, 1) reduction(| : failed)
     for (int k = 0; k < (int)cuts; ++k) {
@@ -263,7 +266,7 @@ static int build_tree(builder *b, uint32_t n, uint32_t *leaves_out) {
             failed = 1;
             continue;
         }
-        sub_leaves[k] = build_nodes(b, cut[k], sub[k], &sub_count[k], 0, NULL, NULL);
+        sub_leaves[k] = build_nodes(b, cut[k], sub[k], &sub_count[k], 0, NULL, NULL, &sub_depth[k]);
     }
     for (uint32_t k = 0; k < cuts && !failed; ++k) {
         /* The subtree's root takes the reserved slot; the rest goes to the end, with
@@ -278,12 +281,14 @@ static int build_tree(builder *b, uint32_t n, uint32_t *leaves_out) {
         }
         count += sub_count[k] - 1;
         leaves += sub_leaves[k];
+        deepest = sub_depth[k] > deepest ? sub_depth[k] : deepest;
     }
     for (uint32_t k = 0; k < cuts; ++k) {
         free(sub[k]);
     }
     b->node_count = count;
     *leaves_out = leaves;
+    *depth_out = deepest;
     return failed ? TR_ERR : TR_OK;
 }
 
@@ -296,24 +301,6 @@ static void bvh_fill_tris(tr_bvh *bvh, const tr_triangle *tris) {
         bvh->tris[k].e2 = v3_sub(t->v2, t->v0);
         bvh->tris[k].index = bvh->indices[k];
     }
-}
-
-static uint32_t tree_depth(const tr_bvh_node *nodes, uint32_t count) {
-    /* Children always come after their parent, so one forward pass gives each depth. */
-    uint32_t *depth = calloc(count ? count : 1, sizeof *depth);
-    uint32_t deepest = 0;
-    if (!depth) {
-        return UINT32_MAX; /* unknown */
-    }
-    for (uint32_t i = 0; i < count; ++i) {
-        if (nodes[i].count == 0) {
-            depth[nodes[i].left_first] = depth[nodes[i].left_first + 1] = depth[i] + 1;
-        } else if (depth[i] > deepest) {
-            deepest = depth[i];
-        }
-    }
-    free(depth);
-    return deepest;
 }
 
 int tr_bvh_build(tr_bvh *bvh, const tr_triangle *tris, uint32_t n, tr_error *err) {
@@ -345,8 +332,8 @@ int tr_bvh_build(tr_bvh *bvh, const tr_triangle *tris, uint32_t n, tr_error *err
         b.centroids[i] = v3_scale(v3_add(b.boxes[i].min, b.boxes[i].max), 0.5f);
         b.indices[m++] = i;
     }
-    uint32_t leaves = 0;
-    int rc = m > 0 ? build_tree(&b, m, &leaves) : TR_OK;
+    uint32_t leaves = 0, depth = 0;
+    int rc = m > 0 ? build_tree(&b, m, &leaves, &depth) : TR_OK;
     free(b.boxes);
     free(b.centroids);
     if (rc != TR_OK) {
@@ -359,7 +346,7 @@ int tr_bvh_build(tr_bvh *bvh, const tr_triangle *tris, uint32_t n, tr_error *err
     bvh->indices = b.indices;
     bvh->index_count = m;
     bvh->leaf_count = leaves;
-    bvh->depth = tree_depth(bvh->nodes, bvh->node_count);
+    bvh->depth = depth;
     bvh->skipped = n - m;
     /* Give back what the worst-case allocation did not use. */
     tr_bvh_node *shrunk =

@@ -26,8 +26,12 @@ TR_FN tr_vec3 tr_render_sample(const tr_scene_view *s, const tr_camera *cam, uin
     float jx, jy;
     tr_sample_pixel_jitter(&rng, &jx, &jy);
     tr_ray ray = tr_camera_ray(cam, (float)x, (float)y, jx, jy);
-    (void)integrator; /* only the naive integrator exists so far */
-    return tr_trace_naive(s, ray, max_depth, &rng, rays);
+    /* The host rejects unknown integrators before a frame starts. */
+    switch (integrator) {
+    case TR_INTEGRATOR_NAIVE:
+    default:
+        return tr_trace_naive(s, ray, max_depth, &rng, rays);
+    }
 }
 
 #endif
