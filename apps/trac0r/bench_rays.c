@@ -146,7 +146,8 @@ static void bench_rays_help(void) {
            "  --scene SCENE        measure only this scene\n"
            "  --runs N             timed passes over each ray set, 1..1000 (default 5)\n"
            "  --accels LIST        structures to compare (default: bvh,embree, those this\n"
-           "                       build has; flat is only practical on small scenes)\n"
+           "                       build has; flat is only practical on small scenes; bvh2\n"
+           "                       is the binary BVH without its SIMD wide form)\n"
            "  -h, --help           show this help\n");
 }
 

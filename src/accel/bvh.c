@@ -365,6 +365,7 @@ int tr_bvh_build(tr_bvh *bvh, const tr_triangle *tris, uint32_t n, tr_error *err
 }
 
 void tr_bvh_refit(tr_bvh *bvh, const tr_triangle *tris) {
+    bvh->refits++;
     bvh_fill_tris(bvh, tris);
     for (uint32_t i = bvh->node_count; i-- > 0;) {
         tr_bvh_node *n = &bvh->nodes[i];
@@ -397,6 +398,9 @@ int tr_accel_from_name(const char *name) {
     if (strcmp(name, "embree") == 0) {
         return TR_ACCEL_TYPE_EMBREE;
     }
+    if (strcmp(name, "bvh2") == 0) {
+        return TR_ACCEL_TYPE_BVH2;
+    }
     return -1;
 }
 
@@ -408,6 +412,8 @@ const char *tr_accel_name(tr_accel_type type) {
         return "bvh";
     case TR_ACCEL_TYPE_EMBREE:
         return "embree";
+    case TR_ACCEL_TYPE_BVH2:
+        return "bvh2";
     }
     return "unknown";
 }
@@ -416,6 +422,7 @@ int tr_accel_available(tr_accel_type type) {
     switch (type) {
     case TR_ACCEL_TYPE_FLAT:
     case TR_ACCEL_TYPE_BVH:
+    case TR_ACCEL_TYPE_BVH2:
         return 1;
     case TR_ACCEL_TYPE_EMBREE:
 #ifdef TRAC0R_HAVE_EMBREE
