@@ -230,9 +230,10 @@ void cli_describe_accel(char *buf, size_t n, const tr_scene *s) {
     if (s->accel == TR_ACCEL_TYPE_BVH) {
         snprintf(buf, n,
                  "bvh (%u-wide %s: %u nodes, %u leaves, depth %u, from %u binary nodes; built "
-                 "in %.1f ms)",
+                 "in %.1f ms, %.1f ms of it the collapse)",
                  TR_WBVH_WIDTH, tr_wbvh_isa(), s->wbvh.node_count, s->wbvh.leaf_count,
-                 s->wbvh.depth, s->bvh.node_count, tr_scene_bvh_build_seconds(s) * 1e3);
+                 s->wbvh.depth, s->bvh.node_count, tr_scene_bvh_build_seconds(s) * 1e3,
+                 s->wbvh.build_seconds * 1e3);
     } else if (s->accel == TR_ACCEL_TYPE_BVH2) {
         snprintf(buf, n, "bvh2 (%u nodes, %u leaves, depth %u, built in %.1f ms)",
                  s->bvh.node_count, s->bvh.leaf_count, s->bvh.depth, s->bvh.build_seconds * 1e3);

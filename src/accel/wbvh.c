@@ -14,12 +14,18 @@ enum {
 
 _Static_assert(TR_BVH_STACK_SIZE < 1 << 8, "recursion depth of the collapse");
 
+/* A leaf of the wide tree: its packets, filled after the tree is laid out. */
+typedef struct leaf_rec {
+    uint32_t packet, first, count;
+} leaf_rec;
+
 typedef struct collapser {
     const tr_bvh *bvh;
     uint32_t *sub_first; /* per binary node: its subtree's run of leaf triangles */
     uint32_t *sub_count;
     tr_wbvh *w;
-    uint32_t node_cap, packet_cap;
+    leaf_rec *leaves;
+    uint32_t node_cap, packet_cap, leaf_cap;
     int failed;
 } collapser;
 
@@ -35,46 +41,42 @@ static int is_wide_leaf(const collapser *c, uint32_t i) {
 }
 
 static uint32_t emit_leaf(collapser *c, uint32_t first, uint32_t count) {
+    tr_wbvh *w = c->w;
     uint32_t packets = (count + 3) / 4;
-    if (packets > TR_WBVH_LEAF_MAX_PACKETS || c->w->packet_count + packets > (1u << 27)) {
-        c->failed = 1; /* the binary builder makes leaves of at most 8 triangles */
+    /* The arrays are sized for the worst case (see tr_wbvh_build); the checks only guard
+     * that bound. */
+    if (packets > TR_WBVH_LEAF_MAX_PACKETS || w->packet_count + packets > c->packet_cap ||
+        w->leaf_count == c->leaf_cap || c->packet_cap > (1u << TR_WBVH_LEAF_SHIFT)) {
+        c->failed = 1;
         return TR_WBVH_EMPTY;
     }
-    tr_wbvh *w = c->w;
-    if (w->packet_count + packets > c->packet_cap) {
-        uint32_t cap = c->packet_cap ? 2 * c->packet_cap : 64;
-        while (cap < w->packet_count + packets) {
-            cap *= 2;
-        }
-        tr_wbvh_tri4 *grown = realloc(w->packets, (size_t)cap * sizeof *grown);
-        if (!grown) {
-            c->failed = 1;
-            return TR_WBVH_EMPTY;
-        }
-        w->packets = grown;
-        c->packet_cap = cap;
-    }
-    uint32_t start = w->packet_count;
-    for (uint32_t p = 0; p < packets; ++p) {
-        tr_wbvh_tri4 *q = &w->packets[start + p];
-        memset(q, 0, sizeof *q);
-        for (uint32_t l = 0; l < 4 && 4 * p + l < count; ++l) {
-            const tr_bvh_tri *t = &c->bvh->tris[first + 4 * p + l];
-            q->v0[0][l] = t->v0.x;
-            q->v0[1][l] = t->v0.y;
-            q->v0[2][l] = t->v0.z;
-            q->e1[0][l] = t->e1.x;
-            q->e1[1][l] = t->e1.y;
-            q->e1[2][l] = t->e1.z;
-            q->e2[0][l] = t->e2.x;
-            q->e2[1][l] = t->e2.y;
-            q->e2[2][l] = t->e2.z;
-            q->index[l] = t->index;
-        }
-    }
+    leaf_rec *l = &c->leaves[w->leaf_count++];
+    l->packet = w->packet_count;
+    l->first = first;
+    l->count = count;
     w->packet_count += packets;
-    w->leaf_count++;
-    return TR_WBVH_LEAF_BIT | packets << TR_WBVH_LEAF_SHIFT | start;
+    return TR_WBVH_LEAF_BIT | packets << TR_WBVH_LEAF_SHIFT | l->packet;
+}
+
+/* Writes a leaf's triangles into its packets, lane by lane. */
+static void fill_leaf(const tr_bvh *bvh, tr_wbvh_tri4 *packets, const leaf_rec *l) {
+    for (uint32_t p = 0; 4 * p < l->count; ++p) {
+        tr_wbvh_tri4 *q = &packets[l->packet + p];
+        memset(q, 0, sizeof *q);
+        for (uint32_t k = 0; k < 4 && 4 * p + k < l->count; ++k) {
+            const tr_bvh_tri *t = &bvh->tris[l->first + 4 * p + k];
+            q->v0[0][k] = t->v0.x;
+            q->v0[1][k] = t->v0.y;
+            q->v0[2][k] = t->v0.z;
+            q->e1[0][k] = t->e1.x;
+            q->e1[1][k] = t->e1.y;
+            q->e1[2][k] = t->e1.z;
+            q->e2[0][k] = t->e2.x;
+            q->e2[1][k] = t->e2.y;
+            q->e2[2][k] = t->e2.z;
+            q->index[k] = t->index;
+        }
+    }
 }
 
 /* Emits the wide node for the binary nodes slots[0, count) (the children it starts
@@ -101,18 +103,8 @@ static uint32_t emit_node(collapser *c, uint32_t *slots, int count, uint32_t dep
     }
     tr_wbvh *w = c->w;
     if (w->node_count == c->node_cap) {
-        uint32_t cap = c->node_cap ? 2 * c->node_cap : 64;
-        tr_wbvh_node *grown = aligned_alloc(64, (size_t)cap * sizeof *grown);
-        if (!grown) {
-            c->failed = 1;
-            return 0;
-        }
-        if (w->node_count) {
-            memcpy(grown, w->nodes, (size_t)w->node_count * sizeof *grown);
-        }
-        free(w->nodes);
-        w->nodes = grown;
-        c->node_cap = cap;
+        c->failed = 1;
+        return 0;
     }
     uint32_t index = w->node_count++;
     w->depth = depth > w->depth ? depth : w->depth;
@@ -146,6 +138,11 @@ static uint32_t emit_node(collapser *c, uint32_t *slots, int count, uint32_t dep
     return index;
 }
 
+/* aligned_alloc wants a multiple of the alignment. */
+static size_t round64(size_t bytes) {
+    return (bytes + 63) & ~(size_t)63;
+}
+
 void tr_wbvh_free(tr_wbvh *w) {
     free(w->nodes);
     free(w->packets);
@@ -166,7 +163,17 @@ int tr_wbvh_build(tr_wbvh *w, const tr_bvh *bvh, tr_error *err) {
     c.w = w;
     c.sub_first = malloc((size_t)bvh->node_count * sizeof *c.sub_first);
     c.sub_count = malloc((size_t)bvh->node_count * sizeof *c.sub_count);
-    if (!c.sub_first || !c.sub_count) {
+    /* Worst cases, allocated once (pages never written are never backed by memory): every
+     * wide node opens at least one binary interior node (the root may be a lone leaf),
+     * and every wide leaf is a binary leaf of at most 8 triangles (two packets) or a
+     * merged subtree of two or more binary leaves (one packet). */
+    c.node_cap = bvh->leaf_count;
+    c.leaf_cap = bvh->leaf_count;
+    c.packet_cap = 2 * bvh->leaf_count;
+    w->nodes = aligned_alloc(64, round64((size_t)c.node_cap * sizeof *w->nodes));
+    w->packets = aligned_alloc(64, round64((size_t)c.packet_cap * sizeof *w->packets));
+    c.leaves = malloc((size_t)c.leaf_cap * sizeof *c.leaves);
+    if (!c.sub_first || !c.sub_count || !w->nodes || !w->packets || !c.leaves) {
         c.failed = 1;
     }
     /* Children come after their parents: one backward pass gives every subtree's run of
@@ -198,8 +205,16 @@ int tr_wbvh_build(tr_wbvh *w, const tr_bvh *bvh, tr_error *err) {
             emit_node(&c, slots, 2, 0);
         }
     }
+    if (!c.failed) {
+        const int leaves = (int)w->leaf_count;
+#pragma omp parallel for schedule(static, 4096) if (leaves > 65536)
+        for (int i = 0; i < leaves; ++i) {
+            fill_leaf(bvh, w->packets, &c.leaves[i]);
+        }
+    }
     free(c.sub_first);
     free(c.sub_count);
+    free(c.leaves);
     if (c.failed) {
         tr_wbvh_free(w);
         return tr_error_set(err, "out of memory collapsing a BVH of %u nodes into a wide BVH",
