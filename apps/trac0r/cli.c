@@ -186,9 +186,10 @@ int cli_common_option(cli_args *a, cli_common *c) {
         }
         int accel = tr_accel_from_name(a->value);
         if (accel < 0) {
-            return cli_error(
-                a, "--accel: unknown acceleration structure '%s' (available: %s)", a->value,
-                tr_accel_available(TR_ACCEL_TYPE_EMBREE) ? "bvh, flat, embree, bvh2" : "bvh, flat, bvh2");
+            return cli_error(a, "--accel: unknown acceleration structure '%s' (available: %s)",
+                             a->value,
+                             tr_accel_available(TR_ACCEL_TYPE_EMBREE) ? "bvh, flat, embree, bvh2"
+                                                                      : "bvh, flat, bvh2");
         }
         if (!tr_accel_available((tr_accel_type)accel)) {
             return cli_error(a,

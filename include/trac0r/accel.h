@@ -80,7 +80,7 @@ void tr_embree_free(tr_embree *e);
 #define TR_WBVH_WIDTH 4
 #endif
 #define TR_WBVH_LEAF_BIT 0x80000000u /* child entry: leaf, with packet count and start */
-#define TR_WBVH_LEAF_SHIFT 27         /* packet count in bits 27..30 */
+#define TR_WBVH_LEAF_SHIFT 27        /* packet count in bits 27..30 */
 #define TR_WBVH_LEAF_MAX_PACKETS 15u
 #define TR_WBVH_EMPTY TR_WBVH_LEAF_BIT /* an unused child slot: a leaf of no packets */
 
@@ -108,8 +108,8 @@ typedef struct tr_wbvh {
     tr_wbvh_tri4 *packets;
     uint32_t packet_count;
     uint32_t leaf_count;
-    uint32_t depth;      /* deepest node, root = 0 */
-    uint32_t bvh_refits; /* tr_bvh.refits of the tree it was collapsed from */
+    uint32_t depth;       /* deepest node, root = 0 */
+    uint32_t bvh_refits;  /* tr_bvh.refits of the tree it was collapsed from */
     double build_seconds; /* the collapse alone (the binary build comes before) */
 } tr_wbvh;
 

@@ -149,13 +149,14 @@ static inline uint32_t tr_wbvh_tri4_hits(const tr_wbvh_tri4 *p, const tr_wbvh_ra
     __m128 qy = _mm_sub_ps(_mm_mul_ps(sz, e1x), _mm_mul_ps(sx, e1z));
     __m128 qz = _mm_sub_ps(_mm_mul_ps(sx, e1y), _mm_mul_ps(sy, e1x));
     __m128 v = _mm_mul_ps(
-        _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, qx), _mm_mul_ps(dy, qy)), _mm_mul_ps(dz, qz)), inv_det);
+        _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, qx), _mm_mul_ps(dy, qy)), _mm_mul_ps(dz, qz)),
+        inv_det);
     ok = _mm_and_ps(ok, _mm_and_ps(_mm_cmpge_ps(v, zero), _mm_cmple_ps(_mm_add_ps(u, v), one)));
     __m128 t = _mm_mul_ps(
         _mm_add_ps(_mm_add_ps(_mm_mul_ps(e2x, qx), _mm_mul_ps(e2y, qy)), _mm_mul_ps(e2z, qz)),
         inv_det);
-    ok = _mm_and_ps(ok, _mm_and_ps(_mm_cmpgt_ps(t, _mm_set1_ps(tmin)),
-                                   _mm_cmplt_ps(t, _mm_set1_ps(tmax))));
+    ok = _mm_and_ps(
+        ok, _mm_and_ps(_mm_cmpgt_ps(t, _mm_set1_ps(tmin)), _mm_cmplt_ps(t, _mm_set1_ps(tmax))));
     uint32_t mask = (uint32_t)_mm_movemask_ps(ok);
     if (mask) {
         _mm_storeu_ps(t_out, t);
