@@ -59,45 +59,101 @@ typedef struct bin {
     uint32_t count;
 } bin;
 
+enum {
+    /* Nodes with at least this many triangles are bounded and binned by all threads (the
+     * top levels of a big build, before there are subtrees to share out). */
+    PARALLEL_NODE_MIN = 1u << 16,
+};
+
+/* Bins indices[first, end) on every axis with active[axis] set, into bins[axis][]. */
+static void bin_range(const builder *b, uint32_t first, uint32_t end, const float lo[3],
+                      const float scale[3], const int active[3], bin bins[3][BINS]) {
+    for (uint32_t k = first; k < end; ++k) {
+        uint32_t t = b->indices[k];
+        for (int axis = 0; axis < 3; ++axis) {
+            if (!active[axis]) {
+                continue;
+            }
+            int i = (int)((axis_of(b->centroids[t], axis) - lo[axis]) * scale[axis]);
+            i = i < 0 ? 0 : i >= BINS ? BINS - 1 : i;
+            bins[axis][i].box = box_union(bins[axis][i].box, b->boxes[t]);
+            bins[axis][i].count++;
+        }
+    }
+}
+
+static void bins_clear(bin bins[3][BINS]) {
+    for (int axis = 0; axis < 3; ++axis) {
+        for (int i = 0; i < BINS; ++i) {
+            bins[axis][i].box = box_empty();
+            bins[axis][i].count = 0;
+        }
+    }
+}
+
 /* The best SAH split of indices[first, first+count): returns its cost (relative to
  * testing all triangles in one leaf, in units of triangle tests) and sets the axis and
- * the bin boundary; INFINITY when no axis has any extent. */
+ * the bin boundary; INFINITY when no axis has any extent. Big nodes are binned by all
+ * threads, each into bins of its own, merged after: box unions and counts do not depend
+ * on the order, so neither does the tree. */
 static float find_split(const builder *b, uint32_t first, uint32_t count, tr_aabb cbox,
                         float node_area, int *best_axis, int *best_bin) {
     float best = INFINITY;
+    float lo[3], scale[3];
+    int active[3], any = 0;
     for (int axis = 0; axis < 3; ++axis) {
-        float lo = axis_of(cbox.min, axis), hi = axis_of(cbox.max, axis);
-        float scale = (float)BINS / (hi - lo);
+        float hi = axis_of(cbox.max, axis);
+        lo[axis] = axis_of(cbox.min, axis);
+        scale[axis] = (float)BINS / (hi - lo[axis]);
         /* No extent, or one so small (or large) that binning would overflow. */
-        if (!(hi > lo) || !(scale > 0.0f && scale < INFINITY)) {
+        active[axis] = hi > lo[axis] && scale[axis] > 0.0f && scale[axis] < INFINITY;
+        any |= active[axis];
+    }
+    if (!any) {
+        return INFINITY;
+    }
+    bin bins[3][BINS];
+    bins_clear(bins);
+    if (count >= PARALLEL_NODE_MIN) {
+#pragma omp parallel
+        {
+            bin local[3][BINS];
+            bins_clear(local);
+            const int64_t end = (int64_t)first + count;
+#pragma omp for schedule(static) nowait
+            for (int64_t k = first; k < end; k += 4096) {
+                uint32_t stop = (uint32_t)(k + 4096 < end ? k + 4096 : end);
+                bin_range(b, (uint32_t)k, stop, lo, scale, active, local);
+            }
+#pragma omp critical
+            for (int axis = 0; axis < 3; ++axis) {
+                for (int i = 0; i < BINS; ++i) {
+                    bins[axis][i].box = box_union(bins[axis][i].box, local[axis][i].box);
+                    bins[axis][i].count += local[axis][i].count;
+                }
+            }
+        }
+    } else {
+        bin_range(b, first, first + count, lo, scale, active, bins);
+    }
+    for (int axis = 0; axis < 3; ++axis) {
+        if (!active[axis]) {
             continue;
-        }
-        bin bins[BINS];
-        for (int i = 0; i < BINS; ++i) {
-            bins[i].box = box_empty();
-            bins[i].count = 0;
-        }
-        for (uint32_t k = first; k < first + count; ++k) {
-            uint32_t t = b->indices[k];
-            int i = (int)((axis_of(b->centroids[t], axis) - lo) * scale);
-            i = i < 0 ? 0 : i >= BINS ? BINS - 1 : i;
-            bins[i].box = box_union(bins[i].box, b->boxes[t]);
-            bins[i].count++;
         }
         /* Sweep from the right, then from the left, evaluating each of the BINS-1 planes. */
         float right_cost[BINS];
         tr_aabb acc = box_empty();
         uint32_t n = 0;
         for (int i = BINS - 1; i > 0; --i) {
-            acc = box_union(acc, bins[i].box);
-            n += bins[i].count;
+            acc = box_union(acc, bins[axis][i].box);
+            n += bins[axis][i].count;
             right_cost[i] = box_area(acc) * (float)n;
         }
         acc = box_empty();
         n = 0;
         for (int i = 0; i < BINS - 1; ++i) {
-            acc = box_union(acc, bins[i].box);
-            n += bins[i].count;
+            acc = box_union(acc, bins[axis][i].box);
+            n += bins[axis][i].count;
             if (n == 0 || n == count) {
                 continue;
             }
@@ -156,11 +212,32 @@ typedef struct task {
  * the left child (the indices are partitioned accordingly), or 0 for a leaf. */
 static uint32_t split_node(builder *b, const task *t, tr_bvh_node *node) {
     tr_aabb box = box_empty(), cbox = box_empty();
-    for (uint32_t k = t->first; k < t->first + t->count; ++k) {
-        uint32_t i = b->indices[k];
-        box = box_union(box, b->boxes[i]);
-        cbox.min = v3_min(cbox.min, b->centroids[i]);
-        cbox.max = v3_max(cbox.max, b->centroids[i]);
+    if (t->count >= PARALLEL_NODE_MIN) {
+        /* Bounds by all threads, merged (min and max do not depend on the order). */
+#pragma omp parallel
+        {
+            tr_aabb lbox = box_empty(), lcbox = box_empty();
+            const int64_t end = (int64_t)t->first + t->count;
+#pragma omp for schedule(static) nowait
+            for (int64_t k = t->first; k < end; ++k) {
+                uint32_t i = b->indices[k];
+                lbox = box_union(lbox, b->boxes[i]);
+                lcbox.min = v3_min(lcbox.min, b->centroids[i]);
+                lcbox.max = v3_max(lcbox.max, b->centroids[i]);
+            }
+#pragma omp critical
+            {
+                box = box_union(box, lbox);
+                cbox = box_union(cbox, lcbox);
+            }
+        }
+    } else {
+        for (uint32_t k = t->first; k < t->first + t->count; ++k) {
+            uint32_t i = b->indices[k];
+            box = box_union(box, b->boxes[i]);
+            cbox.min = v3_min(cbox.min, b->centroids[i]);
+            cbox.max = v3_max(cbox.max, b->centroids[i]);
+        }
     }
     node->box = box;
     node->left_first = t->first;
@@ -240,8 +317,8 @@ static uint32_t build_nodes(builder *b, task root, tr_bvh_node *nodes, uint32_t 
 }
 
 enum {
-    PARALLEL_MIN = 1u << 16, /* fewer triangles than this build on one thread */
-    CUT_DEPTH = 4,           /* the top levels are built serially, up to 16 subtrees after */
+    PARALLEL_MIN = PARALLEL_NODE_MIN, /* fewer triangles than this build on one thread */
+    CUT_DEPTH = 4, /* the top levels are built serially, up to 16 subtrees after */
 };
 
 /* Builds the tree over indices[0, n) into b->nodes. Large trees are built in two
