@@ -5,7 +5,9 @@
  * on machines whose build takes a SIMD path. The SIMD path is chosen from the compiler's
  * target macros: AVX2 (8-wide nodes, one 256-bit register per plane; AVX-512VL, where
  * present, gives the hit mask straight from the compare), else SSE2 (4-wide nodes),
- * else scalar loops over the lanes.
+ * else scalar loops over the lanes. For measuring what each part buys, defining
+ * TR_WBVH_SCALAR_NODES or TR_WBVH_SCALAR_TRIS when building the library keeps only the box
+ * tests or only the triangle tests scalar (docs/benchmarks.md).
  *
  * Every path computes exactly what the binary BVH and the flat structure compute: the
  * slab test as (plane - origin) * inv_dir and Moller-Trumbore in the same operation
@@ -70,7 +72,7 @@ static inline void tr_wbvh_ray_init(tr_wbvh_ray *r, const tr_ray *ray) {
  * to tnear[]. */
 static inline uint32_t tr_wbvh_node_hits(const tr_wbvh_node *n, const tr_wbvh_ray *r, float tmin,
                                          float tmax, float *tnear) {
-#if defined(TR_WBVH_AVX2)
+#if defined(TR_WBVH_AVX2) && !defined(TR_WBVH_SCALAR_NODES)
     __m256 t0 = _mm256_set1_ps(tmin), t1 = _mm256_set1_ps(tmax);
     for (int a = 0; a < 3; ++a) {
         __m256 o = _mm256_set1_ps(r->o[a]), inv = _mm256_set1_ps(r->inv[a]);
@@ -85,7 +87,7 @@ static inline uint32_t tr_wbvh_node_hits(const tr_wbvh_node *n, const tr_wbvh_ra
 #else
     return (uint32_t)_mm256_movemask_ps(_mm256_cmp_ps(t0, t1, _CMP_LE_OQ));
 #endif
-#elif defined(TR_WBVH_SSE2)
+#elif defined(TR_WBVH_SSE2) && !defined(TR_WBVH_SCALAR_NODES)
     __m128 t0 = _mm_set1_ps(tmin), t1 = _mm_set1_ps(tmax);
     for (int a = 0; a < 3; ++a) {
         __m128 o = _mm_set1_ps(r->o[a]), inv = _mm_set1_ps(r->inv[a]);
@@ -115,7 +117,7 @@ static inline uint32_t tr_wbvh_node_hits(const tr_wbvh_node *n, const tr_wbvh_ra
  * returns the mask of lanes hit in (tmin, tmax) and their t, u, v. */
 static inline uint32_t tr_wbvh_tri4_hits(const tr_wbvh_tri4 *p, const tr_wbvh_ray *r, float tmin,
                                          float tmax, float *t_out, float *u_out, float *v_out) {
-#if defined(TR_WBVH_AVX2) || defined(TR_WBVH_SSE2)
+#if (defined(TR_WBVH_AVX2) || defined(TR_WBVH_SSE2)) && !defined(TR_WBVH_SCALAR_TRIS)
     const __m128 dx = _mm_set1_ps(r->d[0]), dy = _mm_set1_ps(r->d[1]), dz = _mm_set1_ps(r->d[2]);
     const __m128 e1x = _mm_load_ps(p->e1[0]), e1y = _mm_load_ps(p->e1[1]),
                  e1z = _mm_load_ps(p->e1[2]);
