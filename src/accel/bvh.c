@@ -336,7 +336,7 @@ static int build_tree(builder *b, uint32_t n, uint32_t *leaves_out, uint32_t *de
     uint32_t sub_count[1u << CUT_DEPTH] = {0}, sub_leaves[1u << CUT_DEPTH] = {0};
     uint32_t sub_depth[1u << CUT_DEPTH] = {0};
     int failed = 0;
-#pragma omp parallel for schedule(dynamic, 1) reduction(| : failed)
+#pragma omp parallel for schedule(dynamic, 1) reduction(| : failed) if (cuts > 1)
     for (int k = 0; k < (int)cuts; ++k) {
         sub[k] = malloc((size_t)(2 * (uint64_t)cut[k].count) * sizeof *sub[k]);
         if (!sub[k]) {
