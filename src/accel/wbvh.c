@@ -83,15 +83,21 @@ static void fill_leaf(const tr_bvh *bvh, tr_wbvh_tri4 *packets, const leaf_rec *
  * from) and everything below it; returns its index. */
 static uint32_t emit_node(collapser *c, uint32_t *slots, int count, uint32_t depth) {
     const tr_bvh_node *bn = c->bvh->nodes;
-    /* Open the largest interior slot until the node is full. */
+    /* Open the largest interior slot until the node is full (areas and kinds computed
+     * once per slot). */
+    float area[TR_WBVH_WIDTH];
+    int leaf[TR_WBVH_WIDTH];
+    for (int i = 0; i < count; ++i) {
+        area[i] = box_area(bn[slots[i]].box);
+        leaf[i] = is_wide_leaf(c, slots[i]);
+    }
     while (count < TR_WBVH_WIDTH) {
         int best = -1;
         float best_area = -1.0f;
         for (int i = 0; i < count; ++i) {
-            float a = box_area(bn[slots[i]].box);
-            if (!is_wide_leaf(c, slots[i]) && a > best_area) {
+            if (!leaf[i] && area[i] > best_area) {
                 best = i;
-                best_area = a;
+                best_area = area[i];
             }
         }
         if (best < 0) {
@@ -99,7 +105,12 @@ static uint32_t emit_node(collapser *c, uint32_t *slots, int count, uint32_t dep
         }
         uint32_t l = bn[slots[best]].left_first;
         slots[best] = l;
-        slots[count++] = l + 1;
+        slots[count] = l + 1;
+        area[best] = box_area(bn[l].box);
+        leaf[best] = is_wide_leaf(c, l);
+        area[count] = box_area(bn[l + 1].box);
+        leaf[count] = is_wide_leaf(c, l + 1);
+        ++count;
     }
     tr_wbvh *w = c->w;
     if (w->node_count == c->node_cap) {
@@ -125,7 +136,7 @@ static uint32_t emit_node(collapser *c, uint32_t *slots, int count, uint32_t dep
         node.bounds[3][i] = b.max.y;
         node.bounds[4][i] = b.min.z;
         node.bounds[5][i] = b.max.z;
-        if (is_wide_leaf(c, s)) {
+        if (leaf[i]) {
             node.child[i] = emit_leaf(c, c->sub_first[s], c->sub_count[s]);
         } else {
             uint32_t kids[TR_WBVH_WIDTH] = {bn[s].left_first, bn[s].left_first + 1};
