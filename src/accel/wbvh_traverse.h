@@ -264,6 +264,19 @@ static inline int tr_wbvh_traverse(const tr_wbvh *w, const tr_ray *ray, tr_hit *
                 float ds[TR_WBVH_WIDTH];
                 ids[0] = n->child[i];
                 ds[0] = tn[i];
+                /* Start loading every child hit (its first three cache lines) while the
+                 * nearest is sorted out: +5% Mrays/s on 1.3 M triangles, neutral on
+                 * small scenes (docs/benchmarks.md). */
+                for (uint32_t pm = m | (1u << i); pm; pm &= pm - 1) {
+                    uint32_t ch = n->child[tr_wbvh_ctz(pm)];
+                    const char *addr =
+                        (ch & TR_WBVH_LEAF_BIT)
+                            ? (const char *)&w->packets[ch & ((1u << TR_WBVH_LEAF_SHIFT) - 1u)]
+                            : (const char *)&w->nodes[ch];
+                    __builtin_prefetch(addr);
+                    __builtin_prefetch(addr + 64);
+                    __builtin_prefetch(addr + 128);
+                }
                 int k = 1;
                 for (; m; m &= m - 1) {
                     i = tr_wbvh_ctz(m);
