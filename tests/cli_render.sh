@@ -89,7 +89,7 @@ else
 fi
 # Every acceleration structure renders the same image for the same seed (ties aside,
 # which the unit tests bound; this scene has none at this size).
-for accel in flat embree; do
+for accel in flat embree bvh2; do
     "$BIN" render --width 16 --height 12 --spp 2 --accel $accel --out $accel.pfm 2>/dev/null ||
         fail "--accel $accel render failed"
     "$BIN" render --width 16 --height 12 --spp 2 --accel bvh --out bvh.pfm 2>/dev/null

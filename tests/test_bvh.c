@@ -6,7 +6,13 @@
  * floating-point tie), the same misses, and any-hit must agree with closest-hit. The
  * tree itself is checked node by node, degenerate input must neither crash the builder
  * nor ever be hit, refitting after a move must keep the answers right, and a rendered
- * image must not change when the acceleration structure does. */
+ * image must not change when the acceleration structure does.
+ *
+ * A BVH view is traced three ways, each compared with the flat structure: through the
+ * wide BVH with this build's SIMD code (what tr_intersect_scene does), through the same
+ * wide BVH with the portable scalar code (src/accel/wbvh_traverse.h compiled here a
+ * second time, with TR_WBVH_SCALAR), and through the binary BVH alone (--accel bvh2,
+ * and what devices trace). */
 #include <stdlib.h>
 #include <string.h>
 
@@ -14,6 +20,9 @@
 
 #include "check.h"
 #include "trac0r/trac0r.h"
+
+#define TR_WBVH_SCALAR 1
+#include "accel/wbvh_traverse.h"
 
 /* Rays per mesh for the main comparisons (the brief asks for at least 100 000) and
  * for the stress meshes, whose flat traversal is a brute-force loop. */
@@ -391,9 +400,34 @@ static tr_ray next_ray(ray_gen *g) {
     return tr_ray_make(o, d, tmin, tmax);
 }
 
+/* The ways a BVH view is traced (see the top of the file). */
+enum { V_WIDE, V_WIDE_SCALAR, V_BVH2, VARIANTS };
+static const char *const variant_name[VARIANTS] = {"wide bvh", "wide bvh (scalar)", "bvh2"};
+
 typedef struct cmp_stats {
-    uint64_t rays, hits, ties, dup_ties, mismatches, anyhit_mismatches;
+    uint64_t rays, hits, mismatches, anyhit_mismatches;
+    uint64_t ties, dup_ties; /* of the wide BVH with this build's SIMD code */
+    uint64_t variant_ties[VARIANTS], variant_dup_ties[VARIANTS];
 } cmp_stats;
+
+/* How many ways the view is traced: three for a view with a wide BVH, else one. */
+static int variants_of(const tr_scene_view *v) {
+    return v->accel == TR_ACCEL_BVH && v->wbvh ? VARIANTS : 1;
+}
+
+static int trace_variant(const tr_scene_view *v, int variant, const tr_ray *ray, tr_hit *hit,
+                         int any_hit) {
+    tr_scene_view bin = *v;
+    switch (variant) {
+    case V_WIDE_SCALAR:
+        return tr_wbvh_traverse(v->wbvh, ray, hit, any_hit);
+    case V_BVH2:
+        bin.wbvh = NULL;
+        return any_hit ? tr_occluded_scene(&bin, ray) : tr_intersect_scene(&bin, ray, hit);
+    default:
+        return any_hit ? tr_occluded_scene(v, ray) : tr_intersect_scene(v, ray, hit);
+    }
+}
 
 static void print_ray(const char *name, const char *what, const tr_ray *ray) {
     fprintf(stderr, "  %s: %s: origin (%a, %a, %a) dir (%a, %a, %a) tmin %a tmax %a\n", name, what,
@@ -401,51 +435,64 @@ static void print_ray(const char *name, const char *what, const tr_ray *ray) {
             (double)ray->dir.y, (double)ray->dir.z, (double)ray->tmin, (double)ray->tmax);
 }
 
-/* Traces one ray through both views and records how the answers compare. */
+/* Traces one ray through both views (the BVH view each way it has) and records how the
+ * answers compare. */
 static void compare_ray(const char *name, const tr_scene_view *flat, const tr_scene_view *bvh,
                         const tr_ray *ray, cmp_stats *st) {
-    tr_hit hf, hb;
+    tr_hit hf;
     memset(&hf, 0, sizeof hf);
-    memset(&hb, 0, sizeof hb);
     int f = tr_intersect_scene(flat, ray, &hf);
-    int b = tr_intersect_scene(bvh, ray, &hb);
-    int any = tr_occluded_scene(bvh, ray);
     st->rays++;
-    if (any != b) {
-        if (st->anyhit_mismatches++ < 5) {
-            print_ray(name, any ? "any-hit hits, closest-hit misses" : "any-hit misses", ray);
+    st->hits += (uint64_t)f;
+    for (int var = 0; var < variants_of(bvh); ++var) {
+        const char *vn = variant_name[bvh->wbvh ? var : V_BVH2];
+        tr_hit hb;
+        memset(&hb, 0, sizeof hb);
+        int b = trace_variant(bvh, var, ray, &hb, 0);
+        int any = trace_variant(bvh, var, ray, NULL, 1);
+        if (any != b) {
+            if (st->anyhit_mismatches++ < 5) {
+                fprintf(stderr, "  %s:\n", vn);
+                print_ray(name, any ? "any-hit hits, closest-hit misses" : "any-hit misses", ray);
+            }
         }
-    }
-    if (f != b) {
-        if (st->mismatches++ < 5) {
-            print_ray(name, f ? "flat hits, bvh misses" : "bvh hits, flat misses", ray);
-            fprintf(stderr, "    flat %d t %.9g tri %u / bvh %d t %.9g tri %u\n", f, (double)hf.t,
-                    f ? hf.triangle : 0, b, (double)hb.t, b ? hb.triangle : 0);
+        if (f != b) {
+            if (st->mismatches++ < 5) {
+                fprintf(stderr, "  %s:\n", vn);
+                print_ray(name, f ? "flat hits, bvh misses" : "bvh hits, flat misses", ray);
+                fprintf(stderr, "    flat %d t %.9g tri %u / bvh %d t %.9g tri %u\n", f,
+                        (double)hf.t, f ? hf.triangle : 0, b, (double)hb.t, b ? hb.triangle : 0);
+            }
+            continue;
         }
-        return;
-    }
-    if (!f) {
-        return;
-    }
-    st->hits++;
-    int ok;
-    if (hb.triangle >= bvh->triangle_count || !(hb.t > ray->tmin && hb.t < ray->tmax) ||
-        !tri_valid(&bvh->triangles[hb.triangle])) {
-        ok = 0;
-    } else if (hb.triangle == hf.triangle) {
-        ok = fabs((double)hb.t - (double)hf.t) <= SAME_T_TOL * fabs((double)hf.t);
-    } else {
-        ok = fabs((double)hb.t - (double)hf.t) <= TIE_T_TOL * fabs((double)hf.t);
-        if (ok) {
-            st->ties++;
-            st->dup_ties += (uint64_t)tri_duplicates(&flat->triangles[hf.triangle],
-                                                     &bvh->triangles[hb.triangle]);
+        if (!f) {
+            continue;
         }
-    }
-    if (!ok && st->mismatches++ < 5) {
-        print_ray(name, "different hits", ray);
-        fprintf(stderr, "    flat t %.9g tri %u / bvh t %.9g tri %u\n", (double)hf.t, hf.triangle,
-                (double)hb.t, hb.triangle);
+        int ok;
+        if (hb.triangle >= bvh->triangle_count || !(hb.t > ray->tmin && hb.t < ray->tmax) ||
+            !tri_valid(&bvh->triangles[hb.triangle])) {
+            ok = 0;
+        } else if (hb.triangle == hf.triangle) {
+            ok = fabs((double)hb.t - (double)hf.t) <= SAME_T_TOL * fabs((double)hf.t);
+        } else {
+            ok = fabs((double)hb.t - (double)hf.t) <= TIE_T_TOL * fabs((double)hf.t);
+            if (ok) {
+                int dup =
+                    tri_duplicates(&flat->triangles[hf.triangle], &bvh->triangles[hb.triangle]);
+                st->variant_ties[var]++;
+                st->variant_dup_ties[var] += (uint64_t)dup;
+                if (var == V_WIDE) {
+                    st->ties++;
+                    st->dup_ties += (uint64_t)dup;
+                }
+            }
+        }
+        if (!ok && st->mismatches++ < 5) {
+            fprintf(stderr, "  %s:\n", vn);
+            print_ray(name, "different hits", ray);
+            fprintf(stderr, "    flat t %.9g tri %u / bvh t %.9g tri %u\n", (double)hf.t,
+                    hf.triangle, (double)hb.t, hb.triangle);
+        }
     }
 }
 
@@ -461,18 +508,21 @@ static cmp_stats compare_views(const char *name, const tr_scene_view *flat,
         tr_ray ray = next_ray(g);
         compare_ray(name, flat, bvh, &ray, &st);
     }
-    uint64_t other_ties = st.ties - st.dup_ties;
-    printf("%-22s %7llu rays %7llu hits %6llu ties (%llu between duplicates) %.2f s\n", name,
-           (unsigned long long)st.rays, (unsigned long long)st.hits, (unsigned long long)st.ties,
-           (unsigned long long)st.dup_ties, tr_time_now() - t0);
-    CHECK(st.mismatches == 0, "%s: %llu of %llu rays differ between flat and bvh", name,
+    printf("%-22s %7llu rays %7llu hits %6llu ties (%llu between duplicates), %d ways, %.2f s\n",
+           name, (unsigned long long)st.rays, (unsigned long long)st.hits,
+           (unsigned long long)st.ties, (unsigned long long)st.dup_ties, variants_of(bvh),
+           tr_time_now() - t0);
+    CHECK(st.mismatches == 0, "%s: %llu answers to %llu rays differ between flat and bvh", name,
           (unsigned long long)st.mismatches, (unsigned long long)st.rays);
-    CHECK(st.anyhit_mismatches == 0, "%s: any-hit and closest-hit disagree on %llu rays", name,
+    CHECK(st.anyhit_mismatches == 0, "%s: any-hit and closest-hit disagree %llu times", name,
           (unsigned long long)st.anyhit_mismatches);
     if (max_tie_fraction >= 0.0) {
-        CHECK((double)other_ties <= max_tie_fraction * (double)(st.hits ? st.hits : 1),
-              "%s: %llu ties between distinct triangles in %llu hits", name,
-              (unsigned long long)other_ties, (unsigned long long)st.hits);
+        for (int var = 0; var < variants_of(bvh); ++var) {
+            uint64_t other = st.variant_ties[var] - st.variant_dup_ties[var];
+            CHECK((double)other <= max_tie_fraction * (double)(st.hits ? st.hits : 1),
+                  "%s: %s: %llu ties between distinct triangles in %llu hits", name,
+                  variant_name[var], (unsigned long long)other, (unsigned long long)st.hits);
+        }
     }
     return st;
 }
@@ -586,6 +636,132 @@ static void check_structure(const char *name, const tr_bvh *bvh, const tr_triang
     free(depth);
 }
 
+/* The same for the wide BVH: every valid triangle in exactly one packet lane, copied
+ * exactly from the binary BVH's leaf triangles, unused lanes all zero, unused child slots
+ * empty, each child's box holding its subtree (and equal to a binary node's box, so
+ * that the wide traversal's box tests are the binary one's), children after parents. */
+static void check_wide_structure(const char *name, const tr_wbvh *w, const tr_bvh *bvh,
+                                 const tr_triangle *tris, uint32_t n) {
+    CHECK(w->bvh_refits == bvh->refits, "%s: the wide BVH is stale", name);
+    if (bvh->node_count == 0) {
+        CHECK(w->node_count == 0 && w->packet_count == 0, "%s: empty wide tree has %u nodes", name,
+              w->node_count);
+        return;
+    }
+    CHECK(w->node_count >= 1 && w->node_count <= bvh->node_count, "%s: %u wide nodes for %u", name,
+          w->node_count, bvh->node_count);
+    CHECK(w->depth <= bvh->depth, "%s: wide depth %u > binary depth %u", name, w->depth,
+          bvh->depth);
+    uint32_t *seen = calloc(n ? n : 1, sizeof *seen);
+    uint32_t *visits = calloc(w->node_count, sizeof *visits);
+    uint32_t *pvisits = calloc(w->packet_count ? w->packet_count : 1, sizeof *pvisits);
+    uint32_t *stack = malloc((size_t)w->node_count * sizeof *stack);
+    if (!seen || !visits || !pvisits || !stack) {
+        abort();
+    }
+    /* Every wide child box is the box of some binary node: collect them. */
+    int bad_links = 0, bad_boxes = 0, bad_lanes = 0, bad_empty = 0;
+    uint32_t top = 0, leaves = 0, lanes = 0;
+    stack[top++] = 0;
+    while (top > 0) {
+        uint32_t i = stack[--top];
+        if (visits[i]++ > 0) {
+            ++bad_links;
+            continue;
+        }
+        const tr_wbvh_node *node = &w->nodes[i];
+        for (int c = 0; c < TR_WBVH_WIDTH; ++c) {
+            uint32_t ch = node->child[c];
+            tr_aabb box = {v3(node->bounds[0][c], node->bounds[2][c], node->bounds[4][c]),
+                           v3(node->bounds[1][c], node->bounds[3][c], node->bounds[5][c])};
+            if (ch == TR_WBVH_EMPTY) {
+                bad_empty +=
+                    !(box.min.x == INFINITY && box.min.y == INFINITY && box.min.z == INFINITY &&
+                      box.max.x == -INFINITY && box.max.y == -INFINITY && box.max.z == -INFINITY);
+                continue;
+            }
+            if (!(ch & TR_WBVH_LEAF_BIT)) {
+                if (ch <= i || ch >= w->node_count) {
+                    ++bad_links;
+                    continue;
+                }
+                const tr_wbvh_node *kid = &w->nodes[ch];
+                for (int k = 0; k < TR_WBVH_WIDTH; ++k) {
+                    if (kid->child[k] != TR_WBVH_EMPTY) {
+                        tr_aabb kb = {v3(kid->bounds[0][k], kid->bounds[2][k], kid->bounds[4][k]),
+                                      v3(kid->bounds[1][k], kid->bounds[3][k], kid->bounds[5][k])};
+                        bad_boxes += !box_contains_box(box, kb);
+                    }
+                }
+                stack[top++] = ch;
+                continue;
+            }
+            ++leaves;
+            uint32_t first = ch & ((1u << TR_WBVH_LEAF_SHIFT) - 1u);
+            uint32_t packets = (ch & ~TR_WBVH_LEAF_BIT) >> TR_WBVH_LEAF_SHIFT;
+            if (packets == 0 || (uint64_t)first + packets > w->packet_count) {
+                ++bad_links;
+                continue;
+            }
+            for (uint32_t p = first; p < first + packets; ++p) {
+                const tr_wbvh_tri4 *q = &w->packets[p];
+                pvisits[p]++;
+                for (int l = 0; l < 4; ++l) {
+                    int zero = 1;
+                    for (int a = 0; a < 3; ++a) {
+                        zero &= q->v0[a][l] == 0.0f && q->e1[a][l] == 0.0f && q->e2[a][l] == 0.0f;
+                    }
+                    uint32_t t = q->index[l];
+                    if (zero && t == 0) {
+                        continue; /* an unused lane (a valid triangle has non-zero edges) */
+                    }
+                    ++lanes;
+                    if (t >= n || !tri_valid(&tris[t])) {
+                        ++bad_lanes;
+                        continue;
+                    }
+                    seen[t]++;
+                    const tr_triangle *tr = &tris[t];
+                    tr_vec3 v0 = v3(q->v0[0][l], q->v0[1][l], q->v0[2][l]);
+                    tr_vec3 e1 = v3(q->e1[0][l], q->e1[1][l], q->e1[2][l]);
+                    tr_vec3 e2 = v3(q->e2[0][l], q->e2[1][l], q->e2[2][l]);
+                    bad_lanes += !vec_eq(v0, tr->v0) || !vec_eq(e1, v3_sub(tr->v1, tr->v0)) ||
+                                 !vec_eq(e2, v3_sub(tr->v2, tr->v0));
+                    bad_boxes += !box_contains_point(box, tr->v0) ||
+                                 !box_contains_point(box, tr->v1) ||
+                                 !box_contains_point(box, tr->v2);
+                }
+            }
+        }
+    }
+    uint32_t unreached = 0, packets_not_once = 0, not_once = 0, valid = 0;
+    for (uint32_t i = 0; i < w->node_count; ++i) {
+        unreached += visits[i] == 0;
+    }
+    for (uint32_t p = 0; p < w->packet_count; ++p) {
+        packets_not_once += pvisits[p] != 1;
+    }
+    for (uint32_t i = 0; i < n; ++i) {
+        valid += (uint32_t)tri_valid(&tris[i]);
+        not_once += tri_valid(&tris[i]) && seen[i] != 1;
+    }
+    CHECK(bad_links == 0 && unreached == 0 && packets_not_once == 0,
+          "%s: wide BVH: %d bad links, %u nodes unreachable, %u packets not used once", name,
+          bad_links, unreached, packets_not_once);
+    CHECK(bad_boxes == 0, "%s: wide BVH: %d boxes do not contain their subtrees", name, bad_boxes);
+    CHECK(bad_empty == 0, "%s: wide BVH: %d empty slots without the empty box", name, bad_empty);
+    CHECK(bad_lanes == 0 && not_once == 0 && lanes == valid,
+          "%s: wide BVH: %d bad lanes, %u valid triangles not in exactly one lane (%u lanes for "
+          "%u)",
+          name, bad_lanes, not_once, lanes, valid);
+    CHECK(leaves == w->leaf_count, "%s: wide BVH: %u leaves reached, leaf_count %u", name, leaves,
+          w->leaf_count);
+    free(seen);
+    free(visits);
+    free(pvisits);
+    free(stack);
+}
+
 /* ---- the tests --------------------------------------------------------------------- */
 
 /* Commits the scene's BVH, checks the tree, and compares it with the flat structure. */
@@ -594,8 +770,10 @@ static void check_mesh(const char *name, tr_scene *s, uint64_t seed, uint32_t ra
     tr_error err;
     CHECK(tr_scene_commit(s, TR_ACCEL_TYPE_BVH, &err) == TR_OK, "%s: %s", name, err.msg);
     check_structure(name, &s->bvh, s->triangles, s->triangle_count);
+    check_wide_structure(name, &s->wbvh, &s->bvh, s->triangles, s->triangle_count);
     tr_scene_view bvh = tr_scene_view_of(s), flat = bvh;
     CHECK(bvh.accel == TR_ACCEL_BVH, "%s: the view is not a BVH view", name);
+    CHECK(bvh.wbvh == &s->wbvh, "%s: the view does not trace the wide BVH", name);
     flat.accel = TR_ACCEL_FLAT;
     ray_gen g;
     ray_gen_init(&g, seed, s->triangles, s->triangle_count, NULL);
@@ -942,10 +1120,32 @@ static void test_refit(void) {
           s.bvh.node_count);
     check_structure("refit soup", &s.bvh, s.triangles, n);
     tr_scene_view bvh = tr_scene_view_of(&s), flat = bvh;
+    /* The wide BVH was collapsed before the refit: the view must not use it. */
+    CHECK(bvh.wbvh == NULL, "a view after tr_bvh_refit traces the stale wide BVH");
     flat.accel = TR_ACCEL_FLAT;
     ray_gen g;
     ray_gen_init(&g, 31, s.triangles, n, NULL);
-    compare_views("refit soup", &flat, &bvh, &g, RAYS, MAX_TIE_FRACTION);
+    compare_views("refit soup (bvh2)", &flat, &bvh, &g, RAYS, MAX_TIE_FRACTION);
+    ray_gen_free(&g);
+
+    /* Move again and refit the scene: both trees follow. */
+    for (uint32_t i = 0; i < n; ++i) {
+        tr_triangle *tri = &s.triangles[i];
+        tri->v0 = v3_sub(v3_mul(tri->v0, scale), offset);
+        tri->v1 = v3_sub(v3_mul(tri->v1, scale), offset);
+        tri->v2 = v3_sub(v3_mul(tri->v2, scale), offset);
+        tr_triangle_finish(tri);
+    }
+    CHECK(tr_scene_refit(&s, &err) == TR_OK, "%s", err.msg);
+    set_flat_nodes(&s, FLAT_CHUNK);
+    check_structure("scene refit soup", &s.bvh, s.triangles, n);
+    check_wide_structure("scene refit soup", &s.wbvh, &s.bvh, s.triangles, n);
+    bvh = tr_scene_view_of(&s);
+    flat = bvh;
+    flat.accel = TR_ACCEL_FLAT;
+    CHECK(bvh.wbvh == &s.wbvh, "a view after tr_scene_refit does not trace the wide BVH");
+    ray_gen_init(&g, 32, s.triangles, n, NULL);
+    compare_views("scene refit soup", &flat, &bvh, &g, RAYS, MAX_TIE_FRACTION);
     ray_gen_free(&g);
     tr_scene_free(&s);
 }
@@ -998,27 +1198,37 @@ static void test_render(void) {
     tr_error err;
     tr_scene s;
     CHECK(tr_scene_builtin(&s, "cornell", w, h, &err) == TR_OK, "%s", err.msg);
-    tr_film ff, fb;
-    CHECK(tr_film_init(&ff, w, h, &err) == TR_OK && tr_film_init(&fb, w, h, &err) == TR_OK, "%s",
-          err.msg);
+    tr_film ff, fb, f2;
+    CHECK(tr_film_init(&ff, w, h, &err) == TR_OK && tr_film_init(&fb, w, h, &err) == TR_OK &&
+              tr_film_init(&f2, w, h, &err) == TR_OK,
+          "%s", err.msg);
     tr_render_config cfg = tr_render_config_default();
     cfg.seed = 12345;
-    tr_film *films[2] = {&ff, &fb};
-    const tr_accel_type accels[2] = {TR_ACCEL_TYPE_FLAT, TR_ACCEL_TYPE_BVH};
-    for (int k = 0; k < 2; ++k) {
+    /* flat, bvh (the wide BVH on the CPU) and bvh2 (the binary one). */
+    tr_film *films[3] = {&ff, &fb, &f2};
+    const tr_accel_type accels[3] = {TR_ACCEL_TYPE_FLAT, TR_ACCEL_TYPE_BVH, TR_ACCEL_TYPE_BVH2};
+    for (int k = 0; k < 3; ++k) {
         CHECK(tr_scene_commit(&s, accels[k], &err) == TR_OK, "%s", err.msg);
+        tr_scene_view v = tr_scene_view_of(&s);
+        CHECK(k == 0 || (v.accel == TR_ACCEL_BVH && (v.wbvh != NULL) == (k == 1)),
+              "%s: view accel %u, wide BVH %p", tr_accel_name(accels[k]), v.accel,
+              (const void *)v.wbvh);
         for (uint32_t i = 0; i < spp; ++i) {
             CHECK(tr_render_frame(&s, &s.camera, &cfg, films[k], i, NULL, &err) == TR_OK, "%s",
                   err.msg);
         }
     }
-    uint32_t differ = 0;
-    for (size_t i = 0; i < (size_t)w * h; ++i) {
-        differ += !films_equal_pixel(&ff, &fb, i);
+    for (int k = 1; k < 3; ++k) {
+        uint32_t differ = 0;
+        for (size_t i = 0; i < (size_t)w * h; ++i) {
+            differ += !films_equal_pixel(&ff, films[k], i);
+        }
+        printf("render: %u of %u pixels differ between flat and %s\n", differ, w * h,
+               tr_accel_name(accels[k]));
+        CHECK(differ * 200u <= w * h, "%u of %u pixels differ between flat and %s (> 0.5%%)",
+              differ, w * h, tr_accel_name(accels[k]));
     }
-    printf("render: %u of %u pixels differ between flat and bvh\n", differ, w * h);
-    CHECK(differ * 200u <= w * h, "%u of %u pixels differ between flat and bvh (> 0.5%%)", differ,
-          w * h);
+    tr_film_free(&f2);
 
     /* A BVH older than the scene's triangles must not be traced; a new commit fixes it,
      * and the flat structure needs none. */

@@ -156,9 +156,8 @@ void bench_accels_all(accel_set *set, int with_flat) {
 }
 
 double bench_build_seconds(const tr_scene *s) {
-    return s->accel == TR_ACCEL_TYPE_BVH      ? s->bvh.build_seconds
-           : s->accel == TR_ACCEL_TYPE_EMBREE ? tr_scene_embree_build_seconds(s)
-                                              : 0.0;
+    return s->accel == TR_ACCEL_TYPE_EMBREE ? tr_scene_embree_build_seconds(s)
+                                            : tr_scene_bvh_build_seconds(s);
 }
 
 int bench_plot_png(const char *script, const char *png) {
@@ -196,7 +195,7 @@ static void bench_complexity_help(void) {
            "  --frames N           timed frames per point after one warm-up, 1..1000\n"
            "                       (default 5); the median is reported\n"
            "  --accels LIST        structures to compare (default: flat,bvh,embree, those\n"
-           "                       this build has)\n"
+           "                       this build has; bvh2 adds the binary BVH alone)\n"
            "  --limit SECONDS      drop a structure after a frame slower than this (default 10)\n"
            "  --out PREFIX         output file prefix (default complexity)\n"
            "  -h, --help           show this help\n",

@@ -112,24 +112,36 @@ static int make_rays(const tr_scene *s, uint64_t seed, ray_set sets[KINDS]) {
     return TR_OK;
 }
 
-/* Seconds to trace every ray of the set once; the hit count goes to *hits so the work
- * cannot be optimised away and the structures can be cross-checked. */
-static double trace_set(const tr_scene *s, const ray_set *set, int shadow, int threads,
+/* Seconds to trace every ray of the set `reps` times; the hit count of one pass goes to
+ * *hits so the work cannot be optimised away and the structures can be cross-checked. */
+static double trace_set(const tr_scene *s, const ray_set *set, int shadow, int threads, int reps,
                         uint64_t *hits) {
     const tr_scene_view view = tr_scene_view_of(s);
     uint64_t h = 0;
     double t0 = tr_time_now();
+    for (int rep = 0; rep < reps; ++rep) {
+        h = 0;
 #pragma omp parallel for num_threads(threads) schedule(dynamic, 1024) reduction(+ : h)
-    for (int64_t i = 0; i < (int64_t)set->count; ++i) {
-        if (shadow) {
-            h += (uint64_t)tr_occluded_scene(&view, &set->rays[i]);
-        } else {
-            tr_hit hit;
-            h += (uint64_t)tr_intersect_scene(&view, &set->rays[i], &hit);
+        for (int64_t i = 0; i < (int64_t)set->count; ++i) {
+            if (shadow) {
+                h += (uint64_t)tr_occluded_scene(&view, &set->rays[i]);
+            } else {
+                tr_hit hit;
+                h += (uint64_t)tr_intersect_scene(&view, &set->rays[i], &hit);
+            }
         }
     }
     *hits = h;
     return tr_time_now() - t0;
+}
+
+/* A timed run traces the set this often, so that it lasts at least MIN_RUN_SECONDS (the
+ * warm-up pass measures one): runs of a few milliseconds would be at the mercy of the
+ * scheduler's time slice on a loaded machine. */
+#define MIN_RUN_SECONDS 0.05
+static int reps_for(double one_pass_seconds) {
+    double r = MIN_RUN_SECONDS / (one_pass_seconds > 1e-6 ? one_pass_seconds : 1e-6);
+    return r < 1.0 ? 1 : r > 1000.0 ? 1000 : (int)r + 1;
 }
 
 static void bench_rays_help(void) {
@@ -138,7 +150,8 @@ static void bench_rays_help(void) {
            "Million rays per second of each acceleration structure on the same rays: primary\n"
            "rays (one per pixel), diffuse bounces (cosine-weighted, incoherent) and shadow\n"
            "rays (any-hit, towards the lights), on builtin:cornell, builtin:cornell-ico-6 and\n"
-           "builtin:cornell-ico-8 (1.3 M triangles). Each figure is the median of the runs;\n"
+           "builtin:cornell-ico-8 (1.3 M triangles). Each figure is the median of the runs\n"
+           "(a run traces its set as often as it takes to last at least 50 ms);\n"
            "build times are reported beside them, and the ratio bvh/embree when both run.\n"
            "\n"
            "Options:\n"
@@ -146,7 +159,8 @@ static void bench_rays_help(void) {
            "  --scene SCENE        measure only this scene\n"
            "  --runs N             timed passes over each ray set, 1..1000 (default 5)\n"
            "  --accels LIST        structures to compare (default: bvh,embree, those this\n"
-           "                       build has; flat is only practical on small scenes)\n"
+           "                       build has; flat is only practical on small scenes; bvh2\n"
+           "                       is the binary BVH without its SIMD wide form)\n"
            "  -h, --help           show this help\n");
 }
 
@@ -222,12 +236,13 @@ int bench_rays(int argc, char **argv) {
                 break;
             }
             for (int kind = 0; kind < KINDS; ++kind) {
-                trace_set(&scene, &sets[kind], kind == SHADOW, threads, &hits[k][kind]); /* warm */
+                int reps = reps_for(trace_set(&scene, &sets[kind], kind == SHADOW, threads, 1,
+                                              &hits[k][kind])); /* warm-up */
                 for (int r = 0; r < runs; ++r) {
-                    times[r] =
-                        trace_set(&scene, &sets[kind], kind == SHADOW, threads, &hits[k][kind]);
+                    times[r] = trace_set(&scene, &sets[kind], kind == SHADOW, threads, reps,
+                                         &hits[k][kind]);
                 }
-                mrays[k][kind] = (double)sets[kind].count / bench_median(times, runs) * 1e-6;
+                mrays[k][kind] = (double)sets[kind].count * reps / bench_median(times, runs) * 1e-6;
             }
             printf("%-24s %10u %-7s %10.1f %10.2f %10.2f %10.2f\n", sc_opts.scene,
                    scene.triangle_count, tr_accel_name(set.type[k]),

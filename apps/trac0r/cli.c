@@ -24,7 +24,8 @@ const char cli_common_help[] =
     "  --integrator NAME    naive: the thesis's path tracer (the default and only one)\n"
     "  --accel NAME         acceleration structure: bvh (binned-SAH BVH, the default),\n"
     "                       flat (the thesis's list of per-shape boxes) or embree (Intel\n"
-    "                       Embree 3, in builds that found it)\n";
+    "                       Embree 3, in builds that found it); bvh2 traces the binary\n"
+    "                       BVH without its SIMD wide form, for comparisons\n";
 
 void cli_common_default(cli_common *c) {
     c->scene = "builtin:cornell";
@@ -185,9 +186,10 @@ int cli_common_option(cli_args *a, cli_common *c) {
         }
         int accel = tr_accel_from_name(a->value);
         if (accel < 0) {
-            return cli_error(
-                a, "--accel: unknown acceleration structure '%s' (available: %s)", a->value,
-                tr_accel_available(TR_ACCEL_TYPE_EMBREE) ? "bvh, flat, embree" : "bvh, flat");
+            return cli_error(a, "--accel: unknown acceleration structure '%s' (available: %s)",
+                             a->value,
+                             tr_accel_available(TR_ACCEL_TYPE_EMBREE) ? "bvh, flat, embree, bvh2"
+                                                                      : "bvh, flat, bvh2");
         }
         if (!tr_accel_available((tr_accel_type)accel)) {
             return cli_error(a,
@@ -227,8 +229,15 @@ int cli_load_scene(const cli_args *a, const cli_common *c, tr_scene *scene) {
 
 void cli_describe_accel(char *buf, size_t n, const tr_scene *s) {
     if (s->accel == TR_ACCEL_TYPE_BVH) {
-        snprintf(buf, n, "bvh (%u nodes, %u leaves, depth %u, built in %.1f ms)", s->bvh.node_count,
-                 s->bvh.leaf_count, s->bvh.depth, s->bvh.build_seconds * 1e3);
+        snprintf(buf, n,
+                 "bvh (%u-wide %s: %u nodes, %u leaves, depth %u, from %u binary nodes; built "
+                 "in %.1f ms, %.1f ms of it the collapse)",
+                 TR_WBVH_WIDTH, tr_wbvh_isa(), s->wbvh.node_count, s->wbvh.leaf_count,
+                 s->wbvh.depth, s->bvh.node_count, tr_scene_bvh_build_seconds(s) * 1e3,
+                 s->wbvh.build_seconds * 1e3);
+    } else if (s->accel == TR_ACCEL_TYPE_BVH2) {
+        snprintf(buf, n, "bvh2 (%u nodes, %u leaves, depth %u, built in %.1f ms)",
+                 s->bvh.node_count, s->bvh.leaf_count, s->bvh.depth, s->bvh.build_seconds * 1e3);
     } else if (s->accel == TR_ACCEL_TYPE_EMBREE) {
         snprintf(buf, n, "embree (built in %.1f ms)", tr_scene_embree_build_seconds(s) * 1e3);
     } else {

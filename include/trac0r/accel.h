@@ -16,6 +16,9 @@ typedef enum tr_accel_type {
     TR_ACCEL_TYPE_FLAT = TR_ACCEL_FLAT,     /* the thesis's flat list of shape boxes */
     TR_ACCEL_TYPE_BVH = TR_ACCEL_BVH,       /* binned-SAH binary BVH */
     TR_ACCEL_TYPE_EMBREE = TR_ACCEL_EMBREE, /* Intel Embree 3 (CPU only; see tr_accel_available) */
+    /* The binary BVH alone, without the wide BVH the CPU traverses for TR_ACCEL_TYPE_BVH:
+     * for comparisons (--accel bvh2). Its scene view is a TR_ACCEL_BVH view. */
+    TR_ACCEL_TYPE_BVH2 = 3,
 } tr_accel_type;
 
 typedef struct tr_bvh {
@@ -28,6 +31,7 @@ typedef struct tr_bvh {
     uint32_t depth;   /* deepest leaf, root = 0 */
     uint32_t skipped; /* degenerate triangles (zero area, NaN/Inf) left out */
     double build_seconds;
+    uint32_t refits; /* times tr_bvh_refit ran: a wide BVH collapsed before is stale */
 } tr_bvh;
 
 /* Builds a BVH over n triangles with the binned surface-area heuristic (Wald, "On fast
@@ -63,11 +67,66 @@ int tr_embree_build(tr_embree *e, const tr_triangle *tris, uint32_t n, tr_error 
 /* Releases the Embree scene and device; safe on a zeroed or already freed tr_embree. */
 void tr_embree_free(tr_embree *e);
 
-/* "flat" / "bvh" / "embree" <-> tr_accel_type; returns -1 for an unknown name.
+/* The wide BVH (src/accel/wbvh.c), host only: the binary BVH collapsed into nodes of
+ * TR_WBVH_WIDTH children whose boxes are stored axis by axis (structure of arrays), so
+ * that one ray meets all of a node's boxes in a few SIMD instructions, and leaves whose
+ * triangles come in packets of four, also stored lane by lane, tested four at a time.
+ * The width follows the compiler's target: 8 with AVX2 (one 256-bit register per
+ * plane), 4 otherwise (SSE2, or the portable scalar code on other CPUs). The binary BVH
+ * stays as it is: devices trace that one. */
+#if defined(__AVX2__)
+#define TR_WBVH_WIDTH 8
+#else
+#define TR_WBVH_WIDTH 4
+#endif
+#define TR_WBVH_LEAF_BIT 0x80000000u /* child entry: leaf, with packet count and start */
+#define TR_WBVH_LEAF_SHIFT 27        /* packet count in bits 27..30 */
+#define TR_WBVH_LEAF_MAX_PACKETS 15u
+#define TR_WBVH_EMPTY TR_WBVH_LEAF_BIT /* an unused child slot: a leaf of no packets */
+
+/* One node: the boxes of its children as bounds[2 * axis + side][child] (side 0 the
+ * minimum, 1 the maximum); unused slots have the empty box (+inf, -inf), which no ray
+ * meets. child[i] is a node index, or TR_WBVH_LEAF_BIT | packets << 27 | first packet. */
+typedef struct tr_wbvh_node {
+    _Alignas(32) float bounds[6][TR_WBVH_WIDTH];
+    uint32_t child[TR_WBVH_WIDTH];
+} tr_wbvh_node;
+
+/* Four leaf triangles, lane by lane: v0 and the edges e1 = v1 - v0, e2 = v2 - v0 as in
+ * tr_bvh_tri, and the scene triangle index. Unused lanes are all zero (a degenerate
+ * triangle, which never hits). 160 bytes. */
+typedef struct tr_wbvh_tri4 {
+    _Alignas(16) float v0[3][4];
+    float e1[3][4];
+    float e2[3][4];
+    uint32_t index[4];
+} tr_wbvh_tri4;
+
+typedef struct tr_wbvh {
+    tr_wbvh_node *nodes; /* node 0 is the root; 0 nodes for an empty scene */
+    uint32_t node_count;
+    tr_wbvh_tri4 *packets;
+    uint32_t packet_count;
+    uint32_t leaf_count;
+    uint32_t depth;       /* deepest node, root = 0 */
+    uint32_t bvh_refits;  /* tr_bvh.refits of the tree it was collapsed from */
+    double build_seconds; /* the collapse alone (the binary build comes before) */
+} tr_wbvh;
+
+/* Collapses a built binary BVH into *w, which it overwrites: each wide node takes the
+ * children of a binary node and keeps opening the largest-area interior one among them
+ * until it has TR_WBVH_WIDTH (as in Wald et al., "Getting Rid of Packets", RT 2008, and
+ * Embree); binary subtrees of at most four triangles become one leaf packet. */
+int tr_wbvh_build(tr_wbvh *w, const tr_bvh *bvh, tr_error *err);
+void tr_wbvh_free(tr_wbvh *w);
+/* Which traversal this build uses: "avx512", "avx2", "sse2" or "scalar". */
+const char *tr_wbvh_isa(void);
+
+/* "flat" / "bvh" / "embree" / "bvh2" <-> tr_accel_type; returns -1 for an unknown name.
  * tr_accel_from_name knows "embree" even where it is not available. */
 int tr_accel_from_name(const char *name);
 const char *tr_accel_name(tr_accel_type type);
-/* 1 when tr_scene_commit can build this structure: flat and bvh always, embree only
+/* 1 when tr_scene_commit can build this structure: flat, bvh and bvh2 always, embree only
  * in builds configured with Embree 3 (TRAC0R_HAVE_EMBREE). */
 int tr_accel_available(tr_accel_type type);
 

@@ -59,6 +59,7 @@ typedef struct tr_scene {
     /* Set by tr_scene_commit: the structure rays are traced through. */
     tr_accel_type accel;
     tr_bvh bvh;
+    tr_wbvh wbvh;                 /* collapsed from bvh for TR_ACCEL_TYPE_BVH (host traversal) */
     tr_embree embree;             /* built for TR_ACCEL_TYPE_EMBREE only */
     uint32_t committed_triangles; /* triangle count when the BVH or Embree scene was built */
 } tr_scene;
@@ -103,6 +104,13 @@ int tr_scene_builtin(tr_scene *s, const char *name, uint32_t width, uint32_t hei
 int tr_scene_commit(tr_scene *s, tr_accel_type accel, tr_error *err);
 /* Whether the committed structure covers the scene's current triangles. */
 int tr_scene_is_committed(const tr_scene *s);
+/* After moving triangles (same count) of a scene committed to a BVH: refits the binary
+ * BVH's boxes (tr_bvh_refit) and collapses the wide BVH again. A view taken after a bare
+ * tr_bvh_refit uses the binary BVH until this runs. */
+int tr_scene_refit(tr_scene *s, tr_error *err);
+/* Seconds tr_scene_commit took to build the BVH: the binary build plus, for
+ * TR_ACCEL_TYPE_BVH, the wide collapse (0 for other structures). */
+double tr_scene_bvh_build_seconds(const tr_scene *s);
 /* Seconds tr_scene_commit took to build the Embree scene (0 unless the scene is
  * committed to TR_ACCEL_TYPE_EMBREE). */
 double tr_scene_embree_build_seconds(const tr_scene *s);

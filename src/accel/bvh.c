@@ -6,7 +6,7 @@
 #include "trac0r/render.h"
 
 enum {
-    BINS = 16,       /* SAH bins per axis */
+    BINS = 16,       /* SAH bins per axis (nodes of fewer triangles use one per triangle) */
     MAX_LEAF = 8,    /* a node this small may become a leaf when the SAH says so */
     FORCED_LEAF = 2, /* a node this small always becomes a leaf */
     SAH_DEPTH = 32,  /* below this depth, split at the object median to bound depth */
@@ -59,45 +59,113 @@ typedef struct bin {
     uint32_t count;
 } bin;
 
+enum {
+    /* Nodes with at least this many triangles are bounded and binned by all threads (the
+     * top levels of a big build, before there are subtrees to share out). */
+    PARALLEL_NODE_MIN = 1u << 16,
+};
+
+static int bin_index(float c, float lo, float scale, int nb) {
+    int i = (int)((c - lo) * scale);
+    return i < 0 ? 0 : i >= nb ? nb - 1 : i;
+}
+
+/* Bins indices[first, end) on all three axes into bins[axis][]; an axis that is not
+ * active has lo = scale = 0 here (every triangle lands in bin 0, which is ignored), so
+ * the loop has no branches on the axis. */
+static void bin_range(const builder *b, uint32_t first, uint32_t end, const float lo[3],
+                      const float scale[3], int nb, bin bins[3][BINS]) {
+    for (uint32_t k = first; k < end; ++k) {
+        uint32_t t = b->indices[k];
+        const tr_vec3 c = b->centroids[t];
+        const tr_aabb box = b->boxes[t];
+        const int ix = bin_index(c.x, lo[0], scale[0], nb);
+        const int iy = bin_index(c.y, lo[1], scale[1], nb);
+        const int iz = bin_index(c.z, lo[2], scale[2], nb);
+        bins[0][ix].box = box_union(bins[0][ix].box, box);
+        bins[0][ix].count++;
+        bins[1][iy].box = box_union(bins[1][iy].box, box);
+        bins[1][iy].count++;
+        bins[2][iz].box = box_union(bins[2][iz].box, box);
+        bins[2][iz].count++;
+    }
+}
+
+static void bins_clear(bin bins[3][BINS], int nb) {
+    for (int axis = 0; axis < 3; ++axis) {
+        for (int i = 0; i < nb; ++i) {
+            bins[axis][i].box = box_empty();
+            bins[axis][i].count = 0;
+        }
+    }
+}
+
 /* The best SAH split of indices[first, first+count): returns its cost (relative to
  * testing all triangles in one leaf, in units of triangle tests) and sets the axis and
- * the bin boundary; INFINITY when no axis has any extent. */
+ * the bin boundary; INFINITY when no axis has any extent. Big nodes are binned by all
+ * threads, each into bins of its own, merged after: box unions and counts do not depend
+ * on the order, so neither does the tree. */
 static float find_split(const builder *b, uint32_t first, uint32_t count, tr_aabb cbox,
-                        float node_area, int *best_axis, int *best_bin) {
+                        float node_area, int nb, int *best_axis, int *best_bin) {
     float best = INFINITY;
+    float lo[3], scale[3];
+    int active[3], any = 0;
     for (int axis = 0; axis < 3; ++axis) {
-        float lo = axis_of(cbox.min, axis), hi = axis_of(cbox.max, axis);
-        float scale = (float)BINS / (hi - lo);
+        float hi = axis_of(cbox.max, axis);
+        lo[axis] = axis_of(cbox.min, axis);
+        scale[axis] = (float)nb / (hi - lo[axis]);
         /* No extent, or one so small (or large) that binning would overflow. */
-        if (!(hi > lo) || !(scale > 0.0f && scale < INFINITY)) {
+        active[axis] = hi > lo[axis] && scale[axis] > 0.0f && scale[axis] < INFINITY;
+        any |= active[axis];
+        if (!active[axis]) {
+            lo[axis] = scale[axis] = 0.0f;
+        }
+    }
+    if (!any) {
+        return INFINITY;
+    }
+    bin bins[3][BINS];
+    bins_clear(bins, nb);
+    if (count >= PARALLEL_NODE_MIN) {
+#pragma omp parallel
+        {
+            bin local[3][BINS];
+            bins_clear(local, nb);
+            const int64_t end = (int64_t)first + count;
+#pragma omp for schedule(static) nowait
+            for (int64_t k = first; k < end; k += 4096) {
+                uint32_t stop = (uint32_t)(k + 4096 < end ? k + 4096 : end);
+                bin_range(b, (uint32_t)k, stop, lo, scale, nb, local);
+            }
+#pragma omp critical
+            for (int axis = 0; axis < 3; ++axis) {
+                for (int i = 0; i < nb; ++i) {
+                    bins[axis][i].box = box_union(bins[axis][i].box, local[axis][i].box);
+                    bins[axis][i].count += local[axis][i].count;
+                }
+            }
+        }
+    } else {
+        bin_range(b, first, first + count, lo, scale, nb, bins);
+    }
+    for (int axis = 0; axis < 3; ++axis) {
+        if (!active[axis]) {
             continue;
         }
-        bin bins[BINS];
-        for (int i = 0; i < BINS; ++i) {
-            bins[i].box = box_empty();
-            bins[i].count = 0;
-        }
-        for (uint32_t k = first; k < first + count; ++k) {
-            uint32_t t = b->indices[k];
-            int i = (int)((axis_of(b->centroids[t], axis) - lo) * scale);
-            i = i < 0 ? 0 : i >= BINS ? BINS - 1 : i;
-            bins[i].box = box_union(bins[i].box, b->boxes[t]);
-            bins[i].count++;
-        }
-        /* Sweep from the right, then from the left, evaluating each of the BINS-1 planes. */
+        /* Sweep from the right, then from the left, evaluating each of the nb-1 planes. */
         float right_cost[BINS];
         tr_aabb acc = box_empty();
         uint32_t n = 0;
-        for (int i = BINS - 1; i > 0; --i) {
-            acc = box_union(acc, bins[i].box);
-            n += bins[i].count;
+        for (int i = nb - 1; i > 0; --i) {
+            acc = box_union(acc, bins[axis][i].box);
+            n += bins[axis][i].count;
             right_cost[i] = box_area(acc) * (float)n;
         }
         acc = box_empty();
         n = 0;
-        for (int i = 0; i < BINS - 1; ++i) {
-            acc = box_union(acc, bins[i].box);
-            n += bins[i].count;
+        for (int i = 0; i < nb - 1; ++i) {
+            acc = box_union(acc, bins[axis][i].box);
+            n += bins[axis][i].count;
             if (n == 0 || n == count) {
                 continue;
             }
@@ -156,11 +224,32 @@ typedef struct task {
  * the left child (the indices are partitioned accordingly), or 0 for a leaf. */
 static uint32_t split_node(builder *b, const task *t, tr_bvh_node *node) {
     tr_aabb box = box_empty(), cbox = box_empty();
-    for (uint32_t k = t->first; k < t->first + t->count; ++k) {
-        uint32_t i = b->indices[k];
-        box = box_union(box, b->boxes[i]);
-        cbox.min = v3_min(cbox.min, b->centroids[i]);
-        cbox.max = v3_max(cbox.max, b->centroids[i]);
+    if (t->count >= PARALLEL_NODE_MIN) {
+        /* Bounds by all threads, merged (min and max do not depend on the order). */
+#pragma omp parallel
+        {
+            tr_aabb lbox = box_empty(), lcbox = box_empty();
+            const int64_t end = (int64_t)t->first + t->count;
+#pragma omp for schedule(static) nowait
+            for (int64_t k = t->first; k < end; ++k) {
+                uint32_t i = b->indices[k];
+                lbox = box_union(lbox, b->boxes[i]);
+                lcbox.min = v3_min(lcbox.min, b->centroids[i]);
+                lcbox.max = v3_max(lcbox.max, b->centroids[i]);
+            }
+#pragma omp critical
+            {
+                box = box_union(box, lbox);
+                cbox = box_union(cbox, lcbox);
+            }
+        }
+    } else {
+        for (uint32_t k = t->first; k < t->first + t->count; ++k) {
+            uint32_t i = b->indices[k];
+            box = box_union(box, b->boxes[i]);
+            cbox.min = v3_min(cbox.min, b->centroids[i]);
+            cbox.max = v3_max(cbox.max, b->centroids[i]);
+        }
     }
     node->box = box;
     node->left_first = t->first;
@@ -170,17 +259,20 @@ static uint32_t split_node(builder *b, const task *t, tr_bvh_node *node) {
     }
     int axis = 0, split_bin = 0;
     float cost = INFINITY;
+    /* Fewer bins than triangles only cost time: small nodes get one per triangle (at
+     * least 4); most nodes are small, and the bins' set-up and sweeps dominate there. */
+    const int nbins = t->count >= BINS ? BINS : t->count < 4 ? 4 : (int)t->count;
     if (t->depth < SAH_DEPTH) {
-        cost = find_split(b, t->first, t->count, cbox, box_area(box), &axis, &split_bin);
+        cost = find_split(b, t->first, t->count, cbox, box_area(box), nbins, &axis, &split_bin);
     }
     if (cost < INFINITY && (cost < (float)t->count || t->count > MAX_LEAF)) {
         /* Partition by the chosen bin plane, binning exactly as find_split did. */
         float lo = axis_of(cbox.min, axis);
-        float scale = (float)BINS / (axis_of(cbox.max, axis) - lo);
+        float scale = (float)nbins / (axis_of(cbox.max, axis) - lo);
         uint32_t i = t->first, j = t->first + t->count;
         while (i < j) {
             int bi = (int)((axis_of(b->centroids[b->indices[i]], axis) - lo) * scale);
-            bi = bi < 0 ? 0 : bi >= BINS ? BINS - 1 : bi;
+            bi = bi < 0 ? 0 : bi >= nbins ? nbins - 1 : bi;
             if (bi <= split_bin) {
                 ++i;
             } else {
@@ -240,8 +332,8 @@ static uint32_t build_nodes(builder *b, task root, tr_bvh_node *nodes, uint32_t 
 }
 
 enum {
-    PARALLEL_MIN = 1u << 16, /* fewer triangles than this build on one thread */
-    CUT_DEPTH = 4,           /* the top levels are built serially, up to 16 subtrees after */
+    PARALLEL_MIN = PARALLEL_NODE_MIN, /* fewer triangles than this build on one thread */
+    CUT_DEPTH = 4, /* the top levels are built serially, up to 16 subtrees after */
 };
 
 /* Builds the tree over indices[0, n) into b->nodes. Large trees are built in two
@@ -259,7 +351,7 @@ static int build_tree(builder *b, uint32_t n, uint32_t *leaves_out, uint32_t *de
     uint32_t sub_count[1u << CUT_DEPTH] = {0}, sub_leaves[1u << CUT_DEPTH] = {0};
     uint32_t sub_depth[1u << CUT_DEPTH] = {0};
     int failed = 0;
-#pragma omp parallel for schedule(dynamic, 1) reduction(| : failed)
+#pragma omp parallel for schedule(dynamic, 1) reduction(| : failed) if (cuts > 1)
     for (int k = 0; k < (int)cuts; ++k) {
         sub[k] = malloc((size_t)(2 * (uint64_t)cut[k].count) * sizeof *sub[k]);
         if (!sub[k]) {
@@ -365,6 +457,7 @@ int tr_bvh_build(tr_bvh *bvh, const tr_triangle *tris, uint32_t n, tr_error *err
 }
 
 void tr_bvh_refit(tr_bvh *bvh, const tr_triangle *tris) {
+    bvh->refits++;
     bvh_fill_tris(bvh, tris);
     for (uint32_t i = bvh->node_count; i-- > 0;) {
         tr_bvh_node *n = &bvh->nodes[i];
@@ -397,6 +490,9 @@ int tr_accel_from_name(const char *name) {
     if (strcmp(name, "embree") == 0) {
         return TR_ACCEL_TYPE_EMBREE;
     }
+    if (strcmp(name, "bvh2") == 0) {
+        return TR_ACCEL_TYPE_BVH2;
+    }
     return -1;
 }
 
@@ -408,6 +504,8 @@ const char *tr_accel_name(tr_accel_type type) {
         return "bvh";
     case TR_ACCEL_TYPE_EMBREE:
         return "embree";
+    case TR_ACCEL_TYPE_BVH2:
+        return "bvh2";
     }
     return "unknown";
 }
@@ -416,6 +514,7 @@ int tr_accel_available(tr_accel_type type) {
     switch (type) {
     case TR_ACCEL_TYPE_FLAT:
     case TR_ACCEL_TYPE_BVH:
+    case TR_ACCEL_TYPE_BVH2:
         return 1;
     case TR_ACCEL_TYPE_EMBREE:
 #ifdef TRAC0R_HAVE_EMBREE

@@ -20,6 +20,15 @@ int tr_embree_intersect(const void *scene, const tr_ray *ray, tr_hit *hit);
 int tr_embree_occluded(const void *scene, const tr_ray *ray);
 #endif
 
+/* The wide BVH (src/accel/wbvh.c) is host code too: host builds trace TR_ACCEL_BVH views
+ * through it when the view holds one, OpenCL C walks the binary BVH. */
+#if !defined(__OPENCL_C_VERSION__) && !defined(__OPENCL_VERSION__)
+#define TR_SCENE_VIEW_WBVH 1
+struct tr_wbvh;
+int tr_wbvh_intersect(const struct tr_wbvh *w, const tr_ray *ray, tr_hit *hit);
+int tr_wbvh_occluded(const struct tr_wbvh *w, const tr_ray *ray);
+#endif
+
 typedef struct tr_scene_view {
     TR_CONST_GLOBAL tr_triangle *triangles;
     TR_CONST_GLOBAL tr_material *materials;
@@ -33,6 +42,9 @@ typedef struct tr_scene_view {
     uint32_t accel;          /* TR_ACCEL_*: which structure tr_intersect_scene walks */
 #ifdef TR_SCENE_VIEW_EMBREE
     const void *embree_scene; /* RTCScene, for TR_ACCEL_EMBREE */
+#endif
+#ifdef TR_SCENE_VIEW_WBVH
+    const struct tr_wbvh *wbvh; /* TR_ACCEL_BVH: the wide BVH, or NULL for the binary one */
 #endif
 } tr_scene_view;
 
@@ -150,6 +162,11 @@ TR_FN int tr_intersect_scene(const tr_scene_view *s, const tr_ray *ray, tr_hit *
         return tr_embree_intersect(s->embree_scene, ray, hit);
     }
 #endif
+#ifdef TR_SCENE_VIEW_WBVH
+    if (s->accel == TR_ACCEL_BVH && s->wbvh) {
+        return tr_wbvh_intersect(s->wbvh, ray, hit);
+    }
+#endif
     if (s->accel == TR_ACCEL_BVH) {
         return tr_traverse_bvh(s, ray, hit, 0);
     }
@@ -162,6 +179,11 @@ TR_FN int tr_occluded_scene(const tr_scene_view *s, const tr_ray *ray) {
 #ifdef TR_SCENE_VIEW_EMBREE
     if (s->accel == TR_ACCEL_EMBREE) {
         return tr_embree_occluded(s->embree_scene, ray);
+    }
+#endif
+#ifdef TR_SCENE_VIEW_WBVH
+    if (s->accel == TR_ACCEL_BVH && s->wbvh) {
+        return tr_wbvh_occluded(s->wbvh, ray);
     }
 #endif
     if (s->accel == TR_ACCEL_BVH) {

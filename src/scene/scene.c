@@ -38,6 +38,7 @@ void tr_scene_free(tr_scene *s) {
     free(s->triangles);
     free(s->shapes);
     tr_bvh_free(&s->bvh);
+    tr_wbvh_free(&s->wbvh);
     tr_embree_free(&s->embree);
     tr_scene_init(s);
 }
@@ -79,6 +80,7 @@ int tr_scene_add_material(tr_scene *s, tr_material m, uint32_t *index, tr_error 
 
 int tr_scene_commit(tr_scene *s, tr_accel_type accel, tr_error *err) {
     tr_bvh_free(&s->bvh);
+    tr_wbvh_free(&s->wbvh);
     tr_embree_free(&s->embree);
     s->accel = TR_ACCEL_TYPE_FLAT;
     s->committed_triangles = 0;
@@ -86,6 +88,18 @@ int tr_scene_commit(tr_scene *s, tr_accel_type accel, tr_error *err) {
     case TR_ACCEL_TYPE_FLAT:
         return TR_OK;
     case TR_ACCEL_TYPE_BVH:
+        if (tr_bvh_build(&s->bvh, s->triangles, s->triangle_count, err) != TR_OK) {
+            return TR_ERR;
+        }
+        /* The CPU traverses the wide BVH collapsed from the binary one. */
+        if (tr_wbvh_build(&s->wbvh, &s->bvh, err) != TR_OK) {
+            tr_bvh_free(&s->bvh);
+            return TR_ERR;
+        }
+        s->accel = accel;
+        s->committed_triangles = s->triangle_count;
+        return TR_OK;
+    case TR_ACCEL_TYPE_BVH2:
         if (tr_bvh_build(&s->bvh, s->triangles, s->triangle_count, err) != TR_OK) {
             return TR_ERR;
         }
@@ -107,6 +121,27 @@ int tr_scene_is_committed(const tr_scene *s) {
     return s->accel == TR_ACCEL_TYPE_FLAT || s->committed_triangles == s->triangle_count;
 }
 
+int tr_scene_refit(tr_scene *s, tr_error *err) {
+    if (s->accel != TR_ACCEL_TYPE_BVH && s->accel != TR_ACCEL_TYPE_BVH2) {
+        return TR_OK;
+    }
+    tr_bvh_refit(&s->bvh, s->triangles);
+    if (s->accel == TR_ACCEL_TYPE_BVH) {
+        tr_wbvh_free(&s->wbvh);
+        if (tr_wbvh_build(&s->wbvh, &s->bvh, err) != TR_OK) {
+            return TR_ERR; /* the view falls back to the binary BVH */
+        }
+    }
+    return TR_OK;
+}
+
+double tr_scene_bvh_build_seconds(const tr_scene *s) {
+    if (s->accel == TR_ACCEL_TYPE_BVH) {
+        return s->bvh.build_seconds + s->wbvh.build_seconds;
+    }
+    return s->accel == TR_ACCEL_TYPE_BVH2 ? s->bvh.build_seconds : 0.0;
+}
+
 double tr_scene_embree_build_seconds(const tr_scene *s) {
     return s->accel == TR_ACCEL_TYPE_EMBREE ? s->embree.build_seconds : 0.0;
 }
@@ -122,7 +157,10 @@ tr_scene_view tr_scene_view_of(const tr_scene *s) {
     v.material_count = s->material_count;
     v.flat_node_count = s->shape_count;
     v.bvh_node_count = s->bvh.node_count;
-    v.accel = (uint32_t)s->accel;
+    v.accel = s->accel == TR_ACCEL_TYPE_BVH2 ? TR_ACCEL_BVH : (uint32_t)s->accel;
+    /* The wide BVH only while it matches the binary one (tr_bvh_refit moves the binary
+     * boxes; tr_scene_refit refits both). */
+    v.wbvh = s->accel == TR_ACCEL_TYPE_BVH && s->wbvh.bvh_refits == s->bvh.refits ? &s->wbvh : NULL;
 #ifdef TR_SCENE_VIEW_EMBREE
     v.embree_scene = s->embree.scene;
 #endif

@@ -1,0 +1,257 @@
+/* wbvh.c - the wide BVH: collapsed from the binary BVH, traversed with SIMD (host only). */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "accel/wbvh_traverse.h"
+#include "kernel/scene_view.h"
+#include "trac0r/accel.h"
+#include "trac0r/render.h"
+
+enum {
+    LEAF_MERGE = 4, /* binary subtrees of at most this many triangles become one packet */
+};
+
+_Static_assert(TR_BVH_STACK_SIZE < 1 << 8, "recursion depth of the collapse");
+
+/* A leaf of the wide tree: its packets, filled after the tree is laid out. */
+typedef struct leaf_rec {
+    uint32_t packet, first, count;
+} leaf_rec;
+
+typedef struct collapser {
+    const tr_bvh *bvh;
+    uint32_t *sub_first; /* per binary node: its subtree's run of leaf triangles */
+    uint32_t *sub_count;
+    tr_wbvh *w;
+    leaf_rec *leaves;
+    uint32_t node_cap, packet_cap, leaf_cap;
+    int failed;
+} collapser;
+
+static float box_area(tr_aabb b) {
+    tr_vec3 d = v3_sub(b.max, b.min);
+    return d.x * d.y + d.y * d.z + d.z * d.x;
+}
+
+/* Whether binary node i becomes a leaf of the wide tree: a binary leaf, or a subtree
+ * small enough for one packet. */
+static int is_wide_leaf(const collapser *c, uint32_t i) {
+    return c->bvh->nodes[i].count > 0 || c->sub_count[i] <= LEAF_MERGE;
+}
+
+static uint32_t emit_leaf(collapser *c, uint32_t first, uint32_t count) {
+    tr_wbvh *w = c->w;
+    uint32_t packets = (count + 3) / 4;
+    /* The arrays are sized for the worst case (see tr_wbvh_build); the checks only guard
+     * that bound. */
+    if (packets > TR_WBVH_LEAF_MAX_PACKETS || w->packet_count + packets > c->packet_cap ||
+        w->leaf_count == c->leaf_cap || c->packet_cap > (1u << TR_WBVH_LEAF_SHIFT)) {
+        c->failed = 1;
+        return TR_WBVH_EMPTY;
+    }
+    leaf_rec *l = &c->leaves[w->leaf_count++];
+    l->packet = w->packet_count;
+    l->first = first;
+    l->count = count;
+    w->packet_count += packets;
+    return TR_WBVH_LEAF_BIT | packets << TR_WBVH_LEAF_SHIFT | l->packet;
+}
+
+/* Writes a leaf's triangles into its packets, lane by lane. */
+static void fill_leaf(const tr_bvh *bvh, tr_wbvh_tri4 *packets, const leaf_rec *l) {
+    for (uint32_t p = 0; 4 * p < l->count; ++p) {
+        tr_wbvh_tri4 *q = &packets[l->packet + p];
+        memset(q, 0, sizeof *q);
+        for (uint32_t k = 0; k < 4 && 4 * p + k < l->count; ++k) {
+            const tr_bvh_tri *t = &bvh->tris[l->first + 4 * p + k];
+            q->v0[0][k] = t->v0.x;
+            q->v0[1][k] = t->v0.y;
+            q->v0[2][k] = t->v0.z;
+            q->e1[0][k] = t->e1.x;
+            q->e1[1][k] = t->e1.y;
+            q->e1[2][k] = t->e1.z;
+            q->e2[0][k] = t->e2.x;
+            q->e2[1][k] = t->e2.y;
+            q->e2[2][k] = t->e2.z;
+            q->index[k] = t->index;
+        }
+    }
+}
+
+/* Emits the wide node for the binary nodes slots[0, count) (the children it starts
+ * from) and everything below it; returns its index. */
+static uint32_t emit_node(collapser *c, uint32_t *slots, int count, uint32_t depth) {
+    const tr_bvh_node *bn = c->bvh->nodes;
+    /* Open the largest interior slot until the node is full (areas and kinds computed
+     * once per slot). */
+    float area[TR_WBVH_WIDTH];
+    int leaf[TR_WBVH_WIDTH];
+    for (int i = 0; i < count; ++i) {
+        area[i] = box_area(bn[slots[i]].box);
+        leaf[i] = is_wide_leaf(c, slots[i]);
+    }
+    while (count < TR_WBVH_WIDTH) {
+        int best = -1;
+        float best_area = -1.0f;
+        for (int i = 0; i < count; ++i) {
+            if (!leaf[i] && area[i] > best_area) {
+                best = i;
+                best_area = area[i];
+            }
+        }
+        if (best < 0) {
+            break;
+        }
+        uint32_t l = bn[slots[best]].left_first;
+        slots[best] = l;
+        slots[count] = l + 1;
+        area[best] = box_area(bn[l].box);
+        leaf[best] = is_wide_leaf(c, l);
+        area[count] = box_area(bn[l + 1].box);
+        leaf[count] = is_wide_leaf(c, l + 1);
+        ++count;
+    }
+    tr_wbvh *w = c->w;
+    if (w->node_count == c->node_cap) {
+        c->failed = 1;
+        return 0;
+    }
+    uint32_t index = w->node_count++;
+    w->depth = depth > w->depth ? depth : w->depth;
+    tr_wbvh_node node;
+    for (int i = 0; i < TR_WBVH_WIDTH; ++i) {
+        for (int a = 0; a < 3; ++a) {
+            node.bounds[2 * a][i] = INFINITY;
+            node.bounds[2 * a + 1][i] = -INFINITY;
+        }
+        node.child[i] = TR_WBVH_EMPTY;
+    }
+    for (int i = 0; i < count && !c->failed; ++i) {
+        uint32_t s = slots[i];
+        const tr_aabb b = bn[s].box;
+        node.bounds[0][i] = b.min.x;
+        node.bounds[1][i] = b.max.x;
+        node.bounds[2][i] = b.min.y;
+        node.bounds[3][i] = b.max.y;
+        node.bounds[4][i] = b.min.z;
+        node.bounds[5][i] = b.max.z;
+        if (leaf[i]) {
+            node.child[i] = emit_leaf(c, c->sub_first[s], c->sub_count[s]);
+        } else {
+            uint32_t kids[TR_WBVH_WIDTH] = {bn[s].left_first, bn[s].left_first + 1};
+            node.child[i] = emit_node(c, kids, 2, depth + 1);
+        }
+    }
+    if (!c->failed) {
+        w->nodes[index] = node; /* after the recursion: it may have moved the array */
+    }
+    return index;
+}
+
+/* aligned_alloc wants a multiple of the alignment. */
+static size_t round64(size_t bytes) {
+    return (bytes + 63) & ~(size_t)63;
+}
+
+void tr_wbvh_free(tr_wbvh *w) {
+    free(w->nodes);
+    free(w->packets);
+    memset(w, 0, sizeof *w);
+}
+
+int tr_wbvh_build(tr_wbvh *w, const tr_bvh *bvh, tr_error *err) {
+    double t0 = tr_time_now();
+    memset(w, 0, sizeof *w);
+    w->bvh_refits = bvh->refits;
+    if (bvh->node_count == 0) {
+        w->build_seconds = tr_time_now() - t0;
+        return TR_OK;
+    }
+    collapser c;
+    memset(&c, 0, sizeof c);
+    c.bvh = bvh;
+    c.w = w;
+    c.sub_first = malloc((size_t)bvh->node_count * sizeof *c.sub_first);
+    c.sub_count = malloc((size_t)bvh->node_count * sizeof *c.sub_count);
+    /* Worst cases, allocated once (pages never written are never backed by memory): every
+     * wide node opens at least one binary interior node (the root may be a lone leaf),
+     * and every wide leaf is a binary leaf of at most 8 triangles (two packets) or a
+     * merged subtree of two or more binary leaves (one packet). */
+    c.node_cap = bvh->leaf_count;
+    c.leaf_cap = bvh->leaf_count;
+    c.packet_cap = 2 * bvh->leaf_count;
+    w->nodes = aligned_alloc(64, round64((size_t)c.node_cap * sizeof *w->nodes));
+    w->packets = aligned_alloc(64, round64((size_t)c.packet_cap * sizeof *w->packets));
+    c.leaves = malloc((size_t)c.leaf_cap * sizeof *c.leaves);
+    if (!c.sub_first || !c.sub_count || !w->nodes || !w->packets || !c.leaves) {
+        c.failed = 1;
+    }
+    /* Children come after their parents: one backward pass gives every subtree's run of
+     * triangles, which is contiguous (the builder partitions its parent's run). */
+    for (uint32_t i = bvh->node_count; i-- > 0 && !c.failed;) {
+        const tr_bvh_node *n = &bvh->nodes[i];
+        if (n->count > 0) {
+            c.sub_first[i] = n->left_first;
+            c.sub_count[i] = n->count;
+        } else {
+            uint32_t l = n->left_first, r = l + 1;
+            c.sub_first[i] = c.sub_first[l] < c.sub_first[r] ? c.sub_first[l] : c.sub_first[r];
+            c.sub_count[i] = c.sub_count[l] + c.sub_count[r];
+            /* A subtree whose run were not contiguous could not be merged into one leaf;
+             * mark it too big to merge. */
+            if (c.sub_first[l] + c.sub_count[l] != c.sub_first[r] &&
+                c.sub_first[r] + c.sub_count[r] != c.sub_first[l]) {
+                c.sub_count[i] = UINT32_MAX / 2;
+            }
+        }
+    }
+    if (!c.failed) {
+        uint32_t slots[TR_WBVH_WIDTH] = {0};
+        if (bvh->nodes[0].count > 0 || c.sub_count[0] <= LEAF_MERGE) {
+            emit_node(&c, slots, 1, 0); /* the root is one leaf: a node holding it */
+        } else {
+            slots[0] = bvh->nodes[0].left_first;
+            slots[1] = slots[0] + 1;
+            emit_node(&c, slots, 2, 0);
+        }
+    }
+    if (!c.failed) {
+        const int leaves = (int)w->leaf_count;
+#pragma omp parallel for schedule(static, 4096) if (leaves > 65536)
+        for (int i = 0; i < leaves; ++i) {
+            fill_leaf(bvh, w->packets, &c.leaves[i]);
+        }
+    }
+    free(c.sub_first);
+    free(c.sub_count);
+    free(c.leaves);
+    if (c.failed) {
+        tr_wbvh_free(w);
+        return tr_error_set(err, "out of memory collapsing a BVH of %u nodes into a wide BVH",
+                            bvh->node_count);
+    }
+    w->build_seconds = tr_time_now() - t0;
+    return TR_OK;
+}
+
+const char *tr_wbvh_isa(void) {
+#if defined(TR_WBVH_AVX2) && defined(__AVX512VL__)
+    return "avx512";
+#elif defined(TR_WBVH_AVX2)
+    return "avx2";
+#elif defined(TR_WBVH_SSE2)
+    return "sse2";
+#else
+    return "scalar";
+#endif
+}
+
+int tr_wbvh_intersect(const struct tr_wbvh *w, const tr_ray *ray, tr_hit *hit) {
+    return tr_wbvh_traverse(w, ray, hit, 0);
+}
+
+int tr_wbvh_occluded(const struct tr_wbvh *w, const tr_ray *ray) {
+    tr_hit hit;
+    return tr_wbvh_traverse(w, ray, &hit, 1);
+}
