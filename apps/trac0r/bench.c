@@ -42,6 +42,7 @@ static int bench_frame(int argc, char **argv) {
     cli_args a = {.cmd = "bench frame", .argc = argc, .argv = argv, .i = 0};
     cli_common c;
     cli_common_default(&c);
+    c.integrator = TR_INTEGRATOR_NAIVE; /* the thesis's frame */
     int frames = 20;
     while (cli_next(&a)) {
         int rc = cli_common_option(&a, &c);
@@ -85,9 +86,10 @@ static int bench_frame(int argc, char **argv) {
 
     char accel[160];
     cli_describe_accel(accel, sizeof accel, &scene);
-    printf("bench frame: %s, %ux%u, 1 spp/frame, integrator naive, max depth %d, %d thread%s, "
+    printf("bench frame: %s, %ux%u, 1 spp/frame, integrator %s, max depth %d, %d thread%s, "
            "%u triangles, accel %s\n",
-           c.scene, c.width, c.height, c.max_depth, threads, threads == 1 ? "" : "s",
+           c.scene, c.width, c.height, c.integrator == TR_INTEGRATOR_PT ? "pt" : "naive",
+           c.max_depth, threads, threads == 1 ? "" : "s",
            scene.triangle_count, accel);
     uint64_t rays = 0;
     double total = 0.0;
