@@ -49,6 +49,8 @@ TR_FN float tr_light_pdf_area(const tr_scene_view *s, const tr_material *m, floa
 /* A point on an emitter: *tri_index the triangle, *p the point; returns the area
  * density of the choice (0 when the scene has no emitters). */
 TR_FN float tr_light_sample(const tr_scene_view *s, tr_rng *rng, uint32_t *tri_index, tr_vec3 *p) {
+    *tri_index = 0u;
+    *p = v3s(0.0f);
     if (s->light_count == 0) {
         return 0.0f;
     }
