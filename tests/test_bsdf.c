@@ -199,8 +199,8 @@ static void furnace(void) {
         tr_material g = mat(TR_MATERIAL_GLOSSY, v3s(1.0f), rough[r], 1.0f);
         for (int t = 0; t < 3; ++t) {
             albedo(&g, theta[t], &a, &sa, &u, &su);
-            CHECK(a <= 1.0 + NSIGMA * sa, "GGX r=%.1f theta %.0f: albedo %.5f > 1", (double)rough[r],
-                  theta[t], a);
+            CHECK(a <= 1.0 + NSIGMA * sa, "GGX r=%.1f theta %.0f: albedo %.5f > 1",
+                  (double)rough[r], theta[t], a);
             CHECK(fabs(a - u) <= NSIGMA * sqrt(sa * sa + su * su),
                   "GGX r=%.1f theta %.0f: sampled albedo %.5f vs uniform %.5f +- %.5f",
                   (double)rough[r], theta[t], a, u, sqrt(sa * sa + su * su));
@@ -252,7 +252,8 @@ static void delta_lobes(void) {
             double expect_sin = is_refl ? sin_i : eta * sin_i;
             /* Reflection mirrors the tangential part; refraction scales it (Snell). */
             /* Both keep the tangential direction of -wo (negative x). */
-            if (fabs(sin_o - expect_sin) > 1e-5 || s.wi.x > 0.0f || fabsf(s.pdf - (float)(is_refl ? r : 1.0 - r)) > 1e-6f) {
+            if (fabs(sin_o - expect_sin) > 1e-5 || s.wi.x > 0.0f ||
+                fabsf(s.pdf - (float)(is_refl ? r : 1.0 - r)) > 1e-6f) {
                 ++bad;
             }
         }
