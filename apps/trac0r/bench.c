@@ -389,6 +389,7 @@ static void bench_help(FILE *fp) {
                 "  complexity   FPS against triangle count per acceleration structure\n"
                 "               (the thesis's figure 3.5)\n"
                 "  rays         Mrays/s of primary, diffuse and shadow rays per structure\n"
+                "  convergence  error against a reference over time and spp, naive vs pt\n"
                 "\n"
                 "Run 'trac0r bench BENCHMARK --help' for its options.\n");
 }
@@ -407,11 +408,15 @@ int cmd_bench(int argc, char **argv) {
     if (strcmp(argv[1], "rays") == 0) {
         return bench_rays(argc - 1, argv + 1);
     }
+    if (strcmp(argv[1], "convergence") == 0) {
+        return bench_convergence(argc - 1, argv + 1);
+    }
     if (strcmp(argv[1], "-h") == 0 || strcmp(argv[1], "--help") == 0) {
         bench_help(stdout);
         return CLI_OK;
     }
-    fprintf(stderr, "trac0r bench: unknown benchmark '%s' (available: frame, complexity, rays)\n",
+    fprintf(stderr, "trac0r bench: unknown benchmark '%s' (available: frame, complexity, rays, "
+            "convergence)\n",
             argv[1]);
     return CLI_USAGE;
 }
