@@ -18,7 +18,7 @@ static const double conv_db[CONV_THRESHOLDS] = {25.0, 30.0, 35.0, 40.0};
 
 typedef struct conv_point {
     uint32_t spp;
-    double seconds; /* render time only */
+    double seconds;  /* render time only */
     image_error raw; /* against the reference as it is */
     double psnr;     /* with the reference's own MSE taken out */
 } conv_point;
@@ -35,34 +35,33 @@ static const char *integrator_name(int integrator) {
 }
 
 static void convergence_help(void) {
-    printf(
-        "Usage: trac0r bench convergence [SCENE] [options]\n"
-        "\n"
-        "Renders a converged reference with pt (two independent halves, so that the\n"
-        "reference's own error can be estimated and taken out), then for each method\n"
-        "and image size accumulates 1 spp frames and records the error against the\n"
-        "reference (trac0r compare's metrics) after geometrically spaced sample counts,\n"
-        "until the time budget is spent or the PSNR passes 41 dB. Prints the time and spp\n"
-        "each method needs to reach 25, 30, 35 and 40 dB and writes PREFIX.csv and\n"
-        "PREFIX.png (gnuplot: PSNR against time and against spp).\n"
-        "\n"
-        "SCENE defaults to builtin:cornell-mirror: the thesis's Cornell box with its glossy\n"
-        "objects as perfect mirrors, on which naive and pt converge to the same image\n"
-        "(they differ on rough glossy surfaces: naive keeps the thesis's cone lobe, pt\n"
-        "uses GGX). naive runs with max depth D + 2, pt with D, so that both estimate\n"
-        "paths of at most D segments.\n"
-        "\n"
-        "Options:\n"
-        "  --sizes LIST         image sizes, e.g. 256x256,800x600 (the default)\n"
-        "  --methods LIST       integrators to measure (default naive,pt)\n"
-        "  --budget SECONDS     render time per method and size, 0.1..86400 (default 30)\n"
-        "  --reference-spp N    spp of the rendered reference, 2..1000000 (default 4096)\n"
-        "  --reference FILE     read the reference (.pfm) instead (one size only; its own\n"
-        "                       error is then unknown and not taken out)\n"
-        "  --max-depth D        pt's path length, 1..1022 (default 8; naive gets D + 2)\n"
-        "  --seed S, --threads T, --accel NAME   as for render\n"
-        "  --out PREFIX         output file prefix (default convergence)\n"
-        "  -h, --help           show this help\n");
+    printf("Usage: trac0r bench convergence [SCENE] [options]\n"
+           "\n"
+           "Renders a converged reference with pt (two independent halves, so that the\n"
+           "reference's own error can be estimated and taken out), then for each method\n"
+           "and image size accumulates 1 spp frames and records the error against the\n"
+           "reference (trac0r compare's metrics) after geometrically spaced sample counts,\n"
+           "until the time budget is spent or the PSNR passes 41 dB. Prints the time and spp\n"
+           "each method needs to reach 25, 30, 35 and 40 dB and writes PREFIX.csv and\n"
+           "PREFIX.png (gnuplot: PSNR against time and against spp).\n"
+           "\n"
+           "SCENE defaults to builtin:cornell-mirror: the thesis's Cornell box with its glossy\n"
+           "objects as perfect mirrors, on which naive and pt converge to the same image\n"
+           "(they differ on rough glossy surfaces: naive keeps the thesis's cone lobe, pt\n"
+           "uses GGX). naive runs with max depth D + 2, pt with D, so that both estimate\n"
+           "paths of at most D segments.\n"
+           "\n"
+           "Options:\n"
+           "  --sizes LIST         image sizes, e.g. 256x256,800x600 (the default)\n"
+           "  --methods LIST       integrators to measure (default naive,pt)\n"
+           "  --budget SECONDS     render time per method and size, 0.1..86400 (default 30)\n"
+           "  --reference-spp N    spp of the rendered reference, 2..1000000 (default 4096)\n"
+           "  --reference FILE     read the reference (.pfm) instead (one size only; its own\n"
+           "                       error is then unknown and not taken out)\n"
+           "  --max-depth D        pt's path length, 1..1022 (default 8; naive gets D + 2)\n"
+           "  --seed S, --threads T, --accel NAME   as for render\n"
+           "  --out PREFIX         output file prefix (default convergence)\n"
+           "  -h, --help           show this help\n");
 }
 
 static int parse_sizes(cli_args *a, uint32_t w[], uint32_t h[], int *n) {
@@ -76,9 +75,8 @@ static int parse_sizes(cli_args *a, uint32_t w[], uint32_t h[], int *n) {
          tok = strtok_r(NULL, ",", &save)) {
         unsigned x, y;
         char tail;
-        if (*n == CONV_MAX_SIZES || sscanf(tok, "%ux%u%c", &x, &y, &tail) != 2 || x < 1 ||
-            y < 1 || x > TR_FILM_MAX_SIDE || y > TR_FILM_MAX_SIDE ||
-            (uint64_t)x * y > TR_FILM_MAX_PIXELS) {
+        if (*n == CONV_MAX_SIZES || sscanf(tok, "%ux%u%c", &x, &y, &tail) != 2 || x < 1 || y < 1 ||
+            x > TR_FILM_MAX_SIDE || y > TR_FILM_MAX_SIDE || (uint64_t)x * y > TR_FILM_MAX_PIXELS) {
             return cli_error(a, "%s: expected up to %d sizes WxH such as 256x256,800x600, got '%s'",
                              a->opt, CONV_MAX_SIZES, a->value);
         }
@@ -251,8 +249,7 @@ int bench_convergence(int argc, char **argv) {
     const int threads = c.threads ? c.threads : tr_default_threads();
     printf("bench convergence: %s, pt max depth %d (naive %d), %d thread%s, budget %.1f s per "
            "method and size\n",
-           c.scene, c.max_depth, c.max_depth + 2, threads, threads == 1 ? "" : "s",
-           (double)budget);
+           c.scene, c.max_depth, c.max_depth + 2, threads, threads == 1 ? "" : "s", (double)budget);
     int rc = CLI_OK;
     for (int si = 0; si < nsizes && rc == CLI_OK; ++si) {
         c.width = sw[si];
@@ -472,9 +469,9 @@ int bench_convergence(int argc, char **argv) {
         len += (size_t)snprintf(script + len, cap - len, "$d%d << EOD\n", i);
         for (int k = 0; k < runs[i].n; ++k) {
             if (isfinite(runs[i].pt[k].psnr)) {
-                len += (size_t)snprintf(script + len, cap - len, "%u %.5f %.4f\n",
-                                        runs[i].pt[k].spp, runs[i].pt[k].seconds,
-                                        runs[i].pt[k].psnr);
+                len +=
+                    (size_t)snprintf(script + len, cap - len, "%u %.5f %.4f\n", runs[i].pt[k].spp,
+                                     runs[i].pt[k].seconds, runs[i].pt[k].psnr);
             }
         }
         len += (size_t)snprintf(script + len, cap - len, "EOD\n");
@@ -487,15 +484,15 @@ int bench_convergence(int argc, char **argv) {
             panel == 0 ? "set multiplot layout 1,2\n" : "",
             panel == 0 ? "render time (s)" : "samples per pixel", c.scene);
         for (int i = 0; i < nsizes * nmethods; ++i) {
-            len += (size_t)snprintf(script + len, cap - len,
-                                    "%s$d%d using %d:3 with linespoints lw 2 title '%s %ux%u'",
-                                    i ? ", " : "", i, panel == 0 ? 2 : 1,
-                                    integrator_name(runs[i].integrator), runs[i].width,
-                                    runs[i].height);
+            len += (size_t)snprintf(
+                script + len, cap - len, "%s$d%d using %d:3 with linespoints lw 2 title '%s %ux%u'",
+                i ? ", " : "", i, panel == 0 ? 2 : 1, integrator_name(runs[i].integrator),
+                runs[i].width, runs[i].height);
         }
-        len += (size_t)snprintf(script + len, cap - len, ", 25 dt 2 lc 'gray' notitle, 30 dt 2 "
-                                                         "lc 'gray' notitle, 35 dt 2 lc 'gray' "
-                                                         "notitle, 40 dt 2 lc 'gray' notitle\n");
+        len += (size_t)snprintf(script + len, cap - len,
+                                ", 25 dt 2 lc 'gray' notitle, 30 dt 2 "
+                                "lc 'gray' notitle, 35 dt 2 lc 'gray' "
+                                "notitle, 40 dt 2 lc 'gray' notitle\n");
     }
     len += (size_t)snprintf(script + len, cap - len, "unset multiplot\n");
     int plotted = bench_plot_png(script, png_path);

@@ -138,8 +138,8 @@ int cmd_compare(int argc, char **argv) {
         }
     }
     if (img[0].width != img[1].width || img[0].height != img[1].height) {
-        int rc = cli_error(&a, "%s is %ux%u but %s is %ux%u", paths[0], img[0].width,
-                           img[0].height, paths[1], img[1].width, img[1].height);
+        int rc = cli_error(&a, "%s is %ux%u but %s is %ux%u", paths[0], img[0].width, img[0].height,
+                           paths[1], img[1].width, img[1].height);
         tr_image_free(&img[0]);
         tr_image_free(&img[1]);
         return rc;
