@@ -41,9 +41,10 @@ static void convergence_help(void) {
            "reference's own error can be estimated and taken out), then for each method\n"
            "and image size accumulates 1 spp frames and records the error against the\n"
            "reference (trac0r compare's metrics) after geometrically spaced sample counts,\n"
-           "until the time budget is spent or the PSNR passes 41 dB. Prints the time and spp\n"
-           "each method needs to reach 25, 30, 35 and 40 dB and writes PREFIX.csv and\n"
-           "PREFIX.png (gnuplot: PSNR against time and against spp).\n"
+           "until the time budget is spent or the PSNR passes 41 dB. The methods take turns\n"
+           "frame by frame, so that they share whatever load the machine has. Prints the\n"
+           "time and spp each method needs to reach 25, 30, 35 and 40 dB and writes\n"
+           "PREFIX.csv and PREFIX.png (gnuplot: PSNR against time and against spp).\n"
            "\n"
            "SCENE defaults to builtin:cornell-mirror: the thesis's Cornell box with its glossy\n"
            "objects as perfect mirrors, on which naive and pt converge to the same image\n"
@@ -321,52 +322,75 @@ int bench_convergence(int argc, char **argv) {
                 }
                 printf("%ux%u: reference pt %u spp in %.1f s, its own PSNR ~ %.1f dB\n", c.width,
                        c.height, ref_spp, tr_time_now() - t0, 10.0 * log10(1.0 / ref_mse));
+                fflush(stdout);
             }
         }
-        for (int mi = 0; mi < nmethods && rc == CLI_OK; ++mi) {
+        /* The methods take turns, one frame at a time, the one with the least render
+         * time so far next: on a machine shared with other work they see the same
+         * load, which keeps their time ratio fair. */
+        tr_film films[2];
+        uint32_t spp[2] = {0, 0}, next[2] = {1, 1};
+        double elapsed[2] = {0.0, 0.0};
+        int done[2] = {0, 0};
+        int nfilms = 0;
+        for (int mi = 0; mi < nmethods; ++mi) {
             conv_run *r = &runs[si * nmethods + mi];
             r->integrator = methods[mi];
             r->width = c.width;
             r->height = c.height;
+            if (tr_film_init(&films[mi], c.width, c.height, &err) != TR_OK) {
+                fprintf(stderr, "trac0r bench convergence: %s\n", err.msg);
+                rc = CLI_FAILURE;
+                break;
+            }
+            ++nfilms;
+        }
+        while (rc == CLI_OK) {
+            int mi = -1;
+            for (int k = 0; k < nmethods; ++k) {
+                if (!done[k] && (mi < 0 || elapsed[k] < elapsed[mi])) {
+                    mi = k;
+                }
+            }
+            if (mi < 0) {
+                break;
+            }
+            conv_run *r = &runs[si * nmethods + mi];
             cfg.integrator = methods[mi];
             cfg.max_depth = methods[mi] == TR_INTEGRATOR_NAIVE ? c.max_depth + 2 : c.max_depth;
             cfg.seed = c.seed;
-            tr_film_clear(&film);
-            double elapsed = 0.0;
-            uint32_t spp = 0, next = 1;
-            while (r->n < CONV_MAX_POINTS) {
-                tr_render_stats st;
-                if (tr_render_frame(&scene, &scene.camera, &cfg, &film, spp, &st, &err) != TR_OK) {
-                    fprintf(stderr, "trac0r bench convergence: %s\n", err.msg);
-                    rc = CLI_FAILURE;
-                    break;
-                }
-                elapsed += st.seconds;
-                ++spp;
-                int last = elapsed >= budget;
-                if (spp == next || last) {
-                    film_mean(&film, cur);
-                    conv_point *p = &r->pt[r->n++];
-                    p->spp = spp;
-                    p->seconds = elapsed;
-                    p->raw = compare_images(cur, ref, px);
-                    double mse = p->raw.mse - ref_mse;
-                    p->psnr = mse > 0.0 ? 10.0 * log10(1.0 / mse) : INFINITY;
-                    uint32_t step = (uint32_t)ceil(next * 0.19);
-                    next += step > 0 ? step : 1;
-                    if (p->psnr > 41.0 || last) {
-                        break;
-                    }
+            tr_render_stats st;
+            if (tr_render_frame(&scene, &scene.camera, &cfg, &films[mi], spp[mi], &st, &err) !=
+                TR_OK) {
+                fprintf(stderr, "trac0r bench convergence: %s\n", err.msg);
+                rc = CLI_FAILURE;
+                break;
+            }
+            elapsed[mi] += st.seconds;
+            ++spp[mi];
+            int last = elapsed[mi] >= budget || r->n == CONV_MAX_POINTS - 1;
+            if (spp[mi] == next[mi] || last) {
+                film_mean(&films[mi], cur);
+                conv_point *p = &r->pt[r->n++];
+                p->spp = spp[mi];
+                p->seconds = elapsed[mi];
+                p->raw = compare_images(cur, ref, px);
+                double mse = p->raw.mse - ref_mse;
+                p->psnr = mse > 0.0 ? 10.0 * log10(1.0 / mse) : INFINITY;
+                uint32_t step = (uint32_t)ceil(next[mi] * 0.19);
+                next[mi] += step > 0 ? step : 1;
+                if (p->psnr > 41.0 || last) {
+                    done[mi] = 1;
+                    printf("%ux%u %-5s: %u spp in %.2f s -> PSNR %.2f dB (raw %.2f), RMSE "
+                           "%.5f, relMSE %.5f\n",
+                           c.width, c.height, integrator_name(r->integrator), p->spp, p->seconds,
+                           p->psnr, p->raw.psnr, p->raw.rmse, p->raw.relmse);
+                    fflush(stdout);
                 }
             }
-            if (rc == CLI_OK && r->n > 0) {
-                const conv_point *p = &r->pt[r->n - 1];
-                printf("%ux%u %-5s: %u spp in %.2f s -> PSNR %.2f dB (raw %.2f), RMSE %.5f, "
-                       "relMSE %.5f\n",
-                       c.width, c.height, integrator_name(r->integrator), p->spp, p->seconds,
-                       p->psnr, p->raw.psnr, p->raw.rmse, p->raw.relmse);
-                fflush(stdout);
-            }
+        }
+        for (int k = 0; k < nfilms; ++k) {
+            tr_film_free(&films[k]);
         }
         free(ref);
         free(half);
