@@ -13,7 +13,8 @@
  *      through the point and that edge), on and off the axis, within 5 standard
  *      errors of the measured variance.
  *  (d) A table older than the scene's triangles is not exposed to the kernel, and a
- *      scene without emitters has an empty table. */
+ *      scene without emitters has an empty table.
+ *  (e) The built-in Cornell box's lamp faces up with our winding and is two-sided. */
 #include "check.h"
 #include "kernel/kernel.h"
 #include "trac0r/trac0r.h"
@@ -210,8 +211,30 @@ static void irradiance(void) {
     tr_scene_free(&s);
 }
 
+/* (e) The built-in Cornell box's lamp: a plane whose normal points up (towards the
+ * ceiling) with our winding, so its material must be two-sided for pt to light the box;
+ * the table weighs it twice. */
+static void builtin_lamp(void) {
+    tr_scene s;
+    tr_error err;
+    CHECK(tr_scene_builtin(&s, "cornell", 64, 48, &err) == TR_OK, "builtin: %s", err.msg);
+    CHECK(tr_scene_commit(&s, TR_ACCEL_TYPE_BVH, &err) == TR_OK, "commit: %s", err.msg);
+    CHECK(s.light_count == 2, "the lamp is two triangles (%u)", s.light_count);
+    for (uint32_t k = 0; k < s.light_count; ++k) {
+        const tr_triangle *t = &s.triangles[s.lights[k]];
+        const tr_material *m = &s.materials[t->material];
+        CHECK(t->normal.y > 0.999f, "lamp triangle normal (%g %g %g) points up",
+              (double)t->normal.x, (double)t->normal.y, (double)t->normal.z);
+        CHECK(m->flags & TR_MATERIAL_TWO_SIDED, "the built-in lamp is two-sided");
+        tr_vec3 down = v3(0.0f, -1.0f, 0.0f);
+        CHECK(tr_emitted(m, t->normal, down).x > 0.0f, "the lamp shines down into the box");
+    }
+    tr_scene_free(&s);
+}
+
 int main(void) {
     table();
+    builtin_lamp();
     irradiance();
     return check_finish("test_lights");
 }
