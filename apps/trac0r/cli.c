@@ -12,8 +12,9 @@
 
 const char cli_common_help[] =
     "  --scene SCENE        scene to render: builtin:cornell (the thesis's Cornell box,\n"
-    "                       the default) or builtin:cornell-mirror (its glossy objects\n"
-    "                       as perfect mirrors)\n"
+    "                       the default), builtin:cornell-mirror (its glossy objects\n"
+    "                       as perfect mirrors) or builtin:cornell-diffuse (every\n"
+    "                       object white diffuse)\n"
     "  --width W            image width in pixels, 1..16384 (default 800)\n"
     "  --height H           image height in pixels, 1..16384 (default 600);\n"
     "                       at most 67108864 pixels in all\n"
