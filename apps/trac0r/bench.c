@@ -89,8 +89,7 @@ static int bench_frame(int argc, char **argv) {
     printf("bench frame: %s, %ux%u, 1 spp/frame, integrator %s, max depth %d, %d thread%s, "
            "%u triangles, accel %s\n",
            c.scene, c.width, c.height, c.integrator == TR_INTEGRATOR_PT ? "pt" : "naive",
-           c.max_depth, threads, threads == 1 ? "" : "s",
-           scene.triangle_count, accel);
+           c.max_depth, threads, threads == 1 ? "" : "s", scene.triangle_count, accel);
     uint64_t rays = 0;
     double total = 0.0;
     rc = CLI_OK;
@@ -415,7 +414,8 @@ int cmd_bench(int argc, char **argv) {
         bench_help(stdout);
         return CLI_OK;
     }
-    fprintf(stderr, "trac0r bench: unknown benchmark '%s' (available: frame, complexity, rays, "
+    fprintf(stderr,
+            "trac0r bench: unknown benchmark '%s' (available: frame, complexity, rays, "
             "convergence)\n",
             argv[1]);
     return CLI_USAGE;

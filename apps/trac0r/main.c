@@ -45,6 +45,7 @@ int main(int argc, char **argv) {
     }
     fprintf(stderr,
             "trac0r: unknown command '%s' (expected render, bench or compare; see 'trac0r "
-            "--help')\n", cmd);
+            "--help')\n",
+            cmd);
     return CLI_USAGE;
 }

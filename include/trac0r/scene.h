@@ -99,9 +99,10 @@ tr_aabb tr_triangles_bounds(const tr_triangle *t, uint32_t n);
 /* Builds a built-in scene by name with its camera set up for a width x height image:
  * "cornell" is the thesis's listing 16; "cornell-mirror" the same with the glossy
  * objects' roughness 0 (perfect mirrors, on which the naive and pt integrators agree);
- * "cornell-diffuse" the same room with every object white diffuse; "cornell-ico-N" is the scene of the thesis's
- * complexity benchmark (figure 3.5): the same room with only the glass icosphere, at
- * N = 0..TR_ICOSPHERE_MAX_SUBDIVISIONS subdivisions (20 * 4^N triangles). */
+ * "cornell-diffuse" the same room with every object white diffuse; "cornell-ico-N" is
+ * the scene of the thesis's complexity benchmark (figure 3.5): the same room with only
+ * the glass icosphere, at N = 0..TR_ICOSPHERE_MAX_SUBDIVISIONS subdivisions (20 * 4^N
+ * triangles). */
 int tr_scene_builtin(tr_scene *s, const char *name, uint32_t width, uint32_t height, tr_error *err);
 
 /* Builds the acceleration structure rays will be traced through (the thesis's flat
