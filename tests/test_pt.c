@@ -12,6 +12,8 @@
  *      errors, the errors measured from the per-frame region means (one sample per
  *      pixel per frame: frames are independent).
  *  (c) pt's variance is lower than naive's on the same scene (what NEE is for).
+ *  (d) One bounce under a square lamp against rho/pi times Lambert's irradiance, and
+ *      one-sided emission seen through the whole integrator.
  *
  * Fixed seeds throughout. */
 #include "check.h"
@@ -235,8 +237,77 @@ static void unbiased(const char *name, const tr_scene *s, int depth, int naive_f
            worst, a.var_sum, b.var_sum);
 }
 
+/* (d) One bounce against a closed form: a diffuse floor (albedo rho) under a square
+ * lamp of radiance L, seen by a ray at a slant; with max depth 2 (camera ray, then the
+ * segment to the lamp by either strategy) the pixel's radiance is rho / pi * E(x), E
+ * from Lambert's polygon formula. A one-sided lamp turned away gives exactly 0; a
+ * two-sided one turned away gives the same as one facing the floor. */
+static double lambert_irradiance(const double (*vtx)[3], int nv, const double x[3], double L) {
+    double sum = 0.0;
+    for (int i = 0; i < nv; ++i) {
+        const double *p0 = vtx[i], *p1 = vtx[(i + 1) % nv];
+        double a[3] = {p0[0] - x[0], p0[1] - x[1], p0[2] - x[2]};
+        double b[3] = {p1[0] - x[0], p1[1] - x[1], p1[2] - x[2]};
+        double la = sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+        double lb = sqrt(b[0] * b[0] + b[1] * b[1] + b[2] * b[2]);
+        double cy = a[2] * b[0] - a[0] * b[2];
+        double cx = a[1] * b[2] - a[2] * b[1], cz = a[0] * b[1] - a[1] * b[0];
+        double lc = sqrt(cx * cx + cy * cy + cz * cz);
+        sum += acos((a[0] * b[0] + a[1] * b[1] + a[2] * b[2]) / (la * lb)) * cy / lc;
+    }
+    return 0.5 * L * fabs(sum);
+}
+
+static void one_bounce(void) {
+    const double rho = 0.6, L = 5.0, hs = 0.3, h = 0.8;
+    const double vtx[4][3] = {{-hs, h, -hs}, {hs, h, -hs}, {hs, h, hs}, {-hs, h, hs}};
+    const double x[3] = {0.25, 0.0, -0.4};
+    const double expect = rho / PI_D * lambert_irradiance(vtx, 4, x, L);
+    /* 0: lamp faces down; 1: one-sided, faces up; 2: two-sided, faces up. */
+    for (int variant = 0; variant < 3; ++variant) {
+        tr_scene s;
+        tr_scene_init(&s);
+        tr_error err;
+        uint32_t floor_m = add_mat(&s, tr_material_diffuse(v3s((float)rho)));
+        tr_material lm = tr_material_emitter(v3s(1.0f), (float)L);
+        lm.flags = variant == 2 ? TR_MATERIAL_TWO_SIDED : 0u;
+        uint32_t lamp = add_mat(&s, lm);
+        add_shape(&s, TR_SHAPE_PLANE, floor_m, v3(0, 0, 0), v3(0, 0, 0), v3(40.0f, 1, 40.0f));
+        add_shape(&s, TR_SHAPE_PLANE, lamp, v3(0, (float)h, 0),
+                  v3(variant == 0 ? (float)PI_D : 0.0f, 0, 0),
+                  v3(2.0f * (float)hs, 1, 2.0f * (float)hs));
+        CHECK(tr_scene_commit(&s, TR_ACCEL_TYPE_BVH, &err) == TR_OK, "commit: %s", err.msg);
+        tr_scene_view v = tr_scene_view_of(&s);
+        tr_vec3 target = v3((float)x[0], (float)x[1], (float)x[2]);
+        tr_vec3 from = v3(1.5f, 0.5f, -1.2f); /* below the lamp's height, off to the side */
+        tr_vec3 dir = v3_normalize(v3_sub(target, from));
+        const int N = 200000;
+        double s1 = 0.0, s2 = 0.0;
+        int nonzero = 0;
+        for (int k = 0; k < N; ++k) {
+            tr_rng rng;
+            tr_rng_init(&rng, 31, (uint64_t)variant, (uint64_t)k);
+            uint32_t rays = 0;
+            tr_vec3 c = tr_trace_pt(&v, tr_ray_make(from, dir, 0.0f, TR_INFINITY), 2, &rng, &rays);
+            s1 += c.x;
+            s2 += (double)c.x * c.x;
+            nonzero += c.x != 0.0f;
+        }
+        double mean = s1 / N, se = sqrt(fmax(0.0, s2 / N - mean * mean) / N);
+        if (variant == 1) {
+            CHECK(nonzero == 0, "one-sided lamp facing away: %d of %d samples lit", nonzero, N);
+        } else {
+            CHECK(fabs(mean - expect) <= NSIGMA * se && se < 0.01 * expect,
+                  "lamp variant %d: pt radiance %.5f +- %.5f vs rho/pi E = %.5f", variant, mean, se,
+                  expect);
+        }
+        tr_scene_free(&s);
+    }
+}
+
 int main(void) {
     mis_weights();
+    one_bounce();
     tr_scene s;
     build_box(&s, 0, W, H);
     unbiased("diffuse box", &s, 5, 2048, 256);
