@@ -88,11 +88,14 @@ else
     fail "a good PFM render failed"
 fi
 # Every acceleration structure renders the same image for the same seed (ties aside,
-# which the unit tests bound; this scene has none at this size).
+# which the unit tests bound; this scene has none at this size). The naive integrator's
+# radiance depends only on which triangles are hit, so its images are bit-identical;
+# pt's next-event estimates use hit distances, which Embree rounds differently.
 for accel in flat embree bvh2; do
-    "$BIN" render --width 16 --height 12 --spp 2 --accel $accel --out $accel.pfm 2>/dev/null ||
-        fail "--accel $accel render failed"
-    "$BIN" render --width 16 --height 12 --spp 2 --accel bvh --out bvh.pfm 2>/dev/null
+    "$BIN" render --width 16 --height 12 --spp 2 --integrator naive --accel $accel \
+        --out $accel.pfm 2>/dev/null || fail "--accel $accel render failed"
+    "$BIN" render --width 16 --height 12 --spp 2 --integrator naive --accel bvh --out bvh.pfm \
+        2>/dev/null
     cmp -s $accel.pfm bvh.pfm || fail "--accel $accel and --accel bvh images differ"
     rm -f $accel.pfm bvh.pfm
 done

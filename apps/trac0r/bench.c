@@ -42,6 +42,7 @@ static int bench_frame(int argc, char **argv) {
     cli_args a = {.cmd = "bench frame", .argc = argc, .argv = argv, .i = 0};
     cli_common c;
     cli_common_default(&c);
+    c.integrator = TR_INTEGRATOR_NAIVE; /* the thesis's frame */
     int frames = 20;
     while (cli_next(&a)) {
         int rc = cli_common_option(&a, &c);
@@ -85,10 +86,10 @@ static int bench_frame(int argc, char **argv) {
 
     char accel[160];
     cli_describe_accel(accel, sizeof accel, &scene);
-    printf("bench frame: %s, %ux%u, 1 spp/frame, integrator naive, max depth %d, %d thread%s, "
+    printf("bench frame: %s, %ux%u, 1 spp/frame, integrator %s, max depth %d, %d thread%s, "
            "%u triangles, accel %s\n",
-           c.scene, c.width, c.height, c.max_depth, threads, threads == 1 ? "" : "s",
-           scene.triangle_count, accel);
+           c.scene, c.width, c.height, c.integrator == TR_INTEGRATOR_PT ? "pt" : "naive",
+           c.max_depth, threads, threads == 1 ? "" : "s", scene.triangle_count, accel);
     uint64_t rays = 0;
     double total = 0.0;
     rc = CLI_OK;
@@ -386,6 +387,7 @@ static void bench_help(FILE *fp) {
                 "  complexity   FPS against triangle count per acceleration structure\n"
                 "               (the thesis's figure 3.5)\n"
                 "  rays         Mrays/s of primary, diffuse and shadow rays per structure\n"
+                "  convergence  error against a reference over time and spp, naive vs pt\n"
                 "\n"
                 "Run 'trac0r bench BENCHMARK --help' for its options.\n");
 }
@@ -404,11 +406,16 @@ int cmd_bench(int argc, char **argv) {
     if (strcmp(argv[1], "rays") == 0) {
         return bench_rays(argc - 1, argv + 1);
     }
+    if (strcmp(argv[1], "convergence") == 0) {
+        return bench_convergence(argc - 1, argv + 1);
+    }
     if (strcmp(argv[1], "-h") == 0 || strcmp(argv[1], "--help") == 0) {
         bench_help(stdout);
         return CLI_OK;
     }
-    fprintf(stderr, "trac0r bench: unknown benchmark '%s' (available: frame, complexity, rays)\n",
+    fprintf(stderr,
+            "trac0r bench: unknown benchmark '%s' (available: frame, complexity, rays, "
+            "convergence)\n",
             argv[1]);
     return CLI_USAGE;
 }

@@ -23,5 +23,6 @@ double bench_build_seconds(const tr_scene *s);
 int bench_plot_png(const char *script, const char *png);
 
 int bench_rays(int argc, char **argv);
+int bench_convergence(int argc, char **argv);
 
 #endif

@@ -12,16 +12,20 @@
 
 const char cli_common_help[] =
     "  --scene SCENE        scene to render: builtin:cornell (the thesis's Cornell box,\n"
-    "                       the default)\n"
+    "                       the default), builtin:cornell-mirror (its glossy objects\n"
+    "                       as perfect mirrors) or builtin:cornell-diffuse (every\n"
+    "                       object white diffuse)\n"
     "  --width W            image width in pixels, 1..16384 (default 800)\n"
     "  --height H           image height in pixels, 1..16384 (default 600);\n"
     "                       at most 67108864 pixels in all\n"
-    "  --max-depth D        path length limit of the integrator, 1..1024 (default 8; the\n"
-    "                       naive integrator's Russian roulette reaches at most D-2 surfaces)\n"
+    "  --max-depth D        path length limit of the integrator, 1..1024 (default 8): pt\n"
+    "                       follows at most D segments (camera ray included); the naive\n"
+    "                       integrator's Russian roulette reaches at most D-2 surfaces\n"
     "  --seed S             random seed, 0..2^64-1 (default 0); the same seed gives the\n"
     "                       same image for any thread count\n"
     "  --threads T          CPU threads, 0..1024 (default 0: one per core)\n"
-    "  --integrator NAME    naive: the thesis's path tracer (the default and only one)\n"
+    "  --integrator NAME    pt (the default): path tracing with next-event estimation,\n"
+    "                       MIS and GGX glossy; naive: the thesis's path tracer\n"
     "  --accel NAME         acceleration structure: bvh (binned-SAH BVH, the default),\n"
     "                       flat (the thesis's list of per-shape boxes) or embree (Intel\n"
     "                       Embree 3, in builds that found it); bvh2 traces the binary\n"
@@ -34,7 +38,7 @@ void cli_common_default(cli_common *c) {
     c->max_depth = 8;
     c->seed = 0;
     c->threads = 0;
-    c->integrator = TR_INTEGRATOR_NAIVE;
+    c->integrator = TR_INTEGRATOR_PT;
     c->accel = TR_ACCEL_TYPE_BVH;
 }
 
@@ -178,7 +182,12 @@ int cli_common_option(cli_args *a, cli_common *c) {
             c->integrator = TR_INTEGRATOR_NAIVE;
             return CLI_OK;
         }
-        return cli_error(a, "--integrator: unknown integrator '%s' (available: naive)", a->value);
+        if (strcmp(a->value, "pt") == 0) {
+            c->integrator = TR_INTEGRATOR_PT;
+            return CLI_OK;
+        }
+        return cli_error(a, "--integrator: unknown integrator '%s' (available: pt, naive)",
+                         a->value);
     }
     if (cli_is(a, "--accel")) {
         if (cli_value(a) != CLI_OK) {

@@ -62,6 +62,13 @@ typedef struct tr_scene {
     tr_wbvh wbvh;                 /* collapsed from bvh for TR_ACCEL_TYPE_BVH (host traversal) */
     tr_embree embree;             /* built for TR_ACCEL_TYPE_EMBREE only */
     uint32_t committed_triangles; /* triangle count when the BVH or Embree scene was built */
+    /* Emitter table for next-event estimation, rebuilt by tr_scene_commit
+     * (src/scene/lights.c): emissive triangle indices and their selection CDF. */
+    uint32_t *lights;
+    float *light_cdf;
+    uint32_t light_count;
+    float light_weight_total;
+    uint32_t light_triangles; /* triangle count when the table was built */
 } tr_scene;
 
 /* A shape of the given type at the origin, unrotated, unit scale, material 0. */
@@ -91,9 +98,12 @@ void tr_triangle_finish(tr_triangle *t);
 tr_aabb tr_triangles_bounds(const tr_triangle *t, uint32_t n);
 
 /* Builds a built-in scene by name with its camera set up for a width x height image:
- * "cornell" is the thesis's listing 16; "cornell-ico-N" is the scene of the thesis's
- * complexity benchmark (figure 3.5): the same room with only the glass icosphere, at
- * N = 0..TR_ICOSPHERE_MAX_SUBDIVISIONS subdivisions (20 * 4^N triangles). */
+ * "cornell" is the thesis's listing 16; "cornell-mirror" the same with the glossy
+ * objects' roughness 0 (perfect mirrors, on which the naive and pt integrators agree);
+ * "cornell-diffuse" the same room with every object white diffuse; "cornell-ico-N" is
+ * the scene of the thesis's complexity benchmark (figure 3.5): the same room with only
+ * the glass icosphere, at N = 0..TR_ICOSPHERE_MAX_SUBDIVISIONS subdivisions (20 * 4^N
+ * triangles). */
 int tr_scene_builtin(tr_scene *s, const char *name, uint32_t width, uint32_t height, tr_error *err);
 
 /* Builds the acceleration structure rays will be traced through (the thesis's flat
@@ -114,6 +124,10 @@ double tr_scene_bvh_build_seconds(const tr_scene *s);
 /* Seconds tr_scene_commit took to build the Embree scene (0 unless the scene is
  * committed to TR_ACCEL_TYPE_EMBREE). */
 double tr_scene_embree_build_seconds(const tr_scene *s);
+
+/* Rebuilds the emitter table (tr_scene_commit calls it): every triangle of positive
+ * area whose material has emittance > 0, weighted by tr_light_weight. */
+int tr_scene_build_lights(tr_scene *s, tr_error *err);
 
 /* The view the kernels trace against; valid while the scene is not modified. */
 tr_scene_view tr_scene_view_of(const tr_scene *s);

@@ -42,7 +42,7 @@ int tr_render_frame(const tr_scene *scene, const tr_camera *cam, const tr_render
         return tr_error_set(err, "max depth %d must be in 1..%d", cfg->max_depth,
                             TR_MAX_DEPTH_LIMIT);
     }
-    if (cfg->integrator != TR_INTEGRATOR_NAIVE) {
+    if (cfg->integrator != TR_INTEGRATOR_NAIVE && cfg->integrator != TR_INTEGRATOR_PT) {
         return tr_error_set(err, "unknown integrator %d", cfg->integrator);
     }
     if (cfg->stride < 1 || cfg->stride > 64) {

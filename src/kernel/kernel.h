@@ -8,12 +8,14 @@
 #include "camera.h"
 #include "compat.h"
 #include "integrator_naive.h"
+#include "integrator_pt.h"
 #include "rng.h"
 #include "sampling.h"
 #include "scene_view.h"
 #include "types.h"
 
 #define TR_INTEGRATOR_NAIVE 0
+#define TR_INTEGRATOR_PT 1 /* next-event estimation + MIS (integrator_pt.h) */
 
 /* Radiance of sample `sample` of pixel (x, y), with jitter inside the pixel. The random
  * stream depends only on (seed, pixel index, sample). */
@@ -28,6 +30,8 @@ TR_FN tr_vec3 tr_render_sample(const tr_scene_view *s, const tr_camera *cam, uin
     tr_ray ray = tr_camera_ray(cam, (float)x, (float)y, jx, jy);
     /* The host rejects unknown integrators before a frame starts. */
     switch (integrator) {
+    case TR_INTEGRATOR_PT:
+        return tr_trace_pt(s, ray, max_depth, &rng, rays);
     case TR_INTEGRATOR_NAIVE:
     default:
         return tr_trace_naive(s, ray, max_depth, &rng, rays);

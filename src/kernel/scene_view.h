@@ -40,6 +40,14 @@ typedef struct tr_scene_view {
     uint32_t flat_node_count;
     uint32_t bvh_node_count; /* 0 for an empty scene */
     uint32_t accel;          /* TR_ACCEL_*: which structure tr_intersect_scene walks */
+    /* Emitter table (src/scene/lights.c, built by tr_scene_commit), for next-event
+     * estimation: light_count emissive triangle indices and the CDF of their
+     * selection weights (light_cdf[light_count - 1] == 1); light_weight_total is the
+     * sum of the weights (tr_light_weight of each triangle). */
+    TR_CONST_GLOBAL uint32_t *lights;
+    TR_CONST_GLOBAL float *light_cdf;
+    uint32_t light_count;
+    float light_weight_total;
 #ifdef TR_SCENE_VIEW_EMBREE
     const void *embree_scene; /* RTCScene, for TR_ACCEL_EMBREE */
 #endif

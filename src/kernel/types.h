@@ -14,6 +14,10 @@
 #define TR_MATERIAL_GLASS 3u
 #define TR_MATERIAL_GLOSSY 4u
 
+/* tr_material.flags bits. Emitters emit towards the side their triangle's geometric
+ * normal points to, unless TWO_SIDED is set (the pt integrator; naive ignores it). */
+#define TR_MATERIAL_TWO_SIDED 1u
+
 /* 32 bytes. */
 typedef struct tr_material {
     uint32_t type;   /* TR_MATERIAL_* */
@@ -21,7 +25,7 @@ typedef struct tr_material {
     float roughness; /* glossy: the reflection cone's half-angle is roughness * pi/2 */
     float ior;       /* glass: index of refraction */
     float emittance; /* radiance scale; emitted radiance is color * emittance */
-    uint32_t pad;
+    uint32_t flags;  /* TR_MATERIAL_TWO_SIDED */
 } tr_material;
 TR_STATIC_ASSERT(sizeof(tr_material) == 32, "tr_material layout");
 

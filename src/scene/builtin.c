@@ -16,10 +16,10 @@ typedef struct shape_spec {
  * a green right wall, a glossy and a white box, a glass and a glossy icosphere and a
  * plane emitter under the ceiling. Plane sizes are (x, z) extents, box sizes full
  * extents, icosphere scales the radius. */
-static int build_cornell(tr_scene *s, uint32_t width, uint32_t height, int ico_level,
+static int build_cornell(tr_scene *s, uint32_t width, uint32_t height, int ico_level, int variant,
                          tr_error *err) {
     enum { EMISSIVE, WHITE, RED, GREEN, GLASS, GLOSSY, MATERIAL_COUNT };
-    const tr_material materials[MATERIAL_COUNT] = {
+    tr_material materials[MATERIAL_COUNT] = {
         [EMISSIVE] = tr_material_emitter(v3(1.0f, 0.93f, 0.85f), 15.0f),
         [WHITE] = tr_material_diffuse(v3(0.740063f, 0.742313f, 0.733934f)),
         [RED] = tr_material_diffuse(v3(0.366046f, 0.0371827f, 0.0416385f)),
@@ -27,6 +27,16 @@ static int build_cornell(tr_scene *s, uint32_t width, uint32_t height, int ico_l
         [GLASS] = tr_material_glass(v3(0.5f, 0.5f, 0.9f), 1.51714f),
         [GLOSSY] = tr_material_glossy(v3(1.0f, 1.0f, 1.0f), 0.09f),
     };
+    /* The lamp is a plane with its normal up (+y), towards the ceiling: the thesis's
+     * emitters shine from both sides, so the built-in one is two-sided for the pt
+     * integrator too (the naive integrator ignores the flag). */
+    materials[EMISSIVE].flags = TR_MATERIAL_TWO_SIDED;
+    if (variant == 1) { /* cornell-mirror */
+        materials[GLOSSY].roughness = 0.0f;
+    } else if (variant == 2) { /* cornell-diffuse */
+        materials[GLOSSY] = materials[WHITE];
+        materials[GLASS] = materials[WHITE];
+    }
     const float hp = TR_HALF_PI, pi = TR_PI;
     const shape_spec shapes[] = {
         {TR_SHAPE_PLANE, {-0.5f, 0.4f, 0}, {0, 0, -hp}, {1, 1, 1}, 0, RED},  /* wall_left */
@@ -82,15 +92,20 @@ int tr_scene_builtin(tr_scene *s, const char *name, uint32_t width, uint32_t hei
         level = strtol(name + strlen(ico), &end, 10);
     }
     if (strcmp(name, "cornell") == 0) {
-        rc = build_cornell(s, width, height, -1, err);
+        rc = build_cornell(s, width, height, -1, 0, err);
+    } else if (strcmp(name, "cornell-mirror") == 0) {
+        rc = build_cornell(s, width, height, -1, 1, err);
+    } else if (strcmp(name, "cornell-diffuse") == 0) {
+        rc = build_cornell(s, width, height, -1, 2, err);
     } else if (end && *end == '\0' && end != name + strlen(ico) && level >= 0 &&
                level <= TR_ICOSPHERE_MAX_SUBDIVISIONS) {
-        rc = build_cornell(s, width, height, (int)level, err);
+        rc = build_cornell(s, width, height, (int)level, 0, err);
     } else {
-        return tr_error_set(err,
-                            "unknown built-in scene '%s' (available: cornell, cornell-ico-N with "
-                            "N = 0..%d)",
-                            name, TR_ICOSPHERE_MAX_SUBDIVISIONS);
+        return tr_error_set(
+            err,
+            "unknown built-in scene '%s' (available: cornell, cornell-mirror, cornell-diffuse, "
+            "cornell-ico-N with N = 0..%d)",
+            name, TR_ICOSPHERE_MAX_SUBDIVISIONS);
     }
     if (rc != TR_OK) {
         tr_scene_free(s);

@@ -40,6 +40,8 @@ void tr_scene_free(tr_scene *s) {
     tr_bvh_free(&s->bvh);
     tr_wbvh_free(&s->wbvh);
     tr_embree_free(&s->embree);
+    free(s->lights);
+    free(s->light_cdf);
     tr_scene_init(s);
 }
 
@@ -60,6 +62,9 @@ int tr_scene_add_material(tr_scene *s, tr_material m, uint32_t *index, tr_error 
     }
     if (!(m.ior >= 1.0f && m.ior <= 10.0f)) {
         return tr_error_set(err, "material ior %g must be in [1, 10]", (double)m.ior);
+    }
+    if ((m.flags & ~TR_MATERIAL_TWO_SIDED) != 0u) {
+        return tr_error_set(err, "material flags 0x%x have unknown bits", m.flags);
     }
     if (s->material_count == s->material_capacity) {
         uint32_t cap = s->material_capacity ? 2 * s->material_capacity : 8;
@@ -84,6 +89,9 @@ int tr_scene_commit(tr_scene *s, tr_accel_type accel, tr_error *err) {
     tr_embree_free(&s->embree);
     s->accel = TR_ACCEL_TYPE_FLAT;
     s->committed_triangles = 0;
+    if (tr_scene_build_lights(s, err) != TR_OK) {
+        return TR_ERR;
+    }
     switch (accel) {
     case TR_ACCEL_TYPE_FLAT:
         return TR_OK;
@@ -161,6 +169,12 @@ tr_scene_view tr_scene_view_of(const tr_scene *s) {
     /* The wide BVH only while it matches the binary one (tr_bvh_refit moves the binary
      * boxes; tr_scene_refit refits both). */
     v.wbvh = s->accel == TR_ACCEL_TYPE_BVH && s->wbvh.bvh_refits == s->bvh.refits ? &s->wbvh : NULL;
+    v.lights = s->lights;
+    v.light_cdf = s->light_cdf;
+    /* A table older than the triangles could name triangles that moved: without a
+     * current one the pt integrator finds emitters only by hitting them. */
+    v.light_count = s->light_triangles == s->triangle_count ? s->light_count : 0;
+    v.light_weight_total = s->light_weight_total;
 #ifdef TR_SCENE_VIEW_EMBREE
     v.embree_scene = s->embree.scene;
 #endif

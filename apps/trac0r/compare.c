@@ -1,0 +1,189 @@
+/* compare.c - `trac0r compare A B`: image error metrics against a reference. */
+#define _POSIX_C_SOURCE 200809L
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "cli.h"
+#include "commands.h"
+#include "compare.h"
+
+/* sRGB-encoded [0,1] back to linear (IEC 61966-2-1). */
+static float srgb_to_linear(float c) {
+    return c <= 0.04045f ? c / 12.92f : powf((c + 0.055f) / 1.055f, 2.4f);
+}
+
+int compare_load(const char *path, tr_image *img, tr_error *err) {
+    switch (tr_image_format_from_path(path)) {
+    case TR_IMAGE_PFM:
+        return tr_image_read_pfm(img, path, err);
+    case TR_IMAGE_PNG: {
+        if (tr_image_read_png(img, path, err) != TR_OK) {
+            return TR_ERR;
+        }
+        size_t n = 3 * (size_t)img->width * img->height;
+        for (size_t i = 0; i < n; ++i) {
+            img->rgb[i] = srgb_to_linear(img->rgb[i]);
+        }
+        return TR_OK;
+    }
+    default:
+        return tr_error_set(err, "%s: unknown image format (expected .pfm or .png)", path);
+    }
+}
+
+static double clamp01(double v) {
+    return v != v ? 0.0 : v < 0.0 ? 0.0 : v > 1.0 ? 1.0 : v;
+}
+
+image_error compare_images(const float *a, const float *ref, size_t pixels) {
+    double se = 0.0, rel = 0.0;
+    for (size_t i = 0; i < 3 * pixels; ++i) {
+        double x = clamp01(a[i]), y = clamp01(ref[i]);
+        double d = x - y;
+        se += d * d;
+        rel += d * d / (y * y + COMPARE_REL_EPSILON);
+    }
+    image_error e;
+    double n = 3.0 * (double)pixels;
+    e.mse = se / n;
+    e.rmse = sqrt(e.mse);
+    e.relmse = rel / n;
+    e.psnr = e.mse > 0.0 ? 10.0 * log10(1.0 / e.mse) : INFINITY;
+    return e;
+}
+
+/* A perceptually ordered false-colour ramp (black, blue, magenta, orange, yellow,
+ * white) for t in [0,1], returned as linear RGB for the PNG writer to encode. */
+static tr_vec3 false_colour(double t) {
+    static const float ramp[6][3] = {{0.0f, 0.0f, 0.0f},  {0.1f, 0.1f, 0.6f}, {0.7f, 0.1f, 0.6f},
+                                     {1.0f, 0.5f, 0.05f}, {1.0f, 0.9f, 0.2f}, {1.0f, 1.0f, 1.0f}};
+    t = clamp01(t) * 5.0;
+    int i = (int)t;
+    if (i >= 5) {
+        i = 4;
+    }
+    float f = (float)(t - i);
+    float c[3];
+    for (int k = 0; k < 3; ++k) {
+        float s = ramp[i][k] + f * (ramp[i + 1][k] - ramp[i][k]);
+        c[k] = srgb_to_linear(s);
+    }
+    return v3(c[0], c[1], c[2]);
+}
+
+static void compare_help(void) {
+    printf("Usage: trac0r compare A B [options]\n"
+           "\n"
+           "Compares image A against the reference B (each .pfm float linear RGB, or .png,\n"
+           "decoded from sRGB to linear) and prints, on linear radiance clamped to [0,1]:\n"
+           "  rmse     root mean squared error over all pixels and channels\n"
+           "  relmse   relative MSE: mean of (A - B)^2 / (B^2 + %g)\n"
+           "  psnr     peak signal-to-noise ratio 10 log10(1 / MSE) in dB (inf if equal)\n"
+           "\n"
+           "Options:\n"
+           "  --error-image FILE   write a false-colour image of the per-pixel absolute error\n"
+           "                       (mean over channels; black = 0, white = the largest error,\n"
+           "                       which is printed), .png or .pfm\n"
+           "  -h, --help           show this help\n"
+           "\n"
+           "Exit status: 0 on success, 2 on a bad command line, an unreadable image or\n"
+           "images of different sizes, 1 when the error image cannot be written.\n",
+           COMPARE_REL_EPSILON);
+}
+
+int cmd_compare(int argc, char **argv) {
+    cli_args a = {.cmd = "compare", .argc = argc, .argv = argv, .i = 0};
+    const char *paths[2] = {NULL, NULL};
+    int npaths = 0;
+    const char *error_image = NULL;
+    while (cli_next(&a)) {
+        if (cli_is(&a, "-h") || cli_is(&a, "--help")) {
+            compare_help();
+            return CLI_OK;
+        }
+        if (cli_is(&a, "--error-image")) {
+            if (cli_value(&a) != CLI_OK) {
+                return CLI_USAGE;
+            }
+            error_image = a.value;
+            if (tr_image_format_from_path(error_image) == TR_IMAGE_UNKNOWN) {
+                return cli_error(&a,
+                                 "--error-image: '%s' has an unknown extension (expected .png or "
+                                 ".pfm)",
+                                 error_image);
+            }
+        } else if (a.opt[0] == '-' && a.opt[1] != '\0') {
+            return cli_error(&a, "unknown option '%s' (see 'trac0r compare --help')", a.opt);
+        } else if (npaths < 2) {
+            paths[npaths++] = a.opt;
+        } else {
+            return cli_error(&a, "unexpected argument '%s' (expected two images)", a.opt);
+        }
+    }
+    if (npaths != 2) {
+        return cli_error(&a, "expected two images A and B (see 'trac0r compare --help')");
+    }
+    tr_error err;
+    if (error_image && tr_image_check_writable(error_image, &err) != TR_OK) {
+        return cli_error(&a, "--error-image: %s", err.msg);
+    }
+    tr_image img[2];
+    memset(img, 0, sizeof img);
+    for (int k = 0; k < 2; ++k) {
+        if (compare_load(paths[k], &img[k], &err) != TR_OK) {
+            tr_image_free(&img[0]);
+            return cli_error(&a, "%s", err.msg);
+        }
+    }
+    if (img[0].width != img[1].width || img[0].height != img[1].height) {
+        int rc = cli_error(&a, "%s is %ux%u but %s is %ux%u", paths[0], img[0].width, img[0].height,
+                           paths[1], img[1].width, img[1].height);
+        tr_image_free(&img[0]);
+        tr_image_free(&img[1]);
+        return rc;
+    }
+    size_t pixels = (size_t)img[0].width * img[0].height;
+    image_error e = compare_images(img[0].rgb, img[1].rgb, pixels);
+    printf("size %ux%u\nrmse %.6g\nrelmse %.6g\npsnr %.3f dB\n", img[0].width, img[0].height,
+           e.rmse, e.relmse, e.psnr);
+    int rc = CLI_OK;
+    if (error_image) {
+        tr_film f;
+        if (tr_film_init(&f, img[0].width, img[0].height, &err) != TR_OK) {
+            fprintf(stderr, "trac0r compare: %s\n", err.msg);
+            rc = CLI_FAILURE;
+        } else {
+            double max = 0.0;
+            for (size_t i = 0; i < pixels; ++i) {
+                double d = 0.0;
+                for (int c = 0; c < 3; ++c) {
+                    d += fabs(clamp01(img[0].rgb[3 * i + c]) - clamp01(img[1].rgb[3 * i + c]));
+                }
+                max = d / 3.0 > max ? d / 3.0 : max;
+            }
+            for (size_t i = 0; i < pixels; ++i) {
+                double d = 0.0;
+                for (int c = 0; c < 3; ++c) {
+                    d += fabs(clamp01(img[0].rgb[3 * i + c]) - clamp01(img[1].rgb[3 * i + c]));
+                }
+                tr_vec3 col = false_colour(max > 0.0 ? d / 3.0 / max : 0.0);
+                f.sum[3 * i] = col.x;
+                f.sum[3 * i + 1] = col.y;
+                f.sum[3 * i + 2] = col.z;
+                f.count[i] = 1;
+            }
+            if (tr_film_write(&f, error_image, 0.0f, &err) != TR_OK) {
+                fprintf(stderr, "trac0r compare: %s\n", err.msg);
+                rc = CLI_FAILURE;
+            } else {
+                printf("error image %s (white = %.6g)\n", error_image, max);
+            }
+            tr_film_free(&f);
+        }
+    }
+    tr_image_free(&img[0]);
+    tr_image_free(&img[1]);
+    return rc;
+}

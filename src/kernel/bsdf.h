@@ -1,0 +1,260 @@
+/* bsdf.h - the physically based materials of the `pt` integrator: each exposes eval
+ * (the BSDF value f), pdf (solid angle density of its sampler) and sample.
+ *
+ * Conventions: n is the triangle's geometric normal (either orientation), wo the unit
+ * direction towards the previous vertex (minus the ray direction), wi the unit
+ * direction towards the next one. Diffuse and glossy surfaces are two-sided: they
+ * reflect on the side wo lies on. Glass needs n pointing outside (index 1).
+ *
+ *   diffuse  Lambertian, f = colour / pi, cosine-weighted sampling.
+ *   glossy   roughness 0: a perfect mirror (delta) with Schlick's Fresnel;
+ *            roughness > 0: a GGX microfacet conductor (Walter et al., "Microfacet
+ *            Models for Refraction through Rough Surfaces", EGSR 2007) with the
+ *            height-correlated Smith shadowing (Heitz, "Understanding the
+ *            Masking-Shadowing Function in Microfacet-Based BRDFs", JCGT 2014),
+ *            Schlick's Fresnel with F0 = colour, and sampling of the visible normals
+ *            (Heitz, "Sampling the GGX Distribution of Visible Normals", JCGT 2018).
+ *            alpha = tr_ggx_alpha(roughness), see docs/integrators.md.
+ *   glass    smooth dielectric (delta): exact Fresnel, total internal reflection,
+ *            the colour as a filter on both lobes (as the naive integrator does).
+ *   emitter  emits only: its BSDF is black.
+ */
+#ifndef TR_KERNEL_BSDF_H
+#define TR_KERNEL_BSDF_H
+
+#include "compat.h"
+#include "material.h"
+#include "rng.h"
+#include "sampling.h"
+#include "types.h"
+#include "vec.h"
+
+/* GGX alpha below this counts as this: the distribution's peak 1/(pi alpha^2) stays
+ * finite in float. */
+#define TR_GGX_MIN_ALPHA 1e-3f
+
+typedef struct tr_scatter {
+    tr_vec3 wi;     /* sampled direction (unit) */
+    tr_vec3 weight; /* f |cos(wi, n)| / pdf; for delta lobes the lobe's weight */
+    float pdf;      /* solid-angle pdf; for delta lobes the probability of the lobe */
+    int delta;      /* 1 when wi came from a delta lobe (mirror, smooth glass) */
+} tr_scatter;
+
+/* The thesis's roughness r (its glossy cone's half-angle is r pi/2) mapped onto GGX's
+ * alpha: the median angle between a sampled direction and the mirror direction is
+ * asin(sin(r pi/2) / sqrt 2) for the thesis's cosine-weighted cone; GGX's median
+ * half-vector angle is atan(alpha), and reflection doubles angles about the normal,
+ * so alpha = tan(asin(sin(r pi/2) / sqrt 2) / 2). Written with sin and sqrt only:
+ * tan(x/2) = sin x / (1 + cos x). r = 1 gives alpha = tan(pi/8) = 0.414. */
+TR_FN float tr_ggx_alpha(float roughness) {
+    float r = tr_fminf(tr_fmaxf(roughness, 0.0f), 1.0f);
+    float s = tr_sinf(r * TR_HALF_PI) * 0.70710678118654752f;
+    float a = s / (1.0f + tr_sqrtf(tr_fmaxf(0.0f, 1.0f - s * s)));
+    return tr_fmaxf(a, TR_GGX_MIN_ALPHA);
+}
+
+/* Whether the material scatters only into isolated directions. */
+TR_FN int tr_bsdf_is_delta(const tr_material *m) {
+    return m->type == TR_MATERIAL_GLASS || (m->type == TR_MATERIAL_GLOSSY && m->roughness <= 0.0f);
+}
+
+/* Schlick's approximation with a coloured F0. */
+TR_FN tr_vec3 tr_fresnel_schlick(tr_vec3 f0, float cos_theta) {
+    float c = tr_fminf(tr_fmaxf(1.0f - cos_theta, 0.0f), 1.0f);
+    float c5 = (c * c) * (c * c) * c;
+    return v3_add(f0, v3_scale(v3_sub(v3s(1.0f), f0), c5));
+}
+
+/* GGX normal distribution D(h) for cos(theta_h) = c (Walter et al. 2007, eq. 33). */
+TR_FN float tr_ggx_d(float alpha, float c) {
+    if (c <= 0.0f) {
+        return 0.0f;
+    }
+    float a2 = alpha * alpha;
+    float t = c * c * (a2 - 1.0f) + 1.0f;
+    return a2 / (TR_PI * t * t);
+}
+
+/* Smith's Lambda for GGX for a direction with cos(theta) = c (Heitz 2014, eq. 72). */
+TR_FN float tr_ggx_lambda(float alpha, float c) {
+    float c2 = c * c;
+    if (c2 <= 0.0f) {
+        return 1e30f;
+    }
+    float tan2 = tr_fmaxf(0.0f, 1.0f - c2) / c2;
+    return 0.5f * (tr_sqrtf(1.0f + alpha * alpha * tan2) - 1.0f);
+}
+
+/* Local frame around the normal on wo's side: returns the normal facing wo. */
+TR_FN tr_vec3 tr_bsdf_facing(tr_vec3 n, tr_vec3 wo) {
+    return v3_dot(wo, n) < 0.0f ? v3_neg(n) : n;
+}
+
+/* GGX conductor f for wo, wi on the side of the unit normal nf (cosines > 0). */
+TR_FN tr_vec3 tr_ggx_eval(const tr_material *m, tr_vec3 nf, tr_vec3 wo, tr_vec3 wi) {
+    float co = v3_dot(wo, nf), ci = v3_dot(wi, nf);
+    if (co <= 0.0f || ci <= 0.0f) {
+        return v3s(0.0f);
+    }
+    float alpha = tr_ggx_alpha(m->roughness);
+    tr_vec3 h = v3_normalize(v3_add(wo, wi));
+    float d = tr_ggx_d(alpha, v3_dot(h, nf));
+    float g2 = 1.0f / (1.0f + tr_ggx_lambda(alpha, co) + tr_ggx_lambda(alpha, ci));
+    tr_vec3 f = tr_fresnel_schlick(m->color, v3_dot(wo, h));
+    return v3_scale(f, d * g2 / (4.0f * co * ci));
+}
+
+/* Pdf of the visible-normal sampler: G1(wo) D(h) / (4 cos_o) (Heitz 2018, eq. 17 with
+ * the reflection Jacobian 1 / (4 wo.h)). */
+TR_FN float tr_ggx_pdf(const tr_material *m, tr_vec3 nf, tr_vec3 wo, tr_vec3 wi) {
+    float co = v3_dot(wo, nf), ci = v3_dot(wi, nf);
+    if (co <= 0.0f || ci <= 0.0f) {
+        return 0.0f;
+    }
+    float alpha = tr_ggx_alpha(m->roughness);
+    tr_vec3 h = v3_normalize(v3_add(wo, wi));
+    float g1 = 1.0f / (1.0f + tr_ggx_lambda(alpha, co));
+    return g1 * tr_ggx_d(alpha, v3_dot(h, nf)) / (4.0f * co);
+}
+
+/* A visible normal for the local view direction v (v.z > 0), isotropic alpha
+ * (Heitz 2018, section 3: stretch, sample the projected hemisphere, unstretch). */
+TR_FN tr_vec3 tr_ggx_sample_vndf(float alpha, tr_vec3 v, float u1, float u2) {
+    tr_vec3 vh = v3_normalize(v3(alpha * v.x, alpha * v.y, v.z));
+    float len2 = vh.x * vh.x + vh.y * vh.y;
+    tr_vec3 t1 =
+        len2 > 0.0f ? v3_scale(v3(-vh.y, vh.x, 0.0f), 1.0f / tr_sqrtf(len2)) : v3(1.0f, 0.0f, 0.0f);
+    tr_vec3 t2 = v3_cross(vh, t1);
+    float r = tr_sqrtf(u1);
+    float phi = TR_TWO_PI * u2;
+    float p1 = r * tr_cosf(phi);
+    float p2 = r * tr_sinf(phi);
+    float s = 0.5f * (1.0f + vh.z);
+    p2 = (1.0f - s) * tr_sqrtf(tr_fmaxf(0.0f, 1.0f - p1 * p1)) + s * p2;
+    float p3 = tr_sqrtf(tr_fmaxf(0.0f, 1.0f - p1 * p1 - p2 * p2));
+    tr_vec3 nh = v3_add(v3_add(v3_scale(t1, p1), v3_scale(t2, p2)), v3_scale(vh, p3));
+    return v3_normalize(v3(alpha * nh.x, alpha * nh.y, tr_fmaxf(0.0f, nh.z)));
+}
+
+/* BSDF value f(wo, wi) (without the cosine). Zero for delta lobes and emitters. */
+TR_FN tr_vec3 tr_bsdf_eval(const tr_material *m, tr_vec3 n, tr_vec3 wo, tr_vec3 wi) {
+    tr_vec3 nf = tr_bsdf_facing(n, wo);
+    switch (m->type) {
+    case TR_MATERIAL_DIFFUSE:
+        if (v3_dot(wi, nf) <= 0.0f) {
+            return v3s(0.0f);
+        }
+        return v3_scale(m->color, TR_INV_PI);
+    case TR_MATERIAL_GLOSSY:
+        if (m->roughness <= 0.0f) {
+            return v3s(0.0f);
+        }
+        return tr_ggx_eval(m, nf, wo, wi);
+    default:
+        return v3s(0.0f);
+    }
+}
+
+/* Solid-angle pdf with which tr_bsdf_sample draws wi. Zero for delta lobes. */
+TR_FN float tr_bsdf_pdf(const tr_material *m, tr_vec3 n, tr_vec3 wo, tr_vec3 wi) {
+    tr_vec3 nf = tr_bsdf_facing(n, wo);
+    switch (m->type) {
+    case TR_MATERIAL_DIFFUSE: {
+        float c = v3_dot(wi, nf);
+        return c > 0.0f ? c * TR_INV_PI : 0.0f;
+    }
+    case TR_MATERIAL_GLOSSY:
+        if (m->roughness <= 0.0f) {
+            return 0.0f;
+        }
+        return tr_ggx_pdf(m, nf, wo, wi);
+    default:
+        return 0.0f;
+    }
+}
+
+/* Draws wi. Returns 0 when the path ends here (emitters, directions below the
+ * surface, zero weight). */
+TR_FN int tr_bsdf_sample(const tr_material *m, tr_vec3 n, tr_vec3 wo, tr_rng *rng, tr_scatter *s) {
+    tr_vec3 nf = tr_bsdf_facing(n, wo);
+    s->delta = 0;
+    switch (m->type) {
+    case TR_MATERIAL_DIFFUSE: {
+        s->wi = tr_sample_cosine_hemisphere(rng, nf);
+        float c = v3_dot(s->wi, nf);
+        if (c <= 0.0f) {
+            return 0;
+        }
+        s->pdf = c * TR_INV_PI;
+        s->weight = m->color; /* (colour / pi) cos / (cos / pi) */
+        return 1;
+    }
+    case TR_MATERIAL_GLOSSY: {
+        float co = v3_dot(wo, nf);
+        if (m->roughness <= 0.0f) {
+            s->wi = v3_reflect(v3_neg(wo), nf);
+            s->delta = 1;
+            s->pdf = 1.0f;
+            s->weight = tr_fresnel_schlick(m->color, co);
+            return 1;
+        }
+        float alpha = tr_ggx_alpha(m->roughness);
+        tr_vec3 t, b;
+        v3_basis(nf, &t, &b);
+        tr_vec3 vl = v3(v3_dot(wo, t), v3_dot(wo, b), co);
+        float u1 = tr_rng_float(rng);
+        float u2 = tr_rng_float(rng);
+        tr_vec3 hl = tr_ggx_sample_vndf(alpha, vl, u1, u2);
+        tr_vec3 h = v3_add(v3_add(v3_scale(t, hl.x), v3_scale(b, hl.y)), v3_scale(nf, hl.z));
+        s->wi = v3_normalize(v3_reflect(v3_neg(wo), h));
+        float ci = v3_dot(s->wi, nf);
+        if (ci <= 0.0f || co <= 0.0f) {
+            return 0;
+        }
+        s->pdf = tr_ggx_pdf(m, nf, wo, s->wi);
+        if (!(s->pdf > 0.0f)) {
+            return 0;
+        }
+        /* F G2 / G1(wo), written through eval and pdf so that the three agree. */
+        s->weight = v3_scale(tr_ggx_eval(m, nf, wo, s->wi), ci / s->pdf);
+        return 1;
+    }
+    case TR_MATERIAL_GLASS: {
+        float cos_dn = v3_dot(wo, n);
+        int entering = cos_dn > 0.0f;
+        float n1 = entering ? 1.0f : m->ior;
+        float n2 = entering ? m->ior : 1.0f;
+        float cos_i = tr_fabsf(cos_dn);
+        float cos_t;
+        float r = tr_fresnel_dielectric(cos_i, n1, n2, &cos_t);
+        s->delta = 1;
+        s->weight = m->color;
+        tr_vec3 d = v3_neg(wo);
+        if (tr_rng_float(rng) < r) {
+            s->wi = v3_reflect(d, nf);
+            s->pdf = r;
+        } else {
+            float eta = n1 / n2;
+            s->wi = v3_normalize(v3_add(v3_scale(d, eta), v3_scale(nf, eta * cos_i - cos_t)));
+            s->pdf = 1.0f - r;
+        }
+        return 1;
+    }
+    default:
+        return 0;
+    }
+}
+
+/* Radiance a surface of material m with geometric normal n emits towards w. Emitters
+ * are one-sided (the side n points to) unless TR_MATERIAL_TWO_SIDED is set. */
+TR_FN tr_vec3 tr_emitted(const tr_material *m, tr_vec3 n, tr_vec3 w) {
+    if (!(m->emittance > 0.0f)) {
+        return v3s(0.0f);
+    }
+    if ((m->flags & TR_MATERIAL_TWO_SIDED) == 0u && v3_dot(w, n) <= 0.0f) {
+        return v3s(0.0f);
+    }
+    return v3_scale(m->color, m->emittance);
+}
+
+#endif

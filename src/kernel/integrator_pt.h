@@ -1,0 +1,135 @@
+/* integrator_pt.h - unidirectional path tracing with next-event estimation and
+ * multiple importance sampling (Veach, "Robust Monte Carlo Methods for Light Transport
+ * Simulation", PhD thesis, Stanford 1997, chapter 9: the power heuristic, beta = 2).
+ *
+ * At every non-delta vertex two strategies produce paths that end on an emitter:
+ * sampling a point on an emitter (light sample, with a shadow ray) and continuing
+ * with the BSDF's sample and hitting an emitter. Each contribution is weighted by
+ * w_s = p_s^2 / (p_light^2 + p_bsdf^2), both pdfs in solid angle at the vertex, so
+ * the weights of the two strategies sum to one for every path. After delta vertices
+ * (mirror, smooth glass) and for the camera ray only the BSDF strategy exists, and
+ * emission counts with weight 1. */
+#ifndef TR_KERNEL_INTEGRATOR_PT_H
+#define TR_KERNEL_INTEGRATOR_PT_H
+
+#include "bsdf.h"
+#include "compat.h"
+#include "light.h"
+#include "material.h"
+#include "rng.h"
+#include "scene_view.h"
+#include "types.h"
+#include "vec.h"
+
+/* Russian roulette starts after this many segments. */
+#define TR_PT_RR_START 3
+
+/* Veach's power heuristic (beta = 2): the weight of strategy a against strategy b. */
+TR_FN float tr_mis_power(float pdf_a, float pdf_b) {
+    float a = pdf_a * pdf_a, b = pdf_b * pdf_b;
+    return a + b > 0.0f ? a / (a + b) : 0.0f;
+}
+
+/* Solid-angle density, seen from a point at distance dist along direction w (unit,
+ * pointing from the point to the emitter), with which light sampling picks the emitter
+ * point on triangle tri of material m. */
+TR_FN float tr_pt_light_pdf(const tr_scene_view *s, const tr_material *m,
+                            TR_CONST_GLOBAL tr_triangle *tri, tr_vec3 w, float dist) {
+    float cos_l = tr_fabsf(v3_dot(w, tri->normal));
+    if (!(cos_l > 0.0f)) {
+        return 0.0f;
+    }
+    return tr_light_pdf_area(s, m, tri->area) * dist * dist / cos_l;
+}
+
+TR_FN int tr_v3_is_zero(tr_vec3 a) {
+    return a.x == 0.0f && a.y == 0.0f && a.z == 0.0f;
+}
+
+/* Radiance arriving along `ray`. A path has at most max_depth segments (the camera ray
+ * is the first); Russian roulette on the throughput's largest component starts after
+ * TR_PT_RR_START segments. *rays counts closest-hit and shadow queries. */
+TR_FN tr_vec3 tr_trace_pt(const tr_scene_view *s, tr_ray ray, int max_depth, tr_rng *rng,
+                          uint32_t *rays) {
+    tr_vec3 radiance = v3s(0.0f);
+    tr_vec3 throughput = v3s(1.0f);
+    float prev_pdf = 0.0f;
+    int prev_delta = 1; /* the camera ray: no light strategy competes */
+    for (int seg = 1; seg <= max_depth; ++seg) {
+        tr_hit hit;
+        *rays += 1;
+        if (!tr_intersect_scene(s, &ray, &hit)) {
+            break;
+        }
+        TR_CONST_GLOBAL tr_triangle *tri = &s->triangles[hit.triangle];
+        tr_material m = s->materials[tri->material];
+        tr_vec3 n = tri->normal;
+        tr_vec3 wo = v3_neg(ray.dir);
+        tr_vec3 p = v3_madd(ray.origin, ray.dir, hit.t);
+
+        /* Emission found by the BSDF strategy (or the camera). */
+        tr_vec3 le = tr_emitted(&m, n, wo);
+        if (!tr_v3_is_zero(le)) {
+            float w = 1.0f;
+            if (!prev_delta) {
+                w = tr_mis_power(prev_pdf, tr_pt_light_pdf(s, &m, tri, ray.dir, hit.t));
+            }
+            radiance = v3_add(radiance, v3_scale(v3_mul(throughput, le), w));
+        }
+        if (seg == max_depth || m.type == TR_MATERIAL_EMITTER) {
+            break;
+        }
+
+        /* Next-event estimation: one emitter point, one shadow ray. */
+        if (!tr_bsdf_is_delta(&m) && s->light_count > 0) {
+            uint32_t lt;
+            tr_vec3 y;
+            float pa = tr_light_sample(s, rng, &lt, &y);
+            TR_CONST_GLOBAL tr_triangle *ltri = &s->triangles[lt];
+            tr_material lm = s->materials[ltri->material];
+            tr_vec3 d = v3_sub(y, p);
+            float dist = v3_length(d);
+            if (pa > 0.0f && dist > 0.0f) {
+                tr_vec3 wi = v3_scale(d, 1.0f / dist);
+                tr_vec3 le_l = tr_emitted(&lm, ltri->normal, v3_neg(wi));
+                tr_vec3 f = tr_bsdf_eval(&m, n, wo, wi);
+                float pl = tr_pt_light_pdf(s, &lm, ltri, wi, dist);
+                if (!tr_v3_is_zero(le_l) && !tr_v3_is_zero(f) && pl > 0.0f) {
+                    float cos_i = tr_fabsf(v3_dot(wi, n));
+                    tr_vec3 o = tr_offset_origin(p, v3_dot(wi, n) > 0.0f ? n : v3_neg(n));
+                    tr_vec3 od = v3_sub(y, o);
+                    float len = v3_length(od);
+                    tr_ray shadow =
+                        tr_ray_make(o, v3_scale(od, 1.0f / len), 0.0f, len * (1.0f - 1e-4f));
+                    *rays += 1;
+                    if (!tr_occluded_scene(s, &shadow)) {
+                        float w = tr_mis_power(pl, tr_bsdf_pdf(&m, n, wo, wi));
+                        radiance = v3_add(radiance, v3_scale(v3_mul(v3_mul(throughput, f), le_l),
+                                                             cos_i * w / pl));
+                    }
+                }
+            }
+        }
+
+        /* Continue with the BSDF's sample. */
+        tr_scatter bs;
+        if (!tr_bsdf_sample(&m, n, wo, rng, &bs)) {
+            break;
+        }
+        throughput = v3_mul(throughput, bs.weight);
+        prev_pdf = bs.pdf;
+        prev_delta = bs.delta;
+        if (seg >= TR_PT_RR_START) {
+            float q = tr_fminf(v3_max_component(throughput), 0.95f);
+            if (!(tr_rng_float(rng) < q)) {
+                break;
+            }
+            throughput = v3_scale(throughput, 1.0f / q);
+        }
+        tr_vec3 o = tr_offset_origin(p, v3_dot(bs.wi, n) > 0.0f ? n : v3_neg(n));
+        ray = tr_ray_make(o, bs.wi, 0.0f, TR_INFINITY);
+    }
+    return radiance;
+}
+
+#endif

@@ -1,0 +1,330 @@
+/* test_bsdf.c - the pt integrator's BSDFs (src/kernel/bsdf.h).
+ *
+ *  (a) Chi-square goodness of fit: directions drawn by tr_bsdf_sample, binned on
+ *      (cos theta, phi), against the counts tr_bsdf_pdf predicts (numerically
+ *      integrated over each bin), plus one bin for samples the sampler rejects
+ *      (GGX's visible-normal sampler sends some reflections below the surface). For
+ *      Lambertian and GGX at several roughnesses and incident angles.
+ *  (b) eval/pdf/sample agree: a sample's weight is eval * cos / pdf at its direction
+ *      and its pdf is tr_bsdf_pdf's.
+ *  (c) Reciprocity: f(wo, wi) = f(wi, wo) for Lambertian and GGX.
+ *  (d) White furnace: the albedo (mean sample weight) of a white Lambertian is 1, of a
+ *      white GGX conductor <= 1 and equal to an independent uniform-hemisphere estimate
+ *      of the integral of f cos; single-scattering GGX loses energy as roughness and
+ *      incidence grow. The smooth dielectric is lossless (weight 1 for every sample),
+ *      reflects with the Fresnel probability and refracts by Snell's law; the smooth
+ *      mirror reflects exactly with Schlick's weight.
+ *
+ * Fixed seeds; statistical bounds are 5 standard errors or chi2_critical (p = 1e-4). */
+#include "check.h"
+#include "kernel/bsdf.h"
+#include "kernel/kernel.h"
+
+#include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define PI_D 3.14159265358979323846
+#define NSIGMA 5.0
+
+static tr_material mat(uint32_t type, tr_vec3 color, float roughness, float ior) {
+    tr_material m;
+    memset(&m, 0, sizeof m);
+    m.type = type;
+    m.color = color;
+    m.roughness = roughness;
+    m.ior = ior;
+    return m;
+}
+
+static tr_vec3 dir_of(double cos_t, double phi) {
+    double s = sqrt(fmax(0.0, 1.0 - cos_t * cos_t));
+    return v3((float)(s * cos(phi)), (float)(s * sin(phi)), (float)cos_t);
+}
+
+enum { NC = 16, NP = 24, SUB = 24 };
+
+/* (a) + (b) for one material and incident angle. */
+static void chi2_case(const tr_material *m, double theta_o_deg, uint64_t seed) {
+    const tr_vec3 n = v3(0.0f, 0.0f, 1.0f);
+    const double to = theta_o_deg * PI_D / 180.0;
+    const tr_vec3 wo = v3((float)sin(to), 0.0f, (float)cos(to));
+    /* Expected fraction per bin: midpoint rule on SUB x SUB cells in (theta, phi), with
+     * the solid angle element sin(theta) d(theta) d(phi): cells in theta stay narrow
+     * near the pole, where the glossy lobes at normal incidence are. */
+    static double expect[NC * NP + 1];
+    double total = 0.0;
+    for (int i = 0; i < NC; ++i) {
+        for (int j = 0; j < NP; ++j) {
+            double sum = 0.0;
+            double th1 = acos((double)i / NC), th0 = acos((double)(i + 1) / NC);
+            double dth = (th1 - th0) / SUB;
+            for (int a = 0; a < SUB; ++a) {
+                double th = th0 + ((double)a + 0.5) * dth;
+                for (int b = 0; b < SUB; ++b) {
+                    double phi = 2.0 * PI_D * ((double)j + ((double)b + 0.5) / SUB) / NP;
+                    sum += tr_bsdf_pdf(m, n, wo, dir_of(cos(th), phi)) * sin(th) * dth;
+                }
+            }
+            expect[i * NP + j] = sum * (2.0 * PI_D / NP) / SUB;
+            total += expect[i * NP + j];
+        }
+    }
+    expect[NC * NP] = fmax(0.0, 1.0 - total); /* rejected samples */
+    CHECK(total <= 1.0 + 1e-3, "type %u r=%.2f theta %.0f: pdf integrates to %.5f > 1", m->type,
+          (double)m->roughness, theta_o_deg, total);
+
+    const int N = 200000;
+    static double count[NC * NP + 1];
+    memset(count, 0, sizeof count);
+    tr_rng rng;
+    tr_rng_init(&rng, seed, 1, 2);
+    int inconsistent = 0;
+    for (int k = 0; k < N; ++k) {
+        tr_scatter s;
+        if (!tr_bsdf_sample(m, n, wo, &rng, &s)) {
+            count[NC * NP] += 1;
+            continue;
+        }
+        double c = s.wi.z;
+        double phi = atan2(s.wi.y, s.wi.x);
+        if (phi < 0.0) {
+            phi += 2.0 * PI_D;
+        }
+        int i = (int)(c * NC), j = (int)(phi / (2.0 * PI_D) * NP);
+        i = i < 0 ? 0 : i >= NC ? NC - 1 : i;
+        j = j < 0 ? 0 : j >= NP ? NP - 1 : j;
+        count[i * NP + j] += 1;
+        /* (b) */
+        float pdf = tr_bsdf_pdf(m, n, wo, s.wi);
+        tr_vec3 f = tr_bsdf_eval(m, n, wo, s.wi);
+        float ci = s.wi.z;
+        tr_vec3 w = v3_scale(f, ci / pdf);
+        if (s.delta || !(fabsf(pdf - s.pdf) <= 1e-4f * pdf) ||
+            !(fabsf(w.x - s.weight.x) <= 1e-4f * fmaxf(1.0f, w.x)) ||
+            !(fabsf(w.y - s.weight.y) <= 1e-4f * fmaxf(1.0f, w.y)) ||
+            !(fabsf(w.z - s.weight.z) <= 1e-4f * fmaxf(1.0f, w.z))) {
+            ++inconsistent;
+        }
+    }
+    CHECK(inconsistent == 0, "type %u r=%.2f theta %.0f: %d samples disagree with eval/pdf",
+          m->type, (double)m->roughness, theta_o_deg, inconsistent);
+
+    /* Pool bins expected to hold fewer than 5 samples, as the chi-square test needs. */
+    double chi2 = 0.0, pool_e = 0.0, pool_o = 0.0;
+    int bins = 0;
+    for (int b = 0; b <= NC * NP; ++b) {
+        double e = expect[b] * N;
+        if (e < 5.0) {
+            pool_e += e;
+            pool_o += count[b];
+            continue;
+        }
+        chi2 += (count[b] - e) * (count[b] - e) / e;
+        ++bins;
+    }
+    if (pool_e >= 5.0) {
+        chi2 += (pool_o - pool_e) * (pool_o - pool_e) / pool_e;
+        ++bins;
+    } else {
+        /* Samples where the pdf says almost none can land are a failure too. */
+        CHECK(pool_o <= pool_e + NSIGMA * sqrt(pool_e) + 5.0,
+              "type %u r=%.2f theta %.0f: %.0f samples where %.2f are expected", m->type,
+              (double)m->roughness, theta_o_deg, pool_o, pool_e);
+    }
+    CHECK(bins > 10 && chi2 < chi2_critical(bins - 1),
+          "type %u r=%.2f theta %.0f: chi2 %.1f with %d bins (critical %.1f)", m->type,
+          (double)m->roughness, theta_o_deg, chi2, bins, chi2_critical(bins - 1));
+}
+
+/* (c) */
+static void reciprocity(const tr_material *m) {
+    const tr_vec3 n = v3(0.0f, 0.0f, 1.0f);
+    tr_rng rng;
+    tr_rng_init(&rng, 77, 3, 4);
+    int bad = 0, nonzero = 0;
+    for (int k = 0; k < 20000; ++k) {
+        tr_vec3 a = dir_of(tr_rng_float(&rng), 2.0 * PI_D * tr_rng_float(&rng));
+        tr_vec3 b = dir_of(tr_rng_float(&rng), 2.0 * PI_D * tr_rng_float(&rng));
+        tr_vec3 fab = tr_bsdf_eval(m, n, a, b), fba = tr_bsdf_eval(m, n, b, a);
+        nonzero += fab.x > 0.0f;
+        float scale = fmaxf(fab.x, 1e-6f);
+        if (!(fabsf(fab.x - fba.x) <= 1e-3f * scale && fabsf(fab.y - fba.y) <= 1e-3f * scale &&
+              fabsf(fab.z - fba.z) <= 1e-3f * scale)) {
+            ++bad;
+        }
+    }
+    CHECK(bad == 0 && nonzero > 10000, "type %u r=%.2f: %d of 20000 pairs not reciprocal (%d > 0)",
+          m->type, (double)m->roughness, bad, nonzero);
+}
+
+/* (d) Albedo by the sampler (mean weight) and by uniform hemisphere sampling of f cos. */
+static void albedo(const tr_material *m, double theta_o_deg, double *sampled, double *se_sampled,
+                   double *uniform, double *se_uniform) {
+    const tr_vec3 n = v3(0.0f, 0.0f, 1.0f);
+    const double to = theta_o_deg * PI_D / 180.0;
+    const tr_vec3 wo = v3((float)sin(to), 0.0f, (float)cos(to));
+    const int N = 400000;
+    tr_rng rng;
+    tr_rng_init(&rng, 1234, (uint64_t)theta_o_deg, (uint64_t)(m->roughness * 100.0f));
+    double s1 = 0.0, s2 = 0.0, u1 = 0.0, u2 = 0.0;
+    for (int k = 0; k < N; ++k) {
+        tr_scatter s;
+        double w = tr_bsdf_sample(m, n, wo, &rng, &s) ? s.weight.x : 0.0;
+        s1 += w;
+        s2 += w * w;
+        tr_vec3 d = dir_of(tr_rng_float(&rng), 2.0 * PI_D * tr_rng_float(&rng));
+        double v = tr_bsdf_eval(m, n, wo, d).x * d.z * 2.0 * PI_D;
+        u1 += v;
+        u2 += v * v;
+    }
+    *sampled = s1 / N;
+    *se_sampled = sqrt(fmax(0.0, s2 / N - *sampled * *sampled) / N);
+    *uniform = u1 / N;
+    *se_uniform = sqrt(fmax(0.0, u2 / N - *uniform * *uniform) / N);
+}
+
+static void furnace(void) {
+    tr_material diffuse = mat(TR_MATERIAL_DIFFUSE, v3s(1.0f), 0.0f, 1.0f);
+    double a, sa, u, su;
+    albedo(&diffuse, 40.0, &a, &sa, &u, &su);
+    CHECK_NEAR(a, 1.0, 1e-6, "white Lambertian albedo (every weight is 1)");
+    CHECK(fabs(u - 1.0) <= NSIGMA * su, "white Lambertian, uniform estimate %.5f +- %.5f", u, su);
+
+    const float rough[] = {0.1f, 0.3f, 0.6f, 1.0f};
+    const double theta[] = {0.0, 45.0, 80.0};
+    double loss_smooth_normal = 0.0, loss_rough_grazing = 0.0;
+    for (int r = 0; r < 4; ++r) {
+        tr_material g = mat(TR_MATERIAL_GLOSSY, v3s(1.0f), rough[r], 1.0f);
+        for (int t = 0; t < 3; ++t) {
+            albedo(&g, theta[t], &a, &sa, &u, &su);
+            CHECK(a <= 1.0 + NSIGMA * sa, "GGX r=%.1f theta %.0f: albedo %.5f > 1",
+                  (double)rough[r], theta[t], a);
+            CHECK(fabs(a - u) <= NSIGMA * sqrt(sa * sa + su * su),
+                  "GGX r=%.1f theta %.0f: sampled albedo %.5f vs uniform %.5f +- %.5f",
+                  (double)rough[r], theta[t], a, u, sqrt(sa * sa + su * su));
+            if (r == 0 && t == 0) {
+                loss_smooth_normal = 1.0 - a;
+                /* Nearly smooth at normal incidence: hardly any energy is lost. */
+                CHECK(a > 0.98, "GGX r=0.1 at normal incidence: albedo %.5f", a);
+            }
+            if (r == 3 && t == 2) {
+                loss_rough_grazing = 1.0 - a;
+            }
+        }
+    }
+    /* Single scattering loses the light that would scatter again between microfacets:
+     * measurably at high roughness and grazing incidence. */
+    CHECK(loss_rough_grazing > 0.02 && loss_rough_grazing > 5.0 * loss_smooth_normal,
+          "GGX energy loss: %.4f at r=1, 80 deg vs %.4f at r=0.1, 0 deg", loss_rough_grazing,
+          loss_smooth_normal);
+}
+
+static void delta_lobes(void) {
+    const tr_vec3 n = v3(0.0f, 0.0f, 1.0f);
+    /* Smooth glass from outside at 50 degrees and from inside at 30 (below TIR) and 60
+     * (beyond the critical angle 41.8 degrees for ior 1.5). */
+    tr_material glass = mat(TR_MATERIAL_GLASS, v3s(1.0f), 0.0f, 1.5f);
+    const double angles[] = {50.0, -30.0, -60.0};
+    for (int c = 0; c < 3; ++c) {
+        double th = fabs(angles[c]) * PI_D / 180.0;
+        int outside = angles[c] > 0.0;
+        tr_vec3 wo = v3((float)sin(th), 0.0f, (float)(outside ? cos(th) : -cos(th)));
+        float cos_t;
+        double r = tr_fresnel_dielectric((float)cos(th), outside ? 1.0f : 1.5f,
+                                         outside ? 1.5f : 1.0f, &cos_t);
+        tr_rng rng;
+        tr_rng_init(&rng, 99, (uint64_t)c, 0);
+        const int N = 100000;
+        int refl = 0, bad = 0;
+        for (int k = 0; k < N; ++k) {
+            tr_scatter s;
+            if (!tr_bsdf_sample(&glass, n, wo, &rng, &s) || !s.delta || s.weight.x != 1.0f ||
+                s.weight.y != 1.0f || s.weight.z != 1.0f) {
+                ++bad;
+                continue;
+            }
+            int is_refl = (s.wi.z > 0.0f) == outside;
+            refl += is_refl;
+            double sin_i = sin(th), sin_o = sqrt(s.wi.x * s.wi.x + s.wi.y * s.wi.y);
+            double eta = outside ? 1.0 / 1.5 : 1.5;
+            double expect_sin = is_refl ? sin_i : eta * sin_i;
+            /* Reflection mirrors the tangential part; refraction scales it (Snell). */
+            /* Both keep the tangential direction of -wo (negative x). */
+            if (fabs(sin_o - expect_sin) > 1e-5 || s.wi.x > 0.0f ||
+                fabsf(s.pdf - (float)(is_refl ? r : 1.0 - r)) > 1e-6f) {
+                ++bad;
+            }
+        }
+        CHECK(bad == 0, "glass case %d: %d bad samples (weight 1 = lossless, Snell, pdf)", c, bad);
+        double se = sqrt(fmax(r * (1.0 - r), 1e-12) / N);
+        CHECK(fabs((double)refl / N - r) <= NSIGMA * se + 1e-9,
+              "glass case %d: reflected fraction %.5f vs Fresnel %.5f", c, (double)refl / N, r);
+        if (angles[c] == -60.0) {
+            CHECK(refl == N, "total internal reflection: %d of %d reflected", refl, N);
+        }
+        CHECK(tr_bsdf_pdf(&glass, n, wo, v3(0, 0, 1)) == 0.0f &&
+                  tr_bsdf_eval(&glass, n, wo, v3(0, 0, 1)).x == 0.0f,
+              "glass: eval and pdf of a delta lobe are 0");
+    }
+    /* Roughness 0: a mirror with Schlick's Fresnel, on either side of the normal. */
+    tr_material mirror = mat(TR_MATERIAL_GLOSSY, v3(0.9f, 0.5f, 0.2f), 0.0f, 1.0f);
+    tr_vec3 wo = v3_normalize(v3(0.3f, -0.4f, -0.8f));
+    tr_rng rng;
+    tr_rng_init(&rng, 5, 5, 5);
+    tr_scatter s;
+    int ok = tr_bsdf_sample(&mirror, n, wo, &rng, &s);
+    tr_vec3 fr = tr_fresnel_schlick(mirror.color, fabsf(wo.z));
+    CHECK(ok && s.delta && fabsf(s.wi.x + wo.x) < 1e-6f && fabsf(s.wi.y + wo.y) < 1e-6f &&
+              fabsf(s.wi.z - wo.z) < 1e-6f && fabsf(s.weight.x - fr.x) < 1e-6f &&
+              fabsf(s.weight.z - fr.z) < 1e-6f,
+          "mirror: wi (%g %g %g) weight %g", (double)s.wi.x, (double)s.wi.y, (double)s.wi.z,
+          (double)s.weight.x);
+    CHECK(tr_bsdf_is_delta(&mirror) && tr_bsdf_is_delta(&glass), "delta materials");
+    /* An emitter's BSDF is black. */
+    tr_material em = mat(TR_MATERIAL_EMITTER, v3s(1.0f), 0.0f, 1.0f);
+    em.emittance = 5.0f;
+    CHECK(!tr_bsdf_sample(&em, n, wo, &rng, &s) && tr_bsdf_eval(&em, n, wo, v3(0, 0, 1)).x == 0.0f,
+          "emitters do not scatter");
+    /* One-sided emission, towards the normal's side only, unless two-sided. */
+    CHECK(tr_emitted(&em, n, v3(0, 0, 1)).x == 5.0f && tr_emitted(&em, n, v3(0, 0, -1)).x == 0.0f,
+          "one-sided emitter");
+    em.flags = TR_MATERIAL_TWO_SIDED;
+    CHECK(tr_emitted(&em, n, v3(0, 0, -1)).x == 5.0f, "two-sided emitter");
+}
+
+static void alpha_mapping(void) {
+    /* Documented in docs/integrators.md: monotonic, tan(pi/8) at r = 1. */
+    CHECK_NEAR(tr_ggx_alpha(1.0f), tan(PI_D / 8.0), 1e-6, "alpha(1)");
+    CHECK(tr_ggx_alpha(0.0f) == TR_GGX_MIN_ALPHA, "alpha(0) clamps");
+    float prev = 0.0f;
+    int mono = 1;
+    for (int i = 1; i <= 100; ++i) {
+        float a = tr_ggx_alpha((float)i / 100.0f);
+        mono &= a >= prev;
+        prev = a;
+    }
+    CHECK(mono, "alpha(r) is non-decreasing");
+}
+
+int main(void) {
+    tr_material diffuse = mat(TR_MATERIAL_DIFFUSE, v3(0.8f, 0.5f, 0.3f), 0.0f, 1.0f);
+    const double theta[] = {0.0, 30.0, 60.0, 80.0};
+    for (int t = 0; t < 4; ++t) {
+        chi2_case(&diffuse, theta[t], 11 + (uint64_t)t);
+    }
+    const float rough[] = {0.15f, 0.4f, 0.7f, 1.0f};
+    for (int r = 0; r < 4; ++r) {
+        tr_material g = mat(TR_MATERIAL_GLOSSY, v3(0.9f, 0.7f, 0.4f), rough[r], 1.0f);
+        for (int t = 0; t < 4; ++t) {
+            chi2_case(&g, theta[t], 100 + (uint64_t)(10 * r + t));
+        }
+        reciprocity(&g);
+    }
+    reciprocity(&diffuse);
+    furnace();
+    delta_lobes();
+    alpha_mapping();
+    return check_finish("test_bsdf");
+}
