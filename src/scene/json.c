@@ -428,9 +428,17 @@ static int parse_camera(jctx *c, const cJSON *cam) {
     }
     double fov, near_d = 0.001, far_d = 1e30;
     int present;
-    if (get_number(c, cam, path, "fov", -INFINITY, INFINITY, &fov, NULL) != TR_OK) {
-        return TR_ERR;
+    const cJSON *fv = cJSON_GetObjectItemCaseSensitive(cam, "fov");
+    if (!fv) {
+        return jerr(c, "camera.fov",
+                    "missing (expected a vertical field of view in (0, 180) "
+                    "degrees)");
     }
+    if (!cJSON_IsNumber(fv)) {
+        return jerr(c, "camera.fov",
+                    "expected a vertical field of view in (0, 180) degrees, got %s", type_name(fv));
+    }
+    fov = fv->valuedouble;
     if (!(fov > 0.0 && fov < 180.0)) {
         return jerr(c, "camera.fov",
                     "expected a vertical field of view in (0, 180) degrees, got %g", fov);
@@ -658,15 +666,103 @@ static int check_triangles(const jctx *c, const char *path, uint32_t first) {
     return TR_OK;
 }
 
+/* A quad: four corners, two triangles (v0 v1 v2) and (v0 v2 v3), facing the side that
+ * (v1 - v0) x (v2 - v0) points to; the shape transform applies to the corners. */
+static int parse_quad(jctx *c, const cJSON *sh, const char *p, const cJSON *verts) {
+    char pv[PATH_MAX_LEN], ps[PATH_MAX_LEN];
+    path_key(pv, p, "vertices");
+    path_key(ps, p, "subdivisions");
+    if (cJSON_GetObjectItemCaseSensitive(sh, "subdivisions")) {
+        return jerr(c, ps, "only icospheres have subdivisions");
+    }
+    if (!verts) {
+        return jerr(c, pv, "missing (expected 4 corners [[x, y, z], ...])");
+    }
+    if (!cJSON_IsArray(verts) || cJSON_GetArraySize(verts) != 4) {
+        return jerr(c, pv, "expected an array of 4 corners [[x, y, z], ...], got %s%s",
+                    type_name(verts), cJSON_IsArray(verts) ? " of another length" : "");
+    }
+    float pos[12];
+    int k = 0;
+    for (const cJSON *v = verts->child; v; v = v->next, ++k) {
+        char pe[PATH_MAX_LEN];
+        path_index(pe, pv, k);
+        if (!cJSON_IsArray(v) || cJSON_GetArraySize(v) != 3) {
+            return jerr(c, pe, "expected an array of 3 numbers [x, y, z], got %s", type_name(v));
+        }
+        int j = 0;
+        for (const cJSON *e = v->child; e; e = e->next, ++j) {
+            char pj[PATH_MAX_LEN];
+            path_index(pj, pe, j);
+            if (!cJSON_IsNumber(e)) {
+                return jerr(c, pj, "expected a number, got %s", type_name(e));
+            }
+            if (!isfinite(e->valuedouble) || fabs(e->valuedouble) > TR_SCENE_FILE_MAX_COORD) {
+                return jerr(c, pj, "expected a finite number with |x| <= %g, got %g",
+                            TR_SCENE_FILE_MAX_COORD, e->valuedouble);
+            }
+            pos[3 * k + j] = (float)e->valuedouble;
+        }
+    }
+    tr_transform tf;
+    int64_t mat;
+    if (get_transform(c, sh, p, &tf) != TR_OK || material_ref(c, sh, p, 1, &mat) != TR_OK) {
+        return TR_ERR;
+    }
+    if ((uint64_t)c->scene->triangle_count + 2 > c->budget) {
+        return jerr(c, p, "the scene would have %llu triangles, more than the budget of %u",
+                    (unsigned long long)c->scene->triangle_count + 2, c->budget);
+    }
+    static const uint32_t idx[6] = {0, 1, 2, 0, 2, 3};
+    uint32_t first = c->scene->triangle_count, dropped = 0;
+    tr_error e;
+    if (tr_scene_add_mesh(c->scene, pos, 4, idx, 2, NULL, (uint32_t)mat, &tf, &dropped, &e) !=
+        TR_OK) {
+        return jerr(c, pv, "the corners span no area");
+    }
+    if (dropped) {
+        return jerr(c, pv, "the corners span a triangle of zero area");
+    }
+    return check_triangles(c, p, first);
+}
+
 static int parse_shapes(jctx *c, const cJSON *shapes) {
     static const char *const keys[] = {
         "type",  "name",         "position", "orientation", "orientation_rad",
-        "scale", "subdivisions", "material"};
-    static const char *const types[] = {"plane", "box", "icosphere"};
+        "scale", "subdivisions", "material", "vertices"};
+    static const char *const types[] = {"plane", "box", "icosphere", "quad"};
     if (!cJSON_IsArray(shapes)) {
         return jerr(c, "shapes", "expected an array, got %s", type_name(shapes));
     }
+    /* The budget first, from the types and subdivisions alone, so that a file asking for
+     * too much fails before anything big is generated. */
+    uint64_t total = c->scene->triangle_count;
     int i = 0;
+    for (const cJSON *sh = shapes->child; sh; sh = sh->next, ++i) {
+        const cJSON *ty = cJSON_GetObjectItemCaseSensitive(sh, "type");
+        const cJSON *sub = cJSON_GetObjectItemCaseSensitive(sh, "subdivisions");
+        if (!cJSON_IsString(ty) || !ty->valuestring) {
+            continue;
+        }
+        if (strcmp(ty->valuestring, "icosphere") == 0) {
+            double n = cJSON_IsNumber(sub) ? sub->valuedouble : 2.0;
+            if (!(n >= 0.0 && n <= TR_ICOSPHERE_MAX_SUBDIVISIONS) || n != floor(n)) {
+                continue; /* reported below */
+            }
+            total += 20ull << (2u * (unsigned)n);
+        } else {
+            total += 12; /* at most (a box) */
+        }
+        if (total > c->budget) {
+            char p[PATH_MAX_LEN];
+            path_index(p, "shapes", i);
+            return jerr(c, p,
+                        "the scene would have more than %u triangles (the triangle budget; "
+                        "an icosphere has 20*4^subdivisions)",
+                        c->budget);
+        }
+    }
+    i = 0;
     for (const cJSON *sh = shapes->child; sh; sh = sh->next, ++i) {
         char p[PATH_MAX_LEN];
         path_index(p, "shapes", i);
@@ -680,7 +776,7 @@ static int parse_shapes(jctx *c, const cJSON *shapes) {
             return TR_ERR;
         }
         int t = -1;
-        for (int k = 0; k < 3; ++k) {
+        for (int k = 0; k < 4; ++k) {
             if (strcmp(type, types[k]) == 0) {
                 t = k;
             }
@@ -688,10 +784,22 @@ static int parse_shapes(jctx *c, const cJSON *shapes) {
         if (t < 0) {
             char pt[PATH_MAX_LEN], buf[40];
             path_key(pt, p, "type");
-            const char *near = closest(type, types, 3);
+            const char *near = closest(type, types, 4);
             return jerr(c, pt, "unknown shape type '%s' (%s%s%s)", shown(type, buf, sizeof buf),
-                        near ? "did you mean '" : "expected plane, box or icosphere",
+                        near ? "did you mean '" : "expected plane, box, icosphere or quad",
                         near ? near : "", near ? "'?" : "");
+        }
+        const cJSON *verts = cJSON_GetObjectItemCaseSensitive(sh, "vertices");
+        if (t == 3) {
+            if (parse_quad(c, sh, p, verts) != TR_OK) {
+                return TR_ERR;
+            }
+            continue;
+        }
+        if (verts) {
+            char pv[PATH_MAX_LEN];
+            path_key(pv, p, "vertices");
+            return jerr(c, pv, "only quads have vertices");
         }
         tr_shape_desc d = tr_shape_desc_default(t == 0   ? TR_SHAPE_PLANE
                                                 : t == 1 ? TR_SHAPE_BOX
@@ -817,10 +925,9 @@ static int build(jctx *c, const cJSON *root) {
     if (check_keys(c, root, "", keys, sizeof keys / sizeof keys[0]) != TR_OK) {
         return TR_ERR;
     }
-    double version = 1;
-    int has;
-    if (get_integer(c, root, "", "version", 1, 1, &version, &has) != TR_OK) {
-        return TR_ERR;
+    const cJSON *ver = cJSON_GetObjectItemCaseSensitive(root, "version");
+    if (ver && !(cJSON_IsNumber(ver) && ver->valuedouble == 1.0)) {
+        return jerr(c, "version", "expected 1 (the only version of the format)");
     }
     const char *desc;
     if (get_string(c, root, "", "description", 0, &desc) != TR_OK) {

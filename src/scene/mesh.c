@@ -246,11 +246,12 @@ int tr_scene_import_mesh(tr_scene *s, const char *path, const tr_transform *tf,
         return tr_error_set(err, "cannot open '%.200s': %s", path, strerror(errno));
     }
     char probe;
+    errno = 0;
     size_t got = fread(&probe, 1, 1, fp);
-    int read_error = ferror(fp);
+    int read_error = ferror(fp) ? (errno ? errno : EIO) : 0;
     fclose(fp);
     if (read_error) {
-        return tr_error_set(err, "cannot read '%.200s'", path);
+        return tr_error_set(err, "cannot read '%.200s': %s", path, strerror(read_error));
     }
     if (got == 0) {
         return tr_error_set(err, "'%.200s' is empty", path);
