@@ -71,7 +71,12 @@ int cmd_info(int argc, char **argv) {
     printf("bounds:     (%g, %g, %g) .. (%g, %g, %g)\n", (double)f.bounds.min.x,
            (double)f.bounds.min.y, (double)f.bounds.min.z, (double)f.bounds.max.x,
            (double)f.bounds.max.y, (double)f.bounds.max.z);
-    printf("normals:    %u triangles with vertex normals\n", s.vertex_normal_count);
+    uint32_t with_normals = 0;
+    for (uint32_t i = 0; i < s.vertex_normal_count; ++i) {
+        const tr_vec3 *n = &s.vertex_normals[3 * (size_t)i];
+        with_normals += v3_length(n[0]) > 0.0f || v3_length(n[1]) > 0.0f || v3_length(n[2]) > 0.0f;
+    }
+    printf("normals:    %u triangles with vertex normals\n", with_normals);
     if (!builtin) {
         printf("render:     %ux%u%s, %u spp%s, max depth %d%s, integrator %s%s, accel %s%s\n",
                f.width, f.height, f.has_width || f.has_height ? "" : " (default)", f.spp,

@@ -71,33 +71,38 @@ static void path_index(char *out, const char *base, int i) {
     }
 }
 
-/* Levenshtein distance, capped: strings longer than 63 characters are "far". */
+/* Edit distance with adjacent transpositions (optimal string alignment: Damerau 1964,
+ * "A technique for computer detection and correction of spelling errors"), capped:
+ * strings longer than 31 bytes are "far". */
 static int edit_distance(const char *a, const char *b) {
     size_t n = strlen(a), m = strlen(b);
-    if (n > 63 || m > 63) {
+    if (n > 31 || m > 31) {
         return 99;
     }
-    int row[64];
+    int d[32][32];
+    for (size_t i = 0; i <= n; ++i) {
+        d[i][0] = (int)i;
+    }
     for (size_t j = 0; j <= m; ++j) {
-        row[j] = (int)j;
+        d[0][j] = (int)j;
     }
     for (size_t i = 1; i <= n; ++i) {
-        int diag = row[0];
-        row[0] = (int)i;
         for (size_t j = 1; j <= m; ++j) {
-            int up = row[j];
-            int best = diag + (a[i - 1] != b[j - 1]);
-            if (up + 1 < best) {
-                best = up + 1;
+            int best = d[i - 1][j - 1] + (a[i - 1] != b[j - 1]);
+            if (d[i - 1][j] + 1 < best) {
+                best = d[i - 1][j] + 1;
             }
-            if (row[j - 1] + 1 < best) {
-                best = row[j - 1] + 1;
+            if (d[i][j - 1] + 1 < best) {
+                best = d[i][j - 1] + 1;
             }
-            row[j] = best;
-            diag = up;
+            if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1] &&
+                d[i - 2][j - 2] + 1 < best) {
+                best = d[i - 2][j - 2] + 1;
+            }
+            d[i][j] = best;
         }
     }
-    return row[m];
+    return d[n][m];
 }
 
 /* The closest of names[] to s within a distance of 1 + len/4, or NULL. */
