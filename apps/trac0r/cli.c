@@ -257,8 +257,9 @@ int cli_load_scene_file(const cli_args *a, cli_common *c, tr_scene *scene, tr_sc
     }
     if (!(c->given & CLI_GIVEN_ACCEL) && file->has_accel) {
         if (!tr_accel_available(file->accel)) {
-            rc = cli_error(a, "%s: render.accel: '%s' is not available: this build of trac0r has "
-                              "no Embree support (use --accel)",
+            rc = cli_error(a,
+                           "%s: render.accel: '%s' is not available: this build of trac0r has "
+                           "no Embree support (use --accel)",
                            c->scene, tr_accel_name(file->accel));
         }
         c->accel = file->accel;

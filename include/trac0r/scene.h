@@ -93,8 +93,7 @@ int tr_scene_add_shape(tr_scene *s, const tr_shape_desc *desc, tr_error *err);
  * is left. */
 int tr_scene_add_mesh(tr_scene *s, const float *positions, uint32_t vertex_count,
                       const uint32_t *indices, uint32_t triangle_count, const float *normals,
-                      uint32_t material, const tr_transform *tf, uint32_t *dropped,
-                      tr_error *err);
+                      uint32_t material, const tr_transform *tf, uint32_t *dropped, tr_error *err);
 /* A shape transform applied to a point, and to a normal (inverse transpose, unit). */
 tr_vec3 tr_transform_point(const tr_transform *tf, tr_vec3 p);
 tr_vec3 tr_transform_normal(const tr_transform *tf, tr_vec3 n);

@@ -102,8 +102,7 @@ static int normals_reserve(tr_scene *s, uint32_t count, tr_error *err) {
 
 int tr_scene_add_mesh(tr_scene *s, const float *positions, uint32_t vertex_count,
                       const uint32_t *indices, uint32_t triangle_count, const float *normals,
-                      uint32_t material, const tr_transform *tf, uint32_t *dropped,
-                      tr_error *err) {
+                      uint32_t material, const tr_transform *tf, uint32_t *dropped, tr_error *err) {
     if (dropped) {
         *dropped = 0;
     }
@@ -130,9 +129,8 @@ int tr_scene_add_mesh(tr_scene *s, const float *positions, uint32_t vertex_count
         }
     }
     tr_triangle *tris = malloc((size_t)(triangle_count ? triangle_count : 1) * sizeof *tris);
-    tr_vec3 *nrm = normals ? malloc((size_t)(triangle_count ? triangle_count : 1) * 3 *
-                                    sizeof *nrm)
-                           : NULL;
+    tr_vec3 *nrm =
+        normals ? malloc((size_t)(triangle_count ? triangle_count : 1) * 3 * sizeof *nrm) : NULL;
     if (!tris || (normals && !nrm)) {
         free(tris);
         free(nrm);
@@ -149,8 +147,7 @@ int tr_scene_add_mesh(tr_scene *s, const float *positions, uint32_t vertex_count
         }
         t.material = material;
         tr_triangle_finish(&t);
-        if (!(t.area > 0.0f) || !v3_is_finite(t.v0) || !v3_is_finite(t.v1) ||
-            !v3_is_finite(t.v2)) {
+        if (!(t.area > 0.0f) || !v3_is_finite(t.v0) || !v3_is_finite(t.v1) || !v3_is_finite(t.v2)) {
             bad++;
             continue;
         }

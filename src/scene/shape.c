@@ -74,8 +74,8 @@ tr_vec3 tr_transform_point(const tr_transform *tf, tr_vec3 p) {
 
 tr_vec3 tr_transform_normal(const tr_transform *tf, tr_vec3 n) {
     /* M = R S, so (M^-1)^T = R S^-1. */
-    tr_vec3 m = rotate_xyz(v3(n.x / tf->scale.x, n.y / tf->scale.y, n.z / tf->scale.z),
-                           tf->orientation);
+    tr_vec3 m =
+        rotate_xyz(v3(n.x / tf->scale.x, n.y / tf->scale.y, n.z / tf->scale.z), tf->orientation);
     float len = v3_length(m);
     return len > 0.0f && isfinite(len) ? v3_scale(m, 1.0f / len) : v3s(0.0f);
 }
