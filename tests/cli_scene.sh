@@ -139,6 +139,10 @@ done
 # A bare built-in name still means the built-in scene.
 "$BIN" render cornell --width 8 --height 6 --spp 1 --out bare.pfm 2>/dev/null || fail "render cornell failed"
 rm -f bare.pfm
+"$BIN" render nosuch --width 8 --height 6 --spp 1 --out bare.pfm 2>err.txt
+[ $? -eq 2 ] && grep -qF "unknown built-in scene 'nosuch'" err.txt || fail "render nosuch: $(cat err.txt)"
+[ ! -e bare.pfm ] || fail "render nosuch wrote an image"
+rm -f err.txt
 
 # info on the scenes in scenes/.
 "$BIN" info "$SRC/scenes/cornell-thesis.json" >info.txt || fail "info cornell-thesis.json failed"

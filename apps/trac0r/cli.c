@@ -216,20 +216,8 @@ int cli_common_option(cli_args *a, cli_common *c) {
 }
 
 int cli_scene_is_builtin(const char *scene) {
-    if (strncmp(scene, "builtin:", 8) == 0) {
-        return 1;
-    }
-    tr_scene probe;
-    tr_error err;
-    /* A bare name is built-in when the library knows it (built at 1x1, then dropped). */
-    if (strchr(scene, '/') || strchr(scene, '.')) {
-        return 0;
-    }
-    if (tr_scene_builtin(&probe, scene, 1, 1, &err) == TR_OK) {
-        tr_scene_free(&probe);
-        return 1;
-    }
-    return 0;
+    /* "builtin:NAME", or a bare name: scene files need a '/' or '.' in their path. */
+    return strncmp(scene, "builtin:", 8) == 0 || (!strchr(scene, '/') && !strchr(scene, '.'));
 }
 
 int cli_load_scene_file(const cli_args *a, cli_common *c, tr_scene *scene, tr_scene_file *file) {

@@ -71,8 +71,9 @@ int cli_common_option(cli_args *a, cli_common *c);
  * c->accel. */
 int cli_load_scene(const cli_args *a, const cli_common *c, tr_scene *scene);
 
-/* Whether a --scene value names a built-in scene ("builtin:NAME" or a bare built-in
- * name); anything else is a scene file's path. */
+/* Whether a --scene value names a built-in scene: "builtin:NAME" or a bare name without
+ * '/' or '.'; anything else is a scene file's path (write ./scene for a file without
+ * an extension). */
 int cli_scene_is_builtin(const char *scene);
 
 /* cli_load_scene that also applies a scene file's render defaults to the options the
