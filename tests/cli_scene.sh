@@ -73,6 +73,7 @@ check missing_camera.json ": camera: missing (expected an object)"
 check missing_ior.json ": materials.glass.ior: missing (expected a number in [1, 10])"
 check version.json ": version: expected 1"
 # Materials and references to them.
+check duplicate_material.json ": materials.a: duplicate material name"
 check ior_range.json ": materials.glass.ior: expected a number in [1, 10], got 0.5"
 check material_type.json ": materials.glass.type: unknown material type 'glas' (did you mean 'glass'?)"
 check material_key.json ": materials.white.roughness: unknown key (expected one of: type, color)"

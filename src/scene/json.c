@@ -19,6 +19,21 @@
 
 #define PATH_MAX_LEN 160
 
+/* A material's name and index, sorted by name. */
+struct named {
+    const char *name;
+    uint32_t index;
+};
+
+static int named_cmp(const void *a, const void *b) {
+    const struct named *x = a, *y = b;
+    int c = strcmp(x->name, y->name);
+    return c ? c : (x->index > y->index) - (x->index < y->index);
+}
+
+/* Scene files may define at most this many materials. */
+#define MAX_FILE_MATERIALS 65536
+
 typedef struct jctx {
     const char *file; /* for messages */
     char dir[4096];   /* directory of the file, for mesh paths ("" = current) */
@@ -27,7 +42,9 @@ typedef struct jctx {
     tr_scene_file *info;
     const tr_scene_file_options *opt;
     uint32_t budget;
-    cJSON *materials; /* the "materials" object: names in file order = material indices */
+    cJSON *materials;      /* the "materials" object: names in file order = material indices */
+    struct named *by_name; /* the materials sorted by name, for lookups */
+    uint32_t name_count;
 } jctx;
 
 /* "FILE: PATH: message". */
@@ -493,17 +510,24 @@ static int parse_materials(jctx *c, const cJSON *mats) {
     static const char *const k_diff[] = {"type", "color"};
     static const char *const k_glass[] = {"type", "color", "ior"};
     static const char *const k_glossy[] = {"type", "color", "roughness"};
+    int n = cJSON_GetArraySize(mats);
+    c->by_name = malloc((size_t)(n > 0 ? (n < MAX_FILE_MATERIALS ? n : MAX_FILE_MATERIALS) : 1) *
+                        sizeof *c->by_name);
+    if (!c->by_name) {
+        return jerr(c, path, "out of memory");
+    }
     for (const cJSON *m = mats->child; m; m = m->next) {
         char p[PATH_MAX_LEN], buf[48];
         path_key(p, path, shown(m->string ? m->string : "", buf, sizeof buf));
         if (!m->string || !m->string[0]) {
             return jerr(c, p, "a material needs a non-empty name");
         }
-        for (const cJSON *o = mats->child; o != m; o = o->next) {
-            if (strcmp(o->string, m->string) == 0) {
-                return jerr(c, p, "duplicate material name");
-            }
+        if (c->name_count == MAX_FILE_MATERIALS) {
+            return jerr(c, p, "more than %d materials", MAX_FILE_MATERIALS);
         }
+        c->by_name[c->name_count].name = m->string;
+        c->by_name[c->name_count].index = c->name_count;
+        c->name_count++;
         if (expect_object(c, m, p) != TR_OK) {
             return TR_ERR;
         }
@@ -569,6 +593,14 @@ static int parse_materials(jctx *c, const cJSON *mats) {
             return jerr(c, p, "%s", e.msg);
         }
     }
+    qsort(c->by_name, c->name_count, sizeof *c->by_name, named_cmp);
+    for (uint32_t i = 1; i < c->name_count; ++i) {
+        if (strcmp(c->by_name[i].name, c->by_name[i - 1].name) == 0) {
+            char p[PATH_MAX_LEN], buf[48];
+            path_key(p, path, shown(c->by_name[i].name, buf, sizeof buf));
+            return jerr(c, p, "duplicate material name");
+        }
+    }
     return TR_OK;
 }
 
@@ -583,23 +615,32 @@ static int material_ref(const jctx *c, const cJSON *obj, const char *path, int r
     if (!name) {
         return TR_OK;
     }
-    int64_t i = 0;
-    const char *names[256];
+    struct named key = {name, 0};
+    size_t lo = 0, hi = c->name_count;
+    while (lo < hi) { /* the first entry not below (name, 0) */
+        size_t mid = lo + (hi - lo) / 2;
+        if (named_cmp(&c->by_name[mid], &key) < 0) {
+            lo = mid + 1;
+        } else {
+            hi = mid;
+        }
+    }
+    if (lo < c->name_count && strcmp(c->by_name[lo].name, name) == 0) {
+        *index = c->by_name[lo].index;
+        return TR_OK;
+    }
+    const char **names = malloc((c->name_count ? c->name_count : 1) * sizeof *names);
     size_t count = 0;
-    for (const cJSON *m = c->materials ? c->materials->child : NULL; m; m = m->next, ++i) {
-        if (strcmp(m->string, name) == 0) {
-            *index = i;
-            return TR_OK;
-        }
-        if (count < 256) {
-            names[count++] = m->string;
-        }
+    for (uint32_t i = 0; names && i < c->name_count; ++i) {
+        names[count++] = c->by_name[i].name;
     }
     char p[PATH_MAX_LEN], buf[48];
     path_key(p, path, "material");
-    const char *near = closest(name, names, count);
-    return jerr(c, p, "undefined material '%s'%s%s%s", shown(name, buf, sizeof buf),
-                near ? " (did you mean '" : "", near ? near : "", near ? "'?)" : "");
+    const char *near = names ? closest(name, names, count) : NULL;
+    int rc = jerr(c, p, "undefined material '%s'%s%s%s", shown(name, buf, sizeof buf),
+                  near ? " (did you mean '" : "", near ? near : "", near ? "'?)" : "");
+    free(names);
+    return rc;
 }
 
 /* position, orientation (degrees) or orientation_rad, scale (number or [x, y, z]). */
@@ -1083,6 +1124,7 @@ int tr_scene_file_parse(tr_scene *s, const char *path, const char *text, size_t 
         rc = build(&c, root);
     }
     cJSON_Delete(root);
+    free(c.by_name);
     if (rc != TR_OK) {
         tr_scene_free(s);
     }
