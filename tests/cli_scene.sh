@@ -104,6 +104,20 @@ expect_bad integrator.json ": render.integrator: unknown integrator 'magic' (ava
 check missing_mesh.json ": meshes[0].path: cannot open '$BAD/no-such-model.obj': No such file or directory"
 check unreadable_mesh.json ": meshes[0].path: cannot read '$BAD/.': Is a directory"
 check assimp_fails.json ": meshes[0].path: Assimp cannot read '$BAD/garbage.ply'"
+check nan_mesh.json ": meshes[0].path: '$BAD/nan_vertex.obj': mesh vertex 2 has a non-finite coordinate"
+check huge_mesh.json ": meshes[0]: a vertex lands at (1e+30, 1, 0), outside the bound |x| <= 1e+07"
+check up_parallel.json ": camera: camera up vector is parallel to the view direction"
+# A good mesh: its dropped faces are a warning on stderr, the render goes on.
+"$BIN" render "$GOOD/mesh.json" --width 8 --height 6 --spp 1 --out mesh.pfm 2>err.txt ||
+    fail "render mesh.json: $(cat err.txt)"
+grep -qF "warning: $GOOD/mesh.json: meshes[0] (../mesh/tri.obj): 2 degenerate faces dropped" err.txt ||
+    fail "mesh.json: no warning about dropped faces: $(cat err.txt)"
+[ -s mesh.pfm ] || fail "mesh.json: no image"
+"$BIN" info "$GOOD/mesh.json" >info.txt 2>&1 || fail "info mesh.json: $(cat info.txt)"
+grep -qF "triangles:  19 (5 from 1 mesh file in 4 parts, 2 degenerate faces dropped)" info.txt ||
+    fail "info mesh.json: $(cat info.txt)"
+grep -qF "emitters:   2 materials, 3 triangles" info.txt || fail "info mesh.json: $(cat info.txt)"
+rm -f mesh.pfm err.txt info.txt
 # No emitter: render refuses unless told, info warns.
 expect_bad no_emitter.json ": the scene has no emitter, so the image would be black"
 "$BIN" info "$BAD/no_emitter.json" >info.txt 2>&1 || fail "info no_emitter.json failed"

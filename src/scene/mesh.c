@@ -283,6 +283,11 @@ int tr_scene_import_mesh(tr_scene *s, const char *path, const tr_transform *tf,
         struct aiMatrix4x4 id = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
         rc = walk(&c, ai->mRootNode, &id, 0);
     }
+    if (rc != TR_OK && err && !strstr(err->msg, path)) {
+        char msg[sizeof err->msg];
+        memcpy(msg, err->msg, sizeof msg);
+        tr_error_set(err, "'%.200s': %.300s", path, msg);
+    }
     if (rc == TR_OK && st->triangles == 0) {
         rc = tr_error_set(err, "'%.200s' has no triangles of non-zero area (%u faces dropped)",
                           path, st->degenerate);
