@@ -10,7 +10,9 @@ fuzz/build.sh
 OUT=build/fuzz
 rm -rf "$OUT/corpus"
 mkdir -p "$OUT/corpus"
-find scenes tests/data -name '*.json' -exec cp {} "$OUT/corpus/" \;
+for f in $(find scenes tests/data -name '*.json'); do
+    cp "$f" "$OUT/corpus/$(echo "$f" | tr / _)"
+done
 cd "$OUT"
 ./fuzz_scene_json -max_total_time="$SECONDS_LIMIT" -print_final_stats=1 -max_len=16384 \
     -timeout=10 -rss_limit_mb=2048 -dict=../../fuzz/scene.dict corpus
