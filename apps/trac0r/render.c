@@ -40,7 +40,7 @@ int cmd_render(int argc, char **argv) {
     cli_common c;
     cli_common_default(&c);
     uint32_t spp = 16;
-    int spp_given = 0;
+    int spp_given = 0, scene_arg = 0;
     int stride = 1;
     float exposure = 0.0f;
     const char *out = "render.png";
@@ -66,8 +66,9 @@ int cmd_render(int argc, char **argv) {
         } else if (cli_is(&a, "--out") || cli_is(&a, "-o")) {
             rc = cli_value(&a);
             out = a.value;
-        } else if (a.opt[0] != '-' && a.i == 1) {
-            c.scene = a.opt; /* positional SCENE */
+        } else if (a.opt[0] != '-' && !scene_arg) {
+            c.scene = a.opt; /* positional SCENE, anywhere on the line */
+            scene_arg = 1;
             rc = CLI_OK;
         } else {
             return cli_error(&a, "unknown option '%s' (see 'trac0r render --help')", a.opt);
