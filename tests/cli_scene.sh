@@ -57,7 +57,8 @@ check() {
 }
 
 # JSON syntax: FILE:LINE:COLUMN.
-check syntax.json "syntax.json:3:28: JSON syntax error"
+check syntax.json "syntax.json:3:28: JSON syntax error at the end of the line, after '[0, 0, 0],,'"
+check nul_byte.json "nul_byte.json:2:13: JSON syntax error: a NUL byte"
 check nan.json "nan.json:2:65: JSON syntax error near 'NaN}'"
 check empty.json "empty.json:1:1: JSON syntax error at the end of the file"
 check trailing.json "trailing.json:2:1: JSON syntax error: text after the top-level value"

@@ -1083,7 +1083,8 @@ int tr_scene_file_parse(tr_scene *s, const char *path, const char *text, size_t 
         if (text[i] == '\0') {
             unsigned line, col;
             line_col(text, i, &line, &col);
-            return tr_error_set(err, "%.80s:%u:%u: JSON syntax error: a NUL byte", path, line, col);
+            return tr_error_set(err, "%.200s:%u:%u: JSON syntax error: a NUL byte", path, line,
+                                col);
         }
     }
     const char *end = NULL;
@@ -1103,10 +1104,26 @@ int tr_scene_file_parse(tr_scene *s, const char *path, const char *text, size_t 
         }
         near[k] = '\0';
         if (k == 0) {
-            return tr_error_set(err, "%.80s:%u:%u: JSON syntax error at the end of %s", path, line,
-                                col, off >= len ? "the file" : "the line");
+            /* Nothing follows on the line: show what precedes instead. */
+            size_t from = off;
+            while (from > 0 && off - from < 12 && text[from - 1] != '\n' &&
+                   text[from - 1] != '\r') {
+                --from;
+            }
+            while (from < off && (text[from] == ' ' || text[from] == '\t')) {
+                ++from;
+            }
+            for (size_t i = from; i < off; ++i) {
+                unsigned char ch = (unsigned char)text[i];
+                near[k++] = (ch >= 32 && ch < 127) ? (char)ch : '?';
+            }
+            near[k] = '\0';
+            return tr_error_set(err, "%.200s:%u:%u: JSON syntax error at the end of %s%s%s%s", path,
+                                line, col, off >= len ? "the file" : "the line",
+                                k ? ", after '" : "", near, k ? "'" : "");
         }
-        return tr_error_set(err, "%.80s:%u:%u: JSON syntax error near '%s'", path, line, col, near);
+        return tr_error_set(err, "%.200s:%u:%u: JSON syntax error near '%s'", path, line, col,
+                            near);
     }
     /* Anything but white space after the value is an error too. */
     size_t off = (size_t)(end - text);
@@ -1118,7 +1135,7 @@ int tr_scene_file_parse(tr_scene *s, const char *path, const char *text, size_t 
     if (off < len) {
         unsigned line, col;
         line_col(text, off, &line, &col);
-        rc = tr_error_set(err, "%.80s:%u:%u: JSON syntax error: text after the top-level value",
+        rc = tr_error_set(err, "%.200s:%u:%u: JSON syntax error: text after the top-level value",
                           path, line, col);
     } else {
         rc = build(&c, root);
