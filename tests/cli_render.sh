@@ -57,7 +57,7 @@ expect_usage_error "--out: missing/dir/x.png: cannot create file" $R --out missi
 touch afile
 expect_usage_error "--out: afile/x.png: cannot create file" $R --out afile/x.png
 rm -f afile
-expect_usage_error "--scene: 'scene.json' is not a built-in scene" $R --scene scene.json
+expect_usage_error "scene.json: cannot open: No such file or directory" $R --scene scene.json
 expect_usage_error "unknown built-in scene 'nope'" $R --scene builtin:nope
 expect_usage_error "unknown command 'paint'" paint
 expect_usage_error "--frames: expected an integer in 1..100000, got '0'" bench frame --frames 0

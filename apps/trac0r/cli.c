@@ -13,8 +13,11 @@
 const char cli_common_help[] =
     "  --scene SCENE        scene to render: builtin:cornell (the thesis's Cornell box,\n"
     "                       the default), builtin:cornell-mirror (its glossy objects\n"
-    "                       as perfect mirrors) or builtin:cornell-diffuse (every\n"
-    "                       object white diffuse)\n"
+    "                       as perfect mirrors), builtin:cornell-diffuse (every object\n"
+    "                       white diffuse), builtin:cornell-ico-N, or a scene file\n"
+    "                       (docs/scene-format.md) whose render defaults apply to the\n"
+    "                       options not given here\n"
+    "  --allow-dark         render a scene file that has no emitter\n"
     "  --width W            image width in pixels, 1..16384 (default 800)\n"
     "  --height H           image height in pixels, 1..16384 (default 600);\n"
     "                       at most 67108864 pixels in all\n"
@@ -40,6 +43,8 @@ void cli_common_default(cli_common *c) {
     c->threads = 0;
     c->integrator = TR_INTEGRATOR_PT;
     c->accel = TR_ACCEL_TYPE_BVH;
+    c->given = 0;
+    c->allow_dark = 0;
 }
 
 int cli_error(const cli_args *a, const char *fmt, ...) {
@@ -159,13 +164,20 @@ int cli_common_option(cli_args *a, cli_common *c) {
         c->scene = a->value;
         return CLI_OK;
     }
+    if (cli_is(a, "--allow-dark")) {
+        c->allow_dark = 1;
+        return CLI_OK;
+    }
     if (cli_is(a, "--width")) {
+        c->given |= CLI_GIVEN_WIDTH;
         return cli_parse_u32(a, 1, TR_FILM_MAX_SIDE, &c->width);
     }
     if (cli_is(a, "--height")) {
+        c->given |= CLI_GIVEN_HEIGHT;
         return cli_parse_u32(a, 1, TR_FILM_MAX_SIDE, &c->height);
     }
     if (cli_is(a, "--max-depth")) {
+        c->given |= CLI_GIVEN_MAX_DEPTH;
         return cli_parse_int(a, 1, TR_MAX_DEPTH_LIMIT, &c->max_depth);
     }
     if (cli_is(a, "--seed")) {
@@ -175,6 +187,7 @@ int cli_common_option(cli_args *a, cli_common *c) {
         return cli_parse_int(a, 0, 1024, &c->threads);
     }
     if (cli_is(a, "--integrator")) {
+        c->given |= CLI_GIVEN_INTEGRATOR;
         if (cli_value(a) != CLI_OK) {
             return CLI_USAGE;
         }
@@ -190,6 +203,7 @@ int cli_common_option(cli_args *a, cli_common *c) {
                          a->value);
     }
     if (cli_is(a, "--accel")) {
+        c->given |= CLI_GIVEN_ACCEL;
         if (cli_value(a) != CLI_OK) {
             return CLI_USAGE;
         }
@@ -212,20 +226,104 @@ int cli_common_option(cli_args *a, cli_common *c) {
     return -1;
 }
 
+int cli_scene_is_builtin(const char *scene) {
+    /* "builtin:NAME", or a bare name: scene files need a '/' or '.' in their path. */
+    return strncmp(scene, "builtin:", 8) == 0 || (!strchr(scene, '/') && !strchr(scene, '.'));
+}
+
+int cli_load_scene_file(const cli_args *a, cli_common *c, tr_scene *scene, tr_scene_file *file) {
+    tr_scene_file local;
+    if (!file) {
+        file = &local;
+    }
+    memset(file, 0, sizeof *file);
+    if (cli_scene_is_builtin(c->scene)) {
+        return cli_load_scene(a, c, scene);
+    }
+    tr_error err;
+    if (tr_scene_file_load(scene, c->scene, NULL, file, &err) != TR_OK) {
+        return cli_error(a, "%s", err.msg);
+    }
+    int rc = CLI_OK;
+    if (!(c->given & CLI_GIVEN_WIDTH) && file->has_width) {
+        c->width = file->width;
+    }
+    if (!(c->given & CLI_GIVEN_HEIGHT) && file->has_height) {
+        c->height = file->height;
+    }
+    if (!(c->given & CLI_GIVEN_MAX_DEPTH) && file->has_max_depth) {
+        c->max_depth = file->max_depth;
+    }
+    if (!(c->given & CLI_GIVEN_ACCEL) && file->has_accel) {
+        if (!tr_accel_available(file->accel)) {
+            rc = cli_error(a,
+                           "%s: render.accel: '%s' is not available: this build of trac0r has "
+                           "no Embree support (use --accel)",
+                           c->scene, tr_accel_name(file->accel));
+        }
+        c->accel = file->accel;
+    }
+    if (rc == CLI_OK && !(c->given & CLI_GIVEN_INTEGRATOR) && file->has_integrator) {
+        if (strcmp(file->integrator, "naive") == 0) {
+            c->integrator = TR_INTEGRATOR_NAIVE;
+        } else if (strcmp(file->integrator, "pt") == 0) {
+            c->integrator = TR_INTEGRATOR_PT;
+        } else {
+            rc = cli_error(a,
+                           "%s: render.integrator: unknown integrator '%s' (available: pt, naive)",
+                           c->scene, file->integrator);
+        }
+    }
+    if (rc == CLI_OK && file->emissive_triangles == 0 && !file->allow_no_emitter &&
+        !c->allow_dark) {
+        rc = cli_error(a,
+                       "%s: the scene has no emitter, so the image would be black (set "
+                       "render.allow_no_emitter or pass --allow-dark if that is intended)",
+                       c->scene);
+    }
+    if (rc == CLI_OK && (uint64_t)c->width * c->height > TR_FILM_MAX_PIXELS) {
+        rc = cli_error(a, "--width/--height: %ux%u is more than %u pixels", c->width, c->height,
+                       TR_FILM_MAX_PIXELS);
+    }
+    if (rc == CLI_OK && tr_camera_resize(&scene->camera, c->width, c->height, &err) != TR_OK) {
+        rc = cli_error(a, "%s: camera: %s", c->scene, err.msg);
+    }
+    if (rc != CLI_OK) {
+        tr_scene_free(scene);
+        return rc;
+    }
+    for (uint32_t i = 0; i < file->warning_count; ++i) {
+        if (file->emissive_triangles == 0 && strstr(file->warnings[i], "no emitter")) {
+            continue; /* allowed, said so above */
+        }
+        fprintf(stderr, "trac0r %s: warning: %s: %s\n", a->cmd, c->scene, file->warnings[i]);
+    }
+    if (tr_scene_commit(scene, c->accel, &err) != TR_OK) {
+        fprintf(stderr, "trac0r %s: %s\n", a->cmd, err.msg);
+        tr_scene_free(scene);
+        return CLI_FAILURE;
+    }
+    return CLI_OK;
+}
+
 int cli_load_scene(const cli_args *a, const cli_common *c, tr_scene *scene) {
+    if (!cli_scene_is_builtin(c->scene)) {
+        /* The caller's options are final here (its film has their size): the file's
+         * render defaults do not apply. */
+        cli_common copy = *c;
+        copy.given = ~0u;
+        return cli_load_scene_file(a, &copy, scene, NULL);
+    }
     if ((uint64_t)c->width * c->height > TR_FILM_MAX_PIXELS) {
         return cli_error(a, "--width/--height: %ux%u is more than %u pixels", c->width, c->height,
                          TR_FILM_MAX_PIXELS);
     }
-    const char *prefix = "builtin:";
-    if (strncmp(c->scene, prefix, strlen(prefix)) != 0) {
-        return cli_error(a,
-                         "--scene: '%s' is not a built-in scene (available: builtin:cornell); "
-                         "this version cannot load scene files",
-                         c->scene);
+    const char *name = c->scene;
+    if (strncmp(name, "builtin:", 8) == 0) {
+        name += 8;
     }
     tr_error err;
-    if (tr_scene_builtin(scene, c->scene + strlen(prefix), c->width, c->height, &err) != TR_OK) {
+    if (tr_scene_builtin(scene, name, c->width, c->height, &err) != TR_OK) {
         return cli_error(a, "--scene: %s", err.msg);
     }
     if (tr_scene_commit(scene, c->accel, &err) != TR_OK) {

@@ -8,6 +8,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "trac0r/scene_file.h"
 #include "trac0r/trac0r.h"
 
 #define CLI_OK 0
@@ -23,7 +24,16 @@ typedef struct cli_common {
     int threads;
     int integrator;
     tr_accel_type accel;
+    unsigned given; /* CLI_GIVEN_*: options set on the command line (a scene file's
+                       render defaults apply to the others) */
+    int allow_dark; /* --allow-dark: render a scene file without an emitter */
 } cli_common;
+
+#define CLI_GIVEN_WIDTH 1u
+#define CLI_GIVEN_HEIGHT 2u
+#define CLI_GIVEN_MAX_DEPTH 4u
+#define CLI_GIVEN_INTEGRATOR 8u
+#define CLI_GIVEN_ACCEL 16u
 
 /* Cursor over argv for one subcommand. */
 typedef struct cli_args {
@@ -60,6 +70,17 @@ int cli_common_option(cli_args *a, cli_common *c);
 /* Builds the scene named by c->scene for c->width x c->height and commits it with
  * c->accel. */
 int cli_load_scene(const cli_args *a, const cli_common *c, tr_scene *scene);
+
+/* Whether a --scene value names a built-in scene: "builtin:NAME" or a bare name without
+ * '/' or '.'; anything else is a scene file's path (write ./scene for a file without
+ * an extension). */
+int cli_scene_is_builtin(const char *scene);
+
+/* cli_load_scene that also applies a scene file's render defaults to the options the
+ * command line did not give (c is updated) and returns the file's settings in *file
+ * (zeroed for a built-in scene; may be NULL). Scene file errors and a file without an
+ * emitter (unless allowed) are CLI_USAGE; warnings go to stderr. */
+int cli_load_scene_file(const cli_args *a, cli_common *c, tr_scene *scene, tr_scene_file *file);
 
 /* One phrase describing the scene's committed acceleration structure and its build. */
 void cli_describe_accel(char *buf, size_t n, const tr_scene *s);

@@ -14,6 +14,7 @@ static void usage(FILE *fp) {
                 "  render   render a scene to a PNG or PFM image\n"
                 "  bench    measure speed: 'trac0r bench frame'\n"
                 "  compare  error metrics (RMSE, relMSE, PSNR) of an image against a reference\n"
+                "  info     describe a scene file: counts, bounds, warnings\n"
                 "\n"
                 "Run 'trac0r COMMAND --help' for a command's options.\n"
                 "  -h, --help      show this help\n"
@@ -35,6 +36,9 @@ int main(int argc, char **argv) {
     if (strcmp(cmd, "compare") == 0) {
         return cmd_compare(argc - 1, argv + 1);
     }
+    if (strcmp(cmd, "info") == 0) {
+        return cmd_info(argc - 1, argv + 1);
+    }
     if (strcmp(cmd, "-h") == 0 || strcmp(cmd, "--help") == 0 || strcmp(cmd, "help") == 0) {
         usage(stdout);
         return CLI_OK;
@@ -44,8 +48,8 @@ int main(int argc, char **argv) {
         return CLI_OK;
     }
     fprintf(stderr,
-            "trac0r: unknown command '%s' (expected render, bench or compare; see 'trac0r "
-            "--help')\n",
+            "trac0r: unknown command '%s' (expected render, bench, compare or info; see "
+            "'trac0r --help')\n",
             cmd);
     return CLI_USAGE;
 }

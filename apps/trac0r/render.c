@@ -12,7 +12,9 @@ static void render_help(void) {
            "\n"
            "Renders a scene with the CPU backend, accumulating one sample per pixel per pass,\n"
            "and writes the result. With no arguments it renders the thesis's Cornell box at\n"
-           "800x600 to render.png.\n"
+           "800x600 to render.png. SCENE is a built-in scene or a scene file\n"
+           "(docs/scene-format.md); a file's render defaults (size, spp, max depth,\n"
+           "integrator, accel) apply unless the command line gives them.\n"
            "\n"
            "Options:\n"
            "%s"
@@ -38,6 +40,7 @@ int cmd_render(int argc, char **argv) {
     cli_common c;
     cli_common_default(&c);
     uint32_t spp = 16;
+    int spp_given = 0, scene_arg = 0;
     int stride = 1;
     float exposure = 0.0f;
     const char *out = "render.png";
@@ -55,6 +58,7 @@ int cmd_render(int argc, char **argv) {
             return CLI_OK;
         } else if (cli_is(&a, "--spp")) {
             rc = cli_parse_u32(&a, 1, 1000000, &spp);
+            spp_given = 1;
         } else if (cli_is(&a, "--stride")) {
             rc = cli_parse_int(&a, 1, 64, &stride);
         } else if (cli_is(&a, "--exposure")) {
@@ -62,8 +66,9 @@ int cmd_render(int argc, char **argv) {
         } else if (cli_is(&a, "--out") || cli_is(&a, "-o")) {
             rc = cli_value(&a);
             out = a.value;
-        } else if (a.opt[0] != '-' && a.i == 1) {
-            c.scene = a.opt; /* positional SCENE */
+        } else if (a.opt[0] != '-' && !scene_arg) {
+            c.scene = a.opt; /* positional SCENE, anywhere on the line */
+            scene_arg = 1;
             rc = CLI_OK;
         } else {
             return cli_error(&a, "unknown option '%s' (see 'trac0r render --help')", a.opt);
@@ -81,9 +86,13 @@ int cmd_render(int argc, char **argv) {
     }
 
     tr_scene scene;
-    int rc = cli_load_scene(&a, &c, &scene);
+    tr_scene_file file;
+    int rc = cli_load_scene_file(&a, &c, &scene, &file);
     if (rc != CLI_OK) {
         return rc;
+    }
+    if (!spp_given && file.has_spp) {
+        spp = file.spp;
     }
     tr_film film;
     if (tr_film_init(&film, c.width, c.height, &err) != TR_OK) {

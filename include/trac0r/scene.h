@@ -69,6 +69,11 @@ typedef struct tr_scene {
     uint32_t light_count;
     float light_weight_total;
     uint32_t light_triangles; /* triangle count when the table was built */
+    /* Vertex normals of imported meshes, kept for smooth shading (the kernels do not read
+     * them yet): three per triangle for triangles 0..vertex_normal_count-1, zero where a
+     * triangle has none; triangles beyond that have none. */
+    tr_vec3 *vertex_normals;
+    uint32_t vertex_normal_count, vertex_normal_capacity;
 } tr_scene;
 
 /* A shape of the given type at the origin, unrotated, unit scale, material 0. */
@@ -88,6 +93,19 @@ void tr_scene_free(tr_scene *s);
 int tr_scene_add_material(tr_scene *s, tr_material m, uint32_t *index, tr_error *err);
 /* Appends a shape's triangles and its bounding box. */
 int tr_scene_add_shape(tr_scene *s, const tr_shape_desc *desc, tr_error *err);
+/* Appends an indexed triangle mesh as one shape: positions holds 3 floats per vertex,
+ * indices 3 per triangle, normals (NULL for none) 3 floats per vertex; tf (NULL for
+ * none) places it like a shape. Triangles of zero area after the transform are dropped
+ * and counted in *dropped (may be NULL). Fails, adding nothing, on an index out of range,
+ * a non-finite position, an unknown material or when nothing but degenerate triangles
+ * is left. */
+int tr_scene_add_mesh(tr_scene *s, const float *positions, uint32_t vertex_count,
+                      const uint32_t *indices, uint32_t triangle_count, const float *normals,
+                      uint32_t material, const tr_transform *tf, uint32_t *dropped, tr_error *err);
+/* A shape transform applied to a point, and to a normal (inverse transpose, unit). */
+tr_vec3 tr_transform_point(const tr_transform *tf, tr_vec3 p);
+tr_vec3 tr_transform_normal(const tr_transform *tf, tr_vec3 n);
+
 /* Number of triangles a shape description generates (0 for an invalid one). */
 uint64_t tr_shape_triangle_count(const tr_shape_desc *desc);
 

@@ -27,6 +27,7 @@
 #include "trac0r/image.h"
 #include "trac0r/render.h"
 #include "trac0r/scene.h"
+#include "trac0r/scene_file.h"
 
 #define TRAC0R_VERSION "0.1.0"
 

@@ -37,6 +37,7 @@ void tr_scene_free(tr_scene *s) {
     free(s->materials);
     free(s->triangles);
     free(s->shapes);
+    free(s->vertex_normals);
     tr_bvh_free(&s->bvh);
     tr_wbvh_free(&s->wbvh);
     tr_embree_free(&s->embree);
@@ -81,6 +82,141 @@ int tr_scene_add_material(tr_scene *s, tr_material m, uint32_t *index, tr_error 
     }
     s->material_count++;
     return TR_OK;
+}
+
+/* Grows the vertex normal array to cover `count` triangles, zero-filling. */
+static int normals_reserve(tr_scene *s, uint32_t count, tr_error *err) {
+    if (count > s->vertex_normal_capacity) {
+        uint64_t cap = (uint64_t)s->vertex_normal_capacity * 2;
+        if (cap < count) {
+            cap = count;
+        }
+        tr_vec3 *grown = realloc(s->vertex_normals, (size_t)cap * 3 * sizeof *grown);
+        if (!grown) {
+            return tr_error_set(err, "out of memory storing vertex normals");
+        }
+        s->vertex_normals = grown;
+        s->vertex_normal_capacity = (uint32_t)cap;
+    }
+    if (count > s->vertex_normal_count) {
+        memset(s->vertex_normals + (size_t)3 * s->vertex_normal_count, 0,
+               (size_t)(count - s->vertex_normal_count) * 3 * sizeof *s->vertex_normals);
+        s->vertex_normal_count = count;
+    }
+    return TR_OK;
+}
+
+int tr_scene_add_mesh(tr_scene *s, const float *positions, uint32_t vertex_count,
+                      const uint32_t *indices, uint32_t triangle_count, const float *normals,
+                      uint32_t material, const tr_transform *tf, uint32_t *dropped, tr_error *err) {
+    if (dropped) {
+        *dropped = 0;
+    }
+    if (material >= s->material_count) {
+        return tr_error_set(err, "mesh refers to material %u, but the scene has %u materials",
+                            material, s->material_count);
+    }
+    if ((uint64_t)s->triangle_count + triangle_count > UINT32_MAX / 2) {
+        return tr_error_set(err, "scene would exceed %u triangles", UINT32_MAX / 2);
+    }
+    tr_transform identity = {v3s(0.0f), v3s(0.0f), v3s(1.0f)};
+    if (!tf) {
+        tf = &identity;
+    }
+    for (uint32_t i = 0; i < 3 * vertex_count; ++i) {
+        if (!isfinite(positions[i])) {
+            return tr_error_set(err, "mesh vertex %u has a non-finite coordinate", i / 3);
+        }
+    }
+    for (uint32_t i = 0; i < 3 * triangle_count; ++i) {
+        if (indices[i] >= vertex_count) {
+            return tr_error_set(err, "mesh triangle %u uses vertex %u of %u", i / 3, indices[i],
+                                vertex_count);
+        }
+    }
+    tr_triangle *tris = malloc((size_t)(triangle_count ? triangle_count : 1) * sizeof *tris);
+    tr_vec3 *nrm =
+        normals ? malloc((size_t)(triangle_count ? triangle_count : 1) * 3 * sizeof *nrm) : NULL;
+    if (!tris || (normals && !nrm)) {
+        free(tris);
+        free(nrm);
+        return tr_error_set(err, "out of memory adding a mesh of %u triangles", triangle_count);
+    }
+    uint32_t n = 0, bad = 0;
+    for (uint32_t i = 0; i < triangle_count; ++i) {
+        tr_triangle t;
+        memset(&t, 0, sizeof t);
+        tr_vec3 *v[3] = {&t.v0, &t.v1, &t.v2};
+        for (int k = 0; k < 3; ++k) {
+            const float *p = positions + (size_t)3 * indices[3 * i + k];
+            *v[k] = tr_transform_point(tf, v3(p[0], p[1], p[2]));
+        }
+        t.material = material;
+        tr_triangle_finish(&t);
+        if (!(t.area > 0.0f) || !v3_is_finite(t.v0) || !v3_is_finite(t.v1) || !v3_is_finite(t.v2)) {
+            bad++;
+            continue;
+        }
+        if (nrm) {
+            for (int k = 0; k < 3; ++k) {
+                const float *q = normals + (size_t)3 * indices[3 * i + k];
+                tr_vec3 nv = v3(q[0], q[1], q[2]);
+                nrm[3 * n + k] = v3_is_finite(nv) ? tr_transform_normal(tf, nv) : v3s(0.0f);
+            }
+        }
+        tris[n++] = t;
+    }
+    if (dropped) {
+        *dropped = bad;
+    }
+    if (n == 0) {
+        free(tris);
+        free(nrm);
+        return tr_error_set(err, "mesh has no triangles of non-zero area (%u dropped)", bad);
+    }
+    int rc = TR_OK;
+    if (s->triangle_count + n > s->triangle_capacity) {
+        uint64_t cap = (uint64_t)s->triangle_capacity * 2;
+        if (cap < (uint64_t)s->triangle_count + n) {
+            cap = (uint64_t)s->triangle_count + n;
+        }
+        tr_triangle *grown = realloc(s->triangles, (size_t)cap * sizeof *grown);
+        if (!grown) {
+            rc = tr_error_set(err, "out of memory growing the scene to %llu triangles",
+                              (unsigned long long)cap);
+        } else {
+            s->triangles = grown;
+            s->triangle_capacity = (uint32_t)cap;
+        }
+    }
+    if (rc == TR_OK && s->shape_count == s->shape_capacity) {
+        uint32_t cap = s->shape_capacity ? 2 * s->shape_capacity : 16;
+        tr_flat_node *grown = realloc(s->shapes, (size_t)cap * sizeof *grown);
+        if (!grown) {
+            rc = tr_error_set(err, "out of memory adding a mesh");
+        } else {
+            s->shapes = grown;
+            s->shape_capacity = cap;
+        }
+    }
+    if (rc == TR_OK && nrm) {
+        rc = normals_reserve(s, s->triangle_count + n, err);
+    }
+    if (rc == TR_OK) {
+        memcpy(s->triangles + s->triangle_count, tris, (size_t)n * sizeof *tris);
+        if (nrm) {
+            memcpy(s->vertex_normals + (size_t)3 * s->triangle_count, nrm,
+                   (size_t)n * 3 * sizeof *nrm);
+        }
+        tr_flat_node *node = &s->shapes[s->shape_count++];
+        node->box = tr_triangles_bounds(tris, n);
+        node->first = s->triangle_count;
+        node->count = n;
+        s->triangle_count += n;
+    }
+    free(tris);
+    free(nrm);
+    return rc;
 }
 
 int tr_scene_commit(tr_scene *s, tr_accel_type accel, tr_error *err) {

@@ -68,6 +68,18 @@ static tr_vec3 apply_transform(const tr_transform *tf, tr_vec3 p) {
     return v3_add(rotate_xyz(v3_mul(p, tf->scale), tf->orientation), tf->position);
 }
 
+tr_vec3 tr_transform_point(const tr_transform *tf, tr_vec3 p) {
+    return apply_transform(tf, p);
+}
+
+tr_vec3 tr_transform_normal(const tr_transform *tf, tr_vec3 n) {
+    /* M = R S, so (M^-1)^T = R S^-1. */
+    tr_vec3 m =
+        rotate_xyz(v3(n.x / tf->scale.x, n.y / tf->scale.y, n.z / tf->scale.z), tf->orientation);
+    float len = v3_length(m);
+    return len > 0.0f && isfinite(len) ? v3_scale(m, 1.0f / len) : v3s(0.0f);
+}
+
 static tr_triangle make_tri(tr_vec3 a, tr_vec3 b, tr_vec3 c) {
     tr_triangle t;
     memset(&t, 0, sizeof t);

@@ -1,0 +1,19 @@
+#!/bin/sh
+# Builds the libFuzzer target for the JSON scene loader with clang into build/fuzz/,
+# separate from the gcc builds: the loader's sources and the scene code it uses are
+# compiled with -fsanitize=fuzzer,address,undefined. Mesh import is left out (the
+# target never opens mesh files).
+# Usage: fuzz/build.sh   (CC defaults to clang)
+set -eu
+cd "$(dirname "$0")/.."
+CC=${CC:-clang}
+OUT=build/fuzz
+mkdir -p "$OUT"
+# shellcheck disable=SC2046
+"$CC" -std=c11 -g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=all \
+    -fno-omit-frame-pointer -ffp-contract=off -Wall -Wextra -Wno-unknown-pragmas \
+    -Iinclude -Isrc $(pkg-config --cflags libcjson) \
+    fuzz/fuzz_scene_json.c src/scene/json.c src/scene/scene.c src/scene/shape.c \
+    src/scene/camera.c src/accel/bvh.c src/accel/embree.c src/util/error.c \
+    $(pkg-config --libs libcjson) -lm -o "$OUT/fuzz_scene_json"
+echo "built $OUT/fuzz_scene_json"

@@ -1,0 +1,87 @@
+/* scene_file.h - scenes from JSON files (docs/scene-format.md) and meshes from any
+ * format Assimp reads.
+ *
+ *     tr_scene s;
+ *     tr_scene_file info;
+ *     tr_error err;
+ *     if (tr_scene_file_load(&s, "scenes/cornell-classic.json", NULL, &info, &err) != TR_OK)
+ *         fprintf(stderr, "%s\n", err.msg); // "FILE: camera.fov: expected ..." or FILE:LINE:COL
+ *
+ * Every error is one line that starts with the file's name and then either the line and
+ * column of a JSON syntax error ("scene.json:3:14: ...") or the JSON path of the value at
+ * fault ("scene.json: materials.glass.ior: ..."). On failure the scene is left empty. */
+#ifndef TRAC0R_SCENE_FILE_H
+#define TRAC0R_SCENE_FILE_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "trac0r/error.h"
+#include "trac0r/scene.h"
+
+/* The most triangles a scene file may generate (shapes and meshes together). */
+#define TR_SCENE_FILE_MAX_TRIANGLES (1u << 24)
+/* Every vertex, after its transform, and the camera position lie within |x| <= this. */
+#define TR_SCENE_FILE_MAX_COORD 1e7
+/* Scene files larger than this are refused before parsing. */
+#define TR_SCENE_FILE_MAX_BYTES (64u * 1024u * 1024u)
+#define TR_SCENE_FILE_MAX_WARNINGS 8
+
+typedef struct tr_scene_file_options {
+    /* 0: meshes are validated as JSON but their files are not opened (the fuzzer). */
+    int load_meshes;
+    /* Triangle budget; 0 means TR_SCENE_FILE_MAX_TRIANGLES. */
+    uint32_t max_triangles;
+} tr_scene_file_options;
+
+/* What a scene file says besides its geometry, and what loading it found. */
+typedef struct tr_scene_file {
+    /* Render defaults; has_* is 1 where the file gave the value. */
+    uint32_t width, height, spp;
+    int max_depth;
+    char integrator[32];
+    tr_accel_type accel;
+    int has_width, has_height, has_spp, has_max_depth, has_integrator, has_accel;
+    int allow_no_emitter; /* "render": {"allow_no_emitter": true} */
+    /* Counts. */
+    uint32_t shape_count;        /* shapes[] entries */
+    uint32_t mesh_count;         /* meshes[] entries */
+    uint32_t mesh_parts;         /* Assimp meshes imported from them */
+    uint32_t mesh_triangles;     /* triangles imported from them */
+    uint32_t degenerate_dropped; /* mesh faces dropped: not triangles, zero area */
+    uint32_t emissive_triangles; /* triangles whose material is an emitter */
+    uint32_t emitter_materials;  /* emitter materials used by some triangle */
+    tr_aabb bounds;              /* of all triangles */
+    uint32_t warning_count;
+    char warnings[TR_SCENE_FILE_MAX_WARNINGS][256];
+} tr_scene_file;
+
+/* Reads and builds a scene file; the camera is set up for the file's image size
+ * (render.width/height, default 800x600) - use tr_camera_resize for another. The scene
+ * is not committed. opt may be NULL (meshes loaded, default budget); info may be NULL. */
+int tr_scene_file_load(tr_scene *s, const char *path, const tr_scene_file_options *opt,
+                       tr_scene_file *info, tr_error *err);
+
+/* The same from text in memory (need not be NUL-terminated). `path` names the file in
+ * messages and mesh paths are relative to its directory. */
+int tr_scene_file_parse(tr_scene *s, const char *path, const char *text, size_t len,
+                        const tr_scene_file_options *opt, tr_scene_file *info, tr_error *err);
+
+/* What importing one mesh file did. */
+typedef struct tr_mesh_import_stats {
+    uint32_t parts;      /* Assimp meshes with triangles */
+    uint32_t triangles;  /* triangles added */
+    uint32_t degenerate; /* faces dropped: points, lines or zero area */
+    uint32_t materials;  /* materials added from the file (0 with an override) */
+} tr_mesh_import_stats;
+
+/* Imports every mesh of a model file through Assimp: node transforms applied, then `tf`
+ * (NULL for none); each Assimp mesh becomes one shape. With material_override >= 0 every
+ * triangle gets that material, otherwise the file's materials are mapped as
+ * docs/scene-format.md describes. Fails, adding nothing, on an unreadable file, a file
+ * Assimp cannot parse, one without triangles or more than max_triangles (0: no limit). */
+int tr_scene_import_mesh(tr_scene *s, const char *path, const tr_transform *tf,
+                         int64_t material_override, uint32_t max_triangles,
+                         tr_mesh_import_stats *stats, tr_error *err);
+
+#endif

@@ -1,0 +1,1191 @@
+/* json.c - scenes from JSON files (docs/scene-format.md), parsed with cJSON.
+ *
+ * Everything in a file is checked before it is used: types, ranges, unknown keys (with a
+ * "did you mean" from the edit distance), references to materials, coordinates after
+ * their transforms and the triangle budget. Errors are one line: "FILE:LINE:COL: ..." for
+ * syntax errors, "FILE: json.path: ..." for everything else. */
+#define _POSIX_C_SOURCE 200809L
+#include <cJSON.h>
+#include <errno.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "trac0r/camera.h"
+#include "trac0r/film.h"
+#include "trac0r/scene_file.h"
+
+#define PATH_MAX_LEN 160
+
+/* A material's name and index, sorted by name. */
+struct named {
+    const char *name;
+    uint32_t index;
+};
+
+static int named_cmp(const void *a, const void *b) {
+    const struct named *x = a, *y = b;
+    int c = strcmp(x->name, y->name);
+    return c ? c : (x->index > y->index) - (x->index < y->index);
+}
+
+/* Scene files may define at most this many materials. */
+#define MAX_FILE_MATERIALS 65536
+
+typedef struct jctx {
+    const char *file; /* for messages */
+    char dir[4096];   /* directory of the file, for mesh paths ("" = current) */
+    tr_error *err;
+    tr_scene *scene;
+    tr_scene_file *info;
+    const tr_scene_file_options *opt;
+    uint32_t budget;
+    cJSON *materials;      /* the "materials" object: names in file order = material indices */
+    struct named *by_name; /* the materials sorted by name, for lookups */
+    uint32_t name_count;
+} jctx;
+
+/* "FILE: PATH: message". */
+static int jerr(const jctx *c, const char *path, const char *fmt, ...)
+    __attribute__((format(printf, 3, 4)));
+static int jerr(const jctx *c, const char *path, const char *fmt, ...) {
+    char msg[400];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    if (path && path[0]) {
+        return tr_error_set(c->err, "%.200s: %s: %s", c->file, path, msg);
+    }
+    return tr_error_set(c->err, "%.200s: %s", c->file, msg);
+}
+
+static void warn(const jctx *c, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+static void warn(const jctx *c, const char *fmt, ...) {
+    tr_scene_file *info = c->info;
+    if (info->warning_count >= TR_SCENE_FILE_MAX_WARNINGS) {
+        return;
+    }
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(info->warnings[info->warning_count++], sizeof info->warnings[0], fmt, ap);
+    va_end(ap);
+}
+
+static void path_key(char *out, const char *base, const char *key) {
+    int n = base[0] ? snprintf(out, PATH_MAX_LEN, "%s.%.40s", base, key)
+                    : snprintf(out, PATH_MAX_LEN, "%.40s", key);
+    if (n < 0 || n >= PATH_MAX_LEN) {
+        out[PATH_MAX_LEN - 1] = '\0'; /* (paths are short: keys are cut to 40 bytes) */
+    }
+}
+
+static void path_index(char *out, const char *base, int i) {
+    if (snprintf(out, PATH_MAX_LEN, "%s[%d]", base, i) >= PATH_MAX_LEN) {
+        out[PATH_MAX_LEN - 1] = '\0';
+    }
+}
+
+/* Edit distance with adjacent transpositions (optimal string alignment: Damerau 1964,
+ * "A technique for computer detection and correction of spelling errors"), capped:
+ * strings longer than 31 bytes are "far". */
+static int edit_distance(const char *a, const char *b) {
+    size_t n = strlen(a), m = strlen(b);
+    if (n > 31 || m > 31) {
+        return 99;
+    }
+    int d[32][32];
+    for (size_t i = 0; i <= n; ++i) {
+        d[i][0] = (int)i;
+    }
+    for (size_t j = 0; j <= m; ++j) {
+        d[0][j] = (int)j;
+    }
+    for (size_t i = 1; i <= n; ++i) {
+        for (size_t j = 1; j <= m; ++j) {
+            int best = d[i - 1][j - 1] + (a[i - 1] != b[j - 1]);
+            if (d[i - 1][j] + 1 < best) {
+                best = d[i - 1][j] + 1;
+            }
+            if (d[i][j - 1] + 1 < best) {
+                best = d[i][j - 1] + 1;
+            }
+            if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1] &&
+                d[i - 2][j - 2] + 1 < best) {
+                best = d[i - 2][j - 2] + 1;
+            }
+            d[i][j] = best;
+        }
+    }
+    return d[n][m];
+}
+
+/* The closest of names[] to s within a distance of 1 + len/4, or NULL. */
+static const char *closest(const char *s, const char *const *names, size_t count) {
+    const char *best = NULL;
+    int best_d = 1 + (int)strlen(s) / 4;
+    if (best_d > 3) {
+        best_d = 3;
+    }
+    for (size_t i = 0; i < count; ++i) {
+        int d = edit_distance(s, names[i]);
+        if (d <= best_d && (!best || d < edit_distance(s, best))) {
+            best = names[i];
+        }
+    }
+    return best;
+}
+
+/* A printable, shortened copy of a JSON key or string for messages. */
+static const char *shown(const char *s, char *buf, size_t n) {
+    size_t j = 0;
+    for (size_t i = 0; s[i] && j + 4 < n; ++i) {
+        unsigned char ch = (unsigned char)s[i];
+        buf[j++] = (ch >= 32 && ch < 127) ? (char)ch : '?';
+    }
+    if (strlen(s) + 4 >= n) {
+        buf[j++] = '.', buf[j++] = '.', buf[j++] = '.';
+    }
+    buf[j] = '\0';
+    return buf;
+}
+
+static const char *type_name(const cJSON *v) {
+    if (cJSON_IsNumber(v)) {
+        return "a number";
+    }
+    if (cJSON_IsString(v)) {
+        return "a string";
+    }
+    if (cJSON_IsBool(v)) {
+        return "a boolean";
+    }
+    if (cJSON_IsNull(v)) {
+        return "null";
+    }
+    if (cJSON_IsArray(v)) {
+        return "an array";
+    }
+    if (cJSON_IsObject(v)) {
+        return "an object";
+    }
+    return "an invalid value";
+}
+
+/* Rejects keys of obj not in allowed[] (with a suggestion) and duplicate keys. */
+static int check_keys(const jctx *c, const cJSON *obj, const char *path, const char *const *allowed,
+                      size_t count) {
+    for (const cJSON *k = obj->child; k; k = k->next) {
+        const char *name = k->string ? k->string : "";
+        char p[PATH_MAX_LEN], buf[48];
+        path_key(p, path, shown(name, buf, sizeof buf));
+        int known = 0;
+        for (size_t i = 0; i < count; ++i) {
+            known |= strcmp(name, allowed[i]) == 0;
+        }
+        if (!known) {
+            const char *near = closest(name, allowed, count);
+            char list[256] = "";
+            for (size_t i = 0; i < count; ++i) {
+                size_t used = strlen(list);
+                snprintf(list + used, sizeof list - used, "%s%s", i ? ", " : "", allowed[i]);
+            }
+            if (near) {
+                return jerr(c, p, "unknown key (did you mean '%s'?)", near);
+            }
+            return jerr(c, p, "unknown key (expected one of: %s)", list);
+        }
+        for (const cJSON *o = obj->child; o != k; o = o->next) {
+            if (o->string && strcmp(o->string, name) == 0) {
+                return jerr(c, p, "duplicate key");
+            }
+        }
+    }
+    return TR_OK;
+}
+
+static int expect_object(const jctx *c, const cJSON *v, const char *path) {
+    if (!cJSON_IsObject(v)) {
+        return jerr(c, path, "expected an object, got %s", type_name(v));
+    }
+    return TR_OK;
+}
+
+/* A number in [lo, hi]; *present says whether the key exists (NULL: required). */
+static int get_number(const jctx *c, const cJSON *obj, const char *path, const char *key, double lo,
+                      double hi, double *out, int *present) {
+    char p[PATH_MAX_LEN];
+    path_key(p, path, key);
+    const cJSON *v = cJSON_GetObjectItemCaseSensitive(obj, key);
+    if (!v) {
+        if (present) {
+            *present = 0;
+            return TR_OK;
+        }
+        return jerr(c, p, "missing (expected a number in [%g, %g])", lo, hi);
+    }
+    if (!cJSON_IsNumber(v)) {
+        return jerr(c, p, "expected a number in [%g, %g], got %s", lo, hi, type_name(v));
+    }
+    double x = v->valuedouble;
+    if (!isfinite(x) || x < lo || x > hi) {
+        return jerr(c, p, "expected a number in [%g, %g], got %g", lo, hi, x);
+    }
+    if (present) {
+        *present = 1;
+    }
+    *out = x;
+    return TR_OK;
+}
+
+/* A whole number in [lo, hi]. */
+static int get_integer(const jctx *c, const cJSON *obj, const char *path, const char *key,
+                       double lo, double hi, double *out, int *present) {
+    int here = 0;
+    if (get_number(c, obj, path, key, lo, hi, out, present ? present : &here) != TR_OK) {
+        return TR_ERR;
+    }
+    char p[PATH_MAX_LEN];
+    path_key(p, path, key);
+    if (!present && !here) {
+        return jerr(c, p, "missing (expected an integer in %.0f..%.0f)", lo, hi);
+    }
+    if ((present ? *present : here) && *out != floor(*out)) {
+        return jerr(c, p, "expected an integer in %.0f..%.0f, got %g", lo, hi, *out);
+    }
+    return TR_OK;
+}
+
+static int get_bool(const jctx *c, const cJSON *obj, const char *path, const char *key, int *out) {
+    const cJSON *v = cJSON_GetObjectItemCaseSensitive(obj, key);
+    if (!v) {
+        return TR_OK;
+    }
+    if (!cJSON_IsBool(v)) {
+        char p[PATH_MAX_LEN];
+        path_key(p, path, key);
+        return jerr(c, p, "expected true or false, got %s", type_name(v));
+    }
+    *out = cJSON_IsTrue(v);
+    return TR_OK;
+}
+
+/* A string; NULL in *out when absent and not required. */
+static int get_string(const jctx *c, const cJSON *obj, const char *path, const char *key,
+                      int required, const char **out) {
+    char p[PATH_MAX_LEN];
+    path_key(p, path, key);
+    const cJSON *v = cJSON_GetObjectItemCaseSensitive(obj, key);
+    *out = NULL;
+    if (!v) {
+        return required ? jerr(c, p, "missing (expected a string)") : TR_OK;
+    }
+    if (!cJSON_IsString(v) || !v->valuestring) {
+        return jerr(c, p, "expected a string, got %s", type_name(v));
+    }
+    *out = v->valuestring;
+    return TR_OK;
+}
+
+/* [x, y, z] with every |component| <= bound (and >= lo_each if positive is set). */
+static int get_vec3(const jctx *c, const cJSON *obj, const char *path, const char *key,
+                    int required, int positive, tr_vec3 *out, int *present) {
+    char p[PATH_MAX_LEN];
+    path_key(p, path, key);
+    const cJSON *v = cJSON_GetObjectItemCaseSensitive(obj, key);
+    if (present) {
+        *present = v != NULL;
+    }
+    const double bound = TR_SCENE_FILE_MAX_COORD;
+    if (!v) {
+        return required ? jerr(c, p, "missing (expected [x, y, z])") : TR_OK;
+    }
+    if (!cJSON_IsArray(v) || cJSON_GetArraySize(v) != 3) {
+        return jerr(c, p, "expected an array of 3 numbers [x, y, z], got %s%s", type_name(v),
+                    cJSON_IsArray(v) ? " of another length" : "");
+    }
+    double x[3];
+    int i = 0;
+    for (const cJSON *e = v->child; e; e = e->next, ++i) {
+        char pe[PATH_MAX_LEN];
+        path_index(pe, p, i);
+        if (!cJSON_IsNumber(e)) {
+            return jerr(c, pe, "expected a number, got %s", type_name(e));
+        }
+        x[i] = e->valuedouble;
+        if (!isfinite(x[i]) || fabs(x[i]) > bound) {
+            return jerr(c, pe, "expected a finite number with |x| <= %g, got %g", bound, x[i]);
+        }
+        if (positive && !(x[i] > 0.0)) {
+            return jerr(c, pe, "expected a positive number, got %g", x[i]);
+        }
+    }
+    *out = v3((float)x[0], (float)x[1], (float)x[2]);
+    return TR_OK;
+}
+
+/* A colour: [r, g, b], each in [0, hi]. */
+static int get_color(const jctx *c, const cJSON *obj, const char *path, double hi, tr_vec3 *out) {
+    char p[PATH_MAX_LEN];
+    if (get_vec3(c, obj, path, "color", 1, 0, out, NULL) != TR_OK) {
+        return TR_ERR;
+    }
+    const float rgb[3] = {out->x, out->y, out->z};
+    for (int i = 0; i < 3; ++i) {
+        if (rgb[i] < 0.0f || rgb[i] > hi) {
+            char pk[PATH_MAX_LEN];
+            path_key(pk, path, "color");
+            path_index(p, pk, i);
+            return jerr(c, p, "expected a number in [0, %g], got %g", hi, (double)rgb[i]);
+        }
+    }
+    return TR_OK;
+}
+
+/* ---------------------------------------------------------------------------------- */
+
+static int parse_render(jctx *c, const cJSON *r) {
+    static const char *const keys[] = {"width", "height",          "spp", "max_depth", "integrator",
+                                       "accel", "allow_no_emitter"};
+    const char *path = "render";
+    if (expect_object(c, r, path) != TR_OK ||
+        check_keys(c, r, path, keys, sizeof keys / sizeof keys[0]) != TR_OK) {
+        return TR_ERR;
+    }
+    tr_scene_file *in = c->info;
+    double x;
+    if (get_integer(c, r, path, "width", 1, TR_FILM_MAX_SIDE, &x, &in->has_width) != TR_OK) {
+        return TR_ERR;
+    }
+    if (in->has_width) {
+        in->width = (uint32_t)x;
+    }
+    if (get_integer(c, r, path, "height", 1, TR_FILM_MAX_SIDE, &x, &in->has_height) != TR_OK) {
+        return TR_ERR;
+    }
+    if (in->has_height) {
+        in->height = (uint32_t)x;
+    }
+    if ((uint64_t)in->width * in->height > TR_FILM_MAX_PIXELS) {
+        return jerr(c, "render.height", "%ux%u is more than %u pixels", in->width, in->height,
+                    TR_FILM_MAX_PIXELS);
+    }
+    if (get_integer(c, r, path, "spp", 1, 1000000, &x, &in->has_spp) != TR_OK) {
+        return TR_ERR;
+    }
+    if (in->has_spp) {
+        in->spp = (uint32_t)x;
+    }
+    if (get_integer(c, r, path, "max_depth", 1, 1024, &x, &in->has_max_depth) != TR_OK) {
+        return TR_ERR;
+    }
+    if (in->has_max_depth) {
+        in->max_depth = (int)x;
+    }
+    const char *s;
+    if (get_string(c, r, path, "integrator", 0, &s) != TR_OK) {
+        return TR_ERR;
+    }
+    if (s) {
+        char buf[40];
+        if (strlen(s) >= sizeof in->integrator) {
+            return jerr(c, "render.integrator", "unknown integrator '%s'",
+                        shown(s, buf, sizeof buf));
+        }
+        snprintf(in->integrator, sizeof in->integrator, "%s", s);
+        in->has_integrator = 1;
+    }
+    if (get_string(c, r, path, "accel", 0, &s) != TR_OK) {
+        return TR_ERR;
+    }
+    if (s) {
+        int a = tr_accel_from_name(s);
+        if (a < 0) {
+            static const char *const names[] = {"bvh", "bvh2", "flat", "embree"};
+            char buf[40];
+            const char *near = closest(s, names, 4);
+            return jerr(c, "render.accel",
+                        "unknown acceleration structure '%s' (expected bvh, bvh2, flat or "
+                        "embree%s%s%s)",
+                        shown(s, buf, sizeof buf), near ? "; did you mean '" : "", near ? near : "",
+                        near ? "'?" : "");
+        }
+        in->accel = (tr_accel_type)a;
+        in->has_accel = 1;
+    }
+    return get_bool(c, r, path, "allow_no_emitter", &in->allow_no_emitter);
+}
+
+static int parse_camera(jctx *c, const cJSON *cam) {
+    static const char *const keys[] = {"position", "look_at", "direction", "up",
+                                       "fov",      "near",    "far",       "handedness"};
+    const char *path = "camera";
+    if (expect_object(c, cam, path) != TR_OK ||
+        check_keys(c, cam, path, keys, sizeof keys / sizeof keys[0]) != TR_OK) {
+        return TR_ERR;
+    }
+    tr_vec3 pos, look = v3s(0.0f), dir = v3s(0.0f), up = v3(0.0f, 1.0f, 0.0f);
+    int has_look = 0, has_dir = 0, has_x = 0;
+    if (get_vec3(c, cam, path, "position", 1, 0, &pos, NULL) != TR_OK ||
+        get_vec3(c, cam, path, "look_at", 0, 0, &look, &has_look) != TR_OK ||
+        get_vec3(c, cam, path, "direction", 0, 0, &dir, &has_dir) != TR_OK ||
+        get_vec3(c, cam, path, "up", 0, 0, &up, &has_x) != TR_OK) {
+        return TR_ERR;
+    }
+    if (has_look == has_dir) {
+        return jerr(c, path, "expected exactly one of 'look_at' and 'direction'%s",
+                    has_look ? ", got both" : "");
+    }
+    if (has_look) {
+        dir = v3_sub(look, pos);
+        if (!(v3_length(dir) > 0.0f)) {
+            return jerr(c, "camera.look_at", "must differ from camera.position");
+        }
+    } else if (!(v3_length(dir) > 0.0f)) {
+        return jerr(c, "camera.direction", "expected a non-zero vector");
+    }
+    if (!(v3_length(up) > 0.0f)) {
+        return jerr(c, "camera.up", "expected a non-zero vector");
+    }
+    double fov, near_d = 0.001, far_d = 1e30;
+    int present;
+    const cJSON *fv = cJSON_GetObjectItemCaseSensitive(cam, "fov");
+    if (!fv) {
+        return jerr(c, "camera.fov",
+                    "missing (expected a vertical field of view in (0, 180) "
+                    "degrees)");
+    }
+    if (!cJSON_IsNumber(fv)) {
+        return jerr(c, "camera.fov",
+                    "expected a vertical field of view in (0, 180) degrees, got %s", type_name(fv));
+    }
+    fov = fv->valuedouble;
+    if (!(fov > 0.0 && fov < 180.0)) {
+        return jerr(c, "camera.fov",
+                    "expected a vertical field of view in (0, 180) degrees, got %g", fov);
+    }
+    if (get_number(c, cam, path, "near", 0.0, 1e30, &near_d, &present) != TR_OK ||
+        get_number(c, cam, path, "far", 0.0, 1e30, &far_d, &present) != TR_OK) {
+        return TR_ERR;
+    }
+    if (!(far_d > near_d)) {
+        return jerr(c, "camera.far", "expected more than camera.near (%g), got %g", near_d, far_d);
+    }
+    const char *hand;
+    if (get_string(c, cam, path, "handedness", 0, &hand) != TR_OK) {
+        return TR_ERR;
+    }
+    int right_handed = 0;
+    if (hand) {
+        if (strcmp(hand, "right") == 0) {
+            right_handed = 1;
+        } else if (strcmp(hand, "left") != 0) {
+            char buf[40];
+            return jerr(c, "camera.handedness", "expected \"left\" or \"right\", got '%s'",
+                        shown(hand, buf, sizeof buf));
+        }
+    }
+    tr_error e;
+    tr_scene_file *in = c->info;
+    if (tr_camera_make(&c->scene->camera, pos, dir, up, (float)fov, (float)near_d, (float)far_d,
+                       in->width, in->height, &e) != TR_OK) {
+        return jerr(c, path, "%s", e.msg);
+    }
+    if (right_handed) {
+        /* A right-handed world seen with +y up: the camera's right is dir x up, the
+         * mirror image of the thesis's up x dir; the up vector stays. */
+        c->scene->camera.right = v3_neg(c->scene->camera.right);
+    }
+    return TR_OK;
+}
+
+static int parse_materials(jctx *c, const cJSON *mats) {
+    const char *path = "materials";
+    if (expect_object(c, mats, path) != TR_OK) {
+        return TR_ERR;
+    }
+    static const char *const types[] = {"emitter", "diffuse", "glass", "glossy"};
+    static const char *const k_emit[] = {"type", "color", "emittance", "two_sided"};
+    static const char *const k_diff[] = {"type", "color"};
+    static const char *const k_glass[] = {"type", "color", "ior"};
+    static const char *const k_glossy[] = {"type", "color", "roughness"};
+    int n = cJSON_GetArraySize(mats);
+    c->by_name = malloc((size_t)(n > 0 ? (n < MAX_FILE_MATERIALS ? n : MAX_FILE_MATERIALS) : 1) *
+                        sizeof *c->by_name);
+    if (!c->by_name) {
+        return jerr(c, path, "out of memory");
+    }
+    for (const cJSON *m = mats->child; m; m = m->next) {
+        char p[PATH_MAX_LEN], buf[48];
+        path_key(p, path, shown(m->string ? m->string : "", buf, sizeof buf));
+        if (!m->string || !m->string[0]) {
+            return jerr(c, p, "a material needs a non-empty name");
+        }
+        if (c->name_count == MAX_FILE_MATERIALS) {
+            return jerr(c, p, "more than %d materials", MAX_FILE_MATERIALS);
+        }
+        c->by_name[c->name_count].name = m->string;
+        c->by_name[c->name_count].index = c->name_count;
+        c->name_count++;
+        if (expect_object(c, m, p) != TR_OK) {
+            return TR_ERR;
+        }
+        const char *type;
+        if (get_string(c, m, p, "type", 1, &type) != TR_OK) {
+            return TR_ERR;
+        }
+        int t = -1;
+        for (int i = 0; i < 4; ++i) {
+            if (strcmp(type, types[i]) == 0) {
+                t = i;
+            }
+        }
+        if (t < 0) {
+            char pt[PATH_MAX_LEN], tb[40];
+            path_key(pt, p, "type");
+            const char *near = closest(type, types, 4);
+            return jerr(c, pt, "unknown material type '%s' (%s%s%s)", shown(type, tb, sizeof tb),
+                        near ? "did you mean '" : "expected emitter, diffuse, glass or glossy",
+                        near ? near : "", near ? "'?" : "");
+        }
+        const char *const *keys = t == 0 ? k_emit : t == 1 ? k_diff : t == 2 ? k_glass : k_glossy;
+        size_t nkeys = t == 0 ? 4 : t == 1 ? 2 : 3;
+        if (check_keys(c, m, p, keys, nkeys) != TR_OK) {
+            return TR_ERR;
+        }
+        tr_vec3 color;
+        if (get_color(c, m, p, t == 0 ? TR_SCENE_FILE_MAX_COORD : 1.0, &color) != TR_OK) {
+            return TR_ERR;
+        }
+        tr_material mat;
+        double x;
+        if (t == 0) {
+            if (get_number(c, m, p, "emittance", 0.0, 1e7, &x, NULL) != TR_OK) {
+                return TR_ERR;
+            }
+            if (!(x > 0.0)) {
+                char pe[PATH_MAX_LEN];
+                path_key(pe, p, "emittance");
+                return jerr(c, pe, "expected a positive number, got %g", x);
+            }
+            mat = tr_material_emitter(color, (float)x);
+            int two = 0;
+            if (get_bool(c, m, p, "two_sided", &two) != TR_OK) {
+                return TR_ERR;
+            }
+            mat.flags = two ? TR_MATERIAL_TWO_SIDED : 0u;
+        } else if (t == 1) {
+            mat = tr_material_diffuse(color);
+        } else if (t == 2) {
+            if (get_number(c, m, p, "ior", 1.0, 10.0, &x, NULL) != TR_OK) {
+                return TR_ERR;
+            }
+            mat = tr_material_glass(color, (float)x);
+        } else {
+            if (get_number(c, m, p, "roughness", 0.0, 1.0, &x, NULL) != TR_OK) {
+                return TR_ERR;
+            }
+            mat = tr_material_glossy(color, (float)x);
+        }
+        tr_error e;
+        if (tr_scene_add_material(c->scene, mat, NULL, &e) != TR_OK) {
+            return jerr(c, p, "%s", e.msg);
+        }
+    }
+    qsort(c->by_name, c->name_count, sizeof *c->by_name, named_cmp);
+    for (uint32_t i = 1; i < c->name_count; ++i) {
+        if (strcmp(c->by_name[i].name, c->by_name[i - 1].name) == 0) {
+            char p[PATH_MAX_LEN], buf[48];
+            path_key(p, path, shown(c->by_name[i].name, buf, sizeof buf));
+            return jerr(c, p, "duplicate material name");
+        }
+    }
+    return TR_OK;
+}
+
+/* The index of the material named by obj[key]; -1 in *index when absent and optional. */
+static int material_ref(const jctx *c, const cJSON *obj, const char *path, int required,
+                        int64_t *index) {
+    const char *name;
+    *index = -1;
+    if (get_string(c, obj, path, "material", required, &name) != TR_OK) {
+        return TR_ERR;
+    }
+    if (!name) {
+        return TR_OK;
+    }
+    struct named key = {name, 0};
+    size_t lo = 0, hi = c->name_count;
+    while (lo < hi) { /* the first entry not below (name, 0) */
+        size_t mid = lo + (hi - lo) / 2;
+        if (named_cmp(&c->by_name[mid], &key) < 0) {
+            lo = mid + 1;
+        } else {
+            hi = mid;
+        }
+    }
+    if (lo < c->name_count && strcmp(c->by_name[lo].name, name) == 0) {
+        *index = c->by_name[lo].index;
+        return TR_OK;
+    }
+    const char **names = malloc((c->name_count ? c->name_count : 1) * sizeof *names);
+    size_t count = 0;
+    for (uint32_t i = 0; names && i < c->name_count; ++i) {
+        names[count++] = c->by_name[i].name;
+    }
+    char p[PATH_MAX_LEN], buf[48];
+    path_key(p, path, "material");
+    const char *near = names ? closest(name, names, count) : NULL;
+    int rc = jerr(c, p, "undefined material '%s'%s%s%s", shown(name, buf, sizeof buf),
+                  near ? " (did you mean '" : "", near ? near : "", near ? "'?)" : "");
+    free(names);
+    return rc;
+}
+
+/* position, orientation (degrees) or orientation_rad, scale (number or [x, y, z]). */
+static int get_transform(const jctx *c, const cJSON *obj, const char *path, tr_transform *tf) {
+    tf->position = v3s(0.0f);
+    tf->orientation = v3s(0.0f);
+    tf->scale = v3s(1.0f);
+    int deg = 0, rad = 0;
+    tr_vec3 o;
+    if (get_vec3(c, obj, path, "position", 0, 0, &tf->position, NULL) != TR_OK ||
+        get_vec3(c, obj, path, "orientation", 0, 0, &o, &deg) != TR_OK) {
+        return TR_ERR;
+    }
+    if (deg) {
+        /* In double, so that 90 gives the float nearest pi/2. */
+        const double k = 3.14159265358979323846 / 180.0;
+        tf->orientation = v3((float)(o.x * k), (float)(o.y * k), (float)(o.z * k));
+    }
+    if (get_vec3(c, obj, path, "orientation_rad", 0, 0, &o, &rad) != TR_OK) {
+        return TR_ERR;
+    }
+    if (deg && rad) {
+        return jerr(c, path,
+                    "expected one of 'orientation' (degrees) and 'orientation_rad', "
+                    "got both");
+    }
+    if (rad) {
+        tf->orientation = o;
+    }
+    char p[PATH_MAX_LEN];
+    path_key(p, path, "scale");
+    const cJSON *s = cJSON_GetObjectItemCaseSensitive(obj, "scale");
+    if (cJSON_IsNumber(s)) {
+        double x = s->valuedouble;
+        if (!isfinite(x) || !(x > 0.0) || x > TR_SCENE_FILE_MAX_COORD) {
+            return jerr(c, p, "expected a positive number up to %g, got %g",
+                        TR_SCENE_FILE_MAX_COORD, x);
+        }
+        tf->scale = v3s((float)x);
+    } else if (s && !cJSON_IsArray(s)) {
+        return jerr(c, p, "expected a positive number or [x, y, z], got %s", type_name(s));
+    } else if (get_vec3(c, obj, path, "scale", 0, 1, &tf->scale, NULL) != TR_OK) {
+        return TR_ERR;
+    }
+    return TR_OK;
+}
+
+/* Triangles first..count-1 must be non-degenerate and within the coordinate bound. */
+static int check_triangles(const jctx *c, const char *path, uint32_t first) {
+    const tr_scene *s = c->scene;
+    const float bound = (float)TR_SCENE_FILE_MAX_COORD;
+    for (uint32_t i = first; i < s->triangle_count; ++i) {
+        const tr_triangle *t = &s->triangles[i];
+        const tr_vec3 v[3] = {t->v0, t->v1, t->v2};
+        for (int k = 0; k < 3; ++k) {
+            if (!v3_is_finite(v[k]) || fabsf(v[k].x) > bound || fabsf(v[k].y) > bound ||
+                fabsf(v[k].z) > bound) {
+                return jerr(c, path, "a vertex lands at (%g, %g, %g), outside the bound |x| <= %g",
+                            (double)v[k].x, (double)v[k].y, (double)v[k].z,
+                            TR_SCENE_FILE_MAX_COORD);
+            }
+        }
+        if (!(t->area > 0.0f)) {
+            char p[PATH_MAX_LEN];
+            path_key(p, path, "scale");
+            return jerr(c, p, "too small: triangle %u has zero area", i - first);
+        }
+    }
+    return TR_OK;
+}
+
+/* A quad: four corners, two triangles (v0 v1 v2) and (v0 v2 v3), facing the side that
+ * (v1 - v0) x (v2 - v0) points to; the shape transform applies to the corners. */
+static int parse_quad(jctx *c, const cJSON *sh, const char *p, const cJSON *verts) {
+    char pv[PATH_MAX_LEN], ps[PATH_MAX_LEN];
+    path_key(pv, p, "vertices");
+    path_key(ps, p, "subdivisions");
+    if (cJSON_GetObjectItemCaseSensitive(sh, "subdivisions")) {
+        return jerr(c, ps, "only icospheres have subdivisions");
+    }
+    if (!verts) {
+        return jerr(c, pv, "missing (expected 4 corners [[x, y, z], ...])");
+    }
+    if (!cJSON_IsArray(verts) || cJSON_GetArraySize(verts) != 4) {
+        return jerr(c, pv, "expected an array of 4 corners [[x, y, z], ...], got %s%s",
+                    type_name(verts), cJSON_IsArray(verts) ? " of another length" : "");
+    }
+    float pos[12];
+    int k = 0;
+    for (const cJSON *v = verts->child; v; v = v->next, ++k) {
+        char pe[PATH_MAX_LEN];
+        path_index(pe, pv, k);
+        if (!cJSON_IsArray(v) || cJSON_GetArraySize(v) != 3) {
+            return jerr(c, pe, "expected an array of 3 numbers [x, y, z], got %s", type_name(v));
+        }
+        int j = 0;
+        for (const cJSON *e = v->child; e; e = e->next, ++j) {
+            char pj[PATH_MAX_LEN];
+            path_index(pj, pe, j);
+            if (!cJSON_IsNumber(e)) {
+                return jerr(c, pj, "expected a number, got %s", type_name(e));
+            }
+            if (!isfinite(e->valuedouble) || fabs(e->valuedouble) > TR_SCENE_FILE_MAX_COORD) {
+                return jerr(c, pj, "expected a finite number with |x| <= %g, got %g",
+                            TR_SCENE_FILE_MAX_COORD, e->valuedouble);
+            }
+            pos[3 * k + j] = (float)e->valuedouble;
+        }
+    }
+    tr_transform tf;
+    int64_t mat;
+    if (get_transform(c, sh, p, &tf) != TR_OK || material_ref(c, sh, p, 1, &mat) != TR_OK) {
+        return TR_ERR;
+    }
+    if ((uint64_t)c->scene->triangle_count + 2 > c->budget) {
+        return jerr(c, p, "the scene would have %llu triangles, more than the budget of %u",
+                    (unsigned long long)c->scene->triangle_count + 2, c->budget);
+    }
+    static const uint32_t idx[6] = {0, 1, 2, 0, 2, 3};
+    uint32_t first = c->scene->triangle_count, dropped = 0;
+    tr_error e;
+    if (tr_scene_add_mesh(c->scene, pos, 4, idx, 2, NULL, (uint32_t)mat, &tf, &dropped, &e) !=
+        TR_OK) {
+        return jerr(c, pv, "the corners span no area");
+    }
+    if (dropped) {
+        return jerr(c, pv, "the corners span a triangle of zero area");
+    }
+    return check_triangles(c, p, first);
+}
+
+static int parse_shapes(jctx *c, const cJSON *shapes) {
+    static const char *const keys[] = {
+        "type",  "name",         "position", "orientation", "orientation_rad",
+        "scale", "subdivisions", "material", "vertices"};
+    static const char *const types[] = {"plane", "box", "icosphere", "quad"};
+    if (!cJSON_IsArray(shapes)) {
+        return jerr(c, "shapes", "expected an array, got %s", type_name(shapes));
+    }
+    /* The budget first, from the types and subdivisions alone, so that a file asking for
+     * too much fails before anything big is generated. */
+    uint64_t total = c->scene->triangle_count;
+    int i = 0;
+    for (const cJSON *sh = shapes->child; sh; sh = sh->next, ++i) {
+        const cJSON *ty = cJSON_GetObjectItemCaseSensitive(sh, "type");
+        const cJSON *sub = cJSON_GetObjectItemCaseSensitive(sh, "subdivisions");
+        if (!cJSON_IsString(ty) || !ty->valuestring) {
+            continue;
+        }
+        if (strcmp(ty->valuestring, "icosphere") == 0) {
+            double n = cJSON_IsNumber(sub) ? sub->valuedouble : 2.0;
+            if (!(n >= 0.0 && n <= TR_ICOSPHERE_MAX_SUBDIVISIONS) || n != floor(n)) {
+                continue; /* reported below */
+            }
+            total += 20ull << (2u * (unsigned)n);
+        } else {
+            total += 12; /* at most (a box) */
+        }
+        if (total > c->budget) {
+            char p[PATH_MAX_LEN];
+            path_index(p, "shapes", i);
+            return jerr(c, p,
+                        "the scene would have more than %u triangles (the triangle budget; "
+                        "an icosphere has 20*4^subdivisions)",
+                        c->budget);
+        }
+    }
+    i = 0;
+    for (const cJSON *sh = shapes->child; sh; sh = sh->next, ++i) {
+        char p[PATH_MAX_LEN];
+        path_index(p, "shapes", i);
+        if (expect_object(c, sh, p) != TR_OK ||
+            check_keys(c, sh, p, keys, sizeof keys / sizeof keys[0]) != TR_OK) {
+            return TR_ERR;
+        }
+        const char *type, *name;
+        if (get_string(c, sh, p, "type", 1, &type) != TR_OK ||
+            get_string(c, sh, p, "name", 0, &name) != TR_OK) {
+            return TR_ERR;
+        }
+        int t = -1;
+        for (int k = 0; k < 4; ++k) {
+            if (strcmp(type, types[k]) == 0) {
+                t = k;
+            }
+        }
+        if (t < 0) {
+            char pt[PATH_MAX_LEN], buf[40];
+            path_key(pt, p, "type");
+            const char *near = closest(type, types, 4);
+            return jerr(c, pt, "unknown shape type '%s' (%s%s%s)", shown(type, buf, sizeof buf),
+                        near ? "did you mean '" : "expected plane, box, icosphere or quad",
+                        near ? near : "", near ? "'?" : "");
+        }
+        const cJSON *verts = cJSON_GetObjectItemCaseSensitive(sh, "vertices");
+        if (t == 3) {
+            if (parse_quad(c, sh, p, verts) != TR_OK) {
+                return TR_ERR;
+            }
+            continue;
+        }
+        if (verts) {
+            char pv[PATH_MAX_LEN];
+            path_key(pv, p, "vertices");
+            return jerr(c, pv, "only quads have vertices");
+        }
+        tr_shape_desc d = tr_shape_desc_default(t == 0   ? TR_SHAPE_PLANE
+                                                : t == 1 ? TR_SHAPE_BOX
+                                                         : TR_SHAPE_ICOSPHERE);
+        int64_t mat;
+        if (get_transform(c, sh, p, &d.transform) != TR_OK ||
+            material_ref(c, sh, p, 1, &mat) != TR_OK) {
+            return TR_ERR;
+        }
+        d.material = (uint32_t)mat;
+        double sub = 2;
+        int has_sub = 0;
+        if (get_integer(c, sh, p, "subdivisions", 0, 1e9, &sub, &has_sub) != TR_OK) {
+            return TR_ERR;
+        }
+        char ps[PATH_MAX_LEN];
+        path_key(ps, p, "subdivisions");
+        if (has_sub && t != 2) {
+            return jerr(c, ps, "only icospheres have subdivisions");
+        }
+        if (sub > TR_ICOSPHERE_MAX_SUBDIVISIONS) {
+            return jerr(c, ps, "expected an integer in 0..%d (20*4^N triangles), got %.0f",
+                        TR_ICOSPHERE_MAX_SUBDIVISIONS, sub);
+        }
+        d.subdivisions = (uint32_t)sub;
+        uint64_t n = tr_shape_triangle_count(&d);
+        if ((uint64_t)c->scene->triangle_count + n > c->budget) {
+            return jerr(c, t == 2 ? ps : p,
+                        "the scene would have %llu triangles, more than the budget of %u",
+                        (unsigned long long)(c->scene->triangle_count + n), c->budget);
+        }
+        uint32_t first = c->scene->triangle_count;
+        tr_error e;
+        if (tr_scene_add_shape(c->scene, &d, &e) != TR_OK) {
+            return jerr(c, p, "%s", e.msg);
+        }
+        if (check_triangles(c, p, first) != TR_OK) {
+            return TR_ERR;
+        }
+    }
+    c->info->shape_count = (uint32_t)i;
+    return TR_OK;
+}
+
+static int parse_meshes(jctx *c, const cJSON *meshes) {
+    static const char *const keys[] = {
+        "path", "name", "position", "orientation", "scale", "orientation_rad", "material"};
+    if (!cJSON_IsArray(meshes)) {
+        return jerr(c, "meshes", "expected an array, got %s", type_name(meshes));
+    }
+    int i = 0;
+    for (const cJSON *m = meshes->child; m; m = m->next, ++i) {
+        char p[PATH_MAX_LEN];
+        path_index(p, "meshes", i);
+        if (expect_object(c, m, p) != TR_OK ||
+            check_keys(c, m, p, keys, sizeof keys / sizeof keys[0]) != TR_OK) {
+            return TR_ERR;
+        }
+        const char *rel, *name;
+        tr_transform tf;
+        int64_t mat;
+        if (get_string(c, m, p, "path", 1, &rel) != TR_OK ||
+            get_string(c, m, p, "name", 0, &name) != TR_OK ||
+            get_transform(c, m, p, &tf) != TR_OK || material_ref(c, m, p, 0, &mat) != TR_OK) {
+            return TR_ERR;
+        }
+        char pp[PATH_MAX_LEN];
+        path_key(pp, p, "path");
+        if (!rel[0]) {
+            return jerr(c, pp, "expected a file name, got an empty string");
+        }
+        if (!c->opt->load_meshes) {
+            continue;
+        }
+        char full[8192];
+        if (rel[0] == '/' || !c->dir[0]) {
+            snprintf(full, sizeof full, "%s", rel);
+        } else {
+            snprintf(full, sizeof full, "%s/%s", c->dir, rel);
+        }
+        uint32_t first = c->scene->triangle_count;
+        tr_mesh_import_stats st;
+        tr_error e;
+        if (tr_scene_import_mesh(c->scene, full, &tf, mat, c->budget - first, &st, &e) != TR_OK) {
+            return jerr(c, pp, "%s", e.msg);
+        }
+        c->info->mesh_parts += st.parts;
+        c->info->mesh_triangles += st.triangles;
+        c->info->degenerate_dropped += st.degenerate;
+        if (check_triangles(c, p, first) != TR_OK) {
+            return TR_ERR;
+        }
+        if (st.degenerate) {
+            char buf[64];
+            warn(c, "meshes[%d] (%s): %u degenerate faces dropped (points, lines or zero area)", i,
+                 shown(rel, buf, sizeof buf), st.degenerate);
+        }
+    }
+    c->info->mesh_count = (uint32_t)i;
+    return TR_OK;
+}
+
+/* Line and column (both from 1) of byte offset `off` in text. */
+static void line_col(const char *text, size_t off, unsigned *line, unsigned *col) {
+    *line = 1;
+    *col = 1;
+    for (size_t i = 0; i < off; ++i) {
+        if (text[i] == '\n') {
+            ++*line;
+            *col = 1;
+        } else {
+            ++*col;
+        }
+    }
+}
+
+static int build(jctx *c, const cJSON *root) {
+    static const char *const keys[] = {"version",   "description", "render", "camera",
+                                       "materials", "shapes",      "meshes"};
+    if (!cJSON_IsObject(root)) {
+        return jerr(c, NULL, "expected a JSON object at the top level, got %s", type_name(root));
+    }
+    if (check_keys(c, root, "", keys, sizeof keys / sizeof keys[0]) != TR_OK) {
+        return TR_ERR;
+    }
+    const cJSON *ver = cJSON_GetObjectItemCaseSensitive(root, "version");
+    if (ver && !(cJSON_IsNumber(ver) && ver->valuedouble == 1.0)) {
+        return jerr(c, "version", "expected 1 (the only version of the format)");
+    }
+    const char *desc;
+    if (get_string(c, root, "", "description", 0, &desc) != TR_OK) {
+        return TR_ERR;
+    }
+    const cJSON *r = cJSON_GetObjectItemCaseSensitive(root, "render");
+    if (r && parse_render(c, r) != TR_OK) {
+        return TR_ERR;
+    }
+    const cJSON *cam = cJSON_GetObjectItemCaseSensitive(root, "camera");
+    if (!cam) {
+        return jerr(c, "camera", "missing (expected an object)");
+    }
+    if (parse_camera(c, cam) != TR_OK) {
+        return TR_ERR;
+    }
+    c->materials = cJSON_GetObjectItemCaseSensitive(root, "materials");
+    if (!c->materials) {
+        return jerr(c, "materials", "missing (expected an object of named materials)");
+    }
+    if (parse_materials(c, c->materials) != TR_OK) {
+        return TR_ERR;
+    }
+    const cJSON *shapes = cJSON_GetObjectItemCaseSensitive(root, "shapes");
+    if (shapes && parse_shapes(c, shapes) != TR_OK) {
+        return TR_ERR;
+    }
+    const cJSON *meshes = cJSON_GetObjectItemCaseSensitive(root, "meshes");
+    if (meshes && parse_meshes(c, meshes) != TR_OK) {
+        return TR_ERR;
+    }
+    tr_scene *s = c->scene;
+    tr_scene_file *in = c->info;
+    if (s->triangle_count == 0 && (c->opt->load_meshes || in->mesh_count == 0)) {
+        return jerr(c, NULL, "the scene has no triangles (expected 'shapes' or 'meshes')");
+    }
+    /* Counts, bounds and warnings. */
+    uint32_t *used = calloc(s->material_count ? s->material_count : 1, sizeof *used);
+    if (!used) {
+        return jerr(c, NULL, "out of memory");
+    }
+    for (uint32_t i = 0; i < s->triangle_count; ++i) {
+        used[s->triangles[i].material]++;
+    }
+    in->bounds = tr_triangles_bounds(s->triangles, s->triangle_count);
+    uint32_t mi = 0;
+    for (const cJSON *m = c->materials->child; m && mi < s->material_count; m = m->next, ++mi) {
+        char buf[48];
+        if (!used[mi]) {
+            warn(c, "materials.%s is not used by any shape or mesh",
+                 shown(m->string, buf, sizeof buf));
+        }
+    }
+    for (uint32_t i = 0; i < s->material_count; ++i) {
+        if (s->materials[i].type == TR_MATERIAL_EMITTER && used[i]) {
+            in->emitter_materials++;
+            in->emissive_triangles += used[i];
+        }
+    }
+    free(used);
+    if (in->emissive_triangles == 0) {
+        warn(c, "the scene has no emitter, so its image would be black%s",
+             in->allow_no_emitter ? " (allowed by render.allow_no_emitter)" : "");
+    }
+    return TR_OK;
+}
+
+int tr_scene_file_parse(tr_scene *s, const char *path, const char *text, size_t len,
+                        const tr_scene_file_options *opt, tr_scene_file *info, tr_error *err) {
+    tr_scene_init(s);
+    tr_scene_file local;
+    if (!info) {
+        info = &local;
+    }
+    memset(info, 0, sizeof *info);
+    info->width = 800;
+    info->height = 600;
+    info->spp = 16;
+    info->max_depth = 8;
+    info->accel = TR_ACCEL_TYPE_BVH;
+    tr_scene_file_options defaults = {1, 0};
+    jctx c;
+    memset(&c, 0, sizeof c);
+    c.file = path;
+    c.err = err;
+    c.scene = s;
+    c.info = info;
+    c.opt = opt ? opt : &defaults;
+    c.budget = c.opt->max_triangles ? c.opt->max_triangles : TR_SCENE_FILE_MAX_TRIANGLES;
+    const char *slash = strrchr(path, '/');
+    if (slash) {
+        size_t n = (size_t)(slash - path);
+        if (n == 0) {
+            n = 1; /* "/scene.json" */
+        }
+        if (n >= sizeof c.dir) {
+            return jerr(&c, NULL, "path too long");
+        }
+        memcpy(c.dir, path, n);
+        c.dir[n] = '\0';
+    }
+    if (len > TR_SCENE_FILE_MAX_BYTES) {
+        return jerr(&c, NULL, "%zu bytes is more than the limit of %u", len,
+                    TR_SCENE_FILE_MAX_BYTES);
+    }
+    for (size_t i = 0; i < len; ++i) {
+        if (text[i] == '\0') {
+            unsigned line, col;
+            line_col(text, i, &line, &col);
+            return tr_error_set(err, "%.200s:%u:%u: JSON syntax error: a NUL byte", path, line,
+                                col);
+        }
+    }
+    const char *end = NULL;
+    cJSON *root = cJSON_ParseWithLengthOpts(text, len, &end, 0);
+    if (!root) {
+        size_t off = end && end >= text && end <= text + len ? (size_t)(end - text) : 0;
+        unsigned line, col;
+        line_col(text, off, &line, &col);
+        char near[24];
+        size_t k = 0;
+        for (size_t i = off; i < len && k < 12; ++i) {
+            unsigned char ch = (unsigned char)text[i];
+            if (ch == '\n' || ch == '\r') {
+                break;
+            }
+            near[k++] = (ch >= 32 && ch < 127) ? (char)ch : '?';
+        }
+        near[k] = '\0';
+        if (k == 0) {
+            /* Nothing follows on the line: show what precedes instead. */
+            size_t from = off;
+            while (from > 0 && off - from < 12 && text[from - 1] != '\n' &&
+                   text[from - 1] != '\r') {
+                --from;
+            }
+            while (from < off && (text[from] == ' ' || text[from] == '\t')) {
+                ++from;
+            }
+            for (size_t i = from; i < off; ++i) {
+                unsigned char ch = (unsigned char)text[i];
+                near[k++] = (ch >= 32 && ch < 127) ? (char)ch : '?';
+            }
+            near[k] = '\0';
+            return tr_error_set(err, "%.200s:%u:%u: JSON syntax error at the end of %s%s%s%s", path,
+                                line, col, off >= len ? "the file" : "the line",
+                                k ? ", after '" : "", near, k ? "'" : "");
+        }
+        return tr_error_set(err, "%.200s:%u:%u: JSON syntax error near '%s'", path, line, col,
+                            near);
+    }
+    /* Anything but white space after the value is an error too. */
+    size_t off = (size_t)(end - text);
+    while (off < len &&
+           (text[off] == ' ' || text[off] == '\t' || text[off] == '\n' || text[off] == '\r')) {
+        ++off;
+    }
+    int rc;
+    if (off < len) {
+        unsigned line, col;
+        line_col(text, off, &line, &col);
+        rc = tr_error_set(err, "%.200s:%u:%u: JSON syntax error: text after the top-level value",
+                          path, line, col);
+    } else {
+        rc = build(&c, root);
+    }
+    cJSON_Delete(root);
+    free(c.by_name);
+    if (rc != TR_OK) {
+        tr_scene_free(s);
+    }
+    return rc;
+}
+
+int tr_scene_file_load(tr_scene *s, const char *path, const tr_scene_file_options *opt,
+                       tr_scene_file *info, tr_error *err) {
+    tr_scene_init(s);
+    FILE *fp = fopen(path, "rb");
+    if (!fp) {
+        return tr_error_set(err, "%.200s: cannot open: %s", path, strerror(errno));
+    }
+    char *buf = NULL;
+    size_t len = 0, cap = 0;
+    int rc = TR_OK;
+    for (;;) {
+        if (len == cap) {
+            if (cap >= TR_SCENE_FILE_MAX_BYTES) {
+                rc = tr_error_set(err, "%.200s: more than %u bytes", path, TR_SCENE_FILE_MAX_BYTES);
+                break;
+            }
+            cap = cap ? 2 * cap : 65536;
+            char *grown = realloc(buf, cap + 1);
+            if (!grown) {
+                rc = tr_error_set(err, "%.200s: out of memory reading it", path);
+                break;
+            }
+            buf = grown;
+        }
+        size_t got = fread(buf + len, 1, cap - len, fp);
+        len += got;
+        if (got == 0) {
+            if (ferror(fp)) {
+                rc = tr_error_set(err, "%.200s: cannot read: %s", path, strerror(errno));
+            }
+            break;
+        }
+    }
+    fclose(fp);
+    if (rc == TR_OK) {
+        rc = tr_scene_file_parse(s, path, buf, len, opt, info, err);
+    }
+    free(buf);
+    return rc;
+}
