@@ -13,6 +13,7 @@ static void usage(FILE *fp) {
                 "Commands:\n"
                 "  render   render a scene to a PNG or PFM image\n"
                 "  bench    measure speed: 'trac0r bench frame'\n"
+                "  view     interactive window: fly through a scene while it converges\n"
                 "\n"
                 "Run 'trac0r COMMAND --help' for a command's options.\n"
                 "  -h, --help      show this help\n"
@@ -30,6 +31,15 @@ int main(int argc, char **argv) {
     }
     if (strcmp(cmd, "bench") == 0) {
         return cmd_bench(argc - 1, argv + 1);
+    }
+    if (strcmp(cmd, "view") == 0) {
+#ifdef TRAC0R_HAVE_VIEW
+        return cmd_view(argc - 1, argv + 1);
+#else
+        fprintf(stderr, "trac0r: this build has no 'view' (SDL2, SDL2_ttf or fontconfig was "
+                        "not found when it was configured)\n");
+        return CLI_USAGE;
+#endif
     }
     if (strcmp(cmd, "-h") == 0 || strcmp(cmd, "--help") == 0 || strcmp(cmd, "help") == 0) {
         usage(stdout);
