@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "commands.h"
+#include "view_overlay.h"
 
 #define VIEW_BENCH_FRAMES 16
 
@@ -190,6 +191,9 @@ int cmd_view(int argc, char **argv) {
     if (o.benchmark >= 0) {
         snprintf(bench_scene, sizeof bench_scene, "builtin:cornell-ico-%d", o.benchmark);
         o.c.scene = bench_scene;
+    }
+    if (!headless && view_font_find(o.font, o.font_path, sizeof o.font_path, &err) != TR_OK) {
+        return cli_error(&a, "%s", err.msg);
     }
     tr_scene scene;
     int rc = cli_load_scene(&a, &o.c, &scene);

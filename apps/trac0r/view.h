@@ -18,6 +18,7 @@ typedef struct view_options {
     const char *state_file; /* rewritten with the viewer's state after changes */
     const char *dump_file;  /* SIGUSR1 writes the window's pixels here (PPM) */
     const char *shot_dir;   /* where F12 writes (default ".") */
+    char font_path[4096];   /* the font found for the debug view */
 } view_options;
 
 /* The interactive window (view_window.c); returns the exit status. */

@@ -144,10 +144,7 @@ typedef struct stage_times {
 
 int view_run_window(const cli_args *a, const view_options *o, tr_scene *scene) {
     tr_error err;
-    char font_path[4096];
-    if (view_font_find(o->font, font_path, sizeof font_path, &err) != TR_OK) {
-        return cli_error(a, "%s", err.msg);
-    }
+    const char *font_path = o->font_path;
     if (SDL_Init(SDL_INIT_VIDEO) != 0) {
         const char *display = getenv("DISPLAY");
         cli_error(a, "cannot open a window on DISPLAY='%s': %s", display ? display : "",
@@ -202,9 +199,11 @@ int view_run_window(const cli_args *a, const view_options *o, tr_scene *scene) {
                       scene->camera.near_dist,
                       scene->camera.far_dist,
                       0.5f};
-    tr_camera cam;
-    if (fly_make(&fly, w, h, &cam) != TR_OK) {
-        fprintf(stderr, "trac0r view: the scene's camera is invalid\n");
+    /* The scene's own camera until the user moves: so that the first view's film is
+     * exactly what `trac0r render` computes. */
+    tr_camera cam = scene->camera;
+    if (tr_camera_resize(&cam, w, h, &err) != TR_OK) {
+        fprintf(stderr, "trac0r view: %s\n", err.msg);
         goto done;
     }
     view_state st = {0};
@@ -223,7 +222,12 @@ int view_run_window(const cli_args *a, const view_options *o, tr_scene *scene) {
         goto done;
     }
     if (o->dump_file) {
-        signal(SIGUSR1, on_sigusr1);
+        struct sigaction sa;
+        memset(&sa, 0, sizeof sa);
+        sa.sa_handler = on_sigusr1; /* stays installed (no SA_RESETHAND) */
+        sigemptyset(&sa.sa_mask);
+        sa.sa_flags = SA_RESTART;
+        sigaction(SIGUSR1, &sa, NULL);
     }
 
     uint32_t tex_w = 0, tex_h = 0;
