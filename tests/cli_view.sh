@@ -213,6 +213,32 @@ done
 wait_for 10 '[ "$(state dir)" != "$dir0" ]' || fail "mouse-look: direction stayed $dir0"
 xdotool click 3
 wait_for 10 '[ "$(state mouselook)" = 0 ]' || fail "second right click did not end mouse-look"
+# The other keys, through the state file: 2 (stride 2, a new view), +/- (exposure,
+# same view), wheel (speed), H (help), V and ] (BVH boxes, one level deeper), N
+# (per-stage timings on stdout).
+gen0=$(state generation)
+xdotool key 2
+wait_for 10 '[ "$(state stride)" = 2 ] && [ "$(state generation)" -gt "$gen0" ]' ||
+    fail "2 did not switch to stride 2: stride $(state stride)"
+xdotool key 3
+wait_for 10 '[ "$(state stride)" = 4 ]' || fail "3 did not switch to stride 4"
+xdotool key 1
+wait_for 10 '[ "$(state stride)" = 1 ]' || fail "1 did not switch back to stride 1"
+gen0=$(state generation)
+xdotool key plus plus minus
+wait_for 10 '[ "$(state exposure)" = 0.50 ]' || fail "+ + -: exposure $(state exposure)"
+[ "$(state generation)" = "$gen0" ] || fail "exposure restarted the accumulation"
+speed0=$(state speed)
+xdotool click 4
+wait_for 10 '[ "$(state speed)" != "$speed0" ]' || fail "wheel did not change the speed"
+xdotool key h v bracketright
+wait_for 10 '[ "$(state help)" = 1 ] && [ "$(state bvh)" = 1 ] && [ "$(state bvh_depth)" = 4 ]' ||
+    fail "H/V/]: help $(state help), bvh $(state bvh), depth $(state bvh_depth)"
+dump bvh.ppm
+cmp -s bvh.ppm off.ppm && fail "BVH boxes and help changed nothing in the window"
+xdotool key n
+wait_for 20 'grep -q "^frame [0-9]*: input .* ms, scene rebuild .* ms, render .* ms, film->texture .* ms" view.out' ||
+    fail "N printed no per-stage timings: $(head -c 300 view.out)"
 quit_viewer
 
 # F12 saves the converged float film: with --max-spp 4 it equals trac0r render --spp 4.

@@ -498,7 +498,9 @@ int view_run_window(const cli_args *a, const view_options *o, tr_scene *scene) {
             view_draw_text(ren, font, 0, 0, text);
         }
         if (st.help) {
-            view_draw_text(ren, font, (int)w / 2 - 150, 40, help_text);
+            /* Bottom right, clear of the debug text in the top left. */
+            const int hx = (int)w - 290, hy = (int)h - 16 * TTF_FontLineSkip(font) - 20;
+            view_draw_text(ren, font, hx > 0 ? hx : 0, hy > 0 ? hy : 0, help_text);
         }
         if (dump_requested && o->dump_file) {
             dump_requested = 0;
