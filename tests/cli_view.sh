@@ -98,6 +98,11 @@ done
 DISPLAY=:$(head -n1 displayfd)
 export DISPLAY
 unset WAYLAND_DISPLAY SDL_VIDEODRIVER
+# A display that cannot be opened (screen 7 of a one-screen server): exit 2, naming it.
+DISPLAY=$DISPLAY.7 timeout 30 "$BIN" view >out.txt 2>err.txt
+rc=$?
+[ "$rc" -eq 2 ] || fail "view on $DISPLAY.7: exit $rc, expected 2"
+grep -qF "DISPLAY='$DISPLAY.7'" err.txt || fail "view on $DISPLAY.7: message: $(cat err.txt)"
 # SDL's software renderer, and no OpenGL behind the window surface: Mesa is loaded
 # with dlopen and unloaded at SDL_Quit, so LeakSanitizer (sanitizer build) could not
 # name it in a suppression. The leak check itself covers every interactive run below:

@@ -145,6 +145,12 @@ typedef struct stage_times {
 int view_run_window(const cli_args *a, const view_options *o, tr_scene *scene) {
     tr_error err;
     const char *font_path = o->font_path;
+    /* With DISPLAY set and no driver asked for, use X11 only: SDL would otherwise fall
+     * back to other drivers when the X server cannot be reached. */
+    const char *driver = getenv("SDL_VIDEODRIVER"), *wayland = getenv("WAYLAND_DISPLAY");
+    if ((!driver || !*driver) && (!wayland || !*wayland)) {
+        SDL_SetHint(SDL_HINT_VIDEODRIVER, "x11");
+    }
     if (SDL_Init(SDL_INIT_VIDEO) != 0) {
         const char *display = getenv("DISPLAY");
         cli_error(a, "cannot open a window on DISPLAY='%s': %s", display ? display : "",
