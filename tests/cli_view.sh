@@ -229,10 +229,12 @@ xdotool key 3
 wait_for 10 '[ "$(state stride)" = 4 ]' || fail "3 did not switch to stride 4"
 xdotool key 1
 wait_for 10 '[ "$(state stride)" = 1 ]' || fail "1 did not switch back to stride 1"
-gen0=$(state generation)
+# view_generation counts view changes asked for, generation is the one on screen.
+wait_for 10 '[ "$(state generation)" = "$(state view_generation)" ]' || fail "view did not settle"
+gen0=$(state view_generation)
 xdotool key plus plus minus
 wait_for 10 '[ "$(state exposure)" = 0.50 ]' || fail "+ + -: exposure $(state exposure)"
-[ "$(state generation)" = "$gen0" ] || fail "exposure restarted the accumulation"
+[ "$(state view_generation)" = "$gen0" ] || fail "exposure restarted the accumulation"
 speed0=$(state speed)
 xdotool click 4
 wait_for 10 '[ "$(state speed)" != "$speed0" ]' || fail "wheel did not change the speed"

@@ -51,24 +51,25 @@ typedef struct view_state {
 } view_state;
 
 static int write_state(const char *path, const view_state *s, const fly_camera *f, uint64_t frames,
-                       uint64_t cancelled, uint32_t spp, uint64_t gen, uint32_t w, uint32_t h,
-                       double fps) {
+                       uint64_t cancelled, uint32_t spp, uint64_t gen, uint64_t view_gen,
+                       uint32_t w, uint32_t h, double fps) {
     char tmp[4200];
     snprintf(tmp, sizeof tmp, "%s.tmp", path);
     FILE *fp = fopen(tmp, "w");
     if (!fp) {
         return -1;
     }
-    fprintf(fp,
-            "spp %u\ngeneration %llu\nframes %llu\ncancelled %llu\nsize %u %u\n"
-            "pos %.6f %.6f %.6f\ndir %.6f %.6f %.6f\nup %.6f %.6f %.6f\nspeed %.6f\n"
-            "overlay %d\nhelp %d\nbvh %d\nbvh_depth %u\ntimings %d\nmouselook %d\nstride %d\n"
-            "exposure %.2f\nfps %.3f\ndumps %llu\nshots %llu\n",
-            spp, (unsigned long long)gen, (unsigned long long)frames, (unsigned long long)cancelled,
-            w, h, f->pos.x, f->pos.y, f->pos.z, f->dir.x, f->dir.y, f->dir.z, f->up.x, f->up.y,
-            f->up.z, f->speed, s->overlay, s->help, s->bvh, s->bvh_depth, s->timings, s->mouselook,
-            s->stride, s->exposure, fps, (unsigned long long)s->dumps,
-            (unsigned long long)s->shots);
+    fprintf(
+        fp,
+        "spp %u\ngeneration %llu\nview_generation %llu\nframes %llu\ncancelled %llu\nsize %u %u\n"
+        "pos %.6f %.6f %.6f\ndir %.6f %.6f %.6f\nup %.6f %.6f %.6f\nspeed %.6f\n"
+        "overlay %d\nhelp %d\nbvh %d\nbvh_depth %u\ntimings %d\nmouselook %d\nstride %d\n"
+        "exposure %.2f\nfps %.3f\ndumps %llu\nshots %llu\n",
+        spp, (unsigned long long)gen, (unsigned long long)view_gen, (unsigned long long)frames,
+        (unsigned long long)cancelled, w, h, f->pos.x, f->pos.y, f->pos.z, f->dir.x, f->dir.y,
+        f->dir.z, f->up.x, f->up.y, f->up.z, f->speed, s->overlay, s->help, s->bvh, s->bvh_depth,
+        s->timings, s->mouselook, s->stride, s->exposure, fps, (unsigned long long)s->dumps,
+        (unsigned long long)s->shots);
     int bad = ferror(fp);
     bad |= fclose(fp);
     if (bad || rename(tmp, path) != 0) {
@@ -518,8 +519,8 @@ int view_run_window(const cli_args *a, const view_options *o, tr_scene *scene) {
         }
         SDL_RenderPresent(ren);
         if (state_dirty && o->state_file) {
-            write_state(o->state_file, &st, &fly, frames_done, cancelled, spp, shown_gen, w, h,
-                        fps);
+            write_state(o->state_file, &st, &fly, frames_done, cancelled, spp, shown_gen,
+                        r.generation, w, h, fps);
             state_dirty = 0;
         }
     }
