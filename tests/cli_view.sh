@@ -246,6 +246,19 @@ cmp -s bvh.ppm off.ppm && fail "BVH boxes and help changed nothing in the window
 xdotool key n
 wait_for 20 'grep -q "^frame [0-9]*: input .* ms, scene rebuild .* ms, render .* ms, film->texture .* ms" view.out' ||
     fail "N printed no per-stage timings: $(head -c 300 view.out)"
+# Resizing the window resizes the film: the next frames are 600x450.
+xdotool windowsize "$WID" 600 450
+wait_for 30 '[ "$(state size)" = "600 450" ] && [ "$(state generation)" = "$(state view_generation)" ]' ||
+    fail "resize: size $(state size), generation $(state generation)/$(state view_generation)"
+dump resized.ppm
+[ "$(sed -n 2p resized.ppm)" = "600 450" ] || fail "resized window dump is $(sed -n 2p resized.ppm)"
+# View changes 30 ms apart, each shorter than a 600x450 frame on one thread: the
+# frames in flight are cancelled, and the last change still shows up.
+cancelled0=$(state cancelled)
+xdotool key --delay 30 2 1 2 1 2 1 2
+wait_for 30 '[ "$(state stride)" = 2 ] && [ "$(state generation)" = "$(state view_generation)" ]' ||
+    fail "after quick stride changes: stride $(state stride)"
+[ "$(state cancelled)" -gt "$cancelled0" ] || fail "no frame in flight was cancelled"
 quit_viewer
 
 # F12 saves the converged float film: with --max-spp 4 it equals trac0r render --spp 4.
