@@ -241,7 +241,7 @@ int view_run_window(const cli_args *a, const view_options *o, tr_scene *scene) {
     uint64_t shown_seq = 0, shown_gen = 0, last_printed_seq = 0;
     uint32_t spp = 0;
     stage_times times = {0};
-    double fps = 0.0, fps_t0 = tr_time_now(), last = fps_t0, title_t = 0.0;
+    double fps = 0.0, fps_t0 = tr_time_now(), last = fps_t0, title_t = 0.0, drawn_t = 0.0;
     uint64_t fps_frames0 = 0;
     int state_dirty = 1, mouse_x = 0, mouse_y = 0;
     int running = 1;
@@ -251,6 +251,7 @@ int view_run_window(const cli_args *a, const view_options *o, tr_scene *scene) {
     while (running) {
         SDL_Event ev;
         int have = SDL_WaitEventTimeout(&ev, 10);
+        const int any_event = have;
         const double t_in = tr_time_now();
         const double dt = fmin(t_in - last, 0.1);
         last = t_in;
@@ -454,6 +455,12 @@ int view_run_window(const cli_args *a, const view_options *o, tr_scene *scene) {
             title_t = now;
         }
 
+        /* Redraw on news only (and 4 times a second for the overlay's numbers): the
+         * render threads need the cores more than an unchanged window does. */
+        if (!(state_dirty || any_event || dump_requested || now - drawn_t >= 0.25)) {
+            continue;
+        }
+        drawn_t = now;
         SDL_SetRenderDrawColor(ren, 0, 0, 0, 255);
         SDL_RenderClear(ren);
         if (tex) {
