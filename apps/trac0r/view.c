@@ -10,7 +10,7 @@
 #include "commands.h"
 #include "view_overlay.h"
 
-#define VIEW_BENCH_FRAMES 16
+#define VIEW_DEFAULT_FRAMES 16 /* --frames default of --screenshot and --benchmark */
 
 static void view_help(void) {
     printf("Usage: trac0r view [SCENE] [options]\n"
@@ -54,7 +54,7 @@ static void view_help(void) {
            "\n"
            "Interactive mode needs an X11 display (DISPLAY). Exit status: 0 on success, 2 on\n"
            "a bad command line or no display, 1 when rendering or writing fails.\n",
-           cli_common_help, VIEW_BENCH_FRAMES);
+           cli_common_help, VIEW_DEFAULT_FRAMES);
 }
 
 static int set_render_config(const cli_common *c, tr_render_config *cfg) {
@@ -91,7 +91,7 @@ static int run_headless(const cli_args *a, const view_options *o, tr_scene *scen
         return cli_error(a, "--width/--height: %s", err.msg);
     }
     double seconds = 0.0;
-    const uint32_t frames = o->frames ? o->frames : (o->benchmark >= 0 ? VIEW_BENCH_FRAMES : 16);
+    const uint32_t frames = o->frames ? o->frames : VIEW_DEFAULT_FRAMES;
     int rc = render_frames(a, o, scene, &film, frames, &seconds);
     if (rc == CLI_OK && o->benchmark >= 0) {
         printf("trac0r view: benchmark cornell-ico-%d (%u triangles) %ux%u, %u frames in "
