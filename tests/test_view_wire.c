@@ -84,7 +84,7 @@ static void test_near_plane_clipping(void) {
     /* The same with the ends swapped gives the same line. */
     float swapped[4];
     CHECK(view_project_segment(&cam, b, a, swapped) == 1, "swapped visible");
-    CHECK_NEAR(swapped[0], out[2], 1e-3 * fabs(out[2]), "swapped x0");
+    CHECK_NEAR(swapped[0], out[2], 1e-3 * fabs((double)out[2]), "swapped x0");
     CHECK_NEAR(swapped[2], out[0], 1e-3, "swapped x1");
     /* Random crossing segments: the clipped end lies on the original segment at
      * camera z = near (checked by projecting the exact point found in double). */
