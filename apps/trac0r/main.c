@@ -15,6 +15,7 @@ static void usage(FILE *fp) {
                 "  bench    measure speed: 'trac0r bench frame'\n"
                 "  compare  error metrics (RMSE, relMSE, PSNR) of an image against a reference\n"
                 "  info     describe a scene file: counts, bounds, warnings\n"
+                "  view     interactive window: fly through a scene while it converges\n"
                 "\n"
                 "Run 'trac0r COMMAND --help' for a command's options.\n"
                 "  -h, --help      show this help\n"
@@ -39,6 +40,15 @@ int main(int argc, char **argv) {
     if (strcmp(cmd, "info") == 0) {
         return cmd_info(argc - 1, argv + 1);
     }
+    if (strcmp(cmd, "view") == 0) {
+#ifdef TRAC0R_HAVE_VIEW
+        return cmd_view(argc - 1, argv + 1);
+#else
+        fprintf(stderr, "trac0r: this build has no 'view' (SDL2, SDL2_ttf or fontconfig was "
+                        "not found when it was configured)\n");
+        return CLI_USAGE;
+#endif
+    }
     if (strcmp(cmd, "-h") == 0 || strcmp(cmd, "--help") == 0 || strcmp(cmd, "help") == 0) {
         usage(stdout);
         return CLI_OK;
@@ -48,8 +58,8 @@ int main(int argc, char **argv) {
         return CLI_OK;
     }
     fprintf(stderr,
-            "trac0r: unknown command '%s' (expected render, bench, compare or info; see "
-            "'trac0r --help')\n",
+            "trac0r: unknown command '%s' (expected render, view, bench, compare or info; "
+            "see 'trac0r --help')\n",
             cmd);
     return CLI_USAGE;
 }

@@ -2,6 +2,7 @@
 #ifndef TRAC0R_RENDER_H
 #define TRAC0R_RENDER_H
 
+#include <stdatomic.h>
 #include <stdint.h>
 
 #include "kernel/kernel.h"
@@ -18,6 +19,10 @@ typedef struct tr_render_config {
     int integrator; /* TR_INTEGRATOR_* */
     int stride;     /* preview: trace every stride-th pixel, fill stride x stride blocks */
     uint32_t tile;  /* tile side in pixels (default 16) */
+    /* Optional (default NULL): when the int it points to becomes nonzero, the frame
+     * stops early (checked before each tile), the film holds a partial sample and the
+     * call fails with "frame cancelled". For interactive use: another thread sets it. */
+    const atomic_int *cancel;
 } tr_render_config;
 
 typedef struct tr_render_stats {

@@ -14,6 +14,7 @@ tr_render_config tr_render_config_default(void) {
     c.integrator = TR_INTEGRATOR_NAIVE;
     c.stride = 1;
     c.tile = 16;
+    c.cancel = NULL;
     return c;
 }
 
@@ -60,10 +61,14 @@ int tr_render_frame(const tr_scene *scene, const tr_camera *cam, const tr_render
     const int max_depth = cfg->max_depth;
     const uint64_t seed = cfg->seed;
     const int integrator = cfg->integrator;
+    const atomic_int *cancel = cfg->cancel;
     uint64_t rays = 0;
 
 #pragma omp parallel for num_threads(threads) schedule(dynamic, 1) reduction(+ : rays)
     for (int t = 0; t < tile_count; ++t) {
+        if (cancel && atomic_load_explicit(cancel, memory_order_relaxed)) {
+            continue; /* an OpenMP loop cannot break: skip the remaining tiles */
+        }
         const uint32_t x0 = ((uint32_t)t % tiles_x) * tile;
         const uint32_t y0 = ((uint32_t)t / tiles_x) * tile;
         const uint32_t x1 = x0 + tile < film->width ? x0 + tile : film->width;
@@ -88,6 +93,9 @@ int tr_render_frame(const tr_scene *scene, const tr_camera *cam, const tr_render
                 }
             }
         }
+    }
+    if (cancel && atomic_load(cancel)) {
+        return tr_error_set(err, "frame cancelled");
     }
     if (stats) {
         stats->rays = rays;

@@ -1,0 +1,220 @@
+/* view.c - `trac0r view`: option parsing, headless frames and the benchmark; the
+ * window itself is view_window.c. */
+#define _POSIX_C_SOURCE 200809L
+#include "view.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "commands.h"
+#include "view_overlay.h"
+
+#define VIEW_DEFAULT_FRAMES 16 /* --frames default of --screenshot and --benchmark */
+
+static void view_help(void) {
+    printf("Usage: trac0r view [SCENE] [options]\n"
+           "\n"
+           "Opens an interactive window (800x600 by default, resizable) that shows the scene\n"
+           "converging progressively: one sample per pixel per frame, rendered on its own\n"
+           "thread. Any camera change cancels the frame in flight and starts over.\n"
+           "\n"
+           "Controls:\n"
+           "  W/S A/D            forward/back, left/right      Space/Left Ctrl  up/down\n"
+           "  Q/E                roll                          right mouse      toggle mouse-look\n"
+           "  mouse wheel        movement speed                +/-              exposure\n"
+           "  1/2/3              preview stride 1/2/4 pixels   B                debug view\n"
+           "  V                  BVH boxes (with [ and ] for depth)\n"
+           "  N                  per-stage timings on stdout   H                help overlay\n"
+           "  F12                save a screenshot PNG (the float film, tonemapped)\n"
+           "  Esc                quit\n"
+           "\n"
+           "Options:\n"
+           "%s"
+           "  --frames N           headless: render N frames (sample k in frame k), save\n"
+           "                       --screenshot and quit; needs no display. The image equals\n"
+           "                       'trac0r render --spp N' with the same options\n"
+           "  --screenshot FILE    headless output image, .png or .pfm (default frames: 16)\n"
+           "  --benchmark LEVEL    headless: render the complexity scene builtin:cornell-ico-\n"
+           "                       LEVEL (0..9) for --frames frames (default %d) and print\n"
+           "                       the average FPS (the thesis's -b1..-b5)\n"
+           "  --stride K           initial preview stride, 1, 2 or 4 (default 1)\n"
+           "  --exposure EV        display and screenshot exposure in stops, -20..20\n"
+           "                       (default 0)\n"
+           "  --max-spp N          stop accumulating after N samples per pixel (default 0:\n"
+           "                       never)\n"
+           "  --font FILE          TrueType font of the debug view (default: DejaVu Sans Mono\n"
+           "                       found through fontconfig)\n"
+           "  --shot-dir DIR       where F12 saves trac0r-view-NNN.png (default: .)\n"
+           "  --state-file FILE    for scripts and tests: rewrite FILE with the viewer's state\n"
+           "                       (camera, spp, toggles) whenever it changes\n"
+           "  --dump-window FILE   for scripts and tests: on SIGUSR1 write the window's\n"
+           "                       pixels, overlay included, to FILE as a binary PPM\n"
+           "  -h, --help           show this help\n"
+           "\n"
+           "Interactive mode needs an X11 display (DISPLAY). Exit status: 0 on success, 2 on\n"
+           "a bad command line or no display, 1 when rendering or writing fails.\n",
+           cli_common_help, VIEW_DEFAULT_FRAMES);
+}
+
+static int set_render_config(const cli_common *c, tr_render_config *cfg) {
+    *cfg = tr_render_config_default();
+    cfg->max_depth = c->max_depth;
+    cfg->seed = c->seed;
+    cfg->threads = c->threads;
+    cfg->integrator = c->integrator;
+    return CLI_OK;
+}
+
+/* Renders `frames` frames of the scene's own camera, as `trac0r render` does; returns
+ * the seconds taken in *seconds. */
+static int render_frames(const cli_args *a, const view_options *o, const tr_scene *scene,
+                         tr_film *film, uint32_t frames, double *seconds) {
+    tr_render_config cfg;
+    set_render_config(&o->c, &cfg);
+    tr_error err;
+    const double t0 = tr_time_now();
+    for (uint32_t s = 0; s < frames; ++s) {
+        if (tr_render_frame(scene, &scene->camera, &cfg, film, s, NULL, &err) != TR_OK) {
+            fprintf(stderr, "trac0r %s: %s\n", a->cmd, err.msg);
+            return CLI_FAILURE;
+        }
+    }
+    *seconds = tr_time_now() - t0;
+    return CLI_OK;
+}
+
+static int run_headless(const cli_args *a, const view_options *o, tr_scene *scene) {
+    tr_error err;
+    tr_film film;
+    if (tr_film_init(&film, o->c.width, o->c.height, &err) != TR_OK) {
+        return cli_error(a, "--width/--height: %s", err.msg);
+    }
+    double seconds = 0.0;
+    const uint32_t frames = o->frames ? o->frames : VIEW_DEFAULT_FRAMES;
+    int rc = render_frames(a, o, scene, &film, frames, &seconds);
+    if (rc == CLI_OK && o->benchmark >= 0) {
+        printf("trac0r view: benchmark cornell-ico-%d (%u triangles) %ux%u, %u frames in "
+               "%.2f s: %.3f average FPS (%.1f ms/frame)\n",
+               o->benchmark, scene->triangle_count, o->c.width, o->c.height, frames, seconds,
+               seconds > 0 ? frames / seconds : 0.0, seconds * 1e3 / frames);
+    }
+    if (rc == CLI_OK && o->screenshot) {
+        if (tr_film_write(&film, o->screenshot, o->exposure, &err) != TR_OK) {
+            fprintf(stderr, "trac0r view: %s\n", err.msg);
+            rc = CLI_FAILURE;
+        } else {
+            fprintf(stderr, "trac0r view: %u frames of %s %ux%u in %.2f s -> %s\n", frames,
+                    o->c.scene, o->c.width, o->c.height, seconds, o->screenshot);
+        }
+    }
+    tr_film_free(&film);
+    return rc;
+}
+
+int cmd_view(int argc, char **argv) {
+    cli_args a = {.cmd = "view", .argc = argc, .argv = argv, .i = 0};
+    view_options o;
+    memset(&o, 0, sizeof o);
+    cli_common_default(&o.c);
+    o.benchmark = -1;
+    o.stride = 1;
+    o.shot_dir = ".";
+    int frames_given = 0;
+    char bench_scene[64];
+
+    while (cli_next(&a)) {
+        int rc = cli_common_option(&a, &o.c);
+        if (rc == CLI_OK) {
+            continue;
+        }
+        if (rc == CLI_USAGE) {
+            return CLI_USAGE;
+        }
+        if (cli_is(&a, "-h") || cli_is(&a, "--help")) {
+            view_help();
+            return CLI_OK;
+        } else if (cli_is(&a, "--frames")) {
+            rc = cli_parse_u32(&a, 1, 1000000, &o.frames);
+            frames_given = 1;
+        } else if (cli_is(&a, "--screenshot")) {
+            rc = cli_value(&a);
+            o.screenshot = a.value;
+        } else if (cli_is(&a, "--benchmark")) {
+            rc = cli_parse_int(&a, 0, TR_ICOSPHERE_MAX_SUBDIVISIONS, &o.benchmark);
+        } else if (cli_is(&a, "--stride")) {
+            rc = cli_parse_int(&a, 1, 4, &o.stride);
+            if (rc == CLI_OK && o.stride == 3) {
+                return cli_error(&a, "--stride: expected 1, 2 or 4, got '3'");
+            }
+        } else if (cli_is(&a, "--exposure")) {
+            rc = cli_parse_float(&a, -20.0f, 20.0f, &o.exposure);
+        } else if (cli_is(&a, "--max-spp")) {
+            rc = cli_parse_u32(&a, 0, 100000000, &o.max_spp);
+        } else if (cli_is(&a, "--font")) {
+            rc = cli_value(&a);
+            o.font = a.value;
+        } else if (cli_is(&a, "--shot-dir")) {
+            rc = cli_value(&a);
+            o.shot_dir = a.value;
+        } else if (cli_is(&a, "--state-file")) {
+            rc = cli_value(&a);
+            o.state_file = a.value;
+        } else if (cli_is(&a, "--dump-window")) {
+            rc = cli_value(&a);
+            o.dump_file = a.value;
+        } else if (a.opt[0] != '-' && a.i == 1) {
+            o.c.scene = a.opt; /* positional SCENE */
+            rc = CLI_OK;
+        } else {
+            return cli_error(&a, "unknown option '%s' (see 'trac0r view --help')", a.opt);
+        }
+        if (rc != CLI_OK) {
+            return CLI_USAGE;
+        }
+    }
+    const int headless = o.screenshot || o.benchmark >= 0;
+    if (frames_given && !headless) {
+        return cli_error(&a, "--frames: needs --screenshot FILE or --benchmark LEVEL");
+    }
+    tr_error err;
+    if (o.screenshot) {
+        if (tr_image_format_from_path(o.screenshot) == TR_IMAGE_UNKNOWN) {
+            return cli_error(&a,
+                             "--screenshot: '%s' has an unknown extension (expected .png or .pfm)",
+                             o.screenshot);
+        }
+        if (tr_image_check_writable(o.screenshot, &err) != TR_OK) {
+            return cli_error(&a, "--screenshot: %s", err.msg);
+        }
+    }
+    if (o.benchmark >= 0) {
+        snprintf(bench_scene, sizeof bench_scene, "builtin:cornell-ico-%d", o.benchmark);
+        o.c.scene = bench_scene;
+    }
+    if (!headless && view_font_find(o.font, o.font_path, sizeof o.font_path, &err) != TR_OK) {
+        return cli_error(&a, "%s", err.msg);
+    }
+    tr_scene scene;
+    /* A scene file's render defaults (size, max depth, integrator, accel) apply to the options not
+     * given, as in `trac0r render`. */
+    int rc = cli_load_scene_file(&a, &o.c, &scene, NULL);
+    if (rc != CLI_OK) {
+        return rc;
+    }
+    if (!headless) {
+        const char *display = getenv("DISPLAY");
+        const char *driver = getenv("SDL_VIDEODRIVER");
+        const char *wayland = getenv("WAYLAND_DISPLAY");
+        if ((!display || !*display) && (!driver || !*driver) && (!wayland || !*wayland)) {
+            tr_scene_free(&scene);
+            return cli_error(&a, "no display: DISPLAY is not set (the window needs an X11 "
+                                 "display; use --frames N --screenshot FILE to render without "
+                                 "one)");
+        }
+    }
+
+    rc = headless ? run_headless(&a, &o, &scene) : view_run_window(&a, &o, &scene);
+    tr_scene_free(&scene);
+    return rc;
+}

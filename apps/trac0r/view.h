@@ -1,0 +1,27 @@
+/* view.h - `trac0r view`: options shared by its parts. */
+#ifndef TRAC0R_VIEW_H
+#define TRAC0R_VIEW_H
+
+#include <stdint.h>
+
+#include "cli.h"
+
+typedef struct view_options {
+    cli_common c;
+    uint32_t frames;        /* headless: frames to render (0: not given) */
+    const char *screenshot; /* headless output image */
+    int benchmark;          /* complexity level, -1: none */
+    int stride;             /* initial preview stride: 1, 2 or 4 */
+    float exposure;
+    uint32_t max_spp;       /* stop accumulating after this many (0: never) */
+    const char *font;       /* --font, or NULL for fontconfig */
+    const char *state_file; /* rewritten with the viewer's state after changes */
+    const char *dump_file;  /* SIGUSR1 writes the window's pixels here (PPM) */
+    const char *shot_dir;   /* where F12 writes (default ".") */
+    char font_path[4096];   /* the font found for the debug view */
+} view_options;
+
+/* The interactive window (view_window.c); returns the exit status. */
+int view_run_window(const cli_args *a, const view_options *o, tr_scene *scene);
+
+#endif

@@ -1,0 +1,73 @@
+/* view_render.h - the viewer's render thread.
+ *
+ * One thread owns the float film and renders frame after frame (sample k in frame k)
+ * of the current view, publishing each finished frame as tonemapped 32-bit pixels.
+ * The UI thread changes the view with view_renderer_set_view, which cancels the frame
+ * in flight (tr_render_config.cancel) and restarts accumulation, so input never waits
+ * for a slow frame. Everything shared is guarded by `mu`. */
+#ifndef TRAC0R_VIEW_RENDER_H
+#define TRAC0R_VIEW_RENDER_H
+
+#include <pthread.h>
+#include <stdatomic.h>
+#include <stdint.h>
+
+#include "trac0r/trac0r.h"
+
+typedef struct view_renderer {
+    const tr_scene *scene;
+    tr_render_config cfg;
+    uint32_t max_spp; /* stop accumulating here (0: never stop) */
+    pthread_t thread;
+    int started;
+    pthread_mutex_t mu;
+    pthread_cond_t cv;
+    atomic_int cancel;
+
+    /* Requests, guarded by mu. */
+    tr_camera cam;
+    int stride;
+    float exposure;
+    uint64_t generation; /* bumped by every view change */
+    int quit;
+    char shot_path[4096]; /* F12: write the film here (empty: no request) */
+
+    /* Results, guarded by mu. */
+    uint32_t *pixels; /* ARGB8888, pw x ph, the last finished frame */
+    uint32_t pw, ph;
+    uint64_t seq;         /* bumped by every published frame */
+    uint64_t shown_gen;   /* the generation of the published frame */
+    uint32_t spp;         /* samples in the published frame */
+    double render_ms;     /* tr_render_frame of the last frame */
+    double tonemap_ms;    /* film -> pixels of the last frame */
+    uint64_t frames_done; /* frames finished since start (for FPS) */
+    uint64_t cancelled;   /* frames cancelled since start */
+    int failed;           /* rendering failed: error holds why; the thread stopped */
+    char error[512];
+    int shot_done; /* a screenshot request finished: shot_msg says how */
+    int shot_ok;
+    char shot_msg[4700];
+
+    /* Private to the thread. */
+    tr_film film;
+    uint32_t *back;
+} view_renderer;
+
+/* Starts the thread rendering `cam` (whose size sets the film's) with cfg's settings. */
+int view_renderer_start(view_renderer *r, const tr_scene *scene, const tr_render_config *cfg,
+                        const tr_camera *cam, int stride, float exposure, uint32_t max_spp,
+                        tr_error *err);
+/* Asks for another view (camera, size or stride): restarts accumulation if it differs. */
+void view_renderer_set_view(view_renderer *r, const tr_camera *cam, int stride);
+/* Tonemaps later frames with this exposure (accumulation continues). */
+void view_renderer_set_exposure(view_renderer *r, float exposure);
+/* Asks the thread to write its film (mean radiance, tonemapped) to path; the result
+ * appears in shot_done/shot_ok/shot_msg. */
+void view_renderer_screenshot(view_renderer *r, const char *path);
+/* Stops the thread and frees everything. Safe on a renderer that never started. */
+void view_renderer_stop(view_renderer *r);
+
+/* Tonemaps a film into ARGB8888 pixels (black where no sample landed). */
+void view_tonemap(const tr_film *film, float exposure, uint32_t *pixels);
+
+#endif

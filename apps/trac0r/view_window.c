@@ -1,0 +1,554 @@
+/* view_window.c - the interactive window of `trac0r view`: events, camera, the
+ * texture, the debug overlay and the state file. Rendering runs on view_render.c's
+ * thread; this thread never waits for a frame. */
+#define _POSIX_C_SOURCE 200809L
+#include <SDL.h>
+#include <SDL_ttf.h>
+#include <math.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "kernel/vec.h"
+#include "view.h"
+#include "view_overlay.h"
+#include "view_render.h"
+#include "view_wire.h"
+
+static volatile sig_atomic_t dump_requested = 0;
+
+static void on_sigusr1(int sig) {
+    (void)sig;
+    dump_requested = 1;
+}
+
+/* The free-flying camera the user steers. */
+typedef struct fly_camera {
+    tr_vec3 pos, dir, up; /* dir and up unit and orthogonal */
+    float vfov, near_dist, far_dist;
+    float speed; /* world units per second */
+} fly_camera;
+
+static int fly_make(const fly_camera *f, uint32_t w, uint32_t h, tr_camera *cam) {
+    tr_error err;
+    return tr_camera_make(cam, f->pos, f->dir, f->up, f->vfov, f->near_dist, f->far_dist, w, h,
+                          &err);
+}
+
+/* Keeps dir and up unit length and orthogonal after many small rotations. */
+static void fly_orthonormalize(fly_camera *f) {
+    f->dir = v3_normalize(f->dir);
+    f->up = v3_normalize(v3_sub(f->up, v3_scale(f->dir, v3_dot(f->up, f->dir))));
+}
+
+typedef struct view_state {
+    int overlay, help, bvh, timings, mouselook;
+    uint32_t bvh_depth;
+    int stride;
+    float exposure;
+    uint64_t dumps, shots;
+} view_state;
+
+static int write_state(const char *path, const view_state *s, const fly_camera *f, uint64_t frames,
+                       uint64_t cancelled, uint32_t spp, uint64_t gen, uint64_t view_gen,
+                       uint32_t w, uint32_t h, double fps) {
+    char tmp[4200];
+    snprintf(tmp, sizeof tmp, "%s.tmp", path);
+    FILE *fp = fopen(tmp, "w");
+    if (!fp) {
+        return -1;
+    }
+    fprintf(
+        fp,
+        "spp %u\ngeneration %llu\nview_generation %llu\nframes %llu\ncancelled %llu\nsize %u %u\n"
+        "pos %.6f %.6f %.6f\ndir %.6f %.6f %.6f\nup %.6f %.6f %.6f\nspeed %.6f\n"
+        "overlay %d\nhelp %d\nbvh %d\nbvh_depth %u\ntimings %d\nmouselook %d\nstride %d\n"
+        "exposure %.2f\nfps %.3f\ndumps %llu\nshots %llu\n",
+        spp, (unsigned long long)gen, (unsigned long long)view_gen, (unsigned long long)frames,
+        (unsigned long long)cancelled, w, h, f->pos.x, f->pos.y, f->pos.z, f->dir.x, f->dir.y,
+        f->dir.z, f->up.x, f->up.y, f->up.z, f->speed, s->overlay, s->help, s->bvh, s->bvh_depth,
+        s->timings, s->mouselook, s->stride, s->exposure, fps, (unsigned long long)s->dumps,
+        (unsigned long long)s->shots);
+    int bad = ferror(fp);
+    bad |= fclose(fp);
+    if (bad || rename(tmp, path) != 0) {
+        remove(tmp);
+        return -1;
+    }
+    return 0;
+}
+
+/* Writes the renderer's current output (the window's pixels) as a binary PPM. */
+static int dump_window(SDL_Renderer *ren, const char *path) {
+    int w = 0, h = 0;
+    if (SDL_GetRendererOutputSize(ren, &w, &h) != 0 || w <= 0 || h <= 0) {
+        return -1;
+    }
+    uint8_t *px = malloc((size_t)w * h * 3);
+    if (!px) {
+        return -1;
+    }
+    int rc = SDL_RenderReadPixels(ren, NULL, SDL_PIXELFORMAT_RGB24, px, w * 3);
+    char tmp[4200];
+    snprintf(tmp, sizeof tmp, "%s.tmp", path);
+    FILE *fp = rc == 0 ? fopen(tmp, "wb") : NULL;
+    if (fp) {
+        fprintf(fp, "P6\n%d %d\n255\n", w, h);
+        fwrite(px, 3, (size_t)w * h, fp);
+        rc = ferror(fp);
+        rc |= fclose(fp);
+        if (rc == 0) {
+            rc = rename(tmp, path);
+        } else {
+            remove(tmp);
+        }
+    } else {
+        rc = -1;
+    }
+    free(px);
+    return rc;
+}
+
+/* The first free trac0r-view-NNN.png in dir. */
+static void next_shot_path(const char *dir, char *path, size_t n) {
+    for (int i = 0; i < 100000; ++i) {
+        snprintf(path, n, "%s/trac0r-view-%03d.png", dir, i);
+        FILE *fp = fopen(path, "rb");
+        if (!fp) {
+            return;
+        }
+        fclose(fp);
+    }
+}
+
+static const char help_text[] = "trac0r view - keys\n"
+                                "W/S        forward / back\n"
+                                "A/D        left / right\n"
+                                "Space/LCtrl up / down\n"
+                                "Q/E        roll\n"
+                                "right mouse toggle mouse-look\n"
+                                "wheel      movement speed\n"
+                                "+/-        exposure\n"
+                                "1/2/3      preview stride 1/2/4\n"
+                                "B          debug view\n"
+                                "V  [ ]     BVH boxes, depth\n"
+                                "N          timings on stdout\n"
+                                "F12        screenshot PNG\n"
+                                "H          this help\n"
+                                "Esc        quit";
+
+/* The stage times of the frame on screen, in milliseconds. */
+typedef struct stage_times {
+    double input, rebuild, render, tonemap, upload;
+} stage_times;
+
+int view_run_window(const cli_args *a, const view_options *o, tr_scene *scene) {
+    tr_error err;
+    const char *font_path = o->font_path;
+    /* With DISPLAY set and no driver asked for, use X11 only: SDL would otherwise fall
+     * back to other drivers when the X server cannot be reached. */
+    const char *driver = getenv("SDL_VIDEODRIVER"), *wayland = getenv("WAYLAND_DISPLAY");
+    if ((!driver || !*driver) && (!wayland || !*wayland)) {
+        SDL_SetHint(SDL_HINT_VIDEODRIVER, "x11");
+    }
+    if (SDL_Init(SDL_INIT_VIDEO) != 0) {
+        const char *display = getenv("DISPLAY");
+        cli_error(a, "cannot open a window on DISPLAY='%s': %s", display ? display : "",
+                  SDL_GetError());
+        SDL_Quit();
+        return CLI_USAGE;
+    }
+    int status = CLI_FAILURE;
+    SDL_Window *win = NULL;
+    SDL_Renderer *ren = NULL;
+    SDL_Texture *tex = NULL;
+    TTF_Font *font = NULL;
+    int ttf = 0;
+    view_renderer r;
+    r.started = 0;
+
+    if (TTF_Init() != 0) {
+        fprintf(stderr, "trac0r view: SDL2_ttf: %s\n", TTF_GetError());
+        goto done;
+    }
+    ttf = 1;
+    font = TTF_OpenFont(font_path, 14);
+    if (!font) {
+        fprintf(stderr, "trac0r view: cannot load the font %s: %s\n", font_path, TTF_GetError());
+        status = CLI_USAGE;
+        goto done;
+    }
+    win = SDL_CreateWindow("trac0r view", SDL_WINDOWPOS_UNDEFINED, SDL_WINDOWPOS_UNDEFINED,
+                           (int)o->c.width, (int)o->c.height, SDL_WINDOW_RESIZABLE);
+    if (!win) {
+        fprintf(stderr, "trac0r view: cannot create the window: %s\n", SDL_GetError());
+        goto done;
+    }
+    ren = SDL_CreateRenderer(win, -1, 0);
+    if (!ren) {
+        fprintf(stderr, "trac0r view: cannot create a renderer: %s\n", SDL_GetError());
+        goto done;
+    }
+
+    uint32_t w = o->c.width, h = o->c.height;
+    {
+        int ow = 0, oh = 0;
+        if (SDL_GetRendererOutputSize(ren, &ow, &oh) == 0 && ow > 0 && oh > 0) {
+            w = (uint32_t)ow;
+            h = (uint32_t)oh;
+        }
+    }
+    fly_camera fly = {scene->camera.pos,
+                      scene->camera.dir,
+                      scene->camera.up,
+                      scene->camera.vertical_fov,
+                      scene->camera.near_dist,
+                      scene->camera.far_dist,
+                      0.5f};
+    /* The scene's own camera until the user moves: so that the first view's film is
+     * exactly what `trac0r render` computes. */
+    tr_camera cam = scene->camera;
+    if (tr_camera_resize(&cam, w, h, &err) != TR_OK) {
+        fprintf(stderr, "trac0r view: %s\n", err.msg);
+        goto done;
+    }
+    view_state st = {0};
+    st.stride = o->stride;
+    st.exposure = o->exposure;
+    st.bvh_depth = 3;
+
+    tr_render_config cfg = tr_render_config_default();
+    cfg.max_depth = o->c.max_depth;
+    cfg.seed = o->c.seed;
+    cfg.threads = o->c.threads;
+    cfg.integrator = o->c.integrator;
+    if (view_renderer_start(&r, scene, &cfg, &cam, st.stride, st.exposure, o->max_spp, &err) !=
+        TR_OK) {
+        fprintf(stderr, "trac0r view: %s\n", err.msg);
+        goto done;
+    }
+    if (o->dump_file) {
+        struct sigaction sa;
+        memset(&sa, 0, sizeof sa);
+        sa.sa_handler = on_sigusr1; /* stays installed (no SA_RESETHAND) */
+        sigemptyset(&sa.sa_mask);
+        sa.sa_flags = SA_RESTART;
+        sigaction(SIGUSR1, &sa, NULL);
+    }
+
+    uint32_t tex_w = 0, tex_h = 0;
+    uint64_t shown_seq = 0, shown_gen = 0, last_printed_seq = 0;
+    uint32_t spp = 0;
+    stage_times times = {0};
+    double fps = 0.0, fps_t0 = tr_time_now(), last = fps_t0, title_t = 0.0, drawn_t = 0.0;
+    uint64_t fps_frames0 = 0;
+    int state_dirty = 1, mouse_x = 0, mouse_y = 0;
+    int running = 1;
+    status = CLI_OK;
+    char title[160], text[4096];
+
+    while (running) {
+        SDL_Event ev;
+        int have = SDL_WaitEventTimeout(&ev, 10);
+        const int any_event = have;
+        const double t_in = tr_time_now();
+        const double dt = fmin(t_in - last, 0.1);
+        last = t_in;
+        int view_changed = 0;
+        while (have) {
+            switch (ev.type) {
+            case SDL_QUIT:
+                running = 0;
+                break;
+            case SDL_WINDOWEVENT:
+                if (ev.window.event == SDL_WINDOWEVENT_SIZE_CHANGED) {
+                    int ow = 0, oh = 0;
+                    SDL_GetRendererOutputSize(ren, &ow, &oh);
+                    if (ow > 0 && oh > 0) {
+                        w = (uint32_t)ow;
+                        h = (uint32_t)oh;
+                        view_changed = 1;
+                    }
+                }
+                state_dirty = 1;
+                break;
+            case SDL_MOUSEBUTTONDOWN:
+                if (ev.button.button == SDL_BUTTON_RIGHT) {
+                    st.mouselook = !st.mouselook;
+                    SDL_SetRelativeMouseMode(st.mouselook ? SDL_TRUE : SDL_FALSE);
+                    state_dirty = 1;
+                }
+                break;
+            case SDL_MOUSEMOTION:
+                mouse_x = ev.motion.x;
+                mouse_y = ev.motion.y;
+                if (st.mouselook && (ev.motion.xrel || ev.motion.yrel)) {
+                    const float k = 0.0025f; /* radians per pixel */
+                    tr_vec3 right = v3_normalize(v3_cross(fly.up, fly.dir));
+                    fly.dir = view_rotate(fly.dir, fly.up, (float)ev.motion.xrel * k);
+                    fly.dir = view_rotate(fly.dir, right, (float)ev.motion.yrel * k);
+                    fly.up = view_rotate(fly.up, right, (float)ev.motion.yrel * k);
+                    fly_orthonormalize(&fly);
+                    view_changed = 1;
+                }
+                break;
+            case SDL_MOUSEWHEEL:
+                fly.speed *= powf(1.25f, (float)ev.wheel.y);
+                fly.speed = fminf(fmaxf(fly.speed, 1e-4f), 1e4f);
+                state_dirty = 1;
+                break;
+            case SDL_KEYDOWN:
+                if (ev.key.repeat) {
+                    break;
+                }
+                state_dirty = 1;
+                switch (ev.key.keysym.sym) {
+                case SDLK_ESCAPE:
+                    running = 0;
+                    break;
+                case SDLK_b:
+                    st.overlay = !st.overlay;
+                    break;
+                case SDLK_h:
+                    st.help = !st.help;
+                    break;
+                case SDLK_v:
+                    st.bvh = !st.bvh;
+                    break;
+                case SDLK_LEFTBRACKET:
+                    st.bvh_depth = st.bvh_depth ? st.bvh_depth - 1 : 0;
+                    break;
+                case SDLK_RIGHTBRACKET:
+                    st.bvh_depth =
+                        st.bvh_depth < scene->bvh.depth ? st.bvh_depth + 1 : st.bvh_depth;
+                    break;
+                case SDLK_n:
+                    st.timings = !st.timings;
+                    break;
+                case SDLK_1:
+                case SDLK_2:
+                case SDLK_3:
+                    st.stride = 1 << (ev.key.keysym.sym - SDLK_1);
+                    view_changed = 1;
+                    break;
+                case SDLK_PLUS:
+                case SDLK_EQUALS:
+                case SDLK_KP_PLUS:
+                    st.exposure = fminf(st.exposure + 0.5f, 20.0f);
+                    view_renderer_set_exposure(&r, st.exposure);
+                    break;
+                case SDLK_MINUS:
+                case SDLK_KP_MINUS:
+                    st.exposure = fmaxf(st.exposure - 0.5f, -20.0f);
+                    view_renderer_set_exposure(&r, st.exposure);
+                    break;
+                case SDLK_F12: {
+                    char path[4200];
+                    next_shot_path(o->shot_dir, path, sizeof path);
+                    view_renderer_screenshot(&r, path);
+                    break;
+                }
+                default:
+                    break;
+                }
+                break;
+            default:
+                break;
+            }
+            have = SDL_PollEvent(&ev);
+        }
+
+        /* Held keys move and roll the camera at a rate independent of the frame rate. */
+        const Uint8 *keys = SDL_GetKeyboardState(NULL);
+        tr_vec3 right = v3_normalize(v3_cross(fly.up, fly.dir));
+        tr_vec3 move = v3(0.0f, 0.0f, 0.0f);
+        move =
+            v3_add(move, v3_scale(fly.dir, (float)(keys[SDL_SCANCODE_W] - keys[SDL_SCANCODE_S])));
+        move = v3_add(move, v3_scale(right, (float)(keys[SDL_SCANCODE_D] - keys[SDL_SCANCODE_A])));
+        move = v3_add(
+            move, v3_scale(fly.up, (float)(keys[SDL_SCANCODE_SPACE] - keys[SDL_SCANCODE_LCTRL])));
+        if (v3_dot(move, move) > 0.0f) {
+            fly.pos = v3_add(fly.pos, v3_scale(v3_normalize(move), fly.speed * (float)dt));
+            view_changed = 1;
+        }
+        const int roll = keys[SDL_SCANCODE_E] - keys[SDL_SCANCODE_Q];
+        if (roll) {
+            fly.up = view_rotate(fly.up, fly.dir, (float)roll * 1.0f * (float)dt);
+            fly_orthonormalize(&fly);
+            view_changed = 1;
+        }
+        if (view_changed) {
+            tr_camera next;
+            if (fly_make(&fly, w, h, &next) == TR_OK) {
+                cam = next;
+                view_renderer_set_view(&r, &cam, st.stride);
+            }
+            state_dirty = 1;
+        }
+        times.input = (tr_time_now() - t_in) * 1e3;
+
+        /* Take the newest frame, if any, into the texture. */
+        pthread_mutex_lock(&r.mu);
+        int failed = r.failed;
+        if (failed) {
+            fprintf(stderr, "trac0r view: %s\n", r.error);
+        }
+        if (r.shot_done) {
+            r.shot_done = 0;
+            if (r.shot_ok) {
+                printf("trac0r view: saved %s\n", r.shot_msg);
+                fflush(stdout);
+                st.shots += 1;
+            } else {
+                fprintf(stderr, "trac0r view: screenshot failed: %s\n", r.shot_msg);
+            }
+            state_dirty = 1;
+        }
+        if (r.pixels && r.seq != shown_seq) {
+            const double t0 = tr_time_now();
+            if (!tex || tex_w != r.pw || tex_h != r.ph) {
+                if (tex) {
+                    SDL_DestroyTexture(tex);
+                }
+                tex = SDL_CreateTexture(ren, SDL_PIXELFORMAT_ARGB8888, SDL_TEXTUREACCESS_STREAMING,
+                                        (int)r.pw, (int)r.ph);
+                tex_w = r.pw;
+                tex_h = r.ph;
+            }
+            if (tex) {
+                SDL_UpdateTexture(tex, NULL, r.pixels, (int)(r.pw * sizeof(uint32_t)));
+            }
+            shown_seq = r.seq;
+            shown_gen = r.shown_gen;
+            spp = r.spp;
+            times.render = r.render_ms;
+            times.tonemap = r.tonemap_ms;
+            times.upload = (tr_time_now() - t0) * 1e3;
+            state_dirty = 1;
+        }
+        const uint64_t frames_done = r.frames_done, cancelled = r.cancelled;
+        pthread_mutex_unlock(&r.mu);
+        if (failed) {
+            status = CLI_FAILURE;
+            break;
+        }
+        const int scene_changing = shown_gen != r.generation; /* a read of our own write */
+
+        const double now = tr_time_now();
+        if (now - fps_t0 >= 0.5) {
+            fps = (double)(frames_done - fps_frames0) / (now - fps_t0);
+            fps_frames0 = frames_done;
+            fps_t0 = now;
+        }
+        if (st.timings && shown_seq != last_printed_seq) {
+            printf("frame %llu: input %.3f ms, scene rebuild %.3f ms, render %.2f ms, "
+                   "film->texture %.2f ms (tonemap %.2f, upload %.2f), %u spp\n",
+                   (unsigned long long)shown_seq, times.input, times.rebuild, times.render,
+                   times.tonemap + times.upload, times.tonemap, times.upload, spp);
+            fflush(stdout);
+            last_printed_seq = shown_seq;
+        }
+        if (now - title_t >= 0.25) {
+            snprintf(title, sizeof title, "trac0r view - %u spp - %.1f FPS", spp, fps);
+            SDL_SetWindowTitle(win, title);
+            title_t = now;
+        }
+
+        /* Redraw on news only (and 4 times a second for the overlay's numbers): the
+         * render threads need the cores more than an unchanged window does. */
+        if (!(state_dirty || any_event || dump_requested || now - drawn_t >= 0.25)) {
+            continue;
+        }
+        drawn_t = now;
+        SDL_SetRenderDrawColor(ren, 0, 0, 0, 255);
+        SDL_RenderClear(ren);
+        if (tex) {
+            SDL_RenderCopy(ren, tex, NULL, NULL);
+        }
+        if (st.overlay) {
+            const SDL_Color yellow = {255, 255, 0, 255};
+            tr_aabb boxes[256];
+            size_t nb = 0;
+            for (uint32_t i = 0; i < scene->shape_count && nb < 256; ++i) {
+                boxes[nb++] = scene->shapes[i].box;
+            }
+            view_draw_boxes(ren, &cam, boxes, nb, yellow);
+        }
+        if (st.bvh && scene->accel == TR_ACCEL_TYPE_BVH) {
+            view_draw_bvh(ren, &cam, &scene->bvh, st.bvh_depth);
+        }
+        if (st.overlay) {
+            tr_vec3 mc = view_screen_to_camera(&cam, (float)mouse_x + 0.5f, (float)mouse_y + 0.5f);
+            tr_vec3 mw = view_screen_to_world(&cam, (float)mouse_x + 0.5f, (float)mouse_y + 0.5f);
+            char accel[160];
+            cli_describe_accel(accel, sizeof accel, scene);
+            snprintf(text, sizeof text,
+                     "FPS %.2f   %u spp   %ux%u   stride %d   exposure %+.1f\n"
+                     "input %.2f ms  scene rebuild %.2f ms  render %.1f ms\n"
+                     "film->texture %.2f ms (tonemap %.2f + upload %.2f)\n"
+                     "scene %s: %s\n"
+                     "accel %s\n"
+                     "pos  % .3f % .3f % .3f\n"
+                     "dir  % .3f % .3f % .3f\n"
+                     "up   % .3f % .3f % .3f\n"
+                     "fov  h %.1f  v %.1f deg   speed %.3g/s\n"
+                     "mouse screen %d %d\n"
+                     "mouse camera % .3f % .3f % .3f\n"
+                     "mouse world  % .3f % .3f % .3f\n"
+                     "%s",
+                     fps, spp, w, h, st.stride, st.exposure, times.input, times.rebuild,
+                     times.render, times.tonemap + times.upload, times.tonemap, times.upload,
+                     o->c.scene, scene_changing ? "changing" : "static", accel, cam.pos.x,
+                     cam.pos.y, cam.pos.z, cam.dir.x, cam.dir.y, cam.dir.z, cam.up.x, cam.up.y,
+                     cam.up.z, cam.horizontal_fov, cam.vertical_fov, fly.speed, mouse_x, mouse_y,
+                     mc.x, mc.y, mc.z, mw.x, mw.y, mw.z,
+                     st.bvh ? "BVH boxes on (V), [ ] depth" : "");
+            char line[64];
+            if (st.bvh) {
+                snprintf(line, sizeof line, " %u of %u", st.bvh_depth, scene->bvh.depth);
+                strncat(text, line, sizeof text - strlen(text) - 1);
+            }
+            view_draw_text(ren, font, 0, 0, text);
+        }
+        if (st.help) {
+            /* Bottom right, clear of the debug text in the top left. */
+            const int hx = (int)w - 290, hy = (int)h - 16 * TTF_FontLineSkip(font) - 20;
+            view_draw_text(ren, font, hx > 0 ? hx : 0, hy > 0 ? hy : 0, help_text);
+        }
+        if (dump_requested && o->dump_file) {
+            dump_requested = 0;
+            if (dump_window(ren, o->dump_file) != 0) {
+                fprintf(stderr, "trac0r view: cannot write %s\n", o->dump_file);
+            }
+            st.dumps += 1;
+            state_dirty = 1;
+        }
+        SDL_RenderPresent(ren);
+        if (state_dirty && o->state_file) {
+            write_state(o->state_file, &st, &fly, frames_done, cancelled, spp, shown_gen,
+                        r.generation, w, h, fps);
+            state_dirty = 0;
+        }
+    }
+
+done:
+    view_renderer_stop(&r);
+    if (tex) {
+        SDL_DestroyTexture(tex);
+    }
+    if (ren) {
+        SDL_DestroyRenderer(ren);
+    }
+    if (win) {
+        SDL_DestroyWindow(win);
+    }
+    if (font) {
+        TTF_CloseFont(font);
+    }
+    if (ttf) {
+        TTF_Quit();
+    }
+    SDL_Quit();
+    return status;
+}

@@ -1,0 +1,280 @@
+#!/bin/sh
+# Drives `trac0r view` from the outside: bad input and a missing display fail before
+# any window; the headless mode equals `trac0r render`; and in a real X server (Xvfb,
+# on a display number it picks itself) the window shows the Cornell box, B toggles the
+# debug text, W moves the camera and restarts accumulation, right mouse + motion turns
+# it, F12 saves the film `trac0r render` computes, and Esc exits 0 within a second.
+# The viewer dumps its window's pixels on SIGUSR1 (--dump-window) and its state to a
+# file (--state-file); keys and the mouse come from xdotool through the X server.
+# Usage: cli_view.sh TRAC0R_BINARY SCRATCH_DIR
+set -u
+BIN=$1
+DIR=$2
+rm -rf "$DIR"
+mkdir -p "$DIR"
+cd "$DIR" || exit 1
+failures=0
+XVFB_PID=
+VIEW_PID=
+
+fail() {
+    echo "FAIL: $*" >&2
+    failures=$((failures + 1))
+}
+
+cleanup() {
+    [ -n "$VIEW_PID" ] && kill "$VIEW_PID" 2>/dev/null
+    [ -n "$XVFB_PID" ] && kill "$XVFB_PID" 2>/dev/null
+    wait 2>/dev/null
+}
+trap cleanup EXIT
+trap 'exit 1' INT TERM HUP
+
+# --- bad input: exit 2 and one line naming the fault, before any window -----------
+expect_usage_error() {
+    needle=$1
+    shift
+    "$BIN" view "$@" >out.txt 2>err.txt
+    rc=$?
+    [ "$rc" -eq 2 ] || fail "trac0r view $*: exit $rc, expected 2"
+    lines=$(wc -l <err.txt)
+    [ "$lines" -eq 1 ] || fail "trac0r view $*: $lines stderr lines, expected 1: $(cat err.txt)"
+    grep -qF -- "$needle" err.txt || fail "trac0r view $*: stderr lacks '$needle': $(cat err.txt)"
+    rm -f out.txt err.txt
+}
+expect_usage_error "unknown option '--bogus'" --bogus
+expect_usage_error "missing-scene.json" missing-scene.json
+expect_usage_error "--frames: needs --screenshot" --frames 3
+expect_usage_error "--stride: expected 1, 2 or 4, got '3'" --stride 3
+expect_usage_error "--benchmark: expected an integer in 0..9, got '10'" --benchmark 10
+expect_usage_error "--screenshot: 'x.jpg' has an unknown extension" --screenshot x.jpg
+expect_usage_error "--font: cannot open 'no-such-font.ttf'" --font no-such-font.ttf
+# No display for the interactive mode: the message names DISPLAY.
+env -u DISPLAY -u WAYLAND_DISPLAY -u SDL_VIDEODRIVER "$BIN" view >out.txt 2>err.txt
+rc=$?
+[ "$rc" -eq 2 ] || fail "view without DISPLAY: exit $rc, expected 2"
+grep -q "DISPLAY" err.txt || fail "view without DISPLAY: message lacks DISPLAY: $(cat err.txt)"
+[ "$(wc -l <err.txt)" -eq 1 ] || fail "view without DISPLAY: not one line: $(cat err.txt)"
+"$BIN" view --help >out.txt || fail "view --help failed"
+grep -q "F12" out.txt || fail "view --help does not list F12"
+
+# --- headless: equals trac0r render, without any display ---------------------------
+for args in "--width 40 --height 30" "--width 33 --height 21 --seed 5 --max-depth 3"; do
+    # shellcheck disable=SC2086
+    env -u DISPLAY SDL_VIDEODRIVER=dummy "$BIN" view $args --frames 5 --screenshot v.png \
+        2>err.txt || fail "headless view $args: $(cat err.txt)"
+    # shellcheck disable=SC2086
+    "$BIN" render $args --spp 5 --out r.png 2>err.txt || fail "render $args: $(cat err.txt)"
+    cmp -s v.png r.png || fail "headless view $args differs from render --spp 5"
+    # shellcheck disable=SC2086
+    "$BIN" render $args --spp 4 --out r4.png 2>/dev/null
+    cmp -s v.png r4.png && fail "headless view $args equals a 4-spp render too"
+    rm -f v.png r.png r4.png
+done
+env -u DISPLAY "$BIN" view --benchmark 1 --width 32 --height 24 --frames 3 >out.txt 2>err.txt ||
+    fail "benchmark: $(cat err.txt)"
+grep -q "benchmark cornell-ico-1 (.* triangles) 32x24, 3 frames.* average FPS" out.txt ||
+    fail "benchmark output: $(cat out.txt)"
+
+# --- a real window under Xvfb --------------------------------------------------------
+for tool in Xvfb xdotool; do
+    command -v $tool >/dev/null || {
+        fail "$tool is not installed (scripts/install-deps installs it)"
+        exit 1
+    }
+done
+# -displayfd: the server picks a free display number and writes it to fd 9.
+Xvfb -displayfd 9 -nolisten tcp -screen 0 640x480x24 9>displayfd 2>xvfb.log &
+XVFB_PID=$!
+i=0
+while [ ! -s displayfd ] && [ $i -lt 100 ]; do
+    sleep 0.1
+    i=$((i + 1))
+done
+[ -s displayfd ] || {
+    fail "Xvfb did not start: $(cat xvfb.log)"
+    exit 1
+}
+DISPLAY=:$(head -n1 displayfd)
+export DISPLAY
+unset WAYLAND_DISPLAY SDL_VIDEODRIVER
+# A display that cannot be opened (screen 7 of a one-screen server): exit 2, naming it.
+DISPLAY=$DISPLAY.7 timeout 30 "$BIN" view >out.txt 2>err.txt
+rc=$?
+[ "$rc" -eq 2 ] || fail "view on $DISPLAY.7: exit $rc, expected 2"
+grep -qF "DISPLAY='$DISPLAY.7'" err.txt || fail "view on $DISPLAY.7: message: $(cat err.txt)"
+# SDL's software renderer, and no OpenGL behind the window surface: Mesa is loaded
+# with dlopen and unloaded at SDL_Quit, so LeakSanitizer (sanitizer build) could not
+# name it in a suppression. The leak check itself covers every interactive run below:
+# a leak exits nonzero, and quit_viewer wants status 0.
+export SDL_RENDER_DRIVER=software
+export SDL_FRAMEBUFFER_ACCELERATION=0
+
+# state KEY: a value from the viewer's state file.
+state() {
+    awk -v k="$1" '$1 == k { $1 = ""; sub(/^ /, ""); print; exit }' state.txt 2>/dev/null
+}
+# wait_for SECONDS 'shell condition': polls every 50 ms.
+wait_for() {
+    n=$(($1 * 20))
+    while [ "$n" -gt 0 ]; do
+        eval "$2" && return 0
+        sleep 0.05
+        n=$((n - 1))
+    done
+    return 1
+}
+# dump FILE: asks the viewer for its window's pixels.
+dump() {
+    before=$(state dumps)
+    kill -USR1 "$VIEW_PID"
+    wait_for 20 '[ "$(state dumps)" -gt "$before" ]' || fail "no window dump after SIGUSR1"
+    cp window.ppm "$1"
+}
+# region PPM X0 Y0 X1 Y1: "mean_r mean_g mean_b bright_count" over [X0,X1) x [Y0,Y1),
+# bright meaning all channels above 200.
+region() {
+    # The header is three text lines: P6, "W H", 255.
+    w=$(sed -n 2p "$1" | cut -d' ' -f1)
+    hdr=$(head -n 3 "$1" | wc -c)
+    tail -c +$((hdr + 1)) "$1" | od -An -v -tu1 -w3 |
+        awk -v w="$w" -v x0="$2" -v y0="$3" -v x1="$4" -v y1="$5" '
+        { x = (NR - 1) % w; y = int((NR - 1) / w)
+          if (x >= x0 && x < x1 && y >= y0 && y < y1) {
+              r += $1; g += $2; b += $3; n++
+              if ($1 > 200 && $2 > 200 && $3 > 200) bright++ } }
+        END { printf "%.1f %.1f %.1f %d\n", r / n, g / n, b / n, bright }'
+}
+start_viewer() {
+    rm -f state.txt window.ppm
+    "$BIN" view --width 160 --height 120 --threads 1 --state-file state.txt \
+        --dump-window window.ppm --shot-dir shots "$@" >view.out 2>view.err &
+    VIEW_PID=$!
+    wait_for 30 '[ -s state.txt ]' || fail "viewer wrote no state: $(cat view.err)"
+    WID=$(xdotool search --sync --onlyvisible --name '^trac0r view' 2>/dev/null | head -n1)
+    [ -n "$WID" ] || fail "no window titled 'trac0r view' appeared"
+    xdotool windowfocus "$WID" 2>/dev/null
+    sleep 0.2
+}
+# quit_viewer: Esc must end the process with status 0 within a second.
+quit_viewer() {
+    xdotool key Escape
+    wait_for 1 '! kill -0 "$VIEW_PID" 2>/dev/null' || fail "viewer still running 1 s after Esc"
+    wait "$VIEW_PID"
+    rc=$?
+    [ "$rc" -eq 0 ] || fail "viewer exit status $rc after Esc: $(cat view.err)"
+    VIEW_PID=
+}
+
+mkdir -p shots
+start_viewer
+wait_for 30 '[ "$(state spp)" -ge 32 ]' || fail "fewer than 32 spp after 30 s"
+dump plain.ppm
+# The Cornell box: not black, the red wall on the left, the green one on the right
+# (converged, the walls' regions are (152, 48, 47) and (102, 149, 67)).
+set -- $(region plain.ppm 0 0 160 120)
+awk -v r="$1" -v g="$2" -v b="$3" 'BEGIN { exit !(r + g + b > 30) }' ||
+    fail "window is black: mean $*"
+set -- $(region plain.ppm 40 50 52 70)
+awk -v r="$1" -v g="$2" 'BEGIN { exit !(r > 1.5 * g && r > 40) }' || fail "left wall not red: $*"
+set -- $(region plain.ppm 108 50 120 70)
+awk -v r="$1" -v g="$2" 'BEGIN { exit !(g > 1.15 * r && g > 40) }' || fail "right wall not green: $*"
+# B: debug text appears in the top-left corner (black outside the room), and goes.
+set -- $(region plain.ppm 0 0 60 14)
+bright_off=$4
+xdotool key b
+wait_for 10 '[ "$(state overlay)" = 1 ]' || fail "B did not turn the debug view on"
+dump overlay.ppm
+set -- $(region overlay.ppm 0 0 60 14)
+[ "$4" -gt $((bright_off + 15)) ] || fail "no debug text in the top left: $4 bright vs $bright_off"
+xdotool key b
+wait_for 10 '[ "$(state overlay)" = 0 ]' || fail "B did not turn the debug view off"
+dump off.ppm
+set -- $(region off.ppm 0 0 60 14)
+[ "$4" -le $((bright_off + 2)) ] || fail "debug text still there: $4 bright vs $bright_off"
+# Holding W moves the camera forward (+z here) and starts the accumulation over.
+wait_for 30 '[ "$(state spp)" -ge 40 ]' || fail "fewer than 40 spp"
+z0=$(state pos | cut -d' ' -f3)
+gen0=$(state generation)
+xdotool keydown w
+sleep 0.4
+xdotool keyup w
+spp1=$(state spp)
+wait_for 10 '[ "$(state generation)" -gt "$gen0" ]' || fail "W did not start a new view"
+z1=$(state pos | cut -d' ' -f3)
+awk -v a="$z0" -v b="$z1" 'BEGIN { exit !(b > a + 0.05) }' || fail "W: z went $z0 -> $z1"
+spp_now=$(state spp)
+[ "$spp_now" -lt 40 ] || [ "$spp1" -lt 40 ] || fail "W: spp did not restart ($spp1, $spp_now)"
+# Right click, then move the mouse: the view direction turns.
+dir0=$(state dir)
+xdotool mousemove --window "$WID" 80 60
+sleep 0.1
+xdotool click 3
+wait_for 10 '[ "$(state mouselook)" = 1 ]' || fail "right click did not start mouse-look"
+for step in 1 2 3 4 5; do
+    xdotool mousemove_relative -- 8 3
+    sleep 0.05
+done
+wait_for 10 '[ "$(state dir)" != "$dir0" ]' || fail "mouse-look: direction stayed $dir0"
+xdotool click 3
+wait_for 10 '[ "$(state mouselook)" = 0 ]' || fail "second right click did not end mouse-look"
+# The other keys, through the state file: 2 (stride 2, a new view), +/- (exposure,
+# same view), wheel (speed), H (help), V and ] (BVH boxes, one level deeper), N
+# (per-stage timings on stdout).
+gen0=$(state generation)
+xdotool key 2
+wait_for 10 '[ "$(state stride)" = 2 ] && [ "$(state generation)" -gt "$gen0" ]' ||
+    fail "2 did not switch to stride 2: stride $(state stride)"
+xdotool key 3
+wait_for 10 '[ "$(state stride)" = 4 ]' || fail "3 did not switch to stride 4"
+xdotool key 1
+wait_for 10 '[ "$(state stride)" = 1 ]' || fail "1 did not switch back to stride 1"
+# view_generation counts view changes asked for, generation is the one on screen.
+wait_for 10 '[ "$(state generation)" = "$(state view_generation)" ]' || fail "view did not settle"
+gen0=$(state view_generation)
+xdotool key plus plus minus
+wait_for 10 '[ "$(state exposure)" = 0.50 ]' || fail "+ + -: exposure $(state exposure)"
+[ "$(state view_generation)" = "$gen0" ] || fail "exposure restarted the accumulation"
+speed0=$(state speed)
+xdotool click 4
+wait_for 10 '[ "$(state speed)" != "$speed0" ]' || fail "wheel did not change the speed"
+xdotool key h v bracketright
+wait_for 10 '[ "$(state help)" = 1 ] && [ "$(state bvh)" = 1 ] && [ "$(state bvh_depth)" = 4 ]' ||
+    fail "H/V/]: help $(state help), bvh $(state bvh), depth $(state bvh_depth)"
+dump bvh.ppm
+cmp -s bvh.ppm off.ppm && fail "BVH boxes and help changed nothing in the window"
+xdotool key n
+wait_for 20 'grep -q "^frame [0-9]*: input .* ms, scene rebuild .* ms, render .* ms, film->texture .* ms" view.out' ||
+    fail "N printed no per-stage timings: $(head -c 300 view.out)"
+# Resizing the window resizes the film: the next frames are 600x450.
+xdotool windowsize "$WID" 600 450
+wait_for 30 '[ "$(state size)" = "600 450" ] && [ "$(state generation)" = "$(state view_generation)" ]' ||
+    fail "resize: size $(state size), generation $(state generation)/$(state view_generation)"
+dump resized.ppm
+[ "$(sed -n 2p resized.ppm)" = "600 450" ] || fail "resized window dump is $(sed -n 2p resized.ppm)"
+# View changes 30 ms apart, each shorter than a 600x450 frame on one thread: the
+# frames in flight are cancelled, and the last change still shows up.
+cancelled0=$(state cancelled)
+xdotool key --delay 30 2 1 2 1 2 1 2
+wait_for 30 '[ "$(state stride)" = 2 ] && [ "$(state generation)" = "$(state view_generation)" ]' ||
+    fail "after quick stride changes: stride $(state stride)"
+[ "$(state cancelled)" -gt "$cancelled0" ] || fail "no frame in flight was cancelled"
+quit_viewer
+
+# F12 saves the converged float film: with --max-spp 4 it equals trac0r render --spp 4.
+rm -rf shots
+mkdir -p shots
+start_viewer --max-spp 4
+wait_for 30 '[ "$(state spp)" -eq 4 ]' || fail "viewer did not reach 4 spp"
+xdotool key F12
+wait_for 20 '[ "$(state shots)" -ge 1 ]' || fail "F12 saved nothing: $(cat view.err)"
+"$BIN" render --width 160 --height 120 --spp 4 --out r4.png 2>/dev/null
+cmp -s shots/trac0r-view-000.png r4.png || fail "F12 screenshot differs from render --spp 4"
+grep -q "saved shots/trac0r-view-000.png (4 spp)" view.out || fail "F12 message: $(cat view.out)"
+quit_viewer
+
+if [ "$failures" -ne 0 ]; then
+    echo "cli_view: $failures failures" >&2
+    exit 1
+fi
+echo "cli_view: all checks passed"
