@@ -23,7 +23,10 @@ typedef struct cli_common {
     int threads;
     int integrator;
     tr_accel_type accel;
+    int device; /* --device: CLI_DEVICE_CPU or an OpenCL device index */
 } cli_common;
+
+#define CLI_DEVICE_CPU (-1)
 
 /* Cursor over argv for one subcommand. */
 typedef struct cli_args {

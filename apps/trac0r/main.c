@@ -13,6 +13,7 @@ static void usage(FILE *fp) {
                 "Commands:\n"
                 "  render   render a scene to a PNG or PFM image\n"
                 "  bench    measure speed: 'trac0r bench frame'\n"
+                "  info     'trac0r info --devices': the OpenCL platforms and devices\n"
                 "\n"
                 "Run 'trac0r COMMAND --help' for a command's options.\n"
                 "  -h, --help      show this help\n"
@@ -31,6 +32,9 @@ int main(int argc, char **argv) {
     if (strcmp(cmd, "bench") == 0) {
         return cmd_bench(argc - 1, argv + 1);
     }
+    if (strcmp(cmd, "info") == 0) {
+        return cmd_info(argc - 1, argv + 1);
+    }
     if (strcmp(cmd, "-h") == 0 || strcmp(cmd, "--help") == 0 || strcmp(cmd, "help") == 0) {
         usage(stdout);
         return CLI_OK;
@@ -40,6 +44,6 @@ int main(int argc, char **argv) {
         return CLI_OK;
     }
     fprintf(stderr,
-            "trac0r: unknown command '%s' (expected render or bench; see 'trac0r --help')\n", cmd);
+            "trac0r: unknown command '%s' (expected render, bench or info; see 'trac0r --help')\n", cmd);
     return CLI_USAGE;
 }
