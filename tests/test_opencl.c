@@ -23,7 +23,8 @@ static int contains_ci(const char *hay, const char *needle) {
     size_t n = strlen(needle);
     for (; *hay; ++hay) {
         size_t i = 0;
-        while (i < n && hay[i] && tolower((unsigned char)hay[i]) == tolower((unsigned char)needle[i])) {
+        while (i < n && hay[i] &&
+               tolower((unsigned char)hay[i]) == tolower((unsigned char)needle[i])) {
             ++i;
         }
         if (i == n) {
@@ -50,8 +51,8 @@ static double luminance(const tr_film *f, size_t i) {
  * |mean(L(a) - scale * L(b))| <= z * sqrt(var(d) / n) with z = 4.9 (two-sided
  * p = 1e-6 per region under the normal approximation). Returns the failing regions.
  */
-static int region_failures(const tr_film *a, const tr_film *b, const tr_film *r1,
-                           const tr_film *r2, double scale, uint32_t stride, int verbose) {
+static int region_failures(const tr_film *a, const tr_film *b, const tr_film *r1, const tr_film *r2,
+                           double scale, uint32_t stride, int verbose) {
     /* With a preview stride only the traced pixel of each block is an independent
      * estimate: use those, in one region. */
     const int R = stride > 1 ? 1 : 4;
@@ -148,8 +149,8 @@ static void compare_backends(tr_cl_context *cl, tr_scene *scene, int stride, uin
      * pixel is bit-identical; allow 1 % of the pixels to differ. */
     CHECK(pix_diff * 100 <= n, "%s: %zu of %zu pixels differ between CPU and OpenCL", what,
           pix_diff, n);
-    printf("%s: %zu of %zu pixels differ (max relative difference %.3g), rays %llu vs %llu\n",
-           what, pix_diff, n, max_rel, (unsigned long long)rays_cpu, (unsigned long long)rays_dev);
+    printf("%s: %zu of %zu pixels differ (max relative difference %.3g), rays %llu vs %llu\n", what,
+           pix_diff, n, max_rel, (unsigned long long)rays_cpu, (unsigned long long)rays_dev);
     /* The ray counts differ only through such paths. */
     CHECK(fabs((double)rays_cpu - (double)rays_dev) <= 0.01 * (double)rays_cpu,
           "%s: %llu rays on the CPU, %llu on the device", what, (unsigned long long)rays_cpu,
@@ -188,9 +189,9 @@ int main(void) {
 
     /* The embedded source is the kernel headers inlined behind entry.cl. */
     CHECK(tr_cl_kernel_source_length == strlen(tr_cl_kernel_source), "embedded length");
-    const char *headers[] = {"kernel.h", "compat.h", "types.h", "vec.h", "rng.h",
-                             "sampling.h", "material.h", "intersect.h", "camera.h",
-                             "scene_view.h", "integrator_naive.h"};
+    const char *headers[] = {"kernel.h", "compat.h",     "types.h",           "vec.h",
+                             "rng.h",    "sampling.h",   "material.h",        "intersect.h",
+                             "camera.h", "scene_view.h", "integrator_naive.h"};
     for (size_t i = 0; i < sizeof headers / sizeof headers[0]; ++i) {
         char tag[64];
         snprintf(tag, sizeof tag, "#line 1 \"%s\"", headers[i]);
@@ -218,6 +219,23 @@ int main(void) {
     printf("device 0: %s (%s), %u compute units; build log: '%s'\n", tr_cl_device(cl)->name,
            tr_cl_device(cl)->vendor, tr_cl_device(cl)->compute_units, log);
 
+    /* The build log shows warnings (so a clean log means something), and a kernel that
+     * does not compile is reported with the call, the error name and the log. */
+    const char *warns =
+        "#warning this line warns\n__kernel void other(__global int *p) { p[0] = 1; }\n";
+    CHECK(tr_cl_open_source(0, warns, &err) == NULL, "a kernel without tr_cl_render opened");
+    CHECK(strstr(err.msg, "clCreateKernel(tr_cl_render)") &&
+              strstr(err.msg, "CL_INVALID_KERNEL_NAME"),
+          "message: %s", err.msg);
+    CHECK(contains_ci(tr_cl_last_build_log(), "warning"), "no warning in the log of %s: '%s'",
+          warns, tr_cl_last_build_log());
+    const char *broken = "__kernel void tr_cl_render(__global int *p) { p[0] = undeclared; }\n";
+    CHECK(tr_cl_open_source(0, broken, &err) == NULL, "a broken kernel opened");
+    CHECK(strstr(err.msg, "clBuildProgram") && strstr(err.msg, "CL_BUILD_PROGRAM_FAILURE") &&
+              strstr(err.msg, "undeclared"),
+          "message: %s", err.msg);
+    CHECK(contains_ci(tr_cl_last_build_log(), "error"), "build log: '%s'", tr_cl_last_build_log());
+
     tr_render_config cfg = tr_render_config_default();
     tr_scene scene;
     tr_scene_init(&scene);
@@ -238,7 +256,8 @@ int main(void) {
         char what[64];
         snprintf(what, sizeof what, "accel %s", tr_accel_name(accels[k]));
         compare_backends(cl, &scene, 1, 64, what);
-        tr_accel_type want = accels[k] == TR_ACCEL_TYPE_FLAT ? TR_ACCEL_TYPE_FLAT : TR_ACCEL_TYPE_BVH;
+        tr_accel_type want =
+            accels[k] == TR_ACCEL_TYPE_FLAT ? TR_ACCEL_TYPE_FLAT : TR_ACCEL_TYPE_BVH;
         CHECK(tr_cl_scene_accel(cl) == want, "%s: the device walks %s", what,
               tr_accel_name(tr_cl_scene_accel(cl)));
     }

@@ -17,8 +17,9 @@ int cli_parse_device(cli_args *a, int *device) {
     }
     if (strncmp(v, "opencl", 6) == 0 && (v[6] == '\0' || v[6] == ':')) {
         if (!tr_cl_available()) {
-            return cli_error(a, "%s: '%s' is not available: this build of trac0r has no OpenCL "
-                                "support",
+            return cli_error(a,
+                             "%s: '%s' is not available: this build of trac0r has no OpenCL "
+                             "support",
                              a->opt, v);
         }
         if (v[6] == '\0') {
@@ -58,10 +59,10 @@ int cli_backend_open(const cli_args *a, const cli_common *c, const tr_scene *sce
     tr_error err;
     be->cl = tr_cl_open(c->device, &err);
     if (!be->cl) {
-        const char *log = tr_cl_last_build_log();
-        if (log[0]) {
-            /* The device compiler rejected the kernel: a fault of this build, not of
-             * the command line. The message already holds the log. */
+        if (strncmp(err.msg, "OpenCL: ", 8) == 0) {
+            /* An OpenCL call failed on a device that exists (the compiler rejected the
+             * kernel, ...): a fault of this build or driver, not of the command line.
+             * A build failure's message holds the build log. */
             fprintf(stderr, "trac0r %s: %s\n", a->cmd, err.msg);
             return CLI_FAILURE;
         }
@@ -89,9 +90,9 @@ int cli_backend_upload(const cli_args *a, cli_backend *be, const tr_scene *scene
     const tr_cl_device_info *d = tr_cl_device(be->cl);
     if (scene->accel != tr_cl_scene_accel(be->cl)) {
         /* Embree is a host library: the device gets a BVH of its own. */
-        snprintf(be->name, sizeof be->name, "opencl:%d (%s; %s is host-only, the device traces a %s)",
-                 d->index, d->name, tr_accel_name(scene->accel),
-                 tr_accel_name(tr_cl_scene_accel(be->cl)));
+        snprintf(be->name, sizeof be->name,
+                 "opencl:%d (%s; %s is host-only, the device traces a %s)", d->index, d->name,
+                 tr_accel_name(scene->accel), tr_accel_name(tr_cl_scene_accel(be->cl)));
     } else {
         snprintf(be->name, sizeof be->name, "opencl:%d (%s)", d->index, d->name);
     }

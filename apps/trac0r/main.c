@@ -44,6 +44,7 @@ int main(int argc, char **argv) {
         return CLI_OK;
     }
     fprintf(stderr,
-            "trac0r: unknown command '%s' (expected render, bench or info; see 'trac0r --help')\n", cmd);
+            "trac0r: unknown command '%s' (expected render, bench or info; see 'trac0r --help')\n",
+            cmd);
     return CLI_USAGE;
 }

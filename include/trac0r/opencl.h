@@ -33,8 +33,8 @@ typedef struct tr_cl_device_info {
     char platform[128]; /* platform name */
     char name[128];
     char vendor[128];
-    char version[128];   /* CL_DEVICE_VERSION */
-    char type[16];       /* "cpu", "gpu", "accelerator", ... */
+    char version[128]; /* CL_DEVICE_VERSION */
+    char type[16];     /* "cpu", "gpu", "accelerator", ... */
     uint32_t compute_units;
     uint64_t global_mem; /* bytes, CL_DEVICE_GLOBAL_MEM_SIZE */
     uint64_t max_alloc;  /* bytes, CL_DEVICE_MAX_MEM_ALLOC_SIZE: the largest buffer */
@@ -55,12 +55,16 @@ int tr_cl_list_devices(tr_cl_device_info *out, int max, int *count, tr_error *er
  * or the kernel fails to compile (the message then names the call and the OpenCL
  * error, and tr_cl_last_build_log() holds the compiler's log). */
 tr_cl_context *tr_cl_open(int index, tr_error *err);
+/* tr_cl_open with another kernel source (NULL: the embedded one), for tests of the
+ * build error path; the source must define tr_cl_render as entry.cl does. */
+tr_cl_context *tr_cl_open_source(int index, const char *source, tr_error *err);
 void tr_cl_close(tr_cl_context *ctx);
 
 const tr_cl_device_info *tr_cl_device(const tr_cl_context *ctx);
 /* The device compiler's log of the kernel build ("" when it said nothing). */
 const char *tr_cl_build_log(const tr_cl_context *ctx);
-/* The build log of the most recent failed tr_cl_open in this process ("" if none). */
+/* The build log of the most recent kernel build by tr_cl_open in this process, whether
+ * it succeeded or not ("" if none, or if the compiler said nothing). */
 const char *tr_cl_last_build_log(void);
 /* Options the kernel was compiled with. */
 const char *tr_cl_build_options(void);

@@ -31,6 +31,10 @@ tr_cl_context *tr_cl_open(int index, tr_error *err) {
     tr_error_set(err, "%s", no_opencl);
     return NULL;
 }
+tr_cl_context *tr_cl_open_source(int index, const char *source, tr_error *err) {
+    (void)source;
+    return tr_cl_open(index, err);
+}
 void tr_cl_close(tr_cl_context *ctx) {
     (void)ctx;
 }
@@ -145,8 +149,8 @@ enum {
     ARG_AFTER_ARRAYS
 };
 static const char *const arg_names[ARG_AFTER_ARRAYS] = {
-    "scene_info", "camera",     "seed",     "sample",      "max_depth",
-    "integrator", "stride",     "film_sum", "film_count",  "rays_per_row"};
+    "scene_info", "camera", "seed",     "sample",     "max_depth",
+    "integrator", "stride", "film_sum", "film_count", "rays_per_row"};
 
 struct tr_cl_context {
     tr_cl_device_info info;
@@ -176,8 +180,8 @@ static char last_build_log[16384];
 
 const char *tr_cl_error_name(int code) {
     switch (code) {
-#define TR_CL_CASE(name)                                                                         \
-    case name:                                                                                   \
+#define TR_CL_CASE(name)                                                                           \
+    case name:                                                                                     \
         return #name;
         TR_CL_CASE(CL_SUCCESS)
         TR_CL_CASE(CL_DEVICE_NOT_FOUND)
@@ -414,7 +418,8 @@ static char *read_build_log(cl_program prog, cl_device_id dev) {
     if (!log) {
         return NULL;
     }
-    if (n > 0 && clGetProgramBuildInfo(prog, dev, CL_PROGRAM_BUILD_LOG, n, log, NULL) != CL_SUCCESS) {
+    if (n > 0 &&
+        clGetProgramBuildInfo(prog, dev, CL_PROGRAM_BUILD_LOG, n, log, NULL) != CL_SUCCESS) {
         log[0] = '\0';
     }
     log[n] = '\0';
@@ -473,6 +478,10 @@ static int check_kernel_args(tr_cl_context *ctx, tr_error *err) {
 }
 
 tr_cl_context *tr_cl_open(int index, tr_error *err) {
+    return tr_cl_open_source(index, NULL, err);
+}
+
+tr_cl_context *tr_cl_open_source(int index, const char *source, tr_error *err) {
     last_build_log[0] = '\0';
     int count = 0;
     cl_platform_id plat = NULL;
@@ -512,8 +521,8 @@ tr_cl_context *tr_cl_open(int index, tr_error *err) {
         cl_fail(err, "clCreateCommandQueue", rc);
         goto fail;
     }
-    const char *src = tr_cl_kernel_source;
-    const size_t len = tr_cl_kernel_source_length;
+    const char *src = source ? source : tr_cl_kernel_source;
+    const size_t len = source ? strlen(source) : tr_cl_kernel_source_length;
     ctx->program = clCreateProgramWithSource(ctx->context, 1, &src, &len, &rc);
     if (!ctx->program) {
         cl_fail(err, "clCreateProgramWithSource", rc);
@@ -525,8 +534,8 @@ tr_cl_context *tr_cl_open(int index, tr_error *err) {
         tr_error_set(err, "out of memory reading the OpenCL build log");
         goto fail;
     }
+    snprintf(last_build_log, sizeof last_build_log, "%s", ctx->build_log);
     if (rc != CL_SUCCESS) {
-        snprintf(last_build_log, sizeof last_build_log, "%s", ctx->build_log);
         tr_error_set(err, "OpenCL: clBuildProgram failed on %s: %s (%d); build log: %s",
                      ctx->info.name, tr_cl_error_name(rc), rc, ctx->build_log);
         goto fail;
@@ -748,13 +757,13 @@ static int make_film(tr_cl_context *ctx, uint32_t w, uint32_t h, tr_error *err) 
         return tr_error_set(err,
                             "a %ux%u film does not fit on OpenCL device %d (%s) next to the "
                             "scene (%.1f MiB + %.1f MiB of %.1f MiB)",
-                            w, h, ctx->info.index, ctx->info.name, mib(ctx->scene_bytes),
-                            mib(need), mib(memory_budget(ctx)));
+                            w, h, ctx->info.index, ctx->info.name, mib(ctx->scene_bytes), mib(need),
+                            mib(memory_budget(ctx)));
     }
     const size_t n = (size_t)w * h;
     cl_int rc;
-    ctx->film_sum = clCreateBuffer(ctx->context, CL_MEM_READ_WRITE, 3 * n * sizeof(cl_float),
-                                   NULL, &rc);
+    ctx->film_sum =
+        clCreateBuffer(ctx->context, CL_MEM_READ_WRITE, 3 * n * sizeof(cl_float), NULL, &rc);
     if (ctx->film_sum) {
         ctx->film_count =
             clCreateBuffer(ctx->context, CL_MEM_READ_WRITE, n * sizeof(cl_uint), NULL, &rc);
@@ -804,8 +813,7 @@ int tr_cl_render_frame(tr_cl_context *ctx, const tr_camera *cam, const tr_render
     if (rc != CL_SUCCESS) {
         return cl_fail(err, "clEnqueueFillBuffer(rays_per_row)", rc);
     }
-    rc = clEnqueueWriteBuffer(ctx->queue, ctx->camera, CL_TRUE, 0, sizeof *cam, cam, 0, NULL,
-                              NULL);
+    rc = clEnqueueWriteBuffer(ctx->queue, ctx->camera, CL_TRUE, 0, sizeof *cam, cam, 0, NULL, NULL);
     if (rc != CL_SUCCESS) {
         return cl_fail(err, "clEnqueueWriteBuffer(camera)", rc);
     }
@@ -818,9 +826,12 @@ int tr_cl_render_frame(tr_cl_context *ctx, const tr_camera *cam, const tr_render
         size_t size;
         const void *value;
     } args[] = {
-        {ARG_CAMERA, sizeof(cl_mem), &ctx->camera},   {ARG_SEED, sizeof seed, &seed},
-        {ARG_SAMPLE, sizeof smp, &smp},               {ARG_MAX_DEPTH, sizeof depth, &depth},
-        {ARG_INTEGRATOR, sizeof integrator, &integrator}, {ARG_STRIDE, sizeof stride, &stride},
+        {ARG_CAMERA, sizeof(cl_mem), &ctx->camera},
+        {ARG_SEED, sizeof seed, &seed},
+        {ARG_SAMPLE, sizeof smp, &smp},
+        {ARG_MAX_DEPTH, sizeof depth, &depth},
+        {ARG_INTEGRATOR, sizeof integrator, &integrator},
+        {ARG_STRIDE, sizeof stride, &stride},
         {ARG_FILM_SUM, sizeof(cl_mem), &ctx->film_sum},
         {ARG_FILM_COUNT, sizeof(cl_mem), &ctx->film_count},
         {ARG_RAYS, sizeof(cl_mem), &ctx->rays},
@@ -839,8 +850,8 @@ int tr_cl_render_frame(tr_cl_context *ctx, const tr_camera *cam, const tr_render
         return cl_fail(err, "clEnqueueNDRangeKernel(tr_cl_render)", rc);
     }
     /* The blocking read waits for the kernel: the frame is done when it returns. */
-    rc = clEnqueueReadBuffer(ctx->queue, ctx->rays, CL_TRUE, 0, h * sizeof(cl_uint),
-                             ctx->rays_host, 0, NULL, NULL);
+    rc = clEnqueueReadBuffer(ctx->queue, ctx->rays, CL_TRUE, 0, h * sizeof(cl_uint), ctx->rays_host,
+                             0, NULL, NULL);
     if (rc != CL_SUCCESS) {
         return cl_fail(err, "clEnqueueReadBuffer(rays_per_row)", rc);
     }
@@ -864,8 +875,8 @@ int tr_cl_read_film(tr_cl_context *ctx, tr_film *film, tr_error *err) {
                             film->height, ctx->width, ctx->height);
     }
     const size_t n = (size_t)film->width * film->height;
-    cl_int rc = clEnqueueReadBuffer(ctx->queue, ctx->film_sum, CL_TRUE, 0,
-                                    3 * n * sizeof(float), film->sum, 0, NULL, NULL);
+    cl_int rc = clEnqueueReadBuffer(ctx->queue, ctx->film_sum, CL_TRUE, 0, 3 * n * sizeof(float),
+                                    film->sum, 0, NULL, NULL);
     if (rc == CL_SUCCESS) {
         rc = clEnqueueReadBuffer(ctx->queue, ctx->film_count, CL_TRUE, 0, n * sizeof(uint32_t),
                                  film->count, 0, NULL, NULL);
