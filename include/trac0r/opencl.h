@@ -66,8 +66,9 @@ const char *tr_cl_build_log(const tr_cl_context *ctx);
 /* The build log of the most recent kernel build by tr_cl_open in this process, whether
  * it succeeded or not ("" if none, or if the compiler said nothing). */
 const char *tr_cl_last_build_log(void);
-/* Options the kernel was compiled with. */
-const char *tr_cl_build_options(void);
+/* Options the kernel was compiled with: -cl-std=CL1.2 -cl-kernel-arg-info, and
+ * -cl-fp32-correctly-rounded-divide-sqrt where the device supports it. */
+const char *tr_cl_build_options(const tr_cl_context *ctx);
 
 /* Uploads the scene's arrays (triangles, materials, flat nodes, BVH nodes and leaf
  * triangles) and releases those of the previous scene. The scene must be committed.

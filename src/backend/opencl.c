@@ -49,7 +49,8 @@ const char *tr_cl_build_log(const tr_cl_context *ctx) {
 const char *tr_cl_last_build_log(void) {
     return "";
 }
-const char *tr_cl_build_options(void) {
+const char *tr_cl_build_options(const tr_cl_context *ctx) {
+    (void)ctx;
     return "";
 }
 int tr_cl_upload_scene(tr_cl_context *ctx, const tr_scene *scene, tr_error *err) {
@@ -105,8 +106,10 @@ extern const size_t tr_cl_kernel_source_length;
 
 /* FP_CONTRACT is switched off in entry.cl (the host builds with -ffp-contract=off);
  * kernel argument names are kept so that tr_cl_open can check them against the host's
- * table of scene arrays. */
+ * table of scene arrays. Devices that can divide and take square roots correctly
+ * rounded, as the host does, are asked to (OpenCL 1.2 otherwise allows 2.5 and 3 ulp). */
 static const char build_options[] = "-cl-std=CL1.2 -cl-kernel-arg-info -DTR_OPENCL_DEVICE=1";
+static const char build_option_rounded[] = " -cl-fp32-correctly-rounded-divide-sqrt";
 
 #define TR_CL_MAX_ARRAYS 16
 
@@ -161,7 +164,8 @@ struct tr_cl_context {
     cl_program program;
     cl_kernel kernel;
     char *build_log;
-    int array_count; /* scene arrays the kernel takes */
+    char options[160]; /* the options the kernel was built with */
+    int array_count;   /* scene arrays the kernel takes */
     uint64_t memory_limit;
     /* The uploaded scene. */
     cl_mem arrays[TR_CL_MAX_ARRAYS];
@@ -259,8 +263,8 @@ int tr_cl_available(void) {
     return 1;
 }
 
-const char *tr_cl_build_options(void) {
-    return build_options;
+const char *tr_cl_build_options(const tr_cl_context *ctx) {
+    return ctx->options;
 }
 
 const char *tr_cl_last_build_log(void) {
@@ -528,7 +532,11 @@ tr_cl_context *tr_cl_open_source(int index, const char *source, tr_error *err) {
         cl_fail(err, "clCreateProgramWithSource", rc);
         goto fail;
     }
-    rc = clBuildProgram(ctx->program, 1, &dev, build_options, NULL, NULL);
+    cl_device_fp_config fp = 0;
+    clGetDeviceInfo(dev, CL_DEVICE_SINGLE_FP_CONFIG, sizeof fp, &fp, NULL);
+    snprintf(ctx->options, sizeof ctx->options, "%s%s", build_options,
+             (fp & CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT) ? build_option_rounded : "");
+    rc = clBuildProgram(ctx->program, 1, &dev, ctx->options, NULL, NULL);
     ctx->build_log = read_build_log(ctx->program, dev);
     if (!ctx->build_log) {
         tr_error_set(err, "out of memory reading the OpenCL build log");
