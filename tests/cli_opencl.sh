@@ -115,6 +115,7 @@ done
     fail "bench frame --device opencl failed: $(cat bench.txt)"
 grep -q "opencl:0" bench.txt || fail "bench frame does not name the device: $(cat bench.txt)"
 grep -q "^fps " bench.txt || fail "bench frame printed no fps: $(cat bench.txt)"
+grep -q "device/cpu [0-9]" bench.txt || fail "bench frame printed no CPU reference: $(cat bench.txt)"
 "$BIN" bench complexity --width 16 --height 12 --frames 1 --max-level 1 --device opencl \
     --out cx >bench.txt 2>&1 || fail "bench complexity --device opencl failed: $(cat bench.txt)"
 grep -q "^1,[0-9]*,bvh," cx.csv || fail "complexity CSV lacks the bvh row of level 1: $(cat cx.csv)"

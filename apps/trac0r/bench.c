@@ -34,6 +34,9 @@ static void bench_frame_help(void) {
            "  --frames N           frames to time, 1..100000 (default 20)\n"
            "  -h, --help           show this help\n"
            "\n"
+           "With --device opencl every device frame is followed by the same frame on the\n"
+           "CPU, and the ratio of the two medians is printed too.\n"
+           "\n"
            "The thesis (table 3.2) reports 11.6 FPS for this scene at 800x600 on an NVIDIA\n"
            "GeForce GTX 570.\n",
            cli_common_help);
@@ -99,6 +102,14 @@ static int bench_frame(int argc, char **argv) {
     uint64_t rays = 0;
     double total = 0.0;
     rc = CLI_OK;
+    /* On a device, every frame is followed by the same frame on the CPU: the reference
+     * the device's speed is reported against, measured under the same load. */
+    cli_backend cpu = {.cl = NULL};
+    double *cpu_times = be.cl ? malloc((size_t)frames * sizeof *cpu_times) : NULL;
+    if (be.cl && !cpu_times) {
+        fprintf(stderr, "trac0r bench frame: out of memory\n");
+        rc = CLI_FAILURE;
+    }
     /* Frame 0 warms caches and the thread pool and is not timed. */
     for (int f = 0; f <= frames && rc == CLI_OK; ++f) {
         tr_render_stats st;
@@ -110,6 +121,14 @@ static int bench_frame(int argc, char **argv) {
             rays += st.rays;
             total += st.seconds;
         }
+        if (rc == CLI_OK && cpu_times) {
+            if (cli_backend_frame(&cpu, &scene, &cfg, &film, (uint32_t)f, &st, &err) != TR_OK) {
+                fprintf(stderr, "trac0r bench frame: %s\n", err.msg);
+                rc = CLI_FAILURE;
+            } else if (f > 0) {
+                cpu_times[f - 1] = st.seconds;
+            }
+        }
     }
     if (rc == CLI_OK) {
         double mrays = (double)rays / total * 1e-6;
@@ -119,7 +138,15 @@ static int bench_frame(int argc, char **argv) {
         printf("fps %.2f (median)  Mrays/s %.2f (mean)\n", 1.0 / med, mrays);
         printf("thesis (table 3.2): 11.6 fps on a GeForce GTX 570 -> ratio %.2f\n",
                (1.0 / med) / 11.6);
+        if (cpu_times) {
+            const int threads = cfg.threads ? cfg.threads : tr_default_threads();
+            double cpu_med = bench_median(cpu_times, frames);
+            printf("cpu (%d thread%s, interleaved with the device's frames): median %.2f ms, "
+                   "fps %.2f -> device/cpu %.2f\n",
+                   threads, threads == 1 ? "" : "s", cpu_med * 1e3, 1.0 / cpu_med, cpu_med / med);
+        }
     }
+    free(cpu_times);
     cli_backend_close(&be);
     free(times);
     tr_film_free(&film);
