@@ -75,7 +75,8 @@ const char *tr_cl_build_options(const tr_cl_context *ctx);
  * A scene committed to Embree (a host library) is traced on the device through a BVH
  * built here; tr_cl_scene_accel says which structure the device walks. Fails before
  * allocating anything when a buffer exceeds the device's largest allocation or the
- * scene plus a film of the camera's size exceeds its memory. */
+ * scene plus a film of the camera's size exceeds its memory; the previous scene then
+ * stays. The device film keeps its samples across uploads (tr_cl_clear_film). */
 int tr_cl_upload_scene(tr_cl_context *ctx, const tr_scene *scene, tr_error *err);
 /* The structure the uploaded scene is traced through on the device (flat or bvh). */
 tr_accel_type tr_cl_scene_accel(const tr_cl_context *ctx);
