@@ -122,6 +122,7 @@ grep -q "^1,[0-9]*,bvh," cx.csv || fail "complexity CSV lacks the bvh row of lev
 grep -q "^0,.*,flat," cx.csv || fail "complexity CSV lacks the flat row of level 0: $(cat cx.csv)"
 if grep -q embree cx.csv; then fail "embree measured on the device: $(cat cx.csv)"; fi
 rm -f bench.txt cx.csv cx.png
+expect_usage_error "--device: not an option of this benchmark" bench rays --device opencl
 expect_usage_error "--accels:" bench complexity --device opencl \
     --accels bvh,embree
 
