@@ -9,6 +9,7 @@
 #include "cli.h"
 #include "bench.h"
 #include "commands.h"
+#include "devices.h"
 
 static int cmp_double(const void *a, const void *b) {
     double x = *(const double *)a, y = *(const double *)b;
@@ -32,6 +33,9 @@ static void bench_frame_help(void) {
            "%s"
            "  --frames N           frames to time, 1..100000 (default 20)\n"
            "  -h, --help           show this help\n"
+           "\n"
+           "With --device opencl every device frame is followed by the same frame on the\n"
+           "CPU, and the ratio of the two medians is printed too.\n"
            "\n"
            "The thesis (table 3.2) reports 11.6 FPS for this scene at 800x600 on an NVIDIA\n"
            "GeForce GTX 570.\n",
@@ -77,32 +81,55 @@ static int bench_frame(int argc, char **argv) {
         tr_scene_free(&scene);
         return cli_error(&a, "--width/--height: %s", times ? err.msg : "out of memory");
     }
+    cli_backend be;
+    rc = cli_backend_open(&a, &c, &scene, &be);
+    if (rc != CLI_OK) {
+        free(times);
+        tr_film_free(&film);
+        tr_scene_free(&scene);
+        return rc;
+    }
     tr_render_config cfg = tr_render_config_default();
     cfg.max_depth = c.max_depth;
     cfg.seed = c.seed;
     cfg.threads = c.threads;
     cfg.integrator = c.integrator;
-    const int threads = cfg.threads ? cfg.threads : tr_default_threads();
 
     char accel[160];
     cli_describe_accel(accel, sizeof accel, &scene);
-    printf("bench frame: %s, %ux%u, 1 spp/frame, integrator %s, max depth %d, %d thread%s, "
+    printf("bench frame: %s, %ux%u, 1 spp/frame, integrator %s, max depth %d, %s, "
            "%u triangles, accel %s\n",
            c.scene, c.width, c.height, c.integrator == TR_INTEGRATOR_PT ? "pt" : "naive",
-           c.max_depth, threads, threads == 1 ? "" : "s", scene.triangle_count, accel);
+           c.max_depth, be.name, scene.triangle_count, accel);
     uint64_t rays = 0;
     double total = 0.0;
     rc = CLI_OK;
+    /* On a device, every frame is followed by the same frame on the CPU: the reference
+     * the device's speed is reported against, measured under the same load. */
+    cli_backend cpu = {.cl = NULL};
+    double *cpu_times = be.cl ? malloc((size_t)frames * sizeof *cpu_times) : NULL;
+    if (be.cl && !cpu_times) {
+        fprintf(stderr, "trac0r bench frame: out of memory\n");
+        rc = CLI_FAILURE;
+    }
     /* Frame 0 warms caches and the thread pool and is not timed. */
     for (int f = 0; f <= frames && rc == CLI_OK; ++f) {
         tr_render_stats st;
-        if (tr_render_frame(&scene, &scene.camera, &cfg, &film, (uint32_t)f, &st, &err) != TR_OK) {
+        if (cli_backend_frame(&be, &scene, &cfg, &film, (uint32_t)f, &st, &err) != TR_OK) {
             fprintf(stderr, "trac0r bench frame: %s\n", err.msg);
             rc = CLI_FAILURE;
         } else if (f > 0) {
             times[f - 1] = st.seconds;
             rays += st.rays;
             total += st.seconds;
+        }
+        if (rc == CLI_OK && cpu_times) {
+            if (cli_backend_frame(&cpu, &scene, &cfg, &film, (uint32_t)f, &st, &err) != TR_OK) {
+                fprintf(stderr, "trac0r bench frame: %s\n", err.msg);
+                rc = CLI_FAILURE;
+            } else if (f > 0) {
+                cpu_times[f - 1] = st.seconds;
+            }
         }
     }
     if (rc == CLI_OK) {
@@ -113,7 +140,16 @@ static int bench_frame(int argc, char **argv) {
         printf("fps %.2f (median)  Mrays/s %.2f (mean)\n", 1.0 / med, mrays);
         printf("thesis (table 3.2): 11.6 fps on a GeForce GTX 570 -> ratio %.2f\n",
                (1.0 / med) / 11.6);
+        if (cpu_times) {
+            const int threads = cfg.threads ? cfg.threads : tr_default_threads();
+            double cpu_med = bench_median(cpu_times, frames);
+            printf("cpu (%d thread%s, interleaved with the device's frames): median %.2f ms, "
+                   "fps %.2f -> device/cpu %.2f\n",
+                   threads, threads == 1 ? "" : "s", cpu_med * 1e3, 1.0 / cpu_med, cpu_med / med);
+        }
     }
+    free(cpu_times);
+    cli_backend_close(&be);
     free(times);
     tr_film_free(&film);
     tr_scene_free(&scene);
@@ -190,7 +226,9 @@ static void bench_complexity_help(void) {
            "limit. Prints the table and writes PREFIX.csv and PREFIX.png (gnuplot).\n"
            "\n"
            "Options:\n"
-           "  --width W, --height H, --max-depth D, --seed S, --threads T   as for render\n"
+           "  --width W, --height H, --max-depth D, --seed S, --threads T, --device DEV\n"
+           "                       as for render (with --device opencl the structures are\n"
+           "                       flat and bvh; Embree runs on the CPU only)\n"
            "                       (default 800x600)\n"
            "  --max-level L        highest subdivision level, 0..%d (default 8)\n"
            "  --frames N           timed frames per point after one warm-up, 1..1000\n"
@@ -212,6 +250,7 @@ static int bench_complexity(int argc, char **argv) {
     const char *prefix = "complexity";
     accel_set set;
     bench_accels_all(&set, 1);
+    int accels_given = 0;
     while (cli_next(&a)) {
         int rc = cli_common_option(&a, &c);
         if (rc == CLI_OK && (cli_is(&a, "--scene") || cli_is(&a, "--accel"))) {
@@ -234,6 +273,7 @@ static int bench_complexity(int argc, char **argv) {
             rc = cli_parse_float(&a, 0.001f, 1e6f, &limit);
         } else if (cli_is(&a, "--accels")) {
             rc = bench_parse_accels(&a, &set);
+            accels_given = 1;
         } else if (cli_is(&a, "--out")) {
             rc = cli_value(&a);
             prefix = a.value;
@@ -243,6 +283,17 @@ static int bench_complexity(int argc, char **argv) {
         }
         if (rc != CLI_OK) {
             return CLI_USAGE;
+        }
+    }
+    /* A device traces the flat structure and the BVH; Embree is host-only. */
+    for (int k = 0; c.device != CLI_DEVICE_CPU && k < set.count; ++k) {
+        if (set.type[k] == TR_ACCEL_TYPE_EMBREE) {
+            if (accels_given) {
+                return cli_error(&a, "--accels: embree runs on the CPU only; with --device "
+                                     "opencl compare flat,bvh");
+            }
+            set.type[k] = set.type[--set.count];
+            --k;
         }
     }
     char csv_path[4096], png_path[4096];
@@ -258,14 +309,20 @@ static int bench_complexity(int argc, char **argv) {
         free(times);
         return cli_error(&a, "--width/--height: %s", times ? err.msg : "out of memory");
     }
+    cli_backend be;
+    int rc = cli_backend_open(&a, &c, NULL, &be);
+    if (rc != CLI_OK) {
+        free(times);
+        tr_film_free(&film);
+        return rc;
+    }
     tr_render_config cfg = tr_render_config_default();
     cfg.max_depth = c.max_depth;
     cfg.seed = c.seed;
     cfg.threads = c.threads;
-    const int threads = cfg.threads ? cfg.threads : tr_default_threads();
-    printf("bench complexity: %ux%u, 1 spp/frame, naive, max depth %d, %d thread%s, median of %d "
+    printf("bench complexity: %ux%u, 1 spp/frame, naive, max depth %d, %s, median of %d "
            "frames\n",
-           c.width, c.height, c.max_depth, threads, threads == 1 ? "" : "s", frames);
+           c.width, c.height, c.max_depth, be.name, frames);
     printf("%5s %10s %-7s %10s %12s %9s\n", "level", "triangles", "accel", "build ms", "frame ms",
            "fps");
     /* Results, for the CSV and plot: fps[level][accel] (0 = not measured). */
@@ -273,7 +330,6 @@ static int bench_complexity(int argc, char **argv) {
     uint32_t tris[TR_ICOSPHERE_MAX_SUBDIVISIONS + 1] = {0};
     double build_ms[TR_ICOSPHERE_MAX_SUBDIVISIONS + 1][4] = {{0}};
     int dropped[4] = {0};
-    int rc = CLI_OK;
     for (int level = 0; level <= max_level && rc == CLI_OK; ++level) {
         char name[32];
         snprintf(name, sizeof name, "cornell-ico-%d", level);
@@ -294,12 +350,19 @@ static int bench_complexity(int argc, char **argv) {
                 break;
             }
             build_ms[level][k] = bench_build_seconds(&scene) * 1e3;
-            tr_film_clear(&film);
+            rc = cli_backend_upload(&a, &be, &scene);
+            if (rc != CLI_OK) {
+                break;
+            }
+            if (cli_backend_clear(&be, &film, &err) != TR_OK) {
+                fprintf(stderr, "trac0r bench complexity: %s\n", err.msg);
+                rc = CLI_FAILURE;
+                break;
+            }
             int n = 0;
             for (int f = 0; f <= frames; ++f) {
                 tr_render_stats st;
-                if (tr_render_frame(&scene, &scene.camera, &cfg, &film, (uint32_t)f, &st, &err) !=
-                    TR_OK) {
+                if (cli_backend_frame(&be, &scene, &cfg, &film, (uint32_t)f, &st, &err) != TR_OK) {
                     fprintf(stderr, "trac0r bench complexity: %s\n", err.msg);
                     rc = CLI_FAILURE;
                     break;
@@ -328,6 +391,7 @@ static int bench_complexity(int argc, char **argv) {
         }
         tr_scene_free(&scene);
     }
+    cli_backend_close(&be);
     free(times);
     tr_film_free(&film);
     if (rc != CLI_OK) {

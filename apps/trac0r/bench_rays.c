@@ -173,8 +173,8 @@ int bench_rays(int argc, char **argv) {
     bench_accels_all(&set, 0);
     while (cli_next(&a)) {
         int rc = cli_common_option(&a, &c);
-        if (rc == CLI_OK &&
-            (cli_is(&a, "--accel") || cli_is(&a, "--integrator") || cli_is(&a, "--max-depth"))) {
+        if (rc == CLI_OK && (cli_is(&a, "--accel") || cli_is(&a, "--integrator") ||
+                             cli_is(&a, "--max-depth") || cli_is(&a, "--device"))) {
             return cli_error(&a, "%s: not an option of this benchmark", a.opt);
         }
         if (rc == CLI_OK) {

@@ -1,5 +1,6 @@
 /* cli.c - option parsing shared by the trac0r subcommands. */
 #include "cli.h"
+#include "devices.h"
 
 #include <errno.h>
 #include <stdio.h>
@@ -32,7 +33,11 @@ const char cli_common_help[] =
     "  --accel NAME         acceleration structure: bvh (binned-SAH BVH, the default),\n"
     "                       flat (the thesis's list of per-shape boxes) or embree (Intel\n"
     "                       Embree 3, in builds that found it); bvh2 traces the binary\n"
-    "                       BVH without its SIMD wide form, for comparisons\n";
+    "                       BVH without its SIMD wide form, for comparisons\n"
+    "  --device DEV         cpu (the default), opencl (OpenCL device 0) or opencl:N\n"
+    "                       (device N of 'trac0r info --devices'); the device traces\n"
+    "                       the flat structure or the BVH (bvh2 and embree scenes: the\n"
+    "                       binary BVH)\n";
 
 void cli_common_default(cli_common *c) {
     c->scene = "builtin:cornell";
@@ -45,6 +50,7 @@ void cli_common_default(cli_common *c) {
     c->accel = TR_ACCEL_TYPE_BVH;
     c->given = 0;
     c->allow_dark = 0;
+    c->device = CLI_DEVICE_CPU;
 }
 
 int cli_error(const cli_args *a, const char *fmt, ...) {
@@ -222,6 +228,9 @@ int cli_common_option(cli_args *a, cli_common *c) {
         }
         c->accel = (tr_accel_type)accel;
         return CLI_OK;
+    }
+    if (cli_is(a, "--device")) {
+        return cli_parse_device(a, &c->device);
     }
     return -1;
 }

@@ -4,36 +4,53 @@
 
 #include "cli.h"
 #include "commands.h"
+#include "devices.h"
 
 static void info_help(void) {
     printf("Usage: trac0r info SCENE [options]\n"
+           "       trac0r info --devices\n"
            "\n"
            "Loads a scene file (docs/scene-format.md) or a built-in scene and prints its\n"
            "triangle, shape, mesh, material and emitter counts, its bounds, its render\n"
            "defaults and any warnings. Nothing is rendered.\n"
            "\n"
+           "With --devices: lists the OpenCL platforms and devices found, numbered as\n"
+           "--device opencl:N takes them: name, platform, vendor, type, OpenCL version,\n"
+           "compute units and memory.\n"
+           "\n"
            "Options:\n"
+           "  --devices            list the OpenCL devices instead of describing a scene\n"
            "  -h, --help           show this help\n"
            "\n"
            "Exit status: 0 when the scene loads, 2 when it does not (one line naming the\n"
-           "file and the line:column or JSON path at fault).\n");
+           "file and the line:column or JSON path at fault) or, with --devices, when no\n"
+           "OpenCL platform is found.\n");
 }
 
 int cmd_info(int argc, char **argv) {
     cli_args a = {.cmd = "info", .argc = argc, .argv = argv, .i = 0};
     const char *path = NULL;
+    int devices = 0;
     while (cli_next(&a)) {
         if (cli_is(&a, "-h") || cli_is(&a, "--help")) {
             info_help();
             return CLI_OK;
+        } else if (cli_is(&a, "--devices")) {
+            devices = 1;
         } else if (a.opt[0] != '-' && !path) {
             path = a.opt;
         } else {
             return cli_error(&a, "unknown option '%s' (see 'trac0r info --help')", a.opt);
         }
     }
+    if (devices && path) {
+        return cli_error(&a, "--devices takes no SCENE (see 'trac0r info --help')");
+    }
+    if (devices) {
+        return cli_print_devices(stdout);
+    }
     if (!path) {
-        return cli_error(&a, "missing SCENE (see 'trac0r info --help')");
+        return cli_error(&a, "missing SCENE or --devices (see 'trac0r info --help')");
     }
     tr_scene s;
     tr_scene_file f;
@@ -81,7 +98,7 @@ int cmd_info(int argc, char **argv) {
         printf("render:     %ux%u%s, %u spp%s, max depth %d%s, integrator %s%s, accel %s%s\n",
                f.width, f.height, f.has_width || f.has_height ? "" : " (default)", f.spp,
                f.has_spp ? "" : " (default)", f.max_depth, f.has_max_depth ? "" : " (default)",
-               f.has_integrator ? f.integrator : "naive", f.has_integrator ? "" : " (default)",
+               f.has_integrator ? f.integrator : "pt", f.has_integrator ? "" : " (default)",
                tr_accel_name(f.accel), f.has_accel ? "" : " (default)");
     }
     printf("warnings:   %u\n", f.warning_count);

@@ -14,7 +14,7 @@ static void usage(FILE *fp) {
                 "  render   render a scene to a PNG or PFM image\n"
                 "  bench    measure speed: 'trac0r bench frame'\n"
                 "  compare  error metrics (RMSE, relMSE, PSNR) of an image against a reference\n"
-                "  info     describe a scene file: counts, bounds, warnings\n"
+                "  info     describe a scene file: counts, bounds, warnings; --devices: OpenCL devices\n"
                 "  view     interactive window: fly through a scene while it converges\n"
                 "\n"
                 "Run 'trac0r COMMAND --help' for a command's options.\n"

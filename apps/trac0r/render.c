@@ -6,11 +6,13 @@
 
 #include "cli.h"
 #include "commands.h"
+#include "devices.h"
 
 static void render_help(void) {
     printf("Usage: trac0r render [SCENE] [options]\n"
            "\n"
-           "Renders a scene with the CPU backend, accumulating one sample per pixel per pass,\n"
+           "Renders a scene on the CPU or an OpenCL device (--device), accumulating one sample\n"
+           "per pixel per pass (on a device, in a film read back once at the end),\n"
            "and writes the result. With no arguments it renders the thesis's Cornell box at\n"
            "800x600 to render.png. SCENE is a built-in scene or a scene file\n"
            "(docs/scene-format.md); a file's render defaults (size, spp, max depth,\n"
@@ -99,6 +101,13 @@ int cmd_render(int argc, char **argv) {
         tr_scene_free(&scene);
         return cli_error(&a, "--width/--height: %s", err.msg);
     }
+    cli_backend be;
+    rc = cli_backend_open(&a, &c, &scene, &be);
+    if (rc != CLI_OK) {
+        tr_film_free(&film);
+        tr_scene_free(&scene);
+        return rc;
+    }
     tr_render_config cfg = tr_render_config_default();
     cfg.max_depth = c.max_depth;
     cfg.seed = c.seed;
@@ -112,7 +121,7 @@ int cmd_render(int argc, char **argv) {
     rc = CLI_OK;
     for (uint32_t s = 0; s < spp; ++s) {
         tr_render_stats st;
-        if (tr_render_frame(&scene, &scene.camera, &cfg, &film, s, &st, &err) != TR_OK) {
+        if (cli_backend_frame(&be, &scene, &cfg, &film, s, &st, &err) != TR_OK) {
             fprintf(stderr, "%strac0r render: %s\n", tty ? "\n" : "", err.msg);
             rc = CLI_FAILURE;
             break;
@@ -129,19 +138,22 @@ int cmd_render(int argc, char **argv) {
     if (tty) {
         fputc('\n', stderr);
     }
+    if (rc == CLI_OK && cli_backend_read(&be, &film, &err) != TR_OK) {
+        fprintf(stderr, "trac0r render: %s\n", err.msg);
+        rc = CLI_FAILURE;
+    }
     if (rc == CLI_OK && tr_film_write(&film, out, exposure, &err) != TR_OK) {
         fprintf(stderr, "trac0r render: %s\n", err.msg);
         rc = CLI_FAILURE;
     }
     if (rc == CLI_OK) {
-        const int threads = cfg.threads ? cfg.threads : tr_default_threads();
         char accel[160];
         cli_describe_accel(accel, sizeof accel, &scene);
-        fprintf(stderr,
-                "trac0r render: %s %ux%u, %u spp, %d thread%s, %s: %.2f s, %.2f Mrays/s -> %s\n",
-                c.scene, c.width, c.height, spp, threads, threads == 1 ? "" : "s", accel, elapsed,
+        fprintf(stderr, "trac0r render: %s %ux%u, %u spp, %s, %s: %.2f s, %.2f Mrays/s -> %s\n",
+                c.scene, c.width, c.height, spp, be.name, accel, elapsed,
                 elapsed > 0 ? (double)rays / elapsed * 1e-6 : 0.0, out);
     }
+    cli_backend_close(&be);
     tr_film_free(&film);
     tr_scene_free(&scene);
     return rc;

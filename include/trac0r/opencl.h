@@ -1,0 +1,106 @@
+/* opencl.h - the OpenCL backend: the kernel of src/kernel/ on any OpenCL 1.2+ device.
+ *
+ * The kernel source (src/kernel/entry.cl and every header it includes) is embedded
+ * into libtrac0r at build time and compiled for the chosen device when a context
+ * opens. The scene's arrays are uploaded once per scene change, the camera once per
+ * frame; samples accumulate into a float film on the device (radiance sum and count
+ * per pixel, as tr_film), which is read back only when asked for.
+ *
+ *     tr_error err;
+ *     tr_cl_context *cl = tr_cl_open(0, &err);          // device 0 of `trac0r info --devices`
+ *     if (!cl || tr_cl_upload_scene(cl, &scene, &err) != TR_OK) { puts(err.msg); ... }
+ *     for (uint32_t s = 0; s < spp; ++s)
+ *         tr_cl_render_frame(cl, &scene.camera, &cfg, s, NULL, &err);
+ *     tr_cl_read_film(cl, &film, &err);                 // film sized like the camera
+ *     tr_cl_close(cl);
+ *
+ * Builds configured without OpenCL (CMake found no OpenCL) keep these functions:
+ * tr_cl_available() returns 0 and tr_cl_open fails saying so. */
+#ifndef TRAC0R_OPENCL_H
+#define TRAC0R_OPENCL_H
+
+#include <stdint.h>
+
+#include "trac0r/error.h"
+#include "trac0r/film.h"
+#include "trac0r/render.h"
+#include "trac0r/scene.h"
+
+/* What is known of one OpenCL device. */
+typedef struct tr_cl_device_info {
+    int index;          /* position in tr_cl_list_devices' list: the N of --device opencl:N */
+    int platform_index; /* the platform's position in clGetPlatformIDs' list */
+    char platform[128]; /* platform name */
+    char name[128];
+    char vendor[128];
+    char version[128]; /* CL_DEVICE_VERSION */
+    char type[16];     /* "cpu", "gpu", "accelerator", ... */
+    uint32_t compute_units;
+    uint64_t global_mem; /* bytes, CL_DEVICE_GLOBAL_MEM_SIZE */
+    uint64_t max_alloc;  /* bytes, CL_DEVICE_MAX_MEM_ALLOC_SIZE: the largest buffer */
+} tr_cl_device_info;
+
+typedef struct tr_cl_context tr_cl_context;
+
+/* 1 in builds with the OpenCL backend, 0 otherwise. */
+int tr_cl_available(void);
+
+/* The devices of every platform, numbered in platform order, then device order. Fills
+ * up to max entries of out (which may be NULL when max is 0) and sets *count to the
+ * number of devices found. No platform at all is an error ("no OpenCL platform found"). */
+int tr_cl_list_devices(tr_cl_device_info *out, int max, int *count, tr_error *err);
+
+/* Opens device `index` of tr_cl_list_devices' list and compiles the kernel for it.
+ * Returns NULL with a message when there is no platform, the index is out of range,
+ * or the kernel fails to compile (the message then names the call and the OpenCL
+ * error, and tr_cl_last_build_log() holds the compiler's log). */
+tr_cl_context *tr_cl_open(int index, tr_error *err);
+/* tr_cl_open with another kernel source (NULL: the embedded one), for tests of the
+ * build error path; the source must define tr_cl_render as entry.cl does. */
+tr_cl_context *tr_cl_open_source(int index, const char *source, tr_error *err);
+void tr_cl_close(tr_cl_context *ctx);
+
+const tr_cl_device_info *tr_cl_device(const tr_cl_context *ctx);
+/* The device compiler's log of the kernel build ("" when it said nothing). */
+const char *tr_cl_build_log(const tr_cl_context *ctx);
+/* The build log of the most recent kernel build by tr_cl_open in this process, whether
+ * it succeeded or not ("" if none, or if the compiler said nothing). */
+const char *tr_cl_last_build_log(void);
+/* Options the kernel was compiled with: -cl-std=CL1.2 -cl-kernel-arg-info, and
+ * -cl-fp32-correctly-rounded-divide-sqrt where the device supports it. */
+const char *tr_cl_build_options(const tr_cl_context *ctx);
+
+/* Uploads the scene's arrays (triangles, materials, flat nodes, BVH nodes and leaf
+ * triangles) and releases those of the previous scene. The scene must be committed.
+ * A scene committed to Embree (a host library) is traced on the device through a BVH
+ * built here; tr_cl_scene_accel says which structure the device walks. Fails before
+ * allocating anything when a buffer exceeds the device's largest allocation or the
+ * scene plus a film of the camera's size exceeds its memory; the previous scene then
+ * stays. The device film keeps its samples across uploads (tr_cl_clear_film). */
+int tr_cl_upload_scene(tr_cl_context *ctx, const tr_scene *scene, tr_error *err);
+/* The structure the uploaded scene is traced through on the device (flat or bvh). */
+tr_accel_type tr_cl_scene_accel(const tr_cl_context *ctx);
+/* Bytes of device memory the uploaded scene's buffers take. */
+uint64_t tr_cl_scene_bytes(const tr_cl_context *ctx);
+
+/* Adds one sample per pixel (sample number `sample`, or per stride-th pixel with
+ * cfg->stride > 1 as tr_render_frame does) to the device film. The film takes the
+ * camera's screen size; a different size than the previous frame's clears it. Waits
+ * for the device to finish, so stats->seconds is the frame's wall time. cfg->threads
+ * and cfg->tile are ignored. */
+int tr_cl_render_frame(tr_cl_context *ctx, const tr_camera *cam, const tr_render_config *cfg,
+                       uint32_t sample, tr_render_stats *stats, tr_error *err);
+/* Forgets every sample of the device film. */
+int tr_cl_clear_film(tr_cl_context *ctx, tr_error *err);
+/* Copies the device film into `film`, which must have the size of the last frame's
+ * camera. */
+int tr_cl_read_film(tr_cl_context *ctx, tr_film *film, tr_error *err);
+
+/* Pretends the device has only `bytes` of global memory (0: its real size), for tests
+ * of the out-of-memory path on devices that have plenty. */
+void tr_cl_set_memory_limit(tr_cl_context *ctx, uint64_t bytes);
+
+/* "CL_OUT_OF_RESOURCES" for -5 etc.; "CL_UNKNOWN_ERROR" for codes it does not know. */
+const char *tr_cl_error_name(int code);
+
+#endif

@@ -1,0 +1,133 @@
+#!/bin/sh
+# Drives `trac0r ... --device opencl` on PoCL (registered only in builds with the OpenCL
+# backend): device listing, a render that matches the CPU's, and the bad configurations
+# (no platform, no such device, a scene too big for the device), each one clear line and
+# exit status 2, with the CPU backend still working.
+# Usage: cli_opencl.sh TRAC0R_BINARY SCRATCH_DIR
+set -u
+BIN=$1
+DIR=$2
+rm -rf "$DIR"
+mkdir -p "$DIR"
+cd "$DIR" || exit 1
+failures=0
+
+fail() {
+    echo "FAIL: $*" >&2
+    failures=$((failures + 1))
+}
+
+# expect_usage_error WHAT_STDERR_MUST_CONTAIN ARGS...: exit 2, one stderr line naming
+# the fault, no image written.
+expect_usage_error() {
+    needle=$1
+    shift
+    "$BIN" "$@" >out.txt 2>err.txt
+    rc=$?
+    [ "$rc" -eq 2 ] || fail "trac0r $*: exit $rc, expected 2: $(cat err.txt)"
+    lines=$(wc -l <err.txt)
+    [ "$lines" -eq 1 ] || fail "trac0r $*: $lines stderr lines, expected 1: $(cat err.txt)"
+    grep -qF -- "$needle" err.txt || fail "trac0r $*: stderr lacks '$needle': $(cat err.txt)"
+    leftovers=$(ls -A | grep -v -e '^out.txt$' -e '^err.txt$' -e '^empty-icd$' -e '^keep')
+    [ -z "$leftovers" ] || fail "trac0r $*: left files behind: $leftovers"
+    rm -f out.txt err.txt
+}
+
+# The device list names device 0 with its compute units and memory.
+if "$BIN" info --devices >devices.txt 2>err.txt; then
+    grep -q "^  0: " devices.txt || fail "info --devices lists no device 0: $(cat devices.txt)"
+    grep -q "compute units: [1-9]" devices.txt || fail "info --devices: no compute units"
+    grep -q "memory: [1-9][0-9]* MiB" devices.txt || fail "info --devices: no memory size"
+else
+    fail "info --devices failed: $(cat err.txt)"
+fi
+rm -f devices.txt err.txt
+
+# Options.
+R="render --width 8 --height 6 --spp 1 --out x.png"
+expect_usage_error "--device: unknown device 'gpu'" $R --device gpu
+expect_usage_error "--device: expected opencl:N with N in 0..1023, got 'opencl:x'" $R --device opencl:x
+expect_usage_error "--device: expected opencl:N" $R --device opencl:-1
+expect_usage_error "--device: missing value" $R --device
+"$BIN" render --help >help.txt 2>&1 && grep -q -- "--device" help.txt ||
+    fail "render --help does not mention --device"
+"$BIN" bench frame --help >help.txt 2>&1 && grep -q -- "--device" help.txt ||
+    fail "bench frame --help does not mention --device"
+"$BIN" bench complexity --help >help.txt 2>&1 && grep -q -- "--device" help.txt ||
+    fail "bench complexity --help does not mention --device"
+rm -f help.txt
+
+# Bad configurations: exit 2, one line; the CPU backend still works afterwards.
+expect_usage_error "--device: OpenCL device 7 does not exist" $R --device opencl:7
+mkdir empty-icd
+OCL_ICD_VENDORS=$PWD/empty-icd
+export OCL_ICD_VENDORS
+expect_usage_error "--device: no OpenCL platform found" $R --device opencl
+"$BIN" info --devices >out.txt 2>err.txt
+[ $? -eq 2 ] || fail "info --devices without a platform: exit status not 2"
+grep -q "no OpenCL platform found" err.txt || fail "info --devices without a platform: $(cat err.txt)"
+rm -f out.txt err.txt
+"$BIN" render --width 8 --height 6 --spp 1 --out keep-cpu.png 2>/dev/null ||
+    fail "the CPU backend fails when no OpenCL platform exists"
+unset OCL_ICD_VENDORS
+# PoCL with 1 GiB of memory allocates at most 256 MiB per buffer; the 5 242 880
+# triangles of cornell-ico-9 take 340 MiB (the flat structure needs no BVH build).
+POCL_MEMORY_LIMIT=1
+export POCL_MEMORY_LIMIT
+expect_usage_error "does not fit on OpenCL device 0" render --scene builtin:cornell-ico-9 \
+    --accel flat --width 8 --height 6 --spp 1 --device opencl --out x.png
+unset POCL_MEMORY_LIMIT
+"$BIN" render --width 8 --height 6 --spp 1 --out keep-cpu.png 2>/dev/null ||
+    fail "the CPU backend fails after an OpenCL error"
+
+# A device render and a CPU render of the same scene, seed and spp: PFM floats compared
+# value by value. Identical is what PoCL gives for this scene (docs/opencl.md); allow at
+# most 1 % of the values to differ by more than 1e-4 (relative) and the mean to move by 1 %.
+for accel in flat bvh embree; do
+    "$BIN" render --width 24 --height 18 --spp 4 --seed 7 --accel $accel --device opencl \
+        --out dev.pfm 2>err.txt || fail "--device opencl --accel $accel failed: $(cat err.txt)"
+    grep -q "opencl:0" err.txt || fail "the summary line does not name the device: $(cat err.txt)"
+    if [ $accel = embree ]; then
+        grep -q "device traces a bvh" err.txt || fail "embree on the device: $(cat err.txt)"
+    fi
+    "$BIN" render --width 24 --height 18 --spp 4 --seed 7 --accel $accel --out cpu.pfm \
+        2>/dev/null || fail "CPU render failed"
+    od -An -v -tf4 -w4 -j 14 dev.pfm >dev.txt
+    od -An -v -tf4 -w4 -j 14 cpu.pfm >cpu.txt
+    verdict=$(paste dev.txt cpu.txt | awk '
+        function abs(v) { return v < 0 ? -v : v }
+        { n++; sa += $1; sb += $2
+          m = abs($1) > abs($2) ? abs($1) : abs($2)
+          if ($1 != $2 && abs($1 - $2) > 1e-4 * m) d++ }
+        END { if (n != 24 * 18 * 3) print "count " n;
+              else if (d * 100 > n) print "differ " d;
+              else if (sa - sb > 0.01 * sb || sb - sa > 0.01 * sb) print "mean " sa " " sb;
+              else print "ok " d }')
+    case $verdict in
+    ok*) ;;
+    *) fail "--accel $accel: OpenCL and CPU images disagree: $verdict" ;;
+    esac
+    rm -f dev.pfm cpu.pfm dev.txt cpu.txt err.txt
+done
+
+# Benchmarks accept the device.
+"$BIN" bench frame --width 16 --height 12 --frames 2 --device opencl >bench.txt 2>&1 ||
+    fail "bench frame --device opencl failed: $(cat bench.txt)"
+grep -q "opencl:0" bench.txt || fail "bench frame does not name the device: $(cat bench.txt)"
+grep -q "^fps " bench.txt || fail "bench frame printed no fps: $(cat bench.txt)"
+grep -q "device/cpu [0-9]" bench.txt || fail "bench frame printed no CPU reference: $(cat bench.txt)"
+"$BIN" bench complexity --width 16 --height 12 --frames 1 --max-level 1 --device opencl \
+    --out cx >bench.txt 2>&1 || fail "bench complexity --device opencl failed: $(cat bench.txt)"
+grep -q "^1,[0-9]*,bvh," cx.csv || fail "complexity CSV lacks the bvh row of level 1: $(cat cx.csv)"
+grep -q "^0,.*,flat," cx.csv || fail "complexity CSV lacks the flat row of level 0: $(cat cx.csv)"
+if grep -q embree cx.csv; then fail "embree measured on the device: $(cat cx.csv)"; fi
+rm -f bench.txt cx.csv cx.png
+expect_usage_error "--device: not an option of this benchmark" bench rays --device opencl
+expect_usage_error "--accels:" bench complexity --device opencl \
+    --accels bvh,embree
+
+if [ "$failures" -ne 0 ]; then
+    echo "cli_opencl: $failures failures" >&2
+    exit 1
+fi
+echo "cli_opencl: all checks passed"

@@ -1,0 +1,323 @@
+/* test_opencl.c - the OpenCL backend on PoCL (or whatever device 0 is): the embedded
+ * kernel compiles without warnings, OpenCL and CPU films agree for the same scene,
+ * seed and spp, and bad configurations fail with clear messages.
+ *
+ * One context (one kernel build) serves the whole binary: PoCL's first compile takes
+ * seconds. Needs an OpenCL platform; tests/CMakeLists.txt registers this test only in
+ * builds with the backend, and it fails (not skips) when no device can be opened. */
+#include <ctype.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "check.h"
+#include "trac0r/opencl.h"
+#include "trac0r/trac0r.h"
+
+extern const char tr_cl_kernel_source[];
+extern const size_t tr_cl_kernel_source_length;
+
+/* Case-insensitive substring search. */
+static int contains_ci(const char *hay, const char *needle) {
+    size_t n = strlen(needle);
+    for (; *hay; ++hay) {
+        size_t i = 0;
+        while (i < n && hay[i] &&
+               tolower((unsigned char)hay[i]) == tolower((unsigned char)needle[i])) {
+            ++i;
+        }
+        if (i == n) {
+            return 1;
+        }
+    }
+    return 0;
+}
+
+static double luminance(const tr_film *f, size_t i) {
+    if (f->count[i] == 0) {
+        return 0.0;
+    }
+    return (f->sum[3 * i] + f->sum[3 * i + 1] + f->sum[3 * i + 2]) / (3.0 * f->count[i]);
+}
+
+/* Region means of two films of the same scene agree within statistical bounds. The
+ * noise of a region's mean is measured from two further CPU films with other seeds,
+ * r1 and r2: per pixel, d = L(r1) - L(r2) has variance 2 sigma^2 (sigma^2 the per-pixel
+ * Monte Carlo variance; pixels are independent, their random streams being keyed by
+ * pixel), so the mean over the region's n pixels of L(a) - L(b), for independent a and
+ * b, has variance var(d) / n. Films that share their random streams (a and b here)
+ * differ by less. Each of the R x R regions must satisfy
+ * |mean(L(a) - scale * L(b))| <= z * sqrt(var(d) / n) with z = 4.9 (two-sided
+ * p = 1e-6 per region under the normal approximation). Returns the failing regions.
+ */
+static int region_failures(const tr_film *a, const tr_film *b, const tr_film *r1, const tr_film *r2,
+                           double scale, uint32_t stride, int verbose) {
+    /* With a preview stride only the traced pixel of each block is an independent
+     * estimate: use those, in one region. */
+    const int R = stride > 1 ? 1 : 4;
+    int failures = 0;
+    for (int ry = 0; ry < R; ++ry) {
+        for (int rx = 0; rx < R; ++rx) {
+            uint32_t x0 = a->width * (uint32_t)rx / R, x1 = a->width * (uint32_t)(rx + 1) / R;
+            uint32_t y0 = a->height * (uint32_t)ry / R, y1 = a->height * (uint32_t)(ry + 1) / R;
+            double sab = 0, sd = 0, qd = 0, n = 0;
+            for (uint32_t y = y0; y < y1; ++y) {
+                for (uint32_t x = x0; x < x1; ++x) {
+                    if (x % stride || y % stride) {
+                        continue;
+                    }
+                    size_t i = (size_t)y * a->width + x;
+                    sab += luminance(a, i) - scale * luminance(b, i);
+                    double d = luminance(r1, i) - luminance(r2, i);
+                    sd += d;
+                    qd += d * d;
+                    n += 1;
+                }
+            }
+            double md = sd / n;
+            double vd = (qd - n * md * md) / (n - 1);
+            double bound = 4.9 * sqrt(fmax(vd, 0) / n);
+            if (!(fabs(sab / n) <= bound)) {
+                ++failures;
+            }
+            if (verbose > 1 || (verbose && !(fabs(sab / n) <= bound))) {
+                fprintf(stderr, "region (%d,%d): mean difference %.4g, bound %.4g\n", rx, ry,
+                        sab / n, bound);
+            }
+        }
+    }
+    return failures;
+}
+
+/* Renders `spp` samples of `scene` on the CPU and on the device and compares. */
+static void compare_backends(tr_cl_context *cl, tr_scene *scene, int stride, uint32_t spp,
+                             const char *what) {
+    tr_error err;
+    const uint32_t w = scene->camera.screen_width, h = scene->camera.screen_height;
+    tr_film cpu, dev, r1, r2;
+    CHECK(tr_film_init(&cpu, w, h, &err) == TR_OK, "%s", err.msg);
+    CHECK(tr_film_init(&dev, w, h, &err) == TR_OK, "%s", err.msg);
+    CHECK(tr_film_init(&r1, w, h, &err) == TR_OK, "%s", err.msg);
+    CHECK(tr_film_init(&r2, w, h, &err) == TR_OK, "%s", err.msg);
+    tr_render_config cfg = tr_render_config_default();
+    cfg.seed = 12345;
+    cfg.stride = stride;
+    CHECK(tr_cl_upload_scene(cl, scene, &err) == TR_OK, "%s: upload: %s", what, err.msg);
+    CHECK(tr_cl_clear_film(cl, &err) == TR_OK, "%s", err.msg);
+    uint64_t rays_cpu = 0, rays_dev = 0;
+    for (uint32_t s = 0; s < spp; ++s) {
+        tr_render_stats st;
+        CHECK(tr_render_frame(scene, &scene->camera, &cfg, &cpu, s, &st, &err) == TR_OK, "%s",
+              err.msg);
+        rays_cpu += st.rays;
+        CHECK(tr_cl_render_frame(cl, &scene->camera, &cfg, s, &st, &err) == TR_OK, "%s: %s", what,
+              err.msg);
+        rays_dev += st.rays;
+        tr_render_config other = cfg;
+        other.seed = 1;
+        CHECK(tr_render_frame(scene, &scene->camera, &other, &r1, s, NULL, &err) == TR_OK, "%s",
+              err.msg);
+        other.seed = 2;
+        CHECK(tr_render_frame(scene, &scene->camera, &other, &r2, s, NULL, &err) == TR_OK, "%s",
+              err.msg);
+    }
+    CHECK(tr_cl_read_film(cl, &dev, &err) == TR_OK, "%s", err.msg);
+
+    /* Sample counts depend on geometry only: identical. */
+    size_t n = (size_t)w * h, count_diff = 0, pix_diff = 0, pix_far = 0;
+    double max_rel = 0;
+    for (size_t i = 0; i < n; ++i) {
+        count_diff += cpu.count[i] != dev.count[i];
+        int differs = 0, far = 0;
+        for (int c = 0; c < 3; ++c) {
+            float a = cpu.sum[3 * i + c], b = dev.sum[3 * i + c];
+            if (a != b) {
+                differs = 1;
+                double rel = fabs((double)a - b) / fmax(fabs((double)a), fabs((double)b));
+                max_rel = fmax(max_rel, rel);
+                far |= rel > 1e-4;
+            }
+        }
+        pix_diff += (size_t)differs;
+        pix_far += (size_t)far;
+    }
+    CHECK(count_diff == 0, "%s: %zu pixels got a different sample count", what, count_diff);
+    /* The device's sin/cos/exp/log1p/expm1/pow differ from glibc's by up to 1 ulp in a
+     * fraction of inputs (docs/opencl.md). With the naive integrator a path's value only
+     * depends on the discrete choices along it (triangles hit, reflect or refract):
+     * cosine and lobe sampling make each bounce's weight the material colour, so a
+     * 1-ulp change of a direction matters only where it changes such a choice (a ray
+     * grazing an edge): nearly every pixel is bit-identical. An integrator whose weights
+     * depend on angles differs in the last bits everywhere; either way, a pixel more
+     * than 1e-4 apart (relative) has taken another path, and at most 1 % may. */
+    CHECK(pix_far * 100 <= n,
+          "%s: %zu of %zu pixels differ by more than 1e-4 between CPU and OpenCL", what, pix_far,
+          n);
+    printf("%s: %zu of %zu pixels differ at all, %zu by more than 1e-4 (max relative "
+           "difference %.3g), rays %llu vs %llu\n",
+           what, pix_diff, n, pix_far, max_rel, (unsigned long long)rays_cpu,
+           (unsigned long long)rays_dev);
+    /* The ray counts differ only through such paths. */
+    CHECK(fabs((double)rays_cpu - (double)rays_dev) <= 0.01 * (double)rays_cpu,
+          "%s: %llu rays on the CPU, %llu on the device", what, (unsigned long long)rays_cpu,
+          (unsigned long long)rays_dev);
+    int rf = region_failures(&cpu, &dev, &r1, &r2, 1.0, (uint32_t)stride, 1);
+    CHECK(rf == 0, "%s: %d region means differ beyond their statistical bound", what, rf);
+    /* The check would notice an independent film (another seed) only by chance, and a
+     * brightness error of 20 % for sure: the bound is tight enough to matter (with a
+     * stride, the few traced pixels leave too wide a bound for that). */
+    CHECK(region_failures(&cpu, &r1, &r1, &r2, 1.0, (uint32_t)stride, 1) == 0,
+          "%s: two CPU films with other seeds fail the region check", what);
+    CHECK(stride > 1 || region_failures(&cpu, &dev, &r1, &r2, 1.2, (uint32_t)stride, 0) > 0,
+          "%s: the region check does not notice a 20 %% scaling", what);
+    tr_film_free(&cpu);
+    tr_film_free(&dev);
+    tr_film_free(&r1);
+    tr_film_free(&r2);
+}
+
+int main(void) {
+    tr_error err;
+    int count = 0;
+    tr_cl_device_info devs[16];
+    CHECK(tr_cl_available() == 1, "this test is only built with the OpenCL backend");
+    CHECK(tr_cl_list_devices(devs, 16, &count, &err) == TR_OK, "%s", err.msg);
+    CHECK(count >= 1, "no OpenCL device (PoCL is installed by scripts/install-deps)");
+    if (count < 1) {
+        return check_finish("test_opencl");
+    }
+    CHECK(devs[0].index == 0 && devs[0].name[0] != '\0', "device 0 has no name");
+    CHECK(devs[0].compute_units >= 1, "device 0: %u compute units", devs[0].compute_units);
+    CHECK(devs[0].global_mem > 0 && devs[0].max_alloc > 0 &&
+              devs[0].max_alloc <= devs[0].global_mem,
+          "device 0: memory %llu, largest buffer %llu", (unsigned long long)devs[0].global_mem,
+          (unsigned long long)devs[0].max_alloc);
+
+    /* The embedded source is the kernel headers inlined behind entry.cl. */
+    CHECK(tr_cl_kernel_source_length == strlen(tr_cl_kernel_source), "embedded length");
+    const char *headers[] = {"kernel.h", "compat.h",     "types.h",           "vec.h",
+                             "rng.h",    "sampling.h",   "material.h",        "intersect.h",
+                             "camera.h", "scene_view.h", "integrator_naive.h"};
+    for (size_t i = 0; i < sizeof headers / sizeof headers[0]; ++i) {
+        char tag[64];
+        snprintf(tag, sizeof tag, "#line 1 \"%s\"", headers[i]);
+        CHECK(strstr(tr_cl_kernel_source, tag) != NULL, "%s is not embedded", headers[i]);
+    }
+    CHECK(strstr(tr_cl_kernel_source, "#include \"") == NULL,
+          "the embedded source still has a quoted #include");
+
+    /* Out-of-range device indices. */
+    CHECK(tr_cl_open(count, &err) == NULL, "device %d opened", count);
+    CHECK(strstr(err.msg, "does not exist") != NULL, "message: %s", err.msg);
+    CHECK(tr_cl_open(-1, &err) == NULL, "device -1 opened");
+
+    tr_cl_context *cl = tr_cl_open(0, &err);
+    CHECK(cl != NULL, "tr_cl_open(0): %s", err.msg);
+    if (!cl) {
+        fprintf(stderr, "build log:\n%s\n", tr_cl_last_build_log());
+        return check_finish("test_opencl");
+    }
+    const char *log = tr_cl_build_log(cl);
+    CHECK(!contains_ci(log, "warning") && !contains_ci(log, "error"),
+          "the kernel build log is not clean:\n%s", log);
+    CHECK(strstr(tr_cl_build_options(cl), "-cl-std=CL1.2") != NULL, "options: %s",
+          tr_cl_build_options(cl));
+    printf("device 0: %s (%s), %u compute units; build log: '%s'\n", tr_cl_device(cl)->name,
+           tr_cl_device(cl)->vendor, tr_cl_device(cl)->compute_units, log);
+
+    /* The build log shows warnings (so a clean log means something), and a kernel that
+     * does not compile is reported with the call, the error name and the log. */
+    const char *warns =
+        "#warning this line warns\n__kernel void other(__global int *p) { p[0] = 1; }\n";
+    CHECK(tr_cl_open_source(0, warns, &err) == NULL, "a kernel without tr_cl_render opened");
+    CHECK(strstr(err.msg, "clCreateKernel(tr_cl_render)") &&
+              strstr(err.msg, "CL_INVALID_KERNEL_NAME"),
+          "message: %s", err.msg);
+    CHECK(contains_ci(tr_cl_last_build_log(), "warning"), "no warning in the log of %s: '%s'",
+          warns, tr_cl_last_build_log());
+    const char *broken = "__kernel void tr_cl_render(__global int *p) { p[0] = undeclared; }\n";
+    CHECK(tr_cl_open_source(0, broken, &err) == NULL, "a broken kernel opened");
+    CHECK(strstr(err.msg, "clBuildProgram") && strstr(err.msg, "CL_BUILD_PROGRAM_FAILURE") &&
+              strstr(err.msg, "undeclared"),
+          "message: %s", err.msg);
+    CHECK(contains_ci(tr_cl_last_build_log(), "error"), "build log: '%s'", tr_cl_last_build_log());
+
+    tr_render_config cfg = tr_render_config_default();
+    tr_scene scene;
+    tr_scene_init(&scene);
+    CHECK(tr_scene_builtin(&scene, "cornell", 48, 36, &err) == TR_OK, "%s", err.msg);
+    /* Nothing uploaded yet. */
+    CHECK(tr_cl_render_frame(cl, &scene.camera, &cfg, 0, NULL, &err) != TR_OK,
+          "a frame rendered without a scene");
+    CHECK(tr_cl_read_film(cl, &(tr_film){0}, &err) != TR_OK, "read an unrendered film");
+
+    /* Both device structures, and Embree's scene traced through a device BVH. */
+    const tr_accel_type accels[] = {TR_ACCEL_TYPE_FLAT, TR_ACCEL_TYPE_BVH, TR_ACCEL_TYPE_EMBREE};
+    for (int k = 0; k < 3; ++k) {
+        if (!tr_accel_available(accels[k])) {
+            printf("accel %s: not in this build\n", tr_accel_name(accels[k]));
+            continue;
+        }
+        CHECK(tr_scene_commit(&scene, accels[k], &err) == TR_OK, "%s", err.msg);
+        char what[64];
+        snprintf(what, sizeof what, "accel %s", tr_accel_name(accels[k]));
+        compare_backends(cl, &scene, 1, 64, what);
+        tr_accel_type want =
+            accels[k] == TR_ACCEL_TYPE_FLAT ? TR_ACCEL_TYPE_FLAT : TR_ACCEL_TYPE_BVH;
+        CHECK(tr_cl_scene_accel(cl) == want, "%s: the device walks %s", what,
+              tr_accel_name(tr_cl_scene_accel(cl)));
+    }
+    /* Preview stride: the same blocks filled as on the CPU. */
+    CHECK(tr_scene_commit(&scene, TR_ACCEL_TYPE_BVH, &err) == TR_OK, "%s", err.msg);
+    compare_backends(cl, &scene, 5, 64, "bvh, stride 5");
+
+    /* Film handling: a wrongly sized film, clearing, a bad config. */
+    tr_film small;
+    CHECK(tr_film_init(&small, 8, 8, &err) == TR_OK, "%s", err.msg);
+    CHECK(tr_cl_read_film(cl, &small, &err) != TR_OK && strstr(err.msg, "8x8"),
+          "read into an 8x8 film: %s", err.msg);
+    tr_film film;
+    CHECK(tr_film_init(&film, 48, 36, &err) == TR_OK, "%s", err.msg);
+    CHECK(tr_cl_clear_film(cl, &err) == TR_OK, "%s", err.msg);
+    CHECK(tr_cl_read_film(cl, &film, &err) == TR_OK, "%s", err.msg);
+    uint64_t total = 0;
+    for (size_t i = 0; i < 48 * 36; ++i) {
+        total += film.count[i];
+    }
+    CHECK(total == 0, "%llu samples left after tr_cl_clear_film", (unsigned long long)total);
+    cfg.integrator = 99;
+    CHECK(tr_cl_render_frame(cl, &scene.camera, &cfg, 0, NULL, &err) != TR_OK &&
+              strstr(err.msg, "integrator"),
+          "integrator 99: %s", err.msg);
+    cfg = tr_render_config_default();
+    cfg.max_depth = 0;
+    CHECK(tr_cl_render_frame(cl, &scene.camera, &cfg, 0, NULL, &err) != TR_OK, "max depth 0");
+    cfg = tr_render_config_default();
+
+    /* A device without enough memory: the upload fails before touching the scene on
+     * the device, which keeps rendering the previous one. */
+    tr_scene big;
+    tr_scene_init(&big);
+    CHECK(tr_scene_builtin(&big, "cornell-ico-5", 48, 36, &err) == TR_OK, "%s", err.msg);
+    CHECK(tr_scene_commit(&big, TR_ACCEL_TYPE_BVH, &err) == TR_OK, "%s", err.msg);
+    tr_cl_set_memory_limit(cl, 1u << 20); /* 1 MiB: cornell-ico-5 needs about 3 */
+    CHECK(tr_cl_upload_scene(cl, &big, &err) != TR_OK, "uploaded a scene beyond the limit");
+    CHECK(strstr(err.msg, "does not fit") != NULL, "message: %s", err.msg);
+    CHECK(tr_cl_render_frame(cl, &scene.camera, &cfg, 0, NULL, &err) == TR_OK,
+          "the previous scene is gone after a failed upload: %s", err.msg);
+    tr_cl_set_memory_limit(cl, 0);
+    CHECK(tr_cl_upload_scene(cl, &big, &err) == TR_OK, "%s", err.msg);
+    CHECK(tr_cl_scene_bytes(cl) > (1u << 20), "scene bytes %llu",
+          (unsigned long long)tr_cl_scene_bytes(cl));
+    tr_render_stats st;
+    CHECK(tr_cl_render_frame(cl, &big.camera, &cfg, 0, &st, &err) == TR_OK, "%s", err.msg);
+    CHECK(st.rays >= 48 * 36, "%llu rays for a 48x36 frame", (unsigned long long)st.rays);
+
+    tr_scene_free(&big);
+    tr_film_free(&small);
+    tr_film_free(&film);
+    tr_scene_free(&scene);
+    tr_cl_close(cl);
+    return check_finish("test_opencl");
+}
