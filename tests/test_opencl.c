@@ -91,8 +91,8 @@ static int region_failures(const tr_film *a, const tr_film *b, const tr_film *r1
 }
 
 /* Renders `spp` samples of `scene` on the CPU and on the device and compares. */
-static void compare_backends(tr_cl_context *cl, tr_scene *scene, int stride, uint32_t spp,
-                             const char *what) {
+static void compare_backends(tr_cl_context *cl, tr_scene *scene, int stride, int integrator,
+                             uint32_t spp, const char *what) {
     tr_error err;
     const uint32_t w = scene->camera.screen_width, h = scene->camera.screen_height;
     tr_film cpu, dev, r1, r2;
@@ -103,6 +103,7 @@ static void compare_backends(tr_cl_context *cl, tr_scene *scene, int stride, uin
     tr_render_config cfg = tr_render_config_default();
     cfg.seed = 12345;
     cfg.stride = stride;
+    cfg.integrator = integrator;
     CHECK(tr_cl_upload_scene(cl, scene, &err) == TR_OK, "%s: upload: %s", what, err.msg);
     CHECK(tr_cl_clear_film(cl, &err) == TR_OK, "%s", err.msg);
     uint64_t rays_cpu = 0, rays_dev = 0;
@@ -253,8 +254,9 @@ int main(void) {
     CHECK(tr_cl_read_film(cl, &(tr_film){0}, &err) != TR_OK, "read an unrendered film");
 
     /* Both device structures, and Embree's scene traced through a device BVH. */
-    const tr_accel_type accels[] = {TR_ACCEL_TYPE_FLAT, TR_ACCEL_TYPE_BVH, TR_ACCEL_TYPE_EMBREE};
-    for (int k = 0; k < 3; ++k) {
+    const tr_accel_type accels[] = {TR_ACCEL_TYPE_FLAT, TR_ACCEL_TYPE_BVH, TR_ACCEL_TYPE_BVH2,
+                                    TR_ACCEL_TYPE_EMBREE};
+    for (int k = 0; k < 4; ++k) {
         if (!tr_accel_available(accels[k])) {
             printf("accel %s: not in this build\n", tr_accel_name(accels[k]));
             continue;
@@ -262,7 +264,7 @@ int main(void) {
         CHECK(tr_scene_commit(&scene, accels[k], &err) == TR_OK, "%s", err.msg);
         char what[64];
         snprintf(what, sizeof what, "accel %s", tr_accel_name(accels[k]));
-        compare_backends(cl, &scene, 1, 64, what);
+        compare_backends(cl, &scene, 1, TR_INTEGRATOR_NAIVE, 64, what);
         tr_accel_type want =
             accels[k] == TR_ACCEL_TYPE_FLAT ? TR_ACCEL_TYPE_FLAT : TR_ACCEL_TYPE_BVH;
         CHECK(tr_cl_scene_accel(cl) == want, "%s: the device walks %s", what,
@@ -270,7 +272,11 @@ int main(void) {
     }
     /* Preview stride: the same blocks filled as on the CPU. */
     CHECK(tr_scene_commit(&scene, TR_ACCEL_TYPE_BVH, &err) == TR_OK, "%s", err.msg);
-    compare_backends(cl, &scene, 5, 64, "bvh, stride 5");
+    compare_backends(cl, &scene, 5, TR_INTEGRATOR_NAIVE, 64, "bvh, stride 5");
+    /* The pt integrator with its emitter table on the device. */
+    compare_backends(cl, &scene, 1, TR_INTEGRATOR_PT, 64, "bvh, pt");
+    CHECK(tr_scene_commit(&scene, TR_ACCEL_TYPE_FLAT, &err) == TR_OK, "%s", err.msg);
+    compare_backends(cl, &scene, 1, TR_INTEGRATOR_PT, 64, "flat, pt");
 
     /* Film handling: a wrongly sized film, clearing, a bad config. */
     tr_film small;
