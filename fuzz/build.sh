@@ -14,6 +14,7 @@ mkdir -p "$OUT"
     -fno-omit-frame-pointer -ffp-contract=off -Wall -Wextra -Wno-unknown-pragmas \
     -Iinclude -Isrc $(pkg-config --cflags libcjson) \
     fuzz/fuzz_scene_json.c src/scene/json.c src/scene/scene.c src/scene/shape.c \
-    src/scene/camera.c src/accel/bvh.c src/accel/embree.c src/util/error.c \
+    src/scene/camera.c src/scene/lights.c src/accel/bvh.c src/accel/wbvh.c src/accel/embree.c \
+    src/util/error.c \
     $(pkg-config --libs libcjson) -lm -o "$OUT/fuzz_scene_json"
 echo "built $OUT/fuzz_scene_json"
