@@ -195,7 +195,8 @@ static void test_parse_memory(void) {
         CHECK(f.has_width && f.width == 64 && !f.has_height && f.height == 600, "width");
         CHECK(f.has_spp && f.spp == 3, "spp");
         CHECK(s.camera.screen_width == 64 && s.camera.screen_height == 600, "camera size");
-        CHECK(s.materials[0].flags == TR_MATERIAL_TWO_SIDED, "two_sided sets TR_MATERIAL_TWO_SIDED");
+        CHECK(s.materials[0].flags == TR_MATERIAL_TWO_SIDED,
+              "two_sided sets TR_MATERIAL_TWO_SIDED");
         CHECK(f.emissive_triangles == 80 && f.emitter_materials == 1, "emitters");
         CHECK_NEAR(f.bounds.max.x, 1.0, 1e-6, "bounds");
         tr_scene_free(&s);
