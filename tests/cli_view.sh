@@ -273,6 +273,36 @@ cmp -s shots/trac0r-view-000.png r4.png || fail "F12 screenshot differs from ren
 grep -q "saved shots/trac0r-view-000.png (4 spp)" view.out || fail "F12 message: $(cat view.out)"
 quit_viewer
 
+# --device opencl (builds and machines with an OpenCL device; tests/cli_opencl.sh checks
+# that PoCL is there): the window renders on the device, a stride change clears the
+# device's film, and F12 then saves what `trac0r render --device opencl --spp 4` computes.
+if "$BIN" info --devices >/dev/null 2>&1; then
+    rm -rf shots
+    mkdir -p shots
+    start_viewer --max-spp 4 --device opencl
+    grep -q "rendering on opencl:0" view.err || fail "--device opencl: $(cat view.err)"
+    wait_for 60 '[ "$(state spp)" -ge 2 ]' || fail "device viewer did not reach 2 spp"
+    gen0=$(state view_generation)
+    xdotool key 2
+    wait_for 30 '[ "$(state stride)" = 2 ] && [ "$(state generation)" -gt "$gen0" ]' ||
+        fail "device viewer: 2 did not switch to stride 2"
+    xdotool key 1
+    wait_for 60 '[ "$(state stride)" = 1 ] && [ "$(state spp)" -eq 4 ] &&
+        [ "$(state generation)" = "$(state view_generation)" ]' ||
+        fail "device viewer did not settle at stride 1, 4 spp: spp $(state spp)"
+    xdotool key F12
+    wait_for 20 '[ "$(state shots)" -ge 1 ]' || fail "device F12 saved nothing: $(cat view.err)"
+    "$BIN" render --width 160 --height 120 --spp 4 --device opencl --out d4.png 2>/dev/null
+    cmp -s shots/trac0r-view-000.png d4.png ||
+        fail "device F12 screenshot differs from render --device opencl --spp 4"
+    quit_viewer
+    # Headless too: view --frames equals render on the same device.
+    "$BIN" view --device opencl --width 40 --height 30 --frames 3 --screenshot dv.pfm \
+        2>/dev/null || fail "headless view --device opencl failed"
+    "$BIN" render --device opencl --width 40 --height 30 --spp 3 --out dr.pfm 2>/dev/null
+    cmp -s dv.pfm dr.pfm || fail "headless view --device opencl differs from render"
+fi
+
 if [ "$failures" -ne 0 ]; then
     echo "cli_view: $failures failures" >&2
     exit 1

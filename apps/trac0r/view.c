@@ -69,22 +69,28 @@ static int set_render_config(const cli_common *c, tr_render_config *cfg) {
 /* Renders `frames` frames of the scene's own camera, as `trac0r render` does; returns
  * the seconds taken in *seconds. */
 static int render_frames(const cli_args *a, const view_options *o, const tr_scene *scene,
-                         tr_film *film, uint32_t frames, double *seconds) {
+                         cli_backend *be, tr_film *film, uint32_t frames, double *seconds) {
     tr_render_config cfg;
     set_render_config(&o->c, &cfg);
     tr_error err;
     const double t0 = tr_time_now();
     for (uint32_t s = 0; s < frames; ++s) {
-        if (tr_render_frame(scene, &scene->camera, &cfg, film, s, NULL, &err) != TR_OK) {
+        if (cli_backend_frame(be, scene, &cfg, film, s, NULL, &err) != TR_OK) {
             fprintf(stderr, "trac0r %s: %s\n", a->cmd, err.msg);
             return CLI_FAILURE;
         }
+    }
+    /* A device's film comes back once, inside the timed span (as a displayed frame would). */
+    if (cli_backend_read(be, film, &err) != TR_OK) {
+        fprintf(stderr, "trac0r %s: %s\n", a->cmd, err.msg);
+        return CLI_FAILURE;
     }
     *seconds = tr_time_now() - t0;
     return CLI_OK;
 }
 
-static int run_headless(const cli_args *a, const view_options *o, tr_scene *scene) {
+static int run_headless(const cli_args *a, const view_options *o, tr_scene *scene,
+                        cli_backend *be) {
     tr_error err;
     tr_film film;
     if (tr_film_init(&film, o->c.width, o->c.height, &err) != TR_OK) {
@@ -92,7 +98,7 @@ static int run_headless(const cli_args *a, const view_options *o, tr_scene *scen
     }
     double seconds = 0.0;
     const uint32_t frames = o->frames ? o->frames : VIEW_DEFAULT_FRAMES;
-    int rc = render_frames(a, o, scene, &film, frames, &seconds);
+    int rc = render_frames(a, o, scene, be, &film, frames, &seconds);
     if (rc == CLI_OK && o->benchmark >= 0) {
         printf("trac0r view: benchmark cornell-ico-%d (%u triangles) %ux%u, %u frames in "
                "%.2f s: %.3f average FPS (%.1f ms/frame)\n",
@@ -214,7 +220,17 @@ int cmd_view(int argc, char **argv) {
         }
     }
 
-    rc = headless ? run_headless(&a, &o, &scene) : view_run_window(&a, &o, &scene);
+    cli_backend be;
+    rc = cli_backend_open(&a, &o.c, &scene, &be);
+    if (rc != CLI_OK) {
+        tr_scene_free(&scene);
+        return rc;
+    }
+    if (be.cl) {
+        fprintf(stderr, "trac0r view: rendering on %s\n", be.name);
+    }
+    rc = headless ? run_headless(&a, &o, &scene, &be) : view_run_window(&a, &o, &scene, &be);
+    cli_backend_close(&be);
     tr_scene_free(&scene);
     return rc;
 }

@@ -5,6 +5,7 @@
 #include <stdint.h>
 
 #include "cli.h"
+#include "devices.h"
 
 typedef struct view_options {
     cli_common c;
@@ -21,7 +22,8 @@ typedef struct view_options {
     char font_path[4096];   /* the font found for the debug view */
 } view_options;
 
-/* The interactive window (view_window.c); returns the exit status. */
-int view_run_window(const cli_args *a, const view_options *o, tr_scene *scene);
+/* The interactive window (view_window.c), rendering on `be` (the CPU or an OpenCL device
+ * holding the scene); returns the exit status. */
+int view_run_window(const cli_args *a, const view_options *o, tr_scene *scene, cli_backend *be);
 
 #endif

@@ -48,6 +48,22 @@ static int resize_buffers(view_renderer *r, uint32_t w, uint32_t h, tr_error *er
     return TR_OK;
 }
 
+/* One frame of sample `spp` into r->film: on the CPU (cancellable), or on the device and
+ * read back. */
+static int render_one(view_renderer *r, const tr_camera *cam, const tr_render_config *cfg,
+                      uint32_t spp, tr_render_stats *st, tr_error *err) {
+    if (!r->cl) {
+        return tr_render_frame(r->scene, cam, cfg, &r->film, spp, st, err);
+    }
+    if (tr_cl_render_frame(r->cl, cam, cfg, spp, st, err) != TR_OK) {
+        return TR_ERR;
+    }
+    if (atomic_load(&r->cancel)) {
+        return tr_error_set(err, "frame cancelled"); /* the view changed meanwhile */
+    }
+    return tr_cl_read_film(r->cl, &r->film, err);
+}
+
 static void *render_main(void *arg) {
     view_renderer *r = arg;
     uint64_t gen = UINT64_MAX; /* the generation the film holds */
@@ -89,7 +105,8 @@ static void *render_main(void *arg) {
         pthread_mutex_unlock(&r->mu);
 
         if (want != gen) {
-            if (resize_buffers(r, cam.screen_width, cam.screen_height, &err) != TR_OK) {
+            if (resize_buffers(r, cam.screen_width, cam.screen_height, &err) != TR_OK ||
+                (r->cl && tr_cl_clear_film(r->cl, &err) != TR_OK)) {
                 pthread_mutex_lock(&r->mu);
                 r->failed = 1;
                 snprintf(r->error, sizeof r->error, "%s", err.msg);
@@ -102,7 +119,7 @@ static void *render_main(void *arg) {
         cfg.stride = stride;
         cfg.cancel = &r->cancel;
         tr_render_stats st;
-        int rc = tr_render_frame(r->scene, &cam, &cfg, &r->film, spp, &st, &err);
+        int rc = render_one(r, &cam, &cfg, spp, &st, &err);
         if (rc != TR_OK) {
             pthread_mutex_lock(&r->mu);
             if (atomic_load(&r->cancel)) {
@@ -147,11 +164,12 @@ static void *render_main(void *arg) {
     return NULL;
 }
 
-int view_renderer_start(view_renderer *r, const tr_scene *scene, const tr_render_config *cfg,
-                        const tr_camera *cam, int stride, float exposure, uint32_t max_spp,
-                        tr_error *err) {
+int view_renderer_start(view_renderer *r, const tr_scene *scene, tr_cl_context *cl,
+                        const tr_render_config *cfg, const tr_camera *cam, int stride,
+                        float exposure, uint32_t max_spp, tr_error *err) {
     memset(r, 0, sizeof *r);
     r->scene = scene;
+    r->cl = cl;
     r->cfg = *cfg;
     r->max_spp = max_spp;
     r->cam = *cam;

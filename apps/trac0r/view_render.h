@@ -4,7 +4,11 @@
  * of the current view, publishing each finished frame as tonemapped 32-bit pixels.
  * The UI thread changes the view with view_renderer_set_view, which cancels the frame
  * in flight (tr_render_config.cancel) and restarts accumulation, so input never waits
- * for a slow frame. Everything shared is guarded by `mu`. */
+ * for a slow frame. Everything shared is guarded by `mu`.
+ *
+ * On an OpenCL device the thread owns the context too: each frame accumulates into the
+ * device's film and is read back into `film` for display; a device frame cannot be
+ * cancelled, so a view change waits for it and then discards it. */
 #ifndef TRAC0R_VIEW_RENDER_H
 #define TRAC0R_VIEW_RENDER_H
 
@@ -12,10 +16,12 @@
 #include <stdatomic.h>
 #include <stdint.h>
 
+#include "trac0r/opencl.h"
 #include "trac0r/trac0r.h"
 
 typedef struct view_renderer {
     const tr_scene *scene;
+    tr_cl_context *cl; /* --device opencl: renders there (the scene uploaded); NULL: the CPU */
     tr_render_config cfg;
     uint32_t max_spp; /* stop accumulating here (0: never stop) */
     pthread_t thread;
@@ -53,10 +59,11 @@ typedef struct view_renderer {
     uint32_t *back;
 } view_renderer;
 
-/* Starts the thread rendering `cam` (whose size sets the film's) with cfg's settings. */
-int view_renderer_start(view_renderer *r, const tr_scene *scene, const tr_render_config *cfg,
-                        const tr_camera *cam, int stride, float exposure, uint32_t max_spp,
-                        tr_error *err);
+/* Starts the thread rendering `cam` (whose size sets the film's) with cfg's settings, on
+ * the CPU (cl NULL) or on the OpenCL context cl, which holds `scene` already. */
+int view_renderer_start(view_renderer *r, const tr_scene *scene, tr_cl_context *cl,
+                        const tr_render_config *cfg, const tr_camera *cam, int stride,
+                        float exposure, uint32_t max_spp, tr_error *err);
 /* Asks for another view (camera, size or stride): restarts accumulation if it differs. */
 void view_renderer_set_view(view_renderer *r, const tr_camera *cam, int stride);
 /* Tonemaps later frames with this exposure (accumulation continues). */

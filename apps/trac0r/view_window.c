@@ -143,7 +143,7 @@ typedef struct stage_times {
     double input, rebuild, render, tonemap, upload;
 } stage_times;
 
-int view_run_window(const cli_args *a, const view_options *o, tr_scene *scene) {
+int view_run_window(const cli_args *a, const view_options *o, tr_scene *scene, cli_backend *be) {
     tr_error err;
     const char *font_path = o->font_path;
     /* With DISPLAY set and no driver asked for, use X11 only: SDL would otherwise fall
@@ -223,8 +223,8 @@ int view_run_window(const cli_args *a, const view_options *o, tr_scene *scene) {
     cfg.seed = o->c.seed;
     cfg.threads = o->c.threads;
     cfg.integrator = o->c.integrator;
-    if (view_renderer_start(&r, scene, &cfg, &cam, st.stride, st.exposure, o->max_spp, &err) !=
-        TR_OK) {
+    if (view_renderer_start(&r, scene, be->cl, &cfg, &cam, st.stride, st.exposure, o->max_spp,
+                            &err) != TR_OK) {
         fprintf(stderr, "trac0r view: %s\n", err.msg);
         goto done;
     }
