@@ -1,7 +1,9 @@
 /* scene.c - the scene's arrays and materials. */
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "trac0r/render.h"
 #include "trac0r/scene.h"
 
 static tr_material material_make(uint32_t type, tr_vec3 color, float roughness, float ior,
@@ -277,6 +279,60 @@ int tr_scene_refit(tr_scene *s, tr_error *err) {
         }
     }
     return TR_OK;
+}
+
+int tr_scene_move_shape(tr_scene *s, uint32_t shape, tr_vec3 delta, tr_error *err) {
+    if (shape >= s->shape_count) {
+        return tr_error_set(err, "shape %u does not exist (the scene has %u)", shape,
+                            s->shape_count);
+    }
+    if (!isfinite(delta.x) || !isfinite(delta.y) || !isfinite(delta.z)) {
+        return tr_error_set(err, "shape %u: the offset is not finite", shape);
+    }
+    tr_flat_node *node = &s->shapes[shape];
+    for (uint32_t i = node->first; i < node->first + node->count; ++i) {
+        tr_triangle *t = &s->triangles[i];
+        t->v0 = v3_add(t->v0, delta);
+        t->v1 = v3_add(t->v1, delta);
+        t->v2 = v3_add(t->v2, delta);
+        t->centroid = v3_add(t->centroid, delta);
+    }
+    node->box = tr_triangles_bounds(s->triangles + node->first, node->count);
+    return TR_OK;
+}
+
+const char *tr_scene_update_kind(const tr_scene *s) {
+    switch (s->accel) {
+    case TR_ACCEL_TYPE_BVH:
+    case TR_ACCEL_TYPE_BVH2:
+        return "refit";
+    case TR_ACCEL_TYPE_EMBREE:
+        return "rebuild";
+    case TR_ACCEL_TYPE_FLAT:
+        break;
+    }
+    return "none";
+}
+
+int tr_scene_update(tr_scene *s, double *seconds, tr_error *err) {
+    const double t0 = tr_time_now();
+    int rc = TR_OK;
+    if (!tr_scene_is_committed(s)) {
+        rc = tr_error_set(err, "the scene's triangle count changed: commit it again");
+    } else if (s->accel == TR_ACCEL_TYPE_BVH || s->accel == TR_ACCEL_TYPE_BVH2) {
+        rc = tr_scene_refit(s, err);
+    } else if (s->accel == TR_ACCEL_TYPE_EMBREE) {
+        tr_embree_free(&s->embree);
+        rc = tr_embree_build(&s->embree, s->triangles, s->triangle_count, err);
+        if (rc != TR_OK) {
+            s->accel = TR_ACCEL_TYPE_FLAT; /* as a failed commit leaves it */
+            s->committed_triangles = 0;
+        }
+    }
+    if (seconds) {
+        *seconds = tr_time_now() - t0;
+    }
+    return rc;
 }
 
 double tr_scene_bvh_build_seconds(const tr_scene *s) {

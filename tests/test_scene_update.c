@@ -1,0 +1,145 @@
+/* test_scene_update.c - dynamic scenes: tr_scene_move_shape + tr_scene_update.
+ *
+ * A shape of the Cornell box is moved several times; after each tr_scene_update every
+ * structure (bvh refitted, bvh2 refitted, Embree rebuilt, flat) must find the same
+ * closest hits and occlusions as the flat structure of a scene built from scratch with
+ * the shape already in its new place. Half the rays aim at the moved shape, so an update
+ * that left the old boxes in place would miss it (checked: before the update the BVH does
+ * disagree). */
+#include <stdint.h>
+#include <string.h>
+
+#include "check.h"
+#include "kernel/kernel.h"
+#include "trac0r/trac0r.h"
+
+static uint32_t rng_state = 12345u;
+static float rnd(void) {
+    rng_state ^= rng_state << 13;
+    rng_state ^= rng_state >> 17;
+    rng_state ^= rng_state << 5;
+    return (float)(rng_state >> 8) * (1.0f / 16777216.0f);
+}
+
+static tr_vec3 lerp_box(tr_aabb b) {
+    return v3(b.min.x + rnd() * (b.max.x - b.min.x), b.min.y + rnd() * (b.max.y - b.min.y),
+              b.min.z + rnd() * (b.max.z - b.min.z));
+}
+
+/* Rays from the camera's position: toward the moved shape's box, and anywhere. */
+static tr_ray test_ray(const tr_scene *s, uint32_t shape, int i) {
+    tr_vec3 o = s->camera.pos;
+    tr_vec3 d;
+    if (i % 2 == 0) {
+        d = v3_sub(lerp_box(s->shapes[shape].box), o);
+    } else {
+        d = v3(2.0f * rnd() - 1.0f, 2.0f * rnd() - 1.0f, 2.0f * rnd() - 1.0f);
+    }
+    return tr_ray_make(o, v3_normalize(d), 0.0f, TR_INFINITY);
+}
+
+/* Disagreements between `s` and the reference `ref` over n rays: another triangle, or a
+ * hit distance more than rel_tol apart (0 for our structures, which compute t exactly as
+ * the flat one does; Embree rounds it its own way). */
+static int disagreements(const tr_scene *s, const tr_scene *ref, uint32_t shape, int n,
+                         float rel_tol, int *hits_on_shape) {
+    tr_scene_view v = tr_scene_view_of(s), rv = tr_scene_view_of(ref);
+    int bad = 0;
+    *hits_on_shape = 0;
+    const tr_flat_node *node = &ref->shapes[shape];
+    for (int i = 0; i < n; ++i) {
+        tr_ray ray = test_ray(ref, shape, i);
+        tr_hit h, rh;
+        int hit = tr_intersect_scene(&v, &ray, &h);
+        int rhit = tr_intersect_scene(&rv, &ray, &rh);
+        if (hit != rhit ||
+            (hit && (h.triangle != rh.triangle || fabsf(h.t - rh.t) > rel_tol * rh.t))) {
+            ++bad;
+        }
+        if (rhit && rh.triangle >= node->first && rh.triangle < node->first + node->count) {
+            ++*hits_on_shape;
+        }
+        tr_ray seg = ray;
+        seg.tmax = rhit ? rh.t * 0.999f : 100.0f;
+        if (tr_occluded_scene(&v, &seg) != tr_occluded_scene(&rv, &seg)) {
+            ++bad;
+        }
+    }
+    return bad;
+}
+
+int main(void) {
+    tr_error err;
+    const tr_accel_type accels[] = {TR_ACCEL_TYPE_BVH, TR_ACCEL_TYPE_BVH2, TR_ACCEL_TYPE_EMBREE,
+                                    TR_ACCEL_TYPE_FLAT};
+    const tr_vec3 steps[] = {{0.06f, 0.0f, -0.04f}, {-0.02f, 0.03f, 0.05f}, {0.0f, -0.03f, 0.0f}};
+    const int nrays = 4000;
+    for (int k = 0; k < 4; ++k) {
+        if (!tr_accel_available(accels[k])) {
+            printf("%s: not in this build\n", tr_accel_name(accels[k]));
+            continue;
+        }
+        tr_scene s;
+        tr_scene_init(&s);
+        CHECK(tr_scene_builtin(&s, "cornell", 64, 48, &err) == TR_OK, "%s", err.msg);
+        const uint32_t shape = s.shape_count - 1; /* the last object in the room */
+        CHECK(tr_scene_commit(&s, accels[k], &err) == TR_OK, "%s", err.msg);
+        const uint32_t lights = s.light_count;
+        tr_vec3 total = v3(0.0f, 0.0f, 0.0f);
+        for (int step = 0; step < 3; ++step) {
+            CHECK(tr_scene_move_shape(&s, shape, steps[step], &err) == TR_OK, "%s", err.msg);
+            total = v3_add(total, steps[step]);
+
+            /* The reference: a fresh scene with the shape moved by the same steps. */
+            tr_scene ref;
+            tr_scene_init(&ref);
+            CHECK(tr_scene_builtin(&ref, "cornell", 64, 48, &err) == TR_OK, "%s", err.msg);
+            for (int j = 0; j <= step; ++j) {
+                CHECK(tr_scene_move_shape(&ref, shape, steps[j], &err) == TR_OK, "%s", err.msg);
+            }
+            CHECK(tr_scene_commit(&ref, TR_ACCEL_TYPE_FLAT, &err) == TR_OK, "%s", err.msg);
+
+            int on_shape = 0;
+            if (accels[k] == TR_ACCEL_TYPE_BVH || accels[k] == TR_ACCEL_TYPE_BVH2) {
+                /* Stale boxes: the test below would notice a missing update. */
+                int stale = disagreements(&s, &ref, shape, nrays, 0.0f, &on_shape);
+                CHECK(stale > 0, "%s step %d: the BVH agreed before its update",
+                      tr_accel_name(accels[k]), step);
+            }
+            double seconds = -1.0;
+            CHECK(tr_scene_update(&s, &seconds, &err) == TR_OK, "%s", err.msg);
+            CHECK(seconds >= 0.0, "update time %g", seconds);
+            CHECK(s.accel == accels[k], "the update changed the structure to %s",
+                  tr_accel_name(s.accel));
+            const float tol = accels[k] == TR_ACCEL_TYPE_EMBREE ? 1e-5f : 0.0f;
+            int bad = disagreements(&s, &ref, shape, nrays, tol, &on_shape);
+            CHECK(bad == 0, "%s step %d: %d of %d rays disagree with a fresh scene",
+                  tr_accel_name(accels[k]), step, bad, 2 * nrays);
+            CHECK(on_shape > nrays / 8, "%s step %d: only %d rays hit the moved shape",
+                  tr_accel_name(accels[k]), step, on_shape);
+            /* The shape's box and the emitter table follow. */
+            const tr_flat_node *n = &s.shapes[shape];
+            tr_aabb b = tr_triangles_bounds(s.triangles + n->first, n->count);
+            CHECK(memcmp(&b, &n->box, sizeof b) == 0, "the shape's box was not moved");
+            CHECK(s.light_count == lights, "emitter table changed: %u vs %u", s.light_count,
+                  lights);
+            tr_scene_free(&ref);
+        }
+        printf("%s: update kind %s, moved by (%.2f, %.2f, %.2f)\n", tr_accel_name(accels[k]),
+               tr_scene_update_kind(&s), (double)total.x, (double)total.y, (double)total.z);
+        tr_scene_free(&s);
+    }
+
+    /* Bad arguments. */
+    tr_scene s;
+    tr_scene_init(&s);
+    CHECK(tr_scene_builtin(&s, "cornell", 64, 48, &err) == TR_OK, "%s", err.msg);
+    CHECK(tr_scene_move_shape(&s, s.shape_count, v3(1, 0, 0), &err) != TR_OK &&
+              strstr(err.msg, "does not exist"),
+          "shape out of range: %s", err.msg);
+    CHECK(tr_scene_move_shape(&s, 0, v3(NAN, 0, 0), &err) != TR_OK && strstr(err.msg, "finite"),
+          "NaN offset: %s", err.msg);
+    CHECK(strcmp(tr_scene_update_kind(&s), "none") == 0, "flat scene update kind");
+    tr_scene_free(&s);
+    return check_finish("test_scene_update");
+}
