@@ -61,6 +61,10 @@ expect_usage_error "scene.json: cannot open: No such file or directory" $R --sce
 expect_usage_error "unknown built-in scene 'nope'" $R --scene builtin:nope
 expect_usage_error "unknown command 'paint'" paint
 expect_usage_error "--frames: expected an integer in 1..100000, got '0'" bench frame --frames 0
+if "$BIN" view --help >/dev/null 2>&1; then # builds with the viewer
+    expect_usage_error "--animate: only in the interactive window" view --animate --frames 2 \
+        --screenshot x.png
+fi
 expect_usage_error "unknown benchmark 'nope'" bench nope
 
 # --help documents every option it accepts.
@@ -101,6 +105,16 @@ for accel in flat embree bvh2; do
 done
 leftovers=$(ls -A | grep -v -e '^ok.png$' -e '^ok.pfm$' -e '^err.txt$')
 [ -z "$leftovers" ] || fail "temporary files left behind: $leftovers"
+
+# bench frame --animate: the scene update is timed and named apart from the frame.
+for accel in bvh embree flat; do
+    "$BIN" bench frame --width 16 --height 12 --frames 3 --animate --accel $accel >bench.txt 2>&1 ||
+        fail "bench frame --animate --accel $accel failed: $(cat bench.txt)"
+    case $accel in bvh) kind=refit ;; embree) kind=rebuild ;; *) kind=none ;; esac
+    grep -q "^scene update per frame ($kind): median [0-9.]* ms" bench.txt ||
+        fail "bench frame --animate --accel $accel: $(cat bench.txt)"
+    rm -f bench.txt
+done
 
 # A file that exists already is replaced only by a complete image.
 "$BIN" render --width 8 --height 6 --spp 1 --out ok.png --width 0 2>/dev/null

@@ -273,6 +273,19 @@ cmp -s shots/trac0r-view-000.png r4.png || fail "F12 screenshot differs from ren
 grep -q "saved shots/trac0r-view-000.png (4 spp)" view.out || fail "F12 message: $(cat view.out)"
 quit_viewer
 
+# --animate: the last shape moves before every frame, so every frame is a new image (1 spp)
+# and the scene update is timed; the window shows the box in new places.
+start_viewer --animate
+wait_for 30 '[ "$(state updates)" -ge 3 ]' || fail "--animate: no scene updates: $(cat view.err)"
+dump anim1.ppm
+u1=$(state updates)
+wait_for 30 '[ "$(state updates)" -ge $((u1 + 15)) ]' || fail "--animate: updates stopped at $u1"
+dump anim2.ppm
+[ "$(state spp)" -eq 1 ] || fail "--animate: $(state spp) spp accumulated over a moving scene"
+awk -v t="$(state rebuild_ms)" 'BEGIN { exit !(t > 0) }' || fail "--animate: rebuild_ms $(state rebuild_ms)"
+cmp -s anim1.ppm anim2.ppm && fail "--animate: the window did not change"
+quit_viewer
+
 # --device opencl (builds and machines with an OpenCL device; tests/cli_opencl.sh checks
 # that PoCL is there): the window renders on the device, a stride change clears the
 # device's film, and F12 then saves what `trac0r render --device opencl --spp 4` computes.

@@ -32,6 +32,11 @@ static void bench_frame_help(void) {
            "Options:\n"
            "%s"
            "  --frames N           frames to time, 1..100000 (default 20)\n"
+           "  --animate            a dynamic scene: before every frame the scene's last\n"
+           "                       shape moves (sways along x) and the structure is\n"
+           "                       updated (bvh/bvh2: refit, embree: rebuild; a device gets\n"
+           "                       the scene again); the update's median is printed\n"
+           "                       apart from the frame's\n"
            "  -h, --help           show this help\n"
            "\n"
            "With --device opencl every device frame is followed by the same frame on the\n"
@@ -48,6 +53,7 @@ static int bench_frame(int argc, char **argv) {
     cli_common_default(&c);
     c.integrator = TR_INTEGRATOR_NAIVE; /* the thesis's frame */
     int frames = 20;
+    int animate = 0;
     while (cli_next(&a)) {
         int rc = cli_common_option(&a, &c);
         if (rc == CLI_OK) {
@@ -61,6 +67,9 @@ static int bench_frame(int argc, char **argv) {
             return CLI_OK;
         } else if (cli_is(&a, "--frames")) {
             rc = cli_parse_int(&a, 1, 100000, &frames);
+        } else if (cli_is(&a, "--animate")) {
+            animate = 1;
+            rc = CLI_OK;
         } else {
             return cli_error(&a, "unknown option '%s' (see 'trac0r bench frame --help')", a.opt);
         }
@@ -75,7 +84,8 @@ static int bench_frame(int argc, char **argv) {
     }
     tr_error err;
     tr_film film;
-    double *times = malloc((size_t)frames * sizeof *times);
+    double *times = malloc((size_t)frames * 2 * sizeof *times);
+    double *update_times = times ? times + frames : NULL;
     if (!times || tr_film_init(&film, c.width, c.height, &err) != TR_OK) {
         free(times);
         tr_scene_free(&scene);
@@ -115,6 +125,29 @@ static int bench_frame(int argc, char **argv) {
     /* Frame 0 warms caches and the thread pool and is not timed. */
     for (int f = 0; f <= frames && rc == CLI_OK; ++f) {
         tr_render_stats st;
+        if (animate) {
+            /* The scene changes, so each frame starts a new image. */
+            const double t0 = tr_time_now();
+            double update = 0.0;
+            if (cli_animate(&scene, (uint32_t)f, &err) != TR_OK ||
+                tr_scene_update(&scene, &update, &err) != TR_OK) {
+                fprintf(stderr, "trac0r bench frame: --animate: %s\n", err.msg);
+                rc = CLI_FAILURE;
+                break;
+            }
+            if (be.cl && (rc = cli_backend_upload(&a, &be, &scene)) != CLI_OK) {
+                break;
+            }
+            if (f > 0) {
+                update_times[f - 1] = tr_time_now() - t0;
+            }
+            tr_film_clear(&film);
+            if (be.cl && tr_cl_clear_film(be.cl, &err) != TR_OK) {
+                fprintf(stderr, "trac0r bench frame: %s\n", err.msg);
+                rc = CLI_FAILURE;
+                break;
+            }
+        }
         if (cli_backend_frame(&be, &scene, &cfg, &film, (uint32_t)f, &st, &err) != TR_OK) {
             fprintf(stderr, "trac0r bench frame: %s\n", err.msg);
             rc = CLI_FAILURE;
@@ -138,6 +171,14 @@ static int bench_frame(int argc, char **argv) {
         printf("frames %d  median %.2f ms  min %.2f ms  max %.2f ms\n", frames, med * 1e3,
                times[0] * 1e3, times[frames - 1] * 1e3);
         printf("fps %.2f (median)  Mrays/s %.2f (mean)\n", 1.0 / med, mrays);
+        if (animate) {
+            const double umed = bench_median(update_times, frames);
+            printf("scene update per frame (%s%s): median %.3f ms  min %.3f ms  max %.3f ms; "
+                   "frame + update %.2f ms (%.2f fps)\n",
+                   tr_scene_update_kind(&scene), be.cl ? " + upload to the device" : "", umed * 1e3,
+                   update_times[0] * 1e3, update_times[frames - 1] * 1e3, (med + umed) * 1e3,
+                   1.0 / (med + umed));
+        }
         printf("thesis (table 3.2): 11.6 fps on a GeForce GTX 570 -> ratio %.2f\n",
                (1.0 / med) / 11.6);
         if (cpu_times) {

@@ -43,6 +43,10 @@ static void view_help(void) {
            "                       (default 0)\n"
            "  --max-spp N          stop accumulating after N samples per pixel (default 0:\n"
            "                       never)\n"
+           "  --animate            a dynamic scene (interactive mode): before every frame the\n"
+           "                       scene's last shape moves and the structure is updated\n"
+           "                       (bvh: refit, embree: rebuild); the debug view shows the\n"
+           "                       update as 'scene rebuild'\n"
            "  --font FILE          TrueType font of the debug view (default: DejaVu Sans Mono\n"
            "                       found through fontconfig)\n"
            "  --shot-dir DIR       where F12 saves trac0r-view-NNN.png (default: .)\n"
@@ -157,6 +161,9 @@ int cmd_view(int argc, char **argv) {
             rc = cli_parse_float(&a, -20.0f, 20.0f, &o.exposure);
         } else if (cli_is(&a, "--max-spp")) {
             rc = cli_parse_u32(&a, 0, 100000000, &o.max_spp);
+        } else if (cli_is(&a, "--animate")) {
+            o.animate = 1;
+            rc = CLI_OK;
         } else if (cli_is(&a, "--font")) {
             rc = cli_value(&a);
             o.font = a.value;
@@ -182,6 +189,10 @@ int cmd_view(int argc, char **argv) {
     const int headless = o.screenshot || o.benchmark >= 0;
     if (frames_given && !headless) {
         return cli_error(&a, "--frames: needs --screenshot FILE or --benchmark LEVEL");
+    }
+    if (o.animate && headless) {
+        return cli_error(&a, "--animate: only in the interactive window ('trac0r bench frame "
+                             "--animate' measures a dynamic scene headless)");
     }
     tr_error err;
     if (o.screenshot) {

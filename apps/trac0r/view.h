@@ -15,6 +15,7 @@ typedef struct view_options {
     int stride;             /* initial preview stride: 1, 2 or 4 */
     float exposure;
     uint32_t max_spp;       /* stop accumulating after this many (0: never) */
+    int animate;            /* --animate: the scene's last shape moves every frame */
     const char *font;       /* --font, or NULL for fontconfig */
     const char *state_file; /* rewritten with the viewer's state after changes */
     const char *dump_file;  /* SIGUSR1 writes the window's pixels here (PPM) */

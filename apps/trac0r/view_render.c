@@ -1,6 +1,7 @@
 /* view_render.c - the viewer's render thread. */
 #define _POSIX_C_SOURCE 200809L
 #include "view_render.h"
+#include "cli.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -102,6 +103,21 @@ static void *render_main(void *arg) {
             continue;
         }
         atomic_store(&r->cancel, 0);
+        if (r->animate) {
+            /* The scene moves: every frame is a new image. Under mu, as the UI thread
+             * reads the scene's boxes. */
+            const double t0 = tr_time_now();
+            if (cli_animate(r->scene, (uint32_t)(r->updates + 1), &err) != TR_OK ||
+                tr_scene_update(r->scene, NULL, &err) != TR_OK ||
+                (r->cl && tr_cl_upload_scene(r->cl, r->scene, &err) != TR_OK)) {
+                r->failed = 1;
+                snprintf(r->error, sizeof r->error, "--animate: %s", err.msg);
+                break;
+            }
+            r->rebuild_ms = (tr_time_now() - t0) * 1e3;
+            r->updates += 1;
+            gen = UINT64_MAX;
+        }
         pthread_mutex_unlock(&r->mu);
 
         if (want != gen) {
@@ -164,11 +180,12 @@ static void *render_main(void *arg) {
     return NULL;
 }
 
-int view_renderer_start(view_renderer *r, const tr_scene *scene, tr_cl_context *cl,
+int view_renderer_start(view_renderer *r, tr_scene *scene, int animate, tr_cl_context *cl,
                         const tr_render_config *cfg, const tr_camera *cam, int stride,
                         float exposure, uint32_t max_spp, tr_error *err) {
     memset(r, 0, sizeof *r);
     r->scene = scene;
+    r->animate = animate;
     r->cl = cl;
     r->cfg = *cfg;
     r->max_spp = max_spp;

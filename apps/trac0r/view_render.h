@@ -20,7 +20,8 @@
 #include "trac0r/trac0r.h"
 
 typedef struct view_renderer {
-    const tr_scene *scene;
+    tr_scene *scene;   /* changed only by this thread, under mu, when animating */
+    int animate;       /* move the scene's last shape before every frame (cli_animate) */
     tr_cl_context *cl; /* --device opencl: renders there (the scene uploaded); NULL: the CPU */
     tr_render_config cfg;
     uint32_t max_spp; /* stop accumulating here (0: never stop) */
@@ -45,11 +46,13 @@ typedef struct view_renderer {
     uint64_t shown_gen;   /* the generation of the published frame */
     uint32_t spp;         /* samples in the published frame */
     double render_ms;     /* tr_render_frame of the last frame */
+    double rebuild_ms;    /* the scene update before the last frame (animate) */
+    uint64_t updates;     /* scene updates since start */
     double tonemap_ms;    /* film -> pixels of the last frame */
     uint64_t frames_done; /* frames finished since start (for FPS) */
     uint64_t cancelled;   /* frames cancelled since start */
     int failed;           /* rendering failed: error holds why; the thread stopped */
-    char error[512];
+    char error[600];
     int shot_done; /* a screenshot request finished: shot_msg says how */
     int shot_ok;
     char shot_msg[4700];
@@ -60,8 +63,10 @@ typedef struct view_renderer {
 } view_renderer;
 
 /* Starts the thread rendering `cam` (whose size sets the film's) with cfg's settings, on
- * the CPU (cl NULL) or on the OpenCL context cl, which holds `scene` already. */
-int view_renderer_start(view_renderer *r, const tr_scene *scene, tr_cl_context *cl,
+ * the CPU (cl NULL) or on the OpenCL context cl, which holds `scene` already. With
+ * `animate` the thread moves the scene's last shape before every frame (and uploads the
+ * scene again to a device); readers of the scene on other threads hold mu. */
+int view_renderer_start(view_renderer *r, tr_scene *scene, int animate, tr_cl_context *cl,
                         const tr_render_config *cfg, const tr_camera *cam, int stride,
                         float exposure, uint32_t max_spp, tr_error *err);
 /* Asks for another view (camera, size or stride): restarts accumulation if it differs. */

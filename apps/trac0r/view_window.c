@@ -48,6 +48,8 @@ typedef struct view_state {
     int stride;
     float exposure;
     uint64_t dumps, shots;
+    uint64_t updates; /* scene updates (--animate) */
+    double rebuild_ms;
 } view_state;
 
 static int write_state(const char *path, const view_state *s, const fly_camera *f, uint64_t frames,
@@ -64,12 +66,12 @@ static int write_state(const char *path, const view_state *s, const fly_camera *
         "spp %u\ngeneration %llu\nview_generation %llu\nframes %llu\ncancelled %llu\nsize %u %u\n"
         "pos %.6f %.6f %.6f\ndir %.6f %.6f %.6f\nup %.6f %.6f %.6f\nspeed %.6f\n"
         "overlay %d\nhelp %d\nbvh %d\nbvh_depth %u\ntimings %d\nmouselook %d\nstride %d\n"
-        "exposure %.2f\nfps %.3f\ndumps %llu\nshots %llu\n",
+        "exposure %.2f\nfps %.3f\ndumps %llu\nshots %llu\nupdates %llu\nrebuild_ms %.3f\n",
         spp, (unsigned long long)gen, (unsigned long long)view_gen, (unsigned long long)frames,
         (unsigned long long)cancelled, w, h, f->pos.x, f->pos.y, f->pos.z, f->dir.x, f->dir.y,
         f->dir.z, f->up.x, f->up.y, f->up.z, f->speed, s->overlay, s->help, s->bvh, s->bvh_depth,
         s->timings, s->mouselook, s->stride, s->exposure, fps, (unsigned long long)s->dumps,
-        (unsigned long long)s->shots);
+        (unsigned long long)s->shots, (unsigned long long)s->updates, s->rebuild_ms);
     int bad = ferror(fp);
     bad |= fclose(fp);
     if (bad || rename(tmp, path) != 0) {
@@ -223,8 +225,8 @@ int view_run_window(const cli_args *a, const view_options *o, tr_scene *scene, c
     cfg.seed = o->c.seed;
     cfg.threads = o->c.threads;
     cfg.integrator = o->c.integrator;
-    if (view_renderer_start(&r, scene, be->cl, &cfg, &cam, st.stride, st.exposure, o->max_spp,
-                            &err) != TR_OK) {
+    if (view_renderer_start(&r, scene, o->animate, be->cl, &cfg, &cam, st.stride, st.exposure,
+                            o->max_spp, &err) != TR_OK) {
         fprintf(stderr, "trac0r view: %s\n", err.msg);
         goto done;
     }
@@ -423,6 +425,9 @@ int view_run_window(const cli_args *a, const view_options *o, tr_scene *scene, c
             shown_gen = r.shown_gen;
             spp = r.spp;
             times.render = r.render_ms;
+            times.rebuild = r.rebuild_ms;
+            st.updates = r.updates;
+            st.rebuild_ms = r.rebuild_ms;
             times.tonemap = r.tonemap_ms;
             times.upload = (tr_time_now() - t0) * 1e3;
             state_dirty = 1;
@@ -433,7 +438,8 @@ int view_run_window(const cli_args *a, const view_options *o, tr_scene *scene, c
             status = CLI_FAILURE;
             break;
         }
-        const int scene_changing = shown_gen != r.generation; /* a read of our own write */
+        /* shown_gen != r.generation: a read of our own write. */
+        const int scene_changing = shown_gen != r.generation || o->animate;
 
         const double now = tr_time_now();
         if (now - fps_t0 >= 0.5) {
@@ -466,6 +472,8 @@ int view_run_window(const cli_args *a, const view_options *o, tr_scene *scene, c
         if (tex) {
             SDL_RenderCopy(ren, tex, NULL, NULL);
         }
+        /* The render thread moves the scene under r.mu when animating. */
+        pthread_mutex_lock(&r.mu);
         if (st.overlay) {
             const SDL_Color yellow = {255, 255, 0, 255};
             tr_aabb boxes[256];
@@ -475,14 +483,16 @@ int view_run_window(const cli_args *a, const view_options *o, tr_scene *scene, c
             }
             view_draw_boxes(ren, &cam, boxes, nb, yellow);
         }
-        if (st.bvh && scene->accel == TR_ACCEL_TYPE_BVH) {
+        if (st.bvh && (scene->accel == TR_ACCEL_TYPE_BVH || scene->accel == TR_ACCEL_TYPE_BVH2)) {
             view_draw_bvh(ren, &cam, &scene->bvh, st.bvh_depth);
         }
+        char accel[160];
+        cli_describe_accel(accel, sizeof accel, scene);
+        const uint32_t bvh_depth = scene->bvh.depth;
+        pthread_mutex_unlock(&r.mu);
         if (st.overlay) {
             tr_vec3 mc = view_screen_to_camera(&cam, (float)mouse_x + 0.5f, (float)mouse_y + 0.5f);
             tr_vec3 mw = view_screen_to_world(&cam, (float)mouse_x + 0.5f, (float)mouse_y + 0.5f);
-            char accel[160];
-            cli_describe_accel(accel, sizeof accel, scene);
             snprintf(text, sizeof text,
                      "FPS %.2f   %u spp   %ux%u   stride %d   exposure %+.1f\n"
                      "input %.2f ms  scene rebuild %.2f ms  render %.1f ms\n"
@@ -506,7 +516,7 @@ int view_run_window(const cli_args *a, const view_options *o, tr_scene *scene, c
                      st.bvh ? "BVH boxes on (V), [ ] depth" : "");
             char line[64];
             if (st.bvh) {
-                snprintf(line, sizeof line, " %u of %u", st.bvh_depth, scene->bvh.depth);
+                snprintf(line, sizeof line, " %u of %u", st.bvh_depth, bvh_depth);
                 strncat(text, line, sizeof text - strlen(text) - 1);
             }
             view_draw_text(ren, font, 0, 0, text);
