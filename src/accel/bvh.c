@@ -458,16 +458,36 @@ int tr_bvh_build(tr_bvh *bvh, const tr_triangle *tris, uint32_t n, tr_error *err
 
 void tr_bvh_refit(tr_bvh *bvh, const tr_triangle *tris) {
     bvh->refits++;
-    bvh_fill_tris(bvh, tris);
-    for (uint32_t i = bvh->node_count; i-- > 0;) {
-        tr_bvh_node *n = &bvh->nodes[i];
-        if (n->count > 0) {
-            tr_aabb box = box_empty();
-            for (uint32_t k = n->left_first; k < n->left_first + n->count; ++k) {
-                box = box_union(box, tri_box(&tris[bvh->indices[k]]));
+    /* The leaves' triangles and boxes are independent of each other: all threads share
+     * them out. The inner nodes (children after their parent in the array) follow on one
+     * thread, bottom up: a union per node. Same operations in the same order per box as
+     * a sequential refit, so the boxes do not depend on the thread count. */
+    const int64_t nk = bvh->index_count, nn = bvh->node_count;
+#pragma omp parallel
+    {
+#pragma omp for schedule(static)
+        for (int64_t k = 0; k < nk; ++k) {
+            const tr_triangle *t = &tris[bvh->indices[k]];
+            bvh->tris[k].v0 = t->v0;
+            bvh->tris[k].e1 = v3_sub(t->v1, t->v0);
+            bvh->tris[k].e2 = v3_sub(t->v2, t->v0);
+            bvh->tris[k].index = bvh->indices[k];
+        }
+#pragma omp for schedule(dynamic, 4096)
+        for (int64_t i = 0; i < nn; ++i) {
+            tr_bvh_node *n = &bvh->nodes[i];
+            if (n->count > 0) {
+                tr_aabb box = box_empty();
+                for (uint32_t k = n->left_first; k < n->left_first + n->count; ++k) {
+                    box = box_union(box, tri_box(&tris[bvh->indices[k]]));
+                }
+                n->box = box;
             }
-            n->box = box;
-        } else {
+        }
+    }
+    for (int64_t i = nn; i-- > 0;) {
+        tr_bvh_node *n = &bvh->nodes[i];
+        if (n->count == 0) {
             n->box = box_union(bvh->nodes[n->left_first].box, bvh->nodes[n->left_first + 1].box);
         }
     }
