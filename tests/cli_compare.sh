@@ -4,32 +4,8 @@
 # line naming the file or option, nothing written).
 # Usage: cli_compare.sh TRAC0R_BINARY SCRATCH_DIR
 set -u
-BIN=$1
-DIR=$2
-rm -rf "$DIR"
-mkdir -p "$DIR"
-cd "$DIR" || exit 1
-failures=0
-
-fail() {
-    echo "FAIL: $*" >&2
-    failures=$((failures + 1))
-}
-
-expect_usage_error() {
-    needle=$1
-    shift
-    before=$(ls -A | sort | tr '\n' ' ')
-    "$BIN" "$@" >out.txt 2>err.txt
-    rc=$?
-    [ "$rc" -eq 2 ] || fail "trac0r $*: exit $rc, expected 2"
-    lines=$(wc -l <err.txt)
-    [ "$lines" -eq 1 ] || fail "trac0r $*: $lines stderr lines, expected 1: $(cat err.txt)"
-    grep -qF -- "$needle" err.txt || fail "trac0r $*: stderr lacks '$needle': $(cat err.txt)"
-    rm -f out.txt err.txt
-    after=$(ls -A | sort | tr '\n' ' ')
-    [ "$before" = "$after" ] || fail "trac0r $*: files changed: '$before' -> '$after'"
-}
+. "$(dirname "$0")/cli_lib.sh"
+cli_begin "$1" "$2"
 
 # Little-endian float32 bytes: 0 = 00000000, 0.5 = 3f000000, 1 = 3f800000, 2 = 40000000.
 Z='\000\000\000\000'
@@ -110,7 +86,4 @@ expect_usage_error "--reference: b.pfm is 2x1, not 16x12" bench convergence --si
 expect_usage_error "--budget: expected a number" bench convergence --budget 0
 expect_usage_error "--width: not an option of this benchmark" bench convergence --width 5
 
-if [ "$failures" -ne 0 ]; then
-    echo "cli_compare: $failures failures" >&2
-    exit 1
-fi
+cli_end cli_compare

@@ -5,33 +5,8 @@
 # exit status 2, with the CPU backend still working.
 # Usage: cli_opencl.sh TRAC0R_BINARY SCRATCH_DIR
 set -u
-BIN=$1
-DIR=$2
-rm -rf "$DIR"
-mkdir -p "$DIR"
-cd "$DIR" || exit 1
-failures=0
-
-fail() {
-    echo "FAIL: $*" >&2
-    failures=$((failures + 1))
-}
-
-# expect_usage_error WHAT_STDERR_MUST_CONTAIN ARGS...: exit 2, one stderr line naming
-# the fault, no image written.
-expect_usage_error() {
-    needle=$1
-    shift
-    "$BIN" "$@" >out.txt 2>err.txt
-    rc=$?
-    [ "$rc" -eq 2 ] || fail "trac0r $*: exit $rc, expected 2: $(cat err.txt)"
-    lines=$(wc -l <err.txt)
-    [ "$lines" -eq 1 ] || fail "trac0r $*: $lines stderr lines, expected 1: $(cat err.txt)"
-    grep -qF -- "$needle" err.txt || fail "trac0r $*: stderr lacks '$needle': $(cat err.txt)"
-    leftovers=$(ls -A | grep -v -e '^out.txt$' -e '^err.txt$' -e '^empty-icd$' -e '^keep')
-    [ -z "$leftovers" ] || fail "trac0r $*: left files behind: $leftovers"
-    rm -f out.txt err.txt
-}
+. "$(dirname "$0")/cli_lib.sh"
+cli_begin "$1" "$2"
 
 # The device list names device 0 with its compute units and memory.
 if "$BIN" info --devices >devices.txt 2>err.txt; then
@@ -126,8 +101,4 @@ expect_usage_error "--device: not an option of this benchmark" bench rays --devi
 expect_usage_error "--accels:" bench complexity --device opencl \
     --accels bvh,embree
 
-if [ "$failures" -ne 0 ]; then
-    echo "cli_opencl: $failures failures" >&2
-    exit 1
-fi
-echo "cli_opencl: all checks passed"
+cli_end cli_opencl

@@ -4,33 +4,8 @@
 # give a complete image and no leftovers.
 # Usage: cli_render.sh TRAC0R_BINARY SCRATCH_DIR
 set -u
-BIN=$1
-DIR=$2
-rm -rf "$DIR"
-mkdir -p "$DIR"
-cd "$DIR" || exit 1
-failures=0
-
-fail() {
-    echo "FAIL: $*" >&2
-    failures=$((failures + 1))
-}
-
-# expect_usage_error WHAT_STDERR_MUST_CONTAIN ARGS... : exit 2, one stderr line naming
-# the fault, nothing written to the scratch directory.
-expect_usage_error() {
-    needle=$1
-    shift
-    "$BIN" "$@" >out.txt 2>err.txt
-    rc=$?
-    [ "$rc" -eq 2 ] || fail "trac0r $*: exit $rc, expected 2"
-    lines=$(wc -l <err.txt)
-    [ "$lines" -eq 1 ] || fail "trac0r $*: $lines stderr lines, expected 1: $(cat err.txt)"
-    grep -qF -- "$needle" err.txt || fail "trac0r $*: stderr lacks '$needle': $(cat err.txt)"
-    leftovers=$(ls -A | grep -v -e '^out.txt$' -e '^err.txt$' -e '^afile$')
-    [ -z "$leftovers" ] || fail "trac0r $*: left files behind: $leftovers"
-    rm -f out.txt err.txt
-}
+. "$(dirname "$0")/cli_lib.sh"
+cli_begin "$1" "$2"
 
 R="render --width 8 --height 6 --spp 1 --out x.png"
 expect_usage_error "'--bogus'" $R --bogus
@@ -121,8 +96,4 @@ done
 sig=$(od -An -tx1 -N8 ok.png | tr -d ' \n')
 [ "$sig" = "89504e470d0a1a0a" ] || fail "a failed run damaged the existing ok.png"
 
-if [ "$failures" -ne 0 ]; then
-    echo "cli_render: $failures failures" >&2
-    exit 1
-fi
-echo "cli_render: all checks passed"
+cli_end cli_render

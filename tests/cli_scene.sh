@@ -6,20 +6,11 @@
 # defaults apply unless the command line overrides them.
 # Usage: cli_scene.sh TRAC0R_BINARY SCRATCH_DIR
 set -u
-BIN=$1
-DIR=$2
+. "$(dirname "$0")/cli_lib.sh"
 SRC=$(cd "$(dirname "$0")/.." && pwd)
 BAD=$SRC/tests/data/bad
 GOOD=$SRC/tests/data/good
-rm -rf "$DIR"
-mkdir -p "$DIR"
-cd "$DIR" || exit 1
-failures=0
-
-fail() {
-    echo "FAIL: $*" >&2
-    failures=$((failures + 1))
-}
+cli_begin "$1" "$2"
 
 # expect_bad FILE NEEDLE [EXTRA ARGS]: render and info both exit 2 with one stderr line
 # that names the file and contains NEEDLE; render writes nothing.
@@ -197,8 +188,4 @@ rm -rf wuson wuson.png info.txt err.txt
 [ $? -eq 2 ] && grep -qF "unknown option '--bogus'" err.txt || fail "info --bogus: $(cat err.txt)"
 rm -f err.txt
 
-if [ "$failures" -ne 0 ]; then
-    echo "$failures failure(s)" >&2
-    exit 1
-fi
-echo "cli_scene: all checks passed"
+cli_end cli_scene

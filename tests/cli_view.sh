@@ -8,19 +8,10 @@
 # file (--state-file); keys and the mouse come from xdotool through the X server.
 # Usage: cli_view.sh TRAC0R_BINARY SCRATCH_DIR
 set -u
-BIN=$1
-DIR=$2
-rm -rf "$DIR"
-mkdir -p "$DIR"
-cd "$DIR" || exit 1
-failures=0
+. "$(dirname "$0")/cli_lib.sh"
+cli_begin "$1" "$2"
 XVFB_PID=
 VIEW_PID=
-
-fail() {
-    echo "FAIL: $*" >&2
-    failures=$((failures + 1))
-}
 
 cleanup() {
     [ -n "$VIEW_PID" ] && kill "$VIEW_PID" 2>/dev/null
@@ -31,24 +22,13 @@ trap cleanup EXIT
 trap 'exit 1' INT TERM HUP
 
 # --- bad input: exit 2 and one line naming the fault, before any window -----------
-expect_usage_error() {
-    needle=$1
-    shift
-    "$BIN" view "$@" >out.txt 2>err.txt
-    rc=$?
-    [ "$rc" -eq 2 ] || fail "trac0r view $*: exit $rc, expected 2"
-    lines=$(wc -l <err.txt)
-    [ "$lines" -eq 1 ] || fail "trac0r view $*: $lines stderr lines, expected 1: $(cat err.txt)"
-    grep -qF -- "$needle" err.txt || fail "trac0r view $*: stderr lacks '$needle': $(cat err.txt)"
-    rm -f out.txt err.txt
-}
-expect_usage_error "unknown option '--bogus'" --bogus
-expect_usage_error "missing-scene.json" missing-scene.json
-expect_usage_error "--frames: needs --screenshot" --frames 3
-expect_usage_error "--stride: expected 1, 2 or 4, got '3'" --stride 3
-expect_usage_error "--benchmark: expected an integer in 0..9, got '10'" --benchmark 10
-expect_usage_error "--screenshot: 'x.jpg' has an unknown extension" --screenshot x.jpg
-expect_usage_error "--font: cannot open 'no-such-font.ttf'" --font no-such-font.ttf
+expect_usage_error "unknown option '--bogus'" view --bogus
+expect_usage_error "missing-scene.json" view missing-scene.json
+expect_usage_error "--frames: needs --screenshot" view --frames 3
+expect_usage_error "--stride: expected 1, 2 or 4, got '3'" view --stride 3
+expect_usage_error "--benchmark: expected an integer in 0..9, got '10'" view --benchmark 10
+expect_usage_error "--screenshot: 'x.jpg' has an unknown extension" view --screenshot x.jpg
+expect_usage_error "--font: cannot open 'no-such-font.ttf'" view --font no-such-font.ttf
 # No display for the interactive mode: the message names DISPLAY.
 env -u DISPLAY -u WAYLAND_DISPLAY -u SDL_VIDEODRIVER "$BIN" view >out.txt 2>err.txt
 rc=$?
@@ -316,8 +296,4 @@ if "$BIN" info --devices >/dev/null 2>&1; then
     cmp -s dv.pfm dr.pfm || fail "headless view --device opencl differs from render"
 fi
 
-if [ "$failures" -ne 0 ]; then
-    echo "cli_view: $failures failures" >&2
-    exit 1
-fi
-echo "cli_view: all checks passed"
+cli_end cli_view
