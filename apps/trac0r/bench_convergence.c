@@ -500,13 +500,23 @@ int bench_convergence(int argc, char **argv) {
         }
         len += (size_t)snprintf(script + len, cap - len, "EOD\n");
     }
+    /* The title names the scene by its file name, kept out of gnuplot's quoting. */
+    const char *base = strrchr(c.scene, '/') ? strrchr(c.scene, '/') + 1 : c.scene;
+    char name[64];
+    size_t nl = 0;
+    for (; base[nl] && nl + 1 < sizeof name; ++nl) {
+        const char ch = base[nl];
+        name[nl] = (ch >= ' ' && ch <= '~' && ch != '\'' && ch != '\\') ? ch : '_';
+    }
+    name[nl] = '\0';
     for (int panel = 0; panel < 2; ++panel) {
         len += (size_t)snprintf(
             script + len, cap - len,
             "%sset logscale x\nset grid\nset key bottom right\nset ylabel 'PSNR (dB)'\n"
-            "set xlabel '%s'\nset title 'trac0r bench convergence: %s'\nplot ",
+            "set xlabel '%s'\nset title 'PSNR against %s: %s'\nplot ",
             panel == 0 ? "set multiplot layout 1,2\n" : "",
-            panel == 0 ? "render time (s)" : "samples per pixel", c.scene);
+            panel == 0 ? "render time (s)" : "samples per pixel", panel == 0 ? "time" : "spp",
+            name);
         for (int i = 0; i < nsizes * nmethods; ++i) {
             len += (size_t)snprintf(
                 script + len, cap - len, "%s$d%d using %d:3 with linespoints lw 2 title '%s %ux%u'",

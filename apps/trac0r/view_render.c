@@ -135,7 +135,10 @@ static void *render_main(void *arg) {
         cfg.stride = stride;
         cfg.cancel = &r->cancel;
         tr_render_stats st;
-        int rc = render_one(r, &cam, &cfg, spp, &st, &err);
+        /* Animated, each frame is sample 0 of a new image: the frame count picks its
+         * random numbers instead, so that the noise changes from frame to frame. */
+        const uint32_t sample = r->animate ? (uint32_t)r->updates : spp;
+        int rc = render_one(r, &cam, &cfg, sample, &st, &err);
         if (rc != TR_OK) {
             pthread_mutex_lock(&r->mu);
             if (atomic_load(&r->cancel)) {
