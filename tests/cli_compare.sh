@@ -4,7 +4,7 @@
 # line naming the file or option, nothing written).
 # Usage: cli_compare.sh TRAC0R_BINARY SCRATCH_DIR
 set -u
-. "$(dirname "$0")/cli_lib.sh"
+. "$(dirname "$0")/common.sh"
 cli_begin "$1" "$2"
 
 # Little-endian float32 bytes: 0 = 00000000, 0.5 = 3f000000, 1 = 3f800000, 2 = 40000000.

@@ -5,7 +5,7 @@
 # exit status 2, with the CPU backend still working.
 # Usage: cli_opencl.sh TRAC0R_BINARY SCRATCH_DIR
 set -u
-. "$(dirname "$0")/cli_lib.sh"
+. "$(dirname "$0")/common.sh"
 cli_begin "$1" "$2"
 
 # The device list names device 0 with its compute units and memory.

@@ -4,7 +4,7 @@
 # give a complete image and no leftovers.
 # Usage: cli_render.sh TRAC0R_BINARY SCRATCH_DIR
 set -u
-. "$(dirname "$0")/cli_lib.sh"
+. "$(dirname "$0")/common.sh"
 cli_begin "$1" "$2"
 
 R="render --width 8 --height 6 --spp 1 --out x.png"

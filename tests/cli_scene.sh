@@ -6,7 +6,7 @@
 # defaults apply unless the command line overrides them.
 # Usage: cli_scene.sh TRAC0R_BINARY SCRATCH_DIR
 set -u
-. "$(dirname "$0")/cli_lib.sh"
+. "$(dirname "$0")/common.sh"
 SRC=$(cd "$(dirname "$0")/.." && pwd)
 BAD=$SRC/tests/data/bad
 GOOD=$SRC/tests/data/good

@@ -8,7 +8,7 @@
 # file (--state-file); keys and the mouse come from xdotool through the X server.
 # Usage: cli_view.sh TRAC0R_BINARY SCRATCH_DIR
 set -u
-. "$(dirname "$0")/cli_lib.sh"
+. "$(dirname "$0")/common.sh"
 cli_begin "$1" "$2"
 XVFB_PID=
 VIEW_PID=

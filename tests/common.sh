@@ -1,8 +1,8 @@
-# cli_lib.sh - sourced by the tests/cli_*.sh scripts: their scratch directory, failure
+# common.sh - sourced by the tests/cli_*.sh scripts: their scratch directory, failure
 # counting, the usage-error check and the summary line.
 #
 #     set -u
-#     . "$(dirname "$0")/cli_lib.sh"
+#     . "$(dirname "$0")/common.sh"
 #     cli_begin "$1" "$2"    # BIN=$1; DIR=$2 made fresh and entered; failures=0
 #     ...
 #     cli_end cli_name       # exits 1 after any fail, else prints "all checks passed"
