@@ -1147,6 +1147,31 @@ static void test_refit(void) {
     ray_gen_init(&g, 32, s.triangles, n, NULL);
     compare_views("scene refit soup", &flat, &bvh, &g, RAYS, MAX_TIE_FRACTION);
     ray_gen_free(&g);
+
+    /* Once more, now with a wide BVH as current as the binary one: tr_scene_refit refits
+     * it in place (tr_wbvh_refit), keeping its node and packet counts. */
+    const uint32_t wide_nodes = s.wbvh.node_count, packets = s.wbvh.packet_count;
+    for (uint32_t i = 0; i < n; ++i) {
+        tr_triangle *tri = &s.triangles[i];
+        tri->v0 = v3_add(v3_mul(tri->v0, scale), offset);
+        tri->v1 = v3_add(v3_mul(tri->v1, scale), offset);
+        tri->v2 = v3_add(v3_mul(tri->v2, scale), offset);
+        tr_triangle_finish(tri);
+    }
+    CHECK(tr_scene_refit(&s, &err) == TR_OK, "%s", err.msg);
+    set_flat_nodes(&s, FLAT_CHUNK);
+    CHECK(s.wbvh.node_count == wide_nodes && s.wbvh.packet_count == packets,
+          "the in-place refit changed the wide tree: %u -> %u nodes, %u -> %u packets", wide_nodes,
+          s.wbvh.node_count, packets, s.wbvh.packet_count);
+    check_structure("wide refit soup", &s.bvh, s.triangles, n);
+    check_wide_structure("wide refit soup", &s.wbvh, &s.bvh, s.triangles, n);
+    bvh = tr_scene_view_of(&s);
+    flat = bvh;
+    flat.accel = TR_ACCEL_FLAT;
+    CHECK(bvh.wbvh == &s.wbvh, "a view after the in-place refit does not trace the wide BVH");
+    ray_gen_init(&g, 33, s.triangles, n, NULL);
+    compare_views("wide refit soup", &flat, &bvh, &g, RAYS, MAX_TIE_FRACTION);
+    ray_gen_free(&g);
     tr_scene_free(&s);
 }
 

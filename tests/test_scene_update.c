@@ -111,6 +111,10 @@ int main(void) {
             CHECK(seconds >= 0.0, "update time %g", seconds);
             CHECK(s.accel == accels[k], "the update changed the structure to %s",
                   tr_accel_name(s.accel));
+            /* bvh: the refitted wide BVH is what rays are traced through, not the binary
+             * fallback. */
+            CHECK(accels[k] != TR_ACCEL_TYPE_BVH || tr_scene_view_of(&s).wbvh != NULL,
+                  "bvh step %d: the view fell back to the binary BVH", step);
             const float tol = accels[k] == TR_ACCEL_TYPE_EMBREE ? 1e-5f : 0.0f;
             int bad = disagreements(&s, &ref, shape, nrays, tol, &on_shape);
             CHECK(bad == 0, "%s step %d: %d of %d rays disagree with a fresh scene",

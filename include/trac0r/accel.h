@@ -102,12 +102,22 @@ typedef struct tr_wbvh_tri4 {
     uint32_t index[4];
 } tr_wbvh_tri4;
 
+/* A leaf of the wide tree: its first packet, and the run of leaf-ordered binary BVH
+ * triangles (tr_bvh.tris) it holds. */
+typedef struct tr_wbvh_leaf {
+    uint32_t packet, first, count;
+} tr_wbvh_leaf;
+
 typedef struct tr_wbvh {
     tr_wbvh_node *nodes; /* node 0 is the root; 0 nodes for an empty scene */
     uint32_t node_count;
     tr_wbvh_tri4 *packets;
     uint32_t packet_count;
     uint32_t leaf_count;
+    /* For tr_wbvh_refit: the binary node each child slot was collapsed from (node i's
+     * slots at [TR_WBVH_WIDTH * i, ...), UINT32_MAX for an empty slot), and the leaves. */
+    uint32_t *slot_src;
+    tr_wbvh_leaf *leaves;
     uint32_t depth;       /* deepest node, root = 0 */
     uint32_t bvh_refits;  /* tr_bvh.refits of the tree it was collapsed from */
     double build_seconds; /* the collapse alone (the binary build comes before) */
@@ -118,6 +128,10 @@ typedef struct tr_wbvh {
  * until it has TR_WBVH_WIDTH (as in Wald et al., "Getting Rid of Packets", RT 2008, and
  * Embree); binary subtrees of at most four triangles become one leaf packet. */
 int tr_wbvh_build(tr_wbvh *w, const tr_bvh *bvh, tr_error *err);
+/* After tr_bvh_refit of the binary BVH it was collapsed from (same tree, moved boxes and
+ * triangles): copies the new boxes into the wide nodes and the triangles into the leaf
+ * packets, keeping the wide tree's shape. */
+void tr_wbvh_refit(tr_wbvh *w, const tr_bvh *bvh);
 void tr_wbvh_free(tr_wbvh *w);
 /* Which traversal this build uses: "avx512", "avx2", "sse2" or "scalar". */
 const char *tr_wbvh_isa(void);

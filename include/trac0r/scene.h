@@ -133,15 +133,16 @@ int tr_scene_commit(tr_scene *s, tr_accel_type accel, tr_error *err);
 /* Whether the committed structure covers the scene's current triangles. */
 int tr_scene_is_committed(const tr_scene *s);
 /* After moving triangles (same count) of a scene committed to a BVH: refits the binary
- * BVH's boxes (tr_bvh_refit) and collapses the wide BVH again. A view taken after a bare
- * tr_bvh_refit uses the binary BVH until this runs. */
+ * BVH's boxes (tr_bvh_refit), then the wide BVH in place (tr_wbvh_refit: same shape, new
+ * boxes and leaf packets; collapsed anew if it was older than the binary tree). A view
+ * taken after a bare tr_bvh_refit uses the binary BVH until this runs. */
 int tr_scene_refit(tr_scene *s, tr_error *err);
 /* Dynamic scenes, as the thesis assumes (geometry may change every frame): moves shape
  * `shape` (its triangles and its box in the flat structure) by `delta`. Areas, normals and
  * the emitter table stay valid; the committed structure is stale until tr_scene_update. */
 int tr_scene_move_shape(tr_scene *s, uint32_t shape, tr_vec3 delta, tr_error *err);
 /* Brings the committed structure up to date after triangles moved (same count): a BVH is
- * refitted (tr_scene_refit: boxes of the same tree, then the wide collapse), Embree's scene
+ * refitted (tr_scene_refit: boxes of the same trees, binary and wide), Embree's scene
  * rebuilt, the flat structure needs nothing. *seconds (may be NULL) gets the time taken. */
 int tr_scene_update(tr_scene *s, double *seconds, tr_error *err);
 /* What tr_scene_update does for the scene's structure: "refit", "rebuild" or "none". */

@@ -14,17 +14,11 @@ enum {
 
 _Static_assert(TR_BVH_STACK_SIZE < 1 << 8, "recursion depth of the collapse");
 
-/* A leaf of the wide tree: its packets, filled after the tree is laid out. */
-typedef struct leaf_rec {
-    uint32_t packet, first, count;
-} leaf_rec;
-
 typedef struct collapser {
     const tr_bvh *bvh;
     uint32_t *sub_first; /* per binary node: its subtree's run of leaf triangles */
     uint32_t *sub_count;
     tr_wbvh *w;
-    leaf_rec *leaves;
     uint32_t node_cap, packet_cap, leaf_cap;
     int failed;
 } collapser;
@@ -50,7 +44,7 @@ static uint32_t emit_leaf(collapser *c, uint32_t first, uint32_t count) {
         c->failed = 1;
         return TR_WBVH_EMPTY;
     }
-    leaf_rec *l = &c->leaves[w->leaf_count++];
+    tr_wbvh_leaf *l = &w->leaves[w->leaf_count++];
     l->packet = w->packet_count;
     l->first = first;
     l->count = count;
@@ -59,7 +53,7 @@ static uint32_t emit_leaf(collapser *c, uint32_t first, uint32_t count) {
 }
 
 /* Writes a leaf's triangles into its packets, lane by lane. */
-static void fill_leaf(const tr_bvh *bvh, tr_wbvh_tri4 *packets, const leaf_rec *l) {
+static void fill_leaf(const tr_bvh *bvh, tr_wbvh_tri4 *packets, const tr_wbvh_leaf *l) {
     for (uint32_t p = 0; 4 * p < l->count; ++p) {
         tr_wbvh_tri4 *q = &packets[l->packet + p];
         memset(q, 0, sizeof *q);
@@ -145,6 +139,9 @@ static uint32_t emit_node(collapser *c, uint32_t *slots, int count, uint32_t dep
     }
     if (!c->failed) {
         w->nodes[index] = node; /* after the recursion: it may have moved the array */
+        for (int i = 0; i < TR_WBVH_WIDTH; ++i) {
+            w->slot_src[(size_t)TR_WBVH_WIDTH * index + i] = i < count ? slots[i] : UINT32_MAX;
+        }
     }
     return index;
 }
@@ -157,6 +154,8 @@ static size_t round64(size_t bytes) {
 void tr_wbvh_free(tr_wbvh *w) {
     free(w->nodes);
     free(w->packets);
+    free(w->slot_src);
+    free(w->leaves);
     memset(w, 0, sizeof *w);
 }
 
@@ -183,8 +182,9 @@ int tr_wbvh_build(tr_wbvh *w, const tr_bvh *bvh, tr_error *err) {
     c.packet_cap = 2 * bvh->leaf_count;
     w->nodes = aligned_alloc(64, round64((size_t)c.node_cap * sizeof *w->nodes));
     w->packets = aligned_alloc(64, round64((size_t)c.packet_cap * sizeof *w->packets));
-    c.leaves = malloc((size_t)c.leaf_cap * sizeof *c.leaves);
-    if (!c.sub_first || !c.sub_count || !w->nodes || !w->packets || !c.leaves) {
+    w->leaves = malloc((size_t)c.leaf_cap * sizeof *w->leaves);
+    w->slot_src = malloc((size_t)c.node_cap * TR_WBVH_WIDTH * sizeof *w->slot_src);
+    if (!c.sub_first || !c.sub_count || !w->nodes || !w->packets || !w->leaves || !w->slot_src) {
         c.failed = 1;
     }
     /* Children come after their parents: one backward pass gives every subtree's run of
@@ -220,12 +220,11 @@ int tr_wbvh_build(tr_wbvh *w, const tr_bvh *bvh, tr_error *err) {
         const int leaves = (int)w->leaf_count;
 #pragma omp parallel for schedule(static, 4096) if (leaves > 65536)
         for (int i = 0; i < leaves; ++i) {
-            fill_leaf(bvh, w->packets, &c.leaves[i]);
+            fill_leaf(bvh, w->packets, &w->leaves[i]);
         }
     }
     free(c.sub_first);
     free(c.sub_count);
-    free(c.leaves);
     if (c.failed) {
         tr_wbvh_free(w);
         return tr_error_set(err, "out of memory collapsing a BVH of %u nodes into a wide BVH",
@@ -233,6 +232,35 @@ int tr_wbvh_build(tr_wbvh *w, const tr_bvh *bvh, tr_error *err) {
     }
     w->build_seconds = tr_time_now() - t0;
     return TR_OK;
+}
+
+void tr_wbvh_refit(tr_wbvh *w, const tr_bvh *bvh) {
+    const int nodes = (int)w->node_count, leaves = (int)w->leaf_count;
+#pragma omp parallel
+    {
+#pragma omp for schedule(static, 1024) nowait
+        for (int n = 0; n < nodes; ++n) {
+            tr_wbvh_node *node = &w->nodes[n];
+            for (int i = 0; i < TR_WBVH_WIDTH; ++i) {
+                const uint32_t s = w->slot_src[(size_t)TR_WBVH_WIDTH * n + i];
+                if (s == UINT32_MAX) {
+                    continue;
+                }
+                const tr_aabb b = bvh->nodes[s].box;
+                node->bounds[0][i] = b.min.x;
+                node->bounds[1][i] = b.max.x;
+                node->bounds[2][i] = b.min.y;
+                node->bounds[3][i] = b.max.y;
+                node->bounds[4][i] = b.min.z;
+                node->bounds[5][i] = b.max.z;
+            }
+        }
+#pragma omp for schedule(static, 4096)
+        for (int i = 0; i < leaves; ++i) {
+            fill_leaf(bvh, w->packets, &w->leaves[i]);
+        }
+    }
+    w->bvh_refits = bvh->refits;
 }
 
 const char *tr_wbvh_isa(void) {

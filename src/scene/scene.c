@@ -271,8 +271,14 @@ int tr_scene_refit(tr_scene *s, tr_error *err) {
     if (s->accel != TR_ACCEL_TYPE_BVH && s->accel != TR_ACCEL_TYPE_BVH2) {
         return TR_OK;
     }
+    /* Whether the wide BVH was collapsed from this tree as it stood before this refit. */
+    const int wide_current = s->wbvh.nodes && s->wbvh.bvh_refits == s->bvh.refits;
     tr_bvh_refit(&s->bvh, s->triangles);
     if (s->accel == TR_ACCEL_TYPE_BVH) {
+        if (wide_current) {
+            tr_wbvh_refit(&s->wbvh, &s->bvh); /* same shape, new boxes and packets */
+            return TR_OK;
+        }
         tr_wbvh_free(&s->wbvh);
         if (tr_wbvh_build(&s->wbvh, &s->bvh, err) != TR_OK) {
             return TR_ERR; /* the view falls back to the binary BVH */
