@@ -1094,6 +1094,18 @@ static void test_degenerate(void) {
     tr_scene_free(&s);
 }
 
+/* Moves every triangle: v -> v * scale + sign * offset. */
+static void move_triangles(tr_scene *s, tr_vec3 scale, tr_vec3 offset, float sign) {
+    const tr_vec3 d = v3_scale(offset, sign);
+    for (uint32_t i = 0; i < s->triangle_count; ++i) {
+        tr_triangle *tri = &s->triangles[i];
+        tri->v0 = v3_add(v3_mul(tri->v0, scale), d);
+        tri->v1 = v3_add(v3_mul(tri->v1, scale), d);
+        tri->v2 = v3_add(v3_mul(tri->v2, scale), d);
+        tr_triangle_finish(tri);
+    }
+}
+
 /* Refit: move every triangle (non-uniform scale and translation), refit the tree, and
  * the BVH must still find what the flat structure finds. */
 static void test_refit(void) {
@@ -1107,13 +1119,7 @@ static void test_refit(void) {
     CHECK(tr_scene_commit(&s, TR_ACCEL_TYPE_BVH, &err) == TR_OK, "%s", err.msg);
     uint32_t nodes = s.bvh.node_count;
     const tr_vec3 scale = v3(1.5f, 0.5f, 2.25f), offset = v3(3.0f, -1.0f, 0.25f);
-    for (uint32_t i = 0; i < n; ++i) {
-        tr_triangle *tri = &s.triangles[i];
-        tri->v0 = v3_add(v3_mul(tri->v0, scale), offset);
-        tri->v1 = v3_add(v3_mul(tri->v1, scale), offset);
-        tri->v2 = v3_add(v3_mul(tri->v2, scale), offset);
-        tr_triangle_finish(tri);
-    }
+    move_triangles(&s, scale, offset, 1.0f);
     tr_bvh_refit(&s.bvh, s.triangles);
     set_flat_nodes(&s, FLAT_CHUNK); /* the flat boxes moved too */
     CHECK(s.bvh.node_count == nodes, "refit changed the node count %u -> %u", nodes,
@@ -1129,13 +1135,7 @@ static void test_refit(void) {
     ray_gen_free(&g);
 
     /* Move again and refit the scene: both trees follow. */
-    for (uint32_t i = 0; i < n; ++i) {
-        tr_triangle *tri = &s.triangles[i];
-        tri->v0 = v3_sub(v3_mul(tri->v0, scale), offset);
-        tri->v1 = v3_sub(v3_mul(tri->v1, scale), offset);
-        tri->v2 = v3_sub(v3_mul(tri->v2, scale), offset);
-        tr_triangle_finish(tri);
-    }
+    move_triangles(&s, scale, offset, -1.0f);
     CHECK(tr_scene_refit(&s, &err) == TR_OK, "%s", err.msg);
     set_flat_nodes(&s, FLAT_CHUNK);
     check_structure("scene refit soup", &s.bvh, s.triangles, n);
@@ -1151,13 +1151,7 @@ static void test_refit(void) {
     /* Once more, now with a wide BVH as current as the binary one: tr_scene_refit refits
      * it in place (tr_wbvh_refit), keeping its node and packet counts. */
     const uint32_t wide_nodes = s.wbvh.node_count, packets = s.wbvh.packet_count;
-    for (uint32_t i = 0; i < n; ++i) {
-        tr_triangle *tri = &s.triangles[i];
-        tri->v0 = v3_add(v3_mul(tri->v0, scale), offset);
-        tri->v1 = v3_add(v3_mul(tri->v1, scale), offset);
-        tri->v2 = v3_add(v3_mul(tri->v2, scale), offset);
-        tr_triangle_finish(tri);
-    }
+    move_triangles(&s, scale, offset, 1.0f);
     CHECK(tr_scene_refit(&s, &err) == TR_OK, "%s", err.msg);
     set_flat_nodes(&s, FLAT_CHUNK);
     CHECK(s.wbvh.node_count == wide_nodes && s.wbvh.packet_count == packets,
