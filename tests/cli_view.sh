@@ -94,6 +94,15 @@ export SDL_FRAMEBUFFER_ACCELERATION=0
 state() {
     awk -v k="$1" '$1 == k { $1 = ""; sub(/^ /, ""); print; exit }' state.txt 2>/dev/null
 }
+# settled_at STRIDE SPP: the frame on screen belongs to the current view, at this stride
+# and sample count. One read of the file for all of them: spp is not monotonic (it
+# restarts with a new view), so values read from two successive versions of the file
+# could pass together when neither version does.
+settled_at() {
+    awk -v stride="$1" -v spp="$2" '$1 == "stride" { s = $2 } $1 == "spp" { p = $2 }
+        $1 == "generation" { g = $2 } $1 == "view_generation" { v = $2 }
+        END { exit !(s == stride && p == spp && g == v) }' state.txt 2>/dev/null
+}
 # wait_for SECONDS 'shell condition': polls every 50 ms.
 wait_for() {
     n=$(($1 * 20))
@@ -280,8 +289,7 @@ if "$BIN" info --devices >/dev/null 2>&1; then
     wait_for 30 '[ "$(state stride)" = 2 ] && [ "$(state generation)" -gt "$gen0" ]' ||
         fail "device viewer: 2 did not switch to stride 2"
     xdotool key 1
-    wait_for 60 '[ "$(state stride)" = 1 ] && [ "$(state spp)" -eq 4 ] &&
-        [ "$(state generation)" = "$(state view_generation)" ]' ||
+    wait_for 60 'settled_at 1 4' ||
         fail "device viewer did not settle at stride 1, 4 spp: spp $(state spp)"
     xdotool key F12
     wait_for 20 '[ "$(state shots)" -ge 1 ]' || fail "device F12 saved nothing: $(cat view.err)"
