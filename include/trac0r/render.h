@@ -31,6 +31,9 @@ typedef struct tr_render_stats {
 } tr_render_stats;
 
 tr_render_config tr_render_config_default(void);
+/* Checks the settings every backend takes alike (max depth, integrator, stride); fails
+ * with a message naming the value out of range. */
+int tr_render_config_check(const tr_render_config *cfg, tr_error *err);
 
 /* Adds one sample per pixel (sample number `sample`) to the film, tracing `scene` from
  * `cam`, whose screen size must equal the film's. Deterministic: the result depends on

@@ -28,6 +28,20 @@ double tr_time_now(void) {
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
+int tr_render_config_check(const tr_render_config *cfg, tr_error *err) {
+    if (cfg->max_depth < 1 || cfg->max_depth > TR_MAX_DEPTH_LIMIT) {
+        return tr_error_set(err, "max depth %d must be in 1..%d", cfg->max_depth,
+                            TR_MAX_DEPTH_LIMIT);
+    }
+    if (cfg->integrator != TR_INTEGRATOR_NAIVE && cfg->integrator != TR_INTEGRATOR_PT) {
+        return tr_error_set(err, "unknown integrator %d", cfg->integrator);
+    }
+    if (cfg->stride < 1 || cfg->stride > 64) {
+        return tr_error_set(err, "stride %d must be in 1..64", cfg->stride);
+    }
+    return TR_OK;
+}
+
 int tr_render_frame(const tr_scene *scene, const tr_camera *cam, const tr_render_config *cfg,
                     tr_film *film, uint32_t sample, tr_render_stats *stats, tr_error *err) {
     double t0 = tr_time_now();
@@ -39,15 +53,8 @@ int tr_render_frame(const tr_scene *scene, const tr_camera *cam, const tr_render
         return tr_error_set(err, "the scene changed since tr_scene_commit built its %s",
                             tr_accel_name(scene->accel));
     }
-    if (cfg->max_depth < 1 || cfg->max_depth > TR_MAX_DEPTH_LIMIT) {
-        return tr_error_set(err, "max depth %d must be in 1..%d", cfg->max_depth,
-                            TR_MAX_DEPTH_LIMIT);
-    }
-    if (cfg->integrator != TR_INTEGRATOR_NAIVE && cfg->integrator != TR_INTEGRATOR_PT) {
-        return tr_error_set(err, "unknown integrator %d", cfg->integrator);
-    }
-    if (cfg->stride < 1 || cfg->stride > 64) {
-        return tr_error_set(err, "stride %d must be in 1..64", cfg->stride);
+    if (tr_render_config_check(cfg, err) != TR_OK) {
+        return TR_ERR;
     }
     const tr_scene_view view = tr_scene_view_of(scene);
     const uint32_t stride = (uint32_t)cfg->stride;

@@ -804,15 +804,8 @@ int tr_cl_render_frame(tr_cl_context *ctx, const tr_camera *cam, const tr_render
     if (!ctx->have_scene) {
         return tr_error_set(err, "no scene uploaded to the OpenCL device");
     }
-    if (cfg->max_depth < 1 || cfg->max_depth > TR_MAX_DEPTH_LIMIT) {
-        return tr_error_set(err, "max depth %d must be in 1..%d", cfg->max_depth,
-                            TR_MAX_DEPTH_LIMIT);
-    }
-    if (cfg->integrator != TR_INTEGRATOR_NAIVE && cfg->integrator != TR_INTEGRATOR_PT) {
-        return tr_error_set(err, "unknown integrator %d", cfg->integrator);
-    }
-    if (cfg->stride < 1 || cfg->stride > 64) {
-        return tr_error_set(err, "stride %d must be in 1..64", cfg->stride);
+    if (tr_render_config_check(cfg, err) != TR_OK) {
+        return TR_ERR;
     }
     const uint32_t w = cam->screen_width, h = cam->screen_height;
     if (w == 0 || h == 0 || w > TR_FILM_MAX_SIDE || h > TR_FILM_MAX_SIDE ||
