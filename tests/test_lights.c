@@ -16,6 +16,7 @@
  *      scene without emitters has an empty table.
  *  (e) The built-in Cornell box's lamp faces up with our winding and is two-sided. */
 #include "check.h"
+#include "scene_util.h"
 #include "kernel/kernel.h"
 #include "trac0r/trac0r.h"
 
@@ -27,21 +28,9 @@
 #define PI_D 3.14159265358979323846
 #define NSIGMA 5.0
 
-static uint32_t add_mat(tr_scene *s, tr_material m) {
-    tr_error err;
-    uint32_t i = 0;
-    CHECK(tr_scene_add_material(s, m, &i, &err) == TR_OK, "material: %s", err.msg);
-    return i;
-}
-
+/* A plane of sx by sz (scene_util.h's add_shape). */
 static void add_plane(tr_scene *s, uint32_t mat, tr_vec3 pos, tr_vec3 rot, float sx, float sz) {
-    tr_error err;
-    tr_shape_desc d = tr_shape_desc_default(TR_SHAPE_PLANE);
-    d.material = mat;
-    d.transform.position = pos;
-    d.transform.orientation = rot;
-    d.transform.scale = v3(sx, 1.0f, sz);
-    CHECK(tr_scene_add_shape(s, &d, &err) == TR_OK, "plane: %s", err.msg);
+    add_shape(s, TR_SHAPE_PLANE, mat, pos, rot, v3(sx, 1.0f, sz));
 }
 
 static double expected_weight(const tr_material *m, const tr_triangle *t) {

@@ -17,6 +17,7 @@
  *
  * Fixed seeds throughout. */
 #include "check.h"
+#include "scene_util.h"
 #include "kernel/kernel.h"
 #include "trac0r/trac0r.h"
 
@@ -27,25 +28,6 @@
 
 #define PI_D 3.14159265358979323846
 #define NSIGMA 5.0
-
-static uint32_t add_mat(tr_scene *s, tr_material m) {
-    tr_error err;
-    uint32_t i = 0;
-    CHECK(tr_scene_add_material(s, m, &i, &err) == TR_OK, "material: %s", err.msg);
-    return i;
-}
-
-static void add_shape(tr_scene *s, tr_shape_type type, uint32_t mat, tr_vec3 pos, tr_vec3 rot,
-                      tr_vec3 scale) {
-    tr_error err;
-    tr_shape_desc d = tr_shape_desc_default(type);
-    d.material = mat;
-    d.transform.position = pos;
-    d.transform.orientation = rot;
-    d.transform.scale = scale;
-    d.subdivisions = 2;
-    CHECK(tr_scene_add_shape(s, &d, &err) == TR_OK, "shape: %s", err.msg);
-}
 
 /* A closed diffuse box [-1,1]^3 with an inner block, a glossy GGX sphere when
  * `glossy`, and two two-sided lamps under the ceiling (naive ignores sidedness). */
