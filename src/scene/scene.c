@@ -5,6 +5,7 @@
 
 #include "trac0r/render.h"
 #include "trac0r/scene.h"
+#include "scene_internal.h"
 
 static tr_material material_make(uint32_t type, tr_vec3 color, float roughness, float ior,
                                  float emittance) {
@@ -108,6 +109,54 @@ static int normals_reserve(tr_scene *s, uint32_t count, tr_error *err) {
     return TR_OK;
 }
 
+int tr_scene_append_shape(tr_scene *s, const tr_triangle *tris, uint32_t n, const tr_vec3 *normals,
+                          tr_error *err) {
+    if ((uint64_t)s->triangle_count + n > UINT32_MAX / 2) {
+        return tr_error_set(err, "scene would exceed %u triangles", UINT32_MAX / 2);
+    }
+    int rc = TR_OK;
+    if (s->triangle_count + n > s->triangle_capacity) {
+        uint64_t cap = (uint64_t)s->triangle_capacity * 2;
+        if (cap < (uint64_t)s->triangle_count + n) {
+            cap = (uint64_t)s->triangle_count + n;
+        }
+        tr_triangle *grown = realloc(s->triangles, (size_t)cap * sizeof *grown);
+        if (!grown) {
+            rc = tr_error_set(err, "out of memory growing the scene to %llu triangles",
+                              (unsigned long long)cap);
+        } else {
+            s->triangles = grown;
+            s->triangle_capacity = (uint32_t)cap;
+        }
+    }
+    if (rc == TR_OK && s->shape_count == s->shape_capacity) {
+        uint32_t cap = s->shape_capacity ? 2 * s->shape_capacity : 16;
+        tr_flat_node *grown = realloc(s->shapes, (size_t)cap * sizeof *grown);
+        if (!grown) {
+            rc = tr_error_set(err, "out of memory adding a shape");
+        } else {
+            s->shapes = grown;
+            s->shape_capacity = cap;
+        }
+    }
+    if (rc == TR_OK && normals) {
+        rc = normals_reserve(s, s->triangle_count + n, err);
+    }
+    if (rc == TR_OK) {
+        memcpy(s->triangles + s->triangle_count, tris, (size_t)n * sizeof *tris);
+        if (normals) {
+            memcpy(s->vertex_normals + (size_t)3 * s->triangle_count, normals,
+                   (size_t)n * 3 * sizeof *normals);
+        }
+        tr_flat_node *node = &s->shapes[s->shape_count++];
+        node->box = tr_triangles_bounds(tris, n);
+        node->first = s->triangle_count;
+        node->count = n;
+        s->triangle_count += n;
+    }
+    return rc;
+}
+
 int tr_scene_add_mesh(tr_scene *s, const float *positions, uint32_t vertex_count,
                       const uint32_t *indices, uint32_t triangle_count, const float *normals,
                       uint32_t material, const tr_transform *tf, uint32_t *dropped, tr_error *err) {
@@ -176,46 +225,7 @@ int tr_scene_add_mesh(tr_scene *s, const float *positions, uint32_t vertex_count
         free(nrm);
         return tr_error_set(err, "mesh has no triangles of non-zero area (%u dropped)", bad);
     }
-    int rc = TR_OK;
-    if (s->triangle_count + n > s->triangle_capacity) {
-        uint64_t cap = (uint64_t)s->triangle_capacity * 2;
-        if (cap < (uint64_t)s->triangle_count + n) {
-            cap = (uint64_t)s->triangle_count + n;
-        }
-        tr_triangle *grown = realloc(s->triangles, (size_t)cap * sizeof *grown);
-        if (!grown) {
-            rc = tr_error_set(err, "out of memory growing the scene to %llu triangles",
-                              (unsigned long long)cap);
-        } else {
-            s->triangles = grown;
-            s->triangle_capacity = (uint32_t)cap;
-        }
-    }
-    if (rc == TR_OK && s->shape_count == s->shape_capacity) {
-        uint32_t cap = s->shape_capacity ? 2 * s->shape_capacity : 16;
-        tr_flat_node *grown = realloc(s->shapes, (size_t)cap * sizeof *grown);
-        if (!grown) {
-            rc = tr_error_set(err, "out of memory adding a mesh");
-        } else {
-            s->shapes = grown;
-            s->shape_capacity = cap;
-        }
-    }
-    if (rc == TR_OK && nrm) {
-        rc = normals_reserve(s, s->triangle_count + n, err);
-    }
-    if (rc == TR_OK) {
-        memcpy(s->triangles + s->triangle_count, tris, (size_t)n * sizeof *tris);
-        if (nrm) {
-            memcpy(s->vertex_normals + (size_t)3 * s->triangle_count, nrm,
-                   (size_t)n * 3 * sizeof *nrm);
-        }
-        tr_flat_node *node = &s->shapes[s->shape_count++];
-        node->box = tr_triangles_bounds(tris, n);
-        node->first = s->triangle_count;
-        node->count = n;
-        s->triangle_count += n;
-    }
+    int rc = tr_scene_append_shape(s, tris, n, nrm, err);
     free(tris);
     free(nrm);
     return rc;

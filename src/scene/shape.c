@@ -3,6 +3,7 @@
 #include <string.h>
 
 #include "trac0r/scene.h"
+#include "scene_internal.h"
 
 tr_shape_desc tr_shape_desc_default(tr_shape_type type) {
     tr_shape_desc d;
@@ -240,40 +241,7 @@ int tr_scene_add_shape(tr_scene *s, const tr_shape_desc *desc, tr_error *err) {
     if (shape_generate(desc, &tris, &n, err) != TR_OK) {
         return TR_ERR;
     }
-    if ((uint64_t)s->triangle_count + n > UINT32_MAX / 2) {
-        free(tris);
-        return tr_error_set(err, "scene would exceed %u triangles", UINT32_MAX / 2);
-    }
-    if (s->triangle_count + n > s->triangle_capacity) {
-        uint64_t cap = (uint64_t)s->triangle_capacity * 2;
-        if (cap < (uint64_t)s->triangle_count + n) {
-            cap = (uint64_t)s->triangle_count + n;
-        }
-        tr_triangle *grown = realloc(s->triangles, (size_t)cap * sizeof *grown);
-        if (!grown) {
-            free(tris);
-            return tr_error_set(err, "out of memory growing the scene to %llu triangles",
-                                (unsigned long long)cap);
-        }
-        s->triangles = grown;
-        s->triangle_capacity = (uint32_t)cap;
-    }
-    if (s->shape_count == s->shape_capacity) {
-        uint32_t cap = s->shape_capacity ? 2 * s->shape_capacity : 16;
-        tr_flat_node *grown = realloc(s->shapes, (size_t)cap * sizeof *grown);
-        if (!grown) {
-            free(tris);
-            return tr_error_set(err, "out of memory adding a shape");
-        }
-        s->shapes = grown;
-        s->shape_capacity = cap;
-    }
-    memcpy(s->triangles + s->triangle_count, tris, (size_t)n * sizeof *tris);
-    tr_flat_node *node = &s->shapes[s->shape_count++];
-    node->box = tr_triangles_bounds(tris, n);
-    node->first = s->triangle_count;
-    node->count = n;
-    s->triangle_count += n;
+    int rc = tr_scene_append_shape(s, tris, n, NULL, err);
     free(tris);
-    return TR_OK;
+    return rc;
 }
