@@ -134,8 +134,8 @@ static int scene_arrays(const tr_scene *s, const tr_bvh *bvh, cl_array *a) {
                         sizeof(tr_bvh_node)};
     a[n++] = (cl_array){"bvh_tris", bvh ? bvh->tris : NULL, bvh ? bvh->index_count : 0,
                         sizeof(tr_bvh_tri)};
-    /* The pt integrator's emitter table, when it is current (as tr_scene_view sets it). */
-    const uint32_t lights = s->light_triangles == s->triangle_count ? s->light_count : 0;
+    /* The pt integrator's emitter table, as the host's view has it (empty when stale). */
+    const uint32_t lights = tr_scene_view_of(s).light_count;
     a[n++] = (cl_array){"lights", s->lights, lights, sizeof(uint32_t)};
     a[n++] = (cl_array){"light_cdf", s->light_cdf, lights, sizeof(float)};
     return n;
