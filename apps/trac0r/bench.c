@@ -127,10 +127,9 @@ static int bench_frame(int argc, char **argv) {
         tr_render_stats st;
         if (animate) {
             /* The scene changes, so each frame starts a new image. */
-            const double t0 = tr_time_now();
-            double update = 0.0;
+            const double t0 = tr_time_now(); /* the update and any upload, together */
             if (cli_animate(&scene, (uint32_t)f, &err) != TR_OK ||
-                tr_scene_update(&scene, &update, &err) != TR_OK) {
+                tr_scene_update(&scene, NULL, &err) != TR_OK) {
                 fprintf(stderr, "trac0r bench frame: --animate: %s\n", err.msg);
                 rc = CLI_FAILURE;
                 break;
