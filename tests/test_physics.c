@@ -12,6 +12,7 @@
  * statistic (measured sample variance, or the binomial one), derived from the estimator
  * rather than tuned to the observed values. */
 #include "check.h"
+#include "device/frame.h"
 #include "kernel/kernel.h"
 #include "trac0r/trac0r.h"
 
@@ -112,6 +113,7 @@ static void furnace_run(tr_vec3 rho, float emittance, int max_depth) {
         return;
     }
     tr_render_config cfg = tr_render_config_default();
+    cfg.integrator = TR_INTEGRATOR_NAIVE; /* the estimator this furnace checks */
     cfg.max_depth = max_depth;
     cfg.seed = 0x5eedf00dULL + (uint64_t)max_depth;
     uint64_t rays = 0;
@@ -138,9 +140,12 @@ static void furnace_run(tr_vec3 rho, float emittance, int max_depth) {
     int mismatch = 0;
     for (uint32_t k = 0; k < 64; ++k) {
         uint32_t x = (k * 7u) % FW, y = (k * 13u + 5u) % FH, smp = (k * 29u) % FSPP;
-        uint32_t r = 0;
-        tr_vec3 c =
-            tr_render_sample(&view, &cam, x, y, smp, cfg.seed, max_depth, TR_INTEGRATOR_NAIVE, &r);
+        tr_frame fr;
+        tr_error ferr;
+        CHECK(tr_frame_make(&fr, &cam, &cfg, smp, 1, NULL, &ferr) == TR_OK, "%s", ferr.msg);
+        tr_sample out;
+        tr_render_sample(&view, &fr, x, y, smp, &out);
+        const tr_vec3 c = out.radiance;
         size_t i = ((size_t)smp * FH + y) * FW + x;
         for (int ch = 0; ch < 3; ++ch) {
             mismatch += !(fabsf(vcomp(c, ch) - val[3 * i + ch]) <= 1e-6f * fabsf(vcomp(c, ch)));

@@ -270,7 +270,8 @@ static void one_bounce(void) {
             tr_rng rng;
             tr_rng_init(&rng, 31, (uint64_t)variant, (uint64_t)k);
             uint32_t rays = 0;
-            tr_vec3 c = tr_trace_pt(&v, tr_ray_make(from, dir, 0.0f, TR_INFINITY), 2, &rng, &rays);
+            tr_vec3 c =
+                tr_trace_pt(&v, tr_ray_make(from, dir, 0.0f, TR_INFINITY), 2, &rng, &rays, NULL);
             s1 += c.x;
             s2 += (double)c.x * c.x;
             nonzero += c.x != 0.0f;

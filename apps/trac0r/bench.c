@@ -99,11 +99,7 @@ static int bench_frame(int argc, char **argv) {
         tr_scene_free(&scene);
         return rc;
     }
-    tr_render_config cfg = tr_render_config_default();
-    cfg.max_depth = c.max_depth;
-    cfg.seed = c.seed;
-    cfg.threads = c.threads;
-    cfg.integrator = c.integrator;
+    tr_render_config cfg = cli_render_config(&c);
 
     char accel[160];
     cli_describe_accel(accel, sizeof accel, &scene);
@@ -116,11 +112,18 @@ static int bench_frame(int argc, char **argv) {
     rc = CLI_OK;
     /* On a device, every frame is followed by the same frame on the CPU: the reference
      * the device's speed is reported against, measured under the same load. */
-    cli_backend cpu = {.cl = NULL};
-    double *cpu_times = be.cl ? malloc((size_t)frames * sizeof *cpu_times) : NULL;
-    if (be.cl && !cpu_times) {
-        fprintf(stderr, "trac0r bench frame: out of memory\n");
-        rc = CLI_FAILURE;
+    cli_backend cpu = {.dev = NULL};
+    double *cpu_times = NULL;
+    if (!cli_backend_is_cpu(&be)) {
+        cli_common cc = c;
+        snprintf(cc.device, sizeof cc.device, "cpu");
+        cpu_times = malloc((size_t)frames * sizeof *cpu_times);
+        if (!cpu_times) {
+            fprintf(stderr, "trac0r bench frame: out of memory\n");
+            rc = CLI_FAILURE;
+        } else {
+            rc = cli_backend_open(&a, &cc, &scene, &cpu);
+        }
     }
     /* Frame 0 warms caches and the thread pool and is not timed. */
     for (int f = 0; f <= frames && rc == CLI_OK; ++f) {
@@ -134,20 +137,20 @@ static int bench_frame(int argc, char **argv) {
                 rc = CLI_FAILURE;
                 break;
             }
-            if (be.cl && (rc = cli_backend_upload(&a, &be, &scene)) != CLI_OK) {
+            if ((rc = cli_backend_upload(&a, &be, &scene)) != CLI_OK ||
+                (cpu.dev && (rc = cli_backend_upload(&a, &cpu, &scene)) != CLI_OK)) {
                 break;
             }
             if (f > 0) {
                 update_times[f - 1] = tr_time_now() - t0;
             }
-            tr_film_clear(&film);
-            if (be.cl && tr_cl_clear_film(be.cl, &err) != TR_OK) {
+            if (cli_backend_clear(&be, &err) != TR_OK) {
                 fprintf(stderr, "trac0r bench frame: %s\n", err.msg);
                 rc = CLI_FAILURE;
                 break;
             }
         }
-        if (cli_backend_frame(&be, &scene, &cfg, &film, (uint32_t)f, &st, &err) != TR_OK) {
+        if (cli_backend_frame(&be, &scene, &cfg, (uint32_t)f, &st, &err) != TR_OK) {
             fprintf(stderr, "trac0r bench frame: %s\n", err.msg);
             rc = CLI_FAILURE;
         } else if (f > 0) {
@@ -156,7 +159,7 @@ static int bench_frame(int argc, char **argv) {
             total += st.seconds;
         }
         if (rc == CLI_OK && cpu_times) {
-            if (cli_backend_frame(&cpu, &scene, &cfg, &film, (uint32_t)f, &st, &err) != TR_OK) {
+            if (cli_backend_frame(&cpu, &scene, &cfg, (uint32_t)f, &st, &err) != TR_OK) {
                 fprintf(stderr, "trac0r bench frame: %s\n", err.msg);
                 rc = CLI_FAILURE;
             } else if (f > 0) {
@@ -174,7 +177,8 @@ static int bench_frame(int argc, char **argv) {
             const double umed = bench_median(update_times, frames);
             printf("scene update per frame (%s%s): median %.3f ms  min %.3f ms  max %.3f ms; "
                    "frame + update %.2f ms (%.2f fps)\n",
-                   tr_scene_update_kind(&scene), be.cl ? " + upload to the device" : "", umed * 1e3,
+                   tr_scene_update_kind(&scene),
+                   cli_backend_is_cpu(&be) ? "" : " + upload to the device", umed * 1e3,
                    update_times[0] * 1e3, update_times[frames - 1] * 1e3, (med + umed) * 1e3,
                    1.0 / (med + umed));
         }
@@ -189,6 +193,7 @@ static int bench_frame(int argc, char **argv) {
         }
     }
     free(cpu_times);
+    cli_backend_close(&cpu);
     cli_backend_close(&be);
     free(times);
     tr_film_free(&film);
@@ -326,7 +331,7 @@ static int bench_complexity(int argc, char **argv) {
         }
     }
     /* A device traces the flat structure and the BVH; Embree is host-only. */
-    for (int k = 0; c.device != CLI_DEVICE_CPU && k < set.count; ++k) {
+    for (int k = 0; strcmp(c.device, "cpu") != 0 && k < set.count; ++k) {
         if (set.type[k] == TR_ACCEL_TYPE_EMBREE) {
             if (accels_given) {
                 return cli_error(&a, "--accels: embree runs on the CPU only; with --device "
@@ -356,10 +361,8 @@ static int bench_complexity(int argc, char **argv) {
         tr_film_free(&film);
         return rc;
     }
-    tr_render_config cfg = tr_render_config_default();
-    cfg.max_depth = c.max_depth;
-    cfg.seed = c.seed;
-    cfg.threads = c.threads;
+    tr_render_config cfg = cli_render_config(&c);
+    cfg.integrator = TR_INTEGRATOR_NAIVE; /* the thesis's figure 3.5 */
     printf("bench complexity: %ux%u, 1 spp/frame, naive, max depth %d, %s, median of %d "
            "frames\n",
            c.width, c.height, c.max_depth, be.name, frames);
@@ -394,7 +397,7 @@ static int bench_complexity(int argc, char **argv) {
             if (rc != CLI_OK) {
                 break;
             }
-            if (cli_backend_clear(&be, &film, &err) != TR_OK) {
+            if (cli_backend_clear(&be, &err) != TR_OK) {
                 fprintf(stderr, "trac0r bench complexity: %s\n", err.msg);
                 rc = CLI_FAILURE;
                 break;
@@ -402,7 +405,7 @@ static int bench_complexity(int argc, char **argv) {
             int n = 0;
             for (int f = 0; f <= frames; ++f) {
                 tr_render_stats st;
-                if (cli_backend_frame(&be, &scene, &cfg, &film, (uint32_t)f, &st, &err) != TR_OK) {
+                if (cli_backend_frame(&be, &scene, &cfg, (uint32_t)f, &st, &err) != TR_OK) {
                     fprintf(stderr, "trac0r bench complexity: %s\n", err.msg);
                     rc = CLI_FAILURE;
                     break;

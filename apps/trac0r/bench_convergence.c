@@ -9,6 +9,7 @@
 
 #include "bench.h"
 #include "cli.h"
+#include "devices.h"
 #include "compare.h"
 
 #define CONV_MAX_SIZES 4
@@ -127,16 +128,15 @@ static void film_mean(const tr_film *f, float *rgb) {
     }
 }
 
-/* Renders spp samples [first, first + spp) into f (cleared first). */
-static int render_spp(const tr_scene *s, const tr_render_config *cfg, tr_film *f, uint32_t first,
-                      uint32_t spp, tr_error *err) {
-    tr_film_clear(f);
-    for (uint32_t k = 0; k < spp; ++k) {
-        if (tr_render_frame(s, &s->camera, cfg, f, first + k, NULL, err) != TR_OK) {
-            return TR_ERR;
-        }
+/* Renders samples [first, first + spp) on the device (its film cleared first) and reads
+ * them into f. */
+static int render_spp(tr_device *dev, const tr_scene *s, const tr_render_config *cfg, tr_film *f,
+                      uint32_t first, uint32_t spp, tr_error *err) {
+    if (tr_device_clear(dev, err) != TR_OK ||
+        tr_device_render(dev, &s->camera, cfg, first, spp, NULL, NULL, err) != TR_OK) {
+        return TR_ERR;
     }
-    return TR_OK;
+    return tr_device_read_film(dev, f, err);
 }
 
 /* Time (or spp, with use_spp) at which the run first reaches `db`: interpolated
@@ -276,6 +276,22 @@ int bench_convergence(int argc, char **argv) {
         float *cur = malloc(3 * px * sizeof *cur);
         tr_film film;
         int film_ok = ref && half && cur && tr_film_init(&film, c.width, c.height, &err) == TR_OK;
+        /* One device for the reference and one per method: each keeps its own film. */
+        cli_backend devs[3] = {{0}};
+        for (int k = 0; film_ok && rc == CLI_OK && k <= nmethods; ++k) {
+            rc = cli_backend_open(&a, &c, &scene, &devs[k]);
+        }
+        if (rc != CLI_OK) {
+            for (int k = 0; k <= nmethods; ++k) {
+                cli_backend_close(&devs[k]);
+            }
+            free(ref);
+            free(half);
+            free(cur);
+            tr_film_free(&film);
+            tr_scene_free(&scene);
+            break;
+        }
         if (!film_ok) {
             fprintf(stderr, "trac0r bench convergence: %ux%u: %s\n", c.width, c.height,
                     ref && half && cur ? err.msg : "out of memory");
@@ -301,11 +317,11 @@ int bench_convergence(int argc, char **argv) {
         } else {
             double t0 = tr_time_now();
             uint32_t h1 = ref_spp / 2, h2 = ref_spp - h1;
-            if (render_spp(&scene, &cfg, &film, 0, h1, &err) != TR_OK) {
+            if (render_spp(devs[nmethods].dev, &scene, &cfg, &film, 0, h1, &err) != TR_OK) {
                 rc = CLI_FAILURE;
             } else {
                 film_mean(&film, half);
-                if (render_spp(&scene, &cfg, &film, h1, h2, &err) != TR_OK) {
+                if (render_spp(devs[nmethods].dev, &scene, &cfg, &film, h1, h2, &err) != TR_OK) {
                     rc = CLI_FAILURE;
                 }
             }
@@ -360,8 +376,7 @@ int bench_convergence(int argc, char **argv) {
             cfg.max_depth = methods[mi] == TR_INTEGRATOR_NAIVE ? c.max_depth + 2 : c.max_depth;
             cfg.seed = c.seed;
             tr_render_stats st;
-            if (tr_render_frame(&scene, &scene.camera, &cfg, &films[mi], spp[mi], &st, &err) !=
-                TR_OK) {
+            if (cli_backend_frame(&devs[mi], &scene, &cfg, spp[mi], &st, &err) != TR_OK) {
                 fprintf(stderr, "trac0r bench convergence: %s\n", err.msg);
                 rc = CLI_FAILURE;
                 break;
@@ -370,6 +385,11 @@ int bench_convergence(int argc, char **argv) {
             ++spp[mi];
             int last = elapsed[mi] >= budget || r->n == CONV_MAX_POINTS - 1;
             if (spp[mi] == next[mi] || last) {
+                if (cli_backend_read(&devs[mi], &films[mi], &err) != TR_OK) {
+                    fprintf(stderr, "trac0r bench convergence: %s\n", err.msg);
+                    rc = CLI_FAILURE;
+                    break;
+                }
                 film_mean(&films[mi], cur);
                 conv_point *p = &r->pt[r->n++];
                 p->spp = spp[mi];
@@ -391,6 +411,9 @@ int bench_convergence(int argc, char **argv) {
         }
         for (int k = 0; k < nfilms; ++k) {
             tr_film_free(&films[k]);
+        }
+        for (int k = 0; k <= nmethods; ++k) {
+            cli_backend_close(&devs[k]);
         }
         free(ref);
         free(half);

@@ -50,7 +50,7 @@ void cli_common_default(cli_common *c) {
     c->accel = TR_ACCEL_TYPE_BVH;
     c->given = 0;
     c->allow_dark = 0;
-    c->device = CLI_DEVICE_CPU;
+    snprintf(c->device, sizeof c->device, "cpu");
 }
 
 int cli_error(const cli_args *a, const char *fmt, ...) {
@@ -230,7 +230,7 @@ int cli_common_option(cli_args *a, cli_common *c) {
         return CLI_OK;
     }
     if (cli_is(a, "--device")) {
-        return cli_parse_device(a, &c->device);
+        return cli_parse_device(a, c);
     }
     return -1;
 }

@@ -27,7 +27,7 @@ typedef struct cli_common {
     unsigned given; /* CLI_GIVEN_*: options set on the command line (a scene file's
                        render defaults apply to the others) */
     int allow_dark; /* --allow-dark: render a scene file without an emitter */
-    int device;     /* --device: CLI_DEVICE_CPU or an OpenCL device index */
+    char device[32]; /* --device: a tr_device name, "cpu" or "opencl:N" */
 } cli_common;
 
 #define CLI_GIVEN_WIDTH 1u
@@ -35,8 +35,6 @@ typedef struct cli_common {
 #define CLI_GIVEN_MAX_DEPTH 4u
 #define CLI_GIVEN_INTEGRATOR 8u
 #define CLI_GIVEN_ACCEL 16u
-
-#define CLI_DEVICE_CPU (-1)
 
 /* Cursor over argv for one subcommand. */
 typedef struct cli_args {

@@ -6,24 +6,18 @@
 #include <stdlib.h>
 #include <string.h>
 
-int cli_parse_device(cli_args *a, int *device) {
+int cli_parse_device(cli_args *a, cli_common *c) {
     if (cli_value(a) != CLI_OK) {
         return CLI_USAGE;
     }
     const char *v = a->value;
     if (strcmp(v, "cpu") == 0) {
-        *device = CLI_DEVICE_CPU;
+        snprintf(c->device, sizeof c->device, "cpu");
         return CLI_OK;
     }
     if (strncmp(v, "opencl", 6) == 0 && (v[6] == '\0' || v[6] == ':')) {
-        if (!tr_cl_available()) {
-            return cli_error(a,
-                             "%s: '%s' is not available: this build of trac0r has no OpenCL "
-                             "support",
-                             a->opt, v);
-        }
         if (v[6] == '\0') {
-            *device = 0;
+            snprintf(c->device, sizeof c->device, "opencl:0");
             return CLI_OK;
         }
         const char *num = v + 7;
@@ -33,32 +27,37 @@ int cli_parse_device(cli_args *a, int *device) {
         if (*num < '0' || *num > '9' || *end != '\0' || errno == ERANGE || n > 1023) {
             return cli_error(a, "%s: expected opencl:N with N in 0..1023, got '%s'", a->opt, v);
         }
-        *device = (int)n;
+        snprintf(c->device, sizeof c->device, "opencl:%ld", n);
         return CLI_OK;
     }
     return cli_error(a, "%s: unknown device '%s' (expected cpu, opencl or opencl:N)", a->opt, v);
 }
 
-static void describe(cli_backend *be, const cli_common *c) {
-    if (!be->cl) {
-        const int threads = c->threads ? c->threads : tr_default_threads();
-        snprintf(be->name, sizeof be->name, "cpu, %d thread%s", threads, threads == 1 ? "" : "s");
+tr_render_config cli_render_config(const cli_common *c) {
+    tr_render_config cfg = tr_render_config_default();
+    cfg.max_depth = c->max_depth;
+    cfg.seed = c->seed;
+    cfg.threads = c->threads;
+    cfg.integrator = c->integrator;
+    return cfg;
+}
+
+static void describe(cli_backend *be, int threads) {
+    const tr_device_info *d = tr_device_get_info(be->dev);
+    if (cli_backend_is_cpu(be)) {
+        const int n = threads ? threads : tr_default_threads();
+        snprintf(be->name, sizeof be->name, "cpu, %d thread%s", n, n == 1 ? "" : "s");
         return;
     }
-    const tr_cl_device_info *d = tr_cl_device(be->cl);
-    snprintf(be->name, sizeof be->name, "opencl:%d (%s)", d->index, d->name);
+    snprintf(be->name, sizeof be->name, "%s (%s)", d->name, d->model);
 }
 
 int cli_backend_open(const cli_args *a, const cli_common *c, const tr_scene *scene,
                      cli_backend *be) {
     memset(be, 0, sizeof *be);
-    if (c->device == CLI_DEVICE_CPU) {
-        describe(be, c);
-        return CLI_OK;
-    }
     tr_error err;
-    be->cl = tr_cl_open(c->device, &err);
-    if (!be->cl) {
+    be->dev = tr_device_open(c->device, &err);
+    if (!be->dev) {
         if (strncmp(err.msg, "OpenCL: ", 8) == 0) {
             /* An OpenCL call failed on a device that exists (the compiler rejected the
              * kernel, ...): a fault of this build or driver, not of the command line.
@@ -68,7 +67,7 @@ int cli_backend_open(const cli_args *a, const cli_common *c, const tr_scene *sce
         }
         return cli_error(a, "--device: %s", err.msg);
     }
-    describe(be, c);
+    describe(be, c->threads);
     if (scene) {
         int rc = cli_backend_upload(a, be, scene);
         if (rc != CLI_OK) {
@@ -80,57 +79,57 @@ int cli_backend_open(const cli_args *a, const cli_common *c, const tr_scene *sce
 }
 
 int cli_backend_upload(const cli_args *a, cli_backend *be, const tr_scene *scene) {
-    if (!be->cl) {
-        return CLI_OK;
-    }
     tr_error err;
-    if (tr_cl_upload_scene(be->cl, scene, &err) != TR_OK) {
+    if (tr_device_upload(be->dev, scene, &err) != TR_OK) {
         return cli_error(a, "--device: %s", err.msg);
     }
-    const tr_cl_device_info *d = tr_cl_device(be->cl);
+    if (cli_backend_is_cpu(be)) {
+        return CLI_OK;
+    }
+    const tr_device_info *d = tr_device_get_info(be->dev);
+    const tr_accel_type walked = tr_device_accel(be->dev);
     /* bvh and bvh2 both upload the binary BVH (the wide BVH is host code). */
-    if (scene->accel != tr_cl_scene_accel(be->cl) && scene->accel != TR_ACCEL_TYPE_BVH2) {
+    if (scene->accel != walked && scene->accel != TR_ACCEL_TYPE_BVH2) {
         /* Embree is a host library: the device gets a BVH of its own. */
-        snprintf(be->name, sizeof be->name,
-                 "opencl:%d (%s; %s is host-only, the device traces a %s)", d->index, d->name,
-                 tr_accel_name(scene->accel), tr_accel_name(tr_cl_scene_accel(be->cl)));
+        snprintf(be->name, sizeof be->name, "%s (%s; %s is host-only, the device traces a %s)",
+                 d->name, d->model, tr_accel_name(scene->accel), tr_accel_name(walked));
     } else {
-        snprintf(be->name, sizeof be->name, "opencl:%d (%s)", d->index, d->name);
+        snprintf(be->name, sizeof be->name, "%s (%s)", d->name, d->model);
     }
     return CLI_OK;
 }
 
 int cli_backend_frame(cli_backend *be, const tr_scene *scene, const tr_render_config *cfg,
-                      tr_film *film, uint32_t sample, tr_render_stats *stats, tr_error *err) {
-    if (!be->cl) {
-        return tr_render_frame(scene, &scene->camera, cfg, film, sample, stats, err);
-    }
-    return tr_cl_render_frame(be->cl, &scene->camera, cfg, sample, stats, err);
+                      uint32_t sample, tr_render_stats *stats, tr_error *err) {
+    return tr_device_render(be->dev, &scene->camera, cfg, sample, 1, NULL, stats, err);
 }
 
 int cli_backend_read(cli_backend *be, tr_film *film, tr_error *err) {
-    return be->cl ? tr_cl_read_film(be->cl, film, err) : TR_OK;
+    return tr_device_read_film(be->dev, film, err);
 }
 
-int cli_backend_clear(cli_backend *be, tr_film *film, tr_error *err) {
-    tr_film_clear(film);
-    return be->cl ? tr_cl_clear_film(be->cl, err) : TR_OK;
+int cli_backend_clear(cli_backend *be, tr_error *err) {
+    return tr_device_clear(be->dev, err);
+}
+
+int cli_backend_is_cpu(const cli_backend *be) {
+    return strcmp(tr_device_kind(be->dev), "cpu") == 0;
 }
 
 void cli_backend_close(cli_backend *be) {
-    tr_cl_close(be->cl);
-    be->cl = NULL;
+    tr_device_close(be->dev);
+    be->dev = NULL;
 }
 
 int cli_print_devices(FILE *fp) {
     tr_error err;
     int count = 0;
-    if (tr_cl_list_devices(NULL, 0, &count, &err) != TR_OK) {
+    if (tr_device_list("opencl", NULL, 0, &count, &err) != TR_OK) {
         fprintf(stderr, "trac0r info: --devices: %s\n", err.msg);
         return CLI_USAGE;
     }
-    tr_cl_device_info *devs = calloc((size_t)(count ? count : 1), sizeof *devs);
-    if (!devs || tr_cl_list_devices(devs, count, &count, &err) != TR_OK) {
+    tr_device_info *devs = calloc((size_t)(count ? count : 1), sizeof *devs);
+    if (!devs || tr_device_list("opencl", devs, count, &count, &err) != TR_OK) {
         free(devs);
         fprintf(stderr, "trac0r info: --devices: %s\n", devs ? err.msg : "out of memory");
         return CLI_FAILURE;
@@ -140,8 +139,8 @@ int cli_print_devices(FILE *fp) {
         fprintf(fp, "  none: the OpenCL platforms found have no devices\n");
     }
     for (int i = 0; i < count; ++i) {
-        const tr_cl_device_info *d = &devs[i];
-        fprintf(fp, "  %d: %s\n", d->index, d->name);
+        const tr_device_info *d = &devs[i];
+        fprintf(fp, "  %d: %s\n", i, d->model);
         fprintf(fp, "     platform %d: %s\n", d->platform_index, d->platform);
         fprintf(fp, "     vendor: %s, type: %s, %s\n", d->vendor, d->type, d->version);
         fprintf(fp, "     compute units: %u, memory: %.0f MiB (largest buffer %.0f MiB)\n",

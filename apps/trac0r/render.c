@@ -108,11 +108,7 @@ int cmd_render(int argc, char **argv) {
         tr_scene_free(&scene);
         return rc;
     }
-    tr_render_config cfg = tr_render_config_default();
-    cfg.max_depth = c.max_depth;
-    cfg.seed = c.seed;
-    cfg.threads = c.threads;
-    cfg.integrator = c.integrator;
+    tr_render_config cfg = cli_render_config(&c);
     cfg.stride = stride;
 
     const int tty = isatty(fileno(stderr));
@@ -121,7 +117,7 @@ int cmd_render(int argc, char **argv) {
     rc = CLI_OK;
     for (uint32_t s = 0; s < spp; ++s) {
         tr_render_stats st;
-        if (cli_backend_frame(&be, &scene, &cfg, &film, s, &st, &err) != TR_OK) {
+        if (cli_backend_frame(&be, &scene, &cfg, s, &st, &err) != TR_OK) {
             fprintf(stderr, "%strac0r render: %s\n", tty ? "\n" : "", err.msg);
             rc = CLI_FAILURE;
             break;

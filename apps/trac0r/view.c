@@ -61,30 +61,20 @@ static void view_help(void) {
            cli_common_help, VIEW_DEFAULT_FRAMES);
 }
 
-static int set_render_config(const cli_common *c, tr_render_config *cfg) {
-    *cfg = tr_render_config_default();
-    cfg->max_depth = c->max_depth;
-    cfg->seed = c->seed;
-    cfg->threads = c->threads;
-    cfg->integrator = c->integrator;
-    return CLI_OK;
-}
-
 /* Renders `frames` frames of the scene's own camera, as `trac0r render` does; returns
  * the seconds taken in *seconds. */
 static int render_frames(const cli_args *a, const view_options *o, const tr_scene *scene,
                          cli_backend *be, tr_film *film, uint32_t frames, double *seconds) {
-    tr_render_config cfg;
-    set_render_config(&o->c, &cfg);
+    const tr_render_config cfg = cli_render_config(&o->c);
     tr_error err;
     const double t0 = tr_time_now();
     for (uint32_t s = 0; s < frames; ++s) {
-        if (cli_backend_frame(be, scene, &cfg, film, s, NULL, &err) != TR_OK) {
+        if (cli_backend_frame(be, scene, &cfg, s, NULL, &err) != TR_OK) {
             fprintf(stderr, "trac0r %s: %s\n", a->cmd, err.msg);
             return CLI_FAILURE;
         }
     }
-    /* A device's film comes back once, inside the timed span (as a displayed frame would). */
+    /* The device's film comes back once, inside the timed span (as a displayed frame would). */
     if (cli_backend_read(be, film, &err) != TR_OK) {
         fprintf(stderr, "trac0r %s: %s\n", a->cmd, err.msg);
         return CLI_FAILURE;
@@ -237,7 +227,7 @@ int cmd_view(int argc, char **argv) {
         tr_scene_free(&scene);
         return rc;
     }
-    if (be.cl) {
+    if (!cli_backend_is_cpu(&be)) {
         fprintf(stderr, "trac0r view: rendering on %s\n", be.name);
     }
     rc = headless ? run_headless(&a, &o, &scene, &be) : view_run_window(&a, &o, &scene, &be);

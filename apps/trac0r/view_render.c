@@ -49,20 +49,22 @@ static int resize_buffers(view_renderer *r, uint32_t w, uint32_t h, tr_error *er
     return TR_OK;
 }
 
-/* One frame of sample `spp` into r->film: on the CPU (cancellable), or on the device and
- * read back. */
+/* The device asks this before each tile (the CPU device; others finish the frame). */
+static int render_cancelled(void *user) {
+    view_renderer *r = user;
+    return atomic_load(&r->cancel);
+}
+
+/* One frame of sample `spp` on the device, read back into r->film. */
 static int render_one(view_renderer *r, const tr_camera *cam, const tr_render_config *cfg,
                       uint32_t spp, tr_render_stats *st, tr_error *err) {
-    if (!r->cl) {
-        return tr_render_frame(r->scene, cam, cfg, &r->film, spp, st, err);
-    }
-    if (tr_cl_render_frame(r->cl, cam, cfg, spp, st, err) != TR_OK) {
+    if (tr_device_render(r->dev, cam, cfg, spp, 1, NULL, st, err) != TR_OK) {
         return TR_ERR;
     }
     if (atomic_load(&r->cancel)) {
         return tr_error_set(err, "frame cancelled"); /* the view changed meanwhile */
     }
-    return tr_cl_read_film(r->cl, &r->film, err);
+    return tr_device_read_film(r->dev, &r->film, err);
 }
 
 static void *render_main(void *arg) {
@@ -109,7 +111,7 @@ static void *render_main(void *arg) {
             const double t0 = tr_time_now();
             if (cli_animate(r->scene, (uint32_t)(r->updates + 1), &err) != TR_OK ||
                 tr_scene_update(r->scene, NULL, &err) != TR_OK ||
-                (r->cl && tr_cl_upload_scene(r->cl, r->scene, &err) != TR_OK)) {
+                tr_device_upload(r->dev, r->scene, &err) != TR_OK) {
                 r->failed = 1;
                 snprintf(r->error, sizeof r->error, "--animate: %s", err.msg);
                 break;
@@ -122,7 +124,7 @@ static void *render_main(void *arg) {
 
         if (want != gen) {
             if (resize_buffers(r, cam.screen_width, cam.screen_height, &err) != TR_OK ||
-                (r->cl && tr_cl_clear_film(r->cl, &err) != TR_OK)) {
+                tr_device_clear(r->dev, &err) != TR_OK) {
                 pthread_mutex_lock(&r->mu);
                 r->failed = 1;
                 snprintf(r->error, sizeof r->error, "%s", err.msg);
@@ -133,7 +135,8 @@ static void *render_main(void *arg) {
         }
         tr_render_config cfg = r->cfg;
         cfg.stride = stride;
-        cfg.cancel = &r->cancel;
+        cfg.cancel = render_cancelled;
+        cfg.cancel_user = r;
         tr_render_stats st;
         /* Animated, each frame is sample 0 of a new image: the frame count picks its
          * random numbers instead, so that the noise changes from frame to frame. */
@@ -183,13 +186,13 @@ static void *render_main(void *arg) {
     return NULL;
 }
 
-int view_renderer_start(view_renderer *r, tr_scene *scene, int animate, tr_cl_context *cl,
+int view_renderer_start(view_renderer *r, tr_scene *scene, int animate, tr_device *dev,
                         const tr_render_config *cfg, const tr_camera *cam, int stride,
                         float exposure, uint32_t max_spp, tr_error *err) {
     memset(r, 0, sizeof *r);
     r->scene = scene;
     r->animate = animate;
-    r->cl = cl;
+    r->dev = dev;
     r->cfg = *cfg;
     r->max_spp = max_spp;
     r->cam = *cam;

@@ -16,13 +16,13 @@
 #include <stdatomic.h>
 #include <stdint.h>
 
-#include "trac0r/opencl.h"
+#include "trac0r/device.h"
 #include "trac0r/trac0r.h"
 
 typedef struct view_renderer {
     tr_scene *scene;   /* changed only by this thread, under mu, when animating */
     int animate;       /* move the scene's last shape before every frame (cli_animate) */
-    tr_cl_context *cl; /* --device opencl: renders there (the scene uploaded); NULL: the CPU */
+    tr_device *dev; /* renders there (the scene uploaded) */
     tr_render_config cfg;
     uint32_t max_spp; /* stop accumulating here (0: never stop) */
     pthread_t thread;
@@ -66,7 +66,7 @@ typedef struct view_renderer {
  * the CPU (cl NULL) or on the OpenCL context cl, which holds `scene` already. With
  * `animate` the thread moves the scene's last shape before every frame (and uploads the
  * scene again to a device); readers of the scene on other threads hold mu. */
-int view_renderer_start(view_renderer *r, tr_scene *scene, int animate, tr_cl_context *cl,
+int view_renderer_start(view_renderer *r, tr_scene *scene, int animate, tr_device *dev,
                         const tr_render_config *cfg, const tr_camera *cam, int stride,
                         float exposure, uint32_t max_spp, tr_error *err);
 /* Asks for another view (camera, size or stride): restarts accumulation if it differs. */

@@ -220,12 +220,8 @@ int view_run_window(const cli_args *a, const view_options *o, tr_scene *scene, c
     st.exposure = o->exposure;
     st.bvh_depth = 3;
 
-    tr_render_config cfg = tr_render_config_default();
-    cfg.max_depth = o->c.max_depth;
-    cfg.seed = o->c.seed;
-    cfg.threads = o->c.threads;
-    cfg.integrator = o->c.integrator;
-    if (view_renderer_start(&r, scene, o->animate, be->cl, &cfg, &cam, st.stride, st.exposure,
+    tr_render_config cfg = cli_render_config(&o->c);
+    if (view_renderer_start(&r, scene, o->animate, be->dev, &cfg, &cam, st.stride, st.exposure,
                             o->max_spp, &err) != TR_OK) {
         fprintf(stderr, "trac0r view: %s\n", err.msg);
         goto done;

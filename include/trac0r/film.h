@@ -1,5 +1,7 @@
-/* film.h - the float accumulation buffer: a sum of radiance and a sample count per
- * pixel. Tonemapping happens only when the film is written out (image.h). */
+/* film.h - the float accumulation buffer: per pixel a sum of radiance and a sample count,
+ * and, for the passes asked for (TR_PASS_*), sums of albedo, normal and depth and the
+ * primitive id of the pixel's first sample. Tonemapping happens only when the film is
+ * written out (image.h). Two films of one size merge exactly: sums and counts add. */
 #ifndef TRAC0R_FILM_H
 #define TRAC0R_FILM_H
 
@@ -16,15 +18,33 @@ typedef struct tr_film {
     uint32_t width, height;
     float *sum;      /* 3 floats (linear RGB) per pixel, row-major, top row first */
     uint32_t *count; /* samples accumulated per pixel */
+    uint32_t passes; /* TR_PASS_* this film keeps; the arrays of the others are NULL */
+    float *albedo;   /* TR_PASS_ALBEDO: 3 floats per pixel, summed like radiance */
+    float *normal;   /* TR_PASS_NORMAL: 3 floats per pixel, summed */
+    float *depth;    /* TR_PASS_DEPTH: 1 float per pixel, summed */
+    uint32_t *prim;  /* TR_PASS_PRIM: triangle index + 1 of the pixel's first sample, 0: none */
 } tr_film;
 
-/* Allocates a cleared film. Fails (without allocating) on a zero size or one beyond
- * TR_FILM_MAX_SIDE / TR_FILM_MAX_PIXELS, or when memory runs out. */
+/* Allocates a cleared film keeping radiance only. Fails (without allocating) on a zero
+ * size or one beyond TR_FILM_MAX_SIDE / TR_FILM_MAX_PIXELS, or when memory runs out. */
 int tr_film_init(tr_film *f, uint32_t width, uint32_t height, tr_error *err);
+/* The same, also keeping the passes in the TR_PASS_* mask `passes`. */
+int tr_film_init_passes(tr_film *f, uint32_t width, uint32_t height, uint32_t passes,
+                        tr_error *err);
 void tr_film_free(tr_film *f);
 /* Forgets every sample (keeps the allocation). */
 void tr_film_clear(tr_film *f);
 /* The mean radiance of pixel (x, y): black where no sample has landed. */
 tr_vec3 tr_film_pixel(const tr_film *f, uint32_t x, uint32_t y);
+/* The mean of pass `pass` (one TR_PASS_* bit the film keeps) at pixel (x, y) in out[0..2]
+ * (depth and the primitive id in out[0], the others zero); zeros where no sample landed. */
+int tr_film_pass_pixel(const tr_film *f, uint32_t pass, uint32_t x, uint32_t y, float out[3],
+                       tr_error *err);
+/* Adds src's samples to dst: sums and counts add, a primitive id is taken from src where
+ * dst has none. The films must have one size, and src must keep every pass dst keeps.
+ * Pixel by pixel this is exact where at most one of the two has samples (a render split
+ * into rectangles comes back bit for bit); where both have, it is one float addition per
+ * sum, as when the two sample ranges had been accumulated apart and then added. */
+int tr_film_accumulate(tr_film *dst, const tr_film *src, tr_error *err);
 
 #endif

@@ -2,7 +2,6 @@
 #ifndef TRAC0R_RENDER_H
 #define TRAC0R_RENDER_H
 
-#include <stdatomic.h>
 #include <stdint.h>
 
 #include "kernel/kernel.h"
@@ -12,18 +11,26 @@
 
 #define TR_MAX_DEPTH_LIMIT 1024
 
+/* What to render and, for the CPU, how. */
 typedef struct tr_render_config {
-    int max_depth;  /* the naive integrator's max_depth (default 8) */
-    uint64_t seed;  /* random streams are keyed by (seed, pixel, sample) */
-    int threads;    /* OpenMP threads; 0 = all the machine has */
-    int integrator; /* TR_INTEGRATOR_* */
-    int stride;     /* preview: trace every stride-th pixel, fill stride x stride blocks */
-    uint32_t tile;  /* tile side in pixels (default 16) */
-    /* Optional (default NULL): when the int it points to becomes nonzero, the frame
-     * stops early (checked before each tile), the film holds a partial sample and the
-     * call fails with "frame cancelled". For interactive use: another thread sets it. */
-    const atomic_int *cancel;
+    int max_depth;   /* the longest path (default 8) */
+    uint64_t seed;   /* random streams are keyed by (seed, pixel, sample) */
+    int threads;     /* CPU: OpenMP threads; 0 = all the machine has */
+    int integrator;  /* TR_INTEGRATOR_* (default TR_INTEGRATOR_PT, as the command line) */
+    int stride;      /* preview: trace every stride-th pixel, fill stride x stride blocks */
+    uint32_t tile;   /* CPU: tile side in traced pixels (default 16) */
+    uint32_t passes; /* TR_PASS_* to accumulate beside radiance (default none) */
+    /* Optional (default NULL): asked before each tile on the CPU; when it returns nonzero
+     * the frame stops early, the film holds a partial sample and the call fails with
+     * "frame cancelled". For interactive use: another thread decides. */
+    int (*cancel)(void *user);
+    void *cancel_user;
 } tr_render_config;
+
+/* A rectangle of pixels: columns x .. x+width-1, rows y .. y+height-1. */
+typedef struct tr_rect {
+    uint32_t x, y, width, height;
+} tr_rect;
 
 typedef struct tr_render_stats {
     uint64_t rays;  /* intersection queries made */
@@ -35,7 +42,8 @@ tr_render_config tr_render_config_default(void);
  * with a message naming the value out of range. */
 int tr_render_config_check(const tr_render_config *cfg, tr_error *err);
 
-/* Adds one sample per pixel (sample number `sample`) to the film, tracing `scene` from
+/* Adds one sample per pixel (sample number `sample`) to the film on the CPU (the "cpu"
+ * device without its own film: device.h renders through devices), tracing `scene` from
  * `cam`, whose screen size must equal the film's. Deterministic: the result depends on
  * the scene, camera, config (except threads and tile) and sample number only.
  * stats may be NULL. */

@@ -1,10 +1,16 @@
-/* film.c - the float accumulation buffer. */
+/* film.c - the float accumulation buffer and its passes. */
 #include <stdlib.h>
 #include <string.h>
 
+#include "kernel/types.h"
 #include "trac0r/film.h"
 
 int tr_film_init(tr_film *f, uint32_t width, uint32_t height, tr_error *err) {
+    return tr_film_init_passes(f, width, height, 0u, err);
+}
+
+int tr_film_init_passes(tr_film *f, uint32_t width, uint32_t height, uint32_t passes,
+                        tr_error *err) {
     memset(f, 0, sizeof *f);
     if (width == 0 || height == 0) {
         return tr_error_set(err, "image size %ux%u must be at least 1x1", width, height);
@@ -14,21 +20,43 @@ int tr_film_init(tr_film *f, uint32_t width, uint32_t height, tr_error *err) {
         return tr_error_set(err, "image size %ux%u exceeds the limit of %u per side and %u pixels",
                             width, height, TR_FILM_MAX_SIDE, TR_FILM_MAX_PIXELS);
     }
+    if ((passes & ~TR_PASS_ALL) != 0u) {
+        return tr_error_set(err, "unknown pass bits 0x%x", passes & ~TR_PASS_ALL);
+    }
     size_t n = (size_t)width * height;
+    int ok = 1;
     f->sum = calloc(3 * n, sizeof *f->sum);
     f->count = calloc(n, sizeof *f->count);
-    if (!f->sum || !f->count) {
+    ok = f->sum && f->count;
+    if (passes & TR_PASS_ALBEDO) {
+        ok = ok && (f->albedo = calloc(3 * n, sizeof *f->albedo)) != NULL;
+    }
+    if (passes & TR_PASS_NORMAL) {
+        ok = ok && (f->normal = calloc(3 * n, sizeof *f->normal)) != NULL;
+    }
+    if (passes & TR_PASS_DEPTH) {
+        ok = ok && (f->depth = calloc(n, sizeof *f->depth)) != NULL;
+    }
+    if (passes & TR_PASS_PRIM) {
+        ok = ok && (f->prim = calloc(n, sizeof *f->prim)) != NULL;
+    }
+    if (!ok) {
         tr_film_free(f);
         return tr_error_set(err, "out of memory allocating a %ux%u film", width, height);
     }
     f->width = width;
     f->height = height;
+    f->passes = passes;
     return TR_OK;
 }
 
 void tr_film_free(tr_film *f) {
     free(f->sum);
     free(f->count);
+    free(f->albedo);
+    free(f->normal);
+    free(f->depth);
+    free(f->prim);
     memset(f, 0, sizeof *f);
 }
 
@@ -36,6 +64,18 @@ void tr_film_clear(tr_film *f) {
     size_t n = (size_t)f->width * f->height;
     memset(f->sum, 0, 3 * n * sizeof *f->sum);
     memset(f->count, 0, n * sizeof *f->count);
+    if (f->albedo) {
+        memset(f->albedo, 0, 3 * n * sizeof *f->albedo);
+    }
+    if (f->normal) {
+        memset(f->normal, 0, 3 * n * sizeof *f->normal);
+    }
+    if (f->depth) {
+        memset(f->depth, 0, n * sizeof *f->depth);
+    }
+    if (f->prim) {
+        memset(f->prim, 0, n * sizeof *f->prim);
+    }
 }
 
 tr_vec3 tr_film_pixel(const tr_film *f, uint32_t x, uint32_t y) {
@@ -46,4 +86,71 @@ tr_vec3 tr_film_pixel(const tr_film *f, uint32_t x, uint32_t y) {
     }
     float inv = 1.0f / (float)c;
     return v3(f->sum[3 * i] * inv, f->sum[3 * i + 1] * inv, f->sum[3 * i + 2] * inv);
+}
+
+int tr_film_pass_pixel(const tr_film *f, uint32_t pass, uint32_t x, uint32_t y, float out[3],
+                       tr_error *err) {
+    out[0] = out[1] = out[2] = 0.0f;
+    if ((pass != TR_PASS_ALBEDO && pass != TR_PASS_NORMAL && pass != TR_PASS_DEPTH &&
+         pass != TR_PASS_PRIM) ||
+        (f->passes & pass) == 0u) {
+        return tr_error_set(err, "the film does not keep pass 0x%x", pass);
+    }
+    if (x >= f->width || y >= f->height) {
+        return tr_error_set(err, "pixel (%u, %u) is outside the %ux%u film", x, y, f->width,
+                            f->height);
+    }
+    size_t i = (size_t)y * f->width + x;
+    uint32_t c = f->count[i];
+    if (pass == TR_PASS_PRIM) {
+        out[0] = (float)f->prim[i];
+        return TR_OK;
+    }
+    if (c == 0) {
+        return TR_OK;
+    }
+    float inv = 1.0f / (float)c;
+    if (pass == TR_PASS_DEPTH) {
+        out[0] = f->depth[i] * inv;
+        return TR_OK;
+    }
+    const float *src = pass == TR_PASS_ALBEDO ? f->albedo : f->normal;
+    for (int k = 0; k < 3; ++k) {
+        out[k] = src[3 * i + (size_t)k] * inv;
+    }
+    return TR_OK;
+}
+
+static void add_floats(float *dst, const float *src, size_t n) {
+    if (dst && src) {
+        for (size_t i = 0; i < n; ++i) {
+            dst[i] += src[i];
+        }
+    }
+}
+
+int tr_film_accumulate(tr_film *dst, const tr_film *src, tr_error *err) {
+    if (dst->width != src->width || dst->height != src->height) {
+        return tr_error_set(err, "cannot add a %ux%u film to a %ux%u one", src->width, src->height,
+                            dst->width, dst->height);
+    }
+    if ((dst->passes & ~src->passes) != 0u) {
+        return tr_error_set(err, "the film added lacks passes 0x%x", dst->passes & ~src->passes);
+    }
+    const size_t n = (size_t)dst->width * dst->height;
+    if (dst->prim) {
+        for (size_t i = 0; i < n; ++i) {
+            if (dst->count[i] == 0u && src->count[i] != 0u) {
+                dst->prim[i] = src->prim[i];
+            }
+        }
+    }
+    add_floats(dst->sum, src->sum, 3 * n);
+    add_floats(dst->albedo, src->albedo, 3 * n);
+    add_floats(dst->normal, src->normal, 3 * n);
+    add_floats(dst->depth, src->depth, n);
+    for (size_t i = 0; i < n; ++i) {
+        dst->count[i] += src->count[i];
+    }
+    return TR_OK;
 }

@@ -32,6 +32,7 @@ typedef ulong uint64_t;
 #else
 /* ---- C11 on the host -------------------------------------------------- */
 #include <math.h>
+#include <stddef.h>
 #include <stdint.h>
 #define TR_FN static inline
 #define TR_GLOBAL

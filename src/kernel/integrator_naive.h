@@ -3,7 +3,9 @@
 #ifndef TR_KERNEL_INTEGRATOR_NAIVE_H
 #define TR_KERNEL_INTEGRATOR_NAIVE_H
 
+#include "bsdf.h"
 #include "compat.h"
+#include "film.h"
 #include "material.h"
 #include "rng.h"
 #include "scene_view.h"
@@ -17,11 +19,13 @@
  * Emission is added wherever a material has emittance (the thesis's emitters, which
  * also end the path); the thesis divided only the final emission by the last p,
  * we divide the throughput at every step, which is what keeps the mean right.
- * *rays counts the intersection queries made. */
+ * *rays counts the intersection queries made; `surface` (may be null) receives the
+ * first hit that is not a perfect mirror or smooth glass, for the passes. */
 TR_FN tr_vec3 tr_trace_naive(const tr_scene_view *s, tr_ray ray, int max_depth, tr_rng *rng,
-                             uint32_t *rays) {
+                             uint32_t *rays, tr_sample *surface) {
     tr_vec3 radiance = v3s(0.0f);
     tr_vec3 throughput = v3s(1.0f);
+    float travelled = 0.0f; /* along the path, for the depth pass */
     int depth = 0;
     for (;;) {
         ++depth;
@@ -42,6 +46,13 @@ TR_FN tr_vec3 tr_trace_naive(const tr_scene_view *s, tr_ray ray, int max_depth, 
         }
         TR_CONST_GLOBAL tr_triangle *tri = &s->triangles[hit.triangle];
         TR_CONST_GLOBAL tr_material *m = &s->materials[tri->material];
+        travelled += hit.t;
+        if (surface) {
+            const tr_material mp = *m;
+            if (!tr_bsdf_is_delta(&mp)) {
+                tr_sample_surface(surface, m->color, tri->normal, ray.dir, travelled, hit.triangle);
+            }
+        }
         if (m->emittance > 0.0f) {
             radiance = v3_add(radiance, v3_scale(v3_mul(throughput, m->color), m->emittance));
         }

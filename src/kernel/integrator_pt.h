@@ -14,6 +14,7 @@
 
 #include "bsdf.h"
 #include "compat.h"
+#include "film.h"
 #include "light.h"
 #include "material.h"
 #include "rng.h"
@@ -48,11 +49,13 @@ TR_FN int tr_v3_is_zero(tr_vec3 a) {
 
 /* Radiance arriving along `ray`. A path has at most max_depth segments (the camera ray
  * is the first); Russian roulette on the throughput's largest component starts after
- * TR_PT_RR_START segments. *rays counts closest-hit and shadow queries. */
+ * TR_PT_RR_START segments. *rays counts closest-hit and shadow queries; `surface` (may
+ * be null) receives the first hit that is not a delta surface, for the passes. */
 TR_FN tr_vec3 tr_trace_pt(const tr_scene_view *s, tr_ray ray, int max_depth, tr_rng *rng,
-                          uint32_t *rays) {
+                          uint32_t *rays, tr_sample *surface) {
     tr_vec3 radiance = v3s(0.0f);
     tr_vec3 throughput = v3s(1.0f);
+    float travelled = 0.0f; /* along the path, for the depth pass */
     float prev_pdf = 0.0f;
     int prev_delta = 1; /* the camera ray: no light strategy competes */
     for (int seg = 1; seg <= max_depth; ++seg) {
@@ -66,6 +69,10 @@ TR_FN tr_vec3 tr_trace_pt(const tr_scene_view *s, tr_ray ray, int max_depth, tr_
         tr_vec3 n = tri->normal;
         tr_vec3 wo = v3_neg(ray.dir);
         tr_vec3 p = v3_madd(ray.origin, ray.dir, hit.t);
+        travelled += hit.t;
+        if (surface && !tr_bsdf_is_delta(&m)) {
+            tr_sample_surface(surface, m.color, n, ray.dir, travelled, hit.triangle);
+        }
 
         /* Emission found by the BSDF strategy (or the camera). */
         tr_vec3 le = tr_emitted(&m, n, wo);

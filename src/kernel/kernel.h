@@ -7,6 +7,7 @@
 
 #include "camera.h"
 #include "compat.h"
+#include "film.h"
 #include "integrator_naive.h"
 #include "integrator_pt.h"
 #include "rng.h"
@@ -17,25 +18,66 @@
 #define TR_INTEGRATOR_NAIVE 0
 #define TR_INTEGRATOR_PT 1 /* next-event estimation + MIS (integrator_pt.h) */
 
-/* Radiance of sample `sample` of pixel (x, y), with jitter inside the pixel. The random
- * stream depends only on (seed, pixel index, sample). */
-TR_FN tr_vec3 tr_render_sample(const tr_scene_view *s, const tr_camera *cam, uint32_t x, uint32_t y,
-                               uint32_t sample, uint64_t seed, int max_depth, int integrator,
-                               uint32_t *rays) {
+/* Sample `sample` of pixel (x, y) of frame f, with jitter inside the pixel: radiance,
+ * rays and the passes' surface into *out. The random stream depends only on (seed,
+ * pixel index, sample). */
+TR_FN void tr_render_sample(const tr_scene_view *s, const tr_frame *f, uint32_t x, uint32_t y,
+                            uint32_t sample, tr_sample *out) {
     tr_rng rng;
-    uint64_t pixel = (uint64_t)y * (uint64_t)cam->screen_width + (uint64_t)x;
+    const uint64_t seed = ((uint64_t)f->seed_hi << 32) | (uint64_t)f->seed_lo;
+    uint64_t pixel = (uint64_t)y * (uint64_t)f->camera.screen_width + (uint64_t)x;
     tr_rng_init(&rng, seed, pixel, (uint64_t)sample);
     float jx, jy;
     tr_sample_pixel_jitter(&rng, &jx, &jy);
-    tr_ray ray = tr_camera_ray(cam, (float)x, (float)y, jx, jy);
+    tr_ray ray = tr_camera_ray(&f->camera, (float)x, (float)y, jx, jy);
+    tr_sample_clear(out);
     /* The host rejects unknown integrators before a frame starts. */
-    switch (integrator) {
+    switch (f->integrator) {
     case TR_INTEGRATOR_PT:
-        return tr_trace_pt(s, ray, max_depth, &rng, rays);
+        out->radiance = tr_trace_pt(s, ray, f->max_depth, &rng, &out->rays, out);
+        break;
     case TR_INTEGRATOR_NAIVE:
     default:
-        return tr_trace_naive(s, ray, max_depth, &rng, rays);
+        out->radiance = tr_trace_naive(s, ray, f->max_depth, &rng, &out->rays, out);
+        break;
     }
+}
+
+/* The pixels frame f traces and the blocks they fill: the traced pixels are those of the
+ * rectangle's stride grid (coordinates multiples of the stride, counted from the image's
+ * corner, so that a frame split into rectangles traces the same pixels as a whole one);
+ * each fills its stride x stride block clipped to the rectangle. *gx0, *gy0 get the grid
+ * index of the first traced column and row, *nx, *ny the number of them. */
+TR_FN void tr_frame_grid(const tr_frame *f, uint32_t *gx0, uint32_t *gy0, uint32_t *nx,
+                         uint32_t *ny) {
+    const uint32_t k = f->stride;
+    const uint32_t x1 = f->rect_x + f->rect_w, y1 = f->rect_y + f->rect_h;
+    *gx0 = f->rect_x / k;
+    *gy0 = f->rect_y / k;
+    *nx = f->rect_w ? (x1 + k - 1u) / k - *gx0 : 0u;
+    *ny = f->rect_h ? (y1 + k - 1u) / k - *gy0 : 0u;
+}
+
+/* Traces grid point (gx, gy) of frame f for samples sample .. sample+sample_count-1 and
+ * adds each to its block of the film; returns the rays traced. A grid point whose anchor
+ * lies left of or above the rectangle is traced all the same (its block overlaps it). */
+TR_FN uint32_t tr_render_grid_point(const tr_scene_view *s, const tr_frame *f,
+                                    const tr_film_view *film, uint32_t gx, uint32_t gy) {
+    const uint32_t k = f->stride;
+    const uint32_t x = gx * k, y = gy * k;
+    const uint32_t rx1 = f->rect_x + f->rect_w, ry1 = f->rect_y + f->rect_h;
+    const uint32_t bx0 = x > f->rect_x ? x : f->rect_x;
+    const uint32_t by0 = y > f->rect_y ? y : f->rect_y;
+    const uint32_t bx1 = x + k < rx1 ? x + k : rx1;
+    const uint32_t by1 = y + k < ry1 ? y + k : ry1;
+    uint32_t rays = 0;
+    for (uint32_t n = 0; n < f->sample_count; ++n) {
+        tr_sample smp;
+        tr_render_sample(s, f, x, y, f->sample + n, &smp);
+        rays += smp.rays;
+        tr_film_add_block(film, &smp, bx0, by0, bx1, by1);
+    }
+    return rays;
 }
 
 #endif

@@ -29,25 +29,36 @@ int tr_wbvh_intersect(const struct tr_wbvh *w, const tr_ray *ray, tr_hit *hit);
 int tr_wbvh_occluded(const struct tr_wbvh *w, const tr_ray *ray);
 #endif
 
+/* Every array a kernel reads, declared once: X(element type, member, count member).
+ * This one list generates the scene view's members below, the OpenCL kernel's buffer
+ * arguments and its view set-up (entry.cl), and the host's upload table
+ * (src/device/opencl.c); adding an array is one line here. */
+#define TR_SCENE_ARRAYS(X)                                                                         \
+    X(tr_triangle, triangles, triangle_count)                                                      \
+    X(tr_material, materials, material_count)                                                      \
+    X(tr_flat_node, flat_nodes, flat_node_count) /* the thesis's flat structure */                 \
+    X(tr_bvh_node, bvh_nodes, bvh_node_count)    /* 0 nodes for an empty scene */                  \
+    X(tr_bvh_tri, bvh_tris, bvh_tri_count)       /* leaf triangles, in tr_bvh.indices order */     \
+    X(uint32_t, lights, light_count)             /* emissive triangle indices */                   \
+    X(float, light_cdf, light_cdf_count)         /* their selection CDF (last entry 1) */
+
+/* The scalars a view carries besides its arrays, X(type, member), uploaded to a device as
+ * 32-bit words after the counts. */
+#define TR_SCENE_SCALARS(X)                                                                        \
+    X(uint32_t, accel)           /* TR_ACCEL_*: which structure tr_intersect_scene walks */        \
+    X(float, light_weight_total) /* sum of the emitters' weights (tr_light_weight) */
+
+#define TR_SCENE_VIEW_ARRAY_MEMBER(type, name, count) TR_CONST_GLOBAL type *name;
+#define TR_SCENE_VIEW_COUNT_MEMBER(type, name, count) uint32_t count;
+#define TR_SCENE_VIEW_SCALAR_MEMBER(type, name) type name;
+
+/* The emitter table (src/scene/lights.c, built by tr_scene_commit) serves next-event
+ * estimation: light_count emissive triangle indices and the CDF of their selection
+ * weights; light_cdf_count equals light_count. */
 typedef struct tr_scene_view {
-    TR_CONST_GLOBAL tr_triangle *triangles;
-    TR_CONST_GLOBAL tr_material *materials;
-    TR_CONST_GLOBAL tr_flat_node *flat_nodes;
-    TR_CONST_GLOBAL tr_bvh_node *bvh_nodes;
-    TR_CONST_GLOBAL tr_bvh_tri *bvh_tris; /* leaf triangles, in tr_bvh.indices order */
-    uint32_t triangle_count;
-    uint32_t material_count;
-    uint32_t flat_node_count;
-    uint32_t bvh_node_count; /* 0 for an empty scene */
-    uint32_t accel;          /* TR_ACCEL_*: which structure tr_intersect_scene walks */
-    /* Emitter table (src/scene/lights.c, built by tr_scene_commit), for next-event
-     * estimation: light_count emissive triangle indices and the CDF of their
-     * selection weights (light_cdf[light_count - 1] == 1); light_weight_total is the
-     * sum of the weights (tr_light_weight of each triangle). */
-    TR_CONST_GLOBAL uint32_t *lights;
-    TR_CONST_GLOBAL float *light_cdf;
-    uint32_t light_count;
-    float light_weight_total;
+    TR_SCENE_ARRAYS(TR_SCENE_VIEW_ARRAY_MEMBER)
+    TR_SCENE_ARRAYS(TR_SCENE_VIEW_COUNT_MEMBER)
+    TR_SCENE_SCALARS(TR_SCENE_VIEW_SCALAR_MEMBER)
 #ifdef TR_SCENE_VIEW_EMBREE
     const void *embree_scene; /* RTCScene, for TR_ACCEL_EMBREE */
 #endif

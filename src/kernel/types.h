@@ -101,6 +101,44 @@ typedef struct tr_camera {
 } tr_camera;
 TR_STATIC_ASSERT(sizeof(tr_camera) == 92, "tr_camera layout");
 
+/* Passes a film can keep beside radiance (tr_frame.passes, tr_film.passes): what a
+ * denoiser needs, taken at the first non-specular hit of each camera path (after mirror
+ * and smooth-glass bounces, as denoisers expect). */
+#define TR_PASS_ALBEDO 1u /* base colour of the surface, linear RGB */
+#define TR_PASS_NORMAL 2u /* unit shading normal, world space, facing the arriving ray */
+#define TR_PASS_DEPTH 4u  /* distance travelled from the camera to the surface */
+#define TR_PASS_PRIM 8u   /* index of the triangle hit, plus one (0: none) */
+#define TR_PASS_ALL 15u
+
+/* Everything one frame of the kernel needs besides the scene: one struct, declared once,
+ * uploaded as one buffer to a device. The 64-bit seed travels as two words so that the
+ * layout has no padding on any device. A frame adds samples sample .. sample+sample_count-1
+ * to every pixel of the rectangle (rect_x, rect_y, rect_w, rect_h); with stride k > 1 only
+ * pixels whose coordinates are multiples of k are traced and each stands for its k x k
+ * block (the thesis's preview). 140 bytes. */
+typedef struct tr_frame {
+    tr_camera camera;
+    uint32_t seed_lo, seed_hi;
+    uint32_t sample, sample_count;
+    int32_t max_depth;
+    uint32_t integrator; /* TR_INTEGRATOR_* */
+    uint32_t stride;
+    uint32_t passes; /* TR_PASS_* the film keeps */
+    uint32_t rect_x, rect_y, rect_w, rect_h;
+} tr_frame;
+TR_STATIC_ASSERT(sizeof(tr_frame) == 140, "tr_frame layout");
+
+/* What one sample of one pixel gives: radiance, the intersection queries it made, and
+ * the surface the passes describe (zero where the path found no non-specular surface). */
+typedef struct tr_sample {
+    tr_vec3 radiance;
+    tr_vec3 albedo;
+    tr_vec3 normal;
+    float depth;
+    uint32_t prim; /* triangle index + 1, 0 for none */
+    uint32_t rays;
+} tr_sample;
+
 typedef struct tr_ray {
     tr_vec3 origin;
     tr_vec3 dir;

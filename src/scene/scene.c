@@ -373,6 +373,7 @@ tr_scene_view tr_scene_view_of(const tr_scene *s) {
     v.material_count = s->material_count;
     v.flat_node_count = s->shape_count;
     v.bvh_node_count = s->bvh.node_count;
+    v.bvh_tri_count = s->bvh.index_count;
     v.accel = s->accel == TR_ACCEL_TYPE_BVH2 ? TR_ACCEL_BVH : (uint32_t)s->accel;
     /* The wide BVH only while it matches the binary one (tr_bvh_refit moves the binary
      * boxes; tr_scene_refit refits both). */
@@ -382,6 +383,7 @@ tr_scene_view tr_scene_view_of(const tr_scene *s) {
     /* A table older than the triangles could name triangles that moved: without a
      * current one the pt integrator finds emitters only by hitting them. */
     v.light_count = s->light_triangles == s->triangle_count ? s->light_count : 0;
+    v.light_cdf_count = v.light_count;
     v.light_weight_total = s->light_weight_total;
 #ifdef TR_SCENE_VIEW_EMBREE
     v.embree_scene = s->embree.scene;

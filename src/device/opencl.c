@@ -1,13 +1,16 @@
 /* opencl.c - the OpenCL backend: the embedded kernel source compiled for one device,
  * the scene's arrays in device buffers and a float film accumulated on the device. */
 #define _POSIX_C_SOURCE 200809L
-#include "trac0r/opencl.h"
+#include "device/opencl.h"
 
 #include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "device/frame.h"
+#include "kernel/kernel.h"
+#include "scene/scene_internal.h"
 #include "trac0r/accel.h"
 
 #ifndef TRAC0R_HAVE_OPENCL
@@ -66,18 +69,20 @@ uint64_t tr_cl_scene_bytes(const tr_cl_context *ctx) {
     (void)ctx;
     return 0;
 }
-int tr_cl_render_frame(tr_cl_context *ctx, const tr_camera *cam, const tr_render_config *cfg,
-                       uint32_t sample, tr_render_stats *stats, tr_error *err) {
+int tr_cl_render_frame(tr_cl_context *ctx, const tr_frame *f, uint64_t *rays, tr_error *err) {
     (void)ctx;
-    (void)cam;
-    (void)cfg;
-    (void)sample;
-    (void)stats;
+    (void)f;
+    (void)rays;
     return tr_error_set(err, "%s", no_opencl);
 }
 int tr_cl_clear_film(tr_cl_context *ctx, tr_error *err) {
     (void)ctx;
     return tr_error_set(err, "%s", no_opencl);
+}
+void tr_cl_film_size(const tr_cl_context *ctx, uint32_t *width, uint32_t *height,
+                     uint32_t *passes) {
+    (void)ctx;
+    *width = *height = *passes = 0u;
 }
 int tr_cl_read_film(tr_cl_context *ctx, tr_film *film, tr_error *err) {
     (void)ctx;
@@ -121,43 +126,44 @@ typedef struct cl_array {
     size_t elem; /* bytes per element */
 } cl_array;
 
-/* The scene's arrays, in kernel argument order. src/kernel/entry.cl lists the same
- * names in TR_CL_SCENE_ARRAYS; to upload another array, add one line here and one X()
- * line there (tr_cl_open checks that the two lists agree). `bvh` is the BVH the device
- * walks (NULL when it walks the flat structure). */
-static int scene_arrays(const tr_scene *s, const tr_bvh *bvh, cl_array *a) {
+/* The view's arrays, in kernel argument order: the one list TR_SCENE_ARRAYS
+ * (src/kernel/scene_view.h) that entry.cl's arguments come from as well (tr_cl_open
+ * checks the compiled kernel's argument names against it). */
+static int scene_arrays(const tr_scene_view *v, cl_array *a) {
     int n = 0;
-    a[n++] = (cl_array){"triangles", s->triangles, s->triangle_count, sizeof(tr_triangle)};
-    a[n++] = (cl_array){"materials", s->materials, s->material_count, sizeof(tr_material)};
-    a[n++] = (cl_array){"flat_nodes", s->shapes, s->shape_count, sizeof(tr_flat_node)};
-    a[n++] = (cl_array){"bvh_nodes", bvh ? bvh->nodes : NULL, bvh ? bvh->node_count : 0,
-                        sizeof(tr_bvh_node)};
-    a[n++] = (cl_array){"bvh_tris", bvh ? bvh->tris : NULL, bvh ? bvh->index_count : 0,
-                        sizeof(tr_bvh_tri)};
-    /* The pt integrator's emitter table, as the host's view has it (empty when stale). */
-    const uint32_t lights = tr_scene_view_of(s).light_count;
-    a[n++] = (cl_array){"lights", s->lights, lights, sizeof(uint32_t)};
-    a[n++] = (cl_array){"light_cdf", s->light_cdf, lights, sizeof(float)};
+#define TR_CL_HOST_ARRAY(type, name, count)                                                        \
+    a[n++] = (cl_array){#name, v->name, v->count, sizeof(type)};
+    TR_SCENE_ARRAYS(TR_CL_HOST_ARRAY)
+#undef TR_CL_HOST_ARRAY
     return n;
 }
 
 /* Kernel arguments after the scene arrays (entry.cl's tr_cl_render). */
 enum {
     ARG_SCENE_INFO = 0,
-    ARG_CAMERA,
-    ARG_SEED,
-    ARG_SAMPLE,
-    ARG_MAX_DEPTH,
-    ARG_INTEGRATOR,
-    ARG_STRIDE,
+    ARG_FRAME,
     ARG_FILM_SUM,
     ARG_FILM_COUNT,
+    ARG_FILM_ALBEDO,
+    ARG_FILM_NORMAL,
+    ARG_FILM_DEPTH,
+    ARG_FILM_PRIM,
     ARG_RAYS,
     ARG_AFTER_ARRAYS
 };
 static const char *const arg_names[ARG_AFTER_ARRAYS] = {
-    "scene_info", "camera", "seed",     "sample",     "max_depth",
-    "integrator", "stride", "film_sum", "film_count", "rays_per_row"};
+    "scene_info",  "frame",      "film_sum",  "film_count",  "film_albedo",
+    "film_normal", "film_depth", "film_prim", "rays_per_row"};
+
+/* The film's buffers on the device: radiance sum and count, then the passes in TR_PASS_*
+ * bit order; a pass not kept has a one-element placeholder. */
+enum { FILM_SUM = 0, FILM_COUNT, FILM_ALBEDO, FILM_NORMAL, FILM_DEPTH, FILM_PRIM, FILM_BUFFERS };
+/* Bytes per pixel of each film buffer, and the pass bit it belongs to (0: always kept). */
+static const size_t film_elem[FILM_BUFFERS] = {3 * sizeof(float), sizeof(uint32_t),
+                                               3 * sizeof(float), 3 * sizeof(float),
+                                               sizeof(float),     sizeof(uint32_t)};
+static const uint32_t film_pass[FILM_BUFFERS] = {
+    0u, 0u, TR_PASS_ALBEDO, TR_PASS_NORMAL, TR_PASS_DEPTH, TR_PASS_PRIM};
 
 struct tr_cl_context {
     tr_cl_device_info info;
@@ -174,13 +180,13 @@ struct tr_cl_context {
     /* The uploaded scene. */
     cl_mem arrays[TR_CL_MAX_ARRAYS];
     cl_mem scene_info;
-    cl_mem camera;
+    cl_mem frame;
     int have_scene;
     tr_accel_type accel;
     uint64_t scene_bytes;
     /* The film. */
-    cl_mem film_sum, film_count, rays;
-    uint32_t width, height;
+    cl_mem film[FILM_BUFFERS], rays;
+    uint32_t width, height, passes;
     uint32_t *rays_host;
 };
 
@@ -392,10 +398,15 @@ void tr_cl_close(tr_cl_context *ctx) {
             clReleaseMemObject(ctx->arrays[i]);
         }
     }
-    cl_mem bufs[] = {ctx->scene_info, ctx->camera, ctx->film_sum, ctx->film_count, ctx->rays};
+    cl_mem bufs[] = {ctx->scene_info, ctx->frame, ctx->rays};
     for (size_t i = 0; i < sizeof bufs / sizeof bufs[0]; ++i) {
         if (bufs[i]) {
             clReleaseMemObject(bufs[i]);
+        }
+    }
+    for (int i = 0; i < FILM_BUFFERS; ++i) {
+        if (ctx->film[i]) {
+            clReleaseMemObject(ctx->film[i]);
         }
     }
     if (ctx->kernel) {
@@ -452,16 +463,13 @@ static int check_kernel_args(tr_cl_context *ctx, tr_error *err) {
         return cl_fail(err, "clGetKernelInfo(CL_KERNEL_NUM_ARGS)", rc);
     }
     cl_array arrays[TR_CL_MAX_ARRAYS];
-    tr_scene empty;
-    tr_scene_init(&empty);
-    tr_bvh none;
+    tr_scene_view none;
     memset(&none, 0, sizeof none);
-    const int na = scene_arrays(&empty, &none, arrays);
+    const int na = scene_arrays(&none, arrays);
     if (nargs != (cl_uint)(na + ARG_AFTER_ARRAYS)) {
         return tr_error_set(err,
                             "OpenCL: the kernel takes %u arguments but the host passes %d: "
-                            "src/backend/opencl.c's scene_arrays and src/kernel/entry.cl's "
-                            "TR_CL_SCENE_ARRAYS disagree",
+                            "src/device/opencl.c and src/kernel/entry.cl disagree",
                             nargs, na + ARG_AFTER_ARRAYS);
     }
     ctx->array_count = na;
@@ -478,7 +486,7 @@ static int check_kernel_args(tr_cl_context *ctx, tr_error *err) {
         if (strcmp(name, want) != 0) {
             return tr_error_set(err,
                                 "OpenCL: kernel argument %u is '%s' but the host passes '%s' "
-                                "there: src/backend/opencl.c and src/kernel/entry.cl disagree",
+                                "there: src/device/opencl.c and src/kernel/entry.cl disagree",
                                 i, name, want);
         }
     }
@@ -560,9 +568,9 @@ tr_cl_context *tr_cl_open_source(int index, const char *source, tr_error *err) {
     if (check_kernel_args(ctx, err) != TR_OK) {
         goto fail;
     }
-    ctx->camera = clCreateBuffer(ctx->context, CL_MEM_READ_ONLY, sizeof(tr_camera), NULL, &rc);
-    if (!ctx->camera) {
-        cl_fail(err, "clCreateBuffer(camera)", rc);
+    ctx->frame = clCreateBuffer(ctx->context, CL_MEM_READ_ONLY, sizeof(tr_frame), NULL, &rc);
+    if (!ctx->frame) {
+        cl_fail(err, "clCreateBuffer(frame)", rc);
         goto fail;
     }
     return ctx;
@@ -590,8 +598,14 @@ static uint64_t memory_budget(const tr_cl_context *ctx) {
     return ctx->info.global_mem;
 }
 
-static uint64_t film_bytes(uint32_t w, uint32_t h) {
-    return (uint64_t)w * h * (3 * sizeof(float) + sizeof(uint32_t)) + (uint64_t)h * 4;
+static uint64_t film_bytes(uint32_t w, uint32_t h, uint32_t passes) {
+    uint64_t per_pixel = 0;
+    for (int i = 0; i < FILM_BUFFERS; ++i) {
+        if (film_pass[i] == 0u || (passes & film_pass[i]) != 0u) {
+            per_pixel += film_elem[i];
+        }
+    }
+    return (uint64_t)w * h * per_pixel + (uint64_t)h * 4;
 }
 
 static void release_scene(tr_cl_context *ctx) {
@@ -618,28 +632,32 @@ int tr_cl_upload_scene(tr_cl_context *ctx, const tr_scene *scene, tr_error *err)
         return tr_error_set(err, "the scene changed since tr_scene_commit built its %s",
                             tr_accel_name(scene->accel));
     }
-    /* The device walks the flat structure or the BVH2; a scene committed to Embree (a
-     * host library) gets a BVH of its own for the device. */
+    /* The device walks what the host's view holds, except that a scene committed to
+     * Embree (a host library) gets a BVH of its own, and bvh scenes upload the binary BVH
+     * (the wide one is host code). */
+    tr_scene_view view = tr_scene_view_of(scene);
     tr_bvh own;
     memset(&own, 0, sizeof own);
-    const tr_bvh *bvh = NULL;
     tr_accel_type accel = TR_ACCEL_TYPE_FLAT;
     if (scene->accel == TR_ACCEL_TYPE_BVH || scene->accel == TR_ACCEL_TYPE_BVH2) {
-        bvh = &scene->bvh; /* the binary BVH: the wide one is host code */
         accel = TR_ACCEL_TYPE_BVH;
     } else if (scene->accel != TR_ACCEL_TYPE_FLAT) {
         if (tr_bvh_build(&own, scene->triangles, scene->triangle_count, err) != TR_OK) {
             return TR_ERR;
         }
-        bvh = &own;
+        view.bvh_nodes = own.nodes;
+        view.bvh_node_count = own.node_count;
+        view.bvh_tris = own.tris;
+        view.bvh_tri_count = own.index_count;
+        view.accel = TR_ACCEL_BVH;
         accel = TR_ACCEL_TYPE_BVH;
     }
     cl_array arrays[TR_CL_MAX_ARRAYS];
-    const int na = scene_arrays(scene, bvh, arrays);
+    const int na = scene_arrays(&view, arrays);
     int rc = TR_OK;
     /* Check the sizes before allocating anything: each buffer against the largest
      * allocation, all of them plus the film against the device's memory. */
-    uint64_t total = film_bytes(scene->camera.screen_width, scene->camera.screen_height);
+    uint64_t total = film_bytes(scene->camera.screen_width, scene->camera.screen_height, 0u);
     for (int i = 0; i < na && rc == TR_OK; ++i) {
         uint64_t bytes = (uint64_t)arrays[i].count * arrays[i].elem;
         if (bytes > ctx->info.max_alloc) {
@@ -662,7 +680,10 @@ int tr_cl_upload_scene(tr_cl_context *ctx, const tr_scene *scene, tr_error *err)
         return rc;
     }
     release_scene(ctx);
-    cl_uint info[TR_CL_MAX_ARRAYS + 2];
+    /* scene_info: the arrays' counts, then the view's scalars as 32-bit words (entry.cl
+     * reads a float back from its bits with as_float). */
+    cl_uint info[TR_CL_MAX_ARRAYS + 8];
+    int ni = 0;
     for (int i = 0; i < na; ++i) {
         cl_int crc;
         const size_t bytes = arrays[i].count * arrays[i].elem;
@@ -685,17 +706,21 @@ int tr_cl_upload_scene(tr_cl_context *ctx, const tr_scene *scene, tr_error *err)
                 break;
             }
         }
-        info[i] = (cl_uint)arrays[i].count;
+        info[ni++] = (cl_uint)arrays[i].count;
         ctx->scene_bytes += bytes;
     }
-    info[na] = (cl_uint)accel;
-    /* entry.cl reads the lights' total weight back from its bits (as_float). */
-    const float weight = scene->light_weight_total;
-    memcpy(&info[na + 1], &weight, sizeof weight);
+#define TR_CL_HOST_SCALAR(type, name)                                                              \
+    {                                                                                              \
+        const type value = view.name;                                                              \
+        _Static_assert(sizeof value == sizeof(cl_uint), "scene scalars are 32-bit words");         \
+        memcpy(&info[ni++], &value, sizeof value);                                                 \
+    }
+    TR_SCENE_SCALARS(TR_CL_HOST_SCALAR)
+#undef TR_CL_HOST_SCALAR
     if (rc == TR_OK) {
         cl_int crc;
         ctx->scene_info = clCreateBuffer(ctx->context, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR,
-                                         (size_t)(na + 2) * sizeof info[0], info, &crc);
+                                         (size_t)ni * sizeof info[0], info, &crc);
         if (!ctx->scene_info) {
             rc = cl_fail(err, "clCreateBuffer(scene_info)", crc);
         }
@@ -731,42 +756,49 @@ uint64_t tr_cl_scene_bytes(const tr_cl_context *ctx) {
     return ctx->scene_bytes;
 }
 
+/* Bytes of film buffer i for the film's size (a placeholder element when not kept). */
+static size_t film_buffer_bytes(const tr_cl_context *ctx, int i) {
+    if (film_pass[i] != 0u && (ctx->passes & film_pass[i]) == 0u) {
+        return film_elem[i];
+    }
+    return (size_t)ctx->width * ctx->height * film_elem[i];
+}
+
 int tr_cl_clear_film(tr_cl_context *ctx, tr_error *err) {
-    if (!ctx->film_sum) {
+    if (!ctx->film[FILM_SUM]) {
         return TR_OK;
     }
-    const size_t n = (size_t)ctx->width * ctx->height;
-    const cl_float zf = 0.0f;
-    const cl_uint zu = 0;
-    cl_int rc = clEnqueueFillBuffer(ctx->queue, ctx->film_sum, &zf, sizeof zf, 0,
-                                    3 * n * sizeof(cl_float), 0, NULL, NULL);
-    if (rc == CL_SUCCESS) {
-        rc = clEnqueueFillBuffer(ctx->queue, ctx->film_count, &zu, sizeof zu, 0,
-                                 n * sizeof(cl_uint), 0, NULL, NULL);
-    }
-    if (rc != CL_SUCCESS) {
-        return cl_fail(err, "clEnqueueFillBuffer(film)", rc);
+    const cl_uint zero = 0; /* the bits of 0.0f too */
+    for (int i = 0; i < FILM_BUFFERS; ++i) {
+        cl_int rc = clEnqueueFillBuffer(ctx->queue, ctx->film[i], &zero, sizeof zero, 0,
+                                        film_buffer_bytes(ctx, i), 0, NULL, NULL);
+        if (rc != CL_SUCCESS) {
+            return cl_fail(err, "clEnqueueFillBuffer(film)", rc);
+        }
     }
     return TR_OK;
 }
 
 static void release_film(tr_cl_context *ctx) {
-    cl_mem *bufs[] = {&ctx->film_sum, &ctx->film_count, &ctx->rays};
-    for (size_t i = 0; i < sizeof bufs / sizeof bufs[0]; ++i) {
-        if (*bufs[i]) {
-            clReleaseMemObject(*bufs[i]);
-            *bufs[i] = NULL;
+    for (int i = 0; i < FILM_BUFFERS; ++i) {
+        if (ctx->film[i]) {
+            clReleaseMemObject(ctx->film[i]);
+            ctx->film[i] = NULL;
         }
+    }
+    if (ctx->rays) {
+        clReleaseMemObject(ctx->rays);
+        ctx->rays = NULL;
     }
     free(ctx->rays_host);
     ctx->rays_host = NULL;
-    ctx->width = ctx->height = 0;
+    ctx->width = ctx->height = ctx->passes = 0;
 }
 
-/* (Re)allocates a cleared film of w x h pixels. */
-static int make_film(tr_cl_context *ctx, uint32_t w, uint32_t h, tr_error *err) {
+/* (Re)allocates a cleared film of w x h pixels keeping `passes`. */
+static int make_film(tr_cl_context *ctx, uint32_t w, uint32_t h, uint32_t passes, tr_error *err) {
     release_film(ctx);
-    const uint64_t need = film_bytes(w, h);
+    const uint64_t need = film_bytes(w, h, passes);
     const uint64_t sum_bytes = (uint64_t)w * h * 3 * sizeof(cl_float);
     if (sum_bytes > ctx->info.max_alloc || ctx->scene_bytes + need > memory_budget(ctx)) {
         return tr_error_set(err,
@@ -775,122 +807,119 @@ static int make_film(tr_cl_context *ctx, uint32_t w, uint32_t h, tr_error *err) 
                             w, h, ctx->info.index, ctx->info.name, mib(ctx->scene_bytes), mib(need),
                             mib(memory_budget(ctx)));
     }
-    const size_t n = (size_t)w * h;
-    cl_int rc;
-    ctx->film_sum =
-        clCreateBuffer(ctx->context, CL_MEM_READ_WRITE, 3 * n * sizeof(cl_float), NULL, &rc);
-    if (ctx->film_sum) {
-        ctx->film_count =
-            clCreateBuffer(ctx->context, CL_MEM_READ_WRITE, n * sizeof(cl_uint), NULL, &rc);
+    ctx->width = w;
+    ctx->height = h;
+    ctx->passes = passes;
+    cl_int rc = CL_SUCCESS;
+    for (int i = 0; i < FILM_BUFFERS; ++i) {
+        ctx->film[i] =
+            clCreateBuffer(ctx->context, CL_MEM_READ_WRITE, film_buffer_bytes(ctx, i), NULL, &rc);
+        if (!ctx->film[i]) {
+            release_film(ctx);
+            return cl_fail(err, "clCreateBuffer(film)", rc);
+        }
     }
-    if (ctx->film_count) {
-        ctx->rays = clCreateBuffer(ctx->context, CL_MEM_READ_WRITE, h * sizeof(cl_uint), NULL, &rc);
-    }
+    ctx->rays = clCreateBuffer(ctx->context, CL_MEM_READ_WRITE, h * sizeof(cl_uint), NULL, &rc);
     ctx->rays_host = malloc(h * sizeof *ctx->rays_host);
     if (!ctx->rays || !ctx->rays_host) {
-        int r = ctx->rays_host ? cl_fail(err, "clCreateBuffer(film)", rc)
+        int r = ctx->rays_host ? cl_fail(err, "clCreateBuffer(rays_per_row)", rc)
                                : tr_error_set(err, "out of memory");
         release_film(ctx);
         return r;
     }
-    ctx->width = w;
-    ctx->height = h;
     return tr_cl_clear_film(ctx, err);
 }
 
-int tr_cl_render_frame(tr_cl_context *ctx, const tr_camera *cam, const tr_render_config *cfg,
-                       uint32_t sample, tr_render_stats *stats, tr_error *err) {
-    const double t0 = tr_time_now();
+void tr_cl_film_size(const tr_cl_context *ctx, uint32_t *width, uint32_t *height,
+                     uint32_t *passes) {
+    *width = ctx->width;
+    *height = ctx->height;
+    *passes = ctx->passes;
+}
+
+int tr_cl_render_frame(tr_cl_context *ctx, const tr_frame *f, uint64_t *rays_out, tr_error *err) {
     if (!ctx->have_scene) {
         return tr_error_set(err, "no scene uploaded to the OpenCL device");
     }
-    if (tr_render_config_check(cfg, err) != TR_OK) {
+    const uint32_t w = f->camera.screen_width, h = f->camera.screen_height;
+    if ((w != ctx->width || h != ctx->height || f->passes != ctx->passes) &&
+        make_film(ctx, w, h, f->passes, err) != TR_OK) {
         return TR_ERR;
     }
-    const uint32_t w = cam->screen_width, h = cam->screen_height;
-    if (w == 0 || h == 0 || w > TR_FILM_MAX_SIDE || h > TR_FILM_MAX_SIDE ||
-        (uint64_t)w * h > TR_FILM_MAX_PIXELS) {
-        return tr_error_set(err, "camera screen size %ux%u is out of range", w, h);
-    }
-    if ((w != ctx->width || h != ctx->height) && make_film(ctx, w, h, err) != TR_OK) {
-        return TR_ERR;
-    }
+    uint32_t gx0, gy0, nx, ny;
+    tr_frame_grid(f, &gx0, &gy0, &nx, &ny);
     const cl_uint zero = 0;
     cl_int rc = clEnqueueFillBuffer(ctx->queue, ctx->rays, &zero, sizeof zero, 0,
-                                    h * sizeof(cl_uint), 0, NULL, NULL);
+                                    ny * sizeof(cl_uint), 0, NULL, NULL);
     if (rc != CL_SUCCESS) {
         return cl_fail(err, "clEnqueueFillBuffer(rays_per_row)", rc);
     }
-    rc = clEnqueueWriteBuffer(ctx->queue, ctx->camera, CL_TRUE, 0, sizeof *cam, cam, 0, NULL, NULL);
+    rc = clEnqueueWriteBuffer(ctx->queue, ctx->frame, CL_TRUE, 0, sizeof *f, f, 0, NULL, NULL);
     if (rc != CL_SUCCESS) {
-        return cl_fail(err, "clEnqueueWriteBuffer(camera)", rc);
+        return cl_fail(err, "clEnqueueWriteBuffer(frame)", rc);
     }
-    const cl_ulong seed = cfg->seed;
-    const cl_uint smp = sample, stride = (cl_uint)cfg->stride;
-    const cl_int depth = cfg->max_depth, integrator = cfg->integrator;
     const cl_uint base = (cl_uint)ctx->array_count;
-    struct {
-        int arg;
-        size_t size;
-        const void *value;
-    } args[] = {
-        {ARG_CAMERA, sizeof(cl_mem), &ctx->camera},
-        {ARG_SEED, sizeof seed, &seed},
-        {ARG_SAMPLE, sizeof smp, &smp},
-        {ARG_MAX_DEPTH, sizeof depth, &depth},
-        {ARG_INTEGRATOR, sizeof integrator, &integrator},
-        {ARG_STRIDE, sizeof stride, &stride},
-        {ARG_FILM_SUM, sizeof(cl_mem), &ctx->film_sum},
-        {ARG_FILM_COUNT, sizeof(cl_mem), &ctx->film_count},
-        {ARG_RAYS, sizeof(cl_mem), &ctx->rays},
-    };
-    for (size_t i = 0; i < sizeof args / sizeof args[0]; ++i) {
-        rc = clSetKernelArg(ctx->kernel, base + (cl_uint)args[i].arg, args[i].size, args[i].value);
+    const cl_mem *bufs[ARG_AFTER_ARRAYS] = {NULL,
+                                            &ctx->frame,
+                                            &ctx->film[FILM_SUM],
+                                            &ctx->film[FILM_COUNT],
+                                            &ctx->film[FILM_ALBEDO],
+                                            &ctx->film[FILM_NORMAL],
+                                            &ctx->film[FILM_DEPTH],
+                                            &ctx->film[FILM_PRIM],
+                                            &ctx->rays};
+    for (int a = ARG_FRAME; a < ARG_AFTER_ARRAYS; ++a) {
+        rc = clSetKernelArg(ctx->kernel, base + (cl_uint)a, sizeof(cl_mem), bufs[a]);
         if (rc != CL_SUCCESS) {
             char call[64];
-            snprintf(call, sizeof call, "clSetKernelArg(%s)", arg_names[args[i].arg]);
+            snprintf(call, sizeof call, "clSetKernelArg(%s)", arg_names[a]);
             return cl_fail(err, call, rc);
         }
     }
-    const size_t global[2] = {(w + stride - 1) / stride, (h + stride - 1) / stride};
+    const size_t global[2] = {nx, ny};
     rc = clEnqueueNDRangeKernel(ctx->queue, ctx->kernel, 2, NULL, global, NULL, 0, NULL, NULL);
     if (rc != CL_SUCCESS) {
         return cl_fail(err, "clEnqueueNDRangeKernel(tr_cl_render)", rc);
     }
     /* The blocking read waits for the kernel: the frame is done when it returns. */
-    rc = clEnqueueReadBuffer(ctx->queue, ctx->rays, CL_TRUE, 0, h * sizeof(cl_uint), ctx->rays_host,
-                             0, NULL, NULL);
+    rc = clEnqueueReadBuffer(ctx->queue, ctx->rays, CL_TRUE, 0, ny * sizeof(cl_uint),
+                             ctx->rays_host, 0, NULL, NULL);
     if (rc != CL_SUCCESS) {
         return cl_fail(err, "clEnqueueReadBuffer(rays_per_row)", rc);
     }
-    if (stats) {
+    if (rays_out) {
         uint64_t rays = 0;
-        for (uint32_t y = 0; y < h; ++y) {
+        for (uint32_t y = 0; y < ny; ++y) {
             rays += ctx->rays_host[y];
         }
-        stats->rays = rays;
-        stats->seconds = tr_time_now() - t0;
+        *rays_out = rays;
     }
     return TR_OK;
 }
 
 int tr_cl_read_film(tr_cl_context *ctx, tr_film *film, tr_error *err) {
-    if (!ctx->film_sum) {
+    if (!ctx->film[FILM_SUM]) {
         return tr_error_set(err, "the OpenCL film is empty: no frame was rendered");
     }
     if (film->width != ctx->width || film->height != ctx->height) {
         return tr_error_set(err, "the film is %ux%u but the OpenCL film is %ux%u", film->width,
                             film->height, ctx->width, ctx->height);
     }
-    const size_t n = (size_t)film->width * film->height;
-    cl_int rc = clEnqueueReadBuffer(ctx->queue, ctx->film_sum, CL_TRUE, 0, 3 * n * sizeof(float),
-                                    film->sum, 0, NULL, NULL);
-    if (rc == CL_SUCCESS) {
-        rc = clEnqueueReadBuffer(ctx->queue, ctx->film_count, CL_TRUE, 0, n * sizeof(uint32_t),
-                                 film->count, 0, NULL, NULL);
+    if ((film->passes & ~ctx->passes) != 0u) {
+        return tr_error_set(err, "the OpenCL film does not keep passes 0x%x",
+                            film->passes & ~ctx->passes);
     }
-    if (rc != CL_SUCCESS) {
-        return cl_fail(err, "clEnqueueReadBuffer(film)", rc);
+    void *dst[FILM_BUFFERS] = {film->sum,    film->count, film->albedo,
+                               film->normal, film->depth, film->prim};
+    for (int i = 0; i < FILM_BUFFERS; ++i) {
+        if (!dst[i] || (film_pass[i] != 0u && (film->passes & film_pass[i]) == 0u)) {
+            continue;
+        }
+        cl_int rc = clEnqueueReadBuffer(ctx->queue, ctx->film[i], CL_TRUE, 0,
+                                        film_buffer_bytes(ctx, i), dst[i], 0, NULL, NULL);
+        if (rc != CL_SUCCESS) {
+            return cl_fail(err, "clEnqueueReadBuffer(film)", rc);
+        }
     }
     return TR_OK;
 }

@@ -1,4 +1,6 @@
-/* opencl.h - the OpenCL backend: the kernel of src/kernel/ on any OpenCL 1.2+ device.
+/* opencl.h - the OpenCL backend (private to the library: applications open it as the
+ * "opencl:N" tr_device, include/trac0r/device.h): the kernel of src/kernel/ on any
+ * OpenCL 1.2+ device.
  *
  * The kernel source (src/kernel/entry.cl and every header it includes) is embedded
  * into libtrac0r at build time and compiled for the chosen device when a context
@@ -9,8 +11,9 @@
  *     tr_error err;
  *     tr_cl_context *cl = tr_cl_open(0, &err);          // device 0 of `trac0r info --devices`
  *     if (!cl || tr_cl_upload_scene(cl, &scene, &err) != TR_OK) { puts(err.msg); ... }
- *     for (uint32_t s = 0; s < spp; ++s)
- *         tr_cl_render_frame(cl, &scene.camera, &cfg, s, NULL, &err);
+ *     tr_frame f;                                       // device/frame.h
+ *     tr_frame_make(&f, &scene.camera, &cfg, 0, spp, NULL, &err);
+ *     tr_cl_render_frame(cl, &f, NULL, &err);
  *     tr_cl_read_film(cl, &film, &err);                 // film sized like the camera
  *     tr_cl_close(cl);
  *
@@ -21,6 +24,7 @@
 
 #include <stdint.h>
 
+#include "kernel/types.h"
 #include "trac0r/error.h"
 #include "trac0r/film.h"
 #include "trac0r/render.h"
@@ -83,17 +87,17 @@ tr_accel_type tr_cl_scene_accel(const tr_cl_context *ctx);
 /* Bytes of device memory the uploaded scene's buffers take. */
 uint64_t tr_cl_scene_bytes(const tr_cl_context *ctx);
 
-/* Adds one sample per pixel (sample number `sample`, or per stride-th pixel with
- * cfg->stride > 1 as tr_render_frame does) to the device film. The film takes the
- * camera's screen size; a different size than the previous frame's clears it. Waits
- * for the device to finish, so stats->seconds is the frame's wall time. cfg->threads
- * and cfg->tile are ignored. */
-int tr_cl_render_frame(tr_cl_context *ctx, const tr_camera *cam, const tr_render_config *cfg,
-                       uint32_t sample, tr_render_stats *stats, tr_error *err);
+/* Adds frame f's samples (tr_frame_make: a sample range over a rectangle, with its
+ * stride and passes) to the device film. The film takes the camera's screen size and the
+ * frame's passes; a frame of another size or other passes than the previous one clears
+ * it. Waits for the device to finish. *rays (may be NULL) gets the queries made. */
+int tr_cl_render_frame(tr_cl_context *ctx, const tr_frame *f, uint64_t *rays, tr_error *err);
+/* The size and passes of the device film (those of the last frame; 0 before one). */
+void tr_cl_film_size(const tr_cl_context *ctx, uint32_t *width, uint32_t *height, uint32_t *passes);
 /* Forgets every sample of the device film. */
 int tr_cl_clear_film(tr_cl_context *ctx, tr_error *err);
 /* Copies the device film into `film`, which must have the size of the last frame's
- * camera. */
+ * camera and may keep no pass the device film lacks. */
 int tr_cl_read_film(tr_cl_context *ctx, tr_film *film, tr_error *err);
 
 /* Pretends the device has only `bytes` of global memory (0: its real size), for tests

@@ -1,0 +1,185 @@
+/* cpu.c - the CPU device: the kernel run by OpenMP threads over screen tiles. */
+#define _POSIX_C_SOURCE 200809L
+#include <omp.h>
+#include <time.h>
+
+#include "device/frame.h"
+#include "kernel/kernel.h"
+#include "scene/scene_internal.h"
+#include "trac0r/render.h"
+
+tr_render_config tr_render_config_default(void) {
+    tr_render_config c;
+    c.max_depth = 8;
+    c.seed = 0;
+    c.threads = 0;
+    /* The command line's default: path tracing with next-event estimation. */
+    c.integrator = TR_INTEGRATOR_PT;
+    c.stride = 1;
+    c.tile = 16;
+    c.passes = 0;
+    c.cancel = NULL;
+    c.cancel_user = NULL;
+    return c;
+}
+
+int tr_default_threads(void) {
+    return omp_get_max_threads();
+}
+
+double tr_time_now(void) {
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+int tr_render_config_check(const tr_render_config *cfg, tr_error *err) {
+    if (cfg->max_depth < 1 || cfg->max_depth > TR_MAX_DEPTH_LIMIT) {
+        return tr_error_set(err, "max depth %d must be in 1..%d", cfg->max_depth,
+                            TR_MAX_DEPTH_LIMIT);
+    }
+    if (cfg->integrator != TR_INTEGRATOR_NAIVE && cfg->integrator != TR_INTEGRATOR_PT) {
+        return tr_error_set(err, "unknown integrator %d", cfg->integrator);
+    }
+    if (cfg->stride < 1 || cfg->stride > 64) {
+        return tr_error_set(err, "stride %d must be in 1..64", cfg->stride);
+    }
+    if ((cfg->passes & ~TR_PASS_ALL) != 0u) {
+        return tr_error_set(err, "unknown pass bits 0x%x", cfg->passes & ~TR_PASS_ALL);
+    }
+    return TR_OK;
+}
+
+int tr_frame_make(tr_frame *f, const tr_camera *cam, const tr_render_config *cfg, uint32_t sample,
+                  uint32_t sample_count, const tr_rect *rect, tr_error *err) {
+    if (tr_render_config_check(cfg, err) != TR_OK) {
+        return TR_ERR;
+    }
+    const uint32_t w = cam->screen_width, h = cam->screen_height;
+    if (w == 0 || h == 0 || w > TR_FILM_MAX_SIDE || h > TR_FILM_MAX_SIDE ||
+        (uint64_t)w * h > TR_FILM_MAX_PIXELS) {
+        return tr_error_set(err, "camera screen size %ux%u is out of range", w, h);
+    }
+    if (sample_count == 0 || (uint64_t)sample + sample_count - 1u > UINT32_MAX) {
+        return tr_error_set(err, "samples %u..%u+%u are out of range", sample, sample,
+                            sample_count);
+    }
+    tr_rect r = {0, 0, w, h};
+    if (rect) {
+        r = *rect;
+        if (r.width == 0 || r.height == 0 || r.x >= w || r.y >= h || r.width > w - r.x ||
+            r.height > h - r.y) {
+            return tr_error_set(err,
+                                "rectangle %ux%u at (%u, %u) is empty or outside the %ux%u image",
+                                r.width, r.height, r.x, r.y, w, h);
+        }
+    }
+    f->camera = *cam;
+    f->seed_lo = (uint32_t)cfg->seed;
+    f->seed_hi = (uint32_t)(cfg->seed >> 32);
+    f->sample = sample;
+    f->sample_count = sample_count;
+    f->max_depth = cfg->max_depth;
+    f->integrator = (uint32_t)cfg->integrator;
+    f->stride = (uint32_t)cfg->stride;
+    f->passes = cfg->passes;
+    f->rect_x = r.x;
+    f->rect_y = r.y;
+    f->rect_w = r.width;
+    f->rect_h = r.height;
+    return TR_OK;
+}
+
+tr_film_view tr_film_view_of(tr_film *film) {
+    tr_film_view v;
+    v.sum = film->sum;
+    v.count = film->count;
+    v.albedo = film->albedo;
+    v.normal = film->normal;
+    v.depth = film->depth;
+    v.prim = film->prim;
+    v.width = film->width;
+    v.passes = film->passes;
+    return v;
+}
+
+int tr_cpu_render(const tr_scene_view *view, const tr_frame *f, tr_film *film, int threads,
+                  uint32_t tile_side, int (*cancel)(void *), void *cancel_user, uint64_t *rays_out,
+                  tr_error *err) {
+    if (f->camera.screen_width != film->width || f->camera.screen_height != film->height) {
+        return tr_error_set(err, "camera is %ux%u but the film is %ux%u", f->camera.screen_width,
+                            f->camera.screen_height, film->width, film->height);
+    }
+    if ((f->passes & ~film->passes) != 0u) {
+        return tr_error_set(err, "the film does not keep the passes asked for (0x%x of 0x%x)",
+                            f->passes & ~film->passes, f->passes);
+    }
+    tr_film_view fv = tr_film_view_of(film);
+    fv.passes = f->passes;
+    uint32_t gx0, gy0, nx, ny;
+    tr_frame_grid(f, &gx0, &gy0, &nx, &ny);
+    /* Tiles of grid points: every stride x stride block belongs to exactly one grid point,
+     * so no two threads write the same pixel. */
+    const uint32_t tile = tile_side ? tile_side : 16u;
+    const uint32_t tiles_x = (nx + tile - 1) / tile;
+    const uint32_t tiles_y = (ny + tile - 1) / tile;
+    const int tile_count = (int)(tiles_x * tiles_y);
+    const int nthreads = threads > 0 ? threads : tr_default_threads();
+    int cancelled = 0;
+    uint64_t rays = 0;
+
+#pragma omp parallel for num_threads(nthreads) schedule(dynamic, 1) reduction(+ : rays)
+    for (int t = 0; t < tile_count; ++t) {
+        int stop;
+#pragma omp atomic read
+        stop = cancelled;
+        if (stop) {
+            continue; /* an OpenMP loop cannot break: skip the remaining tiles */
+        }
+        if (cancel && cancel(cancel_user)) {
+#pragma omp atomic write
+            cancelled = 1;
+            continue;
+        }
+        const uint32_t tx0 = gx0 + ((uint32_t)t % tiles_x) * tile;
+        const uint32_t ty0 = gy0 + ((uint32_t)t / tiles_x) * tile;
+        const uint32_t tx1 = tx0 + tile < gx0 + nx ? tx0 + tile : gx0 + nx;
+        const uint32_t ty1 = ty0 + tile < gy0 + ny ? ty0 + tile : gy0 + ny;
+        for (uint32_t gy = ty0; gy < ty1; ++gy) {
+            for (uint32_t gx = tx0; gx < tx1; ++gx) {
+                rays += tr_render_grid_point(view, f, &fv, gx, gy);
+            }
+        }
+    }
+    if (cancelled) {
+        return tr_error_set(err, "frame cancelled");
+    }
+    if (rays_out) {
+        *rays_out = rays;
+    }
+    return TR_OK;
+}
+
+int tr_render_frame(const tr_scene *scene, const tr_camera *cam, const tr_render_config *cfg,
+                    tr_film *film, uint32_t sample, tr_render_stats *stats, tr_error *err) {
+    const double t0 = tr_time_now();
+    if (!tr_scene_is_committed(scene)) {
+        return tr_error_set(err, "the scene changed since tr_scene_commit built its %s",
+                            tr_accel_name(scene->accel));
+    }
+    tr_frame f;
+    if (tr_frame_make(&f, cam, cfg, sample, 1, NULL, err) != TR_OK) {
+        return TR_ERR;
+    }
+    const tr_scene_view view = tr_scene_view_of(scene);
+    uint64_t rays = 0;
+    if (tr_cpu_render(&view, &f, film, cfg->threads, cfg->tile, cfg->cancel, cfg->cancel_user,
+                      &rays, err) != TR_OK) {
+        return TR_ERR;
+    }
+    if (stats) {
+        stats->rays = rays;
+        stats->seconds = tr_time_now() - t0;
+    }
+    return TR_OK;
+}

@@ -1,0 +1,320 @@
+/* device.c - tr_device: one API over the CPU device (cpu.c) and OpenCL devices
+ * (opencl.c). Dispatch is a switch on the kind; each kind keeps its film its own way (the
+ * CPU in host memory, OpenCL on the device) with the same semantics. */
+#define _POSIX_C_SOURCE 200809L
+#include "trac0r/device.h"
+
+#include <errno.h>
+#include <omp.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "device/frame.h"
+#include "device/opencl.h"
+#include "scene/scene_internal.h"
+
+typedef enum device_kind { KIND_CPU, KIND_OPENCL } device_kind;
+
+struct tr_device {
+    device_kind kind;
+    tr_device_info info;
+    const tr_scene *scene;    /* the uploaded scene (CPU: rendered from directly) */
+    uint32_t scene_triangles; /* its triangle count at upload */
+    tr_accel_type accel;
+    tr_film film; /* CPU: the device's film */
+    tr_cl_context *cl;
+};
+
+/* The processor's name from /proc/cpuinfo ("" where it cannot be read). */
+static void cpu_model(char *out, size_t size) {
+    out[0] = '\0';
+    FILE *fp = fopen("/proc/cpuinfo", "r");
+    if (!fp) {
+        return;
+    }
+    char line[512];
+    while (fgets(line, sizeof line, fp)) {
+        if (strncmp(line, "model name", 10) == 0) {
+            const char *colon = strchr(line, ':');
+            if (colon) {
+                colon += colon[1] == ' ' ? 2 : 1;
+                snprintf(out, size, "%s", colon);
+                out[strcspn(out, "\n")] = '\0';
+            }
+            break;
+        }
+    }
+    fclose(fp);
+}
+
+static void cpu_info(tr_device_info *info) {
+    memset(info, 0, sizeof *info);
+    snprintf(info->name, sizeof info->name, "cpu");
+    snprintf(info->kind, sizeof info->kind, "cpu");
+    snprintf(info->type, sizeof info->type, "cpu");
+    cpu_model(info->model, sizeof info->model);
+    info->compute_units = (uint32_t)omp_get_num_procs();
+    info->platform_index = -1;
+}
+
+static void cl_info(const tr_cl_device_info *d, tr_device_info *info) {
+    memset(info, 0, sizeof *info);
+    snprintf(info->name, sizeof info->name, "opencl:%d", d->index);
+    snprintf(info->kind, sizeof info->kind, "opencl");
+    snprintf(info->model, sizeof info->model, "%s", d->name);
+    snprintf(info->platform, sizeof info->platform, "%s", d->platform);
+    snprintf(info->vendor, sizeof info->vendor, "%s", d->vendor);
+    snprintf(info->version, sizeof info->version, "%s", d->version);
+    snprintf(info->type, sizeof info->type, "%s", d->type);
+    info->compute_units = d->compute_units;
+    info->platform_index = d->platform_index;
+    info->global_mem = d->global_mem;
+    info->max_alloc = d->max_alloc;
+}
+
+int tr_device_list(const char *kind, tr_device_info *out, int max, int *count, tr_error *err) {
+    *count = 0;
+    if (kind && strcmp(kind, "cpu") != 0 && strcmp(kind, "opencl") != 0) {
+        return tr_error_set(err, "unknown device kind '%s' (expected cpu or opencl)", kind);
+    }
+    if (!kind || strcmp(kind, "cpu") == 0) {
+        if (max > 0 && out) {
+            cpu_info(&out[0]);
+        }
+        *count = 1;
+    }
+    if (kind && strcmp(kind, "cpu") == 0) {
+        return TR_OK;
+    }
+    int ncl = 0;
+    tr_error clerr;
+    if (tr_cl_list_devices(NULL, 0, &ncl, &clerr) != TR_OK) {
+        if (kind) {
+            if (err) {
+                *err = clerr;
+            }
+            return TR_ERR;
+        }
+        return TR_OK; /* listing everything: OpenCL has none to add */
+    }
+    tr_cl_device_info *devs = calloc((size_t)(ncl ? ncl : 1), sizeof *devs);
+    if (!devs) {
+        return tr_error_set(err, "out of memory listing OpenCL devices");
+    }
+    if (tr_cl_list_devices(devs, ncl, &ncl, err) != TR_OK) {
+        free(devs);
+        return TR_ERR;
+    }
+    for (int i = 0; i < ncl; ++i) {
+        if (*count < max && out) {
+            cl_info(&devs[i], &out[*count]);
+        }
+        ++*count;
+    }
+    free(devs);
+    return TR_OK;
+}
+
+/* "opencl" -> 0, "opencl:N" -> N; -1 for anything else. */
+static int opencl_index(const char *name) {
+    if (strncmp(name, "opencl", 6) != 0) {
+        return -1;
+    }
+    if (name[6] == '\0') {
+        return 0;
+    }
+    if (name[6] != ':' || name[7] < '0' || name[7] > '9') {
+        return -1;
+    }
+    char *end;
+    errno = 0;
+    long n = strtol(name + 7, &end, 10);
+    if (*end != '\0' || errno == ERANGE || n > 1023) {
+        return -1;
+    }
+    return (int)n;
+}
+
+tr_device *tr_device_open(const char *name, tr_error *err) {
+    if (!name) {
+        name = "cpu";
+    }
+    const int cl_index = opencl_index(name);
+    if (strcmp(name, "cpu") != 0 && cl_index < 0) {
+        tr_error_set(
+            err, "unknown device '%s' (expected cpu, opencl or opencl:N with N in 0..1023)", name);
+        return NULL;
+    }
+    tr_device *dev = calloc(1, sizeof *dev);
+    if (!dev) {
+        tr_error_set(err, "out of memory opening device '%s'", name);
+        return NULL;
+    }
+    if (cl_index < 0) {
+        dev->kind = KIND_CPU;
+        cpu_info(&dev->info);
+        return dev;
+    }
+    dev->kind = KIND_OPENCL;
+    dev->cl = tr_cl_open(cl_index, err);
+    if (!dev->cl) {
+        free(dev);
+        return NULL;
+    }
+    cl_info(tr_cl_device(dev->cl), &dev->info);
+    return dev;
+}
+
+void tr_device_close(tr_device *dev) {
+    if (!dev) {
+        return;
+    }
+    tr_cl_close(dev->cl);
+    tr_film_free(&dev->film);
+    free(dev);
+}
+
+const tr_device_info *tr_device_get_info(const tr_device *dev) {
+    return &dev->info;
+}
+
+const char *tr_device_kind(const tr_device *dev) {
+    return dev->info.kind;
+}
+
+int tr_device_upload(tr_device *dev, const tr_scene *scene, tr_error *err) {
+    if (!tr_scene_is_committed(scene)) {
+        return tr_error_set(err, "the scene changed since tr_scene_commit built its %s",
+                            tr_accel_name(scene->accel));
+    }
+    if (dev->kind == KIND_OPENCL) {
+        if (tr_cl_upload_scene(dev->cl, scene, err) != TR_OK) {
+            return TR_ERR;
+        }
+        dev->accel = tr_cl_scene_accel(dev->cl);
+    } else {
+        dev->accel = scene->accel;
+    }
+    dev->scene = scene;
+    dev->scene_triangles = scene->triangle_count;
+    return TR_OK;
+}
+
+tr_accel_type tr_device_accel(const tr_device *dev) {
+    return dev->accel;
+}
+
+uint64_t tr_device_scene_bytes(const tr_device *dev) {
+    return dev->kind == KIND_OPENCL ? tr_cl_scene_bytes(dev->cl) : 0u;
+}
+
+/* The CPU film for frame f: (re)allocated, cleared, when its size or passes change. */
+static int cpu_film_for(tr_device *dev, const tr_frame *f, tr_error *err) {
+    const uint32_t w = f->camera.screen_width, h = f->camera.screen_height;
+    if (dev->film.sum && dev->film.width == w && dev->film.height == h &&
+        dev->film.passes == f->passes) {
+        return TR_OK;
+    }
+    tr_film_free(&dev->film);
+    return tr_film_init_passes(&dev->film, w, h, f->passes, err);
+}
+
+int tr_device_render(tr_device *dev, const tr_camera *cam, const tr_render_config *cfg,
+                     uint32_t sample, uint32_t sample_count, const tr_rect *rect,
+                     tr_render_stats *stats, tr_error *err) {
+    const double t0 = tr_time_now();
+    if (!dev->scene) {
+        return tr_error_set(err, "no scene uploaded to device %s", dev->info.name);
+    }
+    if (dev->kind == KIND_CPU && !tr_scene_is_committed(dev->scene)) {
+        return tr_error_set(err, "the scene changed since it was uploaded to device %s",
+                            dev->info.name);
+    }
+    tr_frame f;
+    if (tr_frame_make(&f, cam, cfg, sample, sample_count, rect, err) != TR_OK) {
+        return TR_ERR;
+    }
+    uint64_t rays = 0;
+    if (dev->kind == KIND_OPENCL) {
+        if (tr_cl_render_frame(dev->cl, &f, &rays, err) != TR_OK) {
+            return TR_ERR;
+        }
+    } else {
+        if (cpu_film_for(dev, &f, err) != TR_OK) {
+            return TR_ERR;
+        }
+        const tr_scene_view view = tr_scene_view_of(dev->scene);
+        if (tr_cpu_render(&view, &f, &dev->film, cfg->threads, cfg->tile, cfg->cancel,
+                          cfg->cancel_user, &rays, err) != TR_OK) {
+            return TR_ERR;
+        }
+    }
+    if (stats) {
+        stats->rays = rays;
+        stats->seconds = tr_time_now() - t0;
+    }
+    return TR_OK;
+}
+
+int tr_device_read_film(tr_device *dev, tr_film *film, tr_error *err) {
+    if (dev->kind == KIND_OPENCL) {
+        return tr_cl_read_film(dev->cl, film, err);
+    }
+    const tr_film *src = &dev->film;
+    if (!src->sum) {
+        return tr_error_set(err, "the film of device %s is empty: no frame was rendered",
+                            dev->info.name);
+    }
+    if (film->width != src->width || film->height != src->height) {
+        return tr_error_set(err, "the film is %ux%u but the film of device %s is %ux%u",
+                            film->width, film->height, dev->info.name, src->width, src->height);
+    }
+    if ((film->passes & ~src->passes) != 0u) {
+        return tr_error_set(err, "the film of device %s does not keep passes 0x%x", dev->info.name,
+                            film->passes & ~src->passes);
+    }
+    const size_t n = (size_t)src->width * src->height;
+    memcpy(film->sum, src->sum, 3 * n * sizeof *film->sum);
+    memcpy(film->count, src->count, n * sizeof *film->count);
+    if (film->albedo) {
+        memcpy(film->albedo, src->albedo, 3 * n * sizeof *film->albedo);
+    }
+    if (film->normal) {
+        memcpy(film->normal, src->normal, 3 * n * sizeof *film->normal);
+    }
+    if (film->depth) {
+        memcpy(film->depth, src->depth, n * sizeof *film->depth);
+    }
+    if (film->prim) {
+        memcpy(film->prim, src->prim, n * sizeof *film->prim);
+    }
+    return TR_OK;
+}
+
+int tr_device_clear(tr_device *dev, tr_error *err) {
+    if (dev->kind == KIND_OPENCL) {
+        return tr_cl_clear_film(dev->cl, err);
+    }
+    if (dev->film.sum) {
+        tr_film_clear(&dev->film);
+    }
+    return TR_OK;
+}
+
+void tr_device_film_size(const tr_device *dev, uint32_t *width, uint32_t *height,
+                         uint32_t *passes) {
+    if (dev->kind == KIND_OPENCL) {
+        tr_cl_film_size(dev->cl, width, height, passes);
+        return;
+    }
+    *width = dev->film.width;
+    *height = dev->film.height;
+    *passes = dev->film.passes;
+}
+
+void tr_device_set_memory_limit(tr_device *dev, uint64_t bytes) {
+    if (dev->kind == KIND_OPENCL) {
+        tr_cl_set_memory_limit(dev->cl, bytes);
+    }
+}

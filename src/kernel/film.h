@@ -1,0 +1,85 @@
+/* film.h - what one sample leaves behind: the surface record the passes are made of,
+ * and the one function that adds a sample to a film, which the CPU backend and the
+ * OpenCL entry point both call (so both fill radiance and passes the same way).
+ *
+ * A film is a set of per-pixel sums, row-major, top row first: radiance (3 floats), a
+ * sample count, and, for the passes kept (TR_PASS_*), albedo and normal (3 floats each),
+ * depth (1 float) and the primitive id of the pixel's first sample (1 word). The mean of
+ * a pixel is its sum over its count; sums and counts of two films add (src/film/film.c). */
+#ifndef TR_KERNEL_FILM_H
+#define TR_KERNEL_FILM_H
+
+#include "compat.h"
+#include "types.h"
+#include "vec.h"
+
+/* Records, once per path, the surface the passes describe: the first one the path meets
+ * that is not a perfect mirror or smooth glass. `normal` is the geometric normal, turned
+ * to face the arriving direction `dir`; `depth` the distance travelled from the camera. */
+TR_FN void tr_sample_surface(tr_sample *out, tr_vec3 albedo, tr_vec3 normal, tr_vec3 dir,
+                             float depth, uint32_t triangle) {
+    if (out == 0 || out->prim != 0u) {
+        return;
+    }
+    out->albedo = albedo;
+    out->normal = v3_dot(normal, dir) > 0.0f ? v3_neg(normal) : normal;
+    out->depth = depth;
+    out->prim = triangle + 1u;
+}
+
+/* A sample with nothing recorded yet. */
+TR_FN void tr_sample_clear(tr_sample *out) {
+    out->radiance = v3s(0.0f);
+    out->albedo = v3s(0.0f);
+    out->normal = v3s(0.0f);
+    out->depth = 0.0f;
+    out->prim = 0u;
+    out->rays = 0u;
+}
+
+/* The film's buffers as one kernel sees them (device or host memory). Pass buffers that
+ * the film does not keep may be null; `passes` says which are written. */
+typedef struct tr_film_view {
+    TR_GLOBAL float *sum;
+    TR_GLOBAL uint32_t *count;
+    TR_GLOBAL float *albedo;
+    TR_GLOBAL float *normal;
+    TR_GLOBAL float *depth;
+    TR_GLOBAL uint32_t *prim;
+    uint32_t width;
+    uint32_t passes;
+} tr_film_view;
+
+/* Adds sample `smp` to every pixel of the block [x0, x1) x [y0, y1) (one pixel, or a
+ * preview block with stride > 1). The primitive id is kept from the first sample a pixel
+ * receives. */
+TR_FN void tr_film_add_block(const tr_film_view *f, const tr_sample *smp, uint32_t x0, uint32_t y0,
+                             uint32_t x1, uint32_t y1) {
+    for (uint32_t y = y0; y < y1; ++y) {
+        for (uint32_t x = x0; x < x1; ++x) {
+            const size_t i = (size_t)y * f->width + x;
+            f->sum[3 * i] += smp->radiance.x;
+            f->sum[3 * i + 1] += smp->radiance.y;
+            f->sum[3 * i + 2] += smp->radiance.z;
+            if ((f->passes & TR_PASS_ALBEDO) != 0u) {
+                f->albedo[3 * i] += smp->albedo.x;
+                f->albedo[3 * i + 1] += smp->albedo.y;
+                f->albedo[3 * i + 2] += smp->albedo.z;
+            }
+            if ((f->passes & TR_PASS_NORMAL) != 0u) {
+                f->normal[3 * i] += smp->normal.x;
+                f->normal[3 * i + 1] += smp->normal.y;
+                f->normal[3 * i + 2] += smp->normal.z;
+            }
+            if ((f->passes & TR_PASS_DEPTH) != 0u) {
+                f->depth[i] += smp->depth;
+            }
+            if ((f->passes & TR_PASS_PRIM) != 0u && f->count[i] == 0u) {
+                f->prim[i] = smp->prim;
+            }
+            f->count[i] += 1u;
+        }
+    }
+}
+
+#endif
