@@ -91,6 +91,20 @@ for accel in bvh embree flat; do
     rm -f bench.txt
 done
 
+# --passes: one PFM per pass beside the image, of the image's size; bad lists are usage
+# errors that write nothing.
+rm -f err.txt
+expect_usage_error "--passes: unknown pass 'bogus'" $R --passes bogus
+expect_usage_error "--passes: 'albedo,' ends with a comma" $R --passes albedo,
+"$BIN" render --width 8 --height 6 --spp 2 --out p.png --passes albedo,depth 2>/dev/null ||
+    fail "render --passes albedo,depth failed"
+for pass in albedo depth; do
+    [ "$(head -c 2 p.$pass.pfm)" = "PF" ] || fail "p.$pass.pfm is not a colour PFM"
+    [ "$(sed -n 2p p.$pass.pfm)" = "8 6" ] || fail "p.$pass.pfm is not 8x6"
+done
+[ ! -e p.normal.pfm ] && [ ! -e p.id.pfm ] || fail "passes written that were not asked for"
+rm -f p.png p.albedo.pfm p.depth.pfm
+
 # A file that exists already is replaced only by a complete image.
 "$BIN" render --width 8 --height 6 --spp 1 --out ok.png --width 0 2>/dev/null
 sig=$(od -An -tx1 -N8 ok.png | tr -d ' \n')

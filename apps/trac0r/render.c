@@ -28,6 +28,12 @@ static void render_help(void) {
            "  --out FILE           output image, .png (8-bit sRGB) or .pfm (float linear RGB)\n"
            "                       (default render.png); written to a temporary file and\n"
            "                       renamed, so it never exists half-written\n"
+           "  --passes LIST        also write these passes beside the image, comma-separated:\n"
+           "                       albedo, normal, depth, id (or all); each goes to\n"
+           "                       FILE-without-extension.PASS.pfm (float: the pixel's mean\n"
+           "                       base colour, shading normal, distance from the camera,\n"
+           "                       primitive id), at the first surface that is not a mirror\n"
+           "                       or smooth glass; 0 where a sample met none\n"
            "  -h, --help           show this help\n"
            "\n"
            "Progress (samples, elapsed, ETA, Mrays/s) goes to stderr while it is a terminal;\n"
@@ -35,6 +41,53 @@ static void render_help(void) {
            "Exit status: 0 on success, 2 on a bad command line, 1 when rendering or writing\n"
            "fails.\n",
            cli_common_help);
+}
+
+/* --passes: "albedo,normal,depth,id" or "all" into TR_PASS_* bits. */
+static int parse_passes(cli_args *a, uint32_t *passes) {
+    if (cli_value(a) != CLI_OK) {
+        return CLI_USAGE;
+    }
+    *passes = 0;
+    const char *p = a->value;
+    while (*p) {
+        size_t len = strcspn(p, ",");
+        uint32_t bit = 0;
+        if (len == 3 && strncmp(p, "all", 3) == 0) {
+            bit = TR_PASS_ALL;
+        }
+        for (uint32_t k = 1; k <= TR_PASS_PRIM && !bit; k <<= 1) {
+            const char *name = tr_pass_name(k);
+            if (strlen(name) == len && strncmp(p, name, len) == 0) {
+                bit = k;
+            }
+        }
+        if (!bit) {
+            return cli_error(a, "%s: unknown pass '%.*s' (expected albedo, normal, depth, id or all)",
+                             a->opt, (int)len, p);
+        }
+        *passes |= bit;
+        p += len;
+        if (*p == ',') {
+            ++p;
+            if (!*p) {
+                return cli_error(a, "%s: '%s' ends with a comma", a->opt, a->value);
+            }
+        }
+    }
+    if (!*passes) {
+        return cli_error(a, "%s: expected a list of passes", a->opt);
+    }
+    return CLI_OK;
+}
+
+/* "dir/img.png" -> "dir/img.albedo.pfm" for pass `bit`. */
+static int pass_path(const char *out, uint32_t bit, char *buf, size_t size) {
+    const char *slash = strrchr(out, '/');
+    const char *dot = strrchr(out, '.');
+    const size_t stem = dot && (!slash || dot > slash) ? (size_t)(dot - out) : strlen(out);
+    const int n = snprintf(buf, size, "%.*s.%s.pfm", (int)stem, out, tr_pass_name(bit));
+    return n < 0 || (size_t)n >= size ? -1 : 0;
 }
 
 int cmd_render(int argc, char **argv) {
@@ -46,6 +99,7 @@ int cmd_render(int argc, char **argv) {
     int stride = 1;
     float exposure = 0.0f;
     const char *out = "render.png";
+    uint32_t passes = 0;
 
     while (cli_next(&a)) {
         int rc = cli_common_option(&a, &c);
@@ -65,6 +119,8 @@ int cmd_render(int argc, char **argv) {
             rc = cli_parse_int(&a, 1, 64, &stride);
         } else if (cli_is(&a, "--exposure")) {
             rc = cli_parse_float(&a, -20.0f, 20.0f, &exposure);
+        } else if (cli_is(&a, "--passes")) {
+            rc = parse_passes(&a, &passes);
         } else if (cli_is(&a, "--out") || cli_is(&a, "-o")) {
             rc = cli_value(&a);
             out = a.value;
@@ -86,6 +142,13 @@ int cmd_render(int argc, char **argv) {
     if (tr_image_check_writable(out, &err) != TR_OK) {
         return cli_error(&a, "--out: %s", err.msg);
     }
+    char pass_paths[4][4096];
+    for (int k = 0; k < 4; ++k) {
+        const uint32_t bit = 1u << k;
+        if ((passes & bit) != 0u && pass_path(out, bit, pass_paths[k], sizeof pass_paths[k]) != 0) {
+            return cli_error(&a, "--out: '%s' is too long for the pass files' names", out);
+        }
+    }
 
     tr_scene scene;
     tr_scene_file file;
@@ -97,7 +160,7 @@ int cmd_render(int argc, char **argv) {
         spp = file.spp;
     }
     tr_film film;
-    if (tr_film_init(&film, c.width, c.height, &err) != TR_OK) {
+    if (tr_film_init_passes(&film, c.width, c.height, passes, &err) != TR_OK) {
         tr_scene_free(&scene);
         return cli_error(&a, "--width/--height: %s", err.msg);
     }
@@ -110,6 +173,7 @@ int cmd_render(int argc, char **argv) {
     }
     tr_render_config cfg = cli_render_config(&c);
     cfg.stride = stride;
+    cfg.passes = passes;
 
     const int tty = isatty(fileno(stderr));
     const double t0 = tr_time_now();
@@ -141,6 +205,18 @@ int cmd_render(int argc, char **argv) {
     if (rc == CLI_OK && tr_film_write(&film, out, exposure, &err) != TR_OK) {
         fprintf(stderr, "trac0r render: %s\n", err.msg);
         rc = CLI_FAILURE;
+    }
+    for (int k = 0; k < 4 && rc == CLI_OK; ++k) {
+        tr_film pass;
+        if ((passes & (1u << k)) == 0u) {
+            continue;
+        }
+        if (tr_film_extract_pass(&film, 1u << k, &pass, &err) != TR_OK ||
+            tr_film_write_pfm(&pass, pass_paths[k], &err) != TR_OK) {
+            fprintf(stderr, "trac0r render: %s\n", err.msg);
+            rc = CLI_FAILURE;
+        }
+        tr_film_free(&pass);
     }
     if (rc == CLI_OK) {
         char accel[160];

@@ -46,5 +46,11 @@ int tr_film_pass_pixel(const tr_film *f, uint32_t pass, uint32_t x, uint32_t y, 
  * into rectangles comes back bit for bit); where both have, it is one float addition per
  * sum, as when the two sample ranges had been accumulated apart and then added. */
 int tr_film_accumulate(tr_film *dst, const tr_film *src, tr_error *err);
+/* A new radiance-only film (free it with tr_film_free) whose pixels' means are pass
+ * `pass` of f: albedo and normal as RGB, depth and the primitive id in all three
+ * channels (the id as a float, exact up to 2^24); for writing a pass as an image. */
+int tr_film_extract_pass(const tr_film *f, uint32_t pass, tr_film *out, tr_error *err);
+/* "albedo", "normal", "depth", "id" for one TR_PASS_* bit; NULL for anything else. */
+const char *tr_pass_name(uint32_t pass);
 
 #endif

@@ -154,3 +154,47 @@ int tr_film_accumulate(tr_film *dst, const tr_film *src, tr_error *err) {
     }
     return TR_OK;
 }
+
+int tr_film_extract_pass(const tr_film *f, uint32_t pass, tr_film *out, tr_error *err) {
+    if ((pass != TR_PASS_ALBEDO && pass != TR_PASS_NORMAL && pass != TR_PASS_DEPTH &&
+         pass != TR_PASS_PRIM) ||
+        (f->passes & pass) == 0u) {
+        memset(out, 0, sizeof *out);
+        return tr_error_set(err, "the film does not keep pass 0x%x", pass);
+    }
+    if (tr_film_init(out, f->width, f->height, err) != TR_OK) {
+        return TR_ERR;
+    }
+    const size_t n = (size_t)f->width * f->height;
+    for (size_t i = 0; i < n; ++i) {
+        if (pass == TR_PASS_PRIM) {
+            /* One sample of the id itself: exact up to 2^24. */
+            out->count[i] = 1u;
+            out->sum[3 * i] = out->sum[3 * i + 1] = out->sum[3 * i + 2] = (float)f->prim[i];
+            continue;
+        }
+        out->count[i] = f->count[i];
+        for (int c = 0; c < 3; ++c) {
+            const size_t k = 3 * i + (size_t)c;
+            out->sum[k] = pass == TR_PASS_ALBEDO   ? f->albedo[k]
+                          : pass == TR_PASS_NORMAL ? f->normal[k]
+                                                   : f->depth[i];
+        }
+    }
+    return TR_OK;
+}
+
+const char *tr_pass_name(uint32_t pass) {
+    switch (pass) {
+    case TR_PASS_ALBEDO:
+        return "albedo";
+    case TR_PASS_NORMAL:
+        return "normal";
+    case TR_PASS_DEPTH:
+        return "depth";
+    case TR_PASS_PRIM:
+        return "id";
+    default:
+        return NULL;
+    }
+}
