@@ -2,7 +2,8 @@
 # Builds the libFuzzer target for the JSON scene loader with clang into build/fuzz/,
 # separate from the gcc builds: the loader's sources and the scene code it uses are
 # compiled with -fsanitize=fuzzer,address,undefined. Mesh import is left out (the
-# target never opens mesh files).
+# target never opens mesh files), and so are the wide BVH's per-ISA traversals, which need
+# per-file flags: without TR_WBVH_HAVE_X86 the library has the scalar one alone.
 # Usage: fuzz/build.sh   (CC defaults to clang)
 set -eu
 cd "$(dirname "$0")/.."
@@ -14,7 +15,7 @@ mkdir -p "$OUT"
     -fno-omit-frame-pointer -ffp-contract=off -Wall -Wextra -Wno-unknown-pragmas \
     -Iinclude -Isrc $(pkg-config --cflags libcjson) \
     fuzz/fuzz_scene_json.c src/scene/json.c src/scene/scene.c src/scene/shape.c \
-    src/scene/camera.c src/scene/lights.c src/accel/bvh.c src/accel/wbvh.c src/accel/embree.c \
-    src/util/error.c \
+    src/scene/camera.c src/scene/lights.c src/accel/bvh.c src/accel/wbvh.c \
+    src/accel/wbvh_scalar.c src/accel/embree.c src/util/error.c \
     $(pkg-config --libs libcjson) -lm -o "$OUT/fuzz_scene_json"
 echo "built $OUT/fuzz_scene_json"

@@ -9,20 +9,18 @@
  * image must not change when the acceleration structure does.
  *
  * A BVH view is traced three ways, each compared with the flat structure: through the
- * wide BVH with this build's SIMD code (what tr_intersect_scene does), through the same
- * wide BVH with the portable scalar code (src/accel/wbvh_traverse.h compiled here a
- * second time, with TR_WBVH_SCALAR), and through the binary BVH alone (--accel bvh2,
- * and what devices trace). */
+ * wide BVH with the SIMD code chosen at run time (what tr_intersect_scene does), through
+ * the same wide BVH with the portable scalar code (tr_wbvh_trace_isa; test_isa.c compares
+ * every ISA with it hit for hit), and through the binary BVH alone (--accel bvh2, and what
+ * devices trace). */
 #include <stdlib.h>
 #include <string.h>
 
 #include <omp.h>
 
 #include "check.h"
+#include "accel/wbvh.h"
 #include "trac0r/trac0r.h"
-
-#define TR_WBVH_SCALAR 1
-#include "accel/wbvh_traverse.h"
 
 /* Rays per mesh for the main comparisons (the brief asks for at least 100 000) and
  * for the stress meshes, whose flat traversal is a brute-force loop. */
@@ -420,7 +418,7 @@ static int trace_variant(const tr_scene_view *v, int variant, const tr_ray *ray,
     tr_scene_view bin = *v;
     switch (variant) {
     case V_WIDE_SCALAR:
-        return tr_wbvh_traverse(v->wbvh, ray, hit, any_hit);
+        return tr_wbvh_trace_isa(TR_WBVH_ISA_SCALAR, v->wbvh, ray, hit, any_hit);
     case V_BVH2:
         bin.wbvh = NULL;
         return any_hit ? tr_occluded_scene(&bin, ray) : tr_intersect_scene(&bin, ray, hit);

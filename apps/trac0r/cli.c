@@ -2,6 +2,8 @@
 #include "cli.h"
 #include "devices.h"
 
+#include "accel/wbvh.h" /* tr_wbvh_isa, TR_WBVH_WIDTH: the wide BVH's summary */
+
 #include <errno.h>
 #include <stdio.h>
 #include <inttypes.h>
@@ -360,11 +362,18 @@ int cli_load_scene(const cli_args *a, const cli_common *c, tr_scene *scene) {
 
 void cli_describe_accel(char *buf, size_t n, const tr_scene *s) {
     if (s->accel == TR_ACCEL_TYPE_BVH) {
+        /* The traversal's ISA is chosen at run time; a TRAC0R_ISA the CPU (or build)
+         * cannot honour is said here rather than silently replaced. */
+        const char *isa = tr_wbvh_isa(), *asked = getenv("TRAC0R_ISA");
+        char note[96] = "";
+        if (asked && *asked && strcmp(asked, isa) != 0) {
+            snprintf(note, sizeof note, ", TRAC0R_ISA=%.40s unavailable", asked);
+        }
         snprintf(buf, n,
-                 "bvh (%u-wide %s: %u nodes, %u leaves, depth %u, from %u binary nodes; built "
+                 "bvh (%u-wide %s%s: %u nodes, %u leaves, depth %u, from %u binary nodes; built "
                  "in %.1f ms, %.1f ms of it the collapse)",
-                 TR_WBVH_WIDTH, tr_wbvh_isa(), s->wbvh.node_count, s->wbvh.leaf_count,
-                 s->wbvh.depth, s->bvh.node_count, tr_scene_bvh_build_seconds(s) * 1e3,
+                 TR_WBVH_WIDTH, isa, note, s->wbvh.node_count, s->wbvh.leaf_count, s->wbvh.depth,
+                 s->bvh.node_count, tr_scene_bvh_build_seconds(s) * 1e3,
                  s->wbvh.build_seconds * 1e3);
     } else if (s->accel == TR_ACCEL_TYPE_BVH2) {
         snprintf(buf, n, "bvh2 (%u nodes, %u leaves, depth %u, built in %.1f ms)",

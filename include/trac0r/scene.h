@@ -19,6 +19,7 @@
 
 #include <stdint.h>
 
+#include "accel/wbvh.h" /* tr_wbvh, embedded below (private to the library) */
 #include "kernel/scene_view.h"
 #include "kernel/types.h"
 #include "trac0r/accel.h"

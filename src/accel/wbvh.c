@@ -1,9 +1,11 @@
-/* wbvh.c - the wide BVH: collapsed from the binary BVH, traversed with SIMD (host only). */
+/* wbvh.c - the wide BVH: collapsed from the binary BVH (host only), and the run-time
+ * choice of the instruction set its traversal runs with (src/accel/wbvh_*.c). */
 #include <math.h>
+#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "accel/wbvh_traverse.h"
+#include "accel/wbvh.h"
 #include "kernel/scene_view.h"
 #include "trac0r/accel.h"
 #include "trac0r/render.h"
@@ -263,23 +265,121 @@ void tr_wbvh_refit(tr_wbvh *w, const tr_bvh *bvh) {
     w->bvh_refits = bvh->refits;
 }
 
-const char *tr_wbvh_isa(void) {
-#if defined(TR_WBVH_AVX2) && defined(__AVX512VL__)
-    return "avx512";
-#elif defined(TR_WBVH_AVX2)
-    return "avx2";
-#elif defined(TR_WBVH_SSE2)
-    return "sse2";
-#else
-    return "scalar";
+/* ---- Run-time ISA choice ---------------------------------------------------------- */
+
+typedef struct isa_entry {
+    int (*intersect)(const tr_wbvh *w, const tr_ray *ray, tr_hit *hit);
+    int (*occluded)(const tr_wbvh *w, const tr_ray *ray);
+} isa_entry;
+
+/* Entries this build lacks stay NULL (tr_wbvh_isa_mask never offers them). */
+static const isa_entry isa_table[TR_WBVH_ISA_COUNT] = {
+    [TR_WBVH_ISA_SCALAR] = {tr_wbvh_intersect_scalar, tr_wbvh_occluded_scalar},
+#ifdef TR_WBVH_HAVE_X86
+    [TR_WBVH_ISA_SSE2] = {tr_wbvh_intersect_sse2, tr_wbvh_occluded_sse2},
+    [TR_WBVH_ISA_AVX2] = {tr_wbvh_intersect_avx2, tr_wbvh_occluded_avx2},
+    [TR_WBVH_ISA_AVX512] = {tr_wbvh_intersect_avx512, tr_wbvh_occluded_avx512},
 #endif
+};
+
+static const char *const isa_names[TR_WBVH_ISA_COUNT] = {
+    [TR_WBVH_ISA_SCALAR] = "scalar",
+    [TR_WBVH_ISA_SSE2] = "sse2",
+    [TR_WBVH_ISA_AVX2] = "avx2",
+    [TR_WBVH_ISA_AVX512] = "avx512",
+};
+
+/* The ISA every ray takes, -1 until the first ray (or tr_wbvh_isa) chooses it. Choosing
+ * twice gives the same answer, so a race between first rays only repeats the work; the
+ * compare-exchange keeps whichever choice, or tr_wbvh_set_isa, came first. */
+static atomic_int isa_current = -1;
+
+const char *tr_wbvh_isa_name(int isa) {
+    return isa >= 0 && isa < TR_WBVH_ISA_COUNT ? isa_names[isa] : NULL;
+}
+
+int tr_wbvh_isa_from_name(const char *name) {
+    for (int i = 0; name && i < TR_WBVH_ISA_COUNT; ++i) {
+        if (strcmp(name, isa_names[i]) == 0) {
+            return i;
+        }
+    }
+    return -1;
+}
+
+unsigned tr_wbvh_isa_mask(void) {
+    unsigned mask = 1u << TR_WBVH_ISA_SCALAR;
+#ifdef TR_WBVH_HAVE_X86
+    /* __builtin_cpu_supports reads the CPUID bits libgcc (or compiler-rt) gathered at
+     * start-up; for the AVX features it also checks that the OS saves the wide
+     * registers (XGETBV). */
+    if (__builtin_cpu_supports("sse2")) {
+        mask |= 1u << TR_WBVH_ISA_SSE2;
+    }
+    if (__builtin_cpu_supports("avx2")) {
+        mask |= 1u << TR_WBVH_ISA_AVX2;
+        if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl")) {
+            mask |= 1u << TR_WBVH_ISA_AVX512;
+        }
+    }
+#endif
+    return mask;
+}
+
+int tr_wbvh_isa_choose(const char *request, unsigned mask) {
+    int want = tr_wbvh_isa_from_name(request);
+    if (want >= 0 && (mask >> want & 1u)) {
+        return want;
+    }
+    for (int i = TR_WBVH_ISA_COUNT - 1; i > 0; --i) {
+        if (mask >> i & 1u) {
+            return i;
+        }
+    }
+    return TR_WBVH_ISA_SCALAR;
+}
+
+static int isa_choose_once(void) {
+    int isa = tr_wbvh_isa_choose(getenv("TRAC0R_ISA"), tr_wbvh_isa_mask());
+    int expected = -1;
+    if (!atomic_compare_exchange_strong(&isa_current, &expected, isa)) {
+        isa = expected;
+    }
+    return isa;
+}
+
+static inline int isa_now(void) {
+    int isa = atomic_load_explicit(&isa_current, memory_order_relaxed);
+    return isa >= 0 ? isa : isa_choose_once();
+}
+
+const char *tr_wbvh_isa(void) {
+    return isa_names[isa_now()];
+}
+
+int tr_wbvh_set_isa(int isa, tr_error *err) {
+    if (isa < 0 || isa >= TR_WBVH_ISA_COUNT) {
+        return tr_error_set(err, "unknown wide-BVH ISA %d", isa);
+    }
+    if (!(tr_wbvh_isa_mask() >> isa & 1u)) {
+        return tr_error_set(err, "wide-BVH ISA %s: not supported by this CPU or build",
+                            isa_names[isa]);
+    }
+    atomic_store(&isa_current, isa);
+    return TR_OK;
+}
+
+int tr_wbvh_trace_isa(int isa, const tr_wbvh *w, const tr_ray *ray, tr_hit *hit, int any_hit) {
+    if (isa < 0 || isa >= TR_WBVH_ISA_COUNT || !(tr_wbvh_isa_mask() >> isa & 1u)) {
+        return -1;
+    }
+    return any_hit ? isa_table[isa].occluded(w, ray) : isa_table[isa].intersect(w, ray, hit);
 }
 
 int tr_wbvh_intersect(const struct tr_wbvh *w, const tr_ray *ray, tr_hit *hit) {
-    return tr_wbvh_traverse(w, ray, hit, 0);
+    return isa_table[isa_now()].intersect(w, ray, hit);
 }
 
 int tr_wbvh_occluded(const struct tr_wbvh *w, const tr_ray *ray) {
-    tr_hit hit;
-    return tr_wbvh_traverse(w, ray, &hit, 1);
+    return isa_table[isa_now()].occluded(w, ray);
 }

@@ -1,39 +1,73 @@
 /* wbvh_traverse.h - closest-hit and any-hit traversal of the wide BVH (host only).
  *
- * Included by src/accel/wbvh.c, which exports it, and compiled a second time by
- * tests/test_bvh.c with TR_WBVH_SCALAR defined to 1, so that the portable code is tested
- * on machines whose build takes a SIMD path. The SIMD path is chosen from the compiler's
- * target macros: AVX2 (8-wide nodes, one 256-bit register per plane; AVX-512VL, where
- * present, gives the hit mask straight from the compare), else SSE2 (4-wide nodes),
- * else scalar loops over the lanes. For measuring what each part buys, defining
- * TR_WBVH_SCALAR_NODES or TR_WBVH_SCALAR_TRIS when building the library keeps only the box
- * tests or only the triangle tests scalar (docs/benchmarks.md).
+ * A template: each of src/accel/wbvh_{scalar,sse2,avx2,avx512}.c defines
+ * TR_WBVH_TEMPLATE_ISA (a TR_WBVH_ISA_* number) and TR_WBVH_TEMPLATE_SUFFIX, includes
+ * this file once under its own compiler flags (CMakeLists.txt) and so exports
+ * tr_wbvh_intersect_SUFFIX and tr_wbvh_occluded_SUFFIX, between which src/accel/wbvh.c
+ * chooses at run time. The node test takes a node's 8 boxes in one 256-bit operation per
+ * plane with AVX2 (with AVX-512VL the hit mask comes straight from the compare), as two
+ * 128-bit halves with SSE2, or lane by lane in the portable scalar code; the triangle
+ * test takes a packet of four in one 128-bit operation per step (SSE2 and up). For
+ * measuring what each part buys, defining TR_WBVH_SCALAR_NODES or TR_WBVH_SCALAR_TRIS
+ * when building the library keeps only the box tests or only the triangle tests scalar
+ * (docs/benchmarks.md).
  *
  * Every path computes exactly what the binary BVH and the flat structure compute: the
  * slab test as (plane - origin) * inv_dir and Moller-Trumbore in the same operation
  * order (src/kernel/intersect.h; no fused multiply-add, the library is built with
- * -ffp-contract=off), so the wide BVH hits the same triangle at the same distance.
- * The boxes' near and far planes are picked per ray from the sign of inv_dir (as in
- * Embree): then an empty box (+inf, -inf) is never entered, and a plane through which
- * an axis-parallel ray runs (0 * inf = NaN) puts no limit on the segment, as in
- * tr_slab: max and min below return their second operand, the running bound, when the
- * first is NaN (the semantics of the SSE/AVX instructions). */
+ * -ffp-contract=off and none of the files is given -mfma), so the wide BVH hits the same
+ * triangle at the same distance whichever ISA runs it. The boxes' near and far planes
+ * are picked per ray from the sign of inv_dir (as in Embree): then an empty box (+inf,
+ * -inf) is never entered, and a plane through which an axis-parallel ray runs (0 * inf =
+ * NaN) puts no limit on the segment, as in tr_slab: max and min below return their
+ * second operand, the running bound, when the first is NaN (the semantics of the
+ * SSE/AVX instructions). */
 #ifndef TR_ACCEL_WBVH_TRAVERSE_H
 #define TR_ACCEL_WBVH_TRAVERSE_H
 
+#include <stddef.h>
 #include <stdint.h>
 
+#include "accel/wbvh.h"
 #include "kernel/types.h"
-#include "trac0r/accel.h"
 
-#if !defined(TR_WBVH_SCALAR) || !TR_WBVH_SCALAR
-#if defined(__AVX2__) && TR_WBVH_WIDTH == 8
-#define TR_WBVH_AVX2 1
-#include <immintrin.h>
-#elif defined(__SSE2__) && TR_WBVH_WIDTH == 4
-#define TR_WBVH_SSE2 1
-#include <emmintrin.h>
+#if !defined(TR_WBVH_TEMPLATE_ISA) || !defined(TR_WBVH_TEMPLATE_SUFFIX)
+#error "define TR_WBVH_TEMPLATE_ISA and TR_WBVH_TEMPLATE_SUFFIX before including wbvh_traverse.h"
 #endif
+
+/* Each file must be compiled with the flags its ISA needs (and the dispatcher must only
+ * call it on a CPU that has them); a file built without them would not compile anyway,
+ * this says why. */
+#if TR_WBVH_TEMPLATE_ISA == TR_WBVH_ISA_AVX512
+#if !defined(__AVX2__) || !defined(__AVX512F__) || !defined(__AVX512VL__)
+#error "wbvh_avx512.c needs -mavx2 -mavx512f -mavx512vl"
+#endif
+#define TR_WBVH_NODES_256 1
+#define TR_WBVH_TRIS_128 1
+#include <immintrin.h>
+#elif TR_WBVH_TEMPLATE_ISA == TR_WBVH_ISA_AVX2
+#if !defined(__AVX2__)
+#error "wbvh_avx2.c needs -mavx2"
+#endif
+#define TR_WBVH_NODES_256 1
+#define TR_WBVH_TRIS_128 1
+#include <immintrin.h>
+#elif TR_WBVH_TEMPLATE_ISA == TR_WBVH_ISA_SSE2
+#if !defined(__SSE2__)
+#error "wbvh_sse2.c needs -msse2"
+#endif
+#define TR_WBVH_NODES_128 1
+#define TR_WBVH_TRIS_128 1
+#include <emmintrin.h>
+#elif TR_WBVH_TEMPLATE_ISA != TR_WBVH_ISA_SCALAR
+#error "unknown TR_WBVH_TEMPLATE_ISA"
+#endif
+#ifdef TR_WBVH_SCALAR_NODES
+#undef TR_WBVH_NODES_256
+#undef TR_WBVH_NODES_128
+#endif
+#ifdef TR_WBVH_SCALAR_TRIS
+#undef TR_WBVH_TRIS_128
 #endif
 
 /* Each node level pushes at most TR_WBVH_WIDTH - 1 entries, and the wide tree is no
@@ -72,7 +106,7 @@ static inline void tr_wbvh_ray_init(tr_wbvh_ray *r, const tr_ray *ray) {
  * to tnear[]. */
 static inline uint32_t tr_wbvh_node_hits(const tr_wbvh_node *n, const tr_wbvh_ray *r, float tmin,
                                          float tmax, float *tnear) {
-#if defined(TR_WBVH_AVX2) && !defined(TR_WBVH_SCALAR_NODES)
+#if defined(TR_WBVH_NODES_256)
     __m256 t0 = _mm256_set1_ps(tmin), t1 = _mm256_set1_ps(tmax);
     for (int a = 0; a < 3; ++a) {
         __m256 o = _mm256_set1_ps(r->o[a]), inv = _mm256_set1_ps(r->inv[a]);
@@ -82,22 +116,27 @@ static inline uint32_t tr_wbvh_node_hits(const tr_wbvh_node *n, const tr_wbvh_ra
         t1 = _mm256_min_ps(tf, t1);
     }
     _mm256_storeu_ps(tnear, t0);
-#if defined(__AVX512VL__)
+#if TR_WBVH_TEMPLATE_ISA == TR_WBVH_ISA_AVX512
     return (uint32_t)_mm256_cmp_ps_mask(t0, t1, _CMP_LE_OQ);
 #else
     return (uint32_t)_mm256_movemask_ps(_mm256_cmp_ps(t0, t1, _CMP_LE_OQ));
 #endif
-#elif defined(TR_WBVH_SSE2) && !defined(TR_WBVH_SCALAR_NODES)
-    __m128 t0 = _mm_set1_ps(tmin), t1 = _mm_set1_ps(tmax);
+#elif defined(TR_WBVH_NODES_128)
+    /* Boxes 0-3 and 4-7 side by side: the two halves are independent chains. */
+    __m128 t0a = _mm_set1_ps(tmin), t1a = _mm_set1_ps(tmax);
+    __m128 t0b = t0a, t1b = t1a;
     for (int a = 0; a < 3; ++a) {
         __m128 o = _mm_set1_ps(r->o[a]), inv = _mm_set1_ps(r->inv[a]);
-        __m128 tn = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(n->bounds[r->near_row[a]]), o), inv);
-        __m128 tf = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(n->bounds[r->far_row[a]]), o), inv);
-        t0 = _mm_max_ps(tn, t0);
-        t1 = _mm_min_ps(tf, t1);
+        const float *np = n->bounds[r->near_row[a]], *fp = n->bounds[r->far_row[a]];
+        t0a = _mm_max_ps(_mm_mul_ps(_mm_sub_ps(_mm_load_ps(np), o), inv), t0a);
+        t0b = _mm_max_ps(_mm_mul_ps(_mm_sub_ps(_mm_load_ps(np + 4), o), inv), t0b);
+        t1a = _mm_min_ps(_mm_mul_ps(_mm_sub_ps(_mm_load_ps(fp), o), inv), t1a);
+        t1b = _mm_min_ps(_mm_mul_ps(_mm_sub_ps(_mm_load_ps(fp + 4), o), inv), t1b);
     }
-    _mm_storeu_ps(tnear, t0);
-    return (uint32_t)_mm_movemask_ps(_mm_cmple_ps(t0, t1));
+    _mm_storeu_ps(tnear, t0a);
+    _mm_storeu_ps(tnear + 4, t0b);
+    return (uint32_t)_mm_movemask_ps(_mm_cmple_ps(t0a, t1a)) |
+           (uint32_t)_mm_movemask_ps(_mm_cmple_ps(t0b, t1b)) << 4;
 #else
     uint32_t mask = 0;
     for (int i = 0; i < TR_WBVH_WIDTH; ++i) {
@@ -117,7 +156,7 @@ static inline uint32_t tr_wbvh_node_hits(const tr_wbvh_node *n, const tr_wbvh_ra
  * returns the mask of lanes hit in (tmin, tmax) and their t, u, v. */
 static inline uint32_t tr_wbvh_tri4_hits(const tr_wbvh_tri4 *p, const tr_wbvh_ray *r, float tmin,
                                          float tmax, float *t_out, float *u_out, float *v_out) {
-#if (defined(TR_WBVH_AVX2) || defined(TR_WBVH_SSE2)) && !defined(TR_WBVH_SCALAR_TRIS)
+#if defined(TR_WBVH_TRIS_128)
     const __m128 dx = _mm_set1_ps(r->d[0]), dy = _mm_set1_ps(r->d[1]), dz = _mm_set1_ps(r->d[2]);
     const __m128 e1x = _mm_load_ps(p->e1[0]), e1y = _mm_load_ps(p->e1[1]),
                  e1z = _mm_load_ps(p->e1[2]);
@@ -205,7 +244,8 @@ static inline int tr_wbvh_ctz(uint32_t x) {
     return __builtin_ctz(x);
 }
 
-/* Closest hit in (ray->tmin, ray->tmax), or with any_hit set the first hit found.
+/* Closest hit in (ray->tmin, ray->tmax), or with any_hit set the first hit found (hit
+ * is then not written).
  * Children are visited nearest entry first; the others wait on a fixed-size stack with
  * their entry distance and are dropped once they start beyond the closest hit. */
 static inline int tr_wbvh_traverse(const tr_wbvh *w, const tr_ray *ray, tr_hit *hit, int any_hit) {
@@ -308,6 +348,19 @@ static inline int tr_wbvh_traverse(const tr_wbvh *w, const tr_ray *ray, tr_hit *
         } while (stack_t[top] > tmax);
         cur = stack[top];
     }
+}
+
+#define TR_WBVH_NAME_(f, isa) f##_##isa
+#define TR_WBVH_NAME(f, isa) TR_WBVH_NAME_(f, isa)
+
+/* The two entry points of this file's ISA, any_hit folded into each. */
+int TR_WBVH_NAME(tr_wbvh_intersect, TR_WBVH_TEMPLATE_SUFFIX)(const tr_wbvh *w, const tr_ray *ray,
+                                                             tr_hit *hit) {
+    return tr_wbvh_traverse(w, ray, hit, 0);
+}
+
+int TR_WBVH_NAME(tr_wbvh_occluded, TR_WBVH_TEMPLATE_SUFFIX)(const tr_wbvh *w, const tr_ray *ray) {
+    return tr_wbvh_traverse(w, ray, NULL, 1);
 }
 
 #endif
