@@ -9,7 +9,10 @@
  *
  * The exposure arrives as its scale 2^exposure, computed once per image by the caller:
  * a device then has no exp2 per pixel, and the host's result stays bit-identical to
- * `linear * exp2f(exposure)`. */
+ * `linear * exp2f(exposure)`. A device's pow may differ from glibc's powf by an ulp
+ * (OpenCL does not require correct rounding), so a device-tonemapped byte can differ by
+ * one where a value sits on a rounding boundary; includers on a device set
+ * FP_CONTRACT OFF as entry.cl does. */
 #ifndef TR_POST_TONEMAP_H
 #define TR_POST_TONEMAP_H
 
