@@ -223,7 +223,7 @@ static void fill_special_film(tr_film *f) {
 static void test_tonemap_film(void) {
     tr_error err;
     tr_film f;
-    /* Over 16 rows, so that the parallel path runs. */
+    /* An odd size, so that no row or stride arithmetic hides behind a power of two. */
     CHECK(tr_film_init(&f, 37, 29, &err) == TR_OK, "%s", err.msg);
     fill_special_film(&f);
     const size_t px = (size_t)f.width * f.height;

@@ -41,9 +41,9 @@ typedef enum tr_pixel_format {
 
 /* Tonemaps the film's mean radiance in the rectangle at (x, y) of size width x height
  * into dst (row r of the rectangle at dst + r * dst_stride bytes; pixels where no
- * sample landed are black), exactly as tr_tonemap_srgb8 maps each channel. Rows run in
- * parallel (OpenMP). Fails on a rectangle outside the film, an empty one, an unknown
- * format or a stride smaller than a row. */
+ * sample landed are black), exactly as tr_tonemap_srgb8 maps each channel. Runs on the
+ * calling thread only (split the film into rectangles for more). Fails on a rectangle
+ * outside the film, an empty one, an unknown format or a stride smaller than a row. */
 int tr_tonemap_film(const struct tr_film *film, uint32_t x, uint32_t y, uint32_t width,
                     uint32_t height, float exposure, tr_pixel_format format, void *dst,
                     size_t dst_stride, tr_error *err);

@@ -36,8 +36,10 @@ int tr_tonemap_film(const struct tr_film *film, uint32_t x, uint32_t y, uint32_t
     const float *sum = film->sum;
     const uint32_t *count = film->count;
     const size_t fw = film->width;
-    /* A single row (the PNG writer's case) is not worth waking a thread team. */
-#pragma omp parallel for schedule(static) if (height >= 16)
+    /* Serial on purpose: the PNG writer calls this per row, and the viewer from its
+     * render thread, whose --threads limit a thread team here would ignore (and whose
+     * idle OpenMP workers would spin against the render). A caller that wants threads
+     * splits the film into rectangles; a device runs one work item per pixel. */
     for (uint32_t r = 0; r < height; ++r) {
         const size_t row = ((size_t)y + r) * fw + x;
         unsigned char *out = (unsigned char *)dst + (size_t)r * dst_stride;
