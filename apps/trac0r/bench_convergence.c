@@ -10,7 +10,6 @@
 #include "bench.h"
 #include "cli.h"
 #include "devices.h"
-#include "compare.h"
 
 #define CONV_MAX_SIZES 4
 #define CONV_MAX_POINTS 400
@@ -19,9 +18,9 @@ static const double conv_db[CONV_THRESHOLDS] = {25.0, 30.0, 35.0, 40.0};
 
 typedef struct conv_point {
     uint32_t spp;
-    double seconds;  /* render time only */
-    image_error raw; /* against the reference as it is */
-    double psnr;     /* with the reference's own MSE taken out */
+    double seconds;       /* render time only */
+    tr_image_metrics raw; /* against the reference as it is */
+    double psnr;          /* with the reference's own MSE taken out */
 } conv_point;
 
 typedef struct conv_run {
@@ -332,12 +331,12 @@ int bench_convergence(int argc, char **argv) {
                 /* The halves' difference has twice a half's MSE (independent noise), and
                  * their mean a quarter of the difference's: MSE_ref = MSE(h1, h2) / 4
                  * (equal halves). Measured errors then have MSE_true + MSE_ref. */
-                ref_mse = compare_images(half, cur, px).mse / 4.0;
+                ref_mse = tr_image_compare(half, cur, px).mse / 4.0;
                 for (size_t i = 0; i < 3 * px; ++i) {
                     ref[i] = ((float)h1 * half[i] + (float)h2 * cur[i]) / (float)ref_spp;
                 }
                 printf("%ux%u: reference pt %u spp in %.1f s, its own PSNR ~ %.1f dB\n", c.width,
-                       c.height, ref_spp, tr_time_now() - t0, 10.0 * log10(1.0 / ref_mse));
+                       c.height, ref_spp, tr_time_now() - t0, tr_psnr(ref_mse));
                 fflush(stdout);
             }
         }
@@ -394,9 +393,9 @@ int bench_convergence(int argc, char **argv) {
                 conv_point *p = &r->pt[r->n++];
                 p->spp = spp[mi];
                 p->seconds = elapsed[mi];
-                p->raw = compare_images(cur, ref, px);
+                p->raw = tr_image_compare(cur, ref, px);
                 double mse = p->raw.mse - ref_mse;
-                p->psnr = mse > 0.0 ? 10.0 * log10(1.0 / mse) : INFINITY;
+                p->psnr = tr_psnr(mse);
                 uint32_t step = (uint32_t)ceil(next[mi] * 0.19);
                 next[mi] += step > 0 ? step : 1;
                 if (p->psnr > 41.0 || last) {

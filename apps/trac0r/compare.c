@@ -9,11 +9,6 @@
 #include "commands.h"
 #include "compare.h"
 
-/* sRGB-encoded [0,1] back to linear (IEC 61966-2-1). */
-static float srgb_to_linear(float c) {
-    return c <= 0.04045f ? c / 12.92f : powf((c + 0.055f) / 1.055f, 2.4f);
-}
-
 int compare_load(const char *path, tr_image *img, tr_error *err) {
     switch (tr_image_format_from_path(path)) {
     case TR_IMAGE_PFM:
@@ -24,7 +19,7 @@ int compare_load(const char *path, tr_image *img, tr_error *err) {
         }
         size_t n = 3 * (size_t)img->width * img->height;
         for (size_t i = 0; i < n; ++i) {
-            img->rgb[i] = srgb_to_linear(img->rgb[i]);
+            img->rgb[i] = tr_srgb_to_linear(img->rgb[i]);
         }
         return TR_OK;
     }
@@ -33,33 +28,12 @@ int compare_load(const char *path, tr_image *img, tr_error *err) {
     }
 }
 
-static double clamp01(double v) {
-    return v != v ? 0.0 : v < 0.0 ? 0.0 : v > 1.0 ? 1.0 : v;
-}
-
-image_error compare_images(const float *a, const float *ref, size_t pixels) {
-    double se = 0.0, rel = 0.0;
-    for (size_t i = 0; i < 3 * pixels; ++i) {
-        double x = clamp01(a[i]), y = clamp01(ref[i]);
-        double d = x - y;
-        se += d * d;
-        rel += d * d / (y * y + COMPARE_REL_EPSILON);
-    }
-    image_error e;
-    double n = 3.0 * (double)pixels;
-    e.mse = se / n;
-    e.rmse = sqrt(e.mse);
-    e.relmse = rel / n;
-    e.psnr = e.mse > 0.0 ? 10.0 * log10(1.0 / e.mse) : INFINITY;
-    return e;
-}
-
 /* A perceptually ordered false-colour ramp (black, blue, magenta, orange, yellow,
  * white) for t in [0,1], returned as linear RGB for the PNG writer to encode. */
 static tr_vec3 false_colour(double t) {
     static const float ramp[6][3] = {{0.0f, 0.0f, 0.0f},  {0.1f, 0.1f, 0.6f}, {0.7f, 0.1f, 0.6f},
                                      {1.0f, 0.5f, 0.05f}, {1.0f, 0.9f, 0.2f}, {1.0f, 1.0f, 1.0f}};
-    t = clamp01(t) * 5.0;
+    t = (t > 0.0 ? (t < 1.0 ? t : 1.0) : 0.0) * 5.0;
     int i = (int)t;
     if (i >= 5) {
         i = 4;
@@ -68,7 +42,7 @@ static tr_vec3 false_colour(double t) {
     float c[3];
     for (int k = 0; k < 3; ++k) {
         float s = ramp[i][k] + f * (ramp[i + 1][k] - ramp[i][k]);
-        c[k] = srgb_to_linear(s);
+        c[k] = tr_srgb_to_linear(s);
     }
     return v3(c[0], c[1], c[2]);
 }
@@ -90,7 +64,7 @@ static void compare_help(void) {
            "\n"
            "Exit status: 0 on success, 2 on a bad command line, an unreadable image or\n"
            "images of different sizes, 1 when the error image cannot be written.\n",
-           COMPARE_REL_EPSILON);
+           TR_RELMSE_EPSILON);
 }
 
 int cmd_compare(int argc, char **argv) {
@@ -145,7 +119,7 @@ int cmd_compare(int argc, char **argv) {
         return rc;
     }
     size_t pixels = (size_t)img[0].width * img[0].height;
-    image_error e = compare_images(img[0].rgb, img[1].rgb, pixels);
+    tr_image_metrics e = tr_image_compare(img[0].rgb, img[1].rgb, pixels);
     printf("size %ux%u\nrmse %.6g\nrelmse %.6g\npsnr %.3f dB\n", img[0].width, img[0].height,
            e.rmse, e.relmse, e.psnr);
     int rc = CLI_OK;
@@ -155,20 +129,10 @@ int cmd_compare(int argc, char **argv) {
             fprintf(stderr, "trac0r compare: %s\n", err.msg);
             rc = CLI_FAILURE;
         } else {
-            double max = 0.0;
+            const double max = e.max_error;
             for (size_t i = 0; i < pixels; ++i) {
-                double d = 0.0;
-                for (int c = 0; c < 3; ++c) {
-                    d += fabs(clamp01(img[0].rgb[3 * i + c]) - clamp01(img[1].rgb[3 * i + c]));
-                }
-                max = d / 3.0 > max ? d / 3.0 : max;
-            }
-            for (size_t i = 0; i < pixels; ++i) {
-                double d = 0.0;
-                for (int c = 0; c < 3; ++c) {
-                    d += fabs(clamp01(img[0].rgb[3 * i + c]) - clamp01(img[1].rgb[3 * i + c]));
-                }
-                tr_vec3 col = false_colour(max > 0.0 ? d / 3.0 / max : 0.0);
+                const double d = tr_pixel_error(img[0].rgb + 3 * i, img[1].rgb + 3 * i);
+                tr_vec3 col = false_colour(max > 0.0 ? d / max : 0.0);
                 f.sum[3 * i] = col.x;
                 f.sum[3 * i + 1] = col.y;
                 f.sum[3 * i + 2] = col.z;

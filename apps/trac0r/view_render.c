@@ -9,19 +9,10 @@
 #include <string.h>
 
 void view_tonemap(const tr_film *film, float exposure, uint32_t *pixels) {
-    const size_t n = (size_t)film->width * film->height;
-    for (size_t i = 0; i < n; ++i) {
-        uint32_t c = film->count[i];
-        uint32_t rgb = 0;
-        if (c > 0) {
-            float inv = 1.0f / (float)c;
-            uint32_t r = tr_tonemap_srgb8(film->sum[3 * i] * inv, exposure);
-            uint32_t g = tr_tonemap_srgb8(film->sum[3 * i + 1] * inv, exposure);
-            uint32_t b = tr_tonemap_srgb8(film->sum[3 * i + 2] * inv, exposure);
-            rgb = (r << 16) | (g << 8) | b;
-        }
-        pixels[i] = 0xff000000u | rgb;
-    }
+    /* The PNG writer's transform (post.h): a screenshot holds the window's bytes. Cannot
+     * fail: the rectangle is the whole film and the stride one row. */
+    tr_tonemap_film(film, 0, 0, film->width, film->height, exposure, TR_PIXEL_ARGB8888, pixels,
+                    (size_t)film->width * sizeof *pixels, NULL);
 }
 
 static int same_view(const tr_camera *a, const tr_camera *b) {

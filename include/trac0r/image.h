@@ -19,11 +19,8 @@ typedef enum tr_image_format {
 /* The format named by a path's extension (case-insensitive), or TR_IMAGE_UNKNOWN. */
 tr_image_format tr_image_format_from_path(const char *path);
 
-/* Tonemaps one linear value: scale by 2^exposure, clamp to [0,1], sRGB transfer, 8 bits. */
-uint8_t tr_tonemap_srgb8(float linear, float exposure);
-
-/* Writes the film's mean radiance as PNG (tonemapped with `exposure` stops) or PFM,
- * chosen by the path's extension. */
+/* Writes the film's mean radiance as PNG (tonemapped with `exposure` stops by
+ * tr_tonemap_film, post.h) or PFM, chosen by the path's extension. */
 int tr_film_write(const tr_film *f, const char *path, float exposure, tr_error *err);
 int tr_film_write_png(const tr_film *f, const char *path, float exposure, tr_error *err);
 int tr_film_write_pfm(const tr_film *f, const char *path, tr_error *err);

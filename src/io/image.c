@@ -11,6 +11,7 @@
 #include <unistd.h>
 
 #include "trac0r/image.h"
+#include "trac0r/post.h"
 
 tr_image_format tr_image_format_from_path(const char *path) {
     const char *dot = strrchr(path, '.');
@@ -25,19 +26,6 @@ tr_image_format tr_image_format_from_path(const char *path) {
         return TR_IMAGE_PFM;
     }
     return TR_IMAGE_UNKNOWN;
-}
-
-uint8_t tr_tonemap_srgb8(float linear, float exposure) {
-    float v = linear * exp2f(exposure);
-    if (!(v > 0.0f)) { /* also catches NaN */
-        return 0;
-    }
-    if (v >= 1.0f) {
-        return 255;
-    }
-    /* The sRGB transfer function (IEC 61966-2-1). */
-    float s = v <= 0.0031308f ? 12.92f * v : 1.055f * powf(v, 1.0f / 2.4f) - 0.055f;
-    return (uint8_t)(s * 255.0f + 0.5f);
 }
 
 /* A temporary file next to `path`, so that rename() stays on one file system. */
@@ -111,11 +99,11 @@ static int write_png_rows(FILE *fp, const tr_film *f, float exposure, uint8_t *r
     png_set_sRGB_gAMA_and_cHRM(png, info, PNG_sRGB_INTENT_PERCEPTUAL);
     png_write_info(png, info);
     for (uint32_t y = 0; y < f->height; ++y) {
-        for (uint32_t x = 0; x < f->width; ++x) {
-            tr_vec3 c = tr_film_pixel(f, x, y);
-            row[3 * x] = tr_tonemap_srgb8(c.x, exposure);
-            row[3 * x + 1] = tr_tonemap_srgb8(c.y, exposure);
-            row[3 * x + 2] = tr_tonemap_srgb8(c.z, exposure);
+        /* The viewer's transform too (post.h), so a PNG holds the bytes it showed. */
+        if (tr_tonemap_film(f, 0, y, f->width, 1, exposure, TR_PIXEL_RGB8, row,
+                            (size_t)f->width * 3, NULL) != TR_OK) {
+            png_destroy_write_struct(&png, &info);
+            return TR_ERR;
         }
         png_write_row(png, row);
     }
