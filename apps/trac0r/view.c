@@ -58,7 +58,7 @@ static void view_help(void) {
            "\n"
            "Interactive mode needs an X11 display (DISPLAY). Exit status: 0 on success, 2 on\n"
            "a bad command line or no display, 1 when rendering or writing fails.\n",
-           cli_common_help, VIEW_DEFAULT_FRAMES);
+           cli_common_help(), VIEW_DEFAULT_FRAMES);
 }
 
 static int set_render_config(const cli_common *c, tr_render_config *cfg) {

@@ -9,13 +9,11 @@
 #include "compat.h"
 #include "integrator_naive.h"
 #include "integrator_pt.h"
+#include "integrator_types.h"
 #include "rng.h"
 #include "sampling.h"
 #include "scene_view.h"
 #include "types.h"
-
-#define TR_INTEGRATOR_NAIVE 0
-#define TR_INTEGRATOR_PT 1 /* next-event estimation + MIS (integrator_pt.h) */
 
 /* Radiance of sample `sample` of pixel (x, y), with jitter inside the pixel. The random
  * stream depends only on (seed, pixel index, sample). */

@@ -1,9 +1,10 @@
 /* material_types.h - the one list of material types.
  *
- * Each row is X(NAME, value, keys required in a scene file, keys optional there) and
- * generates the TR_MATERIAL_NAME enum constant (numbered as in the thesis, listing 2) here,
- * and on the host the scene-file name (the lower-case NAME), the keys json.c accepts and
- * the validation of src/scene/material_registry.c. A new material type is one row here
+ * Each row is X(NAME, value, "scene-file name", keys required in a scene file, keys
+ * optional there) and generates the TR_MATERIAL_NAME enum constant (numbered as in the
+ * thesis, listing 2) here, and on the host the name tables (src/util/registry.c), the keys
+ * json.c accepts and the validation of src/scene/material_registry.c. Rows are listed in
+ * the order messages and documentation name them. A new material type is one row here
  * plus its case in tr_material_eval (material_eval.h) and its BSDF (bsdf.h; material.h
  * for the naive integrator). The key bits are TR_MATERIAL_KEY_* below; "type" is always
  * allowed. Valid C99 and OpenCL C: the kernel uses the enum only. */
@@ -22,14 +23,14 @@
 
 /* clang-format off */
 #define TR_MATERIAL_TYPES(X)                                                                 \
-    X(EMITTER, 1, TR_MATERIAL_KEY_LIGHT_COLOR | TR_MATERIAL_KEY_EMITTANCE,                   \
+    X(EMITTER, 1, "emitter", TR_MATERIAL_KEY_LIGHT_COLOR | TR_MATERIAL_KEY_EMITTANCE,        \
       TR_MATERIAL_KEY_TWO_SIDED)                                                             \
-    X(DIFFUSE, 2, TR_MATERIAL_KEY_COLOR, 0u)                                                 \
-    X(GLASS,   3, TR_MATERIAL_KEY_COLOR | TR_MATERIAL_KEY_IOR, 0u)                           \
-    X(GLOSSY,  4, TR_MATERIAL_KEY_COLOR | TR_MATERIAL_KEY_ROUGHNESS, 0u)
+    X(DIFFUSE, 2, "diffuse", TR_MATERIAL_KEY_COLOR, 0u)                                      \
+    X(GLASS,   3, "glass",   TR_MATERIAL_KEY_COLOR | TR_MATERIAL_KEY_IOR, 0u)                \
+    X(GLOSSY,  4, "glossy",  TR_MATERIAL_KEY_COLOR | TR_MATERIAL_KEY_ROUGHNESS, 0u)
 /* clang-format on */
 
-#define TR_MATERIAL_ENUM_ROW(name, value, required, optional) TR_MATERIAL_##name = value,
+#define TR_MATERIAL_ENUM_ROW(id, value, name, required, optional) TR_MATERIAL_##id = value,
 enum tr_material_type { TR_MATERIAL_TYPES(TR_MATERIAL_ENUM_ROW) };
 #undef TR_MATERIAL_ENUM_ROW
 
