@@ -5,8 +5,8 @@
  * thesis, listing 2) here, and on the host the name tables (src/util/registry.c), the keys
  * json.c accepts and the validation of src/scene/material_registry.c. Rows are listed in
  * the order messages and documentation name them. A new material type is one row here
- * plus its case in tr_material_eval (material_eval.h) and its BSDF (bsdf.h; material.h
- * for the naive integrator). The key bits are TR_MATERIAL_KEY_* below; "type" is always
+ * plus its BSDF (bsdf.h for pt, material.h for naive); parameters that vary over the
+ * surface also go through tr_material_eval (material_eval.h). The key bits are TR_MATERIAL_KEY_* below; "type" is always
  * allowed. Valid C99 and OpenCL C: the kernel uses the enum only. */
 #ifndef TR_KERNEL_MATERIAL_TYPES_H
 #define TR_KERNEL_MATERIAL_TYPES_H

@@ -544,8 +544,8 @@ static int parse_materials(jctx *c, const cJSON *mats) {
             char pt[PATH_MAX_LEN], tb[40], expected[128];
             path_key(pt, p, "type");
             const char *near = closest(type, types, ntypes);
-            snprintf(expected, sizeof expected, "expected ");
-            tr_names_join(expected + 9, sizeof expected - 9, types, ntypes, " or ");
+            size_t len = (size_t)snprintf(expected, sizeof expected, "expected ");
+            tr_names_join(expected + len, sizeof expected - len, types, ntypes, " or ");
             return jerr(c, pt, "unknown material type '%s' (%s%s%s)", shown(type, tb, sizeof tb),
                         near ? "did you mean '" : expected, near ? near : "", near ? "'?" : "");
         }
