@@ -90,7 +90,7 @@ check subdivisions.json ": shapes[2].subdivisions: expected an integer in 0..9 (
 check budget.json ": shapes[5]: the scene would have more than 16777216 triangles"
 check no_shapes.json ": the scene has no triangles"
 # Render defaults.
-check accel.json ": render.accel: unknown acceleration structure 'bhv' (expected bvh, bvh2, flat or embree; did you mean 'bvh'?)"
+check accel.json ": render.accel: unknown acceleration structure 'bhv' (expected bvh, flat, embree or bvh2; did you mean 'bvh'?)"
 expect_bad integrator.json ": render.integrator: unknown integrator 'magic' (available: pt, naive)"
 # Meshes.
 check missing_mesh.json ": meshes[0].path: cannot open '$BAD/no-such-model.obj': No such file or directory"

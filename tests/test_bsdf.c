@@ -28,14 +28,16 @@
 #define PI_D 3.14159265358979323846
 #define NSIGMA 5.0
 
-static tr_material mat(uint32_t type, tr_vec3 color, float roughness, float ior) {
+/* A material's BSDF parameters on the plane z = 0 with normal +z, the normal every case
+ * below uses. */
+static tr_bsdf_params mat(uint32_t type, tr_vec3 color, float roughness, float ior) {
     tr_material m;
     memset(&m, 0, sizeof m);
     m.type = type;
     m.color = color;
     m.roughness = roughness;
     m.ior = ior;
-    return m;
+    return tr_material_params(&m, v3(0.0f, 0.0f, 1.0f));
 }
 
 static tr_vec3 dir_of(double cos_t, double phi) {
@@ -46,8 +48,7 @@ static tr_vec3 dir_of(double cos_t, double phi) {
 enum { NC = 16, NP = 24, SUB = 24 };
 
 /* (a) + (b) for one material and incident angle. */
-static void chi2_case(const tr_material *m, double theta_o_deg, uint64_t seed) {
-    const tr_vec3 n = v3(0.0f, 0.0f, 1.0f);
+static void chi2_case(const tr_bsdf_params *m, double theta_o_deg, uint64_t seed) {
     const double to = theta_o_deg * PI_D / 180.0;
     const tr_vec3 wo = v3((float)sin(to), 0.0f, (float)cos(to));
     /* Expected fraction per bin: midpoint rule on SUB x SUB cells in (theta, phi), with
@@ -64,7 +65,7 @@ static void chi2_case(const tr_material *m, double theta_o_deg, uint64_t seed) {
                 double th = th0 + ((double)a + 0.5) * dth;
                 for (int b = 0; b < SUB; ++b) {
                     double phi = 2.0 * PI_D * ((double)j + ((double)b + 0.5) / SUB) / NP;
-                    sum += tr_bsdf_pdf(m, n, wo, dir_of(cos(th), phi)) * sin(th) * dth;
+                    sum += tr_bsdf_pdf(m, wo, dir_of(cos(th), phi)) * sin(th) * dth;
                 }
             }
             expect[i * NP + j] = sum * (2.0 * PI_D / NP) / SUB;
@@ -83,7 +84,7 @@ static void chi2_case(const tr_material *m, double theta_o_deg, uint64_t seed) {
     int inconsistent = 0;
     for (int k = 0; k < N; ++k) {
         tr_scatter s;
-        if (!tr_bsdf_sample(m, n, wo, &rng, &s)) {
+        if (!tr_bsdf_sample(m, wo, &rng, &s)) {
             count[NC * NP] += 1;
             continue;
         }
@@ -97,8 +98,8 @@ static void chi2_case(const tr_material *m, double theta_o_deg, uint64_t seed) {
         j = j < 0 ? 0 : j >= NP ? NP - 1 : j;
         count[i * NP + j] += 1;
         /* (b) */
-        float pdf = tr_bsdf_pdf(m, n, wo, s.wi);
-        tr_vec3 f = tr_bsdf_eval(m, n, wo, s.wi);
+        float pdf = tr_bsdf_pdf(m, wo, s.wi);
+        tr_vec3 f = tr_bsdf_eval(m, wo, s.wi);
         float ci = s.wi.z;
         tr_vec3 w = v3_scale(f, ci / pdf);
         if (s.delta || !(fabsf(pdf - s.pdf) <= 1e-4f * pdf) ||
@@ -139,15 +140,14 @@ static void chi2_case(const tr_material *m, double theta_o_deg, uint64_t seed) {
 }
 
 /* (c) */
-static void reciprocity(const tr_material *m) {
-    const tr_vec3 n = v3(0.0f, 0.0f, 1.0f);
+static void reciprocity(const tr_bsdf_params *m) {
     tr_rng rng;
     tr_rng_init(&rng, 77, 3, 4);
     int bad = 0, nonzero = 0;
     for (int k = 0; k < 20000; ++k) {
         tr_vec3 a = dir_of(tr_rng_float(&rng), 2.0 * PI_D * tr_rng_float(&rng));
         tr_vec3 b = dir_of(tr_rng_float(&rng), 2.0 * PI_D * tr_rng_float(&rng));
-        tr_vec3 fab = tr_bsdf_eval(m, n, a, b), fba = tr_bsdf_eval(m, n, b, a);
+        tr_vec3 fab = tr_bsdf_eval(m, a, b), fba = tr_bsdf_eval(m, b, a);
         nonzero += fab.x > 0.0f;
         float scale = fmaxf(fab.x, 1e-6f);
         if (!(fabsf(fab.x - fba.x) <= 1e-3f * scale && fabsf(fab.y - fba.y) <= 1e-3f * scale &&
@@ -160,9 +160,8 @@ static void reciprocity(const tr_material *m) {
 }
 
 /* (d) Albedo by the sampler (mean weight) and by uniform hemisphere sampling of f cos. */
-static void albedo(const tr_material *m, double theta_o_deg, double *sampled, double *se_sampled,
+static void albedo(const tr_bsdf_params *m, double theta_o_deg, double *sampled, double *se_sampled,
                    double *uniform, double *se_uniform) {
-    const tr_vec3 n = v3(0.0f, 0.0f, 1.0f);
     const double to = theta_o_deg * PI_D / 180.0;
     const tr_vec3 wo = v3((float)sin(to), 0.0f, (float)cos(to));
     const int N = 400000;
@@ -171,11 +170,11 @@ static void albedo(const tr_material *m, double theta_o_deg, double *sampled, do
     double s1 = 0.0, s2 = 0.0, u1 = 0.0, u2 = 0.0;
     for (int k = 0; k < N; ++k) {
         tr_scatter s;
-        double w = tr_bsdf_sample(m, n, wo, &rng, &s) ? s.weight.x : 0.0;
+        double w = tr_bsdf_sample(m, wo, &rng, &s) ? s.weight.x : 0.0;
         s1 += w;
         s2 += w * w;
         tr_vec3 d = dir_of(tr_rng_float(&rng), 2.0 * PI_D * tr_rng_float(&rng));
-        double v = tr_bsdf_eval(m, n, wo, d).x * d.z * 2.0 * PI_D;
+        double v = tr_bsdf_eval(m, wo, d).x * d.z * 2.0 * PI_D;
         u1 += v;
         u2 += v * v;
     }
@@ -186,7 +185,7 @@ static void albedo(const tr_material *m, double theta_o_deg, double *sampled, do
 }
 
 static void furnace(void) {
-    tr_material diffuse = mat(TR_MATERIAL_DIFFUSE, v3s(1.0f), 0.0f, 1.0f);
+    tr_bsdf_params diffuse = mat(TR_MATERIAL_DIFFUSE, v3s(1.0f), 0.0f, 1.0f);
     double a, sa, u, su;
     albedo(&diffuse, 40.0, &a, &sa, &u, &su);
     CHECK_NEAR(a, 1.0, 1e-6, "white Lambertian albedo (every weight is 1)");
@@ -196,7 +195,7 @@ static void furnace(void) {
     const double theta[] = {0.0, 45.0, 80.0};
     double loss_smooth_normal = 0.0, loss_rough_grazing = 0.0;
     for (int r = 0; r < 4; ++r) {
-        tr_material g = mat(TR_MATERIAL_GLOSSY, v3s(1.0f), rough[r], 1.0f);
+        tr_bsdf_params g = mat(TR_MATERIAL_GLOSSY, v3s(1.0f), rough[r], 1.0f);
         for (int t = 0; t < 3; ++t) {
             albedo(&g, theta[t], &a, &sa, &u, &su);
             CHECK(a <= 1.0 + NSIGMA * sa, "GGX r=%.1f theta %.0f: albedo %.5f > 1",
@@ -222,10 +221,9 @@ static void furnace(void) {
 }
 
 static void delta_lobes(void) {
-    const tr_vec3 n = v3(0.0f, 0.0f, 1.0f);
     /* Smooth glass from outside at 50 degrees and from inside at 30 (below TIR) and 60
      * (beyond the critical angle 41.8 degrees for ior 1.5). */
-    tr_material glass = mat(TR_MATERIAL_GLASS, v3s(1.0f), 0.0f, 1.5f);
+    tr_bsdf_params glass = mat(TR_MATERIAL_GLASS, v3s(1.0f), 0.0f, 1.5f);
     const double angles[] = {50.0, -30.0, -60.0};
     for (int c = 0; c < 3; ++c) {
         double th = fabs(angles[c]) * PI_D / 180.0;
@@ -240,7 +238,7 @@ static void delta_lobes(void) {
         int refl = 0, bad = 0;
         for (int k = 0; k < N; ++k) {
             tr_scatter s;
-            if (!tr_bsdf_sample(&glass, n, wo, &rng, &s) || !s.delta || s.weight.x != 1.0f ||
+            if (!tr_bsdf_sample(&glass, wo, &rng, &s) || !s.delta || s.weight.x != 1.0f ||
                 s.weight.y != 1.0f || s.weight.z != 1.0f) {
                 ++bad;
                 continue;
@@ -264,17 +262,17 @@ static void delta_lobes(void) {
         if (angles[c] == -60.0) {
             CHECK(refl == N, "total internal reflection: %d of %d reflected", refl, N);
         }
-        CHECK(tr_bsdf_pdf(&glass, n, wo, v3(0, 0, 1)) == 0.0f &&
-                  tr_bsdf_eval(&glass, n, wo, v3(0, 0, 1)).x == 0.0f,
+        CHECK(tr_bsdf_pdf(&glass, wo, v3(0, 0, 1)) == 0.0f &&
+                  tr_bsdf_eval(&glass, wo, v3(0, 0, 1)).x == 0.0f,
               "glass: eval and pdf of a delta lobe are 0");
     }
     /* Roughness 0: a mirror with Schlick's Fresnel, on either side of the normal. */
-    tr_material mirror = mat(TR_MATERIAL_GLOSSY, v3(0.9f, 0.5f, 0.2f), 0.0f, 1.0f);
+    tr_bsdf_params mirror = mat(TR_MATERIAL_GLOSSY, v3(0.9f, 0.5f, 0.2f), 0.0f, 1.0f);
     tr_vec3 wo = v3_normalize(v3(0.3f, -0.4f, -0.8f));
     tr_rng rng;
     tr_rng_init(&rng, 5, 5, 5);
     tr_scatter s;
-    int ok = tr_bsdf_sample(&mirror, n, wo, &rng, &s);
+    int ok = tr_bsdf_sample(&mirror, wo, &rng, &s);
     tr_vec3 fr = tr_fresnel_schlick(mirror.color, fabsf(wo.z));
     CHECK(ok && s.delta && fabsf(s.wi.x + wo.x) < 1e-6f && fabsf(s.wi.y + wo.y) < 1e-6f &&
               fabsf(s.wi.z - wo.z) < 1e-6f && fabsf(s.weight.x - fr.x) < 1e-6f &&
@@ -283,15 +281,15 @@ static void delta_lobes(void) {
           (double)s.weight.x);
     CHECK(tr_bsdf_is_delta(&mirror) && tr_bsdf_is_delta(&glass), "delta materials");
     /* An emitter's BSDF is black. */
-    tr_material em = mat(TR_MATERIAL_EMITTER, v3s(1.0f), 0.0f, 1.0f);
+    tr_bsdf_params em = mat(TR_MATERIAL_EMITTER, v3s(1.0f), 0.0f, 1.0f);
     em.emittance = 5.0f;
-    CHECK(!tr_bsdf_sample(&em, n, wo, &rng, &s) && tr_bsdf_eval(&em, n, wo, v3(0, 0, 1)).x == 0.0f,
+    CHECK(!tr_bsdf_sample(&em, wo, &rng, &s) && tr_bsdf_eval(&em, wo, v3(0, 0, 1)).x == 0.0f,
           "emitters do not scatter");
     /* One-sided emission, towards the normal's side only, unless two-sided. */
-    CHECK(tr_emitted(&em, n, v3(0, 0, 1)).x == 5.0f && tr_emitted(&em, n, v3(0, 0, -1)).x == 0.0f,
+    CHECK(tr_emitted(&em, v3(0, 0, 1)).x == 5.0f && tr_emitted(&em, v3(0, 0, -1)).x == 0.0f,
           "one-sided emitter");
     em.flags = TR_MATERIAL_TWO_SIDED;
-    CHECK(tr_emitted(&em, n, v3(0, 0, -1)).x == 5.0f, "two-sided emitter");
+    CHECK(tr_emitted(&em, v3(0, 0, -1)).x == 5.0f, "two-sided emitter");
 }
 
 static void alpha_mapping(void) {
@@ -309,14 +307,14 @@ static void alpha_mapping(void) {
 }
 
 int main(void) {
-    tr_material diffuse = mat(TR_MATERIAL_DIFFUSE, v3(0.8f, 0.5f, 0.3f), 0.0f, 1.0f);
+    tr_bsdf_params diffuse = mat(TR_MATERIAL_DIFFUSE, v3(0.8f, 0.5f, 0.3f), 0.0f, 1.0f);
     const double theta[] = {0.0, 30.0, 60.0, 80.0};
     for (int t = 0; t < 4; ++t) {
         chi2_case(&diffuse, theta[t], 11 + (uint64_t)t);
     }
     const float rough[] = {0.15f, 0.4f, 0.7f, 1.0f};
     for (int r = 0; r < 4; ++r) {
-        tr_material g = mat(TR_MATERIAL_GLOSSY, v3(0.9f, 0.7f, 0.4f), rough[r], 1.0f);
+        tr_bsdf_params g = mat(TR_MATERIAL_GLOSSY, v3(0.9f, 0.7f, 0.4f), rough[r], 1.0f);
         for (int t = 0; t < 4; ++t) {
             chi2_case(&g, theta[t], 100 + (uint64_t)(10 * r + t));
         }

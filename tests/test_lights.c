@@ -125,7 +125,8 @@ static void table(void) {
     CHECK(v.light_count == 0 && s.lights == NULL, "no emitters, no table");
     uint32_t t;
     tr_vec3 p;
-    CHECK(tr_light_sample(&v, &rng, &t, &p) == 0.0f, "sampling an empty table gives pdf 0");
+    float u, w;
+    CHECK(tr_light_sample(&v, &rng, &t, &p, &u, &w) == 0.0f, "sampling an empty table gives pdf 0");
     tr_scene_free(&s);
 }
 
@@ -181,12 +182,13 @@ static void irradiance(void) {
         for (int k = 0; k < N; ++k) {
             uint32_t t;
             tr_vec3 y;
-            float pa = tr_light_sample(&v, &rng, &t, &y);
+            float bu, bv;
+            float pa = tr_light_sample(&v, &rng, &t, &y, &bu, &bv);
             tr_vec3 d = v3_sub(y, x);
             float r2 = v3_dot(d, d);
             tr_vec3 w = v3_scale(d, 1.0f / sqrtf(r2));
-            tr_material m = s.materials[s.triangles[t].material];
-            double le = tr_emitted(&m, s.triangles[t].normal, v3_neg(w)).x;
+            tr_bsdf_params m = tr_material_eval(&v, t, bu, bv, y, s.triangles[t].normal, w);
+            double le = tr_emitted(&m, v3_neg(w)).x;
             double cos_x = w.y > 0.0f ? w.y : 0.0;
             double cos_l = fabs(v3_dot(w, s.triangles[t].normal));
             double e = le * cos_x * cos_l / ((double)r2 * pa);
@@ -216,7 +218,8 @@ static void builtin_lamp(void) {
               (double)t->normal.x, (double)t->normal.y, (double)t->normal.z);
         CHECK(m->flags & TR_MATERIAL_TWO_SIDED, "the built-in lamp is two-sided");
         tr_vec3 down = v3(0.0f, -1.0f, 0.0f);
-        CHECK(tr_emitted(m, t->normal, down).x > 0.0f, "the lamp shines down into the box");
+        tr_bsdf_params b = tr_material_params(m, t->normal);
+        CHECK(tr_emitted(&b, down).x > 0.0f, "the lamp shines down into the box");
     }
     tr_scene_free(&s);
 }

@@ -406,6 +406,7 @@ static void scatter_case(double theta_deg, int entering, uint64_t seed) {
     const tr_material glass = tr_material_glass(v3s(1.0f), ior);
     /* A tilted normal and a tangent, so that nothing is axis-aligned. */
     const tr_vec3 n = v3_normalize(v3(0.3f, 1.0f, -0.2f));
+    const tr_bsdf_params gb = tr_material_params(&glass, n);
     const tr_vec3 t = v3_normalize(v3_cross(n, v3(0.0f, 0.0f, 1.0f)));
     const double th = theta_deg * DEG;
     /* nf: the normal on the incoming side. */
@@ -428,7 +429,7 @@ static void scatter_case(double theta_deg, int entering, uint64_t seed) {
         tr_rng rng;
         tr_rng_init(&rng, seed, (uint64_t)i, 0);
         tr_vec3 o, nd, w;
-        int rc = tr_material_scatter_naive(&glass, d, p, n, &rng, &o, &nd, &w);
+        int rc = tr_material_scatter_naive(&gb, d, p, &rng, &o, &nd, &w);
         if (rc != TR_SCATTER_CONTINUE) {
             ++bad_rc;
             continue;
@@ -502,8 +503,8 @@ static void test_glass_scatter(void) {
         tr_rng_init(&rng, 4242, (uint64_t)i, 0);
         tr_vec3 o, nd, w;
         tr_vec3 d = v3_normalize(v3(0.3f, -1.0f, 0.1f));
-        int rc = tr_material_scatter_naive(&tinted, d, v3s(0.0f), v3(0.0f, 1.0f, 0.0f), &rng, &o,
-                                           &nd, &w);
+        const tr_bsdf_params tb = tr_material_params(&tinted, v3(0.0f, 1.0f, 0.0f));
+        int rc = tr_material_scatter_naive(&tb, d, v3s(0.0f), &rng, &o, &nd, &w);
         bad += !(rc == TR_SCATTER_CONTINUE && w.x == 0.5f && w.y == 0.5f && w.z == 0.9f);
     }
     CHECK(bad == 0, "tinted glass: %d samples with a weight other than the colour", bad);
@@ -572,8 +573,10 @@ static void slab_case(double theta_deg, int N, uint64_t seed) {
             const tr_triangle *tri = &s.triangles[hit.triangle];
             tr_vec3 p = v3_madd(ray.origin, ray.dir, hit.t);
             tr_vec3 no, nd, w;
-            if (tr_material_scatter_naive(&s.materials[tri->material], ray.dir, p, tri->normal,
-                                          &rng, &no, &nd, &w) != TR_SCATTER_CONTINUE) {
+            tr_bsdf_params bp =
+                tr_material_eval(&view, hit.triangle, hit.u, hit.v, p, tri->normal, ray.dir);
+            if (tr_material_scatter_naive(&bp, ray.dir, p, &rng, &no, &nd, &w) !=
+                TR_SCATTER_CONTINUE) {
                 break;
             }
             ray = tr_ray_make(no, nd, 0.0f, TR_INFINITY);

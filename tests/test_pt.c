@@ -76,24 +76,25 @@ static void mis_weights(void) {
             continue;
         }
         const tr_triangle *tri = &s.triangles[hit.triangle];
-        tr_material m = s.materials[tri->material];
+        tr_vec3 p = v3_madd(r.origin, r.dir, hit.t);
+        tr_bsdf_params m = tr_material_eval(&v, hit.triangle, hit.u, hit.v, p, tri->normal, d);
         if (tr_bsdf_is_delta(&m) || m.type == TR_MATERIAL_EMITTER) {
             continue;
         }
-        tr_vec3 p = v3_madd(r.origin, r.dir, hit.t);
         tr_vec3 wo = v3_neg(d);
         for (int strategy = 0; strategy < 2; ++strategy) {
             tr_vec3 wi;
             if (strategy == 0) { /* light sample */
                 uint32_t lt;
                 tr_vec3 y;
-                if (tr_light_sample(&v, &rng, &lt, &y) <= 0.0f) {
+                float lu, lv;
+                if (tr_light_sample(&v, &rng, &lt, &y, &lu, &lv) <= 0.0f) {
                     continue;
                 }
                 wi = v3_normalize(v3_sub(y, p));
             } else { /* BSDF sample */
                 tr_scatter bs;
-                if (!tr_bsdf_sample(&m, tri->normal, wo, &rng, &bs)) {
+                if (!tr_bsdf_sample(&m, wo, &rng, &bs)) {
                     continue;
                 }
                 wi = bs.wi;
@@ -108,18 +109,18 @@ static void mis_weights(void) {
                 continue;
             }
             const tr_triangle *lt = &s.triangles[h2.triangle];
-            tr_material lm = s.materials[lt->material];
-            tr_vec3 le = tr_emitted(&lm, lt->normal, v3_neg(wi));
-            float pb = tr_bsdf_pdf(&m, tri->normal, wo, wi);
+            tr_vec3 y = v3_madd(o, wi, h2.t);
+            tr_bsdf_params lm = tr_material_eval(&v, h2.triangle, h2.u, h2.v, y, lt->normal, wi);
+            tr_vec3 le = tr_emitted(&lm, v3_neg(wi));
+            float pb = tr_bsdf_pdf(&m, wo, wi);
             if (le.x <= 0.0f || pb <= 0.0f) {
                 continue;
             }
-            tr_vec3 y = v3_madd(o, wi, h2.t);
             float dist = v3_length(v3_sub(y, p));
             /* As next-event estimation computes it (distance from the vertex) ... */
-            float pl_nee = tr_pt_light_pdf(&v, &lm, lt, wi, dist);
+            float pl_nee = tr_pt_light_pdf(&v, lt, wi, dist);
             /* ... and as the BSDF strategy's hit computes it (the traced distance). */
-            float pl_hit = tr_pt_light_pdf(&v, &lm, lt, wi, h2.t);
+            float pl_hit = tr_pt_light_pdf(&v, lt, wi, h2.t);
             double sum = (double)tr_mis_power(pl_nee, pb) + (double)tr_mis_power(pb, pl_hit);
             double dev = fabs(sum - 1.0);
             worst = dev > worst ? dev : worst;

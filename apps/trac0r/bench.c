@@ -44,7 +44,7 @@ static void bench_frame_help(void) {
            "\n"
            "The thesis (table 3.2) reports 11.6 FPS for this scene at 800x600 on an NVIDIA\n"
            "GeForce GTX 570.\n",
-           cli_common_help);
+           cli_common_help());
 }
 
 static int bench_frame(int argc, char **argv) {
@@ -105,8 +105,8 @@ static int bench_frame(int argc, char **argv) {
     cli_describe_accel(accel, sizeof accel, &scene);
     printf("bench frame: %s, %ux%u, 1 spp/frame, integrator %s, max depth %d, %s, "
            "%u triangles, accel %s\n",
-           c.scene, c.width, c.height, c.integrator == TR_INTEGRATOR_PT ? "pt" : "naive",
-           c.max_depth, be.name, scene.triangle_count, accel);
+           c.scene, c.width, c.height, tr_integrator_name(c.integrator), c.max_depth, be.name,
+           scene.triangle_count, accel);
     uint64_t rays = 0;
     double total = 0.0;
     rc = CLI_OK;

@@ -30,10 +30,6 @@ typedef struct conv_run {
     int n;
 } conv_run;
 
-static const char *integrator_name(int integrator) {
-    return integrator == TR_INTEGRATOR_PT ? "pt" : "naive";
-}
-
 static void convergence_help(void) {
     printf("Usage: trac0r bench convergence [SCENE] [options]\n"
            "\n"
@@ -101,12 +97,12 @@ static int parse_methods(cli_args *a, int m[], int *n) {
     *n = 0;
     for (char *save = NULL, *tok = strtok_r(buf, ",", &save); tok;
          tok = strtok_r(NULL, ",", &save)) {
-        int k = strcmp(tok, "naive") == 0 ? TR_INTEGRATOR_NAIVE
-                : strcmp(tok, "pt") == 0  ? TR_INTEGRATOR_PT
-                                          : -1;
+        int k = tr_integrator_from_name(tok);
         if (k < 0 || *n == 2) {
-            return cli_error(a, "%s: unknown integrator '%s' in '%s' (available: naive, pt)",
-                             a->opt, tok, a->value);
+            char names[128];
+            cli_integrator_list(names, sizeof names);
+            return cli_error(a, "%s: unknown integrator '%s' in '%s' (available: %s)", a->opt, tok,
+                             a->value, names);
         }
         m[(*n)++] = k;
     }
@@ -402,7 +398,7 @@ int bench_convergence(int argc, char **argv) {
                     done[mi] = 1;
                     printf("%ux%u %-5s: %u spp in %.2f s -> PSNR %.2f dB (raw %.2f), RMSE "
                            "%.5f, relMSE %.5f\n",
-                           c.width, c.height, integrator_name(r->integrator), p->spp, p->seconds,
+                           c.width, c.height, tr_integrator_name(r->integrator), p->spp, p->seconds,
                            p->psnr, p->raw.psnr, p->raw.rmse, p->raw.relmse);
                     fflush(stdout);
                 }
@@ -436,7 +432,7 @@ int bench_convergence(int argc, char **argv) {
         const conv_run *r = &runs[i];
         char size[32];
         snprintf(size, sizeof size, "%ux%u", r->width, r->height);
-        printf("%-9s %-6s", size, integrator_name(r->integrator));
+        printf("%-9s %-6s", size, tr_integrator_name(r->integrator));
         for (int k = 0; k < CONV_THRESHOLDS; ++k) {
             double t = reach(r, conv_db[k], 0), s = reach(r, conv_db[k], 1);
             char cell[64];
@@ -490,7 +486,7 @@ int bench_convergence(int argc, char **argv) {
         const conv_run *r = &runs[i];
         for (int k = 0; k < r->n; ++k) {
             const conv_point *p = &r->pt[k];
-            fprintf(fp, "%s,%u,%u,%u,%.5f,%.6g,%.6g,%.4f,%.4f\n", integrator_name(r->integrator),
+            fprintf(fp, "%s,%u,%u,%u,%.5f,%.6g,%.6g,%.4f,%.4f\n", tr_integrator_name(r->integrator),
                     r->width, r->height, p->spp, p->seconds, p->raw.rmse, p->raw.relmse,
                     p->raw.psnr, p->psnr);
         }
@@ -542,7 +538,7 @@ int bench_convergence(int argc, char **argv) {
         for (int i = 0; i < nsizes * nmethods; ++i) {
             len += (size_t)snprintf(
                 script + len, cap - len, "%s$d%d using %d:3 with linespoints lw 2 title '%s %ux%u'",
-                i ? ", " : "", i, panel == 0 ? 2 : 1, integrator_name(runs[i].integrator),
+                i ? ", " : "", i, panel == 0 ? 2 : 1, tr_integrator_name(runs[i].integrator),
                 runs[i].width, runs[i].height);
         }
         len += (size_t)snprintf(script + len, cap - len,

@@ -1,6 +1,7 @@
 /* cli.c - option parsing shared by the trac0r subcommands. */
 #include "cli.h"
 #include "devices.h"
+#include "trac0r/registry.h"
 
 #include "accel/wbvh.h" /* tr_wbvh_isa, TR_WBVH_WIDTH: the wide BVH's summary */
 
@@ -13,7 +14,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-const char cli_common_help[] =
+static const char help_before[] =
     "  --scene SCENE        scene to render: builtin:cornell (the thesis's Cornell box,\n"
     "                       the default), builtin:cornell-mirror (its glossy objects\n"
     "                       as perfect mirrors), builtin:cornell-diffuse (every object\n"
@@ -29,17 +30,30 @@ const char cli_common_help[] =
     "                       integrator's Russian roulette reaches at most D-2 surfaces\n"
     "  --seed S             random seed, 0..2^64-1 (default 0); the same seed gives the\n"
     "                       same image for any thread count\n"
-    "  --threads T          CPU threads, 0..1024 (default 0: one per core)\n"
-    "  --integrator NAME    pt (the default): path tracing with next-event estimation,\n"
-    "                       MIS and GGX glossy; naive: the thesis's path tracer\n"
-    "  --accel NAME         acceleration structure: bvh (binned-SAH BVH, the default),\n"
-    "                       flat (the thesis's list of per-shape boxes) or embree (Intel\n"
-    "                       Embree 3, in builds that found it); bvh2 traces the binary\n"
-    "                       BVH without its SIMD wide form, for comparisons\n"
+    "  --threads T          CPU threads, 0..1024 (default 0: one per core)\n";
+static const char help_after[] =
     "  --device DEV         cpu (the default), opencl (OpenCL device 0) or opencl:N\n"
     "                       (device N of 'trac0r info --devices'); the device traces\n"
     "                       the flat structure or the BVH (bvh2 and embree scenes: the\n"
     "                       binary BVH)\n";
+
+void cli_integrator_list(char *buf, size_t size) {
+    size_t count;
+    const char *const *names = tr_integrator_names(&count);
+    tr_names_join(buf, size, names, count, NULL);
+}
+
+void cli_accel_list(char *buf, size_t size) {
+    size_t count, n = 0;
+    const char *const *names = tr_accel_names(&count);
+    const char *avail[16];
+    for (size_t i = 0; i < count && n < 16; ++i) {
+        if (tr_accel_available((tr_accel_type)tr_accel_from_name(names[i]))) {
+            avail[n++] = names[i];
+        }
+    }
+    tr_names_join(buf, size, avail, n, NULL);
+}
 
 void cli_common_default(cli_common *c) {
     c->scene = "builtin:cornell";
@@ -53,6 +67,42 @@ void cli_common_default(cli_common *c) {
     c->given = 0;
     c->allow_dark = 0;
     snprintf(c->device, sizeof c->device, "cpu");
+}
+
+/* The integrator and accel options' text comes from the registries (trac0r/registry.h),
+ * so that --help lists every name the parser takes. */
+const char *cli_common_help(void) {
+    static char buf[4096];
+    if (buf[0]) {
+        return buf;
+    }
+    cli_common d;
+    cli_common_default(&d);
+    size_t used = (size_t)snprintf(buf, sizeof buf, "%s", help_before);
+    used += (size_t)snprintf(buf + used, sizeof buf - used,
+                             "  --integrator NAME    integrator (default %s):\n",
+                             tr_integrator_name(d.integrator));
+    size_t count;
+    const char *const *names = tr_integrator_names(&count);
+    for (size_t i = 0; i < count && used < sizeof buf; ++i) {
+        used += (size_t)snprintf(buf + used, sizeof buf - used, "%25s%-8s%s\n", "", names[i],
+                                 tr_integrator_description(tr_integrator_from_name(names[i])));
+    }
+    if (used < sizeof buf) {
+        used += (size_t)snprintf(buf + used, sizeof buf - used,
+                                 "  --accel NAME         acceleration structure (default %s):\n",
+                                 tr_accel_name(d.accel));
+    }
+    names = tr_accel_names(&count);
+    for (size_t i = 0; i < count && used < sizeof buf; ++i) {
+        tr_accel_type t = (tr_accel_type)tr_accel_from_name(names[i]);
+        used += (size_t)snprintf(buf + used, sizeof buf - used, "%25s%-8s%s\n", "", names[i],
+                                 tr_accel_description(t));
+    }
+    if (used < sizeof buf) {
+        snprintf(buf + used, sizeof buf - used, "%s", help_after);
+    }
+    return buf;
 }
 
 int cli_error(const cli_args *a, const char *fmt, ...) {
@@ -199,16 +249,15 @@ int cli_common_option(cli_args *a, cli_common *c) {
         if (cli_value(a) != CLI_OK) {
             return CLI_USAGE;
         }
-        if (strcmp(a->value, "naive") == 0) {
-            c->integrator = TR_INTEGRATOR_NAIVE;
+        int k = tr_integrator_from_name(a->value);
+        if (k >= 0) {
+            c->integrator = k;
             return CLI_OK;
         }
-        if (strcmp(a->value, "pt") == 0) {
-            c->integrator = TR_INTEGRATOR_PT;
-            return CLI_OK;
-        }
-        return cli_error(a, "--integrator: unknown integrator '%s' (available: pt, naive)",
-                         a->value);
+        char names[128];
+        cli_integrator_list(names, sizeof names);
+        return cli_error(a, "--integrator: unknown integrator '%s' (available: %s)", a->value,
+                         names);
     }
     if (cli_is(a, "--accel")) {
         c->given |= CLI_GIVEN_ACCEL;
@@ -217,10 +266,10 @@ int cli_common_option(cli_args *a, cli_common *c) {
         }
         int accel = tr_accel_from_name(a->value);
         if (accel < 0) {
+            char names[128];
+            cli_accel_list(names, sizeof names);
             return cli_error(a, "--accel: unknown acceleration structure '%s' (available: %s)",
-                             a->value,
-                             tr_accel_available(TR_ACCEL_TYPE_EMBREE) ? "bvh, flat, embree, bvh2"
-                                                                      : "bvh, flat, bvh2");
+                             a->value, names);
         }
         if (!tr_accel_available((tr_accel_type)accel)) {
             return cli_error(a,
@@ -290,14 +339,14 @@ int cli_load_scene_file(const cli_args *a, cli_common *c, tr_scene *scene, tr_sc
         c->accel = file->accel;
     }
     if (rc == CLI_OK && !(c->given & CLI_GIVEN_INTEGRATOR) && file->has_integrator) {
-        if (strcmp(file->integrator, "naive") == 0) {
-            c->integrator = TR_INTEGRATOR_NAIVE;
-        } else if (strcmp(file->integrator, "pt") == 0) {
-            c->integrator = TR_INTEGRATOR_PT;
+        int k = tr_integrator_from_name(file->integrator);
+        if (k >= 0) {
+            c->integrator = k;
         } else {
-            rc = cli_error(a,
-                           "%s: render.integrator: unknown integrator '%s' (available: pt, naive)",
-                           c->scene, file->integrator);
+            char names[128];
+            cli_integrator_list(names, sizeof names);
+            rc = cli_error(a, "%s: render.integrator: unknown integrator '%s' (available: %s)",
+                           c->scene, file->integrator, names);
         }
     }
     if (rc == CLI_OK && file->emissive_triangles == 0 && !file->allow_no_emitter &&

@@ -8,6 +8,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "trac0r/registry.h"
 #include "trac0r/scene_file.h"
 #include "trac0r/trac0r.h"
 
@@ -48,6 +49,9 @@ typedef struct cli_args {
 } cli_args;
 
 void cli_common_default(cli_common *c);
+/* The names --integrator takes, and the --accel names this build has, as "a, b, c". */
+void cli_integrator_list(char *buf, size_t size);
+void cli_accel_list(char *buf, size_t size);
 
 /* Prints "trac0r CMD: message" to stderr and returns CLI_USAGE. */
 int cli_error(const cli_args *a, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
@@ -91,6 +95,6 @@ int cli_load_scene_file(const cli_args *a, cli_common *c, tr_scene *scene, tr_sc
 void cli_describe_accel(char *buf, size_t n, const tr_scene *s);
 
 /* The help text of the common options. */
-extern const char cli_common_help[];
+const char *cli_common_help(void);
 
 #endif

@@ -95,11 +95,14 @@ int cmd_info(int argc, char **argv) {
     }
     printf("normals:    %u triangles with vertex normals\n", with_normals);
     if (!builtin) {
+        cli_common d; /* the integrator the command line defaults to */
+        cli_common_default(&d);
         printf("render:     %ux%u%s, %u spp%s, max depth %d%s, integrator %s%s, accel %s%s\n",
                f.width, f.height, f.has_width || f.has_height ? "" : " (default)", f.spp,
                f.has_spp ? "" : " (default)", f.max_depth, f.has_max_depth ? "" : " (default)",
-               f.has_integrator ? f.integrator : "pt", f.has_integrator ? "" : " (default)",
-               tr_accel_name(f.accel), f.has_accel ? "" : " (default)");
+               f.has_integrator ? f.integrator : tr_integrator_name(d.integrator),
+               f.has_integrator ? "" : " (default)", tr_accel_name(f.accel),
+               f.has_accel ? "" : " (default)");
     }
     printf("warnings:   %u\n", f.warning_count);
     for (uint32_t i = 0; i < f.warning_count; ++i) {

@@ -40,7 +40,7 @@ static void render_help(void) {
            "otherwise one summary line is printed when the image is written.\n"
            "Exit status: 0 on success, 2 on a bad command line, 1 when rendering or writing\n"
            "fails.\n",
-           cli_common_help);
+           cli_common_help());
 }
 
 /* --passes: "albedo,normal,depth,id" or "all" into TR_PASS_* bits. */

@@ -58,7 +58,7 @@ static void view_help(void) {
            "\n"
            "Interactive mode needs an X11 display (DISPLAY). Exit status: 0 on success, 2 on\n"
            "a bad command line or no display, 1 when rendering or writing fails.\n",
-           cli_common_help, VIEW_DEFAULT_FRAMES);
+           cli_common_help(), VIEW_DEFAULT_FRAMES);
 }
 
 /* Renders `frames` frames of the scene's own camera, as `trac0r render` does; returns

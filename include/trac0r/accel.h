@@ -12,14 +12,23 @@
 #include "kernel/types.h"
 #include "trac0r/error.h"
 
-typedef enum tr_accel_type {
-    TR_ACCEL_TYPE_FLAT = TR_ACCEL_FLAT,     /* the thesis's flat list of shape boxes */
-    TR_ACCEL_TYPE_BVH = TR_ACCEL_BVH,       /* binned-SAH binary BVH */
-    TR_ACCEL_TYPE_EMBREE = TR_ACCEL_EMBREE, /* Intel Embree 3 (CPU only; see tr_accel_available) */
-    /* The binary BVH alone, without the wide BVH the CPU traverses for TR_ACCEL_TYPE_BVH:
-     * for comparisons (--accel bvh2). Its scene view is a TR_ACCEL_BVH view. */
-    TR_ACCEL_TYPE_BVH2 = 3,
-} tr_accel_type;
+/* The one list of acceleration structures: X(NAME, value, "name", "description")
+ * generates tr_accel_type's TR_ACCEL_TYPE_NAME and, in src/util/registry.c, the names
+ * tr_accel_from_name / tr_accel_name know and the descriptions --help prints. Rows are in
+ * the order messages list them, the default first. BVH2 is the binary BVH alone, without
+ * the wide BVH the CPU traverses for TR_ACCEL_TYPE_BVH: its scene view is a TR_ACCEL_BVH
+ * view. Embree runs on the CPU only (see tr_accel_available). */
+/* clang-format off */
+#define TR_ACCEL_TYPES(X)                                                                    \
+    X(BVH,    TR_ACCEL_BVH,    "bvh",    "binned-SAH BVH (a SIMD wide BVH on the CPU)")                      \
+    X(FLAT,   TR_ACCEL_FLAT,   "flat",   "the thesis's list of per-shape boxes")             \
+    X(EMBREE, TR_ACCEL_EMBREE, "embree", "Intel Embree 3, in builds that found it")          \
+    X(BVH2,   3,               "bvh2",   "the binary BVH alone, for comparisons")
+/* clang-format on */
+
+#define TR_ACCEL_ENUM_ROW(id, value, name, description) TR_ACCEL_TYPE_##id = value,
+typedef enum tr_accel_type { TR_ACCEL_TYPES(TR_ACCEL_ENUM_ROW) } tr_accel_type;
+#undef TR_ACCEL_ENUM_ROW
 
 typedef struct tr_bvh {
     tr_bvh_node *nodes;
@@ -67,8 +76,10 @@ int tr_embree_build(tr_embree *e, const tr_triangle *tris, uint32_t n, tr_error 
 /* Releases the Embree scene and device; safe on a zeroed or already freed tr_embree. */
 void tr_embree_free(tr_embree *e);
 
-/* "flat" / "bvh" / "embree" / "bvh2" <-> tr_accel_type; returns -1 for an unknown name.
- * tr_accel_from_name knows "embree" even where it is not available. */
+/* Names <-> tr_accel_type, from TR_ACCEL_TYPES (src/util/registry.c; trac0r/registry.h
+ * has the name lists and descriptions): tr_accel_from_name returns -1 for an unknown name
+ * and knows "embree" even where it is not available; tr_accel_name returns "unknown" for
+ * a value not in the list. */
 int tr_accel_from_name(const char *name);
 const char *tr_accel_name(tr_accel_type type);
 /* 1 when tr_scene_commit can build this structure: flat, bvh and bvh2 always, embree only

@@ -26,6 +26,7 @@
 #include "trac0r/film.h"
 #include "trac0r/image.h"
 #include "trac0r/post.h"
+#include "trac0r/registry.h"
 #include "trac0r/render.h"
 #include "trac0r/scene.h"
 #include "trac0r/scene_file.h"

@@ -6,6 +6,7 @@
 #include "device/frame.h"
 #include "kernel/kernel.h"
 #include "scene/scene_internal.h"
+#include "trac0r/registry.h"
 #include "trac0r/render.h"
 
 tr_render_config tr_render_config_default(void) {
@@ -38,7 +39,7 @@ int tr_render_config_check(const tr_render_config *cfg, tr_error *err) {
         return tr_error_set(err, "max depth %d must be in 1..%d", cfg->max_depth,
                             TR_MAX_DEPTH_LIMIT);
     }
-    if (cfg->integrator != TR_INTEGRATOR_NAIVE && cfg->integrator != TR_INTEGRATOR_PT) {
+    if (tr_integrator_name(cfg->integrator) == NULL) {
         return tr_error_set(err, "unknown integrator %d", cfg->integrator);
     }
     if (cfg->stride < 1 || cfg->stride > 64) {

@@ -1,9 +1,10 @@
 /* bsdf.h - the physically based materials of the `pt` integrator: each exposes eval
  * (the BSDF value f), pdf (solid angle density of its sampler) and sample.
  *
- * Conventions: n is the triangle's geometric normal (either orientation), wo the unit
- * direction towards the previous vertex (minus the ray direction), wi the unit
- * direction towards the next one. Diffuse and glossy surfaces are two-sided: they
+ * Conventions: every function takes the surface's tr_bsdf_params from the material stage
+ * (material_eval.h), whose shading normal b->ns (either orientation) is the n below; wo
+ * is the unit direction towards the previous vertex (minus the ray direction), wi the
+ * unit direction towards the next one. Diffuse and glossy surfaces are two-sided: they
  * reflect on the side wo lies on. Glass needs n pointing outside (index 1).
  *
  *   diffuse  Lambertian, f = colour / pi, cosine-weighted sampling.
@@ -24,6 +25,7 @@
 
 #include "compat.h"
 #include "material.h"
+#include "material_eval.h"
 #include "rng.h"
 #include "sampling.h"
 #include "types.h"
@@ -54,7 +56,7 @@ TR_FN float tr_ggx_alpha(float roughness) {
 }
 
 /* Whether the material scatters only into isolated directions. */
-TR_FN int tr_bsdf_is_delta(const tr_material *m) {
+TR_FN int tr_bsdf_is_delta(const tr_bsdf_params *m) {
     return m->type == TR_MATERIAL_GLASS || (m->type == TR_MATERIAL_GLOSSY && m->roughness <= 0.0f);
 }
 
@@ -91,7 +93,7 @@ TR_FN tr_vec3 tr_bsdf_facing(tr_vec3 n, tr_vec3 wo) {
 }
 
 /* GGX conductor f for wo, wi on the side of the unit normal nf (cosines > 0). */
-TR_FN tr_vec3 tr_ggx_eval(const tr_material *m, tr_vec3 nf, tr_vec3 wo, tr_vec3 wi) {
+TR_FN tr_vec3 tr_ggx_eval(const tr_bsdf_params *m, tr_vec3 nf, tr_vec3 wo, tr_vec3 wi) {
     float co = v3_dot(wo, nf), ci = v3_dot(wi, nf);
     if (co <= 0.0f || ci <= 0.0f) {
         return v3s(0.0f);
@@ -106,7 +108,7 @@ TR_FN tr_vec3 tr_ggx_eval(const tr_material *m, tr_vec3 nf, tr_vec3 wo, tr_vec3 
 
 /* Pdf of the visible-normal sampler: G1(wo) D(h) / (4 cos_o) (Heitz 2018, eq. 17 with
  * the reflection Jacobian 1 / (4 wo.h)). */
-TR_FN float tr_ggx_pdf(const tr_material *m, tr_vec3 nf, tr_vec3 wo, tr_vec3 wi) {
+TR_FN float tr_ggx_pdf(const tr_bsdf_params *m, tr_vec3 nf, tr_vec3 wo, tr_vec3 wi) {
     float co = v3_dot(wo, nf), ci = v3_dot(wi, nf);
     if (co <= 0.0f || ci <= 0.0f) {
         return 0.0f;
@@ -137,8 +139,8 @@ TR_FN tr_vec3 tr_ggx_sample_vndf(float alpha, tr_vec3 v, float u1, float u2) {
 }
 
 /* BSDF value f(wo, wi) (without the cosine). Zero for delta lobes and emitters. */
-TR_FN tr_vec3 tr_bsdf_eval(const tr_material *m, tr_vec3 n, tr_vec3 wo, tr_vec3 wi) {
-    tr_vec3 nf = tr_bsdf_facing(n, wo);
+TR_FN tr_vec3 tr_bsdf_eval(const tr_bsdf_params *m, tr_vec3 wo, tr_vec3 wi) {
+    tr_vec3 nf = tr_bsdf_facing(m->ns, wo);
     switch (m->type) {
     case TR_MATERIAL_DIFFUSE:
         if (v3_dot(wi, nf) <= 0.0f) {
@@ -156,8 +158,8 @@ TR_FN tr_vec3 tr_bsdf_eval(const tr_material *m, tr_vec3 n, tr_vec3 wo, tr_vec3 
 }
 
 /* Solid-angle pdf with which tr_bsdf_sample draws wi. Zero for delta lobes. */
-TR_FN float tr_bsdf_pdf(const tr_material *m, tr_vec3 n, tr_vec3 wo, tr_vec3 wi) {
-    tr_vec3 nf = tr_bsdf_facing(n, wo);
+TR_FN float tr_bsdf_pdf(const tr_bsdf_params *m, tr_vec3 wo, tr_vec3 wi) {
+    tr_vec3 nf = tr_bsdf_facing(m->ns, wo);
     switch (m->type) {
     case TR_MATERIAL_DIFFUSE: {
         float c = v3_dot(wi, nf);
@@ -175,8 +177,8 @@ TR_FN float tr_bsdf_pdf(const tr_material *m, tr_vec3 n, tr_vec3 wo, tr_vec3 wi)
 
 /* Draws wi. Returns 0 when the path ends here (emitters, directions below the
  * surface, zero weight). */
-TR_FN int tr_bsdf_sample(const tr_material *m, tr_vec3 n, tr_vec3 wo, tr_rng *rng, tr_scatter *s) {
-    tr_vec3 nf = tr_bsdf_facing(n, wo);
+TR_FN int tr_bsdf_sample(const tr_bsdf_params *m, tr_vec3 wo, tr_rng *rng, tr_scatter *s) {
+    tr_vec3 nf = tr_bsdf_facing(m->ns, wo);
     s->delta = 0;
     switch (m->type) {
     case TR_MATERIAL_DIFFUSE: {
@@ -220,24 +222,10 @@ TR_FN int tr_bsdf_sample(const tr_material *m, tr_vec3 n, tr_vec3 wo, tr_rng *rn
         return 1;
     }
     case TR_MATERIAL_GLASS: {
-        float cos_dn = v3_dot(wo, n);
-        int entering = cos_dn > 0.0f;
-        float n1 = entering ? 1.0f : m->ior;
-        float n2 = entering ? m->ior : 1.0f;
-        float cos_i = tr_fabsf(cos_dn);
-        float cos_t;
-        float r = tr_fresnel_dielectric(cos_i, n1, n2, &cos_t);
+        /* The lobe's probability is its Fresnel weight, so the weight is the filter. */
         s->delta = 1;
         s->weight = m->color;
-        tr_vec3 d = v3_neg(wo);
-        if (tr_rng_float(rng) < r) {
-            s->wi = v3_reflect(d, nf);
-            s->pdf = r;
-        } else {
-            float eta = n1 / n2;
-            s->wi = v3_normalize(v3_add(v3_scale(d, eta), v3_scale(nf, eta * cos_i - cos_t)));
-            s->pdf = 1.0f - r;
-        }
+        tr_glass_sample(v3_neg(wo), m->ns, m->ior, rng, &s->wi, &s->pdf);
         return 1;
     }
     default:
@@ -245,13 +233,13 @@ TR_FN int tr_bsdf_sample(const tr_material *m, tr_vec3 n, tr_vec3 wo, tr_rng *rn
     }
 }
 
-/* Radiance a surface of material m with geometric normal n emits towards w. Emitters
- * are one-sided (the side n points to) unless TR_MATERIAL_TWO_SIDED is set. */
-TR_FN tr_vec3 tr_emitted(const tr_material *m, tr_vec3 n, tr_vec3 w) {
+/* Radiance a surface with parameters m emits towards w. Emitters are one-sided (the side
+ * the geometric normal m->ng points to) unless TR_MATERIAL_TWO_SIDED is set. */
+TR_FN tr_vec3 tr_emitted(const tr_bsdf_params *m, tr_vec3 w) {
     if (!(m->emittance > 0.0f)) {
         return v3s(0.0f);
     }
-    if ((m->flags & TR_MATERIAL_TWO_SIDED) == 0u && v3_dot(w, n) <= 0.0f) {
+    if ((m->flags & TR_MATERIAL_TWO_SIDED) == 0u && v3_dot(w, m->ng) <= 0.0f) {
         return v3s(0.0f);
     }
     return v3_scale(m->color, m->emittance);

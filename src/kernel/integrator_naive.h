@@ -7,6 +7,7 @@
 #include "compat.h"
 #include "film.h"
 #include "material.h"
+#include "material_eval.h"
 #include "rng.h"
 #include "scene_view.h"
 #include "types.h"
@@ -45,24 +46,22 @@ TR_FN tr_vec3 tr_trace_naive(const tr_scene_view *s, tr_ray ray, int max_depth, 
             break;
         }
         TR_CONST_GLOBAL tr_triangle *tri = &s->triangles[hit.triangle];
-        TR_CONST_GLOBAL tr_material *m = &s->materials[tri->material];
+        tr_vec3 p_hit = v3_madd(ray.origin, ray.dir, hit.t);
+        tr_bsdf_params m =
+            tr_material_eval(s, hit.triangle, hit.u, hit.v, p_hit, tri->normal, ray.dir);
         travelled += hit.t;
-        if (surface) {
-            const tr_material mp = *m;
-            if (!tr_bsdf_is_delta(&mp)) {
-                tr_sample_surface(surface, m->color, tri->normal, ray.dir, travelled, hit.triangle);
-            }
+        if (surface && !tr_bsdf_is_delta(&m)) {
+            tr_sample_surface(surface, m.color, m.ns, ray.dir, travelled, hit.triangle);
         }
-        if (m->emittance > 0.0f) {
-            radiance = v3_add(radiance, v3_scale(v3_mul(throughput, m->color), m->emittance));
+        if (m.emittance > 0.0f) {
+            radiance = v3_add(radiance, v3_scale(v3_mul(throughput, m.color), m.emittance));
         }
-        if (m->type == TR_MATERIAL_EMITTER) {
+        if (m.type == TR_MATERIAL_EMITTER) {
             break;
         }
-        tr_vec3 p_hit = v3_madd(ray.origin, ray.dir, hit.t);
         tr_vec3 origin, dir, weight;
-        if (tr_material_scatter_naive(m, ray.dir, p_hit, tri->normal, rng, &origin, &dir,
-                                      &weight) != TR_SCATTER_CONTINUE) {
+        if (tr_material_scatter_naive(&m, ray.dir, p_hit, rng, &origin, &dir, &weight) !=
+            TR_SCATTER_CONTINUE) {
             break;
         }
         throughput = v3_mul(throughput, weight);

@@ -17,6 +17,7 @@
 #include "film.h"
 #include "light.h"
 #include "material.h"
+#include "material_eval.h"
 #include "rng.h"
 #include "scene_view.h"
 #include "types.h"
@@ -33,14 +34,16 @@ TR_FN float tr_mis_power(float pdf_a, float pdf_b) {
 
 /* Solid-angle density, seen from a point at distance dist along direction w (unit,
  * pointing from the point to the emitter), with which light sampling picks the emitter
- * point on triangle tri of material m. */
-TR_FN float tr_pt_light_pdf(const tr_scene_view *s, const tr_material *m,
-                            TR_CONST_GLOBAL tr_triangle *tri, tr_vec3 w, float dist) {
+ * point on triangle tri. The emitter table weighs the material's constants (lights.c),
+ * so this reads the material itself, not the material stage's output. */
+TR_FN float tr_pt_light_pdf(const tr_scene_view *s, TR_CONST_GLOBAL tr_triangle *tri, tr_vec3 w,
+                            float dist) {
     float cos_l = tr_fabsf(v3_dot(w, tri->normal));
     if (!(cos_l > 0.0f)) {
         return 0.0f;
     }
-    return tr_light_pdf_area(s, m, tri->area) * dist * dist / cos_l;
+    tr_material m = s->materials[tri->material];
+    return tr_light_pdf_area(s, &m, tri->area) * dist * dist / cos_l;
 }
 
 TR_FN int tr_v3_is_zero(tr_vec3 a) {
@@ -65,21 +68,21 @@ TR_FN tr_vec3 tr_trace_pt(const tr_scene_view *s, tr_ray ray, int max_depth, tr_
             break;
         }
         TR_CONST_GLOBAL tr_triangle *tri = &s->triangles[hit.triangle];
-        tr_material m = s->materials[tri->material];
         tr_vec3 n = tri->normal;
         tr_vec3 wo = v3_neg(ray.dir);
         tr_vec3 p = v3_madd(ray.origin, ray.dir, hit.t);
+        tr_bsdf_params m = tr_material_eval(s, hit.triangle, hit.u, hit.v, p, n, ray.dir);
         travelled += hit.t;
         if (surface && !tr_bsdf_is_delta(&m)) {
-            tr_sample_surface(surface, m.color, n, ray.dir, travelled, hit.triangle);
+            tr_sample_surface(surface, m.color, m.ns, ray.dir, travelled, hit.triangle);
         }
 
         /* Emission found by the BSDF strategy (or the camera). */
-        tr_vec3 le = tr_emitted(&m, n, wo);
+        tr_vec3 le = tr_emitted(&m, wo);
         if (!tr_v3_is_zero(le)) {
             float w = 1.0f;
             if (!prev_delta) {
-                w = tr_mis_power(prev_pdf, tr_pt_light_pdf(s, &m, tri, ray.dir, hit.t));
+                w = tr_mis_power(prev_pdf, tr_pt_light_pdf(s, tri, ray.dir, hit.t));
             }
             radiance = v3_add(radiance, v3_scale(v3_mul(throughput, le), w));
         }
@@ -91,16 +94,17 @@ TR_FN tr_vec3 tr_trace_pt(const tr_scene_view *s, tr_ray ray, int max_depth, tr_
         if (!tr_bsdf_is_delta(&m) && s->light_count > 0) {
             uint32_t lt;
             tr_vec3 y;
-            float pa = tr_light_sample(s, rng, &lt, &y);
+            float lu, lv;
+            float pa = tr_light_sample(s, rng, &lt, &y, &lu, &lv);
             TR_CONST_GLOBAL tr_triangle *ltri = &s->triangles[lt];
-            tr_material lm = s->materials[ltri->material];
             tr_vec3 d = v3_sub(y, p);
             float dist = v3_length(d);
             if (pa > 0.0f && dist > 0.0f) {
                 tr_vec3 wi = v3_scale(d, 1.0f / dist);
-                tr_vec3 le_l = tr_emitted(&lm, ltri->normal, v3_neg(wi));
-                tr_vec3 f = tr_bsdf_eval(&m, n, wo, wi);
-                float pl = tr_pt_light_pdf(s, &lm, ltri, wi, dist);
+                tr_bsdf_params lm = tr_material_eval(s, lt, lu, lv, y, ltri->normal, wi);
+                tr_vec3 le_l = tr_emitted(&lm, v3_neg(wi));
+                tr_vec3 f = tr_bsdf_eval(&m, wo, wi);
+                float pl = tr_pt_light_pdf(s, ltri, wi, dist);
                 if (!tr_v3_is_zero(le_l) && !tr_v3_is_zero(f) && pl > 0.0f) {
                     float cos_i = tr_fabsf(v3_dot(wi, n));
                     tr_vec3 o = tr_offset_origin(p, v3_dot(wi, n) > 0.0f ? n : v3_neg(n));
@@ -110,7 +114,7 @@ TR_FN tr_vec3 tr_trace_pt(const tr_scene_view *s, tr_ray ray, int max_depth, tr_
                         tr_ray_make(o, v3_scale(od, 1.0f / len), 0.0f, len * (1.0f - 1e-4f));
                     *rays += 1;
                     if (!tr_occluded_scene(s, &shadow)) {
-                        float w = tr_mis_power(pl, tr_bsdf_pdf(&m, n, wo, wi));
+                        float w = tr_mis_power(pl, tr_bsdf_pdf(&m, wo, wi));
                         radiance = v3_add(radiance, v3_scale(v3_mul(v3_mul(throughput, f), le_l),
                                                              cos_i * w / pl));
                     }
@@ -120,7 +124,7 @@ TR_FN tr_vec3 tr_trace_pt(const tr_scene_view *s, tr_ray ray, int max_depth, tr_
 
         /* Continue with the BSDF's sample. */
         tr_scatter bs;
-        if (!tr_bsdf_sample(&m, n, wo, rng, &bs)) {
+        if (!tr_bsdf_sample(&m, wo, rng, &bs)) {
             break;
         }
         throughput = v3_mul(throughput, bs.weight);

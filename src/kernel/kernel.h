@@ -10,13 +10,11 @@
 #include "film.h"
 #include "integrator_naive.h"
 #include "integrator_pt.h"
+#include "integrator_types.h"
 #include "rng.h"
 #include "sampling.h"
 #include "scene_view.h"
 #include "types.h"
-
-#define TR_INTEGRATOR_NAIVE 0
-#define TR_INTEGRATOR_PT 1 /* next-event estimation + MIS (integrator_pt.h) */
 
 /* Sample `sample` of pixel (x, y) of frame f, with jitter inside the pixel: radiance,
  * rays and the passes' surface into *out. The random stream depends only on (seed,

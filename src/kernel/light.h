@@ -46,11 +46,15 @@ TR_FN float tr_light_pdf_area(const tr_scene_view *s, const tr_material *m, floa
     return tr_light_weight(m, area) / (s->light_weight_total * area);
 }
 
-/* A point on an emitter: *tri_index the triangle, *p the point; returns the area
- * density of the choice (0 when the scene has no emitters). */
-TR_FN float tr_light_sample(const tr_scene_view *s, tr_rng *rng, uint32_t *tri_index, tr_vec3 *p) {
+/* A point on an emitter: *tri_index the triangle, *p the point, *u and *v its
+ * barycentrics of the triangle's second and third vertex (as tr_hit's, for the material
+ * stage); returns the area density of the choice (0 when the scene has no emitters). */
+TR_FN float tr_light_sample(const tr_scene_view *s, tr_rng *rng, uint32_t *tri_index, tr_vec3 *p,
+                            float *u, float *v) {
     *tri_index = 0u;
     *p = v3s(0.0f);
+    *u = 0.0f;
+    *v = 0.0f;
     if (s->light_count == 0) {
         return 0.0f;
     }
@@ -65,6 +69,8 @@ TR_FN float tr_light_sample(const tr_scene_view *s, tr_rng *rng, uint32_t *tri_i
     *p = v3_add(v3_add(v3_scale(tri->v0, b0), v3_scale(tri->v1, b1)),
                 v3_scale(tri->v2, 1.0f - b0 - b1));
     *tri_index = t;
+    *u = b1;
+    *v = 1.0f - b0 - b1;
     /* The density from the weight, not from CDF differences, so that it equals what
      * tr_light_pdf_area returns when a BSDF-sampled ray hits the same emitter. */
     tr_material m = s->materials[tri->material];

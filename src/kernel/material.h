@@ -1,10 +1,13 @@
 /* material.h - the thesis's four materials (section 3.1.2) as used by the naive
  * integrator: each turns an incoming ray at a hit into the next ray and a colour
- * factor for the path's throughput. Dispatch is a switch on the material type. */
+ * factor for the path's throughput. Dispatch is a switch on the material type; the
+ * parameters come from the material stage (material_eval.h). The smooth dielectric's
+ * Fresnel choice (tr_glass_sample) is shared with the pt integrator's BSDF (bsdf.h). */
 #ifndef TR_KERNEL_MATERIAL_H
 #define TR_KERNEL_MATERIAL_H
 
 #include "compat.h"
+#include "material_eval.h"
 #include "rng.h"
 #include "sampling.h"
 #include "types.h"
@@ -37,23 +40,52 @@ TR_FN tr_vec3 tr_offset_origin(tr_vec3 p, tr_vec3 n) {
     return v3_madd(p, n, 1e-4f * scale);
 }
 
+/* The smooth dielectric's one random choice, shared by both integrators: light arriving
+ * along unit direction d at a boundary whose unit normal n points to the outside (index 1;
+ * the inside has index ior) is reflected with the exact Fresnel probability r, refracted
+ * otherwise. Consumes one random number. *wi receives the new direction, *prob the
+ * probability of the lobe taken (r or 1 - r). Returns 1 when reflected. */
+TR_FN int tr_glass_sample(tr_vec3 d, tr_vec3 n, float ior, tr_rng *rng, tr_vec3 *wi, float *prob) {
+    float cos_dn = v3_dot(d, n);
+    /* The normal on the side the light came from. */
+    tr_vec3 nf = cos_dn > 0.0f ? v3_neg(n) : n;
+    /* Entering when the light meets the front of the normal, leaving otherwise. */
+    int entering = cos_dn < 0.0f;
+    float n1 = entering ? 1.0f : ior;
+    float n2 = entering ? ior : 1.0f;
+    float cos_i = tr_fabsf(cos_dn);
+    float cos_t;
+    float r = tr_fresnel_dielectric(cos_i, n1, n2, &cos_t);
+    if (tr_rng_float(rng) < r) {
+        *wi = v3_reflect(d, nf);
+        *prob = r;
+        return 1;
+    }
+    float eta = n1 / n2;
+    /* Snell's law in vector form: t = eta d + (eta cos_i - cos_t) n. */
+    *wi = v3_normalize(v3_add(v3_scale(d, eta), v3_scale(nf, eta * cos_i - cos_t)));
+    *prob = 1.0f - r;
+    return 0;
+}
+
 #define TR_SCATTER_ABSORBED 0
 #define TR_SCATTER_CONTINUE 1
 
-/* Scatters the ray arriving along unit direction `dir` at point p of a surface with
- * geometric normal n and material m. Diffuse and glossy surfaces are two-sided; for
- * glass, n must point to the outside (the side of index 1): it decides whether the ray
- * enters or leaves, so closed glass shapes need outward-facing normals. On TR_SCATTER_CONTINUE,
- * *next_origin / *next_dir hold the new ray and *weight the factor to multiply the
- * throughput by. Emitters do not scatter (the caller ends the path there). */
-TR_FN int tr_material_scatter_naive(TR_CONST_GLOBAL tr_material *m, tr_vec3 dir, tr_vec3 p,
-                                    tr_vec3 n, tr_rng *rng, tr_vec3 *next_origin, tr_vec3 *next_dir,
-                                    tr_vec3 *weight) {
+/* Scatters the ray arriving along unit direction `dir` at point p of a surface with the
+ * parameters b (tr_material_eval; b->ns is the normal used). Diffuse and glossy surfaces
+ * are two-sided; for glass, the normal must point to the outside (the side of index 1):
+ * it decides whether the ray enters or leaves, so closed glass shapes need
+ * outward-facing normals. On TR_SCATTER_CONTINUE, *next_origin / *next_dir hold the new
+ * ray and *weight the factor to multiply the throughput by. Emitters do not scatter (the
+ * caller ends the path there). */
+TR_FN int tr_material_scatter_naive(const tr_bsdf_params *b, tr_vec3 dir, tr_vec3 p, tr_rng *rng,
+                                    tr_vec3 *next_origin, tr_vec3 *next_dir, tr_vec3 *weight) {
+    tr_vec3 n = b->ns;
     float cos_dn = v3_dot(dir, n);
     /* The normal on the side the ray came from. */
     tr_vec3 nf = cos_dn > 0.0f ? v3_neg(n) : n;
-    *weight = m->color;
-    switch (m->type) {
+    *weight = b->color;
+    switch (b->type) {
     case TR_MATERIAL_DIFFUSE: {
         /* Cosine-weighted sampling: the cosine and 1/pi of the Lambertian BRDF cancel
          * against the pdf, leaving the albedo as the weight. */
@@ -62,22 +94,9 @@ TR_FN int tr_material_scatter_naive(TR_CONST_GLOBAL tr_material *m, tr_vec3 dir,
         return TR_SCATTER_CONTINUE;
     }
     case TR_MATERIAL_GLASS: {
-        /* Entering when the ray meets the front of the normal, leaving otherwise. */
-        int entering = cos_dn < 0.0f;
-        float n1 = entering ? 1.0f : m->ior;
-        float n2 = entering ? m->ior : 1.0f;
-        float cos_i = tr_fabsf(cos_dn);
-        float cos_t;
-        float r = tr_fresnel_dielectric(cos_i, n1, n2, &cos_t);
-        if (tr_rng_float(rng) < r) {
-            *next_dir = v3_reflect(dir, nf);
-            *next_origin = tr_offset_origin(p, nf);
-        } else {
-            float eta = n1 / n2;
-            /* Snell's law in vector form: t = eta d + (eta cos_i - cos_t) n. */
-            *next_dir = v3_normalize(v3_add(v3_scale(dir, eta), v3_scale(nf, eta * cos_i - cos_t)));
-            *next_origin = tr_offset_origin(p, v3_neg(nf));
-        }
+        float prob;
+        int reflected = tr_glass_sample(dir, n, b->ior, rng, next_dir, &prob);
+        *next_origin = tr_offset_origin(p, reflected ? nf : v3_neg(nf));
         return TR_SCATTER_CONTINUE;
     }
     case TR_MATERIAL_GLOSSY: {
@@ -85,7 +104,7 @@ TR_FN int tr_material_scatter_naive(TR_CONST_GLOBAL tr_material *m, tr_vec3 dir,
          * (roughness 0: a perfect mirror). Directions that fall below the surface are
          * absorbed. */
         tr_vec3 mirror = v3_reflect(dir, nf);
-        float angle = tr_fminf(tr_fmaxf(m->roughness, 0.0f), 1.0f) * TR_HALF_PI;
+        float angle = tr_fminf(tr_fmaxf(b->roughness, 0.0f), 1.0f) * TR_HALF_PI;
         tr_vec3 d = angle > 0.0f ? tr_sample_cosine_cone(rng, mirror, angle) : mirror;
         if (v3_dot(d, nf) <= 0.0f) {
             return TR_SCATTER_ABSORBED;

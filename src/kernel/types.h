@@ -6,13 +6,8 @@
 #define TR_KERNEL_TYPES_H
 
 #include "compat.h"
+#include "material_types.h" /* TR_MATERIAL_EMITTER ..., numbered as in the thesis (listing 2) */
 #include "vec.h"
-
-/* Material types, numbered as in the thesis (listing 2). */
-#define TR_MATERIAL_EMITTER 1u
-#define TR_MATERIAL_DIFFUSE 2u
-#define TR_MATERIAL_GLASS 3u
-#define TR_MATERIAL_GLOSSY 4u
 
 /* tr_material.flags bits. Emitters emit towards the side their triangle's geometric
  * normal points to, unless TWO_SIDED is set (the pt integrator; naive ignores it). */

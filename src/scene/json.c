@@ -15,7 +15,9 @@
 
 #include "trac0r/camera.h"
 #include "trac0r/film.h"
+#include "trac0r/registry.h"
 #include "trac0r/scene_file.h"
+#include "material_registry.h"
 
 #define PATH_MAX_LEN 160
 
@@ -327,16 +329,17 @@ static int get_vec3(const jctx *c, const cJSON *obj, const char *path, const cha
 }
 
 /* A colour: [r, g, b], each in [0, hi]. */
-static int get_color(const jctx *c, const cJSON *obj, const char *path, double hi, tr_vec3 *out) {
+static int get_color(const jctx *c, const cJSON *obj, const char *path, const char *key, double hi,
+                     tr_vec3 *out) {
     char p[PATH_MAX_LEN];
-    if (get_vec3(c, obj, path, "color", 1, 0, out, NULL) != TR_OK) {
+    if (get_vec3(c, obj, path, key, 1, 0, out, NULL) != TR_OK) {
         return TR_ERR;
     }
     const float rgb[3] = {out->x, out->y, out->z};
     for (int i = 0; i < 3; ++i) {
         if (rgb[i] < 0.0f || rgb[i] > hi) {
             char pk[PATH_MAX_LEN];
-            path_key(pk, path, "color");
+            path_key(pk, path, key);
             path_index(p, pk, i);
             return jerr(c, p, "expected a number in [0, %g], got %g", hi, (double)rgb[i]);
         }
@@ -403,14 +406,15 @@ static int parse_render(jctx *c, const cJSON *r) {
     if (s) {
         int a = tr_accel_from_name(s);
         if (a < 0) {
-            static const char *const names[] = {"bvh", "bvh2", "flat", "embree"};
-            char buf[40];
-            const char *near = closest(s, names, 4);
+            size_t count;
+            const char *const *names = tr_accel_names(&count);
+            char buf[40], expected[128];
+            tr_names_join(expected, sizeof expected, names, count, " or ");
+            const char *near = closest(s, names, count);
             return jerr(c, "render.accel",
-                        "unknown acceleration structure '%s' (expected bvh, bvh2, flat or "
-                        "embree%s%s%s)",
-                        shown(s, buf, sizeof buf), near ? "; did you mean '" : "", near ? near : "",
-                        near ? "'?" : "");
+                        "unknown acceleration structure '%s' (expected %s%s%s%s)",
+                        shown(s, buf, sizeof buf), expected, near ? "; did you mean '" : "",
+                        near ? near : "", near ? "'?" : "");
         }
         in->accel = (tr_accel_type)a;
         in->has_accel = 1;
@@ -506,11 +510,9 @@ static int parse_materials(jctx *c, const cJSON *mats) {
     if (expect_object(c, mats, path) != TR_OK) {
         return TR_ERR;
     }
-    static const char *const types[] = {"emitter", "diffuse", "glass", "glossy"};
-    static const char *const k_emit[] = {"type", "color", "emittance", "two_sided"};
-    static const char *const k_diff[] = {"type", "color"};
-    static const char *const k_glass[] = {"type", "color", "ior"};
-    static const char *const k_glossy[] = {"type", "color", "roughness"};
+    size_t ntypes, nkeys;
+    const char *const *types = tr_material_type_names(&ntypes);
+    const tr_material_key_info *keys = tr_material_keys(&nkeys);
     int n = cJSON_GetArraySize(mats);
     c->by_name = malloc((size_t)(n > 0 ? (n < MAX_FILE_MATERIALS ? n : MAX_FILE_MATERIALS) : 1) *
                         sizeof *c->by_name);
@@ -536,58 +538,68 @@ static int parse_materials(jctx *c, const cJSON *mats) {
         if (get_string(c, m, p, "type", 1, &type) != TR_OK) {
             return TR_ERR;
         }
-        int t = -1;
-        for (int i = 0; i < 4; ++i) {
-            if (strcmp(type, types[i]) == 0) {
-                t = i;
-            }
-        }
-        if (t < 0) {
-            char pt[PATH_MAX_LEN], tb[40];
+        int t = tr_material_type_from_name(type);
+        uint32_t required, optional;
+        if (t < 0 || !tr_material_type_keys((uint32_t)t, &required, &optional)) {
+            char pt[PATH_MAX_LEN], tb[40], expected[128];
             path_key(pt, p, "type");
-            const char *near = closest(type, types, 4);
+            const char *near = closest(type, types, ntypes);
+            size_t len = (size_t)snprintf(expected, sizeof expected, "expected ");
+            tr_names_join(expected + len, sizeof expected - len, types, ntypes, " or ");
             return jerr(c, pt, "unknown material type '%s' (%s%s%s)", shown(type, tb, sizeof tb),
-                        near ? "did you mean '" : "expected emitter, diffuse, glass or glossy",
-                        near ? near : "", near ? "'?" : "");
+                        near ? "did you mean '" : expected, near ? near : "", near ? "'?" : "");
         }
-        const char *const *keys = t == 0 ? k_emit : t == 1 ? k_diff : t == 2 ? k_glass : k_glossy;
-        size_t nkeys = t == 0 ? 4 : t == 1 ? 2 : 3;
-        if (check_keys(c, m, p, keys, nkeys) != TR_OK) {
+        /* The keys this type takes, from the registry: "type", then each key of its masks
+         * (a name two keys share, such as "color", once). */
+        const char *allowed[16] = {"type"};
+        size_t nallowed = 1;
+        for (size_t k = 0; k < nkeys && nallowed < 16; ++k) {
+            int dup = 0;
+            for (size_t i = 0; i < nallowed; ++i) {
+                dup |= strcmp(allowed[i], keys[k].name) == 0;
+            }
+            if (!dup && (keys[k].key & (required | optional))) {
+                allowed[nallowed++] = keys[k].name;
+            }
+        }
+        if (check_keys(c, m, p, allowed, nallowed) != TR_OK) {
             return TR_ERR;
         }
-        tr_vec3 color;
-        if (get_color(c, m, p, t == 0 ? TR_SCENE_FILE_MAX_COORD : 1.0, &color) != TR_OK) {
-            return TR_ERR;
-        }
-        tr_material mat;
-        double x;
-        if (t == 0) {
-            if (get_number(c, m, p, "emittance", 0.0, 1e7, &x, NULL) != TR_OK) {
-                return TR_ERR;
+        tr_material mat = tr_material_default((uint32_t)t);
+        for (size_t k = 0; k < nkeys; ++k) {
+            const tr_material_key_info *ki = &keys[k];
+            if (!(ki->key & (required | optional))) {
+                continue;
             }
-            if (!(x > 0.0)) {
-                char pe[PATH_MAX_LEN];
-                path_key(pe, p, "emittance");
-                return jerr(c, pe, "expected a positive number, got %g", x);
+            int is_required = (ki->key & required) != 0u, present = 0;
+            if (ki->kind == TR_KEY_COLOR) {
+                tr_vec3 color; /* (colours are always required) */
+                if (get_color(c, m, p, ki->name, ki->hi, &color) != TR_OK) {
+                    return TR_ERR;
+                }
+                memcpy((char *)&mat + ki->offset, &color, sizeof color);
+            } else if (ki->kind == TR_KEY_FLAG) {
+                int on = 0;
+                if (get_bool(c, m, p, ki->name, &on) != TR_OK) {
+                    return TR_ERR;
+                }
+                mat.flags |= on ? ki->flag : 0u;
+            } else {
+                double x;
+                if (get_number(c, m, p, ki->name, ki->lo, ki->hi, &x,
+                               is_required ? NULL : &present) != TR_OK) {
+                    return TR_ERR;
+                }
+                if (is_required || present) {
+                    if (ki->positive && !(x > ki->lo)) {
+                        char pe[PATH_MAX_LEN];
+                        path_key(pe, p, ki->name);
+                        return jerr(c, pe, "expected a positive number, got %g", x);
+                    }
+                    float f = (float)x;
+                    memcpy((char *)&mat + ki->offset, &f, sizeof f);
+                }
             }
-            mat = tr_material_emitter(color, (float)x);
-            int two = 0;
-            if (get_bool(c, m, p, "two_sided", &two) != TR_OK) {
-                return TR_ERR;
-            }
-            mat.flags = two ? TR_MATERIAL_TWO_SIDED : 0u;
-        } else if (t == 1) {
-            mat = tr_material_diffuse(color);
-        } else if (t == 2) {
-            if (get_number(c, m, p, "ior", 1.0, 10.0, &x, NULL) != TR_OK) {
-                return TR_ERR;
-            }
-            mat = tr_material_glass(color, (float)x);
-        } else {
-            if (get_number(c, m, p, "roughness", 0.0, 1.0, &x, NULL) != TR_OK) {
-                return TR_ERR;
-            }
-            mat = tr_material_glossy(color, (float)x);
         }
         tr_error e;
         if (tr_scene_add_material(c->scene, mat, NULL, &e) != TR_OK) {

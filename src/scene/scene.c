@@ -5,31 +5,31 @@
 
 #include "trac0r/render.h"
 #include "trac0r/scene.h"
+#include "material_registry.h"
 #include "scene_internal.h"
 
-static tr_material material_make(uint32_t type, tr_vec3 color, float roughness, float ior,
-                                 float emittance) {
-    tr_material m;
-    memset(&m, 0, sizeof m);
-    m.type = type;
+tr_material tr_material_emitter(tr_vec3 color, float emittance) {
+    tr_material m = tr_material_default(TR_MATERIAL_EMITTER);
     m.color = color;
-    m.roughness = roughness;
-    m.ior = ior;
     m.emittance = emittance;
     return m;
 }
-
-tr_material tr_material_emitter(tr_vec3 color, float emittance) {
-    return material_make(TR_MATERIAL_EMITTER, color, 0.0f, 1.0f, emittance);
-}
 tr_material tr_material_diffuse(tr_vec3 color) {
-    return material_make(TR_MATERIAL_DIFFUSE, color, 0.0f, 1.0f, 0.0f);
+    tr_material m = tr_material_default(TR_MATERIAL_DIFFUSE);
+    m.color = color;
+    return m;
 }
 tr_material tr_material_glass(tr_vec3 color, float ior) {
-    return material_make(TR_MATERIAL_GLASS, color, 0.0f, ior, 0.0f);
+    tr_material m = tr_material_default(TR_MATERIAL_GLASS);
+    m.color = color;
+    m.ior = ior;
+    return m;
 }
 tr_material tr_material_glossy(tr_vec3 color, float roughness) {
-    return material_make(TR_MATERIAL_GLOSSY, color, roughness, 1.0f, 0.0f);
+    tr_material m = tr_material_default(TR_MATERIAL_GLOSSY);
+    m.color = color;
+    m.roughness = roughness;
+    return m;
 }
 
 void tr_scene_init(tr_scene *s) {
@@ -50,25 +50,8 @@ void tr_scene_free(tr_scene *s) {
 }
 
 int tr_scene_add_material(tr_scene *s, tr_material m, uint32_t *index, tr_error *err) {
-    if (m.type < TR_MATERIAL_EMITTER || m.type > TR_MATERIAL_GLOSSY) {
-        return tr_error_set(err, "unknown material type %u (expected 1..4)", m.type);
-    }
-    if (!v3_is_finite(m.color) || m.color.x < 0.0f || m.color.y < 0.0f || m.color.z < 0.0f) {
-        return tr_error_set(err, "material colour (%g, %g, %g) must be finite and non-negative",
-                            (double)m.color.x, (double)m.color.y, (double)m.color.z);
-    }
-    if (!isfinite(m.emittance) || m.emittance < 0.0f) {
-        return tr_error_set(err, "material emittance %g must be finite and non-negative",
-                            (double)m.emittance);
-    }
-    if (!(m.roughness >= 0.0f && m.roughness <= 1.0f)) {
-        return tr_error_set(err, "material roughness %g must be in [0, 1]", (double)m.roughness);
-    }
-    if (!(m.ior >= 1.0f && m.ior <= 10.0f)) {
-        return tr_error_set(err, "material ior %g must be in [1, 10]", (double)m.ior);
-    }
-    if ((m.flags & ~TR_MATERIAL_TWO_SIDED) != 0u) {
-        return tr_error_set(err, "material flags 0x%x have unknown bits", m.flags);
+    if (tr_material_check(&m, err) != TR_OK) {
+        return TR_ERR;
     }
     if (s->material_count == s->material_capacity) {
         uint32_t cap = s->material_capacity ? 2 * s->material_capacity : 8;
