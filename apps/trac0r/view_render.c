@@ -44,7 +44,7 @@ static int resize_buffers(view_renderer *r, uint32_t w, uint32_t h, tr_error *er
     }
     r->back = malloc((size_t)w * h * sizeof *r->back);
     if (!r->back) {
-        return tr_error_set(err, "out of memory for a %ux%u frame", w, h);
+        return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory for a %ux%u frame", w, h);
     }
     return TR_OK;
 }
@@ -60,7 +60,8 @@ static int render_one(view_renderer *r, const tr_camera *cam, const tr_render_co
         return TR_ERR;
     }
     if (atomic_load(&r->cancel)) {
-        return tr_error_set(err, "frame cancelled"); /* the view changed meanwhile */
+        return tr_error_set(err, TR_STATUS_CANCELLED,
+                            "frame cancelled"); /* the view changed meanwhile */
     }
     return tr_cl_read_film(r->cl, &r->film, err);
 }
@@ -203,7 +204,8 @@ int view_renderer_start(view_renderer *r, tr_scene *scene, int animate, tr_cl_co
     if (rc != 0) {
         pthread_cond_destroy(&r->cv);
         pthread_mutex_destroy(&r->mu);
-        return tr_error_set(err, "cannot start the render thread: %s", strerror(rc));
+        return tr_error_set(err, TR_STATUS_LIMIT, "cannot start the render thread: %s",
+                            strerror(rc));
     }
     r->started = 1;
     return TR_OK;

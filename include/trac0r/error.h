@@ -42,7 +42,7 @@ typedef enum tr_status {
     TR_STATUS_PARSE,
     /* Not in this build or not handled: no Embree, no OpenCL, an image format. */
     TR_STATUS_UNSUPPORTED,
-    /* The scene changed since tr_scene_commit (or the upload): commit and upload it again. */
+    /* The scene is not committed, or changed since its commit or upload: commit it again. */
     TR_STATUS_STALE_SCENE,
     /* The caller's cancel flag stopped the work. */
     TR_STATUS_CANCELLED,
@@ -67,8 +67,8 @@ typedef struct tr_error {
 extern "C" {
 #endif
 
-/* Formats a message into err (if non-NULL) and returns TR_ERR. */
-int tr_error_set(tr_error *err, const char *fmt, ...) TR_PRINTF_FORMAT(2, 3);
+/* Sets err's code and formats its message (if err is non-NULL); returns TR_ERR. */
+int tr_error_set(tr_error *err, tr_status code, const char *fmt, ...) TR_PRINTF_FORMAT(3, 4);
 
 /* The code's name as written here ("TR_STATUS_IO"); "TR_STATUS_UNKNOWN" for no code. */
 const char *tr_status_name(tr_status code);

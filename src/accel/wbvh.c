@@ -227,7 +227,8 @@ int tr_wbvh_build(tr_wbvh *w, const tr_bvh *bvh, tr_error *err) {
     free(c.sub_count);
     if (c.failed) {
         tr_wbvh_free(w);
-        return tr_error_set(err, "out of memory collapsing a BVH of %u nodes into a wide BVH",
+        return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY,
+                            "out of memory collapsing a BVH of %u nodes into a wide BVH",
                             bvh->node_count);
     }
     w->build_seconds = tr_time_now() - t0;

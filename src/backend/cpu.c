@@ -30,14 +30,16 @@ double tr_time_now(void) {
 
 int tr_render_config_check(const tr_render_config *cfg, tr_error *err) {
     if (cfg->max_depth < 1 || cfg->max_depth > TR_MAX_DEPTH_LIMIT) {
-        return tr_error_set(err, "max depth %d must be in 1..%d", cfg->max_depth,
-                            TR_MAX_DEPTH_LIMIT);
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "max depth %d must be in 1..%d",
+                            cfg->max_depth, TR_MAX_DEPTH_LIMIT);
     }
     if (cfg->integrator != TR_INTEGRATOR_NAIVE && cfg->integrator != TR_INTEGRATOR_PT) {
-        return tr_error_set(err, "unknown integrator %d", cfg->integrator);
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "unknown integrator %d",
+                            cfg->integrator);
     }
     if (cfg->stride < 1 || cfg->stride > 64) {
-        return tr_error_set(err, "stride %d must be in 1..64", cfg->stride);
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "stride %d must be in 1..64",
+                            cfg->stride);
     }
     return TR_OK;
 }
@@ -46,11 +48,13 @@ int tr_render_frame(const tr_scene *scene, const tr_camera *cam, const tr_render
                     tr_film *film, uint32_t sample, tr_render_stats *stats, tr_error *err) {
     double t0 = tr_time_now();
     if (cam->screen_width != film->width || cam->screen_height != film->height) {
-        return tr_error_set(err, "camera is %ux%u but the film is %ux%u", cam->screen_width,
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "camera is %ux%u but the film is %ux%u", cam->screen_width,
                             cam->screen_height, film->width, film->height);
     }
     if (!tr_scene_is_committed(scene)) {
-        return tr_error_set(err, "the scene changed since tr_scene_commit built its %s",
+        return tr_error_set(err, TR_STATUS_STALE_SCENE,
+                            "the scene changed since tr_scene_commit built its %s",
                             tr_accel_name(scene->accel));
     }
     if (tr_render_config_check(cfg, err) != TR_OK) {
@@ -102,7 +106,7 @@ int tr_render_frame(const tr_scene *scene, const tr_camera *cam, const tr_render
         }
     }
     if (cancel && atomic_load(cancel)) {
-        return tr_error_set(err, "frame cancelled");
+        return tr_error_set(err, TR_STATUS_CANCELLED, "frame cancelled");
     }
     if (stats) {
         stats->rays = rays;

@@ -7,11 +7,13 @@
 int tr_film_init(tr_film *f, uint32_t width, uint32_t height, tr_error *err) {
     memset(f, 0, sizeof *f);
     if (width == 0 || height == 0) {
-        return tr_error_set(err, "image size %ux%u must be at least 1x1", width, height);
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "image size %ux%u must be at least 1x1", width, height);
     }
     if (width > TR_FILM_MAX_SIDE || height > TR_FILM_MAX_SIDE ||
         (uint64_t)width * height > TR_FILM_MAX_PIXELS) {
-        return tr_error_set(err, "image size %ux%u exceeds the limit of %u per side and %u pixels",
+        return tr_error_set(err, TR_STATUS_LIMIT,
+                            "image size %ux%u exceeds the limit of %u per side and %u pixels",
                             width, height, TR_FILM_MAX_SIDE, TR_FILM_MAX_PIXELS);
     }
     size_t n = (size_t)width * height;
@@ -19,7 +21,8 @@ int tr_film_init(tr_film *f, uint32_t width, uint32_t height, tr_error *err) {
     f->count = calloc(n, sizeof *f->count);
     if (!f->sum || !f->count) {
         tr_film_free(f);
-        return tr_error_set(err, "out of memory allocating a %ux%u film", width, height);
+        return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory allocating a %ux%u film",
+                            width, height);
     }
     f->width = width;
     f->height = height;

@@ -51,30 +51,36 @@ void tr_scene_free(tr_scene *s) {
 
 int tr_scene_add_material(tr_scene *s, tr_material m, uint32_t *index, tr_error *err) {
     if (m.type < TR_MATERIAL_EMITTER || m.type > TR_MATERIAL_GLOSSY) {
-        return tr_error_set(err, "unknown material type %u (expected 1..4)", m.type);
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "unknown material type %u (expected 1..4)", m.type);
     }
     if (!v3_is_finite(m.color) || m.color.x < 0.0f || m.color.y < 0.0f || m.color.z < 0.0f) {
-        return tr_error_set(err, "material colour (%g, %g, %g) must be finite and non-negative",
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "material colour (%g, %g, %g) must be finite and non-negative",
                             (double)m.color.x, (double)m.color.y, (double)m.color.z);
     }
     if (!isfinite(m.emittance) || m.emittance < 0.0f) {
-        return tr_error_set(err, "material emittance %g must be finite and non-negative",
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "material emittance %g must be finite and non-negative",
                             (double)m.emittance);
     }
     if (!(m.roughness >= 0.0f && m.roughness <= 1.0f)) {
-        return tr_error_set(err, "material roughness %g must be in [0, 1]", (double)m.roughness);
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "material roughness %g must be in [0, 1]", (double)m.roughness);
     }
     if (!(m.ior >= 1.0f && m.ior <= 10.0f)) {
-        return tr_error_set(err, "material ior %g must be in [1, 10]", (double)m.ior);
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "material ior %g must be in [1, 10]",
+                            (double)m.ior);
     }
     if ((m.flags & ~TR_MATERIAL_TWO_SIDED) != 0u) {
-        return tr_error_set(err, "material flags 0x%x have unknown bits", m.flags);
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "material flags 0x%x have unknown bits", m.flags);
     }
     if (s->material_count == s->material_capacity) {
         uint32_t cap = s->material_capacity ? 2 * s->material_capacity : 8;
         tr_material *grown = realloc(s->materials, (size_t)cap * sizeof *grown);
         if (!grown) {
-            return tr_error_set(err, "out of memory adding a material");
+            return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory adding a material");
         }
         s->materials = grown;
         s->material_capacity = cap;
@@ -96,7 +102,8 @@ static int normals_reserve(tr_scene *s, uint32_t count, tr_error *err) {
         }
         tr_vec3 *grown = realloc(s->vertex_normals, (size_t)cap * 3 * sizeof *grown);
         if (!grown) {
-            return tr_error_set(err, "out of memory storing vertex normals");
+            return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY,
+                                "out of memory storing vertex normals");
         }
         s->vertex_normals = grown;
         s->vertex_normal_capacity = (uint32_t)cap;
@@ -112,7 +119,8 @@ static int normals_reserve(tr_scene *s, uint32_t count, tr_error *err) {
 int tr_scene_append_shape(tr_scene *s, const tr_triangle *tris, uint32_t n, const tr_vec3 *normals,
                           tr_error *err) {
     if ((uint64_t)s->triangle_count + n > UINT32_MAX / 2) {
-        return tr_error_set(err, "scene would exceed %u triangles", UINT32_MAX / 2);
+        return tr_error_set(err, TR_STATUS_LIMIT, "scene would exceed %u triangles",
+                            UINT32_MAX / 2);
     }
     int rc = TR_OK;
     if (s->triangle_count + n > s->triangle_capacity) {
@@ -122,7 +130,8 @@ int tr_scene_append_shape(tr_scene *s, const tr_triangle *tris, uint32_t n, cons
         }
         tr_triangle *grown = realloc(s->triangles, (size_t)cap * sizeof *grown);
         if (!grown) {
-            rc = tr_error_set(err, "out of memory growing the scene to %llu triangles",
+            rc = tr_error_set(err, TR_STATUS_OUT_OF_MEMORY,
+                              "out of memory growing the scene to %llu triangles",
                               (unsigned long long)cap);
         } else {
             s->triangles = grown;
@@ -133,7 +142,7 @@ int tr_scene_append_shape(tr_scene *s, const tr_triangle *tris, uint32_t n, cons
         uint32_t cap = s->shape_capacity ? 2 * s->shape_capacity : 16;
         tr_flat_node *grown = realloc(s->shapes, (size_t)cap * sizeof *grown);
         if (!grown) {
-            rc = tr_error_set(err, "out of memory adding a shape");
+            rc = tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory adding a shape");
         } else {
             s->shapes = grown;
             s->shape_capacity = cap;
@@ -164,11 +173,13 @@ int tr_scene_add_mesh(tr_scene *s, const float *positions, uint32_t vertex_count
         *dropped = 0;
     }
     if (material >= s->material_count) {
-        return tr_error_set(err, "mesh refers to material %u, but the scene has %u materials",
-                            material, s->material_count);
+        return tr_error_set(err, TR_STATUS_NOT_FOUND,
+                            "mesh refers to material %u, but the scene has %u materials", material,
+                            s->material_count);
     }
     if ((uint64_t)s->triangle_count + triangle_count > UINT32_MAX / 2) {
-        return tr_error_set(err, "scene would exceed %u triangles", UINT32_MAX / 2);
+        return tr_error_set(err, TR_STATUS_LIMIT, "scene would exceed %u triangles",
+                            UINT32_MAX / 2);
     }
     tr_transform identity = {v3s(0.0f), v3s(0.0f), v3s(1.0f)};
     if (!tf) {
@@ -176,12 +187,14 @@ int tr_scene_add_mesh(tr_scene *s, const float *positions, uint32_t vertex_count
     }
     for (uint32_t i = 0; i < 3 * vertex_count; ++i) {
         if (!isfinite(positions[i])) {
-            return tr_error_set(err, "mesh vertex %u has a non-finite coordinate", i / 3);
+            return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                                "mesh vertex %u has a non-finite coordinate", i / 3);
         }
     }
     for (uint32_t i = 0; i < 3 * triangle_count; ++i) {
         if (indices[i] >= vertex_count) {
-            return tr_error_set(err, "mesh triangle %u uses vertex %u of %u", i / 3, indices[i],
+            return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                                "mesh triangle %u uses vertex %u of %u", i / 3, indices[i],
                                 vertex_count);
         }
     }
@@ -191,7 +204,8 @@ int tr_scene_add_mesh(tr_scene *s, const float *positions, uint32_t vertex_count
     if (!tris || (normals && !nrm)) {
         free(tris);
         free(nrm);
-        return tr_error_set(err, "out of memory adding a mesh of %u triangles", triangle_count);
+        return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY,
+                            "out of memory adding a mesh of %u triangles", triangle_count);
     }
     uint32_t n = 0, bad = 0;
     for (uint32_t i = 0; i < triangle_count; ++i) {
@@ -223,7 +237,8 @@ int tr_scene_add_mesh(tr_scene *s, const float *positions, uint32_t vertex_count
     if (n == 0) {
         free(tris);
         free(nrm);
-        return tr_error_set(err, "mesh has no triangles of non-zero area (%u dropped)", bad);
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "mesh has no triangles of non-zero area (%u dropped)", bad);
     }
     int rc = tr_scene_append_shape(s, tris, n, nrm, err);
     free(tris);
@@ -270,7 +285,8 @@ int tr_scene_commit(tr_scene *s, tr_accel_type accel, tr_error *err) {
         s->committed_triangles = s->triangle_count;
         return TR_OK;
     }
-    return tr_error_set(err, "unknown acceleration structure %d", (int)accel);
+    return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "unknown acceleration structure %d",
+                        (int)accel);
 }
 
 int tr_scene_is_committed(const tr_scene *s) {
@@ -299,11 +315,12 @@ int tr_scene_refit(tr_scene *s, tr_error *err) {
 
 int tr_scene_move_shape(tr_scene *s, uint32_t shape, tr_vec3 delta, tr_error *err) {
     if (shape >= s->shape_count) {
-        return tr_error_set(err, "shape %u does not exist (the scene has %u)", shape,
-                            s->shape_count);
+        return tr_error_set(err, TR_STATUS_NOT_FOUND, "shape %u does not exist (the scene has %u)",
+                            shape, s->shape_count);
     }
     if (!isfinite(delta.x) || !isfinite(delta.y) || !isfinite(delta.z)) {
-        return tr_error_set(err, "shape %u: the offset is not finite", shape);
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "shape %u: the offset is not finite",
+                            shape);
     }
     tr_flat_node *node = &s->shapes[shape];
     for (uint32_t i = node->first; i < node->first + node->count; ++i) {
@@ -334,7 +351,8 @@ int tr_scene_update(tr_scene *s, double *seconds, tr_error *err) {
     const double t0 = tr_time_now();
     int rc = TR_OK;
     if (!tr_scene_is_committed(s)) {
-        rc = tr_error_set(err, "the scene's triangle count changed: commit it again");
+        rc = tr_error_set(err, TR_STATUS_STALE_SCENE,
+                          "the scene's triangle count changed: commit it again");
     } else if (s->accel == TR_ACCEL_TYPE_BVH || s->accel == TR_ACCEL_TYPE_BVH2) {
         rc = tr_scene_refit(s, err);
     } else if (s->accel == TR_ACCEL_TYPE_EMBREE) {

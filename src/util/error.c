@@ -4,9 +4,9 @@
 #include <stdarg.h>
 #include <stdio.h>
 
-int tr_error_set(tr_error *err, const char *fmt, ...) {
+int tr_error_set(tr_error *err, tr_status code, const char *fmt, ...) {
     if (err) {
-        err->code = TR_STATUS_OK;
+        err->code = code;
         va_list ap;
         va_start(ap, fmt);
         vsnprintf(err->msg, sizeof err->msg, fmt, ap);
