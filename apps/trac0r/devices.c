@@ -49,6 +49,19 @@ static void describe(cli_backend *be, const cli_common *c) {
     snprintf(be->name, sizeof be->name, "opencl:%d (%s)", d->index, d->name);
 }
 
+/* Reports a failure to open a device or upload to it. An OpenCL call that failed on a
+ * device that exists (the compiler rejected the kernel, ...) or memory running out is a
+ * fault of this build, driver or machine (exit 1; a build failure's message holds the
+ * build log); anything else - no such device, no OpenCL, a scene too big for the
+ * device - is the command line's (exit 2). */
+static int device_error(const cli_args *a, const tr_error *err) {
+    if (err->code == TR_STATUS_DEVICE || err->code == TR_STATUS_OUT_OF_MEMORY) {
+        fprintf(stderr, "trac0r %s: %s\n", a->cmd, err->msg);
+        return CLI_FAILURE;
+    }
+    return cli_error(a, "--device: %s", err->msg);
+}
+
 int cli_backend_open(const cli_args *a, const cli_common *c, const tr_scene *scene,
                      cli_backend *be) {
     memset(be, 0, sizeof *be);
@@ -59,14 +72,7 @@ int cli_backend_open(const cli_args *a, const cli_common *c, const tr_scene *sce
     tr_error err;
     be->cl = tr_cl_open(c->device, &err);
     if (!be->cl) {
-        if (strncmp(err.msg, "OpenCL: ", 8) == 0) {
-            /* An OpenCL call failed on a device that exists (the compiler rejected the
-             * kernel, ...): a fault of this build or driver, not of the command line.
-             * A build failure's message holds the build log. */
-            fprintf(stderr, "trac0r %s: %s\n", a->cmd, err.msg);
-            return CLI_FAILURE;
-        }
-        return cli_error(a, "--device: %s", err.msg);
+        return device_error(a, &err);
     }
     describe(be, c);
     if (scene) {
@@ -85,7 +91,7 @@ int cli_backend_upload(const cli_args *a, cli_backend *be, const tr_scene *scene
     }
     tr_error err;
     if (tr_cl_upload_scene(be->cl, scene, &err) != TR_OK) {
-        return cli_error(a, "--device: %s", err.msg);
+        return device_error(a, &err);
     }
     const tr_cl_device_info *d = tr_cl_device(be->cl);
     /* bvh and bvh2 both upload the binary BVH (the wide BVH is host code). */
