@@ -231,12 +231,18 @@ int tr_image_read_pfm(tr_image *img, const char *path, tr_error *err) {
     bad |= *end != '\0';
     double scale = strtod(ss, &end);
     bad |= *end != '\0' || scale == 0.0 || !isfinite(scale);
-    if (!channels || bad || w <= 0 || h <= 0 || w > (long)TR_FILM_MAX_SIDE ||
-        h > (long)TR_FILM_MAX_SIDE || (uint64_t)w * (uint64_t)h > TR_FILM_MAX_PIXELS) {
+    if (!channels || bad || w <= 0 || h <= 0) {
         fclose(fp);
         return tr_error_set(err, TR_STATUS_PARSE,
                             "%s: not a supported PFM file (header '%s %s %s %s')", path, magic, ws,
                             hs, ss);
+    }
+    if (w > (long)TR_FILM_MAX_SIDE || h > (long)TR_FILM_MAX_SIDE ||
+        (uint64_t)w * (uint64_t)h > TR_FILM_MAX_PIXELS) {
+        fclose(fp);
+        return tr_error_set(err, TR_STATUS_LIMIT,
+                            "%s: PFM size %ldx%ld is more than %u per side or %u pixels", path, w,
+                            h, TR_FILM_MAX_SIDE, TR_FILM_MAX_PIXELS);
     }
     if (scale > 0.0) {
         fclose(fp);
@@ -280,13 +286,21 @@ int tr_image_read_png(tr_image *img, const char *path, tr_error *err) {
     png_image p;
     memset(&p, 0, sizeof p);
     p.version = PNG_IMAGE_VERSION;
-    if (!png_image_begin_read_from_file(&p, path)) {
+    /* Opened here rather than by libpng, so that a missing file is told apart by errno. */
+    FILE *fp = fopen(path, "rb");
+    if (!fp) {
+        return tr_error_set(err, tr_status_from_errno(errno), "%s: cannot open: %s", path,
+                            strerror(errno));
+    }
+    if (!png_image_begin_read_from_stdio(&p, fp)) {
+        fclose(fp);
         return tr_error_set(err, TR_STATUS_PARSE, "%s: cannot read PNG: %s", path, p.message);
     }
     p.format = PNG_FORMAT_RGB;
     if (p.width == 0 || p.height == 0 || p.width > TR_FILM_MAX_SIDE ||
         p.height > TR_FILM_MAX_SIDE) {
         png_image_free(&p);
+        fclose(fp);
         return tr_error_set(err, TR_STATUS_LIMIT, "%s: PNG size %ux%u is not supported", path,
                             p.width, p.height);
     }
@@ -296,10 +310,13 @@ int tr_image_read_png(tr_image *img, const char *path, tr_error *err) {
     if (!buf || !img->rgb) {
         free(buf);
         png_image_free(&p);
+        fclose(fp);
         tr_image_free(img);
         return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "%s: out of memory", path);
     }
-    if (!png_image_finish_read(&p, NULL, buf, 0, NULL)) {
+    const int decoded = png_image_finish_read(&p, NULL, buf, 0, NULL);
+    fclose(fp);
+    if (!decoded) {
         free(buf);
         tr_image_free(img);
         return tr_error_set(err, TR_STATUS_PARSE, "%s: cannot decode PNG: %s", path, p.message);
