@@ -142,7 +142,7 @@ static void *render_main(void *arg) {
         int rc = render_one(r, &cam, &cfg, sample, &st, &err);
         if (rc != TR_OK) {
             pthread_mutex_lock(&r->mu);
-            if (atomic_load(&r->cancel)) {
+            if (err.code == TR_STATUS_CANCELLED) {
                 /* The film holds part of a sample: start this view over. */
                 gen = UINT64_MAX;
                 r->cancelled += 1;
