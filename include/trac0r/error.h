@@ -21,8 +21,8 @@
 #define TR_OK 0
 #define TR_ERR (-1)
 
-/* What kind of failure a tr_error reports. Each function's comment names the codes it
- * can return where that is not obvious; new codes are only ever added at the end. */
+/* What kind of failure a tr_error reports; docs/architecture.md ("Errors") lists which
+ * calls give which code. New codes are only ever added at the end. */
 typedef enum tr_status {
     /* No failure: a tr_error nobody has set. */
     TR_STATUS_OK = 0,

@@ -21,7 +21,7 @@ typedef struct tr_render_config {
     uint32_t tile;  /* tile side in pixels (default 16) */
     /* Optional (default NULL): when the int it points to becomes nonzero, the frame
      * stops early (checked before each tile), the film holds a partial sample and the
-     * call fails with "frame cancelled". For interactive use: another thread sets it. */
+     * call fails with TR_STATUS_CANCELLED. For interactive use: another thread sets it. */
     const atomic_int *cancel;
 } tr_render_config;
 
