@@ -1,12 +1,15 @@
 /* check.h - the few assertion macros the C tests share.
  *
  * CHECK(cond, fmt, ...) records a failure with file:line and a message and goes on;
- * a test's main returns check_finish() so that every failure is reported. */
+ * a test's main returns check_finish() so that every failure is reported.
+ * CHECK_STATUS(rc, err, code, what) checks that a call failed with one tr_status. */
 #ifndef TR_TEST_CHECK_H
 #define TR_TEST_CHECK_H
 
 #include <math.h>
 #include <stdio.h>
+
+#include "trac0r/error.h"
 
 static int check_failures = 0;
 static int check_count = 0;
@@ -26,6 +29,17 @@ static int check_count = 0;
 #define CHECK_NEAR(a, b, tol, what)                                                                \
     CHECK(fabs((double)(a) - (double)(b)) <= (double)(tol), "%s: %.9g vs %.9g (tol %.3g)", (what), \
           (double)(a), (double)(b), (double)(tol))
+
+/* A call that must fail with the error code `want`: rc is what it returned, err the
+ * tr_error it filled (read only when rc is TR_ERR: success leaves it unset). */
+#define CHECK_STATUS(rc, err, want, what)                                                          \
+    do {                                                                                           \
+        const int check_rc_ = (rc);                                                                \
+        const int check_set_ = check_rc_ == TR_ERR;                                                \
+        CHECK(check_set_ && (err).code == (want), "%s: rc %d, %s (expected %s): %s", (what),       \
+              check_rc_, check_set_ ? tr_status_name((err).code) : "no code",                      \
+              tr_status_name(want), check_set_ ? (err).msg : "");                                  \
+    } while (0)
 
 /* Chi-square critical value for `dof` degrees of freedom at p = 1e-4 (Wilson-Hilferty:
  * (X/k)^(1/3) is nearly normal with mean 1 - 2/(9k) and variance 2/(9k)); for 15 to

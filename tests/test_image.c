@@ -105,12 +105,11 @@ static void test_roundtrip(void) {
     tr_image_free(&img);
     CHECK(files_in_dir() == 2, "%d files, expected a.pfm and a.PNG only", files_in_dir());
 
-    CHECK(tr_film_write(&f, path_in("a.bmp"), 0.0f, &err) == TR_ERR &&
-              strstr(err.msg, "unknown image extension"),
-          "unknown extension accepted: %s", err.msg);
-    CHECK(tr_film_write(&f, path_in("no/such/dir/a.png"), 0.0f, &err) == TR_ERR &&
-              strstr(err.msg, "no/such/dir/a.png"),
-          "missing directory accepted or not named: %s", err.msg);
+    CHECK_STATUS(tr_film_write(&f, path_in("a.bmp"), 0.0f, &err), err, TR_STATUS_UNSUPPORTED,
+                 "unknown extension");
+    CHECK_STATUS(tr_film_write(&f, path_in("no/such/dir/a.png"), 0.0f, &err), err,
+                 TR_STATUS_NOT_FOUND, "missing directory");
+    CHECK(strstr(err.msg, "no/such/dir/a.png"), "the file is not named: %s", err.msg);
     CHECK(tr_image_check_writable(path_in("b.png"), &err) == TR_OK, "%s", err.msg);
     CHECK(files_in_dir() == 2, "failed writes or the writability check left files behind");
     CHECK(tr_image_format_from_path("x.pfm") == TR_IMAGE_PFM &&
@@ -125,19 +124,21 @@ static void test_bad_files(void) {
     tr_image img;
     const char truncated[] = "PF\n4 4\n-1.0\n\x00\x00\x80\x3f";
     write_file("t.pfm", truncated, sizeof truncated - 1);
-    CHECK(tr_image_read_pfm(&img, path_in("t.pfm"), &err) == TR_ERR && strstr(err.msg, "truncated"),
-          "truncated PFM: %s", err.msg);
+    CHECK_STATUS(tr_image_read_pfm(&img, path_in("t.pfm"), &err), err, TR_STATUS_PARSE,
+                 "truncated PFM");
     const char huge[] = "PF\n100000 100000\n-1.0\n";
     write_file("h.pfm", huge, sizeof huge - 1);
-    CHECK(tr_image_read_pfm(&img, path_in("h.pfm"), &err) == TR_ERR, "huge PFM accepted");
+    CHECK_STATUS(tr_image_read_pfm(&img, path_in("h.pfm"), &err), err, TR_STATUS_LIMIT, "huge PFM");
     const char garbage[] = "P6\n4 4\n255\n";
     write_file("g.pfm", garbage, sizeof garbage - 1);
-    CHECK(tr_image_read_pfm(&img, path_in("g.pfm"), &err) == TR_ERR, "PPM read as PFM");
+    CHECK_STATUS(tr_image_read_pfm(&img, path_in("g.pfm"), &err), err, TR_STATUS_PARSE,
+                 "PPM read as PFM");
     write_file("g.png", garbage, sizeof garbage - 1);
-    CHECK(tr_image_read_png(&img, path_in("g.png"), &err) == TR_ERR, "garbage read as PNG");
-    CHECK(tr_image_read_pfm(&img, path_in("missing.pfm"), &err) == TR_ERR &&
-              strstr(err.msg, "missing.pfm"),
-          "missing file: %s", err.msg);
+    CHECK_STATUS(tr_image_read_png(&img, path_in("g.png"), &err), err, TR_STATUS_PARSE,
+                 "garbage read as PNG");
+    CHECK_STATUS(tr_image_read_pfm(&img, path_in("missing.pfm"), &err), err, TR_STATUS_NOT_FOUND,
+                 "missing file");
+    CHECK(strstr(err.msg, "missing.pfm"), "the file is not named: %s", err.msg);
     const char gray[] = "Pf\n1 1\n-1.0\n\x00\x00\x00\x3f";
     write_file("gray.pfm", gray, sizeof gray - 1);
     CHECK(tr_image_read_pfm(&img, path_in("gray.pfm"), &err) == TR_OK && img.rgb[0] == 0.5f &&

@@ -397,43 +397,59 @@ static void test_rejects(void) {
     const float nan = NAN, inf = INFINITY;
     tr_shape_desc bad[20];
     const char *what[20];
+    tr_status want[20];
     int nb = 0;
     const tr_vec3 zero = v3s(0.0f), one = v3s(1.0f);
     bad[nb] = make_desc(TR_SHAPE_ICOSPHERE, zero, zero, one, TR_ICOSPHERE_MAX_SUBDIVISIONS + 1, 0);
-    what[nb++] = "subdivisions = max + 1";
+    what[nb] = "subdivisions = max + 1";
+    want[nb++] = TR_STATUS_LIMIT;
     bad[nb] = make_desc(TR_SHAPE_ICOSPHERE, zero, zero, one, 1000, 0);
-    what[nb++] = "subdivisions = 1000";
+    what[nb] = "subdivisions = 1000";
+    want[nb++] = TR_STATUS_LIMIT;
     bad[nb] = make_desc(TR_SHAPE_ICOSPHERE, zero, zero, v3s(0.0f), 1, 0);
-    what[nb++] = "icosphere radius 0";
+    what[nb] = "icosphere radius 0";
+    want[nb++] = TR_STATUS_INVALID_ARGUMENT;
     bad[nb] = make_desc(TR_SHAPE_BOX, zero, zero, v3(1, 0, 1), 0, 0);
-    what[nb++] = "zero scale";
+    what[nb] = "zero scale";
+    want[nb++] = TR_STATUS_INVALID_ARGUMENT;
     bad[nb] = make_desc(TR_SHAPE_BOX, zero, zero, v3(-1, 1, 1), 0, 0);
-    what[nb++] = "negative scale";
+    what[nb] = "negative scale";
+    want[nb++] = TR_STATUS_INVALID_ARGUMENT;
     bad[nb] = make_desc(TR_SHAPE_ICOSPHERE, zero, zero, v3s(-2.0f), 1, 0);
-    what[nb++] = "negative radius";
+    what[nb] = "negative radius";
+    want[nb++] = TR_STATUS_INVALID_ARGUMENT;
     bad[nb] = make_desc(TR_SHAPE_PLANE, zero, zero, v3(1, 1, nan), 0, 0);
-    what[nb++] = "NaN scale";
+    what[nb] = "NaN scale";
+    want[nb++] = TR_STATUS_INVALID_ARGUMENT;
     bad[nb] = make_desc(TR_SHAPE_BOX, zero, zero, v3(inf, 1, 1), 0, 0);
-    what[nb++] = "infinite scale";
+    what[nb] = "infinite scale";
+    want[nb++] = TR_STATUS_INVALID_ARGUMENT;
     bad[nb] = make_desc(TR_SHAPE_BOX, v3(0, nan, 0), zero, one, 0, 0);
-    what[nb++] = "NaN position";
+    what[nb] = "NaN position";
+    want[nb++] = TR_STATUS_INVALID_ARGUMENT;
     bad[nb] = make_desc(TR_SHAPE_BOX, v3(-inf, 0, 0), zero, one, 0, 0);
-    what[nb++] = "infinite position";
+    what[nb] = "infinite position";
+    want[nb++] = TR_STATUS_INVALID_ARGUMENT;
     bad[nb] = make_desc(TR_SHAPE_BOX, zero, v3(0, 0, nan), one, 0, 0);
-    what[nb++] = "NaN orientation";
+    what[nb] = "NaN orientation";
+    want[nb++] = TR_STATUS_INVALID_ARGUMENT;
     bad[nb] = make_desc(TR_SHAPE_BOX, zero, zero, one, 0, 2);
-    what[nb++] = "material == material count";
+    what[nb] = "material == material count";
+    want[nb++] = TR_STATUS_NOT_FOUND;
     bad[nb] = make_desc(TR_SHAPE_PLANE, zero, zero, one, 0, UINT32_MAX);
-    what[nb++] = "material UINT32_MAX";
+    what[nb] = "material UINT32_MAX";
+    want[nb++] = TR_STATUS_NOT_FOUND;
     bad[nb] = make_desc((tr_shape_type)0, zero, zero, one, 0, 0);
-    what[nb++] = "type 0";
+    what[nb] = "type 0";
+    want[nb++] = TR_STATUS_INVALID_ARGUMENT;
     bad[nb] = make_desc((tr_shape_type)99, zero, zero, one, 0, 0);
-    what[nb++] = "type 99";
+    what[nb] = "type 99";
+    want[nb++] = TR_STATUS_INVALID_ARGUMENT;
 
     for (int i = 0; i < nb; ++i) {
         memset(err.msg, 0, sizeof err.msg);
         int rc = tr_scene_add_shape(&s, &bad[i], &err);
-        CHECK(rc == TR_ERR, "%s: accepted (rc %d)", what[i], rc);
+        CHECK_STATUS(rc, err, want[i], what[i]);
         CHECK(err.msg[0] != '\0', "%s: rejected without a message", what[i]);
         int same = s.triangle_count == tri_n && s.shape_count == shape_n &&
                    s.material_count == mat_n &&
@@ -521,9 +537,8 @@ static void test_cornell(void) {
     tr_scene_free(&s);
 
     /* An unknown name fails with a message and leaves an empty scene. */
-    err.msg[0] = '\0';
-    CHECK(tr_scene_builtin(&s, "no-such-scene", 64, 64, &err) == TR_ERR && err.msg[0] != '\0',
-          "unknown built-in scene accepted");
+    CHECK_STATUS(tr_scene_builtin(&s, "no-such-scene", 64, 64, &err), err, TR_STATUS_NOT_FOUND,
+                 "unknown built-in scene");
     CHECK(s.triangle_count == 0 && s.shape_count == 0 && s.triangles == NULL,
           "unknown built-in scene left %u triangles", s.triangle_count);
     tr_scene_free(&s);

@@ -24,7 +24,8 @@ int compare_load(const char *path, tr_image *img, tr_error *err) {
         return TR_OK;
     }
     default:
-        return tr_error_set(err, "%s: unknown image format (expected .pfm or .png)", path);
+        return tr_error_set(err, TR_STATUS_UNSUPPORTED,
+                            "%s: unknown image format (expected .pfm or .png)", path);
     }
 }
 

@@ -52,20 +52,26 @@ static void describe(cli_backend *be, int threads) {
     snprintf(be->name, sizeof be->name, "%s (%s)", d->name, d->model);
 }
 
+/* Reports a failure to open a device or upload to it. An OpenCL call that failed on a
+ * device that exists (the compiler rejected the kernel, ...) or memory running out is a
+ * fault of this build, driver or machine (exit 1; a build failure's message holds the
+ * build log); anything else - no such device, no OpenCL, a scene too big for the
+ * device - is the command line's (exit 2). */
+static int device_error(const cli_args *a, const tr_error *err) {
+    if (err->code == TR_STATUS_DEVICE || err->code == TR_STATUS_OUT_OF_MEMORY) {
+        fprintf(stderr, "trac0r %s: %s\n", a->cmd, err->msg);
+        return CLI_FAILURE;
+    }
+    return cli_error(a, "--device: %s", err->msg);
+}
+
 int cli_backend_open(const cli_args *a, const cli_common *c, const tr_scene *scene,
                      cli_backend *be) {
     memset(be, 0, sizeof *be);
     tr_error err;
     be->dev = tr_device_open(c->device, &err);
     if (!be->dev) {
-        if (strncmp(err.msg, "OpenCL: ", 8) == 0) {
-            /* An OpenCL call failed on a device that exists (the compiler rejected the
-             * kernel, ...): a fault of this build or driver, not of the command line.
-             * A build failure's message holds the build log. */
-            fprintf(stderr, "trac0r %s: %s\n", a->cmd, err.msg);
-            return CLI_FAILURE;
-        }
-        return cli_error(a, "--device: %s", err.msg);
+        return device_error(a, &err);
     }
     describe(be, c->threads);
     if (scene) {
@@ -81,7 +87,7 @@ int cli_backend_open(const cli_args *a, const cli_common *c, const tr_scene *sce
 int cli_backend_upload(const cli_args *a, cli_backend *be, const tr_scene *scene) {
     tr_error err;
     if (tr_device_upload(be->dev, scene, &err) != TR_OK) {
-        return cli_error(a, "--device: %s", err.msg);
+        return device_error(a, &err);
     }
     if (cli_backend_is_cpu(be)) {
         return CLI_OK;

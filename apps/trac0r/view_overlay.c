@@ -2,6 +2,7 @@
 #define _POSIX_C_SOURCE 200809L
 #include "view_overlay.h"
 
+#include <errno.h>
 #include <fontconfig/fontconfig.h>
 #include <stdio.h>
 #include <string.h>
@@ -15,7 +16,8 @@ int view_font_find(const char *override, char *path, size_t n, tr_error *err) {
     if (override) {
         FILE *fp = fopen(override, "rb");
         if (!fp) {
-            return tr_error_set(err, "--font: cannot open '%s'", override);
+            return tr_error_set(err, tr_status_from_errno(errno), "--font: cannot open '%s'",
+                                override);
         }
         fclose(fp);
         snprintf(path, n, "%s", override);
@@ -46,9 +48,10 @@ int view_font_find(const char *override, char *path, size_t n, tr_error *err) {
         FcConfigDestroy(cfg);
     }
     if (!found) {
-        return tr_error_set(err, "fontconfig finds no '" FONT_FAMILY
-                                 "' font for the debug view (install fonts-dejavu-core "
-                                 "or pass --font FILE.ttf)");
+        return tr_error_set(err, TR_STATUS_NOT_FOUND,
+                            "fontconfig finds no '" FONT_FAMILY
+                            "' font for the debug view (install fonts-dejavu-core "
+                            "or pass --font FILE.ttf)");
     }
     return TR_OK;
 }

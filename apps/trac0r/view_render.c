@@ -35,7 +35,7 @@ static int resize_buffers(view_renderer *r, uint32_t w, uint32_t h, tr_error *er
     }
     r->back = malloc((size_t)w * h * sizeof *r->back);
     if (!r->back) {
-        return tr_error_set(err, "out of memory for a %ux%u frame", w, h);
+        return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory for a %ux%u frame", w, h);
     }
     return TR_OK;
 }
@@ -53,7 +53,8 @@ static int render_one(view_renderer *r, const tr_camera *cam, const tr_render_co
         return TR_ERR;
     }
     if (atomic_load(&r->cancel)) {
-        return tr_error_set(err, "frame cancelled"); /* the view changed meanwhile */
+        return tr_error_set(err, TR_STATUS_CANCELLED,
+                            "frame cancelled"); /* the view changed meanwhile */
     }
     return tr_device_read_film(r->dev, &r->film, err);
 }
@@ -135,7 +136,7 @@ static void *render_main(void *arg) {
         int rc = render_one(r, &cam, &cfg, sample, &st, &err);
         if (rc != TR_OK) {
             pthread_mutex_lock(&r->mu);
-            if (atomic_load(&r->cancel)) {
+            if (err.code == TR_STATUS_CANCELLED) {
                 /* The film holds part of a sample: start this view over. */
                 gen = UINT64_MAX;
                 r->cancelled += 1;
@@ -197,7 +198,8 @@ int view_renderer_start(view_renderer *r, tr_scene *scene, int animate, tr_devic
     if (rc != 0) {
         pthread_cond_destroy(&r->cv);
         pthread_mutex_destroy(&r->mu);
-        return tr_error_set(err, "cannot start the render thread: %s", strerror(rc));
+        return tr_error_set(err, TR_STATUS_LIMIT, "cannot start the render thread: %s",
+                            strerror(rc));
     }
     r->started = 1;
     return TR_OK;

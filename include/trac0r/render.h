@@ -22,7 +22,7 @@ typedef struct tr_render_config {
     uint32_t passes; /* TR_PASS_* to accumulate beside radiance (default none) */
     /* Optional (default NULL): asked before each tile on the CPU; when it returns nonzero
      * the frame stops early, the film holds a partial sample and the call fails with
-     * "frame cancelled". For interactive use: another thread decides. */
+     * TR_STATUS_CANCELLED. For interactive use: another thread decides. */
     int (*cancel)(void *user);
     void *cancel_user;
 } tr_render_config;

@@ -15,9 +15,9 @@
  *     tr_film_free(&film);
  *     tr_scene_free(&scene);
  *
- * Every fallible call returns TR_OK or TR_ERR with a message in tr_error; nothing
- * prints or exits. The same scene, config and sample numbers give bit-identical films
- * whatever the thread count. */
+ * Every fallible call returns TR_OK or TR_ERR with a code and a message in tr_error
+ * (error.h); nothing prints or exits. The same scene, config and sample numbers give bit-identical
+ * films whatever the thread count. */
 #ifndef TRAC0R_H
 #define TRAC0R_H
 

@@ -411,7 +411,8 @@ int tr_bvh_build(tr_bvh *bvh, const tr_triangle *tris, uint32_t n, tr_error *err
         free(b.centroids);
         free(b.indices);
         free(b.nodes);
-        return tr_error_set(err, "out of memory building a BVH over %u triangles", n);
+        return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY,
+                            "out of memory building a BVH over %u triangles", n);
     }
     uint32_t m = 0;
     for (uint32_t i = 0; i < n; ++i) {
@@ -431,7 +432,8 @@ int tr_bvh_build(tr_bvh *bvh, const tr_triangle *tris, uint32_t n, tr_error *err
     if (rc != TR_OK) {
         free(b.nodes);
         free(b.indices);
-        return tr_error_set(err, "out of memory building a BVH over %u triangles", n);
+        return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY,
+                            "out of memory building a BVH over %u triangles", n);
     }
     bvh->nodes = b.nodes;
     bvh->node_count = m > 0 ? b.node_count : 0;
@@ -449,7 +451,8 @@ int tr_bvh_build(tr_bvh *bvh, const tr_triangle *tris, uint32_t n, tr_error *err
     bvh->tris = malloc((size_t)(m ? m : 1) * sizeof *bvh->tris);
     if (!bvh->tris) {
         tr_bvh_free(bvh);
-        return tr_error_set(err, "out of memory building a BVH over %u triangles", n);
+        return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY,
+                            "out of memory building a BVH over %u triangles", n);
     }
     bvh_fill_tris(bvh, tris);
     bvh->build_seconds = tr_time_now() - t0;

@@ -82,8 +82,10 @@ static int check_device(struct tr_embree_state *st, const char *what, tr_error *
     if (code == RTC_ERROR_NONE) {
         return TR_OK;
     }
-    return tr_error_set(err, "embree: %s failed: %s", what,
-                        atomic_load(&st->error_claimed) ? st->message : error_name(code));
+    return tr_error_set(
+        err, code == RTC_ERROR_OUT_OF_MEMORY ? TR_STATUS_OUT_OF_MEMORY : TR_STATUS_DEVICE,
+        "embree: %s failed: %s", what,
+        atomic_load(&st->error_claimed) ? st->message : error_name(code));
 }
 
 void tr_embree_free(tr_embree *e) {
@@ -104,18 +106,20 @@ int tr_embree_build(tr_embree *e, const tr_triangle *tris, uint32_t n, tr_error 
     double t0 = tr_time_now();
     /* Embree indexes vertices with 32-bit unsigned integers: three per triangle. */
     if (n > UINT32_MAX / 3) {
-        return tr_error_set(err, "embree: %u triangles are more than Embree can index", n);
+        return tr_error_set(err, TR_STATUS_LIMIT,
+                            "embree: %u triangles are more than Embree can index", n);
     }
     struct tr_embree_state *st = calloc(1, sizeof *st);
     if (!st) {
-        return tr_error_set(err, "out of memory building the Embree scene");
+        return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY,
+                            "out of memory building the Embree scene");
     }
     atomic_init(&st->error_claimed, 0);
     e->state = st;
 
     st->device = rtcNewDevice(NULL);
     if (!st->device) {
-        tr_error_set(err, "embree: could not create a device: %s",
+        tr_error_set(err, TR_STATUS_DEVICE, "embree: could not create a device: %s",
                      error_name(rtcGetDeviceError(NULL)));
         tr_embree_free(e);
         return TR_ERR;
@@ -263,7 +267,7 @@ int tr_embree_build(tr_embree *e, const tr_triangle *tris, uint32_t n, tr_error 
     (void)tris;
     (void)n;
     memset(e, 0, sizeof *e);
-    return tr_error_set(err, "this build of trac0r has no Embree support");
+    return tr_error_set(err, TR_STATUS_UNSUPPORTED, "this build of trac0r has no Embree support");
 }
 
 void tr_embree_free(tr_embree *e) {

@@ -229,7 +229,8 @@ int tr_wbvh_build(tr_wbvh *w, const tr_bvh *bvh, tr_error *err) {
     free(c.sub_count);
     if (c.failed) {
         tr_wbvh_free(w);
-        return tr_error_set(err, "out of memory collapsing a BVH of %u nodes into a wide BVH",
+        return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY,
+                            "out of memory collapsing a BVH of %u nodes into a wide BVH",
                             bvh->node_count);
     }
     w->build_seconds = tr_time_now() - t0;
@@ -359,10 +360,10 @@ const char *tr_wbvh_isa(void) {
 
 int tr_wbvh_set_isa(int isa, tr_error *err) {
     if (isa < 0 || isa >= TR_WBVH_ISA_COUNT) {
-        return tr_error_set(err, "unknown wide-BVH ISA %d", isa);
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "unknown wide-BVH ISA %d", isa);
     }
     if (!(tr_wbvh_isa_mask() >> isa & 1u)) {
-        return tr_error_set(err, "wide-BVH ISA %s: not supported by this CPU or build",
+        return tr_error_set(err, TR_STATUS_UNSUPPORTED, "wide-BVH ISA %s: not supported by this CPU or build",
                             isa_names[isa]);
     }
     atomic_store(&isa_current, isa);

@@ -36,17 +36,20 @@ double tr_time_now(void) {
 
 int tr_render_config_check(const tr_render_config *cfg, tr_error *err) {
     if (cfg->max_depth < 1 || cfg->max_depth > TR_MAX_DEPTH_LIMIT) {
-        return tr_error_set(err, "max depth %d must be in 1..%d", cfg->max_depth,
-                            TR_MAX_DEPTH_LIMIT);
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "max depth %d must be in 1..%d",
+                            cfg->max_depth, TR_MAX_DEPTH_LIMIT);
     }
     if (tr_integrator_name(cfg->integrator) == NULL) {
-        return tr_error_set(err, "unknown integrator %d", cfg->integrator);
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "unknown integrator %d",
+                            cfg->integrator);
     }
     if (cfg->stride < 1 || cfg->stride > 64) {
-        return tr_error_set(err, "stride %d must be in 1..64", cfg->stride);
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "stride %d must be in 1..64",
+                            cfg->stride);
     }
     if ((cfg->passes & ~TR_PASS_ALL) != 0u) {
-        return tr_error_set(err, "unknown pass bits 0x%x", cfg->passes & ~TR_PASS_ALL);
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "unknown pass bits 0x%x",
+                            cfg->passes & ~TR_PASS_ALL);
     }
     return TR_OK;
 }
@@ -59,18 +62,18 @@ int tr_frame_make(tr_frame *f, const tr_camera *cam, const tr_render_config *cfg
     const uint32_t w = cam->screen_width, h = cam->screen_height;
     if (w == 0 || h == 0 || w > TR_FILM_MAX_SIDE || h > TR_FILM_MAX_SIDE ||
         (uint64_t)w * h > TR_FILM_MAX_PIXELS) {
-        return tr_error_set(err, "camera screen size %ux%u is out of range", w, h);
+        return tr_error_set(err, TR_STATUS_LIMIT, "camera screen size %ux%u is out of range", w, h);
     }
     if (sample_count == 0 || (uint64_t)sample + sample_count - 1u > UINT32_MAX) {
-        return tr_error_set(err, "samples %u..%u+%u are out of range", sample, sample,
-                            sample_count);
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "samples %u..%u+%u are out of range",
+                            sample, sample, sample_count);
     }
     tr_rect r = {0, 0, w, h};
     if (rect) {
         r = *rect;
         if (r.width == 0 || r.height == 0 || r.x >= w || r.y >= h || r.width > w - r.x ||
             r.height > h - r.y) {
-            return tr_error_set(err,
+            return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
                                 "rectangle %ux%u at (%u, %u) is empty or outside the %ux%u image",
                                 r.width, r.height, r.x, r.y, w, h);
         }
@@ -108,11 +111,13 @@ int tr_cpu_render(const tr_scene_view *view, const tr_frame *f, tr_film *film, i
                   uint32_t tile_side, int (*cancel)(void *), void *cancel_user, uint64_t *rays_out,
                   tr_error *err) {
     if (f->camera.screen_width != film->width || f->camera.screen_height != film->height) {
-        return tr_error_set(err, "camera is %ux%u but the film is %ux%u", f->camera.screen_width,
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "camera is %ux%u but the film is %ux%u", f->camera.screen_width,
                             f->camera.screen_height, film->width, film->height);
     }
     if ((f->passes & ~film->passes) != 0u) {
-        return tr_error_set(err, "the film does not keep the passes asked for (0x%x of 0x%x)",
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "the film does not keep the passes asked for (0x%x of 0x%x)",
                             f->passes & ~film->passes, f->passes);
     }
     tr_film_view fv = tr_film_view_of(film);
@@ -153,7 +158,7 @@ int tr_cpu_render(const tr_scene_view *view, const tr_frame *f, tr_film *film, i
         }
     }
     if (cancelled) {
-        return tr_error_set(err, "frame cancelled");
+        return tr_error_set(err, TR_STATUS_CANCELLED, "frame cancelled");
     }
     if (rays_out) {
         *rays_out = rays;
@@ -165,7 +170,8 @@ int tr_render_frame(const tr_scene *scene, const tr_camera *cam, const tr_render
                     tr_film *film, uint32_t sample, tr_render_stats *stats, tr_error *err) {
     const double t0 = tr_time_now();
     if (!tr_scene_is_committed(scene)) {
-        return tr_error_set(err, "the scene changed since tr_scene_commit built its %s",
+        return tr_error_set(err, TR_STATUS_STALE_SCENE,
+                            "the scene changed since tr_scene_commit built its %s",
                             tr_accel_name(scene->accel));
     }
     tr_frame f;

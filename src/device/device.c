@@ -76,7 +76,8 @@ static void cl_info(const tr_cl_device_info *d, tr_device_info *info) {
 int tr_device_list(const char *kind, tr_device_info *out, int max, int *count, tr_error *err) {
     *count = 0;
     if (kind && strcmp(kind, "cpu") != 0 && strcmp(kind, "opencl") != 0) {
-        return tr_error_set(err, "unknown device kind '%s' (expected cpu or opencl)", kind);
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "unknown device kind '%s' (expected cpu or opencl)", kind);
     }
     if (!kind || strcmp(kind, "cpu") == 0) {
         if (max > 0 && out) {
@@ -100,7 +101,7 @@ int tr_device_list(const char *kind, tr_device_info *out, int max, int *count, t
     }
     tr_cl_device_info *devs = calloc((size_t)(ncl ? ncl : 1), sizeof *devs);
     if (!devs) {
-        return tr_error_set(err, "out of memory listing OpenCL devices");
+        return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory listing OpenCL devices");
     }
     if (tr_cl_list_devices(devs, ncl, &ncl, err) != TR_OK) {
         free(devs);
@@ -142,13 +143,14 @@ tr_device *tr_device_open(const char *name, tr_error *err) {
     }
     const int cl_index = opencl_index(name);
     if (strcmp(name, "cpu") != 0 && cl_index < 0) {
-        tr_error_set(
-            err, "unknown device '%s' (expected cpu, opencl or opencl:N with N in 0..1023)", name);
+        tr_error_set(err, TR_STATUS_NOT_FOUND,
+                     "unknown device '%s' (expected cpu, opencl or opencl:N with N in 0..1023)",
+                     name);
         return NULL;
     }
     tr_device *dev = calloc(1, sizeof *dev);
     if (!dev) {
-        tr_error_set(err, "out of memory opening device '%s'", name);
+        tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory opening device '%s'", name);
         return NULL;
     }
     if (cl_index < 0) {
@@ -185,7 +187,8 @@ const char *tr_device_kind(const tr_device *dev) {
 
 int tr_device_upload(tr_device *dev, const tr_scene *scene, tr_error *err) {
     if (!tr_scene_is_committed(scene)) {
-        return tr_error_set(err, "the scene changed since tr_scene_commit built its %s",
+        return tr_error_set(err, TR_STATUS_STALE_SCENE,
+                            "the scene changed since tr_scene_commit built its %s",
                             tr_accel_name(scene->accel));
     }
     if (dev->kind == KIND_OPENCL) {
@@ -225,11 +228,12 @@ int tr_device_render(tr_device *dev, const tr_camera *cam, const tr_render_confi
                      tr_render_stats *stats, tr_error *err) {
     const double t0 = tr_time_now();
     if (!dev->scene) {
-        return tr_error_set(err, "no scene uploaded to device %s", dev->info.name);
+        return tr_error_set(err, TR_STATUS_INVALID_OPERATION, "no scene uploaded to device %s",
+                            dev->info.name);
     }
     if (dev->kind == KIND_CPU && !tr_scene_is_committed(dev->scene)) {
-        return tr_error_set(err, "the scene changed since it was uploaded to device %s",
-                            dev->info.name);
+        return tr_error_set(err, TR_STATUS_STALE_SCENE,
+                            "the scene changed since it was uploaded to device %s", dev->info.name);
     }
     tr_frame f;
     if (tr_frame_make(&f, cam, cfg, sample, sample_count, rect, err) != TR_OK) {
@@ -263,15 +267,18 @@ int tr_device_read_film(tr_device *dev, tr_film *film, tr_error *err) {
     }
     const tr_film *src = &dev->film;
     if (!src->sum) {
-        return tr_error_set(err, "the film of device %s is empty: no frame was rendered",
+        return tr_error_set(err, TR_STATUS_INVALID_OPERATION,
+                            "the film of device %s is empty: no frame was rendered",
                             dev->info.name);
     }
     if (film->width != src->width || film->height != src->height) {
-        return tr_error_set(err, "the film is %ux%u but the film of device %s is %ux%u",
-                            film->width, film->height, dev->info.name, src->width, src->height);
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "the film is %ux%u but the film of device %s is %ux%u", film->width,
+                            film->height, dev->info.name, src->width, src->height);
     }
     if ((film->passes & ~src->passes) != 0u) {
-        return tr_error_set(err, "the film of device %s does not keep passes 0x%x", dev->info.name,
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "the film of device %s does not keep passes 0x%x", dev->info.name,
                             film->passes & ~src->passes);
     }
     const size_t n = (size_t)src->width * src->height;

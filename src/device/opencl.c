@@ -27,11 +27,11 @@ int tr_cl_list_devices(tr_cl_device_info *out, int max, int *count, tr_error *er
     (void)out;
     (void)max;
     *count = 0;
-    return tr_error_set(err, "%s", no_opencl);
+    return tr_error_set(err, TR_STATUS_UNSUPPORTED, "%s", no_opencl);
 }
 tr_cl_context *tr_cl_open(int index, tr_error *err) {
     (void)index;
-    tr_error_set(err, "%s", no_opencl);
+    tr_error_set(err, TR_STATUS_UNSUPPORTED, "%s", no_opencl);
     return NULL;
 }
 tr_cl_context *tr_cl_open_source(int index, const char *source, tr_error *err) {
@@ -59,7 +59,7 @@ const char *tr_cl_build_options(const tr_cl_context *ctx) {
 int tr_cl_upload_scene(tr_cl_context *ctx, const tr_scene *scene, tr_error *err) {
     (void)ctx;
     (void)scene;
-    return tr_error_set(err, "%s", no_opencl);
+    return tr_error_set(err, TR_STATUS_UNSUPPORTED, "%s", no_opencl);
 }
 tr_accel_type tr_cl_scene_accel(const tr_cl_context *ctx) {
     (void)ctx;
@@ -73,11 +73,11 @@ int tr_cl_render_frame(tr_cl_context *ctx, const tr_frame *f, uint64_t *rays, tr
     (void)ctx;
     (void)f;
     (void)rays;
-    return tr_error_set(err, "%s", no_opencl);
+    return tr_error_set(err, TR_STATUS_UNSUPPORTED, "%s", no_opencl);
 }
 int tr_cl_clear_film(tr_cl_context *ctx, tr_error *err) {
     (void)ctx;
-    return tr_error_set(err, "%s", no_opencl);
+    return tr_error_set(err, TR_STATUS_UNSUPPORTED, "%s", no_opencl);
 }
 void tr_cl_film_size(const tr_cl_context *ctx, uint32_t *width, uint32_t *height,
                      uint32_t *passes) {
@@ -87,7 +87,7 @@ void tr_cl_film_size(const tr_cl_context *ctx, uint32_t *width, uint32_t *height
 int tr_cl_read_film(tr_cl_context *ctx, tr_film *film, tr_error *err) {
     (void)ctx;
     (void)film;
-    return tr_error_set(err, "%s", no_opencl);
+    return tr_error_set(err, TR_STATUS_UNSUPPORTED, "%s", no_opencl);
 }
 void tr_cl_set_memory_limit(tr_cl_context *ctx, uint64_t bytes) {
     (void)ctx;
@@ -266,7 +266,8 @@ const char *tr_cl_error_name(int code) {
 
 /* "OpenCL: CALL failed: CL_NAME (code)". */
 static int cl_fail(tr_error *err, const char *call, cl_int code) {
-    return tr_error_set(err, "OpenCL: %s failed: %s (%d)", call, tr_cl_error_name(code), code);
+    return tr_error_set(err, TR_STATUS_DEVICE, "OpenCL: %s failed: %s (%d)", call,
+                        tr_cl_error_name(code), code);
 }
 
 int tr_cl_available(void) {
@@ -327,15 +328,16 @@ static int walk_devices(tr_cl_device_info *out, int max, int *count, int want,
     cl_int rc = clGetPlatformIDs(0, NULL, &np);
     if (rc == -1001 /* CL_PLATFORM_NOT_FOUND_KHR: the ICD loader found no driver */ ||
         (rc == CL_SUCCESS && np == 0)) {
-        return tr_error_set(err, "no OpenCL platform found (no ICD installed in "
-                                 "/etc/OpenCL/vendors, or OCL_ICD_VENDORS points elsewhere)");
+        return tr_error_set(err, TR_STATUS_NOT_FOUND,
+                            "no OpenCL platform found (no ICD installed in "
+                            "/etc/OpenCL/vendors, or OCL_ICD_VENDORS points elsewhere)");
     }
     if (rc != CL_SUCCESS) {
         return cl_fail(err, "clGetPlatformIDs", rc);
     }
     cl_platform_id *plats = calloc(np, sizeof *plats);
     if (!plats) {
-        return tr_error_set(err, "out of memory listing OpenCL platforms");
+        return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory listing OpenCL platforms");
     }
     rc = clGetPlatformIDs(np, plats, NULL);
     if (rc != CL_SUCCESS) {
@@ -356,7 +358,8 @@ static int walk_devices(tr_cl_device_info *out, int max, int *count, int want,
         cl_device_id *devs = calloc(nd, sizeof *devs);
         if (!devs) {
             free(plats);
-            return tr_error_set(err, "out of memory listing OpenCL devices");
+            return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY,
+                                "out of memory listing OpenCL devices");
         }
         rc = clGetDeviceIDs(plats[p], CL_DEVICE_TYPE_ALL, nd, devs, NULL);
         if (rc != CL_SUCCESS) {
@@ -467,7 +470,7 @@ static int check_kernel_args(tr_cl_context *ctx, tr_error *err) {
     memset(&none, 0, sizeof none);
     const int na = scene_arrays(&none, arrays);
     if (nargs != (cl_uint)(na + ARG_AFTER_ARRAYS)) {
-        return tr_error_set(err,
+        return tr_error_set(err, TR_STATUS_DEVICE,
                             "OpenCL: the kernel takes %u arguments but the host passes %d: "
                             "src/device/opencl.c and src/kernel/entry.cl disagree",
                             nargs, na + ARG_AFTER_ARRAYS);
@@ -484,7 +487,7 @@ static int check_kernel_args(tr_cl_context *ctx, tr_error *err) {
         }
         const char *want = (int)i < na ? arrays[i].name : arg_names[(int)i - na];
         if (strcmp(name, want) != 0) {
-            return tr_error_set(err,
+            return tr_error_set(err, TR_STATUS_DEVICE,
                                 "OpenCL: kernel argument %u is '%s' but the host passes '%s' "
                                 "there: src/device/opencl.c and src/kernel/entry.cl disagree",
                                 i, name, want);
@@ -504,14 +507,15 @@ tr_cl_context *tr_cl_open_source(int index, const char *source, tr_error *err) {
     cl_device_id dev = NULL;
     tr_cl_device_info info;
     if (index < 0) {
-        tr_error_set(err, "OpenCL device index %d must be at least 0", index);
+        tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "OpenCL device index %d must be at least 0",
+                     index);
         return NULL;
     }
     if (walk_devices(NULL, 0, &count, index, &plat, &dev, &info, err) != TR_OK) {
         return NULL;
     }
     if (!dev) {
-        tr_error_set(err,
+        tr_error_set(err, TR_STATUS_NOT_FOUND,
                      "OpenCL device %d does not exist: %d device%s found (0..%d; see 'trac0r "
                      "info --devices')",
                      index, count, count == 1 ? "" : "s", count - 1);
@@ -519,7 +523,7 @@ tr_cl_context *tr_cl_open_source(int index, const char *source, tr_error *err) {
     }
     tr_cl_context *ctx = calloc(1, sizeof *ctx);
     if (!ctx) {
-        tr_error_set(err, "out of memory opening an OpenCL context");
+        tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory opening an OpenCL context");
         return NULL;
     }
     ctx->info = info;
@@ -551,13 +555,14 @@ tr_cl_context *tr_cl_open_source(int index, const char *source, tr_error *err) {
     rc = clBuildProgram(ctx->program, 1, &dev, ctx->options, NULL, NULL);
     ctx->build_log = read_build_log(ctx->program, dev);
     if (!ctx->build_log) {
-        tr_error_set(err, "out of memory reading the OpenCL build log");
+        tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory reading the OpenCL build log");
         goto fail;
     }
     snprintf(last_build_log, sizeof last_build_log, "%s", ctx->build_log);
     if (rc != CL_SUCCESS) {
-        tr_error_set(err, "OpenCL: clBuildProgram failed on %s: %s (%d); build log: %s",
-                     ctx->info.name, tr_cl_error_name(rc), rc, ctx->build_log);
+        tr_error_set(err, TR_STATUS_DEVICE,
+                     "OpenCL: clBuildProgram failed on %s: %s (%d); build log: %s", ctx->info.name,
+                     tr_cl_error_name(rc), rc, ctx->build_log);
         goto fail;
     }
     ctx->kernel = clCreateKernel(ctx->program, "tr_cl_render", &rc);
@@ -629,7 +634,8 @@ static double mib(uint64_t bytes) {
 
 int tr_cl_upload_scene(tr_cl_context *ctx, const tr_scene *scene, tr_error *err) {
     if (!tr_scene_is_committed(scene)) {
-        return tr_error_set(err, "the scene changed since tr_scene_commit built its %s",
+        return tr_error_set(err, TR_STATUS_STALE_SCENE,
+                            "the scene changed since tr_scene_commit built its %s",
                             tr_accel_name(scene->accel));
     }
     /* The device walks what the host's view holds, except that a scene committed to
@@ -661,7 +667,7 @@ int tr_cl_upload_scene(tr_cl_context *ctx, const tr_scene *scene, tr_error *err)
     for (int i = 0; i < na && rc == TR_OK; ++i) {
         uint64_t bytes = (uint64_t)arrays[i].count * arrays[i].elem;
         if (bytes > ctx->info.max_alloc) {
-            rc = tr_error_set(err,
+            rc = tr_error_set(err, TR_STATUS_LIMIT,
                               "the scene does not fit on OpenCL device %d (%s): its %s take "
                               "%.1f MiB but the device allocates at most %.1f MiB per buffer",
                               ctx->info.index, ctx->info.name, arrays[i].name, mib(bytes),
@@ -670,7 +676,7 @@ int tr_cl_upload_scene(tr_cl_context *ctx, const tr_scene *scene, tr_error *err)
         total += bytes;
     }
     if (rc == TR_OK && total > memory_budget(ctx)) {
-        rc = tr_error_set(err,
+        rc = tr_error_set(err, TR_STATUS_LIMIT,
                           "the scene does not fit on OpenCL device %d (%s): it needs %.1f MiB "
                           "with the film but the device has %.1f MiB",
                           ctx->info.index, ctx->info.name, mib(total), mib(memory_budget(ctx)));
@@ -801,7 +807,7 @@ static int make_film(tr_cl_context *ctx, uint32_t w, uint32_t h, uint32_t passes
     const uint64_t need = film_bytes(w, h, passes);
     const uint64_t sum_bytes = (uint64_t)w * h * 3 * sizeof(cl_float);
     if (sum_bytes > ctx->info.max_alloc || ctx->scene_bytes + need > memory_budget(ctx)) {
-        return tr_error_set(err,
+        return tr_error_set(err, TR_STATUS_LIMIT,
                             "a %ux%u film does not fit on OpenCL device %d (%s) next to the "
                             "scene (%.1f MiB + %.1f MiB of %.1f MiB)",
                             w, h, ctx->info.index, ctx->info.name, mib(ctx->scene_bytes), mib(need),
@@ -823,7 +829,7 @@ static int make_film(tr_cl_context *ctx, uint32_t w, uint32_t h, uint32_t passes
     ctx->rays_host = malloc(h * sizeof *ctx->rays_host);
     if (!ctx->rays || !ctx->rays_host) {
         int r = ctx->rays_host ? cl_fail(err, "clCreateBuffer(rays_per_row)", rc)
-                               : tr_error_set(err, "out of memory");
+                               : tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory");
         release_film(ctx);
         return r;
     }
@@ -839,7 +845,8 @@ void tr_cl_film_size(const tr_cl_context *ctx, uint32_t *width, uint32_t *height
 
 int tr_cl_render_frame(tr_cl_context *ctx, const tr_frame *f, uint64_t *rays_out, tr_error *err) {
     if (!ctx->have_scene) {
-        return tr_error_set(err, "no scene uploaded to the OpenCL device");
+        return tr_error_set(err, TR_STATUS_INVALID_OPERATION,
+                            "no scene uploaded to the OpenCL device");
     }
     const uint32_t w = f->camera.screen_width, h = f->camera.screen_height;
     if ((w != ctx->width || h != ctx->height || f->passes != ctx->passes) &&
@@ -899,14 +906,17 @@ int tr_cl_render_frame(tr_cl_context *ctx, const tr_frame *f, uint64_t *rays_out
 
 int tr_cl_read_film(tr_cl_context *ctx, tr_film *film, tr_error *err) {
     if (!ctx->film[FILM_SUM]) {
-        return tr_error_set(err, "the OpenCL film is empty: no frame was rendered");
+        return tr_error_set(err, TR_STATUS_INVALID_OPERATION,
+                            "the OpenCL film is empty: no frame was rendered");
     }
     if (film->width != ctx->width || film->height != ctx->height) {
-        return tr_error_set(err, "the film is %ux%u but the OpenCL film is %ux%u", film->width,
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "the film is %ux%u but the OpenCL film is %ux%u", film->width,
                             film->height, ctx->width, ctx->height);
     }
     if ((film->passes & ~ctx->passes) != 0u) {
-        return tr_error_set(err, "the OpenCL film does not keep passes 0x%x",
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "the OpenCL film does not keep passes 0x%x",
                             film->passes & ~ctx->passes);
     }
     void *dst[FILM_BUFFERS] = {film->sum,    film->count, film->albedo,

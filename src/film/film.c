@@ -13,15 +13,18 @@ int tr_film_init_passes(tr_film *f, uint32_t width, uint32_t height, uint32_t pa
                         tr_error *err) {
     memset(f, 0, sizeof *f);
     if (width == 0 || height == 0) {
-        return tr_error_set(err, "image size %ux%u must be at least 1x1", width, height);
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "image size %ux%u must be at least 1x1", width, height);
     }
     if (width > TR_FILM_MAX_SIDE || height > TR_FILM_MAX_SIDE ||
         (uint64_t)width * height > TR_FILM_MAX_PIXELS) {
-        return tr_error_set(err, "image size %ux%u exceeds the limit of %u per side and %u pixels",
+        return tr_error_set(err, TR_STATUS_LIMIT,
+                            "image size %ux%u exceeds the limit of %u per side and %u pixels",
                             width, height, TR_FILM_MAX_SIDE, TR_FILM_MAX_PIXELS);
     }
     if ((passes & ~TR_PASS_ALL) != 0u) {
-        return tr_error_set(err, "unknown pass bits 0x%x", passes & ~TR_PASS_ALL);
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "unknown pass bits 0x%x",
+                            passes & ~TR_PASS_ALL);
     }
     size_t n = (size_t)width * height;
     int ok = 1;
@@ -42,7 +45,8 @@ int tr_film_init_passes(tr_film *f, uint32_t width, uint32_t height, uint32_t pa
     }
     if (!ok) {
         tr_film_free(f);
-        return tr_error_set(err, "out of memory allocating a %ux%u film", width, height);
+        return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory allocating a %ux%u film",
+                            width, height);
     }
     f->width = width;
     f->height = height;
@@ -94,11 +98,12 @@ int tr_film_pass_pixel(const tr_film *f, uint32_t pass, uint32_t x, uint32_t y, 
     if ((pass != TR_PASS_ALBEDO && pass != TR_PASS_NORMAL && pass != TR_PASS_DEPTH &&
          pass != TR_PASS_PRIM) ||
         (f->passes & pass) == 0u) {
-        return tr_error_set(err, "the film does not keep pass 0x%x", pass);
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "the film does not keep pass 0x%x",
+                            pass);
     }
     if (x >= f->width || y >= f->height) {
-        return tr_error_set(err, "pixel (%u, %u) is outside the %ux%u film", x, y, f->width,
-                            f->height);
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "pixel (%u, %u) is outside the %ux%u film", x, y, f->width, f->height);
     }
     size_t i = (size_t)y * f->width + x;
     uint32_t c = f->count[i];
@@ -131,11 +136,13 @@ static void add_floats(float *dst, const float *src, size_t n) {
 
 int tr_film_accumulate(tr_film *dst, const tr_film *src, tr_error *err) {
     if (dst->width != src->width || dst->height != src->height) {
-        return tr_error_set(err, "cannot add a %ux%u film to a %ux%u one", src->width, src->height,
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "cannot add a %ux%u film to a %ux%u one", src->width, src->height,
                             dst->width, dst->height);
     }
     if ((dst->passes & ~src->passes) != 0u) {
-        return tr_error_set(err, "the film added lacks passes 0x%x", dst->passes & ~src->passes);
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "the film added lacks passes 0x%x",
+                            dst->passes & ~src->passes);
     }
     const size_t n = (size_t)dst->width * dst->height;
     if (dst->prim) {
@@ -160,7 +167,8 @@ int tr_film_extract_pass(const tr_film *f, uint32_t pass, tr_film *out, tr_error
          pass != TR_PASS_PRIM) ||
         (f->passes & pass) == 0u) {
         memset(out, 0, sizeof *out);
-        return tr_error_set(err, "the film does not keep pass 0x%x", pass);
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "the film does not keep pass 0x%x",
+                            pass);
     }
     if (tr_film_init(out, f->width, f->height, err) != TR_OK) {
         return TR_ERR;

@@ -37,18 +37,20 @@ typedef struct tmpfile_t {
 static int tmp_open(tmpfile_t *t, const char *path, tr_error *err) {
     int n = snprintf(t->name, sizeof t->name, "%s.tmp.XXXXXX", path);
     if (n < 0 || (size_t)n >= sizeof t->name) {
-        return tr_error_set(err, "%s: path too long", path);
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "%s: path too long", path);
     }
     int fd = mkstemp(t->name);
     if (fd < 0) {
-        return tr_error_set(err, "%s: cannot create file: %s", path, strerror(errno));
+        return tr_error_set(err, tr_status_from_errno(errno), "%s: cannot create file: %s", path,
+                            strerror(errno));
     }
     t->fp = fdopen(fd, "wb");
     if (!t->fp) {
         int e = errno;
         close(fd);
         unlink(t->name);
-        return tr_error_set(err, "%s: cannot open file: %s", path, strerror(e));
+        return tr_error_set(err, tr_status_from_errno(e), "%s: cannot open file: %s", path,
+                            strerror(e));
     }
     return TR_OK;
 }
@@ -58,13 +60,16 @@ static int tmp_open(tmpfile_t *t, const char *path, tr_error *err) {
 static int tmp_finish(tmpfile_t *t, const char *path, int ok, tr_error *err) {
     int rc = ok ? TR_OK : TR_ERR;
     if (ok && (fflush(t->fp) != 0 || ferror(t->fp))) {
-        rc = tr_error_set(err, "%s: write failed: %s", path, strerror(errno));
+        rc = tr_error_set(err, tr_status_from_errno(errno), "%s: write failed: %s", path,
+                          strerror(errno));
     }
     if (fclose(t->fp) != 0 && rc == TR_OK) {
-        rc = tr_error_set(err, "%s: write failed: %s", path, strerror(errno));
+        rc = tr_error_set(err, tr_status_from_errno(errno), "%s: write failed: %s", path,
+                          strerror(errno));
     }
     if (rc == TR_OK && rename(t->name, path) != 0) {
-        rc = tr_error_set(err, "%s: cannot rename the finished file into place: %s", path,
+        rc = tr_error_set(err, tr_status_from_errno(errno),
+                          "%s: cannot rename the finished file into place: %s", path,
                           strerror(errno));
     }
     if (rc != TR_OK) {
@@ -115,7 +120,7 @@ static int write_png_rows(FILE *fp, const tr_film *f, float exposure, uint8_t *r
 int tr_film_write_png(const tr_film *f, const char *path, float exposure, tr_error *err) {
     uint8_t *row = malloc((size_t)f->width * 3);
     if (!row) {
-        return tr_error_set(err, "%s: out of memory", path);
+        return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "%s: out of memory", path);
     }
     tmpfile_t t;
     if (tmp_open(&t, path, err) != TR_OK) {
@@ -125,7 +130,7 @@ int tr_film_write_png(const tr_film *f, const char *path, float exposure, tr_err
     int ok = write_png_rows(t.fp, f, exposure, row) == TR_OK;
     free(row);
     if (!ok) {
-        tr_error_set(err, "%s: PNG encoding failed", path);
+        tr_error_set(err, TR_STATUS_IO, "%s: PNG encoding failed", path);
     }
     return tmp_finish(&t, path, ok, err);
 }
@@ -133,7 +138,7 @@ int tr_film_write_png(const tr_film *f, const char *path, float exposure, tr_err
 int tr_film_write_pfm(const tr_film *f, const char *path, tr_error *err) {
     float *row = malloc((size_t)f->width * 3 * sizeof *row);
     if (!row) {
-        return tr_error_set(err, "%s: out of memory", path);
+        return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "%s: out of memory", path);
     }
     tmpfile_t t;
     if (tmp_open(&t, path, err) != TR_OK) {
@@ -154,7 +159,8 @@ int tr_film_write_pfm(const tr_film *f, const char *path, tr_error *err) {
     }
     free(row);
     if (!ok) {
-        tr_error_set(err, "%s: write failed: %s", path, strerror(errno));
+        tr_error_set(err, tr_status_from_errno(errno), "%s: write failed: %s", path,
+                     strerror(errno));
     }
     return tmp_finish(&t, path, ok, err);
 }
@@ -166,7 +172,8 @@ int tr_film_write(const tr_film *f, const char *path, float exposure, tr_error *
     case TR_IMAGE_PFM:
         return tr_film_write_pfm(f, path, err);
     default:
-        return tr_error_set(err, "%s: unknown image extension (expected .png or .pfm)", path);
+        return tr_error_set(err, TR_STATUS_UNSUPPORTED,
+                            "%s: unknown image extension (expected .png or .pfm)", path);
     }
 }
 
@@ -195,13 +202,14 @@ int tr_image_read_pfm(tr_image *img, const char *path, tr_error *err) {
     memset(img, 0, sizeof *img);
     FILE *fp = fopen(path, "rb");
     if (!fp) {
-        return tr_error_set(err, "%s: cannot open: %s", path, strerror(errno));
+        return tr_error_set(err, tr_status_from_errno(errno), "%s: cannot open: %s", path,
+                            strerror(errno));
     }
     char magic[8], ws[32], hs[32], ss[64];
     if (pfm_token(fp, magic, sizeof magic) || pfm_token(fp, ws, sizeof ws) ||
         pfm_token(fp, hs, sizeof hs) || pfm_token(fp, ss, sizeof ss)) {
         fclose(fp);
-        return tr_error_set(err, "%s: not a PFM file (truncated header)", path);
+        return tr_error_set(err, TR_STATUS_PARSE, "%s: not a PFM file (truncated header)", path);
     }
     int channels = strcmp(magic, "PF") == 0 ? 3 : strcmp(magic, "Pf") == 0 ? 1 : 0;
     char *end;
@@ -211,15 +219,23 @@ int tr_image_read_pfm(tr_image *img, const char *path, tr_error *err) {
     bad |= *end != '\0';
     double scale = strtod(ss, &end);
     bad |= *end != '\0' || scale == 0.0 || !isfinite(scale);
-    if (!channels || bad || w <= 0 || h <= 0 || w > (long)TR_FILM_MAX_SIDE ||
-        h > (long)TR_FILM_MAX_SIDE || (uint64_t)w * (uint64_t)h > TR_FILM_MAX_PIXELS) {
+    if (!channels || bad || w <= 0 || h <= 0) {
         fclose(fp);
-        return tr_error_set(err, "%s: not a supported PFM file (header '%s %s %s %s')", path, magic,
-                            ws, hs, ss);
+        return tr_error_set(err, TR_STATUS_PARSE,
+                            "%s: not a supported PFM file (header '%s %s %s %s')", path, magic, ws,
+                            hs, ss);
+    }
+    if (w > (long)TR_FILM_MAX_SIDE || h > (long)TR_FILM_MAX_SIDE ||
+        (uint64_t)w * (uint64_t)h > TR_FILM_MAX_PIXELS) {
+        fclose(fp);
+        return tr_error_set(err, TR_STATUS_LIMIT,
+                            "%s: PFM size %ldx%ld is more than %u per side or %u pixels", path, w,
+                            h, TR_FILM_MAX_SIDE, TR_FILM_MAX_PIXELS);
     }
     if (scale > 0.0) {
         fclose(fp);
-        return tr_error_set(err, "%s: big-endian PFM files are not supported", path);
+        return tr_error_set(err, TR_STATUS_UNSUPPORTED,
+                            "%s: big-endian PFM files are not supported", path);
     }
     size_t n = (size_t)w * (size_t)h;
     float *data = malloc(n * (size_t)channels * sizeof *data);
@@ -228,15 +244,15 @@ int tr_image_read_pfm(tr_image *img, const char *path, tr_error *err) {
         free(data);
         fclose(fp);
         tr_image_free(img);
-        return tr_error_set(err, "%s: out of memory", path);
+        return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "%s: out of memory", path);
     }
     size_t got = fread(data, sizeof *data, n * (size_t)channels, fp);
     fclose(fp);
     if (got != n * (size_t)channels) {
         free(data);
         tr_image_free(img);
-        return tr_error_set(err, "%s: truncated PFM data (%zu of %zu floats)", path, got,
-                            n * (size_t)channels);
+        return tr_error_set(err, TR_STATUS_PARSE, "%s: truncated PFM data (%zu of %zu floats)",
+                            path, got, n * (size_t)channels);
     }
     img->width = (uint32_t)w;
     img->height = (uint32_t)h;
@@ -258,14 +274,23 @@ int tr_image_read_png(tr_image *img, const char *path, tr_error *err) {
     png_image p;
     memset(&p, 0, sizeof p);
     p.version = PNG_IMAGE_VERSION;
-    if (!png_image_begin_read_from_file(&p, path)) {
-        return tr_error_set(err, "%s: cannot read PNG: %s", path, p.message);
+    /* Opened here rather than by libpng, so that a missing file is told apart by errno. */
+    FILE *fp = fopen(path, "rb");
+    if (!fp) {
+        return tr_error_set(err, tr_status_from_errno(errno), "%s: cannot open: %s", path,
+                            strerror(errno));
+    }
+    if (!png_image_begin_read_from_stdio(&p, fp)) {
+        fclose(fp);
+        return tr_error_set(err, TR_STATUS_PARSE, "%s: cannot read PNG: %s", path, p.message);
     }
     p.format = PNG_FORMAT_RGB;
     if (p.width == 0 || p.height == 0 || p.width > TR_FILM_MAX_SIDE ||
         p.height > TR_FILM_MAX_SIDE) {
         png_image_free(&p);
-        return tr_error_set(err, "%s: PNG size %ux%u is not supported", path, p.width, p.height);
+        fclose(fp);
+        return tr_error_set(err, TR_STATUS_LIMIT, "%s: PNG size %ux%u is not supported", path,
+                            p.width, p.height);
     }
     size_t n = (size_t)p.width * p.height;
     uint8_t *buf = malloc(PNG_IMAGE_SIZE(p));
@@ -273,13 +298,16 @@ int tr_image_read_png(tr_image *img, const char *path, tr_error *err) {
     if (!buf || !img->rgb) {
         free(buf);
         png_image_free(&p);
+        fclose(fp);
         tr_image_free(img);
-        return tr_error_set(err, "%s: out of memory", path);
+        return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "%s: out of memory", path);
     }
-    if (!png_image_finish_read(&p, NULL, buf, 0, NULL)) {
+    const int decoded = png_image_finish_read(&p, NULL, buf, 0, NULL);
+    fclose(fp);
+    if (!decoded) {
         free(buf);
         tr_image_free(img);
-        return tr_error_set(err, "%s: cannot decode PNG: %s", path, p.message);
+        return tr_error_set(err, TR_STATUS_PARSE, "%s: cannot decode PNG: %s", path, p.message);
     }
     img->width = p.width;
     img->height = p.height;

@@ -21,16 +21,19 @@ int tr_tonemap_film(const struct tr_film *film, uint32_t x, uint32_t y, uint32_t
     if (width == 0 || height == 0 || x > film->width || width > film->width - x ||
         y > film->height || height > film->height - y) {
         return tr_error_set(
-            err, "tonemap: rectangle %ux%u at (%u, %u) is empty or outside the %ux%u film", width,
+            err, TR_STATUS_INVALID_ARGUMENT,
+            "tonemap: rectangle %ux%u at (%u, %u) is empty or outside the %ux%u film", width,
             height, x, y, film->width, film->height);
     }
     size_t bytes_per_pixel = format == TR_PIXEL_RGB8 ? 3 : format == TR_PIXEL_ARGB8888 ? 4 : 0;
     if (bytes_per_pixel == 0) {
-        return tr_error_set(err, "tonemap: unknown pixel format %d", (int)format);
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "tonemap: unknown pixel format %d",
+                            (int)format);
     }
     if (dst_stride < bytes_per_pixel * width) {
-        return tr_error_set(err, "tonemap: row stride %zu is less than a row of %zu bytes",
-                            dst_stride, bytes_per_pixel * width);
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "tonemap: row stride %zu is less than a row of %zu bytes", dst_stride,
+                            bytes_per_pixel * width);
     }
     const float scale = exp2f(exposure);
     const float *sum = film->sum;

@@ -102,7 +102,7 @@ int tr_scene_builtin(tr_scene *s, const char *name, uint32_t width, uint32_t hei
         rc = build_cornell(s, width, height, (int)level, 0, err);
     } else {
         return tr_error_set(
-            err,
+            err, TR_STATUS_NOT_FOUND,
             "unknown built-in scene '%s' (available: cornell, cornell-mirror, cornell-diffuse, "
             "cornell-ico-N with N = 0..%d)",
             name, TR_ICOSPHERE_MAX_SUBDIVISIONS);

@@ -7,8 +7,12 @@
 static int camera_frame(tr_camera *c, tr_error *err) {
     if (c->screen_width == 0 || c->screen_height == 0 || c->screen_width > TR_FILM_MAX_SIDE ||
         c->screen_height > TR_FILM_MAX_SIDE) {
-        return tr_error_set(err, "camera image size %ux%u must be 1..%u on each side",
-                            c->screen_width, c->screen_height, TR_FILM_MAX_SIDE);
+        return tr_error_set(err,
+                            c->screen_width == 0 || c->screen_height == 0
+                                ? TR_STATUS_INVALID_ARGUMENT
+                                : TR_STATUS_LIMIT,
+                            "camera image size %ux%u must be 1..%u on each side", c->screen_width,
+                            c->screen_height, TR_FILM_MAX_SIDE);
     }
     float half = tanf(c->vertical_fov * (TR_PI / 180.0f) * 0.5f);
     c->canvas_height = 2.0f * half;
@@ -21,17 +25,21 @@ int tr_camera_make(tr_camera *cam, tr_vec3 pos, tr_vec3 dir, tr_vec3 world_up, f
                    float near_dist, float far_dist, uint32_t width, uint32_t height,
                    tr_error *err) {
     if (!v3_is_finite(pos) || !v3_is_finite(dir) || !v3_is_finite(world_up)) {
-        return tr_error_set(err, "camera position, direction and up must be finite");
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "camera position, direction and up must be finite");
     }
     if (!(v3_length(dir) > 0.0f) || !(v3_length(world_up) > 0.0f)) {
-        return tr_error_set(err, "camera direction and up must be non-zero vectors");
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "camera direction and up must be non-zero vectors");
     }
     if (!(vfov_deg > 0.0f && vfov_deg < 180.0f)) {
-        return tr_error_set(err, "camera vertical field of view %g must be in (0, 180) degrees",
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "camera vertical field of view %g must be in (0, 180) degrees",
                             (double)vfov_deg);
     }
     if (!(near_dist >= 0.0f && far_dist > near_dist) || !isfinite(near_dist)) {
-        return tr_error_set(err, "camera near %g / far %g must satisfy 0 <= near < far",
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "camera near %g / far %g must satisfy 0 <= near < far",
                             (double)near_dist, (double)far_dist);
     }
     tr_camera c;
@@ -41,7 +49,8 @@ int tr_camera_make(tr_camera *cam, tr_vec3 pos, tr_vec3 dir, tr_vec3 world_up, f
     c.world_up = v3_normalize(world_up);
     tr_vec3 right = v3_cross(c.world_up, c.dir);
     if (!(v3_length(right) > 1e-6f)) {
-        return tr_error_set(err, "camera up vector is parallel to the view direction");
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "camera up vector is parallel to the view direction");
     }
     c.right = v3_normalize(right);
     c.up = v3_cross(c.dir, c.right);

@@ -49,19 +49,45 @@ typedef struct jctx {
     uint32_t name_count;
 } jctx;
 
-/* "FILE: PATH: message". */
+/* "FILE: PATH: message" with a code. */
+static int vjerr(const jctx *c, tr_status code, const char *path, const char *fmt, va_list ap)
+    __attribute__((format(printf, 4, 0)));
+static int vjerr(const jctx *c, tr_status code, const char *path, const char *fmt, va_list ap) {
+    char msg[400];
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    if (path && path[0]) {
+        return tr_error_set(c->err, code, "%.200s: %s: %s", c->file, path, msg);
+    }
+    return tr_error_set(c->err, code, "%.200s: %s", c->file, msg);
+}
+
+/* The file says something wrong (TR_STATUS_PARSE): "FILE: PATH: message". */
 static int jerr(const jctx *c, const char *path, const char *fmt, ...)
     __attribute__((format(printf, 3, 4)));
 static int jerr(const jctx *c, const char *path, const char *fmt, ...) {
-    char msg[400];
     va_list ap;
     va_start(ap, fmt);
-    vsnprintf(msg, sizeof msg, fmt, ap);
+    int rc = vjerr(c, TR_STATUS_PARSE, path, fmt, ap);
     va_end(ap);
-    if (path && path[0]) {
-        return tr_error_set(c->err, "%.200s: %s: %s", c->file, path, msg);
-    }
-    return tr_error_set(c->err, "%.200s: %s", c->file, msg);
+    return rc;
+}
+
+/* The same for the failures that are not the file's content: a budget, memory. */
+static int jerr_code(const jctx *c, tr_status code, const char *path, const char *fmt, ...)
+    __attribute__((format(printf, 4, 5)));
+static int jerr_code(const jctx *c, tr_status code, const char *path, const char *fmt, ...) {
+    va_list ap;
+    va_start(ap, fmt);
+    int rc = vjerr(c, code, path, fmt, ap);
+    va_end(ap);
+    return rc;
+}
+
+/* A library call failed on the file's values: its message goes after "FILE: PATH:" and
+ * its code is kept, except that a value it finds out of range is the file's fault. */
+static int jerr_from(const jctx *c, const char *path, const tr_error *e) {
+    const tr_status code = e->code == TR_STATUS_INVALID_ARGUMENT ? TR_STATUS_PARSE : e->code;
+    return jerr_code(c, code, path, "%s", e->msg);
 }
 
 static void warn(const jctx *c, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
@@ -495,7 +521,7 @@ static int parse_camera(jctx *c, const cJSON *cam) {
     tr_scene_file *in = c->info;
     if (tr_camera_make(&c->scene->camera, pos, dir, up, (float)fov, (float)near_d, (float)far_d,
                        in->width, in->height, &e) != TR_OK) {
-        return jerr(c, path, "%s", e.msg);
+        return jerr_from(c, path, &e);
     }
     if (right_handed) {
         /* A right-handed world seen with +y up: the camera's right is dir x up, the
@@ -517,7 +543,7 @@ static int parse_materials(jctx *c, const cJSON *mats) {
     c->by_name = malloc((size_t)(n > 0 ? (n < MAX_FILE_MATERIALS ? n : MAX_FILE_MATERIALS) : 1) *
                         sizeof *c->by_name);
     if (!c->by_name) {
-        return jerr(c, path, "out of memory");
+        return jerr_code(c, TR_STATUS_OUT_OF_MEMORY, path, "out of memory");
     }
     for (const cJSON *m = mats->child; m; m = m->next) {
         char p[PATH_MAX_LEN], buf[48];
@@ -526,7 +552,7 @@ static int parse_materials(jctx *c, const cJSON *mats) {
             return jerr(c, p, "a material needs a non-empty name");
         }
         if (c->name_count == MAX_FILE_MATERIALS) {
-            return jerr(c, p, "more than %d materials", MAX_FILE_MATERIALS);
+            return jerr_code(c, TR_STATUS_LIMIT, p, "more than %d materials", MAX_FILE_MATERIALS);
         }
         c->by_name[c->name_count].name = m->string;
         c->by_name[c->name_count].index = c->name_count;
@@ -603,7 +629,7 @@ static int parse_materials(jctx *c, const cJSON *mats) {
         }
         tr_error e;
         if (tr_scene_add_material(c->scene, mat, NULL, &e) != TR_OK) {
-            return jerr(c, p, "%s", e.msg);
+            return jerr_from(c, p, &e);
         }
     }
     qsort(c->by_name, c->name_count, sizeof *c->by_name, named_cmp);
@@ -769,8 +795,9 @@ static int parse_quad(jctx *c, const cJSON *sh, const char *p, const cJSON *vert
         return TR_ERR;
     }
     if ((uint64_t)c->scene->triangle_count + 2 > c->budget) {
-        return jerr(c, p, "the scene would have %llu triangles, more than the budget of %u",
-                    (unsigned long long)c->scene->triangle_count + 2, c->budget);
+        return jerr_code(c, TR_STATUS_LIMIT, p,
+                         "the scene would have %llu triangles, more than the budget of %u",
+                         (unsigned long long)c->scene->triangle_count + 2, c->budget);
     }
     static const uint32_t idx[6] = {0, 1, 2, 0, 2, 3};
     uint32_t first = c->scene->triangle_count, dropped = 0;
@@ -815,10 +842,10 @@ static int parse_shapes(jctx *c, const cJSON *shapes) {
         if (total > c->budget) {
             char p[PATH_MAX_LEN];
             path_index(p, "shapes", i);
-            return jerr(c, p,
-                        "the scene would have more than %u triangles (the triangle budget; "
-                        "an icosphere has 20*4^subdivisions)",
-                        c->budget);
+            return jerr_code(c, TR_STATUS_LIMIT, p,
+                             "the scene would have more than %u triangles (the triangle budget; "
+                             "an icosphere has 20*4^subdivisions)",
+                             c->budget);
         }
     }
     i = 0;
@@ -886,14 +913,14 @@ static int parse_shapes(jctx *c, const cJSON *shapes) {
         d.subdivisions = (uint32_t)sub;
         uint64_t n = tr_shape_triangle_count(&d);
         if ((uint64_t)c->scene->triangle_count + n > c->budget) {
-            return jerr(c, t == 2 ? ps : p,
-                        "the scene would have %llu triangles, more than the budget of %u",
-                        (unsigned long long)(c->scene->triangle_count + n), c->budget);
+            return jerr_code(c, TR_STATUS_LIMIT, t == 2 ? ps : p,
+                             "the scene would have %llu triangles, more than the budget of %u",
+                             (unsigned long long)(c->scene->triangle_count + n), c->budget);
         }
         uint32_t first = c->scene->triangle_count;
         tr_error e;
         if (tr_scene_add_shape(c->scene, &d, &e) != TR_OK) {
-            return jerr(c, p, "%s", e.msg);
+            return jerr_from(c, p, &e);
         }
         if (check_triangles(c, p, first) != TR_OK) {
             return TR_ERR;
@@ -943,7 +970,7 @@ static int parse_meshes(jctx *c, const cJSON *meshes) {
         tr_mesh_import_stats st;
         tr_error e;
         if (tr_scene_import_mesh(c->scene, full, &tf, mat, c->budget - first, &st, &e) != TR_OK) {
-            return jerr(c, pp, "%s", e.msg);
+            return jerr_from(c, pp, &e);
         }
         c->info->mesh_parts += st.parts;
         c->info->mesh_triangles += st.triangles;
@@ -1026,7 +1053,7 @@ static int build(jctx *c, const cJSON *root) {
     /* Counts, bounds and warnings. */
     uint32_t *used = calloc(s->material_count ? s->material_count : 1, sizeof *used);
     if (!used) {
-        return jerr(c, NULL, "out of memory");
+        return jerr_code(c, TR_STATUS_OUT_OF_MEMORY, NULL, "out of memory");
     }
     for (uint32_t i = 0; i < s->triangle_count; ++i) {
         used[s->triangles[i].material]++;
@@ -1083,21 +1110,21 @@ int tr_scene_file_parse(tr_scene *s, const char *path, const char *text, size_t 
             n = 1; /* "/scene.json" */
         }
         if (n >= sizeof c.dir) {
-            return jerr(&c, NULL, "path too long");
+            return jerr_code(&c, TR_STATUS_INVALID_ARGUMENT, NULL, "path too long");
         }
         memcpy(c.dir, path, n);
         c.dir[n] = '\0';
     }
     if (len > TR_SCENE_FILE_MAX_BYTES) {
-        return jerr(&c, NULL, "%zu bytes is more than the limit of %u", len,
-                    TR_SCENE_FILE_MAX_BYTES);
+        return jerr_code(&c, TR_STATUS_LIMIT, NULL, "%zu bytes is more than the limit of %u", len,
+                         TR_SCENE_FILE_MAX_BYTES);
     }
     for (size_t i = 0; i < len; ++i) {
         if (text[i] == '\0') {
             unsigned line, col;
             line_col(text, i, &line, &col);
-            return tr_error_set(err, "%.200s:%u:%u: JSON syntax error: a NUL byte", path, line,
-                                col);
+            return tr_error_set(err, TR_STATUS_PARSE, "%.200s:%u:%u: JSON syntax error: a NUL byte",
+                                path, line, col);
         }
     }
     const char *end = NULL;
@@ -1131,12 +1158,13 @@ int tr_scene_file_parse(tr_scene *s, const char *path, const char *text, size_t 
                 near[k++] = (ch >= 32 && ch < 127) ? (char)ch : '?';
             }
             near[k] = '\0';
-            return tr_error_set(err, "%.200s:%u:%u: JSON syntax error at the end of %s%s%s%s", path,
+            return tr_error_set(err, TR_STATUS_PARSE,
+                                "%.200s:%u:%u: JSON syntax error at the end of %s%s%s%s", path,
                                 line, col, off >= len ? "the file" : "the line",
                                 k ? ", after '" : "", near, k ? "'" : "");
         }
-        return tr_error_set(err, "%.200s:%u:%u: JSON syntax error near '%s'", path, line, col,
-                            near);
+        return tr_error_set(err, TR_STATUS_PARSE, "%.200s:%u:%u: JSON syntax error near '%s'", path,
+                            line, col, near);
     }
     /* Anything but white space after the value is an error too. */
     size_t off = (size_t)(end - text);
@@ -1148,8 +1176,9 @@ int tr_scene_file_parse(tr_scene *s, const char *path, const char *text, size_t 
     if (off < len) {
         unsigned line, col;
         line_col(text, off, &line, &col);
-        rc = tr_error_set(err, "%.200s:%u:%u: JSON syntax error: text after the top-level value",
-                          path, line, col);
+        rc = tr_error_set(err, TR_STATUS_PARSE,
+                          "%.200s:%u:%u: JSON syntax error: text after the top-level value", path,
+                          line, col);
     } else {
         rc = build(&c, root);
     }
@@ -1166,7 +1195,8 @@ int tr_scene_file_load(tr_scene *s, const char *path, const tr_scene_file_option
     tr_scene_init(s);
     FILE *fp = fopen(path, "rb");
     if (!fp) {
-        return tr_error_set(err, "%.200s: cannot open: %s", path, strerror(errno));
+        return tr_error_set(err, tr_status_from_errno(errno), "%.200s: cannot open: %s", path,
+                            strerror(errno));
     }
     char *buf = NULL;
     size_t len = 0, cap = 0;
@@ -1174,13 +1204,15 @@ int tr_scene_file_load(tr_scene *s, const char *path, const tr_scene_file_option
     for (;;) {
         if (len == cap) {
             if (cap >= TR_SCENE_FILE_MAX_BYTES) {
-                rc = tr_error_set(err, "%.200s: more than %u bytes", path, TR_SCENE_FILE_MAX_BYTES);
+                rc = tr_error_set(err, TR_STATUS_LIMIT, "%.200s: more than %u bytes", path,
+                                  TR_SCENE_FILE_MAX_BYTES);
                 break;
             }
             cap = cap ? 2 * cap : 65536;
             char *grown = realloc(buf, cap + 1);
             if (!grown) {
-                rc = tr_error_set(err, "%.200s: out of memory reading it", path);
+                rc = tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "%.200s: out of memory reading it",
+                                  path);
                 break;
             }
             buf = grown;
@@ -1189,7 +1221,8 @@ int tr_scene_file_load(tr_scene *s, const char *path, const tr_scene_file_option
         len += got;
         if (got == 0) {
             if (ferror(fp)) {
-                rc = tr_error_set(err, "%.200s: cannot read: %s", path, strerror(errno));
+                rc = tr_error_set(err, tr_status_from_errno(errno), "%.200s: cannot read: %s", path,
+                                  strerror(errno));
             }
             break;
         }

@@ -26,7 +26,8 @@ int tr_scene_build_lights(tr_scene *s, tr_error *err) {
         free(s->light_cdf);
         s->lights = NULL;
         s->light_cdf = NULL;
-        return tr_error_set(err, "out of memory building the emitter table (%u emitters)", n);
+        return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY,
+                            "out of memory building the emitter table (%u emitters)", n);
     }
     /* The running sum in double, so that a million small emitters still add up. */
     double total = 0.0;

@@ -86,7 +86,7 @@ static int material_of(import_ctx *c, unsigned int index, uint32_t *out) {
         return TR_OK;
     }
     if (index >= c->ai->mNumMaterials) {
-        return tr_error_set(c->err, "a mesh refers to material %u of %u", index,
+        return tr_error_set(c->err, TR_STATUS_PARSE, "a mesh refers to material %u of %u", index,
                             c->ai->mNumMaterials);
     }
     if (c->material_map[index] < 0) {
@@ -131,7 +131,8 @@ static int add_ai_mesh(import_ctx *c, const struct aiMesh *mesh, const struct ai
         return TR_OK;
     }
     if ((uint64_t)c->s->triangle_count - c->start_triangles + tris > c->max_triangles) {
-        return tr_error_set(c->err, "more than %u triangles (the scene's triangle budget)",
+        return tr_error_set(c->err, TR_STATUS_LIMIT,
+                            "more than %u triangles (the scene's triangle budget)",
                             c->max_triangles);
     }
     uint32_t material = 0;
@@ -146,7 +147,8 @@ static int add_ai_mesh(import_ctx *c, const struct aiMesh *mesh, const struct ai
         free(pos);
         free(nrm);
         free(idx);
-        return tr_error_set(c->err, "out of memory importing a mesh of %u triangles", tris);
+        return tr_error_set(c->err, TR_STATUS_OUT_OF_MEMORY,
+                            "out of memory importing a mesh of %u triangles", tris);
     }
     /* Normals go through the cofactor matrix of the upper 3x3 (its inverse transpose
      * times the determinant), with the determinant's sign. */
@@ -199,13 +201,14 @@ static int add_ai_mesh(import_ctx *c, const struct aiMesh *mesh, const struct ai
 static int walk(import_ctx *c, const struct aiNode *node, const struct aiMatrix4x4 *parent,
                 int depth) {
     if (depth > NODE_DEPTH_LIMIT) {
-        return tr_error_set(c->err, "node hierarchy deeper than %d", NODE_DEPTH_LIMIT);
+        return tr_error_set(c->err, TR_STATUS_LIMIT, "node hierarchy deeper than %d",
+                            NODE_DEPTH_LIMIT);
     }
     struct aiMatrix4x4 m = mat_mul(parent, &node->mTransformation);
     for (unsigned int i = 0; i < node->mNumMeshes; ++i) {
         if (node->mMeshes[i] >= c->ai->mNumMeshes) {
-            return tr_error_set(c->err, "a node refers to mesh %u of %u", node->mMeshes[i],
-                                c->ai->mNumMeshes);
+            return tr_error_set(c->err, TR_STATUS_PARSE, "a node refers to mesh %u of %u",
+                                node->mMeshes[i], c->ai->mNumMeshes);
         }
         if (add_ai_mesh(c, c->ai->mMeshes[node->mMeshes[i]], &m) != TR_OK) {
             return TR_ERR;
@@ -239,11 +242,13 @@ int tr_scene_import_mesh(tr_scene *s, const char *path, const tr_transform *tf,
     tr_mesh_import_stats *st = stats ? stats : &local;
     memset(st, 0, sizeof *st);
     if (material_override >= (int64_t)s->material_count) {
-        return tr_error_set(err, "material %lld does not exist", (long long)material_override);
+        return tr_error_set(err, TR_STATUS_NOT_FOUND, "material %lld does not exist",
+                            (long long)material_override);
     }
     FILE *fp = fopen(path, "rb");
     if (!fp) {
-        return tr_error_set(err, "cannot open '%.200s': %s", path, strerror(errno));
+        return tr_error_set(err, tr_status_from_errno(errno), "cannot open '%.200s': %s", path,
+                            strerror(errno));
     }
     char probe;
     errno = 0;
@@ -251,10 +256,11 @@ int tr_scene_import_mesh(tr_scene *s, const char *path, const tr_transform *tf,
     int read_error = ferror(fp) ? (errno ? errno : EIO) : 0;
     fclose(fp);
     if (read_error) {
-        return tr_error_set(err, "cannot read '%.200s': %s", path, strerror(read_error));
+        return tr_error_set(err, tr_status_from_errno(read_error), "cannot read '%.200s': %s", path,
+                            strerror(read_error));
     }
     if (got == 0) {
-        return tr_error_set(err, "'%.200s' is empty", path);
+        return tr_error_set(err, TR_STATUS_PARSE, "'%.200s' is empty", path);
     }
     const struct aiScene *ai =
         aiImportFile(path, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
@@ -265,7 +271,7 @@ int tr_scene_import_mesh(tr_scene *s, const char *path, const tr_transform *tf,
         if (ai) {
             aiReleaseImport(ai);
         }
-        return tr_error_set(err, "Assimp cannot read '%.200s': %s", path,
+        return tr_error_set(err, TR_STATUS_PARSE, "Assimp cannot read '%.200s': %s", path,
                             msg[0] ? msg : "no meshes");
     }
     const uint32_t t0 = s->triangle_count, s0 = s->shape_count, m0 = s->material_count,
@@ -275,7 +281,7 @@ int tr_scene_import_mesh(tr_scene *s, const char *path, const tr_transform *tf,
     c.material_map = malloc((ai->mNumMaterials ? ai->mNumMaterials : 1) * sizeof *c.material_map);
     int rc = TR_OK;
     if (!c.material_map) {
-        rc = tr_error_set(err, "out of memory");
+        rc = tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory");
     } else {
         for (unsigned int i = 0; i < ai->mNumMaterials; ++i) {
             c.material_map[i] = -1;
@@ -286,11 +292,12 @@ int tr_scene_import_mesh(tr_scene *s, const char *path, const tr_transform *tf,
     if (rc != TR_OK && err && !strstr(err->msg, path)) {
         char msg[sizeof err->msg];
         memcpy(msg, err->msg, sizeof msg);
-        tr_error_set(err, "'%.200s': %.300s", path, msg);
+        tr_error_set(err, err->code, "'%.200s': %.300s", path, msg);
     }
     if (rc == TR_OK && st->triangles == 0) {
-        rc = tr_error_set(err, "'%.200s' has no triangles of non-zero area (%u faces dropped)",
-                          path, st->degenerate);
+        rc = tr_error_set(err, TR_STATUS_PARSE,
+                          "'%.200s' has no triangles of non-zero area (%u faces dropped)", path,
+                          st->degenerate);
     }
     if (rc != TR_OK) {
         /* Roll back: everything was appended. */

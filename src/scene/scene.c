@@ -57,7 +57,7 @@ int tr_scene_add_material(tr_scene *s, tr_material m, uint32_t *index, tr_error 
         uint32_t cap = s->material_capacity ? 2 * s->material_capacity : 8;
         tr_material *grown = realloc(s->materials, (size_t)cap * sizeof *grown);
         if (!grown) {
-            return tr_error_set(err, "out of memory adding a material");
+            return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory adding a material");
         }
         s->materials = grown;
         s->material_capacity = cap;
@@ -79,7 +79,8 @@ static int normals_reserve(tr_scene *s, uint32_t count, tr_error *err) {
         }
         tr_vec3 *grown = realloc(s->vertex_normals, (size_t)cap * 3 * sizeof *grown);
         if (!grown) {
-            return tr_error_set(err, "out of memory storing vertex normals");
+            return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY,
+                                "out of memory storing vertex normals");
         }
         s->vertex_normals = grown;
         s->vertex_normal_capacity = (uint32_t)cap;
@@ -95,7 +96,8 @@ static int normals_reserve(tr_scene *s, uint32_t count, tr_error *err) {
 int tr_scene_append_shape(tr_scene *s, const tr_triangle *tris, uint32_t n, const tr_vec3 *normals,
                           tr_error *err) {
     if ((uint64_t)s->triangle_count + n > UINT32_MAX / 2) {
-        return tr_error_set(err, "scene would exceed %u triangles", UINT32_MAX / 2);
+        return tr_error_set(err, TR_STATUS_LIMIT, "scene would exceed %u triangles",
+                            UINT32_MAX / 2);
     }
     int rc = TR_OK;
     if (s->triangle_count + n > s->triangle_capacity) {
@@ -105,7 +107,8 @@ int tr_scene_append_shape(tr_scene *s, const tr_triangle *tris, uint32_t n, cons
         }
         tr_triangle *grown = realloc(s->triangles, (size_t)cap * sizeof *grown);
         if (!grown) {
-            rc = tr_error_set(err, "out of memory growing the scene to %llu triangles",
+            rc = tr_error_set(err, TR_STATUS_OUT_OF_MEMORY,
+                              "out of memory growing the scene to %llu triangles",
                               (unsigned long long)cap);
         } else {
             s->triangles = grown;
@@ -116,7 +119,7 @@ int tr_scene_append_shape(tr_scene *s, const tr_triangle *tris, uint32_t n, cons
         uint32_t cap = s->shape_capacity ? 2 * s->shape_capacity : 16;
         tr_flat_node *grown = realloc(s->shapes, (size_t)cap * sizeof *grown);
         if (!grown) {
-            rc = tr_error_set(err, "out of memory adding a shape");
+            rc = tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory adding a shape");
         } else {
             s->shapes = grown;
             s->shape_capacity = cap;
@@ -147,11 +150,13 @@ int tr_scene_add_mesh(tr_scene *s, const float *positions, uint32_t vertex_count
         *dropped = 0;
     }
     if (material >= s->material_count) {
-        return tr_error_set(err, "mesh refers to material %u, but the scene has %u materials",
-                            material, s->material_count);
+        return tr_error_set(err, TR_STATUS_NOT_FOUND,
+                            "mesh refers to material %u, but the scene has %u materials", material,
+                            s->material_count);
     }
     if ((uint64_t)s->triangle_count + triangle_count > UINT32_MAX / 2) {
-        return tr_error_set(err, "scene would exceed %u triangles", UINT32_MAX / 2);
+        return tr_error_set(err, TR_STATUS_LIMIT, "scene would exceed %u triangles",
+                            UINT32_MAX / 2);
     }
     tr_transform identity = {v3s(0.0f), v3s(0.0f), v3s(1.0f)};
     if (!tf) {
@@ -159,12 +164,14 @@ int tr_scene_add_mesh(tr_scene *s, const float *positions, uint32_t vertex_count
     }
     for (uint32_t i = 0; i < 3 * vertex_count; ++i) {
         if (!isfinite(positions[i])) {
-            return tr_error_set(err, "mesh vertex %u has a non-finite coordinate", i / 3);
+            return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                                "mesh vertex %u has a non-finite coordinate", i / 3);
         }
     }
     for (uint32_t i = 0; i < 3 * triangle_count; ++i) {
         if (indices[i] >= vertex_count) {
-            return tr_error_set(err, "mesh triangle %u uses vertex %u of %u", i / 3, indices[i],
+            return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                                "mesh triangle %u uses vertex %u of %u", i / 3, indices[i],
                                 vertex_count);
         }
     }
@@ -174,7 +181,8 @@ int tr_scene_add_mesh(tr_scene *s, const float *positions, uint32_t vertex_count
     if (!tris || (normals && !nrm)) {
         free(tris);
         free(nrm);
-        return tr_error_set(err, "out of memory adding a mesh of %u triangles", triangle_count);
+        return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY,
+                            "out of memory adding a mesh of %u triangles", triangle_count);
     }
     uint32_t n = 0, bad = 0;
     for (uint32_t i = 0; i < triangle_count; ++i) {
@@ -206,7 +214,8 @@ int tr_scene_add_mesh(tr_scene *s, const float *positions, uint32_t vertex_count
     if (n == 0) {
         free(tris);
         free(nrm);
-        return tr_error_set(err, "mesh has no triangles of non-zero area (%u dropped)", bad);
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "mesh has no triangles of non-zero area (%u dropped)", bad);
     }
     int rc = tr_scene_append_shape(s, tris, n, nrm, err);
     free(tris);
@@ -253,7 +262,8 @@ int tr_scene_commit(tr_scene *s, tr_accel_type accel, tr_error *err) {
         s->committed_triangles = s->triangle_count;
         return TR_OK;
     }
-    return tr_error_set(err, "unknown acceleration structure %d", (int)accel);
+    return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "unknown acceleration structure %d",
+                        (int)accel);
 }
 
 int tr_scene_is_committed(const tr_scene *s) {
@@ -282,11 +292,12 @@ int tr_scene_refit(tr_scene *s, tr_error *err) {
 
 int tr_scene_move_shape(tr_scene *s, uint32_t shape, tr_vec3 delta, tr_error *err) {
     if (shape >= s->shape_count) {
-        return tr_error_set(err, "shape %u does not exist (the scene has %u)", shape,
-                            s->shape_count);
+        return tr_error_set(err, TR_STATUS_NOT_FOUND, "shape %u does not exist (the scene has %u)",
+                            shape, s->shape_count);
     }
     if (!isfinite(delta.x) || !isfinite(delta.y) || !isfinite(delta.z)) {
-        return tr_error_set(err, "shape %u: the offset is not finite", shape);
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "shape %u: the offset is not finite",
+                            shape);
     }
     tr_flat_node *node = &s->shapes[shape];
     for (uint32_t i = node->first; i < node->first + node->count; ++i) {
@@ -317,7 +328,8 @@ int tr_scene_update(tr_scene *s, double *seconds, tr_error *err) {
     const double t0 = tr_time_now();
     int rc = TR_OK;
     if (!tr_scene_is_committed(s)) {
-        rc = tr_error_set(err, "the scene's triangle count changed: commit it again");
+        rc = tr_error_set(err, TR_STATUS_STALE_SCENE,
+                          "the scene's triangle count changed: commit it again");
     } else if (s->accel == TR_ACCEL_TYPE_BVH || s->accel == TR_ACCEL_TYPE_BVH2) {
         rc = tr_scene_refit(s, err);
     } else if (s->accel == TR_ACCEL_TYPE_EMBREE) {

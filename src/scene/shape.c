@@ -170,7 +170,8 @@ static uint32_t gen_icosphere(tr_triangle *out, tr_triangle *tmp, uint32_t level
 static int check_vec(tr_vec3 v, const char *what, tr_error *err) {
     const float huge = 1e30f;
     if (!v3_is_finite(v) || fabsf(v.x) > huge || fabsf(v.y) > huge || fabsf(v.z) > huge) {
-        return tr_error_set(err, "shape %s (%g, %g, %g) is not a finite number below 1e30", what,
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "shape %s (%g, %g, %g) is not a finite number below 1e30", what,
                             (double)v.x, (double)v.y, (double)v.z);
     }
     return TR_OK;
@@ -186,25 +187,28 @@ static int shape_generate(const tr_shape_desc *desc, tr_triangle **out, uint32_t
     }
     tr_vec3 sc = desc->transform.scale;
     if (!(sc.x > 0.0f && sc.y > 0.0f && sc.z > 0.0f)) {
-        return tr_error_set(err, "shape scale (%g, %g, %g) must be positive", (double)sc.x,
-                            (double)sc.y, (double)sc.z);
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "shape scale (%g, %g, %g) must be positive", (double)sc.x, (double)sc.y,
+                            (double)sc.z);
     }
     if (desc->type == TR_SHAPE_ICOSPHERE && desc->subdivisions > TR_ICOSPHERE_MAX_SUBDIVISIONS) {
-        return tr_error_set(err,
+        return tr_error_set(err, TR_STATUS_LIMIT,
                             "icosphere subdivisions %u exceed the limit of %d (%llu triangles)",
                             desc->subdivisions, TR_ICOSPHERE_MAX_SUBDIVISIONS,
                             20ull << (2u * TR_ICOSPHERE_MAX_SUBDIVISIONS));
     }
     uint64_t n = tr_shape_triangle_count(desc);
     if (n == 0) {
-        return tr_error_set(err, "unknown shape type %d", (int)desc->type);
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "unknown shape type %d",
+                            (int)desc->type);
     }
     tr_triangle *tris = malloc((size_t)n * sizeof *tris);
     tr_triangle *tmp = desc->type == TR_SHAPE_ICOSPHERE ? malloc((size_t)n * sizeof *tmp) : NULL;
     if (!tris || (desc->type == TR_SHAPE_ICOSPHERE && !tmp)) {
         free(tris);
         free(tmp);
-        return tr_error_set(err, "out of memory generating %llu triangles", (unsigned long long)n);
+        return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory generating %llu triangles",
+                            (unsigned long long)n);
     }
     uint32_t made = 0;
     switch (desc->type) {
@@ -233,7 +237,8 @@ static int shape_generate(const tr_shape_desc *desc, tr_triangle **out, uint32_t
 
 int tr_scene_add_shape(tr_scene *s, const tr_shape_desc *desc, tr_error *err) {
     if (desc->material >= s->material_count) {
-        return tr_error_set(err, "shape refers to material %u, but the scene has %u materials",
+        return tr_error_set(err, TR_STATUS_NOT_FOUND,
+                            "shape refers to material %u, but the scene has %u materials",
                             desc->material, s->material_count);
     }
     tr_triangle *tris = NULL;
