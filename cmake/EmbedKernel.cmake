@@ -1,8 +1,11 @@
 # EmbedKernel.cmake - turns the OpenCL kernel into one C string at build time.
 #
-# Run as a script: cmake -DTR_KERNEL_ENTRY=<entry.cl> -DTR_KERNEL_OUT=<file.c> -P EmbedKernel.cmake
+# Run as a script: cmake -DTR_KERNEL_ENTRY=<entry.cl> -DTR_KERNEL_OUT=<file.c>
+#                  [-DTR_KERNEL_INCLUDE_DIRS=<dir;dir>] -P EmbedKernel.cmake
 # Starting from entry.cl, every `#include "name.h"` is replaced by that file's text
-# (looked up next to the including file, then under src/kernel/, each file inlined
+# (looked up next to the including file, then under each of TR_KERNEL_INCLUDE_DIRS as a
+# compiler's -I would - the public include/ holds the value types the kernel shares with
+# the API, "trac0r/types.h" - then by its file name under src/kernel/; each file inlined
 # once: the headers have include guards anyway), preceded by a #line directive so that
 # the device compiler's build log names the original file and line. System includes
 # (<math.h>, only in compat.h's host branch) are left alone. The result is written as
@@ -46,7 +49,14 @@ function(tr_inline_file path out_var)
     math(EXPR line "${line} + ${nl_count}")
     get_filename_component(leaf "${name}" NAME)
     set(found "")
-    foreach(candidate "${dir}/${name}" "${_tr_kernel_dir}/${leaf}")
+    # The include directories come before the kernel directory's file of the same leaf
+    # name: "trac0r/types.h" is include/trac0r/types.h, not src/kernel/types.h.
+    set(candidates "${dir}/${name}")
+    foreach(inc_dir IN LISTS TR_KERNEL_INCLUDE_DIRS)
+      list(APPEND candidates "${inc_dir}/${name}")
+    endforeach()
+    list(APPEND candidates "${_tr_kernel_dir}/${leaf}")
+    foreach(candidate IN LISTS candidates)
       if(EXISTS "${candidate}")
         set(found "${candidate}")
         break()

@@ -12,6 +12,8 @@
 #include <string.h>
 
 #include "check.h"
+#include "kernel/kernel.h"
+#include "scene/scene_internal.h"
 #include "trac0r/opencl.h"
 #include "trac0r/trac0r.h"
 
@@ -245,7 +247,7 @@ int main(void) {
     CHECK(contains_ci(tr_cl_last_build_log(), "error"), "build log: '%s'", tr_cl_last_build_log());
 
     tr_render_config cfg = tr_render_config_default();
-    tr_scene scene;
+    tr_scene scene = {0};
     tr_scene_init(&scene);
     CHECK(tr_scene_builtin(&scene, "cornell", 48, 36, &err) == TR_OK, "%s", err.msg);
     /* Nothing uploaded yet. */
@@ -303,7 +305,7 @@ int main(void) {
 
     /* A device without enough memory: the upload fails before touching the scene on
      * the device, which keeps rendering the previous one. */
-    tr_scene big;
+    tr_scene big = {0};
     tr_scene_init(&big);
     CHECK(tr_scene_builtin(&big, "cornell-ico-5", 48, 36, &err) == TR_OK, "%s", err.msg);
     CHECK(tr_scene_commit(&big, TR_ACCEL_TYPE_BVH, &err) == TR_OK, "%s", err.msg);

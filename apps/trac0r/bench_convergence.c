@@ -132,7 +132,7 @@ static int render_spp(const tr_scene *s, const tr_render_config *cfg, tr_film *f
                       uint32_t spp, tr_error *err) {
     tr_film_clear(f);
     for (uint32_t k = 0; k < spp; ++k) {
-        if (tr_render_frame(s, &s->camera, cfg, f, first + k, NULL, err) != TR_OK) {
+        if (tr_render_frame(s, tr_scene_camera(s), cfg, f, first + k, NULL, err) != TR_OK) {
             return TR_ERR;
         }
     }
@@ -255,15 +255,16 @@ int bench_convergence(int argc, char **argv) {
     for (int si = 0; si < nsizes && rc == CLI_OK; ++si) {
         c.width = sw[si];
         c.height = sh[si];
-        tr_scene scene;
-        rc = cli_load_scene(&a, &c, &scene);
+        tr_scene *scene = tr_scene_create(NULL);
+        rc = cli_load_scene(&a, &c, scene);
         if (rc != CLI_OK) {
+            tr_scene_destroy(scene);
             break;
         }
         if (si == 0) {
-            for (uint32_t m = 0; m < scene.material_count; ++m) {
-                if (scene.materials[m].type == TR_MATERIAL_GLOSSY &&
-                    scene.materials[m].roughness > 0.0f) {
+            for (uint32_t m = 0; m < tr_scene_material_count(scene); ++m) {
+                const tr_material mat = tr_scene_material(scene, m);
+                if (mat.type == TR_MATERIAL_GLOSSY && mat.roughness > 0.0f) {
                     printf("note: this scene has rough glossy materials, on which naive (cone "
                            "lobe) and pt (GGX) converge to different images\n");
                     break;
@@ -282,7 +283,7 @@ int bench_convergence(int argc, char **argv) {
             free(ref);
             free(half);
             free(cur);
-            tr_scene_free(&scene);
+            tr_scene_destroy(scene);
             rc = CLI_FAILURE;
             break;
         }
@@ -301,11 +302,11 @@ int bench_convergence(int argc, char **argv) {
         } else {
             double t0 = tr_time_now();
             uint32_t h1 = ref_spp / 2, h2 = ref_spp - h1;
-            if (render_spp(&scene, &cfg, &film, 0, h1, &err) != TR_OK) {
+            if (render_spp(scene, &cfg, &film, 0, h1, &err) != TR_OK) {
                 rc = CLI_FAILURE;
             } else {
                 film_mean(&film, half);
-                if (render_spp(&scene, &cfg, &film, h1, h2, &err) != TR_OK) {
+                if (render_spp(scene, &cfg, &film, h1, h2, &err) != TR_OK) {
                     rc = CLI_FAILURE;
                 }
             }
@@ -360,8 +361,8 @@ int bench_convergence(int argc, char **argv) {
             cfg.max_depth = methods[mi] == TR_INTEGRATOR_NAIVE ? c.max_depth + 2 : c.max_depth;
             cfg.seed = c.seed;
             tr_render_stats st;
-            if (tr_render_frame(&scene, &scene.camera, &cfg, &films[mi], spp[mi], &st, &err) !=
-                TR_OK) {
+            if (tr_render_frame(scene, tr_scene_camera(scene), &cfg, &films[mi], spp[mi], &st,
+                                &err) != TR_OK) {
                 fprintf(stderr, "trac0r bench convergence: %s\n", err.msg);
                 rc = CLI_FAILURE;
                 break;
@@ -396,7 +397,7 @@ int bench_convergence(int argc, char **argv) {
         free(half);
         free(cur);
         tr_film_free(&film);
-        tr_scene_free(&scene);
+        tr_scene_destroy(scene);
     }
     tr_image_free(&ref_img);
     if (rc != CLI_OK) {

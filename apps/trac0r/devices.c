@@ -89,11 +89,12 @@ int cli_backend_upload(const cli_args *a, cli_backend *be, const tr_scene *scene
     }
     const tr_cl_device_info *d = tr_cl_device(be->cl);
     /* bvh and bvh2 both upload the binary BVH (the wide BVH is host code). */
-    if (scene->accel != tr_cl_scene_accel(be->cl) && scene->accel != TR_ACCEL_TYPE_BVH2) {
+    if (tr_scene_accel(scene) != tr_cl_scene_accel(be->cl) &&
+        tr_scene_accel(scene) != TR_ACCEL_TYPE_BVH2) {
         /* Embree is a host library: the device gets a BVH of its own. */
         snprintf(be->name, sizeof be->name,
                  "opencl:%d (%s; %s is host-only, the device traces a %s)", d->index, d->name,
-                 tr_accel_name(scene->accel), tr_accel_name(tr_cl_scene_accel(be->cl)));
+                 tr_accel_name(tr_scene_accel(scene)), tr_accel_name(tr_cl_scene_accel(be->cl)));
     } else {
         snprintf(be->name, sizeof be->name, "opencl:%d (%s)", d->index, d->name);
     }
@@ -103,9 +104,9 @@ int cli_backend_upload(const cli_args *a, cli_backend *be, const tr_scene *scene
 int cli_backend_frame(cli_backend *be, const tr_scene *scene, const tr_render_config *cfg,
                       tr_film *film, uint32_t sample, tr_render_stats *stats, tr_error *err) {
     if (!be->cl) {
-        return tr_render_frame(scene, &scene->camera, cfg, film, sample, stats, err);
+        return tr_render_frame(scene, tr_scene_camera(scene), cfg, film, sample, stats, err);
     }
-    return tr_cl_render_frame(be->cl, &scene->camera, cfg, sample, stats, err);
+    return tr_cl_render_frame(be->cl, tr_scene_camera(scene), cfg, sample, stats, err);
 }
 
 int cli_backend_read(cli_backend *be, tr_film *film, tr_error *err) {

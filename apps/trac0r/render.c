@@ -87,10 +87,11 @@ int cmd_render(int argc, char **argv) {
         return cli_error(&a, "--out: %s", err.msg);
     }
 
-    tr_scene scene;
+    tr_scene *scene = tr_scene_create(NULL);
     tr_scene_file file;
-    int rc = cli_load_scene_file(&a, &c, &scene, &file);
+    int rc = cli_load_scene_file(&a, &c, scene, &file);
     if (rc != CLI_OK) {
+        tr_scene_destroy(scene);
         return rc;
     }
     if (!spp_given && file.has_spp) {
@@ -98,14 +99,14 @@ int cmd_render(int argc, char **argv) {
     }
     tr_film film;
     if (tr_film_init(&film, c.width, c.height, &err) != TR_OK) {
-        tr_scene_free(&scene);
+        tr_scene_destroy(scene);
         return cli_error(&a, "--width/--height: %s", err.msg);
     }
     cli_backend be;
-    rc = cli_backend_open(&a, &c, &scene, &be);
+    rc = cli_backend_open(&a, &c, scene, &be);
     if (rc != CLI_OK) {
         tr_film_free(&film);
-        tr_scene_free(&scene);
+        tr_scene_destroy(scene);
         return rc;
     }
     tr_render_config cfg = tr_render_config_default();
@@ -121,7 +122,7 @@ int cmd_render(int argc, char **argv) {
     rc = CLI_OK;
     for (uint32_t s = 0; s < spp; ++s) {
         tr_render_stats st;
-        if (cli_backend_frame(&be, &scene, &cfg, &film, s, &st, &err) != TR_OK) {
+        if (cli_backend_frame(&be, scene, &cfg, &film, s, &st, &err) != TR_OK) {
             fprintf(stderr, "%strac0r render: %s\n", tty ? "\n" : "", err.msg);
             rc = CLI_FAILURE;
             break;
@@ -148,13 +149,13 @@ int cmd_render(int argc, char **argv) {
     }
     if (rc == CLI_OK) {
         char accel[160];
-        cli_describe_accel(accel, sizeof accel, &scene);
+        cli_describe_accel(accel, sizeof accel, scene);
         fprintf(stderr, "trac0r render: %s %ux%u, %u spp, %s, %s: %.2f s, %.2f Mrays/s -> %s\n",
                 c.scene, c.width, c.height, spp, be.name, accel, elapsed,
                 elapsed > 0 ? (double)rays / elapsed * 1e-6 : 0.0, out);
     }
     cli_backend_close(&be);
     tr_film_free(&film);
-    tr_scene_free(&scene);
+    tr_scene_destroy(scene);
     return rc;
 }

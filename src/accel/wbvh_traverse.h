@@ -24,7 +24,7 @@
 #include <stdint.h>
 
 #include "kernel/types.h"
-#include "trac0r/accel.h"
+#include "accel/accel_internal.h"
 
 #if !defined(TR_WBVH_SCALAR) || !TR_WBVH_SCALAR
 #if defined(__AVX2__) && TR_WBVH_WIDTH == 8

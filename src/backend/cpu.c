@@ -4,6 +4,7 @@
 #include <time.h>
 
 #include "kernel/kernel.h"
+#include "scene/scene_internal.h"
 #include "trac0r/render.h"
 
 tr_render_config tr_render_config_default(void) {
@@ -49,9 +50,8 @@ int tr_render_frame(const tr_scene *scene, const tr_camera *cam, const tr_render
         return tr_error_set(err, "camera is %ux%u but the film is %ux%u", cam->screen_width,
                             cam->screen_height, film->width, film->height);
     }
-    if (!tr_scene_is_committed(scene)) {
-        return tr_error_set(err, "the scene changed since tr_scene_commit built its %s",
-                            tr_accel_name(scene->accel));
+    if (tr_scene_check_committed(scene, err) != TR_OK) {
+        return TR_ERR;
     }
     if (tr_render_config_check(cfg, err) != TR_OK) {
         return TR_ERR;

@@ -8,6 +8,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "accel/accel_internal.h"
+#include "scene/scene_internal.h"
 #include "trac0r/accel.h"
 
 #ifndef TRAC0R_HAVE_OPENCL
@@ -614,9 +616,8 @@ static double mib(uint64_t bytes) {
 }
 
 int tr_cl_upload_scene(tr_cl_context *ctx, const tr_scene *scene, tr_error *err) {
-    if (!tr_scene_is_committed(scene)) {
-        return tr_error_set(err, "the scene changed since tr_scene_commit built its %s",
-                            tr_accel_name(scene->accel));
+    if (tr_scene_check_committed(scene, err) != TR_OK) {
+        return TR_ERR;
     }
     /* The device walks the flat structure or the BVH2; a scene committed to Embree (a
      * host library) gets a BVH of its own for the device. */

@@ -2,6 +2,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "kernel/vec.h"
 #include "trac0r/film.h"
 
 int tr_film_init(tr_film *f, uint32_t width, uint32_t height, tr_error *err) {

@@ -14,8 +14,7 @@
 #include "scene_view.h"
 #include "types.h"
 
-#define TR_INTEGRATOR_NAIVE 0
-#define TR_INTEGRATOR_PT 1 /* next-event estimation + MIS (integrator_pt.h) */
+/* TR_INTEGRATOR_NAIVE / TR_INTEGRATOR_PT: include/trac0r/types.h. */
 
 /* Radiance of sample `sample` of pixel (x, y), with jitter inside the pixel. The random
  * stream depends only on (seed, pixel index, sample). */
