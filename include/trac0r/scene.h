@@ -119,9 +119,11 @@ uint64_t tr_scene_generation(const tr_scene *s);
  * `shape` (its triangles and its box in the flat structure) by `delta`. Areas, normals and
  * the emitter table stay valid; the committed structure is stale until tr_scene_update. */
 int tr_scene_move_shape(tr_scene *s, uint32_t shape, tr_vec3 delta, tr_error *err);
-/* Brings the committed structure up to date after triangles moved (same count): a BVH is
- * refitted (tr_scene_refit: boxes of the same trees, binary and wide), Embree's scene
- * rebuilt, the flat structure needs nothing. *seconds (may be NULL) gets the time taken. */
+/* Brings the committed structure up to date after shapes moved and records the scene's
+ * generation as committed: a BVH is refitted (boxes of the same trees, binary and wide),
+ * Embree's scene rebuilt, the flat structure needs nothing. Fails when anything but moves
+ * happened since the commit (shapes or meshes added, the scene reloaded): that needs
+ * tr_scene_commit. *seconds (may be NULL) gets the time taken. */
 int tr_scene_update(tr_scene *s, double *seconds, tr_error *err);
 /* What tr_scene_update does for the scene's structure: "refit", "rebuild" or "none". */
 const char *tr_scene_update_kind(const tr_scene *s);
