@@ -96,7 +96,7 @@ uint64_t tr_shape_triangle_count(const tr_shape_desc *desc);
  * "cornell-diffuse" the same room with every object white diffuse; "cornell-ico-N" is
  * the scene of the thesis's complexity benchmark (figure 3.5): the same room with only
  * the glass icosphere, at N = 0..TR_ICOSPHERE_MAX_SUBDIVISIONS subdivisions (20 * 4^N
- * triangles). */
+ * triangles). Whatever s held is released first; the scene is not committed. */
 int tr_scene_builtin(tr_scene *s, const char *name, uint32_t width, uint32_t height, tr_error *err);
 
 /* Builds the acceleration structure rays will be traced through (the thesis's flat

@@ -5,7 +5,7 @@
  * OpenCL device. The kernel (src/kernel/types.h) takes these declarations from here
  * rather than declaring them again, so this header is also valid OpenCL C 1.2, where
  * the fixed-width integer types come from src/kernel/compat.h instead of <stdint.h>.
- * tr_abi_sizeof (trac0r.h) reports the sizes as compiled into the library. */
+ * tr_abi_sizeof (abi.h) reports the sizes as compiled into the library. */
 #ifndef TRAC0R_TYPES_H
 #define TRAC0R_TYPES_H
 
