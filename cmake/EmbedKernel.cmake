@@ -21,11 +21,12 @@ endif()
 get_filename_component(_tr_kernel_dir "${TR_KERNEL_ENTRY}" DIRECTORY)
 set(_tr_inlined "")
 
-# Inlines the quoted includes of `path` recursively; the result goes to ${out_var}.
-function(tr_inline_file path out_var)
+# Inlines the quoted includes of `path` recursively; the result goes to ${out_var}. `base`
+# names the file in #line directives: the name it was included by ("vec.h",
+# "trac0r/types.h"), so that the kernel's types.h and the public one stay apart in logs.
+function(tr_inline_file path base out_var)
   file(READ "${path}" text)
   get_filename_component(dir "${path}" DIRECTORY)
-  get_filename_component(base "${path}" NAME)
   set(result "#line 1 \"${base}\"\n")
   set(line 1) # the original line number where `text` starts
   # Walk the text: everything before an #include line is copied, the include replaced.
@@ -70,7 +71,7 @@ function(tr_inline_file path out_var)
     if(seen EQUAL -1)
       list(APPEND _tr_inlined "${found}")
       set(_tr_inlined "${_tr_inlined}" PARENT_SCOPE)
-      tr_inline_file("${found}" sub)
+      tr_inline_file("${found}" "${name}" sub)
       set(_tr_inlined "${_tr_inlined}")
       string(APPEND result "${sub}\n")
     endif()
@@ -80,7 +81,8 @@ function(tr_inline_file path out_var)
   set(_tr_inlined "${_tr_inlined}" PARENT_SCOPE)
 endfunction()
 
-tr_inline_file("${TR_KERNEL_ENTRY}" source)
+get_filename_component(_tr_entry_name "${TR_KERNEL_ENTRY}" NAME)
+tr_inline_file("${TR_KERNEL_ENTRY}" "${_tr_entry_name}" source)
 
 # Escape into a C string literal, one source line per literal line.
 string(REPLACE "\\" "\\\\" source "${source}")

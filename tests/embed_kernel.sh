@@ -55,6 +55,7 @@ grep -q 'int line_b = 4;' pp.txt || fail "__LINE__ in b.h: $(grep line_b pp.txt)
 grep -q 'int line_a = 4;' pp.txt || fail "__LINE__ in a.h: $(grep line_a pp.txt)"
 grep -q 'int line_entry = 4;' pp.txt || fail "__LINE__ in entry.cl: $(grep line_entry pp.txt)"
 grep -q '"b.h"' pp.txt || fail "no line marker names b.h"
+grep -q '"pub/c.h"' pp.txt || fail "no line marker names pub/c.h as it was included"
 
 # Unchanged input: the output file is not rewritten (no needless rebuilds).
 touch -d '2000-01-01' gen.c
