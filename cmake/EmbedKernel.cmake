@@ -1,8 +1,11 @@
 # EmbedKernel.cmake - turns the OpenCL kernel into one C string at build time.
 #
-# Run as a script: cmake -DTR_KERNEL_ENTRY=<entry.cl> -DTR_KERNEL_OUT=<file.c> -P EmbedKernel.cmake
+# Run as a script: cmake -DTR_KERNEL_ENTRY=<entry.cl> -DTR_KERNEL_OUT=<file.c>
+#                  [-DTR_KERNEL_INCLUDE_DIRS=<dir;dir>] -P EmbedKernel.cmake
 # Starting from entry.cl, every `#include "name.h"` is replaced by that file's text
-# (looked up next to the including file, then under src/kernel/, each file inlined
+# (looked up next to the including file, then under each of TR_KERNEL_INCLUDE_DIRS as a
+# compiler's -I would - the public include/ holds the value types the kernel shares with
+# the API, "trac0r/types.h" - then by its file name under src/kernel/; each file inlined
 # once: the headers have include guards anyway), preceded by a #line directive so that
 # the device compiler's build log names the original file and line. System includes
 # (<math.h>, only in compat.h's host branch) are left alone. The result is written as
@@ -18,11 +21,12 @@ endif()
 get_filename_component(_tr_kernel_dir "${TR_KERNEL_ENTRY}" DIRECTORY)
 set(_tr_inlined "")
 
-# Inlines the quoted includes of `path` recursively; the result goes to ${out_var}.
-function(tr_inline_file path out_var)
+# Inlines the quoted includes of `path` recursively; the result goes to ${out_var}. `base`
+# names the file in #line directives: the name it was included by ("vec.h",
+# "trac0r/types.h"), so that the kernel's types.h and the public one stay apart in logs.
+function(tr_inline_file path base out_var)
   file(READ "${path}" text)
   get_filename_component(dir "${path}" DIRECTORY)
-  get_filename_component(base "${path}" NAME)
   set(result "#line 1 \"${base}\"\n")
   set(line 1) # the original line number where `text` starts
   # Walk the text: everything before an #include line is copied, the include replaced.
@@ -46,7 +50,14 @@ function(tr_inline_file path out_var)
     math(EXPR line "${line} + ${nl_count}")
     get_filename_component(leaf "${name}" NAME)
     set(found "")
-    foreach(candidate "${dir}/${name}" "${_tr_kernel_dir}/${leaf}")
+    # The include directories come before the kernel directory's file of the same leaf
+    # name: "trac0r/types.h" is include/trac0r/types.h, not src/kernel/types.h.
+    set(candidates "${dir}/${name}")
+    foreach(inc_dir IN LISTS TR_KERNEL_INCLUDE_DIRS)
+      list(APPEND candidates "${inc_dir}/${name}")
+    endforeach()
+    list(APPEND candidates "${_tr_kernel_dir}/${leaf}")
+    foreach(candidate IN LISTS candidates)
       if(EXISTS "${candidate}")
         set(found "${candidate}")
         break()
@@ -60,7 +71,7 @@ function(tr_inline_file path out_var)
     if(seen EQUAL -1)
       list(APPEND _tr_inlined "${found}")
       set(_tr_inlined "${_tr_inlined}" PARENT_SCOPE)
-      tr_inline_file("${found}" sub)
+      tr_inline_file("${found}" "${name}" sub)
       set(_tr_inlined "${_tr_inlined}")
       string(APPEND result "${sub}\n")
     endif()
@@ -70,7 +81,8 @@ function(tr_inline_file path out_var)
   set(_tr_inlined "${_tr_inlined}" PARENT_SCOPE)
 endfunction()
 
-tr_inline_file("${TR_KERNEL_ENTRY}" source)
+get_filename_component(_tr_entry_name "${TR_KERNEL_ENTRY}" NAME)
+tr_inline_file("${TR_KERNEL_ENTRY}" "${_tr_entry_name}" source)
 
 # Escape into a C string literal, one source line per literal line.
 string(REPLACE "\\" "\\\\" source "${source}")

@@ -9,6 +9,7 @@
 #include <stdlib.h>
 #include <time.h>
 
+#include "scene/scene_internal.h"
 #include "trac0r/scene_file.h"
 
 /* The loader never imports meshes here; this build has no Assimp. Reaching this is a
@@ -31,7 +32,7 @@ double tr_time_now(void) {
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
-    tr_scene s;
+    tr_scene s = {0};
     tr_scene_file info;
     tr_error err;
     const tr_scene_file_options opt = {0, 20000};

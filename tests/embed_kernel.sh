@@ -10,7 +10,7 @@ SCRIPT=$2
 CC=$3
 DIR=$4
 rm -rf "$DIR"
-mkdir -p "$DIR/k"
+mkdir -p "$DIR/k" "$DIR/inc/pub"
 cd "$DIR" || exit 1
 failures=0
 fail() {
@@ -19,11 +19,15 @@ fail() {
 }
 
 printf '#ifndef B_H\n#define B_H\nconst char *b_text = "q\\"uote\\\\ \ttab";\nint line_b = __LINE__;\n#define TWO_LINES(x) \\\n    ((x) + 1)\n#endif\n' >k/b.h
-printf '#include "b.h"\n#include <math.h>\nint line_a = __LINE__;\n' >k/a.h
+printf '#include "b.h"\n#include <math.h>\n#include "pub/c.h"\nint line_a = __LINE__;\n' >k/a.h
+# A header outside the kernel's directory, found through TR_KERNEL_INCLUDE_DIRS (as the
+# public include/trac0r/types.h is), although the kernel has a file of the same name.
+printf 'int c_public = 1;\n' >inc/pub/c.h
+printf 'int c_kernel = 1;\n' >k/c.h
 printf '/* entry */\n#include "a.h"\n#include "b.h"\nint line_entry = __LINE__;\n' >k/entry.cl
 
-"$CMAKE" -DTR_KERNEL_ENTRY="$DIR/k/entry.cl" -DTR_KERNEL_OUT="$DIR/gen.c" -P "$SCRIPT" ||
-    fail "the script failed"
+"$CMAKE" -DTR_KERNEL_ENTRY="$DIR/k/entry.cl" -DTR_KERNEL_OUT="$DIR/gen.c" \
+    -DTR_KERNEL_INCLUDE_DIRS="$DIR/inc" -P "$SCRIPT" || fail "the script failed"
 cat >main.c <<'EOC'
 #include <stdio.h>
 #include <string.h>
@@ -43,16 +47,20 @@ grep -q '^#include <math.h>$' out.cl || fail "the system include was touched"
 if grep -q '#include "' out.cl; then fail "a quoted #include is left"; fi
 grep -qF 'const char *b_text = "q\"uote\\ 	tab";' out.cl || fail "escapes did not survive: $(grep b_text out.cl)"
 grep -q '^#define TWO_LINES(x) \\$' out.cl || fail "the line continuation was lost"
+grep -q '^int c_public = 1;$' out.cl || fail "the header under the include directory is missing"
+if grep -q c_kernel out.cl; then fail "k/c.h was taken for pub/c.h"; fi
 # The preprocessor sees the original line numbers and file names.
 "$CC" -E -x c out.cl >pp.txt 2>&1 || fail "the embedded text does not preprocess: $(cat pp.txt)"
 grep -q 'int line_b = 4;' pp.txt || fail "__LINE__ in b.h: $(grep line_b pp.txt)"
-grep -q 'int line_a = 3;' pp.txt || fail "__LINE__ in a.h: $(grep line_a pp.txt)"
+grep -q 'int line_a = 4;' pp.txt || fail "__LINE__ in a.h: $(grep line_a pp.txt)"
 grep -q 'int line_entry = 4;' pp.txt || fail "__LINE__ in entry.cl: $(grep line_entry pp.txt)"
 grep -q '"b.h"' pp.txt || fail "no line marker names b.h"
+grep -q '"pub/c.h"' pp.txt || fail "no line marker names pub/c.h as it was included"
 
 # Unchanged input: the output file is not rewritten (no needless rebuilds).
 touch -d '2000-01-01' gen.c
-"$CMAKE" -DTR_KERNEL_ENTRY="$DIR/k/entry.cl" -DTR_KERNEL_OUT="$DIR/gen.c" -P "$SCRIPT"
+"$CMAKE" -DTR_KERNEL_ENTRY="$DIR/k/entry.cl" -DTR_KERNEL_OUT="$DIR/gen.c" \
+    -DTR_KERNEL_INCLUDE_DIRS="$DIR/inc" -P "$SCRIPT"
 [ -z "$(find gen.c -newermt '2001-01-01')" ] || fail "gen.c rewritten although nothing changed"
 
 # A missing header fails with its name.

@@ -4,6 +4,8 @@
 #define TR_TEST_SCENE_UTIL_H
 
 #include "check.h"
+#include "kernel/kernel.h"
+#include "scene/scene_internal.h"
 #include "trac0r/trac0r.h"
 
 /* Adds material m; returns its index. */

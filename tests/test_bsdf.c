@@ -17,6 +17,8 @@
  *
  * Fixed seeds; statistical bounds are 5 standard errors or chi2_critical (p = 1e-4). */
 #include "check.h"
+#include "kernel/kernel.h"
+#include "scene/scene_internal.h"
 #include "kernel/bsdf.h"
 #include "kernel/kernel.h"
 

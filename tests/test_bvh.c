@@ -20,6 +20,8 @@
 
 #include "check.h"
 #include "accel/wbvh.h"
+#include "kernel/kernel.h"
+#include "scene/scene_internal.h"
 #include "trac0r/trac0r.h"
 
 /* Rays per mesh for the main comparisons (the brief asks for at least 100 000) and
@@ -783,7 +785,7 @@ static void test_meshes(void) {
     tr_error err;
     tr_rng r;
     tr_rng_init(&r, 2024, 1, 0);
-    tr_scene s;
+    tr_scene s = {0};
     uint32_t n;
     tr_triangle *t;
 
@@ -846,7 +848,7 @@ static void test_stress(void) {
     const uint32_t n = 5000;
     tr_rng r;
     tr_rng_init(&r, 77, 0, 0);
-    tr_scene s;
+    tr_scene s = {0};
     tr_triangle *t;
     const tr_vec3 c = v3(0.5f, 0.5f, 0.5f);
 
@@ -1008,7 +1010,7 @@ static void test_degenerate(void) {
         }
     }
     free(good);
-    tr_scene s;
+    tr_scene s = {0};
     scene_from_triangles(&s, t, n);
     uint32_t zero_area = 0;
     for (uint32_t i = 0; i < n; ++i) {
@@ -1023,7 +1025,7 @@ static void test_degenerate(void) {
     /* The reference: the same mesh with each degenerate triangle collapsed to one finite
      * point, which no ray/triangle test can hit (both edges are exactly zero), so the
      * flat structure sees only the valid triangles, at the same indices. */
-    tr_scene clean;
+    tr_scene clean = {0};
     tr_triangle *ct = alloc_tris(n);
     memcpy(ct, s.triangles, (size_t)n * sizeof *ct);
     for (uint32_t i = 0; i < n; ++i) {
@@ -1110,7 +1112,7 @@ static void test_refit(void) {
     tr_error err;
     tr_rng r;
     tr_rng_init(&r, 555, 0, 0);
-    tr_scene s;
+    tr_scene s = {0};
     uint32_t n;
     tr_triangle *t = make_soup(&r, &n);
     scene_from_triangles(&s, t, n);
@@ -1171,7 +1173,7 @@ static void test_refit(void) {
  * float are still ordinary triangles: the flat structure hits them, so must the BVH. */
 static void test_huge_triangles(void) {
     tr_error err;
-    tr_scene s;
+    tr_scene s = {0};
     tr_scene_init(&s);
     CHECK(tr_scene_add_material(&s, tr_material_diffuse(v3s(0.5f)), NULL, &err) == TR_OK, "%s",
           err.msg);
@@ -1213,7 +1215,7 @@ static int films_equal_pixel(const tr_film *a, const tr_film *b, size_t i) {
 static void test_render(void) {
     const uint32_t w = 64, h = 48, spp = 4;
     tr_error err;
-    tr_scene s;
+    tr_scene s = {0};
     CHECK(tr_scene_builtin(&s, "cornell", w, h, &err) == TR_OK, "%s", err.msg);
     tr_film ff, fb, f2;
     CHECK(tr_film_init(&ff, w, h, &err) == TR_OK && tr_film_init(&fb, w, h, &err) == TR_OK &&
@@ -1247,8 +1249,9 @@ static void test_render(void) {
     }
     tr_film_free(&f2);
 
-    /* A BVH older than the scene's triangles must not be traced; a new commit fixes it,
-     * and the flat structure needs none. */
+    /* A BVH older than the scene's triangles must not be traced; a new commit fixes it.
+     * The flat structure has nothing to build, but its scene still takes edits at commit
+     * only (the emitter table, and devices' uploads, follow the commit). */
     tr_shape_desc extra = tr_shape_desc_default(TR_SHAPE_BOX);
     extra.transform.scale = v3s(0.1f);
     CHECK(tr_scene_add_shape(&s, &extra, &err) == TR_OK, "%s", err.msg);
@@ -1259,6 +1262,9 @@ static void test_render(void) {
     CHECK(tr_render_frame(&s, &s.camera, &cfg, &fb, 0, NULL, &err) == TR_OK, "%s", err.msg);
     CHECK(tr_scene_commit(&s, TR_ACCEL_TYPE_FLAT, &err) == TR_OK, "%s", err.msg);
     CHECK(tr_scene_add_shape(&s, &extra, &err) == TR_OK, "%s", err.msg);
+    CHECK(tr_render_frame(&s, &s.camera, &cfg, &fb, 0, NULL, &err) == TR_ERR,
+          "rendering a flat scene edited since its commit succeeded");
+    CHECK(tr_scene_commit(&s, TR_ACCEL_TYPE_FLAT, &err) == TR_OK, "%s", err.msg);
     CHECK(tr_render_frame(&s, &s.camera, &cfg, &fb, 0, NULL, &err) == TR_OK, "%s", err.msg);
     tr_film_free(&ff);
     tr_film_free(&fb);
@@ -1270,7 +1276,7 @@ static void test_render(void) {
  * the builder's parallel phase. */
 static void test_parallel_build_deterministic(void) {
     tr_error err;
-    tr_scene s;
+    tr_scene s = {0};
     tr_scene_init(&s);
     uint32_t m;
     CHECK(tr_scene_add_material(&s, tr_material_diffuse(v3s(0.5f)), &m, &err) == TR_OK, "%s",

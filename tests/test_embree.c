@@ -16,12 +16,14 @@
 #include <string.h>
 
 #include "check.h"
+#include "kernel/kernel.h"
+#include "scene/scene_internal.h"
 #include "trac0r/trac0r.h"
 
 #ifndef TRAC0R_HAVE_EMBREE
 
 int main(void) {
-    tr_scene s;
+    tr_scene s = {0};
     tr_error err;
     tr_scene_init(&s);
     int rc = tr_scene_commit(&s, TR_ACCEL_TYPE_EMBREE, &err);
@@ -449,7 +451,7 @@ static void check_mesh(const char *name, tr_scene *s, uint32_t rays, uint32_t du
 
 static void test_random_meshes(void) {
     tr_error err;
-    tr_scene s;
+    tr_scene s = {0};
     tr_rng rng;
     tr_rng_init(&rng, 42, 1, 0);
     uint32_t dups = 0, degenerate = 0;
@@ -509,7 +511,7 @@ static void test_random_meshes(void) {
  * it at t exactly 1: the ends of the interval are tested exactly. */
 static void test_interval_and_conventions(void) {
     tr_error err;
-    tr_scene s;
+    tr_scene s = {0};
     tr_triangle *t = calloc(1, sizeof *t);
     if (!t) {
         abort();
@@ -611,7 +613,7 @@ static void test_commit(void) {
     CHECK(tr_accel_available(TR_ACCEL_TYPE_EMBREE) && tr_accel_available(TR_ACCEL_TYPE_BVH) &&
               tr_accel_available(TR_ACCEL_TYPE_FLAT),
           "availability");
-    tr_scene s;
+    tr_scene s = {0};
     CHECK(tr_scene_builtin(&s, "cornell", 32, 24, &err) == TR_OK, "%s", err.msg);
     CHECK(tr_scene_commit(&s, TR_ACCEL_TYPE_EMBREE, &err) == TR_OK, "%s", err.msg);
     CHECK(tr_scene_embree_build_seconds(&s) > 0.0, "build time %g",
@@ -646,7 +648,7 @@ static void test_commit(void) {
 
 static int render_cornell(tr_accel_type accel, tr_film *film, uint64_t *rays) {
     tr_error err;
-    tr_scene s;
+    tr_scene s = {0};
     int ok = tr_scene_builtin(&s, "cornell", 64, 48, &err) == TR_OK;
     CHECK(ok, "%s", err.msg);
     if (!ok) {

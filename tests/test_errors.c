@@ -9,6 +9,8 @@
 #include <string.h>
 
 #include "check.h"
+#include "kernel/kernel.h"
+#include "scene/scene_internal.h"
 #include "trac0r/trac0r.h"
 
 #define DATA TR_SOURCE_DIR "/tests/data"
@@ -93,7 +95,7 @@ static void test_sizes(void) {
                  "film wider than the limit");
     CHECK_STATUS(tr_film_init(&f, TR_FILM_MAX_SIDE, TR_FILM_MAX_SIDE, &err), err, TR_STATUS_LIMIT,
                  "film over the pixel limit");
-    tr_scene s;
+    tr_scene s = {0};
     CHECK(tr_scene_builtin(&s, "cornell", 8, 6, &err) == TR_OK, "%s", err.msg);
     CHECK_STATUS(tr_camera_resize(&s.camera, 8, 0, &err), err, TR_STATUS_INVALID_ARGUMENT,
                  "camera 8x0");
@@ -105,7 +107,7 @@ static void test_sizes(void) {
 /* Scenes built through the API. */
 static void test_scene_api(void) {
     tr_error err;
-    tr_scene s;
+    tr_scene s = {0};
     CHECK_STATUS(tr_scene_builtin(&s, "no-such-scene", 8, 6, &err), err, TR_STATUS_NOT_FOUND,
                  "unknown built-in scene");
     CHECK(err.msg[0] != '\0', "no message");
@@ -154,8 +156,9 @@ static int always_cancel(void *user) {
 
 static void test_render(void) {
     tr_error err;
-    tr_scene s;
+    tr_scene s = {0};
     CHECK(tr_scene_builtin(&s, "cornell", 8, 6, &err) == TR_OK, "%s", err.msg);
+    CHECK(tr_scene_commit(&s, TR_ACCEL_TYPE_FLAT, &err) == TR_OK, "%s", err.msg);
     tr_film f;
     CHECK(tr_film_init(&f, 8, 6, &err) == TR_OK, "%s", err.msg);
     tr_render_config cfg = tr_render_config_default();
@@ -193,7 +196,7 @@ static void test_render(void) {
 }
 
 static int parse(const char *text, uint32_t max_triangles, tr_error *err) {
-    tr_scene s;
+    tr_scene s = {0};
     tr_scene_file_options opt = {0, max_triangles};
     int rc = tr_scene_file_parse(&s, "e.json", text, strlen(text), &opt, NULL, err);
     if (rc == TR_OK) {
@@ -224,13 +227,13 @@ static void test_scene_files(void) {
     /* Too long: rejected before any byte is read. */
     char *huge = calloc((size_t)TR_SCENE_FILE_MAX_BYTES + 1, 1);
     if (huge) {
-        tr_scene s;
+        tr_scene s = {0};
         CHECK_STATUS(tr_scene_file_parse(&s, "huge.json", huge, (size_t)TR_SCENE_FILE_MAX_BYTES + 1,
                                          NULL, NULL, &err),
                      err, TR_STATUS_LIMIT, "a file over the size limit");
         free(huge);
     }
-    tr_scene s;
+    tr_scene s = {0};
     CHECK_STATUS(tr_scene_file_load(&s, "no-such-dir/scene.json", NULL, NULL, &err), err,
                  TR_STATUS_NOT_FOUND, "a missing scene file");
     CHECK(strstr(err.msg, "no-such-dir/scene.json") != NULL, "the file is not named: %s", err.msg);
@@ -249,7 +252,7 @@ static void test_scene_files(void) {
 /* Mesh import. */
 static void test_meshes(void) {
     tr_error err;
-    tr_scene s;
+    tr_scene s = {0};
     tr_scene_init(&s);
     tr_mesh_import_stats st;
     CHECK_STATUS(tr_scene_import_mesh(&s, DATA "/no-such-model.obj", NULL, -1, 0, &st, &err), err,

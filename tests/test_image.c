@@ -7,6 +7,8 @@
 #include <unistd.h>
 
 #include "check.h"
+#include "kernel/kernel.h"
+#include "scene/scene_internal.h"
 #include "trac0r/trac0r.h"
 
 static char dir[256];

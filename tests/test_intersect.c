@@ -6,6 +6,8 @@
  * (Cramer's rule for triangles, Liang-Barsky plane clipping for boxes), skipping only
  * rays whose answer would change under a tiny perturbation of the geometry. */
 #include "check.h"
+#include "kernel/kernel.h"
+#include "scene/scene_internal.h"
 #include "dvec.h"
 #include "kernel/intersect.h"
 #include "kernel/rng.h"

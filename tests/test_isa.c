@@ -16,6 +16,8 @@
 
 #include "accel/wbvh.h"
 #include "check.h"
+#include "kernel/kernel.h"
+#include "scene/scene_internal.h"
 #include "scene_util.h"
 #include "trac0r/trac0r.h"
 
@@ -151,7 +153,7 @@ static void compare_isas(const char *name, tr_scene *s) {
 }
 
 static void builtin_scene(const char *name) {
-    tr_scene s;
+    tr_scene s = {0};
     tr_scene_init(&s);
     tr_error err;
     int ok = tr_scene_builtin(&s, name, 64, 48, &err) == TR_OK &&
@@ -166,7 +168,7 @@ static void builtin_scene(const char *name) {
 /* Many overlapping boxes and icospheres at random places, turns and sizes: nodes with
  * all eight slots full, children whose boxes overlap, thin and flat boxes. */
 static void random_shapes_scene(void) {
-    tr_scene s;
+    tr_scene s = {0};
     tr_scene_init(&s);
     uint32_t mat = add_mat(&s, tr_material_diffuse(v3s(0.5f)));
     tr_rng r;

@@ -18,6 +18,7 @@
 #include "check.h"
 #include "scene_util.h"
 #include "kernel/kernel.h"
+#include "scene/scene_internal.h"
 #include "trac0r/trac0r.h"
 
 #include <math.h>
@@ -42,7 +43,7 @@ static double expected_weight(const tr_material *m, const tr_triangle *t) {
 }
 
 static void table(void) {
-    tr_scene s;
+    tr_scene s = {0};
     tr_scene_init(&s);
     tr_error err;
     uint32_t white = add_mat(&s, tr_material_diffuse(v3s(0.7f)));
@@ -150,7 +151,7 @@ static double polygon_irradiance(const double (*vtx)[3], int nv, const double x[
 
 static void irradiance(void) {
     const double side = 0.8, h = 1.0, L = 6.0;
-    tr_scene s;
+    tr_scene s = {0};
     tr_scene_init(&s);
     tr_error err;
     uint32_t em = add_mat(&s, tr_material_emitter(v3s(1.0f), (float)L));
@@ -206,7 +207,7 @@ static void irradiance(void) {
  * ceiling) with our winding, so its material must be two-sided for pt to light the box;
  * the table weighs it twice. */
 static void builtin_lamp(void) {
-    tr_scene s;
+    tr_scene s = {0};
     tr_error err;
     CHECK(tr_scene_builtin(&s, "cornell", 64, 48, &err) == TR_OK, "builtin: %s", err.msg);
     CHECK(tr_scene_commit(&s, TR_ACCEL_TYPE_BVH, &err) == TR_OK, "commit: %s", err.msg);

@@ -9,6 +9,8 @@
  * (b) tr_material_eval gives every material of a scene its constant parameters and the
  *     geometric normal, whatever the barycentrics, point and direction. */
 #include "check.h"
+#include "kernel/kernel.h"
+#include "scene/scene_internal.h"
 #include "kernel/bsdf.h"
 #include "kernel/kernel.h"
 #include "trac0r/trac0r.h"
@@ -144,7 +146,7 @@ static void glass_bit_identity(void) {
 
 /* (b) */
 static void eval_constant(void) {
-    tr_scene s;
+    tr_scene s = {0};
     tr_error err;
     CHECK(tr_scene_builtin(&s, "cornell", 64, 48, &err) == TR_OK, "builtin: %s", err.msg);
     CHECK(tr_scene_commit(&s, TR_ACCEL_TYPE_BVH, &err) == TR_OK, "commit: %s", err.msg);

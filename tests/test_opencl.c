@@ -14,6 +14,8 @@
 #include "check.h"
 #include "device/opencl.h"
 #include "trac0r/device.h"
+#include "kernel/kernel.h"
+#include "scene/scene_internal.h"
 #include "trac0r/trac0r.h"
 
 extern const char tr_cl_kernel_source[];
@@ -301,7 +303,7 @@ int main(void) {
     CHECK(tr_device_open("opencl:x", &err) == NULL && tr_device_open("gpu", &err) == NULL,
           "bad device names opened");
     tr_render_config cfg = tr_render_config_default();
-    tr_scene scene;
+    tr_scene scene = {0};
     tr_scene_init(&scene);
     CHECK(tr_scene_builtin(&scene, "cornell", 48, 36, &err) == TR_OK, "%s", err.msg);
     /* Nothing uploaded yet. */
@@ -360,7 +362,7 @@ int main(void) {
 
     /* A device without enough memory: the upload fails before touching the scene on
      * the device, which keeps rendering the previous one. */
-    tr_scene big;
+    tr_scene big = {0};
     tr_scene_init(&big);
     CHECK(tr_scene_builtin(&big, "cornell-ico-5", 48, 36, &err) == TR_OK, "%s", err.msg);
     CHECK(tr_scene_commit(&big, TR_ACCEL_TYPE_BVH, &err) == TR_OK, "%s", err.msg);

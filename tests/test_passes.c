@@ -9,6 +9,8 @@
  *    asking for passes leaves the radiance unchanged. */
 #include "check.h"
 #include "kernel/kernel.h"
+#include "scene/scene_internal.h"
+#include "kernel/kernel.h"
 #include "scene_util.h"
 #include "trac0r/device.h"
 #include "trac0r/trac0r.h"
@@ -61,7 +63,7 @@ static void render_passes(const tr_scene *s, const tr_camera *cam, int integrato
 
 /* Floor: colour, upward normal, depth within the corner range, one of its triangles. */
 static void test_floor(void) {
-    tr_scene s;
+    tr_scene s = {0};
     tr_scene_init(&s);
     const tr_vec3 colour = v3(0.2f, 0.5f, 0.8f);
     uint32_t floor = add_mat(&s, tr_material_diffuse(colour));
@@ -112,7 +114,7 @@ static void test_floor(void) {
 /* Mirror floor, diffuse ceiling at height 10 above it, the camera at 5 between: the passes
  * describe the ceiling seen in the mirror, with the distance down and up again. */
 static void test_mirror(void) {
-    tr_scene s;
+    tr_scene s = {0};
     tr_scene_init(&s);
     const tr_vec3 colour = v3(0.6f, 0.3f, 0.1f);
     uint32_t mirror = add_mat(&s, tr_material_glossy(v3s(1.0f), 0.0f));
@@ -205,7 +207,7 @@ static void device_film(const tr_scene *s, const tr_render_config *cfg, uint32_t
 
 static void test_splits(int integrator, int stride) {
     tr_error err;
-    tr_scene s;
+    tr_scene s = {0};
     tr_scene_init(&s);
     CHECK(tr_scene_builtin(&s, "cornell", 37, 29, &err) == TR_OK, "%s", err.msg);
     CHECK(tr_scene_commit(&s, TR_ACCEL_TYPE_BVH, &err) == TR_OK, "%s", err.msg);
@@ -285,6 +287,16 @@ static void test_splits(int integrator, int stride) {
           err.msg);
     CHECK(tr_device_read_film(dev, &whole, &err) == TR_ERR,
           "read passes the device's film does not keep");
+    /* The CPU device renders from the scene itself: a scene moved (and updated) since its
+     * upload must be uploaded again before it renders. */
+    CHECK(tr_scene_move_shape(&s, 0, v3(0.0f, 0.01f, 0.0f), &err) == TR_OK &&
+              tr_scene_update(&s, NULL, &err) == TR_OK,
+          "%s", err.msg);
+    CHECK_STATUS(tr_device_render(dev, &s.camera, &plain_cfg, 0, 1, NULL, NULL, &err), err,
+                 TR_STATUS_STALE_SCENE, "render of a scene changed since its upload");
+    CHECK(tr_device_upload(dev, &s, &err) == TR_OK &&
+              tr_device_render(dev, &s.camera, &plain_cfg, 0, 1, NULL, NULL, &err) == TR_OK,
+          "after a new upload: %s", err.msg);
     tr_device_close(dev);
     CHECK(tr_device_open("vulkan", &err) == NULL, "opened an unknown device");
 

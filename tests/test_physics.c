@@ -14,6 +14,7 @@
 #include "check.h"
 #include "device/frame.h"
 #include "kernel/kernel.h"
+#include "scene/scene_internal.h"
 #include "trac0r/trac0r.h"
 
 #include <math.h>
@@ -82,6 +83,10 @@ static int build_furnace(tr_scene *s, tr_vec3 rho, float emittance, tr_camera *c
         fprintf(stderr, "furnace camera: %s\n", err.msg);
         return TR_ERR;
     }
+    if (tr_scene_commit(s, TR_ACCEL_TYPE_FLAT, &err) != TR_OK) {
+        fprintf(stderr, "furnace commit: %s\n", err.msg);
+        return TR_ERR;
+    }
     return TR_OK;
 }
 
@@ -90,7 +95,7 @@ static int build_furnace(tr_scene *s, tr_vec3 rho, float emittance, tr_camera *c
  * compares the mean and the per-row means with the analytic value per channel. A few
  * samples are recomputed with tr_render_sample to check that the film holds them. */
 static void furnace_run(tr_vec3 rho, float emittance, int max_depth) {
-    tr_scene s;
+    tr_scene s = {0};
     tr_camera cam;
     if (build_furnace(&s, rho, emittance, &cam) != TR_OK) {
         CHECK(0, "could not build the furnace");
@@ -235,7 +240,7 @@ static void furnace_run(tr_vec3 rho, float emittance, int max_depth) {
 
 /* The furnace only works if its sphere is closed: rays from inside always hit. */
 static void test_furnace_closed(void) {
-    tr_scene s;
+    tr_scene s = {0};
     tr_camera cam;
     if (build_furnace(&s, v3s(0.5f), 1.0f, &cam) != TR_OK) {
         CHECK(0, "could not build the furnace");
@@ -532,7 +537,7 @@ static void test_glass_scatter(void) {
  * for reference (2R/(1+R) is concave, so the sampler overestimates it slightly: by
  * 0.003 at 45 deg and 0.009 at Brewster's angle for n = 1.5). */
 static void slab_case(double theta_deg, int N, uint64_t seed) {
-    tr_scene s;
+    tr_scene s = {0};
     tr_scene_init(&s);
     tr_error err;
     uint32_t mi = 0;

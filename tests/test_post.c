@@ -12,6 +12,8 @@
 #include <string.h>
 
 #include "check.h"
+#include "kernel/kernel.h"
+#include "scene/scene_internal.h"
 #include "trac0r/trac0r.h"
 
 /* ---- Oracles: the code the post layer replaced, verbatim ------------------------ */

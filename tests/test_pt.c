@@ -19,6 +19,7 @@
 #include "check.h"
 #include "scene_util.h"
 #include "kernel/kernel.h"
+#include "scene/scene_internal.h"
 #include "trac0r/trac0r.h"
 
 #include <math.h>
@@ -60,7 +61,7 @@ static void build_box(tr_scene *s, int glossy, uint32_t w, uint32_t h) {
 
 /* (a) */
 static void mis_weights(void) {
-    tr_scene s;
+    tr_scene s = {0};
     build_box(&s, 1, 8, 8);
     tr_scene_view v = tr_scene_view_of(&s);
     tr_rng rng;
@@ -248,7 +249,7 @@ static void one_bounce(void) {
     const double expect = rho / PI_D * lambert_irradiance(vtx, 4, x, L);
     /* 0: lamp faces down; 1: one-sided, faces up; 2: two-sided, faces up. */
     for (int variant = 0; variant < 3; ++variant) {
-        tr_scene s;
+        tr_scene s = {0};
         tr_scene_init(&s);
         tr_error err;
         uint32_t floor_m = add_mat(&s, tr_material_diffuse(v3s((float)rho)));
@@ -292,7 +293,7 @@ static void one_bounce(void) {
 int main(void) {
     mis_weights();
     one_bounce();
-    tr_scene s;
+    tr_scene s = {0};
     build_box(&s, 0, W, H);
     unbiased("diffuse box", &s, 5, 2048, 256);
     tr_scene_free(&s);

@@ -10,6 +10,8 @@
  *     required keys loads as that type; leaving out a required key, adding a key that
  *     only another type takes, or an unknown type name fails. */
 #include "check.h"
+#include "kernel/kernel.h"
+#include "scene/scene_internal.h"
 #include "scene/material_registry.h"
 #include "trac0r/registry.h"
 #include "trac0r/trac0r.h"
@@ -132,7 +134,7 @@ static int parse_material(const char *type, const char *body, uint32_t *out_type
              " \"shapes\": [{\"type\": \"plane\", \"material\": \"m\"},"
              " {\"type\": \"plane\", \"position\": [0, 1, 0], \"material\": \"lamp\"}]}",
              type, body);
-    tr_scene s;
+    tr_scene s = {0};
     tr_scene_file f;
     tr_error err;
     int rc = tr_scene_file_parse(&s, "mem.json", text, strlen(text), NULL, &f, &err);

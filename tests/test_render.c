@@ -4,6 +4,8 @@
 #include <string.h>
 
 #include "check.h"
+#include "kernel/kernel.h"
+#include "scene/scene_internal.h"
 #include "trac0r/trac0r.h"
 
 /* Projects a world point to pixel coordinates (inverse of tr_camera_ray). */
@@ -58,8 +60,9 @@ static int films_equal(const tr_film *a, const tr_film *b) {
 
 static void test_cornell_image(void) {
     tr_error err;
-    tr_scene s;
+    tr_scene s = {0};
     CHECK(tr_scene_builtin(&s, "cornell", 160, 120, &err) == TR_OK, "%s", err.msg);
+    CHECK(tr_scene_commit(&s, TR_ACCEL_TYPE_FLAT, &err) == TR_OK, "%s", err.msg);
     tr_film f;
     CHECK(tr_film_init(&f, 160, 120, &err) == TR_OK, "%s", err.msg);
     CHECK(render(&s, &f, 0, 16, 1, 7, 64), "render");
@@ -114,8 +117,9 @@ static void test_cornell_image(void) {
 
 static void test_determinism(void) {
     tr_error err;
-    tr_scene s;
+    tr_scene s = {0};
     CHECK(tr_scene_builtin(&s, "cornell", 67, 41, &err) == TR_OK, "%s", err.msg);
+    CHECK(tr_scene_commit(&s, TR_ACCEL_TYPE_FLAT, &err) == TR_OK, "%s", err.msg);
     tr_film a, b;
     CHECK(tr_film_init(&a, 67, 41, &err) == TR_OK && tr_film_init(&b, 67, 41, &err) == TR_OK, "%s",
           err.msg);
@@ -158,8 +162,9 @@ static void test_determinism(void) {
 
 static void test_bad_config(void) {
     tr_error err;
-    tr_scene s;
+    tr_scene s = {0};
     CHECK(tr_scene_builtin(&s, "cornell", 8, 6, &err) == TR_OK, "%s", err.msg);
+    CHECK(tr_scene_commit(&s, TR_ACCEL_TYPE_FLAT, &err) == TR_OK, "%s", err.msg);
     tr_film f;
     CHECK(tr_film_init(&f, 9, 6, &err) == TR_OK, "%s", err.msg);
     tr_render_config cfg = tr_render_config_default();

@@ -5,6 +5,8 @@
  * the chi-square quantile at p = 1e-4) rather than tuned to the observed values, so
  * that a broken generator fails them and a correct one passes with any seed. */
 #include "check.h"
+#include "kernel/kernel.h"
+#include "scene/scene_internal.h"
 #include "kernel/rng.h"
 
 #include <stdint.h>

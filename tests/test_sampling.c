@@ -12,6 +12,8 @@
  * distribution of its statistic (chi-square quantile at p = 1e-4, or 5 standard
  * errors), not from the values one run happened to produce. */
 #include "check.h"
+#include "kernel/kernel.h"
+#include "scene/scene_internal.h"
 #include "dvec.h"
 #include "kernel/sampling.h"
 

@@ -8,6 +8,8 @@
 #include "check.h"
 #include "kernel/camera.h"
 #include "kernel/intersect.h"
+#include "kernel/kernel.h"
+#include "scene/scene_internal.h"
 #include "trac0r/scene_file.h"
 #include "trac0r/trac0r.h"
 
@@ -21,7 +23,7 @@ static const tr_material *mat_of(const tr_scene *s, uint32_t tri) {
 /* tri.obj: a red quad with normals, a lamp (Ke), a glass (illum 4, Ni, d) and a glossy
  * (illum 3, Ks, Ns) triangle, one zero-area face and one line. */
 static void test_obj(void) {
-    tr_scene s;
+    tr_scene s = {0};
     tr_scene_init(&s);
     tr_error err;
     tr_mesh_import_stats st;
@@ -69,7 +71,7 @@ static void test_obj(void) {
           "material mix %d %d %d %d", seen[1], seen[2], seen[3], seen[4]);
 
     /* With an override and a transform: every triangle gets material 0, placed. */
-    tr_scene o;
+    tr_scene o = {0};
     tr_scene_init(&o);
     uint32_t white;
     tr_scene_add_material(&o, tr_material_diffuse(v3s(0.5f)), &white, &err);
@@ -88,7 +90,7 @@ static void test_obj(void) {
 }
 
 static void test_ply_gltf(void) {
-    tr_scene s;
+    tr_scene s = {0};
     tr_scene_init(&s);
     tr_error err;
     tr_mesh_import_stats st;
@@ -123,7 +125,7 @@ static void test_installed_models(void) {
         {MODELS "/glTF2/BoxTextured-glTF/BoxTextured.gltf", 12, 12},
     };
     for (size_t i = 0; i < sizeof models / sizeof models[0]; ++i) {
-        tr_scene s;
+        tr_scene s = {0};
         tr_scene_init(&s);
         tr_error err;
         tr_mesh_import_stats st;
@@ -142,7 +144,7 @@ static void test_installed_models(void) {
 }
 
 static void test_add_mesh(void) {
-    tr_scene s;
+    tr_scene s = {0};
     tr_scene_init(&s);
     tr_error err;
     uint32_t m;
@@ -184,7 +186,7 @@ static void test_parse_memory(void) {
         " \"two_sided\": true}},\n"
         " \"shapes\": [{\"type\": \"icosphere\", \"subdivisions\": 1, \"material\": \"l\"}],\n"
         " \"meshes\": [{\"path\": \"does-not-exist.obj\"}]}";
-    tr_scene s;
+    tr_scene s = {0};
     tr_scene_file f;
     tr_error err;
     tr_scene_file_options opt = {0, 0};
@@ -230,7 +232,7 @@ static void test_parse_memory(void) {
 /* The classic Cornell box: red wall on the left of the image, green on the right, both
  * in the camera's primary hits and in a small render. */
 static void test_cornell_classic(void) {
-    tr_scene s;
+    tr_scene s = {0};
     tr_scene_file f;
     tr_error err;
     int rc = tr_scene_file_load(&s, TR_SOURCE_DIR "/scenes/cornell-classic.json", NULL, &f, &err);

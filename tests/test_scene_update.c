@@ -11,6 +11,7 @@
 
 #include "check.h"
 #include "kernel/kernel.h"
+#include "scene/scene_internal.h"
 #include "trac0r/trac0r.h"
 
 static uint32_t rng_state = 12345u;
@@ -68,6 +69,120 @@ static int disagreements(const tr_scene *s, const tr_scene *ref, uint32_t shape,
     return bad;
 }
 
+/* Renders `spp` samples of the scene from its own camera with the naive integrator;
+ * returns the rc of the first failing frame. */
+static int render_film(const tr_scene *s, tr_film *f, uint32_t spp, tr_error *err) {
+    tr_render_config cfg = tr_render_config_default();
+    cfg.seed = 99;
+    tr_film_clear(f);
+    for (uint32_t k = 0; k < spp; ++k) {
+        if (tr_render_frame(s, tr_scene_camera(s), &cfg, f, k, NULL, err) != TR_OK) {
+            return TR_ERR;
+        }
+    }
+    return TR_OK;
+}
+
+/* The generation counter through the public API only: every edit bumps it, a render of
+ * a scene edited since its commit fails, and tr_scene_update after moving every shape
+ * makes the scene render exactly as one committed with the shapes already moved. */
+static void test_generation(void) {
+    tr_error err;
+    const tr_accel_type accels[] = {TR_ACCEL_TYPE_FLAT, TR_ACCEL_TYPE_BVH, TR_ACCEL_TYPE_BVH2,
+                                    TR_ACCEL_TYPE_EMBREE};
+    const tr_vec3 delta = {0.05f, -0.02f, 0.03f};
+    for (int k = 0; k < 4; ++k) {
+        if (!tr_accel_available(accels[k])) {
+            continue;
+        }
+        tr_scene *s = tr_scene_create(&err);
+        tr_scene *ref = tr_scene_create(&err);
+        CHECK(s && ref, "tr_scene_create: %s", err.msg);
+        if (!s || !ref) {
+            tr_scene_destroy(s);
+            tr_scene_destroy(ref);
+            return;
+        }
+        CHECK(tr_scene_generation(s) == 0 && !tr_scene_is_committed(s), "a new scene");
+        CHECK(tr_scene_builtin(s, "cornell", 32, 24, &err) == TR_OK, "%s", err.msg);
+        CHECK(tr_scene_builtin(ref, "cornell", 32, 24, &err) == TR_OK, "%s", err.msg);
+        tr_film film, want;
+        CHECK(tr_film_init(&film, 32, 24, &err) == TR_OK, "%s", err.msg);
+        CHECK(tr_film_init(&want, 32, 24, &err) == TR_OK, "%s", err.msg);
+        CHECK(render_film(s, &film, 1, &err) == TR_ERR, "%s: an uncommitted scene rendered",
+              tr_accel_name(accels[k]));
+        CHECK(tr_scene_commit(s, accels[k], &err) == TR_OK, "%s", err.msg);
+        const uint64_t g0 = tr_scene_generation(s);
+        CHECK(g0 > 0 && tr_scene_is_committed(s), "%s: committed at generation %llu",
+              tr_accel_name(accels[k]), (unsigned long long)g0);
+
+        /* The camera is no input to any structure: setting it keeps the commit. */
+        tr_camera cam = *tr_scene_camera(s);
+        tr_scene_set_camera(s, &cam);
+        CHECK(tr_scene_generation(s) == g0 && tr_scene_is_committed(s), "set_camera bumped");
+
+        /* Move every shape: each move bumps the generation, and the scene is stale. */
+        const uint32_t shapes = tr_scene_shape_count(s);
+        for (uint32_t i = 0; i < shapes; ++i) {
+            const uint64_t before = tr_scene_generation(s);
+            CHECK(tr_scene_move_shape(s, i, delta, &err) == TR_OK, "%s", err.msg);
+            CHECK(tr_scene_move_shape(ref, i, delta, &err) == TR_OK, "%s", err.msg);
+            CHECK(tr_scene_generation(s) > before, "move_shape did not bump the generation");
+        }
+        CHECK(!tr_scene_is_committed(s), "%s: moved shapes count as committed",
+              tr_accel_name(accels[k]));
+        CHECK(render_film(s, &film, 1, &err) == TR_ERR, "%s: rendered moved shapes unupdated",
+              tr_accel_name(accels[k]));
+
+        /* After the update: the same image as a scene committed with the shapes moved. */
+        CHECK(tr_scene_update(s, NULL, &err) == TR_OK, "%s", err.msg);
+        CHECK(tr_scene_is_committed(s), "%s: not committed after the update",
+              tr_accel_name(accels[k]));
+        CHECK(tr_scene_commit(ref, accels[k], &err) == TR_OK, "%s", err.msg);
+        CHECK(render_film(s, &film, 2, &err) == TR_OK, "%s", err.msg);
+        CHECK(render_film(ref, &want, 2, &err) == TR_OK, "%s", err.msg);
+        CHECK(memcmp(film.sum, want.sum, (size_t)32 * 24 * 3 * sizeof(float)) == 0,
+              "%s: the updated scene renders differently from one built moved",
+              tr_accel_name(accels[k]));
+
+        /* Other edits: a material, a shape, a mesh each bump it; an update cannot stand in
+         * for the commit a new shape needs. */
+        uint64_t g = tr_scene_generation(s);
+        uint32_t white;
+        CHECK(tr_scene_add_material(s, tr_material_diffuse(tr_vec3_make(0.5f, 0.5f, 0.5f)), &white,
+                                    &err) == TR_OK,
+              "%s", err.msg);
+        CHECK(tr_scene_generation(s) > g && !tr_scene_is_committed(s), "add_material");
+        g = tr_scene_generation(s);
+        tr_shape_desc box = tr_shape_desc_default(TR_SHAPE_BOX);
+        box.material = white;
+        box.transform.scale = tr_vec3_make(0.1f, 0.1f, 0.1f);
+        CHECK(tr_scene_add_shape(s, &box, &err) == TR_OK, "%s", err.msg);
+        CHECK(tr_scene_generation(s) > g, "add_shape did not bump the generation");
+        CHECK(tr_scene_update(s, NULL, &err) == TR_ERR, "%s: update stood in for a commit",
+              tr_accel_name(accels[k]));
+        g = tr_scene_generation(s);
+        const float pos[9] = {0, 0, 0, 0.1f, 0, 0, 0, 0.1f, 0};
+        const uint32_t idx[3] = {0, 1, 2};
+        CHECK(tr_scene_add_mesh(s, pos, 3, idx, 1, NULL, white, NULL, NULL, &err) == TR_OK, "%s",
+              err.msg);
+        CHECK(tr_scene_generation(s) > g, "add_mesh did not bump the generation");
+        CHECK(tr_scene_commit(s, accels[k], &err) == TR_OK, "%s", err.msg);
+        CHECK(render_film(s, &film, 1, &err) == TR_OK, "%s", err.msg);
+
+        /* Reloading the handle goes on counting, so that an upload of the old content
+         * never matches the new one. */
+        g = tr_scene_generation(s);
+        CHECK(tr_scene_builtin(s, "cornell", 32, 24, &err) == TR_OK, "%s", err.msg);
+        CHECK(tr_scene_generation(s) > g && !tr_scene_is_committed(s), "reload: generation %llu",
+              (unsigned long long)tr_scene_generation(s));
+        tr_film_free(&film);
+        tr_film_free(&want);
+        tr_scene_destroy(s);
+        tr_scene_destroy(ref);
+    }
+}
+
 int main(void) {
     tr_error err;
     const tr_accel_type accels[] = {TR_ACCEL_TYPE_BVH, TR_ACCEL_TYPE_BVH2, TR_ACCEL_TYPE_EMBREE,
@@ -79,7 +194,7 @@ int main(void) {
             printf("%s: not in this build\n", tr_accel_name(accels[k]));
             continue;
         }
-        tr_scene s;
+        tr_scene s = {0};
         tr_scene_init(&s);
         CHECK(tr_scene_builtin(&s, "cornell", 64, 48, &err) == TR_OK, "%s", err.msg);
         const uint32_t shape = s.shape_count - 1; /* the last object in the room */
@@ -91,7 +206,7 @@ int main(void) {
             total = v3_add(total, steps[step]);
 
             /* The reference: a fresh scene with the shape moved by the same steps. */
-            tr_scene ref;
+            tr_scene ref = {0};
             tr_scene_init(&ref);
             CHECK(tr_scene_builtin(&ref, "cornell", 64, 48, &err) == TR_OK, "%s", err.msg);
             for (int j = 0; j <= step; ++j) {
@@ -137,7 +252,7 @@ int main(void) {
     }
 
     /* Bad arguments. */
-    tr_scene s;
+    tr_scene s = {0};
     tr_scene_init(&s);
     CHECK(tr_scene_builtin(&s, "cornell", 64, 48, &err) == TR_OK, "%s", err.msg);
     CHECK_STATUS(tr_scene_move_shape(&s, s.shape_count, v3(1, 0, 0), &err), err,
@@ -146,5 +261,6 @@ int main(void) {
                  "NaN offset");
     CHECK(strcmp(tr_scene_update_kind(&s), "none") == 0, "flat scene update kind");
     tr_scene_free(&s);
+    test_generation();
     return check_finish("test_scene_update");
 }

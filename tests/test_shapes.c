@@ -6,6 +6,8 @@
  * a handful of ulps (FLT_EPSILON ~ 1.2e-7) per operation on values of order one. */
 #include "check.h"
 #include "dvec.h"
+#include "kernel/kernel.h"
+#include "scene/scene_internal.h"
 #include "trac0r/trac0r.h"
 
 #include <float.h>
@@ -160,7 +162,7 @@ static void test_icosphere(void) {
     const double sphere_area = 4.0 * PI_D * (double)r * (double)r;
     double prev_area = 0.0, prev_deficit = 0.0;
     for (uint32_t n = 0; n <= 5; ++n) {
-        tr_scene s;
+        tr_scene s = {0};
         scene_with_materials(&s, 1);
         tr_shape_desc d = make_desc(TR_SHAPE_ICOSPHERE, pos, rot, v3s(r), n, 0);
         tr_error err;
@@ -267,7 +269,7 @@ static void test_box(void) {
         {{2.0f, 1.0f, -3.0f}, {2.5f, 0.6f, -2.2f}, {4.0f, 0.05f, 1.5f}, "rotated flat box"},
     };
     for (size_t c = 0; c < sizeof cases / sizeof cases[0]; ++c) {
-        tr_scene s;
+        tr_scene s = {0};
         scene_with_materials(&s, 2);
         tr_shape_desc d = make_desc(TR_SHAPE_BOX, cases[c].pos, cases[c].rot, cases[c].scale, 0, 1);
         tr_error err;
@@ -301,7 +303,7 @@ static void test_plane(void) {
         {{-2.0f, 0.0f, 4.0f}, {3.0f, -1.2f, 0.4f}, {0.25f, 7.0f, 6.0f}, "flipped plane"},
     };
     for (size_t c = 0; c < sizeof cases / sizeof cases[0]; ++c) {
-        tr_scene s;
+        tr_scene s = {0};
         scene_with_materials(&s, 1);
         tr_shape_desc d =
             make_desc(TR_SHAPE_PLANE, cases[c].pos, cases[c].rot, cases[c].scale, 0, 0);
@@ -332,7 +334,7 @@ static void test_plane(void) {
 
 /* Several shapes in one scene: runs are contiguous, in order, and cover every triangle. */
 static void test_runs(void) {
-    tr_scene s;
+    tr_scene s = {0};
     scene_with_materials(&s, 4);
     tr_shape_desc descs[] = {
         make_desc(TR_SHAPE_PLANE, v3(0, -1, 0), v3(0, 0, 0), v3(4, 1, 4), 0, 3),
@@ -372,7 +374,7 @@ static void test_runs(void) {
 
 /* A rejected descriptor returns TR_ERR with a message and leaves every array as it was. */
 static void test_rejects(void) {
-    tr_scene s;
+    tr_scene s = {0};
     scene_with_materials(&s, 2);
     tr_error err;
     tr_shape_desc good = make_desc(TR_SHAPE_BOX, v3(0, 0, 0), v3(0, 0, 0), v3s(1.0f), 0, 1);
@@ -481,7 +483,7 @@ static void test_rejects(void) {
 
 /* The thesis's Cornell scene (listing 16). */
 static void test_cornell(void) {
-    tr_scene s;
+    tr_scene s = {0};
     tr_error err;
     err.msg[0] = '\0';
     int rc = tr_scene_builtin(&s, "cornell", 800, 600, &err);

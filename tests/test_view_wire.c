@@ -8,6 +8,8 @@
 #include "check.h"
 #include "kernel/camera.h"
 #include "kernel/rng.h"
+#include "kernel/kernel.h"
+#include "scene/scene_internal.h"
 #include "trac0r/trac0r.h"
 #include "view_wire.h"
 
@@ -185,7 +187,7 @@ static int flag_set(void *user) {
 /* tr_render_config.cancel: a callback answering "stop" stops the frame before any tile and
  * fails; one answering "go on" changes nothing. */
 static void test_cancel(void) {
-    tr_scene s;
+    tr_scene s = {0};
     tr_error err;
     CHECK(tr_scene_builtin(&s, "cornell", 40, 30, &err) == TR_OK, "%s", err.msg);
     CHECK(tr_scene_commit(&s, TR_ACCEL_TYPE_BVH, &err) == TR_OK, "%s", err.msg);

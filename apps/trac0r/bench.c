@@ -77,9 +77,10 @@ static int bench_frame(int argc, char **argv) {
             return CLI_USAGE;
         }
     }
-    tr_scene scene;
-    int rc = cli_load_scene(&a, &c, &scene);
+    tr_scene *scene = tr_scene_create(NULL);
+    int rc = cli_load_scene(&a, &c, scene);
     if (rc != CLI_OK) {
+        tr_scene_destroy(scene);
         return rc;
     }
     tr_error err;
@@ -88,25 +89,25 @@ static int bench_frame(int argc, char **argv) {
     double *update_times = times ? times + frames : NULL;
     if (!times || tr_film_init(&film, c.width, c.height, &err) != TR_OK) {
         free(times);
-        tr_scene_free(&scene);
+        tr_scene_destroy(scene);
         return cli_error(&a, "--width/--height: %s", times ? err.msg : "out of memory");
     }
     cli_backend be;
-    rc = cli_backend_open(&a, &c, &scene, &be);
+    rc = cli_backend_open(&a, &c, scene, &be);
     if (rc != CLI_OK) {
         free(times);
         tr_film_free(&film);
-        tr_scene_free(&scene);
+        tr_scene_destroy(scene);
         return rc;
     }
     tr_render_config cfg = cli_render_config(&c);
 
     char accel[160];
-    cli_describe_accel(accel, sizeof accel, &scene);
+    cli_describe_accel(accel, sizeof accel, scene);
     printf("bench frame: %s, %ux%u, 1 spp/frame, integrator %s, max depth %d, %s, "
            "%u triangles, accel %s\n",
            c.scene, c.width, c.height, tr_integrator_name(c.integrator), c.max_depth, be.name,
-           scene.triangle_count, accel);
+           tr_scene_triangle_count(scene), accel);
     uint64_t rays = 0;
     double total = 0.0;
     rc = CLI_OK;
@@ -122,7 +123,7 @@ static int bench_frame(int argc, char **argv) {
             fprintf(stderr, "trac0r bench frame: out of memory\n");
             rc = CLI_FAILURE;
         } else {
-            rc = cli_backend_open(&a, &cc, &scene, &cpu);
+            rc = cli_backend_open(&a, &cc, scene, &cpu);
         }
     }
     /* Frame 0 warms caches and the thread pool and is not timed. */
@@ -131,14 +132,14 @@ static int bench_frame(int argc, char **argv) {
         if (animate) {
             /* The scene changes, so each frame starts a new image. */
             const double t0 = tr_time_now(); /* the update and any upload, together */
-            if (cli_animate(&scene, (uint32_t)f, &err) != TR_OK ||
-                tr_scene_update(&scene, NULL, &err) != TR_OK) {
+            if (cli_animate(scene, (uint32_t)f, &err) != TR_OK ||
+                tr_scene_update(scene, NULL, &err) != TR_OK) {
                 fprintf(stderr, "trac0r bench frame: --animate: %s\n", err.msg);
                 rc = CLI_FAILURE;
                 break;
             }
-            if ((rc = cli_backend_upload(&a, &be, &scene)) != CLI_OK ||
-                (cpu.dev && (rc = cli_backend_upload(&a, &cpu, &scene)) != CLI_OK)) {
+            if ((rc = cli_backend_upload(&a, &be, scene)) != CLI_OK ||
+                (cpu.dev && (rc = cli_backend_upload(&a, &cpu, scene)) != CLI_OK)) {
                 break;
             }
             if (f > 0) {
@@ -150,7 +151,7 @@ static int bench_frame(int argc, char **argv) {
                 break;
             }
         }
-        if (cli_backend_frame(&be, &scene, &cfg, (uint32_t)f, &st, &err) != TR_OK) {
+        if (cli_backend_frame(&be, scene, &cfg, (uint32_t)f, &st, &err) != TR_OK) {
             fprintf(stderr, "trac0r bench frame: %s\n", err.msg);
             rc = CLI_FAILURE;
         } else if (f > 0) {
@@ -159,7 +160,7 @@ static int bench_frame(int argc, char **argv) {
             total += st.seconds;
         }
         if (rc == CLI_OK && cpu_times) {
-            if (cli_backend_frame(&cpu, &scene, &cfg, (uint32_t)f, &st, &err) != TR_OK) {
+            if (cli_backend_frame(&cpu, scene, &cfg, (uint32_t)f, &st, &err) != TR_OK) {
                 fprintf(stderr, "trac0r bench frame: %s\n", err.msg);
                 rc = CLI_FAILURE;
             } else if (f > 0) {
@@ -177,7 +178,7 @@ static int bench_frame(int argc, char **argv) {
             const double umed = bench_median(update_times, frames);
             printf("scene update per frame (%s%s): median %.3f ms  min %.3f ms  max %.3f ms; "
                    "frame + update %.2f ms (%.2f fps)\n",
-                   tr_scene_update_kind(&scene),
+                   tr_scene_update_kind(scene),
                    cli_backend_is_cpu(&be) ? "" : " + upload to the device", umed * 1e3,
                    update_times[0] * 1e3, update_times[frames - 1] * 1e3, (med + umed) * 1e3,
                    1.0 / (med + umed));
@@ -197,7 +198,7 @@ static int bench_frame(int argc, char **argv) {
     cli_backend_close(&be);
     free(times);
     tr_film_free(&film);
-    tr_scene_free(&scene);
+    tr_scene_destroy(scene);
     return rc;
 }
 
@@ -238,8 +239,8 @@ void bench_accels_all(accel_set *set, int with_flat) {
 }
 
 double bench_build_seconds(const tr_scene *s) {
-    return s->accel == TR_ACCEL_TYPE_EMBREE ? tr_scene_embree_build_seconds(s)
-                                            : tr_scene_bvh_build_seconds(s);
+    return tr_scene_accel(s) == TR_ACCEL_TYPE_EMBREE ? tr_scene_embree_build_seconds(s)
+                                                     : tr_scene_bvh_build_seconds(s);
 }
 
 int bench_plot_png(const char *script, const char *png) {
@@ -376,24 +377,25 @@ static int bench_complexity(int argc, char **argv) {
     for (int level = 0; level <= max_level && rc == CLI_OK; ++level) {
         char name[32];
         snprintf(name, sizeof name, "cornell-ico-%d", level);
-        tr_scene scene;
-        if (tr_scene_builtin(&scene, name, c.width, c.height, &err) != TR_OK) {
+        tr_scene *scene = tr_scene_create(&err);
+        if (!scene || tr_scene_builtin(scene, name, c.width, c.height, &err) != TR_OK) {
             fprintf(stderr, "trac0r bench complexity: %s\n", err.msg);
+            tr_scene_destroy(scene);
             rc = CLI_FAILURE;
             break;
         }
-        tris[level] = scene.triangle_count;
+        tris[level] = tr_scene_triangle_count(scene);
         for (int k = 0; k < set.count && rc == CLI_OK; ++k) {
             if (dropped[k]) {
                 continue;
             }
-            if (tr_scene_commit(&scene, set.type[k], &err) != TR_OK) {
+            if (tr_scene_commit(scene, set.type[k], &err) != TR_OK) {
                 fprintf(stderr, "trac0r bench complexity: %s\n", err.msg);
                 rc = CLI_FAILURE;
                 break;
             }
-            build_ms[level][k] = bench_build_seconds(&scene) * 1e3;
-            rc = cli_backend_upload(&a, &be, &scene);
+            build_ms[level][k] = bench_build_seconds(scene) * 1e3;
+            rc = cli_backend_upload(&a, &be, scene);
             if (rc != CLI_OK) {
                 break;
             }
@@ -405,7 +407,7 @@ static int bench_complexity(int argc, char **argv) {
             int n = 0;
             for (int f = 0; f <= frames; ++f) {
                 tr_render_stats st;
-                if (cli_backend_frame(&be, &scene, &cfg, (uint32_t)f, &st, &err) != TR_OK) {
+                if (cli_backend_frame(&be, scene, &cfg, (uint32_t)f, &st, &err) != TR_OK) {
                     fprintf(stderr, "trac0r bench complexity: %s\n", err.msg);
                     rc = CLI_FAILURE;
                     break;
@@ -427,12 +429,12 @@ static int bench_complexity(int argc, char **argv) {
             }
             double med = bench_median(times, n);
             fps[level][k] = 1.0 / med;
-            printf("%5d %10u %-7s %10.1f %12.2f %9.3f%s\n", level, scene.triangle_count,
+            printf("%5d %10u %-7s %10.1f %12.2f %9.3f%s\n", level, tr_scene_triangle_count(scene),
                    tr_accel_name(set.type[k]), build_ms[level][k], med * 1e3, 1.0 / med,
                    dropped[k] ? "  (slower than the limit: dropped for higher levels)" : "");
             fflush(stdout);
         }
-        tr_scene_free(&scene);
+        tr_scene_destroy(scene);
     }
     cli_backend_close(&be);
     free(times);

@@ -128,7 +128,7 @@ static void film_mean(const tr_film *f, float *rgb) {
 static int render_spp(tr_device *dev, const tr_scene *s, const tr_render_config *cfg, tr_film *f,
                       uint32_t first, uint32_t spp, tr_error *err) {
     if (tr_device_clear(dev, err) != TR_OK ||
-        tr_device_render(dev, &s->camera, cfg, first, spp, NULL, NULL, err) != TR_OK) {
+        tr_device_render(dev, tr_scene_camera(s), cfg, first, spp, NULL, NULL, err) != TR_OK) {
         return TR_ERR;
     }
     return tr_device_read_film(dev, f, err);
@@ -250,15 +250,16 @@ int bench_convergence(int argc, char **argv) {
     for (int si = 0; si < nsizes && rc == CLI_OK; ++si) {
         c.width = sw[si];
         c.height = sh[si];
-        tr_scene scene;
-        rc = cli_load_scene(&a, &c, &scene);
+        tr_scene *scene = tr_scene_create(NULL);
+        rc = cli_load_scene(&a, &c, scene);
         if (rc != CLI_OK) {
+            tr_scene_destroy(scene);
             break;
         }
         if (si == 0) {
-            for (uint32_t m = 0; m < scene.material_count; ++m) {
-                if (scene.materials[m].type == TR_MATERIAL_GLOSSY &&
-                    scene.materials[m].roughness > 0.0f) {
+            for (uint32_t m = 0; m < tr_scene_material_count(scene); ++m) {
+                const tr_material mat = tr_scene_material(scene, m);
+                if (mat.type == TR_MATERIAL_GLOSSY && mat.roughness > 0.0f) {
                     printf("note: this scene has rough glossy materials, on which naive (cone "
                            "lobe) and pt (GGX) converge to different images\n");
                     break;
@@ -274,7 +275,7 @@ int bench_convergence(int argc, char **argv) {
         /* One device for the reference and one per method: each keeps its own film. */
         cli_backend devs[3] = {{0}};
         for (int k = 0; film_ok && rc == CLI_OK && k <= nmethods; ++k) {
-            rc = cli_backend_open(&a, &c, &scene, &devs[k]);
+            rc = cli_backend_open(&a, &c, scene, &devs[k]);
         }
         if (rc != CLI_OK) {
             for (int k = 0; k <= nmethods; ++k) {
@@ -284,7 +285,7 @@ int bench_convergence(int argc, char **argv) {
             free(half);
             free(cur);
             tr_film_free(&film);
-            tr_scene_free(&scene);
+            tr_scene_destroy(scene);
             break;
         }
         if (!film_ok) {
@@ -293,7 +294,7 @@ int bench_convergence(int argc, char **argv) {
             free(ref);
             free(half);
             free(cur);
-            tr_scene_free(&scene);
+            tr_scene_destroy(scene);
             rc = CLI_FAILURE;
             break;
         }
@@ -312,11 +313,11 @@ int bench_convergence(int argc, char **argv) {
         } else {
             double t0 = tr_time_now();
             uint32_t h1 = ref_spp / 2, h2 = ref_spp - h1;
-            if (render_spp(devs[nmethods].dev, &scene, &cfg, &film, 0, h1, &err) != TR_OK) {
+            if (render_spp(devs[nmethods].dev, scene, &cfg, &film, 0, h1, &err) != TR_OK) {
                 rc = CLI_FAILURE;
             } else {
                 film_mean(&film, half);
-                if (render_spp(devs[nmethods].dev, &scene, &cfg, &film, h1, h2, &err) != TR_OK) {
+                if (render_spp(devs[nmethods].dev, scene, &cfg, &film, h1, h2, &err) != TR_OK) {
                     rc = CLI_FAILURE;
                 }
             }
@@ -371,7 +372,7 @@ int bench_convergence(int argc, char **argv) {
             cfg.max_depth = methods[mi] == TR_INTEGRATOR_NAIVE ? c.max_depth + 2 : c.max_depth;
             cfg.seed = c.seed;
             tr_render_stats st;
-            if (cli_backend_frame(&devs[mi], &scene, &cfg, spp[mi], &st, &err) != TR_OK) {
+            if (cli_backend_frame(&devs[mi], scene, &cfg, spp[mi], &st, &err) != TR_OK) {
                 fprintf(stderr, "trac0r bench convergence: %s\n", err.msg);
                 rc = CLI_FAILURE;
                 break;
@@ -414,7 +415,7 @@ int bench_convergence(int argc, char **argv) {
         free(half);
         free(cur);
         tr_film_free(&film);
-        tr_scene_free(&scene);
+        tr_scene_destroy(scene);
     }
     tr_image_free(&ref_img);
     if (rc != CLI_OK) {

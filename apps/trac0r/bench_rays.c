@@ -7,7 +7,10 @@
 #include <string.h>
 
 #include "bench.h"
+/* The one app file that still reaches into the library (CMakeLists.txt): it traces its
+ * rays with the kernel's functions through tr_scene_view_of. */
 #include "kernel/kernel.h"
+#include "scene/scene_internal.h"
 
 typedef struct ray_set {
     tr_ray *rays;
@@ -25,17 +28,18 @@ typedef struct emitters {
 } emitters;
 
 static int collect_emitters(const tr_scene *s, emitters *e) {
-    e->tri = malloc((size_t)(s->triangle_count ? s->triangle_count : 1) * sizeof *e->tri);
-    e->cdf = malloc((size_t)(s->triangle_count ? s->triangle_count : 1) * sizeof *e->cdf);
+    const uint32_t n = tr_scene_triangle_count(s);
+    e->tri = malloc((size_t)(n ? n : 1) * sizeof *e->tri);
+    e->cdf = malloc((size_t)(n ? n : 1) * sizeof *e->cdf);
     e->count = 0;
     if (!e->tri || !e->cdf) {
         return TR_ERR;
     }
     float total = 0.0f;
-    for (uint32_t i = 0; i < s->triangle_count; ++i) {
-        const tr_material *m = &s->materials[s->triangles[i].material];
-        if (m->emittance > 0.0f && s->triangles[i].area > 0.0f) {
-            total += s->triangles[i].area;
+    for (uint32_t i = 0; i < n; ++i) {
+        const tr_triangle t = tr_scene_triangle(s, i);
+        if (tr_scene_material(s, t.material).emittance > 0.0f && t.area > 0.0f) {
+            total += t.area;
             e->tri[e->count] = i;
             e->cdf[e->count++] = total;
         }
@@ -49,13 +53,12 @@ static tr_vec3 sample_emitter(const tr_scene *s, const emitters *e, tr_rng *r) {
     while (k + 1 < e->count && e->cdf[k] <= x) {
         ++k;
     }
-    const tr_triangle *t = &s->triangles[e->tri[k]];
+    const tr_triangle t = tr_scene_triangle(s, e->tri[k]);
     float u = tr_rng_float(r), v = tr_rng_float(r);
     if (u + v > 1.0f) {
         u = 1.0f - u, v = 1.0f - v;
     }
-    return v3_add(t->v0,
-                  v3_add(v3_scale(v3_sub(t->v1, t->v0), u), v3_scale(v3_sub(t->v2, t->v0), v)));
+    return v3_add(t.v0, v3_add(v3_scale(v3_sub(t.v1, t.v0), u), v3_scale(v3_sub(t.v2, t.v0), v)));
 }
 
 /* Makes the three ray sets from one camera pass traced with the BVH: primary rays
@@ -63,7 +66,7 @@ static tr_vec3 sample_emitter(const tr_scene *s, const emitters *e, tr_rng *r) {
  * shadow ray towards a random point on an emitter. Every set is the same for every
  * structure it is then traced with. */
 static int make_rays(const tr_scene *s, uint64_t seed, ray_set sets[KINDS]) {
-    const tr_camera *cam = &s->camera;
+    const tr_camera *cam = tr_scene_camera(s);
     const uint32_t n = cam->screen_width * cam->screen_height;
     for (int k = 0; k < KINDS; ++k) {
         sets[k].rays = malloc((size_t)n * sizeof *sets[k].rays);
@@ -92,7 +95,7 @@ static int make_rays(const tr_scene *s, uint64_t seed, ray_set sets[KINDS]) {
             continue;
         }
         tr_vec3 p = v3_madd(ray.origin, ray.dir, hit.t);
-        tr_vec3 n_geo = s->triangles[hit.triangle].normal;
+        tr_vec3 n_geo = tr_scene_triangle(s, hit.triangle).normal;
         tr_vec3 nf = v3_dot(n_geo, ray.dir) > 0.0f ? v3_neg(n_geo) : n_geo;
         tr_vec3 o = tr_offset_origin(p, nf);
         sets[DIFFUSE].rays[sets[DIFFUSE].count++] =
@@ -216,13 +219,14 @@ int bench_rays(int argc, char **argv) {
             sc_opts.scene = scenes[sc];
         }
         sc_opts.accel = TR_ACCEL_TYPE_BVH; /* the rays are generated with the BVH */
-        tr_scene scene;
-        rc = cli_load_scene(&a, &sc_opts, &scene);
+        tr_scene *scene = tr_scene_create(NULL);
+        rc = cli_load_scene(&a, &sc_opts, scene);
         if (rc != CLI_OK) {
+            tr_scene_destroy(scene);
             break;
         }
         ray_set sets[KINDS] = {{0}};
-        if (make_rays(&scene, c.seed, sets) != TR_OK) {
+        if (make_rays(scene, c.seed, sets) != TR_OK) {
             fprintf(stderr, "trac0r bench rays: out of memory generating rays\n");
             rc = CLI_FAILURE;
         }
@@ -230,23 +234,23 @@ int bench_rays(int argc, char **argv) {
         uint64_t hits[4][KINDS] = {{0}};
         tr_error err;
         for (int k = 0; k < set.count && rc == CLI_OK; ++k) {
-            if (tr_scene_commit(&scene, set.type[k], &err) != TR_OK) {
+            if (tr_scene_commit(scene, set.type[k], &err) != TR_OK) {
                 fprintf(stderr, "trac0r bench rays: %s\n", err.msg);
                 rc = CLI_FAILURE;
                 break;
             }
             for (int kind = 0; kind < KINDS; ++kind) {
-                int reps = reps_for(trace_set(&scene, &sets[kind], kind == SHADOW, threads, 1,
+                int reps = reps_for(trace_set(scene, &sets[kind], kind == SHADOW, threads, 1,
                                               &hits[k][kind])); /* warm-up */
                 for (int r = 0; r < runs; ++r) {
-                    times[r] = trace_set(&scene, &sets[kind], kind == SHADOW, threads, reps,
+                    times[r] = trace_set(scene, &sets[kind], kind == SHADOW, threads, reps,
                                          &hits[k][kind]);
                 }
                 mrays[k][kind] = (double)sets[kind].count * reps / bench_median(times, runs) * 1e-6;
             }
             printf("%-24s %10u %-7s %10.1f %10.2f %10.2f %10.2f\n", sc_opts.scene,
-                   scene.triangle_count, tr_accel_name(set.type[k]),
-                   bench_build_seconds(&scene) * 1e3, mrays[k][PRIMARY], mrays[k][DIFFUSE],
+                   tr_scene_triangle_count(scene), tr_accel_name(set.type[k]),
+                   bench_build_seconds(scene) * 1e3, mrays[k][PRIMARY], mrays[k][DIFFUSE],
                    mrays[k][SHADOW]);
             fflush(stdout);
             if (k > 0) {
@@ -273,7 +277,7 @@ int bench_rays(int argc, char **argv) {
         for (int kind = 0; kind < KINDS; ++kind) {
             free(sets[kind].rays);
         }
-        tr_scene_free(&scene);
+        tr_scene_destroy(scene);
     }
     free(times);
     return rc;

@@ -3,8 +3,6 @@
 #include "devices.h"
 #include "trac0r/registry.h"
 
-#include "accel/wbvh.h" /* tr_wbvh_isa, TR_WBVH_WIDTH: the wide BVH's summary */
-
 #include <errno.h>
 #include <stdio.h>
 #include <inttypes.h>
@@ -292,13 +290,15 @@ static double animate_offset(double width, uint32_t frame) {
 }
 
 int cli_animate(tr_scene *s, uint32_t frame, tr_error *err) {
-    if (s->shape_count == 0 || frame == 0) {
+    const uint32_t shapes = tr_scene_shape_count(s);
+    if (shapes == 0 || frame == 0) {
         return TR_OK;
     }
-    const uint32_t shape = s->shape_count - 1;
-    const double width = s->shapes[shape].box.max.x - s->shapes[shape].box.min.x;
+    const uint32_t shape = shapes - 1;
+    const tr_aabb box = tr_scene_shape_box(s, shape);
+    const double width = box.max.x - box.min.x;
     const double dx = animate_offset(width, frame) - animate_offset(width, frame - 1);
-    return tr_scene_move_shape(s, shape, v3((float)dx, 0.0f, 0.0f), err);
+    return tr_scene_move_shape(s, shape, tr_vec3_make((float)dx, 0.0f, 0.0f), err);
 }
 
 int cli_scene_is_builtin(const char *scene) {
@@ -310,6 +310,9 @@ int cli_load_scene_file(const cli_args *a, cli_common *c, tr_scene *scene, tr_sc
     tr_scene_file local;
     if (!file) {
         file = &local;
+    }
+    if (!scene) {
+        return cli_error(a, "out of memory creating the scene");
     }
     memset(file, 0, sizeof *file);
     if (cli_scene_is_builtin(c->scene)) {
@@ -360,9 +363,11 @@ int cli_load_scene_file(const cli_args *a, cli_common *c, tr_scene *scene, tr_sc
         rc = cli_error(a, "--width/--height: %ux%u is more than %u pixels", c->width, c->height,
                        TR_FILM_MAX_PIXELS);
     }
-    if (rc == CLI_OK && tr_camera_resize(&scene->camera, c->width, c->height, &err) != TR_OK) {
+    tr_camera cam = *tr_scene_camera(scene);
+    if (rc == CLI_OK && tr_camera_resize(&cam, c->width, c->height, &err) != TR_OK) {
         rc = cli_error(a, "%s: camera: %s", c->scene, err.msg);
     }
+    tr_scene_set_camera(scene, &cam);
     if (rc != CLI_OK) {
         tr_scene_free(scene);
         return rc;
@@ -382,6 +387,9 @@ int cli_load_scene_file(const cli_args *a, cli_common *c, tr_scene *scene, tr_sc
 }
 
 int cli_load_scene(const cli_args *a, const cli_common *c, tr_scene *scene) {
+    if (!scene) {
+        return cli_error(a, "out of memory creating the scene");
+    }
     if (!cli_scene_is_builtin(c->scene)) {
         /* The caller's options are final here (its film has their size): the file's
          * render defaults do not apply. */
@@ -410,26 +418,28 @@ int cli_load_scene(const cli_args *a, const cli_common *c, tr_scene *scene) {
 }
 
 void cli_describe_accel(char *buf, size_t n, const tr_scene *s) {
-    if (s->accel == TR_ACCEL_TYPE_BVH) {
+    tr_accel_info info;
+    tr_scene_accel_info(s, &info);
+    if (info.type == TR_ACCEL_TYPE_BVH) {
         /* The traversal's ISA is chosen at run time; a TRAC0R_ISA the CPU (or build)
          * cannot honour is said here rather than silently replaced. */
-        const char *isa = tr_wbvh_isa(), *asked = getenv("TRAC0R_ISA");
+        const char *asked = getenv("TRAC0R_ISA");
         char note[96] = "";
-        if (asked && *asked && strcmp(asked, isa) != 0) {
+        if (asked && *asked && strcmp(asked, info.wide_isa) != 0) {
             snprintf(note, sizeof note, ", TRAC0R_ISA=%.40s unavailable", asked);
         }
         snprintf(buf, n,
                  "bvh (%u-wide %s%s: %u nodes, %u leaves, depth %u, from %u binary nodes; built "
                  "in %.1f ms, %.1f ms of it the collapse)",
-                 TR_WBVH_WIDTH, isa, note, s->wbvh.node_count, s->wbvh.leaf_count, s->wbvh.depth,
-                 s->bvh.node_count, tr_scene_bvh_build_seconds(s) * 1e3,
-                 s->wbvh.build_seconds * 1e3);
-    } else if (s->accel == TR_ACCEL_TYPE_BVH2) {
-        snprintf(buf, n, "bvh2 (%u nodes, %u leaves, depth %u, built in %.1f ms)",
-                 s->bvh.node_count, s->bvh.leaf_count, s->bvh.depth, s->bvh.build_seconds * 1e3);
-    } else if (s->accel == TR_ACCEL_TYPE_EMBREE) {
-        snprintf(buf, n, "embree (built in %.1f ms)", tr_scene_embree_build_seconds(s) * 1e3);
+                 info.wide_width, info.wide_isa, note, info.wide_nodes, info.wide_leaves,
+                 info.wide_depth, info.bvh_nodes, tr_scene_bvh_build_seconds(s) * 1e3,
+                 info.wide_seconds * 1e3);
+    } else if (info.type == TR_ACCEL_TYPE_BVH2) {
+        snprintf(buf, n, "bvh2 (%u nodes, %u leaves, depth %u, built in %.1f ms)", info.bvh_nodes,
+                 info.bvh_leaves, info.bvh_depth, info.bvh_seconds * 1e3);
+    } else if (info.type == TR_ACCEL_TYPE_EMBREE) {
+        snprintf(buf, n, "embree (built in %.1f ms)", info.embree_seconds * 1e3);
     } else {
-        snprintf(buf, n, "flat (%u shape boxes)", s->shape_count);
+        snprintf(buf, n, "flat (%u shape boxes)", tr_scene_shape_count(s));
     }
 }

@@ -25,9 +25,9 @@ typedef struct cli_common {
     int threads;
     int integrator;
     tr_accel_type accel;
-    unsigned given; /* CLI_GIVEN_*: options set on the command line (a scene file's
-                       render defaults apply to the others) */
-    int allow_dark; /* --allow-dark: render a scene file without an emitter */
+    unsigned given;  /* CLI_GIVEN_*: options set on the command line (a scene file's
+                        render defaults apply to the others) */
+    int allow_dark;  /* --allow-dark: render a scene file without an emitter */
     char device[32]; /* --device: a tr_device name, "cpu" or "opencl:N" */
 } cli_common;
 
@@ -72,8 +72,9 @@ int cli_parse_float(cli_args *a, float lo, float hi, float *out);
  * and -1 if the option is not a common one. */
 int cli_common_option(cli_args *a, cli_common *c);
 
-/* Builds the scene named by c->scene for c->width x c->height and commits it with
- * c->accel. */
+/* Builds the scene named by c->scene for c->width x c->height into `scene` (a handle
+ * from tr_scene_create; NULL is reported as out of memory) and commits it with
+ * c->accel. On failure the scene is left empty: the caller still destroys it. */
 int cli_load_scene(const cli_args *a, const cli_common *c, tr_scene *scene);
 
 /* Whether a --scene value names a built-in scene: "builtin:NAME" or a bare name without

@@ -45,7 +45,7 @@ static tr_vec3 false_colour(double t) {
         float s = ramp[i][k] + f * (ramp[i + 1][k] - ramp[i][k]);
         c[k] = tr_srgb_to_linear(s);
     }
-    return v3(c[0], c[1], c[2]);
+    return tr_vec3_make(c[0], c[1], c[2]);
 }
 
 static void compare_help(void) {

@@ -95,10 +95,10 @@ int cli_backend_upload(const cli_args *a, cli_backend *be, const tr_scene *scene
     const tr_device_info *d = tr_device_get_info(be->dev);
     const tr_accel_type walked = tr_device_accel(be->dev);
     /* bvh and bvh2 both upload the binary BVH (the wide BVH is host code). */
-    if (scene->accel != walked && scene->accel != TR_ACCEL_TYPE_BVH2) {
+    if (tr_scene_accel(scene) != walked && tr_scene_accel(scene) != TR_ACCEL_TYPE_BVH2) {
         /* Embree is a host library: the device gets a BVH of its own. */
         snprintf(be->name, sizeof be->name, "%s (%s; %s is host-only, the device traces a %s)",
-                 d->name, d->model, tr_accel_name(scene->accel), tr_accel_name(walked));
+                 d->name, d->model, tr_accel_name(tr_scene_accel(scene)), tr_accel_name(walked));
     } else {
         snprintf(be->name, sizeof be->name, "%s (%s)", d->name, d->model);
     }
@@ -107,7 +107,7 @@ int cli_backend_upload(const cli_args *a, cli_backend *be, const tr_scene *scene
 
 int cli_backend_frame(cli_backend *be, const tr_scene *scene, const tr_render_config *cfg,
                       uint32_t sample, tr_render_stats *stats, tr_error *err) {
-    return tr_device_render(be->dev, &scene->camera, cfg, sample, 1, NULL, stats, err);
+    return tr_device_render(be->dev, tr_scene_camera(scene), cfg, sample, 1, NULL, stats, err);
 }
 
 int cli_backend_read(cli_backend *be, tr_film *film, tr_error *err) {

@@ -52,36 +52,42 @@ int cmd_info(int argc, char **argv) {
     if (!path) {
         return cli_error(&a, "missing SCENE or --devices (see 'trac0r info --help')");
     }
-    tr_scene s;
     tr_scene_file f;
     memset(&f, 0, sizeof f);
     tr_error err;
+    tr_scene *s = tr_scene_create(&err);
+    if (!s) {
+        return cli_error(&a, "%s", err.msg);
+    }
     int builtin = cli_scene_is_builtin(path);
     if (builtin) {
         const char *name = strncmp(path, "builtin:", 8) == 0 ? path + 8 : path;
-        if (tr_scene_builtin(&s, name, 800, 600, &err) != TR_OK) {
+        if (tr_scene_builtin(s, name, 800, 600, &err) != TR_OK) {
+            tr_scene_destroy(s);
             return cli_error(&a, "%s", err.msg);
         }
-        f.shape_count = s.shape_count;
+        f.shape_count = tr_scene_shape_count(s);
         f.width = 800;
         f.height = 600;
-        f.bounds = tr_triangles_bounds(s.triangles, s.triangle_count);
-        for (uint32_t i = 0; i < s.triangle_count; ++i) {
+        f.bounds = tr_scene_bounds(s);
+        for (uint32_t i = 0; i < tr_scene_triangle_count(s); ++i) {
             f.emissive_triangles +=
-                s.materials[s.triangles[i].material].type == TR_MATERIAL_EMITTER;
+                tr_scene_material(s, tr_scene_triangle(s, i).material).type == TR_MATERIAL_EMITTER;
         }
-        for (uint32_t i = 0; i < s.material_count; ++i) {
-            f.emitter_materials += s.materials[i].type == TR_MATERIAL_EMITTER;
+        for (uint32_t i = 0; i < tr_scene_material_count(s); ++i) {
+            f.emitter_materials += tr_scene_material(s, i).type == TR_MATERIAL_EMITTER;
         }
-    } else if (tr_scene_file_load(&s, path, NULL, &f, &err) != TR_OK) {
+    } else if (tr_scene_file_load(s, path, NULL, &f, &err) != TR_OK) {
+        tr_scene_destroy(s);
         return cli_error(&a, "%s", err.msg);
     }
     printf("scene:      %s\n", path);
     printf("triangles:  %u (%u from %u mesh file%s in %u part%s, %u degenerate faces dropped)\n",
-           s.triangle_count, f.mesh_triangles, f.mesh_count, f.mesh_count == 1 ? "" : "s",
+           tr_scene_triangle_count(s), f.mesh_triangles, f.mesh_count, f.mesh_count == 1 ? "" : "s",
            f.mesh_parts, f.mesh_parts == 1 ? "" : "s", f.degenerate_dropped);
-    printf("shapes:     %u (%u boxes in the flat structure)\n", f.shape_count, s.shape_count);
-    printf("materials:  %u\n", s.material_count);
+    printf("shapes:     %u (%u boxes in the flat structure)\n", f.shape_count,
+           tr_scene_shape_count(s));
+    printf("materials:  %u\n", tr_scene_material_count(s));
     printf("emitters:   %u material%s, %u triangle%s\n", f.emitter_materials,
            f.emitter_materials == 1 ? "" : "s", f.emissive_triangles,
            f.emissive_triangles == 1 ? "" : "s");
@@ -89,9 +95,9 @@ int cmd_info(int argc, char **argv) {
            (double)f.bounds.min.y, (double)f.bounds.min.z, (double)f.bounds.max.x,
            (double)f.bounds.max.y, (double)f.bounds.max.z);
     uint32_t with_normals = 0;
-    for (uint32_t i = 0; i < s.vertex_normal_count; ++i) {
-        const tr_vec3 *n = &s.vertex_normals[3 * (size_t)i];
-        with_normals += v3_length(n[0]) > 0.0f || v3_length(n[1]) > 0.0f || v3_length(n[2]) > 0.0f;
+    for (uint32_t i = 0; i < tr_scene_triangle_count(s); ++i) {
+        tr_vec3 n[3];
+        with_normals += (uint32_t)tr_scene_triangle_normals(s, i, n);
     }
     printf("normals:    %u triangles with vertex normals\n", with_normals);
     if (!builtin) {
@@ -108,6 +114,6 @@ int cmd_info(int argc, char **argv) {
     for (uint32_t i = 0; i < f.warning_count; ++i) {
         printf("  warning: %s\n", f.warnings[i]);
     }
-    tr_scene_free(&s);
+    tr_scene_destroy(s);
     return CLI_OK;
 }

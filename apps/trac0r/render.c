@@ -63,7 +63,8 @@ static int parse_passes(cli_args *a, uint32_t *passes) {
             }
         }
         if (!bit) {
-            return cli_error(a, "%s: unknown pass '%.*s' (expected albedo, normal, depth, id or all)",
+            return cli_error(a,
+                             "%s: unknown pass '%.*s' (expected albedo, normal, depth, id or all)",
                              a->opt, (int)len, p);
         }
         *passes |= bit;
@@ -150,10 +151,11 @@ int cmd_render(int argc, char **argv) {
         }
     }
 
-    tr_scene scene;
+    tr_scene *scene = tr_scene_create(NULL);
     tr_scene_file file;
-    int rc = cli_load_scene_file(&a, &c, &scene, &file);
+    int rc = cli_load_scene_file(&a, &c, scene, &file);
     if (rc != CLI_OK) {
+        tr_scene_destroy(scene);
         return rc;
     }
     if (!spp_given && file.has_spp) {
@@ -161,14 +163,14 @@ int cmd_render(int argc, char **argv) {
     }
     tr_film film;
     if (tr_film_init_passes(&film, c.width, c.height, passes, &err) != TR_OK) {
-        tr_scene_free(&scene);
+        tr_scene_free(scene);
         return cli_error(&a, "--width/--height: %s", err.msg);
     }
     cli_backend be;
-    rc = cli_backend_open(&a, &c, &scene, &be);
+    rc = cli_backend_open(&a, &c, scene, &be);
     if (rc != CLI_OK) {
         tr_film_free(&film);
-        tr_scene_free(&scene);
+        tr_scene_destroy(scene);
         return rc;
     }
     tr_render_config cfg = cli_render_config(&c);
@@ -181,7 +183,7 @@ int cmd_render(int argc, char **argv) {
     rc = CLI_OK;
     for (uint32_t s = 0; s < spp; ++s) {
         tr_render_stats st;
-        if (cli_backend_frame(&be, &scene, &cfg, s, &st, &err) != TR_OK) {
+        if (cli_backend_frame(&be, scene, &cfg, s, &st, &err) != TR_OK) {
             fprintf(stderr, "%strac0r render: %s\n", tty ? "\n" : "", err.msg);
             rc = CLI_FAILURE;
             break;
@@ -220,13 +222,13 @@ int cmd_render(int argc, char **argv) {
     }
     if (rc == CLI_OK) {
         char accel[160];
-        cli_describe_accel(accel, sizeof accel, &scene);
+        cli_describe_accel(accel, sizeof accel, scene);
         fprintf(stderr, "trac0r render: %s %ux%u, %u spp, %s, %s: %.2f s, %.2f Mrays/s -> %s\n",
                 c.scene, c.width, c.height, spp, be.name, accel, elapsed,
                 elapsed > 0 ? (double)rays / elapsed * 1e-6 : 0.0, out);
     }
     cli_backend_close(&be);
     tr_film_free(&film);
-    tr_scene_free(&scene);
+    tr_scene_destroy(scene);
     return rc;
 }

@@ -96,8 +96,8 @@ static int run_headless(const cli_args *a, const view_options *o, tr_scene *scen
     if (rc == CLI_OK && o->benchmark >= 0) {
         printf("trac0r view: benchmark cornell-ico-%d (%u triangles) %ux%u, %u frames in "
                "%.2f s: %.3f average FPS (%.1f ms/frame)\n",
-               o->benchmark, scene->triangle_count, o->c.width, o->c.height, frames, seconds,
-               seconds > 0 ? frames / seconds : 0.0, seconds * 1e3 / frames);
+               o->benchmark, tr_scene_triangle_count(scene), o->c.width, o->c.height, frames,
+               seconds, seconds > 0 ? frames / seconds : 0.0, seconds * 1e3 / frames);
     }
     if (rc == CLI_OK && o->screenshot) {
         if (tr_film_write(&film, o->screenshot, o->exposure, &err) != TR_OK) {
@@ -202,11 +202,12 @@ int cmd_view(int argc, char **argv) {
     if (!headless && view_font_find(o.font, o.font_path, sizeof o.font_path, &err) != TR_OK) {
         return cli_error(&a, "%s", err.msg);
     }
-    tr_scene scene;
+    tr_scene *scene = tr_scene_create(NULL);
     /* A scene file's render defaults (size, max depth, integrator, accel) apply to the options not
      * given, as in `trac0r render`. */
-    int rc = cli_load_scene_file(&a, &o.c, &scene, NULL);
+    int rc = cli_load_scene_file(&a, &o.c, scene, NULL);
     if (rc != CLI_OK) {
+        tr_scene_destroy(scene);
         return rc;
     }
     if (!headless) {
@@ -214,7 +215,7 @@ int cmd_view(int argc, char **argv) {
         const char *driver = getenv("SDL_VIDEODRIVER");
         const char *wayland = getenv("WAYLAND_DISPLAY");
         if ((!display || !*display) && (!driver || !*driver) && (!wayland || !*wayland)) {
-            tr_scene_free(&scene);
+            tr_scene_destroy(scene);
             return cli_error(&a, "no display: DISPLAY is not set (the window needs an X11 "
                                  "display; use --frames N --screenshot FILE to render without "
                                  "one)");
@@ -222,16 +223,16 @@ int cmd_view(int argc, char **argv) {
     }
 
     cli_backend be;
-    rc = cli_backend_open(&a, &o.c, &scene, &be);
+    rc = cli_backend_open(&a, &o.c, scene, &be);
     if (rc != CLI_OK) {
-        tr_scene_free(&scene);
+        tr_scene_destroy(scene);
         return rc;
     }
     if (!cli_backend_is_cpu(&be)) {
         fprintf(stderr, "trac0r view: rendering on %s\n", be.name);
     }
-    rc = headless ? run_headless(&a, &o, &scene, &be) : view_run_window(&a, &o, &scene, &be);
+    rc = headless ? run_headless(&a, &o, scene, &be) : view_run_window(&a, &o, scene, &be);
     cli_backend_close(&be);
-    tr_scene_free(&scene);
+    tr_scene_destroy(scene);
     return rc;
 }

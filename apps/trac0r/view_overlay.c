@@ -115,12 +115,21 @@ void view_draw_boxes(SDL_Renderer *ren, const tr_camera *cam, const tr_aabb *box
     }
 }
 
-size_t view_draw_bvh(SDL_Renderer *ren, const tr_camera *cam, const tr_bvh *bvh,
+uint32_t view_bvh_depth(const tr_scene *scene) {
+    tr_accel_info info;
+    tr_scene_accel_info(scene, &info);
+    return info.bvh_depth;
+}
+
+size_t view_draw_bvh(SDL_Renderer *ren, const tr_camera *cam, const tr_scene *scene,
                      uint32_t max_depth) {
-    if (!bvh->nodes || bvh->node_count == 0) {
+    const uint32_t node_count = tr_scene_bvh_node_count(scene);
+    if (node_count == 0) {
         return 0;
     }
-    enum { STACK = 2 * TR_BVH_STACK_SIZE + 2 };
+    /* Two children pushed per level: room for any depth the BVH builder makes (it stops
+     * at 64 levels), and the push below checks anyway. */
+    enum { STACK = 2 * 64 + 2 };
     uint32_t stack[STACK], depth[STACK];
     int top = 0;
     size_t drawn = 0;
@@ -130,17 +139,21 @@ size_t view_draw_bvh(SDL_Renderer *ren, const tr_camera *cam, const tr_bvh *bvh,
     while (top > 0) {
         --top;
         const uint32_t i = stack[top], d = depth[top];
-        const tr_bvh_node *node = &bvh->nodes[i];
+        tr_aabb box;
+        uint32_t first = 0;
+        const int interior = tr_scene_bvh_node(scene, i, &box, &first);
+        if (interior < 0) {
+            continue;
+        }
         /* Shallow boxes light, deep ones red: g falls from 255 to 0 over the depths. */
         const Uint8 g = (Uint8)(max_depth ? 255u - 255u * d / max_depth : 255u);
         SDL_SetRenderDrawColor(ren, 255, g, (Uint8)(g / 2), 255);
-        draw_box(ren, cam, &node->box);
+        draw_box(ren, cam, &box);
         ++drawn;
-        if (node->count == 0 && d < max_depth && top + 2 <= STACK &&
-            node->left_first + 1 < bvh->node_count) {
-            stack[top] = node->left_first;
+        if (interior && d < max_depth && top + 2 <= STACK && first + 1 < node_count) {
+            stack[top] = first;
             depth[top++] = d + 1;
-            stack[top] = node->left_first + 1;
+            stack[top] = first + 1;
             depth[top++] = d + 1;
         }
     }

@@ -20,9 +20,12 @@ void view_draw_text(SDL_Renderer *ren, TTF_Font *font, int x, int y, const char 
 void view_draw_boxes(SDL_Renderer *ren, const tr_camera *cam, const tr_aabb *boxes, size_t n,
                      SDL_Color color);
 
-/* Draws the BVH's node boxes from the root down to depth max_depth (root = 0), the
- * colour going from yellow-white at the root to red at max_depth. Returns how many. */
-size_t view_draw_bvh(SDL_Renderer *ren, const tr_camera *cam, const tr_bvh *bvh,
+/* Draws the committed binary BVH's node boxes (none for a scene without one) from the
+ * root down to depth max_depth (root = 0), the colour going from yellow-white at the
+ * root to red at max_depth. Returns how many. */
+size_t view_draw_bvh(SDL_Renderer *ren, const tr_camera *cam, const tr_scene *scene,
                      uint32_t max_depth);
+/* The depth of the scene's committed binary BVH (0 without one). */
+uint32_t view_bvh_depth(const tr_scene *scene);
 
 #endif

@@ -20,9 +20,9 @@
 #include "trac0r/trac0r.h"
 
 typedef struct view_renderer {
-    tr_scene *scene;   /* changed only by this thread, under mu, when animating */
-    int animate;       /* move the scene's last shape before every frame (cli_animate) */
-    tr_device *dev; /* renders there (the scene uploaded) */
+    tr_scene *scene; /* changed only by this thread, under mu, when animating */
+    int animate;     /* move the scene's last shape before every frame (cli_animate) */
+    tr_device *dev;  /* renders there (the scene uploaded) */
     tr_render_config cfg;
     uint32_t max_spp; /* stop accumulating here (0: never stop) */
     pthread_t thread;

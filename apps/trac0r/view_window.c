@@ -10,10 +10,10 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "kernel/vec.h"
 #include "view.h"
 #include "view_overlay.h"
 #include "view_render.h"
+#include "view_vec.h"
 #include "view_wire.h"
 
 static volatile sig_atomic_t dump_requested = 0;
@@ -201,16 +201,13 @@ int view_run_window(const cli_args *a, const view_options *o, tr_scene *scene, c
             h = (uint32_t)oh;
         }
     }
-    fly_camera fly = {scene->camera.pos,
-                      scene->camera.dir,
-                      scene->camera.up,
-                      scene->camera.vertical_fov,
-                      scene->camera.near_dist,
-                      scene->camera.far_dist,
-                      0.5f};
+    const tr_camera *scene_cam = tr_scene_camera(scene);
+    fly_camera fly = {
+        scene_cam->pos,       scene_cam->dir,      scene_cam->up, scene_cam->vertical_fov,
+        scene_cam->near_dist, scene_cam->far_dist, 0.5f};
     /* The scene's own camera until the user moves: so that the first view's film is
      * exactly what `trac0r render` computes. */
-    tr_camera cam = scene->camera;
+    tr_camera cam = *scene_cam;
     if (tr_camera_resize(&cam, w, h, &err) != TR_OK) {
         fprintf(stderr, "trac0r view: %s\n", err.msg);
         goto done;
@@ -319,7 +316,7 @@ int view_run_window(const cli_args *a, const view_options *o, tr_scene *scene, c
                     break;
                 case SDLK_RIGHTBRACKET:
                     st.bvh_depth =
-                        st.bvh_depth < scene->bvh.depth ? st.bvh_depth + 1 : st.bvh_depth;
+                        st.bvh_depth < view_bvh_depth(scene) ? st.bvh_depth + 1 : st.bvh_depth;
                     break;
                 case SDLK_n:
                     st.timings = !st.timings;
@@ -474,17 +471,17 @@ int view_run_window(const cli_args *a, const view_options *o, tr_scene *scene, c
             const SDL_Color yellow = {255, 255, 0, 255};
             tr_aabb boxes[256];
             size_t nb = 0;
-            for (uint32_t i = 0; i < scene->shape_count && nb < 256; ++i) {
-                boxes[nb++] = scene->shapes[i].box;
+            for (uint32_t i = 0; i < tr_scene_shape_count(scene) && nb < 256; ++i) {
+                boxes[nb++] = tr_scene_shape_box(scene, i);
             }
             view_draw_boxes(ren, &cam, boxes, nb, yellow);
         }
-        if (st.bvh && (scene->accel == TR_ACCEL_TYPE_BVH || scene->accel == TR_ACCEL_TYPE_BVH2)) {
-            view_draw_bvh(ren, &cam, &scene->bvh, st.bvh_depth);
+        if (st.bvh) {
+            view_draw_bvh(ren, &cam, scene, st.bvh_depth); /* nothing without a BVH */
         }
         char accel[160];
         cli_describe_accel(accel, sizeof accel, scene);
-        const uint32_t bvh_depth = scene->bvh.depth;
+        const uint32_t bvh_depth = view_bvh_depth(scene);
         pthread_mutex_unlock(&r.mu);
         if (st.overlay) {
             tr_vec3 mc = view_screen_to_camera(&cam, (float)mouse_x + 0.5f, (float)mouse_y + 0.5f);

@@ -3,7 +3,7 @@
 
 #include <math.h>
 
-#include "kernel/vec.h"
+#include "view_vec.h"
 
 const unsigned char view_box_edges[12][2] = {
     {0, 1}, {2, 3}, {4, 5}, {6, 7}, /* along x */

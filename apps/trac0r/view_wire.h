@@ -4,7 +4,7 @@
 #ifndef TRAC0R_VIEW_WIRE_H
 #define TRAC0R_VIEW_WIRE_H
 
-#include "kernel/types.h"
+#include "trac0r/types.h"
 
 /* A point in camera space: x right, y up, z along the view direction (all in world
  * units, so z is the distance in front of the camera's plane). */

@@ -1,10 +1,10 @@
-/* camera.h - building the kernel's camera (src/kernel/types.h) on the host. */
+/* camera.h - setting up a pinhole camera (tr_camera, trac0r/types.h). */
 #ifndef TRAC0R_CAMERA_H
 #define TRAC0R_CAMERA_H
 
 #include <stdint.h>
 
-#include "kernel/types.h"
+#include "trac0r/types.h"
 #include "trac0r/error.h"
 
 /* A pinhole camera at pos looking along dir, rolled so that world_up points up,

@@ -7,7 +7,7 @@
 
 #include <stdint.h>
 
-#include "kernel/vec.h"
+#include "trac0r/types.h"
 #include "trac0r/error.h"
 
 /* The largest image libtrac0r allocates: each side and the total pixel count. */

@@ -1,7 +1,7 @@
 /* registry.h - the names of material types, integrators and acceleration structures.
  *
- * Each kind is one X-macro list (TR_MATERIAL_TYPES in kernel/material_types.h,
- * TR_INTEGRATORS in kernel/integrator_types.h, TR_ACCEL_TYPES in trac0r/accel.h); these
+ * Each kind is one X-macro list (TR_MATERIAL_TYPES in trac0r/material_types.h,
+ * TR_INTEGRATORS in trac0r/integrator_types.h, TR_ACCEL_TYPES in trac0r/accel.h); these
  * functions are generated from the lists (src/util/registry.c), so that every place that
  * parses or prints a name (scene files, the command line, --help) agrees with the
  * kernel's enums. Name lookups are exact and case-sensitive.
@@ -16,8 +16,8 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "kernel/integrator_types.h"
-#include "kernel/material_types.h"
+#include "trac0r/integrator_types.h"
+#include "trac0r/material_types.h"
 #include "trac0r/accel.h"
 
 /* Material types: TR_MATERIAL_* <-> scene-file name ("emitter", ...). from_name returns -1

@@ -4,7 +4,7 @@
 
 #include <stdint.h>
 
-#include "kernel/kernel.h"
+#include "trac0r/types.h"
 #include "trac0r/error.h"
 #include "trac0r/film.h"
 #include "trac0r/scene.h"

@@ -1,29 +1,33 @@
 /* scene.h - a scene: materials, triangles grouped into shapes, and a camera.
  *
- * The scene owns flat arrays indexed by integers, exactly as the kernels read them
- * (src/kernel/types.h). Shapes are generators of triangles (the thesis's
- * Shape::make_*): each call appends its triangles and the shape's bounding box.
+ * tr_scene is an opaque handle (as Embree's RTCScene): the scene owns flat arrays
+ * indexed by integers, exactly as the kernels read them, and is read through the
+ * accessors below. Shapes are generators of triangles (the thesis's Shape::make_*):
+ * each call appends its triangles and the shape's bounding box. Edits take effect at
+ * tr_scene_commit (or tr_scene_update after moving shapes): every edit that changes
+ * what rays hit bumps the scene's generation, and rendering a scene whose generation is
+ * not the committed one fails.
  *
- *     tr_scene s;
- *     tr_scene_init(&s);
+ *     tr_error err;
+ *     tr_scene *s = tr_scene_create(&err);
  *     uint32_t white;
- *     tr_scene_add_material(&s, tr_material_diffuse(v3(0.7f, 0.7f, 0.7f)), &white, &err);
+ *     tr_scene_add_material(s, tr_material_diffuse(tr_vec3_make(0.7f, 0.7f, 0.7f)), &white,
+ *                           &err);
  *     tr_shape_desc box = tr_shape_desc_default(TR_SHAPE_BOX);
  *     box.material = white;
- *     tr_scene_add_shape(&s, &box, &err);
+ *     tr_scene_add_shape(s, &box, &err);
  *     ...
- *     tr_scene_free(&s);
+ *     tr_scene_commit(s, TR_ACCEL_TYPE_BVH, &err);
+ *     tr_scene_destroy(s);
  */
 #ifndef TRAC0R_SCENE_H
 #define TRAC0R_SCENE_H
 
 #include <stdint.h>
 
-#include "accel/wbvh.h" /* tr_wbvh, embedded below (private to the library) */
-#include "kernel/scene_view.h"
-#include "kernel/types.h"
 #include "trac0r/accel.h"
 #include "trac0r/error.h"
+#include "trac0r/types.h"
 
 /* Icospheres are limited to this many subdivisions: 20 * 4^9 = 5 242 880 triangles. */
 #define TR_ICOSPHERE_MAX_SUBDIVISIONS 9
@@ -49,33 +53,7 @@ typedef struct tr_shape_desc {
     uint32_t material;     /* index returned by tr_scene_add_material */
 } tr_shape_desc;
 
-typedef struct tr_scene {
-    tr_material *materials;
-    uint32_t material_count, material_capacity;
-    tr_triangle *triangles;
-    uint32_t triangle_count, triangle_capacity;
-    tr_flat_node *shapes; /* one box + triangle run per shape: the thesis's flat structure */
-    uint32_t shape_count, shape_capacity;
-    tr_camera camera;
-    /* Set by tr_scene_commit: the structure rays are traced through. */
-    tr_accel_type accel;
-    tr_bvh bvh;
-    tr_wbvh wbvh;                 /* collapsed from bvh for TR_ACCEL_TYPE_BVH (host traversal) */
-    tr_embree embree;             /* built for TR_ACCEL_TYPE_EMBREE only */
-    uint32_t committed_triangles; /* triangle count when the BVH or Embree scene was built */
-    /* Emitter table for next-event estimation, rebuilt by tr_scene_commit
-     * (src/scene/lights.c): emissive triangle indices and their selection CDF. */
-    uint32_t *lights;
-    float *light_cdf;
-    uint32_t light_count;
-    float light_weight_total;
-    uint32_t light_triangles; /* triangle count when the table was built */
-    /* Vertex normals of imported meshes, kept for smooth shading (the kernels do not read
-     * them yet): three per triangle for triangles 0..vertex_normal_count-1, zero where a
-     * triangle has none; triangles beyond that have none. */
-    tr_vec3 *vertex_normals;
-    uint32_t vertex_normal_count, vertex_normal_capacity;
-} tr_scene;
+typedef struct tr_scene tr_scene;
 
 /* A shape of the given type at the origin, unrotated, unit scale, material 0. */
 tr_shape_desc tr_shape_desc_default(tr_shape_type type);
@@ -85,9 +63,11 @@ tr_material tr_material_diffuse(tr_vec3 color);
 tr_material tr_material_glass(tr_vec3 color, float ior);
 tr_material tr_material_glossy(tr_vec3 color, float roughness);
 
-/* An empty scene (no allocation). */
-void tr_scene_init(tr_scene *s);
-/* Releases everything the scene owns and leaves it empty. */
+/* A new empty scene (generation 0, on the flat structure), or NULL when memory runs out. */
+tr_scene *tr_scene_create(tr_error *err);
+/* Releases the scene and everything it owns; NULL is ignored. */
+void tr_scene_destroy(tr_scene *s);
+/* Releases everything the scene owns and leaves it empty (the handle stays valid). */
 void tr_scene_free(tr_scene *s);
 /* Appends a material and returns its index in *index. Rejects non-finite or negative
  * values and unknown types. */
@@ -110,41 +90,40 @@ tr_vec3 tr_transform_normal(const tr_transform *tf, tr_vec3 n);
 /* Number of triangles a shape description generates (0 for an invalid one). */
 uint64_t tr_shape_triangle_count(const tr_shape_desc *desc);
 
-/* Fills a triangle's normal, centroid and area from its vertices (normal and area are
- * zero for degenerate ones). */
-void tr_triangle_finish(tr_triangle *t);
-/* The bounding box of n triangles. */
-tr_aabb tr_triangles_bounds(const tr_triangle *t, uint32_t n);
-
 /* Builds a built-in scene by name with its camera set up for a width x height image:
  * "cornell" is the thesis's listing 16; "cornell-mirror" the same with the glossy
  * objects' roughness 0 (perfect mirrors, on which the naive and pt integrators agree);
  * "cornell-diffuse" the same room with every object white diffuse; "cornell-ico-N" is
  * the scene of the thesis's complexity benchmark (figure 3.5): the same room with only
  * the glass icosphere, at N = 0..TR_ICOSPHERE_MAX_SUBDIVISIONS subdivisions (20 * 4^N
- * triangles). */
+ * triangles). Whatever s held is released first; the scene is not committed. */
 int tr_scene_builtin(tr_scene *s, const char *name, uint32_t width, uint32_t height, tr_error *err);
 
 /* Builds the acceleration structure rays will be traced through (the thesis's flat
- * structure needs no build), releasing the one built before. Call again after adding
- * shapes; rendering a scene whose BVH or Embree scene is older than its triangles
- * fails. TR_ACCEL_TYPE_EMBREE fails with "this build of trac0r has no Embree support"
- * where tr_accel_available says so. On failure the scene is left on the flat structure. */
+ * structure needs no build), releasing the one built before, and records the
+ * generation it was built for. Call again after adding materials, shapes or meshes;
+ * rendering a scene changed since fails. TR_ACCEL_TYPE_EMBREE fails with "this build of trac0r has
+ * no Embree support" where tr_accel_available says so. On failure the scene is left on the flat
+ * structure. */
 int tr_scene_commit(tr_scene *s, tr_accel_type accel, tr_error *err);
-/* Whether the committed structure covers the scene's current triangles. */
+/* Whether the scene is committed and unchanged since: its generation is the one the
+ * last tr_scene_commit or tr_scene_update built for. */
 int tr_scene_is_committed(const tr_scene *s);
-/* After moving triangles (same count) of a scene committed to a BVH: refits the binary
- * BVH's boxes (tr_bvh_refit), then the wide BVH in place (tr_wbvh_refit: same shape, new
- * boxes and leaf packets; collapsed anew if it was older than the binary tree). A view
- * taken after a bare tr_bvh_refit uses the binary BVH until this runs. */
-int tr_scene_refit(tr_scene *s, tr_error *err);
+/* The scene's generation: 0 when created, bumped by every edit of what rays hit
+ * (materials, shapes, meshes, tr_scene_move_shape, loading a scene into it). A device
+ * that uploaded the scene at one generation knows its copy is stale when this differs.
+ * The camera is not part of it: it is no input to any acceleration structure, and
+ * every backend takes the camera afresh with each frame. */
+uint64_t tr_scene_generation(const tr_scene *s);
 /* Dynamic scenes, as the thesis assumes (geometry may change every frame): moves shape
  * `shape` (its triangles and its box in the flat structure) by `delta`. Areas, normals and
  * the emitter table stay valid; the committed structure is stale until tr_scene_update. */
 int tr_scene_move_shape(tr_scene *s, uint32_t shape, tr_vec3 delta, tr_error *err);
-/* Brings the committed structure up to date after triangles moved (same count): a BVH is
- * refitted (tr_scene_refit: boxes of the same trees, binary and wide), Embree's scene
- * rebuilt, the flat structure needs nothing. *seconds (may be NULL) gets the time taken. */
+/* Brings the committed structure up to date after shapes moved and records the scene's
+ * generation as committed: a BVH is refitted (boxes of the same trees, binary and wide),
+ * Embree's scene rebuilt, the flat structure needs nothing. Fails when anything but moves
+ * happened since the commit (shapes or meshes added, the scene reloaded): that needs
+ * tr_scene_commit. *seconds (may be NULL) gets the time taken. */
 int tr_scene_update(tr_scene *s, double *seconds, tr_error *err);
 /* What tr_scene_update does for the scene's structure: "refit", "rebuild" or "none". */
 const char *tr_scene_update_kind(const tr_scene *s);
@@ -155,11 +134,38 @@ double tr_scene_bvh_build_seconds(const tr_scene *s);
  * committed to TR_ACCEL_TYPE_EMBREE). */
 double tr_scene_embree_build_seconds(const tr_scene *s);
 
-/* Rebuilds the emitter table (tr_scene_commit calls it): every triangle of positive
- * area whose material has emittance > 0, weighted by tr_light_weight. */
-int tr_scene_build_lights(tr_scene *s, tr_error *err);
+/* ---- Reading a scene ---------------------------------------------------------- */
 
-/* The view the kernels trace against; valid while the scene is not modified. */
-tr_scene_view tr_scene_view_of(const tr_scene *s);
+uint32_t tr_scene_triangle_count(const tr_scene *s);
+uint32_t tr_scene_material_count(const tr_scene *s);
+/* Shapes and meshes added: the boxes of the thesis's flat structure. */
+uint32_t tr_scene_shape_count(const tr_scene *s);
+/* Emissive triangles of positive area in the emitter table (built by tr_scene_commit;
+ * 0 before). */
+uint32_t tr_scene_light_count(const tr_scene *s);
+/* Triangle i, material i, the box of shape i; all zero for an index out of range. */
+tr_triangle tr_scene_triangle(const tr_scene *s, uint32_t i);
+tr_material tr_scene_material(const tr_scene *s, uint32_t i);
+tr_aabb tr_scene_shape_box(const tr_scene *s, uint32_t shape);
+/* The vertex normals an imported mesh gave triangle i into out[0..2]; returns 1 when it
+ * has them, 0 (and zeros) when it has none. */
+int tr_scene_triangle_normals(const tr_scene *s, uint32_t i, tr_vec3 out[3]);
+/* The bounding box of every triangle (min = +inf, max = -inf for an empty scene). */
+tr_aabb tr_scene_bounds(const tr_scene *s);
+
+/* The camera rays start from; set by tr_scene_builtin and tr_scene_file_load. */
+const tr_camera *tr_scene_camera(const tr_scene *s);
+void tr_scene_set_camera(tr_scene *s, const tr_camera *cam);
+
+/* The committed acceleration structure (TR_ACCEL_TYPE_FLAT before any commit). */
+tr_accel_type tr_scene_accel(const tr_scene *s);
+/* Counts, depths and build times of the committed structure. */
+void tr_scene_accel_info(const tr_scene *s, tr_accel_info *info);
+/* Node i of the committed binary BVH (bvh and bvh2; node 0 is the root, 0 nodes
+ * otherwise): its box, and for an interior node the index of its first child (the
+ * second follows it). Returns 1 for an interior node, 0 for a leaf, -1 for i out of
+ * range. first_child may be NULL. */
+int tr_scene_bvh_node(const tr_scene *s, uint32_t i, tr_aabb *box, uint32_t *first_child);
+uint32_t tr_scene_bvh_node_count(const tr_scene *s);
 
 #endif

@@ -1,10 +1,10 @@
 /* scene_file.h - scenes from JSON files (docs/scene-format.md) and meshes from any
  * format Assimp reads.
  *
- *     tr_scene s;
- *     tr_scene_file info;
  *     tr_error err;
- *     if (tr_scene_file_load(&s, "scenes/cornell-classic.json", NULL, &info, &err) != TR_OK)
+ *     tr_scene *s = tr_scene_create(&err);
+ *     tr_scene_file info;
+ *     if (s && tr_scene_file_load(s, "scenes/cornell-classic.json", NULL, &info, &err) != TR_OK)
  *         fprintf(stderr, "%s\n", err.msg); // "FILE: camera.fov: expected ..." or FILE:LINE:COL
  *
  * Every error is one line that starts with the file's name and then either the line and
@@ -56,9 +56,11 @@ typedef struct tr_scene_file {
     char warnings[TR_SCENE_FILE_MAX_WARNINGS][256];
 } tr_scene_file;
 
-/* Reads and builds a scene file; the camera is set up for the file's image size
- * (render.width/height, default 800x600) - use tr_camera_resize for another. The scene
- * is not committed. opt may be NULL (meshes loaded, default budget); info may be NULL. */
+/* Reads and builds a scene file into s (a scene from tr_scene_create: whatever it held
+ * is released first); the camera is set up for the file's image size
+ * (render.width/height, default 800x600) - tr_camera_resize and tr_scene_set_camera for
+ * another. The scene is not committed. opt may be NULL (meshes loaded, default budget);
+ * info may be NULL. */
 int tr_scene_file_load(tr_scene *s, const char *path, const tr_scene_file_options *opt,
                        tr_scene_file *info, tr_error *err);
 

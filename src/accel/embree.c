@@ -18,6 +18,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "accel/accel_internal.h"
 #include "trac0r/accel.h"
 #include "trac0r/render.h"
 

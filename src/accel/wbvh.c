@@ -7,6 +7,7 @@
 
 #include "accel/wbvh.h"
 #include "kernel/scene_view.h"
+#include "accel/accel_internal.h"
 #include "trac0r/accel.h"
 #include "trac0r/render.h"
 

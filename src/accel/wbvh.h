@@ -15,6 +15,7 @@
 
 #include <stdint.h>
 
+#include "accel/accel_internal.h"
 #include "kernel/types.h"
 #include "trac0r/accel.h"
 #include "trac0r/error.h"

@@ -30,6 +30,7 @@
 
 #include "accel/wbvh.h"
 #include "kernel/types.h"
+#include "accel/accel_internal.h"
 
 #if !defined(TR_WBVH_TEMPLATE_ISA) || !defined(TR_WBVH_TEMPLATE_SUFFIX)
 #error "define TR_WBVH_TEMPLATE_ISA and TR_WBVH_TEMPLATE_SUFFIX before including wbvh_traverse.h"

@@ -169,10 +169,8 @@ int tr_cpu_render(const tr_scene_view *view, const tr_frame *f, tr_film *film, i
 int tr_render_frame(const tr_scene *scene, const tr_camera *cam, const tr_render_config *cfg,
                     tr_film *film, uint32_t sample, tr_render_stats *stats, tr_error *err) {
     const double t0 = tr_time_now();
-    if (!tr_scene_is_committed(scene)) {
-        return tr_error_set(err, TR_STATUS_STALE_SCENE,
-                            "the scene changed since tr_scene_commit built its %s",
-                            tr_accel_name(scene->accel));
+    if (tr_scene_check_committed(scene, err) != TR_OK) {
+        return TR_ERR;
     }
     tr_frame f;
     if (tr_frame_make(&f, cam, cfg, sample, 1, NULL, err) != TR_OK) {

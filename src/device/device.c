@@ -19,8 +19,8 @@ typedef enum device_kind { KIND_CPU, KIND_OPENCL } device_kind;
 struct tr_device {
     device_kind kind;
     tr_device_info info;
-    const tr_scene *scene;    /* the uploaded scene (CPU: rendered from directly) */
-    uint32_t scene_triangles; /* its triangle count at upload */
+    const tr_scene *scene; /* the uploaded scene (CPU: rendered from directly) */
+    uint64_t generation;   /* its generation at upload (tr_scene_generation) */
     tr_accel_type accel;
     tr_film film; /* CPU: the device's film */
     tr_cl_context *cl;
@@ -186,10 +186,8 @@ const char *tr_device_kind(const tr_device *dev) {
 }
 
 int tr_device_upload(tr_device *dev, const tr_scene *scene, tr_error *err) {
-    if (!tr_scene_is_committed(scene)) {
-        return tr_error_set(err, TR_STATUS_STALE_SCENE,
-                            "the scene changed since tr_scene_commit built its %s",
-                            tr_accel_name(scene->accel));
+    if (tr_scene_check_committed(scene, err) != TR_OK) {
+        return TR_ERR;
     }
     if (dev->kind == KIND_OPENCL) {
         if (tr_cl_upload_scene(dev->cl, scene, err) != TR_OK) {
@@ -200,7 +198,7 @@ int tr_device_upload(tr_device *dev, const tr_scene *scene, tr_error *err) {
         dev->accel = scene->accel;
     }
     dev->scene = scene;
-    dev->scene_triangles = scene->triangle_count;
+    dev->generation = tr_scene_generation(scene);
     return TR_OK;
 }
 
@@ -231,7 +229,9 @@ int tr_device_render(tr_device *dev, const tr_camera *cam, const tr_render_confi
         return tr_error_set(err, TR_STATUS_INVALID_OPERATION, "no scene uploaded to device %s",
                             dev->info.name);
     }
-    if (dev->kind == KIND_CPU && !tr_scene_is_committed(dev->scene)) {
+    /* The CPU renders from the scene itself: it must be the one uploaded. (OpenCL renders
+     * its own copy, and the scene may be gone by now.) */
+    if (dev->kind == KIND_CPU && tr_scene_generation(dev->scene) != dev->generation) {
         return tr_error_set(err, TR_STATUS_STALE_SCENE,
                             "the scene changed since it was uploaded to device %s", dev->info.name);
     }

@@ -10,6 +10,7 @@
 
 #include "device/frame.h"
 #include "kernel/kernel.h"
+#include "accel/accel_internal.h"
 #include "scene/scene_internal.h"
 #include "trac0r/accel.h"
 
@@ -633,10 +634,8 @@ static double mib(uint64_t bytes) {
 }
 
 int tr_cl_upload_scene(tr_cl_context *ctx, const tr_scene *scene, tr_error *err) {
-    if (!tr_scene_is_committed(scene)) {
-        return tr_error_set(err, TR_STATUS_STALE_SCENE,
-                            "the scene changed since tr_scene_commit built its %s",
-                            tr_accel_name(scene->accel));
+    if (tr_scene_check_committed(scene, err) != TR_OK) {
+        return TR_ERR;
     }
     /* The device walks what the host's view holds, except that a scene committed to
      * Embree (a host library) gets a BVH of its own, and bvh scenes upload the binary BVH

@@ -10,7 +10,7 @@
 #include "film.h"
 #include "integrator_naive.h"
 #include "integrator_pt.h"
-#include "integrator_types.h"
+#include "trac0r/integrator_types.h"
 #include "rng.h"
 #include "sampling.h"
 #include "scene_view.h"

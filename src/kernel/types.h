@@ -6,40 +6,16 @@
 #define TR_KERNEL_TYPES_H
 
 #include "compat.h"
-#include "material_types.h" /* TR_MATERIAL_EMITTER ..., numbered as in the thesis (listing 2) */
+#include "trac0r/types.h"
 #include "vec.h"
 
-/* tr_material.flags bits. Emitters emit towards the side their triangle's geometric
- * normal points to, unless TWO_SIDED is set (the pt integrator; naive ignores it). */
-#define TR_MATERIAL_TWO_SIDED 1u
-
-/* 32 bytes. */
-typedef struct tr_material {
-    uint32_t type;   /* TR_MATERIAL_* */
-    tr_vec3 color;   /* base colour (linear RGB) */
-    float roughness; /* glossy: the reflection cone's half-angle is roughness * pi/2 */
-    float ior;       /* glass: index of refraction */
-    float emittance; /* radiance scale; emitted radiance is color * emittance */
-    uint32_t flags;  /* TR_MATERIAL_TWO_SIDED */
-} tr_material;
+/* tr_vec3, tr_material, tr_triangle, tr_aabb and tr_camera are public value types,
+ * declared once in include/trac0r/types.h (included through vec.h); their layouts are
+ * checked here, where the host and the device compile them. */
 TR_STATIC_ASSERT(sizeof(tr_material) == 32, "tr_material layout");
-
-/* A triangle with its precomputed geometric normal, centroid and area (listing 5).
- * The material is an index into the scene's material array. 68 bytes. */
-typedef struct tr_triangle {
-    tr_vec3 v0, v1, v2;
-    tr_vec3 normal;   /* unit, (v1 - v0) x (v2 - v0); zero for a degenerate triangle */
-    tr_vec3 centroid; /* (v0 + v1 + v2) / 3 */
-    float area;
-    uint32_t material;
-} tr_triangle;
 TR_STATIC_ASSERT(sizeof(tr_triangle) == 68, "tr_triangle layout");
-
-typedef struct tr_aabb {
-    tr_vec3 min;
-    tr_vec3 max;
-} tr_aabb;
 TR_STATIC_ASSERT(sizeof(tr_aabb) == 24, "tr_aabb layout");
+TR_STATIC_ASSERT(sizeof(tr_camera) == 92, "tr_camera layout");
 
 /* One entry of the thesis's flat structure: a shape's box and its run of triangles.
  * 32 bytes. */
@@ -77,33 +53,6 @@ TR_STATIC_ASSERT(sizeof(tr_bvh_tri) == 40, "tr_bvh_tri layout");
 /* The BVH's depth never exceeds this (the builder switches to median splits well before),
  * so a traversal stack of this size cannot overflow. */
 #define TR_BVH_STACK_SIZE 64
-
-/* The camera as the kernel sees it (listing 6); built by tr_camera_make() on the host. */
-typedef struct tr_camera {
-    tr_vec3 pos;
-    tr_vec3 dir;          /* unit view direction */
-    tr_vec3 world_up;     /* the up vector the user gave */
-    tr_vec3 right;        /* unit, dir x world_up */
-    tr_vec3 up;           /* unit, right x dir */
-    float vertical_fov;   /* degrees */
-    float horizontal_fov; /* degrees, derived from the aspect ratio */
-    float near_dist;
-    float far_dist;
-    float canvas_width; /* extent of the image plane at distance 1 */
-    float canvas_height;
-    uint32_t screen_width;
-    uint32_t screen_height;
-} tr_camera;
-TR_STATIC_ASSERT(sizeof(tr_camera) == 92, "tr_camera layout");
-
-/* Passes a film can keep beside radiance (tr_frame.passes, tr_film.passes): what a
- * denoiser needs, taken at the first non-specular hit of each camera path (after mirror
- * and smooth-glass bounces, as denoisers expect). */
-#define TR_PASS_ALBEDO 1u /* base colour of the surface, linear RGB */
-#define TR_PASS_NORMAL 2u /* unit shading normal, world space, facing the arriving ray */
-#define TR_PASS_DEPTH 4u  /* distance travelled from the camera to the surface */
-#define TR_PASS_PRIM 8u   /* index of the triangle hit, plus one (0: none) */
-#define TR_PASS_ALL 15u
 
 /* Everything one frame of the kernel needs besides the scene: one struct, declared once,
  * uploaded as one buffer to a device. The 64-bit seed travels as two words so that the

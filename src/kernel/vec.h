@@ -1,15 +1,14 @@
 /* vec.h - 3-component float vectors.
  *
  * tr_vec3 is a plain struct of three floats (12 bytes) rather than OpenCL's float3
- * (16 bytes), so that arrays of it have the same layout on the host and the device. */
+ * (16 bytes), so that arrays of it have the same layout on the host and the device; it
+ * is declared in the public include/trac0r/types.h. The helpers below are the kernel's
+ * own (v3, v3_add, ...): not part of the public API. */
 #ifndef TR_KERNEL_VEC_H
 #define TR_KERNEL_VEC_H
 
 #include "compat.h"
-
-typedef struct tr_vec3 {
-    float x, y, z;
-} tr_vec3;
+#include "trac0r/types.h"
 TR_STATIC_ASSERT(sizeof(tr_vec3) == 12, "tr_vec3 must be 12 bytes on host and device");
 
 TR_FN tr_vec3 v3(float x, float y, float z) {

@@ -3,6 +3,7 @@
 #include <string.h>
 
 #include "trac0r/camera.h"
+#include "scene/scene_internal.h"
 #include "trac0r/scene.h"
 
 typedef struct shape_spec {
@@ -83,7 +84,7 @@ static int build_cornell(tr_scene *s, uint32_t width, uint32_t height, int ico_l
 
 int tr_scene_builtin(tr_scene *s, const char *name, uint32_t width, uint32_t height,
                      tr_error *err) {
-    tr_scene_init(s);
+    tr_scene_free(s); /* the previous content goes; the generation counts on */
     int rc;
     const char *ico = "cornell-ico-";
     char *end = NULL;

@@ -1,6 +1,7 @@
 /* camera.c - host-side set-up of the kernel's camera. */
 #include <string.h>
 
+#include "kernel/vec.h"
 #include "trac0r/camera.h"
 #include "trac0r/film.h"
 

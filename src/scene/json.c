@@ -16,6 +16,7 @@
 #include "trac0r/camera.h"
 #include "trac0r/film.h"
 #include "trac0r/registry.h"
+#include "scene/scene_internal.h"
 #include "trac0r/scene_file.h"
 #include "material_registry.h"
 
@@ -1083,7 +1084,7 @@ static int build(jctx *c, const cJSON *root) {
 
 int tr_scene_file_parse(tr_scene *s, const char *path, const char *text, size_t len,
                         const tr_scene_file_options *opt, tr_scene_file *info, tr_error *err) {
-    tr_scene_init(s);
+    tr_scene_free(s); /* the previous content goes; the generation counts on */
     tr_scene_file local;
     if (!info) {
         info = &local;
@@ -1192,7 +1193,7 @@ int tr_scene_file_parse(tr_scene *s, const char *path, const char *text, size_t 
 
 int tr_scene_file_load(tr_scene *s, const char *path, const tr_scene_file_options *opt,
                        tr_scene_file *info, tr_error *err) {
-    tr_scene_init(s);
+    tr_scene_free(s); /* the previous content goes; the generation counts on */
     FILE *fp = fopen(path, "rb");
     if (!fp) {
         return tr_error_set(err, tr_status_from_errno(errno), "%.200s: cannot open: %s", path,

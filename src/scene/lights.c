@@ -2,6 +2,7 @@
 #include <stdlib.h>
 
 #include "kernel/light.h"
+#include "scene/scene_internal.h"
 #include "trac0r/scene.h"
 
 int tr_scene_build_lights(tr_scene *s, tr_error *err) {

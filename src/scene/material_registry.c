@@ -1,5 +1,5 @@
 /* material_registry.c - material types' keys, neutral values and checks, generated from
- * TR_MATERIAL_TYPES (kernel/material_types.h). */
+ * TR_MATERIAL_TYPES (trac0r/material_types.h). */
 #include "material_registry.h"
 
 #include <math.h>

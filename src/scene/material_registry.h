@@ -1,5 +1,5 @@
 /* material_registry.h - what each material type of TR_MATERIAL_TYPES
- * (kernel/material_types.h) takes: its scene-file keys with their ranges, its neutral
+ * (trac0r/material_types.h) takes: its scene-file keys with their ranges, its neutral
  * values, and the check every material passes before it enters a scene. Internal to
  * libtrac0r: json.c and scene.c use it instead of switches of their own. */
 #ifndef TR_SCENE_MATERIAL_REGISTRY_H

@@ -10,6 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "scene/scene_internal.h"
 #include "trac0r/scene_file.h"
 
 /* Node hierarchies deeper than this are refused (a hostile file could recurse forever). */

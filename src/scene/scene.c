@@ -3,6 +3,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "scene_internal.h"
 #include "trac0r/render.h"
 #include "trac0r/scene.h"
 #include "material_registry.h"
@@ -36,7 +37,27 @@ void tr_scene_init(tr_scene *s) {
     memset(s, 0, sizeof *s);
 }
 
+tr_scene *tr_scene_create(tr_error *err) {
+    tr_scene *s = malloc(sizeof *s);
+    if (!s) {
+        tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory creating a scene");
+        return NULL;
+    }
+    tr_scene_init(s);
+    return s;
+}
+
+void tr_scene_destroy(tr_scene *s) {
+    if (s) {
+        tr_scene_free(s);
+        free(s);
+    }
+}
+
 void tr_scene_free(tr_scene *s) {
+    /* The generation goes on counting: a device holding an upload of the old content
+     * must not take the emptied (or reloaded) scene for the one it has. */
+    const uint64_t generation = s->generation;
     free(s->materials);
     free(s->triangles);
     free(s->shapes);
@@ -47,6 +68,7 @@ void tr_scene_free(tr_scene *s) {
     free(s->lights);
     free(s->light_cdf);
     tr_scene_init(s);
+    s->generation = generation + 1;
 }
 
 int tr_scene_add_material(tr_scene *s, tr_material m, uint32_t *index, tr_error *err) {
@@ -67,6 +89,7 @@ int tr_scene_add_material(tr_scene *s, tr_material m, uint32_t *index, tr_error 
         *index = s->material_count;
     }
     s->material_count++;
+    s->generation++;
     return TR_OK;
 }
 
@@ -139,6 +162,7 @@ int tr_scene_append_shape(tr_scene *s, const tr_triangle *tris, uint32_t n, cons
         node->first = s->triangle_count;
         node->count = n;
         s->triangle_count += n;
+        s->generation++;
     }
     return rc;
 }
@@ -229,11 +253,16 @@ int tr_scene_commit(tr_scene *s, tr_accel_type accel, tr_error *err) {
     tr_embree_free(&s->embree);
     s->accel = TR_ACCEL_TYPE_FLAT;
     s->committed_triangles = 0;
+    s->committed = 0;
     if (tr_scene_build_lights(s, err) != TR_OK) {
         return TR_ERR;
     }
+    /* Every successful case below builds for the scene as it is now. */
+    s->committed_generation = s->generation;
     switch (accel) {
     case TR_ACCEL_TYPE_FLAT:
+        s->committed_triangles = s->triangle_count;
+        s->committed = 1;
         return TR_OK;
     case TR_ACCEL_TYPE_BVH:
         if (tr_bvh_build(&s->bvh, s->triangles, s->triangle_count, err) != TR_OK) {
@@ -246,6 +275,7 @@ int tr_scene_commit(tr_scene *s, tr_accel_type accel, tr_error *err) {
         }
         s->accel = accel;
         s->committed_triangles = s->triangle_count;
+        s->committed = 1;
         return TR_OK;
     case TR_ACCEL_TYPE_BVH2:
         if (tr_bvh_build(&s->bvh, s->triangles, s->triangle_count, err) != TR_OK) {
@@ -253,6 +283,7 @@ int tr_scene_commit(tr_scene *s, tr_accel_type accel, tr_error *err) {
         }
         s->accel = accel;
         s->committed_triangles = s->triangle_count;
+        s->committed = 1;
         return TR_OK;
     case TR_ACCEL_TYPE_EMBREE:
         if (tr_embree_build(&s->embree, s->triangles, s->triangle_count, err) != TR_OK) {
@@ -260,6 +291,7 @@ int tr_scene_commit(tr_scene *s, tr_accel_type accel, tr_error *err) {
         }
         s->accel = accel;
         s->committed_triangles = s->triangle_count;
+        s->committed = 1;
         return TR_OK;
     }
     return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "unknown acceleration structure %d",
@@ -267,7 +299,27 @@ int tr_scene_commit(tr_scene *s, tr_accel_type accel, tr_error *err) {
 }
 
 int tr_scene_is_committed(const tr_scene *s) {
-    return s->accel == TR_ACCEL_TYPE_FLAT || s->committed_triangles == s->triangle_count;
+    return s->committed && s->committed_generation == s->generation;
+}
+
+int tr_scene_check_committed(const tr_scene *s, tr_error *err) {
+    if (!s->committed) {
+        return tr_error_set(err, TR_STATUS_STALE_SCENE,
+                            "the scene is not committed: call tr_scene_commit first");
+    }
+    if (s->committed_generation != s->generation) {
+        return tr_error_set(err, TR_STATUS_STALE_SCENE,
+                            "the scene changed since its %s was built (generation %llu, built "
+                            "for %llu): call tr_scene_commit, or tr_scene_update after moving "
+                            "shapes",
+                            tr_accel_name(s->accel), (unsigned long long)s->generation,
+                            (unsigned long long)s->committed_generation);
+    }
+    return TR_OK;
+}
+
+uint64_t tr_scene_generation(const tr_scene *s) {
+    return s->generation;
 }
 
 int tr_scene_refit(tr_scene *s, tr_error *err) {
@@ -308,6 +360,7 @@ int tr_scene_move_shape(tr_scene *s, uint32_t shape, tr_vec3 delta, tr_error *er
         t->centroid = v3_add(t->centroid, delta);
     }
     node->box = tr_triangles_bounds(s->triangles + node->first, node->count);
+    s->generation++;
     return TR_OK;
 }
 
@@ -327,9 +380,12 @@ const char *tr_scene_update_kind(const tr_scene *s) {
 int tr_scene_update(tr_scene *s, double *seconds, tr_error *err) {
     const double t0 = tr_time_now();
     int rc = TR_OK;
-    if (!tr_scene_is_committed(s)) {
+    /* Moves keep every count; anything else since the commit (shapes or meshes added, the
+     * scene emptied or reloaded) needs tr_scene_commit. */
+    if (!s->committed || s->committed_triangles != s->triangle_count) {
         rc = tr_error_set(err, TR_STATUS_STALE_SCENE,
-                          "the scene's triangle count changed: commit it again");
+                          "the scene changed beyond moved shapes since it was committed "
+                          "(or was never committed): commit it again");
     } else if (s->accel == TR_ACCEL_TYPE_BVH || s->accel == TR_ACCEL_TYPE_BVH2) {
         rc = tr_scene_refit(s, err);
     } else if (s->accel == TR_ACCEL_TYPE_EMBREE) {
@@ -338,7 +394,11 @@ int tr_scene_update(tr_scene *s, double *seconds, tr_error *err) {
         if (rc != TR_OK) {
             s->accel = TR_ACCEL_TYPE_FLAT; /* as a failed commit leaves it */
             s->committed_triangles = 0;
+            s->committed = 0;
         }
+    }
+    if (rc == TR_OK) {
+        s->committed_generation = s->generation;
     }
     if (seconds) {
         *seconds = tr_time_now() - t0;
@@ -384,4 +444,114 @@ tr_scene_view tr_scene_view_of(const tr_scene *s) {
     v.embree_scene = s->embree.scene;
 #endif
     return v;
+}
+
+uint32_t tr_scene_triangle_count(const tr_scene *s) {
+    return s->triangle_count;
+}
+
+uint32_t tr_scene_material_count(const tr_scene *s) {
+    return s->material_count;
+}
+
+uint32_t tr_scene_shape_count(const tr_scene *s) {
+    return s->shape_count;
+}
+
+uint32_t tr_scene_light_count(const tr_scene *s) {
+    return s->light_triangles == s->triangle_count ? s->light_count : 0;
+}
+
+tr_triangle tr_scene_triangle(const tr_scene *s, uint32_t i) {
+    tr_triangle t;
+    if (i < s->triangle_count) {
+        return s->triangles[i];
+    }
+    memset(&t, 0, sizeof t);
+    return t;
+}
+
+tr_material tr_scene_material(const tr_scene *s, uint32_t i) {
+    tr_material m;
+    if (i < s->material_count) {
+        return s->materials[i];
+    }
+    memset(&m, 0, sizeof m);
+    return m;
+}
+
+tr_aabb tr_scene_shape_box(const tr_scene *s, uint32_t shape) {
+    tr_aabb box;
+    if (shape < s->shape_count) {
+        return s->shapes[shape].box;
+    }
+    memset(&box, 0, sizeof box);
+    return box;
+}
+
+int tr_scene_triangle_normals(const tr_scene *s, uint32_t i, tr_vec3 out[3]) {
+    memset(out, 0, 3 * sizeof *out);
+    if (i >= s->vertex_normal_count) {
+        return 0;
+    }
+    int has = 0;
+    for (int k = 0; k < 3; ++k) {
+        out[k] = s->vertex_normals[3 * (size_t)i + (size_t)k];
+        has |= out[k].x != 0.0f || out[k].y != 0.0f || out[k].z != 0.0f;
+    }
+    return has;
+}
+
+tr_aabb tr_scene_bounds(const tr_scene *s) {
+    return tr_triangles_bounds(s->triangles, s->triangle_count);
+}
+
+const tr_camera *tr_scene_camera(const tr_scene *s) {
+    return &s->camera;
+}
+
+void tr_scene_set_camera(tr_scene *s, const tr_camera *cam) {
+    s->camera = *cam;
+}
+
+tr_accel_type tr_scene_accel(const tr_scene *s) {
+    return s->accel;
+}
+
+void tr_scene_accel_info(const tr_scene *s, tr_accel_info *info) {
+    memset(info, 0, sizeof *info);
+    info->type = s->accel;
+    info->wide_width = TR_WBVH_WIDTH;
+    info->wide_isa = tr_wbvh_isa();
+    if (s->accel == TR_ACCEL_TYPE_BVH || s->accel == TR_ACCEL_TYPE_BVH2) {
+        info->bvh_nodes = s->bvh.node_count;
+        info->bvh_leaves = s->bvh.leaf_count;
+        info->bvh_depth = s->bvh.depth;
+        info->bvh_seconds = s->bvh.build_seconds;
+    }
+    if (s->accel == TR_ACCEL_TYPE_BVH) {
+        info->wide_nodes = s->wbvh.node_count;
+        info->wide_leaves = s->wbvh.leaf_count;
+        info->wide_depth = s->wbvh.depth;
+        info->wide_seconds = s->wbvh.build_seconds;
+    }
+    if (s->accel == TR_ACCEL_TYPE_EMBREE) {
+        info->embree_seconds = s->embree.build_seconds;
+    }
+}
+
+uint32_t tr_scene_bvh_node_count(const tr_scene *s) {
+    return s->accel == TR_ACCEL_TYPE_BVH || s->accel == TR_ACCEL_TYPE_BVH2 ? s->bvh.node_count : 0;
+}
+
+int tr_scene_bvh_node(const tr_scene *s, uint32_t i, tr_aabb *box, uint32_t *first_child) {
+    if (i >= tr_scene_bvh_node_count(s)) {
+        return -1;
+    }
+    const tr_bvh_node *n = &s->bvh.nodes[i];
+    *box = n->box;
+    if (first_child) {
+        *first_child = n->count == 0 ? n->left_first : 0;
+    }
+    return n->count == 0;
 }

@@ -8,8 +8,8 @@
  * plus its BSDF (bsdf.h for pt, material.h for naive); parameters that vary over the
  * surface also go through tr_material_eval (material_eval.h). The key bits are TR_MATERIAL_KEY_* below; "type" is always
  * allowed. Valid C99 and OpenCL C: the kernel uses the enum only. */
-#ifndef TR_KERNEL_MATERIAL_TYPES_H
-#define TR_KERNEL_MATERIAL_TYPES_H
+#ifndef TRAC0R_MATERIAL_TYPES_H
+#define TRAC0R_MATERIAL_TYPES_H
 
 /* Scene-file keys of a material (src/scene/material_registry.c names them and holds their
  * ranges). COLOR is a reflectance in [0, 1]; LIGHT_COLOR the same "color" key where it

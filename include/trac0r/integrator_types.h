@@ -6,8 +6,8 @@
  * (src/util/registry.c). Rows are in the order messages list them: the default first. A
  * new integrator is one row here, its integrator_NAME.h and its case in
  * tr_render_sample. Valid C99 and OpenCL C. */
-#ifndef TR_KERNEL_INTEGRATOR_TYPES_H
-#define TR_KERNEL_INTEGRATOR_TYPES_H
+#ifndef TRAC0R_INTEGRATOR_TYPES_H
+#define TRAC0R_INTEGRATOR_TYPES_H
 
 /* clang-format off */
 #define TR_INTEGRATORS(X)                                                                    \

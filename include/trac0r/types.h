@@ -1,0 +1,94 @@
+/* types.h - the plain value types of libtrac0r's API.
+ *
+ * Fixed-width fields, no padding, nothing that depends on compile flags: a struct has
+ * the same size and layout in the library, in a C99, C11 or C++ client, and on an
+ * OpenCL device. The kernel (src/kernel/types.h) takes these declarations from here
+ * rather than declaring them again, so this header is also valid OpenCL C 1.2, where
+ * the fixed-width integer types come from src/kernel/compat.h instead of <stdint.h>.
+ * tr_abi_sizeof (abi.h) reports the sizes as compiled into the library. */
+#ifndef TRAC0R_TYPES_H
+#define TRAC0R_TYPES_H
+
+#if !defined(__OPENCL_C_VERSION__) && !defined(__OPENCL_VERSION__)
+#include <stdint.h>
+#endif
+
+/* Three floats, 12 bytes (OpenCL's float3 takes 16: arrays of it would not match). */
+typedef struct tr_vec3 {
+    float x, y, z;
+} tr_vec3;
+
+/* (x, y, z): for C++ and C99 alike (a compound literal is not C++). */
+static inline tr_vec3 tr_vec3_make(float x, float y, float z) {
+    tr_vec3 v;
+    v.x = x;
+    v.y = y;
+    v.z = z;
+    return v;
+}
+
+/* Material types, numbered as in the thesis (listing 2): TR_MATERIAL_EMITTER ..., from the
+ * one list of them. */
+#include "trac0r/material_types.h"
+
+/* tr_material.flags bits. Emitters emit towards the side their triangle's geometric
+ * normal points to, unless TWO_SIDED is set (the pt integrator; naive ignores it). */
+#define TR_MATERIAL_TWO_SIDED 1u
+
+/* 32 bytes. */
+typedef struct tr_material {
+    uint32_t type;   /* TR_MATERIAL_* */
+    tr_vec3 color;   /* base colour (linear RGB) */
+    float roughness; /* glossy: the reflection cone's half-angle is roughness * pi/2 */
+    float ior;       /* glass: index of refraction */
+    float emittance; /* radiance scale; emitted radiance is color * emittance */
+    uint32_t flags;  /* TR_MATERIAL_TWO_SIDED */
+} tr_material;
+
+/* A triangle with its precomputed geometric normal, centroid and area (listing 5).
+ * The material is an index into the scene's material array. 68 bytes. */
+typedef struct tr_triangle {
+    tr_vec3 v0, v1, v2;
+    tr_vec3 normal;   /* unit, (v1 - v0) x (v2 - v0); zero for a degenerate triangle */
+    tr_vec3 centroid; /* (v0 + v1 + v2) / 3 */
+    float area;
+    uint32_t material;
+} tr_triangle;
+
+/* An axis-aligned box, 24 bytes. */
+typedef struct tr_aabb {
+    tr_vec3 min;
+    tr_vec3 max;
+} tr_aabb;
+
+/* A pinhole camera (listing 6), built by tr_camera_make (camera.h). 92 bytes. */
+typedef struct tr_camera {
+    tr_vec3 pos;
+    tr_vec3 dir;          /* unit view direction */
+    tr_vec3 world_up;     /* the up vector the user gave */
+    tr_vec3 right;        /* unit, dir x world_up */
+    tr_vec3 up;           /* unit, right x dir */
+    float vertical_fov;   /* degrees */
+    float horizontal_fov; /* degrees, derived from the aspect ratio */
+    float near_dist;
+    float far_dist;
+    float canvas_width; /* extent of the image plane at distance 1 */
+    float canvas_height;
+    uint32_t screen_width;
+    uint32_t screen_height;
+} tr_camera;
+
+/* Integrators (tr_render_config.integrator): TR_INTEGRATOR_PT, TR_INTEGRATOR_NAIVE, from the
+ * one list of them. */
+#include "trac0r/integrator_types.h"
+
+/* Passes a film can keep beside radiance (tr_render_config.passes, tr_film.passes): what a
+ * denoiser needs, taken at the first surface of each camera path that is not a mirror or
+ * smooth glass (their bounces are followed, as denoisers expect). */
+#define TR_PASS_ALBEDO 1u /* base colour of the surface, linear RGB */
+#define TR_PASS_NORMAL 2u /* unit shading normal, world space, facing the arriving ray */
+#define TR_PASS_DEPTH 4u  /* distance travelled from the camera to the surface */
+#define TR_PASS_PRIM 8u   /* index of the triangle hit, plus one (0: none) */
+#define TR_PASS_ALL 15u
+
+#endif
