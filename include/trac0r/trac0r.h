@@ -10,13 +10,21 @@
  *         tr_scene_destroy(scene);
  *         return 1;
  *     }
+ *     tr_device *dev = tr_device_open("cpu", &err);      // or "opencl:0"
+ *     tr_render_config cfg = tr_render_config_default(); // path tracing, 8 bounces
  *     tr_film film;
- *     tr_film_init(&film, 320, 240, &err);
- *     tr_render_config cfg = tr_render_config_default();
- *     for (uint32_t s = 0; s < 4; ++s)
- *         tr_render_frame(scene, tr_scene_camera(scene), &cfg, &film, s, NULL, &err);
+ *     if (!dev || tr_device_upload(dev, scene, &err) != TR_OK ||
+ *         tr_device_render(dev, tr_scene_camera(scene), &cfg, 0, 4, NULL, NULL, &err) != TR_OK ||
+ *         tr_film_init(&film, 320, 240, &err) != TR_OK) {           // samples 0..3 above
+ *         fprintf(stderr, "%s\n", err.msg);
+ *         tr_device_close(dev);
+ *         tr_scene_destroy(scene);
+ *         return 1;
+ *     }
+ *     tr_device_read_film(dev, &film, &err);
  *     tr_film_write(&film, "cornell.png", 0.0f, &err);
  *     tr_film_free(&film);
+ *     tr_device_close(dev);
  *     tr_scene_destroy(scene);
  *
  * The scene is an opaque handle: edits (materials, shapes, moves) take effect at
@@ -34,6 +42,7 @@
 #include "trac0r/abi.h"
 #include "trac0r/accel.h"
 #include "trac0r/camera.h"
+#include "trac0r/device.h"
 #include "trac0r/error.h"
 #include "trac0r/film.h"
 #include "trac0r/image.h"
