@@ -7,9 +7,8 @@
 
 __kernel void tr_check_render(TR_SCENE_ARRAYS(CHECK_ARRAY_PARAM) uint accel,
                               float light_weight_total, tr_frame f, __global float *sum,
-                              __global uint *count, __global float *albedo,
-                              __global float *normal, __global float *depth,
-                              __global uint *prim) {
+                              __global uint *count, __global float *albedo, __global float *normal,
+                              __global float *depth, __global uint *prim) {
     tr_scene_view s;
 #define CHECK_VIEW(type, name, count)                                                              \
     s.name = name;                                                                                 \
@@ -30,6 +29,6 @@ __kernel void tr_check_render(TR_SCENE_ARRAYS(CHECK_ARRAY_PARAM) uint accel,
     tr_frame_grid(&f, &gx0, &gy0, &nx, &ny);
     uint x = get_global_id(0), y = get_global_id(1);
     if (x < nx && y < ny) {
-        (void)tr_render_grid_point(&s, &f, &film, gx0 + x, gy0 + y);
+        (void)tr_render_grid_rows(&s, &f, &film, gx0 + x, gy0 + y, gx0 + x + 1u, gy0 + y + 1u);
     }
 }

@@ -151,11 +151,7 @@ int tr_cpu_render(const tr_scene_view *view, const tr_frame *f, tr_film *film, i
         const uint32_t ty0 = gy0 + ((uint32_t)t / tiles_x) * tile;
         const uint32_t tx1 = tx0 + tile < gx0 + nx ? tx0 + tile : gx0 + nx;
         const uint32_t ty1 = ty0 + tile < gy0 + ny ? ty0 + tile : gy0 + ny;
-        for (uint32_t gy = ty0; gy < ty1; ++gy) {
-            for (uint32_t gx = tx0; gx < tx1; ++gx) {
-                rays += tr_render_grid_point(view, f, &fv, gx, gy);
-            }
-        }
+        rays += tr_render_grid_rows(view, f, &fv, tx0, ty0, tx1, ty1);
     }
     if (cancelled) {
         return tr_error_set(err, TR_STATUS_CANCELLED, "frame cancelled");

@@ -1,4 +1,4 @@
-/* entry.cl - the OpenCL entry point: the __kernel that runs tr_render_grid_point, the
+/* entry.cl - the OpenCL entry point: the __kernel that runs tr_render_grid_rows, the
  * same code the CPU device runs, for one traced pixel per work item, and accumulates its
  * samples into the film on the device with tr_film_add_block (src/kernel/film.h).
  *
@@ -50,6 +50,7 @@ __kernel void tr_cl_render(TR_SCENE_ARRAYS(TR_CL_ARRAY_PARAM) __global const uin
     film.prim = film_prim;
     film.width = f.camera.screen_width;
     film.passes = f.passes;
-    const uint rays = tr_render_grid_point(&s, &f, &film, gx0 + gx, gy0 + gy);
+    const uint rays =
+        tr_render_grid_rows(&s, &f, &film, gx0 + gx, gy0 + gy, gx0 + gx + 1u, gy0 + gy + 1u);
     atomic_add(&rays_per_row[gy], rays);
 }

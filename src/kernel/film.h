@@ -9,21 +9,29 @@
 #ifndef TR_KERNEL_FILM_H
 #define TR_KERNEL_FILM_H
 
+#include "bsdf.h"
 #include "compat.h"
+#include "material_eval.h"
 #include "types.h"
 #include "vec.h"
 
-/* Records, once per path, the surface the passes describe: the first one the path meets
- * that is not a perfect mirror or smooth glass. `normal` is the geometric normal, turned
- * to face the arriving direction `dir`; `depth` the distance travelled from the camera. */
-TR_FN void tr_sample_surface(tr_sample *out, tr_vec3 albedo, tr_vec3 normal, tr_vec3 dir,
-                             float depth, uint32_t triangle) {
-    if (out == 0 || out->prim != 0u) {
+/* Called at every hit of a path until it has recorded the surface the passes describe:
+ * the first one that is not a perfect mirror or smooth glass. Adds the segment's length
+ * `t` to the distance travelled from the camera (kept in out->depth meanwhile), and at
+ * that surface records its albedo (base colour) and shading normal, turned to face the
+ * arriving direction `dir`. Only films that keep passes pay for it: the integrators are
+ * handed a null `out` otherwise. */
+TR_FN void tr_sample_surface(tr_sample *out, const tr_bsdf_params *m, tr_vec3 dir, float t,
+                             uint32_t triangle) {
+    if (out->prim != 0u) {
         return;
     }
-    out->albedo = albedo;
-    out->normal = v3_dot(normal, dir) > 0.0f ? v3_neg(normal) : normal;
-    out->depth = depth;
+    out->depth += t;
+    if (tr_bsdf_is_delta(m)) {
+        return;
+    }
+    out->albedo = m->color;
+    out->normal = v3_dot(m->ns, dir) > 0.0f ? v3_neg(m->ns) : m->ns;
     out->prim = triangle + 1u;
 }
 
@@ -55,6 +63,20 @@ typedef struct tr_film_view {
  * receives. */
 TR_FN void tr_film_add_block(const tr_film_view *f, const tr_sample *smp, uint32_t x0, uint32_t y0,
                              uint32_t x1, uint32_t y1) {
+    const tr_vec3 c = smp->radiance;
+    if (f->passes == 0u) {
+        /* Radiance only, the common case: nothing else to look at per pixel. */
+        for (uint32_t y = y0; y < y1; ++y) {
+            for (uint32_t x = x0; x < x1; ++x) {
+                const size_t i = (size_t)y * f->width + x;
+                f->sum[3 * i] += c.x;
+                f->sum[3 * i + 1] += c.y;
+                f->sum[3 * i + 2] += c.z;
+                f->count[i] += 1u;
+            }
+        }
+        return;
+    }
     for (uint32_t y = y0; y < y1; ++y) {
         for (uint32_t x = x0; x < x1; ++x) {
             const size_t i = (size_t)y * f->width + x;

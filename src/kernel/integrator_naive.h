@@ -26,7 +26,6 @@ TR_FN tr_vec3 tr_trace_naive(const tr_scene_view *s, tr_ray ray, int max_depth, 
                              uint32_t *rays, tr_sample *surface) {
     tr_vec3 radiance = v3s(0.0f);
     tr_vec3 throughput = v3s(1.0f);
-    float travelled = 0.0f; /* along the path, for the depth pass */
     int depth = 0;
     for (;;) {
         ++depth;
@@ -49,9 +48,8 @@ TR_FN tr_vec3 tr_trace_naive(const tr_scene_view *s, tr_ray ray, int max_depth, 
         tr_vec3 p_hit = v3_madd(ray.origin, ray.dir, hit.t);
         tr_bsdf_params m =
             tr_material_eval(s, hit.triangle, hit.u, hit.v, p_hit, tri->normal, ray.dir);
-        travelled += hit.t;
-        if (surface && !tr_bsdf_is_delta(&m)) {
-            tr_sample_surface(surface, m.color, m.ns, ray.dir, travelled, hit.triangle);
+        if (surface) {
+            tr_sample_surface(surface, &m, ray.dir, hit.t, hit.triangle);
         }
         if (m.emittance > 0.0f) {
             radiance = v3_add(radiance, v3_scale(v3_mul(throughput, m.color), m.emittance));

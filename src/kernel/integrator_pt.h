@@ -58,7 +58,6 @@ TR_FN tr_vec3 tr_trace_pt(const tr_scene_view *s, tr_ray ray, int max_depth, tr_
                           uint32_t *rays, tr_sample *surface) {
     tr_vec3 radiance = v3s(0.0f);
     tr_vec3 throughput = v3s(1.0f);
-    float travelled = 0.0f; /* along the path, for the depth pass */
     float prev_pdf = 0.0f;
     int prev_delta = 1; /* the camera ray: no light strategy competes */
     for (int seg = 1; seg <= max_depth; ++seg) {
@@ -72,9 +71,8 @@ TR_FN tr_vec3 tr_trace_pt(const tr_scene_view *s, tr_ray ray, int max_depth, tr_
         tr_vec3 wo = v3_neg(ray.dir);
         tr_vec3 p = v3_madd(ray.origin, ray.dir, hit.t);
         tr_bsdf_params m = tr_material_eval(s, hit.triangle, hit.u, hit.v, p, n, ray.dir);
-        travelled += hit.t;
-        if (surface && !tr_bsdf_is_delta(&m)) {
-            tr_sample_surface(surface, m.color, m.ns, ray.dir, travelled, hit.triangle);
+        if (surface) {
+            tr_sample_surface(surface, &m, ray.dir, hit.t, hit.triangle);
         }
 
         /* Emission found by the BSDF strategy (or the camera). */

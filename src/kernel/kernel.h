@@ -16,29 +16,43 @@
 #include "scene_view.h"
 #include "types.h"
 
-/* Sample `sample` of pixel (x, y) of frame f, with jitter inside the pixel: radiance,
- * rays and the passes' surface into *out. The random stream depends only on (seed,
- * pixel index, sample). */
-TR_FN void tr_render_sample(const tr_scene_view *s, const tr_frame *f, uint32_t x, uint32_t y,
-                            uint32_t sample, tr_sample *out) {
+/* Sample `sample` of pixel (x, y), the pixel_index-th of the image, seen from `cam`, with
+ * jitter inside the pixel: radiance, rays and (with `passes`) the passes' surface into
+ * *out. The random stream depends only on (seed, pixel index, sample). */
+TR_FN void tr_render_pixel_sample(const tr_scene_view *s, const tr_camera *cam, uint64_t seed,
+                                  int max_depth, uint32_t integrator, uint32_t passes, uint32_t x,
+                                  uint32_t y, uint64_t pixel_index, uint32_t sample,
+                                  tr_sample *out) {
     tr_rng rng;
-    const uint64_t seed = ((uint64_t)f->seed_hi << 32) | (uint64_t)f->seed_lo;
-    uint64_t pixel = (uint64_t)y * (uint64_t)f->camera.screen_width + (uint64_t)x;
-    tr_rng_init(&rng, seed, pixel, (uint64_t)sample);
+    tr_rng_init(&rng, seed, pixel_index, (uint64_t)sample);
     float jx, jy;
     tr_sample_pixel_jitter(&rng, &jx, &jy);
-    tr_ray ray = tr_camera_ray(&f->camera, (float)x, (float)y, jx, jy);
+    tr_ray ray = tr_camera_ray(cam, (float)x, (float)y, jx, jy);
     tr_sample_clear(out);
+    /* The integrators record the passes' surface only for a film that keeps passes. */
+    tr_sample *surface = passes != 0u ? out : 0;
     /* The host rejects unknown integrators before a frame starts. */
-    switch (f->integrator) {
+    switch (integrator) {
     case TR_INTEGRATOR_PT:
-        out->radiance = tr_trace_pt(s, ray, f->max_depth, &rng, &out->rays, out);
+        out->radiance = tr_trace_pt(s, ray, max_depth, &rng, &out->rays, surface);
         break;
     case TR_INTEGRATOR_NAIVE:
     default:
-        out->radiance = tr_trace_naive(s, ray, f->max_depth, &rng, &out->rays, out);
+        out->radiance = tr_trace_naive(s, ray, max_depth, &rng, &out->rays, surface);
         break;
     }
+    if (out->prim == 0u) {
+        out->depth = 0.0f; /* the path met no surface for the passes: a distance means nothing */
+    }
+}
+
+/* Sample `sample` of pixel (x, y) of frame f (tr_render_pixel_sample with f's settings). */
+TR_FN void tr_render_sample(const tr_scene_view *s, const tr_frame *f, uint32_t x, uint32_t y,
+                            uint32_t sample, tr_sample *out) {
+    const uint64_t seed = ((uint64_t)f->seed_hi << 32) | (uint64_t)f->seed_lo;
+    const uint64_t pixel = (uint64_t)y * (uint64_t)f->camera.screen_width + (uint64_t)x;
+    tr_render_pixel_sample(s, &f->camera, seed, f->max_depth, f->integrator, f->passes, x, y, pixel,
+                           sample, out);
 }
 
 /* The pixels frame f traces and the blocks they fill: the traced pixels are those of the
@@ -56,24 +70,41 @@ TR_FN void tr_frame_grid(const tr_frame *f, uint32_t *gx0, uint32_t *gy0, uint32
     *ny = f->rect_h ? (y1 + k - 1u) / k - *gy0 : 0u;
 }
 
-/* Traces grid point (gx, gy) of frame f for samples sample .. sample+sample_count-1 and
- * adds each to its block of the film; returns the rays traced. A grid point whose anchor
- * lies left of or above the rectangle is traced all the same (its block overlaps it). */
-TR_FN uint32_t tr_render_grid_point(const tr_scene_view *s, const tr_frame *f,
-                                    const tr_film_view *film, uint32_t gx, uint32_t gy) {
+/* Traces grid points [gx0, gx1) x [gy0, gy1) of frame f for samples sample ..
+ * sample+sample_count-1, adding each to its block of the film; returns the rays traced.
+ * A grid point whose anchor lies left of or above the rectangle is traced all the same
+ * (its block overlaps it). The frame's fields are read once, into locals: the film's
+ * stores could otherwise alias them and force a reload after every sample. */
+TR_FN uint32_t tr_render_grid_rows(const tr_scene_view *s, const tr_frame *f,
+                                   const tr_film_view *film, uint32_t gx0, uint32_t gy0,
+                                   uint32_t gx1, uint32_t gy1) {
+    const tr_camera cam = f->camera;
+    const uint64_t seed = ((uint64_t)f->seed_hi << 32) | (uint64_t)f->seed_lo;
+    const int max_depth = f->max_depth;
+    const uint32_t integrator = f->integrator, passes = f->passes;
+    const uint32_t first = f->sample, count = f->sample_count;
     const uint32_t k = f->stride;
-    const uint32_t x = gx * k, y = gy * k;
-    const uint32_t rx1 = f->rect_x + f->rect_w, ry1 = f->rect_y + f->rect_h;
-    const uint32_t bx0 = x > f->rect_x ? x : f->rect_x;
-    const uint32_t by0 = y > f->rect_y ? y : f->rect_y;
-    const uint32_t bx1 = x + k < rx1 ? x + k : rx1;
-    const uint32_t by1 = y + k < ry1 ? y + k : ry1;
+    const uint32_t rx0 = f->rect_x, ry0 = f->rect_y;
+    const uint32_t rx1 = rx0 + f->rect_w, ry1 = ry0 + f->rect_h;
+    const uint64_t width = cam.screen_width;
     uint32_t rays = 0;
-    for (uint32_t n = 0; n < f->sample_count; ++n) {
-        tr_sample smp;
-        tr_render_sample(s, f, x, y, f->sample + n, &smp);
-        rays += smp.rays;
-        tr_film_add_block(film, &smp, bx0, by0, bx1, by1);
+    for (uint32_t gy = gy0; gy < gy1; ++gy) {
+        const uint32_t y = gy * k;
+        const uint32_t by0 = y > ry0 ? y : ry0;
+        const uint32_t by1 = y + k < ry1 ? y + k : ry1;
+        for (uint32_t gx = gx0; gx < gx1; ++gx) {
+            const uint32_t x = gx * k;
+            const uint32_t bx0 = x > rx0 ? x : rx0;
+            const uint32_t bx1 = x + k < rx1 ? x + k : rx1;
+            const uint64_t pixel = (uint64_t)y * width + (uint64_t)x;
+            for (uint32_t n = 0; n < count; ++n) {
+                tr_sample smp;
+                tr_render_pixel_sample(s, &cam, seed, max_depth, integrator, passes, x, y, pixel,
+                                       first + n, &smp);
+                rays += smp.rays;
+                tr_film_add_block(film, &smp, bx0, by0, bx1, by1);
+            }
+        }
     }
     return rays;
 }
