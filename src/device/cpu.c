@@ -1,6 +1,7 @@
 /* cpu.c - the CPU device: the kernel run by OpenMP threads over screen tiles. */
 #define _POSIX_C_SOURCE 200809L
 #include <omp.h>
+#include <string.h>
 #include <time.h>
 
 #include "device/frame.h"
@@ -56,6 +57,7 @@ int tr_render_config_check(const tr_render_config *cfg, tr_error *err) {
 
 int tr_frame_make(tr_frame *f, const tr_camera *cam, const tr_render_config *cfg, uint32_t sample,
                   uint32_t sample_count, const tr_rect *rect, tr_error *err) {
+    memset(f, 0, sizeof *f); /* defined even when a check below fails */
     if (tr_render_config_check(cfg, err) != TR_OK) {
         return TR_ERR;
     }
