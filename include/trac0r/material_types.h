@@ -6,8 +6,8 @@
  * json.c accepts and the validation of src/scene/material_registry.c. Rows are listed in
  * the order messages and documentation name them. A new material type is one row here
  * plus its BSDF (bsdf.h for pt, material.h for naive); parameters that vary over the
- * surface also go through tr_material_eval (material_eval.h). The key bits are TR_MATERIAL_KEY_* below; "type" is always
- * allowed. Valid C99 and OpenCL C: the kernel uses the enum only. */
+ * surface also go through tr_material_eval (material_eval.h). The key bits are TR_MATERIAL_KEY_*
+ * below; "type" is always allowed. Valid C99 and OpenCL C: the kernel uses the enum only. */
 #ifndef TRAC0R_MATERIAL_TYPES_H
 #define TRAC0R_MATERIAL_TYPES_H
 

@@ -364,8 +364,8 @@ int tr_wbvh_set_isa(int isa, tr_error *err) {
         return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "unknown wide-BVH ISA %d", isa);
     }
     if (!(tr_wbvh_isa_mask() >> isa & 1u)) {
-        return tr_error_set(err, TR_STATUS_UNSUPPORTED, "wide-BVH ISA %s: not supported by this CPU or build",
-                            isa_names[isa]);
+        return tr_error_set(err, TR_STATUS_UNSUPPORTED,
+                            "wide-BVH ISA %s: not supported by this CPU or build", isa_names[isa]);
     }
     atomic_store(&isa_current, isa);
     return TR_OK;

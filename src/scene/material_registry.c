@@ -59,24 +59,30 @@ int tr_material_check(const tr_material *m, tr_error *err) {
             lo = values[i] < lo ? values[i] : lo;
             hi = values[i] > hi ? values[i] : hi;
         }
-        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "unknown material type %u (expected %u..%u)", m->type, lo, hi);
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "unknown material type %u (expected %u..%u)", m->type, lo, hi);
     }
     if (!v3_is_finite(m->color) || m->color.x < 0.0f || m->color.y < 0.0f || m->color.z < 0.0f) {
-        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "material colour (%g, %g, %g) must be finite and non-negative",
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "material colour (%g, %g, %g) must be finite and non-negative",
                             (double)m->color.x, (double)m->color.y, (double)m->color.z);
     }
     if (!isfinite(m->emittance) || m->emittance < 0.0f) {
-        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "material emittance %g must be finite and non-negative",
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "material emittance %g must be finite and non-negative",
                             (double)m->emittance);
     }
     if (!(m->roughness >= 0.0f && m->roughness <= 1.0f)) {
-        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "material roughness %g must be in [0, 1]", (double)m->roughness);
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "material roughness %g must be in [0, 1]", (double)m->roughness);
     }
     if (!(m->ior >= 1.0f && m->ior <= 10.0f)) {
-        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "material ior %g must be in [1, 10]", (double)m->ior);
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "material ior %g must be in [1, 10]",
+                            (double)m->ior);
     }
     if ((m->flags & ~TR_MATERIAL_TWO_SIDED) != 0u) {
-        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "material flags 0x%x have unknown bits", m->flags);
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "material flags 0x%x have unknown bits", m->flags);
     }
     return TR_OK;
 }
