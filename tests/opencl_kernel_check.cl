@@ -16,15 +16,8 @@ __kernel void tr_check_render(TR_SCENE_ARRAYS(CHECK_ARRAY_PARAM) uint accel,
     TR_SCENE_ARRAYS(CHECK_VIEW)
     s.accel = accel;
     s.light_weight_total = light_weight_total;
-    tr_film_view film;
-    film.sum = sum;
-    film.count = count;
-    film.albedo = albedo;
-    film.normal = normal;
-    film.depth = depth;
-    film.prim = prim;
-    film.width = f.camera.screen_width;
-    film.passes = f.passes;
+    const tr_film_view film =
+        tr_film_view_make(sum, count, albedo, normal, depth, prim, f.camera.screen_width, f.passes);
     uint gx0, gy0, nx, ny;
     tr_frame_grid(&f, &gx0, &gy0, &nx, &ny);
     uint x = get_global_id(0), y = get_global_id(1);

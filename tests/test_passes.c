@@ -46,6 +46,17 @@ static void corner_range(const tr_camera *cam, uint32_t x, uint32_t y, float pla
     }
 }
 
+/* The means of the four passes at pixel (x, y). */
+static void read_passes(const tr_film *f, uint32_t x, uint32_t y, float a[3], float n[3],
+                        float d[3], float id[3]) {
+    tr_error err;
+    const int ok = tr_film_pass_pixel(f, TR_PASS_ALBEDO, x, y, a, &err) == TR_OK &&
+                   tr_film_pass_pixel(f, TR_PASS_NORMAL, x, y, n, &err) == TR_OK &&
+                   tr_film_pass_pixel(f, TR_PASS_DEPTH, x, y, d, &err) == TR_OK &&
+                   tr_film_pass_pixel(f, TR_PASS_PRIM, x, y, id, &err) == TR_OK;
+    CHECK(ok, "pass read at (%u, %u): %s", x, y, err.msg);
+}
+
 static void render_passes(const tr_scene *s, const tr_camera *cam, int integrator, tr_film *film) {
     tr_error err;
     CHECK(tr_film_init_passes(film, W, H, TR_PASS_ALL, &err) == TR_OK, "%s", err.msg);
@@ -79,10 +90,7 @@ static void test_floor(void) {
     for (uint32_t y = 0; y < H; ++y) {
         for (uint32_t x = 0; x < W; ++x) {
             float a[3], n[3], d[3], id[3];
-            tr_film_pass_pixel(&f, TR_PASS_ALBEDO, x, y, a, &err);
-            tr_film_pass_pixel(&f, TR_PASS_NORMAL, x, y, n, &err);
-            tr_film_pass_pixel(&f, TR_PASS_DEPTH, x, y, d, &err);
-            tr_film_pass_pixel(&f, TR_PASS_PRIM, x, y, id, &err);
+            read_passes(&f, x, y, a, n, d, id);
             bad_albedo += fabsf(a[0] - colour.x) > 1e-6f || fabsf(a[1] - colour.y) > 1e-6f ||
                           fabsf(a[2] - colour.z) > 1e-6f;
             bad_normal += fabsf(n[0]) > 1e-6f || fabsf(n[1] - 1.0f) > 1e-6f || fabsf(n[2]) > 1e-6f;
@@ -134,10 +142,7 @@ static void test_mirror(void) {
         for (uint32_t y = 0; y < H; ++y) {
             for (uint32_t x = 0; x < W; ++x) {
                 float a[3], n[3], d[3], id[3];
-                tr_film_pass_pixel(&f, TR_PASS_ALBEDO, x, y, a, &err);
-                tr_film_pass_pixel(&f, TR_PASS_NORMAL, x, y, n, &err);
-                tr_film_pass_pixel(&f, TR_PASS_DEPTH, x, y, d, &err);
-                tr_film_pass_pixel(&f, TR_PASS_PRIM, x, y, id, &err);
+                read_passes(&f, x, y, a, n, d, id);
                 double lo, hi;
                 corner_range(&cam, x, y, 0.0f, &lo, &hi);
                 /* Down to the mirror, up to the ceiling: three times the way down. */

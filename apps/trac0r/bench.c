@@ -84,10 +84,9 @@ static int bench_frame(int argc, char **argv) {
         return rc;
     }
     tr_error err;
-    tr_film film;
     double *times = malloc((size_t)frames * 2 * sizeof *times);
     double *update_times = times ? times + frames : NULL;
-    if (!times || tr_film_init(&film, c.width, c.height, &err) != TR_OK) {
+    if (!times || tr_film_check_size(c.width, c.height, &err) != TR_OK) {
         free(times);
         tr_scene_destroy(scene);
         return cli_error(&a, "--width/--height: %s", times ? err.msg : "out of memory");
@@ -96,7 +95,6 @@ static int bench_frame(int argc, char **argv) {
     rc = cli_backend_open(&a, &c, scene, &be);
     if (rc != CLI_OK) {
         free(times);
-        tr_film_free(&film);
         tr_scene_destroy(scene);
         return rc;
     }
@@ -197,7 +195,6 @@ static int bench_frame(int argc, char **argv) {
     cli_backend_close(&cpu);
     cli_backend_close(&be);
     free(times);
-    tr_film_free(&film);
     tr_scene_destroy(scene);
     return rc;
 }
@@ -350,8 +347,7 @@ static int bench_complexity(int argc, char **argv) {
         return cli_error(&a, "--out: %s", err.msg);
     }
     double *times = malloc((size_t)frames * sizeof *times);
-    tr_film film;
-    if (!times || tr_film_init(&film, c.width, c.height, &err) != TR_OK) {
+    if (!times || tr_film_check_size(c.width, c.height, &err) != TR_OK) {
         free(times);
         return cli_error(&a, "--width/--height: %s", times ? err.msg : "out of memory");
     }
@@ -359,7 +355,6 @@ static int bench_complexity(int argc, char **argv) {
     int rc = cli_backend_open(&a, &c, NULL, &be);
     if (rc != CLI_OK) {
         free(times);
-        tr_film_free(&film);
         return rc;
     }
     tr_render_config cfg = cli_render_config(&c);
@@ -438,7 +433,6 @@ static int bench_complexity(int argc, char **argv) {
     }
     cli_backend_close(&be);
     free(times);
-    tr_film_free(&film);
     if (rc != CLI_OK) {
         return rc;
     }

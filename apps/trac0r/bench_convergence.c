@@ -123,6 +123,19 @@ static void film_mean(const tr_film *f, float *rgb) {
     }
 }
 
+/* Releases what one image size of the benchmark holds. */
+static void size_free(cli_backend *devs, int ndevs, float *ref, float *half, float *cur,
+                      tr_film *film, tr_scene *scene) {
+    for (int k = 0; k < ndevs; ++k) {
+        cli_backend_close(&devs[k]);
+    }
+    free(ref);
+    free(half);
+    free(cur);
+    tr_film_free(film);
+    tr_scene_destroy(scene);
+}
+
 /* Renders samples [first, first + spp) on the device (its film cleared first) and reads
  * them into f. */
 static int render_spp(tr_device *dev, const tr_scene *s, const tr_render_config *cfg, tr_film *f,
@@ -278,14 +291,7 @@ int bench_convergence(int argc, char **argv) {
             rc = cli_backend_open(&a, &c, scene, &devs[k]);
         }
         if (rc != CLI_OK) {
-            for (int k = 0; k <= nmethods; ++k) {
-                cli_backend_close(&devs[k]);
-            }
-            free(ref);
-            free(half);
-            free(cur);
-            tr_film_free(&film);
-            tr_scene_destroy(scene);
+            size_free(devs, nmethods + 1, ref, half, cur, &film, scene);
             break;
         }
         if (!film_ok) {
@@ -408,14 +414,7 @@ int bench_convergence(int argc, char **argv) {
         for (int k = 0; k < nfilms; ++k) {
             tr_film_free(&films[k]);
         }
-        for (int k = 0; k <= nmethods; ++k) {
-            cli_backend_close(&devs[k]);
-        }
-        free(ref);
-        free(half);
-        free(cur);
-        tr_film_free(&film);
-        tr_scene_destroy(scene);
+        size_free(devs, nmethods + 1, ref, half, cur, &film, scene);
     }
     tr_image_free(&ref_img);
     if (rc != CLI_OK) {

@@ -25,6 +25,10 @@ typedef struct tr_film {
     uint32_t *prim;  /* TR_PASS_PRIM: triangle index + 1 of the pixel's first sample, 0: none */
 } tr_film;
 
+/* Checks, allocating nothing, that a film of width x height may be made: at least 1x1
+ * (TR_STATUS_INVALID_ARGUMENT), within TR_FILM_MAX_SIDE / TR_FILM_MAX_PIXELS
+ * (TR_STATUS_LIMIT). */
+int tr_film_check_size(uint32_t width, uint32_t height, tr_error *err);
 /* Allocates a cleared film keeping radiance only. Fails (without allocating) on a zero
  * size or one beyond TR_FILM_MAX_SIDE / TR_FILM_MAX_PIXELS, or when memory runs out. */
 int tr_film_init(tr_film *f, uint32_t width, uint32_t height, tr_error *err);

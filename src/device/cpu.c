@@ -62,9 +62,8 @@ int tr_frame_make(tr_frame *f, const tr_camera *cam, const tr_render_config *cfg
         return TR_ERR;
     }
     const uint32_t w = cam->screen_width, h = cam->screen_height;
-    if (w == 0 || h == 0 || w > TR_FILM_MAX_SIDE || h > TR_FILM_MAX_SIDE ||
-        (uint64_t)w * h > TR_FILM_MAX_PIXELS) {
-        return tr_error_set(err, TR_STATUS_LIMIT, "camera screen size %ux%u is out of range", w, h);
+    if (tr_film_check_size(w, h, err) != TR_OK) {
+        return TR_ERR; /* the film a frame of this camera would need */
     }
     if (sample_count == 0 || (uint64_t)sample + sample_count - 1u > UINT32_MAX) {
         return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "samples %u..%u+%u are out of range",
@@ -97,16 +96,8 @@ int tr_frame_make(tr_frame *f, const tr_camera *cam, const tr_render_config *cfg
 }
 
 tr_film_view tr_film_view_of(tr_film *film) {
-    tr_film_view v;
-    v.sum = film->sum;
-    v.count = film->count;
-    v.albedo = film->albedo;
-    v.normal = film->normal;
-    v.depth = film->depth;
-    v.prim = film->prim;
-    v.width = film->width;
-    v.passes = film->passes;
-    return v;
+    return tr_film_view_make(film->sum, film->count, film->albedo, film->normal, film->depth,
+                             film->prim, film->width, film->passes);
 }
 
 int tr_cpu_render(const tr_scene_view *view, const tr_frame *f, tr_film *film, int threads,

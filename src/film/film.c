@@ -5,13 +5,7 @@
 #include "kernel/types.h"
 #include "trac0r/film.h"
 
-int tr_film_init(tr_film *f, uint32_t width, uint32_t height, tr_error *err) {
-    return tr_film_init_passes(f, width, height, 0u, err);
-}
-
-int tr_film_init_passes(tr_film *f, uint32_t width, uint32_t height, uint32_t passes,
-                        tr_error *err) {
-    memset(f, 0, sizeof *f);
+int tr_film_check_size(uint32_t width, uint32_t height, tr_error *err) {
     if (width == 0 || height == 0) {
         return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
                             "image size %ux%u must be at least 1x1", width, height);
@@ -21,6 +15,19 @@ int tr_film_init_passes(tr_film *f, uint32_t width, uint32_t height, uint32_t pa
         return tr_error_set(err, TR_STATUS_LIMIT,
                             "image size %ux%u exceeds the limit of %u per side and %u pixels",
                             width, height, TR_FILM_MAX_SIDE, TR_FILM_MAX_PIXELS);
+    }
+    return TR_OK;
+}
+
+int tr_film_init(tr_film *f, uint32_t width, uint32_t height, tr_error *err) {
+    return tr_film_init_passes(f, width, height, 0u, err);
+}
+
+int tr_film_init_passes(tr_film *f, uint32_t width, uint32_t height, uint32_t passes,
+                        tr_error *err) {
+    memset(f, 0, sizeof *f);
+    if (tr_film_check_size(width, height, err) != TR_OK) {
+        return TR_ERR;
     }
     if ((passes & ~TR_PASS_ALL) != 0u) {
         return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "unknown pass bits 0x%x",

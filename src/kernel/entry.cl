@@ -41,15 +41,9 @@ __kernel void tr_cl_render(TR_SCENE_ARRAYS(TR_CL_ARRAY_PARAM) __global const uin
     s.accel = scene_info[TR_CL_INFO_accel];
     s.light_weight_total = as_float(scene_info[TR_CL_INFO_light_weight_total]);
 
-    tr_film_view film;
-    film.sum = film_sum;
-    film.count = film_count;
-    film.albedo = film_albedo;
-    film.normal = film_normal;
-    film.depth = film_depth;
-    film.prim = film_prim;
-    film.width = f.camera.screen_width;
-    film.passes = f.passes;
+    const tr_film_view film =
+        tr_film_view_make(film_sum, film_count, film_albedo, film_normal, film_depth, film_prim,
+                          f.camera.screen_width, f.passes);
     const uint rays =
         tr_render_grid_rows(&s, &f, &film, gx0 + gx, gy0 + gy, gx0 + gx + 1u, gy0 + gy + 1u);
     atomic_add(&rays_per_row[gy], rays);

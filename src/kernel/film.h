@@ -58,6 +58,23 @@ typedef struct tr_film_view {
     uint32_t passes;
 } tr_film_view;
 
+/* A film view over the given buffers (pass buffers the film does not keep may be null). */
+TR_FN tr_film_view tr_film_view_make(TR_GLOBAL float *sum, TR_GLOBAL uint32_t *count,
+                                     TR_GLOBAL float *albedo, TR_GLOBAL float *normal,
+                                     TR_GLOBAL float *depth, TR_GLOBAL uint32_t *prim,
+                                     uint32_t width, uint32_t passes) {
+    tr_film_view v;
+    v.sum = sum;
+    v.count = count;
+    v.albedo = albedo;
+    v.normal = normal;
+    v.depth = depth;
+    v.prim = prim;
+    v.width = width;
+    v.passes = passes;
+    return v;
+}
+
 /* Adds sample `smp` to every pixel of the block [x0, x1) x [y0, y1) (one pixel, or a
  * preview block with stride > 1). The primitive id is kept from the first sample a pixel
  * receives. */
