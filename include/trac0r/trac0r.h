@@ -46,6 +46,7 @@
 #include "trac0r/error.h"
 #include "trac0r/film.h"
 #include "trac0r/image.h"
+#include "trac0r/outfile.h"
 #include "trac0r/post.h"
 #include "trac0r/registry.h"
 #include "trac0r/render.h"

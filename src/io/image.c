@@ -11,6 +11,7 @@
 #include <unistd.h>
 
 #include "trac0r/image.h"
+#include "trac0r/outfile.h"
 #include "trac0r/post.h"
 
 tr_image_format tr_image_format_from_path(const char *path) {
@@ -28,63 +29,12 @@ tr_image_format tr_image_format_from_path(const char *path) {
     return TR_IMAGE_UNKNOWN;
 }
 
-/* A temporary file next to `path`, so that rename() stays on one file system. */
-typedef struct tmpfile_t {
-    char name[4096];
-    FILE *fp;
-} tmpfile_t;
-
-static int tmp_open(tmpfile_t *t, const char *path, tr_error *err) {
-    int n = snprintf(t->name, sizeof t->name, "%s.tmp.XXXXXX", path);
-    if (n < 0 || (size_t)n >= sizeof t->name) {
-        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "%s: path too long", path);
-    }
-    int fd = mkstemp(t->name);
-    if (fd < 0) {
-        return tr_error_set(err, tr_status_from_errno(errno), "%s: cannot create file: %s", path,
-                            strerror(errno));
-    }
-    t->fp = fdopen(fd, "wb");
-    if (!t->fp) {
-        int e = errno;
-        close(fd);
-        unlink(t->name);
-        return tr_error_set(err, tr_status_from_errno(e), "%s: cannot open file: %s", path,
-                            strerror(e));
-    }
-    return TR_OK;
-}
-
-/* Closes the temporary file and renames it onto path, or removes it if `ok` is false
- * or anything fails on the way. */
-static int tmp_finish(tmpfile_t *t, const char *path, int ok, tr_error *err) {
-    int rc = ok ? TR_OK : TR_ERR;
-    if (ok && (fflush(t->fp) != 0 || ferror(t->fp))) {
-        rc = tr_error_set(err, tr_status_from_errno(errno), "%s: write failed: %s", path,
-                          strerror(errno));
-    }
-    if (fclose(t->fp) != 0 && rc == TR_OK) {
-        rc = tr_error_set(err, tr_status_from_errno(errno), "%s: write failed: %s", path,
-                          strerror(errno));
-    }
-    if (rc == TR_OK && rename(t->name, path) != 0) {
-        rc = tr_error_set(err, tr_status_from_errno(errno),
-                          "%s: cannot rename the finished file into place: %s", path,
-                          strerror(errno));
-    }
-    if (rc != TR_OK) {
-        unlink(t->name);
-    }
-    return rc;
-}
-
 int tr_image_check_writable(const char *path, tr_error *err) {
-    tmpfile_t t;
-    if (tmp_open(&t, path, err) != TR_OK) {
+    tr_outfile *t = tr_outfile_open(path, err);
+    if (!t) {
         return TR_ERR;
     }
-    fclose(t.fp);
-    unlink(t.name);
+    tr_outfile_abort(t);
     return TR_OK;
 }
 
@@ -122,17 +72,18 @@ int tr_film_write_png(const tr_film *f, const char *path, float exposure, tr_err
     if (!row) {
         return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "%s: out of memory", path);
     }
-    tmpfile_t t;
-    if (tmp_open(&t, path, err) != TR_OK) {
+    tr_outfile *t = tr_outfile_open(path, err);
+    if (!t) {
         free(row);
         return TR_ERR;
     }
-    int ok = write_png_rows(t.fp, f, exposure, row) == TR_OK;
+    int ok = write_png_rows(tr_outfile_stream(t), f, exposure, row) == TR_OK;
     free(row);
     if (!ok) {
-        tr_error_set(err, TR_STATUS_IO, "%s: PNG encoding failed", path);
+        tr_outfile_abort(t);
+        return tr_error_set(err, TR_STATUS_IO, "%s: PNG encoding failed", path);
     }
-    return tmp_finish(&t, path, ok, err);
+    return tr_outfile_commit(t, err);
 }
 
 int tr_film_write_pfm(const tr_film *f, const char *path, tr_error *err) {
@@ -140,13 +91,14 @@ int tr_film_write_pfm(const tr_film *f, const char *path, tr_error *err) {
     if (!row) {
         return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "%s: out of memory", path);
     }
-    tmpfile_t t;
-    if (tmp_open(&t, path, err) != TR_OK) {
+    tr_outfile *t = tr_outfile_open(path, err);
+    if (!t) {
         free(row);
         return TR_ERR;
     }
+    FILE *fp = tr_outfile_stream(t);
     /* A negative scale marks little-endian data; rows go bottom to top. */
-    int ok = fprintf(t.fp, "PF\n%u %u\n-1.0\n", f->width, f->height) > 0;
+    int ok = fprintf(fp, "PF\n%u %u\n-1.0\n", f->width, f->height) > 0;
     for (uint32_t yy = 0; ok && yy < f->height; ++yy) {
         uint32_t y = f->height - 1 - yy;
         for (uint32_t x = 0; x < f->width; ++x) {
@@ -155,14 +107,16 @@ int tr_film_write_pfm(const tr_film *f, const char *path, tr_error *err) {
             row[3 * x + 1] = c.y;
             row[3 * x + 2] = c.z;
         }
-        ok = fwrite(row, sizeof *row, (size_t)f->width * 3, t.fp) == (size_t)f->width * 3;
+        ok = fwrite(row, sizeof *row, (size_t)f->width * 3, fp) == (size_t)f->width * 3;
     }
     free(row);
     if (!ok) {
-        tr_error_set(err, tr_status_from_errno(errno), "%s: write failed: %s", path,
-                     strerror(errno));
+        int e = errno;
+        tr_outfile_abort(t);
+        return tr_error_set(err, tr_status_from_errno(e), "%s: write failed: %s", path,
+                            strerror(e));
     }
-    return tmp_finish(&t, path, ok, err);
+    return tr_outfile_commit(t, err);
 }
 
 int tr_film_write(const tr_film *f, const char *path, float exposure, tr_error *err) {
