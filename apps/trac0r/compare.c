@@ -13,6 +13,8 @@ int compare_load(const char *path, tr_image *img, tr_error *err) {
     switch (tr_image_format_from_path(path)) {
     case TR_IMAGE_PFM:
         return tr_image_read_pfm(img, path, err);
+    case TR_IMAGE_EXR:
+        return tr_image_read_exr(img, path, NULL, err);
     case TR_IMAGE_PNG: {
         if (tr_image_read_png(img, path, err) != TR_OK) {
             return TR_ERR;
@@ -25,7 +27,7 @@ int compare_load(const char *path, tr_image *img, tr_error *err) {
     }
     default:
         return tr_error_set(err, TR_STATUS_UNSUPPORTED,
-                            "%s: unknown image format (expected .pfm or .png)", path);
+                            "%s: unknown image format (expected .pfm, .exr or .png)", path);
     }
 }
 
@@ -51,8 +53,9 @@ static tr_vec3 false_colour(double t) {
 static void compare_help(void) {
     printf("Usage: trac0r compare A B [options]\n"
            "\n"
-           "Compares image A against the reference B (each .pfm float linear RGB, or .png,\n"
-           "decoded from sRGB to linear) and prints, on linear radiance clamped to [0,1]:\n"
+           "Compares image A against the reference B (each .pfm float linear RGB, .exr (its\n"
+           "R, G, B channels), or .png, decoded from sRGB to linear) and prints, on linear "
+           "radiance clamped to [0,1]:\n"
            "  rmse     root mean squared error over all pixels and channels\n"
            "  relmse   relative MSE: mean of (A - B)^2 / (B^2 + %g)\n"
            "  psnr     peak signal-to-noise ratio 10 log10(1 / MSE) in dB (inf if equal)\n"

@@ -1,12 +1,16 @@
 /* render.c - `trac0r render`: render a scene progressively to an image file. */
 #define _POSIX_C_SOURCE 200809L
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
 
 #include "cli.h"
 #include "commands.h"
 #include "devices.h"
+#include "progress.h"
+#include "render_job.h"
+#include "trac0r/outfile.h"
 
 static void render_help(void) {
     printf("Usage: trac0r render [SCENE] [options]\n"
@@ -25,21 +29,37 @@ static void render_help(void) {
            "                       KxK blocks, 1..64 (default 1: every pixel)\n"
            "  --exposure EV        PNG exposure in stops, -20..20 (default 0): radiance is\n"
            "                       scaled by 2^EV, clamped to [0,1] and sRGB-encoded\n"
-           "  --out FILE           output image, .png (8-bit sRGB) or .pfm (float linear RGB)\n"
+           "  --out FILE           output image, .png (8-bit sRGB), .pfm (float linear RGB)\n"
+           "                       or .exr (OpenEXR, linear RGB with the passes as layers)\n"
            "                       (default render.png); written to a temporary file and\n"
            "                       renamed, so it never exists half-written\n"
+           "  --exr-type T         EXR channel type, half or float (default float)\n"
            "  --passes LIST        also write these passes beside the image, comma-separated:\n"
            "                       albedo, normal, depth, id (or all); each goes to\n"
-           "                       FILE-without-extension.PASS.pfm (float: the pixel's mean\n"
+           "                       FILE-without-extension.PASS.pfm, or into the EXR as layers\n"
+           "                       albedo.RGB, normal.XYZ, depth.Z, id (float: the pixel's mean\n"
            "                       base colour, shading normal, distance from the camera,\n"
            "                       primitive id), at the first surface that is not a mirror\n"
            "                       or smooth glass; 0 where a sample met none\n"
+           "  --checkpoint FILE    save the film and what is needed to continue to FILE\n"
+           "                       every --checkpoint-interval, on SIGINT/SIGTERM and at\n"
+           "                       the end (atomically: the last complete one survives)\n"
+           "  --checkpoint-interval S  seconds between checkpoints, 0..1e6 (default 60;\n"
+           "                       0: after every pass)\n"
+           "  --resume FILE        continue the render saved in FILE: the image is\n"
+           "                       bit-identical to an uninterrupted render of --spp samples\n"
+           "                       (default: the checkpoint's); the scene and options must\n"
+           "                       be the checkpoint's\n"
            "  -h, --help           show this help\n"
            "\n"
-           "Progress (samples, elapsed, ETA, Mrays/s) goes to stderr while it is a terminal;\n"
-           "otherwise one summary line is printed when the image is written.\n"
-           "Exit status: 0 on success, 2 on a bad command line, 1 when rendering or writing\n"
-           "fails.\n",
+           "Progress (a bar with the ETA on a terminal, otherwise a line a second) goes to\n"
+           "stderr, then one summary line. SIGINT or SIGTERM (Ctrl-C) stops the render at the\n"
+           "end of the pass under way and writes the image of the samples so far (and the\n"
+           "checkpoint); a second signal ends it at once. Under mpirun the ranks share the\n"
+           "tiles of the image (docs/distributed.md).\n"
+           "Exit status: 0 on success, 2 on a bad command line or a checkpoint of another\n"
+           "render, 1 when rendering or writing fails, 128+N after signal N (the image of\n"
+           "the samples so far written).\n",
            cli_common_help());
 }
 
@@ -91,144 +111,312 @@ static int pass_path(const char *out, uint32_t bit, char *buf, size_t size) {
     return n < 0 || (size_t)n >= size ? -1 : 0;
 }
 
-int cmd_render(int argc, char **argv) {
-    cli_args a = {.cmd = "render", .argc = argc, .argv = argv, .i = 0};
-    cli_common c;
-    cli_common_default(&c);
-    uint32_t spp = 16;
-    int spp_given = 0, scene_arg = 0;
-    int stride = 1;
-    float exposure = 0.0f;
-    const char *out = "render.png";
-    uint32_t passes = 0;
+/* The extra options of render (one block, so other commands' options merge apart). */
+static int render_option(render_job *job, int *rc) {
+    cli_args *a = &job->args;
+    if (cli_is(a, "--checkpoint")) {
+        *rc = cli_value(a);
+        job->checkpoint = a->value;
+    } else if (cli_is(a, "--checkpoint-interval")) {
+        float s = 0.0f;
+        *rc = cli_parse_float(a, 0.0f, 1e6f, &s);
+        job->checkpoint_interval = s;
+    } else if (cli_is(a, "--resume")) {
+        *rc = cli_value(a);
+        job->resume = a->value;
+    } else if (cli_is(a, "--exr-type")) {
+        *rc = cli_value(a);
+        if (*rc == CLI_OK && strcmp(a->value, "half") != 0 && strcmp(a->value, "float") != 0) {
+            *rc = cli_error(a, "%s: expected half or float, got '%s'", a->opt, a->value);
+        }
+        job->exr_half = *rc == CLI_OK && strcmp(a->value, "half") == 0;
+    } else {
+        return 0;
+    }
+    return 1;
+}
 
-    while (cli_next(&a)) {
-        int rc = cli_common_option(&a, &c);
+void render_job_free(render_job *job) {
+    if (job->be_open) {
+        cli_backend_close(&job->be);
+        job->be_open = 0;
+    }
+    tr_scene_destroy(job->scene);
+    job->scene = NULL;
+}
+
+int render_job_setup(render_job *job, int argc, char **argv, int *done) {
+    memset(job, 0, sizeof *job);
+    job->args = (cli_args){.cmd = "render", .argc = argc, .argv = argv, .i = 0};
+    cli_args *a = &job->args;
+    cli_common *c = &job->common;
+    cli_common_default(c);
+    job->spp = 16;
+    job->out = "render.png";
+    job->checkpoint_interval = 60.0;
+    int scene_arg = 0, stride = 1;
+    *done = 1;
+
+    while (cli_next(a)) {
+        int rc = cli_common_option(a, c);
         if (rc == CLI_OK) {
             continue;
         }
         if (rc == CLI_USAGE) {
             return CLI_USAGE;
         }
-        if (cli_is(&a, "-h") || cli_is(&a, "--help")) {
+        if (cli_is(a, "-h") || cli_is(a, "--help")) {
             render_help();
             return CLI_OK;
-        } else if (cli_is(&a, "--spp")) {
-            rc = cli_parse_u32(&a, 1, 1000000, &spp);
-            spp_given = 1;
-        } else if (cli_is(&a, "--stride")) {
-            rc = cli_parse_int(&a, 1, 64, &stride);
-        } else if (cli_is(&a, "--exposure")) {
-            rc = cli_parse_float(&a, -20.0f, 20.0f, &exposure);
-        } else if (cli_is(&a, "--passes")) {
-            rc = parse_passes(&a, &passes);
-        } else if (cli_is(&a, "--out") || cli_is(&a, "-o")) {
-            rc = cli_value(&a);
-            out = a.value;
-        } else if (a.opt[0] != '-' && !scene_arg) {
-            c.scene = a.opt; /* positional SCENE, anywhere on the line */
+        } else if (cli_is(a, "--spp")) {
+            rc = cli_parse_u32(a, 1, 1000000, &job->spp);
+            job->spp_given = 1;
+        } else if (cli_is(a, "--stride")) {
+            rc = cli_parse_int(a, 1, 64, &stride);
+        } else if (cli_is(a, "--exposure")) {
+            rc = cli_parse_float(a, -20.0f, 20.0f, &job->exposure);
+        } else if (cli_is(a, "--passes")) {
+            rc = parse_passes(a, &job->passes);
+        } else if (cli_is(a, "--out") || cli_is(a, "-o")) {
+            rc = cli_value(a);
+            job->out = a->value;
+        } else if (render_option(job, &rc)) {
+            /* handled */
+        } else if (a->opt[0] != '-' && !scene_arg) {
+            c->scene = a->opt; /* positional SCENE, anywhere on the line */
             scene_arg = 1;
             rc = CLI_OK;
         } else {
-            return cli_error(&a, "unknown option '%s' (see 'trac0r render --help')", a.opt);
+            return cli_error(a, "unknown option '%s' (see 'trac0r render --help')", a->opt);
         }
         if (rc != CLI_OK) {
             return CLI_USAGE;
         }
     }
-    if (tr_image_format_from_path(out) == TR_IMAGE_UNKNOWN) {
-        return cli_error(&a, "--out: '%s' has an unknown extension (expected .png or .pfm)", out);
+    const tr_image_format fmt = tr_image_format_from_path(job->out);
+    if (fmt == TR_IMAGE_UNKNOWN) {
+        return cli_error(a, "--out: '%s' has an unknown extension (expected .png, .pfm or .exr)",
+                         job->out);
     }
     tr_error err;
-    if (tr_image_check_writable(out, &err) != TR_OK) {
-        return cli_error(&a, "--out: %s", err.msg);
+    if (tr_image_check_writable(job->out, &err) != TR_OK) {
+        return cli_error(a, "--out: %s", err.msg);
     }
-    char pass_paths[4][4096];
-    for (int k = 0; k < 4; ++k) {
+    if (job->checkpoint && tr_image_check_writable(job->checkpoint, &err) != TR_OK) {
+        return cli_error(a, "--checkpoint: %s", err.msg);
+    }
+    for (int k = 0; k < 4 && fmt != TR_IMAGE_EXR; ++k) {
         const uint32_t bit = 1u << k;
-        if ((passes & bit) != 0u && pass_path(out, bit, pass_paths[k], sizeof pass_paths[k]) != 0) {
-            return cli_error(&a, "--out: '%s' is too long for the pass files' names", out);
+        if ((job->passes & bit) != 0u &&
+            pass_path(job->out, bit, job->pass_paths[k], sizeof job->pass_paths[k]) != 0) {
+            return cli_error(a, "--out: '%s' is too long for the pass files' names", job->out);
         }
     }
 
-    tr_scene *scene = tr_scene_create(NULL);
+    job->scene = tr_scene_create(NULL);
     tr_scene_file file;
-    int rc = cli_load_scene_file(&a, &c, scene, &file);
+    int rc = cli_load_scene_file(a, c, job->scene, &file);
     if (rc != CLI_OK) {
-        tr_scene_destroy(scene);
         return rc;
     }
-    if (!spp_given && file.has_spp) {
-        spp = file.spp;
+    if (!job->spp_given && file.has_spp) {
+        job->spp = file.spp;
     }
-    tr_film film;
-    if (tr_film_init_passes(&film, c.width, c.height, passes, &err) != TR_OK) {
-        tr_scene_free(scene);
-        return cli_error(&a, "--width/--height: %s", err.msg);
+    if (tr_film_check_size(c->width, c->height, &err) != TR_OK) {
+        return cli_error(a, "--width/--height: %s", err.msg);
     }
-    cli_backend be;
-    rc = cli_backend_open(&a, &c, scene, &be);
+    if ((job->checkpoint || job->resume) &&
+        checkpoint_identity(&job->id, c, job->scene, stride, job->passes, &err) != TR_OK) {
+        return cli_error(a, "%s", err.msg);
+    }
+    rc = cli_backend_open(a, c, job->scene, &job->be);
     if (rc != CLI_OK) {
-        tr_film_free(&film);
-        tr_scene_destroy(scene);
         return rc;
     }
-    tr_render_config cfg = cli_render_config(&c);
-    cfg.stride = stride;
-    cfg.passes = passes;
+    job->be_open = 1;
+    job->cfg = cli_render_config(c);
+    job->cfg.stride = stride;
+    job->cfg.passes = job->passes;
+    *done = 0;
+    return CLI_OK;
+}
 
-    const int tty = isatty(fileno(stderr));
+int render_write_outputs(const render_job *job, const tr_film *film, uint32_t samples,
+                         double elapsed, uint64_t rays, int stop_signal) {
+    tr_error err;
+    const char *out = job->out;
+    int rc = CLI_OK;
+    if (tr_image_format_from_path(out) == TR_IMAGE_EXR) {
+        rc = tr_film_write_exr(film, out, job->exr_half, &err) == TR_OK ? CLI_OK : CLI_FAILURE;
+    } else {
+        rc = tr_film_write(film, out, job->exposure, &err) == TR_OK ? CLI_OK : CLI_FAILURE;
+        for (int k = 0; k < 4 && rc == CLI_OK; ++k) {
+            tr_film pass;
+            if ((job->passes & (1u << k)) == 0u) {
+                continue;
+            }
+            if (tr_film_extract_pass(film, 1u << k, &pass, &err) != TR_OK ||
+                tr_film_write_pfm(&pass, job->pass_paths[k], &err) != TR_OK) {
+                rc = CLI_FAILURE;
+            }
+            tr_film_free(&pass);
+        }
+    }
+    if (rc != CLI_OK) {
+        fprintf(stderr, "trac0r render: %s\n", err.msg);
+        return rc;
+    }
+    char accel[160];
+    cli_describe_accel(accel, sizeof accel, job->scene);
+    char stopped[96] = "";
+    if (stop_signal) {
+        snprintf(stopped, sizeof stopped, " (stopped by signal %d after %u of %u)", stop_signal,
+                 samples, job->spp);
+    }
+    fprintf(stderr, "trac0r render: %s %ux%u, %u spp%s, %s, %s: %.2f s, %.2f Mrays/s -> %s\n",
+            job->common.scene, job->common.width, job->common.height, samples, stopped,
+            job->be.name, accel, elapsed, elapsed > 0 ? (double)rays / elapsed * 1e-6 : 0.0, out);
+    return CLI_OK;
+}
+
+/* One sample per pixel added to a film in host memory (a resumed render's): on the CPU
+ * straight into it, as the device would into its own; elsewhere through the device's
+ * film, cleared, and added - one float addition per sum either way, so the bits are
+ * those of the device's own accumulation. */
+static int host_frame(render_job *job, tr_film *film, tr_film *scratch, uint32_t s,
+                      tr_render_stats *st, tr_error *err) {
+    if (cli_backend_is_cpu(&job->be)) {
+        return tr_render_frame(job->scene, tr_scene_camera(job->scene), &job->cfg, film, s, st,
+                               err);
+    }
+    if (cli_backend_clear(&job->be, err) != TR_OK ||
+        cli_backend_frame(&job->be, job->scene, &job->cfg, s, st, err) != TR_OK ||
+        cli_backend_read(&job->be, scratch, err) != TR_OK) {
+        return TR_ERR;
+    }
+    return tr_film_accumulate(film, scratch, err);
+}
+
+/* The single-process render: whole passes over the image, sample by sample. */
+static int render_local(render_job *job) {
+    cli_args *a = &job->args;
+    tr_error err;
+    tr_film film, scratch;
+    memset(&scratch, 0, sizeof scratch);
+    uint32_t first = 0;
+    int host = 0; /* the film lives in host memory (resumed) rather than on the device */
+    if (job->resume) {
+        uint32_t mode = 0, ck_spp = 0;
+        if (checkpoint_read(job->resume, &job->id, &mode, &film, &first, &ck_spp, &err) != TR_OK) {
+            return err.code == TR_STATUS_INVALID_ARGUMENT || err.code == TR_STATUS_PARSE
+                       ? cli_error(a, "--resume: %s", err.msg)
+                       : (fprintf(stderr, "trac0r render: --resume: %s\n", err.msg), CLI_FAILURE);
+        }
+        if (mode != CHECKPOINT_PASSES) {
+            tr_film_free(&film);
+            return cli_error(a, "--resume: %s was written by an MPI render: resume it under mpirun",
+                             job->resume);
+        }
+        if (!job->spp_given) {
+            job->spp = ck_spp;
+        }
+        if (job->spp < first) {
+            tr_film_free(&film);
+            return cli_error(a, "--spp: %u is fewer than the %u samples of %s", job->spp, first,
+                             job->resume);
+        }
+        host = 1;
+        if (!cli_backend_is_cpu(&job->be) &&
+            tr_film_init_passes(&scratch, film.width, film.height, film.passes, &err) != TR_OK) {
+            tr_film_free(&film);
+            fprintf(stderr, "trac0r render: %s\n", err.msg);
+            return CLI_FAILURE;
+        }
+    } else if (tr_film_init_passes(&film, job->common.width, job->common.height, job->passes,
+                                   &err) != TR_OK) {
+        fprintf(stderr, "trac0r render: %s\n", err.msg);
+        return CLI_FAILURE;
+    }
+
+    render_stop_install();
+    progress bar;
+    progress_begin(&bar, "trac0r render", "spp", job->spp, 0);
     const double t0 = tr_time_now();
+    double last_checkpoint = t0;
     uint64_t rays = 0;
-    rc = CLI_OK;
-    for (uint32_t s = 0; s < spp; ++s) {
+    int rc = CLI_OK;
+    uint32_t s = first;
+    /* The film as the last pass left it, in `film`: reading it off the device is
+     * needed only for a checkpoint or the image. */
+    for (; s < job->spp && !render_stop_signal(); ++s) {
         tr_render_stats st;
-        if (cli_backend_frame(&be, scene, &cfg, s, &st, &err) != TR_OK) {
-            fprintf(stderr, "%strac0r render: %s\n", tty ? "\n" : "", err.msg);
+        const int ok = host ? host_frame(job, &film, &scratch, s, &st, &err)
+                            : cli_backend_frame(&job->be, job->scene, &job->cfg, s, &st, &err);
+        if (ok != TR_OK) {
+            progress_end(&bar);
+            fprintf(stderr, "trac0r render: %s\n", err.msg);
             rc = CLI_FAILURE;
             break;
         }
         rays += st.rays;
-        if (tty) {
-            double el = tr_time_now() - t0;
-            double eta = el / (s + 1) * (spp - s - 1);
-            fprintf(stderr, "\rtrac0r render: %u/%u spp  %.1f s elapsed  ETA %.1f s  %.2f Mrays/s ",
-                    s + 1, spp, el, eta, el > 0 ? (double)rays / el * 1e-6 : 0.0);
+        const double el = tr_time_now() - t0;
+        char rate[48];
+        snprintf(rate, sizeof rate, "%.2f Mrays/s", el > 0 ? (double)rays / el * 1e-6 : 0.0);
+        progress_update(&bar, s + 1, rate);
+        if (job->checkpoint && s + 1 < job->spp &&
+            tr_time_now() - last_checkpoint >= job->checkpoint_interval) {
+            if ((!host && cli_backend_read(&job->be, &film, &err) != TR_OK) ||
+                checkpoint_write(job->checkpoint, &job->id, CHECKPOINT_PASSES, &film, s + 1,
+                                 job->spp, &err) != TR_OK) {
+                progress_end(&bar);
+                fprintf(stderr, "trac0r render: --checkpoint: %s\n", err.msg);
+                rc = CLI_FAILURE;
+                break;
+            }
+            last_checkpoint = tr_time_now();
         }
     }
+    progress_end(&bar);
     const double elapsed = tr_time_now() - t0;
-    if (tty) {
-        fputc('\n', stderr);
-    }
-    if (rc == CLI_OK && cli_backend_read(&be, &film, &err) != TR_OK) {
-        fprintf(stderr, "trac0r render: %s\n", err.msg);
-        rc = CLI_FAILURE;
-    }
-    if (rc == CLI_OK && tr_film_write(&film, out, exposure, &err) != TR_OK) {
-        fprintf(stderr, "trac0r render: %s\n", err.msg);
-        rc = CLI_FAILURE;
-    }
-    for (int k = 0; k < 4 && rc == CLI_OK; ++k) {
-        tr_film pass;
-        if ((passes & (1u << k)) == 0u) {
-            continue;
-        }
-        if (tr_film_extract_pass(&film, 1u << k, &pass, &err) != TR_OK ||
-            tr_film_write_pfm(&pass, pass_paths[k], &err) != TR_OK) {
+    const int sig = render_stop_signal();
+    if (rc == CLI_OK && s == 0) {
+        fprintf(stderr,
+                "trac0r render: stopped by signal %d before the first sample: nothing "
+                "written\n",
+                sig);
+    } else if (rc == CLI_OK) {
+        if (!host && cli_backend_read(&job->be, &film, &err) != TR_OK) {
             fprintf(stderr, "trac0r render: %s\n", err.msg);
             rc = CLI_FAILURE;
         }
-        tr_film_free(&pass);
+        if (rc == CLI_OK && job->checkpoint &&
+            checkpoint_write(job->checkpoint, &job->id, CHECKPOINT_PASSES, &film, s, job->spp,
+                             &err) != TR_OK) {
+            fprintf(stderr, "trac0r render: --checkpoint: %s\n", err.msg);
+            rc = CLI_FAILURE;
+        }
+        if (rc == CLI_OK) {
+            rc = render_write_outputs(job, &film, s, elapsed, rays, sig);
+        }
     }
-    if (rc == CLI_OK) {
-        char accel[160];
-        cli_describe_accel(accel, sizeof accel, scene);
-        fprintf(stderr, "trac0r render: %s %ux%u, %u spp, %s, %s: %.2f s, %.2f Mrays/s -> %s\n",
-                c.scene, c.width, c.height, spp, be.name, accel, elapsed,
-                elapsed > 0 ? (double)rays / elapsed * 1e-6 : 0.0, out);
-    }
-    cli_backend_close(&be);
+    render_stop_uninstall();
+    tr_film_free(&scratch);
     tr_film_free(&film);
-    tr_scene_destroy(scene);
+    return rc == CLI_OK && sig ? 128 + sig : rc;
+}
+
+int cmd_render(int argc, char **argv) {
+#ifdef TRAC0R_HAVE_MPI
+    if (render_mpi_wanted()) {
+        return render_mpi_main(argc, argv);
+    }
+#endif
+    render_job job;
+    int done = 0;
+    int rc = render_job_setup(&job, argc, argv, &done);
+    if (!done) {
+        rc = render_local(&job);
+    }
+    render_job_free(&job);
     return rc;
 }

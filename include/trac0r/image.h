@@ -14,6 +14,7 @@ typedef enum tr_image_format {
     TR_IMAGE_UNKNOWN = 0,
     TR_IMAGE_PNG = 1, /* 8-bit sRGB, tonemapped */
     TR_IMAGE_PFM = 2, /* 32-bit float linear RGB */
+    TR_IMAGE_EXR = 3, /* OpenEXR, half or float linear RGB, passes as layers */
 } tr_image_format;
 
 /* The format named by a path's extension (case-insensitive), or TR_IMAGE_UNKNOWN. */
@@ -24,6 +25,11 @@ tr_image_format tr_image_format_from_path(const char *path);
 int tr_film_write(const tr_film *f, const char *path, float exposure, tr_error *err);
 int tr_film_write_png(const tr_film *f, const char *path, float exposure, tr_error *err);
 int tr_film_write_pfm(const tr_film *f, const char *path, tr_error *err);
+
+/* Writes the film as OpenEXR (src/io/exr.c): the mean radiance as R, G, B, and the
+ * passes it keeps as layers albedo.{R,G,B}, normal.{X,Y,Z}, depth.Z and id (UINT); half
+ * or float channels (`half` nonzero: half). ZIP-compressed scanlines. */
+int tr_film_write_exr(const tr_film *f, const char *path, int half, tr_error *err);
 
 /* Checks, without leaving anything behind, that a file can be created at path's
  * directory (so a long render is not wasted on an unwritable target). */
@@ -38,6 +44,9 @@ typedef struct tr_image {
 int tr_image_read_pfm(tr_image *img, const char *path, tr_error *err);
 /* Reads an 8-bit PNG as values in [0,1] (no inverse transfer applied). */
 int tr_image_read_png(tr_image *img, const char *path, tr_error *err);
+/* Reads layer `layer`'s channels of an OpenEXR image as floats (NULL: the unnamed layer,
+ * R, G, B): LAYER.R/G/B, else LAYER.X/Y/Z, else LAYER.Z in all three. Scanline images. */
+int tr_image_read_exr(tr_image *img, const char *path, const char *layer, tr_error *err);
 void tr_image_free(tr_image *img);
 
 #endif

@@ -26,6 +26,9 @@ tr_image_format tr_image_format_from_path(const char *path) {
     if (strcasecmp(dot, ".pfm") == 0) {
         return TR_IMAGE_PFM;
     }
+    if (strcasecmp(dot, ".exr") == 0) {
+        return TR_IMAGE_EXR;
+    }
     return TR_IMAGE_UNKNOWN;
 }
 
@@ -125,9 +128,11 @@ int tr_film_write(const tr_film *f, const char *path, float exposure, tr_error *
         return tr_film_write_png(f, path, exposure, err);
     case TR_IMAGE_PFM:
         return tr_film_write_pfm(f, path, err);
+    case TR_IMAGE_EXR:
+        return tr_film_write_exr(f, path, 0, err);
     default:
         return tr_error_set(err, TR_STATUS_UNSUPPORTED,
-                            "%s: unknown image extension (expected .png or .pfm)", path);
+                            "%s: unknown image extension (expected .png, .pfm or .exr)", path);
     }
 }
 

@@ -1,0 +1,48 @@
+/* render_job.h - one `trac0r render` as the single-process flow (render.c) and the MPI
+ * flow (render_mpi.c) share it: what to render, where to write it, and how to checkpoint. */
+#ifndef TRAC0R_RENDER_JOB_H
+#define TRAC0R_RENDER_JOB_H
+
+#include "checkpoint.h"
+#include "cli.h"
+#include "devices.h"
+
+typedef struct render_job {
+    cli_args args;
+    cli_common common;
+    tr_scene *scene;
+    cli_backend be;
+    int be_open;
+    tr_render_config cfg;
+    uint32_t spp;
+    int spp_given;
+    float exposure;
+    const char *out;
+    int exr_half;             /* --exr-type half */
+    uint32_t passes;          /* TR_PASS_* */
+    char pass_paths[4][4096]; /* PFM paths of the passes (not for EXR) */
+    const char *checkpoint;   /* --checkpoint FILE or NULL */
+    double checkpoint_interval;
+    const char *resume; /* --resume FILE or NULL */
+    checkpoint_id id;   /* when checkpoint or resume is set */
+} render_job;
+
+/* Parses the command line, loads the scene and opens the device. Returns CLI_OK with
+ * *done = 0 when the job is ready (render_job_free releases it), or an exit status with
+ * *done = 1 (help printed, or an error reported). */
+int render_job_setup(render_job *job, int argc, char **argv, int *done);
+void render_job_free(render_job *job);
+
+/* Writes the image (and its passes) and the summary line. CLI_OK or CLI_FAILURE. */
+int render_write_outputs(const render_job *job, const tr_film *film, uint32_t samples,
+                         double elapsed, uint64_t rays, int stop_signal);
+
+#ifdef TRAC0R_HAVE_MPI
+/* Whether this process was started by mpirun (and MPI should be used). */
+int render_mpi_wanted(void);
+/* `trac0r render` under MPI: tiles handed out by rank 0 (render_mpi.c); returns the
+ * exit status. */
+int render_mpi_main(int argc, char **argv);
+#endif
+
+#endif
