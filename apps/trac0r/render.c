@@ -242,7 +242,7 @@ int render_job_setup(render_job *job, int argc, char **argv, int *done) {
 }
 
 int render_write_outputs(const render_job *job, const tr_film *film, uint32_t samples,
-                         double elapsed, uint64_t rays, int stop_signal) {
+                         double elapsed, uint64_t rays, const char *stopped) {
     tr_error err;
     const char *out = job->out;
     int rc = CLI_OK;
@@ -268,14 +268,10 @@ int render_write_outputs(const render_job *job, const tr_film *film, uint32_t sa
     }
     char accel[160];
     cli_describe_accel(accel, sizeof accel, job->scene);
-    char stopped[96] = "";
-    if (stop_signal) {
-        snprintf(stopped, sizeof stopped, " (stopped by signal %d after %u of %u)", stop_signal,
-                 samples, job->spp);
-    }
-    fprintf(stderr, "trac0r render: %s %ux%u, %u spp%s, %s, %s: %.2f s, %.2f Mrays/s -> %s\n",
-            job->common.scene, job->common.width, job->common.height, samples, stopped,
-            job->be.name, accel, elapsed, elapsed > 0 ? (double)rays / elapsed * 1e-6 : 0.0, out);
+    fprintf(stderr, "trac0r render: %s %ux%u, %u spp%s%s%s, %s, %s: %.2f s, %.2f Mrays/s -> %s\n",
+            job->common.scene, job->common.width, job->common.height, samples, stopped ? " (" : "",
+            stopped ? stopped : "", stopped ? ")" : "", job->be.name, accel, elapsed,
+            elapsed > 0 ? (double)rays / elapsed * 1e-6 : 0.0, out);
     return CLI_OK;
 }
 
@@ -395,8 +391,10 @@ static int render_local(render_job *job) {
             fprintf(stderr, "trac0r render: --checkpoint: %s\n", err.msg);
             rc = CLI_FAILURE;
         }
+        char note[96];
+        snprintf(note, sizeof note, "stopped by signal %d after %u of %u", sig, s, job->spp);
         if (rc == CLI_OK) {
-            rc = render_write_outputs(job, &film, s, elapsed, rays, sig);
+            rc = render_write_outputs(job, &film, s, elapsed, rays, sig ? note : NULL);
         }
     }
     render_stop_uninstall();

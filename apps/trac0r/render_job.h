@@ -33,9 +33,10 @@ typedef struct render_job {
 int render_job_setup(render_job *job, int argc, char **argv, int *done);
 void render_job_free(render_job *job);
 
-/* Writes the image (and its passes) and the summary line. CLI_OK or CLI_FAILURE. */
+/* Writes the image (and its passes) and the summary line, with `stopped` (NULL: none)
+ * saying why the render ended early. CLI_OK or CLI_FAILURE. */
 int render_write_outputs(const render_job *job, const tr_film *film, uint32_t samples,
-                         double elapsed, uint64_t rays, int stop_signal);
+                         double elapsed, uint64_t rays, const char *stopped);
 
 #ifdef TRAC0R_HAVE_MPI
 /* Whether this process was started by mpirun (and MPI should be used). */

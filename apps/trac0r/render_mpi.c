@@ -1,0 +1,513 @@
+/* render_mpi.c - `trac0r render` under mpirun: one render shared by many processes.
+ *
+ * The image is cut into tiles (32 x 32 traced pixels, aligned to the stride). Rank 0
+ * hands them out one at a time as ranks finish (and renders tiles itself between
+ * messages), so a slower machine simply takes fewer tiles. A rank renders every sample
+ * of its tile in one call, in the device's own order, and sends the tile's sums and
+ * counts back; rank 0 copies them into its film. Tiles never overlap, so the film is
+ * the one a single process accumulates, bit for bit, whatever the number of ranks and
+ * whichever rank took which tile. Every worker keeps two tiles in hand (the next one is
+ * already on its way while it renders), so it never waits for rank 0 to answer.
+ *
+ * Setup errors (a bad option, a scene, a device a rank cannot open) are gathered: each
+ * rank's stderr goes to a temporary file until every rank has set up, then the lowest
+ * failing rank alone prints its message and every rank exits with its status. An error
+ * while rendering is sent to rank 0, which stops handing out tiles, prints it once, and
+ * all ranks exit with status 1. Rank 0 alone writes files and prints progress. */
+#define _POSIX_C_SOURCE 200809L
+#include <mpi.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "progress.h"
+#include "render_job.h"
+
+enum { TAG_WORK = 1, TAG_RESULT = 2, TAG_ERROR = 3, TAG_CANCELLED = 4 };
+#define TILE_GRID 32u /* a tile's side in traced pixels */
+#define PREFETCH 2    /* tiles a worker holds */
+
+int render_mpi_wanted(void) {
+    /* Set by Open MPI's launcher (and by PMIx / PMI launchers of other MPIs). */
+    return getenv("OMPI_COMM_WORLD_SIZE") || getenv("PMIX_RANK") || getenv("PMI_RANK");
+}
+
+typedef struct tiling {
+    uint32_t side, nx, ny, count;
+    uint32_t width, height;
+} tiling;
+
+static tiling make_tiling(uint32_t width, uint32_t height, int stride) {
+    tiling t;
+    t.side = TILE_GRID * (uint32_t)stride;
+    t.width = width;
+    t.height = height;
+    t.nx = (width + t.side - 1) / t.side;
+    t.ny = (height + t.side - 1) / t.side;
+    t.count = t.nx * t.ny;
+    return t;
+}
+
+static tr_rect tile_rect(const tiling *t, uint32_t k) {
+    tr_rect r;
+    r.x = (k % t->nx) * t->side;
+    r.y = (k / t->nx) * t->side;
+    r.width = r.x + t->side < t->width ? t->side : t->width - r.x;
+    r.height = r.y + t->side < t->height ? t->side : t->height - r.y;
+    return r;
+}
+
+/* Bytes per pixel of a tile message: the film's arrays for the passes kept. */
+static size_t pixel_bytes(uint32_t passes) {
+    size_t b = 3 * sizeof(float) + sizeof(uint32_t);
+    b += (passes & TR_PASS_ALBEDO) ? 3 * sizeof(float) : 0;
+    b += (passes & TR_PASS_NORMAL) ? 3 * sizeof(float) : 0;
+    b += (passes & TR_PASS_DEPTH) ? sizeof(float) : 0;
+    b += (passes & TR_PASS_PRIM) ? sizeof(uint32_t) : 0;
+    return b;
+}
+
+/* Copies rect r's rows of one array between a film-sized buffer and a packed one. */
+static unsigned char *pack_rows(unsigned char *p, const void *film_array, size_t elem,
+                                uint32_t width, const tr_rect *r, int unpack) {
+    if (!film_array) {
+        return p;
+    }
+    for (uint32_t y = r->y; y < r->y + r->height; ++y) {
+        unsigned char *row = (unsigned char *)film_array + ((size_t)y * width + r->x) * elem;
+        const size_t n = (size_t)r->width * elem;
+        if (unpack) {
+            memcpy(row, p, n);
+        } else {
+            memcpy(p, row, n);
+        }
+        p += n;
+    }
+    return p;
+}
+
+/* Packs (unpack = 0) or unpacks tile r of film f at buf. Returns the bytes. */
+static size_t pack_tile(tr_film *f, const tr_rect *r, unsigned char *buf, int unpack) {
+    unsigned char *p = buf;
+    p = pack_rows(p, f->sum, 3 * sizeof(float), f->width, r, unpack);
+    p = pack_rows(p, f->count, sizeof(uint32_t), f->width, r, unpack);
+    p = pack_rows(p, f->albedo, 3 * sizeof(float), f->width, r, unpack);
+    p = pack_rows(p, f->normal, 3 * sizeof(float), f->width, r, unpack);
+    p = pack_rows(p, f->depth, sizeof(float), f->width, r, unpack);
+    p = pack_rows(p, f->prim, sizeof(uint32_t), f->width, r, unpack);
+    return (size_t)(p - buf);
+}
+
+/* Renders every sample of tile k on this rank's device; `film` gets the device's film. */
+static int render_tile(render_job *job, const tiling *t, uint32_t k, tr_film *film, uint64_t *rays,
+                       tr_error *err) {
+    const tr_rect r = tile_rect(t, k);
+    tr_render_stats st;
+    if (tr_device_render(job->be.dev, tr_scene_camera(job->scene), &job->cfg, 0, job->spp, &r, &st,
+                         err) != TR_OK ||
+        tr_device_read_film(job->be.dev, film, err) != TR_OK) {
+        return TR_ERR;
+    }
+    *rays += st.rays;
+    return TR_OK;
+}
+
+/* mpirun passes SIGINT/SIGTERM to every rank and soon kills them: a tile under way is
+ * dropped (its pixels are not sent) so that rank 0 writes in time. */
+static int stop_requested(void *user) {
+    (void)user;
+    return render_stop_signal() != 0;
+}
+
+/* A worker: renders the tiles rank 0 sends until it sends -1. */
+static int worker(render_job *job, const tiling *t, tr_film *film, unsigned char *buf) {
+    tr_error err;
+    uint64_t rays = 0;
+    for (;;) {
+        int32_t k;
+        MPI_Recv(&k, 1, MPI_INT32_T, 0, TAG_WORK, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+        if (k < 0) {
+            return CLI_OK;
+        }
+        if (render_tile(job, t, (uint32_t)k, film, &rays, &err) != TR_OK) {
+            if (err.code == TR_STATUS_CANCELLED) {
+                MPI_Send(&k, 1, MPI_INT32_T, 0, TAG_CANCELLED, MPI_COMM_WORLD);
+                continue; /* until rank 0 sends -1 */
+            }
+            MPI_Send(err.msg, (int)strlen(err.msg) + 1, MPI_CHAR, 0, TAG_ERROR, MPI_COMM_WORLD);
+            return CLI_FAILURE;
+        }
+        const tr_rect r = tile_rect(t, (uint32_t)k);
+        memcpy(buf, &k, sizeof k);
+        memcpy(buf + sizeof k, &rays, sizeof rays);
+        rays = 0;
+        const size_t n =
+            sizeof k + sizeof rays + pack_tile(film, &r, buf + sizeof k + sizeof rays, 0);
+        MPI_Send(buf, (int)n, MPI_BYTE, 0, TAG_RESULT, MPI_COMM_WORLD);
+    }
+}
+
+/* Rank 0's side of the hand-out. */
+typedef struct master {
+    render_job *job;
+    const tiling *t;
+    tr_film *film;       /* the image: finished tiles */
+    unsigned char *done; /* per tile: finished (or from the checkpoint) */
+    uint32_t next;       /* the first tile not handed out */
+    uint32_t finished;   /* tiles finished, the checkpoint's included */
+    uint32_t resumed;    /* tiles finished in the checkpoint */
+    int stopping;        /* hand out no more (a signal or an error) */
+    int *outstanding;    /* per rank: tiles handed out, not yet back */
+    int *stopped;        /* per rank: sent -1 (or failed) */
+    uint64_t rays;
+    int rc;
+    progress bar;
+} master;
+
+/* The next tile to render, or -1. */
+static int32_t take_tile(master *m) {
+    if (m->stopping || render_stop_signal()) {
+        m->stopping = 1;
+        return -1;
+    }
+    while (m->next < m->t->count && m->done[m->next]) {
+        ++m->next;
+    }
+    return m->next < m->t->count ? (int32_t)m->next++ : -1;
+}
+
+static void hand_out(master *m, int rank) {
+    if (m->stopped[rank]) {
+        return;
+    }
+    const int32_t k = take_tile(m);
+    MPI_Send(&k, 1, MPI_INT32_T, rank, TAG_WORK, MPI_COMM_WORLD);
+    if (k < 0) {
+        m->stopped[rank] = 1;
+    } else {
+        ++m->outstanding[rank];
+    }
+}
+
+static void tile_finished(master *m, uint32_t k) {
+    m->done[k] = 1;
+    ++m->finished;
+    progress_update(&m->bar, m->finished - m->resumed, NULL);
+}
+
+static void maybe_checkpoint(master *m, double *last) {
+    render_job *job = m->job;
+    tr_error err;
+    if (!job->checkpoint || m->rc != CLI_OK || tr_time_now() - *last < job->checkpoint_interval) {
+        return;
+    }
+    if (checkpoint_write(job->checkpoint, &job->id, CHECKPOINT_TILES, m->film, 0, job->spp, &err) !=
+        TR_OK) {
+        progress_end(&m->bar);
+        fprintf(stderr, "trac0r render: --checkpoint: %s\n", err.msg);
+        m->rc = CLI_FAILURE;
+        m->stopping = 1;
+    }
+    *last = tr_time_now();
+}
+
+/* Takes one message from a worker (blocking or not). Returns whether one was taken. */
+static int serve(master *m, unsigned char *buf, size_t cap, int block) {
+    MPI_Status st;
+    int flag = 1;
+    if (block) {
+        MPI_Probe(MPI_ANY_SOURCE, MPI_ANY_TAG, MPI_COMM_WORLD, &st);
+    } else {
+        MPI_Iprobe(MPI_ANY_SOURCE, MPI_ANY_TAG, MPI_COMM_WORLD, &flag, &st);
+    }
+    if (!flag) {
+        return 0;
+    }
+    int n = 0;
+    MPI_Get_count(&st, MPI_BYTE, &n);
+    const int src = st.MPI_SOURCE;
+    if ((size_t)n > cap) {
+        n = (int)cap; /* cannot happen: workers send tiles of this size */
+    }
+    MPI_Recv(buf, n, MPI_BYTE, src, st.MPI_TAG, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+    --m->outstanding[src];
+    if (st.MPI_TAG == TAG_ERROR) {
+        buf[n > 0 ? n - 1 : 0] = '\0';
+        progress_end(&m->bar);
+        if (m->rc == CLI_OK) {
+            fprintf(stderr, "trac0r render: rank %d: %s\n", src, (const char *)buf);
+        }
+        m->rc = CLI_FAILURE;
+        m->stopping = 1;
+        m->stopped[src] = 1; /* it has left the hand-out */
+        m->outstanding[src] = 0;
+        return 1;
+    }
+    if (st.MPI_TAG == TAG_CANCELLED) {
+        m->stopping = 1;
+        hand_out(m, src);
+        return 1;
+    }
+    int32_t k;
+    uint64_t rays;
+    memcpy(&k, buf, sizeof k);
+    memcpy(&rays, buf + sizeof k, sizeof rays);
+    const tr_rect r = tile_rect(m->t, (uint32_t)k);
+    pack_tile(m->film, &r, buf + sizeof k + sizeof rays, 1);
+    m->rays += rays;
+    tile_finished(m, (uint32_t)k);
+    hand_out(m, src);
+    return 1;
+}
+
+static int master_run(render_job *job, const tiling *t, tr_film *film, tr_film *own,
+                      unsigned char *done, int size, unsigned char *buf, size_t cap,
+                      double *elapsed, uint64_t *rays) {
+    master m;
+    memset(&m, 0, sizeof m);
+    m.job = job;
+    m.t = t;
+    m.film = film;
+    m.done = done;
+    m.outstanding = calloc((size_t)size, sizeof *m.outstanding);
+    m.stopped = calloc((size_t)size, sizeof *m.stopped);
+    if (!m.outstanding || !m.stopped) {
+        free(m.outstanding);
+        free(m.stopped);
+        return CLI_FAILURE; /* the workers hang: MPI_Abort follows */
+    }
+    for (uint32_t k = 0; k < t->count; ++k) {
+        m.finished += done[k];
+    }
+    m.resumed = m.finished;
+    progress_begin(&m.bar, "trac0r render", "tiles", t->count - m.resumed, 0);
+    const double t0 = tr_time_now();
+    double last = t0;
+    for (int p = 0; p < PREFETCH; ++p) {
+        for (int w = 1; w < size; ++w) {
+            hand_out(&m, w);
+        }
+    }
+    tr_error err;
+    for (;;) {
+        while (serve(&m, buf, cap, 0)) {
+        }
+        maybe_checkpoint(&m, &last);
+        const int32_t k = take_tile(&m);
+        if (k >= 0) {
+            if (render_tile(job, t, (uint32_t)k, own, &m.rays, &err) != TR_OK) {
+                m.stopping = 1;
+                if (err.code == TR_STATUS_CANCELLED) {
+                    continue;
+                }
+                progress_end(&m.bar);
+                fprintf(stderr, "trac0r render: %s\n", err.msg);
+                m.rc = CLI_FAILURE;
+                continue;
+            }
+            const tr_rect r = tile_rect(t, (uint32_t)k);
+            pack_tile(own, &r, buf, 0);
+            pack_tile(film, &r, buf, 1);
+            tile_finished(&m, (uint32_t)k);
+            continue;
+        }
+        int busy = 0;
+        for (int w = 1; w < size; ++w) {
+            busy |= !m.stopped[w] || m.outstanding[w] > 0;
+        }
+        if (!busy) {
+            break;
+        }
+        serve(&m, buf, cap, 1);
+    }
+    progress_end(&m.bar);
+    *elapsed = tr_time_now() - t0;
+    *rays = m.rays;
+    free(m.outstanding);
+    free(m.stopped);
+    return m.rc;
+}
+
+/* Runs the setup on every rank with stderr captured; returns the status of the lowest
+ * failing rank (which alone prints its messages), or CLI_OK. */
+static int setup_all(render_job *job, int argc, char **argv, int rank, int size, int *done) {
+    fflush(stderr);
+    fflush(stdout);
+    const int saved_err = dup(2), saved_out = dup(1);
+    FILE *cap = tmpfile();
+    if (cap) {
+        dup2(fileno(cap), 2);
+        if (rank != 0) {
+            dup2(fileno(cap), 1); /* --help once */
+        }
+    }
+    int rc = render_job_setup(job, argc, argv, done);
+    tr_error err;
+    if (rc == CLI_OK && !*done && !job->checkpoint && !job->resume &&
+        checkpoint_identity(&job->id, &job->common, job->scene, job->cfg.stride, job->passes,
+                            &err) != TR_OK) {
+        rc = cli_error(&job->args, "%s", err.msg);
+        *done = 1;
+    }
+    fflush(stderr);
+    fflush(stdout);
+    dup2(saved_err, 2);
+    dup2(saved_out, 1);
+    close(saved_err);
+    close(saved_out);
+    const int failed = *done && rc != CLI_OK;
+    int mine = failed ? rank : size, first = size;
+    MPI_Allreduce(&mine, &first, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
+    if (cap && (rank == first || (first == size && rank == 0))) {
+        /* The failing rank's messages, or rank 0's warnings. */
+        char line[1024];
+        rewind(cap);
+        while (fgets(line, sizeof line, cap)) {
+            fputs(line, stderr);
+        }
+    }
+    if (cap) {
+        fclose(cap);
+    }
+    if (first < size) {
+        MPI_Bcast(&rc, 1, MPI_INT, first, MPI_COMM_WORLD);
+        *done = 1;
+        return rc;
+    }
+    /* Every rank must render the same image: the same scene and options. */
+    unsigned long long h[2] = {job->id.scene_hash, 0};
+    for (const char *p = job->id.desc; *p; ++p) {
+        h[1] = h[1] * 131u + (unsigned char)*p;
+    }
+    h[1] = h[1] * 131u + job->spp;
+    unsigned long long lo[2], hi[2];
+    MPI_Allreduce(h, lo, 2, MPI_UNSIGNED_LONG_LONG, MPI_MIN, MPI_COMM_WORLD);
+    MPI_Allreduce(h, hi, 2, MPI_UNSIGNED_LONG_LONG, MPI_MAX, MPI_COMM_WORLD);
+    if (lo[0] != hi[0] || lo[1] != hi[1]) {
+        if (rank == 0) {
+            fprintf(stderr, "trac0r render: the ranks were given different scenes or options "
+                            "(only --device and --threads may differ between ranks)\n");
+        }
+        *done = 1;
+        return CLI_USAGE;
+    }
+    return CLI_OK;
+}
+
+/* Rank 0: the checkpoint to resume into `film` and `done`. */
+static int resume_tiles(render_job *job, const tiling *t, tr_film *film, unsigned char *done) {
+    tr_error err;
+    tr_film ck;
+    uint32_t mode = 0, samples = 0, spp = 0;
+    if (checkpoint_read(job->resume, &job->id, &mode, &ck, &samples, &spp, &err) != TR_OK) {
+        if (err.code == TR_STATUS_INVALID_ARGUMENT || err.code == TR_STATUS_PARSE) {
+            return cli_error(&job->args, "--resume: %s", err.msg);
+        }
+        fprintf(stderr, "trac0r render: --resume: %s\n", err.msg);
+        return CLI_FAILURE;
+    }
+    int rc = CLI_OK;
+    if (mode != CHECKPOINT_TILES) {
+        rc = cli_error(&job->args,
+                       "--resume: %s was written by a single-process render: resume it "
+                       "without mpirun",
+                       job->resume);
+    } else if (job->spp_given && job->spp != spp) {
+        rc = cli_error(&job->args,
+                       "--spp: %u differs from the %u samples of %s (tiles are rendered whole)",
+                       job->spp, spp, job->resume);
+    } else if (tr_film_accumulate(film, &ck, &err) != TR_OK) {
+        rc = cli_error(&job->args, "--resume: %s", err.msg);
+    }
+    for (uint32_t k = 0; rc == CLI_OK && k < t->count; ++k) {
+        const tr_rect r = tile_rect(t, k);
+        done[k] = film->count[(size_t)r.y * film->width + r.x] != 0u;
+    }
+    job->spp = spp;
+    tr_film_free(&ck);
+    return rc;
+}
+
+int render_mpi_main(int argc, char **argv) {
+    int provided = 0;
+    MPI_Init_thread(NULL, NULL, MPI_THREAD_FUNNELED, &provided);
+    int rank = 0, size = 1;
+    MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+    MPI_Comm_size(MPI_COMM_WORLD, &size);
+    render_job job;
+    int done = 0;
+    int rc = setup_all(&job, argc, argv, rank, size, &done);
+    if (done) {
+        render_job_free(&job);
+        MPI_Finalize();
+        return rc;
+    }
+    tr_error err;
+    const tiling t = make_tiling(job.common.width, job.common.height, job.cfg.stride);
+    const size_t cap = 16 + (size_t)t.side * t.side * pixel_bytes(job.passes);
+    unsigned char *buf = malloc(cap);
+    unsigned char *tiles_done = calloc(t.count, 1);
+    tr_film own, film;
+    memset(&film, 0, sizeof film);
+    int ok =
+        buf && tiles_done &&
+        tr_film_init_passes(&own, job.common.width, job.common.height, job.passes, &err) == TR_OK;
+    if (ok && rank == 0) {
+        ok = tr_film_init_passes(&film, job.common.width, job.common.height, job.passes, &err) ==
+             TR_OK;
+    }
+    rc = ok ? CLI_OK : CLI_FAILURE;
+    if (!ok) {
+        fprintf(stderr, "trac0r render: rank %d: out of memory\n", rank);
+        MPI_Abort(MPI_COMM_WORLD, CLI_FAILURE);
+    }
+    if (rank == 0 && job.resume) {
+        rc = resume_tiles(&job, &t, &film, tiles_done);
+    }
+    MPI_Bcast(&rc, 1, MPI_INT, 0, MPI_COMM_WORLD);
+    MPI_Bcast(&job.spp, 1, MPI_UINT32_T, 0, MPI_COMM_WORLD);
+    job.cfg.cancel = stop_requested;
+    if (rc == CLI_OK) {
+        render_stop_install();
+        if (rank == 0) {
+            double elapsed = 0.0;
+            uint64_t rays = 0;
+            rc = master_run(&job, &t, &film, &own, tiles_done, size, buf, cap, &elapsed, &rays);
+            const int sig = render_stop_signal();
+            uint32_t finished = 0;
+            for (uint32_t k = 0; k < t.count; ++k) {
+                finished += tiles_done[k];
+            }
+            if (rc == CLI_OK && job.checkpoint &&
+                checkpoint_write(job.checkpoint, &job.id, CHECKPOINT_TILES, &film, 0, job.spp,
+                                 &err) != TR_OK) {
+                fprintf(stderr, "trac0r render: --checkpoint: %s\n", err.msg);
+                rc = CLI_FAILURE;
+            }
+            if (rc == CLI_OK) {
+                /* An interrupted render: the finished tiles have every sample, the
+                 * others none. */
+                char note[96];
+                snprintf(note, sizeof note, "stopped by signal %d: %u of %u tiles done", sig,
+                         finished, t.count);
+                rc = render_write_outputs(&job, &film, job.spp, elapsed, rays, sig ? note : NULL);
+                if (rc == CLI_OK && sig) {
+                    rc = 128 + sig;
+                }
+            }
+        } else {
+            rc = worker(&job, &t, &own, buf);
+        }
+        render_stop_uninstall();
+        /* Every rank ends with rank 0's status (a worker's failure is rank 0's too). */
+        MPI_Bcast(&rc, 1, MPI_INT, 0, MPI_COMM_WORLD);
+    }
+    free(buf);
+    free(tiles_done);
+    tr_film_free(&own);
+    tr_film_free(&film);
+    render_job_free(&job);
+    MPI_Finalize();
+    return rc;
+}

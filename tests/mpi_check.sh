@@ -1,0 +1,69 @@
+#!/bin/sh
+# `mpirun -np N trac0r render`: 1, 2 and 3 ranks give the single-process image and passes
+# bit for bit; a rank that cannot open its device ends the job with one trac0r message
+# and status 2; ranks given different options are refused; a render stopped by SIGTERM
+# under MPI resumes, with another number of ranks, to the single-process image.
+# Usage: mpi_check.sh TRAC0R_BINARY SCRATCH_DIR MPIEXEC ranks|resume (two CTests: each
+# mpirun start costs a second or more)
+set -u
+. "$(dirname "$0")/common.sh"
+cli_begin "$1" "$2"
+MPIRUN="$3 --oversubscribe"
+PART=$4
+# The CI runs as root; Open MPI refuses that unless told.
+export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
+
+R="render --width 100 --height 70 --spp 6 --threads 1 --passes all"
+if [ "$PART" = ranks ]; then
+    "$BIN" $R --out single.pfm 2>err.txt || fail "single-process render: $(cat err.txt)"
+    for n in 1 2 3; do
+        $MPIRUN -np $n "$BIN" $R --out np$n.pfm 2>err.txt || fail "np $n: exit $?: $(cat err.txt)"
+        for f in "" .albedo .normal .depth .id; do
+            cmp -s single$f.pfm np$n$f.pfm || fail "np $n: np$n$f.pfm differs from single$f.pfm"
+        done
+        grep -q "tiles" err.txt || fail "np $n: no progress lines"
+    done
+    # The preview stride: tiles are aligned to it.
+    "$BIN" $R --stride 3 --out stride.pfm 2>/dev/null
+    $MPIRUN -np 2 "$BIN" $R --stride 3 --out stride2.pfm 2>/dev/null
+    cmp -s stride.pfm stride2.pfm || fail "np 2 --stride 3 differs from a single process"
+
+    # One rank cannot open its device: one message from trac0r, status 2, no image.
+    $MPIRUN -np 1 "$BIN" $R --out bad.pfm : -np 1 "$BIN" $R --out bad.pfm --device opencl:999 \
+        >out.txt 2>err.txt
+    rc=$?
+    [ $rc -eq 2 ] || fail "a failing rank: exit $rc, expected 2: $(cat err.txt)"
+    n=$(grep -c "^trac0r render:" err.txt)
+    [ "$n" -eq 1 ] || fail "a failing rank: $n trac0r messages, expected 1: $(cat err.txt)"
+    grep -q "opencl\|OpenCL\|device" err.txt || fail "a failing rank: the message does not name the device"
+    [ -e bad.pfm ] && fail "a failing rank: an image was written"
+    $MPIRUN -np 1 "$BIN" $R --out bad.pfm : -np 1 "$BIN" $R --seed 9 --out bad.pfm >out.txt 2>err.txt
+    rc=$?
+    [ $rc -eq 2 ] || fail "ranks with different seeds: exit $rc, expected 2"
+    [ -e bad.pfm ] && fail "ranks with different seeds: an image was written"
+
+fi
+
+# SIGTERM under MPI: rank 0 writes the finished tiles and the checkpoint; resuming
+# with three ranks finishes the rest.
+if [ "$PART" = resume ]; then
+    L="render --width 100 --height 70 --spp 600 --threads 1"
+    "$BIN" $L --threads 0 --out long.pfm 2>/dev/null
+    $MPIRUN -np 2 "$BIN" $L --out stopped.pfm --checkpoint ck --checkpoint-interval 0 2>err.txt &
+    pid=$!
+    n=0
+    while [ ! -s ck ] && [ $n -lt 1000 ]; do
+        sleep 0.02
+        n=$((n + 1))
+    done
+    kill -TERM $pid
+    wait $pid
+    grep -q "tiles done" err.txt || fail "SIGTERM under MPI: not stopped early: $(cat err.txt)"
+    [ -s stopped.pfm ] || fail "SIGTERM under MPI: no image"
+    $MPIRUN -np 3 "$BIN" $L --resume ck --out resumed.pfm 2>err.txt || fail "MPI resume: $(cat err.txt)"
+    cmp -s long.pfm resumed.pfm || fail "MPI render resumed with 3 ranks differs from a single process"
+    "$BIN" $L --resume ck --out nompi.pfm >out.txt 2>err.txt
+    [ $? -eq 2 ] || fail "resuming an MPI checkpoint without mpirun: not refused with status 2"
+fi
+
+cli_end "mpi_check $PART"
