@@ -8,6 +8,7 @@
 
 #include "cli.h"
 #include "bench.h"
+#include "progress.h"
 #include "commands.h"
 #include "devices.h"
 
@@ -125,13 +126,19 @@ static int bench_frame(int argc, char **argv) {
         }
     }
     /* Frame 0 warms caches and the thread pool and is not timed. */
+    progress bar;
+    progress_begin(&bar, "trac0r bench frame", "frames", (uint64_t)frames + 1, 0);
     for (int f = 0; f <= frames && rc == CLI_OK; ++f) {
+        if (f > 0) {
+            progress_update(&bar, (uint64_t)f, NULL);
+        }
         tr_render_stats st;
         if (animate) {
             /* The scene changes, so each frame starts a new image. */
             const double t0 = tr_time_now(); /* the update and any upload, together */
             if (cli_animate(scene, (uint32_t)f, &err) != TR_OK ||
                 tr_scene_update(scene, NULL, &err) != TR_OK) {
+                progress_clear(&bar);
                 fprintf(stderr, "trac0r bench frame: --animate: %s\n", err.msg);
                 rc = CLI_FAILURE;
                 break;
@@ -144,12 +151,14 @@ static int bench_frame(int argc, char **argv) {
                 update_times[f - 1] = tr_time_now() - t0;
             }
             if (cli_backend_clear(&be, &err) != TR_OK) {
+                progress_clear(&bar);
                 fprintf(stderr, "trac0r bench frame: %s\n", err.msg);
                 rc = CLI_FAILURE;
                 break;
             }
         }
         if (cli_backend_frame(&be, scene, &cfg, (uint32_t)f, &st, &err) != TR_OK) {
+            progress_clear(&bar);
             fprintf(stderr, "trac0r bench frame: %s\n", err.msg);
             rc = CLI_FAILURE;
         } else if (f > 0) {
@@ -159,6 +168,7 @@ static int bench_frame(int argc, char **argv) {
         }
         if (rc == CLI_OK && cpu_times) {
             if (cli_backend_frame(&cpu, scene, &cfg, (uint32_t)f, &st, &err) != TR_OK) {
+                progress_clear(&bar);
                 fprintf(stderr, "trac0r bench frame: %s\n", err.msg);
                 rc = CLI_FAILURE;
             } else if (f > 0) {
@@ -166,6 +176,10 @@ static int bench_frame(int argc, char **argv) {
             }
         }
     }
+    if (rc == CLI_OK) {
+        progress_update(&bar, (uint64_t)frames + 1, NULL);
+    }
+    progress_end(&bar);
     if (rc == CLI_OK) {
         double mrays = (double)rays / total * 1e-6;
         double med = bench_median(times, frames);
@@ -369,11 +383,16 @@ static int bench_complexity(int argc, char **argv) {
     uint32_t tris[TR_ICOSPHERE_MAX_SUBDIVISIONS + 1] = {0};
     double build_ms[TR_ICOSPHERE_MAX_SUBDIVISIONS + 1][4] = {{0}};
     int dropped[4] = {0};
+    progress bar;
+    progress_begin(&bar, "trac0r bench complexity", "steps",
+                   (uint64_t)(max_level + 1) * (uint64_t)set.count, 0);
     for (int level = 0; level <= max_level && rc == CLI_OK; ++level) {
+        progress_update(&bar, (uint64_t)level * (uint64_t)set.count, NULL);
         char name[32];
         snprintf(name, sizeof name, "cornell-ico-%d", level);
         tr_scene *scene = tr_scene_create(&err);
         if (!scene || tr_scene_builtin(scene, name, c.width, c.height, &err) != TR_OK) {
+            progress_clear(&bar);
             fprintf(stderr, "trac0r bench complexity: %s\n", err.msg);
             tr_scene_destroy(scene);
             rc = CLI_FAILURE;
@@ -385,6 +404,7 @@ static int bench_complexity(int argc, char **argv) {
                 continue;
             }
             if (tr_scene_commit(scene, set.type[k], &err) != TR_OK) {
+                progress_clear(&bar);
                 fprintf(stderr, "trac0r bench complexity: %s\n", err.msg);
                 rc = CLI_FAILURE;
                 break;
@@ -395,6 +415,7 @@ static int bench_complexity(int argc, char **argv) {
                 break;
             }
             if (cli_backend_clear(&be, &err) != TR_OK) {
+                progress_clear(&bar);
                 fprintf(stderr, "trac0r bench complexity: %s\n", err.msg);
                 rc = CLI_FAILURE;
                 break;
@@ -403,6 +424,7 @@ static int bench_complexity(int argc, char **argv) {
             for (int f = 0; f <= frames; ++f) {
                 tr_render_stats st;
                 if (cli_backend_frame(&be, scene, &cfg, (uint32_t)f, &st, &err) != TR_OK) {
+                    progress_clear(&bar);
                     fprintf(stderr, "trac0r bench complexity: %s\n", err.msg);
                     rc = CLI_FAILURE;
                     break;
@@ -424,6 +446,7 @@ static int bench_complexity(int argc, char **argv) {
             }
             double med = bench_median(times, n);
             fps[level][k] = 1.0 / med;
+            progress_clear(&bar);
             printf("%5d %10u %-7s %10.1f %12.2f %9.3f%s\n", level, tr_scene_triangle_count(scene),
                    tr_accel_name(set.type[k]), build_ms[level][k], med * 1e3, 1.0 / med,
                    dropped[k] ? "  (slower than the limit: dropped for higher levels)" : "");
@@ -431,6 +454,10 @@ static int bench_complexity(int argc, char **argv) {
         }
         tr_scene_destroy(scene);
     }
+    if (rc == CLI_OK) {
+        progress_update(&bar, (uint64_t)(max_level + 1) * (uint64_t)set.count, NULL);
+    }
+    progress_end(&bar);
     cli_backend_close(&be);
     free(times);
     if (rc != CLI_OK) {

@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "bench.h"
+#include "progress.h"
 #include "cli.h"
 #include "devices.h"
 
@@ -138,11 +139,23 @@ static void size_free(cli_backend *devs, int ndevs, float *ref, float *half, flo
 
 /* Renders samples [first, first + spp) on the device (its film cleared first) and reads
  * them into f. */
+/* Renders samples first .. first+spp-1 into a cleared film, in calls of a few samples so
+ * that `bar` moves (*done counts the samples so far); a pixel adds its samples in the
+ * same order either way. */
 static int render_spp(tr_device *dev, const tr_scene *s, const tr_render_config *cfg, tr_film *f,
-                      uint32_t first, uint32_t spp, tr_error *err) {
-    if (tr_device_clear(dev, err) != TR_OK ||
-        tr_device_render(dev, tr_scene_camera(s), cfg, first, spp, NULL, NULL, err) != TR_OK) {
+                      uint32_t first, uint32_t spp, progress *bar, uint64_t *done, tr_error *err) {
+    if (tr_device_clear(dev, err) != TR_OK) {
         return TR_ERR;
+    }
+    const uint32_t chunk = 16;
+    for (uint32_t k = 0; k < spp; k += chunk) {
+        const uint32_t n = spp - k < chunk ? spp - k : chunk;
+        if (tr_device_render(dev, tr_scene_camera(s), cfg, first + k, n, NULL, NULL, err) !=
+            TR_OK) {
+            return TR_ERR;
+        }
+        *done += n;
+        progress_update(bar, *done, NULL);
     }
     return tr_device_read_film(dev, f, err);
 }
@@ -319,14 +332,23 @@ int bench_convergence(int argc, char **argv) {
         } else {
             double t0 = tr_time_now();
             uint32_t h1 = ref_spp / 2, h2 = ref_spp - h1;
-            if (render_spp(devs[nmethods].dev, scene, &cfg, &film, 0, h1, &err) != TR_OK) {
+            char label[96];
+            snprintf(label, sizeof label, "trac0r bench convergence: %ux%u reference", c.width,
+                     c.height);
+            progress bar;
+            progress_begin(&bar, label, "spp", ref_spp, 0);
+            uint64_t done_spp = 0;
+            if (render_spp(devs[nmethods].dev, scene, &cfg, &film, 0, h1, &bar, &done_spp, &err) !=
+                TR_OK) {
                 rc = CLI_FAILURE;
             } else {
                 film_mean(&film, half);
-                if (render_spp(devs[nmethods].dev, scene, &cfg, &film, h1, h2, &err) != TR_OK) {
+                if (render_spp(devs[nmethods].dev, scene, &cfg, &film, h1, h2, &bar, &done_spp,
+                               &err) != TR_OK) {
                     rc = CLI_FAILURE;
                 }
             }
+            progress_end(&bar);
             if (rc != CLI_OK) {
                 fprintf(stderr, "trac0r bench convergence: %s\n", err.msg);
             } else {
@@ -363,7 +385,20 @@ int bench_convergence(int argc, char **argv) {
             }
             ++nfilms;
         }
+        /* Progress in render time against the budget of every method (a method that
+         * reaches 41 dB early counts as its whole budget). */
+        char mlabel[96];
+        snprintf(mlabel, sizeof mlabel, "trac0r bench convergence: %ux%u methods", c.width,
+                 c.height);
+        progress mbar;
+        progress_begin(&mbar, mlabel, "ms of budget", (uint64_t)(budget * 1e3) * (uint64_t)nmethods,
+                       0);
         while (rc == CLI_OK) {
+            uint64_t used = 0;
+            for (int k = 0; k < nmethods; ++k) {
+                used += (uint64_t)((done[k] || elapsed[k] > budget ? budget : elapsed[k]) * 1e3);
+            }
+            progress_update(&mbar, used, NULL);
             int mi = -1;
             for (int k = 0; k < nmethods; ++k) {
                 if (!done[k] && (mi < 0 || elapsed[k] < elapsed[mi])) {
@@ -379,6 +414,7 @@ int bench_convergence(int argc, char **argv) {
             cfg.seed = c.seed;
             tr_render_stats st;
             if (cli_backend_frame(&devs[mi], scene, &cfg, spp[mi], &st, &err) != TR_OK) {
+                progress_clear(&mbar);
                 fprintf(stderr, "trac0r bench convergence: %s\n", err.msg);
                 rc = CLI_FAILURE;
                 break;
@@ -388,6 +424,7 @@ int bench_convergence(int argc, char **argv) {
             int last = elapsed[mi] >= budget || r->n == CONV_MAX_POINTS - 1;
             if (spp[mi] == next[mi] || last) {
                 if (cli_backend_read(&devs[mi], &films[mi], &err) != TR_OK) {
+                    progress_clear(&mbar);
                     fprintf(stderr, "trac0r bench convergence: %s\n", err.msg);
                     rc = CLI_FAILURE;
                     break;
@@ -403,6 +440,7 @@ int bench_convergence(int argc, char **argv) {
                 next[mi] += step > 0 ? step : 1;
                 if (p->psnr > 41.0 || last) {
                     done[mi] = 1;
+                    progress_clear(&mbar);
                     printf("%ux%u %-5s: %u spp in %.2f s -> PSNR %.2f dB (raw %.2f), RMSE "
                            "%.5f, relMSE %.5f\n",
                            c.width, c.height, tr_integrator_name(r->integrator), p->spp, p->seconds,
@@ -411,6 +449,7 @@ int bench_convergence(int argc, char **argv) {
                 }
             }
         }
+        progress_end(&mbar);
         for (int k = 0; k < nfilms; ++k) {
             tr_film_free(&films[k]);
         }

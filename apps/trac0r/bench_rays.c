@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "bench.h"
+#include "progress.h"
 /* The one app file that still reaches into the library (CMakeLists.txt): it traces its
  * rays with the kernel's functions through tr_scene_view_of. */
 #include "kernel/kernel.h"
@@ -213,6 +214,10 @@ int bench_rays(int argc, char **argv) {
     printf("%-24s %10s %-7s %10s %10s %10s %10s\n", "scene", "triangles", "accel", "build ms",
            "primary", "diffuse", "shadow");
     int rc = CLI_OK;
+    progress bar;
+    progress_begin(&bar, "trac0r bench rays", "runs",
+                   (uint64_t)scene_count * (uint64_t)set.count * KINDS * (uint64_t)(runs + 1), 0);
+    uint64_t steps = 0;
     for (int sc = 0; sc < scene_count && rc == CLI_OK; ++sc) {
         cli_common sc_opts = c;
         if (!one_scene) {
@@ -220,6 +225,7 @@ int bench_rays(int argc, char **argv) {
         }
         sc_opts.accel = TR_ACCEL_TYPE_BVH; /* the rays are generated with the BVH */
         tr_scene *scene = tr_scene_create(NULL);
+        progress_clear(&bar); /* before any message of the loader */
         rc = cli_load_scene(&a, &sc_opts, scene);
         if (rc != CLI_OK) {
             tr_scene_destroy(scene);
@@ -235,6 +241,7 @@ int bench_rays(int argc, char **argv) {
         tr_error err;
         for (int k = 0; k < set.count && rc == CLI_OK; ++k) {
             if (tr_scene_commit(scene, set.type[k], &err) != TR_OK) {
+                progress_clear(&bar);
                 fprintf(stderr, "trac0r bench rays: %s\n", err.msg);
                 rc = CLI_FAILURE;
                 break;
@@ -242,12 +249,15 @@ int bench_rays(int argc, char **argv) {
             for (int kind = 0; kind < KINDS; ++kind) {
                 int reps = reps_for(trace_set(scene, &sets[kind], kind == SHADOW, threads, 1,
                                               &hits[k][kind])); /* warm-up */
+                progress_update(&bar, ++steps, NULL);
                 for (int r = 0; r < runs; ++r) {
                     times[r] = trace_set(scene, &sets[kind], kind == SHADOW, threads, reps,
                                          &hits[k][kind]);
+                    progress_update(&bar, ++steps, NULL);
                 }
                 mrays[k][kind] = (double)sets[kind].count * reps / bench_median(times, runs) * 1e-6;
             }
+            progress_clear(&bar);
             printf("%-24s %10u %-7s %10.1f %10.2f %10.2f %10.2f\n", sc_opts.scene,
                    tr_scene_triangle_count(scene), tr_accel_name(set.type[k]),
                    bench_build_seconds(scene) * 1e3, mrays[k][PRIMARY], mrays[k][DIFFUSE],
@@ -279,6 +289,7 @@ int bench_rays(int argc, char **argv) {
         }
         tr_scene_destroy(scene);
     }
+    progress_end(&bar);
     free(times);
     return rc;
 }

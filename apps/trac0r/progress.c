@@ -67,6 +67,15 @@ void progress_update(progress *p, uint64_t done, const char *extra) {
     fflush(stderr);
 }
 
+void progress_clear(progress *p) {
+    if (p->drawn) {
+        fputs("\r\033[K", stderr);
+        fflush(stderr);
+        p->drawn = 0;
+        p->last = -1.0; /* redraw at the next update */
+    }
+}
+
 void progress_end(progress *p) {
     if (p->drawn) {
         fputc('\n', stderr);

@@ -20,6 +20,8 @@ typedef struct progress {
 void progress_begin(progress *p, const char *label, const char *unit, uint64_t total, int quiet);
 /* `done` of the total steps are finished; `extra` (may be NULL) is appended to the line. */
 void progress_update(progress *p, uint64_t done, const char *extra);
+/* Erases the bar (on a terminal) before other output; the next update redraws it. */
+void progress_clear(progress *p);
 /* Ends the bar's line on a terminal (before other output follows). */
 void progress_end(progress *p);
 
