@@ -3,8 +3,10 @@
  * The image is cut into tiles (32 x 32 traced pixels, aligned to the stride). Rank 0
  * hands them out one at a time as ranks finish (and renders tiles itself between
  * messages), so a slower machine simply takes fewer tiles. A rank renders every sample
- * of its tile in one call, in the device's own order, and sends the tile's sums and
- * counts back; rank 0 copies them into its film. Tiles never overlap, so the film is
+ * of its tile in one call, in the device's own order, into its device's film, and
+ * reports the tile done; the pixels follow in batches (reading a device's film costs as
+ * much as the whole image, so it is read when a checkpoint is due and at the end, not
+ * per tile), and rank 0 copies them into its film. Tiles never overlap, so the film is
  * the one a single process accumulates, bit for bit, whatever the number of ranks and
  * whichever rank took which tile. Every worker keeps two tiles in hand (the next one is
  * already on its way while it renders), so it never waits for rank 0 to answer.
@@ -24,7 +26,7 @@
 #include "progress.h"
 #include "render_job.h"
 
-enum { TAG_WORK = 1, TAG_RESULT = 2, TAG_ERROR = 3, TAG_CANCELLED = 4 };
+enum { TAG_WORK = 1, TAG_DONE = 2, TAG_DATA = 3, TAG_ERROR = 4, TAG_CANCELLED = 5 };
 #define TILE_GRID 32u /* a tile's side in traced pixels */
 #define PREFETCH 2    /* tiles a worker holds */
 
@@ -99,14 +101,13 @@ static size_t pack_tile(tr_film *f, const tr_rect *r, unsigned char *buf, int un
     return (size_t)(p - buf);
 }
 
-/* Renders every sample of tile k on this rank's device; `film` gets the device's film. */
-static int render_tile(render_job *job, const tiling *t, uint32_t k, tr_film *film, uint64_t *rays,
+/* Renders every sample of tile k into this rank's device film. */
+static int render_tile(render_job *job, const tiling *t, uint32_t k, uint64_t *rays,
                        tr_error *err) {
     const tr_rect r = tile_rect(t, k);
     tr_render_stats st;
     if (tr_device_render(job->be.dev, tr_scene_camera(job->scene), &job->cfg, 0, job->spp, &r, &st,
-                         err) != TR_OK ||
-        tr_device_read_film(job->be.dev, film, err) != TR_OK) {
+                         err) != TR_OK) {
         return TR_ERR;
     }
     *rays += st.rays;
@@ -120,46 +121,114 @@ static int stop_requested(void *user) {
     return render_stop_signal() != 0;
 }
 
-/* A worker: renders the tiles rank 0 sends until it sends -1. */
-static int worker(render_job *job, const tiling *t, tr_film *film, unsigned char *buf) {
+/* Tiles a rank finished whose pixels are still in its device film only. Reading that
+ * film costs as much as the whole image, so it is read once per batch: when a
+ * checkpoint is due and at the end, not once per tile. */
+typedef struct pending {
+    uint32_t *tiles;
+    uint32_t n;
+} pending;
+
+/* The most tiles one message carries (MPI counts are ints). */
+static uint32_t tiles_per_message(const tiling *t, uint32_t passes) {
+    const size_t per = sizeof(uint32_t) + (size_t)t->side * t->side * pixel_bytes(passes);
+    const size_t n = ((size_t)1 << 30) / per;
+    return n > 0 ? (uint32_t)n : 1u;
+}
+
+/* Worker: sends the pending tiles' pixels to rank 0 (TAG_DATA: uint32 final, uint32
+ * count, then per tile its index and pixels), the last message marked final if asked. */
+static int send_pending(render_job *job, const tiling *t, tr_film *film, pending *p, int final,
+                        tr_error *err) {
+    if (p->n > 0 && tr_device_read_film(job->be.dev, film, err) != TR_OK) {
+        return TR_ERR;
+    }
+    const uint32_t most = tiles_per_message(t, job->passes);
+    const size_t per = sizeof(uint32_t) + (size_t)t->side * t->side * pixel_bytes(job->passes);
+    uint32_t sent = 0;
+    do {
+        const uint32_t n = p->n - sent < most ? p->n - sent : most;
+        unsigned char *buf = malloc(2 * sizeof(uint32_t) + (size_t)n * per);
+        if (!buf) {
+            return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory sending tiles");
+        }
+        const uint32_t head[2] = {final && sent + n == p->n, n};
+        memcpy(buf, head, sizeof head);
+        unsigned char *q = buf + sizeof head;
+        for (uint32_t i = 0; i < n; ++i) {
+            const uint32_t k = p->tiles[sent + i];
+            const tr_rect r = tile_rect(t, k);
+            memcpy(q, &k, sizeof k);
+            q += sizeof k;
+            q += pack_tile(film, &r, q, 0);
+        }
+        MPI_Send(buf, (int)(q - buf), MPI_BYTE, 0, TAG_DATA, MPI_COMM_WORLD);
+        free(buf);
+        sent += n;
+    } while (sent < p->n);
+    p->n = 0;
+    return TR_OK;
+}
+
+/* A worker: renders the tiles rank 0 sends until it sends -1, reporting each (TAG_DONE:
+ * uint64 index, rays) and sending the pixels in batches. */
+static int worker(render_job *job, const tiling *t, tr_film *film) {
     tr_error err;
-    uint64_t rays = 0;
+    pending p = {calloc(t->count, sizeof(uint32_t)), 0};
+    if (!p.tiles) {
+        const char msg[] = "out of memory";
+        MPI_Send(msg, (int)sizeof msg, MPI_CHAR, 0, TAG_ERROR, MPI_COMM_WORLD);
+        return CLI_FAILURE;
+    }
+    double last_flush = tr_time_now();
+    int rc = CLI_OK;
     for (;;) {
         int32_t k;
         MPI_Recv(&k, 1, MPI_INT32_T, 0, TAG_WORK, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+        uint64_t rays = 0;
+        int ok = TR_OK;
         if (k < 0) {
-            return CLI_OK;
-        }
-        if (render_tile(job, t, (uint32_t)k, film, &rays, &err) != TR_OK) {
-            if (err.code == TR_STATUS_CANCELLED) {
-                MPI_Send(&k, 1, MPI_INT32_T, 0, TAG_CANCELLED, MPI_COMM_WORLD);
-                continue; /* until rank 0 sends -1 */
+            ok = send_pending(job, t, film, &p, 1, &err);
+        } else if ((ok = render_tile(job, t, (uint32_t)k, &rays, &err)) == TR_OK) {
+            p.tiles[p.n++] = (uint32_t)k;
+            const uint64_t done[2] = {(uint64_t)k, rays};
+            MPI_Send(done, 2, MPI_UINT64_T, 0, TAG_DONE, MPI_COMM_WORLD);
+            if (job->checkpoint && tr_time_now() - last_flush >= job->checkpoint_interval) {
+                ok = send_pending(job, t, film, &p, 0, &err);
+                last_flush = tr_time_now();
             }
-            MPI_Send(err.msg, (int)strlen(err.msg) + 1, MPI_CHAR, 0, TAG_ERROR, MPI_COMM_WORLD);
-            return CLI_FAILURE;
+        } else if (err.code == TR_STATUS_CANCELLED) {
+            MPI_Send(&k, 1, MPI_INT32_T, 0, TAG_CANCELLED, MPI_COMM_WORLD);
+            continue; /* until rank 0 sends -1 */
         }
-        const tr_rect r = tile_rect(t, (uint32_t)k);
-        memcpy(buf, &k, sizeof k);
-        memcpy(buf + sizeof k, &rays, sizeof rays);
-        rays = 0;
-        const size_t n =
-            sizeof k + sizeof rays + pack_tile(film, &r, buf + sizeof k + sizeof rays, 0);
-        MPI_Send(buf, (int)n, MPI_BYTE, 0, TAG_RESULT, MPI_COMM_WORLD);
+        if (ok != TR_OK) {
+            MPI_Send(err.msg, (int)strlen(err.msg) + 1, MPI_CHAR, 0, TAG_ERROR, MPI_COMM_WORLD);
+            rc = CLI_FAILURE;
+            break;
+        }
+        if (k < 0) {
+            break;
+        }
     }
+    free(p.tiles);
+    return rc;
 }
 
 /* Rank 0's side of the hand-out. */
 typedef struct master {
     render_job *job;
     const tiling *t;
-    tr_film *film;       /* the image: finished tiles */
-    unsigned char *done; /* per tile: finished (or from the checkpoint) */
+    tr_film *film;       /* the image: tiles whose pixels arrived */
+    tr_film *own;        /* rank 0's own device film, read when its tiles are needed */
+    unsigned char *done; /* per tile: pixels in `film` (or from the checkpoint) */
+    pending mine;        /* rank 0's finished tiles not yet copied into `film` */
     uint32_t next;       /* the first tile not handed out */
-    uint32_t finished;   /* tiles finished, the checkpoint's included */
+    uint32_t finished;   /* tiles rendered (reported), the checkpoint's included */
     uint32_t resumed;    /* tiles finished in the checkpoint */
     int stopping;        /* hand out no more (a signal or an error) */
-    int *outstanding;    /* per rank: tiles handed out, not yet back */
+    int *outstanding;    /* per rank: tiles handed out, not yet reported */
     int *stopped;        /* per rank: sent -1 (or failed) */
+    int *final;          /* per rank: its last pixels arrived (or it failed) */
     uint64_t rays;
     int rc;
     progress bar;
@@ -190,10 +259,44 @@ static void hand_out(master *m, int rank) {
     }
 }
 
-static void tile_finished(master *m, uint32_t k) {
-    m->done[k] = 1;
+static void tile_reported(master *m) {
     ++m->finished;
     progress_update(&m->bar, m->finished - m->resumed, NULL);
+}
+
+static void fail(master *m, const char *who, const char *msg) {
+    progress_end(&m->bar);
+    if (m->rc == CLI_OK) {
+        fprintf(stderr, "trac0r render: %s%s\n", who, msg);
+    }
+    m->rc = CLI_FAILURE;
+    m->stopping = 1;
+}
+
+/* Copies rank 0's own finished tiles from its device film into the image. */
+static void collect_own(master *m) {
+    tr_error err;
+    if (m->mine.n == 0) {
+        return;
+    }
+    if (tr_device_read_film(m->job->be.dev, m->own, &err) != TR_OK) {
+        fail(m, "", err.msg);
+        return;
+    }
+    unsigned char *tmp = malloc((size_t)m->t->side * m->t->side * pixel_bytes(m->job->passes));
+    if (!tmp) {
+        fail(m, "", "out of memory");
+        return;
+    }
+    for (uint32_t i = 0; i < m->mine.n; ++i) {
+        const uint32_t k = m->mine.tiles[i];
+        const tr_rect r = tile_rect(m->t, k);
+        pack_tile(m->own, &r, tmp, 0);
+        pack_tile(m->film, &r, tmp, 1);
+        m->done[k] = 1;
+    }
+    free(tmp);
+    m->mine.n = 0;
 }
 
 static void maybe_checkpoint(master *m, double *last) {
@@ -202,18 +305,50 @@ static void maybe_checkpoint(master *m, double *last) {
     if (!job->checkpoint || m->rc != CLI_OK || tr_time_now() - *last < job->checkpoint_interval) {
         return;
     }
-    if (checkpoint_write(job->checkpoint, &job->id, CHECKPOINT_TILES, m->film, 0, job->spp, &err) !=
-        TR_OK) {
-        progress_end(&m->bar);
-        fprintf(stderr, "trac0r render: --checkpoint: %s\n", err.msg);
-        m->rc = CLI_FAILURE;
-        m->stopping = 1;
+    /* The workers' pixels come in their own batches, at the same interval: a
+     * checkpoint holds the tiles whose pixels have arrived. */
+    collect_own(m);
+    if (m->rc == CLI_OK && checkpoint_write(job->checkpoint, &job->id, CHECKPOINT_TILES, m->film, 0,
+                                            job->spp, &err) != TR_OK) {
+        fail(m, "--checkpoint: ", err.msg);
     }
     *last = tr_time_now();
 }
 
+/* Unpacks a TAG_DATA message. */
+static void take_pixels(master *m, int src, const unsigned char *buf, size_t n) {
+    uint32_t head[2];
+    if (n < sizeof head) {
+        fail(m, "", "a malformed message from a worker");
+        m->final[src] = 1;
+        return;
+    }
+    memcpy(head, buf, sizeof head);
+    const unsigned char *q = buf + sizeof head;
+    for (uint32_t i = 0; i < head[1]; ++i) {
+        uint32_t k = UINT32_MAX;
+        if ((size_t)(q - buf) + sizeof k <= n) {
+            memcpy(&k, q, sizeof k);
+            q += sizeof k;
+        }
+        const tr_rect r0 = tile_rect(m->t, k < m->t->count ? k : 0);
+        const size_t bytes = (size_t)r0.width * r0.height * pixel_bytes(m->job->passes);
+        if (k >= m->t->count || (size_t)(q - buf) + bytes > n) {
+            fail(m, "", "a malformed message from a worker");
+            m->final[src] = 1; /* waiting for more from it would be in vain */
+            return;
+        }
+        const tr_rect r = tile_rect(m->t, k);
+        q += pack_tile(m->film, &r, (unsigned char *)q, 1);
+        m->done[k] = 1;
+    }
+    if (head[0]) {
+        m->final[src] = 1;
+    }
+}
+
 /* Takes one message from a worker (blocking or not). Returns whether one was taken. */
-static int serve(master *m, unsigned char *buf, size_t cap, int block) {
+static int serve(master *m, int block) {
     MPI_Status st;
     int flag = 1;
     if (block) {
@@ -227,55 +362,55 @@ static int serve(master *m, unsigned char *buf, size_t cap, int block) {
     int n = 0;
     MPI_Get_count(&st, MPI_BYTE, &n);
     const int src = st.MPI_SOURCE;
-    if ((size_t)n > cap) {
-        n = (int)cap; /* cannot happen: workers send tiles of this size */
+    unsigned char *buf = malloc(n > 0 ? (size_t)n : 1u);
+    if (!buf) {
+        /* Nothing sensible is left: the message cannot be taken. */
+        fprintf(stderr, "trac0r render: out of memory receiving %d bytes\n", n);
+        MPI_Abort(MPI_COMM_WORLD, CLI_FAILURE);
     }
     MPI_Recv(buf, n, MPI_BYTE, src, st.MPI_TAG, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
-    --m->outstanding[src];
-    if (st.MPI_TAG == TAG_ERROR) {
-        buf[n > 0 ? n - 1 : 0] = '\0';
-        progress_end(&m->bar);
-        if (m->rc == CLI_OK) {
-            fprintf(stderr, "trac0r render: rank %d: %s\n", src, (const char *)buf);
-        }
-        m->rc = CLI_FAILURE;
-        m->stopping = 1;
-        m->stopped[src] = 1; /* it has left the hand-out */
-        m->outstanding[src] = 0;
-        return 1;
-    }
-    if (st.MPI_TAG == TAG_CANCELLED) {
+    if (st.MPI_TAG == TAG_DONE) {
+        uint64_t done[2];
+        memcpy(done, buf, sizeof done);
+        --m->outstanding[src];
+        m->rays += done[1];
+        tile_reported(m);
+        hand_out(m, src);
+    } else if (st.MPI_TAG == TAG_CANCELLED) {
+        --m->outstanding[src];
         m->stopping = 1;
         hand_out(m, src);
-        return 1;
+    } else if (st.MPI_TAG == TAG_DATA) {
+        take_pixels(m, src, buf, (size_t)n);
+    } else { /* TAG_ERROR: the worker has left the hand-out */
+        buf[n > 0 ? n - 1 : 0] = '\0';
+        char who[32];
+        snprintf(who, sizeof who, "rank %d: ", src);
+        fail(m, who, (const char *)buf);
+        m->stopped[src] = 1;
+        m->outstanding[src] = 0;
+        m->final[src] = 1;
     }
-    int32_t k;
-    uint64_t rays;
-    memcpy(&k, buf, sizeof k);
-    memcpy(&rays, buf + sizeof k, sizeof rays);
-    const tr_rect r = tile_rect(m->t, (uint32_t)k);
-    pack_tile(m->film, &r, buf + sizeof k + sizeof rays, 1);
-    m->rays += rays;
-    tile_finished(m, (uint32_t)k);
-    hand_out(m, src);
+    free(buf);
     return 1;
 }
 
 static int master_run(render_job *job, const tiling *t, tr_film *film, tr_film *own,
-                      unsigned char *done, int size, unsigned char *buf, size_t cap,
-                      double *elapsed, uint64_t *rays) {
+                      unsigned char *done, int size, double *elapsed, uint64_t *rays) {
     master m;
     memset(&m, 0, sizeof m);
     m.job = job;
     m.t = t;
     m.film = film;
+    m.own = own;
     m.done = done;
     m.outstanding = calloc((size_t)size, sizeof *m.outstanding);
     m.stopped = calloc((size_t)size, sizeof *m.stopped);
-    if (!m.outstanding || !m.stopped) {
-        free(m.outstanding);
-        free(m.stopped);
-        return CLI_FAILURE; /* the workers hang: MPI_Abort follows */
+    m.final = calloc((size_t)size, sizeof *m.final);
+    m.mine.tiles = calloc(t->count, sizeof *m.mine.tiles);
+    if (!m.outstanding || !m.stopped || !m.final || !m.mine.tiles) {
+        fprintf(stderr, "trac0r render: out of memory\n");
+        MPI_Abort(MPI_COMM_WORLD, CLI_FAILURE);
     }
     for (uint32_t k = 0; k < t->count; ++k) {
         m.finished += done[k];
@@ -291,41 +426,39 @@ static int master_run(render_job *job, const tiling *t, tr_film *film, tr_film *
     }
     tr_error err;
     for (;;) {
-        while (serve(&m, buf, cap, 0)) {
+        while (serve(&m, 0)) {
         }
         maybe_checkpoint(&m, &last);
         const int32_t k = take_tile(&m);
         if (k >= 0) {
-            if (render_tile(job, t, (uint32_t)k, own, &m.rays, &err) != TR_OK) {
+            if (render_tile(job, t, (uint32_t)k, &m.rays, &err) != TR_OK) {
                 m.stopping = 1;
-                if (err.code == TR_STATUS_CANCELLED) {
-                    continue;
+                if (err.code != TR_STATUS_CANCELLED) {
+                    fail(&m, "", err.msg);
                 }
-                progress_end(&m.bar);
-                fprintf(stderr, "trac0r render: %s\n", err.msg);
-                m.rc = CLI_FAILURE;
                 continue;
             }
-            const tr_rect r = tile_rect(t, (uint32_t)k);
-            pack_tile(own, &r, buf, 0);
-            pack_tile(film, &r, buf, 1);
-            tile_finished(&m, (uint32_t)k);
+            m.mine.tiles[m.mine.n++] = (uint32_t)k;
+            tile_reported(&m);
             continue;
         }
         int busy = 0;
         for (int w = 1; w < size; ++w) {
-            busy |= !m.stopped[w] || m.outstanding[w] > 0;
+            busy |= !m.stopped[w] || m.outstanding[w] > 0 || !m.final[w];
         }
         if (!busy) {
             break;
         }
-        serve(&m, buf, cap, 1);
+        serve(&m, 1);
     }
+    collect_own(&m);
     progress_end(&m.bar);
     *elapsed = tr_time_now() - t0;
     *rays = m.rays;
     free(m.outstanding);
     free(m.stopped);
+    free(m.final);
+    free(m.mine.tiles);
     return m.rc;
 }
 
@@ -445,14 +578,11 @@ int render_mpi_main(int argc, char **argv) {
     }
     tr_error err;
     const tiling t = make_tiling(job.common.width, job.common.height, job.cfg.stride);
-    const size_t cap = 16 + (size_t)t.side * t.side * pixel_bytes(job.passes);
-    unsigned char *buf = malloc(cap);
     unsigned char *tiles_done = calloc(t.count, 1);
     tr_film own, film;
     memset(&film, 0, sizeof film);
-    int ok =
-        buf && tiles_done &&
-        tr_film_init_passes(&own, job.common.width, job.common.height, job.passes, &err) == TR_OK;
+    int ok = tiles_done && tr_film_init_passes(&own, job.common.width, job.common.height,
+                                               job.passes, &err) == TR_OK;
     if (ok && rank == 0) {
         ok = tr_film_init_passes(&film, job.common.width, job.common.height, job.passes, &err) ==
              TR_OK;
@@ -473,7 +603,7 @@ int render_mpi_main(int argc, char **argv) {
         if (rank == 0) {
             double elapsed = 0.0;
             uint64_t rays = 0;
-            rc = master_run(&job, &t, &film, &own, tiles_done, size, buf, cap, &elapsed, &rays);
+            rc = master_run(&job, &t, &film, &own, tiles_done, size, &elapsed, &rays);
             const int sig = render_stop_signal();
             uint32_t finished = 0;
             for (uint32_t k = 0; k < t.count; ++k) {
@@ -497,13 +627,12 @@ int render_mpi_main(int argc, char **argv) {
                 }
             }
         } else {
-            rc = worker(&job, &t, &own, buf);
+            rc = worker(&job, &t, &own);
         }
         render_stop_uninstall();
         /* Every rank ends with rank 0's status (a worker's failure is rank 0's too). */
         MPI_Bcast(&rc, 1, MPI_INT, 0, MPI_COMM_WORLD);
     }
-    free(buf);
     free(tiles_done);
     tr_film_free(&own);
     tr_film_free(&film);
