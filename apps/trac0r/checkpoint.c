@@ -287,11 +287,19 @@ int checkpoint_read(const char *path, const checkpoint_id *id, uint32_t *mode, t
 }
 
 static volatile sig_atomic_t stop_signal;
+/* The actions the render replaced: a second signal and the end of the render give them
+ * back (another part of trac0r may clean up on these signals too). */
+static struct sigaction previous_int, previous_term;
 
 static void on_stop(int sig) {
     if (stop_signal) {
         /* Asked twice: do not wait for the pass to end. */
-        signal(sig, SIG_DFL);
+        const struct sigaction *prev = sig == SIGINT ? &previous_int : &previous_term;
+        if (prev->sa_handler == SIG_IGN) {
+            signal(sig, SIG_DFL);
+        } else {
+            sigaction(sig, prev, NULL);
+        }
         raise(sig);
         return;
     }
@@ -303,8 +311,8 @@ void render_stop_install(void) {
     memset(&sa, 0, sizeof sa);
     sa.sa_handler = on_stop;
     sigemptyset(&sa.sa_mask);
-    sigaction(SIGINT, &sa, NULL);
-    sigaction(SIGTERM, &sa, NULL);
+    sigaction(SIGINT, &sa, &previous_int);
+    sigaction(SIGTERM, &sa, &previous_term);
 }
 
 int render_stop_signal(void) {
@@ -312,6 +320,6 @@ int render_stop_signal(void) {
 }
 
 void render_stop_uninstall(void) {
-    signal(SIGINT, SIG_DFL);
-    signal(SIGTERM, SIG_DFL);
+    sigaction(SIGINT, &previous_int, NULL);
+    sigaction(SIGTERM, &previous_term, NULL);
 }

@@ -40,12 +40,13 @@ int checkpoint_write(const char *path, const checkpoint_id *id, uint32_t mode, c
 int checkpoint_read(const char *path, const checkpoint_id *id, uint32_t *mode, tr_film *film,
                     uint32_t *samples, uint32_t *spp, tr_error *err);
 
-/* SIGINT and SIGTERM set a flag the render polls between passes; a second signal ends
- * the process as the signal's default action would. */
+/* SIGINT and SIGTERM set a flag the render polls between passes; a second signal gets
+ * the action installed before (the default one where it was ignored) and is raised
+ * again: the process ends without waiting for the pass. */
 void render_stop_install(void);
 /* The signal that asked the render to stop, or 0. */
 int render_stop_signal(void);
-/* Restores the default actions. */
+/* Restores the actions installed before. */
 void render_stop_uninstall(void);
 
 #endif
