@@ -69,8 +69,8 @@ _trac0r() {
     COMPREPLY=()
 
     local top
-    top=$(_trac0r_help "$prog")
     if [ "$cword" -eq 1 ]; then
+        top=$(_trac0r_help "$prog")
         COMPREPLY=($(compgen -W "$(_trac0r_section_words "$top" "Commands:")
             $(_trac0r_options "$top" | awk '{ print $1 }')" -- "$cur"))
         return 0
