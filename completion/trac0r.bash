@@ -71,8 +71,8 @@ _trac0r() {
     local top
     if [ "$cword" -eq 1 ]; then
         top=$(_trac0r_help "$prog")
-        COMPREPLY=($(compgen -W "$(_trac0r_section_words "$top" "Commands:")
-            $(_trac0r_options "$top" | awk '{ print $1 }')" -- "$cur"))
+        mapfile -t COMPREPLY < <(compgen -W "$(_trac0r_section_words "$top" "Commands:")
+            $(_trac0r_options "$top" | awk '{ print $1 }')" -- "$cur")
         return 0
     fi
 
@@ -80,8 +80,8 @@ _trac0r() {
     help=$(_trac0r_help "$prog" "$cmd")
     if [ "$cmd" = bench ]; then
         if [ "$cword" -eq 2 ]; then
-            COMPREPLY=($(compgen -W "$(_trac0r_section_words "$help" "Benchmarks:")
-                $(_trac0r_options "$help" | awk '{ print $1 }')" -- "$cur"))
+            mapfile -t COMPREPLY < <(compgen -W "$(_trac0r_section_words "$help" "Benchmarks:")
+                $(_trac0r_options "$help" | awk '{ print $1 }')" -- "$cur")
             return 0
         fi
         help=$(_trac0r_help "$prog" bench "${words[2]}")
@@ -102,37 +102,40 @@ _trac0r() {
         local names
         case $meta in
             FILE | PREFIX)
-                COMPREPLY=($(compgen -f -- "$value"))
+                mapfile -t COMPREPLY < <(compgen -f -- "$value")
                 ;;
             DIR)
-                COMPREPLY=($(compgen -d -- "$value"))
+                mapfile -t COMPREPLY < <(compgen -d -- "$value")
                 ;;
             SCENE)
-                COMPREPLY=($(compgen -W "$(printf '%s\n' "$help" | grep -o 'builtin:[a-z-]*[a-z]' | sort -u)" -- "$value")
-                    $(compgen -f -X '!*.json' -- "$value") $(compgen -d -- "$value"))
+                mapfile -t COMPREPLY < <(
+                    compgen -W "$(printf '%s\n' "$help" | grep -o 'builtin:[a-z-]*[a-z]' | sort -u)" -- "$value"
+                    compgen -f -X '!*.json' -- "$value"
+                    compgen -d -- "$value")
                 ;;
             NAME)
                 names=$(_trac0r_option_names "$help" "$opt")
-                COMPREPLY=($(compgen -W "$names" -- "$value"))
+                mapfile -t COMPREPLY < <(compgen -W "$names" -- "$value")
                 ;;
             DEV)
-                COMPREPLY=($(compgen -W "cpu opencl" -- "$value"))
+                mapfile -t COMPREPLY < <(compgen -W "cpu opencl" -- "$value")
                 ;;
         esac
     else
         case $cur in
             -*)
-                COMPREPLY=($(compgen -W "$(printf '%s\n' "$options" | awk '{ print $1 }')" -- "$cur"))
+                mapfile -t COMPREPLY < <(compgen -W "$(printf '%s\n' "$options" | awk '{ print $1 }')" -- "$cur")
                 ;;
             *)
                 # Positional arguments: scenes for render, view and info; images for compare.
                 case $cmd in
                     render | view | info | bench)
-                        COMPREPLY=($(compgen -f -X '!*.json' -- "$cur") $(compgen -d -- "$cur"))
+                        mapfile -t COMPREPLY < <(compgen -f -X '!*.json' -- "$cur"; compgen -d -- "$cur")
                         ;;
                     compare)
-                        COMPREPLY=($(compgen -f -X '!*.png' -- "$cur") $(compgen -f -X '!*.pfm' -- "$cur")
-                            $(compgen -d -- "$cur"))
+                        mapfile -t COMPREPLY < <(compgen -f -X '!*.png' -- "$cur"
+                            compgen -f -X '!*.pfm' -- "$cur"
+                            compgen -d -- "$cur")
                         ;;
                 esac
                 ;;

@@ -29,7 +29,7 @@ section() {
 options() {
     awk '/^ ? ? ? ?-/ { line = $0; sub(/^ +/, "", line); n = index(line, "   ");
         if (n > 0) line = substr(line, 1, n - 1); print line }' "$1" |
-        tr ', ' '\n\n' | grep -E '^--?[a-z]' | sort -u
+        tr ',' ' ' | tr ' ' '\n' | grep -E '^--?[a-z]' | sort -u
 }
 # What the completion offers for the line "$1" ("trac0r ..." with the binary's path).
 complete_line() {
@@ -77,4 +77,4 @@ done
 if [ "$failures" -ne 0 ]; then
     exit 1
 fi
-echo "help_coverage: $checked options of $(echo $commands | wc -w) commands in the man page and the completion"
+echo "help_coverage: $checked options of $(echo "$commands" | wc -w) commands in the man page and the completion"
