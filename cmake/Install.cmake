@@ -36,8 +36,7 @@ if(TRAC0R_CC_HAS_NO_SEMANTIC_INTERPOSITION)
 endif()
 
 # The exported names: every function the public headers declare, as the preprocessor
-# sees them (so X-macro lists count and comments do not). Names of static inline helpers
-# come along too; the linker ignores names that the library does not define.
+# sees them (so X-macro lists count and comments do not).
 file(GLOB TR_INSTALL_HEADERS CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/include/trac0r/*.h)
 set(TR_ALL_HEADERS_C ${PROJECT_BINARY_DIR}/generated/all_public_headers.c)
 set(TR_ALL_HEADERS_TEXT "")
@@ -57,6 +56,15 @@ set(TR_API_NAMES "")
 foreach(call ${TR_API_CALLS})
   string(REGEX REPLACE "[ \t\n]*\\($" "" name "${call}")
   list(APPEND TR_API_NAMES ${name})
+endforeach()
+# Static inline helpers are no symbols of the library: leave them out, so that linkers
+# that refuse version-script names with no definition (lld) link it too.
+string(REGEX MATCHALL "static[^;{}]*[ *]tr_[A-Za-z0-9_]+[ \t\n]*\\(" TR_STATIC_DECLS
+       "${TR_PREPROCESSED}")
+foreach(decl ${TR_STATIC_DECLS})
+  string(REGEX MATCH "tr_[A-Za-z0-9_]+[ \t\n]*\\($" name "${decl}")
+  string(REGEX REPLACE "[ \t\n]*\\($" "" name "${name}")
+  list(REMOVE_ITEM TR_API_NAMES ${name})
 endforeach()
 list(REMOVE_DUPLICATES TR_API_NAMES)
 list(SORT TR_API_NAMES)
@@ -100,7 +108,6 @@ else()
 endif()
 set_target_properties(trac0r_shared PROPERTIES
   OUTPUT_NAME trac0r
-  LINKER_LANGUAGE C
   VERSION ${PROJECT_VERSION}
   SOVERSION ${TR_SOVERSION}
   EXPORT_NAME trac0r
