@@ -38,6 +38,8 @@ endif()
 # The exported names: every function the public headers declare, as the preprocessor
 # sees them (so X-macro lists count and comments do not).
 file(GLOB TR_INSTALL_HEADERS CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/include/trac0r/*.h)
+# A function added to a header re-runs this, so that it is exported at the next build.
+set_property(DIRECTORY APPEND PROPERTY CMAKE_CONFIGURE_DEPENDS ${TR_INSTALL_HEADERS})
 set(TR_ALL_HEADERS_C ${PROJECT_BINARY_DIR}/generated/all_public_headers.c)
 set(TR_ALL_HEADERS_TEXT "")
 foreach(h ${TR_INSTALL_HEADERS})
