@@ -127,7 +127,9 @@ static void table(void) {
     uint32_t t;
     tr_vec3 p;
     float u, w;
-    CHECK(tr_light_sample(&v, &rng, &t, &p, &u, &w) == 0.0f, "sampling an empty table gives pdf 0");
+    CHECK(tr_light_sample(&v, tr_rng_float(&rng), tr_rng_float(&rng), tr_rng_float(&rng), &t, &p,
+                          &u, &w) == 0.0f,
+          "sampling an empty table gives pdf 0");
     tr_scene_free(&s);
 }
 
@@ -184,7 +186,8 @@ static void irradiance(void) {
             uint32_t t;
             tr_vec3 y;
             float bu, bv;
-            float pa = tr_light_sample(&v, &rng, &t, &y, &bu, &bv);
+            float pa = tr_light_sample(&v, tr_rng_float(&rng), tr_rng_float(&rng),
+                                       tr_rng_float(&rng), &t, &y, &bu, &bv);
             tr_vec3 d = v3_sub(y, x);
             float r2 = v3_dot(d, d);
             tr_vec3 w = v3_scale(d, 1.0f / sqrtf(r2));

@@ -89,13 +89,15 @@ static void mis_weights(void) {
                 uint32_t lt;
                 tr_vec3 y;
                 float lu, lv;
-                if (tr_light_sample(&v, &rng, &lt, &y, &lu, &lv) <= 0.0f) {
+                if (tr_light_sample(&v, tr_rng_float(&rng), tr_rng_float(&rng), tr_rng_float(&rng),
+                                    &lt, &y, &lu, &lv) <= 0.0f) {
                     continue;
                 }
                 wi = v3_normalize(v3_sub(y, p));
             } else { /* BSDF sample */
                 tr_scatter bs;
-                if (!tr_bsdf_sample(&m, wo, &rng, &bs)) {
+                if (!tr_bsdf_sample(&m, wo, tr_rng_float(&rng), tr_rng_float(&rng),
+                                    tr_rng_float(&rng), &bs)) {
                     continue;
                 }
                 wi = bs.wi;
@@ -269,11 +271,10 @@ static void one_bounce(void) {
         double s1 = 0.0, s2 = 0.0;
         int nonzero = 0;
         for (int k = 0; k < N; ++k) {
-            tr_rng rng;
-            tr_rng_init(&rng, 31, (uint64_t)variant, (uint64_t)k);
+            tr_sampler smp = tr_sampler_make(31, (uint64_t)variant, (uint32_t)k);
             uint32_t rays = 0;
             tr_vec3 c =
-                tr_trace_pt(&v, tr_ray_make(from, dir, 0.0f, TR_INFINITY), 2, &rng, &rays, NULL);
+                tr_trace_pt(&v, tr_ray_make(from, dir, 0.0f, TR_INFINITY), 2, &smp, &rays, NULL);
             s1 += c.x;
             s2 += (double)c.x * c.x;
             nonzero += c.x != 0.0f;

@@ -18,7 +18,7 @@
 #include "light.h"
 #include "material.h"
 #include "material_eval.h"
-#include "rng.h"
+#include "sampler.h"
 #include "scene_view.h"
 #include "types.h"
 #include "vec.h"
@@ -52,9 +52,11 @@ TR_FN int tr_v3_is_zero(tr_vec3 a) {
 
 /* Radiance arriving along `ray`. A path has at most max_depth segments (the camera ray
  * is the first); Russian roulette on the throughput's largest component starts after
- * TR_PT_RR_START segments. *rays counts closest-hit and shadow queries; `surface` (may
- * be null) receives the first hit that is not a delta surface, for the passes. */
-TR_FN tr_vec3 tr_trace_pt(const tr_scene_view *s, tr_ray ray, int max_depth, tr_rng *rng,
+ * TR_PT_RR_START segments. Every random decision reads its own dimension of `smp`
+ * (sampler.h): at segment seg, light selection, light point, BSDF lobe, BSDF direction
+ * and roulette each have a dimension pair. *rays counts closest-hit and shadow queries; `surface`
+ * (may be null) receives the first hit that is not a delta surface, for the passes. */
+TR_FN tr_vec3 tr_trace_pt(const tr_scene_view *s, tr_ray ray, int max_depth, const tr_sampler *smp,
                           uint32_t *rays, tr_sample *surface) {
     tr_vec3 radiance = v3s(0.0f);
     tr_vec3 throughput = v3s(1.0f);
@@ -92,8 +94,10 @@ TR_FN tr_vec3 tr_trace_pt(const tr_scene_view *s, tr_ray ray, int max_depth, tr_
         if (!tr_bsdf_is_delta(&m) && s->light_count > 0) {
             uint32_t lt;
             tr_vec3 y;
-            float lu, lv;
-            float pa = tr_light_sample(s, rng, &lt, &y, &lu, &lv);
+            float lu, lv, l1, l2;
+            float lsel = tr_sampler_1d(smp, tr_sampler_dim(seg, TR_DIM_LIGHT_SELECT));
+            tr_sampler_2d(smp, tr_sampler_dim(seg, TR_DIM_LIGHT_POINT), &l1, &l2);
+            float pa = tr_light_sample(s, lsel, l1, l2, &lt, &y, &lu, &lv);
             TR_CONST_GLOBAL tr_triangle *ltri = &s->triangles[lt];
             tr_vec3 d = v3_sub(y, p);
             float dist = v3_length(d);
@@ -122,7 +126,10 @@ TR_FN tr_vec3 tr_trace_pt(const tr_scene_view *s, tr_ray ray, int max_depth, tr_
 
         /* Continue with the BSDF's sample. */
         tr_scatter bs;
-        if (!tr_bsdf_sample(&m, wo, rng, &bs)) {
+        float b1, b2;
+        float blobe = tr_sampler_1d(smp, tr_sampler_dim(seg, TR_DIM_BSDF_LOBE));
+        tr_sampler_2d(smp, tr_sampler_dim(seg, TR_DIM_BSDF_DIR), &b1, &b2);
+        if (!tr_bsdf_sample(&m, wo, blobe, b1, b2, &bs)) {
             break;
         }
         throughput = v3_mul(throughput, bs.weight);
@@ -130,7 +137,7 @@ TR_FN tr_vec3 tr_trace_pt(const tr_scene_view *s, tr_ray ray, int max_depth, tr_
         prev_delta = bs.delta;
         if (seg >= TR_PT_RR_START) {
             float q = tr_fminf(v3_max_component(throughput), 0.95f);
-            if (!(tr_rng_float(rng) < q)) {
+            if (!(tr_sampler_1d(smp, tr_sampler_dim(seg, TR_DIM_ROULETTE)) < q)) {
                 break;
             }
             throughput = v3_scale(throughput, 1.0f / q);

@@ -7,7 +7,6 @@
 #define TR_KERNEL_LIGHT_H
 
 #include "compat.h"
-#include "rng.h"
 #include "scene_view.h"
 #include "types.h"
 #include "vec.h"
@@ -46,11 +45,12 @@ TR_FN float tr_light_pdf_area(const tr_scene_view *s, const tr_material *m, floa
     return tr_light_weight(m, area) / (s->light_weight_total * area);
 }
 
-/* A point on an emitter: *tri_index the triangle, *p the point, *u and *v its
+/* A point on an emitter, from the uniform numbers usel (which emitter) and (u1, u2)
+ * (where on it): *tri_index the triangle, *p the point, *u and *v its
  * barycentrics of the triangle's second and third vertex (as tr_hit's, for the material
  * stage); returns the area density of the choice (0 when the scene has no emitters). */
-TR_FN float tr_light_sample(const tr_scene_view *s, tr_rng *rng, uint32_t *tri_index, tr_vec3 *p,
-                            float *u, float *v) {
+TR_FN float tr_light_sample(const tr_scene_view *s, float usel, float u1, float u2,
+                            uint32_t *tri_index, tr_vec3 *p, float *u, float *v) {
     *tri_index = 0u;
     *p = v3s(0.0f);
     *u = 0.0f;
@@ -58,13 +58,12 @@ TR_FN float tr_light_sample(const tr_scene_view *s, tr_rng *rng, uint32_t *tri_i
     if (s->light_count == 0) {
         return 0.0f;
     }
-    uint32_t k = tr_light_pick(s, tr_rng_float(rng));
+    uint32_t k = tr_light_pick(s, usel);
     uint32_t t = s->lights[k];
     TR_CONST_GLOBAL tr_triangle *tri = &s->triangles[t];
     /* Uniform on the triangle: b0 = 1 - sqrt(u1), b1 = u2 sqrt(u1) (Pharr et al.,
      * Physically Based Rendering, 3rd ed., section 13.6.5). */
-    float su = tr_sqrtf(tr_rng_float(rng));
-    float u2 = tr_rng_float(rng);
+    float su = tr_sqrtf(u1);
     float b0 = 1.0f - su, b1 = u2 * su;
     *p = v3_add(v3_add(v3_scale(tri->v0, b0), v3_scale(tri->v1, b1)),
                 v3_scale(tri->v2, 1.0f - b0 - b1));
