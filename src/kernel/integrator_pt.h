@@ -23,7 +23,12 @@
 #include "types.h"
 #include "vec.h"
 
-/* Russian roulette starts after this many segments. */
+/* Russian roulette starts after this many segments. It is played on the throughput
+ * (which includes earlier roulette's 1/q): a path survives with probability
+ * q = min(1, max RGB component), so a path whose estimate could still be large is never
+ * ended by chance and a surviving path's throughput returns to about 1 — each path
+ * carries about the same weight, which is what keeps roulette's variance low (the rule
+ * of pbrt-v4 and Cycles). Paths that stay bright end at max_depth. */
 #define TR_PT_RR_START 3
 
 /* Veach's power heuristic (beta = 2): the weight of strategy a against strategy b. */
@@ -136,11 +141,13 @@ TR_FN tr_vec3 tr_trace_pt(const tr_scene_view *s, tr_ray ray, int max_depth, con
         prev_pdf = bs.pdf;
         prev_delta = bs.delta;
         if (seg >= TR_PT_RR_START) {
-            float q = tr_fminf(v3_max_component(throughput), 0.95f);
-            if (!(tr_sampler_1d(smp, tr_sampler_dim(seg, TR_DIM_ROULETTE)) < q)) {
-                break;
+            float q = v3_max_component(throughput);
+            if (q < 1.0f) {
+                if (!(tr_sampler_1d(smp, tr_sampler_dim(seg, TR_DIM_ROULETTE)) < q)) {
+                    break;
+                }
+                throughput = v3_scale(throughput, 1.0f / q);
             }
-            throughput = v3_scale(throughput, 1.0f / q);
         }
         tr_vec3 o = tr_offset_origin(p, v3_dot(bs.wi, n) > 0.0f ? n : v3_neg(n));
         ray = tr_ray_make(o, bs.wi, 0.0f, TR_INFINITY);
