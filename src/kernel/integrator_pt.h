@@ -37,20 +37,6 @@ TR_FN float tr_mis_power(float pdf_a, float pdf_b) {
     return a + b > 0.0f ? a / (a + b) : 0.0f;
 }
 
-/* Solid-angle density, seen from a point at distance dist along direction w (unit,
- * pointing from the point to the emitter), with which light sampling picks the emitter
- * point on triangle tri. The emitter table weighs the material's constants (lights.c),
- * so this reads the material itself, not the material stage's output. */
-TR_FN float tr_pt_light_pdf(const tr_scene_view *s, TR_CONST_GLOBAL tr_triangle *tri, tr_vec3 w,
-                            float dist) {
-    float cos_l = tr_fabsf(v3_dot(w, tri->normal));
-    if (!(cos_l > 0.0f)) {
-        return 0.0f;
-    }
-    tr_material m = s->materials[tri->material];
-    return tr_light_pdf_area(s, &m, tri->area) * dist * dist / cos_l;
-}
-
 TR_FN int tr_v3_is_zero(tr_vec3 a) {
     return a.x == 0.0f && a.y == 0.0f && a.z == 0.0f;
 }
@@ -66,7 +52,8 @@ TR_FN tr_vec3 tr_trace_pt(const tr_scene_view *s, tr_ray ray, int max_depth, con
     tr_vec3 radiance = v3s(0.0f);
     tr_vec3 throughput = v3s(1.0f);
     float prev_pdf = 0.0f;
-    int prev_delta = 1; /* the camera ray: no light strategy competes */
+    tr_vec3 prev_p = ray.origin; /* the vertex the last BSDF sample left, for MIS */
+    int prev_delta = 1;          /* the camera ray: no light strategy competes */
     for (int seg = 1; seg <= max_depth; ++seg) {
         tr_hit hit;
         *rays += 1;
@@ -87,7 +74,7 @@ TR_FN tr_vec3 tr_trace_pt(const tr_scene_view *s, tr_ray ray, int max_depth, con
         if (!tr_v3_is_zero(le)) {
             float w = 1.0f;
             if (!prev_delta) {
-                w = tr_mis_power(prev_pdf, tr_pt_light_pdf(s, tri, ray.dir, hit.t));
+                w = tr_mis_power(prev_pdf, tr_light_pdf(s, prev_p, hit.triangle, p));
             }
             radiance = v3_add(radiance, v3_scale(v3_mul(throughput, le), w));
         }
@@ -102,17 +89,16 @@ TR_FN tr_vec3 tr_trace_pt(const tr_scene_view *s, tr_ray ray, int max_depth, con
             float lu, lv, l1, l2;
             float lsel = tr_sampler_1d(smp, tr_sampler_dim(seg, TR_DIM_LIGHT_SELECT));
             tr_sampler_2d(smp, tr_sampler_dim(seg, TR_DIM_LIGHT_POINT), &l1, &l2);
-            float pa = tr_light_sample(s, lsel, l1, l2, &lt, &y, &lu, &lv);
+            float pl = tr_light_sample(s, p, lsel, l1, l2, &lt, &y, &lu, &lv);
             TR_CONST_GLOBAL tr_triangle *ltri = &s->triangles[lt];
             tr_vec3 d = v3_sub(y, p);
             float dist = v3_length(d);
-            if (pa > 0.0f && dist > 0.0f) {
+            if (pl > 0.0f && dist > 0.0f) {
                 tr_vec3 wi = v3_scale(d, 1.0f / dist);
                 tr_bsdf_params lm = tr_material_eval(s, lt, lu, lv, y, ltri->normal, wi);
                 tr_vec3 le_l = tr_emitted(&lm, v3_neg(wi));
                 tr_vec3 f = tr_bsdf_eval(&m, wo, wi);
-                float pl = tr_pt_light_pdf(s, ltri, wi, dist);
-                if (!tr_v3_is_zero(le_l) && !tr_v3_is_zero(f) && pl > 0.0f) {
+                if (!tr_v3_is_zero(le_l) && !tr_v3_is_zero(f)) {
                     float cos_i = tr_fabsf(v3_dot(wi, n));
                     tr_vec3 o = tr_offset_origin(p, v3_dot(wi, n) > 0.0f ? n : v3_neg(n));
                     tr_vec3 od = v3_sub(y, o);
@@ -140,6 +126,7 @@ TR_FN tr_vec3 tr_trace_pt(const tr_scene_view *s, tr_ray ray, int max_depth, con
         throughput = v3_mul(throughput, bs.weight);
         prev_pdf = bs.pdf;
         prev_delta = bs.delta;
+        prev_p = p;
         if (seg >= TR_PT_RR_START) {
             float q = v3_max_component(throughput);
             if (q < 1.0f) {

@@ -2,7 +2,9 @@
  *
  * An emitter is chosen from the scene's table with probability proportional to its
  * weight (emitted power: mean radiance x area x number of emitting sides), by binary
- * search in the table's CDF, then a point uniformly on its area. */
+ * search in the table's CDF, then a point on it: uniformly in the solid angle it
+ * subtends from the shading point where that angle is neither tiny nor nearly a
+ * hemisphere (Arvo 1995), uniformly in area otherwise. */
 #ifndef TR_KERNEL_LIGHT_H
 #define TR_KERNEL_LIGHT_H
 
@@ -45,35 +47,148 @@ TR_FN float tr_light_pdf_area(const tr_scene_view *s, const tr_material *m, floa
     return tr_light_weight(m, area) / (s->light_weight_total * area);
 }
 
-/* A point on an emitter, from the uniform numbers usel (which emitter) and (u1, u2)
- * (where on it): *tri_index the triangle, *p the point, *u and *v its
- * barycentrics of the triangle's second and third vertex (as tr_hit's, for the material
- * stage); returns the area density of the choice (0 when the scene has no emitters). */
-TR_FN float tr_light_sample(const tr_scene_view *s, float usel, float u1, float u2,
-                            uint32_t *tri_index, tr_vec3 *p, float *u, float *v) {
+/* Solid angles between these are sampled uniformly in solid angle (Arvo's spherical
+ * triangle sampling); outside, uniformly in area. Below the lower bound a triangle looks
+ * so small from p that the two densities agree to well under a percent while the angles'
+ * float cancellation (the area is alpha + beta + gamma - pi) grows; near 2 pi the point
+ * is almost in the triangle's plane, where the spherical triangle degenerates. */
+#define TR_LIGHT_SPHERICAL_MIN 1e-3f
+#define TR_LIGHT_SPHERICAL_MAX 6.0f
+
+/* The angle between the planes through the origin and a, b and through the origin and
+ * a, c: the spherical triangle's angle at vertex a. */
+TR_FN float tr_spherical_angle(tr_vec3 a, tr_vec3 b, tr_vec3 c) {
+    tr_vec3 nb = v3_cross(a, b), nc = v3_cross(a, c);
+    return tr_atan2f(v3_length(v3_cross(nb, nc)), v3_dot(nb, nc));
+}
+
+/* Whether light sampling at p picks a point of triangle tri by solid angle: returns the
+ * solid angle of the spherical triangle tri subtends from p when it does (with the unit
+ * directions to its vertices in *a, *b, *c and the angle at a in *alpha), 0 when it
+ * samples by area. Sampling and the pdf call this alike, so they always agree. */
+TR_FN float tr_light_spherical(TR_CONST_GLOBAL tr_triangle *tri, tr_vec3 p, tr_vec3 *a, tr_vec3 *b,
+                               tr_vec3 *c, float *alpha) {
+    tr_vec3 da = v3_sub(tri->v0, p), db = v3_sub(tri->v1, p), dc = v3_sub(tri->v2, p);
+    float la = v3_length(da), lb = v3_length(db), lc = v3_length(dc);
+    if (!(la > 0.0f) || !(lb > 0.0f) || !(lc > 0.0f)) {
+        return 0.0f;
+    }
+    *a = v3_scale(da, 1.0f / la);
+    *b = v3_scale(db, 1.0f / lb);
+    *c = v3_scale(dc, 1.0f / lc);
+    *alpha = tr_spherical_angle(*a, *b, *c);
+    float omega = *alpha + tr_spherical_angle(*b, *c, *a) + tr_spherical_angle(*c, *a, *b) - TR_PI;
+    return omega > TR_LIGHT_SPHERICAL_MIN && omega < TR_LIGHT_SPHERICAL_MAX ? omega : 0.0f;
+}
+
+/* Probability that light sampling picks triangle t (material m): its weight's share. */
+TR_FN float tr_light_select_prob(const tr_scene_view *s, const tr_material *m, float area) {
+    return tr_light_pdf_area(s, m, area) * area;
+}
+
+/* Solid-angle density, seen from p, with which tr_light_sample called at p picks the
+ * point y of triangle t: 1/omega times the selection probability when the triangle is
+ * sampled by solid angle, the area density times r^2 / |cos theta_light| otherwise.
+ * Both MIS strategies use it, so their weights sum to one. */
+TR_FN float tr_light_pdf(const tr_scene_view *s, tr_vec3 p, uint32_t t, tr_vec3 y) {
+    TR_CONST_GLOBAL tr_triangle *tri = &s->triangles[t];
+    tr_material m = s->materials[tri->material];
+    float sel = tr_light_select_prob(s, &m, tri->area);
+    if (!(sel > 0.0f)) {
+        return 0.0f;
+    }
+    tr_vec3 a, b, c;
+    float alpha;
+    float omega = tr_light_spherical(tri, p, &a, &b, &c, &alpha);
+    if (omega > 0.0f) {
+        return sel / omega;
+    }
+    tr_vec3 d = v3_sub(y, p);
+    float d2 = v3_dot(d, d);
+    float cos_l = tr_fabsf(v3_dot(d, tri->normal));
+    if (!(cos_l > 0.0f)) {
+        return 0.0f;
+    }
+    /* r^2 / |cos| = d2 / (|d . n| / |d|) */
+    return sel / tri->area * d2 * tr_sqrtf(d2) / cos_l;
+}
+
+/* A point on an emitter for the shading point p, from the uniform numbers usel (which
+ * emitter) and (u1, u2) (where on it): *tri_index the triangle, *y the point, *u and *v
+ * its barycentrics of the triangle's second and third vertex (as tr_hit's, for the
+ * material stage); returns the solid-angle density of the choice seen from p
+ * (tr_light_pdf), 0 when the scene has no emitters or the sample failed. */
+TR_FN float tr_light_sample(const tr_scene_view *s, tr_vec3 p, float usel, float u1, float u2,
+                            uint32_t *tri_index, tr_vec3 *y, float *u, float *v) {
     *tri_index = 0u;
-    *p = v3s(0.0f);
+    *y = v3s(0.0f);
     *u = 0.0f;
     *v = 0.0f;
     if (s->light_count == 0) {
         return 0.0f;
     }
-    uint32_t k = tr_light_pick(s, usel);
-    uint32_t t = s->lights[k];
+    uint32_t t = s->lights[tr_light_pick(s, usel)];
     TR_CONST_GLOBAL tr_triangle *tri = &s->triangles[t];
-    /* Uniform on the triangle: b0 = 1 - sqrt(u1), b1 = u2 sqrt(u1) (Pharr et al.,
-     * Physically Based Rendering, 3rd ed., section 13.6.5). */
-    float su = tr_sqrtf(u1);
-    float b0 = 1.0f - su, b1 = u2 * su;
-    *p = v3_add(v3_add(v3_scale(tri->v0, b0), v3_scale(tri->v1, b1)),
-                v3_scale(tri->v2, 1.0f - b0 - b1));
     *tri_index = t;
+    tr_vec3 a, b, c;
+    float alpha;
+    float omega = tr_light_spherical(tri, p, &a, &b, &c, &alpha);
+    float b1, b2;
+    if (omega > 0.0f) {
+        /* J. Arvo, "Stratified Sampling of Spherical Triangles", SIGGRAPH 1995: u1 picks
+         * the sub-triangle of area u1 omega with vertices a, b and a point c_hat on arc
+         * ac, whose cosine q from a follows from the area; u2 picks the point on arc
+         * b c_hat by the cosine from b, which is uniform in solid angle along it. */
+        float area_hat = u1 * omega;
+        float sp = tr_sinf(area_hat - alpha), cp = tr_cosf(area_hat - alpha);
+        float ca = tr_cosf(alpha), sa = tr_sinf(alpha);
+        float uu = cp - ca, vv = sp + sa * v3_dot(a, b);
+        float den = (vv * sp + uu * cp) * sa;
+        float q = den != 0.0f ? ((vv * cp - uu * sp) * ca - vv) / den : 1.0f;
+        q = tr_fminf(tr_fmaxf(q, -1.0f), 1.0f);
+        tr_vec3 ct = v3_sub(c, v3_scale(a, v3_dot(c, a)));
+        float lct = v3_length(ct);
+        if (!(lct > 0.0f)) {
+            return 0.0f;
+        }
+        tr_vec3 c_hat = v3_add(v3_scale(a, q), v3_scale(ct, tr_sqrtf(1.0f - q * q) / lct));
+        float z = 1.0f - u2 * (1.0f - v3_dot(c_hat, b));
+        z = tr_fminf(tr_fmaxf(z, -1.0f), 1.0f);
+        tr_vec3 ht = v3_sub(c_hat, v3_scale(b, v3_dot(c_hat, b)));
+        float lht = v3_length(ht);
+        tr_vec3 w =
+            lht > 0.0f ? v3_add(v3_scale(b, z), v3_scale(ht, tr_sqrtf(1.0f - z * z) / lht)) : b;
+        /* Where the direction meets the triangle's plane, in barycentrics (Moller and
+         * Trumbore's solution of the ray-triangle system, without the bounds test; the
+         * clamp absorbs rounding at the edges). */
+        tr_vec3 e1 = v3_sub(tri->v1, tri->v0), e2 = v3_sub(tri->v2, tri->v0);
+        tr_vec3 pv = v3_cross(w, e2);
+        float det = v3_dot(e1, pv);
+        if (!(tr_fabsf(det) > 0.0f)) {
+            return 0.0f;
+        }
+        tr_vec3 tv = v3_sub(p, tri->v0);
+        tr_vec3 qv = v3_cross(tv, e1);
+        b1 = tr_fminf(tr_fmaxf(v3_dot(tv, pv) / det, 0.0f), 1.0f);
+        b2 = tr_fminf(tr_fmaxf(v3_dot(w, qv) / det, 0.0f), 1.0f - b1);
+    } else {
+        /* Uniform on the triangle: b0 = 1 - sqrt(u1), b1 = u2 sqrt(u1) (Pharr et al.,
+         * Physically Based Rendering, 3rd ed., section 13.6.5). */
+        float su = tr_sqrtf(u1);
+        b1 = u2 * su;
+        b2 = 1.0f - (1.0f - su) - b1;
+    }
+    *y = v3_add(v3_add(v3_scale(tri->v0, 1.0f - b1 - b2), v3_scale(tri->v1, b1)),
+                v3_scale(tri->v2, b2));
     *u = b1;
-    *v = 1.0f - b0 - b1;
-    /* The density from the weight, not from CDF differences, so that it equals what
-     * tr_light_pdf_area returns when a BSDF-sampled ray hits the same emitter. */
-    tr_material m = s->materials[tri->material];
-    return tr_light_pdf_area(s, &m, tri->area);
+    *v = b2;
+    if (omega > 0.0f) {
+        /* tr_light_pdf's value, without finding the spherical triangle again. */
+        tr_material m = s->materials[tri->material];
+        float sel = tr_light_select_prob(s, &m, tri->area);
+        return sel > 0.0f ? sel / omega : 0.0f;
+    }
+    return tr_light_pdf(s, p, t, *y);
 }
 
 #endif
