@@ -7,6 +7,7 @@
 #include "cli.h"
 #include "commands.h"
 #include "devices.h"
+#include "render_adaptive.h"
 
 static void render_help(void) {
     printf("Usage: trac0r render [SCENE] [options]\n"
@@ -34,6 +35,15 @@ static void render_help(void) {
            "                       base colour, shading normal, distance from the camera,\n"
            "                       primitive id), at the first surface that is not a mirror\n"
            "                       or smooth glass; 0 where a sample met none\n"
+           "  --noise-threshold E  adaptive sampling, 0..1 (default 0: off): 8x8-pixel tiles\n"
+           "                       stop once their pixels' mean error estimate is below E (at\n"
+           "                       16, 32, 64, ... spp: the mean of N samples against that\n"
+           "                       of the first N/2, relative to the square root of the\n"
+           "                       pixel's value; 0.01 is a good start); --spp is the most\n"
+           "                       a pixel gets. Not with --stride\n"
+           "  --time-limit S       stop before a pass that would end after S seconds,\n"
+           "                       0..1e6 (default 0: none); the image is complete, and the\n"
+           "                       same as one rendered with the spp it reached\n"
            "  -h, --help           show this help\n"
            "\n"
            "Progress (samples, elapsed, ETA, Mrays/s) goes to stderr while it is a terminal;\n"
@@ -101,6 +111,7 @@ int cmd_render(int argc, char **argv) {
     float exposure = 0.0f;
     const char *out = "render.png";
     uint32_t passes = 0;
+    float noise_threshold = 0.0f, time_limit = 0.0f;
 
     while (cli_next(&a)) {
         int rc = cli_common_option(&a, &c);
@@ -120,6 +131,10 @@ int cmd_render(int argc, char **argv) {
             rc = cli_parse_int(&a, 1, 64, &stride);
         } else if (cli_is(&a, "--exposure")) {
             rc = cli_parse_float(&a, -20.0f, 20.0f, &exposure);
+        } else if (cli_is(&a, "--noise-threshold")) {
+            rc = cli_parse_float(&a, 0.0f, 1.0f, &noise_threshold);
+        } else if (cli_is(&a, "--time-limit")) {
+            rc = cli_parse_float(&a, 0.0f, 1e6f, &time_limit);
         } else if (cli_is(&a, "--passes")) {
             rc = parse_passes(&a, &passes);
         } else if (cli_is(&a, "--out") || cli_is(&a, "-o")) {
@@ -135,6 +150,12 @@ int cmd_render(int argc, char **argv) {
         if (rc != CLI_OK) {
             return CLI_USAGE;
         }
+    }
+    if (noise_threshold > 0.0f && stride > 1) {
+        return cli_error(&a,
+                         "--noise-threshold: not with --stride %d (a preview traces too few "
+                         "pixels to estimate their noise)",
+                         stride);
     }
     if (tr_image_format_from_path(out) == TR_IMAGE_UNKNOWN) {
         return cli_error(&a, "--out: '%s' has an unknown extension (expected .png or .pfm)", out);
@@ -181,7 +202,20 @@ int cmd_render(int argc, char **argv) {
     const double t0 = tr_time_now();
     uint64_t rays = 0;
     rc = CLI_OK;
-    for (uint32_t s = 0; s < spp; ++s) {
+    /* Adaptive sampling and the time budget (render_adaptive.c); without them the passes
+     * below, one whole-image frame each. */
+    const int budgeted = noise_threshold > 0.0f || time_limit > 0.0f;
+    adapt_result ares;
+    memset(&ares, 0, sizeof ares);
+    if (budgeted) {
+        adapt_options ao = {spp, noise_threshold, time_limit, tty};
+        if (adapt_render(&be, scene, &cfg, &ao, &ares, &err) != TR_OK) {
+            fprintf(stderr, "%strac0r render: %s\n", tty ? "\n" : "", err.msg);
+            rc = CLI_FAILURE;
+        }
+        rays = ares.rays;
+    }
+    for (uint32_t s = 0; s < spp && !budgeted; ++s) {
         tr_render_stats st;
         if (cli_backend_frame(&be, scene, &cfg, s, &st, &err) != TR_OK) {
             fprintf(stderr, "%strac0r render: %s\n", tty ? "\n" : "", err.msg);
@@ -223,9 +257,20 @@ int cmd_render(int argc, char **argv) {
     if (rc == CLI_OK) {
         char accel[160];
         cli_describe_accel(accel, sizeof accel, scene);
-        fprintf(stderr, "trac0r render: %s %ux%u, %u spp, %s, %s: %.2f s, %.2f Mrays/s -> %s\n",
-                c.scene, c.width, c.height, spp, be.name, accel, elapsed,
-                elapsed > 0 ? (double)rays / elapsed * 1e-6 : 0.0, out);
+        if (budgeted) {
+            fprintf(stderr,
+                    "trac0r render: %s %ux%u, %u of %u spp%s, %.1f spp on average (%u of %u "
+                    "tiles converged), %s, %s: %.2f s, %.2f Mrays/s -> %s\n",
+                    c.scene, c.width, c.height, ares.passes, spp,
+                    ares.stopped_by_time ? " (time limit)" : "",
+                    (double)ares.samples / ((double)c.width * c.height), ares.tiles_converged,
+                    ares.tiles, be.name, accel, elapsed,
+                    elapsed > 0 ? (double)rays / elapsed * 1e-6 : 0.0, out);
+        } else {
+            fprintf(stderr, "trac0r render: %s %ux%u, %u spp, %s, %s: %.2f s, %.2f Mrays/s -> %s\n",
+                    c.scene, c.width, c.height, spp, be.name, accel, elapsed,
+                    elapsed > 0 ? (double)rays / elapsed * 1e-6 : 0.0, out);
+        }
     }
     cli_backend_close(&be);
     tr_film_free(&film);
