@@ -205,8 +205,8 @@ static void irradiance(void) {
             s2 += e * e;
         }
         tr_vec3 va, vb, vc;
-        float alpha;
-        spherical += tr_light_spherical(&s.triangles[0], x, &va, &vb, &vc, &alpha) > 0.0f;
+        float ca, sa;
+        spherical += tr_light_spherical(&s.triangles[0], x, &va, &vb, &vc, &ca, &sa) > 0.0f;
         double mean = s1 / N, se = sqrt(fmax(0.0, s2 / N - mean * mean) / N);
         CHECK(fabs(mean - expect) <= NSIGMA * se && se < 0.01 * expect,
               "point %d: NEE irradiance %.5f +- %.5f vs analytic %.5f", q, mean, se, expect);
@@ -291,8 +291,8 @@ static void pdf_chi_square(void) {
     static double obs[PK * PK];
     for (int q = 0; q < 3; ++q) {
         tr_vec3 va, vb, vc;
-        float alpha;
-        int sph = tr_light_spherical(tri, points[q], &va, &vb, &vc, &alpha) > 0.0f;
+        float ca, sa;
+        int sph = tr_light_spherical(tri, points[q], &va, &vb, &vc, &ca, &sa) > 0.0f;
         CHECK(sph == want_spherical[q], "point %d: spherical %d, expected %d", q, sph,
               want_spherical[q]);
         memset(obs, 0, sizeof obs);

@@ -49,25 +49,21 @@ TR_FN float tr_light_pdf_area(const tr_scene_view *s, const tr_material *m, floa
 
 /* Solid angles between these are sampled uniformly in solid angle (Arvo's spherical
  * triangle sampling); outside, uniformly in area. Below the lower bound a triangle looks
- * so small from p that the two densities agree to well under a percent while the angles'
- * float cancellation (the area is alpha + beta + gamma - pi) grows; near 2 pi the point
- * is almost in the triangle's plane, where the spherical triangle degenerates. */
+ * so small from p that the two densities agree to well under a percent and area sampling
+ * is cheaper; near 2 pi the point is almost in the triangle's plane, where the spherical
+ * triangle degenerates. */
 #define TR_LIGHT_SPHERICAL_MIN 1e-3f
 #define TR_LIGHT_SPHERICAL_MAX 6.0f
 
-/* The angle between the planes through the origin and a, b and through the origin and
- * a, c: the spherical triangle's angle at vertex a. */
-TR_FN float tr_spherical_angle(tr_vec3 a, tr_vec3 b, tr_vec3 c) {
-    tr_vec3 nb = v3_cross(a, b), nc = v3_cross(a, c);
-    return tr_atan2f(v3_length(v3_cross(nb, nc)), v3_dot(nb, nc));
-}
-
 /* Whether light sampling at p picks a point of triangle tri by solid angle: returns the
  * solid angle of the spherical triangle tri subtends from p when it does (with the unit
- * directions to its vertices in *a, *b, *c and the angle at a in *alpha), 0 when it
- * samples by area. Sampling and the pdf call this alike, so they always agree. */
+ * directions to its vertices in *a, *b, *c and the cosine and sine of its angle at a in
+ * *ca, *sa), 0 when it samples by area. Sampling and the pdf call this alike, so they
+ * always agree. The solid angle by Van Oosterom and Strackee's formula (IEEE Trans.
+ * Biomed. Eng. 30(2), 1983), tan(omega / 2) = |a . (b x c)| / (1 + a.b + b.c + c.a): one
+ * atan2 and no cancellation, unlike alpha + beta + gamma - pi. */
 TR_FN float tr_light_spherical(TR_CONST_GLOBAL tr_triangle *tri, tr_vec3 p, tr_vec3 *a, tr_vec3 *b,
-                               tr_vec3 *c, float *alpha) {
+                               tr_vec3 *c, float *ca, float *sa) {
     tr_vec3 da = v3_sub(tri->v0, p), db = v3_sub(tri->v1, p), dc = v3_sub(tri->v2, p);
     float la = v3_length(da), lb = v3_length(db), lc = v3_length(dc);
     if (!(la > 0.0f) || !(lb > 0.0f) || !(lc > 0.0f)) {
@@ -76,9 +72,22 @@ TR_FN float tr_light_spherical(TR_CONST_GLOBAL tr_triangle *tri, tr_vec3 p, tr_v
     *a = v3_scale(da, 1.0f / la);
     *b = v3_scale(db, 1.0f / lb);
     *c = v3_scale(dc, 1.0f / lc);
-    *alpha = tr_spherical_angle(*a, *b, *c);
-    float omega = *alpha + tr_spherical_angle(*b, *c, *a) + tr_spherical_angle(*c, *a, *b) - TR_PI;
-    return omega > TR_LIGHT_SPHERICAL_MIN && omega < TR_LIGHT_SPHERICAL_MAX ? omega : 0.0f;
+    float ab = v3_dot(*a, *b), bc = v3_dot(*b, *c), ca_dot = v3_dot(*c, *a);
+    float triple = tr_fabsf(v3_dot(*a, v3_cross(*b, *c)));
+    float omega = 2.0f * tr_atan2f(triple, 1.0f + ab + bc + ca_dot);
+    if (!(omega > TR_LIGHT_SPHERICAL_MIN && omega < TR_LIGHT_SPHERICAL_MAX)) {
+        return 0.0f;
+    }
+    /* The angle at a is the one between the planes (a, b) and (a, c): from their normals,
+     * |(a x b) x (a x c)| = |a . (b x c)| |a| = triple. */
+    tr_vec3 nb = v3_cross(*a, *b), nc = v3_cross(*a, *c);
+    float len = v3_length(nb) * v3_length(nc);
+    if (!(len > 0.0f)) {
+        return 0.0f;
+    }
+    *ca = v3_dot(nb, nc) / len;
+    *sa = triple / len;
+    return omega;
 }
 
 /* Probability that light sampling picks triangle t (material m): its weight's share. */
@@ -98,8 +107,8 @@ TR_FN float tr_light_pdf(const tr_scene_view *s, tr_vec3 p, uint32_t t, tr_vec3 
         return 0.0f;
     }
     tr_vec3 a, b, c;
-    float alpha;
-    float omega = tr_light_spherical(tri, p, &a, &b, &c, &alpha);
+    float ca, sa;
+    float omega = tr_light_spherical(tri, p, &a, &b, &c, &ca, &sa);
     if (omega > 0.0f) {
         return sel / omega;
     }
@@ -131,8 +140,8 @@ TR_FN float tr_light_sample(const tr_scene_view *s, tr_vec3 p, float usel, float
     TR_CONST_GLOBAL tr_triangle *tri = &s->triangles[t];
     *tri_index = t;
     tr_vec3 a, b, c;
-    float alpha;
-    float omega = tr_light_spherical(tri, p, &a, &b, &c, &alpha);
+    float ca, sa;
+    float omega = tr_light_spherical(tri, p, &a, &b, &c, &ca, &sa);
     float b1, b2;
     if (omega > 0.0f) {
         /* J. Arvo, "Stratified Sampling of Spherical Triangles", SIGGRAPH 1995: u1 picks
@@ -140,8 +149,8 @@ TR_FN float tr_light_sample(const tr_scene_view *s, tr_vec3 p, float usel, float
          * ac, whose cosine q from a follows from the area; u2 picks the point on arc
          * b c_hat by the cosine from b, which is uniform in solid angle along it. */
         float area_hat = u1 * omega;
-        float sp = tr_sinf(area_hat - alpha), cp = tr_cosf(area_hat - alpha);
-        float ca = tr_cosf(alpha), sa = tr_sinf(alpha);
+        float sh = tr_sinf(area_hat), ch = tr_cosf(area_hat);
+        float sp = sh * ca - ch * sa, cp = ch * ca + sh * sa; /* of area_hat - alpha */
         float uu = cp - ca, vv = sp + sa * v3_dot(a, b);
         float den = (vv * sp + uu * cp) * sa;
         float q = den != 0.0f ? ((vv * cp - uu * sp) * ca - vv) / den : 1.0f;

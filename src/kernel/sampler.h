@@ -29,7 +29,8 @@
  * dimension 0 is the identity (the bit-reversed index), dimension 1 comes from the
  * primitive polynomial x + 1 with initial direction number m_1 = 1, whose recurrence
  * v_{k+1} = v_k ^ (v_k >> 1) gives the columns (Bratley and Fox, ACM TOMS 14(1), 1988;
- * the same as the first entry of Joe and Kuo's published table). */
+ * the same as the first entry of Joe and Kuo's published table): the Pascal matrix mod
+ * 2, applied in five shift-and-xor steps (tr_sobol1_reversed). */
 #ifndef TR_KERNEL_SAMPLER_H
 #define TR_KERNEL_SAMPLER_H
 
@@ -70,32 +71,41 @@ TR_FN uint32_t tr_reverse_bits32(uint32_t x) {
     return (x >> 16) | (x << 16);
 }
 
-/* Laine and Karras' hash-based scramble on bit-reversed input, with the constants of
- * Burley 2020 (listing 2): each output bit depends only on itself and the bits below
- * it, so after the reversals each bit of the result depends on itself and the bits
- * above it, which is what a nested uniform (Owen) scramble is. */
-TR_FN uint32_t tr_owen_scramble(uint32_t x, uint32_t seed) {
-    x = tr_reverse_bits32(x);
+/* Laine and Karras' hash-based permutation with the constants of Burley 2020
+ * (listing 2): each output bit depends only on itself and the bits below it. On
+ * bit-reversed input it is an Owen scramble: after reversing back, each bit of the
+ * result depends on itself and the bits above it (nested uniform scrambling). */
+TR_FN uint32_t tr_lk_permute(uint32_t x, uint32_t seed) {
     x += seed;
     x ^= x * 0x6c50b47cu;
     x ^= x * 0xb82f1e52u;
     x ^= x * 0xc7afe638u;
     x ^= x * 0x8d22f6e6u;
-    return tr_reverse_bits32(x);
+    return x;
 }
 
-/* Sobol's dimension 1 for index i, as a 32-bit fraction: the XOR of the generator
- * columns of i's set bits, each column the previous one xor itself shifted by one. */
+TR_FN uint32_t tr_owen_scramble(uint32_t x, uint32_t seed) {
+    return tr_reverse_bits32(tr_lk_permute(tr_reverse_bits32(x), seed));
+}
+
+/* Sobol's dimension 1 for index i, bit-reversed (the fraction's first binary digit in
+ * bit 0). Its generator column k is (1 + z)^k, z one digit further down: the value is
+ * I(1 + z) for the index polynomial I(z) = sum_k i_k z^k, a Taylor shift by one over
+ * GF(2). Since (1 + z)^(2^j) = 1 + z^(2^j) there, the shift takes five steps, each adding
+ * the upper half of every block of 2h coefficients onto its lower half (divide and
+ * conquer: f_lo(z+1) + (1 + z^h) f_hi(z+1)). */
+TR_FN uint32_t tr_sobol1_reversed(uint32_t i) {
+    i ^= (i & 0xaaaaaaaau) >> 1;
+    i ^= (i & 0xccccccccu) >> 2;
+    i ^= (i & 0xf0f0f0f0u) >> 4;
+    i ^= (i & 0xff00ff00u) >> 8;
+    i ^= (i & 0xffff0000u) >> 16;
+    return i;
+}
+
+/* Sobol's dimension 1 for index i, as a 32-bit fraction. */
 TR_FN uint32_t tr_sobol1(uint32_t i) {
-    uint32_t x = 0u, v = 0x80000000u;
-    while (i != 0u) {
-        if (i & 1u) {
-            x ^= v;
-        }
-        i >>= 1;
-        v ^= v >> 1;
-    }
-    return x;
+    return tr_reverse_bits32(tr_sobol1_reversed(i));
 }
 
 /* [0,1) from the top 24 bits: every value exactly representable, never 1. */
@@ -110,12 +120,15 @@ TR_FN tr_sampler tr_sampler_make(uint64_t seed, uint64_t pixel, uint32_t index) 
     return s;
 }
 
-/* The point of dimension pair `dim`: both coordinates in [0,1). */
+/* The point of dimension pair `dim`: both coordinates in [0,1). The Owen scramble of a
+ * Sobol coordinate reverses it, permutes and reverses back; dimension 0 is the reversed
+ * index and dimension 1 is computed reversed, so the first reversal cancels. */
 TR_FN void tr_sampler_2d(const tr_sampler *s, uint32_t dim, float *u1, float *u2) {
     uint32_t k = tr_hash32(s->key ^ tr_hash32(dim + 0x68e31da4u));
     uint32_t i = tr_owen_scramble(s->index, k);
-    uint32_t x = tr_owen_scramble(tr_reverse_bits32(i), tr_hash32(k + 0x1b56c4e9u));
-    uint32_t y = tr_owen_scramble(tr_sobol1(i), tr_hash32(k + 0x2f3a8d17u));
+    uint32_t x = tr_reverse_bits32(tr_lk_permute(i, tr_hash32(k + 0x1b56c4e9u)));
+    uint32_t y =
+        tr_reverse_bits32(tr_lk_permute(tr_sobol1_reversed(i), tr_hash32(k + 0x2f3a8d17u)));
     *u1 = tr_u32_to_unit(x);
     *u2 = tr_u32_to_unit(y);
 }
@@ -124,7 +137,7 @@ TR_FN void tr_sampler_2d(const tr_sampler *s, uint32_t dim, float *u1, float *u2
 TR_FN float tr_sampler_1d(const tr_sampler *s, uint32_t dim) {
     uint32_t k = tr_hash32(s->key ^ tr_hash32(dim + 0x68e31da4u));
     uint32_t i = tr_owen_scramble(s->index, k);
-    return tr_u32_to_unit(tr_owen_scramble(tr_reverse_bits32(i), tr_hash32(k + 0x1b56c4e9u)));
+    return tr_u32_to_unit(tr_reverse_bits32(tr_lk_permute(i, tr_hash32(k + 0x1b56c4e9u))));
 }
 
 /* The dimension pair of use `what` (TR_DIM_*) at path segment seg (1 = camera ray). */
