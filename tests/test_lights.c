@@ -129,8 +129,8 @@ static void table(void) {
     uint32_t t;
     tr_vec3 p;
     float u, w;
-    CHECK(tr_light_sample(&v, v3s(0.0f), tr_rng_float(&rng), tr_rng_float(&rng), tr_rng_float(&rng),
-                          &t, &p, &u, &w) == 0.0f,
+    CHECK(tr_light_sample(&v, v3s(0.0f), tr_rng_float(&rng), tr_rng_float(&rng), &t, &p, &u, &w) ==
+              0.0f,
           "sampling an empty table gives pdf 0");
     tr_scene_free(&s);
 }
@@ -192,8 +192,8 @@ static void irradiance(void) {
             uint32_t t;
             tr_vec3 y;
             float bu, bv;
-            float u0 = tr_rng_float(&rng), u1 = tr_rng_float(&rng), u2 = tr_rng_float(&rng);
-            float pw = tr_light_sample(&v, x, u0, u1, u2, &t, &y, &bu, &bv);
+            float u1 = tr_rng_float(&rng), u2 = tr_rng_float(&rng);
+            float pw = tr_light_sample(&v, x, u1, u2, &t, &y, &bu, &bv);
             tr_vec3 d = v3_sub(y, x);
             float r2 = v3_dot(d, d);
             tr_vec3 w = v3_scale(d, 1.0f / sqrtf(r2));
@@ -301,11 +301,11 @@ static void pdf_chi_square(void) {
         const int N = 300000;
         int failed = 0;
         for (int k = 0; k < N; ++k) {
-            float u0 = tr_rng_float(&rng), u1 = tr_rng_float(&rng), u2 = tr_rng_float(&rng);
+            float u1 = tr_rng_float(&rng), u2 = tr_rng_float(&rng);
             uint32_t t;
             tr_vec3 y;
             float bu, bw;
-            if (!(tr_light_sample(&v, points[q], u0, u1, u2, &t, &y, &bu, &bw) > 0.0f)) {
+            if (!(tr_light_sample(&v, points[q], u1, u2, &t, &y, &bu, &bw) > 0.0f)) {
                 ++failed;
                 continue;
             }

@@ -91,8 +91,8 @@ static void mis_weights(void) {
                 uint32_t lt;
                 tr_vec3 y;
                 float lu, lv;
-                float u0 = tr_rng_float(&rng), u1 = tr_rng_float(&rng), u2 = tr_rng_float(&rng);
-                float pl = tr_light_sample(&v, p, u0, u1, u2, &lt, &y, &lu, &lv);
+                float u1 = tr_rng_float(&rng), u2 = tr_rng_float(&rng);
+                float pl = tr_light_sample(&v, p, u1, u2, &lt, &y, &lu, &lv);
                 if (pl <= 0.0f) {
                     continue;
                 }

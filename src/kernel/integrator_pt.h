@@ -44,9 +44,10 @@ TR_FN int tr_v3_is_zero(tr_vec3 a) {
 /* Radiance arriving along `ray`. A path has at most max_depth segments (the camera ray
  * is the first); Russian roulette on the throughput's largest component starts after
  * TR_PT_RR_START segments. Every random decision reads its own dimension of `smp`
- * (sampler.h): at segment seg, light selection, light point, BSDF lobe, BSDF direction
- * and roulette each have a dimension pair. *rays counts closest-hit and shadow queries; `surface`
- * (may be null) receives the first hit that is not a delta surface, for the passes. */
+ * (sampler.h): at segment seg, the light (selection and point, one pair), BSDF lobe,
+ * BSDF direction and roulette each have a dimension pair. *rays counts closest-hit and shadow
+ * queries; `surface` (may be null) receives the first hit that is not a delta surface, for the
+ * passes. */
 TR_FN tr_vec3 tr_trace_pt(const tr_scene_view *s, tr_ray ray, int max_depth, const tr_sampler *smp,
                           uint32_t *rays, tr_sample *surface) {
     tr_vec3 radiance = v3s(0.0f);
@@ -87,9 +88,8 @@ TR_FN tr_vec3 tr_trace_pt(const tr_scene_view *s, tr_ray ray, int max_depth, con
             uint32_t lt;
             tr_vec3 y;
             float lu, lv, l1, l2;
-            float lsel = tr_sampler_1d(smp, tr_sampler_dim(seg, TR_DIM_LIGHT_SELECT));
-            tr_sampler_2d(smp, tr_sampler_dim(seg, TR_DIM_LIGHT_POINT), &l1, &l2);
-            float pl = tr_light_sample(s, p, lsel, l1, l2, &lt, &y, &lu, &lv);
+            tr_sampler_2d(smp, tr_sampler_dim(seg, TR_DIM_LIGHT), &l1, &l2);
+            float pl = tr_light_sample(s, p, l1, l2, &lt, &y, &lu, &lv);
             TR_CONST_GLOBAL tr_triangle *ltri = &s->triangles[lt];
             tr_vec3 d = v3_sub(y, p);
             float dist = v3_length(d);

@@ -122,12 +122,16 @@ TR_FN float tr_light_pdf(const tr_scene_view *s, tr_vec3 p, uint32_t t, tr_vec3 
     return sel / tri->area * d2 * tr_sqrtf(d2) / cos_l;
 }
 
-/* A point on an emitter for the shading point p, from the uniform numbers usel (which
- * emitter) and (u1, u2) (where on it): *tri_index the triangle, *y the point, *u and *v
+/* A point on an emitter for the shading point p, from the uniform numbers (u1, u2):
+ * u1 picks the emitter, and its position inside the emitter's CDF interval, rescaled to
+ * [0,1), and u2 pick the point on it. Reusing u1 keeps the pair's stratification on
+ * every emitter: the points of a (0,m,2)-net that fall into an interval of u1 are
+ * stratified there too, which a separate selection number would undo (each emitter
+ * would get an unstratified share). *tri_index the triangle, *y the point, *u and *v
  * its barycentrics of the triangle's second and third vertex (as tr_hit's, for the
  * material stage); returns the solid-angle density of the choice seen from p
  * (tr_light_pdf), 0 when the scene has no emitters or the sample failed. */
-TR_FN float tr_light_sample(const tr_scene_view *s, tr_vec3 p, float usel, float u1, float u2,
+TR_FN float tr_light_sample(const tr_scene_view *s, tr_vec3 p, float u1, float u2,
                             uint32_t *tri_index, tr_vec3 *y, float *u, float *v) {
     *tri_index = 0u;
     *y = v3s(0.0f);
@@ -136,7 +140,10 @@ TR_FN float tr_light_sample(const tr_scene_view *s, tr_vec3 p, float usel, float
     if (s->light_count == 0) {
         return 0.0f;
     }
-    uint32_t t = s->lights[tr_light_pick(s, usel)];
+    uint32_t k = tr_light_pick(s, u1);
+    float lo = k > 0u ? s->light_cdf[k - 1u] : 0.0f, hi = s->light_cdf[k];
+    u1 = hi > lo ? tr_fminf(tr_fmaxf((u1 - lo) / (hi - lo), 0.0f), 0.99999994f) : u1;
+    uint32_t t = s->lights[k];
     TR_CONST_GLOBAL tr_triangle *tri = &s->triangles[t];
     *tri_index = t;
     tr_vec3 a, b, c;

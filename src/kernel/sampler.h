@@ -40,12 +40,11 @@
 /* Dimension pairs of one pt path: the camera's pair, then TR_SAMPLER_PER_BOUNCE per
  * segment. */
 #define TR_DIM_CAMERA 0u
-#define TR_DIM_LIGHT_SELECT 0u /* offsets inside a bounce's block */
-#define TR_DIM_LIGHT_POINT 1u
-#define TR_DIM_BSDF_LOBE 2u
-#define TR_DIM_BSDF_DIR 3u
-#define TR_DIM_ROULETTE 4u
-#define TR_SAMPLER_PER_BOUNCE 5u
+#define TR_DIM_LIGHT 0u /* offsets inside a bounce's block; light selection and point */
+#define TR_DIM_BSDF_LOBE 1u
+#define TR_DIM_BSDF_DIR 2u
+#define TR_DIM_ROULETTE 3u
+#define TR_SAMPLER_PER_BOUNCE 4u
 
 typedef struct tr_sampler {
     uint32_t key;   /* hash of (seed, pixel) */
