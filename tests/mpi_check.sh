@@ -47,7 +47,7 @@ fi
 # SIGTERM under MPI: rank 0 writes the finished tiles and the checkpoint; resuming
 # with three ranks finishes the rest.
 if [ "$PART" = resume ]; then
-    L="render --width 100 --height 70 --spp 400 --threads 1"
+    L="render --width 200 --height 140 --spp 400 --threads 1"
     "$BIN" $L --threads 0 --out long.pfm 2>/dev/null
     $MPIRUN -np 2 "$BIN" $L --out stopped.pfm --checkpoint ck --checkpoint-interval 0 2>err.txt &
     pid=$!

@@ -86,7 +86,8 @@ static void chi2_case(const tr_bsdf_params *m, double theta_o_deg, uint64_t seed
     int inconsistent = 0;
     for (int k = 0; k < N; ++k) {
         tr_scatter s;
-        if (!tr_bsdf_sample(m, wo, &rng, &s)) {
+        if (!tr_bsdf_sample(m, wo, tr_rng_float(&rng), tr_rng_float(&rng), tr_rng_float(&rng),
+                            &s)) {
             count[NC * NP] += 1;
             continue;
         }
@@ -172,7 +173,10 @@ static void albedo(const tr_bsdf_params *m, double theta_o_deg, double *sampled,
     double s1 = 0.0, s2 = 0.0, u1 = 0.0, u2 = 0.0;
     for (int k = 0; k < N; ++k) {
         tr_scatter s;
-        double w = tr_bsdf_sample(m, wo, &rng, &s) ? s.weight.x : 0.0;
+        double w =
+            tr_bsdf_sample(m, wo, tr_rng_float(&rng), tr_rng_float(&rng), tr_rng_float(&rng), &s)
+                ? s.weight.x
+                : 0.0;
         s1 += w;
         s2 += w * w;
         tr_vec3 d = dir_of(tr_rng_float(&rng), 2.0 * PI_D * tr_rng_float(&rng));
@@ -240,8 +244,9 @@ static void delta_lobes(void) {
         int refl = 0, bad = 0;
         for (int k = 0; k < N; ++k) {
             tr_scatter s;
-            if (!tr_bsdf_sample(&glass, wo, &rng, &s) || !s.delta || s.weight.x != 1.0f ||
-                s.weight.y != 1.0f || s.weight.z != 1.0f) {
+            if (!tr_bsdf_sample(&glass, wo, tr_rng_float(&rng), tr_rng_float(&rng),
+                                tr_rng_float(&rng), &s) ||
+                !s.delta || s.weight.x != 1.0f || s.weight.y != 1.0f || s.weight.z != 1.0f) {
                 ++bad;
                 continue;
             }
@@ -274,7 +279,8 @@ static void delta_lobes(void) {
     tr_rng rng;
     tr_rng_init(&rng, 5, 5, 5);
     tr_scatter s;
-    int ok = tr_bsdf_sample(&mirror, wo, &rng, &s);
+    int ok =
+        tr_bsdf_sample(&mirror, wo, tr_rng_float(&rng), tr_rng_float(&rng), tr_rng_float(&rng), &s);
     tr_vec3 fr = tr_fresnel_schlick(mirror.color, fabsf(wo.z));
     CHECK(ok && s.delta && fabsf(s.wi.x + wo.x) < 1e-6f && fabsf(s.wi.y + wo.y) < 1e-6f &&
               fabsf(s.wi.z - wo.z) < 1e-6f && fabsf(s.weight.x - fr.x) < 1e-6f &&
@@ -285,8 +291,10 @@ static void delta_lobes(void) {
     /* An emitter's BSDF is black. */
     tr_bsdf_params em = mat(TR_MATERIAL_EMITTER, v3s(1.0f), 0.0f, 1.0f);
     em.emittance = 5.0f;
-    CHECK(!tr_bsdf_sample(&em, wo, &rng, &s) && tr_bsdf_eval(&em, wo, v3(0, 0, 1)).x == 0.0f,
-          "emitters do not scatter");
+    CHECK(
+        !tr_bsdf_sample(&em, wo, tr_rng_float(&rng), tr_rng_float(&rng), tr_rng_float(&rng), &s) &&
+            tr_bsdf_eval(&em, wo, v3(0, 0, 1)).x == 0.0f,
+        "emitters do not scatter");
     /* One-sided emission, towards the normal's side only, unless two-sided. */
     CHECK(tr_emitted(&em, v3(0, 0, 1)).x == 5.0f && tr_emitted(&em, v3(0, 0, -1)).x == 0.0f,
           "one-sided emitter");

@@ -163,9 +163,12 @@ static void test_render(void) {
     CHECK(tr_film_init(&f, 8, 6, &err) == TR_OK, "%s", err.msg);
     tr_render_config cfg = tr_render_config_default();
     CHECK(tr_render_frame(&s, &s.camera, &cfg, &f, 0, NULL, &err) == TR_OK, "%s", err.msg);
-    cfg.max_depth = 0;
+    cfg.max_depth = -1; /* 0 is the integrator's default */
     CHECK_STATUS(tr_render_frame(&s, &s.camera, &cfg, &f, 0, NULL, &err), err,
-                 TR_STATUS_INVALID_ARGUMENT, "max depth 0");
+                 TR_STATUS_INVALID_ARGUMENT, "max depth -1");
+    cfg.max_depth = TR_MAX_DEPTH_LIMIT + 1;
+    CHECK_STATUS(tr_render_frame(&s, &s.camera, &cfg, &f, 0, NULL, &err), err,
+                 TR_STATUS_INVALID_ARGUMENT, "max depth past the limit");
     cfg = tr_render_config_default();
     cfg.integrator = 99;
     CHECK_STATUS(tr_render_frame(&s, &s.camera, &cfg, &f, 0, NULL, &err), err,

@@ -14,7 +14,9 @@
  *      errors of the measured variance.
  *  (d) A table older than the scene's triangles is not exposed to the kernel, and a
  *      scene without emitters has an empty table.
- *  (e) The built-in Cornell box's lamp faces up with our winding and is two-sided. */
+ *  (e) The built-in Cornell box's lamp faces up with our winding and is two-sided.
+ *  (f) Light sampling's density, by solid angle and by area, matches its samples
+ *      (chi-square; see pdf_chi_square). */
 #include "check.h"
 #include "scene_util.h"
 #include "kernel/kernel.h"
@@ -127,7 +129,9 @@ static void table(void) {
     uint32_t t;
     tr_vec3 p;
     float u, w;
-    CHECK(tr_light_sample(&v, &rng, &t, &p, &u, &w) == 0.0f, "sampling an empty table gives pdf 0");
+    CHECK(tr_light_sample(&v, v3s(0.0f), tr_rng_float(&rng), tr_rng_float(&rng), &t, &p, &u, &w) ==
+              0.0f,
+          "sampling an empty table gives pdf 0");
     tr_scene_free(&s);
 }
 
@@ -162,8 +166,12 @@ static void irradiance(void) {
     tr_scene_view v = tr_scene_view_of(&s);
     const double hs = side / 2.0;
     const double vtx[4][3] = {{-hs, h, -hs}, {hs, h, -hs}, {hs, h, hs}, {-hs, h, hs}};
-    const double points[3][3] = {{0.0, 0.0, 0.0}, {0.3, 0.2, -0.5}, {1.2, 0.6, 0.1}};
-    for (int q = 0; q < 3; ++q) {
+    /* Points where the light subtends a solid angle sampled as such, one close to its
+     * plane, and one far below where it is sampled by area. */
+    const double points[5][3] = {
+        {0.0, 0.0, 0.0}, {0.3, 0.2, -0.5}, {1.2, 0.6, 0.1}, {0.1, 0.9, 0.2}, {0.5, -30.0, 1.0}};
+    int spherical = 0;
+    for (int q = 0; q < 5; ++q) {
         double expect = polygon_irradiance(vtx, 4, points[q], L);
         if (q == 0) {
             /* On the axis of a square of half-side s at height h each edge lies at
@@ -184,22 +192,29 @@ static void irradiance(void) {
             uint32_t t;
             tr_vec3 y;
             float bu, bv;
-            float pa = tr_light_sample(&v, &rng, &t, &y, &bu, &bv);
+            float u1 = tr_rng_float(&rng), u2 = tr_rng_float(&rng);
+            float pw = tr_light_sample(&v, x, u1, u2, &t, &y, &bu, &bv);
             tr_vec3 d = v3_sub(y, x);
             float r2 = v3_dot(d, d);
             tr_vec3 w = v3_scale(d, 1.0f / sqrtf(r2));
             tr_bsdf_params m = tr_material_eval(&v, t, bu, bv, y, s.triangles[t].normal, w);
             double le = tr_emitted(&m, v3_neg(w)).x;
             double cos_x = w.y > 0.0f ? w.y : 0.0;
-            double cos_l = fabs(v3_dot(w, s.triangles[t].normal));
-            double e = le * cos_x * cos_l / ((double)r2 * pa);
+            double e = pw > 0.0f ? le * cos_x / pw : 0.0;
             s1 += e;
             s2 += e * e;
         }
+        tr_vec3 va, vb, vc;
+        float ca, sa;
+        spherical += tr_light_spherical(&s.triangles[0], x, &va, &vb, &vc, &ca, &sa) > 0.0f;
         double mean = s1 / N, se = sqrt(fmax(0.0, s2 / N - mean * mean) / N);
         CHECK(fabs(mean - expect) <= NSIGMA * se && se < 0.01 * expect,
               "point %d: NEE irradiance %.5f +- %.5f vs analytic %.5f", q, mean, se, expect);
     }
+    CHECK(spherical == 4,
+          "%d of the 4 near points sample the light by solid angle, the far "
+          "point by area",
+          spherical);
     tr_scene_free(&s);
 }
 
@@ -225,9 +240,115 @@ static void builtin_lamp(void) {
     tr_scene_free(&s);
 }
 
+/* (f) The density light sampling reports is the density it samples: points drawn by
+ * tr_light_sample on one triangle, binned on a 16 x 16 grid of the triangle's uniform-area
+ * parametrisation (u1 = (b1 + b2)^2, u2 = b1 / (b1 + b2); each cell 1/256 of the area),
+ * against the probability tr_light_pdf gives each cell, integrated by the midpoint rule
+ * on 8 x 8 sub-cells (the solid-angle density times |cos theta_l| / r^2 is the area
+ * density). Chi-square at p = 1e-4 with 255 degrees of freedom, from points where the
+ * triangle is sampled by solid angle and by area. The expected probabilities must sum to
+ * 1 (the density is normalised), and the uniform-area density must fail against the
+ * solid-angle samples of a near point (the test can tell them apart). */
+enum { PK = 16, PM = 8 };
+
+static double pdf_cell_prob(const tr_scene_view *v, const tr_triangle *tri, tr_vec3 x, int i, int j,
+                            int area_only) {
+    double sum = 0.0;
+    for (int a = 0; a < PM; ++a) {
+        for (int b = 0; b < PM; ++b) {
+            double u1 = (i + (a + 0.5) / PM) / PK, u2 = (j + (b + 0.5) / PM) / PK;
+            double su = sqrt(u1), b1 = u2 * su, b2 = su - b1;
+            tr_vec3 y = v3_add(
+                v3_add(v3_scale(tri->v0, (float)(1.0 - b1 - b2)), v3_scale(tri->v1, (float)b1)),
+                v3_scale(tri->v2, (float)b2));
+            if (area_only) {
+                sum += 1.0 / tri->area;
+                continue;
+            }
+            tr_vec3 d = v3_sub(y, x);
+            double r2 = v3_dot(d, d);
+            double cos_l = fabs(v3_dot(d, tri->normal)) / sqrt(r2);
+            sum += (double)tr_light_pdf(v, x, 0, y) * cos_l / r2;
+        }
+    }
+    return sum / (PM * PM) * tri->area / (PK * PK);
+}
+
+static void pdf_chi_square(void) {
+    tr_scene s = {0};
+    tr_scene_init(&s);
+    tr_error err;
+    uint32_t em = add_mat(&s, tr_material_emitter(v3s(1.0f), 2.0f));
+    const float pos[9] = {-0.5f, 1.0f, -0.3f, 0.6f, 1.0f, -0.4f, 0.1f, 1.2f, 0.7f};
+    const uint32_t idx[3] = {0, 1, 2};
+    CHECK(tr_scene_add_mesh(&s, pos, 3, idx, 1, NULL, em, NULL, NULL, &err) == TR_OK, "mesh: %s",
+          err.msg);
+    CHECK(tr_scene_commit(&s, TR_ACCEL_TYPE_FLAT, &err) == TR_OK, "commit: %s", err.msg);
+    tr_scene_view v = tr_scene_view_of(&s);
+    const tr_triangle *tri = &s.triangles[0];
+    const tr_vec3 points[3] = {v3(0.0f, 0.7f, 0.0f), v3(0.8f, 0.2f, 0.4f), v3(3.0f, -40.0f, 2.0f)};
+    const int want_spherical[3] = {1, 1, 0};
+    static double obs[PK * PK];
+    for (int q = 0; q < 3; ++q) {
+        tr_vec3 va, vb, vc;
+        float ca, sa;
+        int sph = tr_light_spherical(tri, points[q], &va, &vb, &vc, &ca, &sa) > 0.0f;
+        CHECK(sph == want_spherical[q], "point %d: spherical %d, expected %d", q, sph,
+              want_spherical[q]);
+        memset(obs, 0, sizeof obs);
+        tr_rng rng;
+        tr_rng_init(&rng, 555, (uint64_t)q, 0);
+        const int N = 300000;
+        int failed = 0;
+        for (int k = 0; k < N; ++k) {
+            float u1 = tr_rng_float(&rng), u2 = tr_rng_float(&rng);
+            uint32_t t;
+            tr_vec3 y;
+            float bu, bw;
+            if (!(tr_light_sample(&v, points[q], u1, u2, &t, &y, &bu, &bw) > 0.0f)) {
+                ++failed;
+                continue;
+            }
+            double sum = (double)bu + bw;
+            double c1 = sum * sum, c2 = sum > 0.0 ? bu / sum : 0.0;
+            int i = (int)(c1 * PK), j = (int)(c2 * PK);
+            i = i < 0 ? 0 : (i >= PK ? PK - 1 : i);
+            j = j < 0 ? 0 : (j >= PK ? PK - 1 : j);
+            obs[i * PK + j] += 1.0;
+        }
+        CHECK(failed == 0, "point %d: %d samples failed", q, failed);
+        for (int area_only = 0; area_only < 2; ++area_only) {
+            double chi2 = 0.0, total = 0.0;
+            for (int i = 0; i < PK; ++i) {
+                for (int j = 0; j < PK; ++j) {
+                    double pr = pdf_cell_prob(&v, tri, points[q], i, j, area_only);
+                    total += pr;
+                    double e = pr * N, o = obs[i * PK + j];
+                    chi2 += (o - e) * (o - e) / e;
+                }
+            }
+            double crit = chi2_critical(PK * PK - 1);
+            if (!area_only) {
+                CHECK(fabs(total - 1.0) < 2e-3, "point %d: the density integrates to %.5f", q,
+                      total);
+                CHECK(chi2 < crit, "point %d: chi-square %.1f, critical %.1f", q, chi2, crit);
+                printf("point %d (%s): chi-square %.1f (critical %.1f)\n", q,
+                       sph ? "solid angle" : "area", chi2, crit);
+            } else if (q == 0) {
+                CHECK(chi2 > crit,
+                      "the uniform-area density passes for solid-angle samples "
+                      "(chi-square %.1f)",
+                      chi2);
+            }
+        }
+    }
+    tr_scene_free(&s);
+}
+
 int main(void) {
     table();
     builtin_lamp();
     irradiance();
+    pdf_chi_square();
     return check_finish("test_lights");
 }

@@ -126,7 +126,7 @@ static void glass_bit_identity(void) {
         memset(&os, 0, sizeof os);
         memset(&ns, 0, sizeof ns);
         oracle_pt_glass(&m, n, wo, &a, &os);
-        rc = tr_bsdf_sample(&bp, wo, &b, &ns);
+        rc = tr_bsdf_sample(&bp, wo, tr_rng_float(&b), 0.5f, 0.5f, &ns);
         if (!rc || !same_v3(os.wi, ns.wi) || !same_v3(os.weight, ns.weight) ||
             memcmp(&os.pdf, &ns.pdf, sizeof os.pdf) != 0 || os.delta != ns.delta ||
             memcmp(&a, &b, sizeof a) != 0) {

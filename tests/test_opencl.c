@@ -52,7 +52,11 @@ static double luminance(const tr_film *f, size_t i) {
  * b, has variance var(d) / n. Films that share their random streams (a and b here)
  * differ by less. Each of the R x R regions must satisfy
  * |mean(L(a) - scale * L(b))| <= z * sqrt(var(d) / n) with z = 4.9 (two-sided
- * p = 1e-6 per region under the normal approximation). Returns the failing regions.
+ * p = 1e-6 per region under the normal approximation), plus 1 % of the image's mean: a
+ * region that is black but for a couple of pixels (outside the box) has a variance
+ * estimate of two or three degrees of freedom, which a heavy-tailed pixel (a caustic
+ * path found by BSDF sampling) exceeds by chance; a 20 % scaling stays far beyond the
+ * floor. Returns the failing regions.
  */
 static int region_failures(const tr_film *a, const tr_film *b, const tr_film *r1, const tr_film *r2,
                            double scale, uint32_t stride, int verbose) {
@@ -60,6 +64,11 @@ static int region_failures(const tr_film *a, const tr_film *b, const tr_film *r1
      * estimate: use those, in one region. */
     const int R = stride > 1 ? 1 : 4;
     int failures = 0;
+    double image_mean = 0.0;
+    for (size_t i = 0; i < (size_t)a->width * a->height; ++i) {
+        image_mean += luminance(a, i);
+    }
+    image_mean /= (double)a->width * a->height;
     for (int ry = 0; ry < R; ++ry) {
         for (int rx = 0; rx < R; ++rx) {
             uint32_t x0 = a->width * (uint32_t)rx / R, x1 = a->width * (uint32_t)(rx + 1) / R;
@@ -80,7 +89,7 @@ static int region_failures(const tr_film *a, const tr_film *b, const tr_film *r1
             }
             double md = sd / n;
             double vd = (qd - n * md * md) / (n - 1);
-            double bound = 4.9 * sqrt(fmax(vd, 0) / n);
+            double bound = 4.9 * sqrt(fmax(vd, 0) / n) + 0.01 * image_mean;
             if (!(fabs(sab / n) <= bound)) {
                 ++failures;
             }
@@ -355,9 +364,9 @@ int main(void) {
     CHECK_STATUS(tr_device_render(dev, &scene.camera, &cfg, 0, 1, NULL, NULL, &err), err,
                  TR_STATUS_INVALID_ARGUMENT, "integrator 99");
     cfg = tr_render_config_default();
-    cfg.max_depth = 0;
+    cfg.max_depth = -1; /* 0 asks for the integrator's default */
     CHECK_STATUS(tr_device_render(dev, &scene.camera, &cfg, 0, 1, NULL, NULL, &err), err,
-                 TR_STATUS_INVALID_ARGUMENT, "max depth 0");
+                 TR_STATUS_INVALID_ARGUMENT, "max depth -1");
     cfg = tr_render_config_default();
 
     /* A device without enough memory: the upload fails before touching the scene on

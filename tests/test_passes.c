@@ -313,11 +313,15 @@ static void test_splits(int integrator, int stride) {
 }
 
 int main(void) {
-    /* The library's defaults are the command line's (docs/cli.md): pt, 8 bounces, all
-     * threads, no preview stride, no passes. */
+    /* The library's defaults are the command line's (docs/cli.md): pt, the integrator's
+     * max depth (64 for pt, 8 for naive), all threads, no preview stride, no passes. */
     const tr_render_config d = tr_render_config_default();
-    CHECK(d.integrator == TR_INTEGRATOR_PT && d.max_depth == 8 && d.threads == 0 && d.stride == 1 &&
-              d.passes == 0 && d.cancel == NULL,
+    CHECK(tr_default_max_depth(TR_INTEGRATOR_PT) == 64 &&
+              tr_default_max_depth(TR_INTEGRATOR_NAIVE) == 8,
+          "default depths %d (pt) and %d (naive)", tr_default_max_depth(TR_INTEGRATOR_PT),
+          tr_default_max_depth(TR_INTEGRATOR_NAIVE));
+    CHECK(d.integrator == TR_INTEGRATOR_PT && d.max_depth == TR_MAX_DEPTH_DEFAULT &&
+              d.threads == 0 && d.stride == 1 && d.passes == 0 && d.cancel == NULL,
           "defaults: integrator %d, max depth %d, threads %d, stride %d, passes %u", d.integrator,
           d.max_depth, d.threads, d.stride, d.passes);
     test_floor();

@@ -105,7 +105,8 @@ static int bench_frame(int argc, char **argv) {
     cli_describe_accel(accel, sizeof accel, scene);
     printf("bench frame: %s, %ux%u, 1 spp/frame, integrator %s, max depth %d, %s, "
            "%u triangles, accel %s\n",
-           c.scene, c.width, c.height, tr_integrator_name(c.integrator), c.max_depth, be.name,
+           c.scene, c.width, c.height, tr_integrator_name(c.integrator),
+           c.max_depth ? c.max_depth : tr_default_max_depth(c.integrator), be.name,
            tr_scene_triangle_count(scene), accel);
     uint64_t rays = 0;
     double total = 0.0;
@@ -375,7 +376,8 @@ static int bench_complexity(int argc, char **argv) {
     cfg.integrator = TR_INTEGRATOR_NAIVE; /* the thesis's figure 3.5 */
     printf("bench complexity: %ux%u, 1 spp/frame, naive, max depth %d, %s, median of %d "
            "frames\n",
-           c.width, c.height, c.max_depth, be.name, frames);
+           c.width, c.height, c.max_depth ? c.max_depth : tr_default_max_depth(TR_INTEGRATOR_NAIVE),
+           be.name, frames);
     printf("%5s %10s %-7s %10s %12s %9s\n", "level", "triangles", "accel", "build ms", "frame ms",
            "fps");
     /* Results, for the CSV and plot: fps[level][accel] (0 = not measured). */

@@ -183,6 +183,9 @@ int bench_convergence(int argc, char **argv) {
     cli_common c;
     cli_common_default(&c);
     c.scene = "builtin:cornell-mirror";
+    /* Both integrators estimate paths of the same length here (pt D, naive D + 2): the
+     * comparison keeps the thesis's depth rather than each integrator's default. */
+    c.max_depth = TR_MAX_DEPTH_NAIVE;
     uint32_t sw[CONV_MAX_SIZES] = {256, 800}, sh[CONV_MAX_SIZES] = {256, 600};
     int nsizes = 2;
     int methods[2] = {TR_INTEGRATOR_NAIVE, TR_INTEGRATOR_PT}, nmethods = 2;

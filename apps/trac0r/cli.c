@@ -23,7 +23,8 @@ static const char help_before[] =
     "  --width W            image width in pixels, 1..16384 (default 800)\n"
     "  --height H           image height in pixels, 1..16384 (default 600);\n"
     "                       at most 67108864 pixels in all\n"
-    "  --max-depth D        path length limit of the integrator, 1..1024 (default 8): pt\n"
+    "  --max-depth D        path length limit of the integrator, 1..1024 (default 64 for\n"
+    "                       pt, whose paths end by Russian roulette; 8 for naive): pt\n"
     "                       follows at most D segments (camera ray included); the naive\n"
     "                       integrator's Russian roulette reaches at most D-2 surfaces\n"
     "  --seed S             random seed, 0..2^64-1 (default 0); the same seed gives the\n"
@@ -57,7 +58,7 @@ void cli_common_default(cli_common *c) {
     c->scene = "builtin:cornell";
     c->width = 800;
     c->height = 600;
-    c->max_depth = 8;
+    c->max_depth = TR_MAX_DEPTH_DEFAULT;
     c->seed = 0;
     c->threads = 0;
     c->integrator = TR_INTEGRATOR_PT;

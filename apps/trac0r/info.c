@@ -105,7 +105,12 @@ int cmd_info(int argc, char **argv) {
         cli_common_default(&d);
         printf("render:     %ux%u%s, %u spp%s, max depth %d%s, integrator %s%s, accel %s%s\n",
                f.width, f.height, f.has_width || f.has_height ? "" : " (default)", f.spp,
-               f.has_spp ? "" : " (default)", f.max_depth, f.has_max_depth ? "" : " (default)",
+               f.has_spp ? "" : " (default)",
+               f.has_max_depth
+                   ? f.max_depth
+                   : tr_default_max_depth(f.has_integrator ? tr_integrator_from_name(f.integrator)
+                                                           : d.integrator),
+               f.has_max_depth ? "" : " (default)",
                f.has_integrator ? f.integrator : tr_integrator_name(d.integrator),
                f.has_integrator ? "" : " (default)", tr_accel_name(f.accel),
                f.has_accel ? "" : " (default)");

@@ -9,6 +9,7 @@
 #include "commands.h"
 #include "devices.h"
 #include "progress.h"
+#include "render_adaptive.h"
 #include "render_job.h"
 #include "trac0r/outfile.h"
 
@@ -50,6 +51,16 @@ static void render_help(void) {
            "                       bit-identical to an uninterrupted render of --spp samples\n"
            "                       (default: the checkpoint's); the scene and options must\n"
            "                       be the checkpoint's\n"
+           "  --noise-threshold E  adaptive sampling, 0..1 (default 0: off): 8x8-pixel tiles\n"
+           "                       stop once their pixels' mean error estimate is below E (at\n"
+           "                       16, 32, 64, ... spp: the mean of N samples against that\n"
+           "                       of the first N/2, relative to the square root of the\n"
+           "                       pixel's value; 0.01 is a good start); --spp is the most\n"
+           "                       a pixel gets. Not with --stride, --checkpoint or mpirun\n"
+           "  --time-limit S       stop before a pass that would end after S seconds,\n"
+           "                       0..1e6 (default 0: none); the image is complete, and the\n"
+           "                       same as one rendered with the spp it reached. Not with\n"
+           "                       --checkpoint or mpirun\n"
            "  -h, --help           show this help\n"
            "\n"
            "Progress (a bar with the ETA on a terminal, otherwise a line a second) goes to\n"
@@ -124,6 +135,10 @@ static int render_option(render_job *job, int *rc) {
     } else if (cli_is(a, "--resume")) {
         *rc = cli_value(a);
         job->resume = a->value;
+    } else if (cli_is(a, "--noise-threshold")) {
+        *rc = cli_parse_float(a, 0.0f, 1.0f, &job->noise_threshold);
+    } else if (cli_is(a, "--time-limit")) {
+        *rc = cli_parse_float(a, 0.0f, 1e6f, &job->time_limit);
     } else if (cli_is(a, "--exr-type")) {
         *rc = cli_value(a);
         if (*rc == CLI_OK && strcmp(a->value, "half") != 0 && strcmp(a->value, "float") != 0) {
@@ -192,6 +207,19 @@ int render_job_setup(render_job *job, int argc, char **argv, int *done) {
         if (rc != CLI_OK) {
             return CLI_USAGE;
         }
+    }
+    if (job->noise_threshold > 0.0f && stride > 1) {
+        return cli_error(a,
+                         "--noise-threshold: not with --stride %d (a preview traces too few "
+                         "pixels to estimate their noise)",
+                         stride);
+    }
+    if ((job->noise_threshold > 0.0f || job->time_limit > 0.0f) &&
+        (job->checkpoint || job->resume)) {
+        /* A checkpoint holds whole passes over the image; an adaptive render's tiles stop
+         * at different sample counts, which the checkpoint format does not record. */
+        return cli_error(a, "%s: not with --checkpoint or --resume",
+                         job->noise_threshold > 0.0f ? "--noise-threshold" : "--time-limit");
     }
     const tr_image_format fmt = tr_image_format_from_path(job->out);
     if (fmt == TR_IMAGE_UNKNOWN) {
@@ -293,6 +321,27 @@ static int host_frame(render_job *job, tr_film *film, tr_film *scratch, uint32_t
     return tr_film_accumulate(film, scratch, err);
 }
 
+/* The single-process render with a noise threshold or a time limit (render_adaptive.c). */
+static int render_budgeted(render_job *job, tr_film *film) {
+    tr_error err;
+    adapt_options ao = {job->spp, job->noise_threshold, job->time_limit,
+                        isatty(fileno(stderr))};
+    adapt_result ares;
+    memset(&ares, 0, sizeof ares);
+    const double t0 = tr_time_now();
+    if (adapt_render(&job->be, job->scene, &job->cfg, &ao, &ares, &err) != TR_OK ||
+        cli_backend_read(&job->be, film, &err) != TR_OK) {
+        fprintf(stderr, "trac0r render: %s\n", err.msg);
+        return CLI_FAILURE;
+    }
+    char note[160];
+    snprintf(note, sizeof note, "of %u%s, %.1f spp on average, %u of %u tiles converged",
+             job->spp, ares.stopped_by_time ? ", time limit" : "",
+             (double)ares.samples / ((double)job->common.width * job->common.height),
+             ares.tiles_converged, ares.tiles);
+    return render_write_outputs(job, film, ares.passes, tr_time_now() - t0, ares.rays, note);
+}
+
 /* The single-process render: whole passes over the image, sample by sample. */
 static int render_local(render_job *job) {
     cli_args *a = &job->args;
@@ -334,6 +383,11 @@ static int render_local(render_job *job) {
         return CLI_FAILURE;
     }
 
+    if (job->noise_threshold > 0.0f || job->time_limit > 0.0f) {
+        const int rc = render_budgeted(job, &film);
+        tr_film_free(&film);
+        return rc;
+    }
     render_stop_install();
     progress bar;
     progress_begin(&bar, "trac0r render", "spp", job->spp, 0);

@@ -25,6 +25,8 @@ typedef struct render_job {
     double checkpoint_interval;
     const char *resume; /* --resume FILE or NULL */
     checkpoint_id id;   /* when checkpoint or resume is set */
+    float noise_threshold; /* --noise-threshold (0: off) */
+    float time_limit;      /* --time-limit seconds (0: none) */
 } render_job;
 
 /* Parses the command line, loads the scene and opens the device. Returns CLI_OK with

@@ -477,6 +477,13 @@ static int setup_all(render_job *job, int argc, char **argv, int rank, int size,
     }
     int rc = render_job_setup(job, argc, argv, done);
     tr_error err;
+    if (rc == CLI_OK && !*done && (job->noise_threshold > 0.0f || job->time_limit > 0.0f)) {
+        /* Ranks render tiles at their own pace: a tile-wise stop rule or a wall-clock
+         * budget would make the image depend on the rank count. */
+        rc = cli_error(&job->args, "%s: not under mpirun",
+                       job->noise_threshold > 0.0f ? "--noise-threshold" : "--time-limit");
+        *done = 1;
+    }
     if (rc == CLI_OK && !*done && !job->checkpoint && !job->resume &&
         checkpoint_identity(&job->id, &job->common, job->scene, job->cfg.stride, job->passes,
                             &err) != TR_OK) {

@@ -10,10 +10,16 @@
 #include "trac0r/scene.h"
 
 #define TR_MAX_DEPTH_LIMIT 1024
+/* max_depth 0 asks for the integrator's default (tr_default_max_depth): pt's paths end by
+ * Russian roulette, so its bound is one users should not meet (as production renderers
+ * do); naive keeps the thesis's 8, on which its depth-based roulette depends. */
+#define TR_MAX_DEPTH_DEFAULT 0
+#define TR_MAX_DEPTH_PT 64
+#define TR_MAX_DEPTH_NAIVE 8
 
 /* What to render and, for the CPU, how. */
 typedef struct tr_render_config {
-    int max_depth;   /* the longest path (default 8) */
+    int max_depth;   /* the longest path; 0 (default): the integrator's default */
     uint64_t seed;   /* random streams are keyed by (seed, pixel, sample) */
     int threads;     /* CPU: OpenMP threads; 0 = all the machine has */
     int integrator;  /* TR_INTEGRATOR_* (default TR_INTEGRATOR_PT, as the command line) */
@@ -38,6 +44,9 @@ typedef struct tr_render_stats {
 } tr_render_stats;
 
 tr_render_config tr_render_config_default(void);
+/* The max depth a config with max_depth 0 uses with `integrator`: TR_MAX_DEPTH_PT (64)
+ * for pt, TR_MAX_DEPTH_NAIVE (8) for naive. */
+int tr_default_max_depth(int integrator);
 /* Checks the settings every backend takes alike (max depth, integrator, stride); fails
  * with a message naming the value out of range. */
 int tr_render_config_check(const tr_render_config *cfg, tr_error *err);

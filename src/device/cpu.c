@@ -12,7 +12,7 @@
 
 tr_render_config tr_render_config_default(void) {
     tr_render_config c;
-    c.max_depth = 8;
+    c.max_depth = TR_MAX_DEPTH_DEFAULT;
     c.seed = 0;
     c.threads = 0;
     /* The command line's default: path tracing with next-event estimation. */
@@ -23,6 +23,10 @@ tr_render_config tr_render_config_default(void) {
     c.cancel = NULL;
     c.cancel_user = NULL;
     return c;
+}
+
+int tr_default_max_depth(int integrator) {
+    return integrator == TR_INTEGRATOR_NAIVE ? TR_MAX_DEPTH_NAIVE : TR_MAX_DEPTH_PT;
 }
 
 int tr_default_threads(void) {
@@ -36,8 +40,9 @@ double tr_time_now(void) {
 }
 
 int tr_render_config_check(const tr_render_config *cfg, tr_error *err) {
-    if (cfg->max_depth < 1 || cfg->max_depth > TR_MAX_DEPTH_LIMIT) {
-        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "max depth %d must be in 1..%d",
+    if (cfg->max_depth < 0 || cfg->max_depth > TR_MAX_DEPTH_LIMIT) {
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "max depth %d must be in 1..%d (0: the integrator's default)",
                             cfg->max_depth, TR_MAX_DEPTH_LIMIT);
     }
     if (tr_integrator_name(cfg->integrator) == NULL) {
@@ -84,7 +89,7 @@ int tr_frame_make(tr_frame *f, const tr_camera *cam, const tr_render_config *cfg
     f->seed_hi = (uint32_t)(cfg->seed >> 32);
     f->sample = sample;
     f->sample_count = sample_count;
-    f->max_depth = cfg->max_depth;
+    f->max_depth = cfg->max_depth ? cfg->max_depth : tr_default_max_depth(cfg->integrator);
     f->integrator = (uint32_t)cfg->integrator;
     f->stride = (uint32_t)cfg->stride;
     f->passes = cfg->passes;

@@ -175,14 +175,16 @@ TR_FN float tr_bsdf_pdf(const tr_bsdf_params *m, tr_vec3 wo, tr_vec3 wi) {
     }
 }
 
-/* Draws wi. Returns 0 when the path ends here (emitters, directions below the
- * surface, zero weight). */
-TR_FN int tr_bsdf_sample(const tr_bsdf_params *m, tr_vec3 wo, tr_rng *rng, tr_scatter *s) {
+/* Draws wi from the uniform numbers ulobe (the choice between lobes: glass's reflect or
+ * refract) and (u1, u2) (the direction inside a lobe). Returns 0 when the path ends here
+ * (emitters, directions below the surface, zero weight). */
+TR_FN int tr_bsdf_sample(const tr_bsdf_params *m, tr_vec3 wo, float ulobe, float u1, float u2,
+                         tr_scatter *s) {
     tr_vec3 nf = tr_bsdf_facing(m->ns, wo);
     s->delta = 0;
     switch (m->type) {
     case TR_MATERIAL_DIFFUSE: {
-        s->wi = tr_sample_cosine_hemisphere(rng, nf);
+        s->wi = tr_sample_cosine_hemisphere_u(u1, u2, nf);
         float c = v3_dot(s->wi, nf);
         if (c <= 0.0f) {
             return 0;
@@ -204,8 +206,6 @@ TR_FN int tr_bsdf_sample(const tr_bsdf_params *m, tr_vec3 wo, tr_rng *rng, tr_sc
         tr_vec3 t, b;
         v3_basis(nf, &t, &b);
         tr_vec3 vl = v3(v3_dot(wo, t), v3_dot(wo, b), co);
-        float u1 = tr_rng_float(rng);
-        float u2 = tr_rng_float(rng);
         tr_vec3 hl = tr_ggx_sample_vndf(alpha, vl, u1, u2);
         tr_vec3 h = v3_add(v3_add(v3_scale(t, hl.x), v3_scale(b, hl.y)), v3_scale(nf, hl.z));
         s->wi = v3_normalize(v3_reflect(v3_neg(wo), h));
@@ -225,7 +225,7 @@ TR_FN int tr_bsdf_sample(const tr_bsdf_params *m, tr_vec3 wo, tr_rng *rng, tr_sc
         /* The lobe's probability is its Fresnel weight, so the weight is the filter. */
         s->delta = 1;
         s->weight = m->color;
-        tr_glass_sample(v3_neg(wo), m->ns, m->ior, rng, &s->wi, &s->pdf);
+        tr_glass_sample(v3_neg(wo), m->ns, m->ior, ulobe, &s->wi, &s->pdf);
         return 1;
     }
     default:

@@ -12,34 +12,36 @@
 #include "integrator_pt.h"
 #include "trac0r/integrator_types.h"
 #include "rng.h"
+#include "sampler.h"
 #include "sampling.h"
 #include "scene_view.h"
 #include "types.h"
 
 /* Sample `sample` of pixel (x, y), the pixel_index-th of the image, seen from `cam`, with
  * jitter inside the pixel: radiance, rays and (with `passes`) the passes' surface into
- * *out. The random stream depends only on (seed, pixel index, sample). */
+ * *out. The random numbers depend only on (seed, pixel index, sample): pt reads them
+ * from the low-discrepancy sampler (sampler.h), naive from the thesis's xorshift
+ * stream. */
 TR_FN void tr_render_pixel_sample(const tr_scene_view *s, const tr_camera *cam, uint64_t seed,
                                   int max_depth, uint32_t integrator, uint32_t passes, uint32_t x,
                                   uint32_t y, uint64_t pixel_index, uint32_t sample,
                                   tr_sample *out) {
-    tr_rng rng;
-    tr_rng_init(&rng, seed, pixel_index, (uint64_t)sample);
-    float jx, jy;
-    tr_sample_pixel_jitter(&rng, &jx, &jy);
-    tr_ray ray = tr_camera_ray(cam, (float)x, (float)y, jx, jy);
     tr_sample_clear(out);
     /* The integrators record the passes' surface only for a film that keeps passes. */
     tr_sample *surface = passes != 0u ? out : 0;
+    float jx, jy;
     /* The host rejects unknown integrators before a frame starts. */
-    switch (integrator) {
-    case TR_INTEGRATOR_PT:
-        out->radiance = tr_trace_pt(s, ray, max_depth, &rng, &out->rays, surface);
-        break;
-    case TR_INTEGRATOR_NAIVE:
-    default:
+    if (integrator == TR_INTEGRATOR_PT) {
+        tr_sampler smp = tr_sampler_make(seed, pixel_index, sample);
+        tr_sampler_2d(&smp, TR_DIM_CAMERA, &jx, &jy);
+        tr_ray ray = tr_camera_ray(cam, (float)x, (float)y, jx, jy);
+        out->radiance = tr_trace_pt(s, ray, max_depth, &smp, &out->rays, surface);
+    } else {
+        tr_rng rng;
+        tr_rng_init(&rng, seed, pixel_index, (uint64_t)sample);
+        tr_sample_pixel_jitter(&rng, &jx, &jy);
+        tr_ray ray = tr_camera_ray(cam, (float)x, (float)y, jx, jy);
         out->radiance = tr_trace_naive(s, ray, max_depth, &rng, &out->rays, surface);
-        break;
     }
     if (out->prim == 0u) {
         out->depth = 0.0f; /* the path met no surface for the passes: a distance means nothing */

@@ -2,12 +2,13 @@
  *
  * An emitter is chosen from the scene's table with probability proportional to its
  * weight (emitted power: mean radiance x area x number of emitting sides), by binary
- * search in the table's CDF, then a point uniformly on its area. */
+ * search in the table's CDF, then a point on it: uniformly in the solid angle it
+ * subtends from the shading point where that angle is neither tiny nor nearly a
+ * hemisphere (Arvo 1995), uniformly in area otherwise. */
 #ifndef TR_KERNEL_LIGHT_H
 #define TR_KERNEL_LIGHT_H
 
 #include "compat.h"
-#include "rng.h"
 #include "scene_view.h"
 #include "types.h"
 #include "vec.h"
@@ -46,35 +47,164 @@ TR_FN float tr_light_pdf_area(const tr_scene_view *s, const tr_material *m, floa
     return tr_light_weight(m, area) / (s->light_weight_total * area);
 }
 
-/* A point on an emitter: *tri_index the triangle, *p the point, *u and *v its
- * barycentrics of the triangle's second and third vertex (as tr_hit's, for the material
- * stage); returns the area density of the choice (0 when the scene has no emitters). */
-TR_FN float tr_light_sample(const tr_scene_view *s, tr_rng *rng, uint32_t *tri_index, tr_vec3 *p,
-                            float *u, float *v) {
+/* Solid angles between these are sampled uniformly in solid angle (Arvo's spherical
+ * triangle sampling); outside, uniformly in area. Below the lower bound a triangle looks
+ * so small from p that the two densities agree to well under a percent and area sampling
+ * is cheaper; near 2 pi the point is almost in the triangle's plane, where the spherical
+ * triangle degenerates. */
+#define TR_LIGHT_SPHERICAL_MIN 1e-3f
+#define TR_LIGHT_SPHERICAL_MAX 6.0f
+
+/* Whether light sampling at p picks a point of triangle tri by solid angle: returns the
+ * solid angle of the spherical triangle tri subtends from p when it does (with the unit
+ * directions to its vertices in *a, *b, *c and the cosine and sine of its angle at a in
+ * *ca, *sa), 0 when it samples by area. Sampling and the pdf call this alike, so they
+ * always agree. The solid angle by Van Oosterom and Strackee's formula (IEEE Trans.
+ * Biomed. Eng. 30(2), 1983), tan(omega / 2) = |a . (b x c)| / (1 + a.b + b.c + c.a): one
+ * atan2 and no cancellation, unlike alpha + beta + gamma - pi. */
+TR_FN float tr_light_spherical(TR_CONST_GLOBAL tr_triangle *tri, tr_vec3 p, tr_vec3 *a, tr_vec3 *b,
+                               tr_vec3 *c, float *ca, float *sa) {
+    tr_vec3 da = v3_sub(tri->v0, p), db = v3_sub(tri->v1, p), dc = v3_sub(tri->v2, p);
+    float la = v3_length(da), lb = v3_length(db), lc = v3_length(dc);
+    if (!(la > 0.0f) || !(lb > 0.0f) || !(lc > 0.0f)) {
+        return 0.0f;
+    }
+    *a = v3_scale(da, 1.0f / la);
+    *b = v3_scale(db, 1.0f / lb);
+    *c = v3_scale(dc, 1.0f / lc);
+    float ab = v3_dot(*a, *b), bc = v3_dot(*b, *c), ca_dot = v3_dot(*c, *a);
+    float triple = tr_fabsf(v3_dot(*a, v3_cross(*b, *c)));
+    float omega = 2.0f * tr_atan2f(triple, 1.0f + ab + bc + ca_dot);
+    if (!(omega > TR_LIGHT_SPHERICAL_MIN && omega < TR_LIGHT_SPHERICAL_MAX)) {
+        return 0.0f;
+    }
+    /* The angle at a is the one between the planes (a, b) and (a, c): from their normals,
+     * |(a x b) x (a x c)| = |a . (b x c)| |a| = triple. */
+    tr_vec3 nb = v3_cross(*a, *b), nc = v3_cross(*a, *c);
+    float len = v3_length(nb) * v3_length(nc);
+    if (!(len > 0.0f)) {
+        return 0.0f;
+    }
+    *ca = v3_dot(nb, nc) / len;
+    *sa = triple / len;
+    return omega;
+}
+
+/* Probability that light sampling picks triangle t (material m): its weight's share. */
+TR_FN float tr_light_select_prob(const tr_scene_view *s, const tr_material *m, float area) {
+    return tr_light_pdf_area(s, m, area) * area;
+}
+
+/* Solid-angle density, seen from p, with which tr_light_sample called at p picks the
+ * point y of triangle t: 1/omega times the selection probability when the triangle is
+ * sampled by solid angle, the area density times r^2 / |cos theta_light| otherwise.
+ * Both MIS strategies use it, so their weights sum to one. */
+TR_FN float tr_light_pdf(const tr_scene_view *s, tr_vec3 p, uint32_t t, tr_vec3 y) {
+    TR_CONST_GLOBAL tr_triangle *tri = &s->triangles[t];
+    tr_material m = s->materials[tri->material];
+    float sel = tr_light_select_prob(s, &m, tri->area);
+    if (!(sel > 0.0f)) {
+        return 0.0f;
+    }
+    tr_vec3 a, b, c;
+    float ca, sa;
+    float omega = tr_light_spherical(tri, p, &a, &b, &c, &ca, &sa);
+    if (omega > 0.0f) {
+        return sel / omega;
+    }
+    tr_vec3 d = v3_sub(y, p);
+    float d2 = v3_dot(d, d);
+    float cos_l = tr_fabsf(v3_dot(d, tri->normal));
+    if (!(cos_l > 0.0f)) {
+        return 0.0f;
+    }
+    /* r^2 / |cos| = d2 / (|d . n| / |d|) */
+    return sel / tri->area * d2 * tr_sqrtf(d2) / cos_l;
+}
+
+/* A point on an emitter for the shading point p, from the uniform numbers (u1, u2):
+ * u1 picks the emitter, and its position inside the emitter's CDF interval, rescaled to
+ * [0,1), and u2 pick the point on it. Reusing u1 keeps the pair's stratification on
+ * every emitter: the points of a (0,m,2)-net that fall into an interval of u1 are
+ * stratified there too, which a separate selection number would undo (each emitter
+ * would get an unstratified share). *tri_index the triangle, *y the point, *u and *v
+ * its barycentrics of the triangle's second and third vertex (as tr_hit's, for the
+ * material stage); returns the solid-angle density of the choice seen from p
+ * (tr_light_pdf), 0 when the scene has no emitters or the sample failed. */
+TR_FN float tr_light_sample(const tr_scene_view *s, tr_vec3 p, float u1, float u2,
+                            uint32_t *tri_index, tr_vec3 *y, float *u, float *v) {
     *tri_index = 0u;
-    *p = v3s(0.0f);
+    *y = v3s(0.0f);
     *u = 0.0f;
     *v = 0.0f;
     if (s->light_count == 0) {
         return 0.0f;
     }
-    uint32_t k = tr_light_pick(s, tr_rng_float(rng));
+    uint32_t k = tr_light_pick(s, u1);
+    float lo = k > 0u ? s->light_cdf[k - 1u] : 0.0f, hi = s->light_cdf[k];
+    u1 = hi > lo ? tr_fminf(tr_fmaxf((u1 - lo) / (hi - lo), 0.0f), 0.99999994f) : u1;
     uint32_t t = s->lights[k];
     TR_CONST_GLOBAL tr_triangle *tri = &s->triangles[t];
-    /* Uniform on the triangle: b0 = 1 - sqrt(u1), b1 = u2 sqrt(u1) (Pharr et al.,
-     * Physically Based Rendering, 3rd ed., section 13.6.5). */
-    float su = tr_sqrtf(tr_rng_float(rng));
-    float u2 = tr_rng_float(rng);
-    float b0 = 1.0f - su, b1 = u2 * su;
-    *p = v3_add(v3_add(v3_scale(tri->v0, b0), v3_scale(tri->v1, b1)),
-                v3_scale(tri->v2, 1.0f - b0 - b1));
     *tri_index = t;
+    tr_vec3 a, b, c;
+    float ca, sa;
+    float omega = tr_light_spherical(tri, p, &a, &b, &c, &ca, &sa);
+    float b1, b2;
+    if (omega > 0.0f) {
+        /* J. Arvo, "Stratified Sampling of Spherical Triangles", SIGGRAPH 1995: u1 picks
+         * the sub-triangle of area u1 omega with vertices a, b and a point c_hat on arc
+         * ac, whose cosine q from a follows from the area; u2 picks the point on arc
+         * b c_hat by the cosine from b, which is uniform in solid angle along it. */
+        float area_hat = u1 * omega;
+        float sh = tr_sinf(area_hat), ch = tr_cosf(area_hat);
+        float sp = sh * ca - ch * sa, cp = ch * ca + sh * sa; /* of area_hat - alpha */
+        float uu = cp - ca, vv = sp + sa * v3_dot(a, b);
+        float den = (vv * sp + uu * cp) * sa;
+        float q = den != 0.0f ? ((vv * cp - uu * sp) * ca - vv) / den : 1.0f;
+        q = tr_fminf(tr_fmaxf(q, -1.0f), 1.0f);
+        tr_vec3 ct = v3_sub(c, v3_scale(a, v3_dot(c, a)));
+        float lct = v3_length(ct);
+        if (!(lct > 0.0f)) {
+            return 0.0f;
+        }
+        tr_vec3 c_hat = v3_add(v3_scale(a, q), v3_scale(ct, tr_sqrtf(1.0f - q * q) / lct));
+        float z = 1.0f - u2 * (1.0f - v3_dot(c_hat, b));
+        z = tr_fminf(tr_fmaxf(z, -1.0f), 1.0f);
+        tr_vec3 ht = v3_sub(c_hat, v3_scale(b, v3_dot(c_hat, b)));
+        float lht = v3_length(ht);
+        tr_vec3 w =
+            lht > 0.0f ? v3_add(v3_scale(b, z), v3_scale(ht, tr_sqrtf(1.0f - z * z) / lht)) : b;
+        /* Where the direction meets the triangle's plane, in barycentrics (Moller and
+         * Trumbore's solution of the ray-triangle system, without the bounds test; the
+         * clamp absorbs rounding at the edges). */
+        tr_vec3 e1 = v3_sub(tri->v1, tri->v0), e2 = v3_sub(tri->v2, tri->v0);
+        tr_vec3 pv = v3_cross(w, e2);
+        float det = v3_dot(e1, pv);
+        if (!(tr_fabsf(det) > 0.0f)) {
+            return 0.0f;
+        }
+        tr_vec3 tv = v3_sub(p, tri->v0);
+        tr_vec3 qv = v3_cross(tv, e1);
+        b1 = tr_fminf(tr_fmaxf(v3_dot(tv, pv) / det, 0.0f), 1.0f);
+        b2 = tr_fminf(tr_fmaxf(v3_dot(w, qv) / det, 0.0f), 1.0f - b1);
+    } else {
+        /* Uniform on the triangle: b0 = 1 - sqrt(u1), b1 = u2 sqrt(u1) (Pharr et al.,
+         * Physically Based Rendering, 3rd ed., section 13.6.5). */
+        float su = tr_sqrtf(u1);
+        b1 = u2 * su;
+        b2 = 1.0f - (1.0f - su) - b1;
+    }
+    *y = v3_add(v3_add(v3_scale(tri->v0, 1.0f - b1 - b2), v3_scale(tri->v1, b1)),
+                v3_scale(tri->v2, b2));
     *u = b1;
-    *v = 1.0f - b0 - b1;
-    /* The density from the weight, not from CDF differences, so that it equals what
-     * tr_light_pdf_area returns when a BSDF-sampled ray hits the same emitter. */
-    tr_material m = s->materials[tri->material];
-    return tr_light_pdf_area(s, &m, tri->area);
+    *v = b2;
+    if (omega > 0.0f) {
+        /* tr_light_pdf's value, without finding the spherical triangle again. */
+        tr_material m = s->materials[tri->material];
+        float sel = tr_light_select_prob(s, &m, tri->area);
+        return sel > 0.0f ? sel / omega : 0.0f;
+    }
+    return tr_light_pdf(s, p, t, *y);
 }
 
 #endif

@@ -45,7 +45,7 @@ TR_FN tr_vec3 tr_offset_origin(tr_vec3 p, tr_vec3 n) {
  * the inside has index ior) is reflected with the exact Fresnel probability r, refracted
  * otherwise. Consumes one random number. *wi receives the new direction, *prob the
  * probability of the lobe taken (r or 1 - r). Returns 1 when reflected. */
-TR_FN int tr_glass_sample(tr_vec3 d, tr_vec3 n, float ior, tr_rng *rng, tr_vec3 *wi, float *prob) {
+TR_FN int tr_glass_sample(tr_vec3 d, tr_vec3 n, float ior, float u, tr_vec3 *wi, float *prob) {
     float cos_dn = v3_dot(d, n);
     /* The normal on the side the light came from. */
     tr_vec3 nf = cos_dn > 0.0f ? v3_neg(n) : n;
@@ -56,7 +56,7 @@ TR_FN int tr_glass_sample(tr_vec3 d, tr_vec3 n, float ior, tr_rng *rng, tr_vec3 
     float cos_i = tr_fabsf(cos_dn);
     float cos_t;
     float r = tr_fresnel_dielectric(cos_i, n1, n2, &cos_t);
-    if (tr_rng_float(rng) < r) {
+    if (u < r) {
         *wi = v3_reflect(d, nf);
         *prob = r;
         return 1;
@@ -95,7 +95,7 @@ TR_FN int tr_material_scatter_naive(const tr_bsdf_params *b, tr_vec3 dir, tr_vec
     }
     case TR_MATERIAL_GLASS: {
         float prob;
-        int reflected = tr_glass_sample(dir, n, b->ior, rng, next_dir, &prob);
+        int reflected = tr_glass_sample(dir, n, b->ior, tr_rng_float(rng), next_dir, &prob);
         *next_origin = tr_offset_origin(p, reflected ? nf : v3_neg(nf));
         return TR_SCATTER_CONTINUE;
     }

@@ -1,7 +1,9 @@
 /* sampling.h - direction sampling (thesis section 3.1.6) and pixel jitter.
  *
- * Every sampler takes its uniform numbers from the caller's stream and returns a
- * unit vector. The pdfs are with respect to solid angle. */
+ * The *_u samplers take their uniform numbers as arguments (pt draws them from its
+ * low-discrepancy sampler, sampler.h); the tr_rng versions draw them from the caller's
+ * stream in the same order (naive's thesis streams). Each returns a unit vector; the
+ * pdfs are with respect to solid angle. */
 #ifndef TR_KERNEL_SAMPLING_H
 #define TR_KERNEL_SAMPLING_H
 
@@ -43,11 +45,10 @@ TR_FN float tr_cone_one_minus_cmin(float power, float angle) {
  * which for power = 1 narrows the cone to acos(sqrt(cos(angle))); we sample the cone the
  * documentation describes. power = 0: uniform, power = 1: cosine-weighted. z and
  * sin(theta) both come from log1p/expm1 so that narrow cones keep their spread. */
-TR_FN tr_vec3 tr_sample_cone_local(tr_rng *r, float power, float angle) {
+TR_FN tr_vec3 tr_sample_cone_local_u(float u, float uphi, float power, float angle) {
     float e = power + 1.0f;
     float omc = tr_cone_one_minus_cmin(power, angle);
-    float u = tr_rng_float(r);
-    float phi = TR_TWO_PI * tr_rng_float(r);
+    float phi = TR_TWO_PI * uphi;
     float z, s;
     if (power == 1.0f && omc == 1.0f) {
         /* The cosine-weighted hemisphere, every diffuse bounce: z^2 = u exactly. */
@@ -61,6 +62,12 @@ TR_FN tr_vec3 tr_sample_cone_local(tr_rng *r, float power, float angle) {
     return v3(s * tr_cosf(phi), s * tr_sinf(phi), z);
 }
 
+TR_FN tr_vec3 tr_sample_cone_local(tr_rng *r, float power, float angle) {
+    float u = tr_rng_float(r);
+    float uphi = tr_rng_float(r);
+    return tr_sample_cone_local_u(u, uphi, power, angle);
+}
+
 /* Pdf (solid angle) of tr_sample_cone_local for a direction with cos(theta) = z. */
 TR_FN float tr_pdf_cone(float power, float angle, float z) {
     if (z < tr_cosf(angle) || z > 1.0f) {
@@ -72,11 +79,22 @@ TR_FN float tr_pdf_cone(float power, float angle, float z) {
 }
 
 /* The thesis's sample_hemisphere(dir, power, angle): the lobe above around dir. */
-TR_FN tr_vec3 tr_sample_hemisphere(tr_rng *r, tr_vec3 dir, float power, float angle) {
+TR_FN tr_vec3 tr_sample_hemisphere_u(float u1, float u2, tr_vec3 dir, float power, float angle) {
     tr_vec3 t, b;
     v3_basis(dir, &t, &b);
-    tr_vec3 l = tr_sample_cone_local(r, power, angle);
+    tr_vec3 l = tr_sample_cone_local_u(u1, u2, power, angle);
     return v3_normalize(v3_add(v3_add(v3_scale(t, l.x), v3_scale(b, l.y)), v3_scale(dir, l.z)));
+}
+
+TR_FN tr_vec3 tr_sample_hemisphere(tr_rng *r, tr_vec3 dir, float power, float angle) {
+    float u1 = tr_rng_float(r);
+    float u2 = tr_rng_float(r);
+    return tr_sample_hemisphere_u(u1, u2, dir, power, angle);
+}
+
+/* Cosine-weighted on the hemisphere around dir from the uniforms (u1, u2). */
+TR_FN tr_vec3 tr_sample_cosine_hemisphere_u(float u1, float u2, tr_vec3 dir) {
+    return tr_sample_hemisphere_u(u1, u2, dir, 1.0f, TR_HALF_PI);
 }
 
 /* Uniform on the hemisphere around dir, pdf 1/(2 pi). */

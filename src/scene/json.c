@@ -1093,7 +1093,7 @@ int tr_scene_file_parse(tr_scene *s, const char *path, const char *text, size_t 
     info->width = 800;
     info->height = 600;
     info->spp = 16;
-    info->max_depth = 8;
+    info->max_depth = 0; /* TR_MAX_DEPTH_DEFAULT: the integrator's default */
     info->accel = TR_ACCEL_TYPE_BVH;
     tr_scene_file_options defaults = {1, 0};
     jctx c;
