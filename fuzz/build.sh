@@ -16,7 +16,7 @@ mkdir -p "$OUT"
     -Iinclude -Isrc $(pkg-config --cflags libcjson) \
     fuzz/fuzz_scene_json.c src/scene/json.c src/scene/scene.c src/scene/shape.c \
     src/scene/camera.c src/scene/lights.c src/accel/bvh.c src/accel/wbvh.c \
-    src/accel/wbvh_scalar.c src/accel/embree.c src/util/error.c src/util/registry.c \
+    src/accel/wbvh_scalar.c src/accel/embree.c src/util/error.c src/util/registry.c src/io/infile.c \
     src/scene/material_registry.c \
     $(pkg-config --libs libcjson) -lm -o "$OUT/fuzz_scene_json"
 echo "built $OUT/fuzz_scene_json"

@@ -10,6 +10,7 @@
 #include "bench.h"
 #include "commands.h"
 #include "devices.h"
+#include "trac0r/outfile.h"
 
 static int cmp_double(const void *a, const void *b) {
     double x = *(const double *)a, y = *(const double *)b;
@@ -240,25 +241,6 @@ double bench_build_seconds(const tr_scene *s) {
                                                      : tr_scene_bvh_build_seconds(s);
 }
 
-int bench_plot_png(const char *script, const char *png) {
-    char tmp[4096];
-    if (snprintf(tmp, sizeof tmp, "%s.tmp.png", png) >= (int)sizeof tmp) {
-        return 0;
-    }
-    FILE *gp = popen("gnuplot 2>/dev/null", "w");
-    if (!gp) {
-        return 0;
-    }
-    fprintf(gp, "set terminal pngcairo size 900,600 noenhanced\nset output '%s'\n%s\n", tmp,
-            script);
-    int rc = pclose(gp);
-    if (rc != 0 || rename(tmp, png) != 0) {
-        remove(tmp);
-        return 0;
-    }
-    return 1;
-}
-
 static void bench_complexity_help(void) {
     printf("Usage: trac0r bench complexity [options]\n"
            "\n"
@@ -343,7 +325,8 @@ static int bench_complexity(int argc, char **argv) {
     snprintf(csv_path, sizeof csv_path, "%s.csv", prefix);
     snprintf(png_path, sizeof png_path, "%s.png", prefix);
     tr_error err;
-    if (tr_image_check_writable(csv_path, &err) != TR_OK) {
+    if (tr_image_check_writable(csv_path, &err) != TR_OK ||
+        tr_image_check_writable(png_path, &err) != TR_OK) {
         return cli_error(&a, "--out: %s", err.msg);
     }
     double *times = malloc((size_t)frames * sizeof *times);
@@ -437,11 +420,12 @@ static int bench_complexity(int argc, char **argv) {
         return rc;
     }
     /* CSV: one row per (level, structure) measured. */
-    FILE *fp = fopen(csv_path, "w");
-    if (!fp) {
-        fprintf(stderr, "trac0r bench complexity: %s: cannot write\n", csv_path);
+    tr_outfile *csv = tr_outfile_open(csv_path, &err);
+    if (!csv) {
+        fprintf(stderr, "trac0r bench complexity: %s\n", err.msg);
         return CLI_FAILURE;
     }
+    FILE *fp = tr_outfile_stream(csv);
     fprintf(fp, "level,triangles,accel,build_ms,fps\n");
     for (int level = 0; level <= max_level; ++level) {
         for (int k = 0; k < set.count; ++k) {
@@ -451,7 +435,10 @@ static int bench_complexity(int argc, char **argv) {
             }
         }
     }
-    fclose(fp);
+    if (tr_outfile_commit(csv, &err) != TR_OK) {
+        fprintf(stderr, "trac0r bench complexity: %s\n", err.msg);
+        return CLI_FAILURE;
+    }
     /* One inline data block per structure, so each draws as one connected line. */
     char script[8192];
     int len = 0;
@@ -476,7 +463,11 @@ static int bench_complexity(int argc, char **argv) {
                         "%s$d%d with linespoints lw 2 title '%s'", k ? ", " : "", k,
                         tr_accel_name(set.type[k]));
     }
-    int plotted = bench_plot_png(script, png_path);
+    int plotted = bench_plot_png(script, png_path, &err);
+    if (plotted < 0) {
+        fprintf(stderr, "trac0r bench complexity: %s\n", err.msg);
+        return CLI_FAILURE;
+    }
     printf("wrote %s%s%s\n", csv_path, plotted ? " and " : " (gnuplot failed: no plot)",
            plotted ? png_path : "");
     return CLI_OK;

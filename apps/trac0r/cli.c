@@ -240,7 +240,7 @@ int cli_common_option(cli_args *a, cli_common *c) {
         return cli_parse_u64(a, &c->seed);
     }
     if (cli_is(a, "--threads")) {
-        return cli_parse_int(a, 0, 1024, &c->threads);
+        return cli_parse_int(a, 0, TR_MAX_THREADS, &c->threads);
     }
     if (cli_is(a, "--integrator")) {
         c->given |= CLI_GIVEN_INTEGRATOR;

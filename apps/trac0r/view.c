@@ -2,6 +2,7 @@
  * window itself is view_window.c. */
 #define _POSIX_C_SOURCE 200809L
 #include "view.h"
+#include "trac0r/outfile.h"
 
 #include <stdio.h>
 #include <stdlib.h>
@@ -194,6 +195,14 @@ int cmd_view(int argc, char **argv) {
         if (tr_image_check_writable(o.screenshot, &err) != TR_OK) {
             return cli_error(&a, "--screenshot: %s", err.msg);
         }
+    }
+    /* The window's files are written while it runs: a directory or an unwritable place
+     * is said now, not found never written. */
+    if (o.state_file && tr_outfile_check(o.state_file, &err) != TR_OK) {
+        return cli_error(&a, "--state-file: %s", err.msg);
+    }
+    if (o.dump_file && tr_outfile_check(o.dump_file, &err) != TR_OK) {
+        return cli_error(&a, "--dump-window: %s", err.msg);
     }
     if (o.benchmark >= 0) {
         snprintf(bench_scene, sizeof bench_scene, "builtin:cornell-ico-%d", o.benchmark);
