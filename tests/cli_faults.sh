@@ -159,4 +159,70 @@ rc=$?
 [ "$rc" -eq 1 ] || fail "render --help > /dev/full: exit $rc, expected 1"
 rm -f a.pfm omp.pfm
 
+# --- messages -----------------------------------------------------------------------
+# A film that does not fit in memory is a failure while working (1), not a usage error.
+# The sanitizers reserve more address space than any ulimit -v leaves; there the
+# allocator is told to fail large allocations instead.
+if [ -n "${ASAN_OPTIONS:-}" ]; then
+    ASAN_OPTIONS="$ASAN_OPTIONS:allocator_may_return_null=1:max_allocation_size_mb=256" \
+        "$BIN" render --width 16384 --height 4096 --spp 1 --threads 1 --out oom.pfm \
+        >/dev/null 2>err.txt
+    rc=$?
+else
+    (ulimit -v 600000 && exec "$BIN" render --width 16384 --height 4096 --spp 1 --threads 1 \
+        --out oom.pfm) >/dev/null 2>err.txt
+    rc=$?
+fi
+[ "$rc" -eq 1 ] || fail "film out of memory: exit $rc, expected 1: $(cat err.txt)"
+grep -q -- "--width" err.txt && fail "film out of memory blames --width/--height: $(cat err.txt)"
+
+# The subdivisions message gives the range that holds (0..9), whatever the wrong value.
+printf '{"camera": {"position": [0, 0, -3], "look_at": [0, 0, 0], "fov": 60},
+ "materials": {"l": {"type": "emitter", "color": [1, 1, 1], "emittance": 1}},
+ "shapes": [{"type": "icosphere", "subdivisions": 2.5, "material": "l"}]}\n' >sub.json
+"$BIN" info sub.json >/dev/null 2>err.txt
+rc=$?
+[ "$rc" -eq 2 ] || fail "subdivisions 2.5: exit $rc"
+grep -q "0\.\.9" err.txt || fail "subdivisions 2.5: the range is not 0..9: $(cat err.txt)"
+rm -f sub.json
+
+# A second SCENE is an unexpected argument, not an unknown option.
+"$BIN" render a.json b.json >/dev/null 2>err.txt
+rc=$?
+[ "$rc" -eq 2 ] || fail "two scenes: exit $rc"
+grep -q "unknown option" err.txt && fail "two scenes: called an unknown option: $(cat err.txt)"
+grep -q "b.json" err.txt || fail "two scenes: the extra argument is not named: $(cat err.txt)"
+
+# A PNG that cannot be written: one line, with the reason.
+(ulimit -f 4 && exec "$BIN" render --width 256 --height 256 --spp 1 --out w.png) \
+    >/dev/null 2>err.txt
+rc=$?
+[ "$rc" -eq 1 ] || fail "PNG past ulimit -f: exit $rc, expected 1: $(cat err.txt)"
+[ "$(wc -l <err.txt)" -eq 1 ] || fail "PNG past ulimit -f: not one line: $(cat err.txt)"
+grep -q "File too large" err.txt || fail "PNG past ulimit -f: no reason: $(cat err.txt)"
+no_temps "PNG past ulimit -f"
+
+# A long path does not crowd the reason out.
+long=$(printf 'd%.0s' $(seq 1 240))
+"$BIN" render --width 8 --height 8 --spp 1 --out "$long/$long/$long/x.png" >/dev/null 2>err.txt
+rc=$?
+[ "$rc" -eq 2 ] || fail "long --out path: exit $rc"
+grep -q "No such file or directory" err.txt || fail "long --out path: no reason: $(cut -c 1-80 err.txt)..."
+
+# Five structures for --accels: "more than four", not "unknown".
+"$BIN" bench complexity --accels bvh,bvh,bvh,bvh,bvh >/dev/null 2>err.txt
+rc=$?
+[ "$rc" -eq 2 ] || fail "--accels with five: exit $rc"
+grep -q "unknown" err.txt && fail "--accels with five: called unknown: $(cat err.txt)"
+
+# Installed OpenCL drivers that cannot load for want of memory: status 1, not "no OpenCL
+# platform" (2). Needs OpenCL in the build and a working driver; not under the sanitizers,
+# whose shadow memory no ulimit -v leaves room for.
+if [ -z "${ASAN_OPTIONS:-}" ] && "$BIN" info --devices >/dev/null 2>&1; then
+    (ulimit -v 200000 && exec "$BIN" info --devices) >/dev/null 2>err.txt
+    rc=$?
+    [ "$rc" -eq 1 ] || fail "info --devices with 200 MB: exit $rc, expected 1: $(cat err.txt)"
+fi
+rm -f err.txt out.txt
+
 cli_end cli_faults

@@ -72,7 +72,7 @@ static int bench_frame(int argc, char **argv) {
             animate = 1;
             rc = CLI_OK;
         } else {
-            return cli_error(&a, "unknown option '%s' (see 'trac0r bench frame --help')", a.opt);
+            return cli_unknown(&a);
         }
         if (rc != CLI_OK) {
             return CLI_USAGE;
@@ -87,10 +87,15 @@ static int bench_frame(int argc, char **argv) {
     tr_error err;
     double *times = malloc((size_t)frames * 2 * sizeof *times);
     double *update_times = times ? times + frames : NULL;
-    if (!times || tr_film_check_size(c.width, c.height, &err) != TR_OK) {
+    if (!times) {
+        tr_scene_destroy(scene);
+        fprintf(stderr, "trac0r bench frame: out of memory\n");
+        return CLI_FAILURE;
+    }
+    if (tr_film_check_size(c.width, c.height, &err) != TR_OK) {
         free(times);
         tr_scene_destroy(scene);
-        return cli_error(&a, "--width/--height: %s", times ? err.msg : "out of memory");
+        return cli_error(&a, "--width/--height: %s", err.msg);
     }
     cli_backend be;
     rc = cli_backend_open(&a, &c, scene, &be);
@@ -210,9 +215,13 @@ int bench_parse_accels(cli_args *a, accel_set *set) {
     for (char *save = NULL, *tok = strtok_r(buf, ",", &save); tok;
          tok = strtok_r(NULL, ",", &save)) {
         int t = tr_accel_from_name(tok);
-        if (t < 0 || set->count == 4) {
+        if (t < 0) {
             return cli_error(a, "%s: unknown acceleration structure '%s' in '%s'", a->opt, tok,
                              a->value);
+        }
+        if (set->count == (int)(sizeof set->type / sizeof set->type[0])) {
+            return cli_error(a, "%s: more than %d structures in '%s'", a->opt,
+                             (int)(sizeof set->type / sizeof set->type[0]), a->value);
         }
         if (!tr_accel_available((tr_accel_type)t)) {
             return cli_error(a, "%s: '%s' is not available in this build", a->opt, tok);
@@ -303,8 +312,7 @@ static int bench_complexity(int argc, char **argv) {
             rc = cli_value(&a);
             prefix = a.value;
         } else {
-            return cli_error(&a, "unknown option '%s' (see 'trac0r bench complexity --help')",
-                             a.opt);
+            return cli_unknown(&a);
         }
         if (rc != CLI_OK) {
             return CLI_USAGE;
@@ -330,9 +338,13 @@ static int bench_complexity(int argc, char **argv) {
         return cli_error(&a, "--out: %s", err.msg);
     }
     double *times = malloc((size_t)frames * sizeof *times);
-    if (!times || tr_film_check_size(c.width, c.height, &err) != TR_OK) {
+    if (!times) {
+        fprintf(stderr, "trac0r bench complexity: out of memory\n");
+        return CLI_FAILURE;
+    }
+    if (tr_film_check_size(c.width, c.height, &err) != TR_OK) {
         free(times);
-        return cli_error(&a, "--width/--height: %s", times ? err.msg : "out of memory");
+        return cli_error(&a, "--width/--height: %s", err.msg);
     }
     cli_backend be;
     int rc = cli_backend_open(&a, &c, NULL, &be);

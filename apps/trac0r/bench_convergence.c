@@ -215,8 +215,7 @@ int bench_convergence(int argc, char **argv) {
             c.scene = a.opt;
             rc = CLI_OK;
         } else {
-            return cli_error(&a, "unknown option '%s' (see 'trac0r bench convergence --help')",
-                             a.opt);
+            return cli_unknown(&a);
         }
         if (rc != CLI_OK) {
             return CLI_USAGE;

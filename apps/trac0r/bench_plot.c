@@ -75,7 +75,7 @@ int bench_plot_png(const char *script, const char *png, tr_error *err) {
     size_t n = strlen(head) + strlen(script) + 2;
     char *text = malloc(n);
     if (!text) {
-        tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "%s: out of memory", png);
+        tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "%.200s: out of memory", png);
         return -1;
     }
     snprintf(text, n, "%s%s\n", head, script);
@@ -129,7 +129,7 @@ int bench_plot_png(const char *script, const char *png, tr_error *err) {
     if (copy_error && copy_error != EPIPE && gnuplot_ok) {
         /* gnuplot did its part; writing the file here did not. */
         tr_outfile_abort(f);
-        tr_error_set(err, TR_STATUS_IO, "%s: write failed: %s", png, strerror(copy_error));
+        tr_error_set(err, TR_STATUS_IO, "%.200s: write failed: %s", png, strerror(copy_error));
         return -1;
     }
     if (!gnuplot_ok || copy_error) {

@@ -130,7 +130,7 @@ int cmd_render(int argc, char **argv) {
             scene_arg = 1;
             rc = CLI_OK;
         } else {
-            return cli_error(&a, "unknown option '%s' (see 'trac0r render --help')", a.opt);
+            return cli_unknown(&a);
         }
         if (rc != CLI_OK) {
             return CLI_USAGE;
@@ -164,6 +164,11 @@ int cmd_render(int argc, char **argv) {
     tr_film film;
     if (tr_film_init_passes(&film, c.width, c.height, passes, &err) != TR_OK) {
         tr_scene_free(scene);
+        if (err.code == TR_STATUS_OUT_OF_MEMORY) {
+            /* Not the command line's fault: a failure while working, status 1. */
+            fprintf(stderr, "trac0r render: %s\n", err.msg);
+            return CLI_FAILURE;
+        }
         return cli_error(&a, "--width/--height: %s", err.msg);
     }
     cli_backend be;

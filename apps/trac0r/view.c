@@ -89,6 +89,10 @@ static int run_headless(const cli_args *a, const view_options *o, tr_scene *scen
     tr_error err;
     tr_film film;
     if (tr_film_init(&film, o->c.width, o->c.height, &err) != TR_OK) {
+        if (err.code == TR_STATUS_OUT_OF_MEMORY) {
+            fprintf(stderr, "trac0r view: %s\n", err.msg); /* status 1, not a usage error */
+            return CLI_FAILURE;
+        }
         return cli_error(a, "--width/--height: %s", err.msg);
     }
     double seconds = 0.0;
@@ -171,7 +175,7 @@ int cmd_view(int argc, char **argv) {
             o.c.scene = a.opt; /* positional SCENE */
             rc = CLI_OK;
         } else {
-            return cli_error(&a, "unknown option '%s' (see 'trac0r view --help')", a.opt);
+            return cli_unknown(&a);
         }
         if (rc != CLI_OK) {
             return CLI_USAGE;

@@ -88,7 +88,7 @@ static int write_png_rows(FILE *fp, const tr_film *f, float exposure, uint8_t *r
 int tr_film_write_png(const tr_film *f, const char *path, float exposure, tr_error *err) {
     uint8_t *row = malloc((size_t)f->width * 3);
     if (!row) {
-        return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "%s: out of memory", path);
+        return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "%.200s: out of memory", path);
     }
     tr_outfile *t = tr_outfile_open(path, err);
     if (!t) {
@@ -103,10 +103,10 @@ int tr_film_write_png(const tr_film *f, const char *path, float exposure, tr_err
         /* A write that failed says why through errno (a full disk, EFBIG); other
          * failures through libpng's message. */
         if (pf.errnum) {
-            return tr_error_set(err, tr_status_from_errno(pf.errnum), "%s: write failed: %s", path,
-                                strerror(pf.errnum));
+            return tr_error_set(err, tr_status_from_errno(pf.errnum), "%.200s: write failed: %s",
+                                path, strerror(pf.errnum));
         }
-        return tr_error_set(err, TR_STATUS_IO, "%s: PNG encoding failed: %s", path, pf.msg);
+        return tr_error_set(err, TR_STATUS_IO, "%.200s: PNG encoding failed: %s", path, pf.msg);
     }
     return tr_outfile_commit(t, err);
 }
@@ -114,7 +114,7 @@ int tr_film_write_png(const tr_film *f, const char *path, float exposure, tr_err
 int tr_film_write_pfm(const tr_film *f, const char *path, tr_error *err) {
     float *row = malloc((size_t)f->width * 3 * sizeof *row);
     if (!row) {
-        return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "%s: out of memory", path);
+        return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "%.200s: out of memory", path);
     }
     tr_outfile *t = tr_outfile_open(path, err);
     if (!t) {
@@ -138,7 +138,7 @@ int tr_film_write_pfm(const tr_film *f, const char *path, tr_error *err) {
     if (!ok) {
         int e = errno;
         tr_outfile_abort(t);
-        return tr_error_set(err, tr_status_from_errno(e), "%s: write failed: %s", path,
+        return tr_error_set(err, tr_status_from_errno(e), "%.200s: write failed: %s", path,
                             strerror(e));
     }
     return tr_outfile_commit(t, err);
@@ -152,7 +152,7 @@ int tr_film_write(const tr_film *f, const char *path, float exposure, tr_error *
         return tr_film_write_pfm(f, path, err);
     default:
         return tr_error_set(err, TR_STATUS_UNSUPPORTED,
-                            "%s: unknown image extension (expected .png or .pfm)", path);
+                            "%.200s: unknown image extension (expected .png or .pfm)", path);
     }
 }
 
@@ -187,7 +187,8 @@ int tr_image_read_pfm(tr_image *img, const char *path, tr_error *err) {
     if (pfm_token(fp, magic, sizeof magic) || pfm_token(fp, ws, sizeof ws) ||
         pfm_token(fp, hs, sizeof hs) || pfm_token(fp, ss, sizeof ss)) {
         fclose(fp);
-        return tr_error_set(err, TR_STATUS_PARSE, "%s: not a PFM file (truncated header)", path);
+        return tr_error_set(err, TR_STATUS_PARSE, "%.200s: not a PFM file (truncated header)",
+                            path);
     }
     int channels = strcmp(magic, "PF") == 0 ? 3 : strcmp(magic, "Pf") == 0 ? 1 : 0;
     char *end;
@@ -200,20 +201,20 @@ int tr_image_read_pfm(tr_image *img, const char *path, tr_error *err) {
     if (!channels || bad || w <= 0 || h <= 0) {
         fclose(fp);
         return tr_error_set(err, TR_STATUS_PARSE,
-                            "%s: not a supported PFM file (header '%s %s %s %s')", path, magic, ws,
-                            hs, ss);
+                            "%.200s: not a supported PFM file (header '%s %s %s %s')", path, magic,
+                            ws, hs, ss);
     }
     if (w > (long)TR_FILM_MAX_SIDE || h > (long)TR_FILM_MAX_SIDE ||
         (uint64_t)w * (uint64_t)h > TR_FILM_MAX_PIXELS) {
         fclose(fp);
         return tr_error_set(err, TR_STATUS_LIMIT,
-                            "%s: PFM size %ldx%ld is more than %u per side or %u pixels", path, w,
-                            h, TR_FILM_MAX_SIDE, TR_FILM_MAX_PIXELS);
+                            "%.200s: PFM size %ldx%ld is more than %u per side or %u pixels", path,
+                            w, h, TR_FILM_MAX_SIDE, TR_FILM_MAX_PIXELS);
     }
     if (scale > 0.0) {
         fclose(fp);
         return tr_error_set(err, TR_STATUS_UNSUPPORTED,
-                            "%s: big-endian PFM files are not supported", path);
+                            "%.200s: big-endian PFM files are not supported", path);
     }
     size_t n = (size_t)w * (size_t)h;
     float *data = malloc(n * (size_t)channels * sizeof *data);
@@ -222,14 +223,14 @@ int tr_image_read_pfm(tr_image *img, const char *path, tr_error *err) {
         free(data);
         fclose(fp);
         tr_image_free(img);
-        return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "%s: out of memory", path);
+        return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "%.200s: out of memory", path);
     }
     size_t got = fread(data, sizeof *data, n * (size_t)channels, fp);
     fclose(fp);
     if (got != n * (size_t)channels) {
         free(data);
         tr_image_free(img);
-        return tr_error_set(err, TR_STATUS_PARSE, "%s: truncated PFM data (%zu of %zu floats)",
+        return tr_error_set(err, TR_STATUS_PARSE, "%.200s: truncated PFM data (%zu of %zu floats)",
                             path, got, n * (size_t)channels);
     }
     img->width = (uint32_t)w;
@@ -260,7 +261,7 @@ int tr_image_read_png(tr_image *img, const char *path, tr_error *err) {
     }
     if (!png_image_begin_read_from_stdio(&p, fp)) {
         fclose(fp);
-        return tr_error_set(err, TR_STATUS_PARSE, "%s: cannot read PNG: %s", path, p.message);
+        return tr_error_set(err, TR_STATUS_PARSE, "%.200s: cannot read PNG: %s", path, p.message);
     }
     p.format = PNG_FORMAT_RGB;
     /* The same caps as for PFM files and films, checked on the header before libpng
@@ -270,7 +271,7 @@ int tr_image_read_png(tr_image *img, const char *path, tr_error *err) {
         png_image_free(&p);
         fclose(fp);
         return tr_error_set(err, TR_STATUS_LIMIT,
-                            "%s: PNG size %ux%u is more than %u per side or %u pixels", path,
+                            "%.200s: PNG size %ux%u is more than %u per side or %u pixels", path,
                             p.width, p.height, TR_FILM_MAX_SIDE, TR_FILM_MAX_PIXELS);
     }
     size_t n = (size_t)p.width * p.height;
@@ -281,14 +282,14 @@ int tr_image_read_png(tr_image *img, const char *path, tr_error *err) {
         png_image_free(&p);
         fclose(fp);
         tr_image_free(img);
-        return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "%s: out of memory", path);
+        return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "%.200s: out of memory", path);
     }
     const int decoded = png_image_finish_read(&p, NULL, buf, 0, NULL);
     fclose(fp);
     if (!decoded) {
         free(buf);
         tr_image_free(img);
-        return tr_error_set(err, TR_STATUS_PARSE, "%s: cannot decode PNG: %s", path, p.message);
+        return tr_error_set(err, TR_STATUS_PARSE, "%.200s: cannot decode PNG: %s", path, p.message);
     }
     img->width = p.width;
     img->height = p.height;

@@ -35,8 +35,8 @@ FILE *tr_infile_open(const char *path, uint64_t *size, tr_error *err) {
     }
     if (!S_ISREG(st.st_mode)) {
         close(fd);
-        tr_error_set(err, TR_STATUS_IO,
-                     "%.200s: cannot open: not a regular file (%s)", path, kind(st.st_mode));
+        tr_error_set(err, TR_STATUS_IO, "%.200s: cannot open: not a regular file (%s)", path,
+                     kind(st.st_mode));
         return NULL;
     }
     /* Reads from a regular file never block; the flag is dropped all the same so that

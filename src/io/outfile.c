@@ -148,14 +148,14 @@ tr_outfile *tr_outfile_open(const char *path, tr_error *err) {
     struct stat st;
     int exists = stat(path, &st) == 0;
     if (exists && !S_ISREG(st.st_mode)) {
-        tr_error_set(err, TR_STATUS_IO, "%s: cannot write: it is %s", path,
+        tr_error_set(err, TR_STATUS_IO, "%.200s: cannot write: it is %s", path,
                      type_name(st.st_mode));
         return NULL;
     }
     static const char suffix[] = ".tmp.XXXXXX";
     tr_outfile *f = malloc(sizeof *f + 2 * (n + 1) + sizeof suffix);
     if (!f) {
-        tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "%s: out of memory", path);
+        tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "%.200s: out of memory", path);
         return NULL;
     }
     memcpy(f->tmp, path, n);
@@ -166,7 +166,8 @@ tr_outfile *tr_outfile_open(const char *path, tr_error *err) {
     int fd = create_temp(f, exists ? (st.st_mode & 0777) : 0, exists);
     if (fd < 0) {
         int e = errno;
-        tr_error_set(err, tr_status_from_errno(e), "%s: cannot create file: %s", path, strerror(e));
+        tr_error_set(err, tr_status_from_errno(e), "%.200s: cannot create file: %s", path,
+                     strerror(e));
         free(f);
         return NULL;
     }
@@ -176,7 +177,8 @@ tr_outfile *tr_outfile_open(const char *path, tr_error *err) {
         close(fd);
         unlink(f->tmp);
         slot_release(f->slot);
-        tr_error_set(err, tr_status_from_errno(e), "%s: cannot open file: %s", path, strerror(e));
+        tr_error_set(err, tr_status_from_errno(e), "%.200s: cannot open file: %s", path,
+                     strerror(e));
         free(f);
         return NULL;
     }
@@ -205,11 +207,11 @@ int tr_outfile_commit(tr_outfile *f, tr_error *err) {
     errno = 0;
     if (fflush(f->fp) != 0 || ferror(f->fp)) {
         int e = errno ? errno : EIO;
-        rc = tr_error_set(err, tr_status_from_errno(e), "%s: write failed: %s", f->path,
+        rc = tr_error_set(err, tr_status_from_errno(e), "%.200s: write failed: %s", f->path,
                           strerror(e));
     }
     if (fclose(f->fp) != 0 && rc == TR_OK) {
-        rc = tr_error_set(err, tr_status_from_errno(errno), "%s: write failed: %s", f->path,
+        rc = tr_error_set(err, tr_status_from_errno(errno), "%.200s: write failed: %s", f->path,
                           strerror(errno));
     }
     sigset_t old;
@@ -217,7 +219,7 @@ int tr_outfile_commit(tr_outfile *f, tr_error *err) {
     if (rc == TR_OK && rename(f->tmp, f->path) != 0) {
         int e = errno;
         rc = tr_error_set(err, tr_status_from_errno(e),
-                          "%s: cannot rename the finished file into place: %s", f->path,
+                          "%.200s: cannot rename the finished file into place: %s", f->path,
                           strerror(e));
     }
     if (rc != TR_OK) {

@@ -906,17 +906,23 @@ static int parse_shapes(jctx *c, const cJSON *shapes) {
         d.material = (uint32_t)mat;
         double sub = 2;
         int has_sub = 0;
-        if (get_integer(c, sh, p, "subdivisions", 0, 1e9, &sub, &has_sub) != TR_OK) {
-            return TR_ERR;
-        }
         char ps[PATH_MAX_LEN];
         path_key(ps, p, "subdivisions");
-        if (has_sub && t != 2) {
+        /* Every number outside the range gets the range that holds: 0..9, not get_integer's
+         * own bounds. */
+        const cJSON *sv = cJSON_GetObjectItemCaseSensitive(sh, "subdivisions");
+        if (sv && t != 2) {
             return jerr(c, ps, "only icospheres have subdivisions");
         }
-        if (sub > TR_ICOSPHERE_MAX_SUBDIVISIONS) {
-            return jerr(c, ps, "expected an integer in 0..%d (20*4^N triangles), got %.0f",
-                        TR_ICOSPHERE_MAX_SUBDIVISIONS, sub);
+        if (cJSON_IsNumber(sv) &&
+            !(sv->valuedouble >= 0.0 && sv->valuedouble <= TR_ICOSPHERE_MAX_SUBDIVISIONS &&
+              sv->valuedouble == floor(sv->valuedouble))) {
+            return jerr(c, ps, "expected an integer in 0..%d (20*4^N triangles), got %g",
+                        TR_ICOSPHERE_MAX_SUBDIVISIONS, sv->valuedouble);
+        }
+        if (get_integer(c, sh, p, "subdivisions", 0, TR_ICOSPHERE_MAX_SUBDIVISIONS, &sub,
+                        &has_sub) != TR_OK) {
+            return TR_ERR;
         }
         d.subdivisions = (uint32_t)sub;
         uint64_t n = tr_shape_triangle_count(&d);
