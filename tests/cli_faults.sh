@@ -63,7 +63,17 @@ scene_with_mesh "$PWD/model/m.gltf"
 $T "$BIN" info s.json >/dev/null 2>err.txt
 rc=$?
 [ "$rc" -eq 2 ] || fail "a glTF buffer FIFO: exit $rc (124: hung): $(cat err.txt)"
-rm -rf model fifo.json fifo.obj s.json
+mkfifo fifo.pfm fifo.ttf
+"$BIN" render --width 8 --height 8 --spp 1 --out ok.pfm >/dev/null 2>&1
+$T "$BIN" compare fifo.pfm ok.pfm >/dev/null 2>err.txt
+rc=$?
+[ "$rc" -eq 2 ] || fail "compare with a FIFO image: exit $rc (124: hung): $(cat err.txt)"
+if "$BIN" view --help >/dev/null 2>&1; then
+    $T "$BIN" view --font fifo.ttf >/dev/null 2>err.txt
+    rc=$?
+    [ "$rc" -eq 2 ] || fail "view --font FIFO: exit $rc (124: hung): $(cat err.txt)"
+fi
+rm -rf model fifo.json fifo.obj fifo.pfm fifo.ttf ok.pfm s.json
 
 # No display reachable: SDL's offscreen fallback is refused instead of spinning for ever.
 if "$BIN" view --help >/dev/null 2>&1; then
