@@ -163,7 +163,7 @@ int cmd_render(int argc, char **argv) {
     }
     tr_film film;
     if (tr_film_init_passes(&film, c.width, c.height, passes, &err) != TR_OK) {
-        tr_scene_free(scene);
+        tr_scene_destroy(scene);
         if (err.code == TR_STATUS_OUT_OF_MEMORY) {
             /* Not the command line's fault: a failure while working, status 1. */
             fprintf(stderr, "trac0r render: %s\n", err.msg);

@@ -13,8 +13,11 @@
 
 #include "io/infile.h"
 
+typedef struct guard_file guard_file;
+
 typedef struct guard {
     const char *model; /* the path given */
+    guard_file *open;  /* files Assimp has not closed yet */
     char model_real[PATH_MAX];
     char root[PATH_MAX];     /* the model's directory, resolved */
     char allowed[PATH_MAX];  /* TRAC0R_MODEL_ROOT resolved, or "" */
@@ -22,11 +25,13 @@ typedef struct guard {
     char reason[512];        /* the first refusal, "" for none */
 } guard;
 
-typedef struct guard_file {
+struct guard_file {
     FILE *fp;
     unsigned long long size;
     guard *g;
-} guard_file;
+    struct aiFile *ai;
+    guard_file *prev, *next;
+};
 
 static void refuse(guard *g, const char *fmt, const char *a, const char *b) {
     if (!g->reason[0]) {
@@ -262,6 +267,13 @@ static struct aiFile *g_open(struct aiFileIO *io, const char *name, const char *
     gf->fp = fp;
     gf->size = size;
     gf->g = g;
+    gf->ai = f;
+    gf->prev = NULL;
+    gf->next = g->open;
+    if (g->open) {
+        g->open->prev = gf;
+    }
+    g->open = gf;
     f->ReadProc = g_read;
     f->WriteProc = g_write;
     f->TellProc = g_tell;
@@ -272,13 +284,25 @@ static struct aiFile *g_open(struct aiFileIO *io, const char *name, const char *
     return f;
 }
 
+static void close_file(guard_file *gf) {
+    guard *g = gf->g;
+    if (gf->prev) {
+        gf->prev->next = gf->next;
+    } else {
+        g->open = gf->next;
+    }
+    if (gf->next) {
+        gf->next->prev = gf->prev;
+    }
+    fclose(gf->fp);
+    free(gf->ai);
+    free(gf);
+}
+
 static void g_close(struct aiFileIO *io, struct aiFile *f) {
     (void)io;
     if (f) {
-        guard_file *gf = (guard_file *)f->UserData;
-        fclose(gf->fp);
-        free(gf);
-        free(f);
+        close_file((guard_file *)f->UserData);
     }
 }
 
@@ -323,6 +347,11 @@ const struct aiScene *tr_mesh_guarded_import(const char *path, unsigned int flag
     }
     struct aiFileIO io = {g_open, g_close, (aiUserData)g};
     const struct aiScene *ai = aiImportFileEx(path, flags, &io);
+    /* Some of Assimp's importers throw past an open stream (the glTF importer on a buffer
+     * longer than its file) and never close it: the import is over, so close them here. */
+    while (g->open) {
+        close_file(g->open);
+    }
     /* A refusal fails the import even where Assimp went on without the file (an OBJ
      * whose material library is refused still loads, with default materials). */
     if (!ai || !ai->mRootNode || (ai->mFlags & AI_SCENE_FLAGS_INCOMPLETE) || g->reason[0]) {
