@@ -1,22 +1,33 @@
 #!/bin/sh
-# Builds the libFuzzer target for the JSON scene loader with clang into build/fuzz/,
-# separate from the gcc builds: the loader's sources and the scene code it uses are
-# compiled with -fsanitize=fuzzer,address,undefined. Mesh import is left out (the
-# target never opens mesh files), and so are the wide BVH's per-ISA traversals, which need
-# per-file flags: without TR_WBVH_HAVE_X86 the library has the scalar one alone.
+# Builds the libFuzzer targets with clang into build/fuzz/, separate from the gcc builds:
+# trac0r's sources they use are compiled with -fsanitize=fuzzer,address,undefined (the
+# libraries - cJSON, Assimp, libpng - are not instrumented).
+#   fuzz_scene_json  the JSON scene loader; mesh files are not opened
+#   fuzz_mesh        the mesh import path: mesh.c and mesh_guard.c into Assimp
+#   fuzz_image       the image readers of `compare` (PNG and PFM)
+# The wide BVH's per-ISA traversals need per-file flags and are left out: without
+# TR_WBVH_HAVE_X86 the library has the scalar one alone.
 # Usage: fuzz/build.sh   (CC defaults to clang)
 set -eu
 cd "$(dirname "$0")/.."
 CC=${CC:-clang}
 OUT=build/fuzz
 mkdir -p "$OUT"
-# shellcheck disable=SC2046
-"$CC" -std=c11 -g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=all \
-    -fno-omit-frame-pointer -ffp-contract=off -Wall -Wextra -Wno-unknown-pragmas \
-    -Iinclude -Isrc $(pkg-config --cflags libcjson) \
-    fuzz/fuzz_scene_json.c src/scene/json.c src/scene/scene.c src/scene/shape.c \
-    src/scene/camera.c src/scene/lights.c src/accel/bvh.c src/accel/wbvh.c \
-    src/accel/wbvh_scalar.c src/accel/embree.c src/util/error.c src/util/registry.c \
-    src/scene/material_registry.c \
+FLAGS="-std=c11 -g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=all
+    -fno-omit-frame-pointer -ffp-contract=off -Wall -Wextra -Wno-unknown-pragmas -Iinclude -Isrc"
+SCENE="src/scene/json.c src/scene/scene.c src/scene/shape.c src/scene/camera.c
+    src/scene/lights.c src/accel/bvh.c src/accel/wbvh.c src/accel/wbvh_scalar.c
+    src/accel/embree.c src/util/error.c src/util/registry.c src/scene/material_registry.c
+    src/io/infile.c"
+# shellcheck disable=SC2046,SC2086
+"$CC" $FLAGS $(pkg-config --cflags libcjson) fuzz/fuzz_scene_json.c $SCENE \
     $(pkg-config --libs libcjson) -lm -o "$OUT/fuzz_scene_json"
-echo "built $OUT/fuzz_scene_json"
+# shellcheck disable=SC2046,SC2086
+"$CC" $FLAGS $(pkg-config --cflags libcjson assimp) fuzz/fuzz_mesh.c $SCENE \
+    src/scene/mesh.c src/scene/mesh_guard.c \
+    $(pkg-config --libs libcjson assimp) -lm -o "$OUT/fuzz_mesh"
+# shellcheck disable=SC2046,SC2086
+"$CC" $FLAGS $(pkg-config --cflags libpng) fuzz/fuzz_image.c src/io/image.c src/io/infile.c \
+    src/io/outfile.c src/film/film.c src/post/tonemap.c src/util/error.c \
+    $(pkg-config --libs libpng) -lm -o "$OUT/fuzz_image"
+echo "built $OUT/fuzz_scene_json $OUT/fuzz_mesh $OUT/fuzz_image"

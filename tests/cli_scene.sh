@@ -91,10 +91,10 @@ check budget.json ": shapes[5]: the scene would have more than 16777216 triangle
 check no_shapes.json ": the scene has no triangles"
 # Render defaults.
 check accel.json ": render.accel: unknown acceleration structure 'bhv' (expected bvh, flat, embree or bvh2; did you mean 'bvh'?)"
-expect_bad integrator.json ": render.integrator: unknown integrator 'magic' (available: pt, naive)"
+check integrator.json ": render.integrator: unknown integrator 'magic' (available: pt, naive)"
 # Meshes.
 check missing_mesh.json ": meshes[0].path: cannot open '$BAD/no-such-model.obj': No such file or directory"
-check unreadable_mesh.json ": meshes[0].path: cannot read '$BAD/.': Is a directory"
+check unreadable_mesh.json ": meshes[0].path: cannot open '$BAD/.': not a regular file (a directory)"
 check assimp_fails.json ": meshes[0].path: Assimp cannot read '$BAD/garbage.ply'"
 check nan_mesh.json ": meshes[0].path: '$BAD/nan_vertex.obj': mesh vertex 2 has a non-finite coordinate"
 check huge_mesh.json ": meshes[0]: a vertex lands at (1e+30, 1, 0), outside the bound |x| <= 1e+07"

@@ -83,6 +83,12 @@ DISPLAY=$DISPLAY.7 timeout 30 "$BIN" view >out.txt 2>err.txt
 rc=$?
 [ "$rc" -eq 2 ] || fail "view on $DISPLAY.7: exit $rc, expected 2"
 grep -qF "DISPLAY='$DISPLAY.7'" err.txt || fail "view on $DISPLAY.7: message: $(cat err.txt)"
+# A state file that cannot be written (a directory) is refused before the window opens.
+mkdir -p state.dir
+timeout 30 "$BIN" view --state-file state.dir >out.txt 2>err.txt
+rc=$?
+[ "$rc" -eq 2 ] || fail "view --state-file DIRECTORY: exit $rc, expected 2: $(cat err.txt)"
+rmdir state.dir
 # SDL's software renderer, and no OpenGL behind the window surface: Mesa is loaded
 # with dlopen and unloaded at SDL_Quit, so LeakSanitizer (sanitizer build) could not
 # name it in a suppression. The leak check itself covers every interactive run below:
@@ -247,6 +253,15 @@ wait_for 30 '[ "$(state size)" = "600 450" ] && [ "$(state generation)" = "$(sta
     fail "resize: size $(state size), generation $(state generation)/$(state view_generation)"
 dump resized.ppm
 [ "$(sed -n 2p resized.ppm)" = "600 450" ] || fail "resized window dump is $(sed -n 2p resized.ppm)"
+# A window wider than a film may be (16384) renders scaled down instead of ending the
+# viewer; back to 600x450 for what follows.
+xdotool windowsize "$WID" 17000 100
+wait_for 30 'w17=$(state size | cut -d" " -f1); [ "${w17:-0}" -gt 600 ] && [ "$w17" -le 16384 ]' ||
+    fail "window 17000 wide: render size $(state size): $(cat view.err)"
+kill -0 "$VIEW_PID" 2>/dev/null || fail "viewer ended on a window wider than a film: $(cat view.err)"
+xdotool windowsize "$WID" 600 450
+wait_for 30 '[ "$(state size)" = "600 450" ] && [ "$(state generation)" = "$(state view_generation)" ]' ||
+    fail "back to 600x450: size $(state size)"
 # View changes 30 ms apart, each shorter than a 600x450 frame on one thread: the
 # frames in flight are cancelled, and the last change still shows up.
 cancelled0=$(state cancelled)

@@ -87,7 +87,7 @@ STATIC=$(pkg-config --static --libs trac0r)
 for lib in $(objdump -p "$SO" | awk '$1 == "NEEDED" { print $2 }'); do
     name=${lib#lib}
     name=${name%%.so*}
-    case $name in c) continue ;; esac
+    case $name in c | ld-linux* | gcc_s) continue ;; esac # come with every link
     case " $STATIC " in
         *" -l$name "*) ;;
         *) fail "pkg-config --static --libs trac0r lacks -l$name ($lib): $STATIC" ;;

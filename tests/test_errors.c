@@ -240,7 +240,7 @@ static void test_scene_files(void) {
     CHECK_STATUS(tr_scene_file_load(&s, "no-such-dir/scene.json", NULL, NULL, &err), err,
                  TR_STATUS_NOT_FOUND, "a missing scene file");
     CHECK(strstr(err.msg, "no-such-dir/scene.json") != NULL, "the file is not named: %s", err.msg);
-    /* A directory opens but does not read (EISDIR). */
+    /* A directory is not a regular file: refused before reading. */
     CHECK_STATUS(tr_scene_file_load(&s, DATA, NULL, NULL, &err), err, TR_STATUS_IO,
                  "a directory as a scene file");
     /* A mesh inside a scene file keeps the import's code. */

@@ -11,6 +11,7 @@
 #include "progress.h"
 #include "commands.h"
 #include "devices.h"
+#include "trac0r/outfile.h"
 
 static int cmp_double(const void *a, const void *b) {
     double x = *(const double *)a, y = *(const double *)b;
@@ -72,7 +73,7 @@ static int bench_frame(int argc, char **argv) {
             animate = 1;
             rc = CLI_OK;
         } else {
-            return cli_error(&a, "unknown option '%s' (see 'trac0r bench frame --help')", a.opt);
+            return cli_unknown(&a);
         }
         if (rc != CLI_OK) {
             return CLI_USAGE;
@@ -87,10 +88,15 @@ static int bench_frame(int argc, char **argv) {
     tr_error err;
     double *times = malloc((size_t)frames * 2 * sizeof *times);
     double *update_times = times ? times + frames : NULL;
-    if (!times || tr_film_check_size(c.width, c.height, &err) != TR_OK) {
+    if (!times) {
+        tr_scene_destroy(scene);
+        fprintf(stderr, "trac0r bench frame: out of memory\n");
+        return CLI_FAILURE;
+    }
+    if (tr_film_check_size(c.width, c.height, &err) != TR_OK) {
         free(times);
         tr_scene_destroy(scene);
-        return cli_error(&a, "--width/--height: %s", times ? err.msg : "out of memory");
+        return cli_error(&a, "--width/--height: %s", err.msg);
     }
     cli_backend be;
     rc = cli_backend_open(&a, &c, scene, &be);
@@ -224,9 +230,13 @@ int bench_parse_accels(cli_args *a, accel_set *set) {
     for (char *save = NULL, *tok = strtok_r(buf, ",", &save); tok;
          tok = strtok_r(NULL, ",", &save)) {
         int t = tr_accel_from_name(tok);
-        if (t < 0 || set->count == 4) {
+        if (t < 0) {
             return cli_error(a, "%s: unknown acceleration structure '%s' in '%s'", a->opt, tok,
                              a->value);
+        }
+        if (set->count == (int)(sizeof set->type / sizeof set->type[0])) {
+            return cli_error(a, "%s: more than %d structures in '%s'", a->opt,
+                             (int)(sizeof set->type / sizeof set->type[0]), a->value);
         }
         if (!tr_accel_available((tr_accel_type)t)) {
             return cli_error(a, "%s: '%s' is not available in this build", a->opt, tok);
@@ -253,25 +263,6 @@ void bench_accels_all(accel_set *set, int with_flat) {
 double bench_build_seconds(const tr_scene *s) {
     return tr_scene_accel(s) == TR_ACCEL_TYPE_EMBREE ? tr_scene_embree_build_seconds(s)
                                                      : tr_scene_bvh_build_seconds(s);
-}
-
-int bench_plot_png(const char *script, const char *png) {
-    char tmp[4096];
-    if (snprintf(tmp, sizeof tmp, "%s.tmp.png", png) >= (int)sizeof tmp) {
-        return 0;
-    }
-    FILE *gp = popen("gnuplot 2>/dev/null", "w");
-    if (!gp) {
-        return 0;
-    }
-    fprintf(gp, "set terminal pngcairo size 900,600 noenhanced\nset output '%s'\n%s\n", tmp,
-            script);
-    int rc = pclose(gp);
-    if (rc != 0 || rename(tmp, png) != 0) {
-        remove(tmp);
-        return 0;
-    }
-    return 1;
 }
 
 static void bench_complexity_help(void) {
@@ -336,8 +327,7 @@ static int bench_complexity(int argc, char **argv) {
             rc = cli_value(&a);
             prefix = a.value;
         } else {
-            return cli_error(&a, "unknown option '%s' (see 'trac0r bench complexity --help')",
-                             a.opt);
+            return cli_unknown(&a);
         }
         if (rc != CLI_OK) {
             return CLI_USAGE;
@@ -358,13 +348,18 @@ static int bench_complexity(int argc, char **argv) {
     snprintf(csv_path, sizeof csv_path, "%s.csv", prefix);
     snprintf(png_path, sizeof png_path, "%s.png", prefix);
     tr_error err;
-    if (tr_image_check_writable(csv_path, &err) != TR_OK) {
+    if (tr_image_check_writable(csv_path, &err) != TR_OK ||
+        tr_image_check_writable(png_path, &err) != TR_OK) {
         return cli_error(&a, "--out: %s", err.msg);
     }
     double *times = malloc((size_t)frames * sizeof *times);
-    if (!times || tr_film_check_size(c.width, c.height, &err) != TR_OK) {
+    if (!times) {
+        fprintf(stderr, "trac0r bench complexity: out of memory\n");
+        return CLI_FAILURE;
+    }
+    if (tr_film_check_size(c.width, c.height, &err) != TR_OK) {
         free(times);
-        return cli_error(&a, "--width/--height: %s", times ? err.msg : "out of memory");
+        return cli_error(&a, "--width/--height: %s", err.msg);
     }
     cli_backend be;
     int rc = cli_backend_open(&a, &c, NULL, &be);
@@ -466,11 +461,12 @@ static int bench_complexity(int argc, char **argv) {
         return rc;
     }
     /* CSV: one row per (level, structure) measured. */
-    FILE *fp = fopen(csv_path, "w");
-    if (!fp) {
-        fprintf(stderr, "trac0r bench complexity: %s: cannot write\n", csv_path);
+    tr_outfile *csv = tr_outfile_open(csv_path, &err);
+    if (!csv) {
+        fprintf(stderr, "trac0r bench complexity: %s\n", err.msg);
         return CLI_FAILURE;
     }
+    FILE *fp = tr_outfile_stream(csv);
     fprintf(fp, "level,triangles,accel,build_ms,fps\n");
     for (int level = 0; level <= max_level; ++level) {
         for (int k = 0; k < set.count; ++k) {
@@ -480,7 +476,10 @@ static int bench_complexity(int argc, char **argv) {
             }
         }
     }
-    fclose(fp);
+    if (tr_outfile_commit(csv, &err) != TR_OK) {
+        fprintf(stderr, "trac0r bench complexity: %s\n", err.msg);
+        return CLI_FAILURE;
+    }
     /* One inline data block per structure, so each draws as one connected line. */
     char script[8192];
     int len = 0;
@@ -505,7 +504,11 @@ static int bench_complexity(int argc, char **argv) {
                         "%s$d%d with linespoints lw 2 title '%s'", k ? ", " : "", k,
                         tr_accel_name(set.type[k]));
     }
-    int plotted = bench_plot_png(script, png_path);
+    int plotted = bench_plot_png(script, png_path, &err);
+    if (plotted < 0) {
+        fprintf(stderr, "trac0r bench complexity: %s\n", err.msg);
+        return CLI_FAILURE;
+    }
     printf("wrote %s%s%s\n", csv_path, plotted ? " and " : " (gnuplot failed: no plot)",
            plotted ? png_path : "");
     return CLI_OK;

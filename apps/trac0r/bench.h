@@ -18,9 +18,11 @@ int bench_parse_accels(cli_args *a, accel_set *set);
 void bench_accels_all(accel_set *set, int with_flat);
 /* The build time of the scene's committed structure (0 for flat). */
 double bench_build_seconds(const tr_scene *s);
-/* Runs a gnuplot script with its output going to `png` (through a temporary file that
- * is renamed); returns 0 when gnuplot is missing or fails. */
-int bench_plot_png(const char *script, const char *png);
+/* Runs a gnuplot script (no file names in it: the PNG comes back on gnuplot's standard
+ * output) and writes the plot to `png` through tr_outfile. 1: written; 0: gnuplot is
+ * missing or failed (no plot, nothing written); -1: the file could not be written (`err`
+ * says why). */
+int bench_plot_png(const char *script, const char *png, tr_error *err);
 
 int bench_rays(int argc, char **argv);
 int bench_convergence(int argc, char **argv);

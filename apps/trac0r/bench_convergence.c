@@ -11,6 +11,7 @@
 #include "progress.h"
 #include "cli.h"
 #include "devices.h"
+#include "trac0r/outfile.h"
 
 #define CONV_MAX_SIZES 4
 #define CONV_MAX_POINTS 400
@@ -230,8 +231,7 @@ int bench_convergence(int argc, char **argv) {
             c.scene = a.opt;
             rc = CLI_OK;
         } else {
-            return cli_error(&a, "unknown option '%s' (see 'trac0r bench convergence --help')",
-                             a.opt);
+            return cli_unknown(&a);
         }
         if (rc != CLI_OK) {
             return CLI_USAGE;
@@ -246,7 +246,8 @@ int bench_convergence(int argc, char **argv) {
         return cli_error(&a, "--out: prefix too long");
     }
     tr_error err;
-    if (tr_image_check_writable(csv_path, &err) != TR_OK) {
+    if (tr_image_check_writable(csv_path, &err) != TR_OK ||
+        tr_image_check_writable(png_path, &err) != TR_OK) {
         return cli_error(&a, "--out: %s", err.msg);
     }
     tr_image ref_img;
@@ -517,12 +518,13 @@ int bench_convergence(int argc, char **argv) {
         printf("\n");
     }
 
-    FILE *fp = fopen(csv_path, "w");
-    if (!fp) {
+    tr_outfile *csv = tr_outfile_open(csv_path, &err);
+    if (!csv) {
         free(runs);
-        fprintf(stderr, "trac0r bench convergence: %s: cannot write\n", csv_path);
+        fprintf(stderr, "trac0r bench convergence: %s\n", err.msg);
         return CLI_FAILURE;
     }
+    FILE *fp = tr_outfile_stream(csv);
     fprintf(fp, "method,width,height,spp,seconds,rmse,relmse,psnr_raw,psnr\n");
     for (int i = 0; i < nsizes * nmethods; ++i) {
         const conv_run *r = &runs[i];
@@ -533,11 +535,9 @@ int bench_convergence(int argc, char **argv) {
                     p->raw.psnr, p->psnr);
         }
     }
-    int write_failed = ferror(fp);
-    write_failed |= fclose(fp) != 0;
-    if (write_failed) {
+    if (tr_outfile_commit(csv, &err) != TR_OK) {
         free(runs);
-        fprintf(stderr, "trac0r bench convergence: %s: write failed\n", csv_path);
+        fprintf(stderr, "trac0r bench convergence: %s\n", err.msg);
         return CLI_FAILURE;
     }
 
@@ -589,9 +589,13 @@ int bench_convergence(int argc, char **argv) {
                                 "notitle, 40 dt 2 lc 'gray' notitle\n");
     }
     len += (size_t)snprintf(script + len, cap - len, "unset multiplot\n");
-    int plotted = bench_plot_png(script, png_path);
+    int plotted = bench_plot_png(script, png_path, &err);
     free(script);
     free(runs);
+    if (plotted < 0) {
+        fprintf(stderr, "trac0r bench convergence: %s\n", err.msg);
+        return CLI_FAILURE;
+    }
     printf("wrote %s%s%s\n", csv_path, plotted ? " and " : " (gnuplot failed: no plot)",
            plotted ? png_path : "");
     return CLI_OK;

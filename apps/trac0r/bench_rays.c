@@ -196,7 +196,7 @@ int bench_rays(int argc, char **argv) {
         } else if (cli_is(&a, "--accels")) {
             rc = bench_parse_accels(&a, &set);
         } else {
-            return cli_error(&a, "unknown option '%s' (see 'trac0r bench rays --help')", a.opt);
+            return cli_unknown(&a);
         }
         if (rc != CLI_OK) {
             return CLI_USAGE;

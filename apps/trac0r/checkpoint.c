@@ -3,6 +3,9 @@
 #include "checkpoint.h"
 
 #include <errno.h>
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -186,13 +189,35 @@ static void describe_difference(const char *got, const char *want, char *buf, si
     snprintf(buf, size, "it has '%s', this render '%s'", got, want);
 }
 
+/* Opens a checkpoint when it is a regular file: without blocking first, so that a FIFO
+ * named by --resume is refused rather than waited on forever. */
+static FILE *open_regular(const char *path, tr_error *err) {
+    const int fd = open(path, O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+    struct stat st;
+    if (fd < 0 || fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+        const int e = fd < 0 ? errno : 0;
+        if (fd >= 0) {
+            close(fd);
+        }
+        tr_error_set(err, e ? tr_status_from_errno(e) : TR_STATUS_IO, "%.200s: cannot open: %s",
+                     path, e ? strerror(e) : "not a regular file");
+        return NULL;
+    }
+    FILE *fp = fdopen(fd, "rb");
+    if (!fp) {
+        const int e = errno;
+        close(fd);
+        tr_error_set(err, tr_status_from_errno(e), "%.200s: cannot open: %s", path, strerror(e));
+    }
+    return fp;
+}
+
 int checkpoint_read(const char *path, const checkpoint_id *id, uint32_t *mode, tr_film *film,
                     uint32_t *samples, uint32_t *spp, tr_error *err) {
     memset(film, 0, sizeof *film);
-    FILE *fp = fopen(path, "rb");
+    FILE *fp = open_regular(path, err);
     if (!fp) {
-        return tr_error_set(err, tr_status_from_errno(errno), "%s: cannot open: %s", path,
-                            strerror(errno));
+        return TR_ERR;
     }
     unsigned char *data = NULL;
     size_t size = 0, cap = 0;

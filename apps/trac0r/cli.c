@@ -114,6 +114,14 @@ int cli_error(const cli_args *a, const char *fmt, ...) {
     return CLI_USAGE;
 }
 
+int cli_unknown(const cli_args *a) {
+    if (a->opt[0] == '-' && a->opt[1] != '\0') {
+        return cli_error(a, "unknown option '%s' (see 'trac0r %s --help')", a->opt, a->cmd);
+    }
+    /* Not an option at all: a second SCENE, or an argument where none is taken. */
+    return cli_error(a, "unexpected argument '%s' (see 'trac0r %s --help')", a->opt, a->cmd);
+}
+
 int cli_next(cli_args *a) {
     if (++a->i >= a->argc) {
         return 0;
@@ -241,7 +249,7 @@ int cli_common_option(cli_args *a, cli_common *c) {
         return cli_parse_u64(a, &c->seed);
     }
     if (cli_is(a, "--threads")) {
-        return cli_parse_int(a, 0, 1024, &c->threads);
+        return cli_parse_int(a, 0, TR_MAX_THREADS, &c->threads);
     }
     if (cli_is(a, "--integrator")) {
         c->given |= CLI_GIVEN_INTEGRATOR;

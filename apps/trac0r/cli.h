@@ -55,6 +55,9 @@ void cli_accel_list(char *buf, size_t size);
 
 /* Prints "trac0r CMD: message" to stderr and returns CLI_USAGE. */
 int cli_error(const cli_args *a, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+/* The current argument is not one the command takes: "unknown option '--x'" for an
+ * option, "unexpected argument 'x'" for anything else (a second SCENE). Returns CLI_USAGE. */
+int cli_unknown(const cli_args *a);
 
 /* Advances to the next argument; returns 0 at the end. Splits "--opt=value". */
 int cli_next(cli_args *a);

@@ -93,7 +93,7 @@ int cmd_compare(int argc, char **argv) {
                                  error_image);
             }
         } else if (a.opt[0] == '-' && a.opt[1] != '\0') {
-            return cli_error(&a, "unknown option '%s' (see 'trac0r compare --help')", a.opt);
+            return cli_unknown(&a);
         } else if (npaths < 2) {
             paths[npaths++] = a.opt;
         } else {

@@ -132,7 +132,10 @@ int cli_print_devices(FILE *fp) {
     int count = 0;
     if (tr_device_list("opencl", NULL, 0, &count, &err) != TR_OK) {
         fprintf(stderr, "trac0r info: --devices: %s\n", err.msg);
-        return CLI_USAGE;
+        /* No OpenCL is the machine's setup (2); a driver that fails or memory running out
+         * is a failure while working (1), as for device_error(). */
+        return err.code == TR_STATUS_DEVICE || err.code == TR_STATUS_OUT_OF_MEMORY ? CLI_FAILURE
+                                                                                   : CLI_USAGE;
     }
     tr_device_info *devs = calloc((size_t)(count ? count : 1), sizeof *devs);
     if (!devs || tr_device_list("opencl", devs, count, &count, &err) != TR_OK) {

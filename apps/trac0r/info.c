@@ -40,7 +40,7 @@ int cmd_info(int argc, char **argv) {
         } else if (a.opt[0] != '-' && !path) {
             path = a.opt;
         } else {
-            return cli_error(&a, "unknown option '%s' (see 'trac0r info --help')", a.opt);
+            return cli_unknown(&a);
         }
     }
     if (devices && path) {

@@ -1,9 +1,58 @@
 /* main.c - the trac0r command: dispatches to a subcommand. */
+#define _POSIX_C_SOURCE 200809L
+#include <errno.h>
+#include <signal.h>
 #include <stdio.h>
 #include <string.h>
 
 #include "cli.h"
 #include "commands.h"
+#include "trac0r/outfile.h"
+
+/* A signal that ends the program removes the temporary files of outputs being written
+ * (the manual: nothing is ever left half-written), then ends it as the signal would have:
+ * SA_RESETHAND restored the default action, so raising it again kills with the same
+ * status the shell expects. A command may install its own handler over this one (render's
+ * graceful first SIGINT) and call tr_outfile_cleanup_all() itself. */
+static void die_on_signal(int sig) {
+    tr_outfile_cleanup_all();
+    raise(sig);
+}
+
+static void install_signal_handlers(void) {
+    static const int fatal[] = {SIGINT, SIGTERM, SIGHUP, SIGQUIT};
+    struct sigaction sa;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = die_on_signal;
+    sa.sa_flags = SA_RESETHAND;
+    sigemptyset(&sa.sa_mask);
+    for (size_t i = 0; i < sizeof fatal / sizeof fatal[0]; ++i) {
+        struct sigaction old;
+        /* A signal the parent ignored (nohup, a background job's SIGINT) stays ignored. */
+        if (sigaction(fatal[i], NULL, &old) == 0 && old.sa_handler != SIG_IGN) {
+            sigaction(fatal[i], &sa, NULL);
+        }
+    }
+    /* Past `ulimit -f` a write fails with EFBIG instead of killing the process: the writer
+     * then reports "File too large", removes its temporary file and exits 1. */
+    signal(SIGXFSZ, SIG_IGN);
+}
+
+static int dispatch(int argc, char **argv);
+
+int main(int argc, char **argv) {
+    install_signal_handlers();
+    int rc = dispatch(argc, argv);
+    /* Whatever a command printed must have arrived: `trac0r info > /dev/full` is a
+     * failure, not a success with the output lost. */
+    errno = 0;
+    if (fflush(stdout) != 0 || ferror(stdout)) {
+        int e = errno ? errno : EIO;
+        fprintf(stderr, "trac0r: cannot write standard output: %s\n", strerror(e));
+        return rc == CLI_OK ? CLI_FAILURE : rc;
+    }
+    return rc;
+}
 
 static void usage(FILE *fp) {
     fprintf(fp, "Usage: trac0r COMMAND [options]\n"
@@ -22,7 +71,7 @@ static void usage(FILE *fp) {
                 "  --version       print the version\n");
 }
 
-int main(int argc, char **argv) {
+static int dispatch(int argc, char **argv) {
     if (argc < 2) {
         usage(stderr);
         return CLI_USAGE;

@@ -202,7 +202,7 @@ int render_job_setup(render_job *job, int argc, char **argv, int *done) {
             scene_arg = 1;
             rc = CLI_OK;
         } else {
-            return cli_error(a, "unknown option '%s' (see 'trac0r render --help')", a->opt);
+            return cli_unknown(a);
         }
         if (rc != CLI_OK) {
             return CLI_USAGE;

@@ -2,6 +2,7 @@
  * window itself is view_window.c. */
 #define _POSIX_C_SOURCE 200809L
 #include "view.h"
+#include "trac0r/outfile.h"
 
 #include <stdio.h>
 #include <stdlib.h>
@@ -88,6 +89,10 @@ static int run_headless(const cli_args *a, const view_options *o, tr_scene *scen
     tr_error err;
     tr_film film;
     if (tr_film_init(&film, o->c.width, o->c.height, &err) != TR_OK) {
+        if (err.code == TR_STATUS_OUT_OF_MEMORY) {
+            fprintf(stderr, "trac0r view: %s\n", err.msg); /* status 1, not a usage error */
+            return CLI_FAILURE;
+        }
         return cli_error(a, "--width/--height: %s", err.msg);
     }
     double seconds = 0.0;
@@ -170,7 +175,7 @@ int cmd_view(int argc, char **argv) {
             o.c.scene = a.opt; /* positional SCENE */
             rc = CLI_OK;
         } else {
-            return cli_error(&a, "unknown option '%s' (see 'trac0r view --help')", a.opt);
+            return cli_unknown(&a);
         }
         if (rc != CLI_OK) {
             return CLI_USAGE;
@@ -194,6 +199,14 @@ int cmd_view(int argc, char **argv) {
         if (tr_image_check_writable(o.screenshot, &err) != TR_OK) {
             return cli_error(&a, "--screenshot: %s", err.msg);
         }
+    }
+    /* The window's files are written while it runs: a directory or an unwritable place
+     * is said now, not found never written. */
+    if (o.state_file && tr_outfile_check(o.state_file, &err) != TR_OK) {
+        return cli_error(&a, "--state-file: %s", err.msg);
+    }
+    if (o.dump_file && tr_outfile_check(o.dump_file, &err) != TR_OK) {
+        return cli_error(&a, "--dump-window: %s", err.msg);
     }
     if (o.benchmark >= 0) {
         snprintf(bench_scene, sizeof bench_scene, "builtin:cornell-ico-%d", o.benchmark);

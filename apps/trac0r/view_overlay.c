@@ -7,6 +7,7 @@
 #include <stdio.h>
 #include <string.h>
 #include <strings.h>
+#include <sys/stat.h>
 
 #include "view_wire.h"
 
@@ -14,12 +15,16 @@
 
 int view_font_find(const char *override, char *path, size_t n, tr_error *err) {
     if (override) {
-        FILE *fp = fopen(override, "rb");
-        if (!fp) {
+        /* stat, not fopen: opening a FIFO named as the font would block. */
+        struct stat st;
+        if (stat(override, &st) != 0) {
             return tr_error_set(err, tr_status_from_errno(errno), "--font: cannot open '%s'",
                                 override);
         }
-        fclose(fp);
+        if (!S_ISREG(st.st_mode)) {
+            return tr_error_set(err, TR_STATUS_IO, "--font: cannot open '%s': not a regular file",
+                                override);
+        }
         snprintf(path, n, "%s", override);
         return TR_OK;
     }

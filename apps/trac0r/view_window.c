@@ -9,12 +9,14 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include "view.h"
 #include "view_overlay.h"
 #include "view_render.h"
 #include "view_vec.h"
 #include "view_wire.h"
+#include "trac0r/outfile.h"
 
 static volatile sig_atomic_t dump_requested = 0;
 
@@ -54,15 +56,13 @@ typedef struct view_state {
 
 static int write_state(const char *path, const view_state *s, const fly_camera *f, uint64_t frames,
                        uint64_t cancelled, uint32_t spp, uint64_t gen, uint64_t view_gen,
-                       uint32_t w, uint32_t h, double fps) {
-    char tmp[4200];
-    snprintf(tmp, sizeof tmp, "%s.tmp", path);
-    FILE *fp = fopen(tmp, "w");
-    if (!fp) {
+                       uint32_t w, uint32_t h, double fps, tr_error *err) {
+    tr_outfile *out = tr_outfile_open(path, err);
+    if (!out) {
         return -1;
     }
     fprintf(
-        fp,
+        tr_outfile_stream(out),
         "spp %u\ngeneration %llu\nview_generation %llu\nframes %llu\ncancelled %llu\nsize %u %u\n"
         "pos %.6f %.6f %.6f\ndir %.6f %.6f %.6f\nup %.6f %.6f %.6f\nspeed %.6f\n"
         "overlay %d\nhelp %d\nbvh %d\nbvh_depth %u\ntimings %d\nmouselook %d\nstride %d\n"
@@ -72,55 +72,45 @@ static int write_state(const char *path, const view_state *s, const fly_camera *
         f->dir.z, f->up.x, f->up.y, f->up.z, f->speed, s->overlay, s->help, s->bvh, s->bvh_depth,
         s->timings, s->mouselook, s->stride, s->exposure, fps, (unsigned long long)s->dumps,
         (unsigned long long)s->shots, (unsigned long long)s->updates, s->rebuild_ms);
-    int bad = ferror(fp);
-    bad |= fclose(fp);
-    if (bad || rename(tmp, path) != 0) {
-        remove(tmp);
-        return -1;
-    }
-    return 0;
+    return tr_outfile_commit(out, err) == TR_OK ? 0 : -1;
 }
 
 /* Writes the renderer's current output (the window's pixels) as a binary PPM. */
-static int dump_window(SDL_Renderer *ren, const char *path) {
+static int dump_window(SDL_Renderer *ren, const char *path, tr_error *err) {
     int w = 0, h = 0;
     if (SDL_GetRendererOutputSize(ren, &w, &h) != 0 || w <= 0 || h <= 0) {
+        tr_error_set(err, TR_STATUS_DEVICE, "%s: no window size: %s", path, SDL_GetError());
         return -1;
     }
     uint8_t *px = malloc((size_t)w * h * 3);
     if (!px) {
+        tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "%s: out of memory", path);
         return -1;
     }
-    int rc = SDL_RenderReadPixels(ren, NULL, SDL_PIXELFORMAT_RGB24, px, w * 3);
-    char tmp[4200];
-    snprintf(tmp, sizeof tmp, "%s.tmp", path);
-    FILE *fp = rc == 0 ? fopen(tmp, "wb") : NULL;
-    if (fp) {
-        fprintf(fp, "P6\n%d %d\n255\n", w, h);
-        fwrite(px, 3, (size_t)w * h, fp);
-        rc = ferror(fp);
-        rc |= fclose(fp);
-        if (rc == 0) {
-            rc = rename(tmp, path);
-        } else {
-            remove(tmp);
-        }
-    } else {
-        rc = -1;
+    if (SDL_RenderReadPixels(ren, NULL, SDL_PIXELFORMAT_RGB24, px, w * 3) != 0) {
+        tr_error_set(err, TR_STATUS_DEVICE, "%s: cannot read the window: %s", path, SDL_GetError());
+        free(px);
+        return -1;
     }
+    tr_outfile *out = tr_outfile_open(path, err);
+    if (!out) {
+        free(px);
+        return -1;
+    }
+    fprintf(tr_outfile_stream(out), "P6\n%d %d\n255\n", w, h);
+    fwrite(px, 3, (size_t)w * h, tr_outfile_stream(out)); /* checked by the commit */
     free(px);
-    return rc;
+    return tr_outfile_commit(out, err) == TR_OK ? 0 : -1;
 }
 
 /* The first free trac0r-view-NNN.png in dir. */
 static void next_shot_path(const char *dir, char *path, size_t n) {
     for (int i = 0; i < 100000; ++i) {
         snprintf(path, n, "%s/trac0r-view-%03d.png", dir, i);
-        FILE *fp = fopen(path, "rb");
-        if (!fp) {
+        struct stat st; /* not fopen(): a FIFO of that name would block */
+        if (stat(path, &st) != 0) {
             return;
         }
-        fclose(fp);
     }
 }
 
@@ -140,6 +130,37 @@ static const char help_text[] = "trac0r view - keys\n"
                                 "H          this help\n"
                                 "Esc        quit";
 
+/* The render resolution for a window of w x h output pixels: the window's own, scaled
+ * down (aspect kept) where it exceeds the film's limits; the texture is stretched to the
+ * window then. A window grown past the limits must not end the viewer. */
+static void fit_film_limits(SDL_Renderer *ren, uint32_t *w, uint32_t *h) {
+    /* The renderer's largest texture too (0: no limit). */
+    uint32_t max_w = TR_FILM_MAX_SIDE, max_h = TR_FILM_MAX_SIDE;
+    SDL_RendererInfo info;
+    if (SDL_GetRendererInfo(ren, &info) == 0) {
+        if (info.max_texture_width > 0 && (uint32_t)info.max_texture_width < max_w) {
+            max_w = (uint32_t)info.max_texture_width;
+        }
+        if (info.max_texture_height > 0 && (uint32_t)info.max_texture_height < max_h) {
+            max_h = (uint32_t)info.max_texture_height;
+        }
+    }
+    double k = 1.0;
+    if (*w > max_w) {
+        k = fmin(k, (double)max_w / *w);
+    }
+    if (*h > max_h) {
+        k = fmin(k, (double)max_h / *h);
+    }
+    if ((double)*w * *h * k * k > (double)TR_FILM_MAX_PIXELS) {
+        k = fmin(k, sqrt((double)TR_FILM_MAX_PIXELS / ((double)*w * *h)));
+    }
+    if (k < 1.0) {
+        *w = (uint32_t)fmax(1.0, floor(*w * k));
+        *h = (uint32_t)fmax(1.0, floor(*h * k));
+    }
+}
+
 /* The stage times of the frame on screen, in milliseconds. */
 typedef struct stage_times {
     double input, rebuild, render, tonemap, upload;
@@ -158,6 +179,20 @@ int view_run_window(const cli_args *a, const view_options *o, tr_scene *scene, c
         const char *display = getenv("DISPLAY");
         cli_error(a, "cannot open a window on DISPLAY='%s': %s", display ? display : "",
                   SDL_GetError());
+        SDL_Quit();
+        return CLI_USAGE;
+    }
+    /* When no real display can be reached SDL falls back to its offscreen or dummy
+     * driver: no window, no events, a loop that never ends. Unless one was asked for
+     * (SDL_VIDEODRIVER), that is "no display". */
+    const char *got = SDL_GetCurrentVideoDriver();
+    if (got && (strcmp(got, "offscreen") == 0 || strcmp(got, "dummy") == 0) &&
+        !(driver && strcmp(driver, got) == 0)) {
+        const char *display = getenv("DISPLAY");
+        cli_error(a,
+                  "cannot open a window: no display reachable (DISPLAY='%s', WAYLAND_DISPLAY='%s'; "
+                  "SDL fell back to its %s driver)",
+                  display ? display : "", wayland ? wayland : "", got);
         SDL_Quit();
         return CLI_USAGE;
     }
@@ -199,6 +234,7 @@ int view_run_window(const cli_args *a, const view_options *o, tr_scene *scene, c
         if (SDL_GetRendererOutputSize(ren, &ow, &oh) == 0 && ow > 0 && oh > 0) {
             w = (uint32_t)ow;
             h = (uint32_t)oh;
+            fit_film_limits(ren, &w, &h);
         }
     }
     const tr_camera *scene_cam = tr_scene_camera(scene);
@@ -238,7 +274,7 @@ int view_run_window(const cli_args *a, const view_options *o, tr_scene *scene, c
     stage_times times = {0};
     double fps = 0.0, fps_t0 = tr_time_now(), last = fps_t0, title_t = 0.0, drawn_t = 0.0;
     uint64_t fps_frames0 = 0;
-    int state_dirty = 1, mouse_x = 0, mouse_y = 0;
+    int state_dirty = 1, state_failed = 0, mouse_x = 0, mouse_y = 0;
     int running = 1;
     status = CLI_OK;
     char title[160], text[4096];
@@ -263,6 +299,7 @@ int view_run_window(const cli_args *a, const view_options *o, tr_scene *scene, c
                     if (ow > 0 && oh > 0) {
                         w = (uint32_t)ow;
                         h = (uint32_t)oh;
+                        fit_film_limits(ren, &w, &h);
                         view_changed = 1;
                     }
                 }
@@ -521,16 +558,21 @@ int view_run_window(const cli_args *a, const view_options *o, tr_scene *scene, c
         }
         if (dump_requested && o->dump_file) {
             dump_requested = 0;
-            if (dump_window(ren, o->dump_file) != 0) {
-                fprintf(stderr, "trac0r view: cannot write %s\n", o->dump_file);
+            if (dump_window(ren, o->dump_file, &err) != 0) {
+                fprintf(stderr, "trac0r view: %s\n", err.msg);
             }
             st.dumps += 1;
             state_dirty = 1;
         }
         SDL_RenderPresent(ren);
         if (state_dirty && o->state_file) {
-            write_state(o->state_file, &st, &fly, frames_done, cancelled, spp, shown_gen,
-                        r.generation, w, h, fps);
+            /* Said once, not at every frame, when the file cannot be written. */
+            if (write_state(o->state_file, &st, &fly, frames_done, cancelled, spp, shown_gen,
+                            r.generation, w, h, fps, &err) != 0 &&
+                !state_failed) {
+                fprintf(stderr, "trac0r view: --state-file: %s\n", err.msg);
+                state_failed = 1;
+            }
             state_dirty = 0;
         }
     }

@@ -3,9 +3,17 @@
  * A writer opens a temporary file next to the target (PATH.tmp.XXXXXX, so the final
  * rename() stays on one file system), writes through the stream, and commits: the stream
  * is flushed and closed with every error checked, and only then renamed onto PATH. Any
- * failure, or an abort, removes the temporary file. Images, CSV files, plot scripts,
- * checkpoints and the viewer's state file all go through here, so there is one place
- * where file modes, signals and full disks are handled. */
+ * failure, or an abort, removes the temporary file. Images, CSV files, plots, checkpoints
+ * and the viewer's state file all go through here, so there is one place where file
+ * modes, signals and full disks are handled.
+ *
+ * Modes: the finished file gets the mode fopen(PATH, "w") would have given it - an
+ * existing target keeps its permission bits, a new one gets 0666 less the umask.
+ * Targets: PATH must be a regular file or not exist; a directory, device, FIFO or socket
+ * is refused when the file is opened (rename() would replace a device node, or fail only
+ * after all the work).
+ * Signals: tr_outfile_cleanup_all() removes every temporary file still open; a program's
+ * fatal-signal handlers call it before dying (the trac0r command does). */
 #ifndef TRAC0R_OUTFILE_H
 #define TRAC0R_OUTFILE_H
 
@@ -15,8 +23,13 @@
 
 typedef struct tr_outfile tr_outfile;
 
-/* Creates the temporary file for `path`. NULL (with `err` set) on failure. */
+/* Creates the temporary file for `path`. NULL (with `err` set) on failure, among them a
+ * target that exists and is not a regular file. */
 tr_outfile *tr_outfile_open(const char *path, tr_error *err);
+
+/* Whether `path` could be written: its type is checked and a temporary file is created
+ * and removed again. For commands to check their outputs before long work. */
+int tr_outfile_check(const char *path, tr_error *err);
 
 /* The stream to write to (binary mode), and the temporary file's name (for libraries that
  * want a file name or descriptor of their own). */
@@ -29,5 +42,10 @@ int tr_outfile_commit(tr_outfile *f, tr_error *err);
 
 /* Removes the temporary file and frees `f` (NULL is fine). The target is untouched. */
 void tr_outfile_abort(tr_outfile *f);
+
+/* Unlinks the temporary file of every tr_outfile still open, from any thread. Safe to call
+ * from a signal handler (it calls unlink() alone); the streams stay open and a later
+ * commit of one of them fails. */
+void tr_outfile_cleanup_all(void);
 
 #endif /* TRAC0R_OUTFILE_H */

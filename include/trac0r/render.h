@@ -59,7 +59,13 @@ int tr_render_config_check(const tr_render_config *cfg, tr_error *err);
 int tr_render_frame(const tr_scene *scene, const tr_camera *cam, const tr_render_config *cfg,
                     tr_film *film, uint32_t sample, tr_render_stats *stats, tr_error *err);
 
-/* The number of threads a config with threads = 0 uses. */
+/* The most CPU threads trac0r runs in one team (tr_render_config.threads and the
+ * OpenMP default alike: OMP_NUM_THREADS=100000 would otherwise overflow the team's
+ * stack). */
+#define TR_MAX_THREADS 1024
+
+/* The number of threads a config with threads = 0 uses: OpenMP's default, at most
+ * TR_MAX_THREADS. Every parallel region of the library uses it. */
 int tr_default_threads(void);
 
 /* Monotonic wall clock in seconds. */

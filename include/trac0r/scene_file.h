@@ -25,6 +25,9 @@
 #define TR_SCENE_FILE_MAX_COORD 1e7
 /* Scene files larger than this are refused before parsing. */
 #define TR_SCENE_FILE_MAX_BYTES (64u * 1024u * 1024u)
+/* ... and so are files with more JSON values (numbers, strings, arrays, objects) than
+ * this: each costs memory while the file is parsed. */
+#define TR_SCENE_FILE_MAX_VALUES (1u << 21)
 #define TR_SCENE_FILE_MAX_WARNINGS 8
 
 typedef struct tr_scene_file_options {

@@ -128,7 +128,7 @@ static float find_split(const builder *b, uint32_t first, uint32_t count, tr_aab
     bin bins[3][BINS];
     bins_clear(bins, nb);
     if (count >= PARALLEL_NODE_MIN) {
-#pragma omp parallel
+#pragma omp parallel num_threads(tr_default_threads())
         {
             bin local[3][BINS];
             bins_clear(local, nb);
@@ -227,7 +227,7 @@ static uint32_t split_node(builder *b, const task *t, tr_bvh_node *node) {
     tr_aabb box = box_empty(), cbox = box_empty();
     if (t->count >= PARALLEL_NODE_MIN) {
         /* Bounds by all threads, merged (min and max do not depend on the order). */
-#pragma omp parallel
+#pragma omp parallel num_threads(tr_default_threads())
         {
             tr_aabb lbox = box_empty(), lcbox = box_empty();
             const int64_t end = (int64_t)t->first + t->count;
@@ -352,7 +352,9 @@ static int build_tree(builder *b, uint32_t n, uint32_t *leaves_out, uint32_t *de
     uint32_t sub_count[1u << CUT_DEPTH] = {0}, sub_leaves[1u << CUT_DEPTH] = {0};
     uint32_t sub_depth[1u << CUT_DEPTH] = {0};
     int failed = 0;
-#pragma omp parallel for schedule(dynamic, 1) reduction(| : failed) if (cuts > 1)
+#pragma omp parallel for num_threads(tr_default_threads()) schedule(dynamic, 1)                    \
+    reduction(|                                                                                    \
+              : failed) if (cuts > 1)
     for (int k = 0; k < (int)cuts; ++k) {
         sub[k] = malloc((size_t)(2 * (uint64_t)cut[k].count) * sizeof *sub[k]);
         if (!sub[k]) {
@@ -467,7 +469,7 @@ void tr_bvh_refit(tr_bvh *bvh, const tr_triangle *tris) {
      * thread, bottom up: a union per node. Same operations in the same order per box as
      * a sequential refit, so the boxes do not depend on the thread count. */
     const int64_t nk = bvh->index_count, nn = bvh->node_count;
-#pragma omp parallel
+#pragma omp parallel num_threads(tr_default_threads())
     {
 #pragma omp for schedule(static)
         for (int64_t k = 0; k < nk; ++k) {

@@ -221,7 +221,8 @@ int tr_wbvh_build(tr_wbvh *w, const tr_bvh *bvh, tr_error *err) {
     }
     if (!c.failed) {
         const int leaves = (int)w->leaf_count;
-#pragma omp parallel for schedule(static, 4096) if (leaves > 65536)
+#pragma omp parallel for num_threads(tr_default_threads())                                         \
+    schedule(static, 4096) if (leaves > 65536)
         for (int i = 0; i < leaves; ++i) {
             fill_leaf(bvh, w->packets, &w->leaves[i]);
         }
@@ -240,7 +241,7 @@ int tr_wbvh_build(tr_wbvh *w, const tr_bvh *bvh, tr_error *err) {
 
 void tr_wbvh_refit(tr_wbvh *w, const tr_bvh *bvh) {
     const int nodes = (int)w->node_count, leaves = (int)w->leaf_count;
-#pragma omp parallel
+#pragma omp parallel num_threads(tr_default_threads())
     {
 #pragma omp for schedule(static, 1024) nowait
         for (int n = 0; n < nodes; ++n) {

@@ -30,7 +30,8 @@ int tr_default_max_depth(int integrator) {
 }
 
 int tr_default_threads(void) {
-    return omp_get_max_threads();
+    const int n = omp_get_max_threads();
+    return n > TR_MAX_THREADS ? TR_MAX_THREADS : n;
 }
 
 double tr_time_now(void) {
@@ -52,6 +53,10 @@ int tr_render_config_check(const tr_render_config *cfg, tr_error *err) {
     if (cfg->stride < 1 || cfg->stride > 64) {
         return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "stride %d must be in 1..64",
                             cfg->stride);
+    }
+    if (cfg->threads < 0 || cfg->threads > TR_MAX_THREADS) {
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "threads %d must be in 0..%d",
+                            cfg->threads, TR_MAX_THREADS);
     }
     if ((cfg->passes & ~TR_PASS_ALL) != 0u) {
         return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "unknown pass bits 0x%x",

@@ -3,6 +3,7 @@
 #define _POSIX_C_SOURCE 200809L
 #include "device/opencl.h"
 
+#include <dirent.h>
 #include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -319,6 +320,27 @@ static void describe_device(cl_platform_id p, cl_device_id d, int index, int pin
     info->max_alloc = alloc;
 }
 
+/* The OpenCL drivers the ICD loader would try: *.icd files in OCL_ICD_VENDORS (a
+ * directory) or /etc/OpenCL/vendors. Their number; the first name goes to `first`. */
+static int installed_icds(char *first, size_t n) {
+    const char *env = getenv("OCL_ICD_VENDORS");
+    DIR *d = opendir(env && *env ? env : "/etc/OpenCL/vendors");
+    int count = 0;
+    first[0] = '\0';
+    for (struct dirent *e; d && (e = readdir(d));) {
+        const size_t len = strlen(e->d_name);
+        if (len > 4 && strcmp(e->d_name + len - 4, ".icd") == 0) {
+            if (count++ == 0) {
+                snprintf(first, n, "%s", e->d_name);
+            }
+        }
+    }
+    if (d) {
+        closedir(d);
+    }
+    return count;
+}
+
 /* Walks every device of every platform. With want >= 0 it stops at device `want`
  * and returns its handles; it always counts the devices into *count. */
 static int walk_devices(tr_cl_device_info *out, int max, int *count, int want,
@@ -329,6 +351,17 @@ static int walk_devices(tr_cl_device_info *out, int max, int *count, int want,
     cl_int rc = clGetPlatformIDs(0, NULL, &np);
     if (rc == -1001 /* CL_PLATFORM_NOT_FOUND_KHR: the ICD loader found no driver */ ||
         (rc == CL_SUCCESS && np == 0)) {
+        /* Installed drivers that none of them loaded is another failure: low memory (a
+         * driver's dlopen or initialisation fails) or a broken driver, not "no OpenCL". */
+        char first[64];
+        const int icds = installed_icds(first, sizeof first);
+        if (icds > 0) {
+            return tr_error_set(err, TR_STATUS_DEVICE,
+                                "no OpenCL platform could be loaded, although %d driver%s %s "
+                                "installed (%s%s): out of memory, or a broken driver",
+                                icds, icds == 1 ? "" : "s", icds == 1 ? "is" : "are", first,
+                                icds > 1 ? ", ..." : "");
+        }
         return tr_error_set(err, TR_STATUS_NOT_FOUND,
                             "no OpenCL platform found (no ICD installed in "
                             "/etc/OpenCL/vendors, or OCL_ICD_VENDORS points elsewhere)");

@@ -13,6 +13,7 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "infile.h"
 #include "trac0r/image.h"
 #include "trac0r/outfile.h"
 
@@ -327,6 +328,10 @@ int tr_image_read_exr(tr_image *img, const char *path, const char *layer, tr_err
     exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
     init.user_data = &io;
     init.error_handler_fn = on_exr_error;
+    /* Regular files only: OpenEXR's own open() would block on a FIFO. */
+    if (tr_infile_check(path, err) != TR_OK) {
+        return TR_ERR;
+    }
     exr_context_t ctxt = NULL;
     exr_result_t rc = exr_start_read(&ctxt, path, &init);
     if (rc != EXR_ERR_SUCCESS) {

@@ -11,6 +11,7 @@
 #include <unistd.h>
 
 #include "trac0r/image.h"
+#include "io/infile.h"
 #include "trac0r/outfile.h"
 #include "trac0r/post.h"
 
@@ -33,17 +34,33 @@ tr_image_format tr_image_format_from_path(const char *path) {
 }
 
 int tr_image_check_writable(const char *path, tr_error *err) {
-    tr_outfile *t = tr_outfile_open(path, err);
-    if (!t) {
-        return TR_ERR;
-    }
-    tr_outfile_abort(t);
-    return TR_OK;
+    return tr_outfile_check(path, err);
 }
 
-static int write_png_rows(FILE *fp, const tr_film *f, float exposure, uint8_t *row) {
-    png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, NULL, NULL, NULL);
+/* libpng's errors, kept for the one-line message instead of printed to stderr. */
+typedef struct png_failure {
+    char msg[128];
+    int errnum; /* errno when libpng gave up: a failed fwrite() says why */
+} png_failure;
+
+static void png_on_error(png_structp png, png_const_charp msg) {
+    png_failure *pf = png_get_error_ptr(png);
+    pf->errnum = errno;
+    snprintf(pf->msg, sizeof pf->msg, "%s", msg ? msg : "unknown error");
+    png_longjmp(png, 1);
+}
+
+static void png_on_warning(png_structp png, png_const_charp msg) {
+    (void)png;
+    (void)msg;
+}
+
+static int write_png_rows(FILE *fp, const tr_film *f, float exposure, uint8_t *row,
+                          png_failure *pf) {
+    png_structp png =
+        png_create_write_struct(PNG_LIBPNG_VER_STRING, pf, png_on_error, png_on_warning);
     if (!png) {
+        snprintf(pf->msg, sizeof pf->msg, "out of memory");
         return TR_ERR;
     }
     png_infop info = png_create_info_struct(png);
@@ -61,6 +78,7 @@ static int write_png_rows(FILE *fp, const tr_film *f, float exposure, uint8_t *r
         if (tr_tonemap_film(f, 0, y, f->width, 1, exposure, TR_PIXEL_RGB8, row,
                             (size_t)f->width * 3, NULL) != TR_OK) {
             png_destroy_write_struct(&png, &info);
+            snprintf(pf->msg, sizeof pf->msg, "tone mapping failed");
             return TR_ERR;
         }
         png_write_row(png, row);
@@ -73,18 +91,25 @@ static int write_png_rows(FILE *fp, const tr_film *f, float exposure, uint8_t *r
 int tr_film_write_png(const tr_film *f, const char *path, float exposure, tr_error *err) {
     uint8_t *row = malloc((size_t)f->width * 3);
     if (!row) {
-        return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "%s: out of memory", path);
+        return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "%.200s: out of memory", path);
     }
     tr_outfile *t = tr_outfile_open(path, err);
     if (!t) {
         free(row);
         return TR_ERR;
     }
-    int ok = write_png_rows(tr_outfile_stream(t), f, exposure, row) == TR_OK;
+    png_failure pf = {"", 0};
+    int ok = write_png_rows(tr_outfile_stream(t), f, exposure, row, &pf) == TR_OK;
     free(row);
     if (!ok) {
         tr_outfile_abort(t);
-        return tr_error_set(err, TR_STATUS_IO, "%s: PNG encoding failed", path);
+        /* A write that failed says why through errno (a full disk, EFBIG); other
+         * failures through libpng's message. */
+        if (pf.errnum) {
+            return tr_error_set(err, tr_status_from_errno(pf.errnum), "%.200s: write failed: %s",
+                                path, strerror(pf.errnum));
+        }
+        return tr_error_set(err, TR_STATUS_IO, "%.200s: PNG encoding failed: %s", path, pf.msg);
     }
     return tr_outfile_commit(t, err);
 }
@@ -92,7 +117,7 @@ int tr_film_write_png(const tr_film *f, const char *path, float exposure, tr_err
 int tr_film_write_pfm(const tr_film *f, const char *path, tr_error *err) {
     float *row = malloc((size_t)f->width * 3 * sizeof *row);
     if (!row) {
-        return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "%s: out of memory", path);
+        return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "%.200s: out of memory", path);
     }
     tr_outfile *t = tr_outfile_open(path, err);
     if (!t) {
@@ -116,7 +141,7 @@ int tr_film_write_pfm(const tr_film *f, const char *path, tr_error *err) {
     if (!ok) {
         int e = errno;
         tr_outfile_abort(t);
-        return tr_error_set(err, tr_status_from_errno(e), "%s: write failed: %s", path,
+        return tr_error_set(err, tr_status_from_errno(e), "%.200s: write failed: %s", path,
                             strerror(e));
     }
     return tr_outfile_commit(t, err);
@@ -132,7 +157,7 @@ int tr_film_write(const tr_film *f, const char *path, float exposure, tr_error *
         return tr_film_write_exr(f, path, 0, err);
     default:
         return tr_error_set(err, TR_STATUS_UNSUPPORTED,
-                            "%s: unknown image extension (expected .png, .pfm or .exr)", path);
+                            "%.200s: unknown image extension (expected .png, .pfm or .exr)", path);
     }
 }
 
@@ -159,16 +184,16 @@ static int pfm_token(FILE *fp, char *buf, size_t n) {
 
 int tr_image_read_pfm(tr_image *img, const char *path, tr_error *err) {
     memset(img, 0, sizeof *img);
-    FILE *fp = fopen(path, "rb");
+    FILE *fp = tr_infile_open(path, NULL, err); /* regular files only: a FIFO would block */
     if (!fp) {
-        return tr_error_set(err, tr_status_from_errno(errno), "%s: cannot open: %s", path,
-                            strerror(errno));
+        return TR_ERR;
     }
     char magic[8], ws[32], hs[32], ss[64];
     if (pfm_token(fp, magic, sizeof magic) || pfm_token(fp, ws, sizeof ws) ||
         pfm_token(fp, hs, sizeof hs) || pfm_token(fp, ss, sizeof ss)) {
         fclose(fp);
-        return tr_error_set(err, TR_STATUS_PARSE, "%s: not a PFM file (truncated header)", path);
+        return tr_error_set(err, TR_STATUS_PARSE, "%.200s: not a PFM file (truncated header)",
+                            path);
     }
     int channels = strcmp(magic, "PF") == 0 ? 3 : strcmp(magic, "Pf") == 0 ? 1 : 0;
     char *end;
@@ -181,20 +206,20 @@ int tr_image_read_pfm(tr_image *img, const char *path, tr_error *err) {
     if (!channels || bad || w <= 0 || h <= 0) {
         fclose(fp);
         return tr_error_set(err, TR_STATUS_PARSE,
-                            "%s: not a supported PFM file (header '%s %s %s %s')", path, magic, ws,
-                            hs, ss);
+                            "%.200s: not a supported PFM file (header '%s %s %s %s')", path, magic,
+                            ws, hs, ss);
     }
     if (w > (long)TR_FILM_MAX_SIDE || h > (long)TR_FILM_MAX_SIDE ||
         (uint64_t)w * (uint64_t)h > TR_FILM_MAX_PIXELS) {
         fclose(fp);
         return tr_error_set(err, TR_STATUS_LIMIT,
-                            "%s: PFM size %ldx%ld is more than %u per side or %u pixels", path, w,
-                            h, TR_FILM_MAX_SIDE, TR_FILM_MAX_PIXELS);
+                            "%.200s: PFM size %ldx%ld is more than %u per side or %u pixels", path,
+                            w, h, TR_FILM_MAX_SIDE, TR_FILM_MAX_PIXELS);
     }
     if (scale > 0.0) {
         fclose(fp);
         return tr_error_set(err, TR_STATUS_UNSUPPORTED,
-                            "%s: big-endian PFM files are not supported", path);
+                            "%.200s: big-endian PFM files are not supported", path);
     }
     size_t n = (size_t)w * (size_t)h;
     float *data = malloc(n * (size_t)channels * sizeof *data);
@@ -203,14 +228,14 @@ int tr_image_read_pfm(tr_image *img, const char *path, tr_error *err) {
         free(data);
         fclose(fp);
         tr_image_free(img);
-        return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "%s: out of memory", path);
+        return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "%.200s: out of memory", path);
     }
     size_t got = fread(data, sizeof *data, n * (size_t)channels, fp);
     fclose(fp);
     if (got != n * (size_t)channels) {
         free(data);
         tr_image_free(img);
-        return tr_error_set(err, TR_STATUS_PARSE, "%s: truncated PFM data (%zu of %zu floats)",
+        return tr_error_set(err, TR_STATUS_PARSE, "%.200s: truncated PFM data (%zu of %zu floats)",
                             path, got, n * (size_t)channels);
     }
     img->width = (uint32_t)w;
@@ -233,23 +258,26 @@ int tr_image_read_png(tr_image *img, const char *path, tr_error *err) {
     png_image p;
     memset(&p, 0, sizeof p);
     p.version = PNG_IMAGE_VERSION;
-    /* Opened here rather than by libpng, so that a missing file is told apart by errno. */
-    FILE *fp = fopen(path, "rb");
+    /* Opened here rather than by libpng, so that a missing file is told apart by errno,
+     * and a FIFO or device is refused before a read could block. */
+    FILE *fp = tr_infile_open(path, NULL, err);
     if (!fp) {
-        return tr_error_set(err, tr_status_from_errno(errno), "%s: cannot open: %s", path,
-                            strerror(errno));
+        return TR_ERR;
     }
     if (!png_image_begin_read_from_stdio(&p, fp)) {
         fclose(fp);
-        return tr_error_set(err, TR_STATUS_PARSE, "%s: cannot read PNG: %s", path, p.message);
+        return tr_error_set(err, TR_STATUS_PARSE, "%.200s: cannot read PNG: %s", path, p.message);
     }
     p.format = PNG_FORMAT_RGB;
+    /* The same caps as for PFM files and films, checked on the header before libpng
+     * decodes (and this allocates) what the header claims. */
     if (p.width == 0 || p.height == 0 || p.width > TR_FILM_MAX_SIDE ||
-        p.height > TR_FILM_MAX_SIDE) {
+        p.height > TR_FILM_MAX_SIDE || (uint64_t)p.width * p.height > TR_FILM_MAX_PIXELS) {
         png_image_free(&p);
         fclose(fp);
-        return tr_error_set(err, TR_STATUS_LIMIT, "%s: PNG size %ux%u is not supported", path,
-                            p.width, p.height);
+        return tr_error_set(err, TR_STATUS_LIMIT,
+                            "%.200s: PNG size %ux%u is more than %u per side or %u pixels", path,
+                            p.width, p.height, TR_FILM_MAX_SIDE, TR_FILM_MAX_PIXELS);
     }
     size_t n = (size_t)p.width * p.height;
     uint8_t *buf = malloc(PNG_IMAGE_SIZE(p));
@@ -259,14 +287,14 @@ int tr_image_read_png(tr_image *img, const char *path, tr_error *err) {
         png_image_free(&p);
         fclose(fp);
         tr_image_free(img);
-        return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "%s: out of memory", path);
+        return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "%.200s: out of memory", path);
     }
     const int decoded = png_image_finish_read(&p, NULL, buf, 0, NULL);
     fclose(fp);
     if (!decoded) {
         free(buf);
         tr_image_free(img);
-        return tr_error_set(err, TR_STATUS_PARSE, "%s: cannot decode PNG: %s", path, p.message);
+        return tr_error_set(err, TR_STATUS_PARSE, "%.200s: cannot decode PNG: %s", path, p.message);
     }
     img->width = p.width;
     img->height = p.height;

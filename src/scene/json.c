@@ -8,6 +8,7 @@
 #include <cJSON.h>
 #include <errno.h>
 #include <math.h>
+#include <pthread.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -19,6 +20,7 @@
 #include "scene/scene_internal.h"
 #include "trac0r/scene_file.h"
 #include "material_registry.h"
+#include "io/infile.h"
 
 #define PATH_MAX_LEN 160
 
@@ -420,9 +422,14 @@ static int parse_render(jctx *c, const cJSON *r) {
     }
     if (s) {
         char buf[40];
-        if (strlen(s) >= sizeof in->integrator) {
-            return jerr(c, "render.integrator", "unknown integrator '%s'",
-                        shown(s, buf, sizeof buf));
+        /* Checked here, so that `info` refuses what `render` would. */
+        if (strlen(s) >= sizeof in->integrator || tr_integrator_from_name(s) < 0) {
+            size_t count;
+            const char *const *names = tr_integrator_names(&count);
+            char expected[128];
+            tr_names_join(expected, sizeof expected, names, count, ", ");
+            return jerr(c, "render.integrator", "unknown integrator '%s' (available: %s)",
+                        shown(s, buf, sizeof buf), expected);
         }
         snprintf(in->integrator, sizeof in->integrator, "%s", s);
         in->has_integrator = 1;
@@ -899,17 +906,23 @@ static int parse_shapes(jctx *c, const cJSON *shapes) {
         d.material = (uint32_t)mat;
         double sub = 2;
         int has_sub = 0;
-        if (get_integer(c, sh, p, "subdivisions", 0, 1e9, &sub, &has_sub) != TR_OK) {
-            return TR_ERR;
-        }
         char ps[PATH_MAX_LEN];
         path_key(ps, p, "subdivisions");
-        if (has_sub && t != 2) {
+        /* Every number outside the range gets the range that holds: 0..9, not get_integer's
+         * own bounds. */
+        const cJSON *sv = cJSON_GetObjectItemCaseSensitive(sh, "subdivisions");
+        if (sv && t != 2) {
             return jerr(c, ps, "only icospheres have subdivisions");
         }
-        if (sub > TR_ICOSPHERE_MAX_SUBDIVISIONS) {
-            return jerr(c, ps, "expected an integer in 0..%d (20*4^N triangles), got %.0f",
-                        TR_ICOSPHERE_MAX_SUBDIVISIONS, sub);
+        if (cJSON_IsNumber(sv) &&
+            !(sv->valuedouble >= 0.0 && sv->valuedouble <= TR_ICOSPHERE_MAX_SUBDIVISIONS &&
+              sv->valuedouble == floor(sv->valuedouble))) {
+            return jerr(c, ps, "expected an integer in 0..%d (20*4^N triangles), got %g",
+                        TR_ICOSPHERE_MAX_SUBDIVISIONS, sv->valuedouble);
+        }
+        if (get_integer(c, sh, p, "subdivisions", 0, TR_ICOSPHERE_MAX_SUBDIVISIONS, &sub,
+                        &has_sub) != TR_OK) {
+            return TR_ERR;
         }
         d.subdivisions = (uint32_t)sub;
         uint64_t n = tr_shape_triangle_count(&d);
@@ -968,6 +981,12 @@ static int parse_meshes(jctx *c, const cJSON *meshes) {
             snprintf(full, sizeof full, "%s/%s", c->dir, rel);
         }
         uint32_t first = c->scene->triangle_count;
+        /* The import reads a budget of 0 as "no limit": a full budget must stop here. */
+        if (first >= c->budget) {
+            return jerr_code(c, TR_STATUS_LIMIT, pp,
+                             "the scene already has %u triangles, the whole triangle budget",
+                             first);
+        }
         tr_mesh_import_stats st;
         tr_error e;
         if (tr_scene_import_mesh(c->scene, full, &tf, mat, c->budget - first, &st, &e) != TR_OK) {
@@ -987,6 +1006,47 @@ static int parse_meshes(jctx *c, const cJSON *meshes) {
     }
     c->info->mesh_count = (uint32_t)i;
     return TR_OK;
+}
+
+/* An upper bound of the values cJSON would create for `text`: each value but the first
+ * follows a ',', '[' or '{' outside a string (an object's member is one value). */
+static uint64_t count_json_values(const char *text, size_t len) {
+    uint64_t n = 1;
+    int in_string = 0;
+    for (size_t i = 0; i < len; ++i) {
+        const char ch = text[i];
+        if (in_string) {
+            if (ch == '\\') {
+                ++i;
+            } else if (ch == '"') {
+                in_string = 0;
+            }
+        } else if (ch == '"') {
+            in_string = 1;
+        } else if (ch == ',' || ch == '[' || ch == '{') {
+            ++n;
+        }
+    }
+    return n;
+}
+
+/* cJSON reports a failed allocation as a syntax error at the spot it reached. Its
+ * allocator is wrapped (once, for the process; it still calls malloc and free, so nodes
+ * from before or from other users of cJSON are unaffected) to tell the two apart. */
+static _Thread_local int json_oom;
+static pthread_once_t json_hooks_once = PTHREAD_ONCE_INIT;
+
+static void *json_malloc(size_t n) {
+    void *p = malloc(n);
+    if (!p) {
+        json_oom = 1;
+    }
+    return p;
+}
+
+static void json_install_hooks(void) {
+    cJSON_Hooks hooks = {json_malloc, free};
+    cJSON_InitHooks(&hooks);
 }
 
 /* Line and column (both from 1) of byte offset `off` in text. */
@@ -1069,7 +1129,10 @@ static int build(jctx *c, const cJSON *root) {
         }
     }
     for (uint32_t i = 0; i < s->material_count; ++i) {
-        if (s->materials[i].type == TR_MATERIAL_EMITTER && used[i]) {
+        /* A black emitter (colour or emittance 0) lights nothing: it does not count. */
+        const tr_material *em = &s->materials[i];
+        const float peak = fmaxf(em->color.x, fmaxf(em->color.y, em->color.z));
+        if (em->type == TR_MATERIAL_EMITTER && used[i] && peak > 0.0f && em->emittance > 0.0f) {
             in->emitter_materials++;
             in->emissive_triangles += used[i];
         }
@@ -1128,8 +1191,23 @@ int tr_scene_file_parse(tr_scene *s, const char *path, const char *text, size_t 
                                 path, line, col);
         }
     }
+    /* cJSON spends a node (about 80 bytes with malloc's overhead) on every value: a 64 MiB
+     * file of "[0,0,0,..." would cost 2.7 GB. Values are counted first, and a file with
+     * more than the limit is refused before cJSON allocates. */
+    const uint64_t values = count_json_values(text, len);
+    if (values > TR_SCENE_FILE_MAX_VALUES) {
+        return jerr_code(&c, TR_STATUS_LIMIT, NULL,
+                         "%llu JSON values is more than the limit of %u (about %u MiB in memory)",
+                         (unsigned long long)values, TR_SCENE_FILE_MAX_VALUES,
+                         (unsigned)(((uint64_t)TR_SCENE_FILE_MAX_VALUES * 80u) >> 20));
+    }
+    pthread_once(&json_hooks_once, json_install_hooks);
+    json_oom = 0;
     const char *end = NULL;
     cJSON *root = cJSON_ParseWithLengthOpts(text, len, &end, 0);
+    if (!root && json_oom) {
+        return jerr_code(&c, TR_STATUS_OUT_OF_MEMORY, NULL, "out of memory parsing the file");
+    }
     if (!root) {
         size_t off = end && end >= text && end <= text + len ? (size_t)(end - text) : 0;
         unsigned line, col;
@@ -1194,39 +1272,29 @@ int tr_scene_file_parse(tr_scene *s, const char *path, const char *text, size_t 
 int tr_scene_file_load(tr_scene *s, const char *path, const tr_scene_file_options *opt,
                        tr_scene_file *info, tr_error *err) {
     tr_scene_free(s); /* the previous content goes; the generation counts on */
-    FILE *fp = fopen(path, "rb");
+    uint64_t size = 0;
+    FILE *fp = tr_infile_open(path, &size, err); /* a FIFO would block: regular files only */
     if (!fp) {
-        return tr_error_set(err, tr_status_from_errno(errno), "%.200s: cannot open: %s", path,
-                            strerror(errno));
+        return TR_ERR;
     }
-    char *buf = NULL;
-    size_t len = 0, cap = 0;
+    if (size > TR_SCENE_FILE_MAX_BYTES) {
+        fclose(fp);
+        return tr_error_set(err, TR_STATUS_LIMIT, "%.200s: %llu bytes is more than the limit of %u",
+                            path, (unsigned long long)size, TR_SCENE_FILE_MAX_BYTES);
+    }
+    /* One more byte than the size says, to notice a file that grew meanwhile. */
+    char *buf = malloc((size_t)size + 1);
+    if (!buf) {
+        fclose(fp);
+        return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "%.200s: out of memory reading it", path);
+    }
+    size_t len = fread(buf, 1, (size_t)size + 1, fp);
     int rc = TR_OK;
-    for (;;) {
-        if (len == cap) {
-            if (cap >= TR_SCENE_FILE_MAX_BYTES) {
-                rc = tr_error_set(err, TR_STATUS_LIMIT, "%.200s: more than %u bytes", path,
-                                  TR_SCENE_FILE_MAX_BYTES);
-                break;
-            }
-            cap = cap ? 2 * cap : 65536;
-            char *grown = realloc(buf, cap + 1);
-            if (!grown) {
-                rc = tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "%.200s: out of memory reading it",
-                                  path);
-                break;
-            }
-            buf = grown;
-        }
-        size_t got = fread(buf + len, 1, cap - len, fp);
-        len += got;
-        if (got == 0) {
-            if (ferror(fp)) {
-                rc = tr_error_set(err, tr_status_from_errno(errno), "%.200s: cannot read: %s", path,
-                                  strerror(errno));
-            }
-            break;
-        }
+    if (ferror(fp)) {
+        rc = tr_error_set(err, tr_status_from_errno(errno), "%.200s: cannot read: %s", path,
+                          strerror(errno));
+    } else if (len > size) {
+        rc = tr_error_set(err, TR_STATUS_IO, "%.200s: the file changed while it was read", path);
     }
     fclose(fp);
     if (rc == TR_OK) {

@@ -12,6 +12,8 @@
 
 #include "scene/scene_internal.h"
 #include "trac0r/scene_file.h"
+#include "io/infile.h"
+#include "scene/mesh_guard.h"
 
 /* Node hierarchies deeper than this are refused (a hostile file could recurse forever). */
 #define NODE_DEPTH_LIMIT 256
@@ -223,19 +225,6 @@ static int walk(import_ctx *c, const struct aiNode *node, const struct aiMatrix4
     return TR_OK;
 }
 
-/* Assimp's message on one line. */
-static void one_line(char *out, size_t n, const char *msg) {
-    size_t j = 0;
-    for (size_t i = 0; msg && msg[i] && j + 1 < n; ++i) {
-        unsigned char ch = (unsigned char)msg[i];
-        out[j++] = (ch == '\n' || ch == '\r' || ch == '\t') ? ' ' : (ch < 32 ? '?' : (char)ch);
-    }
-    while (j > 0 && out[j - 1] == ' ') {
-        j--;
-    }
-    out[j] = '\0';
-}
-
 int tr_scene_import_mesh(tr_scene *s, const char *path, const tr_transform *tf,
                          int64_t material_override, uint32_t max_triangles,
                          tr_mesh_import_stats *stats, tr_error *err) {
@@ -246,34 +235,29 @@ int tr_scene_import_mesh(tr_scene *s, const char *path, const tr_transform *tf,
         return tr_error_set(err, TR_STATUS_NOT_FOUND, "material %lld does not exist",
                             (long long)material_override);
     }
-    FILE *fp = fopen(path, "rb");
+    /* Regular files only (a FIFO would block), and an empty one is refused before Assimp
+     * guesses at it. */
+    uint64_t bytes = 0;
+    tr_error open_err;
+    FILE *fp = tr_infile_open(path, &bytes, &open_err);
     if (!fp) {
-        return tr_error_set(err, tr_status_from_errno(errno), "cannot open '%.200s': %s", path,
-                            strerror(errno));
+        const size_t skip = strnlen(path, 200) + strlen(": cannot open: ");
+        return tr_error_set(err, open_err.code, "cannot open '%.200s': %s", path,
+                            strlen(open_err.msg) > skip ? open_err.msg + skip : open_err.msg);
     }
-    char probe;
-    errno = 0;
-    size_t got = fread(&probe, 1, 1, fp);
-    int read_error = ferror(fp) ? (errno ? errno : EIO) : 0;
     fclose(fp);
-    if (read_error) {
-        return tr_error_set(err, tr_status_from_errno(read_error), "cannot read '%.200s': %s", path,
-                            strerror(read_error));
-    }
-    if (got == 0) {
+    if (bytes == 0) {
         return tr_error_set(err, TR_STATUS_PARSE, "'%.200s' is empty", path);
     }
+    /* Through mesh_guard.h: the files the model names confined to its directory tree,
+     * declared sizes checked against real ones, reads within a budget. */
     const struct aiScene *ai =
-        aiImportFile(path, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
-                               aiProcess_SortByPType | aiProcess_ValidateDataStructure);
-    if (!ai || !ai->mRootNode || (ai->mFlags & AI_SCENE_FLAGS_INCOMPLETE)) {
-        char msg[300];
-        one_line(msg, sizeof msg, aiGetErrorString());
-        if (ai) {
-            aiReleaseImport(ai);
-        }
-        return tr_error_set(err, TR_STATUS_PARSE, "Assimp cannot read '%.200s': %s", path,
-                            msg[0] ? msg : "no meshes");
+        tr_mesh_guarded_import(path,
+                               aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
+                                   aiProcess_SortByPType | aiProcess_ValidateDataStructure,
+                               err);
+    if (!ai) {
+        return TR_ERR;
     }
     const uint32_t t0 = s->triangle_count, s0 = s->shape_count, m0 = s->material_count,
                    n0 = s->vertex_normal_count;

@@ -1,0 +1,374 @@
+/* mesh_guard.c - Assimp's file access for trac0r: regular files, confined, sizes checked. */
+#define _XOPEN_SOURCE 700 /* realpath */
+#include "scene/mesh_guard.h"
+
+#include <assimp/cfileio.h>
+#include <assimp/cimport.h>
+#include <errno.h>
+#include <limits.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "io/infile.h"
+
+typedef struct guard_file guard_file;
+
+typedef struct guard {
+    const char *model; /* the path given */
+    guard_file *open;  /* files Assimp has not closed yet */
+    char model_real[PATH_MAX];
+    char root[PATH_MAX];     /* the model's directory, resolved */
+    char allowed[PATH_MAX];  /* TRAC0R_MODEL_ROOT resolved, or "" */
+    unsigned long long read; /* bytes read so far */
+    char reason[512];        /* the first refusal, "" for none */
+} guard;
+
+struct guard_file {
+    FILE *fp;
+    unsigned long long size;
+    guard *g;
+    struct aiFile *ai;
+    guard_file *prev, *next;
+};
+
+static void refuse(guard *g, const char *fmt, const char *a, const char *b) {
+    if (!g->reason[0]) {
+        snprintf(g->reason, sizeof g->reason, fmt, a, b);
+    }
+}
+
+/* `path` (resolved) lies in the tree under `dir` (resolved). */
+static int under(const char *path, const char *dir) {
+    size_t n = strlen(dir);
+    if (n == 0) {
+        return 0;
+    }
+    if (n == 1 && dir[0] == '/') {
+        return 1;
+    }
+    return strncmp(path, dir, n) == 0 && (path[n] == '/' || path[n] == '\0');
+}
+
+static unsigned long long ply_type_size(const char *t) {
+    static const struct {
+        const char *name;
+        unsigned size;
+    } types[] = {{"char", 1},  {"int8", 1},    {"uchar", 1},  {"uint8", 1},
+                 {"short", 2}, {"int16", 2},   {"ushort", 2}, {"uint16", 2},
+                 {"int", 4},   {"int32", 4},   {"uint", 4},   {"uint32", 4},
+                 {"float", 4}, {"float32", 4}, {"double", 8}, {"float64", 8}};
+    for (size_t i = 0; i < sizeof types / sizeof types[0]; ++i) {
+        if (strcmp(t, types[i].name) == 0) {
+            return types[i].size;
+        }
+    }
+    return 1;
+}
+
+/* A PLY header's elements need at least COUNT x (bytes per instance) after the header:
+ * in binary the properties' sizes (a list its count alone), in ASCII two characters per
+ * property (a digit and a separator), and never less than one byte per instance. */
+static int check_ply(const char *name, const unsigned char *head, size_t n,
+                     unsigned long long file_size, tr_error *err) {
+    const char *end = NULL;
+    for (size_t i = 0; i + 10 <= n; ++i) {
+        if (memcmp(head + i, "end_header", 10) == 0) {
+            end = (const char *)head + i;
+            break;
+        }
+    }
+    if (!end) {
+        return TR_OK; /* no header in the first bytes read: Assimp's parser decides */
+    }
+    const char *p = (const char *)head, *stop = end;
+    size_t header_len = (size_t)(end - p) + 10;
+    int binary = 0;
+    unsigned long long need = 0, count = 0, per = 0;
+    int in_element = 0;
+    while (p < stop) {
+        const char *eol = memchr(p, '\n', (size_t)(stop - p));
+        if (!eol) {
+            eol = stop;
+        }
+        char line[256];
+        size_t len = (size_t)(eol - p) < sizeof line - 1 ? (size_t)(eol - p) : sizeof line - 1;
+        memcpy(line, p, len);
+        line[len] = '\0';
+        p = eol + 1;
+        char w1[32] = "", w2[32] = "", w3[32] = "";
+        int k = sscanf(line, "%31s %31s %31s", w1, w2, w3);
+        if (k >= 2 && strcmp(w1, "format") == 0) {
+            binary = strncmp(w2, "binary", 6) == 0;
+        } else if (k >= 3 && strcmp(w1, "element") == 0) {
+            if (in_element) {
+                need += count * (per ? per : 1);
+            }
+            char *e;
+            errno = 0;
+            count = strtoull(w3, &e, 10);
+            if (*e != '\0' || errno || w3[0] == '-' || count > file_size) {
+                return tr_error_set(err, TR_STATUS_LIMIT,
+                                    "'%.200s': PLY element '%s' claims %s instances in a file of "
+                                    "%llu bytes",
+                                    name, w2, w3, file_size);
+            }
+            per = 0;
+            in_element = 1;
+        } else if (k >= 2 && strcmp(w1, "property") == 0 && in_element) {
+            if (strcmp(w2, "list") == 0) {
+                per += binary ? ply_type_size(w3) : 2;
+            } else {
+                per += binary ? ply_type_size(w2) : 2;
+            }
+        }
+        if (need > file_size) {
+            break;
+        }
+    }
+    if (in_element) {
+        need += count * (per ? per : 1);
+    }
+    if (need > file_size - (header_len < file_size ? header_len : file_size)) {
+        return tr_error_set(err, TR_STATUS_LIMIT,
+                            "'%.200s': the PLY header declares elements of at least %llu bytes, "
+                            "but the file has %llu",
+                            name, need, file_size);
+    }
+    return TR_OK;
+}
+
+static unsigned long long le32(const unsigned char *b) {
+    return (unsigned long long)b[0] | (unsigned long long)b[1] << 8 |
+           (unsigned long long)b[2] << 16 | (unsigned long long)b[3] << 24;
+}
+
+/* A binary glTF: a 12-byte header with the total length, then chunks of (length, type,
+ * data). Every length must fit in the file. */
+static int check_glb(const char *name, const unsigned char *head, size_t n,
+                     unsigned long long file_size, tr_error *err) {
+    if (n < 12) {
+        return TR_OK;
+    }
+    unsigned long long total = le32(head + 8);
+    if (total > file_size) {
+        return tr_error_set(err, TR_STATUS_LIMIT,
+                            "'%.200s': the GLB header claims %llu bytes, the file has %llu", name,
+                            total, file_size);
+    }
+    unsigned long long off = 12;
+    for (int chunk = 0; chunk < 2 && off + 8 <= file_size && off + 8 <= n; ++chunk) {
+        unsigned long long len = le32(head + off);
+        if (len > file_size - off - 8) {
+            return tr_error_set(err, TR_STATUS_LIMIT,
+                                "'%.200s': GLB chunk %d claims %llu bytes, the file has %llu "
+                                "after it",
+                                name, chunk, len, file_size - off - 8);
+        }
+        off += 8 + len;
+    }
+    return TR_OK;
+}
+
+int tr_mesh_check_declared_sizes(const char *name, const unsigned char *head, size_t size,
+                                 unsigned long long file_size, tr_error *err) {
+    if (size >= 4 && memcmp(head, "glTF", 4) == 0) {
+        return check_glb(name, head, size, file_size, err);
+    }
+    if (size >= 4 && memcmp(head, "ply", 3) == 0 && (head[3] == '\n' || head[3] == '\r')) {
+        return check_ply(name, head, size, file_size, err);
+    }
+    return TR_OK;
+}
+
+static size_t g_read(struct aiFile *f, char *buf, size_t size, size_t count) {
+    guard_file *gf = (guard_file *)f->UserData;
+    if (size == 0 || count == 0) {
+        return 0;
+    }
+    size_t got = fread(buf, size, count, gf->fp);
+    gf->g->read += (unsigned long long)got * size;
+    if (gf->g->read > TR_MESH_MAX_READ_BYTES) {
+        refuse(gf->g, "'%.200s': the import read more than its budget of %s", gf->g->model,
+               "1 GiB");
+        return 0;
+    }
+    return got;
+}
+
+static size_t g_write(struct aiFile *f, const char *buf, size_t size, size_t count) {
+    (void)f;
+    (void)buf;
+    (void)size;
+    (void)count;
+    return 0;
+}
+
+static size_t g_tell(struct aiFile *f) {
+    long t = ftell(((guard_file *)f->UserData)->fp);
+    return t < 0 ? 0 : (size_t)t;
+}
+
+static size_t g_size(struct aiFile *f) {
+    return (size_t)((guard_file *)f->UserData)->size;
+}
+
+static enum aiReturn g_seek(struct aiFile *f, size_t off, enum aiOrigin origin) {
+    int whence = origin == aiOrigin_SET ? SEEK_SET : origin == aiOrigin_CUR ? SEEK_CUR : SEEK_END;
+    /* Assimp passes a negative offset from the end or the current position as size_t. */
+    long o = off > (size_t)LONG_MAX ? -(long)(SIZE_MAX - off) - 1 : (long)off;
+    return fseek(((guard_file *)f->UserData)->fp, o, whence) == 0 ? aiReturn_SUCCESS
+                                                                  : aiReturn_FAILURE;
+}
+
+static void g_flush(struct aiFile *f) {
+    (void)f;
+}
+
+static struct aiFile *g_open(struct aiFileIO *io, const char *name, const char *mode) {
+    guard *g = (guard *)io->UserData;
+    if (strchr(mode, 'w') || strchr(mode, 'a') || strchr(mode, '+')) {
+        return NULL;
+    }
+    char real[PATH_MAX];
+    if (!realpath(name, real)) {
+        return NULL; /* missing: Assimp says so, or tries another name */
+    }
+    if (strcmp(real, g->model_real) != 0 && !under(real, g->root) && !under(real, g->allowed)) {
+        refuse(g,
+               "'%.200s' refers to '%.150s' outside its directory (set TRAC0R_MODEL_ROOT to a "
+               "directory that holds both to allow it)",
+               g->model, name);
+        return NULL;
+    }
+    tr_error e;
+    uint64_t size = 0;
+    FILE *fp = tr_infile_open(name, &size, &e);
+    if (!fp) {
+        refuse(g, "%s%s", e.msg, "");
+        return NULL;
+    }
+    unsigned char head[65536];
+    size_t n = fread(head, 1, sizeof head, fp);
+    if (tr_mesh_check_declared_sizes(name, head, n, size, &e) != TR_OK || fseek(fp, 0, SEEK_SET)) {
+        refuse(g, "%s%s", e.msg, "");
+        fclose(fp);
+        return NULL;
+    }
+    guard_file *gf = malloc(sizeof *gf);
+    struct aiFile *f = malloc(sizeof *f);
+    if (!gf || !f) {
+        free(gf);
+        free(f);
+        fclose(fp);
+        return NULL;
+    }
+    gf->fp = fp;
+    gf->size = size;
+    gf->g = g;
+    gf->ai = f;
+    gf->prev = NULL;
+    gf->next = g->open;
+    if (g->open) {
+        g->open->prev = gf;
+    }
+    g->open = gf;
+    f->ReadProc = g_read;
+    f->WriteProc = g_write;
+    f->TellProc = g_tell;
+    f->FileSizeProc = g_size;
+    f->SeekProc = g_seek;
+    f->FlushProc = g_flush;
+    f->UserData = (aiUserData)gf;
+    return f;
+}
+
+static void close_file(guard_file *gf) {
+    guard *g = gf->g;
+    if (gf->prev) {
+        gf->prev->next = gf->next;
+    } else {
+        g->open = gf->next;
+    }
+    if (gf->next) {
+        gf->next->prev = gf->prev;
+    }
+    fclose(gf->fp);
+    free(gf->ai);
+    free(gf);
+}
+
+static void g_close(struct aiFileIO *io, struct aiFile *f) {
+    (void)io;
+    if (f) {
+        close_file((guard_file *)f->UserData);
+    }
+}
+
+/* Assimp's message on one line. */
+static void one_line(char *out, size_t n, const char *msg) {
+    size_t j = 0;
+    for (size_t i = 0; msg && msg[i] && j + 1 < n; ++i) {
+        unsigned char ch = (unsigned char)msg[i];
+        out[j++] = (ch == '\n' || ch == '\r' || ch == '\t') ? ' ' : (ch < 32 ? '?' : (char)ch);
+    }
+    while (j > 0 && out[j - 1] == ' ') {
+        j--;
+    }
+    out[j] = '\0';
+}
+
+const struct aiScene *tr_mesh_guarded_import(const char *path, unsigned int flags, tr_error *err) {
+    guard *g = calloc(1, sizeof *g);
+    if (!g) {
+        tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "'%.200s': out of memory", path);
+        return NULL;
+    }
+    g->model = path;
+    char dir[PATH_MAX];
+    const char *slash = strrchr(path, '/');
+    if (!slash) {
+        snprintf(dir, sizeof dir, ".");
+    } else if (slash == path) {
+        snprintf(dir, sizeof dir, "/");
+    } else {
+        snprintf(dir, sizeof dir, "%.*s", (int)(slash - path), path);
+    }
+    if (!realpath(dir, g->root) || !realpath(path, g->model_real)) {
+        int e = errno;
+        free(g);
+        tr_error_set(err, tr_status_from_errno(e), "cannot open '%.200s': %s", path, strerror(e));
+        return NULL;
+    }
+    const char *allow = getenv("TRAC0R_MODEL_ROOT");
+    if (allow && allow[0] && !realpath(allow, g->allowed)) {
+        g->allowed[0] = '\0';
+    }
+    struct aiFileIO io = {g_open, g_close, (aiUserData)g};
+    const struct aiScene *ai = aiImportFileEx(path, flags, &io);
+    /* Some of Assimp's importers throw past an open stream (the glTF importer on a buffer
+     * longer than its file) and never close it: the import is over, so close them here. */
+    while (g->open) {
+        close_file(g->open);
+    }
+    /* A refusal fails the import even where Assimp went on without the file (an OBJ
+     * whose material library is refused still loads, with default materials). */
+    if (!ai || !ai->mRootNode || (ai->mFlags & AI_SCENE_FLAGS_INCOMPLETE) || g->reason[0]) {
+        if (g->reason[0]) {
+            tr_error_set(err, TR_STATUS_LIMIT, "%s", g->reason);
+        } else {
+            char msg[300];
+            one_line(msg, sizeof msg, aiGetErrorString());
+            tr_error_set(err, TR_STATUS_PARSE, "Assimp cannot read '%.200s': %s", path,
+                         msg[0] ? msg : "no meshes");
+        }
+        if (ai) {
+            aiReleaseImport(ai);
+        }
+        free(g);
+        return NULL;
+    }
+    free(g);
+    return ai;
+}

@@ -1,0 +1,33 @@
+/* mesh_guard.h - what a model file may do to the process that imports it.
+ *
+ * Assimp reads model files and the files they name (an OBJ's mtllib, a glTF buffer's
+ * uri) through the callbacks here, which
+ *   - open regular files only (a FIFO would block the import for ever);
+ *   - confine the files a model names to the model's own directory tree, symbolic links
+ *     resolved, unless the environment variable TRAC0R_MODEL_ROOT names a directory that
+ *     holds them (TRAC0R_MODEL_ROOT=/ allows any file);
+ *   - check the sizes a file declares in its header (a GLB's chunk lengths, a PLY's element
+ *     counts) against the file's real size before Assimp allocates for them;
+ *   - stop reading after TR_MESH_MAX_READ_BYTES in all (the import's input budget; with
+ *     the declared sizes checked, Assimp's memory grows with what it reads).
+ * Internal to the library. */
+#ifndef TRAC0R_SCENE_MESH_GUARD_H
+#define TRAC0R_SCENE_MESH_GUARD_H
+
+#include <assimp/scene.h>
+
+#include "trac0r/error.h"
+
+#define TR_MESH_MAX_READ_BYTES (1ull << 30)
+
+/* aiImportFileEx through the callbacks above. NULL with `err` set ("Assimp cannot read
+ * 'PATH': ...", or the guard's own reason) when the import fails. */
+const struct aiScene *tr_mesh_guarded_import(const char *path, unsigned int flags, tr_error *err);
+
+/* The declared-size check alone, on `size` bytes of a file's start `head` whose whole size
+ * is `file_size` (for the fuzzer and tests). TR_OK when nothing claims more than the file
+ * holds. */
+int tr_mesh_check_declared_sizes(const char *name, const unsigned char *head, size_t size,
+                                 unsigned long long file_size, tr_error *err);
+
+#endif
