@@ -45,8 +45,8 @@ static void test_obj(void) {
             CHECK_NEAR(m->color.y, 0.1, 1e-6, "Kd green");
             CHECK(t->v0.x < 1.5f, "the red faces are the quad");
             /* Vertex normals as written: (0, 0, 1) at v1, v2 and (0, 0.6, 0.8) at v3, v4. */
-            const tr_vec3 *n = &s.vertex_normals[3 * i];
-            CHECK(i < s.vertex_normal_count, "normals stored");
+            tr_vec3 n[3];
+            CHECK(tr_scene_triangle_normals(&s, i, n), "normals stored");
             for (int k = 0; k < 3; ++k) {
                 const tr_vec3 v = k == 0 ? t->v0 : k == 1 ? t->v1 : t->v2;
                 const double ey = v.y > 0.5f ? 0.6 : 0.0, ez = v.y > 0.5f ? 0.8 : 1.0;
@@ -96,7 +96,9 @@ static void test_ply_gltf(void) {
     tr_mesh_import_stats st;
     int rc = tr_scene_import_mesh(&s, DATA "/mesh/quad.ply", NULL, -1, 0, &st, &err);
     CHECK(rc == TR_OK && st.triangles == 2 && st.degenerate == 0, "ply: %s", err.msg);
-    CHECK(s.vertex_normal_count == 2 && s.vertex_normals[0].z == 1.0f, "ply normals kept");
+    tr_vec3 pn[3];
+    CHECK(s.tri_verts_count == 2 && tr_scene_triangle_normals(&s, 0, pn) && pn[0].z == 1.0f,
+          "ply normals kept");
     CHECK(s.triangles[0].normal.z > 0.99f, "ply winding: front face +z");
     tr_scene_free(&s);
 
@@ -158,8 +160,10 @@ static void test_add_mesh(void) {
     CHECK(rc == TR_OK && s.triangle_count == 1 && dropped == 1, "add_mesh: %s", err.msg);
     /* Normal (1, 1, 0) under scale (1, 4, 1) goes to (1, 1/4, 0), normalised. */
     const double l = sqrt(1.0 + 1.0 / 16.0);
-    CHECK_NEAR(s.vertex_normals[0].x, 1.0 / l, 1e-6, "inverse-transpose normal x");
-    CHECK_NEAR(s.vertex_normals[0].y, 0.25 / l, 1e-6, "inverse-transpose normal y");
+    tr_vec3 tn[3];
+    CHECK(tr_scene_triangle_normals(&s, 0, tn), "normals kept");
+    CHECK_NEAR(tn[0].x, 1.0 / l, 1e-6, "inverse-transpose normal x");
+    CHECK_NEAR(tn[0].y, 0.25 / l, 1e-6, "inverse-transpose normal y");
     CHECK_NEAR(s.triangles[0].v2.y, 4.0, 1e-6, "scaled position");
     const uint32_t bad[] = {0, 1, 7};
     rc = tr_scene_add_mesh(&s, pos, 4, bad, 1, NULL, m, NULL, NULL, &err);
@@ -173,7 +177,8 @@ static void test_add_mesh(void) {
     /* A shape after a mesh with normals: the normals array still covers only the mesh. */
     tr_shape_desc d = tr_shape_desc_default(TR_SHAPE_BOX);
     CHECK(tr_scene_add_shape(&s, &d, &err) == TR_OK, "%s", err.msg);
-    CHECK(s.vertex_normal_count == 1, "normals cover %u triangles", s.vertex_normal_count);
+    CHECK(s.tri_verts_count == 1, "normals cover %u triangles", s.tri_verts_count);
+    CHECK(!tr_scene_triangle_normals(&s, 1, tn), "the box has none");
     tr_scene_free(&s);
 }
 

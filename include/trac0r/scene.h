@@ -33,9 +33,10 @@
 #define TR_ICOSPHERE_MAX_SUBDIVISIONS 9
 
 typedef enum tr_shape_type {
-    TR_SHAPE_PLANE = 1,     /* unit square in the xz plane, normal +y */
-    TR_SHAPE_BOX = 2,       /* unit cube centred on the origin, normals outward */
-    TR_SHAPE_ICOSPHERE = 3, /* unit sphere from a subdivided icosahedron */
+    TR_SHAPE_PLANE = 1,            /* unit square in the xz plane, normal +y */
+    TR_SHAPE_BOX = 2,              /* unit cube centred on the origin, normals outward */
+    TR_SHAPE_ICOSPHERE = 3,        /* unit sphere from a subdivided icosahedron */
+    TR_SHAPE_ICOSPHERE_SMOOTH = 4, /* the same, shaded with the sphere's normals at its vertices */
 } tr_shape_type;
 
 /* Where a shape's unit geometry goes: scaled, then rotated about x, then y, then z

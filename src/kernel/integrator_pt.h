@@ -104,8 +104,8 @@ TR_FN tr_vec3 tr_trace_pt(const tr_scene_view *s, tr_ray ray, int max_depth, tr_
                 tr_vec3 f = tr_bsdf_eval(&m, wo, wi);
                 float pl = tr_pt_light_pdf(s, ltri, wi, dist);
                 if (!tr_v3_is_zero(le_l) && !tr_v3_is_zero(f) && pl > 0.0f) {
-                    float cos_i = tr_fabsf(v3_dot(wi, n));
-                    tr_vec3 o = tr_offset_origin(p, v3_dot(wi, n) > 0.0f ? n : v3_neg(n));
+                    float cos_i = tr_fabsf(v3_dot(wi, m.ns)); /* issue 14: shading normal */
+                    tr_vec3 o = tr_surface_origin(&m, p, wi); /* issue 14: terminator fix */
                     tr_vec3 od = v3_sub(y, o);
                     float len = v3_length(od);
                     tr_ray shadow =
@@ -135,7 +135,7 @@ TR_FN tr_vec3 tr_trace_pt(const tr_scene_view *s, tr_ray ray, int max_depth, tr_
             }
             throughput = v3_scale(throughput, 1.0f / q);
         }
-        tr_vec3 o = tr_offset_origin(p, v3_dot(bs.wi, n) > 0.0f ? n : v3_neg(n));
+        tr_vec3 o = tr_surface_origin(&m, p, bs.wi); /* issue 14: terminator fix */
         ray = tr_ray_make(o, bs.wi, 0.0f, TR_INFINITY);
     }
     return radiance;

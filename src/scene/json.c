@@ -761,6 +761,11 @@ static int parse_quad(jctx *c, const cJSON *sh, const char *p, const cJSON *vert
     if (cJSON_GetObjectItemCaseSensitive(sh, "subdivisions")) {
         return jerr(c, ps, "only icospheres have subdivisions");
     }
+    if (cJSON_GetObjectItemCaseSensitive(sh, "smooth")) {
+        char pm[PATH_MAX_LEN];
+        path_key(pm, p, "smooth");
+        return jerr(c, pm, "only icospheres have 'smooth' (meshes use their vertex normals)");
+    }
     if (!verts) {
         return jerr(c, pv, "missing (expected 4 corners [[x, y, z], ...])");
     }
@@ -801,10 +806,19 @@ static int parse_quad(jctx *c, const cJSON *sh, const char *p, const cJSON *vert
                          (unsigned long long)c->scene->triangle_count + 2, c->budget);
     }
     static const uint32_t idx[6] = {0, 1, 2, 0, 2, 3};
+    /* Texture coordinates only where the material has textures (vertex attributes cost
+     * a fetch at every hit): the image's top-left corner at v0, top-right at v1. */
+    static const float uv[8] = {0, 0, 1, 0, 1, 1, 0, 1};
+    const tr_material_ext *ext =
+        c->scene->material_ext_count == c->scene->material_count && c->scene->material_ext_count > 0
+            ? &c->scene->material_exts[mat]
+            : NULL;
+    const int textured = ext && (ext->base_tex != TR_NO_INDEX || ext->emission_tex != TR_NO_INDEX ||
+                                 ext->mr_tex != TR_NO_INDEX || ext->normal_tex != TR_NO_INDEX);
     uint32_t first = c->scene->triangle_count, dropped = 0;
     tr_error e;
-    if (tr_scene_add_mesh(c->scene, pos, 4, idx, 2, NULL, (uint32_t)mat, &tf, &dropped, &e) !=
-        TR_OK) {
+    if (tr_scene_add_mesh_uv(c->scene, pos, 4, idx, 2, NULL, textured ? uv : NULL, (uint32_t)mat,
+                             &tf, &dropped, &e) != TR_OK) {
         return jerr(c, pv, "the corners span no area");
     }
     if (dropped) {
@@ -816,7 +830,7 @@ static int parse_quad(jctx *c, const cJSON *sh, const char *p, const cJSON *vert
 static int parse_shapes(jctx *c, const cJSON *shapes) {
     static const char *const keys[] = {
         "type",  "name",         "position", "orientation", "orientation_rad",
-        "scale", "subdivisions", "material", "vertices"};
+        "scale", "subdivisions", "material", "vertices",    "smooth"};
     static const char *const types[] = {"plane", "box", "icosphere", "quad"};
     if (!cJSON_IsArray(shapes)) {
         return jerr(c, "shapes", "expected an array, got %s", type_name(shapes));
@@ -912,6 +926,18 @@ static int parse_shapes(jctx *c, const cJSON *shapes) {
                         TR_ICOSPHERE_MAX_SUBDIVISIONS, sub);
         }
         d.subdivisions = (uint32_t)sub;
+        int smooth = 0;
+        if (get_bool(c, sh, p, "smooth", &smooth) != TR_OK) {
+            return TR_ERR;
+        }
+        if (cJSON_GetObjectItemCaseSensitive(sh, "smooth") && t != 2) {
+            char pm[PATH_MAX_LEN];
+            path_key(pm, p, "smooth");
+            return jerr(c, pm, "only icospheres have 'smooth' (meshes use their vertex normals)");
+        }
+        if (smooth) {
+            d.type = TR_SHAPE_ICOSPHERE_SMOOTH;
+        }
         uint64_t n = tr_shape_triangle_count(&d);
         if ((uint64_t)c->scene->triangle_count + n > c->budget) {
             return jerr_code(c, TR_STATUS_LIMIT, t == 2 ? ps : p,

@@ -275,8 +275,7 @@ int tr_scene_import_mesh(tr_scene *s, const char *path, const tr_transform *tf,
         return tr_error_set(err, TR_STATUS_PARSE, "Assimp cannot read '%.200s': %s", path,
                             msg[0] ? msg : "no meshes");
     }
-    const uint32_t t0 = s->triangle_count, s0 = s->shape_count, m0 = s->material_count,
-                   n0 = s->vertex_normal_count;
+    const uint32_t t0 = s->triangle_count, s0 = s->shape_count, m0 = s->material_count;
     import_ctx c = {s,  ai, tf, material_override, NULL, max_triangles ? max_triangles : UINT32_MAX,
                     t0, st, err};
     c.material_map = malloc((ai->mNumMaterials ? ai->mNumMaterials : 1) * sizeof *c.material_map);
@@ -302,12 +301,7 @@ int tr_scene_import_mesh(tr_scene *s, const char *path, const tr_transform *tf,
     }
     if (rc != TR_OK) {
         /* Roll back: everything was appended. */
-        s->triangle_count = t0;
-        s->shape_count = s0;
-        s->material_count = m0;
-        if (s->vertex_normal_count > n0) {
-            s->vertex_normal_count = n0;
-        }
+        tr_scene_truncate(s, t0, s0, m0);
     }
     free(c.material_map);
     aiReleaseImport(ai);
