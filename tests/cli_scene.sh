@@ -68,7 +68,7 @@ check version.json ": version: expected 1"
 check duplicate_material.json ": materials.a: duplicate material name"
 check ior_range.json ": materials.glass.ior: expected a number in [1, 10], got 0.5"
 check material_type.json ": materials.glass.type: unknown material type 'glas' (did you mean 'glass'?)"
-check material_key.json ": materials.white.roughness: unknown key (expected one of: type, color)"
+check material_key.json ": materials.white.roughness: unknown key (expected one of: type, color, texture,"
 check color_range.json ": materials.white.color[1]: expected a number in [0, 1], got 1.5"
 check undefined_material.json ": shapes[0].material: undefined material 'whit' (did you mean 'white'?)"
 check mesh_material.json ": meshes[0].material: undefined material 'lamb' (did you mean 'lamp'?)"
@@ -98,6 +98,16 @@ check unreadable_mesh.json ": meshes[0].path: cannot read '$BAD/.': Is a directo
 check assimp_fails.json ": meshes[0].path: Assimp cannot read '$BAD/garbage.ply'"
 check nan_mesh.json ": meshes[0].path: '$BAD/nan_vertex.obj': mesh vertex 2 has a non-finite coordinate"
 check huge_mesh.json ": meshes[0]: a vertex lands at (1e+30, 1, 0), outside the bound |x| <= 1e+07"
+# Textures (issue 14): unreadable or undecodable images and bad keys are errors.
+check texture_missing.json ": materials.tex.texture: cannot open '$BAD/../texture/no-such-texture.png'"
+check texture_truncated.json ": materials.tex.texture: '$BAD/../texture/truncated.png': cannot decode"
+check texture_zero.json ": materials.tex.texture: '$BAD/../texture/zero.png'"
+check texture_huge.json ": materials.tex.texture: '$BAD/../texture/huge.png'"
+check texture_not_image.json ": materials.tex.texture: '$BAD/../texture/not_image.png'"
+check texture_wrap.json ": materials.tex.texture.wrap: unknown wrap mode 'mirror'"
+"$BIN" render "$GOOD/textured_quad.json" --width 8 --height 4 --spp 1 --out tq.pfm 2>err.txt ||
+    fail "render textured_quad.json: $(cat err.txt)"
+rm -f tq.pfm err.txt
 check up_parallel.json ": camera: camera up vector is parallel to the view direction"
 # A good mesh: its dropped faces are a warning on stderr, the render goes on.
 "$BIN" render "$GOOD/mesh.json" --width 8 --height 6 --spp 1 --out mesh.pfm 2>err.txt ||

@@ -5,9 +5,19 @@
  *    pixels stays within the analytic sphere's own change plus a small margin (no facet
  *    edges); the same checks fail for the faceted icosphere, so they measure something.
  *    (The analytic normal is taken only where it is within ~32 degrees of the view
- *    direction: near the silhouette the mesh and the sphere are hit at different points.) */
+ *    direction: near the silhouette the mesh and the sphere are hit at different points.)
+ * 2. Texture lookups: texel centres return the texel (sRGB-decoded for colour maps,
+ *    linear otherwise), bilinear midpoints the mean, repeat wraps by whole periods and
+ *    clamp holds the edge texel.
+ * 3. A textured quad filling the image: its emission texture is what the camera sees, so
+ *    the image's mean is the texture's (decoded) mean and the pixel over a texel's centre
+ *    is that texel; its base-colour texture is the albedo pass.
+ * 4. Image files: a PNG decodes to the texels it was written with (top row first, R in
+ *    the low byte); a missing file, a truncated PNG, a 0x0 one, one declaring 10^5 x 10^5
+ *    texels and a text file fail with a status code and add nothing. */
 #include "check.h"
 #include "scene_util.h"
+#include "scene/texture.h"
 #include "trac0r/device.h"
 
 #include <math.h>
@@ -125,7 +135,200 @@ static void test_smooth_icosphere(void) {
           step_f);
 }
 
+#define TW 4
+#define TH 2
+/* A 4x2 texture of distinct colours (R in the low byte), alpha 255 except texel 3. */
+static const uint32_t tex_rgba[TW * TH] = {0xff0000ffu, 0xff00ff00u, 0xffff0000u, 0x80808080u,
+                                           0xff204060u, 0xffffffffu, 0xff000000u, 0xff10c0a0u};
+
+static double srgb_decode(double c) {
+    return c <= 0.04045 ? c / 12.92 : pow((c + 0.055) / 1.055, 2.4);
+}
+
+/* Channel k of texel i, decoded when srgb. */
+static double texel_channel(int i, int k, int srgb) {
+    double c = (double)((tex_rgba[i] >> (8 * k)) & 255u) / 255.0;
+    return srgb ? srgb_decode(c) : c;
+}
+
+static void test_texture_lookup(void) {
+    tr_scene s = {0};
+    tr_scene_init(&s);
+    tr_error err;
+    uint32_t rep, clp;
+    CHECK(tr_scene_add_texture(&s, tex_rgba, TW, TH, 0u, &rep, &err) == TR_OK, "%s", err.msg);
+    CHECK(tr_scene_add_texture(&s, tex_rgba, TW, TH, TR_TEXTURE_CLAMP, &clp, &err) == TR_OK, "%s",
+          err.msg);
+    CHECK_STATUS(tr_scene_add_texture(&s, tex_rgba, 0, TH, 0u, NULL, &err), err,
+                 TR_STATUS_INVALID_ARGUMENT, "a 0-wide texture");
+    tr_scene_view v = tr_scene_view_of(&s);
+    float a;
+    for (int srgb = 0; srgb < 2; ++srgb) {
+        for (int i = 0; i < TW * TH; ++i) {
+            float u = ((float)(i % TW) + 0.5f) / TW, w = ((float)(i / TW) + 0.5f) / TH;
+            tr_vec3 c = tr_texture_sample(&v, rep, u, w, srgb, &a);
+            CHECK_NEAR(c.x, texel_channel(i, 0, srgb), 1e-5, "texel centre r");
+            CHECK_NEAR(c.y, texel_channel(i, 1, srgb), 1e-5, "texel centre g");
+            CHECK_NEAR(c.z, texel_channel(i, 2, srgb), 1e-5, "texel centre b");
+            CHECK_NEAR(a, texel_channel(i, 3, 0), 1e-5, "texel centre alpha");
+            /* Repeat: whole periods away, either sign. */
+            tr_vec3 r = tr_texture_sample(&v, rep, u + 3.0f, w - 2.0f, srgb, &a);
+            CHECK_NEAR(r.x, c.x, 1e-5, "repeat");
+            CHECK_NEAR(r.z, c.z, 1e-5, "repeat");
+        }
+    }
+    /* Bilinear: halfway between texels 0 and 1 (same row), linear channels. */
+    tr_vec3 mid = tr_texture_sample(&v, rep, 1.0f / TW, 0.25f, 0, &a);
+    CHECK_NEAR(mid.x, 0.5 * (texel_channel(0, 0, 0) + texel_channel(1, 0, 0)), 1e-5, "bilinear");
+    CHECK_NEAR(mid.y, 0.5 * (texel_channel(0, 1, 0) + texel_channel(1, 1, 0)), 1e-5, "bilinear");
+    /* At u = 0 the repeating texture blends the first and the last column; the clamped
+     * one holds the first. */
+    tr_vec3 e_rep = tr_texture_sample(&v, rep, 0.0f, 0.25f, 0, &a);
+    tr_vec3 e_clp = tr_texture_sample(&v, clp, 0.0f, 0.25f, 0, &a);
+    CHECK_NEAR(e_rep.x, 0.5 * (texel_channel(0, 0, 0) + texel_channel(3, 0, 0)), 1e-5,
+               "repeat wraps at the edge");
+    CHECK_NEAR(e_clp.x, texel_channel(0, 0, 0), 1e-5, "clamp holds the edge");
+    tr_vec3 far_clp = tr_texture_sample(&v, clp, 7.5f, -3.0f, 0, &a);
+    CHECK_NEAR(far_clp.x, texel_channel(3, 0, 0), 1e-5, "clamp beyond: the corner texel");
+    tr_scene_free(&s);
+}
+
+#define QW 60
+#define QH 30
+static void test_textured_quad(void) {
+    tr_scene s = {0};
+    tr_scene_init(&s);
+    tr_error err;
+    uint32_t tex;
+    CHECK(tr_scene_add_texture(&s, tex_rgba, TW, TH, 0u, &tex, &err) == TR_OK, "%s", err.msg);
+    tr_material black = tr_material_diffuse(v3s(1.0f));
+    uint32_t mat = add_mat(&s, black);
+    tr_material_ext ext = tr_material_ext_default();
+    ext.emission = v3s(1.0f);
+    ext.emission_tex = tex;
+    ext.base_tex = tex;
+    CHECK(tr_scene_set_material_ext(&s, mat, &ext, &err) == TR_OK, "%s", err.msg);
+    /* The quad x in [-2, 2], y in [-1, 1] at z = 0 facing +z, seen from z = 1 with a 90
+     * degree vertical field of view: it fills the 2:1 image exactly. UV (0, 0) at the
+     * top-left corner as the image shows it. */
+    tr_camera cam;
+    CHECK(tr_camera_make(&cam, v3(0.0f, 0.0f, 1.0f), v3(0.0f, 0.0f, -1.0f), v3(0.0f, 1.0f, 0.0f),
+                         90.0f, 1e-3f, 1e3f, QW, QH, &err) == TR_OK,
+          "%s", err.msg);
+    tr_ray tl = tr_camera_ray(&cam, 0.0f, 0.0f, 0.0f, 0.0f);
+    const float left = tl.dir.x < 0.0f ? -2.0f : 2.0f; /* the image's left edge in x */
+    const float pos[12] = {left, 1, 0, -left, 1, 0, -left, -1, 0, left, -1, 0};
+    const float uv[8] = {0, 0, 1, 0, 1, 1, 0, 1};
+    const uint32_t idx[6] = {0, 1, 2, 0, 2, 3};
+    CHECK(tr_scene_add_mesh_uv(&s, pos, 4, idx, 2, NULL, uv, mat, NULL, NULL, &err) == TR_OK, "%s",
+          err.msg);
+    CHECK(tr_scene_commit(&s, TR_ACCEL_TYPE_BVH, &err) == TR_OK, "%s", err.msg);
+    tr_film film;
+    CHECK(tr_film_init_passes(&film, QW, QH, TR_PASS_ALBEDO, &err) == TR_OK, "%s", err.msg);
+    tr_render_config cfg = tr_render_config_default();
+    cfg.passes = TR_PASS_ALBEDO;
+    cfg.max_depth = 1; /* what the camera sees: the emission */
+    for (uint32_t smp = 0; smp < 16; ++smp) {
+        CHECK(tr_render_frame(&s, &cam, &cfg, &film, smp, NULL, &err) == TR_OK, "%s", err.msg);
+    }
+    double mean[3] = {0, 0, 0}, want[3] = {0, 0, 0};
+    for (uint32_t y = 0; y < QH; ++y) {
+        for (uint32_t x = 0; x < QW; ++x) {
+            tr_vec3 px = tr_film_pixel(&film, x, y);
+            mean[0] += px.x / (QW * QH);
+            mean[1] += px.y / (QW * QH);
+            mean[2] += px.z / (QW * QH);
+        }
+    }
+    for (int i = 0; i < TW * TH; ++i) {
+        for (int k = 0; k < 3; ++k) {
+            want[k] += texel_channel(i, k, 1) / (TW * TH);
+        }
+    }
+    /* Bilinear filtering with repeat keeps the mean; 16 jittered samples per pixel over 8
+     * texels of 15x15 pixels leave a sampling error far below 0.01. */
+    for (int k = 0; k < 3; ++k) {
+        CHECK_NEAR(mean[k], want[k], 0.01, "image mean = texture mean");
+    }
+    /* The pixel whose centre is texel i's centre (15 pixels a texel): over its footprint
+     * the bilinear weights move symmetrically by at most 1/30, so the pixel's expected
+     * value is the texel's and a sample's within 1/30 of the neighbours' difference. */
+    for (int i = 0; i < TW * TH; ++i) {
+        uint32_t x = (uint32_t)(i % TW) * (QW / TW) + QW / TW / 2;
+        uint32_t y = (uint32_t)(i / TW) * (QH / TH) + QH / TH / 2;
+        float alb[3];
+        tr_vec3 pv = tr_film_pixel(&film, x, y);
+        const float px[3] = {pv.x, pv.y, pv.z};
+        CHECK(tr_film_pass_pixel(&film, TR_PASS_ALBEDO, x, y, alb, &err) == TR_OK, "%s", err.msg);
+        for (int k = 0; k < 3; ++k) {
+            CHECK_NEAR(px[k], texel_channel(i, k, 1), 0.04, "emission at a texel's centre");
+            CHECK_NEAR(alb[k], texel_channel(i, k, 1), 0.04, "albedo at a texel's centre");
+        }
+    }
+    /* Alpha cut-out at 0.6: texel 3 (alpha 0.5) becomes a hole showing the black behind,
+     * the others (alpha 1) stay. */
+    ext.flags |= TR_MATEXT_ALPHA_MASK;
+    ext.alpha_cutoff = 0.6f;
+    CHECK(tr_scene_set_material_ext(&s, mat, &ext, &err) == TR_OK, "%s", err.msg);
+    CHECK(tr_scene_commit(&s, TR_ACCEL_TYPE_BVH, &err) == TR_OK, "%s", err.msg);
+    tr_film_clear(&film);
+    for (uint32_t smp = 0; smp < 4; ++smp) {
+        CHECK(tr_render_frame(&s, &cam, &cfg, &film, smp, NULL, &err) == TR_OK, "%s", err.msg);
+    }
+    for (int i = 0; i < TW * TH; ++i) {
+        uint32_t x = (uint32_t)(i % TW) * (QW / TW) + QW / TW / 2;
+        uint32_t y = (uint32_t)(i / TW) * (QH / TH) + QH / TH / 2;
+        tr_vec3 pv = tr_film_pixel(&film, x, y);
+        if (i == 3) {
+            CHECK(pv.x == 0.0f && pv.y == 0.0f && pv.z == 0.0f, "the cut-out shows black");
+        } else {
+            CHECK_NEAR(pv.x, texel_channel(i, 0, 1), 0.04, "opaque texels stay");
+        }
+    }
+    tr_film_free(&film);
+    tr_scene_free(&s);
+}
+
+#define TEXDATA TR_SOURCE_DIR "/tests/data/texture"
+
+static void test_texture_files(void) {
+    tr_scene s = {0};
+    tr_scene_init(&s);
+    tr_error err;
+    uint32_t index = 99;
+    CHECK(tr_scene_load_texture(&s, TEXDATA "/checker.png", 0u, &index, &err) == TR_OK, "%s",
+          err.msg);
+    CHECK(index == 0 && s.texture_count == 1 && s.textures[0].width == TW &&
+              s.textures[0].height == TH,
+          "checker.png: %u textures", s.texture_count);
+    for (int i = 0; s.texture_count == 1 && i < TW * TH; ++i) {
+        CHECK(s.texels[i] == tex_rgba[i], "texel %d: %08x vs %08x", i, s.texels[i], tex_rgba[i]);
+    }
+    static const struct {
+        const char *file;
+        tr_status code;
+    } bad[] = {{TEXDATA "/no-such-texture.png", TR_STATUS_NOT_FOUND},
+               {TEXDATA "/truncated.png", TR_STATUS_PARSE},
+               {TEXDATA "/zero.png", TR_STATUS_PARSE},
+               {TEXDATA "/not_image.png", TR_STATUS_PARSE},
+               {TEXDATA, TR_STATUS_IO}};
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; ++i) {
+        CHECK_STATUS(tr_scene_load_texture(&s, bad[i].file, 0u, &index, &err), err, bad[i].code,
+                     bad[i].file);
+    }
+    /* The declared size is refused before anything is decoded: stb_image's own limit
+     * (parse error) or ours (limit), whichever looks first. */
+    int rc = tr_scene_load_texture(&s, TEXDATA "/huge.png", 0u, &index, &err);
+    CHECK(rc == TR_ERR && (err.code == TR_STATUS_PARSE || err.code == TR_STATUS_LIMIT),
+          "huge.png: rc %d", rc);
+    CHECK(s.texture_count == 1 && s.texel_count == TW * TH, "failures add nothing");
+    tr_scene_free(&s);
+}
+
 int main(void) {
     test_smooth_icosphere();
+    test_texture_lookup();
+    test_textured_quad();
+    test_texture_files();
     return check_finish("test_surface");
 }

@@ -60,6 +60,7 @@ TR_FN tr_vec3 tr_trace_pt(const tr_scene_view *s, tr_ray ray, int max_depth, tr_
     tr_vec3 throughput = v3s(1.0f);
     float prev_pdf = 0.0f;
     int prev_delta = 1; /* the camera ray: no light strategy competes */
+    int holes = 0;      /* issue 14: alpha cut-outs passed through */
     for (int seg = 1; seg <= max_depth; ++seg) {
         tr_hit hit;
         *rays += 1;
@@ -71,6 +72,13 @@ TR_FN tr_vec3 tr_trace_pt(const tr_scene_view *s, tr_ray ray, int max_depth, tr_
         tr_vec3 wo = v3_neg(ray.dir);
         tr_vec3 p = v3_madd(ray.origin, ray.dir, hit.t);
         tr_bsdf_params m = tr_material_eval(s, hit.triangle, hit.u, hit.v, p, n, ray.dir);
+        /* issue 14: an alpha cut-out is no surface; the ray goes on as it was. */
+        if (m.hole && holes < TR_MAX_HOLES) {
+            ++holes;
+            --seg;
+            ray.tmin = hit.t + 1e-5f * tr_fmaxf(1.0f, hit.t);
+            continue;
+        }
         if (surface) {
             tr_sample_surface(surface, &m, ray.dir, hit.t, hit.triangle);
         }
@@ -111,7 +119,7 @@ TR_FN tr_vec3 tr_trace_pt(const tr_scene_view *s, tr_ray ray, int max_depth, tr_
                     tr_ray shadow =
                         tr_ray_make(o, v3_scale(od, 1.0f / len), 0.0f, len * (1.0f - 1e-4f));
                     *rays += 1;
-                    if (!tr_occluded_scene(s, &shadow)) {
+                    if (!tr_occluded_masked(s, &shadow)) { /* issue 14: cut-outs */
                         float w = tr_mis_power(pl, tr_bsdf_pdf(&m, wo, wi));
                         radiance = v3_add(radiance, v3_scale(v3_mul(v3_mul(throughput, f), le_l),
                                                              cos_i * w / pl));

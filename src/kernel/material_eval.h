@@ -123,4 +123,42 @@ TR_FN tr_bsdf_params tr_material_eval(const tr_scene_view *s, uint32_t triangle,
     return b;
 }
 
+/* Alpha cut-outs stop nothing: at most this many are passed through along one ray. */
+#define TR_MAX_HOLES 64
+
+/* Whether hit is a hole: an alpha-masked material whose base map is transparent there. */
+TR_FN int tr_hit_is_hole(const tr_scene_view *s, const tr_ray *ray, const tr_hit *hit) {
+    if (s->material_ext_count == 0u) {
+        return 0;
+    }
+    uint32_t mi = s->triangles[hit->triangle].material;
+    if ((s->material_exts[mi].flags & TR_MATEXT_ALPHA_MASK) == 0u) {
+        return 0;
+    }
+    TR_CONST_GLOBAL tr_triangle *tri = &s->triangles[hit->triangle];
+    tr_vec3 p = v3_madd(ray->origin, ray->dir, hit->t);
+    tr_bsdf_params b = tr_material_eval(s, hit->triangle, hit->u, hit->v, p, tri->normal, ray->dir);
+    return b.hole;
+}
+
+/* The shadow-ray query with alpha cut-outs: occluded unless every surface on the segment
+ * is a hole. Without material extras, tr_occluded_scene itself. */
+TR_FN int tr_occluded_masked(const tr_scene_view *s, const tr_ray *ray) {
+    if (s->material_ext_count == 0u) {
+        return tr_occluded_scene(s, ray);
+    }
+    tr_ray r = *ray;
+    for (int k = 0; k < TR_MAX_HOLES; ++k) {
+        tr_hit hit;
+        if (!tr_intersect_scene(s, &r, &hit)) {
+            return 0;
+        }
+        if (!tr_hit_is_hole(s, &r, &hit)) {
+            return 1;
+        }
+        r.tmin = hit.t + 1e-5f * tr_fmaxf(1.0f, hit.t);
+    }
+    return 1;
+}
+
 #endif

@@ -19,6 +19,7 @@
 #include "scene/scene_internal.h"
 #include "trac0r/scene_file.h"
 #include "material_registry.h"
+#include "scene/texture.h"
 
 #define PATH_MAX_LEN 160
 
@@ -532,6 +533,114 @@ static int parse_camera(jctx *c, const cJSON *cam) {
     return TR_OK;
 }
 
+/* Keys every material but an emitter takes besides its type's (attrib.h's extras). */
+static const char *const extra_keys[] = {"texture",
+                                         "normal_texture",
+                                         "emission",
+                                         "emission_texture",
+                                         "alpha_cutoff",
+                                         "metallic",
+                                         "metallic_roughness_texture"};
+#define EXTRA_KEY_COUNT (sizeof extra_keys / sizeof extra_keys[0])
+
+/* A texture key: "file.png" or {"path": "file.png", "wrap": "repeat" | "clamp"}; loaded
+ * relative to the scene file (not opened when meshes are not loaded: the fuzzer). */
+static int get_texture(jctx *c, const cJSON *m, const char *path, const char *key,
+                       uint32_t *index) {
+    const cJSON *v = cJSON_GetObjectItemCaseSensitive(m, key);
+    *index = TR_NO_INDEX;
+    if (!v) {
+        return TR_OK;
+    }
+    char p[PATH_MAX_LEN];
+    path_key(p, path, key);
+    const char *rel = NULL;
+    uint32_t flags = 0;
+    if (cJSON_IsString(v) && v->valuestring) {
+        rel = v->valuestring;
+    } else if (cJSON_IsObject(v)) {
+        static const char *const keys[] = {"path", "wrap"};
+        const char *wrap = NULL;
+        if (check_keys(c, v, p, keys, 2) != TR_OK ||
+            get_string(c, v, p, "path", 1, &rel) != TR_OK ||
+            get_string(c, v, p, "wrap", 0, &wrap) != TR_OK) {
+            return TR_ERR;
+        }
+        if (wrap && strcmp(wrap, "clamp") == 0) {
+            flags |= TR_TEXTURE_CLAMP;
+        } else if (wrap && strcmp(wrap, "repeat") != 0) {
+            char pw[PATH_MAX_LEN], buf[40];
+            path_key(pw, p, "wrap");
+            return jerr(c, pw, "unknown wrap mode '%s' (expected repeat or clamp)",
+                        shown(wrap, buf, sizeof buf));
+        }
+    } else {
+        return jerr(c, p, "expected a file name or {\"path\": ..., \"wrap\": ...}, got %s",
+                    type_name(v));
+    }
+    if (!rel[0]) {
+        return jerr(c, p, "expected a file name, got an empty string");
+    }
+    if (!c->opt->load_meshes) {
+        return TR_OK;
+    }
+    char full[8192];
+    if (rel[0] == '/' || !c->dir[0]) {
+        snprintf(full, sizeof full, "%s", rel);
+    } else {
+        snprintf(full, sizeof full, "%s/%s", c->dir, rel);
+    }
+    tr_error e;
+    if (tr_scene_load_texture(c->scene, full, flags, index, &e) != TR_OK) {
+        return jerr_from(c, p, &e);
+    }
+    return TR_OK;
+}
+
+/* The extras of material `index` from its keys (check_keys has allowed them); nothing is stored when it has
+ * none, so that untextured scenes keep no extras array. */
+static int parse_material_extras(jctx *c, const cJSON *m, const char *p, uint32_t index) {
+    int any = 0;
+    for (size_t k = 0; k < EXTRA_KEY_COUNT; ++k) {
+        any |= cJSON_GetObjectItemCaseSensitive(m, extra_keys[k]) != NULL;
+    }
+    if (!any) {
+        return TR_OK;
+    }
+    tr_material_ext e = tr_material_ext_default();
+    int has_cut = 0, has_metal = 0, has_em = 0;
+    double cut = 0.5, metal = 0.0;
+    if (get_texture(c, m, p, "texture", &e.base_tex) != TR_OK ||
+        get_texture(c, m, p, "normal_texture", &e.normal_tex) != TR_OK ||
+        get_texture(c, m, p, "emission_texture", &e.emission_tex) != TR_OK ||
+        get_texture(c, m, p, "metallic_roughness_texture", &e.mr_tex) != TR_OK ||
+        get_vec3(c, m, p, "emission", 0, 0, &e.emission, &has_em) != TR_OK ||
+        get_number(c, m, p, "alpha_cutoff", 0.0, 1.0, &cut, &has_cut) != TR_OK ||
+        get_number(c, m, p, "metallic", 0.0, 1.0, &metal, &has_metal) != TR_OK) {
+        return TR_ERR;
+    }
+    if (has_em && (e.emission.x < 0.0f || e.emission.y < 0.0f || e.emission.z < 0.0f ||
+                   e.emission.x > 1e7f || e.emission.y > 1e7f || e.emission.z > 1e7f)) {
+        char pe[PATH_MAX_LEN];
+        path_key(pe, p, "emission");
+        return jerr(c, pe, "expected three numbers in [0, 1e+07]");
+    }
+    if (cJSON_GetObjectItemCaseSensitive(m, "emission_texture") &&
+        !cJSON_GetObjectItemCaseSensitive(m, "emission")) {
+        e.emission = v3s(1.0f); /* the texture alone gives the radiance */
+    }
+    e.metallic = (float)metal;
+    if (has_cut) {
+        e.flags |= TR_MATEXT_ALPHA_MASK;
+        e.alpha_cutoff = (float)cut;
+    }
+    tr_error err;
+    if (tr_scene_set_material_ext(c->scene, index, &e, &err) != TR_OK) {
+        return jerr_from(c, p, &err);
+    }
+    return TR_OK;
+}
+
 static int parse_materials(jctx *c, const cJSON *mats) {
     const char *path = "materials";
     if (expect_object(c, mats, path) != TR_OK) {
@@ -578,15 +687,22 @@ static int parse_materials(jctx *c, const cJSON *mats) {
         }
         /* The keys this type takes, from the registry: "type", then each key of its masks
          * (a name two keys share, such as "color", once). */
-        const char *allowed[16] = {"type"};
+        const char *allowed[32] = {"type"};
         size_t nallowed = 1;
-        for (size_t k = 0; k < nkeys && nallowed < 16; ++k) {
+        for (size_t k = 0; k < nkeys && nallowed < 32; ++k) {
             int dup = 0;
             for (size_t i = 0; i < nallowed; ++i) {
                 dup |= strcmp(allowed[i], keys[k].name) == 0;
             }
             if (!dup && (keys[k].key & (required | optional))) {
                 allowed[nallowed++] = keys[k].name;
+            }
+        }
+        /* Then the extras (textures, emission, cut-outs) every non-emitter takes;
+         * "metallic" is the principled material's alone. */
+        for (size_t k = 0; t != TR_MATERIAL_EMITTER && k < EXTRA_KEY_COUNT && nallowed < 32; ++k) {
+            if (t == TR_MATERIAL_PRINCIPLED || strcmp(extra_keys[k], "metallic") != 0) {
+                allowed[nallowed++] = extra_keys[k];
             }
         }
         if (check_keys(c, m, p, allowed, nallowed) != TR_OK) {
@@ -629,8 +745,12 @@ static int parse_materials(jctx *c, const cJSON *mats) {
             }
         }
         tr_error e;
-        if (tr_scene_add_material(c->scene, mat, NULL, &e) != TR_OK) {
+        uint32_t index;
+        if (tr_scene_add_material(c->scene, mat, &index, &e) != TR_OK) {
             return jerr_from(c, p, &e);
+        }
+        if (parse_material_extras(c, m, p, index) != TR_OK) {
+            return TR_ERR;
         }
     }
     qsort(c->by_name, c->name_count, sizeof *c->by_name, named_cmp);
