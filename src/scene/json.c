@@ -597,8 +597,8 @@ static int get_texture(jctx *c, const cJSON *m, const char *path, const char *ke
     return TR_OK;
 }
 
-/* The extras of material `index` from its keys (check_keys has allowed them); nothing is stored when it has
- * none, so that untextured scenes keep no extras array. */
+/* The extras of material `index` from its keys (check_keys has allowed them); nothing is stored
+ * when it has none, so that untextured scenes keep no extras array. */
 static int parse_material_extras(jctx *c, const cJSON *m, const char *p, uint32_t index) {
     int any = 0;
     for (size_t k = 0; k < EXTRA_KEY_COUNT; ++k) {
@@ -1077,6 +1077,19 @@ static int parse_shapes(jctx *c, const cJSON *shapes) {
     return TR_OK;
 }
 
+/* Warnings from a mesh import (dropped or approximated material properties). */
+struct mesh_warn_ctx {
+    const jctx *c;
+    int index;
+    const char *rel;
+};
+
+static void mesh_import_warn(void *ctx, const char *message) {
+    const struct mesh_warn_ctx *w = ctx;
+    char buf[64];
+    warn(w->c, "meshes[%d] (%s): %s", w->index, shown(w->rel, buf, sizeof buf), message);
+}
+
 static int parse_meshes(jctx *c, const cJSON *meshes) {
     static const char *const keys[] = {
         "path", "name", "position", "orientation", "scale", "orientation_rad", "material"};
@@ -1116,7 +1129,9 @@ static int parse_meshes(jctx *c, const cJSON *meshes) {
         uint32_t first = c->scene->triangle_count;
         tr_mesh_import_stats st;
         tr_error e;
-        if (tr_scene_import_mesh(c->scene, full, &tf, mat, c->budget - first, &st, &e) != TR_OK) {
+        struct mesh_warn_ctx wc = {c, i, rel};
+        if (tr_scene_import_mesh_ex(c->scene, full, &tf, mat, c->budget - first, &st,
+                                    mesh_import_warn, &wc, &e) != TR_OK) {
             return jerr_from(c, pp, &e);
         }
         c->info->mesh_parts += st.parts;

@@ -8,6 +8,7 @@
 #include "kernel/scene_view.h"
 #include "kernel/types.h"
 #include "trac0r/scene.h"
+#include "trac0r/scene_file.h"
 
 struct tr_scene {
     tr_material *materials;
@@ -81,6 +82,13 @@ tr_material_ext tr_material_ext_default(void);
  * texture; its index in *index. */
 int tr_scene_add_texture(tr_scene *s, const uint32_t *rgba, uint32_t width, uint32_t height,
                          uint32_t flags, uint32_t *index, tr_error *err);
+/* tr_scene_import_mesh with warnings: warn(ctx, message) for every texture or material
+ * property the import drops or approximates (names the material), may be NULL. */
+typedef void (*tr_import_warn_fn)(void *ctx, const char *message);
+int tr_scene_import_mesh_ex(tr_scene *s, const char *path, const tr_transform *tf,
+                            int64_t material_override, uint32_t max_triangles,
+                            tr_mesh_import_stats *stats, tr_import_warn_fn warn, void *warn_ctx,
+                            tr_error *err);
 /* Restores the counts a failed import started from (everything is appended). */
 void tr_scene_truncate(tr_scene *s, uint32_t triangles, uint32_t shapes, uint32_t materials);
 
