@@ -111,7 +111,8 @@ static void test_ply_gltf(void) {
         CHECK_NEAR(b.max.x, 2.0, 1e-6, "gltf node scale");
         CHECK_NEAR(b.min.z, 5.0, 1e-6, "gltf node translation");
         CHECK_NEAR(mat_of(&s, 0)->color.y, 0.4, 1e-6, "gltf baseColorFactor");
-        CHECK(mat_of(&s, 0)->type == TR_MATERIAL_DIFFUSE, "gltf: diffuse");
+        CHECK(mat_of(&s, 0)->type == TR_MATERIAL_PRINCIPLED,
+              "gltf: principled (metallic-roughness)");
     }
     tr_scene_free(&s);
 }
@@ -121,10 +122,17 @@ static void test_installed_models(void) {
     static const struct {
         const char *path;
         uint32_t min_tris, max_tris;
+        uint32_t type; /* issue 14: the type every material of the file maps to */
+        int textured;  /* some material has a base colour map that loaded */
     } models[] = {
-        {MODELS "/OBJ/spider.obj", 1000, 2000},
-        {MODELS "/PLY/Wuson.ply", 3732, 3732},
-        {MODELS "/glTF2/BoxTextured-glTF/BoxTextured.gltf", 12, 12},
+        {MODELS "/OBJ/spider.obj", 1000, 2000, TR_MATERIAL_DIFFUSE, 1},
+        {MODELS "/PLY/Wuson.ply", 3732, 3732, TR_MATERIAL_DIFFUSE, 0},
+        {MODELS "/glTF2/BoxTextured-glTF/BoxTextured.gltf", 12, 12, TR_MATERIAL_PRINCIPLED, 1},
+        {MODELS "/glTF2/BoxTextured-glTF-Binary/BoxTextured.glb", 12, 12, TR_MATERIAL_PRINCIPLED,
+         1},
+        {MODELS "/Collada/duck.dae", 4000, 4300, TR_MATERIAL_DIFFUSE, 1},
+        /* Partly transparent in the file: cut-outs or opaque, never glass. */
+        {MODELS "/Collada/teapots.DAE", 1000, 100000, TR_MATERIAL_DIFFUSE, 1},
     };
     for (size_t i = 0; i < sizeof models / sizeof models[0]; ++i) {
         tr_scene s = {0};
@@ -141,6 +149,15 @@ static void test_installed_models(void) {
                 break;
             }
         }
+        int textured = 0;
+        for (uint32_t m = 0; m < s.material_count; ++m) {
+            CHECK(s.materials[m].type == models[i].type, "%s: material %u has type %u",
+                  models[i].path, m, s.materials[m].type);
+            textured |= s.material_ext_count == s.material_count &&
+                        s.material_exts[m].base_tex != TR_NO_INDEX;
+        }
+        CHECK(textured == models[i].textured, "%s: textured %d", models[i].path, textured);
+        CHECK(!textured || s.tri_verts_count > 0, "%s: texture coordinates kept", models[i].path);
         tr_scene_free(&s);
     }
 }
