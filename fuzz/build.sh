@@ -17,7 +17,7 @@ mkdir -p "$OUT"
     fuzz/fuzz_scene_json.c src/scene/json.c src/scene/scene.c src/scene/shape.c \
     src/scene/camera.c src/scene/lights.c src/accel/bvh.c src/accel/wbvh.c \
     src/accel/wbvh_scalar.c src/accel/embree.c src/util/error.c src/util/registry.c \
-    src/scene/material_registry.c src/scene/texture.c \
+    src/scene/material_registry.c src/scene/texture.c src/scene/envmap.c \
     $(pkg-config --libs libcjson) -lm -o "$OUT/fuzz_scene_json"
 echo "built $OUT/fuzz_scene_json"
 # Image decoding (textures, environment maps): texture.c and the error code it uses.

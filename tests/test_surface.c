@@ -14,9 +14,15 @@
  *    is that texel; its base-colour texture is the albedo pass.
  * 4. Image files: a PNG decodes to the texels it was written with (top row first, R in
  *    the low byte); a missing file, a truncated PNG, a 0x0 one, one declaring 10^5 x 10^5
- *    texels and a text file fail with a status code and add nothing. */
+ *    texels and a text file fail with a status code and add nothing.
+ * 5. Environment light: directions drawn from an HDR map fall into its texels as the
+ *    sampling weights say (chi-square, p = 1e-4), with the density tr_env_pdf gives, and
+ *    that density integrates to 1 over the sphere (also turned about +y); a white furnace:
+ *    a diffuse sphere under a constant environment of radiance L renders L * albedo. */
 #include "check.h"
 #include "scene_util.h"
+#include "kernel/envmap.h"
+#include "kernel/rng.h"
 #include "scene/texture.h"
 #include "trac0r/device.h"
 
@@ -325,10 +331,134 @@ static void test_texture_files(void) {
     tr_scene_free(&s);
 }
 
+static void test_env_sampling(void) {
+    tr_scene s = {0};
+    tr_scene_init(&s);
+    tr_error err;
+    CHECK(tr_scene_load_environment(&s, TEXDATA "/sky.hdr", v3s(1.0f), 2.0f, 0.7f, &err) == TR_OK,
+          "%s", err.msg);
+    tr_scene_view v = tr_scene_view_of(&s);
+    const uint32_t w = s.env.width, h = s.env.height, n = w * h;
+    CHECK(w == 32 && h == 16, "sky.hdr: %ux%u", w, h);
+    if (w != 32 || h != 16) {
+        tr_scene_free(&s);
+        return;
+    }
+    /* The density integrates to 1: midpoint rule over 512 x 256 cells in (t, p). */
+    double integral = 0.0;
+    for (int a = 0; a < 256; ++a) {
+        double t = (a + 0.5) * 3.14159265358979 / 256;
+        for (int b = 0; b < 512; ++b) {
+            double p = (b + 0.5) * 2 * 3.14159265358979 / 512;
+            tr_vec3 d = v3((float)(sin(t) * cos(p)), (float)cos(t), (float)(sin(t) * sin(p)));
+            integral += tr_env_pdf(&v, d) * sin(t) * (3.14159265358979 / 256) *
+                        (2 * 3.14159265358979 / 512);
+        }
+    }
+    CHECK_NEAR(integral, 1.0, 0.01, "the environment's pdf integrates to 1");
+    /* Chi-square over the texels: expected fraction weight / sum. */
+    static double count[32 * 16];
+    memset(count, 0, sizeof count);
+    const int N = 400000;
+    tr_rng rng;
+    tr_rng_init(&rng, 2024, 5, 6);
+    int bad_pdf = 0;
+    for (int k = 0; k < N; ++k) {
+        float u1 = tr_rng_float(&rng), u2 = tr_rng_float(&rng);
+        tr_vec3 d;
+        float pdf;
+        tr_vec3 le = tr_env_sample(&v, u1, u2, &d, &pdf);
+        float st;
+        uint32_t t = tr_env_texel_of(&s.env, tr_env_to_local(&s.env, d), &st);
+        count[t] += 1;
+        tr_vec3 want = tr_env_radiance(&v, d);
+        if (!(fabsf(pdf - tr_env_pdf(&v, d)) <= 1e-4f * pdf) || le.x != want.x) {
+            ++bad_pdf;
+        }
+    }
+    CHECK(bad_pdf == 0, "%d samples disagree with tr_env_pdf / tr_env_radiance", bad_pdf);
+    double chi2 = 0.0, pool_e = 0.0, pool_o = 0.0;
+    int bins = 0;
+    for (uint32_t k = 0; k < n; ++k) {
+        double e = tr_env_weight(&v, k, k / w) / s.env.weight_sum * N;
+        if (e < 5.0) {
+            pool_e += e;
+            pool_o += count[k];
+            continue;
+        }
+        chi2 += (count[k] - e) * (count[k] - e) / e;
+        ++bins;
+    }
+    if (pool_e >= 5.0) {
+        chi2 += (pool_o - pool_e) * (pool_o - pool_e) / pool_e;
+        ++bins;
+    }
+    double crit = chi2_critical(bins - 1);
+    CHECK(bins > 100 && chi2 < crit, "environment sampling: chi2 %.1f, %d bins (critical %.1f)",
+          chi2, bins, crit);
+    tr_scene_free(&s);
+}
+
+#define NSIGMA_ENV 5.0
+
+static void test_env_furnace(void) {
+    tr_scene s = {0};
+    tr_scene_init(&s);
+    tr_error err;
+    const float albedo = 0.6f;
+    const tr_vec3 L = v3(0.5f, 1.0f, 2.0f);
+    uint32_t mat = add_mat(&s, tr_material_diffuse(v3s(albedo)));
+    tr_shape_desc d = tr_shape_desc_default(TR_SHAPE_ICOSPHERE_SMOOTH);
+    d.material = mat;
+    d.subdivisions = 3;
+    CHECK(tr_scene_add_shape(&s, &d, &err) == TR_OK, "%s", err.msg);
+    CHECK(tr_scene_set_environment(&s, L, 1.0f, 0.0f, NULL, 0, 0, &err) == TR_OK, "%s", err.msg);
+    CHECK(tr_scene_commit(&s, TR_ACCEL_TYPE_BVH, &err) == TR_OK, "%s", err.msg);
+    tr_camera cam;
+    CHECK(tr_camera_make(&cam, v3(0.0f, 0.0f, 3.0f), v3(0.0f, 0.0f, -1.0f), v3(0.0f, 1.0f, 0.0f),
+                         45.0f, 1e-3f, 1e3f, 32, 32, &err) == TR_OK,
+          "%s", err.msg);
+    tr_film film;
+    CHECK(tr_film_init(&film, 32, 32, &err) == TR_OK, "%s", err.msg);
+    tr_render_config cfg = tr_render_config_default();
+    cfg.max_depth = 64; /* a convex sphere: every path leaves after one bounce anyway */
+    for (uint32_t smp = 0; smp < 16; ++smp) {
+        CHECK(tr_render_frame(&s, &cam, &cfg, &film, smp, NULL, &err) == TR_OK, "%s", err.msg);
+    }
+    /* The centre 8x8 pixels see only the sphere, the corners only the environment. The
+     * bound: 5 standard errors of the mean, from the spread of the 64 pixels' means. */
+    double m[3] = {0, 0, 0}, m2[3] = {0, 0, 0};
+    for (uint32_t y = 12; y < 20; ++y) {
+        for (uint32_t x = 12; x < 20; ++x) {
+            tr_vec3 px = tr_film_pixel(&film, x, y);
+            const double c[3] = {px.x, px.y, px.z};
+            for (int k = 0; k < 3; ++k) {
+                m[k] += c[k] / 64;
+                m2[k] += c[k] * c[k] / 64;
+            }
+        }
+    }
+    const double want[3] = {albedo * L.x, albedo * L.y, albedo * L.z};
+    for (int k = 0; k < 3; ++k) {
+        double se = sqrt(fmax(0.0, m2[k] - m[k] * m[k]) / 63.0);
+        CHECK(fabs(m[k] - want[k]) <= NSIGMA_ENV * se + 1e-6,
+              "furnace channel %d: %.4f vs %.4f (se %.4f)", k, m[k], want[k], se);
+        CHECK(se < 0.05 * want[k], "furnace channel %d: se %.4f (the test must be tight)", k, se);
+    }
+    tr_vec3 corner = tr_film_pixel(&film, 0, 0);
+    CHECK(corner.x == L.x && corner.y == L.y && corner.z == L.z, "background is L");
+    printf("env furnace: %.4f %.4f %.4f vs %.4f %.4f %.4f\n", m[0], m[1], m[2], want[0], want[1],
+           want[2]);
+    tr_film_free(&film);
+    tr_scene_free(&s);
+}
+
 int main(void) {
     test_smooth_icosphere();
     test_texture_lookup();
     test_textured_quad();
     test_texture_files();
+    test_env_sampling();
+    test_env_furnace();
     return check_finish("test_surface");
 }

@@ -64,4 +64,18 @@ typedef struct tr_material_ext {
 } tr_material_ext;
 TR_STATIC_ASSERT(sizeof(tr_material_ext) == 48, "tr_material_ext layout");
 
+/* The environment: radiance arriving from infinitely far along directions no surface
+ * blocks, a constant colour or an equirectangular map (width x height RGB floats in
+ * env_texels, row 0 at +y, column 0 at -z turning towards +x... see envmap.h), times
+ * color * strength, turned by `rotation` about +y. The scene holds 0 or 1. 40 bytes. */
+typedef struct tr_env {
+    tr_vec3 color;
+    float strength;
+    float rot_cos, rot_sin; /* the rotation about +y */
+    uint32_t width, height; /* 0 x 0: constant */
+    float weight_sum;       /* sum of the sampling weights (envmap.h) over all texels */
+    uint32_t pad;
+} tr_env;
+TR_STATIC_ASSERT(sizeof(tr_env) == 40, "tr_env layout");
+
 #endif

@@ -14,6 +14,7 @@
 
 #include "bsdf.h"
 #include "compat.h"
+#include "envmap.h"
 #include "film.h"
 #include "light.h"
 #include "material.h"
@@ -65,6 +66,12 @@ TR_FN tr_vec3 tr_trace_pt(const tr_scene_view *s, tr_ray ray, int max_depth, tr_
         tr_hit hit;
         *rays += 1;
         if (!tr_intersect_scene(s, &ray, &hit)) {
+            /* issue 14: a ray leaving the scene sees the environment (BSDF strategy). */
+            if (s->env_count > 0u) {
+                tr_vec3 le = tr_env_radiance(s, ray.dir);
+                float w = prev_delta ? 1.0f : tr_mis_power(prev_pdf, tr_env_pdf(s, ray.dir));
+                radiance = v3_add(radiance, v3_scale(v3_mul(throughput, le), w));
+            }
             break;
         }
         TR_CONST_GLOBAL tr_triangle *tri = &s->triangles[hit.triangle];
@@ -124,6 +131,26 @@ TR_FN tr_vec3 tr_trace_pt(const tr_scene_view *s, tr_ray ray, int max_depth, tr_
                         radiance = v3_add(radiance, v3_scale(v3_mul(v3_mul(throughput, f), le_l),
                                                              cos_i * w / pl));
                     }
+                }
+            }
+        }
+
+        /* issue 14: next-event estimation towards the environment, MIS against the BSDF. */
+        if (!tr_bsdf_is_delta(&m) && s->env_count > 0u) {
+            float eu1 = tr_rng_float(rng);
+            float eu2 = tr_rng_float(rng);
+            tr_vec3 wi;
+            float pe;
+            tr_vec3 le_e = tr_env_sample(s, eu1, eu2, &wi, &pe);
+            tr_vec3 f = pe > 0.0f ? tr_bsdf_eval(&m, wo, wi) : v3s(0.0f);
+            if (!tr_v3_is_zero(le_e) && !tr_v3_is_zero(f)) {
+                tr_ray shadow = tr_ray_make(tr_surface_origin(&m, p, wi), wi, 0.0f, TR_INFINITY);
+                *rays += 1;
+                if (!tr_occluded_masked(s, &shadow)) {
+                    float w = tr_mis_power(pe, tr_bsdf_pdf(&m, wo, wi));
+                    float c = tr_fabsf(v3_dot(wi, m.ns));
+                    radiance =
+                        v3_add(radiance, v3_scale(v3_mul(v3_mul(throughput, f), le_e), c * w / pe));
                 }
             }
         }

@@ -1150,6 +1150,56 @@ static int parse_meshes(jctx *c, const cJSON *meshes) {
     return TR_OK;
 }
 
+/* "environment": {"color": [r, g, b], "map": "sky.hdr", "strength": s, "rotation": deg}:
+ * a light from every direction that leaves the scene (issue 14). */
+static int parse_environment(jctx *c, const cJSON *env) {
+    static const char *const keys[] = {"color", "map", "strength", "rotation"};
+    const char *path = "environment";
+    if (expect_object(c, env, path) != TR_OK ||
+        check_keys(c, env, path, keys, sizeof keys / sizeof keys[0]) != TR_OK) {
+        return TR_ERR;
+    }
+    tr_vec3 color = v3s(1.0f);
+    int has_color = 0, has_strength = 0, has_rot = 0;
+    double strength = 1.0, rot = 0.0;
+    const char *map = NULL;
+    if (get_vec3(c, env, path, "color", 0, 0, &color, &has_color) != TR_OK ||
+        get_number(c, env, path, "strength", 0.0, 1e7, &strength, &has_strength) != TR_OK ||
+        get_number(c, env, path, "rotation", -360.0, 360.0, &rot, &has_rot) != TR_OK ||
+        get_string(c, env, path, "map", 0, &map) != TR_OK) {
+        return TR_ERR;
+    }
+    if (color.x < 0.0f || color.y < 0.0f || color.z < 0.0f || color.x > 1e7f || color.y > 1e7f ||
+        color.z > 1e7f) {
+        return jerr(c, "environment.color", "expected three numbers in [0, 1e+07]");
+    }
+    if (!has_color && !map) {
+        return jerr(c, path, "expected 'color' or 'map'");
+    }
+    const float rad = (float)(rot * 3.14159265358979323846 / 180.0);
+    tr_error e;
+    if (map && c->opt->load_meshes) {
+        if (!map[0]) {
+            return jerr(c, "environment.map", "expected a file name, got an empty string");
+        }
+        char full[8192];
+        if (map[0] == '/' || !c->dir[0]) {
+            snprintf(full, sizeof full, "%s", map);
+        } else {
+            snprintf(full, sizeof full, "%s/%s", c->dir, map);
+        }
+        if (tr_scene_load_environment(c->scene, full, color, (float)strength, rad, &e) != TR_OK) {
+            return jerr_from(c, "environment.map", &e);
+        }
+    } else if (tr_scene_set_environment(c->scene, color, (float)strength, rad, NULL, 0, 0, &e) !=
+               TR_OK) {
+        return jerr_from(c, path, &e);
+    }
+    /* A light: the scene needs no emitter. */
+    c->info->allow_no_emitter = 1;
+    return TR_OK;
+}
+
 /* Line and column (both from 1) of byte offset `off` in text. */
 static void line_col(const char *text, size_t off, unsigned *line, unsigned *col) {
     *line = 1;
@@ -1166,7 +1216,7 @@ static void line_col(const char *text, size_t off, unsigned *line, unsigned *col
 
 static int build(jctx *c, const cJSON *root) {
     static const char *const keys[] = {"version",   "description", "render", "camera",
-                                       "materials", "shapes",      "meshes"};
+                                       "materials", "shapes",      "meshes", "environment"};
     if (!cJSON_IsObject(root)) {
         return jerr(c, NULL, "expected a JSON object at the top level, got %s", type_name(root));
     }
@@ -1207,6 +1257,10 @@ static int build(jctx *c, const cJSON *root) {
     if (meshes && parse_meshes(c, meshes) != TR_OK) {
         return TR_ERR;
     }
+    const cJSON *env = cJSON_GetObjectItemCaseSensitive(root, "environment");
+    if (env && parse_environment(c, env) != TR_OK) {
+        return TR_ERR;
+    }
     tr_scene *s = c->scene;
     tr_scene_file *in = c->info;
     if (s->triangle_count == 0 && (c->opt->load_meshes || in->mesh_count == 0)) {
@@ -1236,7 +1290,7 @@ static int build(jctx *c, const cJSON *root) {
         }
     }
     free(used);
-    if (in->emissive_triangles == 0) {
+    if (in->emissive_triangles == 0 && s->env_count == 0) {
         warn(c, "the scene has no emitter, so its image would be black%s",
              in->allow_no_emitter ? " (allowed by render.allow_no_emitter)" : "");
     }

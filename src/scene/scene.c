@@ -69,6 +69,8 @@ void tr_scene_free(tr_scene *s) {
     free(s->textures);
     free(s->texels);
     free(s->material_exts);
+    free(s->env_texels);
+    free(s->env_cdf);
     tr_bvh_free(&s->bvh);
     tr_wbvh_free(&s->wbvh);
     tr_embree_free(&s->embree);
@@ -617,6 +619,12 @@ tr_scene_view tr_scene_view_of(const tr_scene *s) {
     v.texel_count = s->texel_count;
     v.material_exts = s->material_exts;
     v.material_ext_count = s->material_ext_count == s->material_count ? s->material_ext_count : 0;
+    v.env = &s->env;
+    v.env_count = s->env_count;
+    v.env_texels = s->env_texels;
+    v.env_texel_count = s->env_texel_count;
+    v.env_cdf = s->env_cdf;
+    v.env_cdf_count = s->env_cdf_count;
 #ifdef TR_SCENE_VIEW_EMBREE
     v.embree_scene = s->embree.scene;
 #endif

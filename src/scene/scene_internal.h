@@ -51,6 +51,13 @@ struct tr_scene {
     uint32_t texel_count, texel_capacity;
     tr_material_ext *material_exts;
     uint32_t material_ext_count, material_ext_capacity;
+    /* The environment light (src/scene/envmap.c): env_count 0 or 1. */
+    tr_env env;
+    uint32_t env_count;
+    float *env_texels; /* 3 per texel */
+    uint32_t env_texel_count;
+    float *env_cdf;
+    uint32_t env_cdf_count;
 };
 
 /* An empty scene (no allocation), for a tr_scene the caller owns (tr_scene_create does
@@ -89,6 +96,15 @@ int tr_scene_import_mesh_ex(tr_scene *s, const char *path, const tr_transform *t
                             int64_t material_override, uint32_t max_triangles,
                             tr_mesh_import_stats *stats, tr_import_warn_fn warn, void *warn_ctx,
                             tr_error *err);
+/* Sets the environment light (replacing any): radiance color * strength, times the
+ * width x height RGB map rgb (linear, top row first; NULL and 0 x 0 for a constant
+ * colour), turned by rotation radians about +y. Builds the map's sampling CDFs. */
+int tr_scene_set_environment(tr_scene *s, tr_vec3 color, float strength, float rotation,
+                             const float *rgb, uint32_t width, uint32_t height, tr_error *err);
+/* Loads an equirectangular map (Radiance .hdr, or any image stb_image reads) and sets
+ * it as the environment. */
+int tr_scene_load_environment(tr_scene *s, const char *path, tr_vec3 color, float strength,
+                              float rotation, tr_error *err);
 /* Restores the counts a failed import started from (everything is appended). */
 void tr_scene_truncate(tr_scene *s, uint32_t triangles, uint32_t shapes, uint32_t materials);
 
