@@ -1131,7 +1131,7 @@ static int parse_meshes(jctx *c, const cJSON *meshes) {
         tr_error e;
         struct mesh_warn_ctx wc = {c, i, rel};
         if (tr_scene_import_mesh_ex(c->scene, full, &tf, mat, c->budget - first, &st,
-                                    mesh_import_warn, &wc, &e) != TR_OK) {
+                                    mesh_import_warn, &wc, NULL, &e) != TR_OK) {
             return jerr_from(c, pp, &e);
         }
         c->info->mesh_parts += st.parts;

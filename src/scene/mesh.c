@@ -41,6 +41,7 @@ typedef struct import_ctx {
         int64_t index;
     } tex_cache[64];
     uint32_t tex_cached;
+    tr_import_extras *extras; /* the file's first camera, when asked for */
 } import_ctx;
 
 static void import_warn(const import_ctx *c, const char *fmt, ...)
@@ -446,6 +447,31 @@ static int walk(import_ctx *c, const struct aiNode *node, const struct aiMatrix4
                             NODE_DEPTH_LIMIT);
     }
     struct aiMatrix4x4 m = mat_mul(parent, &node->mTransformation);
+    /* issue 14: the first camera sits at the node of its name. */
+    if (c->extras && !c->extras->has_camera && c->ai->mNumCameras > 0 && c->ai->mCameras[0] &&
+        strcmp(c->ai->mCameras[0]->mName.data, node->mName.data) == 0) {
+        const struct aiCamera *cam = c->ai->mCameras[0];
+        const struct aiVector3D p = cam->mPosition, l = cam->mLookAt, u = cam->mUp;
+        tr_vec3 pos = v3(m.a1 * p.x + m.a2 * p.y + m.a3 * p.z + m.a4,
+                         m.b1 * p.x + m.b2 * p.y + m.b3 * p.z + m.b4,
+                         m.c1 * p.x + m.c2 * p.y + m.c3 * p.z + m.c4);
+        tr_vec3 dir = v3(m.a1 * l.x + m.a2 * l.y + m.a3 * l.z, m.b1 * l.x + m.b2 * l.y + m.b3 * l.z,
+                         m.c1 * l.x + m.c2 * l.y + m.c3 * l.z);
+        tr_vec3 up = v3(m.a1 * u.x + m.a2 * u.y + m.a3 * u.z, m.b1 * u.x + m.b2 * u.y + m.b3 * u.z,
+                        m.c1 * u.x + m.c2 * u.y + m.c3 * u.z);
+        tr_transform identity = {v3s(0.0f), v3s(0.0f), v3s(1.0f)};
+        const tr_transform *tf = c->tf ? c->tf : &identity;
+        /* Directions turn with the transform (its scale is uniform or irrelevant). */
+        tr_vec3 o = tr_transform_point(tf, v3s(0.0f));
+        c->extras->cam_pos = tr_transform_point(tf, pos);
+        c->extras->cam_dir = v3_normalize(v3_sub(tr_transform_point(tf, dir), o));
+        c->extras->cam_up = v3_normalize(v3_sub(tr_transform_point(tf, up), o));
+        c->extras->cam_hfov = cam->mHorizontalFOV;
+        c->extras->cam_aspect = cam->mAspect;
+        c->extras->has_camera = v3_is_finite(c->extras->cam_pos) &&
+                                v3_is_finite(c->extras->cam_dir) &&
+                                v3_is_finite(c->extras->cam_up) && isfinite(cam->mHorizontalFOV);
+    }
     for (unsigned int i = 0; i < node->mNumMeshes; ++i) {
         if (node->mMeshes[i] >= c->ai->mNumMeshes) {
             return tr_error_set(c->err, TR_STATUS_PARSE, "a node refers to mesh %u of %u",
@@ -480,13 +506,13 @@ int tr_scene_import_mesh(tr_scene *s, const char *path, const tr_transform *tf,
                          int64_t material_override, uint32_t max_triangles,
                          tr_mesh_import_stats *stats, tr_error *err) {
     return tr_scene_import_mesh_ex(s, path, tf, material_override, max_triangles, stats, NULL, NULL,
-                                   err);
+                                   NULL, err);
 }
 
 int tr_scene_import_mesh_ex(tr_scene *s, const char *path, const tr_transform *tf,
                             int64_t material_override, uint32_t max_triangles,
                             tr_mesh_import_stats *stats, tr_import_warn_fn warn, void *warn_ctx,
-                            tr_error *err) {
+                            tr_import_extras *extras, tr_error *err) {
     tr_mesh_import_stats local;
     tr_mesh_import_stats *st = stats ? stats : &local;
     memset(st, 0, sizeof *st);
@@ -536,6 +562,12 @@ int tr_scene_import_mesh_ex(tr_scene *s, const char *path, const tr_transform *t
     c.err = err;
     c.warn = warn;
     c.warn_ctx = warn_ctx;
+    c.extras = extras;
+    if (extras) {
+        memset(extras, 0, sizeof *extras);
+        extras->lights = ai->mNumLights;
+        extras->cameras = ai->mNumCameras;
+    }
     const char *slash = strrchr(path, '/');
     if (slash && (size_t)(slash - path) < sizeof c.dir) {
         memcpy(c.dir, path, (size_t)(slash - path));

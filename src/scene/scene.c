@@ -687,6 +687,22 @@ int tr_scene_triangle_normals(const tr_scene *s, uint32_t i, tr_vec3 out[3]) {
     return has;
 }
 
+uint32_t tr_scene_material_maps(const tr_scene *s, uint32_t i) {
+    if (i >= s->material_count || s->material_ext_count != s->material_count) {
+        return 0u;
+    }
+    const tr_material_ext *e = &s->material_exts[i];
+    return (e->base_tex != TR_NO_INDEX ? TR_MAP_BASE : 0u) |
+           (e->emission_tex != TR_NO_INDEX ? TR_MAP_EMISSION : 0u) |
+           (e->mr_tex != TR_NO_INDEX ? TR_MAP_METALLIC_ROUGHNESS : 0u) |
+           (e->normal_tex != TR_NO_INDEX ? TR_MAP_NORMAL : 0u) |
+           ((e->flags & TR_MATEXT_ALPHA_MASK) ? TR_MAP_CUTOUT : 0u);
+}
+
+uint32_t tr_scene_shape_triangle_count(const tr_scene *s, uint32_t shape) {
+    return shape < s->shape_count ? s->shapes[shape].count : 0u;
+}
+
 tr_aabb tr_scene_bounds(const tr_scene *s) {
     return tr_triangles_bounds(s->triangles, s->triangle_count);
 }

@@ -92,10 +92,20 @@ int tr_scene_add_texture(tr_scene *s, const uint32_t *rgba, uint32_t width, uint
 /* tr_scene_import_mesh with warnings: warn(ctx, message) for every texture or material
  * property the import drops or approximates (names the material), may be NULL. */
 typedef void (*tr_import_warn_fn)(void *ctx, const char *message);
+/* What else a model file holds: its first camera (placed by its node and tf) and how many
+ * cameras and lights it has. */
+typedef struct tr_import_extras {
+    int has_camera;
+    tr_vec3 cam_pos, cam_dir, cam_up;
+    float cam_hfov;   /* Assimp's mHorizontalFOV, radians (model.c: the whole angle) */
+    float cam_aspect; /* 0: not given */
+    uint32_t cameras, lights;
+} tr_import_extras;
 int tr_scene_import_mesh_ex(tr_scene *s, const char *path, const tr_transform *tf,
                             int64_t material_override, uint32_t max_triangles,
                             tr_mesh_import_stats *stats, tr_import_warn_fn warn, void *warn_ctx,
-                            tr_error *err);
+                            tr_import_extras *extras, tr_error *err);
+
 /* Sets the environment light (replacing any): radiance color * strength, times the
  * width x height RGB map rgb (linear, top row first; NULL and 0 x 0 for a constant
  * colour), turned by rotation radians about +y. Builds the map's sampling CDFs. */
