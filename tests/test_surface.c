@@ -15,6 +15,9 @@
  * 4. Image files: a PNG decodes to the texels it was written with (top row first, R in
  *    the low byte); a missing file, a truncated PNG, a 0x0 one, one declaring 10^5 x 10^5
  *    texels and a text file fail with a status code and add nothing.
+ * 4b. Normal maps: a constant map tilting the normal towards +X (+Y) of tangent space
+ *    turns the quad's shading normal towards the direction u (the image's up) grows in,
+ *    glTF's convention (+Y up in the image while v grows downwards).
  * 5. Environment light: directions drawn from an HDR map fall into its texels as the
  *    sampling weights say (chi-square, p = 1e-4), with the density tr_env_pdf gives, and
  *    that density integrates to 1 over the sphere (also turned about +y); a white furnace:
@@ -295,6 +298,54 @@ static void test_textured_quad(void) {
     tr_scene_free(&s);
 }
 
+/* The normal pass over a quad filling the image whose material has a constant normal
+ * map texel `texel` (RGBA8, R low); *n receives the centre pixel's normal. */
+static void normal_mapped(uint32_t texel, float n[3]) {
+    tr_scene s = {0};
+    tr_scene_init(&s);
+    tr_error err;
+    const uint32_t map[4] = {texel, texel, texel, texel};
+    uint32_t tex;
+    CHECK(tr_scene_add_texture(&s, map, 2, 2, 0u, &tex, &err) == TR_OK, "%s", err.msg);
+    uint32_t mat = add_mat(&s, tr_material_diffuse(v3s(0.5f)));
+    tr_material_ext ext = tr_material_ext_default();
+    ext.normal_tex = tex;
+    CHECK(tr_scene_set_material_ext(&s, mat, &ext, &err) == TR_OK, "%s", err.msg);
+    tr_camera cam;
+    CHECK(tr_camera_make(&cam, v3(0.0f, 0.0f, 1.0f), v3(0.0f, 0.0f, -1.0f), v3(0.0f, 1.0f, 0.0f),
+                         90.0f, 1e-3f, 1e3f, 8, 8, &err) == TR_OK,
+          "%s", err.msg);
+    /* UV (0, 0) at world (-1, 1): u grows towards +x, v towards -y; wound to face +z,
+     * the camera. */
+    const float pos[12] = {-1, 1, 0, 1, 1, 0, 1, -1, 0, -1, -1, 0};
+    const float uv[8] = {0, 0, 1, 0, 1, 1, 0, 1};
+    const uint32_t idx[6] = {0, 2, 1, 0, 3, 2};
+    CHECK(tr_scene_add_mesh_uv(&s, pos, 4, idx, 2, NULL, uv, mat, NULL, NULL, &err) == TR_OK, "%s",
+          err.msg);
+    CHECK(tr_scene_commit(&s, TR_ACCEL_TYPE_BVH, &err) == TR_OK, "%s", err.msg);
+    tr_film film;
+    CHECK(tr_film_init_passes(&film, 8, 8, TR_PASS_NORMAL, &err) == TR_OK, "%s", err.msg);
+    tr_render_config cfg = tr_render_config_default();
+    cfg.passes = TR_PASS_NORMAL;
+    cfg.max_depth = 1;
+    CHECK(tr_render_frame(&s, &cam, &cfg, &film, 0, NULL, &err) == TR_OK, "%s", err.msg);
+    CHECK(tr_film_pass_pixel(&film, TR_PASS_NORMAL, 4, 4, n, &err) == TR_OK, "%s", err.msg);
+    tr_film_free(&film);
+    tr_scene_free(&s);
+}
+
+static void test_normal_map(void) {
+    float n[3];
+    /* (0.6, 0, 0.8) encoded as (204, 128, 230): decodes to (0.6, 0.004, 0.804). */
+    normal_mapped(0xffe680ccu, n);
+    CHECK(fabs(n[0] - 0.6) < 0.02 && fabs(n[1]) < 0.02 && fabs(n[2] - 0.8) < 0.02,
+          "+X tilt: (%.3f, %.3f, %.3f), expected (0.6, 0, 0.8)", n[0], n[1], n[2]);
+    normal_mapped(0xffe6cc80u, n);
+    CHECK(fabs(n[0]) < 0.02 && fabs(n[1] - 0.6) < 0.02 && fabs(n[2] - 0.8) < 0.02,
+          "+Y tilt: (%.3f, %.3f, %.3f), expected (0, 0.6, 0.8) (+Y up in the image)", n[0], n[1],
+          n[2]);
+}
+
 #define TEXDATA TR_SOURCE_DIR "/tests/data/texture"
 
 static void test_texture_files(void) {
@@ -458,6 +509,7 @@ int main(void) {
     test_texture_lookup();
     test_textured_quad();
     test_texture_files();
+    test_normal_map();
     test_env_sampling();
     test_env_furnace();
     return check_finish("test_surface");
