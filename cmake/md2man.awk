@@ -96,13 +96,16 @@ function trim(s) {
     return s
 }
 
-# Splits a table row into cells[1..n]; returns n.
+# Splits a table row into cells[1..n]; returns n. An escaped pipe (\|) is a character of
+# its cell, not a separator.
 function cells_of(line, cells,    n, k, parts) {
     line = trim(line)
+    gsub(/\\\|/, "\001", line)
     sub(/^\|/, "", line)
     sub(/\|$/, "", line)
     n = split(line, parts, "|")
     for (k = 1; k <= n; k++) {
+        gsub(/\001/, "|", parts[k])
         cells[k] = trim(parts[k])
     }
     return n

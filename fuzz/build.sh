@@ -5,6 +5,7 @@
 #   fuzz_scene_json  the JSON scene loader; mesh files are not opened
 #   fuzz_mesh        the mesh import path: mesh.c and mesh_guard.c into Assimp
 #   fuzz_image       the image readers of `compare` (PNG and PFM)
+#   fuzz_texture     texture and environment-map decoding (stb_image, src/scene/texture.c)
 # The wide BVH's per-ISA traversals need per-file flags and are left out: without
 # TR_WBVH_HAVE_X86 the library has the scalar one alone.
 # Usage: fuzz/build.sh   (CC defaults to clang)
@@ -18,7 +19,7 @@ FLAGS="-std=c11 -g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recover
 SCENE="src/scene/json.c src/scene/scene.c src/scene/shape.c src/scene/camera.c
     src/scene/lights.c src/accel/bvh.c src/accel/wbvh.c src/accel/wbvh_scalar.c
     src/accel/embree.c src/util/error.c src/util/registry.c src/scene/material_registry.c
-    src/io/infile.c"
+    src/io/infile.c src/scene/texture.c src/scene/envmap.c"
 # shellcheck disable=SC2046,SC2086
 "$CC" $FLAGS $(pkg-config --cflags libcjson) fuzz/fuzz_scene_json.c $SCENE \
     $(pkg-config --libs libcjson) -lm -o "$OUT/fuzz_scene_json"
@@ -30,4 +31,6 @@ SCENE="src/scene/json.c src/scene/scene.c src/scene/shape.c src/scene/camera.c
 "$CC" $FLAGS $(pkg-config --cflags libpng) fuzz/fuzz_image.c src/io/image.c src/io/infile.c \
     src/io/outfile.c src/film/film.c src/post/tonemap.c src/util/error.c \
     $(pkg-config --libs libpng) -lm -o "$OUT/fuzz_image"
-echo "built $OUT/fuzz_scene_json $OUT/fuzz_mesh $OUT/fuzz_image"
+# shellcheck disable=SC2086
+"$CC" $FLAGS fuzz/fuzz_texture.c $SCENE $(pkg-config --libs libcjson) -lm -o "$OUT/fuzz_texture"
+echo "built $OUT/fuzz_scene_json $OUT/fuzz_mesh $OUT/fuzz_image $OUT/fuzz_texture"

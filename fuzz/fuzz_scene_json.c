@@ -21,6 +21,14 @@ int tr_scene_import_mesh(tr_scene *s, const char *path, const tr_transform *tf,
     (void)err;
     abort();
 }
+int tr_scene_import_mesh_ex(tr_scene *s, const char *path, const tr_transform *tf,
+                            int64_t material_override, uint32_t max_triangles,
+                            tr_mesh_import_stats *stats, tr_import_warn_fn warn, void *warn_ctx,
+                            tr_import_extras *extras, tr_error *err) {
+    (void)s, (void)path, (void)tf, (void)material_override, (void)max_triangles, (void)stats;
+    (void)warn, (void)warn_ctx, (void)extras, (void)err;
+    abort();
+}
 
 /* The BVH code times its build with the CPU backend's clock, which is not linked. */
 double tr_time_now(void);

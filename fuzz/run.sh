@@ -1,10 +1,10 @@
 #!/bin/sh
-# Builds and runs the fuzzers for a bounded time in all (default 60 s): half of it for the
-# scene loader (seeded with scenes/*.json and tests/data/**/*.json), a quarter each for
-# the mesh import path (tests/data/mesh and the hostile models) and the image readers
-# (the hostile images). Exits non-zero on any crash, leak, timeout, sanitizer report or
-# memory use over the limit (libFuzzer stops and leaves crash-* / oom-* files in
-# build/fuzz/).
+# Builds and runs the fuzzers for a bounded time in all (default 60 s): two fifths of it
+# for the scene loader (seeded with scenes/*.json and tests/data/**/*.json), a fifth each
+# for the mesh import path (tests/data/mesh and the hostile models), the image readers
+# (the hostile images) and texture decoding (tests/data/texture). Exits non-zero on any
+# crash, leak, timeout, sanitizer report or memory use over the limit (libFuzzer stops
+# and leaves crash-* / oom-* files in build/fuzz/).
 # Usage: fuzz/run.sh [SECONDS]
 set -eu
 cd "$(dirname "$0")/.."
@@ -36,12 +36,17 @@ for f in $(find tests/data/hostile/images -type f); do
     *.png) seed "$f" 1 "$OUT/corpus_image" ;;
     esac
 done
+rm -rf "$OUT/corpus_texture"
+mkdir -p "$OUT/corpus_texture"
+cp tests/data/texture/*.png "$OUT/corpus_texture/"
 cd "$OUT"
-./fuzz_scene_json -max_total_time=$((SECONDS_LIMIT / 2)) -print_final_stats=1 -max_len=16384 \
+./fuzz_scene_json -max_total_time=$((SECONDS_LIMIT * 2 / 5)) -print_final_stats=1 -max_len=16384 \
     -timeout=10 -rss_limit_mb=2048 -dict=../../fuzz/scene.dict corpus
 # Assimp's own leak on some hostile glTF files (tests/lsan-assimp.supp) is not ours.
 LSAN_OPTIONS=suppressions=../../tests/lsan-assimp.supp:print_suppressions=0 \
-    ./fuzz_mesh -max_total_time=$((SECONDS_LIMIT / 4)) -print_final_stats=1 -max_len=65536 \
+    ./fuzz_mesh -max_total_time=$((SECONDS_LIMIT / 5)) -print_final_stats=1 -max_len=65536 \
     -timeout=10 -rss_limit_mb=2048 corpus_mesh
-./fuzz_image -max_total_time=$((SECONDS_LIMIT / 4)) -print_final_stats=1 -max_len=65536 \
+./fuzz_image -max_total_time=$((SECONDS_LIMIT / 5)) -print_final_stats=1 -max_len=65536 \
     -timeout=10 -rss_limit_mb=2048 corpus_image
+./fuzz_texture -max_total_time=$((SECONDS_LIMIT / 5)) -print_final_stats=1 -max_len=65536 \
+    -timeout=10 -rss_limit_mb=2048 corpus_texture

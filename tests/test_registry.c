@@ -32,7 +32,7 @@ static void round_trips(void) {
     static const char *const unknown[] = {"", "PT", "Naive", "bvh3", "glas", "pt ", "emitters"};
     size_t n;
     const char *const *names = tr_material_type_names(&n);
-    CHECK(n == 4, "%zu material types", n);
+    CHECK(n == 5, "%zu material types", n);
     names_unique(names, n, "material types");
     for (size_t i = 0; i < n; ++i) {
         int t = tr_material_type_from_name(names[i]);
@@ -49,13 +49,14 @@ static void round_trips(void) {
     /* The thesis's numbering. */
     CHECK(tr_material_type_from_name("emitter") == 1 &&
               tr_material_type_from_name("diffuse") == 2 &&
-              tr_material_type_from_name("glass") == 3 && tr_material_type_from_name("glossy") == 4,
+              tr_material_type_from_name("glass") == 3 && tr_material_type_from_name("glossy") == 4 &&
+              tr_material_type_from_name("principled") == 5,
           "material numbers");
     for (uint32_t t = 0; t < 8; ++t) {
         tr_material m = tr_material_default(t);
         tr_error err;
         int known = tr_material_type_name(t) != NULL;
-        CHECK((tr_material_check(&m, &err) == TR_OK) == known && known == (t >= 1 && t <= 4),
+        CHECK((tr_material_check(&m, &err) == TR_OK) == known && known == (t >= 1 && t <= 5),
               "type %u: known %d", t, known);
     }
 

@@ -2,6 +2,7 @@
 #include "cli.h"
 #include "devices.h"
 #include "trac0r/registry.h"
+#include "trac0r/scene_file.h"
 
 #include <errno.h>
 #include <stdio.h>
@@ -18,7 +19,12 @@ static const char help_before[] =
     "                       as perfect mirrors), builtin:cornell-diffuse (every object\n"
     "                       white diffuse), builtin:cornell-ico-N, or a scene file\n"
     "                       (docs/scene-format.md) whose render defaults apply to the\n"
-    "                       options not given here\n"
+    "                       options not given here, or a model file in any format\n"
+    "                       Assimp reads (.glb, .gltf, .obj, .dae, .fbx, .ply, ...): a\n"
+    "                       scene is built around it (its camera, else one framing it;\n"
+    "                       a white environment light)\n"
+    "  --up y|z             a model file's up axis (default y; z stands z-up models up)\n"
+    "  --scale S            a model file's scale, 1e-6..1e6 (default 1)\n"
     "  --allow-dark         render a scene file that has no emitter\n"
     "  --width W            image width in pixels, 1..16384 (default 800)\n"
     "  --height H           image height in pixels, 1..16384 (default 600);\n"
@@ -56,6 +62,8 @@ void cli_accel_list(char *buf, size_t size) {
 
 void cli_common_default(cli_common *c) {
     c->scene = "builtin:cornell";
+    c->model_scale = 1.0f;
+    c->up_z = 0;
     c->width = 800;
     c->height = 600;
     c->max_depth = TR_MAX_DEPTH_DEFAULT;
@@ -233,6 +241,19 @@ int cli_common_option(cli_args *a, cli_common *c) {
         c->allow_dark = 1;
         return CLI_OK;
     }
+    if (cli_is(a, "--up")) {
+        if (cli_value(a) != CLI_OK) {
+            return CLI_USAGE;
+        }
+        if (strcmp(a->value, "y") != 0 && strcmp(a->value, "z") != 0) {
+            return cli_error(a, "--up: expected y or z, got '%s'", a->value);
+        }
+        c->up_z = a->value[0] == 'z';
+        return CLI_OK;
+    }
+    if (cli_is(a, "--scale")) {
+        return cli_parse_float(a, 1e-6f, 1e6f, &c->model_scale);
+    }
     if (cli_is(a, "--width")) {
         c->given |= CLI_GIVEN_WIDTH;
         return cli_parse_u32(a, 1, TR_FILM_MAX_SIDE, &c->width);
@@ -328,7 +349,13 @@ int cli_load_scene_file(const cli_args *a, cli_common *c, tr_scene *scene, tr_sc
         return cli_load_scene(a, c, scene);
     }
     tr_error err;
-    if (tr_scene_file_load(scene, c->scene, NULL, file, &err) != TR_OK) {
+    if (tr_scene_path_is_model(c->scene)) {
+        /* issue 14: a model file, with a scene built around it. */
+        tr_model_options mo = {c->up_z, c->model_scale, c->width, c->height};
+        if (tr_scene_model_load(scene, c->scene, &mo, file, &err) != TR_OK) {
+            return cli_error(a, "%s", err.msg);
+        }
+    } else if (tr_scene_file_load(scene, c->scene, NULL, file, &err) != TR_OK) {
         return cli_error(a, "%s", err.msg);
     }
     int rc = CLI_OK;

@@ -5,14 +5,18 @@
 #include "cli.h"
 #include "commands.h"
 #include "devices.h"
+#include "trac0r/registry.h"
+#include "trac0r/scene_file.h"
 
 static void info_help(void) {
     printf("Usage: trac0r info SCENE [options]\n"
            "       trac0r info --devices\n"
            "\n"
-           "Loads a scene file (docs/scene-format.md) or a built-in scene and prints its\n"
-           "triangle, shape, mesh, material and emitter counts, its bounds, its render\n"
-           "defaults and any warnings. Nothing is rendered.\n"
+           "Loads a scene file (docs/scene-format.md), a model file (any format Assimp\n"
+           "reads, with a scene built around it as 'trac0r render' does) or a built-in\n"
+           "scene and prints its triangle, shape, mesh, material and emitter counts, its\n"
+           "bounds, each shape's or mesh part's bounds, the material each maps to (type and\n"
+           "maps), its render defaults and any warnings. Nothing is rendered.\n"
            "\n"
            "With --devices: lists the OpenCL platforms and devices found, numbered as\n"
            "--device opencl:N takes them: name, platform, vendor, type, OpenCL version,\n"
@@ -20,6 +24,8 @@ static void info_help(void) {
            "\n"
            "Options:\n"
            "  --devices            list the OpenCL devices instead of describing a scene\n"
+           "  --up y|z             a model file's up axis (default y)\n"
+           "  --scale S            a model file's scale (default 1)\n"
            "  -h, --help           show this help\n"
            "\n"
            "Exit status: 0 when the scene loads, 2 when it does not (one line naming the\n"
@@ -31,12 +37,18 @@ int cmd_info(int argc, char **argv) {
     cli_args a = {.cmd = "info", .argc = argc, .argv = argv, .i = 0};
     const char *path = NULL;
     int devices = 0;
+    cli_common mc; /* --up, --scale for model files */
+    cli_common_default(&mc);
     while (cli_next(&a)) {
         if (cli_is(&a, "-h") || cli_is(&a, "--help")) {
             info_help();
             return CLI_OK;
         } else if (cli_is(&a, "--devices")) {
             devices = 1;
+        } else if (cli_is(&a, "--up") || cli_is(&a, "--scale")) {
+            if (cli_common_option(&a, &mc) != CLI_OK) {
+                return CLI_USAGE;
+            }
         } else if (a.opt[0] != '-' && !path) {
             path = a.opt;
         } else {
@@ -77,6 +89,12 @@ int cmd_info(int argc, char **argv) {
         for (uint32_t i = 0; i < tr_scene_material_count(s); ++i) {
             f.emitter_materials += tr_scene_material(s, i).type == TR_MATERIAL_EMITTER;
         }
+    } else if (tr_scene_path_is_model(path)) {
+        tr_model_options mo = {mc.up_z, mc.model_scale, 0, 0};
+        if (tr_scene_model_load(s, path, &mo, &f, &err) != TR_OK) {
+            tr_scene_destroy(s);
+            return cli_error(&a, "%s", err.msg);
+        }
     } else if (tr_scene_file_load(s, path, NULL, &f, &err) != TR_OK) {
         tr_scene_destroy(s);
         return cli_error(&a, "%s", err.msg);
@@ -100,6 +118,33 @@ int cmd_info(int argc, char **argv) {
         with_normals += (uint32_t)tr_scene_triangle_normals(s, i, n);
     }
     printf("normals:    %u triangles with vertex normals\n", with_normals);
+    /* Per shape or mesh part: its triangles, its material and its bounds. */
+    const uint32_t shown_max = 32, ns = tr_scene_shape_count(s);
+    for (uint32_t i = 0; i < ns && i < shown_max; ++i) {
+        tr_aabb b = tr_scene_shape_box(s, i);
+        uint32_t first = 0;
+        for (uint32_t k = 0; k < i; ++k) {
+            first += tr_scene_shape_triangle_count(s, k);
+        }
+        printf("part %-5u  %u triangles, material %u, bounds (%g, %g, %g) .. (%g, %g, %g)\n", i,
+               tr_scene_shape_triangle_count(s, i), tr_scene_triangle(s, first).material,
+               (double)b.min.x, (double)b.min.y, (double)b.min.z, (double)b.max.x, (double)b.max.y,
+               (double)b.max.z);
+    }
+    if (ns > shown_max) {
+        printf("part ...    %u more\n", ns - shown_max);
+    }
+    for (uint32_t i = 0; i < tr_scene_material_count(s) && i < shown_max; ++i) {
+        tr_material m = tr_scene_material(s, i);
+        uint32_t maps = tr_scene_material_maps(s, i);
+        printf("material %-3u %s, colour (%.3g, %.3g, %.3g)%s%s%s%s%s%s\n", i,
+               tr_material_type_name(m.type) ? tr_material_type_name(m.type) : "?",
+               (double)m.color.x, (double)m.color.y, (double)m.color.z, maps ? ", maps:" : "",
+               maps & TR_MAP_BASE ? " base" : "",
+               maps & TR_MAP_METALLIC_ROUGHNESS ? " metallic-roughness" : "",
+               maps & TR_MAP_NORMAL ? " normal" : "", maps & TR_MAP_EMISSION ? " emission" : "",
+               maps & TR_MAP_CUTOUT ? " cut-out" : "");
+    }
     if (!builtin) {
         cli_common d; /* the integrator the command line defaults to */
         cli_common_default(&d);

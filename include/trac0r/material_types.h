@@ -27,7 +27,8 @@
       TR_MATERIAL_KEY_TWO_SIDED)                                                             \
     X(DIFFUSE, 2, "diffuse", TR_MATERIAL_KEY_COLOR, 0u)                                      \
     X(GLASS,   3, "glass",   TR_MATERIAL_KEY_COLOR | TR_MATERIAL_KEY_IOR, 0u)                \
-    X(GLOSSY,  4, "glossy",  TR_MATERIAL_KEY_COLOR | TR_MATERIAL_KEY_ROUGHNESS, 0u)
+    X(GLOSSY,  4, "glossy",  TR_MATERIAL_KEY_COLOR | TR_MATERIAL_KEY_ROUGHNESS, 0u)          \
+    X(PRINCIPLED, 5, "principled", TR_MATERIAL_KEY_COLOR, TR_MATERIAL_KEY_ROUGHNESS)
 /* clang-format on */
 
 #define TR_MATERIAL_ENUM_ROW(id, value, name, required, optional) TR_MATERIAL_##id = value,

@@ -33,9 +33,10 @@
 #define TR_ICOSPHERE_MAX_SUBDIVISIONS 9
 
 typedef enum tr_shape_type {
-    TR_SHAPE_PLANE = 1,     /* unit square in the xz plane, normal +y */
-    TR_SHAPE_BOX = 2,       /* unit cube centred on the origin, normals outward */
-    TR_SHAPE_ICOSPHERE = 3, /* unit sphere from a subdivided icosahedron */
+    TR_SHAPE_PLANE = 1,            /* unit square in the xz plane, normal +y */
+    TR_SHAPE_BOX = 2,              /* unit cube centred on the origin, normals outward */
+    TR_SHAPE_ICOSPHERE = 3,        /* unit sphere from a subdivided icosahedron */
+    TR_SHAPE_ICOSPHERE_SMOOTH = 4, /* the same, shaded with the sphere's normals at its vertices */
 } tr_shape_type;
 
 /* Where a shape's unit geometry goes: scaled, then rotated about x, then y, then z
@@ -150,6 +151,16 @@ tr_aabb tr_scene_shape_box(const tr_scene *s, uint32_t shape);
 /* The vertex normals an imported mesh gave triangle i into out[0..2]; returns 1 when it
  * has them, 0 (and zeros) when it has none. */
 int tr_scene_triangle_normals(const tr_scene *s, uint32_t i, tr_vec3 out[3]);
+/* The maps material i has (issue 14: textures from a scene file or a model's import
+ * table), as TR_MAP_* bits; 0 for none or an index out of range. */
+#define TR_MAP_BASE 1u
+#define TR_MAP_EMISSION 2u
+#define TR_MAP_METALLIC_ROUGHNESS 4u
+#define TR_MAP_NORMAL 8u
+#define TR_MAP_CUTOUT 16u /* alpha cut-out of the base map */
+uint32_t tr_scene_material_maps(const tr_scene *s, uint32_t i);
+/* Triangles of shape i (a shape, or one part of an imported mesh); 0 out of range. */
+uint32_t tr_scene_shape_triangle_count(const tr_scene *s, uint32_t shape);
 /* The bounding box of every triangle (min = +inf, max = -inf for an empty scene). */
 tr_aabb tr_scene_bounds(const tr_scene *s);
 

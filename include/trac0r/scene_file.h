@@ -89,4 +89,21 @@ int tr_scene_import_mesh(tr_scene *s, const char *path, const tr_transform *tf,
                          int64_t material_override, uint32_t max_triangles,
                          tr_mesh_import_stats *stats, tr_error *err);
 
+/* A scene built around one model file (`trac0r render model.glb`): the model, turned so
+ * that up_z models stand up (+z becomes +y) and scaled by `scale`; the file's first camera
+ * if it has one, else one framing the model's bounding sphere (40 degree vertical field of
+ * view, right-handed); a constant white environment light of radiance 1 (lights in the file
+ * are not imported: a warning counts them). info (may be NULL) gets the counts, bounds,
+ * warnings (the import table's, naming materials) and render defaults. */
+typedef struct tr_model_options {
+    int up_z;
+    float scale;            /* > 0 */
+    uint32_t width, height; /* the camera's image size; 0 for 800 x 600 */
+} tr_model_options;
+int tr_scene_model_load(tr_scene *s, const char *path, const tr_model_options *opt,
+                        tr_scene_file *info, tr_error *err);
+/* Whether a scene name is a model file for tr_scene_model_load: a path (with a '/' or a
+ * '.') that is not builtin:NAME and does not end in .json. */
+int tr_scene_path_is_model(const char *path);
+
 #endif

@@ -18,6 +18,7 @@
  *            alpha = tr_ggx_alpha(roughness), see docs/integrators.md.
  *   glass    smooth dielectric (delta): exact Fresnel, total internal reflection,
  *            the colour as a filter on both lobes (as the naive integrator does).
+ *   principled  glTF metallic-roughness: diffuse base + GGX layer (bsdf_principled.h).
  *   emitter  emits only: its BSDF is black.
  */
 #ifndef TR_KERNEL_BSDF_H
@@ -138,6 +139,9 @@ TR_FN tr_vec3 tr_ggx_sample_vndf(float alpha, tr_vec3 v, float u1, float u2) {
     return v3_normalize(v3(alpha * nh.x, alpha * nh.y, tr_fmaxf(0.0f, nh.z)));
 }
 
+/* issue 14: the principled material, built on the GGX helpers above. */
+#include "bsdf_principled.h"
+
 /* BSDF value f(wo, wi) (without the cosine). Zero for delta lobes and emitters. */
 TR_FN tr_vec3 tr_bsdf_eval(const tr_bsdf_params *m, tr_vec3 wo, tr_vec3 wi) {
     tr_vec3 nf = tr_bsdf_facing(m->ns, wo);
@@ -152,6 +156,8 @@ TR_FN tr_vec3 tr_bsdf_eval(const tr_bsdf_params *m, tr_vec3 wo, tr_vec3 wi) {
             return v3s(0.0f);
         }
         return tr_ggx_eval(m, nf, wo, wi);
+    case TR_MATERIAL_PRINCIPLED:
+        return tr_principled_eval(m, nf, wo, wi);
     default:
         return v3s(0.0f);
     }
@@ -170,6 +176,8 @@ TR_FN float tr_bsdf_pdf(const tr_bsdf_params *m, tr_vec3 wo, tr_vec3 wi) {
             return 0.0f;
         }
         return tr_ggx_pdf(m, nf, wo, wi);
+    case TR_MATERIAL_PRINCIPLED:
+        return tr_principled_pdf(m, nf, wo, wi);
     default:
         return 0.0f;
     }
@@ -228,6 +236,8 @@ TR_FN int tr_bsdf_sample(const tr_bsdf_params *m, tr_vec3 wo, float ulobe, float
         tr_glass_sample(v3_neg(wo), m->ns, m->ior, ulobe, &s->wi, &s->pdf);
         return 1;
     }
+    case TR_MATERIAL_PRINCIPLED:
+        return tr_principled_sample(m, nf, wo, ulobe, u1, u2, s);
     default:
         return 0;
     }
@@ -237,6 +247,13 @@ TR_FN int tr_bsdf_sample(const tr_bsdf_params *m, tr_vec3 wo, float ulobe, float
  * the geometric normal m->ng points to) unless TR_MATERIAL_TWO_SIDED is set. */
 TR_FN tr_vec3 tr_emitted(const tr_bsdf_params *m, tr_vec3 w) {
     if (!(m->emittance > 0.0f)) {
+        /* issue 14: emission of a non-emitter material (principled, glTF emissive). */
+        if (m->emission.x > 0.0f || m->emission.y > 0.0f || m->emission.z > 0.0f) {
+            if ((m->flags & TR_MATERIAL_TWO_SIDED) == 0u && v3_dot(w, m->ng) <= 0.0f) {
+                return v3s(0.0f);
+            }
+            return m->emission;
+        }
         return v3s(0.0f);
     }
     if ((m->flags & TR_MATERIAL_TWO_SIDED) == 0u && v3_dot(w, m->ng) <= 0.0f) {

@@ -14,6 +14,7 @@
 
 #include "bsdf.h"
 #include "compat.h"
+#include "envmap.h"
 #include "film.h"
 #include "light.h"
 #include "material.h"
@@ -49,7 +50,7 @@ TR_FN int tr_v3_is_zero(tr_vec3 a) {
  * is the first); Russian roulette on the throughput's largest component starts after
  * TR_PT_RR_START segments. Every random decision reads its own dimension of `smp`
  * (sampler.h): at segment seg, the light (selection and point, one pair), BSDF lobe,
- * BSDF direction and roulette each have a dimension pair. *rays counts closest-hit and shadow
+ * BSDF direction, roulette and the environment light each have a dimension pair. *rays counts closest-hit and shadow
  * queries; `surface` (may be null) receives the first hit that is not a delta surface, for the
  * passes. */
 TR_FN tr_vec3 tr_trace_pt(const tr_scene_view *s, tr_ray ray, int max_depth, const tr_sampler *smp,
@@ -59,10 +60,17 @@ TR_FN tr_vec3 tr_trace_pt(const tr_scene_view *s, tr_ray ray, int max_depth, con
     float prev_pdf = 0.0f;
     tr_vec3 prev_p = ray.origin; /* the vertex the last BSDF sample left, for MIS */
     int prev_delta = 1;          /* the camera ray: no light strategy competes */
+    int holes = 0;               /* alpha cut-outs passed through */
     for (int seg = 1; seg <= max_depth; ++seg) {
         tr_hit hit;
         *rays += 1;
         if (!tr_intersect_scene(s, &ray, &hit)) {
+            /* A ray leaving the scene sees the environment (BSDF strategy). */
+            if (s->env_count > 0u) {
+                tr_vec3 le = tr_env_radiance(s, ray.dir);
+                float w = prev_delta ? 1.0f : tr_mis_power(prev_pdf, tr_env_pdf(s, ray.dir));
+                radiance = v3_add(radiance, v3_scale(v3_mul(throughput, le), w));
+            }
             break;
         }
         TR_CONST_GLOBAL tr_triangle *tri = &s->triangles[hit.triangle];
@@ -70,6 +78,14 @@ TR_FN tr_vec3 tr_trace_pt(const tr_scene_view *s, tr_ray ray, int max_depth, con
         tr_vec3 wo = v3_neg(ray.dir);
         tr_vec3 p = v3_madd(ray.origin, ray.dir, hit.t);
         tr_bsdf_params m = tr_material_eval(s, hit.triangle, hit.u, hit.v, p, n, ray.dir);
+        /* An alpha cut-out is no surface: the ray goes on as it was, and the segment (with
+         * its sampler dimensions) is not used up. */
+        if (m.hole && holes < TR_MAX_HOLES) {
+            ++holes;
+            --seg;
+            ray.tmin = hit.t + 1e-5f * tr_fmaxf(1.0f, hit.t);
+            continue;
+        }
         if (surface) {
             tr_sample_surface(surface, &m, ray.dir, hit.t, hit.triangle);
         }
@@ -103,18 +119,38 @@ TR_FN tr_vec3 tr_trace_pt(const tr_scene_view *s, tr_ray ray, int max_depth, con
                 tr_vec3 le_l = tr_emitted(&lm, v3_neg(wi));
                 tr_vec3 f = tr_bsdf_eval(&m, wo, wi);
                 if (!tr_v3_is_zero(le_l) && !tr_v3_is_zero(f)) {
-                    float cos_i = tr_fabsf(v3_dot(wi, n));
-                    tr_vec3 o = tr_offset_origin(p, v3_dot(wi, n) > 0.0f ? n : v3_neg(n));
+                    float cos_i = tr_fabsf(v3_dot(wi, m.ns)); /* the shading normal */
+                    tr_vec3 o = tr_surface_origin(&m, p, wi); /* shadow-terminator fix */
                     tr_vec3 od = v3_sub(y, o);
                     float len = v3_length(od);
                     tr_ray shadow =
                         tr_ray_make(o, v3_scale(od, 1.0f / len), 0.0f, len * (1.0f - 1e-4f));
                     *rays += 1;
-                    if (!tr_occluded_scene(s, &shadow)) {
+                    if (!tr_occluded_masked(s, &shadow)) { /* cut-outs let light through */
                         float w = tr_mis_power(pl, tr_bsdf_pdf(&m, wo, wi));
                         radiance = v3_add(radiance, v3_scale(v3_mul(v3_mul(throughput, f), le_l),
                                                              cos_i * w / pl));
                     }
+                }
+            }
+        }
+
+        /* Next-event estimation towards the environment, MIS against the BSDF. */
+        if (!tr_bsdf_is_delta(&m) && s->env_count > 0u) {
+            float eu1, eu2;
+            tr_sampler_2d(smp, tr_sampler_dim(seg, TR_DIM_ENV), &eu1, &eu2);
+            tr_vec3 wi;
+            float pe;
+            tr_vec3 le_e = tr_env_sample(s, eu1, eu2, &wi, &pe);
+            tr_vec3 f = pe > 0.0f ? tr_bsdf_eval(&m, wo, wi) : v3s(0.0f);
+            if (!tr_v3_is_zero(le_e) && !tr_v3_is_zero(f)) {
+                tr_ray shadow = tr_ray_make(tr_surface_origin(&m, p, wi), wi, 0.0f, TR_INFINITY);
+                *rays += 1;
+                if (!tr_occluded_masked(s, &shadow)) {
+                    float w = tr_mis_power(pe, tr_bsdf_pdf(&m, wo, wi));
+                    float c = tr_fabsf(v3_dot(wi, m.ns));
+                    radiance =
+                        v3_add(radiance, v3_scale(v3_mul(v3_mul(throughput, f), le_e), c * w / pe));
                 }
             }
         }
@@ -140,7 +176,7 @@ TR_FN tr_vec3 tr_trace_pt(const tr_scene_view *s, tr_ray ray, int max_depth, con
                 throughput = v3_scale(throughput, 1.0f / q);
             }
         }
-        tr_vec3 o = tr_offset_origin(p, v3_dot(bs.wi, n) > 0.0f ? n : v3_neg(n));
+        tr_vec3 o = tr_surface_origin(&m, p, bs.wi); /* shadow-terminator fix */
         ray = tr_ray_make(o, bs.wi, 0.0f, TR_INFINITY);
     }
     return radiance;

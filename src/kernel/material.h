@@ -40,6 +40,15 @@ TR_FN tr_vec3 tr_offset_origin(tr_vec3 p, tr_vec3 n) {
     return v3_madd(p, n, 1e-4f * scale);
 }
 
+/* Where a ray leaving the surface along wi starts: just off the surface on wi's side of
+ * the shading normal, from the terminator-corrected point b->ps (Hanika 2021, texture.h)
+ * when that is the side the shading normal faces. Without vertex normals (ns == ng,
+ * ps == p) this is tr_offset_origin(p, ng or -ng). */
+TR_FN tr_vec3 tr_surface_origin(const tr_bsdf_params *b, tr_vec3 p, tr_vec3 wi) {
+    int front = v3_dot(wi, b->ns) > 0.0f;
+    return tr_offset_origin(front ? b->ps : p, front ? b->ns : v3_neg(b->ns));
+}
+
 /* The smooth dielectric's one random choice, shared by both integrators: light arriving
  * along unit direction d at a boundary whose unit normal n points to the outside (index 1;
  * the inside has index ior) is reflected with the exact Fresnel probability r, refracted

@@ -3,28 +3,34 @@
  *
  * tr_material_eval turns a hit (triangle, barycentrics, position, geometric normal, ray
  * direction) into tr_bsdf_params; the BSDFs (bsdf.h), the naive integrator's scatter
- * (material.h) and emission read only that struct. Today every parameter is the
- * material's constant and the shading normal is the geometric one; textures and
- * interpolated or mapped normals change this step alone (as yocto-gl's eval_material
- * comes before eval_bsdf, and pbrt-v4's Material::GetBSDF before the BSDF). */
+ * (material.h) and emission read only that struct. Without vertex attributes and
+ * material extras (attrib.h) every parameter is the material's constant and the shading
+ * normal is the geometric one; interpolated normals, textures and normal maps (texture.h)
+ * change this step alone (as yocto-gl's eval_material comes before eval_bsdf, and
+ * pbrt-v4's Material::GetBSDF before the BSDF). */
 #ifndef TR_KERNEL_MATERIAL_EVAL_H
 #define TR_KERNEL_MATERIAL_EVAL_H
 
 #include "compat.h"
 #include "scene_view.h"
+#include "texture.h"
 #include "types.h"
 #include "vec.h"
 
 /* The BSDF's inputs at one surface point. */
 typedef struct tr_bsdf_params {
-    uint32_t type;   /* TR_MATERIAL_* */
-    uint32_t flags;  /* TR_MATERIAL_TWO_SIDED */
-    tr_vec3 color;   /* base colour (linear RGB): albedo, F0, glass filter, emitted colour */
-    float roughness; /* glossy, in [0, 1] */
-    float ior;       /* glass: index of refraction */
-    float emittance; /* emitted radiance is color * emittance */
-    tr_vec3 ng;      /* the triangle's geometric normal: emitters' sides */
-    tr_vec3 ns;      /* shading normal the BSDFs use (glass: pointing outside) */
+    uint32_t type;    /* TR_MATERIAL_* */
+    uint32_t flags;   /* TR_MATERIAL_TWO_SIDED */
+    tr_vec3 color;    /* base colour (linear RGB): albedo, F0, glass filter, emitted colour */
+    float roughness;  /* glossy, in [0, 1] */
+    float ior;        /* glass: index of refraction */
+    float emittance;  /* emitted radiance is color * emittance */
+    tr_vec3 ng;       /* the triangle's geometric normal: emitters' sides */
+    tr_vec3 ns;       /* shading normal the BSDFs use (glass: pointing outside) */
+    tr_vec3 ps;       /* where rays leaving on ng's side start (tr_surface_origin) */
+    tr_vec3 emission; /* emitted radiance of a non-emitter (principled materials) */
+    float metallic;   /* principled: 0 dielectric .. 1 conductor */
+    int hole;         /* an alpha cut-out: the ray passes through (tr_material_ext) */
 } tr_bsdf_params;
 
 /* The parameters of a material whose values do not vary over the surface, with
@@ -39,20 +45,120 @@ TR_FN tr_bsdf_params tr_material_params(const tr_material *m, tr_vec3 ng) {
     b.emittance = m->emittance;
     b.ng = ng;
     b.ns = ng;
+    b.ps = v3s(0.0f);
+    b.emission = v3s(0.0f);
+    b.metallic = 0.0f;
+    b.hole = 0;
     return b;
 }
 
+/* The extras of material `mat` at texture coordinates (tu, tv) (texture.h): textures
+ * multiply the material's factors, a normal map tilts b->ns in the frame of dpdu, dpdv. */
+TR_FN void tr_material_apply_ext(const tr_scene_view *s, uint32_t mat, const tr_surface_attr *a,
+                                 tr_bsdf_params *b) {
+    tr_material_ext e = s->material_exts[mat];
+    b->metallic = e.metallic;
+    b->emission = e.emission;
+    float alpha = 1.0f;
+    if (e.base_tex != TR_NO_INDEX) {
+        b->color = v3_mul(b->color, tr_texture_sample(s, e.base_tex, a->tu, a->tv, 1, &alpha));
+    }
+    if ((e.flags & TR_MATEXT_ALPHA_MASK) != 0u && alpha < e.alpha_cutoff) {
+        b->hole = 1;
+    }
+    float unused;
+    if (e.emission_tex != TR_NO_INDEX) {
+        b->emission =
+            v3_mul(b->emission, tr_texture_sample(s, e.emission_tex, a->tu, a->tv, 1, &unused));
+    }
+    if (e.mr_tex != TR_NO_INDEX) {
+        /* glTF: roughness in green, metallic in blue, both linear. */
+        tr_vec3 mr = tr_texture_sample(s, e.mr_tex, a->tu, a->tv, 0, &unused);
+        b->roughness *= mr.y;
+        b->metallic *= mr.z;
+    }
+    if (e.normal_tex != TR_NO_INDEX && v3_dot(a->dpdu, a->dpdu) > 0.0f) {
+        tr_vec3 t = tr_texture_sample(s, e.normal_tex, a->tu, a->tv, 0, &unused);
+        tr_vec3 k = v3(2.0f * t.x - 1.0f, 2.0f * t.y - 1.0f, 2.0f * t.z - 1.0f);
+        /* Gram-Schmidt: a tangent frame around the interpolated normal. glTF's +Y is up in
+         * the image, against our v (downwards): the bitangent is -dp/dv. */
+        tr_vec3 n = b->ns;
+        tr_vec3 tu = v3_sub(a->dpdu, v3_scale(n, v3_dot(n, a->dpdu)));
+        float lt = v3_dot(tu, tu);
+        if (lt > 0.0f) {
+            tu = v3_scale(tu, 1.0f / tr_sqrtf(lt));
+            tr_vec3 bt = v3_cross(n, tu);
+            if (v3_dot(bt, a->dpdv) > 0.0f) {
+                bt = v3_neg(bt);
+            }
+            tr_vec3 m = v3_add(
+                v3_add(v3_scale(tu, k.x * e.normal_scale), v3_scale(bt, k.y * e.normal_scale)),
+                v3_scale(n, k.z));
+            float lm = v3_dot(m, m);
+            if (lm > 0.0f && lm < TR_INFINITY) {
+                b->ns = v3_scale(m, 1.0f / tr_sqrtf(lm));
+            }
+        }
+    }
+}
+
 /* The material stage: the BSDF parameters at point p of triangle `triangle` (barycentrics
- * u, v of its second and third vertex; geometric normal ng), reached along direction dir.
- * p, u, v and dir are unused until textures and shading normals need them. */
+ * u, v of its second and third vertex; geometric normal ng), reached along direction dir
+ * (unused so far). */
 TR_FN tr_bsdf_params tr_material_eval(const tr_scene_view *s, uint32_t triangle, float u, float v,
                                       tr_vec3 p, tr_vec3 ng, tr_vec3 dir) {
-    (void)u;
-    (void)v;
-    (void)p;
     (void)dir;
-    tr_material m = s->materials[s->triangles[triangle].material];
-    return tr_material_params(&m, ng);
+    uint32_t mi = s->triangles[triangle].material;
+    tr_material m = s->materials[mi];
+    tr_bsdf_params b = tr_material_params(&m, ng);
+    b.ps = p;
+    if (triangle < s->tri_verts_count || s->material_ext_count > 0u) {
+        tr_surface_attr a = tr_surface_attributes(s, triangle, u, v, p, ng);
+        b.ns = a.ns;
+        b.ps = a.ps;
+        if (s->material_ext_count > 0u) {
+            tr_material_apply_ext(s, mi, &a, &b);
+        }
+    }
+    return b;
+}
+
+/* Alpha cut-outs stop nothing: at most this many are passed through along one ray. */
+#define TR_MAX_HOLES 64
+
+/* Whether hit is a hole: an alpha-masked material whose base map is transparent there. */
+TR_FN int tr_hit_is_hole(const tr_scene_view *s, const tr_ray *ray, const tr_hit *hit) {
+    if (s->material_ext_count == 0u) {
+        return 0;
+    }
+    uint32_t mi = s->triangles[hit->triangle].material;
+    if ((s->material_exts[mi].flags & TR_MATEXT_ALPHA_MASK) == 0u) {
+        return 0;
+    }
+    TR_CONST_GLOBAL tr_triangle *tri = &s->triangles[hit->triangle];
+    tr_vec3 p = v3_madd(ray->origin, ray->dir, hit->t);
+    tr_bsdf_params b = tr_material_eval(s, hit->triangle, hit->u, hit->v, p, tri->normal, ray->dir);
+    return b.hole;
+}
+
+/* The shadow-ray query with alpha cut-outs: occluded unless every surface on the segment
+ * is a hole. Without material extras, tr_occluded_scene itself. */
+TR_FN int tr_occluded_masked(const tr_scene_view *s, const tr_ray *ray) {
+    if (s->material_ext_count == 0u) {
+        return tr_occluded_scene(s, ray);
+    }
+    tr_ray r = *ray;
+    for (int k = 0; k < TR_MAX_HOLES; ++k) {
+        tr_hit hit;
+        if (!tr_intersect_scene(s, &r, &hit)) {
+            return 0;
+        }
+        if (!tr_hit_is_hole(s, &r, &hit)) {
+            return 1;
+        }
+        r.tmin = hit.t + 1e-5f * tr_fmaxf(1.0f, hit.t);
+    }
+    return 1;
 }
 
 #endif

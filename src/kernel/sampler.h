@@ -44,7 +44,8 @@
 #define TR_DIM_BSDF_LOBE 1u
 #define TR_DIM_BSDF_DIR 2u
 #define TR_DIM_ROULETTE 3u
-#define TR_SAMPLER_PER_BOUNCE 4u
+#define TR_DIM_ENV 4u /* environment light direction */
+#define TR_SAMPLER_PER_BOUNCE 5u
 
 typedef struct tr_sampler {
     uint32_t key;   /* hash of (seed, pixel) */

@@ -5,6 +5,7 @@
 #ifndef TR_KERNEL_SCENE_VIEW_H
 #define TR_KERNEL_SCENE_VIEW_H
 
+#include "attrib.h"
 #include "compat.h"
 #include "intersect.h"
 #include "types.h"
@@ -40,7 +41,15 @@ int tr_wbvh_occluded(const struct tr_wbvh *w, const tr_ray *ray);
     X(tr_bvh_node, bvh_nodes, bvh_node_count)    /* 0 nodes for an empty scene */                  \
     X(tr_bvh_tri, bvh_tris, bvh_tri_count)       /* leaf triangles, in tr_bvh.indices order */     \
     X(uint32_t, lights, light_count)             /* emissive triangle indices */                   \
-    X(float, light_cdf, light_cdf_count)         /* their selection CDF (last entry 1) */
+    X(float, light_cdf, light_cdf_count)         /* their selection CDF (last entry 1) */          \
+    X(tr_vertex, vertices, vertex_count)         /* attrib.h: shading normals, UVs */              \
+    X(tr_tri_verts, tri_verts, tri_verts_count)  /* triangles 0..count-1: their vertices */        \
+    X(tr_texture, textures, texture_count)                                                         \
+    X(uint32_t, texels, texel_count)                      /* every texture's RGBA8 texels */       \
+    X(tr_material_ext, material_exts, material_ext_count) /* 0 or one per material */              \
+    X(tr_env, env, env_count)             /* 0 or 1: the environment light (envmap.h) */           \
+    X(float, env_texels, env_texel_count) /* its map, RGB */                                       \
+    X(float, env_cdf, env_cdf_count) /* marginal CDF (height + 1), then each row's (width + 1) */
 
 /* The scalars a view carries besides its arrays, X(type, member), uploaded to a device as
  * 32-bit words after the counts. */

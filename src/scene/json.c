@@ -21,6 +21,7 @@
 #include "trac0r/scene_file.h"
 #include "material_registry.h"
 #include "io/infile.h"
+#include "scene/texture.h"
 
 #define PATH_MAX_LEN 160
 
@@ -539,6 +540,114 @@ static int parse_camera(jctx *c, const cJSON *cam) {
     return TR_OK;
 }
 
+/* Keys every material but an emitter takes besides its type's (attrib.h's extras). */
+static const char *const extra_keys[] = {"texture",
+                                         "normal_texture",
+                                         "emission",
+                                         "emission_texture",
+                                         "alpha_cutoff",
+                                         "metallic",
+                                         "metallic_roughness_texture"};
+#define EXTRA_KEY_COUNT (sizeof extra_keys / sizeof extra_keys[0])
+
+/* A texture key: "file.png" or {"path": "file.png", "wrap": "repeat" | "clamp"}; loaded
+ * relative to the scene file (not opened when meshes are not loaded: the fuzzer). */
+static int get_texture(jctx *c, const cJSON *m, const char *path, const char *key,
+                       uint32_t *index) {
+    const cJSON *v = cJSON_GetObjectItemCaseSensitive(m, key);
+    *index = TR_NO_INDEX;
+    if (!v) {
+        return TR_OK;
+    }
+    char p[PATH_MAX_LEN];
+    path_key(p, path, key);
+    const char *rel = NULL;
+    uint32_t flags = 0;
+    if (cJSON_IsString(v) && v->valuestring) {
+        rel = v->valuestring;
+    } else if (cJSON_IsObject(v)) {
+        static const char *const keys[] = {"path", "wrap"};
+        const char *wrap = NULL;
+        if (check_keys(c, v, p, keys, 2) != TR_OK ||
+            get_string(c, v, p, "path", 1, &rel) != TR_OK ||
+            get_string(c, v, p, "wrap", 0, &wrap) != TR_OK) {
+            return TR_ERR;
+        }
+        if (wrap && strcmp(wrap, "clamp") == 0) {
+            flags |= TR_TEXTURE_CLAMP;
+        } else if (wrap && strcmp(wrap, "repeat") != 0) {
+            char pw[PATH_MAX_LEN], buf[40];
+            path_key(pw, p, "wrap");
+            return jerr(c, pw, "unknown wrap mode '%s' (expected repeat or clamp)",
+                        shown(wrap, buf, sizeof buf));
+        }
+    } else {
+        return jerr(c, p, "expected a file name or {\"path\": ..., \"wrap\": ...}, got %s",
+                    type_name(v));
+    }
+    if (!rel[0]) {
+        return jerr(c, p, "expected a file name, got an empty string");
+    }
+    if (!c->opt->load_meshes) {
+        return TR_OK;
+    }
+    char full[8192];
+    if (rel[0] == '/' || !c->dir[0]) {
+        snprintf(full, sizeof full, "%s", rel);
+    } else {
+        snprintf(full, sizeof full, "%s/%s", c->dir, rel);
+    }
+    tr_error e;
+    if (tr_scene_load_texture(c->scene, full, flags, index, &e) != TR_OK) {
+        return jerr_from(c, p, &e);
+    }
+    return TR_OK;
+}
+
+/* The extras of material `index` from its keys (check_keys has allowed them); nothing is stored
+ * when it has none, so that untextured scenes keep no extras array. */
+static int parse_material_extras(jctx *c, const cJSON *m, const char *p, uint32_t index) {
+    int any = 0;
+    for (size_t k = 0; k < EXTRA_KEY_COUNT; ++k) {
+        any |= cJSON_GetObjectItemCaseSensitive(m, extra_keys[k]) != NULL;
+    }
+    if (!any) {
+        return TR_OK;
+    }
+    tr_material_ext e = tr_material_ext_default();
+    int has_cut = 0, has_metal = 0, has_em = 0;
+    double cut = 0.5, metal = 0.0;
+    if (get_texture(c, m, p, "texture", &e.base_tex) != TR_OK ||
+        get_texture(c, m, p, "normal_texture", &e.normal_tex) != TR_OK ||
+        get_texture(c, m, p, "emission_texture", &e.emission_tex) != TR_OK ||
+        get_texture(c, m, p, "metallic_roughness_texture", &e.mr_tex) != TR_OK ||
+        get_vec3(c, m, p, "emission", 0, 0, &e.emission, &has_em) != TR_OK ||
+        get_number(c, m, p, "alpha_cutoff", 0.0, 1.0, &cut, &has_cut) != TR_OK ||
+        get_number(c, m, p, "metallic", 0.0, 1.0, &metal, &has_metal) != TR_OK) {
+        return TR_ERR;
+    }
+    if (has_em && (e.emission.x < 0.0f || e.emission.y < 0.0f || e.emission.z < 0.0f ||
+                   e.emission.x > 1e7f || e.emission.y > 1e7f || e.emission.z > 1e7f)) {
+        char pe[PATH_MAX_LEN];
+        path_key(pe, p, "emission");
+        return jerr(c, pe, "expected three numbers in [0, 1e+07]");
+    }
+    if (cJSON_GetObjectItemCaseSensitive(m, "emission_texture") &&
+        !cJSON_GetObjectItemCaseSensitive(m, "emission")) {
+        e.emission = v3s(1.0f); /* the texture alone gives the radiance */
+    }
+    e.metallic = (float)metal;
+    if (has_cut) {
+        e.flags |= TR_MATEXT_ALPHA_MASK;
+        e.alpha_cutoff = (float)cut;
+    }
+    tr_error err;
+    if (tr_scene_set_material_ext(c->scene, index, &e, &err) != TR_OK) {
+        return jerr_from(c, p, &err);
+    }
+    return TR_OK;
+}
+
 static int parse_materials(jctx *c, const cJSON *mats) {
     const char *path = "materials";
     if (expect_object(c, mats, path) != TR_OK) {
@@ -585,15 +694,22 @@ static int parse_materials(jctx *c, const cJSON *mats) {
         }
         /* The keys this type takes, from the registry: "type", then each key of its masks
          * (a name two keys share, such as "color", once). */
-        const char *allowed[16] = {"type"};
+        const char *allowed[32] = {"type"};
         size_t nallowed = 1;
-        for (size_t k = 0; k < nkeys && nallowed < 16; ++k) {
+        for (size_t k = 0; k < nkeys && nallowed < 32; ++k) {
             int dup = 0;
             for (size_t i = 0; i < nallowed; ++i) {
                 dup |= strcmp(allowed[i], keys[k].name) == 0;
             }
             if (!dup && (keys[k].key & (required | optional))) {
                 allowed[nallowed++] = keys[k].name;
+            }
+        }
+        /* Then the extras (textures, emission, cut-outs) every non-emitter takes;
+         * "metallic" is the principled material's alone. */
+        for (size_t k = 0; t != TR_MATERIAL_EMITTER && k < EXTRA_KEY_COUNT && nallowed < 32; ++k) {
+            if (t == TR_MATERIAL_PRINCIPLED || strcmp(extra_keys[k], "metallic") != 0) {
+                allowed[nallowed++] = extra_keys[k];
             }
         }
         if (check_keys(c, m, p, allowed, nallowed) != TR_OK) {
@@ -636,8 +752,12 @@ static int parse_materials(jctx *c, const cJSON *mats) {
             }
         }
         tr_error e;
-        if (tr_scene_add_material(c->scene, mat, NULL, &e) != TR_OK) {
+        uint32_t index;
+        if (tr_scene_add_material(c->scene, mat, &index, &e) != TR_OK) {
             return jerr_from(c, p, &e);
+        }
+        if (parse_material_extras(c, m, p, index) != TR_OK) {
+            return TR_ERR;
         }
     }
     qsort(c->by_name, c->name_count, sizeof *c->by_name, named_cmp);
@@ -768,6 +888,11 @@ static int parse_quad(jctx *c, const cJSON *sh, const char *p, const cJSON *vert
     if (cJSON_GetObjectItemCaseSensitive(sh, "subdivisions")) {
         return jerr(c, ps, "only icospheres have subdivisions");
     }
+    if (cJSON_GetObjectItemCaseSensitive(sh, "smooth")) {
+        char pm[PATH_MAX_LEN];
+        path_key(pm, p, "smooth");
+        return jerr(c, pm, "only icospheres have 'smooth' (meshes use their vertex normals)");
+    }
     if (!verts) {
         return jerr(c, pv, "missing (expected 4 corners [[x, y, z], ...])");
     }
@@ -808,10 +933,19 @@ static int parse_quad(jctx *c, const cJSON *sh, const char *p, const cJSON *vert
                          (unsigned long long)c->scene->triangle_count + 2, c->budget);
     }
     static const uint32_t idx[6] = {0, 1, 2, 0, 2, 3};
+    /* Texture coordinates only where the material has textures (vertex attributes cost
+     * a fetch at every hit): the image's top-left corner at v0, top-right at v1. */
+    static const float uv[8] = {0, 0, 1, 0, 1, 1, 0, 1};
+    const tr_material_ext *ext =
+        c->scene->material_ext_count == c->scene->material_count && c->scene->material_ext_count > 0
+            ? &c->scene->material_exts[mat]
+            : NULL;
+    const int textured = ext && (ext->base_tex != TR_NO_INDEX || ext->emission_tex != TR_NO_INDEX ||
+                                 ext->mr_tex != TR_NO_INDEX || ext->normal_tex != TR_NO_INDEX);
     uint32_t first = c->scene->triangle_count, dropped = 0;
     tr_error e;
-    if (tr_scene_add_mesh(c->scene, pos, 4, idx, 2, NULL, (uint32_t)mat, &tf, &dropped, &e) !=
-        TR_OK) {
+    if (tr_scene_add_mesh_uv(c->scene, pos, 4, idx, 2, NULL, textured ? uv : NULL, (uint32_t)mat,
+                             &tf, &dropped, &e) != TR_OK) {
         return jerr(c, pv, "the corners span no area");
     }
     if (dropped) {
@@ -823,7 +957,7 @@ static int parse_quad(jctx *c, const cJSON *sh, const char *p, const cJSON *vert
 static int parse_shapes(jctx *c, const cJSON *shapes) {
     static const char *const keys[] = {
         "type",  "name",         "position", "orientation", "orientation_rad",
-        "scale", "subdivisions", "material", "vertices"};
+        "scale", "subdivisions", "material", "vertices",    "smooth"};
     static const char *const types[] = {"plane", "box", "icosphere", "quad"};
     if (!cJSON_IsArray(shapes)) {
         return jerr(c, "shapes", "expected an array, got %s", type_name(shapes));
@@ -925,6 +1059,18 @@ static int parse_shapes(jctx *c, const cJSON *shapes) {
             return TR_ERR;
         }
         d.subdivisions = (uint32_t)sub;
+        int smooth = 0;
+        if (get_bool(c, sh, p, "smooth", &smooth) != TR_OK) {
+            return TR_ERR;
+        }
+        if (cJSON_GetObjectItemCaseSensitive(sh, "smooth") && t != 2) {
+            char pm[PATH_MAX_LEN];
+            path_key(pm, p, "smooth");
+            return jerr(c, pm, "only icospheres have 'smooth' (meshes use their vertex normals)");
+        }
+        if (smooth) {
+            d.type = TR_SHAPE_ICOSPHERE_SMOOTH;
+        }
         uint64_t n = tr_shape_triangle_count(&d);
         if ((uint64_t)c->scene->triangle_count + n > c->budget) {
             return jerr_code(c, TR_STATUS_LIMIT, t == 2 ? ps : p,
@@ -942,6 +1088,19 @@ static int parse_shapes(jctx *c, const cJSON *shapes) {
     }
     c->info->shape_count = (uint32_t)i;
     return TR_OK;
+}
+
+/* Warnings from a mesh import (dropped or approximated material properties). */
+struct mesh_warn_ctx {
+    const jctx *c;
+    int index;
+    const char *rel;
+};
+
+static void mesh_import_warn(void *ctx, const char *message) {
+    const struct mesh_warn_ctx *w = ctx;
+    char buf[64];
+    warn(w->c, "meshes[%d] (%s): %s", w->index, shown(w->rel, buf, sizeof buf), message);
 }
 
 static int parse_meshes(jctx *c, const cJSON *meshes) {
@@ -989,7 +1148,9 @@ static int parse_meshes(jctx *c, const cJSON *meshes) {
         }
         tr_mesh_import_stats st;
         tr_error e;
-        if (tr_scene_import_mesh(c->scene, full, &tf, mat, c->budget - first, &st, &e) != TR_OK) {
+        struct mesh_warn_ctx wc = {c, i, rel};
+        if (tr_scene_import_mesh_ex(c->scene, full, &tf, mat, c->budget - first, &st,
+                                    mesh_import_warn, &wc, NULL, &e) != TR_OK) {
             return jerr_from(c, pp, &e);
         }
         c->info->mesh_parts += st.parts;
@@ -1049,6 +1210,56 @@ static void json_install_hooks(void) {
     cJSON_InitHooks(&hooks);
 }
 
+/* "environment": {"color": [r, g, b], "map": "sky.hdr", "strength": s, "rotation": deg}:
+ * a light from every direction that leaves the scene (issue 14). */
+static int parse_environment(jctx *c, const cJSON *env) {
+    static const char *const keys[] = {"color", "map", "strength", "rotation"};
+    const char *path = "environment";
+    if (expect_object(c, env, path) != TR_OK ||
+        check_keys(c, env, path, keys, sizeof keys / sizeof keys[0]) != TR_OK) {
+        return TR_ERR;
+    }
+    tr_vec3 color = v3s(1.0f);
+    int has_color = 0, has_strength = 0, has_rot = 0;
+    double strength = 1.0, rot = 0.0;
+    const char *map = NULL;
+    if (get_vec3(c, env, path, "color", 0, 0, &color, &has_color) != TR_OK ||
+        get_number(c, env, path, "strength", 0.0, 1e7, &strength, &has_strength) != TR_OK ||
+        get_number(c, env, path, "rotation", -360.0, 360.0, &rot, &has_rot) != TR_OK ||
+        get_string(c, env, path, "map", 0, &map) != TR_OK) {
+        return TR_ERR;
+    }
+    if (color.x < 0.0f || color.y < 0.0f || color.z < 0.0f || color.x > 1e7f || color.y > 1e7f ||
+        color.z > 1e7f) {
+        return jerr(c, "environment.color", "expected three numbers in [0, 1e+07]");
+    }
+    if (!has_color && !map) {
+        return jerr(c, path, "expected 'color' or 'map'");
+    }
+    const float rad = (float)(rot * 3.14159265358979323846 / 180.0);
+    tr_error e;
+    if (map && c->opt->load_meshes) {
+        if (!map[0]) {
+            return jerr(c, "environment.map", "expected a file name, got an empty string");
+        }
+        char full[8192];
+        if (map[0] == '/' || !c->dir[0]) {
+            snprintf(full, sizeof full, "%s", map);
+        } else {
+            snprintf(full, sizeof full, "%s/%s", c->dir, map);
+        }
+        if (tr_scene_load_environment(c->scene, full, color, (float)strength, rad, &e) != TR_OK) {
+            return jerr_from(c, "environment.map", &e);
+        }
+    } else if (tr_scene_set_environment(c->scene, color, (float)strength, rad, NULL, 0, 0, &e) !=
+               TR_OK) {
+        return jerr_from(c, path, &e);
+    }
+    /* A light: the scene needs no emitter. */
+    c->info->allow_no_emitter = 1;
+    return TR_OK;
+}
+
 /* Line and column (both from 1) of byte offset `off` in text. */
 static void line_col(const char *text, size_t off, unsigned *line, unsigned *col) {
     *line = 1;
@@ -1065,7 +1276,7 @@ static void line_col(const char *text, size_t off, unsigned *line, unsigned *col
 
 static int build(jctx *c, const cJSON *root) {
     static const char *const keys[] = {"version",   "description", "render", "camera",
-                                       "materials", "shapes",      "meshes"};
+                                       "materials", "shapes",      "meshes", "environment"};
     if (!cJSON_IsObject(root)) {
         return jerr(c, NULL, "expected a JSON object at the top level, got %s", type_name(root));
     }
@@ -1106,6 +1317,10 @@ static int build(jctx *c, const cJSON *root) {
     if (meshes && parse_meshes(c, meshes) != TR_OK) {
         return TR_ERR;
     }
+    const cJSON *env = cJSON_GetObjectItemCaseSensitive(root, "environment");
+    if (env && parse_environment(c, env) != TR_OK) {
+        return TR_ERR;
+    }
     tr_scene *s = c->scene;
     tr_scene_file *in = c->info;
     if (s->triangle_count == 0 && (c->opt->load_meshes || in->mesh_count == 0)) {
@@ -1138,7 +1353,7 @@ static int build(jctx *c, const cJSON *root) {
         }
     }
     free(used);
-    if (in->emissive_triangles == 0) {
+    if (in->emissive_triangles == 0 && s->env_count == 0) {
         warn(c, "the scene has no emitter, so its image would be black%s",
              in->allow_no_emitter ? " (allowed by render.allow_no_emitter)" : "");
     }

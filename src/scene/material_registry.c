@@ -46,6 +46,11 @@ tr_material tr_material_default(uint32_t type) {
     memset(&m, 0, sizeof m);
     m.type = type;
     m.ior = 1.0f;
+    if (type == TR_MATERIAL_PRINCIPLED) {
+        /* A dielectric layer of index 1.5 (F0 = 0.04, glTF's) and glTF's default roughness. */
+        m.ior = 1.5f;
+        m.roughness = 1.0f;
+    }
     return m;
 }
 

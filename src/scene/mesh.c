@@ -5,12 +5,17 @@
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 #include <errno.h>
+#include <stdarg.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include <assimp/GltfMaterial.h>
+#include <assimp/texture.h>
+
 #include "scene/scene_internal.h"
+#include "scene/texture.h"
 #include "trac0r/scene_file.h"
 #include "io/infile.h"
 #include "scene/mesh_guard.h"
@@ -27,7 +32,33 @@ typedef struct import_ctx {
     uint32_t max_triangles, start_triangles;
     tr_mesh_import_stats *st;
     tr_error *err;
+    /* issue 14: where texture paths are relative to, warnings, textures already loaded
+     * (keyed by their path as the file gives it; -1: failed, not tried again). */
+    char dir[4096];
+    tr_import_warn_fn warn;
+    void *warn_ctx;
+    struct {
+        char path[256];
+        uint32_t flags;
+        int64_t index;
+    } tex_cache[64];
+    uint32_t tex_cached;
+    tr_import_extras *extras; /* the file's first camera, when asked for */
 } import_ctx;
+
+static void import_warn(const import_ctx *c, const char *fmt, ...)
+    __attribute__((format(printf, 2, 3)));
+static void import_warn(const import_ctx *c, const char *fmt, ...) {
+    if (!c->warn) {
+        return;
+    }
+    char msg[256];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    c->warn(c->warn_ctx, msg);
+}
 
 static float clamp01(float x) {
     return isfinite(x) ? (x < 0.0f ? 0.0f : x > 1.0f ? 1.0f : x) : 0.0f;
@@ -38,49 +69,250 @@ static float max3(float a, float b, float c) {
     return m > c ? m : c;
 }
 
-/* Wavefront MTL (and whatever Assimp maps onto the same keys) to our four materials:
- * Ke > 0 -> emitter (colour Ke / max(Ke), emittance max(Ke)); dissolve d < 1 or illum
- * 4, 6, 7, 9 -> glass (colour Kd, ior Ni, 1.5 where Ni is missing or below 1); illum 3,
- * 5, 8 -> glossy (colour Ks, or Kd where Ks is black, roughness sqrt(2 / (Ns + 2)));
- * otherwise diffuse with colour Kd. Colours other than Ke are clamped to [0, 1]. */
-static tr_material map_material(const struct aiMaterial *m) {
+/* Texture `type` of material m as a scene texture: embedded ("*N", or a name Assimp
+ * matches to an embedded texture) or a file beside the model. A texture that cannot be
+ * read is a warning naming the material, and the material goes without it. */
+static uint32_t load_texture(import_ctx *c, const struct aiMaterial *m, const char *mname,
+                             enum aiTextureType type, const char *what) {
+    struct aiString path;
+    enum aiTextureMapMode mode[2] = {aiTextureMapMode_Wrap, aiTextureMapMode_Wrap};
+    if (aiGetMaterialTexture(m, type, 0, &path, NULL, NULL, NULL, NULL, mode, NULL) != AI_SUCCESS ||
+        path.length == 0) {
+        return TR_NO_INDEX;
+    }
+    const char *p = path.data;
+    uint32_t flags = mode[0] == aiTextureMapMode_Clamp || mode[0] == aiTextureMapMode_Decal
+                         ? TR_TEXTURE_CLAMP
+                         : 0u;
+    if (mode[0] == aiTextureMapMode_Mirror || mode[1] == aiTextureMapMode_Mirror) {
+        import_warn(c, "material '%.60s': %s map '%.80s' mirrors; repeated instead", mname, what,
+                    p);
+    }
+    for (uint32_t i = 0; i < c->tex_cached; ++i) {
+        if (c->tex_cache[i].flags == flags && strcmp(c->tex_cache[i].path, p) == 0) {
+            return c->tex_cache[i].index < 0 ? TR_NO_INDEX : (uint32_t)c->tex_cache[i].index;
+        }
+    }
+    uint32_t index = TR_NO_INDEX;
+    tr_error e;
+    int rc = TR_ERR;
+    /* Embedded: "*N", or the file name of one of the scene's embedded textures. */
+    const struct aiTexture *emb = NULL;
+    if (p[0] == '*') {
+        char *end;
+        unsigned long k = strtoul(p + 1, &end, 10);
+        if (*end == '\0' && k < c->ai->mNumTextures) {
+            emb = c->ai->mTextures[k];
+        }
+    }
+    for (unsigned int k = 0; !emb && k < c->ai->mNumTextures; ++k) {
+        const struct aiTexture *t = c->ai->mTextures[k];
+        if (t && t->mFilename.length && strcmp(t->mFilename.data, p) == 0) {
+            emb = t;
+        }
+    }
+    if (emb && emb->pcData) {
+        if (emb->mHeight == 0) {
+            rc = tr_scene_load_texture_memory(c->s, (const unsigned char *)emb->pcData, emb->mWidth,
+                                              p, flags, &index, &e);
+        } else if ((uint64_t)emb->mWidth * emb->mHeight <= TR_TEXTURE_MAX_TEXELS) {
+            size_t n = (size_t)emb->mWidth * emb->mHeight;
+            uint32_t *rgba = malloc(n * sizeof *rgba);
+            if (rgba) {
+                for (size_t i = 0; i < n; ++i) {
+                    const struct aiTexel *t = &emb->pcData[i]; /* BGRA */
+                    rgba[i] = (uint32_t)t->r | ((uint32_t)t->g << 8) | ((uint32_t)t->b << 16) |
+                              ((uint32_t)t->a << 24);
+                }
+                rc = tr_scene_add_texture(c->s, rgba, emb->mWidth, emb->mHeight, flags, &index, &e);
+                free(rgba);
+            } else {
+                rc = tr_error_set(&e, TR_STATUS_OUT_OF_MEMORY, "out of memory");
+            }
+        } else {
+            rc = tr_error_set(&e, TR_STATUS_LIMIT, "%ux%u texels", emb->mWidth, emb->mHeight);
+        }
+    } else if (p[0] == '*') {
+        rc = tr_error_set(&e, TR_STATUS_NOT_FOUND, "no embedded texture %s", p);
+    } else {
+        char rel[1024], full[8192];
+        snprintf(rel, sizeof rel, "%s", p);
+        for (char *q = rel; *q; ++q) {
+            *q = *q == '\\' ? '/' : *q; /* Windows separators, as Assimp hands them on */
+        }
+        if (rel[0] == '/' || !c->dir[0]) {
+            snprintf(full, sizeof full, "%s", rel);
+        } else {
+            snprintf(full, sizeof full, "%s/%s", c->dir, rel);
+        }
+        rc = tr_mesh_check_confined(c->dir, full, &e);
+        if (rc == TR_OK) {
+            rc = tr_scene_load_texture(c->s, full, flags, &index, &e);
+        }
+    }
+    if (rc != TR_OK) {
+        import_warn(c, "material '%.60s': %s map dropped: %.150s", mname, what, e.msg);
+        index = TR_NO_INDEX;
+    }
+    if (c->tex_cached < sizeof c->tex_cache / sizeof c->tex_cache[0] &&
+        strlen(p) < sizeof c->tex_cache[0].path) {
+        snprintf(c->tex_cache[c->tex_cached].path, sizeof c->tex_cache[0].path, "%s", p);
+        c->tex_cache[c->tex_cached].flags = flags;
+        c->tex_cache[c->tex_cached].index = index == TR_NO_INDEX ? -1 : (int64_t)index;
+        c->tex_cached++;
+    }
+    return index;
+}
+
+/* The import table: a file's material (Wavefront MTL keys, glTF's metallic-roughness, and
+ * whatever Assimp maps onto the same keys for other formats) onto ours, with its extras
+ * (textures, emission, cut-out) in *ext (*has_ext set when there are any):
+ *
+ *   glTF metallic-roughness (metallicFactor or roughnessFactor present) -> principled:
+ *     base colour factor (Kd where missing) x base colour map, metallic and roughness
+ *     factors x the metallic-roughness map, normal map, emissive factor x emissive map;
+ *     transmission factor > 0 -> glass instead (colour: base colour, ior 1.5).
+ *   otherwise Ke > 0 without an emissive map -> emitter (colour Ke / max(Ke), emittance
+ *     max(Ke)); illum 4, 6, 7 or 9 (refraction) -> glass (colour Kd, ior Ni, 1.5 where
+ *     missing or outside [1, 10]); illum 3, 5 or 8 -> glossy (colour Ks, or Kd where Ks is
+ *     black, roughness sqrt(2 / (Ns + 2))); otherwise diffuse, colour Kd x diffuse map.
+ *   Opacity below 1 alone is not glass: glTF's alphaMode MASK cuts out below its
+ *     alphaCutoff, BLEND and MTL's d < 1 cut out below 0.5 where the base map has alpha
+ *     and are otherwise opaque (a warning says so).
+ *   Maps we do not use (specular, bump/height, opacity, ambient, shininess, displacement,
+ *     light, reflection) are dropped with a warning naming the material.
+ * Colours other than Ke and the emission are clamped to [0, 1]. */
+static tr_material map_material(import_ctx *c, const struct aiMaterial *m, tr_material_ext *ext,
+                                int *has_ext) {
     struct aiColor4D kd = {0.6f, 0.6f, 0.6f, 1.0f}, ks = {0, 0, 0, 1}, ke = {0, 0, 0, 1};
+    struct aiColor4D base = {0, 0, 0, 0};
     aiGetMaterialColor(m, AI_MATKEY_COLOR_DIFFUSE, &kd);
     aiGetMaterialColor(m, AI_MATKEY_COLOR_SPECULAR, &ks);
     aiGetMaterialColor(m, AI_MATKEY_COLOR_EMISSIVE, &ke);
-    ai_real ni = 0.0f, d = 1.0f, ns = 0.0f;
+    int has_base = aiGetMaterialColor(m, AI_MATKEY_BASE_COLOR, &base) == AI_SUCCESS;
+    ai_real ni = 0.0f, d = 1.0f, ns = 0.0f, metal = 0.0f, rough = 1.0f, transmission = 0.0f;
+    ai_real cutoff = 0.5f;
     unsigned int one = 1;
     aiGetMaterialFloatArray(m, AI_MATKEY_REFRACTI, &ni, &one);
     one = 1;
     aiGetMaterialFloatArray(m, AI_MATKEY_OPACITY, &d, &one);
     one = 1;
     aiGetMaterialFloatArray(m, AI_MATKEY_SHININESS, &ns, &one);
+    one = 1;
+    int pbr = aiGetMaterialFloatArray(m, AI_MATKEY_METALLIC_FACTOR, &metal, &one) == AI_SUCCESS;
+    one = 1;
+    pbr |= aiGetMaterialFloatArray(m, AI_MATKEY_ROUGHNESS_FACTOR, &rough, &one) == AI_SUCCESS;
+    one = 1;
+    aiGetMaterialFloatArray(m, AI_MATKEY_TRANSMISSION_FACTOR, &transmission, &one);
+    one = 1;
+    aiGetMaterialFloatArray(m, AI_MATKEY_GLTF_ALPHACUTOFF, &cutoff, &one);
     int illum = -1;
     one = 1;
     aiGetMaterialIntegerArray(m, "$mat.illum", 0, 0, &illum, &one);
+    struct aiString name, alpha_mode;
+    char mname[64] = "(unnamed)";
+    if (aiGetMaterialString(m, AI_MATKEY_NAME, &name) == AI_SUCCESS && name.length) {
+        snprintf(mname, sizeof mname, "%.63s", name.data);
+    }
+    int mask = 0, blend = 0;
+    if (aiGetMaterialString(m, AI_MATKEY_GLTF_ALPHAMODE, &alpha_mode) == AI_SUCCESS) {
+        mask = strcmp(alpha_mode.data, "MASK") == 0;
+        blend = strcmp(alpha_mode.data, "BLEND") == 0;
+    }
 
+    *ext = tr_material_ext_default();
+    *has_ext = 0;
     tr_vec3 diffuse = v3(clamp01(kd.r), clamp01(kd.g), clamp01(kd.b));
+    if (has_base) {
+        diffuse = v3(clamp01(base.r), clamp01(base.g), clamp01(base.b));
+    }
     float e[3] = {ke.r, ke.g, ke.b};
     for (int i = 0; i < 3; ++i) {
         e[i] = isfinite(e[i]) && e[i] > 0.0f ? (e[i] > 1e7f ? 1e7f : e[i]) : 0.0f;
     }
     float emax = max3(e[0], e[1], e[2]);
-    if (emax > 0.0f) {
-        return tr_material_emitter(v3(e[0] / emax, e[1] / emax, e[2] / emax), emax);
-    }
-    if ((isfinite(d) && d < 1.0f) || illum == 4 || illum == 6 || illum == 7 || illum == 9) {
+    const int refract = illum == 4 || illum == 6 || illum == 7 || illum == 9;
+    const int transmit = isfinite(transmission) && transmission > 0.0f;
+    if (transmit || (refract && !pbr)) {
         float ior = isfinite(ni) && ni >= 1.0f && ni <= 10.0f ? ni : 1.5f;
+        if (transmit && transmission < 1.0f) {
+            import_warn(c, "material '%.60s': transmission %.2f taken as fully transmissive glass",
+                        mname, (double)transmission);
+        }
         return tr_material_glass(diffuse, ior);
     }
-    if (illum == 3 || illum == 5 || illum == 8) {
+    uint32_t emission_tex = load_texture(c, m, mname, aiTextureType_EMISSIVE, "emissive");
+    if (emax > 0.0f && emission_tex == TR_NO_INDEX && !pbr) {
+        return tr_material_emitter(v3(e[0] / emax, e[1] / emax, e[2] / emax), emax);
+    }
+    ext->base_tex = load_texture(
+        c, m, mname, has_base ? aiTextureType_BASE_COLOR : aiTextureType_DIFFUSE, "base colour");
+    if (ext->base_tex == TR_NO_INDEX) {
+        ext->base_tex = load_texture(c, m, mname, aiTextureType_DIFFUSE, "diffuse");
+    }
+    ext->normal_tex = load_texture(c, m, mname, aiTextureType_NORMALS, "normal");
+    ext->emission_tex = emission_tex;
+    ext->emission = v3(e[0], e[1], e[2]);
+    if (emission_tex != TR_NO_INDEX && emax <= 0.0f) {
+        ext->emission = v3s(1.0f);
+    }
+    /* Cut-outs: glTF MASK at its cutoff; BLEND and d < 1 at 0.5 where the base map can
+     * say where (its alpha), else opaque. */
+    if (mask || ((blend || (isfinite(d) && d < 1.0f)) && ext->base_tex != TR_NO_INDEX)) {
+        ext->flags |= TR_MATEXT_ALPHA_MASK;
+        ext->alpha_cutoff = mask && isfinite(cutoff) ? clamp01(cutoff) : 0.5f;
+        if (!mask) {
+            import_warn(c, "material '%.60s': %s approximated by a cut-out at alpha 0.5", mname,
+                        blend ? "alpha blending" : "opacity below 1");
+        }
+    } else if (blend || (isfinite(d) && d < 1.0f)) {
+        import_warn(c, "material '%.60s': opacity %.2f without a map taken as opaque", mname,
+                    (double)d);
+    }
+    static const struct {
+        enum aiTextureType type;
+        const char *what;
+    } unused[] = {
+        {aiTextureType_SPECULAR, "specular"},   {aiTextureType_HEIGHT, "bump"},
+        {aiTextureType_OPACITY, "opacity"},     {aiTextureType_AMBIENT, "ambient"},
+        {aiTextureType_SHININESS, "shininess"}, {aiTextureType_DISPLACEMENT, "displacement"},
+        {aiTextureType_LIGHTMAP, "light"},      {aiTextureType_REFLECTION, "reflection"}};
+    for (size_t i = 0; i < sizeof unused / sizeof unused[0]; ++i) {
+        if (aiGetMaterialTextureCount(m, unused[i].type) > 0) {
+            import_warn(c, "material '%.60s': %s map dropped (not supported)", mname,
+                        unused[i].what);
+        }
+    }
+    tr_material out;
+    if (pbr) {
+        ext->mr_tex = load_texture(c, m, mname, aiTextureType_UNKNOWN, "metallic-roughness");
+        if (ext->mr_tex == TR_NO_INDEX) {
+            ext->mr_tex =
+                load_texture(c, m, mname, aiTextureType_DIFFUSE_ROUGHNESS, "metallic-roughness");
+        }
+        ext->metallic = clamp01(metal);
+        tr_material pm;
+        memset(&pm, 0, sizeof pm);
+        pm.type = TR_MATERIAL_PRINCIPLED;
+        pm.color = diffuse;
+        pm.roughness = clamp01(rough);
+        pm.ior = 1.5f;
+        out = pm;
+    } else if (illum == 3 || illum == 5 || illum == 8) {
         tr_vec3 spec = v3(clamp01(ks.r), clamp01(ks.g), clamp01(ks.b));
         if (!(max3(spec.x, spec.y, spec.z) > 0.0f)) {
             spec = diffuse;
         }
-        float rough = isfinite(ns) && ns >= 0.0f ? sqrtf(2.0f / (ns + 2.0f)) : 1.0f;
-        return tr_material_glossy(spec, rough > 1.0f ? 1.0f : rough);
+        float r = isfinite(ns) && ns >= 0.0f ? sqrtf(2.0f / (ns + 2.0f)) : 1.0f;
+        out = tr_material_glossy(spec, r > 1.0f ? 1.0f : r);
+    } else {
+        out = tr_material_diffuse(diffuse);
     }
-    return tr_material_diffuse(diffuse);
+    *has_ext = ext->base_tex != TR_NO_INDEX || ext->normal_tex != TR_NO_INDEX ||
+               ext->emission_tex != TR_NO_INDEX || ext->mr_tex != TR_NO_INDEX ||
+               (ext->flags & TR_MATEXT_ALPHA_MASK) || ext->metallic > 0.0f ||
+               ext->emission.x > 0.0f || ext->emission.y > 0.0f || ext->emission.z > 0.0f;
+    return out;
 }
 
 static int material_of(import_ctx *c, unsigned int index, uint32_t *out) {
@@ -94,8 +326,11 @@ static int material_of(import_ctx *c, unsigned int index, uint32_t *out) {
     }
     if (c->material_map[index] < 0) {
         uint32_t m;
-        if (tr_scene_add_material(c->s, map_material(c->ai->mMaterials[index]), &m, c->err) !=
-            TR_OK) {
+        tr_material_ext ext;
+        int has_ext;
+        tr_material mat = map_material(c, c->ai->mMaterials[index], &ext, &has_ext);
+        if (tr_scene_add_material(c->s, mat, &m, c->err) != TR_OK ||
+            (has_ext && tr_scene_set_material_ext(c->s, m, &ext, c->err) != TR_OK)) {
             return TR_ERR;
         }
         c->material_map[index] = m;
@@ -145,10 +380,13 @@ static int add_ai_mesh(import_ctx *c, const struct aiMesh *mesh, const struct ai
     const uint32_t nv = mesh->mNumVertices;
     float *pos = malloc((size_t)nv * 3 * sizeof *pos);
     float *nrm = mesh->mNormals ? malloc((size_t)nv * 3 * sizeof *nrm) : NULL;
+    const struct aiVector3D *tc = mesh->mTextureCoords[0];
+    float *uv = tc ? malloc((size_t)nv * 2 * sizeof *uv) : NULL;
     uint32_t *idx = malloc((size_t)tris * 3 * sizeof *idx);
-    if (!pos || !idx || (mesh->mNormals && !nrm)) {
+    if (!pos || !idx || (mesh->mNormals && !nrm) || (tc && !uv)) {
         free(pos);
         free(nrm);
+        free(uv);
         free(idx);
         return tr_error_set(c->err, TR_STATUS_OUT_OF_MEMORY,
                             "out of memory importing a mesh of %u triangles", tris);
@@ -173,6 +411,11 @@ static int add_ai_mesh(import_ctx *c, const struct aiMesh *mesh, const struct ai
             nrm[3 * v + 1] = sgn * (cof[3] * n.x + cof[4] * n.y + cof[5] * n.z);
             nrm[3 * v + 2] = sgn * (cof[6] * n.x + cof[7] * n.y + cof[8] * n.z);
         }
+        if (uv) {
+            /* Assimp's v grows upwards (OpenGL); ours downwards, as image rows. */
+            uv[2 * v + 0] = tc[v].x;
+            uv[2 * v + 1] = 1.0f - tc[v].y;
+        }
     }
     uint32_t t = 0;
     int rc = TR_OK;
@@ -187,7 +430,7 @@ static int add_ai_mesh(import_ctx *c, const struct aiMesh *mesh, const struct ai
         t++;
     }
     uint32_t dropped = 0;
-    rc = tr_scene_add_mesh(c->s, pos, nv, idx, tris, nrm, material, c->tf, &dropped, c->err);
+    rc = tr_scene_add_mesh_uv(c->s, pos, nv, idx, tris, nrm, uv, material, c->tf, &dropped, c->err);
     c->st->degenerate += dropped;
     if (rc == TR_OK) {
         c->st->parts++;
@@ -197,6 +440,7 @@ static int add_ai_mesh(import_ctx *c, const struct aiMesh *mesh, const struct ai
     }
     free(pos);
     free(nrm);
+    free(uv);
     free(idx);
     return rc;
 }
@@ -208,6 +452,31 @@ static int walk(import_ctx *c, const struct aiNode *node, const struct aiMatrix4
                             NODE_DEPTH_LIMIT);
     }
     struct aiMatrix4x4 m = mat_mul(parent, &node->mTransformation);
+    /* issue 14: the first camera sits at the node of its name. */
+    if (c->extras && !c->extras->has_camera && c->ai->mNumCameras > 0 && c->ai->mCameras[0] &&
+        strcmp(c->ai->mCameras[0]->mName.data, node->mName.data) == 0) {
+        const struct aiCamera *cam = c->ai->mCameras[0];
+        const struct aiVector3D p = cam->mPosition, l = cam->mLookAt, u = cam->mUp;
+        tr_vec3 pos = v3(m.a1 * p.x + m.a2 * p.y + m.a3 * p.z + m.a4,
+                         m.b1 * p.x + m.b2 * p.y + m.b3 * p.z + m.b4,
+                         m.c1 * p.x + m.c2 * p.y + m.c3 * p.z + m.c4);
+        tr_vec3 dir = v3(m.a1 * l.x + m.a2 * l.y + m.a3 * l.z, m.b1 * l.x + m.b2 * l.y + m.b3 * l.z,
+                         m.c1 * l.x + m.c2 * l.y + m.c3 * l.z);
+        tr_vec3 up = v3(m.a1 * u.x + m.a2 * u.y + m.a3 * u.z, m.b1 * u.x + m.b2 * u.y + m.b3 * u.z,
+                        m.c1 * u.x + m.c2 * u.y + m.c3 * u.z);
+        tr_transform identity = {v3s(0.0f), v3s(0.0f), v3s(1.0f)};
+        const tr_transform *tf = c->tf ? c->tf : &identity;
+        /* Directions turn with the transform (its scale is uniform or irrelevant). */
+        tr_vec3 o = tr_transform_point(tf, v3s(0.0f));
+        c->extras->cam_pos = tr_transform_point(tf, pos);
+        c->extras->cam_dir = v3_normalize(v3_sub(tr_transform_point(tf, dir), o));
+        c->extras->cam_up = v3_normalize(v3_sub(tr_transform_point(tf, up), o));
+        c->extras->cam_hfov = cam->mHorizontalFOV;
+        c->extras->cam_aspect = cam->mAspect;
+        c->extras->has_camera = v3_is_finite(c->extras->cam_pos) &&
+                                v3_is_finite(c->extras->cam_dir) &&
+                                v3_is_finite(c->extras->cam_up) && isfinite(cam->mHorizontalFOV);
+    }
     for (unsigned int i = 0; i < node->mNumMeshes; ++i) {
         if (node->mMeshes[i] >= c->ai->mNumMeshes) {
             return tr_error_set(c->err, TR_STATUS_PARSE, "a node refers to mesh %u of %u",
@@ -228,6 +497,14 @@ static int walk(import_ctx *c, const struct aiNode *node, const struct aiMatrix4
 int tr_scene_import_mesh(tr_scene *s, const char *path, const tr_transform *tf,
                          int64_t material_override, uint32_t max_triangles,
                          tr_mesh_import_stats *stats, tr_error *err) {
+    return tr_scene_import_mesh_ex(s, path, tf, material_override, max_triangles, stats, NULL, NULL,
+                                   NULL, err);
+}
+
+int tr_scene_import_mesh_ex(tr_scene *s, const char *path, const tr_transform *tf,
+                            int64_t material_override, uint32_t max_triangles,
+                            tr_mesh_import_stats *stats, tr_import_warn_fn warn, void *warn_ctx,
+                            tr_import_extras *extras, tr_error *err) {
     tr_mesh_import_stats local;
     tr_mesh_import_stats *st = stats ? stats : &local;
     memset(st, 0, sizeof *st);
@@ -259,10 +536,33 @@ int tr_scene_import_mesh(tr_scene *s, const char *path, const tr_transform *tf,
     if (!ai) {
         return TR_ERR;
     }
-    const uint32_t t0 = s->triangle_count, s0 = s->shape_count, m0 = s->material_count,
-                   n0 = s->vertex_normal_count;
-    import_ctx c = {s,  ai, tf, material_override, NULL, max_triangles ? max_triangles : UINT32_MAX,
-                    t0, st, err};
+    const uint32_t t0 = s->triangle_count, s0 = s->shape_count, m0 = s->material_count;
+    import_ctx c;
+    memset(&c, 0, sizeof c);
+    c.s = s;
+    c.ai = ai;
+    c.tf = tf;
+    c.override = material_override;
+    c.max_triangles = max_triangles ? max_triangles : UINT32_MAX;
+    c.start_triangles = t0;
+    c.st = st;
+    c.err = err;
+    c.warn = warn;
+    c.warn_ctx = warn_ctx;
+    c.extras = extras;
+    if (extras) {
+        memset(extras, 0, sizeof *extras);
+        extras->lights = ai->mNumLights;
+        extras->cameras = ai->mNumCameras;
+    }
+    const char *slash = strrchr(path, '/');
+    if (slash && (size_t)(slash - path) < sizeof c.dir) {
+        memcpy(c.dir, path, (size_t)(slash - path));
+        c.dir[slash - path] = '\0';
+        if (slash == path) {
+            snprintf(c.dir, sizeof c.dir, "/");
+        }
+    }
     c.material_map = malloc((ai->mNumMaterials ? ai->mNumMaterials : 1) * sizeof *c.material_map);
     int rc = TR_OK;
     if (!c.material_map) {
@@ -286,12 +586,7 @@ int tr_scene_import_mesh(tr_scene *s, const char *path, const tr_transform *tf,
     }
     if (rc != TR_OK) {
         /* Roll back: everything was appended. */
-        s->triangle_count = t0;
-        s->shape_count = s0;
-        s->material_count = m0;
-        if (s->vertex_normal_count > n0) {
-            s->vertex_normal_count = n0;
-        }
+        tr_scene_truncate(s, t0, s0, m0);
     }
     free(c.material_map);
     aiReleaseImport(ai);

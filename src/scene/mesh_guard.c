@@ -372,3 +372,23 @@ const struct aiScene *tr_mesh_guarded_import(const char *path, unsigned int flag
     free(g);
     return ai;
 }
+
+int tr_mesh_check_confined(const char *model_dir, const char *file, tr_error *err) {
+    char root[PATH_MAX], real[PATH_MAX], allowed[PATH_MAX] = "";
+    if (!realpath(model_dir[0] ? model_dir : ".", root) || !realpath(file, real)) {
+        const int e = errno;
+        return tr_error_set(err, tr_status_from_errno(e), "cannot open '%.200s': %s", file,
+                            strerror(e));
+    }
+    const char *allow = getenv("TRAC0R_MODEL_ROOT");
+    if (allow && allow[0] && !realpath(allow, allowed)) {
+        allowed[0] = '\0';
+    }
+    if (!under(real, root) && !under(real, allowed)) {
+        return tr_error_set(err, TR_STATUS_LIMIT,
+                            "'%.150s' lies outside the model's directory (set TRAC0R_MODEL_ROOT "
+                            "to a directory that holds both to allow it)",
+                            file);
+    }
+    return TR_OK;
+}

@@ -30,4 +30,9 @@ const struct aiScene *tr_mesh_guarded_import(const char *path, unsigned int flag
 int tr_mesh_check_declared_sizes(const char *name, const unsigned char *head, size_t size,
                                  unsigned long long file_size, tr_error *err);
 
+/* The model-confinement rule above for a file a model names outside Assimp (a texture):
+ * TR_OK when `file` (symbolic links resolved) lies in the tree under `model_dir` or under
+ * TRAC0R_MODEL_ROOT; TR_STATUS_LIMIT otherwise. */
+int tr_mesh_check_confined(const char *model_dir, const char *file, tr_error *err);
+
 #endif

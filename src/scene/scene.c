@@ -33,6 +33,9 @@ tr_material tr_material_glossy(tr_vec3 color, float roughness) {
     return m;
 }
 
+static int grow(void **arr, uint32_t *cap, uint64_t need, size_t elem, const char *what,
+                tr_error *err);
+
 void tr_scene_init(tr_scene *s) {
     memset(s, 0, sizeof *s);
 }
@@ -61,7 +64,13 @@ void tr_scene_free(tr_scene *s) {
     free(s->materials);
     free(s->triangles);
     free(s->shapes);
-    free(s->vertex_normals);
+    free(s->vertices);
+    free(s->tri_verts);
+    free(s->textures);
+    free(s->texels);
+    free(s->material_exts);
+    free(s->env_texels);
+    free(s->env_cdf);
     tr_bvh_free(&s->bvh);
     tr_wbvh_free(&s->wbvh);
     tr_embree_free(&s->embree);
@@ -84,6 +93,14 @@ int tr_scene_add_material(tr_scene *s, tr_material m, uint32_t *index, tr_error 
         s->materials = grown;
         s->material_capacity = cap;
     }
+    if (s->material_ext_count == s->material_count && s->material_ext_count > 0) {
+        if (grow((void **)&s->material_exts, &s->material_ext_capacity,
+                 (uint64_t)s->material_ext_count + 1, sizeof *s->material_exts, "material extras",
+                 err) != TR_OK) {
+            return TR_ERR;
+        }
+        s->material_exts[s->material_ext_count++] = tr_material_ext_default();
+    }
     s->materials[s->material_count] = m;
     if (index) {
         *index = s->material_count;
@@ -93,83 +110,215 @@ int tr_scene_add_material(tr_scene *s, tr_material m, uint32_t *index, tr_error 
     return TR_OK;
 }
 
-/* Grows the vertex normal array to cover `count` triangles, zero-filling. */
-static int normals_reserve(tr_scene *s, uint32_t count, tr_error *err) {
-    if (count > s->vertex_normal_capacity) {
-        uint64_t cap = (uint64_t)s->vertex_normal_capacity * 2;
-        if (cap < count) {
-            cap = count;
-        }
-        tr_vec3 *grown = realloc(s->vertex_normals, (size_t)cap * 3 * sizeof *grown);
-        if (!grown) {
-            return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY,
-                                "out of memory storing vertex normals");
-        }
-        s->vertex_normals = grown;
-        s->vertex_normal_capacity = (uint32_t)cap;
+/* Grows *arr (capacity *cap elements of `elem` bytes) to hold at least `need`. */
+static int grow(void **arr, uint32_t *cap, uint64_t need, size_t elem, const char *what,
+                tr_error *err) {
+    if (need <= *cap) {
+        return TR_OK;
     }
-    if (count > s->vertex_normal_count) {
-        memset(s->vertex_normals + (size_t)3 * s->vertex_normal_count, 0,
-               (size_t)(count - s->vertex_normal_count) * 3 * sizeof *s->vertex_normals);
-        s->vertex_normal_count = count;
+    if (need > UINT32_MAX) {
+        return tr_error_set(err, TR_STATUS_LIMIT, "more than %u %s", UINT32_MAX, what);
     }
+    uint64_t c = (uint64_t)*cap * 2;
+    if (c < need) {
+        c = need;
+    }
+    if (c > UINT32_MAX) {
+        c = UINT32_MAX;
+    }
+    void *grown = realloc(*arr, (size_t)c * elem);
+    if (!grown) {
+        return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory storing %llu %s",
+                            (unsigned long long)need, what);
+    }
+    *arr = grown;
+    *cap = (uint32_t)c;
     return TR_OK;
+}
+
+tr_material_ext tr_material_ext_default(void) {
+    tr_material_ext e;
+    memset(&e, 0, sizeof e);
+    e.base_tex = e.emission_tex = e.mr_tex = e.normal_tex = TR_NO_INDEX;
+    e.alpha_cutoff = 0.5f;
+    e.normal_scale = 1.0f;
+    return e;
+}
+
+int tr_scene_set_material_ext(tr_scene *s, uint32_t index, const tr_material_ext *ext,
+                              tr_error *err) {
+    if (index >= s->material_count) {
+        return tr_error_set(err, TR_STATUS_NOT_FOUND, "material %u of %u", index,
+                            s->material_count);
+    }
+    const uint32_t tex[4] = {ext->base_tex, ext->emission_tex, ext->mr_tex, ext->normal_tex};
+    for (int k = 0; k < 4; ++k) {
+        if (tex[k] != TR_NO_INDEX && tex[k] >= s->texture_count) {
+            return tr_error_set(err, TR_STATUS_NOT_FOUND,
+                                "material %u refers to texture %u, but the scene has %u", index,
+                                tex[k], s->texture_count);
+        }
+    }
+    if (!v3_is_finite(ext->emission) || !isfinite(ext->metallic) || !isfinite(ext->alpha_cutoff) ||
+        !isfinite(ext->normal_scale)) {
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "material %u has a non-finite parameter", index);
+    }
+    if (s->material_ext_count < s->material_count) {
+        if (grow((void **)&s->material_exts, &s->material_ext_capacity, s->material_count,
+                 sizeof *s->material_exts, "material extras", err) != TR_OK) {
+            return TR_ERR;
+        }
+        for (uint32_t i = s->material_ext_count; i < s->material_count; ++i) {
+            s->material_exts[i] = tr_material_ext_default();
+        }
+        s->material_ext_count = s->material_count;
+    }
+    s->material_exts[index] = *ext;
+    s->generation++;
+    return TR_OK;
+}
+
+int tr_scene_add_texture(tr_scene *s, const uint32_t *rgba, uint32_t width, uint32_t height,
+                         uint32_t flags, uint32_t *index, tr_error *err) {
+    uint64_t n = (uint64_t)width * height;
+    if (width == 0 || height == 0) {
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "a texture of %ux%u texels", width,
+                            height);
+    }
+    if (n + s->texel_count > UINT32_MAX) {
+        return tr_error_set(err, TR_STATUS_LIMIT, "textures would exceed %u texels", UINT32_MAX);
+    }
+    if (grow((void **)&s->texels, &s->texel_capacity, s->texel_count + n, sizeof *s->texels,
+             "texels", err) != TR_OK ||
+        grow((void **)&s->textures, &s->texture_capacity, (uint64_t)s->texture_count + 1,
+             sizeof *s->textures, "textures", err) != TR_OK) {
+        return TR_ERR;
+    }
+    memcpy(s->texels + s->texel_count, rgba, (size_t)n * sizeof *rgba);
+    tr_texture *t = &s->textures[s->texture_count];
+    t->offset = s->texel_count;
+    t->width = width;
+    t->height = height;
+    t->flags = flags;
+    s->texel_count += (uint32_t)n;
+    if (index) {
+        *index = s->texture_count;
+    }
+    s->texture_count++;
+    s->generation++;
+    return TR_OK;
+}
+
+void tr_scene_truncate(tr_scene *s, uint32_t triangles, uint32_t shapes, uint32_t materials) {
+    s->triangle_count = triangles;
+    s->shape_count = shapes;
+    s->material_count = materials;
+    if (s->tri_verts_count > triangles) {
+        s->tri_verts_count = triangles;
+    }
+    if (s->material_ext_count > materials) {
+        s->material_ext_count = materials;
+    }
+    s->generation++;
 }
 
 int tr_scene_append_shape(tr_scene *s, const tr_triangle *tris, uint32_t n, const tr_vec3 *normals,
                           tr_error *err) {
+    if (!normals) {
+        return tr_scene_append_shape_attr(s, tris, n, NULL, 0, NULL, err);
+    }
+    if ((uint64_t)n * 3 > UINT32_MAX) {
+        return tr_error_set(err, TR_STATUS_LIMIT, "more than %u vertices", UINT32_MAX);
+    }
+    tr_vertex *v = malloc((size_t)(n ? n : 1) * 3 * sizeof *v);
+    uint32_t *idx = malloc((size_t)(n ? n : 1) * 3 * sizeof *idx);
+    int rc = TR_OK;
+    if (!v || !idx) {
+        rc = tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory storing vertex normals");
+    } else {
+        for (uint32_t i = 0; i < 3 * n; ++i) {
+            v[i].normal = normals[i];
+            v[i].u = 0.0f;
+            v[i].v = 0.0f;
+            idx[i] = i;
+        }
+        rc = tr_scene_append_shape_attr(s, tris, n, v, 3 * n, idx, err);
+    }
+    free(v);
+    free(idx);
+    return rc;
+}
+
+int tr_scene_append_shape_attr(tr_scene *s, const tr_triangle *tris, uint32_t n,
+                               const tr_vertex *verts, uint32_t nv, const uint32_t *idx,
+                               tr_error *err) {
     if ((uint64_t)s->triangle_count + n > UINT32_MAX / 2) {
         return tr_error_set(err, TR_STATUS_LIMIT, "scene would exceed %u triangles",
                             UINT32_MAX / 2);
     }
-    int rc = TR_OK;
-    if (s->triangle_count + n > s->triangle_capacity) {
-        uint64_t cap = (uint64_t)s->triangle_capacity * 2;
-        if (cap < (uint64_t)s->triangle_count + n) {
-            cap = (uint64_t)s->triangle_count + n;
-        }
-        tr_triangle *grown = realloc(s->triangles, (size_t)cap * sizeof *grown);
-        if (!grown) {
-            rc = tr_error_set(err, TR_STATUS_OUT_OF_MEMORY,
-                              "out of memory growing the scene to %llu triangles",
-                              (unsigned long long)cap);
-        } else {
-            s->triangles = grown;
-            s->triangle_capacity = (uint32_t)cap;
-        }
+    if (verts && (uint64_t)s->vertex_count + nv >= TR_NO_INDEX) {
+        return tr_error_set(err, TR_STATUS_LIMIT, "scene would exceed %u vertices",
+                            TR_NO_INDEX - 1u);
     }
-    if (rc == TR_OK && s->shape_count == s->shape_capacity) {
-        uint32_t cap = s->shape_capacity ? 2 * s->shape_capacity : 16;
-        tr_flat_node *grown = realloc(s->shapes, (size_t)cap * sizeof *grown);
-        if (!grown) {
-            rc = tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory adding a shape");
-        } else {
-            s->shapes = grown;
-            s->shape_capacity = cap;
-        }
-    }
-    if (rc == TR_OK && normals) {
-        rc = normals_reserve(s, s->triangle_count + n, err);
-    }
+    int rc = grow((void **)&s->triangles, &s->triangle_capacity, (uint64_t)s->triangle_count + n,
+                  sizeof *s->triangles, "triangles", err);
     if (rc == TR_OK) {
-        memcpy(s->triangles + s->triangle_count, tris, (size_t)n * sizeof *tris);
-        if (normals) {
-            memcpy(s->vertex_normals + (size_t)3 * s->triangle_count, normals,
-                   (size_t)n * 3 * sizeof *normals);
-        }
-        tr_flat_node *node = &s->shapes[s->shape_count++];
-        node->box = tr_triangles_bounds(tris, n);
-        node->first = s->triangle_count;
-        node->count = n;
-        s->triangle_count += n;
-        s->generation++;
+        rc = grow((void **)&s->shapes, &s->shape_capacity, (uint64_t)s->shape_count + 1,
+                  sizeof *s->shapes, "shapes", err);
     }
-    return rc;
+    if (rc == TR_OK && verts) {
+        rc = grow((void **)&s->vertices, &s->vertex_capacity, (uint64_t)s->vertex_count + nv,
+                  sizeof *s->vertices, "vertices", err);
+        if (rc == TR_OK) {
+            rc = grow((void **)&s->tri_verts, &s->tri_verts_capacity,
+                      (uint64_t)s->triangle_count + n, sizeof *s->tri_verts, "triangles", err);
+        }
+    }
+    if (rc != TR_OK) {
+        return rc;
+    }
+    memcpy(s->triangles + s->triangle_count, tris, (size_t)n * sizeof *tris);
+    if (verts) {
+        /* Triangles between the last attributed shape and this one have none. */
+        for (uint32_t i = s->tri_verts_count; i < s->triangle_count; ++i) {
+            s->tri_verts[i].v[0] = s->tri_verts[i].v[1] = s->tri_verts[i].v[2] = TR_NO_INDEX;
+        }
+        memcpy(s->vertices + s->vertex_count, verts, (size_t)nv * sizeof *verts);
+        for (uint32_t i = 0; i < n; ++i) {
+            for (int k = 0; k < 3; ++k) {
+                uint32_t j = idx[3 * i + (uint32_t)k];
+                s->tri_verts[s->triangle_count + i].v[k] =
+                    j < nv ? s->vertex_count + j : TR_NO_INDEX;
+            }
+            if (s->tri_verts[s->triangle_count + i].v[1] == TR_NO_INDEX ||
+                s->tri_verts[s->triangle_count + i].v[2] == TR_NO_INDEX) {
+                s->tri_verts[s->triangle_count + i].v[0] = TR_NO_INDEX;
+            }
+        }
+        s->vertex_count += nv;
+        s->tri_verts_count = s->triangle_count + n;
+    }
+    tr_flat_node *node = &s->shapes[s->shape_count++];
+    node->box = tr_triangles_bounds(tris, n);
+    node->first = s->triangle_count;
+    node->count = n;
+    s->triangle_count += n;
+    s->generation++;
+    return TR_OK;
 }
 
 int tr_scene_add_mesh(tr_scene *s, const float *positions, uint32_t vertex_count,
                       const uint32_t *indices, uint32_t triangle_count, const float *normals,
                       uint32_t material, const tr_transform *tf, uint32_t *dropped, tr_error *err) {
+    return tr_scene_add_mesh_uv(s, positions, vertex_count, indices, triangle_count, normals, NULL,
+                                material, tf, dropped, err);
+}
+
+int tr_scene_add_mesh_uv(tr_scene *s, const float *positions, uint32_t vertex_count,
+                         const uint32_t *indices, uint32_t triangle_count, const float *normals,
+                         const float *uvs, uint32_t material, const tr_transform *tf,
+                         uint32_t *dropped, tr_error *err) {
     if (dropped) {
         *dropped = 0;
     }
@@ -200,11 +349,15 @@ int tr_scene_add_mesh(tr_scene *s, const float *positions, uint32_t vertex_count
         }
     }
     tr_triangle *tris = malloc((size_t)(triangle_count ? triangle_count : 1) * sizeof *tris);
-    tr_vec3 *nrm =
-        normals ? malloc((size_t)(triangle_count ? triangle_count : 1) * 3 * sizeof *nrm) : NULL;
-    if (!tris || (normals && !nrm)) {
+    const int attr = normals || uvs;
+    uint32_t *idx =
+        attr ? malloc((size_t)(triangle_count ? triangle_count : 1) * 3 * sizeof *idx) : NULL;
+    tr_vertex *verts =
+        attr ? malloc((size_t)(vertex_count ? vertex_count : 1) * sizeof *verts) : NULL;
+    if (!tris || (attr && (!idx || !verts))) {
         free(tris);
-        free(nrm);
+        free(idx);
+        free(verts);
         return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY,
                             "out of memory adding a mesh of %u triangles", triangle_count);
     }
@@ -223,11 +376,9 @@ int tr_scene_add_mesh(tr_scene *s, const float *positions, uint32_t vertex_count
             bad++;
             continue;
         }
-        if (nrm) {
+        if (idx) {
             for (int k = 0; k < 3; ++k) {
-                const float *q = normals + (size_t)3 * indices[3 * i + k];
-                tr_vec3 nv = v3(q[0], q[1], q[2]);
-                nrm[3 * n + k] = v3_is_finite(nv) ? tr_transform_normal(tf, nv) : v3s(0.0f);
+                idx[3 * n + (uint32_t)k] = indices[3 * i + (uint32_t)k];
             }
         }
         tris[n++] = t;
@@ -235,15 +386,32 @@ int tr_scene_add_mesh(tr_scene *s, const float *positions, uint32_t vertex_count
     if (dropped) {
         *dropped = bad;
     }
+    for (uint32_t i = 0; verts && i < vertex_count; ++i) {
+        tr_vertex *o = &verts[i];
+        o->normal = v3s(0.0f);
+        if (normals) {
+            tr_vec3 nv = v3(normals[3 * i], normals[3 * i + 1], normals[3 * i + 2]);
+            if (v3_is_finite(nv) && v3_dot(nv, nv) > 0.0f) {
+                o->normal = tr_transform_normal(tf, nv);
+                if (!v3_is_finite(o->normal)) {
+                    o->normal = v3s(0.0f);
+                }
+            }
+        }
+        o->u = uvs && isfinite(uvs[2 * i]) ? uvs[2 * i] : 0.0f;
+        o->v = uvs && isfinite(uvs[2 * i + 1]) ? uvs[2 * i + 1] : 0.0f;
+    }
     if (n == 0) {
         free(tris);
-        free(nrm);
+        free(idx);
+        free(verts);
         return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
                             "mesh has no triangles of non-zero area (%u dropped)", bad);
     }
-    int rc = tr_scene_append_shape(s, tris, n, nrm, err);
+    int rc = tr_scene_append_shape_attr(s, tris, n, verts, verts ? vertex_count : 0, idx, err);
     free(tris);
-    free(nrm);
+    free(idx);
+    free(verts);
     return rc;
 }
 
@@ -440,6 +608,23 @@ tr_scene_view tr_scene_view_of(const tr_scene *s) {
     v.light_count = s->light_triangles == s->triangle_count ? s->light_count : 0;
     v.light_cdf_count = v.light_count;
     v.light_weight_total = s->light_weight_total;
+    v.vertices = s->vertices;
+    v.vertex_count = s->vertex_count;
+    v.tri_verts = s->tri_verts;
+    v.tri_verts_count =
+        s->tri_verts_count < s->triangle_count ? s->tri_verts_count : s->triangle_count;
+    v.textures = s->textures;
+    v.texture_count = s->texture_count;
+    v.texels = s->texels;
+    v.texel_count = s->texel_count;
+    v.material_exts = s->material_exts;
+    v.material_ext_count = s->material_ext_count == s->material_count ? s->material_ext_count : 0;
+    v.env = &s->env;
+    v.env_count = s->env_count;
+    v.env_texels = s->env_texels;
+    v.env_texel_count = s->env_texel_count;
+    v.env_cdf = s->env_cdf;
+    v.env_cdf_count = s->env_cdf_count;
 #ifdef TR_SCENE_VIEW_EMBREE
     v.embree_scene = s->embree.scene;
 #endif
@@ -491,15 +676,31 @@ tr_aabb tr_scene_shape_box(const tr_scene *s, uint32_t shape) {
 
 int tr_scene_triangle_normals(const tr_scene *s, uint32_t i, tr_vec3 out[3]) {
     memset(out, 0, 3 * sizeof *out);
-    if (i >= s->vertex_normal_count) {
+    if (i >= s->tri_verts_count || i >= s->triangle_count || s->tri_verts[i].v[0] == TR_NO_INDEX) {
         return 0;
     }
     int has = 0;
     for (int k = 0; k < 3; ++k) {
-        out[k] = s->vertex_normals[3 * (size_t)i + (size_t)k];
+        out[k] = s->vertices[s->tri_verts[i].v[k]].normal;
         has |= out[k].x != 0.0f || out[k].y != 0.0f || out[k].z != 0.0f;
     }
     return has;
+}
+
+uint32_t tr_scene_material_maps(const tr_scene *s, uint32_t i) {
+    if (i >= s->material_count || s->material_ext_count != s->material_count) {
+        return 0u;
+    }
+    const tr_material_ext *e = &s->material_exts[i];
+    return (e->base_tex != TR_NO_INDEX ? TR_MAP_BASE : 0u) |
+           (e->emission_tex != TR_NO_INDEX ? TR_MAP_EMISSION : 0u) |
+           (e->mr_tex != TR_NO_INDEX ? TR_MAP_METALLIC_ROUGHNESS : 0u) |
+           (e->normal_tex != TR_NO_INDEX ? TR_MAP_NORMAL : 0u) |
+           ((e->flags & TR_MATEXT_ALPHA_MASK) ? TR_MAP_CUTOUT : 0u);
+}
+
+uint32_t tr_scene_shape_triangle_count(const tr_scene *s, uint32_t shape) {
+    return shape < s->shape_count ? s->shapes[shape].count : 0u;
 }
 
 tr_aabb tr_scene_bounds(const tr_scene *s) {

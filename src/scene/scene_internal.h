@@ -8,6 +8,7 @@
 #include "kernel/scene_view.h"
 #include "kernel/types.h"
 #include "trac0r/scene.h"
+#include "trac0r/scene_file.h"
 
 struct tr_scene {
     tr_material *materials;
@@ -36,11 +37,27 @@ struct tr_scene {
     uint32_t light_count;
     float light_weight_total;
     uint32_t light_triangles; /* triangle count when the table was built */
-    /* Vertex normals of imported meshes, kept for smooth shading (the kernels do not read
-     * them yet): three per triangle for triangles 0..vertex_normal_count-1, zero where a
-     * triangle has none; triangles beyond that have none. */
-    tr_vec3 *vertex_normals;
-    uint32_t vertex_normal_count, vertex_normal_capacity;
+    /* Vertex attributes (kernel/attrib.h): triangles 0..tri_verts_count-1 name three
+     * entries of `vertices` each (v[0] == TR_NO_INDEX: none); triangles beyond have none. */
+    tr_vertex *vertices;
+    uint32_t vertex_count, vertex_capacity;
+    tr_tri_verts *tri_verts;
+    uint32_t tri_verts_count, tri_verts_capacity;
+    /* Textures (src/scene/texture.c) and the per-material extras that refer to them:
+     * material_ext_count is 0 or material_count. */
+    tr_texture *textures;
+    uint32_t texture_count, texture_capacity;
+    uint32_t *texels;
+    uint32_t texel_count, texel_capacity;
+    tr_material_ext *material_exts;
+    uint32_t material_ext_count, material_ext_capacity;
+    /* The environment light (src/scene/envmap.c): env_count 0 or 1. */
+    tr_env env;
+    uint32_t env_count;
+    float *env_texels; /* 3 per texel */
+    uint32_t env_texel_count;
+    float *env_cdf;
+    uint32_t env_cdf_count;
 };
 
 /* An empty scene (no allocation), for a tr_scene the caller owns (tr_scene_create does
@@ -51,6 +68,55 @@ void tr_scene_init(tr_scene *s);
  * arrays; `normals` (3 per triangle) may be NULL. The caller keeps its arrays. */
 int tr_scene_append_shape(tr_scene *s, const tr_triangle *tris, uint32_t n, const tr_vec3 *normals,
                           tr_error *err);
+/* The same with indexed vertex attributes: nv vertices, and for triangle i the indices
+ * idx[3i..3i+2] into them (verts and idx may be NULL together for none). */
+int tr_scene_append_shape_attr(tr_scene *s, const tr_triangle *tris, uint32_t n,
+                               const tr_vertex *verts, uint32_t nv, const uint32_t *idx,
+                               tr_error *err);
+/* tr_scene_add_mesh with texture coordinates: uvs (NULL for none) holds 2 floats per
+ * vertex. */
+int tr_scene_add_mesh_uv(tr_scene *s, const float *positions, uint32_t vertex_count,
+                         const uint32_t *indices, uint32_t triangle_count, const float *normals,
+                         const float *uvs, uint32_t material, const tr_transform *tf,
+                         uint32_t *dropped, tr_error *err);
+/* Sets the extras of material `index` (the scene's other materials get the defaults,
+ * tr_material_ext_default, when this is the first). */
+int tr_scene_set_material_ext(tr_scene *s, uint32_t index, const tr_material_ext *ext,
+                              tr_error *err);
+/* No textures, metallic 0, no cut-out, normal scale 1. */
+tr_material_ext tr_material_ext_default(void);
+/* Appends a width x height RGBA8 image (row-major from the top, R in the low byte) as a
+ * texture; its index in *index. */
+int tr_scene_add_texture(tr_scene *s, const uint32_t *rgba, uint32_t width, uint32_t height,
+                         uint32_t flags, uint32_t *index, tr_error *err);
+/* tr_scene_import_mesh with warnings: warn(ctx, message) for every texture or material
+ * property the import drops or approximates (names the material), may be NULL. */
+typedef void (*tr_import_warn_fn)(void *ctx, const char *message);
+/* What else a model file holds: its first camera (placed by its node and tf) and how many
+ * cameras and lights it has. */
+typedef struct tr_import_extras {
+    int has_camera;
+    tr_vec3 cam_pos, cam_dir, cam_up;
+    float cam_hfov;   /* Assimp's mHorizontalFOV, radians (model.c: the whole angle) */
+    float cam_aspect; /* 0: not given */
+    uint32_t cameras, lights;
+} tr_import_extras;
+int tr_scene_import_mesh_ex(tr_scene *s, const char *path, const tr_transform *tf,
+                            int64_t material_override, uint32_t max_triangles,
+                            tr_mesh_import_stats *stats, tr_import_warn_fn warn, void *warn_ctx,
+                            tr_import_extras *extras, tr_error *err);
+
+/* Sets the environment light (replacing any): radiance color * strength, times the
+ * width x height RGB map rgb (linear, top row first; NULL and 0 x 0 for a constant
+ * colour), turned by rotation radians about +y. Builds the map's sampling CDFs. */
+int tr_scene_set_environment(tr_scene *s, tr_vec3 color, float strength, float rotation,
+                             const float *rgb, uint32_t width, uint32_t height, tr_error *err);
+/* Loads an equirectangular map (Radiance .hdr, or any image stb_image reads) and sets
+ * it as the environment. */
+int tr_scene_load_environment(tr_scene *s, const char *path, tr_vec3 color, float strength,
+                              float rotation, tr_error *err);
+/* Restores the counts a failed import started from (everything is appended). */
+void tr_scene_truncate(tr_scene *s, uint32_t triangles, uint32_t shapes, uint32_t materials);
 
 /* After moving triangles (same count) of a scene committed to a BVH: refits the binary
  * BVH's boxes (tr_bvh_refit), then the wide BVH in place (tr_wbvh_refit: same shape, new

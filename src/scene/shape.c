@@ -47,6 +47,7 @@ uint64_t tr_shape_triangle_count(const tr_shape_desc *desc) {
     case TR_SHAPE_BOX:
         return 12;
     case TR_SHAPE_ICOSPHERE:
+    case TR_SHAPE_ICOSPHERE_SMOOTH:
         if (desc->subdivisions > TR_ICOSPHERE_MAX_SUBDIVISIONS) {
             return 0;
         }
@@ -177,9 +178,12 @@ static int check_vec(tr_vec3 v, const char *what, tr_error *err) {
     return TR_OK;
 }
 
-/* Generates the shape's triangles into a new array (caller frees). */
+/* Generates the shape's triangles into a new array (caller frees); for a smooth icosphere
+ * also its vertex normals, three per triangle (*normals, caller frees; NULL otherwise). */
 static int shape_generate(const tr_shape_desc *desc, tr_triangle **out, uint32_t *count,
-                          tr_error *err) {
+                          tr_vec3 **normals, tr_error *err) {
+    const int ico = desc->type == TR_SHAPE_ICOSPHERE || desc->type == TR_SHAPE_ICOSPHERE_SMOOTH;
+    *normals = NULL;
     if (check_vec(desc->transform.position, "position", err) != TR_OK ||
         check_vec(desc->transform.orientation, "orientation", err) != TR_OK ||
         check_vec(desc->transform.scale, "scale", err) != TR_OK) {
@@ -191,7 +195,7 @@ static int shape_generate(const tr_shape_desc *desc, tr_triangle **out, uint32_t
                             "shape scale (%g, %g, %g) must be positive", (double)sc.x, (double)sc.y,
                             (double)sc.z);
     }
-    if (desc->type == TR_SHAPE_ICOSPHERE && desc->subdivisions > TR_ICOSPHERE_MAX_SUBDIVISIONS) {
+    if (ico && desc->subdivisions > TR_ICOSPHERE_MAX_SUBDIVISIONS) {
         return tr_error_set(err, TR_STATUS_LIMIT,
                             "icosphere subdivisions %u exceed the limit of %d (%llu triangles)",
                             desc->subdivisions, TR_ICOSPHERE_MAX_SUBDIVISIONS,
@@ -203,10 +207,13 @@ static int shape_generate(const tr_shape_desc *desc, tr_triangle **out, uint32_t
                             (int)desc->type);
     }
     tr_triangle *tris = malloc((size_t)n * sizeof *tris);
-    tr_triangle *tmp = desc->type == TR_SHAPE_ICOSPHERE ? malloc((size_t)n * sizeof *tmp) : NULL;
-    if (!tris || (desc->type == TR_SHAPE_ICOSPHERE && !tmp)) {
+    tr_triangle *tmp = ico ? malloc((size_t)n * sizeof *tmp) : NULL;
+    tr_vec3 *nrm =
+        desc->type == TR_SHAPE_ICOSPHERE_SMOOTH ? malloc((size_t)n * 3 * sizeof *nrm) : NULL;
+    if (!tris || (ico && !tmp) || (desc->type == TR_SHAPE_ICOSPHERE_SMOOTH && !nrm)) {
         free(tris);
         free(tmp);
+        free(nrm);
         return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory generating %llu triangles",
                             (unsigned long long)n);
     }
@@ -219,10 +226,18 @@ static int shape_generate(const tr_shape_desc *desc, tr_triangle **out, uint32_t
         made = gen_box(tris);
         break;
     case TR_SHAPE_ICOSPHERE:
+    case TR_SHAPE_ICOSPHERE_SMOOTH:
         made = gen_icosphere(tris, tmp, desc->subdivisions);
         break;
     }
     free(tmp);
+    for (uint32_t i = 0; nrm && i < made; ++i) {
+        /* The unit sphere's normal at a vertex is the vertex. */
+        nrm[3 * i + 0] = tr_transform_normal(&desc->transform, tris[i].v0);
+        nrm[3 * i + 1] = tr_transform_normal(&desc->transform, tris[i].v1);
+        nrm[3 * i + 2] = tr_transform_normal(&desc->transform, tris[i].v2);
+    }
+    *normals = nrm;
     for (uint32_t i = 0; i < made; ++i) {
         tris[i].v0 = apply_transform(&desc->transform, tris[i].v0);
         tris[i].v1 = apply_transform(&desc->transform, tris[i].v1);
@@ -242,11 +257,13 @@ int tr_scene_add_shape(tr_scene *s, const tr_shape_desc *desc, tr_error *err) {
                             desc->material, s->material_count);
     }
     tr_triangle *tris = NULL;
+    tr_vec3 *normals = NULL;
     uint32_t n = 0;
-    if (shape_generate(desc, &tris, &n, err) != TR_OK) {
+    if (shape_generate(desc, &tris, &n, &normals, err) != TR_OK) {
         return TR_ERR;
     }
-    int rc = tr_scene_append_shape(s, tris, n, NULL, err);
+    int rc = tr_scene_append_shape(s, tris, n, normals, err);
     free(tris);
+    free(normals);
     return rc;
 }

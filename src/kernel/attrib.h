@@ -1,0 +1,81 @@
+/* attrib.h - what a surface carries besides its triangle: vertex attributes (shading
+ * normals, texture coordinates), textures and the material parameters that the public
+ * tr_material (32 bytes, part of the ABI) has no room for.
+ *
+ * Every array here is optional: a scene without any of them has zero counts, and the
+ * material stage (material_eval.h) then does exactly what it did before they existed.
+ *
+ * Vertex attributes are indexed: tri_verts[t] names three entries of `vertices` for
+ * triangle t. An imported mesh shares a vertex among ~6 triangles, so the index buffer
+ * costs 12 bytes a triangle plus 20 bytes for every ~2 triangles (~22 bytes), against
+ * 60 for three independent vertices per triangle; the positions stay in tr_triangle
+ * and the BVH's leaves, whose layout the traversal is tuned for. */
+#ifndef TR_KERNEL_ATTRIB_H
+#define TR_KERNEL_ATTRIB_H
+
+#include "compat.h"
+#include "types.h"
+
+/* tr_tri_verts.v[0] of a triangle without vertex attributes; tr_material_ext's texture
+ * index of no texture. */
+#define TR_NO_INDEX 0xffffffffu
+
+/* One vertex's attributes, 20 bytes. A zero normal means none (the geometric one). */
+typedef struct tr_vertex {
+    tr_vec3 normal; /* unit, world space, on the side the triangle's geometric normal faces */
+    float u, v;     /* texture coordinates, glTF's convention: v grows downwards in the image */
+} tr_vertex;
+TR_STATIC_ASSERT(sizeof(tr_vertex) == 20, "tr_vertex layout");
+
+/* The vertices of one triangle, in the order of tr_triangle's v0, v1, v2. 12 bytes. */
+typedef struct tr_tri_verts {
+    uint32_t v[3];
+} tr_tri_verts;
+TR_STATIC_ASSERT(sizeof(tr_tri_verts) == 12, "tr_tri_verts layout");
+
+/* tr_texture.flags */
+#define TR_TEXTURE_CLAMP 1u /* clamp coordinates to the edge (else repeat) */
+
+/* An image in the scene's texel array: width x height RGBA8 texels (R in the low byte),
+ * row-major from the top row, starting at texels[offset]. 16 bytes. */
+typedef struct tr_texture {
+    uint32_t offset;
+    uint32_t width, height;
+    uint32_t flags; /* TR_TEXTURE_* */
+} tr_texture;
+TR_STATIC_ASSERT(sizeof(tr_texture) == 16, "tr_texture layout");
+
+/* tr_material_ext.flags */
+#define TR_MATEXT_ALPHA_MASK 1u /* texels with alpha below alpha_cutoff are holes */
+
+/* Per-material extras, one per material when the scene has any (material_ext_count is 0
+ * or material_count). Texture indices are TR_NO_INDEX for none. 48 bytes. */
+typedef struct tr_material_ext {
+    uint32_t base_tex;     /* sRGB colour (x the material's colour), alpha in a */
+    uint32_t emission_tex; /* sRGB colour (x emission) */
+    uint32_t mr_tex;       /* glTF: roughness in g, metallic in b (x the factors) */
+    uint32_t normal_tex;   /* tangent-space normal map, linear */
+    tr_vec3 emission;      /* emitted radiance of a non-emitter material (principled) */
+    float metallic;        /* principled: 0 dielectric, 1 conductor */
+    float alpha_cutoff;    /* TR_MATEXT_ALPHA_MASK: alpha below this is a hole */
+    float normal_scale;    /* glTF normalTexture.scale */
+    uint32_t flags;        /* TR_MATEXT_* */
+    uint32_t pad;
+} tr_material_ext;
+TR_STATIC_ASSERT(sizeof(tr_material_ext) == 48, "tr_material_ext layout");
+
+/* The environment: radiance arriving from infinitely far along directions no surface
+ * blocks, a constant colour or an equirectangular map (width x height RGB floats in
+ * env_texels, row 0 at +y, column 0 at -z turning towards +x... see envmap.h), times
+ * color * strength, turned by `rotation` about +y. The scene holds 0 or 1. 40 bytes. */
+typedef struct tr_env {
+    tr_vec3 color;
+    float strength;
+    float rot_cos, rot_sin; /* the rotation about +y */
+    uint32_t width, height; /* 0 x 0: constant */
+    float weight_sum;       /* sum of the sampling weights (envmap.h) over all texels */
+    uint32_t pad;
+} tr_env;
+TR_STATIC_ASSERT(sizeof(tr_env) == 40, "tr_env layout");
+
+#endif

@@ -1,0 +1,131 @@
+/* bsdf_principled.h - the principled material: glTF 2.0's metallic-roughness model
+ * (base colour, metallic, roughness; Khronos glTF 2.0 specification, appendix B) as a
+ * diffuse base under a GGX specular layer, importance-sampled by lobe.
+ *
+ *   f = (1 - metallic) f_diffuse + f_spec(F0),   F0 = mix(0.04, base, metallic)
+ *
+ * f_spec is bsdf.h's GGX microfacet reflection (Walter et al. 2007, height-correlated
+ * Smith G2, Schlick's Fresnel) with alpha = roughness^2 (glTF's convention; the mix of
+ * two Schlick terms, dielectric and metal, is the Schlick term of the mixed F0).
+ * f_diffuse couples the base to the layer above it so that the sum never reflects more
+ * than arrives, with Ashikhmin and Shirley's energy-conserving diffuse term ("An
+ * Anisotropic Phong BRDF Model", JGT 2000, eq. 5):
+ *
+ *   f_diffuse = 28 / (23 pi) base (1 - F0) (1 - (1 - cos_i / 2)^5) (1 - (1 - cos_o / 2)^5)
+ *
+ * Sampling: the specular lobe (visible normals, Heitz 2018) with probability p_spec from
+ * the lobes' estimated albedos, else the cosine-weighted hemisphere; the pdf is the
+ * mixture's, so MIS in pt sees the one density. The sampler takes its uniform numbers
+ * explicitly (ulobe, u1, u2). Included by bsdf.h after the GGX helpers it uses. */
+#ifndef TR_KERNEL_BSDF_PRINCIPLED_H
+#define TR_KERNEL_BSDF_PRINCIPLED_H
+
+/* Dielectric F0 of glTF's default index of refraction 1.5. */
+#define TR_PRINCIPLED_F0 0.04f
+
+TR_FN float tr_principled_alpha(float roughness) {
+    float r = tr_fminf(tr_fmaxf(roughness, 0.0f), 1.0f);
+    return tr_fmaxf(r * r, TR_GGX_MIN_ALPHA);
+}
+
+TR_FN tr_vec3 tr_principled_f0(const tr_bsdf_params *m) {
+    float k = tr_fminf(tr_fmaxf(m->metallic, 0.0f), 1.0f);
+    return v3_add(v3s(TR_PRINCIPLED_F0 * (1.0f - k)), v3_scale(m->color, k));
+}
+
+/* 1 - (1 - c/2)^5 */
+TR_FN float tr_as_factor(float c) {
+    float x = 1.0f - 0.5f * c;
+    float x2 = x * x;
+    return 1.0f - x2 * x2 * x;
+}
+
+/* GGX reflection with alpha and F0 given, for wo, wi on nf's side (cosines > 0). */
+TR_FN tr_vec3 tr_principled_spec(float alpha, tr_vec3 f0, tr_vec3 nf, tr_vec3 wo, tr_vec3 wi,
+                                 float co, float ci) {
+    tr_vec3 h = v3_normalize(v3_add(wo, wi));
+    float d = tr_ggx_d(alpha, v3_dot(h, nf));
+    float g2 = 1.0f / (1.0f + tr_ggx_lambda(alpha, co) + tr_ggx_lambda(alpha, ci));
+    tr_vec3 f = tr_fresnel_schlick(f0, v3_dot(wo, h));
+    return v3_scale(f, d * g2 / (4.0f * co * ci));
+}
+
+TR_FN tr_vec3 tr_principled_eval(const tr_bsdf_params *m, tr_vec3 nf, tr_vec3 wo, tr_vec3 wi) {
+    float co = v3_dot(wo, nf), ci = v3_dot(wi, nf);
+    if (co <= 0.0f || ci <= 0.0f) {
+        return v3s(0.0f);
+    }
+    float k = tr_fminf(tr_fmaxf(m->metallic, 0.0f), 1.0f);
+    tr_vec3 f0 = tr_principled_f0(m);
+    tr_vec3 f = tr_principled_spec(tr_principled_alpha(m->roughness), f0, nf, wo, wi, co, ci);
+    float kd = (1.0f - k) * (28.0f / 23.0f) * TR_INV_PI * (1.0f - TR_PRINCIPLED_F0) *
+               tr_as_factor(ci) * tr_as_factor(co);
+    return v3_add(f, v3_scale(m->color, kd));
+}
+
+/* Probability of sampling the specular lobe for outgoing cosine co: its Fresnel weight at
+ * co against the diffuse base's albedo (luminance-free: the RGB mean). */
+TR_FN float tr_principled_spec_prob(const tr_bsdf_params *m, float co) {
+    float k = tr_fminf(tr_fmaxf(m->metallic, 0.0f), 1.0f);
+    tr_vec3 fs = tr_fresnel_schlick(tr_principled_f0(m), co);
+    float ws = (fs.x + fs.y + fs.z) * (1.0f / 3.0f);
+    float wd = (1.0f - k) * (m->color.x + m->color.y + m->color.z) * (1.0f / 3.0f) *
+               (1.0f - TR_PRINCIPLED_F0) * tr_as_factor(co);
+    if (!(ws + wd > 0.0f)) {
+        return 1.0f;
+    }
+    /* At least 10 % each way where both lobes exist: a dark base must not starve the
+     * specular lobe of samples or the other way round. */
+    float p = ws / (ws + wd);
+    return wd > 0.0f ? tr_fminf(tr_fmaxf(p, 0.1f), 0.9f) : 1.0f;
+}
+
+TR_FN float tr_principled_pdf(const tr_bsdf_params *m, tr_vec3 nf, tr_vec3 wo, tr_vec3 wi) {
+    float co = v3_dot(wo, nf), ci = v3_dot(wi, nf);
+    if (co <= 0.0f || ci <= 0.0f) {
+        return 0.0f;
+    }
+    float alpha = tr_principled_alpha(m->roughness);
+    tr_vec3 h = v3_normalize(v3_add(wo, wi));
+    float g1 = 1.0f / (1.0f + tr_ggx_lambda(alpha, co));
+    float pspec = g1 * tr_ggx_d(alpha, v3_dot(h, nf)) / (4.0f * co);
+    float ps = tr_principled_spec_prob(m, co);
+    return ps * pspec + (1.0f - ps) * ci * TR_INV_PI;
+}
+
+/* Draws wi from uniform numbers ulobe, u1, u2 in [0, 1). Returns 0 when wi falls below
+ * the surface (the path ends). */
+TR_FN int tr_principled_sample(const tr_bsdf_params *m, tr_vec3 nf, tr_vec3 wo, float ulobe,
+                               float u1, float u2, tr_scatter *s) {
+    float co = v3_dot(wo, nf);
+    if (co <= 0.0f) {
+        return 0;
+    }
+    tr_vec3 t, b;
+    v3_basis(nf, &t, &b);
+    if (ulobe < tr_principled_spec_prob(m, co)) {
+        tr_vec3 vl = v3(v3_dot(wo, t), v3_dot(wo, b), co);
+        tr_vec3 hl = tr_ggx_sample_vndf(tr_principled_alpha(m->roughness), vl, u1, u2);
+        tr_vec3 h = v3_add(v3_add(v3_scale(t, hl.x), v3_scale(b, hl.y)), v3_scale(nf, hl.z));
+        s->wi = v3_normalize(v3_reflect(v3_neg(wo), h));
+    } else {
+        /* Cosine-weighted (Malley's method: the unit disk's concentric map lifted). */
+        float r = tr_sqrtf(u1), phi = TR_TWO_PI * u2;
+        float z = tr_sqrtf(tr_fmaxf(0.0f, 1.0f - u1));
+        s->wi = v3_add(v3_add(v3_scale(t, r * tr_cosf(phi)), v3_scale(b, r * tr_sinf(phi))),
+                       v3_scale(nf, z));
+    }
+    float ci = v3_dot(s->wi, nf);
+    if (ci <= 0.0f) {
+        return 0;
+    }
+    s->pdf = tr_principled_pdf(m, nf, wo, s->wi);
+    if (!(s->pdf > 0.0f)) {
+        return 0;
+    }
+    s->delta = 0;
+    s->weight = v3_scale(tr_principled_eval(m, nf, wo, s->wi), ci / s->pdf);
+    return 1;
+}
+
+#endif

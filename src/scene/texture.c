@@ -1,0 +1,162 @@
+/* texture.c - images for textures (RGBA8) and environment maps (float RGB), decoded with
+ * stb_image (Debian's libstb-dev); files are read here, so that size limits, special
+ * files and read errors are ours to report. */
+#define _POSIX_C_SOURCE 200809L
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#include "io/infile.h"
+#include "scene/scene_internal.h"
+#include "scene/texture.h"
+
+/* stb_image refuses larger sides itself; our own check comes first, from the header. */
+#define STBI_MAX_DIMENSIONS TR_TEXTURE_MAX_SIDE
+#define STBI_NO_STDIO
+#define STBI_FAILURE_USERMSG
+#define STB_IMAGE_STATIC
+#define STB_IMAGE_IMPLEMENTATION
+/* Static, so that libtrac0r exports no stbi_ names. The header declares a function its
+ * static build never defines, which gcc reports at the end of the file: the warning is
+ * off for this file (the pragma cannot be popped before that). */
+#pragma GCC diagnostic ignored "-Wunused-function"
+#include <stb/stb_image.h>
+
+int tr_read_image_file(const char *path, unsigned char **data, size_t *len, tr_error *err) {
+    *data = NULL;
+    *len = 0;
+    /* Regular files only, opened without blocking (a FIFO would hang the load). */
+    uint64_t size = 0;
+    FILE *fp = tr_infile_open(path, &size, err);
+    if (!fp) {
+        return TR_ERR;
+    }
+    if (size > TR_IMAGE_MAX_FILE_BYTES) {
+        fclose(fp);
+        return tr_error_set(err, TR_STATUS_LIMIT, "'%.200s' is larger than %u MiB", path,
+                            TR_IMAGE_MAX_FILE_BYTES >> 20);
+    }
+    size_t n = (size_t)size;
+    unsigned char *buf = malloc(n ? n : 1);
+    if (!buf) {
+        fclose(fp);
+        return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory reading '%.200s'", path);
+    }
+    size_t got = fread(buf, 1, n, fp);
+    int bad = ferror(fp);
+    fclose(fp);
+    if (bad || got != n) {
+        free(buf);
+        return tr_error_set(err, TR_STATUS_IO, "cannot read '%.200s'", path);
+    }
+    *data = buf;
+    *len = n;
+    return TR_OK;
+}
+
+/* The image's size from its header, checked before anything is decoded. */
+static int check_header(const unsigned char *data, size_t len, const char *name, int *w, int *h,
+                        tr_error *err) {
+    int comp;
+    if (len == 0 || len > (size_t)TR_IMAGE_MAX_FILE_BYTES) {
+        return tr_error_set(err, TR_STATUS_PARSE, "'%.200s': %s", name,
+                            len ? "too large" : "empty");
+    }
+    if (!stbi_info_from_memory(data, (int)len, w, h, &comp)) {
+        return tr_error_set(err, TR_STATUS_PARSE, "'%.200s': not an image stb_image reads (%s)",
+                            name, stbi_failure_reason() ? stbi_failure_reason() : "unknown");
+    }
+    if (*w <= 0 || *h <= 0) {
+        return tr_error_set(err, TR_STATUS_PARSE, "'%.200s': an image of %dx%d texels", name, *w,
+                            *h);
+    }
+    if (*w > TR_TEXTURE_MAX_SIDE || *h > TR_TEXTURE_MAX_SIDE ||
+        (uint64_t)*w * (uint64_t)*h > TR_TEXTURE_MAX_TEXELS) {
+        return tr_error_set(err, TR_STATUS_LIMIT,
+                            "'%.200s': %dx%d texels exceed the limit (sides up to %d, %u texels)",
+                            name, *w, *h, TR_TEXTURE_MAX_SIDE, TR_TEXTURE_MAX_TEXELS);
+    }
+    return TR_OK;
+}
+
+int tr_image_decode_rgba8(const unsigned char *data, size_t len, const char *name, uint32_t **out,
+                          uint32_t *width, uint32_t *height, tr_error *err) {
+    int w, h, comp;
+    *out = NULL;
+    if (check_header(data, len, name, &w, &h, err) != TR_OK) {
+        return TR_ERR;
+    }
+    unsigned char *px = stbi_load_from_memory(data, (int)len, &w, &h, &comp, 4);
+    if (!px) {
+        return tr_error_set(err, TR_STATUS_PARSE, "'%.200s': cannot decode (%s)", name,
+                            stbi_failure_reason() ? stbi_failure_reason() : "unknown");
+    }
+    size_t n = (size_t)w * (size_t)h;
+    uint32_t *rgba = malloc(n * sizeof *rgba);
+    if (!rgba) {
+        stbi_image_free(px);
+        return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory decoding '%.200s'", name);
+    }
+    for (size_t i = 0; i < n; ++i) {
+        const unsigned char *p = px + 4 * i;
+        rgba[i] = (uint32_t)p[0] | ((uint32_t)p[1] << 8) | ((uint32_t)p[2] << 16) |
+                  ((uint32_t)p[3] << 24);
+    }
+    stbi_image_free(px);
+    *out = rgba;
+    *width = (uint32_t)w;
+    *height = (uint32_t)h;
+    return TR_OK;
+}
+
+int tr_image_decode_rgbf(const unsigned char *data, size_t len, const char *name, float **out,
+                         uint32_t *width, uint32_t *height, tr_error *err) {
+    int w, h, comp;
+    *out = NULL;
+    if (check_header(data, len, name, &w, &h, err) != TR_OK) {
+        return TR_ERR;
+    }
+    /* Radiance .hdr comes linear; 8-bit formats are taken as sRGB (stb_image's default
+     * gamma 2.2 is close to it, and environment maps are HDR in practice). */
+    float *px = stbi_loadf_from_memory(data, (int)len, &w, &h, &comp, 3);
+    if (!px) {
+        return tr_error_set(err, TR_STATUS_PARSE, "'%.200s': cannot decode (%s)", name,
+                            stbi_failure_reason() ? stbi_failure_reason() : "unknown");
+    }
+    size_t n = (size_t)w * (size_t)h * 3;
+    for (size_t i = 0; i < n; ++i) {
+        if (!(px[i] >= 0.0f) || px[i] > 1e30f) {
+            px[i] = px[i] > 1e30f ? 1e30f : 0.0f; /* NaN and negative: black */
+        }
+    }
+    /* stb_image's allocation is malloc's (STBI_MALLOC default): free() releases it. */
+    *out = px;
+    *width = (uint32_t)w;
+    *height = (uint32_t)h;
+    return TR_OK;
+}
+
+int tr_scene_load_texture_memory(tr_scene *s, const unsigned char *data, size_t len,
+                                 const char *name, uint32_t flags, uint32_t *index, tr_error *err) {
+    uint32_t *rgba, w, h;
+    if (tr_image_decode_rgba8(data, len, name, &rgba, &w, &h, err) != TR_OK) {
+        return TR_ERR;
+    }
+    int rc = tr_scene_add_texture(s, rgba, w, h, flags, index, err);
+    free(rgba);
+    return rc;
+}
+
+int tr_scene_load_texture(tr_scene *s, const char *path, uint32_t flags, uint32_t *index,
+                          tr_error *err) {
+    unsigned char *data;
+    size_t len;
+    if (tr_read_image_file(path, &data, &len, err) != TR_OK) {
+        return TR_ERR;
+    }
+    int rc = tr_scene_load_texture_memory(s, data, len, path, flags, index, err);
+    free(data);
+    return rc;
+}
