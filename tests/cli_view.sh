@@ -9,6 +9,7 @@
 # Usage: cli_view.sh TRAC0R_BINARY SCRATCH_DIR
 set -u
 . "$(dirname "$0")/common.sh"
+SRC=$(cd "$(dirname "$0")/.." && pwd)
 cli_begin "$1" "$2"
 XVFB_PID=
 VIEW_PID=
@@ -255,6 +256,58 @@ wait_for 30 '[ "$(state stride)" = 2 ] && [ "$(state generation)" = "$(state vie
     fail "after quick stride changes: stride $(state stride)"
 [ "$(state cancelled)" -gt "$cancelled0" ] || fail "no frame in flight was cancelled"
 quit_viewer
+
+# A right-handed scene (the classic box: red wall on the left) stays the same way round
+# after a move, and holding a key keeps the picture live: frames keep being finished and
+# shown (the counter rises, the window changes) while the camera changes every 10 ms.
+# sides PPM: exits 0 when the left strip is red and the right one green.
+sides() {
+    set -- $(region "$1" 4 40 30 80) $(region "$1" 130 40 156 80)
+    awk -v lr="$1" -v lg="$2" -v rr="$5" -v rg="$6" \
+        'BEGIN { exit !(lr > 1.3 * lg && rg > 1.1 * rr) }'
+}
+start_viewer --scene "$SRC/scenes/cornell-classic.json" --target-fps 30
+wait_for 30 '[ "$(state spp)" -ge 16 ]' || fail "classic: fewer than 16 spp after 30 s"
+[ "$(state mirrored)" = 1 ] || fail "classic: the viewer's camera is not mirrored"
+dump classic0.ppm
+sides classic0.ppm || fail "classic before a move: red wall not left: $(region classic0.ppm 4 40 30 80)"
+xdotool keydown w
+sleep 0.5
+frames0=$(state frames)
+dump hold1.ppm
+sleep 1
+frames1=$(state frames)
+dump hold2.ppm
+moving=$(state moving)
+xdotool keyup w
+[ "$moving" = 1 ] || fail "holding W: the viewer does not say it is moving"
+[ "$frames1" -ge $((frames0 + 3)) ] || fail "holding W: frames went $frames0 -> $frames1 in 1 s"
+cmp -s hold1.ppm hold2.ppm && fail "holding W: the window did not change in 1 s"
+wait_for 10 '[ "$(state moving)" = 0 ] && [ "$(state generation)" = "$(state view_generation)" ]' ||
+    fail "classic: view did not settle after W"
+wait_for 30 '[ "$(state spp)" -ge 8 ]' || fail "classic after W: fewer than 8 spp"
+dump classic1.ppm
+sides classic1.ppm || fail "classic after W: mirrored: $(region classic1.ppm 4 40 30 80)"
+# R resets the camera; C writes it as scene-file JSON that loads back.
+pos1=$(state pos)
+xdotool key r
+wait_for 10 '[ "$(state pos)" != "$pos1" ]' || fail "R did not reset the camera"
+xdotool key c
+wait_for 10 '[ "$(state cameras)" = 1 ]' || fail "C wrote no camera: $(cat view.err)"
+grep -q '"handedness": "right"' shots/trac0r-camera-000.json || fail "C: $(cat shots/trac0r-camera-000.json)"
+quit_viewer
+# The reset camera, written by C into the scene file in place of its own camera, renders
+# the same image: the JSON is the scene's camera, handedness included.
+awk -v f=shots/trac0r-camera-000.json '
+    /^  "camera": \{/ { skip = 1; while ((getline l < f) > 0) { buf = buf sep "  " l; sep = "\n" }
+                       sub(/\n?  $/, "", buf); print buf ","; next }
+    skip && /^  \},?$/ { skip = 0; next }
+    !skip { print }' "$SRC/scenes/cornell-classic.json" >cam.json
+"$BIN" render "$SRC/scenes/cornell-classic.json" --width 40 --height 30 --spp 2 --out c0.png ||
+    fail "render cornell-classic failed"
+"$BIN" render cam.json --width 40 --height 30 --spp 2 --out c1.png 2>err.txt ||
+    fail "the camera C wrote does not load: $(cat err.txt)"
+cmp -s c0.png c1.png || fail "the camera C wrote renders another image"
 
 # F12 saves the converged float film: with --max-spp 4 it equals trac0r render --spp 4.
 rm -rf shots

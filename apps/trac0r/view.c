@@ -17,7 +17,8 @@ static void view_help(void) {
            "\n"
            "Opens an interactive window (800x600 by default, resizable) that shows the scene\n"
            "converging progressively: one sample per pixel per frame, rendered on its own\n"
-           "thread. Any camera change cancels the frame in flight and starts over.\n"
+           "thread. While the camera moves, frames hold --target-fps (resolution and samples\n"
+           "per pixel adapt); at rest the view converges at full resolution.\n"
            "\n"
            "Controls:\n"
            "  W/S A/D            forward/back, left/right      Space/Left Ctrl  up/down\n"
@@ -25,6 +26,8 @@ static void view_help(void) {
            "  mouse wheel        movement speed                +/-              exposure\n"
            "  1/2/3              preview stride 1/2/4 pixels   B                debug view\n"
            "  V                  BVH boxes (with [ and ] for depth)\n"
+           "  R                  reset the camera              C                camera as JSON\n"
+           "                     (printed, and saved to --shot-dir/trac0r-camera-NNN.json)\n"
            "  N                  per-stage timings on stdout   H                help overlay\n"
            "  F12                save a screenshot PNG (the float film, tonemapped)\n"
            "  Esc                quit\n"
@@ -41,6 +44,8 @@ static void view_help(void) {
            "  --stride K           initial preview stride, 1, 2 or 4 (default 1)\n"
            "  --exposure EV        display and screenshot exposure in stops, -20..20\n"
            "                       (default 0)\n"
+           "  --target-fps F       frame budget while the camera moves, 1..1000 (default 60):\n"
+           "                       the resolution and samples per frame adapt to hold it\n"
            "  --max-spp N          stop accumulating after N samples per pixel (default 0:\n"
            "                       never)\n"
            "  --animate            a dynamic scene (interactive mode): before every frame the\n"
@@ -119,6 +124,7 @@ int cmd_view(int argc, char **argv) {
     cli_common_default(&o.c);
     o.benchmark = -1;
     o.stride = 1;
+    o.target_fps = 60.0f;
     o.shot_dir = ".";
     int frames_given = 0;
     char bench_scene[64];
@@ -149,6 +155,8 @@ int cmd_view(int argc, char **argv) {
             }
         } else if (cli_is(&a, "--exposure")) {
             rc = cli_parse_float(&a, -20.0f, 20.0f, &o.exposure);
+        } else if (cli_is(&a, "--target-fps")) {
+            rc = cli_parse_float(&a, 1.0f, 1000.0f, &o.target_fps);
         } else if (cli_is(&a, "--max-spp")) {
             rc = cli_parse_u32(&a, 0, 100000000, &o.max_spp);
         } else if (cli_is(&a, "--animate")) {

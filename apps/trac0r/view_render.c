@@ -2,6 +2,7 @@
 #define _POSIX_C_SOURCE 200809L
 #include "view_render.h"
 #include "cli.h"
+#include "view_camera.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -46,10 +47,10 @@ static int render_cancelled(void *user) {
     return atomic_load(&r->cancel);
 }
 
-/* One frame of sample `spp` on the device, read back into r->film. */
+/* One frame of samples spp .. spp + n - 1 on the device, read back into r->film. */
 static int render_one(view_renderer *r, const tr_camera *cam, const tr_render_config *cfg,
-                      uint32_t spp, tr_render_stats *st, tr_error *err) {
-    if (tr_device_render(r->dev, cam, cfg, spp, 1, NULL, st, err) != TR_OK) {
+                      uint32_t spp, uint32_t n, tr_render_stats *st, tr_error *err) {
+    if (tr_device_render(r->dev, cam, cfg, spp, n, NULL, st, err) != TR_OK) {
         return TR_ERR;
     }
     if (atomic_load(&r->cancel)) {
@@ -63,6 +64,9 @@ static void *render_main(void *arg) {
     view_renderer *r = arg;
     uint64_t gen = UINT64_MAX; /* the generation the film holds */
     uint32_t spp = 0;
+    tr_camera rcam;  /* the camera the film is rendered with (reduced in motion) */
+    int rmoving = 0; /* the film's generation was asked for while moving */
+    memset(&rcam, 0, sizeof rcam);
     float tonemapped_exposure = 0.0f;
     tr_error err;
     pthread_mutex_lock(&r->mu);
@@ -84,6 +88,8 @@ static void *render_main(void *arg) {
         tr_camera cam = r->cam;
         const int stride = r->stride;
         const float exposure = r->exposure;
+        const int moving = r->moving;
+        const double budget_ms = r->budget_ms;
         const uint64_t want = r->generation;
         if (want == gen && r->max_spp && spp >= r->max_spp) {
             if (exposure != tonemapped_exposure && r->pixels) {
@@ -97,6 +103,8 @@ static void *render_main(void *arg) {
             continue;
         }
         atomic_store(&r->cancel, 0);
+        /* Only a refinement of a view on screen may be cancelled (view_render.h). */
+        atomic_store(&r->refining, want == gen && spp > 0);
         if (r->animate) {
             /* The scene moves: every frame is a new image. Under mu, as the UI thread
              * reads the scene's boxes. */
@@ -115,7 +123,16 @@ static void *render_main(void *arg) {
         pthread_mutex_unlock(&r->mu);
 
         if (want != gen) {
-            if (resize_buffers(r, cam.screen_width, cam.screen_height, &err) != TR_OK ||
+            rcam = cam;
+            rmoving = moving;
+            if (moving && r->motion_scale > 1.0f) {
+                const float s = r->motion_scale;
+                uint32_t w = (uint32_t)((float)cam.screen_width / s + 0.5f);
+                uint32_t h = (uint32_t)((float)cam.screen_height / s + 0.5f);
+                /* Cannot fail: the size only shrinks, and stays at least 1x1. */
+                (void)tr_camera_resize(&rcam, w ? w : 1, h ? h : 1, &err);
+            }
+            if (resize_buffers(r, rcam.screen_width, rcam.screen_height, &err) != TR_OK ||
                 tr_device_clear(r->dev, &err) != TR_OK) {
                 pthread_mutex_lock(&r->mu);
                 r->failed = 1;
@@ -130,10 +147,17 @@ static void *render_main(void *arg) {
         cfg.cancel = render_cancelled;
         cfg.cancel_user = r;
         tr_render_stats st;
-        /* Animated, each frame is sample 0 of a new image: the frame count picks its
-         * random numbers instead, so that the noise changes from frame to frame. */
-        const uint32_t sample = r->animate ? (uint32_t)r->updates : spp;
-        int rc = render_one(r, &cam, &cfg, sample, &st, &err);
+        /* Animated or moving, each frame is a new image: a frame count picks its random
+         * numbers instead of the sample count, so that the noise changes from frame to
+         * frame (at rest sample k is frame k's, as `trac0r render` has it). */
+        const uint32_t nspp = rmoving ? r->motion_spp : 1u;
+        uint32_t sample = spp;
+        if (r->animate) {
+            sample = (uint32_t)r->updates;
+        } else if (rmoving) {
+            sample = (r->motion_frame++ & 0xffffu) * 16u + spp;
+        }
+        int rc = render_one(r, &rcam, &cfg, sample, nspp, &st, &err);
         if (rc != TR_OK) {
             pthread_mutex_lock(&r->mu);
             if (err.code == TR_STATUS_CANCELLED) {
@@ -146,27 +170,34 @@ static void *render_main(void *arg) {
             snprintf(r->error, sizeof r->error, "%s", err.msg);
             break;
         }
-        ++spp;
+        spp += nspp;
         double t0 = tr_time_now();
         view_tonemap(&r->film, exposure, r->back);
         tonemapped_exposure = exposure;
         double t1 = tr_time_now();
+        const float frame_scale = (float)cam.screen_width / (float)rcam.screen_width;
+        if (rmoving) {
+            view_budget_adapt(st.seconds * 1e3 + (t1 - t0) * 1e3, budget_ms, &r->motion_scale,
+                              &r->motion_spp);
+        }
 
         pthread_mutex_lock(&r->mu);
         uint32_t *tmp = r->pixels;
         r->pixels = r->back;
         r->back = tmp;
-        if (!r->back || r->pw != cam.screen_width || r->ph != cam.screen_height) {
+        if (!r->back || r->pw != rcam.screen_width || r->ph != rcam.screen_height) {
             free(r->back);
-            r->back = malloc((size_t)cam.screen_width * cam.screen_height * sizeof *r->back);
+            r->back = malloc((size_t)rcam.screen_width * rcam.screen_height * sizeof *r->back);
             if (!r->back) {
                 r->failed = 1;
                 snprintf(r->error, sizeof r->error, "out of memory for a frame");
                 break;
             }
         }
-        r->pw = cam.screen_width;
-        r->ph = cam.screen_height;
+        r->pw = rcam.screen_width;
+        r->ph = rcam.screen_height;
+        r->scale = frame_scale;
+        r->frame_spp = nspp;
         r->seq += 1;
         r->shown_gen = gen;
         r->spp = spp;
@@ -191,7 +222,12 @@ int view_renderer_start(view_renderer *r, tr_scene *scene, int animate, tr_devic
     r->stride = stride;
     r->exposure = exposure;
     r->generation = 1;
+    r->budget_ms = 1000.0 / 60.0;
+    r->motion_scale = 1.0f;
+    r->motion_spp = 1;
+    r->scale = 1.0f;
     atomic_init(&r->cancel, 0);
+    atomic_init(&r->refining, 0);
     pthread_mutex_init(&r->mu, NULL);
     pthread_cond_init(&r->cv, NULL);
     int rc = pthread_create(&r->thread, NULL, render_main, r);
@@ -205,15 +241,24 @@ int view_renderer_start(view_renderer *r, tr_scene *scene, int animate, tr_devic
     return TR_OK;
 }
 
-void view_renderer_set_view(view_renderer *r, const tr_camera *cam, int stride) {
+void view_renderer_set_view(view_renderer *r, const tr_camera *cam, int stride, int moving) {
     pthread_mutex_lock(&r->mu);
-    if (!same_view(&r->cam, cam) || r->stride != stride) {
+    if (!same_view(&r->cam, cam) || r->stride != stride || r->moving != moving) {
         r->cam = *cam;
         r->stride = stride;
+        r->moving = moving;
         r->generation += 1;
-        atomic_store(&r->cancel, 1);
+        if (atomic_load(&r->refining)) {
+            atomic_store(&r->cancel, 1);
+        }
         pthread_cond_signal(&r->cv);
     }
+    pthread_mutex_unlock(&r->mu);
+}
+
+void view_renderer_set_budget(view_renderer *r, double budget_ms) {
+    pthread_mutex_lock(&r->mu);
+    r->budget_ms = budget_ms;
     pthread_mutex_unlock(&r->mu);
 }
 
