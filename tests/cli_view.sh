@@ -27,6 +27,8 @@ expect_usage_error "unknown option '--bogus'" view --bogus
 expect_usage_error "missing-scene.json" view missing-scene.json
 expect_usage_error "--frames: needs --screenshot" view --frames 3
 expect_usage_error "--stride: expected 1, 2 or 4, got '3'" view --stride 3
+expect_usage_error "--recon: expected off, accumulate" view --recon blur
+expect_usage_error "--target-fps: expected" view --target-fps 0
 expect_usage_error "--benchmark: expected an integer in 0..9, got '10'" view --benchmark 10
 expect_usage_error "--screenshot: 'x.jpg' has an unknown extension" view --screenshot x.jpg
 expect_usage_error "--font: cannot open 'no-such-font.ttf'" view --font no-such-font.ttf
@@ -259,14 +261,15 @@ quit_viewer
 
 # A right-handed scene (the classic box: red wall on the left) stays the same way round
 # after a move, and holding a key keeps the picture live: frames keep being finished and
-# shown (the counter rises, the window changes) while the camera changes every 10 ms.
+# shown (the counter rises, the window changes) while the camera changes every 10 ms,
+# here with SVGF reconstructing every frame; M cycles the reconstruction.
 # sides PPM: exits 0 when the left strip is red and the right one green.
 sides() {
     set -- $(region "$1" 4 40 30 80) $(region "$1" 130 40 156 80)
     awk -v lr="$1" -v lg="$2" -v rr="$5" -v rg="$6" \
         'BEGIN { exit !(lr > 1.3 * lg && rg > 1.1 * rr) }'
 }
-start_viewer --scene "$SRC/scenes/cornell-classic.json" --target-fps 30
+start_viewer --scene "$SRC/scenes/cornell-classic.json" --target-fps 30 --recon svgf
 wait_for 30 '[ "$(state spp)" -ge 16 ]' || fail "classic: fewer than 16 spp after 30 s"
 [ "$(state mirrored)" = 1 ] || fail "classic: the viewer's camera is not mirrored"
 dump classic0.ppm
@@ -288,6 +291,10 @@ wait_for 10 '[ "$(state moving)" = 0 ] && [ "$(state generation)" = "$(state vie
 wait_for 30 '[ "$(state spp)" -ge 8 ]' || fail "classic after W: fewer than 8 spp"
 dump classic1.ppm
 sides classic1.ppm || fail "classic after W: mirrored: $(region classic1.ppm 4 40 30 80)"
+xdotool key m
+wait_for 10 '[ "$(state recon)" = off ]' || fail "M after svgf: recon $(state recon)"
+xdotool key m
+wait_for 10 '[ "$(state recon)" = accumulate ]' || fail "M after off: recon $(state recon)"
 # R resets the camera; C writes it as scene-file JSON that loads back.
 pos1=$(state pos)
 xdotool key r

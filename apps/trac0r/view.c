@@ -26,6 +26,7 @@ static void view_help(void) {
            "  mouse wheel        movement speed                +/-              exposure\n"
            "  1/2/3              preview stride 1/2/4 pixels   B                debug view\n"
            "  V                  BVH boxes (with [ and ] for depth)\n"
+           "  M                  reconstruction: off, accumulate, bilateral, atrous, svgf\n"
            "  R                  reset the camera              C                camera as JSON\n"
            "                     (printed, and saved to --shot-dir/trac0r-camera-NNN.json)\n"
            "  N                  per-stage timings on stdout   H                help overlay\n"
@@ -46,6 +47,8 @@ static void view_help(void) {
            "                       (default 0)\n"
            "  --target-fps F       frame budget while the camera moves, 1..1000 (default 60):\n"
            "                       the resolution and samples per frame adapt to hold it\n"
+           "  --recon METHOD       reconstruction shown first: off (default), accumulate,\n"
+           "                       bilateral, atrous or svgf (see docs/realtime.md)\n"
            "  --max-spp N          stop accumulating after N samples per pixel (default 0:\n"
            "                       never)\n"
            "  --animate            a dynamic scene (interactive mode): before every frame the\n"
@@ -157,6 +160,14 @@ int cmd_view(int argc, char **argv) {
             rc = cli_parse_float(&a, -20.0f, 20.0f, &o.exposure);
         } else if (cli_is(&a, "--target-fps")) {
             rc = cli_parse_float(&a, 1.0f, 1000.0f, &o.target_fps);
+        } else if (cli_is(&a, "--recon")) {
+            rc = cli_value(&a);
+            if (rc == CLI_OK && (o.recon = tr_recon_parse(a.value)) < 0) {
+                return cli_error(&a,
+                                 "--recon: expected off, accumulate, bilateral, atrous or "
+                                 "svgf, got '%s'",
+                                 a.value);
+            }
         } else if (cli_is(&a, "--max-spp")) {
             rc = cli_parse_u32(&a, 0, 100000000, &o.max_spp);
         } else if (cli_is(&a, "--animate")) {

@@ -22,16 +22,17 @@ static int same_view(const tr_camera *a, const tr_camera *b) {
     return memcmp(a, b, sizeof *a) == 0; /* NOLINT(bugprone-suspicious-memory-comparison) */
 }
 
-/* Makes the film and back buffer match w x h (cleared). */
-static int resize_buffers(view_renderer *r, uint32_t w, uint32_t h, tr_error *err) {
-    if (r->film.sum && r->film.width == w && r->film.height == h) {
+/* Makes the film (keeping `passes`) and back buffer match w x h (cleared). */
+static int resize_buffers(view_renderer *r, uint32_t w, uint32_t h, uint32_t passes,
+                          tr_error *err) {
+    if (r->film.sum && r->film.width == w && r->film.height == h && r->film.passes == passes) {
         tr_film_clear(&r->film);
         return TR_OK;
     }
     tr_film_free(&r->film);
     free(r->back);
     r->back = NULL;
-    if (tr_film_init(&r->film, w, h, err) != TR_OK) {
+    if (tr_film_init_passes(&r->film, w, h, passes, err) != TR_OK) {
         return TR_ERR;
     }
     r->back = malloc((size_t)w * h * sizeof *r->back);
@@ -58,6 +59,31 @@ static int render_one(view_renderer *r, const tr_camera *cam, const tr_render_co
                             "frame cancelled"); /* the view changed meanwhile */
     }
     return tr_device_read_film(r->dev, &r->film, err);
+}
+
+/* The film through reconstruction `method` into r->disp (sized to the film; a new size
+ * starts the history over). */
+static int reconstruct(view_renderer *r, const tr_camera *cam, int method, int threads,
+                       tr_error *err) {
+    const uint32_t w = r->film.width, h = r->film.height;
+    if (r->gb.width != w || r->gb.height != h) {
+        tr_gbuffer_free(&r->gb);
+        tr_recon_free(&r->rec);
+        tr_film_free(&r->disp);
+        if (tr_gbuffer_init(&r->gb, w, h, err) != TR_OK ||
+            tr_recon_init(&r->rec, w, h, err) != TR_OK ||
+            tr_film_init(&r->disp, w, h, err) != TR_OK) {
+            return TR_ERR;
+        }
+        for (size_t i = 0; i < (size_t)w * h; ++i) {
+            r->disp.count[i] = 1;
+        }
+    }
+    const tr_recon_params p = tr_recon_params_default();
+    if (tr_gbuffer_from_film(&r->gb, &r->film, err) != TR_OK) {
+        return TR_ERR;
+    }
+    return tr_recon_frame(&r->rec, &r->gb, cam, method, &p, threads, r->disp.sum, err);
 }
 
 static void *render_main(void *arg) {
@@ -89,12 +115,14 @@ static void *render_main(void *arg) {
         const int stride = r->stride;
         const float exposure = r->exposure;
         const int moving = r->moving;
+        const int method = r->recon;
         const double budget_ms = r->budget_ms;
         const uint64_t want = r->generation;
         if (want == gen && r->max_spp && spp >= r->max_spp) {
             if (exposure != tonemapped_exposure && r->pixels) {
                 /* Idle, but the exposure changed: show the film with the new one. */
-                view_tonemap(&r->film, exposure, r->pixels);
+                view_tonemap(r->recon != TR_RECON_OFF && r->disp.sum ? &r->disp : &r->film,
+                             exposure, r->pixels);
                 tonemapped_exposure = exposure;
                 r->seq += 1;
                 continue;
@@ -126,13 +154,24 @@ static void *render_main(void *arg) {
             rcam = cam;
             rmoving = moving;
             if (moving && r->motion_scale > 1.0f) {
-                const float s = r->motion_scale;
+                /* A few sizes only: every new size starts the reconstruction's history
+                 * over, so the budget's small steps must not change it every frame. */
+                static const float levels[] = {1.0f, 1.25f, 1.5f, 2.0f,  2.5f,  3.0f, 4.0f,
+                                               5.0f, 6.0f,  8.0f, 10.0f, 12.0f, 16.0f};
+                float s = 16.0f;
+                for (size_t k = 0; k < sizeof levels / sizeof levels[0]; ++k) {
+                    if (levels[k] >= 0.95f * r->motion_scale) {
+                        s = levels[k];
+                        break;
+                    }
+                }
                 uint32_t w = (uint32_t)((float)cam.screen_width / s + 0.5f);
                 uint32_t h = (uint32_t)((float)cam.screen_height / s + 0.5f);
                 /* Cannot fail: the size only shrinks, and stays at least 1x1. */
                 (void)tr_camera_resize(&rcam, w ? w : 1, h ? h : 1, &err);
             }
-            if (resize_buffers(r, rcam.screen_width, rcam.screen_height, &err) != TR_OK ||
+            if (resize_buffers(r, rcam.screen_width, rcam.screen_height,
+                               method != TR_RECON_OFF ? TR_PASS_ALL : 0u, &err) != TR_OK ||
                 tr_device_clear(r->dev, &err) != TR_OK) {
                 pthread_mutex_lock(&r->mu);
                 r->failed = 1;
@@ -144,6 +183,7 @@ static void *render_main(void *arg) {
         }
         tr_render_config cfg = r->cfg;
         cfg.stride = stride;
+        cfg.passes = r->film.passes;
         cfg.cancel = render_cancelled;
         cfg.cancel_user = r;
         tr_render_stats st;
@@ -172,7 +212,18 @@ static void *render_main(void *arg) {
         }
         spp += nspp;
         double t0 = tr_time_now();
-        view_tonemap(&r->film, exposure, r->back);
+        const tr_film *shown = &r->film;
+        if (method != TR_RECON_OFF) {
+            if (reconstruct(r, &rcam, method, cfg.threads, &err) != TR_OK) {
+                pthread_mutex_lock(&r->mu);
+                r->failed = 1;
+                snprintf(r->error, sizeof r->error, "reconstruction: %s", err.msg);
+                break;
+            }
+            shown = &r->disp;
+        }
+        const double t_rec = tr_time_now();
+        view_tonemap(shown, exposure, r->back);
         tonemapped_exposure = exposure;
         double t1 = tr_time_now();
         const float frame_scale = (float)cam.screen_width / (float)rcam.screen_width;
@@ -202,7 +253,9 @@ static void *render_main(void *arg) {
         r->shown_gen = gen;
         r->spp = spp;
         r->render_ms = st.seconds * 1e3;
-        r->tonemap_ms = (t1 - t0) * 1e3;
+        r->tonemap_ms = (t1 - t_rec) * 1e3;
+        r->temporal_ms = method != TR_RECON_OFF ? r->rec.ms_temporal : 0.0;
+        r->spatial_ms = method != TR_RECON_OFF ? r->rec.ms_spatial : 0.0;
         r->frames_done += 1;
     }
     pthread_mutex_unlock(&r->mu);
@@ -262,6 +315,19 @@ void view_renderer_set_budget(view_renderer *r, double budget_ms) {
     pthread_mutex_unlock(&r->mu);
 }
 
+void view_renderer_set_recon(view_renderer *r, int method) {
+    pthread_mutex_lock(&r->mu);
+    if (r->recon != method) {
+        r->recon = method;
+        r->generation += 1;
+        if (atomic_load(&r->refining)) {
+            atomic_store(&r->cancel, 1);
+        }
+        pthread_cond_signal(&r->cv);
+    }
+    pthread_mutex_unlock(&r->mu);
+}
+
 void view_renderer_set_exposure(view_renderer *r, float exposure) {
     pthread_mutex_lock(&r->mu);
     r->exposure = exposure;
@@ -290,6 +356,9 @@ void view_renderer_stop(view_renderer *r) {
     pthread_cond_destroy(&r->cv);
     pthread_mutex_destroy(&r->mu);
     tr_film_free(&r->film);
+    tr_film_free(&r->disp);
+    tr_gbuffer_free(&r->gb);
+    tr_recon_free(&r->rec);
     free(r->back);
     free(r->pixels);
     r->back = NULL;

@@ -25,6 +25,7 @@
 #include <stdint.h>
 
 #include "trac0r/device.h"
+#include "trac0r/post.h"
 #include "trac0r/trac0r.h"
 
 typedef struct view_renderer {
@@ -44,6 +45,7 @@ typedef struct view_renderer {
     int stride;
     float exposure;
     int moving;          /* the UI's camera is changing: render to the frame budget */
+    int recon;           /* tr_recon_method of the frames shown */
     double budget_ms;    /* the frame budget while moving (1000 / --target-fps) */
     uint64_t generation; /* bumped by every view change */
     int quit;
@@ -62,6 +64,8 @@ typedef struct view_renderer {
     uint64_t frames_done; /* frames finished since start (for FPS) */
     uint64_t cancelled;   /* frames cancelled since start */
     float scale;          /* resolution divisor of the published frame (1: full) */
+    double temporal_ms;   /* reconstruction of the published frame: temporal stage */
+    double spatial_ms;    /* ... and its spatial filter */
     uint32_t frame_spp;   /* samples per pixel the published frame traced */
     int failed;           /* rendering failed: error holds why; the thread stopped */
     char error[600];
@@ -76,6 +80,9 @@ typedef struct view_renderer {
     float motion_scale;    /* the resolution divisor the budget asks for while moving */
     uint32_t motion_spp;   /* samples per frame while moving */
     uint32_t motion_frame; /* counts moving frames: their sample numbers, so noise changes */
+    tr_gbuffer gb;         /* the film's means and passes, for the reconstruction */
+    tr_recon rec;          /* the reconstruction's history */
+    tr_film disp;          /* the reconstructed frame as a film of one sample per pixel */
 } view_renderer;
 
 /* Starts the thread rendering `cam` (whose size sets the film's) with cfg's settings, on
@@ -90,6 +97,9 @@ int view_renderer_start(view_renderer *r, tr_scene *scene, int animate, tr_devic
 void view_renderer_set_view(view_renderer *r, const tr_camera *cam, int stride, int moving);
 /* The frame budget while moving, in milliseconds. */
 void view_renderer_set_budget(view_renderer *r, double budget_ms);
+/* Shows later frames through reconstruction `method` (tr_recon_method): a new view, as
+ * the film then keeps the passes the guided filters need. */
+void view_renderer_set_recon(view_renderer *r, int method);
 /* Tonemaps later frames with this exposure (accumulation continues). */
 void view_renderer_set_exposure(view_renderer *r, float exposure);
 /* Asks the thread to write its film (mean radiance, tonemapped) to path; the result

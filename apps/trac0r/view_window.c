@@ -28,6 +28,7 @@ typedef struct view_state {
     int overlay, help, bvh, timings, mouselook;
     uint32_t bvh_depth;
     int stride;
+    int recon; /* tr_recon_method */
     float exposure;
     uint64_t dumps, shots, cameras;
     uint64_t updates; /* scene updates (--animate) */
@@ -56,14 +57,14 @@ static int write_state(const char *path, const view_state *s, const fly_camera *
         "pos %.6f %.6f %.6f\ndir %.6f %.6f %.6f\nup %.6f %.6f %.6f\nspeed %.6f\n"
         "overlay %d\nhelp %d\nbvh %d\nbvh_depth %u\ntimings %d\nmouselook %d\nstride %d\n"
         "exposure %.2f\nfps %.3f\ndumps %llu\nshots %llu\nupdates %llu\nrebuild_ms %.3f\n"
-        "moving %d\nscale %.3f\nframe_spp %u\ncameras %llu\nmirrored %d\n",
+        "moving %d\nscale %.3f\nframe_spp %u\ncameras %llu\nmirrored %d\nrecon %s\n",
         sf->spp, (unsigned long long)sf->gen, (unsigned long long)sf->view_gen,
         (unsigned long long)sf->frames, (unsigned long long)sf->cancelled, w, h, f->pos.x, f->pos.y,
         f->pos.z, f->dir.x, f->dir.y, f->dir.z, f->up.x, f->up.y, f->up.z, f->speed, s->overlay,
         s->help, s->bvh, s->bvh_depth, s->timings, s->mouselook, s->stride, s->exposure, fps,
         (unsigned long long)s->dumps, (unsigned long long)s->shots, (unsigned long long)s->updates,
         s->rebuild_ms, sf->moving, (double)sf->scale, sf->frame_spp, (unsigned long long)s->cameras,
-        f->mirrored);
+        f->mirrored, tr_recon_name(s->recon));
     int bad = ferror(fp);
     bad |= fclose(fp);
     if (bad || rename(tmp, path) != 0) {
@@ -126,6 +127,7 @@ static const char help_text[] = "trac0r view - keys\n"
                                 "wheel      movement speed\n"
                                 "R          reset the camera\n"
                                 "C          camera as scene JSON\n"
+                                "M          reconstruction method\n"
                                 "+/-        exposure\n"
                                 "1/2/3      preview stride 1/2/4\n"
                                 "B          debug view\n"
@@ -137,7 +139,7 @@ static const char help_text[] = "trac0r view - keys\n"
 
 /* The stage times of the frame on screen, in milliseconds. */
 typedef struct stage_times {
-    double input, rebuild, render, tonemap, upload;
+    double input, rebuild, render, temporal, spatial, tonemap, upload;
 } stage_times;
 
 int view_run_window(const cli_args *a, const view_options *o, tr_scene *scene, cli_backend *be) {
@@ -210,6 +212,7 @@ int view_run_window(const cli_args *a, const view_options *o, tr_scene *scene, c
     view_state st = {0};
     st.stride = o->stride;
     st.exposure = o->exposure;
+    st.recon = o->recon;
     st.bvh_depth = 3;
 
     tr_render_config cfg = cli_render_config(&o->c);
@@ -219,6 +222,7 @@ int view_run_window(const cli_args *a, const view_options *o, tr_scene *scene, c
         goto done;
     }
     view_renderer_set_budget(&r, 1000.0 / o->target_fps);
+    view_renderer_set_recon(&r, st.recon);
     if (o->dump_file) {
         struct sigaction sa;
         memset(&sa, 0, sizeof sa);
@@ -340,6 +344,10 @@ int view_run_window(const cli_args *a, const view_options *o, tr_scene *scene, c
                     st.exposure = fmaxf(st.exposure - 0.5f, -20.0f);
                     view_renderer_set_exposure(&r, st.exposure);
                     break;
+                case SDLK_m:
+                    st.recon = (st.recon + 1) % TR_RECON_COUNT;
+                    view_renderer_set_recon(&r, st.recon);
+                    break;
                 case SDLK_r:
                     /* Back to the scene's camera and speed. */
                     fly = fly0;
@@ -457,6 +465,8 @@ int view_run_window(const cli_args *a, const view_options *o, tr_scene *scene, c
             st.updates = r.updates;
             st.rebuild_ms = r.rebuild_ms;
             times.tonemap = r.tonemap_ms;
+            times.temporal = r.temporal_ms;
+            times.spatial = r.spatial_ms;
             times.upload = (tr_time_now() - t0) * 1e3;
             sf.scale = r.scale;
             sf.frame_spp = r.frame_spp;
@@ -479,8 +489,10 @@ int view_run_window(const cli_args *a, const view_options *o, tr_scene *scene, c
         }
         if (st.timings && shown_seq != last_printed_seq) {
             printf("frame %llu: input %.3f ms, scene rebuild %.3f ms, render %.2f ms, "
+                   "reconstruction (temporal %.2f, spatial %.2f) %.2f ms, "
                    "film->texture %.2f ms (tonemap %.2f, upload %.2f), %u spp\n",
                    (unsigned long long)shown_seq, times.input, times.rebuild, times.render,
+                   times.temporal, times.spatial, times.temporal + times.spatial,
                    times.tonemap + times.upload, times.tonemap, times.upload, spp);
             fflush(stdout);
             last_printed_seq = shown_seq;
@@ -527,6 +539,7 @@ int view_run_window(const cli_args *a, const view_options *o, tr_scene *scene, c
                      "FPS %.2f   %u spp   %ux%u   stride %d   exposure %+.1f\n"
                      "%s: 1/%.2f resolution, %u spp per frame, budget %.1f ms\n"
                      "input %.2f ms  scene rebuild %.2f ms  render %.1f ms\n"
+                     "reconstruction %s: temporal %.2f ms  spatial %.2f ms\n"
                      "film->texture %.2f ms (tonemap %.2f + upload %.2f)\n"
                      "scene %s: %s\n"
                      "accel %s\n"
@@ -540,11 +553,12 @@ int view_run_window(const cli_args *a, const view_options *o, tr_scene *scene, c
                      "%s",
                      fps, spp, w, h, st.stride, st.exposure, was_moving ? "moving" : "at rest",
                      (double)sf.scale, sf.frame_spp, 1000.0 / o->target_fps, times.input,
-                     times.rebuild, times.render, times.tonemap + times.upload, times.tonemap,
-                     times.upload, o->c.scene, scene_changing ? "changing" : "static", accel,
-                     cam.pos.x, cam.pos.y, cam.pos.z, cam.dir.x, cam.dir.y, cam.dir.z, cam.up.x,
-                     cam.up.y, cam.up.z, cam.horizontal_fov, cam.vertical_fov, fly.speed, mouse_x,
-                     mouse_y, mc.x, mc.y, mc.z, mw.x, mw.y, mw.z,
+                     times.rebuild, times.render, tr_recon_name(st.recon), times.temporal,
+                     times.spatial, times.tonemap + times.upload, times.tonemap, times.upload,
+                     o->c.scene, scene_changing ? "changing" : "static", accel, cam.pos.x,
+                     cam.pos.y, cam.pos.z, cam.dir.x, cam.dir.y, cam.dir.z, cam.up.x, cam.up.y,
+                     cam.up.z, cam.horizontal_fov, cam.vertical_fov, fly.speed, mouse_x, mouse_y,
+                     mc.x, mc.y, mc.z, mw.x, mw.y, mw.z,
                      st.bvh ? "BVH boxes on (V), [ ] depth" : "");
             char line[64];
             if (st.bvh) {
