@@ -8,9 +8,12 @@
  *    and the same buffers reprojected through a wrong (mirrored) camera mostly fail.
  * 3. After a camera cut the error returns within 8 frames to that of a history started
  *    fresh on the new view: no ghost of the old one survives.
- * 4. The result does not depend on the thread count. */
+ * 4. The result does not depend on the thread count.
+ * 5. The filmic display curve rises strictly below white, and its display film gives the
+ *    direct tonemap's bytes. */
 #include "check.h"
 #include "post/filter.h"
+#include "post/tonemap.h"
 #include "trac0r/post.h"
 #include "trac0r/scene_file.h"
 #include "trac0r/trac0r.h"
@@ -299,6 +302,48 @@ static void test_cut(void) {
     tr_scene_destroy(s);
 }
 
+/* The filmic curve: 0 stays black, it rises strictly until it reaches white, and a
+ * display film written at exposure 0 holds exactly the bytes of the direct tonemap. */
+static void test_filmic(void) {
+    float prev = 0.0f;
+    CHECK(tr_tonemap_curve(0.0f, 1.0f, TR_CURVE_FILMIC) == 0.0f, "filmic(0)");
+    for (int k = 1; k <= 400; ++k) {
+        const float x = 0.01f * (float)k * (float)k;
+        const float y = tr_tonemap_curve(x, 1.0f, TR_CURVE_FILMIC);
+        CHECK(y <= 1.0f && (y > prev || y == 1.0f), "filmic(%g) = %g after %g", x, y, prev);
+        prev = y;
+    }
+    CHECK(tr_tonemap_curve(1e38f, 1.0f, TR_CURVE_FILMIC) == 1.0f &&
+              tr_tonemap_curve(NAN, 1.0f, TR_CURVE_FILMIC) == 0.0f,
+          "filmic at the ends");
+    tr_film f, d;
+    tr_error err;
+    CHECK(tr_film_init(&f, W, H, &err) == TR_OK, "%s", err.msg);
+    uint32_t s = 5;
+    for (size_t i = 0; i < (size_t)W * H; ++i) {
+        f.count[i] = i % 7;
+        for (int k = 0; k < 3; ++k) {
+            f.sum[3 * i + k] = 4.0f * unit(&s) * (float)f.count[i];
+        }
+    }
+    static uint32_t direct[W * H], via[W * H];
+    for (int curve = TR_TONEMAP_CLAMP; curve <= TR_TONEMAP_FILMIC; ++curve) {
+        CHECK(tr_tonemap_film_curve(&f, 0, 0, W, H, 0.5f, curve, TR_PIXEL_ARGB8888, direct, W * 4,
+                                    &err) == TR_OK &&
+                  tr_tonemap_display_film(&f, 0.5f, curve, &d, &err) == TR_OK &&
+                  tr_tonemap_film(&d, 0, 0, W, H, 0.0f, TR_PIXEL_ARGB8888, via, W * 4, &err) ==
+                      TR_OK,
+              "%s", err.msg);
+        CHECK(memcmp(direct, via, sizeof direct) == 0, "curve %s: display film differs",
+              tr_tonemap_curve_name(curve));
+        tr_film_free(&d);
+    }
+    CHECK(tr_tonemap_curve_parse("filmic") == TR_TONEMAP_FILMIC &&
+              tr_tonemap_curve_parse("aces") == -1,
+          "tr_tonemap_curve_parse");
+    tr_film_free(&f);
+}
+
 static void test_errors(void) {
     tr_recon r;
     tr_gbuffer g;
@@ -325,6 +370,7 @@ int main(void) {
     test_filters();
     test_reprojection();
     test_cut();
+    test_filmic();
     test_errors();
     return check_finish("test_recon");
 }

@@ -8,6 +8,41 @@
 #include "commands.h"
 #include "devices.h"
 
+/* Writes the film, first through the a-trous filter (denoise) and, for a PNG, the
+ * display curve; the plain path (clamp, no filter) is tr_film_write as before. */
+static int render_write(const tr_film *film, const char *out, float exposure, int curve,
+                        int denoise, tr_error *err) {
+    const int png = tr_image_format_from_path(out) == TR_IMAGE_PNG;
+    if (!denoise && (curve == TR_TONEMAP_CLAMP || !png)) {
+        return tr_film_write(film, out, exposure, err);
+    }
+    tr_film den = {0}, disp = {0};
+    tr_gbuffer g = {0};
+    const tr_film *img = film;
+    int rc = TR_OK;
+    if (denoise) {
+        const tr_recon_params p = tr_recon_params_default();
+        rc = tr_gbuffer_init(&g, film->width, film->height, err);
+        rc = rc == TR_OK ? tr_gbuffer_from_film(&g, film, err) : rc;
+        rc = rc == TR_OK ? tr_film_init(&den, film->width, film->height, err) : rc;
+        rc = rc == TR_OK ? tr_filter_atrous(&g, g.color, den.sum, &p, 0, err) : rc;
+        for (size_t i = 0; rc == TR_OK && i < (size_t)film->width * film->height; ++i) {
+            den.count[i] = film->count[i] ? 1u : 0u;
+        }
+        img = &den;
+    }
+    if (rc == TR_OK && png && curve != TR_TONEMAP_CLAMP) {
+        rc = tr_tonemap_display_film(img, exposure, curve, &disp, err);
+        img = &disp;
+        exposure = 0.0f; /* applied */
+    }
+    rc = rc == TR_OK ? tr_film_write(img, out, exposure, err) : rc;
+    tr_film_free(&disp);
+    tr_film_free(&den);
+    tr_gbuffer_free(&g);
+    return rc;
+}
+
 static void render_help(void) {
     printf("Usage: trac0r render [SCENE] [options]\n"
            "\n"
@@ -34,6 +69,11 @@ static void render_help(void) {
            "                       base colour, shading normal, distance from the camera,\n"
            "                       primitive id), at the first surface that is not a mirror\n"
            "                       or smooth glass; 0 where a sample met none\n"
+           "  --tonemap CURVE      PNG display curve: clamp (default) or filmic (an ACES-like\n"
+           "                       fitted curve that rolls highlights off); PFM stays linear\n"
+           "  --denoise            filter the final image with the edge-avoiding a-trous\n"
+           "                       filter guided by the albedo, normal and depth passes\n"
+           "                       (docs/realtime.md); the passes are rendered for it\n"
            "  -h, --help           show this help\n"
            "\n"
            "Progress (samples, elapsed, ETA, Mrays/s) goes to stderr while it is a terminal;\n"
@@ -101,6 +141,7 @@ int cmd_render(int argc, char **argv) {
     float exposure = 0.0f;
     const char *out = "render.png";
     uint32_t passes = 0;
+    int curve = TR_TONEMAP_CLAMP, denoise = 0;
 
     while (cli_next(&a)) {
         int rc = cli_common_option(&a, &c);
@@ -122,6 +163,14 @@ int cmd_render(int argc, char **argv) {
             rc = cli_parse_float(&a, -20.0f, 20.0f, &exposure);
         } else if (cli_is(&a, "--passes")) {
             rc = parse_passes(&a, &passes);
+        } else if (cli_is(&a, "--tonemap")) {
+            rc = cli_value(&a);
+            if (rc == CLI_OK && (curve = tr_tonemap_curve_parse(a.value)) < 0) {
+                return cli_error(&a, "--tonemap: expected clamp or filmic, got '%s'", a.value);
+            }
+        } else if (cli_is(&a, "--denoise")) {
+            denoise = 1;
+            rc = CLI_OK;
         } else if (cli_is(&a, "--out") || cli_is(&a, "-o")) {
             rc = cli_value(&a);
             out = a.value;
@@ -162,7 +211,10 @@ int cmd_render(int argc, char **argv) {
         spp = file.spp;
     }
     tr_film film;
-    if (tr_film_init_passes(&film, c.width, c.height, passes, &err) != TR_OK) {
+    /* --denoise needs the guides; the radiance does not change with passes. */
+    const uint32_t render_passes =
+        passes | (denoise ? TR_PASS_ALBEDO | TR_PASS_NORMAL | TR_PASS_DEPTH : 0u);
+    if (tr_film_init_passes(&film, c.width, c.height, render_passes, &err) != TR_OK) {
         tr_scene_free(scene);
         return cli_error(&a, "--width/--height: %s", err.msg);
     }
@@ -175,7 +227,7 @@ int cmd_render(int argc, char **argv) {
     }
     tr_render_config cfg = cli_render_config(&c);
     cfg.stride = stride;
-    cfg.passes = passes;
+    cfg.passes = render_passes;
 
     const int tty = isatty(fileno(stderr));
     const double t0 = tr_time_now();
@@ -204,7 +256,7 @@ int cmd_render(int argc, char **argv) {
         fprintf(stderr, "trac0r render: %s\n", err.msg);
         rc = CLI_FAILURE;
     }
-    if (rc == CLI_OK && tr_film_write(&film, out, exposure, &err) != TR_OK) {
+    if (rc == CLI_OK && render_write(&film, out, exposure, curve, denoise, &err) != TR_OK) {
         fprintf(stderr, "trac0r render: %s\n", err.msg);
         rc = CLI_FAILURE;
     }

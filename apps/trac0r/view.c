@@ -47,6 +47,7 @@ static void view_help(void) {
            "                       (default 0)\n"
            "  --target-fps F       frame budget while the camera moves, 1..1000 (default 60):\n"
            "                       the resolution and samples per frame adapt to hold it\n"
+           "  --tonemap CURVE      display and screenshot curve: clamp (default) or filmic\n"
            "  --recon METHOD       reconstruction shown first: off (default), accumulate,\n"
            "                       bilateral, atrous or svgf (see docs/realtime.md)\n"
            "  --max-spp N          stop accumulating after N samples per pixel (default 0:\n"
@@ -108,13 +109,20 @@ static int run_headless(const cli_args *a, const view_options *o, tr_scene *scen
                seconds, seconds > 0 ? frames / seconds : 0.0, seconds * 1e3 / frames);
     }
     if (rc == CLI_OK && o->screenshot) {
-        if (tr_film_write(&film, o->screenshot, o->exposure, &err) != TR_OK) {
+        tr_film disp = {0};
+        const int curved = o->curve != TR_TONEMAP_CLAMP &&
+                           tr_image_format_from_path(o->screenshot) == TR_IMAGE_PNG;
+        if ((curved &&
+             tr_tonemap_display_film(&film, o->exposure, o->curve, &disp, &err) != TR_OK) ||
+            tr_film_write(curved ? &disp : &film, o->screenshot, curved ? 0.0f : o->exposure,
+                          &err) != TR_OK) {
             fprintf(stderr, "trac0r view: %s\n", err.msg);
             rc = CLI_FAILURE;
         } else {
             fprintf(stderr, "trac0r view: %u frames of %s %ux%u in %.2f s -> %s\n", frames,
                     o->c.scene, o->c.width, o->c.height, seconds, o->screenshot);
         }
+        tr_film_free(&disp);
     }
     tr_film_free(&film);
     return rc;
@@ -160,6 +168,11 @@ int cmd_view(int argc, char **argv) {
             rc = cli_parse_float(&a, -20.0f, 20.0f, &o.exposure);
         } else if (cli_is(&a, "--target-fps")) {
             rc = cli_parse_float(&a, 1.0f, 1000.0f, &o.target_fps);
+        } else if (cli_is(&a, "--tonemap")) {
+            rc = cli_value(&a);
+            if (rc == CLI_OK && (o.curve = tr_tonemap_curve_parse(a.value)) < 0) {
+                return cli_error(&a, "--tonemap: expected clamp or filmic, got '%s'", a.value);
+            }
         } else if (cli_is(&a, "--recon")) {
             rc = cli_value(&a);
             if (rc == CLI_OK && (o.recon = tr_recon_parse(a.value)) < 0) {

@@ -16,6 +16,7 @@ typedef struct view_options {
     float exposure;
     float target_fps;       /* --target-fps: the frame budget while moving */
     int recon;              /* --recon: tr_recon_method shown (M cycles) */
+    int curve;              /* --tonemap: tr_tonemap_curve_kind */
     uint32_t max_spp;       /* stop accumulating after this many (0: never) */
     int animate;            /* --animate: the scene's last shape moves every frame */
     const char *font;       /* --font, or NULL for fontconfig */

@@ -9,11 +9,26 @@
 #include <stdlib.h>
 #include <string.h>
 
-void view_tonemap(const tr_film *film, float exposure, uint32_t *pixels) {
+void view_tonemap(const tr_film *film, float exposure, int curve, uint32_t *pixels) {
     /* The PNG writer's transform (post.h): a screenshot holds the window's bytes. Cannot
-     * fail: the rectangle is the whole film and the stride one row. */
-    tr_tonemap_film(film, 0, 0, film->width, film->height, exposure, TR_PIXEL_ARGB8888, pixels,
-                    (size_t)film->width * sizeof *pixels, NULL);
+     * fail: the rectangle is the whole film, the stride one row, the curve checked. */
+    tr_tonemap_film_curve(film, 0, 0, film->width, film->height, exposure, curve, TR_PIXEL_ARGB8888,
+                          pixels, (size_t)film->width * sizeof *pixels, NULL);
+}
+
+/* F12: the film as `trac0r render --tonemap CURVE` writes it. */
+static int write_shot(const tr_film *film, const char *path, float exposure, int curve,
+                      tr_error *err) {
+    if (curve == TR_TONEMAP_CLAMP || tr_image_format_from_path(path) != TR_IMAGE_PNG) {
+        return tr_film_write(film, path, exposure, err);
+    }
+    tr_film disp;
+    if (tr_tonemap_display_film(film, exposure, curve, &disp, err) != TR_OK) {
+        return TR_ERR;
+    }
+    const int rc = tr_film_write(&disp, path, 0.0f, err);
+    tr_film_free(&disp);
+    return rc;
 }
 
 static int same_view(const tr_camera *a, const tr_camera *b) {
@@ -101,7 +116,7 @@ static void *render_main(void *arg) {
             int ok = 0;
             if (spp == 0) {
                 snprintf(r->shot_msg, sizeof r->shot_msg, "%s: no samples yet", r->shot_path);
-            } else if (tr_film_write(&r->film, r->shot_path, r->exposure, &err) != TR_OK) {
+            } else if (write_shot(&r->film, r->shot_path, r->exposure, r->curve, &err) != TR_OK) {
                 snprintf(r->shot_msg, sizeof r->shot_msg, "%s", err.msg);
             } else {
                 ok = 1;
@@ -122,7 +137,7 @@ static void *render_main(void *arg) {
             if (exposure != tonemapped_exposure && r->pixels) {
                 /* Idle, but the exposure changed: show the film with the new one. */
                 view_tonemap(r->recon != TR_RECON_OFF && r->disp.sum ? &r->disp : &r->film,
-                             exposure, r->pixels);
+                             exposure, r->curve, r->pixels);
                 tonemapped_exposure = exposure;
                 r->seq += 1;
                 continue;
@@ -223,7 +238,7 @@ static void *render_main(void *arg) {
             shown = &r->disp;
         }
         const double t_rec = tr_time_now();
-        view_tonemap(shown, exposure, r->back);
+        view_tonemap(shown, exposure, r->curve, r->back);
         tonemapped_exposure = exposure;
         double t1 = tr_time_now();
         const float frame_scale = (float)cam.screen_width / (float)rcam.screen_width;
@@ -264,7 +279,7 @@ static void *render_main(void *arg) {
 
 int view_renderer_start(view_renderer *r, tr_scene *scene, int animate, tr_device *dev,
                         const tr_render_config *cfg, const tr_camera *cam, int stride,
-                        float exposure, uint32_t max_spp, tr_error *err) {
+                        float exposure, int curve, uint32_t max_spp, tr_error *err) {
     memset(r, 0, sizeof *r);
     r->scene = scene;
     r->animate = animate;
@@ -274,6 +289,7 @@ int view_renderer_start(view_renderer *r, tr_scene *scene, int animate, tr_devic
     r->cam = *cam;
     r->stride = stride;
     r->exposure = exposure;
+    r->curve = curve;
     r->generation = 1;
     r->budget_ms = 1000.0 / 60.0;
     r->motion_scale = 1.0f;

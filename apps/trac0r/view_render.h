@@ -44,6 +44,7 @@ typedef struct view_renderer {
     tr_camera cam;
     int stride;
     float exposure;
+    int curve;           /* tr_tonemap_curve_kind of the display (fixed at the start) */
     int moving;          /* the UI's camera is changing: render to the frame budget */
     int recon;           /* tr_recon_method of the frames shown */
     double budget_ms;    /* the frame budget while moving (1000 / --target-fps) */
@@ -91,7 +92,7 @@ typedef struct view_renderer {
  * scene again to a device); readers of the scene on other threads hold mu. */
 int view_renderer_start(view_renderer *r, tr_scene *scene, int animate, tr_device *dev,
                         const tr_render_config *cfg, const tr_camera *cam, int stride,
-                        float exposure, uint32_t max_spp, tr_error *err);
+                        float exposure, int curve, uint32_t max_spp, tr_error *err);
 /* Asks for another view (camera, size, stride or moving): restarts accumulation if it
  * differs. `moving` says that the camera is changing: frames then hold the budget. */
 void view_renderer_set_view(view_renderer *r, const tr_camera *cam, int stride, int moving);
@@ -109,6 +110,6 @@ void view_renderer_screenshot(view_renderer *r, const char *path);
 void view_renderer_stop(view_renderer *r);
 
 /* Tonemaps a film into ARGB8888 pixels (black where no sample landed). */
-void view_tonemap(const tr_film *film, float exposure, uint32_t *pixels);
+void view_tonemap(const tr_film *film, float exposure, int curve, uint32_t *pixels);
 
 #endif

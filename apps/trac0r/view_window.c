@@ -217,7 +217,7 @@ int view_run_window(const cli_args *a, const view_options *o, tr_scene *scene, c
 
     tr_render_config cfg = cli_render_config(&o->c);
     if (view_renderer_start(&r, scene, o->animate, be->dev, &cfg, &cam, st.stride, st.exposure,
-                            o->max_spp, &err) != TR_OK) {
+                            o->curve, o->max_spp, &err) != TR_OK) {
         fprintf(stderr, "trac0r view: %s\n", err.msg);
         goto done;
     }

@@ -49,6 +49,30 @@ int tr_tonemap_film(const struct tr_film *film, uint32_t x, uint32_t y, uint32_t
                     uint32_t height, float exposure, tr_pixel_format format, void *dst,
                     size_t dst_stride, tr_error *err);
 
+/* Display curves: the hard clamp (the default: bytes as before), or a filmic curve
+ * (Narkowicz's fit of ACES, src/post/tonemap.h) that rolls highlights off. */
+typedef enum tr_tonemap_curve_kind {
+    TR_TONEMAP_CLAMP = 0,
+    TR_TONEMAP_FILMIC = 1
+} tr_tonemap_curve_kind;
+
+/* "clamp" or "filmic"; NULL for anything else. */
+const char *tr_tonemap_curve_name(int curve);
+/* The curve of a name above; -1 for anything else. */
+int tr_tonemap_curve_parse(const char *name);
+
+/* tr_tonemap_film through `curve` (TR_TONEMAP_CLAMP: tr_tonemap_film's bytes). */
+int tr_tonemap_film_curve(const struct tr_film *film, uint32_t x, uint32_t y, uint32_t width,
+                          uint32_t height, float exposure, int curve, tr_pixel_format format,
+                          void *dst, size_t dst_stride, tr_error *err);
+
+/* A new radiance-only film (free it with tr_film_free) holding `in`'s display-referred
+ * values: each mean scaled by 2^exposure and put through `curve`, one sample per pixel
+ * (none where `in` has none). Written as PNG at exposure 0 it gives exactly the bytes of
+ * tr_tonemap_film_curve: how `--tonemap filmic` reaches the PNG writer. */
+int tr_tonemap_display_film(const struct tr_film *in, float exposure, int curve,
+                            struct tr_film *out, tr_error *err);
+
 /* ---- Image metrics ------------------------------------------------------------- */
 
 /* The epsilon of the relative MSE's denominator, ref^2 + epsilon. */
