@@ -10,7 +10,8 @@
  *    fresh on the new view: no ghost of the old one survives.
  * 4. The result does not depend on the thread count.
  * 5. The filmic display curve rises strictly below white, and its display film gives the
- *    direct tonemap's bytes. */
+ *    direct tonemap's bytes.
+ * 6. SSIM is 1 for an image with itself, falls with noise and is symmetric. */
 #include "check.h"
 #include "post/filter.h"
 #include "post/tonemap.h"
@@ -344,6 +345,27 @@ static void test_filmic(void) {
     tr_film_free(&f);
 }
 
+/* SSIM: 1 for identical images, lower with more noise, symmetric. */
+static void test_ssim(void) {
+    tr_gbuffer g;
+    tr_error err;
+    CHECK(tr_gbuffer_init(&g, W, H, &err) == TR_OK, "%s", err.msg);
+    synth(&g, 0.3f, 0.7f, 0.0f, 1);
+    float *clean = malloc(3 * W * H * sizeof *clean);
+    memcpy(clean, g.color, 3 * W * H * sizeof *clean);
+    CHECK_NEAR(tr_ssim(clean, clean, W, H), 1.0, 1e-9, "ssim of an image with itself");
+    double last = 1.0;
+    for (int k = 1; k <= 3; ++k) {
+        synth(&g, 0.3f, 0.7f, 0.1f * (float)k, 7);
+        const double v = tr_ssim(g.color, clean, W, H);
+        CHECK(v < last && v > 0.0, "ssim at noise %g: %g after %g", 0.1 * k, v, last);
+        CHECK_NEAR(tr_ssim(clean, g.color, W, H), v, 1e-9, "ssim symmetric");
+        last = v;
+    }
+    free(clean);
+    tr_gbuffer_free(&g);
+}
+
 static void test_errors(void) {
     tr_recon r;
     tr_gbuffer g;
@@ -371,6 +393,7 @@ int main(void) {
     test_reprojection();
     test_cut();
     test_filmic();
+    test_ssim();
     test_errors();
     return check_finish("test_recon");
 }

@@ -95,6 +95,12 @@ tr_image_metrics tr_image_compare(const float *a, const float *ref, size_t pixel
 /* One pixel's error: the mean over R, G, B of |a - ref| on values clamped as above. */
 double tr_pixel_error(const float *a_rgb, const float *ref_rgb);
 
+/* The structural similarity index (SSIM, Wang et al. 2004) of `a` against `ref` (3
+ * floats per pixel, width x height) on the luminance of values clamped as above: 1 for
+ * identical images, less the more their local structure differs. Sequential, so the same
+ * on every run; NaN only when memory runs out. */
+double tr_ssim(const float *a, const float *ref, uint32_t width, uint32_t height);
+
 /* Peak signal-to-noise ratio of an MSE, peak 1: 10 log10(1 / mse) dB; +inf where mse is
  * not above 0. */
 double tr_psnr(double mse);
