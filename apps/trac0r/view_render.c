@@ -146,8 +146,6 @@ static void *render_main(void *arg) {
             continue;
         }
         atomic_store(&r->cancel, 0);
-        /* Only a refinement of a view on screen may be cancelled (view_render.h). */
-        atomic_store(&r->refining, want == gen && spp > 0);
         if (r->animate) {
             /* The scene moves: every frame is a new image. Under mu, as the UI thread
              * reads the scene's boxes. */
@@ -163,6 +161,9 @@ static void *render_main(void *arg) {
             r->updates += 1;
             gen = UINT64_MAX;
         }
+        /* Only a refinement of a view on screen may be cancelled (view_render.h); an
+         * animated frame is always a new image. */
+        atomic_store(&r->refining, want == gen && spp > 0);
         pthread_mutex_unlock(&r->mu);
 
         if (want != gen) {
