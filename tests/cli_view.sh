@@ -97,14 +97,15 @@ export SDL_FRAMEBUFFER_ACCELERATION=0
 state() {
     awk -v k="$1" '$1 == k { $1 = ""; sub(/^ /, ""); print; exit }' state.txt 2>/dev/null
 }
-# settled_at STRIDE SPP: the frame on screen belongs to the current view, at this stride
-# and sample count. One read of the file for all of them: spp is not monotonic (it
+# settled_at STRIDE SPP: the frame on screen belongs to the current view at rest (not a
+# moving view's film, whose samples are numbered by frame), at this stride and sample
+# count. One read of the file for all of them: spp is not monotonic (it
 # restarts with a new view), so values read from two successive versions of the file
 # could pass together when neither version does.
 settled_at() {
     awk -v stride="$1" -v spp="$2" '$1 == "stride" { s = $2 } $1 == "spp" { p = $2 }
-        $1 == "generation" { g = $2 } $1 == "view_generation" { v = $2 }
-        END { exit !(s == stride && p == spp && g == v) }' state.txt 2>/dev/null
+        $1 == "generation" { g = $2 } $1 == "view_generation" { v = $2 } $1 == "moving" { m = $2 }
+        END { exit !(s == stride && p == spp && g == v && m == 0) }' state.txt 2>/dev/null
 }
 # wait_for SECONDS 'shell condition': polls every 50 ms.
 wait_for() {
@@ -227,8 +228,9 @@ xdotool key 3
 wait_for 10 '[ "$(state stride)" = 4 ]' || fail "3 did not switch to stride 4"
 xdotool key 1
 wait_for 10 '[ "$(state stride)" = 1 ]' || fail "1 did not switch back to stride 1"
-# view_generation counts view changes asked for, generation is the one on screen.
-wait_for 10 '[ "$(state generation)" = "$(state view_generation)" ]' || fail "view did not settle"
+# view_generation counts view changes asked for (the end of a move is one: the view restarts
+# at full resolution, moving 0), generation is the one on screen.
+wait_for 10 '[ "$(state moving)" = 0 ] && [ "$(state generation)" = "$(state view_generation)" ]' || fail "view did not settle"
 gen0=$(state view_generation)
 xdotool key plus plus minus
 wait_for 10 '[ "$(state exposure)" = 0.50 ]' || fail "+ + -: exposure $(state exposure)"
@@ -246,7 +248,7 @@ wait_for 20 'grep -q "^frame [0-9]*: input .* ms, scene rebuild .* ms, render .*
     fail "N printed no per-stage timings: $(head -c 300 view.out)"
 # Resizing the window resizes the film: the next frames are 600x450.
 xdotool windowsize "$WID" 600 450
-wait_for 30 '[ "$(state size)" = "600 450" ] && [ "$(state generation)" = "$(state view_generation)" ]' ||
+wait_for 30 '[ "$(state size)" = "600 450" ] && [ "$(state moving)" = 0 ] && [ "$(state generation)" = "$(state view_generation)" ]' ||
     fail "resize: size $(state size), generation $(state generation)/$(state view_generation)"
 dump resized.ppm
 [ "$(sed -n 2p resized.ppm)" = "600 450" ] || fail "resized window dump is $(sed -n 2p resized.ppm)"
@@ -254,7 +256,7 @@ dump resized.ppm
 # frames in flight are cancelled, and the last change still shows up.
 cancelled0=$(state cancelled)
 xdotool key --delay 30 2 1 2 1 2 1 2
-wait_for 30 '[ "$(state stride)" = 2 ] && [ "$(state generation)" = "$(state view_generation)" ]' ||
+wait_for 30 '[ "$(state stride)" = 2 ] && [ "$(state moving)" = 0 ] && [ "$(state generation)" = "$(state view_generation)" ]' ||
     fail "after quick stride changes: stride $(state stride)"
 [ "$(state cancelled)" -gt "$cancelled0" ] || fail "no frame in flight was cancelled"
 quit_viewer
