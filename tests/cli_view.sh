@@ -9,6 +9,7 @@
 # Usage: cli_view.sh TRAC0R_BINARY SCRATCH_DIR
 set -u
 . "$(dirname "$0")/common.sh"
+SRC=$(cd "$(dirname "$0")/.." && pwd)
 cli_begin "$1" "$2"
 XVFB_PID=
 VIEW_PID=
@@ -26,6 +27,8 @@ expect_usage_error "unknown option '--bogus'" view --bogus
 expect_usage_error "missing-scene.json" view missing-scene.json
 expect_usage_error "--frames: needs --screenshot" view --frames 3
 expect_usage_error "--stride: expected 1, 2 or 4, got '3'" view --stride 3
+expect_usage_error "--recon: expected off, accumulate" view --recon blur
+expect_usage_error "--target-fps: expected" view --target-fps 0
 expect_usage_error "--benchmark: expected an integer in 0..9, got '10'" view --benchmark 10
 expect_usage_error "--screenshot: 'x.jpg' has an unknown extension" view --screenshot x.jpg
 expect_usage_error "--font: cannot open 'no-such-font.ttf'" view --font no-such-font.ttf
@@ -100,14 +103,15 @@ export SDL_FRAMEBUFFER_ACCELERATION=0
 state() {
     awk -v k="$1" '$1 == k { $1 = ""; sub(/^ /, ""); print; exit }' state.txt 2>/dev/null
 }
-# settled_at STRIDE SPP: the frame on screen belongs to the current view, at this stride
-# and sample count. One read of the file for all of them: spp is not monotonic (it
+# settled_at STRIDE SPP: the frame on screen belongs to the current view at rest (not a
+# moving view's film, whose samples are numbered by frame), at this stride and sample
+# count. One read of the file for all of them: spp is not monotonic (it
 # restarts with a new view), so values read from two successive versions of the file
 # could pass together when neither version does.
 settled_at() {
     awk -v stride="$1" -v spp="$2" '$1 == "stride" { s = $2 } $1 == "spp" { p = $2 }
-        $1 == "generation" { g = $2 } $1 == "view_generation" { v = $2 }
-        END { exit !(s == stride && p == spp && g == v) }' state.txt 2>/dev/null
+        $1 == "generation" { g = $2 } $1 == "view_generation" { v = $2 } $1 == "moving" { m = $2 }
+        END { exit !(s == stride && p == spp && g == v && m == 0) }' state.txt 2>/dev/null
 }
 # wait_for SECONDS 'shell condition': polls every 50 ms.
 wait_for() {
@@ -230,8 +234,9 @@ xdotool key 3
 wait_for 10 '[ "$(state stride)" = 4 ]' || fail "3 did not switch to stride 4"
 xdotool key 1
 wait_for 10 '[ "$(state stride)" = 1 ]' || fail "1 did not switch back to stride 1"
-# view_generation counts view changes asked for, generation is the one on screen.
-wait_for 10 '[ "$(state generation)" = "$(state view_generation)" ]' || fail "view did not settle"
+# view_generation counts view changes asked for (the end of a move is one: the view restarts
+# at full resolution, moving 0), generation is the one on screen.
+wait_for 10 '[ "$(state moving)" = 0 ] && [ "$(state generation)" = "$(state view_generation)" ]' || fail "view did not settle"
 gen0=$(state view_generation)
 xdotool key plus plus minus
 wait_for 10 '[ "$(state exposure)" = 0.50 ]' || fail "+ + -: exposure $(state exposure)"
@@ -249,7 +254,7 @@ wait_for 20 'grep -q "^frame [0-9]*: input .* ms, scene rebuild .* ms, render .*
     fail "N printed no per-stage timings: $(head -c 300 view.out)"
 # Resizing the window resizes the film: the next frames are 600x450.
 xdotool windowsize "$WID" 600 450
-wait_for 30 '[ "$(state size)" = "600 450" ] && [ "$(state generation)" = "$(state view_generation)" ]' ||
+wait_for 30 '[ "$(state size)" = "600 450" ] && [ "$(state moving)" = 0 ] && [ "$(state generation)" = "$(state view_generation)" ]' ||
     fail "resize: size $(state size), generation $(state generation)/$(state view_generation)"
 dump resized.ppm
 [ "$(sed -n 2p resized.ppm)" = "600 450" ] || fail "resized window dump is $(sed -n 2p resized.ppm)"
@@ -266,10 +271,67 @@ wait_for 30 '[ "$(state size)" = "600 450" ] && [ "$(state generation)" = "$(sta
 # frames in flight are cancelled, and the last change still shows up.
 cancelled0=$(state cancelled)
 xdotool key --delay 30 2 1 2 1 2 1 2
-wait_for 30 '[ "$(state stride)" = 2 ] && [ "$(state generation)" = "$(state view_generation)" ]' ||
+wait_for 30 '[ "$(state stride)" = 2 ] && [ "$(state moving)" = 0 ] && [ "$(state generation)" = "$(state view_generation)" ]' ||
     fail "after quick stride changes: stride $(state stride)"
 [ "$(state cancelled)" -gt "$cancelled0" ] || fail "no frame in flight was cancelled"
 quit_viewer
+
+# A right-handed scene (the classic box: red wall on the left) stays the same way round
+# after a move, and holding a key keeps the picture live: frames keep being finished and
+# shown (the counter rises, the window changes) while the camera changes every 10 ms,
+# here with SVGF reconstructing every frame; M cycles the reconstruction.
+# sides PPM: exits 0 when the left strip is red and the right one green.
+sides() {
+    set -- $(region "$1" 4 40 30 80) $(region "$1" 130 40 156 80)
+    awk -v lr="$1" -v lg="$2" -v rr="$5" -v rg="$6" \
+        'BEGIN { exit !(lr > 1.3 * lg && rg > 1.1 * rr) }'
+}
+start_viewer --scene "$SRC/scenes/cornell-classic.json" --target-fps 30 --recon svgf
+wait_for 30 '[ "$(state spp)" -ge 16 ]' || fail "classic: fewer than 16 spp after 30 s"
+[ "$(state mirrored)" = 1 ] || fail "classic: the viewer's camera is not mirrored"
+dump classic0.ppm
+sides classic0.ppm || fail "classic before a move: red wall not left: $(region classic0.ppm 4 40 30 80)"
+xdotool keydown w
+sleep 0.5
+frames0=$(state frames)
+dump hold1.ppm
+sleep 1
+frames1=$(state frames)
+dump hold2.ppm
+moving=$(state moving)
+xdotool keyup w
+[ "$moving" = 1 ] || fail "holding W: the viewer does not say it is moving"
+[ "$frames1" -ge $((frames0 + 3)) ] || fail "holding W: frames went $frames0 -> $frames1 in 1 s"
+cmp -s hold1.ppm hold2.ppm && fail "holding W: the window did not change in 1 s"
+wait_for 10 '[ "$(state moving)" = 0 ] && [ "$(state generation)" = "$(state view_generation)" ]' ||
+    fail "classic: view did not settle after W"
+wait_for 30 '[ "$(state spp)" -ge 8 ]' || fail "classic after W: fewer than 8 spp"
+dump classic1.ppm
+sides classic1.ppm || fail "classic after W: mirrored: $(region classic1.ppm 4 40 30 80)"
+xdotool key m
+wait_for 10 '[ "$(state recon)" = off ]' || fail "M after svgf: recon $(state recon)"
+xdotool key m
+wait_for 10 '[ "$(state recon)" = accumulate ]' || fail "M after off: recon $(state recon)"
+# R resets the camera; C writes it as scene-file JSON that loads back.
+pos1=$(state pos)
+xdotool key r
+wait_for 10 '[ "$(state pos)" != "$pos1" ]' || fail "R did not reset the camera"
+xdotool key c
+wait_for 10 '[ "$(state cameras)" = 1 ]' || fail "C wrote no camera: $(cat view.err)"
+grep -q '"handedness": "right"' shots/trac0r-camera-000.json || fail "C: $(cat shots/trac0r-camera-000.json)"
+quit_viewer
+# The reset camera, written by C into the scene file in place of its own camera, renders
+# the same image: the JSON is the scene's camera, handedness included.
+awk -v f=shots/trac0r-camera-000.json '
+    /^  "camera": \{/ { skip = 1; while ((getline l < f) > 0) { buf = buf sep "  " l; sep = "\n" }
+                       sub(/\n?  $/, "", buf); print buf ","; next }
+    skip && /^  \},?$/ { skip = 0; next }
+    !skip { print }' "$SRC/scenes/cornell-classic.json" >cam.json
+"$BIN" render "$SRC/scenes/cornell-classic.json" --width 40 --height 30 --spp 2 --out c0.png ||
+    fail "render cornell-classic failed"
+"$BIN" render cam.json --width 40 --height 30 --spp 2 --out c1.png 2>err.txt ||
+    fail "the camera C wrote does not load: $(cat err.txt)"
+cmp -s c0.png c1.png || fail "the camera C wrote renders another image"
 
 # F12 saves the converged float film: with --max-spp 4 it equals trac0r render --spp 4.
 rm -rf shots

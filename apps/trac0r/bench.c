@@ -523,6 +523,8 @@ static void bench_help(FILE *fp) {
                 "               (the thesis's figure 3.5)\n"
                 "  rays         Mrays/s of primary, diffuse and shadow rays per structure\n"
                 "  convergence  error against a reference over time and spp, naive vs pt\n"
+                "  realtime     quality and time per frame of each reconstruction method\n"
+                "               along a moving camera (docs/realtime.md)\n"
                 "\n"
                 "Run 'trac0r bench BENCHMARK --help' for its options.\n");
 }
@@ -544,13 +546,16 @@ int cmd_bench(int argc, char **argv) {
     if (strcmp(argv[1], "convergence") == 0) {
         return bench_convergence(argc - 1, argv + 1);
     }
+    if (strcmp(argv[1], "realtime") == 0) {
+        return bench_realtime(argc - 1, argv + 1);
+    }
     if (strcmp(argv[1], "-h") == 0 || strcmp(argv[1], "--help") == 0) {
         bench_help(stdout);
         return CLI_OK;
     }
     fprintf(stderr,
             "trac0r bench: unknown benchmark '%s' (available: frame, complexity, rays, "
-            "convergence)\n",
+            "convergence, realtime)\n",
             argv[1]);
     return CLI_USAGE;
 }

@@ -26,5 +26,6 @@ int bench_plot_png(const char *script, const char *png, tr_error *err);
 
 int bench_rays(int argc, char **argv);
 int bench_convergence(int argc, char **argv);
+int bench_realtime(int argc, char **argv);
 
 #endif

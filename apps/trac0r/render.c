@@ -13,6 +13,50 @@
 #include "render_job.h"
 #include "trac0r/outfile.h"
 
+/* The film's radiance through the edge-avoiding a-trous filter guided by its albedo,
+ * normal and depth passes, into `den` (radiance only, one sample per covered pixel). */
+static int render_denoise(const tr_film *film, tr_film *den, tr_error *err) {
+    tr_gbuffer g = {0};
+    const tr_recon_params p = tr_recon_params_default();
+    int rc = tr_gbuffer_init(&g, film->width, film->height, err);
+    rc = rc == TR_OK ? tr_gbuffer_from_film(&g, film, err) : rc;
+    rc = rc == TR_OK ? tr_film_init(den, film->width, film->height, err) : rc;
+    rc = rc == TR_OK ? tr_filter_atrous(&g, g.color, den->sum, &p, 0, err) : rc;
+    for (size_t i = 0; rc == TR_OK && i < (size_t)film->width * film->height; ++i) {
+        den->count[i] = film->count[i] ? 1u : 0u;
+    }
+    tr_gbuffer_free(&g);
+    return rc;
+}
+
+/* Writes the film (PNG or PFM), first through the a-trous filter (denoise) and, for a
+ * PNG, the display curve; the plain path (clamp, no filter) is tr_film_write as before. */
+static int render_write(const tr_film *film, const char *out, float exposure, int curve,
+                        int denoise, tr_error *err) {
+    const int png = tr_image_format_from_path(out) == TR_IMAGE_PNG;
+    if (!denoise && (curve == TR_TONEMAP_CLAMP || !png)) {
+        return tr_film_write(film, out, exposure, err);
+    }
+    tr_film den = {0}, disp = {0};
+    const tr_film *img = film;
+    int rc = TR_OK;
+    if (denoise) {
+        rc = render_denoise(film, &den, err);
+        img = &den;
+    }
+    if (rc == TR_OK && png && curve != TR_TONEMAP_CLAMP) {
+        rc = tr_tonemap_display_film(img, exposure, curve, &disp, err);
+        img = &disp;
+        exposure = 0.0f; /* applied */
+    }
+    rc = rc == TR_OK ? tr_film_write(img, out, exposure, err) : rc;
+    tr_film_free(&disp);
+    tr_film_free(&den);
+    return rc;
+}
+
+static void render_help(void) {
+
 static void render_help(void) {
     printf("Usage: trac0r render [SCENE] [options]\n"
            "\n"
@@ -57,6 +101,12 @@ static void render_help(void) {
            "                       of the first N/2, relative to the square root of the\n"
            "                       pixel's value; 0.01 is a good start); --spp is the most\n"
            "                       a pixel gets. Not with --stride, --checkpoint or mpirun\n"
+           "  --tonemap CURVE      PNG display curve: clamp (default) or filmic (an ACES-like\n"
+           "                       fitted curve that rolls highlights off); PFM and EXR\n"
+           "                       stay linear\n"
+           "  --denoise            filter the final image with the edge-avoiding a-trous\n"
+           "                       filter guided by the albedo, normal and depth passes\n"
+           "                       (docs/realtime.md); the passes are rendered for it\n"
            "  --time-limit S       stop before a pass that would end after S seconds,\n"
            "                       0..1e6 (default 0: none); the image is complete, and the\n"
            "                       same as one rendered with the spp it reached. Not with\n"
@@ -139,6 +189,14 @@ static int render_option(render_job *job, int *rc) {
         *rc = cli_parse_float(a, 0.0f, 1.0f, &job->noise_threshold);
     } else if (cli_is(a, "--time-limit")) {
         *rc = cli_parse_float(a, 0.0f, 1e6f, &job->time_limit);
+    } else if (cli_is(a, "--tonemap")) {
+        *rc = cli_value(a);
+        if (*rc == CLI_OK && (job->curve = tr_tonemap_curve_parse(a->value)) < 0) {
+            *rc = cli_error(a, "--tonemap: expected clamp or filmic, got '%s'", a->value);
+        }
+    } else if (cli_is(a, "--denoise")) {
+        job->denoise = 1;
+        *rc = CLI_OK;
     } else if (cli_is(a, "--exr-type")) {
         *rc = cli_value(a);
         if (*rc == CLI_OK && strcmp(a->value, "half") != 0 && strcmp(a->value, "float") != 0) {
@@ -241,6 +299,12 @@ int render_job_setup(render_job *job, int argc, char **argv, int *done) {
         }
     }
 
+    /* The passes written as files or layers are the ones asked for; --denoise needs the
+     * guides in the film too (the radiance does not change with passes). */
+    job->write_passes = job->passes;
+    if (job->denoise) {
+        job->passes |= TR_PASS_ALBEDO | TR_PASS_NORMAL | TR_PASS_DEPTH;
+    }
     job->scene = tr_scene_create(NULL);
     tr_scene_file file;
     int rc = cli_load_scene_file(a, c, job->scene, &file);
@@ -275,12 +339,27 @@ int render_write_outputs(const render_job *job, const tr_film *film, uint32_t sa
     const char *out = job->out;
     int rc = CLI_OK;
     if (tr_image_format_from_path(out) == TR_IMAGE_EXR) {
-        rc = tr_film_write_exr(film, out, job->exr_half, &err) == TR_OK ? CLI_OK : CLI_FAILURE;
+        /* A view of the film with the layers asked for; its radiance denoised if asked. */
+        tr_film view = *film, den = {0};
+        view.passes = job->write_passes;
+        if (job->denoise) {
+            rc = render_denoise(film, &den, &err) == TR_OK
+                     ? CLI_OK
+                     : CLI_FAILURE;
+            view.sum = den.sum;
+            view.count = den.count;
+        }
+        if (rc == CLI_OK) {
+            rc = tr_film_write_exr(&view, out, job->exr_half, &err) == TR_OK ? CLI_OK : CLI_FAILURE;
+        }
+        tr_film_free(&den);
     } else {
-        rc = tr_film_write(film, out, job->exposure, &err) == TR_OK ? CLI_OK : CLI_FAILURE;
+        rc = render_write(film, out, job->exposure, job->curve, job->denoise, &err) == TR_OK
+                 ? CLI_OK
+                 : CLI_FAILURE;
         for (int k = 0; k < 4 && rc == CLI_OK; ++k) {
             tr_film pass;
-            if ((job->passes & (1u << k)) == 0u) {
+            if ((job->write_passes & (1u << k)) == 0u) {
                 continue;
             }
             if (tr_film_extract_pass(film, 1u << k, &pass, &err) != TR_OK ||

@@ -19,7 +19,10 @@ typedef struct render_job {
     float exposure;
     const char *out;
     int exr_half;             /* --exr-type half */
-    uint32_t passes;          /* TR_PASS_* */
+    uint32_t passes;          /* TR_PASS_* the film keeps (with --denoise's guides) */
+    uint32_t write_passes;    /* TR_PASS_* written as files or EXR layers (--passes) */
+    int curve;                /* --tonemap: TR_TONEMAP_* (PNG only) */
+    int denoise;              /* --denoise */
     char pass_paths[4][4096]; /* PFM paths of the passes (not for EXR) */
     const char *checkpoint;   /* --checkpoint FILE or NULL */
     double checkpoint_interval;

@@ -18,7 +18,8 @@ static void view_help(void) {
            "\n"
            "Opens an interactive window (800x600 by default, resizable) that shows the scene\n"
            "converging progressively: one sample per pixel per frame, rendered on its own\n"
-           "thread. Any camera change cancels the frame in flight and starts over.\n"
+           "thread. While the camera moves, frames hold --target-fps (resolution and samples\n"
+           "per pixel adapt); at rest the view converges at full resolution.\n"
            "\n"
            "Controls:\n"
            "  W/S A/D            forward/back, left/right      Space/Left Ctrl  up/down\n"
@@ -26,6 +27,9 @@ static void view_help(void) {
            "  mouse wheel        movement speed                +/-              exposure\n"
            "  1/2/3              preview stride 1/2/4 pixels   B                debug view\n"
            "  V                  BVH boxes (with [ and ] for depth)\n"
+           "  M                  reconstruction: off, accumulate, bilateral, atrous, svgf\n"
+           "  R                  reset the camera              C                camera as JSON\n"
+           "                     (printed, and saved to --shot-dir/trac0r-camera-NNN.json)\n"
            "  N                  per-stage timings on stdout   H                help overlay\n"
            "  F12                save a screenshot PNG (the float film, tonemapped)\n"
            "  Esc                quit\n"
@@ -42,6 +46,11 @@ static void view_help(void) {
            "  --stride K           initial preview stride, 1, 2 or 4 (default 1)\n"
            "  --exposure EV        display and screenshot exposure in stops, -20..20\n"
            "                       (default 0)\n"
+           "  --target-fps F       frame budget while the camera moves, 1..1000 (default 60):\n"
+           "                       the resolution and samples per frame adapt to hold it\n"
+           "  --tonemap CURVE      display and screenshot curve: clamp (default) or filmic\n"
+           "  --recon METHOD       reconstruction shown first: off (default), accumulate,\n"
+           "                       bilateral, atrous or svgf (see docs/realtime.md)\n"
            "  --max-spp N          stop accumulating after N samples per pixel (default 0:\n"
            "                       never)\n"
            "  --animate            a dynamic scene (interactive mode): before every frame the\n"
@@ -105,13 +114,20 @@ static int run_headless(const cli_args *a, const view_options *o, tr_scene *scen
                seconds, seconds > 0 ? frames / seconds : 0.0, seconds * 1e3 / frames);
     }
     if (rc == CLI_OK && o->screenshot) {
-        if (tr_film_write(&film, o->screenshot, o->exposure, &err) != TR_OK) {
+        tr_film disp = {0};
+        const int curved = o->curve != TR_TONEMAP_CLAMP &&
+                           tr_image_format_from_path(o->screenshot) == TR_IMAGE_PNG;
+        if ((curved &&
+             tr_tonemap_display_film(&film, o->exposure, o->curve, &disp, &err) != TR_OK) ||
+            tr_film_write(curved ? &disp : &film, o->screenshot, curved ? 0.0f : o->exposure,
+                          &err) != TR_OK) {
             fprintf(stderr, "trac0r view: %s\n", err.msg);
             rc = CLI_FAILURE;
         } else {
             fprintf(stderr, "trac0r view: %u frames of %s %ux%u in %.2f s -> %s\n", frames,
                     o->c.scene, o->c.width, o->c.height, seconds, o->screenshot);
         }
+        tr_film_free(&disp);
     }
     tr_film_free(&film);
     return rc;
@@ -124,6 +140,7 @@ int cmd_view(int argc, char **argv) {
     cli_common_default(&o.c);
     o.benchmark = -1;
     o.stride = 1;
+    o.target_fps = 60.0f;
     o.shot_dir = ".";
     int frames_given = 0;
     char bench_scene[64];
@@ -154,6 +171,21 @@ int cmd_view(int argc, char **argv) {
             }
         } else if (cli_is(&a, "--exposure")) {
             rc = cli_parse_float(&a, -20.0f, 20.0f, &o.exposure);
+        } else if (cli_is(&a, "--target-fps")) {
+            rc = cli_parse_float(&a, 1.0f, 1000.0f, &o.target_fps);
+        } else if (cli_is(&a, "--tonemap")) {
+            rc = cli_value(&a);
+            if (rc == CLI_OK && (o.curve = tr_tonemap_curve_parse(a.value)) < 0) {
+                return cli_error(&a, "--tonemap: expected clamp or filmic, got '%s'", a.value);
+            }
+        } else if (cli_is(&a, "--recon")) {
+            rc = cli_value(&a);
+            if (rc == CLI_OK && (o.recon = tr_recon_parse(a.value)) < 0) {
+                return cli_error(&a,
+                                 "--recon: expected off, accumulate, bilateral, atrous or "
+                                 "svgf, got '%s'",
+                                 a.value);
+            }
         } else if (cli_is(&a, "--max-spp")) {
             rc = cli_parse_u32(&a, 0, 100000000, &o.max_spp);
         } else if (cli_is(&a, "--animate")) {

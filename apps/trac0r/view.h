@@ -14,6 +14,9 @@ typedef struct view_options {
     int benchmark;          /* complexity level, -1: none */
     int stride;             /* initial preview stride: 1, 2 or 4 */
     float exposure;
+    float target_fps;       /* --target-fps: the frame budget while moving */
+    int recon;              /* --recon: tr_recon_method shown (M cycles) */
+    int curve;              /* --tonemap: tr_tonemap_curve_kind */
     uint32_t max_spp;       /* stop accumulating after this many (0: never) */
     int animate;            /* --animate: the scene's last shape moves every frame */
     const char *font;       /* --font, or NULL for fontconfig */

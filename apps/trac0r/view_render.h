@@ -2,9 +2,17 @@
  *
  * One thread owns the float film and renders frame after frame (sample k in frame k)
  * of the current view, publishing each finished frame as tonemapped 32-bit pixels.
- * The UI thread changes the view with view_renderer_set_view, which cancels the frame
- * in flight (tr_render_config.cancel) and restarts accumulation, so input never waits
- * for a slow frame. Everything shared is guarded by `mu`.
+ * The UI thread changes the view with view_renderer_set_view, which restarts
+ * accumulation, so input never waits for a slow frame. Everything shared is guarded by
+ * `mu`.
+ *
+ * Staying live in motion: a view change cancels the frame in flight only when that frame
+ * refines a view already on screen (its second sample or later). The first frame of a
+ * view is always finished and shown, so a camera that changes every 10 ms still gets a
+ * new picture every frame instead of a frozen one. While the UI says the view is moving,
+ * frames are rendered at a reduced resolution (the window stretches them) chosen to hold
+ * the frame budget, and with more than one sample per pixel when even full resolution
+ * leaves time over; at rest the film accumulates at full resolution as before.
  *
  * On an OpenCL device the thread owns the context too: each frame accumulates into the
  * device's film and is read back into `film` for display; a device frame cannot be
@@ -17,6 +25,7 @@
 #include <stdint.h>
 
 #include "trac0r/device.h"
+#include "trac0r/post.h"
 #include "trac0r/trac0r.h"
 
 typedef struct view_renderer {
@@ -35,6 +44,10 @@ typedef struct view_renderer {
     tr_camera cam;
     int stride;
     float exposure;
+    int curve;           /* tr_tonemap_curve_kind of the display (fixed at the start) */
+    int moving;          /* the UI's camera is changing: render to the frame budget */
+    int recon;           /* tr_recon_method of the frames shown */
+    double budget_ms;    /* the frame budget while moving (1000 / --target-fps) */
     uint64_t generation; /* bumped by every view change */
     int quit;
     char shot_path[4096]; /* F12: write the film here (empty: no request) */
@@ -51,6 +64,10 @@ typedef struct view_renderer {
     double tonemap_ms;    /* film -> pixels of the last frame */
     uint64_t frames_done; /* frames finished since start (for FPS) */
     uint64_t cancelled;   /* frames cancelled since start */
+    float scale;          /* resolution divisor of the published frame (1: full) */
+    double temporal_ms;   /* reconstruction of the published frame: temporal stage */
+    double spatial_ms;    /* ... and its spatial filter */
+    uint32_t frame_spp;   /* samples per pixel the published frame traced */
     int failed;           /* rendering failed: error holds why; the thread stopped */
     char error[600];
     int shot_done; /* a screenshot request finished: shot_msg says how */
@@ -60,6 +77,13 @@ typedef struct view_renderer {
     /* Private to the thread. */
     tr_film film;
     uint32_t *back;
+    atomic_int refining;   /* the frame in flight refines a view on screen: cancellable */
+    float motion_scale;    /* the resolution divisor the budget asks for while moving */
+    uint32_t motion_spp;   /* samples per frame while moving */
+    uint32_t motion_frame; /* counts moving frames: their sample numbers, so noise changes */
+    tr_gbuffer gb;         /* the film's means and passes, for the reconstruction */
+    tr_recon rec;          /* the reconstruction's history */
+    tr_film disp;          /* the reconstructed frame as a film of one sample per pixel */
 } view_renderer;
 
 /* Starts the thread rendering `cam` (whose size sets the film's) with cfg's settings, on
@@ -68,9 +92,15 @@ typedef struct view_renderer {
  * scene again to a device); readers of the scene on other threads hold mu. */
 int view_renderer_start(view_renderer *r, tr_scene *scene, int animate, tr_device *dev,
                         const tr_render_config *cfg, const tr_camera *cam, int stride,
-                        float exposure, uint32_t max_spp, tr_error *err);
-/* Asks for another view (camera, size or stride): restarts accumulation if it differs. */
-void view_renderer_set_view(view_renderer *r, const tr_camera *cam, int stride);
+                        float exposure, int curve, uint32_t max_spp, tr_error *err);
+/* Asks for another view (camera, size, stride or moving): restarts accumulation if it
+ * differs. `moving` says that the camera is changing: frames then hold the budget. */
+void view_renderer_set_view(view_renderer *r, const tr_camera *cam, int stride, int moving);
+/* The frame budget while moving, in milliseconds. */
+void view_renderer_set_budget(view_renderer *r, double budget_ms);
+/* Shows later frames through reconstruction `method` (tr_recon_method): a new view, as
+ * the film then keeps the passes the guided filters need. */
+void view_renderer_set_recon(view_renderer *r, int method);
 /* Tonemaps later frames with this exposure (accumulation continues). */
 void view_renderer_set_exposure(view_renderer *r, float exposure);
 /* Asks the thread to write its film (mean radiance, tonemapped) to path; the result
@@ -80,6 +110,6 @@ void view_renderer_screenshot(view_renderer *r, const char *path);
 void view_renderer_stop(view_renderer *r);
 
 /* Tonemaps a film into ARGB8888 pixels (black where no sample landed). */
-void view_tonemap(const tr_film *film, float exposure, uint32_t *pixels);
+void view_tonemap(const tr_film *film, float exposure, int curve, uint32_t *pixels);
 
 #endif

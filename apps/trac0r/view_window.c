@@ -12,6 +12,7 @@
 #include <sys/stat.h>
 
 #include "view.h"
+#include "view_camera.h"
 #include "view_overlay.h"
 #include "view_render.h"
 #include "view_vec.h"
@@ -25,38 +26,27 @@ static void on_sigusr1(int sig) {
     dump_requested = 1;
 }
 
-/* The free-flying camera the user steers. */
-typedef struct fly_camera {
-    tr_vec3 pos, dir, up; /* dir and up unit and orthogonal */
-    float vfov, near_dist, far_dist;
-    float speed; /* world units per second */
-} fly_camera;
-
-static int fly_make(const fly_camera *f, uint32_t w, uint32_t h, tr_camera *cam) {
-    tr_error err;
-    return tr_camera_make(cam, f->pos, f->dir, f->up, f->vfov, f->near_dist, f->far_dist, w, h,
-                          &err);
-}
-
-/* Keeps dir and up unit length and orthogonal after many small rotations. */
-static void fly_orthonormalize(fly_camera *f) {
-    f->dir = v3_normalize(f->dir);
-    f->up = v3_normalize(v3_sub(f->up, v3_scale(f->dir, v3_dot(f->up, f->dir))));
-}
-
 typedef struct view_state {
     int overlay, help, bvh, timings, mouselook;
     uint32_t bvh_depth;
     int stride;
+    int recon; /* tr_recon_method */
     float exposure;
-    uint64_t dumps, shots;
+    uint64_t dumps, shots, cameras;
     uint64_t updates; /* scene updates (--animate) */
     double rebuild_ms;
 } view_state;
 
-static int write_state(const char *path, const view_state *s, const fly_camera *f, uint64_t frames,
-                       uint64_t cancelled, uint32_t spp, uint64_t gen, uint64_t view_gen,
-                       uint32_t w, uint32_t h, double fps, tr_error *err) {
+/* What the render thread last published, for the state file. */
+typedef struct shown_frame {
+    uint64_t frames, cancelled, gen, view_gen;
+    uint32_t spp, frame_spp;
+    float scale;
+    int moving;
+} shown_frame;
+
+static int write_state(const char *path, const view_state *s, const fly_camera *f,
+                       const shown_frame *sf, uint32_t w, uint32_t h, double fps, tr_error *err) {
     tr_outfile *out = tr_outfile_open(path, err);
     if (!out) {
         return -1;
@@ -66,12 +56,15 @@ static int write_state(const char *path, const view_state *s, const fly_camera *
         "spp %u\ngeneration %llu\nview_generation %llu\nframes %llu\ncancelled %llu\nsize %u %u\n"
         "pos %.6f %.6f %.6f\ndir %.6f %.6f %.6f\nup %.6f %.6f %.6f\nspeed %.6f\n"
         "overlay %d\nhelp %d\nbvh %d\nbvh_depth %u\ntimings %d\nmouselook %d\nstride %d\n"
-        "exposure %.2f\nfps %.3f\ndumps %llu\nshots %llu\nupdates %llu\nrebuild_ms %.3f\n",
-        spp, (unsigned long long)gen, (unsigned long long)view_gen, (unsigned long long)frames,
-        (unsigned long long)cancelled, w, h, f->pos.x, f->pos.y, f->pos.z, f->dir.x, f->dir.y,
-        f->dir.z, f->up.x, f->up.y, f->up.z, f->speed, s->overlay, s->help, s->bvh, s->bvh_depth,
-        s->timings, s->mouselook, s->stride, s->exposure, fps, (unsigned long long)s->dumps,
-        (unsigned long long)s->shots, (unsigned long long)s->updates, s->rebuild_ms);
+        "exposure %.2f\nfps %.3f\ndumps %llu\nshots %llu\nupdates %llu\nrebuild_ms %.3f\n"
+        "moving %d\nscale %.3f\nframe_spp %u\ncameras %llu\nmirrored %d\nrecon %s\n",
+        sf->spp, (unsigned long long)sf->gen, (unsigned long long)sf->view_gen,
+        (unsigned long long)sf->frames, (unsigned long long)sf->cancelled, w, h, f->pos.x, f->pos.y,
+        f->pos.z, f->dir.x, f->dir.y, f->dir.z, f->up.x, f->up.y, f->up.z, f->speed, s->overlay,
+        s->help, s->bvh, s->bvh_depth, s->timings, s->mouselook, s->stride, s->exposure, fps,
+        (unsigned long long)s->dumps, (unsigned long long)s->shots, (unsigned long long)s->updates,
+        s->rebuild_ms, sf->moving, (double)sf->scale, sf->frame_spp, (unsigned long long)s->cameras,
+        f->mirrored, tr_recon_name(s->recon));
     return tr_outfile_commit(out, err) == TR_OK ? 0 : -1;
 }
 
@@ -103,10 +96,11 @@ static int dump_window(SDL_Renderer *ren, const char *path, tr_error *err) {
     return tr_outfile_commit(out, err) == TR_OK ? 0 : -1;
 }
 
-/* The first free trac0r-view-NNN.png in dir. */
-static void next_shot_path(const char *dir, char *path, size_t n) {
+/* The first free STEM-NNN.EXT in dir. */
+static void next_file_path(const char *dir, const char *stem, const char *ext, char *path,
+                           size_t n) {
     for (int i = 0; i < 100000; ++i) {
-        snprintf(path, n, "%s/trac0r-view-%03d.png", dir, i);
+        snprintf(path, n, "%s/%s-%03d.%s", dir, stem, i, ext);
         struct stat st; /* not fopen(): a FIFO of that name would block */
         if (stat(path, &st) != 0) {
             return;
@@ -121,6 +115,9 @@ static const char help_text[] = "trac0r view - keys\n"
                                 "Q/E        roll\n"
                                 "right mouse toggle mouse-look\n"
                                 "wheel      movement speed\n"
+                                "R          reset the camera\n"
+                                "C          camera as scene JSON\n"
+                                "M          reconstruction method\n"
                                 "+/-        exposure\n"
                                 "1/2/3      preview stride 1/2/4\n"
                                 "B          debug view\n"
@@ -163,7 +160,7 @@ static void fit_film_limits(SDL_Renderer *ren, uint32_t *w, uint32_t *h) {
 
 /* The stage times of the frame on screen, in milliseconds. */
 typedef struct stage_times {
-    double input, rebuild, render, tonemap, upload;
+    double input, rebuild, render, temporal, spatial, tonemap, upload;
 } stage_times;
 
 int view_run_window(const cli_args *a, const view_options *o, tr_scene *scene, cli_backend *be) {
@@ -238,9 +235,9 @@ int view_run_window(const cli_args *a, const view_options *o, tr_scene *scene, c
         }
     }
     const tr_camera *scene_cam = tr_scene_camera(scene);
-    fly_camera fly = {
-        scene_cam->pos,       scene_cam->dir,      scene_cam->up, scene_cam->vertical_fov,
-        scene_cam->near_dist, scene_cam->far_dist, 0.5f};
+    const tr_aabb bounds = tr_scene_bounds(scene);
+    const fly_camera fly0 = fly_from_camera(scene_cam, view_default_speed(&bounds));
+    fly_camera fly = fly0;
     /* The scene's own camera until the user moves: so that the first view's film is
      * exactly what `trac0r render` computes. */
     tr_camera cam = *scene_cam;
@@ -251,14 +248,17 @@ int view_run_window(const cli_args *a, const view_options *o, tr_scene *scene, c
     view_state st = {0};
     st.stride = o->stride;
     st.exposure = o->exposure;
+    st.recon = o->recon;
     st.bvh_depth = 3;
 
     tr_render_config cfg = cli_render_config(&o->c);
     if (view_renderer_start(&r, scene, o->animate, be->dev, &cfg, &cam, st.stride, st.exposure,
-                            o->max_spp, &err) != TR_OK) {
+                            o->curve, o->max_spp, &err) != TR_OK) {
         fprintf(stderr, "trac0r view: %s\n", err.msg);
         goto done;
     }
+    view_renderer_set_budget(&r, 1000.0 / o->target_fps);
+    view_renderer_set_recon(&r, st.recon);
     if (o->dump_file) {
         struct sigaction sa;
         memset(&sa, 0, sizeof sa);
@@ -274,7 +274,9 @@ int view_run_window(const cli_args *a, const view_options *o, tr_scene *scene, c
     stage_times times = {0};
     double fps = 0.0, fps_t0 = tr_time_now(), last = fps_t0, title_t = 0.0, drawn_t = 0.0;
     uint64_t fps_frames0 = 0;
-    int state_dirty = 1, state_failed = 0, mouse_x = 0, mouse_y = 0;
+    int state_dirty = 1, state_failed = 0, mouse_x = 0, mouse_y = 0, was_moving = 0;
+    double last_change_t = -1e9;
+    shown_frame sf = {0};
     int running = 1;
     status = CLI_OK;
     char title[160], text[4096];
@@ -317,8 +319,12 @@ int view_run_window(const cli_args *a, const view_options *o, tr_scene *scene, c
                 mouse_y = ev.motion.y;
                 if (st.mouselook && (ev.motion.xrel || ev.motion.yrel)) {
                     const float k = 0.0025f; /* radians per pixel */
+                    /* Pitch turns about up x dir whatever the handedness (up stays up);
+                     * yaw turns towards the screen's right, which a mirrored camera has
+                     * on the other side. */
                     tr_vec3 right = v3_normalize(v3_cross(fly.up, fly.dir));
-                    fly.dir = view_rotate(fly.dir, fly.up, (float)ev.motion.xrel * k);
+                    const float yaw = fly.mirrored ? -k : k;
+                    fly.dir = view_rotate(fly.dir, fly.up, (float)ev.motion.xrel * yaw);
                     fly.dir = view_rotate(fly.dir, right, (float)ev.motion.yrel * k);
                     fly.up = view_rotate(fly.up, right, (float)ev.motion.yrel * k);
                     fly_orthonormalize(&fly);
@@ -375,9 +381,38 @@ int view_run_window(const cli_args *a, const view_options *o, tr_scene *scene, c
                     st.exposure = fmaxf(st.exposure - 0.5f, -20.0f);
                     view_renderer_set_exposure(&r, st.exposure);
                     break;
+                case SDLK_m:
+                    st.recon = (st.recon + 1) % TR_RECON_COUNT;
+                    view_renderer_set_recon(&r, st.recon);
+                    break;
+                case SDLK_r:
+                    /* Back to the scene's camera and speed. */
+                    fly = fly0;
+                    view_changed = 1;
+                    break;
+                case SDLK_c: {
+                    char json[1024], path[4200];
+                    view_camera_json(&fly, json, sizeof json);
+                    fputs(json, stdout);
+                    fflush(stdout);
+                    next_file_path(o->shot_dir, "trac0r-camera", "json", path, sizeof path);
+                    tr_error cerr;
+                    tr_outfile *cf = tr_outfile_open(path, &cerr);
+                    if (cf) {
+                        fputs(json, tr_outfile_stream(cf)); /* checked by the commit */
+                    }
+                    if (!cf || tr_outfile_commit(cf, &cerr) != TR_OK) {
+                        fprintf(stderr, "trac0r view: %s\n", cerr.msg);
+                    } else {
+                        printf("trac0r view: saved %s\n", path);
+                        fflush(stdout);
+                        st.cameras += 1;
+                    }
+                    break;
+                }
                 case SDLK_F12: {
                     char path[4200];
-                    next_shot_path(o->shot_dir, path, sizeof path);
+                    next_file_path(o->shot_dir, "trac0r-view", "png", path, sizeof path);
                     view_renderer_screenshot(&r, path);
                     break;
                 }
@@ -393,7 +428,7 @@ int view_run_window(const cli_args *a, const view_options *o, tr_scene *scene, c
 
         /* Held keys move and roll the camera at a rate independent of the frame rate. */
         const Uint8 *keys = SDL_GetKeyboardState(NULL);
-        tr_vec3 right = v3_normalize(v3_cross(fly.up, fly.dir));
+        tr_vec3 right = fly_right(&fly);
         tr_vec3 move = v3(0.0f, 0.0f, 0.0f);
         move =
             v3_add(move, v3_scale(fly.dir, (float)(keys[SDL_SCANCODE_W] - keys[SDL_SCANCODE_S])));
@@ -410,12 +445,21 @@ int view_run_window(const cli_args *a, const view_options *o, tr_scene *scene, c
             fly_orthonormalize(&fly);
             view_changed = 1;
         }
+        /* Moving: a view change in the last 150 ms. The renderer then holds the frame
+         * budget; the first tick without changes asks for the full-resolution view. */
         if (view_changed) {
+            last_change_t = t_in;
+        }
+        const int moving = t_in - last_change_t < 0.15;
+        if (view_changed || moving != was_moving) {
             tr_camera next;
-            if (fly_make(&fly, w, h, &next) == TR_OK) {
-                cam = next;
-                view_renderer_set_view(&r, &cam, st.stride);
+            if (!view_changed || fly_make(&fly, w, h, &next) == TR_OK) {
+                if (view_changed) {
+                    cam = next;
+                }
+                view_renderer_set_view(&r, &cam, st.stride, moving);
             }
+            was_moving = moving;
             state_dirty = 1;
         }
         times.input = (tr_time_now() - t_in) * 1e3;
@@ -459,7 +503,11 @@ int view_run_window(const cli_args *a, const view_options *o, tr_scene *scene, c
             st.updates = r.updates;
             st.rebuild_ms = r.rebuild_ms;
             times.tonemap = r.tonemap_ms;
+            times.temporal = r.temporal_ms;
+            times.spatial = r.spatial_ms;
             times.upload = (tr_time_now() - t0) * 1e3;
+            sf.scale = r.scale;
+            sf.frame_spp = r.frame_spp;
             state_dirty = 1;
         }
         const uint64_t frames_done = r.frames_done, cancelled = r.cancelled;
@@ -479,8 +527,10 @@ int view_run_window(const cli_args *a, const view_options *o, tr_scene *scene, c
         }
         if (st.timings && shown_seq != last_printed_seq) {
             printf("frame %llu: input %.3f ms, scene rebuild %.3f ms, render %.2f ms, "
+                   "reconstruction (temporal %.2f, spatial %.2f) %.2f ms, "
                    "film->texture %.2f ms (tonemap %.2f, upload %.2f), %u spp\n",
                    (unsigned long long)shown_seq, times.input, times.rebuild, times.render,
+                   times.temporal, times.spatial, times.temporal + times.spatial,
                    times.tonemap + times.upload, times.tonemap, times.upload, spp);
             fflush(stdout);
             last_printed_seq = shown_seq;
@@ -525,7 +575,9 @@ int view_run_window(const cli_args *a, const view_options *o, tr_scene *scene, c
             tr_vec3 mw = view_screen_to_world(&cam, (float)mouse_x + 0.5f, (float)mouse_y + 0.5f);
             snprintf(text, sizeof text,
                      "FPS %.2f   %u spp   %ux%u   stride %d   exposure %+.1f\n"
+                     "%s: 1/%.2f resolution, %u spp per frame, budget %.1f ms\n"
                      "input %.2f ms  scene rebuild %.2f ms  render %.1f ms\n"
+                     "reconstruction %s: temporal %.2f ms  spatial %.2f ms\n"
                      "film->texture %.2f ms (tonemap %.2f + upload %.2f)\n"
                      "scene %s: %s\n"
                      "accel %s\n"
@@ -537,8 +589,10 @@ int view_run_window(const cli_args *a, const view_options *o, tr_scene *scene, c
                      "mouse camera % .3f % .3f % .3f\n"
                      "mouse world  % .3f % .3f % .3f\n"
                      "%s",
-                     fps, spp, w, h, st.stride, st.exposure, times.input, times.rebuild,
-                     times.render, times.tonemap + times.upload, times.tonemap, times.upload,
+                     fps, spp, w, h, st.stride, st.exposure, was_moving ? "moving" : "at rest",
+                     (double)sf.scale, sf.frame_spp, 1000.0 / o->target_fps, times.input,
+                     times.rebuild, times.render, tr_recon_name(st.recon), times.temporal,
+                     times.spatial, times.tonemap + times.upload, times.tonemap, times.upload,
                      o->c.scene, scene_changing ? "changing" : "static", accel, cam.pos.x,
                      cam.pos.y, cam.pos.z, cam.dir.x, cam.dir.y, cam.dir.z, cam.up.x, cam.up.y,
                      cam.up.z, cam.horizontal_fov, cam.vertical_fov, fly.speed, mouse_x, mouse_y,
@@ -566,9 +620,14 @@ int view_run_window(const cli_args *a, const view_options *o, tr_scene *scene, c
         }
         SDL_RenderPresent(ren);
         if (state_dirty && o->state_file) {
+            sf.frames = frames_done;
+            sf.cancelled = cancelled;
+            sf.spp = spp;
+            sf.gen = shown_gen;
+            sf.view_gen = r.generation;
+            sf.moving = was_moving;
             /* Said once, not at every frame, when the file cannot be written. */
-            if (write_state(o->state_file, &st, &fly, frames_done, cancelled, spp, shown_gen,
-                            r.generation, w, h, fps, &err) != 0 &&
+            if (write_state(o->state_file, &st, &fly, &sf, w, h, fps, &err) != 0 &&
                 !state_failed) {
                 fprintf(stderr, "trac0r view: --state-file: %s\n", err.msg);
                 state_failed = 1;

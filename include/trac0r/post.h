@@ -18,6 +18,7 @@
 #include <stdint.h>
 
 #include "trac0r/error.h"
+#include "trac0r/types.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -48,6 +49,30 @@ int tr_tonemap_film(const struct tr_film *film, uint32_t x, uint32_t y, uint32_t
                     uint32_t height, float exposure, tr_pixel_format format, void *dst,
                     size_t dst_stride, tr_error *err);
 
+/* Display curves: the hard clamp (the default: bytes as before), or a filmic curve
+ * (Narkowicz's fit of ACES, src/post/tonemap.h) that rolls highlights off. */
+typedef enum tr_tonemap_curve_kind {
+    TR_TONEMAP_CLAMP = 0,
+    TR_TONEMAP_FILMIC = 1
+} tr_tonemap_curve_kind;
+
+/* "clamp" or "filmic"; NULL for anything else. */
+const char *tr_tonemap_curve_name(int curve);
+/* The curve of a name above; -1 for anything else. */
+int tr_tonemap_curve_parse(const char *name);
+
+/* tr_tonemap_film through `curve` (TR_TONEMAP_CLAMP: tr_tonemap_film's bytes). */
+int tr_tonemap_film_curve(const struct tr_film *film, uint32_t x, uint32_t y, uint32_t width,
+                          uint32_t height, float exposure, int curve, tr_pixel_format format,
+                          void *dst, size_t dst_stride, tr_error *err);
+
+/* A new radiance-only film (free it with tr_film_free) holding `in`'s display-referred
+ * values: each mean scaled by 2^exposure and put through `curve`, one sample per pixel
+ * (none where `in` has none). Written as PNG at exposure 0 it gives exactly the bytes of
+ * tr_tonemap_film_curve: how `--tonemap filmic` reaches the PNG writer. */
+int tr_tonemap_display_film(const struct tr_film *in, float exposure, int curve,
+                            struct tr_film *out, tr_error *err);
+
 /* ---- Image metrics ------------------------------------------------------------- */
 
 /* The epsilon of the relative MSE's denominator, ref^2 + epsilon. */
@@ -70,9 +95,95 @@ tr_image_metrics tr_image_compare(const float *a, const float *ref, size_t pixel
 /* One pixel's error: the mean over R, G, B of |a - ref| on values clamped as above. */
 double tr_pixel_error(const float *a_rgb, const float *ref_rgb);
 
+/* The structural similarity index (SSIM, Wang et al. 2004) of `a` against `ref` (3
+ * floats per pixel, width x height) on the luminance of values clamped as above: 1 for
+ * identical images, less the more their local structure differs. Sequential, so the same
+ * on every run; NaN only when memory runs out. */
+double tr_ssim(const float *a, const float *ref, uint32_t width, uint32_t height);
+
 /* Peak signal-to-noise ratio of an MSE, peak 1: 10 log10(1 / mse) dB; +inf where mse is
  * not above 0. */
 double tr_psnr(double mse);
+
+/* ---- Real-time reconstruction --------------------------------------------------- */
+
+/* One frame's mean radiance and passes, planar, row-major, top row first. */
+typedef struct tr_gbuffer {
+    uint32_t width, height;
+    float *color;   /* 3 floats per pixel: linear radiance */
+    float *albedo;  /* 3 per pixel */
+    float *normal;  /* 3 per pixel, unit (zero where nothing was hit) */
+    float *depth;   /* 1 per pixel: distance along the camera ray, 0 where nothing was hit */
+    uint32_t *prim; /* 1 per pixel: triangle index + 1, 0 where nothing was hit */
+} tr_gbuffer;
+
+int tr_gbuffer_init(tr_gbuffer *g, uint32_t width, uint32_t height, tr_error *err);
+void tr_gbuffer_free(tr_gbuffer *g);
+/* The film's means into g (of the film's size). A pass the film lacks reads as albedo 1,
+ * normal, depth and id 0 (the guided filters then fall back on colour alone). */
+int tr_gbuffer_from_film(tr_gbuffer *g, const struct tr_film *film, tr_error *err);
+
+/* What tr_recon_frame does to a frame, each method one stage more than "accumulate". */
+typedef enum tr_recon_method {
+    TR_RECON_OFF = 0,        /* the frame as rendered */
+    TR_RECON_ACCUMULATE = 1, /* temporal accumulation with reprojection */
+    TR_RECON_BILATERAL = 2,  /* ... then the bilateral filter (the thesis's baseline) */
+    TR_RECON_ATROUS = 3,     /* ... then edge-avoiding à-trous (Dammertz et al. 2010) */
+    TR_RECON_SVGF = 4,       /* ... then variance-guided à-trous (Schied et al. 2017) */
+    TR_RECON_COUNT = 5
+} tr_recon_method;
+
+/* "off", "accumulate", "bilateral", "atrous", "svgf"; NULL for anything else. */
+const char *tr_recon_name(int method);
+/* The method of a name above; -1 for anything else. */
+int tr_recon_parse(const char *name);
+
+typedef struct tr_recon_params {
+    float alpha_min;      /* the EMA's smallest new-sample weight (0.2 in SVGF) */
+    float max_len;        /* history length cap (frames) */
+    int bilateral_radius; /* window (2r+1)^2 */
+    float bilateral_sigma_s, bilateral_sigma_r;
+    int atrous_iterations; /* steps 1, 2, 4, ... */
+    float atrous_sigma_c, atrous_sigma_n, atrous_sigma_z, atrous_sigma_a;
+    float svgf_sigma_l, svgf_sigma_n, svgf_sigma_z;
+} tr_recon_params;
+
+tr_recon_params tr_recon_params_default(void);
+
+/* The reconstruction's state between frames (history and scratch buffers): the caller
+ * owns it; nothing else is kept between calls. */
+typedef struct tr_recon {
+    uint32_t width, height;
+    int have_history;
+    tr_camera prev_cam;
+    int cur;                /* which of the two history buffers is the newest */
+    float *hist_color[2];   /* demodulated illumination, 3 per pixel */
+    float *hist_moments[2]; /* luminance mean and mean square, 2 per pixel */
+    float *hist_len[2];     /* frames of history */
+    float *hist_depth, *hist_normal;
+    uint32_t *hist_prim;
+    float *illum, *tmp_a, *tmp_b, *var_a, *var_b; /* scratch */
+    double ms_temporal, ms_spatial; /* the stages' wall times in the last tr_recon_frame */
+} tr_recon;
+
+int tr_recon_init(tr_recon *r, uint32_t width, uint32_t height, tr_error *err);
+void tr_recon_free(tr_recon *r);
+/* Forgets the history (a camera cut, a new scene). */
+void tr_recon_reset(tr_recon *r);
+/* Reconstructs frame g, rendered through cam, with `method` into out (3 floats per
+ * pixel), on up to `threads` OpenMP threads (0: the default); the result does not
+ * depend on the thread count. The history then holds this frame. Fails on a size other
+ * than the state's or an unknown method. */
+int tr_recon_frame(tr_recon *r, const tr_gbuffer *g, const tr_camera *cam, int method,
+                   const tr_recon_params *p, int threads, float *out, tr_error *err);
+
+/* The spatial filters alone, on one image `in` (3 floats per pixel) guided by g's
+ * passes (`trac0r render --denoise`): the bilateral filter on radiance, à-trous on
+ * demodulated radiance. */
+int tr_filter_bilateral(const tr_gbuffer *g, const float *in, float *out, const tr_recon_params *p,
+                        int threads, tr_error *err);
+int tr_filter_atrous(const tr_gbuffer *g, const float *in, float *out, const tr_recon_params *p,
+                     int threads, tr_error *err);
 
 #ifdef __cplusplus
 }

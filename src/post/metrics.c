@@ -1,6 +1,7 @@
 /* metrics.c - error metrics of an image against a reference: what `trac0r compare`
  * prints and what `trac0r bench convergence` plots. */
 #include <math.h>
+#include <stdlib.h>
 
 #include "trac0r/post.h"
 
@@ -43,4 +44,89 @@ tr_image_metrics tr_image_compare(const float *a, const float *ref, size_t pixel
     m.psnr = tr_psnr(m.mse);
     m.max_error = max;
     return m;
+}
+
+/* Luminance of a clamped pixel: SSIM is taken on one channel, as usual for colour. */
+static double clamped_luma(const float *rgb) {
+    return 0.2126 * clamp01(rgb[0]) + 0.7152 * clamp01(rgb[1]) + 0.0722 * clamp01(rgb[2]);
+}
+
+/* Wang, Bovik, Sheikh and Simoncelli, "Image Quality Assessment: From Error Visibility to
+ * Structural Similarity", IEEE TIP 13(4), 2004: local means, variances and covariance
+ * under an 11x11 Gaussian window (sigma 1.5, cut at the border and renormalised), the
+ * SSIM index per pixel with C1 = (0.01 L)^2, C2 = (0.03 L)^2 for L = 1, averaged. */
+double tr_ssim(const float *a, const float *ref, uint32_t width, uint32_t height) {
+    const size_t n = (size_t)width * height;
+    double *buf = malloc(7 * n * sizeof *buf);
+    if (!buf || n == 0) {
+        free(buf);
+        return NAN;
+    }
+    double *x = buf, *y = buf + n, *mom[5];
+    for (int k = 0; k < 5; ++k) {
+        mom[k] = buf + (2 + k) * n;
+    }
+    for (size_t i = 0; i < n; ++i) {
+        x[i] = clamped_luma(a + 3 * i);
+        y[i] = clamped_luma(ref + 3 * i);
+    }
+    double g[11];
+    for (int k = -5; k <= 5; ++k) {
+        g[k + 5] = exp(-(double)(k * k) / (2.0 * 1.5 * 1.5));
+    }
+    /* mom: E[x], E[y], E[x^2], E[y^2], E[xy], blurred separably: rows into `row`, then
+     * columns into mom[k]. */
+    double *row = malloc(n * sizeof *row);
+    if (!row) {
+        free(buf);
+        return NAN;
+    }
+    for (int k = 0; k < 5; ++k) {
+        for (uint32_t r = 0; r < height; ++r) {
+            for (uint32_t c = 0; c < width; ++c) {
+                double s = 0.0, w = 0.0;
+                for (int d = -5; d <= 5; ++d) {
+                    const long cc = (long)c + d;
+                    if (cc < 0 || cc >= (long)width) {
+                        continue;
+                    }
+                    const size_t i = (size_t)r * width + (size_t)cc;
+                    const double v = k == 0   ? x[i]
+                                     : k == 1 ? y[i]
+                                     : k == 2 ? x[i] * x[i]
+                                     : k == 3 ? y[i] * y[i]
+                                              : x[i] * y[i];
+                    s += g[d + 5] * v;
+                    w += g[d + 5];
+                }
+                row[(size_t)r * width + c] = s / w;
+            }
+        }
+        for (uint32_t r = 0; r < height; ++r) {
+            for (uint32_t c = 0; c < width; ++c) {
+                double s = 0.0, w = 0.0;
+                for (int d = -5; d <= 5; ++d) {
+                    const long rr = (long)r + d;
+                    if (rr < 0 || rr >= (long)height) {
+                        continue;
+                    }
+                    s += g[d + 5] * row[(size_t)rr * width + c];
+                    w += g[d + 5];
+                }
+                mom[k][(size_t)r * width + c] = s / w;
+            }
+        }
+    }
+    const double c1 = 0.01 * 0.01, c2 = 0.03 * 0.03;
+    double sum = 0.0;
+    for (size_t i = 0; i < n; ++i) {
+        const double mx = mom[0][i], my = mom[1][i];
+        const double vx = mom[2][i] - mx * mx, vy = mom[3][i] - my * my;
+        const double cxy = mom[4][i] - mx * my;
+        sum +=
+            ((2.0 * mx * my + c1) * (2.0 * cxy + c2)) / ((mx * mx + my * my + c1) * (vx + vy + c2));
+    }
+    free(row);
+    free(buf);
+    return sum / (double)n;
 }

@@ -15,9 +15,52 @@ float tr_srgb_to_linear(float encoded) {
     return tr_srgb_decode(encoded);
 }
 
+const char *tr_tonemap_curve_name(int curve) {
+    return curve == TR_TONEMAP_CLAMP ? "clamp" : curve == TR_TONEMAP_FILMIC ? "filmic" : NULL;
+}
+
+int tr_tonemap_curve_parse(const char *name) {
+    return strcmp(name, "clamp") == 0    ? TR_TONEMAP_CLAMP
+           : strcmp(name, "filmic") == 0 ? TR_TONEMAP_FILMIC
+                                         : -1;
+}
+
 int tr_tonemap_film(const struct tr_film *film, uint32_t x, uint32_t y, uint32_t width,
                     uint32_t height, float exposure, tr_pixel_format format, void *dst,
                     size_t dst_stride, tr_error *err) {
+    return tr_tonemap_film_curve(film, x, y, width, height, exposure, TR_TONEMAP_CLAMP, format, dst,
+                                 dst_stride, err);
+}
+
+int tr_tonemap_display_film(const struct tr_film *in, float exposure, int curve,
+                            struct tr_film *out, tr_error *err) {
+    if (!tr_tonemap_curve_name(curve)) {
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "tonemap: unknown curve %d", curve);
+    }
+    if (tr_film_init(out, in->width, in->height, err) != TR_OK) {
+        return TR_ERR;
+    }
+    const float scale = exp2f(exposure);
+    const size_t n = (size_t)in->width * in->height;
+    for (size_t i = 0; i < n; ++i) {
+        /* The mean as the tonemap takes it (a reciprocal, then products), so that this
+         * film written at exposure 0 gives the bytes of the direct tonemap. */
+        const float inv = in->count[i] ? 1.0f / (float)in->count[i] : 0.0f;
+        for (int k = 0; k < 3; ++k) {
+            out->sum[3 * i + k] =
+                in->count[i] ? tr_tonemap_curve(in->sum[3 * i + k] * inv, scale, curve) : 0.0f;
+        }
+        out->count[i] = in->count[i] ? 1u : 0u;
+    }
+    return TR_OK;
+}
+
+int tr_tonemap_film_curve(const struct tr_film *film, uint32_t x, uint32_t y, uint32_t width,
+                          uint32_t height, float exposure, int curve, tr_pixel_format format,
+                          void *dst, size_t dst_stride, tr_error *err) {
+    if (!tr_tonemap_curve_name(curve)) {
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "tonemap: unknown curve %d", curve);
+    }
     if (width == 0 || height == 0 || x > film->width || width > film->width - x ||
         y > film->height || height > film->height - y) {
         return tr_error_set(
@@ -48,8 +91,8 @@ int tr_tonemap_film(const struct tr_film *film, uint32_t x, uint32_t y, uint32_t
         unsigned char *out = (unsigned char *)dst + (size_t)r * dst_stride;
         for (uint32_t c = 0; c < width; ++c) {
             const size_t i = row + c;
-            const uint32_t rgb =
-                tr_tonemap_film_pixel(sum[3 * i], sum[3 * i + 1], sum[3 * i + 2], count[i], scale);
+            const uint32_t rgb = tr_tonemap_film_pixel_curve(
+                sum[3 * i], sum[3 * i + 1], sum[3 * i + 2], count[i], scale, curve);
             if (format == TR_PIXEL_RGB8) {
                 out[3 * c] = (unsigned char)(rgb >> 16);
                 out[3 * c + 1] = (unsigned char)(rgb >> 8);

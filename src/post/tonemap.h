@@ -42,6 +42,36 @@ TR_FN uint32_t tr_tonemap_srgb8_scaled(float linear, float scale) {
     return (uint32_t)(tr_srgb_encode(v) * 255.0f + 0.5f);
 }
 
+/* Display curves (post.h's tr_tonemap_curve): 0 clamps, 1 is the filmic curve. */
+#define TR_CURVE_CLAMP 0
+#define TR_CURVE_FILMIC 1
+
+/* A filmic curve: Krzysztof Narkowicz's rational fit of the ACES reference rendering
+ * transform with the output transform for an sRGB display ("ACES Filmic Tone Mapping
+ * Curve", 2016), applied per channel. It rolls highlights off towards 1 instead of
+ * clipping them (the lamp and its glow keep their shape) and darkens the toe slightly;
+ * Narkowicz's fit expects the input pre-scaled by 0.6, which is folded in here so that
+ * exposure 0 keeps mid-grey near where the clamp puts it. The fit rises past 1 near
+ * x = 11 (its asymptote is 2.51 / 2.43); tr_tonemap_curve clips it there. */
+TR_FN float tr_filmic_aces(float x) {
+    const float v = 0.6f * x;
+    return (v * (2.51f * v + 0.03f)) / (v * (2.43f * v + 0.59f) + 0.14f);
+}
+
+/* The display-referred linear value of `linear` scaled by `scale` through `curve`:
+ * what the sRGB transfer then encodes. NaN and everything not above 0 are 0; the clamp's
+ * values above 1 stay (the encoder clips them). */
+TR_FN float tr_tonemap_curve(float linear, float scale, int curve) {
+    const float v = linear * scale;
+    if (!(v > 0.0f)) { /* also catches NaN */
+        return 0.0f;
+    }
+    if (curve == TR_CURVE_FILMIC) {
+        return v < 1e30f ? tr_fminf(tr_filmic_aces(v), 1.0f) : 1.0f;
+    }
+    return v;
+}
+
 /* One film pixel (the sum of its samples' radiance and their count) to 0x00RRGGBB:
  * its mean radiance sum * (1 / count), tonemapped per channel; black where no sample
  * landed. The mean is taken as tr_film_pixel takes it (a reciprocal, then products),
@@ -55,6 +85,22 @@ TR_FN uint32_t tr_tonemap_film_pixel(float sum_r, float sum_g, float sum_b, uint
     const uint32_t r = tr_tonemap_srgb8_scaled(sum_r * inv, scale);
     const uint32_t g = tr_tonemap_srgb8_scaled(sum_g * inv, scale);
     const uint32_t b = tr_tonemap_srgb8_scaled(sum_b * inv, scale);
+    return (r << 16) | (g << 8) | b;
+}
+
+/* The same through `curve`; TR_CURVE_CLAMP gives tr_tonemap_film_pixel's bytes. */
+TR_FN uint32_t tr_tonemap_film_pixel_curve(float sum_r, float sum_g, float sum_b, uint32_t count,
+                                           float scale, int curve) {
+    if (curve == TR_CURVE_CLAMP) {
+        return tr_tonemap_film_pixel(sum_r, sum_g, sum_b, count, scale);
+    }
+    if (count == 0u) {
+        return 0u;
+    }
+    const float inv = 1.0f / (float)count;
+    const uint32_t r = tr_tonemap_srgb8_scaled(tr_tonemap_curve(sum_r * inv, scale, curve), 1.0f);
+    const uint32_t g = tr_tonemap_srgb8_scaled(tr_tonemap_curve(sum_g * inv, scale, curve), 1.0f);
+    const uint32_t b = tr_tonemap_srgb8_scaled(tr_tonemap_curve(sum_b * inv, scale, curve), 1.0f);
     return (r << 16) | (g << 8) | b;
 }
 

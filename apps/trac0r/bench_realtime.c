@@ -1,0 +1,428 @@
+/* bench_realtime.c - `trac0r bench realtime`: the thesis's question, how much noise is
+ * too much, answered per reconstruction method. A camera moves along a path through the
+ * scene; every frame is rendered once with few samples and handed to every method (raw,
+ * accumulate, bilateral, à-trous, SVGF); each output is compared with a converged
+ * reference of that same frame: PSNR (the reference's own error taken out, as in `bench
+ * convergence`), SSIM, and a temporal flicker measure; per stage the milliseconds. */
+#define _POSIX_C_SOURCE 200809L
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "bench.h"
+#include "cli.h"
+#include "devices.h"
+
+typedef struct rt_frame_stats {
+    double render_ms, temporal_ms, spatial_ms, psnr, ssim, flicker;
+} rt_frame_stats;
+
+static void realtime_help(void) {
+    printf("Usage: trac0r bench realtime [SCENE] [options]\n"
+           "\n"
+           "Moves the camera along a path through the scene (a sideways sway, a slow dolly\n"
+           "forward and a small yaw, scaled to the scene's size), renders every frame once\n"
+           "with --spp samples per pixel (with the albedo, normal, depth and id passes) and\n"
+           "runs each reconstruction method on it: off (raw), accumulate (temporal\n"
+           "accumulation with reprojection), bilateral, atrous, svgf (accumulation, then that\n"
+           "spatial filter; docs/realtime.md). Every output is compared with a converged\n"
+           "reference of the same frame, rendered in two halves so that the reference's own\n"
+           "error is taken out of the PSNR. With --cut K the camera jumps to another view at\n"
+           "frame K, and the frames each method needs to return to its PSNR before the cut\n"
+           "are reported. Prints a table per method (milliseconds per stage, FPS of render +\n"
+           "reconstruction, mean and worst PSNR, SSIM, flicker) and writes PREFIX.csv (one\n"
+           "row per method and frame). Progress goes to stderr while references render.\n"
+           "\n"
+           "Flicker: the RMS over pixels of the change of luminance from the previous frame\n"
+           "minus the reference's change, so that motion the reference has is not counted.\n"
+           "\n"
+           "SCENE defaults to builtin:cornell (as render); docs/realtime.md measures\n"
+           "scenes/cornell-classic.json and scenes/cornell-thesis.json.\n"
+           "\n"
+           "Options:\n"
+           "  --width W, --height H   frame size (default 320x240)\n"
+           "  --frames N           frames along the path, 2..100000 (default 32)\n"
+           "  --spp S              samples per pixel per frame, 1..1024 (default 1)\n"
+           "  --reference-spp R    samples of each frame's reference, 2..1000000 (default 256)\n"
+           "  --cut K              jump to another view at frame K (default: no cut)\n"
+           "  --methods LIST       of off,accumulate,bilateral,atrous,svgf (default all)\n"
+           "  --seed S, --threads T, --max-depth D, --accel NAME, --device D   as for render\n"
+           "  --out PREFIX         output file prefix (default realtime)\n"
+           "  -h, --help           show this help\n");
+}
+
+static int parse_methods(cli_args *a, int on[TR_RECON_COUNT]) {
+    if (cli_value(a) != CLI_OK) {
+        return CLI_USAGE;
+    }
+    char buf[256];
+    snprintf(buf, sizeof buf, "%s", a->value);
+    memset(on, 0, TR_RECON_COUNT * sizeof *on);
+    int any = 0;
+    for (char *save = NULL, *tok = strtok_r(buf, ",", &save); tok;
+         tok = strtok_r(NULL, ",", &save)) {
+        const int m = tr_recon_parse(tok);
+        if (m < 0) {
+            return cli_error(a,
+                             "%s: unknown method '%s' in '%s' (available: off, accumulate, "
+                             "bilateral, atrous, svgf)",
+                             a->opt, tok, a->value);
+        }
+        on[m] = 1;
+        any = 1;
+    }
+    if (!any) {
+        return cli_error(a, "%s: expected a list such as 'off,svgf'", a->opt);
+    }
+    return CLI_OK;
+}
+
+/* Frame f's camera: the scene's, swayed sideways, moved forward and turned a little; from
+ * frame `cut` on (cut > 0) another view, offset and looking back towards the middle. The
+ * scene camera's handedness is kept (its right vector negated when it was). */
+static int path_camera(const tr_camera *c0, float diag, uint32_t f, uint32_t frames, uint32_t cut,
+                       tr_camera *out, tr_error *err) {
+    const double t = (double)f / (double)frames;
+    const float sway = (float)sin(2.0 * 3.14159265358979 * t);
+    tr_vec3 pos = c0->pos, dir = c0->dir;
+    float side = 0.03f * diag * sway, fwd = 0.1f * diag * (float)t, yaw = 0.15f * sway, lift = 0;
+    if (cut > 0 && f >= cut) {
+        side += 0.2f * diag;
+        lift = 0.08f * diag;
+        yaw -= 0.3f;
+    }
+    for (int k = 0; k < 3; ++k) {
+        const float *r = &c0->right.x, *u = &c0->up.x, *d = &c0->dir.x;
+        (&pos.x)[k] += r[k] * side + d[k] * fwd + u[k] * lift;
+        (&dir.x)[k] = d[k] + r[k] * yaw;
+    }
+    tr_camera c;
+    if (tr_camera_make(&c, pos, dir, c0->world_up, c0->vertical_fov, c0->near_dist, c0->far_dist,
+                       c0->screen_width, c0->screen_height, err) != TR_OK) {
+        return TR_ERR;
+    }
+    /* tr_camera_make's right is up x dir; the scene's may be mirrored (handedness right). */
+    const tr_vec3 r0 = c0->right, r1 = c.right;
+    if (r0.x * r1.x + r0.y * r1.y + r0.z * r1.z < 0.0f) {
+        c.right = tr_vec3_make(-r1.x, -r1.y, -r1.z);
+    }
+    *out = c;
+    return TR_OK;
+}
+
+/* Renders samples [first, first + n) of cam on be (its film cleared) into f. */
+static int render_into(cli_backend *be, const tr_camera *cam, const tr_render_config *cfg,
+                       uint32_t first, uint32_t n, tr_film *f, double *ms, tr_error *err) {
+    const double t0 = tr_time_now();
+    if (tr_device_clear(be->dev, err) != TR_OK ||
+        tr_device_render(be->dev, cam, cfg, first, n, NULL, NULL, err) != TR_OK ||
+        tr_device_read_film(be->dev, f, err) != TR_OK) {
+        return TR_ERR;
+    }
+    if (ms) {
+        *ms = (tr_time_now() - t0) * 1e3;
+    }
+    return TR_OK;
+}
+
+static double mse_of(const float *a, const float *b, size_t px) {
+    return tr_image_compare(a, b, px).mse;
+}
+
+/* RMS over pixels of (luma(a) - luma(a_prev)) - (luma(r) - luma(r_prev)). */
+static double flicker(const float *a, const float *ap, const float *r, const float *rp, size_t px) {
+    double s = 0.0;
+    for (size_t i = 0; i < px; ++i) {
+        double d = 0.0;
+        for (int k = 0; k < 3; ++k) {
+            static const double w[3] = {0.2126, 0.7152, 0.0722};
+            const double va =
+                fmin(fmax(a[3 * i + k], 0.0), 1.0) - fmin(fmax(ap[3 * i + k], 0.0), 1.0);
+            const double vr =
+                fmin(fmax(r[3 * i + k], 0.0), 1.0) - fmin(fmax(rp[3 * i + k], 0.0), 1.0);
+            d += w[k] * (va - vr);
+        }
+        s += d * d;
+    }
+    return sqrt(s / (double)px);
+}
+
+int bench_realtime(int argc, char **argv) {
+    cli_args a = {.cmd = "bench realtime", .argc = argc, .argv = argv, .i = 0};
+    cli_common c;
+    cli_common_default(&c);
+    c.width = 320;
+    c.height = 240;
+    uint32_t frames = 32, spp = 1, ref_spp = 256, cut = 0;
+    int on[TR_RECON_COUNT] = {1, 1, 1, 1, 1};
+    const char *prefix = "realtime";
+    int size_given = 0;
+    while (cli_next(&a)) {
+        int rc = cli_common_option(&a, &c);
+        if (rc == CLI_OK) {
+            size_given |= cli_is(&a, "--width") || cli_is(&a, "--height");
+            continue;
+        }
+        if (rc == CLI_USAGE) {
+            return CLI_USAGE;
+        }
+        if (cli_is(&a, "-h") || cli_is(&a, "--help")) {
+            realtime_help();
+            return CLI_OK;
+        } else if (cli_is(&a, "--frames")) {
+            rc = cli_parse_u32(&a, 2, 100000, &frames);
+        } else if (cli_is(&a, "--spp")) {
+            rc = cli_parse_u32(&a, 1, 1024, &spp);
+        } else if (cli_is(&a, "--reference-spp")) {
+            rc = cli_parse_u32(&a, 2, 1000000, &ref_spp);
+        } else if (cli_is(&a, "--cut")) {
+            rc = cli_parse_u32(&a, 1, 100000, &cut);
+        } else if (cli_is(&a, "--methods")) {
+            rc = parse_methods(&a, on);
+        } else if (cli_is(&a, "--out")) {
+            rc = cli_value(&a);
+            prefix = a.value;
+        } else if (a.opt[0] != '-' && a.i == 1) {
+            c.scene = a.opt;
+            rc = CLI_OK;
+        } else {
+            return cli_error(&a, "unknown option '%s' (see 'trac0r bench realtime --help')", a.opt);
+        }
+        if (rc != CLI_OK) {
+            return CLI_USAGE;
+        }
+    }
+    if (cut >= frames) {
+        return cli_error(&a, "--cut: expected a frame before --frames (%u), got %u", frames, cut);
+    }
+    char csv_path[4096];
+    if (snprintf(csv_path, sizeof csv_path, "%s.csv", prefix) >= (int)sizeof csv_path) {
+        return cli_error(&a, "--out: prefix too long");
+    }
+    tr_error err;
+    if (tr_image_check_writable(csv_path, &err) != TR_OK) {
+        return cli_error(&a, "--out: %s", err.msg);
+    }
+    const uint32_t width = c.width, height = c.height;
+    tr_scene *scene = tr_scene_create(NULL);
+    int rc = cli_load_scene_file(&a, &c, scene, NULL);
+    if (rc != CLI_OK) {
+        tr_scene_destroy(scene);
+        return rc;
+    }
+    if (size_given) { /* a scene file's size applies only where none was given */
+        c.width = width;
+        c.height = height;
+    }
+    tr_camera cam0 = *tr_scene_camera(scene);
+    if (tr_camera_resize(&cam0, c.width, c.height, &err) != TR_OK) {
+        tr_scene_destroy(scene);
+        return cli_error(&a, "--width/--height: %s", err.msg);
+    }
+    const tr_aabb b = tr_scene_bounds(scene);
+    const tr_vec3 d = tr_vec3_make(b.max.x - b.min.x, b.max.y - b.min.y, b.max.z - b.min.z);
+    float diag = sqrtf(d.x * d.x + d.y * d.y + d.z * d.z);
+    diag = diag > 0.0f && isfinite(diag) ? diag : 1.0f;
+
+    const size_t px = (size_t)c.width * c.height;
+    const int nm = TR_RECON_COUNT;
+    float *ref = malloc(3 * px * sizeof *ref), *half = malloc(3 * px * sizeof *half);
+    float *ref_prev = malloc(3 * px * sizeof *ref_prev);
+    float *out = malloc(3 * px * sizeof *out);
+    float *prev = malloc((size_t)nm * 3 * px * sizeof *prev);
+    rt_frame_stats *st = calloc((size_t)nm * frames, sizeof *st);
+    tr_recon rec[TR_RECON_COUNT];
+    memset(rec, 0, sizeof rec);
+    tr_film film, rfilm;
+    memset(&film, 0, sizeof film);
+    memset(&rfilm, 0, sizeof rfilm);
+    tr_gbuffer g;
+    memset(&g, 0, sizeof g);
+    cli_backend be = {0};
+    FILE *csv = NULL;
+    int ok = ref && half && ref_prev && out && prev && st;
+    ok = ok && tr_film_init_passes(&film, c.width, c.height, TR_PASS_ALL, &err) == TR_OK &&
+         tr_film_init(&rfilm, c.width, c.height, &err) == TR_OK &&
+         tr_gbuffer_init(&g, c.width, c.height, &err) == TR_OK;
+    for (int m = 0; ok && m < nm; ++m) {
+        ok = tr_recon_init(&rec[m], c.width, c.height, &err) == TR_OK;
+    }
+    if (!ok) {
+        fprintf(stderr, "trac0r bench realtime: %s\n",
+                ref && half && ref_prev && out && prev && st ? err.msg : "out of memory");
+        rc = CLI_FAILURE;
+    }
+    if (rc == CLI_OK) {
+        rc = cli_backend_open(&a, &c, scene, &be);
+    }
+    tr_render_config cfg = cli_render_config(&c);
+    tr_render_config rcfg = cfg;
+    cfg.passes = TR_PASS_ALL;
+    /* The references' seed differs from the frames', so their noise is independent. */
+    rcfg.seed = c.seed ^ 0x7265666572656e63ULL;
+    const tr_recon_params params = tr_recon_params_default();
+    const int threads = c.threads ? c.threads : tr_default_threads();
+    if (rc == CLI_OK) {
+        printf("bench realtime: %s %ux%u, %u frames at %u spp, references %u spp, %s%s\n", c.scene,
+               c.width, c.height, frames, spp, ref_spp, be.name, cut ? ", camera cut" : "");
+        if (cut) {
+            printf("camera cut at frame %u\n", cut);
+        }
+    }
+    const double t_start = tr_time_now();
+    for (uint32_t f = 0; rc == CLI_OK && f < frames; ++f) {
+        tr_camera cam;
+        if (path_camera(&cam0, diag, f, frames, cut, &cam, &err) != TR_OK) {
+            fprintf(stderr, "trac0r bench realtime: frame %u camera: %s\n", f, err.msg);
+            rc = CLI_FAILURE;
+            break;
+        }
+        /* The reference in two halves: the MSE of one half against the whole estimates the
+         * whole's own MSE (bench convergence does the same). */
+        const uint32_t h1 = ref_spp / 2, h2 = ref_spp - h1;
+        double ref_mse = 0.0;
+        if (render_into(&be, &cam, &rcfg, 0, h1, &rfilm, NULL, &err) != TR_OK) {
+            rc = CLI_FAILURE;
+        } else {
+            for (size_t i = 0; i < px; ++i) {
+                const float inv = rfilm.count[i] ? 1.0f / (float)rfilm.count[i] : 0.0f;
+                for (int k = 0; k < 3; ++k) {
+                    half[3 * i + k] = rfilm.sum[3 * i + k] * inv;
+                }
+            }
+            if (tr_device_render(be.dev, &cam, &rcfg, h1, h2, NULL, NULL, &err) != TR_OK ||
+                tr_device_read_film(be.dev, &rfilm, &err) != TR_OK) {
+                rc = CLI_FAILURE;
+            }
+        }
+        if (rc != CLI_OK) {
+            fprintf(stderr, "trac0r bench realtime: reference of frame %u: %s\n", f, err.msg);
+            break;
+        }
+        for (size_t i = 0; i < px; ++i) {
+            const float inv = rfilm.count[i] ? 1.0f / (float)rfilm.count[i] : 0.0f;
+            for (int k = 0; k < 3; ++k) {
+                ref[3 * i + k] = rfilm.sum[3 * i + k] * inv;
+            }
+        }
+        ref_mse = mse_of(half, ref, px);
+        /* The frame itself: samples numbered by frame, so that noise changes over time. */
+        double render_ms = 0.0;
+        if (render_into(&be, &cam, &cfg, f * spp, spp, &film, &render_ms, &err) != TR_OK ||
+            tr_gbuffer_from_film(&g, &film, &err) != TR_OK) {
+            fprintf(stderr, "trac0r bench realtime: frame %u: %s\n", f, err.msg);
+            rc = CLI_FAILURE;
+            break;
+        }
+        for (int m = 0; m < nm; ++m) {
+            if (!on[m]) {
+                continue;
+            }
+            if (tr_recon_frame(&rec[m], &g, &cam, m, &params, threads, out, &err) != TR_OK) {
+                fprintf(stderr, "trac0r bench realtime: %s: %s\n", tr_recon_name(m), err.msg);
+                rc = CLI_FAILURE;
+                break;
+            }
+            rt_frame_stats *s = &st[(size_t)m * frames + f];
+            s->render_ms = render_ms;
+            s->temporal_ms = rec[m].ms_temporal;
+            s->spatial_ms = rec[m].ms_spatial;
+            const double mse = mse_of(out, ref, px) - ref_mse;
+            s->psnr = tr_psnr(mse > 1e-12 ? mse : 1e-12);
+            s->ssim = tr_ssim(out, ref, c.width, c.height);
+            float *pm = prev + (size_t)m * 3 * px;
+            s->flicker = f > 0 ? flicker(out, pm, ref, ref_prev, px) : 0.0;
+            memcpy(pm, out, 3 * px * sizeof *out);
+        }
+        memcpy(ref_prev, ref, 3 * px * sizeof *ref);
+        fprintf(stderr, "\rbench realtime: frame %u/%u (reference %u spp)  %.1f s ", f + 1, frames,
+                ref_spp, tr_time_now() - t_start);
+    }
+    fputc('\n', stderr);
+    if (rc == CLI_OK) {
+        csv = fopen(csv_path, "w");
+        if (!csv) {
+            fprintf(stderr, "trac0r bench realtime: cannot write %s\n", csv_path);
+            rc = CLI_FAILURE;
+        }
+    }
+    if (rc == CLI_OK) {
+        fprintf(csv, "method,frame,render_ms,temporal_ms,spatial_ms,total_ms,psnr_db,ssim,"
+                     "flicker\n");
+        printf("%-11s %9s %11s %10s %9s %7s %9s %9s %7s %8s", "method", "render_ms", "temporal_ms",
+               "spatial_ms", "total_ms", "fps", "psnr_mean", "psnr_min", "ssim", "flicker");
+        printf(cut ? " recover\n" : "\n");
+        for (int m = 0; m < nm; ++m) {
+            if (!on[m]) {
+                continue;
+            }
+            double sr = 0, stt = 0, ss = 0, sp = 0, sssim = 0, sfl = 0, pmin = INFINITY;
+            for (uint32_t f = 0; f < frames; ++f) {
+                const rt_frame_stats *s = &st[(size_t)m * frames + f];
+                fprintf(csv, "%s,%u,%.4f,%.4f,%.4f,%.4f,%.4f,%.5f,%.6f\n", tr_recon_name(m), f,
+                        s->render_ms, s->temporal_ms, s->spatial_ms,
+                        s->render_ms + s->temporal_ms + s->spatial_ms, s->psnr, s->ssim,
+                        s->flicker);
+                sr += s->render_ms;
+                stt += s->temporal_ms;
+                ss += s->spatial_ms;
+                sp += s->psnr;
+                sssim += s->ssim;
+                sfl += s->flicker;
+                pmin = fmin(pmin, s->psnr);
+            }
+            const double n = (double)frames, total = (sr + stt + ss) / n;
+            printf("%-11s %9.2f %11.2f %10.2f %9.2f %7.1f %9.2f %9.2f %7.4f %8.5f",
+                   tr_recon_name(m), sr / n, stt / n, ss / n, total, 1000.0 / total, sp / n, pmin,
+                   sssim / n, sfl / (n - 1.0));
+            if (cut) {
+                /* Steady: the mean PSNR of the (up to) 8 frames before the cut; recovered at
+                 * the first frame from the cut on within 0.5 dB of it. */
+                const uint32_t k0 = cut > 8 ? cut - 8 : 0;
+                double steady = 0.0;
+                for (uint32_t f = k0; f < cut; ++f) {
+                    steady += st[(size_t)m * frames + f].psnr;
+                }
+                steady /= (double)(cut - k0);
+                int rec_frames = -1;
+                for (uint32_t f = cut; f < frames; ++f) {
+                    if (st[(size_t)m * frames + f].psnr >= steady - 0.5) {
+                        rec_frames = (int)(f - cut);
+                        break;
+                    }
+                }
+                if (rec_frames >= 0) {
+                    printf(" %7d\n", rec_frames);
+                } else {
+                    printf(" %7s\n", "never");
+                }
+            } else {
+                printf("\n");
+            }
+        }
+        if (fclose(csv) != 0) {
+            fprintf(stderr, "trac0r bench realtime: cannot write %s\n", csv_path);
+            rc = CLI_FAILURE;
+        } else {
+            printf("wrote %s\n", csv_path);
+        }
+    }
+    if (be.dev) {
+        cli_backend_close(&be);
+    }
+    for (int m = 0; m < nm; ++m) {
+        tr_recon_free(&rec[m]);
+    }
+    tr_gbuffer_free(&g);
+    tr_film_free(&film);
+    tr_film_free(&rfilm);
+    free(ref);
+    free(half);
+    free(ref_prev);
+    free(out);
+    free(prev);
+    free(st);
+    tr_scene_destroy(scene);
+    return rc;
+}

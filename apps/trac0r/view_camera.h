@@ -1,0 +1,48 @@
+/* view_camera.h - the viewer's free-flying camera and its frame budget: pure functions,
+ * no SDL, unit-tested in tests/test_view_camera.c. */
+#ifndef TRAC0R_VIEW_CAMERA_H
+#define TRAC0R_VIEW_CAMERA_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "trac0r/types.h"
+
+/* The camera the user steers. `mirrored` remembers a right-handed scene's camera, whose
+ * right vector is dir x up where tr_camera_make builds up x dir (the scene file negates
+ * it after tr_camera_make): every rebuild must negate it again, or the image flips. */
+typedef struct fly_camera {
+    tr_vec3 pos, dir, up; /* dir and up unit and orthogonal */
+    float vfov, near_dist, far_dist;
+    float speed; /* world units per second */
+    int mirrored;
+} fly_camera;
+
+/* The fly camera of a scene's camera, moving at `speed`. */
+fly_camera fly_from_camera(const tr_camera *cam, float speed);
+/* The tr_camera of f at w x h (right negated when mirrored); TR_OK or TR_ERR. */
+int fly_make(const fly_camera *f, uint32_t w, uint32_t h, tr_camera *cam);
+/* The screen's right in world space: where D moves and what a mouse pitch turns about. */
+tr_vec3 fly_right(const fly_camera *f);
+/* Keeps dir and up unit length and orthogonal after many small rotations. */
+void fly_orthonormalize(fly_camera *f);
+
+/* The default movement speed for a scene whose bounds are `b`: a quarter of the
+ * diagonal per second, so that crossing the scene takes seconds whatever its units
+ * (0.5 for an empty or unbounded scene). */
+float view_default_speed(const tr_aabb *b);
+
+/* Writes f as the "camera" object of a scene file (position, direction, up, fov, near,
+ * far, handedness) into buf; returns what snprintf returns. */
+int view_camera_json(const fly_camera *f, char *buf, size_t n);
+
+/* The frame budget while moving: after a frame that took frame_ms of budget_ms at the
+ * resolution divisor *scale (1: full resolution, up to 16) with *spp samples per pixel,
+ * the divisor and samples for the next one. Over budget, samples are dropped first,
+ * then the divisor grows; under budget the divisor shrinks to 1, and only at full
+ * resolution do samples grow (up to 16). Steps are damped (a quarter power of the
+ * time ratio, the divisor's square being the pixel count) so one slow frame does not
+ * make the picture jump. */
+void view_budget_adapt(double frame_ms, double budget_ms, float *scale, uint32_t *spp);
+
+#endif

@@ -1,0 +1,343 @@
+/* filter.h - per-pixel operators of real-time reconstruction: reprojection through the
+ * previous camera, temporal accumulation, the bilateral filter, the edge-avoiding
+ * à-trous wavelet filter and SVGF's variance-steered à-trous step.
+ *
+ * Single source like tonemap.h: C99 that also compiles as OpenCL C 1.2 (compat.h; the
+ * CTest post_opencl_c checks it), so that a device can run the same text on its own
+ * buffers. Each operator computes one output pixel from read-only inputs; the host's
+ * wrappers (filter.c) run them over rows. Sums run in a fixed tap order, so that a
+ * pixel's value never depends on how the image was split among threads.
+ *
+ * Buffers are planar per quantity, row-major, top row first: colour, albedo and normal
+ * 3 floats per pixel, depth (distance along the camera ray, 0 where nothing was hit)
+ * 1 float, the primitive id (triangle + 1, 0: nothing) 1 uint. */
+#ifndef TR_POST_FILTER_H
+#define TR_POST_FILTER_H
+
+#include "../kernel/compat.h"
+#include "../kernel/types.h"
+#include "../kernel/vec.h"
+
+/* Rec. 709 luminance of linear RGB. */
+TR_FN float tr_post_luminance(float r, float g, float b) {
+    return 0.2126f * r + 0.7152f * g + 0.0722f * b;
+}
+
+/* The world point seen through the centre of pixel (x, y) of `cam` at distance `depth`
+ * along the ray (the depth pass's definition; the ray as src/kernel/camera.h makes it). */
+TR_FN tr_vec3 tr_post_world_point(const tr_camera *cam, float x, float y, float depth) {
+    const float sx = ((x + 0.5f) / (float)cam->screen_width - 0.5f) * cam->canvas_width;
+    const float sy = (0.5f - (y + 0.5f) / (float)cam->screen_height) * cam->canvas_height;
+    const tr_vec3 d =
+        v3_normalize(v3_add(cam->dir, v3_add(v3_scale(cam->right, sx), v3_scale(cam->up, sy))));
+    return v3_add(cam->pos, v3_scale(d, depth));
+}
+
+/* Projects world point p into `cam`: the continuous screen position (pixel centres at
+ * k + 0.5) in out_xy and the distance from the camera in *dist; returns 0 when p lies
+ * behind the camera's plane. */
+TR_FN int tr_post_project(const tr_camera *cam, tr_vec3 p, float *out_x, float *out_y,
+                          float *dist) {
+    const tr_vec3 v = v3_sub(p, cam->pos);
+    const float z = v3_dot(v, cam->dir);
+    if (!(z > 1e-6f)) {
+        return 0;
+    }
+    const float cx = v3_dot(v, cam->right) / z, cy = v3_dot(v, cam->up) / z;
+    *out_x = (cx / cam->canvas_width + 0.5f) * (float)cam->screen_width;
+    *out_y = (0.5f - cy / cam->canvas_height) * (float)cam->screen_height;
+    *dist = tr_sqrtf(v3_dot(v, v));
+    return 1;
+}
+
+/* Whether a history sample describes the same surface as the current point p (normal
+ * n, primitive prim, at distance dist from the previous camera): the same primitive, a
+ * facing normal, and the history's point q (its pixel's ray at its depth) on p's tangent
+ * plane within 2 % of the distance. A plane test rather than a depth test, because on a
+ * surface seen at a grazing angle depth changes a lot from one pixel to the next while
+ * the plane does not. Disocclusions fail here: where the previous camera saw another
+ * surface in front of p, q lies off p's plane (or on another primitive). */
+TR_FN int tr_post_consistent(uint32_t prim, tr_vec3 p, tr_vec3 n, float dist, uint32_t prev_prim,
+                             tr_vec3 q, tr_vec3 prev_n) {
+    /* Id 0 on a surface: a shape that is not a triangle; then the geometry decides. */
+    if (prim != prev_prim) {
+        return 0;
+    }
+    if (tr_fabsf(v3_dot(v3_sub(q, p), n)) > 0.02f * dist) {
+        return 0;
+    }
+    return v3_dot(n, prev_n) > 0.9f;
+}
+
+/* The reprojection of pixel (x, y) of the current frame (camera cam, its depth, normal
+ * and primitive) into the previous frame (camera prev, its depth, normal and primitive
+ * buffers): the bilinear weights of the four previous pixels around the reprojected
+ * position, zero for a tap that is off screen or fails tr_post_consistent, in w[0..3]
+ * for the taps (x0, y0), (x0+1, y0), (x0, y0+1), (x0+1, y0+1); *x0, *y0 receive the
+ * top-left tap. Returns the sum of the weights (0: no history survives).
+ *
+ * Reprojection through the previous camera as in Nehab et al., "Accelerating
+ * Real-Time Shading with Reverse Reprojection Caching", Graphics Hardware 2007. */
+TR_FN float tr_post_reproject(const tr_camera *cam, const tr_camera *prev, uint32_t x, uint32_t y,
+                              float depth, tr_vec3 n, uint32_t prim,
+                              TR_CONST_GLOBAL float *prev_depth, TR_CONST_GLOBAL float *prev_normal,
+                              TR_CONST_GLOBAL uint32_t *prev_prim, int *x0, int *y0, float w[4]) {
+    w[0] = w[1] = w[2] = w[3] = 0.0f;
+    *x0 = *y0 = 0;
+    if (!(depth > 0.0f)) {
+        return 0.0f; /* nothing hit: no point to follow */
+    }
+    const tr_vec3 p = tr_post_world_point(cam, (float)x, (float)y, depth);
+    float px, py, dist;
+    if (!tr_post_project(prev, p, &px, &py, &dist)) {
+        return 0.0f;
+    }
+    const float fx = px - 0.5f, fy = py - 0.5f;
+    if (!(fx > -1.0f && fy > -1.0f && fx < (float)prev->screen_width &&
+          fy < (float)prev->screen_height)) {
+        return 0.0f;
+    }
+    /* floor, for fx, fy > -1 (compat.h has no floor of its own). */
+    const int ix = fx < 0.0f ? -1 : (int)fx, iy = fy < 0.0f ? -1 : (int)fy;
+    const float ax = fx - (float)ix, ay = fy - (float)iy;
+    *x0 = ix;
+    *y0 = iy;
+    const int pw = (int)prev->screen_width, ph = (int)prev->screen_height;
+    float total = 0.0f;
+    for (int k = 0; k < 4; ++k) {
+        const int tx = ix + (k & 1), ty = iy + (k >> 1);
+        if (tx < 0 || ty < 0 || tx >= pw || ty >= ph) {
+            continue;
+        }
+        const int i = ty * pw + tx;
+        if (!(prev_depth[i] > 0.0f)) {
+            continue;
+        }
+        const tr_vec3 pn = v3(prev_normal[3 * i], prev_normal[3 * i + 1], prev_normal[3 * i + 2]);
+        const tr_vec3 q = tr_post_world_point(prev, (float)tx, (float)ty, prev_depth[i]);
+        if (!tr_post_consistent(prim, p, n, dist, prev_prim[i], q, pn)) {
+            continue;
+        }
+        const float bw = ((k & 1) ? ax : 1.0f - ax) * ((k >> 1) ? ay : 1.0f - ay);
+        w[k] = bw;
+        total += bw;
+    }
+    return total;
+}
+
+/* Temporal accumulation of pixel (x, y) (Schied et al. 2017, section 4.1): the
+ * history (colour, luminance moments and length of the previous frame) reprojected by
+ * tr_post_reproject's bilinear weights, blended with the new sample by an exponential
+ * moving average of weight max(alpha_min, 1 / length), so that a fresh history averages
+ * uniformly until it is long enough to become an EMA. No surviving history: the sample
+ * alone, length 1. Writes colour, moments (mean luminance and mean squared luminance)
+ * and the new length. */
+TR_FN void
+tr_post_temporal_pixel(const tr_camera *cam, const tr_camera *prev, uint32_t x, uint32_t y,
+                       TR_CONST_GLOBAL float *color, TR_CONST_GLOBAL float *normal,
+                       TR_CONST_GLOBAL float *depth, TR_CONST_GLOBAL uint32_t *prim,
+                       TR_CONST_GLOBAL float *prev_color, TR_CONST_GLOBAL float *prev_moments,
+                       TR_CONST_GLOBAL float *prev_len, TR_CONST_GLOBAL float *prev_depth,
+                       TR_CONST_GLOBAL float *prev_normal, TR_CONST_GLOBAL uint32_t *prev_prim,
+                       float alpha_min, float max_len, float out_color[3], float out_moments[2],
+                       float *out_len) {
+    const int i = (int)(y * cam->screen_width + x);
+    const float r = color[3 * i], g = color[3 * i + 1], b = color[3 * i + 2];
+    const float l = tr_post_luminance(r, g, b);
+    const tr_vec3 n = v3(normal[3 * i], normal[3 * i + 1], normal[3 * i + 2]);
+    float w[4];
+    int x0, y0;
+    const float total = tr_post_reproject(cam, prev, x, y, depth[i], n, prim[i], prev_depth,
+                                          prev_normal, prev_prim, &x0, &y0, w);
+    /* A sliver of a tap (a pixel at a silhouette) is not enough history to trust. */
+    if (!(total > 0.05f)) {
+        out_color[0] = r;
+        out_color[1] = g;
+        out_color[2] = b;
+        out_moments[0] = l;
+        out_moments[1] = l * l;
+        *out_len = 1.0f;
+        return;
+    }
+    const int pw = (int)prev->screen_width;
+    float hc[3] = {0.0f, 0.0f, 0.0f}, hm[2] = {0.0f, 0.0f}, hl = 0.0f;
+    for (int k = 0; k < 4; ++k) {
+        if (w[k] > 0.0f) {
+            const int j = (y0 + (k >> 1)) * pw + x0 + (k & 1);
+            const float wk = w[k] / total;
+            hc[0] += wk * prev_color[3 * j];
+            hc[1] += wk * prev_color[3 * j + 1];
+            hc[2] += wk * prev_color[3 * j + 2];
+            hm[0] += wk * prev_moments[2 * j];
+            hm[1] += wk * prev_moments[2 * j + 1];
+            hl += wk * prev_len[j];
+        }
+    }
+    const float len = tr_fminf(hl + 1.0f, max_len);
+    const float a = tr_fmaxf(alpha_min, 1.0f / len);
+    out_color[0] = hc[0] + a * (r - hc[0]);
+    out_color[1] = hc[1] + a * (g - hc[1]);
+    out_color[2] = hc[2] + a * (b - hc[2]);
+    out_moments[0] = hm[0] + a * (l - hm[0]);
+    out_moments[1] = hm[1] + a * (l * l - hm[1]);
+    *out_len = len;
+}
+
+/* Demodulation (Dammertz et al. 2010, section 4; Schied et al. 2017, section 4.1): the
+ * filters smooth illumination = radiance / albedo, so that texture and material edges
+ * survive, and multiply the albedo back after. An albedo channel near zero keeps the
+ * radiance as it is (the factor 1). */
+TR_FN float tr_post_demod_factor(float albedo) {
+    return albedo > 1e-3f ? albedo : 1.0f;
+}
+
+/* The thesis's baseline: a bilateral filter (Tomasi and Manduchi, "Bilateral Filtering
+ * for Gray and Color Images", ICCV 1998) of pixel (x, y) of the w x h colour image `in`
+ * into out[0..2]: Gaussian weights in distance (sigma_s pixels) and in colour
+ * difference (sigma_r), over a (2 radius + 1)^2 window. It knows nothing of the
+ * geometry, which is why the guided filters below beat it. */
+TR_FN void tr_post_bilateral_pixel(TR_CONST_GLOBAL float *in, int w, int h, int x, int y,
+                                   int radius, float sigma_s, float sigma_r, float out[3]) {
+    const int c = y * w + x;
+    const float cr = in[3 * c], cg = in[3 * c + 1], cb = in[3 * c + 2];
+    const float is = 1.0f / (2.0f * sigma_s * sigma_s), ir = 1.0f / (2.0f * sigma_r * sigma_r);
+    float sr = 0.0f, sg = 0.0f, sb = 0.0f, sw = 0.0f;
+    for (int dy = -radius; dy <= radius; ++dy) {
+        const int ty = y + dy;
+        if (ty < 0 || ty >= h) {
+            continue;
+        }
+        for (int dx = -radius; dx <= radius; ++dx) {
+            const int tx = x + dx;
+            if (tx < 0 || tx >= w) {
+                continue;
+            }
+            const int i = ty * w + tx;
+            const float dr = in[3 * i] - cr, dg = in[3 * i + 1] - cg, db = in[3 * i + 2] - cb;
+            const float wt =
+                tr_expf(-(float)(dx * dx + dy * dy) * is - (dr * dr + dg * dg + db * db) * ir);
+            sr += wt * in[3 * i];
+            sg += wt * in[3 * i + 1];
+            sb += wt * in[3 * i + 2];
+            sw += wt;
+        }
+    }
+    out[0] = sr / sw;
+    out[1] = sg / sw;
+    out[2] = sb / sw;
+}
+
+/* The B3 spline's taps (1, 4, 6, 4, 1) / 16: the à-trous scaling function of both
+ * Dammertz et al. and Schied et al. */
+TR_FN float tr_post_b3(int k) {
+    return k == 0 ? 0.375f : (k == 1 || k == -1) ? 0.25f : 0.0625f;
+}
+
+/* One iteration of the edge-avoiding à-trous wavelet transform (Dammertz, Sewtz,
+ * Hanika and Lensch, "Edge-Avoiding À-Trous Wavelet Transform for fast Global
+ * Illumination Filtering", HPG 2010) at pixel (x, y): the 5x5 B3 kernel with holes of
+ * `step` pixels, each tap weighted by exp(-|Δ|^2 / sigma^2) of the differences in
+ * (demodulated) colour, normal and depth (the paper uses world position; along one
+ * camera ray depth carries the same edge, relative to the centre's depth) and albedo. */
+TR_FN void tr_post_atrous_pixel(TR_CONST_GLOBAL float *in, TR_CONST_GLOBAL float *normal,
+                                TR_CONST_GLOBAL float *depth, TR_CONST_GLOBAL float *albedo, int w,
+                                int h, int x, int y, int step, float sigma_c, float sigma_n,
+                                float sigma_z, float sigma_a, float out[3]) {
+    const int c = y * w + x;
+    const float cr = in[3 * c], cg = in[3 * c + 1], cb = in[3 * c + 2];
+    const tr_vec3 cn = v3(normal[3 * c], normal[3 * c + 1], normal[3 * c + 2]);
+    const float cz = depth[c];
+    const float ca0 = albedo[3 * c], ca1 = albedo[3 * c + 1], ca2 = albedo[3 * c + 2];
+    const float ic = 1.0f / (sigma_c * sigma_c), in2 = 1.0f / (sigma_n * sigma_n);
+    const float iz = 1.0f / (sigma_z * sigma_z), ia = 1.0f / (sigma_a * sigma_a);
+    float sr = 0.0f, sg = 0.0f, sb = 0.0f, sw = 0.0f;
+    for (int ky = -2; ky <= 2; ++ky) {
+        const int ty = y + ky * step;
+        if (ty < 0 || ty >= h) {
+            continue;
+        }
+        for (int kx = -2; kx <= 2; ++kx) {
+            const int tx = x + kx * step;
+            if (tx < 0 || tx >= w) {
+                continue;
+            }
+            const int i = ty * w + tx;
+            const float dr = in[3 * i] - cr, dg = in[3 * i + 1] - cg, db = in[3 * i + 2] - cb;
+            const tr_vec3 dn = v3_sub(v3(normal[3 * i], normal[3 * i + 1], normal[3 * i + 2]), cn);
+            const float dz = (depth[i] - cz) / (cz > 1e-6f ? cz : 1.0f);
+            const float da0 = albedo[3 * i] - ca0, da1 = albedo[3 * i + 1] - ca1,
+                        da2 = albedo[3 * i + 2] - ca2;
+            const float e = (dr * dr + dg * dg + db * db) * ic + v3_dot(dn, dn) * in2 +
+                            dz * dz * iz + (da0 * da0 + da1 * da1 + da2 * da2) * ia;
+            const float wt = tr_post_b3(kx) * tr_post_b3(ky) * tr_expf(-e);
+            sr += wt * in[3 * i];
+            sg += wt * in[3 * i + 1];
+            sb += wt * in[3 * i + 2];
+            sw += wt;
+        }
+    }
+    out[0] = sr / sw;
+    out[1] = sg / sw;
+    out[2] = sb / sw;
+}
+
+/* One iteration of SVGF's à-trous step (Schied et al., "Spatiotemporal
+ * Variance-Guided Filtering: Real-Time Reconstruction for Path-Traced Global
+ * Illumination", HPG 2017, section 4.3) at pixel (x, y): the B3 kernel with holes of
+ * `step` pixels, weighted by a depth term exp(-|Δz| / (sigma_z |∇z| |offset| + ε)), a
+ * normal term max(0, n·n')^sigma_n and a luminance term exp(-|Δl| / (sigma_l
+ * sqrt(variance) + ε)) steered by the variance of the centre's luminance (var, its 3x3
+ * Gaussian blur in the paper; here the caller's). Filters colour into out[0..2] and the
+ * variance with squared weights into *out_var (eq. 5), for the next iteration. */
+TR_FN void tr_post_svgf_pixel(TR_CONST_GLOBAL float *in, TR_CONST_GLOBAL float *var,
+                              TR_CONST_GLOBAL float *normal, TR_CONST_GLOBAL float *depth, int w,
+                              int h, int x, int y, int step, float sigma_l, float sigma_n,
+                              float sigma_z, float centre_var, float out[3], float *out_var) {
+    const int c = y * w + x;
+    const float cl = tr_post_luminance(in[3 * c], in[3 * c + 1], in[3 * c + 2]);
+    const tr_vec3 cn = v3(normal[3 * c], normal[3 * c + 1], normal[3 * c + 2]);
+    const int has_normal = v3_dot(cn, cn) > 0.25f; /* no surface hit: no normal term */
+    const float cz = depth[c];
+    /* Depth's screen-space gradient by central differences (the paper takes it from
+     * the rasteriser's derivatives). */
+    const int xl = x > 0 ? x - 1 : x, xr = x + 1 < w ? x + 1 : x;
+    const int yu = y > 0 ? y - 1 : y, yd = y + 1 < h ? y + 1 : y;
+    const float gx = (depth[y * w + xr] - depth[y * w + xl]) / (float)(xr - xl > 0 ? xr - xl : 1);
+    const float gy = (depth[yd * w + x] - depth[yu * w + x]) / (float)(yd - yu > 0 ? yd - yu : 1);
+    const float grad = tr_sqrtf(gx * gx + gy * gy) + 1e-3f * cz;
+    const float lden = sigma_l * tr_sqrtf(tr_fmaxf(centre_var, 0.0f)) + 1e-6f;
+    float sr = 0.0f, sg = 0.0f, sb = 0.0f, sw = 0.0f, sv = 0.0f;
+    for (int ky = -2; ky <= 2; ++ky) {
+        const int ty = y + ky * step;
+        if (ty < 0 || ty >= h) {
+            continue;
+        }
+        for (int kx = -2; kx <= 2; ++kx) {
+            const int tx = x + kx * step;
+            if (tx < 0 || tx >= w) {
+                continue;
+            }
+            const int i = ty * w + tx;
+            const float li = tr_post_luminance(in[3 * i], in[3 * i + 1], in[3 * i + 2]);
+            const float dist = tr_sqrtf((float)(kx * kx + ky * ky)) * (float)step;
+            const float wz = tr_fabsf(depth[i] - cz) / (sigma_z * grad * dist + 1e-6f);
+            const float nd =
+                tr_fmaxf(0.0f, v3_dot(cn, v3(normal[3 * i], normal[3 * i + 1], normal[3 * i + 2])));
+            const float wn = has_normal ? tr_powf(nd, sigma_n) : 1.0f;
+            const float wl = tr_fabsf(li - cl) / lden;
+            const float wt = tr_post_b3(kx) * tr_post_b3(ky) * wn * tr_expf(-wz - wl);
+            sr += wt * in[3 * i];
+            sg += wt * in[3 * i + 1];
+            sb += wt * in[3 * i + 2];
+            sv += wt * wt * var[i];
+            sw += wt;
+        }
+    }
+    /* The centre's own weight is b3(0)^2 > 0: sw never vanishes. */
+    out[0] = sr / sw;
+    out[1] = sg / sw;
+    out[2] = sb / sw;
+    *out_var = sv / (sw * sw);
+}
+
+#endif

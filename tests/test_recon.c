@@ -1,0 +1,399 @@
+/* test_recon.c - real-time reconstruction (src/post/filter.h, filter.c).
+ *
+ * 1. Every filter keeps a constant image constant and the mean of a noisy one (within
+ *    1 %), and the guided ones do not blur across a depth and normal step.
+ * 2. Reprojection of a rendered static scene under a known camera move: surviving taps
+ *    lie on the pixel's own primitive, most pixels survive a small move, pixels whose
+ *    point the previous camera saw behind another surface (disocclusions) are rejected,
+ *    and the same buffers reprojected through a wrong (mirrored) camera mostly fail.
+ * 3. After a camera cut the error returns within 8 frames to that of a history started
+ *    fresh on the new view: no ghost of the old one survives.
+ * 4. The result does not depend on the thread count.
+ * 5. The filmic display curve rises strictly below white, and its display film gives the
+ *    direct tonemap's bytes.
+ * 6. SSIM is 1 for an image with itself, falls with noise and is symmetric. */
+#include "check.h"
+#include "post/filter.h"
+#include "post/tonemap.h"
+#include "trac0r/post.h"
+#include "trac0r/scene_file.h"
+#include "trac0r/trac0r.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define W 40
+#define H 30
+
+static uint32_t lcg(uint32_t *s) {
+    *s = *s * 1664525u + 1013904223u;
+    return *s >> 8;
+}
+static float unit(uint32_t *s) {
+    return (float)lcg(s) / 16777216.0f;
+}
+
+/* A synthetic frame: left half a wall facing the camera at depth 1 (colour left_c), right
+ * half a wall at depth 2 turned away (colour right_c), each with uniform noise of
+ * amplitude `noise` (seeded). Albedo 0.5 everywhere. */
+static void synth(tr_gbuffer *g, float left_c, float right_c, float noise, uint32_t seed) {
+    uint32_t s = seed;
+    for (uint32_t y = 0; y < H; ++y) {
+        for (uint32_t x = 0; x < W; ++x) {
+            const size_t i = (size_t)y * W + x;
+            const int left = x < W / 2;
+            const float c = left ? left_c : right_c;
+            for (int k = 0; k < 3; ++k) {
+                g->color[3 * i + k] = c + noise * (2.0f * unit(&s) - 1.0f);
+                g->albedo[3 * i + k] = 0.5f;
+            }
+            g->normal[3 * i] = left ? 0.0f : 0.6f;
+            g->normal[3 * i + 1] = 0.0f;
+            g->normal[3 * i + 2] = left ? -1.0f : -0.8f;
+            g->depth[i] = left ? 1.0f : 2.0f;
+            g->prim[i] = left ? 1u : 2u;
+        }
+    }
+}
+
+static double mean(const float *img, size_t pixels) {
+    double s = 0.0;
+    for (size_t i = 0; i < 3 * pixels; ++i) {
+        s += img[i];
+    }
+    return s / (3.0 * (double)pixels);
+}
+
+/* The mean of channel 0 over columns [x0, x1). */
+static double column_mean(const float *img, int x0, int x1) {
+    double s = 0.0;
+    for (int y = 0; y < H; ++y) {
+        for (int x = x0; x < x1; ++x) {
+            s += img[3 * (y * W + x)];
+        }
+    }
+    return s / (double)(H * (x1 - x0));
+}
+
+static tr_camera front_camera(void) {
+    tr_camera cam;
+    tr_error err;
+    CHECK(tr_camera_make(&cam, tr_vec3_make(0, 0, -1), tr_vec3_make(0, 0, 1), tr_vec3_make(0, 1, 0),
+                         60.0f, 1e-3f, 1e4f, W, H, &err) == TR_OK,
+          "%s", err.msg);
+    return cam;
+}
+
+/* One spatial method's output on g (fresh history). */
+static void run_method(const tr_gbuffer *g, int method, float *out, int threads) {
+    tr_recon r;
+    tr_error err;
+    const tr_camera cam = front_camera();
+    const tr_recon_params p = tr_recon_params_default();
+    CHECK(tr_recon_init(&r, W, H, &err) == TR_OK, "%s", err.msg);
+    CHECK(tr_recon_frame(&r, g, &cam, method, &p, threads, out, &err) == TR_OK, "%s", err.msg);
+    tr_recon_free(&r);
+}
+
+static void test_filters(void) {
+    tr_gbuffer g;
+    tr_error err;
+    CHECK(tr_gbuffer_init(&g, W, H, &err) == TR_OK, "%s", err.msg);
+    float *out = malloc(3 * W * H * sizeof *out), *out1 = malloc(3 * W * H * sizeof *out);
+    for (int m = TR_RECON_ACCUMULATE; m < TR_RECON_COUNT; ++m) {
+        const char *name = tr_recon_name(m);
+        /* Constant: the normalised weights give the constant back. */
+        synth(&g, 0.4f, 0.4f, 0.0f, 1);
+        run_method(&g, m, out, 2);
+        double worst = 0.0;
+        for (size_t i = 0; i < 3 * W * H; ++i) {
+            worst = fmax(worst, fabs(out[i] - 0.4));
+        }
+        CHECK(worst < 1e-5, "%s: constant image changed by %g", name, worst);
+        /* Noisy: the mean stays within 1 %. */
+        synth(&g, 0.4f, 0.4f, 0.3f, 2);
+        const double m0 = mean(g.color, W * H);
+        run_method(&g, m, out, 2);
+        const double m1 = mean(out, W * H);
+        CHECK(fabs(m1 - m0) <= 0.01 * m0, "%s: mean %g -> %g", name, m0, m1);
+        /* The thread count changes nothing, bit for bit. */
+        run_method(&g, m, out1, 1);
+        CHECK(memcmp(out, out1, 3 * W * H * sizeof *out) == 0, "%s: 1 and 2 threads differ", name);
+        if (m == TR_RECON_ACCUMULATE) {
+            continue;
+        }
+        /* A step in depth, normal and colour: the two columns next to the edge keep their
+         * side's colour (a blur across would pull each towards 0.5). The noise is small
+         * enough for the bilateral filter's colour weight to see the step too. */
+        synth(&g, 0.2f, 0.8f, 0.05f, 3);
+        run_method(&g, m, out, 2);
+        const double l = column_mean(out, W / 2 - 2, W / 2), r = column_mean(out, W / 2, W / 2 + 2);
+        CHECK(fabs(l - 0.2) < 0.03 && fabs(r - 0.8) < 0.03, "%s: edge blurred: %g | %g", name, l,
+              r);
+    }
+    /* Noisier and guided by geometry only: à-trous and SVGF still keep the edge where
+     * the colour difference alone is within the noise. */
+    for (int m = TR_RECON_ATROUS; m <= TR_RECON_SVGF; ++m) {
+        synth(&g, 0.3f, 0.5f, 0.3f, 4);
+        run_method(&g, m, out, 2);
+        const double l = column_mean(out, W / 2 - 2, W / 2), r = column_mean(out, W / 2, W / 2 + 2);
+        CHECK(fabs(l - 0.3) < 0.05 && fabs(r - 0.5) < 0.05, "%s: noisy edge blurred: %g | %g",
+              tr_recon_name(m), l, r);
+    }
+    free(out);
+    free(out1);
+    tr_gbuffer_free(&g);
+}
+
+/* Renders `spp` samples (first sample `first`) of scene through cam into g. */
+static void render_g(const tr_scene *s, const tr_camera *cam, uint32_t first, uint32_t spp,
+                     tr_gbuffer *g) {
+    tr_film f;
+    tr_error err;
+    CHECK(tr_film_init_passes(&f, cam->screen_width, cam->screen_height, TR_PASS_ALL, &err) ==
+              TR_OK,
+          "%s", err.msg);
+    tr_render_config cfg = tr_render_config_default();
+    cfg.passes = TR_PASS_ALL;
+    cfg.threads = 2;
+    for (uint32_t k = 0; k < spp; ++k) {
+        CHECK(tr_render_frame(s, cam, &cfg, &f, first + k, NULL, &err) == TR_OK, "%s", err.msg);
+    }
+    CHECK(tr_gbuffer_from_film(g, &f, &err) == TR_OK, "%s", err.msg);
+    tr_film_free(&f);
+}
+
+/* The classic Cornell box (triangles, millimetres, a right-handed camera) at W x H. */
+static tr_scene *cornell(tr_error *err) {
+    tr_scene *s = tr_scene_create(err);
+    CHECK(s && tr_scene_file_load(s, TR_SOURCE_DIR "/scenes/cornell-classic.json", NULL, NULL,
+                                  err) == TR_OK,
+          "cornell-classic: %s", err->msg);
+    tr_camera cam = *tr_scene_camera(s);
+    CHECK(tr_camera_resize(&cam, W, H, err) == TR_OK, "%s", err->msg);
+    tr_scene_set_camera(s, &cam);
+    CHECK(tr_scene_commit(s, TR_ACCEL_TYPE_BVH, err) == TR_OK, "commit: %s", err->msg);
+    return s;
+}
+
+/* A camera at pos looking along dir with a's field of view and a's handedness. */
+static tr_camera like(const tr_camera *a, tr_vec3 pos, tr_vec3 dir) {
+    tr_camera b;
+    tr_error err;
+    CHECK(tr_camera_make(&b, pos, dir, a->world_up, a->vertical_fov, a->near_dist, a->far_dist, W,
+                         H, &err) == TR_OK,
+          "%s", err.msg);
+    b.right = a->right.x < 0.0f ? tr_vec3_make(-b.right.x, -b.right.y, -b.right.z) : b.right;
+    return b;
+}
+
+static void test_reprojection(void) {
+    tr_error err;
+    tr_scene *s = cornell(&err);
+    const tr_camera a = *tr_scene_camera(s);
+    /* B: a step sideways and up, so that the boxes' edges move against the walls. */
+    const tr_camera b = like(&a, tr_vec3_make(a.pos.x + 20.0f, a.pos.y + 12.0f, a.pos.z), a.dir);
+    tr_gbuffer ga, gb;
+    CHECK(tr_gbuffer_init(&ga, W, H, &err) == TR_OK && tr_gbuffer_init(&gb, W, H, &err) == TR_OK,
+          "%s", err.msg);
+    /* One sample: depth and primitive belong to the same ray, as in a real-time frame. */
+    render_g(s, &a, 0, 1, &ga);
+    render_g(s, &b, 0, 1, &gb);
+    int hits = 0, survived = 0, occluded = 0, occluded_rejected = 0, mirrored_survived = 0;
+    tr_camera am = a; /* a wrong previous camera: a's image mirrored */
+    am.right = tr_vec3_make(-a.right.x, -a.right.y, -a.right.z);
+    for (uint32_t y = 0; y < H; ++y) {
+        for (uint32_t x = 0; x < W; ++x) {
+            const size_t i = (size_t)y * W + x;
+            if (!(gb.depth[i] > 0.0f)) {
+                continue;
+            }
+            ++hits;
+            const tr_vec3 n =
+                tr_vec3_make(gb.normal[3 * i], gb.normal[3 * i + 1], gb.normal[3 * i + 2]);
+            float wt[4];
+            int x0, y0;
+            const float total = tr_post_reproject(&b, &a, x, y, gb.depth[i], n, gb.prim[i],
+                                                  ga.depth, ga.normal, ga.prim, &x0, &y0, wt);
+            for (int k = 0; k < 4; ++k) {
+                if (wt[k] > 0.0f) {
+                    const size_t j = (size_t)(y0 + (k >> 1)) * W + (size_t)(x0 + (k & 1));
+                    CHECK(ga.prim[j] == gb.prim[i], "(%u, %u): tap on primitive %u, not %u", x, y,
+                          ga.prim[j] - 1, gb.prim[i] - 1);
+                }
+            }
+            survived += total > 0.0f;
+            /* Independently of the taps: where does the point land in A, and is A's
+             * surface there nearer than the point (it hid the point)? */
+            const tr_vec3 p = tr_post_world_point(&b, (float)x, (float)y, gb.depth[i]);
+            float px, py, dist;
+            if (tr_post_project(&a, p, &px, &py, &dist) && px >= 0 && py >= 0 && px < W && py < H) {
+                const size_t j = (size_t)py * W + (size_t)px;
+                if (ga.depth[j] > 0.0f && ga.depth[j] < 0.9f * dist) {
+                    ++occluded;
+                    /* Every tap within a pixel of it must see the nearer surface too,
+                     * or the tap test rejects it: nothing survives. */
+                    occluded_rejected += total == 0.0f || wt[0] + wt[1] + wt[2] + wt[3] < 1.0f;
+                }
+            }
+            mirrored_survived +=
+                tr_post_reproject(&b, &am, x, y, gb.depth[i], n, gb.prim[i], ga.depth, ga.normal,
+                                  ga.prim, &x0, &y0, wt) > 0.0f;
+        }
+    }
+    CHECK(hits > W * H / 2, "only %d pixels hit something", hits);
+    CHECK(survived > hits * 8 / 10, "only %d of %d pixels survived a small move", survived, hits);
+    CHECK(occluded > 0, "the move disoccluded nothing: no test of rejection");
+    CHECK(occluded_rejected == occluded, "%d of %d disoccluded pixels kept history",
+          occluded - occluded_rejected, occluded);
+    CHECK(mirrored_survived < survived / 2, "a mirrored previous camera kept %d of %d",
+          mirrored_survived, survived);
+    tr_gbuffer_free(&ga);
+    tr_gbuffer_free(&gb);
+    tr_scene_destroy(s);
+}
+
+/* Mean squared error of img against ref. */
+static double mse(const float *img, const float *ref) {
+    double s = 0.0;
+    for (size_t i = 0; i < 3 * W * H; ++i) {
+        const double d = fmin(fmax(img[i], 0.0), 1.0) - fmin(fmax(ref[i], 0.0), 1.0);
+        s += d * d;
+    }
+    return s / (3.0 * W * H);
+}
+
+static void test_cut(void) {
+    tr_error err;
+    tr_scene *s = cornell(&err);
+    const tr_camera a = *tr_scene_camera(s);
+    /* B looks at the box from high up on its side: another view of the same scene. */
+    const tr_camera b =
+        like(&a, tr_vec3_make(120.0f, 420.0f, -300.0f), tr_vec3_make(0.35f, -0.35f, 1.0f));
+    tr_gbuffer ref, g;
+    CHECK(tr_gbuffer_init(&ref, W, H, &err) == TR_OK && tr_gbuffer_init(&g, W, H, &err) == TR_OK,
+          "%s", err.msg);
+    render_g(s, &b, 100000, 128, &ref);
+    float *out = malloc(3 * W * H * sizeof *out);
+    const tr_recon_params p = tr_recon_params_default();
+    for (int m = TR_RECON_ACCUMULATE; m < TR_RECON_COUNT; ++m) {
+        /* Fresh: 8 frames of B; cut: 12 frames of A, then the same 8 frames of B. */
+        double fresh = 0.0, cut = 0.0;
+        for (int run = 0; run < 2; ++run) {
+            tr_recon r;
+            CHECK(tr_recon_init(&r, W, H, &err) == TR_OK, "%s", err.msg);
+            for (uint32_t f = 0; run == 1 && f < 12; ++f) {
+                render_g(s, &a, 1000 + f, 1, &g);
+                CHECK(tr_recon_frame(&r, &g, &a, m, &p, 2, out, &err) == TR_OK, "%s", err.msg);
+            }
+            for (uint32_t f = 0; f < 8; ++f) {
+                render_g(s, &b, f, 1, &g);
+                CHECK(tr_recon_frame(&r, &g, &b, m, &p, 2, out, &err) == TR_OK, "%s", err.msg);
+            }
+            *(run ? &cut : &fresh) = mse(out, ref.color);
+            tr_recon_free(&r);
+        }
+        CHECK(cut <= 1.05 * fresh, "%s: 8 frames after a cut, MSE %g vs %g fresh", tr_recon_name(m),
+              cut, fresh);
+    }
+    free(out);
+    tr_gbuffer_free(&ref);
+    tr_gbuffer_free(&g);
+    tr_scene_destroy(s);
+}
+
+/* The filmic curve: 0 stays black, it rises strictly until it reaches white, and a
+ * display film written at exposure 0 holds exactly the bytes of the direct tonemap. */
+static void test_filmic(void) {
+    float prev = 0.0f;
+    CHECK(tr_tonemap_curve(0.0f, 1.0f, TR_CURVE_FILMIC) == 0.0f, "filmic(0)");
+    for (int k = 1; k <= 400; ++k) {
+        const float x = 0.01f * (float)k * (float)k;
+        const float y = tr_tonemap_curve(x, 1.0f, TR_CURVE_FILMIC);
+        CHECK(y <= 1.0f && (y > prev || y == 1.0f), "filmic(%g) = %g after %g", x, y, prev);
+        prev = y;
+    }
+    CHECK(tr_tonemap_curve(1e38f, 1.0f, TR_CURVE_FILMIC) == 1.0f &&
+              tr_tonemap_curve(NAN, 1.0f, TR_CURVE_FILMIC) == 0.0f,
+          "filmic at the ends");
+    tr_film f, d;
+    tr_error err;
+    CHECK(tr_film_init(&f, W, H, &err) == TR_OK, "%s", err.msg);
+    uint32_t s = 5;
+    for (size_t i = 0; i < (size_t)W * H; ++i) {
+        f.count[i] = i % 7;
+        for (int k = 0; k < 3; ++k) {
+            f.sum[3 * i + k] = 4.0f * unit(&s) * (float)f.count[i];
+        }
+    }
+    static uint32_t direct[W * H], via[W * H];
+    for (int curve = TR_TONEMAP_CLAMP; curve <= TR_TONEMAP_FILMIC; ++curve) {
+        CHECK(tr_tonemap_film_curve(&f, 0, 0, W, H, 0.5f, curve, TR_PIXEL_ARGB8888, direct, W * 4,
+                                    &err) == TR_OK &&
+                  tr_tonemap_display_film(&f, 0.5f, curve, &d, &err) == TR_OK &&
+                  tr_tonemap_film(&d, 0, 0, W, H, 0.0f, TR_PIXEL_ARGB8888, via, W * 4, &err) ==
+                      TR_OK,
+              "%s", err.msg);
+        CHECK(memcmp(direct, via, sizeof direct) == 0, "curve %s: display film differs",
+              tr_tonemap_curve_name(curve));
+        tr_film_free(&d);
+    }
+    CHECK(tr_tonemap_curve_parse("filmic") == TR_TONEMAP_FILMIC &&
+              tr_tonemap_curve_parse("aces") == -1,
+          "tr_tonemap_curve_parse");
+    tr_film_free(&f);
+}
+
+/* SSIM: 1 for identical images, lower with more noise, symmetric. */
+static void test_ssim(void) {
+    tr_gbuffer g;
+    tr_error err;
+    CHECK(tr_gbuffer_init(&g, W, H, &err) == TR_OK, "%s", err.msg);
+    synth(&g, 0.3f, 0.7f, 0.0f, 1);
+    float *clean = malloc(3 * W * H * sizeof *clean);
+    memcpy(clean, g.color, 3 * W * H * sizeof *clean);
+    CHECK_NEAR(tr_ssim(clean, clean, W, H), 1.0, 1e-9, "ssim of an image with itself");
+    double last = 1.0;
+    for (int k = 1; k <= 3; ++k) {
+        synth(&g, 0.3f, 0.7f, 0.1f * (float)k, 7);
+        const double v = tr_ssim(g.color, clean, W, H);
+        CHECK(v < last && v > 0.0, "ssim at noise %g: %g after %g", 0.1 * k, v, last);
+        CHECK_NEAR(tr_ssim(clean, g.color, W, H), v, 1e-9, "ssim symmetric");
+        last = v;
+    }
+    free(clean);
+    tr_gbuffer_free(&g);
+}
+
+static void test_errors(void) {
+    tr_recon r;
+    tr_gbuffer g;
+    tr_error err;
+    CHECK(tr_recon_init(&r, W, H, &err) == TR_OK && tr_gbuffer_init(&g, W + 1, H, &err) == TR_OK,
+          "%s", err.msg);
+    const tr_camera cam = front_camera();
+    const tr_recon_params p = tr_recon_params_default();
+    float *out = malloc(3 * (W + 1) * H * sizeof *out);
+    CHECK_STATUS(tr_recon_frame(&r, &g, &cam, TR_RECON_SVGF, &p, 1, out, &err), err,
+                 TR_STATUS_INVALID_ARGUMENT, "size mismatch");
+    tr_gbuffer_free(&g);
+    CHECK(tr_gbuffer_init(&g, W, H, &err) == TR_OK, "%s", err.msg);
+    CHECK_STATUS(tr_recon_frame(&r, &g, &cam, 9, &p, 1, out, &err), err, TR_STATUS_INVALID_ARGUMENT,
+                 "unknown method");
+    CHECK(tr_recon_parse("svgf") == TR_RECON_SVGF && tr_recon_parse("bogus") == -1,
+          "tr_recon_parse");
+    free(out);
+    tr_gbuffer_free(&g);
+    tr_recon_free(&r);
+}
+
+int main(void) {
+    test_filters();
+    test_reprojection();
+    test_cut();
+    test_filmic();
+    test_ssim();
+    test_errors();
+    return check_finish("test_recon");
+}

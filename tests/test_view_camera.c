@@ -1,0 +1,79 @@
+/* test_view_camera.c - the viewer's fly camera and frame budget (apps/trac0r/view_camera.c).
+ *
+ * 1. A right-handed scene's camera rebuilt after a move keeps its mirrored right vector
+ *    (the viewer's old rebuild dropped it and flipped the image), and the screen's right
+ *    that D moves along is that vector.
+ * 2. The budget: over budget the divisor grows (samples drop first), under budget it
+ *    falls back to 1, and only at full resolution do samples grow; it stays in range.
+ * 3. The default speed scales with the scene's size. */
+#include "check.h"
+#include "trac0r/trac0r.h"
+#include "view_camera.h"
+
+#include <math.h>
+
+static void test_mirrored(void) {
+    tr_camera cam;
+    tr_error err;
+    CHECK(tr_camera_make(&cam, tr_vec3_make(278, 273, -800), tr_vec3_make(0, 0, 1),
+                         tr_vec3_make(0, 1, 0), 37.0f, 1.0f, 1e5f, 64, 48, &err) == TR_OK,
+          "%s", err.msg);
+    for (int mirrored = 0; mirrored < 2; ++mirrored) {
+        tr_camera c = cam;
+        if (mirrored) {
+            c.right = tr_vec3_make(-c.right.x, -c.right.y, -c.right.z); /* as the scene file does */
+        }
+        fly_camera f = fly_from_camera(&c, 1.0f);
+        CHECK(f.mirrored == mirrored, "mirrored %d detected as %d", mirrored, f.mirrored);
+        f.pos.z += 10.0f; /* a move */
+        tr_camera next;
+        CHECK(fly_make(&f, 64, 48, &next) == TR_OK, "fly_make");
+        CHECK(next.right.x == c.right.x && next.up.y == c.up.y,
+              "mirrored %d: right %g after a move, %g before", mirrored, next.right.x, c.right.x);
+        const tr_vec3 r = fly_right(&f);
+        CHECK(fabsf(r.x - c.right.x) < 1e-6f, "mirrored %d: D moves along %g, right is %g",
+              mirrored, r.x, c.right.x);
+    }
+}
+
+static void test_budget(void) {
+    float scale = 1.0f;
+    uint32_t spp = 1;
+    /* Four times over budget: the divisor grows, step by step, towards 2 * sqrt(...). */
+    for (int i = 0; i < 40; ++i) {
+        const double ms = 4.0 * 16.7 / (scale * scale); /* time falls with the pixel count */
+        view_budget_adapt(ms, 16.7, &scale, &spp);
+    }
+    CHECK(scale > 1.9f && scale < 2.6f && spp == 1, "4x over budget: scale %g, spp %u", scale, spp);
+    /* Far under budget: back to full resolution, then more samples per frame. */
+    for (int i = 0; i < 40; ++i) {
+        view_budget_adapt(0.5, 16.7, &scale, &spp);
+    }
+    CHECK(scale == 1.0f && spp == 16, "under budget: scale %g, spp %u", scale, spp);
+    /* Over budget with many samples: samples drop before the resolution does. */
+    view_budget_adapt(40.0, 16.7, &scale, &spp);
+    CHECK(scale == 1.0f && spp == 8, "over budget at 16 spp: scale %g, spp %u", scale, spp);
+    /* Never beyond 16, whatever the time. */
+    spp = 1;
+    for (int i = 0; i < 100; ++i) {
+        view_budget_adapt(1e6, 16.7, &scale, &spp);
+    }
+    CHECK(scale == 16.0f, "hopeless budget: scale %g", scale);
+}
+
+static void test_speed(void) {
+    tr_aabb small = {{0, 0, 0}, {1, 1, 1}}, big = {{0, 0, 0}, {556, 548, 559}};
+    const float a = view_default_speed(&small), b = view_default_speed(&big);
+    const float ratio = sqrtf(556.0f * 556.0f + 548.0f * 548.0f + 559.0f * 559.0f) / sqrtf(3.0f);
+    CHECK(fabsf(b / a - ratio) < 0.01f * ratio, "speed %g for a unit box, %g for the classic box",
+          a, b);
+    tr_aabb empty = {{INFINITY, INFINITY, INFINITY}, {-INFINITY, -INFINITY, -INFINITY}};
+    CHECK(view_default_speed(&empty) == 0.5f, "empty scene: %g", view_default_speed(&empty));
+}
+
+int main(void) {
+    test_mirrored();
+    test_budget();
+    test_speed();
+    return check_finish("test_view_camera");
+}
