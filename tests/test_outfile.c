@@ -87,8 +87,7 @@ static void test_targets(void) {
     CHECK_STATUS(tr_infile_check(p, &err), err, TR_STATUS_IO, "FIFO input");
     unlink(p);
     CHECK_STATUS(tr_infile_check(dir, &err), err, TR_STATUS_IO, "directory input");
-    CHECK_STATUS(tr_outfile_check("/dev/null", &err), err, TR_STATUS_IO,
-                 "device target");
+    CHECK_STATUS(tr_outfile_check("/dev/null", &err), err, TR_STATUS_IO, "device target");
 }
 
 /* A write beyond RLIMIT_FSIZE fails with EFBIG (SIGXFSZ ignored, as the CLI does): the

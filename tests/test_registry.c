@@ -47,11 +47,11 @@ static void round_trips(void) {
         CHECK(tr_material_check(&m, &err) == TR_OK, "neutral %s refused: %s", names[i], err.msg);
     }
     /* The thesis's numbering. */
-    CHECK(tr_material_type_from_name("emitter") == 1 &&
-              tr_material_type_from_name("diffuse") == 2 &&
-              tr_material_type_from_name("glass") == 3 && tr_material_type_from_name("glossy") == 4 &&
-              tr_material_type_from_name("principled") == 5,
-          "material numbers");
+    CHECK(
+        tr_material_type_from_name("emitter") == 1 && tr_material_type_from_name("diffuse") == 2 &&
+            tr_material_type_from_name("glass") == 3 && tr_material_type_from_name("glossy") == 4 &&
+            tr_material_type_from_name("principled") == 5,
+        "material numbers");
     for (uint32_t t = 0; t < 8; ++t) {
         tr_material m = tr_material_default(t);
         tr_error err;

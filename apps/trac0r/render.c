@@ -56,8 +56,6 @@ static int render_write(const tr_film *film, const char *out, float exposure, in
 }
 
 static void render_help(void) {
-
-static void render_help(void) {
     printf("Usage: trac0r render [SCENE] [options]\n"
            "\n"
            "Renders a scene on the CPU or an OpenCL device (--device), accumulating one sample\n"
@@ -343,9 +341,7 @@ int render_write_outputs(const render_job *job, const tr_film *film, uint32_t sa
         tr_film view = *film, den = {0};
         view.passes = job->write_passes;
         if (job->denoise) {
-            rc = render_denoise(film, &den, &err) == TR_OK
-                     ? CLI_OK
-                     : CLI_FAILURE;
+            rc = render_denoise(film, &den, &err) == TR_OK ? CLI_OK : CLI_FAILURE;
             view.sum = den.sum;
             view.count = den.count;
         }
@@ -403,8 +399,7 @@ static int host_frame(render_job *job, tr_film *film, tr_film *scratch, uint32_t
 /* The single-process render with a noise threshold or a time limit (render_adaptive.c). */
 static int render_budgeted(render_job *job, tr_film *film) {
     tr_error err;
-    adapt_options ao = {job->spp, job->noise_threshold, job->time_limit,
-                        isatty(fileno(stderr))};
+    adapt_options ao = {job->spp, job->noise_threshold, job->time_limit, isatty(fileno(stderr))};
     adapt_result ares;
     memset(&ares, 0, sizeof ares);
     const double t0 = tr_time_now();
@@ -414,8 +409,8 @@ static int render_budgeted(render_job *job, tr_film *film) {
         return CLI_FAILURE;
     }
     char note[160];
-    snprintf(note, sizeof note, "of %u%s, %.1f spp on average, %u of %u tiles converged",
-             job->spp, ares.stopped_by_time ? ", time limit" : "",
+    snprintf(note, sizeof note, "of %u%s, %.1f spp on average, %u of %u tiles converged", job->spp,
+             ares.stopped_by_time ? ", time limit" : "",
              (double)ares.samples / ((double)job->common.width * job->common.height),
              ares.tiles_converged, ares.tiles);
     return render_write_outputs(job, film, ares.passes, tr_time_now() - t0, ares.rays, note);

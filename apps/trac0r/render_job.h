@@ -26,8 +26,8 @@ typedef struct render_job {
     char pass_paths[4][4096]; /* PFM paths of the passes (not for EXR) */
     const char *checkpoint;   /* --checkpoint FILE or NULL */
     double checkpoint_interval;
-    const char *resume; /* --resume FILE or NULL */
-    checkpoint_id id;   /* when checkpoint or resume is set */
+    const char *resume;    /* --resume FILE or NULL */
+    checkpoint_id id;      /* when checkpoint or resume is set */
     float noise_threshold; /* --noise-threshold (0: off) */
     float time_limit;      /* --time-limit seconds (0: none) */
 } render_job;

@@ -627,8 +627,7 @@ int view_run_window(const cli_args *a, const view_options *o, tr_scene *scene, c
             sf.view_gen = r.generation;
             sf.moving = was_moving;
             /* Said once, not at every frame, when the file cannot be written. */
-            if (write_state(o->state_file, &st, &fly, &sf, w, h, fps, &err) != 0 &&
-                !state_failed) {
+            if (write_state(o->state_file, &st, &fly, &sf, w, h, fps, &err) != 0 && !state_failed) {
                 fprintf(stderr, "trac0r view: --state-file: %s\n", err.msg);
                 state_failed = 1;
             }

@@ -50,9 +50,9 @@ TR_FN int tr_v3_is_zero(tr_vec3 a) {
  * is the first); Russian roulette on the throughput's largest component starts after
  * TR_PT_RR_START segments. Every random decision reads its own dimension of `smp`
  * (sampler.h): at segment seg, the light (selection and point, one pair), BSDF lobe,
- * BSDF direction, roulette and the environment light each have a dimension pair. *rays counts closest-hit and shadow
- * queries; `surface` (may be null) receives the first hit that is not a delta surface, for the
- * passes. */
+ * BSDF direction, roulette and the environment light each have a dimension pair. *rays counts
+ * closest-hit and shadow queries; `surface` (may be null) receives the first hit that is not a
+ * delta surface, for the passes. */
 TR_FN tr_vec3 tr_trace_pt(const tr_scene_view *s, tr_ray ray, int max_depth, const tr_sampler *smp,
                           uint32_t *rays, tr_sample *surface) {
     tr_vec3 radiance = v3s(0.0f);
