@@ -2,9 +2,9 @@
  * (tr_image_read_png and tr_image_read_pfm in src/io/image.c, tr_image_read_exr in
  * src/io/exr.c through OpenEXRCore).
  *
- * The first byte picks the reader (its value mod 3: PFM, PNG, EXR), the rest is the file, written to a private directory
- * (the readers take paths). An image that reads must have a size within the film limits
- * and finite-or-not floats in a buffer of exactly that size (ASan checks the bounds);
+ * The first byte picks the reader (its value mod 3: PFM, PNG, EXR), the rest is the file, written
+ * to a private directory (the readers take paths). An image that reads must have a size within the
+ * film limits and finite-or-not floats in a buffer of exactly that size (ASan checks the bounds);
  * one that fails must leave the image empty. -rss_limit_mb catches a header whose
  * declared size is allocated before it is checked. Built by fuzz/build.sh; run by
  * fuzz/run.sh. */
@@ -23,9 +23,9 @@ static char dir[64];
 
 /* The private directory goes when libFuzzer exits. */
 static void remove_dir(void) {
-    static const char *const names[] = {"model.obj", "model.ply", "model.gltf", "model.glb",
-                                        "model.stl", "model.off", "image.png",  "image.pfm",
-                                        "image.exr"};
+    static const char *const names[] = {"model.obj", "model.ply", "model.gltf",
+                                        "model.glb", "model.stl", "model.off",
+                                        "image.png", "image.pfm", "image.exr"};
     for (size_t i = 0; i < sizeof names / sizeof names[0]; ++i) {
         char p[128];
         snprintf(p, sizeof p, "%s/%s", dir, names[i]);
