@@ -38,10 +38,11 @@ SCENE="src/scene/json.c src/scene/scene.c src/scene/shape.c src/scene/camera.c
     src/io/outfile.c src/film/film.c src/post/tonemap.c src/util/error.c \
     $(pkg-config --libs libpng) -lOpenEXRCore-3_1 -lm -o "$OUT/fuzz_image"
 # shellcheck disable=SC2086
-# stb_image (compiled into texture.c) computes `NULL + 0` on its first IDAT chunk, which
-# UBSan's pointer-overflow check reports though nothing is read there: that one check is off
-# for this target.
-"$CC" $FLAGS -fno-sanitize=pointer-overflow fuzz/fuzz_texture.c src/scene/texture.c src/scene/scene.c src/scene/shape.c \
+# stb_image (compiled into texture.c) computes `NULL + 0` on its first IDAT chunk and calls
+# memcpy(NULL, ..., 0) on an empty one, which UBSan's pointer-overflow and nonnull-attribute
+# checks report though no byte is read or written there (Debian's stb, 2022-09-08): those
+# two checks are off for this target, every other one stays.
+"$CC" $FLAGS -fno-sanitize=pointer-overflow,nonnull-attribute fuzz/fuzz_texture.c src/scene/texture.c src/scene/scene.c src/scene/shape.c \
     src/scene/lights.c src/accel/bvh.c src/accel/wbvh.c src/accel/wbvh_scalar.c \
     src/accel/embree.c src/util/error.c src/util/registry.c src/scene/material_registry.c \
     src/io/infile.c -lm -o "$OUT/fuzz_texture"
