@@ -9,14 +9,8 @@ TRAC0R=$1
 MAN=$2
 COMPLETION=$3
 DIR=$4
-rm -rf "$DIR"
-mkdir -p "$DIR"
-cd "$DIR" || exit 1
-failures=0
-fail() {
-    echo "FAIL: $*" >&2
-    failures=$((failures + 1))
-}
+. "$(dirname "$0")/common.sh"
+cli_begin "$TRAC0R" "$DIR" # the scratch directory, entered; fail() counts
 
 # The page's text: roff's \- as -, font changes and other escapes dropped.
 sed -e 's/\\-/-/g' -e 's/\\f[BIRP]//g' -e 's/\\&//g' "$MAN" >man.txt

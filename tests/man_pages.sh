@@ -8,14 +8,8 @@ set -u
 MD=$1
 MAN=$2
 DIR=$3
-rm -rf "$DIR"
-mkdir -p "$DIR"
-cd "$DIR" || exit 1
-failures=0
-fail() {
-    echo "FAIL: $*" >&2
-    failures=$((failures + 1))
-}
+. "$(dirname "$0")/common.sh"
+cli_begin "$MD" "$DIR" # the scratch directory, entered; fail() counts
 
 # The page as text: roff's \- as -, \e as a backslash, font changes and \& dropped,
 # words broken over lines joined by one blank.
