@@ -58,6 +58,9 @@ struct tr_scene {
     uint32_t env_texel_count;
     float *env_cdf;
     uint32_t env_cdf_count;
+    /* The sun (src/scene/sun.c): sun_count 0 or 1. */
+    tr_sun sun;
+    uint32_t sun_count;
 };
 
 /* An empty scene (no allocation), for a tr_scene the caller owns (tr_scene_create does
@@ -115,6 +118,12 @@ int tr_scene_set_environment(tr_scene *s, tr_vec3 color, float strength, float r
  * it as the environment. */
 int tr_scene_load_environment(tr_scene *s, const char *path, tr_vec3 color, float strength,
                               float rotation, tr_error *err);
+#define TR_SUN_MIN_ANGLE 1e-3f /* degrees: the cone's pdf squared stays a float */
+#define TR_SUN_MAX_ANGLE 90.0f
+/* Sets the sun (replacing any): seen from the scene in direction `dir` (towards the sun,
+ * any length > 0) as a disc of angular diameter angle_deg (1e-3..90 degrees), giving the
+ * irradiance `irradiance` (W/m^2 per channel) on a surface facing it. */
+int tr_scene_set_sun(tr_scene *s, tr_vec3 dir, float angle_deg, tr_vec3 irradiance, tr_error *err);
 /* Restores the counts a failed import started from (everything is appended). */
 void tr_scene_truncate(tr_scene *s, uint32_t triangles, uint32_t shapes, uint32_t materials);
 
