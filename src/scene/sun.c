@@ -37,3 +37,23 @@ int tr_scene_set_sun(tr_scene *s, tr_vec3 dir, float angle_deg, tr_vec3 irradian
     s->generation++;
     return TR_OK;
 }
+
+int tr_scene_sun(const tr_scene *s, tr_vec3 *dir, float *angle_deg, tr_vec3 *irradiance) {
+    if (!s->sun_count) {
+        return 0;
+    }
+    /* The inverse of tr_scene_set_sun's: t = 2 asin(sqrt((1 - cos t) / 2)). */
+    const double t = 2.0 * asin(sqrt(0.5 * (double)s->sun.one_minus_cos));
+    const double k = 3.14159265358979323846 * sin(t) * sin(t);
+    if (dir) {
+        *dir = s->sun.dir;
+    }
+    if (angle_deg) {
+        *angle_deg = (float)(2.0 * t * 180.0 / 3.14159265358979323846);
+    }
+    if (irradiance) {
+        *irradiance = v3((float)(s->sun.radiance.x * k), (float)(s->sun.radiance.y * k),
+                         (float)(s->sun.radiance.z * k));
+    }
+    return 1;
+}
