@@ -11,6 +11,8 @@
  *    as irradiance), the point light an emissive sphere at its node whose power is the
  *    light's 4 pi I; the lights replace the default environment, so the background
  *    renders black and the quad under the point light does not.
+ *    Lights that cannot be had (black, past the emitter's limit) are dropped or adjusted
+ *    with warnings, never fail the model.
  * 2. Collada's duck (assimp-testmodels): its camera is placed by the node's translate
  *    and rotations (times the file's unit, centimetres) and its yfov; with the framing
  *    camera the model's pixels (the albedo pass) are centred in the image. */
@@ -30,11 +32,9 @@ static char dir[512];
 
 /* A quad (x, y in [-1, 1], z = 0, facing +z) under a point light 2 above its centre and
  * a directional light shining down; cameras "front" and "side". */
-static const char gltf[] =
+static const char gltf_fmt[] =
     "{\"asset\": {\"version\": \"2.0\"}, \"extensionsUsed\": [\"KHR_lights_punctual\"],\n"
-    " \"extensions\": {\"KHR_lights_punctual\": {\"lights\": [\n"
-    "   {\"type\": \"point\", \"color\": [1.0, 0.5, 0.25], \"intensity\": 4.0},\n"
-    "   {\"type\": \"directional\", \"color\": [1.0, 1.0, 1.0], \"intensity\": 2.0}]}},\n"
+    " \"extensions\": {\"KHR_lights_punctual\": {\"lights\": [%s]}},\n"
     " \"scene\": 0, \"scenes\": [{\"nodes\": [0, 1, 2, 3, 4]}],\n"
     " \"nodes\": [{\"name\": \"quad\", \"mesh\": 0},\n"
     "   {\"name\": \"front\", \"camera\": 0, \"translation\": [0.5, 0.25, 5.0]},\n"
@@ -62,11 +62,22 @@ static int near3(tr_vec3 a, float x, float y, float z, float tol) {
     return fabsf(a.x - x) <= tol && fabsf(a.y - y) <= tol && fabsf(a.z - z) <= tol;
 }
 
+static const char lights_ok[] =
+    "{\"type\": \"point\", \"color\": [1.0, 0.5, 0.25], \"intensity\": 4.0},\n"
+    " {\"type\": \"directional\", \"color\": [1.0, 1.0, 1.0], \"intensity\": 2.0}";
+
+/* Writes the glTF with the given lights to dir/name; its path in path. */
+static void write_gltf(const char *name, const char *lights, char *path, size_t size) {
+    snprintf(path, size, "%s/%s", dir, name);
+    static char text[8192];
+    snprintf(text, sizeof text, gltf_fmt, lights);
+    FILE *f = fopen(path, "w");
+    CHECK(f && fputs(text, f) >= 0 && fclose(f) == 0, "writing %s", path);
+}
+
 static void test_gltf(void) {
     char path[600];
-    snprintf(path, sizeof path, "%s/lit.gltf", dir);
-    FILE *f = fopen(path, "w");
-    CHECK(f && fputs(gltf, f) >= 0 && fclose(f) == 0, "writing %s", path);
+    write_gltf("lit.gltf", lights_ok, path, sizeof path);
     tr_scene s;
     tr_scene_init(&s);
     tr_error err;
@@ -157,6 +168,34 @@ static void test_gltf(void) {
     unlink(path);
 }
 
+/* Lights that cannot be had are dropped or adjusted with a warning, and the model still
+ * loads: a spot light past any emitter's radiance limit (its sphere grows, or it is
+ * dropped), a black directional light (no sun; with no light left, the default
+ * environment). */
+static void test_gltf_odd_lights(void) {
+    char path[600];
+    write_gltf("odd.gltf",
+               "{\"type\": \"spot\", \"intensity\": 1e30, \"spot\": {}},\n"
+               " {\"type\": \"directional\", \"color\": [0, 0, 0], \"intensity\": 3.0}",
+               path, sizeof path);
+    tr_scene s;
+    tr_scene_init(&s);
+    tr_error err;
+    tr_scene_file info;
+    tr_model_options opt = {0, 1.0f, 0, 0, NULL};
+    CHECK(tr_scene_model_load(&s, path, &opt, &info, &err) == TR_OK, "%s", err.msg);
+    uint32_t emitters = 0;
+    for (uint32_t i = 0; i < s.material_count; ++i) {
+        emitters += s.materials[i].type == TR_MATERIAL_EMITTER;
+    }
+    CHECK(emitters <= 1 && tr_scene_sun(&s, NULL, NULL, NULL) == 0,
+          "odd lights: %u emitters, no sun from a black light", emitters);
+    CHECK(emitters == 1 || s.env_count == 1, "no light left: the default environment");
+    CHECK(info.warning_count >= 2, "odd lights: %u warnings", info.warning_count);
+    tr_scene_free(&s);
+    unlink(path);
+}
+
 #define DUCK "/usr/share/assimp/models/Collada/duck.dae"
 
 static void test_duck(void) {
@@ -222,6 +261,7 @@ int main(void) {
         return 1;
     }
     test_gltf();
+    test_gltf_odd_lights();
     test_duck();
     rmdir(dir);
     return check_finish("test_model");

@@ -38,7 +38,7 @@ enum { AI_DIRECTIONAL = 1, AI_POINT = 2, AI_SPOT = 3, AI_AMBIENT = 4, AI_AREA = 
 /* A light of the file onto trac0r's: directional -> the sun (the Sun's angular size),
  * point and spot -> a small emissive sphere radiating the light's intensity (W/sr) in
  * every direction, ambient -> a constant environment, area -> an emissive rectangle.
- * Returns 1 where it added a light. */
+ * Returns 1 where it added a light, 0 where it warned and added none, -1 with err. */
 static int model_add_light(tr_scene *s, const tr_import_light *l, float radius, tr_scene_file *info,
                            int *have_sun, tr_error *err) {
     char msg[256];
@@ -97,7 +97,7 @@ static int model_add_light(tr_scene *s, const tr_import_light *l, float radius, 
         /* Intensity I (W/sr) from a sphere of radius r: radiance I / (pi r^2) gives the
          * same power, 4 pi I. The radius is 1 % of the model's, grown if the radiance
          * would pass the emitter's limit. */
-        float r = fmaxf(0.01f * radius, sqrtf(peak / (3.14159265f * 1e7f)));
+        float r = fmaxf(0.01f * radius, sqrtf(peak / (3.14159265f * 0.99e7f)));
         d = tr_shape_desc_default(TR_SHAPE_ICOSPHERE_SMOOTH);
         d.subdivisions = 2;
         d.transform.scale = v3s(r);
@@ -181,10 +181,16 @@ int tr_scene_model_load(tr_scene *s, const char *path, const tr_model_options *o
     /* The file's lights, or the default environment. */
     int lit = 0, have_sun = 0;
     for (uint32_t i = 0; i < ex.light_count; ++i) {
-        int rc = model_add_light(s, &ex.light[i], radius, info, &have_sun, err);
+        tr_error le;
+        int rc = model_add_light(s, &ex.light[i], radius, info, &have_sun, &le);
         if (rc < 0) {
-            tr_scene_free(s);
-            return TR_ERR;
+            /* A light the file places or sizes badly (non-finite, too small to make
+             * triangles) is dropped, not the model. */
+            char msg[256];
+            snprintf(msg, sizeof msg, "light '%.64s' not imported: %.160s", ex.light[i].name,
+                     le.msg);
+            model_warn(info, msg);
+            continue;
         }
         lit += rc;
     }
