@@ -2,9 +2,9 @@
 # Model files straight from the command line (issue 14): `trac0r render` and `trac0r
 # info` build a scene around a model in any format Assimp reads (Debian's
 # assimp-testmodels): glTF 2.0 binary with its embedded texture, Collada with its camera,
-# OBJ with textures beside it; --up z turns a model upright; a missing model and bad
-# --up/--scale values are one-line errors with exit status 2; the textured demo scene
-# renders.
+# OBJ with textures beside it; --up z turns a model upright; --camera picks a camera or
+# frames the model; a missing model, bad --up/--scale values and a camera the file lacks
+# are one-line errors with exit status 2; the textured demo scene renders.
 # Usage: cli_model.sh TRAC0R_BINARY SCRATCH_DIR
 set -u
 . "$(dirname "$0")/common.sh"
@@ -51,6 +51,15 @@ grep -q "maps: base" info.txt && [ "$(grep -c 'maps: base' info.txt)" -ge 3 ] ||
 [ -s demo.png ] || fail "textured-demo.json: no image"
 rm -rf demo demo.png info.txt err.txt
 
+# A model's camera by name or number, or the framing one; one it lacks is an error.
+"$BIN" info "$M/Collada/duck.dae" >cam.txt 2>/dev/null || fail "info duck.dae"
+"$BIN" info "$M/Collada/duck.dae" --camera 0 >cam0.txt 2>/dev/null || fail "info --camera 0"
+"$BIN" info "$M/Collada/duck.dae" --camera frame >frame.txt 2>/dev/null || fail "--camera frame"
+[ "$(grep '^camera:' cam.txt)" = "$(grep '^camera:' cam0.txt)" ] || fail "--camera 0 is the first"
+[ "$(grep '^camera:' cam.txt)" != "$(grep '^camera:' frame.txt)" ] || fail "--camera frame"
+rm -f cam.txt cam0.txt frame.txt
+expect_usage_error "duck.dae" render "$M/Collada/duck.dae" --camera 3 --out x.pfm
+expect_usage_error "--camera" render "$M/Collada/duck.dae" --camera "" --out x.pfm
 expect_usage_error "no-such-model.glb" render no-such-model.glb --width 8 --height 6 --out x.pfm
 expect_usage_error "--up" render "$M/Collada/duck.dae" --up x --out x.pfm
 expect_usage_error "--scale" render "$M/Collada/duck.dae" --scale 0 --out x.pfm

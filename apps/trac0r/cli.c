@@ -22,9 +22,11 @@ static const char help_before[] =
     "                       options not given here, or a model file in any format\n"
     "                       Assimp reads (.glb, .gltf, .obj, .dae, .fbx, .ply, ...): a\n"
     "                       scene is built around it (its camera, else one framing it;\n"
-    "                       a white environment light)\n"
+    "                       its lights, else a white environment light)\n"
     "  --up y|z             a model file's up axis (default y; z stands z-up models up)\n"
     "  --scale S            a model file's scale, 1e-6..1e6 (default 1)\n"
+    "  --camera N|NAME|frame  a model file's camera by number or name (default its\n"
+    "                       first), or frame: one framing the model\n"
     "  --allow-dark         render a scene file that has no emitter\n"
     "  --width W            image width in pixels, 1..16384 (default 800)\n"
     "  --height H           image height in pixels, 1..16384 (default 600);\n"
@@ -64,6 +66,7 @@ void cli_common_default(cli_common *c) {
     c->scene = "builtin:cornell";
     c->model_scale = 1.0f;
     c->up_z = 0;
+    c->model_camera = NULL;
     c->width = 800;
     c->height = 600;
     c->max_depth = TR_MAX_DEPTH_DEFAULT;
@@ -251,6 +254,16 @@ int cli_common_option(cli_args *a, cli_common *c) {
         c->up_z = a->value[0] == 'z';
         return CLI_OK;
     }
+    if (cli_is(a, "--camera")) {
+        if (cli_value(a) != CLI_OK) {
+            return CLI_USAGE;
+        }
+        if (!a->value[0]) {
+            return cli_error(a, "--camera: expected a camera's name or number, or 'frame'");
+        }
+        c->model_camera = a->value;
+        return CLI_OK;
+    }
     if (cli_is(a, "--scale")) {
         return cli_parse_float(a, 1e-6f, 1e6f, &c->model_scale);
     }
@@ -351,7 +364,8 @@ int cli_load_scene_file(const cli_args *a, cli_common *c, tr_scene *scene, tr_sc
     tr_error err;
     if (tr_scene_path_is_model(c->scene)) {
         /* issue 14: a model file, with a scene built around it. */
-        tr_model_options mo = {c->up_z, c->model_scale, c->width, c->height};
+        tr_model_options mo = {c->up_z, c->model_scale, c->width,
+                               c->given & CLI_GIVEN_HEIGHT ? c->height : 0, c->model_camera};
         if (tr_scene_model_load(scene, c->scene, &mo, file, &err) != TR_OK) {
             return cli_error(a, "%s", err.msg);
         }

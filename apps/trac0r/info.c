@@ -15,8 +15,9 @@ static void info_help(void) {
            "Loads a scene file (docs/scene-format.md), a model file (any format Assimp\n"
            "reads, with a scene built around it as 'trac0r render' does) or a built-in\n"
            "scene and prints its triangle, shape, mesh, material and emitter counts, its\n"
-           "bounds, each shape's or mesh part's bounds, the material each maps to (type and\n"
-           "maps), its render defaults and any warnings. Nothing is rendered.\n"
+           "bounds, its camera and sun, each shape's or mesh part's bounds, the material\n"
+           "each maps to (type and maps), its render defaults and any warnings (a model's\n"
+           "lights and how each was mapped among them). Nothing is rendered.\n"
            "\n"
            "With --devices: lists the OpenCL platforms and devices found, numbered as\n"
            "--device opencl:N takes them: name, platform, vendor, type, OpenCL version,\n"
@@ -26,6 +27,7 @@ static void info_help(void) {
            "  --devices            list the OpenCL devices instead of describing a scene\n"
            "  --up y|z             a model file's up axis (default y)\n"
            "  --scale S            a model file's scale (default 1)\n"
+           "  --camera N|NAME|frame  a model file's camera (default its first)\n"
            "  -h, --help           show this help\n"
            "\n"
            "Exit status: 0 when the scene loads, 2 when it does not (one line naming the\n"
@@ -45,7 +47,7 @@ int cmd_info(int argc, char **argv) {
             return CLI_OK;
         } else if (cli_is(&a, "--devices")) {
             devices = 1;
-        } else if (cli_is(&a, "--up") || cli_is(&a, "--scale")) {
+        } else if (cli_is(&a, "--up") || cli_is(&a, "--scale") || cli_is(&a, "--camera")) {
             if (cli_common_option(&a, &mc) != CLI_OK) {
                 return CLI_USAGE;
             }
@@ -90,7 +92,7 @@ int cmd_info(int argc, char **argv) {
             f.emitter_materials += tr_scene_material(s, i).type == TR_MATERIAL_EMITTER;
         }
     } else if (tr_scene_path_is_model(path)) {
-        tr_model_options mo = {mc.up_z, mc.model_scale, 0, 0};
+        tr_model_options mo = {mc.up_z, mc.model_scale, 0, 0, mc.model_camera};
         if (tr_scene_model_load(s, path, &mo, &f, &err) != TR_OK) {
             tr_scene_destroy(s);
             return cli_error(&a, "%s", err.msg);
@@ -112,6 +114,18 @@ int cmd_info(int argc, char **argv) {
     printf("bounds:     (%g, %g, %g) .. (%g, %g, %g)\n", (double)f.bounds.min.x,
            (double)f.bounds.min.y, (double)f.bounds.min.z, (double)f.bounds.max.x,
            (double)f.bounds.max.y, (double)f.bounds.max.z);
+    const tr_camera *cam = tr_scene_camera(s);
+    printf("camera:     at (%g, %g, %g), looking (%g, %g, %g), up (%g, %g, %g), vertical fov %g\n",
+           (double)cam->pos.x, (double)cam->pos.y, (double)cam->pos.z, (double)cam->dir.x,
+           (double)cam->dir.y, (double)cam->dir.z, (double)cam->up.x, (double)cam->up.y,
+           (double)cam->up.z, (double)cam->vertical_fov);
+    tr_vec3 sun_dir, sun_e;
+    float sun_angle;
+    if (tr_scene_sun(s, &sun_dir, &sun_angle, &sun_e)) {
+        printf("sun:        towards (%g, %g, %g), %g degrees, irradiance (%g, %g, %g)\n",
+               (double)sun_dir.x, (double)sun_dir.y, (double)sun_dir.z, (double)sun_angle,
+               (double)sun_e.x, (double)sun_e.y, (double)sun_e.z);
+    }
     uint32_t with_normals = 0;
     for (uint32_t i = 0; i < tr_scene_triangle_count(s); ++i) {
         tr_vec3 n[3];

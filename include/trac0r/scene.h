@@ -164,6 +164,11 @@ uint32_t tr_scene_shape_triangle_count(const tr_scene *s, uint32_t shape);
 /* The bounding box of every triangle (min = +inf, max = -inf for an empty scene). */
 tr_aabb tr_scene_bounds(const tr_scene *s);
 
+/* The sun ("sun" in scene files; a model's directional light): 1 with its direction
+ * (unit, towards it), angular diameter in degrees and irradiance (W/m^2) where the scene
+ * has one, else 0. Any pointer may be NULL. */
+int tr_scene_sun(const tr_scene *s, tr_vec3 *dir, float *angle_deg, tr_vec3 *irradiance);
+
 /* The camera rays start from; set by tr_scene_builtin and tr_scene_file_load. */
 const tr_camera *tr_scene_camera(const tr_scene *s);
 void tr_scene_set_camera(tr_scene *s, const tr_camera *cam);

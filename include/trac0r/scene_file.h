@@ -90,15 +90,18 @@ int tr_scene_import_mesh(tr_scene *s, const char *path, const tr_transform *tf,
                          tr_mesh_import_stats *stats, tr_error *err);
 
 /* A scene built around one model file (`trac0r render model.glb`): the model, turned so
- * that up_z models stand up (+z becomes +y) and scaled by `scale`; the file's first camera
- * if it has one, else one framing the model's bounding sphere (40 degree vertical field of
- * view, right-handed); a constant white environment light of radiance 1 (lights in the file
- * are not imported: a warning counts them). info (may be NULL) gets the counts, bounds,
- * warnings (the import table's, naming materials) and render defaults. */
+ * that up_z models stand up (+z becomes +y) and scaled by `scale`; the file's camera (the
+ * first, or the one `camera` names) if it has one, else one framing the model's bounding
+ * sphere (40 degree vertical field of view, right-handed); the file's lights mapped onto
+ * trac0r's (docs/scene-format.md, "Model files"; a warning names each approximated one),
+ * or without any a constant white environment light of radiance 1. info (may be NULL)
+ * gets the counts, bounds, warnings (the import table's, naming materials and lights) and
+ * render defaults (the file camera's aspect ratio when height is 0). */
 typedef struct tr_model_options {
     int up_z;
     float scale;            /* > 0 */
-    uint32_t width, height; /* the camera's image size; 0 for 800 x 600 */
+    uint32_t width, height; /* the camera's image size; 0 for 800 and 600 (or the aspect's) */
+    const char *camera;     /* NULL: the first; "frame": the framing one; a name or index */
 } tr_model_options;
 int tr_scene_model_load(tr_scene *s, const char *path, const tr_model_options *opt,
                         tr_scene_file *info, tr_error *err);

@@ -78,4 +78,16 @@ typedef struct tr_env {
 } tr_env;
 TR_STATIC_ASSERT(sizeof(tr_env) == 40, "tr_env layout");
 
+/* The sun (sun.h): radiance from a cone of directions around `dir` (unit, towards the
+ * sun) of half-angle t, one_minus_cos = 1 - cos t kept apart so that small discs keep
+ * their precision; radiance = irradiance / (pi sin^2 t), so that a surface facing the
+ * sun receives the given irradiance. The scene holds 0 or 1. 32 bytes. */
+typedef struct tr_sun {
+    tr_vec3 dir;
+    float one_minus_cos;
+    tr_vec3 radiance;
+    float pdf; /* 1 / (2 pi one_minus_cos): uniform over the cone's solid angle */
+} tr_sun;
+TR_STATIC_ASSERT(sizeof(tr_sun) == 32, "tr_sun layout");
+
 #endif

@@ -10,6 +10,7 @@
 #include "material_eval.h"
 #include "rng.h"
 #include "scene_view.h"
+#include "sun.h"
 #include "types.h"
 #include "vec.h"
 
@@ -42,6 +43,9 @@ TR_FN tr_vec3 tr_trace_naive(const tr_scene_view *s, tr_ray ray, int max_depth, 
         tr_hit hit;
         *rays += 1;
         if (!tr_intersect_scene(s, &ray, &hit)) {
+            if (s->sun_count > 0u) { /* an escaping ray may see the sun */
+                radiance = v3_add(radiance, v3_mul(throughput, tr_sun_radiance(s, ray.dir)));
+            }
             break;
         }
         TR_CONST_GLOBAL tr_triangle *tri = &s->triangles[hit.triangle];

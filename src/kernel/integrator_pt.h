@@ -21,6 +21,7 @@
 #include "material_eval.h"
 #include "sampler.h"
 #include "scene_view.h"
+#include "sun.h"
 #include "types.h"
 #include "vec.h"
 
@@ -70,6 +71,12 @@ TR_FN tr_vec3 tr_trace_pt(const tr_scene_view *s, tr_ray ray, int max_depth, con
                 tr_vec3 le = tr_env_radiance(s, ray.dir);
                 float w = prev_delta ? 1.0f : tr_mis_power(prev_pdf, tr_env_pdf(s, ray.dir));
                 radiance = v3_add(radiance, v3_scale(v3_mul(throughput, le), w));
+            }
+            if (s->sun_count > 0u) { /* the sun, found by the BSDF strategy */
+                float ps = prev_delta ? 0.0f : tr_sun_pdf(s, ray.dir);
+                float w = prev_delta ? 1.0f : tr_mis_power(prev_pdf, ps);
+                radiance =
+                    v3_add(radiance, v3_scale(v3_mul(throughput, tr_sun_radiance(s, ray.dir)), w));
             }
             break;
         }
@@ -153,6 +160,14 @@ TR_FN tr_vec3 tr_trace_pt(const tr_scene_view *s, tr_ray ray, int max_depth, con
                         v3_add(radiance, v3_scale(v3_mul(v3_mul(throughput, f), le_e), c * w / pe));
                 }
             }
+        }
+
+        /* Next-event estimation towards the sun (sun.h), MIS against the BSDF. */
+        if (!tr_bsdf_is_delta(&m) && s->sun_count > 0u) {
+            float su1, su2;
+            tr_sampler_2d(smp, tr_sun_dim(seg), &su1, &su2);
+            radiance =
+                v3_add(radiance, v3_mul(throughput, tr_sun_nee(s, &m, wo, p, su1, su2, rays)));
         }
 
         /* Continue with the BSDF's sample. */

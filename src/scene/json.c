@@ -1260,6 +1260,48 @@ static int parse_environment(jctx *c, const cJSON *env) {
     return TR_OK;
 }
 
+/* "sun": {"direction": [x, y, z], "angle": degrees, "irradiance": E or [r, g, b]}: a
+ * distant disc (src/kernel/sun.h) towards `direction`, of angular diameter `angle`
+ * (default 0.526, the Sun's), giving irradiance E in W/m^2 on a surface facing it. */
+static int parse_sun(jctx *c, const cJSON *sun) {
+    static const char *const keys[] = {"direction", "angle", "irradiance"};
+    const char *path = "sun";
+    if (expect_object(c, sun, path) != TR_OK ||
+        check_keys(c, sun, path, keys, sizeof keys / sizeof keys[0]) != TR_OK) {
+        return TR_ERR;
+    }
+    tr_vec3 dir, e = v3s(1.0f);
+    double angle = 0.526, ev = 1.0;
+    if (get_vec3(c, sun, path, "direction", 1, 0, &dir, NULL) != TR_OK ||
+        get_number(c, sun, path, "angle", TR_SUN_MIN_ANGLE, TR_SUN_MAX_ANGLE, &angle, NULL) !=
+            TR_OK) {
+        return TR_ERR;
+    }
+    if (!(v3_length(dir) > 0.0f)) {
+        return jerr(c, "sun.direction", "expected a non-zero vector, got [0, 0, 0]");
+    }
+    const cJSON *irr = cJSON_GetObjectItemCaseSensitive(sun, "irradiance");
+    if (irr && cJSON_IsNumber(irr)) {
+        if (get_number(c, sun, path, "irradiance", 0.0, 1e7, &ev, NULL) != TR_OK) {
+            return TR_ERR;
+        }
+        e = v3s((float)ev);
+    } else if (irr) {
+        if (get_vec3(c, sun, path, "irradiance", 1, 0, &e, NULL) != TR_OK) {
+            return TR_ERR;
+        }
+        if (e.x < 0.0f || e.y < 0.0f || e.z < 0.0f || e.x > 1e7f || e.y > 1e7f || e.z > 1e7f) {
+            return jerr(c, "sun.irradiance", "expected a number or three numbers in [0, 1e+07]");
+        }
+    }
+    tr_error err;
+    if (tr_scene_set_sun(c->scene, dir, (float)angle, e, &err) != TR_OK) {
+        return jerr_from(c, path, &err);
+    }
+    c->info->allow_no_emitter = 1; /* a light: the scene needs no emitter */
+    return TR_OK;
+}
+
 /* Line and column (both from 1) of byte offset `off` in text. */
 static void line_col(const char *text, size_t off, unsigned *line, unsigned *col) {
     *line = 1;
@@ -1275,8 +1317,9 @@ static void line_col(const char *text, size_t off, unsigned *line, unsigned *col
 }
 
 static int build(jctx *c, const cJSON *root) {
-    static const char *const keys[] = {"version",   "description", "render", "camera",
-                                       "materials", "shapes",      "meshes", "environment"};
+    static const char *const keys[] = {"version", "description", "render",
+                                       "camera",  "materials",   "shapes",
+                                       "meshes",  "environment", "sun"};
     if (!cJSON_IsObject(root)) {
         return jerr(c, NULL, "expected a JSON object at the top level, got %s", type_name(root));
     }
@@ -1321,6 +1364,10 @@ static int build(jctx *c, const cJSON *root) {
     if (env && parse_environment(c, env) != TR_OK) {
         return TR_ERR;
     }
+    const cJSON *sun = cJSON_GetObjectItemCaseSensitive(root, "sun");
+    if (sun && parse_sun(c, sun) != TR_OK) {
+        return TR_ERR;
+    }
     tr_scene *s = c->scene;
     tr_scene_file *in = c->info;
     if (s->triangle_count == 0 && (c->opt->load_meshes || in->mesh_count == 0)) {
@@ -1353,7 +1400,7 @@ static int build(jctx *c, const cJSON *root) {
         }
     }
     free(used);
-    if (in->emissive_triangles == 0 && s->env_count == 0) {
+    if (in->emissive_triangles == 0 && s->env_count == 0 && s->sun_count == 0) {
         warn(c, "the scene has no emitter, so its image would be black%s",
              in->allow_no_emitter ? " (allowed by render.allow_no_emitter)" : "");
     }

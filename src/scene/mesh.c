@@ -10,6 +10,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 
 #include <assimp/GltfMaterial.h>
 #include <assimp/texture.h>
@@ -44,6 +45,7 @@ typedef struct import_ctx {
     } tex_cache[64];
     uint32_t tex_cached;
     tr_import_extras *extras; /* the file's first camera, when asked for */
+    int gltf;                 /* a .gltf or .glb file (their cameras' conventions) */
 } import_ctx;
 
 static void import_warn(const import_ctx *c, const char *fmt, ...)
@@ -445,6 +447,84 @@ static int add_ai_mesh(import_ctx *c, const struct aiMesh *mesh, const struct ai
     return rc;
 }
 
+/* Point p (w = 1) or direction p (w = 0) through m, then through the import's tf. */
+static tr_vec3 place(const import_ctx *c, const struct aiMatrix4x4 *m, struct aiVector3D p,
+                     float w) {
+    tr_vec3 q = v3(m->a1 * p.x + m->a2 * p.y + m->a3 * p.z + w * m->a4,
+                   m->b1 * p.x + m->b2 * p.y + m->b3 * p.z + w * m->b4,
+                   m->c1 * p.x + m->c2 * p.y + m->c3 * p.z + w * m->c4);
+    tr_transform identity = {v3s(0.0f), v3s(0.0f), v3s(1.0f)};
+    const tr_transform *tf = c->tf ? c->tf : &identity;
+    if (w != 0.0f) {
+        return tr_transform_point(tf, q);
+    }
+    /* Directions turn with the transform (its scale is uniform or irrelevant). */
+    return v3_normalize(v3_sub(tr_transform_point(tf, q), tr_transform_point(tf, v3s(0.0f))));
+}
+
+/* The camera asked for and every light whose name is this node's, placed by m. */
+static void place_extras(import_ctx *c, const struct aiNode *node, const struct aiMatrix4x4 *m) {
+    tr_import_extras *x = c->extras;
+    const unsigned int want = (unsigned int)x->camera_want;
+    if (!x->has_camera && want < c->ai->mNumCameras && c->ai->mCameras[want] &&
+        strcmp(c->ai->mCameras[want]->mName.data, node->mName.data) == 0) {
+        const struct aiCamera *cam = c->ai->mCameras[want];
+        /* Assimp 5.2's glTF importer copies the node's translation into mPosition and
+         * keeps it in the node's transform too: a glTF camera sits at its node's origin. */
+        const struct aiVector3D origin = {0.0f, 0.0f, 0.0f};
+        x->cam_gltf = c->gltf;
+        x->cam_pos = place(c, m, c->gltf ? origin : cam->mPosition, 1.0f);
+        x->cam_dir = place(c, m, cam->mLookAt, 0.0f);
+        x->cam_up = place(c, m, cam->mUp, 0.0f);
+        x->cam_hfov = cam->mHorizontalFOV;
+        x->cam_aspect = cam->mAspect;
+        snprintf(x->cam_name, sizeof x->cam_name, "%.63s", cam->mName.data);
+        x->has_camera = v3_is_finite(x->cam_pos) && v3_is_finite(x->cam_dir) &&
+                        v3_is_finite(x->cam_up) && isfinite(cam->mHorizontalFOV);
+    }
+    for (unsigned int i = 0; i < c->ai->mNumLights && x->light_count < TR_IMPORT_MAX_LIGHTS; ++i) {
+        const struct aiLight *l = c->ai->mLights[i];
+        if (!l || strcmp(l->mName.data, node->mName.data) != 0) {
+            continue;
+        }
+        tr_import_light *o = &x->light[x->light_count++];
+        memset(o, 0, sizeof *o);
+        o->type = (int)l->mType;
+        snprintf(o->name, sizeof o->name, "%.63s", l->mName.data);
+        o->pos = place(c, m, l->mPosition, 1.0f);
+        o->dir = place(c, m, l->mDirection, 0.0f);
+        o->color = v3(l->mColorDiffuse.r, l->mColorDiffuse.g, l->mColorDiffuse.b);
+        o->outer_cone = l->mAngleOuterCone;
+        o->size_x = l->mSize.x;
+        o->size_y = l->mSize.y;
+    }
+}
+
+int tr_model_find_camera(const char *path, const char *name, int *index, tr_error *err) {
+    const struct aiScene *ai = tr_mesh_guarded_import(path, aiProcess_ValidateDataStructure, err);
+    if (!ai) {
+        return TR_ERR;
+    }
+    int rc = TR_ERR;
+    char *end = NULL;
+    long k = strtol(name, &end, 10);
+    for (unsigned int i = 0; i < ai->mNumCameras; ++i) {
+        if ((end != name && *end == '\0' && k == (long)i) ||
+            (ai->mCameras[i] && strcmp(ai->mCameras[i]->mName.data, name) == 0)) {
+            *index = (int)i;
+            rc = TR_OK;
+            break;
+        }
+    }
+    if (rc != TR_OK) {
+        tr_error_set(err, TR_STATUS_NOT_FOUND, "'%.200s' has no camera '%.64s' (it has %u%s%.64s)",
+                     path, name, ai->mNumCameras, ai->mNumCameras ? ": 0 is " : "",
+                     ai->mNumCameras && ai->mCameras[0] ? ai->mCameras[0]->mName.data : "");
+    }
+    aiReleaseImport(ai);
+    return rc;
+}
+
 static int walk(import_ctx *c, const struct aiNode *node, const struct aiMatrix4x4 *parent,
                 int depth) {
     if (depth > NODE_DEPTH_LIMIT) {
@@ -452,30 +532,9 @@ static int walk(import_ctx *c, const struct aiNode *node, const struct aiMatrix4
                             NODE_DEPTH_LIMIT);
     }
     struct aiMatrix4x4 m = mat_mul(parent, &node->mTransformation);
-    /* issue 14: the first camera sits at the node of its name. */
-    if (c->extras && !c->extras->has_camera && c->ai->mNumCameras > 0 && c->ai->mCameras[0] &&
-        strcmp(c->ai->mCameras[0]->mName.data, node->mName.data) == 0) {
-        const struct aiCamera *cam = c->ai->mCameras[0];
-        const struct aiVector3D p = cam->mPosition, l = cam->mLookAt, u = cam->mUp;
-        tr_vec3 pos = v3(m.a1 * p.x + m.a2 * p.y + m.a3 * p.z + m.a4,
-                         m.b1 * p.x + m.b2 * p.y + m.b3 * p.z + m.b4,
-                         m.c1 * p.x + m.c2 * p.y + m.c3 * p.z + m.c4);
-        tr_vec3 dir = v3(m.a1 * l.x + m.a2 * l.y + m.a3 * l.z, m.b1 * l.x + m.b2 * l.y + m.b3 * l.z,
-                         m.c1 * l.x + m.c2 * l.y + m.c3 * l.z);
-        tr_vec3 up = v3(m.a1 * u.x + m.a2 * u.y + m.a3 * u.z, m.b1 * u.x + m.b2 * u.y + m.b3 * u.z,
-                        m.c1 * u.x + m.c2 * u.y + m.c3 * u.z);
-        tr_transform identity = {v3s(0.0f), v3s(0.0f), v3s(1.0f)};
-        const tr_transform *tf = c->tf ? c->tf : &identity;
-        /* Directions turn with the transform (its scale is uniform or irrelevant). */
-        tr_vec3 o = tr_transform_point(tf, v3s(0.0f));
-        c->extras->cam_pos = tr_transform_point(tf, pos);
-        c->extras->cam_dir = v3_normalize(v3_sub(tr_transform_point(tf, dir), o));
-        c->extras->cam_up = v3_normalize(v3_sub(tr_transform_point(tf, up), o));
-        c->extras->cam_hfov = cam->mHorizontalFOV;
-        c->extras->cam_aspect = cam->mAspect;
-        c->extras->has_camera = v3_is_finite(c->extras->cam_pos) &&
-                                v3_is_finite(c->extras->cam_dir) &&
-                                v3_is_finite(c->extras->cam_up) && isfinite(cam->mHorizontalFOV);
+    /* issue 14: cameras and lights sit at the nodes of their names. */
+    if (c->extras) {
+        place_extras(c, node, &m);
     }
     for (unsigned int i = 0; i < node->mNumMeshes; ++i) {
         if (node->mMeshes[i] >= c->ai->mNumMeshes) {
@@ -550,8 +609,13 @@ int tr_scene_import_mesh_ex(tr_scene *s, const char *path, const tr_transform *t
     c.warn = warn;
     c.warn_ctx = warn_ctx;
     c.extras = extras;
+    const size_t plen = strlen(path);
+    c.gltf = (plen > 5 && strcasecmp(path + plen - 5, ".gltf") == 0) ||
+             (plen > 4 && strcasecmp(path + plen - 4, ".glb") == 0);
     if (extras) {
+        const int want = extras->camera_want;
         memset(extras, 0, sizeof *extras);
+        extras->camera_want = want;
         extras->lights = ai->mNumLights;
         extras->cameras = ai->mNumCameras;
     }

@@ -32,6 +32,98 @@ static void model_warn(void *ctx, const char *message) {
     }
 }
 
+/* Assimp's light types (aiLightSourceType), without its headers here. */
+enum { AI_DIRECTIONAL = 1, AI_POINT = 2, AI_SPOT = 3, AI_AMBIENT = 4, AI_AREA = 5 };
+
+/* A light of the file onto trac0r's: directional -> the sun (the Sun's angular size),
+ * point and spot -> a small emissive sphere radiating the light's intensity (W/sr) in
+ * every direction, ambient -> a constant environment, area -> an emissive rectangle.
+ * Returns 1 where it added a light, 0 where it warned and added none, -1 with err. */
+static int model_add_light(tr_scene *s, const tr_import_light *l, float radius, tr_scene_file *info,
+                           int *have_sun, tr_error *err) {
+    char msg[256];
+    const tr_vec3 c = l->color;
+    const float peak = fmaxf(c.x, fmaxf(c.y, c.z));
+    if (!(peak > 0.0f) || !v3_is_finite(c)) {
+        snprintf(msg, sizeof msg, "light '%.64s' is black: not imported", l->name);
+        model_warn(info, msg);
+        return 0;
+    }
+    if (l->type == AI_DIRECTIONAL) {
+        if (*have_sun) {
+            snprintf(msg, sizeof msg, "directional light '%.64s': one sun only, not imported",
+                     l->name);
+            model_warn(info, msg);
+            return 0;
+        }
+        if (tr_scene_set_sun(s, v3_neg(l->dir), 0.526f, c, err) != TR_OK) {
+            return -1;
+        }
+        *have_sun = 1;
+        snprintf(msg, sizeof msg,
+                 "directional light '%.64s': a sun of 0.526 degrees, irradiance its colour",
+                 l->name);
+        model_warn(info, msg);
+        return 1;
+    }
+    if (l->type == AI_AMBIENT) {
+        if (tr_scene_set_environment(s, c, 1.0f, 0.0f, NULL, 0, 0, err) != TR_OK) {
+            return -1;
+        }
+        snprintf(msg, sizeof msg, "ambient light '%.64s': a constant environment", l->name);
+        model_warn(info, msg);
+        return 1;
+    }
+    if (l->type != AI_POINT && l->type != AI_SPOT && l->type != AI_AREA) {
+        snprintf(msg, sizeof msg, "light '%.64s' of unknown type %d: not imported", l->name,
+                 l->type);
+        model_warn(info, msg);
+        return 0;
+    }
+    tr_shape_desc d;
+    float emittance;
+    if (l->type == AI_AREA && l->size_x > 0.0f && l->size_y > 0.0f) {
+        /* A plane faces +y; Rx then Ry turns +y to (sin a sin b, cos a, sin a cos b). */
+        d = tr_shape_desc_default(TR_SHAPE_PLANE);
+        d.transform.scale = v3(l->size_x, 1.0f, l->size_y);
+        const float yaw = atan2f(l->dir.x, l->dir.z);
+        d.transform.orientation = v3(acosf(fmaxf(-1.0f, fminf(1.0f, l->dir.y))), yaw, 0.0f);
+        emittance = peak; /* Assimp's colour taken as the radiance */
+        snprintf(msg, sizeof msg,
+                 "area light '%.64s': an emissive %gx%g rectangle, radiance its "
+                 "colour",
+                 l->name, (double)l->size_x, (double)l->size_y);
+    } else {
+        /* Intensity I (W/sr) from a sphere of radius r: radiance I / (pi r^2) gives the
+         * same power, 4 pi I. The radius is 1 % of the model's, grown if the radiance
+         * would pass the emitter's limit. */
+        float r = fmaxf(0.01f * radius, sqrtf(peak / (3.14159265f * 0.99e7f)));
+        d = tr_shape_desc_default(TR_SHAPE_ICOSPHERE_SMOOTH);
+        d.subdivisions = 2;
+        d.transform.scale = v3s(r);
+        emittance = peak / (3.14159265f * r * r);
+        snprintf(msg, sizeof msg,
+                 "%s light '%.64s': an emissive sphere of radius %g, intensity its colour%s",
+                 l->type == AI_SPOT   ? "spot"
+                 : l->type == AI_AREA ? "area"
+                                      : "point",
+                 l->name, (double)r,
+                 l->type == AI_SPOT ? " (its cone is dropped: light in all directions)" : "");
+    }
+    d.transform.position = l->pos;
+    uint32_t mat;
+    if (tr_scene_add_material(s, tr_material_emitter(v3_scale(c, 1.0f / peak), emittance), &mat,
+                              err) != TR_OK) {
+        return -1;
+    }
+    d.material = mat;
+    if (tr_scene_add_shape(s, &d, err) != TR_OK) {
+        return -1;
+    }
+    model_warn(info, msg);
+    return 1;
+}
+
 int tr_scene_model_load(tr_scene *s, const char *path, const tr_model_options *opt,
                         tr_scene_file *info, tr_error *err) {
     tr_scene_file local;
@@ -48,8 +140,14 @@ int tr_scene_model_load(tr_scene *s, const char *path, const tr_model_options *o
     if (opt->up_z) {
         tf.orientation = v3(-1.57079632679489662f, 0.0f, 0.0f); /* +z to +y */
     }
+    const int frame = opt->camera && strcmp(opt->camera, "frame") == 0;
     tr_mesh_import_stats st;
     tr_import_extras ex;
+    memset(&ex, 0, sizeof ex);
+    if (opt->camera && !frame &&
+        tr_model_find_camera(path, opt->camera, &ex.camera_want, err) != TR_OK) {
+        return TR_ERR;
+    }
     if (tr_scene_import_mesh_ex(s, path, &tf, -1, TR_SCENE_FILE_MAX_TRIANGLES, &st, model_warn,
                                 info, &ex, err) != TR_OK) {
         tr_scene_free(s);
@@ -59,32 +157,20 @@ int tr_scene_model_load(tr_scene *s, const char *path, const tr_model_options *o
     info->mesh_parts = st.parts;
     info->mesh_triangles = st.triangles;
     info->degenerate_dropped = st.degenerate;
-    info->bounds = tr_scene_bounds(s);
+    info->bounds = tr_scene_bounds(s); /* the model's, before any light's shape */
     info->width = opt->width ? opt->width : 800;
     info->height = opt->height ? opt->height : 600;
+    if (ex.has_camera && !frame && !opt->height && ex.cam_aspect > 0.1f && ex.cam_aspect < 10.0f) {
+        /* The file camera's aspect ratio, at the width asked for. */
+        info->height = (uint32_t)fmaxf(1.0f, roundf((float)info->width / ex.cam_aspect));
+        info->has_height = 1;
+    }
     info->spp = 16;
     info->max_depth = 8;
     info->accel = TR_ACCEL_TYPE_BVH;
-    info->allow_no_emitter = 1; /* the environment lights it */
-    for (uint32_t i = 0; i < s->material_count; ++i) {
-        info->emitter_materials += s->materials[i].type == TR_MATERIAL_EMITTER;
-    }
-    for (uint32_t i = 0; i < s->triangle_count; ++i) {
-        info->emissive_triangles +=
-            s->materials[s->triangles[i].material].type == TR_MATERIAL_EMITTER;
-    }
+    info->allow_no_emitter = 1; /* the environment or the sun lights it */
     if (st.degenerate) {
         model_warn(info, "degenerate faces dropped (points, lines or zero area)");
-    }
-    if (ex.lights) {
-        char msg[96];
-        snprintf(msg, sizeof msg, "%u light%s in the file not imported (lit by the environment)",
-                 ex.lights, ex.lights == 1 ? "" : "s");
-        model_warn(info, msg);
-    }
-    if (tr_scene_set_environment(s, v3s(1.0f), 1.0f, 0.0f, NULL, 0, 0, err) != TR_OK) {
-        tr_scene_free(s);
-        return TR_ERR;
     }
     tr_aabb b = info->bounds;
     tr_vec3 centre = v3_scale(v3_add(b.min, b.max), 0.5f);
@@ -92,15 +178,53 @@ int tr_scene_model_load(tr_scene *s, const char *path, const tr_model_options *o
     if (!(radius > 0.0f) || !isfinite(radius)) {
         radius = 1.0f;
     }
+    /* The file's lights, or the default environment. */
+    int lit = 0, have_sun = 0;
+    for (uint32_t i = 0; i < ex.light_count; ++i) {
+        tr_error le;
+        int rc = model_add_light(s, &ex.light[i], radius, info, &have_sun, &le);
+        if (rc < 0) {
+            /* A light the file places or sizes badly (non-finite, too small to make
+             * triangles) is dropped, not the model. */
+            char msg[256];
+            snprintf(msg, sizeof msg, "light '%.64s' not imported: %.160s", ex.light[i].name,
+                     le.msg);
+            model_warn(info, msg);
+            continue;
+        }
+        lit += rc;
+    }
+    if (ex.lights > ex.light_count) {
+        char msg[96];
+        snprintf(msg, sizeof msg, "%u light%s in the file not imported (no node, or past %d)",
+                 ex.lights - ex.light_count, ex.lights - ex.light_count == 1 ? "" : "s",
+                 TR_IMPORT_MAX_LIGHTS);
+        model_warn(info, msg);
+    }
+    if (!lit && tr_scene_set_environment(s, v3s(1.0f), 1.0f, 0.0f, NULL, 0, 0, err) != TR_OK) {
+        tr_scene_free(s);
+        return TR_ERR;
+    }
+    for (uint32_t i = 0; i < s->material_count; ++i) {
+        info->emitter_materials += s->materials[i].type == TR_MATERIAL_EMITTER;
+    }
+    for (uint32_t i = 0; i < s->triangle_count; ++i) {
+        info->emissive_triangles +=
+            s->materials[s->triangles[i].material].type == TR_MATERIAL_EMITTER;
+    }
     const float vfov = 40.0f;
     tr_vec3 pos, dir, up = v3(0.0f, 1.0f, 0.0f);
     float near_d = radius * 1e-3f, far_d;
-    if (ex.has_camera) {
+    if (ex.has_camera && !frame) {
         /* Assimp documents mHorizontalFOV as half the horizontal angle, but its Collada and
          * glTF loaders store the whole angle (xfov; 2 atan(aspect tan(yfov / 2))): taken as
          * the whole, the vertical angle follows from the image's aspect. */
         float aspect = (float)info->width / (float)info->height;
         float vf = 2.0f * atanf(tanf(0.5f * ex.cam_hfov) / aspect) * 57.2957795f;
+        if (ex.cam_gltf && ex.cam_aspect > 0.0f) {
+            /* Assimp 5.2's glTF importer stores yfov x aspectRatio: glTF's yfov back. */
+            vf = ex.cam_hfov / ex.cam_aspect * 57.2957795f;
+        }
         pos = ex.cam_pos;
         dir = ex.cam_dir;
         up = ex.cam_up;
@@ -112,7 +236,10 @@ int tr_scene_model_load(tr_scene *s, const char *path, const tr_model_options *o
             s->camera.right = v3_neg(s->camera.right); /* model files are right-handed */
             return TR_OK;
         }
-        model_warn(info, "the file's camera is unusable; framing the model instead");
+        char msg[160];
+        snprintf(msg, sizeof msg, "camera '%.64s' is unusable; framing the model instead",
+                 ex.cam_name);
+        model_warn(info, msg);
     }
     /* In front (+z), a little to the right and above, the whole bounding sphere in view. */
     dir = v3_normalize(v3(-0.45f, -0.35f, -1.0f));

@@ -625,6 +625,8 @@ tr_scene_view tr_scene_view_of(const tr_scene *s) {
     v.env_texel_count = s->env_texel_count;
     v.env_cdf = s->env_cdf;
     v.env_cdf_count = s->env_cdf_count;
+    v.sun = &s->sun;
+    v.sun_count = s->sun_count;
 #ifdef TR_SCENE_VIEW_EMBREE
     v.embree_scene = s->embree.scene;
 #endif

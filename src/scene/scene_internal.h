@@ -58,6 +58,9 @@ struct tr_scene {
     uint32_t env_texel_count;
     float *env_cdf;
     uint32_t env_cdf_count;
+    /* The sun (src/scene/sun.c): sun_count 0 or 1. */
+    tr_sun sun;
+    uint32_t sun_count;
 };
 
 /* An empty scene (no allocation), for a tr_scene the caller owns (tr_scene_create does
@@ -92,15 +95,34 @@ int tr_scene_add_texture(tr_scene *s, const uint32_t *rgba, uint32_t width, uint
 /* tr_scene_import_mesh with warnings: warn(ctx, message) for every texture or material
  * property the import drops or approximates (names the material), may be NULL. */
 typedef void (*tr_import_warn_fn)(void *ctx, const char *message);
-/* What else a model file holds: its first camera (placed by its node and tf) and how many
- * cameras and lights it has. */
+/* A light of a model file, placed by its node and tf (model.c maps it onto trac0r's). */
+#define TR_IMPORT_MAX_LIGHTS 16
+typedef struct tr_import_light {
+    int type; /* Assimp's aiLightSourceType */
+    char name[64];
+    tr_vec3 pos, dir;     /* dir: where the light shines (unit) */
+    tr_vec3 color;        /* Assimp's mColorDiffuse (glTF: colour x intensity) */
+    float outer_cone;     /* spot lights: half-angle, radians */
+    float size_x, size_y; /* area lights */
+} tr_import_light;
+/* What else a model file holds: the camera asked for (camera_want, before the import:
+ * its index in the file, >= 0), placed by its node and tf; how many cameras and lights
+ * it has; its lights (the first TR_IMPORT_MAX_LIGHTS). */
 typedef struct tr_import_extras {
+    int camera_want;
     int has_camera;
+    char cam_name[64];
     tr_vec3 cam_pos, cam_dir, cam_up;
     float cam_hfov;   /* Assimp's mHorizontalFOV, radians (model.c: the whole angle) */
     float cam_aspect; /* 0: not given */
+    int cam_gltf;     /* a glTF file's camera: cam_hfov is Assimp 5.2's yfov x aspect */
     uint32_t cameras, lights;
+    uint32_t light_count; /* placed in light[]: those whose node was found */
+    tr_import_light light[TR_IMPORT_MAX_LIGHTS];
 } tr_import_extras;
+/* The index of the camera called `name` in model file `path`, or of camera number `name`
+ * (digits); -1 (with err) when there is none such. */
+int tr_model_find_camera(const char *path, const char *name, int *index, tr_error *err);
 int tr_scene_import_mesh_ex(tr_scene *s, const char *path, const tr_transform *tf,
                             int64_t material_override, uint32_t max_triangles,
                             tr_mesh_import_stats *stats, tr_import_warn_fn warn, void *warn_ctx,
@@ -115,6 +137,12 @@ int tr_scene_set_environment(tr_scene *s, tr_vec3 color, float strength, float r
  * it as the environment. */
 int tr_scene_load_environment(tr_scene *s, const char *path, tr_vec3 color, float strength,
                               float rotation, tr_error *err);
+#define TR_SUN_MIN_ANGLE 1e-3f /* degrees: the cone's pdf squared stays a float */
+#define TR_SUN_MAX_ANGLE 90.0f
+/* Sets the sun (replacing any): seen from the scene in direction `dir` (towards the sun,
+ * any length > 0) as a disc of angular diameter angle_deg (1e-3..90 degrees), giving the
+ * irradiance `irradiance` (W/m^2 per channel) on a surface facing it. */
+int tr_scene_set_sun(tr_scene *s, tr_vec3 dir, float angle_deg, tr_vec3 irradiance, tr_error *err);
 /* Restores the counts a failed import started from (everything is appended). */
 void tr_scene_truncate(tr_scene *s, uint32_t triangles, uint32_t shapes, uint32_t materials);
 

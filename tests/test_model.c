@@ -1,0 +1,268 @@
+/* test_model.c - scenes built around model files (src/scene/model.c, issue 14): their
+ * cameras and lights.
+ *
+ * 1. A glTF file written here with two cameras and KHR_lights_punctual (a point light
+ *    and a directional one): the first camera is used, at its node's translation (not
+ *    twice it: Assimp 5.2 copies the translation into the camera as well), looking down
+ *    the node's -z with glTF's yfov, the image's height taken from its aspect ratio; the
+ *    second, on a node turned 90 degrees about +y, by name, looks down -x from its
+ *    node; a camera that does not exist is an error; "frame" frames the model. The
+ *    directional light becomes the sun (towards -its direction, its colour x intensity
+ *    as irradiance), the point light an emissive sphere at its node whose power is the
+ *    light's 4 pi I; the lights replace the default environment, so the background
+ *    renders black and the quad under the point light does not.
+ *    Lights that cannot be had (black, past the emitter's limit) are dropped or adjusted
+ *    with warnings, never fail the model.
+ * 2. Collada's duck (assimp-testmodels): its camera is placed by the node's translate
+ *    and rotations (times the file's unit, centimetres) and its yfov; with the framing
+ *    camera the model's pixels (the albedo pass) are centred in the image. */
+#define _POSIX_C_SOURCE 200809L
+#include "check.h"
+#include "scene_util.h"
+#include "trac0r/device.h"
+#include "trac0r/scene_file.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+static char dir[512];
+
+/* A quad (x, y in [-1, 1], z = 0, facing +z) under a point light 2 above its centre and
+ * a directional light shining down; cameras "front" and "side". */
+static const char gltf_fmt[] =
+    "{\"asset\": {\"version\": \"2.0\"}, \"extensionsUsed\": [\"KHR_lights_punctual\"],\n"
+    " \"extensions\": {\"KHR_lights_punctual\": {\"lights\": [%s]}},\n"
+    " \"scene\": 0, \"scenes\": [{\"nodes\": [0, 1, 2, 3, 4]}],\n"
+    " \"nodes\": [{\"name\": \"quad\", \"mesh\": 0},\n"
+    "   {\"name\": \"front\", \"camera\": 0, \"translation\": [0.5, 0.25, 5.0]},\n"
+    "   {\"name\": \"side\", \"camera\": 1, \"translation\": [5.0, 0.0, 0.0],\n"
+    "    \"rotation\": [0.0, 0.70710678, 0.0, 0.70710678]},\n"
+    "   {\"name\": \"bulb\", \"translation\": [0.0, 0.0, 2.0],\n"
+    "    \"extensions\": {\"KHR_lights_punctual\": {\"light\": 0}}},\n"
+    "   {\"name\": \"sky\", \"rotation\": [-0.70710678, 0.0, 0.0, 0.70710678],\n"
+    "    \"extensions\": {\"KHR_lights_punctual\": {\"light\": 1}}}],\n"
+    " \"cameras\": [{\"type\": \"perspective\", \"perspective\": {\"yfov\": 0.5,\n"
+    "   \"aspectRatio\": 2.0, \"znear\": 0.1, \"zfar\": 100.0}},\n"
+    "   {\"type\": \"perspective\", \"perspective\": {\"yfov\": 0.7, \"aspectRatio\": 1.5,\n"
+    "   \"znear\": 0.1, \"zfar\": 100.0}}],\n"
+    " \"meshes\": [{\"primitives\": [{\"attributes\": {\"POSITION\": 0}, \"indices\": 1}]}],\n"
+    " \"accessors\": [{\"bufferView\": 0, \"componentType\": 5126, \"count\": 4, \"type\": "
+    "\"VEC3\",\n"
+    "   \"min\": [-1, -1, 0], \"max\": [1, 1, 0]},\n"
+    "   {\"bufferView\": 1, \"componentType\": 5123, \"count\": 6, \"type\": \"SCALAR\"}],\n"
+    " \"bufferViews\": [{\"buffer\": 0, \"byteOffset\": 0, \"byteLength\": 48},\n"
+    "   {\"buffer\": 0, \"byteOffset\": 48, \"byteLength\": 12}],\n"
+    " \"buffers\": [{\"byteLength\": 60, \"uri\": \"data:application/octet-stream;base64,"
+    "AACAvwAAgL8AAAAAAACAPwAAgL8AAAAAAACAPwAAgD8AAAAAAACAvwAAgD8AAAAAAAABAAIAAAACAAMA\"}]}\n";
+
+static int near3(tr_vec3 a, float x, float y, float z, float tol) {
+    return fabsf(a.x - x) <= tol && fabsf(a.y - y) <= tol && fabsf(a.z - z) <= tol;
+}
+
+static const char lights_ok[] =
+    "{\"type\": \"point\", \"color\": [1.0, 0.5, 0.25], \"intensity\": 4.0},\n"
+    " {\"type\": \"directional\", \"color\": [1.0, 1.0, 1.0], \"intensity\": 2.0}";
+
+/* Writes the glTF with the given lights to dir/name; its path in path. */
+static void write_gltf(const char *name, const char *lights, char *path, size_t size) {
+    snprintf(path, size, "%s/%s", dir, name);
+    static char text[8192];
+    snprintf(text, sizeof text, gltf_fmt, lights);
+    FILE *f = fopen(path, "w");
+    CHECK(f && fputs(text, f) >= 0 && fclose(f) == 0, "writing %s", path);
+}
+
+static void test_gltf(void) {
+    char path[600];
+    write_gltf("lit.gltf", lights_ok, path, sizeof path);
+    tr_scene s;
+    tr_scene_init(&s);
+    tr_error err;
+    tr_scene_file info;
+    tr_model_options opt = {0, 1.0f, 0, 0, NULL};
+    if (tr_scene_model_load(&s, path, &opt, &info, &err) != TR_OK) {
+        CHECK(0, "%s", err.msg);
+        return;
+    }
+    const tr_camera *cam = &s.camera;
+    CHECK(info.width == 800 && info.height == 400 && info.has_height, "image %ux%u (aspect 2)",
+          info.width, info.height);
+    CHECK(near3(cam->pos, 0.5f, 0.25f, 5.0f, 1e-5f), "front camera at (%g, %g, %g)",
+          (double)cam->pos.x, (double)cam->pos.y, (double)cam->pos.z);
+    CHECK(near3(cam->dir, 0.0f, 0.0f, -1.0f, 1e-5f) && near3(cam->up, 0.0f, 1.0f, 0.0f, 1e-5f),
+          "front camera looks down -z, +y up");
+    CHECK(fabsf(cam->vertical_fov - 0.5f * 57.2957795f) < 1e-3f, "vertical fov %g (yfov 0.5)",
+          (double)cam->vertical_fov);
+    /* The sun: towards +y (the light shines down), irradiance colour x intensity. */
+    tr_vec3 sd, se;
+    float sa;
+    CHECK(tr_scene_sun(&s, &sd, &sa, &se) == 1 && near3(sd, 0.0f, 1.0f, 0.0f, 1e-5f) &&
+              near3(se, 2.0f, 2.0f, 2.0f, 1e-3f),
+          "sun towards (%g, %g, %g), irradiance %g", (double)sd.x, (double)sd.y, (double)sd.z,
+          (double)se.x);
+    /* The point light: an emitter around (0, 0, 2) radiating 4 pi I. */
+    double power = 0.0;
+    tr_vec3 lo = v3s(1e30f), hi = v3s(-1e30f);
+    for (uint32_t i = 0; i < s.triangle_count; ++i) {
+        const tr_material *m = &s.materials[s.triangles[i].material];
+        if (m->type == TR_MATERIAL_EMITTER) {
+            power += 3.14159265358979 * m->emittance * m->color.x * s.triangles[i].area;
+            const tr_vec3 v[3] = {s.triangles[i].v0, s.triangles[i].v1, s.triangles[i].v2};
+            for (int k = 0; k < 3; ++k) {
+                lo = v3_min(lo, v[k]);
+                hi = v3_max(hi, v[k]);
+            }
+        }
+    }
+    const tr_vec3 mid = v3_scale(v3_add(lo, hi), 0.5f);
+    CHECK(near3(mid, 0.0f, 0.0f, 2.0f, 1e-4f) && hi.z - lo.z < 0.1f, "bulb at (%g, %g, %g)",
+          (double)mid.x, (double)mid.y, (double)mid.z);
+    /* An icosphere of 320 faces has 97.3 % of its sphere's area. */
+    const double want = 4.0 * 3.14159265358979 * 4.0;
+    CHECK(fabs(power / want - 1.0) < 0.05, "bulb power %g vs 4 pi I = %g", power, want);
+    CHECK(s.env_count == 0, "the file's lights replace the default environment");
+    /* Rendered through the file's camera: background black, the quad lit. */
+    CHECK(tr_scene_commit(&s, TR_ACCEL_TYPE_BVH, &err) == TR_OK, "%s", err.msg);
+    tr_camera c = s.camera;
+    CHECK(tr_camera_resize(&c, 32, 16, &err) == TR_OK, "%s", err.msg);
+    tr_film film;
+    CHECK(tr_film_init(&film, 32, 16, &err) == TR_OK, "%s", err.msg);
+    tr_render_config cfg = tr_render_config_default();
+    cfg.max_depth = 4;
+    for (uint32_t k = 0; k < 4; ++k) {
+        CHECK(tr_render_frame(&s, &c, &cfg, &film, k, NULL, &err) == TR_OK, "%s", err.msg);
+    }
+    tr_vec3 corner = tr_film_pixel(&film, 0, 0), centre = tr_film_pixel(&film, 14, 9);
+    CHECK(corner.x == 0.0f && corner.y == 0.0f && corner.z == 0.0f, "background black");
+    CHECK(centre.x > 0.0f && centre.x > centre.y && centre.y > centre.z,
+          "the quad lit by the orange bulb: (%g, %g, %g)", (double)centre.x, (double)centre.y,
+          (double)centre.z);
+    tr_film_free(&film);
+
+    /* The second camera by its node's name. */
+    opt.camera = "side";
+    CHECK(tr_scene_model_load(&s, path, &opt, &info, &err) == TR_OK, "%s", err.msg);
+    CHECK(near3(s.camera.pos, 5.0f, 0.0f, 0.0f, 1e-4f) &&
+              near3(s.camera.dir, -1.0f, 0.0f, 0.0f, 1e-4f),
+          "side camera at (%g, %g, %g) looking (%g, %g, %g)", (double)s.camera.pos.x,
+          (double)s.camera.pos.y, (double)s.camera.pos.z, (double)s.camera.dir.x,
+          (double)s.camera.dir.y, (double)s.camera.dir.z);
+    CHECK(info.height == 533 && fabsf(s.camera.vertical_fov - 0.7f * 57.2957795f) < 1e-3f,
+          "side camera: %u high, fov %g", info.height, (double)s.camera.vertical_fov);
+    opt.camera = "1";
+    CHECK(tr_scene_model_load(&s, path, &opt, &info, &err) == TR_OK &&
+              near3(s.camera.pos, 5.0f, 0.0f, 0.0f, 1e-4f),
+          "camera 1 is the side camera");
+    opt.camera = "2";
+    CHECK(tr_scene_model_load(&s, path, &opt, &info, &err) == TR_ERR &&
+              err.code == TR_STATUS_NOT_FOUND,
+          "no camera 2");
+    opt.camera = "frame";
+    CHECK(tr_scene_model_load(&s, path, &opt, &info, &err) == TR_OK && info.height == 600 &&
+              !near3(s.camera.pos, 0.5f, 0.25f, 5.0f, 0.1f),
+          "frame: the framing camera");
+    tr_scene_free(&s);
+    unlink(path);
+}
+
+/* Lights that cannot be had are dropped or adjusted with a warning, and the model still
+ * loads: a spot light past any emitter's radiance limit (its sphere grows, or it is
+ * dropped), a black directional light (no sun; with no light left, the default
+ * environment). */
+static void test_gltf_odd_lights(void) {
+    char path[600];
+    write_gltf("odd.gltf",
+               "{\"type\": \"spot\", \"intensity\": 1e30, \"spot\": {}},\n"
+               " {\"type\": \"directional\", \"color\": [0, 0, 0], \"intensity\": 3.0}",
+               path, sizeof path);
+    tr_scene s;
+    tr_scene_init(&s);
+    tr_error err;
+    tr_scene_file info;
+    tr_model_options opt = {0, 1.0f, 0, 0, NULL};
+    CHECK(tr_scene_model_load(&s, path, &opt, &info, &err) == TR_OK, "%s", err.msg);
+    uint32_t emitters = 0;
+    for (uint32_t i = 0; i < s.material_count; ++i) {
+        emitters += s.materials[i].type == TR_MATERIAL_EMITTER;
+    }
+    CHECK(emitters <= 1 && tr_scene_sun(&s, NULL, NULL, NULL) == 0,
+          "odd lights: %u emitters, no sun from a black light", emitters);
+    CHECK(emitters == 1 || s.env_count == 1, "no light left: the default environment");
+    CHECK(info.warning_count >= 2, "odd lights: %u warnings", info.warning_count);
+    tr_scene_free(&s);
+    unlink(path);
+}
+
+#define DUCK "/usr/share/assimp/models/Collada/duck.dae"
+
+static void test_duck(void) {
+    tr_scene s;
+    tr_scene_init(&s);
+    tr_error err;
+    tr_scene_file info;
+    tr_model_options opt = {0, 1.0f, 0, 0, NULL};
+    if (tr_scene_model_load(&s, DUCK, &opt, &info, &err) != TR_OK) {
+        CHECK(0, "%s", err.msg);
+        return;
+    }
+    /* <translate>400.113 463.264 -431.078</translate> in centimetres; rotateY -223.2, then
+     * rotateX -38.4 (applied first) turn the camera's -z. */
+    const double ry = -223.2 * 3.14159265358979 / 180.0, rx = -38.4 * 3.14159265358979 / 180.0;
+    const double d1y = sin(rx), d1z = -cos(rx); /* Rx (0, 0, -1) */
+    const tr_vec3 want = v3((float)(d1z * sin(ry)), (float)d1y, (float)(d1z * cos(ry)));
+    CHECK(near3(s.camera.pos, 4.00113f, 4.63264f, -4.31078f, 1e-4f), "duck camera at (%g, %g, %g)",
+          (double)s.camera.pos.x, (double)s.camera.pos.y, (double)s.camera.pos.z);
+    CHECK(near3(s.camera.dir, want.x, want.y, want.z, 1e-4f), "duck camera looks (%g, %g, %g)",
+          (double)s.camera.dir.x, (double)s.camera.dir.y, (double)s.camera.dir.z);
+    CHECK(info.height == 533 && fabsf(s.camera.vertical_fov - 37.8492f) < 0.05f,
+          "duck camera: %u high, fov %g", info.height, (double)s.camera.vertical_fov);
+
+    /* The framing camera centres the model. */
+    opt.camera = "frame";
+    CHECK(tr_scene_model_load(&s, DUCK, &opt, &info, &err) == TR_OK, "%s", err.msg);
+    CHECK(tr_scene_commit(&s, TR_ACCEL_TYPE_BVH, &err) == TR_OK, "%s", err.msg);
+    const uint32_t w = 64, h = 48;
+    tr_camera c = s.camera;
+    CHECK(tr_camera_resize(&c, w, h, &err) == TR_OK, "%s", err.msg);
+    tr_film film;
+    CHECK(tr_film_init_passes(&film, w, h, TR_PASS_ALBEDO, &err) == TR_OK, "%s", err.msg);
+    tr_render_config cfg = tr_render_config_default();
+    cfg.passes = TR_PASS_ALBEDO;
+    cfg.max_depth = 1;
+    CHECK(tr_render_frame(&s, &c, &cfg, &film, 0, NULL, &err) == TR_OK, "%s", err.msg);
+    double n = 0.0, sx = 0.0, sy = 0.0;
+    for (uint32_t y = 0; y < h; ++y) {
+        for (uint32_t x = 0; x < w; ++x) {
+            float a[3];
+            tr_film_pass_pixel(&film, TR_PASS_ALBEDO, x, y, a, &err);
+            if (a[0] + a[1] + a[2] > 0.0f) {
+                n += 1.0;
+                sx += (x + 0.5) / w;
+                sy += (y + 0.5) / h;
+            }
+        }
+    }
+    CHECK(n > 0.05 * w * h, "the duck covers %.0f pixels", n);
+    CHECK(n > 0.0 && fabs(sx / n - 0.5) < 0.08 && fabs(sy / n - 0.5) < 0.08,
+          "framed duck's centroid (%.3f, %.3f)", n > 0 ? sx / n : 0.0, n > 0 ? sy / n : 0.0);
+    printf("framed duck: %.0f pixels, centroid (%.3f, %.3f)\n", n, sx / n, sy / n);
+    tr_film_free(&film);
+    tr_scene_free(&s);
+}
+
+int main(void) {
+    const char *tmp = getenv("TMPDIR");
+    snprintf(dir, sizeof dir, "%s/trac0r-test-model-XXXXXX", tmp && *tmp ? tmp : "/tmp");
+    if (!mkdtemp(dir)) {
+        perror("mkdtemp");
+        return 1;
+    }
+    test_gltf();
+    test_gltf_odd_lights();
+    test_duck();
+    rmdir(dir);
+    return check_finish("test_model");
+}
