@@ -588,43 +588,15 @@ int tr_filter_atrous(const tr_gbuffer *g, const float *in, float *out, const tr_
     return TR_OK;
 }
 
-/* SVGF's variance of each pixel's luminance: from the temporal moments once 4 frames of
- * history exist, before that from the 5x5 neighbourhood's moments (Schied et al. take
- * 7x7 on the same condition), weighted by the normal so that it stays on one surface. */
+/* SVGF's variance of every pixel (tr_post_svgf_variance_pixel). */
 static void svgf_variance(const tr_gbuffer *g, const float *illum, const float *moments,
                           const float *len, float *var, int threads) {
     const int w = (int)g->width, h = (int)g->height;
 #pragma omp parallel for num_threads(threads) schedule(static)
     for (int y = 0; y < h; ++y) {
         for (int x = 0; x < w; ++x) {
-            const int c = y * w + x;
-            if (len[c] >= 4.0f) {
-                const float m = moments[2 * c];
-                var[c] = tr_fmaxf(moments[2 * c + 1] - m * m, 0.0f);
-                continue;
-            }
-            float s1 = 0.0f, s2 = 0.0f, sw = 0.0f;
-            for (int dy = -2; dy <= 2; ++dy) {
-                for (int dx = -2; dx <= 2; ++dx) {
-                    const int tx = x + dx, ty = y + dy;
-                    if (tx < 0 || ty < 0 || tx >= w || ty >= h) {
-                        continue;
-                    }
-                    const int i = ty * w + tx;
-                    const float nd = g->normal[3 * c] * g->normal[3 * i] +
-                                     g->normal[3 * c + 1] * g->normal[3 * i + 1] +
-                                     g->normal[3 * c + 2] * g->normal[3 * i + 2];
-                    const float wt = (dx == 0 && dy == 0) || nd > 0.9f ? 1.0f : 0.0f;
-                    const float l =
-                        tr_post_luminance(illum[3 * i], illum[3 * i + 1], illum[3 * i + 2]);
-                    s1 += wt * l;
-                    s2 += wt * l * l;
-                    sw += wt;
-                }
-            }
-            const float m = s1 / sw;
-            /* Few frames: trust the estimate less, as the paper boosts it. */
-            var[c] = tr_fmaxf(s2 / sw - m * m, 0.0f) * (4.0f / len[c]);
+            var[y * w + x] =
+                tr_post_svgf_variance_pixel(illum, moments, len, g->normal, w, h, x, y);
         }
     }
 }

@@ -340,6 +340,40 @@ TR_FN float tr_post_svgf_kz(TR_CONST_GLOBAL float *depth, int w, int h, int x, i
     return 1.0f / (sigma_z * grad + 1e-6f);
 }
 
+/* SVGF's variance of pixel (x, y)'s luminance (Schied et al. 2017, section 4.2): from
+ * the temporal moments once 4 frames of history exist, before that from the 5x5
+ * neighbourhood's moments (the paper takes 7x7 on the same condition), restricted to
+ * taps whose normal is within ~25 degrees so that it stays on one surface, and boosted
+ * by 4 / length as the paper does, since so few frames are less to trust. */
+TR_FN float tr_post_svgf_variance_pixel(TR_CONST_GLOBAL float *illum,
+                                        TR_CONST_GLOBAL float *moments, TR_CONST_GLOBAL float *len,
+                                        TR_CONST_GLOBAL float *normal, int w, int h, int x, int y) {
+    const int c = y * w + x;
+    if (len[c] >= 4.0f) {
+        const float m = moments[2 * c];
+        return tr_fmaxf(moments[2 * c + 1] - m * m, 0.0f);
+    }
+    float s1 = 0.0f, s2 = 0.0f, sw = 0.0f;
+    for (int dy = -2; dy <= 2; ++dy) {
+        for (int dx = -2; dx <= 2; ++dx) {
+            const int tx = x + dx, ty = y + dy;
+            if (tx < 0 || ty < 0 || tx >= w || ty >= h) {
+                continue;
+            }
+            const int i = ty * w + tx;
+            const float nd = normal[3 * c] * normal[3 * i] + normal[3 * c + 1] * normal[3 * i + 1] +
+                             normal[3 * c + 2] * normal[3 * i + 2];
+            const float wt = (dx == 0 && dy == 0) || nd > 0.9f ? 1.0f : 0.0f;
+            const float l = tr_post_luminance(illum[3 * i], illum[3 * i + 1], illum[3 * i + 2]);
+            s1 += wt * l;
+            s2 += wt * l * l;
+            sw += wt;
+        }
+    }
+    const float m = s1 / sw;
+    return tr_fmaxf(s2 / sw - m * m, 0.0f) * (4.0f / len[c]);
+}
+
 /* The variance of pixel (x, y) through SVGF's 3x3 Gaussian prefilter (taps 1, 1/2, 1/4,
  * renormalised at the border), which keeps one noisy estimate from stopping the filter. */
 TR_FN float tr_post_var3x3(TR_CONST_GLOBAL float *var, int w, int h, int x, int y) {
