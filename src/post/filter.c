@@ -201,6 +201,15 @@ static int check_frame(uint32_t w, uint32_t h, const tr_gbuffer *g, tr_error *er
  * independent of the thread count, and the one exponential per tap is filter.h's
  * branch-free tr_post_exp_neg, which gcc vectorises. */
 
+/* The hot row loops twice, for AVX2 and for the baseline, chosen at load time (gcc's
+ * ifunc clones): the same operations per lane either way (no FMA: -ffp-contract=off), so
+ * the numbers do not depend on the CPU. */
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__)
+#define TR_POST_CLONES __attribute__((target_clones("avx2", "default")))
+#else
+#define TR_POST_CLONES
+#endif
+
 static void ws_bind(post_ws *ws, float *block, int w, int h) {
     ws->w = w;
     ws->h = h;
@@ -279,14 +288,13 @@ static void prep_guides(const tr_gbuffer *g, const post_ws *ws, const tr_recon_p
 }
 
 /* The bilateral filter (tr_post_bilateral_pixel) of planes src into interleaved out. */
-static void bilateral_planes(const post_ws *ws, const float *const src[3], float *out,
-                             const tr_recon_params *p, int threads) {
+TR_POST_CLONES static void bilateral_rows(const post_ws *ws, const float *const src[3], float *out,
+                                          const tr_recon_params *p, int y0, int y1) {
     const int w = ws->w, h = ws->h, rad = p->bilateral_radius;
     const float is = 1.0f / (2.0f * p->bilateral_sigma_s * p->bilateral_sigma_s);
     const float ir = 1.0f / (2.0f * p->bilateral_sigma_r * p->bilateral_sigma_r);
     const float *restrict r = src[0], *restrict gg = src[1], *restrict b = src[2];
-#pragma omp parallel for num_threads(threads) schedule(static)
-    for (int y = 0; y < h; ++y) {
+    for (int y = y0; y < y1; ++y) {
         for (int x0 = 0; x0 < w; x0 += TR_POST_CHUNK) {
             const int x1 = imin(w, x0 + TR_POST_CHUNK);
             float ar[TR_POST_CHUNK] = {0}, ag[TR_POST_CHUNK] = {0}, ab[TR_POST_CHUNK] = {0},
@@ -322,10 +330,18 @@ static void bilateral_planes(const post_ws *ws, const float *const src[3], float
     }
 }
 
+static void bilateral_planes(const post_ws *ws, const float *const src[3], float *out,
+                             const tr_recon_params *p, int threads) {
+#pragma omp parallel for num_threads(threads) schedule(static)
+    for (int y = 0; y < ws->h; ++y) {
+        bilateral_rows(ws, src, out, p, y, y + 1);
+    }
+}
+
 /* One edge-avoiding à-trous iteration (tr_post_atrous_pixel) of planes src into dst. */
-static void atrous_planes(const post_ws *ws, const float *depth, const float *const src[3],
-                          float *const dst[3], int step, float sigma_c, const tr_recon_params *p,
-                          int threads) {
+TR_POST_CLONES static void atrous_rows(const post_ws *ws, const float *depth,
+                                       const float *const src[3], float *const dst[3], int step,
+                                       float sigma_c, const tr_recon_params *p, int y0, int y1) {
     const int w = ws->w, h = ws->h;
     const float ic = 1.0f / (sigma_c * sigma_c);
     const float in2 = 1.0f / (p->atrous_sigma_n * p->atrous_sigma_n);
@@ -337,8 +353,7 @@ static void atrous_planes(const post_ws *ws, const float *depth, const float *co
     const float *restrict a0 = ws->p[WS_A], *restrict a1 = ws->p[WS_A + 1],
                           *restrict a2 = ws->p[WS_A + 2];
     const float *restrict icz = ws->p[WS_KZ];
-#pragma omp parallel for num_threads(threads) schedule(static)
-    for (int y = 0; y < h; ++y) {
+    for (int y = y0; y < y1; ++y) {
         for (int x0 = 0; x0 < w; x0 += TR_POST_CHUNK) {
             const int x1 = imin(w, x0 + TR_POST_CHUNK);
             float ar[TR_POST_CHUNK] = {0}, ag[TR_POST_CHUNK] = {0}, ab[TR_POST_CHUNK] = {0},
@@ -377,6 +392,15 @@ static void atrous_planes(const post_ws *ws, const float *depth, const float *co
                 dst[2][c] = ab[a] / aw[a];
             }
         }
+    }
+}
+
+static void atrous_planes(const post_ws *ws, const float *depth, const float *const src[3],
+                          float *const dst[3], int step, float sigma_c, const tr_recon_params *p,
+                          int threads) {
+#pragma omp parallel for num_threads(threads) schedule(static)
+    for (int y = 0; y < ws->h; ++y) {
+        atrous_rows(ws, depth, src, dst, step, sigma_c, p, y, y + 1);
     }
 }
 
@@ -429,9 +453,10 @@ static void svgf_kl(const post_ws *ws, const float *var, float sigma_l, int thre
 
 /* One SVGF iteration (tr_post_svgf_pixel) of planes src (luminance lum, variance var)
  * into dst, dlum, dvar. */
-static void svgf_planes(const post_ws *ws, const float *depth, const float *const src[3],
-                        const float *lum, const float *var, float *const dst[3], float *dlum,
-                        float *dvar, int step, int threads) {
+TR_POST_CLONES static void svgf_rows(const post_ws *ws, const float *depth,
+                                     const float *const src[3], const float *lum, const float *var,
+                                     float *const dst[3], float *dlum, float *dvar, int step,
+                                     int y0, int y1) {
     const int w = ws->w, h = ws->h;
     const float *restrict r = src[0], *restrict gg = src[1], *restrict b = src[2];
     const float *restrict nx = ws->p[WS_N], *restrict ny = ws->p[WS_N + 1],
@@ -439,8 +464,7 @@ static void svgf_planes(const post_ws *ws, const float *depth, const float *cons
     const float *restrict kz = ws->p[WS_KZ], *restrict kl = ws->p[WS_KL],
                           *restrict kn = ws->p[WS_KN];
     const float *restrict l = lum, *restrict v = var, *restrict z = depth;
-#pragma omp parallel for num_threads(threads) schedule(static)
-    for (int y = 0; y < h; ++y) {
+    for (int y = y0; y < y1; ++y) {
         for (int x0 = 0; x0 < w; x0 += TR_POST_CHUNK) {
             const int x1 = imin(w, x0 + TR_POST_CHUNK);
             float ar[TR_POST_CHUNK] = {0}, ag[TR_POST_CHUNK] = {0}, ab[TR_POST_CHUNK] = {0},
@@ -480,6 +504,15 @@ static void svgf_planes(const post_ws *ws, const float *depth, const float *cons
                 dvar[c] = av[a] / (aw[a] * aw[a]);
             }
         }
+    }
+}
+
+static void svgf_planes(const post_ws *ws, const float *depth, const float *const src[3],
+                        const float *lum, const float *var, float *const dst[3], float *dlum,
+                        float *dvar, int step, int threads) {
+#pragma omp parallel for num_threads(threads) schedule(static)
+    for (int y = 0; y < ws->h; ++y) {
+        svgf_rows(ws, depth, src, lum, var, dst, dlum, dvar, step, y, y + 1);
     }
 }
 
