@@ -126,11 +126,16 @@ tr_recon_params tr_recon_params_default(void) {
     p.atrous_sigma_n = 0.3f;
     p.atrous_sigma_z = 0.05f;
     p.atrous_sigma_a = 0.1f;
-    /* Schied et al.'s values: sigma_l 4, sigma_n 128, sigma_z 1. */
-    p.svgf_sigma_l = 4.0f;
+    /* Schied et al.'s values are sigma_l 4, sigma_n 128, sigma_z 1 and 5 iterations with
+     * TAA after them. On the classic box at 1 spp (docs/realtime.md, "Choosing SVGF's
+     * parameters") sigma_l 8 and 3 iterations measured better, and TAA
+     * (alpha 0.1 or 0.3) worse, so it is off unless asked for. */
+    p.svgf_sigma_l = 8.0f;
+    p.svgf_iterations = 3;
     p.svgf_sigma_n = 128.0f;
     p.svgf_sigma_z = 1.0f;
-    p.svgf_feedback = 0;
+    p.svgf_feedback = 1;
+    p.svgf_taa_alpha = 0.0f;
     return p;
 }
 
@@ -154,7 +159,8 @@ int tr_recon_init(tr_recon *r, uint32_t width, uint32_t height, tr_error *err) {
     r->hist_prim = calloc(n, sizeof(uint32_t));
     r->illum = calloc(3 * n, sizeof(float));
     r->soa = calloc((size_t)WS_PLANES * n, sizeof(float));
-    bad |= !r->hist_depth || !r->hist_normal || !r->hist_prim || !r->illum || !r->soa;
+    r->taa = calloc(3 * n, sizeof(float));
+    bad |= !r->hist_depth || !r->hist_normal || !r->hist_prim || !r->illum || !r->soa || !r->taa;
     if (bad) {
         tr_recon_free(r);
         return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY,
@@ -174,6 +180,7 @@ void tr_recon_free(tr_recon *r) {
     free(r->hist_prim);
     free(r->illum);
     free(r->soa);
+    free(r->taa);
     memset(r, 0, sizeof *r);
 }
 
@@ -516,18 +523,14 @@ static void svgf_planes(const post_ws *ws, const float *depth, const float *cons
     }
 }
 
-/* SVGF's iterations on the planes at WS_CA with variance WS_VA; the planes of the result
- * returned. After the first iteration its output goes to `feedback` (interleaved) when
+/* SVGF's iterations on the planes at WS_CA with luminance WS_LA and variance WS_VA; the planes of
+ * the result returned. After the first iteration its output goes to `feedback` (interleaved) when
  * that is not NULL: Schied et al. feed it back as the next frame's history. */
 static int svgf(const post_ws *ws, const float *depth, const tr_recon_params *p, float *feedback,
                 int threads) {
     int src = WS_CA, dst = WS_CB, ls = WS_LA, ld = WS_LB, vs = WS_VA, vd = WS_VB;
     const long n = (long)ws->w * ws->h;
-    {
-        const float *const s3[3] = {ws->p[src], ws->p[src + 1], ws->p[src + 2]};
-        luminance_plane(s3, ws->p[ls], n, threads);
-    }
-    for (int it = 0; it < p->atrous_iterations; ++it) {
+    for (int it = 0; it < p->svgf_iterations; ++it) {
         const float *const s3[3] = {ws->p[src], ws->p[src + 1], ws->p[src + 2]};
         float *const d3[3] = {ws->p[dst], ws->p[dst + 1], ws->p[dst + 2]};
         svgf_kl(ws, ws->p[vs], p->svgf_sigma_l, threads);
@@ -621,17 +624,68 @@ int tr_filter_atrous(const tr_gbuffer *g, const float *in, float *out, const tr_
     return TR_OK;
 }
 
-/* SVGF's variance of every pixel (tr_post_svgf_variance_pixel). */
-static void svgf_variance(const tr_gbuffer *g, const float *illum, const float *moments,
-                          const float *len, float *var, int threads) {
-    const int w = (int)g->width, h = (int)g->height;
-#pragma omp parallel for num_threads(threads) schedule(static)
-    for (int y = 0; y < h; ++y) {
-        for (int x = 0; x < w; ++x) {
-            var[y * w + x] =
-                tr_post_svgf_variance_pixel(illum, moments, len, g->normal, w, h, x, y);
+/* SVGF's variance of every pixel (tr_post_svgf_variance_pixel) from the luminance plane
+ * lum of the illumination, turned round like the filters: the spatial estimate's 5x5
+ * sums for every pixel of a chunk, tap by tap, then the temporal moments where the
+ * history is long enough. */
+TR_POST_CLONES static void svgf_variance_rows(const post_ws *ws, const float *lum,
+                                              const float *moments, const float *len, float *var,
+                                              int y0, int y1) {
+    const int w = ws->w, h = ws->h;
+    const float *restrict nx = ws->p[WS_N], *restrict ny = ws->p[WS_N + 1],
+                          *restrict nz = ws->p[WS_N + 2], *restrict l = lum;
+    for (int y = y0; y < y1; ++y) {
+        for (int x0 = 0; x0 < w; x0 += TR_POST_CHUNK) {
+            const int x1 = imin(w, x0 + TR_POST_CHUNK);
+            float a1[TR_POST_CHUNK] = {0}, a2[TR_POST_CHUNK] = {0}, aw[TR_POST_CHUNK] = {0};
+            for (int dy = -2; dy <= 2; ++dy) {
+                const int ty = y + dy;
+                if (ty < 0 || ty >= h) {
+                    continue;
+                }
+                for (int dx = -2; dx <= 2; ++dx) {
+                    const int xa = imax(x0, -dx), xb = imin(x1, w - dx);
+                    const int row = ty * w + dx, crow = y * w, centre = dx == 0 && dy == 0;
+                    for (int x = xa; x < xb; ++x) {
+                        const int i = row + x, c = crow + x, a = x - x0;
+                        const float nd = nx[c] * nx[i] + ny[c] * ny[i] + nz[c] * nz[i];
+                        const float wt = centre || nd > 0.9f ? 1.0f : 0.0f;
+                        a1[a] += wt * l[i];
+                        a2[a] += wt * l[i] * l[i];
+                        aw[a] += wt;
+                    }
+                }
+            }
+            for (int x = x0; x < x1; ++x) {
+                const int c = y * w + x, a = x - x0;
+                if (len[c] >= 4.0f) {
+                    const float m = moments[2 * c];
+                    var[c] = tr_fmaxf(moments[2 * c + 1] - m * m, 0.0f);
+                } else {
+                    const float m = a1[a] / aw[a];
+                    var[c] = tr_fmaxf(a2[a] / aw[a] - m * m, 0.0f) * (4.0f / len[c]);
+                }
+            }
         }
     }
+}
+
+static void svgf_variance(const post_ws *ws, const float *lum, const float *moments,
+                          const float *len, float *var, int threads) {
+#pragma omp parallel for num_threads(threads) schedule(static)
+    for (int y = 0; y < ws->h; ++y) {
+        svgf_variance_rows(ws, lum, moments, len, var, y, y + 1);
+    }
+}
+
+/* The geometry this frame's history was seen with, for the next frame's tests. */
+static void keep_geometry(tr_recon *r, const tr_gbuffer *g, const tr_camera *cam) {
+    const size_t n = (size_t)g->width * g->height;
+    memcpy(r->hist_depth, g->depth, n * sizeof *r->hist_depth);
+    memcpy(r->hist_normal, g->normal, 3 * n * sizeof *r->hist_normal);
+    memcpy(r->hist_prim, g->prim, n * sizeof *r->hist_prim);
+    r->prev_cam = *cam;
+    r->have_history = 1;
 }
 
 int tr_recon_frame(tr_recon *r, const tr_gbuffer *g, const tr_camera *cam, int method,
@@ -685,18 +739,15 @@ int tr_recon_frame(tr_recon *r, const tr_gbuffer *g, const tr_camera *cam, int m
             hl[i] = 1.0f;
         }
     }
-    /* The geometry this history was seen with, for the next frame's test. */
-    memcpy(r->hist_depth, g->depth, n * sizeof *r->hist_depth);
-    memcpy(r->hist_normal, g->normal, 3 * n * sizeof *r->hist_normal);
-    memcpy(r->hist_prim, g->prim, n * sizeof *r->hist_prim);
-    r->prev_cam = *cam;
     r->cur = next;
-    r->have_history = 1;
     const double t1 = tr_time_now();
     r->ms_temporal = (t1 - t0) * 1e3;
 
+    const int had_taa = r->have_taa && r->have_history;
+    r->have_taa = 0;
     if (method == TR_RECON_ACCUMULATE) {
         remodulate(g, hc, out, threads);
+        keep_geometry(r, g, cam);
         r->ms_spatial = (tr_time_now() - t1) * 1e3;
         return TR_OK;
     }
@@ -715,10 +766,30 @@ int tr_recon_frame(tr_recon *r, const tr_gbuffer *g, const tr_camera *cam, int m
     } else {
         to_planes(g, hc, c3, 0, threads);
         prep_guides(g, &ws, p, 1, threads);
-        svgf_variance(g, hc, hm, hl, ws.p[WS_VA], threads);
+        luminance_plane((const float *const *)c3, ws.p[WS_LA], (long)n, threads);
+        svgf_variance(&ws, ws.p[WS_LA], hm, hl, ws.p[WS_VA], threads);
         planes_of(&ws, svgf(&ws, g->depth, p, p->svgf_feedback ? hc : NULL, threads), c3);
-        from_planes(g, (const float *const *)c3, out, 1, threads);
+        if (p->svgf_taa_alpha > 0.0f) {
+            /* Schied et al.'s last stage: temporal antialiasing of the remodulated
+             * output against its own reprojected history (r->illum is free by now). */
+            from_planes(g, (const float *const *)c3, r->illum, 1, threads);
+            const tr_camera pc = r->prev_cam;
+#pragma omp parallel for num_threads(threads) schedule(static)
+            for (int y = 0; y < h; ++y) {
+                for (int x = 0; x < w; ++x) {
+                    tr_post_taa_pixel(cam, &pc, x, y, r->illum, g->normal, g->depth, g->prim,
+                                      had_taa ? r->taa : NULL, r->hist_depth, r->hist_normal,
+                                      r->hist_prim, p->svgf_taa_alpha,
+                                      out + 3 * ((size_t)y * w + x));
+                }
+            }
+            memcpy(r->taa, out, 3 * n * sizeof *out);
+            r->have_taa = 1;
+        } else {
+            from_planes(g, (const float *const *)c3, out, 1, threads);
+        }
     }
+    keep_geometry(r, g, cam);
     r->ms_spatial = (tr_time_now() - t1) * 1e3;
     return TR_OK;
 }

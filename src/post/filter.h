@@ -227,6 +227,58 @@ tr_post_temporal_pixel(const tr_camera *cam, const tr_camera *prev, uint32_t x, 
     *out_len = len;
 }
 
+/* Temporal antialiasing of pixel (x, y) (Karis, "High Quality Temporal Supersampling",
+ * SIGGRAPH 2014 course; the last stage of Schied et al. 2017): the previous output
+ * `prev_out` reprojected as tr_post_reproject does (NULL: none), clamped per channel to
+ * the range of the current output's 3x3 neighbourhood so that stale colour cannot
+ * linger (ghosting), then blended with the current pixel by weight alpha. Where no
+ * history survives, the current pixel as it is. */
+TR_FN void tr_post_taa_pixel(const tr_camera *cam, const tr_camera *prev, int x, int y,
+                             TR_CONST_GLOBAL float *cur, TR_CONST_GLOBAL float *normal,
+                             TR_CONST_GLOBAL float *depth, TR_CONST_GLOBAL uint32_t *prim,
+                             TR_CONST_GLOBAL float *prev_out, TR_CONST_GLOBAL float *prev_depth,
+                             TR_CONST_GLOBAL float *prev_normal,
+                             TR_CONST_GLOBAL uint32_t *prev_prim, float alpha, float out[3]) {
+    const int w = (int)cam->screen_width, h = (int)cam->screen_height;
+    const int c = y * w + x;
+    out[0] = cur[3 * c];
+    out[1] = cur[3 * c + 1];
+    out[2] = cur[3 * c + 2];
+    if (!prev_out) {
+        return;
+    }
+    float wts[4];
+    int x0, y0;
+    const tr_vec3 n = v3(normal[3 * c], normal[3 * c + 1], normal[3 * c + 2]);
+    const float total = tr_post_reproject(cam, prev, (uint32_t)x, (uint32_t)y, depth[c], n, prim[c],
+                                          prev_depth, prev_normal, prev_prim, &x0, &y0, wts);
+    if (!(total > 0.05f)) {
+        return;
+    }
+    const int pw = (int)prev->screen_width;
+    for (int k = 0; k < 3; ++k) {
+        float lo = out[k], hi = out[k];
+        for (int dy = -1; dy <= 1; ++dy) {
+            for (int dx = -1; dx <= 1; ++dx) {
+                const int tx = x + dx, ty = y + dy;
+                if (tx >= 0 && ty >= 0 && tx < w && ty < h) {
+                    const float v = cur[3 * (ty * w + tx) + k];
+                    lo = tr_fminf(lo, v);
+                    hi = tr_fmaxf(hi, v);
+                }
+            }
+        }
+        float hv = 0.0f;
+        for (int t = 0; t < 4; ++t) {
+            if (wts[t] > 0.0f) {
+                hv += wts[t] / total * prev_out[3 * ((y0 + (t >> 1)) * pw + x0 + (t & 1)) + k];
+            }
+        }
+        hv = tr_fminf(tr_fmaxf(hv, lo), hi);
+        out[k] = hv + alpha * (out[k] - hv);
+    }
+}
+
 /* Demodulation (Dammertz et al. 2010, section 4; Schied et al. 2017, section 4.1): the
  * filters smooth illumination = radiance / albedo, so that texture and material edges
  * survive, and multiply the albedo back after. An albedo channel near zero keeps the
