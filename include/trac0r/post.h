@@ -143,9 +143,12 @@ typedef struct tr_recon_params {
     float max_len;        /* history length cap (frames) */
     int bilateral_radius; /* window (2r+1)^2 */
     float bilateral_sigma_s, bilateral_sigma_r;
-    int atrous_iterations; /* steps 1, 2, 4, ... */
+    int atrous_iterations; /* à-trous's steps 1, 2, 4, ... */
     float atrous_sigma_c, atrous_sigma_n, atrous_sigma_z, atrous_sigma_a;
+    int svgf_iterations; /* SVGF's à-trous steps 1, 2, 4, ... */
     float svgf_sigma_l, svgf_sigma_n, svgf_sigma_z;
+    int svgf_feedback;    /* 1: the first SVGF iteration's output becomes the history */
+    float svgf_taa_alpha; /* SVGF's temporal antialiasing: new-frame weight (0: off) */
 } tr_recon_params;
 
 tr_recon_params tr_recon_params_default(void);
@@ -162,7 +165,10 @@ typedef struct tr_recon {
     float *hist_len[2];     /* frames of history */
     float *hist_depth, *hist_normal;
     uint32_t *hist_prim;
-    float *illum, *tmp_a, *tmp_b, *var_a, *var_b; /* scratch */
+    float *illum; /* scratch, 3 floats per pixel */
+    float *soa;   /* scratch planes of the spatial filters */
+    float *taa;   /* SVGF's last output, for temporal antialiasing */
+    int have_taa;
     double ms_temporal, ms_spatial; /* the stages' wall times in the last tr_recon_frame */
 } tr_recon;
 

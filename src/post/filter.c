@@ -2,6 +2,13 @@
  * src/post/filter.h over images, rows spread over OpenMP threads. Every output pixel is
  * computed from read-only inputs in a fixed tap order, so results do not depend on the
  * thread count. */
+/* The filters' inner loops (below) vectorise only when gcc may if-convert the clamps
+ * of tr_post_exp_neg, which it does not while it must keep floating-point exceptions
+ * exact. Nothing here reads the exception flags, and the values computed are the same
+ * either way. */
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC optimize("no-trapping-math")
+#endif
 #include <omp.h>
 #include <stdlib.h>
 #include <string.h>
@@ -14,6 +21,30 @@
 static int nthreads(int threads) {
     return threads > 0 ? threads : omp_get_max_threads();
 }
+
+/* Pixels per chunk of a row: the accumulators live on the stack, in L1. */
+#define TR_POST_CHUNK 256
+
+/* The planes of the scratch block (each w * h floats). */
+enum {
+    WS_CA = 0,  /* colour ping (r, g, b planes) */
+    WS_CB = 3,  /* colour pong */
+    WS_LA = 6,  /* luminance of ping, of pong */
+    WS_LB = 7,  /* */
+    WS_VA = 8,  /* variance ping, pong */
+    WS_VB = 9,  /* */
+    WS_KL = 10, /* SVGF's luminance coefficient of this iteration */
+    WS_KZ = 11, /* SVGF's depth coefficient; à-trous's 1 / depth */
+    WS_KN = 12, /* SVGF's normal exponent (sigma_n, or 0 without a normal) */
+    WS_N = 13,  /* normal x, y, z planes */
+    WS_A = 16,  /* albedo r, g, b planes */
+    WS_PLANES = 19
+};
+
+typedef struct post_ws {
+    int w, h;
+    float *p[WS_PLANES];
+} post_ws;
 
 int tr_gbuffer_init(tr_gbuffer *g, uint32_t width, uint32_t height, tr_error *err) {
     memset(g, 0, sizeof *g);
@@ -95,10 +126,16 @@ tr_recon_params tr_recon_params_default(void) {
     p.atrous_sigma_n = 0.3f;
     p.atrous_sigma_z = 0.05f;
     p.atrous_sigma_a = 0.1f;
-    /* Schied et al.'s values: sigma_l 4, sigma_n 128, sigma_z 1. */
-    p.svgf_sigma_l = 4.0f;
+    /* Schied et al.'s values are sigma_l 4, sigma_n 128, sigma_z 1 and 5 iterations with
+     * TAA after them. On the classic box at 1 spp (docs/realtime.md, "Choosing SVGF's
+     * parameters") sigma_l 8 and 3 iterations measured better, and TAA
+     * (alpha 0.1 or 0.3) worse, so it is off unless asked for. */
+    p.svgf_sigma_l = 8.0f;
+    p.svgf_iterations = 3;
     p.svgf_sigma_n = 128.0f;
     p.svgf_sigma_z = 1.0f;
+    p.svgf_feedback = 1;
+    p.svgf_taa_alpha = 0.0f;
     return p;
 }
 
@@ -121,12 +158,9 @@ int tr_recon_init(tr_recon *r, uint32_t width, uint32_t height, tr_error *err) {
     r->hist_normal = calloc(3 * n, sizeof(float));
     r->hist_prim = calloc(n, sizeof(uint32_t));
     r->illum = calloc(3 * n, sizeof(float));
-    r->tmp_a = calloc(3 * n, sizeof(float));
-    r->tmp_b = calloc(3 * n, sizeof(float));
-    r->var_a = calloc(n, sizeof(float));
-    r->var_b = calloc(n, sizeof(float));
-    bad |= !r->hist_depth || !r->hist_normal || !r->hist_prim || !r->illum || !r->tmp_a ||
-           !r->tmp_b || !r->var_a || !r->var_b;
+    r->soa = calloc((size_t)WS_PLANES * n, sizeof(float));
+    r->taa = calloc(3 * n, sizeof(float));
+    bad |= !r->hist_depth || !r->hist_normal || !r->hist_prim || !r->illum || !r->soa || !r->taa;
     if (bad) {
         tr_recon_free(r);
         return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY,
@@ -145,10 +179,8 @@ void tr_recon_free(tr_recon *r) {
     free(r->hist_normal);
     free(r->hist_prim);
     free(r->illum);
-    free(r->tmp_a);
-    free(r->tmp_b);
-    free(r->var_a);
-    free(r->var_b);
+    free(r->soa);
+    free(r->taa);
     memset(r, 0, sizeof *r);
 }
 
@@ -165,39 +197,361 @@ static int check_frame(uint32_t w, uint32_t h, const tr_gbuffer *g, tr_error *er
     return TR_OK;
 }
 
-/* One bilateral pass of `in` into `out`. */
-static void bilateral(const tr_gbuffer *g, const float *in, float *out, const tr_recon_params *p,
+/* ---- The spatial filters on the host -------------------------------------------
+ *
+ * The per-pixel operators of filter.h loop over their taps inside one pixel, which a
+ * device runs one work item per pixel. On the CPU that shape does not vectorise, so the
+ * host turns the loops round: for each tap (in the operators' order) it runs along a
+ * chunk of a row, accumulating every pixel's sums, on planar (structure-of-arrays)
+ * copies of the colour and the guides. Each pixel's sums take the same terms in the
+ * same order as its operator (test_recon checks the agreement), so the result is still
+ * independent of the thread count, and the one exponential per tap is filter.h's
+ * branch-free tr_post_exp_neg, which gcc vectorises. */
+
+/* The hot row loops twice, for AVX2 and for the baseline, chosen at load time (gcc's
+ * ifunc clones): the same operations per lane either way (no FMA: -ffp-contract=off), so
+ * the numbers do not depend on the CPU. */
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__)
+#define TR_POST_CLONES __attribute__((target_clones("avx2", "default")))
+#else
+#define TR_POST_CLONES
+#endif
+
+static void ws_bind(post_ws *ws, float *block, int w, int h) {
+    ws->w = w;
+    ws->h = h;
+    for (int k = 0; k < WS_PLANES; ++k) {
+        ws->p[k] = block + (size_t)k * w * h;
+    }
+}
+
+static int imax(int a, int b) {
+    return a > b ? a : b;
+}
+static int imin(int a, int b) {
+    return a < b ? a : b;
+}
+
+/* Interleaved RGB `in` (times 1 / albedo when demod, times albedo when remod, else as
+ * it is) into the three planes at dst. */
+static void to_planes(const tr_gbuffer *g, const float *in, float *const dst[3], int demod,
                       int threads) {
-    const int w = (int)g->width, h = (int)g->height;
+    const long n = (long)g->width * g->height;
 #pragma omp parallel for num_threads(threads) schedule(static)
-    for (int y = 0; y < h; ++y) {
-        for (int x = 0; x < w; ++x) {
-            tr_post_bilateral_pixel(in, w, h, x, y, p->bilateral_radius, p->bilateral_sigma_s,
-                                    p->bilateral_sigma_r, out + 3 * ((size_t)y * w + x));
+    for (long i = 0; i < n; ++i) {
+        for (int k = 0; k < 3; ++k) {
+            const float a = tr_post_demod_factor(g->albedo[3 * i + k]);
+            const float v = in[3 * i + k];
+            dst[k][i] = demod > 0 ? v / a : demod < 0 ? v * a : v;
         }
     }
 }
 
-/* Dammertz et al.'s iterations on demodulated `illum` (overwritten): the result in the
- * buffer returned (illum or tmp); sigma_c halves each step as in the paper. */
-static float *atrous(const tr_gbuffer *g, float *illum, float *tmp, const tr_recon_params *p,
-                     int threads) {
-    const int w = (int)g->width, h = (int)g->height;
-    float *src = illum, *dst = tmp;
-    for (int it = 0; it < p->atrous_iterations; ++it) {
-        const int step = 1 << it;
-        const float sc = p->atrous_sigma_c / (float)(1 << it);
+/* Three planes into interleaved RGB out, times the albedo when remod. */
+static void from_planes(const tr_gbuffer *g, const float *const src[3], float *out, int remod,
+                        int threads) {
+    const long n = (long)g->width * g->height;
 #pragma omp parallel for num_threads(threads) schedule(static)
-        for (int y = 0; y < h; ++y) {
-            for (int x = 0; x < w; ++x) {
-                tr_post_atrous_pixel(src, g->normal, g->depth, g->albedo, w, h, x, y, step, sc,
-                                     p->atrous_sigma_n, p->atrous_sigma_z, p->atrous_sigma_a,
-                                     dst + 3 * ((size_t)y * w + x));
+    for (long i = 0; i < n; ++i) {
+        for (int k = 0; k < 3; ++k) {
+            out[3 * i + k] =
+                remod ? src[k][i] * tr_post_demod_factor(g->albedo[3 * i + k]) : src[k][i];
+        }
+    }
+}
+
+static void luminance_plane(const float *const c[3], float *lum, long n, int threads) {
+#pragma omp parallel for num_threads(threads) schedule(static)
+    for (long i = 0; i < n; ++i) {
+        lum[i] = tr_post_luminance(c[0][i], c[1][i], c[2][i]);
+    }
+}
+
+/* The guides as planes: normals, albedo, and the per-pixel coefficients that do not
+ * change between iterations. */
+static void prep_guides(const tr_gbuffer *g, const post_ws *ws, const tr_recon_params *p,
+                        int svgf_coeffs, int threads) {
+    const int w = ws->w, h = ws->h;
+#pragma omp parallel for num_threads(threads) schedule(static)
+    for (int y = 0; y < h; ++y) {
+        for (int x = 0; x < w; ++x) {
+            const int c = y * w + x;
+            const float nx = g->normal[3 * c], ny = g->normal[3 * c + 1], nz = g->normal[3 * c + 2];
+            ws->p[WS_N][c] = nx;
+            ws->p[WS_N + 1][c] = ny;
+            ws->p[WS_N + 2][c] = nz;
+            for (int k = 0; k < 3; ++k) {
+                ws->p[WS_A + k][c] = g->albedo[3 * c + k];
+            }
+            if (svgf_coeffs) {
+                ws->p[WS_KZ][c] = tr_post_svgf_kz(g->depth, w, h, x, y, p->svgf_sigma_z);
+                ws->p[WS_KN][c] = nx * nx + ny * ny + nz * nz > 0.25f ? p->svgf_sigma_n : 0.0f;
+            } else {
+                const float cz = g->depth[c];
+                ws->p[WS_KZ][c] = 1.0f / (cz > 1e-6f ? cz : 1.0f);
             }
         }
-        float *t = src;
+    }
+}
+
+/* The bilateral filter (tr_post_bilateral_pixel) of planes src into interleaved out. */
+TR_POST_CLONES static void bilateral_rows(const post_ws *ws, const float *const src[3], float *out,
+                                          const tr_recon_params *p, int y0, int y1) {
+    const int w = ws->w, h = ws->h, rad = p->bilateral_radius;
+    const float is = 1.0f / (2.0f * p->bilateral_sigma_s * p->bilateral_sigma_s);
+    const float ir = 1.0f / (2.0f * p->bilateral_sigma_r * p->bilateral_sigma_r);
+    const float *restrict r = src[0], *restrict gg = src[1], *restrict b = src[2];
+    for (int y = y0; y < y1; ++y) {
+        for (int x0 = 0; x0 < w; x0 += TR_POST_CHUNK) {
+            const int x1 = imin(w, x0 + TR_POST_CHUNK);
+            float ar[TR_POST_CHUNK] = {0}, ag[TR_POST_CHUNK] = {0}, ab[TR_POST_CHUNK] = {0},
+                  aw[TR_POST_CHUNK] = {0};
+            for (int dy = -rad; dy <= rad; ++dy) {
+                const int ty = y + dy;
+                if (ty < 0 || ty >= h) {
+                    continue;
+                }
+                for (int dx = -rad; dx <= rad; ++dx) {
+                    const int xa = imax(x0, -dx), xb = imin(x1, w - dx);
+                    const float es = (float)(dx * dx + dy * dy) * is;
+                    const int row = ty * w + dx, crow = y * w;
+                    for (int x = xa; x < xb; ++x) {
+                        const int i = row + x, c = crow + x, a = x - x0;
+                        const float dr = r[i] - r[c], dg = gg[i] - gg[c], db = b[i] - b[c];
+                        const float wt = tr_post_exp_neg(es + (dr * dr + dg * dg + db * db) * ir);
+                        ar[a] += wt * r[i];
+                        ag[a] += wt * gg[i];
+                        ab[a] += wt * b[i];
+                        aw[a] += wt;
+                    }
+                }
+            }
+            for (int x = x0; x < x1; ++x) {
+                const size_t c = (size_t)y * w + x;
+                const int a = x - x0;
+                out[3 * c] = ar[a] / aw[a];
+                out[3 * c + 1] = ag[a] / aw[a];
+                out[3 * c + 2] = ab[a] / aw[a];
+            }
+        }
+    }
+}
+
+static void bilateral_planes(const post_ws *ws, const float *const src[3], float *out,
+                             const tr_recon_params *p, int threads) {
+#pragma omp parallel for num_threads(threads) schedule(static)
+    for (int y = 0; y < ws->h; ++y) {
+        bilateral_rows(ws, src, out, p, y, y + 1);
+    }
+}
+
+/* One edge-avoiding à-trous iteration (tr_post_atrous_pixel) of planes src into dst. */
+TR_POST_CLONES static void atrous_rows(const post_ws *ws, const float *depth,
+                                       const float *const src[3], float *const dst[3], int step,
+                                       float sigma_c, const tr_recon_params *p, int y0, int y1) {
+    const int w = ws->w, h = ws->h;
+    const float ic = 1.0f / (sigma_c * sigma_c);
+    const float in2 = 1.0f / (p->atrous_sigma_n * p->atrous_sigma_n);
+    const float iz = 1.0f / (p->atrous_sigma_z * p->atrous_sigma_z);
+    const float ia = 1.0f / (p->atrous_sigma_a * p->atrous_sigma_a);
+    const float *restrict r = src[0], *restrict gg = src[1], *restrict b = src[2];
+    const float *restrict nx = ws->p[WS_N], *restrict ny = ws->p[WS_N + 1],
+                          *restrict nz = ws->p[WS_N + 2];
+    const float *restrict a0 = ws->p[WS_A], *restrict a1 = ws->p[WS_A + 1],
+                          *restrict a2 = ws->p[WS_A + 2];
+    const float *restrict icz = ws->p[WS_KZ];
+    for (int y = y0; y < y1; ++y) {
+        for (int x0 = 0; x0 < w; x0 += TR_POST_CHUNK) {
+            const int x1 = imin(w, x0 + TR_POST_CHUNK);
+            float ar[TR_POST_CHUNK] = {0}, ag[TR_POST_CHUNK] = {0}, ab[TR_POST_CHUNK] = {0},
+                  aw[TR_POST_CHUNK] = {0};
+            for (int ky = -2; ky <= 2; ++ky) {
+                const int ty = y + ky * step;
+                if (ty < 0 || ty >= h) {
+                    continue;
+                }
+                for (int kx = -2; kx <= 2; ++kx) {
+                    const int off = kx * step;
+                    const int xa = imax(x0, -off), xb = imin(x1, w - off);
+                    const float bk = tr_post_b3(kx) * tr_post_b3(ky);
+                    const int row = ty * w + off, crow = y * w;
+                    for (int x = xa; x < xb; ++x) {
+                        const int i = row + x, c = crow + x, a = x - x0;
+                        const float dr = r[i] - r[c], dg = gg[i] - gg[c], db = b[i] - b[c];
+                        const float dnx = nx[i] - nx[c], dny = ny[i] - ny[c], dnz = nz[i] - nz[c];
+                        const float dz = (depth[i] - depth[c]) * icz[c];
+                        const float da0 = a0[i] - a0[c], da1 = a1[i] - a1[c], da2 = a2[i] - a2[c];
+                        const float e = (dr * dr + dg * dg + db * db) * ic +
+                                        (dnx * dnx + dny * dny + dnz * dnz) * in2 + dz * dz * iz +
+                                        (da0 * da0 + da1 * da1 + da2 * da2) * ia;
+                        const float wt = bk * tr_post_exp_neg(e);
+                        ar[a] += wt * r[i];
+                        ag[a] += wt * gg[i];
+                        ab[a] += wt * b[i];
+                        aw[a] += wt;
+                    }
+                }
+            }
+            for (int x = x0; x < x1; ++x) {
+                const int c = y * w + x, a = x - x0;
+                dst[0][c] = ar[a] / aw[a];
+                dst[1][c] = ag[a] / aw[a];
+                dst[2][c] = ab[a] / aw[a];
+            }
+        }
+    }
+}
+
+static void atrous_planes(const post_ws *ws, const float *depth, const float *const src[3],
+                          float *const dst[3], int step, float sigma_c, const tr_recon_params *p,
+                          int threads) {
+#pragma omp parallel for num_threads(threads) schedule(static)
+    for (int y = 0; y < ws->h; ++y) {
+        atrous_rows(ws, depth, src, dst, step, sigma_c, p, y, y + 1);
+    }
+}
+
+/* Dammertz et al.'s iterations on the planes at WS_CA: the planes of the result
+ * returned (WS_CA or WS_CB); sigma_c halves each step as in the paper. */
+static int atrous(const post_ws *ws, const float *depth, const tr_recon_params *p, int threads) {
+    int src = WS_CA, dst = WS_CB;
+    for (int it = 0; it < p->atrous_iterations; ++it) {
+        const float *const s3[3] = {ws->p[src], ws->p[src + 1], ws->p[src + 2]};
+        float *const d3[3] = {ws->p[dst], ws->p[dst + 1], ws->p[dst + 2]};
+        atrous_planes(ws, depth, s3, d3, 1 << it, p->atrous_sigma_c / (float)(1 << it), p, threads);
+        const int t = src;
         src = dst;
         dst = t;
+    }
+    return src;
+}
+
+/* SVGF's prefiltered luminance coefficient (tr_post_var3x3, tr_post_svgf_kl) of every
+ * pixel from variance plane var, into WS_KL. */
+static void svgf_kl(const post_ws *ws, const float *var, float sigma_l, int threads) {
+    const int w = ws->w, h = ws->h;
+    float *restrict kl = ws->p[WS_KL];
+#pragma omp parallel for num_threads(threads) schedule(static)
+    for (int y = 0; y < h; ++y) {
+        for (int x0 = 0; x0 < w; x0 += TR_POST_CHUNK) {
+            const int x1 = imin(w, x0 + TR_POST_CHUNK);
+            float av[TR_POST_CHUNK] = {0}, aw[TR_POST_CHUNK] = {0};
+            for (int dy = -1; dy <= 1; ++dy) {
+                const int ty = y + dy;
+                if (ty < 0 || ty >= h) {
+                    continue;
+                }
+                for (int dx = -1; dx <= 1; ++dx) {
+                    const int xa = imax(x0, -dx), xb = imin(x1, w - dx);
+                    const float k = (dx ? 0.5f : 1.0f) * (dy ? 0.5f : 1.0f);
+                    const float *restrict v = var + ty * w + dx;
+                    for (int x = xa; x < xb; ++x) {
+                        av[x - x0] += k * v[x];
+                        aw[x - x0] += k;
+                    }
+                }
+            }
+            for (int x = x0; x < x1; ++x) {
+                kl[y * w + x] = tr_post_svgf_kl(av[x - x0] / aw[x - x0], sigma_l);
+            }
+        }
+    }
+}
+
+/* One SVGF iteration (tr_post_svgf_pixel) of planes src (luminance lum, variance var)
+ * into dst, dlum, dvar. */
+TR_POST_CLONES static void svgf_rows(const post_ws *ws, const float *depth,
+                                     const float *const src[3], const float *lum, const float *var,
+                                     float *const dst[3], float *dlum, float *dvar, int step,
+                                     int y0, int y1) {
+    const int w = ws->w, h = ws->h;
+    const float *restrict r = src[0], *restrict gg = src[1], *restrict b = src[2];
+    const float *restrict nx = ws->p[WS_N], *restrict ny = ws->p[WS_N + 1],
+                          *restrict nz = ws->p[WS_N + 2];
+    const float *restrict kz = ws->p[WS_KZ], *restrict kl = ws->p[WS_KL],
+                          *restrict kn = ws->p[WS_KN];
+    const float *restrict l = lum, *restrict v = var, *restrict z = depth;
+    for (int y = y0; y < y1; ++y) {
+        for (int x0 = 0; x0 < w; x0 += TR_POST_CHUNK) {
+            const int x1 = imin(w, x0 + TR_POST_CHUNK);
+            float ar[TR_POST_CHUNK] = {0}, ag[TR_POST_CHUNK] = {0}, ab[TR_POST_CHUNK] = {0},
+                  aw[TR_POST_CHUNK] = {0}, av[TR_POST_CHUNK] = {0};
+            for (int ky = -2; ky <= 2; ++ky) {
+                const int ty = y + ky * step;
+                if (ty < 0 || ty >= h) {
+                    continue;
+                }
+                for (int kx = -2; kx <= 2; ++kx) {
+                    const int off = kx * step;
+                    const int xa = imax(x0, -off), xb = imin(x1, w - off);
+                    const float bk = tr_post_b3(kx) * tr_post_b3(ky);
+                    const float id = tr_post_svgf_idist(kx, ky, step);
+                    const int row = ty * w + off, crow = y * w;
+                    for (int x = xa; x < xb; ++x) {
+                        const int i = row + x, c = crow + x, a = x - x0;
+                        const float nd = nx[c] * nx[i] + ny[c] * ny[i] + nz[c] * nz[i];
+                        const float e = tr_post_svgf_exponent(z[i] - z[c], kz[c], id, l[i] - l[c],
+                                                              kl[c], kn[c], nd);
+                        const float wt = bk * tr_post_exp_neg(e);
+                        ar[a] += wt * r[i];
+                        ag[a] += wt * gg[i];
+                        ab[a] += wt * b[i];
+                        av[a] += wt * wt * v[i];
+                        aw[a] += wt;
+                    }
+                }
+            }
+            for (int x = x0; x < x1; ++x) {
+                const int c = y * w + x, a = x - x0;
+                const float ro = ar[a] / aw[a], go = ag[a] / aw[a], bo = ab[a] / aw[a];
+                dst[0][c] = ro;
+                dst[1][c] = go;
+                dst[2][c] = bo;
+                dlum[c] = tr_post_luminance(ro, go, bo);
+                dvar[c] = av[a] / (aw[a] * aw[a]);
+            }
+        }
+    }
+}
+
+static void svgf_planes(const post_ws *ws, const float *depth, const float *const src[3],
+                        const float *lum, const float *var, float *const dst[3], float *dlum,
+                        float *dvar, int step, int threads) {
+#pragma omp parallel for num_threads(threads) schedule(static)
+    for (int y = 0; y < ws->h; ++y) {
+        svgf_rows(ws, depth, src, lum, var, dst, dlum, dvar, step, y, y + 1);
+    }
+}
+
+/* SVGF's iterations on the planes at WS_CA with luminance WS_LA and variance WS_VA; the planes of
+ * the result returned. After the first iteration its output goes to `feedback` (interleaved) when
+ * that is not NULL: Schied et al. feed it back as the next frame's history. */
+static int svgf(const post_ws *ws, const float *depth, const tr_recon_params *p, float *feedback,
+                int threads) {
+    int src = WS_CA, dst = WS_CB, ls = WS_LA, ld = WS_LB, vs = WS_VA, vd = WS_VB;
+    const long n = (long)ws->w * ws->h;
+    for (int it = 0; it < p->svgf_iterations; ++it) {
+        const float *const s3[3] = {ws->p[src], ws->p[src + 1], ws->p[src + 2]};
+        float *const d3[3] = {ws->p[dst], ws->p[dst + 1], ws->p[dst + 2]};
+        svgf_kl(ws, ws->p[vs], p->svgf_sigma_l, threads);
+        svgf_planes(ws, depth, s3, ws->p[ls], ws->p[vs], d3, ws->p[ld], ws->p[vd], 1 << it,
+                    threads);
+        if (it == 0 && feedback) {
+            for (long i = 0; i < n; ++i) {
+                for (int k = 0; k < 3; ++k) {
+                    feedback[3 * i + k] = d3[k][i];
+                }
+            }
+        }
+        int t = src;
+        src = dst;
+        dst = t;
+        t = ls;
+        ls = ld;
+        ld = t;
+        t = vs;
+        vs = vd;
+        vd = t;
     }
     return src;
 }
@@ -222,109 +576,116 @@ static void remodulate(const tr_gbuffer *g, const float *in, float *out, int thr
     }
 }
 
+static float *ws_alloc(const tr_gbuffer *g) {
+    return malloc((size_t)WS_PLANES * g->width * g->height * sizeof(float));
+}
+
+static void planes_of(const post_ws *ws, int k, float *out3[3]) {
+    out3[0] = ws->p[k];
+    out3[1] = ws->p[k + 1];
+    out3[2] = ws->p[k + 2];
+}
+
 int tr_filter_bilateral(const tr_gbuffer *g, const float *in, float *out, const tr_recon_params *p,
                         int threads, tr_error *err) {
-    (void)err;
-    bilateral(g, in, out, p, nthreads(threads));
+    float *block = ws_alloc(g);
+    if (!block) {
+        return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory for a %ux%u filter",
+                            g->width, g->height);
+    }
+    threads = nthreads(threads);
+    post_ws ws;
+    ws_bind(&ws, block, (int)g->width, (int)g->height);
+    float *c3[3];
+    planes_of(&ws, WS_CA, c3);
+    to_planes(g, in, c3, 0, threads);
+    bilateral_planes(&ws, (const float *const *)c3, out, p, threads);
+    free(block);
     return TR_OK;
 }
 
 int tr_filter_atrous(const tr_gbuffer *g, const float *in, float *out, const tr_recon_params *p,
                      int threads, tr_error *err) {
-    const size_t n = (size_t)g->width * g->height;
-    float *a = malloc(3 * n * sizeof *a), *b = malloc(3 * n * sizeof *b);
-    if (!a || !b) {
-        free(a);
-        free(b);
+    float *block = ws_alloc(g);
+    if (!block) {
         return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory for a %ux%u filter",
                             g->width, g->height);
     }
     threads = nthreads(threads);
-    demodulate(g, in, a, threads);
-    remodulate(g, atrous(g, a, b, p, threads), out, threads);
-    free(a);
-    free(b);
+    post_ws ws;
+    ws_bind(&ws, block, (int)g->width, (int)g->height);
+    float *c3[3];
+    planes_of(&ws, WS_CA, c3);
+    to_planes(g, in, c3, 1, threads);
+    prep_guides(g, &ws, p, 0, threads);
+    planes_of(&ws, atrous(&ws, g->depth, p, threads), c3);
+    from_planes(g, (const float *const *)c3, out, 1, threads);
+    free(block);
     return TR_OK;
 }
 
-/* SVGF's variance of each pixel's luminance: from the temporal moments once 4 frames of
- * history exist, before that from the 5x5 neighbourhood's moments (Schied et al. take
- * 7x7 on the same condition), weighted by the normal so that it stays on one surface. */
-static void svgf_variance(const tr_gbuffer *g, const float *illum, const float *moments,
-                          const float *len, float *var, int threads) {
-    const int w = (int)g->width, h = (int)g->height;
-#pragma omp parallel for num_threads(threads) schedule(static)
-    for (int y = 0; y < h; ++y) {
-        for (int x = 0; x < w; ++x) {
-            const int c = y * w + x;
-            if (len[c] >= 4.0f) {
-                const float m = moments[2 * c];
-                var[c] = tr_fmaxf(moments[2 * c + 1] - m * m, 0.0f);
-                continue;
-            }
-            float s1 = 0.0f, s2 = 0.0f, sw = 0.0f;
+/* SVGF's variance of every pixel (tr_post_svgf_variance_pixel) from the luminance plane
+ * lum of the illumination, turned round like the filters: the spatial estimate's 5x5
+ * sums for every pixel of a chunk, tap by tap, then the temporal moments where the
+ * history is long enough. */
+TR_POST_CLONES static void svgf_variance_rows(const post_ws *ws, const float *lum,
+                                              const float *moments, const float *len, float *var,
+                                              int y0, int y1) {
+    const int w = ws->w, h = ws->h;
+    const float *restrict nx = ws->p[WS_N], *restrict ny = ws->p[WS_N + 1],
+                          *restrict nz = ws->p[WS_N + 2], *restrict l = lum;
+    for (int y = y0; y < y1; ++y) {
+        for (int x0 = 0; x0 < w; x0 += TR_POST_CHUNK) {
+            const int x1 = imin(w, x0 + TR_POST_CHUNK);
+            float a1[TR_POST_CHUNK] = {0}, a2[TR_POST_CHUNK] = {0}, aw[TR_POST_CHUNK] = {0};
             for (int dy = -2; dy <= 2; ++dy) {
+                const int ty = y + dy;
+                if (ty < 0 || ty >= h) {
+                    continue;
+                }
                 for (int dx = -2; dx <= 2; ++dx) {
-                    const int tx = x + dx, ty = y + dy;
-                    if (tx < 0 || ty < 0 || tx >= w || ty >= h) {
-                        continue;
+                    const int xa = imax(x0, -dx), xb = imin(x1, w - dx);
+                    const int row = ty * w + dx, crow = y * w, centre = dx == 0 && dy == 0;
+                    for (int x = xa; x < xb; ++x) {
+                        const int i = row + x, c = crow + x, a = x - x0;
+                        const float nd = nx[c] * nx[i] + ny[c] * ny[i] + nz[c] * nz[i];
+                        const float wt = centre || nd > 0.9f ? 1.0f : 0.0f;
+                        a1[a] += wt * l[i];
+                        a2[a] += wt * l[i] * l[i];
+                        aw[a] += wt;
                     }
-                    const int i = ty * w + tx;
-                    const float nd = g->normal[3 * c] * g->normal[3 * i] +
-                                     g->normal[3 * c + 1] * g->normal[3 * i + 1] +
-                                     g->normal[3 * c + 2] * g->normal[3 * i + 2];
-                    const float wt = (dx == 0 && dy == 0) || nd > 0.9f ? 1.0f : 0.0f;
-                    const float l =
-                        tr_post_luminance(illum[3 * i], illum[3 * i + 1], illum[3 * i + 2]);
-                    s1 += wt * l;
-                    s2 += wt * l * l;
-                    sw += wt;
                 }
             }
-            const float m = s1 / sw;
-            /* Few frames: trust the estimate less, as the paper boosts it. */
-            var[c] = tr_fmaxf(s2 / sw - m * m, 0.0f) * (4.0f / len[c]);
+            for (int x = x0; x < x1; ++x) {
+                const int c = y * w + x, a = x - x0;
+                if (len[c] >= 4.0f) {
+                    const float m = moments[2 * c];
+                    var[c] = tr_fmaxf(moments[2 * c + 1] - m * m, 0.0f);
+                } else {
+                    const float m = a1[a] / aw[a];
+                    var[c] = tr_fmaxf(a2[a] / aw[a] - m * m, 0.0f) * (4.0f / len[c]);
+                }
+            }
         }
     }
 }
 
-/* SVGF's iterations on `illum`; the variance in var_a (overwritten). */
-static float *svgf(const tr_gbuffer *g, float *illum, float *tmp, float *var_a, float *var_b,
-                   const tr_recon_params *p, int threads) {
-    const int w = (int)g->width, h = (int)g->height;
-    float *src = illum, *dst = tmp, *vs = var_a, *vd = var_b;
-    for (int it = 0; it < p->atrous_iterations; ++it) {
-        const int step = 1 << it;
+static void svgf_variance(const post_ws *ws, const float *lum, const float *moments,
+                          const float *len, float *var, int threads) {
 #pragma omp parallel for num_threads(threads) schedule(static)
-        for (int y = 0; y < h; ++y) {
-            for (int x = 0; x < w; ++x) {
-                /* The centre's variance through a 3x3 Gaussian (the paper's prefilter),
-                 * which keeps one noisy estimate from stopping the filter. */
-                float cv = 0.0f, cw = 0.0f;
-                for (int dy = -1; dy <= 1; ++dy) {
-                    for (int dx = -1; dx <= 1; ++dx) {
-                        const int tx = x + dx, ty = y + dy;
-                        if (tx < 0 || ty < 0 || tx >= w || ty >= h) {
-                            continue;
-                        }
-                        const float k = (dx ? 0.5f : 1.0f) * (dy ? 0.5f : 1.0f);
-                        cv += k * vs[ty * w + tx];
-                        cw += k;
-                    }
-                }
-                const size_t c = (size_t)y * w + x;
-                tr_post_svgf_pixel(src, vs, g->normal, g->depth, w, h, x, y, step, p->svgf_sigma_l,
-                                   p->svgf_sigma_n, p->svgf_sigma_z, cv / cw, dst + 3 * c, vd + c);
-            }
-        }
-        float *t = src;
-        src = dst;
-        dst = t;
-        t = vs;
-        vs = vd;
-        vd = t;
+    for (int y = 0; y < ws->h; ++y) {
+        svgf_variance_rows(ws, lum, moments, len, var, y, y + 1);
     }
-    return src;
+}
+
+/* The geometry this frame's history was seen with, for the next frame's tests. */
+static void keep_geometry(tr_recon *r, const tr_gbuffer *g, const tr_camera *cam) {
+    const size_t n = (size_t)g->width * g->height;
+    memcpy(r->hist_depth, g->depth, n * sizeof *r->hist_depth);
+    memcpy(r->hist_normal, g->normal, 3 * n * sizeof *r->hist_normal);
+    memcpy(r->hist_prim, g->prim, n * sizeof *r->hist_prim);
+    r->prev_cam = *cam;
+    r->have_history = 1;
 }
 
 int tr_recon_frame(tr_recon *r, const tr_gbuffer *g, const tr_camera *cam, int method,
@@ -378,28 +739,57 @@ int tr_recon_frame(tr_recon *r, const tr_gbuffer *g, const tr_camera *cam, int m
             hl[i] = 1.0f;
         }
     }
-    /* The geometry this history was seen with, for the next frame's test. */
-    memcpy(r->hist_depth, g->depth, n * sizeof *r->hist_depth);
-    memcpy(r->hist_normal, g->normal, 3 * n * sizeof *r->hist_normal);
-    memcpy(r->hist_prim, g->prim, n * sizeof *r->hist_prim);
-    r->prev_cam = *cam;
     r->cur = next;
-    r->have_history = 1;
     const double t1 = tr_time_now();
     r->ms_temporal = (t1 - t0) * 1e3;
 
-    memcpy(r->tmp_a, hc, 3 * n * sizeof *hc);
+    const int had_taa = r->have_taa && r->have_history;
+    r->have_taa = 0;
     if (method == TR_RECON_ACCUMULATE) {
-        remodulate(g, r->tmp_a, out, threads);
-    } else if (method == TR_RECON_BILATERAL) {
-        remodulate(g, r->tmp_a, r->tmp_b, threads);
-        bilateral(g, r->tmp_b, out, p, threads);
-    } else if (method == TR_RECON_ATROUS) {
-        remodulate(g, atrous(g, r->tmp_a, r->tmp_b, p, threads), out, threads);
-    } else {
-        svgf_variance(g, r->tmp_a, hm, hl, r->var_a, threads);
-        remodulate(g, svgf(g, r->tmp_a, r->tmp_b, r->var_a, r->var_b, p, threads), out, threads);
+        remodulate(g, hc, out, threads);
+        keep_geometry(r, g, cam);
+        r->ms_spatial = (tr_time_now() - t1) * 1e3;
+        return TR_OK;
     }
+    post_ws ws;
+    ws_bind(&ws, r->soa, w, h);
+    float *c3[3];
+    planes_of(&ws, WS_CA, c3);
+    if (method == TR_RECON_BILATERAL) {
+        to_planes(g, hc, c3, -1, threads);
+        bilateral_planes(&ws, (const float *const *)c3, out, p, threads);
+    } else if (method == TR_RECON_ATROUS) {
+        to_planes(g, hc, c3, 0, threads);
+        prep_guides(g, &ws, p, 0, threads);
+        planes_of(&ws, atrous(&ws, g->depth, p, threads), c3);
+        from_planes(g, (const float *const *)c3, out, 1, threads);
+    } else {
+        to_planes(g, hc, c3, 0, threads);
+        prep_guides(g, &ws, p, 1, threads);
+        luminance_plane((const float *const *)c3, ws.p[WS_LA], (long)n, threads);
+        svgf_variance(&ws, ws.p[WS_LA], hm, hl, ws.p[WS_VA], threads);
+        planes_of(&ws, svgf(&ws, g->depth, p, p->svgf_feedback ? hc : NULL, threads), c3);
+        if (p->svgf_taa_alpha > 0.0f) {
+            /* Schied et al.'s last stage: temporal antialiasing of the remodulated
+             * output against its own reprojected history (r->illum is free by now). */
+            from_planes(g, (const float *const *)c3, r->illum, 1, threads);
+            const tr_camera pc = r->prev_cam;
+#pragma omp parallel for num_threads(threads) schedule(static)
+            for (int y = 0; y < h; ++y) {
+                for (int x = 0; x < w; ++x) {
+                    tr_post_taa_pixel(cam, &pc, x, y, r->illum, g->normal, g->depth, g->prim,
+                                      had_taa ? r->taa : NULL, r->hist_depth, r->hist_normal,
+                                      r->hist_prim, p->svgf_taa_alpha,
+                                      out + 3 * ((size_t)y * w + x));
+                }
+            }
+            memcpy(r->taa, out, 3 * n * sizeof *out);
+            r->have_taa = 1;
+        } else {
+            from_planes(g, (const float *const *)c3, out, 1, threads);
+        }
+    }
+    keep_geometry(r, g, cam);
     r->ms_spatial = (tr_time_now() - t1) * 1e3;
     return TR_OK;
 }

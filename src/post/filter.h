@@ -18,6 +18,50 @@
 #include "../kernel/types.h"
 #include "../kernel/vec.h"
 
+/* An IEEE single's bits as a float and back (OpenCL's as_float, as_uint; a union on
+ * the host, which gcc vectorises). */
+#if defined(__OPENCL_C_VERSION__) || defined(__OPENCL_VERSION__)
+#define tr_post_bits_float(u) as_float(u)
+#define tr_post_float_bits(f) as_uint(f)
+#else
+TR_FN float tr_post_bits_float(uint32_t u) {
+    union {
+        uint32_t u;
+        float f;
+    } v;
+    v.u = u;
+    return v.f;
+}
+TR_FN uint32_t tr_post_float_bits(float f) {
+    union {
+        uint32_t u;
+        float f;
+    } v;
+    v.f = f;
+    return v.u;
+}
+#endif
+
+/* exp(-x) for the filters' weights, x >= 0 (below 0 it reads as 0; above ~69, NaN
+ * included, as 69): 2^-t with t = x log2 e split into the nearest integer n, applied
+ * through the exponent bits, and a remainder |f| <= ln2 / 2 whose exponential a
+ * degree-5 Taylor polynomial gives to 6e-6 relative. n comes from the mantissa of
+ * t + 1.5 * 2^23 (round to nearest, no float-to-int conversion), so there is no libm
+ * call, no branch and nothing that traps: the host's loops over pixels vectorise, and a
+ * device computes the same numbers. */
+TR_FN float tr_post_exp_neg(float x) {
+    float t = x * 1.44269504f;
+    t = t < 100.0f ? t : 100.0f;
+    t = t > 0.0f ? t : 0.0f;
+    const float m = t + 12582912.0f;
+    const uint32_t n = tr_post_float_bits(m) - 0x4B400000u;
+    const float f = ((m - 12582912.0f) - t) * 0.693147181f;
+    const float p =
+        1.0f +
+        f * (1.0f + f * (0.5f + f * (0.166666672f + f * (0.0416666679f + f * 0.00833333377f))));
+    return p * tr_post_bits_float((127u - n) << 23);
+}
+
 /* Rec. 709 luminance of linear RGB. */
 TR_FN float tr_post_luminance(float r, float g, float b) {
     return 0.2126f * r + 0.7152f * g + 0.0722f * b;
@@ -183,6 +227,58 @@ tr_post_temporal_pixel(const tr_camera *cam, const tr_camera *prev, uint32_t x, 
     *out_len = len;
 }
 
+/* Temporal antialiasing of pixel (x, y) (Karis, "High Quality Temporal Supersampling",
+ * SIGGRAPH 2014 course; the last stage of Schied et al. 2017): the previous output
+ * `prev_out` reprojected as tr_post_reproject does (NULL: none), clamped per channel to
+ * the range of the current output's 3x3 neighbourhood so that stale colour cannot
+ * linger (ghosting), then blended with the current pixel by weight alpha. Where no
+ * history survives, the current pixel as it is. */
+TR_FN void tr_post_taa_pixel(const tr_camera *cam, const tr_camera *prev, int x, int y,
+                             TR_CONST_GLOBAL float *cur, TR_CONST_GLOBAL float *normal,
+                             TR_CONST_GLOBAL float *depth, TR_CONST_GLOBAL uint32_t *prim,
+                             TR_CONST_GLOBAL float *prev_out, TR_CONST_GLOBAL float *prev_depth,
+                             TR_CONST_GLOBAL float *prev_normal,
+                             TR_CONST_GLOBAL uint32_t *prev_prim, float alpha, float out[3]) {
+    const int w = (int)cam->screen_width, h = (int)cam->screen_height;
+    const int c = y * w + x;
+    out[0] = cur[3 * c];
+    out[1] = cur[3 * c + 1];
+    out[2] = cur[3 * c + 2];
+    if (!prev_out) {
+        return;
+    }
+    float wts[4];
+    int x0, y0;
+    const tr_vec3 n = v3(normal[3 * c], normal[3 * c + 1], normal[3 * c + 2]);
+    const float total = tr_post_reproject(cam, prev, (uint32_t)x, (uint32_t)y, depth[c], n, prim[c],
+                                          prev_depth, prev_normal, prev_prim, &x0, &y0, wts);
+    if (!(total > 0.05f)) {
+        return;
+    }
+    const int pw = (int)prev->screen_width;
+    for (int k = 0; k < 3; ++k) {
+        float lo = out[k], hi = out[k];
+        for (int dy = -1; dy <= 1; ++dy) {
+            for (int dx = -1; dx <= 1; ++dx) {
+                const int tx = x + dx, ty = y + dy;
+                if (tx >= 0 && ty >= 0 && tx < w && ty < h) {
+                    const float v = cur[3 * (ty * w + tx) + k];
+                    lo = tr_fminf(lo, v);
+                    hi = tr_fmaxf(hi, v);
+                }
+            }
+        }
+        float hv = 0.0f;
+        for (int t = 0; t < 4; ++t) {
+            if (wts[t] > 0.0f) {
+                hv += wts[t] / total * prev_out[3 * ((y0 + (t >> 1)) * pw + x0 + (t & 1)) + k];
+            }
+        }
+        hv = tr_fminf(tr_fmaxf(hv, lo), hi);
+        out[k] = hv + alpha * (out[k] - hv);
+    }
+}
+
 /* Demodulation (Dammertz et al. 2010, section 4; Schied et al. 2017, section 4.1): the
  * filters smooth illumination = radiance / albedo, so that texture and material edges
  * survive, and multiply the albedo back after. An albedo channel near zero keeps the
@@ -214,8 +310,8 @@ TR_FN void tr_post_bilateral_pixel(TR_CONST_GLOBAL float *in, int w, int h, int 
             }
             const int i = ty * w + tx;
             const float dr = in[3 * i] - cr, dg = in[3 * i + 1] - cg, db = in[3 * i + 2] - cb;
-            const float wt =
-                tr_expf(-(float)(dx * dx + dy * dy) * is - (dr * dr + dg * dg + db * db) * ir);
+            const float wt = tr_post_exp_neg((float)(dx * dx + dy * dy) * is +
+                                             (dr * dr + dg * dg + db * db) * ir);
             sr += wt * in[3 * i];
             sg += wt * in[3 * i + 1];
             sb += wt * in[3 * i + 2];
@@ -248,6 +344,7 @@ TR_FN void tr_post_atrous_pixel(TR_CONST_GLOBAL float *in, TR_CONST_GLOBAL float
     const tr_vec3 cn = v3(normal[3 * c], normal[3 * c + 1], normal[3 * c + 2]);
     const float cz = depth[c];
     const float ca0 = albedo[3 * c], ca1 = albedo[3 * c + 1], ca2 = albedo[3 * c + 2];
+    const float icz = 1.0f / (cz > 1e-6f ? cz : 1.0f);
     const float ic = 1.0f / (sigma_c * sigma_c), in2 = 1.0f / (sigma_n * sigma_n);
     const float iz = 1.0f / (sigma_z * sigma_z), ia = 1.0f / (sigma_a * sigma_a);
     float sr = 0.0f, sg = 0.0f, sb = 0.0f, sw = 0.0f;
@@ -264,12 +361,12 @@ TR_FN void tr_post_atrous_pixel(TR_CONST_GLOBAL float *in, TR_CONST_GLOBAL float
             const int i = ty * w + tx;
             const float dr = in[3 * i] - cr, dg = in[3 * i + 1] - cg, db = in[3 * i + 2] - cb;
             const tr_vec3 dn = v3_sub(v3(normal[3 * i], normal[3 * i + 1], normal[3 * i + 2]), cn);
-            const float dz = (depth[i] - cz) / (cz > 1e-6f ? cz : 1.0f);
+            const float dz = (depth[i] - cz) * icz;
             const float da0 = albedo[3 * i] - ca0, da1 = albedo[3 * i + 1] - ca1,
                         da2 = albedo[3 * i + 2] - ca2;
             const float e = (dr * dr + dg * dg + db * db) * ic + v3_dot(dn, dn) * in2 +
                             dz * dz * iz + (da0 * da0 + da1 * da1 + da2 * da2) * ia;
-            const float wt = tr_post_b3(kx) * tr_post_b3(ky) * tr_expf(-e);
+            const float wt = tr_post_b3(kx) * tr_post_b3(ky) * tr_post_exp_neg(e);
             sr += wt * in[3 * i];
             sg += wt * in[3 * i + 1];
             sb += wt * in[3 * i + 2];
@@ -281,31 +378,115 @@ TR_FN void tr_post_atrous_pixel(TR_CONST_GLOBAL float *in, TR_CONST_GLOBAL float
     out[2] = sb / sw;
 }
 
+/* SVGF's depth coefficient at pixel (x, y): 1 / (sigma_z |∇z|), with depth's
+ * screen-space gradient by central differences (the paper takes it from the
+ * rasteriser's derivatives) and a floor of 1e-3 of the depth itself, so that a surface
+ * seen head-on still tolerates its own noise. */
+TR_FN float tr_post_svgf_kz(TR_CONST_GLOBAL float *depth, int w, int h, int x, int y,
+                            float sigma_z) {
+    const int xl = x > 0 ? x - 1 : x, xr = x + 1 < w ? x + 1 : x;
+    const int yu = y > 0 ? y - 1 : y, yd = y + 1 < h ? y + 1 : y;
+    const float gx = (depth[y * w + xr] - depth[y * w + xl]) / (float)(xr - xl > 0 ? xr - xl : 1);
+    const float gy = (depth[yd * w + x] - depth[yu * w + x]) / (float)(yd - yu > 0 ? yd - yu : 1);
+    const float grad = tr_sqrtf(gx * gx + gy * gy) + 1e-3f * depth[y * w + x];
+    return 1.0f / (sigma_z * grad + 1e-6f);
+}
+
+/* SVGF's variance of pixel (x, y)'s luminance (Schied et al. 2017, section 4.2): from
+ * the temporal moments once 4 frames of history exist, before that from the 5x5
+ * neighbourhood's moments (the paper takes 7x7 on the same condition), restricted to
+ * taps whose normal is within ~25 degrees so that it stays on one surface, and boosted
+ * by 4 / length as the paper does, since so few frames are less to trust. */
+TR_FN float tr_post_svgf_variance_pixel(TR_CONST_GLOBAL float *illum,
+                                        TR_CONST_GLOBAL float *moments, TR_CONST_GLOBAL float *len,
+                                        TR_CONST_GLOBAL float *normal, int w, int h, int x, int y) {
+    const int c = y * w + x;
+    if (len[c] >= 4.0f) {
+        const float m = moments[2 * c];
+        return tr_fmaxf(moments[2 * c + 1] - m * m, 0.0f);
+    }
+    float s1 = 0.0f, s2 = 0.0f, sw = 0.0f;
+    for (int dy = -2; dy <= 2; ++dy) {
+        for (int dx = -2; dx <= 2; ++dx) {
+            const int tx = x + dx, ty = y + dy;
+            if (tx < 0 || ty < 0 || tx >= w || ty >= h) {
+                continue;
+            }
+            const int i = ty * w + tx;
+            const float nd = normal[3 * c] * normal[3 * i] + normal[3 * c + 1] * normal[3 * i + 1] +
+                             normal[3 * c + 2] * normal[3 * i + 2];
+            const float wt = (dx == 0 && dy == 0) || nd > 0.9f ? 1.0f : 0.0f;
+            const float l = tr_post_luminance(illum[3 * i], illum[3 * i + 1], illum[3 * i + 2]);
+            s1 += wt * l;
+            s2 += wt * l * l;
+            sw += wt;
+        }
+    }
+    const float m = s1 / sw;
+    return tr_fmaxf(s2 / sw - m * m, 0.0f) * (4.0f / len[c]);
+}
+
+/* The variance of pixel (x, y) through SVGF's 3x3 Gaussian prefilter (taps 1, 1/2, 1/4,
+ * renormalised at the border), which keeps one noisy estimate from stopping the filter. */
+TR_FN float tr_post_var3x3(TR_CONST_GLOBAL float *var, int w, int h, int x, int y) {
+    float cv = 0.0f, cw = 0.0f;
+    for (int dy = -1; dy <= 1; ++dy) {
+        for (int dx = -1; dx <= 1; ++dx) {
+            const int tx = x + dx, ty = y + dy;
+            if (tx < 0 || ty < 0 || tx >= w || ty >= h) {
+                continue;
+            }
+            const float k = (dx ? 0.5f : 1.0f) * (dy ? 0.5f : 1.0f);
+            cv += k * var[ty * w + tx];
+            cw += k;
+        }
+    }
+    return cv / cw;
+}
+
+/* SVGF's luminance coefficient for a centre of (prefiltered) variance var:
+ * 1 / (sigma_l sqrt(var)). */
+TR_FN float tr_post_svgf_kl(float var, float sigma_l) {
+    return 1.0f / (sigma_l * tr_sqrtf(tr_fmaxf(var, 0.0f)) + 1e-6f);
+}
+
+/* 1 / |offset| in pixels of tap (kx, ky) at hole size `step`; 0 for the centre (whose
+ * depth difference is 0). */
+TR_FN float tr_post_svgf_idist(int kx, int ky, int step) {
+    return kx || ky ? 1.0f / (tr_sqrtf((float)(kx * kx + ky * ky)) * (float)step) : 0.0f;
+}
+
+/* The exponent of SVGF's edge-stopping weight (Schied et al. 2017, eq. 3-5): depth
+ * |Δz| / (sigma_z |∇z| |offset|), luminance |Δl| / (sigma_l sqrt(g(Var))), and the
+ * normal term max(0, n·n')^sigma_n written as exp(-sigma_n (1 - n·n')) (kn = sigma_n,
+ * or 0 where the centre has no normal): ln(d) = -(1 - d) to first order, the same
+ * weight to within 1 % wherever it is above 0.01 (d > 0.96 for sigma_n 128), and one
+ * exponential per tap instead of a pow and an exp. */
+TR_FN float tr_post_svgf_exponent(float dz, float kz, float idist, float dl, float kl, float kn,
+                                  float nd) {
+    return tr_fabsf(dz) * kz * idist + tr_fabsf(dl) * kl + kn * (1.0f - nd);
+}
+
 /* One iteration of SVGF's à-trous step (Schied et al., "Spatiotemporal
  * Variance-Guided Filtering: Real-Time Reconstruction for Path-Traced Global
  * Illumination", HPG 2017, section 4.3) at pixel (x, y): the B3 kernel with holes of
- * `step` pixels, weighted by a depth term exp(-|Δz| / (sigma_z |∇z| |offset| + ε)), a
- * normal term max(0, n·n')^sigma_n and a luminance term exp(-|Δl| / (sigma_l
- * sqrt(variance) + ε)) steered by the variance of the centre's luminance (var, its 3x3
- * Gaussian blur in the paper; here the caller's). Filters colour into out[0..2] and the
- * variance with squared weights into *out_var (eq. 5), for the next iteration. */
+ * `step` pixels, weighted by tr_post_svgf_exponent's terms, the luminance one steered
+ * by centre_var (the centre's variance through the paper's 3x3 Gaussian; the caller's).
+ * Filters colour into out[0..2] and the variance with squared weights into *out_var
+ * (eq. 5), for the next iteration. The host's vectorised loops (filter.c) compute the
+ * same sums in the same order. */
 TR_FN void tr_post_svgf_pixel(TR_CONST_GLOBAL float *in, TR_CONST_GLOBAL float *var,
                               TR_CONST_GLOBAL float *normal, TR_CONST_GLOBAL float *depth, int w,
                               int h, int x, int y, int step, float sigma_l, float sigma_n,
                               float sigma_z, float centre_var, float out[3], float *out_var) {
     const int c = y * w + x;
     const float cl = tr_post_luminance(in[3 * c], in[3 * c + 1], in[3 * c + 2]);
-    const tr_vec3 cn = v3(normal[3 * c], normal[3 * c + 1], normal[3 * c + 2]);
-    const int has_normal = v3_dot(cn, cn) > 0.25f; /* no surface hit: no normal term */
+    const float cnx = normal[3 * c], cny = normal[3 * c + 1], cnz = normal[3 * c + 2];
+    /* No surface hit: no normal term. */
+    const float kn = cnx * cnx + cny * cny + cnz * cnz > 0.25f ? sigma_n : 0.0f;
     const float cz = depth[c];
-    /* Depth's screen-space gradient by central differences (the paper takes it from
-     * the rasteriser's derivatives). */
-    const int xl = x > 0 ? x - 1 : x, xr = x + 1 < w ? x + 1 : x;
-    const int yu = y > 0 ? y - 1 : y, yd = y + 1 < h ? y + 1 : y;
-    const float gx = (depth[y * w + xr] - depth[y * w + xl]) / (float)(xr - xl > 0 ? xr - xl : 1);
-    const float gy = (depth[yd * w + x] - depth[yu * w + x]) / (float)(yd - yu > 0 ? yd - yu : 1);
-    const float grad = tr_sqrtf(gx * gx + gy * gy) + 1e-3f * cz;
-    const float lden = sigma_l * tr_sqrtf(tr_fmaxf(centre_var, 0.0f)) + 1e-6f;
+    const float kz = tr_post_svgf_kz(depth, w, h, x, y, sigma_z);
+    const float kl = tr_post_svgf_kl(centre_var, sigma_l);
     float sr = 0.0f, sg = 0.0f, sb = 0.0f, sw = 0.0f, sv = 0.0f;
     for (int ky = -2; ky <= 2; ++ky) {
         const int ty = y + ky * step;
@@ -319,13 +500,11 @@ TR_FN void tr_post_svgf_pixel(TR_CONST_GLOBAL float *in, TR_CONST_GLOBAL float *
             }
             const int i = ty * w + tx;
             const float li = tr_post_luminance(in[3 * i], in[3 * i + 1], in[3 * i + 2]);
-            const float dist = tr_sqrtf((float)(kx * kx + ky * ky)) * (float)step;
-            const float wz = tr_fabsf(depth[i] - cz) / (sigma_z * grad * dist + 1e-6f);
             const float nd =
-                tr_fmaxf(0.0f, v3_dot(cn, v3(normal[3 * i], normal[3 * i + 1], normal[3 * i + 2])));
-            const float wn = has_normal ? tr_powf(nd, sigma_n) : 1.0f;
-            const float wl = tr_fabsf(li - cl) / lden;
-            const float wt = tr_post_b3(kx) * tr_post_b3(ky) * wn * tr_expf(-wz - wl);
+                cnx * normal[3 * i] + cny * normal[3 * i + 1] + cnz * normal[3 * i + 2];
+            const float e = tr_post_svgf_exponent(
+                depth[i] - cz, kz, tr_post_svgf_idist(kx, ky, step), li - cl, kl, kn, nd);
+            const float wt = tr_post_b3(kx) * tr_post_b3(ky) * tr_post_exp_neg(e);
             sr += wt * in[3 * i];
             sg += wt * in[3 * i + 1];
             sb += wt * in[3 * i + 2];
