@@ -2,7 +2,10 @@
 
     blender -b --factory-startup -P tools/cycles/render_scene.py -- SCENE.json \
         [--width 256] [--height 256] [--spp N] [--seed S] [--threads T] \
-        [--time-limit SECONDS] --out OUT.exr|OUT.pfm
+        [--time-limit SECONDS] [--max-bounces 1024] --out OUT.exr|OUT.pfm
+
+--max-bounces is for diagnosis only (0: direct light only, as trac0r's --max-depth 2); the
+comparison keeps the default, 1024, where Cycles' Russian roulette ends the paths.
 
 Blender is a measuring instrument here, never a dependency of trac0r: nothing in the build,
 the tests or CI runs this script (docs/cycles.md says how the comparison is made).
@@ -60,10 +63,11 @@ def parse_args(argv):
     else:
         argv = []
     opts = {"width": 256, "height": 256, "spp": 16, "seed": 0, "threads": 0,
-            "time_limit": 0.0, "out": None, "scene": None}
+            "time_limit": 0.0, "max_bounces": 1024, "light_threshold": 0.01, "pattern": "pmj", "out": None, "scene": None}
     numeric = {"--width": ("width", int), "--height": ("height", int), "--spp": ("spp", int),
                "--seed": ("seed", int), "--threads": ("threads", int),
-               "--time-limit": ("time_limit", float)}
+               "--time-limit": ("time_limit", float), "--max-bounces": ("max_bounces", int),
+               "--light-threshold": ("light_threshold", float), "--pattern": ("pattern", str)}
     i = 0
     while i < len(argv):
         a = argv[i]
@@ -90,7 +94,7 @@ def parse_args(argv):
     if opts["scene"] is None or opts["out"] is None:
         fail("usage: blender -b --factory-startup -P render_scene.py -- SCENE.json "
              "[--width W] [--height H] [--spp N] [--seed S] [--threads T] "
-             "[--time-limit SECONDS] --out OUT.exr|OUT.pfm")
+             "[--time-limit SECONDS] [--max-bounces B] --out OUT.exr|OUT.pfm")
     if not (1 <= opts["width"] <= 16384 and 1 <= opts["height"] <= 16384):
         fail("--width/--height: expected 1..16384, got %dx%d" % (opts["width"], opts["height"]))
     if not (1 <= opts["spp"] <= 1 << 24):
@@ -99,6 +103,12 @@ def parse_args(argv):
         fail("--seed: expected 0..2147483647, got %d" % opts["seed"])
     if opts["threads"] < 0 or opts["threads"] > 1024:
         fail("--threads: expected 0 (all) .. 1024, got %d" % opts["threads"])
+    if opts["pattern"] not in ("pmj", "sobol"):
+        fail("--pattern: expected pmj or sobol, got '%s'" % opts["pattern"])
+    if not (0.0 <= opts["light_threshold"] <= 1.0):
+        fail("--light-threshold: expected 0..1, got %s" % opts["light_threshold"])
+    if not (0 <= opts["max_bounces"] <= 1024):
+        fail("--max-bounces: expected 0..1024, got %d" % opts["max_bounces"])
     if not (opts["time_limit"] >= 0.0 and math.isfinite(opts["time_limit"])):
         fail("--time-limit: expected seconds >= 0, got %s" % opts["time_limit"])
     ext = os.path.splitext(opts["out"])[1].lower()
@@ -408,13 +418,14 @@ def configure(scene, opts):
     c.samples = opts["spp"]
     c.use_adaptive_sampling = False
     c.use_denoising = False
-    c.sampling_pattern = "PROGRESSIVE_MULTI_JITTER"
+    c.sampling_pattern = {"pmj": "PROGRESSIVE_MULTI_JITTER", "sobol": "SOBOL"}[opts["pattern"]]
+    c.light_sampling_threshold = opts["light_threshold"]
     c.seed = opts["seed"]
     c.use_animated_seed = False
     c.time_limit = opts["time_limit"]
     for k in ("max_bounces", "diffuse_bounces", "glossy_bounces", "transmission_bounces",
               "volume_bounces", "transparent_max_bounces"):
-        setattr(c, k, 1024)
+        setattr(c, k, opts["max_bounces"])
     c.sample_clamp_direct = 0.0
     c.sample_clamp_indirect = 0.0
     c.blur_glossy = 0.0
