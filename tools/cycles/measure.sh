@@ -7,7 +7,11 @@
 #     tools/cycles/measure.sh --reference REF.exr|REF.pfm [--scene scenes/cornell-classic.json]
 #         [--size 256x256] [--ladder "16 32 64 128 256 512 1024"] [--target 4.7e-4]
 #         [--seed 1] [--threads 0] [--trac0r build/release/trac0r] [--blender blender]
-#         [--out cycles-measure]
+#         [--reference-error 0] [--out cycles-measure]
+#
+# --reference-error E: the reference's own relative MSE (from two independent halves:
+# tools/cycles/pfmtool.py halves), taken off every measured figure before the fit, since
+# measured = true + reference's for independent noise. The CSV keeps the measured figures.
 #
 # Run it on a quiet machine: the renders take turns rung by rung (trac0r, then Cycles, at
 # each sample count), so slow drifts of the load hit both. Times:
@@ -32,6 +36,7 @@ trac0r=build/release/trac0r
 blender=blender
 out=cycles-measure
 reference=
+referr=0
 
 die() {
     echo "measure.sh: $*" >&2
@@ -51,6 +56,7 @@ while [ $# -gt 0 ]; do
     --blender) blender=$2 ;;
     --out) out=$2 ;;
     --reference) reference=$2 ;;
+    --reference-error) referr=$2 ;;
     *) die "unknown option '$1'" ;;
     esac
     shift 2
@@ -72,6 +78,8 @@ for v in $width $height $seed $threads $ladder; do
 done
 python3 -c "import sys; t = float(sys.argv[1]); sys.exit(0 if t > 0 else 1)" "$target" 2>/dev/null ||
     die "--target: expected a positive number, got '$target'"
+python3 -c "import sys; e = float(sys.argv[1]); sys.exit(0 if e >= 0 else 1)" "$referr" 2>/dev/null ||
+    die "--reference-error: expected a number >= 0, got '$referr'"
 
 mkdir -p "$out"
 csv=$out/measure.csv
@@ -118,10 +126,10 @@ done
     awk -F, 'NR > 1 { e[$1 "," $2] = $6; s[$2] = 1 }
         END { for (n in s) printf "  %6d spp: trac0r %s, cycles %s\n", n, e["trac0r," n], e["cycles," n] }' \
         "$csv" | sort -n -k1
-    echo "time to relative MSE $target (render seconds; log-log interpolation):"
-    python3 "$here/pfmtool.py" fit "$csv" "$target" | sed 's/^/  /'
+    echo "time to relative MSE $target (render seconds; log-log interpolation; reference's own error $referr taken off):"
+    python3 "$here/pfmtool.py" fit "$csv" "$target" "$referr" | sed 's/^/  /'
     echo "the same on the wall time of the whole process (start-up included):"
     awk -F, 'BEGIN { OFS = "," } NR > 1 { t = $4; $4 = $5; $5 = t } { print }' "$csv" >"$out/wall.csv"
-    python3 "$here/pfmtool.py" fit "$out/wall.csv" "$target" | sed 's/^/  /'
+    python3 "$here/pfmtool.py" fit "$out/wall.csv" "$target" "$referr" | sed 's/^/  /'
 } >"$out/summary.txt"
 cat "$out/summary.txt"

@@ -10,7 +10,8 @@
     pfmtool.py blocks A.pfm REF.pfm [N]    N x N-pixel block means (default 8) of A against
                                            REF, RGB mean: the largest relative deviation, the
                                            mean deviation and the fraction beyond 3 %
-    pfmtool.py fit CSV TARGET              log-log interpolation of spp/time against relMSE
+    pfmtool.py fit CSV TARGET [REF_ERROR]  log-log interpolation of spp/time against relMSE
+                                           (less the reference's own relMSE, default 0)
 
 PFM as trac0r writes it: "PF", width height, a negative scale (little-endian), float RGB
 rows bottom to top. Errors name the file and exit with status 2.
@@ -167,9 +168,15 @@ def loglog_crossing(points, target):
 def cmd_fit(args):
     """CSV rows renderer,spp,seconds,relmse (a header line first): per renderer the spp and
     the seconds at which relmse reaches TARGET, and their ratio."""
-    if len(args) != 2:
-        die("fit: expected CSV TARGET")
-    target = float(args[1])
+    if len(args) not in (2, 3):
+        die("fit: expected CSV TARGET [REF_ERROR]")
+    try:
+        target = float(args[1])
+        ref_err = float(args[2]) if len(args) == 3 else 0.0
+    except ValueError:
+        die("fit: TARGET and REF_ERROR must be numbers, got %s" % args[1:])
+    if not (target > 0 and ref_err >= 0):
+        die("fit: expected TARGET > 0 and REF_ERROR >= 0")
     rows = {}
     try:
         with open(args[0], "r", encoding="utf-8") as fh:
@@ -188,7 +195,8 @@ def cmd_fit(args):
             name, spp, sec, err = f[idx[0]], float(f[idx[1]]), float(f[idx[2]]), float(f[idx[3]])
         except (ValueError, IndexError):
             die("%s:%d: bad row '%s'" % (args[0], ln, line))
-        rows.setdefault(name, []).append((spp, sec, err))
+        # The reference's noise is independent of the image's: measured = true + ref_err.
+        rows.setdefault(name, []).append((spp, sec, err - ref_err))
     times = {}
     for name, rs in rows.items():
         s, how_s = loglog_crossing([(r[0], r[2]) for r in rs], target)
