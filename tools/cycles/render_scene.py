@@ -2,10 +2,12 @@
 
     blender -b --factory-startup -P tools/cycles/render_scene.py -- SCENE.json \
         [--width 256] [--height 256] [--spp N] [--seed S] [--threads T] \
-        [--time-limit SECONDS] [--max-bounces 1024] --out OUT.exr|OUT.pfm
+        [--time-limit SECONDS] --out OUT.exr|OUT.pfm
+    for diagnosis only: [--max-bounces 1024] [--light-threshold 0.01] [--pattern pmj|sobol]
 
---max-bounces is for diagnosis only (0: direct light only, as trac0r's --max-depth 2); the
-comparison keeps the default, 1024, where Cycles' Russian roulette ends the paths.
+--max-bounces 0 is direct light only (as trac0r's --max-depth 2); --light-threshold is
+Cycles' light_sampling_threshold (its default 0.01); --pattern picks Cycles' sampler. The
+comparison keeps the defaults: 1024 bounces, where Cycles' Russian roulette ends the paths.
 
 Blender is a measuring instrument here, never a dependency of trac0r: nothing in the build,
 the tests or CI runs this script (docs/cycles.md says how the comparison is made).
@@ -94,7 +96,8 @@ def parse_args(argv):
     if opts["scene"] is None or opts["out"] is None:
         fail("usage: blender -b --factory-startup -P render_scene.py -- SCENE.json "
              "[--width W] [--height H] [--spp N] [--seed S] [--threads T] "
-             "[--time-limit SECONDS] [--max-bounces B] --out OUT.exr|OUT.pfm")
+             "[--time-limit SECONDS] [--max-bounces B] [--light-threshold X] "
+             "[--pattern pmj|sobol] --out OUT.exr|OUT.pfm")
     if not (1 <= opts["width"] <= 16384 and 1 <= opts["height"] <= 16384):
         fail("--width/--height: expected 1..16384, got %dx%d" % (opts["width"], opts["height"]))
     if not (1 <= opts["spp"] <= 1 << 24):
