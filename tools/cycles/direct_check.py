@@ -12,6 +12,7 @@ edges of the angle each subtends times the cosine of its plane's normal with the
 normal). Prints render / exact per surface (shape name), summed over the pixels.
 """
 import json, math, os, sys
+sys.dont_write_bytecode = True  # no __pycache__ in the source tree
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import pfmtool as P
 if len(sys.argv) < 3:
