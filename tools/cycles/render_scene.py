@@ -1,0 +1,550 @@
+"""Render a trac0r scene file with Blender's Cycles, for the comparison of issue 15.
+
+    blender -b --factory-startup -P tools/cycles/render_scene.py -- SCENE.json \
+        [--width 256] [--height 256] [--spp N] [--seed S] [--threads T] \
+        [--time-limit SECONDS] --out OUT.exr|OUT.pfm
+    for diagnosis only: [--max-bounces 1024] [--light-threshold 0.01] [--pattern pmj|sobol]
+
+--max-bounces 0 is direct light only (as trac0r's --max-depth 2); --light-threshold is
+Cycles' light_sampling_threshold (its default 0.01); --pattern picks Cycles' sampler. The
+comparison keeps the defaults: 1024 bounces, where Cycles' Russian roulette ends the paths.
+
+Blender is a measuring instrument here, never a dependency of trac0r: nothing in the build,
+the tests or CI runs this script (docs/cycles.md says how the comparison is made).
+
+What it maps, so that both renderers solve the same light transport problem:
+  * shapes `quad`, `plane`, `box` (with position / orientation(_rad) / scale), as the
+    triangles trac0r makes of them (a quad is (v0 v1 v2) and (v0 v2 v3): the classic box's
+    walls are not planar, so the diagonal matters), in the scene's own units;
+  * materials `diffuse` (Diffuse BSDF, roughness 0: Lambert; not the Principled BSDF, whose
+    diffuse lobe is Burley's, not Lambert's) and `emitter` (Emission, radiance
+    color x emittance; one-sided unless `two_sided`: Cycles 3.4's mesh emission is
+    two-sided, so the strength is multiplied by 1 - Backfacing);
+  * the camera: position, look_at / direction, up, vertical fov, near / far, handedness.
+Anything else (other shapes or materials, material extras, meshes, an environment) is
+refused with a message naming the field, and exit status 2, rather than rendered wrongly.
+
+trac0r's world is right-handed with y up; Blender's is right-handed with z up, so a point
+(x, y, z) goes to (x, -z, y), a rotation. A left-handed trac0r camera (the thesis's: right =
+up x direction) sees the mirror image of what Blender's camera (right = direction x up)
+sees; that scene is mirrored in x first, and its triangles re-wound so that their fronts
+stay on the same physical side.
+
+Cycles settings: CPU, path tracing with light sampling and MIS (its defaults), progressive
+multi-jitter sampling, 1024 bounces of every kind (paths end by Cycles' own Russian
+roulette, not by depth), no clamping, no glossy filter, no denoising, no adaptive
+sampling, a 1-pixel box pixel filter (trac0r jitters uniformly in the pixel), a black
+world, Standard view transform, and the image written as linear 32-bit float.
+"""
+
+import json
+import math
+import os
+import struct
+import sys
+import time
+
+import bpy
+from mathutils import Matrix, Vector
+
+
+class SceneError(Exception):
+    pass
+
+
+def fail(msg, code=2):
+    sys.stderr.write("render_scene.py: %s\n" % msg)
+    sys.stderr.flush()
+    # Blender's own exit would run the rest of its command line; leave at once.
+    os._exit(code)
+
+
+def parse_args(argv):
+    if "--" in argv:
+        argv = argv[argv.index("--") + 1:]
+    else:
+        argv = []
+    opts = {"width": 256, "height": 256, "spp": 16, "seed": 0, "threads": 0,
+            "time_limit": 0.0, "max_bounces": 1024, "light_threshold": 0.01, "pattern": "pmj", "out": None, "scene": None}
+    numeric = {"--width": ("width", int), "--height": ("height", int), "--spp": ("spp", int),
+               "--seed": ("seed", int), "--threads": ("threads", int),
+               "--time-limit": ("time_limit", float), "--max-bounces": ("max_bounces", int),
+               "--light-threshold": ("light_threshold", float), "--pattern": ("pattern", str)}
+    i = 0
+    while i < len(argv):
+        a = argv[i]
+        if a in numeric or a == "--out":
+            if i + 1 >= len(argv):
+                fail("%s needs a value" % a)
+            v = argv[i + 1]
+            if a == "--out":
+                opts["out"] = v
+            else:
+                key, conv = numeric[a]
+                try:
+                    opts[key] = conv(v)
+                except ValueError:
+                    fail("%s: expected a number, got '%s'" % (a, v))
+            i += 2
+        elif a.startswith("--"):
+            fail("unknown option '%s'" % a)
+        elif opts["scene"] is None:
+            opts["scene"] = a
+            i += 1
+        else:
+            fail("more than one scene file ('%s')" % a)
+    if opts["scene"] is None or opts["out"] is None:
+        fail("usage: blender -b --factory-startup -P render_scene.py -- SCENE.json "
+             "[--width W] [--height H] [--spp N] [--seed S] [--threads T] "
+             "[--time-limit SECONDS] [--max-bounces B] [--light-threshold X] "
+             "[--pattern pmj|sobol] --out OUT.exr|OUT.pfm")
+    if not (1 <= opts["width"] <= 16384 and 1 <= opts["height"] <= 16384):
+        fail("--width/--height: expected 1..16384, got %dx%d" % (opts["width"], opts["height"]))
+    if not (1 <= opts["spp"] <= 1 << 24):
+        fail("--spp: expected 1..16777216, got %d" % opts["spp"])
+    if opts["seed"] < 0 or opts["seed"] > 2**31 - 1:
+        fail("--seed: expected 0..2147483647, got %d" % opts["seed"])
+    if opts["threads"] < 0 or opts["threads"] > 1024:
+        fail("--threads: expected 0 (all) .. 1024, got %d" % opts["threads"])
+    if opts["pattern"] not in ("pmj", "sobol"):
+        fail("--pattern: expected pmj or sobol, got '%s'" % opts["pattern"])
+    if not (0.0 <= opts["light_threshold"] <= 1.0):
+        fail("--light-threshold: expected 0..1, got %s" % opts["light_threshold"])
+    if not (0 <= opts["max_bounces"] <= 1024):
+        fail("--max-bounces: expected 0..1024, got %d" % opts["max_bounces"])
+    if not (opts["time_limit"] >= 0.0 and math.isfinite(opts["time_limit"])):
+        fail("--time-limit: expected seconds >= 0, got %s" % opts["time_limit"])
+    ext = os.path.splitext(opts["out"])[1].lower()
+    if ext not in (".exr", ".pfm"):
+        fail("--out: expected a .exr or .pfm file, got '%s'" % opts["out"])
+    return opts
+
+
+# ---- reading the trac0r scene ---------------------------------------------------------
+
+
+def vec3(v, where):
+    if (not isinstance(v, list) or len(v) != 3
+            or not all(isinstance(e, (int, float)) and not isinstance(e, bool) for e in v)):
+        raise SceneError("%s: expected [x, y, z], got %s" % (where, json.dumps(v)))
+    return [float(e) for e in v]
+
+
+def check_keys(obj, allowed, where):
+    for k in obj:
+        if k not in allowed:
+            raise SceneError("%s.%s: not mapped to Cycles by this script (it maps %s)"
+                             % (where, k, ", ".join(sorted(allowed))))
+
+
+def rotate_xyz(p, a):
+    """trac0r's rotation: about x, then y, then z (src/scene/shape.c)."""
+    x, y, z = p
+    c, s = math.cos(a[0]), math.sin(a[0])
+    y, z = c * y - s * z, s * y + c * z
+    c, s = math.cos(a[1]), math.sin(a[1])
+    x, z = c * x + s * z, -s * x + c * z
+    c, s = math.cos(a[2]), math.sin(a[2])
+    x, y = c * x - s * y, s * x + c * y
+    return [x, y, z]
+
+
+def shape_transform(sh, where):
+    pos = vec3(sh.get("position", [0, 0, 0]), where + ".position")
+    if "orientation" in sh and "orientation_rad" in sh:
+        raise SceneError("%s: both orientation and orientation_rad" % where)
+    if "orientation_rad" in sh:
+        ang = vec3(sh["orientation_rad"], where + ".orientation_rad")
+    else:
+        ang = [math.radians(e) for e in vec3(sh.get("orientation", [0, 0, 0]),
+                                             where + ".orientation")]
+    sc = sh.get("scale", 1)
+    if isinstance(sc, (int, float)) and not isinstance(sc, bool):
+        sc = [float(sc)] * 3
+    else:
+        sc = vec3(sc, where + ".scale")
+    if not all(e > 0 for e in sc):
+        raise SceneError("%s.scale: expected positive numbers, got %s" % (where, json.dumps(sc)))
+
+    def apply(p):
+        q = rotate_xyz([p[0] * sc[0], p[1] * sc[1], p[2] * sc[2]], ang)
+        return [q[0] + pos[0], q[1] + pos[1], q[2] + pos[2]]
+    return apply
+
+
+def unit_box_triangles():
+    """The unit cube [-0.5, 0.5]^3, two triangles a face, fronts outward."""
+    tris = []
+    for axis in range(3):
+        for side in (-1.0, 1.0):
+            n = [0.0, 0.0, 0.0]
+            n[axis] = 0.5 * side
+            u = [0.0, 0.0, 0.0]
+            v = [0.0, 0.0, 0.0]
+            u[(axis + 1) % 3] = 0.5
+            v[(axis + 2) % 3] = 0.5
+            if side < 0:
+                u = [-e for e in u]
+            c = [[n[k] + su * u[k] + sv * v[k] for k in range(3)]
+                 for su, sv in ((-1, -1), (1, -1), (1, 1), (-1, 1))]
+            tris.append((c[0], c[1], c[2]))
+            tris.append((c[0], c[2], c[3]))
+    return tris
+
+
+def shape_triangles(sh, where):
+    t = sh.get("type")
+    common = {"type", "name", "position", "orientation", "orientation_rad", "scale", "material"}
+    if t == "quad":
+        check_keys(sh, common | {"vertices"}, where)
+        vs = sh.get("vertices")
+        if not isinstance(vs, list) or len(vs) != 4:
+            raise SceneError("%s.vertices: expected 4 corners" % where)
+        c = [vec3(v, "%s.vertices[%d]" % (where, i)) for i, v in enumerate(vs)]
+        local = [(c[0], c[1], c[2]), (c[0], c[2], c[3])]
+    elif t == "plane":
+        check_keys(sh, common, where)
+        a, b = [-0.5, 0.0, -0.5], [0.5, 0.0, -0.5]
+        c, d = [0.5, 0.0, 0.5], [-0.5, 0.0, 0.5]
+        local = [(a, c, b), (a, d, c)]
+    elif t == "box":
+        check_keys(sh, common, where)
+        local = unit_box_triangles()
+    else:
+        raise SceneError("%s.type: '%s' is not mapped to Cycles by this script "
+                         "(it maps quad, plane, box)" % (where, t))
+    f = shape_transform(sh, where)
+    return [tuple(f(p) for p in tri) for tri in local]
+
+
+def read_materials(mats):
+    if not isinstance(mats, dict):
+        raise SceneError("materials: expected an object")
+    out = {}
+    for name, m in mats.items():
+        where = "materials.%s" % name
+        if not isinstance(m, dict):
+            raise SceneError("%s: expected an object" % where)
+        t = m.get("type")
+        if t == "diffuse":
+            check_keys(m, {"type", "color"}, where)
+            col = vec3(m.get("color"), where + ".color")
+            out[name] = {"type": t, "color": col}
+        elif t == "emitter":
+            check_keys(m, {"type", "color", "emittance", "two_sided"}, where)
+            col = vec3(m.get("color"), where + ".color")
+            e = m.get("emittance")
+            if not isinstance(e, (int, float)) or isinstance(e, bool) or not e > 0:
+                raise SceneError("%s.emittance: expected a number > 0" % where)
+            two = m.get("two_sided", False)
+            if not isinstance(two, bool):
+                raise SceneError("%s.two_sided: expected true or false" % where)
+            out[name] = {"type": t, "color": col, "emittance": float(e), "two_sided": two}
+        else:
+            raise SceneError("%s.type: '%s' is not mapped to Cycles by this script "
+                             "(it maps diffuse, emitter)" % (where, t))
+    return out
+
+
+def read_scene(path):
+    try:
+        with open(path, "r", encoding="utf-8") as fh:
+            doc = json.load(fh)
+    except OSError as e:
+        raise SceneError("%s: %s" % (path, e.strerror))
+    except ValueError as e:
+        raise SceneError("%s: not JSON: %s" % (path, e))
+    if not isinstance(doc, dict):
+        raise SceneError("%s: expected an object at the top" % path)
+    check_keys(doc, {"version", "description", "render", "camera", "materials", "shapes"},
+               "(top level)")
+    mats = read_materials(doc.get("materials"))
+    cam = doc.get("camera")
+    if not isinstance(cam, dict):
+        raise SceneError("camera: missing or not an object")
+    check_keys(cam, {"position", "look_at", "direction", "up", "fov", "near", "far",
+                     "handedness"}, "camera")
+    pos = vec3(cam.get("position"), "camera.position")
+    if ("look_at" in cam) == ("direction" in cam):
+        raise SceneError("camera: expected exactly one of look_at and direction")
+    if "look_at" in cam:
+        la = vec3(cam["look_at"], "camera.look_at")
+        d = [la[k] - pos[k] for k in range(3)]
+    else:
+        d = vec3(cam["direction"], "camera.direction")
+    fov = cam.get("fov")
+    if not isinstance(fov, (int, float)) or not 0 < fov < 180:
+        raise SceneError("camera.fov: expected degrees in (0, 180), got %s" % json.dumps(fov))
+    hand = cam.get("handedness", "left")
+    if hand not in ("left", "right"):
+        raise SceneError("camera.handedness: expected left or right, got %s" % json.dumps(hand))
+    camera = {"pos": pos, "dir": d, "up": vec3(cam.get("up", [0, 1, 0]), "camera.up"),
+              "fov": float(fov), "near": float(cam.get("near", 0.001)),
+              "far": float(cam.get("far", 1e30)), "right_handed": hand == "right"}
+    shapes = doc.get("shapes", [])
+    if not isinstance(shapes, list) or not shapes:
+        raise SceneError("shapes: expected a non-empty array")
+    by_mat = {}
+    for i, sh in enumerate(shapes):
+        where = "shapes[%d]" % i
+        if not isinstance(sh, dict):
+            raise SceneError("%s: expected an object" % where)
+        m = sh.get("material")
+        if m not in mats:
+            raise SceneError("%s.material: unknown material %s" % (where, json.dumps(m)))
+        by_mat.setdefault(m, []).extend(shape_triangles(sh, where))
+    return mats, camera, by_mat
+
+
+# ---- building it in Blender -----------------------------------------------------------
+
+
+def to_blender(p, mirror):
+    """trac0r (x, y up, z) to Blender (x, y, z up); mirrored in x for a left-handed camera."""
+    x = -p[0] if mirror else p[0]
+    return (x, -p[2], p[1])
+
+
+def make_material(name, m):
+    mat = bpy.data.materials.new("tr_" + name)
+    mat.use_nodes = True
+    nt = mat.node_tree
+    for n in list(nt.nodes):
+        nt.nodes.remove(n)
+    out = nt.nodes.new("ShaderNodeOutputMaterial")
+    out.target = "CYCLES"
+    if m["type"] == "diffuse":
+        bsdf = nt.nodes.new("ShaderNodeBsdfDiffuse")
+        bsdf.inputs["Color"].default_value = (*m["color"], 1.0)
+        bsdf.inputs["Roughness"].default_value = 0.0
+        nt.links.new(bsdf.outputs["BSDF"], out.inputs["Surface"])
+    else:
+        em = nt.nodes.new("ShaderNodeEmission")
+        em.inputs["Color"].default_value = (*m["color"], 1.0)
+        if m["two_sided"]:
+            em.inputs["Strength"].default_value = m["emittance"]
+        else:
+            # Strength = emittance * (1 - backfacing): only the front face emits.
+            geo = nt.nodes.new("ShaderNodeNewGeometry")
+            front = nt.nodes.new("ShaderNodeMath")
+            front.operation = "SUBTRACT"
+            front.inputs[0].default_value = 1.0
+            nt.links.new(geo.outputs["Backfacing"], front.inputs[1])
+            strength = nt.nodes.new("ShaderNodeMath")
+            strength.operation = "MULTIPLY"
+            strength.inputs[1].default_value = m["emittance"]
+            nt.links.new(front.outputs["Value"], strength.inputs[0])
+            nt.links.new(strength.outputs["Value"], em.inputs["Strength"])
+        nt.links.new(em.outputs["Emission"], out.inputs["Surface"])
+    # Multiple importance sampling of the mesh light (Cycles' default, said explicitly).
+    mat.cycles.sample_as_light = True
+    return mat
+
+
+def build(scene, mats, camera, by_mat):
+    mirror = not camera["right_handed"]
+    for obj in list(bpy.data.objects):
+        bpy.data.objects.remove(obj, do_unlink=True)
+    for name, tris in by_mat.items():
+        verts, faces = [], []
+        for tri in tris:
+            base = len(verts)
+            verts.extend(to_blender(p, mirror) for p in tri)
+            # A mirror turns the winding round; re-wind to keep the front where it was.
+            faces.append((base, base + 2, base + 1) if mirror else (base, base + 1, base + 2))
+        me = bpy.data.meshes.new("tr_" + name)
+        me.from_pydata(verts, [], faces)
+        me.validate()
+        me.materials.append(make_material(name, mats[name]))
+        ob = bpy.data.objects.new("tr_" + name, me)
+        scene.collection.objects.link(ob)
+
+    world = bpy.data.worlds.new("tr_black")
+    world.use_nodes = False
+    world.color = (0.0, 0.0, 0.0)
+    world.cycles.sampling_method = "NONE"
+    scene.world = world
+
+    pos = Vector(to_blender(camera["pos"], mirror))
+    d = Vector(to_blender(camera["dir"], mirror))
+    up = Vector(to_blender(camera["up"], mirror))
+    if d.length == 0:
+        raise SceneError("camera: zero view direction")
+    d.normalize()
+    right = d.cross(up)
+    if right.length < 1e-6:
+        raise SceneError("camera.up: parallel to the view direction")
+    right.normalize()
+    cup = right.cross(d)
+    # Blender's camera looks down its local -z with local +y up, so its right is
+    # direction x up: a right-handed trac0r camera.
+    m = Matrix.Identity(4)
+    for r in range(3):
+        m[r][0], m[r][1], m[r][2], m[r][3] = right[r], cup[r], -d[r], pos[r]
+    cd = bpy.data.cameras.new("tr_camera")
+    cd.type = "PERSP"
+    cd.sensor_fit = "VERTICAL"
+    cd.sensor_height = 24.0
+    cd.lens = cd.sensor_height / (2.0 * math.tan(math.radians(camera["fov"]) / 2.0))
+    cd.shift_x = cd.shift_y = 0.0
+    # Cycles clips at z depths, trac0r at ray distances: the same wherever nothing lies
+    # nearer than `near` to the camera (true of every scene it is meant for).
+    cd.clip_start = max(camera["near"], 1e-6)
+    cd.clip_end = min(camera["far"], 1e30)
+    cam = bpy.data.objects.new("tr_camera", cd)
+    cam.matrix_world = m
+    scene.collection.objects.link(cam)
+    scene.camera = cam
+
+
+def configure(scene, opts):
+    r = scene.render
+    r.engine = "CYCLES"
+    r.resolution_x = opts["width"]
+    r.resolution_y = opts["height"]
+    r.resolution_percentage = 100
+    r.pixel_aspect_x = r.pixel_aspect_y = 1.0
+    r.use_border = False
+    r.use_compositing = False
+    r.use_sequencer = False
+    r.use_persistent_data = False
+    r.film_transparent = False
+    if opts["threads"] > 0:
+        r.threads_mode = "FIXED"
+        r.threads = opts["threads"]
+    else:
+        r.threads_mode = "AUTO"
+    c = scene.cycles
+    c.device = "CPU"
+    c.feature_set = "SUPPORTED"
+    c.progressive = "PATH"
+    c.samples = opts["spp"]
+    c.use_adaptive_sampling = False
+    c.use_denoising = False
+    c.sampling_pattern = {"pmj": "PROGRESSIVE_MULTI_JITTER", "sobol": "SOBOL"}[opts["pattern"]]
+    c.light_sampling_threshold = opts["light_threshold"]
+    c.seed = opts["seed"]
+    c.use_animated_seed = False
+    c.time_limit = opts["time_limit"]
+    for k in ("max_bounces", "diffuse_bounces", "glossy_bounces", "transmission_bounces",
+              "volume_bounces", "transparent_max_bounces"):
+        setattr(c, k, opts["max_bounces"])
+    c.sample_clamp_direct = 0.0
+    c.sample_clamp_indirect = 0.0
+    c.blur_glossy = 0.0
+    c.caustics_reflective = True
+    c.caustics_refractive = True
+    c.film_exposure = 1.0
+    c.pixel_filter_type = "BOX"
+    c.filter_width = 1.0
+    for vl in scene.view_layers:
+        vl.cycles.use_denoising = False
+    vs = scene.view_settings
+    vs.view_transform = "Standard"
+    vs.look = "None"
+    vs.exposure = 0.0
+    vs.gamma = 1.0
+    vs.use_curve_mapping = False
+    scene.sequencer_colorspace_settings.name = "Linear"
+    im = r.image_settings
+    im.file_format = "OPEN_EXR"
+    im.color_mode = "RGB"
+    im.color_depth = "32"
+    im.exr_codec = "ZIP"
+
+
+def write_pfm(exr_path, pfm_path):
+    """PFM from the EXR Blender wrote (linear float; PFM rows run bottom-up, as Blender's)."""
+    img = bpy.data.images.load(exr_path)
+    w, h = img.size
+    px = list(img.pixels)
+    ch = img.channels
+    tmp = pfm_path + ".tmp"
+    with open(tmp, "wb") as fh:
+        fh.write(b"PF\n%d %d\n-1.0\n" % (w, h))
+        rgb = []
+        for i in range(w * h):
+            rgb.extend(px[i * ch:i * ch + 3])
+        fh.write(struct.pack("<%df" % len(rgb), *rgb))
+    os.replace(tmp, pfm_path)
+
+
+def exr_string_attributes(path):
+    """The string attributes of an EXR header (Cycles stores its timings there:
+    cycles.<layer>.render_time, .synchronization_time). The header is: magic, version,
+    then (name NUL, type NUL, int32 size, value) until an empty name."""
+    out = {}
+    with open(path, "rb") as fh:
+        data = fh.read(1 << 16)
+    pos = 8
+    while pos < len(data) and data[pos] != 0:
+        name_end = data.index(b"\0", pos)
+        type_end = data.index(b"\0", name_end + 1)
+        size = struct.unpack("<i", data[type_end + 1:type_end + 5])[0]
+        value = data[type_end + 5:type_end + 5 + size]
+        if data[name_end + 1:type_end] == b"string":
+            out[data[pos:name_end].decode("ascii", "replace")] = value.decode("ascii", "replace")
+        pos = type_end + 5 + size
+    return out
+
+
+def clock_seconds(text):
+    """Cycles' "MM:SS.ss" or "HH:MM:SS.ss" as seconds; None if it is neither."""
+    try:
+        parts = [float(e) for e in text.split(":")]
+    except ValueError:
+        return None
+    secs = 0.0
+    for part in parts:
+        secs = 60.0 * secs + part
+    return secs
+
+
+def main():
+    opts = parse_args(sys.argv)
+    try:
+        mats, camera, by_mat = read_scene(opts["scene"])
+    except SceneError as e:
+        fail("%s: %s" % (opts["scene"], e))
+    scene = bpy.context.scene
+    build(scene, mats, camera, by_mat)
+    configure(scene, opts)
+    out = os.path.abspath(opts["out"])
+    pfm = out.lower().endswith(".pfm")
+    exr = out + ".tmp.exr" if pfm else out[:-4] + ".tmp.exr"
+    t0 = time.perf_counter()
+    bpy.ops.render.render(write_still=False)
+    t1 = time.perf_counter()
+    res = bpy.data.images["Render Result"]
+    res.save_render(exr, scene=scene)
+    if not os.path.isfile(exr):
+        fail("%s: Blender wrote no image" % exr, 1)
+    times = {"render": None, "sync": None}
+    try:
+        for k, v in exr_string_attributes(exr).items():
+            if k.startswith("cycles.") and k.endswith(".render_time"):
+                times["render"] = clock_seconds(v)
+            elif k.startswith("cycles.") and k.endswith(".synchronization_time"):
+                times["sync"] = clock_seconds(v)
+    except (ValueError, struct.error):
+        pass
+    if pfm:
+        write_pfm(exr, out)
+        os.remove(exr)
+    else:
+        os.replace(exr, out)
+    # One machine-readable line for tools/cycles/measure.sh: Cycles' own sampling time
+    # (render_time, 10 ms resolution), its scene synchronisation (BVH build included), and
+    # the wall time of the render call around both; none of them counts Blender's start-up
+    # or this script's scene building.
+    def fmt(v):
+        return "%.3f" % v if v is not None else "nan"
+    print("cycles_render_seconds=%s cycles_sync_seconds=%s render_call_seconds=%.3f "
+          "spp=%d width=%d height=%d seed=%d"
+          % (fmt(times["render"]), fmt(times["sync"]), t1 - t0, opts["spp"], opts["width"],
+             opts["height"], opts["seed"]))
+    sys.stdout.flush()
+    os._exit(0)
+
+
+main()
