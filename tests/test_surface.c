@@ -12,6 +12,8 @@
  * 3. A textured quad filling the image: its emission texture is what the camera sees, so
  *    the image's mean is the texture's (decoded) mean and the pixel over a texel's centre
  *    is that texel; its base-colour texture is the albedo pass.
+ * 3b. tr_emitted_at (next-event estimation's read of a light's emission) equals tr_emitted
+ *    of the whole material stage, on a textured emissive quad and on a plain emitter.
  * 4. Image files: a PNG decodes to the texels it was written with (top row first, R in
  *    the low byte); a missing file, a truncated PNG, a 0x0 one, one declaring 10^5 x 10^5
  *    texels and a text file fail with a status code and add nothing.
@@ -437,6 +439,69 @@ static void test_metallic_roughness_map(void) {
 
 #define TEXDATA TR_SOURCE_DIR "/tests/data/texture"
 
+/* 3b. Next-event estimation reads a light's emission through tr_emitted_at (issue 14's
+ * performance fix): it must equal tr_emitted of the whole material stage, on a textured
+ * emissive quad (the attribute path: the emission texture varies over it) and on the same
+ * quad with a plain emitter (the path that reads the material alone), from both sides. */
+static void emitted_at_matches(int textured) {
+    tr_scene s = {0};
+    tr_scene_init(&s);
+    tr_error err;
+    uint32_t mat;
+    if (textured) {
+        uint32_t tex;
+        CHECK(tr_scene_add_texture(&s, tex_rgba, TW, TH, 0u, &tex, &err) == TR_OK, "%s", err.msg);
+        mat = add_mat(&s, tr_material_diffuse(v3s(0.5f)));
+        tr_material_ext ext = tr_material_ext_default();
+        ext.emission = v3(2.0f, 1.0f, 0.5f);
+        ext.emission_tex = tex;
+        CHECK(tr_scene_set_material_ext(&s, mat, &ext, &err) == TR_OK, "%s", err.msg);
+    } else {
+        mat = add_mat(&s, tr_material_emitter(v3(1.0f, 0.5f, 0.25f), 3.0f));
+    }
+    const float pos[12] = {-1, 1, 0, 1, 1, 0, 1, -1, 0, -1, -1, 0};
+    const float uv[8] = {0, 0, 1, 0, 1, 1, 0, 1};
+    const uint32_t idx[6] = {0, 1, 2, 0, 2, 3};
+    CHECK(tr_scene_add_mesh_uv(&s, pos, 4, idx, 2, NULL, textured ? uv : NULL, mat, NULL, NULL,
+                               &err) == TR_OK,
+          "%s", err.msg);
+    CHECK(tr_scene_commit(&s, TR_ACCEL_TYPE_BVH, &err) == TR_OK, "%s", err.msg);
+    const tr_scene_view view = tr_scene_view_of(&s);
+    CHECK((view.tri_verts_count == 0u && view.material_ext_count == 0u) == !textured,
+          "the scene takes the path meant");
+    int checked = 0, lit = 0;
+    for (uint32_t t = 0; t < view.triangle_count; ++t) {
+        tr_vec3 ng = view.triangles[t].normal;
+        for (int k = 0; k < 16; ++k) {
+            float u = 0.05f + 0.06f * (float)k, v = 0.9f - u; /* inside: u + v < 1 */
+            if (v < 0.0f) {
+                v = 0.02f;
+            }
+            tr_vec3 p = v3_add(v3_add(v3_scale(view.triangles[t].v0, 1.0f - u - v),
+                                      v3_scale(view.triangles[t].v1, u)),
+                               v3_scale(view.triangles[t].v2, v));
+            for (int side = 0; side < 2; ++side) {
+                tr_vec3 w = side ? v3_neg(ng) : ng;
+                tr_bsdf_params b = tr_material_eval(&view, t, u, v, p, ng, v3_neg(w));
+                tr_vec3 want = tr_emitted(&b, w);
+                tr_vec3 got = tr_emitted_at(&view, t, u, v, p, ng, w);
+                CHECK(got.x == want.x && got.y == want.y && got.z == want.z,
+                      "triangle %u (%g, %g) side %d: (%g %g %g) against (%g %g %g)", t, u, v, side,
+                      got.x, got.y, got.z, want.x, want.y, want.z);
+                lit += want.x + want.y + want.z > 0.0f;
+                ++checked;
+            }
+        }
+    }
+    CHECK(checked == 64 && lit == 32, "%d points, %d lit (only the front emits)", checked, lit);
+    tr_scene_free(&s);
+}
+
+static void test_emitted_at(void) {
+    emitted_at_matches(1);
+    emitted_at_matches(0);
+}
+
 static void test_texture_files(void) {
     tr_scene s = {0};
     tr_scene_init(&s);
@@ -597,6 +662,7 @@ int main(void) {
     test_smooth_icosphere();
     test_texture_lookup();
     test_textured_quad();
+    test_emitted_at();
     test_texture_files();
     test_normal_map();
     test_metallic_roughness_map();

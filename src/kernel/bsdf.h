@@ -142,8 +142,26 @@ TR_FN tr_vec3 tr_ggx_sample_vndf(float alpha, tr_vec3 v, float u1, float u2) {
 /* issue 14: the principled material, built on the GGX helpers above. */
 #include "bsdf_principled.h"
 
+/* The principled functions are out of line (TR_FN_NOINLINE); these hand them copies, so
+ * that no caller's tr_bsdf_params or tr_scatter has its address taken: the compiler keeps
+ * those in registers for every other material instead of storing each field at every
+ * vertex. */
+TR_FN tr_vec3 tr_principled_eval_copy(tr_bsdf_params m, tr_vec3 nf, tr_vec3 wo, tr_vec3 wi) {
+    return tr_principled_eval(&m, nf, wo, wi);
+}
+TR_FN float tr_principled_pdf_copy(tr_bsdf_params m, tr_vec3 nf, tr_vec3 wo, tr_vec3 wi) {
+    return tr_principled_pdf(&m, nf, wo, wi);
+}
+TR_FN int tr_principled_sample_copy(tr_bsdf_params m, tr_vec3 nf, tr_vec3 wo, float ulobe, float u1,
+                                    float u2, tr_scatter *s) {
+    tr_scatter r;
+    int ok = tr_principled_sample(&m, nf, wo, ulobe, u1, u2, &r);
+    *s = r;
+    return ok;
+}
+
 /* BSDF value f(wo, wi) (without the cosine). Zero for delta lobes and emitters. */
-TR_FN tr_vec3 tr_bsdf_eval(const tr_bsdf_params *m, tr_vec3 wo, tr_vec3 wi) {
+TR_FN_INLINE tr_vec3 tr_bsdf_eval(const tr_bsdf_params *m, tr_vec3 wo, tr_vec3 wi) {
     tr_vec3 nf = tr_bsdf_facing(m->ns, wo);
     switch (m->type) {
     case TR_MATERIAL_DIFFUSE:
@@ -157,14 +175,14 @@ TR_FN tr_vec3 tr_bsdf_eval(const tr_bsdf_params *m, tr_vec3 wo, tr_vec3 wi) {
         }
         return tr_ggx_eval(m, nf, wo, wi);
     case TR_MATERIAL_PRINCIPLED:
-        return tr_principled_eval(m, nf, wo, wi);
+        return tr_principled_eval_copy(*m, nf, wo, wi);
     default:
         return v3s(0.0f);
     }
 }
 
 /* Solid-angle pdf with which tr_bsdf_sample draws wi. Zero for delta lobes. */
-TR_FN float tr_bsdf_pdf(const tr_bsdf_params *m, tr_vec3 wo, tr_vec3 wi) {
+TR_FN_INLINE float tr_bsdf_pdf(const tr_bsdf_params *m, tr_vec3 wo, tr_vec3 wi) {
     tr_vec3 nf = tr_bsdf_facing(m->ns, wo);
     switch (m->type) {
     case TR_MATERIAL_DIFFUSE: {
@@ -177,7 +195,7 @@ TR_FN float tr_bsdf_pdf(const tr_bsdf_params *m, tr_vec3 wo, tr_vec3 wi) {
         }
         return tr_ggx_pdf(m, nf, wo, wi);
     case TR_MATERIAL_PRINCIPLED:
-        return tr_principled_pdf(m, nf, wo, wi);
+        return tr_principled_pdf_copy(*m, nf, wo, wi);
     default:
         return 0.0f;
     }
@@ -186,8 +204,8 @@ TR_FN float tr_bsdf_pdf(const tr_bsdf_params *m, tr_vec3 wo, tr_vec3 wi) {
 /* Draws wi from the uniform numbers ulobe (the choice between lobes: glass's reflect or
  * refract) and (u1, u2) (the direction inside a lobe). Returns 0 when the path ends here
  * (emitters, directions below the surface, zero weight). */
-TR_FN int tr_bsdf_sample(const tr_bsdf_params *m, tr_vec3 wo, float ulobe, float u1, float u2,
-                         tr_scatter *s) {
+TR_FN_INLINE int tr_bsdf_sample(const tr_bsdf_params *m, tr_vec3 wo, float ulobe, float u1,
+                                float u2, tr_scatter *s) {
     tr_vec3 nf = tr_bsdf_facing(m->ns, wo);
     s->delta = 0;
     switch (m->type) {
@@ -237,7 +255,7 @@ TR_FN int tr_bsdf_sample(const tr_bsdf_params *m, tr_vec3 wo, float ulobe, float
         return 1;
     }
     case TR_MATERIAL_PRINCIPLED:
-        return tr_principled_sample(m, nf, wo, ulobe, u1, u2, s);
+        return tr_principled_sample_copy(*m, nf, wo, ulobe, u1, u2, s);
     default:
         return 0;
     }
@@ -260,6 +278,22 @@ TR_FN tr_vec3 tr_emitted(const tr_bsdf_params *m, tr_vec3 w) {
         return v3s(0.0f);
     }
     return v3_scale(m->color, m->emittance);
+}
+
+/* tr_emitted(tr_material_eval(s, triangle, u, v, p, ng, .), w): what next-event estimation
+ * needs of a light's material. Without vertex attributes or material extras it reads the
+ * material alone, never building the whole tr_bsdf_params in memory. */
+TR_FN tr_vec3 tr_emitted_at(const tr_scene_view *s, uint32_t triangle, float u, float v, tr_vec3 p,
+                            tr_vec3 ng, tr_vec3 w) {
+    uint32_t mi = s->triangles[triangle].material;
+    if (triangle < s->tri_verts_count || s->material_ext_count > 0u) {
+        tr_bsdf_params t;
+        tr_material_eval_attributes(s, triangle, mi, u, v, p, ng, &t);
+        return tr_emitted(&t, w);
+    }
+    tr_material m = s->materials[mi];
+    tr_bsdf_params b = tr_material_params(&m, ng);
+    return tr_emitted(&b, w);
 }
 
 #endif

@@ -50,7 +50,8 @@ TR_FN tr_vec3 tr_principled_spec(float alpha, tr_vec3 f0, tr_vec3 nf, tr_vec3 wo
     return v3_scale(f, d * g2 / (4.0f * co * ci));
 }
 
-TR_FN tr_vec3 tr_principled_eval(const tr_bsdf_params *m, tr_vec3 nf, tr_vec3 wo, tr_vec3 wi) {
+TR_FN_NOINLINE tr_vec3 tr_principled_eval(const tr_bsdf_params *m, tr_vec3 nf, tr_vec3 wo,
+                                          tr_vec3 wi) {
     float co = v3_dot(wo, nf), ci = v3_dot(wi, nf);
     if (co <= 0.0f || ci <= 0.0f) {
         return v3s(0.0f);
@@ -80,7 +81,8 @@ TR_FN float tr_principled_spec_prob(const tr_bsdf_params *m, float co) {
     return wd > 0.0f ? tr_fminf(tr_fmaxf(p, 0.1f), 0.9f) : 1.0f;
 }
 
-TR_FN float tr_principled_pdf(const tr_bsdf_params *m, tr_vec3 nf, tr_vec3 wo, tr_vec3 wi) {
+TR_FN_NOINLINE float tr_principled_pdf(const tr_bsdf_params *m, tr_vec3 nf, tr_vec3 wo,
+                                       tr_vec3 wi) {
     float co = v3_dot(wo, nf), ci = v3_dot(wi, nf);
     if (co <= 0.0f || ci <= 0.0f) {
         return 0.0f;
@@ -95,8 +97,8 @@ TR_FN float tr_principled_pdf(const tr_bsdf_params *m, tr_vec3 nf, tr_vec3 wo, t
 
 /* Draws wi from uniform numbers ulobe, u1, u2 in [0, 1). Returns 0 when wi falls below
  * the surface (the path ends). */
-TR_FN int tr_principled_sample(const tr_bsdf_params *m, tr_vec3 nf, tr_vec3 wo, float ulobe,
-                               float u1, float u2, tr_scatter *s) {
+TR_FN_NOINLINE int tr_principled_sample(const tr_bsdf_params *m, tr_vec3 nf, tr_vec3 wo,
+                                        float ulobe, float u1, float u2, tr_scatter *s) {
     float co = v3_dot(wo, nf);
     if (co <= 0.0f) {
         return 0;

@@ -13,6 +13,8 @@ typedef uint uint32_t;
 typedef int int32_t;
 typedef ulong uint64_t;
 #define TR_FN static inline
+#define TR_FN_INLINE static inline
+#define TR_FN_NOINLINE static inline
 #define TR_GLOBAL __global
 #define TR_CONST_GLOBAL __global const
 #define tr_sqrtf(x) sqrt(x)
@@ -38,6 +40,13 @@ typedef ulong uint64_t;
 #include <stddef.h>
 #include <stdint.h>
 #define TR_FN static inline
+/* Inlining decides the hot paths' speed on the CPU (the device compilers inline
+ * everything): TR_FN_INLINE for a body a caller copies per constant argument
+ * (tr_render_grid_rows), TR_FN_NOINLINE for a large path that only some scenes take
+ * (textures, vertex normals, cut-outs, the principled BSDF, the environment), so that
+ * its size does not push the code every scene runs out of line. */
+#define TR_FN_INLINE static inline __attribute__((always_inline))
+#define TR_FN_NOINLINE static __attribute__((noinline, unused))
 #define TR_GLOBAL
 #define TR_CONST_GLOBAL const
 #define tr_sqrtf(x) sqrtf(x)

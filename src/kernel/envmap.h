@@ -49,7 +49,7 @@ TR_FN tr_vec3 tr_env_texel(const tr_scene_view *s, uint32_t k) {
 }
 
 /* Radiance arriving along -d, from the environment in direction d (unit). */
-TR_FN tr_vec3 tr_env_radiance(const tr_scene_view *s, tr_vec3 d) {
+TR_FN_NOINLINE tr_vec3 tr_env_radiance(const tr_scene_view *s, tr_vec3 d) {
     TR_CONST_GLOBAL tr_env *e = &s->env[0];
     tr_vec3 c = v3_scale(e->color, e->strength);
     if (e->width == 0u) {
@@ -68,7 +68,7 @@ TR_FN float tr_env_weight(const tr_scene_view *s, uint32_t k, uint32_t j) {
 }
 
 /* Solid-angle density with which tr_env_sample draws direction d. */
-TR_FN float tr_env_pdf(const tr_scene_view *s, tr_vec3 d) {
+TR_FN_NOINLINE float tr_env_pdf(const tr_scene_view *s, tr_vec3 d) {
     TR_CONST_GLOBAL tr_env *e = &s->env[0];
     if (e->width == 0u) {
         return 0.25f * TR_INV_PI;
@@ -103,7 +103,8 @@ TR_FN uint32_t tr_env_find(const tr_scene_view *s, uint32_t first, uint32_t n, f
 
 /* Draws a direction *d from uniform numbers u1, u2 in [0, 1); *pdf its solid-angle
  * density (0: none drawn). Returns the radiance from there. */
-TR_FN tr_vec3 tr_env_sample(const tr_scene_view *s, float u1, float u2, tr_vec3 *d, float *pdf) {
+TR_FN_NOINLINE tr_vec3 tr_env_sample(const tr_scene_view *s, float u1, float u2, tr_vec3 *d,
+                                     float *pdf) {
     TR_CONST_GLOBAL tr_env *e = &s->env[0];
     if (e->width == 0u) {
         float z = 1.0f - 2.0f * u1;

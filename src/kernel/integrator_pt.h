@@ -47,6 +47,33 @@ TR_FN int tr_v3_is_zero(tr_vec3 a) {
     return a.x == 0.0f && a.y == 0.0f && a.z == 0.0f;
 }
 
+/* Next-event estimation towards the environment at vertex p of segment seg (surface m,
+ * wo towards the viewer), MIS against the BSDF: the radiance it adds, throughput
+ * included; *rays counts its shadow ray. Out of line, so that scenes without an
+ * environment do not pay for a second copy of the BSDF's evaluation in tr_trace_pt (its
+ * size kept the compiler from inlining the BSDF sampler there). */
+TR_FN_NOINLINE tr_vec3 tr_pt_env_light(const tr_scene_view *s, const tr_sampler *smp, int seg,
+                                       const tr_bsdf_params *m, tr_vec3 p, tr_vec3 wo,
+                                       tr_vec3 throughput, uint32_t *rays) {
+    float eu1, eu2;
+    tr_sampler_2d(smp, tr_sampler_dim(seg, TR_DIM_ENV), &eu1, &eu2);
+    tr_vec3 wi;
+    float pe;
+    tr_vec3 le_e = tr_env_sample(s, eu1, eu2, &wi, &pe);
+    tr_vec3 f = pe > 0.0f ? tr_bsdf_eval(m, wo, wi) : v3s(0.0f);
+    if (tr_v3_is_zero(le_e) || tr_v3_is_zero(f)) {
+        return v3s(0.0f);
+    }
+    tr_ray shadow = tr_ray_make(tr_surface_origin(m, p, wi), wi, 0.0f, TR_INFINITY);
+    *rays += 1;
+    if (tr_occluded_masked(s, &shadow)) {
+        return v3s(0.0f);
+    }
+    float w = tr_mis_power(pe, tr_bsdf_pdf(m, wo, wi));
+    float c = tr_fabsf(v3_dot(wi, m->ns));
+    return v3_scale(v3_mul(v3_mul(throughput, f), le_e), c * w / pe);
+}
+
 /* Radiance arriving along `ray`. A path has at most max_depth segments (the camera ray
  * is the first); Russian roulette on the throughput's largest component starts after
  * TR_PT_RR_START segments. Every random decision reads its own dimension of `smp`
@@ -122,8 +149,7 @@ TR_FN tr_vec3 tr_trace_pt(const tr_scene_view *s, tr_ray ray, int max_depth, con
             float dist = v3_length(d);
             if (pl > 0.0f && dist > 0.0f) {
                 tr_vec3 wi = v3_scale(d, 1.0f / dist);
-                tr_bsdf_params lm = tr_material_eval(s, lt, lu, lv, y, ltri->normal, wi);
-                tr_vec3 le_l = tr_emitted(&lm, v3_neg(wi));
+                tr_vec3 le_l = tr_emitted_at(s, lt, lu, lv, y, ltri->normal, v3_neg(wi));
                 tr_vec3 f = tr_bsdf_eval(&m, wo, wi);
                 if (!tr_v3_is_zero(le_l) && !tr_v3_is_zero(f)) {
                     float cos_i = tr_fabsf(v3_dot(wi, m.ns)); /* the shading normal */
@@ -144,22 +170,8 @@ TR_FN tr_vec3 tr_trace_pt(const tr_scene_view *s, tr_ray ray, int max_depth, con
 
         /* Next-event estimation towards the environment, MIS against the BSDF. */
         if (!tr_bsdf_is_delta(&m) && s->env_count > 0u) {
-            float eu1, eu2;
-            tr_sampler_2d(smp, tr_sampler_dim(seg, TR_DIM_ENV), &eu1, &eu2);
-            tr_vec3 wi;
-            float pe;
-            tr_vec3 le_e = tr_env_sample(s, eu1, eu2, &wi, &pe);
-            tr_vec3 f = pe > 0.0f ? tr_bsdf_eval(&m, wo, wi) : v3s(0.0f);
-            if (!tr_v3_is_zero(le_e) && !tr_v3_is_zero(f)) {
-                tr_ray shadow = tr_ray_make(tr_surface_origin(&m, p, wi), wi, 0.0f, TR_INFINITY);
-                *rays += 1;
-                if (!tr_occluded_masked(s, &shadow)) {
-                    float w = tr_mis_power(pe, tr_bsdf_pdf(&m, wo, wi));
-                    float c = tr_fabsf(v3_dot(wi, m.ns));
-                    radiance =
-                        v3_add(radiance, v3_scale(v3_mul(v3_mul(throughput, f), le_e), c * w / pe));
-                }
-            }
+            tr_bsdf_params mc = m; /* a copy: m's address taken would keep it in memory */
+            radiance = v3_add(radiance, tr_pt_env_light(s, smp, seg, &mc, p, wo, throughput, rays));
         }
 
         /* Next-event estimation towards the sun (sun.h), MIS against the BSDF. */
@@ -173,7 +185,12 @@ TR_FN tr_vec3 tr_trace_pt(const tr_scene_view *s, tr_ray ray, int max_depth, con
         /* Continue with the BSDF's sample. */
         tr_scatter bs;
         float b1, b2;
-        float blobe = tr_sampler_1d(smp, tr_sampler_dim(seg, TR_DIM_BSDF_LOBE));
+        /* Only glass and the principled material choose a lobe: for the others the
+         * dimension is left unread rather than hashed at every vertex. */
+        float blobe = 0.0f;
+        if (m.type == TR_MATERIAL_GLASS || m.type == TR_MATERIAL_PRINCIPLED) {
+            blobe = tr_sampler_1d(smp, tr_sampler_dim(seg, TR_DIM_BSDF_LOBE));
+        }
         tr_sampler_2d(smp, tr_sampler_dim(seg, TR_DIM_BSDF_DIR), &b1, &b2);
         if (!tr_bsdf_sample(&m, wo, blobe, b1, b2, &bs)) {
             break;

@@ -72,18 +72,17 @@ TR_FN void tr_frame_grid(const tr_frame *f, uint32_t *gx0, uint32_t *gy0, uint32
     *ny = f->rect_h ? (y1 + k - 1u) / k - *gy0 : 0u;
 }
 
-/* Traces grid points [gx0, gx1) x [gy0, gy1) of frame f for samples sample ..
- * sample+sample_count-1, adding each to its block of the film; returns the rays traced.
- * A grid point whose anchor lies left of or above the rectangle is traced all the same
- * (its block overlaps it). The frame's fields are read once, into locals: the film's
- * stores could otherwise alias them and force a reload after every sample. */
-TR_FN uint32_t tr_render_grid_rows(const tr_scene_view *s, const tr_frame *f,
-                                   const tr_film_view *film, uint32_t gx0, uint32_t gy0,
-                                   uint32_t gx1, uint32_t gy1) {
+/* tr_render_grid_rows with the frame's integrator given as `integrator`. Always inlined,
+ * so that each of tr_render_grid_rows's two calls holds one integrator's code: with the
+ * choice made per sample, the compiler hoisted pt's sampler set-up (invariant over a
+ * pixel's samples) above the branch, and naive paid for it at every pixel. */
+TR_FN_INLINE uint32_t tr_render_grid_rows_as(const tr_scene_view *s, const tr_frame *f,
+                                             const tr_film_view *film, uint32_t gx0, uint32_t gy0,
+                                             uint32_t gx1, uint32_t gy1, uint32_t integrator) {
     const tr_camera cam = f->camera;
     const uint64_t seed = ((uint64_t)f->seed_hi << 32) | (uint64_t)f->seed_lo;
     const int max_depth = f->max_depth;
-    const uint32_t integrator = f->integrator, passes = f->passes;
+    const uint32_t passes = f->passes;
     const uint32_t first = f->sample, count = f->sample_count;
     const uint32_t k = f->stride;
     const uint32_t rx0 = f->rect_x, ry0 = f->rect_y;
@@ -109,6 +108,20 @@ TR_FN uint32_t tr_render_grid_rows(const tr_scene_view *s, const tr_frame *f,
         }
     }
     return rays;
+}
+
+/* Traces grid points [gx0, gx1) x [gy0, gy1) of frame f for samples sample ..
+ * sample+sample_count-1, adding each to its block of the film; returns the rays traced.
+ * A grid point whose anchor lies left of or above the rectangle is traced all the same
+ * (its block overlaps it). The frame's fields are read once, into locals: the film's
+ * stores could otherwise alias them and force a reload after every sample. */
+TR_FN uint32_t tr_render_grid_rows(const tr_scene_view *s, const tr_frame *f,
+                                   const tr_film_view *film, uint32_t gx0, uint32_t gy0,
+                                   uint32_t gx1, uint32_t gy1) {
+    if (f->integrator == TR_INTEGRATOR_PT) {
+        return tr_render_grid_rows_as(s, f, film, gx0, gy0, gx1, gy1, TR_INTEGRATOR_PT);
+    }
+    return tr_render_grid_rows_as(s, f, film, gx0, gy0, gx1, gy1, TR_INTEGRATOR_NAIVE);
 }
 
 #endif

@@ -102,6 +102,24 @@ TR_FN void tr_material_apply_ext(const tr_scene_view *s, uint32_t mat, const tr_
     }
 }
 
+/* tr_material_eval for a triangle with vertex attributes or a scene with material
+ * extras (material mi), into *out. Out of line: inlined, its size kept the integrators
+ * from inlining the material stage at all, and scenes without any of it paid for the
+ * call. */
+TR_FN_NOINLINE void tr_material_eval_attributes(const tr_scene_view *s, uint32_t triangle,
+                                                uint32_t mi, float u, float v, tr_vec3 p,
+                                                tr_vec3 ng, tr_bsdf_params *out) {
+    tr_material m = s->materials[mi];
+    tr_bsdf_params b = tr_material_params(&m, ng);
+    tr_surface_attr a = tr_surface_attributes(s, triangle, u, v, p, ng);
+    b.ns = a.ns;
+    b.ps = a.ps;
+    if (s->material_ext_count > 0u) {
+        tr_material_apply_ext(s, mi, &a, &b);
+    }
+    *out = b;
+}
+
 /* The material stage: the BSDF parameters at point p of triangle `triangle` (barycentrics
  * u, v of its second and third vertex; geometric normal ng), reached along direction dir
  * (unused so far). */
@@ -109,17 +127,16 @@ TR_FN tr_bsdf_params tr_material_eval(const tr_scene_view *s, uint32_t triangle,
                                       tr_vec3 p, tr_vec3 ng, tr_vec3 dir) {
     (void)dir;
     uint32_t mi = s->triangles[triangle].material;
+    if (triangle < s->tri_verts_count || s->material_ext_count > 0u) {
+        /* Through a temporary: a result written straight into the caller's struct would
+         * take its address, and keep it in memory on the path without attributes too. */
+        tr_bsdf_params t;
+        tr_material_eval_attributes(s, triangle, mi, u, v, p, ng, &t);
+        return t;
+    }
     tr_material m = s->materials[mi];
     tr_bsdf_params b = tr_material_params(&m, ng);
     b.ps = p;
-    if (triangle < s->tri_verts_count || s->material_ext_count > 0u) {
-        tr_surface_attr a = tr_surface_attributes(s, triangle, u, v, p, ng);
-        b.ns = a.ns;
-        b.ps = a.ps;
-        if (s->material_ext_count > 0u) {
-            tr_material_apply_ext(s, mi, &a, &b);
-        }
-    }
     return b;
 }
 
@@ -141,12 +158,9 @@ TR_FN int tr_hit_is_hole(const tr_scene_view *s, const tr_ray *ray, const tr_hit
     return b.hole;
 }
 
-/* The shadow-ray query with alpha cut-outs: occluded unless every surface on the segment
- * is a hole. Without material extras, tr_occluded_scene itself. */
-TR_FN int tr_occluded_masked(const tr_scene_view *s, const tr_ray *ray) {
-    if (s->material_ext_count == 0u) {
-        return tr_occluded_scene(s, ray);
-    }
+/* tr_occluded_masked in a scene with material extras: out of line, as the material stage's
+ * attribute path is (tr_material_eval_attributes). */
+TR_FN_NOINLINE int tr_occluded_through_holes(const tr_scene_view *s, const tr_ray *ray) {
     tr_ray r = *ray;
     for (int k = 0; k < TR_MAX_HOLES; ++k) {
         tr_hit hit;
@@ -159,6 +173,15 @@ TR_FN int tr_occluded_masked(const tr_scene_view *s, const tr_ray *ray) {
         r.tmin = hit.t + 1e-5f * tr_fmaxf(1.0f, hit.t);
     }
     return 1;
+}
+
+/* The shadow-ray query with alpha cut-outs: occluded unless every surface on the segment
+ * is a hole. Without material extras, tr_occluded_scene itself. */
+TR_FN int tr_occluded_masked(const tr_scene_view *s, const tr_ray *ray) {
+    if (s->material_ext_count == 0u) {
+        return tr_occluded_scene(s, ray);
+    }
+    return tr_occluded_through_holes(s, ray);
 }
 
 #endif
