@@ -78,12 +78,14 @@ static void render_help(void) {
            "                       renamed, so it never exists half-written\n"
            "  --exr-type T         EXR channel type, half or float (default float)\n"
            "  --passes LIST        also write these passes beside the image, comma-separated:\n"
-           "                       albedo, normal, depth, id (or all); each goes to\n"
+           "                       albedo, normal, depth, id, variance (or all); each goes to\n"
            "                       FILE-without-extension.PASS.pfm, or into the EXR as layers\n"
-           "                       albedo.RGB, normal.XYZ, depth.Z, id (float: the pixel's mean\n"
-           "                       base colour, shading normal, distance from the camera,\n"
-           "                       primitive id), at the first surface that is not a mirror\n"
-           "                       or smooth glass; 0 where a sample met none\n"
+           "                       albedo.RGB, normal.XYZ, depth.Z, id, variance.RGB (float:\n"
+           "                       the pixel's mean base colour, shading normal, distance\n"
+           "                       from the camera, primitive id, at the first surface that\n"
+           "                       is not a mirror or smooth glass, 0 where a sample met\n"
+           "                       none; the variance of the pixel's mean radiance per\n"
+           "                       channel, 0 below 2 samples)\n"
            "  --checkpoint FILE    save the film and what is needed to continue to FILE\n"
            "                       every --checkpoint-interval, on SIGINT/SIGTERM and at\n"
            "                       the end (atomically: the last complete one survives)\n"
@@ -122,7 +124,7 @@ static void render_help(void) {
            cli_common_help());
 }
 
-/* --passes: "albedo,normal,depth,id" or "all" into TR_PASS_* bits. */
+/* --passes: "albedo,normal,depth,id,variance" or "all" into TR_PASS_* bits. */
 static int parse_passes(cli_args *a, uint32_t *passes) {
     if (cli_value(a) != CLI_OK) {
         return CLI_USAGE;
@@ -133,9 +135,9 @@ static int parse_passes(cli_args *a, uint32_t *passes) {
         size_t len = strcspn(p, ",");
         uint32_t bit = 0;
         if (len == 3 && strncmp(p, "all", 3) == 0) {
-            bit = TR_PASS_ALL;
+            bit = TR_PASS_MASK;
         }
-        for (uint32_t k = 1; k <= TR_PASS_PRIM && !bit; k <<= 1) {
+        for (uint32_t k = 1; k <= TR_PASS_VARIANCE && !bit; k <<= 1) {
             const char *name = tr_pass_name(k);
             if (strlen(name) == len && strncmp(p, name, len) == 0) {
                 bit = k;
@@ -143,7 +145,8 @@ static int parse_passes(cli_args *a, uint32_t *passes) {
         }
         if (!bit) {
             return cli_error(a,
-                             "%s: unknown pass '%.*s' (expected albedo, normal, depth, id or all)",
+                             "%s: unknown pass '%.*s' (expected albedo, normal, depth, id, "
+                             "variance or all)",
                              a->opt, (int)len, p);
         }
         *passes |= bit;
@@ -289,7 +292,7 @@ int render_job_setup(render_job *job, int argc, char **argv, int *done) {
     if (job->checkpoint && tr_image_check_writable(job->checkpoint, &err) != TR_OK) {
         return cli_error(a, "--checkpoint: %s", err.msg);
     }
-    for (int k = 0; k < 4 && fmt != TR_IMAGE_EXR; ++k) {
+    for (int k = 0; k < 5 && fmt != TR_IMAGE_EXR; ++k) {
         const uint32_t bit = 1u << k;
         if ((job->passes & bit) != 0u &&
             pass_path(job->out, bit, job->pass_paths[k], sizeof job->pass_paths[k]) != 0) {
@@ -337,23 +340,25 @@ int render_write_outputs(const render_job *job, const tr_film *film, uint32_t sa
     const char *out = job->out;
     int rc = CLI_OK;
     if (tr_image_format_from_path(out) == TR_IMAGE_EXR) {
-        /* A view of the film with the layers asked for; its radiance denoised if asked. */
+        /* A view of the film with the layers asked for; its radiance denoised if asked
+         * (the variance layer stays the noise of the rendered estimate). */
         tr_film view = *film, den = {0};
         view.passes = job->write_passes;
         if (job->denoise) {
             rc = render_denoise(film, &den, &err) == TR_OK ? CLI_OK : CLI_FAILURE;
-            view.sum = den.sum;
-            view.count = den.count;
         }
         if (rc == CLI_OK) {
-            rc = tr_film_write_exr(&view, out, job->exr_half, &err) == TR_OK ? CLI_OK : CLI_FAILURE;
+            rc = tr_film_write_exr_rgb(&view, job->denoise ? &den : &view, out, job->exr_half,
+                                       &err) == TR_OK
+                     ? CLI_OK
+                     : CLI_FAILURE;
         }
         tr_film_free(&den);
     } else {
         rc = render_write(film, out, job->exposure, job->curve, job->denoise, &err) == TR_OK
                  ? CLI_OK
                  : CLI_FAILURE;
-        for (int k = 0; k < 4 && rc == CLI_OK; ++k) {
+        for (int k = 0; k < 5 && rc == CLI_OK; ++k) {
             tr_film pass;
             if ((job->write_passes & (1u << k)) == 0u) {
                 continue;

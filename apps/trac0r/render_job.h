@@ -23,7 +23,7 @@ typedef struct render_job {
     uint32_t write_passes;    /* TR_PASS_* written as files or EXR layers (--passes) */
     int curve;                /* --tonemap: TR_TONEMAP_* (PNG only) */
     int denoise;              /* --denoise */
-    char pass_paths[4][4096]; /* PFM paths of the passes (not for EXR) */
+    char pass_paths[5][4096]; /* PFM paths of the passes, by bit (not for EXR) */
     const char *checkpoint;   /* --checkpoint FILE or NULL */
     double checkpoint_interval;
     const char *resume;    /* --resume FILE or NULL */

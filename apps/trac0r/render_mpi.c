@@ -67,6 +67,7 @@ static size_t pixel_bytes(uint32_t passes) {
     b += (passes & TR_PASS_NORMAL) ? 3 * sizeof(float) : 0;
     b += (passes & TR_PASS_DEPTH) ? sizeof(float) : 0;
     b += (passes & TR_PASS_PRIM) ? sizeof(uint32_t) : 0;
+    b += (passes & TR_PASS_VARIANCE) ? 3 * sizeof(float) : 0;
     return b;
 }
 
@@ -98,6 +99,7 @@ static size_t pack_tile(tr_film *f, const tr_rect *r, unsigned char *buf, int un
     p = pack_rows(p, f->normal, 3 * sizeof(float), f->width, r, unpack);
     p = pack_rows(p, f->depth, sizeof(float), f->width, r, unpack);
     p = pack_rows(p, f->prim, sizeof(uint32_t), f->width, r, unpack);
+    p = pack_rows(p, f->sq, 3 * sizeof(float), f->width, r, unpack);
     return (size_t)(p - buf);
 }
 
