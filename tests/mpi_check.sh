@@ -24,6 +24,12 @@ if [ "$PART" = ranks ]; then
         done
         grep -q "tiles" err.txt || fail "np $n: no progress lines"
     done
+    # --verbose: rank 0 reports every rank's time, one line each, and the image is the same.
+    $MPIRUN -np 2 "$BIN" $R --verbose --out verbose.pfm 2>err.txt || fail "np 2 --verbose: $(cat err.txt)"
+    n=$(grep -c "rank [01]: setup" err.txt)
+    [ "$n" -eq 2 ] || fail "np 2 --verbose: $n lines of per-rank times, expected 2: $(cat err.txt)"
+    cmp -s single.pfm verbose.pfm || fail "np 2 --verbose: the image differs"
+
     # The preview stride: tiles are aligned to it.
     "$BIN" $R --stride 3 --out stride.pfm 2>/dev/null
     $MPIRUN -np 2 "$BIN" $R --stride 3 --out stride2.pfm 2>/dev/null

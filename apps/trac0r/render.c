@@ -3,6 +3,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/resource.h>
 #include <unistd.h>
 
 #include "cli.h"
@@ -111,6 +112,10 @@ static void render_help(void) {
            "                       0..1e6 (default 0: none); the image is complete, and the\n"
            "                       same as one rendered with the spp it reached. Not with\n"
            "                       --checkpoint or mpirun\n"
+           "  --verbose            after the summary, where the time went: setting up (scene,\n"
+           "                       acceleration structure, device), rendering, and the CPU\n"
+           "                       time used (user + system); under mpirun per rank, with\n"
+           "                       the time spent waiting, on messages and on pixels\n"
            "  -h, --help           show this help\n"
            "\n"
            "Progress (a bar with the ETA on a terminal, otherwise a line a second) goes to\n"
@@ -173,6 +178,15 @@ static int pass_path(const char *out, uint32_t bit, char *buf, size_t size) {
     return n < 0 || (size_t)n >= size ? -1 : 0;
 }
 
+double render_cpu_seconds(void) {
+    struct rusage ru;
+    if (getrusage(RUSAGE_SELF, &ru) != 0) {
+        return 0.0;
+    }
+    return (double)ru.ru_utime.tv_sec + 1e-6 * (double)ru.ru_utime.tv_usec +
+           (double)ru.ru_stime.tv_sec + 1e-6 * (double)ru.ru_stime.tv_usec;
+}
+
 /* The extra options of render (one block, so other commands' options merge apart). */
 static int render_option(render_job *job, int *rc) {
     cli_args *a = &job->args;
@@ -198,6 +212,9 @@ static int render_option(render_job *job, int *rc) {
     } else if (cli_is(a, "--denoise")) {
         job->denoise = 1;
         *rc = CLI_OK;
+    } else if (cli_is(a, "--verbose")) {
+        job->verbose = 1;
+        *rc = CLI_OK;
     } else if (cli_is(a, "--exr-type")) {
         *rc = cli_value(a);
         if (*rc == CLI_OK && strcmp(a->value, "half") != 0 && strcmp(a->value, "float") != 0) {
@@ -221,6 +238,7 @@ void render_job_free(render_job *job) {
 
 int render_job_setup(render_job *job, int argc, char **argv, int *done) {
     memset(job, 0, sizeof *job);
+    job->started = tr_time_now();
     job->args = (cli_args){.cmd = "render", .argc = argc, .argv = argv, .i = 0};
     cli_args *a = &job->args;
     cli_common *c = &job->common;
@@ -531,6 +549,12 @@ static int render_local(render_job *job) {
         }
     }
     render_stop_uninstall();
+    if (rc == CLI_OK && job->verbose) {
+        fprintf(stderr,
+                "trac0r render: setup %.3f s, rendering %.3f s, output %.3f s; CPU %.3f s (user "
+                "+ system)\n",
+                t0 - job->started, elapsed, tr_time_now() - t0 - elapsed, render_cpu_seconds());
+    }
     tr_film_free(&scratch);
     tr_film_free(&film);
     return rc == CLI_OK && sig ? 128 + sig : rc;
