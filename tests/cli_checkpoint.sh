@@ -1,14 +1,14 @@
 #!/bin/sh
 # Checkpoints and interrupted renders: a render killed with SIGKILL and resumed from its
 # last checkpoint gives the bits of the uninterrupted one; a checkpoint of another scene
-# or other options is refused (exit 2); SIGINT leaves a complete image of the samples so
+# or other options, or of an older format version, is refused (exit 2); SIGINT leaves a complete image of the samples so
 # far, a checkpoint that resumes to the same bits, and no temporary file.
 # Usage: cli_checkpoint.sh TRAC0R_BINARY SCRATCH_DIR
 set -u
 . "$(dirname "$0")/common.sh"
 cli_begin "$1" "$2"
 
-R="render --width 64 --height 48 --threads 1 --passes albedo,depth"
+R="render --width 64 --height 48 --threads 1 --passes albedo,depth,variance"
 SPP=400
 
 # wait_for FILE: until FILE exists (at most ~20 s).
@@ -35,16 +35,21 @@ wait $pid
 cmp -s full.pfm resumed.pfm || fail "resumed render differs from the uninterrupted one"
 cmp -s full.depth.pfm resumed.depth.pfm || fail "resumed depth pass differs"
 cmp -s full.albedo.pfm resumed.albedo.pfm || fail "resumed albedo pass differs"
+cmp -s full.variance.pfm resumed.variance.pfm || fail "resumed variance pass differs"
 rm -f ck.tmp.* err.txt # SIGKILL may leave the checkpoint being written
 
 # Another scene, other options, a damaged file: refused with exit 2 and nothing written.
 expect_usage_error "--resume" render builtin:cornell-mirror --width 64 --height 48 \
-    --passes albedo,depth --resume ck --out other.pfm
+    --passes albedo,depth,variance --resume ck --out other.pfm
 expect_usage_error "seed" $R --seed 7 --resume ck --out other.pfm
 expect_usage_error "passes" render --width 64 --height 48 --resume ck --out other.pfm
 expect_usage_error "--spp" $R --resume ck --spp 1 --out other.pfm
 head -c 1000 ck >damaged
 expect_usage_error "--resume" $R --resume damaged --out other.pfm
+# Format version 1 (before the variance pass): refused as such, not as damage.
+cp ck old
+printf '\001\000\000\000' | dd of=old bs=1 seek=8 conv=notrunc 2>/dev/null
+expect_usage_error "version 1" $R --resume old --out other.pfm
 printf 'not a checkpoint' >junk
 expect_usage_error "--resume" $R --resume junk --out other.pfm
 expect_usage_error "--checkpoint-interval" $R --checkpoint ck --checkpoint-interval -1

@@ -17,7 +17,8 @@ R="render --width 40 --height 30 --spp 4 --threads 1"
 [ -e f.albedo.pfm ] && fail "an EXR render wrote its passes as PFM files too"
 
 "$EXRHEADER" f.exr >hdr.txt 2>&1 || fail "exrheader cannot read f.exr: $(cat hdr.txt)"
-for ch in R G B albedo.R albedo.G albedo.B normal.X normal.Y normal.Z depth.Z; do
+for ch in R G B albedo.R albedo.G albedo.B normal.X normal.Y normal.Z depth.Z variance.R \
+    variance.G variance.B; do
     grep -q "^ *$ch, 32-bit floating-point" hdr.txt || fail "f.exr: no float channel $ch"
 done
 grep -q "^ *id, 32-bit unsigned integer" hdr.txt || fail "f.exr: no integer channel id"
@@ -28,7 +29,7 @@ grep -q "^ *R, 16-bit floating-point" hdrh.txt || fail "h.exr: R is not half"
 "$EXRHEADER" plain.exr | grep -q "albedo" && fail "plain.exr has passes nobody asked for"
 
 # Pixels, as OpenEXR's own library reads them.
-for layer in "" albedo normal depth; do
+for layer in "" albedo normal depth variance; do
     name=${layer:-rgb}
     ref=ref.pfm
     [ -n "$layer" ] && ref=ref.$layer.pfm
@@ -38,6 +39,13 @@ for layer in "" albedo normal depth; do
     "$DUMP" --half "$ref" "want.$name.pfm" || fail "exr_dump --half $ref"
     cmp -s "h.$name.pfm" "want.$name.pfm" || fail "h.exr layer '$name' is not $ref rounded to half"
 done
+
+# --denoise filters R, G, B only: the variance layer stays that of the rendered estimate.
+"$BIN" $R --passes variance --denoise --out d.exr 2>err.txt || fail "denoised EXR: $(cat err.txt)"
+"$DUMP" d.exr variance d.variance.pfm || fail "exr_dump d.exr layer 'variance'"
+cmp -s d.variance.pfm ref.variance.pfm || fail "d.exr: --denoise changed the variance layer"
+"$DUMP" d.exr "" d.rgb.pfm || fail "exr_dump d.exr"
+cmp -s d.rgb.pfm ref.pfm && fail "d.exr: --denoise left R, G, B unfiltered"
 
 # compare reads EXR: the float file equals the PFM, the half one is close but not equal.
 "$BIN" compare f.exr ref.pfm >cmp.txt 2>&1 || fail "compare f.exr: $(cat cmp.txt)"

@@ -2,7 +2,8 @@
 # `mpirun -np N trac0r render`: 1, 2 and 3 ranks give the single-process image and passes
 # bit for bit; a rank that cannot open its device ends the job with one trac0r message
 # and status 2; ranks given different options are refused; a render stopped by SIGTERM
-# under MPI resumes, with another number of ranks, to the single-process image.
+# under MPI resumes, with another number of ranks, to the single-process image (and
+# variance: the checkpoint and the tile messages carry its sums of squares).
 # Usage: mpi_check.sh TRAC0R_BINARY SCRATCH_DIR MPIEXEC ranks|resume (two CTests: each
 # mpirun start costs a second or more)
 set -u
@@ -18,11 +19,17 @@ if [ "$PART" = ranks ]; then
     "$BIN" $R --out single.pfm 2>err.txt || fail "single-process render: $(cat err.txt)"
     for n in 1 2 3; do
         $MPIRUN -np $n "$BIN" $R --out np$n.pfm 2>err.txt || fail "np $n: exit $?: $(cat err.txt)"
-        for f in "" .albedo .normal .depth .id; do
+        for f in "" .albedo .normal .depth .id .variance; do
             cmp -s single$f.pfm np$n$f.pfm || fail "np $n: np$n$f.pfm differs from single$f.pfm"
         done
         grep -q "tiles" err.txt || fail "np $n: no progress lines"
     done
+    # --verbose: rank 0 reports every rank's time, one line each, and the image is the same.
+    $MPIRUN -np 2 "$BIN" $R --verbose --out verbose.pfm 2>err.txt || fail "np 2 --verbose: $(cat err.txt)"
+    n=$(grep -c "rank [01]: setup" err.txt)
+    [ "$n" -eq 2 ] || fail "np 2 --verbose: $n lines of per-rank times, expected 2: $(cat err.txt)"
+    cmp -s single.pfm verbose.pfm || fail "np 2 --verbose: the image differs"
+
     # The preview stride: tiles are aligned to it.
     "$BIN" $R --stride 3 --out stride.pfm 2>/dev/null
     $MPIRUN -np 2 "$BIN" $R --stride 3 --out stride2.pfm 2>/dev/null
@@ -47,7 +54,7 @@ fi
 # SIGTERM under MPI: rank 0 writes the finished tiles and the checkpoint; resuming
 # with three ranks finishes the rest.
 if [ "$PART" = resume ]; then
-    L="render --width 200 --height 140 --spp 400 --threads 1"
+    L="render --width 200 --height 140 --spp 400 --threads 1 --passes variance"
     "$BIN" $L --threads 0 --out long.pfm 2>/dev/null
     $MPIRUN -np 2 "$BIN" $L --out stopped.pfm --checkpoint ck --checkpoint-interval 0 2>err.txt &
     pid=$!
@@ -62,6 +69,8 @@ if [ "$PART" = resume ]; then
     [ -s stopped.pfm ] || fail "SIGTERM under MPI: no image"
     $MPIRUN -np 3 "$BIN" $L --resume ck --out resumed.pfm 2>err.txt || fail "MPI resume: $(cat err.txt)"
     cmp -s long.pfm resumed.pfm || fail "MPI render resumed with 3 ranks differs from a single process"
+    cmp -s long.variance.pfm resumed.variance.pfm ||
+        fail "MPI render resumed with 3 ranks: the variance differs from a single process's"
     "$BIN" $L --resume ck --out nompi.pfm >out.txt 2>err.txt
     [ $? -eq 2 ] || fail "resuming an MPI checkpoint without mpirun: not refused with status 2"
 fi

@@ -102,40 +102,40 @@ static int region_failures(const tr_film *a, const tr_film *b, const tr_film *r1
     return failures;
 }
 
-/* The passes of the CPU's and the device's films: filled by the same kernel code
- * (src/kernel/film.h), so they agree exactly except where a path took another turn
- * through the device's last-bit float differences, as radiance does (at most 1 % of
- * the pixels); the primitive ids, discrete, must agree on nearly every pixel. */
+/* The passes (the variance's sums of squares too) of the CPU's and the device's films: filled by
+ * the same kernel code (src/kernel/film.h), so they agree exactly except where a path took another
+ * turn through the device's last-bit float differences, as radiance does (at most 1 % of the
+ * pixels); the primitive ids, discrete, must agree on nearly every pixel. */
 static void compare_passes(const tr_film *cpu, const tr_film *dev, const char *what) {
     const size_t n = (size_t)cpu->width * cpu->height;
-    size_t far[4] = {0, 0, 0, 0}, nonzero = 0;
+    size_t far[5] = {0, 0, 0, 0, 0}, nonzero = 0;
     for (size_t i = 0; i < n; ++i) {
         for (int c = 0; c < 3; ++c) {
-            const float pa[3] = {cpu->albedo[3 * i + c], cpu->normal[3 * i + c],
-                                 c == 0 ? cpu->depth[i] : 0.0f};
-            const float pb[3] = {dev->albedo[3 * i + c], dev->normal[3 * i + c],
-                                 c == 0 ? dev->depth[i] : 0.0f};
-            for (int p = 0; p < 3; ++p) {
+            const float pa[4] = {cpu->albedo[3 * i + c], cpu->normal[3 * i + c],
+                                 c == 0 ? cpu->depth[i] : 0.0f, cpu->sq[3 * i + c]};
+            const float pb[4] = {dev->albedo[3 * i + c], dev->normal[3 * i + c],
+                                 c == 0 ? dev->depth[i] : 0.0f, dev->sq[3 * i + c]};
+            for (int p = 0; p < 4; ++p) {
                 const double d = fabs((double)pa[p] - pb[p]);
                 if (d > 1e-4 * fmax(1.0, fmax(fabs((double)pa[p]), fabs((double)pb[p])))) {
                     far[p] += 1;
                 }
             }
         }
-        far[3] += cpu->prim[i] != dev->prim[i];
+        far[4] += cpu->prim[i] != dev->prim[i];
         nonzero += cpu->prim[i] != 0u && cpu->count[i] > 0u;
     }
     /* The thesis's camera sees past the room's edges (black), and naive paths may end
      * before their first hit: a fifth of the pixels with a surface is a safe floor. */
     CHECK(nonzero * 5 > n, "%s: only %zu of %zu pixels have a surface in the passes", what, nonzero,
           n);
-    const char *names[4] = {"albedo", "normal", "depth", "primitive id"};
-    for (int p = 0; p < 4; ++p) {
+    const char *names[5] = {"albedo", "normal", "depth", "variance", "primitive id"};
+    for (int p = 0; p < 5; ++p) {
         CHECK(far[p] * 100 <= 3 * n, "%s: %zu of %zu values of the %s pass differ", what, far[p],
               3 * n, names[p]);
     }
-    printf("%s: passes differ in %zu/%zu/%zu/%zu values (albedo/normal/depth/id)\n", what, far[0],
-           far[1], far[2], far[3]);
+    printf("%s: passes differ in %zu/%zu/%zu/%zu/%zu values (albedo/normal/depth/variance/id)\n",
+           what, far[0], far[1], far[2], far[3], far[4]);
 }
 
 /* Renders `spp` samples of `scene` on the CPU and on the device and compares. */
@@ -144,8 +144,8 @@ static void compare_backends(tr_device *cl, tr_scene *scene, int stride, int int
     tr_error err;
     const uint32_t w = scene->camera.screen_width, h = scene->camera.screen_height;
     tr_film cpu, dev, r1, r2;
-    CHECK(tr_film_init_passes(&cpu, w, h, TR_PASS_ALL, &err) == TR_OK, "%s", err.msg);
-    CHECK(tr_film_init_passes(&dev, w, h, TR_PASS_ALL, &err) == TR_OK, "%s", err.msg);
+    CHECK(tr_film_init_passes(&cpu, w, h, TR_PASS_MASK, &err) == TR_OK, "%s", err.msg);
+    CHECK(tr_film_init_passes(&dev, w, h, TR_PASS_MASK, &err) == TR_OK, "%s", err.msg);
     CHECK(tr_film_init(&r1, w, h, &err) == TR_OK, "%s", err.msg);
     CHECK(tr_film_init(&r2, w, h, &err) == TR_OK, "%s", err.msg);
     tr_render_config cfg = tr_render_config_default();
@@ -158,12 +158,12 @@ static void compare_backends(tr_device *cl, tr_scene *scene, int stride, int int
     for (uint32_t s = 0; s < spp; ++s) {
         tr_render_stats st;
         tr_render_config with_passes = cfg;
-        with_passes.passes = TR_PASS_ALL;
+        with_passes.passes = TR_PASS_MASK;
         CHECK(tr_render_frame(scene, &scene->camera, &with_passes, &cpu, s, &st, &err) == TR_OK,
               "%s", err.msg);
         rays_cpu += st.rays;
         tr_render_config passes = cfg;
-        passes.passes = TR_PASS_ALL;
+        passes.passes = TR_PASS_MASK;
         CHECK(tr_device_render(cl, &scene->camera, &passes, s, 1, NULL, &st, &err) == TR_OK,
               "%s: %s", what, err.msg);
         rays_dev += st.rays;

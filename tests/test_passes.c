@@ -188,6 +188,9 @@ static int films_equal(const tr_film *a, const tr_film *b) {
     if (a->passes & TR_PASS_PRIM) {
         same &= memcmp(a->prim, b->prim, n * sizeof(uint32_t)) == 0;
     }
+    if (a->passes & TR_PASS_VARIANCE) {
+        same &= memcmp(a->sq, b->sq, 3 * n * sizeof(float)) == 0;
+    }
     return same;
 }
 
@@ -220,13 +223,13 @@ static void test_splits(int integrator, int stride) {
     cfg.integrator = integrator;
     cfg.stride = stride;
     cfg.seed = 99;
-    cfg.passes = TR_PASS_ALL;
+    cfg.passes = TR_PASS_MASK; /* the surface passes and the variance */
     const uint32_t spp = 6;
 
     /* One call for all samples equals one call per sample (tr_render_frame's loop). */
     tr_film whole, loop;
     device_film(&s, &cfg, 0, spp, NULL, &whole);
-    CHECK(tr_film_init_passes(&loop, 37, 29, TR_PASS_ALL, &err) == TR_OK, "%s", err.msg);
+    CHECK(tr_film_init_passes(&loop, 37, 29, TR_PASS_MASK, &err) == TR_OK, "%s", err.msg);
     for (uint32_t k = 0; k < spp; ++k) {
         CHECK(tr_render_frame(&s, &s.camera, &cfg, &loop, k, NULL, &err) == TR_OK, "%s", err.msg);
     }
@@ -236,7 +239,7 @@ static void test_splits(int integrator, int stride) {
     /* Rectangles that cut through stride blocks, accumulated: bit for bit the whole. */
     const tr_rect rects[3] = {{0, 0, 11, 29}, {11, 0, 26, 13}, {11, 13, 26, 16}};
     tr_film sum;
-    CHECK(tr_film_init_passes(&sum, 37, 29, TR_PASS_ALL, &err) == TR_OK, "%s", err.msg);
+    CHECK(tr_film_init_passes(&sum, 37, 29, TR_PASS_MASK, &err) == TR_OK, "%s", err.msg);
     for (int r = 0; r < 3; ++r) {
         tr_film part;
         device_film(&s, &cfg, 0, spp, &rects[r], &part);
@@ -251,7 +254,7 @@ static void test_splits(int integrator, int stride) {
     tr_film a, b, ab;
     device_film(&s, &cfg, 0, 2, NULL, &a);
     device_film(&s, &cfg, 2, spp - 2, NULL, &b);
-    CHECK(tr_film_init_passes(&ab, 37, 29, TR_PASS_ALL, &err) == TR_OK, "%s", err.msg);
+    CHECK(tr_film_init_passes(&ab, 37, 29, TR_PASS_MASK, &err) == TR_OK, "%s", err.msg);
     CHECK(tr_film_accumulate(&ab, &a, &err) == TR_OK && tr_film_accumulate(&ab, &b, &err) == TR_OK,
           "%s", err.msg);
     const size_t n = 37 * 29;
@@ -261,6 +264,7 @@ static void test_splits(int integrator, int stride) {
         for (int c = 0; c < 3; ++c) {
             bad += ab.sum[3 * i + c] != a.sum[3 * i + c] + b.sum[3 * i + c];
             bad += ab.albedo[3 * i + c] != a.albedo[3 * i + c] + b.albedo[3 * i + c];
+            bad += ab.sq[3 * i + c] != a.sq[3 * i + c] + b.sq[3 * i + c];
         }
     }
     CHECK(bad == 0, "stride %d: %d values of the sample-split film are not the ranges' sums",

@@ -14,7 +14,8 @@
 #include "trac0r/outfile.h"
 
 static const char magic[8] = {'T', 'R', 'A', 'C', '0', 'R', 'C', 'K'};
-#define CHECKPOINT_VERSION 1u
+/* 2: the film's sums of squared radiance (TR_PASS_VARIANCE) after the primitive ids. */
+#define CHECKPOINT_VERSION 2u
 #define BYTE_ORDER_MARK 0x01020304u
 
 /* FNV-1a, 64-bit (Fowler, Noll, Vo): a fast hash; checkpoints need to tell renders apart
@@ -99,7 +100,8 @@ typedef struct film_array {
     size_t bytes;
 } film_array;
 
-static int film_arrays(const tr_film *f, film_array out[6]) {
+#define FILM_ARRAYS 7
+static int film_arrays(const tr_film *f, film_array out[FILM_ARRAYS]) {
     const size_t n = (size_t)f->width * f->height;
     int k = 0;
     out[k++] = (film_array){f->sum, 3 * n * sizeof(float)};
@@ -115,6 +117,9 @@ static int film_arrays(const tr_film *f, film_array out[6]) {
     }
     if (f->prim) {
         out[k++] = (film_array){f->prim, n * sizeof(uint32_t)};
+    }
+    if (f->sq) {
+        out[k++] = (film_array){f->sq, 3 * n * sizeof(float)};
     }
     return k;
 }
@@ -149,7 +154,7 @@ int checkpoint_write(const char *path, const checkpoint_id *id, uint32_t mode, c
     put(&w, head, sizeof head);
     put(&w, &id->scene_hash, sizeof id->scene_hash);
     put(&w, id->desc, head[8]);
-    film_array arrays[6];
+    film_array arrays[FILM_ARRAYS];
     const int k = film_arrays(film, arrays);
     for (int i = 0; i < k; ++i) {
         put(&w, arrays[i].data, arrays[i].bytes);
@@ -251,15 +256,22 @@ int checkpoint_read(const char *path, const checkpoint_id *id, uint32_t *mode, t
     } else if (size < sizeof magic + sizeof sum || take(&r, got_magic, sizeof got_magic) != 0 ||
                memcmp(got_magic, magic, sizeof magic) != 0) {
         rc = tr_error_set(err, TR_STATUS_PARSE, "%s: not a trac0r checkpoint", path);
+    } else if (take(&r, head, sizeof head) != 0) {
+        rc = tr_error_set(err, TR_STATUS_PARSE, "%s: truncated checkpoint header", path);
+    } else if (head[1] != BYTE_ORDER_MARK) {
+        /* Before the checksum: a file of another version or machine is whole, and says so. */
+        rc = tr_error_set(err, TR_STATUS_PARSE,
+                          "%s: the checkpoint was written on a machine of another byte order "
+                          "(mark 0x%08x, this one's 0x%08x)",
+                          path, head[1], BYTE_ORDER_MARK);
+    } else if (head[0] != CHECKPOINT_VERSION) {
+        rc = tr_error_set(err, TR_STATUS_PARSE,
+                          "%s: checkpoint format version %u, but this trac0r reads version %u "
+                          "only: resume it with the trac0r that wrote it, or render again",
+                          path, head[0], CHECKPOINT_VERSION);
     } else if (memcpy(&sum, data + size - sizeof sum, sizeof sum),
                fnv(FNV_OFFSET, data, size - sizeof sum) != sum) {
         rc = tr_error_set(err, TR_STATUS_PARSE, "%s: damaged checkpoint (checksum mismatch)", path);
-    } else if (take(&r, head, sizeof head) != 0 || head[0] != CHECKPOINT_VERSION ||
-               head[1] != BYTE_ORDER_MARK) {
-        rc = tr_error_set(err, TR_STATUS_PARSE,
-                          "%s: checkpoint version %u or byte order 0x%08x is not this build's "
-                          "(%u, 0x%08x)",
-                          path, head[0], head[1], CHECKPOINT_VERSION, BYTE_ORDER_MARK);
     } else if (head[8] >= sizeof desc || take(&r, &scene_hash, sizeof scene_hash) != 0 ||
                take(&r, desc, head[8]) != 0) {
         rc = tr_error_set(err, TR_STATUS_PARSE, "%s: truncated checkpoint header", path);
@@ -284,7 +296,7 @@ int checkpoint_read(const char *path, const checkpoint_id *id, uint32_t *mode, t
         rc = TR_ERR;
     }
     if (rc == TR_OK) {
-        film_array arrays[6];
+        film_array arrays[FILM_ARRAYS];
         const int k = film_arrays(film, arrays);
         for (int i = 0; i < k && rc == TR_OK; ++i) {
             if (take(&r, arrays[i].data, arrays[i].bytes) != 0) {

@@ -3,6 +3,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/resource.h>
 #include <unistd.h>
 
 #include "cli.h"
@@ -78,12 +79,14 @@ static void render_help(void) {
            "                       renamed, so it never exists half-written\n"
            "  --exr-type T         EXR channel type, half or float (default float)\n"
            "  --passes LIST        also write these passes beside the image, comma-separated:\n"
-           "                       albedo, normal, depth, id (or all); each goes to\n"
+           "                       albedo, normal, depth, id, variance (or all); each goes to\n"
            "                       FILE-without-extension.PASS.pfm, or into the EXR as layers\n"
-           "                       albedo.RGB, normal.XYZ, depth.Z, id (float: the pixel's mean\n"
-           "                       base colour, shading normal, distance from the camera,\n"
-           "                       primitive id), at the first surface that is not a mirror\n"
-           "                       or smooth glass; 0 where a sample met none\n"
+           "                       albedo.RGB, normal.XYZ, depth.Z, id, variance.RGB (float:\n"
+           "                       the pixel's mean base colour, shading normal, distance\n"
+           "                       from the camera, primitive id, at the first surface that\n"
+           "                       is not a mirror or smooth glass, 0 where a sample met\n"
+           "                       none; the variance of the pixel's mean radiance per\n"
+           "                       channel, 0 below 2 samples)\n"
            "  --checkpoint FILE    save the film and what is needed to continue to FILE\n"
            "                       every --checkpoint-interval, on SIGINT/SIGTERM and at\n"
            "                       the end (atomically: the last complete one survives)\n"
@@ -109,6 +112,10 @@ static void render_help(void) {
            "                       0..1e6 (default 0: none); the image is complete, and the\n"
            "                       same as one rendered with the spp it reached. Not with\n"
            "                       --checkpoint or mpirun\n"
+           "  --verbose            after the summary, where the time went: setting up (scene,\n"
+           "                       acceleration structure, device), rendering, and the CPU\n"
+           "                       time used (user + system); under mpirun per rank, with\n"
+           "                       the time spent waiting, on messages and on pixels\n"
            "  -h, --help           show this help\n"
            "\n"
            "Progress (a bar with the ETA on a terminal, otherwise a line a second) goes to\n"
@@ -122,7 +129,7 @@ static void render_help(void) {
            cli_common_help());
 }
 
-/* --passes: "albedo,normal,depth,id" or "all" into TR_PASS_* bits. */
+/* --passes: "albedo,normal,depth,id,variance" or "all" into TR_PASS_* bits. */
 static int parse_passes(cli_args *a, uint32_t *passes) {
     if (cli_value(a) != CLI_OK) {
         return CLI_USAGE;
@@ -133,9 +140,9 @@ static int parse_passes(cli_args *a, uint32_t *passes) {
         size_t len = strcspn(p, ",");
         uint32_t bit = 0;
         if (len == 3 && strncmp(p, "all", 3) == 0) {
-            bit = TR_PASS_ALL;
+            bit = TR_PASS_MASK;
         }
-        for (uint32_t k = 1; k <= TR_PASS_PRIM && !bit; k <<= 1) {
+        for (uint32_t k = 1; k <= TR_PASS_VARIANCE && !bit; k <<= 1) {
             const char *name = tr_pass_name(k);
             if (strlen(name) == len && strncmp(p, name, len) == 0) {
                 bit = k;
@@ -143,7 +150,8 @@ static int parse_passes(cli_args *a, uint32_t *passes) {
         }
         if (!bit) {
             return cli_error(a,
-                             "%s: unknown pass '%.*s' (expected albedo, normal, depth, id or all)",
+                             "%s: unknown pass '%.*s' (expected albedo, normal, depth, id, "
+                             "variance or all)",
                              a->opt, (int)len, p);
         }
         *passes |= bit;
@@ -168,6 +176,15 @@ static int pass_path(const char *out, uint32_t bit, char *buf, size_t size) {
     const size_t stem = dot && (!slash || dot > slash) ? (size_t)(dot - out) : strlen(out);
     const int n = snprintf(buf, size, "%.*s.%s.pfm", (int)stem, out, tr_pass_name(bit));
     return n < 0 || (size_t)n >= size ? -1 : 0;
+}
+
+double render_cpu_seconds(void) {
+    struct rusage ru;
+    if (getrusage(RUSAGE_SELF, &ru) != 0) {
+        return 0.0;
+    }
+    return (double)ru.ru_utime.tv_sec + 1e-6 * (double)ru.ru_utime.tv_usec +
+           (double)ru.ru_stime.tv_sec + 1e-6 * (double)ru.ru_stime.tv_usec;
 }
 
 /* The extra options of render (one block, so other commands' options merge apart). */
@@ -195,6 +212,9 @@ static int render_option(render_job *job, int *rc) {
     } else if (cli_is(a, "--denoise")) {
         job->denoise = 1;
         *rc = CLI_OK;
+    } else if (cli_is(a, "--verbose")) {
+        job->verbose = 1;
+        *rc = CLI_OK;
     } else if (cli_is(a, "--exr-type")) {
         *rc = cli_value(a);
         if (*rc == CLI_OK && strcmp(a->value, "half") != 0 && strcmp(a->value, "float") != 0) {
@@ -218,6 +238,7 @@ void render_job_free(render_job *job) {
 
 int render_job_setup(render_job *job, int argc, char **argv, int *done) {
     memset(job, 0, sizeof *job);
+    job->started = tr_time_now();
     job->args = (cli_args){.cmd = "render", .argc = argc, .argv = argv, .i = 0};
     cli_args *a = &job->args;
     cli_common *c = &job->common;
@@ -289,7 +310,7 @@ int render_job_setup(render_job *job, int argc, char **argv, int *done) {
     if (job->checkpoint && tr_image_check_writable(job->checkpoint, &err) != TR_OK) {
         return cli_error(a, "--checkpoint: %s", err.msg);
     }
-    for (int k = 0; k < 4 && fmt != TR_IMAGE_EXR; ++k) {
+    for (int k = 0; k < 5 && fmt != TR_IMAGE_EXR; ++k) {
         const uint32_t bit = 1u << k;
         if ((job->passes & bit) != 0u &&
             pass_path(job->out, bit, job->pass_paths[k], sizeof job->pass_paths[k]) != 0) {
@@ -337,23 +358,25 @@ int render_write_outputs(const render_job *job, const tr_film *film, uint32_t sa
     const char *out = job->out;
     int rc = CLI_OK;
     if (tr_image_format_from_path(out) == TR_IMAGE_EXR) {
-        /* A view of the film with the layers asked for; its radiance denoised if asked. */
+        /* A view of the film with the layers asked for; its radiance denoised if asked
+         * (the variance layer stays the noise of the rendered estimate). */
         tr_film view = *film, den = {0};
         view.passes = job->write_passes;
         if (job->denoise) {
             rc = render_denoise(film, &den, &err) == TR_OK ? CLI_OK : CLI_FAILURE;
-            view.sum = den.sum;
-            view.count = den.count;
         }
         if (rc == CLI_OK) {
-            rc = tr_film_write_exr(&view, out, job->exr_half, &err) == TR_OK ? CLI_OK : CLI_FAILURE;
+            rc = tr_film_write_exr_rgb(&view, job->denoise ? &den : &view, out, job->exr_half,
+                                       &err) == TR_OK
+                     ? CLI_OK
+                     : CLI_FAILURE;
         }
         tr_film_free(&den);
     } else {
         rc = render_write(film, out, job->exposure, job->curve, job->denoise, &err) == TR_OK
                  ? CLI_OK
                  : CLI_FAILURE;
-        for (int k = 0; k < 4 && rc == CLI_OK; ++k) {
+        for (int k = 0; k < 5 && rc == CLI_OK; ++k) {
             tr_film pass;
             if ((job->write_passes & (1u << k)) == 0u) {
                 continue;
@@ -526,6 +549,12 @@ static int render_local(render_job *job) {
         }
     }
     render_stop_uninstall();
+    if (rc == CLI_OK && job->verbose) {
+        fprintf(stderr,
+                "trac0r render: setup %.3f s, rendering %.3f s, output %.3f s; CPU %.3f s (user "
+                "+ system)\n",
+                t0 - job->started, elapsed, tr_time_now() - t0 - elapsed, render_cpu_seconds());
+    }
     tr_film_free(&scratch);
     tr_film_free(&film);
     return rc == CLI_OK && sig ? 128 + sig : rc;

@@ -23,14 +23,19 @@ typedef struct render_job {
     uint32_t write_passes;    /* TR_PASS_* written as files or EXR layers (--passes) */
     int curve;                /* --tonemap: TR_TONEMAP_* (PNG only) */
     int denoise;              /* --denoise */
-    char pass_paths[4][4096]; /* PFM paths of the passes (not for EXR) */
+    char pass_paths[5][4096]; /* PFM paths of the passes, by bit (not for EXR) */
     const char *checkpoint;   /* --checkpoint FILE or NULL */
     double checkpoint_interval;
     const char *resume;    /* --resume FILE or NULL */
     checkpoint_id id;      /* when checkpoint or resume is set */
     float noise_threshold; /* --noise-threshold (0: off) */
     float time_limit;      /* --time-limit seconds (0: none) */
+    int verbose;           /* --verbose: where the time went */
+    double started;        /* tr_time_now() when the setup began */
 } render_job;
+
+/* user + system CPU seconds this process has used so far (all its threads). */
+double render_cpu_seconds(void);
 
 /* Parses the command line, loads the scene and opens the device. Returns CLI_OK with
  * *done = 0 when the job is ready (render_job_free releases it), or an exit status with

@@ -1,15 +1,18 @@
 /* render_mpi.c - `trac0r render` under mpirun: one render shared by many processes.
  *
  * The image is cut into tiles (32 x 32 traced pixels, aligned to the stride). Rank 0
- * hands them out one at a time as ranks finish (and renders tiles itself between
- * messages), so a slower machine simply takes fewer tiles. A rank renders every sample
+ * hands them out one at a time as ranks finish, and renders tiles itself, answering the
+ * workers between the pieces of its tile (between_pieces), so a slower machine simply
+ * takes fewer tiles and no worker waits for rank 0's tile to end. A rank renders every sample
  * of its tile in one call, in the device's own order, into its device's film, and
  * reports the tile done; the pixels follow in batches (reading a device's film costs as
  * much as the whole image, so it is read when a checkpoint is due and at the end, not
  * per tile), and rank 0 copies them into its film. Tiles never overlap, so the film is
  * the one a single process accumulates, bit for bit, whatever the number of ranks and
  * whichever rank took which tile. Every worker keeps two tiles in hand (the next one is
- * already on its way while it renders), so it never waits for rank 0 to answer.
+ * already on its way while it renders), one near the end so that the ranks finish
+ * together. A rank waiting for a message sleeps between probes (wait_message) rather than
+ * spinning in Open MPI's blocking calls. --verbose reports where each rank's time went.
  *
  * Setup errors (a bad option, a scene, a device a rank cannot open) are gathered: each
  * rank's stderr goes to a temporary file until every rank has set up, then the lowest
@@ -17,18 +20,53 @@
  * while rendering is sent to rank 0, which stops handing out tiles, prints it once, and
  * all ranks exit with status 1. Rank 0 alone writes files and prints progress. */
 #define _POSIX_C_SOURCE 200809L
+#include <math.h>
 #include <mpi.h>
+#include <omp.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 #include <unistd.h>
 
 #include "progress.h"
 #include "render_job.h"
 
-enum { TAG_WORK = 1, TAG_DONE = 2, TAG_DATA = 3, TAG_ERROR = 4, TAG_CANCELLED = 5 };
+enum { TAG_WORK = 1, TAG_DONE = 2, TAG_DATA = 3, TAG_ERROR = 4, TAG_CANCELLED = 5, TAG_PHASES = 6 };
 #define TILE_GRID 32u /* a tile's side in traced pixels */
 #define PREFETCH 2    /* tiles a worker holds */
+
+/* Where this rank's time went, in seconds (--verbose): rank 0 gathers and prints them. */
+enum {
+    PH_SETUP,  /* options, scene, acceleration structure, device */
+    PH_RENDER, /* inside the tiles' renders */
+    PH_WAIT,   /* blocked for a message (a worker for its next tile, rank 0 at the end) */
+    PH_SERVE,  /* rank 0: answering the workers between its tiles */
+    PH_PIXELS, /* reading the device film, packing, sending or copying pixels */
+    PH_TOTAL,  /* from the end of the setup to the end of the hand-out */
+    PH_CPU,    /* user + system CPU time of the process, setup included */
+    PH_TILES,  /* tiles this rank rendered */
+    PH_COUNT
+};
+static double phase[PH_COUNT];
+
+/* Waits for a message without spinning: Open MPI's blocking calls poll the network at
+ * full speed, which takes a core that a rank rendering on the same machine (or another
+ * job) could use. The probe is repeated with sleeps growing from 20 us to 1 ms: a tile
+ * takes far longer, so the latency this adds is lost in it. */
+static void wait_message(int source, int tag, MPI_Status *st) {
+    long ns = 20000;
+    for (;;) {
+        int flag = 0;
+        MPI_Iprobe(source, tag, MPI_COMM_WORLD, &flag, st);
+        if (flag) {
+            return;
+        }
+        const struct timespec pause = {0, ns};
+        nanosleep(&pause, NULL);
+        ns = ns < 1000000 ? 2 * ns : ns;
+    }
+}
 
 int render_mpi_wanted(void) {
     /* Set by Open MPI's launcher (and by PMIx / PMI launchers of other MPIs). */
@@ -67,6 +105,7 @@ static size_t pixel_bytes(uint32_t passes) {
     b += (passes & TR_PASS_NORMAL) ? 3 * sizeof(float) : 0;
     b += (passes & TR_PASS_DEPTH) ? sizeof(float) : 0;
     b += (passes & TR_PASS_PRIM) ? sizeof(uint32_t) : 0;
+    b += (passes & TR_PASS_VARIANCE) ? 3 * sizeof(float) : 0;
     return b;
 }
 
@@ -98,6 +137,7 @@ static size_t pack_tile(tr_film *f, const tr_rect *r, unsigned char *buf, int un
     p = pack_rows(p, f->normal, 3 * sizeof(float), f->width, r, unpack);
     p = pack_rows(p, f->depth, sizeof(float), f->width, r, unpack);
     p = pack_rows(p, f->prim, sizeof(uint32_t), f->width, r, unpack);
+    p = pack_rows(p, f->sq, 3 * sizeof(float), f->width, r, unpack);
     return (size_t)(p - buf);
 }
 
@@ -106,12 +146,27 @@ static int render_tile(render_job *job, const tiling *t, uint32_t k, uint64_t *r
                        tr_error *err) {
     const tr_rect r = tile_rect(t, k);
     tr_render_stats st;
-    if (tr_device_render(job->be.dev, tr_scene_camera(job->scene), &job->cfg, 0, job->spp, &r, &st,
-                         err) != TR_OK) {
+    const double t0 = tr_time_now();
+    const int rc = tr_device_render(job->be.dev, tr_scene_camera(job->scene), &job->cfg, 0,
+                                    job->spp, &r, &st, err);
+    phase[PH_RENDER] += tr_time_now() - t0;
+    if (rc != TR_OK) {
         return TR_ERR;
     }
+    phase[PH_TILES] += 1.0;
     *rays += st.rays;
     return TR_OK;
+}
+
+/* The side, in traced pixels, of the pieces the CPU device cuts a tile into (its OpenMP
+ * threads share them out; rank 0 answers messages between them): at least 8 pieces per
+ * thread, so the threads end a tile together, and at least 16 pieces, so rank 0 answers
+ * within a sixteenth of a tile. The pieces do not change the image (every pixel is still
+ * one thread's, its samples in order). */
+static uint32_t piece_side(const tr_render_config *cfg) {
+    const int threads = cfg->threads > 0 ? cfg->threads : tr_default_threads();
+    const double side = floor((double)TILE_GRID / sqrt(8.0 * threads));
+    return side < 1.0 ? 1u : (side > TILE_GRID / 4 ? TILE_GRID / 4 : (uint32_t)side);
 }
 
 /* mpirun passes SIGINT/SIGTERM to every rank and soon kills them: a tile under way is
@@ -184,18 +239,26 @@ static int worker(render_job *job, const tiling *t, tr_film *film) {
     int rc = CLI_OK;
     for (;;) {
         int32_t k;
+        double t0 = tr_time_now();
+        MPI_Status st;
+        wait_message(0, TAG_WORK, &st);
         MPI_Recv(&k, 1, MPI_INT32_T, 0, TAG_WORK, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+        phase[PH_WAIT] += tr_time_now() - t0;
         uint64_t rays = 0;
         int ok = TR_OK;
         if (k < 0) {
+            t0 = tr_time_now();
             ok = send_pending(job, t, film, &p, 1, &err);
+            phase[PH_PIXELS] += tr_time_now() - t0;
         } else if ((ok = render_tile(job, t, (uint32_t)k, &rays, &err)) == TR_OK) {
             p.tiles[p.n++] = (uint32_t)k;
             const uint64_t done[2] = {(uint64_t)k, rays};
             MPI_Send(done, 2, MPI_UINT64_T, 0, TAG_DONE, MPI_COMM_WORLD);
             if (job->checkpoint && tr_time_now() - last_flush >= job->checkpoint_interval) {
+                t0 = tr_time_now();
                 ok = send_pending(job, t, film, &p, 0, &err);
                 last_flush = tr_time_now();
+                phase[PH_PIXELS] += last_flush - t0;
             }
         } else if (err.code == TR_STATUS_CANCELLED) {
             MPI_Send(&k, 1, MPI_INT32_T, 0, TAG_CANCELLED, MPI_COMM_WORLD);
@@ -229,6 +292,7 @@ typedef struct master {
     int *outstanding;    /* per rank: tiles handed out, not yet reported */
     int *stopped;        /* per rank: sent -1 (or failed) */
     int *final;          /* per rank: its last pixels arrived (or it failed) */
+    int size;            /* ranks */
     uint64_t rays;
     int rc;
     progress bar;
@@ -352,7 +416,7 @@ static int serve(master *m, int block) {
     MPI_Status st;
     int flag = 1;
     if (block) {
-        MPI_Probe(MPI_ANY_SOURCE, MPI_ANY_TAG, MPI_COMM_WORLD, &st);
+        wait_message(MPI_ANY_SOURCE, MPI_ANY_TAG, &st);
     } else {
         MPI_Iprobe(MPI_ANY_SOURCE, MPI_ANY_TAG, MPI_COMM_WORLD, &flag, &st);
     }
@@ -375,7 +439,11 @@ static int serve(master *m, int block) {
         --m->outstanding[src];
         m->rays += done[1];
         tile_reported(m);
-        hand_out(m, src);
+        /* A second tile in hand hides rank 0's answer; near the end it would leave the
+         * others idle while this worker renders it, so there a worker holds one. */
+        if (m->outstanding[src] == 0 || m->t->count - m->next > (uint32_t)(m->size * PREFETCH)) {
+            hand_out(m, src);
+        }
     } else if (st.MPI_TAG == TAG_CANCELLED) {
         --m->outstanding[src];
         m->stopping = 1;
@@ -395,6 +463,23 @@ static int serve(master *m, int block) {
     return 1;
 }
 
+/* Asked by the CPU device before each piece of rank 0's tile (tr_render_config.cancel):
+ * a stop signal drops the tile; on the main thread (the one that calls MPI, and OpenMP's
+ * thread 0 of the device's loop) the workers' messages are answered meanwhile, so a
+ * worker waits for a piece of rank 0's tile at most, not for all of it. */
+static int between_pieces(void *user) {
+    if (render_stop_signal() != 0) {
+        return 1;
+    }
+    if (omp_get_thread_num() == 0) {
+        const double t0 = tr_time_now();
+        while (serve(user, 0)) {
+        }
+        phase[PH_SERVE] += tr_time_now() - t0;
+    }
+    return 0;
+}
+
 static int master_run(render_job *job, const tiling *t, tr_film *film, tr_film *own,
                       unsigned char *done, int size, double *elapsed, uint64_t *rays) {
     master m;
@@ -404,6 +489,7 @@ static int master_run(render_job *job, const tiling *t, tr_film *film, tr_film *
     m.film = film;
     m.own = own;
     m.done = done;
+    m.size = size;
     m.outstanding = calloc((size_t)size, sizeof *m.outstanding);
     m.stopped = calloc((size_t)size, sizeof *m.stopped);
     m.final = calloc((size_t)size, sizeof *m.final);
@@ -416,6 +502,8 @@ static int master_run(render_job *job, const tiling *t, tr_film *film, tr_film *
         m.finished += done[k];
     }
     m.resumed = m.finished;
+    job->cfg.cancel = between_pieces;
+    job->cfg.cancel_user = &m;
     progress_begin(&m.bar, "trac0r render", "tiles", t->count - m.resumed, 0);
     const double t0 = tr_time_now();
     double last = t0;
@@ -426,8 +514,10 @@ static int master_run(render_job *job, const tiling *t, tr_film *film, tr_film *
     }
     tr_error err;
     for (;;) {
+        double t1 = tr_time_now();
         while (serve(&m, 0)) {
         }
+        phase[PH_SERVE] += tr_time_now() - t1;
         maybe_checkpoint(&m, &last);
         const int32_t k = take_tile(&m);
         if (k >= 0) {
@@ -449,9 +539,13 @@ static int master_run(render_job *job, const tiling *t, tr_film *film, tr_film *
         if (!busy) {
             break;
         }
+        t1 = tr_time_now();
         serve(&m, 1);
+        phase[PH_WAIT] += tr_time_now() - t1;
     }
+    const double t2 = tr_time_now();
     collect_own(&m);
+    phase[PH_PIXELS] += tr_time_now() - t2;
     progress_end(&m.bar);
     *elapsed = tr_time_now() - t0;
     *rays = m.rays;
@@ -535,6 +629,39 @@ static int setup_all(render_job *job, int argc, char **argv, int rank, int size,
     return CLI_OK;
 }
 
+/* --verbose: rank 0 prints where every rank's time went. Every rank sends its times (the
+ * option may differ between ranks), one small message each, after the render. */
+static void report_phases(const render_job *job, int rank, int size, int rc) {
+    phase[PH_CPU] = render_cpu_seconds();
+    if (rank != 0) {
+        MPI_Send(phase, PH_COUNT, MPI_DOUBLE, 0, TAG_PHASES, MPI_COMM_WORLD);
+        return;
+    }
+    const int print = job->verbose && rc == CLI_OK;
+    double cpu = 0.0, render = 0.0;
+    for (int r = 0; r < size; ++r) {
+        double p[PH_COUNT];
+        if (r == 0) {
+            memcpy(p, phase, sizeof p);
+        } else {
+            MPI_Recv(p, PH_COUNT, MPI_DOUBLE, r, TAG_PHASES, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+        }
+        if (print) {
+            fprintf(stderr,
+                    "trac0r render: rank %d: setup %.3f s, then %.3f s: rendering %.3f s (%.0f "
+                    "tiles), waiting %.3f s, messages %.3f s, pixels %.3f s; CPU %.3f s\n",
+                    r, p[PH_SETUP], p[PH_TOTAL], p[PH_RENDER], p[PH_TILES], p[PH_WAIT], p[PH_SERVE],
+                    p[PH_PIXELS], p[PH_CPU]);
+        }
+        cpu += p[PH_CPU];
+        render += p[PH_RENDER];
+    }
+    if (print) {
+        fprintf(stderr, "trac0r render: %d ranks: rendering %.3f s, CPU %.3f s (user + system)\n",
+                size, render, cpu);
+    }
+}
+
 /* Rank 0: the checkpoint to resume into `film` and `done`. */
 static int resume_tiles(render_job *job, const tiling *t, tr_film *film, unsigned char *done) {
     tr_error err;
@@ -578,6 +705,7 @@ int render_mpi_main(int argc, char **argv) {
     render_job job;
     int done = 0;
     int rc = setup_all(&job, argc, argv, rank, size, &done);
+    phase[PH_SETUP] = tr_time_now() - job.started;
     if (done) {
         render_job_free(&job);
         MPI_Finalize();
@@ -605,12 +733,14 @@ int render_mpi_main(int argc, char **argv) {
     MPI_Bcast(&rc, 1, MPI_INT, 0, MPI_COMM_WORLD);
     MPI_Bcast(&job.spp, 1, MPI_UINT32_T, 0, MPI_COMM_WORLD);
     job.cfg.cancel = stop_requested;
+    job.cfg.tile = piece_side(&job.cfg);
     if (rc == CLI_OK) {
         render_stop_install();
         if (rank == 0) {
             double elapsed = 0.0;
             uint64_t rays = 0;
             rc = master_run(&job, &t, &film, &own, tiles_done, size, &elapsed, &rays);
+            phase[PH_TOTAL] = elapsed;
             const int sig = render_stop_signal();
             uint32_t finished = 0;
             for (uint32_t k = 0; k < t.count; ++k) {
@@ -634,11 +764,14 @@ int render_mpi_main(int argc, char **argv) {
                 }
             }
         } else {
+            const double t0 = tr_time_now();
             rc = worker(&job, &t, &own);
+            phase[PH_TOTAL] = tr_time_now() - t0;
         }
         render_stop_uninstall();
         /* Every rank ends with rank 0's status (a worker's failure is rank 0's too). */
         MPI_Bcast(&rc, 1, MPI_INT, 0, MPI_COMM_WORLD);
+        report_phases(&job, rank, size, rc);
     }
     free(tiles_done);
     tr_film_free(&own);

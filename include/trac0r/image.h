@@ -27,9 +27,14 @@ int tr_film_write_png(const tr_film *f, const char *path, float exposure, tr_err
 int tr_film_write_pfm(const tr_film *f, const char *path, tr_error *err);
 
 /* Writes the film as OpenEXR (src/io/exr.c): the mean radiance as R, G, B, and the
- * passes it keeps as layers albedo.{R,G,B}, normal.{X,Y,Z}, depth.Z and id (UINT); half
- * or float channels (`half` nonzero: half). ZIP-compressed scanlines. */
+ * passes it keeps as layers albedo.{R,G,B}, normal.{X,Y,Z}, depth.Z, id (UINT) and
+ * variance.{R,G,B} (the variance of the mean radiance, tr_film_variance); half or float
+ * channels (`half` nonzero: half). ZIP-compressed scanlines. */
 int tr_film_write_exr(const tr_film *f, const char *path, int half, tr_error *err);
+/* The same with R, G, B from `rgb` (a film of f's size: a filtered image of f) and the
+ * layers, the variance included, from f. */
+int tr_film_write_exr_rgb(const tr_film *f, const tr_film *rgb, const char *path, int half,
+                          tr_error *err);
 
 /* Checks, without leaving anything behind, that a file can be created at path's
  * directory (so a long render is not wasted on an unwritable target). */

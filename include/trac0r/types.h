@@ -89,6 +89,12 @@ typedef struct tr_camera {
 #define TR_PASS_NORMAL 2u /* unit shading normal, world space, facing the arriving ray */
 #define TR_PASS_DEPTH 4u  /* distance travelled from the camera to the surface */
 #define TR_PASS_PRIM 8u   /* index of the triangle hit, plus one (0: none) */
-#define TR_PASS_ALL 15u
+#define TR_PASS_ALL 15u   /* the surface passes above: a denoiser's guides */
+/* Not a surface but the noise of the radiance estimate: the film keeps per-pixel sums of
+ * squared radiance (per channel), from which the variance of the pixel's mean follows
+ * (tr_film_pass_pixel). Taken from every sample, so it costs a few multiplications and
+ * 12 bytes a pixel, and changes no other pass or the radiance. */
+#define TR_PASS_VARIANCE 16u
+#define TR_PASS_MASK 31u /* every pass bit a film knows */
 
 #endif

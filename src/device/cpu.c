@@ -58,9 +58,9 @@ int tr_render_config_check(const tr_render_config *cfg, tr_error *err) {
         return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "threads %d must be in 0..%d",
                             cfg->threads, TR_MAX_THREADS);
     }
-    if ((cfg->passes & ~TR_PASS_ALL) != 0u) {
+    if ((cfg->passes & ~TR_PASS_MASK) != 0u) {
         return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "unknown pass bits 0x%x",
-                            cfg->passes & ~TR_PASS_ALL);
+                            cfg->passes & ~TR_PASS_MASK);
     }
     return TR_OK;
 }
@@ -106,8 +106,10 @@ int tr_frame_make(tr_frame *f, const tr_camera *cam, const tr_render_config *cfg
 }
 
 tr_film_view tr_film_view_of(tr_film *film) {
-    return tr_film_view_make(film->sum, film->count, film->albedo, film->normal, film->depth,
-                             film->prim, film->width, film->passes);
+    tr_film_view v = tr_film_view_make(film->sum, film->count, film->albedo, film->normal,
+                                       film->depth, film->prim, film->width, film->passes);
+    v.sq = film->sq;
+    return v;
 }
 
 int tr_cpu_render(const tr_scene_view *view, const tr_frame *f, tr_film *film, int threads,

@@ -296,6 +296,9 @@ int tr_device_read_film(tr_device *dev, tr_film *film, tr_error *err) {
     if (film->prim) {
         memcpy(film->prim, src->prim, n * sizeof *film->prim);
     }
+    if (film->sq) {
+        memcpy(film->sq, src->sq, 3 * n * sizeof *film->sq);
+    }
     return TR_OK;
 }
 

@@ -29,9 +29,9 @@ int tr_film_init_passes(tr_film *f, uint32_t width, uint32_t height, uint32_t pa
     if (tr_film_check_size(width, height, err) != TR_OK) {
         return TR_ERR;
     }
-    if ((passes & ~TR_PASS_ALL) != 0u) {
+    if ((passes & ~TR_PASS_MASK) != 0u) {
         return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "unknown pass bits 0x%x",
-                            passes & ~TR_PASS_ALL);
+                            passes & ~TR_PASS_MASK);
     }
     size_t n = (size_t)width * height;
     int ok = 1;
@@ -49,6 +49,9 @@ int tr_film_init_passes(tr_film *f, uint32_t width, uint32_t height, uint32_t pa
     }
     if (passes & TR_PASS_PRIM) {
         ok = ok && (f->prim = calloc(n, sizeof *f->prim)) != NULL;
+    }
+    if (passes & TR_PASS_VARIANCE) {
+        ok = ok && (f->sq = calloc(3 * n, sizeof *f->sq)) != NULL;
     }
     if (!ok) {
         tr_film_free(f);
@@ -68,6 +71,7 @@ void tr_film_free(tr_film *f) {
     free(f->normal);
     free(f->depth);
     free(f->prim);
+    free(f->sq);
     memset(f, 0, sizeof *f);
 }
 
@@ -87,6 +91,9 @@ void tr_film_clear(tr_film *f) {
     if (f->prim) {
         memset(f->prim, 0, n * sizeof *f->prim);
     }
+    if (f->sq) {
+        memset(f->sq, 0, 3 * n * sizeof *f->sq);
+    }
 }
 
 tr_vec3 tr_film_pixel(const tr_film *f, uint32_t x, uint32_t y) {
@@ -99,12 +106,25 @@ tr_vec3 tr_film_pixel(const tr_film *f, uint32_t x, uint32_t y) {
     return v3(f->sum[3 * i] * inv, f->sum[3 * i + 1] * inv, f->sum[3 * i + 2] * inv);
 }
 
+/* Whether `pass` is one pass bit that f keeps. */
+static int keeps_pass(const tr_film *f, uint32_t pass) {
+    return tr_pass_name(pass) != NULL && (f->passes & pass) != 0u;
+}
+
+float tr_film_variance(const tr_film *f, size_t i, int c) {
+    const uint32_t n = f->count[i];
+    if (n < 2u) {
+        return 0.0f;
+    }
+    const double s = f->sum[3 * i + (size_t)c], q = f->sq[3 * i + (size_t)c];
+    const double var = (q - s * s / n) / (double)(n - 1u) / (double)n;
+    return var > 0.0 ? (float)var : 0.0f;
+}
+
 int tr_film_pass_pixel(const tr_film *f, uint32_t pass, uint32_t x, uint32_t y, float out[3],
                        tr_error *err) {
     out[0] = out[1] = out[2] = 0.0f;
-    if ((pass != TR_PASS_ALBEDO && pass != TR_PASS_NORMAL && pass != TR_PASS_DEPTH &&
-         pass != TR_PASS_PRIM) ||
-        (f->passes & pass) == 0u) {
+    if (!keeps_pass(f, pass)) {
         return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "the film does not keep pass 0x%x",
                             pass);
     }
@@ -116,6 +136,12 @@ int tr_film_pass_pixel(const tr_film *f, uint32_t pass, uint32_t x, uint32_t y, 
     uint32_t c = f->count[i];
     if (pass == TR_PASS_PRIM) {
         out[0] = (float)f->prim[i];
+        return TR_OK;
+    }
+    if (pass == TR_PASS_VARIANCE) {
+        for (int k = 0; k < 3; ++k) {
+            out[k] = tr_film_variance(f, i, k);
+        }
         return TR_OK;
     }
     if (c == 0) {
@@ -163,6 +189,7 @@ int tr_film_accumulate(tr_film *dst, const tr_film *src, tr_error *err) {
     add_floats(dst->albedo, src->albedo, 3 * n);
     add_floats(dst->normal, src->normal, 3 * n);
     add_floats(dst->depth, src->depth, n);
+    add_floats(dst->sq, src->sq, 3 * n);
     for (size_t i = 0; i < n; ++i) {
         dst->count[i] += src->count[i];
     }
@@ -170,9 +197,7 @@ int tr_film_accumulate(tr_film *dst, const tr_film *src, tr_error *err) {
 }
 
 int tr_film_extract_pass(const tr_film *f, uint32_t pass, tr_film *out, tr_error *err) {
-    if ((pass != TR_PASS_ALBEDO && pass != TR_PASS_NORMAL && pass != TR_PASS_DEPTH &&
-         pass != TR_PASS_PRIM) ||
-        (f->passes & pass) == 0u) {
+    if (!keeps_pass(f, pass)) {
         memset(out, 0, sizeof *out);
         return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "the film does not keep pass 0x%x",
                             pass);
@@ -186,6 +211,14 @@ int tr_film_extract_pass(const tr_film *f, uint32_t pass, tr_film *out, tr_error
             /* One sample of the id itself: exact up to 2^24. */
             out->count[i] = 1u;
             out->sum[3 * i] = out->sum[3 * i + 1] = out->sum[3 * i + 2] = (float)f->prim[i];
+            continue;
+        }
+        if (pass == TR_PASS_VARIANCE) {
+            /* One sample of the variance itself (a mean of the sums would not be one). */
+            out->count[i] = 1u;
+            for (int c = 0; c < 3; ++c) {
+                out->sum[3 * i + (size_t)c] = tr_film_variance(f, i, c);
+            }
             continue;
         }
         out->count[i] = f->count[i];
@@ -209,6 +242,8 @@ const char *tr_pass_name(uint32_t pass) {
         return "depth";
     case TR_PASS_PRIM:
         return "id";
+    case TR_PASS_VARIANCE:
+        return "variance";
     default:
         return NULL;
     }

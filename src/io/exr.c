@@ -2,7 +2,8 @@
  *
  * One scanline part, ZIP-compressed (16 lines a chunk), channels in the sorted order the
  * format wants: B, G, R (the mean radiance), then the passes as layers, albedo.{B,G,R},
- * depth.Z, id (a UINT channel), normal.{X,Y,Z}. The file goes through outfile.h: the
+ * depth.Z, id (a UINT channel), normal.{X,Y,Z}, variance.{B,G,R} (of the mean radiance,
+ * from the film's sums of squares: tr_film_variance). The file goes through outfile.h: the
  * library writes into the temporary file by a write callback and the commit renames it. */
 #define _POSIX_C_SOURCE 200809L
 #include <errno.h>
@@ -94,11 +95,25 @@ static const exr_channel all_channels[] = {
     {"normal.X", TR_PASS_NORMAL, 0, 0},
     {"normal.Y", TR_PASS_NORMAL, 1, 0},
     {"normal.Z", TR_PASS_NORMAL, 2, 0},
+    {"variance.B", TR_PASS_VARIANCE, 2, 0},
+    {"variance.G", TR_PASS_VARIANCE, 1, 0},
+    {"variance.R", TR_PASS_VARIANCE, 0, 0},
 };
 #define EXR_MAX_CHANNELS (sizeof all_channels / sizeof all_channels[0])
 
-/* The mean of channel ch at pixel i (sum / count, 0 where no sample landed). */
-static float channel_mean(const tr_film *f, const exr_channel *ch, size_t i) {
+/* What one file holds: the passes of `f`, the radiance of `rgb` (f itself, or the
+ * denoised image of f). */
+typedef struct exr_source {
+    const tr_film *f, *rgb;
+} exr_source;
+
+/* The value of channel ch at pixel i: a pass's or the radiance's mean (sum / count, 0
+ * where no sample landed), or the variance of the mean radiance. */
+static float channel_mean(const exr_source *src, const exr_channel *ch, size_t i) {
+    if (ch->pass == TR_PASS_VARIANCE) {
+        return tr_film_variance(src->f, i, ch->component);
+    }
+    const tr_film *f = ch->pass == 0u ? src->rgb : src->f;
     const uint32_t n = f->count[i];
     if (n == 0u) {
         return 0.0f;
@@ -122,8 +137,9 @@ static int exr_fail(tr_error *err, const char *path, const exr_io *io, exr_resul
                         io->msg[0] ? io->msg : exr_get_default_error_message(rc));
 }
 
-static exr_result_t write_chunks(exr_context_t ctxt, const tr_film *f, const exr_channel **chs,
+static exr_result_t write_chunks(exr_context_t ctxt, const exr_source *src, const exr_channel **chs,
                                  int nch, int half, unsigned char *buf) {
+    const tr_film *f = src->f;
     int32_t lines = 1;
     exr_result_t rc = exr_get_scanlines_per_chunk(ctxt, 0, &lines);
     exr_encode_pipeline_t enc;
@@ -154,10 +170,10 @@ static exr_result_t write_chunks(exr_context_t ctxt, const tr_film *f, const exr
                     if (chs[c]->is_uint) {
                         memcpy(dst + o, &f->prim[i], 4);
                     } else if (half) {
-                        const uint16_t h = float_to_half(channel_mean(f, chs[c], i));
+                        const uint16_t h = float_to_half(channel_mean(src, chs[c], i));
                         memcpy(dst + o, &h, 2);
                     } else {
-                        const float v = channel_mean(f, chs[c], i);
+                        const float v = channel_mean(src, chs[c], i);
                         memcpy(dst + o, &v, 4);
                     }
                 }
@@ -185,6 +201,17 @@ static exr_result_t write_chunks(exr_context_t ctxt, const tr_film *f, const exr
 }
 
 int tr_film_write_exr(const tr_film *f, const char *path, int half, tr_error *err) {
+    return tr_film_write_exr_rgb(f, f, path, half, err);
+}
+
+int tr_film_write_exr_rgb(const tr_film *f, const tr_film *rgb, const char *path, int half,
+                          tr_error *err) {
+    if (rgb->width != f->width || rgb->height != f->height) {
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "%s: the radiance is %ux%u but the passes %ux%u", path, rgb->width,
+                            rgb->height, f->width, f->height);
+    }
+    const exr_source src = {f, rgb};
     const exr_channel *chs[EXR_MAX_CHANNELS];
     int nch = 0;
     for (size_t k = 0; k < EXR_MAX_CHANNELS; ++k) {
@@ -230,7 +257,7 @@ int tr_film_write_exr(const tr_film *f, const char *path, int half, tr_error *er
         rc = exr_write_header(ctxt);
     }
     if (rc == EXR_ERR_SUCCESS) {
-        rc = write_chunks(ctxt, f, chs, nch, half, buf);
+        rc = write_chunks(ctxt, &src, chs, nch, half, buf);
     }
     if (ctxt) {
         /* exr_finish writes the chunk offset table. */

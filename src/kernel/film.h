@@ -4,8 +4,9 @@
  *
  * A film is a set of per-pixel sums, row-major, top row first: radiance (3 floats), a
  * sample count, and, for the passes kept (TR_PASS_*), albedo and normal (3 floats each),
- * depth (1 float) and the primitive id of the pixel's first sample (1 word). The mean of
- * a pixel is its sum over its count; sums and counts of two films add (src/film/film.c). */
+ * depth (1 float), the primitive id of the pixel's first sample (1 word) and squared
+ * radiance (3 floats, for the variance). The mean of a pixel is its sum over its count;
+ * sums and counts of two films add (src/film/film.c). */
 #ifndef TR_KERNEL_FILM_H
 #define TR_KERNEL_FILM_H
 
@@ -54,6 +55,7 @@ typedef struct tr_film_view {
     TR_GLOBAL float *normal;
     TR_GLOBAL float *depth;
     TR_GLOBAL uint32_t *prim;
+    TR_GLOBAL float *sq; /* TR_PASS_VARIANCE: squared radiance; set after tr_film_view_make */
     uint32_t width;
     uint32_t passes;
 } tr_film_view;
@@ -70,6 +72,7 @@ TR_FN tr_film_view tr_film_view_make(TR_GLOBAL float *sum, TR_GLOBAL uint32_t *c
     v.normal = normal;
     v.depth = depth;
     v.prim = prim;
+    v.sq = 0;
     v.width = width;
     v.passes = passes;
     return v;
@@ -115,6 +118,11 @@ TR_FN void tr_film_add_block(const tr_film_view *f, const tr_sample *smp, uint32
             }
             if ((f->passes & TR_PASS_PRIM) != 0u && f->count[i] == 0u) {
                 f->prim[i] = smp->prim;
+            }
+            if ((f->passes & TR_PASS_VARIANCE) != 0u) {
+                f->sq[3 * i] += smp->radiance.x * smp->radiance.x;
+                f->sq[3 * i + 1] += smp->radiance.y * smp->radiance.y;
+                f->sq[3 * i + 2] += smp->radiance.z * smp->radiance.z;
             }
             f->count[i] += 1u;
         }
