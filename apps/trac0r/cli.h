@@ -25,12 +25,14 @@ typedef struct cli_common {
     int threads;
     int integrator;
     tr_accel_type accel;
-    unsigned given;    /* CLI_GIVEN_*: options set on the command line (a scene file's
-                          render defaults apply to the others) */
-    int allow_dark;    /* --allow-dark: render a scene file without an emitter */
-    char device[32];   /* --device: a tr_device name, "cpu" or "opencl:N" */
-    int up_z;          /* --up z: a model file's +z is up (issue 14) */
-    float model_scale; /* --scale: a model file's scale */
+    unsigned given;     /* CLI_GIVEN_*: options set on the command line (a scene file's
+                           render defaults apply to the others) */
+    int allow_dark;     /* --allow-dark: render a scene file without an emitter */
+    char device[32];    /* --device: a tr_device name, "cpu" or "opencl:N" */
+    int up_z;           /* --up z: a model file's +z is up (issue 14) */
+    float model_scale;  /* --scale: a model file's scale */
+    int sampler;        /* --sampler: TR_SAMPLER_* (issue 15) */
+    int light_sampling; /* --light-sampling: TR_LIGHT_SAMPLING_*, -1 for the scene's own */
 } cli_common;
 
 #define CLI_GIVEN_WIDTH 1u
