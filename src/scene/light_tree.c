@@ -3,13 +3,14 @@
  *
  * C. Conty Estevez and C. Kulla, "Importance Sampling of Many Lights with Adaptive Tree
  * Splitting", 2018: a binary tree, top down, each node split where the surface area
- * orientation heuristic (their SAOH, section 4.3) is least: for the two halves, power x
- * M_omega (the solid angle measure of the orientation cone, their equation 1) x box
+ * orientation heuristic (their SAOH) is least: for the two halves, power x
+ * M_omega (their solid-angle measure of the orientation cone) x box
  * surface area, times the ratio of the box's longest side to its side along the split
  * axis (which keeps thin boxes from being cut along their short side). Candidates are
  * every position in the centroid order along each axis, from prefix and suffix bounds,
- * so a node costs three sorts. One emitter per leaf: the leaf's probability is the
- * emitter's. */
+ * so a node costs four sorts (the last for the winning axis; two above
+ * SAOH_ALL_AXES_MAX emitters, which try one axis). One emitter per leaf: the leaf's
+ * probability is the emitter's. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -21,6 +22,8 @@
 /* Below this depth the heuristic chooses; beyond it (a degenerate arrangement that keeps
  * peeling single emitters off) the median, so the recursion stays shallow. */
 #define SAOH_MAX_DEPTH 48
+/* Nodes with more emitters than this try one axis (see build). */
+#define SAOH_ALL_AXES_MAX 1024u
 
 /* An orientation cone: normals within theta_o of axis, light leaving up to theta_e beyond
  * them. empty for the bounds of nothing. */
@@ -45,7 +48,7 @@ typedef struct sort_key {
 typedef struct builder {
     const bounds *prim; /* one per emitter */
     uint32_t *order;    /* emitter indices, permuted by the build */
-    sort_key *keys, *best_keys;
+    sort_key *keys;
     bounds *prefix, *suffix;
     tr_light_node *nodes;
     uint32_t *leaf;
@@ -65,9 +68,10 @@ static void normalize3(double *a) {
     }
 }
 
-/* The smallest cone (of this construction) holding both: Conty Estevez and Kulla's
- * algorithm 1. The wider cone's axis is turned towards the other's, in their common
- * plane, by just enough to take it in. */
+/* The smallest cone (of this construction) holding both, as Conty Estevez and Kulla
+ * merge orientation cones (pbrt-v4's DirectionCone Union does the same). The wider
+ * cone's axis is turned towards the other's, in their common plane, by just enough to
+ * take it in. */
 static cone cone_union(cone a, cone b) {
     if (a.empty) {
         return b;
@@ -199,8 +203,28 @@ static void build(builder *bd, uint32_t node, uint32_t parent, uint32_t lo, uint
     uint32_t split = count / 2; /* the median of the longest axis unless the SAOH says */
     int best_axis = -1;
     double best = INFINITY;
+    /* Large nodes (an emissive mesh) try only the axis along which the centroids spread
+     * most: the cone unions of the sweeps are the build's cost. */
+    int only = -1;
+    if (count > SAOH_ALL_AXES_MAX) {
+        double ext[3] = {0.0, 0.0, 0.0};
+        for (int axis = 0; axis < 3; ++axis) {
+            double cmin = INFINITY, cmax = -INFINITY;
+            for (uint32_t i = lo; i < hi; ++i) {
+                const bounds *p = &bd->prim[bd->order[i]];
+                double c = 0.5 * (p->lo[axis] + p->hi[axis]);
+                cmin = fmin(cmin, c);
+                cmax = fmax(cmax, c);
+            }
+            ext[axis] = cmax - cmin;
+        }
+        only = ext[1] > ext[0] ? (ext[2] > ext[1] ? 2 : 1) : (ext[2] > ext[0] ? 2 : 0);
+    }
     if (depth < SAOH_MAX_DEPTH) {
         for (int axis = 0; axis < 3; ++axis) {
+            if (only >= 0 && axis != only) {
+                continue;
+            }
             sort_axis(bd, lo, hi, axis);
             if (!(bd->keys[count - 1].key > bd->keys[0].key)) {
                 continue; /* every centroid in one plane across this axis */
@@ -222,24 +246,23 @@ static void build(builder *bd, uint32_t node, uint32_t parent, uint32_t lo, uint
                     best = c;
                     best_axis = axis;
                     split = i;
-                    memcpy(bd->best_keys, bd->keys, count * sizeof *bd->keys);
                 }
             }
         }
     }
     if (best_axis < 0) {
-        int axis = 0;
+        best_axis = 0;
         for (int i = 1; i < 3; ++i) {
-            if (all.hi[i] - all.lo[i] > all.hi[axis] - all.lo[axis]) {
-                axis = i;
+            if (all.hi[i] - all.lo[i] > all.hi[best_axis] - all.lo[best_axis]) {
+                best_axis = i;
             }
         }
-        sort_axis(bd, lo, hi, axis);
-        memcpy(bd->best_keys, bd->keys, count * sizeof *bd->keys);
         split = count / 2;
     }
+    /* The winning axis's order once more (the sort is deterministic: ties by index). */
+    sort_axis(bd, lo, hi, best_axis);
     for (uint32_t i = 0; i < count; ++i) {
-        bd->order[lo + i] = bd->best_keys[i].prim;
+        bd->order[lo + i] = bd->keys[i].prim;
     }
     const uint32_t c = bd->next;
     bd->next += 2;
@@ -267,13 +290,11 @@ int tr_scene_build_light_tree(tr_scene *s, tr_error *err) {
     bounds *prim = malloc((size_t)n * sizeof *prim);
     bd.order = malloc((size_t)n * sizeof *bd.order);
     bd.keys = malloc((size_t)n * sizeof *bd.keys);
-    bd.best_keys = malloc((size_t)n * sizeof *bd.best_keys);
     bd.prefix = malloc((size_t)n * sizeof *bd.prefix);
     bd.suffix = malloc((size_t)n * sizeof *bd.suffix);
     bd.nodes = calloc(2 * (size_t)n - 1, sizeof *bd.nodes);
     bd.leaf = malloc((size_t)n * sizeof *bd.leaf);
-    int ok = prim && bd.order && bd.keys && bd.best_keys && bd.prefix && bd.suffix && bd.nodes &&
-             bd.leaf;
+    int ok = prim && bd.order && bd.keys && bd.prefix && bd.suffix && bd.nodes && bd.leaf;
     if (ok) {
         for (uint32_t k = 0; k < n; ++k) {
             const tr_triangle *t = &s->triangles[s->lights[k]];
@@ -301,7 +322,6 @@ int tr_scene_build_light_tree(tr_scene *s, tr_error *err) {
     }
     free(prim);
     free(bd.keys);
-    free(bd.best_keys);
     free(bd.prefix);
     free(bd.suffix);
     free(bd.order);
