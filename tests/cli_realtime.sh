@@ -54,6 +54,7 @@ awk -v a="$p0" -v b="$p1" 'BEGIN { exit !(b > a + 3) }' ||
 # recovers after the cut within 8 frames.
 rm -f err.txt
 expect_usage_error "--methods: unknown method 'blur'" bench realtime --methods blur
+expect_usage_error "'halton'" bench realtime --sampler halton
 expect_usage_error "--cut: expected a frame before --frames (8), got 9" bench realtime --frames 8 --cut 9
 "$BIN" bench realtime "$CLASSIC" --width 48 --height 36 --frames 14 --cut 6 --reference-spp 64 \
     --threads 1 --out rt >rt.txt 2>rt.err || fail "bench realtime: $(cat rt.err)"

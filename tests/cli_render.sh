@@ -105,6 +105,17 @@ done
 [ ! -e p.normal.pfm ] && [ ! -e p.id.pfm ] || fail "passes written that were not asked for"
 rm -f p.png p.albedo.pfm p.depth.pfm
 
+# Issue 15: --sampler and --light-sampling take their names only; the random sampler
+# renders another (equally valid) image than the Sobol points with the same seed.
+expect_usage_error "'bogus'" $R --sampler bogus
+expect_usage_error "'trees'" $R --light-sampling trees
+"$BIN" render --width 8 --height 6 --spp 2 --out s.pfm --light-sampling tree 2>/dev/null ||
+    fail "render --light-sampling tree failed"
+"$BIN" render --width 8 --height 6 --spp 2 --out r.pfm --sampler random 2>/dev/null ||
+    fail "render --sampler random failed"
+cmp -s s.pfm r.pfm && fail "--sampler random rendered the Sobol sampler's image"
+rm -f s.pfm r.pfm
+
 # A file that exists already is replaced only by a complete image.
 "$BIN" render --width 8 --height 6 --spp 1 --out ok.png --width 0 2>/dev/null
 sig=$(od -An -tx1 -N8 ok.png | tr -d ' \n')

@@ -1,8 +1,10 @@
 /* test_pt.c - the pt integrator (src/kernel/integrator_pt.h).
  *
- *  (a) MIS: for paths that reach an emitter from a surface vertex, the power-heuristic
- *      weights the integrator gives the light strategy (next-event estimation) and the
- *      BSDF strategy (hitting the emitter) sum to one. Both weights are computed as the
+ *  (a) MIS, with the power CDF and with the light tree (light_tree.h, which weighs by the
+ *      vertex's shading normal as the integrator does): for paths that reach an emitter
+ *      from a surface vertex, the power-heuristic weights the integrator gives the light
+ *      strategy (next-event estimation) and the BSDF strategy (hitting the emitter) sum
+ *      to one. Both weights are computed as the
  *      integrator computes them: the light pdf once from the sampled point, once from
  *      the traced hit, so a mismatch between the two code paths would show.
  *  (b) Unbiasedness: the naive integrator (max depth D + 2, i.e. at most D segments)
@@ -59,10 +61,15 @@ static void build_box(tr_scene *s, int glossy, uint32_t w, uint32_t h) {
     CHECK(tr_scene_commit(s, TR_ACCEL_TYPE_BVH, &err) == TR_OK, "commit: %s", err.msg);
 }
 
-/* (a) */
-static void mis_weights(void) {
+/* (a), with light sampling `mode` (TR_LIGHT_SAMPLING_*). */
+static void mis_weights(int mode) {
     tr_scene s = {0};
     build_box(&s, 1, 8, 8);
+    tr_error err;
+    CHECK(tr_scene_set_light_sampling(&s, mode, &err) == TR_OK &&
+              tr_scene_commit(&s, TR_ACCEL_TYPE_BVH, &err) == TR_OK,
+          "light sampling %d: %s", mode, err.msg);
+    CHECK(tr_scene_light_sampling(&s) == mode, "light sampling %d not used", mode);
     tr_scene_view v = tr_scene_view_of(&s);
     tr_rng rng;
     tr_rng_init(&rng, 2024, 0, 0);
@@ -92,12 +99,12 @@ static void mis_weights(void) {
                 tr_vec3 y;
                 float lu, lv;
                 float u1 = tr_rng_float(&rng), u2 = tr_rng_float(&rng);
-                float pl = tr_light_sample(&v, p, u1, u2, &lt, &y, &lu, &lv);
+                float pl = tr_light_sample_n(&v, p, m.ns, u1, u2, &lt, &y, &lu, &lv);
                 if (pl <= 0.0f) {
                     continue;
                 }
                 /* The density sampling reports is the one MIS evaluates. */
-                float pe = tr_light_pdf(&v, p, lt, y);
+                float pe = tr_light_pdf_n(&v, p, m.ns, lt, y);
                 pdf_bad += !(fabsf(pl - pe) <= 1e-5f * pe);
                 pl_sampled = pl;
                 sampled_tri = lt;
@@ -130,7 +137,7 @@ static void mis_weights(void) {
             /* The light strategy's density of the path from p to y as the BSDF strategy's
              * hit evaluates it (at the traced point), and as next-event estimation has it
              * (what sampling reported, for light samples). */
-            float pl_hit = tr_light_pdf(&v, p, h2.triangle, y);
+            float pl_hit = tr_light_pdf_n(&v, p, m.ns, h2.triangle, y);
             if (strategy == 0 && h2.triangle != sampled_tri) {
                 /* A point on an edge the tracer assigns to the neighbour: a measure-zero
                  * set whose densities belong to different triangles. */
@@ -146,8 +153,9 @@ static void mis_weights(void) {
         }
     }
     CHECK(paths > 2000 && nee_paths > 1000 && bad == 0,
-          "MIS weights: %d of %d paths (%d light-sampled) do not sum to 1 (worst %.2e)", bad, paths,
-          nee_paths, worst);
+          "MIS weights (light sampling %d): %d of %d paths (%d light-sampled) do not sum to 1 "
+          "(worst %.2e)",
+          mode, bad, paths, nee_paths, worst);
     CHECK(pdf_bad == 0, "%d light samples report another density than tr_light_pdf", pdf_bad);
     /* Away from the two-strategy case the heuristic gives all weight to the only one. */
     CHECK(tr_mis_power(1.0f, 0.0f) == 1.0f && tr_mis_power(0.0f, 1.0f) == 0.0f &&
@@ -306,7 +314,8 @@ static void one_bounce(void) {
 }
 
 int main(void) {
-    mis_weights();
+    mis_weights(TR_LIGHT_SAMPLING_POWER);
+    mis_weights(TR_LIGHT_SAMPLING_TREE);
     one_bounce();
     tr_scene s = {0};
     build_box(&s, 0, W, H);

@@ -16,9 +16,15 @@
  * (d) Determinism and range: the same address gives the same bits; values lie in [0,1).
  * (e) The sampler's bit operations against their definitions: reversal, Sobol's second
  *     dimension from its generator matrix built column by column, the Owen scramble
- *     changing each bit only as a function of the bits above it. */
+ *     changing each bit only as a function of the bits above it.
+ * (f) The random kind (tr_sampler_make_kind with TR_SAMPLER_RANDOM, `--sampler random`):
+ *     values in [0,1), the same bits for the same address, and Monte Carlo's error, not
+ *     the Sobol points': the RMS error of the exp(x y) integral at N = 1024 over 128
+ *     pixels lies within 0.75 and 1.33 times sigma / sqrt(N) (the RMS over 128 pixels is
+ *     good to about 6 %), and the first 256 points of a pixel are no (0,8,2)-net. */
 #include "check.h"
 #include "kernel/sampler.h"
+#include "trac0r/render.h"
 
 #include <math.h>
 #include <stdint.h>
@@ -254,11 +260,51 @@ static void bit_operations(void) {
     CHECK(owen_bad == 0, "%d Owen scrambles are not nested", owen_bad);
 }
 
+/* (f) */
+static void random_kind(void) {
+    const double integral = series_exp_xy(1.0);
+    const double sigma = sqrt(series_exp_xy(2.0) - integral * integral);
+    double se = 0.0;
+    int bad = 0, nets = 0;
+    for (int p = 0; p < 128; ++p) {
+        double sum = 0.0;
+        static unsigned char hit[256];
+        memset(hit, 0, sizeof hit);
+        for (int i = 0; i < 1024; ++i) {
+            tr_sampler s = tr_sampler_make_kind(2024, (uint64_t)p, (uint32_t)i, TR_SAMPLER_RANDOM);
+            tr_sampler t = tr_sampler_make_kind(2024, (uint64_t)p, (uint32_t)i, TR_SAMPLER_RANDOM);
+            float u1, u2, v1, v2;
+            tr_sampler_2d(&s, 3, &u1, &u2);
+            tr_sampler_2d(&t, 3, &v1, &v2);
+            bad += !(u1 >= 0.0f && u1 < 1.0f && u2 >= 0.0f && u2 < 1.0f) || u1 != v1 || u2 != v2 ||
+                   tr_sampler_1d(&s, 3) != u1;
+            sum += exp((double)u1 * u2);
+            if (i < 256) { /* the 16 x 16 elementary intervals of the (0,8,2)-net */
+                hit[(bits24(u1) >> 20) * 16u + (bits24(u2) >> 20)]++;
+            }
+        }
+        int net = 1;
+        for (int c = 0; c < 256; ++c) {
+            net &= hit[c] == 1;
+        }
+        nets += net;
+        double e = sum / 1024 - integral;
+        se += e * e;
+    }
+    double rms = sqrt(se / 128), mc = sigma / 32.0;
+    printf("random kind: RMS error %.3g at 1024 samples (Monte Carlo %.3g)\n", rms, mc);
+    CHECK(bad == 0, "random kind: %d values out of range or not deterministic", bad);
+    CHECK(rms > 0.75 * mc && rms < 1.33 * mc, "random kind: RMS error %.3g, Monte Carlo %.3g", rms,
+          mc);
+    CHECK(nets == 0, "random kind: %d of 128 pixels' first 256 points form a net", nets);
+}
+
 int main(void) {
     stratification();
     convergence();
     independence();
     determinism();
     bit_operations();
+    random_kind();
     return check_finish("test_sampler");
 }

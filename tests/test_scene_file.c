@@ -254,6 +254,26 @@ static void test_parse_memory(void) {
     rc = tr_scene_file_parse(&s, "m.json", buf, 2, NULL, NULL, &err);
     CHECK_STATUS(rc, err, TR_STATUS_PARSE, "only '{}' of '{}xxxxxx'");
     CHECK(rc == TR_ERR && strncmp(err.msg, "m.json: camera: ", 16) == 0, "FILE: PATH: %s", err.msg);
+    /* render.light_sampling (issue 15): the scene keeps it for its commit; an unknown
+     * name is refused at its path. */
+    const char *ls_text =
+        "{\"render\": {\"light_sampling\": \"tree\"},\n"
+        " \"camera\": {\"position\": [0, 0, -2], \"direction\": [0, 0, 1], \"fov\": 45},\n"
+        " \"materials\": {\"l\": {\"type\": \"emitter\", \"color\": [1, 1, 1], \"emittance\": "
+        "2}},\n"
+        " \"shapes\": [{\"type\": \"plane\", \"material\": \"l\"}]}";
+    rc = tr_scene_file_parse(&s, "ls.json", ls_text, strlen(ls_text), NULL, NULL, &err);
+    CHECK(rc == TR_OK, "%s", err.msg);
+    CHECK(rc == TR_OK && tr_scene_commit(&s, TR_ACCEL_TYPE_BVH, &err) == TR_OK &&
+              tr_scene_light_sampling(&s) == TR_LIGHT_SAMPLING_TREE,
+          "render.light_sampling tree: a scene of two emitters is not sampled by the tree");
+    char ls_bad[512];
+    snprintf(ls_bad, sizeof ls_bad, "%s", ls_text);
+    memcpy(strstr(ls_bad, "tree"), "tref", 4);
+    rc = tr_scene_file_parse(&s, "ls.json", ls_bad, strlen(ls_bad), NULL, NULL, &err);
+    CHECK_STATUS(rc, err, TR_STATUS_PARSE, "light_sampling 'tref'");
+    CHECK(rc == TR_ERR && strstr(err.msg, "render.light_sampling"), "%s", err.msg);
+    tr_scene_free(&s);
     /* Line and column count from 1 across lines. */
     const char *bad = "{\n  \"camera\":\n    tru }";
     rc = tr_scene_file_parse(&s, "b.json", bad, strlen(bad), NULL, NULL, &err);

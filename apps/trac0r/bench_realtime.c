@@ -48,6 +48,8 @@ static void realtime_help(void) {
            "  --cut K              jump to another view at frame K (default: no cut)\n"
            "  --methods LIST       of off,accumulate,bilateral,atrous,svgf (default all)\n"
            "  --seed S, --threads T, --max-depth D, --accel NAME, --device D   as for render\n"
+           "  --sampler NAME, --light-sampling NAME   as for render: --sampler random gives\n"
+           "                       pt independent numbers instead of the Sobol points\n"
            "  --out PREFIX         output file prefix (default realtime)\n"
            "  -h, --help           show this help\n");
 }

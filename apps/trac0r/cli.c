@@ -37,7 +37,15 @@ static const char help_before[] =
     "                       integrator's Russian roulette reaches at most D-2 surfaces\n"
     "  --seed S             random seed, 0..2^64-1 (default 0); the same seed gives the\n"
     "                       same image for any thread count\n"
-    "  --threads T          CPU threads, 0..1024 (default 0: one per core)\n";
+    "  --threads T          CPU threads, 0..1024 (default 0: one per core)\n"
+    "  --sampler NAME       pt's uniform numbers (default sobol):\n"
+    "                         sobol   Owen-scrambled Sobol points, stratified\n"
+    "                         random  independent numbers, for comparison\n"
+    "  --light-sampling NAME  how pt picks an emitter for next-event estimation\n"
+    "                       (default: the scene file's render.light_sampling, else auto):\n"
+    "                         auto    tree from 8 emissive triangles on, else power\n"
+    "                         tree    light tree: power, distance and orientation\n"
+    "                         power   in proportion to emitted power\n";
 static const char help_after[] =
     "  --device DEV         cpu (the default), opencl (OpenCL device 0) or opencl:N\n"
     "                       (device N of 'trac0r info --devices'); the device traces\n"
@@ -76,6 +84,8 @@ void cli_common_default(cli_common *c) {
     c->accel = TR_ACCEL_TYPE_BVH;
     c->given = 0;
     c->allow_dark = 0;
+    c->sampler = TR_SAMPLER_SOBOL;
+    c->light_sampling = -1;
     snprintf(c->device, sizeof c->device, "cpu");
 }
 
@@ -324,6 +334,29 @@ int cli_common_option(cli_args *a, cli_common *c) {
     if (cli_is(a, "--device")) {
         return cli_parse_device(a, c);
     }
+    if (cli_is(a, "--sampler")) {
+        if (cli_value(a) != CLI_OK) {
+            return CLI_USAGE;
+        }
+        if (strcmp(a->value, "sobol") == 0 || strcmp(a->value, "random") == 0) {
+            c->sampler = a->value[0] == 's' ? TR_SAMPLER_SOBOL : TR_SAMPLER_RANDOM;
+            return CLI_OK;
+        }
+        return cli_error(a, "--sampler: unknown sampler '%s' (available: sobol, random)", a->value);
+    }
+    if (cli_is(a, "--light-sampling")) {
+        if (cli_value(a) != CLI_OK) {
+            return CLI_USAGE;
+        }
+        c->light_sampling = tr_light_sampling_from_name(a->value);
+        if (c->light_sampling < 0) {
+            return cli_error(a,
+                             "--light-sampling: unknown light sampling '%s' (available: auto, "
+                             "tree, power)",
+                             a->value);
+        }
+        return CLI_OK;
+    }
     return -1;
 }
 
@@ -428,6 +461,9 @@ int cli_load_scene_file(const cli_args *a, cli_common *c, tr_scene *scene, tr_sc
         }
         fprintf(stderr, "trac0r %s: warning: %s: %s\n", a->cmd, c->scene, file->warnings[i]);
     }
+    if (c->light_sampling >= 0) { /* the command line over render.light_sampling */
+        tr_scene_set_light_sampling(scene, c->light_sampling, NULL);
+    }
     if (tr_scene_commit(scene, c->accel, &err) != TR_OK) {
         fprintf(stderr, "trac0r %s: %s\n", a->cmd, err.msg);
         tr_scene_free(scene);
@@ -458,6 +494,9 @@ int cli_load_scene(const cli_args *a, const cli_common *c, tr_scene *scene) {
     tr_error err;
     if (tr_scene_builtin(scene, name, c->width, c->height, &err) != TR_OK) {
         return cli_error(a, "--scene: %s", err.msg);
+    }
+    if (c->light_sampling >= 0) {
+        tr_scene_set_light_sampling(scene, c->light_sampling, NULL);
     }
     if (tr_scene_commit(scene, c->accel, &err) != TR_OK) {
         fprintf(stderr, "trac0r %s: %s\n", a->cmd, err.msg);

@@ -32,6 +32,8 @@ typedef struct cli_common {
     int up_z;                 /* --up z: a model file's +z is up (issue 14) */
     const char *model_camera; /* --camera: a model file's camera, or "frame"; NULL: its first */
     float model_scale;        /* --scale: a model file's scale */
+    int sampler;              /* --sampler: TR_SAMPLER_* (issue 15) */
+    int light_sampling;       /* --light-sampling: TR_LIGHT_SAMPLING_*, -1 for the scene's own */
 } cli_common;
 
 #define CLI_GIVEN_WIDTH 1u

@@ -39,6 +39,7 @@ tr_render_config cli_render_config(const cli_common *c) {
     cfg.seed = c->seed;
     cfg.threads = c->threads;
     cfg.integrator = c->integrator;
+    cfg.sampler = c->sampler;
     return cfg;
 }
 

@@ -17,6 +17,13 @@
 #define TR_MAX_DEPTH_PT 64
 #define TR_MAX_DEPTH_NAIVE 8
 
+/* Where pt's uniform numbers come from (tr_render_config.sampler). sobol: the
+ * Owen-scrambled Sobol sampler (stratified, the default); random: independent uniform
+ * numbers per (seed, pixel, sample, dimension), for comparisons. naive always draws from
+ * its xorshift streams. */
+#define TR_SAMPLER_SOBOL 0
+#define TR_SAMPLER_RANDOM 1
+
 /* What to render and, for the CPU, how. */
 typedef struct tr_render_config {
     int max_depth;   /* the longest path; 0 (default): the integrator's default */
@@ -26,6 +33,7 @@ typedef struct tr_render_config {
     int stride;      /* preview: trace every stride-th pixel, fill stride x stride blocks */
     uint32_t tile;   /* CPU: tile side in traced pixels (default 16) */
     uint32_t passes; /* TR_PASS_* to accumulate beside radiance (default none) */
+    int sampler;     /* TR_SAMPLER_*: pt's uniform numbers (default TR_SAMPLER_SOBOL) */
     /* Optional (default NULL): asked before each tile on the CPU; when it returns nonzero
      * the frame stops early, the film holds a partial sample and the call fails with
      * TR_STATUS_CANCELLED. For interactive use: another thread decides. */

@@ -144,6 +144,24 @@ uint32_t tr_scene_shape_count(const tr_scene *s);
 /* Emissive triangles of positive area in the emitter table (built by tr_scene_commit;
  * 0 before). */
 uint32_t tr_scene_light_count(const tr_scene *s);
+
+/* How next-event estimation picks an emitter. auto: the light tree when the emitter table
+ * has at least TR_LIGHT_TREE_MIN_EMITTERS entries, the power CDF otherwise. tree: a
+ * light tree (Conty Estevez and Kulla 2018) that weighs each emitter's power by its
+ * distance and orientation from the shading point. power: probability proportional to
+ * emitted power, the same everywhere. */
+#define TR_LIGHT_SAMPLING_AUTO 0
+#define TR_LIGHT_SAMPLING_TREE 1
+#define TR_LIGHT_SAMPLING_POWER 2
+#define TR_LIGHT_TREE_MIN_EMITTERS 8
+/* Sets the light sampling the next tr_scene_commit builds for (a fresh or freed scene
+ * has auto); fails on an unknown mode. */
+int tr_scene_set_light_sampling(tr_scene *s, int mode, tr_error *err);
+/* What the committed scene uses: TR_LIGHT_SAMPLING_TREE or TR_LIGHT_SAMPLING_POWER. */
+int tr_scene_light_sampling(const tr_scene *s);
+/* "auto", "tree", "power" (NULL for anything else), and back (-1 for an unknown name). */
+const char *tr_light_sampling_name(int mode);
+int tr_light_sampling_from_name(const char *name);
 /* Triangle i, material i, the box of shape i; all zero for an index out of range. */
 tr_triangle tr_scene_triangle(const tr_scene *s, uint32_t i);
 tr_material tr_scene_material(const tr_scene *s, uint32_t i);

@@ -20,6 +20,7 @@ tr_render_config tr_render_config_default(void) {
     c.stride = 1;
     c.tile = 16;
     c.passes = 0;
+    c.sampler = TR_SAMPLER_SOBOL;
     c.cancel = NULL;
     c.cancel_user = NULL;
     return c;
@@ -57,6 +58,11 @@ int tr_render_config_check(const tr_render_config *cfg, tr_error *err) {
     if (cfg->threads < 0 || cfg->threads > TR_MAX_THREADS) {
         return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "threads %d must be in 0..%d",
                             cfg->threads, TR_MAX_THREADS);
+    }
+    if (cfg->sampler != TR_SAMPLER_SOBOL && cfg->sampler != TR_SAMPLER_RANDOM) {
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "unknown sampler %d (expected TR_SAMPLER_SOBOL or TR_SAMPLER_RANDOM)",
+                            cfg->sampler);
     }
     if ((cfg->passes & ~TR_PASS_MASK) != 0u) {
         return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "unknown pass bits 0x%x",
@@ -98,6 +104,7 @@ int tr_frame_make(tr_frame *f, const tr_camera *cam, const tr_render_config *cfg
     f->integrator = (uint32_t)cfg->integrator;
     f->stride = (uint32_t)cfg->stride;
     f->passes = cfg->passes;
+    f->sampler = (uint32_t)cfg->sampler;
     f->rect_x = r.x;
     f->rect_y = r.y;
     f->rect_w = r.width;

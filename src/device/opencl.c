@@ -118,7 +118,7 @@ extern const size_t tr_cl_kernel_source_length;
 static const char build_options[] = "-cl-std=CL1.2 -cl-kernel-arg-info -DTR_OPENCL_DEVICE=1";
 static const char build_option_rounded[] = " -cl-fp32-correctly-rounded-divide-sqrt";
 
-#define TR_CL_MAX_ARRAYS 16
+#define TR_CL_MAX_ARRAYS 24
 
 /* One scene array as uploaded: a kernel argument of its own. */
 typedef struct cl_array {

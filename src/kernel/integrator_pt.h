@@ -87,6 +87,7 @@ TR_FN tr_vec3 tr_trace_pt(const tr_scene_view *s, tr_ray ray, int max_depth, con
     tr_vec3 throughput = v3s(1.0f);
     float prev_pdf = 0.0f;
     tr_vec3 prev_p = ray.origin; /* the vertex the last BSDF sample left, for MIS */
+    tr_vec3 prev_n = v3s(0.0f);  /* its shading normal (the light tree weighs by it) */
     int prev_delta = 1;          /* the camera ray: no light strategy competes */
     int holes = 0;               /* alpha cut-outs passed through */
     for (int seg = 1; seg <= max_depth; ++seg) {
@@ -129,7 +130,7 @@ TR_FN tr_vec3 tr_trace_pt(const tr_scene_view *s, tr_ray ray, int max_depth, con
         if (!tr_v3_is_zero(le)) {
             float w = 1.0f;
             if (!prev_delta) {
-                w = tr_mis_power(prev_pdf, tr_light_pdf(s, prev_p, hit.triangle, p));
+                w = tr_mis_power(prev_pdf, tr_light_pdf_n(s, prev_p, prev_n, hit.triangle, p));
             }
             radiance = v3_add(radiance, v3_scale(v3_mul(throughput, le), w));
         }
@@ -143,7 +144,7 @@ TR_FN tr_vec3 tr_trace_pt(const tr_scene_view *s, tr_ray ray, int max_depth, con
             tr_vec3 y;
             float lu, lv, l1, l2;
             tr_sampler_2d(smp, tr_sampler_dim(seg, TR_DIM_LIGHT), &l1, &l2);
-            float pl = tr_light_sample(s, p, l1, l2, &lt, &y, &lu, &lv);
+            float pl = tr_light_sample_n(s, p, m.ns, l1, l2, &lt, &y, &lu, &lv);
             TR_CONST_GLOBAL tr_triangle *ltri = &s->triangles[lt];
             tr_vec3 d = v3_sub(y, p);
             float dist = v3_length(d);
@@ -199,6 +200,7 @@ TR_FN tr_vec3 tr_trace_pt(const tr_scene_view *s, tr_ray ray, int max_depth, con
         prev_pdf = bs.pdf;
         prev_delta = bs.delta;
         prev_p = p;
+        prev_n = m.ns;
         if (seg >= TR_PT_RR_START) {
             float q = tr_sqrtf(v3_max_component(throughput));
             if (q < 1.0f) {

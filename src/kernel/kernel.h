@@ -20,12 +20,12 @@
 /* Sample `sample` of pixel (x, y), the pixel_index-th of the image, seen from `cam`, with
  * jitter inside the pixel: radiance, rays and (with `passes`) the passes' surface into
  * *out. The random numbers depend only on (seed, pixel index, sample): pt reads them
- * from the low-discrepancy sampler (sampler.h), naive from the thesis's xorshift
- * stream. */
-TR_FN void tr_render_pixel_sample(const tr_scene_view *s, const tr_camera *cam, uint64_t seed,
-                                  int max_depth, uint32_t integrator, uint32_t passes, uint32_t x,
-                                  uint32_t y, uint64_t pixel_index, uint32_t sample,
-                                  tr_sample *out) {
+ * from the low-discrepancy sampler (sampler.h; independent numbers with `sampler`
+ * TR_SAMPLER_RANDOM), naive from the thesis's xorshift stream. */
+TR_FN void tr_render_pixel_sample_kind(const tr_scene_view *s, const tr_camera *cam, uint64_t seed,
+                                       int max_depth, uint32_t integrator, uint32_t sampler,
+                                       uint32_t passes, uint32_t x, uint32_t y,
+                                       uint64_t pixel_index, uint32_t sample, tr_sample *out) {
     tr_sample_clear(out);
     /* The integrators record the passes' surface only for a film that keeps surface
      * passes (the variance needs the radiance alone). */
@@ -33,7 +33,7 @@ TR_FN void tr_render_pixel_sample(const tr_scene_view *s, const tr_camera *cam, 
     float jx, jy;
     /* The host rejects unknown integrators before a frame starts. */
     if (integrator == TR_INTEGRATOR_PT) {
-        tr_sampler smp = tr_sampler_make(seed, pixel_index, sample);
+        tr_sampler smp = tr_sampler_make_kind(seed, pixel_index, sample, sampler);
         tr_sampler_2d(&smp, TR_DIM_CAMERA, &jx, &jy);
         tr_ray ray = tr_camera_ray(cam, (float)x, (float)y, jx, jy);
         out->radiance = tr_trace_pt(s, ray, max_depth, &smp, &out->rays, surface);
@@ -49,13 +49,22 @@ TR_FN void tr_render_pixel_sample(const tr_scene_view *s, const tr_camera *cam, 
     }
 }
 
+/* tr_render_pixel_sample_kind with the Sobol sampler. */
+TR_FN void tr_render_pixel_sample(const tr_scene_view *s, const tr_camera *cam, uint64_t seed,
+                                  int max_depth, uint32_t integrator, uint32_t passes, uint32_t x,
+                                  uint32_t y, uint64_t pixel_index, uint32_t sample,
+                                  tr_sample *out) {
+    tr_render_pixel_sample_kind(s, cam, seed, max_depth, integrator, 0u, passes, x, y, pixel_index,
+                                sample, out);
+}
+
 /* Sample `sample` of pixel (x, y) of frame f (tr_render_pixel_sample with f's settings). */
 TR_FN void tr_render_sample(const tr_scene_view *s, const tr_frame *f, uint32_t x, uint32_t y,
                             uint32_t sample, tr_sample *out) {
     const uint64_t seed = ((uint64_t)f->seed_hi << 32) | (uint64_t)f->seed_lo;
     const uint64_t pixel = (uint64_t)y * (uint64_t)f->camera.screen_width + (uint64_t)x;
-    tr_render_pixel_sample(s, &f->camera, seed, f->max_depth, f->integrator, f->passes, x, y, pixel,
-                           sample, out);
+    tr_render_pixel_sample_kind(s, &f->camera, seed, f->max_depth, f->integrator, f->sampler,
+                                f->passes, x, y, pixel, sample, out);
 }
 
 /* The pixels frame f traces and the blocks they fill: the traced pixels are those of the
@@ -83,7 +92,7 @@ TR_FN_INLINE uint32_t tr_render_grid_rows_as(const tr_scene_view *s, const tr_fr
     const tr_camera cam = f->camera;
     const uint64_t seed = ((uint64_t)f->seed_hi << 32) | (uint64_t)f->seed_lo;
     const int max_depth = f->max_depth;
-    const uint32_t passes = f->passes;
+    const uint32_t passes = f->passes, sampler = f->sampler;
     const uint32_t first = f->sample, count = f->sample_count;
     const uint32_t k = f->stride;
     const uint32_t rx0 = f->rect_x, ry0 = f->rect_y;
@@ -101,8 +110,8 @@ TR_FN_INLINE uint32_t tr_render_grid_rows_as(const tr_scene_view *s, const tr_fr
             const uint64_t pixel = (uint64_t)y * width + (uint64_t)x;
             for (uint32_t n = 0; n < count; ++n) {
                 tr_sample smp;
-                tr_render_pixel_sample(s, &cam, seed, max_depth, integrator, passes, x, y, pixel,
-                                       first + n, &smp);
+                tr_render_pixel_sample_kind(s, &cam, seed, max_depth, integrator, sampler, passes,
+                                            x, y, pixel, first + n, &smp);
                 rays += smp.rays;
                 tr_film_add_block(film, &smp, bx0, by0, bx1, by1);
             }

@@ -2,13 +2,16 @@
  *
  * An emitter is chosen from the scene's table with probability proportional to its
  * weight (emitted power: mean radiance x area x number of emitting sides), by binary
- * search in the table's CDF, then a point on it: uniformly in the solid angle it
+ * search in the table's CDF, or, where the scene has a light tree (light_tree.h: scenes
+ * with many emitters), by the tree's estimate of what each can send to the shading
+ * point; then a point on it: uniformly in the solid angle it
  * subtends from the shading point where that angle is neither tiny nor nearly a
  * hemisphere (Arvo 1995), uniformly in area otherwise. */
 #ifndef TR_KERNEL_LIGHT_H
 #define TR_KERNEL_LIGHT_H
 
 #include "compat.h"
+#include "light_tree.h"
 #include "scene_view.h"
 #include "types.h"
 #include "vec.h"
@@ -95,23 +98,27 @@ TR_FN float tr_light_select_prob(const tr_scene_view *s, const tr_material *m, f
     return tr_light_pdf_area(s, m, area) * area;
 }
 
-/* Solid-angle density, seen from p, with which tr_light_sample called at p picks the
- * point y of triangle t: 1/omega times the selection probability when the triangle is
- * sampled by solid angle, the area density times r^2 / |cos theta_light| otherwise.
- * Both MIS strategies use it, so their weights sum to one. */
-TR_FN float tr_light_pdf(const tr_scene_view *s, tr_vec3 p, uint32_t t, tr_vec3 y) {
+/* Probability that tr_light_sample_n at p (normal nr, zero for none) picks triangle t: the
+ * branch probabilities of the light tree when the view has one, the power share
+ * otherwise. */
+TR_FN float tr_light_select_pdf_n(const tr_scene_view *s, tr_vec3 p, tr_vec3 nr, uint32_t t) {
+    if (s->light_node_count > 0u) {
+        return tr_light_tree_prob(s, p, nr, tr_light_index_of(s, t));
+    }
     TR_CONST_GLOBAL tr_triangle *tri = &s->triangles[t];
     tr_material m = s->materials[tri->material];
-    float sel = tr_light_select_prob(s, &m, tri->area);
-    if (!(sel > 0.0f)) {
-        return 0.0f;
-    }
-    tr_vec3 a, b, c;
-    float ca, sa;
-    float omega = tr_light_spherical(tri, p, &a, &b, &c, &ca, &sa);
-    if (omega > 0.0f) {
-        return sel / omega;
-    }
+    return tr_light_select_prob(s, &m, tri->area);
+}
+
+/* tr_light_select_pdf_n without a receiver normal (tr_light_sample's choice). */
+TR_FN float tr_light_select_pdf(const tr_scene_view *s, tr_vec3 p, uint32_t t) {
+    return tr_light_select_pdf_n(s, p, v3s(0.0f), t);
+}
+
+/* The area-sampled density of the point y of triangle tri, picked with probability sel,
+ * in solid angle from p: sel / area times r^2 / |cos theta_light|. */
+TR_FN float tr_light_pdf_by_area(TR_CONST_GLOBAL tr_triangle *tri, float sel, tr_vec3 p,
+                                 tr_vec3 y) {
     tr_vec3 d = v3_sub(y, p);
     float d2 = v3_dot(d, d);
     float cos_l = tr_fabsf(v3_dot(d, tri->normal));
@@ -122,17 +129,41 @@ TR_FN float tr_light_pdf(const tr_scene_view *s, tr_vec3 p, uint32_t t, tr_vec3 
     return sel / tri->area * d2 * tr_sqrtf(d2) / cos_l;
 }
 
+/* Solid-angle density, seen from p, with which tr_light_sample_n called at p (normal nr)
+ * picks the point y of triangle t: 1/omega times the selection probability when the triangle is
+ * sampled by solid angle, the area density times r^2 / |cos theta_light| otherwise.
+ * Both MIS strategies use it, so their weights sum to one. */
+TR_FN float tr_light_pdf_n(const tr_scene_view *s, tr_vec3 p, tr_vec3 nr, uint32_t t, tr_vec3 y) {
+    TR_CONST_GLOBAL tr_triangle *tri = &s->triangles[t];
+    float sel = tr_light_select_pdf_n(s, p, nr, t);
+    if (!(sel > 0.0f)) {
+        return 0.0f;
+    }
+    tr_vec3 a, b, c;
+    float ca, sa;
+    float omega = tr_light_spherical(tri, p, &a, &b, &c, &ca, &sa);
+    if (omega > 0.0f) {
+        return sel / omega;
+    }
+    return tr_light_pdf_by_area(tri, sel, p, y);
+}
+
+/* tr_light_pdf_n without a receiver normal: tr_light_sample's density. */
+TR_FN float tr_light_pdf(const tr_scene_view *s, tr_vec3 p, uint32_t t, tr_vec3 y) {
+    return tr_light_pdf_n(s, p, v3s(0.0f), t, y);
+}
+
 /* A point on an emitter for the shading point p, from the uniform numbers (u1, u2):
- * u1 picks the emitter, and its position inside the emitter's CDF interval, rescaled to
- * [0,1), and u2 pick the point on it. Reusing u1 keeps the pair's stratification on
- * every emitter: the points of a (0,m,2)-net that fall into an interval of u1 are
- * stratified there too, which a separate selection number would undo (each emitter
- * would get an unstratified share). *tri_index the triangle, *y the point, *u and *v
- * its barycentrics of the triangle's second and third vertex (as tr_hit's, for the
- * material stage); returns the solid-angle density of the choice seen from p
- * (tr_light_pdf), 0 when the scene has no emitters or the sample failed. */
-TR_FN float tr_light_sample(const tr_scene_view *s, tr_vec3 p, float u1, float u2,
-                            uint32_t *tri_index, tr_vec3 *y, float *u, float *v) {
+ * u1 picks the emitter, and its position inside the emitter's CDF interval (or inside
+ * the light tree's branch intervals), rescaled to [0,1), and u2 pick the point on it. Reusing u1
+ * keeps the pair's stratification on every emitter: the points of a (0,m,2)-net that fall into an
+ * interval of u1 are stratified there too, which a separate selection number would undo (each
+ * emitter would get an unstratified share). *tri_index the triangle, *y the point, *u and *v its
+ * barycentrics of the triangle's second and third vertex (as tr_hit's, for the material stage);
+ * returns the solid-angle density of the choice seen from p (tr_light_pdf), 0 when the scene has no
+ * emitters or the sample failed. */
+TR_FN float tr_light_sample_n(const tr_scene_view *s, tr_vec3 p, tr_vec3 nr, float u1, float u2,
+                              uint32_t *tri_index, tr_vec3 *y, float *u, float *v) {
     *tri_index = 0u;
     *y = v3s(0.0f);
     *u = 0.0f;
@@ -140,9 +171,18 @@ TR_FN float tr_light_sample(const tr_scene_view *s, tr_vec3 p, float u1, float u
     if (s->light_count == 0) {
         return 0.0f;
     }
-    uint32_t k = tr_light_pick(s, u1);
-    float lo = k > 0u ? s->light_cdf[k - 1u] : 0.0f, hi = s->light_cdf[k];
-    u1 = hi > lo ? tr_fminf(tr_fmaxf((u1 - lo) / (hi - lo), 0.0f), 0.99999994f) : u1;
+    uint32_t k;
+    float sel = 0.0f; /* the tree's probability; the CDF's is found below */
+    if (s->light_node_count > 0u) {
+        k = tr_light_tree_pick(s, p, nr, &u1, &sel);
+        if (!(sel > 0.0f)) {
+            return 0.0f;
+        }
+    } else {
+        k = tr_light_pick(s, u1);
+        float lo = k > 0u ? s->light_cdf[k - 1u] : 0.0f, hi = s->light_cdf[k];
+        u1 = hi > lo ? tr_fminf(tr_fmaxf((u1 - lo) / (hi - lo), 0.0f), 0.99999994f) : u1;
+    }
     uint32_t t = s->lights[k];
     TR_CONST_GLOBAL tr_triangle *tri = &s->triangles[t];
     *tri_index = t;
@@ -198,13 +238,22 @@ TR_FN float tr_light_sample(const tr_scene_view *s, tr_vec3 p, float u1, float u
                 v3_scale(tri->v2, b2));
     *u = b1;
     *v = b2;
-    if (omega > 0.0f) {
-        /* tr_light_pdf's value, without finding the spherical triangle again. */
+    /* tr_light_pdf's value, without finding the spherical triangle or walking the tree
+     * again. */
+    if (s->light_node_count == 0u) {
         tr_material m = s->materials[tri->material];
-        float sel = tr_light_select_prob(s, &m, tri->area);
-        return sel > 0.0f ? sel / omega : 0.0f;
+        sel = tr_light_select_prob(s, &m, tri->area);
+        if (!(sel > 0.0f)) {
+            return 0.0f;
+        }
     }
-    return tr_light_pdf(s, p, t, *y);
+    return omega > 0.0f ? sel / omega : tr_light_pdf_by_area(tri, sel, p, *y);
+}
+
+/* tr_light_sample_n without a receiver normal. */
+TR_FN float tr_light_sample(const tr_scene_view *s, tr_vec3 p, float u1, float u2,
+                            uint32_t *tri_index, tr_vec3 *y, float *u, float *v) {
+    return tr_light_sample_n(s, p, v3s(0.0f), u1, u2, tri_index, y, u, v);
 }
 
 #endif

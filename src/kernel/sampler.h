@@ -48,8 +48,9 @@
 #define TR_SAMPLER_PER_BOUNCE 5u
 
 typedef struct tr_sampler {
-    uint32_t key;   /* hash of (seed, pixel) */
-    uint32_t index; /* sample index inside the pixel */
+    uint32_t key;    /* hash of (seed, pixel) */
+    uint32_t index;  /* sample index inside the pixel */
+    uint32_t random; /* 1: independent numbers instead of Sobol points (TR_SAMPLER_RANDOM) */
 } tr_sampler;
 
 /* A 32-bit integer hash (the "lowbias32" finaliser of C. Wellons' hash prospector):
@@ -117,13 +118,37 @@ TR_FN tr_sampler tr_sampler_make(uint64_t seed, uint64_t pixel, uint32_t index) 
     tr_sampler s;
     s.key = (uint32_t)tr_mix64(seed ^ tr_mix64(pixel + (uint64_t)0x9e3779b97f4a7c15UL));
     s.index = index;
+    s.random = 0u;
     return s;
+}
+
+/* The sampler of kind `kind` (TR_SAMPLER_SOBOL 0, TR_SAMPLER_RANDOM 1): the same key and
+ * index; random replaces the points by independent uniform numbers, as a baseline. */
+TR_FN tr_sampler tr_sampler_make_kind(uint64_t seed, uint64_t pixel, uint32_t index,
+                                      uint32_t kind) {
+    tr_sampler s = tr_sampler_make(seed, pixel, index);
+    s.random = kind == 1u ? 1u : 0u;
+    return s;
+}
+
+/* Independent uniform numbers for (key, index, dim): 64 bits of a hash of all three, no
+ * stratification across samples or pixels (the baseline the Sobol points are measured
+ * against; bench realtime --sampler random). */
+TR_FN uint64_t tr_sampler_random_bits(const tr_sampler *s, uint32_t dim) {
+    uint64_t k = ((uint64_t)s->key << 32) | (uint64_t)s->index;
+    return tr_mix64(k ^ tr_mix64((uint64_t)dim + (uint64_t)0x632be59bd9b4e019UL));
 }
 
 /* The point of dimension pair `dim`: both coordinates in [0,1). The Owen scramble of a
  * Sobol coordinate reverses it, permutes and reverses back; dimension 0 is the reversed
  * index and dimension 1 is computed reversed, so the first reversal cancels. */
 TR_FN void tr_sampler_2d(const tr_sampler *s, uint32_t dim, float *u1, float *u2) {
+    if (s->random) {
+        uint64_t r = tr_sampler_random_bits(s, dim);
+        *u1 = tr_u32_to_unit((uint32_t)r);
+        *u2 = tr_u32_to_unit((uint32_t)(r >> 32));
+        return;
+    }
     uint32_t k = tr_hash32(s->key ^ tr_hash32(dim + 0x68e31da4u));
     uint32_t i = tr_owen_scramble(s->index, k);
     uint32_t x = tr_reverse_bits32(tr_lk_permute(i, tr_hash32(k + 0x1b56c4e9u)));
@@ -135,6 +160,9 @@ TR_FN void tr_sampler_2d(const tr_sampler *s, uint32_t dim, float *u1, float *u2
 
 /* The first coordinate of dimension pair `dim`. */
 TR_FN float tr_sampler_1d(const tr_sampler *s, uint32_t dim) {
+    if (s->random) {
+        return tr_u32_to_unit((uint32_t)tr_sampler_random_bits(s, dim));
+    }
     uint32_t k = tr_hash32(s->key ^ tr_hash32(dim + 0x68e31da4u));
     uint32_t i = tr_owen_scramble(s->index, k);
     return tr_u32_to_unit(tr_reverse_bits32(tr_lk_permute(i, tr_hash32(k + 0x1b56c4e9u))));

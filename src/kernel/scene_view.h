@@ -37,13 +37,15 @@ int tr_wbvh_occluded(const struct tr_wbvh *w, const tr_ray *ray);
 #define TR_SCENE_ARRAYS(X)                                                                         \
     X(tr_triangle, triangles, triangle_count)                                                      \
     X(tr_material, materials, material_count)                                                      \
-    X(tr_flat_node, flat_nodes, flat_node_count) /* the thesis's flat structure */                 \
-    X(tr_bvh_node, bvh_nodes, bvh_node_count)    /* 0 nodes for an empty scene */                  \
-    X(tr_bvh_tri, bvh_tris, bvh_tri_count)       /* leaf triangles, in tr_bvh.indices order */     \
-    X(uint32_t, lights, light_count)             /* emissive triangle indices */                   \
-    X(float, light_cdf, light_cdf_count)         /* their selection CDF (last entry 1) */          \
-    X(tr_vertex, vertices, vertex_count)         /* attrib.h: shading normals, UVs */              \
-    X(tr_tri_verts, tri_verts, tri_verts_count)  /* triangles 0..count-1: their vertices */        \
+    X(tr_flat_node, flat_nodes, flat_node_count)    /* the thesis's flat structure */              \
+    X(tr_bvh_node, bvh_nodes, bvh_node_count)       /* 0 nodes for an empty scene */               \
+    X(tr_bvh_tri, bvh_tris, bvh_tri_count)          /* leaf triangles, in tr_bvh.indices order */  \
+    X(uint32_t, lights, light_count)                /* emissive triangle indices */                \
+    X(float, light_cdf, light_cdf_count)            /* their selection CDF (last entry 1) */       \
+    X(tr_light_node, light_nodes, light_node_count) /* light tree (light_tree.h), or none */       \
+    X(uint32_t, light_leaf, light_leaf_count)       /* each emitter's leaf in it */                \
+    X(tr_vertex, vertices, vertex_count)            /* attrib.h: shading normals, UVs */           \
+    X(tr_tri_verts, tri_verts, tri_verts_count)     /* triangles 0..count-1: their vertices */     \
     X(tr_texture, textures, texture_count)                                                         \
     X(uint32_t, texels, texel_count)                      /* every texture's RGBA8 texels */       \
     X(tr_material_ext, material_exts, material_ext_count) /* 0 or one per material */              \
@@ -64,7 +66,9 @@ int tr_wbvh_occluded(const struct tr_wbvh *w, const tr_ray *ray);
 
 /* The emitter table (src/scene/lights.c, built by tr_scene_commit) serves next-event
  * estimation: light_count emissive triangle indices and the CDF of their selection
- * weights; light_cdf_count equals light_count. */
+ * weights; light_cdf_count equals light_count. With a light tree (light_node_count > 0,
+ * light_leaf_count == light_count) next-event estimation picks emitters through it
+ * instead of the CDF. */
 typedef struct tr_scene_view {
     TR_SCENE_ARRAYS(TR_SCENE_VIEW_ARRAY_MEMBER)
     TR_SCENE_ARRAYS(TR_SCENE_VIEW_COUNT_MEMBER)

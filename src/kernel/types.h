@@ -50,6 +50,24 @@ typedef struct tr_bvh_tri {
 } tr_bvh_tri;
 TR_STATIC_ASSERT(sizeof(tr_bvh_tri) == 40, "tr_bvh_tri layout");
 
+/* A node of the light tree (src/scene/light_tree.c, kernel/light_tree.h) over the emissive
+ * triangles, after Conty Estevez and Kulla 2018: the box and total power of the emitters
+ * below, and a cone bounding their normals (axis, cos_o) beyond which they emit at most
+ * theta_e further (cos_e: 0 for one-sided triangles). Interior nodes have their two
+ * children at child and child + 1; a leaf (child has TR_LIGHT_LEAF set) holds one emitter,
+ * child & ~TR_LIGHT_LEAF indexing the scene's light table. parent is the parent node's
+ * index (the root's is 0). 56 bytes. */
+typedef struct tr_light_node {
+    tr_aabb box;
+    tr_vec3 axis;
+    float cos_o, cos_e;
+    float power;
+    uint32_t child;
+    uint32_t parent;
+} tr_light_node;
+TR_STATIC_ASSERT(sizeof(tr_light_node) == 56, "tr_light_node layout");
+#define TR_LIGHT_LEAF 0x80000000u
+
 /* The BVH's depth never exceeds this (the builder switches to median splits well before),
  * so a traversal stack of this size cannot overflow. */
 #define TR_BVH_STACK_SIZE 64
@@ -59,7 +77,7 @@ TR_STATIC_ASSERT(sizeof(tr_bvh_tri) == 40, "tr_bvh_tri layout");
  * layout has no padding on any device. A frame adds samples sample .. sample+sample_count-1
  * to every pixel of the rectangle (rect_x, rect_y, rect_w, rect_h); with stride k > 1 only
  * pixels whose coordinates are multiples of k are traced and each stands for its k x k
- * block (the thesis's preview). 140 bytes. */
+ * block (the thesis's preview). 144 bytes. */
 typedef struct tr_frame {
     tr_camera camera;
     uint32_t seed_lo, seed_hi;
@@ -69,8 +87,9 @@ typedef struct tr_frame {
     uint32_t stride;
     uint32_t passes; /* TR_PASS_* the film keeps */
     uint32_t rect_x, rect_y, rect_w, rect_h;
+    uint32_t sampler; /* TR_SAMPLER_*: pt's uniform numbers */
 } tr_frame;
-TR_STATIC_ASSERT(sizeof(tr_frame) == 140, "tr_frame layout");
+TR_STATIC_ASSERT(sizeof(tr_frame) == 144, "tr_frame layout");
 
 /* What one sample of one pixel gives: radiance, the intersection queries it made, and
  * the surface the passes describe (zero where the path found no non-specular surface). */

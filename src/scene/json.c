@@ -380,8 +380,9 @@ static int get_color(const jctx *c, const cJSON *obj, const char *path, const ch
 /* ---------------------------------------------------------------------------------- */
 
 static int parse_render(jctx *c, const cJSON *r) {
-    static const char *const keys[] = {"width", "height",          "spp", "max_depth", "integrator",
-                                       "accel", "allow_no_emitter"};
+    static const char *const keys[] = {
+        "width", "height",           "spp",           "max_depth", "integrator",
+        "accel", "allow_no_emitter", "light_sampling"};
     const char *path = "render";
     if (expect_object(c, r, path) != TR_OK ||
         check_keys(c, r, path, keys, sizeof keys / sizeof keys[0]) != TR_OK) {
@@ -453,6 +454,21 @@ static int parse_render(jctx *c, const cJSON *r) {
         }
         in->accel = (tr_accel_type)a;
         in->has_accel = 1;
+    }
+    /* Issue 15: how next-event estimation picks emitters, a property of the scene that
+     * tr_scene_commit builds for. */
+    if (get_string(c, r, path, "light_sampling", 0, &s) != TR_OK) {
+        return TR_ERR;
+    }
+    if (s) {
+        int m = tr_light_sampling_from_name(s);
+        if (m < 0) {
+            char buf[40];
+            return jerr(c, "render.light_sampling",
+                        "unknown light sampling '%s' (expected auto, tree or power)",
+                        shown(s, buf, sizeof buf));
+        }
+        tr_scene_set_light_sampling(c->scene, m, NULL);
     }
     return get_bool(c, r, path, "allow_no_emitter", &in->allow_no_emitter);
 }

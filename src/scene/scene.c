@@ -76,6 +76,7 @@ void tr_scene_free(tr_scene *s) {
     tr_embree_free(&s->embree);
     free(s->lights);
     free(s->light_cdf);
+    tr_scene_free_light_tree(s);
     tr_scene_init(s);
     s->generation = generation + 1;
 }
@@ -425,6 +426,10 @@ int tr_scene_commit(tr_scene *s, tr_accel_type accel, tr_error *err) {
     if (tr_scene_build_lights(s, err) != TR_OK) {
         return TR_ERR;
     }
+    tr_scene_free_light_tree(s);
+    if (tr_scene_light_tree_wanted(s) && tr_scene_build_light_tree(s, err) != TR_OK) {
+        return TR_ERR;
+    }
     /* Every successful case below builds for the scene as it is now. */
     s->committed_generation = s->generation;
     switch (accel) {
@@ -565,6 +570,10 @@ int tr_scene_update(tr_scene *s, double *seconds, tr_error *err) {
             s->committed = 0;
         }
     }
+    /* The tree bounds where the emitters are: moved ones need it built anew. */
+    if (rc == TR_OK && s->light_node_count > 0) {
+        rc = tr_scene_build_light_tree(s, err);
+    }
     if (rc == TR_OK) {
         s->committed_generation = s->generation;
     }
@@ -608,6 +617,10 @@ tr_scene_view tr_scene_view_of(const tr_scene *s) {
     v.light_count = s->light_triangles == s->triangle_count ? s->light_count : 0;
     v.light_cdf_count = v.light_count;
     v.light_weight_total = s->light_weight_total;
+    v.light_nodes = s->light_nodes;
+    v.light_node_count = v.light_count > 0 ? s->light_node_count : 0;
+    v.light_leaf = s->light_leaf;
+    v.light_leaf_count = v.light_node_count > 0 ? v.light_count : 0;
     v.vertices = s->vertices;
     v.vertex_count = s->vertex_count;
     v.tri_verts = s->tri_verts;
@@ -643,6 +656,52 @@ uint32_t tr_scene_material_count(const tr_scene *s) {
 
 uint32_t tr_scene_shape_count(const tr_scene *s) {
     return s->shape_count;
+}
+
+int tr_scene_light_tree_wanted(const tr_scene *s) {
+    if (s->light_sampling == TR_LIGHT_SAMPLING_AUTO) {
+        return s->light_count >= TR_LIGHT_TREE_MIN_EMITTERS;
+    }
+    return s->light_sampling == TR_LIGHT_SAMPLING_TREE && s->light_count > 0;
+}
+
+int tr_scene_set_light_sampling(tr_scene *s, int mode, tr_error *err) {
+    if (mode != TR_LIGHT_SAMPLING_AUTO && mode != TR_LIGHT_SAMPLING_TREE &&
+        mode != TR_LIGHT_SAMPLING_POWER) {
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "unknown light sampling %d (expected TR_LIGHT_SAMPLING_AUTO, _TREE "
+                            "or _POWER)",
+                            mode);
+    }
+    s->light_sampling = mode;
+    return TR_OK;
+}
+
+int tr_scene_light_sampling(const tr_scene *s) {
+    return tr_scene_light_count(s) > 0 && s->light_node_count > 0 ? TR_LIGHT_SAMPLING_TREE
+                                                                  : TR_LIGHT_SAMPLING_POWER;
+}
+
+const char *tr_light_sampling_name(int mode) {
+    switch (mode) {
+    case TR_LIGHT_SAMPLING_AUTO:
+        return "auto";
+    case TR_LIGHT_SAMPLING_TREE:
+        return "tree";
+    case TR_LIGHT_SAMPLING_POWER:
+        return "power";
+    default:
+        return NULL;
+    }
+}
+
+int tr_light_sampling_from_name(const char *name) {
+    for (int m = TR_LIGHT_SAMPLING_AUTO; m <= TR_LIGHT_SAMPLING_POWER; ++m) {
+        if (name && strcmp(name, tr_light_sampling_name(m)) == 0) {
+            return m;
+        }
+    }
+    return -1;
 }
 
 uint32_t tr_scene_light_count(const tr_scene *s) {

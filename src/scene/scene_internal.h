@@ -37,6 +37,13 @@ struct tr_scene {
     uint32_t light_count;
     float light_weight_total;
     uint32_t light_triangles; /* triangle count when the table was built */
+    /* The light tree over the table (src/scene/light_tree.c; kernel/light_tree.h), built
+     * by tr_scene_commit when light_sampling asks for it: 2 light_count - 1 nodes and
+     * each emitter's leaf; light_node_count 0 for none. */
+    tr_light_node *light_nodes;
+    uint32_t *light_leaf;
+    uint32_t light_node_count;
+    int light_sampling; /* TR_LIGHT_SAMPLING_*, what the next commit builds */
     /* Vertex attributes (kernel/attrib.h): triangles 0..tri_verts_count-1 name three
      * entries of `vertices` each (v[0] == TR_NO_INDEX: none); triangles beyond have none. */
     tr_vertex *vertices;
@@ -155,6 +162,14 @@ int tr_scene_refit(tr_scene *s, tr_error *err);
 /* Rebuilds the emitter table (tr_scene_commit calls it): every triangle of positive
  * area whose material has emittance > 0, weighted by tr_light_weight. */
 int tr_scene_build_lights(tr_scene *s, tr_error *err);
+
+/* Builds the light tree over the emitter table (after tr_scene_build_lights), replacing
+ * any; tr_scene_free_light_tree drops it. */
+int tr_scene_build_light_tree(tr_scene *s, tr_error *err);
+/* Whether tr_scene_commit builds the tree: as light_sampling says, for auto with at least
+ * TR_LIGHT_TREE_MIN_EMITTERS emitters in the (fresh) table. */
+int tr_scene_light_tree_wanted(const tr_scene *s);
+void tr_scene_free_light_tree(tr_scene *s);
 
 /* Fills a triangle's normal, centroid and area from its vertices (normal and area are
  * zero for degenerate ones). */
