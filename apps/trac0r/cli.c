@@ -30,9 +30,10 @@ static const char help_before[] =
     "  --height H           image height in pixels, 1..16384 (default 600);\n"
     "                       at most 67108864 pixels in all\n"
     "  --max-depth D        path length limit of the integrator, 1..1024 (default 64 for\n"
-    "                       pt, whose paths end by Russian roulette; 8 for naive): pt\n"
-    "                       follows at most D segments (camera ray included); the naive\n"
-    "                       integrator's Russian roulette reaches at most D-2 surfaces\n"
+    "                       pt, whose paths end by Russian roulette; 8 for naive; 15,\n"
+    "                       also its limit, for bdpt): pt and bdpt follow at most D\n"
+    "                       segments (camera ray included); the naive integrator's\n"
+    "                       Russian roulette reaches at most D-2 surfaces\n"
     "  --seed S             random seed, 0..2^64-1 (default 0); the same seed gives the\n"
     "                       same image for any thread count\n"
     "  --threads T          CPU threads, 0..1024 (default 0: one per core)\n";
