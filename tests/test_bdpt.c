@@ -107,6 +107,9 @@ static float rebuilt_weight(const tr_scene_view *v, const tr_camera *cam, const 
         L[i].pdf_fwd = fl[i];
         L[i].pdf_rev = fc[i];
     }
+    if (k >= 1 && n >= 2) {
+        L[0].pdf_nee = tr_bdpt_nee_pdf(v, &PL[0], &PL[1]);
+    }
     for (int j = 0; j < n - k; ++j) {
         int i = n - 1 - j;
         C[j] = PL[i];

@@ -91,6 +91,8 @@ typedef struct tr_bdpt_vertex {
     tr_vec3 wo;    /* unit direction to the previous vertex (surfaces) */
     float pdf_fwd; /* area density of this vertex, drawn from its subpath's side */
     float pdf_rev; /* area density of this vertex, drawn from the other side */
+    float pdf_nee; /* light vertices: area density of next-event estimation choosing this
+                    * point from the next vertex of the path (tr_bdpt_nee_pdf) */
     uint32_t tri;
     uint32_t kind; /* TR_BDPT_* */
     int delta;     /* its scattering was a delta lobe */
@@ -189,6 +191,19 @@ TR_FN float tr_bdpt_shading_fix(const tr_bsdf_params *m, tr_vec3 wo, tr_vec3 wi)
     return den > 0.0f ? num / den : 0.0f;
 }
 
+/* Area density with which next-event estimation (tr_light_sample) at vertex x picks the
+ * point of light vertex y. */
+TR_FN float tr_bdpt_nee_pdf(const tr_scene_view *s, const tr_bdpt_vertex *y,
+                            const tr_bdpt_vertex *x) {
+    tr_vec3 d = v3_sub(y->p, x->p);
+    float d2 = v3_dot(d, d);
+    if (!(d2 > 0.0f)) {
+        return 0.0f;
+    }
+    float sa = tr_light_pdf(s, x->p, y->tri, y->p);
+    return sa * tr_fabsf(v3_dot(d, y->m.ng)) / (d2 * tr_sqrtf(d2));
+}
+
 TR_FN float tr_bdpt_remap0(float x) {
     return x != 0.0f ? x : 1.0f;
 }
@@ -256,14 +271,14 @@ TR_FN float tr_bdpt_mis_weight(const tr_scene_view *s, const tr_camera *cam,
         float q = tr_bdpt_remap0(pl[k - 1]) / tr_bdpt_remap0(pc[k - 1]);
         r[k] = r[k - 1] * q;
     }
-    /* Strategy 1 draws y_0 by solid angle from y_1, not by area: p_1 scales by c. */
+    /* Strategy 1 draws y_0 by solid angle from y_1, not by area: p_1 scales by c. The
+     * density is the light vertex's own (computed once per subpath or sample) except for
+     * s = 0, where y_0 is a camera vertex. */
     const int light_ok = pl[0] > 0.0f; /* y_0 is a point light subpaths can start on */
     float c = 0.0f;
     if (light_ok && !dl[1]) {
-        tr_vec3 d = v3_sub(v[0]->p, v[1]->p);
-        float d2 = v3_dot(d, d);
-        float sa = tr_light_pdf(s, v[1]->p, v[0]->tri, v[0]->p);
-        c = d2 > 0.0f ? sa * tr_fabsf(v3_dot(d, v[0]->m.ng)) / (d2 * tr_sqrtf(d2)) / pl[0] : 0.0f;
+        float nee_area = ns >= 1 ? v[0]->pdf_nee : tr_bdpt_nee_pdf(s, v[0], v[1]);
+        c = nee_area / pl[0];
     }
     if (ns == 1) {
         if (!(c > 0.0f)) {
@@ -324,6 +339,7 @@ TR_FN void tr_bdpt_walk(const tr_scene_view *s, tr_ray ray, tr_vec3 beta, float 
         cur->kind = TR_BDPT_SURFACE;
         cur->delta = 0;
         cur->pdf_rev = 0.0f;
+        cur->pdf_nee = 0.0f;
         if (prev->kind == TR_BDPT_SURFACE && n >= 2) {
             /* Both densities through prev from the vertices' positions, as the connections
              * evaluate them (not from the offset ray origin), so that every strategy of a
@@ -418,6 +434,7 @@ TR_FN int tr_bdpt_camera_subpath(const tr_scene_view *s, const tr_camera *cam, f
     cv[0].tri = 0u;
     cv[0].pdf_fwd = 1.0f;
     cv[0].pdf_rev = 0.0f;
+    cv[0].pdf_nee = 0.0f;
     /* cv[0].m is never read: the pinhole has no surface. */
     float rx, ry, cam_pdf;
     tr_bdpt_camera_we(cam, ray.dir, &rx, &ry, &cam_pdf);
@@ -454,6 +471,7 @@ TR_FN int tr_bdpt_light_subpath(const tr_scene_view *s, int max_depth, const tr_
         y0->delta = 0;
         y0->wo = v3s(0.0f);
         y0->pdf_rev = 0.0f;
+        y0->pdf_nee = 0.0f;
         y0->pdf_fwd = tr_bdpt_origin_pdf(s, y0);
         y0->beta = v3s(0.0f);
         nl = 1;
@@ -476,6 +494,9 @@ TR_FN int tr_bdpt_light_subpath(const tr_scene_view *s, int max_depth, const tr_
             tr_vec3 beta = v3_scale(le, cs / (y0->pdf_fwd * pdf_dir));
             tr_ray lr = tr_ray_make(tr_offset_origin(yp, n0), w, 0.0f, TR_INFINITY);
             tr_bdpt_walk(s, lr, beta, pdf_dir, lv, &nl, max_depth, 1, smp, rays, 0);
+            if (nl >= 2) {
+                y0->pdf_nee = tr_bdpt_nee_pdf(s, y0, &lv[1]);
+            }
         }
     }
 
@@ -589,6 +610,7 @@ TR_FN tr_vec3 tr_trace_bdpt(const tr_scene_view *s, const tr_camera *cam, float 
                 nee.beta = v3s(0.0f);
                 nee.pdf_rev = 0.0f;
                 nee.pdf_fwd = tr_bdpt_origin_pdf(s, &nee);
+                nee.pdf_nee = pl * tr_fabsf(v3_dot(wi, ltri->normal)) / (dist * dist);
                 neep = &nee;
             } else {
                 const tr_bdpt_vertex *qs = &lv[ns - 1];
