@@ -65,13 +65,15 @@ expect_usage_error "--error-image: 'e.jpg' has an unknown extension" compare a.p
     --error-image e.jpg
 expect_usage_error "unknown option '--bogus'" compare a.pfm b.pfm --bogus
 
-# bench convergence, tiny: both methods measured, CSV written, table printed.
+# bench convergence, tiny: every method measured, CSV written, table printed.
 if "$BIN" bench convergence --sizes 16x12 --budget 0.2 --reference-spp 8 --out conv \
     >out.txt 2>err.txt; then
     head -1 conv.csv | grep -qx "method,width,height,spp,seconds,rmse,relmse,psnr_raw,psnr" ||
         fail "conv.csv header: $(head -1 conv.csv)"
     grep -q "^naive,16,12," conv.csv || fail "conv.csv has no naive rows"
     grep -q "^pt,16,12," conv.csv || fail "conv.csv has no pt rows"
+    grep -q "^bdpt,16,12," conv.csv || fail "conv.csv has no bdpt rows"
+    grep -q "time pt / time bdpt" out.txt || fail "no bdpt speed-up line: $(cat out.txt)"
     grep -q "^16x12 *naive" out.txt || fail "no table row for naive: $(cat out.txt)"
     grep -q "40 dB" out.txt || fail "no 40 dB column: $(cat out.txt)"
 else

@@ -55,6 +55,14 @@ unset POCL_MEMORY_LIMIT
 "$BIN" render --width 8 --height 6 --spp 1 --out keep-cpu.png 2>/dev/null ||
     fail "the CPU backend fails after an OpenCL error"
 
+# bdpt is the CPU's alone (its light tracing splats with 64-bit atomics): refused on the
+# device with a failure status, and no image written.
+"$BIN" render --width 8 --height 6 --spp 1 --device opencl --integrator bdpt --out bd.png \
+    >/dev/null 2>err.txt
+[ $? -eq 1 ] || fail "bdpt on OpenCL: exit status not 1: $(cat err.txt)"
+[ ! -e bd.png ] || fail "bdpt on OpenCL wrote an image"
+rm -f err.txt
+
 # A device render and a CPU render of the same scene, seed and spp: PFM floats compared
 # value by value. Identical is what PoCL gives for this scene (docs/opencl.md); allow at
 # most 1 % of the values to differ by more than 1e-4 (relative) and the mean to move by 1 %.

@@ -244,6 +244,23 @@ static void test_scene_file(void) {
           "direction normalised");
     const double st = sin(1.0 * PI_D / 180.0);
     CHECK(fabs(s.sun.radiance.z * PI_D * st * st - 4.0) < 1e-4, "radiance x pi sin^2 t = E");
+    /* bdpt starts light subpaths on emissive triangles only: it must refuse a sun rather
+     * than weigh its light wrongly (issue 18). The same scene renders with pt. */
+    CHECK(tr_scene_commit(&s, TR_ACCEL_TYPE_BVH, &err) == TR_OK, "%s", err.msg);
+    tr_film film;
+    CHECK(tr_film_init(&film, 8, 8, &err) == TR_OK, "film: %s", err.msg);
+    tr_camera cam = *tr_scene_camera(&s);
+    CHECK(tr_camera_resize(&cam, 8, 8, &err) == TR_OK, "%s", err.msg);
+    tr_render_config cfg = tr_render_config_default();
+    cfg.integrator = TR_INTEGRATOR_BDPT;
+    err.code = TR_STATUS_OK;
+    CHECK(tr_render_frame(&s, &cam, &cfg, &film, 0, NULL, &err) == TR_ERR &&
+              err.code == TR_STATUS_UNSUPPORTED,
+          "bdpt with a sun: expected TR_STATUS_UNSUPPORTED (got %d)", (int)err.code);
+    cfg.integrator = TR_INTEGRATOR_PT;
+    CHECK(tr_render_frame(&s, &cam, &cfg, &film, 0, NULL, &err) == TR_OK, "pt with a sun: %s",
+          err.msg);
+    tr_film_free(&film);
     tr_scene_free(&s);
 }
 

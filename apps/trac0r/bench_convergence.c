@@ -16,6 +16,7 @@
 #define CONV_MAX_SIZES 4
 #define CONV_MAX_POINTS 400
 #define CONV_THRESHOLDS 4
+#define CONV_MAX_METHODS 3 /* naive, pt, bdpt */
 static const double conv_db[CONV_THRESHOLDS] = {25.0, 30.0, 35.0, 40.0};
 
 typedef struct conv_point {
@@ -52,7 +53,7 @@ static void convergence_help(void) {
            "\n"
            "Options:\n"
            "  --sizes LIST         image sizes, e.g. 256x256,800x600 (the default)\n"
-           "  --methods LIST       integrators to measure (default naive,pt)\n"
+           "  --methods LIST       integrators to measure (default naive,pt,bdpt)\n"
            "  --budget SECONDS     render time per method and size, 0.1..86400 (default 30)\n"
            "  --reference-spp N    spp of the rendered reference, 2..1000000 (default 4096)\n"
            "  --reference FILE     read the reference (.pfm) instead (one size only; its own\n"
@@ -100,7 +101,7 @@ static int parse_methods(cli_args *a, int m[], int *n) {
     for (char *save = NULL, *tok = strtok_r(buf, ",", &save); tok;
          tok = strtok_r(NULL, ",", &save)) {
         int k = tr_integrator_from_name(tok);
-        if (k < 0 || *n == 2) {
+        if (k < 0 || *n == CONV_MAX_METHODS) {
             char names[128];
             cli_integrator_list(names, sizeof names);
             return cli_error(a, "%s: unknown integrator '%s' in '%s' (available: %s)", a->opt, tok,
@@ -189,7 +190,8 @@ int bench_convergence(int argc, char **argv) {
     c.max_depth = TR_MAX_DEPTH_NAIVE;
     uint32_t sw[CONV_MAX_SIZES] = {256, 800}, sh[CONV_MAX_SIZES] = {256, 600};
     int nsizes = 2;
-    int methods[2] = {TR_INTEGRATOR_NAIVE, TR_INTEGRATOR_PT}, nmethods = 2;
+    int methods[CONV_MAX_METHODS] = {TR_INTEGRATOR_NAIVE, TR_INTEGRATOR_PT, TR_INTEGRATOR_BDPT};
+    int nmethods = 3;
     float budget = 30.0f;
     uint32_t ref_spp = 4096;
     const char *ref_path = NULL;
@@ -303,7 +305,7 @@ int bench_convergence(int argc, char **argv) {
         tr_film film;
         int film_ok = ref && half && cur && tr_film_init(&film, c.width, c.height, &err) == TR_OK;
         /* One device for the reference and one per method: each keeps its own film. */
-        cli_backend devs[3] = {{0}};
+        cli_backend devs[CONV_MAX_METHODS + 1] = {{0}};
         for (int k = 0; film_ok && rc == CLI_OK && k <= nmethods; ++k) {
             rc = cli_backend_open(&a, &c, scene, &devs[k]);
         }
@@ -372,10 +374,10 @@ int bench_convergence(int argc, char **argv) {
         /* The methods take turns, one frame at a time, the one with the least render
          * time so far next: on a machine shared with other work they see the same
          * load, which keeps their time ratio fair. */
-        tr_film films[2];
-        uint32_t spp[2] = {0, 0}, next[2] = {1, 1};
-        double elapsed[2] = {0.0, 0.0};
-        int done[2] = {0, 0};
+        tr_film films[CONV_MAX_METHODS];
+        uint32_t spp[CONV_MAX_METHODS] = {0}, next[CONV_MAX_METHODS] = {1, 1, 1};
+        double elapsed[CONV_MAX_METHODS] = {0.0};
+        int done[CONV_MAX_METHODS] = {0};
         int nfilms = 0;
         for (int mi = 0; mi < nmethods; ++mi) {
             conv_run *r = &runs[si * nmethods + mi];
@@ -488,34 +490,37 @@ int bench_convergence(int argc, char **argv) {
         }
         printf("\n");
     }
-    /* Speed-up of pt over naive in time to each threshold. */
-    for (int si = 0; si < nsizes && nmethods == 2; ++si) {
-        const conv_run *rn = NULL, *rp = NULL;
-        for (int mi = 0; mi < 2; ++mi) {
+    /* Speed-ups in time to each threshold: pt over naive, bdpt over pt. */
+    for (int si = 0; si < nsizes; ++si) {
+        const conv_run *by[3] = {NULL, NULL, NULL}; /* naive, pt, bdpt */
+        for (int mi = 0; mi < nmethods; ++mi) {
             const conv_run *r = &runs[si * nmethods + mi];
-            if (r->integrator == TR_INTEGRATOR_NAIVE) {
-                rn = r;
-            } else {
-                rp = r;
+            by[r->integrator == TR_INTEGRATOR_NAIVE ? 0
+               : r->integrator == TR_INTEGRATOR_PT  ? 1
+                                                    : 2] = r;
+        }
+        for (int pair = 0; pair < 2; ++pair) {
+            const conv_run *rn = by[pair], *rp = by[pair + 1];
+            if (!rn || !rp) {
+                continue;
             }
-        }
-        if (!rn || !rp) {
-            continue;
-        }
-        printf("%ux%u time naive / time pt:", rn->width, rn->height);
-        for (int k = 0; k < CONV_THRESHOLDS; ++k) {
-            double tn = reach(rn, conv_db[k], 0), tp = reach(rp, conv_db[k], 0);
-            if (tn > 0.0 && tp > 0.0) {
-                printf("  %.0f dB: %.1fx", conv_db[k], tn / tp);
-            } else if (tp > 0.0) {
-                printf("  %.0f dB: > %.1fx (naive not there in %.1f s)", conv_db[k],
-                       rn->n ? rn->pt[rn->n - 1].seconds / tp : 0.0,
-                       rn->n ? rn->pt[rn->n - 1].seconds : 0.0);
-            } else {
-                printf("  %.0f dB: -", conv_db[k]);
+            const char *sn = tr_integrator_name(rn->integrator);
+            const char *sp = tr_integrator_name(rp->integrator);
+            printf("%ux%u time %s / time %s:", rn->width, rn->height, sn, sp);
+            for (int k = 0; k < CONV_THRESHOLDS; ++k) {
+                double tn = reach(rn, conv_db[k], 0), tp = reach(rp, conv_db[k], 0);
+                if (tn > 0.0 && tp > 0.0) {
+                    printf("  %.0f dB: %.1fx", conv_db[k], tn / tp);
+                } else if (tp > 0.0) {
+                    printf("  %.0f dB: > %.1fx (%s not there in %.1f s)", conv_db[k],
+                           rn->n ? rn->pt[rn->n - 1].seconds / tp : 0.0, sn,
+                           rn->n ? rn->pt[rn->n - 1].seconds : 0.0);
+                } else {
+                    printf("  %.0f dB: -", conv_db[k]);
+                }
             }
+            printf("\n");
         }
-        printf("\n");
     }
 
     tr_outfile *csv = tr_outfile_open(csv_path, &err);

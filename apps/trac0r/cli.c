@@ -32,9 +32,10 @@ static const char help_before[] =
     "  --height H           image height in pixels, 1..16384 (default 600);\n"
     "                       at most 67108864 pixels in all\n"
     "  --max-depth D        path length limit of the integrator, 1..1024 (default 64 for\n"
-    "                       pt, whose paths end by Russian roulette; 8 for naive): pt\n"
-    "                       follows at most D segments (camera ray included); the naive\n"
-    "                       integrator's Russian roulette reaches at most D-2 surfaces\n"
+    "                       pt, whose paths end by Russian roulette; 8 for naive; 15,\n"
+    "                       also its limit, for bdpt): pt and bdpt follow at most D\n"
+    "                       segments (camera ray included); the naive integrator's\n"
+    "                       Russian roulette reaches at most D-2 surfaces\n"
     "  --seed S             random seed, 0..2^64-1 (default 0); the same seed gives the\n"
     "                       same image for any thread count\n"
     "  --threads T          CPU threads, 0..1024 (default 0: one per core)\n"
@@ -434,6 +435,12 @@ int cli_load_scene_file(const cli_args *a, cli_common *c, tr_scene *scene, tr_sc
             rc = cli_error(a, "%s: render.integrator: unknown integrator '%s' (available: %s)",
                            c->scene, file->integrator, names);
         }
+    }
+    /* issue 18: a scene file's depth is pt's; bdpt follows at most TR_MAX_DEPTH_BDPT
+     * segments (--max-depth beyond that is an error, tr_render_config_check). */
+    if (rc == CLI_OK && !(c->given & CLI_GIVEN_MAX_DEPTH) && c->integrator == TR_INTEGRATOR_BDPT &&
+        c->max_depth > TR_MAX_DEPTH_BDPT) {
+        c->max_depth = TR_MAX_DEPTH_BDPT;
     }
     if (rc == CLI_OK && file->emissive_triangles == 0 && !file->allow_no_emitter &&
         !c->allow_dark) {

@@ -12,7 +12,8 @@
 /* clang-format off */
 #define TR_INTEGRATORS(X)                                                                    \
     X(PT,    1, "pt",    "next-event estimation, MIS and GGX glossy")      \
-    X(NAIVE, 0, "naive", "the thesis's path tracer")
+    X(NAIVE, 0, "naive", "the thesis's path tracer")                     \
+    X(BDPT,  2, "bdpt",  "bidirectional path tracing, MIS over all strategies (CPU)")
 /* clang-format on */
 
 #define TR_INTEGRATOR_ENUM_ROW(id, value, name, description) TR_INTEGRATOR_##id = value,

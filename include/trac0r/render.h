@@ -16,6 +16,8 @@
 #define TR_MAX_DEPTH_DEFAULT 0
 #define TR_MAX_DEPTH_PT 64
 #define TR_MAX_DEPTH_NAIVE 8
+/* bdpt's default and its limit: its subpaths live in fixed arrays of 16 vertices. */
+#define TR_MAX_DEPTH_BDPT 15
 
 /* Where pt's uniform numbers come from (tr_render_config.sampler). sobol: the
  * Owen-scrambled Sobol sampler (stratified, the default); random: independent uniform
@@ -53,7 +55,7 @@ typedef struct tr_render_stats {
 
 tr_render_config tr_render_config_default(void);
 /* The max depth a config with max_depth 0 uses with `integrator`: TR_MAX_DEPTH_PT (64)
- * for pt, TR_MAX_DEPTH_NAIVE (8) for naive. */
+ * for pt, TR_MAX_DEPTH_NAIVE (8) for naive, TR_MAX_DEPTH_BDPT (15) for bdpt. */
 int tr_default_max_depth(int integrator);
 /* Checks the settings every backend takes alike (max depth, integrator, stride); fails
  * with a message naming the value out of range. */

@@ -1,10 +1,12 @@
 /* cpu.c - the CPU device: the kernel run by OpenMP threads over screen tiles. */
 #define _POSIX_C_SOURCE 200809L
 #include <omp.h>
+#include <stdlib.h>
 #include <string.h>
 #include <time.h>
 
 #include "device/frame.h"
+#include "kernel/integrator_bdpt.h"
 #include "kernel/kernel.h"
 #include "scene/scene_internal.h"
 #include "trac0r/registry.h"
@@ -26,7 +28,12 @@ tr_render_config tr_render_config_default(void) {
     return c;
 }
 
+TR_STATIC_ASSERT(TR_MAX_DEPTH_BDPT == TR_BDPT_MAX_DEPTH, "bdpt's depth limit");
+
 int tr_default_max_depth(int integrator) {
+    if (integrator == TR_INTEGRATOR_BDPT) {
+        return TR_MAX_DEPTH_BDPT;
+    }
     return integrator == TR_INTEGRATOR_NAIVE ? TR_MAX_DEPTH_NAIVE : TR_MAX_DEPTH_PT;
 }
 
@@ -50,6 +57,10 @@ int tr_render_config_check(const tr_render_config *cfg, tr_error *err) {
     if (tr_integrator_name(cfg->integrator) == NULL) {
         return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "unknown integrator %d",
                             cfg->integrator);
+    }
+    if (cfg->integrator == TR_INTEGRATOR_BDPT && cfg->max_depth > TR_MAX_DEPTH_BDPT) {
+        return tr_error_set(err, TR_STATUS_LIMIT, "max depth %d: bdpt supports at most %d",
+                            cfg->max_depth, TR_MAX_DEPTH_BDPT);
     }
     if (cfg->stride < 1 || cfg->stride > 64) {
         return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "stride %d must be in 1..64",
@@ -119,6 +130,26 @@ tr_film_view tr_film_view_of(tr_film *film) {
     return v;
 }
 
+/* Adds frame f's light-tracing splats to the film. The frame traced `grid` pixels x
+ * sample_count light subpaths and adds sample_count samples to each pixel of its
+ * rectangle; the splats carry the whole image's importance (integrator_bdpt.h), so pixel j
+ * gets sample_count x (W H / (grid sample_count)) x its splat sum. Splats that fell outside
+ * the rectangle were dropped: the pixels there get no samples from this frame. */
+static void tr_bdpt_fold_splats(const tr_frame *f, const tr_bdpt_splat *sp, uint32_t grid,
+                                tr_film *film) {
+    const double scale = (double)f->camera.screen_width * (double)f->camera.screen_height /
+                         ((double)grid * TR_BDPT_SPLAT_ONE);
+    for (uint32_t y = 0; y < sp->h; ++y) {
+        for (uint32_t x = 0; x < sp->w; ++x) {
+            const size_t i = (size_t)(sp->y0 + y) * film->width + (sp->x0 + x);
+            const int64_t *q = &sp->sum[3u * ((size_t)y * sp->w + x)];
+            for (int c = 0; c < 3; ++c) {
+                film->sum[3 * i + (size_t)c] += (float)((double)q[c] * scale);
+            }
+        }
+    }
+}
+
 int tr_cpu_render(const tr_scene_view *view, const tr_frame *f, tr_film *film, int threads,
                   uint32_t tile_side, int (*cancel)(void *), void *cancel_user, uint64_t *rays_out,
                   tr_error *err) {
@@ -145,6 +176,28 @@ int tr_cpu_render(const tr_scene_view *view, const tr_frame *f, tr_film *film, i
     const int nthreads = threads > 0 ? threads : tr_default_threads();
     int cancelled = 0;
     uint64_t rays = 0;
+    const int bdpt = f->integrator == TR_INTEGRATOR_BDPT;
+    tr_bdpt_splat sp = {NULL, f->rect_x, f->rect_y, f->rect_w, f->rect_h};
+    if (bdpt) {
+        if (view->env_count > 0u) {
+            return tr_error_set(err, TR_STATUS_UNSUPPORTED,
+                                "bdpt does not support environment lights: use pt");
+        }
+        if (view->sun_count > 0u) {
+            /* Light subpaths start only on emissive triangles: a sun's light would reach
+             * the image through s = 0 alone, with MIS weights that assume otherwise. */
+            return tr_error_set(err, TR_STATUS_UNSUPPORTED,
+                                "bdpt does not support the sun: use pt");
+        }
+        /* Light tracing's splats, in fixed point (integrator_bdpt.h): per frame, for the
+         * rectangle. */
+        sp.sum = calloc(3u * (size_t)f->rect_w * f->rect_h, sizeof *sp.sum);
+        if (!sp.sum) {
+            return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY,
+                                "out of memory for bdpt's %ux%u splat buffer", f->rect_w,
+                                f->rect_h);
+        }
+    }
 
 #pragma omp parallel for num_threads(nthreads) schedule(dynamic, 1) reduction(+ : rays)
     for (int t = 0; t < tile_count; ++t) {
@@ -163,7 +216,17 @@ int tr_cpu_render(const tr_scene_view *view, const tr_frame *f, tr_film *film, i
         const uint32_t ty0 = gy0 + ((uint32_t)t / tiles_x) * tile;
         const uint32_t tx1 = tx0 + tile < gx0 + nx ? tx0 + tile : gx0 + nx;
         const uint32_t ty1 = ty0 + tile < gy0 + ny ? ty0 + tile : gy0 + ny;
-        rays += tr_render_grid_rows(view, f, &fv, tx0, ty0, tx1, ty1);
+        if (bdpt) {
+            rays += tr_bdpt_render_grid_rows(view, f, &fv, &sp, tx0, ty0, tx1, ty1);
+        } else {
+            rays += tr_render_grid_rows(view, f, &fv, tx0, ty0, tx1, ty1);
+        }
+    }
+    if (bdpt) {
+        if (!cancelled) {
+            tr_bdpt_fold_splats(f, &sp, nx * ny, film);
+        }
+        free(sp.sum);
     }
     if (cancelled) {
         return tr_error_set(err, TR_STATUS_CANCELLED, "frame cancelled");

@@ -240,6 +240,12 @@ int tr_device_render(tr_device *dev, const tr_camera *cam, const tr_render_confi
         return TR_ERR;
     }
     uint64_t rays = 0;
+    if (dev->kind == KIND_OPENCL && f.integrator == TR_INTEGRATOR_BDPT) {
+        /* issue 18: light tracing splats with 64-bit atomics the device may lack. */
+        return tr_error_set(err, TR_STATUS_UNSUPPORTED,
+                            "the bdpt integrator runs on the CPU only (device %s is OpenCL)",
+                            dev->info.name);
+    }
     if (dev->kind == KIND_OPENCL) {
         if (tr_cl_render_frame(dev->cl, &f, &rays, err) != TR_OK) {
             return TR_ERR;

@@ -1,0 +1,700 @@
+/* integrator_bdpt.h - bidirectional path tracing with multiple importance sampling of all
+ * strategies (E. Veach, "Robust Monte Carlo Methods for Light Transport Simulation", PhD
+ * thesis, Stanford 1997, chapter 10; Veach and Guibas, "Bidirectional Estimators for Light
+ * Transport", EGWR 1994, and "Optimally Combining Sampling Techniques", SIGGRAPH 1995).
+ *
+ * One sample of one pixel traces a camera subpath z_0 (the pinhole) .. z_{t-1} and a light
+ * subpath y_0 (a point on an emitter) .. y_{s-1}, and joins every prefix pair (s, t):
+ *   s = 0      the camera subpath hits an emitter;
+ *   s = 1      next-event estimation: a fresh light point drawn by tr_light_sample (the
+ *              solid-angle sampler pt uses) is joined to z_{t-1} with a shadow ray;
+ *   t = 1      light tracing: y_{s-1} is joined to the pinhole and its contribution lands in
+ *              the pixel it projects to (a splat, see below), weighted by the camera's
+ *              importance We = 1 / (A cos^4 theta) times the cosine at the sensor (A: the
+ *              image plane's area at distance 1; the pixel sample's jitter draws camera rays
+ *              with density 1 / (A cos^3 theta));
+ *   otherwise  y_{s-1} and z_{t-1} are joined by a shadow ray.
+ * (s, t) = (1, 1) is left out (the camera path's s = 0 sees the emitter itself), as are
+ * t = 0 strategies (a pinhole cannot be hit). Connections at delta vertices (mirror, smooth
+ * glass) carry nothing and are not tried.
+ *
+ * MIS: the power heuristic (beta = 2) over every strategy able to make the path. With p_k
+ * the density of the path made with k light vertices, p_k / p_{k+1} is the ratio of the
+ * densities with which vertex k is drawn from the camera side and from the light side,
+ * so all p_k / p_s follow from the vertices' forward and reverse area densities in one
+ * pass along the path: the recursive formulation of pbrt-v3's MISWeight (Pharr, Jakob and
+ * Humphreys, Physically Based Rendering, 3rd ed., section 16.3.4) and of van Antwerpen's
+ * "Improving SIMD Efficiency for Parallel Monte Carlo Light Transport on the GPU" (HPG
+ * 2011). Light subpaths start on a point drawn by area (the emitter table's CDF), but the
+ * s = 1 strategy draws y_0 by solid angle from y_1; the weight accounts for that by
+ * rescaling p_1 by P_nee(y_0 | y_1) / P_area(y_0) (tr_bdpt_mis_weight).
+ *
+ * Transport mode: light subpaths carry importance. Every BSDF here is symmetric (glass too:
+ * neither integrator scales radiance by eta^2), so the adjoint BSDF is the BSDF; shading
+ * normals are not, and light-side scattering is multiplied by Veach's correction
+ * |wo.ns| |wi.ng| / (|wo.ng| |wi.ns|) (thesis, section 5.3, eq. 5.17).
+ *
+ * Splatting: light-tracing contributions go to a frame-sized buffer of 64-bit fixed-point
+ * sums (2^-24 units), added with atomic integer additions: integer addition is associative,
+ * so the sums, and the image, do not depend on the thread count or the tile order. The
+ * host folds the buffer into the film after the frame (src/device/cpu.c).
+ *
+ * Limits: a subpath holds at most TR_BDPT_MAX_VERTS vertices, so the max depth is
+ * TR_BDPT_MAX_DEPTH (also the default). The environment light is not a light subpath
+ * origin here: scenes with one are refused by the host. The atomic 64-bit addition is the
+ * host's; the OpenCL device does not run bdpt (docs/integrators.md). */
+#ifndef TR_KERNEL_INTEGRATOR_BDPT_H
+#define TR_KERNEL_INTEGRATOR_BDPT_H
+
+#include "bsdf.h"
+#include "camera.h"
+#include "compat.h"
+#include "film.h"
+#include "integrator_pt.h"
+#include "light.h"
+#include "material.h"
+#include "material_eval.h"
+#include "sampler.h"
+#include "sampling.h"
+#include "scene_view.h"
+#include "types.h"
+#include "vec.h"
+
+/* Vertices of one subpath: the camera subpath has the pinhole and up to max_depth hits. */
+#define TR_BDPT_MAX_VERTS 16
+#define TR_BDPT_MAX_DEPTH (TR_BDPT_MAX_VERTS - 1)
+
+/* Light-tracing splats are sums of value * 2^24, rounded. */
+#define TR_BDPT_SPLAT_ONE 16777216.0f
+/* A splat beyond this (in radiance units) is dropped rather than allowed to overflow. */
+#define TR_BDPT_SPLAT_MAX 1e9f
+
+/* Light subpaths read their own sampler dimensions, after those a camera subpath of
+ * TR_BDPT_MAX_DEPTH segments can use: the origin's pair, the emission direction's pair,
+ * then TR_SAMPLER_PER_BOUNCE pairs per segment as the camera side. */
+#define TR_BDPT_DIM_LIGHT0 (1u + (uint32_t)(TR_BDPT_MAX_DEPTH + 1) * TR_SAMPLER_PER_BOUNCE)
+#define TR_BDPT_DIM_LIGHT_ORIGIN TR_BDPT_DIM_LIGHT0
+#define TR_BDPT_DIM_LIGHT_DIR (TR_BDPT_DIM_LIGHT0 + 1u)
+
+TR_FN uint32_t tr_bdpt_light_dim(int seg, uint32_t what) {
+    return TR_BDPT_DIM_LIGHT0 + 2u + (uint32_t)(seg - 1) * TR_SAMPLER_PER_BOUNCE + what;
+}
+
+#define TR_BDPT_CAMERA 0u
+#define TR_BDPT_LIGHT 1u /* the origin of a light subpath, or the s = 1 light sample */
+#define TR_BDPT_SURFACE 2u
+
+typedef struct tr_bdpt_vertex {
+    tr_bsdf_params m; /* surfaces and light points: the material stage's output */
+    tr_vec3 p;
+    tr_vec3 beta;  /* the subpath's throughput up to (not including) this vertex's scattering */
+    tr_vec3 wo;    /* unit direction to the previous vertex (surfaces) */
+    float pdf_fwd; /* area density of this vertex, drawn from its subpath's side */
+    float pdf_rev; /* area density of this vertex, drawn from the other side */
+    float pdf_nee; /* light vertices: area density of next-event estimation choosing this
+                    * point from the next vertex of the path (tr_bdpt_nee_pdf) */
+    uint32_t tri;
+    uint32_t kind; /* TR_BDPT_* */
+    int delta;     /* its scattering was a delta lobe */
+} tr_bdpt_vertex;
+
+/* Where light tracing's splats go: 3 fixed-point sums per pixel of the rectangle
+ * (x0, y0, w, h); splats outside it are dropped (the host scales what it keeps). */
+typedef struct tr_bdpt_splat {
+    TR_GLOBAL int64_t *sum;
+    uint32_t x0, y0, w, h;
+} tr_bdpt_splat;
+
+/* Camera importance towards unit direction w (from the pinhole) times the cosine at the
+ * sensor, We cos = 1 / (A cos^3) with We = 1 / (A cos^4) (normalised so that its integral
+ * times cos over the image's solid angle is 1), the solid-angle density of the camera's
+ * rays *pdf_dir = 1 / (A cos^3) and the raster point (*rx, *ry) w goes through; 0 where w
+ * leaves the image. */
+TR_FN float tr_bdpt_camera_we(const tr_camera *c, tr_vec3 w, float *rx, float *ry, float *pdf_dir) {
+    *pdf_dir = 0.0f;
+    float cs = v3_dot(w, c->dir);
+    if (!(cs > 0.0f)) {
+        return 0.0f;
+    }
+    float fx = v3_dot(w, c->right) / cs / c->canvas_width + 0.5f;
+    float fy = 0.5f - v3_dot(w, c->up) / cs / c->canvas_height;
+    if (!(fx >= 0.0f && fx < 1.0f && fy >= 0.0f && fy < 1.0f)) {
+        return 0.0f;
+    }
+    *rx = fx * (float)c->screen_width;
+    *ry = fy * (float)c->screen_height;
+    float a = c->canvas_width * c->canvas_height;
+    float c3 = cs * cs * cs;
+    *pdf_dir = 1.0f / (a * c3);
+    return *pdf_dir;
+}
+
+/* Solid-angle density of an emitter at y (cosine-weighted about its normal on the side
+ * chosen, each side with probability 1/2 when two-sided) emitting towards unit w. */
+TR_FN float tr_bdpt_emit_pdf(const tr_bdpt_vertex *y, tr_vec3 w) {
+    float c = v3_dot(w, y->m.ng);
+    if ((y->m.flags & TR_MATERIAL_TWO_SIDED) != 0u) {
+        return tr_fabsf(c) * (0.5f * TR_INV_PI);
+    }
+    return c > 0.0f ? c * TR_INV_PI : 0.0f;
+}
+
+/* Area density of choosing y as a light subpath's origin: 0 for surfaces that emit but are
+ * not in the emitter table (glTF emission). */
+TR_FN float tr_bdpt_origin_pdf(const tr_scene_view *s, const tr_bdpt_vertex *y) {
+    TR_CONST_GLOBAL tr_triangle *tri = &s->triangles[y->tri];
+    tr_material m = s->materials[tri->material];
+    return tr_light_pdf_area(s, &m, tri->area);
+}
+
+/* Solid-angle density at `next` converted to area density there. */
+TR_FN float tr_bdpt_to_area(float pdf_dir, tr_vec3 from, const tr_bdpt_vertex *next) {
+    tr_vec3 d = v3_sub(next->p, from);
+    float d2 = v3_dot(d, d);
+    if (!(d2 > 0.0f)) {
+        return 0.0f;
+    }
+    if (next->kind == TR_BDPT_CAMERA) {
+        return pdf_dir / d2;
+    }
+    return pdf_dir * tr_fabsf(v3_dot(d, next->m.ng)) / (d2 * tr_sqrtf(d2));
+}
+
+/* Area density with which vertex `cur`, reached from `prev` (null for the pinhole and
+ * light origins), draws `next`. */
+TR_FN float tr_bdpt_pdf(const tr_camera *cam, const tr_bdpt_vertex *cur, const tr_bdpt_vertex *prev,
+                        const tr_bdpt_vertex *next) {
+    tr_vec3 d = v3_sub(next->p, cur->p);
+    float len = v3_length(d);
+    if (!(len > 0.0f)) {
+        return 0.0f;
+    }
+    tr_vec3 w = v3_scale(d, 1.0f / len);
+    float pdf;
+    if (cur->kind == TR_BDPT_CAMERA) {
+        float rx, ry;
+        tr_bdpt_camera_we(cam, w, &rx, &ry, &pdf);
+    } else if (cur->kind == TR_BDPT_LIGHT || prev == 0) {
+        pdf = tr_bdpt_emit_pdf(cur, w);
+    } else {
+        tr_vec3 wp = v3_normalize(v3_sub(prev->p, cur->p));
+        pdf = tr_bsdf_pdf(&cur->m, wp, w);
+    }
+    return tr_bdpt_to_area(pdf, cur->p, next);
+}
+
+/* Veach's shading-normal correction for importance carried from wo to wi (thesis eq. 5.17);
+ * 0 where a geometric cosine vanishes. */
+TR_FN float tr_bdpt_shading_fix(const tr_bsdf_params *m, tr_vec3 wo, tr_vec3 wi) {
+    float num = tr_fabsf(v3_dot(wo, m->ns)) * tr_fabsf(v3_dot(wi, m->ng));
+    float den = tr_fabsf(v3_dot(wo, m->ng)) * tr_fabsf(v3_dot(wi, m->ns));
+    return den > 0.0f ? num / den : 0.0f;
+}
+
+/* Area density with which next-event estimation (tr_light_sample) at vertex x picks the
+ * point of light vertex y. */
+TR_FN float tr_bdpt_nee_pdf(const tr_scene_view *s, const tr_bdpt_vertex *y,
+                            const tr_bdpt_vertex *x) {
+    tr_vec3 d = v3_sub(y->p, x->p);
+    float d2 = v3_dot(d, d);
+    if (!(d2 > 0.0f)) {
+        return 0.0f;
+    }
+    float sa = tr_light_pdf(s, x->p, y->tri, y->p);
+    return sa * tr_fabsf(v3_dot(d, y->m.ng)) / (d2 * tr_sqrtf(d2));
+}
+
+TR_FN float tr_bdpt_remap0(float x) {
+    return x != 0.0f ? x : 1.0f;
+}
+
+/* The power-heuristic weight of strategy (s, t) for the path made of lv[0..s-1] and
+ * cv[t-1..0] (with `nee` standing for lv[0] when s = 1). The path's vertices are indexed
+ * from the light end, 0 .. n-1 with n = s + t; for each, pl and pc are its area densities
+ * drawn from the light side and from the camera side. Most are stored by the random walks;
+ * the ones next to the connection change with it and are computed here. */
+TR_FN float tr_bdpt_mis_weight(const tr_scene_view *s, const tr_camera *cam,
+                               const tr_bdpt_vertex *lv, int ns, const tr_bdpt_vertex *nee,
+                               const tr_bdpt_vertex *cv, int nt) {
+    const int n = ns + nt;
+    if (n == 2) {
+        return 1.0f; /* only (0, 2): (1, 1) is not used */
+    }
+    float pl[2 * TR_BDPT_MAX_VERTS], pc[2 * TR_BDPT_MAX_VERTS], r[2 * TR_BDPT_MAX_VERTS];
+    int dl[2 * TR_BDPT_MAX_VERTS];
+    const tr_bdpt_vertex *v[2 * TR_BDPT_MAX_VERTS] = {0};
+    if (nt < 1 || ns < 0 || n > 2 * TR_BDPT_MAX_VERTS) {
+        return 0.0f;
+    }
+    for (int i = 0; i < n; ++i) {
+        if (i < ns) {
+            v[i] = (ns == 1 && i == 0) ? nee : &lv[i];
+            pl[i] = v[i]->pdf_fwd;
+            pc[i] = v[i]->pdf_rev;
+        } else {
+            v[i] = &cv[n - 1 - i];
+            pc[i] = v[i]->pdf_fwd;
+            pl[i] = v[i]->pdf_rev;
+        }
+        dl[i] = v[i]->delta;
+    }
+    /* The densities the connection changes. */
+    const tr_bdpt_vertex *pt = v[ns];
+    const tr_bdpt_vertex *pt_prev = nt >= 2 ? v[ns + 1] : 0;
+    dl[ns] = 0;
+    if (ns > 0) {
+        const tr_bdpt_vertex *qs = v[ns - 1];
+        const tr_bdpt_vertex *qs_prev = ns >= 2 ? v[ns - 2] : 0;
+        dl[ns - 1] = 0;
+        pc[ns - 1] = tr_bdpt_pdf(cam, pt, pt_prev, qs);
+        if (qs_prev) {
+            pc[ns - 2] = tr_bdpt_pdf(cam, qs, pt, qs_prev);
+        }
+        pl[ns] = tr_bdpt_pdf(cam, qs, qs_prev, pt);
+        if (pt_prev) {
+            pl[ns + 1] = tr_bdpt_pdf(cam, pt, qs, pt_prev);
+        }
+    } else {
+        pl[0] = tr_bdpt_origin_pdf(s, pt);
+        if (pt_prev) {
+            pl[1] = tr_bdpt_to_area(tr_bdpt_emit_pdf(pt, v3_normalize(v3_sub(pt_prev->p, pt->p))),
+                                    pt->p, pt_prev);
+        }
+    }
+    /* r[k] = p_k / p_s. */
+    r[ns] = 1.0f;
+    for (int k = ns - 1; k >= 0; --k) {
+        float q = tr_bdpt_remap0(pc[k]) / tr_bdpt_remap0(pl[k]);
+        r[k] = r[k + 1] * q;
+    }
+    for (int k = ns + 1; k < n; ++k) {
+        float q = tr_bdpt_remap0(pl[k - 1]) / tr_bdpt_remap0(pc[k - 1]);
+        r[k] = r[k - 1] * q;
+    }
+    /* Strategy 1 draws y_0 by solid angle from y_1, not by area: p_1 scales by c. The
+     * density is the light vertex's own (computed once per subpath or sample) except for
+     * s = 0, where y_0 is a camera vertex. */
+    const int light_ok = pl[0] > 0.0f; /* y_0 is a point light subpaths can start on */
+    float c = 0.0f;
+    if (light_ok && !dl[1]) {
+        float nee_area = ns >= 1 ? v[0]->pdf_nee : tr_bdpt_nee_pdf(s, v[0], v[1]);
+        c = nee_area / pl[0];
+    }
+    if (ns == 1) {
+        if (!(c > 0.0f)) {
+            return 0.0f;
+        }
+        for (int k = 0; k < n; ++k) {
+            r[k] = k == 1 ? 1.0f : r[k] / c;
+        }
+    } else {
+        r[1] *= c;
+    }
+    float sum = 0.0f;
+    for (int k = 0; k < n; ++k) {
+        int ok = (k == 0 || !dl[k - 1]) && !dl[k];
+        ok = ok && (k == 0 || light_ok) && !(k == 1 && n == 2);
+        if (ok || k == ns) {
+            sum += r[k] * r[k];
+        }
+    }
+    return sum > 0.0f ? 1.0f / sum : 0.0f;
+}
+
+/* Extends a subpath whose last vertex is v[0 .. *count-1] along `ray` with throughput
+ * beta and the last vertex's solid-angle density pdf_dir for ray's direction, up to
+ * max_verts vertices. importance: a light subpath (shading-normal correction, its own
+ * sampler dimensions). `surface` (camera subpaths, may be null) gets the passes' surface. */
+TR_FN void tr_bdpt_walk(const tr_scene_view *s, tr_ray ray, tr_vec3 beta, float pdf_dir,
+                        tr_bdpt_vertex *v, int *count, int max_verts, int importance,
+                        const tr_sampler *smp, uint32_t *rays, tr_sample *surface) {
+    int n = *count;
+    int holes = 0;
+    float rr_ref = v3_max_component(beta); /* roulette is played on beta relative to this */
+    for (int seg = 1; n < max_verts; ++seg) {
+        tr_hit hit;
+        *rays += 1;
+        if (!tr_intersect_scene(s, &ray, &hit)) {
+            break;
+        }
+        TR_CONST_GLOBAL tr_triangle *tri = &s->triangles[hit.triangle];
+        tr_vec3 p = v3_madd(ray.origin, ray.dir, hit.t);
+        tr_bsdf_params m = tr_material_eval(s, hit.triangle, hit.u, hit.v, p, tri->normal, ray.dir);
+        if (m.hole && holes < TR_MAX_HOLES) {
+            ++holes;
+            --seg;
+            ray.tmin = hit.t + 1e-5f * tr_fmaxf(1.0f, hit.t);
+            continue;
+        }
+        if (surface) {
+            tr_sample_surface(surface, &m, ray.dir, hit.t, hit.triangle);
+        }
+        tr_bdpt_vertex *cur = &v[n];
+        tr_bdpt_vertex *prev = &v[n - 1];
+        cur->m = m;
+        cur->p = p;
+        cur->beta = beta;
+        cur->wo = v3_neg(ray.dir);
+        cur->tri = hit.triangle;
+        cur->kind = TR_BDPT_SURFACE;
+        cur->delta = 0;
+        cur->pdf_rev = 0.0f;
+        cur->pdf_nee = 0.0f;
+        if (prev->kind == TR_BDPT_SURFACE && n >= 2) {
+            /* Both densities through prev from the vertices' positions, as the connections
+             * evaluate them (not from the offset ray origin), so that every strategy of a
+             * path computes the same densities. */
+            tr_bdpt_vertex *pp = &v[n - 2];
+            cur->pdf_fwd = prev->delta ? 0.0f : tr_bdpt_pdf(0, prev, pp, cur);
+            pp->pdf_rev = prev->delta ? 0.0f : tr_bdpt_pdf(0, prev, cur, pp);
+        } else if (prev->kind == TR_BDPT_LIGHT) {
+            cur->pdf_fwd = tr_bdpt_pdf(0, prev, 0, cur);
+        } else {
+            cur->pdf_fwd = tr_bdpt_to_area(pdf_dir, prev->p, cur);
+        }
+        ++n;
+        if (n >= max_verts) {
+            break;
+        }
+        tr_scatter bs;
+        float b1, b2, blobe;
+        uint32_t dl = importance ? tr_bdpt_light_dim(seg, TR_DIM_BSDF_LOBE)
+                                 : tr_sampler_dim(seg, TR_DIM_BSDF_LOBE);
+        uint32_t dd = importance ? tr_bdpt_light_dim(seg, TR_DIM_BSDF_DIR)
+                                 : tr_sampler_dim(seg, TR_DIM_BSDF_DIR);
+        blobe = tr_sampler_1d(smp, dl);
+        tr_sampler_2d(smp, dd, &b1, &b2);
+        if (!tr_bsdf_sample(&m, cur->wo, blobe, b1, b2, &bs)) {
+            break;
+        }
+        tr_vec3 weight = bs.weight;
+        if (importance) {
+            weight = v3_scale(weight, tr_bdpt_shading_fix(&m, cur->wo, bs.wi));
+        }
+        cur->delta = bs.delta;
+        beta = v3_mul(beta, weight);
+        if (tr_v3_is_zero(beta)) {
+            break;
+        }
+        if (seg >= TR_PT_RR_START && rr_ref > 0.0f) {
+            float q = tr_sqrtf(v3_max_component(beta) / rr_ref);
+            if (q < 1.0f) {
+                uint32_t dr = importance ? tr_bdpt_light_dim(seg, TR_DIM_ROULETTE)
+                                         : tr_sampler_dim(seg, TR_DIM_ROULETTE);
+                if (!(tr_sampler_1d(smp, dr) < q)) {
+                    break;
+                }
+                beta = v3_scale(beta, 1.0f / q);
+            }
+        }
+        ray = tr_ray_make(tr_surface_origin(&m, p, bs.wi), bs.wi, 0.0f, TR_INFINITY);
+    }
+    *count = n;
+}
+
+/* Adds c (a light-tracing contribution) to the splat buffer at raster point (rx, ry). */
+TR_FN void tr_bdpt_splat_add(const tr_bdpt_splat *sp, float rx, float ry, tr_vec3 c) {
+    uint32_t x = (uint32_t)rx, y = (uint32_t)ry;
+    if (x < sp->x0 || y < sp->y0 || x >= sp->x0 + sp->w || y >= sp->y0 + sp->h) {
+        return;
+    }
+    float m = v3_max_component(c);
+    if (!(m > 0.0f) || !(m < TR_BDPT_SPLAT_MAX) || !(c.x >= 0.0f && c.y >= 0.0f && c.z >= 0.0f)) {
+        return; /* nothing, or NaN, or beyond the fixed-point range */
+    }
+    size_t i = 3u * ((size_t)(y - sp->y0) * sp->w + (x - sp->x0));
+    int64_t q0 = (int64_t)(c.x * TR_BDPT_SPLAT_ONE + 0.5f);
+    int64_t q1 = (int64_t)(c.y * TR_BDPT_SPLAT_ONE + 0.5f);
+    int64_t q2 = (int64_t)(c.z * TR_BDPT_SPLAT_ONE + 0.5f);
+    __atomic_fetch_add(&sp->sum[i], q0, __ATOMIC_RELAXED);
+    __atomic_fetch_add(&sp->sum[i + 1], q1, __ATOMIC_RELAXED);
+    __atomic_fetch_add(&sp->sum[i + 2], q2, __ATOMIC_RELAXED);
+}
+
+/* Selects strategies for tests: with only_t > 0 only (only_s, only_t) contributes, with
+ * weight 1 (the unweighted estimator of that strategy); otherwise every strategy, with
+ * its MIS weight. */
+typedef struct tr_bdpt_select {
+    int only_s, only_t;
+} tr_bdpt_select;
+
+/* The camera subpath of the ray through raster point (x + jx, y + jy), (jx, jy) from the
+ * sampler: cv[0] the pinhole, then up to max_depth hits. Returns the vertex count. */
+TR_FN int tr_bdpt_camera_subpath(const tr_scene_view *s, const tr_camera *cam, float x, float y,
+                                 int max_depth, const tr_sampler *smp, tr_bdpt_vertex *cv,
+                                 uint32_t *rays, tr_sample *surface) {
+    float jx, jy;
+    tr_sampler_2d(smp, TR_DIM_CAMERA, &jx, &jy);
+    tr_ray ray = tr_camera_ray(cam, x, y, jx, jy);
+    cv[0].p = cam->pos;
+    cv[0].beta = v3s(1.0f);
+    cv[0].wo = v3s(0.0f);
+    cv[0].kind = TR_BDPT_CAMERA;
+    cv[0].delta = 0;
+    cv[0].tri = 0u;
+    cv[0].pdf_fwd = 1.0f;
+    cv[0].pdf_rev = 0.0f;
+    cv[0].pdf_nee = 0.0f;
+    /* cv[0].m is never read: the pinhole has no surface. */
+    float rx, ry, cam_pdf;
+    tr_bdpt_camera_we(cam, ray.dir, &rx, &ry, &cam_pdf);
+    int nc = 1;
+    tr_bdpt_walk(s, ray, v3s(1.0f), cam_pdf, cv, &nc, max_depth + 1, 0, smp, rays, surface);
+    return nc;
+}
+
+/* The light subpath: a point by area from the emitter table, a cosine-weighted direction
+ * on its emitting side (either, for two-sided emitters), then up to max_depth - 1 hits
+ * (a light subpath of s vertices serves paths of at least s segments). Returns the vertex
+ * count (0 without emitters). */
+TR_FN int tr_bdpt_light_subpath(const tr_scene_view *s, int max_depth, const tr_sampler *smp,
+                                tr_bdpt_vertex *lv, uint32_t *rays) {
+    int nl = 0;
+    if (s->light_count > 0u && max_depth >= 2) {
+        float u1, u2, d1, d2;
+        tr_sampler_2d(smp, TR_BDPT_DIM_LIGHT_ORIGIN, &u1, &u2);
+        tr_sampler_2d(smp, TR_BDPT_DIM_LIGHT_DIR, &d1, &d2);
+        uint32_t k = tr_light_pick(s, u1);
+        float lo = k > 0u ? s->light_cdf[k - 1u] : 0.0f, hi = s->light_cdf[k];
+        u1 = hi > lo ? tr_fminf(tr_fmaxf((u1 - lo) / (hi - lo), 0.0f), 0.99999994f) : u1;
+        uint32_t t = s->lights[k];
+        TR_CONST_GLOBAL tr_triangle *tri = &s->triangles[t];
+        float su = tr_sqrtf(u1);
+        float b1 = u2 * su, b2 = su - b1; /* uniform on the triangle (pbrt 3rd ed. 13.6.5) */
+        tr_vec3 yp = v3_add(v3_add(v3_scale(tri->v0, 1.0f - b1 - b2), v3_scale(tri->v1, b1)),
+                            v3_scale(tri->v2, b2));
+        tr_bdpt_vertex *y0 = &lv[0];
+        y0->m = tr_material_eval(s, t, b1, b2, yp, tri->normal, tri->normal);
+        y0->p = yp;
+        y0->tri = t;
+        y0->kind = TR_BDPT_LIGHT;
+        y0->delta = 0;
+        y0->wo = v3s(0.0f);
+        y0->pdf_rev = 0.0f;
+        y0->pdf_nee = 0.0f;
+        y0->pdf_fwd = tr_bdpt_origin_pdf(s, y0);
+        y0->beta = v3s(0.0f);
+        nl = 1;
+        tr_vec3 n0 = tri->normal;
+        int two = (y0->m.flags & TR_MATERIAL_TWO_SIDED) != 0u;
+        if (two) {
+            if (d1 < 0.5f) {
+                d1 *= 2.0f;
+            } else {
+                d1 = (d1 - 0.5f) * 2.0f;
+                n0 = v3_neg(n0);
+            }
+        }
+        tr_vec3 w = tr_sample_cosine_hemisphere_u(d1, d2, n0);
+        float pdf_dir = tr_bdpt_emit_pdf(y0, w);
+        tr_vec3 le = tr_emitted(&y0->m, w);
+        if (y0->pdf_fwd > 0.0f && pdf_dir > 0.0f && !tr_v3_is_zero(le)) {
+            float cs = tr_fabsf(v3_dot(w, tri->normal));
+            y0->beta = v3_scale(le, 1.0f / y0->pdf_fwd); /* Le / p(y_0) */
+            tr_vec3 beta = v3_scale(le, cs / (y0->pdf_fwd * pdf_dir));
+            tr_ray lr = tr_ray_make(tr_offset_origin(yp, n0), w, 0.0f, TR_INFINITY);
+            tr_bdpt_walk(s, lr, beta, pdf_dir, lv, &nl, max_depth, 1, smp, rays, 0);
+            if (nl >= 2) {
+                y0->pdf_nee = tr_bdpt_nee_pdf(s, y0, &lv[1]);
+            }
+        }
+    }
+
+    return nl;
+}
+
+/* One BDPT sample for the camera ray through raster point (x + jx, y + jy): returns what
+ * the camera-side strategies (t >= 2) bring to this pixel and splats the light-tracing
+ * ones (t = 1). Paths have at most max_depth segments (<= TR_BDPT_MAX_DEPTH). */
+TR_FN tr_vec3 tr_trace_bdpt(const tr_scene_view *s, const tr_camera *cam, float x, float y,
+                            int max_depth, const tr_sampler *smp, const tr_bdpt_splat *sp,
+                            tr_bdpt_select sel, uint32_t *rays, tr_sample *surface) {
+    tr_vec3 radiance = v3s(0.0f);
+    if (max_depth > TR_BDPT_MAX_DEPTH) {
+        max_depth = TR_BDPT_MAX_DEPTH;
+    }
+    tr_bdpt_vertex cv[TR_BDPT_MAX_VERTS], lv[TR_BDPT_MAX_VERTS];
+    int nc = tr_bdpt_camera_subpath(s, cam, x, y, max_depth, smp, cv, rays, surface);
+    int nl = tr_bdpt_light_subpath(s, max_depth, smp, lv, rays);
+
+    /* Every connection. */
+    for (int t = 1; t <= nc; ++t) {
+        for (int ns = 0; ns <= nl; ++ns) {
+            const int n = ns + t;
+            if (n < 2 || n - 1 > max_depth || (ns == 1 && t == 1)) {
+                continue;
+            }
+            if (sel.only_t > 0 && (ns != sel.only_s || t != sel.only_t)) {
+                continue;
+            }
+            const tr_bdpt_vertex *pt = &cv[t - 1];
+            tr_vec3 c = v3s(0.0f);
+            tr_bdpt_vertex nee;
+            const tr_bdpt_vertex *neep = 0;
+            int splat = 0;
+            float sx = 0.0f, sy = 0.0f;
+            if (ns == 0) {
+                if (t < 2) {
+                    continue;
+                }
+                c = v3_mul(pt->beta, tr_emitted(&pt->m, pt->wo));
+            } else if (t == 1) {
+                const tr_bdpt_vertex *qs = &lv[ns - 1];
+                if (ns < 2 || tr_bsdf_is_delta(&qs->m)) {
+                    continue;
+                }
+                tr_vec3 d = v3_sub(cam->pos, qs->p);
+                float dist = v3_length(d);
+                if (!(dist > cam->near_dist && dist < cam->far_dist)) {
+                    continue;
+                }
+                tr_vec3 w = v3_scale(d, 1.0f / dist);
+                float pdf;
+                float we = tr_bdpt_camera_we(cam, v3_neg(w), &sx, &sy, &pdf); /* We cos */
+                if (!(we > 0.0f)) {
+                    continue;
+                }
+                tr_vec3 f = v3_scale(tr_bsdf_eval(&qs->m, qs->wo, w),
+                                     tr_bdpt_shading_fix(&qs->m, qs->wo, w));
+                c = v3_scale(v3_mul(qs->beta, f),
+                             tr_fabsf(v3_dot(w, qs->m.ns)) * we / (dist * dist));
+                if (tr_v3_is_zero(c)) {
+                    continue;
+                }
+                tr_vec3 o = tr_surface_origin(&qs->m, qs->p, w);
+                tr_vec3 od = v3_sub(o, cam->pos);
+                float len = v3_length(od);
+                tr_ray sh = tr_ray_make(cam->pos, v3_scale(od, 1.0f / len), cam->near_dist,
+                                        len * (1.0f - 1e-4f));
+                *rays += 1;
+                if (tr_occluded_masked(s, &sh)) {
+                    continue;
+                }
+                splat = 1;
+            } else if (ns == 1) {
+                if (tr_bsdf_is_delta(&pt->m) || pt->m.type == TR_MATERIAL_EMITTER) {
+                    continue;
+                }
+                uint32_t lt;
+                tr_vec3 yl;
+                float lu, lvv, l1, l2;
+                tr_sampler_2d(smp, tr_sampler_dim(t - 1, TR_DIM_LIGHT), &l1, &l2);
+                float pl = tr_light_sample(s, pt->p, l1, l2, &lt, &yl, &lu, &lvv);
+                TR_CONST_GLOBAL tr_triangle *ltri = &s->triangles[lt];
+                tr_vec3 d = v3_sub(yl, pt->p);
+                float dist = v3_length(d);
+                if (!(pl > 0.0f) || !(dist > 0.0f)) {
+                    continue;
+                }
+                tr_vec3 wi = v3_scale(d, 1.0f / dist);
+                nee.m = tr_material_eval(s, lt, lu, lvv, yl, ltri->normal, wi);
+                tr_vec3 le = tr_emitted(&nee.m, v3_neg(wi));
+                tr_vec3 f = tr_bsdf_eval(&pt->m, pt->wo, wi);
+                if (tr_v3_is_zero(le) || tr_v3_is_zero(f)) {
+                    continue;
+                }
+                tr_vec3 o = tr_surface_origin(&pt->m, pt->p, wi);
+                tr_vec3 od = v3_sub(yl, o);
+                float len = v3_length(od);
+                tr_ray sh = tr_ray_make(o, v3_scale(od, 1.0f / len), 0.0f, len * (1.0f - 1e-4f));
+                *rays += 1;
+                if (tr_occluded_masked(s, &sh)) {
+                    continue;
+                }
+                c = v3_scale(v3_mul(v3_mul(pt->beta, f), le), tr_fabsf(v3_dot(wi, pt->m.ns)) / pl);
+                nee.p = yl;
+                nee.tri = lt;
+                nee.kind = TR_BDPT_LIGHT;
+                nee.delta = 0;
+                nee.wo = v3s(0.0f);
+                nee.beta = v3s(0.0f);
+                nee.pdf_rev = 0.0f;
+                nee.pdf_fwd = tr_bdpt_origin_pdf(s, &nee);
+                nee.pdf_nee = pl * tr_fabsf(v3_dot(wi, ltri->normal)) / (dist * dist);
+                neep = &nee;
+            } else {
+                const tr_bdpt_vertex *qs = &lv[ns - 1];
+                if (tr_bsdf_is_delta(&qs->m) || tr_bsdf_is_delta(&pt->m)) {
+                    continue;
+                }
+                tr_vec3 d = v3_sub(pt->p, qs->p);
+                float d2 = v3_dot(d, d);
+                if (!(d2 > 0.0f)) {
+                    continue;
+                }
+                tr_vec3 w = v3_scale(d, 1.0f / tr_sqrtf(d2));
+                tr_vec3 fq = v3_scale(tr_bsdf_eval(&qs->m, qs->wo, w),
+                                      tr_bdpt_shading_fix(&qs->m, qs->wo, w));
+                tr_vec3 fp = tr_bsdf_eval(&pt->m, pt->wo, v3_neg(w));
+                float g = tr_fabsf(v3_dot(w, qs->m.ns)) * tr_fabsf(v3_dot(w, pt->m.ns)) / d2;
+                c = v3_scale(v3_mul(v3_mul(qs->beta, fq), v3_mul(fp, pt->beta)), g);
+                if (tr_v3_is_zero(c)) {
+                    continue;
+                }
+                tr_vec3 o1 = tr_surface_origin(&qs->m, qs->p, w);
+                tr_vec3 o2 = tr_surface_origin(&pt->m, pt->p, v3_neg(w));
+                tr_vec3 od = v3_sub(o2, o1);
+                float len = v3_length(od);
+                if (!(len > 0.0f)) {
+                    continue;
+                }
+                tr_ray sh = tr_ray_make(o1, v3_scale(od, 1.0f / len), 0.0f, len * (1.0f - 1e-4f));
+                *rays += 1;
+                if (tr_occluded_masked(s, &sh)) {
+                    continue;
+                }
+            }
+            if (tr_v3_is_zero(c)) {
+                continue;
+            }
+            float w = sel.only_t > 0 ? 1.0f : tr_bdpt_mis_weight(s, cam, lv, ns, neep, cv, t);
+            c = v3_scale(c, w);
+            if (splat) {
+                tr_bdpt_splat_add(sp, sx, sy, c);
+            } else {
+                radiance = v3_add(radiance, c);
+            }
+        }
+    }
+    return radiance;
+}
+
+/* tr_render_grid_rows (kernel.h) for bdpt: grid points [gx0, gx1) x [gy0, gy1) of frame f,
+ * camera-side contributions into the film, light tracing into sp. Returns the rays. */
+TR_FN uint32_t tr_bdpt_render_grid_rows(const tr_scene_view *s, const tr_frame *f,
+                                        const tr_film_view *film, const tr_bdpt_splat *sp,
+                                        uint32_t gx0, uint32_t gy0, uint32_t gx1, uint32_t gy1) {
+    const tr_camera cam = f->camera;
+    const uint64_t seed = ((uint64_t)f->seed_hi << 32) | (uint64_t)f->seed_lo;
+    const uint32_t k = f->stride;
+    const uint32_t rx0 = f->rect_x, ry0 = f->rect_y;
+    const uint32_t rx1 = rx0 + f->rect_w, ry1 = ry0 + f->rect_h;
+    const tr_bdpt_select all = {0, 0};
+    uint32_t rays = 0;
+    for (uint32_t gy = gy0; gy < gy1; ++gy) {
+        const uint32_t y = gy * k;
+        const uint32_t by0 = y > ry0 ? y : ry0;
+        const uint32_t by1 = y + k < ry1 ? y + k : ry1;
+        for (uint32_t gx = gx0; gx < gx1; ++gx) {
+            const uint32_t x = gx * k;
+            const uint32_t bx0 = x > rx0 ? x : rx0;
+            const uint32_t bx1 = x + k < rx1 ? x + k : rx1;
+            const uint64_t pixel = (uint64_t)y * cam.screen_width + (uint64_t)x;
+            for (uint32_t n = 0; n < f->sample_count; ++n) {
+                tr_sample out;
+                tr_sample_clear(&out);
+                tr_sampler smp = tr_sampler_make(seed, pixel, f->sample + n);
+                out.radiance = tr_trace_bdpt(s, &cam, (float)x, (float)y, f->max_depth, &smp, sp,
+                                             all, &out.rays, f->passes != 0u ? &out : 0);
+                if (out.prim == 0u) {
+                    out.depth = 0.0f;
+                }
+                rays += out.rays;
+                tr_film_add_block(film, &out, bx0, by0, bx1, by1);
+            }
+        }
+    }
+    return rays;
+}
+
+#endif

@@ -1,0 +1,570 @@
+/* test_bdpt.c - the bdpt integrator (src/kernel/integrator_bdpt.h).
+ *
+ *  (a) MIS: for random paths (from real camera and light subpaths, in a box with a
+ *      two-sided and a one-sided lamp, diffuse, GGX, smooth-shaded, mirror and glass
+ *      surfaces), the power-heuristic weights of every strategy that can make the path sum
+ *      to one. Each strategy's subpaths are rebuilt with the densities its random walks
+ *      would store, and the weight the walks' own bookkeeping gives matches the rebuilt one.
+ *  (b) Each strategy (s, t) alone, unweighted, estimates the same image: for paths of 2 and
+ *      3 segments, every strategy's 8x8-region means agree with next-event estimation's
+ *      (s = 1) within 5 standard errors (from per-frame region means, fixed seeds).
+ *  (c) Light tracing alone (t = 1) reproduces rho / pi times Lambert's irradiance under a
+ *      square lamp (as test_pt's one-bounce case); a one-sided lamp turned away gives 0.
+ *  (d) Determinism: bit-identical films with 1, 2 and 3 threads (light tracing splats).
+ *  (e) bdpt and pt agree (region means within 5 standard errors) on every scene file in
+ *      scenes/; a scene bdpt cannot render (an environment light) must be refused with
+ *      TR_STATUS_UNSUPPORTED, as must a max depth beyond TR_MAX_DEPTH_BDPT. */
+#define _DEFAULT_SOURCE
+#include "check.h"
+#include "scene_util.h"
+#include "kernel/integrator_bdpt.h"
+#include "kernel/kernel.h"
+#include "scene/scene_internal.h"
+#include "trac0r/trac0r.h"
+
+#include <dirent.h>
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define PI_D 3.14159265358979323846
+#define NSIGMA 5.0
+
+/* A closed diffuse box [-1,1]^3 with a red block, a smooth-shaded diffuse sphere, a GGX
+ * sphere, a two-sided and a one-sided lamp (facing down); `specular` adds a glass sphere
+ * and a mirror. */
+static void build_box(tr_scene *s, int specular, uint32_t w, uint32_t h) {
+    tr_error err;
+    tr_scene_init(s);
+    uint32_t white = add_mat(s, tr_material_diffuse(v3(0.7f, 0.7f, 0.7f)));
+    uint32_t red = add_mat(s, tr_material_diffuse(v3(0.7f, 0.15f, 0.1f)));
+    tr_material lamp = tr_material_emitter(v3(1.0f, 0.9f, 0.7f), 8.0f);
+    lamp.flags = TR_MATERIAL_TWO_SIDED;
+    uint32_t l1 = add_mat(s, lamp);
+    uint32_t l2 = add_mat(s, tr_material_emitter(v3(0.3f, 0.5f, 1.0f), 6.0f));
+    uint32_t g = add_mat(s, tr_material_glossy(v3(0.9f, 0.8f, 0.6f), 0.4f));
+    add_shape(s, TR_SHAPE_BOX, white, v3(0, 0, 0), v3(0, 0, 0), v3(2, 2, 2));
+    add_shape(s, TR_SHAPE_BOX, red, v3(0.3f, -0.6f, 0.4f), v3(0, 0.5f, 0), v3(0.6f, 0.8f, 0.6f));
+    add_shape(s, TR_SHAPE_PLANE, l1, v3(-0.3f, 0.9f, 0.2f), v3((float)PI_D, 0, 0),
+              v3(0.6f, 1, 0.5f));
+    add_shape(s, TR_SHAPE_PLANE, l2, v3(0.5f, 0.95f, -0.5f), v3((float)PI_D, 0, 0),
+              v3(0.3f, 1, 0.3f));
+    add_shape(s, TR_SHAPE_ICOSPHERE, g, v3(-0.4f, -0.6f, 0.1f), v3(0, 0, 0), v3s(0.35f));
+    add_shape(s, TR_SHAPE_ICOSPHERE_SMOOTH, white, v3(0.6f, -0.1f, -0.2f), v3(0, 0, 0), v3s(0.2f));
+    if (specular) {
+        uint32_t glass = add_mat(s, tr_material_glass(v3(1.0f, 1.0f, 1.0f), 1.5f));
+        uint32_t mirror = add_mat(s, tr_material_glossy(v3(0.9f, 0.9f, 0.9f), 0.0f));
+        add_shape(s, TR_SHAPE_ICOSPHERE, glass, v3(-0.5f, -0.1f, 0.5f), v3(0, 0, 0), v3s(0.25f));
+        add_shape(s, TR_SHAPE_PLANE, mirror, v3(0.0f, 0.0f, 0.98f), v3((float)PI_D / 2.0f, 0, 0),
+                  v3(1.2f, 1, 1.2f));
+    }
+    CHECK(tr_camera_make(&s->camera, v3(0.0f, 0.0f, -0.95f), v3(0.0f, -0.1f, 1.0f),
+                         v3(0.0f, 1.0f, 0.0f), 80.0f, 0.001f, 100.0f, w, h, &err) == TR_OK,
+          "camera: %s", err.msg);
+    CHECK(tr_scene_commit(s, TR_ACCEL_TYPE_BVH, &err) == TR_OK, "commit: %s", err.msg);
+}
+
+/* (a) ---------------------------------------------------------------------------------- */
+
+static int vtx_delta(const tr_bdpt_vertex *v) {
+    return v->kind == TR_BDPT_SURFACE && tr_bsdf_is_delta(&v->m);
+}
+
+/* Whether the integrator tries strategy k (light vertices) on path P of n vertices. */
+static int strategy_used(const tr_bdpt_vertex *P, int n, int k) {
+    if (k >= n || (k == 1 && n == 2)) {
+        return 0;
+    }
+    if (vtx_delta(&P[k]) || (k >= 1 && vtx_delta(&P[k - 1]))) {
+        return 0;
+    }
+    return 1;
+}
+
+/* The weight of strategy k for path P (P[0] on an emitter, P[n-1] the pinhole), with the
+ * subpaths rebuilt as the random walks would have stored them. */
+static float rebuilt_weight(const tr_scene_view *v, const tr_camera *cam, const tr_bdpt_vertex *P,
+                            int n, int k) {
+    tr_bdpt_vertex L[2 * TR_BDPT_MAX_VERTS], C[2 * TR_BDPT_MAX_VERTS], PL[2 * TR_BDPT_MAX_VERTS];
+    for (int i = 0; i < n; ++i) {
+        PL[i] = P[i];
+        PL[i].kind = i == 0 ? TR_BDPT_LIGHT : (i == n - 1 ? TR_BDPT_CAMERA : TR_BDPT_SURFACE);
+        PL[i].delta = vtx_delta(&PL[i]);
+    }
+    /* Light side densities of P[i] (drawn from P[i-1]) and camera side (from P[i+1]). */
+    float fl[2 * TR_BDPT_MAX_VERTS], fc[2 * TR_BDPT_MAX_VERTS];
+    for (int i = 0; i < n; ++i) {
+        fl[i] = i == 0 ? tr_bdpt_origin_pdf(v, &PL[0])
+                       : tr_bdpt_pdf(cam, &PL[i - 1], i >= 2 ? &PL[i - 2] : NULL, &PL[i]);
+        fc[i] = i == n - 1
+                    ? 1.0f
+                    : tr_bdpt_pdf(cam, &PL[i + 1], i + 2 <= n - 1 ? &PL[i + 2] : NULL, &PL[i]);
+    }
+    for (int i = 0; i < k; ++i) {
+        L[i] = PL[i];
+        L[i].pdf_fwd = fl[i];
+        L[i].pdf_rev = fc[i];
+    }
+    if (k >= 1 && n >= 2) {
+        L[0].pdf_nee = tr_bdpt_nee_pdf(v, &PL[0], &PL[1]);
+    }
+    for (int j = 0; j < n - k; ++j) {
+        int i = n - 1 - j;
+        C[j] = PL[i];
+        if (i == 0) {
+            C[j].kind = TR_BDPT_SURFACE; /* the camera subpath found the emitter */
+        }
+        C[j].pdf_fwd = fc[i];
+        C[j].pdf_rev = fl[i];
+    }
+    return tr_bdpt_mis_weight(v, cam, L, k, k == 1 ? &L[0] : NULL, C, n - k);
+}
+
+static void mis_sum(void) {
+    tr_scene s = {0};
+    build_box(&s, 1, 8, 8);
+    tr_scene_view v = tr_scene_view_of(&s);
+    const tr_camera *cam = &s.camera;
+    const int depth = 8;
+    int paths = 0, bad = 0, bookkeeping_bad = 0, with_delta = 0;
+    double worst = 0.0;
+    for (uint32_t k = 0; k < 3000; ++k) {
+        tr_sampler smp = tr_sampler_make(77, k % 64u, k);
+        tr_bdpt_vertex cv[TR_BDPT_MAX_VERTS], lv[TR_BDPT_MAX_VERTS];
+        uint32_t rays = 0;
+        int nc = tr_bdpt_camera_subpath(&v, cam, (float)(k % 8u), (float)((k / 8u) % 8u), depth,
+                                        &smp, cv, &rays, NULL);
+        int nl = tr_bdpt_light_subpath(&v, depth, &smp, lv, &rays);
+        for (int t = 1; t <= nc; ++t) {
+            for (int ns = 2; ns <= nl; ++ns) {
+                const int n = ns + t;
+                if (n - 1 > depth || vtx_delta(&lv[ns - 1]) || vtx_delta(&cv[t - 1]) ||
+                    lv[ns - 1].m.type == TR_MATERIAL_EMITTER ||
+                    cv[t - 1].m.type == TR_MATERIAL_EMITTER) {
+                    continue;
+                }
+                tr_bdpt_vertex P[2 * TR_BDPT_MAX_VERTS];
+                int has_delta = 0;
+                for (int i = 0; i < n; ++i) {
+                    P[i] = i < ns ? lv[i] : cv[n - 1 - i];
+                    has_delta |= vtx_delta(&P[i]);
+                }
+                double sum = 0.0;
+                for (int kk = 0; kk < n; ++kk) {
+                    if (strategy_used(P, n, kk)) {
+                        float w = rebuilt_weight(&v, cam, P, n, kk);
+                        sum += w;
+                    }
+                }
+                /* The walks' stored densities give the weight the rebuilt subpaths give. */
+                float w_walk = tr_bdpt_mis_weight(&v, cam, lv, ns, NULL, cv, t);
+                float w_rebuilt = rebuilt_weight(&v, cam, P, n, ns);
+                bookkeeping_bad += !(fabsf(w_walk - w_rebuilt) <= 1e-3f * fmaxf(1.0f, w_rebuilt));
+                double dev = fabs(sum - 1.0);
+                worst = dev > worst ? dev : worst;
+                bad += !(dev <= 2e-3);
+                ++paths;
+                with_delta += has_delta;
+            }
+        }
+    }
+    CHECK(paths > 2000 && with_delta > 100 && bad == 0,
+          "MIS weights: %d of %d paths (%d through mirror or glass) do not sum to 1 (worst %.2e)",
+          bad, paths, with_delta, worst);
+    CHECK(bookkeeping_bad == 0, "%d of %d paths: the walks' densities give another weight",
+          bookkeeping_bad, paths);
+    printf("MIS: %d paths (%d through delta vertices), worst |sum - 1| = %.2e\n", paths, with_delta,
+           worst);
+    tr_scene_free(&s);
+}
+
+/* Region statistics ---------------------------------------------------------------------- */
+
+enum { RW = 16, RH = 16, RS = 8, NR = (RW / RS) * (RH / RS) };
+
+typedef struct region_stats {
+    double mean[NR][3];
+    double se[NR][3];
+} region_stats;
+
+typedef struct region_acc {
+    double s1[NR][3], s2[NR][3];
+    int frames;
+} region_acc;
+
+static void acc_frame(region_acc *a, const double *img) {
+    double reg[NR][3] = {{0}};
+    for (int y = 0; y < RH; ++y) {
+        for (int x = 0; x < RW; ++x) {
+            int r = (y / RS) * (RW / RS) + x / RS;
+            for (int c = 0; c < 3; ++c) {
+                reg[r][c] += img[3 * (y * RW + x) + c] / (RS * RS);
+            }
+        }
+    }
+    for (int r = 0; r < NR; ++r) {
+        for (int c = 0; c < 3; ++c) {
+            a->s1[r][c] += reg[r][c];
+            a->s2[r][c] += reg[r][c] * reg[r][c];
+        }
+    }
+    a->frames++;
+}
+
+static region_stats acc_stats(const region_acc *a) {
+    region_stats st;
+    const double f = a->frames;
+    for (int r = 0; r < NR; ++r) {
+        for (int c = 0; c < 3; ++c) {
+            double m = a->s1[r][c] / f;
+            double var = fmax(0.0, a->s2[r][c] / f - m * m) * f / (f - 1.0);
+            st.mean[r][c] = m;
+            st.se[r][c] = sqrt(var / f);
+        }
+    }
+    return st;
+}
+
+/* Region means of a and b agree within NSIGMA standard errors; returns the worst z. */
+static double compare_regions(const char *what, const region_stats *a, const region_stats *b) {
+    int bad = 0;
+    double worst = 0.0;
+    for (int r = 0; r < NR; ++r) {
+        for (int c = 0; c < 3; ++c) {
+            double se = sqrt(a->se[r][c] * a->se[r][c] + b->se[r][c] * b->se[r][c]);
+            double d = fabs(a->mean[r][c] - b->mean[r][c]);
+            double z = se > 0.0 ? d / se : (d > 0.0 ? 1e9 : 0.0);
+            worst = z > worst ? z : worst;
+            bad += !(z <= NSIGMA);
+        }
+    }
+    CHECK(bad == 0, "%s: %d of %d region means differ by more than %.0f sigma (worst %.2f)", what,
+          bad, 3 * NR, NSIGMA, worst);
+    return worst;
+}
+
+/* One frame (one sample per pixel, sample index `frame`) of the whole RW x RH image with
+ * strategy selection sel, single-threaded, splats folded in (scale 1: every pixel traced). */
+static void bdpt_frame(const tr_scene_view *v, const tr_camera *cam, int depth, uint64_t seed,
+                       uint32_t frame, tr_bdpt_select sel, double *img, int64_t *splat) {
+    memset(splat, 0, sizeof(int64_t) * 3 * RW * RH);
+    tr_bdpt_splat sp = {splat, 0, 0, RW, RH};
+    for (uint32_t y = 0; y < RH; ++y) {
+        for (uint32_t x = 0; x < RW; ++x) {
+            tr_sampler smp = tr_sampler_make(seed, (uint64_t)y * RW + x, frame);
+            uint32_t rays = 0;
+            tr_vec3 c =
+                tr_trace_bdpt(v, cam, (float)x, (float)y, depth, &smp, &sp, sel, &rays, NULL);
+            img[3 * (y * RW + x)] = c.x;
+            img[3 * (y * RW + x) + 1] = c.y;
+            img[3 * (y * RW + x) + 2] = c.z;
+        }
+    }
+    for (int i = 0; i < 3 * RW * RH; ++i) {
+        img[i] += (double)splat[i] / TR_BDPT_SPLAT_ONE;
+    }
+}
+
+/* (b) ---------------------------------------------------------------------------------- */
+
+static void strategies(void) {
+    tr_scene s = {0};
+    build_box(&s, 0, RW, RH);
+    tr_scene_view v = tr_scene_view_of(&s);
+    static double img[3 * RW * RH];
+    static int64_t splat[3 * RW * RH];
+    const int frames = 160;
+    for (int n = 3; n <= 4; ++n) {
+        static region_acc acc[5];
+        memset(acc, 0, sizeof acc);
+        for (int k = 0; k < n; ++k) {
+            if (k == 1 && n == 2) {
+                continue;
+            }
+            tr_bdpt_select sel = {k, n - k};
+            for (int f = 0; f < frames; ++f) {
+                bdpt_frame(&v, &s.camera, n - 1, 0x5eedULL + (uint64_t)k, (uint32_t)f, sel, img,
+                           splat);
+                acc_frame(&acc[k], img);
+            }
+        }
+        region_stats ref = acc_stats(&acc[1]);
+        int lit = 0;
+        for (int r = 0; r < NR; ++r) {
+            lit += ref.mean[r][0] > 0.0 && ref.mean[r][2] > 0.0;
+        }
+        CHECK(lit == NR, "paths of %d vertices: only %d of %d regions lit", n, lit, NR);
+        for (int k = 0; k < n; ++k) {
+            if (k == 1) {
+                continue;
+            }
+            char what[64];
+            snprintf(what, sizeof what, "strategy (%d, %d) vs (1, %d)", k, n - k, n - 1);
+            region_stats st = acc_stats(&acc[k]);
+            double z = compare_regions(what, &st, &ref);
+            printf("%s: worst %.2f sigma\n", what, z);
+        }
+    }
+    tr_scene_free(&s);
+}
+
+/* (c) ---------------------------------------------------------------------------------- */
+
+static double lambert_irradiance(const double (*vtx)[3], int nv, const double x[3], double L) {
+    double sum = 0.0;
+    for (int i = 0; i < nv; ++i) {
+        const double *p0 = vtx[i], *p1 = vtx[(i + 1) % nv];
+        double a[3] = {p0[0] - x[0], p0[1] - x[1], p0[2] - x[2]};
+        double b[3] = {p1[0] - x[0], p1[1] - x[1], p1[2] - x[2]};
+        double la = sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+        double lb = sqrt(b[0] * b[0] + b[1] * b[1] + b[2] * b[2]);
+        double cy = a[2] * b[0] - a[0] * b[2];
+        double cx = a[1] * b[2] - a[2] * b[1], cz = a[0] * b[1] - a[1] * b[0];
+        double lc = sqrt(cx * cx + cy * cy + cz * cz);
+        sum += acos((a[0] * b[0] + a[1] * b[1] + a[2] * b[2]) / (la * lb)) * cy / lc;
+    }
+    return 0.5 * L * fabs(sum);
+}
+
+static void light_tracing(void) {
+    const double rho = 0.6, L = 5.0, hs = 0.3, h = 0.8;
+    const double vtx[4][3] = {{-hs, h, -hs}, {hs, h, -hs}, {hs, h, hs}, {-hs, h, hs}};
+    static double img[3 * RW * RH];
+    static int64_t splat[3 * RW * RH];
+    /* 0: lamp faces down; 1: one-sided, faces up; 2: two-sided, faces up. */
+    for (int variant = 0; variant < 3; ++variant) {
+        tr_scene s = {0};
+        tr_scene_init(&s);
+        tr_error err;
+        uint32_t floor_m = add_mat(&s, tr_material_diffuse(v3s((float)rho)));
+        tr_material lm = tr_material_emitter(v3s(1.0f), (float)L);
+        lm.flags = variant == 2 ? TR_MATERIAL_TWO_SIDED : 0u;
+        uint32_t lamp = add_mat(&s, lm);
+        add_shape(&s, TR_SHAPE_PLANE, floor_m, v3(0, 0, 0), v3(0, 0, 0), v3(4.0f, 1, 4.0f));
+        add_shape(&s, TR_SHAPE_PLANE, lamp, v3(0, (float)h, 0),
+                  v3(variant == 0 ? (float)PI_D : 0.0f, 0, 0),
+                  v3(2.0f * (float)hs, 1, 2.0f * (float)hs));
+        /* Looking down at the floor from beside the lamp, with a wide lens: the camera's
+         * importance varies by a third across the image. */
+        CHECK(tr_camera_make(&s.camera, v3(1.2f, 0.6f, -1.0f), v3(-1.0f, -0.6f, 0.8f), v3(0, 1, 0),
+                             60.0f, 0.001f, 100.0f, RW, RH, &err) == TR_OK,
+              "camera: %s", err.msg);
+        CHECK(tr_scene_commit(&s, TR_ACCEL_TYPE_BVH, &err) == TR_OK, "commit: %s", err.msg);
+        tr_scene_view v = tr_scene_view_of(&s);
+        /* The expected image: rho / pi E at 4x4 points inside each pixel where the
+         * camera ray meets the floor (y = 0). */
+        static double expect[3 * RW * RH];
+        for (uint32_t y = 0; y < RH; ++y) {
+            for (uint32_t x = 0; x < RW; ++x) {
+                double e = 0.0;
+                for (int j = 0; j < 16; ++j) {
+                    tr_ray r =
+                        tr_camera_ray(&s.camera, (float)x, (float)y, ((float)(j % 4) + 0.5f) / 4.0f,
+                                      ((float)(j / 4) + 0.5f) / 4.0f);
+                    double t = -r.origin.y / r.dir.y;
+                    double p[3] = {r.origin.x + t * r.dir.x, 0.0, r.origin.z + t * r.dir.z};
+                    int on_floor = t > 0.0 && fabs(p[0]) < 2.0 && fabs(p[2]) < 2.0;
+                    e += on_floor ? rho / PI_D * lambert_irradiance(vtx, 4, p, L) / 16.0 : 0.0;
+                }
+                expect[3 * (y * RW + x)] = variant == 1 ? 0.0 : e;
+            }
+        }
+        region_acc acc;
+        memset(&acc, 0, sizeof acc);
+        tr_bdpt_select sel = {2, 1};
+        const int frames = variant == 1 ? 8 : 400;
+        int64_t nonzero = 0;
+        for (int f = 0; f < frames; ++f) {
+            bdpt_frame(&v, &s.camera, 2, 0x1a9ULL, (uint32_t)f, sel, img, splat);
+            for (int i = 0; i < RW * RH; ++i) {
+                nonzero += img[3 * i] != 0.0;
+            }
+            acc_frame(&acc, img);
+        }
+        region_stats got = acc_stats(&acc);
+        if (variant == 1) {
+            CHECK(nonzero == 0, "one-sided lamp facing away: %lld pixel samples lit",
+                  (long long)nonzero);
+        } else {
+            region_acc ea;
+            memset(&ea, 0, sizeof ea);
+            acc_frame(&ea, expect);
+            acc_frame(&ea, expect);
+            for (int r = 0; r < NR; ++r) {
+                double m = ea.s1[r][0] / 2.0;
+                double d = fabs(got.mean[r][0] - m);
+                CHECK(m > 0.0 && d <= NSIGMA * got.se[r][0] && got.se[r][0] < 0.03 * m,
+                      "lamp variant %d, region %d: light tracing %.5f +- %.5f vs rho/pi E = %.5f",
+                      variant, r, got.mean[r][0], got.se[r][0], m);
+            }
+        }
+        tr_scene_free(&s);
+    }
+}
+
+/* (d) ---------------------------------------------------------------------------------- */
+
+static void determinism(void) {
+    tr_scene s = {0};
+    build_box(&s, 1, 24, 20);
+    tr_error err;
+    tr_film films[3];
+    for (int i = 0; i < 3; ++i) {
+        CHECK(tr_film_init(&films[i], 24, 20, &err) == TR_OK, "film: %s", err.msg);
+        tr_render_config cfg = tr_render_config_default();
+        cfg.integrator = TR_INTEGRATOR_BDPT;
+        cfg.seed = 99;
+        cfg.threads = i + 1;
+        cfg.tile = 4; /* many tiles, so threads interleave their splats */
+        for (uint32_t f = 0; f < 3; ++f) {
+            CHECK(tr_render_frame(&s, &s.camera, &cfg, &films[i], f, NULL, &err) == TR_OK,
+                  "render: %s", err.msg);
+        }
+    }
+    const size_t n = 3u * 24u * 20u;
+    double total = 0.0;
+    for (size_t k = 0; k < n; ++k) {
+        total += films[0].sum[k];
+    }
+    CHECK(total > 0.0, "the film is black");
+    for (int i = 1; i < 3; ++i) {
+        CHECK(memcmp(films[0].sum, films[i].sum, n * sizeof(float)) == 0,
+              "bdpt with %d threads differs from 1 thread", i + 1);
+        tr_film_free(&films[i]);
+    }
+    tr_film_free(&films[0]);
+    tr_scene_free(&s);
+}
+
+/* (e) ---------------------------------------------------------------------------------- */
+
+/* Frames of one sample per pixel of integrator `integrator` into region statistics;
+ * returns the status of the first frame that failed (TR_OK when none). */
+static int run(const tr_scene *s, const tr_camera *cam, int integrator, int depth, int frames,
+               uint64_t seed, region_stats *out, tr_error *err) {
+    tr_film film;
+    CHECK(tr_film_init(&film, RW, RH, err) == TR_OK, "film: %s", err->msg);
+    tr_render_config cfg = tr_render_config_default();
+    cfg.integrator = integrator;
+    cfg.max_depth = depth;
+    cfg.seed = seed;
+    static region_acc acc;
+    static double img[3 * RW * RH];
+    memset(&acc, 0, sizeof acc);
+    int rc = TR_OK;
+    for (int f = 0; f < frames && rc == TR_OK; ++f) {
+        tr_film_clear(&film);
+        if (tr_render_frame(s, cam, &cfg, &film, (uint32_t)f, NULL, err) != TR_OK) {
+            rc = err->code;
+            break;
+        }
+        for (uint32_t y = 0; y < RH; ++y) {
+            for (uint32_t x = 0; x < RW; ++x) {
+                tr_vec3 c = tr_film_pixel(&film, x, y);
+                img[3 * (y * RW + x)] = c.x;
+                img[3 * (y * RW + x) + 1] = c.y;
+                img[3 * (y * RW + x) + 2] = c.z;
+            }
+        }
+        acc_frame(&acc, img);
+    }
+    if (rc == TR_OK) {
+        *out = acc_stats(&acc);
+    }
+    tr_film_free(&film);
+    return rc;
+}
+
+static int by_name(const void *a, const void *b) {
+    return strcmp(*(const char *const *)a, *(const char *const *)b);
+}
+
+static void shipped_scenes(void) {
+    DIR *d = opendir(TR_SOURCE_DIR "/scenes");
+    CHECK(d != NULL, "cannot list %s/scenes", TR_SOURCE_DIR);
+    if (!d) {
+        return;
+    }
+    char *names[64];
+    int count = 0;
+    struct dirent *e;
+    while ((e = readdir(d)) != NULL && count < 64) {
+        size_t len = strlen(e->d_name);
+        if (len > 5 && strcmp(e->d_name + len - 5, ".json") == 0) {
+            names[count++] = strdup(e->d_name);
+        }
+    }
+    closedir(d);
+    qsort(names, (size_t)count, sizeof *names, by_name);
+    int glass_seen = 0;
+    for (int i = 0; i < count; ++i) {
+        char path[512];
+        snprintf(path, sizeof path, "%s/scenes/%s", TR_SOURCE_DIR, names[i]);
+        glass_seen |= strcmp(names[i], "cornell-glass.json") == 0;
+        tr_error err;
+        tr_scene *s = tr_scene_create(&err);
+        CHECK(s != NULL, "scene: %s", err.msg);
+        const char *note = "";
+        if (tr_scene_file_load(s, path, NULL, NULL, &err) != TR_OK) {
+            /* A model the file links to may not be installed here: the room without it. */
+            tr_scene_file_options opt = {0, 0};
+            CHECK(tr_scene_file_load(s, path, &opt, NULL, &err) == TR_OK, "%s", err.msg);
+            note = " (without its mesh files)";
+        }
+        tr_camera cam = *tr_scene_camera(s);
+        CHECK(tr_camera_resize(&cam, RW, RH, &err) == TR_OK, "%s", err.msg);
+        CHECK(tr_scene_commit(s, TR_ACCEL_TYPE_BVH, &err) == TR_OK, "%s: %s", path, err.msg);
+        tr_scene_view v = tr_scene_view_of(s);
+        static region_stats a, b;
+        const int depth = 6, frames = 48;
+        int rc = run(s, &cam, TR_INTEGRATOR_BDPT, depth, frames, 0xb1ULL, &b, &err);
+        if (v.env_count > 0u) {
+            CHECK(rc == TR_STATUS_UNSUPPORTED, "%s: bdpt with an environment light gave status %d",
+                  names[i], rc);
+            printf("%s%s: environment light, refused by bdpt as it should be\n", names[i], note);
+        } else {
+            CHECK(rc == TR_OK, "%s: bdpt: %s", names[i], err.msg);
+            CHECK(run(s, &cam, TR_INTEGRATOR_PT, depth, frames, 0xa1ULL, &a, &err) == TR_OK,
+                  "%s: pt: %s", names[i], err.msg);
+            double z = compare_regions(names[i], &a, &b);
+            printf("%s%s: worst |pt - bdpt| = %.2f sigma\n", names[i], note, z);
+        }
+        tr_scene_destroy(s);
+        free(names[i]);
+    }
+    CHECK(count >= 5 && glass_seen, "%d scene files, cornell-glass.json %s", count,
+          glass_seen ? "among them" : "missing");
+}
+
+/* Settings bdpt refuses. */
+static void refusals(void) {
+    tr_scene s = {0};
+    build_box(&s, 0, 8, 8);
+    tr_error err;
+    tr_film film;
+    CHECK(tr_film_init(&film, 8, 8, &err) == TR_OK, "film: %s", err.msg);
+    tr_render_config cfg = tr_render_config_default();
+    cfg.integrator = TR_INTEGRATOR_BDPT;
+    cfg.max_depth = TR_MAX_DEPTH_BDPT + 1;
+    CHECK(tr_render_frame(&s, &s.camera, &cfg, &film, 0, NULL, &err) == TR_ERR &&
+              err.code == TR_STATUS_LIMIT,
+          "max depth %d accepted", cfg.max_depth);
+    cfg.max_depth = 0;
+    CHECK(tr_default_max_depth(TR_INTEGRATOR_BDPT) == TR_MAX_DEPTH_BDPT &&
+              tr_render_frame(&s, &s.camera, &cfg, &film, 0, NULL, &err) == TR_OK,
+          "default depth: %s", err.msg);
+    tr_film_free(&film);
+    tr_scene_free(&s);
+}
+
+int main(void) {
+    refusals();
+    mis_sum();
+    light_tracing();
+    strategies();
+    determinism();
+    shipped_scenes();
+    return check_finish("test_bdpt");
+}
