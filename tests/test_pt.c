@@ -250,22 +250,6 @@ static void unbiased(const char *name, const tr_scene *s, int depth, int naive_f
  * segment to the lamp by either strategy) the pixel's radiance is rho / pi * E(x), E
  * from Lambert's polygon formula. A one-sided lamp turned away gives exactly 0; a
  * two-sided one turned away gives the same as one facing the floor. */
-static double lambert_irradiance(const double (*vtx)[3], int nv, const double x[3], double L) {
-    double sum = 0.0;
-    for (int i = 0; i < nv; ++i) {
-        const double *p0 = vtx[i], *p1 = vtx[(i + 1) % nv];
-        double a[3] = {p0[0] - x[0], p0[1] - x[1], p0[2] - x[2]};
-        double b[3] = {p1[0] - x[0], p1[1] - x[1], p1[2] - x[2]};
-        double la = sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
-        double lb = sqrt(b[0] * b[0] + b[1] * b[1] + b[2] * b[2]);
-        double cy = a[2] * b[0] - a[0] * b[2];
-        double cx = a[1] * b[2] - a[2] * b[1], cz = a[0] * b[1] - a[1] * b[0];
-        double lc = sqrt(cx * cx + cy * cy + cz * cz);
-        sum += acos((a[0] * b[0] + a[1] * b[1] + a[2] * b[2]) / (la * lb)) * cy / lc;
-    }
-    return 0.5 * L * fabs(sum);
-}
-
 static void one_bounce(void) {
     const double rho = 0.6, L = 5.0, hs = 0.3, h = 0.8;
     const double vtx[4][3] = {{-hs, h, -hs}, {hs, h, -hs}, {hs, h, hs}, {-hs, h, hs}};
