@@ -21,7 +21,7 @@ FLAGS="-std=c11 -g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recover
 SCENE="src/scene/json.c src/scene/scene.c src/scene/shape.c src/scene/camera.c
     src/scene/lights.c src/accel/bvh.c src/accel/wbvh.c src/accel/wbvh_scalar.c
     src/accel/embree.c src/util/error.c src/util/registry.c src/scene/material_registry.c
-    src/io/infile.c src/scene/texture.c src/scene/envmap.c src/scene/sun.c"
+    src/io/infile.c src/scene/texture.c src/scene/envmap.c src/scene/sun.c src/scene/light_tree.c"
 # shellcheck disable=SC2046,SC2086
 "$CC" $FLAGS $(pkg-config --cflags libcjson) fuzz/fuzz_scene_json.c $SCENE \
     $(pkg-config --libs libcjson) -lm -o "$OUT/fuzz_scene_json"
@@ -45,5 +45,5 @@ SCENE="src/scene/json.c src/scene/scene.c src/scene/shape.c src/scene/camera.c
 "$CC" $FLAGS -fno-sanitize=pointer-overflow,nonnull-attribute fuzz/fuzz_texture.c src/scene/texture.c src/scene/scene.c src/scene/shape.c \
     src/scene/lights.c src/accel/bvh.c src/accel/wbvh.c src/accel/wbvh_scalar.c \
     src/accel/embree.c src/util/error.c src/util/registry.c src/scene/material_registry.c \
-    src/io/infile.c -lm -o "$OUT/fuzz_texture"
+    src/io/infile.c src/scene/light_tree.c -lm -o "$OUT/fuzz_texture"
 echo "built $OUT/fuzz_scene_json $OUT/fuzz_mesh $OUT/fuzz_mesh_guard $OUT/fuzz_image $OUT/fuzz_texture"
