@@ -302,8 +302,8 @@ int tr_scene_build_light_tree(tr_scene *s, tr_error *err) {
             bounds *b = &prim[k];
             const float *v[3] = {&t->v0.x, &t->v1.x, &t->v2.x};
             for (int i = 0; i < 3; ++i) {
-                b->lo[i] = fmin(fmin(v[0][i], v[1][i]), v[2][i]);
-                b->hi[i] = fmax(fmax(v[0][i], v[1][i]), v[2][i]);
+                b->lo[i] = fminf(fminf(v[0][i], v[1][i]), v[2][i]);
+                b->hi[i] = fmaxf(fmaxf(v[0][i], v[1][i]), v[2][i]);
             }
             b->power = tr_light_weight(m, t->area);
             b->c.axis[0] = t->normal.x;
