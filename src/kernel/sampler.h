@@ -23,7 +23,9 @@
  * white rather than blue, but every pixel keeps the full (0,2) stratification for any
  * power-of-two count, the image size and sample count need not be powers of two, and a
  * pixel's sequence does not change when the resolution does (tiles, strides and
- * distributed rectangles address pixels by index).
+ * distributed rectangles address pixels by index). `--sampler zsobol` (sampler_z.h) is the
+ * screen-space alternative: the same points per pixel, digitally shifted by the pixel's
+ * point in a Z-ordered net, so that neighbours' errors are blue noise.
  *
  * Sobol's generator matrices for dimensions 0 and 1 are derived here, not tabulated:
  * dimension 0 is the identity (the bit-reversed index), dimension 1 comes from the
