@@ -114,7 +114,11 @@ expect_usage_error "'trees'" $R --light-sampling trees
 "$BIN" render --width 8 --height 6 --spp 2 --out r.pfm --sampler random 2>/dev/null ||
     fail "render --sampler random failed"
 cmp -s s.pfm r.pfm && fail "--sampler random rendered the Sobol sampler's image"
-rm -f s.pfm r.pfm
+"$BIN" render --width 8 --height 6 --spp 2 --out d.pfm 2>/dev/null || fail "render failed"
+"$BIN" render --width 8 --height 6 --spp 2 --out z.pfm --sampler zsobol 2>/dev/null ||
+    fail "render --sampler zsobol failed"
+cmp -s d.pfm z.pfm && fail "--sampler zsobol rendered the Sobol sampler's image"
+rm -f s.pfm r.pfm d.pfm z.pfm
 
 # A file that exists already is replaced only by a complete image.
 "$BIN" render --width 8 --height 6 --spp 1 --out ok.png --width 0 2>/dev/null

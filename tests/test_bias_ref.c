@@ -1,20 +1,22 @@
 /* test_bias_ref.c - issue 15's bias target: every 8x8 block mean of pt's default render
- * within 3 % of a high-spp reference, at low resolution, with a bound from the variance.
+ * within 3 % of a 16384-spp reference, at low resolution, with a bound from the variance.
  *
- * The classic Cornell box (scenes/cornell-classic.json) at 24 x 24 pixels: 9 blocks.
- *  - Reference: 2048 samples per pixel (131 072 per block: 8 times fewer per pixel than
- *    the issue's 16384-spp reference at 256 x 256, but the same order per block, which is
- *    what a block mean's error depends on), by another estimator than the one tested:
- *    independent random numbers (--sampler random) and max depth 1024 (no path of this
- *    scene gets that far), in 8 chunks with their own seeds.
- *  - Tested: the defaults (Sobol sampler, max depth 64), 8 seeds of 32 spp.
+ * The classic Cornell box (scenes/cornell-classic.json) at 16 x 16 pixels: 4 blocks.
+ *  - Reference: 16384 samples per pixel (1 048 576 per block), by another estimator than
+ *    the one tested: independent random numbers (--sampler random) and max depth 1024 (no
+ *    path of this scene gets that far), in 8 chunks of 2048 with their own seeds. 16 x 16
+ *    rather than the 24 x 24 of the 2048-spp reference this test had: 4.2 M reference
+ *    samples, 5 s of CPU time in a release build (9.4 M at 24 x 24 would take about 20 s
+ *    on two cores). Each render is one device call (tr_device_render with a sample count):
+ *    a frame per sample spends more on starting threads than on 256 pixels' paths.
+ *  - Tested: the defaults (Sobol sampler, max depth 64), 8 seeds of 64 spp.
  * Standard errors come from the spread over the chunks and seeds (Student's t, 7 degrees of
  * freedom each). Every block must be within 3 % of the reference AND within 6 combined
  * standard errors of it (two-sided p < 1e-3 per block). The same check on max depth 4
- * (16 % dark in places) must fail in some block: the test sees a bias of that kind. Max
- * depth 8, the former default, is 1.8 % dark in the worst block here, which the 6-se
- * bound catches at these counts. Sanitizer builds (ASan's slowdown) take half the
- * samples. */
+ * (14 % dark in every block) must fail in some block: the test sees a bias of that kind. Max
+ * depth 8, the former default, is 0.9 % dark in the worst block at this size (its dark
+ * corners are a small part of a quarter of the image), which neither bound catches.
+ * Sanitizer builds (ASan's slowdown) take half the samples: an 8192-spp reference. */
 #include "check.h"
 #include "trac0r/trac0r.h"
 
@@ -28,7 +30,7 @@
 #define SAMPLE_SHIFT 0
 #endif
 
-enum { W = 24, H = 24, B = 8, NB = (W / B) * (H / B), R = 8 };
+enum { W = 16, H = 16, B = 8, NB = (W / B) * (H / B), R = 8 };
 
 /* Block means (luminance) of R renders of spp samples each, seeds seed0 .. seed0 + R - 1. */
 static void block_means(const tr_scene *s, int depth, int sampler, uint32_t spp, uint64_t seed0,
@@ -36,16 +38,19 @@ static void block_means(const tr_scene *s, int depth, int sampler, uint32_t spp,
     tr_error err;
     tr_film f;
     CHECK(tr_film_init(&f, W, H, &err) == TR_OK, "%s", err.msg);
+    /* One device call per render: a frame per sample would spend more on starting the
+     * threads of a 256-pixel frame than on its paths. */
+    tr_device *dev = tr_device_open("cpu", &err);
+    CHECK(dev != NULL && tr_device_upload(dev, s, &err) == TR_OK, "%s", err.msg);
     tr_render_config cfg = tr_render_config_default();
     cfg.max_depth = depth;
     cfg.sampler = sampler;
     for (int r = 0; r < R; ++r) {
-        tr_film_clear(&f);
         cfg.seed = seed0 + (uint64_t)r;
-        for (uint32_t k = 0; k < spp; ++k) {
-            CHECK(tr_render_frame(s, tr_scene_camera(s), &cfg, &f, k, NULL, &err) == TR_OK, "%s",
-                  err.msg);
-        }
+        CHECK(tr_device_clear(dev, &err) == TR_OK, "%s", err.msg);
+        CHECK(tr_device_render(dev, tr_scene_camera(s), &cfg, 0, spp, NULL, NULL, &err) == TR_OK,
+              "%s", err.msg);
+        CHECK(tr_device_read_film(dev, &f, &err) == TR_OK, "%s", err.msg);
         memset(m[r], 0, sizeof m[r]);
         for (uint32_t y = 0; y < H; ++y) {
             for (uint32_t x = 0; x < W; ++x) {
@@ -54,6 +59,7 @@ static void block_means(const tr_scene *s, int depth, int sampler, uint32_t spp,
             }
         }
     }
+    tr_device_close(dev);
     tr_film_free(&f);
 }
 
@@ -99,7 +105,7 @@ int main(void) {
     tr_scene_set_camera(s, &cam);
     CHECK(tr_scene_commit(s, TR_ACCEL_TYPE_BVH, &err) == TR_OK, "%s", err.msg);
     static double ref[R][NB], def[R][NB], shallow[R][NB];
-    const uint32_t ref_spp = 256u >> SAMPLE_SHIFT, spp = 32u >> SAMPLE_SHIFT;
+    const uint32_t ref_spp = 2048u >> SAMPLE_SHIFT, spp = 64u >> SAMPLE_SHIFT;
     block_means(s, 1024, TR_SAMPLER_RANDOM, ref_spp, 5000, ref);
     block_means(s, 0, TR_SAMPLER_SOBOL, spp, 6000, def);
     block_means(s, 4, TR_SAMPLER_SOBOL, spp, 6000, shallow);

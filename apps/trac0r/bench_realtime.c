@@ -49,7 +49,8 @@ static void realtime_help(void) {
            "  --methods LIST       of off,accumulate,bilateral,atrous,svgf (default all)\n"
            "  --seed S, --threads T, --max-depth D, --accel NAME, --device D   as for render\n"
            "  --sampler NAME, --light-sampling NAME   as for render: --sampler random gives\n"
-           "                       pt independent numbers instead of the Sobol points\n"
+           "                       pt independent numbers instead of the Sobol points,\n"
+           "                       zsobol the Sobol points with screen-space blue noise\n"
            "  --out PREFIX         output file prefix (default realtime)\n"
            "  -h, --help           show this help\n");
 }

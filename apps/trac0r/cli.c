@@ -42,6 +42,7 @@ static const char help_before[] =
     "  --sampler NAME       pt's uniform numbers (default sobol):\n"
     "                         sobol   Owen-scrambled Sobol points, stratified\n"
     "                         random  independent numbers, for comparison\n"
+    "                         zsobol  sobol, with errors as blue noise between pixels\n"
     "  --light-sampling NAME  how pt picks an emitter for next-event estimation\n"
     "                       (default: the scene file's render.light_sampling, else auto):\n"
     "                         auto    tree from 8 emissive triangles on, else power\n"
@@ -339,11 +340,15 @@ int cli_common_option(cli_args *a, cli_common *c) {
         if (cli_value(a) != CLI_OK) {
             return CLI_USAGE;
         }
-        if (strcmp(a->value, "sobol") == 0 || strcmp(a->value, "random") == 0) {
-            c->sampler = a->value[0] == 's' ? TR_SAMPLER_SOBOL : TR_SAMPLER_RANDOM;
+        if (strcmp(a->value, "sobol") == 0 || strcmp(a->value, "random") == 0 ||
+            strcmp(a->value, "zsobol") == 0) {
+            c->sampler = a->value[0] == 's'   ? TR_SAMPLER_SOBOL
+                         : a->value[0] == 'r' ? TR_SAMPLER_RANDOM
+                                              : TR_SAMPLER_ZSOBOL;
             return CLI_OK;
         }
-        return cli_error(a, "--sampler: unknown sampler '%s' (available: sobol, random)", a->value);
+        return cli_error(a, "--sampler: unknown sampler '%s' (available: sobol, random, zsobol)",
+                         a->value);
     }
     if (cli_is(a, "--light-sampling")) {
         if (cli_value(a) != CLI_OK) {

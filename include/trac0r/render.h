@@ -21,10 +21,13 @@
 
 /* Where pt's uniform numbers come from (tr_render_config.sampler). sobol: the
  * Owen-scrambled Sobol sampler (stratified, the default); random: independent uniform
- * numbers per (seed, pixel, sample, dimension), for comparisons. naive always draws from
- * its xorshift streams. */
+ * numbers per (seed, pixel, sample, dimension), for comparisons; zsobol: the Sobol points
+ * with each pixel's sequence shifted by its point in a Z-ordered screen-space net
+ * (stratified per pixel as sobol, and at every sample index across neighbouring pixels:
+ * blue-noise error). naive always draws from its xorshift streams. */
 #define TR_SAMPLER_SOBOL 0
 #define TR_SAMPLER_RANDOM 1
+#define TR_SAMPLER_ZSOBOL 2
 
 /* What to render and, for the CPU, how. */
 typedef struct tr_render_config {

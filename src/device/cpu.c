@@ -70,9 +70,11 @@ int tr_render_config_check(const tr_render_config *cfg, tr_error *err) {
         return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "threads %d must be in 0..%d",
                             cfg->threads, TR_MAX_THREADS);
     }
-    if (cfg->sampler != TR_SAMPLER_SOBOL && cfg->sampler != TR_SAMPLER_RANDOM) {
+    if (cfg->sampler != TR_SAMPLER_SOBOL && cfg->sampler != TR_SAMPLER_RANDOM &&
+        cfg->sampler != TR_SAMPLER_ZSOBOL) {
         return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
-                            "unknown sampler %d (expected TR_SAMPLER_SOBOL or TR_SAMPLER_RANDOM)",
+                            "unknown sampler %d (expected TR_SAMPLER_SOBOL, TR_SAMPLER_RANDOM or "
+                            "TR_SAMPLER_ZSOBOL)",
                             cfg->sampler);
     }
     if ((cfg->passes & ~TR_PASS_MASK) != 0u) {

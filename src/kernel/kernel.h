@@ -21,7 +21,8 @@
  * jitter inside the pixel: radiance, rays and (with `passes`) the passes' surface into
  * *out. The random numbers depend only on (seed, pixel index, sample): pt reads them
  * from the low-discrepancy sampler (sampler.h; independent numbers with `sampler`
- * TR_SAMPLER_RANDOM), naive from the thesis's xorshift stream. */
+ * TR_SAMPLER_RANDOM, screen-space blue noise with TR_SAMPLER_ZSOBOL, which addresses the
+ * pixel by (x, y) instead of its index), naive from the thesis's xorshift stream. */
 TR_FN void tr_render_pixel_sample_kind(const tr_scene_view *s, const tr_camera *cam, uint64_t seed,
                                        int max_depth, uint32_t integrator, uint32_t sampler,
                                        uint32_t passes, uint32_t x, uint32_t y,
@@ -33,7 +34,7 @@ TR_FN void tr_render_pixel_sample_kind(const tr_scene_view *s, const tr_camera *
     float jx, jy;
     /* The host rejects unknown integrators before a frame starts. */
     if (integrator == TR_INTEGRATOR_PT) {
-        tr_sampler smp = tr_sampler_make_kind(seed, pixel_index, sample, sampler);
+        tr_sampler smp = tr_sampler_make_pixel(seed, pixel_index, x, y, sample, sampler);
         tr_sampler_2d(&smp, TR_DIM_CAMERA, &jx, &jy);
         tr_ray ray = tr_camera_ray(cam, (float)x, (float)y, jx, jy);
         out->radiance = tr_trace_pt(s, ray, max_depth, &smp, &out->rays, surface);

@@ -23,7 +23,9 @@
  * white rather than blue, but every pixel keeps the full (0,2) stratification for any
  * power-of-two count, the image size and sample count need not be powers of two, and a
  * pixel's sequence does not change when the resolution does (tiles, strides and
- * distributed rectangles address pixels by index).
+ * distributed rectangles address pixels by index). `--sampler zsobol` (sampler_z.h) is the
+ * screen-space alternative: the same points per pixel, digitally shifted by the pixel's
+ * point in a Z-ordered net, so that neighbours' errors are blue noise.
  *
  * Sobol's generator matrices for dimensions 0 and 1 are derived here, not tabulated:
  * dimension 0 is the identity (the bit-reversed index), dimension 1 comes from the
@@ -48,9 +50,10 @@
 #define TR_SAMPLER_PER_BOUNCE 5u
 
 typedef struct tr_sampler {
-    uint32_t key;    /* hash of (seed, pixel) */
+    uint32_t key;    /* hash of (seed, pixel); zsobol: of the seed and the pixel's tile */
     uint32_t index;  /* sample index inside the pixel */
-    uint32_t random; /* 1: independent numbers instead of Sobol points (TR_SAMPLER_RANDOM) */
+    uint32_t kind;   /* TR_SAMPLER_SOBOL 0, TR_SAMPLER_RANDOM 1, TR_SAMPLER_ZSOBOL 2 */
+    uint32_t morton; /* zsobol: the pixel's Z-order code inside its 65536 x 65536 tile */
 } tr_sampler;
 
 /* A 32-bit integer hash (the "lowbias32" finaliser of C. Wellons' hash prospector):
@@ -118,7 +121,8 @@ TR_FN tr_sampler tr_sampler_make(uint64_t seed, uint64_t pixel, uint32_t index) 
     tr_sampler s;
     s.key = (uint32_t)tr_mix64(seed ^ tr_mix64(pixel + (uint64_t)0x9e3779b97f4a7c15UL));
     s.index = index;
-    s.random = 0u;
+    s.kind = 0u;
+    s.morton = 0u;
     return s;
 }
 
@@ -127,8 +131,20 @@ TR_FN tr_sampler tr_sampler_make(uint64_t seed, uint64_t pixel, uint32_t index) 
 TR_FN tr_sampler tr_sampler_make_kind(uint64_t seed, uint64_t pixel, uint32_t index,
                                       uint32_t kind) {
     tr_sampler s = tr_sampler_make(seed, pixel, index);
-    s.random = kind == 1u ? 1u : 0u;
+    s.kind = kind == 1u ? 1u : 0u;
     return s;
+}
+
+#include "sampler_z.h"
+
+/* The sampler of any kind for pixel (x, y), the pixel_index-th of the image: zsobol
+ * addresses the pixel by its coordinates, the others by its index. */
+TR_FN tr_sampler tr_sampler_make_pixel(uint64_t seed, uint64_t pixel_index, uint32_t x, uint32_t y,
+                                       uint32_t index, uint32_t kind) {
+    if (kind == 2u) {
+        return tr_sampler_make_z(seed, x, y, index);
+    }
+    return tr_sampler_make_kind(seed, pixel_index, index, kind);
 }
 
 /* Independent uniform numbers for (key, index, dim): 64 bits of a hash of all three, no
@@ -143,7 +159,11 @@ TR_FN uint64_t tr_sampler_random_bits(const tr_sampler *s, uint32_t dim) {
  * Sobol coordinate reverses it, permutes and reverses back; dimension 0 is the reversed
  * index and dimension 1 is computed reversed, so the first reversal cancels. */
 TR_FN void tr_sampler_2d(const tr_sampler *s, uint32_t dim, float *u1, float *u2) {
-    if (s->random) {
+    if (s->kind == 2u) {
+        tr_sampler_z_2d(s, dim, u1, u2);
+        return;
+    }
+    if (s->kind == 1u) {
         uint64_t r = tr_sampler_random_bits(s, dim);
         *u1 = tr_u32_to_unit((uint32_t)r);
         *u2 = tr_u32_to_unit((uint32_t)(r >> 32));
@@ -160,7 +180,12 @@ TR_FN void tr_sampler_2d(const tr_sampler *s, uint32_t dim, float *u1, float *u2
 
 /* The first coordinate of dimension pair `dim`. */
 TR_FN float tr_sampler_1d(const tr_sampler *s, uint32_t dim) {
-    if (s->random) {
+    if (s->kind == 2u) {
+        float u1, u2;
+        tr_sampler_z_2d(s, dim, &u1, &u2);
+        return u1;
+    }
+    if (s->kind == 1u) {
         return tr_u32_to_unit((uint32_t)tr_sampler_random_bits(s, dim));
     }
     uint32_t k = tr_hash32(s->key ^ tr_hash32(dim + 0x68e31da4u));
