@@ -288,6 +288,17 @@ int bench_convergence(int argc, char **argv) {
             tr_scene_destroy(scene);
             break;
         }
+        /* A method that cannot render the scene (bdpt with an environment light or a sun)
+         * fails here, not after the reference has been rendered. */
+        for (int mi = 0; mi < nmethods && rc == CLI_OK; ++mi) {
+            if (tr_integrator_supports(scene, methods[mi], &err) != TR_OK) {
+                rc = cli_error(&a, "--methods %s: %s", tr_integrator_name(methods[mi]), err.msg);
+            }
+        }
+        if (rc != CLI_OK) {
+            tr_scene_destroy(scene);
+            break;
+        }
         if (si == 0) {
             for (uint32_t m = 0; m < tr_scene_material_count(scene); ++m) {
                 const tr_material mat = tr_scene_material(scene, m);
