@@ -64,6 +64,18 @@
 #define TR_BDPT_MAX_VERTS 16
 #define TR_BDPT_MAX_DEPTH (TR_BDPT_MAX_VERTS - 1)
 
+/* Russian roulette (Arvo and Kirk, "Particle Transport and Image Synthesis", SIGGRAPH
+ * 1990) decides a subpath's segment seg + 1 from this segment seg on, with pt's rule (the
+ * survival probability the square root of the throughput relative to the subpath's first).
+ * Camera subpaths start where pt does. Light subpaths start after their second hit: each
+ * light vertex costs a light-tracing join and a join with every camera vertex, while the
+ * deep ones carry paths that the camera side's strategies (next-event estimation, short
+ * light prefixes) sample with nearly all the MIS weight. Measured (docs/integrators.md):
+ * from segment 2 instead of 5, 11-13 % fewer instructions per sample for 1-2.5 % more
+ * MSE at equal samples on cornell-mirror and cornell-glass. */
+#define TR_BDPT_RR_START_CAMERA TR_PT_RR_START
+#define TR_BDPT_RR_START_LIGHT 2
+
 /* Light-tracing splats are sums of value * 2^24, rounded. */
 #define TR_BDPT_SPLAT_ONE 16777216.0f
 /* A splat beyond this (in radiance units) is dropped rather than allowed to overflow. */
@@ -404,7 +416,8 @@ TR_FN void tr_bdpt_walk(const tr_scene_view *s, tr_ray ray, tr_vec3 beta, float 
         if (tr_v3_is_zero(beta)) {
             break;
         }
-        if (seg >= TR_PT_RR_START && rr_ref > 0.0f) {
+        if (seg >= (importance ? TR_BDPT_RR_START_LIGHT : TR_BDPT_RR_START_CAMERA) &&
+            rr_ref > 0.0f) {
             float q = tr_sqrtf(v3_max_component(beta) / rr_ref);
             if (q < 1.0f) {
                 uint32_t dr = importance ? tr_bdpt_light_dim(seg, TR_DIM_ROULETTE)
