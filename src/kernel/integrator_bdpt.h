@@ -253,29 +253,30 @@ TR_FN float tr_bdpt_mis_weight(const tr_scene_view *s, const tr_camera *cam,
     }
     float pl[2 * TR_BDPT_MAX_VERTS], pc[2 * TR_BDPT_MAX_VERTS], r[2 * TR_BDPT_MAX_VERTS];
     int dl[2 * TR_BDPT_MAX_VERTS];
-    const tr_bdpt_vertex *v[2 * TR_BDPT_MAX_VERTS] = {0};
     if (nt < 1 || ns < 0 || n > 2 * TR_BDPT_MAX_VERTS) {
         return 0.0f;
     }
-    for (int i = 0; i < n; ++i) {
-        if (i < ns) {
-            v[i] = (ns == 1 && i == 0) ? nee : &lv[i];
-            pl[i] = v[i]->pdf_fwd;
-            pc[i] = v[i]->pdf_rev;
-        } else {
-            v[i] = &cv[n - 1 - i];
-            pc[i] = v[i]->pdf_fwd;
-            pl[i] = v[i]->pdf_rev;
-        }
-        dl[i] = v[i]->delta;
+    /* The path's vertices are read where they lie (no array of pointers to fill). */
+    const tr_bdpt_vertex *y0 = ns == 1 ? nee : (ns >= 1 ? &lv[0] : &cv[n - 1]);
+    for (int i = 0; i < ns; ++i) {
+        const tr_bdpt_vertex *vi = i == 0 ? y0 : &lv[i];
+        pl[i] = vi->pdf_fwd;
+        pc[i] = vi->pdf_rev;
+        dl[i] = vi->delta;
+    }
+    for (int i = ns; i < n; ++i) {
+        const tr_bdpt_vertex *vi = &cv[n - 1 - i];
+        pc[i] = vi->pdf_fwd;
+        pl[i] = vi->pdf_rev;
+        dl[i] = vi->delta;
     }
     /* The densities the connection changes. */
-    const tr_bdpt_vertex *pt = v[ns];
-    const tr_bdpt_vertex *pt_prev = nt >= 2 ? v[ns + 1] : 0;
+    const tr_bdpt_vertex *pt = &cv[nt - 1];
+    const tr_bdpt_vertex *pt_prev = nt >= 2 ? &cv[nt - 2] : 0;
     dl[ns] = 0;
     if (ns > 0) {
-        const tr_bdpt_vertex *qs = v[ns - 1];
-        const tr_bdpt_vertex *qs_prev = ns >= 2 ? v[ns - 2] : 0;
+        const tr_bdpt_vertex *qs = ns == 1 ? y0 : &lv[ns - 1];
+        const tr_bdpt_vertex *qs_prev = ns >= 2 ? (ns == 2 ? y0 : &lv[ns - 2]) : 0;
         dl[ns - 1] = 0;
         /* Three directions serve the four densities: the connection's (qs to pt) and
          * those from each end to its own subpath's previous vertex. */
@@ -314,7 +315,9 @@ TR_FN float tr_bdpt_mis_weight(const tr_scene_view *s, const tr_camera *cam,
     const int light_ok = pl[0] > 0.0f; /* y_0 is a point light subpaths can start on */
     float c = 0.0f;
     if (light_ok && !dl[1]) {
-        float nee_area = ns >= 1 ? v[0]->pdf_nee : tr_bdpt_nee_pdf(s, v[0], v[1]);
+        /* Vertex 1 of the path: a light vertex, or for s = 0 and s = 1 a camera one. */
+        const tr_bdpt_vertex *y1 = ns >= 2 ? &lv[1] : &cv[n - 2];
+        float nee_area = ns >= 1 ? y0->pdf_nee : tr_bdpt_nee_pdf(s, y0, y1);
         c = nee_area / pl[0];
     }
     if (ns == 1) {
