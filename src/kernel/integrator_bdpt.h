@@ -71,7 +71,7 @@
  * light vertex costs a light-tracing join and a join with every camera vertex, while the
  * deep ones carry paths that the camera side's strategies (next-event estimation, short
  * light prefixes) sample with nearly all the MIS weight. Measured (docs/integrators.md):
- * from segment 2 instead of 5, 11-13 % fewer instructions per sample for 1-2.5 % more
+ * from segment 2 instead of 5, 11-13 % fewer instructions per sample for 1-3 % more
  * MSE at equal samples on cornell-mirror and cornell-glass. */
 #define TR_BDPT_RR_START_CAMERA TR_PT_RR_START
 #define TR_BDPT_RR_START_LIGHT 2
