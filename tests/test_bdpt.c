@@ -504,6 +504,12 @@ static void shipped_scenes(void) {
         static region_stats a, b;
         const int depth = 6, frames = 48;
         int rc = run(s, &cam, TR_INTEGRATOR_BDPT, depth, frames, 0xb1ULL, &b, &err);
+        /* The up-front query agrees with the render: refused exactly where it fails. */
+        const int sup = tr_integrator_supports(s, TR_INTEGRATOR_BDPT, &err);
+        CHECK(v.env_count > 0u ? sup == TR_ERR && err.code == TR_STATUS_UNSUPPORTED : sup == TR_OK,
+              "%s: tr_integrator_supports(bdpt) disagrees with the render", names[i]);
+        CHECK(tr_integrator_supports(s, TR_INTEGRATOR_PT, &err) == TR_OK,
+              "%s: tr_integrator_supports(pt) refused", names[i]);
         if (v.env_count > 0u) {
             CHECK(rc == TR_STATUS_UNSUPPORTED, "%s: bdpt with an environment light gave status %d",
                   names[i], rc);

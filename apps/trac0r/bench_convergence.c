@@ -53,7 +53,9 @@ static void convergence_help(void) {
            "\n"
            "Options:\n"
            "  --sizes LIST         image sizes, e.g. 256x256,800x600 (the default)\n"
-           "  --methods LIST       integrators to measure (default naive,pt,bdpt)\n"
+           "  --methods LIST       integrators to measure (default naive,pt,bdpt); one that\n"
+           "                       cannot render the scene (bdpt with an environment light\n"
+           "                       or a sun) is refused before the reference is rendered\n"
            "  --budget SECONDS     render time per method and size, 0.1..86400 (default 30)\n"
            "  --reference-spp N    spp of the rendered reference, 2..1000000 (default 4096)\n"
            "  --reference FILE     read the reference (.pfm) instead (one size only; its own\n"
@@ -284,6 +286,17 @@ int bench_convergence(int argc, char **argv) {
         c.height = sh[si];
         tr_scene *scene = tr_scene_create(NULL);
         rc = cli_load_scene(&a, &c, scene);
+        if (rc != CLI_OK) {
+            tr_scene_destroy(scene);
+            break;
+        }
+        /* A method that cannot render the scene (bdpt with an environment light or a sun)
+         * fails here, not after the reference has been rendered. */
+        for (int mi = 0; mi < nmethods && rc == CLI_OK; ++mi) {
+            if (tr_integrator_supports(scene, methods[mi], &err) != TR_OK) {
+                rc = cli_error(&a, "--methods %s: %s", tr_integrator_name(methods[mi]), err.msg);
+            }
+        }
         if (rc != CLI_OK) {
             tr_scene_destroy(scene);
             break;

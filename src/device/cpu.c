@@ -152,6 +152,28 @@ static void tr_bdpt_fold_splats(const tr_frame *f, const tr_bdpt_splat *sp, uint
     }
 }
 
+/* The scenes an integrator cannot render, for tr_cpu_render and tr_integrator_supports. */
+static int tr_integrator_check_view(const tr_scene_view *view, int integrator, tr_error *err) {
+    if (integrator == TR_INTEGRATOR_BDPT) {
+        if (view->env_count > 0u) {
+            return tr_error_set(err, TR_STATUS_UNSUPPORTED,
+                                "bdpt does not support environment lights: use pt");
+        }
+        if (view->sun_count > 0u) {
+            /* Light subpaths start only on emissive triangles: a sun's light would reach
+             * the image through s = 0 alone, with MIS weights that assume otherwise. */
+            return tr_error_set(err, TR_STATUS_UNSUPPORTED,
+                                "bdpt does not support the sun: use pt");
+        }
+    }
+    return TR_OK;
+}
+
+int tr_integrator_supports(const tr_scene *scene, int integrator, tr_error *err) {
+    const tr_scene_view view = tr_scene_view_of(scene);
+    return tr_integrator_check_view(&view, integrator, err);
+}
+
 int tr_cpu_render(const tr_scene_view *view, const tr_frame *f, tr_film *film, int threads,
                   uint32_t tile_side, int (*cancel)(void *), void *cancel_user, uint64_t *rays_out,
                   tr_error *err) {
@@ -180,17 +202,10 @@ int tr_cpu_render(const tr_scene_view *view, const tr_frame *f, tr_film *film, i
     uint64_t rays = 0;
     const int bdpt = f->integrator == TR_INTEGRATOR_BDPT;
     tr_bdpt_splat sp = {NULL, f->rect_x, f->rect_y, f->rect_w, f->rect_h};
+    if (tr_integrator_check_view(view, f->integrator, err) != TR_OK) {
+        return TR_ERR;
+    }
     if (bdpt) {
-        if (view->env_count > 0u) {
-            return tr_error_set(err, TR_STATUS_UNSUPPORTED,
-                                "bdpt does not support environment lights: use pt");
-        }
-        if (view->sun_count > 0u) {
-            /* Light subpaths start only on emissive triangles: a sun's light would reach
-             * the image through s = 0 alone, with MIS weights that assume otherwise. */
-            return tr_error_set(err, TR_STATUS_UNSUPPORTED,
-                                "bdpt does not support the sun: use pt");
-        }
         /* Light tracing's splats, in fixed point (integrator_bdpt.h): per frame, for the
          * rectangle. */
         sp.sum = calloc(3u * (size_t)f->rect_w * f->rect_h, sizeof *sp.sum);
