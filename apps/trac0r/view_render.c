@@ -81,6 +81,26 @@ static int render_one(view_renderer *r, const tr_camera *cam, const tr_render_co
 static int reconstruct(view_renderer *r, const tr_camera *cam, int method, int threads,
                        tr_error *err) {
     const uint32_t w = r->film.width, h = r->film.height;
+    const tr_recon_params p = tr_recon_params_default();
+    if (strcmp(tr_device_kind(r->dev), "opencl") == 0) {
+        /* On an OpenCL device the stages run where the film lies (recon_device.h). */
+        if (!r->rdev || r->disp.width != w || r->disp.height != h) {
+            tr_recon_device_close(r->rdev);
+            tr_film_free(&r->disp);
+            if (!(r->rdev = tr_recon_device_open(r->dev, w, h, err)) ||
+                tr_film_init(&r->disp, w, h, err) != TR_OK) {
+                return TR_ERR;
+            }
+            for (size_t i = 0; i < (size_t)w * h; ++i) {
+                r->disp.count[i] = 1;
+            }
+        }
+        if (tr_recon_device_frame(r->rdev, cam, method, &p, r->disp.sum, err) != TR_OK) {
+            return TR_ERR;
+        }
+        tr_recon_device_times(r->rdev, &r->rec.ms_temporal, &r->rec.ms_spatial);
+        return TR_OK;
+    }
     if (r->gb.width != w || r->gb.height != h) {
         tr_gbuffer_free(&r->gb);
         tr_recon_free(&r->rec);
@@ -94,7 +114,6 @@ static int reconstruct(view_renderer *r, const tr_camera *cam, int method, int t
             r->disp.count[i] = 1;
         }
     }
-    const tr_recon_params p = tr_recon_params_default();
     if (tr_gbuffer_from_film(&r->gb, &r->film, err) != TR_OK) {
         return TR_ERR;
     }
@@ -376,6 +395,8 @@ void view_renderer_stop(view_renderer *r) {
     tr_film_free(&r->disp);
     tr_gbuffer_free(&r->gb);
     tr_recon_free(&r->rec);
+    tr_recon_device_close(r->rdev);
+    r->rdev = NULL;
     free(r->back);
     free(r->pixels);
     r->back = NULL;

@@ -83,6 +83,7 @@ typedef struct view_renderer {
     uint32_t motion_frame; /* counts moving frames: their sample numbers, so noise changes */
     tr_gbuffer gb;         /* the film's means and passes, for the reconstruction */
     tr_recon rec;          /* the reconstruction's history */
+    tr_recon_device *rdev; /* on an OpenCL device: the reconstruction there instead */
     tr_film disp;          /* the reconstructed frame as a film of one sample per pixel */
 } view_renderer;
 
