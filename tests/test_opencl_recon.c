@@ -98,7 +98,8 @@ static void agree(tr_device *cl, const tr_gbuffer *g, const tr_camera *cams, int
     for (int k = 0; k < FRAMES; ++k) {
         CHECK(tr_recon_frame(&host, &g[k], &cams[k], method, p, 2, a, &err) == TR_OK, "%s",
               err.msg);
-        CHECK(tr_recon_device_frame_gbuffer(dev, &g[k], &cams[k], method, p, b, &err) == TR_OK,
+        CHECK(tr_recon_device_frame_gbuffer(dev, &g[k], &cams[k], NULL, 0, method, p, b, &err) ==
+                  TR_OK,
               "%s: %s", label, err.msg);
         const double d = worst_rel(b, a, 3 * W * H);
         CHECK(d <= bound, "%s, frame %d: device and host differ by %.3g (relative) > %.1g", label,
@@ -142,8 +143,8 @@ static void film_on_device(tr_device *cl, const tr_scene *s, const tr_camera *ca
         /* Two samples, so that the film's means divide by a count above 1. */
         CHECK(tr_device_render(cl, &cams[k], &cfg, 2u * (uint32_t)k, 2, NULL, NULL, &err) == TR_OK,
               "%s", err.msg);
-        CHECK(tr_recon_device_frame(dev, &cams[k], TR_RECON_SVGF, &p, b, &err) == TR_OK, "%s",
-              err.msg);
+        CHECK(tr_recon_device_frame(dev, &cams[k], NULL, 0, TR_RECON_SVGF, &p, b, &err) == TR_OK,
+              "%s", err.msg);
         CHECK(tr_device_read_film(cl, &f, &err) == TR_OK, "%s", err.msg);
         CHECK(tr_gbuffer_from_film(&g, &f, &err) == TR_OK, "%s", err.msg);
         CHECK(tr_recon_frame(&host, &g, &cams[k], TR_RECON_SVGF, &p, 2, a, &err) == TR_OK, "%s",
@@ -157,15 +158,15 @@ static void film_on_device(tr_device *cl, const tr_scene *s, const tr_camera *ca
     /* Section 4: bad input. */
     tr_camera small = cams[0];
     small.screen_width = W / 2;
-    CHECK(tr_recon_device_frame(dev, &small, TR_RECON_SVGF, &p, b, &err) == TR_ERR &&
+    CHECK(tr_recon_device_frame(dev, &small, NULL, 0, TR_RECON_SVGF, &p, b, &err) == TR_ERR &&
               err.code == TR_STATUS_INVALID_ARGUMENT,
           "a camera of another size was accepted");
-    CHECK(tr_recon_device_frame(dev, &cams[0], 99, &p, b, &err) == TR_ERR &&
+    CHECK(tr_recon_device_frame(dev, &cams[0], NULL, 0, 99, &p, b, &err) == TR_ERR &&
               err.code == TR_STATUS_INVALID_ARGUMENT,
           "method 99 was accepted");
     tr_recon_device *wrong = tr_recon_device_open(cl, W + 1, H, &err);
     CHECK(wrong, "%s", err.msg);
-    CHECK(tr_recon_device_frame(wrong, &cams[0], TR_RECON_SVGF, &p, b, &err) == TR_ERR,
+    CHECK(tr_recon_device_frame(wrong, &cams[0], NULL, 0, TR_RECON_SVGF, &p, b, &err) == TR_ERR,
           "a film of another size was accepted");
     tr_recon_device_close(wrong);
     free(a);
@@ -198,8 +199,8 @@ static void cpu_device(const tr_scene *s, const tr_camera *cams) {
         CHECK(tr_device_clear(cpu, &err) == TR_OK, "%s", err.msg);
         CHECK(tr_device_render(cpu, &cams[k], &cfg, (uint32_t)k, 1, NULL, NULL, &err) == TR_OK,
               "%s", err.msg);
-        CHECK(tr_recon_device_frame(dev, &cams[k], TR_RECON_SVGF, &p, b, &err) == TR_OK, "%s",
-              err.msg);
+        CHECK(tr_recon_device_frame(dev, &cams[k], NULL, 0, TR_RECON_SVGF, &p, b, &err) == TR_OK,
+              "%s", err.msg);
         CHECK(tr_device_read_film(cpu, &f, &err) == TR_OK, "%s", err.msg);
         CHECK(tr_gbuffer_from_film(&g, &f, &err) == TR_OK, "%s", err.msg);
         CHECK(tr_recon_frame(&host, &g, &cams[k], TR_RECON_SVGF, &p, 0, a, &err) == TR_OK, "%s",

@@ -330,7 +330,7 @@ int bench_realtime(int argc, char **argv) {
             if (!on[m]) {
                 continue;
             }
-            if ((rdev[m] ? tr_recon_device_frame(rdev[m], &cam, m, &params, out, &err)
+            if ((rdev[m] ? tr_recon_device_frame(rdev[m], &cam, NULL, 0, m, &params, out, &err)
                          : tr_recon_frame(&rec[m], &g, &cam, m, &params, threads, out, &err)) !=
                 TR_OK) {
                 fprintf(stderr, "trac0r bench realtime: %s: %s\n", tr_recon_name(m), err.msg);

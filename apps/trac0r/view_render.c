@@ -95,7 +95,7 @@ static int reconstruct(view_renderer *r, const tr_camera *cam, int method, int t
                 r->disp.count[i] = 1;
             }
         }
-        if (tr_recon_device_frame(r->rdev, cam, method, &p, r->disp.sum, err) != TR_OK) {
+        if (tr_recon_device_frame(r->rdev, cam, NULL, 0, method, &p, r->disp.sum, err) != TR_OK) {
             return TR_ERR;
         }
         tr_recon_device_times(r->rdev, &r->rec.ms_temporal, &r->rec.ms_spatial);

@@ -4,7 +4,7 @@
  *     tr_recon_device *rd = tr_recon_device_open(dev, w, h, &err);   // dev: tr_device_open
  *     for (each frame) {
  *         tr_device_render(dev, &cam, &cfg, ...);                     // cfg.passes TR_PASS_ALL
- *         tr_recon_device_frame(rd, &cam, TR_RECON_SVGF, &params, out, &err);
+ *         tr_recon_device_frame(rd, &cam, NULL, 0, TR_RECON_SVGF, &params, out, &err);
  *         tr_device_clear(dev, &err);
  *     }
  *     tr_recon_device_close(rd);                                      // before tr_device_close
@@ -43,13 +43,17 @@ int tr_recon_device_on_device(const tr_recon_device *r);
 
 /* Reconstructs the device's film (the mean of its samples and its passes; it must have
  * the state's size), rendered through cam, with `method` into out (3 floats per pixel).
- * The history then holds this frame. Fails on another size or an unknown method. */
-int tr_recon_device_frame(tr_recon_device *r, const tr_camera *cam, int method,
-                          const tr_recon_params *p, float *out, tr_error *err);
+ * motion, motion_count: the primitives' motion since the previous frame as
+ * tr_recon_frame_moving (post.h) takes it (NULL, 0: a static scene). The history then
+ * holds this frame. Fails on another size or an unknown method. */
+int tr_recon_device_frame(tr_recon_device *r, const tr_camera *cam, const tr_vec3 *motion,
+                          uint32_t motion_count, int method, const tr_recon_params *p, float *out,
+                          tr_error *err);
 /* The same from a frame on the host, uploaded first: the same input through the host and
  * the device. */
 int tr_recon_device_frame_gbuffer(tr_recon_device *r, const tr_gbuffer *g, const tr_camera *cam,
-                                  int method, const tr_recon_params *p, float *out, tr_error *err);
+                                  const tr_vec3 *motion, uint32_t motion_count, int method,
+                                  const tr_recon_params *p, float *out, tr_error *err);
 /* The stages' wall times in the last frame, milliseconds (the device waited for). */
 void tr_recon_device_times(const tr_recon_device *r, double *ms_temporal, double *ms_spatial);
 

@@ -49,17 +49,19 @@ __kernel void tr_recon_modulate(__global const float *in, __global const float *
     }
 }
 
-/* Temporal accumulation (tr_post_temporal_pixel) through cams[0] (this frame) and
+/* Temporal accumulation (tr_post_temporal_pixel_moving) through cams[0] (this frame) and
  * cams[1] (the previous one); without history (have_history 0) each pixel starts over
- * with its own sample, length 1. */
+ * with its own sample, length 1. motion: 3 floats per primitive id below motion_count,
+ * its movement since the previous frame (tr_recon_frame_moving). */
 __kernel void tr_recon_temporal(__global const tr_camera *cams, __global const float *illum,
                                 __global const float *normal, __global const float *depth,
                                 __global const uint *prim, __global const float *prev_color,
                                 __global const float *prev_moments, __global const float *prev_len,
                                 __global const float *prev_depth, __global const float *prev_normal,
-                                __global const uint *prev_prim, int have_history, float alpha_min,
-                                float max_len, __global float *out_color,
-                                __global float *out_moments, __global float *out_len) {
+                                __global const uint *prev_prim, __global const float *motion,
+                                uint motion_count, int have_history, float alpha_min, float max_len,
+                                __global float *out_color, __global float *out_moments,
+                                __global float *out_len) {
     const tr_camera cam = cams[0], prev = cams[1];
     const uint x = (uint)get_global_id(0), y = (uint)get_global_id(1);
     if (x >= cam.screen_width || y >= cam.screen_height) {
@@ -76,10 +78,13 @@ __kernel void tr_recon_temporal(__global const tr_camera *cams, __global const f
         out_len[i] = 1.0f;
         return;
     }
+    const uint id = prim[i];
+    const tr_vec3 mv =
+        id < motion_count ? v3(motion[3 * id], motion[3 * id + 1], motion[3 * id + 2]) : v3s(0.0f);
     float c[3], m[2], len;
-    tr_post_temporal_pixel(&cam, &prev, x, y, illum, normal, depth, prim, prev_color, prev_moments,
-                           prev_len, prev_depth, prev_normal, prev_prim, alpha_min, max_len, c, m,
-                           &len);
+    tr_post_temporal_pixel_moving(&cam, &prev, x, y, mv, illum, normal, depth, prim, prev_color,
+                                  prev_moments, prev_len, prev_depth, prev_normal, prev_prim,
+                                  alpha_min, max_len, c, m, &len);
     out_color[3 * i] = c[0];
     out_color[3 * i + 1] = c[1];
     out_color[3 * i + 2] = c[2];

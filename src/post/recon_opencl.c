@@ -70,6 +70,8 @@ typedef struct recon_cl {
     cl_program program;
     cl_kernel k[K_COUNT];
     cl_mem b[B_COUNT];
+    cl_mem motion; /* the primitives' motion (tr_recon_frame_moving) */
+    size_t motion_cap;
     tr_camera prev_cam;
     int have_history, cur, have_taa;
 } recon_cl;
@@ -115,6 +117,9 @@ static void cl_state_free(recon_cl *c) {
         if (c->b[i]) {
             clReleaseMemObject(c->b[i]);
         }
+    }
+    if (c->motion) {
+        clReleaseMemObject(c->motion);
     }
     for (int i = 0; i < K_COUNT; ++i) {
         if (c->k[i]) {
@@ -268,10 +273,52 @@ static int cl_upload(tr_recon_device *r, const tr_gbuffer *g, tr_error *err) {
     return finish(r->cl, err);
 }
 
+/* The primitives' motion onto the device (count 0: none). */
+static int cl_motion(recon_cl *c, const tr_vec3 *motion, uint32_t count, tr_error *err) {
+    const size_t bytes = (size_t)count * 3 * sizeof(float);
+    if (count == 0) {
+        return TR_OK;
+    }
+    if (bytes > c->motion_cap) {
+        if (c->motion) {
+            clReleaseMemObject(c->motion);
+        }
+        cl_int rc;
+        c->motion_cap = 0;
+        c->motion = clCreateBuffer(c->context, CL_MEM_READ_ONLY, bytes, NULL, &rc);
+        if (!c->motion) {
+            return cl_fail(err, "clCreateBuffer(motion)", rc);
+        }
+        c->motion_cap = bytes;
+    }
+    float *flat = malloc(bytes);
+    if (!flat) {
+        return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory for %u motions", count);
+    }
+    for (uint32_t i = 0; i < count; ++i) {
+        flat[3 * i] = motion[i].x;
+        flat[3 * i + 1] = motion[i].y;
+        flat[3 * i + 2] = motion[i].z;
+    }
+    const cl_int rc =
+        clEnqueueWriteBuffer(c->queue, c->motion, CL_TRUE, 0, bytes, flat, 0, NULL, NULL);
+    free(flat);
+    return rc == CL_SUCCESS ? TR_OK : cl_fail(err, "clEnqueueWriteBuffer(motion)", rc);
+}
+
 /* tr_recon_frame's stages (filter.c) on the frame in the device's frame buffers. */
-static int cl_frame(tr_recon_device *r, const tr_camera *cam, int method, const tr_recon_params *p,
-                    float *out, tr_error *err) {
+static int cl_frame(tr_recon_device *r, const tr_camera *cam, const tr_vec3 *motion,
+                    uint32_t motion_count, int method, const tr_recon_params *p, float *out,
+                    tr_error *err) {
     recon_cl *c = r->cl;
+    if (!motion) {
+        motion_count = 0;
+    }
+    if (cl_motion(c, motion, motion_count, err) != TR_OK) {
+        return TR_ERR;
+    }
+    /* Any buffer stands in for the motion when there is none: nothing reads it. */
+    cl_mem mbuf = motion_count ? c->motion : c->b[B_DEPTH];
     const int w = (int)r->width, h = (int)r->height;
     const size_t n = (size_t)w * h;
     int rc = TR_OK;
@@ -296,9 +343,9 @@ static int cl_frame(tr_recon_device *r, const tr_camera *cam, int method, const 
     rc = rc ? rc
             : RUN(c, K_TEMPORAL, w, h, err, KB(c, B_CAMS), KB(c, B_ILLUM), KB(c, B_NORMAL),
                   KB(c, B_DEPTH), KB(c, B_PRIM), KB(c, B_HC0 + prev), KB(c, B_HM0 + prev),
-                  KB(c, B_HL0 + prev), KB(c, B_HDEPTH), KB(c, B_HNORMAL), KB(c, B_HPRIM),
-                  KI(c->have_history), KF(p->alpha_min), KF(p->max_len), KB(c, hc), KB(c, hm),
-                  KB(c, hl));
+                  KB(c, B_HL0 + prev), KB(c, B_HDEPTH), KB(c, B_HNORMAL), KB(c, B_HPRIM), KM(mbuf),
+                  KU(motion_count), KI(c->have_history), KF(p->alpha_min), KF(p->max_len),
+                  KB(c, hc), KB(c, hm), KB(c, hl));
     if (rc != TR_OK || (rc = finish(c, err)) != TR_OK) {
         return rc;
     }
@@ -461,7 +508,8 @@ void tr_recon_device_times(const tr_recon_device *r, double *ms_temporal, double
 }
 
 int tr_recon_device_frame_gbuffer(tr_recon_device *r, const tr_gbuffer *g, const tr_camera *cam,
-                                  int method, const tr_recon_params *p, float *out, tr_error *err) {
+                                  const tr_vec3 *motion, uint32_t motion_count, int method,
+                                  const tr_recon_params *p, float *out, tr_error *err) {
     if (check_args(r, cam, method, err) != TR_OK) {
         return TR_ERR;
     }
@@ -475,14 +523,15 @@ int tr_recon_device_frame_gbuffer(tr_recon_device *r, const tr_gbuffer *g, const
         if (cl_upload(r, g, err) != TR_OK) {
             return TR_ERR;
         }
-        return cl_frame(r, cam, method, p, out, err);
+        return cl_frame(r, cam, motion, motion_count, method, p, out, err);
     }
 #endif
-    return tr_recon_frame(&r->host, g, cam, method, p, 0, out, err);
+    return tr_recon_frame_moving(&r->host, g, cam, motion, motion_count, method, p, 0, out, err);
 }
 
-int tr_recon_device_frame(tr_recon_device *r, const tr_camera *cam, int method,
-                          const tr_recon_params *p, float *out, tr_error *err) {
+int tr_recon_device_frame(tr_recon_device *r, const tr_camera *cam, const tr_vec3 *motion,
+                          uint32_t motion_count, int method, const tr_recon_params *p, float *out,
+                          tr_error *err) {
     if (check_args(r, cam, method, err) != TR_OK) {
         return TR_ERR;
     }
@@ -491,7 +540,7 @@ int tr_recon_device_frame(tr_recon_device *r, const tr_camera *cam, int method,
         if (cl_from_film(r, err) != TR_OK) {
             return TR_ERR;
         }
-        return cl_frame(r, cam, method, p, out, err);
+        return cl_frame(r, cam, motion, motion_count, method, p, out, err);
     }
 #endif
     uint32_t w, h, passes;
@@ -511,5 +560,6 @@ int tr_recon_device_frame(tr_recon_device *r, const tr_camera *cam, int method,
         tr_gbuffer_from_film(&r->gb, &r->film, err) != TR_OK) {
         return TR_ERR;
     }
-    return tr_recon_frame(&r->host, &r->gb, cam, method, p, 0, out, err);
+    return tr_recon_frame_moving(&r->host, &r->gb, cam, motion, motion_count, method, p, 0, out,
+                                 err);
 }
