@@ -18,6 +18,8 @@
  *    the same film read back.
  * 3. On the CPU device tr_recon_device is tr_recon_frame, bit for bit.
  * 4. A frame or camera of another size and an unknown method fail with a message.
+ * 5. Per-primitive motion (a sphere moving in front of a wall, tests/motion_scene.h):
+ *    host and device agree with the motion table as in 1.
  *
  * Needs an OpenCL platform; it fails (not skips) when no device can be opened. */
 #include <math.h>
@@ -25,11 +27,12 @@
 #include <string.h>
 
 #include "check.h"
+#include "motion_scene.h"
 #include "trac0r/scene_file.h"
 #include "trac0r/trac0r.h"
 
-#define W 48
-#define H 36
+#define W MOTION_W
+#define H MOTION_H
 #define FRAMES 4
 
 static const double bound = 1e-4;
@@ -217,6 +220,54 @@ static void cpu_device(const tr_scene *s, const tr_camera *cams) {
     tr_device_close(cpu);
 }
 
+/* Section 5: the moving sphere with its motion, host against device. */
+static void moving(tr_device *cl) {
+    tr_camera cam;
+    uint32_t first, count;
+    tr_scene *s = motion_scene(&cam, &first, &count);
+    tr_vec3 *table = motion_table(first, count);
+    const uint32_t ids = first + count + 1;
+    tr_error err;
+    const tr_recon_params p = tr_recon_params_default();
+    const int methods[2] = {TR_RECON_ACCUMULATE, TR_RECON_SVGF};
+    tr_recon host[2];
+    tr_recon_device *dev[2];
+    for (int m = 0; m < 2; ++m) {
+        CHECK(tr_recon_init(&host[m], W, H, &err) == TR_OK, "%s", err.msg);
+        dev[m] = tr_recon_device_open(cl, W, H, &err);
+        CHECK(dev[m], "%s", err.msg);
+    }
+    float *a = malloc(3 * W * H * sizeof *a), *b = malloc(3 * W * H * sizeof *b);
+    CHECK(a && b, "out of memory");
+    double worst = 0.0;
+    for (int k = 0; k < FRAMES; ++k) {
+        tr_gbuffer g;
+        motion_frame(s, &cam, k, &g);
+        for (int m = 0; m < 2; ++m) {
+            CHECK(tr_recon_frame_moving(&host[m], &g, &cam, k ? table : NULL, ids, methods[m], &p,
+                                        2, a, &err) == TR_OK,
+                  "%s", err.msg);
+            CHECK(tr_recon_device_frame_gbuffer(dev[m], &g, &cam, k ? table : NULL, ids, methods[m],
+                                                &p, b, &err) == TR_OK,
+                  "%s", err.msg);
+            const double d = worst_rel(b, a, 3 * W * H);
+            CHECK(d <= bound, "moving sphere, %s, frame %d: differs by %.3g > %.1g",
+                  tr_recon_name(methods[m]), k, d, bound);
+            worst = fmax(worst, d);
+        }
+        tr_gbuffer_free(&g);
+    }
+    printf("  moving sphere with its motion: worst relative difference %.3g\n", worst);
+    for (int m = 0; m < 2; ++m) {
+        tr_recon_free(&host[m]);
+        tr_recon_device_close(dev[m]);
+    }
+    free(a);
+    free(b);
+    free(table);
+    tr_scene_destroy(s);
+}
+
 int main(void) {
     tr_error err;
     tr_scene *s = cornell(&err);
@@ -243,6 +294,7 @@ int main(void) {
     agree(cl, g, cams, TR_RECON_SVGF, &p, "svgf-nofb");
 
     film_on_device(cl, s, cams);
+    moving(cl);
     cpu_device(s, cams);
 
     for (int k = 0; k < FRAMES; ++k) {
