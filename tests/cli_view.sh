@@ -357,11 +357,6 @@ dump anim2.ppm
 awk -v t="$(state rebuild_ms)" 'BEGIN { exit !(t > 0) }' || fail "--animate: rebuild_ms $(state rebuild_ms)"
 cmp -s anim1.ppm anim2.ppm && fail "--animate: the window did not change"
 quit_viewer
-# ... and through SVGF, whose temporal stage then follows the moving shape by its
-# per-primitive motion (tests/test_recon_motion.c checks what that keeps).
-start_viewer --animate --recon svgf
-wait_for 30 '[ "$(state updates)" -ge 5 ]' || fail "--animate --recon svgf: $(cat view.err)"
-quit_viewer
 
 # --device opencl (builds and machines with an OpenCL device; tests/cli_opencl.sh checks
 # that PoCL is there): the window renders on the device, a stride change clears the
