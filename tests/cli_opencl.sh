@@ -105,6 +105,17 @@ grep -q "^1,[0-9]*,bvh," cx.csv || fail "complexity CSV lacks the bvh row of lev
 grep -q "^0,.*,flat," cx.csv || fail "complexity CSV lacks the flat row of level 0: $(cat cx.csv)"
 if grep -q embree cx.csv; then fail "embree measured on the device: $(cat cx.csv)"; fi
 rm -f bench.txt cx.csv cx.png
+# bench realtime on the device reconstructs there (recon_device.h): the device's SVGF
+# lifts the raw frames' PSNR as the host's does (tests/test_opencl_recon.c checks the
+# two agree).
+"$BIN" bench realtime "$(dirname "$0")/../scenes/cornell-classic.json" --width 32 --height 24 \
+    --frames 4 --reference-spp 16 --methods off,svgf --device opencl --out rt >rt.txt 2>rt.err ||
+    fail "bench realtime --device opencl: $(cat rt.err)"
+raw=$(awk '$1 == "off" { print $7 }' rt.txt)
+svgf=$(awk '$1 == "svgf" { print $7 }' rt.txt)
+awk -v a="$raw" -v b="$svgf" 'BEGIN { exit !(b > a + 1) }' ||
+    fail "bench realtime --device opencl: svgf $svgf dB vs raw $raw dB"
+rm -f rt.txt rt.err rt.csv rt.png
 expect_usage_error "--device: not an option of this benchmark" bench rays --device opencl
 expect_usage_error "--accels:" bench complexity --device opencl \
     --accels bvh,embree

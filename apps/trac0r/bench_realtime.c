@@ -237,6 +237,8 @@ int bench_realtime(int argc, char **argv) {
     rt_frame_stats *st = calloc((size_t)nm * frames, sizeof *st);
     tr_recon rec[TR_RECON_COUNT];
     memset(rec, 0, sizeof rec);
+    /* On an OpenCL device the methods run there, on its film (recon_device.h). */
+    tr_recon_device *rdev[TR_RECON_COUNT] = {0};
     tr_film film, rfilm;
     memset(&film, 0, sizeof film);
     memset(&rfilm, 0, sizeof rfilm);
@@ -258,6 +260,13 @@ int bench_realtime(int argc, char **argv) {
     }
     if (rc == CLI_OK) {
         rc = cli_backend_open(&a, &c, scene, &be);
+    }
+    for (int m = 0; rc == CLI_OK && m < nm; ++m) {
+        if (on[m] && strcmp(tr_device_kind(be.dev), "opencl") == 0 &&
+            !(rdev[m] = tr_recon_device_open(be.dev, c.width, c.height, &err))) {
+            fprintf(stderr, "trac0r bench realtime: %s\n", err.msg);
+            rc = CLI_FAILURE;
+        }
     }
     tr_render_config cfg = cli_render_config(&c);
     tr_render_config rcfg = cfg;
@@ -322,7 +331,9 @@ int bench_realtime(int argc, char **argv) {
             if (!on[m]) {
                 continue;
             }
-            if (tr_recon_frame(&rec[m], &g, &cam, m, &params, threads, out, &err) != TR_OK) {
+            if ((rdev[m] ? tr_recon_device_frame(rdev[m], &cam, NULL, 0, m, &params, out, &err)
+                         : tr_recon_frame(&rec[m], &g, &cam, m, &params, threads, out, &err)) !=
+                TR_OK) {
                 fprintf(stderr, "trac0r bench realtime: %s: %s\n", tr_recon_name(m), err.msg);
                 rc = CLI_FAILURE;
                 break;
@@ -331,6 +342,9 @@ int bench_realtime(int argc, char **argv) {
             s->render_ms = render_ms;
             s->temporal_ms = rec[m].ms_temporal;
             s->spatial_ms = rec[m].ms_spatial;
+            if (rdev[m]) {
+                tr_recon_device_times(rdev[m], &s->temporal_ms, &s->spatial_ms);
+            }
             const double mse = mse_of(out, ref, px) - ref_mse;
             s->psnr = tr_psnr(mse > 1e-12 ? mse : 1e-12);
             s->ssim = tr_ssim(out, ref, c.width, c.height);
@@ -410,6 +424,9 @@ int bench_realtime(int argc, char **argv) {
         } else {
             printf("wrote %s\n", csv_path);
         }
+    }
+    for (int m = 0; m < nm; ++m) {
+        tr_recon_device_close(rdev[m]);
     }
     if (be.dev) {
         cli_backend_close(&be);

@@ -76,11 +76,73 @@ static int render_one(view_renderer *r, const tr_camera *cam, const tr_render_co
     return tr_device_read_film(r->dev, &r->film, err);
 }
 
+/* --animate: how far each primitive moved since the last reconstructed frame, as
+ * tr_recon_frame_moving takes it (indexed by triangle + 1), from the shapes' boxes (the
+ * animation translates shapes); NULL when nothing moved or memory runs out (the history
+ * of moving shapes is then rejected, as without motion). *ids gets the table's size. */
+static const tr_vec3 *animate_motion(view_renderer *r, uint32_t *ids) {
+    *ids = 0;
+    if (!r->animate) {
+        return NULL;
+    }
+    const uint32_t shapes = tr_scene_shape_count(r->scene);
+    const uint32_t n = tr_scene_triangle_count(r->scene) + 1;
+    if (r->motion_shapes != shapes || r->motion_ids != n) {
+        free(r->motion);
+        free(r->motion_boxes);
+        r->motion = calloc(n, sizeof *r->motion);
+        r->motion_boxes = calloc(shapes ? shapes : 1, sizeof *r->motion_boxes);
+        r->motion_shapes = r->motion && r->motion_boxes ? shapes : 0;
+        r->motion_ids = r->motion_shapes ? n : 0;
+        for (uint32_t i = 0; i < r->motion_shapes; ++i) {
+            r->motion_boxes[i] = tr_scene_shape_box(r->scene, i);
+        }
+        return NULL; /* the first frame: nothing to compare with */
+    }
+    int moved = 0;
+    for (uint32_t i = 0, first = 0; i < shapes; ++i) {
+        const tr_aabb b = tr_scene_shape_box(r->scene, i), a = r->motion_boxes[i];
+        const tr_vec3 d = tr_vec3_make(b.min.x - a.min.x, b.min.y - a.min.y, b.min.z - a.min.z);
+        const uint32_t count = tr_scene_shape_triangle_count(r->scene, i);
+        moved |= d.x != 0.0f || d.y != 0.0f || d.z != 0.0f;
+        for (uint32_t t = first; t < first + count && t + 1 < n; ++t) {
+            r->motion[t + 1] = d;
+        }
+        first += count;
+        r->motion_boxes[i] = b;
+    }
+    *ids = moved ? n : 0;
+    return moved ? r->motion : NULL;
+}
+
 /* The film through reconstruction `method` into r->disp (sized to the film; a new size
  * starts the history over). */
 static int reconstruct(view_renderer *r, const tr_camera *cam, int method, int threads,
                        tr_error *err) {
     const uint32_t w = r->film.width, h = r->film.height;
+    const tr_recon_params p = tr_recon_params_default();
+    uint32_t ids;
+    const tr_vec3 *motion = animate_motion(r, &ids);
+    if (strcmp(tr_device_kind(r->dev), "opencl") == 0) {
+        /* On an OpenCL device the stages run where the film lies (recon_device.h). */
+        if (!r->rdev || r->disp.width != w || r->disp.height != h) {
+            tr_recon_device_close(r->rdev);
+            tr_film_free(&r->disp);
+            if (!(r->rdev = tr_recon_device_open(r->dev, w, h, err)) ||
+                tr_film_init(&r->disp, w, h, err) != TR_OK) {
+                return TR_ERR;
+            }
+            for (size_t i = 0; i < (size_t)w * h; ++i) {
+                r->disp.count[i] = 1;
+            }
+        }
+        if (tr_recon_device_frame(r->rdev, cam, motion, ids, method, &p, r->disp.sum, err) !=
+            TR_OK) {
+            return TR_ERR;
+        }
+        tr_recon_device_times(r->rdev, &r->rec.ms_temporal, &r->rec.ms_spatial);
+        return TR_OK;
+    }
     if (r->gb.width != w || r->gb.height != h) {
         tr_gbuffer_free(&r->gb);
         tr_recon_free(&r->rec);
@@ -94,11 +156,11 @@ static int reconstruct(view_renderer *r, const tr_camera *cam, int method, int t
             r->disp.count[i] = 1;
         }
     }
-    const tr_recon_params p = tr_recon_params_default();
     if (tr_gbuffer_from_film(&r->gb, &r->film, err) != TR_OK) {
         return TR_ERR;
     }
-    return tr_recon_frame(&r->rec, &r->gb, cam, method, &p, threads, r->disp.sum, err);
+    return tr_recon_frame_moving(&r->rec, &r->gb, cam, motion, ids, method, &p, threads,
+                                 r->disp.sum, err);
 }
 
 static void *render_main(void *arg) {
@@ -376,6 +438,12 @@ void view_renderer_stop(view_renderer *r) {
     tr_film_free(&r->disp);
     tr_gbuffer_free(&r->gb);
     tr_recon_free(&r->rec);
+    tr_recon_device_close(r->rdev);
+    r->rdev = NULL;
+    free(r->motion);
+    free(r->motion_boxes);
+    r->motion = NULL;
+    r->motion_boxes = NULL;
     free(r->back);
     free(r->pixels);
     r->back = NULL;

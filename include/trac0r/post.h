@@ -182,6 +182,15 @@ void tr_recon_reset(tr_recon *r);
  * than the state's or an unknown method. */
 int tr_recon_frame(tr_recon *r, const tr_gbuffer *g, const tr_camera *cam, int method,
                    const tr_recon_params *p, int threads, float *out, tr_error *err);
+/* tr_recon_frame for a scene whose shapes move (view --animate): motion[id] is how far
+ * primitive id (the prim pass: triangle index + 1) moved in world space since the
+ * previous frame, for ids below motion_count (others, and all when motion is NULL, did
+ * not move). The temporal stage follows each pixel's surface back by its primitive's
+ * motion, so that the history of a moving shape stays with it (per-primitive motion
+ * vectors) instead of being rejected. */
+int tr_recon_frame_moving(tr_recon *r, const tr_gbuffer *g, const tr_camera *cam,
+                          const tr_vec3 *motion, uint32_t motion_count, int method,
+                          const tr_recon_params *p, int threads, float *out, tr_error *err);
 
 /* The spatial filters alone, on one image `in` (3 floats per pixel) guided by g's
  * passes (`trac0r render --denoise`): the bilateral filter on radiance, à-trous on

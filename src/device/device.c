@@ -185,6 +185,10 @@ const char *tr_device_kind(const tr_device *dev) {
     return dev->info.kind;
 }
 
+tr_cl_context *tr_device_cl_context(const tr_device *dev) {
+    return dev->cl;
+}
+
 int tr_device_upload(tr_device *dev, const tr_scene *scene, tr_error *err) {
     if (tr_scene_check_committed(scene, err) != TR_OK) {
         return TR_ERR;

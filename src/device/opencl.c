@@ -95,6 +95,11 @@ void tr_cl_set_memory_limit(tr_cl_context *ctx, uint64_t bytes) {
     (void)ctx;
     (void)bytes;
 }
+int tr_cl_get_handles(const tr_cl_context *ctx, tr_cl_handles *out, tr_error *err) {
+    (void)ctx;
+    memset(out, 0, sizeof *out);
+    return tr_error_set(err, TR_STATUS_UNSUPPORTED, "%s", no_opencl);
+}
 const char *tr_cl_error_name(int code) {
     (void)code;
     return "CL_UNKNOWN_ERROR";
@@ -974,6 +979,22 @@ int tr_cl_read_film(tr_cl_context *ctx, tr_film *film, tr_error *err) {
             return cl_fail(err, "clEnqueueReadBuffer(film)", rc);
         }
     }
+    return TR_OK;
+}
+
+int tr_cl_get_handles(const tr_cl_context *ctx, tr_cl_handles *out, tr_error *err) {
+    (void)err;
+    memset(out, 0, sizeof *out);
+    out->context = ctx->context;
+    out->device = ctx->device;
+    out->queue = ctx->queue;
+    out->options = ctx->options;
+    for (int i = 0; i < 6; ++i) {
+        out->film[i] = ctx->film[i];
+    }
+    out->width = ctx->width;
+    out->height = ctx->height;
+    out->passes = ctx->passes;
     return TR_OK;
 }
 

@@ -104,6 +104,24 @@ int tr_cl_read_film(tr_cl_context *ctx, tr_film *film, tr_error *err);
  * of the out-of-memory path on devices that have plenty. */
 void tr_cl_set_memory_limit(tr_cl_context *ctx, uint64_t bytes);
 
+/* The context's OpenCL objects, for programs of the library's own that work on its
+ * film where it lies (src/post/recon_opencl.c): cl_context, cl_device_id and
+ * cl_command_queue as void pointers (this header does not need CL/cl.h), the options
+ * its kernel was built with, and the film's buffers (cl_mem: radiance sum, count,
+ * albedo, normal, depth, primitive id; NULL before the first frame; a pass the film
+ * does not keep is a one-element placeholder) with its size and passes. */
+typedef struct tr_cl_handles {
+    void *context, *device, *queue;
+    const char *options;
+    void *film[6];
+    uint32_t width, height, passes;
+} tr_cl_handles;
+/* Fails only in builds without OpenCL. */
+int tr_cl_get_handles(const tr_cl_context *ctx, tr_cl_handles *out, tr_error *err);
+/* The OpenCL context of device dev (src/device/device.c); NULL for the CPU device. */
+struct tr_device;
+tr_cl_context *tr_device_cl_context(const struct tr_device *dev);
+
 /* "CL_OUT_OF_RESOURCES" for -5 etc.; "CL_UNKNOWN_ERROR" for codes it does not know. */
 const char *tr_cl_error_name(int code);
 

@@ -690,6 +690,12 @@ static void keep_geometry(tr_recon *r, const tr_gbuffer *g, const tr_camera *cam
 
 int tr_recon_frame(tr_recon *r, const tr_gbuffer *g, const tr_camera *cam, int method,
                    const tr_recon_params *p, int threads, float *out, tr_error *err) {
+    return tr_recon_frame_moving(r, g, cam, NULL, 0, method, p, threads, out, err);
+}
+
+int tr_recon_frame_moving(tr_recon *r, const tr_gbuffer *g, const tr_camera *cam,
+                          const tr_vec3 *motion, uint32_t motion_count, int method,
+                          const tr_recon_params *p, int threads, float *out, tr_error *err) {
     if (check_frame(r->width, r->height, g, err) != TR_OK) {
         return TR_ERR;
     }
@@ -723,10 +729,14 @@ int tr_recon_frame(tr_recon *r, const tr_gbuffer *g, const tr_camera *cam, int m
         for (int y = 0; y < h; ++y) {
             for (int x = 0; x < w; ++x) {
                 const size_t i = (size_t)y * w + x;
-                tr_post_temporal_pixel(cam, &pc, (uint32_t)x, (uint32_t)y, r->illum, g->normal,
-                                       g->depth, g->prim, pcol, pmom, plen, r->hist_depth,
-                                       r->hist_normal, r->hist_prim, p->alpha_min, p->max_len,
-                                       hc + 3 * i, hm + 2 * i, hl + i);
+                /* The primitive's own motion since the last frame (per-primitive motion
+                 * vectors; none for a static scene). */
+                const uint32_t id = g->prim[i];
+                const tr_vec3 m = motion && id < motion_count ? motion[id] : v3s(0.0f);
+                tr_post_temporal_pixel_moving(
+                    cam, &pc, (uint32_t)x, (uint32_t)y, m, r->illum, g->normal, g->depth, g->prim,
+                    pcol, pmom, plen, r->hist_depth, r->hist_normal, r->hist_prim, p->alpha_min,
+                    p->max_len, hc + 3 * i, hm + 2 * i, hl + i);
             }
         }
     } else {

@@ -121,17 +121,27 @@ TR_FN int tr_post_consistent(uint32_t prim, tr_vec3 p, tr_vec3 n, float dist, ui
  * top-left tap. Returns the sum of the weights (0: no history survives).
  *
  * Reprojection through the previous camera as in Nehab et al., "Accelerating
- * Real-Time Shading with Reverse Reprojection Caching", Graphics Hardware 2007. */
-TR_FN float tr_post_reproject(const tr_camera *cam, const tr_camera *prev, uint32_t x, uint32_t y,
-                              float depth, tr_vec3 n, uint32_t prim,
-                              TR_CONST_GLOBAL float *prev_depth, TR_CONST_GLOBAL float *prev_normal,
-                              TR_CONST_GLOBAL uint32_t *prev_prim, int *x0, int *y0, float w[4]) {
+ * Real-Time Shading with Reverse Reprojection Caching", Graphics Hardware 2007.
+ *
+ * `motion` is how far the surface at the pixel moved since the previous frame (world
+ * space; zero for a static scene): the point is followed back to where it was, p -
+ * motion, before it is projected and tested, so that the history of a moving shape
+ * (view --animate) follows it instead of failing the plane test: per-primitive motion
+ * vectors, as a rasteriser's previous-frame transform gives them. Shapes translate
+ * only, so the normal stays. tr_post_reproject is this with no motion (p - 0 is p:
+ * the same numbers). */
+TR_FN float tr_post_reproject_moving(const tr_camera *cam, const tr_camera *prev, uint32_t x,
+                                     uint32_t y, float depth, tr_vec3 n, uint32_t prim,
+                                     tr_vec3 motion, TR_CONST_GLOBAL float *prev_depth,
+                                     TR_CONST_GLOBAL float *prev_normal,
+                                     TR_CONST_GLOBAL uint32_t *prev_prim, int *x0, int *y0,
+                                     float w[4]) {
     w[0] = w[1] = w[2] = w[3] = 0.0f;
     *x0 = *y0 = 0;
     if (!(depth > 0.0f)) {
         return 0.0f; /* nothing hit: no point to follow */
     }
-    const tr_vec3 p = tr_post_world_point(cam, (float)x, (float)y, depth);
+    const tr_vec3 p = v3_sub(tr_post_world_point(cam, (float)x, (float)y, depth), motion);
     float px, py, dist;
     if (!tr_post_project(prev, p, &px, &py, &dist)) {
         return 0.0f;
@@ -169,30 +179,39 @@ TR_FN float tr_post_reproject(const tr_camera *cam, const tr_camera *prev, uint3
     return total;
 }
 
+TR_FN float tr_post_reproject(const tr_camera *cam, const tr_camera *prev, uint32_t x, uint32_t y,
+                              float depth, tr_vec3 n, uint32_t prim,
+                              TR_CONST_GLOBAL float *prev_depth, TR_CONST_GLOBAL float *prev_normal,
+                              TR_CONST_GLOBAL uint32_t *prev_prim, int *x0, int *y0, float w[4]) {
+    return tr_post_reproject_moving(cam, prev, x, y, depth, n, prim, v3s(0.0f), prev_depth,
+                                    prev_normal, prev_prim, x0, y0, w);
+}
+
 /* Temporal accumulation of pixel (x, y) (Schied et al. 2017, section 4.1): the
  * history (colour, luminance moments and length of the previous frame) reprojected by
  * tr_post_reproject's bilinear weights, blended with the new sample by an exponential
  * moving average of weight max(alpha_min, 1 / length), so that a fresh history averages
  * uniformly until it is long enough to become an EMA. No surviving history: the sample
  * alone, length 1. Writes colour, moments (mean luminance and mean squared luminance)
- * and the new length. */
+ * and the new length. `motion`: the surface's own movement since the previous frame
+ * (tr_post_reproject_moving); tr_post_temporal_pixel is this with none. */
 TR_FN void
-tr_post_temporal_pixel(const tr_camera *cam, const tr_camera *prev, uint32_t x, uint32_t y,
-                       TR_CONST_GLOBAL float *color, TR_CONST_GLOBAL float *normal,
-                       TR_CONST_GLOBAL float *depth, TR_CONST_GLOBAL uint32_t *prim,
-                       TR_CONST_GLOBAL float *prev_color, TR_CONST_GLOBAL float *prev_moments,
-                       TR_CONST_GLOBAL float *prev_len, TR_CONST_GLOBAL float *prev_depth,
-                       TR_CONST_GLOBAL float *prev_normal, TR_CONST_GLOBAL uint32_t *prev_prim,
-                       float alpha_min, float max_len, float out_color[3], float out_moments[2],
-                       float *out_len) {
+tr_post_temporal_pixel_moving(const tr_camera *cam, const tr_camera *prev, uint32_t x, uint32_t y,
+                              tr_vec3 motion, TR_CONST_GLOBAL float *color,
+                              TR_CONST_GLOBAL float *normal, TR_CONST_GLOBAL float *depth,
+                              TR_CONST_GLOBAL uint32_t *prim, TR_CONST_GLOBAL float *prev_color,
+                              TR_CONST_GLOBAL float *prev_moments, TR_CONST_GLOBAL float *prev_len,
+                              TR_CONST_GLOBAL float *prev_depth, TR_CONST_GLOBAL float *prev_normal,
+                              TR_CONST_GLOBAL uint32_t *prev_prim, float alpha_min, float max_len,
+                              float out_color[3], float out_moments[2], float *out_len) {
     const int i = (int)(y * cam->screen_width + x);
     const float r = color[3 * i], g = color[3 * i + 1], b = color[3 * i + 2];
     const float l = tr_post_luminance(r, g, b);
     const tr_vec3 n = v3(normal[3 * i], normal[3 * i + 1], normal[3 * i + 2]);
     float w[4];
     int x0, y0;
-    const float total = tr_post_reproject(cam, prev, x, y, depth[i], n, prim[i], prev_depth,
-                                          prev_normal, prev_prim, &x0, &y0, w);
+    const float total = tr_post_reproject_moving(cam, prev, x, y, depth[i], n, prim[i], motion,
+                                                 prev_depth, prev_normal, prev_prim, &x0, &y0, w);
     /* A sliver of a tap (a pixel at a silhouette) is not enough history to trust. */
     if (!(total > 0.05f)) {
         out_color[0] = r;
@@ -225,6 +244,20 @@ tr_post_temporal_pixel(const tr_camera *cam, const tr_camera *prev, uint32_t x, 
     out_moments[0] = hm[0] + a * (l - hm[0]);
     out_moments[1] = hm[1] + a * (l * l - hm[1]);
     *out_len = len;
+}
+
+TR_FN void
+tr_post_temporal_pixel(const tr_camera *cam, const tr_camera *prev, uint32_t x, uint32_t y,
+                       TR_CONST_GLOBAL float *color, TR_CONST_GLOBAL float *normal,
+                       TR_CONST_GLOBAL float *depth, TR_CONST_GLOBAL uint32_t *prim,
+                       TR_CONST_GLOBAL float *prev_color, TR_CONST_GLOBAL float *prev_moments,
+                       TR_CONST_GLOBAL float *prev_len, TR_CONST_GLOBAL float *prev_depth,
+                       TR_CONST_GLOBAL float *prev_normal, TR_CONST_GLOBAL uint32_t *prev_prim,
+                       float alpha_min, float max_len, float out_color[3], float out_moments[2],
+                       float *out_len) {
+    tr_post_temporal_pixel_moving(cam, prev, x, y, v3s(0.0f), color, normal, depth, prim,
+                                  prev_color, prev_moments, prev_len, prev_depth, prev_normal,
+                                  prev_prim, alpha_min, max_len, out_color, out_moments, out_len);
 }
 
 /* Temporal antialiasing of pixel (x, y) (Karis, "High Quality Temporal Supersampling",

@@ -1,0 +1,177 @@
+/* recon.cl - real-time reconstruction on an OpenCL device: one kernel per stage of
+ * tr_recon_frame (src/post/filter.c), each a work item per pixel calling the per-pixel
+ * operators of filter.h, the very text the host's filters are checked against. The
+ * host side is src/post/recon_opencl.c; cmake/EmbedKernel.cmake inlines this file and
+ * the headers it includes into one string (tr_cl_recon_source).
+ *
+ * Every kernel takes the image size and returns for work items outside it, so the
+ * host may round the global size up. */
+#pragma OPENCL FP_CONTRACT OFF
+
+#include "filter.h"
+
+/* The device film's means into the frame's buffers (tr_gbuffer_from_film's arithmetic):
+ * passes bit 0 albedo, 1 normal, 2 depth, 3 primitive id; a pass the film lacks reads
+ * as albedo 1, normal, depth and id 0. */
+__kernel void tr_recon_from_film(__global const float *sum, __global const uint *count,
+                                 __global const float *albedo_sum, __global const float *normal_sum,
+                                 __global const float *depth_sum, __global const uint *prim_in,
+                                 uint passes, int w, int h, __global float *color,
+                                 __global float *albedo, __global float *normal,
+                                 __global float *depth, __global uint *prim) {
+    const int x = (int)get_global_id(0), y = (int)get_global_id(1);
+    if (x >= w || y >= h) {
+        return;
+    }
+    const int i = y * w + x;
+    const uint c = count[i];
+    const float inv = c ? 1.0f / (float)c : 0.0f;
+    for (int k = 0; k < 3; ++k) {
+        color[3 * i + k] = sum[3 * i + k] * inv;
+        albedo[3 * i + k] = (passes & 1u) ? albedo_sum[3 * i + k] * inv : 1.0f;
+        normal[3 * i + k] = (passes & 2u) ? normal_sum[3 * i + k] * inv : 0.0f;
+    }
+    depth[i] = (passes & 4u) ? depth_sum[i] * inv : 0.0f;
+    prim[i] = (passes & 8u) ? prim_in[i] : 0u;
+}
+
+/* Demodulation (remod 0: in / albedo factor) or remodulation (remod 1: in * factor). */
+__kernel void tr_recon_modulate(__global const float *in, __global const float *albedo, int remod,
+                                int w, int h, __global float *out) {
+    const int x = (int)get_global_id(0), y = (int)get_global_id(1);
+    if (x >= w || y >= h) {
+        return;
+    }
+    const int i = y * w + x;
+    for (int k = 0; k < 3; ++k) {
+        const float a = tr_post_demod_factor(albedo[3 * i + k]);
+        out[3 * i + k] = remod ? in[3 * i + k] * a : in[3 * i + k] / a;
+    }
+}
+
+/* Temporal accumulation (tr_post_temporal_pixel_moving) through cams[0] (this frame) and
+ * cams[1] (the previous one); without history (have_history 0) each pixel starts over
+ * with its own sample, length 1. motion: 3 floats per primitive id below motion_count,
+ * its movement since the previous frame (tr_recon_frame_moving). */
+__kernel void tr_recon_temporal(__global const tr_camera *cams, __global const float *illum,
+                                __global const float *normal, __global const float *depth,
+                                __global const uint *prim, __global const float *prev_color,
+                                __global const float *prev_moments, __global const float *prev_len,
+                                __global const float *prev_depth, __global const float *prev_normal,
+                                __global const uint *prev_prim, __global const float *motion,
+                                uint motion_count, int have_history, float alpha_min, float max_len,
+                                __global float *out_color, __global float *out_moments,
+                                __global float *out_len) {
+    const tr_camera cam = cams[0], prev = cams[1];
+    const uint x = (uint)get_global_id(0), y = (uint)get_global_id(1);
+    if (x >= cam.screen_width || y >= cam.screen_height) {
+        return;
+    }
+    const uint i = y * cam.screen_width + x;
+    if (!have_history) {
+        const float l = tr_post_luminance(illum[3 * i], illum[3 * i + 1], illum[3 * i + 2]);
+        out_color[3 * i] = illum[3 * i];
+        out_color[3 * i + 1] = illum[3 * i + 1];
+        out_color[3 * i + 2] = illum[3 * i + 2];
+        out_moments[2 * i] = l;
+        out_moments[2 * i + 1] = l * l;
+        out_len[i] = 1.0f;
+        return;
+    }
+    const uint id = prim[i];
+    const tr_vec3 mv =
+        id < motion_count ? v3(motion[3 * id], motion[3 * id + 1], motion[3 * id + 2]) : v3s(0.0f);
+    float c[3], m[2], len;
+    tr_post_temporal_pixel_moving(&cam, &prev, x, y, mv, illum, normal, depth, prim, prev_color,
+                                  prev_moments, prev_len, prev_depth, prev_normal, prev_prim,
+                                  alpha_min, max_len, c, m, &len);
+    out_color[3 * i] = c[0];
+    out_color[3 * i + 1] = c[1];
+    out_color[3 * i + 2] = c[2];
+    out_moments[2 * i] = m[0];
+    out_moments[2 * i + 1] = m[1];
+    out_len[i] = len;
+}
+
+__kernel void tr_recon_bilateral(__global const float *in, int w, int h, int radius, float sigma_s,
+                                 float sigma_r, __global float *out) {
+    const int x = (int)get_global_id(0), y = (int)get_global_id(1);
+    if (x >= w || y >= h) {
+        return;
+    }
+    const int i = y * w + x;
+    float o[3];
+    tr_post_bilateral_pixel(in, w, h, x, y, radius, sigma_s, sigma_r, o);
+    out[3 * i] = o[0];
+    out[3 * i + 1] = o[1];
+    out[3 * i + 2] = o[2];
+}
+
+__kernel void tr_recon_atrous(__global const float *in, __global const float *normal,
+                              __global const float *depth, __global const float *albedo, int w,
+                              int h, int step, float sigma_c, float sigma_n, float sigma_z,
+                              float sigma_a, __global float *out) {
+    const int x = (int)get_global_id(0), y = (int)get_global_id(1);
+    if (x >= w || y >= h) {
+        return;
+    }
+    const int i = y * w + x;
+    float o[3];
+    tr_post_atrous_pixel(in, normal, depth, albedo, w, h, x, y, step, sigma_c, sigma_n, sigma_z,
+                         sigma_a, o);
+    out[3 * i] = o[0];
+    out[3 * i + 1] = o[1];
+    out[3 * i + 2] = o[2];
+}
+
+/* SVGF's variance estimate (tr_post_svgf_variance_pixel) of the accumulated illumination. */
+__kernel void tr_recon_svgf_variance(__global const float *illum, __global const float *moments,
+                                     __global const float *len, __global const float *normal, int w,
+                                     int h, __global float *var) {
+    const int x = (int)get_global_id(0), y = (int)get_global_id(1);
+    if (x >= w || y >= h) {
+        return;
+    }
+    var[y * w + x] = tr_post_svgf_variance_pixel(illum, moments, len, normal, w, h, x, y);
+}
+
+/* One SVGF iteration (tr_post_svgf_pixel), the centre's variance through the paper's
+ * 3x3 Gaussian (tr_post_var3x3) as the host prefilters it. */
+__kernel void tr_recon_svgf(__global const float *in, __global const float *var,
+                            __global const float *normal, __global const float *depth, int w, int h,
+                            int step, float sigma_l, float sigma_n, float sigma_z,
+                            __global float *out, __global float *out_var) {
+    const int x = (int)get_global_id(0), y = (int)get_global_id(1);
+    if (x >= w || y >= h) {
+        return;
+    }
+    const int i = y * w + x;
+    float o[3], v;
+    tr_post_svgf_pixel(in, var, normal, depth, w, h, x, y, step, sigma_l, sigma_n, sigma_z,
+                       tr_post_var3x3(var, w, h, x, y), o, &v);
+    out[3 * i] = o[0];
+    out[3 * i + 1] = o[1];
+    out[3 * i + 2] = o[2];
+    out_var[i] = v;
+}
+
+/* SVGF's temporal antialiasing (tr_post_taa_pixel); have_prev 0: no previous output. */
+__kernel void tr_recon_taa(__global const tr_camera *cams, __global const float *cur,
+                           __global const float *normal, __global const float *depth,
+                           __global const uint *prim, __global const float *prev_out, int have_prev,
+                           __global const float *prev_depth, __global const float *prev_normal,
+                           __global const uint *prev_prim, float alpha, __global float *out) {
+    const tr_camera cam = cams[0], prev = cams[1];
+    const int x = (int)get_global_id(0), y = (int)get_global_id(1);
+    if (x >= (int)cam.screen_width || y >= (int)cam.screen_height) {
+        return;
+    }
+    const int i = y * (int)cam.screen_width + x;
+    float o[3];
+    tr_post_taa_pixel(&cam, &prev, x, y, cur, normal, depth, prim,
+                      have_prev ? prev_out : (__global const float *)0, prev_depth, prev_normal,
+                      prev_prim, alpha, o);
+    out[3 * i] = o[0];
+    out[3 * i + 1] = o[1];
+    out[3 * i + 2] = o[2];
+}

@@ -1,0 +1,565 @@
+/* recon_opencl.c - tr_recon_device (include/trac0r/recon_device.h): tr_recon_frame's
+ * stages where the frame was rendered. On an OpenCL device, the program of
+ * src/post/recon.cl (embedded as tr_cl_recon_source) is built in the device's context
+ * and its kernels run on the device's film and on history kept on the device, in the
+ * order and with the parameters filter.c uses; on the CPU, filter.c itself. */
+#include <stdlib.h>
+#include <string.h>
+
+#include "device/opencl.h"
+#include "trac0r/film.h"
+#include "trac0r/post.h"
+#include "trac0r/recon_device.h"
+#include "trac0r/render.h"
+
+#ifdef TRAC0R_HAVE_OPENCL
+#define CL_TARGET_OPENCL_VERSION 120
+#include <CL/cl.h>
+
+extern const char tr_cl_recon_source[];
+extern const size_t tr_cl_recon_source_length;
+
+enum {
+    K_FROM_FILM = 0,
+    K_MODULATE,
+    K_TEMPORAL,
+    K_BILATERAL,
+    K_ATROUS,
+    K_SVGF_VARIANCE,
+    K_SVGF,
+    K_TAA,
+    K_COUNT
+};
+static const char *const kernel_names[K_COUNT] = {
+    "tr_recon_from_film", "tr_recon_modulate",      "tr_recon_temporal", "tr_recon_bilateral",
+    "tr_recon_atrous",    "tr_recon_svgf_variance", "tr_recon_svgf",     "tr_recon_taa"};
+
+/* The device's buffers: the frame (as tr_gbuffer), scratch, history, the two cameras. */
+enum {
+    B_COLOR = 0,
+    B_ALBEDO,
+    B_NORMAL,
+    B_DEPTH,
+    B_PRIM,
+    B_ILLUM,
+    B_HC0, /* history colour, moments and length, two of each (this frame's, the last) */
+    B_HC1,
+    B_HM0,
+    B_HM1,
+    B_HL0,
+    B_HL1,
+    B_HDEPTH, /* the geometry the history was seen with */
+    B_HNORMAL,
+    B_HPRIM,
+    B_CA, /* filter ping, pong */
+    B_CB,
+    B_VA, /* SVGF's variance ping, pong */
+    B_VB,
+    B_OUT,
+    B_TAA, /* SVGF's last output */
+    B_CAMS,
+    B_COUNT
+};
+/* Floats (or uints) per pixel of each buffer; 0: the cameras. */
+static const int buffer_elems[B_COUNT] = {3, 3, 3, 1, 1, 3, 3, 3, 2, 2, 1,
+                                          1, 1, 3, 1, 3, 3, 1, 1, 3, 3, 0};
+
+typedef struct recon_cl {
+    cl_context context;
+    cl_command_queue queue;
+    cl_program program;
+    cl_kernel k[K_COUNT];
+    cl_mem b[B_COUNT];
+    cl_mem motion; /* the primitives' motion (tr_recon_frame_moving) */
+    size_t motion_cap;
+    tr_camera prev_cam;
+    int have_history, cur, have_taa;
+} recon_cl;
+#else
+typedef struct recon_cl recon_cl;
+#endif
+
+struct tr_recon_device {
+    tr_device *dev;
+    uint32_t width, height;
+    double ms_temporal, ms_spatial;
+    recon_cl *cl; /* NULL: the host's tr_recon below */
+    tr_recon host;
+    tr_gbuffer gb;
+    tr_film film;
+};
+
+static int check_args(const tr_recon_device *r, const tr_camera *cam, int method, tr_error *err) {
+    if (!tr_recon_name(method)) {
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "reconstruction: unknown method %d",
+                            method);
+    }
+    if (cam->screen_width != r->width || cam->screen_height != r->height) {
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "reconstruction: a %ux%u camera for a %ux%u state", cam->screen_width,
+                            cam->screen_height, r->width, r->height);
+    }
+    return TR_OK;
+}
+
+#ifdef TRAC0R_HAVE_OPENCL
+
+static int cl_fail(tr_error *err, const char *call, cl_int code) {
+    return tr_error_set(err, TR_STATUS_DEVICE, "OpenCL reconstruction: %s failed: %s (%d)", call,
+                        tr_cl_error_name(code), code);
+}
+
+static void cl_state_free(recon_cl *c) {
+    if (!c) {
+        return;
+    }
+    for (int i = 0; i < B_COUNT; ++i) {
+        if (c->b[i]) {
+            clReleaseMemObject(c->b[i]);
+        }
+    }
+    if (c->motion) {
+        clReleaseMemObject(c->motion);
+    }
+    for (int i = 0; i < K_COUNT; ++i) {
+        if (c->k[i]) {
+            clReleaseKernel(c->k[i]);
+        }
+    }
+    if (c->program) {
+        clReleaseProgram(c->program);
+    }
+    if (c->queue) {
+        clReleaseCommandQueue(c->queue);
+    }
+    if (c->context) {
+        clReleaseContext(c->context);
+    }
+    free(c);
+}
+
+/* The program built for the device of h with the render kernel's options (FP_CONTRACT
+ * off in recon.cl, divisions and square roots correctly rounded where the device can),
+ * so that it computes what the host's filters compute. */
+static recon_cl *cl_state_open(const tr_cl_handles *h, uint32_t w, uint32_t ht, tr_error *err) {
+    recon_cl *c = calloc(1, sizeof *c);
+    if (!c) {
+        tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory for a reconstruction");
+        return NULL;
+    }
+    c->context = (cl_context)h->context;
+    c->queue = (cl_command_queue)h->queue;
+    clRetainContext(c->context);
+    clRetainCommandQueue(c->queue);
+    cl_device_id dev = (cl_device_id)h->device;
+    cl_int rc;
+    const char *src = tr_cl_recon_source;
+    const size_t len = tr_cl_recon_source_length;
+    c->program = clCreateProgramWithSource(c->context, 1, &src, &len, &rc);
+    if (!c->program) {
+        cl_fail(err, "clCreateProgramWithSource", rc);
+        goto fail;
+    }
+    rc = clBuildProgram(c->program, 1, &dev, h->options, NULL, NULL);
+    if (rc != CL_SUCCESS) {
+        char log[4096] = "";
+        clGetProgramBuildInfo(c->program, dev, CL_PROGRAM_BUILD_LOG, sizeof log - 1, log, NULL);
+        tr_error_set(err, TR_STATUS_DEVICE,
+                     "OpenCL reconstruction: clBuildProgram failed: %s (%d); build log: %s",
+                     tr_cl_error_name(rc), rc, log);
+        goto fail;
+    }
+    for (int i = 0; i < K_COUNT; ++i) {
+        c->k[i] = clCreateKernel(c->program, kernel_names[i], &rc);
+        if (!c->k[i]) {
+            cl_fail(err, kernel_names[i], rc);
+            goto fail;
+        }
+    }
+    const size_t n = (size_t)w * ht;
+    for (int i = 0; i < B_COUNT; ++i) {
+        const size_t bytes =
+            buffer_elems[i] ? n * (size_t)buffer_elems[i] * sizeof(float) : 2 * sizeof(tr_camera);
+        c->b[i] = clCreateBuffer(c->context, CL_MEM_READ_WRITE, bytes, NULL, &rc);
+        if (!c->b[i]) {
+            tr_error_set(err, TR_STATUS_OUT_OF_MEMORY,
+                         "OpenCL reconstruction: no device memory for a %ux%u frame: "
+                         "clCreateBuffer failed: %s (%d)",
+                         w, ht, tr_cl_error_name(rc), rc);
+            goto fail;
+        }
+    }
+    return c;
+fail:
+    cl_state_free(c);
+    return NULL;
+}
+
+/* Kernel arguments: a buffer, or a value of its own size. */
+typedef struct karg {
+    size_t size;
+    const void *ptr;
+} karg;
+#define KB(c, i) ((karg){sizeof(cl_mem), &(c)->b[i]})
+#define KM(m) ((karg){sizeof(cl_mem), &(m)})
+#define KI(v) ((karg){sizeof(cl_int), &(cl_int){(v)}})
+#define KU(v) ((karg){sizeof(cl_uint), &(cl_uint){(v)}})
+#define KF(v) ((karg){sizeof(cl_float), &(cl_float){(v)}})
+
+/* Sets kernel k's n arguments and runs it over w x h pixels. */
+static int run(recon_cl *c, int k, int w, int h, int n, const karg *a, tr_error *err) {
+    for (int i = 0; i < n; ++i) {
+        const cl_int rc = clSetKernelArg(c->k[k], (cl_uint)i, a[i].size, a[i].ptr);
+        if (rc != CL_SUCCESS) {
+            return cl_fail(err, kernel_names[k], rc);
+        }
+    }
+    const size_t global[2] = {(size_t)w, (size_t)h};
+    const cl_int rc =
+        clEnqueueNDRangeKernel(c->queue, c->k[k], 2, NULL, global, NULL, 0, NULL, NULL);
+    return rc == CL_SUCCESS ? TR_OK : cl_fail(err, kernel_names[k], rc);
+}
+#define RUN(c, k, w, h, err, ...)                                                                  \
+    run(c, k, w, h, (int)(sizeof((karg[]){__VA_ARGS__}) / sizeof(karg)), (karg[]){__VA_ARGS__}, err)
+
+static int copy(recon_cl *c, int from, int to, size_t bytes, tr_error *err) {
+    const cl_int rc =
+        clEnqueueCopyBuffer(c->queue, c->b[from], c->b[to], 0, 0, bytes, 0, NULL, NULL);
+    return rc == CL_SUCCESS ? TR_OK : cl_fail(err, "clEnqueueCopyBuffer", rc);
+}
+
+static int finish(recon_cl *c, tr_error *err) {
+    const cl_int rc = clFinish(c->queue);
+    return rc == CL_SUCCESS ? TR_OK : cl_fail(err, "clFinish", rc);
+}
+
+/* The device's film into the frame's buffers. */
+static int cl_from_film(tr_recon_device *r, tr_error *err) {
+    tr_cl_handles h;
+    if (tr_cl_get_handles(tr_device_cl_context(r->dev), &h, err) != TR_OK) {
+        return TR_ERR;
+    }
+    if (!h.film[0] || h.width != r->width || h.height != r->height) {
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "reconstruction: the device's film is %ux%u, the state %ux%u", h.width,
+                            h.height, r->width, r->height);
+    }
+    const cl_uint passes =
+        ((h.passes & TR_PASS_ALBEDO) ? 1u : 0u) | ((h.passes & TR_PASS_NORMAL) ? 2u : 0u) |
+        ((h.passes & TR_PASS_DEPTH) ? 4u : 0u) | ((h.passes & TR_PASS_PRIM) ? 8u : 0u);
+    cl_mem f[6];
+    for (int i = 0; i < 6; ++i) {
+        f[i] = (cl_mem)h.film[i];
+    }
+    recon_cl *c = r->cl;
+    const int w = (int)r->width, ht = (int)r->height;
+    return RUN(c, K_FROM_FILM, w, ht, err, KM(f[0]), KM(f[1]), KM(f[2]), KM(f[3]), KM(f[4]),
+               KM(f[5]), KU(passes), KI(w), KI(ht), KB(c, B_COLOR), KB(c, B_ALBEDO),
+               KB(c, B_NORMAL), KB(c, B_DEPTH), KB(c, B_PRIM));
+}
+
+static int cl_upload(tr_recon_device *r, const tr_gbuffer *g, tr_error *err) {
+    const size_t n = (size_t)r->width * r->height;
+    const void *src[5] = {g->color, g->albedo, g->normal, g->depth, g->prim};
+    const size_t bytes[5] = {3 * n * 4, 3 * n * 4, 3 * n * 4, n * 4, n * 4};
+    for (int i = 0; i < 5; ++i) {
+        const cl_int rc = clEnqueueWriteBuffer(r->cl->queue, r->cl->b[B_COLOR + i], CL_FALSE, 0,
+                                               bytes[i], src[i], 0, NULL, NULL);
+        if (rc != CL_SUCCESS) {
+            return cl_fail(err, "clEnqueueWriteBuffer", rc);
+        }
+    }
+    /* The host's arrays may change once this returns. */
+    return finish(r->cl, err);
+}
+
+/* The primitives' motion onto the device (count 0: none). */
+static int cl_motion(recon_cl *c, const tr_vec3 *motion, uint32_t count, tr_error *err) {
+    const size_t bytes = (size_t)count * 3 * sizeof(float);
+    if (count == 0) {
+        return TR_OK;
+    }
+    if (bytes > c->motion_cap) {
+        if (c->motion) {
+            clReleaseMemObject(c->motion);
+        }
+        cl_int rc;
+        c->motion_cap = 0;
+        c->motion = clCreateBuffer(c->context, CL_MEM_READ_ONLY, bytes, NULL, &rc);
+        if (!c->motion) {
+            return cl_fail(err, "clCreateBuffer(motion)", rc);
+        }
+        c->motion_cap = bytes;
+    }
+    float *flat = malloc(bytes);
+    if (!flat) {
+        return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory for %u motions", count);
+    }
+    for (uint32_t i = 0; i < count; ++i) {
+        flat[3 * i] = motion[i].x;
+        flat[3 * i + 1] = motion[i].y;
+        flat[3 * i + 2] = motion[i].z;
+    }
+    const cl_int rc =
+        clEnqueueWriteBuffer(c->queue, c->motion, CL_TRUE, 0, bytes, flat, 0, NULL, NULL);
+    free(flat);
+    return rc == CL_SUCCESS ? TR_OK : cl_fail(err, "clEnqueueWriteBuffer(motion)", rc);
+}
+
+/* tr_recon_frame's stages (filter.c) on the frame in the device's frame buffers. */
+static int cl_frame(tr_recon_device *r, const tr_camera *cam, const tr_vec3 *motion,
+                    uint32_t motion_count, int method, const tr_recon_params *p, float *out,
+                    tr_error *err) {
+    recon_cl *c = r->cl;
+    if (!motion) {
+        motion_count = 0;
+    }
+    if (cl_motion(c, motion, motion_count, err) != TR_OK) {
+        return TR_ERR;
+    }
+    /* Any buffer stands in for the motion when there is none: nothing reads it. */
+    cl_mem mbuf = motion_count ? c->motion : c->b[B_DEPTH];
+    const int w = (int)r->width, h = (int)r->height;
+    const size_t n = (size_t)w * h;
+    int rc = TR_OK;
+    const double t0 = tr_time_now();
+    int result = B_COLOR; /* the buffer read back */
+    if (method == TR_RECON_OFF) {
+        c->have_history = 0;
+        goto read;
+    }
+    {
+        const tr_camera cams[2] = {*cam, c->have_history ? c->prev_cam : *cam};
+        cl_int crc = clEnqueueWriteBuffer(c->queue, c->b[B_CAMS], CL_TRUE, 0, sizeof cams, cams, 0,
+                                          NULL, NULL);
+        if (crc != CL_SUCCESS) {
+            return cl_fail(err, "clEnqueueWriteBuffer(cameras)", crc);
+        }
+    }
+    const int prev = c->cur, next = 1 - c->cur;
+    const int hc = B_HC0 + next, hm = B_HM0 + next, hl = B_HL0 + next;
+    rc = RUN(c, K_MODULATE, w, h, err, KB(c, B_COLOR), KB(c, B_ALBEDO), KI(0), KI(w), KI(h),
+             KB(c, B_ILLUM));
+    rc = rc ? rc
+            : RUN(c, K_TEMPORAL, w, h, err, KB(c, B_CAMS), KB(c, B_ILLUM), KB(c, B_NORMAL),
+                  KB(c, B_DEPTH), KB(c, B_PRIM), KB(c, B_HC0 + prev), KB(c, B_HM0 + prev),
+                  KB(c, B_HL0 + prev), KB(c, B_HDEPTH), KB(c, B_HNORMAL), KB(c, B_HPRIM), KM(mbuf),
+                  KU(motion_count), KI(c->have_history), KF(p->alpha_min), KF(p->max_len),
+                  KB(c, hc), KB(c, hm), KB(c, hl));
+    if (rc != TR_OK || (rc = finish(c, err)) != TR_OK) {
+        return rc;
+    }
+    c->cur = next;
+    const double t1 = tr_time_now();
+    r->ms_temporal = (t1 - t0) * 1e3;
+    const int had_taa = c->have_taa && c->have_history;
+    c->have_taa = 0;
+    result = B_OUT;
+    if (method == TR_RECON_ACCUMULATE) {
+        rc = RUN(c, K_MODULATE, w, h, err, KB(c, hc), KB(c, B_ALBEDO), KI(1), KI(w), KI(h),
+                 KB(c, B_OUT));
+    } else if (method == TR_RECON_BILATERAL) {
+        rc = RUN(c, K_MODULATE, w, h, err, KB(c, hc), KB(c, B_ALBEDO), KI(1), KI(w), KI(h),
+                 KB(c, B_CA));
+        rc = rc ? rc
+                : RUN(c, K_BILATERAL, w, h, err, KB(c, B_CA), KI(w), KI(h), KI(p->bilateral_radius),
+                      KF(p->bilateral_sigma_s), KF(p->bilateral_sigma_r), KB(c, B_OUT));
+    } else if (method == TR_RECON_ATROUS) {
+        int src = hc, dst = B_CA;
+        for (int it = 0; rc == TR_OK && it < p->atrous_iterations; ++it) {
+            rc = RUN(c, K_ATROUS, w, h, err, KB(c, src), KB(c, B_NORMAL), KB(c, B_DEPTH),
+                     KB(c, B_ALBEDO), KI(w), KI(h), KI(1 << it),
+                     KF(p->atrous_sigma_c / (float)(1 << it)), KF(p->atrous_sigma_n),
+                     KF(p->atrous_sigma_z), KF(p->atrous_sigma_a), KB(c, dst));
+            src = dst;
+            dst = dst == B_CA ? B_CB : B_CA;
+        }
+        rc = rc ? rc
+                : RUN(c, K_MODULATE, w, h, err, KB(c, src), KB(c, B_ALBEDO), KI(1), KI(w), KI(h),
+                      KB(c, B_OUT));
+    } else {
+        rc = RUN(c, K_SVGF_VARIANCE, w, h, err, KB(c, hc), KB(c, hm), KB(c, hl), KB(c, B_NORMAL),
+                 KI(w), KI(h), KB(c, B_VA));
+        int src = hc, dst = B_CA, vs = B_VA, vd = B_VB;
+        for (int it = 0; rc == TR_OK && it < p->svgf_iterations; ++it) {
+            rc = RUN(c, K_SVGF, w, h, err, KB(c, src), KB(c, vs), KB(c, B_NORMAL), KB(c, B_DEPTH),
+                     KI(w), KI(h), KI(1 << it), KF(p->svgf_sigma_l), KF(p->svgf_sigma_n),
+                     KF(p->svgf_sigma_z), KB(c, dst), KB(c, vd));
+            /* Schied et al. feed the first iteration's output back as the history. */
+            if (rc == TR_OK && it == 0 && p->svgf_feedback) {
+                rc = copy(c, dst, hc, 3 * n * sizeof(float), err);
+            }
+            src = dst;
+            dst = dst == B_CA ? B_CB : B_CA;
+            const int t = vs;
+            vs = vd;
+            vd = t;
+        }
+        if (rc == TR_OK && p->svgf_taa_alpha > 0.0f) {
+            /* The remodulated output (B_ILLUM is free by now) through temporal
+             * antialiasing against the last frame's output. */
+            rc = RUN(c, K_MODULATE, w, h, err, KB(c, src), KB(c, B_ALBEDO), KI(1), KI(w), KI(h),
+                     KB(c, B_ILLUM));
+            rc = rc ? rc
+                    : RUN(c, K_TAA, w, h, err, KB(c, B_CAMS), KB(c, B_ILLUM), KB(c, B_NORMAL),
+                          KB(c, B_DEPTH), KB(c, B_PRIM), KB(c, B_TAA), KI(had_taa), KB(c, B_HDEPTH),
+                          KB(c, B_HNORMAL), KB(c, B_HPRIM), KF(p->svgf_taa_alpha), KB(c, B_OUT));
+            rc = rc ? rc : copy(c, B_OUT, B_TAA, 3 * n * sizeof(float), err);
+            c->have_taa = rc == TR_OK;
+        } else if (rc == TR_OK) {
+            rc = RUN(c, K_MODULATE, w, h, err, KB(c, src), KB(c, B_ALBEDO), KI(1), KI(w), KI(h),
+                     KB(c, B_OUT));
+        }
+    }
+    /* The geometry this frame's history was seen with, for the next frame's tests. */
+    rc = rc ? rc : copy(c, B_DEPTH, B_HDEPTH, n * sizeof(float), err);
+    rc = rc ? rc : copy(c, B_NORMAL, B_HNORMAL, 3 * n * sizeof(float), err);
+    rc = rc ? rc : copy(c, B_PRIM, B_HPRIM, n * sizeof(uint32_t), err);
+    if (rc != TR_OK) {
+        c->have_history = 0;
+        return rc;
+    }
+    c->prev_cam = *cam;
+    c->have_history = 1;
+read:;
+    const cl_int crc = clEnqueueReadBuffer(c->queue, c->b[result], CL_TRUE, 0,
+                                           3 * n * sizeof(float), out, 0, NULL, NULL);
+    if (crc != CL_SUCCESS) {
+        return cl_fail(err, "clEnqueueReadBuffer(output)", crc);
+    }
+    const double t2 = tr_time_now();
+    if (method == TR_RECON_OFF) {
+        r->ms_temporal = 0.0;
+    }
+    r->ms_spatial = (t2 - t0) * 1e3 - r->ms_temporal;
+    return TR_OK;
+}
+#endif
+
+tr_recon_device *tr_recon_device_open(tr_device *dev, uint32_t width, uint32_t height,
+                                      tr_error *err) {
+    if (tr_film_check_size(width, height, err) != TR_OK) {
+        return NULL;
+    }
+    tr_recon_device *r = calloc(1, sizeof *r);
+    if (!r) {
+        tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory for a reconstruction");
+        return NULL;
+    }
+    r->dev = dev;
+    r->width = width;
+    r->height = height;
+    tr_cl_context *cl = tr_device_cl_context(dev);
+    if (cl) {
+#ifdef TRAC0R_HAVE_OPENCL
+        tr_cl_handles h;
+        if (tr_cl_get_handles(cl, &h, err) != TR_OK ||
+            !(r->cl = cl_state_open(&h, width, height, err))) {
+            free(r);
+            return NULL;
+        }
+        return r;
+#endif
+    }
+    if (tr_recon_init(&r->host, width, height, err) != TR_OK) {
+        free(r);
+        return NULL;
+    }
+    if (tr_gbuffer_init(&r->gb, width, height, err) != TR_OK) {
+        tr_recon_free(&r->host);
+        free(r);
+        return NULL;
+    }
+    return r;
+}
+
+void tr_recon_device_close(tr_recon_device *r) {
+    if (!r) {
+        return;
+    }
+#ifdef TRAC0R_HAVE_OPENCL
+    cl_state_free(r->cl);
+#endif
+    if (!r->cl) {
+        tr_recon_free(&r->host);
+        tr_gbuffer_free(&r->gb);
+        tr_film_free(&r->film);
+    }
+    free(r);
+}
+
+void tr_recon_device_reset(tr_recon_device *r) {
+#ifdef TRAC0R_HAVE_OPENCL
+    if (r->cl) {
+        r->cl->have_history = 0;
+        return;
+    }
+#endif
+    tr_recon_reset(&r->host);
+}
+
+int tr_recon_device_on_device(const tr_recon_device *r) {
+    return r->cl != NULL;
+}
+
+void tr_recon_device_times(const tr_recon_device *r, double *ms_temporal, double *ms_spatial) {
+    *ms_temporal = r->cl ? r->ms_temporal : r->host.ms_temporal;
+    *ms_spatial = r->cl ? r->ms_spatial : r->host.ms_spatial;
+}
+
+int tr_recon_device_frame_gbuffer(tr_recon_device *r, const tr_gbuffer *g, const tr_camera *cam,
+                                  const tr_vec3 *motion, uint32_t motion_count, int method,
+                                  const tr_recon_params *p, float *out, tr_error *err) {
+    if (check_args(r, cam, method, err) != TR_OK) {
+        return TR_ERR;
+    }
+    if (g->width != r->width || g->height != r->height) {
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "reconstruction: %ux%u frame for a %ux%u state", g->width, g->height,
+                            r->width, r->height);
+    }
+#ifdef TRAC0R_HAVE_OPENCL
+    if (r->cl) {
+        if (cl_upload(r, g, err) != TR_OK) {
+            return TR_ERR;
+        }
+        return cl_frame(r, cam, motion, motion_count, method, p, out, err);
+    }
+#endif
+    return tr_recon_frame_moving(&r->host, g, cam, motion, motion_count, method, p, 0, out, err);
+}
+
+int tr_recon_device_frame(tr_recon_device *r, const tr_camera *cam, const tr_vec3 *motion,
+                          uint32_t motion_count, int method, const tr_recon_params *p, float *out,
+                          tr_error *err) {
+    if (check_args(r, cam, method, err) != TR_OK) {
+        return TR_ERR;
+    }
+#ifdef TRAC0R_HAVE_OPENCL
+    if (r->cl) {
+        if (cl_from_film(r, err) != TR_OK) {
+            return TR_ERR;
+        }
+        return cl_frame(r, cam, motion, motion_count, method, p, out, err);
+    }
+#endif
+    uint32_t w, h, passes;
+    tr_device_film_size(r->dev, &w, &h, &passes);
+    if (w != r->width || h != r->height) {
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "reconstruction: the device's film is %ux%u, the state %ux%u", w, h,
+                            r->width, r->height);
+    }
+    if (!r->film.sum || r->film.passes != passes) {
+        tr_film_free(&r->film);
+        if (tr_film_init_passes(&r->film, w, h, passes, err) != TR_OK) {
+            return TR_ERR;
+        }
+    }
+    if (tr_device_read_film(r->dev, &r->film, err) != TR_OK ||
+        tr_gbuffer_from_film(&r->gb, &r->film, err) != TR_OK) {
+        return TR_ERR;
+    }
+    return tr_recon_frame_moving(&r->host, &r->gb, cam, motion, motion_count, method, p, 0, out,
+                                 err);
+}

@@ -1,0 +1,306 @@
+/* test_opencl_recon.c - the reconstruction on an OpenCL device (src/post/recon.cl,
+ * recon_opencl.c) on PoCL (or whatever device 0 is) against the host's (filter.c).
+ *
+ * 1. The same frames (the classic Cornell box at 1 spp, passes included, under a moving
+ *    camera) through every method on the host and on the device agree to float
+ *    rounding, frame after frame: the temporal stage, the history kept on the device,
+ *    SVGF's feedback and TAA included. The host's filters are filter.h's per-pixel
+ *    operators with their loops turned round (test_recon: within 1e-5); the device runs
+ *    those operators, compiled with the same FP_CONTRACT off and correctly rounded
+ *    division and square root, so what remains is the rounding of a few operations
+ *    done in another order (the host's vectorised sums, its reciprocals), ~1e-7
+ *    relative per operation, grown through up to 5 filter iterations and 4 frames of
+ *    history: a bound of 1e-4 relative to max(1, |value|) (the images are radiance in
+ *    [0, ~10]) leaves that two orders of magnitude, while a filter that differed in any
+ *    weight or tap differs by 1e-2 and more (checked: every method changes the frame by
+ *    far more than the bound).
+ * 2. The device's own film, reconstructed where it lies, gives what the host gives on
+ *    the same film read back.
+ * 3. On the CPU device tr_recon_device is tr_recon_frame, bit for bit.
+ * 4. A frame or camera of another size and an unknown method fail with a message.
+ * 5. Per-primitive motion (a sphere moving in front of a wall, tests/motion_scene.h):
+ *    host and device agree with the motion table as in 1.
+ *
+ * Needs an OpenCL platform; it fails (not skips) when no device can be opened. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "check.h"
+#include "motion_scene.h"
+#include "trac0r/scene_file.h"
+#include "trac0r/trac0r.h"
+
+#define W MOTION_W
+#define H MOTION_H
+#define FRAMES 4
+
+static const double bound = 1e-4;
+
+static tr_scene *cornell(tr_error *err) {
+    tr_scene *s = tr_scene_create(err);
+    CHECK(s && tr_scene_file_load(s, TR_SOURCE_DIR "/scenes/cornell-classic.json", NULL, NULL,
+                                  err) == TR_OK,
+          "cornell-classic: %s", err->msg);
+    tr_camera cam = *tr_scene_camera(s);
+    CHECK(tr_camera_resize(&cam, W, H, err) == TR_OK, "%s", err->msg);
+    tr_scene_set_camera(s, &cam);
+    CHECK(tr_scene_commit(s, TR_ACCEL_TYPE_BVH, err) == TR_OK, "commit: %s", err->msg);
+    return s;
+}
+
+/* Frame k's camera: the scene's, moved sideways and turned a little more each frame. */
+static tr_camera camera_at(const tr_camera *a, int k) {
+    tr_camera b;
+    tr_error err;
+    const tr_vec3 pos =
+        tr_vec3_make(a->pos.x + 6.0f * (float)k, a->pos.y + 2.0f * (float)k, a->pos.z);
+    const tr_vec3 dir = tr_vec3_make(a->dir.x + 0.01f * (float)k, a->dir.y, a->dir.z);
+    CHECK(tr_camera_make(&b, pos, dir, a->world_up, a->vertical_fov, a->near_dist, a->far_dist, W,
+                         H, &err) == TR_OK,
+          "%s", err.msg);
+    b.right = a->right.x < 0.0f ? tr_vec3_make(-b.right.x, -b.right.y, -b.right.z) : b.right;
+    return b;
+}
+
+static void render_g(const tr_scene *s, const tr_camera *cam, uint32_t sample, tr_gbuffer *g) {
+    tr_film f;
+    tr_error err;
+    CHECK(tr_film_init_passes(&f, W, H, TR_PASS_ALL, &err) == TR_OK, "%s", err.msg);
+    tr_render_config cfg = tr_render_config_default();
+    cfg.passes = TR_PASS_ALL;
+    cfg.threads = 2;
+    CHECK(tr_render_frame(s, cam, &cfg, &f, sample, NULL, &err) == TR_OK, "%s", err.msg);
+    CHECK(tr_gbuffer_init(g, W, H, &err) == TR_OK, "%s", err.msg);
+    CHECK(tr_gbuffer_from_film(g, &f, &err) == TR_OK, "%s", err.msg);
+    tr_film_free(&f);
+}
+
+/* The largest difference of a from b relative to max(1, |b|). */
+static double worst_rel(const float *a, const float *b, size_t n) {
+    double worst = 0.0;
+    for (size_t i = 0; i < n; ++i) {
+        const double d = fabs((double)a[i] - b[i]) / fmax(1.0, fabs((double)b[i]));
+        worst = d > worst || d != d ? (d != d ? INFINITY : d) : worst;
+    }
+    return worst;
+}
+
+/* Section 1: one method over FRAMES frames on both sides. */
+static void agree(tr_device *cl, const tr_gbuffer *g, const tr_camera *cams, int method,
+                  const tr_recon_params *p, const char *label) {
+    tr_error err;
+    tr_recon host;
+    CHECK(tr_recon_init(&host, W, H, &err) == TR_OK, "%s", err.msg);
+    tr_recon_device *dev = tr_recon_device_open(cl, W, H, &err);
+    CHECK(dev, "tr_recon_device_open: %s", err.msg);
+    CHECK(tr_recon_device_on_device(dev), "%s: the OpenCL state runs on the host", label);
+    float *a = malloc(3 * W * H * sizeof *a), *b = malloc(3 * W * H * sizeof *b);
+    CHECK(a && b, "out of memory");
+    double worst = 0.0, change = 0.0;
+    for (int k = 0; k < FRAMES; ++k) {
+        CHECK(tr_recon_frame(&host, &g[k], &cams[k], method, p, 2, a, &err) == TR_OK, "%s",
+              err.msg);
+        CHECK(tr_recon_device_frame_gbuffer(dev, &g[k], &cams[k], NULL, 0, method, p, b, &err) ==
+                  TR_OK,
+              "%s: %s", label, err.msg);
+        const double d = worst_rel(b, a, 3 * W * H);
+        CHECK(d <= bound, "%s, frame %d: device and host differ by %.3g (relative) > %.1g", label,
+              k, d, bound);
+        worst = fmax(worst, d);
+        change = fmax(change, worst_rel(a, g[k].color, 3 * W * H));
+    }
+    /* The bound is not vacuous: the method changed the frames by far more. */
+    if (method != TR_RECON_OFF) {
+        CHECK(change > 100.0 * bound, "%s changed the frames by only %.3g", label, change);
+    } else {
+        CHECK(worst == 0.0, "off: the device's frame differs from the input by %.3g", worst);
+    }
+    printf("  %-12s worst relative difference %.3g (the method changes the frame by %.3g)\n", label,
+           worst, change);
+    free(a);
+    free(b);
+    tr_recon_device_close(dev);
+    tr_recon_free(&host);
+}
+
+/* Section 2: the device's film, where it lies, against the same film on the host. */
+static void film_on_device(tr_device *cl, const tr_scene *s, const tr_camera *cams) {
+    tr_error err;
+    tr_recon host;
+    tr_gbuffer g;
+    tr_film f;
+    CHECK(tr_recon_init(&host, W, H, &err) == TR_OK, "%s", err.msg);
+    CHECK(tr_gbuffer_init(&g, W, H, &err) == TR_OK, "%s", err.msg);
+    CHECK(tr_film_init_passes(&f, W, H, TR_PASS_ALL, &err) == TR_OK, "%s", err.msg);
+    tr_recon_device *dev = tr_recon_device_open(cl, W, H, &err);
+    CHECK(dev, "%s", err.msg);
+    CHECK(tr_device_upload(cl, s, &err) == TR_OK, "%s", err.msg);
+    tr_render_config cfg = tr_render_config_default();
+    cfg.passes = TR_PASS_ALL;
+    const tr_recon_params p = tr_recon_params_default();
+    float *a = malloc(3 * W * H * sizeof *a), *b = malloc(3 * W * H * sizeof *b);
+    CHECK(a && b, "out of memory");
+    for (int k = 0; k < FRAMES; ++k) {
+        CHECK(tr_device_clear(cl, &err) == TR_OK || k == 0, "%s", err.msg);
+        /* Two samples, so that the film's means divide by a count above 1. */
+        CHECK(tr_device_render(cl, &cams[k], &cfg, 2u * (uint32_t)k, 2, NULL, NULL, &err) == TR_OK,
+              "%s", err.msg);
+        CHECK(tr_recon_device_frame(dev, &cams[k], NULL, 0, TR_RECON_SVGF, &p, b, &err) == TR_OK,
+              "%s", err.msg);
+        CHECK(tr_device_read_film(cl, &f, &err) == TR_OK, "%s", err.msg);
+        CHECK(tr_gbuffer_from_film(&g, &f, &err) == TR_OK, "%s", err.msg);
+        CHECK(tr_recon_frame(&host, &g, &cams[k], TR_RECON_SVGF, &p, 2, a, &err) == TR_OK, "%s",
+              err.msg);
+        const double d = worst_rel(b, a, 3 * W * H);
+        CHECK(d <= bound, "film on the device, frame %d: differs by %.3g > %.1g", k, d, bound);
+    }
+    double ms_t, ms_s;
+    tr_recon_device_times(dev, &ms_t, &ms_s);
+    CHECK(ms_t >= 0.0 && ms_s >= 0.0, "negative stage times %g %g", ms_t, ms_s);
+    /* Section 4: bad input. */
+    tr_camera small = cams[0];
+    small.screen_width = W / 2;
+    CHECK(tr_recon_device_frame(dev, &small, NULL, 0, TR_RECON_SVGF, &p, b, &err) == TR_ERR &&
+              err.code == TR_STATUS_INVALID_ARGUMENT,
+          "a camera of another size was accepted");
+    CHECK(tr_recon_device_frame(dev, &cams[0], NULL, 0, 99, &p, b, &err) == TR_ERR &&
+              err.code == TR_STATUS_INVALID_ARGUMENT,
+          "method 99 was accepted");
+    tr_recon_device *wrong = tr_recon_device_open(cl, W + 1, H, &err);
+    CHECK(wrong, "%s", err.msg);
+    CHECK(tr_recon_device_frame(wrong, &cams[0], NULL, 0, TR_RECON_SVGF, &p, b, &err) == TR_ERR,
+          "a film of another size was accepted");
+    tr_recon_device_close(wrong);
+    free(a);
+    free(b);
+    tr_film_free(&f);
+    tr_gbuffer_free(&g);
+    tr_recon_device_close(dev);
+    tr_recon_free(&host);
+}
+
+/* Section 3: the CPU device's state is the host's, bit for bit. */
+static void cpu_device(const tr_scene *s, const tr_camera *cams) {
+    tr_error err;
+    tr_device *cpu = tr_device_open("cpu", &err);
+    CHECK(cpu && tr_device_upload(cpu, s, &err) == TR_OK, "%s", err.msg);
+    tr_recon_device *dev = tr_recon_device_open(cpu, W, H, &err);
+    CHECK(dev && !tr_recon_device_on_device(dev), "%s", err.msg);
+    tr_recon host;
+    tr_gbuffer g;
+    tr_film f;
+    CHECK(tr_recon_init(&host, W, H, &err) == TR_OK, "%s", err.msg);
+    CHECK(tr_gbuffer_init(&g, W, H, &err) == TR_OK, "%s", err.msg);
+    CHECK(tr_film_init_passes(&f, W, H, TR_PASS_ALL, &err) == TR_OK, "%s", err.msg);
+    tr_render_config cfg = tr_render_config_default();
+    cfg.passes = TR_PASS_ALL;
+    const tr_recon_params p = tr_recon_params_default();
+    float *a = malloc(3 * W * H * sizeof *a), *b = malloc(3 * W * H * sizeof *b);
+    CHECK(a && b, "out of memory");
+    for (int k = 0; k < 2; ++k) {
+        CHECK(tr_device_clear(cpu, &err) == TR_OK, "%s", err.msg);
+        CHECK(tr_device_render(cpu, &cams[k], &cfg, (uint32_t)k, 1, NULL, NULL, &err) == TR_OK,
+              "%s", err.msg);
+        CHECK(tr_recon_device_frame(dev, &cams[k], NULL, 0, TR_RECON_SVGF, &p, b, &err) == TR_OK,
+              "%s", err.msg);
+        CHECK(tr_device_read_film(cpu, &f, &err) == TR_OK, "%s", err.msg);
+        CHECK(tr_gbuffer_from_film(&g, &f, &err) == TR_OK, "%s", err.msg);
+        CHECK(tr_recon_frame(&host, &g, &cams[k], TR_RECON_SVGF, &p, 0, a, &err) == TR_OK, "%s",
+              err.msg);
+        CHECK(memcmp(a, b, 3 * W * H * sizeof *a) == 0, "cpu device, frame %d: not bit-identical",
+              k);
+    }
+    free(a);
+    free(b);
+    tr_film_free(&f);
+    tr_gbuffer_free(&g);
+    tr_recon_free(&host);
+    tr_recon_device_close(dev);
+    tr_device_close(cpu);
+}
+
+/* Section 5: the moving sphere with its motion, host against device. */
+static void moving(tr_device *cl) {
+    tr_camera cam;
+    uint32_t first, count;
+    tr_scene *s = motion_scene(&cam, &first, &count);
+    tr_vec3 *table = motion_table(first, count);
+    const uint32_t ids = first + count + 1;
+    tr_error err;
+    const tr_recon_params p = tr_recon_params_default();
+    const int methods[2] = {TR_RECON_ACCUMULATE, TR_RECON_SVGF};
+    tr_recon host[2];
+    tr_recon_device *dev[2];
+    for (int m = 0; m < 2; ++m) {
+        CHECK(tr_recon_init(&host[m], W, H, &err) == TR_OK, "%s", err.msg);
+        dev[m] = tr_recon_device_open(cl, W, H, &err);
+        CHECK(dev[m], "%s", err.msg);
+    }
+    float *a = malloc(3 * W * H * sizeof *a), *b = malloc(3 * W * H * sizeof *b);
+    CHECK(a && b, "out of memory");
+    double worst = 0.0;
+    for (int k = 0; k < FRAMES; ++k) {
+        tr_gbuffer g;
+        motion_frame(s, &cam, k, &g);
+        for (int m = 0; m < 2; ++m) {
+            CHECK(tr_recon_frame_moving(&host[m], &g, &cam, k ? table : NULL, ids, methods[m], &p,
+                                        2, a, &err) == TR_OK,
+                  "%s", err.msg);
+            CHECK(tr_recon_device_frame_gbuffer(dev[m], &g, &cam, k ? table : NULL, ids, methods[m],
+                                                &p, b, &err) == TR_OK,
+                  "%s", err.msg);
+            const double d = worst_rel(b, a, 3 * W * H);
+            CHECK(d <= bound, "moving sphere, %s, frame %d: differs by %.3g > %.1g",
+                  tr_recon_name(methods[m]), k, d, bound);
+            worst = fmax(worst, d);
+        }
+        tr_gbuffer_free(&g);
+    }
+    printf("  moving sphere with its motion: worst relative difference %.3g\n", worst);
+    for (int m = 0; m < 2; ++m) {
+        tr_recon_free(&host[m]);
+        tr_recon_device_close(dev[m]);
+    }
+    free(a);
+    free(b);
+    free(table);
+    tr_scene_destroy(s);
+}
+
+int main(void) {
+    tr_error err;
+    tr_scene *s = cornell(&err);
+    tr_camera cams[FRAMES];
+    tr_gbuffer g[FRAMES];
+    for (int k = 0; k < FRAMES; ++k) {
+        cams[k] = camera_at(tr_scene_camera(s), k);
+        render_g(s, &cams[k], (uint32_t)k, &g[k]);
+    }
+    tr_device *cl = tr_device_open("opencl:0", &err);
+    CHECK(cl, "no OpenCL device: %s", err.msg);
+    printf("OpenCL device: %s\n", tr_device_get_info(cl)->model);
+
+    tr_recon_params p = tr_recon_params_default();
+    agree(cl, g, cams, TR_RECON_OFF, &p, "off");
+    agree(cl, g, cams, TR_RECON_ACCUMULATE, &p, "accumulate");
+    agree(cl, g, cams, TR_RECON_BILATERAL, &p, "bilateral");
+    agree(cl, g, cams, TR_RECON_ATROUS, &p, "atrous");
+    agree(cl, g, cams, TR_RECON_SVGF, &p, "svgf");
+    p.svgf_taa_alpha = 0.3f;
+    agree(cl, g, cams, TR_RECON_SVGF, &p, "svgf+taa");
+    p = tr_recon_params_default();
+    p.svgf_feedback = 0;
+    agree(cl, g, cams, TR_RECON_SVGF, &p, "svgf-nofb");
+
+    film_on_device(cl, s, cams);
+    moving(cl);
+    cpu_device(s, cams);
+
+    for (int k = 0; k < FRAMES; ++k) {
+        tr_gbuffer_free(&g[k]);
+    }
+    tr_device_close(cl);
+    tr_scene_destroy(s);
+    return check_finish("test_opencl_recon");
+}
