@@ -80,6 +80,7 @@ done
 # the PSNR of the depth-D reference against a deeper one: it must rise with D (measured
 # at this size: 28.4 dB at depth 2, 34.3 dB at 3, 51 dB for 64 against 64).
 expect_usage_error "--bias-reference-depth" bench realtime --bias-reference-depth 0
+expect_usage_error "--bias-reference-depth" bench realtime --integrator bdpt --bias-reference-depth 64
 # bias D: the bias PSNR printed for --max-depth D against depth 64.
 bias() {
     "$BIN" bench realtime "$CLASSIC" --width 48 --height 36 --frames 2 --reference-spp 64 \

@@ -255,6 +255,12 @@ int bench_realtime(int argc, char **argv) {
         c.width = width;
         c.height = height;
     }
+    /* The integrator may come from the scene file: checked once it is loaded. */
+    if (c.integrator == TR_INTEGRATOR_BDPT && bias_depth > TR_MAX_DEPTH_BDPT) {
+        tr_scene_destroy(scene);
+        return cli_error(&a, "--bias-reference-depth: bdpt supports at most %d, got %u",
+                         TR_MAX_DEPTH_BDPT, bias_depth);
+    }
     tr_camera cam0 = *tr_scene_camera(scene);
     if (tr_camera_resize(&cam0, c.width, c.height, &err) != TR_OK) {
         tr_scene_destroy(scene);
