@@ -30,7 +30,9 @@ static void realtime_help(void) {
            "reference of the same frame, rendered in two halves so that the reference's own\n"
            "error is taken out of the PSNR. With --cut K the camera jumps to another view at\n"
            "frame K, and the frames each method needs to return to its PSNR before the cut\n"
-           "are reported. Prints a table per method (milliseconds per stage, FPS of render +\n"
+           "are reported. Frames and references are rendered at --max-depth (real-time path\n"
+           "tracers limit bounces; --bias-reference-depth measures what that costs).\n"
+           "Prints a table per method (milliseconds per stage, FPS of render +\n"
            "reconstruction, mean and worst PSNR, SSIM, flicker) and writes PREFIX.csv (one\n"
            "row per method and frame). Progress goes to stderr while references render.\n"
            "\n"
@@ -46,6 +48,9 @@ static void realtime_help(void) {
            "  --spp S              samples per pixel per frame, 1..1024 (default 1)\n"
            "  --reference-spp R    samples of each frame's reference, 2..1000000 (default 256)\n"
            "  --cut K              jump to another view at frame K (default: no cut)\n"
+           "  --bias-reference-depth D2   also render frame 0's reference at max depth D2\n"
+           "                       (another seed) and print the PSNR of the frames' depth\n"
+           "                       (--max-depth) against it: the depth limit's bias\n"
            "  --methods LIST       of off,accumulate,bilateral,atrous,svgf (default all)\n"
            "  --seed S, --threads T, --max-depth D, --accel NAME, --device D   as for render\n"
            "  --sampler NAME, --light-sampling NAME   as for render: --sampler random gives\n"
@@ -133,6 +138,37 @@ static double mse_of(const float *a, const float *b, size_t px) {
     return tr_image_compare(a, b, px).mse;
 }
 
+/* The mean of film f's samples, 3 floats per pixel, into out. */
+static void film_mean(const tr_film *f, float *out, size_t px) {
+    for (size_t i = 0; i < px; ++i) {
+        const float inv = f->count[i] ? 1.0f / (float)f->count[i] : 0.0f;
+        for (int k = 0; k < 3; ++k) {
+            out[3 * i + k] = f->sum[3 * i + k] * inv;
+        }
+    }
+}
+
+/* A reference of cam with `spp` samples of cfg into ref, rendered in two halves: the MSE
+ * of the first half against the whole estimates the whole's own MSE, into *own (bench
+ * convergence does the same). half is scratch of ref's size. */
+static int render_reference(cli_backend *be, const tr_camera *cam, const tr_render_config *cfg,
+                            uint32_t spp, tr_film *f, float *half, float *ref, double *own,
+                            tr_error *err) {
+    const uint32_t h1 = spp / 2, h2 = spp - h1;
+    const size_t px = (size_t)f->width * f->height;
+    if (render_into(be, cam, cfg, 0, h1, f, NULL, err) != TR_OK) {
+        return TR_ERR;
+    }
+    film_mean(f, half, px);
+    if (tr_device_render(be->dev, cam, cfg, h1, h2, NULL, NULL, err) != TR_OK ||
+        tr_device_read_film(be->dev, f, err) != TR_OK) {
+        return TR_ERR;
+    }
+    film_mean(f, ref, px);
+    *own = mse_of(half, ref, px);
+    return TR_OK;
+}
+
 /* RMS over pixels of (luma(a) - luma(a_prev)) - (luma(r) - luma(r_prev)). */
 static double flicker(const float *a, const float *ap, const float *r, const float *rp, size_t px) {
     double s = 0.0;
@@ -157,7 +193,7 @@ int bench_realtime(int argc, char **argv) {
     cli_common_default(&c);
     c.width = 320;
     c.height = 240;
-    uint32_t frames = 32, spp = 1, ref_spp = 256, cut = 0;
+    uint32_t frames = 32, spp = 1, ref_spp = 256, cut = 0, bias_depth = 0;
     int on[TR_RECON_COUNT] = {1, 1, 1, 1, 1};
     const char *prefix = "realtime";
     int size_given = 0;
@@ -179,6 +215,8 @@ int bench_realtime(int argc, char **argv) {
             rc = cli_parse_u32(&a, 1, 1024, &spp);
         } else if (cli_is(&a, "--reference-spp")) {
             rc = cli_parse_u32(&a, 2, 1000000, &ref_spp);
+        } else if (cli_is(&a, "--bias-reference-depth")) {
+            rc = cli_parse_u32(&a, 1, TR_MAX_DEPTH_LIMIT, &bias_depth);
         } else if (cli_is(&a, "--cut")) {
             rc = cli_parse_u32(&a, 1, 100000, &cut);
         } else if (cli_is(&a, "--methods")) {
@@ -218,6 +256,12 @@ int bench_realtime(int argc, char **argv) {
         c.width = width;
         c.height = height;
     }
+    /* The integrator may come from the scene file: checked once it is loaded. */
+    if (c.integrator == TR_INTEGRATOR_BDPT && bias_depth > TR_MAX_DEPTH_BDPT) {
+        tr_scene_destroy(scene);
+        return cli_error(&a, "--bias-reference-depth: bdpt supports at most %d, got %u",
+                         TR_MAX_DEPTH_BDPT, bias_depth);
+    }
     tr_camera cam0 = *tr_scene_camera(scene);
     if (tr_camera_resize(&cam0, c.width, c.height, &err) != TR_OK) {
         tr_scene_destroy(scene);
@@ -233,6 +277,8 @@ int bench_realtime(int argc, char **argv) {
     float *ref = malloc(3 * px * sizeof *ref), *half = malloc(3 * px * sizeof *half);
     float *ref_prev = malloc(3 * px * sizeof *ref_prev);
     float *out = malloc(3 * px * sizeof *out);
+    float *bias_ref = bias_depth ? malloc(3 * px * sizeof *bias_ref) : NULL;
+    double bias_mse = 0.0, bias_own = 0.0;
     float *prev = malloc((size_t)nm * 3 * px * sizeof *prev);
     rt_frame_stats *st = calloc((size_t)nm * frames, sizeof *st);
     tr_recon rec[TR_RECON_COUNT];
@@ -246,7 +292,7 @@ int bench_realtime(int argc, char **argv) {
     memset(&g, 0, sizeof g);
     cli_backend be = {0};
     FILE *csv = NULL;
-    int ok = ref && half && ref_prev && out && prev && st;
+    int ok = ref && half && ref_prev && out && prev && st && (bias_ref || !bias_depth);
     ok = ok && tr_film_init_passes(&film, c.width, c.height, TR_PASS_ALL, &err) == TR_OK &&
          tr_film_init(&rfilm, c.width, c.height, &err) == TR_OK &&
          tr_gbuffer_init(&g, c.width, c.height, &err) == TR_OK;
@@ -255,7 +301,9 @@ int bench_realtime(int argc, char **argv) {
     }
     if (!ok) {
         fprintf(stderr, "trac0r bench realtime: %s\n",
-                ref && half && ref_prev && out && prev && st ? err.msg : "out of memory");
+                ref && half && ref_prev && out && prev && st && (bias_ref || !bias_depth)
+                    ? err.msg
+                    : "out of memory");
         rc = CLI_FAILURE;
     }
     if (rc == CLI_OK) {
@@ -269,15 +317,23 @@ int bench_realtime(int argc, char **argv) {
         }
     }
     tr_render_config cfg = cli_render_config(&c);
-    tr_render_config rcfg = cfg;
     cfg.passes = TR_PASS_ALL;
+    /* The references keep the frames' passes too, although only their radiance is read
+     * (the passes do not change it): a device keeps one film for one set of passes, and
+     * alternating them reallocated the device's film twice per frame, inside the timed
+     * render. */
+    tr_render_config rcfg = cfg;
     /* The references' seed differs from the frames', so their noise is independent. */
     rcfg.seed = c.seed ^ 0x7265666572656e63ULL;
     const tr_recon_params params = tr_recon_params_default();
+    /* Frames and references alike are rendered at this depth. */
+    const int depth = cfg.max_depth ? cfg.max_depth : tr_default_max_depth(cfg.integrator);
     const int threads = c.threads ? c.threads : tr_default_threads();
     if (rc == CLI_OK) {
-        printf("bench realtime: %s %ux%u, %u frames at %u spp, references %u spp, %s%s\n", c.scene,
-               c.width, c.height, frames, spp, ref_spp, be.name, cut ? ", camera cut" : "");
+        printf("bench realtime: %s %ux%u, %u frames at %u spp, references %u spp, max depth %d, "
+               "%s%s\n",
+               c.scene, c.width, c.height, frames, spp, ref_spp, depth, be.name,
+               cut ? ", camera cut" : "");
         if (cut) {
             printf("camera cut at frame %u\n", cut);
         }
@@ -290,35 +346,31 @@ int bench_realtime(int argc, char **argv) {
             rc = CLI_FAILURE;
             break;
         }
-        /* The reference in two halves: the MSE of one half against the whole estimates the
-         * whole's own MSE (bench convergence does the same). */
-        const uint32_t h1 = ref_spp / 2, h2 = ref_spp - h1;
         double ref_mse = 0.0;
-        if (render_into(&be, &cam, &rcfg, 0, h1, &rfilm, NULL, &err) != TR_OK) {
-            rc = CLI_FAILURE;
-        } else {
-            for (size_t i = 0; i < px; ++i) {
-                const float inv = rfilm.count[i] ? 1.0f / (float)rfilm.count[i] : 0.0f;
-                for (int k = 0; k < 3; ++k) {
-                    half[3 * i + k] = rfilm.sum[3 * i + k] * inv;
-                }
-            }
-            if (tr_device_render(be.dev, &cam, &rcfg, h1, h2, NULL, NULL, &err) != TR_OK ||
-                tr_device_read_film(be.dev, &rfilm, &err) != TR_OK) {
-                rc = CLI_FAILURE;
-            }
-        }
-        if (rc != CLI_OK) {
+        if (render_reference(&be, &cam, &rcfg, ref_spp, &rfilm, half, ref, &ref_mse, &err) !=
+            TR_OK) {
             fprintf(stderr, "trac0r bench realtime: reference of frame %u: %s\n", f, err.msg);
+            rc = CLI_FAILURE;
             break;
         }
-        for (size_t i = 0; i < px; ++i) {
-            const float inv = rfilm.count[i] ? 1.0f / (float)rfilm.count[i] : 0.0f;
-            for (int k = 0; k < 3; ++k) {
-                ref[3 * i + k] = rfilm.sum[3 * i + k] * inv;
+        if (f == 0 && bias_depth) {
+            /* The bias of the depth limit: frame 0's reference against one at bias_depth,
+             * with another seed so that the two references' noise is independent; the
+             * expected squared difference is the bias's plus both references' own. */
+            tr_render_config bcfg = rcfg;
+            bcfg.max_depth = (int)bias_depth;
+            bcfg.seed = rcfg.seed ^ 0x6269617364657074ULL;
+            double own = 0.0;
+            if (render_reference(&be, &cam, &bcfg, ref_spp, &rfilm, half, bias_ref, &own, &err) !=
+                TR_OK) {
+                fprintf(stderr, "trac0r bench realtime: depth-%u reference of frame 0: %s\n",
+                        bias_depth, err.msg);
+                rc = CLI_FAILURE;
+                break;
             }
+            bias_mse = mse_of(ref, bias_ref, px) - ref_mse - own;
+            bias_own = ref_mse + own;
         }
-        ref_mse = mse_of(half, ref, px);
         /* The frame itself: samples numbered by frame, so that noise changes over time. */
         double render_ms = 0.0;
         if (render_into(&be, &cam, &cfg, f * spp, spp, &film, &render_ms, &err) != TR_OK ||
@@ -418,6 +470,23 @@ int bench_realtime(int argc, char **argv) {
                 printf("\n");
             }
         }
+        if (bias_depth) {
+            /* The depth limit's own error, which no reconstruction can take out: the
+             * frames' converged image against the deeper one. A bias below a tenth of the
+             * references' own MSE is not resolved by them: only a bound is printed. */
+            printf("bias of max depth %d against max depth %u (frame 0's references, %u spp "
+                   "each): ",
+                   depth, bias_depth, ref_spp);
+            if (bias_mse > 0.1 * bias_own) {
+                printf("PSNR %.2f dB (MSE %.3g; the references' own MSE %.3g taken out)\n",
+                       tr_psnr(bias_mse > 1e-12 ? bias_mse : 1e-12), bias_mse, bias_own);
+            } else {
+                printf("PSNR above %.2f dB (MSE %.3g, below a tenth of the references' own "
+                       "MSE %.3g: more --reference-spp resolve it)\n",
+                       tr_psnr(0.1 * bias_own > 1e-12 ? 0.1 * bias_own : 1e-12), bias_mse,
+                       bias_own);
+            }
+        }
         if (fclose(csv) != 0) {
             fprintf(stderr, "trac0r bench realtime: cannot write %s\n", csv_path);
             rc = CLI_FAILURE;
@@ -441,6 +510,7 @@ int bench_realtime(int argc, char **argv) {
     free(half);
     free(ref_prev);
     free(out);
+    free(bias_ref);
     free(prev);
     free(st);
     tr_scene_destroy(scene);

@@ -163,6 +163,7 @@ typedef struct tr_recon {
     float *hist_color[2];   /* demodulated illumination, 3 per pixel */
     float *hist_moments[2]; /* luminance mean and mean square, 2 per pixel */
     float *hist_len[2];     /* frames of history */
+    float *temporal;        /* the host temporal stage's planes: points, projection */
     float *hist_depth, *hist_normal;
     uint32_t *hist_prim;
     float *illum; /* scratch, 3 floats per pixel */

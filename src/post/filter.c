@@ -5,7 +5,7 @@
 /* The filters' inner loops (below) vectorise only when gcc may if-convert the clamps
  * of tr_post_exp_neg, which it does not while it must keep floating-point exceptions
  * exact. Nothing here reads the exception flags, and the values computed are the same
- * either way. */
+ * either way. (CMakeLists.txt adds -fno-math-errno, for the square roots.) */
 #if defined(__GNUC__) && !defined(__clang__)
 #pragma GCC optimize("no-trapping-math")
 #endif
@@ -40,6 +40,11 @@ enum {
     WS_A = 16,  /* albedo r, g, b planes */
     WS_PLANES = 19
 };
+
+/* The planes of r->temporal (each w * h floats): the surface points of the two newest
+ * frames (x, y, z planes; slot k as hist_color[k]), then this frame's projection into
+ * the previous camera. */
+enum { TP_FX = 6, TP_FY = 7, TP_DIST = 8, TP_PLANES = 9 };
 
 typedef struct post_ws {
     int w, h;
@@ -160,7 +165,9 @@ int tr_recon_init(tr_recon *r, uint32_t width, uint32_t height, tr_error *err) {
     r->illum = calloc(3 * n, sizeof(float));
     r->soa = calloc((size_t)WS_PLANES * n, sizeof(float));
     r->taa = calloc(3 * n, sizeof(float));
+    r->temporal = calloc((size_t)TP_PLANES * n, sizeof(float));
     bad |= !r->hist_depth || !r->hist_normal || !r->hist_prim || !r->illum || !r->soa || !r->taa;
+    bad |= !r->temporal;
     if (bad) {
         tr_recon_free(r);
         return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY,
@@ -181,6 +188,7 @@ void tr_recon_free(tr_recon *r) {
     free(r->illum);
     free(r->soa);
     free(r->taa);
+    free(r->temporal);
     memset(r, 0, sizeof *r);
 }
 
@@ -678,6 +686,184 @@ static void svgf_variance(const post_ws *ws, const float *lum, const float *mome
     }
 }
 
+/* ---- The temporal stage on the host ---------------------------------------------
+ *
+ * tr_post_temporal_pixel finds, for every pixel, its surface point and the surface
+ * points of the up to four previous pixels around its reprojection: five normalised
+ * camera rays a pixel, in scalar, branching code. The host instead computes every
+ * frame's points once, in a loop gcc vectorises, and keeps them: the next frame's taps
+ * read them instead of recomputing them (the same operations on the same operands as
+ * tr_post_world_point, so the same bits). The projection into the previous camera is
+ * vectorised along with them. What is left per pixel - the taps' tests
+ * (tr_post_consistent) and the blend (tr_post_temporal_blend) - are the operator's own
+ * functions, in its order; test_recon checks the host against tr_post_temporal_pixel. */
+
+/* Rows [y0, y1): each pixel's surface point (tr_post_world_point at its depth) into
+ * pt's planes. Branch-free, so that gcc vectorises it (as the next one). */
+TR_POST_CLONES static void temporal_points_rows(const tr_camera *cam, const float *depth,
+                                                float *const pt[3], int y0, int y1) {
+    const tr_camera c = *cam;
+    const int w = (int)c.screen_width;
+    float *restrict px = pt[0], *restrict py = pt[1], *restrict pz = pt[2];
+    const float *restrict dep = depth;
+    for (int y = y0; y < y1; ++y) {
+        for (int x = 0; x < w; ++x) {
+            const int i = y * w + x;
+            const tr_vec3 p = tr_post_world_point(&c, (float)x, (float)y, dep[i]);
+            px[i] = p.x;
+            py[i] = p.y;
+            pz[i] = p.z;
+        }
+    }
+}
+
+/* Rows [y0, y1) of points pt (at depths depth) projected into the previous camera pc:
+ * tr_post_project's position less 0.5 (fx, fy; fx -2 where tr_post_reproject stops
+ * early: nothing hit, behind the camera or off screen) and the distance. */
+TR_POST_CLONES static void temporal_project_rows(const tr_camera *pc, int w,
+                                                 const float *restrict dep,
+                                                 const float *restrict px, const float *restrict py,
+                                                 const float *restrict pz, float *restrict fx,
+                                                 float *restrict fy, float *restrict dist, int y0,
+                                                 int y1) {
+    /* The previous camera's fields as scalars: loads from a struct in the loop would
+     * keep gcc from vectorising it. */
+    const tr_vec3 qo = pc->pos, qd = pc->dir, qr = pc->right, qu = pc->up;
+    const float cw = pc->canvas_width, ch = pc->canvas_height;
+    const float pw = (float)pc->screen_width, ph = (float)pc->screen_height;
+    const float ox = qo.x, oy = qo.y, oz = qo.z, dx = qd.x, dy = qd.y, dz = qd.z;
+    const float rx = qr.x, ry = qr.y, rz = qr.z, ux = qu.x, uy = qu.y, uz = qu.z;
+    for (int y = y0; y < y1; ++y) {
+        for (int x = 0; x < w; ++x) {
+            const int i = y * w + x;
+            /* tr_post_project's arithmetic, in its order, its test folded into the flag. */
+            const float vx = px[i] - ox, vy = py[i] - oy, vz = pz[i] - oz;
+            const float z = vx * dx + vy * dy + vz * dz;
+            const float cx = (vx * rx + vy * ry + vz * rz) / z;
+            const float cy = (vx * ux + vy * uy + vz * uz) / z;
+            const float sx = (cx / cw + 0.5f) * pw - 0.5f;
+            const float sy = (0.5f - cy / ch) * ph - 0.5f;
+            const int ok =
+                (dep[i] > 0.0f) & (z > 1e-6f) & (sx > -1.0f) & (sy > -1.0f) & (sx < pw) & (sy < ph);
+            fx[i] = ok ? sx : -2.0f;
+            fy[i] = sy;
+            dist[i] = tr_sqrtf(vx * vx + vy * vy + vz * vz);
+        }
+    }
+}
+
+/* Rows [y0, y1) of the temporal stage: tr_post_temporal_pixel of every pixel, from the
+ * points and projection of temporal_points_rows and the previous frame's points pq. */
+static void temporal_rows(const tr_recon *r, const tr_gbuffer *g, const float *const pt[3],
+                          const float *const pq[3], const float *fxs, const float *fys,
+                          const float *dists, const float *pcol, const float *pmom,
+                          const float *plen, const tr_recon_params *p, float *hc, float *hm,
+                          float *hl, int y0, int y1) {
+    const int w = (int)g->width, h = (int)g->height;
+    for (int y = y0; y < y1; ++y) {
+        for (int x = 0; x < w; ++x) {
+            const int i = y * w + x;
+            const float cr = r->illum[3 * i], cg = r->illum[3 * i + 1], cb = r->illum[3 * i + 2];
+            float wt[4] = {0.0f, 0.0f, 0.0f, 0.0f}, total = 0.0f;
+            int ix = 0, iy = 0;
+            const float fx = fxs ? fxs[i] : -2.0f;
+            if (fx > -1.0f) {
+                const float fy = fys[i];
+                /* tr_post_reproject's taps, its world points read from pq. */
+                ix = fx < 0.0f ? -1 : (int)fx;
+                iy = fy < 0.0f ? -1 : (int)fy;
+                const float ax = fx - (float)ix, ay = fy - (float)iy;
+                const tr_vec3 pp = v3(pt[0][i], pt[1][i], pt[2][i]);
+                const tr_vec3 n = v3(g->normal[3 * i], g->normal[3 * i + 1], g->normal[3 * i + 2]);
+                for (int k = 0; k < 4; ++k) {
+                    const int tx = ix + (k & 1), ty = iy + (k >> 1);
+                    if (tx < 0 || ty < 0 || tx >= w || ty >= h) {
+                        continue;
+                    }
+                    const int j = ty * w + tx;
+                    if (!(r->hist_depth[j] > 0.0f)) {
+                        continue;
+                    }
+                    const tr_vec3 pn = v3(r->hist_normal[3 * j], r->hist_normal[3 * j + 1],
+                                          r->hist_normal[3 * j + 2]);
+                    const tr_vec3 q = v3(pq[0][j], pq[1][j], pq[2][j]);
+                    if (!tr_post_consistent(g->prim[i], pp, n, dists[i], r->hist_prim[j], q, pn)) {
+                        continue;
+                    }
+                    const float bw = ((k & 1) ? ax : 1.0f - ax) * ((k >> 1) ? ay : 1.0f - ay);
+                    wt[k] = bw;
+                    total += bw;
+                }
+            }
+            if (total > 0.05f) {
+                tr_post_temporal_blend(cr, cg, cb, total, wt, ix, iy, w, pcol, pmom, plen,
+                                       p->alpha_min, p->max_len, hc + 3 * i, hm + 2 * i, hl + i);
+            } else {
+                const float l = tr_post_luminance(cr, cg, cb);
+                hc[3 * i] = cr;
+                hc[3 * i + 1] = cg;
+                hc[3 * i + 2] = cb;
+                hm[2 * i] = l;
+                hm[2 * i + 1] = l * l;
+                hl[i] = 1.0f;
+            }
+        }
+    }
+}
+
+/* The temporal stage of tr_recon_frame (r->illum holds this frame's illumination): the
+ * history of slot `prev` reprojected and blended into hc, hm, hl; this frame's points
+ * into slot `next`. */
+static void temporal_stage(tr_recon *r, const tr_gbuffer *g, const tr_camera *cam,
+                           const tr_vec3 *motion, uint32_t motion_count, int prev, int next,
+                           const tr_recon_params *p, int threads, float *hc, float *hm, float *hl) {
+    const int h = (int)g->height;
+    const size_t n = (size_t)g->width * g->height;
+    float *const tp = r->temporal;
+    float *const pt[3] = {tp + (size_t)(3 * next) * n, tp + (size_t)(3 * next + 1) * n,
+                          tp + (size_t)(3 * next + 2) * n};
+    const float *const pq[3] = {tp + (size_t)(3 * prev) * n, tp + (size_t)(3 * prev + 1) * n,
+                                tp + (size_t)(3 * prev + 2) * n};
+    float *fx = tp + (size_t)TP_FX * n, *fy = tp + (size_t)TP_FY * n;
+    float *dist = tp + (size_t)TP_DIST * n;
+    const int hist = r->have_history;
+    const tr_camera pc = r->prev_cam;
+#pragma omp parallel for num_threads(threads) schedule(static)
+    for (int y = 0; y < h; ++y) {
+        temporal_points_rows(cam, g->depth, pt, y, y + 1);
+        if (hist) {
+            temporal_project_rows(&pc, (int)g->width, g->depth, pt[0], pt[1], pt[2], fx, fy, dist,
+                                  y, y + 1);
+        }
+    }
+    const float *pcol = r->hist_color[prev], *pmom = r->hist_moments[prev],
+                *plen = r->hist_len[prev];
+    if (hist && motion) {
+        /* Moving primitives (view --animate): each pixel's point is followed back by its
+         * primitive's motion before it is projected, so the per-pixel operator runs; the
+         * points above are still kept for the next frame. */
+        const int w = (int)g->width;
+#pragma omp parallel for num_threads(threads) schedule(static)
+        for (int y = 0; y < h; ++y) {
+            for (int x = 0; x < w; ++x) {
+                const size_t i = (size_t)y * w + x;
+                const uint32_t id = g->prim[i];
+                const tr_vec3 m = id < motion_count ? motion[id] : v3s(0.0f);
+                tr_post_temporal_pixel_moving(
+                    cam, &pc, (uint32_t)x, (uint32_t)y, m, r->illum, g->normal, g->depth, g->prim,
+                    pcol, pmom, plen, r->hist_depth, r->hist_normal, r->hist_prim, p->alpha_min,
+                    p->max_len, hc + 3 * i, hm + 2 * i, hl + i);
+            }
+        }
+        return;
+    }
+#pragma omp parallel for num_threads(threads) schedule(static)
+    for (int y = 0; y < h; ++y) {
+        temporal_rows(r, g, (const float *const *)pt, pq, hist ? fx : NULL, fy, dist, pcol, pmom,
+                      plen, p, hc, hm, hl, y, y + 1);
+    }
+}
+
 /* The geometry this frame's history was seen with, for the next frame's tests. */
 static void keep_geometry(tr_recon *r, const tr_gbuffer *g, const tr_camera *cam) {
     const size_t n = (size_t)g->width * g->height;
@@ -721,34 +907,7 @@ int tr_recon_frame_moving(tr_recon *r, const tr_gbuffer *g, const tr_camera *cam
     demodulate(g, g->color, r->illum, threads);
     const int prev = r->cur, next = 1 - r->cur;
     float *hc = r->hist_color[next], *hm = r->hist_moments[next], *hl = r->hist_len[next];
-    if (r->have_history) {
-        const tr_camera pc = r->prev_cam;
-        const float *pcol = r->hist_color[prev], *pmom = r->hist_moments[prev],
-                    *plen = r->hist_len[prev];
-#pragma omp parallel for num_threads(threads) schedule(static)
-        for (int y = 0; y < h; ++y) {
-            for (int x = 0; x < w; ++x) {
-                const size_t i = (size_t)y * w + x;
-                /* The primitive's own motion since the last frame (per-primitive motion
-                 * vectors; none for a static scene). */
-                const uint32_t id = g->prim[i];
-                const tr_vec3 m = motion && id < motion_count ? motion[id] : v3s(0.0f);
-                tr_post_temporal_pixel_moving(
-                    cam, &pc, (uint32_t)x, (uint32_t)y, m, r->illum, g->normal, g->depth, g->prim,
-                    pcol, pmom, plen, r->hist_depth, r->hist_normal, r->hist_prim, p->alpha_min,
-                    p->max_len, hc + 3 * i, hm + 2 * i, hl + i);
-            }
-        }
-    } else {
-        for (size_t i = 0; i < n; ++i) {
-            const float l =
-                tr_post_luminance(r->illum[3 * i], r->illum[3 * i + 1], r->illum[3 * i + 2]);
-            memcpy(hc + 3 * i, r->illum + 3 * i, 3 * sizeof *hc);
-            hm[2 * i] = l;
-            hm[2 * i + 1] = l * l;
-            hl[i] = 1.0f;
-        }
-    }
+    temporal_stage(r, g, cam, motion, motion_count, prev, next, p, threads, hc, hm, hl);
     r->cur = next;
     const double t1 = tr_time_now();
     r->ms_temporal = (t1 - t0) * 1e3;

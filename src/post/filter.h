@@ -187,6 +187,40 @@ TR_FN float tr_post_reproject(const tr_camera *cam, const tr_camera *prev, uint3
                                     prev_normal, prev_prim, x0, y0, w);
 }
 
+/* The blend of tr_post_temporal_pixel for a pixel whose reprojection kept weights w
+ * (sum total > 0.05) on the previous pixels from (x0, y0) (tr_post_reproject's taps, pw
+ * pixels a row): the history interpolated by the normalised weights, then the
+ * exponential moving average with the new sample (r, g, b). Separate so that a host
+ * which finds the weights its own way blends with the same arithmetic. */
+TR_FN void tr_post_temporal_blend(float r, float g, float b, float total, const float w[4], int x0,
+                                  int y0, int pw, TR_CONST_GLOBAL float *prev_color,
+                                  TR_CONST_GLOBAL float *prev_moments,
+                                  TR_CONST_GLOBAL float *prev_len, float alpha_min, float max_len,
+                                  float out_color[3], float out_moments[2], float *out_len) {
+    const float l = tr_post_luminance(r, g, b);
+    float hc[3] = {0.0f, 0.0f, 0.0f}, hm[2] = {0.0f, 0.0f}, hl = 0.0f;
+    for (int k = 0; k < 4; ++k) {
+        if (w[k] > 0.0f) {
+            const int j = (y0 + (k >> 1)) * pw + x0 + (k & 1);
+            const float wk = w[k] / total;
+            hc[0] += wk * prev_color[3 * j];
+            hc[1] += wk * prev_color[3 * j + 1];
+            hc[2] += wk * prev_color[3 * j + 2];
+            hm[0] += wk * prev_moments[2 * j];
+            hm[1] += wk * prev_moments[2 * j + 1];
+            hl += wk * prev_len[j];
+        }
+    }
+    const float len = tr_fminf(hl + 1.0f, max_len);
+    const float a = tr_fmaxf(alpha_min, 1.0f / len);
+    out_color[0] = hc[0] + a * (r - hc[0]);
+    out_color[1] = hc[1] + a * (g - hc[1]);
+    out_color[2] = hc[2] + a * (b - hc[2]);
+    out_moments[0] = hm[0] + a * (l - hm[0]);
+    out_moments[1] = hm[1] + a * (l * l - hm[1]);
+    *out_len = len;
+}
+
 /* Temporal accumulation of pixel (x, y) (Schied et al. 2017, section 4.1): the
  * history (colour, luminance moments and length of the previous frame) reprojected by
  * tr_post_reproject's bilinear weights, blended with the new sample by an exponential
@@ -222,28 +256,9 @@ tr_post_temporal_pixel_moving(const tr_camera *cam, const tr_camera *prev, uint3
         *out_len = 1.0f;
         return;
     }
-    const int pw = (int)prev->screen_width;
-    float hc[3] = {0.0f, 0.0f, 0.0f}, hm[2] = {0.0f, 0.0f}, hl = 0.0f;
-    for (int k = 0; k < 4; ++k) {
-        if (w[k] > 0.0f) {
-            const int j = (y0 + (k >> 1)) * pw + x0 + (k & 1);
-            const float wk = w[k] / total;
-            hc[0] += wk * prev_color[3 * j];
-            hc[1] += wk * prev_color[3 * j + 1];
-            hc[2] += wk * prev_color[3 * j + 2];
-            hm[0] += wk * prev_moments[2 * j];
-            hm[1] += wk * prev_moments[2 * j + 1];
-            hl += wk * prev_len[j];
-        }
-    }
-    const float len = tr_fminf(hl + 1.0f, max_len);
-    const float a = tr_fmaxf(alpha_min, 1.0f / len);
-    out_color[0] = hc[0] + a * (r - hc[0]);
-    out_color[1] = hc[1] + a * (g - hc[1]);
-    out_color[2] = hc[2] + a * (b - hc[2]);
-    out_moments[0] = hm[0] + a * (l - hm[0]);
-    out_moments[1] = hm[1] + a * (l * l - hm[1]);
-    *out_len = len;
+    tr_post_temporal_blend(r, g, b, total, w, x0, y0, (int)prev->screen_width, prev_color,
+                           prev_moments, prev_len, alpha_min, max_len, out_color, out_moments,
+                           out_len);
 }
 
 TR_FN void
