@@ -244,7 +244,13 @@ int bench_realtime(int argc, char **argv) {
     cli_backend be = {0};
     FILE *csv = NULL;
     int ok = ref && half && ref_prev && out && prev && st;
-    ok = ok && tr_film_init_passes(&film, c.width, c.height, TR_PASS_ALL, &err) == TR_OK &&
+    const tr_recon_params params = tr_recon_params_default();
+    /* The direct pass only where SVGF filters direct and indirect light apart (bdpt has
+     * none). */
+    const uint32_t frame_passes =
+        TR_PASS_ALL |
+        (params.svgf_split && c.integrator != TR_INTEGRATOR_BDPT ? TR_PASS_DIRECT : 0u);
+    ok = ok && tr_film_init_passes(&film, c.width, c.height, frame_passes, &err) == TR_OK &&
          tr_film_init(&rfilm, c.width, c.height, &err) == TR_OK &&
          tr_gbuffer_init(&g, c.width, c.height, &err) == TR_OK;
     for (int m = 0; ok && m < nm; ++m) {
@@ -260,10 +266,9 @@ int bench_realtime(int argc, char **argv) {
     }
     tr_render_config cfg = cli_render_config(&c);
     tr_render_config rcfg = cfg;
-    cfg.passes = TR_PASS_ALL;
+    cfg.passes = frame_passes;
     /* The references' seed differs from the frames', so their noise is independent. */
     rcfg.seed = c.seed ^ 0x7265666572656e63ULL;
-    const tr_recon_params params = tr_recon_params_default();
     const int threads = c.threads ? c.threads : tr_default_threads();
     if (rc == CLI_OK) {
         printf("bench realtime: %s %ux%u, %u frames at %u spp, references %u spp, %s%s\n", c.scene,
