@@ -102,23 +102,25 @@ static int region_failures(const tr_film *a, const tr_film *b, const tr_film *r1
     return failures;
 }
 
-/* The passes (the variance's sums of squares too) of the CPU's and the device's films: filled by
- * the same kernel code (src/kernel/film.h), so they agree exactly except where a path took another
- * turn through the device's last-bit float differences, as radiance does (at most 1 % of the
- * pixels); the primitive ids, discrete, must agree on nearly every pixel. */
+/* The passes (the variance's sums of squares and the direct part too) of the CPU's and the device's
+ * films: filled by the same kernel code (src/kernel/film.h), so they agree exactly except where a
+ * path took another turn through the device's last-bit float differences, as radiance does (at most
+ * 1 % of the pixels); the primitive ids, discrete, must agree on nearly every pixel. */
 static void compare_passes(const tr_film *cpu, const tr_film *dev, const char *what) {
     const size_t n = (size_t)cpu->width * cpu->height;
-    size_t far[5] = {0, 0, 0, 0, 0}, nonzero = 0;
+    size_t far[6] = {0, 0, 0, 0, 0, 0}, nonzero = 0;
     for (size_t i = 0; i < n; ++i) {
         for (int c = 0; c < 3; ++c) {
-            const float pa[4] = {cpu->albedo[3 * i + c], cpu->normal[3 * i + c],
-                                 c == 0 ? cpu->depth[i] : 0.0f, cpu->sq[3 * i + c]};
-            const float pb[4] = {dev->albedo[3 * i + c], dev->normal[3 * i + c],
-                                 c == 0 ? dev->depth[i] : 0.0f, dev->sq[3 * i + c]};
-            for (int p = 0; p < 4; ++p) {
+            const float pa[5] = {cpu->albedo[3 * i + c], cpu->normal[3 * i + c],
+                                 c == 0 ? cpu->depth[i] : 0.0f, cpu->sq[3 * i + c],
+                                 cpu->direct[3 * i + c]};
+            const float pb[5] = {dev->albedo[3 * i + c], dev->normal[3 * i + c],
+                                 c == 0 ? dev->depth[i] : 0.0f, dev->sq[3 * i + c],
+                                 dev->direct[3 * i + c]};
+            for (int p = 0; p < 5; ++p) {
                 const double d = fabs((double)pa[p] - pb[p]);
                 if (d > 1e-4 * fmax(1.0, fmax(fabs((double)pa[p]), fabs((double)pb[p])))) {
-                    far[p] += 1;
+                    far[p < 4 ? p : 5] += 1;
                 }
             }
         }
@@ -129,13 +131,14 @@ static void compare_passes(const tr_film *cpu, const tr_film *dev, const char *w
      * before their first hit: a fifth of the pixels with a surface is a safe floor. */
     CHECK(nonzero * 5 > n, "%s: only %zu of %zu pixels have a surface in the passes", what, nonzero,
           n);
-    const char *names[5] = {"albedo", "normal", "depth", "variance", "primitive id"};
-    for (int p = 0; p < 5; ++p) {
+    const char *names[6] = {"albedo", "normal", "depth", "variance", "primitive id", "direct"};
+    for (int p = 0; p < 6; ++p) {
         CHECK(far[p] * 100 <= 3 * n, "%s: %zu of %zu values of the %s pass differ", what, far[p],
               3 * n, names[p]);
     }
-    printf("%s: passes differ in %zu/%zu/%zu/%zu/%zu values (albedo/normal/depth/variance/id)\n",
-           what, far[0], far[1], far[2], far[3], far[4]);
+    printf("%s: passes differ in %zu/%zu/%zu/%zu/%zu/%zu values "
+           "(albedo/normal/depth/variance/id/direct)\n",
+           what, far[0], far[1], far[2], far[3], far[4], far[5]);
 }
 
 /* Renders `spp` samples of `scene` on the CPU and on the device and compares. */

@@ -191,6 +191,9 @@ static int films_equal(const tr_film *a, const tr_film *b) {
     if (a->passes & TR_PASS_VARIANCE) {
         same &= memcmp(a->sq, b->sq, 3 * n * sizeof(float)) == 0;
     }
+    if (a->passes & TR_PASS_DIRECT) {
+        same &= memcmp(a->direct, b->direct, 3 * n * sizeof(float)) == 0;
+    }
     return same;
 }
 
@@ -223,7 +226,7 @@ static void test_splits(int integrator, int stride) {
     cfg.integrator = integrator;
     cfg.stride = stride;
     cfg.seed = 99;
-    cfg.passes = TR_PASS_MASK; /* the surface passes and the variance */
+    cfg.passes = TR_PASS_MASK; /* the surface passes, the variance and the direct part */
     const uint32_t spp = 6;
 
     /* One call for all samples equals one call per sample (tr_render_frame's loop). */

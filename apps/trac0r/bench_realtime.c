@@ -293,7 +293,13 @@ int bench_realtime(int argc, char **argv) {
     cli_backend be = {0};
     FILE *csv = NULL;
     int ok = ref && half && ref_prev && out && prev && st && (bias_ref || !bias_depth);
-    ok = ok && tr_film_init_passes(&film, c.width, c.height, TR_PASS_ALL, &err) == TR_OK &&
+    const tr_recon_params params = tr_recon_params_default();
+    /* The direct pass only where SVGF filters direct and indirect light apart (bdpt has
+     * none). */
+    const uint32_t frame_passes =
+        TR_PASS_ALL |
+        (params.svgf_split && c.integrator != TR_INTEGRATOR_BDPT ? TR_PASS_DIRECT : 0u);
+    ok = ok && tr_film_init_passes(&film, c.width, c.height, frame_passes, &err) == TR_OK &&
          tr_film_init(&rfilm, c.width, c.height, &err) == TR_OK &&
          tr_gbuffer_init(&g, c.width, c.height, &err) == TR_OK;
     for (int m = 0; ok && m < nm; ++m) {
@@ -317,7 +323,7 @@ int bench_realtime(int argc, char **argv) {
         }
     }
     tr_render_config cfg = cli_render_config(&c);
-    cfg.passes = TR_PASS_ALL;
+    cfg.passes = frame_passes;
     /* The references keep the frames' passes too, although only their radiance is read
      * (the passes do not change it): a device keeps one film for one set of passes, and
      * alternating them reallocated the device's film twice per frame, inside the timed
@@ -325,7 +331,6 @@ int bench_realtime(int argc, char **argv) {
     tr_render_config rcfg = cfg;
     /* The references' seed differs from the frames', so their noise is independent. */
     rcfg.seed = c.seed ^ 0x7265666572656e63ULL;
-    const tr_recon_params params = tr_recon_params_default();
     /* Frames and references alike are rendered at this depth. */
     const int depth = cfg.max_depth ? cfg.max_depth : tr_default_max_depth(cfg.integrator);
     const int threads = c.threads ? c.threads : tr_default_threads();

@@ -115,12 +115,15 @@ typedef struct tr_gbuffer {
     float *normal;  /* 3 per pixel, unit (zero where nothing was hit) */
     float *depth;   /* 1 per pixel: distance along the camera ray, 0 where nothing was hit */
     uint32_t *prim; /* 1 per pixel: triangle index + 1, 0 where nothing was hit */
+    float *direct;  /* 3 per pixel: the direct part of color (TR_PASS_DIRECT) */
+    int has_direct; /* whether direct holds the film's direct pass (else it is not read) */
 } tr_gbuffer;
 
 int tr_gbuffer_init(tr_gbuffer *g, uint32_t width, uint32_t height, tr_error *err);
 void tr_gbuffer_free(tr_gbuffer *g);
 /* The film's means into g (of the film's size). A pass the film lacks reads as albedo 1,
- * normal, depth and id 0 (the guided filters then fall back on colour alone). */
+ * normal, depth and id 0 (the guided filters then fall back on colour alone); has_direct
+ * says whether the film kept the direct pass. */
 int tr_gbuffer_from_film(tr_gbuffer *g, const struct tr_film *film, tr_error *err);
 
 /* What tr_recon_frame does to a frame, each method one stage more than "accumulate". */
@@ -149,6 +152,8 @@ typedef struct tr_recon_params {
     float svgf_sigma_l, svgf_sigma_n, svgf_sigma_z;
     int svgf_feedback;    /* 1: the first SVGF iteration's output becomes the history */
     float svgf_taa_alpha; /* SVGF's temporal antialiasing: new-frame weight (0: off) */
+    int svgf_split;       /* 1: SVGF filters direct and indirect apart where the frame has the
+                             direct pass (Schied et al. 2017, section 4) */
 } tr_recon_params;
 
 tr_recon_params tr_recon_params_default(void);
@@ -169,6 +174,11 @@ typedef struct tr_recon {
     float *illum; /* scratch, 3 floats per pixel */
     float *soa;   /* scratch planes of the spatial filters */
     float *taa;   /* SVGF's last output, for temporal antialiasing */
+    /* SVGF with direct and indirect apart: then hist_color and hist_moments hold the
+     * indirect part and these the direct one (demodulated, luminance moments). */
+    float *hist_direct[2], *hist_dmoments[2];
+    float *illum_d; /* scratch: this frame's demodulated direct illumination */
+    int hist_split; /* whether the history was written split */
     int have_taa;
     double ms_temporal, ms_spatial; /* the stages' wall times in the last tr_recon_frame */
 } tr_recon;

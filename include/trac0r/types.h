@@ -95,6 +95,12 @@ typedef struct tr_camera {
  * (tr_film_pass_pixel). Taken from every sample, so it costs a few multiplications and
  * 12 bytes a pixel, and changes no other pass or the radiance. */
 #define TR_PASS_VARIANCE 16u
-#define TR_PASS_MASK 31u /* every pass bit a film knows */
+/* Not a surface either: the part of the radiance that is direct illumination of the passes'
+ * surface (the first one that is not a mirror or smooth glass), summed like radiance, for
+ * filters that treat direct and indirect light apart (SVGF, Schied et al. 2017, section 4).
+ * pt and naive write it (tr_trace_pt: what goes where); bdpt does not. Radiance minus direct
+ * is the indirect part. */
+#define TR_PASS_DIRECT 32u
+#define TR_PASS_MASK 63u /* every pass bit a film knows */
 
 #endif

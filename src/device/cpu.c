@@ -81,6 +81,10 @@ int tr_render_config_check(const tr_render_config *cfg, tr_error *err) {
         return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "unknown pass bits 0x%x",
                             cfg->passes & ~TR_PASS_MASK);
     }
+    if ((cfg->passes & TR_PASS_DIRECT) != 0u && cfg->integrator == TR_INTEGRATOR_BDPT) {
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "the direct pass needs the pt or naive integrator, not bdpt");
+    }
     return TR_OK;
 }
 
@@ -129,6 +133,7 @@ tr_film_view tr_film_view_of(tr_film *film) {
     tr_film_view v = tr_film_view_make(film->sum, film->count, film->albedo, film->normal,
                                        film->depth, film->prim, film->width, film->passes);
     v.sq = film->sq;
+    v.direct = film->direct;
     return v;
 }
 

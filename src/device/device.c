@@ -309,6 +309,9 @@ int tr_device_read_film(tr_device *dev, tr_film *film, tr_error *err) {
     if (film->sq) {
         memcpy(film->sq, src->sq, 3 * n * sizeof *film->sq);
     }
+    if (film->direct) {
+        memcpy(film->direct, src->direct, 3 * n * sizeof *film->direct);
+    }
     return TR_OK;
 }
 

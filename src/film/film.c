@@ -53,6 +53,9 @@ int tr_film_init_passes(tr_film *f, uint32_t width, uint32_t height, uint32_t pa
     if (passes & TR_PASS_VARIANCE) {
         ok = ok && (f->sq = calloc(3 * n, sizeof *f->sq)) != NULL;
     }
+    if (passes & TR_PASS_DIRECT) {
+        ok = ok && (f->direct = calloc(3 * n, sizeof *f->direct)) != NULL;
+    }
     if (!ok) {
         tr_film_free(f);
         return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory allocating a %ux%u film",
@@ -72,6 +75,7 @@ void tr_film_free(tr_film *f) {
     free(f->depth);
     free(f->prim);
     free(f->sq);
+    free(f->direct);
     memset(f, 0, sizeof *f);
 }
 
@@ -93,6 +97,9 @@ void tr_film_clear(tr_film *f) {
     }
     if (f->sq) {
         memset(f->sq, 0, 3 * n * sizeof *f->sq);
+    }
+    if (f->direct) {
+        memset(f->direct, 0, 3 * n * sizeof *f->direct);
     }
 }
 
@@ -152,7 +159,9 @@ int tr_film_pass_pixel(const tr_film *f, uint32_t pass, uint32_t x, uint32_t y, 
         out[0] = f->depth[i] * inv;
         return TR_OK;
     }
-    const float *src = pass == TR_PASS_ALBEDO ? f->albedo : f->normal;
+    const float *src = pass == TR_PASS_ALBEDO   ? f->albedo
+                       : pass == TR_PASS_DIRECT ? f->direct
+                                                : f->normal;
     for (int k = 0; k < 3; ++k) {
         out[k] = src[3 * i + (size_t)k] * inv;
     }
@@ -190,6 +199,7 @@ int tr_film_accumulate(tr_film *dst, const tr_film *src, tr_error *err) {
     add_floats(dst->normal, src->normal, 3 * n);
     add_floats(dst->depth, src->depth, n);
     add_floats(dst->sq, src->sq, 3 * n);
+    add_floats(dst->direct, src->direct, 3 * n);
     for (size_t i = 0; i < n; ++i) {
         dst->count[i] += src->count[i];
     }
@@ -226,6 +236,7 @@ int tr_film_extract_pass(const tr_film *f, uint32_t pass, tr_film *out, tr_error
             const size_t k = 3 * i + (size_t)c;
             out->sum[k] = pass == TR_PASS_ALBEDO   ? f->albedo[k]
                           : pass == TR_PASS_NORMAL ? f->normal[k]
+                          : pass == TR_PASS_DIRECT ? f->direct[k]
                                                    : f->depth[i];
         }
     }
@@ -244,6 +255,8 @@ const char *tr_pass_name(uint32_t pass) {
         return "id";
     case TR_PASS_VARIANCE:
         return "variance";
+    case TR_PASS_DIRECT:
+        return "direct";
     default:
         return NULL;
     }

@@ -26,7 +26,7 @@ __kernel void tr_cl_render(TR_SCENE_ARRAYS(TR_CL_ARRAY_PARAM) __global const uin
                            __global uint *film_count, __global float *film_albedo,
                            __global float *film_normal, __global float *film_depth,
                            __global uint *film_prim, __global float *film_sq,
-                           __global uint *rays_per_row) {
+                           __global float *film_direct, __global uint *rays_per_row) {
     const tr_frame f = *frame;
     uint gx0, gy0, nx, ny;
     tr_frame_grid(&f, &gx0, &gy0, &nx, &ny);
@@ -42,10 +42,10 @@ __kernel void tr_cl_render(TR_SCENE_ARRAYS(TR_CL_ARRAY_PARAM) __global const uin
     s.accel = scene_info[TR_CL_INFO_accel];
     s.light_weight_total = as_float(scene_info[TR_CL_INFO_light_weight_total]);
 
-    tr_film_view film =
-        tr_film_view_make(film_sum, film_count, film_albedo, film_normal, film_depth, film_prim,
-                          f.camera.screen_width, f.passes);
+    tr_film_view film = tr_film_view_make(film_sum, film_count, film_albedo, film_normal,
+                                          film_depth, film_prim, f.camera.screen_width, f.passes);
     film.sq = film_sq;
+    film.direct = film_direct;
     const uint rays =
         tr_render_grid_rows(&s, &f, &film, gx0 + gx, gy0 + gy, gx0 + gx + 1u, gy0 + gy + 1u);
     atomic_add(&rays_per_row[gy], rays);

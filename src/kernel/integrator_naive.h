@@ -22,12 +22,18 @@
  * also end the path); the thesis divided only the final emission by the last p,
  * we divide the throughput at every step, which is what keeps the mean right.
  * *rays counts the intersection queries made; `surface` (may be null) receives the
- * first hit that is not a perfect mirror or smooth glass, for the passes. */
+ * first hit that is not a perfect mirror or smooth glass, for the passes, and in
+ * surface->direct the direct part of the radiance: as tr_trace_pt defines it, the emission
+ * found up to and including the vertex after that surface S (naive has no light samples,
+ * so at S only the BSDF's direction finds light). */
 TR_FN tr_vec3 tr_trace_naive(const tr_scene_view *s, tr_ray ray, int max_depth, tr_rng *rng,
                              uint32_t *rays, tr_sample *surface) {
     tr_vec3 radiance = v3s(0.0f);
     tr_vec3 throughput = v3s(1.0f);
     int depth = 0;
+    int direct_depth = max_depth + 1; /* the vertex whose emission ends the direct part */
+    int direct_done = 0;
+    tr_vec3 direct = v3s(0.0f);
     for (;;) {
         ++depth;
         int remaining = max_depth - depth;
@@ -55,8 +61,15 @@ TR_FN tr_vec3 tr_trace_naive(const tr_scene_view *s, tr_ray ray, int max_depth, 
         if (surface) {
             tr_sample_surface(surface, &m, ray.dir, hit.t, hit.triangle);
         }
+        if (direct_depth > max_depth && !tr_bsdf_is_delta(&m)) {
+            direct_depth = depth + 1;
+        }
         if (m.emittance > 0.0f) {
             radiance = v3_add(radiance, v3_scale(v3_mul(throughput, m.color), m.emittance));
+        }
+        if (depth == direct_depth) {
+            direct = radiance;
+            direct_done = 1;
         }
         if (m.type == TR_MATERIAL_EMITTER) {
             break;
@@ -68,6 +81,9 @@ TR_FN tr_vec3 tr_trace_naive(const tr_scene_view *s, tr_ray ray, int max_depth, 
         }
         throughput = v3_mul(throughput, weight);
         ray = tr_ray_make(origin, dir, 0.0f, TR_INFINITY);
+    }
+    if (surface) {
+        surface->direct = direct_done ? direct : radiance;
     }
     return radiance;
 }

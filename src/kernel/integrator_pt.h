@@ -80,16 +80,30 @@ TR_FN_NOINLINE tr_vec3 tr_pt_env_light(const tr_scene_view *s, const tr_sampler 
  * (sampler.h): at segment seg, the light (selection and point, one pair), BSDF lobe,
  * BSDF direction, roulette and the environment light each have a dimension pair. *rays counts
  * closest-hit and shadow queries; `surface` (may be null) receives the first hit that is not a
- * delta surface, for the passes. */
+ * delta surface, for the passes, and the direct part of the radiance in surface->direct.
+ *
+ * The direct part (TR_PASS_DIRECT) is everything added up to and including the light that
+ * reaches the passes' surface S (the first hit that is not a delta surface) without another
+ * bounce: emission seen before S (through mirrors and glass, or the environment and the sun
+ * when the path leaves without finding S) and S's own emission; at S, the light sample (NEE
+ * to an emitter, the environment, the sun) with its MIS weight; and at the next vertex, what
+ * the BSDF sample from S finds: an emitter's emission, or the environment and the sun if it
+ * leaves, each with its MIS weight (the two strategies' weights for the light at S sum to
+ * one, so the direct part is unbiased on its own). Everything after that (NEE at the second
+ * vertex on) is indirect. It is taken as a snapshot of the running sum right after that next
+ * vertex's emission, so the radiance itself is computed exactly as without the pass. */
 TR_FN tr_vec3 tr_trace_pt(const tr_scene_view *s, tr_ray ray, int max_depth, const tr_sampler *smp,
                           uint32_t *rays, tr_sample *surface) {
     tr_vec3 radiance = v3s(0.0f);
     tr_vec3 throughput = v3s(1.0f);
     float prev_pdf = 0.0f;
-    tr_vec3 prev_p = ray.origin; /* the vertex the last BSDF sample left, for MIS */
-    tr_vec3 prev_n = v3s(0.0f);  /* its shading normal (the light tree weighs by it) */
-    int prev_delta = 1;          /* the camera ray: no light strategy competes */
-    int holes = 0;               /* alpha cut-outs passed through */
+    tr_vec3 prev_p = ray.origin;    /* the vertex the last BSDF sample left, for MIS */
+    tr_vec3 prev_n = v3s(0.0f);     /* its shading normal (the light tree weighs by it) */
+    int prev_delta = 1;             /* the camera ray: no light strategy competes */
+    int holes = 0;                  /* alpha cut-outs passed through */
+    int direct_seg = max_depth + 1; /* the segment whose emission ends the direct part */
+    int direct_done = 0;
+    tr_vec3 direct = v3s(0.0f);
     for (int seg = 1; seg <= max_depth; ++seg) {
         tr_hit hit;
         *rays += 1;
@@ -124,6 +138,9 @@ TR_FN tr_vec3 tr_trace_pt(const tr_scene_view *s, tr_ray ray, int max_depth, con
         if (surface) {
             tr_sample_surface(surface, &m, ray.dir, hit.t, hit.triangle);
         }
+        if (direct_seg > max_depth && !tr_bsdf_is_delta(&m)) {
+            direct_seg = seg + 1; /* S is this vertex: the next one's emission is still direct */
+        }
 
         /* Emission found by the BSDF strategy (or the camera). */
         tr_vec3 le = tr_emitted(&m, wo);
@@ -133,6 +150,10 @@ TR_FN tr_vec3 tr_trace_pt(const tr_scene_view *s, tr_ray ray, int max_depth, con
                 w = tr_mis_power(prev_pdf, tr_light_pdf_n(s, prev_p, prev_n, hit.triangle, p));
             }
             radiance = v3_add(radiance, v3_scale(v3_mul(throughput, le), w));
+        }
+        if (seg == direct_seg) {
+            direct = radiance;
+            direct_done = 1;
         }
         if (seg == max_depth || m.type == TR_MATERIAL_EMITTER) {
             break;
@@ -212,6 +233,10 @@ TR_FN tr_vec3 tr_trace_pt(const tr_scene_view *s, tr_ray ray, int max_depth, con
         }
         tr_vec3 o = tr_surface_origin(&m, p, bs.wi); /* shadow-terminator fix */
         ray = tr_ray_make(o, bs.wi, 0.0f, TR_INFINITY);
+    }
+    if (surface) {
+        /* A path that ended before the vertex after S: all of it was direct. */
+        surface->direct = direct_done ? direct : radiance;
     }
     return radiance;
 }
