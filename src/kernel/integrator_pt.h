@@ -138,7 +138,7 @@ TR_FN tr_vec3 tr_trace_pt(const tr_scene_view *s, tr_ray ray, int max_depth, con
         if (surface) {
             tr_sample_surface(surface, &m, ray.dir, hit.t, hit.triangle);
         }
-        if (direct_seg > max_depth && !tr_bsdf_is_delta(&m)) {
+        if (surface && direct_seg > max_depth && !tr_bsdf_is_delta(&m)) {
             direct_seg = seg + 1; /* S is this vertex: the next one's emission is still direct */
         }
 
@@ -151,7 +151,7 @@ TR_FN tr_vec3 tr_trace_pt(const tr_scene_view *s, tr_ray ray, int max_depth, con
             }
             radiance = v3_add(radiance, v3_scale(v3_mul(throughput, le), w));
         }
-        if (seg == direct_seg) {
+        if (seg == direct_seg) { /* never without `surface`: direct_seg stays past the end */
             direct = radiance;
             direct_done = 1;
         }

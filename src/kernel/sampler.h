@@ -159,14 +159,14 @@ TR_FN uint64_t tr_sampler_random_bits(const tr_sampler *s, uint32_t dim) {
  * Sobol coordinate reverses it, permutes and reverses back; dimension 0 is the reversed
  * index and dimension 1 is computed reversed, so the first reversal cancels. */
 TR_FN void tr_sampler_2d(const tr_sampler *s, uint32_t dim, float *u1, float *u2) {
-    if (s->kind == 2u) {
-        tr_sampler_z_2d(s, dim, u1, u2);
-        return;
-    }
-    if (s->kind == 1u) {
-        uint64_t r = tr_sampler_random_bits(s, dim);
-        *u1 = tr_u32_to_unit((uint32_t)r);
-        *u2 = tr_u32_to_unit((uint32_t)(r >> 32));
+    if (s->kind != 0u) {
+        if (s->kind == 2u) {
+            tr_sampler_z_2d(s, dim, u1, u2);
+        } else {
+            uint64_t r = tr_sampler_random_bits(s, dim);
+            *u1 = tr_u32_to_unit((uint32_t)r);
+            *u2 = tr_u32_to_unit((uint32_t)(r >> 32));
+        }
         return;
     }
     uint32_t k = tr_hash32(s->key ^ tr_hash32(dim + 0x68e31da4u));
@@ -180,12 +180,12 @@ TR_FN void tr_sampler_2d(const tr_sampler *s, uint32_t dim, float *u1, float *u2
 
 /* The first coordinate of dimension pair `dim`. */
 TR_FN float tr_sampler_1d(const tr_sampler *s, uint32_t dim) {
-    if (s->kind == 2u) {
-        float u1, u2;
-        tr_sampler_z_2d(s, dim, &u1, &u2);
-        return u1;
-    }
-    if (s->kind == 1u) {
+    if (s->kind != 0u) {
+        if (s->kind == 2u) {
+            float u1, u2;
+            tr_sampler_z_2d(s, dim, &u1, &u2);
+            return u1;
+        }
         return tr_u32_to_unit((uint32_t)tr_sampler_random_bits(s, dim));
     }
     uint32_t k = tr_hash32(s->key ^ tr_hash32(dim + 0x68e31da4u));

@@ -106,7 +106,9 @@ TR_FN void tr_sampler_z_bits(const tr_sampler *s, uint32_t dim, uint32_t *rx, ui
     *ry = ty ^ tr_sobol1_reversed(g);
 }
 
-TR_FN void tr_sampler_z_2d(const tr_sampler *s, uint32_t dim, float *u1, float *u2) {
+/* Out of line: it is called from tr_sampler_2d's rarely taken branch, and pt's default
+ * (Sobol) path should not carry its code. */
+TR_FN_NOINLINE void tr_sampler_z_2d(const tr_sampler *s, uint32_t dim, float *u1, float *u2) {
     uint32_t rx, ry;
     tr_sampler_z_bits(s, dim, &rx, &ry);
     *u1 = tr_u32_to_unit(tr_reverse_bits32(rx));
