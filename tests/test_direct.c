@@ -13,6 +13,7 @@
  *    it), keeps the mean of a noisy frame within 1 %, and does not blur across a depth
  *    and normal step; it differs from the unsplit filter (the split is really used). */
 #include "check.h"
+#include "classic_box.h"
 #include "trac0r/post.h"
 #include "trac0r/scene_file.h"
 #include "trac0r/trac0r.h"
@@ -25,15 +26,7 @@
 #define H 24
 
 static tr_scene *cornell(tr_error *err) {
-    tr_scene *s = tr_scene_create(err);
-    CHECK(s && tr_scene_file_load(s, TR_SOURCE_DIR "/scenes/cornell-classic.json", NULL, NULL,
-                                  err) == TR_OK,
-          "cornell-classic: %s", err->msg);
-    tr_camera cam = *tr_scene_camera(s);
-    CHECK(tr_camera_resize(&cam, W, H, err) == TR_OK, "%s", err->msg);
-    tr_scene_set_camera(s, &cam);
-    CHECK(tr_scene_commit(s, TR_ACCEL_TYPE_BVH, err) == TR_OK, "commit: %s", err->msg);
-    return s;
+    return classic_box(W, H, err);
 }
 
 static void render(const tr_scene *s, int integrator, int max_depth, uint32_t passes, uint32_t spp,

@@ -27,6 +27,7 @@
 #include <string.h>
 
 #include "check.h"
+#include "classic_box.h"
 #include "motion_scene.h"
 #include "trac0r/scene_file.h"
 #include "trac0r/trac0r.h"
@@ -38,15 +39,7 @@
 static const double bound = 1e-4;
 
 static tr_scene *cornell(tr_error *err) {
-    tr_scene *s = tr_scene_create(err);
-    CHECK(s && tr_scene_file_load(s, TR_SOURCE_DIR "/scenes/cornell-classic.json", NULL, NULL,
-                                  err) == TR_OK,
-          "cornell-classic: %s", err->msg);
-    tr_camera cam = *tr_scene_camera(s);
-    CHECK(tr_camera_resize(&cam, W, H, err) == TR_OK, "%s", err->msg);
-    tr_scene_set_camera(s, &cam);
-    CHECK(tr_scene_commit(s, TR_ACCEL_TYPE_BVH, err) == TR_OK, "commit: %s", err->msg);
-    return s;
+    return classic_box(W, H, err);
 }
 
 /* Frame k's camera: the scene's, moved sideways and turned a little more each frame. */

@@ -15,6 +15,7 @@
  *    direct tonemap's bytes.
  * 6. SSIM is 1 for an image with itself, falls with noise and is symmetric. */
 #include "check.h"
+#include "classic_box.h"
 #include "post/filter.h"
 #include "post/tonemap.h"
 #include "trac0r/post.h"
@@ -291,17 +292,8 @@ static void render_g(const tr_scene *s, const tr_camera *cam, uint32_t first, ui
     tr_film_free(&f);
 }
 
-/* The classic Cornell box (triangles, millimetres, a right-handed camera) at W x H. */
 static tr_scene *cornell(tr_error *err) {
-    tr_scene *s = tr_scene_create(err);
-    CHECK(s && tr_scene_file_load(s, TR_SOURCE_DIR "/scenes/cornell-classic.json", NULL, NULL,
-                                  err) == TR_OK,
-          "cornell-classic: %s", err->msg);
-    tr_camera cam = *tr_scene_camera(s);
-    CHECK(tr_camera_resize(&cam, W, H, err) == TR_OK, "%s", err->msg);
-    tr_scene_set_camera(s, &cam);
-    CHECK(tr_scene_commit(s, TR_ACCEL_TYPE_BVH, err) == TR_OK, "commit: %s", err->msg);
-    return s;
+    return classic_box(W, H, err);
 }
 
 /* A camera at pos looking along dir with a's field of view and a's handedness. */
