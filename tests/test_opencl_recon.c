@@ -117,8 +117,12 @@ static void agree(tr_device *cl, const tr_gbuffer *g, const tr_camera *cams, int
     tr_recon_free(&host);
 }
 
-/* Section 2: the device's film, where it lies, against the same film on the host. */
-static void film_on_device(tr_device *cl, const tr_scene *s, const tr_camera *cams) {
+/* Frames 0..frames-1 rendered on device d (spp samples each, from sample spp*k) and
+ * reconstructed by SVGF through `dev` on the device's own film, and, read back, through
+ * the host's tr_recon_frame with `threads`: every frame's output must agree within
+ * `tol` relative (0: bit for bit). */
+static void film_frames(tr_device *d, tr_recon_device *dev, const tr_camera *cams, int frames,
+                        uint32_t spp, int threads, double tol, const char *label) {
     tr_error err;
     tr_recon host;
     tr_gbuffer g;
@@ -126,32 +130,53 @@ static void film_on_device(tr_device *cl, const tr_scene *s, const tr_camera *ca
     CHECK(tr_recon_init(&host, W, H, &err) == TR_OK, "%s", err.msg);
     CHECK(tr_gbuffer_init(&g, W, H, &err) == TR_OK, "%s", err.msg);
     CHECK(tr_film_init_passes(&f, W, H, TR_PASS_ALL, &err) == TR_OK, "%s", err.msg);
-    tr_recon_device *dev = tr_recon_device_open(cl, W, H, &err);
-    CHECK(dev, "%s", err.msg);
-    CHECK(tr_device_upload(cl, s, &err) == TR_OK, "%s", err.msg);
     tr_render_config cfg = tr_render_config_default();
     cfg.passes = TR_PASS_ALL;
     const tr_recon_params p = tr_recon_params_default();
     float *a = malloc(3 * W * H * sizeof *a), *b = malloc(3 * W * H * sizeof *b);
     CHECK(a && b, "out of memory");
-    for (int k = 0; k < FRAMES; ++k) {
-        CHECK(tr_device_clear(cl, &err) == TR_OK || k == 0, "%s", err.msg);
-        /* Two samples, so that the film's means divide by a count above 1. */
-        CHECK(tr_device_render(cl, &cams[k], &cfg, 2u * (uint32_t)k, 2, NULL, NULL, &err) == TR_OK,
+    for (int k = 0; k < frames; ++k) {
+        /* The OpenCL device has no film to clear before its first render. */
+        CHECK(tr_device_clear(d, &err) == TR_OK || (k == 0 && tol > 0.0), "%s", err.msg);
+        CHECK(tr_device_render(d, &cams[k], &cfg, spp * (uint32_t)k, spp, NULL, NULL, &err) ==
+                  TR_OK,
               "%s", err.msg);
         CHECK(tr_recon_device_frame(dev, &cams[k], NULL, 0, TR_RECON_SVGF, &p, b, &err) == TR_OK,
               "%s", err.msg);
-        CHECK(tr_device_read_film(cl, &f, &err) == TR_OK, "%s", err.msg);
+        CHECK(tr_device_read_film(d, &f, &err) == TR_OK, "%s", err.msg);
         CHECK(tr_gbuffer_from_film(&g, &f, &err) == TR_OK, "%s", err.msg);
-        CHECK(tr_recon_frame(&host, &g, &cams[k], TR_RECON_SVGF, &p, 2, a, &err) == TR_OK, "%s",
-              err.msg);
-        const double d = worst_rel(b, a, 3 * W * H);
-        CHECK(d <= bound, "film on the device, frame %d: differs by %.3g > %.1g", k, d, bound);
+        CHECK(tr_recon_frame(&host, &g, &cams[k], TR_RECON_SVGF, &p, threads, a, &err) == TR_OK,
+              "%s", err.msg);
+        if (tol > 0.0) {
+            const double diff = worst_rel(b, a, 3 * W * H);
+            CHECK(diff <= tol, "%s, frame %d: differs by %.3g > %.1g", label, k, diff, tol);
+        } else {
+            CHECK(memcmp(a, b, 3 * W * H * sizeof *a) == 0, "%s, frame %d: not bit-identical",
+                  label, k);
+        }
     }
+    free(a);
+    free(b);
+    tr_film_free(&f);
+    tr_gbuffer_free(&g);
+    tr_recon_free(&host);
+}
+
+/* Section 2: the device's film, where it lies, against the same film on the host. */
+static void film_on_device(tr_device *cl, const tr_scene *s, const tr_camera *cams) {
+    tr_error err;
+    CHECK(tr_device_upload(cl, s, &err) == TR_OK, "%s", err.msg);
+    tr_recon_device *dev = tr_recon_device_open(cl, W, H, &err);
+    CHECK(dev, "%s", err.msg);
+    /* Two samples, so that the film's means divide by a count above 1. */
+    film_frames(cl, dev, cams, FRAMES, 2, 2, bound, "film on the device");
     double ms_t, ms_s;
     tr_recon_device_times(dev, &ms_t, &ms_s);
     CHECK(ms_t >= 0.0 && ms_s >= 0.0, "negative stage times %g %g", ms_t, ms_s);
     /* Section 4: bad input. */
+    const tr_recon_params p = tr_recon_params_default();
+    float *b = malloc(3 * W * H * sizeof *b);
+    CHECK(b, "out of memory");
     tr_camera small = cams[0];
     small.screen_width = W / 2;
     CHECK(tr_recon_device_frame(dev, &small, NULL, 0, TR_RECON_SVGF, &p, b, &err) == TR_ERR &&
@@ -165,12 +190,8 @@ static void film_on_device(tr_device *cl, const tr_scene *s, const tr_camera *ca
     CHECK(tr_recon_device_frame(wrong, &cams[0], NULL, 0, TR_RECON_SVGF, &p, b, &err) == TR_ERR,
           "a film of another size was accepted");
     tr_recon_device_close(wrong);
-    free(a);
     free(b);
-    tr_film_free(&f);
-    tr_gbuffer_free(&g);
     tr_recon_device_close(dev);
-    tr_recon_free(&host);
 }
 
 /* Section 3: the CPU device's state is the host's, bit for bit. */
@@ -180,35 +201,7 @@ static void cpu_device(const tr_scene *s, const tr_camera *cams) {
     CHECK(cpu && tr_device_upload(cpu, s, &err) == TR_OK, "%s", err.msg);
     tr_recon_device *dev = tr_recon_device_open(cpu, W, H, &err);
     CHECK(dev && !tr_recon_device_on_device(dev), "%s", err.msg);
-    tr_recon host;
-    tr_gbuffer g;
-    tr_film f;
-    CHECK(tr_recon_init(&host, W, H, &err) == TR_OK, "%s", err.msg);
-    CHECK(tr_gbuffer_init(&g, W, H, &err) == TR_OK, "%s", err.msg);
-    CHECK(tr_film_init_passes(&f, W, H, TR_PASS_ALL, &err) == TR_OK, "%s", err.msg);
-    tr_render_config cfg = tr_render_config_default();
-    cfg.passes = TR_PASS_ALL;
-    const tr_recon_params p = tr_recon_params_default();
-    float *a = malloc(3 * W * H * sizeof *a), *b = malloc(3 * W * H * sizeof *b);
-    CHECK(a && b, "out of memory");
-    for (int k = 0; k < 2; ++k) {
-        CHECK(tr_device_clear(cpu, &err) == TR_OK, "%s", err.msg);
-        CHECK(tr_device_render(cpu, &cams[k], &cfg, (uint32_t)k, 1, NULL, NULL, &err) == TR_OK,
-              "%s", err.msg);
-        CHECK(tr_recon_device_frame(dev, &cams[k], NULL, 0, TR_RECON_SVGF, &p, b, &err) == TR_OK,
-              "%s", err.msg);
-        CHECK(tr_device_read_film(cpu, &f, &err) == TR_OK, "%s", err.msg);
-        CHECK(tr_gbuffer_from_film(&g, &f, &err) == TR_OK, "%s", err.msg);
-        CHECK(tr_recon_frame(&host, &g, &cams[k], TR_RECON_SVGF, &p, 0, a, &err) == TR_OK, "%s",
-              err.msg);
-        CHECK(memcmp(a, b, 3 * W * H * sizeof *a) == 0, "cpu device, frame %d: not bit-identical",
-              k);
-    }
-    free(a);
-    free(b);
-    tr_film_free(&f);
-    tr_gbuffer_free(&g);
-    tr_recon_free(&host);
+    film_frames(cpu, dev, cams, 2, 1, 0, 0.0, "cpu device");
     tr_recon_device_close(dev);
     tr_device_close(cpu);
 }
