@@ -7,7 +7,9 @@
  *    are rejected (another triangle of the sphere, or a point off the tangent plane,
  *    lies where the surface was) and start over. This is what `view --animate` gains.
  * 2. The wall, which does not move, keeps its history either way; and a motion table
- *    of zeros gives tr_recon_frame's numbers bit for bit. */
+ *    of zeros gives tr_recon_frame's numbers bit for bit.
+ * 3. The scene's record of tr_scene_move_shape (tr_scene_take_motion, what the viewer
+ *    passes) is the sphere's step each frame, and nothing before the first move. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -49,11 +51,25 @@ int main(void) {
     float *a = malloc(n3 * sizeof *a), *b = malloc(n3 * sizeof *b), *c = malloc(n3 * sizeof *c);
     CHECK(a && b && c, "out of memory");
     const uint32_t ids = first + count + 1;
+    tr_vec3 *taken = calloc(ids, sizeof *taken);
+    CHECK(taken != NULL, "out of memory");
+    /* The scene's own record (tr_scene_take_motion) against the table built by hand: a
+     * table of another size is refused, and nothing has moved yet. */
+    int moved = 1;
+    CHECK(tr_scene_take_motion(s, taken, ids + 1, &moved, &err) == TR_ERR &&
+              err.code == TR_STATUS_INVALID_ARGUMENT,
+          "a motion table of the wrong size was accepted");
+    CHECK(tr_scene_take_motion(s, taken, ids, &moved, &err) == TR_OK && !moved, "moved %d: %s",
+          moved, err.msg);
     tr_gbuffer g;
     for (int k = 0; k < FRAMES; ++k) {
         motion_frame(s, &cam, k, &g);
+        CHECK(tr_scene_take_motion(s, taken, ids, &moved, &err) == TR_OK, "%s", err.msg);
+        CHECK(moved == (k > 0), "frame %d: moved %d", k, moved);
+        CHECK(memcmp(taken, k ? table : zeros, ids * sizeof *taken) == 0,
+              "frame %d: the scene's motion record is not the sphere's step", k);
         /* The first frame has no previous one: no motion either. */
-        CHECK(tr_recon_frame_moving(&moving, &g, &cam, k ? table : NULL, ids, TR_RECON_ACCUMULATE,
+        CHECK(tr_recon_frame_moving(&moving, &g, &cam, k ? taken : NULL, ids, TR_RECON_ACCUMULATE,
                                     &p, 2, a, &err) == TR_OK,
               "%s", err.msg);
         CHECK(tr_recon_frame(&still, &g, &cam, TR_RECON_ACCUMULATE, &p, 2, b, &err) == TR_OK, "%s",
@@ -86,6 +102,7 @@ int main(void) {
     free(b);
     free(c);
     free(table);
+    free(taken);
     free(zeros);
     tr_recon_free(&moving);
     tr_recon_free(&still);

@@ -77,42 +77,28 @@ static int render_one(view_renderer *r, const tr_camera *cam, const tr_render_co
 }
 
 /* --animate: how far each primitive moved since the last reconstructed frame, as
- * tr_recon_frame_moving takes it (indexed by triangle + 1), from the shapes' boxes (the
- * animation translates shapes); NULL when nothing moved or memory runs out (the history
- * of moving shapes is then rejected, as without motion). *ids gets the table's size. */
+ * tr_recon_frame_moving takes it (tr_scene_take_motion); NULL when nothing moved or memory
+ * runs out (the history of moving shapes is then rejected, as without motion). *ids gets
+ * the table's size. */
 static const tr_vec3 *animate_motion(view_renderer *r, uint32_t *ids) {
     *ids = 0;
     if (!r->animate) {
         return NULL;
     }
-    const uint32_t shapes = tr_scene_shape_count(r->scene);
     const uint32_t n = tr_scene_triangle_count(r->scene) + 1;
-    if (r->motion_shapes != shapes || r->motion_ids != n) {
+    if (r->motion_ids != n) {
         free(r->motion);
-        free(r->motion_boxes);
         r->motion = calloc(n, sizeof *r->motion);
-        r->motion_boxes = calloc(shapes ? shapes : 1, sizeof *r->motion_boxes);
-        r->motion_shapes = r->motion && r->motion_boxes ? shapes : 0;
-        r->motion_ids = r->motion_shapes ? n : 0;
-        for (uint32_t i = 0; i < r->motion_shapes; ++i) {
-            r->motion_boxes[i] = tr_scene_shape_box(r->scene, i);
-        }
-        return NULL; /* the first frame: nothing to compare with */
+        r->motion_ids = r->motion ? n : 0;
     }
     int moved = 0;
-    for (uint32_t i = 0, first = 0; i < shapes; ++i) {
-        const tr_aabb b = tr_scene_shape_box(r->scene, i), a = r->motion_boxes[i];
-        const tr_vec3 d = tr_vec3_make(b.min.x - a.min.x, b.min.y - a.min.y, b.min.z - a.min.z);
-        const uint32_t count = tr_scene_shape_triangle_count(r->scene, i);
-        moved |= d.x != 0.0f || d.y != 0.0f || d.z != 0.0f;
-        for (uint32_t t = first; t < first + count && t + 1 < n; ++t) {
-            r->motion[t + 1] = d;
-        }
-        first += count;
-        r->motion_boxes[i] = b;
+    tr_error err;
+    if (!r->motion || tr_scene_take_motion(r->scene, r->motion, n, &moved, &err) != TR_OK ||
+        !moved) {
+        return NULL;
     }
-    *ids = moved ? n : 0;
-    return moved ? r->motion : NULL;
+    *ids = n;
+    return r->motion;
 }
 
 /* The film through reconstruction `method` into r->disp (sized to the film; a new size
@@ -446,9 +432,7 @@ void view_renderer_stop(view_renderer *r) {
     tr_recon_device_close(r->rdev);
     r->rdev = NULL;
     free(r->motion);
-    free(r->motion_boxes);
     r->motion = NULL;
-    r->motion_boxes = NULL;
     free(r->back);
     free(r->pixels);
     r->back = NULL;

@@ -85,9 +85,8 @@ typedef struct view_renderer {
     tr_recon rec;          /* the reconstruction's history */
     tr_recon_device *rdev; /* on an OpenCL device: the reconstruction there instead */
     tr_vec3 *motion;       /* --animate: each primitive's motion since the last frame */
-    tr_aabb *motion_boxes; /* the shapes' boxes at the last reconstructed frame */
-    uint32_t motion_shapes, motion_ids;
-    tr_film disp; /* the reconstructed frame as a film of one sample per pixel */
+    uint32_t motion_ids;   /* its entries (triangles + 1) */
+    tr_film disp;          /* the reconstructed frame as a film of one sample per pixel */
 } view_renderer;
 
 /* Starts the thread rendering `cam` (whose size sets the film's) with cfg's settings, on

@@ -120,6 +120,12 @@ uint64_t tr_scene_generation(const tr_scene *s);
  * `shape` (its triangles and its box in the flat structure) by `delta`. Areas, normals and
  * the emitter table stay valid; the committed structure is stale until tr_scene_update. */
 int tr_scene_move_shape(tr_scene *s, uint32_t shape, tr_vec3 delta, tr_error *err);
+/* Motion vectors for temporal reconstruction (tr_recon_frame_moving): how far each
+ * primitive moved through tr_scene_move_shape since the last call, into motion[0, n) with
+ * n = tr_scene_triangle_count(s) + 1, indexed as the id pass numbers primitives (triangle
+ * + 1; entry 0, nothing hit, is zero); *moved is 1 when anything moved. The record starts
+ * over. A table of another size fails with TR_STATUS_INVALID_ARGUMENT. */
+int tr_scene_take_motion(tr_scene *s, tr_vec3 *motion, uint32_t n, int *moved, tr_error *err);
 /* Brings the committed structure up to date after shapes moved and records the scene's
  * generation as committed: a BVH is refitted (boxes of the same trees, binary and wide),
  * Embree's scene rebuilt, the flat structure needs nothing. Fails when anything but moves

@@ -64,6 +64,7 @@ void tr_scene_free(tr_scene *s) {
     free(s->materials);
     free(s->triangles);
     free(s->shapes);
+    free(s->shape_moved);
     free(s->vertices);
     free(s->tri_verts);
     free(s->textures);
@@ -268,6 +269,10 @@ int tr_scene_append_shape_attr(tr_scene *s, const tr_triangle *tris, uint32_t n,
         rc = grow((void **)&s->shapes, &s->shape_capacity, (uint64_t)s->shape_count + 1,
                   sizeof *s->shapes, "shapes", err);
     }
+    if (rc == TR_OK) {
+        rc = grow((void **)&s->shape_moved, &s->shape_moved_capacity, (uint64_t)s->shape_count + 1,
+                  sizeof *s->shape_moved, "shapes", err);
+    }
     if (rc == TR_OK && verts) {
         rc = grow((void **)&s->vertices, &s->vertex_capacity, (uint64_t)s->vertex_count + nv,
                   sizeof *s->vertices, "vertices", err);
@@ -300,6 +305,7 @@ int tr_scene_append_shape_attr(tr_scene *s, const tr_triangle *tris, uint32_t n,
         s->vertex_count += nv;
         s->tri_verts_count = s->triangle_count + n;
     }
+    s->shape_moved[s->shape_count] = v3s(0.0f);
     tr_flat_node *node = &s->shapes[s->shape_count++];
     node->box = tr_triangles_bounds(tris, n);
     node->first = s->triangle_count;
@@ -533,7 +539,29 @@ int tr_scene_move_shape(tr_scene *s, uint32_t shape, tr_vec3 delta, tr_error *er
         t->centroid = v3_add(t->centroid, delta);
     }
     node->box = tr_triangles_bounds(s->triangles + node->first, node->count);
+    s->shape_moved[shape] = v3_add(s->shape_moved[shape], delta);
     s->generation++;
+    return TR_OK;
+}
+
+int tr_scene_take_motion(tr_scene *s, tr_vec3 *motion, uint32_t n, int *moved, tr_error *err) {
+    if (n != s->triangle_count + 1u) {
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "motion table of %u entries for %u triangles (needs %u)", n,
+                            s->triangle_count, s->triangle_count + 1u);
+    }
+    int any = 0;
+    motion[0] = v3s(0.0f); /* id 0: nothing hit */
+    for (uint32_t i = 0; i < s->shape_count; ++i) {
+        const tr_flat_node *node = &s->shapes[i];
+        const tr_vec3 d = s->shape_moved[i];
+        any |= d.x != 0.0f || d.y != 0.0f || d.z != 0.0f;
+        for (uint32_t t = node->first; t < node->first + node->count; ++t) {
+            motion[t + 1] = d;
+        }
+        s->shape_moved[i] = v3s(0.0f);
+    }
+    *moved = any;
     return TR_OK;
 }
 

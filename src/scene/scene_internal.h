@@ -17,6 +17,10 @@ struct tr_scene {
     uint32_t triangle_count, triangle_capacity;
     tr_flat_node *shapes; /* one box + triangle run per shape: the thesis's flat structure */
     uint32_t shape_count, shape_capacity;
+    /* Per shape, how far tr_scene_move_shape moved it since the last tr_scene_take_motion
+     * (motion vectors for temporal reconstruction). */
+    tr_vec3 *shape_moved;
+    uint32_t shape_moved_capacity;
     tr_camera camera;
     /* Set by tr_scene_commit: the structure rays are traced through. */
     tr_accel_type accel;
