@@ -120,12 +120,15 @@ static int path_camera(const tr_camera *c0, float diag, uint32_t f, uint32_t fra
 }
 
 /* Renders samples [first, first + n) of cam on be (its film cleared) into f. */
+/* Renders into the device's film and, with f, reads it into f. *ms times both: a frame
+ * whose reconstruction runs on the host needs its film there; one reconstructed on the
+ * device (tr_recon_device) passes f NULL and is timed without the read. */
 static int render_into(cli_backend *be, const tr_camera *cam, const tr_render_config *cfg,
                        uint32_t first, uint32_t n, tr_film *f, double *ms, tr_error *err) {
     const double t0 = tr_time_now();
     if (tr_device_clear(be->dev, err) != TR_OK ||
         tr_device_render(be->dev, cam, cfg, first, n, NULL, NULL, err) != TR_OK ||
-        tr_device_read_film(be->dev, f, err) != TR_OK) {
+        (f && tr_device_read_film(be->dev, f, err) != TR_OK)) {
         return TR_ERR;
     }
     if (ms) {
@@ -322,6 +325,11 @@ int bench_realtime(int argc, char **argv) {
             rc = CLI_FAILURE;
         }
     }
+    /* Whether a method reconstructs on the host, which needs each frame's film there. */
+    int host_recon = 0;
+    for (int m = 0; m < nm; ++m) {
+        host_recon |= on[m] && !rdev[m];
+    }
     tr_render_config cfg = cli_render_config(&c);
     cfg.passes = frame_passes;
     /* The references keep the frames' passes too, although only their radiance is read
@@ -378,8 +386,9 @@ int bench_realtime(int argc, char **argv) {
         }
         /* The frame itself: samples numbered by frame, so that noise changes over time. */
         double render_ms = 0.0;
-        if (render_into(&be, &cam, &cfg, f * spp, spp, &film, &render_ms, &err) != TR_OK ||
-            tr_gbuffer_from_film(&g, &film, &err) != TR_OK) {
+        if (render_into(&be, &cam, &cfg, f * spp, spp, host_recon ? &film : NULL, &render_ms,
+                        &err) != TR_OK ||
+            (host_recon && tr_gbuffer_from_film(&g, &film, &err) != TR_OK)) {
             fprintf(stderr, "trac0r bench realtime: frame %u: %s\n", f, err.msg);
             rc = CLI_FAILURE;
             break;
