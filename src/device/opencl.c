@@ -118,8 +118,12 @@ extern const size_t tr_cl_kernel_source_length;
 
 /* FP_CONTRACT is switched off in entry.cl (the host builds with -ffp-contract=off);
  * kernel argument names are kept so that tr_cl_open can check them against the host's
- * table of scene arrays. Devices that can divide and take square roots correctly
- * rounded, as the host does, are asked to (OpenCL 1.2 otherwise allows 2.5 and 3 ulp). */
+ * table of scene arrays. CPU devices that can divide and take square roots correctly
+ * rounded, as the host does, are asked to (OpenCL 1.2 otherwise allows 2.5 and 3 ulp),
+ * so that PoCL's numbers follow the host's. GPUs are not: on an H100 the correctly
+ * rounded division and root made pt's 1080p frame 1.2x slower (13.65 against 11.34 ms,
+ * docs/gpu.md), and their images differ from the host's in the last bits anyway through
+ * the device's exp, pow, sin and cos (docs/opencl.md). */
 static const char build_options[] = "-cl-std=CL1.2 -cl-kernel-arg-info -DTR_OPENCL_DEVICE=1";
 static const char build_option_rounded[] = " -cl-fp32-correctly-rounded-divide-sqrt";
 
@@ -200,6 +204,7 @@ struct tr_cl_context {
     cl_kernel kernel;
     char *build_log;
     char options[160]; /* the options the kernel was built with */
+    size_t local[2];   /* the render kernel's work-group size; 0 x 0: the driver's choice */
     int array_count;   /* scene arrays the kernel takes */
     uint64_t memory_limit;
     /* The uploaded scene. */
@@ -557,6 +562,49 @@ tr_cl_context *tr_cl_open(int index, tr_error *err) {
     return tr_cl_open_source(index, NULL, err);
 }
 
+/* The render kernel's work-group size. A GPU gets 8 x 8 pixels: neighbouring rays walk
+ * the same nodes, and on an H100 it beat the driver's own choice for a 1920x1080 grid
+ * (docs/gpu.md). A CPU device keeps its driver's choice (PoCL folds a work-group into
+ * loops). TRAC0R_OPENCL_WORK_GROUP=WxH sets it, "driver" leaves it to the driver; the
+ * variable is read before the kernel is built, checked against the kernel's limit after. */
+static const char work_group_env[] = "TRAC0R_OPENCL_WORK_GROUP";
+
+static int parse_work_group(size_t local[2], int *given, tr_error *err) {
+    local[0] = local[1] = 0;
+    const char *env = getenv(work_group_env);
+    *given = env && *env;
+    if (!*given || strcmp(env, "driver") == 0) {
+        return TR_OK;
+    }
+    unsigned w = 0, h = 0;
+    char end = 0;
+    if (sscanf(env, "%ux%u%c", &w, &h, &end) != 2 || w < 1 || h < 1 || w > 1024 || h > 1024) {
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "%s='%s' is not WxH (1..1024 each) or 'driver'", work_group_env, env);
+    }
+    local[0] = w;
+    local[1] = h;
+    return TR_OK;
+}
+
+static int check_work_group(tr_cl_context *ctx, int given, int cpu, tr_error *err) {
+    size_t max = 0;
+    clGetKernelWorkGroupInfo(ctx->kernel, ctx->device, CL_KERNEL_WORK_GROUP_SIZE, sizeof max, &max,
+                             NULL);
+    if (!given) {
+        if (!cpu && max >= 64) {
+            ctx->local[0] = ctx->local[1] = 8;
+        }
+        return TR_OK;
+    }
+    if (ctx->local[0] * ctx->local[1] > max) {
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "%s=%zux%zu: %s runs at most %zu work items in a group", work_group_env,
+                            ctx->local[0], ctx->local[1], ctx->info.name, max);
+    }
+    return TR_OK;
+}
+
 tr_cl_context *tr_cl_open_source(int index, const char *source, tr_error *err) {
     last_build_log[0] = '\0';
     int count = 0;
@@ -584,6 +632,10 @@ tr_cl_context *tr_cl_open_source(int index, const char *source, tr_error *err) {
         return NULL;
     }
     ctx->info = info;
+    int wg_given = 0;
+    if (parse_work_group(ctx->local, &wg_given, err) != TR_OK) {
+        goto fail;
+    }
     ctx->platform = plat;
     ctx->device = dev;
     cl_int rc;
@@ -607,8 +659,11 @@ tr_cl_context *tr_cl_open_source(int index, const char *source, tr_error *err) {
     }
     cl_device_fp_config fp = 0;
     clGetDeviceInfo(dev, CL_DEVICE_SINGLE_FP_CONFIG, sizeof fp, &fp, NULL);
+    cl_device_type type = 0;
+    clGetDeviceInfo(dev, CL_DEVICE_TYPE, sizeof type, &type, NULL);
+    const int cpu = (type & CL_DEVICE_TYPE_CPU) != 0;
     snprintf(ctx->options, sizeof ctx->options, "%s%s", build_options,
-             (fp & CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT) ? build_option_rounded : "");
+             cpu && (fp & CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT) ? build_option_rounded : "");
     rc = clBuildProgram(ctx->program, 1, &dev, ctx->options, NULL, NULL);
     ctx->build_log = read_build_log(ctx->program, dev);
     if (!ctx->build_log) {
@@ -627,7 +682,8 @@ tr_cl_context *tr_cl_open_source(int index, const char *source, tr_error *err) {
         cl_fail(err, "clCreateKernel(tr_cl_render)", rc);
         goto fail;
     }
-    if (check_kernel_args(ctx, err) != TR_OK) {
+    if (check_kernel_args(ctx, err) != TR_OK ||
+        check_work_group(ctx, wg_given, cpu, err) != TR_OK) {
         goto fail;
     }
     ctx->frame = clCreateBuffer(ctx->context, CL_MEM_READ_ONLY, sizeof(tr_frame), NULL, &rc);
@@ -940,8 +996,12 @@ int tr_cl_render_frame(tr_cl_context *ctx, const tr_frame *f, uint64_t *rays_out
             return cl_fail(err, call, rc);
         }
     }
-    const size_t global[2] = {nx, ny};
-    rc = clEnqueueNDRangeKernel(ctx->queue, ctx->kernel, 2, NULL, global, NULL, 0, NULL, NULL);
+    /* With a work-group size the grid is rounded up to whole groups; the kernel returns
+     * at once for the work items beyond the frame's grid. */
+    const size_t *local = ctx->local[0] ? ctx->local : NULL;
+    const size_t global[2] = {local ? (nx + local[0] - 1) / local[0] * local[0] : nx,
+                              local ? (ny + local[1] - 1) / local[1] * local[1] : ny};
+    rc = clEnqueueNDRangeKernel(ctx->queue, ctx->kernel, 2, NULL, global, local, 0, NULL, NULL);
     if (rc != CL_SUCCESS) {
         return cl_fail(err, "clEnqueueNDRangeKernel(tr_cl_render)", rc);
     }

@@ -134,7 +134,8 @@ TR_FN int tr_intersect_bvh_leaf(const tr_scene_view *s, tr_ray *r, uint32_t firs
 /* Closest hit through the binary BVH: children visited near-first, the far one pushed
  * on a fixed-size stack, subtrees skipped once they start beyond the closest hit. With
  * any_hit set it returns at the first hit in (tmin, tmax), for shadow rays. */
-TR_FN int tr_traverse_bvh(const tr_scene_view *s, const tr_ray *ray, tr_hit *hit, int any_hit) {
+TR_FN_TRAVERSE int tr_traverse_bvh(const tr_scene_view *s, const tr_ray *ray, tr_hit *hit,
+                                   int any_hit) {
     tr_ray r = *ray;
     int found = 0;
     float tn;
