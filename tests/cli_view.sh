@@ -380,6 +380,16 @@ if "$BIN" info --devices >/dev/null 2>&1; then
     cmp -s shots/trac0r-view-000.png d4.png ||
         fail "device F12 screenshot differs from render --device opencl --spp 4"
     quit_viewer
+    # Reconstructed on the device, the frames leave the film there; F12 reads it then.
+    rm -rf shots
+    mkdir -p shots
+    start_viewer --max-spp 4 --device opencl --recon svgf
+    wait_for 60 'settled_at 1 4' || fail "device viewer with svgf did not settle: spp $(state spp)"
+    xdotool key F12
+    wait_for 20 '[ "$(state shots)" -ge 1 ]' || fail "device F12 with svgf saved nothing: $(cat view.err)"
+    cmp -s shots/trac0r-view-000.png d4.png ||
+        fail "device F12 with svgf differs from render --device opencl --spp 4"
+    quit_viewer
     # Headless too: view --frames equals render on the same device.
     "$BIN" view --device opencl --width 40 --height 30 --frames 3 --screenshot dv.pfm \
         2>/dev/null || fail "headless view --device opencl failed"

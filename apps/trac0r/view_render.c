@@ -63,9 +63,12 @@ static int render_cancelled(void *user) {
     return atomic_load(&r->cancel);
 }
 
-/* One frame of samples spp .. spp + n - 1 on the device, read back into r->film. */
+/* One frame of samples spp .. spp + n - 1 on the device, read back into r->film unless
+ * `read` is 0: a frame reconstructed on an OpenCL device needs its film only there, and at
+ * 1920x1080 reading the film with its passes took 10-12 ms a frame on an H100
+ * (docs/gpu.md). r->film_stale then says so, and F12 reads it. */
 static int render_one(view_renderer *r, const tr_camera *cam, const tr_render_config *cfg,
-                      uint32_t spp, uint32_t n, tr_render_stats *st, tr_error *err) {
+                      uint32_t spp, uint32_t n, int read, tr_render_stats *st, tr_error *err) {
     if (tr_device_render(r->dev, cam, cfg, spp, n, NULL, st, err) != TR_OK) {
         return TR_ERR;
     }
@@ -73,7 +76,19 @@ static int render_one(view_renderer *r, const tr_camera *cam, const tr_render_co
         return tr_error_set(err, TR_STATUS_CANCELLED,
                             "frame cancelled"); /* the view changed meanwhile */
     }
-    return tr_device_read_film(r->dev, &r->film, err);
+    r->film_stale = !read;
+    return read ? tr_device_read_film(r->dev, &r->film, err) : TR_OK;
+}
+
+/* Reads the device's film into r->film if render_one left it there. */
+static int film_current(view_renderer *r, tr_error *err) {
+    if (r->film_stale) {
+        if (tr_device_read_film(r->dev, &r->film, err) != TR_OK) {
+            return TR_ERR;
+        }
+        r->film_stale = 0;
+    }
+    return TR_OK;
 }
 
 /* --animate: how far each primitive moved since the last reconstructed frame, as
@@ -164,7 +179,8 @@ static void *render_main(void *arg) {
             int ok = 0;
             if (spp == 0) {
                 snprintf(r->shot_msg, sizeof r->shot_msg, "%s: no samples yet", r->shot_path);
-            } else if (write_shot(&r->film, r->shot_path, r->exposure, r->curve, &err) != TR_OK) {
+            } else if (film_current(r, &err) != TR_OK ||
+                       write_shot(&r->film, r->shot_path, r->exposure, r->curve, &err) != TR_OK) {
                 snprintf(r->shot_msg, sizeof r->shot_msg, "%s", err.msg);
             } else {
                 ok = 1;
@@ -266,7 +282,10 @@ static void *render_main(void *arg) {
         } else if (rmoving) {
             sample = (r->motion_frame++ & 0xffffu) * 16u + spp;
         }
-        int rc = render_one(r, &rcam, &cfg, sample, nspp, &st, &err);
+        /* Reconstructed on an OpenCL device, the frame's film stays there. */
+        const int device_recon =
+            method != TR_RECON_OFF && strcmp(tr_device_kind(r->dev), "opencl") == 0;
+        int rc = render_one(r, &rcam, &cfg, sample, nspp, !device_recon, &st, &err);
         if (rc != TR_OK) {
             pthread_mutex_lock(&r->mu);
             if (err.code == TR_STATUS_CANCELLED) {

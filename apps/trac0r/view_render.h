@@ -76,6 +76,7 @@ typedef struct view_renderer {
 
     /* Private to the thread. */
     tr_film film;
+    int film_stale; /* the device's film was not read into film (reconstructed there) */
     uint32_t *back;
     atomic_int refining;   /* the frame in flight refines a view on screen: cancellable */
     float motion_scale;    /* the resolution divisor the budget asks for while moving */
