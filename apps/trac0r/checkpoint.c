@@ -63,10 +63,17 @@ static int hash_file(uint64_t *h, const char *path, tr_error *err) {
 int checkpoint_identity(checkpoint_id *id, const cli_common *c, const tr_scene *scene, int stride,
                         uint32_t passes, tr_error *err) {
     memset(id, 0, sizeof *id);
+    /* The sampler and the light selection decide the samples too: a film resumed with
+     * other ones would mix two sequences of points. */
+    const char *sampler = c->sampler == TR_SAMPLER_RANDOM   ? "random"
+                          : c->sampler == TR_SAMPLER_ZSOBOL ? "zsobol"
+                                                            : "sobol";
     snprintf(id->desc, sizeof id->desc,
-             "size=%ux%u seed=%llu max-depth=%d integrator=%s accel=%s stride=%d passes=0x%x",
+             "size=%ux%u seed=%llu max-depth=%d integrator=%s accel=%s stride=%d passes=0x%x "
+             "sampler=%s light-sampling=%s",
              c->width, c->height, (unsigned long long)c->seed, c->max_depth,
-             tr_integrator_name(c->integrator), tr_accel_name(c->accel), stride, passes);
+             tr_integrator_name(c->integrator), tr_accel_name(c->accel), stride, passes, sampler,
+             c->light_sampling < 0 ? "scene" : tr_light_sampling_name(c->light_sampling));
     uint64_t h = FNV_OFFSET;
     const uint32_t nt = tr_scene_triangle_count(scene);
     h = fnv_u32(h, nt);
