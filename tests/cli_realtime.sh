@@ -81,6 +81,22 @@ done
 # at this size: 28.4 dB at depth 2, 34.3 dB at 3, 51 dB for 64 against 64).
 expect_usage_error "--bias-reference-depth" bench realtime --bias-reference-depth 0
 expect_usage_error "--bias-reference-depth" bench realtime --integrator bdpt --bias-reference-depth 64
+# --reference-sampler: the frames keep their sampler, the references take the one named
+# (sobol named is the default's run to the digit; random gives other references).
+expect_usage_error "'halton'" bench realtime --reference-sampler halton
+refs() {
+    n=$1
+    shift
+    "$BIN" bench realtime "$CLASSIC" --width 48 --height 36 --frames 2 --reference-spp 16 \
+        --threads 1 --methods off --out "rs$n" "$@" >/dev/null 2>&1 || fail "--reference-sampler $*"
+    cut -d, -f7 "rs$n.csv" | tr '\n' ' '
+}
+rs_default=$(refs 0)
+rs_sobol=$(refs 1 --reference-sampler sobol)
+rs_random=$(refs 2 --reference-sampler random)
+[ "$rs_default" = "$rs_sobol" ] || fail "--reference-sampler sobol: '$rs_sobol' vs '$rs_default'"
+[ "$rs_default" != "$rs_random" ] || fail "--reference-sampler random changed nothing: '$rs_random'"
+
 # bias D: the bias PSNR printed for --max-depth D against depth 64.
 bias() {
     "$BIN" bench realtime "$CLASSIC" --width 48 --height 36 --frames 2 --reference-spp 64 \

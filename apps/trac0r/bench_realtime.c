@@ -56,6 +56,10 @@ static void realtime_help(void) {
            "  --sampler NAME, --light-sampling NAME   as for render: --sampler random gives\n"
            "                       pt independent numbers instead of the Sobol points,\n"
            "                       zsobol the Sobol points with screen-space blue noise\n"
+           "  --reference-sampler NAME   the references' sampler (default: --sampler's). The\n"
+           "                       two-halves estimate of a reference's own error holds for\n"
+           "                       independent samples: compare samplers against random\n"
+           "                       references\n"
            "  --out PREFIX         output file prefix (default realtime)\n"
            "  -h, --help           show this help\n");
 }
@@ -198,6 +202,7 @@ int bench_realtime(int argc, char **argv) {
     c.height = 240;
     uint32_t frames = 32, spp = 1, ref_spp = 256, cut = 0, bias_depth = 0;
     int on[TR_RECON_COUNT] = {1, 1, 1, 1, 1};
+    int ref_sampler = -1; /* TR_SAMPLER_*, -1: the frames' */
     const char *prefix = "realtime";
     int size_given = 0;
     while (cli_next(&a)) {
@@ -220,6 +225,20 @@ int bench_realtime(int argc, char **argv) {
             rc = cli_parse_u32(&a, 2, 1000000, &ref_spp);
         } else if (cli_is(&a, "--bias-reference-depth")) {
             rc = cli_parse_u32(&a, 1, TR_MAX_DEPTH_LIMIT, &bias_depth);
+        } else if (cli_is(&a, "--reference-sampler")) {
+            rc = cli_value(&a);
+            if (rc == CLI_OK) {
+                ref_sampler = strcmp(a.value, "sobol") == 0    ? TR_SAMPLER_SOBOL
+                              : strcmp(a.value, "random") == 0 ? TR_SAMPLER_RANDOM
+                              : strcmp(a.value, "zsobol") == 0 ? TR_SAMPLER_ZSOBOL
+                                                               : -1;
+                if (ref_sampler < 0) {
+                    return cli_error(&a,
+                                     "--reference-sampler: unknown sampler '%s' (available: "
+                                     "sobol, random, zsobol)",
+                                     a.value);
+                }
+            }
         } else if (cli_is(&a, "--cut")) {
             rc = cli_parse_u32(&a, 1, 100000, &cut);
         } else if (cli_is(&a, "--methods")) {
@@ -339,6 +358,9 @@ int bench_realtime(int argc, char **argv) {
     tr_render_config rcfg = cfg;
     /* The references' seed differs from the frames', so their noise is independent. */
     rcfg.seed = c.seed ^ 0x7265666572656e63ULL;
+    if (ref_sampler >= 0) {
+        rcfg.sampler = ref_sampler;
+    }
     /* Frames and references alike are rendered at this depth. */
     const int depth = cfg.max_depth ? cfg.max_depth : tr_default_max_depth(cfg.integrator);
     const int threads = c.threads ? c.threads : tr_default_threads();
@@ -349,6 +371,11 @@ int bench_realtime(int argc, char **argv) {
                cut ? ", camera cut" : "");
         if (cut) {
             printf("camera cut at frame %u\n", cut);
+        }
+        if (ref_sampler >= 0) {
+            printf("references sampled with %s\n", ref_sampler == TR_SAMPLER_SOBOL    ? "sobol"
+                                                   : ref_sampler == TR_SAMPLER_RANDOM ? "random"
+                                                                                      : "zsobol");
         }
     }
     const double t_start = tr_time_now();
