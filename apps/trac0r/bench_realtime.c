@@ -123,10 +123,10 @@ static int path_camera(const tr_camera *c0, float diag, uint32_t f, uint32_t fra
     return TR_OK;
 }
 
-/* Renders samples [first, first + n) of cam on be (its film cleared) into f. */
-/* Renders into the device's film and, with f, reads it into f. *ms times both: a frame
- * whose reconstruction runs on the host needs its film there; one reconstructed on the
- * device (tr_recon_device) passes f NULL and is timed without the read. */
+/* Renders samples [first, first + n) of cam on be (its film cleared) and, with f, reads
+ * the film into f. *ms times both: a frame whose reconstruction runs on the host needs its
+ * film there; one reconstructed on the device (tr_recon_device) passes f NULL and is timed
+ * without the read. */
 static int render_into(cli_backend *be, const tr_camera *cam, const tr_render_config *cfg,
                        uint32_t first, uint32_t n, tr_film *f, double *ms, tr_error *err) {
     const double t0 = tr_time_now();

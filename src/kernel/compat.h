@@ -46,8 +46,8 @@ typedef ulong uint64_t;
 #include <stdint.h>
 #define TR_FN static inline
 /* Inlining decides the hot paths' speed on the CPU (the device compilers inline
- * everything but TR_FN_TRAVERSE): TR_FN_INLINE for a body a caller copies per constant argument
- * (tr_render_grid_rows), TR_FN_NOINLINE for a large path that only some scenes take
+ * everything but TR_FN_TRAVERSE): TR_FN_INLINE for a body a caller copies per constant
+ * argument (tr_render_grid_rows), TR_FN_NOINLINE for a large path that only some scenes take
  * (textures, vertex normals, cut-outs, the principled BSDF, the environment), so that
  * its size does not push the code every scene runs out of line. */
 #define TR_FN_INLINE static inline __attribute__((always_inline))
