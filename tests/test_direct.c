@@ -13,6 +13,7 @@
  *    it), keeps the mean of a noisy frame within 1 %, and does not blur across a depth
  *    and normal step; it differs from the unsplit filter (the split is really used). */
 #include "check.h"
+#include "synth_frame.h"
 #include "classic_box.h"
 #include "trac0r/post.h"
 #include "trac0r/scene_file.h"
@@ -116,40 +117,12 @@ static void test_pass(void) {
     tr_scene_destroy(s);
 }
 
-static uint32_t lcg(uint32_t *s) {
-    *s = *s * 1664525u + 1013904223u;
-    return *s >> 8;
-}
-static float unit(uint32_t *s) {
-    return (float)lcg(s) / 16777216.0f;
-}
-
 /* Left half a wall facing the camera at depth 1, right half one at depth 2 turned away;
  * colour c_left / c_right plus uniform noise of amplitude `noise`, of which the fraction
  * `dfrac` is the direct part (with its own noise). Albedo 0.5. */
 static void synth(tr_gbuffer *g, float c_left, float c_right, float noise, float dfrac,
                   uint32_t seed) {
-    uint32_t s = seed;
-    for (uint32_t y = 0; y < H; ++y) {
-        for (uint32_t x = 0; x < W; ++x) {
-            const size_t i = (size_t)y * W + x;
-            const int left = x < W / 2;
-            const float c = left ? c_left : c_right;
-            for (int k = 0; k < 3; ++k) {
-                const float d = dfrac * c + noise * (2.0f * unit(&s) - 1.0f);
-                const float ind = (1.0f - dfrac) * c + noise * (2.0f * unit(&s) - 1.0f);
-                g->direct[3 * i + k] = d;
-                g->color[3 * i + k] = d + ind;
-                g->albedo[3 * i + k] = 0.5f;
-            }
-            g->normal[3 * i] = left ? 0.0f : 0.6f;
-            g->normal[3 * i + 1] = 0.0f;
-            g->normal[3 * i + 2] = left ? -1.0f : -0.8f;
-            g->depth[i] = left ? 1.0f : 2.0f;
-            g->prim[i] = left ? 1u : 2u;
-        }
-    }
-    g->has_direct = 1;
+    synth_frame(g, W, H, c_left, c_right, noise, dfrac, seed);
 }
 
 static tr_camera front_camera(void) {

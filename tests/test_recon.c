@@ -15,6 +15,7 @@
  *    direct tonemap's bytes.
  * 6. SSIM is 1 for an image with itself, falls with noise and is symmetric. */
 #include "check.h"
+#include "synth_frame.h"
 #include "classic_box.h"
 #include "post/filter.h"
 #include "post/tonemap.h"
@@ -29,35 +30,11 @@
 #define W 40
 #define H 30
 
-static uint32_t lcg(uint32_t *s) {
-    *s = *s * 1664525u + 1013904223u;
-    return *s >> 8;
-}
-static float unit(uint32_t *s) {
-    return (float)lcg(s) / 16777216.0f;
-}
-
 /* A synthetic frame: left half a wall facing the camera at depth 1 (colour left_c), right
  * half a wall at depth 2 turned away (colour right_c), each with uniform noise of
  * amplitude `noise` (seeded). Albedo 0.5 everywhere. */
 static void synth(tr_gbuffer *g, float left_c, float right_c, float noise, uint32_t seed) {
-    uint32_t s = seed;
-    for (uint32_t y = 0; y < H; ++y) {
-        for (uint32_t x = 0; x < W; ++x) {
-            const size_t i = (size_t)y * W + x;
-            const int left = x < W / 2;
-            const float c = left ? left_c : right_c;
-            for (int k = 0; k < 3; ++k) {
-                g->color[3 * i + k] = c + noise * (2.0f * unit(&s) - 1.0f);
-                g->albedo[3 * i + k] = 0.5f;
-            }
-            g->normal[3 * i] = left ? 0.0f : 0.6f;
-            g->normal[3 * i + 1] = 0.0f;
-            g->normal[3 * i + 2] = left ? -1.0f : -0.8f;
-            g->depth[i] = left ? 1.0f : 2.0f;
-            g->prim[i] = left ? 1u : 2u;
-        }
-    }
+    synth_frame(g, W, H, left_c, right_c, noise, -1.0f, seed);
 }
 
 static double mean(const float *img, size_t pixels) {

@@ -23,6 +23,7 @@
  *     pixels lies within 0.75 and 1.33 times sigma / sqrt(N) (the RMS over 128 pixels is
  *     good to about 6 %), and the first 256 points of a pixel are no (0,8,2)-net. */
 #include "check.h"
+#include "exp_xy.h"
 #include "kernel/sampler.h"
 #include "trac0r/render.h"
 
@@ -91,17 +92,7 @@ static void stratification(void) {
     CHECK(unaligned_nets < 8, "every unaligned block of 256 was a net (%d of 8)", unaligned_nets);
 }
 
-/* (b) */
-static double series_exp_xy(double c) {
-    /* integral over [0,1]^2 of exp(c x y) = sum_{n>=0} c^n / (n! (n+1)^2) */
-    double sum = 0.0, term = 1.0;
-    for (int n = 0; n < 40; ++n) {
-        sum += term / ((n + 1.0) * (n + 1.0));
-        term *= c / (n + 1.0);
-    }
-    return sum;
-}
-
+/* (b) (series_exp_xy: exp_xy.h) */
 static double rms_error(int n, uint32_t dim, double integral) {
     const int pixels = 128;
     double se = 0.0;

@@ -28,6 +28,7 @@
 #include <string.h>
 
 #include "check.h"
+#include "exp_xy.h"
 #include "kernel/kernel.h"
 #include "scene/scene_internal.h"
 #include "trac0r/trac0r.h"
@@ -142,15 +143,6 @@ static void permutation(void) {
         cols += (a ^ b) == 2u;
     }
     CHECK(rows > 64 && cols > 64, "pairs on rows %d, on columns %d of 256", rows, cols);
-}
-
-static double series_exp_xy(double c) {
-    double sum = 0.0, term = 1.0;
-    for (int n = 0; n < 40; ++n) {
-        sum += term / ((n + 1.0) * (n + 1.0));
-        term *= c / (n + 1.0);
-    }
-    return sum;
 }
 
 /* (d) RMS error of the mean of exp(x y) over side x side pixel blocks at one sample. */
