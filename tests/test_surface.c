@@ -16,7 +16,8 @@
  *    of the whole material stage, on a textured emissive quad and on a plain emitter.
  * 4. Image files: a PNG decodes to the texels it was written with (top row first, R in
  *    the low byte); a missing file, a truncated PNG, a 0x0 one, one declaring 10^5 x 10^5
- *    texels and a text file fail with a status code and add nothing.
+ *    texels, one whose chunk runs past the end of the file and a text file fail with a
+ *    status code and add nothing.
  * 4b. Normal maps: a constant map tilting the normal towards +X (+Y) of tangent space
  *    turns the quad's shading normal towards the direction u (the image's up) grows in,
  *    glTF's convention (+Y up in the image while v grows downwards).
@@ -522,6 +523,7 @@ static void test_texture_files(void) {
                {TEXDATA "/truncated.png", TR_STATUS_PARSE},
                {TEXDATA "/zero.png", TR_STATUS_PARSE},
                {TEXDATA "/not_image.png", TR_STATUS_PARSE},
+               {TEXDATA "/chunk_past_end.png", TR_STATUS_PARSE},
                {TEXDATA, TR_STATUS_IO}};
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; ++i) {
         CHECK_STATUS(tr_scene_load_texture(&s, bad[i].file, 0u, &index, &err), err, bad[i].code,
@@ -534,6 +536,36 @@ static void test_texture_files(void) {
           "huge.png: rc %d", rc);
     CHECK(s.texture_count == 1 && s.texel_count == TW * TH, "failures add nothing");
     tr_scene_free(&s);
+
+    /* The PNG chunk walk that runs before stb_image: a whole PNG fits, so does one with
+     * bytes after IEND; one cut inside its IDAT or its IEND does not, nor does the file
+     * fuzz_texture found; other formats pass through. */
+    unsigned char *png = NULL;
+    size_t len = 0;
+    CHECK(tr_read_image_file(TEXDATA "/checker.png", &png, &len, &err) == TR_OK, "%s", err.msg);
+    if (png) {
+        CHECK(tr_png_chunks_fit(png, len), "checker.png does not fit");
+        CHECK(len > 8 + 25 + 13 && memcmp(png + 8 + 25 + 4, "IDAT", 4) == 0,
+              "checker.png: no IDAT after IHDR");
+        CHECK(!tr_png_chunks_fit(png, 8 + 25 + 13), "a cut inside IDAT fits");
+        CHECK(!tr_png_chunks_fit(png, len - 1), "a cut inside IEND fits");
+        unsigned char *more = malloc(len + 5);
+        if (more) {
+            memcpy(more, png, len);
+            memcpy(more + len, "extra", 5);
+            CHECK(tr_png_chunks_fit(more, len + 5), "bytes after IEND refused");
+            free(more);
+        }
+        free(png);
+    }
+    CHECK(tr_read_image_file(TEXDATA "/chunk_past_end.png", &png, &len, &err) == TR_OK, "%s",
+          err.msg);
+    if (png) {
+        CHECK(!tr_png_chunks_fit(png, len), "chunk_past_end.png fits");
+        free(png);
+    }
+    static const unsigned char ppm[] = "P6 1 1 255\n\1\2\3";
+    CHECK(tr_png_chunks_fit(ppm, sizeof ppm - 1), "a PPM refused by the PNG walk");
 }
 
 static void test_env_sampling(void) {

@@ -15,6 +15,9 @@
 
 /* Reads a whole regular file (not a FIFO or device) of at most TR_IMAGE_MAX_FILE_BYTES. */
 int tr_read_image_file(const char *path, unsigned char **data, size_t *len, tr_error *err);
+/* 0 when data is a PNG (by its signature) one of whose chunks, up to IEND, declares more
+ * bytes than the data holds; 1 otherwise (also for every other format). */
+int tr_png_chunks_fit(const unsigned char *data, size_t len);
 /* Decodes an image (PNG, JPEG, TGA, BMP, HDR, ... whatever stb_image reads) to RGBA8
  * texels, R in the low byte, top row first (*out: caller frees). `name` is for messages. */
 int tr_image_decode_rgba8(const unsigned char *data, size_t len, const char *name, uint32_t **out,
