@@ -100,7 +100,7 @@ check nan_mesh.json ": meshes[0].path: '$BAD/nan_vertex.obj': mesh vertex 2 has 
 check huge_mesh.json ": meshes[0]: a vertex lands at (1e+30, 1, 0), outside the bound |x| <= 1e+07"
 # Textures (issue 14): unreadable or undecodable images and bad keys are errors.
 check texture_missing.json ": materials.tex.texture: $BAD/../texture/no-such-texture.png: cannot open"
-check texture_truncated.json ": materials.tex.texture: '$BAD/../texture/truncated.png': cannot decode"
+check texture_truncated.json ": materials.tex.texture: '$BAD/../texture/truncated.png'"
 check texture_zero.json ": materials.tex.texture: '$BAD/../texture/zero.png'"
 check texture_huge.json ": materials.tex.texture: '$BAD/../texture/huge.png'"
 check texture_not_image.json ": materials.tex.texture: '$BAD/../texture/not_image.png'"
