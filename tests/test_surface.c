@@ -524,6 +524,7 @@ static void test_texture_files(void) {
                {TEXDATA "/zero.png", TR_STATUS_PARSE},
                {TEXDATA "/not_image.png", TR_STATUS_PARSE},
                {TEXDATA "/chunk_past_end.png", TR_STATUS_PARSE},
+               {TEXDATA "/rle_past_end.tga", TR_STATUS_PARSE},
                {TEXDATA, TR_STATUS_IO}};
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; ++i) {
         CHECK_STATUS(tr_scene_load_texture(&s, bad[i].file, 0u, &index, &err), err, bad[i].code,
@@ -566,6 +567,40 @@ static void test_texture_files(void) {
     }
     static const unsigned char ppm[] = "P6 1 1 255\n\1\2\3";
     CHECK(tr_png_chunks_fit(ppm, sizeof ppm - 1), "a PPM refused by the PNG walk");
+
+    /* The declared size against the file's length: the 17-byte TGA fuzz_texture found
+     * declares 9799x4096 texels; a PPM of 2x1 texels that holds them decodes, the same
+     * header declaring 200x1 in 15 bytes does not (64 texels a byte at most). */
+    CHECK(tr_image_max_texels_per_byte(ppm, sizeof ppm - 1) == 64, "PPM: %u",
+          tr_image_max_texels_per_byte(ppm, sizeof ppm - 1));
+    CHECK(tr_read_image_file(TEXDATA "/checker.png", &png, &len, &err) == TR_OK, "%s", err.msg);
+    if (png) {
+        CHECK(tr_image_max_texels_per_byte(png, len) == 8256, "PNG: %u",
+              tr_image_max_texels_per_byte(png, len));
+        free(png);
+    }
+    static const unsigned char ppm2[] = "P6 2 1 255\n\1\2\3\4\5\6";
+    static const unsigned char wide[] = "P6 2000 1 255\n\1\2\3\4\5\6";
+    uint32_t *rgba = NULL, w = 0, h = 0;
+    CHECK(tr_image_decode_rgba8(ppm2, sizeof ppm2 - 1, "ppm2", &rgba, &w, &h, &err) == TR_OK &&
+              w == 2 && h == 1 && rgba[1] == 0xff060504u,
+          "%s", err.msg);
+    free(rgba);
+    rgba = NULL;
+    CHECK_STATUS(tr_image_decode_rgba8(wide, sizeof wide - 1, "wide", &rgba, &w, &h, &err), err,
+                 TR_STATUS_PARSE, "2000x1 texels in 24 bytes");
+    CHECK(rgba == NULL, "a refused image left texels");
+
+    /* 8-bit images as linear floats: stb_image's gamma 2.2 of each channel, in order. */
+    float *rgb = NULL;
+    CHECK(tr_image_decode_rgbf(ppm2, sizeof ppm2 - 1, "ppm2", &rgb, &w, &h, &err) == TR_OK &&
+              w == 2 && h == 1,
+          "%s", err.msg);
+    for (int i = 0; rgb && i < 6; ++i) {
+        const float want = (float)pow((float)(i + 1) / 255.0f, 2.2f);
+        CHECK(rgb[i] == want, "channel %d: %g, want %g", i, (double)rgb[i], (double)want);
+    }
+    free(rgb);
 }
 
 static void test_env_sampling(void) {

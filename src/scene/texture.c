@@ -3,6 +3,7 @@
  * files and read errors are ours to report. */
 #define _POSIX_C_SOURCE 200809L
 #include <errno.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -56,7 +57,31 @@ int tr_read_image_file(const char *path, unsigned char **data, size_t *len, tr_e
     return TR_OK;
 }
 
-/* The image's size from its header, checked before anything is decoded. */
+uint32_t tr_image_max_texels_per_byte(const unsigned char *data, size_t len) {
+    /* The densest each format stb_image reads can encode, rounded up:
+     * - PNG: deflate expands one byte to at most 1032 (RFC 1951: a 258-byte match in a
+     *   code of at least two bits), at 1 bit a texel: 8256;
+     * - GIF: an LZW code of k bits stands for at most 2^k texels, k <= 12: 2731;
+     * - Softimage PIC: a mixed run's 16-bit count (65535 texels) in 4 bytes: 16384;
+     * - JPEG: an 8x8 block needs at least one bit (its DC difference; progressive scans
+     *   run their ends of block together): 512;
+     * - the rest (TGA and PSD run-length packets of 128 in 2 bytes, Radiance HDR runs of
+     *   127 in 2 bytes a channel, BMP at 1 bit a texel, PNM): 64. */
+    if (len >= 8 && memcmp(data, "\x89PNG\r\n\x1a\n", 8) == 0) {
+        return 8256;
+    }
+    if (len >= 4 && memcmp(data, "GIF8", 4) == 0) {
+        return 2731;
+    }
+    if (len >= 4 && memcmp(data, "S\x80\xf6\x34", 4) == 0) {
+        return 16384;
+    }
+    if (len >= 2 && data[0] == 0xff && data[1] == 0xd8) {
+        return 512;
+    }
+    return 64;
+}
+
 int tr_png_chunks_fit(const unsigned char *data, size_t len) {
     static const unsigned char sig[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
     if (len < 8 || memcmp(data, sig, 8) != 0) {
@@ -77,6 +102,7 @@ int tr_png_chunks_fit(const unsigned char *data, size_t len) {
     return 1;
 }
 
+/* The image's size from its header, checked before anything is decoded. */
 static int check_header(const unsigned char *data, size_t len, const char *name, int *w, int *h,
                         tr_error *err) {
     int comp;
@@ -104,6 +130,16 @@ static int check_header(const unsigned char *data, size_t len, const char *name,
         return tr_error_set(err, TR_STATUS_LIMIT,
                             "'%.200s': %dx%d texels exceed the limit (sides up to %d, %u texels)",
                             name, *w, *h, TR_TEXTURE_MAX_SIDE, TR_TEXTURE_MAX_TEXELS);
+    }
+    /* stb_image's TGA, BMP, PSD and PNM readers take bytes past the end as zeros: a
+     * 17-byte TGA declaring 9799x4096 texels decoded to 40 million of them, 12 s under
+     * the sanitizers (found by fuzz_texture). A header may not declare more texels than
+     * its format could encode in the file's bytes. */
+    const uint64_t texels = (uint64_t)*w * (uint64_t)*h;
+    if (texels / tr_image_max_texels_per_byte(data, len) > (uint64_t)len) {
+        return tr_error_set(err, TR_STATUS_PARSE,
+                            "'%.200s': declares %dx%d texels, more than its %zu bytes can hold",
+                            name, *w, *h, len);
     }
     return TR_OK;
 }
@@ -145,9 +181,32 @@ int tr_image_decode_rgbf(const unsigned char *data, size_t len, const char *name
     if (check_header(data, len, name, &w, &h, err) != TR_OK) {
         return TR_ERR;
     }
-    /* Radiance .hdr comes linear; 8-bit formats are taken as sRGB (stb_image's default
-     * gamma 2.2 is close to it, and environment maps are HDR in practice). */
-    float *px = stbi_loadf_from_memory(data, (int)len, &w, &h, &comp, 3);
+    /* Radiance .hdr comes linear; 8-bit formats are taken as sRGB, through stb_image's
+     * gamma 2.2 (close to it; environment maps are HDR in practice). The 8-bit case goes
+     * through a table of the 256 values stb_image would compute with pow() per channel. */
+    float *px = NULL;
+    if (stbi_is_hdr_from_memory(data, (int)len)) {
+        px = stbi_loadf_from_memory(data, (int)len, &w, &h, &comp, 3);
+    } else {
+        unsigned char *ldr = stbi_load_from_memory(data, (int)len, &w, &h, &comp, 3);
+        if (ldr) {
+            const size_t n = (size_t)w * (size_t)h * 3;
+            px = malloc(n * sizeof *px);
+            if (!px) {
+                stbi_image_free(ldr);
+                return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory decoding '%.200s'",
+                                    name);
+            }
+            float lut[256];
+            for (int i = 0; i < 256; ++i) {
+                lut[i] = (float)pow((float)i / 255.0f, 2.2f);
+            }
+            for (size_t i = 0; i < n; ++i) {
+                px[i] = lut[ldr[i]];
+            }
+            stbi_image_free(ldr);
+        }
+    }
     if (!px) {
         return tr_error_set(err, TR_STATUS_PARSE, "'%.200s': cannot decode (%s)", name,
                             stbi_failure_reason() ? stbi_failure_reason() : "unknown");

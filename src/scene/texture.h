@@ -18,6 +18,10 @@ int tr_read_image_file(const char *path, unsigned char **data, size_t *len, tr_e
 /* 0 when data is a PNG (by its signature) one of whose chunks, up to IEND, declares more
  * bytes than the data holds; 1 otherwise (also for every other format). */
 int tr_png_chunks_fit(const unsigned char *data, size_t len);
+/* The most texels one byte of data can encode in its format (known by its signature; 64
+ * for formats without one): a header that declares more than this times the file's
+ * length is refused before decoding. */
+uint32_t tr_image_max_texels_per_byte(const unsigned char *data, size_t len);
 /* Decodes an image (PNG, JPEG, TGA, BMP, HDR, ... whatever stb_image reads) to RGBA8
  * texels, R in the low byte, top row first (*out: caller frees). `name` is for messages. */
 int tr_image_decode_rgba8(const unsigned char *data, size_t len, const char *name, uint32_t **out,
