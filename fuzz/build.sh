@@ -7,7 +7,8 @@
 #                    Assimp 5.2.5 itself crashes on inputs it finds, see fuzz_mesh.c)
 #   fuzz_mesh_guard  the same target's declared-size checks alone (what CI runs)
 #   fuzz_image       the image readers of `compare` (PNG, PFM and EXR)
-#   fuzz_texture     texture and environment-map decoding (stb_image, src/scene/texture.c)
+#   fuzz_texture     texture and environment-map decoding (src/scene/texture.c and
+#                    image_codec.c: libpng, libjpeg, the HDR reader, stb_image's TGA and BMP)
 # The wide BVH's per-ISA traversals need per-file flags and are left out: without
 # TR_WBVH_HAVE_X86 the library has the scalar one alone.
 # Usage: fuzz/build.sh   (CC defaults to clang)
@@ -21,29 +22,25 @@ FLAGS="-std=c11 -g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recover
 SCENE="src/scene/json.c src/scene/scene.c src/scene/shape.c src/scene/camera.c
     src/scene/lights.c src/accel/bvh.c src/accel/wbvh.c src/accel/wbvh_scalar.c
     src/accel/embree.c src/util/error.c src/util/registry.c src/scene/material_registry.c
-    src/io/infile.c src/scene/texture.c src/scene/envmap.c src/scene/sun.c src/scene/light_tree.c"
+    src/io/infile.c src/scene/texture.c src/scene/image_codec.c src/scene/envmap.c src/scene/sun.c src/scene/light_tree.c"
 # shellcheck disable=SC2046,SC2086
 "$CC" $FLAGS $(pkg-config --cflags libcjson) fuzz/fuzz_scene_json.c $SCENE \
-    $(pkg-config --libs libcjson) -lm -o "$OUT/fuzz_scene_json"
+    $(pkg-config --libs libcjson libpng) -ljpeg -lm -o "$OUT/fuzz_scene_json"
 # shellcheck disable=SC2046,SC2086
 "$CC" $FLAGS $(pkg-config --cflags libcjson assimp) fuzz/fuzz_mesh.c $SCENE \
     src/scene/mesh.c src/scene/mesh_guard.c \
-    $(pkg-config --libs libcjson assimp) -lm -o "$OUT/fuzz_mesh"
+    $(pkg-config --libs libcjson assimp libpng) -ljpeg -lm -o "$OUT/fuzz_mesh"
 # shellcheck disable=SC2046,SC2086
 "$CC" $FLAGS -DTR_FUZZ_GUARD_ONLY $(pkg-config --cflags libcjson assimp) fuzz/fuzz_mesh.c $SCENE \
     src/scene/mesh.c src/scene/mesh_guard.c \
-    $(pkg-config --libs libcjson assimp) -lm -o "$OUT/fuzz_mesh_guard"
+    $(pkg-config --libs libcjson assimp libpng) -ljpeg -lm -o "$OUT/fuzz_mesh_guard"
 # shellcheck disable=SC2046,SC2086
 "$CC" $FLAGS $(pkg-config --cflags libpng OpenEXR) fuzz/fuzz_image.c src/io/image.c src/io/exr.c src/io/infile.c \
     src/io/outfile.c src/film/film.c src/post/tonemap.c src/util/error.c \
     $(pkg-config --libs libpng) -lOpenEXRCore-3_1 -lm -o "$OUT/fuzz_image"
-# shellcheck disable=SC2086
-# stb_image (compiled into texture.c) computes `NULL + 0` on its first IDAT chunk and calls
-# memcpy(NULL, ..., 0) on an empty one, which UBSan's pointer-overflow and nonnull-attribute
-# checks report though no byte is read or written there (Debian's stb, 2022-09-08): those
-# two checks are off for this target, every other one stays.
-"$CC" $FLAGS -fno-sanitize=pointer-overflow,nonnull-attribute fuzz/fuzz_texture.c src/scene/texture.c src/scene/scene.c src/scene/shape.c \
-    src/scene/lights.c src/accel/bvh.c src/accel/wbvh.c src/accel/wbvh_scalar.c \
+# shellcheck disable=SC2046,SC2086
+"$CC" $FLAGS fuzz/fuzz_texture.c src/scene/texture.c src/scene/image_codec.c src/scene/scene.c \
+    src/scene/shape.c src/scene/lights.c src/accel/bvh.c src/accel/wbvh.c src/accel/wbvh_scalar.c \
     src/accel/embree.c src/util/error.c src/util/registry.c src/scene/material_registry.c \
-    src/io/infile.c src/scene/light_tree.c -lm -o "$OUT/fuzz_texture"
+    src/io/infile.c src/scene/light_tree.c $(pkg-config --libs libpng) -ljpeg -lm -o "$OUT/fuzz_texture"
 echo "built $OUT/fuzz_scene_json $OUT/fuzz_mesh $OUT/fuzz_mesh_guard $OUT/fuzz_image $OUT/fuzz_texture"

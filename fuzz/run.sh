@@ -44,7 +44,8 @@ for f in $(find tests/data/hostile/images -type f); do
 done
 rm -rf "$OUT/corpus_texture"
 mkdir -p "$OUT/corpus_texture"
-cp tests/data/texture/*.png tests/data/texture/*.tga tests/data/texture/*.hdr "$OUT/corpus_texture/"
+cp tests/data/texture/*.png tests/data/texture/*.tga tests/data/texture/*.hdr \
+    tests/data/texture/*.jpg "$OUT/corpus_texture/"
 # The mesh target through Assimp only when asked (TRAC0R_FUZZ_ASSIMP=1): Assimp 5.2.5
 # crashes on what it finds (fuzz/fuzz_mesh.c); otherwise trac0r's declared-size checks.
 MESH_TARGET=fuzz_mesh_guard

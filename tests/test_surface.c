@@ -565,36 +565,41 @@ static void test_texture_files(void) {
         CHECK(!tr_png_chunks_fit(png, len), "chunk_past_end.png fits");
         free(png);
     }
-    static const unsigned char ppm[] = "P6 1 1 255\n\1\2\3";
-    CHECK(tr_png_chunks_fit(ppm, sizeof ppm - 1), "a PPM refused by the PNG walk");
+    static const unsigned char hdr[] = "#?RADIANCE\n\n-Y 1 +X 1\n\1\2\3\4";
+    CHECK(tr_png_chunks_fit(hdr, sizeof hdr - 1), "an HDR refused by the PNG walk");
 
     /* The declared size against the file's length: the 17-byte TGA fuzz_texture found
-     * declares 9799x4096 texels; a PPM of 2x1 texels that holds them decodes, the same
-     * header declaring 200x1 in 15 bytes does not (64 texels a byte at most). */
-    CHECK(tr_image_max_texels_per_byte(ppm, sizeof ppm - 1) == 64, "PPM: %u",
-          tr_image_max_texels_per_byte(ppm, sizeof ppm - 1));
+     * declares 9799x4096 texels; a TGA of 2x1 texels that holds them decodes, the same
+     * header declaring 2000x1 in 24 bytes does not (64 texels a byte at most). */
+    unsigned char tga[18 + 6] = {
+        0, 0, 2, 0, 0,  0,    0, 0, 0, 0, 0, 0,
+        2, 0, 1, 0, 24, 0x20, 3, 2, 1, 6, 5, 4}; /* uncompressed, top row first, BGR */
+    CHECK(tr_image_max_texels_per_byte(tga, sizeof tga) == 64, "TGA: %u",
+          tr_image_max_texels_per_byte(tga, sizeof tga));
     CHECK(tr_read_image_file(TEXDATA "/checker.png", &png, &len, &err) == TR_OK, "%s", err.msg);
     if (png) {
         CHECK(tr_image_max_texels_per_byte(png, len) == 8256, "PNG: %u",
               tr_image_max_texels_per_byte(png, len));
         free(png);
     }
-    static const unsigned char ppm2[] = "P6 2 1 255\n\1\2\3\4\5\6";
-    static const unsigned char wide[] = "P6 2000 1 255\n\1\2\3\4\5\6";
     uint32_t *rgba = NULL, w = 0, h = 0;
-    CHECK(tr_image_decode_rgba8(ppm2, sizeof ppm2 - 1, "ppm2", &rgba, &w, &h, &err) == TR_OK &&
-              w == 2 && h == 1 && rgba[1] == 0xff060504u,
+    CHECK(tr_image_decode_rgba8(tga, sizeof tga, "tga", &rgba, &w, &h, &err) == TR_OK && w == 2 &&
+              h == 1 && rgba[0] == 0xff030201u && rgba[1] == 0xff060504u,
           "%s", err.msg);
     free(rgba);
     rgba = NULL;
-    CHECK_STATUS(tr_image_decode_rgba8(wide, sizeof wide - 1, "wide", &rgba, &w, &h, &err), err,
+    unsigned char wide[sizeof tga];
+    memcpy(wide, tga, sizeof tga);
+    wide[12] = 2000 & 0xff;
+    wide[13] = 2000 >> 8;
+    CHECK_STATUS(tr_image_decode_rgba8(wide, sizeof wide, "wide", &rgba, &w, &h, &err), err,
                  TR_STATUS_PARSE, "2000x1 texels in 24 bytes");
     CHECK(rgba == NULL, "a refused image left texels");
 
-    /* 8-bit images as linear floats: stb_image's gamma 2.2 of each channel, in order. */
+    /* 8-bit images as linear floats: a gamma of 2.2 on each channel, in order. */
     float *rgb = NULL;
-    CHECK(tr_image_decode_rgbf(ppm2, sizeof ppm2 - 1, "ppm2", &rgb, &w, &h, &err) == TR_OK &&
-              w == 2 && h == 1,
+    CHECK(tr_image_decode_rgbf(tga, sizeof tga, "tga", &rgb, &w, &h, &err) == TR_OK && w == 2 &&
+              h == 1,
           "%s", err.msg);
     for (int i = 0; rgb && i < 6; ++i) {
         const float want = (float)pow((float)(i + 1) / 255.0f, 2.2f);

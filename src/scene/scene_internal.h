@@ -144,7 +144,7 @@ int tr_scene_import_mesh_ex(tr_scene *s, const char *path, const tr_transform *t
  * colour), turned by rotation radians about +y. Builds the map's sampling CDFs. */
 int tr_scene_set_environment(tr_scene *s, tr_vec3 color, float strength, float rotation,
                              const float *rgb, uint32_t width, uint32_t height, tr_error *err);
-/* Loads an equirectangular map (Radiance .hdr, or any image stb_image reads) and sets
+/* Loads an equirectangular map (Radiance .hdr, or a PNG, JPEG, TGA or BMP) and sets
  * it as the environment. */
 int tr_scene_load_environment(tr_scene *s, const char *path, tr_vec3 color, float strength,
                               float rotation, tr_error *err);

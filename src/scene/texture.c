@@ -1,6 +1,6 @@
-/* texture.c - images for textures (RGBA8) and environment maps (float RGB), decoded with
- * stb_image (Debian's libstb-dev); files are read here, so that size limits, special
- * files and read errors are ours to report. */
+/* texture.c - images for textures (RGBA8) and environment maps (float RGB), decoded by
+ * src/scene/image_codec.c once the header's size has passed the limits here; files are
+ * read here, so that size limits, special files and read errors are ours to report. */
 #define _POSIX_C_SOURCE 200809L
 #include <errno.h>
 #include <math.h>
@@ -10,20 +10,9 @@
 #include <sys/stat.h>
 
 #include "io/infile.h"
+#include "scene/image_codec.h"
 #include "scene/scene_internal.h"
 #include "scene/texture.h"
-
-/* stb_image refuses larger sides itself; our own check comes first, from the header. */
-#define STBI_MAX_DIMENSIONS TR_TEXTURE_MAX_SIDE
-#define STBI_NO_STDIO
-#define STBI_FAILURE_USERMSG
-#define STB_IMAGE_STATIC
-#define STB_IMAGE_IMPLEMENTATION
-/* Static, so that libtrac0r exports no stbi_ names. The header declares a function its
- * static build never defines, which gcc reports at the end of the file: the warning is
- * off for this file (the pragma cannot be popped before that). */
-#pragma GCC diagnostic ignored "-Wunused-function"
-#include <stb/stb_image.h>
 
 int tr_read_image_file(const char *path, unsigned char **data, size_t *len, tr_error *err) {
     *data = NULL;
@@ -58,26 +47,21 @@ int tr_read_image_file(const char *path, unsigned char **data, size_t *len, tr_e
 }
 
 uint32_t tr_image_max_texels_per_byte(const unsigned char *data, size_t len) {
-    /* The densest each format stb_image reads can encode, rounded up:
+    /* The densest each format read here can encode, rounded up:
      * - PNG: deflate expands one byte to at most 1032 (RFC 1951: a 258-byte match in a
      *   code of at least two bits), at 1 bit a texel: 8256;
-     * - GIF: an LZW code of k bits stands for at most 2^k texels, k <= 12: 2731;
-     * - Softimage PIC: a mixed run's 16-bit count (65535 texels) in 4 bytes: 16384;
      * - JPEG: an 8x8 block needs at least one bit (its DC difference; progressive scans
      *   run their ends of block together): 512;
-     * - the rest (TGA and PSD run-length packets of 128 in 2 bytes, Radiance HDR runs of
-     *   127 in 2 bytes a channel, BMP at 1 bit a texel, PNM): 64. */
-    if (len >= 8 && memcmp(data, "\x89PNG\r\n\x1a\n", 8) == 0) {
+     * - the rest (TGA run-length packets of 128 texels in 2 bytes, Radiance HDR runs of
+     *   127 in 2 bytes a channel, BMP at 1 bit a texel): 64. */
+    switch (tr_codec_of(data, len)) {
+    case TR_CODEC_PNG:
         return 8256;
-    }
-    if (len >= 4 && memcmp(data, "GIF8", 4) == 0) {
-        return 2731;
-    }
-    if (len >= 4 && memcmp(data, "S\x80\xf6\x34", 4) == 0) {
-        return 16384;
-    }
-    if (len >= 2 && data[0] == 0xff && data[1] == 0xd8) {
+    case TR_CODEC_JPEG:
         return 512;
+    case TR_CODEC_HDR:
+    case TR_CODEC_STB:
+        break;
     }
     return 64;
 }
@@ -105,7 +89,6 @@ int tr_png_chunks_fit(const unsigned char *data, size_t len) {
 /* The image's size from its header, checked before anything is decoded. */
 static int check_header(const unsigned char *data, size_t len, const char *name, int *w, int *h,
                         tr_error *err) {
-    int comp;
     if (len == 0 || len > (size_t)TR_IMAGE_MAX_FILE_BYTES) {
         return tr_error_set(err, TR_STATUS_PARSE, "'%.200s': %s", name,
                             len ? "too large" : "empty");
@@ -117,9 +100,8 @@ static int check_header(const unsigned char *data, size_t len, const char *name,
         return tr_error_set(err, TR_STATUS_PARSE,
                             "'%.200s': a PNG chunk runs past the end of the file", name);
     }
-    if (!stbi_info_from_memory(data, (int)len, w, h, &comp)) {
-        return tr_error_set(err, TR_STATUS_PARSE, "'%.200s': not an image stb_image reads (%s)",
-                            name, stbi_failure_reason() ? stbi_failure_reason() : "unknown");
+    if (tr_codec_info(data, len, name, w, h, err) != TR_OK) {
+        return TR_ERR;
     }
     if (*w <= 0 || *h <= 0) {
         return tr_error_set(err, TR_STATUS_PARSE, "'%.200s': an image of %dx%d texels", name, *w,
@@ -131,7 +113,7 @@ static int check_header(const unsigned char *data, size_t len, const char *name,
                             "'%.200s': %dx%d texels exceed the limit (sides up to %d, %u texels)",
                             name, *w, *h, TR_TEXTURE_MAX_SIDE, TR_TEXTURE_MAX_TEXELS);
     }
-    /* stb_image's TGA, BMP, PSD and PNM readers take bytes past the end as zeros: a
+    /* stb_image's TGA and BMP readers take bytes past the end as zeros: a
      * 17-byte TGA declaring 9799x4096 texels decoded to 40 million of them, 12 s under
      * the sanitizers (found by fuzz_texture). A header may not declare more texels than
      * its format could encode in the file's bytes. */
@@ -144,22 +126,37 @@ static int check_header(const unsigned char *data, size_t len, const char *name,
     return TR_OK;
 }
 
-int tr_image_decode_rgba8(const unsigned char *data, size_t len, const char *name, uint32_t **out,
-                          uint32_t *width, uint32_t *height, tr_error *err) {
-    int w, h, comp;
+/* Decodes to 8-bit RGBA after the header's checks; the decoded size must be the one
+ * checked. */
+static int decode_rgba8(const unsigned char *data, size_t len, const char *name,
+                        unsigned char **out, int *w, int *h, tr_error *err) {
+    int cw, ch;
     *out = NULL;
-    if (check_header(data, len, name, &w, &h, err) != TR_OK) {
+    if (check_header(data, len, name, &cw, &ch, err) != TR_OK ||
+        tr_codec_rgba8(data, len, name, out, w, h, err) != TR_OK) {
         return TR_ERR;
     }
-    unsigned char *px = stbi_load_from_memory(data, (int)len, &w, &h, &comp, 4);
-    if (!px) {
-        return tr_error_set(err, TR_STATUS_PARSE, "'%.200s': cannot decode (%s)", name,
-                            stbi_failure_reason() ? stbi_failure_reason() : "unknown");
+    if (*w != cw || *h != ch) {
+        free(*out);
+        *out = NULL;
+        return tr_error_set(err, TR_STATUS_PARSE, "'%.200s': decoded %dx%d texels, header %dx%d",
+                            name, *w, *h, cw, ch);
+    }
+    return TR_OK;
+}
+
+int tr_image_decode_rgba8(const unsigned char *data, size_t len, const char *name, uint32_t **out,
+                          uint32_t *width, uint32_t *height, tr_error *err) {
+    int w, h;
+    unsigned char *px;
+    *out = NULL;
+    if (decode_rgba8(data, len, name, &px, &w, &h, err) != TR_OK) {
+        return TR_ERR;
     }
     size_t n = (size_t)w * (size_t)h;
     uint32_t *rgba = malloc(n * sizeof *rgba);
     if (!rgba) {
-        stbi_image_free(px);
+        free(px);
         return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory decoding '%.200s'", name);
     }
     for (size_t i = 0; i < n; ++i) {
@@ -167,7 +164,7 @@ int tr_image_decode_rgba8(const unsigned char *data, size_t len, const char *nam
         rgba[i] = (uint32_t)p[0] | ((uint32_t)p[1] << 8) | ((uint32_t)p[2] << 16) |
                   ((uint32_t)p[3] << 24);
     }
-    stbi_image_free(px);
+    free(px);
     *out = rgba;
     *width = (uint32_t)w;
     *height = (uint32_t)h;
@@ -176,48 +173,44 @@ int tr_image_decode_rgba8(const unsigned char *data, size_t len, const char *nam
 
 int tr_image_decode_rgbf(const unsigned char *data, size_t len, const char *name, float **out,
                          uint32_t *width, uint32_t *height, tr_error *err) {
-    int w, h, comp;
-    *out = NULL;
-    if (check_header(data, len, name, &w, &h, err) != TR_OK) {
-        return TR_ERR;
-    }
-    /* Radiance .hdr comes linear; 8-bit formats are taken as sRGB, through stb_image's
-     * gamma 2.2 (close to it; environment maps are HDR in practice). The 8-bit case goes
-     * through a table of the 256 values stb_image would compute with pow() per channel. */
+    int w, h;
     float *px = NULL;
-    if (stbi_is_hdr_from_memory(data, (int)len)) {
-        px = stbi_loadf_from_memory(data, (int)len, &w, &h, &comp, 3);
+    *out = NULL;
+    /* Radiance .hdr comes linear; 8-bit formats are taken as sRGB through a gamma of 2.2
+     * (stb_image's mapping, close to it; environment maps are HDR in practice), a table of
+     * the 256 values. */
+    if (tr_codec_of(data, len) == TR_CODEC_HDR) {
+        if (check_header(data, len, name, &w, &h, err) != TR_OK ||
+            tr_codec_hdr_rgbf(data, len, name, &px, &w, &h, err) != TR_OK) {
+            return TR_ERR;
+        }
+        /* RGBE reaches 255 * 2^119; sums of such texels would overflow to infinity. */
+        for (size_t i = 0, n = (size_t)w * (size_t)h * 3; i < n; ++i) {
+            px[i] = px[i] > 1e30f ? 1e30f : px[i];
+        }
     } else {
-        unsigned char *ldr = stbi_load_from_memory(data, (int)len, &w, &h, &comp, 3);
-        if (ldr) {
-            const size_t n = (size_t)w * (size_t)h * 3;
-            px = malloc(n * sizeof *px);
-            if (!px) {
-                stbi_image_free(ldr);
-                return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory decoding '%.200s'",
-                                    name);
-            }
-            float lut[256];
-            for (int i = 0; i < 256; ++i) {
-                lut[i] = (float)pow((float)i / 255.0f, 2.2f);
-            }
-            for (size_t i = 0; i < n; ++i) {
-                px[i] = lut[ldr[i]];
-            }
-            stbi_image_free(ldr);
+        unsigned char *ldr;
+        if (decode_rgba8(data, len, name, &ldr, &w, &h, err) != TR_OK) {
+            return TR_ERR;
         }
-    }
-    if (!px) {
-        return tr_error_set(err, TR_STATUS_PARSE, "'%.200s': cannot decode (%s)", name,
-                            stbi_failure_reason() ? stbi_failure_reason() : "unknown");
-    }
-    size_t n = (size_t)w * (size_t)h * 3;
-    for (size_t i = 0; i < n; ++i) {
-        if (!(px[i] >= 0.0f) || px[i] > 1e30f) {
-            px[i] = px[i] > 1e30f ? 1e30f : 0.0f; /* NaN and negative: black */
+        const size_t n = (size_t)w * (size_t)h;
+        px = malloc(n * 3 * sizeof *px);
+        if (!px) {
+            free(ldr);
+            return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory decoding '%.200s'",
+                                name);
         }
+        float lut[256];
+        for (int i = 0; i < 256; ++i) {
+            lut[i] = (float)pow((float)i / 255.0f, 2.2f);
+        }
+        for (size_t i = 0; i < n; ++i) {
+            for (int c = 0; c < 3; ++c) {
+                px[3 * i + c] = lut[ldr[4 * i + c]];
+            }
+        }
+        free(ldr);
     }
-    /* stb_image's allocation is malloc's (STBI_MALLOC default): free() releases it. */
     *out = px;
     *width = (uint32_t)w;
     *height = (uint32_t)h;

@@ -1,4 +1,4 @@
-/* texture.h - decoding images for the scene (src/scene/texture.c, stb_image). */
+/* texture.h - decoding images for the scene (src/scene/texture.c, image_codec.c). */
 #ifndef TR_SCENE_TEXTURE_H
 #define TR_SCENE_TEXTURE_H
 
@@ -22,7 +22,7 @@ int tr_png_chunks_fit(const unsigned char *data, size_t len);
  * for formats without one): a header that declares more than this times the file's
  * length is refused before decoding. */
 uint32_t tr_image_max_texels_per_byte(const unsigned char *data, size_t len);
-/* Decodes an image (PNG, JPEG, TGA, BMP, HDR, ... whatever stb_image reads) to RGBA8
+/* Decodes an image (PNG, JPEG, Radiance HDR, TGA or BMP: image_codec.h) to RGBA8
  * texels, R in the low byte, top row first (*out: caller frees). `name` is for messages. */
 int tr_image_decode_rgba8(const unsigned char *data, size_t len, const char *name, uint32_t **out,
                           uint32_t *width, uint32_t *height, tr_error *err);
