@@ -45,7 +45,7 @@ done
 rm -rf "$OUT/corpus_texture"
 mkdir -p "$OUT/corpus_texture"
 cp tests/data/texture/*.png tests/data/texture/*.tga tests/data/texture/*.hdr \
-    tests/data/texture/*.jpg "$OUT/corpus_texture/"
+    tests/data/texture/*.jpg tests/data/texture/*.bmp "$OUT/corpus_texture/"
 # The mesh target through Assimp only when asked (TRAC0R_FUZZ_ASSIMP=1): Assimp 5.2.5
 # crashes on what it finds (fuzz/fuzz_mesh.c); otherwise trac0r's declared-size checks.
 MESH_TARGET=fuzz_mesh_guard

@@ -243,7 +243,68 @@ static void test_hdr(void) {
     free(sky);
 }
 
+static int read_rgba8(const char *file, uint32_t **tex, uint32_t *w, uint32_t *h) {
+    unsigned char *d = NULL;
+    size_t len = 0;
+    tr_error err;
+    *tex = NULL;
+    int rc = tr_read_image_file(file, &d, &len, &err);
+    if (rc == TR_OK) {
+        rc = tr_image_decode_rgba8(d, len, file, tex, w, h, &err);
+    }
+    CHECK(rc == TR_OK, "%s", err.msg);
+    free(d);
+    return rc;
+}
+
+/* The same pictures in other containers (tests/data/texture/generate.py writes them):
+ * checker.png's colours as a 24-bit BMP and a run-length TGA, the sky in run-length
+ * scanlines next to its flat ones. */
+static void test_formats(void) {
+    uint32_t *png, *bmp, *tga, w, h, bw, bh, tw, th;
+    if (read_rgba8(TEXDATA "/checker.png", &png, &w, &h) != TR_OK) {
+        return;
+    }
+    if (read_rgba8(TEXDATA "/checker.bmp", &bmp, &bw, &bh) == TR_OK) {
+        CHECK(bw == w && bh == h, "checker.bmp: %ux%u", bw, bh);
+        for (uint32_t i = 0; bw == w && bh == h && i < w * h; ++i) {
+            CHECK(bmp[i] == (png[i] | 0xff000000u), "checker.bmp, texel %u: %08x vs %08x", i,
+                  bmp[i], png[i]);
+        }
+        free(bmp);
+    }
+    if (read_rgba8(TEXDATA "/checker_rle.tga", &tga, &tw, &th) == TR_OK) {
+        static const uint32_t from[8] = {0, 1, 2, 2, 4, 5, 6, 6}; /* the runs repeat texel 2 */
+        CHECK(tw == w && th == h, "checker_rle.tga: %ux%u", tw, th);
+        for (uint32_t i = 0; tw == w && th == h && i < w * h; ++i) {
+            CHECK(tga[i] == png[from[i]], "checker_rle.tga, texel %u: %08x vs %08x", i, tga[i],
+                  png[from[i]]);
+        }
+        free(tga);
+    }
+    free(png);
+
+    float *sky[2] = {NULL, NULL};
+    uint32_t sw[2] = {0, 0}, sh[2] = {0, 0};
+    static const char *const skies[2] = {TEXDATA "/sky.hdr", TEXDATA "/sky_rle.hdr"};
+    for (int k = 0; k < 2; ++k) {
+        unsigned char *d = NULL;
+        size_t len = 0;
+        tr_error err;
+        CHECK(tr_read_image_file(skies[k], &d, &len, &err) == TR_OK &&
+                  tr_image_decode_rgbf(d, len, skies[k], &sky[k], &sw[k], &sh[k], &err) == TR_OK,
+              "%s: %s", skies[k], err.msg);
+        free(d);
+    }
+    CHECK(sky[0] && sky[1] && sw[0] == 32 && sh[0] == 16 && sw[1] == 32 && sh[1] == 16 &&
+              memcmp(sky[0], sky[1], 32 * 16 * 3 * sizeof(float)) == 0,
+          "sky_rle.hdr differs from sky.hdr");
+    free(sky[0]);
+    free(sky[1]);
+}
+
 int main(void) {
+    test_formats();
     test_jpeg();
     test_hdr();
     return check_finish("test_image_codec");
