@@ -331,8 +331,8 @@ static int hdr_scanline(const unsigned char *d, size_t len, size_t *pos, int w, 
 
 int tr_codec_hdr_rgbf(const unsigned char *data, size_t len, const char *name, float **out,
                       int *width, int *height, tr_error *err) {
-    size_t pos;
-    int w, h;
+    size_t pos = 0;
+    int w = 0, h = 0;
     *out = NULL;
     if (hdr_header(data, len, name, &w, &h, &pos, err) != TR_OK) {
         return TR_ERR;
@@ -407,8 +407,8 @@ int tr_codec_rgba8(const unsigned char *data, size_t len, const char *name, unsi
     case TR_CODEC_JPEG:
         return jpeg_decode(data, len, name, out, width, height, err);
     case TR_CODEC_HDR: {
-        float *f;
-        int w, h;
+        float *f = NULL;
+        int w = 0, h = 0;
         if (tr_codec_hdr_rgbf(data, len, name, &f, &w, &h, err) != TR_OK) {
             return TR_ERR;
         }

@@ -130,7 +130,7 @@ static int check_header(const unsigned char *data, size_t len, const char *name,
  * checked. */
 static int decode_rgba8(const unsigned char *data, size_t len, const char *name,
                         unsigned char **out, int *w, int *h, tr_error *err) {
-    int cw, ch;
+    int cw = 0, ch = 0;
     *out = NULL;
     if (check_header(data, len, name, &cw, &ch, err) != TR_OK ||
         tr_codec_rgba8(data, len, name, out, w, h, err) != TR_OK) {
@@ -147,8 +147,8 @@ static int decode_rgba8(const unsigned char *data, size_t len, const char *name,
 
 int tr_image_decode_rgba8(const unsigned char *data, size_t len, const char *name, uint32_t **out,
                           uint32_t *width, uint32_t *height, tr_error *err) {
-    int w, h;
-    unsigned char *px;
+    int w = 0, h = 0;
+    unsigned char *px = NULL;
     *out = NULL;
     if (decode_rgba8(data, len, name, &px, &w, &h, err) != TR_OK) {
         return TR_ERR;
@@ -173,7 +173,7 @@ int tr_image_decode_rgba8(const unsigned char *data, size_t len, const char *nam
 
 int tr_image_decode_rgbf(const unsigned char *data, size_t len, const char *name, float **out,
                          uint32_t *width, uint32_t *height, tr_error *err) {
-    int w, h;
+    int w = 0, h = 0;
     float *px = NULL;
     *out = NULL;
     /* Radiance .hdr comes linear; 8-bit formats are taken as sRGB through a gamma of 2.2
@@ -202,6 +202,8 @@ int tr_image_decode_rgbf(const unsigned char *data, size_t len, const char *name
         }
         float lut[256];
         for (int i = 0; i < 256; ++i) {
+            /* In double, as stb_image computed it. */
+            /* NOLINTNEXTLINE(performance-type-promotion-in-math-fn) */
             lut[i] = (float)pow((float)i / 255.0f, 2.2f);
         }
         for (size_t i = 0; i < n; ++i) {
@@ -219,7 +221,7 @@ int tr_image_decode_rgbf(const unsigned char *data, size_t len, const char *name
 
 int tr_scene_load_texture_memory(tr_scene *s, const unsigned char *data, size_t len,
                                  const char *name, uint32_t flags, uint32_t *index, tr_error *err) {
-    uint32_t *rgba, w, h;
+    uint32_t *rgba = NULL, w = 0, h = 0;
     if (tr_image_decode_rgba8(data, len, name, &rgba, &w, &h, err) != TR_OK) {
         return TR_ERR;
     }
