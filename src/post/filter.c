@@ -235,7 +235,7 @@ static int check_frame(uint32_t w, uint32_t h, const tr_gbuffer *g, tr_error *er
 /* The hot row loops three times, for AVX-512, AVX2 and the baseline, chosen at load time
  * (gcc's ifunc clones): the same operations per lane either way (no FMA:
  * -ffp-contract=off), so the numbers do not depend on the CPU. AVX-512 took SVGF's spatial
- * stage from 6.69 to 5.86 ms and the bilateral filter's from 2.72 to 1.73 ms at 320x240
+ * stage from 6.69 to 5.86 ms and the bilateral filter's from 2.71 to 1.73 ms at 320x240
  * on the 2-core EPYC (docs/realtime.md), with the same images. */
 #if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__)
 #define TR_POST_CLONES __attribute__((target_clones("avx512f", "avx2", "default")))
