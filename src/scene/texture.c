@@ -67,8 +67,7 @@ uint32_t tr_image_max_texels_per_byte(const unsigned char *data, size_t len) {
 }
 
 int tr_png_chunks_fit(const unsigned char *data, size_t len) {
-    static const unsigned char sig[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
-    if (len < 8 || memcmp(data, sig, 8) != 0) {
+    if (tr_codec_of(data, len) != TR_CODEC_PNG) {
         return 1;
     }
     /* Each chunk: 4-byte big-endian length, 4-byte type, the data, 4-byte CRC. */
