@@ -16,7 +16,7 @@
 #define CONV_MAX_SIZES 4
 #define CONV_MAX_POINTS 400
 #define CONV_THRESHOLDS 4
-#define CONV_MAX_METHODS 3 /* naive, pt, bdpt */
+#define CONV_MAX_METHODS 4 /* naive, pt, bdpt, vcm */
 static const double conv_db[CONV_THRESHOLDS] = {25.0, 30.0, 35.0, 40.0};
 
 typedef struct conv_point {
@@ -503,17 +503,19 @@ int bench_convergence(int argc, char **argv) {
         }
         printf("\n");
     }
-    /* Speed-ups in time to each threshold: pt over naive, bdpt over pt. */
+    /* Speed-ups in time to each threshold: pt over naive, bdpt and vcm over pt. */
+    static const int pairs[3][2] = {{0, 1}, {1, 2}, {1, 3}};
     for (int si = 0; si < nsizes; ++si) {
-        const conv_run *by[3] = {NULL, NULL, NULL}; /* naive, pt, bdpt */
+        const conv_run *by[4] = {NULL, NULL, NULL, NULL}; /* naive, pt, bdpt, vcm */
         for (int mi = 0; mi < nmethods; ++mi) {
             const conv_run *r = &runs[si * nmethods + mi];
-            by[r->integrator == TR_INTEGRATOR_NAIVE ? 0
-               : r->integrator == TR_INTEGRATOR_PT  ? 1
-                                                    : 2] = r;
+            by[r->integrator == TR_INTEGRATOR_NAIVE  ? 0
+               : r->integrator == TR_INTEGRATOR_PT   ? 1
+               : r->integrator == TR_INTEGRATOR_BDPT ? 2
+                                                     : 3] = r;
         }
-        for (int pair = 0; pair < 2; ++pair) {
-            const conv_run *rn = by[pair], *rp = by[pair + 1];
+        for (int pair = 0; pair < 3; ++pair) {
+            const conv_run *rn = by[pairs[pair][0]], *rp = by[pairs[pair][1]];
             if (!rn || !rp) {
                 continue;
             }

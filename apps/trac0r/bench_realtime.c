@@ -279,10 +279,10 @@ int bench_realtime(int argc, char **argv) {
         c.height = height;
     }
     /* The integrator may come from the scene file: checked once it is loaded. */
-    if (c.integrator == TR_INTEGRATOR_BDPT && bias_depth > TR_MAX_DEPTH_BDPT) {
+    if (tr_integrator_is_bidirectional(c.integrator) && bias_depth > TR_MAX_DEPTH_BDPT) {
         tr_scene_destroy(scene);
-        return cli_error(&a, "--bias-reference-depth: bdpt supports at most %d, got %u",
-                         TR_MAX_DEPTH_BDPT, bias_depth);
+        return cli_error(&a, "--bias-reference-depth: %s supports at most %d, got %u",
+                         tr_integrator_name(c.integrator), TR_MAX_DEPTH_BDPT, bias_depth);
     }
     tr_camera cam0 = *tr_scene_camera(scene);
     if (tr_camera_resize(&cam0, c.width, c.height, &err) != TR_OK) {
@@ -320,7 +320,7 @@ int bench_realtime(int argc, char **argv) {
      * none). */
     const uint32_t frame_passes =
         TR_PASS_ALL |
-        (params.svgf_split && c.integrator != TR_INTEGRATOR_BDPT ? TR_PASS_DIRECT : 0u);
+        (params.svgf_split && !tr_integrator_is_bidirectional(c.integrator) ? TR_PASS_DIRECT : 0u);
     ok = ok && tr_film_init_passes(&film, c.width, c.height, frame_passes, &err) == TR_OK &&
          tr_film_init(&rfilm, c.width, c.height, &err) == TR_OK &&
          tr_gbuffer_init(&g, c.width, c.height, &err) == TR_OK;

@@ -252,7 +252,7 @@ static void *render_main(void *arg) {
             }
             /* The direct pass where SVGF filters direct and indirect light apart (not bdpt). */
             const uint32_t direct =
-                tr_recon_params_default().svgf_split && r->cfg.integrator != TR_INTEGRATOR_BDPT
+                tr_recon_params_default().svgf_split && !tr_integrator_is_bidirectional(r->cfg.integrator)
                     ? TR_PASS_DIRECT
                     : 0u;
             if (resize_buffers(r, rcam.screen_width, rcam.screen_height,

@@ -13,7 +13,8 @@
 #define TR_INTEGRATORS(X)                                                                    \
     X(PT,    1, "pt",    "next-event estimation, MIS and GGX glossy")      \
     X(NAIVE, 0, "naive", "the thesis's path tracer")                     \
-    X(BDPT,  2, "bdpt",  "bidirectional path tracing, MIS over all strategies (CPU)")
+    X(BDPT,  2, "bdpt",  "bidirectional path tracing, MIS over all strategies (CPU)")  \
+    X(VCM,   3, "vcm",   "vertex connection and merging: bdpt plus photon merging (CPU)")
 /* clang-format on */
 
 #define TR_INTEGRATOR_ENUM_ROW(id, value, name, description) TR_INTEGRATOR_##id = value,

@@ -60,6 +60,10 @@ tr_render_config tr_render_config_default(void);
 /* The max depth a config with max_depth 0 uses with `integrator`: TR_MAX_DEPTH_PT (64)
  * for pt, TR_MAX_DEPTH_NAIVE (8) for naive, TR_MAX_DEPTH_BDPT (15) for bdpt. */
 int tr_default_max_depth(int integrator);
+
+/* Whether an integrator traces light subpaths (bdpt, vcm): CPU only, TR_MAX_DEPTH_BDPT at
+ * most, no environment light or sun, no direct pass. */
+int tr_integrator_is_bidirectional(int integrator);
 /* Checks the settings every backend takes alike (max depth, integrator, stride); fails
  * with a message naming the value out of range. */
 int tr_render_config_check(const tr_render_config *cfg, tr_error *err);

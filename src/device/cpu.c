@@ -6,6 +6,7 @@
 #include <time.h>
 
 #include "device/frame.h"
+#include "device/vcm.h"
 #include "kernel/integrator_bdpt.h"
 #include "kernel/kernel.h"
 #include "scene/scene_internal.h"
@@ -30,8 +31,12 @@ tr_render_config tr_render_config_default(void) {
 
 TR_STATIC_ASSERT(TR_MAX_DEPTH_BDPT == TR_BDPT_MAX_DEPTH, "bdpt's depth limit");
 
+int tr_integrator_is_bidirectional(int integrator) {
+    return integrator == TR_INTEGRATOR_BDPT || integrator == TR_INTEGRATOR_VCM;
+}
+
 int tr_default_max_depth(int integrator) {
-    if (integrator == TR_INTEGRATOR_BDPT) {
+    if (tr_integrator_is_bidirectional(integrator)) {
         return TR_MAX_DEPTH_BDPT;
     }
     return integrator == TR_INTEGRATOR_NAIVE ? TR_MAX_DEPTH_NAIVE : TR_MAX_DEPTH_PT;
@@ -58,9 +63,10 @@ int tr_render_config_check(const tr_render_config *cfg, tr_error *err) {
         return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "unknown integrator %d",
                             cfg->integrator);
     }
-    if (cfg->integrator == TR_INTEGRATOR_BDPT && cfg->max_depth > TR_MAX_DEPTH_BDPT) {
-        return tr_error_set(err, TR_STATUS_LIMIT, "max depth %d: bdpt supports at most %d",
-                            cfg->max_depth, TR_MAX_DEPTH_BDPT);
+    if (tr_integrator_is_bidirectional(cfg->integrator) && cfg->max_depth > TR_MAX_DEPTH_BDPT) {
+        return tr_error_set(err, TR_STATUS_LIMIT, "max depth %d: %s supports at most %d",
+                            cfg->max_depth, tr_integrator_name(cfg->integrator),
+                            TR_MAX_DEPTH_BDPT);
     }
     if (cfg->stride < 1 || cfg->stride > 64) {
         return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "stride %d must be in 1..64",
@@ -81,9 +87,10 @@ int tr_render_config_check(const tr_render_config *cfg, tr_error *err) {
         return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "unknown pass bits 0x%x",
                             cfg->passes & ~TR_PASS_MASK);
     }
-    if ((cfg->passes & TR_PASS_DIRECT) != 0u && cfg->integrator == TR_INTEGRATOR_BDPT) {
+    if ((cfg->passes & TR_PASS_DIRECT) != 0u && tr_integrator_is_bidirectional(cfg->integrator)) {
         return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
-                            "the direct pass needs the pt or naive integrator, not bdpt");
+                            "the direct pass needs the pt or naive integrator, not %s",
+                            tr_integrator_name(cfg->integrator));
     }
     return TR_OK;
 }
@@ -159,16 +166,17 @@ static void tr_bdpt_fold_splats(const tr_frame *f, const tr_bdpt_splat *sp, uint
 
 /* The scenes an integrator cannot render, for tr_cpu_render and tr_integrator_supports. */
 static int tr_integrator_check_view(const tr_scene_view *view, int integrator, tr_error *err) {
-    if (integrator == TR_INTEGRATOR_BDPT) {
+    if (tr_integrator_is_bidirectional(integrator)) {
         if (view->env_count > 0u) {
             return tr_error_set(err, TR_STATUS_UNSUPPORTED,
-                                "bdpt does not support environment lights: use pt");
+                                "%s does not support environment lights: use pt",
+                                tr_integrator_name(integrator));
         }
         if (view->sun_count > 0u) {
             /* Light subpaths start only on emissive triangles: a sun's light would reach
              * the image through s = 0 alone, with MIS weights that assume otherwise. */
-            return tr_error_set(err, TR_STATUS_UNSUPPORTED,
-                                "bdpt does not support the sun: use pt");
+            return tr_error_set(err, TR_STATUS_UNSUPPORTED, "%s does not support the sun: use pt",
+                                tr_integrator_name(integrator));
         }
     }
     return TR_OK;
@@ -205,7 +213,7 @@ int tr_cpu_render(const tr_scene_view *view, const tr_frame *f, tr_film *film, i
     const int nthreads = threads > 0 ? threads : tr_default_threads();
     int cancelled = 0;
     uint64_t rays = 0;
-    const int bdpt = f->integrator == TR_INTEGRATOR_BDPT;
+    const int bdpt = tr_integrator_is_bidirectional((int)f->integrator);
     tr_bdpt_splat sp = {NULL, f->rect_x, f->rect_y, f->rect_w, f->rect_h};
     if (tr_integrator_check_view(view, f->integrator, err) != TR_OK) {
         return TR_ERR;
@@ -220,28 +228,37 @@ int tr_cpu_render(const tr_scene_view *view, const tr_frame *f, tr_film *film, i
                                 f->rect_h);
         }
     }
+    if (f->integrator == TR_INTEGRATOR_VCM) {
+        /* Two passes per sample over the tiles (vcm.c). */
+        if (tr_vcm_render(view, f, &fv, &sp, nthreads, tile, cancel, cancel_user, &rays,
+                          &cancelled, err) != TR_OK) {
+            free(sp.sum);
+            return TR_ERR;
+        }
+    } else {
 
 #pragma omp parallel for num_threads(nthreads) schedule(dynamic, 1) reduction(+ : rays)
-    for (int t = 0; t < tile_count; ++t) {
-        int stop;
+        for (int t = 0; t < tile_count; ++t) {
+            int stop;
 #pragma omp atomic read
-        stop = cancelled;
-        if (stop) {
-            continue; /* an OpenMP loop cannot break: skip the remaining tiles */
-        }
-        if (cancel && cancel(cancel_user)) {
+            stop = cancelled;
+            if (stop) {
+                continue; /* an OpenMP loop cannot break: skip the remaining tiles */
+            }
+            if (cancel && cancel(cancel_user)) {
 #pragma omp atomic write
-            cancelled = 1;
-            continue;
-        }
-        const uint32_t tx0 = gx0 + ((uint32_t)t % tiles_x) * tile;
-        const uint32_t ty0 = gy0 + ((uint32_t)t / tiles_x) * tile;
-        const uint32_t tx1 = tx0 + tile < gx0 + nx ? tx0 + tile : gx0 + nx;
-        const uint32_t ty1 = ty0 + tile < gy0 + ny ? ty0 + tile : gy0 + ny;
-        if (bdpt) {
-            rays += tr_bdpt_render_grid_rows(view, f, &fv, &sp, tx0, ty0, tx1, ty1);
-        } else {
-            rays += tr_render_grid_rows(view, f, &fv, tx0, ty0, tx1, ty1);
+                cancelled = 1;
+                continue;
+            }
+            const uint32_t tx0 = gx0 + ((uint32_t)t % tiles_x) * tile;
+            const uint32_t ty0 = gy0 + ((uint32_t)t / tiles_x) * tile;
+            const uint32_t tx1 = tx0 + tile < gx0 + nx ? tx0 + tile : gx0 + nx;
+            const uint32_t ty1 = ty0 + tile < gy0 + ny ? ty0 + tile : gy0 + ny;
+            if (bdpt) {
+                rays += tr_bdpt_render_grid_rows(view, f, &fv, &sp, tx0, ty0, tx1, ty1);
+            } else {
+                rays += tr_render_grid_rows(view, f, &fv, tx0, ty0, tx1, ty1);
+            }
         }
     }
     if (bdpt) {

@@ -13,6 +13,7 @@
 #include "device/frame.h"
 #include "device/opencl.h"
 #include "scene/scene_internal.h"
+#include "trac0r/registry.h"
 
 typedef enum device_kind { KIND_CPU, KIND_OPENCL } device_kind;
 
@@ -244,11 +245,11 @@ int tr_device_render(tr_device *dev, const tr_camera *cam, const tr_render_confi
         return TR_ERR;
     }
     uint64_t rays = 0;
-    if (dev->kind == KIND_OPENCL && f.integrator == TR_INTEGRATOR_BDPT) {
+    if (dev->kind == KIND_OPENCL && tr_integrator_is_bidirectional((int)f.integrator)) {
         /* issue 18: light tracing splats with 64-bit atomics the device may lack. */
         return tr_error_set(err, TR_STATUS_UNSUPPORTED,
-                            "the bdpt integrator runs on the CPU only (device %s is OpenCL)",
-                            dev->info.name);
+                            "the %s integrator runs on the CPU only (device %s is OpenCL)",
+                            tr_integrator_name((int)f.integrator), dev->info.name);
     }
     if (dev->kind == KIND_OPENCL) {
         if (tr_cl_render_frame(dev->cl, &f, &rays, err) != TR_OK) {

@@ -244,12 +244,27 @@ TR_FN float tr_bdpt_remap0(float x) {
  * from the light end, 0 .. n-1 with n = s + t; for each, pl and pc are its area densities
  * drawn from the light side and from the camera side. Most are stored by the random walks;
  * the ones next to the connection change with it and are computed here. */
-TR_FN float tr_bdpt_mis_weight(const tr_scene_view *s, const tr_camera *cam,
-                               const tr_bdpt_vertex *lv, int ns, const tr_bdpt_vertex *nee,
-                               const tr_bdpt_vertex *cv, int nt) {
+/*
+ * Vertex merging (integrator_vcm.h) adds a strategy at the camera subpath's first
+ * non-delta vertex v (1 <= v <= n - 2): the light subpath's vertex v is drawn from the
+ * light side, the camera subpath's from the camera side, and the two are merged when they
+ * lie within the radius r of each other, out of the light subpaths of all N pixels. Its density is
+ * p_{v+1} * pc[v] * eta with eta = N pi r^2 (Georgiev, Krivanek, Davidovic and Slusallek,
+ * "Light Transport Simulation with Vertex Connection and Merging", SIGGRAPH Asia 2012,
+ * section 4.2: n_VM pi r^2 / n_VC with one connection per camera subpath). With eta > 0
+ * those strategies join every sum. merge: the strategy weighed is the merge at vertex ns,
+ * with cv[nt-1] standing for the merged vertex and lv[ns-1] the light vertex before it
+ * (which may be a delta vertex: the merge does not connect there); eta 0 gives BDPT's
+ * weights exactly. */
+TR_FN float tr_bdpt_mis_weight_vm(const tr_scene_view *s, const tr_camera *cam,
+                                  const tr_bdpt_vertex *lv, int ns, const tr_bdpt_vertex *nee,
+                                  const tr_bdpt_vertex *cv, int nt, float eta, int merge) {
     const int n = ns + nt;
     if (n == 2) {
-        return 1.0f; /* only (0, 2): (1, 1) is not used */
+        return 1.0f; /* only (0, 2): (1, 1) is not used; no vertex to merge at */
+    }
+    if (merge && (ns < 1 || nt < 2 || !(eta > 0.0f))) {
+        return 0.0f;
     }
     float pl[2 * TR_BDPT_MAX_VERTS], pc[2 * TR_BDPT_MAX_VERTS], r[2 * TR_BDPT_MAX_VERTS];
     int dl[2 * TR_BDPT_MAX_VERTS];
@@ -257,7 +272,7 @@ TR_FN float tr_bdpt_mis_weight(const tr_scene_view *s, const tr_camera *cam,
         return 0.0f;
     }
     /* The path's vertices are read where they lie (no array of pointers to fill). */
-    const tr_bdpt_vertex *y0 = ns == 1 ? nee : (ns >= 1 ? &lv[0] : &cv[n - 1]);
+    const tr_bdpt_vertex *y0 = ns == 1 && nee ? nee : (ns >= 1 ? &lv[0] : &cv[n - 1]);
     for (int i = 0; i < ns; ++i) {
         const tr_bdpt_vertex *vi = i == 0 ? y0 : &lv[i];
         pl[i] = vi->pdf_fwd;
@@ -277,7 +292,9 @@ TR_FN float tr_bdpt_mis_weight(const tr_scene_view *s, const tr_camera *cam,
     if (ns > 0) {
         const tr_bdpt_vertex *qs = ns == 1 ? y0 : &lv[ns - 1];
         const tr_bdpt_vertex *qs_prev = ns >= 2 ? (ns == 2 ? y0 : &lv[ns - 2]) : 0;
-        dl[ns - 1] = 0;
+        /* A merge reaches pt from qs by qs's own scattering, delta or not. */
+        const int qs_delta = merge && qs->delta;
+        dl[ns - 1] = qs_delta;
         /* Three directions serve the four densities: the connection's (qs to pt) and
          * those from each end to its own subpath's previous vertex. */
         float de2, da2 = 0.0f, db2 = 0.0f;
@@ -286,9 +303,9 @@ TR_FN float tr_bdpt_mis_weight(const tr_scene_view *s, const tr_camera *cam,
         const tr_vec3 wb = pt_prev ? tr_bdpt_dir(pt->p, pt_prev->p, &db2) : v3s(0.0f);
         pc[ns - 1] = tr_bdpt_pdf_dir(cam, pt, pt_prev != 0, wb, v3_neg(w), de2, qs);
         if (qs_prev) {
-            pc[ns - 2] = tr_bdpt_pdf_dir(cam, qs, 1, w, wa, da2, qs_prev);
+            pc[ns - 2] = qs_delta ? 0.0f : tr_bdpt_pdf_dir(cam, qs, 1, w, wa, da2, qs_prev);
         }
-        pl[ns] = tr_bdpt_pdf_dir(cam, qs, qs_prev != 0, wa, w, de2, pt);
+        pl[ns] = qs_delta ? 0.0f : tr_bdpt_pdf_dir(cam, qs, qs_prev != 0, wa, w, de2, pt);
         if (pt_prev) {
             pl[ns + 1] = tr_bdpt_pdf_dir(cam, pt, 1, v3_neg(w), wb, db2, pt_prev);
         }
@@ -317,10 +334,11 @@ TR_FN float tr_bdpt_mis_weight(const tr_scene_view *s, const tr_camera *cam,
     if (light_ok && !dl[1]) {
         /* Vertex 1 of the path: a light vertex, or for s = 0 and s = 1 a camera one. */
         const tr_bdpt_vertex *y1 = ns >= 2 ? &lv[1] : &cv[n - 2];
-        float nee_area = ns >= 1 ? y0->pdf_nee : tr_bdpt_nee_pdf(s, y0, y1);
+        /* A merge at vertex 1 puts y_1 where the camera vertex is, not the light's. */
+        float nee_area = ns >= 1 && !(merge && ns == 1) ? y0->pdf_nee : tr_bdpt_nee_pdf(s, y0, y1);
         c = nee_area / pl[0];
     }
-    if (ns == 1) {
+    if (ns == 1 && !merge) {
         if (!(c > 0.0f)) {
             return 0.0f;
         }
@@ -334,11 +352,33 @@ TR_FN float tr_bdpt_mis_weight(const tr_scene_view *s, const tr_camera *cam,
     for (int k = 0; k < n; ++k) {
         int ok = (k == 0 || !dl[k - 1]) && !dl[k];
         ok = ok && (k == 0 || light_ok) && !(k == 1 && n == 2);
-        if (ok || k == ns) {
+        if (ok || (k == ns && !merge)) {
             sum += r[k] * r[k];
         }
     }
-    return sum > 0.0f ? 1.0f / sum : 0.0f;
+    float own = merge ? 0.0f : 1.0f;
+    if (eta > 0.0f && light_ok) {
+        /* Merges happen only at the camera subpath's first non-delta vertex
+         * (integrator_vcm.h): going back from the camera, the vertices n-2 .. v+1 are
+         * delta and v is not. */
+        int v = n - 2;
+        while (v >= 1 && dl[v]) {
+            --v;
+        }
+        if (v >= 1) {
+            const float m = r[v + 1] * tr_bdpt_remap0(pc[v]) * eta;
+            sum += m * m;
+            own = merge && v == ns ? m * m : own;
+        }
+    }
+    return sum > 0.0f ? own / sum : 0.0f;
+}
+
+/* The power-heuristic weight of connection strategy (s, t) among BDPT's strategies. */
+TR_FN float tr_bdpt_mis_weight(const tr_scene_view *s, const tr_camera *cam,
+                               const tr_bdpt_vertex *lv, int ns, const tr_bdpt_vertex *nee,
+                               const tr_bdpt_vertex *cv, int nt) {
+    return tr_bdpt_mis_weight_vm(s, cam, lv, ns, nee, cv, nt, 0.0f, 0);
 }
 
 /* Extends a subpath whose last vertex is v[0 .. *count-1] along `ray` with throughput
@@ -547,21 +587,15 @@ TR_FN int tr_bdpt_light_subpath(const tr_scene_view *s, int max_depth, const tr_
     return nl;
 }
 
-/* One BDPT sample for the camera ray through raster point (x + jx, y + jy): returns what
- * the camera-side strategies (t >= 2) bring to this pixel and splats the light-tracing
- * ones (t = 1). Paths have at most max_depth segments (<= TR_BDPT_MAX_DEPTH). */
-TR_FN tr_vec3 tr_trace_bdpt(const tr_scene_view *s, const tr_camera *cam, float x, float y,
-                            int max_depth, const tr_sampler *smp, const tr_bdpt_splat *sp,
-                            tr_bdpt_select sel, uint32_t *rays, tr_sample *surface) {
+/* Every connection strategy (s, t) of camera subpath cv[0 .. nc-1] and light subpath
+ * lv[0 .. nl-1]: returns what the camera-side strategies (t >= 2) bring to the pixel and
+ * splats the light-tracing ones (t = 1). eta: vertex merging's eta for the MIS weights
+ * (0 for BDPT). */
+TR_FN tr_vec3 tr_bdpt_connect(const tr_scene_view *s, const tr_camera *cam,
+                              const tr_bdpt_vertex *cv, int nc, const tr_bdpt_vertex *lv, int nl,
+                              int max_depth, const tr_sampler *smp, const tr_bdpt_splat *sp,
+                              tr_bdpt_select sel, float eta, uint32_t *rays) {
     tr_vec3 radiance = v3s(0.0f);
-    if (max_depth > TR_BDPT_MAX_DEPTH) {
-        max_depth = TR_BDPT_MAX_DEPTH;
-    }
-    tr_bdpt_vertex cv[TR_BDPT_MAX_VERTS], lv[TR_BDPT_MAX_VERTS];
-    int nc = tr_bdpt_camera_subpath(s, cam, x, y, max_depth, smp, cv, rays, surface);
-    int nl = tr_bdpt_light_subpath(s, max_depth, smp, lv, rays);
-
-    /* Every connection. */
     for (int t = 1; t <= nc; ++t) {
         for (int ns = 0; ns <= nl && ns + t - 1 <= max_depth; ++ns) {
             const int n = ns + t;
@@ -691,7 +725,8 @@ TR_FN tr_vec3 tr_trace_bdpt(const tr_scene_view *s, const tr_camera *cam, float 
             if (tr_v3_is_zero(c)) {
                 continue;
             }
-            float w = sel.only_t > 0 ? 1.0f : tr_bdpt_mis_weight(s, cam, lv, ns, neep, cv, t);
+            float w = sel.only_t > 0 ? 1.0f
+                                     : tr_bdpt_mis_weight_vm(s, cam, lv, ns, neep, cv, t, eta, 0);
             c = v3_scale(c, w);
             if (splat) {
                 tr_bdpt_splat_add(sp, sx, sy, c);
@@ -701,6 +736,21 @@ TR_FN tr_vec3 tr_trace_bdpt(const tr_scene_view *s, const tr_camera *cam, float 
         }
     }
     return radiance;
+}
+
+/* One BDPT sample for the camera ray through raster point (x + jx, y + jy): returns what
+ * the camera-side strategies (t >= 2) bring to this pixel and splats the light-tracing
+ * ones (t = 1). Paths have at most max_depth segments (<= TR_BDPT_MAX_DEPTH). */
+TR_FN tr_vec3 tr_trace_bdpt(const tr_scene_view *s, const tr_camera *cam, float x, float y,
+                            int max_depth, const tr_sampler *smp, const tr_bdpt_splat *sp,
+                            tr_bdpt_select sel, uint32_t *rays, tr_sample *surface) {
+    if (max_depth > TR_BDPT_MAX_DEPTH) {
+        max_depth = TR_BDPT_MAX_DEPTH;
+    }
+    tr_bdpt_vertex cv[TR_BDPT_MAX_VERTS], lv[TR_BDPT_MAX_VERTS];
+    int nc = tr_bdpt_camera_subpath(s, cam, x, y, max_depth, smp, cv, rays, surface);
+    int nl = tr_bdpt_light_subpath(s, max_depth, smp, lv, rays);
+    return tr_bdpt_connect(s, cam, cv, nc, lv, nl, max_depth, smp, sp, sel, 0.0f, rays);
 }
 
 /* tr_render_grid_rows (kernel.h) for bdpt: grid points [gx0, gx1) x [gy0, gy1) of frame f,

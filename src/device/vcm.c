@@ -1,0 +1,354 @@
+/* vcm.c - the CPU device's frame for vertex connection and merging (integrator_vcm.h).
+ *
+ * Each of the frame's samples is two passes over the frame's tiles: the first traces one
+ * light subpath per grid point and keeps it in its tile's list; the lists are joined in
+ * tile order, the mergeable vertices sorted into the hashed grid (a counting sort, stable
+ * in vertex order), and the second pass traces the camera subpaths, connects each with
+ * its own grid point's light subpath and merges with the grid. Nothing depends on which
+ * thread ran which tile, so the image does not depend on the thread count. */
+#define _POSIX_C_SOURCE 200809L
+#include <errno.h>
+#include <math.h>
+#include <omp.h>
+#include <pthread.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "device/vcm.h"
+#include "kernel/integrator_vcm.h"
+#include "kernel/kernel.h"
+#include "scene/scene_internal.h"
+
+/* One tile's light subpaths: their vertices, subpath after subpath in the tile's grid
+ * order, and each subpath's vertex count. */
+typedef struct vcm_tile {
+    tr_bdpt_vertex *verts;
+    size_t count, cap;
+    int failed; /* out of memory */
+} vcm_tile;
+
+int tr_vcm_radius_pixels(float *pixels, tr_error *err) {
+    *pixels = TR_VCM_RADIUS_DEFAULT;
+    const char *e = getenv("TRAC0R_VCM_RADIUS");
+    if (!e || !*e) {
+        return TR_OK;
+    }
+    char *end = NULL;
+    errno = 0;
+    const double v = strtod(e, &end);
+    if (errno != 0 || end == e || *end != '\0' || !(v >= 0.0 && v <= 1000.0)) {
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "TRAC0R_VCM_RADIUS=\"%s\": expected a radius in pixels, 0..1000 (0: "
+                            "no merging)",
+                            e);
+    }
+    *pixels = (float)v;
+    return TR_OK;
+}
+
+/* The tiles' lists kept from one frame to the next: a frame's lists are tens of MB,
+ * and fresh pages for them every frame cost more than the merging (page faults). One
+ * frame at a time holds the cache; a frame rendered concurrently allocates its own. */
+static pthread_mutex_t vcm_cache_lock = PTHREAD_MUTEX_INITIALIZER;
+static vcm_tile *vcm_cache;
+static uint32_t vcm_cache_count;
+
+/* Tile lists for tile_count tiles: the cache's when it is free (*cached set), else new
+ * ones. NULL when out of memory. */
+static vcm_tile *vcm_tiles_get(uint32_t tile_count, int *cached) {
+    *cached = 0;
+    if (pthread_mutex_trylock(&vcm_cache_lock) == 0) {
+        if (vcm_cache_count < tile_count) {
+            vcm_tile *p = realloc(vcm_cache, tile_count * sizeof *p);
+            if (!p) {
+                pthread_mutex_unlock(&vcm_cache_lock);
+                return NULL;
+            }
+            memset(p + vcm_cache_count, 0, (tile_count - vcm_cache_count) * sizeof *p);
+            vcm_cache = p;
+            vcm_cache_count = tile_count;
+        }
+        for (uint32_t i = 0; i < tile_count; ++i) {
+            vcm_cache[i].count = 0;
+            vcm_cache[i].failed = 0;
+        }
+        *cached = 1;
+        return vcm_cache;
+    }
+    return calloc(tile_count, sizeof(vcm_tile));
+}
+
+static void vcm_tiles_put(vcm_tile *tiles, uint32_t tile_count, int cached) {
+    if (cached) {
+        pthread_mutex_unlock(&vcm_cache_lock);
+        return;
+    }
+    for (uint32_t ti = 0; ti < tile_count; ++ti) {
+        free(tiles[ti].verts);
+    }
+    free(tiles);
+}
+
+/* Room for one more light subpath at the end of t's list; 0 when out of memory. */
+static int vcm_tile_reserve(vcm_tile *t) {
+    const size_t need = t->count + TR_BDPT_MAX_VERTS;
+    if (need > t->cap) {
+        size_t cap = t->cap ? 2u * t->cap : 4u * TR_BDPT_MAX_VERTS;
+        cap = cap < need ? need : cap;
+        tr_bdpt_vertex *p = realloc(t->verts, cap * sizeof *p);
+        if (!p) {
+            t->failed = 1;
+            return 0;
+        }
+        t->verts = p;
+        t->cap = cap;
+    }
+    return 1;
+}
+
+/* The frame's grid points in tiles of side x side. */
+typedef struct vcm_tiling {
+    uint32_t gx0, gy0, nx, ny, side, tiles_x, tiles_y;
+} vcm_tiling;
+
+static void vcm_tile_rect(const vcm_tiling *g, uint32_t t, uint32_t *x0, uint32_t *y0,
+                          uint32_t *x1, uint32_t *y1) {
+    *x0 = g->gx0 + (t % g->tiles_x) * g->side;
+    *y0 = g->gy0 + (t / g->tiles_x) * g->side;
+    *x1 = *x0 + g->side < g->gx0 + g->nx ? *x0 + g->side : g->gx0 + g->nx;
+    *y1 = *y0 + g->side < g->gy0 + g->ny ? *y0 + g->side : g->gy0 + g->ny;
+}
+
+/* Runs BODY for every mergeable light vertex path[j] (j >= 1: not a subpath's origin),
+ * tile after tile, each tile's subpaths in its grid order. */
+#define VCM_FOR_EACH_MERGEABLE(BODY)                                                             \
+    for (uint32_t ti = 0; ti < tile_count; ++ti) {                                               \
+        uint32_t x0, y0, x1, y1;                                                                 \
+        vcm_tile_rect(tl, ti, &x0, &y0, &x1, &y1);                                               \
+        for (uint32_t gy = y0; gy < y1; ++gy) {                                                  \
+            for (uint32_t gx = x0; gx < x1; ++gx) {                                              \
+                const size_t pi = (size_t)(gy - tl->gy0) * tl->nx + (gx - tl->gx0);             \
+                const tr_bdpt_vertex *path = tiles[ti].verts + path_at[pi];                      \
+                for (uint32_t j = 1; j < path_len[pi]; ++j) {                                    \
+                    if (tr_vcm_mergeable(&path[j])) {                                            \
+                        BODY                                                                     \
+                    }                                                                            \
+                }                                                                                \
+            }                                                                                    \
+        }                                                                                        \
+    }
+
+/* Sorts the light subpaths' mergeable vertices into g's buckets (a counting sort, stable
+ * in tile and grid order). Returns 0 when out of memory. */
+static int vcm_build_grid(tr_vcm_grid *g, const vcm_tiling *tl, const vcm_tile *tiles,
+                          uint32_t tile_count, const uint8_t *path_len, const uint32_t *path_at,
+                          uint32_t **cell_first, tr_vcm_entry **entries) {
+    size_t merge = 0;
+    VCM_FOR_EACH_MERGEABLE(++merge;)
+    /* Four buckets a vertex: fewer cells share one. */
+    uint32_t cells = 1u;
+    while (cells < 4u * merge && cells < (1u << 30)) {
+        cells *= 2u;
+    }
+    g->cell_mask = cells - 1u;
+    *cell_first = calloc((size_t)cells + 1u, sizeof **cell_first);
+    *entries = malloc((merge ? merge : 1u) * sizeof **entries);
+    uint32_t *bucket = malloc((merge ? merge : 1u) * sizeof *bucket);
+    uint32_t *fill = malloc((size_t)cells * sizeof *fill);
+    if (!*cell_first || !*entries || !bucket || !fill || merge > UINT32_MAX) {
+        free(bucket);
+        free(fill);
+        return 0;
+    }
+    size_t k = 0;
+    VCM_FOR_EACH_MERGEABLE({
+        const tr_vec3 c = v3_scale(v3_sub(path[j].p, g->origin), g->inv_cell);
+        bucket[k] = tr_vcm_cell_hash((int32_t)floorf(c.x), (int32_t)floorf(c.y),
+                                     (int32_t)floorf(c.z), g->cell_mask);
+        (*cell_first)[bucket[k] + 1u] += 1u;
+        ++k;
+    })
+    for (uint32_t c = 0; c < cells; ++c) {
+        (*cell_first)[c + 1u] += (*cell_first)[c];
+    }
+    memcpy(fill, *cell_first, (size_t)cells * sizeof *fill);
+    k = 0;
+    VCM_FOR_EACH_MERGEABLE({
+        tr_vcm_entry *e = &(*entries)[fill[bucket[k]]++];
+        e->p = path[j].p;
+        e->path = path;
+        e->index = j;
+        tr_vcm_light_sums(path, (int)j, &e->a, &e->b, &e->g);
+        ++k;
+    })
+    free(fill);
+    free(bucket);
+    return 1;
+}
+
+int tr_vcm_render(const tr_scene_view *view, const tr_frame *f, const tr_film_view *fv,
+                  const tr_bdpt_splat *sp, int nthreads, uint32_t tile, int (*cancel)(void *),
+                  void *cancel_user, uint64_t *rays_out, int *cancelled_out, tr_error *err) {
+    float pixels;
+    if (tr_vcm_radius_pixels(&pixels, err) != TR_OK) {
+        return TR_ERR;
+    }
+    vcm_tiling tl;
+    tr_frame_grid(f, &tl.gx0, &tl.gy0, &tl.nx, &tl.ny);
+    tl.side = tile;
+    tl.tiles_x = (tl.nx + tile - 1u) / tile;
+    tl.tiles_y = (tl.ny + tile - 1u) / tile;
+    const uint32_t tile_count = tl.tiles_x * tl.tiles_y;
+    const size_t points = (size_t)tl.nx * tl.ny;
+    const tr_camera cam = f->camera;
+    const uint64_t seed = ((uint64_t)f->seed_hi << 32) | (uint64_t)f->seed_lo;
+    const uint32_t k = f->stride;
+    const int max_depth = f->max_depth > TR_BDPT_MAX_DEPTH ? TR_BDPT_MAX_DEPTH : f->max_depth;
+    const tr_aabb box = tr_triangles_bounds(view->triangles, view->triangle_count);
+    /* A pixel's footprint at the distance of the scene's centre. */
+    const tr_vec3 centre = v3_scale(v3_add(box.min, box.max), 0.5f);
+    const float footprint = v3_length(v3_sub(centre, cam.pos)) * cam.canvas_width /
+                            (float)(cam.screen_width ? cam.screen_width : 1u);
+    uint64_t rays = 0;
+    int cancelled = 0, failed = 0;
+
+    int cached = 0;
+    vcm_tile *tiles = vcm_tiles_get(tile_count ? tile_count : 1u, &cached);
+    uint8_t *path_len = malloc(points ? points : 1u);
+    uint32_t *path_at = malloc((points ? points : 1u) * sizeof *path_at);
+    if (!tiles || !path_len || !path_at) {
+        if (tiles) {
+            vcm_tiles_put(tiles, tile_count ? tile_count : 1u, cached);
+        }
+        free(path_len);
+        free(path_at);
+        return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory for vcm's light subpaths");
+    }
+    for (uint32_t n = 0; n < f->sample_count && !cancelled && !failed; ++n) {
+        const uint32_t sample = f->sample + n;
+        /* Pass 1: the light subpaths. */
+#pragma omp parallel for num_threads(nthreads) schedule(dynamic, 1) reduction(+ : rays)
+        for (int ti = 0; ti < (int)tile_count; ++ti) {
+            int stop;
+#pragma omp atomic read
+            stop = cancelled;
+            if (stop) {
+                continue;
+            }
+            if (cancel && cancel(cancel_user)) {
+#pragma omp atomic write
+                cancelled = 1;
+                continue;
+            }
+            vcm_tile *tt = &tiles[ti];
+            tt->count = 0;
+            uint32_t x0, y0, x1, y1;
+            vcm_tile_rect(&tl, (uint32_t)ti, &x0, &y0, &x1, &y1);
+            for (uint32_t gy = y0; gy < y1; ++gy) {
+                for (uint32_t gx = x0; gx < x1; ++gx) {
+                    const uint64_t pixel = (uint64_t)(gy * k) * cam.screen_width + gx * k;
+                    const size_t pi = (size_t)(gy - tl.gy0) * tl.nx + (gx - tl.gx0);
+                    path_at[pi] = (uint32_t)tt->count;
+                    path_len[pi] = 0;
+                    if (!vcm_tile_reserve(tt)) {
+                        continue;
+                    }
+                    tr_sampler smp = tr_sampler_make(seed, pixel, sample);
+                    uint32_t r = 0;
+                    const int nl =
+                        tr_bdpt_light_subpath(view, max_depth, &smp, tt->verts + tt->count, &r);
+                    rays += r;
+                    tt->count += (size_t)nl;
+                    path_len[pi] = (uint8_t)nl;
+                }
+            }
+        }
+        if (cancelled) {
+            break;
+        }
+        for (uint32_t ti = 0; ti < tile_count; ++ti) {
+            failed |= tiles[ti].failed;
+        }
+        if (failed) {
+            break;
+        }
+        /* The merge radius of this sample. */
+        const float r =
+            pixels * footprint * powf((float)sample + 1.0f, 0.5f * (TR_VCM_ALPHA - 1.0f));
+        tr_vcm_grid g;
+        memset(&g, 0, sizeof g);
+        uint32_t *cell_first = NULL;
+        tr_vcm_entry *entries = NULL;
+        if (r > 0.0f && points > 0) {
+            const float area = (float)TR_PI * r * r;
+            g.origin = box.min;
+            g.inv_cell = 0.5f / r;
+            g.radius2 = r * r;
+            g.eta = (float)points * area;
+            g.norm = 1.0f / g.eta;
+            if (!vcm_build_grid(&g, &tl, tiles, tile_count, path_len, path_at, &cell_first,
+                                &entries)) {
+                failed = 1;
+            }
+            g.cell_first = cell_first;
+            g.entries = entries;
+        }
+        /* Pass 2: the camera subpaths, their connections and merges. */
+        if (!failed) {
+#pragma omp parallel for num_threads(nthreads) schedule(dynamic, 1) reduction(+ : rays)
+            for (int ti = 0; ti < (int)tile_count; ++ti) {
+                int stop;
+#pragma omp atomic read
+                stop = cancelled;
+                if (stop) {
+                    continue;
+                }
+                if (cancel && cancel(cancel_user)) {
+#pragma omp atomic write
+                    cancelled = 1;
+                    continue;
+                }
+                uint32_t x0, y0, x1, y1;
+                vcm_tile_rect(&tl, (uint32_t)ti, &x0, &y0, &x1, &y1);
+                const uint32_t rx0 = f->rect_x, ry0 = f->rect_y;
+                const uint32_t rx1 = rx0 + f->rect_w, ry1 = ry0 + f->rect_h;
+                for (uint32_t gy = y0; gy < y1; ++gy) {
+                    const uint32_t y = gy * k;
+                    const uint32_t by0 = y > ry0 ? y : ry0;
+                    const uint32_t by1 = y + k < ry1 ? y + k : ry1;
+                    for (uint32_t gx = x0; gx < x1; ++gx) {
+                        const uint32_t x = gx * k;
+                        const uint32_t bx0 = x > rx0 ? x : rx0;
+                        const uint32_t bx1 = x + k < rx1 ? x + k : rx1;
+                        const uint64_t pixel = (uint64_t)y * cam.screen_width + (uint64_t)x;
+                        const size_t pi = (size_t)(gy - tl.gy0) * tl.nx + (gx - tl.gx0);
+                        tr_sample out;
+                        tr_sample_clear(&out);
+                        tr_sampler smp = tr_sampler_make(seed, pixel, sample);
+                        out.radiance = tr_trace_vcm(view, &cam, (float)x, (float)y, max_depth, &smp,
+                                                    sp, tiles[ti].verts + path_at[pi], path_len[pi],
+                                                    &g,
+                                                    &out.rays, f->passes != 0u ? &out : 0);
+                        if (out.prim == 0u) {
+                            out.depth = 0.0f;
+                        }
+                        rays += out.rays;
+                        tr_film_add_block(fv, &out, bx0, by0, bx1, by1);
+                    }
+                }
+            }
+        }
+        free(cell_first);
+        free(entries);
+    }
+    vcm_tiles_put(tiles, tile_count ? tile_count : 1u, cached);
+    free(path_len);
+    free(path_at);
+    *cancelled_out = cancelled;
+    if (failed) {
+        return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY,
+                            "out of memory for vcm's light subpaths (%ux%u points)", tl.nx, tl.ny);
+    }
+    *rays_out += rays;
+    return TR_OK;
+}
