@@ -205,10 +205,13 @@ int tr_vcm_render(const tr_scene_view *view, const tr_frame *f, const tr_film_vi
     const uint32_t k = f->stride;
     const int max_depth = f->max_depth > TR_BDPT_MAX_DEPTH ? TR_BDPT_MAX_DEPTH : f->max_depth;
     const tr_aabb box = tr_triangles_bounds(view->triangles, view->triangle_count);
-    /* A pixel's footprint at the distance of the scene's centre. */
+    /* A pixel's footprint at the distance of the scene's centre, or at half the scene's
+     * diagonal where the camera is nearer the centre than that (inside the scene). */
     const tr_vec3 centre = v3_scale(v3_add(box.min, box.max), 0.5f);
-    const float footprint = v3_length(v3_sub(centre, cam.pos)) * cam.canvas_width /
-                            (float)(cam.screen_width ? cam.screen_width : 1u);
+    const float dist = fmaxf(v3_length(v3_sub(centre, cam.pos)),
+                             0.5f * v3_length(v3_sub(box.max, box.min)));
+    const float footprint =
+        dist * cam.canvas_width / (float)(cam.screen_width ? cam.screen_width : 1u);
     uint64_t rays = 0;
     int cancelled = 0, failed = 0;
 

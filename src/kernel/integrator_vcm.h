@@ -31,8 +31,9 @@
  * vanish (Knaus and Zwicker, "Progressive Photon Mapping: A Probabilistic Approach", ACM
  * TOG 2011, the same schedule as the VCM paper's). r_1 is given in pixels: that many
  * pixel footprints at the distance from the camera to the centre of the scene's bounding
- * box (TR_VCM_RADIUS_DEFAULT, or the environment's TRAC0R_VCM_RADIUS), so that the blur
- * the bias brings is about the same on screen at any resolution.
+ * box, or at half its diagonal if that is more (a camera inside the scene), so that the
+ * blur the bias brings is about the same on screen at any resolution
+ * (TR_VCM_RADIUS_DEFAULT, or the environment's TRAC0R_VCM_RADIUS).
  *
  * The light vertices are found through a hashed uniform grid of cells 2r wide: a point's
  * neighbours within r lie in the 2 x 2 x 2 cells nearest it (the hash: Teschner et al.,
@@ -49,7 +50,7 @@
 /* alpha of the radius schedule: r^2 shrinks as i^(alpha - 1). */
 #define TR_VCM_ALPHA 0.75f
 /* The first sample's merge radius, in pixel footprints at the distance from the camera to
- * the centre of the scene's bounding box. */
+ * the centre of the scene's bounding box (or half its diagonal, if more). */
 #define TR_VCM_RADIUS_DEFAULT 3.0f
 
 /* A light vertex merged with: vertex `index` of the light subpath at `path`, at p (a
