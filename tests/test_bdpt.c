@@ -220,10 +220,10 @@ static void mis_sum(void) {
                         C[j].kind = i == n - 1 ? TR_BDPT_CAMERA : TR_BDPT_SURFACE;
                         C[j].delta = vtx_delta(&P[i]);
                         C[j].wo = i < n - 1 ? v3_normalize(v3_sub(P[i + 1].p, P[i].p)) : v3s(0.0f);
-                        C[j].pdf_fwd = i == n - 1 ? 1.0f
-                                                  : tr_bdpt_pdf(cam, &P[i + 1],
-                                                                i + 2 <= n - 1 ? &P[i + 2] : NULL,
-                                                                &P[i]);
+                        C[j].pdf_fwd = i == n - 1
+                                           ? 1.0f
+                                           : tr_bdpt_pdf(cam, &P[i + 1],
+                                                         i + 2 <= n - 1 ? &P[i + 2] : NULL, &P[i]);
                     }
                     C[0].kind = TR_BDPT_CAMERA;
                     float a, b, g;
@@ -567,8 +567,7 @@ static void build_caustic_floor(tr_scene *s) {
     uint32_t mirror = add_mat(s, tr_material_glossy(v3(0.9f, 0.9f, 0.9f), 0.0f));
     uint32_t lamp = add_mat(s, tr_material_emitter(v3(1.0f, 0.9f, 0.8f), 30.0f));
     add_shape(s, TR_SHAPE_PLANE, white, v3(0.0f, -1.0f, 0.0f), v3(0, 0, 0), v3(6, 1, 6));
-    add_shape(s, TR_SHAPE_PLANE, mirror, v3(0.0f, 1.0f, 0.0f), v3((float)PI_D, 0, 0),
-              v3(6, 1, 6));
+    add_shape(s, TR_SHAPE_PLANE, mirror, v3(0.0f, 1.0f, 0.0f), v3((float)PI_D, 0, 0), v3(6, 1, 6));
     add_shape(s, TR_SHAPE_PLANE, lamp, v3(0.6f, 0.4f, 0.0f), v3(0, 0, 0), v3(0.4f, 1, 0.4f));
     CHECK(tr_camera_make(&s->camera, v3(0.0f, 0.2f, 0.0f), v3(0.0f, -1.0f, 0.0f),
                          v3(0.0f, 0.0f, 1.0f), 60.0f, 0.001f, 100.0f, RW, RH, &err) == TR_OK,

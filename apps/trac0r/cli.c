@@ -443,8 +443,8 @@ int cli_load_scene_file(const cli_args *a, cli_common *c, tr_scene *scene, tr_sc
     }
     /* issue 18: a scene file's depth is pt's; bdpt follows at most TR_MAX_DEPTH_BDPT
      * segments (--max-depth beyond that is an error, tr_render_config_check). */
-    if (rc == CLI_OK && !(c->given & CLI_GIVEN_MAX_DEPTH) && tr_integrator_is_bidirectional(c->integrator) &&
-        c->max_depth > TR_MAX_DEPTH_BDPT) {
+    if (rc == CLI_OK && !(c->given & CLI_GIVEN_MAX_DEPTH) &&
+        tr_integrator_is_bidirectional(c->integrator) && c->max_depth > TR_MAX_DEPTH_BDPT) {
         c->max_depth = TR_MAX_DEPTH_BDPT;
     }
     if (rc == CLI_OK && file->emissive_triangles == 0 && !file->allow_no_emitter &&

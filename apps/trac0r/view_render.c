@@ -251,10 +251,10 @@ static void *render_main(void *arg) {
                 (void)tr_camera_resize(&rcam, w ? w : 1, h ? h : 1, &err);
             }
             /* The direct pass where SVGF filters direct and indirect light apart (not bdpt). */
-            const uint32_t direct =
-                tr_recon_params_default().svgf_split && !tr_integrator_is_bidirectional(r->cfg.integrator)
-                    ? TR_PASS_DIRECT
-                    : 0u;
+            const uint32_t direct = tr_recon_params_default().svgf_split &&
+                                            !tr_integrator_is_bidirectional(r->cfg.integrator)
+                                        ? TR_PASS_DIRECT
+                                        : 0u;
             if (resize_buffers(r, rcam.screen_width, rcam.screen_height,
                                method != TR_RECON_OFF ? TR_PASS_ALL | direct : 0u, &err) != TR_OK ||
                 tr_device_clear(r->dev, &err) != TR_OK) {

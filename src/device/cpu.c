@@ -65,8 +65,7 @@ int tr_render_config_check(const tr_render_config *cfg, tr_error *err) {
     }
     if (tr_integrator_is_bidirectional(cfg->integrator) && cfg->max_depth > TR_MAX_DEPTH_BDPT) {
         return tr_error_set(err, TR_STATUS_LIMIT, "max depth %d: %s supports at most %d",
-                            cfg->max_depth, tr_integrator_name(cfg->integrator),
-                            TR_MAX_DEPTH_BDPT);
+                            cfg->max_depth, tr_integrator_name(cfg->integrator), TR_MAX_DEPTH_BDPT);
     }
     if (cfg->stride < 1 || cfg->stride > 64) {
         return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "stride %d must be in 1..64",
@@ -230,8 +229,8 @@ int tr_cpu_render(const tr_scene_view *view, const tr_frame *f, tr_film *film, i
     }
     if (f->integrator == TR_INTEGRATOR_VCM) {
         /* Two passes per sample over the tiles (vcm.c). */
-        if (tr_vcm_render(view, f, &fv, &sp, nthreads, tile, cancel, cancel_user, &rays,
-                          &cancelled, err) != TR_OK) {
+        if (tr_vcm_render(view, f, &fv, &sp, nthreads, tile, cancel, cancel_user, &rays, &cancelled,
+                          err) != TR_OK) {
             free(sp.sum);
             return TR_ERR;
         }

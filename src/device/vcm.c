@@ -111,8 +111,8 @@ typedef struct vcm_tiling {
     uint32_t gx0, gy0, nx, ny, side, tiles_x, tiles_y;
 } vcm_tiling;
 
-static void vcm_tile_rect(const vcm_tiling *g, uint32_t t, uint32_t *x0, uint32_t *y0,
-                          uint32_t *x1, uint32_t *y1) {
+static void vcm_tile_rect(const vcm_tiling *g, uint32_t t, uint32_t *x0, uint32_t *y0, uint32_t *x1,
+                          uint32_t *y1) {
     *x0 = g->gx0 + (t % g->tiles_x) * g->side;
     *y0 = g->gy0 + (t / g->tiles_x) * g->side;
     *x1 = *x0 + g->side < g->gx0 + g->nx ? *x0 + g->side : g->gx0 + g->nx;
@@ -121,21 +121,21 @@ static void vcm_tile_rect(const vcm_tiling *g, uint32_t t, uint32_t *x0, uint32_
 
 /* Runs BODY for every mergeable light vertex path[j] (j >= 1: not a subpath's origin),
  * tile after tile, each tile's subpaths in its grid order. */
-#define VCM_FOR_EACH_MERGEABLE(BODY)                                                             \
-    for (uint32_t ti = 0; ti < tile_count; ++ti) {                                               \
-        uint32_t x0, y0, x1, y1;                                                                 \
-        vcm_tile_rect(tl, ti, &x0, &y0, &x1, &y1);                                               \
-        for (uint32_t gy = y0; gy < y1; ++gy) {                                                  \
-            for (uint32_t gx = x0; gx < x1; ++gx) {                                              \
-                const size_t pi = (size_t)(gy - tl->gy0) * tl->nx + (gx - tl->gx0);             \
-                const tr_bdpt_vertex *path = tiles[ti].verts + path_at[pi];                      \
-                for (uint32_t j = 1; j < path_len[pi]; ++j) {                                    \
-                    if (tr_vcm_mergeable(&path[j])) {                                            \
-                        BODY                                                                     \
-                    }                                                                            \
-                }                                                                                \
-            }                                                                                    \
-        }                                                                                        \
+#define VCM_FOR_EACH_MERGEABLE(BODY)                                                               \
+    for (uint32_t ti = 0; ti < tile_count; ++ti) {                                                 \
+        uint32_t x0, y0, x1, y1;                                                                   \
+        vcm_tile_rect(tl, ti, &x0, &y0, &x1, &y1);                                                 \
+        for (uint32_t gy = y0; gy < y1; ++gy) {                                                    \
+            for (uint32_t gx = x0; gx < x1; ++gx) {                                                \
+                const size_t pi = (size_t)(gy - tl->gy0) * tl->nx + (gx - tl->gx0);                \
+                const tr_bdpt_vertex *path = tiles[ti].verts + path_at[pi];                        \
+                for (uint32_t j = 1; j < path_len[pi]; ++j) {                                      \
+                    if (tr_vcm_mergeable(&path[j])) {                                              \
+                        BODY                                                                       \
+                    }                                                                              \
+                }                                                                                  \
+            }                                                                                      \
+        }                                                                                          \
     }
 
 /* Sorts the light subpaths' mergeable vertices into g's buckets (a counting sort, stable
@@ -208,8 +208,8 @@ int tr_vcm_render(const tr_scene_view *view, const tr_frame *f, const tr_film_vi
     /* A pixel's footprint at the distance of the scene's centre, or at half the scene's
      * diagonal where the camera is nearer the centre than that (inside the scene). */
     const tr_vec3 centre = v3_scale(v3_add(box.min, box.max), 0.5f);
-    const float dist = fmaxf(v3_length(v3_sub(centre, cam.pos)),
-                             0.5f * v3_length(v3_sub(box.max, box.min)));
+    const float dist =
+        fmaxf(v3_length(v3_sub(centre, cam.pos)), 0.5f * v3_length(v3_sub(box.max, box.min)));
     const float footprint =
         dist * cam.canvas_width / (float)(cam.screen_width ? cam.screen_width : 1u);
     uint64_t rays = 0;
@@ -330,8 +330,7 @@ int tr_vcm_render(const tr_scene_view *view, const tr_frame *f, const tr_film_vi
                         tr_sampler smp = tr_sampler_make(seed, pixel, sample);
                         out.radiance = tr_trace_vcm(view, &cam, (float)x, (float)y, max_depth, &smp,
                                                     sp, tiles[ti].verts + path_at[pi], path_len[pi],
-                                                    &g,
-                                                    &out.rays, f->passes != 0u ? &out : 0);
+                                                    &g, &out.rays, f->passes != 0u ? &out : 0);
                         if (out.prim == 0u) {
                             out.depth = 0.0f;
                         }

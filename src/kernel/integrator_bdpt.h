@@ -725,8 +725,8 @@ TR_FN tr_vec3 tr_bdpt_connect(const tr_scene_view *s, const tr_camera *cam,
             if (tr_v3_is_zero(c)) {
                 continue;
             }
-            float w = sel.only_t > 0 ? 1.0f
-                                     : tr_bdpt_mis_weight_vm(s, cam, lv, ns, neep, cv, t, eta, 0);
+            float w =
+                sel.only_t > 0 ? 1.0f : tr_bdpt_mis_weight_vm(s, cam, lv, ns, neep, cv, t, eta, 0);
             c = v3_scale(c, w);
             if (splat) {
                 tr_bdpt_splat_add(sp, sx, sy, c);

@@ -65,8 +65,8 @@ typedef struct tr_vcm_entry {
 
 /* The grid over the light vertices of one sample's light subpaths. */
 typedef struct tr_vcm_grid {
-    const uint32_t *cell_first;   /* cell_count + 1 offsets into entries */
-    const tr_vcm_entry *entries;  /* the vertices merged with, cell by cell */
+    const uint32_t *cell_first;  /* cell_count + 1 offsets into entries */
+    const tr_vcm_entry *entries; /* the vertices merged with, cell by cell */
     uint32_t cell_mask;          /* cell_count - 1, cell_count a power of two */
     tr_vec3 origin;              /* cells are counted from here */
     float inv_cell;              /* 1 / (2 r) */
@@ -77,8 +77,8 @@ typedef struct tr_vcm_grid {
 
 /* The bucket of grid cell (ix, iy, iz). */
 TR_FN uint32_t tr_vcm_cell_hash(int32_t ix, int32_t iy, int32_t iz, uint32_t mask) {
-    const uint32_t h = ((uint32_t)ix * 73856093u) ^ ((uint32_t)iy * 19349663u) ^
-                       ((uint32_t)iz * 83492791u);
+    const uint32_t h =
+        ((uint32_t)ix * 73856093u) ^ ((uint32_t)iy * 19349663u) ^ ((uint32_t)iz * 83492791u);
     return h & mask;
 }
 
@@ -176,7 +176,8 @@ TR_FN tr_vec3 tr_vcm_merge(const tr_bdpt_vertex *cv, int nc, int max_depth, cons
         tr_vcm_cell_pair(c.z, &zs[0], &zs[1]);
         uint32_t seen[8];
         for (int j = 0; j < 8; ++j) {
-            const uint32_t h = tr_vcm_cell_hash(xs[j & 1], ys[(j >> 1) & 1], zs[j >> 2], g->cell_mask);
+            const uint32_t h =
+                tr_vcm_cell_hash(xs[j & 1], ys[(j >> 1) & 1], zs[j >> 2], g->cell_mask);
             int dup = 0;
             for (int i = 0; i < j; ++i) {
                 dup |= seen[i] == h; /* two cells in one bucket: visit it once */
@@ -221,8 +222,8 @@ TR_FN tr_vec3 tr_vcm_merge(const tr_bdpt_vertex *cv, int nc, int max_depth, cons
  * strategies, and the merges. Light tracing splats into sp. */
 TR_FN tr_vec3 tr_trace_vcm(const tr_scene_view *s, const tr_camera *cam, float x, float y,
                            int max_depth, const tr_sampler *smp, const tr_bdpt_splat *sp,
-                           const tr_bdpt_vertex *lv, int nl, const tr_vcm_grid *g,
-                           uint32_t *rays, tr_sample *surface) {
+                           const tr_bdpt_vertex *lv, int nl, const tr_vcm_grid *g, uint32_t *rays,
+                           tr_sample *surface) {
     if (max_depth > TR_BDPT_MAX_DEPTH) {
         max_depth = TR_BDPT_MAX_DEPTH;
     }
