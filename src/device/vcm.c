@@ -151,37 +151,46 @@ static int vcm_build_grid(tr_vcm_grid *g, const vcm_tiling *tl, const vcm_tile *
         cells *= 2u;
     }
     g->cell_mask = cells - 1u;
+    const size_t n = merge ? merge : 1u;
     *cell_first = calloc((size_t)cells + 1u, sizeof **cell_first);
-    *entries = malloc((merge ? merge : 1u) * sizeof **entries);
-    uint32_t *bucket = malloc((merge ? merge : 1u) * sizeof *bucket);
-    uint32_t *fill = malloc((size_t)cells * sizeof *fill);
-    if (!*cell_first || !*entries || !bucket || !fill || merge > UINT32_MAX) {
+    *entries = malloc(n * sizeof **entries);
+    tr_vcm_entry *unsorted = malloc(n * sizeof *unsorted);
+    uint32_t *bucket = malloc(n * sizeof *bucket);
+    if (!*cell_first || !*entries || !unsorted || !bucket || merge > UINT32_MAX) {
+        free(unsorted);
         free(bucket);
-        free(fill);
         return 0;
     }
+    /* The entries in vertex order with their buckets, then scattered bucket by bucket. */
     size_t k = 0;
     VCM_FOR_EACH_MERGEABLE({
-        const tr_vec3 c = v3_scale(v3_sub(path[j].p, g->origin), g->inv_cell);
-        bucket[k] = tr_vcm_cell_hash((int32_t)floorf(c.x), (int32_t)floorf(c.y),
-                                     (int32_t)floorf(c.z), g->cell_mask);
+        tr_vcm_entry *e = &unsorted[k];
+        e->p = path[j].p;
+        e->path = path;
+        e->index = j;
+        tr_vcm_light_sums(path, (int)j, &e->a, &e->b, &e->g);
+        const tr_vec3 c = v3_scale(v3_sub(e->p, g->origin), g->inv_cell);
+        bucket[k] = tr_vcm_cell_hash(tr_vcm_cell_of(c.x), tr_vcm_cell_of(c.y),
+                                     tr_vcm_cell_of(c.z), g->cell_mask);
         (*cell_first)[bucket[k] + 1u] += 1u;
         ++k;
     })
     for (uint32_t c = 0; c < cells; ++c) {
         (*cell_first)[c + 1u] += (*cell_first)[c];
     }
+    /* fill: where each bucket's next entry goes (cell_first's first `cells`, reused). */
+    uint32_t *fill = malloc((size_t)cells * sizeof *fill);
+    if (!fill) {
+        free(unsorted);
+        free(bucket);
+        return 0;
+    }
     memcpy(fill, *cell_first, (size_t)cells * sizeof *fill);
-    k = 0;
-    VCM_FOR_EACH_MERGEABLE({
-        tr_vcm_entry *e = &(*entries)[fill[bucket[k]]++];
-        e->p = path[j].p;
-        e->path = path;
-        e->index = j;
-        tr_vcm_light_sums(path, (int)j, &e->a, &e->b, &e->g);
-        ++k;
-    })
+    for (size_t i = 0; i < k; ++i) {
+        (*entries)[fill[bucket[i]]++] = unsorted[i];
+    }
     free(fill);
+    free(unsorted);
     free(bucket);
     return 1;
 }

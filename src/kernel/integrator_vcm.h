@@ -82,11 +82,16 @@ TR_FN uint32_t tr_vcm_cell_hash(int32_t ix, int32_t iy, int32_t iz, uint32_t mas
     return h & mask;
 }
 
+/* The cell coordinate of c (in cells along one axis), clamped so that the conversion is
+ * defined for any point (cells that far out only share buckets). */
+TR_FN int32_t tr_vcm_cell_of(float c) {
+    return (int32_t)floorf(tr_fminf(tr_fmaxf(c, -1073741824.0f), 1073741824.0f));
+}
+
 /* Cell coordinate along one axis of c (in cells) and its neighbour on the side nearer c. */
 TR_FN void tr_vcm_cell_pair(float c, int32_t *a, int32_t *b) {
-    const float fl = floorf(c);
-    *a = (int32_t)fl;
-    *b = c - fl < 0.5f ? *a - 1 : *a + 1;
+    *a = tr_vcm_cell_of(c);
+    *b = c - (float)*a < 0.5f ? *a - 1 : *a + 1;
 }
 
 /* Whether a light vertex is stored in the grid: a surface past the subpath's origin whose
