@@ -521,6 +521,11 @@ static int render_box(tr_scene *s, int integrator, uint32_t frames, tr_film *fil
     return TR_OK;
 }
 
+static int cancel_now(void *user) {
+    (void)user;
+    return 1;
+}
+
 static void vcm_radius(void) {
     tr_scene s = {0};
     build_box(&s, 1, 24, 20);
@@ -547,6 +552,15 @@ static void vcm_radius(void) {
         tr_film_free(&a);
     }
     unsetenv("TRAC0R_VCM_RADIUS");
+    /* A cancelled frame stops with TR_STATUS_CANCELLED (the viewer's moving camera). */
+    CHECK(tr_film_init(&a, 24, 20, &err) == TR_OK, "film: %s", err.msg);
+    tr_render_config cfg = tr_render_config_default();
+    cfg.integrator = TR_INTEGRATOR_VCM;
+    cfg.cancel = cancel_now;
+    CHECK(tr_render_frame(&s, &s.camera, &cfg, &a, 0, NULL, &err) == TR_ERR &&
+              err.code == TR_STATUS_CANCELLED,
+          "a cancelled vcm frame: status %d", err.code);
+    tr_film_free(&a);
     tr_scene_free(&s);
 }
 

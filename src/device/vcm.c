@@ -170,8 +170,8 @@ static int vcm_build_grid(tr_vcm_grid *g, const vcm_tiling *tl, const vcm_tile *
         e->index = j;
         tr_vcm_light_sums(path, (int)j, &e->a, &e->b, &e->g);
         const tr_vec3 c = v3_scale(v3_sub(e->p, g->origin), g->inv_cell);
-        bucket[k] = tr_vcm_cell_hash(tr_vcm_cell_of(c.x), tr_vcm_cell_of(c.y),
-                                     tr_vcm_cell_of(c.z), g->cell_mask);
+        bucket[k] = tr_vcm_cell_hash(tr_vcm_cell_of(c.x), tr_vcm_cell_of(c.y), tr_vcm_cell_of(c.z),
+                                     g->cell_mask);
         (*cell_first)[bucket[k] + 1u] += 1u;
         ++k;
     })
@@ -193,6 +193,23 @@ static int vcm_build_grid(tr_vcm_grid *g, const vcm_tiling *tl, const vcm_tile *
     free(unsorted);
     free(bucket);
     return 1;
+}
+
+/* Whether a tile should be skipped: the frame was cancelled, or the caller's cancel
+ * callback asks for it now (then *cancelled is set for the other threads). */
+static int vcm_stopped(int *cancelled, int (*cancel)(void *), void *cancel_user) {
+    int stop;
+#pragma omp atomic read
+    stop = *cancelled;
+    if (stop) {
+        return 1;
+    }
+    if (cancel && cancel(cancel_user)) {
+#pragma omp atomic write
+        *cancelled = 1;
+        return 1;
+    }
+    return 0;
 }
 
 int tr_vcm_render(const tr_scene_view *view, const tr_frame *f, const tr_film_view *fv,
@@ -241,16 +258,8 @@ int tr_vcm_render(const tr_scene_view *view, const tr_frame *f, const tr_film_vi
         /* Pass 1: the light subpaths. */
 #pragma omp parallel for num_threads(nthreads) schedule(dynamic, 1) reduction(+ : rays)
         for (int ti = 0; ti < (int)tile_count; ++ti) {
-            int stop;
-#pragma omp atomic read
-            stop = cancelled;
-            if (stop) {
-                continue;
-            }
-            if (cancel && cancel(cancel_user)) {
-#pragma omp atomic write
-                cancelled = 1;
-                continue;
+            if (vcm_stopped(&cancelled, cancel, cancel_user)) {
+                continue; /* an OpenMP loop cannot break: skip the remaining tiles */
             }
             vcm_tile *tt = &tiles[ti];
             tt->count = 0;
@@ -309,15 +318,7 @@ int tr_vcm_render(const tr_scene_view *view, const tr_frame *f, const tr_film_vi
         if (!failed) {
 #pragma omp parallel for num_threads(nthreads) schedule(dynamic, 1) reduction(+ : rays)
             for (int ti = 0; ti < (int)tile_count; ++ti) {
-                int stop;
-#pragma omp atomic read
-                stop = cancelled;
-                if (stop) {
-                    continue;
-                }
-                if (cancel && cancel(cancel_user)) {
-#pragma omp atomic write
-                    cancelled = 1;
+                if (vcm_stopped(&cancelled, cancel, cancel_user)) {
                     continue;
                 }
                 uint32_t x0, y0, x1, y1;
