@@ -20,12 +20,41 @@
 #include "scene/scene_internal.h"
 
 /* One tile's light subpaths: their vertices, subpath after subpath in the tile's grid
- * order, and each subpath's vertex count. */
+ * order, and for each vertex past a subpath's origin its merge weight's light-side sums
+ * (tr_vcm_light_sums: a, b, g), computed here by the threads rather than by the grid's
+ * serial build. */
 typedef struct vcm_tile {
     tr_bdpt_vertex *verts;
+    float *sums; /* 3 per vertex */
     size_t count, cap;
     int failed; /* out of memory */
 } vcm_tile;
+
+/* A buffer that only grows. */
+typedef struct vcm_buf {
+    void *p;
+    size_t cap; /* bytes */
+} vcm_buf;
+
+/* b's memory, at least `bytes` of it; NULL when out of memory (b unchanged). */
+static void *vcm_buf_get(vcm_buf *b, size_t bytes) {
+    if (bytes > b->cap) {
+        void *q = realloc(b->p, bytes);
+        if (!q) {
+            return NULL;
+        }
+        b->p = q;
+        b->cap = bytes;
+    }
+    return b->p;
+}
+
+/* What a frame allocates: the tiles' lists and the grid's arrays. */
+typedef struct vcm_scratch {
+    vcm_tile *tiles;
+    uint32_t tile_count; /* tiles allocated (zeroed when added) */
+    vcm_buf cell_first, entries, unsorted, bucket, fill;
+} vcm_scratch;
 
 int tr_vcm_radius_pixels(float *pixels, tr_error *err) {
     *pixels = TR_VCM_RADIUS_DEFAULT;
@@ -46,47 +75,56 @@ int tr_vcm_radius_pixels(float *pixels, tr_error *err) {
     return TR_OK;
 }
 
-/* The tiles' lists kept from one frame to the next: a frame's lists are tens of MB,
+/* The scratch kept from one frame to the next: a frame's lists and grid are tens of MB,
  * and fresh pages for them every frame cost more than the merging (page faults). One
  * frame at a time holds the cache; a frame rendered concurrently allocates its own. */
 static pthread_mutex_t vcm_cache_lock = PTHREAD_MUTEX_INITIALIZER;
-static vcm_tile *vcm_cache;
-static uint32_t vcm_cache_count;
+static vcm_scratch vcm_cache;
 
-/* Tile lists for tile_count tiles: the cache's when it is free (*cached set), else new
- * ones. NULL when out of memory. */
-static vcm_tile *vcm_tiles_get(uint32_t tile_count, int *cached) {
-    *cached = 0;
-    if (pthread_mutex_trylock(&vcm_cache_lock) == 0) {
-        if (vcm_cache_count < tile_count) {
-            vcm_tile *p = realloc(vcm_cache, tile_count * sizeof *p);
-            if (!p) {
-                pthread_mutex_unlock(&vcm_cache_lock);
-                return NULL;
-            }
-            memset(p + vcm_cache_count, 0, (tile_count - vcm_cache_count) * sizeof *p);
-            vcm_cache = p;
-            vcm_cache_count = tile_count;
-        }
-        for (uint32_t i = 0; i < tile_count; ++i) {
-            vcm_cache[i].count = 0;
-            vcm_cache[i].failed = 0;
-        }
-        *cached = 1;
-        return vcm_cache;
+/* Scratch with tile_count empty tiles: the cache when it is free (*cached set), else
+ * `own`, zeroed. NULL when out of memory. */
+static vcm_scratch *vcm_scratch_get(vcm_scratch *own, uint32_t tile_count, int *cached) {
+    vcm_scratch *sc = own;
+    memset(own, 0, sizeof *own);
+    *cached = pthread_mutex_trylock(&vcm_cache_lock) == 0;
+    if (*cached) {
+        sc = &vcm_cache;
     }
-    return calloc(tile_count, sizeof(vcm_tile));
+    if (sc->tile_count < tile_count) {
+        vcm_tile *p = realloc(sc->tiles, tile_count * sizeof *p);
+        if (!p) {
+            if (*cached) {
+                pthread_mutex_unlock(&vcm_cache_lock);
+            }
+            return NULL;
+        }
+        memset(p + sc->tile_count, 0, (tile_count - sc->tile_count) * sizeof *p);
+        sc->tiles = p;
+        sc->tile_count = tile_count;
+    }
+    for (uint32_t i = 0; i < tile_count; ++i) {
+        sc->tiles[i].count = 0;
+        sc->tiles[i].failed = 0;
+    }
+    return sc;
 }
 
-static void vcm_tiles_put(vcm_tile *tiles, uint32_t tile_count, int cached) {
+/* Gives the cache back, or frees a frame's own scratch. */
+static void vcm_scratch_put(vcm_scratch *sc, int cached) {
     if (cached) {
         pthread_mutex_unlock(&vcm_cache_lock);
         return;
     }
-    for (uint32_t ti = 0; ti < tile_count; ++ti) {
-        free(tiles[ti].verts);
+    for (uint32_t ti = 0; ti < sc->tile_count; ++ti) {
+        free(sc->tiles[ti].verts);
+        free(sc->tiles[ti].sums);
     }
-    free(tiles);
+    free(sc->tiles);
+    free(sc->cell_first.p);
+    free(sc->entries.p);
+    free(sc->unsorted.p);
+    free(sc->bucket.p);
+    free(sc->fill.p);
 }
 
 /* Room for one more light subpath at the end of t's list; 0 when out of memory. */
@@ -96,11 +134,15 @@ static int vcm_tile_reserve(vcm_tile *t) {
         size_t cap = t->cap ? 2u * t->cap : 4u * TR_BDPT_MAX_VERTS;
         cap = cap < need ? need : cap;
         tr_bdpt_vertex *p = realloc(t->verts, cap * sizeof *p);
-        if (!p) {
+        if (p) {
+            t->verts = p;
+        }
+        float *q = p ? realloc(t->sums, 3u * cap * sizeof *q) : NULL;
+        if (!q) {
             t->failed = 1;
             return 0;
         }
-        t->verts = p;
+        t->sums = q;
         t->cap = cap;
     }
     return 1;
@@ -120,7 +162,8 @@ static void vcm_tile_rect(const vcm_tiling *g, uint32_t t, uint32_t *x0, uint32_
 }
 
 /* Runs BODY for every mergeable light vertex path[j] (j >= 1: not a subpath's origin),
- * tile after tile, each tile's subpaths in its grid order. */
+ * whose light-side sums are sums[3j .. 3j+2], tile after tile, each tile's subpaths in its
+ * grid order. */
 #define VCM_FOR_EACH_MERGEABLE(BODY)                                                               \
     for (uint32_t ti = 0; ti < tile_count; ++ti) {                                                 \
         uint32_t x0, y0, x1, y1;                                                                   \
@@ -129,6 +172,7 @@ static void vcm_tile_rect(const vcm_tiling *g, uint32_t t, uint32_t *x0, uint32_
             for (uint32_t gx = x0; gx < x1; ++gx) {                                                \
                 const size_t pi = (size_t)(gy - tl->gy0) * tl->nx + (gx - tl->gx0);                \
                 const tr_bdpt_vertex *path = tiles[ti].verts + path_at[pi];                        \
+                const float *sums = tiles[ti].sums + 3u * (size_t)path_at[pi];                     \
                 for (uint32_t j = 1; j < path_len[pi]; ++j) {                                      \
                     if (tr_vcm_mergeable(&path[j])) {                                              \
                         BODY                                                                       \
@@ -139,12 +183,12 @@ static void vcm_tile_rect(const vcm_tiling *g, uint32_t t, uint32_t *x0, uint32_
     }
 
 /* Sorts the light subpaths' mergeable vertices into g's buckets (a counting sort, stable
- * in tile and grid order). Returns 0 when out of memory. */
-static int vcm_build_grid(tr_vcm_grid *g, const vcm_tiling *tl, const vcm_tile *tiles,
-                          uint32_t tile_count, const uint8_t *path_len, const uint32_t *path_at,
-                          uint32_t **cell_first, tr_vcm_entry **entries) {
+ * in tile and grid order), in sc's buffers. Returns 0 when out of memory. */
+static int vcm_build_grid(tr_vcm_grid *g, const vcm_tiling *tl, vcm_scratch *sc,
+                          uint32_t tile_count, const uint8_t *path_len, const uint32_t *path_at) {
+    const vcm_tile *tiles = sc->tiles;
     size_t merge = 0;
-    VCM_FOR_EACH_MERGEABLE(++merge;)
+    VCM_FOR_EACH_MERGEABLE((void)sums; ++merge;)
     /* Four buckets a vertex: fewer cells share one. */
     uint32_t cells = 1u;
     while (cells < 4u * merge && cells < (1u << 30)) {
@@ -152,15 +196,15 @@ static int vcm_build_grid(tr_vcm_grid *g, const vcm_tiling *tl, const vcm_tile *
     }
     g->cell_mask = cells - 1u;
     const size_t n = merge ? merge : 1u;
-    *cell_first = calloc((size_t)cells + 1u, sizeof **cell_first);
-    *entries = malloc(n * sizeof **entries);
-    tr_vcm_entry *unsorted = malloc(n * sizeof *unsorted);
-    uint32_t *bucket = malloc(n * sizeof *bucket);
-    if (!*cell_first || !*entries || !unsorted || !bucket || merge > UINT32_MAX) {
-        free(unsorted);
-        free(bucket);
+    uint32_t *cell_first = vcm_buf_get(&sc->cell_first, ((size_t)cells + 1u) * sizeof(uint32_t));
+    tr_vcm_entry *entries = vcm_buf_get(&sc->entries, n * sizeof(tr_vcm_entry));
+    tr_vcm_entry *unsorted = vcm_buf_get(&sc->unsorted, n * sizeof(tr_vcm_entry));
+    uint32_t *bucket = vcm_buf_get(&sc->bucket, n * sizeof(uint32_t));
+    uint32_t *fill = vcm_buf_get(&sc->fill, (size_t)cells * sizeof(uint32_t));
+    if (!cell_first || !entries || !unsorted || !bucket || !fill || merge > UINT32_MAX) {
         return 0;
     }
+    memset(cell_first, 0, ((size_t)cells + 1u) * sizeof *cell_first);
     /* The entries in vertex order with their buckets, then scattered bucket by bucket. */
     size_t k = 0;
     VCM_FOR_EACH_MERGEABLE({
@@ -168,30 +212,24 @@ static int vcm_build_grid(tr_vcm_grid *g, const vcm_tiling *tl, const vcm_tile *
         e->p = path[j].p;
         e->path = path;
         e->index = j;
-        tr_vcm_light_sums(path, (int)j, &e->a, &e->b, &e->g);
+        e->a = sums[3u * j];
+        e->b = sums[3u * j + 1u];
+        e->g = sums[3u * j + 2u];
         const tr_vec3 c = v3_scale(v3_sub(e->p, g->origin), g->inv_cell);
         bucket[k] = tr_vcm_cell_hash(tr_vcm_cell_of(c.x), tr_vcm_cell_of(c.y), tr_vcm_cell_of(c.z),
                                      g->cell_mask);
-        (*cell_first)[bucket[k] + 1u] += 1u;
+        cell_first[bucket[k] + 1u] += 1u;
         ++k;
     })
     for (uint32_t c = 0; c < cells; ++c) {
-        (*cell_first)[c + 1u] += (*cell_first)[c];
+        cell_first[c + 1u] += cell_first[c];
     }
-    /* fill: where each bucket's next entry goes (cell_first's first `cells`, reused). */
-    uint32_t *fill = malloc((size_t)cells * sizeof *fill);
-    if (!fill) {
-        free(unsorted);
-        free(bucket);
-        return 0;
-    }
-    memcpy(fill, *cell_first, (size_t)cells * sizeof *fill);
+    memcpy(fill, cell_first, (size_t)cells * sizeof *fill);
     for (size_t i = 0; i < k; ++i) {
-        (*entries)[fill[bucket[i]]++] = unsorted[i];
+        entries[fill[bucket[i]]++] = unsorted[i];
     }
-    free(fill);
-    free(unsorted);
-    free(bucket);
+    g->cell_first = cell_first;
+    g->entries = entries;
     return 1;
 }
 
@@ -242,12 +280,14 @@ int tr_vcm_render(const tr_scene_view *view, const tr_frame *f, const tr_film_vi
     int cancelled = 0, failed = 0;
 
     int cached = 0;
-    vcm_tile *tiles = vcm_tiles_get(tile_count ? tile_count : 1u, &cached);
+    vcm_scratch own;
+    vcm_scratch *sc = vcm_scratch_get(&own, tile_count ? tile_count : 1u, &cached);
+    vcm_tile *tiles = sc ? sc->tiles : NULL;
     uint8_t *path_len = malloc(points ? points : 1u);
     uint32_t *path_at = malloc((points ? points : 1u) * sizeof *path_at);
     if (!tiles || !path_len || !path_at) {
-        if (tiles) {
-            vcm_tiles_put(tiles, tile_count ? tile_count : 1u, cached);
+        if (sc) {
+            vcm_scratch_put(sc, cached);
         }
         free(path_len);
         free(path_at);
@@ -279,6 +319,12 @@ int tr_vcm_render(const tr_scene_view *view, const tr_frame *f, const tr_film_vi
                     const int nl =
                         tr_bdpt_light_subpath(view, max_depth, &smp, tt->verts + tt->count, &r);
                     rays += r;
+                    const tr_bdpt_vertex *path = tt->verts + tt->count;
+                    float *sums = tt->sums + 3u * tt->count;
+                    for (int j = 1; j < nl; ++j) {
+                        tr_vcm_light_sums(path, j, &sums[3 * j], &sums[3 * j + 1],
+                                          &sums[3 * j + 2]);
+                    }
                     tt->count += (size_t)nl;
                     path_len[pi] = (uint8_t)nl;
                 }
@@ -298,8 +344,6 @@ int tr_vcm_render(const tr_scene_view *view, const tr_frame *f, const tr_film_vi
             pixels * footprint * powf((float)sample + 1.0f, 0.5f * (TR_VCM_ALPHA - 1.0f));
         tr_vcm_grid g;
         memset(&g, 0, sizeof g);
-        uint32_t *cell_first = NULL;
-        tr_vcm_entry *entries = NULL;
         if (r > 0.0f && points > 0) {
             const float area = (float)TR_PI * r * r;
             g.origin = box.min;
@@ -307,12 +351,9 @@ int tr_vcm_render(const tr_scene_view *view, const tr_frame *f, const tr_film_vi
             g.radius2 = r * r;
             g.eta = (float)points * area;
             g.norm = 1.0f / g.eta;
-            if (!vcm_build_grid(&g, &tl, tiles, tile_count, path_len, path_at, &cell_first,
-                                &entries)) {
+            if (!vcm_build_grid(&g, &tl, sc, tile_count, path_len, path_at)) {
                 failed = 1;
             }
-            g.cell_first = cell_first;
-            g.entries = entries;
         }
         /* Pass 2: the camera subpaths, their connections and merges. */
         if (!failed) {
@@ -350,10 +391,8 @@ int tr_vcm_render(const tr_scene_view *view, const tr_frame *f, const tr_film_vi
                 }
             }
         }
-        free(cell_first);
-        free(entries);
     }
-    vcm_tiles_put(tiles, tile_count ? tile_count : 1u, cached);
+    vcm_scratch_put(sc, cached);
     free(path_len);
     free(path_at);
     *cancelled_out = cancelled;
