@@ -91,7 +91,7 @@ check budget.json ": shapes[5]: the scene would have more than 16777216 triangle
 check no_shapes.json ": the scene has no triangles"
 # Render defaults.
 check accel.json ": render.accel: unknown acceleration structure 'bhv' (expected bvh, flat, embree or bvh2; did you mean 'bvh'?)"
-check integrator.json ": render.integrator: unknown integrator 'magic' (available: pt, naive, bdpt)"
+check integrator.json ": render.integrator: unknown integrator 'magic' (available: pt, naive, bdpt, vcm)"
 # Meshes.
 check missing_mesh.json ": meshes[0].path: cannot open '$BAD/no-such-model.obj': No such file or directory"
 check unreadable_mesh.json ": meshes[0].path: cannot open '$BAD/.': not a regular file (a directory)"

@@ -61,7 +61,7 @@ static void round_trips(void) {
     }
 
     names = tr_integrator_names(&n);
-    CHECK(n == 3, "%zu integrators", n);
+    CHECK(n == 4, "%zu integrators", n);
     names_unique(names, n, "integrators");
     for (size_t i = 0; i < n; ++i) {
         int k = tr_integrator_from_name(names[i]);
@@ -71,7 +71,8 @@ static void round_trips(void) {
     }
     CHECK(tr_integrator_from_name("pt") == TR_INTEGRATOR_PT &&
               tr_integrator_from_name("naive") == TR_INTEGRATOR_NAIVE &&
-              tr_integrator_from_name("bdpt") == TR_INTEGRATOR_BDPT,
+              tr_integrator_from_name("bdpt") == TR_INTEGRATOR_BDPT &&
+              tr_integrator_from_name("vcm") == TR_INTEGRATOR_VCM,
           "integrator values");
     CHECK(tr_integrator_name(7) == NULL && tr_integrator_description(-1) == NULL,
           "unknown integrator values have no name");
