@@ -17,7 +17,6 @@
 #include "device/vcm.h"
 #include "kernel/integrator_vcm.h"
 #include "kernel/kernel.h"
-#include "scene/scene_internal.h"
 
 /* One tile's light subpaths: their vertices, subpath after subpath in the tile's grid
  * order, and for each vertex past a subpath's origin its merge weight's light-side sums
@@ -266,9 +265,15 @@ int tr_vcm_render(const tr_scene_view *view, const tr_frame *f, const tr_film_vi
     const size_t points = (size_t)tl.nx * tl.ny;
     const tr_camera cam = f->camera;
     const uint64_t seed = ((uint64_t)f->seed_hi << 32) | (uint64_t)f->seed_lo;
-    const uint32_t k = f->stride;
     const int max_depth = f->max_depth > TR_BDPT_MAX_DEPTH ? TR_BDPT_MAX_DEPTH : f->max_depth;
-    const tr_aabb box = tr_triangles_bounds(view->triangles, view->triangle_count);
+    /* The scene's bounds: the union of its shapes' boxes (the flat structure's nodes),
+     * not a pass over every triangle each frame. */
+    tr_aabb box = {{0.0f, 0.0f, 0.0f}, {0.0f, 0.0f, 0.0f}};
+    for (uint32_t i = 0; i < view->flat_node_count; ++i) {
+        const tr_aabb b = view->flat_nodes[i].box;
+        box.min = i ? v3_min(box.min, b.min) : b.min;
+        box.max = i ? v3_max(box.max, b.max) : b.max;
+    }
     /* A pixel's footprint at the distance of the scene's centre, or at half the scene's
      * diagonal where the camera is nearer the centre than that (inside the scene). */
     const tr_vec3 centre = v3_scale(v3_add(box.min, box.max), 0.5f);
@@ -307,7 +312,9 @@ int tr_vcm_render(const tr_scene_view *view, const tr_frame *f, const tr_film_vi
             vcm_tile_rect(&tl, (uint32_t)ti, &x0, &y0, &x1, &y1);
             for (uint32_t gy = y0; gy < y1; ++gy) {
                 for (uint32_t gx = x0; gx < x1; ++gx) {
-                    const uint64_t pixel = (uint64_t)(gy * k) * cam.screen_width + gx * k;
+                    uint32_t x, y, bx0, by0, bx1, by1;
+                    const uint64_t pixel =
+                        tr_frame_point(f, gx, gy, &x, &y, &bx0, &by0, &bx1, &by1);
                     const size_t pi = (size_t)(gy - tl.gy0) * tl.nx + (gx - tl.gx0);
                     path_at[pi] = (uint32_t)tt->count;
                     path_len[pi] = 0;
@@ -364,17 +371,11 @@ int tr_vcm_render(const tr_scene_view *view, const tr_frame *f, const tr_film_vi
                 }
                 uint32_t x0, y0, x1, y1;
                 vcm_tile_rect(&tl, (uint32_t)ti, &x0, &y0, &x1, &y1);
-                const uint32_t rx0 = f->rect_x, ry0 = f->rect_y;
-                const uint32_t rx1 = rx0 + f->rect_w, ry1 = ry0 + f->rect_h;
                 for (uint32_t gy = y0; gy < y1; ++gy) {
-                    const uint32_t y = gy * k;
-                    const uint32_t by0 = y > ry0 ? y : ry0;
-                    const uint32_t by1 = y + k < ry1 ? y + k : ry1;
                     for (uint32_t gx = x0; gx < x1; ++gx) {
-                        const uint32_t x = gx * k;
-                        const uint32_t bx0 = x > rx0 ? x : rx0;
-                        const uint32_t bx1 = x + k < rx1 ? x + k : rx1;
-                        const uint64_t pixel = (uint64_t)y * cam.screen_width + (uint64_t)x;
+                        uint32_t x, y, bx0, by0, bx1, by1;
+                        const uint64_t pixel =
+                            tr_frame_point(f, gx, gy, &x, &y, &bx0, &by0, &bx1, &by1);
                         const size_t pi = (size_t)(gy - tl.gy0) * tl.nx + (gx - tl.gx0);
                         tr_sample out;
                         tr_sample_clear(&out);

@@ -33,6 +33,7 @@ typedef ulong uint64_t;
 #define tr_expf(x) exp(x)
 #define tr_expm1f(x) expm1(x)
 #define tr_log1pf(x) log1p(x)
+#define tr_floorf(x) floor(x)
 #define tr_atan2f(y, x) atan2((y), (x))
 #define tr_fminf(a, b) fmin((a), (b))
 #define tr_fmaxf(a, b) fmax((a), (b))
@@ -66,6 +67,7 @@ typedef ulong uint64_t;
 #define tr_expf(x) expf(x)
 #define tr_expm1f(x) expm1f(x)
 #define tr_log1pf(x) log1pf(x)
+#define tr_floorf(x) floorf(x)
 #define tr_atan2f(y, x) atan2f((y), (x))
 /* fminf/fmaxf semantics (a NaN operand yields the other one) without the libm call
  * that gcc emits for them unless NaNs are assumed away; the slab test relies on this. */

@@ -51,6 +51,7 @@
 #include "compat.h"
 #include "film.h"
 #include "integrator_pt.h"
+#include "kernel.h"
 #include "light.h"
 #include "material.h"
 #include "material_eval.h"
@@ -760,20 +761,12 @@ TR_FN uint32_t tr_bdpt_render_grid_rows(const tr_scene_view *s, const tr_frame *
                                         uint32_t gx0, uint32_t gy0, uint32_t gx1, uint32_t gy1) {
     const tr_camera cam = f->camera;
     const uint64_t seed = ((uint64_t)f->seed_hi << 32) | (uint64_t)f->seed_lo;
-    const uint32_t k = f->stride;
-    const uint32_t rx0 = f->rect_x, ry0 = f->rect_y;
-    const uint32_t rx1 = rx0 + f->rect_w, ry1 = ry0 + f->rect_h;
     const tr_bdpt_select all = {0, 0};
     uint32_t rays = 0;
     for (uint32_t gy = gy0; gy < gy1; ++gy) {
-        const uint32_t y = gy * k;
-        const uint32_t by0 = y > ry0 ? y : ry0;
-        const uint32_t by1 = y + k < ry1 ? y + k : ry1;
         for (uint32_t gx = gx0; gx < gx1; ++gx) {
-            const uint32_t x = gx * k;
-            const uint32_t bx0 = x > rx0 ? x : rx0;
-            const uint32_t bx1 = x + k < rx1 ? x + k : rx1;
-            const uint64_t pixel = (uint64_t)y * cam.screen_width + (uint64_t)x;
+            uint32_t x, y, bx0, by0, bx1, by1;
+            const uint64_t pixel = tr_frame_point(f, gx, gy, &x, &y, &bx0, &by0, &bx1, &by1);
             for (uint32_t n = 0; n < f->sample_count; ++n) {
                 tr_sample out;
                 tr_sample_clear(&out);

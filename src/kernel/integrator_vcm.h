@@ -85,7 +85,7 @@ TR_FN uint32_t tr_vcm_cell_hash(int32_t ix, int32_t iy, int32_t iz, uint32_t mas
 /* The cell coordinate of c (in cells along one axis), clamped so that the conversion is
  * defined for any point (cells that far out only share buckets). */
 TR_FN int32_t tr_vcm_cell_of(float c) {
-    return (int32_t)floorf(tr_fminf(tr_fmaxf(c, -1073741824.0f), 1073741824.0f));
+    return (int32_t)tr_floorf(tr_fminf(tr_fmaxf(c, -1073741824.0f), 1073741824.0f));
 }
 
 /* Cell coordinate along one axis of c (in cells) and its neighbour on the side nearer c. */

@@ -83,6 +83,21 @@ TR_FN void tr_frame_grid(const tr_frame *f, uint32_t *gx0, uint32_t *gy0, uint32
     *ny = f->rect_h ? (y1 + k - 1u) / k - *gy0 : 0u;
 }
 
+/* Grid point (gx, gy) of frame f: its traced pixel (*x, *y), returned as the pixel index
+ * the samplers key on, and the block it fills, [*bx0, *bx1) x [*by0, *by1). */
+TR_FN uint64_t tr_frame_point(const tr_frame *f, uint32_t gx, uint32_t gy, uint32_t *x, uint32_t *y,
+                              uint32_t *bx0, uint32_t *by0, uint32_t *bx1, uint32_t *by1) {
+    const uint32_t k = f->stride;
+    const uint32_t rx1 = f->rect_x + f->rect_w, ry1 = f->rect_y + f->rect_h;
+    *x = gx * k;
+    *y = gy * k;
+    *bx0 = *x > f->rect_x ? *x : f->rect_x;
+    *by0 = *y > f->rect_y ? *y : f->rect_y;
+    *bx1 = *x + k < rx1 ? *x + k : rx1;
+    *by1 = *y + k < ry1 ? *y + k : ry1;
+    return (uint64_t)*y * f->camera.screen_width + (uint64_t)*x;
+}
+
 /* tr_render_grid_rows with the frame's integrator given as `integrator`. Always inlined,
  * so that each of tr_render_grid_rows's two calls holds one integrator's code: with the
  * choice made per sample, the compiler hoisted pt's sampler set-up (invariant over a
