@@ -16,7 +16,10 @@
  *      scene without emitters has an empty table.
  *  (e) The built-in Cornell box's lamp faces up with our winding and is two-sided.
  *  (f) Light sampling's density, by solid angle and by area, matches its samples
- *      (chi-square; see pdf_chi_square). */
+ *      (chi-square; see pdf_chi_square).
+ *  (g) The switch to area sampling for far triangles (tr_light_far) happens at four
+ *      bounding radii from the centroid, in every direction, and there the density
+ *      light sampling reports is the area density. */
 #include "check.h"
 #include "scene_util.h"
 #include "kernel/kernel.h"
@@ -286,10 +289,13 @@ static void pdf_chi_square(void) {
     CHECK(tr_scene_commit(&s, TR_ACCEL_TYPE_FLAT, &err) == TR_OK, "commit: %s", err.msg);
     tr_scene_view v = tr_scene_view_of(&s);
     const tr_triangle *tri = &s.triangles[0];
-    const tr_vec3 points[3] = {v3(0.0f, 0.7f, 0.0f), v3(0.8f, 0.2f, 0.4f), v3(3.0f, -40.0f, 2.0f)};
-    const int want_spherical[3] = {1, 1, 0};
+    /* The third point lies five bounding radii below the triangle, where it subtends
+     * some 0.03 sr: sampled by area through tr_light_far's test alone. */
+    const tr_vec3 points[4] = {v3(0.0f, 0.7f, 0.0f), v3(0.8f, 0.2f, 0.4f), v3(0.0f, -2.5f, 0.0f),
+                               v3(3.0f, -40.0f, 2.0f)};
+    const int want_spherical[4] = {1, 1, 0, 0};
     static double obs[PK * PK];
-    for (int q = 0; q < 3; ++q) {
+    for (int q = 0; q < 4; ++q) {
         tr_vec3 va, vb, vc;
         float ca, sa;
         int sph = tr_light_spherical(tri, points[q], &va, &vb, &vc, &ca, &sa) > 0.0f;
@@ -345,10 +351,88 @@ static void pdf_chi_square(void) {
     tr_scene_free(&s);
 }
 
+/* (g) A point at f bounding radii from the centroid of a triangle, in direction dir,
+ * crosses to area sampling at f = 4 and not before; beyond, tr_light_pdf is the area
+ * density seen from the point. The solid angle there (Van Oosterom and Strackee, in
+ * double) is far above TR_LIGHT_SPHERICAL_MIN, so the distance test alone decides. */
+static double solid_angle_d(const tr_triangle *t, tr_vec3 p) {
+    double v[3][3], l[3];
+    const tr_vec3 vs[3] = {t->v0, t->v1, t->v2};
+    for (int k = 0; k < 3; ++k) {
+        v[k][0] = (double)vs[k].x - p.x;
+        v[k][1] = (double)vs[k].y - p.y;
+        v[k][2] = (double)vs[k].z - p.z;
+        l[k] = sqrt(v[k][0] * v[k][0] + v[k][1] * v[k][1] + v[k][2] * v[k][2]);
+    }
+    double cx = v[1][1] * v[2][2] - v[1][2] * v[2][1], cy = v[1][2] * v[2][0] - v[1][0] * v[2][2],
+           cz = v[1][0] * v[2][1] - v[1][1] * v[2][0];
+    double triple = fabs(v[0][0] * cx + v[0][1] * cy + v[0][2] * cz);
+    double dots = 0.0;
+    for (int k = 0; k < 3; ++k) {
+        const double *a = v[k], *b = v[(k + 1) % 3];
+        dots += (a[0] * b[0] + a[1] * b[1] + a[2] * b[2]) * l[(k + 2) % 3];
+    }
+    return 2.0 * atan2(triple, l[0] * l[1] * l[2] + dots);
+}
+
+static void far_switch(void) {
+    tr_scene s = {0};
+    tr_scene_init(&s);
+    tr_error err;
+    uint32_t em = add_mat(&s, tr_material_emitter(v3s(1.0f), 2.0f));
+    const float pos[9] = {0.0f, 0.0f, 0.0f, 2.0f, 0.0f, 0.0f, 0.5f, 0.0f, 1.5f};
+    const uint32_t idx[3] = {0, 1, 2};
+    CHECK(tr_scene_add_mesh(&s, pos, 3, idx, 1, NULL, em, NULL, NULL, &err) == TR_OK, "mesh: %s",
+          err.msg);
+    CHECK(tr_scene_commit(&s, TR_ACCEL_TYPE_FLAT, &err) == TR_OK, "commit: %s", err.msg);
+    tr_scene_view v = tr_scene_view_of(&s);
+    const tr_triangle *tri = &s.triangles[0];
+    const double cen[3] = {2.5 / 3.0, 0.0, 0.5};
+    double r2 = 0.0;
+    for (int k = 0; k < 3; ++k) {
+        double dx = pos[3 * k] - cen[0], dy = pos[3 * k + 1] - cen[1], dz = pos[3 * k + 2] - cen[2];
+        r2 = fmax(r2, dx * dx + dy * dy + dz * dz);
+    }
+    const double radius = sqrt(r2);
+    const double dirs[3][3] = {{0.0, -1.0, 0.0}, {0.6, -0.64, -0.48}, {0.48, 0.6, 0.64}};
+    for (int d = 0; d < 3; ++d) {
+        for (int side = 0; side < 2; ++side) {
+            const double f = side ? 4.02 : 3.98;
+            tr_vec3 p = v3((float)(cen[0] + f * radius * dirs[d][0]),
+                           (float)(cen[1] + f * radius * dirs[d][1]),
+                           (float)(cen[2] + f * radius * dirs[d][2]));
+            tr_vec3 va, vb, vc;
+            float ca, sa;
+            const float omega = tr_light_spherical(tri, p, &va, &vb, &vc, &ca, &sa);
+            CHECK(tr_light_far(tri, p) == side, "direction %d at %.2f radii: far %d", d, f,
+                  tr_light_far(tri, p));
+            const double exact = solid_angle_d(tri, p);
+            if (!side) {
+                CHECK(omega > 0.0f && fabs(omega - exact) < 1e-4 * exact,
+                      "direction %d inside: solid angle %g, exact %g", d, (double)omega, exact);
+                continue;
+            }
+            CHECK(omega == 0.0f && exact > 10.0 * TR_LIGHT_SPHERICAL_MIN,
+                  "direction %d outside: spherical %g (solid angle %g)", d, (double)omega, exact);
+            /* Beyond the switch the reported density is the area density: the light's
+             * centroid seen from p, sel = 1 (one emitter). */
+            tr_vec3 y = v3((float)cen[0], (float)cen[1], (float)cen[2]);
+            tr_vec3 dv = v3_sub(y, p);
+            double dist2 = v3_dot(dv, dv), cos_l = fabs(v3_dot(dv, tri->normal)) / sqrt(dist2);
+            double want = dist2 / (cos_l * tri->area);
+            double got = tr_light_pdf(&v, p, 0, y);
+            CHECK(fabs(got - want) < 1e-4 * want, "direction %d: density %g, area density %g", d,
+                  got, want);
+        }
+    }
+    tr_scene_free(&s);
+}
+
 int main(void) {
     table();
     builtin_lamp();
     irradiance();
     pdf_chi_square();
+    far_switch();
     return check_finish("test_lights");
 }
