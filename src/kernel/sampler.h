@@ -67,12 +67,18 @@ TR_FN uint32_t tr_hash32(uint32_t x) {
     return x;
 }
 
+/* The bits of x in reverse order: swap neighbouring bits, pairs and nibbles, then the
+ * bytes (one instruction where the compiler has a byte swap; OpenCL C has none). */
 TR_FN uint32_t tr_reverse_bits32(uint32_t x) {
     x = ((x >> 1) & 0x55555555u) | ((x & 0x55555555u) << 1);
     x = ((x >> 2) & 0x33333333u) | ((x & 0x33333333u) << 2);
     x = ((x >> 4) & 0x0f0f0f0fu) | ((x & 0x0f0f0f0fu) << 4);
+#if defined(__GNUC__) && !defined(__OPENCL_VERSION__) && !defined(__OPENCL_C_VERSION__)
+    return __builtin_bswap32(x);
+#else
     x = ((x >> 8) & 0x00ff00ffu) | ((x & 0x00ff00ffu) << 8);
     return (x >> 16) | (x << 16);
+#endif
 }
 
 /* Laine and Karras' hash-based permutation with the constants of Burley 2020
