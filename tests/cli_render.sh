@@ -120,6 +120,19 @@ cmp -s s.pfm r.pfm && fail "--sampler random rendered the Sobol sampler's image"
 cmp -s d.pfm z.pfm && fail "--sampler zsobol rendered the Sobol sampler's image"
 rm -f s.pfm r.pfm d.pfm z.pfm
 
+# --roulette-start takes 1..1024; 5 is the default's image bit for bit, and an earlier
+# start (the real-time one) renders another image with the same seed.
+expect_usage_error "got '0'" $R --roulette-start 0
+expect_usage_error "got '1025'" $R --roulette-start 1025
+"$BIN" render --width 8 --height 6 --spp 2 --out d.pfm 2>/dev/null || fail "render failed"
+"$BIN" render --width 8 --height 6 --spp 2 --out r5.pfm --roulette-start 5 2>/dev/null ||
+    fail "render --roulette-start 5 failed"
+cmp -s d.pfm r5.pfm || fail "--roulette-start 5 is not the default's image"
+"$BIN" render --width 8 --height 6 --spp 2 --out r2.pfm --roulette-start 2 2>/dev/null ||
+    fail "render --roulette-start 2 failed"
+cmp -s d.pfm r2.pfm && fail "--roulette-start 2 rendered the default's image"
+rm -f d.pfm r5.pfm r2.pfm
+
 # A file that exists already is replaced only by a complete image.
 "$BIN" render --width 8 --height 6 --spp 1 --out ok.png --width 0 2>/dev/null
 sig=$(od -An -tx1 -N8 ok.png | tr -d ' \n')

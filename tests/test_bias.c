@@ -11,7 +11,9 @@
  *      comparison with max depth 8, the former default, must find at least one block
  *      beyond 6 standard errors and 2 % dim: the test sees the bias it guards against.
  *  (b) Independent seeds: every block of the default render within 6 standard errors of
- *      the reference (Student's t with 14 degrees of freedom: two-sided p < 1e-4). */
+ *      the reference (Student's t with 14 degrees of freedom: two-sided p < 1e-4).
+ *  (c) The real-time roulette (TR_ROULETTE_START_REALTIME, view and bench realtime) is
+ *      unbiased as (b) says, and traces at least a tenth fewer rays than the default. */
 #include "check.h"
 #include "trac0r/trac0r.h"
 
@@ -23,18 +25,23 @@
 enum { W = 48, H = 48, B = 8, NB = (W / B) * (H / B), R = 8, SPP = 16 };
 
 /* Each block's mean for each of the R seeds seed0 .. seed0 + R - 1. */
-static void block_means(const tr_scene *s, int depth, uint64_t seed0, double m[R][NB]) {
+static void block_means(const tr_scene *s, int depth, int rr_start, uint64_t seed0, double m[R][NB],
+                        uint64_t *rays) {
     tr_error err;
     tr_film f;
     CHECK(tr_film_init(&f, W, H, &err) == TR_OK, "%s", err.msg);
+    *rays = 0;
     for (int r = 0; r < R; ++r) {
         tr_film_clear(&f);
         tr_render_config cfg = tr_render_config_default();
         cfg.max_depth = depth;
+        cfg.roulette_start = rr_start;
         cfg.seed = seed0 + (uint64_t)r;
         for (uint32_t k = 0; k < SPP; ++k) {
-            CHECK(tr_render_frame(s, tr_scene_camera(s), &cfg, &f, k, NULL, &err) == TR_OK, "%s",
+            tr_render_stats st;
+            CHECK(tr_render_frame(s, tr_scene_camera(s), &cfg, &f, k, &st, &err) == TR_OK, "%s",
                   err.msg);
+            *rays += st.rays;
         }
         memset(m[r], 0, sizeof m[r]);
         for (uint32_t y = 0; y < H; ++y) {
@@ -100,15 +107,18 @@ int main(void) {
     CHECK(tr_camera_resize(&cam, W, H, &err) == TR_OK, "%s", err.msg);
     tr_scene_set_camera(s, &cam);
     CHECK(tr_scene_commit(s, TR_ACCEL_TYPE_BVH, &err) == TR_OK, "%s", err.msg);
-    static double ref[R][NB], def[R][NB], d8[R][NB], indep[R][NB];
-    block_means(s, 1024, 1000, ref);
-    block_means(s, 0, 1000, def);
-    block_means(s, 8, 1000, d8);
-    block_means(s, 0, 2000, indep);
+    static double ref[R][NB], def[R][NB], d8[R][NB], indep[R][NB], rt[R][NB];
+    uint64_t rays_ref, rays_def, rays_8, rays_indep, rays_rt;
+    block_means(s, 1024, 0, 1000, ref, &rays_ref);
+    block_means(s, 0, 0, 1000, def, &rays_def);
+    block_means(s, 8, 0, 1000, d8, &rays_8);
+    block_means(s, 0, 0, 2000, indep, &rays_indep);
+    block_means(s, 0, TR_ROULETTE_START_REALTIME, 3000, rt, &rays_rt);
     double worst_def, worst_8;
     int bad_def = paired_failures(def, ref, &worst_def);
     int bad_8 = paired_failures(d8, ref, &worst_8);
     int bad_indep = independent_failures(indep, ref);
+    int bad_rt = independent_failures(rt, ref);
     printf("paired: default %d of %d blocks beyond 6 se (worst %.3f %%), max depth 8 %d (worst "
            "%.2f %%); independent seeds: %d blocks beyond 6 se\n",
            bad_def, NB, 100.0 * worst_def, bad_8, 100.0 * worst_8, bad_indep);
@@ -120,6 +130,17 @@ int main(void) {
           100.0 * worst_8);
     CHECK(bad_indep == 0, "default settings: %d of %d blocks differ from the reference", bad_indep,
           NB);
+    printf("real-time roulette: %d blocks beyond 6 se, %.3f of the default's rays\n", bad_rt,
+           (double)rays_rt / (double)rays_indep);
+    CHECK(bad_rt == 0, "real-time roulette: %d of %d blocks differ from the reference", bad_rt, NB);
+    CHECK(rays_rt < 0.9 * (double)rays_indep, "real-time roulette: %llu rays, default %llu",
+          (unsigned long long)rays_rt, (unsigned long long)rays_indep);
+    for (int k = 0; k < 2; ++k) {
+        tr_render_config cfg = tr_render_config_default();
+        cfg.roulette_start = k ? TR_MAX_DEPTH_LIMIT + 1 : -1;
+        CHECK_STATUS(tr_render_config_check(&cfg, &err), err, TR_STATUS_INVALID_ARGUMENT,
+                     "roulette start out of range");
+    }
     tr_scene_destroy(s);
     return check_finish("test_bias");
 }

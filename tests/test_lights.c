@@ -418,7 +418,8 @@ static void far_switch(void) {
              * centroid seen from p, sel = 1 (one emitter). */
             tr_vec3 y = v3((float)cen[0], (float)cen[1], (float)cen[2]);
             tr_vec3 dv = v3_sub(y, p);
-            double dist2 = v3_dot(dv, dv), cos_l = fabs(v3_dot(dv, tri->normal)) / sqrt(dist2);
+            double dist2 = v3_dot(dv, dv),
+                   cos_l = fabs((double)v3_dot(dv, tri->normal)) / sqrt(dist2);
             double want = dist2 / (cos_l * tri->area);
             double got = tr_light_pdf(&v, p, 0, y);
             CHECK(fabs(got - want) < 1e-4 * want, "direction %d: density %g, area density %g", d,

@@ -361,6 +361,13 @@ int bench_realtime(int argc, char **argv) {
     if (ref_sampler >= 0) {
         rcfg.sampler = ref_sampler;
     }
+    /* The frames' roulette starts early (TR_ROULETTE_START_REALTIME unless given); the
+     * references keep the offline default, the least error per sample, and stay the
+     * same whatever --roulette-start the frames have (both are unbiased). */
+    if (!c.roulette_start) {
+        cfg.roulette_start = TR_ROULETTE_START_REALTIME;
+    }
+    rcfg.roulette_start = TR_ROULETTE_START_PT;
     /* Frames and references alike are rendered at this depth. */
     const int depth = cfg.max_depth ? cfg.max_depth : tr_default_max_depth(cfg.integrator);
     const int threads = c.threads ? c.threads : tr_default_threads();

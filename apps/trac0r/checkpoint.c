@@ -74,6 +74,14 @@ int checkpoint_identity(checkpoint_id *id, const cli_common *c, const tr_scene *
              c->width, c->height, (unsigned long long)c->seed, c->max_depth,
              tr_integrator_name(c->integrator), tr_accel_name(c->accel), stride, passes, sampler,
              c->light_sampling < 0 ? "scene" : tr_light_sampling_name(c->light_sampling));
+    /* pt's roulette start decides the paths as well; named only when it is not the
+     * default, so that a checkpoint of a default render keeps the identity it had before
+     * the option existed. */
+    const int rr = c->roulette_start ? c->roulette_start : TR_ROULETTE_START_PT;
+    if (rr != TR_ROULETTE_START_PT) {
+        const size_t used = strlen(id->desc);
+        snprintf(id->desc + used, sizeof id->desc - used, " roulette-start=%d", rr);
+    }
     uint64_t h = FNV_OFFSET;
     const uint32_t nt = tr_scene_triangle_count(scene);
     h = fnv_u32(h, nt);

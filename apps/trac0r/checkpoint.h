@@ -5,7 +5,7 @@
  * remaining samples to the very floats an uninterrupted render would have held: the
  * resumed image is bit-identical. It also holds the render's identity (what decides the
  * image: the scene's geometry, materials and camera, the scene file's bytes, size, seed,
- * depth, integrator, accel, stride, passes, sampler, light selection), and resuming
+ * depth, integrator, accel, stride, passes, sampler, light selection, roulette start), and resuming
  * refuses any other. The format is trac0r's own, in the writing machine's byte order
  * (docs/distributed.md). */
 #ifndef TRAC0R_CHECKPOINT_H

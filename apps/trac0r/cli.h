@@ -33,6 +33,7 @@ typedef struct cli_common {
     const char *model_camera; /* --camera: a model file's camera, or "frame"; NULL: its first */
     float model_scale;        /* --scale: a model file's scale */
     int sampler;              /* --sampler: TR_SAMPLER_* (issue 15) */
+    int roulette_start;       /* --roulette-start: pt's, 0 for the command's default */
     int light_sampling;       /* --light-sampling: TR_LIGHT_SAMPLING_*, -1 for the scene's own */
 } cli_common;
 

@@ -40,6 +40,7 @@ tr_render_config cli_render_config(const cli_common *c) {
     cfg.threads = c->threads;
     cfg.integrator = c->integrator;
     cfg.sampler = c->sampler;
+    cfg.roulette_start = c->roulette_start;
     return cfg;
 }
 

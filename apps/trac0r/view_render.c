@@ -276,6 +276,13 @@ static void *render_main(void *arg) {
          * numbers instead of the sample count, so that the noise changes from frame to
          * frame (at rest sample k is frame k's, as `trac0r render` has it). */
         const uint32_t nspp = rmoving ? r->motion_spp : 1u;
+        /* A moving or animated frame is reconstructed from few samples: pt's roulette
+         * starts early there, which adds noise the filter hides and saves a fifth of the
+         * frame (docs/realtime.md). At rest the image converges with the config's (by
+         * default the offline one), so F12 equals `trac0r render`. */
+        if (rmoving || r->animate) {
+            cfg.roulette_start = r->motion_roulette;
+        }
         uint32_t sample = spp;
         if (r->animate) {
             sample = (uint32_t)r->updates;
@@ -358,6 +365,7 @@ int view_renderer_start(view_renderer *r, tr_scene *scene, int animate, tr_devic
     r->animate = animate;
     r->dev = dev;
     r->cfg = *cfg;
+    r->motion_roulette = cfg->roulette_start ? cfg->roulette_start : TR_ROULETTE_START_REALTIME;
     r->max_spp = max_spp;
     r->cam = *cam;
     r->stride = stride;

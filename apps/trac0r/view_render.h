@@ -82,6 +82,8 @@ typedef struct view_renderer {
     float motion_scale;    /* the resolution divisor the budget asks for while moving */
     uint32_t motion_spp;   /* samples per frame while moving */
     uint32_t motion_frame; /* counts moving frames: their sample numbers, so noise changes */
+    int motion_roulette;   /* pt's roulette start while moving or animated (the config's if
+                              it names one, else TR_ROULETTE_START_REALTIME) */
     tr_gbuffer gb;         /* the film's means and passes, for the reconstruction */
     tr_recon rec;          /* the reconstruction's history */
     tr_recon_device *rdev; /* on an OpenCL device: the reconstruction there instead */

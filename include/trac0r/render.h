@@ -15,6 +15,11 @@
  * do); naive keeps the thesis's 8, on which its depth-based roulette depends. */
 #define TR_MAX_DEPTH_DEFAULT 0
 #define TR_MAX_DEPTH_PT 64
+/* Where pt's Russian roulette starts (tr_render_config.roulette_start): after 5
+ * segments for the least error per sample (the default), after 2 for real-time frames,
+ * which a filter reconstructs (view, bench realtime; docs/integrators.md). */
+#define TR_ROULETTE_START_PT 5
+#define TR_ROULETTE_START_REALTIME 2
 #define TR_MAX_DEPTH_NAIVE 8
 /* bdpt's default and its limit: its subpaths live in fixed arrays of 16 vertices. */
 #define TR_MAX_DEPTH_BDPT 15
@@ -39,6 +44,9 @@ typedef struct tr_render_config {
     uint32_t tile;   /* CPU: tile side in traced pixels (default 16) */
     uint32_t passes; /* TR_PASS_* to accumulate beside radiance (default none) */
     int sampler;     /* TR_SAMPLER_*: pt's uniform numbers (default TR_SAMPLER_SOBOL) */
+    /* pt: Russian roulette may end a path after this many segments (the camera ray is the
+     * first), 1..TR_MAX_DEPTH_LIMIT; 0 (default): TR_ROULETTE_START_PT. */
+    int roulette_start;
     /* Optional (default NULL): asked before each tile on the CPU; when it returns nonzero
      * the frame stops early, the film holds a partial sample and the call fails with
      * TR_STATUS_CANCELLED. For interactive use: another thread decides. */

@@ -24,12 +24,14 @@ tr_render_config tr_render_config_default(void) {
     c.tile = 16;
     c.passes = 0;
     c.sampler = TR_SAMPLER_SOBOL;
+    c.roulette_start = 0;
     c.cancel = NULL;
     c.cancel_user = NULL;
     return c;
 }
 
 TR_STATIC_ASSERT(TR_MAX_DEPTH_BDPT == TR_BDPT_MAX_DEPTH, "bdpt's depth limit");
+TR_STATIC_ASSERT(TR_ROULETTE_START_PT == TR_PT_RR_START, "pt's roulette default");
 
 int tr_integrator_is_bidirectional(int integrator) {
     return integrator == TR_INTEGRATOR_BDPT || integrator == TR_INTEGRATOR_VCM;
@@ -82,6 +84,11 @@ int tr_render_config_check(const tr_render_config *cfg, tr_error *err) {
                             "TR_SAMPLER_ZSOBOL)",
                             cfg->sampler);
     }
+    if (cfg->roulette_start < 0 || cfg->roulette_start > TR_MAX_DEPTH_LIMIT) {
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "roulette start %d must be in 1..%d (0: the default, %d)",
+                            cfg->roulette_start, TR_MAX_DEPTH_LIMIT, TR_ROULETTE_START_PT);
+    }
     if ((cfg->passes & ~TR_PASS_MASK) != 0u) {
         return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "unknown pass bits 0x%x",
                             cfg->passes & ~TR_PASS_MASK);
@@ -128,6 +135,7 @@ int tr_frame_make(tr_frame *f, const tr_camera *cam, const tr_render_config *cfg
     f->stride = (uint32_t)cfg->stride;
     f->passes = cfg->passes;
     f->sampler = (uint32_t)cfg->sampler;
+    f->rr_start = cfg->roulette_start ? cfg->roulette_start : TR_ROULETTE_START_PT;
     f->rect_x = r.x;
     f->rect_y = r.y;
     f->rect_w = r.width;

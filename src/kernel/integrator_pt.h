@@ -76,11 +76,13 @@ TR_FN_NOINLINE tr_vec3 tr_pt_env_light(const tr_scene_view *s, const tr_sampler 
 
 /* Radiance arriving along `ray`. A path has at most max_depth segments (the camera ray
  * is the first); Russian roulette on the throughput's largest component starts after
- * TR_PT_RR_START segments. Every random decision reads its own dimension of `smp`
- * (sampler.h): at segment seg, the light (selection and point, one pair), BSDF lobe,
- * BSDF direction, roulette and the environment light each have a dimension pair. *rays counts
- * closest-hit and shadow queries; `surface` (may be null) receives the first hit that is not a
- * delta surface, for the passes, and the direct part of the radiance in surface->direct.
+ * rr_start segments (tr_trace_pt: TR_PT_RR_START; a real-time frame, whose filter hides
+ * what an earlier start adds to the noise, takes fewer: TR_ROULETTE_START_REALTIME). Every random
+ * decision reads its own dimension of `smp` (sampler.h): at segment seg, the light (selection and
+ * point, one pair), BSDF lobe, BSDF direction, roulette and the environment light each have a
+ * dimension pair. *rays counts closest-hit and shadow queries; `surface` (may be null) receives the
+ * first hit that is not a delta surface, for the passes, and the direct part of the radiance in
+ * surface->direct.
  *
  * The direct part (TR_PASS_DIRECT) is everything added up to and including the light that
  * reaches the passes' surface S (the first hit that is not a delta surface) without another
@@ -92,8 +94,8 @@ TR_FN_NOINLINE tr_vec3 tr_pt_env_light(const tr_scene_view *s, const tr_sampler 
  * one, so the direct part is unbiased on its own). Everything after that (NEE at the second
  * vertex on) is indirect. It is taken as a snapshot of the running sum right after that next
  * vertex's emission, so the radiance itself is computed exactly as without the pass. */
-TR_FN tr_vec3 tr_trace_pt(const tr_scene_view *s, tr_ray ray, int max_depth, const tr_sampler *smp,
-                          uint32_t *rays, tr_sample *surface) {
+TR_FN tr_vec3 tr_trace_pt_rr(const tr_scene_view *s, tr_ray ray, int max_depth, int rr_start,
+                             const tr_sampler *smp, uint32_t *rays, tr_sample *surface) {
     tr_vec3 radiance = v3s(0.0f);
     tr_vec3 throughput = v3s(1.0f);
     float prev_pdf = 0.0f;
@@ -222,7 +224,7 @@ TR_FN tr_vec3 tr_trace_pt(const tr_scene_view *s, tr_ray ray, int max_depth, con
         prev_delta = bs.delta;
         prev_p = p;
         prev_n = m.ns;
-        if (seg >= TR_PT_RR_START) {
+        if (seg >= rr_start) {
             float q = tr_sqrtf(v3_max_component(throughput));
             if (q < 1.0f) {
                 if (!(tr_sampler_1d(smp, tr_sampler_dim(seg, TR_DIM_ROULETTE)) < q)) {
@@ -239,6 +241,12 @@ TR_FN tr_vec3 tr_trace_pt(const tr_scene_view *s, tr_ray ray, int max_depth, con
         surface->direct = direct_done ? direct : radiance;
     }
     return radiance;
+}
+
+/* tr_trace_pt_rr with roulette after TR_PT_RR_START segments, the offline default. */
+TR_FN tr_vec3 tr_trace_pt(const tr_scene_view *s, tr_ray ray, int max_depth, const tr_sampler *smp,
+                          uint32_t *rays, tr_sample *surface) {
+    return tr_trace_pt_rr(s, ray, max_depth, TR_PT_RR_START, smp, rays, surface);
 }
 
 #endif

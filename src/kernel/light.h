@@ -209,7 +209,7 @@ TR_FN float tr_light_sample_n(const tr_scene_view *s, tr_vec3 p, tr_vec3 nr, flo
     TR_CONST_GLOBAL tr_triangle *tri = &s->triangles[t];
     *tri_index = t;
     tr_vec3 a, b, c;
-    float ca, sa;
+    float ca = 0.0f, sa = 0.0f;
     float omega = tr_light_spherical(tri, p, &a, &b, &c, &ca, &sa);
     float b1, b2;
     if (omega > 0.0f) {

@@ -88,8 +88,9 @@ typedef struct tr_frame {
     uint32_t passes; /* TR_PASS_* the film keeps */
     uint32_t rect_x, rect_y, rect_w, rect_h;
     uint32_t sampler; /* TR_SAMPLER_*: pt's uniform numbers */
+    int32_t rr_start; /* pt: Russian roulette after this many segments */
 } tr_frame;
-TR_STATIC_ASSERT(sizeof(tr_frame) == 144, "tr_frame layout");
+TR_STATIC_ASSERT(sizeof(tr_frame) == 148, "tr_frame layout");
 
 /* What one sample of one pixel gives: radiance, the intersection queries it made, and
  * the surface the passes describe (zero where the path found no non-specular surface). */
