@@ -277,16 +277,21 @@ static double pdf_cell_prob(const tr_scene_view *v, const tr_triangle *tri, tr_v
     return sum / (PM * PM) * tri->area / (PK * PK);
 }
 
+/* A scene of one emissive triangle (vertices pos), committed with the flat structure. */
+static void one_light(tr_scene *s, const float pos[9]) {
+    tr_scene_init(s);
+    tr_error err;
+    uint32_t em = add_mat(s, tr_material_emitter(v3s(1.0f), 2.0f));
+    const uint32_t idx[3] = {0, 1, 2};
+    CHECK(tr_scene_add_mesh(s, pos, 3, idx, 1, NULL, em, NULL, NULL, &err) == TR_OK, "mesh: %s",
+          err.msg);
+    CHECK(tr_scene_commit(s, TR_ACCEL_TYPE_FLAT, &err) == TR_OK, "commit: %s", err.msg);
+}
+
 static void pdf_chi_square(void) {
     tr_scene s = {0};
-    tr_scene_init(&s);
-    tr_error err;
-    uint32_t em = add_mat(&s, tr_material_emitter(v3s(1.0f), 2.0f));
     const float pos[9] = {-0.5f, 1.0f, -0.3f, 0.6f, 1.0f, -0.4f, 0.1f, 1.2f, 0.7f};
-    const uint32_t idx[3] = {0, 1, 2};
-    CHECK(tr_scene_add_mesh(&s, pos, 3, idx, 1, NULL, em, NULL, NULL, &err) == TR_OK, "mesh: %s",
-          err.msg);
-    CHECK(tr_scene_commit(&s, TR_ACCEL_TYPE_FLAT, &err) == TR_OK, "commit: %s", err.msg);
+    one_light(&s, pos);
     tr_scene_view v = tr_scene_view_of(&s);
     const tr_triangle *tri = &s.triangles[0];
     /* The third point lies five bounding radii below the triangle, where it subtends
@@ -377,14 +382,8 @@ static double solid_angle_d(const tr_triangle *t, tr_vec3 p) {
 
 static void far_switch(void) {
     tr_scene s = {0};
-    tr_scene_init(&s);
-    tr_error err;
-    uint32_t em = add_mat(&s, tr_material_emitter(v3s(1.0f), 2.0f));
     const float pos[9] = {0.0f, 0.0f, 0.0f, 2.0f, 0.0f, 0.0f, 0.5f, 0.0f, 1.5f};
-    const uint32_t idx[3] = {0, 1, 2};
-    CHECK(tr_scene_add_mesh(&s, pos, 3, idx, 1, NULL, em, NULL, NULL, &err) == TR_OK, "mesh: %s",
-          err.msg);
-    CHECK(tr_scene_commit(&s, TR_ACCEL_TYPE_FLAT, &err) == TR_OK, "commit: %s", err.msg);
+    one_light(&s, pos);
     tr_scene_view v = tr_scene_view_of(&s);
     const tr_triangle *tri = &s.triangles[0];
     const double cen[3] = {2.5 / 3.0, 0.0, 0.5};
