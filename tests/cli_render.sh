@@ -122,8 +122,8 @@ rm -f s.pfm r.pfm d.pfm z.pfm
 
 # --roulette-start takes 1..1024; 5 is the default's image bit for bit, and an earlier
 # start (the real-time one) renders another image with the same seed.
-expect_usage_error "got '0'" $R --roulette-start 0
-expect_usage_error "got '1025'" $R --roulette-start 1025
+expect_usage_error "'0'" $R --roulette-start 0
+expect_usage_error "'1025'" $R --roulette-start 1025
 "$BIN" render --width 8 --height 6 --spp 2 --out d.pfm 2>/dev/null || fail "render failed"
 "$BIN" render --width 8 --height 6 --spp 2 --out r5.pfm --roulette-start 5 2>/dev/null ||
     fail "render --roulette-start 5 failed"
