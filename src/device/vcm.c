@@ -160,6 +160,19 @@ static void vcm_tile_rect(const vcm_tiling *g, uint32_t t, uint32_t *x0, uint32_
     *y1 = *y0 + g->side < g->gy0 + g->ny ? *y0 + g->side : g->gy0 + g->ny;
 }
 
+/* Grid point (gx, gy)'s index among the frame's points, tile by tile's arrays. */
+static size_t vcm_point_index(const vcm_tiling *g, uint32_t gx, uint32_t gy) {
+    return (size_t)(gy - g->gy0) * g->nx + (gx - g->gx0);
+}
+
+/* Grid point (gx, gy) of frame f: its pixel (tr_frame_point: (x, y), the block b[0..3] it
+ * fills and the pixel's index, returned) and its index among the points in *pi. */
+static uint64_t vcm_point(const tr_frame *f, const vcm_tiling *g, uint32_t gx, uint32_t gy,
+                          uint32_t *x, uint32_t *y, uint32_t b[4], size_t *pi) {
+    *pi = vcm_point_index(g, gx, gy);
+    return tr_frame_point(f, gx, gy, x, y, &b[0], &b[1], &b[2], &b[3]);
+}
+
 /* Runs BODY for every mergeable light vertex path[j] (j >= 1: not a subpath's origin),
  * whose light-side sums are sums[3j .. 3j+2], tile after tile, each tile's subpaths in its
  * grid order. */
@@ -169,7 +182,7 @@ static void vcm_tile_rect(const vcm_tiling *g, uint32_t t, uint32_t *x0, uint32_
         vcm_tile_rect(tl, ti, &x0, &y0, &x1, &y1);                                                 \
         for (uint32_t gy = y0; gy < y1; ++gy) {                                                    \
             for (uint32_t gx = x0; gx < x1; ++gx) {                                                \
-                const size_t pi = (size_t)(gy - tl->gy0) * tl->nx + (gx - tl->gx0);                \
+                const size_t pi = vcm_point_index(tl, gx, gy);                                     \
                 const tr_bdpt_vertex *path = tiles[ti].verts + path_at[pi];                        \
                 const float *sums = tiles[ti].sums + 3u * (size_t)path_at[pi];                     \
                 for (uint32_t j = 1; j < path_len[pi]; ++j) {                                      \
@@ -312,10 +325,9 @@ int tr_vcm_render(const tr_scene_view *view, const tr_frame *f, const tr_film_vi
             vcm_tile_rect(&tl, (uint32_t)ti, &x0, &y0, &x1, &y1);
             for (uint32_t gy = y0; gy < y1; ++gy) {
                 for (uint32_t gx = x0; gx < x1; ++gx) {
-                    uint32_t x, y, bx0, by0, bx1, by1;
-                    const uint64_t pixel =
-                        tr_frame_point(f, gx, gy, &x, &y, &bx0, &by0, &bx1, &by1);
-                    const size_t pi = (size_t)(gy - tl.gy0) * tl.nx + (gx - tl.gx0);
+                    uint32_t x, y, blk[4];
+                    size_t pi;
+                    const uint64_t pixel = vcm_point(f, &tl, gx, gy, &x, &y, blk, &pi);
                     path_at[pi] = (uint32_t)tt->count;
                     path_len[pi] = 0;
                     if (!vcm_tile_reserve(tt)) {
@@ -373,21 +385,18 @@ int tr_vcm_render(const tr_scene_view *view, const tr_frame *f, const tr_film_vi
                 vcm_tile_rect(&tl, (uint32_t)ti, &x0, &y0, &x1, &y1);
                 for (uint32_t gy = y0; gy < y1; ++gy) {
                     for (uint32_t gx = x0; gx < x1; ++gx) {
-                        uint32_t x, y, bx0, by0, bx1, by1;
-                        const uint64_t pixel =
-                            tr_frame_point(f, gx, gy, &x, &y, &bx0, &by0, &bx1, &by1);
-                        const size_t pi = (size_t)(gy - tl.gy0) * tl.nx + (gx - tl.gx0);
+                        uint32_t x, y, blk[4];
+                        size_t pi;
+                        const uint64_t pixel = vcm_point(f, &tl, gx, gy, &x, &y, blk, &pi);
                         tr_sample out;
                         tr_sample_clear(&out);
                         tr_sampler smp = tr_sampler_make(seed, pixel, sample);
                         out.radiance = tr_trace_vcm(view, &cam, (float)x, (float)y, max_depth, &smp,
                                                     sp, tiles[ti].verts + path_at[pi], path_len[pi],
                                                     &g, &out.rays, f->passes != 0u ? &out : 0);
-                        if (out.prim == 0u) {
-                            out.depth = 0.0f;
-                        }
+                        tr_sample_finish(&out);
                         rays += out.rays;
-                        tr_film_add_block(fv, &out, bx0, by0, bx1, by1);
+                        tr_film_add_block(fv, &out, blk[0], blk[1], blk[2], blk[3]);
                     }
                 }
             }

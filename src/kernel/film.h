@@ -47,6 +47,14 @@ TR_FN void tr_sample_clear(tr_sample *out) {
     out->rays = 0u;
 }
 
+/* Ends a traced sample: where the path met no surface for the passes, its depth means
+ * nothing and is zero. */
+TR_FN void tr_sample_finish(tr_sample *out) {
+    if (out->prim == 0u) {
+        out->depth = 0.0f;
+    }
+}
+
 /* The film's buffers as one kernel sees them (device or host memory). Pass buffers that
  * the film does not keep may be null; `passes` says which are written. */
 typedef struct tr_film_view {

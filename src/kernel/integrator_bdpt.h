@@ -773,9 +773,7 @@ TR_FN uint32_t tr_bdpt_render_grid_rows(const tr_scene_view *s, const tr_frame *
                 tr_sampler smp = tr_sampler_make(seed, pixel, f->sample + n);
                 out.radiance = tr_trace_bdpt(s, &cam, (float)x, (float)y, f->max_depth, &smp, sp,
                                              all, &out.rays, f->passes != 0u ? &out : 0);
-                if (out.prim == 0u) {
-                    out.depth = 0.0f;
-                }
+                tr_sample_finish(&out);
                 rays += out.rays;
                 tr_film_add_block(film, &out, bx0, by0, bx1, by1);
             }

@@ -46,9 +46,7 @@ TR_FN void tr_render_pixel_sample_kind(const tr_scene_view *s, const tr_camera *
         tr_ray ray = tr_camera_ray(cam, (float)x, (float)y, jx, jy);
         out->radiance = tr_trace_naive(s, ray, max_depth, &rng, &out->rays, surface);
     }
-    if (out->prim == 0u) {
-        out->depth = 0.0f; /* the path met no surface for the passes: a distance means nothing */
-    }
+    tr_sample_finish(out);
 }
 
 /* tr_render_pixel_sample_kind with the Sobol sampler. */
