@@ -96,6 +96,17 @@ rs_sobol=$(refs 1 --reference-sampler sobol)
 rs_random=$(refs 2 --reference-sampler random)
 [ "$rs_default" = "$rs_sobol" ] || fail "--reference-sampler sobol: '$rs_sobol' vs '$rs_default'"
 [ "$rs_default" != "$rs_random" ] || fail "--reference-sampler random changed nothing: '$rs_random'"
+# The frames' sampler: random unless --sampler names one, and the references stay sobol
+# whatever the frames' (so --sampler random is the default's run to the digit, and
+# --sampler sobol changes the frames, not the references).
+fs_random=$(refs 3 --sampler random)
+fs_sobol=$(refs 4 --sampler sobol)
+[ "$rs_default" = "$fs_random" ] || fail "--sampler random: '$fs_random' vs '$rs_default'"
+[ "$rs_default" != "$fs_sobol" ] || fail "--sampler sobol changed nothing: '$fs_sobol'"
+"$BIN" bench realtime "$CLASSIC" --width 48 --height 36 --frames 2 --reference-spp 16 \
+    --threads 1 --methods off --out rs5 --sampler zsobol --reference-sampler random >rs5.txt \
+    2>/dev/null || fail "bench realtime --sampler zsobol --reference-sampler random"
+grep -q "frames zsobol, references random" rs5.txt || fail "bench realtime: samplers not named"
 
 # bias D: the bias PSNR printed for --max-depth D against depth 64.
 bias() {

@@ -53,13 +53,16 @@ static void realtime_help(void) {
            "                       (--max-depth) against it: the depth limit's bias\n"
            "  --methods LIST       of off,accumulate,bilateral,atrous,svgf (default all)\n"
            "  --seed S, --threads T, --max-depth D, --accel NAME, --device D   as for render\n"
-           "  --sampler NAME, --light-sampling NAME   as for render: --sampler random gives\n"
-           "                       pt independent numbers instead of the Sobol points,\n"
-           "                       zsobol the Sobol points with screen-space blue noise\n"
-           "  --reference-sampler NAME   the references' sampler (default: --sampler's). The\n"
-           "                       two-halves estimate of a reference's own error holds for\n"
-           "                       independent samples: compare samplers against random\n"
-           "                       references\n"
+           "  --sampler NAME, --light-sampling NAME   as for render; the frames' sampler\n"
+           "                       defaults to random (independent numbers, the cheapest),\n"
+           "                       as the viewer's moving frames; sobol and zsobol give the\n"
+           "                       Sobol points, zsobol with screen-space blue noise\n"
+           "  --roulette-start N   as for render; the frames' default is 2, the references'\n"
+           "                       always 5\n"
+           "  --reference-sampler NAME   the references' sampler (default sobol, whatever the\n"
+           "                       frames'). The two-halves estimate of a reference's own\n"
+           "                       error holds for independent samples: compare samplers\n"
+           "                       against random references\n"
            "  --out PREFIX         output file prefix (default realtime)\n"
            "  -h, --help           show this help\n");
 }
@@ -141,6 +144,10 @@ static int render_into(cli_backend *be, const tr_camera *cam, const tr_render_co
     return TR_OK;
 }
 
+static const char *sampler_name(int s) {
+    return s == TR_SAMPLER_SOBOL ? "sobol" : s == TR_SAMPLER_RANDOM ? "random" : "zsobol";
+}
+
 static double mse_of(const float *a, const float *b, size_t px) {
     return tr_image_compare(a, b, px).mse;
 }
@@ -202,7 +209,7 @@ int bench_realtime(int argc, char **argv) {
     c.height = 240;
     uint32_t frames = 32, spp = 1, ref_spp = 256, cut = 0, bias_depth = 0;
     int on[TR_RECON_COUNT] = {1, 1, 1, 1, 1};
-    int ref_sampler = -1; /* TR_SAMPLER_*, -1: the frames' */
+    int ref_sampler = -1; /* TR_SAMPLER_*, -1: sobol, whatever the frames' */
     const char *prefix = "realtime";
     int size_given = 0;
     while (cli_next(&a)) {
@@ -358,9 +365,7 @@ int bench_realtime(int argc, char **argv) {
     tr_render_config rcfg = cfg;
     /* The references' seed differs from the frames', so their noise is independent. */
     rcfg.seed = c.seed ^ 0x7265666572656e63ULL;
-    if (ref_sampler >= 0) {
-        rcfg.sampler = ref_sampler;
-    }
+    rcfg.sampler = ref_sampler >= 0 ? ref_sampler : TR_SAMPLER_SOBOL;
     /* The frames' roulette starts early (TR_ROULETTE_START_REALTIME unless given); the
      * references keep the offline default, the least error per sample, and stay the
      * same whatever --roulette-start the frames have (both are unbiased). */
@@ -368,6 +373,11 @@ int bench_realtime(int argc, char **argv) {
         cfg.roulette_start = TR_ROULETTE_START_REALTIME;
     }
     rcfg.roulette_start = TR_ROULETTE_START_PT;
+    /* Likewise the frames' sampler is TR_SAMPLER_REALTIME unless given, and the
+     * references' the offline default (sobol) unless --reference-sampler names one. */
+    if (c.sampler < 0) {
+        cfg.sampler = TR_SAMPLER_REALTIME;
+    }
     /* Frames and references alike are rendered at this depth. */
     const int depth = cfg.max_depth ? cfg.max_depth : tr_default_max_depth(cfg.integrator);
     const int threads = c.threads ? c.threads : tr_default_threads();
@@ -379,11 +389,8 @@ int bench_realtime(int argc, char **argv) {
         if (cut) {
             printf("camera cut at frame %u\n", cut);
         }
-        if (ref_sampler >= 0) {
-            printf("references sampled with %s\n", ref_sampler == TR_SAMPLER_SOBOL    ? "sobol"
-                                                   : ref_sampler == TR_SAMPLER_RANDOM ? "random"
-                                                                                      : "zsobol");
-        }
+        printf("samplers: frames %s, references %s\n", sampler_name(cfg.sampler),
+               sampler_name(rcfg.sampler));
     }
     const double t_start = tr_time_now();
     for (uint32_t f = 0; rc == CLI_OK && f < frames; ++f) {

@@ -40,9 +40,10 @@ static const char help_before[] =
     "  --seed S             random seed, 0..2^64-1 (default 0); the same seed gives the\n"
     "                       same image for any thread count\n"
     "  --threads T          CPU threads, 0..1024 (default 0: one per core)\n"
-    "  --sampler NAME       pt's uniform numbers (default sobol):\n"
+    "  --sampler NAME       pt's uniform numbers (default sobol; bench realtime's frames\n"
+    "                       and the viewer's moving frames: random):\n"
     "                         sobol   Owen-scrambled Sobol points, stratified\n"
-    "                         random  independent numbers, for comparison\n"
+    "                         random  independent numbers, the cheapest\n"
     "                         zsobol  sobol, with errors as blue noise between pixels\n"
     "  --roulette-start N   pt's Russian roulette may end a path after N segments\n"
     "                       (the camera ray is the first), 1..1024 (default 5, the\n"
@@ -92,7 +93,7 @@ void cli_common_default(cli_common *c) {
     c->accel = TR_ACCEL_TYPE_BVH;
     c->given = 0;
     c->allow_dark = 0;
-    c->sampler = TR_SAMPLER_SOBOL;
+    c->sampler = -1;
     c->roulette_start = 0;
     c->light_sampling = -1;
     snprintf(c->device, sizeof c->device, "cpu");

@@ -32,7 +32,7 @@ typedef struct cli_common {
     int up_z;                 /* --up z: a model file's +z is up (issue 14) */
     const char *model_camera; /* --camera: a model file's camera, or "frame"; NULL: its first */
     float model_scale;        /* --scale: a model file's scale */
-    int sampler;              /* --sampler: TR_SAMPLER_* (issue 15) */
+    int sampler;              /* --sampler: TR_SAMPLER_* (issue 15), -1 for the command's default */
     int roulette_start;       /* --roulette-start: pt's, 0 for the command's default */
     int light_sampling;       /* --light-sampling: TR_LIGHT_SAMPLING_*, -1 for the scene's own */
 } cli_common;

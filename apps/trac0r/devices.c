@@ -39,7 +39,7 @@ tr_render_config cli_render_config(const cli_common *c) {
     cfg.seed = c->seed;
     cfg.threads = c->threads;
     cfg.integrator = c->integrator;
-    cfg.sampler = c->sampler;
+    cfg.sampler = c->sampler >= 0 ? c->sampler : TR_SAMPLER_SOBOL;
     cfg.roulette_start = c->roulette_start;
     return cfg;
 }

@@ -278,10 +278,12 @@ static void *render_main(void *arg) {
         const uint32_t nspp = rmoving ? r->motion_spp : 1u;
         /* A moving or animated frame is reconstructed from few samples: pt's roulette
          * starts early there, which adds noise the filter hides and saves a fifth of the
-         * frame (docs/realtime.md). At rest the image converges with the config's (by
-         * default the offline one), so F12 equals `trac0r render`. */
+         * frame, and its numbers are independent, which the reconstruction cannot tell
+         * from Sobol points and cost less (docs/realtime.md). At rest the image converges
+         * with the config's (by default the offline ones), so F12 equals `trac0r render`. */
         if (rmoving || r->animate) {
             cfg.roulette_start = r->motion_roulette;
+            cfg.sampler = r->motion_sampler;
         }
         uint32_t sample = spp;
         if (r->animate) {
@@ -358,14 +360,15 @@ static void *render_main(void *arg) {
 }
 
 int view_renderer_start(view_renderer *r, tr_scene *scene, int animate, tr_device *dev,
-                        const tr_render_config *cfg, const tr_camera *cam, int stride,
-                        float exposure, int curve, uint32_t max_spp, tr_error *err) {
+                        const tr_render_config *cfg, int motion_sampler, const tr_camera *cam,
+                        int stride, float exposure, int curve, uint32_t max_spp, tr_error *err) {
     memset(r, 0, sizeof *r);
     r->scene = scene;
     r->animate = animate;
     r->dev = dev;
     r->cfg = *cfg;
     r->motion_roulette = cfg->roulette_start ? cfg->roulette_start : TR_ROULETTE_START_REALTIME;
+    r->motion_sampler = motion_sampler;
     r->max_spp = max_spp;
     r->cam = *cam;
     r->stride = stride;

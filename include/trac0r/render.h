@@ -33,6 +33,12 @@
 #define TR_SAMPLER_SOBOL 0
 #define TR_SAMPLER_RANDOM 1
 #define TR_SAMPLER_ZSOBOL 2
+/* The sampler of real-time frames (view's moving frames, bench realtime's frames):
+ * independent numbers. Reprojection mixes the histories of four neighbouring pixels, whose
+ * sequences are scrambled apart, so no sampler's stratification survives into the
+ * reconstructed frame (docs/benchmarks.md); random costs about a tenth fewer instructions
+ * than sobol (docs/realtime.md). */
+#define TR_SAMPLER_REALTIME TR_SAMPLER_RANDOM
 
 /* What to render and, for the CPU, how. */
 typedef struct tr_render_config {
