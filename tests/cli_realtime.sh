@@ -108,6 +108,37 @@ fs_sobol=$(refs 4 --sampler sobol)
     2>/dev/null || fail "bench realtime --sampler zsobol --reference-sampler random"
 grep -q "frames zsobol, references random" rs5.txt || fail "bench realtime: samplers not named"
 
+# The reconstruction's settings: out-of-range values are refused; --max-history 1 leaves
+# no history, so accumulate is the raw frame to the digit; SVGF's settings change SVGF and
+# not the bilateral filter; a new frame's weight of 0.5 instead of 1/3 and 1/4 changes
+# frames 2 and 3 of accumulate; the header names the settings.
+expect_usage_error "--svgf-iterations" bench realtime --svgf-iterations 0
+expect_usage_error "--svgf-iterations" bench realtime --svgf-iterations 9
+expect_usage_error "--alpha-min" bench realtime --alpha-min 0
+expect_usage_error "--max-history" bench realtime --max-history 0.5
+expect_usage_error "--svgf-sigma-l" bench realtime --svgf-sigma-l x
+expect_usage_error "--taa" bench realtime --taa 1.5
+rp() {
+    n=$1
+    shift
+    "$BIN" bench realtime "$CLASSIC" --width 48 --height 36 --frames 4 --reference-spp 8 \
+        --threads 1 --methods off,accumulate,bilateral,svgf --out "rp$n" "$@" >"rp$n.txt" \
+        2>/dev/null || fail "bench realtime $*"
+}
+col() { awk -F, -v m="$2" '$1 == m { printf "%s ", $7 }' "rp$1.csv"; }
+rp 0
+rp 1 --max-history 1
+rp 2 --svgf-iterations 1 --svgf-sigma-l 4 --taa 0.5
+rp 3 --alpha-min 0.5
+[ "$(col 1 off)" = "$(col 1 accumulate)" ] ||
+    fail "--max-history 1: accumulate '$(col 1 accumulate)' is not the raw '$(col 1 off)'"
+[ "$(col 0 off)" != "$(col 0 accumulate)" ] || fail "accumulate is the raw frame by default"
+[ "$(col 0 bilateral)" = "$(col 2 bilateral)" ] || fail "SVGF's settings changed bilateral"
+[ "$(col 0 svgf)" != "$(col 2 svgf)" ] || fail "SVGF's settings changed nothing"
+[ "$(col 0 accumulate)" != "$(col 3 accumulate)" ] || fail "--alpha-min 0.5 changed nothing"
+grep -q "svgf-iterations 3, svgf-sigma-l 8, taa 0," rp0.txt || fail "defaults not named"
+grep -q "svgf-iterations 1, svgf-sigma-l 4, taa 0.5," rp2.txt || fail "settings not named"
+
 # bias D: the bias PSNR printed for --max-depth D against depth 64.
 bias() {
     "$BIN" bench realtime "$CLASSIC" --width 48 --height 36 --frames 2 --reference-spp 64 \

@@ -63,6 +63,15 @@ static void realtime_help(void) {
            "                       frames'). The two-halves estimate of a reference's own\n"
            "                       error holds for independent samples: compare samplers\n"
            "                       against random references\n"
+           "  --alpha-min A        the temporal average's least weight of a new frame,\n"
+           "                       0.01..1 (default 0.1)\n"
+           "  --max-history L      frames of history at most, 1..1024 (default 64; 1: no\n"
+           "                       temporal accumulation)\n"
+           "  --svgf-iterations N  SVGF's a-trous steps, 1..8 (default 3)\n"
+           "  --svgf-sigma-l S     SVGF's luminance weight, 0.1..1000 (default 8)\n"
+           "  --taa A              SVGF's temporal antialiasing, the new frame's weight,\n"
+           "                       0..1 (default 0: off)\n"
+           "  --svgf-split         SVGF filters direct and indirect light apart\n"
            "  --out PREFIX         output file prefix (default realtime)\n"
            "  -h, --help           show this help\n");
 }
@@ -209,6 +218,8 @@ int bench_realtime(int argc, char **argv) {
     c.height = 240;
     uint32_t frames = 32, spp = 1, ref_spp = 256, cut = 0, bias_depth = 0;
     int on[TR_RECON_COUNT] = {1, 1, 1, 1, 1};
+    /* The reconstruction's settings: the library's defaults unless an option sets one. */
+    tr_recon_params params = tr_recon_params_default();
     int ref_sampler = -1; /* TR_SAMPLER_*, -1: sobol, whatever the frames' */
     const char *prefix = "realtime";
     int size_given = 0;
@@ -246,6 +257,19 @@ int bench_realtime(int argc, char **argv) {
                                      a.value);
                 }
             }
+        } else if (cli_is(&a, "--alpha-min")) {
+            rc = cli_parse_float(&a, 0.01f, 1.0f, &params.alpha_min);
+        } else if (cli_is(&a, "--max-history")) {
+            rc = cli_parse_float(&a, 1.0f, 1024.0f, &params.max_len);
+        } else if (cli_is(&a, "--svgf-iterations")) {
+            rc = cli_parse_int(&a, 1, 8, &params.svgf_iterations);
+        } else if (cli_is(&a, "--svgf-sigma-l")) {
+            rc = cli_parse_float(&a, 0.1f, 1000.0f, &params.svgf_sigma_l);
+        } else if (cli_is(&a, "--taa")) {
+            rc = cli_parse_float(&a, 0.0f, 1.0f, &params.svgf_taa_alpha);
+        } else if (cli_is(&a, "--svgf-split")) {
+            params.svgf_split = 1;
+            rc = CLI_OK;
         } else if (cli_is(&a, "--cut")) {
             rc = cli_parse_u32(&a, 1, 100000, &cut);
         } else if (cli_is(&a, "--methods")) {
@@ -322,7 +346,6 @@ int bench_realtime(int argc, char **argv) {
     cli_backend be = {0};
     FILE *csv = NULL;
     int ok = ref && half && ref_prev && out && prev && st && (bias_ref || !bias_depth);
-    const tr_recon_params params = tr_recon_params_default();
     /* The direct pass only where SVGF filters direct and indirect light apart (bdpt has
      * none). */
     const uint32_t frame_passes =
@@ -391,6 +414,11 @@ int bench_realtime(int argc, char **argv) {
         }
         printf("samplers: frames %s, references %s\n", sampler_name(cfg.sampler),
                sampler_name(rcfg.sampler));
+        printf("reconstruction: alpha-min %g, max-history %g, svgf-iterations %d, svgf-sigma-l "
+               "%g, taa %g, svgf-split %s\n",
+               (double)params.alpha_min, (double)params.max_len, params.svgf_iterations,
+               (double)params.svgf_sigma_l, (double)params.svgf_taa_alpha,
+               params.svgf_split ? "on" : "off");
     }
     const double t_start = tr_time_now();
     for (uint32_t f = 0; rc == CLI_OK && f < frames; ++f) {
