@@ -28,6 +28,10 @@ expect_usage_error "missing-scene.json" view missing-scene.json
 expect_usage_error "--frames: needs --screenshot" view --frames 3
 expect_usage_error "--stride: expected 1, 2 or 4, got '3'" view --stride 3
 expect_usage_error "--recon: expected off, accumulate" view --recon blur
+# The reconstruction's settings, parsed as bench realtime parses them.
+expect_usage_error "--svgf-iterations" view --svgf-iterations 9
+expect_usage_error "--max-history" view --max-history 0
+expect_usage_error "--taa" view --taa -0.5
 expect_usage_error "--target-fps: expected" view --target-fps 0
 expect_usage_error "--benchmark: expected an integer in 0..9, got '10'" view --benchmark 10
 expect_usage_error "--screenshot: 'x.jpg' has an unknown extension" view --screenshot x.jpg
@@ -40,6 +44,7 @@ grep -q "DISPLAY" err.txt || fail "view without DISPLAY: message lacks DISPLAY: 
 [ "$(wc -l <err.txt)" -eq 1 ] || fail "view without DISPLAY: not one line: $(cat err.txt)"
 "$BIN" view --help >out.txt || fail "view --help failed"
 grep -q "F12" out.txt || fail "view --help does not list F12"
+grep -q -- "--svgf-iterations" out.txt || fail "view --help does not list --svgf-iterations"
 
 # --- headless: equals trac0r render, without any display ---------------------------
 for args in "--width 40 --height 30" "--width 33 --height 21 --seed 5 --max-depth 3"; do

@@ -63,17 +63,11 @@ static void realtime_help(void) {
            "                       frames'). The two-halves estimate of a reference's own\n"
            "                       error holds for independent samples: compare samplers\n"
            "                       against random references\n"
-           "  --alpha-min A        the temporal average's least weight of a new frame,\n"
-           "                       0.01..1 (default 0.1)\n"
-           "  --max-history L      frames of history at most, 1..1024 (default 64; 1: no\n"
-           "                       temporal accumulation)\n"
-           "  --svgf-iterations N  SVGF's a-trous steps, 1..8 (default 3)\n"
-           "  --svgf-sigma-l S     SVGF's luminance weight, 0.1..1000 (default 8)\n"
-           "  --taa A              SVGF's temporal antialiasing, the new frame's weight,\n"
-           "                       0..1 (default 0: off)\n"
-           "  --svgf-split         SVGF filters direct and indirect light apart\n"
            "  --out PREFIX         output file prefix (default realtime)\n"
-           "  -h, --help           show this help\n");
+           "  -h, --help           show this help\n"
+           "\n"
+           "The reconstruction's settings:\n");
+    fputs(cli_recon_help, stdout);
 }
 
 static int parse_methods(cli_args *a, int on[TR_RECON_COUNT]) {
@@ -257,19 +251,8 @@ int bench_realtime(int argc, char **argv) {
                                      a.value);
                 }
             }
-        } else if (cli_is(&a, "--alpha-min")) {
-            rc = cli_parse_float(&a, 0.01f, 1.0f, &params.alpha_min);
-        } else if (cli_is(&a, "--max-history")) {
-            rc = cli_parse_float(&a, 1.0f, 1024.0f, &params.max_len);
-        } else if (cli_is(&a, "--svgf-iterations")) {
-            rc = cli_parse_int(&a, 1, 8, &params.svgf_iterations);
-        } else if (cli_is(&a, "--svgf-sigma-l")) {
-            rc = cli_parse_float(&a, 0.1f, 1000.0f, &params.svgf_sigma_l);
-        } else if (cli_is(&a, "--taa")) {
-            rc = cli_parse_float(&a, 0.0f, 1.0f, &params.svgf_taa_alpha);
-        } else if (cli_is(&a, "--svgf-split")) {
-            params.svgf_split = 1;
-            rc = CLI_OK;
+        } else if ((rc = cli_recon_option(&a, &params)) != -1) {
+            /* handled: rc is CLI_OK or CLI_USAGE */
         } else if (cli_is(&a, "--cut")) {
             rc = cli_parse_u32(&a, 1, 100000, &cut);
         } else if (cli_is(&a, "--methods")) {

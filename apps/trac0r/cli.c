@@ -377,6 +377,40 @@ int cli_common_option(cli_args *a, cli_common *c) {
     return -1;
 }
 
+const char cli_recon_help[] =
+    "  --alpha-min A        the temporal average's least weight of a new frame,\n"
+    "                       0.01..1 (default 0.1)\n"
+    "  --max-history L      frames of history at most, 1..1024 (default 64; 1: no\n"
+    "                       temporal accumulation)\n"
+    "  --svgf-iterations N  SVGF's a-trous steps, 1..8 (default 3)\n"
+    "  --svgf-sigma-l S     SVGF's luminance weight, 0.1..1000 (default 8)\n"
+    "  --taa A              SVGF's temporal antialiasing, the new frame's weight,\n"
+    "                       0..1 (default 0: off)\n"
+    "  --svgf-split         SVGF filters direct and indirect light apart (CPU only)\n";
+
+int cli_recon_option(cli_args *a, tr_recon_params *p) {
+    if (cli_is(a, "--alpha-min")) {
+        return cli_parse_float(a, 0.01f, 1.0f, &p->alpha_min);
+    }
+    if (cli_is(a, "--max-history")) {
+        return cli_parse_float(a, 1.0f, 1024.0f, &p->max_len);
+    }
+    if (cli_is(a, "--svgf-iterations")) {
+        return cli_parse_int(a, 1, 8, &p->svgf_iterations);
+    }
+    if (cli_is(a, "--svgf-sigma-l")) {
+        return cli_parse_float(a, 0.1f, 1000.0f, &p->svgf_sigma_l);
+    }
+    if (cli_is(a, "--taa")) {
+        return cli_parse_float(a, 0.0f, 1.0f, &p->svgf_taa_alpha);
+    }
+    if (cli_is(a, "--svgf-split")) {
+        p->svgf_split = 1;
+        return CLI_OK;
+    }
+    return -1;
+}
+
 static double animate_offset(double width, uint32_t frame) {
     const double two_pi = 6.283185307179586;
     return 0.25 * width * sin(two_pi * (double)(frame % 60u) / 60.0);

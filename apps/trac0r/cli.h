@@ -81,6 +81,12 @@ int cli_parse_float(cli_args *a, float lo, float hi, float *out);
  * and -1 if the option is not a common one. */
 int cli_common_option(cli_args *a, cli_common *c);
 
+/* The reconstruction's settings (tr_recon_params) that bench realtime and view take;
+ * cli_recon_help lists them for --help. Returns CLI_OK if handled, CLI_USAGE on a bad
+ * value, and -1 if the option is not one of them. */
+extern const char cli_recon_help[];
+int cli_recon_option(cli_args *a, tr_recon_params *p);
+
 /* Builds the scene named by c->scene for c->width x c->height into `scene` (a handle
  * from tr_scene_create; NULL is reported as out of memory) and commits it with
  * c->accel. On failure the scene is left empty: the caller still destroys it. */

@@ -66,9 +66,12 @@ static void view_help(void) {
            "                       pixels, overlay included, to FILE as a binary PPM\n"
            "  -h, --help           show this help\n"
            "\n"
+           "The reconstruction's settings (as for bench realtime):\n"
+           "%s"
+           "\n"
            "Interactive mode needs an X11 display (DISPLAY). Exit status: 0 on success, 2 on\n"
            "a bad command line or no display, 1 when rendering or writing fails.\n",
-           cli_common_help(), VIEW_DEFAULT_FRAMES);
+           cli_common_help(), VIEW_DEFAULT_FRAMES, cli_recon_help);
 }
 
 /* Renders `frames` frames of the scene's own camera, as `trac0r render` does; returns
@@ -141,6 +144,7 @@ int cmd_view(int argc, char **argv) {
     o.benchmark = -1;
     o.stride = 1;
     o.target_fps = 60.0f;
+    o.recon_params = tr_recon_params_default();
     o.shot_dir = ".";
     int frames_given = 0;
     char bench_scene[64];
@@ -156,6 +160,8 @@ int cmd_view(int argc, char **argv) {
         if (cli_is(&a, "-h") || cli_is(&a, "--help")) {
             view_help();
             return CLI_OK;
+        } else if ((rc = cli_recon_option(&a, &o.recon_params)) != -1) {
+            /* handled: rc is CLI_OK or CLI_USAGE */
         } else if (cli_is(&a, "--frames")) {
             rc = cli_parse_u32(&a, 1, 1000000, &o.frames);
             frames_given = 1;

@@ -14,16 +14,17 @@ typedef struct view_options {
     int benchmark;          /* complexity level, -1: none */
     int stride;             /* initial preview stride: 1, 2 or 4 */
     float exposure;
-    float target_fps;       /* --target-fps: the frame budget while moving */
-    int recon;              /* --recon: tr_recon_method shown (M cycles) */
-    int curve;              /* --tonemap: tr_tonemap_curve_kind */
-    uint32_t max_spp;       /* stop accumulating after this many (0: never) */
-    int animate;            /* --animate: the scene's last shape moves every frame */
-    const char *font;       /* --font, or NULL for fontconfig */
-    const char *state_file; /* rewritten with the viewer's state after changes */
-    const char *dump_file;  /* SIGUSR1 writes the window's pixels here (PPM) */
-    const char *shot_dir;   /* where F12 writes (default ".") */
-    char font_path[4096];   /* the font found for the debug view */
+    float target_fps;             /* --target-fps: the frame budget while moving */
+    int recon;                    /* --recon: tr_recon_method shown (M cycles) */
+    tr_recon_params recon_params; /* its settings (--svgf-iterations, ...) */
+    int curve;                    /* --tonemap: tr_tonemap_curve_kind */
+    uint32_t max_spp;             /* stop accumulating after this many (0: never) */
+    int animate;                  /* --animate: the scene's last shape moves every frame */
+    const char *font;             /* --font, or NULL for fontconfig */
+    const char *state_file;       /* rewritten with the viewer's state after changes */
+    const char *dump_file;        /* SIGUSR1 writes the window's pixels here (PPM) */
+    const char *shot_dir;         /* where F12 writes (default ".") */
+    char font_path[4096];         /* the font found for the debug view */
 } view_options;
 
 /* The interactive window (view_window.c), rendering on `be` (the CPU or an OpenCL device

@@ -121,7 +121,7 @@ static const tr_vec3 *animate_motion(view_renderer *r, uint32_t *ids) {
 static int reconstruct(view_renderer *r, const tr_camera *cam, int method, int threads,
                        tr_error *err) {
     const uint32_t w = r->film.width, h = r->film.height;
-    const tr_recon_params p = tr_recon_params_default();
+    const tr_recon_params p = r->params;
     uint32_t ids;
     const tr_vec3 *motion = animate_motion(r, &ids);
     if (strcmp(tr_device_kind(r->dev), "opencl") == 0) {
@@ -251,10 +251,10 @@ static void *render_main(void *arg) {
                 (void)tr_camera_resize(&rcam, w ? w : 1, h ? h : 1, &err);
             }
             /* The direct pass where SVGF filters direct and indirect light apart (not bdpt). */
-            const uint32_t direct = tr_recon_params_default().svgf_split &&
-                                            !tr_integrator_is_bidirectional(r->cfg.integrator)
-                                        ? TR_PASS_DIRECT
-                                        : 0u;
+            const uint32_t direct =
+                r->params.svgf_split && !tr_integrator_is_bidirectional(r->cfg.integrator)
+                    ? TR_PASS_DIRECT
+                    : 0u;
             if (resize_buffers(r, rcam.screen_width, rcam.screen_height,
                                method != TR_RECON_OFF ? TR_PASS_ALL | direct : 0u, &err) != TR_OK ||
                 tr_device_clear(r->dev, &err) != TR_OK) {
@@ -360,8 +360,9 @@ static void *render_main(void *arg) {
 }
 
 int view_renderer_start(view_renderer *r, tr_scene *scene, int animate, tr_device *dev,
-                        const tr_render_config *cfg, int motion_sampler, const tr_camera *cam,
-                        int stride, float exposure, int curve, uint32_t max_spp, tr_error *err) {
+                        const tr_render_config *cfg, int motion_sampler,
+                        const tr_recon_params *params, const tr_camera *cam, int stride,
+                        float exposure, int curve, uint32_t max_spp, tr_error *err) {
     memset(r, 0, sizeof *r);
     r->scene = scene;
     r->animate = animate;
@@ -369,6 +370,7 @@ int view_renderer_start(view_renderer *r, tr_scene *scene, int animate, tr_devic
     r->cfg = *cfg;
     r->motion_roulette = cfg->roulette_start ? cfg->roulette_start : TR_ROULETTE_START_REALTIME;
     r->motion_sampler = motion_sampler;
+    r->params = *params;
     r->max_spp = max_spp;
     r->cam = *cam;
     r->stride = stride;

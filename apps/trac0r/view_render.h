@@ -78,29 +78,32 @@ typedef struct view_renderer {
     tr_film film;
     int film_stale; /* the device's film was not read into film (reconstructed there) */
     uint32_t *back;
-    atomic_int refining;   /* the frame in flight refines a view on screen: cancellable */
-    float motion_scale;    /* the resolution divisor the budget asks for while moving */
-    uint32_t motion_spp;   /* samples per frame while moving */
-    uint32_t motion_frame; /* counts moving frames: their sample numbers, so noise changes */
-    int motion_roulette;   /* pt's roulette start while moving or animated (the config's if
-                              it names one, else TR_ROULETTE_START_REALTIME) */
-    int motion_sampler;    /* pt's sampler while moving or animated (TR_SAMPLER_*) */
-    tr_gbuffer gb;         /* the film's means and passes, for the reconstruction */
-    tr_recon rec;          /* the reconstruction's history */
-    tr_recon_device *rdev; /* on an OpenCL device: the reconstruction there instead */
-    tr_vec3 *motion;       /* --animate: each primitive's motion since the last frame */
-    uint32_t motion_ids;   /* its entries (triangles + 1) */
-    tr_film disp;          /* the reconstructed frame as a film of one sample per pixel */
+    atomic_int refining;    /* the frame in flight refines a view on screen: cancellable */
+    float motion_scale;     /* the resolution divisor the budget asks for while moving */
+    uint32_t motion_spp;    /* samples per frame while moving */
+    uint32_t motion_frame;  /* counts moving frames: their sample numbers, so noise changes */
+    int motion_roulette;    /* pt's roulette start while moving or animated (the config's if
+                               it names one, else TR_ROULETTE_START_REALTIME) */
+    int motion_sampler;     /* pt's sampler while moving or animated (TR_SAMPLER_*) */
+    tr_recon_params params; /* the reconstruction's settings */
+    tr_gbuffer gb;          /* the film's means and passes, for the reconstruction */
+    tr_recon rec;           /* the reconstruction's history */
+    tr_recon_device *rdev;  /* on an OpenCL device: the reconstruction there instead */
+    tr_vec3 *motion;        /* --animate: each primitive's motion since the last frame */
+    uint32_t motion_ids;    /* its entries (triangles + 1) */
+    tr_film disp;           /* the reconstructed frame as a film of one sample per pixel */
 } view_renderer;
 
 /* Starts the thread rendering `cam` (whose size sets the film's) with cfg's settings, on
  * the CPU (cl NULL) or on the OpenCL context cl, which holds `scene` already; moving or
- * animated frames take `motion_sampler` (TR_SAMPLER_*) instead of cfg's. With
+ * animated frames take `motion_sampler` (TR_SAMPLER_*) instead of cfg's, and the
+ * reconstruction `params`. With
  * `animate` the thread moves the scene's last shape before every frame (and uploads the
  * scene again to a device); readers of the scene on other threads hold mu. */
 int view_renderer_start(view_renderer *r, tr_scene *scene, int animate, tr_device *dev,
-                        const tr_render_config *cfg, int motion_sampler, const tr_camera *cam,
-                        int stride, float exposure, int curve, uint32_t max_spp, tr_error *err);
+                        const tr_render_config *cfg, int motion_sampler,
+                        const tr_recon_params *params, const tr_camera *cam, int stride,
+                        float exposure, int curve, uint32_t max_spp, tr_error *err);
 /* Asks for another view (camera, size, stride or moving): restarts accumulation if it
  * differs. `moving` says that the camera is changing: frames then hold the budget. */
 void view_renderer_set_view(view_renderer *r, const tr_camera *cam, int stride, int moving);

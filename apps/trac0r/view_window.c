@@ -254,8 +254,8 @@ int view_run_window(const cli_args *a, const view_options *o, tr_scene *scene, c
     tr_render_config cfg = cli_render_config(&o->c);
     /* Moving frames: independent numbers unless --sampler names a sampler. */
     const int motion_sampler = o->c.sampler >= 0 ? o->c.sampler : TR_SAMPLER_REALTIME;
-    if (view_renderer_start(&r, scene, o->animate, be->dev, &cfg, motion_sampler, &cam, st.stride,
-                            st.exposure, o->curve, o->max_spp, &err) != TR_OK) {
+    if (view_renderer_start(&r, scene, o->animate, be->dev, &cfg, motion_sampler, &o->recon_params,
+                            &cam, st.stride, st.exposure, o->curve, o->max_spp, &err) != TR_OK) {
         fprintf(stderr, "trac0r view: %s\n", err.msg);
         goto done;
     }
