@@ -139,6 +139,28 @@ rp 3 --alpha-min 0.5
 grep -q "svgf-iterations 3, svgf-sigma-l 8, taa 0," rp0.txt || fail "defaults not named"
 grep -q "svgf-iterations 1, svgf-sigma-l 4, taa 0.5," rp2.txt || fail "settings not named"
 
+# --animate: the thesis box's last shape (a sphere) moves before every frame but the
+# first, so frame 0 is the static run's to the digit and later frames differ; the moving
+# shape's pixels get their own PSNR per method, and SVGF's is above the raw frame's.
+THESIS=$SRC/scenes/cornell-thesis.json
+an() {
+    n=$1
+    shift
+    "$BIN" bench realtime "$THESIS" --width 64 --height 48 --frames 6 --reference-spp 8 \
+        --threads 1 --methods off,accumulate,svgf --out "an$n" "$@" >"an$n.txt" 2>/dev/null ||
+        fail "bench realtime $*"
+}
+an 0
+an 1 --animate
+f0() { awk -F, -v f="$2" '$1 == "svgf" && $2 == f { print $7 }' "an$1.csv"; }
+[ "$(f0 0 0)" = "$(f0 1 0)" ] || fail "--animate changed frame 0: $(f0 1 0) vs $(f0 0 0)"
+[ "$(f0 0 5)" != "$(f0 1 5)" ] || fail "--animate changed nothing by frame 5"
+mv_off=$(awk '/^moving shape/ { for (i = 1; i < NF; ++i) if ($i == "off") print $(i + 1) }' an1.txt)
+mv_svgf=$(awk '/^moving shape/ { for (i = 1; i < NF; ++i) if ($i == "svgf") print $(i + 1) }' an1.txt)
+awk -v a="$mv_off" -v b="$mv_svgf" 'BEGIN { exit !(a + 0 > 0 && b > a) }' ||
+    fail "--animate: moving shape PSNR raw '$mv_off', svgf '$mv_svgf'"
+grep -q "^moving shape" an0.txt && fail "a static run printed a moving shape's PSNR"
+
 # bias D: the bias PSNR printed for --max-depth D against depth 64.
 bias() {
     "$BIN" bench realtime "$CLASSIC" --width 48 --height 36 --frames 2 --reference-spp 64 \

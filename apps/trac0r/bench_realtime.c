@@ -16,6 +16,7 @@
 
 typedef struct rt_frame_stats {
     double render_ms, temporal_ms, spatial_ms, psnr, ssim, flicker;
+    double moving_psnr; /* --animate: over the pixels of moving primitives; NAN: none */
 } rt_frame_stats;
 
 static void realtime_help(void) {
@@ -48,6 +49,9 @@ static void realtime_help(void) {
            "  --spp S              samples per pixel per frame, 1..1024 (default 1)\n"
            "  --reference-spp R    samples of each frame's reference, 2..1000000 (default 256)\n"
            "  --cut K              jump to another view at frame K (default: no cut)\n"
+           "  --animate            the scene's last shape moves before every frame (as view\n"
+           "                       --animate), and the reconstruction is told how far each\n"
+           "                       primitive moved; references see the same scene\n"
            "  --bias-reference-depth D2   also render frame 0's reference at max depth D2\n"
            "                       (another seed) and print the PSNR of the frames' depth\n"
            "                       (--max-depth) against it: the depth limit's bias\n"
@@ -155,6 +159,28 @@ static double mse_of(const float *a, const float *b, size_t px) {
     return tr_image_compare(a, b, px).mse;
 }
 
+/* The pixels of a, b and c whose primitive (id pass) moved, gathered into ga, gb, gc;
+ * returns how many. */
+static size_t gather_moving(const float *a, const float *b, const float *c, const uint32_t *prim,
+                            const tr_vec3 *motion, uint32_t motion_n, size_t px, float *ga,
+                            float *gb, float *gc) {
+    size_t n = 0;
+    for (size_t i = 0; i < px; ++i) {
+        const uint32_t id = prim[i];
+        if (id == 0u || id >= motion_n ||
+            (motion[id].x == 0.0f && motion[id].y == 0.0f && motion[id].z == 0.0f)) {
+            continue;
+        }
+        for (int k = 0; k < 3; ++k) {
+            ga[3 * n + k] = a[3 * i + k];
+            gb[3 * n + k] = b[3 * i + k];
+            gc[3 * n + k] = c[3 * i + k];
+        }
+        ++n;
+    }
+    return n;
+}
+
 /* The mean of film f's samples, 3 floats per pixel, into out. */
 static void film_mean(const tr_film *f, float *out, size_t px) {
     for (size_t i = 0; i < px; ++i) {
@@ -215,6 +241,7 @@ int bench_realtime(int argc, char **argv) {
     /* The reconstruction's settings: the library's defaults unless an option sets one. */
     tr_recon_params params = tr_recon_params_default();
     int ref_sampler = -1; /* TR_SAMPLER_*, -1: sobol, whatever the frames' */
+    int animate = 0;      /* --animate: the scene's last shape moves every frame */
     const char *prefix = "realtime";
     int size_given = 0;
     while (cli_next(&a)) {
@@ -253,6 +280,9 @@ int bench_realtime(int argc, char **argv) {
             }
         } else if ((rc = cli_recon_option(&a, &params)) != -1) {
             /* handled: rc is CLI_OK or CLI_USAGE */
+        } else if (cli_is(&a, "--animate")) {
+            animate = 1;
+            rc = CLI_OK;
         } else if (cli_is(&a, "--cut")) {
             rc = cli_parse_u32(&a, 1, 100000, &cut);
         } else if (cli_is(&a, "--methods")) {
@@ -403,6 +433,22 @@ int bench_realtime(int argc, char **argv) {
                (double)params.svgf_sigma_l, (double)params.svgf_taa_alpha,
                params.svgf_split ? "on" : "off");
     }
+    /* --animate: how far each primitive (the id pass's numbering) moved since the previous
+     * frame, for the reconstruction's reprojection. */
+    const uint32_t motion_n = animate ? tr_scene_triangle_count(scene) + 1u : 0u;
+    tr_vec3 *motion = motion_n ? calloc(motion_n, sizeof *motion) : NULL;
+    if (rc == CLI_OK && animate && !motion) {
+        fprintf(stderr, "trac0r bench realtime: out of memory\n");
+        rc = CLI_FAILURE;
+    }
+    float *gm = animate ? malloc(9 * px * sizeof *gm) : NULL; /* gather_moving's */
+    if (rc == CLI_OK && animate && !gm) {
+        fprintf(stderr, "trac0r bench realtime: out of memory\n");
+        rc = CLI_FAILURE;
+    }
+    if (rc == CLI_OK && animate) {
+        printf("animated: the scene's last shape moves every frame\n");
+    }
     const double t_start = tr_time_now();
     for (uint32_t f = 0; rc == CLI_OK && f < frames; ++f) {
         tr_camera cam;
@@ -411,6 +457,22 @@ int bench_realtime(int argc, char **argv) {
             rc = CLI_FAILURE;
             break;
         }
+        int moved = 0;
+        if (animate) {
+            /* Outside the timed render: the scene's update is not the reconstruction's. */
+            if (cli_animate(scene, f, &err) != TR_OK ||
+                tr_scene_update(scene, NULL, &err) != TR_OK ||
+                tr_scene_take_motion(scene, motion, motion_n, &moved, &err) != TR_OK) {
+                fprintf(stderr, "trac0r bench realtime: --animate: frame %u: %s\n", f, err.msg);
+                rc = CLI_FAILURE;
+                break;
+            }
+            if ((rc = cli_backend_upload(&a, &be, scene)) != CLI_OK) {
+                break;
+            }
+        }
+        const tr_vec3 *fmotion = moved ? motion : NULL;
+        const uint32_t fmotion_n = moved ? motion_n : 0u;
         double ref_mse = 0.0;
         if (render_reference(&be, &cam, &rcfg, ref_spp, &rfilm, half, ref, &ref_mse, &err) !=
             TR_OK) {
@@ -449,9 +511,10 @@ int bench_realtime(int argc, char **argv) {
             if (!on[m]) {
                 continue;
             }
-            if ((rdev[m] ? tr_recon_device_frame(rdev[m], &cam, NULL, 0, m, &params, out, &err)
-                         : tr_recon_frame(&rec[m], &g, &cam, m, &params, threads, out, &err)) !=
-                TR_OK) {
+            if ((rdev[m] ? tr_recon_device_frame(rdev[m], &cam, fmotion, fmotion_n, m, &params, out,
+                                                 &err)
+                         : tr_recon_frame_moving(&rec[m], &g, &cam, fmotion, fmotion_n, m, &params,
+                                                 threads, out, &err)) != TR_OK) {
                 fprintf(stderr, "trac0r bench realtime: %s: %s\n", tr_recon_name(m), err.msg);
                 rc = CLI_FAILURE;
                 break;
@@ -468,6 +531,18 @@ int bench_realtime(int argc, char **argv) {
             s->ssim = tr_ssim(out, ref, c.width, c.height);
             float *pm = prev + (size_t)m * 3 * px;
             s->flicker = f > 0 ? flicker(out, pm, ref, ref_prev, px) : 0.0;
+            /* With a moving shape and the frame's id pass on the host: the error over the
+             * moving primitives' pixels, the references' own error there taken out. */
+            s->moving_psnr = NAN;
+            if (fmotion && host_recon) {
+                const size_t n = gather_moving(out, ref, half, g.prim, fmotion, fmotion_n, px, gm,
+                                               gm + 3 * px, gm + 6 * px);
+                if (n > 0) {
+                    const double mm =
+                        mse_of(gm, gm + 3 * px, n) - mse_of(gm + 6 * px, gm + 3 * px, n);
+                    s->moving_psnr = tr_psnr(mm > 1e-12 ? mm : 1e-12);
+                }
+            }
             memcpy(pm, out, 3 * px * sizeof *out);
         }
         memcpy(ref_prev, ref, 3 * px * sizeof *ref);
@@ -536,6 +611,30 @@ int bench_realtime(int argc, char **argv) {
                 printf("\n");
             }
         }
+        if (animate && host_recon) {
+            /* Ghosting of the moving shape: each method's PSNR over its pixels. */
+            printf("moving shape, PSNR over its pixels (mean over the frames it moved):");
+            for (int m = 0; m < nm; ++m) {
+                if (!on[m] || rdev[m]) {
+                    continue;
+                }
+                double sum = 0.0;
+                int n = 0;
+                for (uint32_t f = 0; f < frames; ++f) {
+                    const double v = st[(size_t)m * frames + f].moving_psnr;
+                    if (v == v) {
+                        sum += v;
+                        ++n;
+                    }
+                }
+                if (n > 0) {
+                    printf(" %s %.2f dB", tr_recon_name(m), sum / n);
+                } else {
+                    printf(" %s -", tr_recon_name(m));
+                }
+            }
+            printf("\n");
+        }
         if (bias_depth) {
             /* The depth limit's own error, which no reconstruction can take out: the
              * frames' converged image against the deeper one. A bias below a tenth of the
@@ -579,6 +678,8 @@ int bench_realtime(int argc, char **argv) {
     free(bias_ref);
     free(prev);
     free(st);
+    free(motion);
+    free(gm);
     tr_scene_destroy(scene);
     return rc;
 }
