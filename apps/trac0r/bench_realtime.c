@@ -151,34 +151,31 @@ static int render_into(cli_backend *be, const tr_camera *cam, const tr_render_co
     return TR_OK;
 }
 
-static const char *sampler_name(int s) {
-    return s == TR_SAMPLER_SOBOL ? "sobol" : s == TR_SAMPLER_RANDOM ? "random" : "zsobol";
-}
-
 static double mse_of(const float *a, const float *b, size_t px) {
     return tr_image_compare(a, b, px).mse;
 }
 
-/* The pixels of a, b and c whose primitive (id pass) moved, gathered into ga, gb, gc;
- * returns how many. */
-static size_t gather_moving(const float *a, const float *b, const float *c, const uint32_t *prim,
-                            const tr_vec3 *motion, uint32_t motion_n, size_t px, float *ga,
-                            float *gb, float *gc) {
+/* The indices of the pixels whose primitive (id pass) moved into idx; returns how many. */
+static size_t moving_pixels(const uint32_t *prim, const tr_vec3 *motion, uint32_t motion_n,
+                            size_t px, size_t *idx) {
     size_t n = 0;
     for (size_t i = 0; i < px; ++i) {
         const uint32_t id = prim[i];
-        if (id == 0u || id >= motion_n ||
-            (motion[id].x == 0.0f && motion[id].y == 0.0f && motion[id].z == 0.0f)) {
-            continue;
+        if (id != 0u && id < motion_n &&
+            (motion[id].x != 0.0f || motion[id].y != 0.0f || motion[id].z != 0.0f)) {
+            idx[n++] = i;
         }
-        for (int k = 0; k < 3; ++k) {
-            ga[3 * n + k] = a[3 * i + k];
-            gb[3 * n + k] = b[3 * i + k];
-            gc[3 * n + k] = c[3 * i + k];
-        }
-        ++n;
     }
     return n;
+}
+
+/* Pixels idx[0..n) of image a (3 floats each) gathered into out. */
+static void gather(const float *a, const size_t *idx, size_t n, float *out) {
+    for (size_t j = 0; j < n; ++j) {
+        for (int k = 0; k < 3; ++k) {
+            out[3 * j + k] = a[3 * idx[j] + k];
+        }
+    }
 }
 
 /* The mean of film f's samples, 3 floats per pixel, into out. */
@@ -265,19 +262,7 @@ int bench_realtime(int argc, char **argv) {
         } else if (cli_is(&a, "--bias-reference-depth")) {
             rc = cli_parse_u32(&a, 1, TR_MAX_DEPTH_LIMIT, &bias_depth);
         } else if (cli_is(&a, "--reference-sampler")) {
-            rc = cli_value(&a);
-            if (rc == CLI_OK) {
-                ref_sampler = strcmp(a.value, "sobol") == 0    ? TR_SAMPLER_SOBOL
-                              : strcmp(a.value, "random") == 0 ? TR_SAMPLER_RANDOM
-                              : strcmp(a.value, "zsobol") == 0 ? TR_SAMPLER_ZSOBOL
-                                                               : -1;
-                if (ref_sampler < 0) {
-                    return cli_error(&a,
-                                     "--reference-sampler: unknown sampler '%s' (available: "
-                                     "sobol, random, zsobol)",
-                                     a.value);
-                }
-            }
+            rc = cli_parse_sampler(&a, &ref_sampler);
         } else if ((rc = cli_recon_option(&a, &params)) != -1) {
             /* handled: rc is CLI_OK or CLI_USAGE */
         } else if (cli_is(&a, "--animate")) {
@@ -425,8 +410,8 @@ int bench_realtime(int argc, char **argv) {
         if (cut) {
             printf("camera cut at frame %u\n", cut);
         }
-        printf("samplers: frames %s, references %s\n", sampler_name(cfg.sampler),
-               sampler_name(rcfg.sampler));
+        printf("samplers: frames %s, references %s\n", cli_sampler_name(cfg.sampler),
+               cli_sampler_name(rcfg.sampler));
         printf("reconstruction: alpha-min %g, max-history %g, svgf-iterations %d, svgf-sigma-l "
                "%g, taa %g, svgf-split %s\n",
                (double)params.alpha_min, (double)params.max_len, params.svgf_iterations,
@@ -437,12 +422,11 @@ int bench_realtime(int argc, char **argv) {
      * frame, for the reconstruction's reprojection. */
     const uint32_t motion_n = animate ? tr_scene_triangle_count(scene) + 1u : 0u;
     tr_vec3 *motion = motion_n ? calloc(motion_n, sizeof *motion) : NULL;
-    if (rc == CLI_OK && animate && !motion) {
-        fprintf(stderr, "trac0r bench realtime: out of memory\n");
-        rc = CLI_FAILURE;
-    }
-    float *gm = animate ? malloc(9 * px * sizeof *gm) : NULL; /* gather_moving's */
-    if (rc == CLI_OK && animate && !gm) {
+    /* The moving pixels' indices and, gathered, a method's output, the reference and its
+     * half. */
+    size_t *mv_idx = animate ? malloc(px * sizeof *mv_idx) : NULL;
+    float *gm = animate ? malloc(9 * px * sizeof *gm) : NULL;
+    if (rc == CLI_OK && animate && (!motion || !mv_idx || !gm)) {
         fprintf(stderr, "trac0r bench realtime: out of memory\n");
         rc = CLI_FAILURE;
     }
@@ -507,6 +491,16 @@ int bench_realtime(int argc, char **argv) {
             rc = CLI_FAILURE;
             break;
         }
+        /* The moving shape's pixels (on the host, where the id pass is), with the
+         * references' own error over them: the same for every method. */
+        size_t n_mv = 0;
+        double own_mv = 0.0;
+        if (fmotion && host_recon) {
+            n_mv = moving_pixels(g.prim, fmotion, fmotion_n, px, mv_idx);
+            gather(ref, mv_idx, n_mv, gm + 3 * px);
+            gather(half, mv_idx, n_mv, gm + 6 * px);
+            own_mv = n_mv ? mse_of(gm + 6 * px, gm + 3 * px, n_mv) : 0.0;
+        }
         for (int m = 0; m < nm; ++m) {
             if (!on[m]) {
                 continue;
@@ -534,14 +528,10 @@ int bench_realtime(int argc, char **argv) {
             /* With a moving shape and the frame's id pass on the host: the error over the
              * moving primitives' pixels, the references' own error there taken out. */
             s->moving_psnr = NAN;
-            if (fmotion && host_recon) {
-                const size_t n = gather_moving(out, ref, half, g.prim, fmotion, fmotion_n, px, gm,
-                                               gm + 3 * px, gm + 6 * px);
-                if (n > 0) {
-                    const double mm =
-                        mse_of(gm, gm + 3 * px, n) - mse_of(gm + 6 * px, gm + 3 * px, n);
-                    s->moving_psnr = tr_psnr(mm > 1e-12 ? mm : 1e-12);
-                }
+            if (n_mv > 0) {
+                gather(out, mv_idx, n_mv, gm);
+                const double mm = mse_of(gm, gm + 3 * px, n_mv) - own_mv;
+                s->moving_psnr = tr_psnr(mm > 1e-12 ? mm : 1e-12);
             }
             memcpy(pm, out, 3 * px * sizeof *out);
         }
@@ -679,6 +669,7 @@ int bench_realtime(int argc, char **argv) {
     free(prev);
     free(st);
     free(motion);
+    free(mv_idx);
     free(gm);
     tr_scene_destroy(scene);
     return rc;

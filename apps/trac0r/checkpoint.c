@@ -65,9 +65,7 @@ int checkpoint_identity(checkpoint_id *id, const cli_common *c, const tr_scene *
     memset(id, 0, sizeof *id);
     /* The sampler and the light selection decide the samples too: a film resumed with
      * other ones would mix two sequences of points. */
-    const char *sampler = c->sampler == TR_SAMPLER_RANDOM   ? "random"
-                          : c->sampler == TR_SAMPLER_ZSOBOL ? "zsobol"
-                                                            : "sobol";
+    const char *sampler = cli_sampler_name(c->sampler);
     snprintf(id->desc, sizeof id->desc,
              "size=%ux%u seed=%llu max-depth=%d integrator=%s accel=%s stride=%d passes=0x%x "
              "sampler=%s light-sampling=%s",

@@ -252,6 +252,27 @@ int cli_parse_float(cli_args *a, float lo, float hi, float *out) {
     return CLI_OK;
 }
 
+const char *cli_sampler_name(int sampler) {
+    return sampler == TR_SAMPLER_RANDOM   ? "random"
+           : sampler == TR_SAMPLER_ZSOBOL ? "zsobol"
+                                          : "sobol";
+}
+
+int cli_parse_sampler(cli_args *a, int *out) {
+    if (cli_value(a) != CLI_OK) {
+        return CLI_USAGE;
+    }
+    static const int kinds[] = {TR_SAMPLER_SOBOL, TR_SAMPLER_RANDOM, TR_SAMPLER_ZSOBOL};
+    for (size_t k = 0; k < sizeof kinds / sizeof *kinds; ++k) {
+        if (strcmp(a->value, cli_sampler_name(kinds[k])) == 0) {
+            *out = kinds[k];
+            return CLI_OK;
+        }
+    }
+    return cli_error(a, "%s: unknown sampler '%s' (available: sobol, random, zsobol)", a->opt,
+                     a->value);
+}
+
 int cli_common_option(cli_args *a, cli_common *c) {
     if (cli_is(a, "--scene")) {
         if (cli_value(a) != CLI_OK) {
@@ -345,18 +366,7 @@ int cli_common_option(cli_args *a, cli_common *c) {
         return cli_parse_device(a, c);
     }
     if (cli_is(a, "--sampler")) {
-        if (cli_value(a) != CLI_OK) {
-            return CLI_USAGE;
-        }
-        if (strcmp(a->value, "sobol") == 0 || strcmp(a->value, "random") == 0 ||
-            strcmp(a->value, "zsobol") == 0) {
-            c->sampler = a->value[0] == 's'   ? TR_SAMPLER_SOBOL
-                         : a->value[0] == 'r' ? TR_SAMPLER_RANDOM
-                                              : TR_SAMPLER_ZSOBOL;
-            return CLI_OK;
-        }
-        return cli_error(a, "--sampler: unknown sampler '%s' (available: sobol, random, zsobol)",
-                         a->value);
+        return cli_parse_sampler(a, &c->sampler);
     }
     if (cli_is(a, "--roulette-start")) {
         return cli_parse_int(a, 1, TR_MAX_DEPTH_LIMIT, &c->roulette_start);

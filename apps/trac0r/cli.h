@@ -81,6 +81,11 @@ int cli_parse_float(cli_args *a, float lo, float hi, float *out);
  * and -1 if the option is not a common one. */
 int cli_common_option(cli_args *a, cli_common *c);
 
+/* A TR_SAMPLER_* by its name (--sampler, --reference-sampler) into *out, and the name of
+ * one (anything but random and zsobol reads as the default, sobol). */
+int cli_parse_sampler(cli_args *a, int *out);
+const char *cli_sampler_name(int sampler);
+
 /* The reconstruction's settings (tr_recon_params) that bench realtime and view take;
  * cli_recon_help lists them for --help. Returns CLI_OK if handled, CLI_USAGE on a bad
  * value, and -1 if the option is not one of them. */
