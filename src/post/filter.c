@@ -24,6 +24,8 @@ static int nthreads(int threads) {
 
 /* Pixels per chunk of a row: the accumulators live on the stack, in L1. */
 #define TR_POST_CHUNK 256
+/* Pixels per block of the register-blocked loops: a 512-bit vector of floats. */
+#define TR_POST_BLOCK 16
 
 /* The planes of the scratch block (each w * h floats). */
 enum {
@@ -497,11 +499,14 @@ static void svgf_kl(const post_ws *ws, const float *var, float sigma_l, int thre
 }
 
 /* One SVGF iteration (tr_post_svgf_pixel) of planes src (luminance lum, variance var)
- * into dst, dlum, dvar. */
-TR_POST_CLONES static void svgf_rows(const post_ws *ws, const float *depth,
-                                     const float *const src[3], const float *lum, const float *var,
-                                     float *const dst[3], float *dlum, float *dvar, int step,
-                                     int y0, int y1) {
+ * into dst, dlum, dvar, for the pixels x0 .. x0 + n - 1 of row y. Every tap's pixels
+ * lie in the image when `inner` (then n is TR_POST_BLOCK, a constant the compiler
+ * sees); otherwise each tap's run is clipped to the image. Inlined into svgf_rows
+ * twice: the inner copy keeps its accumulators in vector registers. */
+static inline __attribute__((always_inline)) void
+svgf_run(const post_ws *ws, const float *restrict depth, const float *const src[3],
+         const float *restrict lum, const float *restrict var, float *const dst[3],
+         float *restrict dlum, float *restrict dvar, int step, int y, int x0, int n, int inner) {
     const int w = ws->w, h = ws->h;
     const float *restrict r = src[0], *restrict gg = src[1], *restrict b = src[2];
     const float *restrict nx = ws->p[WS_N], *restrict ny = ws->p[WS_N + 1],
@@ -509,44 +514,65 @@ TR_POST_CLONES static void svgf_rows(const post_ws *ws, const float *depth,
     const float *restrict kz = ws->p[WS_KZ], *restrict kl = ws->p[WS_KL],
                           *restrict kn = ws->p[WS_KN];
     const float *restrict l = lum, *restrict v = var, *restrict z = depth;
-    for (int y = y0; y < y1; ++y) {
-        for (int x0 = 0; x0 < w; x0 += TR_POST_CHUNK) {
-            const int x1 = imin(w, x0 + TR_POST_CHUNK);
-            float ar[TR_POST_CHUNK] = {0}, ag[TR_POST_CHUNK] = {0}, ab[TR_POST_CHUNK] = {0},
-                  aw[TR_POST_CHUNK] = {0}, av[TR_POST_CHUNK] = {0};
-            for (int ky = -2; ky <= 2; ++ky) {
-                const int ty = y + ky * step;
-                if (ty < 0 || ty >= h) {
-                    continue;
-                }
-                for (int kx = -2; kx <= 2; ++kx) {
-                    const int off = kx * step;
-                    const int xa = imax(x0, -off), xb = imin(x1, w - off);
-                    const float bk = tr_post_b3(kx) * tr_post_b3(ky);
-                    const float id = tr_post_svgf_idist(kx, ky, step);
-                    const int row = ty * w + off, crow = y * w;
-                    for (int x = xa; x < xb; ++x) {
-                        const int i = row + x, c = crow + x, a = x - x0;
-                        const float nd = nx[c] * nx[i] + ny[c] * ny[i] + nz[c] * nz[i];
-                        const float e = tr_post_svgf_exponent(z[i] - z[c], kz[c], id, l[i] - l[c],
-                                                              kl[c], kn[c], nd);
-                        const float wt = bk * tr_post_exp_neg(e);
-                        ar[a] += wt * r[i];
-                        ag[a] += wt * gg[i];
-                        ab[a] += wt * b[i];
-                        av[a] += wt * wt * v[i];
-                        aw[a] += wt;
-                    }
-                }
+    float ar[TR_POST_CHUNK], ag[TR_POST_CHUNK], ab[TR_POST_CHUNK], aw[TR_POST_CHUNK],
+        av[TR_POST_CHUNK];
+    for (int a = 0; a < n; ++a) {
+        ar[a] = ag[a] = ab[a] = aw[a] = av[a] = 0.0f;
+    }
+    for (int ky = -2; ky <= 2; ++ky) {
+        const int ty = y + ky * step;
+        if (ty < 0 || ty >= h) {
+            continue;
+        }
+        for (int kx = -2; kx <= 2; ++kx) {
+            const int off = kx * step;
+            const int xa = inner ? 0 : imax(0, -off - x0), xb = inner ? n : imin(n, w - off - x0);
+            const float bk = tr_post_b3(kx) * tr_post_b3(ky);
+            const float id = tr_post_svgf_idist(kx, ky, step);
+            const int row = ty * w + off + x0, crow = y * w + x0;
+            for (int a = xa; a < xb; ++a) {
+                const int i = row + a, c = crow + a;
+                const float nd = nx[c] * nx[i] + ny[c] * ny[i] + nz[c] * nz[i];
+                const float e =
+                    tr_post_svgf_exponent(z[i] - z[c], kz[c], id, l[i] - l[c], kl[c], kn[c], nd);
+                const float wt = bk * tr_post_exp_neg(e);
+                ar[a] += wt * r[i];
+                ag[a] += wt * gg[i];
+                ab[a] += wt * b[i];
+                av[a] += wt * wt * v[i];
+                aw[a] += wt;
             }
-            for (int x = x0; x < x1; ++x) {
-                const int c = y * w + x, a = x - x0;
-                const float ro = ar[a] / aw[a], go = ag[a] / aw[a], bo = ab[a] / aw[a];
-                dst[0][c] = ro;
-                dst[1][c] = go;
-                dst[2][c] = bo;
-                dlum[c] = tr_post_luminance(ro, go, bo);
-                dvar[c] = av[a] / (aw[a] * aw[a]);
+        }
+    }
+    for (int a = 0; a < n; ++a) {
+        const int c = y * w + x0 + a;
+        const float ro = ar[a] / aw[a], go = ag[a] / aw[a], bo = ab[a] / aw[a];
+        dst[0][c] = ro;
+        dst[1][c] = go;
+        dst[2][c] = bo;
+        dlum[c] = tr_post_luminance(ro, go, bo);
+        dvar[c] = av[a] / (aw[a] * aw[a]);
+    }
+}
+
+/* Rows y0 .. y1 - 1 of one SVGF iteration: blocks whose taps all lie in the image take
+ * the fixed-width path, the rest (near the left and right edges) the clipped one. */
+TR_POST_CLONES static void svgf_rows(const post_ws *ws, const float *depth,
+                                     const float *const src[3], const float *lum, const float *var,
+                                     float *const dst[3], float *dlum, float *dvar, int step,
+                                     int y0, int y1) {
+    const int w = ws->w;
+    for (int y = y0; y < y1; ++y) {
+        int x0 = 0;
+        while (x0 < w) {
+            if (x0 >= 2 * step && x0 + TR_POST_BLOCK + 2 * step <= w) {
+                svgf_run(ws, depth, src, lum, var, dst, dlum, dvar, step, y, x0, TR_POST_BLOCK, 1);
+                x0 += TR_POST_BLOCK;
+            } else {
+                const int n = x0 < 2 * step ? imin(w - x0, 2 * step - x0 > 0 ? 2 * step - x0 : 1)
+                                            : imin(w - x0, TR_POST_CHUNK);
+                svgf_run(ws, depth, src, lum, var, dst, dlum, dvar, step, y, x0, n, 0);
+                x0 += n;
             }
         }
     }
