@@ -160,6 +160,46 @@ mv_svgf=$(awk '/^moving shape/ { for (i = 1; i < NF; ++i) if ($i == "svgf") prin
 awk -v a="$mv_off" -v b="$mv_svgf" 'BEGIN { exit !(a + 0 > 0 && b > a) }' ||
     fail "--animate: moving shape PSNR raw '$mv_off', svgf '$mv_svgf'"
 grep -q "^moving shape" an0.txt && fail "a static run printed a moving shape's PSNR"
+head -n1 an1.csv | grep -q ",flicker,shape_psnr_db$" || fail "--animate: no shape_psnr_db column"
+head -n1 an0.csv | grep -q "shape_psnr_db" && fail "a static run wrote shape_psnr_db"
+
+# --max-history-moving: a moving surface keeps at most that many frames (default 4), so
+# frames 0-3 equal a run with a cap of 64 to the digit and frame 5 does not (the classic
+# box's moving wall: at this size most of the thesis box's sphere is its rim, whose
+# history restarts anyway).
+expect_usage_error "--max-history-moving" bench realtime --max-history-moving 0
+for cap in 4 64; do
+    "$BIN" bench realtime "$CLASSIC" --width 64 --height 48 --frames 6 --reference-spp 8 \
+        --threads 1 --methods accumulate --out "mh$cap" --animate --max-history-moving "$cap" \
+        >"mh$cap.txt" 2>/dev/null || fail "bench realtime --max-history-moving $cap"
+done
+f1() { awk -F, -v f="$2" '$1 == "accumulate" && $2 == f { print $7 }' "mh$1.csv"; }
+for f in 0 1 2 3; do
+    [ "$(f1 4 $f)" = "$(f1 64 $f)" ] || fail "--max-history-moving 64 changed frame $f"
+done
+[ "$(f1 4 5)" != "$(f1 64 5)" ] || fail "--max-history-moving 64 changed nothing by frame 5"
+grep -q "max-history-moving 64," mh64.txt || fail "--max-history-moving not named"
+
+# --animate-frames A:B: the shape rests before frame A (frames 0-2 are the static run's
+# to the digit, frame 3 is not) and after B; with A >= 2 and B < N every method gets
+# the frames it needs after the stop to return to the shape's PSNR before it moved.
+expect_usage_error "--animate-frames" bench realtime --animate-frames 0:3
+expect_usage_error "--animate-frames" bench realtime --animate-frames 3:3
+expect_usage_error "--animate-frames" bench realtime --animate-frames 3:x
+expect_usage_error "--animate-frames" bench realtime --animate-frames -1:3
+expect_usage_error "--animate-frames: expected B up to --frames (8), got 9" \
+    bench realtime --frames 8 --animate-frames 2:9
+an 4 --animate-frames 3:5
+for f in 0 1 2; do
+    [ "$(f0 0 $f)" = "$(f0 4 $f)" ] || fail "--animate-frames 3:5 changed frame $f"
+done
+[ "$(f0 0 3)" != "$(f0 4 3)" ] || fail "--animate-frames 3:5: frame 3 did not change"
+grep -q "moves before frames 3 to 4" an4.txt || fail "--animate-frames: window not named"
+awk '/^moving shape stopped at frame 5/ { for (m = 0; m < 3; ++m) {
+        name = m == 0 ? "off" : m == 1 ? "accumulate" : "svgf"; found = 0
+        for (i = 1; i < NF; ++i) if ($i == name && ($(i + 1) ~ /^[0-9]+$/ || $(i + 1) == "never")) found = 1
+        if (!found) exit 1 } ok = 1 } END { exit !ok }' an4.txt ||
+    fail "--animate-frames: no recovery per method: $(grep '^moving shape stopped' an4.txt)"
 
 # bias D: the bias PSNR printed for --max-depth D against depth 64.
 bias() {

@@ -31,6 +31,7 @@ expect_usage_error "--recon: expected off, accumulate" view --recon blur
 # The reconstruction's settings, parsed as bench realtime parses them.
 expect_usage_error "--svgf-iterations" view --svgf-iterations 9
 expect_usage_error "--max-history" view --max-history 0
+expect_usage_error "--max-history-moving" view --max-history-moving 0
 expect_usage_error "--taa" view --taa -0.5
 expect_usage_error "--target-fps: expected" view --target-fps 0
 expect_usage_error "--benchmark: expected an integer in 0..9, got '10'" view --benchmark 10

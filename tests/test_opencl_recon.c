@@ -214,7 +214,9 @@ static void moving(tr_device *cl) {
     tr_vec3 *table = motion_table(first, count);
     const uint32_t ids = first + count + 1;
     tr_error err;
-    const tr_recon_params p = tr_recon_params_default();
+    /* A moving surface's history capped below FRAMES, so that both sides apply the cap. */
+    tr_recon_params p = tr_recon_params_default();
+    p.max_len_moving = 2.0f;
     const int methods[2] = {TR_RECON_ACCUMULATE, TR_RECON_SVGF};
     tr_recon host[2];
     tr_recon_device *dev[2];

@@ -5,6 +5,7 @@
  * reference of that same frame: PSNR (the reference's own error taken out, as in `bench
  * convergence`), SSIM, and a temporal flicker measure; per stage the milliseconds. */
 #define _POSIX_C_SOURCE 200809L
+#include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -16,7 +17,7 @@
 
 typedef struct rt_frame_stats {
     double render_ms, temporal_ms, spatial_ms, psnr, ssim, flicker;
-    double moving_psnr; /* --animate: over the pixels of moving primitives; NAN: none */
+    double moving_psnr; /* --animate: over the moving shape's pixels; NAN: none */
 } rt_frame_stats;
 
 static void realtime_help(void) {
@@ -52,6 +53,10 @@ static void realtime_help(void) {
            "  --animate            the scene's last shape moves before every frame (as view\n"
            "                       --animate), and the reconstruction is told how far each\n"
            "                       primitive moved; references see the same scene\n"
+           "  --animate-frames A:B   the same, but the shape moves only before frames A to\n"
+           "                       B-1 and rests before and after; with A >= 2 and B < N the\n"
+           "                       frames each method needs after it stops to return to its\n"
+           "                       PSNR over the shape's pixels before it moved are reported\n"
            "  --bias-reference-depth D2   also render frame 0's reference at max depth D2\n"
            "                       (another seed) and print the PSNR of the frames' depth\n"
            "                       (--max-depth) against it: the depth limit's bias\n"
@@ -156,17 +161,79 @@ static double mse_of(const float *a, const float *b, size_t px) {
 }
 
 /* The indices of the pixels whose primitive (id pass) moved into idx; returns how many. */
-static size_t moving_pixels(const uint32_t *prim, const tr_vec3 *motion, uint32_t motion_n,
-                            size_t px, size_t *idx) {
+static size_t shape_pixels(const uint32_t *prim, uint32_t lo, uint32_t hi, size_t px, size_t *idx) {
     size_t n = 0;
     for (size_t i = 0; i < px; ++i) {
-        const uint32_t id = prim[i];
-        if (id != 0u && id < motion_n &&
-            (motion[id].x != 0.0f || motion[id].y != 0.0f || motion[id].z != 0.0f)) {
+        if (prim[i] >= lo && prim[i] < hi) {
             idx[n++] = i;
         }
     }
     return n;
+}
+
+/* After --animate-frames A:B, per method reconstructed on the host: steady is the mean
+ * PSNR over the shape's pixels in the (up to) 8 frames before it moved; recovered at the
+ * first frame from B on within 0.5 dB of it, as after a cut. */
+static void print_shape_recovery(const rt_frame_stats *st, const int *on,
+                                 tr_recon_device *const *rdev, uint32_t frames, uint32_t from,
+                                 uint32_t until) {
+    printf("moving shape stopped at frame %u, frames to return to its PSNR before it moved:",
+           until);
+    for (int m = 0; m < TR_RECON_COUNT; ++m) {
+        if (!on[m] || rdev[m]) {
+            continue;
+        }
+        const uint32_t k0 = from > 8 ? from - 8 : 0;
+        double steady = 0.0;
+        int n = 0;
+        for (uint32_t f = k0; f < from; ++f) {
+            const double v = st[(size_t)m * frames + f].moving_psnr;
+            if (v == v) {
+                steady += v;
+                ++n;
+            }
+        }
+        int rec_frames = -1;
+        for (uint32_t f = until; n > 0 && f < frames; ++f) {
+            if (st[(size_t)m * frames + f].moving_psnr >= steady / n - 0.5) {
+                rec_frames = (int)(f - until);
+                break;
+            }
+        }
+        if (n == 0) {
+            printf(" %s -", tr_recon_name(m));
+        } else if (rec_frames >= 0) {
+            printf(" %s %d (%.2f dB)", tr_recon_name(m), rec_frames, steady / n);
+        } else {
+            printf(" %s never (%.2f dB)", tr_recon_name(m), steady / n);
+        }
+    }
+    printf("\n");
+}
+
+/* "A:B" with 1 <= A < B <= 100000 into *from, *until. */
+static int parse_window(cli_args *a, uint32_t *from, uint32_t *until) {
+    if (cli_value(a) != CLI_OK) {
+        return CLI_USAGE;
+    }
+    char *end = NULL;
+    errno = 0;
+    const unsigned long x = strtoul(a->value, &end, 10);
+    const char *rest = end;
+    unsigned long y = 0;
+    int good = end != a->value && *end == ':' && a->value[0] != '-' && errno == 0;
+    if (good) {
+        rest = end + 1;
+        y = strtoul(rest, &end, 10);
+        good = end != rest && *end == '\0' && *rest != '-' && errno == 0;
+    }
+    if (!good || x < 1 || y <= x || y > 100000) {
+        return cli_error(a, "%s: expected A:B with 1 <= A < B <= 100000, got '%s'", a->opt,
+                         a->value);
+    }
+    *from = (uint32_t)x;
+    *until = (uint32_t)y;
+    return CLI_OK;
 }
 
 /* Pixels idx[0..n) of image a (3 floats each) gathered into out. */
@@ -239,6 +306,7 @@ int bench_realtime(int argc, char **argv) {
     tr_recon_params params = tr_recon_params_default();
     int ref_sampler = -1; /* TR_SAMPLER_*, -1: sobol, whatever the frames' */
     int animate = 0;      /* --animate: the scene's last shape moves every frame */
+    uint32_t anim_from = 1, anim_until = 0; /* it moves before frames from .. until - 1; 0: all */
     const char *prefix = "realtime";
     int size_given = 0;
     while (cli_next(&a)) {
@@ -268,6 +336,9 @@ int bench_realtime(int argc, char **argv) {
         } else if (cli_is(&a, "--animate")) {
             animate = 1;
             rc = CLI_OK;
+        } else if (cli_is(&a, "--animate-frames")) {
+            animate = 1;
+            rc = parse_window(&a, &anim_from, &anim_until);
         } else if (cli_is(&a, "--cut")) {
             rc = cli_parse_u32(&a, 1, 100000, &cut);
         } else if (cli_is(&a, "--methods")) {
@@ -287,6 +358,13 @@ int bench_realtime(int argc, char **argv) {
     }
     if (cut >= frames) {
         return cli_error(&a, "--cut: expected a frame before --frames (%u), got %u", frames, cut);
+    }
+    if (anim_until > frames) {
+        return cli_error(&a, "--animate-frames: expected B up to --frames (%u), got %u", frames,
+                         anim_until);
+    }
+    if (!anim_until) {
+        anim_until = frames;
     }
     char csv_path[4096];
     if (snprintf(csv_path, sizeof csv_path, "%s.csv", prefix) >= (int)sizeof csv_path) {
@@ -412,15 +490,23 @@ int bench_realtime(int argc, char **argv) {
         }
         printf("samplers: frames %s, references %s\n", cli_sampler_name(cfg.sampler),
                cli_sampler_name(rcfg.sampler));
-        printf("reconstruction: alpha-min %g, max-history %g, svgf-iterations %d, svgf-sigma-l "
-               "%g, taa %g, svgf-split %s\n",
-               (double)params.alpha_min, (double)params.max_len, params.svgf_iterations,
-               (double)params.svgf_sigma_l, (double)params.svgf_taa_alpha,
+        printf("reconstruction: alpha-min %g, max-history %g, max-history-moving %g, "
+               "svgf-iterations %d, svgf-sigma-l %g, taa %g, svgf-split %s\n",
+               (double)params.alpha_min, (double)params.max_len, (double)params.max_len_moving,
+               params.svgf_iterations, (double)params.svgf_sigma_l, (double)params.svgf_taa_alpha,
                params.svgf_split ? "on" : "off");
     }
     /* --animate: how far each primitive (the id pass's numbering) moved since the previous
      * frame, for the reconstruction's reprojection. */
     const uint32_t motion_n = animate ? tr_scene_triangle_count(scene) + 1u : 0u;
+    /* The moving shape's ids in the id pass (triangle index + 1): the last shape's
+     * triangles come last. */
+    uint32_t shape_lo = 1u, shape_hi = 1u;
+    if (animate && tr_scene_shape_count(scene) > 0) {
+        const uint32_t last = tr_scene_shape_count(scene) - 1u;
+        shape_hi = motion_n;
+        shape_lo = motion_n - tr_scene_shape_triangle_count(scene, last);
+    }
     tr_vec3 *motion = motion_n ? calloc(motion_n, sizeof *motion) : NULL;
     /* The moving pixels' indices and, gathered, a method's output, the reference and its
      * half. */
@@ -431,7 +517,12 @@ int bench_realtime(int argc, char **argv) {
         rc = CLI_FAILURE;
     }
     if (rc == CLI_OK && animate) {
-        printf("animated: the scene's last shape moves every frame\n");
+        if (anim_from == 1 && anim_until == frames) {
+            printf("animated: the scene's last shape moves every frame\n");
+        } else {
+            printf("animated: the scene's last shape moves before frames %u to %u\n", anim_from,
+                   anim_until - 1);
+        }
     }
     const double t_start = tr_time_now();
     for (uint32_t f = 0; rc == CLI_OK && f < frames; ++f) {
@@ -444,7 +535,9 @@ int bench_realtime(int argc, char **argv) {
         int moved = 0;
         if (animate) {
             /* Outside the timed render: the scene's update is not the reconstruction's. */
-            if (cli_animate(scene, f, &err) != TR_OK ||
+            /* Its own frame count: 1 at the first frame it moves, 0 (no move) outside. */
+            const uint32_t af = f >= anim_from && f < anim_until ? f - anim_from + 1 : 0;
+            if (cli_animate(scene, af, &err) != TR_OK ||
                 tr_scene_update(scene, NULL, &err) != TR_OK ||
                 tr_scene_take_motion(scene, motion, motion_n, &moved, &err) != TR_OK) {
                 fprintf(stderr, "trac0r bench realtime: --animate: frame %u: %s\n", f, err.msg);
@@ -495,8 +588,8 @@ int bench_realtime(int argc, char **argv) {
          * references' own error over them: the same for every method. */
         size_t n_mv = 0;
         double own_mv = 0.0;
-        if (fmotion && host_recon) {
-            n_mv = moving_pixels(g.prim, fmotion, fmotion_n, px, mv_idx);
+        if (animate && host_recon) {
+            n_mv = shape_pixels(g.prim, shape_lo, shape_hi, px, mv_idx);
             gather(ref, mv_idx, n_mv, gm + 3 * px);
             gather(half, mv_idx, n_mv, gm + 6 * px);
             own_mv = n_mv ? mse_of(gm + 6 * px, gm + 3 * px, n_mv) : 0.0;
@@ -548,8 +641,10 @@ int bench_realtime(int argc, char **argv) {
         }
     }
     if (rc == CLI_OK) {
-        fprintf(csv, "method,frame,render_ms,temporal_ms,spatial_ms,total_ms,psnr_db,ssim,"
-                     "flicker\n");
+        fprintf(csv,
+                "method,frame,render_ms,temporal_ms,spatial_ms,total_ms,psnr_db,ssim,"
+                "flicker%s\n",
+                animate ? ",shape_psnr_db" : "");
         printf("%-11s %9s %11s %10s %9s %7s %9s %9s %7s %8s", "method", "render_ms", "temporal_ms",
                "spatial_ms", "total_ms", "fps", "psnr_mean", "psnr_min", "ssim", "flicker");
         printf(cut ? " recover\n" : "\n");
@@ -560,10 +655,18 @@ int bench_realtime(int argc, char **argv) {
             double sr = 0, stt = 0, ss = 0, sp = 0, sssim = 0, sfl = 0, pmin = INFINITY;
             for (uint32_t f = 0; f < frames; ++f) {
                 const rt_frame_stats *s = &st[(size_t)m * frames + f];
-                fprintf(csv, "%s,%u,%.4f,%.4f,%.4f,%.4f,%.4f,%.5f,%.6f\n", tr_recon_name(m), f,
+                fprintf(csv, "%s,%u,%.4f,%.4f,%.4f,%.4f,%.4f,%.5f,%.6f", tr_recon_name(m), f,
                         s->render_ms, s->temporal_ms, s->spatial_ms,
                         s->render_ms + s->temporal_ms + s->spatial_ms, s->psnr, s->ssim,
                         s->flicker);
+                if (animate) { /* empty where the shape was not seen or not measured */
+                    if (s->moving_psnr == s->moving_psnr) {
+                        fprintf(csv, ",%.4f", s->moving_psnr);
+                    } else {
+                        fputc(',', csv);
+                    }
+                }
+                fputc('\n', csv);
                 sr += s->render_ms;
                 stt += s->temporal_ms;
                 ss += s->spatial_ms;
@@ -610,7 +713,7 @@ int bench_realtime(int argc, char **argv) {
                 }
                 double sum = 0.0;
                 int n = 0;
-                for (uint32_t f = 0; f < frames; ++f) {
+                for (uint32_t f = anim_from; f < anim_until; ++f) {
                     const double v = st[(size_t)m * frames + f].moving_psnr;
                     if (v == v) {
                         sum += v;
@@ -624,6 +727,9 @@ int bench_realtime(int argc, char **argv) {
                 }
             }
             printf("\n");
+            if (anim_from >= 2 && anim_until < frames) {
+                print_shape_recovery(st, on, rdev, frames, anim_from, anim_until);
+            }
         }
         if (bias_depth) {
             /* The depth limit's own error, which no reconstruction can take out: the

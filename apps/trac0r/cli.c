@@ -392,6 +392,8 @@ const char cli_recon_help[] =
     "                       0.01..1 (default 0.1)\n"
     "  --max-history L      frames of history at most, 1..1024 (default 64; 1: no\n"
     "                       temporal accumulation)\n"
+    "  --max-history-moving L   the same where a shape moved since the previous frame\n"
+    "                       (--animate), 1..1024 (default 4: its shading follows the motion)\n"
     "  --svgf-iterations N  SVGF's a-trous steps, 1..8 (default 3)\n"
     "  --svgf-sigma-l S     SVGF's luminance weight, 0.1..1000 (default 8)\n"
     "  --taa A              SVGF's temporal antialiasing, the new frame's weight,\n"
@@ -404,6 +406,9 @@ int cli_recon_option(cli_args *a, tr_recon_params *p) {
     }
     if (cli_is(a, "--max-history")) {
         return cli_parse_float(a, 1.0f, 1024.0f, &p->max_len);
+    }
+    if (cli_is(a, "--max-history-moving")) {
+        return cli_parse_float(a, 1.0f, 1024.0f, &p->max_len_moving);
     }
     if (cli_is(a, "--svgf-iterations")) {
         return cli_parse_int(a, 1, 8, &p->svgf_iterations);

@@ -144,6 +144,9 @@ int tr_recon_parse(const char *name);
 typedef struct tr_recon_params {
     float alpha_min;      /* the EMA's smallest new-sample weight (0.2 in SVGF) */
     float max_len;        /* history length cap (frames) */
+    float max_len_moving; /* the cap where the surface moved since the previous frame (its
+                             primitive's motion, tr_recon_frame_moving), so that its
+                             changing shading does not lag behind */
     int bilateral_radius; /* window (2r+1)^2 */
     float bilateral_sigma_s, bilateral_sigma_r;
     int atrous_iterations; /* à-trous's steps 1, 2, 4, ... */

@@ -128,6 +128,10 @@ tr_recon_params tr_recon_params_default(void) {
     tr_recon_params p;
     p.alpha_min = 0.1f;
     p.max_len = 64.0f;
+    /* A moving surface's shading changes as it moves (its lighting, its reflections), and
+     * a long history lags behind: 4 frames measured best for SVGF on the bench's moving
+     * shapes (docs/realtime.md, "A moving shape stops"). */
+    p.max_len_moving = 4.0f;
     p.bilateral_radius = 3;
     p.bilateral_sigma_s = 2.0f;
     p.bilateral_sigma_r = 0.3f;
@@ -888,7 +892,8 @@ static void direct_temporal(tr_recon *r, const tr_gbuffer *g, const tr_camera *c
                                               g->normal, g->depth, g->prim, r->hist_direct[prev],
                                               r->hist_dmoments[prev], plen, r->hist_depth,
                                               r->hist_normal, r->hist_prim, p->alpha_min,
-                                              p->max_len, hd + 3 * i, hdm + 2 * i, hl + i);
+                                              tr_post_max_len(m, p->max_len, p->max_len_moving),
+                                              hd + 3 * i, hdm + 2 * i, hl + i);
             } else {
                 const float ld = tr_post_luminance(r->illum_d[3 * i], r->illum_d[3 * i + 1],
                                                    r->illum_d[3 * i + 2]);
@@ -943,7 +948,8 @@ static void temporal_stage(tr_recon *r, const tr_gbuffer *g, const tr_camera *ca
                 tr_post_temporal_pixel_moving(
                     cam, &pc, (uint32_t)x, (uint32_t)y, m, r->illum, g->normal, g->depth, g->prim,
                     pcol, pmom, plen, r->hist_depth, r->hist_normal, r->hist_prim, p->alpha_min,
-                    p->max_len, hc + 3 * i, hm + 2 * i, hl + i);
+                    tr_post_max_len(m, p->max_len, p->max_len_moving), hc + 3 * i, hm + 2 * i,
+                    hl + i);
             }
         }
     } else {

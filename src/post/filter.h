@@ -187,6 +187,14 @@ TR_FN float tr_post_reproject(const tr_camera *cam, const tr_camera *prev, uint3
                                     prev_normal, prev_prim, x0, y0, w);
 }
 
+/* The history length cap of a pixel whose surface moved by `motion` since the previous
+ * frame: max_len_moving where it moved (its shading changes with the motion, and a long
+ * history would lag behind it), max_len elsewhere. */
+TR_FN float tr_post_max_len(tr_vec3 motion, float max_len, float max_len_moving) {
+    const int moved = motion.x != 0.0f || motion.y != 0.0f || motion.z != 0.0f;
+    return moved ? tr_fminf(max_len, max_len_moving) : max_len;
+}
+
 /* The blend of tr_post_temporal_pixel for a pixel whose reprojection kept weights w
  * (sum total > 0.05) on the previous pixels from (x0, y0) (tr_post_reproject's taps, pw
  * pixels a row): the history interpolated by the normalised weights, then the

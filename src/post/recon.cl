@@ -60,6 +60,7 @@ __kernel void tr_recon_temporal(__global const tr_camera *cams, __global const f
                                 __global const float *prev_depth, __global const float *prev_normal,
                                 __global const uint *prev_prim, __global const float *motion,
                                 uint motion_count, int have_history, float alpha_min, float max_len,
+                                float max_len_moving,
                                 __global float *out_color, __global float *out_moments,
                                 __global float *out_len) {
     const tr_camera cam = cams[0], prev = cams[1];
@@ -84,7 +85,8 @@ __kernel void tr_recon_temporal(__global const tr_camera *cams, __global const f
     float c[3], m[2], len;
     tr_post_temporal_pixel_moving(&cam, &prev, x, y, mv, illum, normal, depth, prim, prev_color,
                                   prev_moments, prev_len, prev_depth, prev_normal, prev_prim,
-                                  alpha_min, max_len, c, m, &len);
+                                  alpha_min, tr_post_max_len(mv, max_len, max_len_moving), c, m,
+                                  &len);
     out_color[3 * i] = c[0];
     out_color[3 * i + 1] = c[1];
     out_color[3 * i + 2] = c[2];

@@ -362,7 +362,7 @@ static int cl_frame(tr_recon_device *r, const tr_camera *cam, const tr_vec3 *mot
                   KB(c, B_DEPTH), KB(c, B_PRIM), KB(c, B_HC0 + prev), KB(c, B_HM0 + prev),
                   KB(c, B_HL0 + prev), KB(c, B_HDEPTH), KB(c, B_HNORMAL), KB(c, B_HPRIM), KM(mbuf),
                   KU(motion_count), KI(c->have_history), KF(p->alpha_min), KF(p->max_len),
-                  KB(c, hc), KB(c, hm), KB(c, hl));
+                  KF(p->max_len_moving), KB(c, hc), KB(c, hm), KB(c, hl));
     if (rc != TR_OK || (rc = finish(c, err)) != TR_OK) {
         return rc;
     }
