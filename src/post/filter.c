@@ -812,13 +812,33 @@ TR_POST_CLONES static void temporal_project_rows(const tr_camera *pc, int w,
     }
 }
 
-/* Rows [y0, y1) of the temporal stage: tr_post_temporal_pixel of every pixel, from the
- * points and projection of temporal_points_rows and the previous frame's points pq. */
+/* Rows [y0, y1) of points pt followed back by their primitives' motion (id prim[i],
+ * motion[id] where id < motion_count) into pm: tr_post_reproject_moving's p - motion. */
+static void temporal_moved_rows(const float *const pt[3], const uint32_t *prim,
+                                const tr_vec3 *motion, uint32_t motion_count, float *const pm[3],
+                                int w, int y0, int y1) {
+    for (int y = y0; y < y1; ++y) {
+        for (int x = 0; x < w; ++x) {
+            const int i = y * w + x;
+            const uint32_t id = prim[i];
+            const tr_vec3 m = id < motion_count ? motion[id] : v3s(0.0f);
+            pm[0][i] = pt[0][i] - m.x;
+            pm[1][i] = pt[1][i] - m.y;
+            pm[2][i] = pt[2][i] - m.z;
+        }
+    }
+}
+
+/* Rows [y0, y1) of the temporal stage: tr_post_temporal_pixel_moving of every pixel,
+ * from the points (followed back by their motion, if any) and projection of
+ * temporal_points_rows, temporal_moved_rows and temporal_project_rows, and the previous
+ * frame's points pq. */
 static void temporal_rows(const tr_recon *r, const tr_gbuffer *g, const float *const pt[3],
                           const float *const pq[3], const float *fxs, const float *fys,
-                          const float *dists, const float *pcol, const float *pmom,
-                          const float *plen, const tr_recon_params *p, float *hc, float *hm,
-                          float *hl, int y0, int y1) {
+                          const float *dists, const tr_vec3 *motion, uint32_t motion_count,
+                          const float *pcol, const float *pmom, const float *plen,
+                          const tr_recon_params *p, float *hc, float *hm, float *hl, int y0,
+                          int y1) {
     const int w = (int)g->width, h = (int)g->height;
     for (int y = y0; y < y1; ++y) {
         for (int x = 0; x < w; ++x) {
@@ -856,8 +876,12 @@ static void temporal_rows(const tr_recon *r, const tr_gbuffer *g, const float *c
                 }
             }
             if (total > 0.05f) {
+                const uint32_t id = g->prim[i];
+                const tr_vec3 m = motion && id < motion_count ? motion[id] : v3s(0.0f);
                 tr_post_temporal_blend(cr, cg, cb, total, wt, ix, iy, w, pcol, pmom, plen,
-                                       p->alpha_min, p->max_len, hc + 3 * i, hm + 2 * i, hl + i);
+                                       p->alpha_min,
+                                       tr_post_max_len(m, p->max_len, p->max_len_moving),
+                                       hc + 3 * i, hm + 2 * i, hl + i);
             } else {
                 const float l = tr_post_luminance(cr, cg, cb);
                 hc[3 * i] = cr;
@@ -924,40 +948,32 @@ static void temporal_stage(tr_recon *r, const tr_gbuffer *g, const tr_camera *ca
     /* A history kept with the other split (direct and indirect apart or not) starts over. */
     const int hist = r->have_history && r->hist_split == split;
     const tr_camera pc = r->prev_cam;
+    /* With moving primitives (view --animate) each pixel's point is followed back by its
+     * primitive's motion before it is projected and tested, into scratch planes (the
+     * spatial filters' workspace, unused until they run); pt keeps the points themselves
+     * for the next frame. */
+    const int moving = hist && motion;
+    float *const pm[3] = {r->soa, r->soa + n, r->soa + 2 * n};
+    const float *const proj[3] = {moving ? pm[0] : pt[0], moving ? pm[1] : pt[1],
+                                  moving ? pm[2] : pt[2]};
 #pragma omp parallel for num_threads(threads) schedule(static)
     for (int y = 0; y < h; ++y) {
         temporal_points_rows(cam, g->depth, pt, y, y + 1);
+        if (moving) {
+            temporal_moved_rows((const float *const *)pt, g->prim, motion, motion_count, pm,
+                                (int)g->width, y, y + 1);
+        }
         if (hist) {
-            temporal_project_rows(&pc, (int)g->width, g->depth, pt[0], pt[1], pt[2], fx, fy, dist,
-                                  y, y + 1);
+            temporal_project_rows(&pc, (int)g->width, g->depth, proj[0], proj[1], proj[2], fx, fy,
+                                  dist, y, y + 1);
         }
     }
     const float *pcol = r->hist_color[prev], *pmom = r->hist_moments[prev],
                 *plen = r->hist_len[prev];
-    if (hist && motion) {
-        /* Moving primitives (view --animate): each pixel's point is followed back by its
-         * primitive's motion before it is projected, so the per-pixel operator runs; the
-         * points above are still kept for the next frame. */
-        const int w = (int)g->width;
 #pragma omp parallel for num_threads(threads) schedule(static)
-        for (int y = 0; y < h; ++y) {
-            for (int x = 0; x < w; ++x) {
-                const size_t i = (size_t)y * w + x;
-                const uint32_t id = g->prim[i];
-                const tr_vec3 m = id < motion_count ? motion[id] : v3s(0.0f);
-                tr_post_temporal_pixel_moving(
-                    cam, &pc, (uint32_t)x, (uint32_t)y, m, r->illum, g->normal, g->depth, g->prim,
-                    pcol, pmom, plen, r->hist_depth, r->hist_normal, r->hist_prim, p->alpha_min,
-                    tr_post_max_len(m, p->max_len, p->max_len_moving), hc + 3 * i, hm + 2 * i,
-                    hl + i);
-            }
-        }
-    } else {
-#pragma omp parallel for num_threads(threads) schedule(static)
-        for (int y = 0; y < h; ++y) {
-            temporal_rows(r, g, (const float *const *)pt, pq, hist ? fx : NULL, fy, dist, pcol,
-                          pmom, plen, p, hc, hm, hl, y, y + 1);
-        }
+    for (int y = 0; y < h; ++y) {
+        temporal_rows(r, g, proj, pq, hist ? fx : NULL, fy, dist, moving ? motion : NULL,
+                      motion_count, pcol, pmom, plen, p, hc, hm, hl, y, y + 1);
     }
     if (split) {
         direct_temporal(r, g, cam, &pc, hist ? motion : NULL, motion_count, hist, prev, next, p,
