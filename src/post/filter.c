@@ -389,58 +389,120 @@ static void bilateral_planes(const post_ws *ws, const float *const src[3], float
     }
 }
 
-/* One edge-avoiding à-trous iteration (tr_post_atrous_pixel) of planes src into dst. */
+/* One à-trous iteration's inputs (planes), its weights' reciprocal squared sigmas and
+ * its accumulators for a run of pixels. */
+typedef struct atrous_run_ctx {
+    const float *r, *g, *b, *z, *nx, *ny, *nz, *a0, *a1, *a2, *icz;
+    float ic, in2, iz, ia;
+    int w, step;
+    float ar[TR_POST_CHUNK], ag[TR_POST_CHUNK], ab[TR_POST_CHUNK], aw[TR_POST_CHUNK];
+} atrous_run_ctx;
+
+/* Tap (kx, ky) of one edge-avoiding à-trous iteration (tr_post_atrous_pixel's terms)
+ * for the pixels x0 + a, a in [xa, xb), of row y (the tap's row ty), added into the
+ * run's accumulators. */
+static inline __attribute__((always_inline)) void
+atrous_tap(atrous_run_ctx *restrict k, int y, int ty, int x0, int kx, int ky, int xa, int xb) {
+    const float *restrict r = k->r, *restrict gg = k->g, *restrict b = k->b, *restrict z = k->z,
+                          *restrict nx = k->nx, *restrict ny = k->ny, *restrict nz = k->nz,
+                          *restrict a0 = k->a0, *restrict a1 = k->a1, *restrict a2 = k->a2,
+                          *restrict icz = k->icz;
+    const float ic = k->ic, in2 = k->in2, iz = k->iz, ia = k->ia;
+    const int off = kx * k->step;
+    const float bk = tr_post_b3(kx) * tr_post_b3(ky);
+    const int row = ty * k->w + off + x0, crow = y * k->w + x0;
+    for (int a = xa; a < xb; ++a) {
+        const int i = row + a, c = crow + a;
+        const float dr = r[i] - r[c], dg = gg[i] - gg[c], db = b[i] - b[c];
+        const float dnx = nx[i] - nx[c], dny = ny[i] - ny[c], dnz = nz[i] - nz[c];
+        const float dz = (z[i] - z[c]) * icz[c];
+        const float da0 = a0[i] - a0[c], da1 = a1[i] - a1[c], da2 = a2[i] - a2[c];
+        const float e = (dr * dr + dg * dg + db * db) * ic +
+                        (dnx * dnx + dny * dny + dnz * dnz) * in2 + dz * dz * iz +
+                        (da0 * da0 + da1 * da1 + da2 * da2) * ia;
+        const float wt = bk * tr_post_exp_neg(e);
+        k->ar[a] += wt * r[i];
+        k->ag[a] += wt * gg[i];
+        k->ab[a] += wt * b[i];
+        k->aw[a] += wt;
+    }
+}
+
+/* One à-trous iteration (tr_post_atrous_pixel) of the run of n pixels from x0 in row y
+ * into dst; `inner` as in svgf_run: the 25 taps unrolled over a block whose taps all lie
+ * in the image, or each tap clipped to it in a loop. The taps go in the operator's
+ * order either way. */
+static inline __attribute__((always_inline)) void atrous_run(atrous_run_ctx *restrict k,
+                                                             float *const dst[3], int h, int y,
+                                                             int x0, int n, int inner) {
+    const int w = k->w, step = k->step;
+    for (int a = 0; a < n; ++a) {
+        k->ar[a] = k->ag[a] = k->ab[a] = k->aw[a] = 0.0f;
+    }
+    if (inner) {
+#pragma GCC unroll 5
+        for (int ky = -2; ky <= 2; ++ky) {
+            const int ty = y + ky * step;
+#pragma GCC unroll 5
+            for (int kx = -2; kx <= 2; ++kx) {
+                atrous_tap(k, y, ty, x0, kx, ky, 0, TR_POST_BLOCK);
+            }
+        }
+    } else {
+        for (int ky = -2; ky <= 2; ++ky) {
+            const int ty = y + ky * step;
+            if (ty < 0 || ty >= h) {
+                continue;
+            }
+            for (int kx = -2; kx <= 2; ++kx) {
+                const int off = kx * step;
+                atrous_tap(k, y, ty, x0, kx, ky, imax(0, -off - x0), imin(n, w - off - x0));
+            }
+        }
+    }
+    for (int a = 0; a < n; ++a) {
+        const int c = y * w + x0 + a;
+        dst[0][c] = k->ar[a] / k->aw[a];
+        dst[1][c] = k->ag[a] / k->aw[a];
+        dst[2][c] = k->ab[a] / k->aw[a];
+    }
+}
+
+/* Rows y0 .. y1 - 1 of one edge-avoiding à-trous iteration (tr_post_atrous_pixel) of
+ * planes src into dst, blocked as svgf_rows. */
 TR_POST_CLONES static void atrous_rows(const post_ws *ws, const float *depth,
                                        const float *const src[3], float *const dst[3], int step,
                                        float sigma_c, const tr_recon_params *p, int y0, int y1) {
-    const int w = ws->w, h = ws->h;
-    const float ic = 1.0f / (sigma_c * sigma_c);
-    const float in2 = 1.0f / (p->atrous_sigma_n * p->atrous_sigma_n);
-    const float iz = 1.0f / (p->atrous_sigma_z * p->atrous_sigma_z);
-    const float ia = 1.0f / (p->atrous_sigma_a * p->atrous_sigma_a);
-    const float *restrict r = src[0], *restrict gg = src[1], *restrict b = src[2];
-    const float *restrict nx = ws->p[WS_N], *restrict ny = ws->p[WS_N + 1],
-                          *restrict nz = ws->p[WS_N + 2];
-    const float *restrict a0 = ws->p[WS_A], *restrict a1 = ws->p[WS_A + 1],
-                          *restrict a2 = ws->p[WS_A + 2];
-    const float *restrict icz = ws->p[WS_KZ];
+    const int w = ws->w, h = ws->h, reach = 2 * step;
+    atrous_run_ctx k;
+    k.ic = 1.0f / (sigma_c * sigma_c);
+    k.in2 = 1.0f / (p->atrous_sigma_n * p->atrous_sigma_n);
+    k.iz = 1.0f / (p->atrous_sigma_z * p->atrous_sigma_z);
+    k.ia = 1.0f / (p->atrous_sigma_a * p->atrous_sigma_a);
+    k.r = src[0];
+    k.g = src[1];
+    k.b = src[2];
+    k.z = depth;
+    k.nx = ws->p[WS_N];
+    k.ny = ws->p[WS_N + 1];
+    k.nz = ws->p[WS_N + 2];
+    k.a0 = ws->p[WS_A];
+    k.a1 = ws->p[WS_A + 1];
+    k.a2 = ws->p[WS_A + 2];
+    k.icz = ws->p[WS_KZ];
+    k.w = w;
+    k.step = step;
     for (int y = y0; y < y1; ++y) {
-        for (int x0 = 0; x0 < w; x0 += TR_POST_CHUNK) {
-            const int x1 = imin(w, x0 + TR_POST_CHUNK);
-            float ar[TR_POST_CHUNK] = {0}, ag[TR_POST_CHUNK] = {0}, ab[TR_POST_CHUNK] = {0},
-                  aw[TR_POST_CHUNK] = {0};
-            for (int ky = -2; ky <= 2; ++ky) {
-                const int ty = y + ky * step;
-                if (ty < 0 || ty >= h) {
-                    continue;
-                }
-                for (int kx = -2; kx <= 2; ++kx) {
-                    const int off = kx * step;
-                    const int xa = imax(x0, -off), xb = imin(x1, w - off);
-                    const float bk = tr_post_b3(kx) * tr_post_b3(ky);
-                    const int row = ty * w + off, crow = y * w;
-                    for (int x = xa; x < xb; ++x) {
-                        const int i = row + x, c = crow + x, a = x - x0;
-                        const float dr = r[i] - r[c], dg = gg[i] - gg[c], db = b[i] - b[c];
-                        const float dnx = nx[i] - nx[c], dny = ny[i] - ny[c], dnz = nz[i] - nz[c];
-                        const float dz = (depth[i] - depth[c]) * icz[c];
-                        const float da0 = a0[i] - a0[c], da1 = a1[i] - a1[c], da2 = a2[i] - a2[c];
-                        const float e = (dr * dr + dg * dg + db * db) * ic +
-                                        (dnx * dnx + dny * dny + dnz * dnz) * in2 + dz * dz * iz +
-                                        (da0 * da0 + da1 * da1 + da2 * da2) * ia;
-                        const float wt = bk * tr_post_exp_neg(e);
-                        ar[a] += wt * r[i];
-                        ag[a] += wt * gg[i];
-                        ab[a] += wt * b[i];
-                        aw[a] += wt;
-                    }
-                }
-            }
-            for (int x = x0; x < x1; ++x) {
-                const int c = y * w + x, a = x - x0;
-                dst[0][c] = ar[a] / aw[a];
-                dst[1][c] = ag[a] / aw[a];
-                dst[2][c] = ab[a] / aw[a];
+        const int rows_in = y >= reach && y + reach < h;
+        int x0 = 0;
+        while (x0 < w) {
+            if (rows_in && x0 >= reach && x0 + TR_POST_BLOCK + reach <= w) {
+                atrous_run(&k, dst, h, y, x0, TR_POST_BLOCK, 1);
+                x0 += TR_POST_BLOCK;
+            } else {
+                const int n = rows_in && x0 < reach ? reach - x0 : imin(w - x0, TR_POST_CHUNK);
+                atrous_run(&k, dst, h, y, x0, n, 0);
+                x0 += n;
             }
         }
     }
