@@ -171,6 +171,23 @@ static size_t shape_pixels(const uint32_t *prim, uint32_t lo, uint32_t hi, size_
     return n;
 }
 
+/* Method m's mean PSNR over the moving shape's pixels in frames f0 .. f1 - 1 that have
+ * such pixels (NaN where a frame has none); *count: how many did. */
+static double shape_psnr_mean(const rt_frame_stats *st, int m, uint32_t frames, uint32_t f0,
+                              uint32_t f1, int *count) {
+    double sum = 0.0;
+    int n = 0;
+    for (uint32_t f = f0; f < f1; ++f) {
+        const double v = st[(size_t)m * frames + f].moving_psnr;
+        if (v == v) {
+            sum += v;
+            ++n;
+        }
+    }
+    *count = n;
+    return n > 0 ? sum / n : 0.0;
+}
+
 /* After --animate-frames A:B, per method reconstructed on the host: steady is the mean
  * PSNR over the shape's pixels in the (up to) 8 frames before it moved; recovered at the
  * first frame from B on within 0.5 dB of it, as after a cut. */
@@ -183,19 +200,11 @@ static void print_shape_recovery(const rt_frame_stats *st, const int *on,
         if (!on[m] || rdev[m]) {
             continue;
         }
-        const uint32_t k0 = from > 8 ? from - 8 : 0;
-        double steady = 0.0;
         int n = 0;
-        for (uint32_t f = k0; f < from; ++f) {
-            const double v = st[(size_t)m * frames + f].moving_psnr;
-            if (v == v) {
-                steady += v;
-                ++n;
-            }
-        }
+        const double steady = shape_psnr_mean(st, m, frames, from > 8 ? from - 8 : 0, from, &n);
         int rec_frames = -1;
         for (uint32_t f = until; n > 0 && f < frames; ++f) {
-            if (st[(size_t)m * frames + f].moving_psnr >= steady / n - 0.5) {
+            if (st[(size_t)m * frames + f].moving_psnr >= steady - 0.5) {
                 rec_frames = (int)(f - until);
                 break;
             }
@@ -203,9 +212,9 @@ static void print_shape_recovery(const rt_frame_stats *st, const int *on,
         if (n == 0) {
             printf(" %s -", tr_recon_name(m));
         } else if (rec_frames >= 0) {
-            printf(" %s %d (%.2f dB)", tr_recon_name(m), rec_frames, steady / n);
+            printf(" %s %d (%.2f dB)", tr_recon_name(m), rec_frames, steady);
         } else {
-            printf(" %s never (%.2f dB)", tr_recon_name(m), steady / n);
+            printf(" %s never (%.2f dB)", tr_recon_name(m), steady);
         }
     }
     printf("\n");
@@ -711,17 +720,10 @@ int bench_realtime(int argc, char **argv) {
                 if (!on[m] || rdev[m]) {
                     continue;
                 }
-                double sum = 0.0;
                 int n = 0;
-                for (uint32_t f = anim_from; f < anim_until; ++f) {
-                    const double v = st[(size_t)m * frames + f].moving_psnr;
-                    if (v == v) {
-                        sum += v;
-                        ++n;
-                    }
-                }
+                const double mean = shape_psnr_mean(st, m, frames, anim_from, anim_until, &n);
                 if (n > 0) {
-                    printf(" %s %.2f dB", tr_recon_name(m), sum / n);
+                    printf(" %s %.2f dB", tr_recon_name(m), mean);
                 } else {
                     printf(" %s -", tr_recon_name(m));
                 }

@@ -389,6 +389,35 @@ static void bilateral_planes(const post_ws *ws, const float *const src[3], float
     }
 }
 
+/* The 25 taps of one step of an edge-avoiding à-trous filter (5x5, holes of `step`) over
+ * the run of n pixels from x0 in row y of a w x h image, in the operator's order: each
+ * tap calls TAP(k, y, ty, x0, kx, ky, xa, xb) for the run's pixels x0 + a, a in
+ * [xa, xb). `inner` (a block of TR_POST_BLOCK pixels whose taps all lie in the image):
+ * the taps unrolled, so that the compiler keeps TAP's accumulators in vector registers
+ * across them; otherwise each tap's run is clipped to the image, in a loop. */
+#define POST_RUN_TAPS(TAP, k, y, x0, n, w, h, step, inner)                                         \
+    do {                                                                                           \
+        if (inner) {                                                                               \
+            _Pragma("GCC unroll 5") for (int ky = -2; ky <= 2; ++ky) {                             \
+                const int ty = (y) + ky * (step);                                                  \
+                _Pragma("GCC unroll 5") for (int kx = -2; kx <= 2; ++kx) {                         \
+                    TAP(k, y, ty, x0, kx, ky, 0, TR_POST_BLOCK);                                   \
+                }                                                                                  \
+            }                                                                                      \
+        } else {                                                                                   \
+            for (int ky = -2; ky <= 2; ++ky) {                                                     \
+                const int ty = (y) + ky * (step);                                                  \
+                if (ty < 0 || ty >= (h)) {                                                         \
+                    continue;                                                                      \
+                }                                                                                  \
+                for (int kx = -2; kx <= 2; ++kx) {                                                 \
+                    const int off = kx * (step);                                                   \
+                    TAP(k, y, ty, x0, kx, ky, imax(0, -off - (x0)), imin(n, (w)-off - (x0)));      \
+                }                                                                                  \
+            }                                                                                      \
+        }                                                                                          \
+    } while (0)
+
 /* One à-trous iteration's inputs (planes), its weights' reciprocal squared sigmas and
  * its accumulators for a run of pixels. */
 typedef struct atrous_run_ctx {
@@ -429,9 +458,7 @@ atrous_tap(atrous_run_ctx *restrict k, int y, int ty, int x0, int kx, int ky, in
 }
 
 /* One à-trous iteration (tr_post_atrous_pixel) of the run of n pixels from x0 in row y
- * into dst; `inner` as in svgf_run: the 25 taps unrolled over a block whose taps all lie
- * in the image, or each tap clipped to it in a loop. The taps go in the operator's
- * order either way. */
+ * into dst; `inner` as in POST_RUN_TAPS. */
 static inline __attribute__((always_inline)) void atrous_run(atrous_run_ctx *restrict k,
                                                              float *const dst[3], int h, int y,
                                                              int x0, int n, int inner) {
@@ -439,27 +466,7 @@ static inline __attribute__((always_inline)) void atrous_run(atrous_run_ctx *res
     for (int a = 0; a < n; ++a) {
         k->ar[a] = k->ag[a] = k->ab[a] = k->aw[a] = 0.0f;
     }
-    if (inner) {
-#pragma GCC unroll 5
-        for (int ky = -2; ky <= 2; ++ky) {
-            const int ty = y + ky * step;
-#pragma GCC unroll 5
-            for (int kx = -2; kx <= 2; ++kx) {
-                atrous_tap(k, y, ty, x0, kx, ky, 0, TR_POST_BLOCK);
-            }
-        }
-    } else {
-        for (int ky = -2; ky <= 2; ++ky) {
-            const int ty = y + ky * step;
-            if (ty < 0 || ty >= h) {
-                continue;
-            }
-            for (int kx = -2; kx <= 2; ++kx) {
-                const int off = kx * step;
-                atrous_tap(k, y, ty, x0, kx, ky, imax(0, -off - x0), imin(n, w - off - x0));
-            }
-        }
-    }
+    POST_RUN_TAPS(atrous_tap, k, y, x0, n, w, h, step, inner);
     for (int a = 0; a < n; ++a) {
         const int c = y * w + x0 + a;
         dst[0][c] = k->ar[a] / k->aw[a];
@@ -599,11 +606,8 @@ static inline __attribute__((always_inline)) void svgf_tap(svgf_run_ctx *restric
 }
 
 /* One SVGF iteration (tr_post_svgf_pixel) of the run of n pixels from x0 in row y into
- * dst, dlum, dvar. `inner`: every tap's pixels lie in the image (n is then
- * TR_POST_BLOCK), and the 25 taps are unrolled so that the compiler keeps the
- * accumulators in vector registers across them (1.3x faster, docs/realtime.md);
- * otherwise each tap's run is clipped to the image, in a loop. The taps go in the
- * operator's order either way. */
+ * dst, dlum, dvar; `inner` as in POST_RUN_TAPS (the unrolled taps 1.3x faster,
+ * docs/realtime.md). */
 static inline __attribute__((always_inline)) void
 svgf_run(svgf_run_ctx *restrict k, float *const dst[3], float *restrict dlum, float *restrict dvar,
          int h, int y, int x0, int n, int inner) {
@@ -611,27 +615,7 @@ svgf_run(svgf_run_ctx *restrict k, float *const dst[3], float *restrict dlum, fl
     for (int a = 0; a < n; ++a) {
         k->ar[a] = k->ag[a] = k->ab[a] = k->aw[a] = k->av[a] = 0.0f;
     }
-    if (inner) {
-#pragma GCC unroll 5
-        for (int ky = -2; ky <= 2; ++ky) {
-            const int ty = y + ky * step;
-#pragma GCC unroll 5
-            for (int kx = -2; kx <= 2; ++kx) {
-                svgf_tap(k, y, ty, x0, kx, ky, 0, TR_POST_BLOCK);
-            }
-        }
-    } else {
-        for (int ky = -2; ky <= 2; ++ky) {
-            const int ty = y + ky * step;
-            if (ty < 0 || ty >= h) {
-                continue;
-            }
-            for (int kx = -2; kx <= 2; ++kx) {
-                const int off = kx * step;
-                svgf_tap(k, y, ty, x0, kx, ky, imax(0, -off - x0), imin(n, w - off - x0));
-            }
-        }
-    }
+    POST_RUN_TAPS(svgf_tap, k, y, x0, n, w, h, step, inner);
     for (int a = 0; a < n; ++a) {
         const int c = y * w + x0 + a;
         const float ro = k->ar[a] / k->aw[a], go = k->ag[a] / k->aw[a], bo = k->ab[a] / k->aw[a];

@@ -60,9 +60,8 @@ __kernel void tr_recon_temporal(__global const tr_camera *cams, __global const f
                                 __global const float *prev_depth, __global const float *prev_normal,
                                 __global const uint *prev_prim, __global const float *motion,
                                 uint motion_count, int have_history, float alpha_min, float max_len,
-                                float max_len_moving,
-                                __global float *out_color, __global float *out_moments,
-                                __global float *out_len) {
+                                float max_len_moving, __global float *out_color,
+                                __global float *out_moments, __global float *out_len) {
     const tr_camera cam = cams[0], prev = cams[1];
     const uint x = (uint)get_global_id(0), y = (uint)get_global_id(1);
     if (x >= cam.screen_width || y >= cam.screen_height) {
