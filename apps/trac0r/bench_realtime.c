@@ -228,11 +228,10 @@ static int parse_window(cli_args *a, uint32_t *from, uint32_t *until) {
     char *end = NULL;
     errno = 0;
     const unsigned long x = strtoul(a->value, &end, 10);
-    const char *rest = end;
     unsigned long y = 0;
     int good = end != a->value && *end == ':' && a->value[0] != '-' && errno == 0;
     if (good) {
-        rest = end + 1;
+        const char *rest = end + 1;
         y = strtoul(rest, &end, 10);
         good = end != rest && *end == '\0' && *rest != '-' && errno == 0;
     }
