@@ -62,6 +62,24 @@ expect_usage_error "--cut: expected a frame before --frames (8), got 9" bench re
 head -n1 rt.csv | grep -q "^method,frame,render_ms,temporal_ms,spatial_ms,total_ms,psnr_db,ssim,flicker$" ||
     fail "bench realtime CSV header: $(head -n1 rt.csv)"
 grep -q "frame 14/14" rt.err || fail "bench realtime: no progress on stderr"
+# The plot: a PNG (its signature and gnuplot's 900x600 in the IHDR chunk), named in the
+# last line.
+[ "$(od -An -tx1 -N8 rt.png | tr -d ' \n')" = "89504e470d0a1a0a" ] || fail "bench realtime: rt.png is no PNG"
+[ "$(od -An -tu1 -j16 -N8 rt.png | tr -s ' ' | sed 's/^ //')" = "0 0 3 132 0 0 2 88" ] ||
+    fail "bench realtime: rt.png is not 900x600"
+tail -n1 rt.txt | grep -q "rt.csv and rt.png" || fail "bench realtime: plot not named: $(tail -n1 rt.txt)"
+# A scene whose name would end gnuplot's quoted title still plots; a prefix whose PNG
+# cannot be written is refused before anything renders.
+cp "$CLASSIC" "q'uote.json"
+"$BIN" bench realtime "q'uote.json" --width 16 --height 12 --frames 2 --reference-spp 2 \
+    --threads 1 --methods off --out rq >rq.txt 2>rq.err || fail "bench realtime, quoted scene: $(cat rq.err)"
+[ -s rq.png ] && tail -n1 rq.txt | grep -q "rq.png" || fail "bench realtime: no plot for a quoted scene name"
+mkdir -p dirpng.png
+"$BIN" bench realtime "$CLASSIC" --width 16 --height 12 --frames 2 --reference-spp 2 \
+    --threads 1 --methods off --out dirpng >/dev/null 2>&1
+rc=$?
+[ "$rc" -eq 2 ] || fail "bench realtime with PREFIX.png a directory: exit $rc"
+[ ! -e dirpng.csv ] || fail "bench realtime wrote a CSV although its plot could not be written"
 # col METHOD N: column N of METHOD's row in the table.
 col() {
     awk -v m="$1" -v n="$2" '$1 == m { print $n }' rt.txt

@@ -23,6 +23,10 @@ double bench_build_seconds(const tr_scene *s);
  * missing or failed (no plot, nothing written); -1: the file could not be written (`err`
  * says why). */
 int bench_plot_png(const char *script, const char *png, tr_error *err);
+/* The file name of `path` (what follows its last '/') for a plot's title, at most n - 1
+ * characters into out, with anything that could end or escape gnuplot's single-quoted
+ * string (a quote, a backslash, a control or non-ASCII byte) replaced by '_'. */
+void bench_plot_name(const char *path, char *out, size_t n);
 
 int bench_rays(int argc, char **argv);
 int bench_convergence(int argc, char **argv);

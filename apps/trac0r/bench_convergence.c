@@ -582,14 +582,8 @@ int bench_convergence(int argc, char **argv) {
         len += (size_t)snprintf(script + len, cap - len, "EOD\n");
     }
     /* The title names the scene by its file name, kept out of gnuplot's quoting. */
-    const char *base = strrchr(c.scene, '/') ? strrchr(c.scene, '/') + 1 : c.scene;
     char name[64];
-    size_t nl = 0;
-    for (; base[nl] && nl + 1 < sizeof name; ++nl) {
-        const char ch = base[nl];
-        name[nl] = (ch >= ' ' && ch <= '~' && ch != '\'' && ch != '\\') ? ch : '_';
-    }
-    name[nl] = '\0';
+    bench_plot_name(c.scene, name, sizeof name);
     for (int panel = 0; panel < 2; ++panel) {
         len += (size_t)snprintf(
             script + len, cap - len,

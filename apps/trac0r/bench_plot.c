@@ -138,3 +138,13 @@ int bench_plot_png(const char *script, const char *png, tr_error *err) {
     }
     return tr_outfile_commit(f, err) == TR_OK ? 1 : -1;
 }
+
+void bench_plot_name(const char *path, char *out, size_t n) {
+    const char *base = strrchr(path, '/') ? strrchr(path, '/') + 1 : path;
+    size_t k = 0;
+    for (; base[k] && k + 1 < n; ++k) {
+        const char ch = base[k];
+        out[k] = (ch >= ' ' && ch <= '~' && ch != '\'' && ch != '\\') ? ch : '_';
+    }
+    out[k] = '\0';
+}

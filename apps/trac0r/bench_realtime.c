@@ -7,6 +7,7 @@
 #define _POSIX_C_SOURCE 200809L
 #include <errno.h>
 #include <math.h>
+#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -36,7 +37,8 @@ static void realtime_help(void) {
            "tracers limit bounces; --bias-reference-depth measures what that costs).\n"
            "Prints a table per method (milliseconds per stage, FPS of render +\n"
            "reconstruction, mean and worst PSNR, SSIM, flicker) and writes PREFIX.csv (one\n"
-           "row per method and frame). Progress goes to stderr while references render.\n"
+           "row per method and frame) and PREFIX.png (gnuplot: each method's PSNR and frame\n"
+           "time per frame). Progress goes to stderr while references render.\n"
            "\n"
            "Flicker: the RMS over pixels of the change of luminance from the previous frame\n"
            "minus the reference's change, so that motion the reference has is not counted.\n"
@@ -302,6 +304,83 @@ static double flicker(const float *a, const float *ap, const float *r, const flo
     return sqrt(s / (double)px);
 }
 
+/* Appends to the text buf (capacity cap, *len used) what printf would write; once it is
+ * full, *len stays at cap and nothing more is added. */
+static void put(char *buf, size_t cap, size_t *len, const char *fmt, ...)
+    __attribute__((format(printf, 4, 5)));
+static void put(char *buf, size_t cap, size_t *len, const char *fmt, ...) {
+    if (*len >= cap) {
+        return;
+    }
+    va_list ap;
+    va_start(ap, fmt);
+    const int n = vsnprintf(buf + *len, cap - *len, fmt, ap);
+    va_end(ap);
+    *len = n < 0 || (size_t)n >= cap - *len ? cap : *len + (size_t)n;
+}
+
+/* PREFIX.png (gnuplot, bench_plot_png): each method's PSNR per frame (the cut marked,
+ * 30 dB dashed) and its frame time, render + reconstruction (16.7 and 33.3 ms dashed).
+ * As bench_plot_png: 1 written, 0 no gnuplot, -1 the file could not be written. */
+static int plot_realtime(const rt_frame_stats *st, const int *on, uint32_t frames, uint32_t cut,
+                         const char *scene, const char *png, tr_error *err) {
+    const size_t cap = 4096 + (size_t)TR_RECON_COUNT * (frames * 40u + 64u);
+    char *script = malloc(cap);
+    if (!script) {
+        tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "%.200s: out of memory", png);
+        return -1;
+    }
+    size_t len = 0;
+    for (int m = 0; m < TR_RECON_COUNT; ++m) {
+        if (!on[m]) {
+            continue;
+        }
+        put(script, cap, &len, "$d%d << EOD\n", m);
+        for (uint32_t f = 0; f < frames; ++f) {
+            const rt_frame_stats *s = &st[(size_t)m * frames + f];
+            const double total = s->render_ms + s->temporal_ms + s->spatial_ms;
+            /* An identical frame's PSNR is infinite: left out of the PSNR panel. */
+            put(script, cap, &len, "%u %.4f %.4f\n", f, isfinite(s->psnr) ? s->psnr : NAN, total);
+        }
+        put(script, cap, &len, "EOD\n");
+    }
+    char name[64];
+    bench_plot_name(scene, name, sizeof name);
+    put(script, cap, &len,
+        "set multiplot layout 1,2\nset grid\nset key below\n"
+        "set xlabel 'frame'\nset datafile missing 'nan'\n");
+    if (cut) {
+        put(script, cap, &len,
+            "set arrow 1 from %u, graph 0 to %u, graph 1 nohead dt 2 lw 2 lc 'black'\n"
+            "set label 1 'cut' at %u, graph 0.97 offset 0.5, 0\n",
+            cut, cut, cut);
+    }
+    for (int panel = 0; panel < 2; ++panel) {
+        put(script, cap, &len, "set ylabel '%s'\nset title '%s: %s'\n",
+            panel == 0 ? "PSNR (dB)" : "render + reconstruction (ms)", name,
+            panel == 0 ? "PSNR per frame" : "frame time");
+        put(script, cap, &len, "%splot ", panel == 0 ? "" : "set yrange [0:*]\n");
+        int first = 1;
+        for (int m = 0; m < TR_RECON_COUNT; ++m) {
+            if (!on[m]) {
+                continue;
+            }
+            put(script, cap, &len, "%s$d%d using 1:%d with linespoints lw 2 title '%s'",
+                first ? "" : ", ", m, panel == 0 ? 2 : 3, tr_recon_name(m));
+            first = 0;
+        }
+        put(script, cap, &len, "%s\n",
+            panel == 0 ? ", 30 dt 2 lc 'gray' notitle"
+                       : ", 16.67 dt 2 lc 'gray' notitle, 33.33 dt 2 lc "
+                         "'gray' notitle");
+    }
+    put(script, cap, &len, "unset multiplot\n");
+    /* A script that did not fit (it cannot at these sizes) plots nothing. */
+    const int plotted = len < cap ? bench_plot_png(script, png, err) : 0;
+    free(script);
+    return plotted;
+}
+
 int bench_realtime(int argc, char **argv) {
     cli_args a = {.cmd = "bench realtime", .argc = argc, .argv = argv, .i = 0};
     cli_common c;
@@ -378,8 +457,13 @@ int bench_realtime(int argc, char **argv) {
     if (snprintf(csv_path, sizeof csv_path, "%s.csv", prefix) >= (int)sizeof csv_path) {
         return cli_error(&a, "--out: prefix too long");
     }
+    char png_path[4096];
+    if (snprintf(png_path, sizeof png_path, "%s.png", prefix) >= (int)sizeof png_path) {
+        return cli_error(&a, "--out: prefix too long");
+    }
     tr_error err;
-    if (tr_image_check_writable(csv_path, &err) != TR_OK) {
+    if (tr_image_check_writable(csv_path, &err) != TR_OK ||
+        tr_image_check_writable(png_path, &err) != TR_OK) {
         return cli_error(&a, "--out: %s", err.msg);
     }
     const uint32_t width = c.width, height = c.height;
@@ -753,7 +837,13 @@ int bench_realtime(int argc, char **argv) {
             fprintf(stderr, "trac0r bench realtime: cannot write %s\n", csv_path);
             rc = CLI_FAILURE;
         } else {
-            printf("wrote %s\n", csv_path);
+            const int plotted = plot_realtime(st, on, frames, cut, c.scene, png_path, &err);
+            if (plotted < 0) {
+                fprintf(stderr, "trac0r bench realtime: %s\n", err.msg);
+                rc = CLI_FAILURE;
+            }
+            printf("wrote %s%s%s\n", csv_path, plotted > 0 ? " and " : " (gnuplot failed: no plot)",
+                   plotted > 0 ? png_path : "");
         }
     }
     for (int m = 0; m < nm; ++m) {
