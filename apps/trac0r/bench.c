@@ -482,29 +482,28 @@ static int bench_complexity(int argc, char **argv) {
     }
     /* One inline data block per structure, so each draws as one connected line. */
     char script[8192];
-    int len = 0;
+    size_t len = 0;
     for (int k = 0; k < set.count; ++k) {
-        len += snprintf(script + len, sizeof script - (size_t)len, "$d%d << EOD\n", k);
+        bench_plot_put(script, sizeof script, &len, "$d%d << EOD\n", k);
         for (int level = 0; level <= max_level; ++level) {
             if (fps[level][k] > 0.0) {
-                len += snprintf(script + len, sizeof script - (size_t)len, "%u %.5f\n", tris[level],
-                                fps[level][k]);
+                bench_plot_put(script, sizeof script, &len, "%u %.5f\n", tris[level],
+                               fps[level][k]);
             }
         }
-        len += snprintf(script + len, sizeof script - (size_t)len, "EOD\n");
+        bench_plot_put(script, sizeof script, &len, "EOD\n");
     }
-    len += snprintf(script + len, sizeof script - (size_t)len,
-                    "set logscale xy\nset grid\nset xlabel 'triangles'\n"
-                    "set ylabel 'frames per second (%ux%u, 1 spp)'\n"
-                    "set title 'trac0r bench complexity (thesis figure 3.5)'\n"
-                    "set key top right\nplot ",
-                    c.width, c.height);
+    bench_plot_put(script, sizeof script, &len,
+                   "set logscale xy\nset grid\nset xlabel 'triangles'\n"
+                   "set ylabel 'frames per second (%ux%u, 1 spp)'\n"
+                   "set title 'trac0r bench complexity (thesis figure 3.5)'\n"
+                   "set key top right\nplot ",
+                   c.width, c.height);
     for (int k = 0; k < set.count; ++k) {
-        len += snprintf(script + len, sizeof script - (size_t)len,
-                        "%s$d%d with linespoints lw 2 title '%s'", k ? ", " : "", k,
-                        tr_accel_name(set.type[k]));
+        bench_plot_put(script, sizeof script, &len, "%s$d%d with linespoints lw 2 title '%s'",
+                       k ? ", " : "", k, tr_accel_name(set.type[k]));
     }
-    int plotted = bench_plot_png(script, png_path, &err);
+    int plotted = len < sizeof script ? bench_plot_png(script, png_path, &err) : 0;
     if (plotted < 0) {
         fprintf(stderr, "trac0r bench complexity: %s\n", err.msg);
         return CLI_FAILURE;

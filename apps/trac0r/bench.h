@@ -27,6 +27,11 @@ int bench_plot_png(const char *script, const char *png, tr_error *err);
  * characters into out, with anything that could end or escape gnuplot's single-quoted
  * string (a quote, a backslash, a control or non-ASCII byte) replaced by '_'. */
 void bench_plot_name(const char *path, char *out, size_t n);
+/* Appends to the script buf (capacity cap, *len used) what printf would write; once a
+ * piece does not fit, *len becomes cap and nothing more is added, so the caller plots
+ * only when *len < cap. */
+void bench_plot_put(char *buf, size_t cap, size_t *len, const char *fmt, ...)
+    __attribute__((format(printf, 4, 5)));
 
 int bench_rays(int argc, char **argv);
 int bench_convergence(int argc, char **argv);

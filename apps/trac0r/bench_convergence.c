@@ -571,15 +571,14 @@ int bench_convergence(int argc, char **argv) {
     }
     size_t len = 0;
     for (int i = 0; i < nsizes * nmethods; ++i) {
-        len += (size_t)snprintf(script + len, cap - len, "$d%d << EOD\n", i);
+        bench_plot_put(script, cap, &len, "$d%d << EOD\n", i);
         for (int k = 0; k < runs[i].n; ++k) {
             if (isfinite(runs[i].pt[k].psnr)) {
-                len +=
-                    (size_t)snprintf(script + len, cap - len, "%u %.5f %.4f\n", runs[i].pt[k].spp,
-                                     runs[i].pt[k].seconds, runs[i].pt[k].psnr);
+                bench_plot_put(script, cap, &len, "%u %.5f %.4f\n", runs[i].pt[k].spp,
+                               runs[i].pt[k].seconds, runs[i].pt[k].psnr);
             }
         }
-        len += (size_t)snprintf(script + len, cap - len, "EOD\n");
+        bench_plot_put(script, cap, &len, "EOD\n");
     }
     /* The title names the scene by its file name, kept out of gnuplot's quoting. */
     char name[64];
@@ -598,13 +597,13 @@ int bench_convergence(int argc, char **argv) {
                 i ? ", " : "", i, panel == 0 ? 2 : 1, tr_integrator_name(runs[i].integrator),
                 runs[i].width, runs[i].height);
         }
-        len += (size_t)snprintf(script + len, cap - len,
-                                ", 25 dt 2 lc 'gray' notitle, 30 dt 2 "
-                                "lc 'gray' notitle, 35 dt 2 lc 'gray' "
-                                "notitle, 40 dt 2 lc 'gray' notitle\n");
+        bench_plot_put(script, cap, &len,
+                       ", 25 dt 2 lc 'gray' notitle, 30 dt 2 "
+                       "lc 'gray' notitle, 35 dt 2 lc 'gray' "
+                       "notitle, 40 dt 2 lc 'gray' notitle\n");
     }
-    len += (size_t)snprintf(script + len, cap - len, "unset multiplot\n");
-    int plotted = bench_plot_png(script, png_path, &err);
+    bench_plot_put(script, cap, &len, "unset multiplot\n");
+    int plotted = len < cap ? bench_plot_png(script, png_path, &err) : 0;
     free(script);
     free(runs);
     if (plotted < 0) {

@@ -9,6 +9,7 @@
 #include <fcntl.h>
 #include <poll.h>
 #include <signal.h>
+#include <stdarg.h>
 #include <spawn.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -147,4 +148,15 @@ void bench_plot_name(const char *path, char *out, size_t n) {
         out[k] = (ch >= ' ' && ch <= '~' && ch != '\'' && ch != '\\') ? ch : '_';
     }
     out[k] = '\0';
+}
+
+void bench_plot_put(char *buf, size_t cap, size_t *len, const char *fmt, ...) {
+    if (*len >= cap) {
+        return;
+    }
+    va_list ap;
+    va_start(ap, fmt);
+    const int n = vsnprintf(buf + *len, cap - *len, fmt, ap);
+    va_end(ap);
+    *len = n < 0 || (size_t)n >= cap - *len ? cap : *len + (size_t)n;
 }

@@ -7,7 +7,6 @@
 #define _POSIX_C_SOURCE 200809L
 #include <errno.h>
 #include <math.h>
-#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -304,21 +303,6 @@ static double flicker(const float *a, const float *ap, const float *r, const flo
     return sqrt(s / (double)px);
 }
 
-/* Appends to the text buf (capacity cap, *len used) what printf would write; once it is
- * full, *len stays at cap and nothing more is added. */
-static void put(char *buf, size_t cap, size_t *len, const char *fmt, ...)
-    __attribute__((format(printf, 4, 5)));
-static void put(char *buf, size_t cap, size_t *len, const char *fmt, ...) {
-    if (*len >= cap) {
-        return;
-    }
-    va_list ap;
-    va_start(ap, fmt);
-    const int n = vsnprintf(buf + *len, cap - *len, fmt, ap);
-    va_end(ap);
-    *len = n < 0 || (size_t)n >= cap - *len ? cap : *len + (size_t)n;
-}
-
 /* PREFIX.png (gnuplot, bench_plot_png): each method's PSNR per frame (the cut marked,
  * 30 dB dashed) and its frame time, render + reconstruction (16.7 and 33.3 ms dashed).
  * As bench_plot_png: 1 written, 0 no gnuplot, -1 the file could not be written. */
@@ -335,47 +319,47 @@ static int plot_realtime(const rt_frame_stats *st, const int *on, uint32_t frame
         if (!on[m]) {
             continue;
         }
-        put(script, cap, &len, "$d%d << EOD\n", m);
+        bench_plot_put(script, cap, &len, "$d%d << EOD\n", m);
         for (uint32_t f = 0; f < frames; ++f) {
             const rt_frame_stats *s = &st[(size_t)m * frames + f];
             const double total = s->render_ms + s->temporal_ms + s->spatial_ms;
             /* An identical frame's PSNR is infinite: left out of the PSNR panel. */
-            put(script, cap, &len, "%u %.4f %.4f\n", f, isfinite(s->psnr) ? s->psnr : NAN, total);
+            bench_plot_put(script, cap, &len, "%u %.4f %.4f\n", f,
+                           isfinite(s->psnr) ? s->psnr : NAN, total);
         }
-        put(script, cap, &len, "EOD\n");
+        bench_plot_put(script, cap, &len, "EOD\n");
     }
     char name[64];
     bench_plot_name(scene, name, sizeof name);
-    put(script, cap, &len,
-        "set multiplot layout 1,2\nset grid\nset key below\n"
-        "set xlabel 'frame'\nset datafile missing 'nan'\n");
+    bench_plot_put(script, cap, &len,
+                   "set multiplot layout 1,2\nset grid\nset key below\n"
+                   "set xlabel 'frame'\nset datafile missing 'nan'\n");
     if (cut) {
-        put(script, cap, &len,
-            "set arrow 1 from %u, graph 0 to %u, graph 1 nohead dt 2 lw 2 lc 'black'\n"
-            "set label 1 'cut' at %u, graph 0.97 offset 0.5, 0\n",
-            cut, cut, cut);
+        bench_plot_put(script, cap, &len,
+                       "set arrow 1 from %u, graph 0 to %u, graph 1 nohead dt 2 lw 2 lc 'black'\n"
+                       "set label 1 'cut' at %u, graph 0.97 offset 0.5, 0\n",
+                       cut, cut, cut);
     }
     for (int panel = 0; panel < 2; ++panel) {
-        put(script, cap, &len, "set ylabel '%s'\nset title '%s: %s'\n",
-            panel == 0 ? "PSNR (dB)" : "render + reconstruction (ms)", name,
-            panel == 0 ? "PSNR per frame" : "frame time");
-        put(script, cap, &len, "%splot ", panel == 0 ? "" : "set yrange [0:*]\n");
+        bench_plot_put(script, cap, &len, "set ylabel '%s'\nset title '%s: %s'\n",
+                       panel == 0 ? "PSNR (dB)" : "render + reconstruction (ms)", name,
+                       panel == 0 ? "PSNR per frame" : "frame time");
+        bench_plot_put(script, cap, &len, "%splot ", panel == 0 ? "" : "set yrange [0:*]\n");
         int first = 1;
         for (int m = 0; m < TR_RECON_COUNT; ++m) {
             if (!on[m]) {
                 continue;
             }
-            put(script, cap, &len, "%s$d%d using 1:%d with linespoints lw 2 title '%s'",
-                first ? "" : ", ", m, panel == 0 ? 2 : 3, tr_recon_name(m));
+            bench_plot_put(script, cap, &len, "%s$d%d using 1:%d with linespoints lw 2 title '%s'",
+                           first ? "" : ", ", m, panel == 0 ? 2 : 3, tr_recon_name(m));
             first = 0;
         }
-        put(script, cap, &len, "%s\n",
-            panel == 0 ? ", 30 dt 2 lc 'gray' notitle"
-                       : ", 16.67 dt 2 lc 'gray' notitle, 33.33 dt 2 lc "
-                         "'gray' notitle");
+        bench_plot_put(script, cap, &len, "%s\n",
+                       panel == 0 ? ", 30 dt 2 lc 'gray' notitle"
+                                  : ", 16.67 dt 2 lc 'gray' notitle, 33.33 dt 2 lc "
+                                    "'gray' notitle");
     }
-    put(script, cap, &len, "unset multiplot\n");
-    /* A script that did not fit (it cannot at these sizes) plots nothing. */
+    bench_plot_put(script, cap, &len, "unset multiplot\n");
     const int plotted = len < cap ? bench_plot_png(script, png, err) : 0;
     free(script);
     return plotted;
