@@ -127,7 +127,9 @@ fs_sobol=$(refs 4 --sampler sobol)
 grep -q "frames zsobol, references random" rs5.txt || fail "bench realtime: samplers not named"
 
 # The reconstruction's settings: out-of-range values are refused; --max-history 1 leaves
-# no history, so accumulate is the raw frame to the digit; SVGF's settings change SVGF and
+# no history, so accumulate is the raw frame to the digit when the emission is filtered
+# with the rest (--resolve-emission 0), and above it on average when the lamp's edge is
+# resolved (the default, 4 x 4 rays per edge pixel); SVGF's settings change SVGF and
 # not the bilateral filter; a new frame's weight of 0.5 instead of 1/3 and 1/4 changes
 # frames 2 and 3 of accumulate; the header names the settings.
 expect_usage_error "--svgf-iterations" bench realtime --svgf-iterations 0
@@ -136,6 +138,8 @@ expect_usage_error "--alpha-min" bench realtime --alpha-min 0
 expect_usage_error "--max-history" bench realtime --max-history 0.5
 expect_usage_error "--svgf-sigma-l" bench realtime --svgf-sigma-l x
 expect_usage_error "--taa" bench realtime --taa 1.5
+expect_usage_error "--resolve-emission" bench realtime --resolve-emission 17
+expect_usage_error "--resolve-emission" bench realtime --resolve-emission -1
 rp() {
     n=$1
     shift
@@ -145,7 +149,8 @@ rp() {
 }
 col() { awk -F, -v m="$2" '$1 == m { printf "%s ", $7 }' "rp$1.csv"; }
 rp 0
-rp 1 --max-history 1
+rp 1 --max-history 1 --resolve-emission 0
+rp 4 --max-history 1
 rp 2 --svgf-iterations 1 --svgf-sigma-l 4 --taa 0.5
 rp 3 --alpha-min 0.5
 [ "$(col 1 off)" = "$(col 1 accumulate)" ] ||
@@ -155,6 +160,12 @@ rp 3 --alpha-min 0.5
 [ "$(col 0 svgf)" != "$(col 2 svgf)" ] || fail "SVGF's settings changed nothing"
 [ "$(col 0 accumulate)" != "$(col 3 accumulate)" ] || fail "--alpha-min 0.5 changed nothing"
 grep -q "svgf-iterations 3, svgf-sigma-l 8, taa 0," rp0.txt || fail "defaults not named"
+[ "$(col 4 off)" = "$(col 1 off)" ] || fail "--resolve-emission changed the raw frame"
+mean() { awk -F, -v m="$2" '$1 == m { s += $7; n++ } END { printf "%.4f", s / n }' "rp$1.csv"; }
+awk -v a="$(mean 4 accumulate)" -v r="$(mean 4 off)" 'BEGIN { exit !(a > r + 0.1) }' ||
+    fail "resolved emission: accumulate $(mean 4 accumulate) dB not above raw $(mean 4 off) dB"
+grep -q "4 x 4" rp0.txt || fail "the emission's resolution not named"
+grep -q "4 x 4" rp1.txt && fail "--resolve-emission 0 still names a resolution"
 grep -q "svgf-iterations 1, svgf-sigma-l 4, taa 0.5," rp2.txt || fail "settings not named"
 
 # --animate: the thesis box's last shape (a sphere) moves before every frame but the

@@ -502,7 +502,8 @@ int bench_realtime(int argc, char **argv) {
      * none). */
     const uint32_t frame_passes =
         TR_PASS_ALL |
-        (params.svgf_split && !tr_integrator_is_bidirectional(c.integrator) ? TR_PASS_DIRECT : 0u);
+        (params.svgf_split && !tr_integrator_is_bidirectional(c.integrator) ? TR_PASS_DIRECT : 0u) |
+        (params.emission_samples > 0 && c.integrator == TR_INTEGRATOR_PT ? TR_PASS_EMISSION : 0u);
     ok = ok && tr_film_init_passes(&film, c.width, c.height, frame_passes, &err) == TR_OK &&
          tr_film_init(&rfilm, c.width, c.height, &err) == TR_OK &&
          tr_gbuffer_init(&g, c.width, c.height, &err) == TR_OK;
@@ -571,6 +572,17 @@ int bench_realtime(int argc, char **argv) {
                (double)params.alpha_min, (double)params.max_len, (double)params.max_len_moving,
                params.svgf_iterations, (double)params.svgf_sigma_l, (double)params.svgf_taa_alpha,
                params.svgf_split ? "on" : "off");
+        if (!(frame_passes & TR_PASS_EMISSION)) {
+            printf("emission: filtered with the rest (%s)\n",
+                   params.emission_samples == 0 ? "--resolve-emission 0"
+                                                : "the emission pass needs --integrator pt");
+        } else if (!host_recon) {
+            printf("emission: filtered with the rest (the OpenCL reconstruction keeps it in)\n");
+        } else {
+            printf("emission: kept out of the filters, resolved with %d x %d rays per pixel on "
+                   "emitter edges (its time counted in temporal_ms)\n",
+                   params.emission_samples, params.emission_samples);
+        }
     }
     /* --animate: how far each primitive (the id pass's numbering) moved since the previous
      * frame, for the reconstruction's reprojection. */
@@ -601,6 +613,8 @@ int bench_realtime(int argc, char **argv) {
         }
     }
     const double t_start = tr_time_now();
+    double resolve_sum_ms = 0.0; /* tr_resolve_emission over the frames */
+    uint64_t resolve_px = 0;
     for (uint32_t f = 0; rc == CLI_OK && f < frames; ++f) {
         tr_camera cam;
         if (path_camera(&cam0, diag, f, frames, cut, &cam, &err) != TR_OK) {
@@ -660,6 +674,21 @@ int bench_realtime(int argc, char **argv) {
             rc = CLI_FAILURE;
             break;
         }
+        /* The emitters' edges resolved over the pixels' area, once for every method. */
+        double resolve_ms = 0.0;
+        if (host_recon && g.has_emission) {
+            const double t0 = tr_time_now();
+            uint32_t resolved = 0;
+            if (tr_resolve_emission(scene, &cam, params.emission_samples, threads, &g, &resolved,
+                                    &err) != TR_OK) {
+                fprintf(stderr, "trac0r bench realtime: frame %u: %s\n", f, err.msg);
+                rc = CLI_FAILURE;
+                break;
+            }
+            resolve_ms = (tr_time_now() - t0) * 1e3;
+            resolve_sum_ms += resolve_ms;
+            resolve_px += resolved;
+        }
         /* The moving shape's pixels (on the host, where the id pass is), with the
          * references' own error over them: the same for every method. */
         size_t n_mv = 0;
@@ -684,7 +713,7 @@ int bench_realtime(int argc, char **argv) {
             }
             rt_frame_stats *s = &st[(size_t)m * frames + f];
             s->render_ms = render_ms;
-            s->temporal_ms = rec[m].ms_temporal;
+            s->temporal_ms = rec[m].ms_temporal + (m != TR_RECON_OFF ? resolve_ms : 0.0);
             s->spatial_ms = rec[m].ms_spatial;
             if (rdev[m]) {
                 tr_recon_device_times(rdev[m], &s->temporal_ms, &s->spatial_ms);
@@ -779,6 +808,10 @@ int bench_realtime(int argc, char **argv) {
             } else {
                 printf("\n");
             }
+        }
+        if (resolve_px > 0 || (host_recon && (frame_passes & TR_PASS_EMISSION))) {
+            printf("emission resolved: %.1f pixels and %.2f ms per frame (mean)\n",
+                   (double)resolve_px / frames, resolve_sum_ms / frames);
         }
         if (animate && host_recon) {
             /* Ghosting of the moving shape: each method's PSNR over its pixels. */

@@ -398,7 +398,10 @@ const char cli_recon_help[] =
     "  --svgf-sigma-l S     SVGF's luminance weight, 0.1..1000 (default 8)\n"
     "  --taa A              SVGF's temporal antialiasing, the new frame's weight,\n"
     "                       0..1 (default 0: off)\n"
-    "  --svgf-split         SVGF filters direct and indirect light apart (CPU only)\n";
+    "  --svgf-split         SVGF filters direct and indirect light apart (CPU only)\n"
+    "  --resolve-emission N emitters' edges: N x N camera rays per edge pixel, added\n"
+    "                       after the filters, 0..16 (default 4; 0: the emission is\n"
+    "                       filtered with the rest; pt only, CPU reconstruction only)\n";
 
 int cli_recon_option(cli_args *a, tr_recon_params *p) {
     if (cli_is(a, "--alpha-min")) {
@@ -418,6 +421,9 @@ int cli_recon_option(cli_args *a, tr_recon_params *p) {
     }
     if (cli_is(a, "--taa")) {
         return cli_parse_float(a, 0.0f, 1.0f, &p->svgf_taa_alpha);
+    }
+    if (cli_is(a, "--resolve-emission")) {
+        return cli_parse_int(a, 0, TR_RESOLVE_EMISSION_MAX, &p->emission_samples);
     }
     if (cli_is(a, "--svgf-split")) {
         p->svgf_split = 1;

@@ -140,8 +140,9 @@ static int parse_passes(cli_args *a, uint32_t *passes) {
         size_t len = strcspn(p, ",");
         uint32_t bit = 0;
         if (len == 3 && strncmp(p, "all", 3) == 0) {
-            /* The direct pass feeds the real-time filters; render does not write it. */
-            bit = TR_PASS_MASK & ~TR_PASS_DIRECT;
+            /* The direct and emission passes feed the real-time filters; render does not
+             * write them. */
+            bit = TR_PASS_MASK & ~(TR_PASS_DIRECT | TR_PASS_EMISSION);
         }
         for (uint32_t k = 1; k <= TR_PASS_VARIANCE && !bit; k <<= 1) {
             const char *name = tr_pass_name(k);

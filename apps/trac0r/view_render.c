@@ -160,8 +160,23 @@ static int reconstruct(view_renderer *r, const tr_camera *cam, int method, int t
     if (tr_gbuffer_from_film(&r->gb, &r->film, err) != TR_OK) {
         return TR_ERR;
     }
-    return tr_recon_frame_moving(&r->rec, &r->gb, cam, motion, ids, method, &p, threads,
-                                 r->disp.sum, err);
+    /* Emitters' edges resolved over the pixels' area (post.h); shown as part of the
+     * temporal stage's time. */
+    double resolve_ms = 0.0;
+    if (r->gb.has_emission && method != TR_RECON_OFF) {
+        const double t0 = tr_time_now();
+        if (tr_resolve_emission(r->scene, cam, p.emission_samples, threads, &r->gb, NULL, err) !=
+            TR_OK) {
+            return TR_ERR;
+        }
+        resolve_ms = (tr_time_now() - t0) * 1e3;
+    }
+    if (tr_recon_frame_moving(&r->rec, &r->gb, cam, motion, ids, method, &p, threads, r->disp.sum,
+                              err) != TR_OK) {
+        return TR_ERR;
+    }
+    r->rec.ms_temporal += resolve_ms;
+    return TR_OK;
 }
 
 static void *render_main(void *arg) {
@@ -255,8 +270,16 @@ static void *render_main(void *arg) {
                 r->params.svgf_split && !tr_integrator_is_bidirectional(r->cfg.integrator)
                     ? TR_PASS_DIRECT
                     : 0u;
+            /* The emission pass where the host reconstructs and resolves emitters' edges
+             * (pt only; the OpenCL reconstruction keeps the emission in). */
+            const uint32_t emission = r->params.emission_samples > 0 &&
+                                              r->cfg.integrator == TR_INTEGRATOR_PT &&
+                                              strcmp(tr_device_kind(r->dev), "opencl") != 0
+                                          ? TR_PASS_EMISSION
+                                          : 0u;
             if (resize_buffers(r, rcam.screen_width, rcam.screen_height,
-                               method != TR_RECON_OFF ? TR_PASS_ALL | direct : 0u, &err) != TR_OK ||
+                               method != TR_RECON_OFF ? TR_PASS_ALL | direct | emission : 0u,
+                               &err) != TR_OK ||
                 tr_device_clear(r->dev, &err) != TR_OK) {
                 pthread_mutex_lock(&r->mu);
                 r->failed = 1;

@@ -1,7 +1,8 @@
 /* film.h - the float accumulation buffer: per pixel a sum of radiance and a sample count,
  * and, for the passes asked for (TR_PASS_*), sums of albedo, normal and depth, the
- * primitive id of the pixel's first sample, sums of squared radiance (the variance) and of
- * direct radiance (TR_PASS_DIRECT). Tonemapping
+ * primitive id of the pixel's first sample, sums of squared radiance (the variance), of
+ * direct radiance (TR_PASS_DIRECT) and of the first hit's emission (TR_PASS_EMISSION).
+ * Tonemapping
  * happens only when the film is written out (image.h). Two films of one size merge exactly: sums
  * and counts add. */
 #ifndef TRAC0R_FILM_H
@@ -28,6 +29,7 @@ typedef struct tr_film {
     uint32_t *prim;  /* TR_PASS_PRIM: triangle index + 1 of the pixel's first sample, 0: none */
     float *sq;       /* TR_PASS_VARIANCE: 3 floats per pixel, sums of squared radiance */
     float *direct;   /* TR_PASS_DIRECT: 3 floats per pixel, sums of direct radiance */
+    float *emission; /* TR_PASS_EMISSION: 3 floats per pixel, sums of the first hit's emission */
 } tr_film;
 
 /* Checks, allocating nothing, that a film of width x height may be made: at least 1x1
@@ -58,8 +60,9 @@ int tr_film_pass_pixel(const tr_film *f, uint32_t pass, uint32_t x, uint32_t y, 
  * sum, as when the two sample ranges had been accumulated apart and then added. */
 int tr_film_accumulate(tr_film *dst, const tr_film *src, tr_error *err);
 /* A new radiance-only film (free it with tr_film_free) whose pixels' means are pass
- * `pass` of f: albedo, normal, the variance and direct radiance as RGB, depth and the primitive id
- * in all three channels (the id as a float, exact up to 2^24); for writing a pass as an image. */
+ * `pass` of f: albedo, normal, the variance, direct radiance and emission as RGB, depth and the
+ * primitive id in all three channels (the id as a float, exact up to 2^24); for writing a pass as
+ * an image. */
 int tr_film_extract_pass(const tr_film *f, uint32_t pass, tr_film *out, tr_error *err);
 /* The variance of the mean radiance of pixel i (row-major index), channel c, from a film
  * keeping TR_PASS_VARIANCE: with n samples, sum S and sum of squares Q, the unbiased
@@ -67,8 +70,8 @@ int tr_film_extract_pass(const tr_film *f, uint32_t pass, tr_film *out, tr_error
  * and clamped at 0 (rounding can make a constant pixel's difference slightly negative);
  * 0 below two samples. */
 float tr_film_variance(const tr_film *f, size_t i, int c);
-/* "albedo", "normal", "depth", "id", "variance", "direct" for one TR_PASS_* bit; NULL for
- * anything else. */
+/* "albedo", "normal", "depth", "id", "variance", "direct", "emission" for one TR_PASS_* bit; NULL
+ * for anything else. */
 const char *tr_pass_name(uint32_t pass);
 
 #endif

@@ -110,20 +110,25 @@ double tr_psnr(double mse);
 /* One frame's mean radiance and passes, planar, row-major, top row first. */
 typedef struct tr_gbuffer {
     uint32_t width, height;
-    float *color;   /* 3 floats per pixel: linear radiance */
-    float *albedo;  /* 3 per pixel */
-    float *normal;  /* 3 per pixel, unit (zero where nothing was hit) */
-    float *depth;   /* 1 per pixel: distance along the camera ray, 0 where nothing was hit */
-    uint32_t *prim; /* 1 per pixel: triangle index + 1, 0 where nothing was hit */
-    float *direct;  /* 3 per pixel: the direct part of color (TR_PASS_DIRECT) */
-    int has_direct; /* whether direct holds the film's direct pass (else it is not read) */
+    float *color;     /* 3 floats per pixel: linear radiance */
+    float *albedo;    /* 3 per pixel */
+    float *normal;    /* 3 per pixel, unit (zero where nothing was hit) */
+    float *depth;     /* 1 per pixel: distance along the camera ray, 0 where nothing was hit */
+    uint32_t *prim;   /* 1 per pixel: triangle index + 1, 0 where nothing was hit */
+    float *direct;    /* 3 per pixel: the direct part of color (TR_PASS_DIRECT) */
+    int has_direct;   /* whether direct holds the film's direct pass (else it is not read) */
+    float *emission;  /* 3 per pixel: the first hit's emission in color (TR_PASS_EMISSION) */
+    int has_emission; /* whether emission holds the film's emission pass (else not read) */
+    float *emission_resolved; /* 3 per pixel: the emission resolved over each pixel's area */
+    int has_resolved;         /* whether emission_resolved is set (tr_resolve_emission) */
 } tr_gbuffer;
 
 int tr_gbuffer_init(tr_gbuffer *g, uint32_t width, uint32_t height, tr_error *err);
 void tr_gbuffer_free(tr_gbuffer *g);
 /* The film's means into g (of the film's size). A pass the film lacks reads as albedo 1,
  * normal, depth and id 0 (the guided filters then fall back on colour alone); has_direct
- * says whether the film kept the direct pass. */
+ * and has_emission say whether the film kept the direct and emission passes; has_resolved
+ * is cleared. */
 int tr_gbuffer_from_film(tr_gbuffer *g, const struct tr_film *film, tr_error *err);
 
 /* What tr_recon_frame does to a frame, each method one stage more than "accumulate". */
@@ -157,6 +162,9 @@ typedef struct tr_recon_params {
     float svgf_taa_alpha; /* SVGF's temporal antialiasing: new-frame weight (0: off) */
     int svgf_split;       /* 1: SVGF filters direct and indirect apart where the frame has the
                              direct pass (Schied et al. 2017, section 4) */
+    int emission_samples; /* n of tr_resolve_emission for the callers that resolve the
+                             emission (bench realtime, view): n x n rays per edge pixel;
+                             0: they keep the emission in the filtered frame */
 } tr_recon_params;
 
 tr_recon_params tr_recon_params_default(void);
@@ -180,8 +188,9 @@ typedef struct tr_recon {
     /* SVGF with direct and indirect apart: then hist_color and hist_moments hold the
      * indirect part and these the direct one (demodulated, luminance moments). */
     float *hist_direct[2], *hist_dmoments[2];
-    float *illum_d; /* scratch: this frame's demodulated direct illumination */
-    int hist_split; /* whether the history was written split */
+    float *illum_d;                 /* scratch: this frame's demodulated direct illumination */
+    float *reflected, *reflected_d; /* scratch: colour and direct less the frame's emission */
+    int hist_split;                 /* whether the history was written split */
     int have_taa;
     double ms_temporal, ms_spatial; /* the stages' wall times in the last tr_recon_frame */
 } tr_recon;
@@ -193,7 +202,9 @@ void tr_recon_reset(tr_recon *r);
 /* Reconstructs frame g, rendered through cam, with `method` into out (3 floats per
  * pixel), on up to `threads` OpenMP threads (0: the default); the result does not
  * depend on the thread count. The history then holds this frame. Fails on a size other
- * than the state's or an unknown method. */
+ * than the state's or an unknown method. A frame with the emission pass (has_emission) is
+ * filtered without it, and it is added to the result after: emission_resolved where
+ * has_resolved is set, else the frame's own (method "off" leaves the frame as it is). */
 int tr_recon_frame(tr_recon *r, const tr_gbuffer *g, const tr_camera *cam, int method,
                    const tr_recon_params *p, int threads, float *out, tr_error *err);
 /* tr_recon_frame for a scene whose shapes move (view --animate): motion[id] is how far
@@ -205,6 +216,22 @@ int tr_recon_frame(tr_recon *r, const tr_gbuffer *g, const tr_camera *cam, int m
 int tr_recon_frame_moving(tr_recon *r, const tr_gbuffer *g, const tr_camera *cam,
                           const tr_vec3 *motion, uint32_t motion_count, int method,
                           const tr_recon_params *p, int threads, float *out, tr_error *err);
+
+/* The largest n of tr_resolve_emission. */
+#define TR_RESOLVE_EMISSION_MAX 16
+
+struct tr_scene;
+/* Resolves g's emission (the first hit's, TR_PASS_EMISSION) over each pixel's area where
+ * it matters: every pixel next to an edge between pixels whose sample saw emission and
+ * pixels whose sample did not traces an n x n grid of camera rays through `cam` (the
+ * frame's camera) into the committed scene and takes the mean emission they see at their
+ * first hit; other pixels keep their own. The result goes to g->emission_resolved and
+ * g->has_resolved is set, so that tr_recon_frame adds it after filtering: a lamp's edge
+ * antialiased at one sample per pixel. n in 1..TR_RESOLVE_EMISSION_MAX; `resolved` (may
+ * be NULL) gets the number of pixels traced. Runs on the host on up to `threads` threads
+ * (0: the default), whatever device rendered the frame. */
+int tr_resolve_emission(const struct tr_scene *scene, const tr_camera *cam, int n, int threads,
+                        tr_gbuffer *g, uint32_t *resolved, tr_error *err);
 
 /* The spatial filters alone, on one image `in` (3 floats per pixel) guided by g's
  * passes (`trac0r render --denoise`): the bilateral filter on radiance, à-trous on

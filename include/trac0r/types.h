@@ -101,6 +101,13 @@ typedef struct tr_camera {
  * pt and naive write it (tr_trace_pt: what goes where); bdpt does not. Radiance minus direct
  * is the indirect part. */
 #define TR_PASS_DIRECT 32u
-#define TR_PASS_MASK 63u /* every pass bit a film knows */
+/* Not a surface either: the emission the camera ray sees at its first hit (an emitter's, or
+ * the environment's and the sun's where it leaves the scene), summed like radiance; radiance
+ * minus it is the light the scene reflects. The real-time reconstruction keeps it out of its
+ * filters and adds back an estimate resolved over the pixel's area (tr_resolve_emission), so
+ * that a lamp's edge is antialiased at 1 spp. pt and naive write it (naive's with its
+ * roulette weight and without the environment, which naive does not see); bdpt does not. */
+#define TR_PASS_EMISSION 64u
+#define TR_PASS_MASK 127u /* every pass bit a film knows */
 
 #endif

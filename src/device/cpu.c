@@ -98,6 +98,11 @@ int tr_render_config_check(const tr_render_config *cfg, tr_error *err) {
                             "the direct pass needs the pt or naive integrator, not %s",
                             tr_integrator_name(cfg->integrator));
     }
+    if ((cfg->passes & TR_PASS_EMISSION) != 0u && tr_integrator_is_bidirectional(cfg->integrator)) {
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "the emission pass needs the pt or naive integrator, not %s",
+                            tr_integrator_name(cfg->integrator));
+    }
     return TR_OK;
 }
 
@@ -148,6 +153,7 @@ tr_film_view tr_film_view_of(tr_film *film) {
                                        film->depth, film->prim, film->width, film->passes);
     v.sq = film->sq;
     v.direct = film->direct;
+    v.emission = film->emission;
     return v;
 }
 

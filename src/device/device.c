@@ -313,6 +313,9 @@ int tr_device_read_film(tr_device *dev, tr_film *film, tr_error *err) {
     if (film->direct) {
         memcpy(film->direct, src->direct, 3 * n * sizeof *film->direct);
     }
+    if (film->emission) {
+        memcpy(film->emission, src->emission, 3 * n * sizeof *film->emission);
+    }
     return TR_OK;
 }
 

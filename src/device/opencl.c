@@ -161,12 +161,13 @@ enum {
     ARG_FILM_PRIM,
     ARG_FILM_SQ,
     ARG_FILM_DIRECT,
+    ARG_FILM_EMISSION,
     ARG_RAYS,
     ARG_AFTER_ARRAYS
 };
 static const char *const arg_names[ARG_AFTER_ARRAYS] = {
-    "scene_info", "frame",     "film_sum", "film_count",  "film_albedo", "film_normal",
-    "film_depth", "film_prim", "film_sq",  "film_direct", "rays_per_row"};
+    "scene_info", "frame",     "film_sum", "film_count",  "film_albedo",   "film_normal",
+    "film_depth", "film_prim", "film_sq",  "film_direct", "film_emission", "rays_per_row"};
 
 /* The film's buffers on the device: radiance sum and count, then the passes in TR_PASS_*
  * bit order; a pass not kept has a one-element placeholder. */
@@ -179,12 +180,13 @@ enum {
     FILM_PRIM,
     FILM_SQ,
     FILM_DIRECT,
+    FILM_EMISSION,
     FILM_BUFFERS
 };
 /* Bytes per pixel of each film buffer, and the pass bit it belongs to (0: always kept). */
 static const size_t film_elem[FILM_BUFFERS] = {
-    3 * sizeof(float), sizeof(uint32_t), 3 * sizeof(float), 3 * sizeof(float),
-    sizeof(float),     sizeof(uint32_t), 3 * sizeof(float), 3 * sizeof(float)};
+    3 * sizeof(float), sizeof(uint32_t),  3 * sizeof(float), 3 * sizeof(float), sizeof(float),
+    sizeof(uint32_t),  3 * sizeof(float), 3 * sizeof(float), 3 * sizeof(float)};
 static const uint32_t film_pass[FILM_BUFFERS] = {0u,
                                                  0u,
                                                  TR_PASS_ALBEDO,
@@ -192,7 +194,8 @@ static const uint32_t film_pass[FILM_BUFFERS] = {0u,
                                                  TR_PASS_DEPTH,
                                                  TR_PASS_PRIM,
                                                  TR_PASS_VARIANCE,
-                                                 TR_PASS_DIRECT};
+                                                 TR_PASS_DIRECT,
+                                                 TR_PASS_EMISSION};
 
 struct tr_cl_context {
     tr_cl_device_info info;
@@ -987,6 +990,7 @@ int tr_cl_render_frame(tr_cl_context *ctx, const tr_frame *f, uint64_t *rays_out
                                             &ctx->film[FILM_PRIM],
                                             &ctx->film[FILM_SQ],
                                             &ctx->film[FILM_DIRECT],
+                                            &ctx->film[FILM_EMISSION],
                                             &ctx->rays};
     for (int a = ARG_FRAME; a < ARG_AFTER_ARRAYS; ++a) {
         rc = clSetKernelArg(ctx->kernel, base + (cl_uint)a, sizeof(cl_mem), bufs[a]);
@@ -1036,8 +1040,8 @@ int tr_cl_read_film(tr_cl_context *ctx, tr_film *film, tr_error *err) {
                             "the OpenCL film does not keep passes 0x%x",
                             film->passes & ~ctx->passes);
     }
-    void *dst[FILM_BUFFERS] = {film->sum,   film->count, film->albedo, film->normal,
-                               film->depth, film->prim,  film->sq,     film->direct};
+    void *dst[FILM_BUFFERS] = {film->sum,  film->count, film->albedo, film->normal,  film->depth,
+                               film->prim, film->sq,    film->direct, film->emission};
     for (int i = 0; i < FILM_BUFFERS; ++i) {
         if (!dst[i] || (film_pass[i] != 0u && (film->passes & film_pass[i]) == 0u)) {
             continue;

@@ -56,6 +56,9 @@ int tr_film_init_passes(tr_film *f, uint32_t width, uint32_t height, uint32_t pa
     if (passes & TR_PASS_DIRECT) {
         ok = ok && (f->direct = calloc(3 * n, sizeof *f->direct)) != NULL;
     }
+    if (passes & TR_PASS_EMISSION) {
+        ok = ok && (f->emission = calloc(3 * n, sizeof *f->emission)) != NULL;
+    }
     if (!ok) {
         tr_film_free(f);
         return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory allocating a %ux%u film",
@@ -76,6 +79,7 @@ void tr_film_free(tr_film *f) {
     free(f->prim);
     free(f->sq);
     free(f->direct);
+    free(f->emission);
     memset(f, 0, sizeof *f);
 }
 
@@ -100,6 +104,9 @@ void tr_film_clear(tr_film *f) {
     }
     if (f->direct) {
         memset(f->direct, 0, 3 * n * sizeof *f->direct);
+    }
+    if (f->emission) {
+        memset(f->emission, 0, 3 * n * sizeof *f->emission);
     }
 }
 
@@ -159,9 +166,10 @@ int tr_film_pass_pixel(const tr_film *f, uint32_t pass, uint32_t x, uint32_t y, 
         out[0] = f->depth[i] * inv;
         return TR_OK;
     }
-    const float *src = pass == TR_PASS_ALBEDO   ? f->albedo
-                       : pass == TR_PASS_DIRECT ? f->direct
-                                                : f->normal;
+    const float *src = pass == TR_PASS_ALBEDO     ? f->albedo
+                       : pass == TR_PASS_DIRECT   ? f->direct
+                       : pass == TR_PASS_EMISSION ? f->emission
+                                                  : f->normal;
     for (int k = 0; k < 3; ++k) {
         out[k] = src[3 * i + (size_t)k] * inv;
     }
@@ -200,6 +208,7 @@ int tr_film_accumulate(tr_film *dst, const tr_film *src, tr_error *err) {
     add_floats(dst->depth, src->depth, n);
     add_floats(dst->sq, src->sq, 3 * n);
     add_floats(dst->direct, src->direct, 3 * n);
+    add_floats(dst->emission, src->emission, 3 * n);
     for (size_t i = 0; i < n; ++i) {
         dst->count[i] += src->count[i];
     }
@@ -234,10 +243,11 @@ int tr_film_extract_pass(const tr_film *f, uint32_t pass, tr_film *out, tr_error
         out->count[i] = f->count[i];
         for (int c = 0; c < 3; ++c) {
             const size_t k = 3 * i + (size_t)c;
-            out->sum[k] = pass == TR_PASS_ALBEDO   ? f->albedo[k]
-                          : pass == TR_PASS_NORMAL ? f->normal[k]
-                          : pass == TR_PASS_DIRECT ? f->direct[k]
-                                                   : f->depth[i];
+            out->sum[k] = pass == TR_PASS_ALBEDO     ? f->albedo[k]
+                          : pass == TR_PASS_NORMAL   ? f->normal[k]
+                          : pass == TR_PASS_DIRECT   ? f->direct[k]
+                          : pass == TR_PASS_EMISSION ? f->emission[k]
+                                                     : f->depth[i];
         }
     }
     return TR_OK;
@@ -257,6 +267,8 @@ const char *tr_pass_name(uint32_t pass) {
         return "variance";
     case TR_PASS_DIRECT:
         return "direct";
+    case TR_PASS_EMISSION:
+        return "emission";
     default:
         return NULL;
     }

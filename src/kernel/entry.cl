@@ -26,7 +26,8 @@ __kernel void tr_cl_render(TR_SCENE_ARRAYS(TR_CL_ARRAY_PARAM) __global const uin
                            __global uint *film_count, __global float *film_albedo,
                            __global float *film_normal, __global float *film_depth,
                            __global uint *film_prim, __global float *film_sq,
-                           __global float *film_direct, __global uint *rays_per_row) {
+                           __global float *film_direct, __global float *film_emission,
+                           __global uint *rays_per_row) {
     const tr_frame f = *frame;
     uint gx0, gy0, nx, ny;
     tr_frame_grid(&f, &gx0, &gy0, &nx, &ny);
@@ -46,6 +47,7 @@ __kernel void tr_cl_render(TR_SCENE_ARRAYS(TR_CL_ARRAY_PARAM) __global const uin
                                           film_depth, film_prim, f.camera.screen_width, f.passes);
     film.sq = film_sq;
     film.direct = film_direct;
+    film.emission = film_emission;
     const uint rays =
         tr_render_grid_rows(&s, &f, &film, gx0 + gx, gy0 + gy, gx0 + gx + 1u, gy0 + gy + 1u);
     atomic_add(&rays_per_row[gy], rays);

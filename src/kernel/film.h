@@ -5,7 +5,8 @@
  * A film is a set of per-pixel sums, row-major, top row first: radiance (3 floats), a
  * sample count, and, for the passes kept (TR_PASS_*), albedo and normal (3 floats each),
  * depth (1 float), the primitive id of the pixel's first sample (1 word) and squared
- * radiance (3 floats, for the variance) and direct radiance (3 floats). The mean of a pixel is its
+ * radiance (3 floats, for the variance), direct radiance and the first hit's emission
+ * (3 floats each). The mean of a pixel is its
  * sum over its count; sums and counts of two films add (src/film/film.c). */
 #ifndef TR_KERNEL_FILM_H
 #define TR_KERNEL_FILM_H
@@ -40,6 +41,7 @@ TR_FN void tr_sample_surface(tr_sample *out, const tr_bsdf_params *m, tr_vec3 di
 TR_FN void tr_sample_clear(tr_sample *out) {
     out->radiance = v3s(0.0f);
     out->direct = v3s(0.0f);
+    out->emission = v3s(0.0f);
     out->albedo = v3s(0.0f);
     out->normal = v3s(0.0f);
     out->depth = 0.0f;
@@ -64,8 +66,9 @@ typedef struct tr_film_view {
     TR_GLOBAL float *normal;
     TR_GLOBAL float *depth;
     TR_GLOBAL uint32_t *prim;
-    TR_GLOBAL float *sq;     /* TR_PASS_VARIANCE: squared radiance; set after tr_film_view_make */
-    TR_GLOBAL float *direct; /* TR_PASS_DIRECT: direct radiance; set after tr_film_view_make */
+    TR_GLOBAL float *sq;       /* TR_PASS_VARIANCE: squared radiance; set after tr_film_view_make */
+    TR_GLOBAL float *direct;   /* TR_PASS_DIRECT: direct radiance; set after tr_film_view_make */
+    TR_GLOBAL float *emission; /* TR_PASS_EMISSION: the same */
     uint32_t width;
     uint32_t passes;
 } tr_film_view;
@@ -84,6 +87,7 @@ TR_FN tr_film_view tr_film_view_make(TR_GLOBAL float *sum, TR_GLOBAL uint32_t *c
     v.prim = prim;
     v.sq = 0;
     v.direct = 0;
+    v.emission = 0;
     v.width = width;
     v.passes = passes;
     return v;
@@ -139,6 +143,11 @@ TR_FN void tr_film_add_block(const tr_film_view *f, const tr_sample *smp, uint32
                 f->direct[3 * i] += smp->direct.x;
                 f->direct[3 * i + 1] += smp->direct.y;
                 f->direct[3 * i + 2] += smp->direct.z;
+            }
+            if ((f->passes & TR_PASS_EMISSION) != 0u) {
+                f->emission[3 * i] += smp->emission.x;
+                f->emission[3 * i + 1] += smp->emission.y;
+                f->emission[3 * i + 2] += smp->emission.z;
             }
             f->count[i] += 1u;
         }

@@ -52,6 +52,9 @@ TR_FN tr_vec3 tr_trace_naive(const tr_scene_view *s, tr_ray ray, int max_depth, 
             if (s->sun_count > 0u) { /* an escaping ray may see the sun */
                 radiance = v3_add(radiance, v3_mul(throughput, tr_sun_radiance(s, ray.dir)));
             }
+            if (surface && depth == 1) {
+                surface->emission = radiance;
+            }
             break;
         }
         TR_CONST_GLOBAL tr_triangle *tri = &s->triangles[hit.triangle];
@@ -66,6 +69,10 @@ TR_FN tr_vec3 tr_trace_naive(const tr_scene_view *s, tr_ray ray, int max_depth, 
         }
         if (m.emittance > 0.0f) {
             radiance = v3_add(radiance, v3_scale(v3_mul(throughput, m.color), m.emittance));
+        }
+        if (surface && depth == 1) {
+            /* The first hit's emission (TR_PASS_EMISSION), roulette's weight included. */
+            surface->emission = radiance;
         }
         if (depth == direct_depth) {
             direct = radiance;

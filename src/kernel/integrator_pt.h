@@ -122,6 +122,9 @@ TR_FN tr_vec3 tr_trace_pt_rr(const tr_scene_view *s, tr_ray ray, int max_depth, 
                 radiance =
                     v3_add(radiance, v3_scale(v3_mul(throughput, tr_sun_radiance(s, ray.dir)), w));
             }
+            if (surface && seg == 1) {
+                surface->emission = radiance; /* all the camera ray saw */
+            }
             break;
         }
         TR_CONST_GLOBAL tr_triangle *tri = &s->triangles[hit.triangle];
@@ -152,6 +155,9 @@ TR_FN tr_vec3 tr_trace_pt_rr(const tr_scene_view *s, tr_ray ray, int max_depth, 
                 w = tr_mis_power(prev_pdf, tr_light_pdf_n(s, prev_p, prev_n, hit.triangle, p));
             }
             radiance = v3_add(radiance, v3_scale(v3_mul(throughput, le), w));
+        }
+        if (surface && seg == 1) {
+            surface->emission = radiance; /* the first hit's emission, nothing else yet */
         }
         if (seg == direct_seg) { /* never without `surface`: direct_seg stays past the end */
             direct = radiance;
@@ -241,6 +247,33 @@ TR_FN tr_vec3 tr_trace_pt_rr(const tr_scene_view *s, tr_ray ray, int max_depth, 
         surface->direct = direct_done ? direct : radiance;
     }
     return radiance;
+}
+
+/* The emission the camera ray `ray` sees at its first hit, as tr_trace_pt_rr's first
+ * segment adds it (TR_PASS_EMISSION): cut-outs passed, an emitter's emission towards the
+ * camera, or the environment and the sun where the ray leaves the scene. For resolving the
+ * emission over a pixel's area (tr_resolve_emission). */
+TR_FN tr_vec3 tr_pt_first_emission(const tr_scene_view *s, tr_ray ray) {
+    for (int holes = 0;; ++holes) {
+        tr_hit hit;
+        if (!tr_intersect_scene(s, &ray, &hit)) {
+            tr_vec3 le = v3s(0.0f);
+            if (s->env_count > 0u) {
+                le = tr_env_radiance(s, ray.dir);
+            }
+            if (s->sun_count > 0u) {
+                le = v3_add(le, tr_sun_radiance(s, ray.dir));
+            }
+            return le;
+        }
+        TR_CONST_GLOBAL tr_triangle *tri = &s->triangles[hit.triangle];
+        tr_vec3 p = v3_madd(ray.origin, ray.dir, hit.t);
+        tr_bsdf_params m = tr_material_eval(s, hit.triangle, hit.u, hit.v, p, tri->normal, ray.dir);
+        if (!(m.hole && holes < TR_MAX_HOLES)) {
+            return tr_emitted(&m, v3_neg(ray.dir));
+        }
+        ray.tmin = hit.t + 1e-5f * tr_fmaxf(1.0f, hit.t);
+    }
 }
 
 /* tr_trace_pt_rr with roulette after TR_PT_RR_START segments, the offline default. */

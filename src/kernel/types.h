@@ -96,7 +96,8 @@ TR_STATIC_ASSERT(sizeof(tr_frame) == 148, "tr_frame layout");
  * the surface the passes describe (zero where the path found no non-specular surface). */
 typedef struct tr_sample {
     tr_vec3 radiance;
-    tr_vec3 direct; /* the part of radiance that is direct light (TR_PASS_DIRECT) */
+    tr_vec3 direct;   /* the part of radiance that is direct light (TR_PASS_DIRECT) */
+    tr_vec3 emission; /* the emission the camera ray saw at its first hit (TR_PASS_EMISSION) */
     tr_vec3 albedo;
     tr_vec3 normal;
     float depth;

@@ -67,7 +67,10 @@ int tr_gbuffer_init(tr_gbuffer *g, uint32_t width, uint32_t height, tr_error *er
     g->depth = calloc(n, sizeof *g->depth);
     g->prim = calloc(n, sizeof *g->prim);
     g->direct = calloc(3 * n, sizeof *g->direct);
-    if (!g->color || !g->albedo || !g->normal || !g->depth || !g->prim || !g->direct) {
+    g->emission = calloc(3 * n, sizeof *g->emission);
+    g->emission_resolved = calloc(3 * n, sizeof *g->emission_resolved);
+    if (!g->color || !g->albedo || !g->normal || !g->depth || !g->prim || !g->direct ||
+        !g->emission || !g->emission_resolved) {
         tr_gbuffer_free(g);
         return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory for a %ux%u frame", width,
                             height);
@@ -82,6 +85,8 @@ void tr_gbuffer_free(tr_gbuffer *g) {
     free(g->depth);
     free(g->prim);
     free(g->direct);
+    free(g->emission);
+    free(g->emission_resolved);
     memset(g, 0, sizeof *g);
 }
 
@@ -100,11 +105,14 @@ int tr_gbuffer_from_film(tr_gbuffer *g, const struct tr_film *f, tr_error *err) 
             g->albedo[3 * i + k] = f->albedo ? f->albedo[3 * i + k] * inv : 1.0f;
             g->normal[3 * i + k] = f->normal ? f->normal[3 * i + k] * inv : 0.0f;
             g->direct[3 * i + k] = f->direct ? f->direct[3 * i + k] * inv : 0.0f;
+            g->emission[3 * i + k] = f->emission ? f->emission[3 * i + k] * inv : 0.0f;
         }
         g->depth[i] = f->depth ? f->depth[i] * inv : 0.0f;
         g->prim[i] = f->prim ? f->prim[i] : 0u;
     }
     g->has_direct = f->direct != NULL;
+    g->has_emission = f->emission != NULL;
+    g->has_resolved = 0;
     return TR_OK;
 }
 
@@ -150,6 +158,8 @@ tr_recon_params tr_recon_params_default(void) {
     p.svgf_sigma_n = 128.0f;
     p.svgf_sigma_z = 1.0f;
     p.svgf_feedback = 1;
+    /* 4 x 4 rays per pixel on an emitter's edge: coverage to 1/16 at most 16 rays a pixel. */
+    p.emission_samples = 4;
     p.svgf_taa_alpha = 0.0f;
     /* Direct and indirect apart, as the paper does, measured 0.4 dB (160x120) to 0.9 dB
      * (320x240) lower on the classic box at 1 spp and costs twice the instructions
@@ -177,7 +187,9 @@ int tr_recon_init(tr_recon *r, uint32_t width, uint32_t height, tr_error *err) {
         bad |= !r->hist_direct[k] || !r->hist_dmoments[k];
     }
     r->illum_d = calloc(3 * n, sizeof(float));
-    bad |= !r->illum_d;
+    r->reflected = calloc(3 * n, sizeof(float));
+    r->reflected_d = calloc(3 * n, sizeof(float));
+    bad |= !r->illum_d || !r->reflected || !r->reflected_d;
     r->hist_depth = calloc(n, sizeof(float));
     r->hist_normal = calloc(3 * n, sizeof(float));
     r->hist_prim = calloc(n, sizeof(uint32_t));
@@ -204,6 +216,8 @@ void tr_recon_free(tr_recon *r) {
         free(r->hist_dmoments[k]);
     }
     free(r->illum_d);
+    free(r->reflected);
+    free(r->reflected_d);
     free(r->hist_depth);
     free(r->hist_normal);
     free(r->hist_prim);
@@ -1115,9 +1129,38 @@ int tr_recon_frame(tr_recon *r, const tr_gbuffer *g, const tr_camera *cam, int m
     return tr_recon_frame_moving(r, g, cam, NULL, 0, method, p, threads, out, err);
 }
 
-int tr_recon_frame_moving(tr_recon *r, const tr_gbuffer *g, const tr_camera *cam,
+/* A frame with the emission pass: its colour (and direct part) without the first hit's
+ * emission into r's scratch, as a gbuffer `ge` that shares g's other passes. */
+static void take_out_emission(tr_recon *r, const tr_gbuffer *g, int split, tr_gbuffer *ge,
+                              int threads) {
+    *ge = *g;
+    ge->color = r->reflected;
+    ge->direct = r->reflected_d;
+    const long n = 3L * g->width * g->height;
+#pragma omp parallel for num_threads(threads) schedule(static)
+    for (long i = 0; i < n; ++i) {
+        r->reflected[i] = g->color[i] - g->emission[i];
+        if (split) {
+            r->reflected_d[i] = g->direct[i] - g->emission[i];
+        }
+    }
+}
+
+/* Adds back the emission take_out_emission took out: the estimate resolved over each
+ * pixel's area where the caller made one (tr_resolve_emission), else the frame's own. */
+static void put_back_emission(const tr_gbuffer *g, float *out, int threads) {
+    const float *e = g->has_resolved ? g->emission_resolved : g->emission;
+    const long n = 3L * g->width * g->height;
+#pragma omp parallel for num_threads(threads) schedule(static)
+    for (long i = 0; i < n; ++i) {
+        out[i] += e[i];
+    }
+}
+
+int tr_recon_frame_moving(tr_recon *r, const tr_gbuffer *frame, const tr_camera *cam,
                           const tr_vec3 *motion, uint32_t motion_count, int method,
                           const tr_recon_params *p, int threads, float *out, tr_error *err) {
+    const tr_gbuffer *g = frame;
     if (check_frame(r->width, r->height, g, err) != TR_OK) {
         return TR_ERR;
     }
@@ -1140,9 +1183,16 @@ int tr_recon_frame_moving(tr_recon *r, const tr_gbuffer *g, const tr_camera *cam
         return TR_OK;
     }
     const double t0 = tr_time_now();
-    demodulate(g, g->color, r->illum, threads);
     /* SVGF apart: direct and indirect illumination each get a history (split_illum). */
     const int split = method == TR_RECON_SVGF && p->svgf_split && g->has_direct;
+    /* With the emission pass the filters see only reflected light: an emitter's edge is
+     * not spread onto its neighbours, and the emission comes back after them. */
+    tr_gbuffer reflected;
+    if (frame->has_emission) {
+        take_out_emission(r, frame, split, &reflected, threads);
+        g = &reflected;
+    }
+    demodulate(g, g->color, r->illum, threads);
     if (split) {
         split_illum(g, r->illum, r->illum_d, threads);
     }
@@ -1157,6 +1207,9 @@ int tr_recon_frame_moving(tr_recon *r, const tr_gbuffer *g, const tr_camera *cam
     r->have_taa = 0;
     if (method == TR_RECON_ACCUMULATE) {
         remodulate(g, hc, out, threads);
+        if (frame->has_emission) {
+            put_back_emission(frame, out, threads);
+        }
         keep_geometry(r, g, cam);
         r->ms_spatial = (tr_time_now() - t1) * 1e3;
         return TR_OK;
@@ -1201,6 +1254,9 @@ int tr_recon_frame_moving(tr_recon *r, const tr_gbuffer *g, const tr_camera *cam
             memcpy(r->taa, out, 3 * n * sizeof *out);
             r->have_taa = 1;
         }
+    }
+    if (frame->has_emission) {
+        put_back_emission(frame, out, threads);
     }
     keep_geometry(r, g, cam);
     r->ms_spatial = (tr_time_now() - t1) * 1e3;

@@ -1,0 +1,250 @@
+/* test_emission.c - the emission pass (TR_PASS_EMISSION), its resolution over the pixels'
+ * area (tr_resolve_emission) and the reconstruction's use of both.
+ *
+ * 1. The pass is the first hit's emission: with max depth 1 pt adds nothing else, so the
+ *    radiance of a max-depth-1 render is the emission pass of a max-depth-8 one on the
+ *    same seed, bit for bit (the camera ray reads the same sampler dimensions). Asking
+ *    for the pass changes no other pass and no radiance; bdpt with it is refused.
+ * 2. Resolving: every pixel the resolver traces lies next to an edge between emitting and
+ *    non-emitting samples, the others keep their own emission exactly, and a traced
+ *    pixel's value agrees with an independent estimate of the same integral, the mean
+ *    emission of 256 randomly jittered samples, within bounds from that estimate's
+ *    variance (the lamp's partly covered pixels: coverage times radiance).
+ * 3. The reconstruction: a frame whose colour is a constant plus an emission pass comes
+ *    out as the constant (filtered) plus the emission added back, for every method, and
+ *    with has_resolved set the resolved emission is what is added. Without the pass SVGF
+ *    spreads the same bright pixels onto their neighbours. */
+#include "check.h"
+#include "classic_box.h"
+#include "synth_frame.h"
+#include "trac0r/post.h"
+#include "trac0r/trac0r.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define W 64
+#define H 48
+
+static void render(const tr_scene *s, int integrator, int max_depth, uint32_t passes,
+                   uint32_t first, uint32_t spp, tr_film *f) {
+    tr_error err;
+    CHECK(tr_film_init_passes(f, W, H, passes, &err) == TR_OK, "%s", err.msg);
+    tr_render_config cfg = tr_render_config_default();
+    cfg.integrator = integrator;
+    cfg.max_depth = max_depth;
+    cfg.passes = passes;
+    cfg.seed = 5;
+    cfg.threads = 2;
+    for (uint32_t k = first; k < first + spp; ++k) {
+        CHECK(tr_render_frame(s, tr_scene_camera(s), &cfg, f, k, NULL, &err) == TR_OK, "%s",
+              err.msg);
+    }
+}
+
+static void test_pass(const tr_scene *s) {
+    const size_t n3 = 3u * W * H;
+    tr_film d1, d8, plain, all;
+    render(s, TR_INTEGRATOR_PT, 1, 0u, 0, 2, &d1);
+    render(s, TR_INTEGRATOR_PT, 8, TR_PASS_ALL | TR_PASS_EMISSION, 0, 2, &d8);
+    CHECK(memcmp(d8.emission, d1.sum, n3 * sizeof(float)) == 0,
+          "the emission pass is not the max-depth-1 radiance");
+    double e = 0.0, r = 0.0;
+    for (size_t i = 0; i < n3; ++i) {
+        e += d8.emission[i];
+        r += d8.sum[i];
+    }
+    CHECK(e > 0.0 && r > 1.5 * e, "emission %g of radiance %g: the lamp or the room is lost", e, r);
+    render(s, TR_INTEGRATOR_PT, 8, 0u, 0, 2, &plain);
+    render(s, TR_INTEGRATOR_PT, 8, TR_PASS_ALL, 0, 2, &all);
+    CHECK(memcmp(plain.sum, d8.sum, n3 * sizeof(float)) == 0,
+          "the emission pass changed the radiance");
+    CHECK(memcmp(all.albedo, d8.albedo, n3 * sizeof(float)) == 0 &&
+              memcmp(all.normal, d8.normal, n3 * sizeof(float)) == 0 &&
+              memcmp(all.depth, d8.depth, (n3 / 3) * sizeof(float)) == 0 &&
+              memcmp(all.prim, d8.prim, (n3 / 3) * sizeof(uint32_t)) == 0,
+          "the emission pass changed another pass");
+    tr_film_free(&d1);
+    tr_film_free(&d8);
+    tr_film_free(&plain);
+    tr_film_free(&all);
+
+    tr_film f;
+    tr_error err;
+    CHECK(tr_film_init_passes(&f, W, H, TR_PASS_EMISSION, &err) == TR_OK, "%s", err.msg);
+    tr_render_config cfg = tr_render_config_default();
+    cfg.integrator = TR_INTEGRATOR_BDPT;
+    cfg.passes = TR_PASS_EMISSION;
+    CHECK(tr_render_frame(s, tr_scene_camera(s), &cfg, &f, 0, NULL, &err) == TR_ERR &&
+              err.code == TR_STATUS_INVALID_ARGUMENT,
+          "bdpt with the emission pass was not refused");
+    tr_film_free(&f);
+}
+
+static float max3(const float *v) {
+    return fmaxf(v[0], fmaxf(v[1], v[2]));
+}
+
+static void test_resolve(const tr_scene *s) {
+    tr_error err;
+    tr_film one, many;
+    render(s, TR_INTEGRATOR_PT, 8, TR_PASS_ALL | TR_PASS_EMISSION, 0, 1, &one);
+    /* The independent estimate: 256 jittered camera rays per pixel, first hit only. */
+    render(s, TR_INTEGRATOR_PT, 1, TR_PASS_EMISSION, 100, 256, &many);
+    tr_gbuffer g;
+    CHECK(tr_gbuffer_init(&g, W, H, &err) == TR_OK, "%s", err.msg);
+    CHECK(tr_gbuffer_from_film(&g, &one, &err) == TR_OK && g.has_emission && !g.has_resolved,
+          "gbuffer from a film with the emission pass");
+    uint32_t traced = 0;
+    CHECK(tr_resolve_emission(s, tr_scene_camera(s), 16, 2, &g, &traced, &err) == TR_OK, "%s",
+          err.msg);
+    CHECK(g.has_resolved, "has_resolved not set");
+    /* The lamp's radiance: the brightest channel any sample saw. */
+    float le = 0.0f;
+    for (size_t i = 0; i < (size_t)W * H; ++i) {
+        le = fmaxf(le, max3(g.emission + 3 * i));
+    }
+    CHECK(le > 1.0f, "no lamp in view (%g)", (double)le);
+    uint32_t edge = 0, partial = 0, bad = 0;
+    for (int y = 0; y < H; ++y) {
+        for (int x = 0; x < W; ++x) {
+            const size_t i = (size_t)y * W + x;
+            int on_edge = 0;
+            const int c = max3(g.emission + 3 * i) > 0.0f;
+            for (int dy = -1; dy <= 1; ++dy) {
+                for (int dx = -1; dx <= 1; ++dx) {
+                    const int xx = x + dx, yy = y + dy;
+                    if (xx >= 0 && yy >= 0 && xx < W && yy < H &&
+                        (max3(g.emission + 3 * ((size_t)yy * W + xx)) > 0.0f) != c) {
+                        on_edge = 1;
+                    }
+                }
+            }
+            edge += (uint32_t)on_edge;
+            if (!on_edge) {
+                bad +=
+                    memcmp(g.emission + 3 * i, g.emission_resolved + 3 * i, 3 * sizeof(float)) != 0;
+                continue;
+            }
+            /* Coverage c of the pixel by the lamp, estimated twice: from the 16 x 16 grid
+             * (error at most a row of cells, 1/16, along a straight edge) and from 256
+             * random samples (standard deviation sqrt(c (1 - c) / 256) <= 1/32). */
+            for (int k = 0; k < 3; ++k) {
+                const float mean = many.emission[3 * i + k] / (float)many.count[i];
+                const float got = g.emission_resolved[3 * i + k];
+                const float cov = fminf(fmaxf(mean / le, 0.0f), 1.0f);
+                const float sd = sqrtf(fmaxf(cov * (1.0f - cov), 1.0f / 256.0f) / 256.0f);
+                if (fabsf(got - mean) > le * (5.0f * sd + 1.0f / 16.0f)) {
+                    ++bad;
+                }
+            }
+            const float cov = max3(g.emission_resolved + 3 * i) / le;
+            partial += cov > 0.05f && cov < 0.95f;
+        }
+    }
+    CHECK(traced == edge, "traced %u pixels, %u are on an edge", traced, edge);
+    CHECK(edge > 8 && edge < (uint32_t)(W * H) / 10, "%u edge pixels", edge);
+    CHECK(partial > 4, "only %u partly covered pixels: nothing resolved", partial);
+    CHECK(bad == 0, "%u resolved values disagree with the jittered estimate", bad);
+
+    /* Bad input: no pass, a wrong n, a camera of another size. */
+    g.has_emission = 0;
+    CHECK(tr_resolve_emission(s, tr_scene_camera(s), 4, 2, &g, NULL, &err) == TR_ERR,
+          "resolved without the pass");
+    g.has_emission = 1;
+    CHECK(tr_resolve_emission(s, tr_scene_camera(s), 0, 2, &g, NULL, &err) == TR_ERR &&
+              tr_resolve_emission(s, tr_scene_camera(s), TR_RESOLVE_EMISSION_MAX + 1, 2, &g, NULL,
+                                  &err) == TR_ERR,
+          "n out of range accepted");
+    tr_camera small = *tr_scene_camera(s);
+    CHECK(tr_camera_resize(&small, W / 2, H / 2, &err) == TR_OK, "%s", err.msg);
+    CHECK(tr_resolve_emission(s, &small, 4, 2, &g, NULL, &err) == TR_ERR &&
+              err.code == TR_STATUS_INVALID_ARGUMENT,
+          "a camera of another size accepted");
+    tr_gbuffer_free(&g);
+    tr_film_free(&one);
+    tr_film_free(&many);
+}
+
+/* A synthetic frame (synth_frame.h, no noise, colour `base`) plus a 3 x 3 block of
+ * emission 20 on the left wall, with or without the emission pass. */
+static void lamp_frame(tr_gbuffer *g, float base, int with_pass) {
+    synth_frame(g, W, H, base, base, 0.0f, -1.0f, 1u);
+    memset(g->emission, 0, 3u * W * H * sizeof(float));
+    for (int y = 20; y < 23; ++y) {
+        for (int x = 10; x < 13; ++x) {
+            for (int k = 0; k < 3; ++k) {
+                g->emission[3 * ((size_t)y * W + x) + k] = 20.0f;
+                g->color[3 * ((size_t)y * W + x) + k] += 20.0f;
+            }
+        }
+    }
+    g->has_emission = with_pass;
+    g->has_resolved = 0;
+}
+
+static void test_recon(void) {
+    tr_error err;
+    tr_gbuffer g;
+    tr_recon r;
+    CHECK(tr_gbuffer_init(&g, W, H, &err) == TR_OK && tr_recon_init(&r, W, H, &err) == TR_OK, "%s",
+          err.msg);
+    tr_camera cam;
+    CHECK(tr_camera_make(&cam, tr_vec3_make(0, 0, -1), tr_vec3_make(0, 0, 1), tr_vec3_make(0, 1, 0),
+                         60.0f, 1e-3f, 1e4f, W, H, &err) == TR_OK,
+          "%s", err.msg);
+    const tr_recon_params p = tr_recon_params_default();
+    float *out = malloc(3u * W * H * sizeof *out);
+    CHECK(out != NULL, "out of memory");
+    for (int m = TR_RECON_ACCUMULATE; out && m < TR_RECON_COUNT; ++m) {
+        tr_recon_reset(&r);
+        lamp_frame(&g, 0.3f, 1);
+        CHECK(tr_recon_frame(&r, &g, &cam, m, &p, 2, out, &err) == TR_OK, "%s", err.msg);
+        double worst = 0.0;
+        for (size_t i = 0; i < 3u * W * H; ++i) {
+            worst = fmax(worst, fabs(out[i] - (0.3 + g.emission[i])));
+        }
+        CHECK(worst < 1e-4, "%s: constant plus emission off by %g", tr_recon_name(m), worst);
+
+        /* The resolved emission is the one added. */
+        tr_recon_reset(&r);
+        for (size_t i = 0; i < 3u * W * H; ++i) {
+            g.emission_resolved[i] = 0.25f * g.emission[i];
+        }
+        g.has_resolved = 1;
+        CHECK(tr_recon_frame(&r, &g, &cam, m, &p, 2, out, &err) == TR_OK, "%s", err.msg);
+        worst = 0.0;
+        for (size_t i = 0; i < 3u * W * H; ++i) {
+            worst = fmax(worst, fabs(out[i] - (0.3 + g.emission_resolved[i])));
+        }
+        CHECK(worst < 1e-4, "%s: resolved emission not the one added (off by %g)", tr_recon_name(m),
+              worst);
+
+        /* Without the pass SVGF spreads the lamp's light onto its neighbours (the
+         * bilateral and a-trous filters' colour weights stop a value this bright). */
+        if (m == TR_RECON_SVGF) {
+            tr_recon_reset(&r);
+            lamp_frame(&g, 0.3f, 0);
+            CHECK(tr_recon_frame(&r, &g, &cam, m, &p, 2, out, &err) == TR_OK, "%s", err.msg);
+            const size_t nb = 3 * ((size_t)21 * W + 14);
+            CHECK(out[nb] > 0.31f, "%s: without the pass the lamp did not spread (%g)",
+                  tr_recon_name(m), (double)out[nb]);
+        }
+    }
+    free(out);
+    tr_recon_free(&r);
+    tr_gbuffer_free(&g);
+}
+
+int main(void) {
+    tr_error err;
+    tr_scene *s = classic_box(W, H, &err);
+    if (s) {
+        test_pass(s);
+        test_resolve(s);
+        tr_scene_destroy(s);
+    }
+    test_recon();
+    return check_finish("test_emission");
+}
