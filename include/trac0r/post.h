@@ -121,6 +121,7 @@ typedef struct tr_gbuffer {
     int has_emission; /* whether emission holds the film's emission pass (else not read) */
     float *emission_resolved; /* 3 per pixel: the emission resolved over each pixel's area */
     int has_resolved;         /* whether emission_resolved is set (tr_resolve_emission) */
+    uint8_t *scratch;         /* 3 bytes per pixel for tr_resolve_emission, allocated once */
 } tr_gbuffer;
 
 int tr_gbuffer_init(tr_gbuffer *g, uint32_t width, uint32_t height, tr_error *err);

@@ -8,34 +8,53 @@
  * camera rays each, which see only the first hit (no shading, no path), and average the
  * emission they find: the pixel's coverage times the emitter's radiance, as a converged
  * image has it. Every other pixel keeps the emission of its own sample, which is exact
- * there (it covers one emitter, or none). */
+ * there (it covers one emitter, or none). The per-pixel arithmetic is the kernel's
+ * (src/kernel/emission.h), which an OpenCL device runs as it is. */
 #include <omp.h>
 #include <string.h>
 
-#include "kernel/kernel.h"
+#include "kernel/emission.h"
 #include "scene/scene_internal.h"
 #include "trac0r/post.h"
 #include "trac0r/render.h"
 
-/* Whether pixel i's own sample saw any emission. */
-static int emits(const tr_gbuffer *g, size_t i) {
-    const float *e = g->emission + 3 * i;
-    return e[0] > 0.0f || e[1] > 0.0f || e[2] > 0.0f;
-}
-
-/* Whether a pixel of the 3 x 3 block around (x, y) differs from it in emits(). */
-static int on_edge(const tr_gbuffer *g, int x, int y) {
-    const int w = (int)g->width, h = (int)g->height;
-    const int c = emits(g, (size_t)y * w + x);
-    for (int dy = -1; dy <= 1; ++dy) {
-        for (int dx = -1; dx <= 1; ++dx) {
-            const int xx = x + dx, yy = y + dy;
-            if (xx >= 0 && yy >= 0 && xx < w && yy < h && emits(g, (size_t)yy * w + xx) != c) {
-                return 1;
+/* edge[i] = tr_emission_on_edge(e, w, h, x, y) for every pixel, computed with the loops
+ * turned round (the count of emitting pixels in each clipped 3 x 3 block, from
+ * horizontal then vertical sums of a 0/1 mask) so that it costs a few passes over bytes
+ * instead of nine tests per pixel. */
+static void edge_mask(const float *e, int w, int h, uint8_t *seen, uint8_t *hsum, uint8_t *edge,
+                      int threads) {
+    const long n = (long)w * h;
+#pragma omp parallel num_threads(threads)
+    {
+#pragma omp for schedule(static)
+        for (long i = 0; i < n; ++i) {
+            seen[i] = (uint8_t)tr_emission_seen(e, (uint32_t)i);
+        }
+#pragma omp for schedule(static)
+        for (int y = 0; y < h; ++y) {
+            const uint8_t *m = seen + (size_t)y * w;
+            uint8_t *s = hsum + (size_t)y * w;
+            for (int x = 0; x < w; ++x) {
+                s[x] = (uint8_t)((x > 0 ? m[x - 1] : 0) + m[x] + (x + 1 < w ? m[x + 1] : 0));
+            }
+        }
+#pragma omp for schedule(static)
+        for (int y = 0; y < h; ++y) {
+            const uint8_t *up = hsum + (size_t)(y > 0 ? y - 1 : y) * w;
+            const uint8_t *mid = hsum + (size_t)y * w;
+            const uint8_t *dn = hsum + (size_t)(y + 1 < h ? y + 1 : y) * w;
+            const int rows = 1 + (y > 0) + (y + 1 < h);
+            const uint8_t *m = seen + (size_t)y * w;
+            uint8_t *out = edge + (size_t)y * w;
+            for (int x = 0; x < w; ++x) {
+                const int cols = 1 + (x > 0) + (x + 1 < w);
+                const int k = (y > 0 ? up[x] : 0) + mid[x] + (y + 1 < h ? dn[x] : 0);
+                /* A block that is all one kind holds 0 emitting pixels or all of them. */
+                out[x] = (uint8_t)(m[x] ? k < rows * cols : k > 0);
             }
         }
     }
-    return 0;
 }
 
 int tr_resolve_emission(const struct tr_scene *scene, const tr_camera *cam, int n, int threads,
@@ -61,33 +80,27 @@ int tr_resolve_emission(const struct tr_scene *scene, const tr_camera *cam, int 
         return tr_error_set(err, TR_STATUS_INVALID_OPERATION,
                             "resolving emission: the scene is not committed");
     }
-    const tr_scene_view view = tr_scene_view_of(scene);
     const int w = (int)g->width, h = (int)g->height;
-    memcpy(g->emission_resolved, g->emission, 3 * (size_t)w * h * sizeof(float));
-    const float inv_n = 1.0f / (float)n, inv_nn = inv_n * inv_n;
-    uint32_t count = 0;
+    const size_t px = (size_t)w * h;
+    uint8_t *mask = g->scratch;
     threads = threads > 0 ? threads : tr_default_threads();
+    uint8_t *edge = mask + 2 * px;
+    edge_mask(g->emission, w, h, mask, mask + px, edge, threads);
+    const tr_scene_view view = tr_scene_view_of(scene);
+    memcpy(g->emission_resolved, g->emission, 3 * px * sizeof(float));
+    uint32_t count = 0;
     /* Few pixels are on an edge, and they cluster: rows go out a few at a time. */
-#pragma omp parallel for num_threads(threads) schedule(dynamic, 4) reduction(+ : count)
+#pragma omp parallel for num_threads(threads) schedule(dynamic, 8) reduction(+ : count)
     for (int y = 0; y < h; ++y) {
         for (int x = 0; x < w; ++x) {
-            if (!on_edge(g, x, y)) {
+            const size_t i = (size_t)y * w + x;
+            if (!edge[i]) {
                 continue;
             }
-            tr_vec3 sum = v3s(0.0f);
-            for (int sy = 0; sy < n; ++sy) {
-                for (int sx = 0; sx < n; ++sx) {
-                    /* The centres of an n x n grid of cells over the pixel. */
-                    const tr_ray ray =
-                        tr_camera_ray(cam, (float)x, (float)y, ((float)sx + 0.5f) * inv_n,
-                                      ((float)sy + 0.5f) * inv_n);
-                    sum = v3_add(sum, tr_pt_first_emission(&view, ray));
-                }
-            }
-            float *e = g->emission_resolved + 3 * ((size_t)y * w + x);
-            e[0] = sum.x * inv_nn;
-            e[1] = sum.y * inv_nn;
-            e[2] = sum.z * inv_nn;
+            const tr_vec3 e = tr_emission_resolve_pixel(&view, cam, x, y, n);
+            g->emission_resolved[3 * i] = e.x;
+            g->emission_resolved[3 * i + 1] = e.y;
+            g->emission_resolved[3 * i + 2] = e.z;
             ++count;
         }
     }

@@ -69,8 +69,9 @@ int tr_gbuffer_init(tr_gbuffer *g, uint32_t width, uint32_t height, tr_error *er
     g->direct = calloc(3 * n, sizeof *g->direct);
     g->emission = calloc(3 * n, sizeof *g->emission);
     g->emission_resolved = calloc(3 * n, sizeof *g->emission_resolved);
+    g->scratch = calloc(3 * n, 1);
     if (!g->color || !g->albedo || !g->normal || !g->depth || !g->prim || !g->direct ||
-        !g->emission || !g->emission_resolved) {
+        !g->emission || !g->emission_resolved || !g->scratch) {
         tr_gbuffer_free(g);
         return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory for a %ux%u frame", width,
                             height);
@@ -87,6 +88,7 @@ void tr_gbuffer_free(tr_gbuffer *g) {
     free(g->direct);
     free(g->emission);
     free(g->emission_resolved);
+    free(g->scratch);
     memset(g, 0, sizeof *g);
 }
 

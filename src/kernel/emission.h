@@ -1,0 +1,54 @@
+/* emission.h - the first hit's emission resolved over a pixel's area, per pixel: what
+ * tr_resolve_emission (src/device/emission.c) runs on the host and tr_cl_resolve_emission
+ * (entry.cl) on an OpenCL device.
+ *
+ * `e` is a frame's emission pass (TR_PASS_EMISSION: sums or means, 3 floats per pixel,
+ * row-major); a pixel "saw emission" where any of its channels is above zero. */
+#ifndef TR_KERNEL_EMISSION_H
+#define TR_KERNEL_EMISSION_H
+
+#include "camera.h"
+#include "compat.h"
+#include "integrator_pt.h"
+#include "scene_view.h"
+#include "vec.h"
+
+/* Whether pixel i's samples saw any emission. */
+TR_FN int tr_emission_seen(TR_GLOBAL const float *e, uint32_t i) {
+    return e[3u * i] > 0.0f || e[3u * i + 1u] > 0.0f || e[3u * i + 2u] > 0.0f;
+}
+
+/* Whether a pixel of the 3 x 3 block around (x, y), clipped to the w x h image, differs
+ * from (x, y) in tr_emission_seen: the pixels next to an emitter's edge, on both sides. */
+TR_FN int tr_emission_on_edge(TR_GLOBAL const float *e, int w, int h, int x, int y) {
+    const int c = tr_emission_seen(e, (uint32_t)(y * w + x));
+    for (int dy = -1; dy <= 1; ++dy) {
+        for (int dx = -1; dx <= 1; ++dx) {
+            const int xx = x + dx, yy = y + dy;
+            if (xx >= 0 && yy >= 0 && xx < w && yy < h &&
+                tr_emission_seen(e, (uint32_t)(yy * w + xx)) != c) {
+                return 1;
+            }
+        }
+    }
+    return 0;
+}
+
+/* The mean emission seen at the first hit by n x n camera rays through the centres of an
+ * n x n grid of cells over pixel (x, y) (tr_pt_first_emission): the pixel's coverage by
+ * each emitter times its radiance. */
+TR_FN tr_vec3 tr_emission_resolve_pixel(const tr_scene_view *s, const tr_camera *cam, int x, int y,
+                                        int n) {
+    const float inv_n = 1.0f / (float)n;
+    tr_vec3 sum = v3s(0.0f);
+    for (int sy = 0; sy < n; ++sy) {
+        for (int sx = 0; sx < n; ++sx) {
+            const tr_ray ray = tr_camera_ray(cam, (float)x, (float)y, ((float)sx + 0.5f) * inv_n,
+                                             ((float)sy + 0.5f) * inv_n);
+            sum = v3_add(sum, tr_pt_first_emission(s, ray));
+        }
+    }
+    return v3_scale(sum, inv_n * inv_n);
+}
+
+#endif
