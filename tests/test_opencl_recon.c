@@ -15,8 +15,10 @@
  *    weight or tap differs by 1e-2 and more (checked: every method changes the frame by
  *    far more than the bound).
  * 2. The device's own film, reconstructed where it lies, gives what the host gives on
- *    the same film read back.
- * 3. On the CPU device tr_recon_device is tr_recon_frame, bit for bit.
+ *    the same film read back; also with the emission pass, which the device resolves on
+ *    emitters' edges (tr_cl_resolve_emission) and the host by tr_resolve_emission.
+ * 3. On the CPU device tr_recon_device is tr_recon_frame, bit for bit (with the emission
+ *    pass: tr_resolve_emission, then tr_recon_frame).
  * 4. A frame or camera of another size and an unknown method fail with a message.
  * 5. Per-primitive motion (a sphere moving in front of a wall, tests/motion_scene.h):
  *    host and device agree with the motion table as in 1.
@@ -122,16 +124,20 @@ static void agree(tr_device *cl, const tr_gbuffer *g, const tr_camera *cams, int
  * the host's tr_recon_frame with `threads`: every frame's output must agree within
  * `tol` relative (0: bit for bit). */
 static void film_frames(tr_device *d, tr_recon_device *dev, const tr_camera *cams, int frames,
-                        uint32_t spp, int threads, double tol, const char *label) {
+                        uint32_t spp, int threads, double tol, const tr_scene *emission,
+                        const char *label) {
     tr_error err;
     tr_recon host;
     tr_gbuffer g;
     tr_film f;
+    /* With `emission` (the scene) the film keeps the emission pass and both sides resolve
+     * it (the device in tr_recon_device_frame, the host by tr_resolve_emission). */
+    const uint32_t passes = TR_PASS_ALL | (emission ? TR_PASS_EMISSION : 0u);
     CHECK(tr_recon_init(&host, W, H, &err) == TR_OK, "%s", err.msg);
     CHECK(tr_gbuffer_init(&g, W, H, &err) == TR_OK, "%s", err.msg);
-    CHECK(tr_film_init_passes(&f, W, H, TR_PASS_ALL, &err) == TR_OK, "%s", err.msg);
+    CHECK(tr_film_init_passes(&f, W, H, passes, &err) == TR_OK, "%s", err.msg);
     tr_render_config cfg = tr_render_config_default();
-    cfg.passes = TR_PASS_ALL;
+    cfg.passes = passes;
     const tr_recon_params p = tr_recon_params_default();
     float *a = malloc(3 * W * H * sizeof *a), *b = malloc(3 * W * H * sizeof *b);
     CHECK(a && b, "out of memory");
@@ -145,6 +151,9 @@ static void film_frames(tr_device *d, tr_recon_device *dev, const tr_camera *cam
               "%s", err.msg);
         CHECK(tr_device_read_film(d, &f, &err) == TR_OK, "%s", err.msg);
         CHECK(tr_gbuffer_from_film(&g, &f, &err) == TR_OK, "%s", err.msg);
+        CHECK(!emission || tr_resolve_emission(emission, &cams[k], p.emission_samples, threads, &g,
+                                               NULL, &err) == TR_OK,
+              "%s", err.msg);
         CHECK(tr_recon_frame(&host, &g, &cams[k], TR_RECON_SVGF, &p, threads, a, &err) == TR_OK,
               "%s", err.msg);
         if (tol > 0.0) {
@@ -169,7 +178,11 @@ static void film_on_device(tr_device *cl, const tr_scene *s, const tr_camera *ca
     tr_recon_device *dev = tr_recon_device_open(cl, W, H, &err);
     CHECK(dev, "%s", err.msg);
     /* Two samples, so that the film's means divide by a count above 1. */
-    film_frames(cl, dev, cams, FRAMES, 2, 2, bound, "film on the device");
+    film_frames(cl, dev, cams, FRAMES, 2, 2, bound, NULL, "film on the device");
+    /* The emission pass, resolved on the device as on the host (tr_cl_resolve_emission
+     * against tr_resolve_emission: the same per-pixel code, src/kernel/emission.h). */
+    tr_recon_device_reset(dev);
+    film_frames(cl, dev, cams, FRAMES, 1, 2, bound, s, "emission resolved on the device");
     double ms_t, ms_s;
     tr_recon_device_times(dev, &ms_t, &ms_s);
     CHECK(ms_t >= 0.0 && ms_s >= 0.0, "negative stage times %g %g", ms_t, ms_s);
@@ -201,7 +214,9 @@ static void cpu_device(const tr_scene *s, const tr_camera *cams) {
     CHECK(cpu && tr_device_upload(cpu, s, &err) == TR_OK, "%s", err.msg);
     tr_recon_device *dev = tr_recon_device_open(cpu, W, H, &err);
     CHECK(dev && !tr_recon_device_on_device(dev), "%s", err.msg);
-    film_frames(cpu, dev, cams, 2, 1, 0, 0.0, "cpu device");
+    film_frames(cpu, dev, cams, 2, 1, 0, 0.0, NULL, "cpu device");
+    tr_recon_device_reset(dev);
+    film_frames(cpu, dev, cams, 2, 1, 0, 0.0, s, "cpu device, emission resolved");
     tr_recon_device_close(dev);
     tr_device_close(cpu);
 }

@@ -577,7 +577,9 @@ int bench_realtime(int argc, char **argv) {
                    params.emission_samples == 0 ? "--resolve-emission 0"
                                                 : "the emission pass needs --integrator pt");
         } else if (!host_recon) {
-            printf("emission: filtered with the rest (the OpenCL reconstruction keeps it in)\n");
+            printf("emission: kept out of the filters, resolved on the OpenCL device with %d x "
+                   "%d rays per pixel on emitter edges (its time counted in temporal_ms)\n",
+                   params.emission_samples, params.emission_samples);
         } else {
             printf("emission: kept out of the filters, resolved with %d x %d rays per pixel on "
                    "emitter edges (its time counted in temporal_ms)\n",

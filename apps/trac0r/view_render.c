@@ -270,13 +270,12 @@ static void *render_main(void *arg) {
                 r->params.svgf_split && !tr_integrator_is_bidirectional(r->cfg.integrator)
                     ? TR_PASS_DIRECT
                     : 0u;
-            /* The emission pass where the host reconstructs and resolves emitters' edges
-             * (pt only; the OpenCL reconstruction keeps the emission in). */
-            const uint32_t emission = r->params.emission_samples > 0 &&
-                                              r->cfg.integrator == TR_INTEGRATOR_PT &&
-                                              strcmp(tr_device_kind(r->dev), "opencl") != 0
-                                          ? TR_PASS_EMISSION
-                                          : 0u;
+            /* The emission pass where the reconstruction resolves emitters' edges (pt
+             * only: the resolved edge follows pt's first segment). */
+            const uint32_t emission =
+                r->params.emission_samples > 0 && r->cfg.integrator == TR_INTEGRATOR_PT
+                    ? TR_PASS_EMISSION
+                    : 0u;
             if (resize_buffers(r, rcam.screen_width, rcam.screen_height,
                                method != TR_RECON_OFF ? TR_PASS_ALL | direct | emission : 0u,
                                &err) != TR_OK ||

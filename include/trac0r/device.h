@@ -63,6 +63,8 @@ const char *tr_device_kind(const tr_device *dev);
  * outlive the device's use of it), OpenCL copies its arrays. Call again after changing
  * the scene; rendering a scene changed since its upload fails. The film is kept. */
 int tr_device_upload(tr_device *dev, const tr_scene *scene, tr_error *err);
+/* The scene last uploaded (NULL before the first upload). */
+const tr_scene *tr_device_scene(const tr_device *dev);
 /* The structure the device walks for the uploaded scene: the scene's own, except that
  * OpenCL walks the binary BVH for bvh and bvh2, and a BVH of its own for a scene
  * committed to Embree (a host library). */

@@ -186,6 +186,10 @@ const char *tr_device_kind(const tr_device *dev) {
     return dev->info.kind;
 }
 
+const tr_scene *tr_device_scene(const tr_device *dev) {
+    return dev->scene;
+}
+
 tr_cl_context *tr_device_cl_context(const tr_device *dev) {
     return dev->cl;
 }

@@ -100,6 +100,12 @@ int tr_cl_get_handles(const tr_cl_context *ctx, tr_cl_handles *out, tr_error *er
     memset(out, 0, sizeof *out);
     return tr_error_set(err, TR_STATUS_UNSUPPORTED, "%s", no_opencl);
 }
+int tr_cl_resolve_emission(tr_cl_context *ctx, const tr_camera *cam, int n, tr_error *err) {
+    (void)ctx;
+    (void)cam;
+    (void)n;
+    return tr_error_set(err, TR_STATUS_UNSUPPORTED, "%s", no_opencl);
+}
 const char *tr_cl_error_name(int code) {
     (void)code;
     return "CL_UNKNOWN_ERROR";
@@ -205,6 +211,7 @@ struct tr_cl_context {
     cl_command_queue queue;
     cl_program program;
     cl_kernel kernel;
+    cl_kernel resolve; /* tr_cl_resolve_emission */
     char *build_log;
     char options[160]; /* the options the kernel was built with */
     size_t local[2];   /* the render kernel's work-group size; 0 x 0: the driver's choice */
@@ -219,6 +226,7 @@ struct tr_cl_context {
     uint64_t scene_bytes;
     /* The film. */
     cl_mem film[FILM_BUFFERS], rays;
+    cl_mem resolved; /* with TR_PASS_EMISSION: tr_cl_resolve_emission's output */
     uint32_t width, height, passes;
     uint32_t *rays_host;
 };
@@ -480,6 +488,12 @@ void tr_cl_close(tr_cl_context *ctx) {
     if (ctx->kernel) {
         clReleaseKernel(ctx->kernel);
     }
+    if (ctx->resolve) {
+        clReleaseKernel(ctx->resolve);
+    }
+    if (ctx->resolved) {
+        clReleaseMemObject(ctx->resolved);
+    }
     if (ctx->program) {
         clReleaseProgram(ctx->program);
     }
@@ -685,6 +699,11 @@ tr_cl_context *tr_cl_open_source(int index, const char *source, tr_error *err) {
         cl_fail(err, "clCreateKernel(tr_cl_render)", rc);
         goto fail;
     }
+    ctx->resolve = clCreateKernel(ctx->program, "tr_cl_resolve_emission", &rc);
+    if (!ctx->resolve) {
+        cl_fail(err, "clCreateKernel(tr_cl_resolve_emission)", rc);
+        goto fail;
+    }
     if (check_kernel_args(ctx, err) != TR_OK ||
         check_work_group(ctx, wg_given, cpu, err) != TR_OK) {
         goto fail;
@@ -725,6 +744,9 @@ static uint64_t film_bytes(uint32_t w, uint32_t h, uint32_t passes) {
         if (film_pass[i] == 0u || (passes & film_pass[i]) != 0u) {
             per_pixel += film_elem[i];
         }
+    }
+    if (passes & TR_PASS_EMISSION) {
+        per_pixel += 3 * sizeof(cl_float); /* the resolved emission */
     }
     return (uint64_t)w * h * per_pixel + (uint64_t)h * 4;
 }
@@ -845,17 +867,21 @@ int tr_cl_upload_scene(tr_cl_context *ctx, const tr_scene *scene, tr_error *err)
             rc = cl_fail(err, "clCreateBuffer(scene_info)", crc);
         }
     }
-    for (int i = 0; i < na && rc == TR_OK; ++i) {
-        cl_int crc = clSetKernelArg(ctx->kernel, (cl_uint)i, sizeof(cl_mem), &ctx->arrays[i]);
-        if (crc != CL_SUCCESS) {
-            rc = cl_fail(err, "clSetKernelArg(scene array)", crc);
+    /* Both kernels take the scene's arrays and scene_info first. */
+    const cl_kernel kernels[2] = {ctx->kernel, ctx->resolve};
+    for (int k = 0; k < 2; ++k) {
+        for (int i = 0; i < na && rc == TR_OK; ++i) {
+            cl_int crc = clSetKernelArg(kernels[k], (cl_uint)i, sizeof(cl_mem), &ctx->arrays[i]);
+            if (crc != CL_SUCCESS) {
+                rc = cl_fail(err, "clSetKernelArg(scene array)", crc);
+            }
         }
-    }
-    if (rc == TR_OK) {
-        cl_int crc = clSetKernelArg(ctx->kernel, (cl_uint)(na + ARG_SCENE_INFO), sizeof(cl_mem),
-                                    &ctx->scene_info);
-        if (crc != CL_SUCCESS) {
-            rc = cl_fail(err, "clSetKernelArg(scene_info)", crc);
+        if (rc == TR_OK) {
+            cl_int crc = clSetKernelArg(kernels[k], (cl_uint)(na + ARG_SCENE_INFO), sizeof(cl_mem),
+                                        &ctx->scene_info);
+            if (crc != CL_SUCCESS) {
+                rc = cl_fail(err, "clSetKernelArg(scene_info)", crc);
+            }
         }
     }
     tr_bvh_free(&own);
@@ -910,6 +936,10 @@ static void release_film(tr_cl_context *ctx) {
         clReleaseMemObject(ctx->rays);
         ctx->rays = NULL;
     }
+    if (ctx->resolved) {
+        clReleaseMemObject(ctx->resolved);
+        ctx->resolved = NULL;
+    }
     free(ctx->rays_host);
     ctx->rays_host = NULL;
     ctx->width = ctx->height = ctx->passes = 0;
@@ -937,6 +967,14 @@ static int make_film(tr_cl_context *ctx, uint32_t w, uint32_t h, uint32_t passes
         if (!ctx->film[i]) {
             release_film(ctx);
             return cl_fail(err, "clCreateBuffer(film)", rc);
+        }
+    }
+    if (passes & TR_PASS_EMISSION) {
+        ctx->resolved = clCreateBuffer(ctx->context, CL_MEM_READ_WRITE,
+                                       (size_t)w * h * 3 * sizeof(cl_float), NULL, &rc);
+        if (!ctx->resolved) {
+            release_film(ctx);
+            return cl_fail(err, "clCreateBuffer(resolved emission)", rc);
         }
     }
     ctx->rays = clCreateBuffer(ctx->context, CL_MEM_READ_WRITE, h * sizeof(cl_uint), NULL, &rc);
@@ -1055,6 +1093,46 @@ int tr_cl_read_film(tr_cl_context *ctx, tr_film *film, tr_error *err) {
     return TR_OK;
 }
 
+int tr_cl_resolve_emission(tr_cl_context *ctx, const tr_camera *cam, int n, tr_error *err) {
+    if (!ctx->resolved || !ctx->have_scene) {
+        return tr_error_set(err, TR_STATUS_INVALID_OPERATION,
+                            "resolving emission: the OpenCL film has no emission pass or no "
+                            "scene");
+    }
+    if (cam->screen_width != ctx->width || cam->screen_height != ctx->height) {
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "resolving emission: a %ux%u camera for a %ux%u film",
+                            cam->screen_width, cam->screen_height, ctx->width, ctx->height);
+    }
+    tr_frame f;
+    memset(&f, 0, sizeof f);
+    f.camera = *cam;
+    cl_int rc =
+        clEnqueueWriteBuffer(ctx->queue, ctx->frame, CL_TRUE, 0, sizeof f, &f, 0, NULL, NULL);
+    if (rc != CL_SUCCESS) {
+        return cl_fail(err, "clEnqueueWriteBuffer(frame)", rc);
+    }
+    const cl_uint base = (cl_uint)ctx->array_count + ARG_FRAME;
+    const cl_int nn = n;
+    const struct {
+        size_t size;
+        const void *ptr;
+    } args[5] = {{sizeof(cl_mem), &ctx->frame},
+                 {sizeof(cl_mem), &ctx->film[FILM_COUNT]},
+                 {sizeof(cl_mem), &ctx->film[FILM_EMISSION]},
+                 {sizeof(cl_int), &nn},
+                 {sizeof(cl_mem), &ctx->resolved}};
+    for (cl_uint a = 0; a < 5; ++a) {
+        rc = clSetKernelArg(ctx->resolve, base + a, args[a].size, args[a].ptr);
+        if (rc != CL_SUCCESS) {
+            return cl_fail(err, "clSetKernelArg(tr_cl_resolve_emission)", rc);
+        }
+    }
+    const size_t global[2] = {ctx->width, ctx->height};
+    rc = clEnqueueNDRangeKernel(ctx->queue, ctx->resolve, 2, NULL, global, NULL, 0, NULL, NULL);
+    return rc == CL_SUCCESS ? TR_OK : cl_fail(err, "clEnqueueNDRangeKernel(resolve)", rc);
+}
+
 int tr_cl_get_handles(const tr_cl_context *ctx, tr_cl_handles *out, tr_error *err) {
     (void)err;
     memset(out, 0, sizeof *out);
@@ -1065,6 +1143,8 @@ int tr_cl_get_handles(const tr_cl_context *ctx, tr_cl_handles *out, tr_error *er
     for (int i = 0; i < 6; ++i) {
         out->film[i] = ctx->film[i];
     }
+    out->emission = ctx->film[FILM_EMISSION];
+    out->resolved = ctx->resolved;
     out->width = ctx->width;
     out->height = ctx->height;
     out->passes = ctx->passes;

@@ -114,8 +114,15 @@ typedef struct tr_cl_handles {
     void *context, *device, *queue;
     const char *options;
     void *film[6];
+    void *emission; /* the film's emission pass (a placeholder when not kept) */
+    void *resolved; /* tr_cl_resolve_emission's output; NULL without the emission pass */
     uint32_t width, height, passes;
 } tr_cl_handles;
+/* Resolves the film's emission pass over each pixel's area (tr_cl_resolve_emission in
+ * entry.cl: post.h's tr_resolve_emission on the device) into the handles' `resolved`
+ * buffer, n x n rays per edge pixel through `cam`, the camera the film was rendered with;
+ * enqueued, not waited for. Fails without the emission pass or a scene. */
+int tr_cl_resolve_emission(tr_cl_context *ctx, const tr_camera *cam, int n, tr_error *err);
 /* Fails only in builds without OpenCL. */
 int tr_cl_get_handles(const tr_cl_context *ctx, tr_cl_handles *out, tr_error *err);
 /* The OpenCL context of device dev (src/device/device.c); NULL for the CPU device. */

@@ -6,6 +6,7 @@
  * one string compiled by src/device/opencl.c. */
 #pragma OPENCL FP_CONTRACT OFF
 
+#include "emission.h"
 #include "kernel.h"
 
 /* The scene's arrays come as one __global buffer argument each, generated from the one
@@ -16,6 +17,15 @@
 #define TR_CL_INFO_ENUM(type, name, count) TR_CL_INFO_##count,
 #define TR_CL_SCALAR_ENUM(type, name) TR_CL_INFO_##name,
 enum { TR_SCENE_ARRAYS(TR_CL_INFO_ENUM) TR_SCENE_SCALARS(TR_CL_SCALAR_ENUM) TR_CL_INFO_COUNT };
+
+/* The scene view `s` over the kernel's scene arguments. */
+#define TR_CL_VIEW_ARRAY(type, name, count)                                                        \
+    s.name = name;                                                                                 \
+    s.count = scene_info[TR_CL_INFO_##count];
+#define TR_CL_SCENE_VIEW(s)                                                                        \
+    TR_SCENE_ARRAYS(TR_CL_VIEW_ARRAY)                                                              \
+    s.accel = scene_info[TR_CL_INFO_accel];                                                        \
+    s.light_weight_total = as_float(scene_info[TR_CL_INFO_light_weight_total])
 
 /* One work item per traced pixel of the frame's grid (tr_frame_grid); with a stride above
  * 1 the traced pixel's value fills its stride x stride block (preview mode). Pass buffers
@@ -36,12 +46,7 @@ __kernel void tr_cl_render(TR_SCENE_ARRAYS(TR_CL_ARRAY_PARAM) __global const uin
         return;
     }
     tr_scene_view s;
-#define TR_CL_VIEW_ARRAY(type, name, count)                                                        \
-    s.name = name;                                                                                 \
-    s.count = scene_info[TR_CL_INFO_##count];
-    TR_SCENE_ARRAYS(TR_CL_VIEW_ARRAY)
-    s.accel = scene_info[TR_CL_INFO_accel];
-    s.light_weight_total = as_float(scene_info[TR_CL_INFO_light_weight_total]);
+    TR_CL_SCENE_VIEW(s);
 
     tr_film_view film = tr_film_view_make(film_sum, film_count, film_albedo, film_normal,
                                           film_depth, film_prim, f.camera.screen_width, f.passes);
@@ -51,4 +56,36 @@ __kernel void tr_cl_render(TR_SCENE_ARRAYS(TR_CL_ARRAY_PARAM) __global const uin
     const uint rays =
         tr_render_grid_rows(&s, &f, &film, gx0 + gx, gy0 + gy, gx0 + gx + 1u, gy0 + gy + 1u);
     atomic_add(&rays_per_row[gy], rays);
+}
+
+/* The film's emission (TR_PASS_EMISSION) resolved over each pixel's area, as the host's
+ * tr_resolve_emission does it (src/device/emission.c, src/kernel/emission.h): a pixel next
+ * to an edge between emitting and non-emitting samples gets the mean over an n x n grid of
+ * first-hit rays through the frame's camera, every other pixel its own mean emission.
+ * One work item per pixel of the film (the camera's screen). */
+__kernel void
+tr_cl_resolve_emission(TR_SCENE_ARRAYS(TR_CL_ARRAY_PARAM) __global const uint *scene_info,
+                       __global const tr_frame *frame, __global const uint *film_count,
+                       __global const float *film_emission, int n, __global float *resolved) {
+    const tr_frame f = *frame;
+    const int w = (int)f.camera.screen_width, h = (int)f.camera.screen_height;
+    const int x = (int)get_global_id(0), y = (int)get_global_id(1);
+    if (x >= w || y >= h) {
+        return;
+    }
+    const uint i = (uint)(y * w + x);
+    tr_vec3 e;
+    if (tr_emission_on_edge(film_emission, w, h, x, y)) {
+        tr_scene_view s;
+        TR_CL_SCENE_VIEW(s);
+        e = tr_emission_resolve_pixel(&s, &f.camera, x, y, n);
+    } else {
+        const uint c = film_count[i];
+        const float inv = c ? 1.0f / (float)c : 0.0f;
+        e = v3(film_emission[3u * i] * inv, film_emission[3u * i + 1u] * inv,
+               film_emission[3u * i + 2u] * inv);
+    }
+    resolved[3u * i] = e.x;
+    resolved[3u * i + 1u] = e.y;
+    resolved[3u * i + 2u] = e.z;
 }

@@ -11,14 +11,15 @@
 #include "filter.h"
 
 /* The device film's means into the frame's buffers (tr_gbuffer_from_film's arithmetic):
- * passes bit 0 albedo, 1 normal, 2 depth, 3 primitive id; a pass the film lacks reads
- * as albedo 1, normal, depth and id 0. */
+ * passes bit 0 albedo, 1 normal, 2 depth, 3 primitive id, 4 emission; a pass the film
+ * lacks reads as albedo 1, normal, depth, id and emission 0. */
 __kernel void tr_recon_from_film(__global const float *sum, __global const uint *count,
                                  __global const float *albedo_sum, __global const float *normal_sum,
                                  __global const float *depth_sum, __global const uint *prim_in,
-                                 uint passes, int w, int h, __global float *color,
-                                 __global float *albedo, __global float *normal,
-                                 __global float *depth, __global uint *prim) {
+                                 __global const float *emission_sum, uint passes, int w, int h,
+                                 __global float *color, __global float *albedo,
+                                 __global float *normal, __global float *depth, __global uint *prim,
+                                 __global float *emission) {
     const int x = (int)get_global_id(0), y = (int)get_global_id(1);
     if (x >= w || y >= h) {
         return;
@@ -30,9 +31,24 @@ __kernel void tr_recon_from_film(__global const float *sum, __global const uint 
         color[3 * i + k] = sum[3 * i + k] * inv;
         albedo[3 * i + k] = (passes & 1u) ? albedo_sum[3 * i + k] * inv : 1.0f;
         normal[3 * i + k] = (passes & 2u) ? normal_sum[3 * i + k] * inv : 0.0f;
+        emission[3 * i + k] = (passes & 16u) ? emission_sum[3 * i + k] * inv : 0.0f;
     }
     depth[i] = (passes & 4u) ? depth_sum[i] * inv : 0.0f;
     prim[i] = (passes & 8u) ? prim_in[i] : 0u;
+}
+
+/* dst += scale * src, 3 floats per pixel: the emission taken out of the frame's colour
+ * before the filters (scale -1) and added to their output after (scale 1). */
+__kernel void tr_recon_add(__global float *dst, __global const float *src, float scale, int w,
+                           int h) {
+    const int x = (int)get_global_id(0), y = (int)get_global_id(1);
+    if (x >= w || y >= h) {
+        return;
+    }
+    const int i = y * w + x;
+    for (int k = 0; k < 3; ++k) {
+        dst[3 * i + k] += scale * src[3 * i + k];
+    }
 }
 
 /* Demodulation (remod 0: in / albedo factor) or remodulation (remod 1: in * factor). */

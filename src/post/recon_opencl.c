@@ -29,11 +29,13 @@ enum {
     K_SVGF_VARIANCE,
     K_SVGF,
     K_TAA,
+    K_ADD,
     K_COUNT
 };
 static const char *const kernel_names[K_COUNT] = {
-    "tr_recon_from_film", "tr_recon_modulate",      "tr_recon_temporal", "tr_recon_bilateral",
-    "tr_recon_atrous",    "tr_recon_svgf_variance", "tr_recon_svgf",     "tr_recon_taa"};
+    "tr_recon_from_film", "tr_recon_modulate", "tr_recon_temporal",
+    "tr_recon_bilateral", "tr_recon_atrous",   "tr_recon_svgf_variance",
+    "tr_recon_svgf",      "tr_recon_taa",      "tr_recon_add"};
 
 /* The device's buffers: the frame (as tr_gbuffer), scratch, history, the two cameras. */
 enum {
@@ -57,13 +59,14 @@ enum {
     B_VA, /* SVGF's variance ping, pong */
     B_VB,
     B_OUT,
-    B_TAA, /* SVGF's last output */
+    B_TAA,  /* SVGF's last output */
+    B_EMIS, /* the frame's own emission (TR_PASS_EMISSION) */
     B_CAMS,
     B_COUNT
 };
 /* Floats (or uints) per pixel of each buffer; 0: the cameras. */
-static const int buffer_elems[B_COUNT] = {3, 3, 3, 1, 1, 3, 3, 3, 2, 2, 1,
-                                          1, 1, 3, 1, 3, 3, 1, 1, 3, 3, 0};
+static const int buffer_elems[B_COUNT] = {3, 3, 3, 1, 1, 3, 3, 3, 2, 2, 1, 1,
+                                          1, 3, 1, 3, 3, 1, 1, 3, 3, 3, 0};
 
 typedef struct recon_cl {
     cl_context context;
@@ -75,6 +78,7 @@ typedef struct recon_cl {
     size_t motion_cap;
     tr_camera prev_cam;
     int have_history, cur, have_taa;
+    int has_emission; /* the frame came from a film with the emission pass */
 } recon_cl;
 #else
 typedef struct recon_cl recon_cl;
@@ -263,16 +267,19 @@ static int cl_from_film(tr_recon_device *r, tr_error *err) {
     }
     const cl_uint passes =
         ((h.passes & TR_PASS_ALBEDO) ? 1u : 0u) | ((h.passes & TR_PASS_NORMAL) ? 2u : 0u) |
-        ((h.passes & TR_PASS_DEPTH) ? 4u : 0u) | ((h.passes & TR_PASS_PRIM) ? 8u : 0u);
-    cl_mem f[6];
+        ((h.passes & TR_PASS_DEPTH) ? 4u : 0u) | ((h.passes & TR_PASS_PRIM) ? 8u : 0u) |
+        ((h.passes & TR_PASS_EMISSION) ? 16u : 0u);
+    cl_mem f[7];
     for (int i = 0; i < 6; ++i) {
         f[i] = (cl_mem)h.film[i];
     }
+    f[6] = (cl_mem)h.emission;
     recon_cl *c = r->cl;
+    c->has_emission = (h.passes & TR_PASS_EMISSION) != 0u;
     const int w = (int)r->width, ht = (int)r->height;
     return RUN(c, K_FROM_FILM, w, ht, err, KM(f[0]), KM(f[1]), KM(f[2]), KM(f[3]), KM(f[4]),
-               KM(f[5]), KU(passes), KI(w), KI(ht), KB(c, B_COLOR), KB(c, B_ALBEDO),
-               KB(c, B_NORMAL), KB(c, B_DEPTH), KB(c, B_PRIM));
+               KM(f[5]), KM(f[6]), KU(passes), KI(w), KI(ht), KB(c, B_COLOR), KB(c, B_ALBEDO),
+               KB(c, B_NORMAL), KB(c, B_DEPTH), KB(c, B_PRIM), KB(c, B_EMIS));
 }
 
 static int cl_upload(tr_recon_device *r, const tr_gbuffer *g, tr_error *err) {
@@ -286,6 +293,9 @@ static int cl_upload(tr_recon_device *r, const tr_gbuffer *g, tr_error *err) {
             return cl_fail(err, "clEnqueueWriteBuffer", rc);
         }
     }
+    /* The host's frame comes with its emission filtered (the device takes no emission
+     * from a gbuffer yet). */
+    r->cl->has_emission = 0;
     /* The host's arrays may change once this returns. */
     return finish(r->cl, err);
 }
@@ -355,8 +365,25 @@ static int cl_frame(tr_recon_device *r, const tr_camera *cam, const tr_vec3 *mot
     }
     const int prev = c->cur, next = 1 - c->cur;
     const int hc = B_HC0 + next, hm = B_HM0 + next, hl = B_HL0 + next;
-    rc = RUN(c, K_MODULATE, w, h, err, KB(c, B_COLOR), KB(c, B_ALBEDO), KI(0), KI(w), KI(h),
-             KB(c, B_ILLUM));
+    /* With the emission pass the filters see the colour less the first hit's emission,
+     * and the emission comes back after them: resolved over the pixels' area on the
+     * device (tr_cl_resolve_emission) where asked for, else the frame's own. */
+    cl_mem emis = c->b[B_EMIS];
+    if (c->has_emission) {
+        if (p->emission_samples > 0) {
+            tr_cl_context *ctx = tr_device_cl_context(r->dev);
+            tr_cl_handles hd;
+            if (tr_cl_resolve_emission(ctx, cam, p->emission_samples, err) != TR_OK ||
+                tr_cl_get_handles(ctx, &hd, err) != TR_OK) {
+                return TR_ERR;
+            }
+            emis = (cl_mem)hd.resolved;
+        }
+        rc = RUN(c, K_ADD, w, h, err, KB(c, B_COLOR), KB(c, B_EMIS), KF(-1.0f), KI(w), KI(h));
+    }
+    rc = rc ? rc
+            : RUN(c, K_MODULATE, w, h, err, KB(c, B_COLOR), KB(c, B_ALBEDO), KI(0), KI(w), KI(h),
+                  KB(c, B_ILLUM));
     rc = rc ? rc
             : RUN(c, K_TEMPORAL, w, h, err, KB(c, B_CAMS), KB(c, B_ILLUM), KB(c, B_NORMAL),
                   KB(c, B_DEPTH), KB(c, B_PRIM), KB(c, B_HC0 + prev), KB(c, B_HM0 + prev),
@@ -427,6 +454,9 @@ static int cl_frame(tr_recon_device *r, const tr_camera *cam, const tr_vec3 *mot
             rc = RUN(c, K_MODULATE, w, h, err, KB(c, src), KB(c, B_ALBEDO), KI(1), KI(w), KI(h),
                      KB(c, B_OUT));
         }
+    }
+    if (rc == TR_OK && c->has_emission) {
+        rc = RUN(c, K_ADD, w, h, err, KB(c, B_OUT), KM(emis), KF(1.0f), KI(w), KI(h));
     }
     /* The geometry this frame's history was seen with, for the next frame's tests. */
     rc = rc ? rc : copy(c, B_DEPTH, B_HDEPTH, n * sizeof(float), err);
@@ -583,6 +613,19 @@ int tr_recon_device_frame(tr_recon_device *r, const tr_camera *cam, const tr_vec
         tr_gbuffer_from_film(&r->gb, &r->film, err) != TR_OK) {
         return TR_ERR;
     }
-    return tr_recon_frame_moving(&r->host, &r->gb, cam, motion, motion_count, method, p, 0, out,
-                                 err);
+    /* As on the OpenCL device: emitters' edges resolved where asked for, timed with the
+     * temporal stage. */
+    const double t0 = tr_time_now();
+    if (r->gb.has_emission && p->emission_samples > 0 && method != TR_RECON_OFF &&
+        tr_resolve_emission(tr_device_scene(r->dev), cam, p->emission_samples, 0, &r->gb, NULL,
+                            err) != TR_OK) {
+        return TR_ERR;
+    }
+    const double resolve_ms = (tr_time_now() - t0) * 1e3;
+    if (tr_recon_frame_moving(&r->host, &r->gb, cam, motion, motion_count, method, p, 0, out,
+                              err) != TR_OK) {
+        return TR_ERR;
+    }
+    r->host.ms_temporal += method != TR_RECON_OFF ? resolve_ms : 0.0;
+    return TR_OK;
 }
