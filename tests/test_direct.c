@@ -15,6 +15,7 @@
 #include "check.h"
 #include "synth_frame.h"
 #include "classic_box.h"
+#include "render_film.h"
 #include "trac0r/post.h"
 #include "trac0r/scene_file.h"
 #include "trac0r/trac0r.h"
@@ -32,18 +33,7 @@ static tr_scene *cornell(tr_error *err) {
 
 static void render(const tr_scene *s, int integrator, int max_depth, uint32_t passes, uint32_t spp,
                    tr_film *f) {
-    tr_error err;
-    CHECK(tr_film_init_passes(f, W, H, passes, &err) == TR_OK, "%s", err.msg);
-    tr_render_config cfg = tr_render_config_default();
-    cfg.integrator = integrator;
-    cfg.max_depth = max_depth;
-    cfg.passes = passes;
-    cfg.seed = 11;
-    cfg.threads = 2;
-    for (uint32_t k = 0; k < spp; ++k) {
-        CHECK(tr_render_frame(s, tr_scene_camera(s), &cfg, f, k, NULL, &err) == TR_OK, "%s",
-              err.msg);
-    }
+    render_film(s, W, H, integrator, max_depth, passes, 11, 0, spp, f);
 }
 
 static void test_pass(void) {

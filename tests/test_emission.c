@@ -16,6 +16,7 @@
  *    spreads the same bright pixels onto their neighbours. */
 #include "check.h"
 #include "classic_box.h"
+#include "render_film.h"
 #include "synth_frame.h"
 #include "trac0r/post.h"
 #include "trac0r/trac0r.h"
@@ -29,18 +30,7 @@
 
 static void render(const tr_scene *s, int integrator, int max_depth, uint32_t passes,
                    uint32_t first, uint32_t spp, tr_film *f) {
-    tr_error err;
-    CHECK(tr_film_init_passes(f, W, H, passes, &err) == TR_OK, "%s", err.msg);
-    tr_render_config cfg = tr_render_config_default();
-    cfg.integrator = integrator;
-    cfg.max_depth = max_depth;
-    cfg.passes = passes;
-    cfg.seed = 5;
-    cfg.threads = 2;
-    for (uint32_t k = first; k < first + spp; ++k) {
-        CHECK(tr_render_frame(s, tr_scene_camera(s), &cfg, f, k, NULL, &err) == TR_OK, "%s",
-              err.msg);
-    }
+    render_film(s, W, H, integrator, max_depth, passes, 5, first, spp, f);
 }
 
 static void test_pass(const tr_scene *s) {
