@@ -3,7 +3,8 @@
 # bit for bit; a rank that cannot open its device ends the job with one trac0r message
 # and status 2; ranks given different options are refused; a render stopped by SIGTERM
 # under MPI resumes, with another number of ranks, to the single-process image (and
-# variance: the checkpoint and the tile messages carry its sums of squares).
+# variance: the checkpoint and the tile messages carry its sums of squares); the same
+# checkpoint resumes without mpirun, and one written without it resumes under mpirun.
 # Usage: mpi_check.sh TRAC0R_BINARY SCRATCH_DIR MPIEXEC ranks|resume (two CTests: each
 # mpirun start costs a second or more)
 set -u
@@ -71,8 +72,17 @@ if [ "$PART" = resume ]; then
     cmp -s long.pfm resumed.pfm || fail "MPI render resumed with 3 ranks differs from a single process"
     cmp -s long.variance.pfm resumed.variance.pfm ||
         fail "MPI render resumed with 3 ranks: the variance differs from a single process's"
-    "$BIN" $L --resume ck --out nompi.pfm >out.txt 2>err.txt
-    [ $? -eq 2 ] || fail "resuming an MPI checkpoint without mpirun: not refused with status 2"
+    # One checkpoint format: the MPI checkpoint resumes in one process, and a checkpoint of
+    # one process under mpirun, both to the uninterrupted image.
+    "$BIN" $L --resume ck --out nompi.pfm 2>err.txt || fail "MPI checkpoint resumed in one process: $(cat err.txt)"
+    cmp -s long.pfm nompi.pfm || fail "MPI checkpoint resumed in one process differs from a single process"
+    cmp -s long.variance.pfm nompi.variance.pfm ||
+        fail "MPI checkpoint resumed in one process: the variance differs"
+    "$BIN" $L --spp 150 --checkpoint ck1 --out part.pfm 2>err.txt || fail "150 spp with a checkpoint: $(cat err.txt)"
+    $MPIRUN -np 2 "$BIN" $L --resume ck1 --out frommain.pfm 2>err.txt || fail "single-process checkpoint under mpirun: $(cat err.txt)"
+    cmp -s long.pfm frommain.pfm || fail "single-process checkpoint resumed under mpirun differs from a single process"
+    cmp -s long.variance.pfm frommain.variance.pfm ||
+        fail "single-process checkpoint resumed under mpirun: the variance differs"
 fi
 
 cli_end "mpi_check $PART"

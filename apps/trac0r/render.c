@@ -10,49 +10,22 @@
 #include "commands.h"
 #include "devices.h"
 #include "progress.h"
-#include "render_adaptive.h"
 #include "render_job.h"
+#include "stop.h"
 #include "trac0r/outfile.h"
 
-/* The film's radiance through the edge-avoiding a-trous filter guided by its albedo,
- * normal and depth passes, into `den` (radiance only, one sample per covered pixel). */
-static int render_denoise(const tr_film *film, tr_film *den, tr_error *err) {
-    tr_gbuffer g = {0};
-    const tr_recon_params p = tr_recon_params_default();
-    int rc = tr_gbuffer_init(&g, film->width, film->height, err);
-    rc = rc == TR_OK ? tr_gbuffer_from_film(&g, film, err) : rc;
-    rc = rc == TR_OK ? tr_film_init(den, film->width, film->height, err) : rc;
-    rc = rc == TR_OK ? tr_filter_atrous(&g, g.color, den->sum, &p, 0, err) : rc;
-    for (size_t i = 0; rc == TR_OK && i < (size_t)film->width * film->height; ++i) {
-        den->count[i] = film->count[i] ? 1u : 0u;
-    }
-    tr_gbuffer_free(&g);
-    return rc;
-}
-
-/* Writes the film (PNG or PFM), first through the a-trous filter (denoise) and, for a
- * PNG, the display curve; the plain path (clamp, no filter) is tr_film_write as before. */
-static int render_write(const tr_film *film, const char *out, float exposure, int curve,
-                        int denoise, tr_error *err) {
+/* Writes the image (PNG or PFM) through the display curve for a PNG; the plain path
+ * (clamp) is tr_film_write. */
+static int render_write(const tr_film *img, const char *out, float exposure, int curve,
+                        tr_error *err) {
     const int png = tr_image_format_from_path(out) == TR_IMAGE_PNG;
-    if (!denoise && (curve == TR_TONEMAP_CLAMP || !png)) {
-        return tr_film_write(film, out, exposure, err);
+    if (curve == TR_TONEMAP_CLAMP || !png) {
+        return tr_film_write(img, out, exposure, err);
     }
-    tr_film den = {0}, disp = {0};
-    const tr_film *img = film;
-    int rc = TR_OK;
-    if (denoise) {
-        rc = render_denoise(film, &den, err);
-        img = &den;
-    }
-    if (rc == TR_OK && png && curve != TR_TONEMAP_CLAMP) {
-        rc = tr_tonemap_display_film(img, exposure, curve, &disp, err);
-        img = &disp;
-        exposure = 0.0f; /* applied */
-    }
-    rc = rc == TR_OK ? tr_film_write(img, out, exposure, err) : rc;
+    tr_film disp = {0};
+    int rc = tr_tonemap_display_film(img, exposure, curve, &disp, err);
+    rc = rc == TR_OK ? tr_film_write(&disp, out, 0.0f, err) : rc; /* exposure applied */
     tr_film_free(&disp);
-    tr_film_free(&den);
     return rc;
 }
 
@@ -101,7 +74,8 @@ static void render_help(void) {
            "                       16, 32, 64, ... spp: the mean of N samples against that\n"
            "                       of the first N/2, relative to the square root of the\n"
            "                       pixel's value; 0.01 is a good start); --spp is the most\n"
-           "                       a pixel gets. Not with --stride, --checkpoint or mpirun\n"
+           "                       a pixel gets. Not with --stride, --checkpoint, --resume\n"
+           "                       or mpirun\n"
            "  --tonemap CURVE      PNG display curve: clamp (default) or filmic (an ACES-like\n"
            "                       fitted curve that rolls highlights off); PFM and EXR\n"
            "                       stay linear\n"
@@ -110,8 +84,8 @@ static void render_help(void) {
            "                       (docs/realtime.md); the passes are rendered for it\n"
            "  --time-limit S       stop before a pass that would end after S seconds,\n"
            "                       0..1e6 (default 0: none); the image is complete, and the\n"
-           "                       same as one rendered with the spp it reached. Not with\n"
-           "                       --checkpoint or mpirun\n"
+           "                       same as one rendered with the spp it reached (and its\n"
+           "                       checkpoint resumes to the rest). Not with mpirun\n"
            "  --verbose            after the summary, where the time went: setting up (scene,\n"
            "                       acceleration structure, device), rendering, and the CPU\n"
            "                       time used (user + system); under mpirun per rank, with\n"
@@ -293,12 +267,10 @@ int render_job_setup(render_job *job, int argc, char **argv, int *done) {
                          "pixels to estimate their noise)",
                          stride);
     }
-    if ((job->noise_threshold > 0.0f || job->time_limit > 0.0f) &&
-        (job->checkpoint || job->resume)) {
-        /* A checkpoint holds whole passes over the image; an adaptive render's tiles stop
-         * at different sample counts, which the checkpoint format does not record. */
-        return cli_error(a, "%s: not with --checkpoint or --resume",
-                         job->noise_threshold > 0.0f ? "--noise-threshold" : "--time-limit");
+    if (job->noise_threshold > 0.0f && (job->checkpoint || job->resume)) {
+        /* An adaptive render's tiles stop at different sample counts, on tests of
+         * half-films that a checkpoint does not keep. */
+        return cli_error(a, "--noise-threshold: not with --checkpoint or --resume");
     }
     const tr_image_format fmt = tr_image_format_from_path(job->out);
     if (fmt == TR_IMAGE_UNKNOWN) {
@@ -338,10 +310,6 @@ int render_job_setup(render_job *job, int argc, char **argv, int *done) {
     if (tr_film_check_size(c->width, c->height, &err) != TR_OK) {
         return cli_error(a, "--width/--height: %s", err.msg);
     }
-    if ((job->checkpoint || job->resume) &&
-        checkpoint_identity(&job->id, c, job->scene, stride, job->passes, &err) != TR_OK) {
-        return cli_error(a, "%s", err.msg);
-    }
     rc = cli_backend_open(a, c, job->scene, &job->be);
     if (rc != CLI_OK) {
         return rc;
@@ -354,211 +322,178 @@ int render_job_setup(render_job *job, int argc, char **argv, int *done) {
     return CLI_OK;
 }
 
-int render_write_outputs(const render_job *job, const tr_film *film, uint32_t samples,
-                         double elapsed, uint64_t rays, const char *stopped) {
-    tr_error err;
-    const char *out = job->out;
-    int rc = CLI_OK;
-    if (tr_image_format_from_path(out) == TR_IMAGE_EXR) {
-        /* A view of the film with the layers asked for; its radiance denoised if asked
-         * (the variance layer stays the noise of the rendered estimate). */
-        tr_film view = *film, den = {0};
-        view.passes = job->write_passes;
-        if (job->denoise) {
-            rc = render_denoise(film, &den, &err) == TR_OK ? CLI_OK : CLI_FAILURE;
-        }
-        if (rc == CLI_OK) {
-            rc = tr_film_write_exr_rgb(&view, job->denoise ? &den : &view, out, job->exr_half,
-                                       &err) == TR_OK
-                     ? CLI_OK
-                     : CLI_FAILURE;
-        }
-        tr_film_free(&den);
-    } else {
-        rc = render_write(film, out, job->exposure, job->curve, job->denoise, &err) == TR_OK
-                 ? CLI_OK
-                 : CLI_FAILURE;
-        for (int k = 0; k < 5 && rc == CLI_OK; ++k) {
-            tr_film pass;
-            if ((job->write_passes & (1u << k)) == 0u) {
-                continue;
-            }
-            if (tr_film_extract_pass(film, 1u << k, &pass, &err) != TR_OK ||
-                tr_film_write_pfm(&pass, job->pass_paths[k], &err) != TR_OK) {
-                rc = CLI_FAILURE;
-            }
-            tr_film_free(&pass);
-        }
+tr_session_desc render_session_desc(const render_job *job) {
+    tr_session_desc d = {0};
+    /* Resumed without --spp: the checkpoint's. */
+    d.spp = job->resume && !job->spp_given ? 0u : job->spp;
+    d.noise_threshold = job->noise_threshold;
+    d.time_limit = job->time_limit;
+    d.checkpoint = job->checkpoint;
+    /* --checkpoint-interval 0 means after every pass. */
+    d.checkpoint_interval = job->checkpoint_interval > 0.0 ? job->checkpoint_interval : -1.0;
+    d.resume = job->resume;
+    d.scene_file = cli_scene_is_builtin(job->common.scene) ? NULL : job->common.scene;
+    d.denoise = job->denoise;
+    return d;
+}
+
+int render_session_error(render_job *job, const tr_error *err) {
+    if (err->code == TR_STATUS_LIMIT && job->resume) {
+        return cli_error(&job->args, "--spp: %s", err->msg); /* below the checkpoint's */
     }
-    if (rc != CLI_OK) {
+    if (err->code == TR_STATUS_INVALID_ARGUMENT || err->code == TR_STATUS_PARSE) {
+        return cli_error(&job->args, "%s%s", job->resume ? "--resume: " : "", err->msg);
+    }
+    fprintf(stderr, "trac0r render: %s%s\n", job->resume ? "--resume: " : "", err->msg);
+    return CLI_FAILURE;
+}
+
+/* The image and its passes written as PFM files beside it (not EXR). */
+static int write_plain(const render_job *job, const tr_film *film, const tr_film *img,
+                       tr_error *err) {
+    int rc = render_write(img, job->out, job->exposure, job->curve, err);
+    for (int k = 0; k < 5 && rc == TR_OK; ++k) {
+        tr_film pass;
+        if ((job->write_passes & (1u << k)) == 0u) {
+            continue;
+        }
+        rc = tr_film_extract_pass(film, 1u << k, &pass, err);
+        rc = rc == TR_OK ? tr_film_write_pfm(&pass, job->pass_paths[k], err) : rc;
+        tr_film_free(&pass);
+    }
+    return rc;
+}
+
+int render_write_outputs(const render_job *job, tr_session *s, uint32_t samples, double elapsed,
+                         uint64_t rays, const char *stopped) {
+    tr_error err;
+    const tr_film *film = tr_session_film(s, &err);
+    tr_film den = {0};
+    int rc = film ? TR_OK : TR_ERR;
+    if (rc == TR_OK && job->denoise) {
+        /* The variance layer stays the noise of the rendered estimate. */
+        rc = tr_session_denoise(s, &den, &err);
+    }
+    if (rc == TR_OK && tr_image_format_from_path(job->out) == TR_IMAGE_EXR) {
+        tr_film view = *film; /* the layers asked for */
+        view.passes = job->write_passes;
+        rc = tr_film_write_exr_rgb(&view, job->denoise ? &den : &view, job->out, job->exr_half,
+                                   &err);
+    } else if (rc == TR_OK) {
+        rc = write_plain(job, film, job->denoise ? &den : film, &err);
+    }
+    tr_film_free(&den);
+    if (rc != TR_OK) {
         fprintf(stderr, "trac0r render: %s\n", err.msg);
-        return rc;
+        return CLI_FAILURE;
     }
     char accel[160];
     cli_describe_accel(accel, sizeof accel, job->scene);
     fprintf(stderr, "trac0r render: %s %ux%u, %u spp%s%s%s, %s, %s: %.2f s, %.2f Mrays/s -> %s\n",
             job->common.scene, job->common.width, job->common.height, samples, stopped ? " (" : "",
             stopped ? stopped : "", stopped ? ")" : "", job->be.name, accel, elapsed,
-            elapsed > 0 ? (double)rays / elapsed * 1e-6 : 0.0, out);
+            elapsed > 0 ? (double)rays / elapsed * 1e-6 : 0.0, job->out);
     return CLI_OK;
 }
 
-/* One sample per pixel added to a film in host memory (a resumed render's): on the CPU
- * straight into it, as the device would into its own; elsewhere through the device's
- * film, cleared, and added - one float addition per sum either way, so the bits are
- * those of the device's own accumulation. */
-static int host_frame(render_job *job, tr_film *film, tr_film *scratch, uint32_t s,
-                      tr_render_stats *st, tr_error *err) {
-    if (cli_backend_is_cpu(&job->be)) {
-        return tr_render_frame(job->scene, tr_scene_camera(job->scene), &job->cfg, film, s, st,
-                               err);
-    }
-    if (cli_backend_clear(&job->be, err) != TR_OK ||
-        cli_backend_frame(&job->be, job->scene, &job->cfg, s, st, err) != TR_OK ||
-        cli_backend_read(&job->be, scratch, err) != TR_OK) {
-        return TR_ERR;
-    }
-    return tr_film_accumulate(film, scratch, err);
-}
-
-/* The single-process render with a noise threshold or a time limit (render_adaptive.c). */
-static int render_budgeted(render_job *job, tr_film *film) {
-    tr_error err;
-    adapt_options ao = {job->spp, job->noise_threshold, job->time_limit, isatty(fileno(stderr))};
-    adapt_result ares;
-    memset(&ares, 0, sizeof ares);
-    const double t0 = tr_time_now();
-    if (adapt_render(&job->be, job->scene, &job->cfg, &ao, &ares, &err) != TR_OK ||
-        cli_backend_read(&job->be, film, &err) != TR_OK) {
-        fprintf(stderr, "trac0r render: %s\n", err.msg);
-        return CLI_FAILURE;
-    }
-    char note[160];
-    snprintf(note, sizeof note, "of %u%s, %.1f spp on average, %u of %u tiles converged", job->spp,
-             ares.stopped_by_time ? ", time limit" : "",
-             (double)ares.samples / ((double)job->common.width * job->common.height),
-             ares.tiles_converged, ares.tiles);
-    return render_write_outputs(job, film, ares.passes, tr_time_now() - t0, ares.rays, note);
-}
-
-/* The single-process render: whole passes over the image, sample by sample. */
-static int render_local(render_job *job) {
-    cli_args *a = &job->args;
-    tr_error err;
-    tr_film film, scratch;
-    memset(&scratch, 0, sizeof scratch);
-    uint32_t first = 0;
-    int host = 0; /* the film lives in host memory (resumed) rather than on the device */
-    if (job->resume) {
-        uint32_t mode = 0, ck_spp = 0;
-        if (checkpoint_read(job->resume, &job->id, &mode, &film, &first, &ck_spp, &err) != TR_OK) {
-            return err.code == TR_STATUS_INVALID_ARGUMENT || err.code == TR_STATUS_PARSE
-                       ? cli_error(a, "--resume: %s", err.msg)
-                       : (fprintf(stderr, "trac0r render: --resume: %s\n", err.msg), CLI_FAILURE);
-        }
-        if (mode != CHECKPOINT_PASSES) {
-            tr_film_free(&film);
-            return cli_error(a, "--resume: %s was written by an MPI render: resume it under mpirun",
-                             job->resume);
-        }
-        if (!job->spp_given) {
-            job->spp = ck_spp;
-        }
-        if (job->spp < first) {
-            tr_film_free(&film);
-            return cli_error(a, "--spp: %u is fewer than the %u samples of %s", job->spp, first,
-                             job->resume);
-        }
-        host = 1;
-        if (!cli_backend_is_cpu(&job->be) &&
-            tr_film_init_passes(&scratch, film.width, film.height, film.passes, &err) != TR_OK) {
-            tr_film_free(&film);
-            fprintf(stderr, "trac0r render: %s\n", err.msg);
-            return CLI_FAILURE;
-        }
-    } else if (tr_film_init_passes(&film, job->common.width, job->common.height, job->passes,
-                                   &err) != TR_OK) {
-        fprintf(stderr, "trac0r render: %s\n", err.msg);
-        return CLI_FAILURE;
-    }
-
-    if (job->noise_threshold > 0.0f || job->time_limit > 0.0f) {
-        const int rc = render_budgeted(job, &film);
-        tr_film_free(&film);
-        return rc;
-    }
-    render_stop_install();
+/* Progress on stderr: the bar (spp, or tiles when a resumed tile checkpoint is finished
+ * tile by tile), or with a noise threshold or time limit a line redrawn on a terminal. */
+typedef struct render_progress {
     progress bar;
-    progress_begin(&bar, "trac0r render", "spp", job->spp, 0);
-    const double t0 = tr_time_now();
-    double last_checkpoint = t0;
-    uint64_t rays = 0;
-    int rc = CLI_OK;
-    uint32_t s = first;
-    /* The film as the last pass left it, in `film`: reading it off the device is
-     * needed only for a checkpoint or the image. */
-    for (; s < job->spp && !render_stop_signal(); ++s) {
-        tr_render_stats st;
-        const int ok = host ? host_frame(job, &film, &scratch, s, &st, &err)
-                            : cli_backend_frame(&job->be, job->scene, &job->cfg, s, &st, &err);
-        if (ok != TR_OK) {
-            progress_end(&bar);
-            fprintf(stderr, "trac0r render: %s\n", err.msg);
-            rc = CLI_FAILURE;
-            break;
+    int begun;
+    int budgeted; /* --noise-threshold or --time-limit */
+    int tty;
+} render_progress;
+
+static int on_progress(void *user, const tr_session_progress *p) {
+    render_progress *rp = user;
+    const double rate = p->seconds > 0 ? (double)p->rays / p->seconds * 1e-6 : 0.0;
+    if (rp->budgeted) {
+        if (rp->tty) {
+            fprintf(stderr,
+                    "\rtrac0r render: %u/%u spp  %u/%u tiles converged  %.1f s elapsed  "
+                    "%.2f Mrays/s ",
+                    p->samples, p->spp, p->tiles_done, p->tiles, p->seconds, rate);
         }
-        rays += st.rays;
-        const double el = tr_time_now() - t0;
-        char rate[48];
-        snprintf(rate, sizeof rate, "%.2f Mrays/s", el > 0 ? (double)rays / el * 1e-6 : 0.0);
-        progress_update(&bar, s + 1, rate);
-        if (job->checkpoint && s + 1 < job->spp &&
-            tr_time_now() - last_checkpoint >= job->checkpoint_interval) {
-            if ((!host && cli_backend_read(&job->be, &film, &err) != TR_OK) ||
-                checkpoint_write(job->checkpoint, &job->id, CHECKPOINT_PASSES, &film, s + 1,
-                                 job->spp, &err) != TR_OK) {
-                progress_end(&bar);
-                fprintf(stderr, "trac0r render: --checkpoint: %s\n", err.msg);
-                rc = CLI_FAILURE;
-                break;
-            }
-            last_checkpoint = tr_time_now();
-        }
+        return 0;
     }
-    progress_end(&bar);
-    const double elapsed = tr_time_now() - t0;
+    const int tiles = p->tiles > 0;
+    if (!rp->begun) {
+        progress_begin(&rp->bar, "trac0r render", tiles ? "tiles" : "spp",
+                       tiles ? p->tiles : p->spp, 0);
+        rp->begun = 1;
+    }
+    char extra[48];
+    snprintf(extra, sizeof extra, "%.2f Mrays/s", rate);
+    progress_update(&rp->bar, tiles ? p->tiles_done : p->samples, extra);
+    return 0;
+}
+
+/* Why the render ended early, for the summary line (NULL: it did not). */
+static const char *stop_note(const render_job *job, const tr_session_progress *p, int sig,
+                             char *buf, size_t size) {
+    if (sig) {
+        snprintf(buf, size, "stopped by signal %d after %u of %u", sig, p->samples, p->spp);
+        return buf;
+    }
+    if (job->noise_threshold > 0.0f || job->time_limit > 0.0f) {
+        const double pixels = (double)job->common.width * job->common.height;
+        snprintf(buf, size, "of %u%s, %.1f spp on average, %u of %u tiles converged", p->spp,
+                 p->end == TR_SESSION_TIME_LIMIT ? ", time limit" : "",
+                 (double)(p->pixel_samples + (uint64_t)p->first * (uint64_t)pixels) / pixels,
+                 p->tiles_done, p->tiles);
+        return buf;
+    }
+    return NULL;
+}
+
+/* The single-process render: one session on the job's device. */
+static int render_local(render_job *job) {
+    tr_error err;
+    render_progress rp;
+    memset(&rp, 0, sizeof rp);
+    rp.budgeted = job->noise_threshold > 0.0f || job->time_limit > 0.0f;
+    rp.tty = isatty(fileno(stderr));
+    tr_session_desc desc = render_session_desc(job);
+    desc.progress = on_progress;
+    desc.progress_user = &rp;
+    tr_session *s = tr_session_create(job->be.dev, job->scene, &job->cfg, &desc, &err);
+    if (!s) {
+        return render_session_error(job, &err);
+    }
+    render_stop_install(s);
+    const double t0 = tr_time_now();
+    int rc = tr_session_run(s, &err) == TR_OK ? CLI_OK : CLI_FAILURE;
+    const double t1 = tr_time_now();
+    render_stop_uninstall();
+    if (rp.begun) {
+        progress_end(&rp.bar);
+    }
+    if (rp.budgeted && rp.tty) {
+        fputc('\n', stderr);
+    }
+    tr_session_progress p;
+    tr_session_progress_get(s, &p);
     const int sig = render_stop_signal();
-    if (rc == CLI_OK && s == 0) {
+    if (rc != CLI_OK) {
+        fprintf(stderr, "trac0r render: %s\n", err.msg);
+    } else if (p.samples == 0 && p.tiles_done == 0) {
         fprintf(stderr,
                 "trac0r render: stopped by signal %d before the first sample: nothing "
                 "written\n",
                 sig);
-    } else if (rc == CLI_OK) {
-        if (!host && cli_backend_read(&job->be, &film, &err) != TR_OK) {
-            fprintf(stderr, "trac0r render: %s\n", err.msg);
-            rc = CLI_FAILURE;
-        }
-        if (rc == CLI_OK && job->checkpoint &&
-            checkpoint_write(job->checkpoint, &job->id, CHECKPOINT_PASSES, &film, s, job->spp,
-                             &err) != TR_OK) {
-            fprintf(stderr, "trac0r render: --checkpoint: %s\n", err.msg);
-            rc = CLI_FAILURE;
-        }
-        char note[96];
-        snprintf(note, sizeof note, "stopped by signal %d after %u of %u", sig, s, job->spp);
-        if (rc == CLI_OK) {
-            rc = render_write_outputs(job, &film, s, elapsed, rays, sig ? note : NULL);
-        }
+    } else {
+        char note[160];
+        rc = render_write_outputs(job, s, p.samples, p.seconds, p.rays,
+                                  stop_note(job, &p, sig, note, sizeof note));
     }
-    render_stop_uninstall();
     if (rc == CLI_OK && job->verbose) {
         fprintf(stderr,
                 "trac0r render: setup %.3f s, rendering %.3f s, output %.3f s; CPU %.3f s (user "
                 "+ system)\n",
-                t0 - job->started, elapsed, tr_time_now() - t0 - elapsed, render_cpu_seconds());
+                t0 - job->started, t1 - t0, tr_time_now() - t1, render_cpu_seconds());
     }
-    tr_film_free(&scratch);
-    tr_film_free(&film);
+    tr_session_destroy(s);
     return rc == CLI_OK && sig ? 128 + sig : rc;
 }
 

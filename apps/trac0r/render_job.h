@@ -1,11 +1,12 @@
 /* render_job.h - one `trac0r render` as the single-process flow (render.c) and the MPI
- * flow (render_mpi.c) share it: what to render, where to write it, and how to checkpoint. */
+ * flow (render_mpi.c) share it: the options, the scene and device, and the session
+ * (include/trac0r/session.h) that renders. */
 #ifndef TRAC0R_RENDER_JOB_H
 #define TRAC0R_RENDER_JOB_H
 
-#include "checkpoint.h"
 #include "cli.h"
 #include "devices.h"
+#include "trac0r/session.h"
 
 typedef struct render_job {
     cli_args args;
@@ -27,7 +28,6 @@ typedef struct render_job {
     const char *checkpoint;   /* --checkpoint FILE or NULL */
     double checkpoint_interval;
     const char *resume;    /* --resume FILE or NULL */
-    checkpoint_id id;      /* when checkpoint or resume is set */
     float noise_threshold; /* --noise-threshold (0: off) */
     float time_limit;      /* --time-limit seconds (0: none) */
     int verbose;           /* --verbose: where the time went */
@@ -43,10 +43,16 @@ double render_cpu_seconds(void);
 int render_job_setup(render_job *job, int argc, char **argv, int *done);
 void render_job_free(render_job *job);
 
-/* Writes the image (and its passes) and the summary line, with `stopped` (NULL: none)
- * saying why the render ended early. CLI_OK or CLI_FAILURE. */
-int render_write_outputs(const render_job *job, const tr_film *film, uint32_t samples,
-                         double elapsed, uint64_t rays, const char *stopped);
+/* The session's settings the options describe (progress left to the caller). */
+tr_session_desc render_session_desc(const render_job *job);
+/* Reports a failed tr_session_create: a checkpoint of another render, a damaged one or
+ * settings that do not go together are the command line's (exit 2), the rest exit 1. */
+int render_session_error(render_job *job, const tr_error *err);
+
+/* Writes the session's image (and its passes) and the summary line, with `stopped` (NULL:
+ * none) saying why the render ended early. CLI_OK or CLI_FAILURE. */
+int render_write_outputs(const render_job *job, tr_session *s, uint32_t samples, double elapsed,
+                         uint64_t rays, const char *stopped);
 
 #ifdef TRAC0R_HAVE_MPI
 /* Whether this process was started by mpirun (and MPI should be used). */

@@ -31,10 +31,10 @@
 
 #include "progress.h"
 #include "render_job.h"
+#include "stop.h"
 
 enum { TAG_WORK = 1, TAG_DONE = 2, TAG_DATA = 3, TAG_ERROR = 4, TAG_CANCELLED = 5, TAG_PHASES = 6 };
-#define TILE_GRID 32u /* a tile's side in traced pixels */
-#define PREFETCH 2    /* tiles a worker holds */
+#define PREFETCH 2 /* tiles a worker holds */
 
 /* Where this rank's time went, in seconds (--verbose): rank 0 gathers and prints them. */
 enum {
@@ -73,82 +73,34 @@ int render_mpi_wanted(void) {
     return getenv("OMPI_COMM_WORLD_SIZE") || getenv("PMIX_RANK") || getenv("PMI_RANK");
 }
 
+/* The session's tile plan (tr_session_tile_*): the tiles' count, side and rectangles. */
 typedef struct tiling {
-    uint32_t side, nx, ny, count;
-    uint32_t width, height;
+    tr_session *s;
+    uint32_t side, count;
+    size_t pixel_bytes; /* of the film's layout, for the passes kept */
 } tiling;
 
-static tiling make_tiling(uint32_t width, uint32_t height, int stride) {
+static tiling make_tiling(tr_session *s, const render_job *job) {
     tiling t;
-    t.side = TILE_GRID * (uint32_t)stride;
-    t.width = width;
-    t.height = height;
-    t.nx = (width + t.side - 1) / t.side;
-    t.ny = (height + t.side - 1) / t.side;
-    t.count = t.nx * t.ny;
+    t.s = s;
+    t.side = TR_SESSION_TILE * (uint32_t)job->cfg.stride;
+    t.count = tr_session_tile_count(s);
+    t.pixel_bytes = tr_film_pixel_bytes(job->passes);
     return t;
 }
 
 static tr_rect tile_rect(const tiling *t, uint32_t k) {
-    tr_rect r;
-    r.x = (k % t->nx) * t->side;
-    r.y = (k / t->nx) * t->side;
-    r.width = r.x + t->side < t->width ? t->side : t->width - r.x;
-    r.height = r.y + t->side < t->height ? t->side : t->height - r.y;
+    tr_rect r = {0, 0, 0, 0};
+    tr_session_tile(t->s, k, &r, NULL, NULL);
     return r;
 }
 
-/* Bytes per pixel of a tile message: the film's arrays for the passes kept. */
-static size_t pixel_bytes(uint32_t passes) {
-    size_t b = 3 * sizeof(float) + sizeof(uint32_t);
-    b += (passes & TR_PASS_ALBEDO) ? 3 * sizeof(float) : 0;
-    b += (passes & TR_PASS_NORMAL) ? 3 * sizeof(float) : 0;
-    b += (passes & TR_PASS_DEPTH) ? sizeof(float) : 0;
-    b += (passes & TR_PASS_PRIM) ? sizeof(uint32_t) : 0;
-    b += (passes & TR_PASS_VARIANCE) ? 3 * sizeof(float) : 0;
-    return b;
-}
-
-/* Copies rect r's rows of one array between a film-sized buffer and a packed one. */
-static unsigned char *pack_rows(unsigned char *p, const void *film_array, size_t elem,
-                                uint32_t width, const tr_rect *r, int unpack) {
-    if (!film_array) {
-        return p;
-    }
-    for (uint32_t y = r->y; y < r->y + r->height; ++y) {
-        unsigned char *row = (unsigned char *)film_array + ((size_t)y * width + r->x) * elem;
-        const size_t n = (size_t)r->width * elem;
-        if (unpack) {
-            memcpy(row, p, n);
-        } else {
-            memcpy(p, row, n);
-        }
-        p += n;
-    }
-    return p;
-}
-
-/* Packs (unpack = 0) or unpacks tile r of film f at buf. Returns the bytes. */
-static size_t pack_tile(tr_film *f, const tr_rect *r, unsigned char *buf, int unpack) {
-    unsigned char *p = buf;
-    p = pack_rows(p, f->sum, 3 * sizeof(float), f->width, r, unpack);
-    p = pack_rows(p, f->count, sizeof(uint32_t), f->width, r, unpack);
-    p = pack_rows(p, f->albedo, 3 * sizeof(float), f->width, r, unpack);
-    p = pack_rows(p, f->normal, 3 * sizeof(float), f->width, r, unpack);
-    p = pack_rows(p, f->depth, sizeof(float), f->width, r, unpack);
-    p = pack_rows(p, f->prim, sizeof(uint32_t), f->width, r, unpack);
-    p = pack_rows(p, f->sq, 3 * sizeof(float), f->width, r, unpack);
-    return (size_t)(p - buf);
-}
-
-/* Renders every sample of tile k into this rank's device film. */
+/* Renders every sample tile k lacks into this rank's device film. */
 static int render_tile(render_job *job, const tiling *t, uint32_t k, uint64_t *rays,
                        tr_error *err) {
-    const tr_rect r = tile_rect(t, k);
     tr_render_stats st;
     const double t0 = tr_time_now();
-    const int rc = tr_device_render(job->be.dev, tr_scene_camera(job->scene), &job->cfg, 0,
-                                    job->spp, &r, &st, err);
+    const int rc = tr_session_render_tile(t->s, k, job->cfg.cancel, job->cfg.cancel_user, &st, err);
     phase[PH_RENDER] += tr_time_now() - t0;
     if (rc != TR_OK) {
         return TR_ERR;
@@ -165,8 +117,8 @@ static int render_tile(render_job *job, const tiling *t, uint32_t k, uint64_t *r
  * one thread's, its samples in order). */
 static uint32_t piece_side(const tr_render_config *cfg) {
     const int threads = cfg->threads > 0 ? cfg->threads : tr_default_threads();
-    const double side = floor((double)TILE_GRID / sqrt(8.0 * threads));
-    return side < 1.0 ? 1u : (side > TILE_GRID / 4 ? TILE_GRID / 4 : (uint32_t)side);
+    const double side = floor((double)TR_SESSION_TILE / sqrt(8.0 * threads));
+    return side < 1.0 ? 1u : (side > TR_SESSION_TILE / 4 ? TR_SESSION_TILE / 4 : (uint32_t)side);
 }
 
 /* mpirun passes SIGINT/SIGTERM to every rank and soon kills them: a tile under way is
@@ -185,21 +137,21 @@ typedef struct pending {
 } pending;
 
 /* The most tiles one message carries (MPI counts are ints). */
-static uint32_t tiles_per_message(const tiling *t, uint32_t passes) {
-    const size_t per = sizeof(uint32_t) + (size_t)t->side * t->side * pixel_bytes(passes);
+static uint32_t tiles_per_message(const tiling *t) {
+    const size_t per = sizeof(uint32_t) + (size_t)t->side * t->side * t->pixel_bytes;
     const size_t n = ((size_t)1 << 30) / per;
     return n > 0 ? (uint32_t)n : 1u;
 }
 
 /* Worker: sends the pending tiles' pixels to rank 0 (TAG_DATA: uint32 final, uint32
  * count, then per tile its index and pixels), the last message marked final if asked. */
-static int send_pending(render_job *job, const tiling *t, tr_film *film, pending *p, int final,
-                        tr_error *err) {
-    if (p->n > 0 && tr_device_read_film(job->be.dev, film, err) != TR_OK) {
+static int send_pending(const tiling *t, pending *p, int final, tr_error *err) {
+    const tr_film *film = p->n > 0 ? tr_session_film(t->s, err) : NULL;
+    if (p->n > 0 && !film) {
         return TR_ERR;
     }
-    const uint32_t most = tiles_per_message(t, job->passes);
-    const size_t per = sizeof(uint32_t) + (size_t)t->side * t->side * pixel_bytes(job->passes);
+    const uint32_t most = tiles_per_message(t);
+    const size_t per = sizeof(uint32_t) + (size_t)t->side * t->side * t->pixel_bytes;
     uint32_t sent = 0;
     do {
         const uint32_t n = p->n - sent < most ? p->n - sent : most;
@@ -215,7 +167,12 @@ static int send_pending(render_job *job, const tiling *t, tr_film *film, pending
             const tr_rect r = tile_rect(t, k);
             memcpy(q, &k, sizeof k);
             q += sizeof k;
-            q += pack_tile(film, &r, q, 0);
+            const size_t bytes = (size_t)r.width * r.height * t->pixel_bytes;
+            if (tr_film_pack_rect(film, &r, q, bytes, err) != TR_OK) {
+                free(buf);
+                return TR_ERR;
+            }
+            q += bytes;
         }
         MPI_Send(buf, (int)(q - buf), MPI_BYTE, 0, TAG_DATA, MPI_COMM_WORLD);
         free(buf);
@@ -227,7 +184,7 @@ static int send_pending(render_job *job, const tiling *t, tr_film *film, pending
 
 /* A worker: renders the tiles rank 0 sends until it sends -1, reporting each (TAG_DONE:
  * uint64 index, rays) and sending the pixels in batches. */
-static int worker(render_job *job, const tiling *t, tr_film *film) {
+static int worker(render_job *job, const tiling *t) {
     tr_error err;
     pending p = {calloc(t->count, sizeof(uint32_t)), 0};
     if (!p.tiles) {
@@ -248,7 +205,7 @@ static int worker(render_job *job, const tiling *t, tr_film *film) {
         int ok = TR_OK;
         if (k < 0) {
             t0 = tr_time_now();
-            ok = send_pending(job, t, film, &p, 1, &err);
+            ok = send_pending(t, &p, 1, &err);
             phase[PH_PIXELS] += tr_time_now() - t0;
         } else if ((ok = render_tile(job, t, (uint32_t)k, &rays, &err)) == TR_OK) {
             p.tiles[p.n++] = (uint32_t)k;
@@ -256,7 +213,7 @@ static int worker(render_job *job, const tiling *t, tr_film *film) {
             MPI_Send(done, 2, MPI_UINT64_T, 0, TAG_DONE, MPI_COMM_WORLD);
             if (job->checkpoint && tr_time_now() - last_flush >= job->checkpoint_interval) {
                 t0 = tr_time_now();
-                ok = send_pending(job, t, film, &p, 0, &err);
+                ok = send_pending(t, &p, 0, &err);
                 last_flush = tr_time_now();
                 phase[PH_PIXELS] += last_flush - t0;
             }
@@ -280,10 +237,8 @@ static int worker(render_job *job, const tiling *t, tr_film *film) {
 /* Rank 0's side of the hand-out. */
 typedef struct master {
     render_job *job;
-    const tiling *t;
-    tr_film *film;       /* the image: tiles whose pixels arrived */
-    tr_film *own;        /* rank 0's own device film, read when its tiles are needed */
-    unsigned char *done; /* per tile: pixels in `film` (or from the checkpoint) */
+    const tiling *t;     /* over rank 0's session, whose film is the image */
+    unsigned char *done; /* per tile: its pixels in the image (or from the checkpoint) */
     pending mine;        /* rank 0's finished tiles not yet copied into `film` */
     uint32_t next;       /* the first tile not handed out */
     uint32_t finished;   /* tiles rendered (reported), the checkpoint's included */
@@ -343,23 +298,13 @@ static void collect_own(master *m) {
     if (m->mine.n == 0) {
         return;
     }
-    if (tr_device_read_film(m->job->be.dev, m->own, &err) != TR_OK) {
+    if (!tr_session_film(m->t->s, &err)) {
         fail(m, "", err.msg);
         return;
     }
-    unsigned char *tmp = malloc((size_t)m->t->side * m->t->side * pixel_bytes(m->job->passes));
-    if (!tmp) {
-        fail(m, "", "out of memory");
-        return;
-    }
     for (uint32_t i = 0; i < m->mine.n; ++i) {
-        const uint32_t k = m->mine.tiles[i];
-        const tr_rect r = tile_rect(m->t, k);
-        pack_tile(m->own, &r, tmp, 0);
-        pack_tile(m->film, &r, tmp, 1);
-        m->done[k] = 1;
+        m->done[m->mine.tiles[i]] = 1;
     }
-    free(tmp);
     m->mine.n = 0;
 }
 
@@ -372,8 +317,7 @@ static void maybe_checkpoint(master *m, double *last) {
     /* The workers' pixels come in their own batches, at the same interval: a
      * checkpoint holds the tiles whose pixels have arrived. */
     collect_own(m);
-    if (m->rc == CLI_OK && checkpoint_write(job->checkpoint, &job->id, CHECKPOINT_TILES, m->film, 0,
-                                            job->spp, &err) != TR_OK) {
+    if (m->rc == CLI_OK && tr_session_checkpoint(m->t->s, NULL, &err) != TR_OK) {
         fail(m, "--checkpoint: ", err.msg);
     }
     *last = tr_time_now();
@@ -395,15 +339,16 @@ static void take_pixels(master *m, int src, const unsigned char *buf, size_t n) 
             memcpy(&k, q, sizeof k);
             q += sizeof k;
         }
-        const tr_rect r0 = tile_rect(m->t, k < m->t->count ? k : 0);
-        const size_t bytes = (size_t)r0.width * r0.height * pixel_bytes(m->job->passes);
-        if (k >= m->t->count || (size_t)(q - buf) + bytes > n) {
+        const tr_rect r = tile_rect(m->t, k < m->t->count ? k : 0);
+        const size_t bytes = (size_t)r.width * r.height * m->t->pixel_bytes;
+        tr_error err;
+        if (k >= m->t->count || (size_t)(q - buf) + bytes > n ||
+            tr_session_put_tile(m->t->s, k, q, bytes, &err) != TR_OK) {
             fail(m, "", "a malformed message from a worker");
             m->final[src] = 1; /* waiting for more from it would be in vain */
             return;
         }
-        const tr_rect r = tile_rect(m->t, k);
-        q += pack_tile(m->film, &r, (unsigned char *)q, 1);
+        q += bytes;
         m->done[k] = 1;
     }
     if (head[0]) {
@@ -480,14 +425,12 @@ static int between_pieces(void *user) {
     return 0;
 }
 
-static int master_run(render_job *job, const tiling *t, tr_film *film, tr_film *own,
-                      unsigned char *done, int size, double *elapsed, uint64_t *rays) {
+static int master_run(render_job *job, const tiling *t, unsigned char *done, int size,
+                      double *elapsed, uint64_t *rays) {
     master m;
     memset(&m, 0, sizeof m);
     m.job = job;
     m.t = t;
-    m.film = film;
-    m.own = own;
     m.done = done;
     m.size = size;
     m.outstanding = calloc((size_t)size, sizeof *m.outstanding);
@@ -570,18 +513,11 @@ static int setup_all(render_job *job, int argc, char **argv, int rank, int size,
         }
     }
     int rc = render_job_setup(job, argc, argv, done);
-    tr_error err;
     if (rc == CLI_OK && !*done && (job->noise_threshold > 0.0f || job->time_limit > 0.0f)) {
         /* Ranks render tiles at their own pace: a tile-wise stop rule or a wall-clock
          * budget would make the image depend on the rank count. */
         rc = cli_error(&job->args, "%s: not under mpirun",
                        job->noise_threshold > 0.0f ? "--noise-threshold" : "--time-limit");
-        *done = 1;
-    }
-    if (rc == CLI_OK && !*done && !job->checkpoint && !job->resume &&
-        checkpoint_identity(&job->id, &job->common, job->scene, job->cfg.stride, job->passes,
-                            &err) != TR_OK) {
-        rc = cli_error(&job->args, "%s", err.msg);
         *done = 1;
     }
     fflush(stderr);
@@ -607,14 +543,36 @@ static int setup_all(render_job *job, int argc, char **argv, int rank, int size,
     if (first < size) {
         MPI_Bcast(&rc, 1, MPI_INT, first, MPI_COMM_WORLD);
         *done = 1;
+    }
+    return rc;
+}
+
+/* Every rank opens its session (resuming reads the checkpoint on every rank, so that a
+ * tile a checkpoint holds in part goes on from its very floats), and checks that all
+ * render the same image: the same scene and options. Returns the status of the lowest
+ * failing rank (which alone prints its message), or CLI_OK with *out set. */
+static int open_sessions(render_job *job, int rank, int size, tr_session **out) {
+    tr_error err;
+    tr_session_desc desc = render_session_desc(job);
+    tr_session *s = tr_session_create(job->be.dev, job->scene, &job->cfg, &desc, &err);
+    const char *id = s ? tr_session_identity(s, NULL, &err) : NULL;
+    int mine = id ? size : rank, first = size;
+    MPI_Allreduce(&mine, &first, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
+    if (first < size) {
+        int rc = rank == first ? render_session_error(job, &err) : CLI_OK;
+        MPI_Bcast(&rc, 1, MPI_INT, first, MPI_COMM_WORLD);
+        tr_session_destroy(s);
         return rc;
     }
-    /* Every rank must render the same image: the same scene and options. */
-    unsigned long long h[2] = {job->id.scene_hash, 0};
-    for (const char *p = job->id.desc; *p; ++p) {
-        h[1] = h[1] * 131u + (unsigned char)*p;
+    uint64_t hash = 0;
+    tr_session_identity(s, &hash, &err);
+    tr_session_progress p;
+    tr_session_progress_get(s, &p);
+    unsigned long long h[2] = {hash, 0};
+    for (const char *c = id; *c; ++c) {
+        h[1] = h[1] * 131u + (unsigned char)*c;
     }
-    h[1] = h[1] * 131u + job->spp;
+    h[1] = h[1] * 131u + p.spp;
     unsigned long long lo[2], hi[2];
     MPI_Allreduce(h, lo, 2, MPI_UNSIGNED_LONG_LONG, MPI_MIN, MPI_COMM_WORLD);
     MPI_Allreduce(h, hi, 2, MPI_UNSIGNED_LONG_LONG, MPI_MAX, MPI_COMM_WORLD);
@@ -623,9 +581,10 @@ static int setup_all(render_job *job, int argc, char **argv, int rank, int size,
             fprintf(stderr, "trac0r render: the ranks were given different scenes or options "
                             "(only --device and --threads may differ between ranks)\n");
         }
-        *done = 1;
+        tr_session_destroy(s);
         return CLI_USAGE;
     }
+    *out = s;
     return CLI_OK;
 }
 
@@ -662,40 +621,6 @@ static void report_phases(const render_job *job, int rank, int size, int rc) {
     }
 }
 
-/* Rank 0: the checkpoint to resume into `film` and `done`. */
-static int resume_tiles(render_job *job, const tiling *t, tr_film *film, unsigned char *done) {
-    tr_error err;
-    tr_film ck;
-    uint32_t mode = 0, samples = 0, spp = 0;
-    if (checkpoint_read(job->resume, &job->id, &mode, &ck, &samples, &spp, &err) != TR_OK) {
-        if (err.code == TR_STATUS_INVALID_ARGUMENT || err.code == TR_STATUS_PARSE) {
-            return cli_error(&job->args, "--resume: %s", err.msg);
-        }
-        fprintf(stderr, "trac0r render: --resume: %s\n", err.msg);
-        return CLI_FAILURE;
-    }
-    int rc = CLI_OK;
-    if (mode != CHECKPOINT_TILES) {
-        rc = cli_error(&job->args,
-                       "--resume: %s was written by a single-process render: resume it "
-                       "without mpirun",
-                       job->resume);
-    } else if (job->spp_given && job->spp != spp) {
-        rc = cli_error(&job->args,
-                       "--spp: %u differs from the %u samples of %s (tiles are rendered whole)",
-                       job->spp, spp, job->resume);
-    } else if (tr_film_accumulate(film, &ck, &err) != TR_OK) {
-        rc = cli_error(&job->args, "--resume: %s", err.msg);
-    }
-    for (uint32_t k = 0; rc == CLI_OK && k < t->count; ++k) {
-        const tr_rect r = tile_rect(t, k);
-        done[k] = film->count[(size_t)r.y * film->width + r.x] != 0u;
-    }
-    job->spp = spp;
-    tr_film_free(&ck);
-    return rc;
-}
-
 int render_mpi_main(int argc, char **argv) {
     int provided = 0;
     MPI_Init_thread(NULL, NULL, MPI_THREAD_FUNNELED, &provided);
@@ -711,71 +636,68 @@ int render_mpi_main(int argc, char **argv) {
         MPI_Finalize();
         return rc;
     }
-    tr_error err;
-    const tiling t = make_tiling(job.common.width, job.common.height, job.cfg.stride);
-    unsigned char *tiles_done = calloc(t.count, 1);
-    tr_film own, film;
-    memset(&film, 0, sizeof film);
-    int ok = tiles_done && tr_film_init_passes(&own, job.common.width, job.common.height,
-                                               job.passes, &err) == TR_OK;
-    if (ok && rank == 0) {
-        ok = tr_film_init_passes(&film, job.common.width, job.common.height, job.passes, &err) ==
-             TR_OK;
+    /* The tiles are rendered whole by whichever rank: the pieces the CPU cuts them into
+     * let rank 0 answer between them, and a signal drop the tile under way. */
+    job.cfg.cancel = stop_requested;
+    job.cfg.tile = piece_side(&job.cfg);
+    tr_session *s = NULL;
+    rc = open_sessions(&job, rank, size, &s);
+    if (rc != CLI_OK) {
+        render_job_free(&job);
+        MPI_Finalize();
+        return rc;
     }
-    rc = ok ? CLI_OK : CLI_FAILURE;
-    if (!ok) {
+    const tiling t = make_tiling(s, &job);
+    unsigned char *tiles_done = calloc(t.count, 1);
+    if (!tiles_done) {
         fprintf(stderr, "trac0r render: rank %d: out of memory\n", rank);
         MPI_Abort(MPI_COMM_WORLD, CLI_FAILURE);
     }
-    if (rank == 0 && job.resume) {
-        rc = resume_tiles(&job, &t, &film, tiles_done);
+    tr_session_progress prog;
+    tr_session_progress_get(s, &prog);
+    for (uint32_t k = 0; k < t.count; ++k) {
+        uint32_t have = 0;
+        tr_session_tile(s, k, NULL, &have, NULL);
+        tiles_done[k] = have >= prog.spp;
     }
-    MPI_Bcast(&rc, 1, MPI_INT, 0, MPI_COMM_WORLD);
-    MPI_Bcast(&job.spp, 1, MPI_UINT32_T, 0, MPI_COMM_WORLD);
-    job.cfg.cancel = stop_requested;
-    job.cfg.tile = piece_side(&job.cfg);
-    if (rc == CLI_OK) {
-        render_stop_install();
-        if (rank == 0) {
-            double elapsed = 0.0;
-            uint64_t rays = 0;
-            rc = master_run(&job, &t, &film, &own, tiles_done, size, &elapsed, &rays);
-            phase[PH_TOTAL] = elapsed;
-            const int sig = render_stop_signal();
-            uint32_t finished = 0;
-            for (uint32_t k = 0; k < t.count; ++k) {
-                finished += tiles_done[k];
-            }
-            if (rc == CLI_OK && job.checkpoint &&
-                checkpoint_write(job.checkpoint, &job.id, CHECKPOINT_TILES, &film, 0, job.spp,
-                                 &err) != TR_OK) {
-                fprintf(stderr, "trac0r render: --checkpoint: %s\n", err.msg);
-                rc = CLI_FAILURE;
-            }
-            if (rc == CLI_OK) {
-                /* An interrupted render: the finished tiles have every sample, the
-                 * others none. */
-                char note[96];
-                snprintf(note, sizeof note, "stopped by signal %d: %u of %u tiles done", sig,
-                         finished, t.count);
-                rc = render_write_outputs(&job, &film, job.spp, elapsed, rays, sig ? note : NULL);
-                if (rc == CLI_OK && sig) {
-                    rc = 128 + sig;
-                }
-            }
-        } else {
-            const double t0 = tr_time_now();
-            rc = worker(&job, &t, &own);
-            phase[PH_TOTAL] = tr_time_now() - t0;
+    render_stop_install(NULL);
+    if (rank == 0) {
+        double elapsed = 0.0;
+        uint64_t rays = 0;
+        rc = master_run(&job, &t, tiles_done, size, &elapsed, &rays);
+        phase[PH_TOTAL] = elapsed;
+        const int sig = render_stop_signal();
+        uint32_t finished = 0;
+        for (uint32_t k = 0; k < t.count; ++k) {
+            finished += tiles_done[k];
         }
-        render_stop_uninstall();
-        /* Every rank ends with rank 0's status (a worker's failure is rank 0's too). */
-        MPI_Bcast(&rc, 1, MPI_INT, 0, MPI_COMM_WORLD);
-        report_phases(&job, rank, size, rc);
+        tr_error err;
+        if (rc == CLI_OK && job.checkpoint && tr_session_checkpoint(s, NULL, &err) != TR_OK) {
+            fprintf(stderr, "trac0r render: --checkpoint: %s\n", err.msg);
+            rc = CLI_FAILURE;
+        }
+        if (rc == CLI_OK) {
+            /* An interrupted render: the finished tiles have every sample, the others
+             * what the checkpoint resumed held. */
+            char note[96];
+            snprintf(note, sizeof note, "stopped by signal %d: %u of %u tiles done", sig, finished,
+                     t.count);
+            rc = render_write_outputs(&job, s, prog.spp, elapsed, rays, sig ? note : NULL);
+            if (rc == CLI_OK && sig) {
+                rc = 128 + sig;
+            }
+        }
+    } else {
+        const double t0 = tr_time_now();
+        rc = worker(&job, &t);
+        phase[PH_TOTAL] = tr_time_now() - t0;
     }
+    render_stop_uninstall();
+    /* Every rank ends with rank 0's status (a worker's failure is rank 0's too). */
+    MPI_Bcast(&rc, 1, MPI_INT, 0, MPI_COMM_WORLD);
+    report_phases(&job, rank, size, rc);
     free(tiles_done);
-    tr_film_free(&own);
-    tr_film_free(&film);
+    tr_session_destroy(s);
     render_job_free(&job);
     MPI_Finalize();
     return rc;

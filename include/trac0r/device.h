@@ -83,6 +83,10 @@ int tr_device_render(tr_device *dev, const tr_camera *cam, const tr_render_confi
 /* Copies the device's film into `film`, which must have its size and may keep only passes
  * it keeps. */
 int tr_device_read_film(tr_device *dev, tr_film *film, tr_error *err);
+/* Replaces the device's film by a copy of `film` (its size, passes and every sum and
+ * count): a render continued from a film kept elsewhere (a checkpoint) adds its samples to
+ * those very floats, so it ends with the bits of an uninterrupted one. */
+int tr_device_write_film(tr_device *dev, const tr_film *film, tr_error *err);
 /* Forgets every sample of the device's film. */
 int tr_device_clear(tr_device *dev, tr_error *err);
 /* The size and passes of the device's film (0 x 0 before the first render). */

@@ -32,6 +32,33 @@ typedef struct tr_film {
     float *emission; /* TR_PASS_EMISSION: 3 floats per pixel, sums of the first hit's emission */
 } tr_film;
 
+/* A rectangle of pixels: columns x .. x+width-1, rows y .. y+height-1. */
+typedef struct tr_rect {
+    uint32_t x, y, width, height;
+} tr_rect;
+
+/* The film's layout, described once: its arrays in a fixed order - the radiance sums, the
+ * counts, then one array per pass in TR_PASS_* bit order (albedo, normal, depth, id,
+ * variance, direct, emission) - each kept always (pass 0) or when the film keeps its pass.
+ * Everything that copies a film whole or in part (a device's read-back, checkpoints, the
+ * tiles of a distributed render) walks this list, so a pass added to the film travels with
+ * it everywhere. */
+#define TR_FILM_ARRAYS 9
+/* The pass bit that keeps array i (0: always kept), and its bytes per pixel; 0 for both
+ * when i is not in 0..TR_FILM_ARRAYS-1. */
+uint32_t tr_film_array_pass(int i);
+size_t tr_film_array_pixel_bytes(int i);
+/* Array i of f, or NULL when f does not keep it. */
+void *tr_film_array_data(const tr_film *f, int i);
+/* The bytes one pixel takes in all the arrays a film keeping `passes` has. */
+size_t tr_film_pixel_bytes(uint32_t passes);
+
+/* Copies rectangle r of every array f keeps, in layout order and row by row, to buf (at
+ * least tr_film_pixel_bytes(f->passes) * r->width * r->height bytes: `size`), or back from
+ * buf into f. Fails on a rectangle outside the film or a buffer too small. */
+int tr_film_pack_rect(const tr_film *f, const tr_rect *r, void *buf, size_t size, tr_error *err);
+int tr_film_unpack_rect(tr_film *f, const tr_rect *r, const void *buf, size_t size, tr_error *err);
+
 /* Checks, allocating nothing, that a film of width x height may be made: at least 1x1
  * (TR_STATUS_INVALID_ARGUMENT), within TR_FILM_MAX_SIDE / TR_FILM_MAX_PIXELS
  * (TR_STATUS_LIMIT). */

@@ -60,11 +60,6 @@ typedef struct tr_render_config {
     void *cancel_user;
 } tr_render_config;
 
-/* A rectangle of pixels: columns x .. x+width-1, rows y .. y+height-1. */
-typedef struct tr_rect {
-    uint32_t x, y, width, height;
-} tr_rect;
-
 typedef struct tr_render_stats {
     uint64_t rays;  /* intersection queries made */
     double seconds; /* wall time of the call */

@@ -53,6 +53,7 @@
 #include "trac0r/render.h"
 #include "trac0r/scene.h"
 #include "trac0r/scene_file.h"
+#include "trac0r/session.h"
 #include "trac0r/types.h"
 
 #define TRAC0R_VERSION "0.1.0"

@@ -297,28 +297,37 @@ int tr_device_read_film(tr_device *dev, tr_film *film, tr_error *err) {
                             film->passes & ~src->passes);
     }
     const size_t n = (size_t)src->width * src->height;
-    memcpy(film->sum, src->sum, 3 * n * sizeof *film->sum);
-    memcpy(film->count, src->count, n * sizeof *film->count);
-    if (film->albedo) {
-        memcpy(film->albedo, src->albedo, 3 * n * sizeof *film->albedo);
+    for (int i = 0; i < TR_FILM_ARRAYS; ++i) {
+        void *dst = tr_film_array_data(film, i);
+        if (dst) {
+            memcpy(dst, tr_film_array_data(src, i), n * tr_film_array_pixel_bytes(i));
+        }
     }
-    if (film->normal) {
-        memcpy(film->normal, src->normal, 3 * n * sizeof *film->normal);
+    return TR_OK;
+}
+
+int tr_device_write_film(tr_device *dev, const tr_film *film, tr_error *err) {
+    if (!film || !film->sum) {
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "no film to write to device %s",
+                            dev->info.name);
     }
-    if (film->depth) {
-        memcpy(film->depth, src->depth, n * sizeof *film->depth);
+    if (dev->kind == KIND_OPENCL) {
+        return tr_cl_write_film(dev->cl, film, err);
     }
-    if (film->prim) {
-        memcpy(film->prim, src->prim, n * sizeof *film->prim);
+    if (!dev->film.sum || dev->film.width != film->width || dev->film.height != film->height ||
+        dev->film.passes != film->passes) {
+        tr_film_free(&dev->film);
+        if (tr_film_init_passes(&dev->film, film->width, film->height, film->passes, err) !=
+            TR_OK) {
+            return TR_ERR;
+        }
     }
-    if (film->sq) {
-        memcpy(film->sq, src->sq, 3 * n * sizeof *film->sq);
-    }
-    if (film->direct) {
-        memcpy(film->direct, src->direct, 3 * n * sizeof *film->direct);
-    }
-    if (film->emission) {
-        memcpy(film->emission, src->emission, 3 * n * sizeof *film->emission);
+    const size_t n = (size_t)film->width * film->height;
+    for (int i = 0; i < TR_FILM_ARRAYS; ++i) {
+        void *dst = tr_film_array_data(&dev->film, i);
+        if (dst) {
+            memcpy(dst, tr_film_array_data(film, i), n * tr_film_array_pixel_bytes(i));
+        }
     }
     return TR_OK;
 }

@@ -91,6 +91,11 @@ int tr_cl_read_film(tr_cl_context *ctx, tr_film *film, tr_error *err) {
     (void)film;
     return tr_error_set(err, TR_STATUS_UNSUPPORTED, "%s", no_opencl);
 }
+int tr_cl_write_film(tr_cl_context *ctx, const tr_film *film, tr_error *err) {
+    (void)ctx;
+    (void)film;
+    return tr_error_set(err, TR_STATUS_UNSUPPORTED, "%s", no_opencl);
+}
 void tr_cl_set_memory_limit(tr_cl_context *ctx, uint64_t bytes) {
     (void)ctx;
     (void)bytes;
@@ -189,19 +194,10 @@ enum {
     FILM_EMISSION,
     FILM_BUFFERS
 };
-/* Bytes per pixel of each film buffer, and the pass bit it belongs to (0: always kept). */
-static const size_t film_elem[FILM_BUFFERS] = {
-    3 * sizeof(float), sizeof(uint32_t),  3 * sizeof(float), 3 * sizeof(float), sizeof(float),
-    sizeof(uint32_t),  3 * sizeof(float), 3 * sizeof(float), 3 * sizeof(float)};
-static const uint32_t film_pass[FILM_BUFFERS] = {0u,
-                                                 0u,
-                                                 TR_PASS_ALBEDO,
-                                                 TR_PASS_NORMAL,
-                                                 TR_PASS_DEPTH,
-                                                 TR_PASS_PRIM,
-                                                 TR_PASS_VARIANCE,
-                                                 TR_PASS_DIRECT,
-                                                 TR_PASS_EMISSION};
+/* The buffers follow the film's layout (tr_film_array_*, film.h): buffer i is array i. */
+_Static_assert(FILM_BUFFERS == TR_FILM_ARRAYS, "one OpenCL buffer per film array");
+#define film_pass(i) tr_film_array_pass(i)
+#define film_elem(i) tr_film_array_pixel_bytes(i)
 
 struct tr_cl_context {
     tr_cl_device_info info;
@@ -741,8 +737,8 @@ static uint64_t memory_budget(const tr_cl_context *ctx) {
 static uint64_t film_bytes(uint32_t w, uint32_t h, uint32_t passes) {
     uint64_t per_pixel = 0;
     for (int i = 0; i < FILM_BUFFERS; ++i) {
-        if (film_pass[i] == 0u || (passes & film_pass[i]) != 0u) {
-            per_pixel += film_elem[i];
+        if (film_pass(i) == 0u || (passes & film_pass(i)) != 0u) {
+            per_pixel += film_elem(i);
         }
     }
     if (passes & TR_PASS_EMISSION) {
@@ -904,10 +900,10 @@ uint64_t tr_cl_scene_bytes(const tr_cl_context *ctx) {
 
 /* Bytes of film buffer i for the film's size (a placeholder element when not kept). */
 static size_t film_buffer_bytes(const tr_cl_context *ctx, int i) {
-    if (film_pass[i] != 0u && (ctx->passes & film_pass[i]) == 0u) {
-        return film_elem[i];
+    if (film_pass(i) != 0u && (ctx->passes & film_pass(i)) == 0u) {
+        return film_elem(i);
     }
-    return (size_t)ctx->width * ctx->height * film_elem[i];
+    return (size_t)ctx->width * ctx->height * film_elem(i);
 }
 
 int tr_cl_clear_film(tr_cl_context *ctx, tr_error *err) {
@@ -1078,16 +1074,35 @@ int tr_cl_read_film(tr_cl_context *ctx, tr_film *film, tr_error *err) {
                             "the OpenCL film does not keep passes 0x%x",
                             film->passes & ~ctx->passes);
     }
-    void *dst[FILM_BUFFERS] = {film->sum,  film->count, film->albedo, film->normal,  film->depth,
-                               film->prim, film->sq,    film->direct, film->emission};
     for (int i = 0; i < FILM_BUFFERS; ++i) {
-        if (!dst[i] || (film_pass[i] != 0u && (film->passes & film_pass[i]) == 0u)) {
+        void *dst = tr_film_array_data(film, i);
+        if (!dst) {
             continue;
         }
         cl_int rc = clEnqueueReadBuffer(ctx->queue, ctx->film[i], CL_TRUE, 0,
-                                        film_buffer_bytes(ctx, i), dst[i], 0, NULL, NULL);
+                                        film_buffer_bytes(ctx, i), dst, 0, NULL, NULL);
         if (rc != CL_SUCCESS) {
             return cl_fail(err, "clEnqueueReadBuffer(film)", rc);
+        }
+    }
+    return TR_OK;
+}
+
+int tr_cl_write_film(tr_cl_context *ctx, const tr_film *film, tr_error *err) {
+    if ((!ctx->film[FILM_SUM] || film->width != ctx->width || film->height != ctx->height ||
+         film->passes != ctx->passes) &&
+        make_film(ctx, film->width, film->height, film->passes, err) != TR_OK) {
+        return TR_ERR;
+    }
+    for (int i = 0; i < FILM_BUFFERS; ++i) {
+        const void *src = tr_film_array_data(film, i);
+        if (!src) {
+            continue;
+        }
+        cl_int rc = clEnqueueWriteBuffer(ctx->queue, ctx->film[i], CL_TRUE, 0,
+                                         film_buffer_bytes(ctx, i), src, 0, NULL, NULL);
+        if (rc != CL_SUCCESS) {
+            return cl_fail(err, "clEnqueueWriteBuffer(film)", rc);
         }
     }
     return TR_OK;

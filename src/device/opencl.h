@@ -99,6 +99,8 @@ int tr_cl_clear_film(tr_cl_context *ctx, tr_error *err);
 /* Copies the device film into `film`, which must have the size of the last frame's
  * camera and may keep no pass the device film lacks. */
 int tr_cl_read_film(tr_cl_context *ctx, tr_film *film, tr_error *err);
+/* Makes the device's film a copy of `film` (reallocated for its size and passes). */
+int tr_cl_write_film(tr_cl_context *ctx, const tr_film *film, tr_error *err);
 
 /* Pretends the device has only `bytes` of global memory (0: its real size), for tests
  * of the out-of-memory path on devices that have plenty. */

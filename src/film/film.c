@@ -23,6 +23,94 @@ int tr_film_init(tr_film *f, uint32_t width, uint32_t height, tr_error *err) {
     return tr_film_init_passes(f, width, height, 0u, err);
 }
 
+/* The layout (film.h): per array, the pass that keeps it and its bytes per pixel. */
+static const uint32_t array_pass[TR_FILM_ARRAYS] = {0u,
+                                                    0u,
+                                                    TR_PASS_ALBEDO,
+                                                    TR_PASS_NORMAL,
+                                                    TR_PASS_DEPTH,
+                                                    TR_PASS_PRIM,
+                                                    TR_PASS_VARIANCE,
+                                                    TR_PASS_DIRECT,
+                                                    TR_PASS_EMISSION};
+static const size_t array_bytes[TR_FILM_ARRAYS] = {
+    3 * sizeof(float), sizeof(uint32_t),  3 * sizeof(float), 3 * sizeof(float), sizeof(float),
+    sizeof(uint32_t),  3 * sizeof(float), 3 * sizeof(float), 3 * sizeof(float)};
+
+uint32_t tr_film_array_pass(int i) {
+    return i >= 0 && i < TR_FILM_ARRAYS ? array_pass[i] : 0u;
+}
+
+size_t tr_film_array_pixel_bytes(int i) {
+    return i >= 0 && i < TR_FILM_ARRAYS ? array_bytes[i] : 0u;
+}
+
+void *tr_film_array_data(const tr_film *f, int i) {
+    switch (i) {
+    case 0:
+        return f->sum;
+    case 1:
+        return f->count;
+    case 2:
+        return f->albedo;
+    case 3:
+        return f->normal;
+    case 4:
+        return f->depth;
+    case 5:
+        return f->prim;
+    case 6:
+        return f->sq;
+    case 7:
+        return f->direct;
+    case 8:
+        return f->emission;
+    default:
+        return NULL;
+    }
+}
+
+/* Sets array i of f to p (the film's members are typed; the layout is not). */
+static void set_array(tr_film *f, int i, void *p) {
+    switch (i) {
+    case 0:
+        f->sum = p;
+        break;
+    case 1:
+        f->count = p;
+        break;
+    case 2:
+        f->albedo = p;
+        break;
+    case 3:
+        f->normal = p;
+        break;
+    case 4:
+        f->depth = p;
+        break;
+    case 5:
+        f->prim = p;
+        break;
+    case 6:
+        f->sq = p;
+        break;
+    case 7:
+        f->direct = p;
+        break;
+    default:
+        f->emission = p;
+        break;
+    }
+}
+
+size_t tr_film_pixel_bytes(uint32_t passes) {
+    size_t b = 0;
+    for (int i = 0; i < TR_FILM_ARRAYS; ++i) {
+        b += array_pass[i] == 0u || (passes & array_pass[i]) != 0u ? array_bytes[i] : 0u;
+    }
+    return b;
+}
+
 int tr_film_init_passes(tr_film *f, uint32_t width, uint32_t height, uint32_t passes,
                         tr_error *err) {
     memset(f, 0, sizeof *f);
@@ -33,31 +121,14 @@ int tr_film_init_passes(tr_film *f, uint32_t width, uint32_t height, uint32_t pa
         return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "unknown pass bits 0x%x",
                             passes & ~TR_PASS_MASK);
     }
-    size_t n = (size_t)width * height;
+    const size_t n = (size_t)width * height;
     int ok = 1;
-    f->sum = calloc(3 * n, sizeof *f->sum);
-    f->count = calloc(n, sizeof *f->count);
-    ok = f->sum && f->count;
-    if (passes & TR_PASS_ALBEDO) {
-        ok = ok && (f->albedo = calloc(3 * n, sizeof *f->albedo)) != NULL;
-    }
-    if (passes & TR_PASS_NORMAL) {
-        ok = ok && (f->normal = calloc(3 * n, sizeof *f->normal)) != NULL;
-    }
-    if (passes & TR_PASS_DEPTH) {
-        ok = ok && (f->depth = calloc(n, sizeof *f->depth)) != NULL;
-    }
-    if (passes & TR_PASS_PRIM) {
-        ok = ok && (f->prim = calloc(n, sizeof *f->prim)) != NULL;
-    }
-    if (passes & TR_PASS_VARIANCE) {
-        ok = ok && (f->sq = calloc(3 * n, sizeof *f->sq)) != NULL;
-    }
-    if (passes & TR_PASS_DIRECT) {
-        ok = ok && (f->direct = calloc(3 * n, sizeof *f->direct)) != NULL;
-    }
-    if (passes & TR_PASS_EMISSION) {
-        ok = ok && (f->emission = calloc(3 * n, sizeof *f->emission)) != NULL;
+    for (int i = 0; i < TR_FILM_ARRAYS && ok; ++i) {
+        if (array_pass[i] == 0u || (passes & array_pass[i]) != 0u) {
+            void *p = calloc(n, array_bytes[i]);
+            set_array(f, i, p);
+            ok = p != NULL;
+        }
     }
     if (!ok) {
         tr_film_free(f);
@@ -71,43 +142,59 @@ int tr_film_init_passes(tr_film *f, uint32_t width, uint32_t height, uint32_t pa
 }
 
 void tr_film_free(tr_film *f) {
-    free(f->sum);
-    free(f->count);
-    free(f->albedo);
-    free(f->normal);
-    free(f->depth);
-    free(f->prim);
-    free(f->sq);
-    free(f->direct);
-    free(f->emission);
+    for (int i = 0; i < TR_FILM_ARRAYS; ++i) {
+        free(tr_film_array_data(f, i));
+    }
     memset(f, 0, sizeof *f);
 }
 
 void tr_film_clear(tr_film *f) {
-    size_t n = (size_t)f->width * f->height;
-    memset(f->sum, 0, 3 * n * sizeof *f->sum);
-    memset(f->count, 0, n * sizeof *f->count);
-    if (f->albedo) {
-        memset(f->albedo, 0, 3 * n * sizeof *f->albedo);
+    const size_t n = (size_t)f->width * f->height;
+    for (int i = 0; i < TR_FILM_ARRAYS; ++i) {
+        void *p = tr_film_array_data(f, i);
+        if (p) {
+            memset(p, 0, n * array_bytes[i]);
+        }
     }
-    if (f->normal) {
-        memset(f->normal, 0, 3 * n * sizeof *f->normal);
+}
+
+/* Copies rectangle r of f's arrays to or from buf (pack: film to buf). */
+static int copy_rect(tr_film *f, const tr_rect *r, unsigned char *buf, size_t size, int pack,
+                     tr_error *err) {
+    if (!r || r->width == 0 || r->height == 0 || r->x >= f->width || r->y >= f->height ||
+        r->width > f->width - r->x || r->height > f->height - r->y) {
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "the rectangle is not inside the %ux%u film", f->width, f->height);
     }
-    if (f->depth) {
-        memset(f->depth, 0, n * sizeof *f->depth);
+    const size_t need = tr_film_pixel_bytes(f->passes) * r->width * r->height;
+    if (!buf || size < need) {
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "a %ux%u rectangle of the film takes %zu bytes, the buffer has %zu",
+                            r->width, r->height, need, buf ? size : 0u);
     }
-    if (f->prim) {
-        memset(f->prim, 0, n * sizeof *f->prim);
+    unsigned char *p = buf;
+    for (int i = 0; i < TR_FILM_ARRAYS; ++i) {
+        unsigned char *a = tr_film_array_data(f, i);
+        if (!a) {
+            continue;
+        }
+        const size_t row = (size_t)r->width * array_bytes[i];
+        for (uint32_t y = r->y; y < r->y + r->height; ++y) {
+            unsigned char *at = a + ((size_t)y * f->width + r->x) * array_bytes[i];
+            memcpy(pack ? p : at, pack ? at : p, row);
+            p += row;
+        }
     }
-    if (f->sq) {
-        memset(f->sq, 0, 3 * n * sizeof *f->sq);
-    }
-    if (f->direct) {
-        memset(f->direct, 0, 3 * n * sizeof *f->direct);
-    }
-    if (f->emission) {
-        memset(f->emission, 0, 3 * n * sizeof *f->emission);
-    }
+    return TR_OK;
+}
+
+int tr_film_pack_rect(const tr_film *f, const tr_rect *r, void *buf, size_t size, tr_error *err) {
+    tr_film view = *f; /* copy_rect reads f when packing */
+    return copy_rect(&view, r, buf, size, 1, err);
+}
+
+int tr_film_unpack_rect(tr_film *f, const tr_rect *r, const void *buf, size_t size, tr_error *err) {
+    return copy_rect(f, r, (unsigned char *)(uintptr_t)buf, size, 0, err);
 }
 
 tr_vec3 tr_film_pixel(const tr_film *f, uint32_t x, uint32_t y) {

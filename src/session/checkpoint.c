@@ -1,0 +1,326 @@
+/* checkpoint.c - the session's checkpoint files (checkpoint.h). */
+#define _POSIX_C_SOURCE 200809L
+#include "session/checkpoint.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "trac0r/outfile.h"
+#include "trac0r/registry.h"
+
+static const char magic[8] = {'T', 'R', 'A', 'C', '0', 'R', 'C', 'K'};
+/* 3: one format for renders in one process and in many: per-tile sample counts, and every
+ * array of the film's layout (the direct and emission passes too). */
+#define CK_VERSION 3u
+#define BYTE_ORDER_MARK 0x01020304u
+#define HEAD_WORDS 9
+
+/* FNV-1a, 64-bit (Fowler, Noll, Vo): a fast hash; checkpoints need to tell renders apart
+ * and catch damage, not resist an adversary. */
+#define FNV_OFFSET 14695981039346656037ull
+#define FNV_PRIME 1099511628211ull
+
+static uint64_t fnv(uint64_t h, const void *data, size_t n) {
+    const unsigned char *p = data;
+    for (size_t i = 0; i < n; ++i) {
+        h = (h ^ p[i]) * FNV_PRIME;
+    }
+    return h;
+}
+
+static uint64_t fnv_floats(uint64_t h, const float *v, size_t n) {
+    return fnv(h, v, n * sizeof *v);
+}
+
+static uint64_t fnv_u32(uint64_t h, uint32_t v) {
+    return fnv(h, &v, sizeof v);
+}
+
+/* The scene file's bytes: its meshes are in the geometry hashed below, but settings the
+ * geometry does not show (a light's sampling, a future field) are in the file. */
+static int hash_file(uint64_t *h, const char *path, tr_error *err) {
+    FILE *fp = fopen(path, "rb");
+    if (!fp) {
+        return tr_error_set(err, tr_status_from_errno(errno), "%s: cannot read: %s", path,
+                            strerror(errno));
+    }
+    unsigned char buf[65536];
+    size_t n;
+    while ((n = fread(buf, 1, sizeof buf, fp)) > 0) {
+        *h = fnv(*h, buf, n);
+    }
+    const int bad = ferror(fp);
+    fclose(fp);
+    if (bad) {
+        return tr_error_set(err, TR_STATUS_IO, "%s: read error", path);
+    }
+    return TR_OK;
+}
+
+static const char *sampler_name(int sampler) {
+    return sampler == TR_SAMPLER_RANDOM   ? "random"
+           : sampler == TR_SAMPLER_ZSOBOL ? "zsobol"
+                                          : "sobol";
+}
+
+int tr_ck_identity(tr_ck_id *id, const tr_scene *scene, const tr_render_config *cfg,
+                   const char *scene_file, tr_error *err) {
+    memset(id, 0, sizeof *id);
+    const tr_camera *cam = tr_scene_camera(scene);
+    /* The sampler and the light selection decide the samples too: a film resumed with
+     * other ones would mix two sequences of points. */
+    snprintf(id->desc, sizeof id->desc,
+             "size=%ux%u seed=%llu max-depth=%d integrator=%s accel=%s stride=%d passes=0x%x "
+             "sampler=%s light-sampling=%s",
+             cam->screen_width, cam->screen_height, (unsigned long long)cfg->seed, cfg->max_depth,
+             tr_integrator_name(cfg->integrator), tr_accel_name(tr_scene_accel(scene)),
+             cfg->stride > 0 ? cfg->stride : 1, cfg->passes, sampler_name(cfg->sampler),
+             tr_light_sampling_name(tr_scene_light_sampling(scene)));
+    /* pt's roulette start decides the paths as well. */
+    const int rr = cfg->roulette_start ? cfg->roulette_start : TR_ROULETTE_START_PT;
+    if (rr != TR_ROULETTE_START_PT) {
+        const size_t used = strlen(id->desc);
+        snprintf(id->desc + used, sizeof id->desc - used, " roulette-start=%d", rr);
+    }
+    uint64_t h = FNV_OFFSET;
+    const uint32_t nt = tr_scene_triangle_count(scene);
+    h = fnv_u32(h, nt);
+    for (uint32_t i = 0; i < nt; ++i) {
+        const tr_triangle t = tr_scene_triangle(scene, i);
+        const float v[9] = {t.v0.x, t.v0.y, t.v0.z, t.v1.x, t.v1.y, t.v1.z, t.v2.x, t.v2.y, t.v2.z};
+        h = fnv_u32(fnv_floats(h, v, 9), t.material);
+    }
+    const uint32_t nm = tr_scene_material_count(scene);
+    h = fnv_u32(h, nm);
+    for (uint32_t i = 0; i < nm; ++i) {
+        const tr_material m = tr_scene_material(scene, i);
+        const float v[6] = {m.color.x, m.color.y, m.color.z, m.roughness, m.ior, m.emittance};
+        h = fnv_u32(fnv_u32(fnv_floats(h, v, 6), m.type), m.flags);
+    }
+    const float c[10] = {cam->pos.x,      cam->pos.y,       cam->pos.z,      cam->dir.x,
+                         cam->dir.y,      cam->dir.z,       cam->world_up.x, cam->world_up.y,
+                         cam->world_up.z, cam->vertical_fov};
+    h = fnv_floats(h, c, 10);
+    if (scene_file && hash_file(&h, scene_file, err) != TR_OK) {
+        return TR_ERR;
+    }
+    id->scene_hash = h;
+    return TR_OK;
+}
+
+/* The bytes of the film's arrays for a film of w x h keeping `passes`. */
+static uint64_t film_bytes(uint32_t w, uint32_t h, uint32_t passes) {
+    return (uint64_t)w * h * tr_film_pixel_bytes(passes);
+}
+
+typedef struct hashed_writer {
+    FILE *fp;
+    uint64_t h;
+} hashed_writer;
+
+static void put(hashed_writer *w, const void *data, size_t n) {
+    w->h = fnv(w->h, data, n);
+    fwrite(data, 1, n, w->fp);
+}
+
+int tr_ck_write(const char *path, const tr_ck_id *id, const tr_film *film, uint32_t spp,
+                const tr_ck_tiles *tiles, tr_error *err) {
+    tr_outfile *out = tr_outfile_open(path, err);
+    if (!out) {
+        return TR_ERR;
+    }
+    hashed_writer w = {tr_outfile_stream(out), FNV_OFFSET};
+    const uint32_t head[HEAD_WORDS] = {CK_VERSION,   BYTE_ORDER_MARK, film->width,
+                                       film->height, film->passes,    spp,
+                                       tiles->side,  tiles->count,    (uint32_t)strlen(id->desc)};
+    put(&w, magic, sizeof magic);
+    put(&w, head, sizeof head);
+    put(&w, &id->scene_hash, sizeof id->scene_hash);
+    put(&w, id->desc, head[8]);
+    put(&w, tiles->samples, (size_t)tiles->count * sizeof *tiles->samples);
+    const size_t n = (size_t)film->width * film->height;
+    for (int i = 0; i < TR_FILM_ARRAYS; ++i) {
+        const void *a = tr_film_array_data(film, i);
+        if (a) {
+            put(&w, a, n * tr_film_array_pixel_bytes(i));
+        }
+    }
+    const uint64_t sum = w.h;
+    fwrite(&sum, sizeof sum, 1, w.fp);
+    return tr_outfile_commit(out, err);
+}
+
+/* Names the first setting of `want` whose value differs in `got` (both "key=value ..."). */
+static void describe_difference(const char *got, const char *want, char *buf, size_t size) {
+    const char *g = got, *w = want;
+    while (*g && *w) {
+        const size_t gl = strcspn(g, " "), wl = strcspn(w, " ");
+        if (gl != wl || strncmp(g, w, gl) != 0) {
+            snprintf(buf, size, "it has %.*s, this render %.*s", (int)gl, g, (int)wl, w);
+            return;
+        }
+        g += gl + (g[gl] == ' ');
+        w += wl + (w[wl] == ' ');
+    }
+    snprintf(buf, size, "it has '%s', this render '%s'", got, want);
+}
+
+/* Opens a checkpoint when it is a regular file, without blocking first (a FIFO is refused
+ * rather than waited on forever); *size gets its length. */
+static FILE *open_regular(const char *path, uint64_t *size, tr_error *err) {
+    const int fd = open(path, O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+    struct stat st;
+    if (fd < 0 || fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+        const int e = fd < 0 ? errno : 0;
+        if (fd >= 0) {
+            close(fd);
+        }
+        tr_error_set(err, e ? tr_status_from_errno(e) : TR_STATUS_IO, "%.200s: cannot open: %s",
+                     path, e ? strerror(e) : "not a regular file");
+        return NULL;
+    }
+    *size = (uint64_t)st.st_size;
+    FILE *fp = fdopen(fd, "rb");
+    if (!fp) {
+        const int e = errno;
+        close(fd);
+        tr_error_set(err, tr_status_from_errno(e), "%.200s: cannot open: %s", path, strerror(e));
+    }
+    return fp;
+}
+
+typedef struct hashed_reader {
+    FILE *fp;
+    uint64_t h;
+} hashed_reader;
+
+static int take(hashed_reader *r, void *out, size_t n) {
+    if (fread(out, 1, n, r->fp) != n) {
+        return -1;
+    }
+    r->h = fnv(r->h, out, n);
+    return 0;
+}
+
+/* The header: magic, words, scene hash and description, checked against what the file's
+ * size and this reader allow. */
+static int read_header(hashed_reader *r, const char *path, uint64_t size, uint32_t head[HEAD_WORDS],
+                       uint64_t *scene_hash, char desc[512], tr_error *err) {
+    char got[8];
+    if (take(r, got, sizeof got) != 0 || memcmp(got, magic, sizeof magic) != 0) {
+        return tr_error_set(err, TR_STATUS_PARSE, "%s: not a trac0r checkpoint", path);
+    }
+    if (take(r, head, HEAD_WORDS * sizeof *head) != 0) {
+        return tr_error_set(err, TR_STATUS_PARSE, "%s: truncated checkpoint header", path);
+    }
+    if (head[1] != BYTE_ORDER_MARK) {
+        return tr_error_set(err, TR_STATUS_PARSE,
+                            "%s: the checkpoint was written on a machine of another byte order "
+                            "(mark 0x%08x, this one's 0x%08x)",
+                            path, head[1], BYTE_ORDER_MARK);
+    }
+    if (head[0] != CK_VERSION) {
+        return tr_error_set(err, TR_STATUS_PARSE,
+                            "%s: checkpoint format version %u, but this trac0r reads version %u "
+                            "only: resume it with the trac0r that wrote it, or render again",
+                            path, head[0], CK_VERSION);
+    }
+    tr_error size_err;
+    if (tr_film_check_size(head[2], head[3], &size_err) != TR_OK || (head[4] & ~TR_PASS_MASK) ||
+        head[8] >= 512 || head[7] == 0 || head[7] > TR_FILM_MAX_PIXELS) {
+        return tr_error_set(err, TR_STATUS_PARSE, "%s: bad checkpoint header", path);
+    }
+    const uint64_t want = sizeof magic + HEAD_WORDS * 4u + 8u + head[8] + 4ull * head[7] +
+                          film_bytes(head[2], head[3], head[4]) + 8u;
+    if (size != want) {
+        return tr_error_set(err, TR_STATUS_PARSE,
+                            "%s: the checkpoint has %llu bytes where its header says %llu", path,
+                            (unsigned long long)size, (unsigned long long)want);
+    }
+    if (take(r, scene_hash, sizeof *scene_hash) != 0 || take(r, desc, head[8]) != 0) {
+        return tr_error_set(err, TR_STATUS_PARSE, "%s: truncated checkpoint header", path);
+    }
+    desc[head[8]] = '\0';
+    return TR_OK;
+}
+
+/* The rest: tile samples and the film's arrays, then the checksum. */
+static int read_body(hashed_reader *r, const char *path, const uint32_t head[HEAD_WORDS],
+                     tr_ck_tiles *tiles, tr_film *film, tr_error *err) {
+    if (take(r, tiles->samples, (size_t)tiles->count * sizeof *tiles->samples) != 0) {
+        return tr_error_set(err, TR_STATUS_PARSE, "%s: truncated tiles", path);
+    }
+    if (tr_film_init_passes(film, head[2], head[3], head[4], err) != TR_OK) {
+        return TR_ERR;
+    }
+    const size_t n = (size_t)film->width * film->height;
+    for (int i = 0; i < TR_FILM_ARRAYS; ++i) {
+        void *a = tr_film_array_data(film, i);
+        if (a && take(r, a, n * tr_film_array_pixel_bytes(i)) != 0) {
+            return tr_error_set(err, TR_STATUS_PARSE, "%s: truncated film", path);
+        }
+    }
+    const uint64_t h = r->h;
+    uint64_t sum = 0;
+    if (fread(&sum, sizeof sum, 1, r->fp) != 1 || sum != h) {
+        return tr_error_set(err, TR_STATUS_PARSE, "%s: damaged checkpoint (checksum mismatch)",
+                            path);
+    }
+    for (uint32_t k = 0; k < tiles->count; ++k) {
+        if (tiles->samples[k] > head[5]) {
+            return tr_error_set(err, TR_STATUS_PARSE, "%s: tile %u holds %u samples of %u", path, k,
+                                tiles->samples[k], head[5]);
+        }
+    }
+    return TR_OK;
+}
+
+int tr_ck_read(const char *path, const tr_ck_id *id, tr_ck_tiles *tiles, tr_film *film,
+               uint32_t *spp, tr_error *err) {
+    memset(film, 0, sizeof *film);
+    uint64_t size = 0;
+    FILE *fp = open_regular(path, &size, err);
+    if (!fp) {
+        return TR_ERR;
+    }
+    hashed_reader r = {fp, FNV_OFFSET};
+    uint32_t head[HEAD_WORDS] = {0};
+    uint64_t scene_hash = 0;
+    char desc[512];
+    int rc = read_header(&r, path, size, head, &scene_hash, desc, err);
+    if (rc == TR_OK && scene_hash != id->scene_hash) {
+        rc = tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                          "%s: the checkpoint is of another scene (scene hash %016llx, this "
+                          "render's %016llx)",
+                          path, (unsigned long long)scene_hash, (unsigned long long)id->scene_hash);
+    } else if (rc == TR_OK && strcmp(desc, id->desc) != 0) {
+        char diff[1100];
+        describe_difference(desc, id->desc, diff, sizeof diff);
+        rc = tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                          "%s: the checkpoint is of a render with other options: %s", path, diff);
+    } else if (rc == TR_OK && (head[6] != tiles->side || head[7] != tiles->count)) {
+        /* The plan follows from the size and stride, which the identity holds. */
+        rc = tr_error_set(err, TR_STATUS_PARSE, "%s: bad tile plan (%u tiles of %u)", path, head[7],
+                          head[6]);
+    } else if (rc == TR_OK && head[5] == 0) {
+        rc = tr_error_set(err, TR_STATUS_PARSE, "%s: bad sample count 0", path);
+    }
+    if (rc == TR_OK) {
+        rc = read_body(&r, path, head, tiles, film, err);
+    }
+    if (rc == TR_OK && ferror(fp)) {
+        rc = tr_error_set(err, TR_STATUS_IO, "%s: read error", path);
+    }
+    fclose(fp);
+    if (rc != TR_OK) {
+        tr_film_free(film);
+        return TR_ERR;
+    }
+    *spp = head[5];
+    return TR_OK;
+}
