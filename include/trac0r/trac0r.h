@@ -1,31 +1,38 @@
 /* trac0r.h - libtrac0r, a physically based Monte Carlo path tracer in C11.
  *
- * Usage:
+ * A program that renders the thesis's Cornell box for at most a second, up to 256 samples
+ * per pixel, with progress, and writes it (built and run as the test usage_block). Usage:
  *
- *     tr_error err;
- *     tr_scene *scene = tr_scene_create(&err);
- *     if (!scene || tr_scene_builtin(scene, "cornell", 320, 240, &err) != TR_OK ||
- *         tr_scene_commit(scene, TR_ACCEL_TYPE_BVH, &err) != TR_OK) {
- *         fprintf(stderr, "%s\n", err.msg);
- *         tr_scene_destroy(scene);
- *         return 1;
+ *     static int show(void *user, const tr_session_progress *p) { // after every pass
+ *         (void)user;
+ *         fprintf(stderr, "\r%u/%u spp, %.2f s", p->samples, p->spp, p->seconds);
+ *         return 0; // nonzero would stop the render here
  *     }
- *     tr_device *dev = tr_device_open("cpu", &err);      // or "opencl:0"
- *     tr_render_config cfg = tr_render_config_default(); // path tracing, 8 bounces
- *     tr_film film;
- *     if (!dev || tr_device_upload(dev, scene, &err) != TR_OK ||
- *         tr_device_render(dev, tr_scene_camera(scene), &cfg, 0, 4, NULL, NULL, &err) != TR_OK ||
- *         tr_film_init(&film, 320, 240, &err) != TR_OK) {           // samples 0..3 above
- *         fprintf(stderr, "%s\n", err.msg);
+ *     int main(void) {
+ *         tr_error err;
+ *         tr_scene *scene = tr_scene_create(&err);
+ *         tr_device *dev = tr_device_open("cpu", &err); // or "opencl:0"
+ *         if (!scene || !dev || tr_scene_builtin(scene, "cornell", 320, 240, &err) != TR_OK ||
+ *             tr_scene_commit(scene, TR_ACCEL_TYPE_BVH, &err) != TR_OK) {
+ *             return fprintf(stderr, "%s\n", err.msg), 1;
+ *         }
+ *         tr_session_desc desc = {0}; // zero means the defaults: 16 spp, no limits
+ *         desc.spp = 256;
+ *         desc.time_limit = 1.0; // seconds: the image is that of the passes made in time
+ *         desc.progress = show;
+ *         tr_session *s = tr_session_create(dev, scene, NULL, &desc, &err); // default config
+ *         const tr_film *film = NULL;
+ *         int rc = !s || tr_session_run(s, &err) != TR_OK || !(film = tr_session_film(s, &err)) ||
+ *                  tr_film_write(film, "cornell.png", 0.0f, &err) != TR_OK;
+ *         fprintf(stderr, "\n%s\n", rc ? err.msg : "cornell.png");
+ *         tr_session_destroy(s);
  *         tr_device_close(dev);
  *         tr_scene_destroy(scene);
- *         return 1;
+ *         return rc;
  *     }
- *     tr_device_read_film(dev, &film, &err);
- *     tr_film_write(&film, "cornell.png", 0.0f, &err);
- *     tr_film_free(&film);
- *     tr_device_close(dev);
- *     tr_scene_destroy(scene);
+ *
+ * A render without the session's loop is one call: tr_device_render adds a range of
+ * samples to the device's film (device.h), tr_device_read_film copies it out.
  *
  * The scene is an opaque handle: edits (materials, shapes, moves) take effect at
  * tr_scene_commit / tr_scene_update, and rendering a scene edited since fails. Only
