@@ -28,7 +28,7 @@ list_files() {
 }
 
 # The pattern must catch each form (a grep without \b would pass everything), and must not
-# catch a number that only follows a word ending in those letters.
+# catch a number that only follows a word ending in those letters, nor a dated anchor.
 n=12
 for sample in "see stop $n" "Stop $n's binary" "issue $n" "Issues $n and 13" "fixed (#$n)"; do
     printf '%s\n' "$sample" | grep -qE "$PATTERN" || {
@@ -36,7 +36,7 @@ for sample in "see stop $n" "Stop $n's binary" "issue $n" "Issues $n and 13" "fi
         exit 1
     }
 done
-for sample in "backstop $n" "tissue $n" "nonstop $n" "x#$n"; do
+for sample in "backstop $n" "tissue $n" "nonstop $n" "x#$n" "(#2026-11-23--an-anchor)"; do
     if printf '%s\n' "$sample" | grep -qE "$PATTERN"; then
         echo "no_tracker_refs: the pattern catches '$sample'" >&2
         exit 1
