@@ -1,5 +1,5 @@
 #!/bin/sh
-# Faults around the trac0r command (issue 17): what an attacker or an unlucky user can do
+# Faults around the trac0r command: what an attacker or an unlucky user can do
 # to it must end in a clear error and an exit status, never a crash, a hang, code run, a
 # lost or partial file. Each check fails without its fix.
 # Usage: cli_faults.sh TRAC0R_BINARY SCRATCH_DIR

@@ -1,5 +1,5 @@
 #!/bin/sh
-# Model files straight from the command line (issue 14): `trac0r render` and `trac0r
+# Model files straight from the command line: `trac0r render` and `trac0r
 # info` build a scene around a model in any format Assimp reads (Debian's
 # assimp-testmodels): glTF 2.0 binary with its embedded texture, Collada with its camera,
 # OBJ with textures beside it; --up z turns a model upright; --camera picks a camera or

@@ -105,7 +105,7 @@ done
 [ ! -e p.normal.pfm ] && [ ! -e p.id.pfm ] || fail "passes written that were not asked for"
 rm -f p.png p.albedo.pfm p.depth.pfm
 
-# Issue 15: --sampler and --light-sampling take their names only; the random sampler
+# --sampler and --light-sampling take their names only; the random sampler
 # renders another (equally valid) image than the Sobol points with the same seed.
 expect_usage_error "'bogus'" $R --sampler bogus
 expect_usage_error "'trees'" $R --light-sampling trees

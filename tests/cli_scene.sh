@@ -98,7 +98,7 @@ check unreadable_mesh.json ": meshes[0].path: cannot open '$BAD/.': not a regula
 check assimp_fails.json ": meshes[0].path: Assimp cannot read '$BAD/garbage.ply'"
 check nan_mesh.json ": meshes[0].path: '$BAD/nan_vertex.obj': mesh vertex 2 has a non-finite coordinate"
 check huge_mesh.json ": meshes[0]: a vertex lands at (1e+30, 1, 0), outside the bound |x| <= 1e+07"
-# Textures (issue 14): unreadable or undecodable images and bad keys are errors.
+# Textures: unreadable or undecodable images and bad keys are errors.
 check texture_missing.json ": materials.tex.texture: $BAD/../texture/no-such-texture.png: cannot open"
 check texture_truncated.json ": materials.tex.texture: '$BAD/../texture/truncated.png'"
 check texture_zero.json ": materials.tex.texture: '$BAD/../texture/zero.png'"

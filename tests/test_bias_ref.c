@@ -1,4 +1,4 @@
-/* test_bias_ref.c - issue 15's bias target: every 8x8 block mean of pt's default render
+/* test_bias_ref.c - pt must be unbiased: every 8x8 block mean of pt's default render
  * within 3 % of a 16384-spp reference, at low resolution, with a bound from the variance.
  *
  * The classic Cornell box (scenes/cornell-classic.json) at 16 x 16 pixels: 4 blocks.

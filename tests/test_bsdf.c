@@ -15,7 +15,7 @@
  *      reflects with the Fresnel probability and refracts by Snell's law; the smooth
  *      mirror reflects exactly with Schlick's weight.
  *
- *  (e) The principled material (issue 14): (a)-(c) at several roughness x metallic, and
+ *  (e) The principled material: (a)-(c) at several roughness x metallic, and
  *      a white furnace over a grid of roughness x metallic x incidence: albedo <= 1,
  *      equal to the uniform estimate, and above the single-scattering floor.
  *

@@ -1,7 +1,7 @@
-/* test_limits.c - limits a file must not walk around (issue 17): the triangle budget when
- * shapes fill it exactly, a model's references outside its directory (and
- * TRAC0R_MODEL_ROOT allowing them), the scene file's value limit, the PNG reader's pixel
- * cap, and black emitters, which light nothing. */
+/* test_limits.c - limits a file must not walk around (a hostile or broken file must end in an
+ * error): the triangle budget when shapes fill it exactly, a model's references outside its
+ * directory (and TRAC0R_MODEL_ROOT allowing them), the scene file's value limit, the PNG reader's
+ * pixel cap, and black emitters, which light nothing. */
 #define _POSIX_C_SOURCE 200809L
 #include <stdio.h>
 #include <stdlib.h>

@@ -1,4 +1,4 @@
-/* test_model.c - scenes built around model files (src/scene/model.c, issue 14): their
+/* test_model.c - scenes built around model files (src/scene/model.c): their
  * cameras and lights.
  *
  * 1. A glTF file written here with two cameras and KHR_lights_punctual (a point light

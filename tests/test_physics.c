@@ -369,7 +369,7 @@ static void test_fresnel_closed_forms(void) {
 /* R + T = 1 with T from the transmission amplitudes, and Snell's law for the returned
  * cos_t, over a sweep of angles in both directions. R is float: its rounding error is a
  * few ulps of the O(1) amplitudes, but near the critical angle cos_t = sqrt(1 - sin^2)
- * amplifies the float error of sin^2 (~1e-7) by 1/(2 cos_t); we stop 0.5 degrees short of
+ * amplifies the float error of sin^2 (~1e-7) by 1/(2 cos_t); we end 0.5 degrees short of
  * it, where cos_t > 0.1 for n = 1.5 and the error stays below ~1e-5. */
 static void test_fresnel_energy(void) {
     const double iors[] = {1.33, 1.5, 2.4};

@@ -124,7 +124,7 @@ static void test_installed_models(void) {
     static const struct {
         const char *path;
         uint32_t min_tris, max_tris;
-        uint32_t type; /* issue 14: the type every material of the file maps to */
+        uint32_t type; /* the type every material of the file maps to */
         int textured;  /* some material has a base colour map that loaded */
     } models[] = {
         {MODELS "/OBJ/spider.obj", 1000, 2000, TR_MATERIAL_DIFFUSE, 1},
@@ -134,8 +134,8 @@ static void test_installed_models(void) {
          1},
         {MODELS "/Collada/duck.dae", 4000, 4300, TR_MATERIAL_DIFFUSE, 1},
         /* Partly transparent in the file: cut-outs or opaque, never glass. Its texture lies
-         * in ../LWO, outside the model's directory: dropped (issue 17's confinement) unless
-         * TRAC0R_MODEL_ROOT allows the whole models tree (the last row). */
+         * in ../LWO, outside the model's directory: dropped (a model may not reach outside its
+         * directory) unless TRAC0R_MODEL_ROOT allows the whole models tree (the last row). */
         {MODELS "/Collada/teapots.DAE", 1000, 100000, TR_MATERIAL_DIFFUSE, 0},
         {MODELS "/Collada/teapots.DAE", 1000, 100000, TR_MATERIAL_DIFFUSE, 1},
     };
@@ -254,7 +254,7 @@ static void test_parse_memory(void) {
     rc = tr_scene_file_parse(&s, "m.json", buf, 2, NULL, NULL, &err);
     CHECK_STATUS(rc, err, TR_STATUS_PARSE, "only '{}' of '{}xxxxxx'");
     CHECK(rc == TR_ERR && strncmp(err.msg, "m.json: camera: ", 16) == 0, "FILE: PATH: %s", err.msg);
-    /* render.light_sampling (issue 15): the scene keeps it for its commit; an unknown
+    /* render.light_sampling: the scene keeps it for its commit; an unknown
      * name is refused at its path. */
     const char *ls_text =
         "{\"render\": {\"light_sampling\": \"tree\"},\n"

@@ -1,4 +1,4 @@
-/* test_sun.c - the sun: a distant disc with an angular size (src/kernel/sun.h, issue 14).
+/* test_sun.c - the sun: a distant disc with an angular size (src/kernel/sun.h).
  *
  * 1. Sampling: every drawn direction lies in the cone, the mean cosine to the axis is the
  *    uniform cone's 1 - (1 - cos t) / 2, and the density tr_sun_pdf gives is 1 / the
@@ -245,7 +245,7 @@ static void test_scene_file(void) {
     const double st = sin(1.0 * PI_D / 180.0);
     CHECK(fabs(s.sun.radiance.z * PI_D * st * st - 4.0) < 1e-4, "radiance x pi sin^2 t = E");
     /* bdpt starts light subpaths on emissive triangles only: it must refuse a sun rather
-     * than weigh its light wrongly (issue 18). The same scene renders with pt. */
+     * than weigh its light wrongly. The same scene renders with pt. */
     CHECK(tr_scene_commit(&s, TR_ACCEL_TYPE_BVH, &err) == TR_OK, "%s", err.msg);
     tr_film film;
     CHECK(tr_film_init(&film, 8, 8, &err) == TR_OK, "film: %s", err.msg);

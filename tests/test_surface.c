@@ -1,4 +1,4 @@
-/* test_surface.c - vertex attributes and textures (issue 14).
+/* test_surface.c - vertex attributes and textures.
  *
  * 1. Smooth icosphere: the normal pass of a smooth-shaded icosphere matches the analytic
  *    sphere's normal within a fraction of a degree, and its change between neighbouring
@@ -440,9 +440,9 @@ static void test_metallic_roughness_map(void) {
 
 #define TEXDATA TR_SOURCE_DIR "/tests/data/texture"
 
-/* 3b. Next-event estimation reads a light's emission through tr_emitted_at (issue 14's
- * performance fix): it must equal tr_emitted of the whole material stage, on a textured
- * emissive quad (the attribute path: the emission texture varies over it) and on the same
+/* 3b. Next-event estimation reads a light's emission through tr_emitted_at (a faster path
+ * than evaluating the whole material): it must equal tr_emitted of the whole material stage, on a
+ * textured emissive quad (the attribute path: the emission texture varies over it) and on the same
  * quad with a plain emitter (the path that reads the material alone), from both sides. */
 static void emitted_at_matches(int textured) {
     tr_scene s = {0};

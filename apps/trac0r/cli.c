@@ -468,7 +468,7 @@ int cli_load_scene_file(const cli_args *a, cli_common *c, tr_scene *scene, tr_sc
     }
     tr_error err;
     if (tr_scene_path_is_model(c->scene)) {
-        /* issue 14: a model file, with a scene built around it. */
+        /* A model file (glTF, OBJ, ...), with a scene built around it. */
         tr_model_options mo = {c->up_z, c->model_scale, c->width,
                                c->given & CLI_GIVEN_HEIGHT ? c->height : 0, c->model_camera};
         if (tr_scene_model_load(scene, c->scene, &mo, file, &err) != TR_OK) {
@@ -507,7 +507,7 @@ int cli_load_scene_file(const cli_args *a, cli_common *c, tr_scene *scene, tr_sc
                            c->scene, file->integrator, names);
         }
     }
-    /* issue 18: a scene file's depth is pt's; bdpt follows at most TR_MAX_DEPTH_BDPT
+    /* A scene file's depth is pt's; bdpt follows at most TR_MAX_DEPTH_BDPT
      * segments (--max-depth beyond that is an error, tr_render_config_check). */
     if (rc == CLI_OK && !(c->given & CLI_GIVEN_MAX_DEPTH) &&
         tr_integrator_is_bidirectional(c->integrator) && c->max_depth > TR_MAX_DEPTH_BDPT) {

@@ -29,10 +29,10 @@ typedef struct cli_common {
                                  render defaults apply to the others) */
     int allow_dark;           /* --allow-dark: render a scene file without an emitter */
     char device[32];          /* --device: a tr_device name, "cpu" or "opencl:N" */
-    int up_z;                 /* --up z: a model file's +z is up (issue 14) */
+    int up_z;                 /* --up z: a model file's +z is up */
     const char *model_camera; /* --camera: a model file's camera, or "frame"; NULL: its first */
     float model_scale;        /* --scale: a model file's scale */
-    int sampler;              /* --sampler: TR_SAMPLER_* (issue 15), -1 for the command's default */
+    int sampler;              /* --sampler: TR_SAMPLER_*, -1 for the command's default */
     int roulette_start;       /* --roulette-start: pt's, 0 for the command's default */
     int light_sampling;       /* --light-sampling: TR_LIGHT_SAMPLING_*, -1 for the scene's own */
 } cli_common;

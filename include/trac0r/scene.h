@@ -175,7 +175,7 @@ tr_aabb tr_scene_shape_box(const tr_scene *s, uint32_t shape);
 /* The vertex normals an imported mesh gave triangle i into out[0..2]; returns 1 when it
  * has them, 0 (and zeros) when it has none. */
 int tr_scene_triangle_normals(const tr_scene *s, uint32_t i, tr_vec3 out[3]);
-/* The maps material i has (issue 14: textures from a scene file or a model's import
+/* The maps material i has (textures from a scene file or a model's import
  * table), as TR_MAP_* bits; 0 for none or an index out of range. */
 #define TR_MAP_BASE 1u
 #define TR_MAP_EMISSION 2u

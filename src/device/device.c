@@ -250,7 +250,7 @@ int tr_device_render(tr_device *dev, const tr_camera *cam, const tr_render_confi
     }
     uint64_t rays = 0;
     if (dev->kind == KIND_OPENCL && tr_integrator_is_bidirectional((int)f.integrator)) {
-        /* issue 18: light tracing splats with 64-bit atomics the device may lack. */
+        /* bdpt's light tracing splats with 64-bit atomics the device may lack. */
         return tr_error_set(err, TR_STATUS_UNSUPPORTED,
                             "the %s integrator runs on the CPU only (device %s is OpenCL)",
                             tr_integrator_name((int)f.integrator), dev->info.name);

@@ -139,7 +139,7 @@ TR_FN tr_vec3 tr_ggx_sample_vndf(float alpha, tr_vec3 v, float u1, float u2) {
     return v3_normalize(v3(alpha * nh.x, alpha * nh.y, tr_fmaxf(0.0f, nh.z)));
 }
 
-/* issue 14: the principled material, built on the GGX helpers above. */
+/* The principled material (glTF's metallic-roughness), built on the GGX helpers above. */
 #include "bsdf_principled.h"
 
 /* The principled functions are out of line (TR_FN_NOINLINE); these hand them copies, so
@@ -265,7 +265,7 @@ TR_FN_INLINE int tr_bsdf_sample(const tr_bsdf_params *m, tr_vec3 wo, float ulobe
  * the geometric normal m->ng points to) unless TR_MATERIAL_TWO_SIDED is set. */
 TR_FN tr_vec3 tr_emitted(const tr_bsdf_params *m, tr_vec3 w) {
     if (!(m->emittance > 0.0f)) {
-        /* issue 14: emission of a non-emitter material (principled, glTF emissive). */
+        /* Emission of a non-emitter material (principled, glTF emissive). */
         if (m->emission.x > 0.0f || m->emission.y > 0.0f || m->emission.z > 0.0f) {
             if ((m->flags & TR_MATERIAL_TWO_SIDED) == 0u && v3_dot(w, m->ng) <= 0.0f) {
                 return v3s(0.0f);

@@ -17,7 +17,7 @@
  * from the side of index n1 onto the side of index n2 with cos(theta_i) = cos_i >= 0.
  * Returns 1 on total internal reflection. The average of the s and p reflectances is
  * (Rs + Rp) / 2 - the thesis's code divided only Rp by two (the mis-parenthesised
- * average the issue mentions); this is the physical quantity.
+ * average); this is the physical quantity.
  * *cos_t receives cos(theta_t) (0 on total internal reflection). */
 TR_FN float tr_fresnel_dielectric(float cos_i, float n1, float n2, float *cos_t) {
     float eta = n1 / n2;

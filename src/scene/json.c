@@ -455,7 +455,7 @@ static int parse_render(jctx *c, const cJSON *r) {
         in->accel = (tr_accel_type)a;
         in->has_accel = 1;
     }
-    /* Issue 15: how next-event estimation picks emitters, a property of the scene that
+    /* render.light_sampling: how next-event estimation picks emitters, a property of the scene that
      * tr_scene_commit builds for. */
     if (get_string(c, r, path, "light_sampling", 0, &s) != TR_OK) {
         return TR_ERR;
@@ -1227,7 +1227,7 @@ static void json_install_hooks(void) {
 }
 
 /* "environment": {"color": [r, g, b], "map": "sky.hdr", "strength": s, "rotation": deg}:
- * a light from every direction that leaves the scene (issue 14). */
+ * a light from every direction that leaves the scene. */
 static int parse_environment(jctx *c, const cJSON *env) {
     static const char *const keys[] = {"color", "map", "strength", "rotation"};
     const char *path = "environment";

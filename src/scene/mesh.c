@@ -33,7 +33,7 @@ typedef struct import_ctx {
     uint32_t max_triangles, start_triangles;
     tr_mesh_import_stats *st;
     tr_error *err;
-    /* issue 14: where texture paths are relative to, warnings, textures already loaded
+    /* Where texture paths are relative to, warnings, textures already loaded
      * (keyed by their path as the file gives it; -1: failed, not tried again). */
     char dir[4096];
     tr_import_warn_fn warn;
@@ -532,7 +532,7 @@ static int walk(import_ctx *c, const struct aiNode *node, const struct aiMatrix4
                             NODE_DEPTH_LIMIT);
     }
     struct aiMatrix4x4 m = mat_mul(parent, &node->mTransformation);
-    /* issue 14: cameras and lights sit at the nodes of their names. */
+    /* A model's cameras and lights sit at the nodes of their names. */
     if (c->extras) {
         place_extras(c, node, &m);
     }

@@ -1,5 +1,5 @@
 #!/bin/sh
-# measure.sh - issue 15's comparison with Cycles: for trac0r `pt` and for Blender's Cycles, a
+# measure.sh - pt against Cycles (docs/cycles.md): for trac0r `pt` and for Blender's Cycles, a
 # ladder of sample counts on one scene, the time of each render and its relative MSE against a
 # converged reference (`trac0r compare`), then the time each renderer needs to reach a target
 # relative MSE (log-log interpolation between the rungs) and their ratio. See docs/cycles.md.

@@ -1,4 +1,4 @@
-"""Render a trac0r scene file with Blender's Cycles, for the comparison of issue 15.
+"""Render a trac0r scene file with Blender's Cycles, for the comparison in docs/cycles.md.
 
     blender -b --factory-startup -P tools/cycles/render_scene.py -- SCENE.json \
         [--width 256] [--height 256] [--spp N] [--seed S] [--threads T] \
