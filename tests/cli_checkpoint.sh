@@ -2,7 +2,8 @@
 # Checkpoints and interrupted renders: a render killed with SIGKILL and resumed from its
 # last checkpoint gives the bits of the uninterrupted one; a checkpoint of another scene
 # or other options, or of an older format version, is refused (exit 2); SIGINT leaves a complete image of the samples so
-# far, a checkpoint that resumes to the same bits, and no temporary file.
+# far, a checkpoint that resumes to the same bits, and no temporary file; a time-limited
+# render's checkpoint resumes too.
 # Usage: cli_checkpoint.sh TRAC0R_BINARY SCRATCH_DIR
 set -u
 . "$(dirname "$0")/common.sh"
@@ -59,6 +60,16 @@ printf 'not a checkpoint' >junk
 expect_usage_error "--resume" $R --resume junk --out other.pfm
 expect_usage_error "--checkpoint-interval" $R --checkpoint ck --checkpoint-interval -1
 expect_usage_error "--checkpoint: nodir/ck" $R --checkpoint nodir/ck
+
+# A time limit no pass fits in stops after the first pass; its checkpoint resumes to the
+# uninterrupted image.
+"$BIN" $R --spp $SPP --time-limit 0.000001 --checkpoint ckt --out t1.pfm 2>err.txt ||
+    fail "--time-limit with --checkpoint: $(cat err.txt)"
+grep -q "time limit" err.txt || fail "--time-limit with --checkpoint: not stopped by the limit: $(cat err.txt)"
+"$BIN" $R --resume ckt --spp $SPP --out t2.pfm 2>err.txt || fail "resume after a time limit: $(cat err.txt)"
+cmp -s full.pfm t2.pfm || fail "a time-limited render resumed differs from the uninterrupted one"
+rm -f err.txt
+expect_usage_error "--noise-threshold" $R --noise-threshold 0.1 --checkpoint ckn --out n.pfm
 
 # SIGINT: the pass under way ends, image and checkpoint are written, exit 128+2.
 "$BIN" $R --spp 1000000 --out int.pfm --checkpoint ck2 2>err.txt &
