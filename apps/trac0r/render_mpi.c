@@ -569,7 +569,7 @@ static int open_sessions(render_job *job, int rank, int size, tr_session **out) 
     tr_session_progress p;
     tr_session_progress_get(s, &p);
     unsigned long long h[2] = {hash, 0};
-    for (const char *c = id; *c; ++c) {
+    for (const char *c = id ? id : ""; *c; ++c) {
         h[1] = h[1] * 131u + (unsigned char)*c;
     }
     h[1] = h[1] * 131u + p.spp;

@@ -158,21 +158,22 @@ void tr_film_clear(tr_film *f) {
     }
 }
 
-/* Copies rectangle r of f's arrays to or from buf (pack: film to buf). */
-static int copy_rect(tr_film *f, const tr_rect *r, unsigned char *buf, size_t size, int pack,
-                     tr_error *err) {
+/* Copies rectangle r of f's arrays to `out` (packing) or from `in` (unpacking), `size`
+ * bytes there. */
+static int copy_rect(const tr_film *f, const tr_rect *r, unsigned char *out,
+                     const unsigned char *in, size_t size, tr_error *err) {
     if (!r || r->width == 0 || r->height == 0 || r->x >= f->width || r->y >= f->height ||
         r->width > f->width - r->x || r->height > f->height - r->y) {
         return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
                             "the rectangle is not inside the %ux%u film", f->width, f->height);
     }
     const size_t need = tr_film_pixel_bytes(f->passes) * r->width * r->height;
-    if (!buf || size < need) {
+    if ((!out && !in) || size < need) {
         return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
                             "a %ux%u rectangle of the film takes %zu bytes, the buffer has %zu",
-                            r->width, r->height, need, buf ? size : 0u);
+                            r->width, r->height, need, size);
     }
-    unsigned char *p = buf;
+    size_t at = 0;
     for (int i = 0; i < TR_FILM_ARRAYS; ++i) {
         unsigned char *a = tr_film_array_data(f, i);
         if (!a) {
@@ -180,21 +181,25 @@ static int copy_rect(tr_film *f, const tr_rect *r, unsigned char *buf, size_t si
         }
         const size_t row = (size_t)r->width * array_bytes[i];
         for (uint32_t y = r->y; y < r->y + r->height; ++y) {
-            unsigned char *at = a + ((size_t)y * f->width + r->x) * array_bytes[i];
-            memcpy(pack ? p : at, pack ? at : p, row);
-            p += row;
+            unsigned char *film_row = a + ((size_t)y * f->width + r->x) * array_bytes[i];
+            if (out) {
+                memcpy(out + at, film_row, row);
+            } else {
+                memcpy(film_row, in + at, row);
+            }
+            at += row;
         }
     }
     return TR_OK;
 }
 
 int tr_film_pack_rect(const tr_film *f, const tr_rect *r, void *buf, size_t size, tr_error *err) {
-    tr_film view = *f; /* copy_rect reads f when packing */
-    return copy_rect(&view, r, buf, size, 1, err);
+    return copy_rect(f, r, buf, NULL, buf ? size : 0u, err);
 }
 
-int tr_film_unpack_rect(tr_film *f, const tr_rect *r, const void *buf, size_t size, tr_error *err) {
-    return copy_rect(f, r, (unsigned char *)(uintptr_t)buf, size, 0, err);
+int tr_film_unpack_rect(tr_film *f, const tr_rect *r, const void *buf, size_t size,
+                        tr_error *err) {
+    return copy_rect(f, r, NULL, buf, buf ? size : 0u, err);
 }
 
 tr_vec3 tr_film_pixel(const tr_film *f, uint32_t x, uint32_t y) {
