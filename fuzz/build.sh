@@ -9,6 +9,7 @@
 #   fuzz_image       the image readers of `compare` (PNG, PFM and EXR)
 #   fuzz_texture     texture and environment-map decoding (src/scene/texture.c and
 #                    image_codec.c: libpng, libjpeg, the HDR reader, stb_image's TGA and BMP)
+#   fuzz_checkpoint  the checkpoint reader of --resume (src/session/checkpoint.c)
 # The wide BVH's per-ISA traversals need per-file flags and are left out: without
 # TR_WBVH_HAVE_X86 the library has the scalar one alone.
 # Usage: fuzz/build.sh   (CC defaults to clang)
@@ -43,4 +44,7 @@ SCENE="src/scene/json.c src/scene/scene.c src/scene/shape.c src/scene/camera.c
     src/scene/shape.c src/scene/lights.c src/accel/bvh.c src/accel/wbvh.c src/accel/wbvh_scalar.c \
     src/accel/embree.c src/util/error.c src/util/registry.c src/scene/material_registry.c \
     src/io/infile.c src/scene/light_tree.c $(pkg-config --libs libpng) -ljpeg -lm -o "$OUT/fuzz_texture"
-echo "built $OUT/fuzz_scene_json $OUT/fuzz_mesh $OUT/fuzz_mesh_guard $OUT/fuzz_image $OUT/fuzz_texture"
+# shellcheck disable=SC2046,SC2086
+"$CC" $FLAGS $(pkg-config --cflags libcjson) fuzz/fuzz_checkpoint.c src/session/checkpoint.c src/film/film.c src/io/outfile.c \
+    $SCENE $(pkg-config --libs libcjson libpng) -ljpeg -lm -o "$OUT/fuzz_checkpoint"
+echo "built $OUT/fuzz_scene_json $OUT/fuzz_mesh $OUT/fuzz_mesh_guard $OUT/fuzz_image $OUT/fuzz_texture $OUT/fuzz_checkpoint"

@@ -1,8 +1,9 @@
 #!/bin/sh
-# Builds and runs the fuzzers for a bounded time in all (default 60 s): two fifths of it
-# for the scene loader (seeded with scenes/*.json and tests/data/**/*.json), a fifth each
-# for the mesh import path (tests/data/mesh and the hostile models), the image readers
-# (the hostile images) and texture decoding (tests/data/texture). Exits non-zero on any
+# Builds and runs the fuzzers for a bounded time in all (default 60 s): a third of it for
+# the scene loader (seeded with scenes/*.json and tests/data/**/*.json), a sixth each for
+# the mesh import path (tests/data/mesh and the hostile models), the image readers (the
+# hostile images), texture decoding (tests/data/texture) and the checkpoint reader (a
+# checkpoint the release build writes, when it is there). Exits non-zero on any
 # crash, leak, timeout, sanitizer report or memory use over the limit (libFuzzer stops
 # and leaves crash-* / oom-* files in build/fuzz/).
 # Usage: fuzz/run.sh [SECONDS]
@@ -42,6 +43,12 @@ for f in $(find tests/data/hostile/images -type f); do
     *.png) seed "$f" 1 "$OUT/corpus_image" ;;
     esac
 done
+rm -rf "$OUT/corpus_checkpoint"
+mkdir -p "$OUT/corpus_checkpoint"
+if [ -x build/release/trac0r ]; then
+    build/release/trac0r render --width 5 --height 3 --spp 2 --passes all \
+        --checkpoint "$OUT/corpus_checkpoint/seed.ck" --out "$OUT/seed-ck.pfm" 2>/dev/null || true
+fi
 rm -rf "$OUT/corpus_texture"
 mkdir -p "$OUT/corpus_texture"
 cp tests/data/texture/*.png tests/data/texture/*.tga tests/data/texture/*.hdr \
@@ -53,13 +60,15 @@ if [ -n "${TRAC0R_FUZZ_ASSIMP:-}" ]; then
     MESH_TARGET=fuzz_mesh
 fi
 cd "$OUT"
-./fuzz_scene_json -max_total_time=$((SECONDS_LIMIT * 2 / 5)) -print_final_stats=1 -max_len=16384 \
+./fuzz_scene_json -max_total_time=$((SECONDS_LIMIT / 3)) -print_final_stats=1 -max_len=16384 \
     -timeout=10 -rss_limit_mb=2048 -dict=../../fuzz/scene.dict corpus
 # Assimp's own leak on some hostile glTF files (tests/lsan-assimp.supp) is not ours.
 LSAN_OPTIONS=suppressions=../../tests/lsan-assimp.supp:print_suppressions=0 \
-    ./"$MESH_TARGET" -max_total_time=$((SECONDS_LIMIT / 5)) -print_final_stats=1 -max_len=65536 \
+    ./"$MESH_TARGET" -max_total_time=$((SECONDS_LIMIT / 6)) -print_final_stats=1 -max_len=65536 \
     -timeout=10 -rss_limit_mb=2048 corpus_mesh
-./fuzz_image -max_total_time=$((SECONDS_LIMIT / 5)) -print_final_stats=1 -max_len=65536 \
+./fuzz_image -max_total_time=$((SECONDS_LIMIT / 6)) -print_final_stats=1 -max_len=65536 \
     -timeout=10 -rss_limit_mb=2048 corpus_image
-./fuzz_texture -max_total_time=$((SECONDS_LIMIT / 5)) -print_final_stats=1 -max_len=65536 \
+./fuzz_texture -max_total_time=$((SECONDS_LIMIT / 6)) -print_final_stats=1 -max_len=65536 \
     -timeout=10 -rss_limit_mb=2048 corpus_texture
+./fuzz_checkpoint -max_total_time=$((SECONDS_LIMIT / 6)) -print_final_stats=1 -max_len=65536 \
+    -timeout=10 -rss_limit_mb=2048 corpus_checkpoint
