@@ -44,17 +44,6 @@ int tr_default_max_depth(int integrator) {
     return integrator == TR_INTEGRATOR_NAIVE ? TR_MAX_DEPTH_NAIVE : TR_MAX_DEPTH_PT;
 }
 
-int tr_default_threads(void) {
-    const int n = omp_get_max_threads();
-    return n > TR_MAX_THREADS ? TR_MAX_THREADS : n;
-}
-
-double tr_time_now(void) {
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
 int tr_render_config_check(const tr_render_config *cfg, tr_error *err) {
     if (cfg->max_depth < 0 || cfg->max_depth > TR_MAX_DEPTH_LIMIT) {
         return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
