@@ -11,7 +11,7 @@
  *         return 1;
  *     }
  *     tr_device *dev = tr_device_open("cpu", &err);      // or "opencl:0"
- *     tr_render_config cfg = tr_render_config_default(); // path tracing, 8 bounces
+ *     tr_render_config cfg = tr_render_config_default(); // path tracing, up to 64 bounces
  *     tr_film film;
  *     if (!dev || tr_device_upload(dev, scene, &err) != TR_OK ||
  *         tr_device_render(dev, tr_scene_camera(scene), &cfg, 0, 4, NULL, NULL, &err) != TR_OK ||
