@@ -44,8 +44,7 @@ typedef enum tr_shape_type {
 typedef struct tr_transform {
     tr_vec3 position;
     tr_vec3 orientation; /* Euler angles, radians */
-    tr_vec3 scale;       /* plane: (size x, 1, size z); box: size; icosphere: radius;
-                            (0, 0, 0) means (1, 1, 1), the default */
+    tr_vec3 scale;       /* plane: (size x, 1, size z); box: size; icosphere: radius */
 } tr_transform;
 
 typedef struct tr_shape_desc {

@@ -256,16 +256,10 @@ int tr_scene_add_shape(tr_scene *s, const tr_shape_desc *desc, tr_error *err) {
                             "shape refers to material %u, but the scene has %u materials",
                             desc->material, s->material_count);
     }
-    /* A scale of (0, 0, 0), as in a zero-initialised desc, is the default unit scale; a
-     * scale with some components 0 and others not stays an error. */
-    tr_shape_desc d = *desc;
-    if (d.transform.scale.x == 0.0f && d.transform.scale.y == 0.0f && d.transform.scale.z == 0.0f) {
-        d.transform.scale = v3s(1.0f);
-    }
     tr_triangle *tris = NULL;
     tr_vec3 *normals = NULL;
     uint32_t n = 0;
-    if (shape_generate(&d, &tris, &n, &normals, err) != TR_OK) {
+    if (shape_generate(desc, &tris, &n, &normals, err) != TR_OK) {
         return TR_ERR;
     }
     int rc = tr_scene_append_shape(s, tris, n, normals, err);
