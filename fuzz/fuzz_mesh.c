@@ -20,21 +20,12 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
 #include "scene/mesh_guard.h"
 #include "scene/scene_internal.h"
 #include "trac0r/scene_file.h"
-
-/* The scene code times its builds with the CPU backend's clock, which is not linked. */
-double tr_time_now(void);
-double tr_time_now(void) {
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
 
 static char dir[64];
 

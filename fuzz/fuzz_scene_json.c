@@ -7,7 +7,6 @@
 #define _POSIX_C_SOURCE 200809L
 #include <stdint.h>
 #include <stdlib.h>
-#include <time.h>
 
 #include "scene/scene_internal.h"
 #include "trac0r/scene_file.h"
@@ -28,14 +27,6 @@ int tr_scene_import_mesh_ex(tr_scene *s, const char *path, const tr_transform *t
     (void)s, (void)path, (void)tf, (void)material_override, (void)max_triangles, (void)stats;
     (void)warn, (void)warn_ctx, (void)extras, (void)err;
     abort();
-}
-
-/* The BVH code times its build with the CPU backend's clock, which is not linked. */
-double tr_time_now(void);
-double tr_time_now(void) {
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);

@@ -1,5 +1,5 @@
 /* test_outfile.c - the write path every output file takes (outfile.h) and the read path
- * for inputs (io/infile.h): modes from the umask or the replaced file, non-regular
+ * for inputs (util/infile.h): modes from the umask or the replaced file, non-regular
  * targets and inputs refused before any work, full files (RLIMIT_FSIZE) failing the
  * commit with the temporary file gone, tr_outfile_cleanup_all() removing every open
  * temporary file, and the declared-size check of model headers (mesh_guard.h). */
@@ -17,7 +17,7 @@
 #include <unistd.h>
 
 #include "check.h"
-#include "io/infile.h"
+#include "util/infile.h"
 #include "scene/mesh_guard.h"
 #include "trac0r/outfile.h"
 

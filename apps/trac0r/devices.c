@@ -44,16 +44,6 @@ tr_render_config cli_render_config(const cli_common *c) {
     return cfg;
 }
 
-static void describe(cli_backend *be, int threads) {
-    const tr_device_info *d = tr_device_get_info(be->dev);
-    if (cli_backend_is_cpu(be)) {
-        const int n = threads ? threads : tr_default_threads();
-        snprintf(be->name, sizeof be->name, "cpu, %d thread%s", n, n == 1 ? "" : "s");
-        return;
-    }
-    snprintf(be->name, sizeof be->name, "%s (%s)", d->name, d->model);
-}
-
 /* Reports a failure to open a device or upload to it. An OpenCL call that failed on a
  * device that exists (the compiler rejected the kernel, ...) or memory running out is a
  * fault of this build, driver or machine (exit 1; a build failure's message holds the
@@ -75,7 +65,8 @@ int cli_backend_open(const cli_args *a, const cli_common *c, const tr_scene *sce
     if (!be->dev) {
         return device_error(a, &err);
     }
-    describe(be, c->threads);
+    be->threads = c->threads;
+    tr_device_describe(be->dev, be->threads, be->name, sizeof be->name);
     if (scene) {
         int rc = cli_backend_upload(a, be, scene);
         if (rc != CLI_OK) {
@@ -91,19 +82,8 @@ int cli_backend_upload(const cli_args *a, cli_backend *be, const tr_scene *scene
     if (tr_device_upload(be->dev, scene, &err) != TR_OK) {
         return device_error(a, &err);
     }
-    if (cli_backend_is_cpu(be)) {
-        return CLI_OK;
-    }
-    const tr_device_info *d = tr_device_get_info(be->dev);
-    const tr_accel_type walked = tr_device_accel(be->dev);
-    /* bvh and bvh2 both upload the binary BVH (the wide BVH is host code). */
-    if (tr_scene_accel(scene) != walked && tr_scene_accel(scene) != TR_ACCEL_TYPE_BVH2) {
-        /* Embree is a host library: the device gets a BVH of its own. */
-        snprintf(be->name, sizeof be->name, "%s (%s; %s is host-only, the device traces a %s)",
-                 d->name, d->model, tr_accel_name(tr_scene_accel(scene)), tr_accel_name(walked));
-    } else {
-        snprintf(be->name, sizeof be->name, "%s (%s)", d->name, d->model);
-    }
+    /* The description names the structure the device traces when it is not the scene's. */
+    tr_device_describe(be->dev, be->threads, be->name, sizeof be->name);
     return CLI_OK;
 }
 
@@ -121,7 +101,7 @@ int cli_backend_clear(cli_backend *be, tr_error *err) {
 }
 
 int cli_backend_is_cpu(const cli_backend *be) {
-    return strcmp(tr_device_kind(be->dev), "cpu") == 0;
+    return (tr_device_caps(be->dev) & TR_DEVICE_CAP_HOST) != 0u;
 }
 
 void cli_backend_close(cli_backend *be) {

@@ -13,6 +13,7 @@
 typedef struct cli_backend {
     tr_device *dev;
     char name[384]; /* "cpu, 2 threads" / "opencl:0 (pthread-..., bvh on the device)" */
+    int threads;    /* the --threads the description counts (0: all) */
 } cli_backend;
 
 /* Opens the device c->device names and uploads `scene` (NULL: none yet). Prints one line
@@ -30,7 +31,7 @@ int cli_backend_frame(cli_backend *be, const tr_scene *scene, const tr_render_co
 int cli_backend_read(cli_backend *be, tr_film *film, tr_error *err);
 /* Forgets the samples of the device's film. */
 int cli_backend_clear(cli_backend *be, tr_error *err);
-/* Whether frames run on the host's CPU device. */
+/* Whether frames run on the host's CPU threads (TR_DEVICE_CAP_HOST). */
 int cli_backend_is_cpu(const cli_backend *be);
 void cli_backend_close(cli_backend *be);
 

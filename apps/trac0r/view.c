@@ -279,7 +279,7 @@ int cmd_view(int argc, char **argv) {
         tr_scene_destroy(scene);
         return rc;
     }
-    if (!cli_backend_is_cpu(&be)) {
+    if ((tr_device_caps(be.dev) & TR_DEVICE_CAP_HOST) == 0u) {
         fprintf(stderr, "trac0r view: rendering on %s\n", be.name);
     }
     rc = headless ? run_headless(&a, &o, scene, &be) : view_run_window(&a, &o, scene, &be);

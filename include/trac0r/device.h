@@ -20,6 +20,7 @@
 #ifndef TRAC0R_DEVICE_H
 #define TRAC0R_DEVICE_H
 
+#include <stddef.h>
 #include <stdint.h>
 
 #include "trac0r/error.h"
@@ -56,8 +57,34 @@ int tr_device_list(const char *kind, tr_device_info *out, int max, int *count, t
 tr_device *tr_device_open(const char *name, tr_error *err);
 void tr_device_close(tr_device *dev);
 const tr_device_info *tr_device_get_info(const tr_device *dev);
-/* "cpu" or "opencl". */
+/* "cpu" or "opencl" (tr_device_get_kind names it as an enum). */
 const char *tr_device_kind(const tr_device *dev);
+
+/* The kinds of device. */
+typedef enum tr_device_kind_id {
+    TR_DEVICE_CPU = 0,    /* the host's cores, by OpenMP threads ("cpu") */
+    TR_DEVICE_OPENCL = 1, /* an OpenCL device ("opencl:N") */
+} tr_device_kind_id;
+tr_device_kind_id tr_device_get_kind(const tr_device *dev);
+
+/* What a device does, as flags (tr_device_caps), for programs that adapt to it without
+ * naming its kind. */
+/* Frames run on the calling process's CPU threads, as many as tr_render_config.threads
+ * asks (0: tr_default_threads). */
+#define TR_DEVICE_CAP_HOST 0x1u
+/* tr_device_upload copies the scene into the device's own memory: a changed scene is
+ * seen only after it is uploaded again, and the upload costs time of its own. */
+#define TR_DEVICE_CAP_SCENE_COPY 0x2u
+uint32_t tr_device_caps(const tr_device *dev);
+/* Whether the device traces a scene committed with `accel` on that structure itself
+ * (nonzero), or builds a structure of its own from it (0: OpenCL with Embree's). */
+int tr_device_traces(const tr_device *dev, tr_accel_type accel);
+/* One line that says what frames run on, into out (size bytes, always terminated): "cpu,
+ * 4 threads" (threads as tr_render_config.threads, 0: tr_default_threads) or
+ * "opencl:0 (MODEL)", followed for an uploaded scene the device does not trace on its own
+ * structure by which one it traces ("opencl:0 (MODEL; embree is host-only, the device
+ * traces a bvh)"). */
+void tr_device_describe(const tr_device *dev, int threads, char *out, size_t size);
 
 /* Hands a committed scene to the device: the CPU keeps a reference (the scene must
  * outlive the device's use of it), OpenCL copies its arrays. Call again after changing

@@ -168,6 +168,10 @@ typedef struct tr_recon_params {
                              0: they keep the emission in the filtered frame */
 } tr_recon_params;
 
+/* The defaults. A field that would divide by zero at 0 (max_len, max_len_moving, the
+ * bilateral and à-trous sigmas) takes its default when 0; the others are used as given,
+ * so a zero-initialised tr_recon_params differs from the defaults in alpha_min,
+ * bilateral_radius, the iteration counts, svgf_feedback and emission_samples. */
 tr_recon_params tr_recon_params_default(void);
 
 /* The reconstruction's state between frames (history and scratch buffers): the caller

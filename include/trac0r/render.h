@@ -40,14 +40,16 @@
  * than sobol (docs/realtime.md). */
 #define TR_SAMPLER_REALTIME TR_SAMPLER_RANDOM
 
-/* What to render and, for the CPU, how. */
+/* What to render and, for the CPU, how. A zero-initialised config is the default
+ * (tr_render_config_default) except for the integrator: 0 names TR_INTEGRATOR_NAIVE. */
 typedef struct tr_render_config {
     int max_depth;   /* the longest path; 0 (default): the integrator's default */
     uint64_t seed;   /* random streams are keyed by (seed, pixel, sample) */
     int threads;     /* CPU: OpenMP threads; 0 = all the machine has */
     int integrator;  /* TR_INTEGRATOR_* (default TR_INTEGRATOR_PT, as the command line) */
-    int stride;      /* preview: trace every stride-th pixel, fill stride x stride blocks */
-    uint32_t tile;   /* CPU: tile side in traced pixels (default 16) */
+    int stride;      /* preview: trace every stride-th pixel, fill stride x stride blocks
+                        (1..64; 0 means 1, the default) */
+    uint32_t tile;   /* CPU: tile side in traced pixels (0 means 16, the default) */
     uint32_t passes; /* TR_PASS_* to accumulate beside radiance (default none) */
     int sampler;     /* TR_SAMPLER_*: pt's uniform numbers (default TR_SAMPLER_SOBOL) */
     /* pt: Russian roulette may end a path after this many segments (the camera ray is the

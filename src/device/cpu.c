@@ -44,17 +44,6 @@ int tr_default_max_depth(int integrator) {
     return integrator == TR_INTEGRATOR_NAIVE ? TR_MAX_DEPTH_NAIVE : TR_MAX_DEPTH_PT;
 }
 
-int tr_default_threads(void) {
-    const int n = omp_get_max_threads();
-    return n > TR_MAX_THREADS ? TR_MAX_THREADS : n;
-}
-
-double tr_time_now(void) {
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
 int tr_render_config_check(const tr_render_config *cfg, tr_error *err) {
     if (cfg->max_depth < 0 || cfg->max_depth > TR_MAX_DEPTH_LIMIT) {
         return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
@@ -69,9 +58,9 @@ int tr_render_config_check(const tr_render_config *cfg, tr_error *err) {
         return tr_error_set(err, TR_STATUS_LIMIT, "max depth %d: %s supports at most %d",
                             cfg->max_depth, tr_integrator_name(cfg->integrator), TR_MAX_DEPTH_BDPT);
     }
-    if (cfg->stride < 1 || cfg->stride > 64) {
-        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "stride %d must be in 1..64",
-                            cfg->stride);
+    if (cfg->stride < 0 || cfg->stride > 64) {
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "stride %d must be in 1..64 (0: the default, 1)", cfg->stride);
     }
     if (cfg->threads < 0 || cfg->threads > TR_MAX_THREADS) {
         return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "threads %d must be in 0..%d",
@@ -137,7 +126,7 @@ int tr_frame_make(tr_frame *f, const tr_camera *cam, const tr_render_config *cfg
     f->sample_count = sample_count;
     f->max_depth = cfg->max_depth ? cfg->max_depth : tr_default_max_depth(cfg->integrator);
     f->integrator = (uint32_t)cfg->integrator;
-    f->stride = (uint32_t)cfg->stride;
+    f->stride = cfg->stride ? (uint32_t)cfg->stride : 1u; /* 0: every pixel, as 1 */
     f->passes = cfg->passes;
     f->sampler = (uint32_t)cfg->sampler;
     f->rr_start = cfg->roulette_start ? cfg->roulette_start : TR_ROULETTE_START_PT;

@@ -15,10 +15,8 @@
 #include "scene/scene_internal.h"
 #include "trac0r/registry.h"
 
-typedef enum device_kind { KIND_CPU, KIND_OPENCL } device_kind;
-
 struct tr_device {
-    device_kind kind;
+    tr_device_kind_id kind;
     tr_device_info info;
     const tr_scene *scene; /* the uploaded scene (CPU: rendered from directly) */
     uint64_t generation;   /* its generation at upload (tr_scene_generation) */
@@ -155,11 +153,11 @@ tr_device *tr_device_open(const char *name, tr_error *err) {
         return NULL;
     }
     if (cl_index < 0) {
-        dev->kind = KIND_CPU;
+        dev->kind = TR_DEVICE_CPU;
         cpu_info(&dev->info);
         return dev;
     }
-    dev->kind = KIND_OPENCL;
+    dev->kind = TR_DEVICE_OPENCL;
     dev->cl = tr_cl_open(cl_index, err);
     if (!dev->cl) {
         free(dev);
@@ -186,6 +184,37 @@ const char *tr_device_kind(const tr_device *dev) {
     return dev->info.kind;
 }
 
+tr_device_kind_id tr_device_get_kind(const tr_device *dev) {
+    return dev->kind;
+}
+
+uint32_t tr_device_caps(const tr_device *dev) {
+    return dev->kind == TR_DEVICE_CPU ? TR_DEVICE_CAP_HOST : TR_DEVICE_CAP_SCENE_COPY;
+}
+
+int tr_device_traces(const tr_device *dev, tr_accel_type accel) {
+    if (dev->kind == TR_DEVICE_CPU) {
+        return 1;
+    }
+    /* opencl.c walks the flat boxes and the binary BVH (bvh2 uploads it too). */
+    return accel == TR_ACCEL_TYPE_FLAT || accel == TR_ACCEL_TYPE_BVH || accel == TR_ACCEL_TYPE_BVH2;
+}
+
+void tr_device_describe(const tr_device *dev, int threads, char *out, size_t size) {
+    if (size == 0) {
+        return;
+    }
+    if (dev->kind == TR_DEVICE_CPU) {
+        const int n = threads > 0 ? threads : tr_default_threads();
+        snprintf(out, size, "cpu, %d thread%s", n, n == 1 ? "" : "s");
+    } else if (dev->scene && !tr_device_traces(dev, dev->scene->accel)) {
+        snprintf(out, size, "%s (%s; %s is host-only, the device traces a %s)", dev->info.name,
+                 dev->info.model, tr_accel_name(dev->scene->accel), tr_accel_name(dev->accel));
+    } else {
+        snprintf(out, size, "%s (%s)", dev->info.name, dev->info.model);
+    }
+}
+
 const tr_scene *tr_device_scene(const tr_device *dev) {
     return dev->scene;
 }
@@ -198,7 +227,7 @@ int tr_device_upload(tr_device *dev, const tr_scene *scene, tr_error *err) {
     if (tr_scene_check_committed(scene, err) != TR_OK) {
         return TR_ERR;
     }
-    if (dev->kind == KIND_OPENCL) {
+    if (dev->kind == TR_DEVICE_OPENCL) {
         if (tr_cl_upload_scene(dev->cl, scene, err) != TR_OK) {
             return TR_ERR;
         }
@@ -216,7 +245,7 @@ tr_accel_type tr_device_accel(const tr_device *dev) {
 }
 
 uint64_t tr_device_scene_bytes(const tr_device *dev) {
-    return dev->kind == KIND_OPENCL ? tr_cl_scene_bytes(dev->cl) : 0u;
+    return dev->kind == TR_DEVICE_OPENCL ? tr_cl_scene_bytes(dev->cl) : 0u;
 }
 
 /* The CPU film for frame f: (re)allocated, cleared, when its size or passes change. */
@@ -240,7 +269,7 @@ int tr_device_render(tr_device *dev, const tr_camera *cam, const tr_render_confi
     }
     /* The CPU renders from the scene itself: it must be the one uploaded. (OpenCL renders
      * its own copy, and the scene may be gone by now.) */
-    if (dev->kind == KIND_CPU && tr_scene_generation(dev->scene) != dev->generation) {
+    if (dev->kind == TR_DEVICE_CPU && tr_scene_generation(dev->scene) != dev->generation) {
         return tr_error_set(err, TR_STATUS_STALE_SCENE,
                             "the scene changed since it was uploaded to device %s", dev->info.name);
     }
@@ -249,13 +278,13 @@ int tr_device_render(tr_device *dev, const tr_camera *cam, const tr_render_confi
         return TR_ERR;
     }
     uint64_t rays = 0;
-    if (dev->kind == KIND_OPENCL && tr_integrator_is_bidirectional((int)f.integrator)) {
+    if (dev->kind == TR_DEVICE_OPENCL && tr_integrator_is_bidirectional((int)f.integrator)) {
         /* bdpt's light tracing splats with 64-bit atomics the device may lack. */
         return tr_error_set(err, TR_STATUS_UNSUPPORTED,
                             "the %s integrator runs on the CPU only (device %s is OpenCL)",
                             tr_integrator_name((int)f.integrator), dev->info.name);
     }
-    if (dev->kind == KIND_OPENCL) {
+    if (dev->kind == TR_DEVICE_OPENCL) {
         if (tr_cl_render_frame(dev->cl, &f, &rays, err) != TR_OK) {
             return TR_ERR;
         }
@@ -277,7 +306,7 @@ int tr_device_render(tr_device *dev, const tr_camera *cam, const tr_render_confi
 }
 
 int tr_device_read_film(tr_device *dev, tr_film *film, tr_error *err) {
-    if (dev->kind == KIND_OPENCL) {
+    if (dev->kind == TR_DEVICE_OPENCL) {
         return tr_cl_read_film(dev->cl, film, err);
     }
     const tr_film *src = &dev->film;
@@ -311,7 +340,7 @@ int tr_device_write_film(tr_device *dev, const tr_film *film, tr_error *err) {
         return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "no film to write to device %s",
                             dev->info.name);
     }
-    if (dev->kind == KIND_OPENCL) {
+    if (dev->kind == TR_DEVICE_OPENCL) {
         return tr_cl_write_film(dev->cl, film, err);
     }
     if (!dev->film.sum || dev->film.width != film->width || dev->film.height != film->height ||
@@ -333,7 +362,7 @@ int tr_device_write_film(tr_device *dev, const tr_film *film, tr_error *err) {
 }
 
 int tr_device_clear(tr_device *dev, tr_error *err) {
-    if (dev->kind == KIND_OPENCL) {
+    if (dev->kind == TR_DEVICE_OPENCL) {
         return tr_cl_clear_film(dev->cl, err);
     }
     if (dev->film.sum) {
@@ -344,7 +373,7 @@ int tr_device_clear(tr_device *dev, tr_error *err) {
 
 void tr_device_film_size(const tr_device *dev, uint32_t *width, uint32_t *height,
                          uint32_t *passes) {
-    if (dev->kind == KIND_OPENCL) {
+    if (dev->kind == TR_DEVICE_OPENCL) {
         tr_cl_film_size(dev->cl, width, height, passes);
         return;
     }
@@ -354,7 +383,7 @@ void tr_device_film_size(const tr_device *dev, uint32_t *width, uint32_t *height
 }
 
 void tr_device_set_memory_limit(tr_device *dev, uint64_t bytes) {
-    if (dev->kind == KIND_OPENCL) {
+    if (dev->kind == TR_DEVICE_OPENCL) {
         tr_cl_set_memory_limit(dev->cl, bytes);
     }
 }

@@ -14,7 +14,7 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "infile.h"
+#include "util/infile.h"
 #include "trac0r/image.h"
 #include "trac0r/outfile.h"
 
@@ -343,7 +343,10 @@ static int read_channels(exr_context_t ctxt, const char *path, exr_io *io, const
         rc = rc == EXR_ERR_SUCCESS ? d : rc;
     }
     if (rc != EXR_ERR_SUCCESS) {
-        tr_image_free(img);
+        /* Freed here rather than by tr_image_free: image.c calls this file (the writer's
+         * dispatch by extension), so this file calls nothing of image.c's. */
+        free(img->rgb);
+        memset(img, 0, sizeof *img);
         return exr_fail(err, path, io, rc);
     }
     return TR_OK;

@@ -11,7 +11,7 @@
 #include <unistd.h>
 
 #include "trac0r/image.h"
-#include "io/infile.h"
+#include "util/infile.h"
 #include "trac0r/outfile.h"
 #include "trac0r/post.h"
 

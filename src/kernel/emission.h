@@ -1,5 +1,5 @@
 /* emission.h - the first hit's emission resolved over a pixel's area, per pixel: what
- * tr_resolve_emission (src/device/emission.c) runs on the host and tr_cl_resolve_emission
+ * tr_resolve_emission (src/post/emission.c) runs on the host and tr_cl_resolve_emission
  * (entry.cl) on an OpenCL device.
  *
  * `e` is a frame's emission pass (TR_PASS_EMISSION: sums or means, 3 floats per pixel,

@@ -59,7 +59,7 @@ __kernel void tr_cl_render(TR_SCENE_ARRAYS(TR_CL_ARRAY_PARAM) __global const uin
 }
 
 /* The film's emission (TR_PASS_EMISSION) resolved over each pixel's area, as the host's
- * tr_resolve_emission does it (src/device/emission.c, src/kernel/emission.h): a pixel next
+ * tr_resolve_emission does it (src/post/emission.c, src/kernel/emission.h): a pixel next
  * to an edge between emitting and non-emitting samples gets the mean over an n x n grid of
  * first-hit rays through the frame's camera, every other pixel its own mean emission.
  * One work item per pixel of the film (the camera's screen). */

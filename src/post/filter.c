@@ -14,6 +14,7 @@
 #include <string.h>
 
 #include "post/filter.h"
+#include "post/recon_params.h"
 #include "trac0r/film.h"
 #include "trac0r/post.h"
 #include "trac0r/render.h"
@@ -757,6 +758,8 @@ static void planes_of(const post_ws *ws, int k, float *out3[3]) {
 
 int tr_filter_bilateral(const tr_gbuffer *g, const float *in, float *out, const tr_recon_params *p,
                         int threads, tr_error *err) {
+    const tr_recon_params resolved = tr_recon_params_resolve(p);
+    p = &resolved;
     float *block = ws_alloc(g);
     if (!block) {
         return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory for a %ux%u filter",
@@ -775,6 +778,8 @@ int tr_filter_bilateral(const tr_gbuffer *g, const float *in, float *out, const 
 
 int tr_filter_atrous(const tr_gbuffer *g, const float *in, float *out, const tr_recon_params *p,
                      int threads, tr_error *err) {
+    const tr_recon_params resolved = tr_recon_params_resolve(p);
+    p = &resolved;
     float *block = ws_alloc(g);
     if (!block) {
         return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory for a %ux%u filter",
@@ -1163,6 +1168,8 @@ int tr_recon_frame_moving(tr_recon *r, const tr_gbuffer *frame, const tr_camera 
                           const tr_vec3 *motion, uint32_t motion_count, int method,
                           const tr_recon_params *p, int threads, float *out, tr_error *err) {
     const tr_gbuffer *g = frame;
+    const tr_recon_params resolved = tr_recon_params_resolve(p);
+    p = &resolved;
     if (check_frame(r->width, r->height, g, err) != TR_OK) {
         return TR_ERR;
     }

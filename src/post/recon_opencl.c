@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "device/opencl.h"
+#include "post/recon_params.h"
 #include "trac0r/film.h"
 #include "trac0r/post.h"
 #include "trac0r/recon_device.h"
@@ -337,6 +338,8 @@ static int cl_motion(recon_cl *c, const tr_vec3 *motion, uint32_t count, tr_erro
 static int cl_frame(tr_recon_device *r, const tr_camera *cam, const tr_vec3 *motion,
                     uint32_t motion_count, int method, const tr_recon_params *p, float *out,
                     tr_error *err) {
+    const tr_recon_params resolved = tr_recon_params_resolve(p);
+    p = &resolved;
     recon_cl *c = r->cl;
     if (!motion) {
         motion_count = 0;

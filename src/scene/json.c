@@ -20,7 +20,7 @@
 #include "scene/scene_internal.h"
 #include "trac0r/scene_file.h"
 #include "material_registry.h"
-#include "io/infile.h"
+#include "util/infile.h"
 #include "scene/texture.h"
 
 #define PATH_MAX_LEN 160

@@ -18,7 +18,7 @@
 #include "scene/scene_internal.h"
 #include "scene/texture.h"
 #include "trac0r/scene_file.h"
-#include "io/infile.h"
+#include "util/infile.h"
 #include "scene/mesh_guard.h"
 
 /* Node hierarchies deeper than this are refused (a hostile file could recurse forever). */

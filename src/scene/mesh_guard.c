@@ -11,7 +11,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "io/infile.h"
+#include "util/infile.h"
 
 typedef struct guard_file guard_file;
 

@@ -9,7 +9,7 @@
 #include <string.h>
 #include <sys/stat.h>
 
-#include "io/infile.h"
+#include "util/infile.h"
 #include "scene/image_codec.h"
 #include "scene/scene_internal.h"
 #include "scene/texture.h"

@@ -2,8 +2,8 @@
  * name, images): regular files only. A FIFO named as a scene or model would block open()
  * or read() forever, and a device could be read without end, so the file is opened
  * without blocking and its type checked before a byte is read. Internal to the library. */
-#ifndef TRAC0R_IO_INFILE_H
-#define TRAC0R_IO_INFILE_H
+#ifndef TRAC0R_UTIL_INFILE_H
+#define TRAC0R_UTIL_INFILE_H
 
 #include <stdint.h>
 #include <stdio.h>

@@ -1,6 +1,6 @@
 /* infile.c - regular files only, opened without ever blocking. */
 #define _POSIX_C_SOURCE 200809L
-#include "io/infile.h"
+#include "util/infile.h"
 
 #include <errno.h>
 #include <fcntl.h>

@@ -1,0 +1,1 @@
+/* The lowest module of the fixture: includes nothing. */

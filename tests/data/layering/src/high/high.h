@@ -1,0 +1,3 @@
+/* Includes the layer below and, back, low.h. */
+#include "base/base.h"
+#include "low/low.h"
