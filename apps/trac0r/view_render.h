@@ -78,12 +78,12 @@ typedef struct view_renderer {
     char shot_msg[4700];
 
     /* Private to the thread. */
-    tr_realtime *rt;       /* the frame loop: sampling, reconstruction, budget (realtime.h) */
-    const tr_film *shown;  /* the last frame shown (tr_realtime's, valid until its next frame) */
-    uint32_t *back;        /* the next frame's pixels */
-    size_t back_px;        /* back's capacity in pixels */
-    size_t pixels_px;      /* ... and pixels' */
-    atomic_int refining;   /* the frame in flight refines a view on screen: cancellable */
+    tr_realtime *rt;      /* the frame loop: sampling, reconstruction, budget (realtime.h) */
+    const tr_film *shown; /* the last frame shown (tr_realtime's, valid until its next frame) */
+    uint32_t *back;       /* the next frame's pixels */
+    size_t back_px;       /* back's capacity in pixels */
+    size_t pixels_px;     /* ... and pixels' */
+    atomic_int refining;  /* the frame in flight refines a view on screen: cancellable */
 } view_renderer;
 
 /* Starts the thread rendering `cam` (whose size sets the film's) with cfg's settings, on

@@ -97,12 +97,12 @@ typedef struct tr_realtime_frame_desc {
     const tr_camera *camera; /* the view; its screen size is the full resolution */
     int method;              /* tr_recon_method (default TR_RECON_OFF: the film itself) */
     int moving;              /* 1: the camera is changing: hold budget_ms (default 0) */
-    double budget_ms; /* a moving frame's budget in milliseconds; 0 (default): none, frames
-                         at full resolution with the desc's spp */
-    double extra_ms;  /* the caller's own time per frame (its display), counted into the
-                         budget (default 0) */
-    int stride;       /* tr_render_config.stride; 0 (default): the config's */
-    int restart;      /* 1: start the film over even for the same view (default 0) */
+    double budget_ms;        /* a moving frame's budget in milliseconds; 0 (default): none, frames
+                                at full resolution with the desc's spp */
+    double extra_ms;         /* the caller's own time per frame (its display), counted into the
+                                budget (default 0) */
+    int stride;              /* tr_render_config.stride; 0 (default): the config's */
+    int restart;             /* 1: start the film over even for the same view (default 0) */
     /* Asked before each CPU tile and after the render: nonzero stops the frame, which
      * fails with TR_STATUS_CANCELLED and starts the next one over (default NULL). */
     int (*cancel)(void *user);

@@ -113,8 +113,8 @@ tr_realtime *tr_realtime_create(tr_device *dev, tr_scene *scene, const tr_realti
     }
     if (d->spp > TR_REALTIME_MAX_SPP * 64u) {
         tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
-                     "tr_realtime_desc.spp: expected at most %u, got %u",
-                     TR_REALTIME_MAX_SPP * 64u, d->spp);
+                     "tr_realtime_desc.spp: expected at most %u, got %u", TR_REALTIME_MAX_SPP * 64u,
+                     d->spp);
         return NULL;
     }
     tr_realtime *rt = calloc(1, sizeof *rt);
@@ -177,10 +177,9 @@ uint32_t tr_realtime_passes(const tr_realtime *rt, int method) {
             : 0u;
     /* The emission pass where the reconstruction resolves emitters' edges (pt only: the
      * resolved edge follows pt's first segment). */
-    const uint32_t emission = rt->params.emission_samples > 0 &&
-                                      rt->cfg.integrator == TR_INTEGRATOR_PT
-                                  ? TR_PASS_EMISSION
-                                  : 0u;
+    const uint32_t emission =
+        rt->params.emission_samples > 0 && rt->cfg.integrator == TR_INTEGRATOR_PT ? TR_PASS_EMISSION
+                                                                                  : 0u;
     return TR_PASS_ALL | direct | emission;
 }
 
@@ -190,7 +189,9 @@ static int check_frame_desc(const tr_realtime *rt, const tr_realtime_frame_desc 
                             tr_error *err) {
     if (!rt || !fd || !fd->camera) {
         return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "tr_realtime: %s is NULL",
-                            !rt ? "the instance" : !fd ? "the frame desc" : "the camera");
+                            !rt   ? "the instance"
+                            : !fd ? "the frame desc"
+                                  : "the camera");
     }
     if (!tr_recon_name(fd->method)) {
         return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "tr_realtime: unknown method %d",
@@ -228,8 +229,7 @@ static int start_view(tr_realtime *rt, const tr_realtime_frame_desc *fd, int str
     }
     const uint32_t w = rt->rcam.screen_width, h = rt->rcam.screen_height;
     const uint32_t passes = tr_realtime_passes(rt, fd->method);
-    if (rt->film.sum && rt->film.width == w && rt->film.height == h &&
-        rt->film.passes == passes) {
+    if (rt->film.sum && rt->film.width == w && rt->film.height == h && rt->film.passes == passes) {
         tr_film_clear(&rt->film);
     } else {
         tr_film_free(&rt->film);
@@ -417,8 +417,8 @@ static int host_frame(tr_realtime *rt, tr_error *err) {
     rt->resolved = 0;
     if (rt->gb.has_emission) {
         const double t0 = tr_time_now();
-        if (tr_resolve_emission(rt->scene, &rt->rcam, rt->params.emission_samples,
-                                rt->cfg.threads, &rt->gb, &rt->resolved, err) != TR_OK) {
+        if (tr_resolve_emission(rt->scene, &rt->rcam, rt->params.emission_samples, rt->cfg.threads,
+                                &rt->gb, &rt->resolved, err) != TR_OK) {
             return TR_ERR;
         }
         rt->resolve_ms = (tr_time_now() - t0) * 1e3;
@@ -469,8 +469,8 @@ int tr_realtime_reconstruct(tr_realtime *rt, int method, tr_realtime_result *out
         tr_recon_device_times(hist->rdev, &temporal, &spatial);
     } else {
         if (host_frame(rt, err) != TR_OK ||
-            tr_recon_frame_moving(&hist->rec, &rt->gb, &rt->rcam, motion, ids, method,
-                                  &rt->params, rt->cfg.threads, rt->disp.sum, err) != TR_OK) {
+            tr_recon_frame_moving(&hist->rec, &rt->gb, &rt->rcam, motion, ids, method, &rt->params,
+                                  rt->cfg.threads, rt->disp.sum, err) != TR_OK) {
             return TR_ERR;
         }
         /* The resolve counts as part of the temporal stage; "off" does not use it. */
