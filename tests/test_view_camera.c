@@ -1,4 +1,5 @@
-/* test_view_camera.c - the viewer's fly camera and frame budget (apps/trac0r/view_camera.c).
+/* test_view_camera.c - the viewer's fly camera (apps/trac0r/view_camera.c) and the frame budget
+ * of its moving frames (tr_realtime_budget_adapt, realtime.h).
  *
  * 1. A right-handed scene's camera rebuilt after a move keeps its mirrored right vector
  *    (the viewer's old rebuild dropped it and flipped the image), and the screen's right
@@ -42,21 +43,21 @@ static void test_budget(void) {
     /* Four times over budget: the divisor grows, step by step, towards 2 * sqrt(...). */
     for (int i = 0; i < 40; ++i) {
         const double ms = 4.0 * 16.7 / (scale * scale); /* time falls with the pixel count */
-        view_budget_adapt(ms, 16.7, &scale, &spp);
+        tr_realtime_budget_adapt(ms, 16.7, &scale, &spp);
     }
     CHECK(scale > 1.9f && scale < 2.6f && spp == 1, "4x over budget: scale %g, spp %u", scale, spp);
     /* Far under budget: back to full resolution, then more samples per frame. */
     for (int i = 0; i < 40; ++i) {
-        view_budget_adapt(0.5, 16.7, &scale, &spp);
+        tr_realtime_budget_adapt(0.5, 16.7, &scale, &spp);
     }
     CHECK(scale == 1.0f && spp == 16, "under budget: scale %g, spp %u", scale, spp);
     /* Over budget with many samples: samples drop before the resolution does. */
-    view_budget_adapt(40.0, 16.7, &scale, &spp);
+    tr_realtime_budget_adapt(40.0, 16.7, &scale, &spp);
     CHECK(scale == 1.0f && spp == 8, "over budget at 16 spp: scale %g, spp %u", scale, spp);
     /* Never beyond 16, whatever the time. */
     spp = 1;
     for (int i = 0; i < 100; ++i) {
-        view_budget_adapt(1e6, 16.7, &scale, &spp);
+        tr_realtime_budget_adapt(1e6, 16.7, &scale, &spp);
     }
     CHECK(scale == 16.0f, "hopeless budget: scale %g", scale);
 }

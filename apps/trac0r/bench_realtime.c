@@ -139,24 +139,6 @@ static int path_camera(const tr_camera *c0, float diag, uint32_t f, uint32_t fra
     return TR_OK;
 }
 
-/* Renders samples [first, first + n) of cam on be (its film cleared) and, with f, reads
- * the film into f. *ms times both: a frame whose reconstruction runs on the host needs its
- * film there; one reconstructed on the device (tr_recon_device) passes f NULL and is timed
- * without the read. */
-static int render_into(cli_backend *be, const tr_camera *cam, const tr_render_config *cfg,
-                       uint32_t first, uint32_t n, tr_film *f, double *ms, tr_error *err) {
-    const double t0 = tr_time_now();
-    if (tr_device_clear(be->dev, err) != TR_OK ||
-        tr_device_render(be->dev, cam, cfg, first, n, NULL, NULL, err) != TR_OK ||
-        (f && tr_device_read_film(be->dev, f, err) != TR_OK)) {
-        return TR_ERR;
-    }
-    if (ms) {
-        *ms = (tr_time_now() - t0) * 1e3;
-    }
-    return TR_OK;
-}
-
 static double mse_of(const float *a, const float *b, size_t px) {
     return tr_image_compare(a, b, px).mse;
 }
@@ -189,16 +171,15 @@ static double shape_psnr_mean(const rt_frame_stats *st, int m, uint32_t frames, 
     return n > 0 ? sum / n : 0.0;
 }
 
-/* After --animate-frames A:B, per method reconstructed on the host: steady is the mean
+/* After --animate-frames A:B, per method (reconstructed on the host): steady is the mean
  * PSNR over the shape's pixels in the (up to) 8 frames before it moved; recovered at the
  * first frame from B on within 0.5 dB of it, as after a cut. */
-static void print_shape_recovery(const rt_frame_stats *st, const int *on,
-                                 tr_recon_device *const *rdev, uint32_t frames, uint32_t from,
-                                 uint32_t until) {
+static void print_shape_recovery(const rt_frame_stats *st, const int *on, uint32_t frames,
+                                 uint32_t from, uint32_t until) {
     printf("moving shape stopped at frame %u, frames to return to its PSNR before it moved:",
            until);
     for (int m = 0; m < TR_RECON_COUNT; ++m) {
-        if (!on[m] || rdev[m]) {
+        if (!on[m]) {
             continue;
         }
         int n = 0;
@@ -272,7 +253,9 @@ static int render_reference(cli_backend *be, const tr_camera *cam, const tr_rend
                             tr_error *err) {
     const uint32_t h1 = spp / 2, h2 = spp - h1;
     const size_t px = (size_t)f->width * f->height;
-    if (render_into(be, cam, cfg, 0, h1, f, NULL, err) != TR_OK) {
+    if (tr_device_clear(be->dev, err) != TR_OK ||
+        tr_device_render(be->dev, cam, cfg, 0, h1, NULL, NULL, err) != TR_OK ||
+        tr_device_read_film(be->dev, f, err) != TR_OK) {
         return TR_ERR;
     }
     film_mean(f, half, px);
@@ -365,528 +348,624 @@ static int plot_realtime(const rt_frame_stats *st, const int *on, uint32_t frame
     return plotted;
 }
 
-int bench_realtime(int argc, char **argv) {
-    cli_args a = {.cmd = "bench realtime", .argc = argc, .argv = argv, .i = 0};
+/* The command's options. */
+typedef struct rt_opts {
     cli_common c;
-    cli_common_default(&c);
-    c.width = 320;
-    c.height = 240;
-    uint32_t frames = 32, spp = 1, ref_spp = 256, cut = 0, bias_depth = 0;
-    int on[TR_RECON_COUNT] = {1, 1, 1, 1, 1};
-    /* The reconstruction's settings: the library's defaults unless an option sets one. */
-    tr_recon_params params = tr_recon_params_default();
-    int ref_sampler = -1; /* TR_SAMPLER_*, -1: sobol, whatever the frames' */
-    int animate = 0;      /* --animate: the scene's last shape moves every frame */
-    uint32_t anim_from = 1, anim_until = 0; /* it moves before frames from .. until - 1; 0: all */
-    const char *prefix = "realtime";
-    int size_given = 0;
-    while (cli_next(&a)) {
-        int rc = cli_common_option(&a, &c);
+    uint32_t frames, spp, ref_spp, cut, bias_depth;
+    int on[TR_RECON_COUNT];
+    tr_recon_params params;         /* the library's defaults unless an option sets one */
+    int ref_sampler;                /* TR_SAMPLER_*, -1: sobol, whatever the frames' */
+    int animate;                    /* --animate: the scene's last shape moves every frame */
+    uint32_t anim_from, anim_until; /* it moves before frames from .. until - 1 */
+    int size_given;
+    char csv_path[4096], png_path[4096];
+} rt_opts;
+
+/* One run: the scene, the device, the real-time loop and the measures. */
+typedef struct rt_run {
+    cli_args *a;
+    const rt_opts *o;
+    tr_scene *scene;
+    cli_backend be;
+    tr_realtime *rt;
+    int host;       /* the reconstruction runs on the host (its passes there) */
+    tr_camera cam0; /* the path's start, at the frames' size */
+    float diag;     /* the scene's diagonal: the path's scale */
+    size_t px;
+    tr_render_config rcfg; /* the references' */
+    int frame_sampler;     /* the frames' sampler, for the header */
+    uint32_t frame_passes; /* the frames' passes, which the references keep too */
+    int depth;
+    tr_film rfilm;                       /* the references' film */
+    float *ref, *half, *ref_prev, *prev; /* 3 floats per pixel (prev: per method) */
+    float *bias_ref;                     /* --bias-reference-depth's reference */
+    double bias_mse, bias_own;           /* its measures */
+    rt_frame_stats *st;                  /* per method and frame */
+    uint32_t shape_lo, shape_hi;         /* --animate: the moving shape's ids */
+    size_t *mv_idx;                      /* its pixels in the frame */
+    float *gm;                           /* gathered: an output, the reference, its half */
+    double resolve_sum_ms;               /* tr_resolve_emission over the frames */
+    uint64_t resolve_px;
+} rt_run;
+
+/* Parses the command line into o; CLI_OK to run, else the status to return (-h: *done). */
+static int parse_options(cli_args *a, rt_opts *o, int *done) {
+    while (cli_next(a)) {
+        int rc = cli_common_option(a, &o->c);
         if (rc == CLI_OK) {
-            size_given |= cli_is(&a, "--width") || cli_is(&a, "--height");
+            o->size_given |= cli_is(a, "--width") || cli_is(a, "--height");
             continue;
         }
         if (rc == CLI_USAGE) {
             return CLI_USAGE;
         }
-        if (cli_is(&a, "-h") || cli_is(&a, "--help")) {
+        if (cli_is(a, "-h") || cli_is(a, "--help")) {
             realtime_help();
+            *done = 1;
             return CLI_OK;
-        } else if (cli_is(&a, "--frames")) {
-            rc = cli_parse_u32(&a, 2, 100000, &frames);
-        } else if (cli_is(&a, "--spp")) {
-            rc = cli_parse_u32(&a, 1, 1024, &spp);
-        } else if (cli_is(&a, "--reference-spp")) {
-            rc = cli_parse_u32(&a, 2, 1000000, &ref_spp);
-        } else if (cli_is(&a, "--bias-reference-depth")) {
-            rc = cli_parse_u32(&a, 1, TR_MAX_DEPTH_LIMIT, &bias_depth);
-        } else if (cli_is(&a, "--reference-sampler")) {
-            rc = cli_parse_sampler(&a, &ref_sampler);
-        } else if ((rc = cli_recon_option(&a, &params)) != -1) {
+        } else if (cli_is(a, "--frames")) {
+            rc = cli_parse_u32(a, 2, 100000, &o->frames);
+        } else if (cli_is(a, "--spp")) {
+            rc = cli_parse_u32(a, 1, 1024, &o->spp);
+        } else if (cli_is(a, "--reference-spp")) {
+            rc = cli_parse_u32(a, 2, 1000000, &o->ref_spp);
+        } else if (cli_is(a, "--bias-reference-depth")) {
+            rc = cli_parse_u32(a, 1, TR_MAX_DEPTH_LIMIT, &o->bias_depth);
+        } else if (cli_is(a, "--reference-sampler")) {
+            rc = cli_parse_sampler(a, &o->ref_sampler);
+        } else if ((rc = cli_recon_option(a, &o->params)) != -1) {
             /* handled: rc is CLI_OK or CLI_USAGE */
-        } else if (cli_is(&a, "--animate")) {
-            animate = 1;
+        } else if (cli_is(a, "--animate")) {
+            o->animate = 1;
             rc = CLI_OK;
-        } else if (cli_is(&a, "--animate-frames")) {
-            animate = 1;
-            rc = parse_window(&a, &anim_from, &anim_until);
-        } else if (cli_is(&a, "--cut")) {
-            rc = cli_parse_u32(&a, 1, 100000, &cut);
-        } else if (cli_is(&a, "--methods")) {
-            rc = parse_methods(&a, on);
-        } else if (cli_is(&a, "--out")) {
-            rc = cli_value(&a);
-            prefix = a.value;
-        } else if (a.opt[0] != '-' && a.i == 1) {
-            c.scene = a.opt;
+        } else if (cli_is(a, "--animate-frames")) {
+            o->animate = 1;
+            rc = parse_window(a, &o->anim_from, &o->anim_until);
+        } else if (cli_is(a, "--cut")) {
+            rc = cli_parse_u32(a, 1, 100000, &o->cut);
+        } else if (cli_is(a, "--methods")) {
+            rc = parse_methods(a, o->on);
+        } else if (cli_is(a, "--out")) {
+            rc = cli_value(a);
+            o->csv_path[0] = '\0';
+            if (rc == CLI_OK && (snprintf(o->csv_path, sizeof o->csv_path, "%s.csv", a->value) >=
+                                     (int)sizeof o->csv_path ||
+                                 snprintf(o->png_path, sizeof o->png_path, "%s.png", a->value) >=
+                                     (int)sizeof o->png_path)) {
+                o->csv_path[0] = '\0';
+            }
+        } else if (a->opt[0] != '-' && a->i == 1) {
+            o->c.scene = a->opt;
             rc = CLI_OK;
         } else {
-            return cli_error(&a, "unknown option '%s' (see 'trac0r bench realtime --help')", a.opt);
+            return cli_error(a, "unknown option '%s' (see 'trac0r bench realtime --help')", a->opt);
         }
         if (rc != CLI_OK) {
             return CLI_USAGE;
         }
     }
-    if (cut >= frames) {
-        return cli_error(&a, "--cut: expected a frame before --frames (%u), got %u", frames, cut);
+    if (o->cut >= o->frames) {
+        return cli_error(a, "--cut: expected a frame before --frames (%u), got %u", o->frames,
+                         o->cut);
     }
-    if (anim_until > frames) {
-        return cli_error(&a, "--animate-frames: expected B up to --frames (%u), got %u", frames,
-                         anim_until);
+    if (o->anim_until > o->frames) {
+        return cli_error(a, "--animate-frames: expected B up to --frames (%u), got %u", o->frames,
+                         o->anim_until);
     }
-    if (!anim_until) {
-        anim_until = frames;
+    if (!o->anim_until) {
+        o->anim_until = o->frames;
     }
-    char csv_path[4096];
-    if (snprintf(csv_path, sizeof csv_path, "%s.csv", prefix) >= (int)sizeof csv_path) {
-        return cli_error(&a, "--out: prefix too long");
-    }
-    char png_path[4096];
-    if (snprintf(png_path, sizeof png_path, "%s.png", prefix) >= (int)sizeof png_path) {
-        return cli_error(&a, "--out: prefix too long");
+    if (!o->csv_path[0]) {
+        return cli_error(a, "--out: prefix too long");
     }
     tr_error err;
-    if (tr_image_check_writable(csv_path, &err) != TR_OK ||
-        tr_image_check_writable(png_path, &err) != TR_OK) {
-        return cli_error(&a, "--out: %s", err.msg);
+    if (tr_image_check_writable(o->csv_path, &err) != TR_OK ||
+        tr_image_check_writable(o->png_path, &err) != TR_OK) {
+        return cli_error(a, "--out: %s", err.msg);
     }
-    const uint32_t width = c.width, height = c.height;
-    tr_scene *scene = tr_scene_create(NULL);
-    int rc = cli_load_scene_file(&a, &c, scene, NULL);
+    return CLI_OK;
+}
+
+/* Loads the scene and sets the path's camera; CLI_OK or the status to return. */
+static int load_scene(rt_run *r, rt_opts *o) {
+    const uint32_t width = o->c.width, height = o->c.height;
+    r->scene = tr_scene_create(NULL);
+    int rc = cli_load_scene_file(r->a, &o->c, r->scene, NULL);
     if (rc != CLI_OK) {
-        tr_scene_destroy(scene);
         return rc;
     }
-    if (size_given) { /* a scene file's size applies only where none was given */
-        c.width = width;
-        c.height = height;
+    if (o->size_given) { /* a scene file's size applies only where none was given */
+        o->c.width = width;
+        o->c.height = height;
     }
     /* The integrator may come from the scene file: checked once it is loaded. */
-    if (tr_integrator_is_bidirectional(c.integrator) && bias_depth > TR_MAX_DEPTH_BDPT) {
-        tr_scene_destroy(scene);
-        return cli_error(&a, "--bias-reference-depth: %s supports at most %d, got %u",
-                         tr_integrator_name(c.integrator), TR_MAX_DEPTH_BDPT, bias_depth);
+    if (tr_integrator_is_bidirectional(o->c.integrator) && o->bias_depth > TR_MAX_DEPTH_BDPT) {
+        return cli_error(r->a, "--bias-reference-depth: %s supports at most %d, got %u",
+                         tr_integrator_name(o->c.integrator), TR_MAX_DEPTH_BDPT, o->bias_depth);
     }
-    tr_camera cam0 = *tr_scene_camera(scene);
-    if (tr_camera_resize(&cam0, c.width, c.height, &err) != TR_OK) {
-        tr_scene_destroy(scene);
-        return cli_error(&a, "--width/--height: %s", err.msg);
+    tr_error err;
+    r->cam0 = *tr_scene_camera(r->scene);
+    if (tr_camera_resize(&r->cam0, o->c.width, o->c.height, &err) != TR_OK) {
+        return cli_error(r->a, "--width/--height: %s", err.msg);
     }
-    const tr_aabb b = tr_scene_bounds(scene);
+    const tr_aabb b = tr_scene_bounds(r->scene);
     const tr_vec3 d = tr_vec3_make(b.max.x - b.min.x, b.max.y - b.min.y, b.max.z - b.min.z);
-    float diag = sqrtf(d.x * d.x + d.y * d.y + d.z * d.z);
-    diag = diag > 0.0f && isfinite(diag) ? diag : 1.0f;
+    const float diag = sqrtf(d.x * d.x + d.y * d.y + d.z * d.z);
+    r->diag = diag > 0.0f && isfinite(diag) ? diag : 1.0f;
+    r->px = (size_t)o->c.width * o->c.height;
+    return CLI_OK;
+}
 
-    const size_t px = (size_t)c.width * c.height;
-    const int nm = TR_RECON_COUNT;
-    float *ref = malloc(3 * px * sizeof *ref), *half = malloc(3 * px * sizeof *half);
-    float *ref_prev = malloc(3 * px * sizeof *ref_prev);
-    float *out = malloc(3 * px * sizeof *out);
-    float *bias_ref = bias_depth ? malloc(3 * px * sizeof *bias_ref) : NULL;
-    double bias_mse = 0.0, bias_own = 0.0;
-    float *prev = malloc((size_t)nm * 3 * px * sizeof *prev);
-    rt_frame_stats *st = calloc((size_t)nm * frames, sizeof *st);
-    tr_recon rec[TR_RECON_COUNT];
-    memset(rec, 0, sizeof rec);
-    /* On an OpenCL device the methods run there, on its film (recon_device.h). */
-    tr_recon_device *rdev[TR_RECON_COUNT] = {0};
-    tr_film film, rfilm;
-    memset(&film, 0, sizeof film);
-    memset(&rfilm, 0, sizeof rfilm);
-    tr_gbuffer g;
-    memset(&g, 0, sizeof g);
-    cli_backend be = {0};
-    FILE *csv = NULL;
-    int ok = ref && half && ref_prev && out && prev && st && (bias_ref || !bias_depth);
-    /* The direct pass only where SVGF filters direct and indirect light apart (bdpt has
-     * none). */
-    const uint32_t frame_passes =
-        TR_PASS_ALL |
-        (params.svgf_split && !tr_integrator_is_bidirectional(c.integrator) ? TR_PASS_DIRECT : 0u) |
-        (params.emission_samples > 0 && c.integrator == TR_INTEGRATOR_PT ? TR_PASS_EMISSION : 0u);
-    ok = ok && tr_film_init_passes(&film, c.width, c.height, frame_passes, &err) == TR_OK &&
-         tr_film_init(&rfilm, c.width, c.height, &err) == TR_OK &&
-         tr_gbuffer_init(&g, c.width, c.height, &err) == TR_OK;
-    for (int m = 0; ok && m < nm; ++m) {
-        ok = tr_recon_init(&rec[m], c.width, c.height, &err) == TR_OK;
+/* The measures' buffers; 0 when memory runs out. */
+static int alloc_buffers(rt_run *r) {
+    const rt_opts *o = r->o;
+    const size_t px = r->px;
+    r->ref = malloc(3 * px * sizeof *r->ref);
+    r->half = malloc(3 * px * sizeof *r->half);
+    r->ref_prev = malloc(3 * px * sizeof *r->ref_prev);
+    r->bias_ref = o->bias_depth ? malloc(3 * px * sizeof *r->bias_ref) : NULL;
+    r->prev = malloc((size_t)TR_RECON_COUNT * 3 * px * sizeof *r->prev);
+    r->st = calloc((size_t)TR_RECON_COUNT * o->frames, sizeof *r->st);
+    return r->ref && r->half && r->ref_prev && r->prev && r->st && (r->bias_ref || !o->bias_depth);
+}
+
+/* The device, the real-time loop (the frames' settings) and the references' config. */
+static int open_loop(rt_run *r) {
+    const rt_opts *o = r->o;
+    tr_error err;
+    int rc = cli_backend_open(r->a, &o->c, r->scene, &r->be);
+    if (rc != CLI_OK) {
+        return rc;
     }
-    if (!ok) {
-        fprintf(stderr, "trac0r bench realtime: %s\n",
-                ref && half && ref_prev && out && prev && st && (bias_ref || !bias_depth)
-                    ? err.msg
-                    : "out of memory");
-        rc = CLI_FAILURE;
+    const tr_render_config cfg = cli_render_config(&o->c);
+    /* The frames' sampler is TR_SAMPLER_REALTIME unless given, and their roulette starts
+     * early (TR_ROULETTE_START_REALTIME unless given): realtime.h. */
+    tr_realtime_desc desc = {0};
+    desc.config = &cfg;
+    desc.recon = &o->params;
+    desc.sampler = o->c.sampler >= 0 ? TR_REALTIME_SAMPLER(o->c.sampler) : 0;
+    desc.spp = o->spp;
+    desc.animated = o->animate;
+    desc.keep_passes = 1; /* one frame goes to every method */
+    if (!(r->rt = tr_realtime_create(r->be.dev, r->scene, &desc, &err))) {
+        fprintf(stderr, "trac0r bench realtime: %s\n", err.msg);
+        return CLI_FAILURE;
     }
-    if (rc == CLI_OK) {
-        rc = cli_backend_open(&a, &c, scene, &be);
-    }
-    for (int m = 0; rc == CLI_OK && m < nm; ++m) {
-        if (on[m] && strcmp(tr_device_kind(be.dev), "opencl") == 0 &&
-            !(rdev[m] = tr_recon_device_open(be.dev, c.width, c.height, &err))) {
-            fprintf(stderr, "trac0r bench realtime: %s\n", err.msg);
-            rc = CLI_FAILURE;
-        }
-    }
-    /* Whether a method reconstructs on the host, which needs each frame's film there. */
-    int host_recon = 0;
-    for (int m = 0; m < nm; ++m) {
-        host_recon |= on[m] && !rdev[m];
-    }
-    tr_render_config cfg = cli_render_config(&c);
-    cfg.passes = frame_passes;
+    r->host = !tr_realtime_on_device(r->rt);
+    r->frame_sampler = o->c.sampler >= 0 ? o->c.sampler : TR_SAMPLER_REALTIME;
+    r->frame_passes = tr_realtime_passes(r->rt, TR_RECON_SVGF);
     /* The references keep the frames' passes too, although only their radiance is read
      * (the passes do not change it): a device keeps one film for one set of passes, and
      * alternating them reallocated the device's film twice per frame, inside the timed
      * render. */
-    tr_render_config rcfg = cfg;
+    r->rcfg = cfg;
+    r->rcfg.passes = r->frame_passes;
     /* The references' seed differs from the frames', so their noise is independent. */
-    rcfg.seed = c.seed ^ 0x7265666572656e63ULL;
-    rcfg.sampler = ref_sampler >= 0 ? ref_sampler : TR_SAMPLER_SOBOL;
-    /* The frames' roulette starts early (TR_ROULETTE_START_REALTIME unless given); the
-     * references keep the offline default, the least error per sample, and stay the
-     * same whatever --roulette-start the frames have (both are unbiased). */
-    if (!c.roulette_start) {
-        cfg.roulette_start = TR_ROULETTE_START_REALTIME;
-    }
-    rcfg.roulette_start = TR_ROULETTE_START_PT;
-    /* Likewise the frames' sampler is TR_SAMPLER_REALTIME unless given, and the
-     * references' the offline default (sobol) unless --reference-sampler names one. */
-    if (c.sampler < 0) {
-        cfg.sampler = TR_SAMPLER_REALTIME;
-    }
+    r->rcfg.seed = o->c.seed ^ 0x7265666572656e63ULL;
+    /* The references keep the offline sampler (sobol) unless --reference-sampler names
+     * one, and the offline roulette start, the least error per sample, whatever
+     * --roulette-start the frames have (both are unbiased). */
+    r->rcfg.sampler = o->ref_sampler >= 0 ? o->ref_sampler : TR_SAMPLER_SOBOL;
+    r->rcfg.roulette_start = TR_ROULETTE_START_PT;
     /* Frames and references alike are rendered at this depth. */
-    const int depth = cfg.max_depth ? cfg.max_depth : tr_default_max_depth(cfg.integrator);
-    const int threads = c.threads ? c.threads : tr_default_threads();
-    if (rc == CLI_OK) {
-        printf("bench realtime: %s %ux%u, %u frames at %u spp, references %u spp, max depth %d, "
-               "%s%s\n",
-               c.scene, c.width, c.height, frames, spp, ref_spp, depth, be.name,
-               cut ? ", camera cut" : "");
-        if (cut) {
-            printf("camera cut at frame %u\n", cut);
-        }
-        printf("samplers: frames %s, references %s\n", cli_sampler_name(cfg.sampler),
-               cli_sampler_name(rcfg.sampler));
-        printf("reconstruction: alpha-min %g, max-history %g, max-history-moving %g, "
-               "svgf-iterations %d, svgf-sigma-l %g, taa %g, svgf-split %s\n",
-               (double)params.alpha_min, (double)params.max_len, (double)params.max_len_moving,
-               params.svgf_iterations, (double)params.svgf_sigma_l, (double)params.svgf_taa_alpha,
-               params.svgf_split ? "on" : "off");
-        if (!(frame_passes & TR_PASS_EMISSION)) {
-            printf("emission: filtered with the rest (%s)\n",
-                   params.emission_samples == 0 ? "--resolve-emission 0"
-                                                : "the emission pass needs --integrator pt");
-        } else if (!host_recon) {
-            printf("emission: kept out of the filters, resolved on the OpenCL device with %d x "
-                   "%d rays per pixel on emitter edges (its time counted in temporal_ms)\n",
-                   params.emission_samples, params.emission_samples);
-        } else {
-            printf("emission: kept out of the filters, resolved with %d x %d rays per pixel on "
-                   "emitter edges (its time counted in temporal_ms)\n",
-                   params.emission_samples, params.emission_samples);
-        }
+    r->depth = cfg.max_depth ? cfg.max_depth : tr_default_max_depth(cfg.integrator);
+    return CLI_OK;
+}
+
+/* --animate: the moving shape's ids in the id pass (triangle index + 1: the last shape's
+ * triangles come last) and the buffers its measures need. */
+static int setup_shape(rt_run *r) {
+    const rt_opts *o = r->o;
+    const uint32_t ids = tr_scene_triangle_count(r->scene) + 1u;
+    r->shape_lo = r->shape_hi = 1u;
+    if (tr_scene_shape_count(r->scene) > 0) {
+        const uint32_t last = tr_scene_shape_count(r->scene) - 1u;
+        r->shape_hi = ids;
+        r->shape_lo = ids - tr_scene_shape_triangle_count(r->scene, last);
     }
-    /* --animate: how far each primitive (the id pass's numbering) moved since the previous
-     * frame, for the reconstruction's reprojection. */
-    const uint32_t motion_n = animate ? tr_scene_triangle_count(scene) + 1u : 0u;
-    /* The moving shape's ids in the id pass (triangle index + 1): the last shape's
-     * triangles come last. */
-    uint32_t shape_lo = 1u, shape_hi = 1u;
-    if (animate && tr_scene_shape_count(scene) > 0) {
-        const uint32_t last = tr_scene_shape_count(scene) - 1u;
-        shape_hi = motion_n;
-        shape_lo = motion_n - tr_scene_shape_triangle_count(scene, last);
-    }
-    tr_vec3 *motion = motion_n ? calloc(motion_n, sizeof *motion) : NULL;
     /* The moving pixels' indices and, gathered, a method's output, the reference and its
      * half. */
-    size_t *mv_idx = animate ? malloc(px * sizeof *mv_idx) : NULL;
-    float *gm = animate ? malloc(9 * px * sizeof *gm) : NULL;
-    if (rc == CLI_OK && animate && (!motion || !mv_idx || !gm)) {
+    r->mv_idx = malloc(r->px * sizeof *r->mv_idx);
+    r->gm = malloc(9 * r->px * sizeof *r->gm);
+    if (!r->mv_idx || !r->gm) {
         fprintf(stderr, "trac0r bench realtime: out of memory\n");
-        rc = CLI_FAILURE;
+        return CLI_FAILURE;
     }
-    if (rc == CLI_OK && animate) {
-        if (anim_from == 1 && anim_until == frames) {
-            printf("animated: the scene's last shape moves every frame\n");
-        } else {
-            printf("animated: the scene's last shape moves before frames %u to %u\n", anim_from,
-                   anim_until - 1);
+    if (o->anim_from == 1 && o->anim_until == o->frames) {
+        printf("animated: the scene's last shape moves every frame\n");
+    } else {
+        printf("animated: the scene's last shape moves before frames %u to %u\n", o->anim_from,
+               o->anim_until - 1);
+    }
+    return CLI_OK;
+}
+
+static void print_header(const rt_run *r) {
+    const rt_opts *o = r->o;
+    const tr_recon_params *p = &o->params;
+    printf("bench realtime: %s %ux%u, %u frames at %u spp, references %u spp, max depth %d, "
+           "%s%s\n",
+           o->c.scene, o->c.width, o->c.height, o->frames, o->spp, o->ref_spp, r->depth, r->be.name,
+           o->cut ? ", camera cut" : "");
+    if (o->cut) {
+        printf("camera cut at frame %u\n", o->cut);
+    }
+    printf("samplers: frames %s, references %s\n", cli_sampler_name(r->frame_sampler),
+           cli_sampler_name(r->rcfg.sampler));
+    printf("reconstruction: alpha-min %g, max-history %g, max-history-moving %g, "
+           "svgf-iterations %d, svgf-sigma-l %g, taa %g, svgf-split %s\n",
+           (double)p->alpha_min, (double)p->max_len, (double)p->max_len_moving, p->svgf_iterations,
+           (double)p->svgf_sigma_l, (double)p->svgf_taa_alpha, p->svgf_split ? "on" : "off");
+    if (!(r->frame_passes & TR_PASS_EMISSION)) {
+        printf("emission: filtered with the rest (%s)\n",
+               p->emission_samples == 0 ? "--resolve-emission 0"
+                                        : "the emission pass needs --integrator pt");
+    } else if (!r->host) {
+        printf("emission: kept out of the filters, resolved on the OpenCL device with %d x "
+               "%d rays per pixel on emitter edges (its time counted in temporal_ms)\n",
+               p->emission_samples, p->emission_samples);
+    } else {
+        printf("emission: kept out of the filters, resolved with %d x %d rays per pixel on "
+               "emitter edges (its time counted in temporal_ms)\n",
+               p->emission_samples, p->emission_samples);
+    }
+}
+
+/* Frame f's reference (and at frame 0 the depth limit's bias); *ref_mse gets the
+ * reference's own error. */
+static int frame_reference(rt_run *r, const tr_camera *cam, uint32_t f, double *ref_mse) {
+    const rt_opts *o = r->o;
+    tr_error err;
+    if (render_reference(&r->be, cam, &r->rcfg, o->ref_spp, &r->rfilm, r->half, r->ref, ref_mse,
+                         &err) != TR_OK) {
+        fprintf(stderr, "trac0r bench realtime: reference of frame %u: %s\n", f, err.msg);
+        return CLI_FAILURE;
+    }
+    if (f == 0 && o->bias_depth) {
+        /* The bias of the depth limit: frame 0's reference against one at bias_depth,
+         * with another seed so that the two references' noise is independent; the
+         * expected squared difference is the bias's plus both references' own. */
+        tr_render_config bcfg = r->rcfg;
+        bcfg.max_depth = (int)o->bias_depth;
+        bcfg.seed = r->rcfg.seed ^ 0x6269617364657074ULL;
+        double own = 0.0;
+        if (render_reference(&r->be, cam, &bcfg, o->ref_spp, &r->rfilm, r->half, r->bias_ref, &own,
+                             &err) != TR_OK) {
+            fprintf(stderr, "trac0r bench realtime: depth-%u reference of frame 0: %s\n",
+                    o->bias_depth, err.msg);
+            return CLI_FAILURE;
+        }
+        r->bias_mse = mse_of(r->ref, r->bias_ref, r->px) - *ref_mse - own;
+        r->bias_own = *ref_mse + own;
+    }
+    return CLI_OK;
+}
+
+/* The moving shape's pixels (on the host, where the id pass is) into mv_idx, with the
+ * references' own error over them into *own: the same for every method. */
+static size_t frame_shape(rt_run *r, double *own) {
+    const tr_gbuffer *g = tr_realtime_gbuffer(r->rt);
+    *own = 0.0;
+    if (!r->o->animate || !g) {
+        return 0;
+    }
+    const size_t px = r->px;
+    const size_t n = shape_pixels(g->prim, r->shape_lo, r->shape_hi, px, r->mv_idx);
+    gather(r->ref, r->mv_idx, n, r->gm + 3 * px);
+    gather(r->half, r->mv_idx, n, r->gm + 6 * px);
+    *own = n ? mse_of(r->gm + 6 * px, r->gm + 3 * px, n) : 0.0;
+    return n;
+}
+
+/* Method m's output of frame f against the reference: its row of measures. */
+static void measure(rt_run *r, int m, uint32_t f, const tr_realtime_result *res, double ref_mse,
+                    size_t n_mv, double own_mv) {
+    const size_t px = r->px;
+    const float *out = res->rgb;
+    rt_frame_stats *s = &r->st[(size_t)m * r->o->frames + f];
+    s->render_ms = res->render_ms;
+    s->temporal_ms = res->temporal_ms;
+    s->spatial_ms = res->spatial_ms;
+    const double mse = mse_of(out, r->ref, px) - ref_mse;
+    s->psnr = tr_psnr(mse > 1e-12 ? mse : 1e-12);
+    s->ssim = tr_ssim(out, r->ref, r->o->c.width, r->o->c.height);
+    float *pm = r->prev + (size_t)m * 3 * px;
+    s->flicker = f > 0 ? flicker(out, pm, r->ref, r->ref_prev, px) : 0.0;
+    /* With a moving shape and the frame's id pass on the host: the error over the moving
+     * primitives' pixels, the references' own error there taken out. */
+    s->moving_psnr = NAN;
+    if (n_mv > 0) {
+        gather(out, r->mv_idx, n_mv, r->gm);
+        const double mm = mse_of(r->gm, r->gm + 3 * px, n_mv) - own_mv;
+        s->moving_psnr = tr_psnr(mm > 1e-12 ? mm : 1e-12);
+    }
+    memcpy(pm, out, 3 * px * sizeof *out);
+}
+
+/* Frame f: the scene moved (--animate), its reference, the frame rendered once and
+ * handed to every method. */
+static int run_frame(rt_run *r, uint32_t f) {
+    const rt_opts *o = r->o;
+    tr_error err;
+    tr_camera cam;
+    if (path_camera(&r->cam0, r->diag, f, o->frames, o->cut, &cam, &err) != TR_OK) {
+        fprintf(stderr, "trac0r bench realtime: frame %u camera: %s\n", f, err.msg);
+        return CLI_FAILURE;
+    }
+    if (o->animate) {
+        /* Outside the timed render: the scene's update is not the reconstruction's. Its
+         * own frame count: 1 at the first frame it moves, 0 (no move) outside. */
+        const uint32_t af = f >= o->anim_from && f < o->anim_until ? f - o->anim_from + 1 : 0;
+        if (cli_animate(r->scene, af, &err) != TR_OK ||
+            tr_scene_update(r->scene, NULL, &err) != TR_OK) {
+            fprintf(stderr, "trac0r bench realtime: --animate: frame %u: %s\n", f, err.msg);
+            return CLI_FAILURE;
+        }
+        const int rc = cli_backend_upload(r->a, &r->be, r->scene);
+        if (rc != CLI_OK) {
+            return rc;
         }
     }
-    const double t_start = tr_time_now();
-    double resolve_sum_ms = 0.0; /* tr_resolve_emission over the frames */
-    uint64_t resolve_px = 0;
-    for (uint32_t f = 0; rc == CLI_OK && f < frames; ++f) {
-        tr_camera cam;
-        if (path_camera(&cam0, diag, f, frames, cut, &cam, &err) != TR_OK) {
-            fprintf(stderr, "trac0r bench realtime: frame %u camera: %s\n", f, err.msg);
-            rc = CLI_FAILURE;
+    double ref_mse = 0.0;
+    int rc = frame_reference(r, &cam, f, &ref_mse);
+    if (rc != CLI_OK) {
+        return rc;
+    }
+    /* The frame itself: samples numbered by frame, so that noise changes over time. */
+    tr_realtime_frame_desc fd = {0};
+    fd.camera = &cam;
+    if (tr_realtime_render(r->rt, &fd, &err) != TR_OK) {
+        fprintf(stderr, "trac0r bench realtime: frame %u: %s\n", f, err.msg);
+        return CLI_FAILURE;
+    }
+    size_t n_mv = 0;
+    double own_mv = 0.0;
+    int first = 1;
+    for (int m = 0; m < TR_RECON_COUNT; ++m) {
+        if (!o->on[m]) {
+            continue;
+        }
+        tr_realtime_result res;
+        if (tr_realtime_reconstruct(r->rt, m, &res, &err) != TR_OK) {
+            fprintf(stderr, "trac0r bench realtime: %s: %s\n", tr_recon_name(m), err.msg);
+            return CLI_FAILURE;
+        }
+        if (first) {
+            /* The emitters' edges were resolved once for every method. */
+            r->resolve_sum_ms += res.resolve_ms;
+            r->resolve_px += res.resolved;
+            n_mv = frame_shape(r, &own_mv);
+            first = 0;
+        }
+        measure(r, m, f, &res, ref_mse, n_mv, own_mv);
+    }
+    memcpy(r->ref_prev, r->ref, 3 * r->px * sizeof *r->ref);
+    return CLI_OK;
+}
+
+/* Method m's row of the table (with the frames to recover after a cut) and its CSV rows. */
+static void report_method(const rt_run *r, int m, FILE *csv) {
+    const rt_opts *o = r->o;
+    const uint32_t frames = o->frames, cut = o->cut;
+    const rt_frame_stats *st = r->st;
+    double sr = 0, stt = 0, ss = 0, sp = 0, sssim = 0, sfl = 0, pmin = INFINITY;
+    for (uint32_t f = 0; f < frames; ++f) {
+        const rt_frame_stats *s = &st[(size_t)m * frames + f];
+        fprintf(csv, "%s,%u,%.4f,%.4f,%.4f,%.4f,%.4f,%.5f,%.6f", tr_recon_name(m), f, s->render_ms,
+                s->temporal_ms, s->spatial_ms, s->render_ms + s->temporal_ms + s->spatial_ms,
+                s->psnr, s->ssim, s->flicker);
+        if (o->animate) { /* empty where the shape was not seen or not measured */
+            if (s->moving_psnr == s->moving_psnr) {
+                fprintf(csv, ",%.4f", s->moving_psnr);
+            } else {
+                fputc(',', csv);
+            }
+        }
+        fputc('\n', csv);
+        sr += s->render_ms;
+        stt += s->temporal_ms;
+        ss += s->spatial_ms;
+        sp += s->psnr;
+        sssim += s->ssim;
+        sfl += s->flicker;
+        pmin = fmin(pmin, s->psnr);
+    }
+    const double n = (double)frames, total = (sr + stt + ss) / n;
+    printf("%-11s %9.2f %11.2f %10.2f %9.2f %7.1f %9.2f %9.2f %7.4f %8.5f", tr_recon_name(m),
+           sr / n, stt / n, ss / n, total, 1000.0 / total, sp / n, pmin, sssim / n,
+           sfl / (n - 1.0));
+    if (!cut) {
+        printf("\n");
+        return;
+    }
+    /* Steady: the mean PSNR of the (up to) 8 frames before the cut; recovered at the
+     * first frame from the cut on within 0.5 dB of it. */
+    const uint32_t k0 = cut > 8 ? cut - 8 : 0;
+    double steady = 0.0;
+    for (uint32_t f = k0; f < cut; ++f) {
+        steady += st[(size_t)m * frames + f].psnr;
+    }
+    steady /= (double)(cut - k0);
+    int rec_frames = -1;
+    for (uint32_t f = cut; f < frames; ++f) {
+        if (st[(size_t)m * frames + f].psnr >= steady - 0.5) {
+            rec_frames = (int)(f - cut);
             break;
         }
-        int moved = 0;
-        if (animate) {
-            /* Outside the timed render: the scene's update is not the reconstruction's. */
-            /* Its own frame count: 1 at the first frame it moves, 0 (no move) outside. */
-            const uint32_t af = f >= anim_from && f < anim_until ? f - anim_from + 1 : 0;
-            if (cli_animate(scene, af, &err) != TR_OK ||
-                tr_scene_update(scene, NULL, &err) != TR_OK ||
-                tr_scene_take_motion(scene, motion, motion_n, &moved, &err) != TR_OK) {
-                fprintf(stderr, "trac0r bench realtime: --animate: frame %u: %s\n", f, err.msg);
-                rc = CLI_FAILURE;
-                break;
-            }
-            if ((rc = cli_backend_upload(&a, &be, scene)) != CLI_OK) {
-                break;
-            }
-        }
-        const tr_vec3 *fmotion = moved ? motion : NULL;
-        const uint32_t fmotion_n = moved ? motion_n : 0u;
-        double ref_mse = 0.0;
-        if (render_reference(&be, &cam, &rcfg, ref_spp, &rfilm, half, ref, &ref_mse, &err) !=
-            TR_OK) {
-            fprintf(stderr, "trac0r bench realtime: reference of frame %u: %s\n", f, err.msg);
-            rc = CLI_FAILURE;
-            break;
-        }
-        if (f == 0 && bias_depth) {
-            /* The bias of the depth limit: frame 0's reference against one at bias_depth,
-             * with another seed so that the two references' noise is independent; the
-             * expected squared difference is the bias's plus both references' own. */
-            tr_render_config bcfg = rcfg;
-            bcfg.max_depth = (int)bias_depth;
-            bcfg.seed = rcfg.seed ^ 0x6269617364657074ULL;
-            double own = 0.0;
-            if (render_reference(&be, &cam, &bcfg, ref_spp, &rfilm, half, bias_ref, &own, &err) !=
-                TR_OK) {
-                fprintf(stderr, "trac0r bench realtime: depth-%u reference of frame 0: %s\n",
-                        bias_depth, err.msg);
-                rc = CLI_FAILURE;
-                break;
-            }
-            bias_mse = mse_of(ref, bias_ref, px) - ref_mse - own;
-            bias_own = ref_mse + own;
-        }
-        /* The frame itself: samples numbered by frame, so that noise changes over time. */
-        double render_ms = 0.0;
-        if (render_into(&be, &cam, &cfg, f * spp, spp, host_recon ? &film : NULL, &render_ms,
-                        &err) != TR_OK ||
-            (host_recon && tr_gbuffer_from_film(&g, &film, &err) != TR_OK)) {
-            fprintf(stderr, "trac0r bench realtime: frame %u: %s\n", f, err.msg);
-            rc = CLI_FAILURE;
-            break;
-        }
-        /* The emitters' edges resolved over the pixels' area, once for every method. */
-        double resolve_ms = 0.0;
-        if (host_recon && g.has_emission) {
-            const double t0 = tr_time_now();
-            uint32_t resolved = 0;
-            if (tr_resolve_emission(scene, &cam, params.emission_samples, threads, &g, &resolved,
-                                    &err) != TR_OK) {
-                fprintf(stderr, "trac0r bench realtime: frame %u: %s\n", f, err.msg);
-                rc = CLI_FAILURE;
-                break;
-            }
-            resolve_ms = (tr_time_now() - t0) * 1e3;
-            resolve_sum_ms += resolve_ms;
-            resolve_px += resolved;
-        }
-        /* The moving shape's pixels (on the host, where the id pass is), with the
-         * references' own error over them: the same for every method. */
-        size_t n_mv = 0;
-        double own_mv = 0.0;
-        if (animate && host_recon) {
-            n_mv = shape_pixels(g.prim, shape_lo, shape_hi, px, mv_idx);
-            gather(ref, mv_idx, n_mv, gm + 3 * px);
-            gather(half, mv_idx, n_mv, gm + 6 * px);
-            own_mv = n_mv ? mse_of(gm + 6 * px, gm + 3 * px, n_mv) : 0.0;
-        }
-        for (int m = 0; m < nm; ++m) {
-            if (!on[m]) {
+    }
+    if (rec_frames >= 0) {
+        printf(" %7d\n", rec_frames);
+    } else {
+        printf(" %7s\n", "never");
+    }
+}
+
+/* The lines after the table: the emission's resolve, the moving shape, the depth bias. */
+static void report_extras(const rt_run *r) {
+    const rt_opts *o = r->o;
+    const uint32_t frames = o->frames;
+    if (r->resolve_px > 0 || (r->host && (r->frame_passes & TR_PASS_EMISSION))) {
+        printf("emission resolved: %.1f pixels and %.2f ms per frame (mean)\n",
+               (double)r->resolve_px / frames, r->resolve_sum_ms / frames);
+    }
+    if (o->animate && r->host) {
+        /* Ghosting of the moving shape: each method's PSNR over its pixels. */
+        printf("moving shape, PSNR over its pixels (mean over the frames it moved):");
+        for (int m = 0; m < TR_RECON_COUNT; ++m) {
+            if (!o->on[m]) {
                 continue;
             }
-            if ((rdev[m] ? tr_recon_device_frame(rdev[m], &cam, fmotion, fmotion_n, m, &params, out,
-                                                 &err)
-                         : tr_recon_frame_moving(&rec[m], &g, &cam, fmotion, fmotion_n, m, &params,
-                                                 threads, out, &err)) != TR_OK) {
-                fprintf(stderr, "trac0r bench realtime: %s: %s\n", tr_recon_name(m), err.msg);
-                rc = CLI_FAILURE;
-                break;
+            int n = 0;
+            const double mean = shape_psnr_mean(r->st, m, frames, o->anim_from, o->anim_until, &n);
+            if (n > 0) {
+                printf(" %s %.2f dB", tr_recon_name(m), mean);
+            } else {
+                printf(" %s -", tr_recon_name(m));
             }
-            rt_frame_stats *s = &st[(size_t)m * frames + f];
-            s->render_ms = render_ms;
-            s->temporal_ms = rec[m].ms_temporal + (m != TR_RECON_OFF ? resolve_ms : 0.0);
-            s->spatial_ms = rec[m].ms_spatial;
-            if (rdev[m]) {
-                tr_recon_device_times(rdev[m], &s->temporal_ms, &s->spatial_ms);
-            }
-            const double mse = mse_of(out, ref, px) - ref_mse;
-            s->psnr = tr_psnr(mse > 1e-12 ? mse : 1e-12);
-            s->ssim = tr_ssim(out, ref, c.width, c.height);
-            float *pm = prev + (size_t)m * 3 * px;
-            s->flicker = f > 0 ? flicker(out, pm, ref, ref_prev, px) : 0.0;
-            /* With a moving shape and the frame's id pass on the host: the error over the
-             * moving primitives' pixels, the references' own error there taken out. */
-            s->moving_psnr = NAN;
-            if (n_mv > 0) {
-                gather(out, mv_idx, n_mv, gm);
-                const double mm = mse_of(gm, gm + 3 * px, n_mv) - own_mv;
-                s->moving_psnr = tr_psnr(mm > 1e-12 ? mm : 1e-12);
-            }
-            memcpy(pm, out, 3 * px * sizeof *out);
         }
-        memcpy(ref_prev, ref, 3 * px * sizeof *ref);
-        fprintf(stderr, "\rbench realtime: frame %u/%u (reference %u spp)  %.1f s ", f + 1, frames,
-                ref_spp, tr_time_now() - t_start);
+        printf("\n");
+        if (o->anim_from >= 2 && o->anim_until < frames) {
+            print_shape_recovery(r->st, o->on, frames, o->anim_from, o->anim_until);
+        }
+    }
+    if (o->bias_depth) {
+        /* The depth limit's own error, which no reconstruction can take out: the frames'
+         * converged image against the deeper one. A bias below a tenth of the references'
+         * own MSE is not resolved by them: only a bound is printed. */
+        printf("bias of max depth %d against max depth %u (frame 0's references, %u spp "
+               "each): ",
+               r->depth, o->bias_depth, o->ref_spp);
+        if (r->bias_mse > 0.1 * r->bias_own) {
+            printf("PSNR %.2f dB (MSE %.3g; the references' own MSE %.3g taken out)\n",
+                   tr_psnr(r->bias_mse > 1e-12 ? r->bias_mse : 1e-12), r->bias_mse, r->bias_own);
+        } else {
+            printf("PSNR above %.2f dB (MSE %.3g, below a tenth of the references' own "
+                   "MSE %.3g: more --reference-spp resolve it)\n",
+                   tr_psnr(0.1 * r->bias_own > 1e-12 ? 0.1 * r->bias_own : 1e-12), r->bias_mse,
+                   r->bias_own);
+        }
+    }
+}
+
+/* The table, PREFIX.csv and PREFIX.png. */
+static int report(const rt_run *r) {
+    const rt_opts *o = r->o;
+    FILE *csv = fopen(o->csv_path, "w");
+    if (!csv) {
+        fprintf(stderr, "trac0r bench realtime: cannot write %s\n", o->csv_path);
+        return CLI_FAILURE;
+    }
+    fprintf(csv,
+            "method,frame,render_ms,temporal_ms,spatial_ms,total_ms,psnr_db,ssim,"
+            "flicker%s\n",
+            o->animate ? ",shape_psnr_db" : "");
+    printf("%-11s %9s %11s %10s %9s %7s %9s %9s %7s %8s", "method", "render_ms", "temporal_ms",
+           "spatial_ms", "total_ms", "fps", "psnr_mean", "psnr_min", "ssim", "flicker");
+    printf(o->cut ? " recover\n" : "\n");
+    for (int m = 0; m < TR_RECON_COUNT; ++m) {
+        if (o->on[m]) {
+            report_method(r, m, csv);
+        }
+    }
+    report_extras(r);
+    if (fclose(csv) != 0) {
+        fprintf(stderr, "trac0r bench realtime: cannot write %s\n", o->csv_path);
+        return CLI_FAILURE;
+    }
+    tr_error err;
+    const int plotted =
+        plot_realtime(r->st, o->on, o->frames, o->cut, o->c.scene, o->png_path, &err);
+    if (plotted < 0) {
+        fprintf(stderr, "trac0r bench realtime: %s\n", err.msg);
+    }
+    printf("wrote %s%s%s\n", o->csv_path, plotted > 0 ? " and " : " (gnuplot failed: no plot)",
+           plotted > 0 ? o->png_path : "");
+    return plotted < 0 ? CLI_FAILURE : CLI_OK;
+}
+
+static void free_run(rt_run *r) {
+    tr_realtime_destroy(r->rt); /* before the device */
+    if (r->be.dev) {
+        cli_backend_close(&r->be);
+    }
+    tr_film_free(&r->rfilm);
+    free(r->ref);
+    free(r->half);
+    free(r->ref_prev);
+    free(r->bias_ref);
+    free(r->prev);
+    free(r->st);
+    free(r->mv_idx);
+    free(r->gm);
+    tr_scene_destroy(r->scene);
+}
+
+/* Everything after the options: setup, the frames, the report. */
+static int run_bench(cli_args *a, rt_opts *o) {
+    rt_run r;
+    memset(&r, 0, sizeof r);
+    r.a = a;
+    r.o = o;
+    int rc = load_scene(&r, o);
+    if (rc != CLI_OK) {
+        free_run(&r);
+        return rc;
+    }
+    tr_error err;
+    if (!alloc_buffers(&r)) {
+        fprintf(stderr, "trac0r bench realtime: out of memory\n");
+        rc = CLI_FAILURE;
+    } else if (tr_film_init(&r.rfilm, o->c.width, o->c.height, &err) != TR_OK) {
+        fprintf(stderr, "trac0r bench realtime: %s\n", err.msg);
+        rc = CLI_FAILURE;
+    }
+    if (rc == CLI_OK) {
+        rc = open_loop(&r);
+    }
+    if (rc == CLI_OK) {
+        print_header(&r);
+    }
+    if (rc == CLI_OK && o->animate) {
+        rc = setup_shape(&r);
+    }
+    const double t_start = tr_time_now();
+    for (uint32_t f = 0; rc == CLI_OK && f < o->frames; ++f) {
+        rc = run_frame(&r, f);
+        if (rc == CLI_OK) {
+            fprintf(stderr, "\rbench realtime: frame %u/%u (reference %u spp)  %.1f s ", f + 1,
+                    o->frames, o->ref_spp, tr_time_now() - t_start);
+        }
     }
     fputc('\n', stderr);
     if (rc == CLI_OK) {
-        csv = fopen(csv_path, "w");
-        if (!csv) {
-            fprintf(stderr, "trac0r bench realtime: cannot write %s\n", csv_path);
-            rc = CLI_FAILURE;
-        }
+        rc = report(&r);
     }
-    if (rc == CLI_OK) {
-        fprintf(csv,
-                "method,frame,render_ms,temporal_ms,spatial_ms,total_ms,psnr_db,ssim,"
-                "flicker%s\n",
-                animate ? ",shape_psnr_db" : "");
-        printf("%-11s %9s %11s %10s %9s %7s %9s %9s %7s %8s", "method", "render_ms", "temporal_ms",
-               "spatial_ms", "total_ms", "fps", "psnr_mean", "psnr_min", "ssim", "flicker");
-        printf(cut ? " recover\n" : "\n");
-        for (int m = 0; m < nm; ++m) {
-            if (!on[m]) {
-                continue;
-            }
-            double sr = 0, stt = 0, ss = 0, sp = 0, sssim = 0, sfl = 0, pmin = INFINITY;
-            for (uint32_t f = 0; f < frames; ++f) {
-                const rt_frame_stats *s = &st[(size_t)m * frames + f];
-                fprintf(csv, "%s,%u,%.4f,%.4f,%.4f,%.4f,%.4f,%.5f,%.6f", tr_recon_name(m), f,
-                        s->render_ms, s->temporal_ms, s->spatial_ms,
-                        s->render_ms + s->temporal_ms + s->spatial_ms, s->psnr, s->ssim,
-                        s->flicker);
-                if (animate) { /* empty where the shape was not seen or not measured */
-                    if (s->moving_psnr == s->moving_psnr) {
-                        fprintf(csv, ",%.4f", s->moving_psnr);
-                    } else {
-                        fputc(',', csv);
-                    }
-                }
-                fputc('\n', csv);
-                sr += s->render_ms;
-                stt += s->temporal_ms;
-                ss += s->spatial_ms;
-                sp += s->psnr;
-                sssim += s->ssim;
-                sfl += s->flicker;
-                pmin = fmin(pmin, s->psnr);
-            }
-            const double n = (double)frames, total = (sr + stt + ss) / n;
-            printf("%-11s %9.2f %11.2f %10.2f %9.2f %7.1f %9.2f %9.2f %7.4f %8.5f",
-                   tr_recon_name(m), sr / n, stt / n, ss / n, total, 1000.0 / total, sp / n, pmin,
-                   sssim / n, sfl / (n - 1.0));
-            if (cut) {
-                /* Steady: the mean PSNR of the (up to) 8 frames before the cut; recovered at
-                 * the first frame from the cut on within 0.5 dB of it. */
-                const uint32_t k0 = cut > 8 ? cut - 8 : 0;
-                double steady = 0.0;
-                for (uint32_t f = k0; f < cut; ++f) {
-                    steady += st[(size_t)m * frames + f].psnr;
-                }
-                steady /= (double)(cut - k0);
-                int rec_frames = -1;
-                for (uint32_t f = cut; f < frames; ++f) {
-                    if (st[(size_t)m * frames + f].psnr >= steady - 0.5) {
-                        rec_frames = (int)(f - cut);
-                        break;
-                    }
-                }
-                if (rec_frames >= 0) {
-                    printf(" %7d\n", rec_frames);
-                } else {
-                    printf(" %7s\n", "never");
-                }
-            } else {
-                printf("\n");
-            }
-        }
-        if (resolve_px > 0 || (host_recon && (frame_passes & TR_PASS_EMISSION))) {
-            printf("emission resolved: %.1f pixels and %.2f ms per frame (mean)\n",
-                   (double)resolve_px / frames, resolve_sum_ms / frames);
-        }
-        if (animate && host_recon) {
-            /* Ghosting of the moving shape: each method's PSNR over its pixels. */
-            printf("moving shape, PSNR over its pixels (mean over the frames it moved):");
-            for (int m = 0; m < nm; ++m) {
-                if (!on[m] || rdev[m]) {
-                    continue;
-                }
-                int n = 0;
-                const double mean = shape_psnr_mean(st, m, frames, anim_from, anim_until, &n);
-                if (n > 0) {
-                    printf(" %s %.2f dB", tr_recon_name(m), mean);
-                } else {
-                    printf(" %s -", tr_recon_name(m));
-                }
-            }
-            printf("\n");
-            if (anim_from >= 2 && anim_until < frames) {
-                print_shape_recovery(st, on, rdev, frames, anim_from, anim_until);
-            }
-        }
-        if (bias_depth) {
-            /* The depth limit's own error, which no reconstruction can take out: the
-             * frames' converged image against the deeper one. A bias below a tenth of the
-             * references' own MSE is not resolved by them: only a bound is printed. */
-            printf("bias of max depth %d against max depth %u (frame 0's references, %u spp "
-                   "each): ",
-                   depth, bias_depth, ref_spp);
-            if (bias_mse > 0.1 * bias_own) {
-                printf("PSNR %.2f dB (MSE %.3g; the references' own MSE %.3g taken out)\n",
-                       tr_psnr(bias_mse > 1e-12 ? bias_mse : 1e-12), bias_mse, bias_own);
-            } else {
-                printf("PSNR above %.2f dB (MSE %.3g, below a tenth of the references' own "
-                       "MSE %.3g: more --reference-spp resolve it)\n",
-                       tr_psnr(0.1 * bias_own > 1e-12 ? 0.1 * bias_own : 1e-12), bias_mse,
-                       bias_own);
-            }
-        }
-        if (fclose(csv) != 0) {
-            fprintf(stderr, "trac0r bench realtime: cannot write %s\n", csv_path);
-            rc = CLI_FAILURE;
-        } else {
-            const int plotted = plot_realtime(st, on, frames, cut, c.scene, png_path, &err);
-            if (plotted < 0) {
-                fprintf(stderr, "trac0r bench realtime: %s\n", err.msg);
-                rc = CLI_FAILURE;
-            }
-            printf("wrote %s%s%s\n", csv_path, plotted > 0 ? " and " : " (gnuplot failed: no plot)",
-                   plotted > 0 ? png_path : "");
-        }
-    }
-    for (int m = 0; m < nm; ++m) {
-        tr_recon_device_close(rdev[m]);
-    }
-    if (be.dev) {
-        cli_backend_close(&be);
-    }
-    for (int m = 0; m < nm; ++m) {
-        tr_recon_free(&rec[m]);
-    }
-    tr_gbuffer_free(&g);
-    tr_film_free(&film);
-    tr_film_free(&rfilm);
-    free(ref);
-    free(half);
-    free(ref_prev);
-    free(out);
-    free(bias_ref);
-    free(prev);
-    free(st);
-    free(motion);
-    free(mv_idx);
-    free(gm);
-    tr_scene_destroy(scene);
+    free_run(&r);
     return rc;
+}
+
+int bench_realtime(int argc, char **argv) {
+    cli_args a = {.cmd = "bench realtime", .argc = argc, .argv = argv, .i = 0};
+    rt_opts o;
+    memset(&o, 0, sizeof o);
+    cli_common_default(&o.c);
+    o.c.width = 320;
+    o.c.height = 240;
+    o.frames = 32;
+    o.spp = 1;
+    o.ref_spp = 256;
+    for (int m = 0; m < TR_RECON_COUNT; ++m) {
+        o.on[m] = 1;
+    }
+    o.params = tr_recon_params_default();
+    o.ref_sampler = -1;
+    o.anim_from = 1;
+    snprintf(o.csv_path, sizeof o.csv_path, "realtime.csv");
+    snprintf(o.png_path, sizeof o.png_path, "realtime.png");
+    int done = 0;
+    const int rc = parse_options(&a, &o, &done);
+    if (rc != CLI_OK || done) {
+        return rc;
+    }
+    return run_bench(&a, &o);
 }

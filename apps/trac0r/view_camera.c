@@ -1,4 +1,4 @@
-/* view_camera.c - the viewer's free-flying camera and its frame budget. */
+/* view_camera.c - the viewer's free-flying camera. */
 #include "view_camera.h"
 
 #include <math.h>
@@ -71,25 +71,4 @@ int view_camera_json(const fly_camera *f, char *buf, size_t n) {
                     (double)f->dir.y, (double)f->dir.z, (double)f->up.x, (double)f->up.y,
                     (double)f->up.z, (double)f->vfov, (double)f->near_dist, (double)f->far_dist,
                     f->mirrored ? "right" : "left");
-}
-
-void view_budget_adapt(double frame_ms, double budget_ms, float *scale, uint32_t *spp) {
-    if (!(budget_ms > 0.0) || !(frame_ms >= 0.0)) {
-        return;
-    }
-    const double ratio = frame_ms / budget_ms;
-    if (ratio > 1.0 && *spp > 1) {
-        *spp /= 2;
-        return;
-    }
-    /* A dead band around 80 % of the budget: no hunting between two sizes. */
-    if (ratio > 0.9 || ratio < 0.6) {
-        const double target = ratio / 0.8;
-        double s = (double)*scale * pow(target > 1e-6 ? target : 1e-6, 0.25);
-        s = s < 1.0 ? 1.0 : s > 16.0 ? 16.0 : s;
-        *scale = (float)s;
-    }
-    if (*scale <= 1.0f && ratio < 0.4 && *spp < 16) {
-        *spp *= 2;
-    }
 }

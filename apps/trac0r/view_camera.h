@@ -1,4 +1,4 @@
-/* view_camera.h - the viewer's free-flying camera and its frame budget: pure functions,
+/* view_camera.h - the viewer's free-flying camera: pure functions,
  * no SDL, unit-tested in tests/test_view_camera.c. */
 #ifndef TRAC0R_VIEW_CAMERA_H
 #define TRAC0R_VIEW_CAMERA_H
@@ -35,14 +35,5 @@ float view_default_speed(const tr_aabb *b);
 /* Writes f as the "camera" object of a scene file (position, direction, up, fov, near,
  * far, handedness) into buf; returns what snprintf returns. */
 int view_camera_json(const fly_camera *f, char *buf, size_t n);
-
-/* The frame budget while moving: after a frame that took frame_ms of budget_ms at the
- * resolution divisor *scale (1: full resolution, up to 16) with *spp samples per pixel,
- * the divisor and samples for the next one. Over budget, samples are dropped first,
- * then the divisor grows; under budget the divisor shrinks to 1, and only at full
- * resolution do samples grow (up to 16). Steps are damped (a quarter power of the
- * time ratio, the divisor's square being the pixel count) so one slow frame does not
- * make the picture jump. */
-void view_budget_adapt(double frame_ms, double budget_ms, float *scale, uint32_t *spp);
 
 #endif

@@ -14,9 +14,11 @@
  * the frame budget, and with more than one sample per pixel when even full resolution
  * leaves time over; at rest the film accumulates at full resolution as before.
  *
- * On an OpenCL device the thread owns the context too: each frame accumulates into the
- * device's film and is read back into `film` for display; a device frame cannot be
- * cancelled, so a view change waits for it and then discards it. */
+ * The frames themselves come from the library's real-time loop (tr_realtime, realtime.h):
+ * it picks the resolution, samples and reconstruction on whatever device renders; this
+ * thread decides which frames may be cancelled, tonemaps and publishes them. A device
+ * that finishes its frames (OpenCL) cannot cancel one, so a view change waits for it and
+ * then discards it. */
 #ifndef TRAC0R_VIEW_RENDER_H
 #define TRAC0R_VIEW_RENDER_H
 
@@ -26,6 +28,7 @@
 
 #include "trac0r/device.h"
 #include "trac0r/post.h"
+#include "trac0r/realtime.h"
 #include "trac0r/trac0r.h"
 
 typedef struct view_renderer {
@@ -75,23 +78,12 @@ typedef struct view_renderer {
     char shot_msg[4700];
 
     /* Private to the thread. */
-    tr_film film;
-    int film_stale; /* the device's film was not read into film (reconstructed there) */
-    uint32_t *back;
-    atomic_int refining;    /* the frame in flight refines a view on screen: cancellable */
-    float motion_scale;     /* the resolution divisor the budget asks for while moving */
-    uint32_t motion_spp;    /* samples per frame while moving */
-    uint32_t motion_frame;  /* counts moving frames: their sample numbers, so noise changes */
-    int motion_roulette;    /* pt's roulette start while moving or animated (the config's if
-                               it names one, else TR_ROULETTE_START_REALTIME) */
-    int motion_sampler;     /* pt's sampler while moving or animated (TR_SAMPLER_*) */
-    tr_recon_params params; /* the reconstruction's settings */
-    tr_gbuffer gb;          /* the film's means and passes, for the reconstruction */
-    tr_recon rec;           /* the reconstruction's history */
-    tr_recon_device *rdev;  /* on an OpenCL device: the reconstruction there instead */
-    tr_vec3 *motion;        /* --animate: each primitive's motion since the last frame */
-    uint32_t motion_ids;    /* its entries (triangles + 1) */
-    tr_film disp;           /* the reconstructed frame as a film of one sample per pixel */
+    tr_realtime *rt;      /* the frame loop: sampling, reconstruction, budget (realtime.h) */
+    const tr_film *shown; /* the last frame shown (tr_realtime's, valid until its next frame) */
+    uint32_t *back;       /* the next frame's pixels */
+    size_t back_px;       /* back's capacity in pixels */
+    size_t pixels_px;     /* ... and pixels' */
+    atomic_int refining;  /* the frame in flight refines a view on screen: cancellable */
 } view_renderer;
 
 /* Starts the thread rendering `cam` (whose size sets the film's) with cfg's settings, on

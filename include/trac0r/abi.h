@@ -17,6 +17,7 @@
 #include "trac0r/error.h"
 #include "trac0r/film.h"
 #include "trac0r/image.h"
+#include "trac0r/realtime.h"
 #include "trac0r/scene.h"
 #include "trac0r/scene_file.h"
 #include "trac0r/types.h"
@@ -36,7 +37,10 @@
     X(ACCEL_INFO, tr_accel_info)                                                                   \
     X(SCENE_FILE_OPTIONS, tr_scene_file_options)                                                   \
     X(SCENE_FILE, tr_scene_file)                                                                   \
-    X(MESH_IMPORT_STATS, tr_mesh_import_stats)
+    X(MESH_IMPORT_STATS, tr_mesh_import_stats)                                                     \
+    X(REALTIME_DESC, tr_realtime_desc)                                                             \
+    X(REALTIME_FRAME_DESC, tr_realtime_frame_desc)                                                 \
+    X(REALTIME_RESULT, tr_realtime_result)
 
 #define TR_ABI_ENUM_ENTRY(name, type) TR_ABI_##name,
 typedef enum tr_abi_type { TR_ABI_TYPES(TR_ABI_ENUM_ENTRY) TR_ABI_TYPE_COUNT } tr_abi_type;

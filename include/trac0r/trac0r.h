@@ -55,6 +55,7 @@
 #include "trac0r/image.h"
 #include "trac0r/outfile.h"
 #include "trac0r/post.h"
+#include "trac0r/realtime.h"
 #include "trac0r/recon_device.h"
 #include "trac0r/registry.h"
 #include "trac0r/render.h"

@@ -1,0 +1,520 @@
+/* realtime.c - the real-time frame loop (realtime.h): sampling, reconstruction and the
+ * frame budget, each stage its own function below. */
+#include "trac0r/realtime.h"
+#include "trac0r/recon_device.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* One reconstruction method's history: on the host (rec) or on the device (rdev). */
+typedef struct rt_history {
+    tr_recon rec;
+    tr_recon_device *rdev;
+    uint32_t width, height; /* the size it was made for (0: not made) */
+    int used;               /* rec or rdev holds a history */
+    uint64_t frame;         /* the rendered frame it last took */
+} rt_history;
+
+struct tr_realtime {
+    tr_device *dev;
+    tr_scene *scene;
+    tr_render_config cfg;
+    tr_recon_params params;
+    int rt_sampler;  /* TR_SAMPLER_* of real-time frames */
+    int rt_roulette; /* their roulette start */
+    uint32_t spp;
+    int accumulate, animated, keep_passes;
+    int on_device; /* the reconstruction runs where the film lies (an OpenCL device) */
+
+    /* Sampling. */
+    tr_film film;       /* the film of samples, on the host */
+    int film_stale;     /* the device's film was not read into film */
+    int have_view;      /* film holds a view that later frames may add to */
+    tr_camera view_cam; /* the view asked for (full resolution) */
+    tr_camera rcam;     /* the camera the film is rendered with (reduced while moving) */
+    int view_stride, view_moving, view_method;
+    uint32_t acc_spp;       /* samples per pixel in the film */
+    uint32_t frame_spp;     /* ... of which the last frame traced */
+    uint32_t calls;         /* tr_realtime_render calls: real-time frames' numbers */
+    uint32_t moving_frames; /* moving frames: their sample numbers */
+    uint64_t rendered;      /* frames rendered to the end */
+    double render_ms;
+    float budget_scale;  /* the resolution divisor the budget asks for while moving */
+    uint32_t budget_spp; /* samples per moving frame under a budget */
+    tr_vec3 *motion;     /* animated: each primitive's motion since the last frame */
+    uint32_t motion_ids; /* its entries (triangles + 1) */
+    int moved;           /* motion holds some this frame */
+
+    /* Reconstruction. */
+    tr_gbuffer gb;     /* the frame's means and passes on the host */
+    int gb_frame_set;  /* gb holds the last rendered frame (emission resolved) */
+    double resolve_ms; /* the frame's emission resolve */
+    uint32_t resolved;
+    rt_history hist[TR_RECON_COUNT];
+    tr_film disp; /* the reconstruction as a film of one sample per pixel */
+};
+
+static int same_camera(const tr_camera *a, const tr_camera *b) {
+    /* Bitwise on purpose: any change of any bit is a new view (tr_camera has no padding:
+     * 23 four-byte members). */
+    return memcmp(a, b, sizeof *a) == 0; /* NOLINT(bugprone-suspicious-memory-comparison) */
+}
+
+void tr_realtime_budget_adapt(double frame_ms, double budget_ms, float *scale, uint32_t *spp) {
+    if (!(budget_ms > 0.0) || !(frame_ms >= 0.0)) {
+        return;
+    }
+    const double ratio = frame_ms / budget_ms;
+    if (ratio > 1.0 && *spp > 1) {
+        *spp /= 2;
+        return;
+    }
+    /* A dead band around 80 % of the budget: no hunting between two sizes. */
+    if (ratio > 0.9 || ratio < 0.6) {
+        const double target = ratio / 0.8;
+        double s = (double)*scale * pow(target > 1e-6 ? target : 1e-6, 0.25);
+        s = s < 1.0 ? 1.0 : s > TR_REALTIME_MAX_SCALE ? TR_REALTIME_MAX_SCALE : s;
+        *scale = (float)s;
+    }
+    if (*scale <= 1.0f && ratio < 0.4 && *spp < TR_REALTIME_MAX_SPP) {
+        *spp *= 2;
+    }
+}
+
+float tr_realtime_level(float scale) {
+    static const float levels[] = {1.0f, 1.25f, 1.5f, 2.0f,  2.5f,  3.0f, 4.0f,
+                                   5.0f, 6.0f,  8.0f, 10.0f, 12.0f, 16.0f};
+    for (size_t k = 0; k < sizeof levels / sizeof levels[0]; ++k) {
+        if (levels[k] >= 0.95f * scale) {
+            return levels[k];
+        }
+    }
+    return TR_REALTIME_MAX_SCALE;
+}
+
+tr_realtime *tr_realtime_create(tr_device *dev, tr_scene *scene, const tr_realtime_desc *desc,
+                                tr_error *err) {
+    if (!dev || !scene) {
+        tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "tr_realtime_create: %s is NULL",
+                     dev ? "the scene" : "the device");
+        return NULL;
+    }
+    const tr_realtime_desc zero = {0};
+    const tr_realtime_desc *d = desc ? desc : &zero;
+    const tr_render_config cfg = d->config ? *d->config : tr_render_config_default();
+    if (tr_render_config_check(&cfg, err) != TR_OK) {
+        return NULL;
+    }
+    if (d->sampler < 0 || d->sampler > TR_REALTIME_SAMPLER(TR_SAMPLER_ZSOBOL)) {
+        tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "tr_realtime_desc.sampler: unknown %d",
+                     d->sampler);
+        return NULL;
+    }
+    if (d->spp > TR_REALTIME_MAX_SPP * 64u) {
+        tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                     "tr_realtime_desc.spp: expected at most %u, got %u", TR_REALTIME_MAX_SPP * 64u,
+                     d->spp);
+        return NULL;
+    }
+    tr_realtime *rt = calloc(1, sizeof *rt);
+    if (!rt) {
+        tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory for tr_realtime");
+        return NULL;
+    }
+    rt->dev = dev;
+    rt->scene = scene;
+    rt->cfg = cfg;
+    rt->cfg.passes = 0;
+    rt->cfg.cancel = NULL;
+    rt->cfg.cancel_user = NULL;
+    rt->params = d->recon ? *d->recon : tr_recon_params_default();
+    rt->rt_sampler = d->sampler ? d->sampler - 1 : TR_SAMPLER_REALTIME;
+    rt->rt_roulette = cfg.roulette_start ? cfg.roulette_start : TR_ROULETTE_START_REALTIME;
+    rt->spp = d->spp ? d->spp : 1u;
+    rt->accumulate = d->accumulate != 0;
+    rt->animated = d->animated != 0;
+    rt->keep_passes = d->keep_passes != 0;
+    /* On an OpenCL device the reconstruction runs where the film lies (recon_device.h). */
+    rt->on_device = strcmp(tr_device_kind(dev), "opencl") == 0;
+    rt->budget_scale = 1.0f;
+    rt->budget_spp = 1;
+    return rt;
+}
+
+static void free_history(rt_history *h) {
+    tr_recon_free(&h->rec);
+    tr_recon_device_close(h->rdev);
+    memset(h, 0, sizeof *h);
+}
+
+void tr_realtime_destroy(tr_realtime *rt) {
+    if (!rt) {
+        return;
+    }
+    for (int m = 0; m < TR_RECON_COUNT; ++m) {
+        free_history(&rt->hist[m]);
+    }
+    tr_film_free(&rt->film);
+    tr_film_free(&rt->disp);
+    tr_gbuffer_free(&rt->gb);
+    free(rt->motion);
+    free(rt);
+}
+
+int tr_realtime_on_device(const tr_realtime *rt) {
+    return rt ? rt->on_device : 0;
+}
+
+uint32_t tr_realtime_passes(const tr_realtime *rt, int method) {
+    if (!rt || (method == TR_RECON_OFF && !rt->keep_passes)) {
+        return 0u;
+    }
+    /* The direct pass where SVGF filters direct and indirect light apart (not bdpt). */
+    const uint32_t direct =
+        rt->params.svgf_split && !tr_integrator_is_bidirectional(rt->cfg.integrator)
+            ? TR_PASS_DIRECT
+            : 0u;
+    /* The emission pass where the reconstruction resolves emitters' edges (pt only: the
+     * resolved edge follows pt's first segment). */
+    const uint32_t emission =
+        rt->params.emission_samples > 0 && rt->cfg.integrator == TR_INTEGRATOR_PT ? TR_PASS_EMISSION
+                                                                                  : 0u;
+    return TR_PASS_ALL | direct | emission;
+}
+
+/* ---- Sampling -------------------------------------------------------------------- */
+
+static int check_frame_desc(const tr_realtime *rt, const tr_realtime_frame_desc *fd,
+                            tr_error *err) {
+    if (!rt || !fd || !fd->camera) {
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "tr_realtime: %s is NULL",
+                            !rt   ? "the instance"
+                            : !fd ? "the frame desc"
+                                  : "the camera");
+    }
+    if (!tr_recon_name(fd->method)) {
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "tr_realtime: unknown method %d",
+                            fd->method);
+    }
+    if (fd->camera->screen_width == 0 || fd->camera->screen_height == 0) {
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "tr_realtime: the camera is empty");
+    }
+    return TR_OK;
+}
+
+/* Whether the frame fd asks for adds to the film's view instead of starting a new one. */
+static int continues_view(const tr_realtime *rt, const tr_realtime_frame_desc *fd, int stride) {
+    return rt->accumulate && !rt->animated && rt->have_view && !fd->restart &&
+           same_camera(&rt->view_cam, fd->camera) && rt->view_stride == stride &&
+           rt->view_moving == (fd->moving != 0) && rt->view_method == fd->method;
+}
+
+/* A new view: the film sized to the camera (reduced to a resolution level while moving
+ * under a budget) with the method's passes, cleared here and on the device. */
+static int start_view(tr_realtime *rt, const tr_realtime_frame_desc *fd, int stride,
+                      tr_error *err) {
+    rt->have_view = 0;
+    rt->view_cam = *fd->camera;
+    rt->rcam = *fd->camera;
+    rt->view_stride = stride;
+    rt->view_moving = fd->moving != 0;
+    rt->view_method = fd->method;
+    if (rt->view_moving && rt->budget_scale > 1.0f) {
+        const float s = tr_realtime_level(rt->budget_scale);
+        const uint32_t w = (uint32_t)((float)fd->camera->screen_width / s + 0.5f);
+        const uint32_t h = (uint32_t)((float)fd->camera->screen_height / s + 0.5f);
+        /* Cannot fail: the size only shrinks, and stays at least 1x1. */
+        (void)tr_camera_resize(&rt->rcam, w ? w : 1, h ? h : 1, err);
+    }
+    const uint32_t w = rt->rcam.screen_width, h = rt->rcam.screen_height;
+    const uint32_t passes = tr_realtime_passes(rt, fd->method);
+    if (rt->film.sum && rt->film.width == w && rt->film.height == h && rt->film.passes == passes) {
+        tr_film_clear(&rt->film);
+    } else {
+        tr_film_free(&rt->film);
+        if (tr_film_init_passes(&rt->film, w, h, passes, err) != TR_OK) {
+            return TR_ERR;
+        }
+    }
+    if (tr_device_clear(rt->dev, err) != TR_OK) {
+        return TR_ERR;
+    }
+    rt->acc_spp = 0;
+    rt->film_stale = 0;
+    rt->have_view = 1;
+    return TR_OK;
+}
+
+/* The first sample number of a frame of n samples per pixel: at rest the film's next
+ * ones, as `trac0r render` numbers them; a real-time frame's by its frame number, so that
+ * the noise changes from frame to frame. */
+static uint32_t first_sample(tr_realtime *rt, uint32_t n) {
+    if (!rt->accumulate) {
+        return (rt->calls - 1u) * n;
+    }
+    if (rt->animated) {
+        return rt->calls;
+    }
+    if (rt->view_moving) {
+        return (rt->moving_frames++ & 0xffffu) * (uint32_t)TR_REALTIME_MAX_SPP + rt->acc_spp;
+    }
+    return rt->acc_spp;
+}
+
+/* Animated: how far each primitive moved since the last frame (tr_scene_take_motion),
+ * for the reconstruction. Without memory the motion is dropped: the history of moving
+ * shapes is then rejected, as for a static scene. */
+static void take_motion(tr_realtime *rt) {
+    rt->moved = 0;
+    if (!rt->animated) {
+        return;
+    }
+    const uint32_t n = tr_scene_triangle_count(rt->scene) + 1;
+    if (rt->motion_ids != n) {
+        free(rt->motion);
+        rt->motion = calloc(n, sizeof *rt->motion);
+        rt->motion_ids = rt->motion ? n : 0;
+    }
+    int moved = 0;
+    tr_error err;
+    if (rt->motion && tr_scene_take_motion(rt->scene, rt->motion, n, &moved, &err) == TR_OK) {
+        rt->moved = moved;
+    }
+}
+
+int tr_realtime_render(tr_realtime *rt, const tr_realtime_frame_desc *fd, tr_error *err) {
+    if (check_frame_desc(rt, fd, err) != TR_OK) {
+        return TR_ERR;
+    }
+    rt->calls += 1;
+    rt->gb_frame_set = 0;
+    const int stride = fd->stride ? fd->stride : rt->cfg.stride;
+    if (!continues_view(rt, fd, stride) && start_view(rt, fd, stride, err) != TR_OK) {
+        return TR_ERR;
+    }
+    tr_render_config cfg = rt->cfg;
+    cfg.stride = stride;
+    cfg.passes = rt->film.passes;
+    cfg.cancel = fd->cancel;
+    cfg.cancel_user = fd->cancel_user;
+    /* A real-time frame is reconstructed from few samples: pt's roulette starts early
+     * there, which adds noise the filter hides and saves a fifth of the frame, and its
+     * numbers are independent, which the reconstruction cannot tell from Sobol points and
+     * cost less (docs/realtime.md). At rest the film converges with the config's, so that
+     * it equals `trac0r render`. */
+    if (rt->view_moving || rt->animated || !rt->accumulate) {
+        cfg.roulette_start = rt->rt_roulette;
+        cfg.sampler = rt->rt_sampler;
+    }
+    const uint32_t n = rt->view_moving && fd->budget_ms > 0.0 ? rt->budget_spp : rt->spp;
+    const uint32_t sample = first_sample(rt, n);
+    const double t0 = tr_time_now();
+    if (tr_device_render(rt->dev, &rt->rcam, &cfg, sample, n, NULL, NULL, err) != TR_OK) {
+        rt->have_view = 0; /* the film may hold part of a sample: start over */
+        return TR_ERR;
+    }
+    if (fd->cancel && fd->cancel(fd->cancel_user)) {
+        rt->have_view = 0;
+        return tr_error_set(err, TR_STATUS_CANCELLED, "frame cancelled");
+    }
+    /* Reconstructed on an OpenCL device, the film stays there: at 1920x1080 reading it
+     * with its passes took 10-12 ms a frame on an H100 (docs/gpu.md). */
+    rt->film_stale = 1;
+    if (!rt->on_device) {
+        if (tr_device_read_film(rt->dev, &rt->film, err) != TR_OK) {
+            rt->have_view = 0;
+            return TR_ERR;
+        }
+        rt->film_stale = 0;
+    }
+    rt->render_ms = (tr_time_now() - t0) * 1e3;
+    rt->acc_spp += n;
+    rt->frame_spp = n;
+    rt->rendered += 1;
+    take_motion(rt);
+    return TR_OK;
+}
+
+int tr_realtime_film(tr_realtime *rt, const tr_film **film, tr_error *err) {
+    if (!rt || !film) {
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "tr_realtime_film: NULL argument");
+    }
+    if (!rt->have_view || rt->acc_spp == 0) {
+        return tr_error_set(err, TR_STATUS_INVALID_OPERATION, "tr_realtime: no frame rendered");
+    }
+    if (rt->film_stale) {
+        if (tr_device_read_film(rt->dev, &rt->film, err) != TR_OK) {
+            return TR_ERR;
+        }
+        rt->film_stale = 0;
+    }
+    *film = &rt->film;
+    return TR_OK;
+}
+
+/* ---- Reconstruction ---------------------------------------------------------------- */
+
+/* The display film sized to the frame (one sample per pixel). */
+static int size_disp(tr_realtime *rt, uint32_t w, uint32_t h, tr_error *err) {
+    if (rt->disp.sum && rt->disp.width == w && rt->disp.height == h) {
+        return TR_OK;
+    }
+    tr_film_free(&rt->disp);
+    if (tr_film_init(&rt->disp, w, h, err) != TR_OK) {
+        return TR_ERR;
+    }
+    for (size_t i = 0; i < (size_t)w * h; ++i) {
+        rt->disp.count[i] = 1;
+    }
+    return TR_OK;
+}
+
+/* Method m's history for this frame: (re)made for a new size, forgotten when the method
+ * skipped a frame (its reprojection and motion are from one frame to the next). */
+static int prepare_history(tr_realtime *rt, int m, uint32_t w, uint32_t h, tr_error *err) {
+    rt_history *hist = &rt->hist[m];
+    if (hist->width != w || hist->height != h) {
+        free_history(hist);
+        if (rt->on_device) {
+            if (!(hist->rdev = tr_recon_device_open(rt->dev, w, h, err))) {
+                return TR_ERR;
+            }
+        } else if (tr_recon_init(&hist->rec, w, h, err) != TR_OK) {
+            return TR_ERR;
+        }
+        hist->width = w;
+        hist->height = h;
+    } else if (hist->used && hist->frame + 1 != rt->rendered) {
+        if (rt->on_device) {
+            tr_recon_device_reset(hist->rdev);
+        } else {
+            tr_recon_reset(&hist->rec);
+        }
+    }
+    hist->used = 1;
+    hist->frame = rt->rendered;
+    return TR_OK;
+}
+
+/* The frame's means and passes on the host, its emitters' edges resolved over the pixels'
+ * area (post.h): once per frame, whatever methods follow. */
+static int host_frame(tr_realtime *rt, tr_error *err) {
+    if (rt->gb_frame_set) {
+        return TR_OK;
+    }
+    const uint32_t w = rt->film.width, h = rt->film.height;
+    if (rt->gb.width != w || rt->gb.height != h || !rt->gb.color) {
+        tr_gbuffer_free(&rt->gb);
+        if (tr_gbuffer_init(&rt->gb, w, h, err) != TR_OK) {
+            return TR_ERR;
+        }
+    }
+    if (tr_gbuffer_from_film(&rt->gb, &rt->film, err) != TR_OK) {
+        return TR_ERR;
+    }
+    rt->resolve_ms = 0.0;
+    rt->resolved = 0;
+    if (rt->gb.has_emission) {
+        const double t0 = tr_time_now();
+        if (tr_resolve_emission(rt->scene, &rt->rcam, rt->params.emission_samples, rt->cfg.threads,
+                                &rt->gb, &rt->resolved, err) != TR_OK) {
+            return TR_ERR;
+        }
+        rt->resolve_ms = (tr_time_now() - t0) * 1e3;
+    }
+    rt->gb_frame_set = 1;
+    return TR_OK;
+}
+
+static void fill_result(const tr_realtime *rt, const tr_film *film, const float *rgb, int method,
+                        tr_realtime_result *out) {
+    memset(out, 0, sizeof *out);
+    out->film = film;
+    out->rgb = rgb;
+    out->width = film->width;
+    out->height = film->height;
+    out->scale = (float)rt->view_cam.screen_width / (float)rt->rcam.screen_width;
+    out->spp = rt->acc_spp;
+    out->frame_spp = rt->frame_spp;
+    out->method = method;
+    out->render_ms = rt->render_ms;
+}
+
+int tr_realtime_reconstruct(tr_realtime *rt, int method, tr_realtime_result *out, tr_error *err) {
+    if (!rt || !out) {
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "tr_realtime_reconstruct: NULL argument");
+    }
+    if (!tr_recon_name(method)) {
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "tr_realtime: unknown method %d",
+                            method);
+    }
+    if (!rt->have_view || rt->acc_spp == 0) {
+        return tr_error_set(err, TR_STATUS_INVALID_OPERATION, "tr_realtime: no frame rendered");
+    }
+    const uint32_t w = rt->rcam.screen_width, h = rt->rcam.screen_height;
+    if (size_disp(rt, w, h, err) != TR_OK || prepare_history(rt, method, w, h, err) != TR_OK) {
+        return TR_ERR;
+    }
+    rt_history *hist = &rt->hist[method];
+    const tr_vec3 *motion = rt->moved ? rt->motion : NULL;
+    const uint32_t ids = rt->moved ? rt->motion_ids : 0u;
+    double temporal = 0.0, spatial = 0.0;
+    if (rt->on_device) {
+        if (tr_recon_device_frame(hist->rdev, &rt->rcam, motion, ids, method, &rt->params,
+                                  rt->disp.sum, err) != TR_OK) {
+            return TR_ERR;
+        }
+        tr_recon_device_times(hist->rdev, &temporal, &spatial);
+    } else {
+        if (host_frame(rt, err) != TR_OK ||
+            tr_recon_frame_moving(&hist->rec, &rt->gb, &rt->rcam, motion, ids, method, &rt->params,
+                                  rt->cfg.threads, rt->disp.sum, err) != TR_OK) {
+            return TR_ERR;
+        }
+        /* The resolve counts as part of the temporal stage; "off" does not use it. */
+        temporal = hist->rec.ms_temporal + (method != TR_RECON_OFF ? rt->resolve_ms : 0.0);
+        spatial = hist->rec.ms_spatial;
+    }
+    fill_result(rt, &rt->disp, rt->disp.sum, method, out);
+    out->temporal_ms = temporal;
+    out->spatial_ms = spatial;
+    out->resolve_ms = rt->on_device ? 0.0 : rt->resolve_ms;
+    out->resolved = rt->on_device ? 0u : rt->resolved;
+    return TR_OK;
+}
+
+const tr_gbuffer *tr_realtime_gbuffer(const tr_realtime *rt) {
+    return rt && !rt->on_device && rt->gb_frame_set ? &rt->gb : NULL;
+}
+
+/* ---- The frame --------------------------------------------------------------------- */
+
+int tr_realtime_frame(tr_realtime *rt, const tr_realtime_frame_desc *fd, tr_realtime_result *out,
+                      tr_error *err) {
+    if (!out) {
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "tr_realtime_frame: NULL result");
+    }
+    if (tr_realtime_render(rt, fd, err) != TR_OK) {
+        return TR_ERR;
+    }
+    const double t0 = tr_time_now();
+    if (fd->method != TR_RECON_OFF) {
+        if (tr_realtime_reconstruct(rt, fd->method, out, err) != TR_OK) {
+            return TR_ERR;
+        }
+    } else {
+        const tr_film *film = NULL;
+        if (tr_realtime_film(rt, &film, err) != TR_OK) {
+            return TR_ERR;
+        }
+        fill_result(rt, film, NULL, TR_RECON_OFF, out);
+    }
+    /* The budget: the next moving frame's divisor and samples from this one's time. */
+    if (rt->view_moving) {
+        const double ms = rt->render_ms + (tr_time_now() - t0) * 1e3 + fd->extra_ms;
+        tr_realtime_budget_adapt(ms, fd->budget_ms, &rt->budget_scale, &rt->budget_spp);
+    }
+    return TR_OK;
+}
