@@ -348,7 +348,7 @@ static void test_failures(void) {
     CHECK(!tr_realtime_create(dev, s, &bad, &err) && err.code == TR_STATUS_INVALID_ARGUMENT,
           "spp out of range");
     tr_render_config cfg = tr_render_config_default();
-    cfg.stride = 0; /* refused: 1..64 */
+    cfg.stride = -1; /* refused: 1..64 (0 means the default, 1) */
     bad.spp = 0;
     bad.config = &cfg;
     CHECK(!tr_realtime_create(dev, s, &bad, &err) && err.code == TR_STATUS_INVALID_ARGUMENT,
