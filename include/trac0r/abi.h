@@ -36,7 +36,9 @@
     X(ACCEL_INFO, tr_accel_info)                                                                   \
     X(SCENE_FILE_OPTIONS, tr_scene_file_options)                                                   \
     X(SCENE_FILE, tr_scene_file)                                                                   \
-    X(MESH_IMPORT_STATS, tr_mesh_import_stats)
+    X(MESH_IMPORT_STATS, tr_mesh_import_stats)                                                     \
+    X(RENDER_REQUEST, tr_render_request)                                                           \
+    X(RENDER_SETTINGS, tr_render_settings)
 
 #define TR_ABI_ENUM_ENTRY(name, type) TR_ABI_##name,
 typedef enum tr_abi_type { TR_ABI_TYPES(TR_ABI_ENUM_ENTRY) TR_ABI_TYPE_COUNT } tr_abi_type;
