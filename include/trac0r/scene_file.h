@@ -93,15 +93,19 @@ typedef struct tr_render_settings {
  * The scene is not committed: tr_scene_commit(s, out->accel, err) is next. `path` names
  * the file in messages. Fails, with a message naming the JSON path or request field at
  * fault, on:
- *   - an unknown integrator or accel name: TR_STATUS_PARSE for the file's
- *     ("FILE: render.integrator: unknown integrator 'x' (available: pt, ...)"),
- *     TR_STATUS_INVALID_ARGUMENT for the request's (as for an unknown light sampling);
- *   - an acceleration structure this build lacks (embree): TR_STATUS_UNSUPPORTED;
+ *   - an unknown integrator name in `file` (the JSON parser refuses those itself; a
+ *     tr_scene_file filled another way): TR_STATUS_PARSE ("FILE: render.integrator:
+ *     unknown integrator 'x' (available: pt, ...)");
+ *   - an unknown integrator, accel or light sampling name in the request:
+ *     TR_STATUS_INVALID_ARGUMENT;
+ *   - an acceleration structure this build lacks (embree without Embree), the file's
+ *     ("FILE: render.accel: ...") or the request's: TR_STATUS_UNSUPPORTED;
  *   - a scene without an emitter, unless render.allow_no_emitter or req->allow_dark:
  *     TR_STATUS_NOT_FOUND (the image would be black);
  *   - an image of more than TR_FILM_MAX_PIXELS pixels: TR_STATUS_LIMIT;
  *   - a camera that cannot take the size: tr_camera_resize's status.
- * out holds the values resolved up to the failure (the size once the size is checked). */
+ * On failure out still holds the image size and spp, resolved first (the size a
+ * TR_STATUS_LIMIT names); the camera is resized only on success. */
 int tr_scene_file_apply(tr_scene *s, const char *path, const tr_scene_file *file,
                         const tr_render_request *req, tr_render_settings *out, tr_error *err);
 
