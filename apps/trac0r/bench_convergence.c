@@ -129,21 +129,6 @@ static void film_mean(const tr_film *f, float *rgb) {
     }
 }
 
-/* Releases what one image size of the benchmark holds. */
-static void size_free(cli_backend *devs, int ndevs, float *ref, float *half, float *cur,
-                      tr_film *film, tr_scene *scene) {
-    for (int k = 0; k < ndevs; ++k) {
-        cli_backend_close(&devs[k]);
-    }
-    free(ref);
-    free(half);
-    free(cur);
-    tr_film_free(film);
-    tr_scene_destroy(scene);
-}
-
-/* Renders samples [first, first + spp) on the device (its film cleared first) and reads
- * them into f. */
 /* Renders samples first .. first+spp-1 into a cleared film, in calls of a few samples so
  * that `bar` moves (*done counts the samples so far); a pixel adds its samples in the
  * same order either way. */
@@ -183,31 +168,104 @@ static double reach(const conv_run *r, double db, int use_spp) {
     return -1.0;
 }
 
-int bench_convergence(int argc, char **argv) {
-    cli_args a = {.cmd = "bench convergence", .argc = argc, .argv = argv, .i = 0};
+/* What the command line asked for. */
+typedef struct conv_options {
     cli_common c;
-    cli_common_default(&c);
-    c.scene = "builtin:cornell-mirror";
+    uint32_t sw[CONV_MAX_SIZES], sh[CONV_MAX_SIZES];
+    int nsizes;
+    int methods[CONV_MAX_METHODS];
+    int nmethods;
+    float budget;
+    uint32_t ref_spp;
+    const char *ref_path; /* --reference, or NULL: render it */
+    const char *prefix;
+    char csv_path[4096], png_path[4096];
+    tr_image ref_img; /* --reference's image, read by check_outputs */
+} conv_options;
+
+/* One image size under measurement: its scene, the reference and the devices. */
+typedef struct conv_size {
+    tr_scene *scene;
+    size_t px;
+    float *ref, *half, *cur; /* 3 floats per pixel: the reference, its first half, a mean */
+    tr_film film;            /* the reference's read-back */
+    cli_backend devs[CONV_MAX_METHODS + 1]; /* one per method, then the reference's */
+    double ref_mse;                         /* the reference's own error (0: unknown) */
+} conv_size;
+
+/* The methods' turns at one size: each its own film, samples so far, the sample count of
+ * its next recorded point, render time, and whether it is finished. */
+typedef struct conv_turns {
+    tr_film films[CONV_MAX_METHODS];
+    int nfilms;
+    uint32_t spp[CONV_MAX_METHODS], next[CONV_MAX_METHODS];
+    double elapsed[CONV_MAX_METHODS];
+    int done[CONV_MAX_METHODS];
+} conv_turns;
+
+static void conv_defaults(conv_options *o) {
+    memset(o, 0, sizeof *o);
+    cli_common_default(&o->c);
+    o->c.scene = "builtin:cornell-mirror";
     /* Both integrators estimate paths of the same length here (pt D, naive D + 2): the
      * comparison keeps the thesis's depth rather than each integrator's default. */
-    c.max_depth = TR_MAX_DEPTH_NAIVE;
-    uint32_t sw[CONV_MAX_SIZES] = {256, 800}, sh[CONV_MAX_SIZES] = {256, 600};
-    int nsizes = 2;
-    int methods[CONV_MAX_METHODS] = {TR_INTEGRATOR_NAIVE, TR_INTEGRATOR_PT, TR_INTEGRATOR_BDPT};
-    int nmethods = 3;
-    float budget = 30.0f;
-    uint32_t ref_spp = 4096;
-    const char *ref_path = NULL;
-    const char *prefix = "convergence";
-    while (cli_next(&a)) {
-        if (cli_is(&a, "--width") || cli_is(&a, "--height") || cli_is(&a, "--integrator")) {
-            return cli_error(&a, "%s: not an option of this benchmark (see --sizes, --methods)",
-                             a.opt);
+    o->c.max_depth = TR_MAX_DEPTH_NAIVE;
+    o->sw[0] = 256;
+    o->sh[0] = 256;
+    o->sw[1] = 800;
+    o->sh[1] = 600;
+    o->nsizes = 2;
+    o->methods[0] = TR_INTEGRATOR_NAIVE;
+    o->methods[1] = TR_INTEGRATOR_PT;
+    o->methods[2] = TR_INTEGRATOR_BDPT;
+    o->nmethods = 3;
+    o->budget = 30.0f;
+    o->ref_spp = 4096;
+    o->prefix = "convergence";
+}
+
+/* One of the benchmark's own options: CLI_OK, CLI_USAGE, or -1 if it is none of them. */
+static int parse_own_option(cli_args *a, conv_options *o) {
+    if (cli_is(a, "--sizes")) {
+        return parse_sizes(a, o->sw, o->sh, &o->nsizes);
+    }
+    if (cli_is(a, "--methods")) {
+        return parse_methods(a, o->methods, &o->nmethods);
+    }
+    if (cli_is(a, "--budget")) {
+        return cli_parse_float(a, 0.1f, 86400.0f, &o->budget);
+    }
+    if (cli_is(a, "--reference-spp")) {
+        return cli_parse_u32(a, 2, 1000000, &o->ref_spp);
+    }
+    if (cli_is(a, "--reference")) {
+        const int rc = cli_value(a);
+        o->ref_path = a->value;
+        return rc;
+    }
+    if (cli_is(a, "--out")) {
+        const int rc = cli_value(a);
+        o->prefix = a->value;
+        return rc;
+    }
+    if (a->opt[0] != '-' && a->i == 1) {
+        o->c.scene = a->opt;
+        return CLI_OK;
+    }
+    return -1;
+}
+
+/* The command line into o; *help is set when --help printed the usage. */
+static int parse_options(cli_args *a, conv_options *o, int *help) {
+    while (cli_next(a)) {
+        if (cli_is(a, "--width") || cli_is(a, "--height") || cli_is(a, "--integrator")) {
+            return cli_error(a, "%s: not an option of this benchmark (see --sizes, --methods)",
+                             a->opt);
         }
-        int rc = cli_common_option(&a, &c);
+        int rc = cli_common_option(a, &o->c);
         if (rc == CLI_OK) {
-            if (cli_is(&a, "--max-depth") && c.max_depth > TR_MAX_DEPTH_LIMIT - 2) {
-                return cli_error(&a, "--max-depth: expected 1..%d here (naive gets D + 2)",
+            if (cli_is(a, "--max-depth") && o->c.max_depth > TR_MAX_DEPTH_LIMIT - 2) {
+                return cli_error(a, "--max-depth: expected 1..%d here (naive gets D + 2)",
                                  TR_MAX_DEPTH_LIMIT - 2);
             }
             continue;
@@ -215,279 +273,343 @@ int bench_convergence(int argc, char **argv) {
         if (rc == CLI_USAGE) {
             return CLI_USAGE;
         }
-        if (cli_is(&a, "-h") || cli_is(&a, "--help")) {
+        if (cli_is(a, "-h") || cli_is(a, "--help")) {
             convergence_help();
+            *help = 1;
             return CLI_OK;
-        } else if (cli_is(&a, "--sizes")) {
-            rc = parse_sizes(&a, sw, sh, &nsizes);
-        } else if (cli_is(&a, "--methods")) {
-            rc = parse_methods(&a, methods, &nmethods);
-        } else if (cli_is(&a, "--budget")) {
-            rc = cli_parse_float(&a, 0.1f, 86400.0f, &budget);
-        } else if (cli_is(&a, "--reference-spp")) {
-            rc = cli_parse_u32(&a, 2, 1000000, &ref_spp);
-        } else if (cli_is(&a, "--reference")) {
-            rc = cli_value(&a);
-            ref_path = a.value;
-        } else if (cli_is(&a, "--out")) {
-            rc = cli_value(&a);
-            prefix = a.value;
-        } else if (a.opt[0] != '-' && a.i == 1) {
-            c.scene = a.opt;
-            rc = CLI_OK;
-        } else {
-            return cli_unknown(&a);
+        }
+        rc = parse_own_option(a, o);
+        if (rc < 0) {
+            return cli_unknown(a);
         }
         if (rc != CLI_OK) {
             return CLI_USAGE;
         }
     }
-    if (ref_path && nsizes != 1) {
-        return cli_error(&a, "--reference: needs exactly one size in --sizes (it has %d)", nsizes);
+    return CLI_OK;
+}
+
+/* Before any work: the output files can be written, and a --reference is a PFM of the
+ * one size asked for (read into o->ref_img). */
+static int check_outputs(cli_args *a, conv_options *o) {
+    if (o->ref_path && o->nsizes != 1) {
+        return cli_error(a, "--reference: needs exactly one size in --sizes (it has %d)",
+                         o->nsizes);
     }
-    char csv_path[4096], png_path[4096];
-    if (snprintf(csv_path, sizeof csv_path, "%s.csv", prefix) >= (int)sizeof csv_path ||
-        snprintf(png_path, sizeof png_path, "%s.png", prefix) >= (int)sizeof png_path) {
-        return cli_error(&a, "--out: prefix too long");
+    if (snprintf(o->csv_path, sizeof o->csv_path, "%s.csv", o->prefix) >= (int)sizeof o->csv_path ||
+        snprintf(o->png_path, sizeof o->png_path, "%s.png", o->prefix) >= (int)sizeof o->png_path) {
+        return cli_error(a, "--out: prefix too long");
     }
     tr_error err;
-    if (tr_image_check_writable(csv_path, &err) != TR_OK ||
-        tr_image_check_writable(png_path, &err) != TR_OK) {
-        return cli_error(&a, "--out: %s", err.msg);
+    if (tr_image_check_writable(o->csv_path, &err) != TR_OK ||
+        tr_image_check_writable(o->png_path, &err) != TR_OK) {
+        return cli_error(a, "--out: %s", err.msg);
     }
-    tr_image ref_img;
-    memset(&ref_img, 0, sizeof ref_img);
-    if (ref_path) {
-        if (tr_image_format_from_path(ref_path) != TR_IMAGE_PFM) {
-            return cli_error(&a, "--reference: '%s' is not a .pfm file", ref_path);
-        }
-        if (tr_image_read_pfm(&ref_img, ref_path, &err) != TR_OK) {
-            return cli_error(&a, "--reference: %s", err.msg);
-        }
-        if (ref_img.width != sw[0] || ref_img.height != sh[0]) {
-            int rc = cli_error(&a, "--reference: %s is %ux%u, not %ux%u", ref_path, ref_img.width,
-                               ref_img.height, sw[0], sh[0]);
-            tr_image_free(&ref_img);
-            return rc;
-        }
+    if (!o->ref_path) {
+        return CLI_OK;
     }
+    if (tr_image_format_from_path(o->ref_path) != TR_IMAGE_PFM) {
+        return cli_error(a, "--reference: '%s' is not a .pfm file", o->ref_path);
+    }
+    if (tr_image_read_pfm(&o->ref_img, o->ref_path, &err) != TR_OK) {
+        return cli_error(a, "--reference: %s", err.msg);
+    }
+    if (o->ref_img.width != o->sw[0] || o->ref_img.height != o->sh[0]) {
+        const int rc = cli_error(a, "--reference: %s is %ux%u, not %ux%u", o->ref_path,
+                                 o->ref_img.width, o->ref_img.height, o->sw[0], o->sh[0]);
+        tr_image_free(&o->ref_img);
+        return rc;
+    }
+    return CLI_OK;
+}
 
-    conv_run *runs = calloc((size_t)(nsizes * nmethods), sizeof *runs);
-    if (!runs) {
-        tr_image_free(&ref_img);
-        return cli_error(&a, "out of memory");
+/* Releases what one image size of the benchmark holds. */
+static void size_free(conv_size *z, int ndevs) {
+    for (int k = 0; k < ndevs; ++k) {
+        cli_backend_close(&z->devs[k]);
     }
-    const int threads = c.threads ? c.threads : tr_default_threads();
-    printf("bench convergence: %s, pt max depth %d (naive %d), %d thread%s, budget %.1f s per "
-           "method and size\n",
-           c.scene, c.max_depth, c.max_depth + 2, threads, threads == 1 ? "" : "s", (double)budget);
+    free(z->ref);
+    free(z->half);
+    free(z->cur);
+    tr_film_free(&z->film);
+    tr_scene_destroy(z->scene);
+}
+
+/* Says once (at the first size) that naive and pt disagree on this scene's rough glossy
+ * materials. */
+static void note_rough_glossy(const tr_scene *scene) {
+    for (uint32_t m = 0; m < tr_scene_material_count(scene); ++m) {
+        const tr_material mat = tr_scene_material(scene, m);
+        if (mat.type == TR_MATERIAL_GLOSSY && mat.roughness > 0.0f) {
+            printf("note: this scene has rough glossy materials, on which naive (cone "
+                   "lobe) and pt (GGX) converge to different images\n");
+            return;
+        }
+    }
+}
+
+/* The scene at size si (o->c takes its size), checked against every method. On failure
+ * nothing is left to free. */
+static int size_scene(cli_args *a, conv_options *o, int si, conv_size *z) {
+    o->c.width = o->sw[si];
+    o->c.height = o->sh[si];
+    z->scene = tr_scene_create(NULL);
+    int rc = cli_load_scene(a, &o->c, z->scene);
+    /* A method that cannot render the scene (bdpt with an environment light or a sun)
+     * fails here, not after the reference has been rendered. */
+    for (int mi = 0; mi < o->nmethods && rc == CLI_OK; ++mi) {
+        tr_error err;
+        if (tr_integrator_supports(z->scene, o->methods[mi], &err) != TR_OK) {
+            rc = cli_error(a, "--methods %s: %s", tr_integrator_name(o->methods[mi]), err.msg);
+        }
+    }
+    if (rc != CLI_OK) {
+        tr_scene_destroy(z->scene);
+        return rc;
+    }
+    if (si == 0) {
+        note_rough_glossy(z->scene);
+    }
+    return CLI_OK;
+}
+
+/* The scene, the image buffers, the reference's film and one device per method plus the
+ * reference's, at size si. On failure nothing is left to free. */
+static int size_open(cli_args *a, conv_options *o, int si, conv_size *z) {
+    memset(z, 0, sizeof *z);
+    int rc = size_scene(a, o, si, z);
+    if (rc != CLI_OK) {
+        return rc;
+    }
+    const uint32_t w = o->c.width, h = o->c.height;
+    z->px = (size_t)w * h;
+    z->ref = malloc(3 * z->px * sizeof *z->ref);
+    z->half = malloc(3 * z->px * sizeof *z->half);
+    z->cur = malloc(3 * z->px * sizeof *z->cur);
+    tr_error err;
+    const int buffers = z->ref && z->half && z->cur;
+    const int film_ok = buffers && tr_film_init(&z->film, w, h, &err) == TR_OK;
+    for (int k = 0; film_ok && rc == CLI_OK && k <= o->nmethods; ++k) {
+        rc = cli_backend_open(a, &o->c, z->scene, &z->devs[k]);
+    }
+    if (rc != CLI_OK) {
+        size_free(z, o->nmethods + 1);
+        return rc;
+    }
+    if (!film_ok) {
+        fprintf(stderr, "trac0r bench convergence: %ux%u: %s\n", w, h,
+                buffers ? err.msg : "out of memory");
+        free(z->ref);
+        free(z->half);
+        free(z->cur);
+        tr_scene_destroy(z->scene);
+        return CLI_FAILURE;
+    }
+    return CLI_OK;
+}
+
+/* Renders the reference with pt in two independent halves: their mean is the reference
+ * and a quarter of their difference's MSE its own error (z->ref_mse). Not through
+ * tr_session: the second half is samples h1.. on a cleared film, and a session's samples
+ * always start at 0 (or at a checkpoint's, whose film it keeps). */
+static int render_reference(const conv_options *o, conv_size *z) {
+    const uint32_t w = o->c.width, h = o->c.height;
+    tr_render_config cfg = tr_render_config_default();
+    cfg.threads = o->c.threads;
+    cfg.integrator = TR_INTEGRATOR_PT;
+    cfg.max_depth = o->c.max_depth;
+    /* The reference's seed differs from the measured runs', so its noise is
+     * independent of theirs. */
+    cfg.seed = o->c.seed ^ 0x7265666572656e63ULL;
+    tr_device *dev = z->devs[o->nmethods].dev;
+    const double t0 = tr_time_now();
+    const uint32_t h1 = o->ref_spp / 2, h2 = o->ref_spp - h1;
+    char label[96];
+    snprintf(label, sizeof label, "trac0r bench convergence: %ux%u reference", w, h);
+    progress bar;
+    progress_begin(&bar, label, "spp", o->ref_spp, 0);
+    uint64_t done_spp = 0;
+    tr_error err;
+    int ok = render_spp(dev, z->scene, &cfg, &z->film, 0, h1, &bar, &done_spp, &err) == TR_OK;
+    if (ok) {
+        film_mean(&z->film, z->half);
+        ok = render_spp(dev, z->scene, &cfg, &z->film, h1, h2, &bar, &done_spp, &err) == TR_OK;
+    }
+    progress_end(&bar);
+    if (!ok) {
+        fprintf(stderr, "trac0r bench convergence: %s\n", err.msg);
+        return CLI_FAILURE;
+    }
+    film_mean(&z->film, z->cur);
+    /* The halves' difference has twice a half's MSE (independent noise), and their mean a
+     * quarter of the difference's: MSE_ref = MSE(h1, h2) / 4 (equal halves). Measured
+     * errors then have MSE_true + MSE_ref. */
+    z->ref_mse = tr_image_compare(z->half, z->cur, z->px).mse / 4.0;
+    for (size_t i = 0; i < 3 * z->px; ++i) {
+        z->ref[i] = ((float)h1 * z->half[i] + (float)h2 * z->cur[i]) / (float)o->ref_spp;
+    }
+    printf("%ux%u: reference pt %u spp in %.1f s, its own PSNR ~ %.1f dB\n", w, h, o->ref_spp,
+           tr_time_now() - t0, tr_psnr(z->ref_mse));
+    fflush(stdout);
+    return CLI_OK;
+}
+
+/* The reference of size z: --reference's image, or rendered. */
+static int size_reference(const conv_options *o, conv_size *z) {
+    if (!o->ref_path) {
+        return render_reference(o, z);
+    }
+    memcpy(z->ref, o->ref_img.rgb, 3 * z->px * sizeof *z->ref);
+    z->ref_mse = 0.0;
+    printf("%ux%u: reference %s (its own error unknown: not taken out)\n", o->c.width, o->c.height,
+           o->ref_path);
+    return CLI_OK;
+}
+
+/* The unfinished method with the least render time so far, or -1 when all are done. */
+static int next_method(const conv_turns *t, int nmethods) {
+    int mi = -1;
+    for (int k = 0; k < nmethods; ++k) {
+        if (!t->done[k] && (mi < 0 || t->elapsed[k] < t->elapsed[mi])) {
+            mi = k;
+        }
+    }
+    return mi;
+}
+
+/* Render time used against the budget of every method (a method that reaches 41 dB
+ * early counts as its whole budget), in ms. */
+static uint64_t budget_used(const conv_turns *t, int nmethods, float budget) {
+    uint64_t used = 0;
+    for (int k = 0; k < nmethods; ++k) {
+        used += (uint64_t)((t->done[k] || t->elapsed[k] > budget ? budget : t->elapsed[k]) * 1e3);
+    }
+    return used;
+}
+
+/* Method mi's film as it stands, scored against the reference as r's next point; the
+ * method is done past 41 dB or at its last point (`last`). */
+static int record_point(const conv_options *o, conv_size *z, conv_turns *t, int mi, int last,
+                        conv_run *r, progress *bar) {
+    tr_error err;
+    if (cli_backend_read(&z->devs[mi], &t->films[mi], &err) != TR_OK) {
+        progress_clear(bar);
+        fprintf(stderr, "trac0r bench convergence: %s\n", err.msg);
+        return CLI_FAILURE;
+    }
+    film_mean(&t->films[mi], z->cur);
+    conv_point *p = &r->pt[r->n++];
+    p->spp = t->spp[mi];
+    p->seconds = t->elapsed[mi];
+    p->raw = tr_image_compare(z->cur, z->ref, z->px);
+    const double mse = p->raw.mse - z->ref_mse;
+    p->psnr = tr_psnr(mse);
+    const uint32_t step = (uint32_t)ceil(t->next[mi] * 0.19);
+    t->next[mi] += step > 0 ? step : 1;
+    if (p->psnr > 41.0 || last) {
+        t->done[mi] = 1;
+        progress_clear(bar);
+        printf("%ux%u %-5s: %u spp in %.2f s -> PSNR %.2f dB (raw %.2f), RMSE "
+               "%.5f, relMSE %.5f\n",
+               o->c.width, o->c.height, tr_integrator_name(r->integrator), p->spp, p->seconds,
+               p->psnr, p->raw.psnr, p->raw.rmse, p->raw.relmse);
+        fflush(stdout);
+    }
+    return CLI_OK;
+}
+
+/* One 1 spp frame of method mi, recorded at geometrically spaced sample counts. */
+static int method_turn(const conv_options *o, conv_size *z, conv_turns *t, int mi, conv_run *r,
+                       progress *bar) {
+    tr_render_config cfg = tr_render_config_default();
+    cfg.threads = o->c.threads;
+    cfg.integrator = o->methods[mi];
+    cfg.max_depth = o->methods[mi] == TR_INTEGRATOR_NAIVE ? o->c.max_depth + 2 : o->c.max_depth;
+    cfg.seed = o->c.seed;
+    tr_render_stats st;
+    tr_error err;
+    if (cli_backend_frame(&z->devs[mi], z->scene, &cfg, t->spp[mi], &st, &err) != TR_OK) {
+        progress_clear(bar);
+        fprintf(stderr, "trac0r bench convergence: %s\n", err.msg);
+        return CLI_FAILURE;
+    }
+    t->elapsed[mi] += st.seconds;
+    ++t->spp[mi];
+    const int last = t->elapsed[mi] >= o->budget || r->n == CONV_MAX_POINTS - 1;
+    if (t->spp[mi] == t->next[mi] || last) {
+        return record_point(o, z, t, mi, last, r, bar);
+    }
+    return CLI_OK;
+}
+
+/* Every method at size z until its budget is spent or it passes 41 dB, into runs[0 ..
+ * nmethods). The methods take turns, one frame at a time, the one with the least render
+ * time so far next: on a machine shared with other work they see the same load, which
+ * keeps their time ratio fair. (So each method is its own device stepped frame by frame,
+ * not a tr_session, which renders one job to its end.) */
+static int run_methods(const conv_options *o, conv_size *z, conv_run *runs) {
+    conv_turns t;
+    memset(&t, 0, sizeof t);
+    /* The first three methods record their first point at 1 spp; a fourth starts at 0
+     * and so records its last point alone (kept: the output stays as it was). */
+    t.next[0] = t.next[1] = t.next[2] = 1;
     int rc = CLI_OK;
-    for (int si = 0; si < nsizes && rc == CLI_OK; ++si) {
-        c.width = sw[si];
-        c.height = sh[si];
-        tr_scene *scene = tr_scene_create(NULL);
-        rc = cli_load_scene(&a, &c, scene);
-        if (rc != CLI_OK) {
-            tr_scene_destroy(scene);
-            break;
-        }
-        /* A method that cannot render the scene (bdpt with an environment light or a sun)
-         * fails here, not after the reference has been rendered. */
-        for (int mi = 0; mi < nmethods && rc == CLI_OK; ++mi) {
-            if (tr_integrator_supports(scene, methods[mi], &err) != TR_OK) {
-                rc = cli_error(&a, "--methods %s: %s", tr_integrator_name(methods[mi]), err.msg);
-            }
-        }
-        if (rc != CLI_OK) {
-            tr_scene_destroy(scene);
-            break;
-        }
-        if (si == 0) {
-            for (uint32_t m = 0; m < tr_scene_material_count(scene); ++m) {
-                const tr_material mat = tr_scene_material(scene, m);
-                if (mat.type == TR_MATERIAL_GLOSSY && mat.roughness > 0.0f) {
-                    printf("note: this scene has rough glossy materials, on which naive (cone "
-                           "lobe) and pt (GGX) converge to different images\n");
-                    break;
-                }
-            }
-        }
-        const size_t px = (size_t)c.width * c.height;
-        float *ref = malloc(3 * px * sizeof *ref);
-        float *half = malloc(3 * px * sizeof *half);
-        float *cur = malloc(3 * px * sizeof *cur);
-        tr_film film;
-        int film_ok = ref && half && cur && tr_film_init(&film, c.width, c.height, &err) == TR_OK;
-        /* One device for the reference and one per method: each keeps its own film. */
-        cli_backend devs[CONV_MAX_METHODS + 1] = {{0}};
-        for (int k = 0; film_ok && rc == CLI_OK && k <= nmethods; ++k) {
-            rc = cli_backend_open(&a, &c, scene, &devs[k]);
-        }
-        if (rc != CLI_OK) {
-            size_free(devs, nmethods + 1, ref, half, cur, &film, scene);
-            break;
-        }
-        if (!film_ok) {
-            fprintf(stderr, "trac0r bench convergence: %ux%u: %s\n", c.width, c.height,
-                    ref && half && cur ? err.msg : "out of memory");
-            free(ref);
-            free(half);
-            free(cur);
-            tr_scene_destroy(scene);
+    for (int mi = 0; mi < o->nmethods; ++mi) {
+        runs[mi].integrator = o->methods[mi];
+        runs[mi].width = o->c.width;
+        runs[mi].height = o->c.height;
+        tr_error err;
+        if (tr_film_init(&t.films[mi], o->c.width, o->c.height, &err) != TR_OK) {
+            fprintf(stderr, "trac0r bench convergence: %s\n", err.msg);
             rc = CLI_FAILURE;
             break;
         }
-        tr_render_config cfg = tr_render_config_default();
-        cfg.threads = c.threads;
-        cfg.integrator = TR_INTEGRATOR_PT;
-        cfg.max_depth = c.max_depth;
-        /* The reference's seed differs from the measured runs', so its noise is
-         * independent of theirs. */
-        cfg.seed = c.seed ^ 0x7265666572656e63ULL;
-        double ref_mse = 0.0;
-        if (ref_path) {
-            memcpy(ref, ref_img.rgb, 3 * px * sizeof *ref);
-            printf("%ux%u: reference %s (its own error unknown: not taken out)\n", c.width,
-                   c.height, ref_path);
-        } else {
-            double t0 = tr_time_now();
-            uint32_t h1 = ref_spp / 2, h2 = ref_spp - h1;
-            char label[96];
-            snprintf(label, sizeof label, "trac0r bench convergence: %ux%u reference", c.width,
-                     c.height);
-            progress bar;
-            progress_begin(&bar, label, "spp", ref_spp, 0);
-            uint64_t done_spp = 0;
-            if (render_spp(devs[nmethods].dev, scene, &cfg, &film, 0, h1, &bar, &done_spp, &err) !=
-                TR_OK) {
-                rc = CLI_FAILURE;
-            } else {
-                film_mean(&film, half);
-                if (render_spp(devs[nmethods].dev, scene, &cfg, &film, h1, h2, &bar, &done_spp,
-                               &err) != TR_OK) {
-                    rc = CLI_FAILURE;
-                }
-            }
-            progress_end(&bar);
-            if (rc != CLI_OK) {
-                fprintf(stderr, "trac0r bench convergence: %s\n", err.msg);
-            } else {
-                film_mean(&film, cur);
-                /* The halves' difference has twice a half's MSE (independent noise), and
-                 * their mean a quarter of the difference's: MSE_ref = MSE(h1, h2) / 4
-                 * (equal halves). Measured errors then have MSE_true + MSE_ref. */
-                ref_mse = tr_image_compare(half, cur, px).mse / 4.0;
-                for (size_t i = 0; i < 3 * px; ++i) {
-                    ref[i] = ((float)h1 * half[i] + (float)h2 * cur[i]) / (float)ref_spp;
-                }
-                printf("%ux%u: reference pt %u spp in %.1f s, its own PSNR ~ %.1f dB\n", c.width,
-                       c.height, ref_spp, tr_time_now() - t0, tr_psnr(ref_mse));
-                fflush(stdout);
-            }
-        }
-        /* The methods take turns, one frame at a time, the one with the least render
-         * time so far next: on a machine shared with other work they see the same
-         * load, which keeps their time ratio fair. */
-        tr_film films[CONV_MAX_METHODS];
-        uint32_t spp[CONV_MAX_METHODS] = {0}, next[CONV_MAX_METHODS] = {1, 1, 1};
-        double elapsed[CONV_MAX_METHODS] = {0.0};
-        int done[CONV_MAX_METHODS] = {0};
-        int nfilms = 0;
-        for (int mi = 0; mi < nmethods; ++mi) {
-            conv_run *r = &runs[si * nmethods + mi];
-            r->integrator = methods[mi];
-            r->width = c.width;
-            r->height = c.height;
-            if (tr_film_init(&films[mi], c.width, c.height, &err) != TR_OK) {
-                fprintf(stderr, "trac0r bench convergence: %s\n", err.msg);
-                rc = CLI_FAILURE;
-                break;
-            }
-            ++nfilms;
-        }
-        /* Progress in render time against the budget of every method (a method that
-         * reaches 41 dB early counts as its whole budget). */
-        char mlabel[96];
-        snprintf(mlabel, sizeof mlabel, "trac0r bench convergence: %ux%u methods", c.width,
-                 c.height);
-        progress mbar;
-        progress_begin(&mbar, mlabel, "ms of budget", (uint64_t)(budget * 1e3) * (uint64_t)nmethods,
-                       0);
-        while (rc == CLI_OK) {
-            uint64_t used = 0;
-            for (int k = 0; k < nmethods; ++k) {
-                used += (uint64_t)((done[k] || elapsed[k] > budget ? budget : elapsed[k]) * 1e3);
-            }
-            progress_update(&mbar, used, NULL);
-            int mi = -1;
-            for (int k = 0; k < nmethods; ++k) {
-                if (!done[k] && (mi < 0 || elapsed[k] < elapsed[mi])) {
-                    mi = k;
-                }
-            }
-            if (mi < 0) {
-                break;
-            }
-            conv_run *r = &runs[si * nmethods + mi];
-            cfg.integrator = methods[mi];
-            cfg.max_depth = methods[mi] == TR_INTEGRATOR_NAIVE ? c.max_depth + 2 : c.max_depth;
-            cfg.seed = c.seed;
-            tr_render_stats st;
-            if (cli_backend_frame(&devs[mi], scene, &cfg, spp[mi], &st, &err) != TR_OK) {
-                progress_clear(&mbar);
-                fprintf(stderr, "trac0r bench convergence: %s\n", err.msg);
-                rc = CLI_FAILURE;
-                break;
-            }
-            elapsed[mi] += st.seconds;
-            ++spp[mi];
-            int last = elapsed[mi] >= budget || r->n == CONV_MAX_POINTS - 1;
-            if (spp[mi] == next[mi] || last) {
-                if (cli_backend_read(&devs[mi], &films[mi], &err) != TR_OK) {
-                    progress_clear(&mbar);
-                    fprintf(stderr, "trac0r bench convergence: %s\n", err.msg);
-                    rc = CLI_FAILURE;
-                    break;
-                }
-                film_mean(&films[mi], cur);
-                conv_point *p = &r->pt[r->n++];
-                p->spp = spp[mi];
-                p->seconds = elapsed[mi];
-                p->raw = tr_image_compare(cur, ref, px);
-                double mse = p->raw.mse - ref_mse;
-                p->psnr = tr_psnr(mse);
-                uint32_t step = (uint32_t)ceil(next[mi] * 0.19);
-                next[mi] += step > 0 ? step : 1;
-                if (p->psnr > 41.0 || last) {
-                    done[mi] = 1;
-                    progress_clear(&mbar);
-                    printf("%ux%u %-5s: %u spp in %.2f s -> PSNR %.2f dB (raw %.2f), RMSE "
-                           "%.5f, relMSE %.5f\n",
-                           c.width, c.height, tr_integrator_name(r->integrator), p->spp, p->seconds,
-                           p->psnr, p->raw.psnr, p->raw.rmse, p->raw.relmse);
-                    fflush(stdout);
-                }
-            }
-        }
-        progress_end(&mbar);
-        for (int k = 0; k < nfilms; ++k) {
-            tr_film_free(&films[k]);
-        }
-        size_free(devs, nmethods + 1, ref, half, cur, &film, scene);
+        ++t.nfilms;
     }
-    tr_image_free(&ref_img);
+    char label[96];
+    snprintf(label, sizeof label, "trac0r bench convergence: %ux%u methods", o->c.width,
+             o->c.height);
+    progress bar;
+    progress_begin(&bar, label, "ms of budget", (uint64_t)(o->budget * 1e3) * (uint64_t)o->nmethods,
+                   0);
+    while (rc == CLI_OK) {
+        progress_update(&bar, budget_used(&t, o->nmethods, o->budget), NULL);
+        const int mi = next_method(&t, o->nmethods);
+        if (mi < 0) {
+            break;
+        }
+        rc = method_turn(o, z, &t, mi, &runs[mi], &bar);
+    }
+    progress_end(&bar);
+    for (int k = 0; k < t.nfilms; ++k) {
+        tr_film_free(&t.films[k]);
+    }
+    return rc;
+}
+
+/* Size si: its reference, then every method against it. */
+static int measure_size(cli_args *a, conv_options *o, int si, conv_run *runs) {
+    conv_size z;
+    int rc = size_open(a, o, si, &z);
     if (rc != CLI_OK) {
-        free(runs);
         return rc;
     }
+    rc = size_reference(o, &z);
+    if (rc == CLI_OK) {
+        rc = run_methods(o, &z, runs);
+    }
+    size_free(&z, o->nmethods + 1);
+    return rc;
+}
 
-    /* The table: time and spp to reach each PSNR. */
+/* The table: time and spp to reach each PSNR. */
+static void print_table(const conv_run *runs, int n) {
     printf("\n%-9s %-6s", "size", "method");
     for (int k = 0; k < CONV_THRESHOLDS; ++k) {
         printf("  %20.0f dB", conv_db[k]);
     }
     printf("\n");
-    for (int i = 0; i < nsizes * nmethods; ++i) {
+    for (int i = 0; i < n; ++i) {
         const conv_run *r = &runs[i];
         char size[32];
         snprintf(size, sizeof size, "%ux%u", r->width, r->height);
@@ -504,7 +626,30 @@ int bench_convergence(int argc, char **argv) {
         }
         printf("\n");
     }
-    /* Speed-ups in time to each threshold: pt over naive, bdpt and vcm over pt. */
+}
+
+/* One line: how many times longer rn takes than rp to reach each threshold. */
+static void print_speedup(const conv_run *rn, const conv_run *rp) {
+    const char *sn = tr_integrator_name(rn->integrator);
+    const char *sp = tr_integrator_name(rp->integrator);
+    printf("%ux%u time %s / time %s:", rn->width, rn->height, sn, sp);
+    for (int k = 0; k < CONV_THRESHOLDS; ++k) {
+        double tn = reach(rn, conv_db[k], 0), tp = reach(rp, conv_db[k], 0);
+        if (tn > 0.0 && tp > 0.0) {
+            printf("  %.0f dB: %.1fx", conv_db[k], tn / tp);
+        } else if (tp > 0.0) {
+            printf("  %.0f dB: > %.1fx (%s not there in %.1f s)", conv_db[k],
+                   rn->n ? rn->pt[rn->n - 1].seconds / tp : 0.0, sn,
+                   rn->n ? rn->pt[rn->n - 1].seconds : 0.0);
+        } else {
+            printf("  %.0f dB: -", conv_db[k]);
+        }
+    }
+    printf("\n");
+}
+
+/* Speed-ups in time to each threshold: pt over naive, bdpt and vcm over pt. */
+static void print_speedups(const conv_run *runs, int nsizes, int nmethods) {
     static const int pairs[3][2] = {{0, 1}, {1, 2}, {1, 3}};
     for (int si = 0; si < nsizes; ++si) {
         const conv_run *by[4] = {NULL, NULL, NULL, NULL}; /* naive, pt, bdpt, vcm */
@@ -517,37 +662,24 @@ int bench_convergence(int argc, char **argv) {
         }
         for (int pair = 0; pair < 3; ++pair) {
             const conv_run *rn = by[pairs[pair][0]], *rp = by[pairs[pair][1]];
-            if (!rn || !rp) {
-                continue;
+            if (rn && rp) {
+                print_speedup(rn, rp);
             }
-            const char *sn = tr_integrator_name(rn->integrator);
-            const char *sp = tr_integrator_name(rp->integrator);
-            printf("%ux%u time %s / time %s:", rn->width, rn->height, sn, sp);
-            for (int k = 0; k < CONV_THRESHOLDS; ++k) {
-                double tn = reach(rn, conv_db[k], 0), tp = reach(rp, conv_db[k], 0);
-                if (tn > 0.0 && tp > 0.0) {
-                    printf("  %.0f dB: %.1fx", conv_db[k], tn / tp);
-                } else if (tp > 0.0) {
-                    printf("  %.0f dB: > %.1fx (%s not there in %.1f s)", conv_db[k],
-                           rn->n ? rn->pt[rn->n - 1].seconds / tp : 0.0, sn,
-                           rn->n ? rn->pt[rn->n - 1].seconds : 0.0);
-                } else {
-                    printf("  %.0f dB: -", conv_db[k]);
-                }
-            }
-            printf("\n");
         }
     }
+}
 
-    tr_outfile *csv = tr_outfile_open(csv_path, &err);
+/* Every point of every run as CSV, written atomically. */
+static int write_csv(const char *path, const conv_run *runs, int n) {
+    tr_error err;
+    tr_outfile *csv = tr_outfile_open(path, &err);
     if (!csv) {
-        free(runs);
         fprintf(stderr, "trac0r bench convergence: %s\n", err.msg);
         return CLI_FAILURE;
     }
     FILE *fp = tr_outfile_stream(csv);
     fprintf(fp, "method,width,height,spp,seconds,rmse,relmse,psnr_raw,psnr\n");
-    for (int i = 0; i < nsizes * nmethods; ++i) {
+    for (int i = 0; i < n; ++i) {
         const conv_run *r = &runs[i];
         for (int k = 0; k < r->n; ++k) {
             const conv_point *p = &r->pt[k];
@@ -557,20 +689,18 @@ int bench_convergence(int argc, char **argv) {
         }
     }
     if (tr_outfile_commit(csv, &err) != TR_OK) {
-        free(runs);
         fprintf(stderr, "trac0r bench convergence: %s\n", err.msg);
         return CLI_FAILURE;
     }
+    return CLI_OK;
+}
 
-    /* gnuplot: one inline data block per run, PSNR against time and against spp. */
-    size_t cap = 64 + (size_t)(nsizes * nmethods) * (CONV_MAX_POINTS * 48 + 256);
-    char *script = malloc(cap);
-    if (!script) {
-        free(runs);
-        return CLI_FAILURE;
-    }
+/* gnuplot's script: one inline data block per run, then PSNR against time and against
+ * spp side by side. Returns the length written (cap or more: it did not fit). */
+static size_t plot_script(char *script, size_t cap, const char *scene, const conv_run *runs,
+                          int n) {
     size_t len = 0;
-    for (int i = 0; i < nsizes * nmethods; ++i) {
+    for (int i = 0; i < n; ++i) {
         bench_plot_put(script, cap, &len, "$d%d << EOD\n", i);
         for (int k = 0; k < runs[i].n; ++k) {
             if (isfinite(runs[i].pt[k].psnr)) {
@@ -582,7 +712,7 @@ int bench_convergence(int argc, char **argv) {
     }
     /* The title names the scene by its file name, kept out of gnuplot's quoting. */
     char name[64];
-    bench_plot_name(c.scene, name, sizeof name);
+    bench_plot_name(scene, name, sizeof name);
     for (int panel = 0; panel < 2; ++panel) {
         len += (size_t)snprintf(
             script + len, cap - len,
@@ -591,7 +721,7 @@ int bench_convergence(int argc, char **argv) {
             panel == 0 ? "set multiplot layout 1,2\n" : "",
             panel == 0 ? "render time (s)" : "samples per pixel", panel == 0 ? "time" : "spp",
             name);
-        for (int i = 0; i < nsizes * nmethods; ++i) {
+        for (int i = 0; i < n; ++i) {
             len += (size_t)snprintf(
                 script + len, cap - len, "%s$d%d using %d:3 with linespoints lw 2 title '%s %ux%u'",
                 i ? ", " : "", i, panel == 0 ? 2 : 1, tr_integrator_name(runs[i].integrator),
@@ -603,14 +733,66 @@ int bench_convergence(int argc, char **argv) {
                        "notitle, 40 dt 2 lc 'gray' notitle\n");
     }
     bench_plot_put(script, cap, &len, "unset multiplot\n");
-    int plotted = len < cap ? bench_plot_png(script, png_path, &err) : 0;
+    return len;
+}
+
+/* The CSV and the plot, and the line naming them. */
+static int write_outputs(const conv_options *o, const conv_run *runs) {
+    const int n = o->nsizes * o->nmethods;
+    int rc = write_csv(o->csv_path, runs, n);
+    if (rc != CLI_OK) {
+        return rc;
+    }
+    const size_t cap = 64 + (size_t)n * (CONV_MAX_POINTS * 48 + 256);
+    char *script = malloc(cap);
+    if (!script) {
+        return CLI_FAILURE;
+    }
+    tr_error err;
+    const size_t len = plot_script(script, cap, o->c.scene, runs, n);
+    const int plotted = len < cap ? bench_plot_png(script, o->png_path, &err) : 0;
     free(script);
-    free(runs);
     if (plotted < 0) {
         fprintf(stderr, "trac0r bench convergence: %s\n", err.msg);
         return CLI_FAILURE;
     }
-    printf("wrote %s%s%s\n", csv_path, plotted ? " and " : " (gnuplot failed: no plot)",
-           plotted ? png_path : "");
+    printf("wrote %s%s%s\n", o->csv_path, plotted ? " and " : " (gnuplot failed: no plot)",
+           plotted ? o->png_path : "");
     return CLI_OK;
+}
+
+int bench_convergence(int argc, char **argv) {
+    cli_args a = {.cmd = "bench convergence", .argc = argc, .argv = argv, .i = 0};
+    conv_options o;
+    conv_defaults(&o);
+    int help = 0;
+    int rc = parse_options(&a, &o, &help);
+    if (rc != CLI_OK || help) {
+        return rc;
+    }
+    rc = check_outputs(&a, &o);
+    if (rc != CLI_OK) {
+        return rc;
+    }
+    conv_run *runs = calloc((size_t)(o.nsizes * o.nmethods), sizeof *runs);
+    if (!runs) {
+        tr_image_free(&o.ref_img);
+        return cli_error(&a, "out of memory");
+    }
+    const int threads = o.c.threads ? o.c.threads : tr_default_threads();
+    printf("bench convergence: %s, pt max depth %d (naive %d), %d thread%s, budget %.1f s per "
+           "method and size\n",
+           o.c.scene, o.c.max_depth, o.c.max_depth + 2, threads, threads == 1 ? "" : "s",
+           (double)o.budget);
+    for (int si = 0; si < o.nsizes && rc == CLI_OK; ++si) {
+        rc = measure_size(&a, &o, si, &runs[si * o.nmethods]);
+    }
+    tr_image_free(&o.ref_img);
+    if (rc == CLI_OK) {
+        print_table(runs, o.nsizes * o.nmethods);
+        print_speedups(runs, o.nsizes, o.nmethods);
+        rc = write_outputs(&o, runs);
+    }
+    free(runs);
+    return rc;
 }

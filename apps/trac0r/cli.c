@@ -454,6 +454,53 @@ int cli_scene_is_builtin(const char *scene) {
     return strncmp(scene, "builtin:", 8) == 0 || (!strchr(scene, '/') && !strchr(scene, '.'));
 }
 
+/* The request over a scene file's render defaults: the options the command line gave,
+ * and the command's own defaults (bench realtime's 320x240, bench's naive integrator)
+ * where the file has no value; the rest stay 0, the file's. */
+static tr_render_request file_request(const cli_common *c, const tr_scene_file *f) {
+    tr_render_request r = {0};
+    if ((c->given & CLI_GIVEN_WIDTH) || !f->has_width) {
+        r.width = c->width;
+    }
+    if ((c->given & CLI_GIVEN_HEIGHT) || !f->has_height) {
+        r.height = c->height;
+    }
+    if ((c->given & CLI_GIVEN_MAX_DEPTH) || !f->has_max_depth) {
+        r.max_depth = c->max_depth; /* 0 without either: the integrator's default */
+    }
+    if ((c->given & CLI_GIVEN_INTEGRATOR) || !f->has_integrator) {
+        r.integrator = tr_integrator_name(c->integrator);
+    }
+    if ((c->given & CLI_GIVEN_ACCEL) || !f->has_accel) {
+        r.accel = tr_accel_name(c->accel);
+    }
+    if (c->light_sampling >= 0) { /* the command line over render.light_sampling */
+        r.light_sampling = tr_light_sampling_name(c->light_sampling);
+    }
+    r.allow_dark = c->allow_dark;
+    return r;
+}
+
+/* tr_scene_file_apply's failure in the command's words: its options named where they
+ * are the way out. Every one is a usage error. */
+static int apply_error(const cli_args *a, const cli_common *c, const tr_render_settings *st,
+                       const tr_error *err) {
+    switch (err->code) {
+    case TR_STATUS_UNSUPPORTED:
+        return cli_error(a, "%s (use --accel)", err->msg);
+    case TR_STATUS_NOT_FOUND:
+        return cli_error(a,
+                         "%s: the scene has no emitter, so the image would be black (set "
+                         "render.allow_no_emitter or pass --allow-dark if that is intended)",
+                         c->scene);
+    case TR_STATUS_LIMIT:
+        return cli_error(a, "--width/--height: %ux%u is more than %u pixels", st->width, st->height,
+                         TR_FILM_MAX_PIXELS);
+    default:
+        return cli_error(a, "%s", err->msg);
+    }
+}
+
 int cli_load_scene_file(const cli_args *a, cli_common *c, tr_scene *scene, tr_scene_file *file) {
     tr_scene_file local;
     if (!file) {
@@ -477,70 +524,22 @@ int cli_load_scene_file(const cli_args *a, cli_common *c, tr_scene *scene, tr_sc
     } else if (tr_scene_file_load(scene, c->scene, NULL, file, &err) != TR_OK) {
         return cli_error(a, "%s", err.msg);
     }
-    int rc = CLI_OK;
-    if (!(c->given & CLI_GIVEN_WIDTH) && file->has_width) {
-        c->width = file->width;
-    }
-    if (!(c->given & CLI_GIVEN_HEIGHT) && file->has_height) {
-        c->height = file->height;
-    }
-    if (!(c->given & CLI_GIVEN_MAX_DEPTH) && file->has_max_depth) {
-        c->max_depth = file->max_depth;
-    }
-    if (!(c->given & CLI_GIVEN_ACCEL) && file->has_accel) {
-        if (!tr_accel_available(file->accel)) {
-            rc = cli_error(a,
-                           "%s: render.accel: '%s' is not available: this build of trac0r has "
-                           "no Embree support (use --accel)",
-                           c->scene, tr_accel_name(file->accel));
-        }
-        c->accel = file->accel;
-    }
-    if (rc == CLI_OK && !(c->given & CLI_GIVEN_INTEGRATOR) && file->has_integrator) {
-        int k = tr_integrator_from_name(file->integrator);
-        if (k >= 0) {
-            c->integrator = k;
-        } else {
-            char names[128];
-            cli_integrator_list(names, sizeof names);
-            rc = cli_error(a, "%s: render.integrator: unknown integrator '%s' (available: %s)",
-                           c->scene, file->integrator, names);
-        }
-    }
-    /* A scene file's depth is pt's; bdpt follows at most TR_MAX_DEPTH_BDPT
-     * segments (--max-depth beyond that is an error, tr_render_config_check). */
-    if (rc == CLI_OK && !(c->given & CLI_GIVEN_MAX_DEPTH) &&
-        tr_integrator_is_bidirectional(c->integrator) && c->max_depth > TR_MAX_DEPTH_BDPT) {
-        c->max_depth = TR_MAX_DEPTH_BDPT;
-    }
-    if (rc == CLI_OK && file->emissive_triangles == 0 && !file->allow_no_emitter &&
-        !c->allow_dark) {
-        rc = cli_error(a,
-                       "%s: the scene has no emitter, so the image would be black (set "
-                       "render.allow_no_emitter or pass --allow-dark if that is intended)",
-                       c->scene);
-    }
-    if (rc == CLI_OK && (uint64_t)c->width * c->height > TR_FILM_MAX_PIXELS) {
-        rc = cli_error(a, "--width/--height: %ux%u is more than %u pixels", c->width, c->height,
-                       TR_FILM_MAX_PIXELS);
-    }
-    tr_camera cam = *tr_scene_camera(scene);
-    if (rc == CLI_OK && tr_camera_resize(&cam, c->width, c->height, &err) != TR_OK) {
-        rc = cli_error(a, "%s: camera: %s", c->scene, err.msg);
-    }
-    tr_scene_set_camera(scene, &cam);
-    if (rc != CLI_OK) {
+    tr_render_settings st;
+    const tr_render_request req = file_request(c, file);
+    if (tr_scene_file_apply(scene, c->scene, file, &req, &st, &err) != TR_OK) {
         tr_scene_free(scene);
-        return rc;
+        return apply_error(a, c, &st, &err);
     }
+    c->width = st.width;
+    c->height = st.height;
+    c->accel = st.accel;
+    c->integrator = st.config.integrator;
+    c->max_depth = st.config.max_depth;
     for (uint32_t i = 0; i < file->warning_count; ++i) {
         if (file->emissive_triangles == 0 && strstr(file->warnings[i], "no emitter")) {
             continue; /* allowed, said so above */
         }
         fprintf(stderr, "trac0r %s: warning: %s: %s\n", a->cmd, c->scene, file->warnings[i]);
-    }
-    if (c->light_sampling >= 0) { /* the command line over render.light_sampling */
-        tr_scene_set_light_sampling(scene, c->light_sampling, NULL);
     }
     if (tr_scene_commit(scene, c->accel, &err) != TR_OK) {
         fprintf(stderr, "trac0r %s: %s\n", a->cmd, err.msg);

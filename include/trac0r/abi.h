@@ -20,6 +20,7 @@
 #include "trac0r/realtime.h"
 #include "trac0r/scene.h"
 #include "trac0r/scene_file.h"
+#include "trac0r/session.h"
 #include "trac0r/types.h"
 
 /* Every public struct: X(NAME, type). A struct added to a public header is added here. */
@@ -40,7 +41,11 @@
     X(MESH_IMPORT_STATS, tr_mesh_import_stats)                                                     \
     X(REALTIME_DESC, tr_realtime_desc)                                                             \
     X(REALTIME_FRAME_DESC, tr_realtime_frame_desc)                                                 \
-    X(REALTIME_RESULT, tr_realtime_result)
+    X(REALTIME_RESULT, tr_realtime_result)                                                         \
+    X(RENDER_REQUEST, tr_render_request)                                                           \
+    X(RENDER_SETTINGS, tr_render_settings)                                                         \
+    X(SESSION_DESC, tr_session_desc)                                                               \
+    X(SESSION_PROGRESS, tr_session_progress)
 
 #define TR_ABI_ENUM_ENTRY(name, type) TR_ABI_##name,
 typedef enum tr_abi_type { TR_ABI_TYPES(TR_ABI_ENUM_ENTRY) TR_ABI_TYPE_COUNT } tr_abi_type;

@@ -17,6 +17,7 @@
 #include <stdint.h>
 
 #include "trac0r/error.h"
+#include "trac0r/render.h"
 #include "trac0r/scene.h"
 
 /* The most triangles a scene file may generate (shapes and meshes together). */
@@ -58,6 +59,55 @@ typedef struct tr_scene_file {
     uint32_t warning_count;
     char warnings[TR_SCENE_FILE_MAX_WARNINGS][256];
 } tr_scene_file;
+
+/* What a program asks of a render of a scene file (tr_scene_file_apply). Zero-initialised,
+ * every field means "the file's render block, else the default": a program passes on what
+ * its user gave and leaves the rest 0 or NULL. */
+typedef struct tr_render_request {
+    uint32_t width, height;     /* the image; 0: render.width / render.height, else 800 / 600 */
+    uint32_t spp;               /* samples per pixel; 0: render.spp, else 16 (tr_session's) */
+    int max_depth;              /* 1..TR_MAX_DEPTH_LIMIT; 0: render.max_depth (at most
+                                   TR_MAX_DEPTH_BDPT for bdpt and vcm), else the integrator's
+                                   default */
+    const char *integrator;     /* a name ("pt", "bdpt"); NULL: render.integrator, else pt */
+    const char *accel;          /* a name ("bvh", "flat"); NULL: render.accel, else bvh */
+    const char *light_sampling; /* "auto", "tree", "power"; NULL: render.light_sampling */
+    int allow_dark;             /* nonzero: render a scene without an emitter even where the
+                                   file does not set render.allow_no_emitter */
+} tr_render_request;
+
+/* The settings a render of the file uses, every default resolved. */
+typedef struct tr_render_settings {
+    uint32_t width, height; /* the image, and now the scene camera's screen */
+    uint32_t spp;           /* for tr_session_desc.spp */
+    tr_accel_type accel;    /* for tr_scene_commit: available in this build */
+    /* tr_render_config_default() with the integrator and max_depth resolved (max_depth 0:
+     * the integrator's default, tr_default_max_depth). */
+    tr_render_config config;
+} tr_render_settings;
+
+/* Applies the render block of a scene file (or model file) that tr_scene_file_load,
+ * tr_scene_file_parse or tr_scene_model_load just read into s and `file`: resolves the
+ * request (NULL: a zero one) against the file's values and the defaults into *out,
+ * resizes the scene's camera to the image size and sets the requested light sampling.
+ * The scene is not committed: tr_scene_commit(s, out->accel, err) is next. `path` names
+ * the file in messages. Fails, with a message naming the JSON path or request field at
+ * fault, on:
+ *   - an unknown integrator name in `file` (the JSON parser refuses those itself; a
+ *     tr_scene_file filled another way): TR_STATUS_PARSE ("FILE: render.integrator:
+ *     unknown integrator 'x' (available: pt, ...)");
+ *   - an unknown integrator, accel or light sampling name in the request:
+ *     TR_STATUS_INVALID_ARGUMENT;
+ *   - an acceleration structure this build lacks (embree without Embree), the file's
+ *     ("FILE: render.accel: ...") or the request's: TR_STATUS_UNSUPPORTED;
+ *   - a scene without an emitter, unless render.allow_no_emitter or req->allow_dark:
+ *     TR_STATUS_NOT_FOUND (the image would be black);
+ *   - an image of more than TR_FILM_MAX_PIXELS pixels: TR_STATUS_LIMIT;
+ *   - a camera that cannot take the size: tr_camera_resize's status.
+ * On failure out still holds the image size and spp, resolved first (the size a
+ * TR_STATUS_LIMIT names); the camera is resized only on success. */
+int tr_scene_file_apply(tr_scene *s, const char *path, const tr_scene_file *file,
+                        const tr_render_request *req, tr_render_settings *out, tr_error *err);
 
 /* Reads and builds a scene file into s (a scene from tr_scene_create: whatever it held
  * is released first); the camera is set up for the file's image size

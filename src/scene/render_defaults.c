@@ -1,0 +1,154 @@
+/* render_defaults.c - a scene file's render block applied to a program's request
+ * (tr_scene_file_apply): what every program that renders scene files would otherwise
+ * repeat, with the same defaults and messages as the trac0r command. */
+#include "trac0r/camera.h"
+#include "trac0r/film.h"
+#include "trac0r/registry.h"
+#include "trac0r/scene_file.h"
+#include "trac0r/session.h"
+
+#include <stdio.h>
+#include <string.h>
+
+#define DEFAULT_WIDTH 800u
+#define DEFAULT_HEIGHT 600u
+
+static uint32_t pick_u32(uint32_t asked, int has, uint32_t file_value, uint32_t fallback) {
+    if (asked) {
+        return asked;
+    }
+    return has ? file_value : fallback;
+}
+
+/* The integrator: the request's name, else the file's, else pt. */
+static int resolve_integrator(const char *path, const tr_scene_file *file,
+                              const tr_render_request *req, int *out, tr_error *err) {
+    const char *name = req->integrator;
+    const int from_file = !name && file->has_integrator;
+    if (from_file) {
+        name = file->integrator;
+    }
+    if (!name) {
+        *out = TR_INTEGRATOR_PT;
+        return TR_OK;
+    }
+    const int k = tr_integrator_from_name(name);
+    if (k >= 0) {
+        *out = k;
+        return TR_OK;
+    }
+    char names[128];
+    size_t count;
+    const char *const *all = tr_integrator_names(&count);
+    tr_names_join(names, sizeof names, all, count, NULL);
+    if (from_file) {
+        return tr_error_set(err, TR_STATUS_PARSE,
+                            "%s: render.integrator: unknown integrator '%s' (available: %s)", path,
+                            name, names);
+    }
+    return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                        "integrator: unknown integrator '%s' (available: %s)", name, names);
+}
+
+/* The acceleration structure: the request's name, else the file's, else the BVH; one
+ * this build lacks is refused. */
+static int resolve_accel(const char *path, const tr_scene_file *file, const tr_render_request *req,
+                         tr_accel_type *out, tr_error *err) {
+    *out = TR_ACCEL_TYPE_BVH;
+    if (req->accel) {
+        const int k = tr_accel_from_name(req->accel);
+        if (k < 0) {
+            return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                                "accel: unknown acceleration structure '%s'", req->accel);
+        }
+        *out = (tr_accel_type)k;
+        if (!tr_accel_available(*out)) {
+            return tr_error_set(err, TR_STATUS_UNSUPPORTED,
+                                "accel: '%s' is not available: this build of trac0r has no "
+                                "Embree support",
+                                req->accel);
+        }
+        return TR_OK;
+    }
+    if (file->has_accel) {
+        *out = file->accel;
+        if (!tr_accel_available(*out)) {
+            return tr_error_set(err, TR_STATUS_UNSUPPORTED,
+                                "%s: render.accel: '%s' is not available: this build of trac0r "
+                                "has no Embree support",
+                                path, tr_accel_name(*out));
+        }
+    }
+    return TR_OK;
+}
+
+/* The max depth: the request's, else the file's (written for pt: bdpt and vcm follow at
+ * most TR_MAX_DEPTH_BDPT segments, so a longer one is cut to that), else 0, the
+ * integrator's default. A request beyond bdpt's limit is left for tr_render_config_check
+ * to refuse. */
+static int resolve_max_depth(const tr_scene_file *file, const tr_render_request *req,
+                             int integrator) {
+    if (req->max_depth) {
+        return req->max_depth;
+    }
+    int depth = file->has_max_depth ? file->max_depth : TR_MAX_DEPTH_DEFAULT;
+    if (tr_integrator_is_bidirectional(integrator) && depth > TR_MAX_DEPTH_BDPT) {
+        depth = TR_MAX_DEPTH_BDPT;
+    }
+    return depth;
+}
+
+int tr_scene_file_apply(tr_scene *s, const char *path, const tr_scene_file *file,
+                        const tr_render_request *req, tr_render_settings *out, tr_error *err) {
+    static const tr_render_request zero;
+    if (!s || !file || !out) {
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "tr_scene_file_apply: the scene, file and out must not be NULL");
+    }
+    if (!req) {
+        req = &zero;
+    }
+    if (!path) {
+        path = "(scene)";
+    }
+    memset(out, 0, sizeof *out);
+    out->config = tr_render_config_default();
+    out->width = pick_u32(req->width, file->has_width, file->width, DEFAULT_WIDTH);
+    out->height = pick_u32(req->height, file->has_height, file->height, DEFAULT_HEIGHT);
+    out->spp = pick_u32(req->spp, file->has_spp, file->spp, TR_SESSION_SPP_DEFAULT);
+    int light_sampling = -1;
+    if (req->light_sampling) {
+        light_sampling = tr_light_sampling_from_name(req->light_sampling);
+        if (light_sampling < 0) {
+            return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                                "light_sampling: unknown light sampling '%s' (available: auto, "
+                                "tree, power)",
+                                req->light_sampling);
+        }
+    }
+    if (resolve_accel(path, file, req, &out->accel, err) != TR_OK ||
+        resolve_integrator(path, file, req, &out->config.integrator, err) != TR_OK) {
+        return TR_ERR;
+    }
+    out->config.max_depth = resolve_max_depth(file, req, out->config.integrator);
+    if (file->emissive_triangles == 0 && !file->allow_no_emitter && !req->allow_dark) {
+        return tr_error_set(err, TR_STATUS_NOT_FOUND,
+                            "%s: the scene has no emitter, so the image would be black (set "
+                            "render.allow_no_emitter if that is intended)",
+                            path);
+    }
+    if ((uint64_t)out->width * out->height > TR_FILM_MAX_PIXELS) {
+        return tr_error_set(err, TR_STATUS_LIMIT, "width/height: %ux%u is more than %u pixels",
+                            out->width, out->height, TR_FILM_MAX_PIXELS);
+    }
+    tr_camera cam = *tr_scene_camera(s);
+    tr_error cam_err;
+    if (tr_camera_resize(&cam, out->width, out->height, &cam_err) != TR_OK) {
+        return tr_error_set(err, cam_err.code, "%s: camera: %s", path, cam_err.msg);
+    }
+    tr_scene_set_camera(s, &cam);
+    if (light_sampling >= 0) {
+        return tr_scene_set_light_sampling(s, light_sampling, err);
+    }
+    return TR_OK;
+}

@@ -1,0 +1,256 @@
+/* A scene file's render block applied to a program's request (tr_scene_file_apply): the
+ * file's values where the request leaves 0, the request's where it gives them, the
+ * defaults where neither does, bdpt's depth limit, the refusals (an unknown integrator, an
+ * accel this build lacks, a scene without an emitter, too many pixels) and the camera
+ * resized to the image. */
+#include <stdio.h>
+#include <string.h>
+
+#include "check.h"
+#include "trac0r/trac0r.h"
+
+/* A lit box seen from the front; RENDER is spliced in as the file's render block. */
+#define SCENE_HEAD                                                                                 \
+    "{\"camera\": {\"position\": [0, 0.3, -1.2], \"look_at\": [0, 0.3, 0], \"fov\": 60},"          \
+    " \"materials\": {\"white\": {\"type\": \"diffuse\", \"color\": [0.7, 0.7, 0.7]},"             \
+    " \"lamp\": {\"type\": \"emitter\", \"color\": [1, 1, 1], \"emittance\": 10}},"                \
+    " \"shapes\": [{\"type\": \"box\", \"position\": [0, 0, 0], \"scale\": 0.5, \"material\":"     \
+    " \"white\"}"
+#define LAMP                                                                                       \
+    ", {\"type\": \"plane\", \"position\": [0, 0.9, 0], \"orientation\": [180, 0, 0], \"scale\":"  \
+    " 0.4, \"material\": \"lamp\"}"
+
+/* Parses a scene (with the lamp or without) whose render block is `render` (NULL: none)
+ * into s and f. */
+static int load(tr_scene *s, tr_scene_file *f, int lamp, const char *render) {
+    char text[2048];
+    snprintf(text, sizeof text, "%s%s]%s%s%s}", SCENE_HEAD, lamp ? LAMP : "",
+             render ? ", \"render\": {" : "", render ? render : "", render ? "}" : "");
+    tr_error err;
+    const int rc = tr_scene_file_parse(s, "mem.json", text, strlen(text), NULL, f, &err);
+    CHECK(rc == TR_OK, "parse: %s", err.msg);
+    return rc;
+}
+
+static const char full_block[] = "\"width\": 24, \"height\": 16, \"spp\": 2, \"max_depth\": 4,"
+                                 " \"accel\": \"flat\", \"integrator\": \"naive\"";
+
+/* The zero request is the defaults: 800x600, 16 spp, pt at its own depth, the BVH. */
+static void test_zero_request(tr_scene *s) {
+    tr_scene_file f;
+    if (load(s, &f, 1, NULL) != TR_OK) {
+        return;
+    }
+    tr_render_request req;
+    memset(&req, 0, sizeof req);
+    tr_render_settings st;
+    tr_error err;
+    int rc = tr_scene_file_apply(s, "mem.json", &f, &req, &st, &err);
+    CHECK(rc == TR_OK, "zero request: %s", err.msg);
+    CHECK(st.width == 800 && st.height == 600, "size %ux%u", st.width, st.height);
+    CHECK(st.spp == TR_SESSION_SPP_DEFAULT, "spp %u", st.spp);
+    CHECK(st.accel == TR_ACCEL_TYPE_BVH, "accel %s", tr_accel_name(st.accel));
+    CHECK(st.config.integrator == TR_INTEGRATOR_PT, "integrator %d", st.config.integrator);
+    CHECK(st.config.max_depth == TR_MAX_DEPTH_DEFAULT, "max depth %d", st.config.max_depth);
+    const tr_render_config def = tr_render_config_default();
+    CHECK(st.config.seed == def.seed && st.config.sampler == def.sampler &&
+              st.config.stride == def.stride,
+          "the rest of the config is not tr_render_config_default()'s");
+    CHECK(tr_scene_camera(s)->screen_width == 800 && tr_scene_camera(s)->screen_height == 600,
+          "camera %ux%u", tr_scene_camera(s)->screen_width, tr_scene_camera(s)->screen_height);
+    /* A NULL request means the same. */
+    rc = tr_scene_file_apply(s, "mem.json", &f, NULL, &st, &err);
+    CHECK(rc == TR_OK && st.width == 800 && st.spp == TR_SESSION_SPP_DEFAULT,
+          "NULL request: rc %d, %ux%u, %u spp", rc, st.width, st.height, st.spp);
+}
+
+/* The file's values where the request leaves 0; the request's where it gives them. */
+static void test_file_and_request(tr_scene *s) {
+    tr_scene_file f;
+    if (load(s, &f, 1, full_block) != TR_OK) {
+        return;
+    }
+    tr_render_settings st;
+    tr_error err;
+    int rc = tr_scene_file_apply(s, "mem.json", &f, NULL, &st, &err);
+    CHECK(rc == TR_OK, "file values: %s", err.msg);
+    CHECK(st.width == 24 && st.height == 16 && st.spp == 2, "file: %ux%u, %u spp", st.width,
+          st.height, st.spp);
+    CHECK(st.config.max_depth == 4, "file: depth %d", st.config.max_depth);
+    CHECK(st.accel == TR_ACCEL_TYPE_FLAT, "file: accel %s", tr_accel_name(st.accel));
+    CHECK(st.config.integrator == TR_INTEGRATOR_NAIVE, "file: integrator %d", st.config.integrator);
+    CHECK(tr_scene_camera(s)->screen_width == 24 && tr_scene_camera(s)->screen_height == 16,
+          "file: camera %ux%u", tr_scene_camera(s)->screen_width,
+          tr_scene_camera(s)->screen_height);
+
+    tr_render_request req = {0};
+    req.width = 10;
+    req.spp = 5;
+    req.max_depth = 7;
+    req.integrator = "pt";
+    req.accel = "bvh2";
+    rc = tr_scene_file_apply(s, "mem.json", &f, &req, &st, &err);
+    CHECK(rc == TR_OK, "request values: %s", err.msg);
+    CHECK(st.width == 10 && st.height == 16 && st.spp == 5, "request: %ux%u, %u spp", st.width,
+          st.height, st.spp);
+    CHECK(st.config.max_depth == 7, "request: depth %d", st.config.max_depth);
+    CHECK(st.accel == TR_ACCEL_TYPE_BVH2, "request: accel %s", tr_accel_name(st.accel));
+    CHECK(st.config.integrator == TR_INTEGRATOR_PT, "request: integrator %d", st.config.integrator);
+    CHECK(tr_scene_camera(s)->screen_width == 10 && tr_scene_camera(s)->screen_height == 16,
+          "request: camera %ux%u", tr_scene_camera(s)->screen_width,
+          tr_scene_camera(s)->screen_height);
+    /* The resolved scene commits and renders. */
+    rc = tr_scene_commit(s, st.accel, &err);
+    CHECK(rc == TR_OK, "commit: %s", err.msg);
+
+    req = (tr_render_request){0};
+    req.light_sampling = "power";
+    rc = tr_scene_file_apply(s, "mem.json", &f, &req, &st, &err);
+    CHECK(rc == TR_OK, "light sampling: %s", err.msg);
+    rc = tr_scene_commit(s, st.accel, &err);
+    CHECK(rc == TR_OK && tr_scene_light_sampling(s) == TR_LIGHT_SAMPLING_POWER,
+          "light sampling power not applied: rc %d, mode %d", rc, tr_scene_light_sampling(s));
+}
+
+/* bdpt and vcm follow at most TR_MAX_DEPTH_BDPT segments: a file's longer depth (written
+ * for pt) is cut to that; a request's is left for tr_render_config_check to refuse. */
+static void test_bdpt_clamp(tr_scene *s) {
+    tr_scene_file f;
+    if (load(s, &f, 1, "\"max_depth\": 40, \"integrator\": \"bdpt\"") != TR_OK) {
+        return;
+    }
+    tr_render_settings st;
+    tr_error err;
+    int rc = tr_scene_file_apply(s, "mem.json", &f, NULL, &st, &err);
+    CHECK(rc == TR_OK && st.config.integrator == TR_INTEGRATOR_BDPT, "bdpt file: rc %d, %d", rc,
+          st.config.integrator);
+    CHECK(st.config.max_depth == TR_MAX_DEPTH_BDPT, "bdpt: depth %d, expected %d",
+          st.config.max_depth, TR_MAX_DEPTH_BDPT);
+    tr_render_request req = {0};
+    req.integrator = "pt";
+    rc = tr_scene_file_apply(s, "mem.json", &f, &req, &st, &err);
+    CHECK(rc == TR_OK && st.config.max_depth == 40, "pt keeps the file's 40: %d",
+          st.config.max_depth);
+    req.integrator = "vcm";
+    req.max_depth = 40;
+    rc = tr_scene_file_apply(s, "mem.json", &f, &req, &st, &err);
+    CHECK(rc == TR_OK && st.config.max_depth == 40, "a requested depth is kept: %d",
+          st.config.max_depth);
+    CHECK_STATUS(tr_render_config_check(&st.config, &err), err, TR_STATUS_LIMIT, "vcm at depth 40");
+    /* A file depth within the limit is kept. */
+    if (load(s, &f, 1, "\"max_depth\": 9, \"integrator\": \"vcm\"") != TR_OK) {
+        return;
+    }
+    rc = tr_scene_file_apply(s, "mem.json", &f, NULL, &st, &err);
+    CHECK(rc == TR_OK && st.config.max_depth == 9, "vcm depth 9: %d", st.config.max_depth);
+}
+
+static void test_refusals(tr_scene *s) {
+    tr_scene_file f;
+    tr_render_settings st;
+    tr_error err;
+    /* The parser refuses an unknown name itself; a tr_scene_file filled another way may
+     * still hold one. */
+    if (load(s, &f, 1, "\"integrator\": \"naive\"") != TR_OK) {
+        return;
+    }
+    snprintf(f.integrator, sizeof f.integrator, "magic");
+    CHECK_STATUS(tr_scene_file_apply(s, "mem.json", &f, NULL, &st, &err), err, TR_STATUS_PARSE,
+                 "the file's unknown integrator");
+    CHECK(strstr(err.msg, "mem.json: render.integrator: unknown integrator 'magic'") != NULL,
+          "message: %s", err.msg);
+    tr_render_request req = {0};
+    req.integrator = "naive"; /* the request's wins: no error */
+    CHECK(tr_scene_file_apply(s, "mem.json", &f, &req, &st, &err) == TR_OK &&
+              st.config.integrator == TR_INTEGRATOR_NAIVE,
+          "request over a bad file integrator: %s", err.msg);
+    req.integrator = "fast";
+    CHECK_STATUS(tr_scene_file_apply(s, "mem.json", &f, &req, &st, &err), err,
+                 TR_STATUS_INVALID_ARGUMENT, "the request's unknown integrator");
+    req = (tr_render_request){0};
+    req.integrator = "pt";
+    req.accel = "octree";
+    CHECK_STATUS(tr_scene_file_apply(s, "mem.json", &f, &req, &st, &err), err,
+                 TR_STATUS_INVALID_ARGUMENT, "the request's unknown accel");
+    req.accel = NULL;
+    req.light_sampling = "random";
+    CHECK_STATUS(tr_scene_file_apply(s, "mem.json", &f, &req, &st, &err), err,
+                 TR_STATUS_INVALID_ARGUMENT, "the request's unknown light sampling");
+
+    /* Embree where the build has none: the file's and the request's alike. */
+    if (load(s, &f, 1, "\"accel\": \"embree\"") != TR_OK) {
+        return;
+    }
+    int rc = tr_scene_file_apply(s, "mem.json", &f, NULL, &st, &err);
+    if (tr_accel_available(TR_ACCEL_TYPE_EMBREE)) {
+        CHECK(rc == TR_OK && st.accel == TR_ACCEL_TYPE_EMBREE, "embree: %s", err.msg);
+    } else {
+        CHECK_STATUS(rc, err, TR_STATUS_UNSUPPORTED, "the file's embree without Embree");
+        CHECK(strstr(err.msg, "render.accel") != NULL, "message: %s", err.msg);
+        req = (tr_render_request){0};
+        req.accel = "embree";
+        if (load(s, &f, 1, NULL) != TR_OK) {
+            return;
+        }
+        CHECK_STATUS(tr_scene_file_apply(s, "mem.json", &f, &req, &st, &err), err,
+                     TR_STATUS_UNSUPPORTED, "the request's embree without Embree");
+    }
+
+    /* A structure the library does not know (a tr_scene_file filled by hand) is not
+     * available either, in any build. */
+    if (load(s, &f, 1, "\"accel\": \"flat\"") != TR_OK) {
+        return;
+    }
+    f.accel = (tr_accel_type)99;
+    CHECK_STATUS(tr_scene_file_apply(s, "mem.json", &f, NULL, &st, &err), err,
+                 TR_STATUS_UNSUPPORTED, "the file's unknown accel value");
+    CHECK(strstr(err.msg, "mem.json: render.accel") != NULL, "message: %s", err.msg);
+
+    /* Too many pixels: the file's height with the request's width. */
+    if (load(s, &f, 1, "\"height\": 16384") != TR_OK) {
+        return;
+    }
+    req = (tr_render_request){0};
+    req.width = 16384;
+    CHECK_STATUS(tr_scene_file_apply(s, "mem.json", &f, &req, &st, &err), err, TR_STATUS_LIMIT,
+                 "16384x16384");
+    CHECK(st.width == 16384 && st.height == 16384, "the size at fault: %ux%u", st.width, st.height);
+}
+
+/* A scene without an emitter renders black: refused unless the file or the request
+ * allows it. */
+static void test_no_emitter(tr_scene *s) {
+    tr_scene_file f;
+    tr_render_settings st;
+    tr_error err;
+    if (load(s, &f, 0, NULL) != TR_OK) {
+        return;
+    }
+    CHECK(f.emissive_triangles == 0, "%u emissive triangles", f.emissive_triangles);
+    CHECK_STATUS(tr_scene_file_apply(s, "mem.json", &f, NULL, &st, &err), err, TR_STATUS_NOT_FOUND,
+                 "no emitter");
+    tr_render_request req = {0};
+    req.allow_dark = 1;
+    int rc = tr_scene_file_apply(s, "mem.json", &f, &req, &st, &err);
+    CHECK(rc == TR_OK, "allow_dark: %s", err.msg);
+    if (load(s, &f, 0, "\"allow_no_emitter\": true") != TR_OK) {
+        return;
+    }
+    rc = tr_scene_file_apply(s, "mem.json", &f, NULL, &st, &err);
+    CHECK(rc == TR_OK, "render.allow_no_emitter: %s", err.msg);
+}
+
+int main(void) {
+    tr_scene *s = tr_scene_create(NULL);
+    CHECK(s != NULL, "tr_scene_create");
+    if (!s) {
+        return check_finish("test_render_defaults");
+    }
+    test_zero_request(s);
+    test_file_and_request(s);
+    test_bdpt_clamp(s);
+    test_refusals(s);
+    test_no_emitter(s);
+    tr_scene_destroy(s);
+    return check_finish("test_render_defaults");
+}
