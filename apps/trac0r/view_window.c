@@ -163,17 +163,38 @@ typedef struct stage_times {
     double input, rebuild, render, temporal, spatial, tonemap, upload;
 } stage_times;
 
-int view_run_window(const cli_args *a, const view_options *o, tr_scene *scene, cli_backend *be) {
-    tr_error err;
-    const char *font_path = o->font_path;
+/* Everything the window's loop keeps between ticks. */
+typedef struct view_window {
+    const view_options *o;
+    tr_scene *scene;
+    SDL_Window *win;
+    SDL_Renderer *ren;
+    SDL_Texture *tex;
+    TTF_Font *font;
+    int ttf;
+    view_renderer r;
+    uint32_t w, h, tex_w, tex_h;
+    fly_camera fly0, fly;
+    tr_camera cam;
+    view_state st;
+    uint64_t shown_seq, shown_gen, last_printed_seq, fps_frames0, frames_done, cancelled;
+    uint32_t spp;
+    stage_times times;
+    double fps, fps_t0, last, title_t, drawn_t, last_change_t;
+    int state_dirty, state_failed, mouse_x, mouse_y, was_moving, running;
+    shown_frame sf;
+} view_window;
+
+/* SDL's video on the display the environment names. CLI_OK, or the status to exit with. */
+static int open_video(const cli_args *a) {
     /* With DISPLAY set and no driver asked for, use X11 only: SDL would otherwise fall
      * back to other drivers when the X server cannot be reached. */
     const char *driver = getenv("SDL_VIDEODRIVER"), *wayland = getenv("WAYLAND_DISPLAY");
+    const char *display = getenv("DISPLAY");
     if ((!driver || !*driver) && (!wayland || !*wayland)) {
         SDL_SetHint(SDL_HINT_VIDEODRIVER, "x11");
     }
     if (SDL_Init(SDL_INIT_VIDEO) != 0) {
-        const char *display = getenv("DISPLAY");
         cli_error(a, "cannot open a window on DISPLAY='%s': %s", display ? display : "",
                   SDL_GetError());
         SDL_Quit();
@@ -185,7 +206,6 @@ int view_run_window(const cli_args *a, const view_options *o, tr_scene *scene, c
     const char *got = SDL_GetCurrentVideoDriver();
     if (got && (strcmp(got, "offscreen") == 0 || strcmp(got, "dummy") == 0) &&
         !(driver && strcmp(driver, got) == 0)) {
-        const char *display = getenv("DISPLAY");
         cli_error(a,
                   "cannot open a window: no display reachable (DISPLAY='%s', WAYLAND_DISPLAY='%s'; "
                   "SDL fell back to its %s driver)",
@@ -193,74 +213,75 @@ int view_run_window(const cli_args *a, const view_options *o, tr_scene *scene, c
         SDL_Quit();
         return CLI_USAGE;
     }
-    int status = CLI_FAILURE;
-    SDL_Window *win = NULL;
-    SDL_Renderer *ren = NULL;
-    SDL_Texture *tex = NULL;
-    TTF_Font *font = NULL;
-    int ttf = 0;
-    view_renderer r;
-    r.started = 0;
+    return CLI_OK;
+}
 
+/* The font, the window and its renderer, and the render size from the window's.
+ * CLI_OK, or the status to exit with (its message printed). */
+static int open_window(view_window *vw) {
+    const view_options *o = vw->o;
     if (TTF_Init() != 0) {
         fprintf(stderr, "trac0r view: SDL2_ttf: %s\n", TTF_GetError());
-        goto done;
+        return CLI_FAILURE;
     }
-    ttf = 1;
-    font = TTF_OpenFont(font_path, 14);
-    if (!font) {
-        fprintf(stderr, "trac0r view: cannot load the font %s: %s\n", font_path, TTF_GetError());
-        status = CLI_USAGE;
-        goto done;
+    vw->ttf = 1;
+    vw->font = TTF_OpenFont(o->font_path, 14);
+    if (!vw->font) {
+        fprintf(stderr, "trac0r view: cannot load the font %s: %s\n", o->font_path, TTF_GetError());
+        return CLI_USAGE;
     }
-    win = SDL_CreateWindow("trac0r view", SDL_WINDOWPOS_UNDEFINED, SDL_WINDOWPOS_UNDEFINED,
-                           (int)o->c.width, (int)o->c.height, SDL_WINDOW_RESIZABLE);
-    if (!win) {
+    vw->win = SDL_CreateWindow("trac0r view", SDL_WINDOWPOS_UNDEFINED, SDL_WINDOWPOS_UNDEFINED,
+                               (int)o->c.width, (int)o->c.height, SDL_WINDOW_RESIZABLE);
+    if (!vw->win) {
         fprintf(stderr, "trac0r view: cannot create the window: %s\n", SDL_GetError());
-        goto done;
+        return CLI_FAILURE;
     }
-    ren = SDL_CreateRenderer(win, -1, 0);
-    if (!ren) {
+    vw->ren = SDL_CreateRenderer(vw->win, -1, 0);
+    if (!vw->ren) {
         fprintf(stderr, "trac0r view: cannot create a renderer: %s\n", SDL_GetError());
-        goto done;
+        return CLI_FAILURE;
     }
+    vw->w = o->c.width;
+    vw->h = o->c.height;
+    int ow = 0, oh = 0;
+    if (SDL_GetRendererOutputSize(vw->ren, &ow, &oh) == 0 && ow > 0 && oh > 0) {
+        vw->w = (uint32_t)ow;
+        vw->h = (uint32_t)oh;
+        fit_film_limits(vw->ren, &vw->w, &vw->h);
+    }
+    return CLI_OK;
+}
 
-    uint32_t w = o->c.width, h = o->c.height;
-    {
-        int ow = 0, oh = 0;
-        if (SDL_GetRendererOutputSize(ren, &ow, &oh) == 0 && ow > 0 && oh > 0) {
-            w = (uint32_t)ow;
-            h = (uint32_t)oh;
-            fit_film_limits(ren, &w, &h);
-        }
-    }
-    const tr_camera *scene_cam = tr_scene_camera(scene);
-    const tr_aabb bounds = tr_scene_bounds(scene);
-    const fly_camera fly0 = fly_from_camera(scene_cam, view_default_speed(&bounds));
-    fly_camera fly = fly0;
+/* The camera, the state and the render thread. CLI_OK or CLI_FAILURE (said). */
+static int start_rendering(view_window *vw, cli_backend *be) {
+    const view_options *o = vw->o;
+    tr_error err;
+    const tr_camera *scene_cam = tr_scene_camera(vw->scene);
+    const tr_aabb bounds = tr_scene_bounds(vw->scene);
+    vw->fly0 = fly_from_camera(scene_cam, view_default_speed(&bounds));
+    vw->fly = vw->fly0;
     /* The scene's own camera until the user moves: so that the first view's film is
      * exactly what `trac0r render` computes. */
-    tr_camera cam = *scene_cam;
-    if (tr_camera_resize(&cam, w, h, &err) != TR_OK) {
+    vw->cam = *scene_cam;
+    if (tr_camera_resize(&vw->cam, vw->w, vw->h, &err) != TR_OK) {
         fprintf(stderr, "trac0r view: %s\n", err.msg);
-        goto done;
+        return CLI_FAILURE;
     }
-    view_state st = {0};
-    st.stride = o->stride;
-    st.exposure = o->exposure;
-    st.recon = o->recon;
-    st.bvh_depth = 3;
-
+    vw->st.stride = o->stride;
+    vw->st.exposure = o->exposure;
+    vw->st.recon = o->recon;
+    vw->st.bvh_depth = 3;
     tr_render_config cfg = cli_render_config(&o->c);
     /* Moving frames: independent numbers unless --sampler names a sampler. */
     const int motion_sampler = o->c.sampler >= 0 ? o->c.sampler : TR_SAMPLER_REALTIME;
-    if (view_renderer_start(&r, scene, o->animate, be->dev, &cfg, motion_sampler, &o->recon_params,
-                            &cam, st.stride, st.exposure, o->curve, o->max_spp, &err) != TR_OK) {
+    if (view_renderer_start(&vw->r, vw->scene, o->animate, be->dev, &cfg, motion_sampler,
+                            &o->recon_params, &vw->cam, vw->st.stride, vw->st.exposure, o->curve,
+                            o->max_spp, &err) != TR_OK) {
         fprintf(stderr, "trac0r view: %s\n", err.msg);
-        goto done;
+        return CLI_FAILURE;
     }
-    view_renderer_set_budget(&r, 1000.0 / o->target_fps);
-    view_renderer_set_recon(&r, st.recon);
+    view_renderer_set_budget(&vw->r, 1000.0 / o->target_fps);
+    view_renderer_set_recon(&vw->r, vw->st.recon);
     if (o->dump_file) {
         struct sigaction sa;
         memset(&sa, 0, sizeof sa);
@@ -269,391 +290,465 @@ int view_run_window(const cli_args *a, const view_options *o, tr_scene *scene, c
         sa.sa_flags = SA_RESTART;
         sigaction(SIGUSR1, &sa, NULL);
     }
+    vw->fps_t0 = vw->last = tr_time_now();
+    vw->state_dirty = 1;
+    vw->last_change_t = -1e9;
+    vw->running = 1;
+    return CLI_OK;
+}
 
-    uint32_t tex_w = 0, tex_h = 0;
-    uint64_t shown_seq = 0, shown_gen = 0, last_printed_seq = 0;
-    uint32_t spp = 0;
-    stage_times times = {0};
-    double fps = 0.0, fps_t0 = tr_time_now(), last = fps_t0, title_t = 0.0, drawn_t = 0.0;
-    uint64_t fps_frames0 = 0;
-    int state_dirty = 1, state_failed = 0, mouse_x = 0, mouse_y = 0, was_moving = 0;
-    double last_change_t = -1e9;
-    shown_frame sf = {0};
-    int running = 1;
-    status = CLI_OK;
-    char title[160], text[4096];
+/* C: the camera as scene JSON, on stdout and into the next free file. */
+static void save_camera(view_window *vw) {
+    char json[1024], path[4200];
+    view_camera_json(&vw->fly, json, sizeof json);
+    fputs(json, stdout);
+    fflush(stdout);
+    next_file_path(vw->o->shot_dir, "trac0r-camera", "json", path, sizeof path);
+    tr_error cerr;
+    tr_outfile *cf = tr_outfile_open(path, &cerr);
+    if (cf) {
+        fputs(json, tr_outfile_stream(cf)); /* checked by the commit */
+    }
+    if (!cf || tr_outfile_commit(cf, &cerr) != TR_OK) {
+        fprintf(stderr, "trac0r view: %s\n", cerr.msg);
+    } else {
+        printf("trac0r view: saved %s\n", path);
+        fflush(stdout);
+        vw->st.cameras += 1;
+    }
+}
 
-    while (running) {
-        SDL_Event ev;
-        int have = SDL_WaitEventTimeout(&ev, 10);
-        const int any_event = have;
-        const double t_in = tr_time_now();
-        const double dt = fmin(t_in - last, 0.1);
-        last = t_in;
-        int view_changed = 0;
-        while (have) {
-            switch (ev.type) {
-            case SDL_QUIT:
-                running = 0;
-                break;
-            case SDL_WINDOWEVENT:
-                if (ev.window.event == SDL_WINDOWEVENT_SIZE_CHANGED) {
-                    int ow = 0, oh = 0;
-                    SDL_GetRendererOutputSize(ren, &ow, &oh);
-                    if (ow > 0 && oh > 0) {
-                        w = (uint32_t)ow;
-                        h = (uint32_t)oh;
-                        fit_film_limits(ren, &w, &h);
-                        view_changed = 1;
-                    }
-                }
-                state_dirty = 1;
-                break;
-            case SDL_MOUSEBUTTONDOWN:
-                if (ev.button.button == SDL_BUTTON_RIGHT) {
-                    st.mouselook = !st.mouselook;
-                    SDL_SetRelativeMouseMode(st.mouselook ? SDL_TRUE : SDL_FALSE);
-                    state_dirty = 1;
-                }
-                break;
-            case SDL_MOUSEMOTION:
-                mouse_x = ev.motion.x;
-                mouse_y = ev.motion.y;
-                if (st.mouselook && (ev.motion.xrel || ev.motion.yrel)) {
-                    const float k = 0.0025f; /* radians per pixel */
-                    /* Pitch turns about up x dir whatever the handedness (up stays up);
-                     * yaw turns towards the screen's right, which a mirrored camera has
-                     * on the other side. */
-                    tr_vec3 right = v3_normalize(v3_cross(fly.up, fly.dir));
-                    const float yaw = fly.mirrored ? -k : k;
-                    fly.dir = view_rotate(fly.dir, fly.up, (float)ev.motion.xrel * yaw);
-                    fly.dir = view_rotate(fly.dir, right, (float)ev.motion.yrel * k);
-                    fly.up = view_rotate(fly.up, right, (float)ev.motion.yrel * k);
-                    fly_orthonormalize(&fly);
-                    view_changed = 1;
-                }
-                break;
-            case SDL_MOUSEWHEEL:
-                fly.speed *= powf(1.25f, (float)ev.wheel.y);
-                fly.speed = fminf(fmaxf(fly.speed, 1e-4f), 1e4f);
-                state_dirty = 1;
-                break;
-            case SDL_KEYDOWN:
-                if (ev.key.repeat) {
-                    break;
-                }
-                state_dirty = 1;
-                switch (ev.key.keysym.sym) {
-                case SDLK_ESCAPE:
-                    running = 0;
-                    break;
-                case SDLK_b:
-                    st.overlay = !st.overlay;
-                    break;
-                case SDLK_h:
-                    st.help = !st.help;
-                    break;
-                case SDLK_v:
-                    st.bvh = !st.bvh;
-                    break;
-                case SDLK_LEFTBRACKET:
-                    st.bvh_depth = st.bvh_depth ? st.bvh_depth - 1 : 0;
-                    break;
-                case SDLK_RIGHTBRACKET:
-                    st.bvh_depth =
-                        st.bvh_depth < view_bvh_depth(scene) ? st.bvh_depth + 1 : st.bvh_depth;
-                    break;
-                case SDLK_n:
-                    st.timings = !st.timings;
-                    break;
-                case SDLK_1:
-                case SDLK_2:
-                case SDLK_3:
-                    st.stride = 1 << (ev.key.keysym.sym - SDLK_1);
-                    view_changed = 1;
-                    break;
-                case SDLK_PLUS:
-                case SDLK_EQUALS:
-                case SDLK_KP_PLUS:
-                    st.exposure = fminf(st.exposure + 0.5f, 20.0f);
-                    view_renderer_set_exposure(&r, st.exposure);
-                    break;
-                case SDLK_MINUS:
-                case SDLK_KP_MINUS:
-                    st.exposure = fmaxf(st.exposure - 0.5f, -20.0f);
-                    view_renderer_set_exposure(&r, st.exposure);
-                    break;
-                case SDLK_m:
-                    st.recon = (st.recon + 1) % TR_RECON_COUNT;
-                    view_renderer_set_recon(&r, st.recon);
-                    break;
-                case SDLK_r:
-                    /* Back to the scene's camera and speed. */
-                    fly = fly0;
-                    view_changed = 1;
-                    break;
-                case SDLK_c: {
-                    char json[1024], path[4200];
-                    view_camera_json(&fly, json, sizeof json);
-                    fputs(json, stdout);
-                    fflush(stdout);
-                    next_file_path(o->shot_dir, "trac0r-camera", "json", path, sizeof path);
-                    tr_error cerr;
-                    tr_outfile *cf = tr_outfile_open(path, &cerr);
-                    if (cf) {
-                        fputs(json, tr_outfile_stream(cf)); /* checked by the commit */
-                    }
-                    if (!cf || tr_outfile_commit(cf, &cerr) != TR_OK) {
-                        fprintf(stderr, "trac0r view: %s\n", cerr.msg);
-                    } else {
-                        printf("trac0r view: saved %s\n", path);
-                        fflush(stdout);
-                        st.cameras += 1;
-                    }
-                    break;
-                }
-                case SDLK_F12: {
-                    char path[4200];
-                    next_file_path(o->shot_dir, "trac0r-view", "png", path, sizeof path);
-                    view_renderer_screenshot(&r, path);
-                    break;
-                }
-                default:
-                    break;
-                }
-                break;
-            default:
-                break;
-            }
-            have = SDL_PollEvent(&ev);
-        }
+/* One key pressed; sets *view_changed when the camera or the stride changed. */
+static void on_key(view_window *vw, SDL_Keycode key, int *view_changed) {
+    view_state *st = &vw->st;
+    switch (key) {
+    case SDLK_ESCAPE:
+        vw->running = 0;
+        break;
+    case SDLK_b:
+        st->overlay = !st->overlay;
+        break;
+    case SDLK_h:
+        st->help = !st->help;
+        break;
+    case SDLK_v:
+        st->bvh = !st->bvh;
+        break;
+    case SDLK_LEFTBRACKET:
+        st->bvh_depth = st->bvh_depth ? st->bvh_depth - 1 : 0;
+        break;
+    case SDLK_RIGHTBRACKET:
+        st->bvh_depth =
+            st->bvh_depth < view_bvh_depth(vw->scene) ? st->bvh_depth + 1 : st->bvh_depth;
+        break;
+    case SDLK_n:
+        st->timings = !st->timings;
+        break;
+    case SDLK_1:
+    case SDLK_2:
+    case SDLK_3:
+        st->stride = 1 << (key - SDLK_1);
+        *view_changed = 1;
+        break;
+    case SDLK_PLUS:
+    case SDLK_EQUALS:
+    case SDLK_KP_PLUS:
+    case SDLK_MINUS:
+    case SDLK_KP_MINUS: {
+        const int up = key == SDLK_PLUS || key == SDLK_EQUALS || key == SDLK_KP_PLUS;
+        st->exposure = up ? fminf(st->exposure + 0.5f, 20.0f) : fmaxf(st->exposure - 0.5f, -20.0f);
+        view_renderer_set_exposure(&vw->r, st->exposure);
+        break;
+    }
+    case SDLK_m:
+        st->recon = (st->recon + 1) % TR_RECON_COUNT;
+        view_renderer_set_recon(&vw->r, st->recon);
+        break;
+    case SDLK_r:
+        /* Back to the scene's camera and speed. */
+        vw->fly = vw->fly0;
+        *view_changed = 1;
+        break;
+    case SDLK_c:
+        save_camera(vw);
+        break;
+    case SDLK_F12: {
+        char path[4200];
+        next_file_path(vw->o->shot_dir, "trac0r-view", "png", path, sizeof path);
+        view_renderer_screenshot(&vw->r, path);
+        break;
+    }
+    default:
+        break;
+    }
+}
 
-        /* Held keys move and roll the camera at a rate independent of the frame rate. */
-        const Uint8 *keys = SDL_GetKeyboardState(NULL);
-        tr_vec3 right = fly_right(&fly);
-        tr_vec3 move = v3(0.0f, 0.0f, 0.0f);
-        move =
-            v3_add(move, v3_scale(fly.dir, (float)(keys[SDL_SCANCODE_W] - keys[SDL_SCANCODE_S])));
-        move = v3_add(move, v3_scale(right, (float)(keys[SDL_SCANCODE_D] - keys[SDL_SCANCODE_A])));
-        move = v3_add(
-            move, v3_scale(fly.up, (float)(keys[SDL_SCANCODE_SPACE] - keys[SDL_SCANCODE_LCTRL])));
-        if (v3_dot(move, move) > 0.0f) {
-            fly.pos = v3_add(fly.pos, v3_scale(v3_normalize(move), fly.speed * (float)dt));
-            view_changed = 1;
-        }
-        const int roll = keys[SDL_SCANCODE_E] - keys[SDL_SCANCODE_Q];
-        if (roll) {
-            fly.up = view_rotate(fly.up, fly.dir, (float)roll * 1.0f * (float)dt);
-            fly_orthonormalize(&fly);
-            view_changed = 1;
-        }
-        /* Moving: a view change in the last 150 ms. The renderer then holds the frame
-         * budget; the first tick without changes asks for the full-resolution view. */
-        if (view_changed) {
-            last_change_t = t_in;
-        }
-        const int moving = t_in - last_change_t < 0.15;
-        if (view_changed || moving != was_moving) {
-            tr_camera next;
-            if (!view_changed || fly_make(&fly, w, h, &next) == TR_OK) {
-                if (view_changed) {
-                    cam = next;
-                }
-                view_renderer_set_view(&r, &cam, st.stride, moving);
-            }
-            was_moving = moving;
-            state_dirty = 1;
-        }
-        times.input = (tr_time_now() - t_in) * 1e3;
+/* Mouse-look: pitch turns about up x dir whatever the handedness (up stays up); yaw turns
+ * towards the screen's right, which a mirrored camera has on the other side. */
+static void look(fly_camera *fly, int dx, int dy) {
+    const float k = 0.0025f; /* radians per pixel */
+    tr_vec3 right = v3_normalize(v3_cross(fly->up, fly->dir));
+    const float yaw = fly->mirrored ? -k : k;
+    fly->dir = view_rotate(fly->dir, fly->up, (float)dx * yaw);
+    fly->dir = view_rotate(fly->dir, right, (float)dy * k);
+    fly->up = view_rotate(fly->up, right, (float)dy * k);
+    fly_orthonormalize(fly);
+}
 
-        /* Take the newest frame, if any, into the texture. */
-        pthread_mutex_lock(&r.mu);
-        int failed = r.failed;
-        if (failed) {
-            fprintf(stderr, "trac0r view: %s\n", r.error);
-        }
-        if (r.shot_done) {
-            r.shot_done = 0;
-            if (r.shot_ok) {
-                printf("trac0r view: saved %s\n", r.shot_msg);
-                fflush(stdout);
-                st.shots += 1;
-            } else {
-                fprintf(stderr, "trac0r view: screenshot failed: %s\n", r.shot_msg);
+/* One event; sets *view_changed when the view changed. */
+static void on_event(view_window *vw, const SDL_Event *ev, int *view_changed) {
+    switch (ev->type) {
+    case SDL_QUIT:
+        vw->running = 0;
+        break;
+    case SDL_WINDOWEVENT:
+        if (ev->window.event == SDL_WINDOWEVENT_SIZE_CHANGED) {
+            int ow = 0, oh = 0;
+            SDL_GetRendererOutputSize(vw->ren, &ow, &oh);
+            if (ow > 0 && oh > 0) {
+                vw->w = (uint32_t)ow;
+                vw->h = (uint32_t)oh;
+                fit_film_limits(vw->ren, &vw->w, &vw->h);
+                *view_changed = 1;
             }
-            state_dirty = 1;
         }
-        if (r.pixels && r.seq != shown_seq) {
-            const double t0 = tr_time_now();
-            if (!tex || tex_w != r.pw || tex_h != r.ph) {
-                if (tex) {
-                    SDL_DestroyTexture(tex);
-                }
-                tex = SDL_CreateTexture(ren, SDL_PIXELFORMAT_ARGB8888, SDL_TEXTUREACCESS_STREAMING,
-                                        (int)r.pw, (int)r.ph);
-                tex_w = r.pw;
-                tex_h = r.ph;
-            }
-            if (tex) {
-                SDL_UpdateTexture(tex, NULL, r.pixels, (int)(r.pw * sizeof(uint32_t)));
-            }
-            shown_seq = r.seq;
-            shown_gen = r.shown_gen;
-            spp = r.spp;
-            times.render = r.render_ms;
-            times.rebuild = r.rebuild_ms;
-            st.updates = r.updates;
-            st.rebuild_ms = r.rebuild_ms;
-            times.tonemap = r.tonemap_ms;
-            times.temporal = r.temporal_ms;
-            times.spatial = r.spatial_ms;
-            times.upload = (tr_time_now() - t0) * 1e3;
-            sf.scale = r.scale;
-            sf.frame_spp = r.frame_spp;
-            state_dirty = 1;
+        vw->state_dirty = 1;
+        break;
+    case SDL_MOUSEBUTTONDOWN:
+        if (ev->button.button == SDL_BUTTON_RIGHT) {
+            vw->st.mouselook = !vw->st.mouselook;
+            SDL_SetRelativeMouseMode(vw->st.mouselook ? SDL_TRUE : SDL_FALSE);
+            vw->state_dirty = 1;
         }
-        const uint64_t frames_done = r.frames_done, cancelled = r.cancelled;
-        pthread_mutex_unlock(&r.mu);
-        if (failed) {
-            status = CLI_FAILURE;
-            break;
+        break;
+    case SDL_MOUSEMOTION:
+        vw->mouse_x = ev->motion.x;
+        vw->mouse_y = ev->motion.y;
+        if (vw->st.mouselook && (ev->motion.xrel || ev->motion.yrel)) {
+            look(&vw->fly, ev->motion.xrel, ev->motion.yrel);
+            *view_changed = 1;
         }
-        /* shown_gen != r.generation: a read of our own write. */
-        const int scene_changing = shown_gen != r.generation || o->animate;
+        break;
+    case SDL_MOUSEWHEEL:
+        vw->fly.speed *= powf(1.25f, (float)ev->wheel.y);
+        vw->fly.speed = fminf(fmaxf(vw->fly.speed, 1e-4f), 1e4f);
+        vw->state_dirty = 1;
+        break;
+    case SDL_KEYDOWN:
+        if (!ev->key.repeat) {
+            vw->state_dirty = 1;
+            on_key(vw, ev->key.keysym.sym, view_changed);
+        }
+        break;
+    default:
+        break;
+    }
+}
 
-        const double now = tr_time_now();
-        if (now - fps_t0 >= 0.5) {
-            fps = (double)(frames_done - fps_frames0) / (now - fps_t0);
-            fps_frames0 = frames_done;
-            fps_t0 = now;
+/* Held keys move and roll the camera at a rate independent of the frame rate; a changed
+ * view (or the end of a movement) goes to the render thread. */
+static void steer(view_window *vw, double t_in, double dt, int view_changed) {
+    fly_camera *fly = &vw->fly;
+    const Uint8 *keys = SDL_GetKeyboardState(NULL);
+    tr_vec3 right = fly_right(fly);
+    tr_vec3 move = v3(0.0f, 0.0f, 0.0f);
+    move = v3_add(move, v3_scale(fly->dir, (float)(keys[SDL_SCANCODE_W] - keys[SDL_SCANCODE_S])));
+    move = v3_add(move, v3_scale(right, (float)(keys[SDL_SCANCODE_D] - keys[SDL_SCANCODE_A])));
+    move = v3_add(move,
+                  v3_scale(fly->up, (float)(keys[SDL_SCANCODE_SPACE] - keys[SDL_SCANCODE_LCTRL])));
+    if (v3_dot(move, move) > 0.0f) {
+        fly->pos = v3_add(fly->pos, v3_scale(v3_normalize(move), fly->speed * (float)dt));
+        view_changed = 1;
+    }
+    const int roll = keys[SDL_SCANCODE_E] - keys[SDL_SCANCODE_Q];
+    if (roll) {
+        fly->up = view_rotate(fly->up, fly->dir, (float)roll * 1.0f * (float)dt);
+        fly_orthonormalize(fly);
+        view_changed = 1;
+    }
+    /* Moving: a view change in the last 150 ms. The renderer then holds the frame budget;
+     * the first tick without changes asks for the full-resolution view. */
+    if (view_changed) {
+        vw->last_change_t = t_in;
+    }
+    const int moving = t_in - vw->last_change_t < 0.15;
+    if (view_changed || moving != vw->was_moving) {
+        tr_camera next;
+        if (!view_changed || fly_make(fly, vw->w, vw->h, &next) == TR_OK) {
+            if (view_changed) {
+                vw->cam = next;
+            }
+            view_renderer_set_view(&vw->r, &vw->cam, vw->st.stride, moving);
         }
-        if (st.timings && shown_seq != last_printed_seq) {
-            printf("frame %llu: input %.3f ms, scene rebuild %.3f ms, render %.2f ms, "
-                   "reconstruction (temporal %.2f, spatial %.2f) %.2f ms, "
-                   "film->texture %.2f ms (tonemap %.2f, upload %.2f), %u spp\n",
-                   (unsigned long long)shown_seq, times.input, times.rebuild, times.render,
-                   times.temporal, times.spatial, times.temporal + times.spatial,
-                   times.tonemap + times.upload, times.tonemap, times.upload, spp);
+        vw->was_moving = moving;
+        vw->state_dirty = 1;
+    }
+}
+
+/* The newest frame, if any, into the texture (under the render thread's lock). */
+static void take_frame(view_window *vw) {
+    view_renderer *r = &vw->r;
+    const double t0 = tr_time_now();
+    if (!vw->tex || vw->tex_w != r->pw || vw->tex_h != r->ph) {
+        if (vw->tex) {
+            SDL_DestroyTexture(vw->tex);
+        }
+        vw->tex = SDL_CreateTexture(vw->ren, SDL_PIXELFORMAT_ARGB8888, SDL_TEXTUREACCESS_STREAMING,
+                                    (int)r->pw, (int)r->ph);
+        vw->tex_w = r->pw;
+        vw->tex_h = r->ph;
+    }
+    if (vw->tex) {
+        SDL_UpdateTexture(vw->tex, NULL, r->pixels, (int)(r->pw * sizeof(uint32_t)));
+    }
+    vw->shown_seq = r->seq;
+    vw->shown_gen = r->shown_gen;
+    vw->spp = r->spp;
+    vw->times.render = r->render_ms;
+    vw->times.rebuild = r->rebuild_ms;
+    vw->st.updates = r->updates;
+    vw->st.rebuild_ms = r->rebuild_ms;
+    vw->times.tonemap = r->tonemap_ms;
+    vw->times.temporal = r->temporal_ms;
+    vw->times.spatial = r->spatial_ms;
+    vw->times.upload = (tr_time_now() - t0) * 1e3;
+    vw->sf.scale = r->scale;
+    vw->sf.frame_spp = r->frame_spp;
+    vw->state_dirty = 1;
+}
+
+/* What the render thread published since the last tick: a failure (returned, said), a
+ * screenshot's result, a new frame. */
+static int collect(view_window *vw) {
+    view_renderer *r = &vw->r;
+    pthread_mutex_lock(&r->mu);
+    const int failed = r->failed;
+    if (failed) {
+        fprintf(stderr, "trac0r view: %s\n", r->error);
+    }
+    if (r->shot_done) {
+        r->shot_done = 0;
+        if (r->shot_ok) {
+            printf("trac0r view: saved %s\n", r->shot_msg);
             fflush(stdout);
-            last_printed_seq = shown_seq;
+            vw->st.shots += 1;
+        } else {
+            fprintf(stderr, "trac0r view: screenshot failed: %s\n", r->shot_msg);
         }
-        if (now - title_t >= 0.25) {
-            snprintf(title, sizeof title, "trac0r view - %u spp - %.1f FPS", spp, fps);
-            SDL_SetWindowTitle(win, title);
-            title_t = now;
-        }
+        vw->state_dirty = 1;
+    }
+    if (r->pixels && r->seq != vw->shown_seq) {
+        take_frame(vw);
+    }
+    vw->frames_done = r->frames_done;
+    vw->cancelled = r->cancelled;
+    pthread_mutex_unlock(&r->mu);
+    return failed;
+}
 
-        /* Redraw on news only (and 4 times a second for the overlay's numbers): the
-         * render threads need the cores more than an unchanged window does. */
-        if (!(state_dirty || any_event || dump_requested || now - drawn_t >= 0.25)) {
-            continue;
-        }
-        drawn_t = now;
-        SDL_SetRenderDrawColor(ren, 0, 0, 0, 255);
-        SDL_RenderClear(ren);
-        if (tex) {
-            SDL_RenderCopy(ren, tex, NULL, NULL);
-        }
-        /* The render thread moves the scene under r.mu when animating. */
-        pthread_mutex_lock(&r.mu);
-        if (st.overlay) {
-            const SDL_Color yellow = {255, 255, 0, 255};
-            tr_aabb boxes[256];
-            size_t nb = 0;
-            for (uint32_t i = 0; i < tr_scene_shape_count(scene) && nb < 256; ++i) {
-                boxes[nb++] = tr_scene_shape_box(scene, i);
-            }
-            view_draw_boxes(ren, &cam, boxes, nb, yellow);
-        }
-        if (st.bvh) {
-            view_draw_bvh(ren, &cam, scene, st.bvh_depth); /* nothing without a BVH */
-        }
-        char accel[160];
-        cli_describe_accel(accel, sizeof accel, scene);
-        const uint32_t bvh_depth = view_bvh_depth(scene);
-        pthread_mutex_unlock(&r.mu);
-        if (st.overlay) {
-            tr_vec3 mc = view_screen_to_camera(&cam, (float)mouse_x + 0.5f, (float)mouse_y + 0.5f);
-            tr_vec3 mw = view_screen_to_world(&cam, (float)mouse_x + 0.5f, (float)mouse_y + 0.5f);
-            snprintf(text, sizeof text,
-                     "FPS %.2f   %u spp   %ux%u   stride %d   exposure %+.1f\n"
-                     "%s: 1/%.2f resolution, %u spp per frame, budget %.1f ms\n"
-                     "input %.2f ms  scene rebuild %.2f ms  render %.1f ms\n"
-                     "reconstruction %s: temporal %.2f ms  spatial %.2f ms\n"
-                     "film->texture %.2f ms (tonemap %.2f + upload %.2f)\n"
-                     "scene %s: %s\n"
-                     "accel %s\n"
-                     "pos  % .3f % .3f % .3f\n"
-                     "dir  % .3f % .3f % .3f\n"
-                     "up   % .3f % .3f % .3f\n"
-                     "fov  h %.1f  v %.1f deg   speed %.3g/s\n"
-                     "mouse screen %d %d\n"
-                     "mouse camera % .3f % .3f % .3f\n"
-                     "mouse world  % .3f % .3f % .3f\n"
-                     "%s",
-                     fps, spp, w, h, st.stride, st.exposure, was_moving ? "moving" : "at rest",
-                     (double)sf.scale, sf.frame_spp, 1000.0 / o->target_fps, times.input,
-                     times.rebuild, times.render, tr_recon_name(st.recon), times.temporal,
-                     times.spatial, times.tonemap + times.upload, times.tonemap, times.upload,
-                     o->c.scene, scene_changing ? "changing" : "static", accel, cam.pos.x,
-                     cam.pos.y, cam.pos.z, cam.dir.x, cam.dir.y, cam.dir.z, cam.up.x, cam.up.y,
-                     cam.up.z, cam.horizontal_fov, cam.vertical_fov, fly.speed, mouse_x, mouse_y,
-                     mc.x, mc.y, mc.z, mw.x, mw.y, mw.z,
-                     st.bvh ? "BVH boxes on (V), [ ] depth" : "");
-            char line[64];
-            if (st.bvh) {
-                snprintf(line, sizeof line, " %u of %u", st.bvh_depth, bvh_depth);
-                strncat(text, line, sizeof text - strlen(text) - 1);
-            }
-            view_draw_text(ren, font, 0, 0, text);
-        }
-        if (st.help) {
-            /* Bottom right, clear of the debug text in the top left. */
-            const int hx = (int)w - 290, hy = (int)h - 16 * TTF_FontLineSkip(font) - 20;
-            view_draw_text(ren, font, hx > 0 ? hx : 0, hy > 0 ? hy : 0, help_text);
-        }
-        if (dump_requested && o->dump_file) {
-            dump_requested = 0;
-            if (dump_window(ren, o->dump_file, &err) != 0) {
-                fprintf(stderr, "trac0r view: %s\n", err.msg);
-            }
-            st.dumps += 1;
-            state_dirty = 1;
-        }
-        SDL_RenderPresent(ren);
-        if (state_dirty && o->state_file) {
-            sf.frames = frames_done;
-            sf.cancelled = cancelled;
-            sf.spp = spp;
-            sf.gen = shown_gen;
-            sf.view_gen = r.generation;
-            sf.moving = was_moving;
-            /* Said once, not at every frame, when the file cannot be written. */
-            if (write_state(o->state_file, &st, &fly, &sf, w, h, fps, &err) != 0 && !state_failed) {
-                fprintf(stderr, "trac0r view: --state-file: %s\n", err.msg);
-                state_failed = 1;
-            }
-            state_dirty = 0;
-        }
+/* The frame rate, the timings line (N) and the window's title. */
+static void report(view_window *vw, double now) {
+    if (now - vw->fps_t0 >= 0.5) {
+        vw->fps = (double)(vw->frames_done - vw->fps_frames0) / (now - vw->fps_t0);
+        vw->fps_frames0 = vw->frames_done;
+        vw->fps_t0 = now;
     }
+    const stage_times *t = &vw->times;
+    if (vw->st.timings && vw->shown_seq != vw->last_printed_seq) {
+        printf("frame %llu: input %.3f ms, scene rebuild %.3f ms, render %.2f ms, "
+               "reconstruction (temporal %.2f, spatial %.2f) %.2f ms, "
+               "film->texture %.2f ms (tonemap %.2f, upload %.2f), %u spp\n",
+               (unsigned long long)vw->shown_seq, t->input, t->rebuild, t->render, t->temporal,
+               t->spatial, t->temporal + t->spatial, t->tonemap + t->upload, t->tonemap, t->upload,
+               vw->spp);
+        fflush(stdout);
+        vw->last_printed_seq = vw->shown_seq;
+    }
+    if (now - vw->title_t >= 0.25) {
+        char title[160];
+        snprintf(title, sizeof title, "trac0r view - %u spp - %.1f FPS", vw->spp, vw->fps);
+        SDL_SetWindowTitle(vw->win, title);
+        vw->title_t = now;
+    }
+}
 
-done:
-    view_renderer_stop(&r);
-    if (tex) {
-        SDL_DestroyTexture(tex);
+/* The debug text (B) in the top left. */
+static void draw_overlay(view_window *vw, const char *accel, uint32_t bvh_depth) {
+    const view_options *o = vw->o;
+    const view_state *st = &vw->st;
+    const stage_times *t = &vw->times;
+    const tr_camera *cam = &vw->cam;
+    /* shown_gen != r.generation: a read of our own write. */
+    const int scene_changing = vw->shown_gen != vw->r.generation || o->animate;
+    const float mx = (float)vw->mouse_x + 0.5f, my = (float)vw->mouse_y + 0.5f;
+    const tr_vec3 mc = view_screen_to_camera(cam, mx, my), mw = view_screen_to_world(cam, mx, my);
+    char text[4096];
+    snprintf(text, sizeof text,
+             "FPS %.2f   %u spp   %ux%u   stride %d   exposure %+.1f\n"
+             "%s: 1/%.2f resolution, %u spp per frame, budget %.1f ms\n"
+             "input %.2f ms  scene rebuild %.2f ms  render %.1f ms\n"
+             "reconstruction %s: temporal %.2f ms  spatial %.2f ms\n"
+             "film->texture %.2f ms (tonemap %.2f + upload %.2f)\n"
+             "scene %s: %s\n"
+             "accel %s\n"
+             "pos  % .3f % .3f % .3f\n"
+             "dir  % .3f % .3f % .3f\n"
+             "up   % .3f % .3f % .3f\n"
+             "fov  h %.1f  v %.1f deg   speed %.3g/s\n"
+             "mouse screen %d %d\n"
+             "mouse camera % .3f % .3f % .3f\n"
+             "mouse world  % .3f % .3f % .3f\n"
+             "%s",
+             vw->fps, vw->spp, vw->w, vw->h, st->stride, st->exposure,
+             vw->was_moving ? "moving" : "at rest", (double)vw->sf.scale, vw->sf.frame_spp,
+             1000.0 / o->target_fps, t->input, t->rebuild, t->render, tr_recon_name(st->recon),
+             t->temporal, t->spatial, t->tonemap + t->upload, t->tonemap, t->upload, o->c.scene,
+             scene_changing ? "changing" : "static", accel, cam->pos.x, cam->pos.y, cam->pos.z,
+             cam->dir.x, cam->dir.y, cam->dir.z, cam->up.x, cam->up.y, cam->up.z,
+             cam->horizontal_fov, cam->vertical_fov, vw->fly.speed, vw->mouse_x, vw->mouse_y, mc.x,
+             mc.y, mc.z, mw.x, mw.y, mw.z, st->bvh ? "BVH boxes on (V), [ ] depth" : "");
+    if (st->bvh) {
+        char line[64];
+        snprintf(line, sizeof line, " %u of %u", st->bvh_depth, bvh_depth);
+        strncat(text, line, sizeof text - strlen(text) - 1);
     }
-    if (ren) {
-        SDL_DestroyRenderer(ren);
+    view_draw_text(vw->ren, vw->font, 0, 0, text);
+}
+
+/* The frame, the wireframes, the overlay and the help; a window dump if asked. */
+static void draw(view_window *vw) {
+    SDL_Renderer *ren = vw->ren;
+    SDL_SetRenderDrawColor(ren, 0, 0, 0, 255);
+    SDL_RenderClear(ren);
+    if (vw->tex) {
+        SDL_RenderCopy(ren, vw->tex, NULL, NULL);
     }
-    if (win) {
-        SDL_DestroyWindow(win);
+    /* The render thread moves the scene under r.mu when animating. */
+    pthread_mutex_lock(&vw->r.mu);
+    if (vw->st.overlay) {
+        const SDL_Color yellow = {255, 255, 0, 255};
+        tr_aabb boxes[256];
+        size_t nb = 0;
+        for (uint32_t i = 0; i < tr_scene_shape_count(vw->scene) && nb < 256; ++i) {
+            boxes[nb++] = tr_scene_shape_box(vw->scene, i);
+        }
+        view_draw_boxes(ren, &vw->cam, boxes, nb, yellow);
     }
-    if (font) {
-        TTF_CloseFont(font);
+    if (vw->st.bvh) {
+        view_draw_bvh(ren, &vw->cam, vw->scene, vw->st.bvh_depth); /* nothing without a BVH */
     }
-    if (ttf) {
+    char accel[160];
+    cli_describe_accel(accel, sizeof accel, vw->scene);
+    const uint32_t bvh_depth = view_bvh_depth(vw->scene);
+    pthread_mutex_unlock(&vw->r.mu);
+    if (vw->st.overlay) {
+        draw_overlay(vw, accel, bvh_depth);
+    }
+    if (vw->st.help) {
+        /* Bottom right, clear of the debug text in the top left. */
+        const int hx = (int)vw->w - 290, hy = (int)vw->h - 16 * TTF_FontLineSkip(vw->font) - 20;
+        view_draw_text(ren, vw->font, hx > 0 ? hx : 0, hy > 0 ? hy : 0, help_text);
+    }
+    if (dump_requested && vw->o->dump_file) {
+        tr_error err;
+        dump_requested = 0;
+        if (dump_window(ren, vw->o->dump_file, &err) != 0) {
+            fprintf(stderr, "trac0r view: %s\n", err.msg);
+        }
+        vw->st.dumps += 1;
+        vw->state_dirty = 1;
+    }
+    SDL_RenderPresent(ren);
+}
+
+/* --state-file: written when something changed. */
+static void save_state(view_window *vw) {
+    if (!vw->state_dirty || !vw->o->state_file) {
+        return;
+    }
+    tr_error err;
+    shown_frame *sf = &vw->sf;
+    sf->frames = vw->frames_done;
+    sf->cancelled = vw->cancelled;
+    sf->spp = vw->spp;
+    sf->gen = vw->shown_gen;
+    sf->view_gen = vw->r.generation;
+    sf->moving = vw->was_moving;
+    /* Said once, not at every frame, when the file cannot be written. */
+    if (write_state(vw->o->state_file, &vw->st, &vw->fly, sf, vw->w, vw->h, vw->fps, &err) != 0 &&
+        !vw->state_failed) {
+        fprintf(stderr, "trac0r view: --state-file: %s\n", err.msg);
+        vw->state_failed = 1;
+    }
+    vw->state_dirty = 0;
+}
+
+/* One tick: events, steering, the render thread's news, and a redraw when there is news
+ * (and 4 times a second for the overlay's numbers: the render threads need the cores more
+ * than an unchanged window does). Returns CLI_FAILURE when rendering failed, else CLI_OK. */
+static int tick(view_window *vw) {
+    SDL_Event ev;
+    int have = SDL_WaitEventTimeout(&ev, 10);
+    const int any_event = have;
+    const double t_in = tr_time_now();
+    const double dt = fmin(t_in - vw->last, 0.1);
+    vw->last = t_in;
+    int view_changed = 0;
+    while (have) {
+        on_event(vw, &ev, &view_changed);
+        have = SDL_PollEvent(&ev);
+    }
+    steer(vw, t_in, dt, view_changed);
+    vw->times.input = (tr_time_now() - t_in) * 1e3;
+    if (collect(vw)) {
+        return CLI_FAILURE;
+    }
+    const double now = tr_time_now();
+    report(vw, now);
+    if (vw->state_dirty || any_event || dump_requested || now - vw->drawn_t >= 0.25) {
+        vw->drawn_t = now;
+        draw(vw);
+        save_state(vw);
+    }
+    return CLI_OK;
+}
+
+int view_run_window(const cli_args *a, const view_options *o, tr_scene *scene, cli_backend *be) {
+    int status = open_video(a);
+    if (status != CLI_OK) {
+        return status;
+    }
+    view_window *vw = calloc(1, sizeof *vw);
+    if (!vw) {
+        fprintf(stderr, "trac0r view: out of memory\n");
+        SDL_Quit();
+        return CLI_FAILURE;
+    }
+    vw->o = o;
+    vw->scene = scene;
+    vw->r.started = 0;
+    status = open_window(vw);
+    status = status == CLI_OK ? start_rendering(vw, be) : status;
+    while (status == CLI_OK && vw->running) {
+        status = tick(vw);
+    }
+    view_renderer_stop(&vw->r);
+    if (vw->tex) {
+        SDL_DestroyTexture(vw->tex);
+    }
+    if (vw->ren) {
+        SDL_DestroyRenderer(vw->ren);
+    }
+    if (vw->win) {
+        SDL_DestroyWindow(vw->win);
+    }
+    if (vw->font) {
+        TTF_CloseFont(vw->font);
+    }
+    if (vw->ttf) {
         TTF_Quit();
     }
     SDL_Quit();
+    free(vw);
     return status;
 }
