@@ -79,6 +79,6 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
     } else if (s.triangle_count || s.shape_count || s.material_count) {
         abort(); /* a failed import adds nothing */
     }
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
     return 0;
 }

@@ -56,7 +56,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
         if (tr_scene_commit(&s, TR_ACCEL_TYPE_BVH, &err) != TR_OK) {
             abort();
         }
-        tr_scene_free(&s);
+        tr_scene_clear(&s);
     } else if (s.triangles || s.materials || s.shapes || s.triangle_count) {
         abort(); /* a failed load leaves the scene empty */
     }

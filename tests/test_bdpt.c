@@ -260,7 +260,7 @@ static void mis_sum(void) {
     CHECK(fast_bad == 0, "%d of %d merges: tr_vcm_merge_weight differs from the full weight",
           fast_bad, merged);
     printf("MIS with merges: %d paths with a merge, worst |sum - 1| = %.2e\n", merged, worst_vm);
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 }
 
 /* Region statistics ---------------------------------------------------------------------- */
@@ -390,7 +390,7 @@ static void strategies(void) {
             printf("%s: worst %.2f sigma\n", what, z);
         }
     }
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 }
 
 /* (c) ---------------------------------------------------------------------------------- */
@@ -467,7 +467,7 @@ static void light_tracing(void) {
                       variant, r, got.mean[r][0], got.se[r][0], m);
             }
         }
-        tr_scene_free(&s);
+        tr_scene_clear(&s);
     }
 }
 
@@ -502,7 +502,7 @@ static void determinism(int integrator) {
         tr_film_free(&films[i]);
     }
     tr_film_free(&films[0]);
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 }
 
 /* (g) ---------------------------------------------------------------------------------- */
@@ -561,7 +561,7 @@ static void vcm_radius(void) {
               err.code == TR_STATUS_CANCELLED,
           "a cancelled vcm frame: status %d", err.code);
     tr_film_free(&a);
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 }
 
 /* (h) ---------------------------------------------------------------------------------- */
@@ -602,7 +602,7 @@ static void vcm_agrees(void) {
           err.msg);
     printf("floor lit through a mirror: worst |bdpt - vcm| = %.2f sigma\n",
            compare_regions("vcm vs bdpt", &a, &b));
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 }
 
 /* (e) ---------------------------------------------------------------------------------- */
@@ -729,7 +729,7 @@ static void refusals(void) {
               tr_render_frame(&s, &s.camera, &cfg, &film, 0, NULL, &err) == TR_OK,
           "default depth: %s", err.msg);
     tr_film_free(&film);
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 }
 
 int main(void) {

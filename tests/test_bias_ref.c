@@ -40,7 +40,7 @@ static void block_means(const tr_scene *s, int depth, int sampler, uint32_t spp,
     CHECK(tr_film_init(&f, W, H, &err) == TR_OK, "%s", err.msg);
     /* One device call per render: a frame per sample would spend more on starting the
      * threads of a 256-pixel frame than on its paths. */
-    tr_device *dev = tr_device_open("cpu", &err);
+    tr_device *dev = tr_device_create("cpu", &err);
     CHECK(dev != NULL && tr_device_upload(dev, s, &err) == TR_OK, "%s", err.msg);
     tr_render_config cfg = tr_render_config_default();
     cfg.max_depth = depth;
@@ -59,7 +59,7 @@ static void block_means(const tr_scene *s, int depth, int sampler, uint32_t spp,
             }
         }
     }
-    tr_device_close(dev);
+    tr_device_destroy(dev);
     tr_film_free(&f);
 }
 

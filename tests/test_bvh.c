@@ -792,7 +792,7 @@ static void test_meshes(void) {
     t = make_soup(&r, &n);
     scene_from_triangles(&s, t, n);
     check_mesh("soup", &s, 1, RAYS, MAX_TIE_FRACTION);
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 
     /* The icosphere's triangles come in subdivision order, so runs of 64 are the
      * descendants of one level-2 face: compact flat nodes. */
@@ -805,16 +805,16 @@ static void test_meshes(void) {
     CHECK(s.triangle_count == 20480, "icosphere has %u triangles", s.triangle_count);
     set_flat_nodes(&s, 64);
     check_mesh("icosphere(5)", &s, 2, RAYS, MAX_TIE_FRACTION);
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 
     CHECK(tr_scene_builtin(&s, "cornell", 64, 48, &err) == TR_OK, "%s", err.msg);
     check_mesh("cornell", &s, 3, RAYS, MAX_TIE_FRACTION);
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 
     t = make_slivers(&r, &n);
     scene_from_triangles(&s, t, n);
     check_mesh("slivers(1e4:1)", &s, 4, RAYS, MAX_TIE_FRACTION);
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 
     /* The tilted grid meets the flat one exactly along the diagonals of the flat one's
      * quads, so rays aimed at the line x = y in z = 0.5 hit a shared edge: about 1.2% of
@@ -822,7 +822,7 @@ static void test_meshes(void) {
     t = make_coplanar(&n);
     scene_from_triangles(&s, t, n);
     check_mesh("coplanar+duplicates", &s, 5, RAYS, 0.03);
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 
     t = alloc_tris(1);
     t[0].v0 = v3(0.1f, 0.2f, 0.3f);
@@ -833,13 +833,13 @@ static void test_meshes(void) {
     CHECK(s.bvh.node_count == 1 && s.bvh.leaf_count == 1 && s.bvh.depth == 0,
           "single triangle: %u nodes, %u leaves, depth %u", s.bvh.node_count, s.bvh.leaf_count,
           s.bvh.depth);
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 
     /* No triangles: nothing is ever hit and nothing crashes. */
     scene_from_triangles(&s, alloc_tris(0), 0);
     check_mesh("empty", &s, 7, RAYS, MAX_TIE_FRACTION);
     CHECK(s.bvh.node_count == 0, "empty scene: %u nodes", s.bvh.node_count);
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 }
 
 /* Meshes on which the SAH finds no split or only lopsided ones: the builder must fall
@@ -861,7 +861,7 @@ static void test_stress(void) {
     scene_from_triangles(&s, t, n);
     check_mesh("identical x5000", &s, 11, STRESS_RAYS, MAX_TIE_FRACTION);
     printf("  depth %u, %u leaves\n", s.bvh.depth, s.bvh.leaf_count);
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 
     /* v0 + v1 + v2 = 3c exactly (offsets are multiples of 2^-12): one centroid. */
     t = alloc_tris(n);
@@ -879,7 +879,7 @@ static void test_stress(void) {
     scene_from_triangles(&s, t, n);
     check_mesh("same centroid x5000", &s, 12, STRESS_RAYS, MAX_TIE_FRACTION);
     printf("  depth %u, %u leaves\n", s.bvh.depth, s.bvh.leaf_count);
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 
     /* The builder bins box centres: v0 = c + p, v1 = c - p and v2 inside the box they
      * span give every triangle the box centre c, so no bin plane separates any two. */
@@ -895,7 +895,7 @@ static void test_stress(void) {
     scene_from_triangles(&s, t, n);
     check_mesh("same box centre x5000", &s, 13, STRESS_RAYS, MAX_TIE_FRACTION);
     printf("  depth %u, %u leaves\n", s.bvh.depth, s.bvh.leaf_count);
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 
     /* Parallel squares at x = 0.8^k: each SAH split peels a few off the far end, so the
      * SAH alone would build a chain thousands deep. Far down the planes are closer than
@@ -913,7 +913,7 @@ static void test_stress(void) {
     printf("  depth %u, %u leaves\n", s.bvh.depth, s.bvh.leaf_count);
     CHECK(s.bvh.depth > 32, "geometric planes: depth %u never reached the median fallback",
           s.bvh.depth);
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 
     /* Box centres one float apart near 1e-31 on x: the centroid extent is so small that
      * BINS / extent overflows, which the binning must survive (the other axes split). */
@@ -927,7 +927,7 @@ static void test_stress(void) {
     }
     scene_from_triangles(&s, t, tiny);
     check_mesh("tiny centroid spread", &s, 15, STRESS_RAYS, MAX_TIE_FRACTION);
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 }
 
 /* The kinds of degenerate triangle mixed into a valid mesh. */
@@ -1079,19 +1079,19 @@ static void test_degenerate(void) {
           (unsigned long long)st.hits);
     ray_gen_free(&g_valid);
     ray_gen_free(&g_bad);
-    tr_scene_free(&clean);
+    tr_scene_clear(&clean);
 
     /* Nothing valid at all: an empty tree. */
     tr_triangle *only_bad = alloc_tris(DEGENERATE_KINDS);
     for (uint32_t k = 0; k < DEGENERATE_KINDS; ++k) {
         only_bad[k] = degenerate(&r, k, v3s(0.5f));
     }
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
     scene_from_triangles(&s, only_bad, DEGENERATE_KINDS);
     check_mesh("only degenerate", &s, 23, STRESS_RAYS, MAX_TIE_FRACTION);
     CHECK(s.bvh.skipped == DEGENERATE_KINDS && s.bvh.node_count == 0,
           "only degenerate: skipped %u, %u nodes", s.bvh.skipped, s.bvh.node_count);
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 }
 
 /* Moves every triangle: v -> v * scale + sign * offset. */
@@ -1166,7 +1166,7 @@ static void test_refit(void) {
     ray_gen_init(&g, 33, s.triangles, n, NULL);
     compare_views("wide refit soup", &flat, &bvh, &g, RAYS, MAX_TIE_FRACTION);
     ray_gen_free(&g);
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 }
 
 /* Triangles big enough that the square of their cross product's length overflows a
@@ -1202,7 +1202,7 @@ static void test_huge_triangles(void) {
     }
     CHECK(st.mismatches == 0, "huge plane: %llu of %llu rays differ between flat and bvh",
           (unsigned long long)st.mismatches, (unsigned long long)st.rays);
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 }
 
 static int films_equal_pixel(const tr_film *a, const tr_film *b, size_t i) {
@@ -1268,7 +1268,7 @@ static void test_render(void) {
     CHECK(tr_render_frame(&s, &s.camera, &cfg, &fb, 0, NULL, &err) == TR_OK, "%s", err.msg);
     tr_film_free(&ff);
     tr_film_free(&fb);
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 }
 
 /* The parallel build must give the same arrays whatever the thread count, or images
@@ -1295,7 +1295,7 @@ static void test_parallel_build_deterministic(void) {
           "BVH built with 1 and 2 threads differs");
     tr_bvh_free(&one);
     tr_bvh_free(&two);
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 }
 
 int main(void) {

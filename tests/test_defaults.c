@@ -37,7 +37,7 @@ static void render(const tr_scene *s, const tr_render_config *cfg, tr_film *f) {
 static void render_device(const tr_scene *s, const tr_render_config *cfg, tr_film *f) {
     tr_error err;
     CHECK(tr_film_init(f, W, H, &err) == TR_OK, "%s", err.msg);
-    tr_device *dev = tr_device_open("cpu", &err);
+    tr_device *dev = tr_device_create("cpu", &err);
     CHECK(dev != NULL, "%s", err.msg);
     if (!dev) {
         return;
@@ -46,7 +46,7 @@ static void render_device(const tr_scene *s, const tr_render_config *cfg, tr_fil
     CHECK(tr_device_render(dev, tr_scene_camera(s), cfg, 0, SPP, NULL, NULL, &err) == TR_OK, "%s",
           err.msg);
     CHECK(tr_device_read_film(dev, f, &err) == TR_OK, "%s", err.msg);
-    tr_device_close(dev);
+    tr_device_destroy(dev);
 }
 
 static void test_render_config(const tr_scene *s) {

@@ -29,7 +29,7 @@ int main(void) {
     int rc = tr_scene_commit(&s, TR_ACCEL_TYPE_EMBREE, &err);
     CHECK_STATUS(rc, err, TR_STATUS_UNSUPPORTED, "commit without Embree");
     CHECK(!tr_accel_available(TR_ACCEL_TYPE_EMBREE), "embree reported available");
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
     fprintf(stderr, "test_embree: this build has no Embree (TRAC0R_HAVE_EMBREE is not defined); "
                     "run scripts/install-deps and configure again\n");
     check_finish("test_embree");
@@ -478,20 +478,20 @@ static void test_random_meshes(void) {
         }
     }
     CHECK(degenerate_hits == 0, "soup: %u rays hit degenerate triangles", degenerate_hits);
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 
     make_icosphere(&s, 5);
     CHECK(s.triangle_count == 20480u, "icosphere: %u triangles", s.triangle_count);
     check_mesh("icosphere-5", &s, ICO_RAYS, 0, 2);
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 
     CHECK(tr_scene_builtin(&s, "cornell", 64, 48, &err) == TR_OK, "%s", err.msg);
     check_mesh("cornell", &s, RAYS, 0, 3);
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 
     tr_scene_init(&s);
     check_mesh("empty", &s, 10000, 0, 4);
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 
     tr_triangle *one = calloc(1, sizeof *one);
     if (!one) {
@@ -502,7 +502,7 @@ static void test_random_meshes(void) {
     one->v2 = v3(0.0f, 0.7f, 0.05f);
     scene_take_triangles(&s, one, 1, 1);
     check_mesh("single", &s, RAYS, 0, 5);
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 }
 
 /* ---- exact cases -------------------------------------------------------------------- */
@@ -602,7 +602,7 @@ static void test_interval_and_conventions(void) {
         CHECK(!f && !e && !tr_occluded_scene(&emb, &bad[i]), "bad ray %zu: flat %d embree %d", i, f,
               e);
     }
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 }
 
 /* Commit bookkeeping: names, availability, staleness, switching structures. */
@@ -638,10 +638,10 @@ static void test_commit(void) {
     CHECK(tr_scene_commit(&s, TR_ACCEL_TYPE_EMBREE, &err) == TR_OK, "%s", err.msg);
     CHECK(tr_render_frame(&s, &s.camera, &cfg, &film, 0, NULL, &err) == TR_OK, "%s", err.msg);
     tr_film_free(&film);
-    tr_scene_free(&s);
-    CHECK(s.embree.scene == NULL && s.embree.state == NULL, "tr_scene_free kept Embree");
+    tr_scene_clear(&s);
+    CHECK(s.embree.scene == NULL && s.embree.state == NULL, "tr_scene_clear kept Embree");
     /* Freeing twice, and a scene never committed, are fine. */
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 }
 
 /* ---- rendering ---------------------------------------------------------------------- */
@@ -665,7 +665,7 @@ static int render_cornell(tr_accel_type accel, tr_film *film, uint64_t *rays) {
         CHECK(ok, "render %s: %s", tr_accel_name(accel), ok ? "" : err.msg);
         *rays += stats.rays;
     }
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
     return ok;
 }
 

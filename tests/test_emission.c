@@ -188,7 +188,7 @@ static void test_recon(void) {
     float *out = malloc(3u * W * H * sizeof *out);
     CHECK(out != NULL, "out of memory");
     for (int m = TR_RECON_ACCUMULATE; out && m < TR_RECON_COUNT; ++m) {
-        tr_recon_reset(&r);
+        tr_recon_clear(&r);
         lamp_frame(&g, 0.3f, 1);
         CHECK(tr_recon_frame(&r, &g, &cam, m, &p, 2, out, &err) == TR_OK, "%s", err.msg);
         double worst = 0.0;
@@ -198,7 +198,7 @@ static void test_recon(void) {
         CHECK(worst < 1e-4, "%s: constant plus emission off by %g", tr_recon_name(m), worst);
 
         /* The resolved emission is the one added. */
-        tr_recon_reset(&r);
+        tr_recon_clear(&r);
         for (size_t i = 0; i < 3u * W * H; ++i) {
             g.emission_resolved[i] = 0.25f * g.emission[i];
         }
@@ -214,7 +214,7 @@ static void test_recon(void) {
         /* Without the pass SVGF spreads the lamp's light onto its neighbours (the
          * bilateral and a-trous filters' colour weights stop a value this bright). */
         if (m == TR_RECON_SVGF) {
-            tr_recon_reset(&r);
+            tr_recon_clear(&r);
             lamp_frame(&g, 0.3f, 0);
             CHECK(tr_recon_frame(&r, &g, &cam, m, &p, 2, out, &err) == TR_OK, "%s", err.msg);
             const size_t nb = 3 * ((size_t)21 * W + 14);

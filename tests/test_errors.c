@@ -101,7 +101,7 @@ static void test_sizes(void) {
                  "camera 8x0");
     CHECK_STATUS(tr_camera_resize(&s.camera, TR_FILM_MAX_SIDE + 1, 8, &err), err, TR_STATUS_LIMIT,
                  "camera wider than the limit");
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 }
 
 /* Scenes built through the API. */
@@ -144,7 +144,7 @@ static void test_scene_api(void) {
         CHECK_STATUS(tr_scene_commit(&s, TR_ACCEL_TYPE_EMBREE, &err), err, TR_STATUS_UNSUPPORTED,
                      "embree without Embree");
     }
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 }
 
 /* Rendering: bad configurations, a stale scene, the cancel flag. */
@@ -195,7 +195,7 @@ static void test_render(void) {
     CHECK(tr_scene_commit(&s, TR_ACCEL_TYPE_BVH, &err) == TR_OK, "%s", err.msg);
     CHECK(tr_render_frame(&s, &s.camera, &cfg, &f, 0, NULL, &err) == TR_OK, "%s", err.msg);
     tr_film_free(&f);
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 }
 
 static int parse(const char *text, uint32_t max_triangles, tr_error *err) {
@@ -203,7 +203,7 @@ static int parse(const char *text, uint32_t max_triangles, tr_error *err) {
     tr_scene_file_options opt = {0, max_triangles};
     int rc = tr_scene_file_parse(&s, "e.json", text, strlen(text), &opt, NULL, err);
     if (rc == TR_OK) {
-        tr_scene_free(&s);
+        tr_scene_clear(&s);
     }
     return rc;
 }
@@ -267,7 +267,7 @@ static void test_meshes(void) {
     CHECK_STATUS(tr_scene_import_mesh(&s, DATA "/mesh/tri.obj", NULL, -1, 3, &st, &err), err,
                  TR_STATUS_LIMIT, "a budget of 3 triangles");
     CHECK(s.triangle_count == 0, "failures added %u triangles", s.triangle_count);
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 }
 
 /* Images: files named by paths that do not exist, unknown formats. */

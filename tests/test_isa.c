@@ -162,7 +162,7 @@ static void builtin_scene(const char *name) {
     if (ok) {
         compare_isas(name, &s);
     }
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 }
 
 /* Many overlapping boxes and icospheres at random places, turns and sizes: nodes with
@@ -188,7 +188,7 @@ static void random_shapes_scene(void) {
     if (ok) {
         compare_isas("random shapes", &s);
     }
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 }
 
 /* The TRAC0R_ISA rule on made-up CPUs: a usable request is honoured, anything else

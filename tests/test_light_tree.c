@@ -276,8 +276,8 @@ static void equal_spp(void) {
           NR);
     CHECK(vt > 0.0 && vp > 2.0 * vt, "the tree's variance %.4e is not half the power CDF's %.4e",
           vt, vp);
-    tr_scene_free(&tree);
-    tr_scene_free(&power);
+    tr_scene_clear(&tree);
+    tr_scene_clear(&power);
 }
 
 /* (e) */
@@ -298,13 +298,13 @@ static void modes(void) {
     CHECK(v.light_node_count > 0 && inside(v.light_nodes[0].box, moved->v0),
           "the root's box does not hold the moved lamp");
     structure(&s);
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 
     build(&s, TR_LIGHT_SAMPLING_POWER, 0, 8, 8);
     CHECK(tr_scene_light_sampling(&s) == TR_LIGHT_SAMPLING_POWER &&
               tr_scene_view_of(&s).light_node_count == 0,
           "power: a tree was built");
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 
     /* One two-triangle lamp: auto keeps the power CDF; tree is honoured. */
     for (int mode = TR_LIGHT_SAMPLING_AUTO; mode <= TR_LIGHT_SAMPLING_TREE; ++mode) {
@@ -317,7 +317,7 @@ static void modes(void) {
             mode == TR_LIGHT_SAMPLING_TREE ? TR_LIGHT_SAMPLING_TREE : TR_LIGHT_SAMPLING_POWER;
         CHECK(tr_scene_light_sampling(&s) == want, "one lamp, mode %d: uses %d", mode,
               tr_scene_light_sampling(&s));
-        tr_scene_free(&s);
+        tr_scene_clear(&s);
     }
     CHECK(tr_scene_set_light_sampling(&s, 7, &err) == TR_ERR, "mode 7 accepted");
     CHECK(tr_light_sampling_from_name("tree") == TR_LIGHT_SAMPLING_TREE &&

@@ -122,7 +122,7 @@ static void table(void) {
     CHECK(tr_scene_commit(&s, TR_ACCEL_TYPE_FLAT, &err) == TR_OK, "recommit: %s", err.msg);
     v = tr_scene_view_of(&s);
     CHECK(v.light_count == 8, "recommitted table has %u entries (8)", v.light_count);
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 
     tr_scene_init(&s);
     add_plane(&s, add_mat(&s, tr_material_diffuse(v3s(0.5f))), v3(0, 0, 0), v3(0, 0, 0), 1, 1);
@@ -135,7 +135,7 @@ static void table(void) {
     CHECK(tr_light_sample(&v, v3s(0.0f), tr_rng_float(&rng), tr_rng_float(&rng), &t, &p, &u, &w) ==
               0.0f,
           "sampling an empty table gives pdf 0");
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 }
 
 /* Irradiance at x (normal +y) from a Lambertian polygon of radiance L (Lambert). */
@@ -218,7 +218,7 @@ static void irradiance(void) {
           "%d of the 4 near points sample the light by solid angle, the far "
           "point by area",
           spherical);
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 }
 
 /* (e) The built-in Cornell box's lamp: a plane whose normal points up (towards the
@@ -240,7 +240,7 @@ static void builtin_lamp(void) {
         tr_bsdf_params b = tr_material_params(m, t->normal);
         CHECK(tr_emitted(&b, down).x > 0.0f, "the lamp shines down into the box");
     }
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 }
 
 /* (f) The density light sampling reports is the density it samples: points drawn by
@@ -353,7 +353,7 @@ static void pdf_chi_square(void) {
             }
         }
     }
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 }
 
 /* (g) A point at f bounding radii from the centroid of a triangle, in direction dir,
@@ -425,7 +425,7 @@ static void far_switch(void) {
                   got, want);
         }
     }
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 }
 
 int main(void) {

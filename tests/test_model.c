@@ -164,7 +164,7 @@ static void test_gltf(void) {
     CHECK(tr_scene_model_load(&s, path, &opt, &info, &err) == TR_OK && info.height == 600 &&
               !near3(s.camera.pos, 0.5f, 0.25f, 5.0f, 0.1f),
           "frame: the framing camera");
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
     unlink(path);
 }
 
@@ -192,7 +192,7 @@ static void test_gltf_odd_lights(void) {
           "odd lights: %u emitters, no sun from a black light", emitters);
     CHECK(emitters == 1 || s.env_count == 1, "no light left: the default environment");
     CHECK(info.warning_count >= 2, "odd lights: %u warnings", info.warning_count);
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
     unlink(path);
 }
 
@@ -250,7 +250,7 @@ static void test_duck(void) {
           "framed duck's centroid (%.3f, %.3f)", n > 0 ? sx / n : 0.0, n > 0 ? sy / n : 0.0);
     printf("framed duck: %.0f pixels, centroid (%.3f, %.3f)\n", n, sx / n, sy / n);
     tr_film_free(&film);
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 }
 
 int main(void) {

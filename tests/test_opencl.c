@@ -66,7 +66,7 @@ static int render_with_work_group(tr_scene *scene, const char *wg, tr_film *f, t
     } else {
         unsetenv("TRAC0R_OPENCL_WORK_GROUP");
     }
-    tr_device *d = tr_device_open("opencl:0", err);
+    tr_device *d = tr_device_create("opencl:0", err);
     unsetenv("TRAC0R_OPENCL_WORK_GROUP");
     if (!d) {
         return TR_ERR;
@@ -78,7 +78,7 @@ static int render_with_work_group(tr_scene *scene, const char *wg, tr_film *f, t
                      tr_device_read_film(d, f, err) == TR_OK
                  ? TR_OK
                  : TR_ERR;
-    tr_device_close(d);
+    tr_device_destroy(d);
     return rc;
 }
 
@@ -357,13 +357,13 @@ int main(void) {
 
     tr_cl_close(cl);
     /* From here on through the device API, as applications use it. */
-    tr_device *dev = tr_device_open("opencl:0", &err);
-    CHECK(dev != NULL, "tr_device_open(opencl:0): %s", err.msg);
+    tr_device *dev = tr_device_create("opencl:0", &err);
+    CHECK(dev != NULL, "tr_device_create(opencl:0): %s", err.msg);
     if (!dev) {
         return check_finish("test_opencl");
     }
     CHECK(strcmp(tr_device_kind(dev), "opencl") == 0, "kind %s", tr_device_kind(dev));
-    CHECK(tr_device_open("opencl:x", &err) == NULL && tr_device_open("gpu", &err) == NULL,
+    CHECK(tr_device_create("opencl:x", &err) == NULL && tr_device_create("gpu", &err) == NULL,
           "bad device names opened");
     tr_render_config cfg = tr_render_config_default();
     tr_scene scene = {0};
@@ -477,12 +477,12 @@ int main(void) {
     CHECK(render_with_work_group(&odd, bad[6], &wgot, &err) == TR_OK, "'': %s", err.msg);
     tr_film_free(&wref);
     tr_film_free(&wgot);
-    tr_scene_free(&odd);
+    tr_scene_clear(&odd);
 
-    tr_scene_free(&big);
+    tr_scene_clear(&big);
     tr_film_free(&small);
     tr_film_free(&film);
-    tr_scene_free(&scene);
-    tr_device_close(dev);
+    tr_scene_clear(&scene);
+    tr_device_destroy(dev);
     return check_finish("test_opencl");
 }

@@ -87,8 +87,8 @@ static void agree(tr_device *cl, const tr_gbuffer *g, const tr_camera *cams, int
     tr_error err;
     tr_recon host;
     CHECK(tr_recon_init(&host, W, H, &err) == TR_OK, "%s", err.msg);
-    tr_recon_device *dev = tr_recon_device_open(cl, W, H, &err);
-    CHECK(dev, "tr_recon_device_open: %s", err.msg);
+    tr_recon_device *dev = tr_recon_device_create(cl, W, H, &err);
+    CHECK(dev, "tr_recon_device_create: %s", err.msg);
     CHECK(tr_recon_device_on_device(dev), "%s: the OpenCL state runs on the host", label);
     float *a = malloc(3 * W * H * sizeof *a), *b = malloc(3 * W * H * sizeof *b);
     CHECK(a && b, "out of memory");
@@ -115,7 +115,7 @@ static void agree(tr_device *cl, const tr_gbuffer *g, const tr_camera *cams, int
            worst, change);
     free(a);
     free(b);
-    tr_recon_device_close(dev);
+    tr_recon_device_destroy(dev);
     tr_recon_free(&host);
 }
 
@@ -175,13 +175,13 @@ static void film_frames(tr_device *d, tr_recon_device *dev, const tr_camera *cam
 static void film_on_device(tr_device *cl, const tr_scene *s, const tr_camera *cams) {
     tr_error err;
     CHECK(tr_device_upload(cl, s, &err) == TR_OK, "%s", err.msg);
-    tr_recon_device *dev = tr_recon_device_open(cl, W, H, &err);
+    tr_recon_device *dev = tr_recon_device_create(cl, W, H, &err);
     CHECK(dev, "%s", err.msg);
     /* Two samples, so that the film's means divide by a count above 1. */
     film_frames(cl, dev, cams, FRAMES, 2, 2, bound, NULL, "film on the device");
     /* The emission pass, resolved on the device as on the host (tr_cl_resolve_emission
      * against tr_resolve_emission: the same per-pixel code, src/kernel/emission.h). */
-    tr_recon_device_reset(dev);
+    tr_recon_device_clear(dev);
     film_frames(cl, dev, cams, FRAMES, 1, 2, bound, s, "emission resolved on the device");
     double ms_t, ms_s;
     tr_recon_device_times(dev, &ms_t, &ms_s);
@@ -198,27 +198,27 @@ static void film_on_device(tr_device *cl, const tr_scene *s, const tr_camera *ca
     CHECK(tr_recon_device_frame(dev, &cams[0], NULL, 0, 99, &p, b, &err) == TR_ERR &&
               err.code == TR_STATUS_INVALID_ARGUMENT,
           "method 99 was accepted");
-    tr_recon_device *wrong = tr_recon_device_open(cl, W + 1, H, &err);
+    tr_recon_device *wrong = tr_recon_device_create(cl, W + 1, H, &err);
     CHECK(wrong, "%s", err.msg);
     CHECK(tr_recon_device_frame(wrong, &cams[0], NULL, 0, TR_RECON_SVGF, &p, b, &err) == TR_ERR,
           "a film of another size was accepted");
-    tr_recon_device_close(wrong);
+    tr_recon_device_destroy(wrong);
     free(b);
-    tr_recon_device_close(dev);
+    tr_recon_device_destroy(dev);
 }
 
 /* Section 3: the CPU device's state is the host's, bit for bit. */
 static void cpu_device(const tr_scene *s, const tr_camera *cams) {
     tr_error err;
-    tr_device *cpu = tr_device_open("cpu", &err);
+    tr_device *cpu = tr_device_create("cpu", &err);
     CHECK(cpu && tr_device_upload(cpu, s, &err) == TR_OK, "%s", err.msg);
-    tr_recon_device *dev = tr_recon_device_open(cpu, W, H, &err);
+    tr_recon_device *dev = tr_recon_device_create(cpu, W, H, &err);
     CHECK(dev && !tr_recon_device_on_device(dev), "%s", err.msg);
     film_frames(cpu, dev, cams, 2, 1, 0, 0.0, NULL, "cpu device");
-    tr_recon_device_reset(dev);
+    tr_recon_device_clear(dev);
     film_frames(cpu, dev, cams, 2, 1, 0, 0.0, s, "cpu device, emission resolved");
-    tr_recon_device_close(dev);
-    tr_device_close(cpu);
+    tr_recon_device_destroy(dev);
+    tr_device_destroy(cpu);
 }
 
 /* Section 5: the moving sphere with its motion, host against device. */
@@ -237,7 +237,7 @@ static void moving(tr_device *cl) {
     tr_recon_device *dev[2];
     for (int m = 0; m < 2; ++m) {
         CHECK(tr_recon_init(&host[m], W, H, &err) == TR_OK, "%s", err.msg);
-        dev[m] = tr_recon_device_open(cl, W, H, &err);
+        dev[m] = tr_recon_device_create(cl, W, H, &err);
         CHECK(dev[m], "%s", err.msg);
     }
     float *a = malloc(3 * W * H * sizeof *a), *b = malloc(3 * W * H * sizeof *b);
@@ -263,7 +263,7 @@ static void moving(tr_device *cl) {
     printf("  moving sphere with its motion: worst relative difference %.3g\n", worst);
     for (int m = 0; m < 2; ++m) {
         tr_recon_free(&host[m]);
-        tr_recon_device_close(dev[m]);
+        tr_recon_device_destroy(dev[m]);
     }
     free(a);
     free(b);
@@ -280,7 +280,7 @@ int main(void) {
         cams[k] = camera_at(tr_scene_camera(s), k);
         render_g(s, &cams[k], (uint32_t)k, &g[k]);
     }
-    tr_device *cl = tr_device_open("opencl:0", &err);
+    tr_device *cl = tr_device_create("opencl:0", &err);
     CHECK(cl, "no OpenCL device: %s", err.msg);
     printf("OpenCL device: %s\n", tr_device_get_info(cl)->model);
 
@@ -303,7 +303,7 @@ int main(void) {
     for (int k = 0; k < FRAMES; ++k) {
         tr_gbuffer_free(&g[k]);
     }
-    tr_device_close(cl);
+    tr_device_destroy(cl);
     tr_scene_destroy(s);
     return check_finish("test_opencl_recon");
 }

@@ -37,7 +37,7 @@ static int entries(void) {
 }
 
 static int write_file(const char *path, const char *text, tr_error *err) {
-    tr_outfile *f = tr_outfile_open(path, err);
+    tr_outfile *f = tr_outfile_create(path, err);
     if (!f) {
         return TR_ERR;
     }
@@ -76,7 +76,7 @@ static void test_targets(void) {
     snprintf(p, sizeof p, "%s/sub.png", dir);
     mkdir(p, 0755);
     CHECK_STATUS(tr_outfile_check(p, &err), err, TR_STATUS_IO, "directory target");
-    CHECK(tr_outfile_open(p, &err) == NULL, "a directory target was opened");
+    CHECK(tr_outfile_create(p, &err) == NULL, "a directory target was opened");
     CHECK(entries() == 1, "a refused target left %d entries", entries());
     rmdir(p);
     snprintf(p, sizeof p, "%s/fifo", dir);
@@ -102,7 +102,7 @@ static void test_full(void) {
         char p[512];
         snprintf(p, sizeof p, "%s/big.bin", dir);
         tr_error err;
-        tr_outfile *f = tr_outfile_open(p, &err);
+        tr_outfile *f = tr_outfile_create(p, &err);
         if (!f) {
             _exit(10);
         }
@@ -135,7 +135,7 @@ static void test_cleanup(void) {
         for (int i = 0; i < 3; ++i) {
             char p[512];
             snprintf(p, sizeof p, "%s/open%d.pfm", dir, i);
-            tr_outfile *f = tr_outfile_open(p, &err);
+            tr_outfile *f = tr_outfile_create(p, &err);
             if (!f) {
                 _exit(10);
             }

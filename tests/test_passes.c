@@ -116,7 +116,7 @@ static void test_floor(void) {
           "rendered passes into a film without them");
     tr_film_free(&plain);
     tr_film_free(&f);
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 }
 
 /* Mirror floor, diffuse ceiling at height 10 above it, the camera at 5 between: the passes
@@ -166,7 +166,7 @@ static void test_mirror(void) {
               integrator == 0 ? "pt" : "naive", bad, checked);
         tr_film_free(&f);
     }
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 }
 
 static int films_equal(const tr_film *a, const tr_film *b) {
@@ -202,7 +202,7 @@ static int films_equal(const tr_film *a, const tr_film *b) {
 static void device_film(const tr_scene *s, const tr_render_config *cfg, uint32_t first,
                         uint32_t count, const tr_rect *rect, tr_film *out) {
     tr_error err;
-    tr_device *dev = tr_device_open("cpu", &err);
+    tr_device *dev = tr_device_create("cpu", &err);
     CHECK(dev != NULL, "%s", err.msg);
     const uint32_t w = s->camera.screen_width, h = s->camera.screen_height;
     CHECK(tr_film_init_passes(out, w, h, cfg->passes, &err) == TR_OK, "%s", err.msg);
@@ -213,7 +213,7 @@ static void device_film(const tr_scene *s, const tr_render_config *cfg, uint32_t
     CHECK(tr_device_render(dev, &s->camera, cfg, first, count, rect, NULL, &err) == TR_OK, "%s",
           err.msg);
     CHECK(tr_device_read_film(dev, out, &err) == TR_OK, "%s", err.msg);
-    tr_device_close(dev);
+    tr_device_destroy(dev);
 }
 
 static void test_splits(int integrator, int stride) {
@@ -289,7 +289,7 @@ static void test_splits(int integrator, int stride) {
     CHECK(tr_film_accumulate(&whole, &plain, &err) == TR_ERR,
           "added a film without the passes of the target");
     const tr_rect outside = {30, 20, 8, 2};
-    tr_device *dev = tr_device_open("cpu", &err);
+    tr_device *dev = tr_device_create("cpu", &err);
     CHECK(dev && tr_device_upload(dev, &s, &err) == TR_OK, "%s", err.msg);
     CHECK(tr_device_render(dev, &s.camera, &cfg, 0, 1, &outside, NULL, &err) == TR_ERR,
           "rendered a rectangle outside the image");
@@ -309,14 +309,14 @@ static void test_splits(int integrator, int stride) {
     CHECK(tr_device_upload(dev, &s, &err) == TR_OK &&
               tr_device_render(dev, &s.camera, &plain_cfg, 0, 1, NULL, NULL, &err) == TR_OK,
           "after a new upload: %s", err.msg);
-    tr_device_close(dev);
-    CHECK(tr_device_open("vulkan", &err) == NULL, "opened an unknown device");
+    tr_device_destroy(dev);
+    CHECK(tr_device_create("vulkan", &err) == NULL, "opened an unknown device");
 
     tr_film *films[] = {&whole, &loop, &sum, &a, &b, &ab, &plain, &small};
     for (size_t i = 0; i < sizeof films / sizeof films[0]; ++i) {
         tr_film_free(films[i]);
     }
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 }
 
 int main(void) {

@@ -99,14 +99,14 @@ static void furnace_run(tr_vec3 rho, float emittance, int max_depth) {
     tr_camera cam;
     if (build_furnace(&s, rho, emittance, &cam) != TR_OK) {
         CHECK(0, "could not build the furnace");
-        tr_scene_free(&s);
+        tr_scene_clear(&s);
         return;
     }
     tr_error err;
     tr_film film;
     if (tr_film_init(&film, FW, FH, &err) != TR_OK) {
         CHECK(0, "film: %s", err.msg);
-        tr_scene_free(&s);
+        tr_scene_clear(&s);
         return;
     }
     const size_t n = (size_t)FW * FH * FSPP;
@@ -114,7 +114,7 @@ static void furnace_run(tr_vec3 rho, float emittance, int max_depth) {
     if (!val) {
         CHECK(0, "out of memory");
         tr_film_free(&film);
-        tr_scene_free(&s);
+        tr_scene_clear(&s);
         return;
     }
     tr_render_config cfg = tr_render_config_default();
@@ -235,7 +235,7 @@ static void furnace_run(tr_vec3 rho, float emittance, int max_depth) {
     }
     free(val);
     tr_film_free(&film);
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 }
 
 /* The furnace only works if its sphere is closed: rays from inside always hit. */
@@ -244,7 +244,7 @@ static void test_furnace_closed(void) {
     tr_camera cam;
     if (build_furnace(&s, v3s(0.5f), 1.0f, &cam) != TR_OK) {
         CHECK(0, "could not build the furnace");
-        tr_scene_free(&s);
+        tr_scene_clear(&s);
         return;
     }
     const tr_scene_view view = tr_scene_view_of(&s);
@@ -262,7 +262,7 @@ static void test_furnace_closed(void) {
         misses += !tr_intersect_scene(&view, &ray, &hit);
     }
     CHECK(misses == 0, "%d of %d rays escaped the furnace sphere", misses, n);
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 }
 
 static void test_furnace(void) {
@@ -550,7 +550,7 @@ static void slab_case(double theta_deg, int N, uint64_t seed) {
     }
     CHECK(rc == TR_OK, "slab: %s", err.msg);
     if (rc != TR_OK) {
-        tr_scene_free(&s);
+        tr_scene_clear(&s);
         return;
     }
     const tr_scene_view view = tr_scene_view_of(&s);
@@ -618,7 +618,7 @@ static void slab_case(double theta_deg, int N, uint64_t seed) {
            "max %d\n",
            theta_deg, frac, (double)down / N, expect, f.r, NSIGMA * se, (frac - expect) / se,
            polarised, (double)bounces / N, max_bounces);
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 }
 
 static void test_slab(void) {

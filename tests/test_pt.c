@@ -161,7 +161,7 @@ static void mis_weights(int mode) {
     CHECK(tr_mis_power(1.0f, 0.0f) == 1.0f && tr_mis_power(0.0f, 1.0f) == 0.0f &&
               tr_mis_power(0.0f, 0.0f) == 0.0f,
           "power heuristic limits");
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 }
 
 enum { W = 32, H = 32, RS = 16, NR = (W / RS) * (H / RS) };
@@ -293,7 +293,7 @@ static void one_bounce(void) {
                   "lamp variant %d: pt radiance %.5f +- %.5f vs rho/pi E = %.5f", variant, mean, se,
                   expect);
         }
-        tr_scene_free(&s);
+        tr_scene_clear(&s);
     }
 }
 
@@ -304,11 +304,11 @@ int main(void) {
     tr_scene s = {0};
     build_box(&s, 0, W, H);
     unbiased("diffuse box", &s, 5, 2048, 256);
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
     tr_error err;
     CHECK(tr_scene_builtin(&s, "cornell-mirror", W, H, &err) == TR_OK, "builtin: %s", err.msg);
     CHECK(tr_scene_commit(&s, TR_ACCEL_TYPE_BVH, &err) == TR_OK, "commit: %s", err.msg);
     unbiased("cornell-mirror", &s, 5, 2048, 256);
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
     return check_finish("test_pt");
 }

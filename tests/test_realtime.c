@@ -35,7 +35,7 @@ static tr_camera moved_camera(const tr_camera *a, int k) {
 
 static tr_device *cpu(void) {
     tr_error err;
-    tr_device *dev = tr_device_open("cpu", &err);
+    tr_device *dev = tr_device_create("cpu", &err);
     CHECK(dev != NULL, "%s", err.msg);
     return dev;
 }
@@ -74,7 +74,7 @@ static void test_defaults(void) {
         CHECK(tr_realtime_on_device(rt) == 0, "the CPU device reconstructs on the host");
         tr_realtime_destroy(rt);
     }
-    tr_device_close(dev);
+    tr_device_destroy(dev);
     tr_scene_destroy(s);
 }
 
@@ -116,8 +116,8 @@ static void test_deterministic(void) {
     }
     tr_realtime_destroy(a);
     tr_realtime_destroy(b);
-    tr_device_close(d1);
-    tr_device_close(d2);
+    tr_device_destroy(d1);
+    tr_device_destroy(d2);
     tr_scene_destroy(s);
     free(fa);
     free(fb);
@@ -157,7 +157,7 @@ static void test_animated(void) {
     }
     for (int i = 0; i < 2; ++i) {
         tr_realtime_destroy(rt[i]);
-        tr_device_close(d[i]);
+        tr_device_destroy(d[i]);
         tr_scene_destroy(s[i]);
         free(out[i]);
     }
@@ -195,7 +195,7 @@ static void test_accumulate(void) {
           res.spp);
     tr_film_free(&ref);
     tr_realtime_destroy(rt);
-    tr_device_close(dev);
+    tr_device_destroy(dev);
     tr_scene_destroy(s);
 }
 
@@ -240,7 +240,7 @@ static void test_budget(void) {
     CHECK(res.scale == 1.0f && res.frame_spp == TR_REALTIME_MAX_SPP,
           "a generous budget: scale %g, %u spp", (double)res.scale, res.frame_spp);
     tr_realtime_destroy(rt);
-    tr_device_close(dev);
+    tr_device_destroy(dev);
     tr_scene_destroy(s);
 
     CHECK(tr_realtime_level(0.5f) == 1.0f && tr_realtime_level(1.0f) == 1.0f &&
@@ -278,8 +278,8 @@ static void test_methods(void) {
     free(atrous);
     tr_realtime_destroy(both);
     tr_realtime_destroy(one);
-    tr_device_close(d1);
-    tr_device_close(d2);
+    tr_device_destroy(d1);
+    tr_device_destroy(d2);
     tr_scene_destroy(s);
 }
 
@@ -305,7 +305,7 @@ static void history_run(tr_scene *s, unsigned mask, float *out) {
         }
     }
     tr_realtime_destroy(rt);
-    tr_device_close(dev);
+    tr_device_destroy(dev);
 }
 
 static void test_history(void) {
@@ -393,7 +393,7 @@ static void test_failures(void) {
     CHECK(tr_realtime_frame(rt, &fd, &res, &err) == TR_OK && res.spp == 1, "after a cancel: %u spp",
           res.spp);
     tr_realtime_destroy(rt);
-    tr_device_close(dev);
+    tr_device_destroy(dev);
     tr_scene_destroy(s);
 }
 

@@ -144,7 +144,7 @@ static int parse_material(const char *type, const char *body, uint32_t *out_type
     *out_type = 0;
     if (rc == TR_OK) {
         *out_type = s.materials[1].type;
-        tr_scene_free(&s);
+        tr_scene_clear(&s);
     }
     return rc;
 }

@@ -112,7 +112,7 @@ static void test_cornell_image(void) {
     CHECK(lamp.x + lamp.y + lamp.z > 3.0f * (left.x + left.y + left.z), "lamp %g not brighter",
           (double)(lamp.x + lamp.y + lamp.z));
     tr_film_free(&f);
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 }
 
 static void test_determinism(void) {
@@ -157,7 +157,7 @@ static void test_determinism(void) {
     CHECK(mismatch == 0, "%d pixels differ from their stride block's corner", mismatch);
     tr_film_free(&a);
     tr_film_free(&b);
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 }
 
 static void test_bad_config(void) {
@@ -181,7 +181,7 @@ static void test_bad_config(void) {
     CHECK(tr_film_init(&f, 0, 6, &err) == TR_ERR, "zero-width film accepted");
     CHECK(tr_film_init(&f, TR_FILM_MAX_SIDE, TR_FILM_MAX_SIDE, &err) == TR_ERR,
           "a film over the pixel limit is accepted");
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
     CHECK(tr_scene_builtin(&s, "nope", 8, 6, &err) == TR_ERR, "unknown scene accepted");
 }
 

@@ -225,10 +225,10 @@ static void unbiased(void) {
 static int render(const tr_scene *s, tr_film *f, int threads, uint32_t tile, int sampler,
                   int split) {
     tr_error err;
-    tr_device *dev = tr_device_open("cpu", &err);
+    tr_device *dev = tr_device_create("cpu", &err);
     if (!dev || tr_device_upload(dev, s, &err) != TR_OK) {
         fprintf(stderr, "device: %s\n", err.msg);
-        tr_device_close(dev);
+        tr_device_destroy(dev);
         return 0;
     }
     tr_render_config cfg = tr_render_config_default();
@@ -245,7 +245,7 @@ static int render(const tr_scene *s, tr_film *f, int threads, uint32_t tile, int
     if (!ok) {
         fprintf(stderr, "render failed: %s\n", err.msg);
     }
-    tr_device_close(dev);
+    tr_device_destroy(dev);
     return ok;
 }
 
@@ -303,7 +303,7 @@ static void determinism(void) {
                  TR_STATUS_INVALID_ARGUMENT, "sampler 3");
     tr_film_free(&a);
     tr_film_free(&b);
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 }
 
 int main(void) {

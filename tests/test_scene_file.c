@@ -87,8 +87,8 @@ static void test_obj(void) {
     rc = tr_scene_import_mesh(&o, DATA "/mesh/tri.obj", NULL, white, 3, &st, &err);
     CHECK_STATUS(rc, err, TR_STATUS_LIMIT, "a budget of 3 triangles");
     CHECK(o.triangle_count == 5, "nothing added on failure: %u", o.triangle_count);
-    tr_scene_free(&o);
-    tr_scene_free(&s);
+    tr_scene_clear(&o);
+    tr_scene_clear(&s);
 }
 
 static void test_ply_gltf(void) {
@@ -102,7 +102,7 @@ static void test_ply_gltf(void) {
     CHECK(s.tri_verts_count == 2 && tr_scene_triangle_normals(&s, 0, pn) && pn[0].z == 1.0f,
           "ply normals kept");
     CHECK(s.triangles[0].normal.z > 0.99f, "ply winding: front face +z");
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 
     tr_scene_init(&s);
     rc = tr_scene_import_mesh(&s, DATA "/mesh/tri.gltf", NULL, -1, 0, &st, &err);
@@ -116,7 +116,7 @@ static void test_ply_gltf(void) {
         CHECK(mat_of(&s, 0)->type == TR_MATERIAL_PRINCIPLED,
               "gltf: principled (metallic-roughness)");
     }
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 }
 
 /* Debian's assimp-testmodels (installed by scripts/install-deps): required. */
@@ -167,7 +167,7 @@ static void test_installed_models(void) {
         }
         CHECK(textured == models[i].textured, "%s: textured %d", models[i].path, textured);
         CHECK(!textured || s.tri_verts_count > 0, "%s: texture coordinates kept", models[i].path);
-        tr_scene_free(&s);
+        tr_scene_clear(&s);
     }
     unsetenv("TRAC0R_MODEL_ROOT");
 }
@@ -206,7 +206,7 @@ static void test_add_mesh(void) {
     CHECK(tr_scene_add_shape(&s, &d, &err) == TR_OK, "%s", err.msg);
     CHECK(s.tri_verts_count == 1, "normals cover %u triangles", s.tri_verts_count);
     CHECK(!tr_scene_triangle_normals(&s, 1, tn), "the box has none");
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 }
 
 /* The loader from memory: meshes skipped, messages, render defaults, paths. */
@@ -233,7 +233,7 @@ static void test_parse_memory(void) {
               "two_sided sets TR_MATERIAL_TWO_SIDED");
         CHECK(f.emissive_triangles == 80 && f.emitter_materials == 1, "emitters");
         CHECK_NEAR(f.bounds.max.x, 1.0, 1e-6, "bounds");
-        tr_scene_free(&s);
+        tr_scene_clear(&s);
     }
     /* The same with meshes loaded: the missing file is named relative to the scene. */
     opt.load_meshes = 1;
@@ -273,7 +273,7 @@ static void test_parse_memory(void) {
     rc = tr_scene_file_parse(&s, "ls.json", ls_bad, strlen(ls_bad), NULL, NULL, &err);
     CHECK_STATUS(rc, err, TR_STATUS_PARSE, "light_sampling 'tref'");
     CHECK(rc == TR_ERR && strstr(err.msg, "render.light_sampling"), "%s", err.msg);
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
     /* Line and column count from 1 across lines. */
     const char *bad = "{\n  \"camera\":\n    tru }";
     rc = tr_scene_file_parse(&s, "b.json", bad, strlen(bad), NULL, NULL, &err);
@@ -349,7 +349,7 @@ static void test_cornell_classic(void) {
     CHECK(l[0] > 3.0 * l[1], "left quarter: red %g vs green %g", l[0], l[1]);
     CHECK(r[1] > 1.5 * r[0], "right quarter: green %g vs red %g", r[1], r[0]);
     tr_film_free(&film);
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 }
 
 int main(void) {

@@ -244,11 +244,11 @@ int main(void) {
                   "the shape's box was not moved");
             CHECK(s.light_count == lights, "emitter table changed: %u vs %u", s.light_count,
                   lights);
-            tr_scene_free(&ref);
+            tr_scene_clear(&ref);
         }
         printf("%s: update kind %s, moved by (%.2f, %.2f, %.2f)\n", tr_accel_name(accels[k]),
                tr_scene_update_kind(&s), (double)total.x, (double)total.y, (double)total.z);
-        tr_scene_free(&s);
+        tr_scene_clear(&s);
     }
 
     /* Bad arguments. */
@@ -260,7 +260,7 @@ int main(void) {
     CHECK_STATUS(tr_scene_move_shape(&s, 0, v3(NAN, 0, 0), &err), err, TR_STATUS_INVALID_ARGUMENT,
                  "NaN offset");
     CHECK(strcmp(tr_scene_update_kind(&s), "none") == 0, "flat scene update kind");
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
     test_generation();
     return check_finish("test_scene_update");
 }

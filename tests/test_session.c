@@ -33,7 +33,7 @@ static tr_render_config config(uint32_t passes) {
 /* Samples 0..spp-1 one pass at a time on a device of its own, into *out. */
 static void straight(const tr_scene *s, const tr_render_config *cfg, uint32_t spp, tr_film *out) {
     tr_error err;
-    tr_device *dev = tr_device_open("cpu", &err);
+    tr_device *dev = tr_device_create("cpu", &err);
     CHECK(dev && tr_device_upload(dev, s, &err) == TR_OK, "%s", err.msg);
     for (uint32_t k = 0; k < spp; ++k) {
         CHECK(tr_device_render(dev, tr_scene_camera(s), cfg, k, 1, NULL, NULL, &err) == TR_OK, "%s",
@@ -41,7 +41,7 @@ static void straight(const tr_scene *s, const tr_render_config *cfg, uint32_t sp
     }
     CHECK(tr_film_init_passes(out, W, H, cfg->passes, &err) == TR_OK, "%s", err.msg);
     CHECK(tr_device_read_film(dev, out, &err) == TR_OK, "%s", err.msg);
-    tr_device_close(dev);
+    tr_device_destroy(dev);
 }
 
 /* Whether every array of the two films' layout holds the same bits. */
@@ -293,7 +293,7 @@ static void test_tiles(const tr_scene *s, const char *dir) {
     tr_error err;
     char ck[600];
     snprintf(ck, sizeof ck, "%s/tiles.ck", dir);
-    tr_device *d0 = tr_device_open("cpu", &err), *d1 = tr_device_open("cpu", &err);
+    tr_device *d0 = tr_device_create("cpu", &err), *d1 = tr_device_create("cpu", &err);
     const tr_render_config cfg = config(TR_PASS_MASK);
     tr_session_desc d = {0};
     d.spp = 6;
@@ -343,15 +343,15 @@ static void test_tiles(const tr_scene *s, const char *dir) {
     tr_session_destroy(again);
     tr_film_free(&ref);
     free(buf);
-    tr_device_close(d0);
-    tr_device_close(d1);
+    tr_device_destroy(d0);
+    tr_device_destroy(d1);
     remove(ck);
 }
 
 int main(void) {
     tr_error err;
     tr_scene *s = box();
-    tr_device *dev = tr_device_open("cpu", &err);
+    tr_device *dev = tr_device_create("cpu", &err);
     CHECK(dev != NULL, "%s", err.msg);
     const char *tmp = getenv("TMPDIR");
     char path[256];
@@ -367,7 +367,7 @@ int main(void) {
         test_tiles(s, path);
     }
     rmdir(path);
-    tr_device_close(dev);
+    tr_device_destroy(dev);
     tr_scene_destroy(s);
     return check_finish("test_session");
 }

@@ -181,7 +181,7 @@ static void test_icosphere(void) {
               s.shape_count, s.shape_count ? s.shapes[0].first : 0,
               s.shape_count ? s.shapes[0].count : 0, (unsigned long long)expect);
         if (rc != TR_OK || s.triangle_count != expect) {
-            tr_scene_free(&s);
+            tr_scene_clear(&s);
             continue;
         }
         /* Every vertex at the radius: the unit vertices are normalised in float (a few
@@ -219,7 +219,7 @@ static void test_icosphere(void) {
                n, s.triangle_count, worst, area, sphere_area, deficit);
         prev_area = area;
         prev_deficit = deficit;
-        tr_scene_free(&s);
+        tr_scene_clear(&s);
     }
 }
 
@@ -279,7 +279,7 @@ static void test_box(void) {
         CHECK(tr_shape_triangle_count(&d) == 12 && s.triangle_count == 12 && s.shape_count == 1,
               "%s: %u triangles, %u shapes", cases[c].label, s.triangle_count, s.shape_count);
         if (rc != TR_OK || s.triangle_count != 12) {
-            tr_scene_free(&s);
+            tr_scene_clear(&s);
             continue;
         }
         check_shape(&s, 0, dv(cases[c].pos), 1, 1, cases[c].label);
@@ -288,7 +288,7 @@ static void test_box(void) {
         double expect = 2.0 * (a * b + b * cc + cc * a);
         /* Sum of 12 float areas, each good to ~1e-6 relative. */
         CHECK_NEAR(shape_area(&s, 0), expect, 1e-5 * expect, cases[c].label);
-        tr_scene_free(&s);
+        tr_scene_clear(&s);
     }
 }
 
@@ -314,7 +314,7 @@ static void test_plane(void) {
         CHECK(tr_shape_triangle_count(&d) == 2 && s.triangle_count == 2 && s.shape_count == 1,
               "%s: %u triangles, %u shapes", cases[c].label, s.triangle_count, s.shape_count);
         if (rc != TR_OK || s.triangle_count != 2) {
-            tr_scene_free(&s);
+            tr_scene_clear(&s);
             continue;
         }
         check_shape(&s, 0, dv(cases[c].pos), 0, 0, cases[c].label);
@@ -328,7 +328,7 @@ static void test_plane(void) {
         }
         double expect = (double)cases[c].scale.x * (double)cases[c].scale.z;
         CHECK_NEAR(shape_area(&s, 0), expect, 1e-5 * expect, cases[c].label);
-        tr_scene_free(&s);
+        tr_scene_clear(&s);
     }
 }
 
@@ -369,7 +369,7 @@ static void test_runs(void) {
         next = s.shapes[i].first + s.shapes[i].count;
     }
     CHECK(next == s.triangle_count, "runs end at %u of %u triangles", next, s.triangle_count);
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 }
 
 /* A rejected descriptor returns TR_ERR with a message and leaves every array as it was. */
@@ -389,7 +389,7 @@ static void test_rejects(void) {
         free(tri_copy);
         free(shape_copy);
         free(mat_copy);
-        tr_scene_free(&s);
+        tr_scene_clear(&s);
         return;
     }
     memcpy(tri_copy, s.triangles, (size_t)tri_n * sizeof *tri_copy);
@@ -478,7 +478,7 @@ static void test_rejects(void) {
     free(tri_copy);
     free(shape_copy);
     free(mat_copy);
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 }
 
 /* The thesis's Cornell scene (listing 16). */
@@ -536,14 +536,14 @@ static void test_cornell(void) {
     } else {
         CHECK(0, "cornell shape 0 is not a plane");
     }
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 
     /* An unknown name fails with a message and leaves an empty scene. */
     CHECK_STATUS(tr_scene_builtin(&s, "no-such-scene", 64, 64, &err), err, TR_STATUS_NOT_FOUND,
                  "unknown built-in scene");
     CHECK(s.triangle_count == 0 && s.shape_count == 0 && s.triangles == NULL,
           "unknown built-in scene left %u triangles", s.triangle_count);
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 }
 
 int main(void) {

@@ -57,7 +57,7 @@ static void test_sampling(void) {
     tr_vec3 away = v3_normalize(v3(1.0f, 2.0f, 0.5f));
     CHECK(tr_sun_pdf(&v, away) == 0.0f && tr_sun_radiance(&v, away).x == 0.0f,
           "outside the cone: no density, no radiance");
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 }
 
 /* Renders spp samples of a w x w image of scene s from straight above with integrator
@@ -120,7 +120,7 @@ static void test_analytic(void) {
               m, want, se);
         printf("sun pt channel %d: %.5f vs analytic %.5f (se %.2g)\n", c, m, want, se);
     }
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
     /* naive: a wider disc, which escaping rays find often enough. */
     sun_plane(&s, tr_material_diffuse(v3s(albedo)), 40.0f, e);
     const double want = albedo / PI_D * e.y * 0.5;
@@ -129,7 +129,7 @@ static void test_analytic(void) {
     CHECK(fabs(m - want) <= 5.0 * se && se < 0.05 * want, "naive: %.5f vs %.5f (se %.2g)", m, want,
           se);
     printf("sun naive: %.5f vs analytic %.5f (se %.2g)\n", m, want, se);
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 }
 
 /* One-bounce radiance off the glossy plane towards wo by the BSDF strategy alone (a
@@ -202,7 +202,7 @@ static void test_mis(void) {
     printf("sun on glossy: pt (MIS) %.5f (se %.2g), BSDF alone %.5f (se %.2g), light alone %.5f "
            "(se %.2g)\n",
            mp, sp, mb, sb, ml, sl);
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 }
 
 static int parse(const char *sun, tr_scene *s, tr_error *err) {
@@ -261,7 +261,7 @@ static void test_scene_file(void) {
     CHECK(tr_render_frame(&s, &cam, &cfg, &film, 0, NULL, &err) == TR_OK, "pt with a sun: %s",
           err.msg);
     tr_film_free(&film);
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 }
 
 int main(void) {

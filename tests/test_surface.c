@@ -130,7 +130,7 @@ static void sphere_normal_errors(tr_shape_type type, double *max_err, double *ma
         }
     }
     tr_film_free(&film);
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 }
 
 static void test_smooth_icosphere(void) {
@@ -205,7 +205,7 @@ static void test_texture_lookup(void) {
     CHECK_NEAR(e_clp.x, texel_channel(0, 0, 0), 1e-5, "clamp holds the edge");
     tr_vec3 far_clp = tr_texture_sample(&v, clp, 7.5f, -3.0f, 0, &a);
     CHECK_NEAR(far_clp.x, texel_channel(3, 0, 0), 1e-5, "clamp beyond: the corner texel");
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 }
 
 #define QW 60
@@ -301,7 +301,7 @@ static void test_textured_quad(void) {
         }
     }
     tr_film_free(&film);
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 }
 
 /* The normal pass over a quad filling the image whose material has a constant normal
@@ -337,7 +337,7 @@ static void normal_mapped(uint32_t texel, float n[3]) {
     CHECK(tr_render_frame(&s, &cam, &cfg, &film, 0, NULL, &err) == TR_OK, "%s", err.msg);
     CHECK(tr_film_pass_pixel(&film, TR_PASS_NORMAL, 4, 4, n, &err) == TR_OK, "%s", err.msg);
     tr_film_free(&film);
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 }
 
 static void test_normal_map(void) {
@@ -435,7 +435,7 @@ static void test_metallic_roughness_map(void) {
     printf("metallic-roughness map: metal half %.4f, dielectric half %.4f (se %.2g)\n", m[0], m[1],
            se);
     tr_film_free(&film);
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 }
 
 #define TEXDATA TR_SOURCE_DIR "/tests/data/texture"
@@ -495,7 +495,7 @@ static void emitted_at_matches(int textured) {
         }
     }
     CHECK(checked == 64 && lit == 32, "%d points, %d lit (only the front emits)", checked, lit);
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 }
 
 static void test_emitted_at(void) {
@@ -536,7 +536,7 @@ static void test_texture_files(void) {
     CHECK(rc == TR_ERR && (err.code == TR_STATUS_PARSE || err.code == TR_STATUS_LIMIT),
           "huge.png: rc %d", rc);
     CHECK(s.texture_count == 1 && s.texel_count == TW * TH, "failures add nothing");
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 
     /* The PNG chunk walk that runs before stb_image: a whole PNG fits, so does one with
      * bytes after IEND; one cut inside its IDAT or its IEND does not, nor does the file
@@ -618,7 +618,7 @@ static void test_env_sampling(void) {
     const uint32_t w = s.env.width, h = s.env.height, n = w * h;
     CHECK(w == 32 && h == 16, "sky.hdr: %ux%u", w, h);
     if (w != 32 || h != 16) {
-        tr_scene_free(&s);
+        tr_scene_clear(&s);
         return;
     }
     /* The density integrates to 1: midpoint rule over 512 x 256 cells in (t, p). */
@@ -673,7 +673,7 @@ static void test_env_sampling(void) {
     double crit = chi2_critical(bins - 1);
     CHECK(bins > 100 && chi2 < crit, "environment sampling: chi2 %.1f, %d bins (critical %.1f)",
           chi2, bins, crit);
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 }
 
 #define NSIGMA_ENV 5.0
@@ -727,7 +727,7 @@ static void test_env_furnace(void) {
     printf("env furnace: %.4f %.4f %.4f vs %.4f %.4f %.4f\n", m[0], m[1], m[2], want[0], want[1],
            want[2]);
     tr_film_free(&film);
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 }
 
 int main(void) {

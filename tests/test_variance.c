@@ -70,7 +70,7 @@ static void test_constant(void) {
     CHECK(bad_mean == 0, "%d pixels do not see the emitter's radiance", bad_mean);
     CHECK(bad_var == 0, "%d pixels of constant radiance have a variance", bad_var);
     tr_film_free(&f);
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 }
 
 static void test_noisy(int integrator) {
@@ -152,7 +152,7 @@ static void test_noisy(int integrator) {
     free(layer);
     free(mean);
     free(mean_sq);
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 }
 
 static void test_threads(void) {
@@ -194,7 +194,7 @@ static void test_threads(void) {
     tr_film_free(&pass);
     tr_film_free(&one);
     tr_film_free(&two);
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 }
 
 int main(void) {

@@ -216,7 +216,7 @@ static void test_cancel(void) {
     CHECK(n == 0, "no tile rendered after the flag was set (%llu samples)", (unsigned long long)n);
     tr_film_free(&a);
     tr_film_free(&b);
-    tr_scene_free(&s);
+    tr_scene_clear(&s);
 }
 
 int main(void) {

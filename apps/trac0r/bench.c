@@ -468,7 +468,7 @@ static int bench_complexity(int argc, char **argv) {
         return rc;
     }
     /* CSV: one row per (level, structure) measured. */
-    tr_outfile *csv = tr_outfile_open(csv_path, &err);
+    tr_outfile *csv = tr_outfile_create(csv_path, &err);
     if (!csv) {
         fprintf(stderr, "trac0r bench complexity: %s\n", err.msg);
         return CLI_FAILURE;

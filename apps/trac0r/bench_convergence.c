@@ -672,7 +672,7 @@ static void print_speedups(const conv_run *runs, int nsizes, int nmethods) {
 /* Every point of every run as CSV, written atomically. */
 static int write_csv(const char *path, const conv_run *runs, int n) {
     tr_error err;
-    tr_outfile *csv = tr_outfile_open(path, &err);
+    tr_outfile *csv = tr_outfile_create(path, &err);
     if (!csv) {
         fprintf(stderr, "trac0r bench convergence: %s\n", err.msg);
         return CLI_FAILURE;

@@ -80,7 +80,7 @@ int bench_plot_png(const char *script, const char *png, tr_error *err) {
         return -1;
     }
     snprintf(text, n, "%s%s\n", head, script);
-    tr_outfile *f = tr_outfile_open(png, err);
+    tr_outfile *f = tr_outfile_create(png, err);
     if (!f) {
         free(text);
         return -1;

@@ -527,7 +527,7 @@ int cli_load_scene_file(const cli_args *a, cli_common *c, tr_scene *scene, tr_sc
     tr_render_settings st;
     const tr_render_request req = file_request(c, file);
     if (tr_scene_file_apply(scene, c->scene, file, &req, &st, &err) != TR_OK) {
-        tr_scene_free(scene);
+        tr_scene_clear(scene);
         return apply_error(a, c, &st, &err);
     }
     c->width = st.width;
@@ -543,7 +543,7 @@ int cli_load_scene_file(const cli_args *a, cli_common *c, tr_scene *scene, tr_sc
     }
     if (tr_scene_commit(scene, c->accel, &err) != TR_OK) {
         fprintf(stderr, "trac0r %s: %s\n", a->cmd, err.msg);
-        tr_scene_free(scene);
+        tr_scene_clear(scene);
         return CLI_FAILURE;
     }
     return CLI_OK;
@@ -577,7 +577,7 @@ int cli_load_scene(const cli_args *a, const cli_common *c, tr_scene *scene) {
     }
     if (tr_scene_commit(scene, c->accel, &err) != TR_OK) {
         fprintf(stderr, "trac0r %s: %s\n", a->cmd, err.msg);
-        tr_scene_free(scene);
+        tr_scene_clear(scene);
         return CLI_FAILURE;
     }
     return CLI_OK;

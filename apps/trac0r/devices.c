@@ -61,7 +61,7 @@ int cli_backend_open(const cli_args *a, const cli_common *c, const tr_scene *sce
                      cli_backend *be) {
     memset(be, 0, sizeof *be);
     tr_error err;
-    be->dev = tr_device_open(c->device, &err);
+    be->dev = tr_device_create(c->device, &err);
     if (!be->dev) {
         return device_error(a, &err);
     }
@@ -105,7 +105,7 @@ int cli_backend_is_cpu(const cli_backend *be) {
 }
 
 void cli_backend_close(cli_backend *be) {
-    tr_device_close(be->dev);
+    tr_device_destroy(be->dev);
     be->dev = NULL;
 }
 

@@ -47,7 +47,7 @@ typedef struct shown_frame {
 
 static int write_state(const char *path, const view_state *s, const fly_camera *f,
                        const shown_frame *sf, uint32_t w, uint32_t h, double fps, tr_error *err) {
-    tr_outfile *out = tr_outfile_open(path, err);
+    tr_outfile *out = tr_outfile_create(path, err);
     if (!out) {
         return -1;
     }
@@ -85,7 +85,7 @@ static int dump_window(SDL_Renderer *ren, const char *path, tr_error *err) {
         free(px);
         return -1;
     }
-    tr_outfile *out = tr_outfile_open(path, err);
+    tr_outfile *out = tr_outfile_create(path, err);
     if (!out) {
         free(px);
         return -1;
@@ -305,7 +305,7 @@ static void save_camera(view_window *vw) {
     fflush(stdout);
     next_file_path(vw->o->shot_dir, "trac0r-camera", "json", path, sizeof path);
     tr_error cerr;
-    tr_outfile *cf = tr_outfile_open(path, &cerr);
+    tr_outfile *cf = tr_outfile_create(path, &cerr);
     if (cf) {
         fputs(json, tr_outfile_stream(cf)); /* checked by the commit */
     }

@@ -1,7 +1,7 @@
 /* device.h - where frames are rendered: the CPU or an OpenCL device, behind one API.
  *
  *     tr_error err;
- *     tr_device *dev = tr_device_open("cpu", &err);       // or "opencl", "opencl:1"
+ *     tr_device *dev = tr_device_create("cpu", &err);       // or "opencl", "opencl:1"
  *     if (!dev || tr_device_upload(dev, scene, &err) != TR_OK) { puts(err.msg); ... }
  *     tr_render_config cfg = tr_render_config_default();
  *     cfg.passes = TR_PASS_ALBEDO | TR_PASS_NORMAL;
@@ -9,7 +9,7 @@
  *     tr_film film;
  *     tr_film_init_passes(&film, camera.screen_width, camera.screen_height, cfg.passes, &err);
  *     tr_device_read_film(dev, &film, &err);
- *     tr_device_close(dev);
+ *     tr_device_destroy(dev);
  *
  * A device owns a film of the camera's size that keeps the passes of the last render;
  * each render adds a range of samples over a rectangle of pixels to it, so a render can
@@ -32,7 +32,7 @@ typedef struct tr_device tr_device;
 
 /* What is known of one device. */
 typedef struct tr_device_info {
-    char name[32];      /* what tr_device_open takes: "cpu", "opencl:0", ... */
+    char name[32];      /* what tr_device_create takes: "cpu", "opencl:0", ... */
     char kind[16];      /* "cpu" or "opencl" */
     char model[128];    /* the processor or OpenCL device name */
     char platform[128]; /* OpenCL platform name ("" for the CPU) */
@@ -54,8 +54,8 @@ int tr_device_list(const char *kind, tr_device_info *out, int max, int *count, t
 /* Opens a device by name: "cpu", "opencl" (= "opencl:0") or "opencl:N" (N as listed by
  * tr_device_list("opencl", ...)). For OpenCL the kernel is compiled here; a compiler
  * failure's message holds the build log. Returns NULL with a message on failure. */
-tr_device *tr_device_open(const char *name, tr_error *err);
-void tr_device_close(tr_device *dev);
+tr_device *tr_device_create(const char *name, tr_error *err);
+void tr_device_destroy(tr_device *dev);
 const tr_device_info *tr_device_get_info(const tr_device *dev);
 /* "cpu" or "opencl" (tr_device_get_kind names it as an enum). */
 const char *tr_device_kind(const tr_device *dev);

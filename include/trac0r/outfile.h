@@ -25,7 +25,7 @@ typedef struct tr_outfile tr_outfile;
 
 /* Creates the temporary file for `path`. NULL (with `err` set) on failure, among them a
  * target that exists and is not a regular file. */
-tr_outfile *tr_outfile_open(const char *path, tr_error *err);
+tr_outfile *tr_outfile_create(const char *path, tr_error *err);
 
 /* Whether `path` could be written: its type is checked and a temporary file is created
  * and removed again. For commands to check their outputs before long work. */

@@ -203,7 +203,7 @@ typedef struct tr_recon {
 int tr_recon_init(tr_recon *r, uint32_t width, uint32_t height, tr_error *err);
 void tr_recon_free(tr_recon *r);
 /* Forgets the history (a camera cut, a new scene). */
-void tr_recon_reset(tr_recon *r);
+void tr_recon_clear(tr_recon *r);
 /* Reconstructs frame g, rendered through cam, with `method` into out (3 floats per
  * pixel), on up to `threads` OpenMP threads (0: the default); the result does not
  * depend on the thread count. The history then holds this frame. Fails on a size other

@@ -13,7 +13,7 @@
  *         if (tr_realtime_frame(rt, &fd, &res, &err) != TR_OK) { ... }
  *         show(res.film);                                  // res.width x res.height
  *     }
- *     tr_realtime_destroy(rt);                             // before tr_device_close
+ *     tr_realtime_destroy(rt);                             // before tr_device_destroy
  *
  * A frame goes through stages, each its own function in src/realtime/realtime.c:
  *

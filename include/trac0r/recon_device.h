@@ -1,13 +1,13 @@
 /* recon_device.h - real-time reconstruction where the frame was rendered: on an OpenCL
  * device the film never leaves the device until the reconstructed image does.
  *
- *     tr_recon_device *rd = tr_recon_device_open(dev, w, h, &err);   // dev: tr_device_open
+ *     tr_recon_device *rd = tr_recon_device_create(dev, w, h, &err);   // dev: tr_device_create
  *     for (each frame) {
  *         tr_device_render(dev, &cam, &cfg, ...);                     // cfg.passes TR_PASS_ALL
  *         tr_recon_device_frame(rd, &cam, NULL, 0, TR_RECON_SVGF, &params, out, &err);
  *         tr_device_clear(dev, &err);
  *     }
- *     tr_recon_device_close(rd);                                      // before tr_device_close
+ *     tr_recon_device_destroy(rd);                                      // before tr_device_destroy
  *
  * On an OpenCL device each stage of tr_recon_frame (post.h) runs as a kernel built from
  * src/post/recon.cl, the per-pixel operators of src/post/filter.h that the host's filters
@@ -33,11 +33,11 @@ typedef struct tr_recon_device tr_recon_device;
 /* Reconstruction state of width x height frames on `dev`, which must outlive it (close
  * this first). For OpenCL the filters are compiled for the device here (a compiler
  * failure's message holds the build log) and the history allocated on it. */
-tr_recon_device *tr_recon_device_open(tr_device *dev, uint32_t width, uint32_t height,
-                                      tr_error *err);
-void tr_recon_device_close(tr_recon_device *r);
+tr_recon_device *tr_recon_device_create(tr_device *dev, uint32_t width, uint32_t height,
+                                        tr_error *err);
+void tr_recon_device_destroy(tr_recon_device *r);
 /* Forgets the history (a camera cut, a new scene). */
-void tr_recon_device_reset(tr_recon_device *r);
+void tr_recon_device_clear(tr_recon_device *r);
 /* 1 when the stages run on an OpenCL device, 0 on the host. */
 int tr_recon_device_on_device(const tr_recon_device *r);
 

@@ -69,7 +69,7 @@ tr_scene *tr_scene_create(tr_error *err);
 /* Releases the scene and everything it owns; NULL is ignored. */
 void tr_scene_destroy(tr_scene *s);
 /* Releases everything the scene owns and leaves it empty (the handle stays valid). */
-void tr_scene_free(tr_scene *s);
+void tr_scene_clear(tr_scene *s);
 /* Appends a material and returns its index in *index. Rejects non-finite or negative
  * values and unknown types. */
 int tr_scene_add_material(tr_scene *s, tr_material m, uint32_t *index, tr_error *err);

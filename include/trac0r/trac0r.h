@@ -11,7 +11,7 @@
  *     int main(void) {
  *         tr_error err;
  *         tr_scene *scene = tr_scene_create(&err);
- *         tr_device *dev = tr_device_open("cpu", &err); // or "opencl:0"
+ *         tr_device *dev = tr_device_create("cpu", &err); // or "opencl:0"
  *         if (!scene || !dev || tr_scene_builtin(scene, "cornell", 320, 240, &err) != TR_OK ||
  *             tr_scene_commit(scene, TR_ACCEL_TYPE_BVH, &err) != TR_OK) {
  *             return fprintf(stderr, "%s\n", err.msg), 1;
@@ -26,7 +26,7 @@
  *                  tr_film_write(film, "cornell.png", 0.0f, &err) != TR_OK;
  *         fprintf(stderr, "\n%s\n", rc ? err.msg : "cornell.png");
  *         tr_session_destroy(s);
- *         tr_device_close(dev);
+ *         tr_device_destroy(dev);
  *         tr_scene_destroy(scene);
  *         return rc;
  *     }

@@ -11,7 +11,7 @@
  * time in a process and under 0.1 ms after that (Embree 3.13.5, the Debian package),
  * nothing next to a build, and it keeps the library free of global state: there is no
  * once-initialiser to get right, errors go to the scene that caused them, and
- * tr_scene_free releases everything Embree allocated for the scene. */
+ * tr_scene_clear releases everything Embree allocated for the scene. */
 #include <math.h>
 #include <stdatomic.h>
 #include <stdio.h>

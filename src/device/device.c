@@ -136,7 +136,7 @@ static int opencl_index(const char *name) {
     return (int)n;
 }
 
-tr_device *tr_device_open(const char *name, tr_error *err) {
+tr_device *tr_device_create(const char *name, tr_error *err) {
     if (!name) {
         name = "cpu";
     }
@@ -167,7 +167,7 @@ tr_device *tr_device_open(const char *name, tr_error *err) {
     return dev;
 }
 
-void tr_device_close(tr_device *dev) {
+void tr_device_destroy(tr_device *dev) {
     if (!dev) {
         return;
     }

@@ -223,7 +223,7 @@ int tr_film_write_exr_rgb(const tr_film *f, const tr_film *rgb, const char *path
     if (!buf) {
         return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "%s: out of memory", path);
     }
-    tr_outfile *out = tr_outfile_open(path, err);
+    tr_outfile *out = tr_outfile_create(path, err);
     if (!out) {
         free(buf);
         return TR_ERR;

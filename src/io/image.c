@@ -93,7 +93,7 @@ int tr_film_write_png(const tr_film *f, const char *path, float exposure, tr_err
     if (!row) {
         return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "%.200s: out of memory", path);
     }
-    tr_outfile *t = tr_outfile_open(path, err);
+    tr_outfile *t = tr_outfile_create(path, err);
     if (!t) {
         free(row);
         return TR_ERR;
@@ -119,7 +119,7 @@ int tr_film_write_pfm(const tr_film *f, const char *path, tr_error *err) {
     if (!row) {
         return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "%.200s: out of memory", path);
     }
-    tr_outfile *t = tr_outfile_open(path, err);
+    tr_outfile *t = tr_outfile_create(path, err);
     if (!t) {
         free(row);
         return TR_ERR;

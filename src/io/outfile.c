@@ -137,7 +137,7 @@ static const char *type_name(mode_t m) {
                          : "not a regular file";
 }
 
-tr_outfile *tr_outfile_open(const char *path, tr_error *err) {
+tr_outfile *tr_outfile_create(const char *path, tr_error *err) {
     size_t n = strlen(path);
     if (n == 0) {
         tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "empty output path");
@@ -186,7 +186,7 @@ tr_outfile *tr_outfile_open(const char *path, tr_error *err) {
 }
 
 int tr_outfile_check(const char *path, tr_error *err) {
-    tr_outfile *t = tr_outfile_open(path, err);
+    tr_outfile *t = tr_outfile_create(path, err);
     if (!t) {
         return TR_ERR;
     }

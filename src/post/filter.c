@@ -231,7 +231,7 @@ void tr_recon_free(tr_recon *r) {
     memset(r, 0, sizeof *r);
 }
 
-void tr_recon_reset(tr_recon *r) {
+void tr_recon_clear(tr_recon *r) {
     r->have_history = 0;
 }
 

@@ -486,8 +486,8 @@ read:;
 }
 #endif
 
-tr_recon_device *tr_recon_device_open(tr_device *dev, uint32_t width, uint32_t height,
-                                      tr_error *err) {
+tr_recon_device *tr_recon_device_create(tr_device *dev, uint32_t width, uint32_t height,
+                                        tr_error *err) {
     if (tr_film_check_size(width, height, err) != TR_OK) {
         return NULL;
     }
@@ -523,7 +523,7 @@ tr_recon_device *tr_recon_device_open(tr_device *dev, uint32_t width, uint32_t h
     return r;
 }
 
-void tr_recon_device_close(tr_recon_device *r) {
+void tr_recon_device_destroy(tr_recon_device *r) {
     if (!r) {
         return;
     }
@@ -538,14 +538,14 @@ void tr_recon_device_close(tr_recon_device *r) {
     free(r);
 }
 
-void tr_recon_device_reset(tr_recon_device *r) {
+void tr_recon_device_clear(tr_recon_device *r) {
 #ifdef TRAC0R_HAVE_OPENCL
     if (r->cl) {
         r->cl->have_history = 0;
         return;
     }
 #endif
-    tr_recon_reset(&r->host);
+    tr_recon_clear(&r->host);
 }
 
 int tr_recon_device_on_device(const tr_recon_device *r) {

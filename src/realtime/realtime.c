@@ -144,7 +144,7 @@ tr_realtime *tr_realtime_create(tr_device *dev, tr_scene *scene, const tr_realti
 
 static void free_history(rt_history *h) {
     tr_recon_free(&h->rec);
-    tr_recon_device_close(h->rdev);
+    tr_recon_device_destroy(h->rdev);
     memset(h, 0, sizeof *h);
 }
 
@@ -377,7 +377,7 @@ static int prepare_history(tr_realtime *rt, int m, uint32_t w, uint32_t h, tr_er
     if (hist->width != w || hist->height != h) {
         free_history(hist);
         if (rt->on_device) {
-            if (!(hist->rdev = tr_recon_device_open(rt->dev, w, h, err))) {
+            if (!(hist->rdev = tr_recon_device_create(rt->dev, w, h, err))) {
                 return TR_ERR;
             }
         } else if (tr_recon_init(&hist->rec, w, h, err) != TR_OK) {
@@ -387,9 +387,9 @@ static int prepare_history(tr_realtime *rt, int m, uint32_t w, uint32_t h, tr_er
         hist->height = h;
     } else if (hist->used && hist->frame + 1 != rt->rendered) {
         if (rt->on_device) {
-            tr_recon_device_reset(hist->rdev);
+            tr_recon_device_clear(hist->rdev);
         } else {
-            tr_recon_reset(&hist->rec);
+            tr_recon_clear(&hist->rec);
         }
     }
     hist->used = 1;

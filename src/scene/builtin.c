@@ -84,7 +84,7 @@ static int build_cornell(tr_scene *s, uint32_t width, uint32_t height, int ico_l
 
 int tr_scene_builtin(tr_scene *s, const char *name, uint32_t width, uint32_t height,
                      tr_error *err) {
-    tr_scene_free(s); /* the previous content goes; the generation counts on */
+    tr_scene_clear(s); /* the previous content goes; the generation counts on */
     int rc;
     const char *ico = "cornell-ico-";
     char *end = NULL;
@@ -109,7 +109,7 @@ int tr_scene_builtin(tr_scene *s, const char *name, uint32_t width, uint32_t hei
             name, TR_ICOSPHERE_MAX_SUBDIVISIONS);
     }
     if (rc != TR_OK) {
-        tr_scene_free(s);
+        tr_scene_clear(s);
     }
     return rc;
 }

@@ -1425,7 +1425,7 @@ static int build(jctx *c, const cJSON *root) {
 
 int tr_scene_file_parse(tr_scene *s, const char *path, const char *text, size_t len,
                         const tr_scene_file_options *opt, tr_scene_file *info, tr_error *err) {
-    tr_scene_free(s); /* the previous content goes; the generation counts on */
+    tr_scene_clear(s); /* the previous content goes; the generation counts on */
     tr_scene_file local;
     if (!info) {
         info = &local;
@@ -1542,14 +1542,14 @@ int tr_scene_file_parse(tr_scene *s, const char *path, const char *text, size_t 
     cJSON_Delete(root);
     free(c.by_name);
     if (rc != TR_OK) {
-        tr_scene_free(s);
+        tr_scene_clear(s);
     }
     return rc;
 }
 
 int tr_scene_file_load(tr_scene *s, const char *path, const tr_scene_file_options *opt,
                        tr_scene_file *info, tr_error *err) {
-    tr_scene_free(s); /* the previous content goes; the generation counts on */
+    tr_scene_clear(s); /* the previous content goes; the generation counts on */
     uint64_t size = 0;
     FILE *fp = tr_infile_open(path, &size, err); /* a FIFO would block: regular files only */
     if (!fp) {

@@ -131,7 +131,7 @@ int tr_scene_model_load(tr_scene *s, const char *path, const tr_model_options *o
         info = &local;
     }
     memset(info, 0, sizeof *info);
-    tr_scene_free(s);
+    tr_scene_clear(s);
     if (!(opt->scale > 0.0f) || !isfinite(opt->scale)) {
         return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "--scale %g: expected > 0",
                             (double)opt->scale);
@@ -150,7 +150,7 @@ int tr_scene_model_load(tr_scene *s, const char *path, const tr_model_options *o
     }
     if (tr_scene_import_mesh_ex(s, path, &tf, -1, TR_SCENE_FILE_MAX_TRIANGLES, &st, model_warn,
                                 info, &ex, err) != TR_OK) {
-        tr_scene_free(s);
+        tr_scene_clear(s);
         return TR_ERR;
     }
     info->mesh_count = 1;
@@ -202,7 +202,7 @@ int tr_scene_model_load(tr_scene *s, const char *path, const tr_model_options *o
         model_warn(info, msg);
     }
     if (!lit && tr_scene_set_environment(s, v3s(1.0f), 1.0f, 0.0f, NULL, 0, 0, err) != TR_OK) {
-        tr_scene_free(s);
+        tr_scene_clear(s);
         return TR_ERR;
     }
     for (uint32_t i = 0; i < s->material_count; ++i) {
@@ -248,7 +248,7 @@ int tr_scene_model_load(tr_scene *s, const char *path, const tr_model_options *o
     far_d = dist + 4.0f * radius;
     if (tr_camera_make(&s->camera, pos, dir, up, vfov, near_d, far_d, info->width, info->height,
                        err) != TR_OK) {
-        tr_scene_free(s);
+        tr_scene_clear(s);
         return TR_ERR;
     }
     s->camera.right = v3_neg(s->camera.right);

@@ -52,12 +52,12 @@ tr_scene *tr_scene_create(tr_error *err) {
 
 void tr_scene_destroy(tr_scene *s) {
     if (s) {
-        tr_scene_free(s);
+        tr_scene_clear(s);
         free(s);
     }
 }
 
-void tr_scene_free(tr_scene *s) {
+void tr_scene_clear(tr_scene *s) {
     /* The generation goes on counting: a device holding an upload of the old content
      * must not take the emptied (or reloaded) scene for the one it has. */
     const uint64_t generation = s->generation;

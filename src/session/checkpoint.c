@@ -130,7 +130,7 @@ static void put(hashed_writer *w, const void *data, size_t n) {
 
 int tr_ck_write(const char *path, const tr_ck_id *id, const tr_film *film, uint32_t spp,
                 const tr_ck_tiles *tiles, tr_error *err) {
-    tr_outfile *out = tr_outfile_open(path, err);
+    tr_outfile *out = tr_outfile_create(path, err);
     if (!out) {
         return TR_ERR;
     }

@@ -34,7 +34,7 @@ int main(int argc, char **argv) {
         tr_scene_commit(scene, TR_ACCEL_TYPE_BVH, &err) != TR_OK) {
         goto done;
     }
-    dev = tr_device_open("cpu", &err);
+    dev = tr_device_create("cpu", &err);
     tr_render_config cfg = tr_render_config_default();
     if (!dev || tr_device_upload(dev, scene, &err) != TR_OK ||
         tr_device_render(dev, tr_scene_camera(scene), &cfg, 0, SPP, NULL, NULL, &err) != TR_OK ||
@@ -71,7 +71,7 @@ done:
     }
     tr_image_free(&ref);
     tr_film_free(&film);
-    tr_device_close(dev);
+    tr_device_destroy(dev);
     tr_scene_destroy(scene);
     return status;
 }
