@@ -45,6 +45,6 @@ SCENE="src/scene/json.c src/scene/scene.c src/scene/shape.c src/scene/camera.c
     src/accel/embree.c src/util/error.c src/util/registry.c src/util/clock.c src/scene/material_registry.c \
     src/util/infile.c src/scene/light_tree.c $(pkg-config --libs libpng) -ljpeg -lm -o "$OUT/fuzz_texture"
 # shellcheck disable=SC2046,SC2086
-"$CC" $FLAGS $(pkg-config --cflags libcjson) fuzz/fuzz_checkpoint.c src/session/checkpoint.c src/film/film.c src/io/outfile.c \
-    $SCENE $(pkg-config --libs libcjson libpng) -ljpeg -lm -o "$OUT/fuzz_checkpoint"
+"$CC" $FLAGS fuzz/fuzz_checkpoint.c src/session/checkpoint.c src/film/film.c src/io/outfile.c \
+    src/util/error.c -lm -o "$OUT/fuzz_checkpoint"
 echo "built $OUT/fuzz_scene_json $OUT/fuzz_mesh $OUT/fuzz_mesh_guard $OUT/fuzz_image $OUT/fuzz_texture $OUT/fuzz_checkpoint"

@@ -11,7 +11,6 @@
 #include <unistd.h>
 
 #include "trac0r/outfile.h"
-#include "trac0r/registry.h"
 
 static const char magic[8] = {'T', 'R', 'A', 'C', '0', 'R', 'C', 'K'};
 /* 3: one format for renders in one process and in many: per-tile sample counts, and every
@@ -22,95 +21,14 @@ static const char magic[8] = {'T', 'R', 'A', 'C', '0', 'R', 'C', 'K'};
 
 /* FNV-1a, 64-bit (Fowler, Noll, Vo): a fast hash; checkpoints need to tell renders apart
  * and catch damage, not resist an adversary. */
-#define FNV_OFFSET 14695981039346656037ull
 #define FNV_PRIME 1099511628211ull
 
-static uint64_t fnv(uint64_t h, const void *data, size_t n) {
+uint64_t tr_ck_fnv(uint64_t h, const void *data, size_t n) {
     const unsigned char *p = data;
     for (size_t i = 0; i < n; ++i) {
         h = (h ^ p[i]) * FNV_PRIME;
     }
     return h;
-}
-
-static uint64_t fnv_floats(uint64_t h, const float *v, size_t n) {
-    return fnv(h, v, n * sizeof *v);
-}
-
-static uint64_t fnv_u32(uint64_t h, uint32_t v) {
-    return fnv(h, &v, sizeof v);
-}
-
-/* The scene file's bytes: its meshes are in the geometry hashed below, but settings the
- * geometry does not show (a light's sampling, a future field) are in the file. */
-static int hash_file(uint64_t *h, const char *path, tr_error *err) {
-    FILE *fp = fopen(path, "rb");
-    if (!fp) {
-        return tr_error_set(err, tr_status_from_errno(errno), "%s: cannot read: %s", path,
-                            strerror(errno));
-    }
-    unsigned char buf[65536];
-    size_t n;
-    while ((n = fread(buf, 1, sizeof buf, fp)) > 0) {
-        *h = fnv(*h, buf, n);
-    }
-    const int bad = ferror(fp);
-    fclose(fp);
-    if (bad) {
-        return tr_error_set(err, TR_STATUS_IO, "%s: read error", path);
-    }
-    return TR_OK;
-}
-
-static const char *sampler_name(int sampler) {
-    return sampler == TR_SAMPLER_RANDOM   ? "random"
-           : sampler == TR_SAMPLER_ZSOBOL ? "zsobol"
-                                          : "sobol";
-}
-
-int tr_ck_identity(tr_ck_id *id, const tr_scene *scene, const tr_render_config *cfg,
-                   const char *scene_file, tr_error *err) {
-    memset(id, 0, sizeof *id);
-    const tr_camera *cam = tr_scene_camera(scene);
-    /* The sampler and the light selection decide the samples too: a film resumed with
-     * other ones would mix two sequences of points. */
-    snprintf(id->desc, sizeof id->desc,
-             "size=%ux%u seed=%llu max-depth=%d integrator=%s accel=%s stride=%d passes=0x%x "
-             "sampler=%s light-sampling=%s",
-             cam->screen_width, cam->screen_height, (unsigned long long)cfg->seed, cfg->max_depth,
-             tr_integrator_name(cfg->integrator), tr_accel_name(tr_scene_accel(scene)),
-             cfg->stride > 0 ? cfg->stride : 1, cfg->passes, sampler_name(cfg->sampler),
-             tr_light_sampling_name(tr_scene_light_sampling(scene)));
-    /* pt's roulette start decides the paths as well. */
-    const int rr = cfg->roulette_start ? cfg->roulette_start : TR_ROULETTE_START_PT;
-    if (rr != TR_ROULETTE_START_PT) {
-        const size_t used = strlen(id->desc);
-        snprintf(id->desc + used, sizeof id->desc - used, " roulette-start=%d", rr);
-    }
-    uint64_t h = FNV_OFFSET;
-    const uint32_t nt = tr_scene_triangle_count(scene);
-    h = fnv_u32(h, nt);
-    for (uint32_t i = 0; i < nt; ++i) {
-        const tr_triangle t = tr_scene_triangle(scene, i);
-        const float v[9] = {t.v0.x, t.v0.y, t.v0.z, t.v1.x, t.v1.y, t.v1.z, t.v2.x, t.v2.y, t.v2.z};
-        h = fnv_u32(fnv_floats(h, v, 9), t.material);
-    }
-    const uint32_t nm = tr_scene_material_count(scene);
-    h = fnv_u32(h, nm);
-    for (uint32_t i = 0; i < nm; ++i) {
-        const tr_material m = tr_scene_material(scene, i);
-        const float v[6] = {m.color.x, m.color.y, m.color.z, m.roughness, m.ior, m.emittance};
-        h = fnv_u32(fnv_u32(fnv_floats(h, v, 6), m.type), m.flags);
-    }
-    const float c[10] = {cam->pos.x,      cam->pos.y,       cam->pos.z,      cam->dir.x,
-                         cam->dir.y,      cam->dir.z,       cam->world_up.x, cam->world_up.y,
-                         cam->world_up.z, cam->vertical_fov};
-    h = fnv_floats(h, c, 10);
-    if (scene_file && hash_file(&h, scene_file, err) != TR_OK) {
-        return TR_ERR;
-    }
-    id->scene_hash = h;
-    return TR_OK;
 }
 
 /* The bytes of the film's arrays for a film of w x h keeping `passes`. */
@@ -124,7 +42,7 @@ typedef struct hashed_writer {
 } hashed_writer;
 
 static void put(hashed_writer *w, const void *data, size_t n) {
-    w->h = fnv(w->h, data, n);
+    w->h = tr_ck_fnv(w->h, data, n);
     fwrite(data, 1, n, w->fp);
 }
 
@@ -134,7 +52,7 @@ int tr_ck_write(const char *path, const tr_ck_id *id, const tr_film *film, uint3
     if (!out) {
         return TR_ERR;
     }
-    hashed_writer w = {tr_outfile_stream(out), FNV_OFFSET};
+    hashed_writer w = {tr_outfile_stream(out), TR_CK_FNV_OFFSET};
     const uint32_t head[HEAD_WORDS] = {CK_VERSION,   BYTE_ORDER_MARK, film->width,
                                        film->height, film->passes,    spp,
                                        tiles->side,  tiles->count,    (uint32_t)strlen(id->desc)};
@@ -203,7 +121,7 @@ static int take(hashed_reader *r, void *out, size_t n) {
     if (fread(out, 1, n, r->fp) != n) {
         return -1;
     }
-    r->h = fnv(r->h, out, n);
+    r->h = tr_ck_fnv(r->h, out, n);
     return 0;
 }
 
@@ -288,7 +206,7 @@ int tr_ck_read(const char *path, const tr_ck_id *id, tr_ck_tiles *tiles, tr_film
     if (!fp) {
         return TR_ERR;
     }
-    hashed_reader r = {fp, FNV_OFFSET};
+    hashed_reader r = {fp, TR_CK_FNV_OFFSET};
     uint32_t head[HEAD_WORDS] = {0};
     uint64_t scene_hash = 0;
     char desc[512];

@@ -10,6 +10,7 @@
 #ifndef TRAC0R_SESSION_CHECKPOINT_H
 #define TRAC0R_SESSION_CHECKPOINT_H
 
+#include <stddef.h>
 #include <stdint.h>
 
 #include "trac0r/error.h"
@@ -23,9 +24,15 @@ typedef struct tr_ck_id {
 } tr_ck_id;
 
 /* The identity of a render of the committed scene with cfg (stride and passes as cfg's;
- * scene_file, may be NULL, hashed too). */
+ * scene_file, may be NULL, hashed too): session.c, apart from the file format so that the
+ * reader builds and is fuzzed alone. */
 int tr_ck_identity(tr_ck_id *id, const tr_scene *scene, const tr_render_config *cfg,
                    const char *scene_file, tr_error *err);
+
+/* FNV-1a, 64-bit (Fowler, Noll, Vo) of n bytes, continuing from h (start: TR_CK_FNV_OFFSET):
+ * checkpoints need to tell renders apart and catch damage, not resist an adversary. */
+#define TR_CK_FNV_OFFSET 14695981039346656037ull
+uint64_t tr_ck_fnv(uint64_t h, const void *data, size_t n);
 
 /* The tiles of a film: side (pixels) and count, and the samples each holds. */
 typedef struct tr_ck_tiles {
