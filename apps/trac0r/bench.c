@@ -23,6 +23,41 @@ double bench_median(double *v, int n) {
     return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
+/* A step of a benchmark failed: clears the progress bar and says why. */
+static int bench_failed(progress *bar, const cli_args *a, const char *what, const tr_error *err) {
+    progress_clear(bar);
+    fprintf(stderr, "trac0r %s: %s%s\n", a->cmd, what, err->msg);
+    return CLI_FAILURE;
+}
+
+#define BENCH_HELP (-1) /* bench_options printed the help: exit status 0, nothing to do */
+
+/* The command line of a benchmark: the common options (those in `refused`, a NULL-ended
+ * list, are rejected once parsed), -h/--help (prints `help`), and `own` for the rest,
+ * which returns CLI_OK, CLI_USAGE, or -1 for an option that is not its own. */
+static int bench_options(cli_args *a, cli_common *c, const char *const *refused, void (*help)(void),
+                         int (*own)(cli_args *, void *), void *bench) {
+    while (cli_next(a)) {
+        int rc = cli_common_option(a, c);
+        for (const char *const *r = refused; rc == CLI_OK && r && *r; ++r) {
+            if (cli_is(a, *r)) {
+                return cli_error(a, "%s: not an option of this benchmark", a->opt);
+            }
+        }
+        if (rc != -1) {
+            if (rc != CLI_OK) {
+                return CLI_USAGE;
+            }
+        } else if (cli_is(a, "-h") || cli_is(a, "--help")) {
+            help();
+            return BENCH_HELP;
+        } else if ((rc = own(a, bench)) != CLI_OK) {
+            return rc < 0 ? cli_unknown(a) : CLI_USAGE;
+        }
+    }
+    return CLI_OK;
+}
+
 static void bench_frame_help(void) {
     printf("Usage: trac0r bench frame [options]\n"
            "\n"
@@ -49,176 +84,173 @@ static void bench_frame_help(void) {
            cli_common_help());
 }
 
-static int bench_frame(int argc, char **argv) {
-    cli_args a = {.cmd = "bench frame", .argc = argc, .argv = argv, .i = 0};
+/* bench frame: its options, what it renders on, and what it measures. */
+typedef struct frame_bench {
+    cli_args a;
     cli_common c;
-    cli_common_default(&c);
-    c.integrator = TR_INTEGRATOR_NAIVE; /* the thesis's frame */
-    int frames = 20;
-    int animate = 0;
-    while (cli_next(&a)) {
-        int rc = cli_common_option(&a, &c);
-        if (rc == CLI_OK) {
-            continue;
-        }
-        if (rc == CLI_USAGE) {
-            return CLI_USAGE;
-        }
-        if (cli_is(&a, "-h") || cli_is(&a, "--help")) {
-            bench_frame_help();
-            return CLI_OK;
-        } else if (cli_is(&a, "--frames")) {
-            rc = cli_parse_int(&a, 1, 100000, &frames);
-        } else if (cli_is(&a, "--animate")) {
-            animate = 1;
-            rc = CLI_OK;
-        } else {
-            return cli_unknown(&a);
-        }
-        if (rc != CLI_OK) {
-            return CLI_USAGE;
-        }
+    int frames;  /* timed frames, after one warm-up frame */
+    int animate; /* --animate: the scene changes before every frame */
+    tr_scene *scene;
+    cli_backend be, cpu; /* cpu: beside a device, the same frames on the CPU (else no dev) */
+    tr_render_config cfg;
+    progress bar;
+    double *times, *update_times, *cpu_times; /* one per timed frame */
+    uint64_t rays;
+    double total; /* seconds of the timed frames */
+} frame_bench;
+
+/* One of bench frame's own options: CLI_OK, CLI_USAGE, or -1 if it is none of them. */
+static int frame_option(cli_args *a, void *bench) {
+    frame_bench *b = bench;
+    if (cli_is(a, "--animate")) {
+        b->animate = 1;
+        return CLI_OK;
     }
-    tr_scene *scene = tr_scene_create(NULL);
-    int rc = cli_load_scene(&a, &c, scene);
+    return cli_is(a, "--frames") ? cli_parse_int(a, 1, 100000, &b->frames) : -1;
+}
+
+/* The scene, the storage of the times, the image size, the device, and on a device the
+ * CPU beside it (the reference its speed is reported against, under the same load). */
+static int frame_open(frame_bench *b) {
+    int rc = cli_load_scene(&b->a, &b->c, b->scene);
     if (rc != CLI_OK) {
-        tr_scene_destroy(scene);
         return rc;
     }
-    tr_error err;
-    double *times = malloc((size_t)frames * 2 * sizeof *times);
-    double *update_times = times ? times + frames : NULL;
-    if (!times) {
-        tr_scene_destroy(scene);
+    if (!(b->times = malloc((size_t)b->frames * 3 * sizeof *b->times))) {
         fprintf(stderr, "trac0r bench frame: out of memory\n");
         return CLI_FAILURE;
     }
-    if (tr_film_check_size(c.width, c.height, &err) != TR_OK) {
-        free(times);
-        tr_scene_destroy(scene);
-        return cli_error(&a, "--width/--height: %s", err.msg);
+    b->update_times = b->times + b->frames;
+    b->cpu_times = b->update_times + b->frames;
+    tr_error err;
+    if (tr_film_check_size(b->c.width, b->c.height, &err) != TR_OK) {
+        return cli_error(&b->a, "--width/--height: %s", err.msg);
     }
-    cli_backend be;
-    rc = cli_backend_open(&a, &c, scene, &be);
-    if (rc != CLI_OK) {
-        free(times);
-        tr_scene_destroy(scene);
+    if ((rc = cli_backend_open(&b->a, &b->c, b->scene, &b->be)) != CLI_OK) {
         return rc;
     }
-    tr_render_config cfg = cli_render_config(&c);
-
+    b->cfg = cli_render_config(&b->c);
     char accel[160];
-    cli_describe_accel(accel, sizeof accel, scene);
+    cli_describe_accel(accel, sizeof accel, b->scene);
     printf("bench frame: %s, %ux%u, 1 spp/frame, integrator %s, max depth %d, %s, "
            "%u triangles, accel %s\n",
-           c.scene, c.width, c.height, tr_integrator_name(c.integrator),
-           c.max_depth ? c.max_depth : tr_default_max_depth(c.integrator), be.name,
-           tr_scene_triangle_count(scene), accel);
-    uint64_t rays = 0;
-    double total = 0.0;
-    rc = CLI_OK;
-    /* On a device, every frame is followed by the same frame on the CPU: the reference
-     * the device's speed is reported against, measured under the same load. */
-    cli_backend cpu = {.dev = NULL};
-    double *cpu_times = NULL;
-    if (!cli_backend_is_cpu(&be)) {
-        cli_common cc = c;
-        snprintf(cc.device, sizeof cc.device, "cpu");
-        cpu_times = malloc((size_t)frames * sizeof *cpu_times);
-        if (!cpu_times) {
-            fprintf(stderr, "trac0r bench frame: out of memory\n");
-            rc = CLI_FAILURE;
-        } else {
-            rc = cli_backend_open(&a, &cc, scene, &cpu);
-        }
+           b->c.scene, b->c.width, b->c.height, tr_integrator_name(b->c.integrator),
+           b->c.max_depth ? b->c.max_depth : tr_default_max_depth(b->c.integrator), b->be.name,
+           tr_scene_triangle_count(b->scene), accel);
+    if (cli_backend_is_cpu(&b->be)) {
+        return CLI_OK;
     }
-    /* Frame 0 warms caches and the thread pool and is not timed. */
-    progress bar;
-    progress_begin(&bar, "trac0r bench frame", "frames", (uint64_t)frames + 1, 0);
-    for (int f = 0; f <= frames && rc == CLI_OK; ++f) {
+    cli_common cc = b->c;
+    snprintf(cc.device, sizeof cc.device, "cpu");
+    return cli_backend_open(&b->a, &cc, b->scene, &b->cpu);
+}
+
+/* --animate: the scene's change and its uploads (timed together), then a new image. */
+static int frame_update(frame_bench *b, int f) {
+    tr_error err;
+    const double t0 = tr_time_now();
+    if (cli_animate(b->scene, (uint32_t)f, &err) != TR_OK ||
+        tr_scene_update(b->scene, NULL, &err) != TR_OK) {
+        return bench_failed(&b->bar, &b->a, "--animate: ", &err);
+    }
+    int rc;
+    if ((rc = cli_backend_upload(&b->a, &b->be, b->scene)) != CLI_OK ||
+        (b->cpu.dev && (rc = cli_backend_upload(&b->a, &b->cpu, b->scene)) != CLI_OK)) {
+        return rc;
+    }
+    if (f > 0) {
+        b->update_times[f - 1] = tr_time_now() - t0;
+    }
+    return cli_backend_clear(&b->be, &err) != TR_OK ? bench_failed(&b->bar, &b->a, "", &err)
+                                                    : CLI_OK;
+}
+
+/* Frame f (0: the warm-up, not timed) on the device, and on the CPU beside it. */
+static int frame_render(frame_bench *b, int f) {
+    int rc = b->animate ? frame_update(b, f) : CLI_OK;
+    tr_render_stats st;
+    tr_error err;
+    if (rc != CLI_OK) {
+        return rc;
+    }
+    if (cli_backend_frame(&b->be, b->scene, &b->cfg, (uint32_t)f, &st, &err) != TR_OK) {
+        return bench_failed(&b->bar, &b->a, "", &err);
+    }
+    if (f > 0) {
+        b->times[f - 1] = st.seconds;
+        b->rays += st.rays;
+        b->total += st.seconds;
+    }
+    if (b->cpu.dev &&
+        cli_backend_frame(&b->cpu, b->scene, &b->cfg, (uint32_t)f, &st, &err) != TR_OK) {
+        return bench_failed(&b->bar, &b->a, "", &err);
+    }
+    if (b->cpu.dev && f > 0) {
+        b->cpu_times[f - 1] = st.seconds;
+    }
+    return CLI_OK;
+}
+
+static int frame_measure(frame_bench *b) {
+    progress_begin(&b->bar, "trac0r bench frame", "frames", (uint64_t)b->frames + 1, 0);
+    int rc = CLI_OK;
+    for (int f = 0; f <= b->frames && rc == CLI_OK; ++f) {
         if (f > 0) {
-            progress_update(&bar, (uint64_t)f, NULL);
+            progress_update(&b->bar, (uint64_t)f, NULL);
         }
-        tr_render_stats st;
-        if (animate) {
-            /* The scene changes, so each frame starts a new image. */
-            const double t0 = tr_time_now(); /* the update and any upload, together */
-            if (cli_animate(scene, (uint32_t)f, &err) != TR_OK ||
-                tr_scene_update(scene, NULL, &err) != TR_OK) {
-                progress_clear(&bar);
-                fprintf(stderr, "trac0r bench frame: --animate: %s\n", err.msg);
-                rc = CLI_FAILURE;
-                break;
-            }
-            if ((rc = cli_backend_upload(&a, &be, scene)) != CLI_OK ||
-                (cpu.dev && (rc = cli_backend_upload(&a, &cpu, scene)) != CLI_OK)) {
-                break;
-            }
-            if (f > 0) {
-                update_times[f - 1] = tr_time_now() - t0;
-            }
-            if (cli_backend_clear(&be, &err) != TR_OK) {
-                progress_clear(&bar);
-                fprintf(stderr, "trac0r bench frame: %s\n", err.msg);
-                rc = CLI_FAILURE;
-                break;
-            }
-        }
-        if (cli_backend_frame(&be, scene, &cfg, (uint32_t)f, &st, &err) != TR_OK) {
-            progress_clear(&bar);
-            fprintf(stderr, "trac0r bench frame: %s\n", err.msg);
-            rc = CLI_FAILURE;
-        } else if (f > 0) {
-            times[f - 1] = st.seconds;
-            rays += st.rays;
-            total += st.seconds;
-        }
-        if (rc == CLI_OK && cpu_times) {
-            if (cli_backend_frame(&cpu, scene, &cfg, (uint32_t)f, &st, &err) != TR_OK) {
-                progress_clear(&bar);
-                fprintf(stderr, "trac0r bench frame: %s\n", err.msg);
-                rc = CLI_FAILURE;
-            } else if (f > 0) {
-                cpu_times[f - 1] = st.seconds;
-            }
-        }
+        rc = frame_render(b, f);
     }
     if (rc == CLI_OK) {
-        progress_update(&bar, (uint64_t)frames + 1, NULL);
+        progress_update(&b->bar, (uint64_t)b->frames + 1, NULL);
     }
-    progress_end(&bar);
-    if (rc == CLI_OK) {
-        double mrays = (double)rays / total * 1e-6;
-        double med = bench_median(times, frames);
-        printf("frames %d  median %.2f ms  min %.2f ms  max %.2f ms\n", frames, med * 1e3,
-               times[0] * 1e3, times[frames - 1] * 1e3);
-        printf("fps %.2f (median)  Mrays/s %.2f (mean)\n", 1.0 / med, mrays);
-        if (animate) {
-            const double umed = bench_median(update_times, frames);
-            printf("scene update per frame (%s%s): median %.3f ms  min %.3f ms  max %.3f ms; "
-                   "frame + update %.2f ms (%.2f fps)\n",
-                   tr_scene_update_kind(scene),
-                   (tr_device_caps(be.dev) & TR_DEVICE_CAP_SCENE_COPY) != 0u
-                       ? " + upload to the device"
-                       : "",
-                   umed * 1e3, update_times[0] * 1e3, update_times[frames - 1] * 1e3,
-                   (med + umed) * 1e3, 1.0 / (med + umed));
-        }
-        printf("thesis (table 3.2): 11.6 fps on a GeForce GTX 570 -> ratio %.2f\n",
-               (1.0 / med) / 11.6);
-        if (cpu_times) {
-            const int threads = cfg.threads ? cfg.threads : tr_default_threads();
-            double cpu_med = bench_median(cpu_times, frames);
-            printf("cpu (%d thread%s, interleaved with the device's frames): median %.2f ms, "
-                   "fps %.2f -> device/cpu %.2f\n",
-                   threads, threads == 1 ? "" : "s", cpu_med * 1e3, 1.0 / cpu_med, cpu_med / med);
-        }
+    progress_end(&b->bar);
+    return rc;
+}
+
+static void frame_report(frame_bench *b) {
+    const int n = b->frames;
+    const double med = bench_median(b->times, n);
+    printf("frames %d  median %.2f ms  min %.2f ms  max %.2f ms\n", n, med * 1e3, b->times[0] * 1e3,
+           b->times[n - 1] * 1e3);
+    printf("fps %.2f (median)  Mrays/s %.2f (mean)\n", 1.0 / med,
+           (double)b->rays / b->total * 1e-6);
+    if (b->animate) {
+        const double umed = bench_median(b->update_times, n);
+        printf("scene update per frame (%s%s): median %.3f ms  min %.3f ms  max %.3f ms; "
+               "frame + update %.2f ms (%.2f fps)\n",
+               tr_scene_update_kind(b->scene),
+               (tr_device_caps(b->be.dev) & TR_DEVICE_CAP_SCENE_COPY) != 0u
+                   ? " + upload to the device"
+                   : "",
+               umed * 1e3, b->update_times[0] * 1e3, b->update_times[n - 1] * 1e3,
+               (med + umed) * 1e3, 1.0 / (med + umed));
     }
-    free(cpu_times);
-    cli_backend_close(&cpu);
-    cli_backend_close(&be);
-    free(times);
-    tr_scene_destroy(scene);
+    printf("thesis (table 3.2): 11.6 fps on a GeForce GTX 570 -> ratio %.2f\n", (1.0 / med) / 11.6);
+    if (b->cpu.dev) {
+        const int threads = b->cfg.threads ? b->cfg.threads : tr_default_threads();
+        const double cpu_med = bench_median(b->cpu_times, n);
+        printf("cpu (%d thread%s, interleaved with the device's frames): median %.2f ms, "
+               "fps %.2f -> device/cpu %.2f\n",
+               threads, threads == 1 ? "" : "s", cpu_med * 1e3, 1.0 / cpu_med, cpu_med / med);
+    }
+}
+
+static int bench_frame(int argc, char **argv) {
+    frame_bench b = {.a = {.cmd = "bench frame", .argc = argc, .argv = argv}, .frames = 20};
+    cli_common_default(&b.c);
+    b.c.integrator = TR_INTEGRATOR_NAIVE; /* the thesis's frame */
+    int rc = bench_options(&b.a, &b.c, NULL, bench_frame_help, frame_option, &b);
+    if (rc != CLI_OK) {
+        return rc == BENCH_HELP ? CLI_OK : rc;
+    }
+    b.scene = tr_scene_create(NULL);
+    if ((rc = frame_open(&b)) == CLI_OK && (rc = frame_measure(&b)) == CLI_OK) {
+        frame_report(&b);
+    }
+    cli_backend_close(&b.cpu);
+    cli_backend_close(&b.be);
+    free(b.times);
+    tr_scene_destroy(b.scene);
     return rc;
 }
 
@@ -292,210 +324,185 @@ static void bench_complexity_help(void) {
            TR_ICOSPHERE_MAX_SUBDIVISIONS);
 }
 
-static int bench_complexity(int argc, char **argv) {
-    cli_args a = {.cmd = "bench complexity", .argc = argc, .argv = argv, .i = 0};
+#define CX_MAX_FRAMES 1000
+#define CX_LEVELS (TR_ICOSPHERE_MAX_SUBDIVISIONS + 1)
+
+/* bench complexity: its options, the device, and the results for the CSV and the plot. */
+typedef struct cx_bench {
+    cli_args a;
     cli_common c;
-    cli_common_default(&c);
-    int frames = 5, max_level = 8;
-    float limit = 10.0f;
-    const char *prefix = "complexity";
+    int frames, max_level;
+    float limit; /* a frame slower than this (seconds) drops its structure */
+    const char *prefix;
     accel_set set;
-    bench_accels_all(&set, 1);
-    int accels_given = 0;
-    while (cli_next(&a)) {
-        int rc = cli_common_option(&a, &c);
-        if (rc == CLI_OK && (cli_is(&a, "--scene") || cli_is(&a, "--accel"))) {
-            return cli_error(&a, "%s: not an option of this benchmark", a.opt);
-        }
-        if (rc == CLI_OK) {
+    int accels_given;
+    char csv_path[4096], png_path[4096];
+    cli_backend be;
+    tr_render_config cfg;
+    progress bar;
+    uint32_t tris[CX_LEVELS];
+    double fps[CX_LEVELS][4]; /* [level][structure], 0: not measured */
+    double build_ms[CX_LEVELS][4];
+    int dropped[4]; /* a frame was slower than the limit: no higher levels */
+} cx_bench;
+
+/* One of bench complexity's own options: CLI_OK, CLI_USAGE, or -1 if it is none of them. */
+static int cx_option(cli_args *a, void *bench) {
+    cx_bench *b = bench;
+    if (cli_is(a, "--frames")) {
+        return cli_parse_int(a, 1, CX_MAX_FRAMES, &b->frames);
+    }
+    if (cli_is(a, "--max-level")) {
+        return cli_parse_int(a, 0, TR_ICOSPHERE_MAX_SUBDIVISIONS, &b->max_level);
+    }
+    if (cli_is(a, "--limit")) {
+        return cli_parse_float(a, 0.001f, 1e6f, &b->limit);
+    }
+    if (cli_is(a, "--accels")) {
+        b->accels_given = 1;
+        return bench_parse_accels(a, &b->set);
+    }
+    if (!cli_is(a, "--out")) {
+        return -1;
+    }
+    const int rc = cli_value(a);
+    b->prefix = a->value;
+    return rc;
+}
+
+/* Before any work: the output files can be written, the image size is valid, and the
+ * device walks the structures itself (Embree is host-only): one given with --accels that
+ * it cannot walk is refused, one of the defaults is left out. */
+static int cx_open(cx_bench *b) {
+    snprintf(b->csv_path, sizeof b->csv_path, "%s.csv", b->prefix);
+    snprintf(b->png_path, sizeof b->png_path, "%s.png", b->prefix);
+    tr_error err;
+    if (tr_image_check_writable(b->csv_path, &err) != TR_OK ||
+        tr_image_check_writable(b->png_path, &err) != TR_OK) {
+        return cli_error(&b->a, "--out: %s", err.msg);
+    }
+    if (tr_film_check_size(b->c.width, b->c.height, &err) != TR_OK) {
+        return cli_error(&b->a, "--width/--height: %s", err.msg);
+    }
+    int rc = cli_backend_open(&b->a, &b->c, NULL, &b->be);
+    for (int k = 0; k < b->set.count && rc == CLI_OK; ++k) {
+        if (tr_device_traces(b->be.dev, b->set.type[k])) {
             continue;
         }
-        if (rc == CLI_USAGE) {
-            return CLI_USAGE;
+        if (b->accels_given) {
+            return cli_error(&b->a,
+                             "--accels: %s runs on the CPU only; with --device %s compare flat,bvh",
+                             tr_accel_name(b->set.type[k]), tr_device_kind(b->be.dev));
         }
-        if (cli_is(&a, "-h") || cli_is(&a, "--help")) {
-            bench_complexity_help();
-            return CLI_OK;
-        } else if (cli_is(&a, "--frames")) {
-            rc = cli_parse_int(&a, 1, 1000, &frames);
-        } else if (cli_is(&a, "--max-level")) {
-            rc = cli_parse_int(&a, 0, TR_ICOSPHERE_MAX_SUBDIVISIONS, &max_level);
-        } else if (cli_is(&a, "--limit")) {
-            rc = cli_parse_float(&a, 0.001f, 1e6f, &limit);
-        } else if (cli_is(&a, "--accels")) {
-            rc = bench_parse_accels(&a, &set);
-            accels_given = 1;
-        } else if (cli_is(&a, "--out")) {
-            rc = cli_value(&a);
-            prefix = a.value;
-        } else {
-            return cli_unknown(&a);
-        }
-        if (rc != CLI_OK) {
-            return CLI_USAGE;
-        }
+        b->set.type[k] = b->set.type[--b->set.count];
+        --k; /* the structure moved into place k is checked next */
     }
-    char csv_path[4096], png_path[4096];
-    snprintf(csv_path, sizeof csv_path, "%s.csv", prefix);
-    snprintf(png_path, sizeof png_path, "%s.png", prefix);
+    return rc;
+}
+
+/* One point: the scene committed with structure k, timed over a warm-up frame and
+ * b->frames more, and its row of the table. */
+static int cx_point(cx_bench *b, tr_scene *scene, int level, int k) {
     tr_error err;
-    if (tr_image_check_writable(csv_path, &err) != TR_OK ||
-        tr_image_check_writable(png_path, &err) != TR_OK) {
-        return cli_error(&a, "--out: %s", err.msg);
+    if (tr_scene_commit(scene, b->set.type[k], &err) != TR_OK) {
+        return bench_failed(&b->bar, &b->a, "", &err);
     }
-    double *times = malloc((size_t)frames * sizeof *times);
-    if (!times) {
-        fprintf(stderr, "trac0r bench complexity: out of memory\n");
-        return CLI_FAILURE;
-    }
-    if (tr_film_check_size(c.width, c.height, &err) != TR_OK) {
-        free(times);
-        return cli_error(&a, "--width/--height: %s", err.msg);
-    }
-    cli_backend be;
-    int rc = cli_backend_open(&a, &c, NULL, &be);
+    b->build_ms[level][k] = bench_build_seconds(scene) * 1e3;
+    const int rc = cli_backend_upload(&b->a, &b->be, scene);
     if (rc != CLI_OK) {
-        free(times);
         return rc;
     }
-    /* Only the structures the device walks itself are compared (Embree is host-only). */
-    for (int k = 0; k < set.count; ++k) {
-        if (!tr_device_traces(be.dev, set.type[k])) {
-            if (accels_given) {
-                rc = cli_error(&a,
-                               "--accels: %s runs on the CPU only; with --device %s "
-                               "compare flat,bvh",
-                               tr_accel_name(set.type[k]), tr_device_kind(be.dev));
-                cli_backend_close(&be);
-                free(times);
-                return rc;
-            }
-            set.type[k] = set.type[--set.count];
-            --k;
-        }
+    if (cli_backend_clear(&b->be, &err) != TR_OK) {
+        return bench_failed(&b->bar, &b->a, "", &err);
     }
-    tr_render_config cfg = cli_render_config(&c);
-    cfg.integrator = TR_INTEGRATOR_NAIVE; /* the thesis's figure 3.5 */
-    printf("bench complexity: %ux%u, 1 spp/frame, naive, max depth %d, %s, median of %d "
-           "frames\n",
-           c.width, c.height, c.max_depth ? c.max_depth : tr_default_max_depth(TR_INTEGRATOR_NAIVE),
-           be.name, frames);
-    printf("%5s %10s %-7s %10s %12s %9s\n", "level", "triangles", "accel", "build ms", "frame ms",
-           "fps");
-    /* Results, for the CSV and plot: fps[level][accel] (0 = not measured). */
-    double fps[TR_ICOSPHERE_MAX_SUBDIVISIONS + 1][4] = {{0}};
-    uint32_t tris[TR_ICOSPHERE_MAX_SUBDIVISIONS + 1] = {0};
-    double build_ms[TR_ICOSPHERE_MAX_SUBDIVISIONS + 1][4] = {{0}};
-    int dropped[4] = {0};
-    progress bar;
-    progress_begin(&bar, "trac0r bench complexity", "steps",
-                   (uint64_t)(max_level + 1) * (uint64_t)set.count, 0);
-    for (int level = 0; level <= max_level && rc == CLI_OK; ++level) {
-        progress_update(&bar, (uint64_t)level * (uint64_t)set.count, NULL);
-        char name[32];
-        snprintf(name, sizeof name, "cornell-ico-%d", level);
-        tr_scene *scene = tr_scene_create(&err);
-        if (!scene || tr_scene_builtin(scene, name, c.width, c.height, &err) != TR_OK) {
-            progress_clear(&bar);
-            fprintf(stderr, "trac0r bench complexity: %s\n", err.msg);
-            tr_scene_destroy(scene);
-            rc = CLI_FAILURE;
+    double times[CX_MAX_FRAMES];
+    int n = 0;
+    for (int f = 0; f <= b->frames; ++f) {
+        tr_render_stats st;
+        if (cli_backend_frame(&b->be, scene, &b->cfg, (uint32_t)f, &st, &err) != TR_OK) {
+            return bench_failed(&b->bar, &b->a, "", &err);
+        }
+        if (st.seconds > b->limit) {
+            /* Too slow to repeat: this frame is the measurement, and the structure sits
+             * out the larger scenes. */
+            times[0] = st.seconds;
+            n = 1;
+            b->dropped[k] = 1;
             break;
         }
-        tris[level] = tr_scene_triangle_count(scene);
-        for (int k = 0; k < set.count && rc == CLI_OK; ++k) {
-            if (dropped[k]) {
-                continue;
-            }
-            if (tr_scene_commit(scene, set.type[k], &err) != TR_OK) {
-                progress_clear(&bar);
-                fprintf(stderr, "trac0r bench complexity: %s\n", err.msg);
-                rc = CLI_FAILURE;
-                break;
-            }
-            build_ms[level][k] = bench_build_seconds(scene) * 1e3;
-            rc = cli_backend_upload(&a, &be, scene);
-            if (rc != CLI_OK) {
-                break;
-            }
-            if (cli_backend_clear(&be, &err) != TR_OK) {
-                progress_clear(&bar);
-                fprintf(stderr, "trac0r bench complexity: %s\n", err.msg);
-                rc = CLI_FAILURE;
-                break;
-            }
-            int n = 0;
-            for (int f = 0; f <= frames; ++f) {
-                tr_render_stats st;
-                if (cli_backend_frame(&be, scene, &cfg, (uint32_t)f, &st, &err) != TR_OK) {
-                    progress_clear(&bar);
-                    fprintf(stderr, "trac0r bench complexity: %s\n", err.msg);
-                    rc = CLI_FAILURE;
-                    break;
-                }
-                if (st.seconds > limit) {
-                    /* Too slow to repeat: this frame is the measurement, and the
-                     * structure sits out the larger scenes. */
-                    times[0] = st.seconds;
-                    n = 1;
-                    dropped[k] = 1;
-                    break;
-                }
-                if (f > 0) {
-                    times[n++] = st.seconds;
-                }
-            }
-            if (rc != CLI_OK) {
-                break;
-            }
-            double med = bench_median(times, n);
-            fps[level][k] = 1.0 / med;
-            progress_clear(&bar);
-            printf("%5d %10u %-7s %10.1f %12.2f %9.3f%s\n", level, tr_scene_triangle_count(scene),
-                   tr_accel_name(set.type[k]), build_ms[level][k], med * 1e3, 1.0 / med,
-                   dropped[k] ? "  (slower than the limit: dropped for higher levels)" : "");
-            fflush(stdout);
+        if (f > 0) {
+            times[n++] = st.seconds;
+        }
+    }
+    const double med = bench_median(times, n);
+    b->fps[level][k] = 1.0 / med;
+    progress_clear(&b->bar);
+    printf("%5d %10u %-7s %10.1f %12.2f %9.3f%s\n", level, tr_scene_triangle_count(scene),
+           tr_accel_name(b->set.type[k]), b->build_ms[level][k], med * 1e3, 1.0 / med,
+           b->dropped[k] ? "  (slower than the limit: dropped for higher levels)" : "");
+    fflush(stdout);
+    return CLI_OK;
+}
+
+/* Each level's scene, and its point for each structure still in. */
+static int cx_measure(cx_bench *b) {
+    const uint64_t per_level = (uint64_t)b->set.count;
+    progress_begin(&b->bar, "trac0r bench complexity", "steps",
+                   (uint64_t)(b->max_level + 1) * per_level, 0);
+    int rc = CLI_OK;
+    for (int level = 0; level <= b->max_level && rc == CLI_OK; ++level) {
+        progress_update(&b->bar, (uint64_t)level * per_level, NULL);
+        char name[32];
+        snprintf(name, sizeof name, "cornell-ico-%d", level);
+        tr_error err;
+        tr_scene *scene = tr_scene_create(&err);
+        if (!scene || tr_scene_builtin(scene, name, b->c.width, b->c.height, &err) != TR_OK) {
+            rc = bench_failed(&b->bar, &b->a, "", &err);
+        } else {
+            b->tris[level] = tr_scene_triangle_count(scene);
+        }
+        for (int k = 0; k < b->set.count && rc == CLI_OK; ++k) {
+            rc = b->dropped[k] ? CLI_OK : cx_point(b, scene, level, k);
         }
         tr_scene_destroy(scene);
     }
     if (rc == CLI_OK) {
-        progress_update(&bar, (uint64_t)(max_level + 1) * (uint64_t)set.count, NULL);
+        progress_update(&b->bar, (uint64_t)(b->max_level + 1) * per_level, NULL);
     }
-    progress_end(&bar);
-    cli_backend_close(&be);
-    free(times);
-    if (rc != CLI_OK) {
-        return rc;
-    }
-    /* CSV: one row per (level, structure) measured. */
-    tr_outfile *csv = tr_outfile_create(csv_path, &err);
+    progress_end(&b->bar);
+    return rc;
+}
+
+/* The CSV: one row per (level, structure) measured. */
+static int cx_write_csv(cx_bench *b) {
+    tr_error err;
+    tr_outfile *csv = tr_outfile_create(b->csv_path, &err);
     if (!csv) {
-        fprintf(stderr, "trac0r bench complexity: %s\n", err.msg);
-        return CLI_FAILURE;
+        return bench_failed(&b->bar, &b->a, "", &err);
     }
     FILE *fp = tr_outfile_stream(csv);
     fprintf(fp, "level,triangles,accel,build_ms,fps\n");
-    for (int level = 0; level <= max_level; ++level) {
-        for (int k = 0; k < set.count; ++k) {
-            if (fps[level][k] > 0.0) {
-                fprintf(fp, "%d,%u,%s,%.3f,%.5f\n", level, tris[level], tr_accel_name(set.type[k]),
-                        build_ms[level][k], fps[level][k]);
+    for (int level = 0; level <= b->max_level; ++level) {
+        for (int k = 0; k < b->set.count; ++k) {
+            if (b->fps[level][k] > 0.0) {
+                fprintf(fp, "%d,%u,%s,%.3f,%.5f\n", level, b->tris[level],
+                        tr_accel_name(b->set.type[k]), b->build_ms[level][k], b->fps[level][k]);
             }
         }
     }
-    if (tr_outfile_commit(csv, &err) != TR_OK) {
-        fprintf(stderr, "trac0r bench complexity: %s\n", err.msg);
-        return CLI_FAILURE;
-    }
-    /* One inline data block per structure, so each draws as one connected line. */
+    return tr_outfile_commit(csv, &err) != TR_OK ? bench_failed(&b->bar, &b->a, "", &err) : CLI_OK;
+}
+
+/* The plot: one inline data block per structure, so each draws as one connected line. */
+static int cx_write_plot(cx_bench *b) {
     char script[8192];
     size_t len = 0;
-    for (int k = 0; k < set.count; ++k) {
+    for (int k = 0; k < b->set.count; ++k) {
         bench_plot_put(script, sizeof script, &len, "$d%d << EOD\n", k);
-        for (int level = 0; level <= max_level; ++level) {
-            if (fps[level][k] > 0.0) {
-                bench_plot_put(script, sizeof script, &len, "%u %.5f\n", tris[level],
-                               fps[level][k]);
+        for (int level = 0; level <= b->max_level; ++level) {
+            if (b->fps[level][k] > 0.0) {
+                bench_plot_put(script, sizeof script, &len, "%u %.5f\n", b->tris[level],
+                               b->fps[level][k]);
             }
         }
         bench_plot_put(script, sizeof script, &len, "EOD\n");
@@ -505,19 +512,51 @@ static int bench_complexity(int argc, char **argv) {
                    "set ylabel 'frames per second (%ux%u, 1 spp)'\n"
                    "set title 'trac0r bench complexity (thesis figure 3.5)'\n"
                    "set key top right\nplot ",
-                   c.width, c.height);
-    for (int k = 0; k < set.count; ++k) {
+                   b->c.width, b->c.height);
+    for (int k = 0; k < b->set.count; ++k) {
         bench_plot_put(script, sizeof script, &len, "%s$d%d with linespoints lw 2 title '%s'",
-                       k ? ", " : "", k, tr_accel_name(set.type[k]));
+                       k ? ", " : "", k, tr_accel_name(b->set.type[k]));
     }
-    int plotted = len < sizeof script ? bench_plot_png(script, png_path, &err) : 0;
+    tr_error err;
+    const int plotted = len < sizeof script ? bench_plot_png(script, b->png_path, &err) : 0;
     if (plotted < 0) {
-        fprintf(stderr, "trac0r bench complexity: %s\n", err.msg);
-        return CLI_FAILURE;
+        return bench_failed(&b->bar, &b->a, "", &err);
     }
-    printf("wrote %s%s%s\n", csv_path, plotted ? " and " : " (gnuplot failed: no plot)",
-           plotted ? png_path : "");
+    printf("wrote %s%s%s\n", b->csv_path, plotted ? " and " : " (gnuplot failed: no plot)",
+           plotted ? b->png_path : "");
     return CLI_OK;
+}
+
+static int bench_complexity(int argc, char **argv) {
+    cx_bench b = {.a = {.cmd = "bench complexity", .argc = argc, .argv = argv},
+                  .frames = 5,
+                  .max_level = 8,
+                  .limit = 10.0f,
+                  .prefix = "complexity"};
+    cli_common_default(&b.c);
+    bench_accels_all(&b.set, 1);
+    static const char *const refused[] = {"--scene", "--accel", NULL};
+    int rc = bench_options(&b.a, &b.c, refused, bench_complexity_help, cx_option, &b);
+    if (rc != CLI_OK) {
+        return rc == BENCH_HELP ? CLI_OK : rc;
+    }
+    if ((rc = cx_open(&b)) == CLI_OK) {
+        b.cfg = cli_render_config(&b.c);
+        b.cfg.integrator = TR_INTEGRATOR_NAIVE; /* the thesis's figure 3.5 */
+        printf("bench complexity: %ux%u, 1 spp/frame, naive, max depth %d, %s, median of %d "
+               "frames\n",
+               b.c.width, b.c.height,
+               b.c.max_depth ? b.c.max_depth : tr_default_max_depth(TR_INTEGRATOR_NAIVE), b.be.name,
+               b.frames);
+        printf("%5s %10s %-7s %10s %12s %9s\n", "level", "triangles", "accel", "build ms",
+               "frame ms", "fps");
+        rc = cx_measure(&b);
+    }
+    cli_backend_close(&b.be);
+    if (rc == CLI_OK && (rc = cx_write_csv(&b)) == CLI_OK) {
+        rc = cx_write_plot(&b);
+    }
+    return rc;
 }
 
 static void bench_help(FILE *fp) {

@@ -136,153 +136,174 @@ static int run_headless(const cli_args *a, const view_options *o, tr_scene *scen
     return rc;
 }
 
+/* One of view's own options: CLI_OK, CLI_USAGE, or -1 if it is none of them. */
+static int view_option(cli_args *a, view_options *o) {
+    int rc = cli_recon_option(a, &o->recon_params);
+    if (rc != -1) {
+        return rc;
+    }
+    const struct {
+        const char *name;
+        const char **value;
+    } paths[] = {{"--screenshot", &o->screenshot},
+                 {"--font", &o->font},
+                 {"--shot-dir", &o->shot_dir},
+                 {"--state-file", &o->state_file},
+                 {"--dump-window", &o->dump_file}};
+    for (size_t k = 0; k < sizeof paths / sizeof paths[0]; ++k) {
+        if (cli_is(a, paths[k].name)) {
+            rc = cli_value(a);
+            *paths[k].value = a->value;
+            return rc;
+        }
+    }
+    if (cli_is(a, "--frames")) {
+        return cli_parse_u32(a, 1, 1000000, &o->frames);
+    }
+    if (cli_is(a, "--benchmark")) {
+        return cli_parse_int(a, 0, TR_ICOSPHERE_MAX_SUBDIVISIONS, &o->benchmark);
+    }
+    if (cli_is(a, "--stride")) {
+        rc = cli_parse_int(a, 1, 4, &o->stride);
+        return rc == CLI_OK && o->stride == 3
+                   ? cli_error(a, "--stride: expected 1, 2 or 4, got '3'")
+                   : rc;
+    }
+    if (cli_is(a, "--exposure")) {
+        return cli_parse_float(a, -20.0f, 20.0f, &o->exposure);
+    }
+    if (cli_is(a, "--target-fps")) {
+        return cli_parse_float(a, 1.0f, 1000.0f, &o->target_fps);
+    }
+    if (cli_is(a, "--tonemap")) {
+        rc = cli_value(a);
+        if (rc == CLI_OK && (o->curve = tr_tonemap_curve_parse(a->value)) < 0) {
+            return cli_error(a, "--tonemap: expected clamp or filmic, got '%s'", a->value);
+        }
+        return rc;
+    }
+    if (cli_is(a, "--recon")) {
+        rc = cli_value(a);
+        if (rc == CLI_OK && (o->recon = tr_recon_parse(a->value)) < 0) {
+            return cli_error(
+                a, "--recon: expected off, accumulate, bilateral, atrous or svgf, got '%s'",
+                a->value);
+        }
+        return rc;
+    }
+    if (cli_is(a, "--max-spp")) {
+        return cli_parse_u32(a, 0, 100000000, &o->max_spp);
+    }
+    if (cli_is(a, "--animate")) {
+        o->animate = 1;
+        return CLI_OK;
+    }
+    if (a->opt[0] != '-' && a->i == 1) {
+        o->c.scene = a->opt; /* positional SCENE */
+        return CLI_OK;
+    }
+    return -1;
+}
+
+#define VIEW_HELP (-1) /* view_parse printed the help: exit status 0, nothing to do */
+
+static int view_parse(cli_args *a, view_options *o) {
+    memset(o, 0, sizeof *o);
+    cli_common_default(&o->c);
+    o->benchmark = -1;
+    o->stride = 1;
+    o->target_fps = 60.0f;
+    o->recon_params = tr_recon_params_default();
+    o->shot_dir = ".";
+    while (cli_next(a)) {
+        int rc = cli_common_option(a, &o->c);
+        if (rc != -1) {
+            if (rc != CLI_OK) {
+                return CLI_USAGE;
+            }
+        } else if (cli_is(a, "-h") || cli_is(a, "--help")) {
+            view_help();
+            return VIEW_HELP;
+        } else if ((rc = view_option(a, o)) != CLI_OK) {
+            return rc < 0 ? cli_unknown(a) : CLI_USAGE;
+        }
+    }
+    return CLI_OK;
+}
+
+/* Before the scene: the options agree, and the files they name can be written (the
+ * window's are written while it runs: a directory or an unwritable place is said now, not
+ * found never written). */
+static int view_check(const cli_args *a, view_options *o, int headless) {
+    if (o->frames && !headless) {
+        return cli_error(a, "--frames: needs --screenshot FILE or --benchmark LEVEL");
+    }
+    if (o->animate && headless) {
+        return cli_error(a, "--animate: only in the interactive window ('trac0r bench frame "
+                            "--animate' measures a dynamic scene headless)");
+    }
+    tr_error err;
+    if (o->screenshot && tr_image_format_from_path(o->screenshot) == TR_IMAGE_UNKNOWN) {
+        return cli_error(a, "--screenshot: '%s' has an unknown extension (expected .png or .pfm)",
+                         o->screenshot);
+    }
+    if (o->screenshot && tr_image_check_writable(o->screenshot, &err) != TR_OK) {
+        return cli_error(a, "--screenshot: %s", err.msg);
+    }
+    if (o->state_file && tr_outfile_check(o->state_file, &err) != TR_OK) {
+        return cli_error(a, "--state-file: %s", err.msg);
+    }
+    if (o->dump_file && tr_outfile_check(o->dump_file, &err) != TR_OK) {
+        return cli_error(a, "--dump-window: %s", err.msg);
+    }
+    if (o->benchmark >= 0) {
+        snprintf(o->bench_scene, sizeof o->bench_scene, "builtin:cornell-ico-%d", o->benchmark);
+        o->c.scene = o->bench_scene;
+    }
+    if (!headless && view_font_find(o->font, o->font_path, sizeof o->font_path, &err) != TR_OK) {
+        return cli_error(a, "%s", err.msg);
+    }
+    return CLI_OK;
+}
+
+/* Whether a window could open: an X11 display, an SDL video driver or a Wayland one. */
+static int have_display(void) {
+    const char *vars[] = {"DISPLAY", "SDL_VIDEODRIVER", "WAYLAND_DISPLAY"};
+    for (size_t k = 0; k < sizeof vars / sizeof vars[0]; ++k) {
+        const char *v = getenv(vars[k]);
+        if (v && *v) {
+            return 1;
+        }
+    }
+    return 0;
+}
+
 int cmd_view(int argc, char **argv) {
     cli_args a = {.cmd = "view", .argc = argc, .argv = argv, .i = 0};
     view_options o;
-    memset(&o, 0, sizeof o);
-    cli_common_default(&o.c);
-    o.benchmark = -1;
-    o.stride = 1;
-    o.target_fps = 60.0f;
-    o.recon_params = tr_recon_params_default();
-    o.shot_dir = ".";
-    int frames_given = 0;
-    char bench_scene[64];
-
-    while (cli_next(&a)) {
-        int rc = cli_common_option(&a, &o.c);
-        if (rc == CLI_OK) {
-            continue;
-        }
-        if (rc == CLI_USAGE) {
-            return CLI_USAGE;
-        }
-        if (cli_is(&a, "-h") || cli_is(&a, "--help")) {
-            view_help();
-            return CLI_OK;
-        } else if ((rc = cli_recon_option(&a, &o.recon_params)) != -1) {
-            /* handled: rc is CLI_OK or CLI_USAGE */
-        } else if (cli_is(&a, "--frames")) {
-            rc = cli_parse_u32(&a, 1, 1000000, &o.frames);
-            frames_given = 1;
-        } else if (cli_is(&a, "--screenshot")) {
-            rc = cli_value(&a);
-            o.screenshot = a.value;
-        } else if (cli_is(&a, "--benchmark")) {
-            rc = cli_parse_int(&a, 0, TR_ICOSPHERE_MAX_SUBDIVISIONS, &o.benchmark);
-        } else if (cli_is(&a, "--stride")) {
-            rc = cli_parse_int(&a, 1, 4, &o.stride);
-            if (rc == CLI_OK && o.stride == 3) {
-                return cli_error(&a, "--stride: expected 1, 2 or 4, got '3'");
-            }
-        } else if (cli_is(&a, "--exposure")) {
-            rc = cli_parse_float(&a, -20.0f, 20.0f, &o.exposure);
-        } else if (cli_is(&a, "--target-fps")) {
-            rc = cli_parse_float(&a, 1.0f, 1000.0f, &o.target_fps);
-        } else if (cli_is(&a, "--tonemap")) {
-            rc = cli_value(&a);
-            if (rc == CLI_OK && (o.curve = tr_tonemap_curve_parse(a.value)) < 0) {
-                return cli_error(&a, "--tonemap: expected clamp or filmic, got '%s'", a.value);
-            }
-        } else if (cli_is(&a, "--recon")) {
-            rc = cli_value(&a);
-            if (rc == CLI_OK && (o.recon = tr_recon_parse(a.value)) < 0) {
-                return cli_error(&a,
-                                 "--recon: expected off, accumulate, bilateral, atrous or "
-                                 "svgf, got '%s'",
-                                 a.value);
-            }
-        } else if (cli_is(&a, "--max-spp")) {
-            rc = cli_parse_u32(&a, 0, 100000000, &o.max_spp);
-        } else if (cli_is(&a, "--animate")) {
-            o.animate = 1;
-            rc = CLI_OK;
-        } else if (cli_is(&a, "--font")) {
-            rc = cli_value(&a);
-            o.font = a.value;
-        } else if (cli_is(&a, "--shot-dir")) {
-            rc = cli_value(&a);
-            o.shot_dir = a.value;
-        } else if (cli_is(&a, "--state-file")) {
-            rc = cli_value(&a);
-            o.state_file = a.value;
-        } else if (cli_is(&a, "--dump-window")) {
-            rc = cli_value(&a);
-            o.dump_file = a.value;
-        } else if (a.opt[0] != '-' && a.i == 1) {
-            o.c.scene = a.opt; /* positional SCENE */
-            rc = CLI_OK;
-        } else {
-            return cli_unknown(&a);
-        }
-        if (rc != CLI_OK) {
-            return CLI_USAGE;
-        }
+    int rc = view_parse(&a, &o);
+    if (rc != CLI_OK) {
+        return rc == VIEW_HELP ? CLI_OK : rc;
     }
     const int headless = o.screenshot || o.benchmark >= 0;
-    if (frames_given && !headless) {
-        return cli_error(&a, "--frames: needs --screenshot FILE or --benchmark LEVEL");
-    }
-    if (o.animate && headless) {
-        return cli_error(&a, "--animate: only in the interactive window ('trac0r bench frame "
-                             "--animate' measures a dynamic scene headless)");
-    }
-    tr_error err;
-    if (o.screenshot) {
-        if (tr_image_format_from_path(o.screenshot) == TR_IMAGE_UNKNOWN) {
-            return cli_error(&a,
-                             "--screenshot: '%s' has an unknown extension (expected .png or .pfm)",
-                             o.screenshot);
-        }
-        if (tr_image_check_writable(o.screenshot, &err) != TR_OK) {
-            return cli_error(&a, "--screenshot: %s", err.msg);
-        }
-    }
-    /* The window's files are written while it runs: a directory or an unwritable place
-     * is said now, not found never written. */
-    if (o.state_file && tr_outfile_check(o.state_file, &err) != TR_OK) {
-        return cli_error(&a, "--state-file: %s", err.msg);
-    }
-    if (o.dump_file && tr_outfile_check(o.dump_file, &err) != TR_OK) {
-        return cli_error(&a, "--dump-window: %s", err.msg);
-    }
-    if (o.benchmark >= 0) {
-        snprintf(bench_scene, sizeof bench_scene, "builtin:cornell-ico-%d", o.benchmark);
-        o.c.scene = bench_scene;
-    }
-    if (!headless && view_font_find(o.font, o.font_path, sizeof o.font_path, &err) != TR_OK) {
-        return cli_error(&a, "%s", err.msg);
+    if ((rc = view_check(&a, &o, headless)) != CLI_OK) {
+        return rc;
     }
     tr_scene *scene = tr_scene_create(NULL);
-    /* A scene file's render defaults (size, max depth, integrator, accel) apply to the options not
-     * given, as in `trac0r render`. */
-    int rc = cli_load_scene_file(&a, &o.c, scene, NULL);
-    if (rc != CLI_OK) {
-        tr_scene_destroy(scene);
-        return rc;
+    /* A scene file's render defaults (size, max depth, integrator, accel) apply to the
+     * options not given, as in `trac0r render`. */
+    rc = cli_load_scene_file(&a, &o.c, scene, NULL);
+    if (rc == CLI_OK && !headless && !have_display()) {
+        rc = cli_error(&a, "no display: DISPLAY is not set (the window needs an X11 display; use "
+                           "--frames N --screenshot FILE to render without one)");
     }
-    if (!headless) {
-        const char *display = getenv("DISPLAY");
-        const char *driver = getenv("SDL_VIDEODRIVER");
-        const char *wayland = getenv("WAYLAND_DISPLAY");
-        if ((!display || !*display) && (!driver || !*driver) && (!wayland || !*wayland)) {
-            tr_scene_destroy(scene);
-            return cli_error(&a, "no display: DISPLAY is not set (the window needs an X11 "
-                                 "display; use --frames N --screenshot FILE to render without "
-                                 "one)");
+    cli_backend be = {.dev = NULL};
+    if (rc == CLI_OK && (rc = cli_backend_open(&a, &o.c, scene, &be)) == CLI_OK) {
+        if ((tr_device_caps(be.dev) & TR_DEVICE_CAP_HOST) == 0u) {
+            fprintf(stderr, "trac0r view: rendering on %s\n", be.name);
         }
+        rc = headless ? run_headless(&a, &o, scene, &be) : view_run_window(&a, &o, scene, &be);
     }
-
-    cli_backend be;
-    rc = cli_backend_open(&a, &o.c, scene, &be);
-    if (rc != CLI_OK) {
-        tr_scene_destroy(scene);
-        return rc;
-    }
-    if ((tr_device_caps(be.dev) & TR_DEVICE_CAP_HOST) == 0u) {
-        fprintf(stderr, "trac0r view: rendering on %s\n", be.name);
-    }
-    rc = headless ? run_headless(&a, &o, scene, &be) : view_run_window(&a, &o, scene, &be);
     cli_backend_close(&be);
     tr_scene_destroy(scene);
     return rc;

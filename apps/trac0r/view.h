@@ -25,6 +25,7 @@ typedef struct view_options {
     const char *dump_file;        /* SIGUSR1 writes the window's pixels here (PPM) */
     const char *shot_dir;         /* where F12 writes (default ".") */
     char font_path[4096];         /* the font found for the debug view */
+    char bench_scene[64];         /* --benchmark's scene name */
 } view_options;
 
 /* The interactive window (view_window.c), rendering on `be` (the CPU or an OpenCL device
