@@ -211,9 +211,10 @@ static void test_budget(void) {
     fd.moving = 1;
     fd.budget_ms = 1e-9; /* no frame holds it */
     tr_realtime_result res;
+    tr_camera cam; /* outlives the loop: the frame at rest below looks through it */
+    fd.camera = &cam;
     for (int k = 0; k < 3; ++k) {
-        const tr_camera cam = moved_camera(tr_scene_camera(s), k);
-        fd.camera = &cam;
+        cam = moved_camera(tr_scene_camera(s), k);
         CHECK(tr_realtime_frame(rt, &fd, &res, &err) == TR_OK, "%s", err.msg);
     }
     CHECK(res.scale > 1.0f && res.width < 64 && res.height < 48 && res.frame_spp == 1,
@@ -233,8 +234,7 @@ static void test_budget(void) {
     fd.moving = 1;
     fd.budget_ms = 1e9;
     for (int k = 0; k < 8; ++k) {
-        const tr_camera cam = moved_camera(tr_scene_camera(s), k);
-        fd.camera = &cam;
+        cam = moved_camera(tr_scene_camera(s), k);
         CHECK(tr_realtime_frame(rt, &fd, &res, &err) == TR_OK, "%s", err.msg);
     }
     CHECK(res.scale == 1.0f && res.frame_spp == TR_REALTIME_MAX_SPP,
