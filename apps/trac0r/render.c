@@ -438,10 +438,10 @@ static const char *stop_note(const render_job *job, const tr_session_progress *p
     }
     if (job->noise_threshold > 0.0f || job->time_limit > 0.0f) {
         const double pixels = (double)job->common.width * job->common.height;
-        const int n = snprintf(
-            buf, size, "of %u%s, %.1f spp on average", p->spp,
-            p->end == TR_SESSION_TIME_LIMIT ? ", time limit" : "",
-            (double)(p->pixel_samples + (uint64_t)p->first * (uint64_t)pixels) / pixels);
+        const int n =
+            snprintf(buf, size, "of %u%s, %.1f spp on average", p->spp,
+                     p->end == TR_SESSION_TIME_LIMIT ? ", time limit" : "",
+                     (double)(p->pixel_samples + (uint64_t)p->first * (uint64_t)pixels) / pixels);
         if (job->noise_threshold > 0.0f && n > 0 && (size_t)n < size) {
             snprintf(buf + n, size - (size_t)n, ", %u of %u tiles converged", p->tiles_done,
                      p->tiles);

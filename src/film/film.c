@@ -197,8 +197,7 @@ int tr_film_pack_rect(const tr_film *f, const tr_rect *r, void *buf, size_t size
     return copy_rect(f, r, buf, NULL, buf ? size : 0u, err);
 }
 
-int tr_film_unpack_rect(tr_film *f, const tr_rect *r, const void *buf, size_t size,
-                        tr_error *err) {
+int tr_film_unpack_rect(tr_film *f, const tr_rect *r, const void *buf, size_t size, tr_error *err) {
     return copy_rect(f, r, NULL, buf, buf ? size : 0u, err);
 }
 
