@@ -14,21 +14,6 @@
 #include "stop.h"
 #include "trac0r/outfile.h"
 
-/* Writes the image (PNG or PFM) through the display curve for a PNG; the plain path
- * (clamp) is tr_film_write. */
-static int render_write(const tr_film *img, const char *out, float exposure, int curve,
-                        tr_error *err) {
-    const int png = tr_image_format_from_path(out) == TR_IMAGE_PNG;
-    if (curve == TR_TONEMAP_CLAMP || !png) {
-        return tr_film_write(img, out, exposure, err);
-    }
-    tr_film disp = {0};
-    int rc = tr_tonemap_display_film(img, exposure, curve, &disp, err);
-    rc = rc == TR_OK ? tr_film_write(&disp, out, 0.0f, err) : rc; /* exposure applied */
-    tr_film_free(&disp);
-    return rc;
-}
-
 static void render_help(void) {
     printf("Usage: trac0r render [SCENE] [options]\n"
            "\n"
@@ -351,7 +336,7 @@ int render_session_error(render_job *job, const tr_error *err) {
 /* The image and its passes written as PFM files beside it (not EXR). */
 static int write_plain(const render_job *job, const tr_film *film, const tr_film *img,
                        tr_error *err) {
-    int rc = render_write(img, job->out, job->exposure, job->curve, err);
+    int rc = tr_film_write_curve(img, job->out, job->exposure, job->curve, err);
     for (int k = 0; k < 5 && rc == TR_OK; ++k) {
         tr_film pass;
         if ((job->write_passes & (1u << k)) == 0u) {

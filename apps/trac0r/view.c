@@ -117,20 +117,13 @@ static int run_headless(const cli_args *a, const view_options *o, tr_scene *scen
                seconds, seconds > 0 ? frames / seconds : 0.0, seconds * 1e3 / frames);
     }
     if (rc == CLI_OK && o->screenshot) {
-        tr_film disp = {0};
-        const int curved = o->curve != TR_TONEMAP_CLAMP &&
-                           tr_image_format_from_path(o->screenshot) == TR_IMAGE_PNG;
-        if ((curved &&
-             tr_tonemap_display_film(&film, o->exposure, o->curve, &disp, &err) != TR_OK) ||
-            tr_film_write(curved ? &disp : &film, o->screenshot, curved ? 0.0f : o->exposure,
-                          &err) != TR_OK) {
+        if (tr_film_write_curve(&film, o->screenshot, o->exposure, o->curve, &err) != TR_OK) {
             fprintf(stderr, "trac0r view: %s\n", err.msg);
             rc = CLI_FAILURE;
         } else {
             fprintf(stderr, "trac0r view: %u frames of %s %ux%u in %.2f s -> %s\n", frames,
                     o->c.scene, o->c.width, o->c.height, seconds, o->screenshot);
         }
-        tr_film_free(&disp);
     }
     tr_film_free(&film);
     return rc;

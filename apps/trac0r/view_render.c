@@ -15,21 +15,6 @@ void view_tonemap(const tr_film *film, float exposure, int curve, uint32_t *pixe
                           pixels, (size_t)film->width * sizeof *pixels, NULL);
 }
 
-/* F12: the film as `trac0r render --tonemap CURVE` writes it. */
-static int write_shot(const tr_film *film, const char *path, float exposure, int curve,
-                      tr_error *err) {
-    if (curve == TR_TONEMAP_CLAMP || tr_image_format_from_path(path) != TR_IMAGE_PNG) {
-        return tr_film_write(film, path, exposure, err);
-    }
-    tr_film disp;
-    if (tr_tonemap_display_film(film, exposure, curve, &disp, err) != TR_OK) {
-        return TR_ERR;
-    }
-    const int rc = tr_film_write(&disp, path, 0.0f, err);
-    tr_film_free(&disp);
-    return rc;
-}
-
 static int same_view(const tr_camera *a, const tr_camera *b) {
     /* Bitwise on purpose: any change of any bit is a new view (tr_camera has no
      * padding: 23 four-byte members). */
@@ -63,7 +48,7 @@ static void take_shot(view_renderer *r, uint32_t spp) {
     if (spp == 0) {
         snprintf(r->shot_msg, sizeof r->shot_msg, "%s: no samples yet", r->shot_path);
     } else if (tr_realtime_film(r->rt, &film, &err) != TR_OK ||
-               write_shot(film, r->shot_path, r->exposure, r->curve, &err) != TR_OK) {
+               tr_film_write_curve(film, r->shot_path, r->exposure, r->curve, &err) != TR_OK) {
         snprintf(r->shot_msg, sizeof r->shot_msg, "%s", err.msg);
     } else {
         ok = 1;

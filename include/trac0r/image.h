@@ -23,6 +23,10 @@ tr_image_format tr_image_format_from_path(const char *path);
 /* Writes the film's mean radiance as PNG (tonemapped with `exposure` stops by
  * tr_tonemap_film, post.h) or PFM, chosen by the path's extension. */
 int tr_film_write(const tr_film *f, const char *path, float exposure, tr_error *err);
+/* The same, a PNG through display curve `curve` (TR_TONEMAP_*, post.h; TR_TONEMAP_CLAMP is
+ * tr_film_write's own transform); PFM and EXR stay linear whatever the curve. */
+int tr_film_write_curve(const tr_film *f, const char *path, float exposure, int curve,
+                        tr_error *err);
 int tr_film_write_png(const tr_film *f, const char *path, float exposure, tr_error *err);
 int tr_film_write_pfm(const tr_film *f, const char *path, tr_error *err);
 

@@ -305,6 +305,17 @@ int tr_device_render(tr_device *dev, const tr_camera *cam, const tr_render_confi
     return TR_OK;
 }
 
+/* Copies every array dst keeps from src (of one size; src keeps at least dst's passes). */
+static void copy_arrays(tr_film *dst, const tr_film *src) {
+    const size_t n = (size_t)src->width * src->height;
+    for (int i = 0; i < TR_FILM_ARRAYS; ++i) {
+        void *a = tr_film_array_data(dst, i);
+        if (a) {
+            memcpy(a, tr_film_array_data(src, i), n * tr_film_array_pixel_bytes(i));
+        }
+    }
+}
+
 int tr_device_read_film(tr_device *dev, tr_film *film, tr_error *err) {
     if (dev->kind == TR_DEVICE_OPENCL) {
         return tr_cl_read_film(dev->cl, film, err);
@@ -325,13 +336,7 @@ int tr_device_read_film(tr_device *dev, tr_film *film, tr_error *err) {
                             "the film of device %s does not keep passes 0x%x", dev->info.name,
                             film->passes & ~src->passes);
     }
-    const size_t n = (size_t)src->width * src->height;
-    for (int i = 0; i < TR_FILM_ARRAYS; ++i) {
-        void *dst = tr_film_array_data(film, i);
-        if (dst) {
-            memcpy(dst, tr_film_array_data(src, i), n * tr_film_array_pixel_bytes(i));
-        }
-    }
+    copy_arrays(film, src);
     return TR_OK;
 }
 
@@ -351,13 +356,7 @@ int tr_device_write_film(tr_device *dev, const tr_film *film, tr_error *err) {
             return TR_ERR;
         }
     }
-    const size_t n = (size_t)film->width * film->height;
-    for (int i = 0; i < TR_FILM_ARRAYS; ++i) {
-        void *dst = tr_film_array_data(&dev->film, i);
-        if (dst) {
-            memcpy(dst, tr_film_array_data(film, i), n * tr_film_array_pixel_bytes(i));
-        }
-    }
+    copy_arrays(&dev->film, film);
     return TR_OK;
 }
 

@@ -161,6 +161,20 @@ int tr_film_write(const tr_film *f, const char *path, float exposure, tr_error *
     }
 }
 
+int tr_film_write_curve(const tr_film *f, const char *path, float exposure, int curve,
+                        tr_error *err) {
+    if (curve == TR_TONEMAP_CLAMP || tr_image_format_from_path(path) != TR_IMAGE_PNG) {
+        return tr_film_write(f, path, exposure, err);
+    }
+    tr_film disp;
+    if (tr_tonemap_display_film(f, exposure, curve, &disp, err) != TR_OK) {
+        return TR_ERR;
+    }
+    const int rc = tr_film_write(&disp, path, 0.0f, err); /* the exposure is applied */
+    tr_film_free(&disp);
+    return rc;
+}
+
 void tr_image_free(tr_image *img) {
     free(img->rgb);
     memset(img, 0, sizeof *img);

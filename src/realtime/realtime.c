@@ -135,8 +135,9 @@ tr_realtime *tr_realtime_create(tr_device *dev, tr_scene *scene, const tr_realti
     rt->accumulate = d->accumulate != 0;
     rt->animated = d->animated != 0;
     rt->keep_passes = d->keep_passes != 0;
-    /* On an OpenCL device the reconstruction runs where the film lies (recon_device.h). */
-    rt->on_device = strcmp(tr_device_kind(dev), "opencl") == 0;
+    /* On a device with a film of its own (OpenCL) the reconstruction runs where the film
+     * lies (recon_device.h). */
+    rt->on_device = (tr_device_caps(dev) & TR_DEVICE_CAP_HOST) == 0u;
     rt->budget_scale = 1.0f;
     rt->budget_spp = 1;
     return rt;
