@@ -277,12 +277,6 @@ int render_job_setup(render_job *job, int argc, char **argv, int *done) {
         }
     }
 
-    /* The passes written as files or layers are the ones asked for; --denoise needs the
-     * guides in the film too (the radiance does not change with passes). */
-    job->write_passes = job->passes;
-    if (job->denoise) {
-        job->passes |= TR_PASS_ALBEDO | TR_PASS_NORMAL | TR_PASS_DEPTH;
-    }
     job->scene = tr_scene_create(NULL);
     tr_scene_file file;
     int rc = cli_load_scene_file(a, c, job->scene, &file);
@@ -339,7 +333,7 @@ static int write_plain(const render_job *job, const tr_film *film, const tr_film
     int rc = tr_film_write_curve(img, job->out, job->exposure, job->curve, err);
     for (int k = 0; k < 5 && rc == TR_OK; ++k) {
         tr_film pass;
-        if ((job->write_passes & (1u << k)) == 0u) {
+        if ((job->passes & (1u << k)) == 0u) {
             continue;
         }
         rc = tr_film_extract_pass(film, 1u << k, &pass, err);
@@ -361,7 +355,7 @@ int render_write_outputs(const render_job *job, tr_session *s, uint32_t samples,
     }
     if (rc == TR_OK && tr_image_format_from_path(job->out) == TR_IMAGE_EXR) {
         tr_film view = *film; /* the layers asked for */
-        view.passes = job->write_passes;
+        view.passes = job->passes;
         rc = tr_film_write_exr_rgb(&view, job->denoise ? &den : &view, job->out, job->exr_half,
                                    &err);
     } else if (rc == TR_OK) {

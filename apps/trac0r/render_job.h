@@ -20,8 +20,8 @@ typedef struct render_job {
     float exposure;
     const char *out;
     int exr_half;             /* --exr-type half */
-    uint32_t passes;          /* TR_PASS_* the film keeps (with --denoise's guides) */
-    uint32_t write_passes;    /* TR_PASS_* written as files or EXR layers (--passes) */
+    uint32_t passes;          /* TR_PASS_* written as files or EXR layers (--passes); the
+                                 session adds --denoise's guides to the film */
     int curve;                /* --tonemap: TR_TONEMAP_* (PNG only) */
     int denoise;              /* --denoise */
     char pass_paths[5][4096]; /* PFM paths of the passes, by bit (not for EXR) */

@@ -85,7 +85,7 @@ static tiling make_tiling(tr_session *s, const render_job *job) {
     t.s = s;
     t.side = TR_SESSION_TILE * (uint32_t)job->cfg.stride;
     t.count = tr_session_tile_count(s);
-    t.pixel_bytes = tr_film_pixel_bytes(job->passes);
+    t.pixel_bytes = tr_film_pixel_bytes(tr_session_film(s, NULL)->passes); /* with guides */
     return t;
 }
 
