@@ -11,27 +11,14 @@
 #include "progress.h"
 #include "cli.h"
 #include "devices.h"
+#include "trac0r/measure.h"
 #include "trac0r/outfile.h"
 
 #define CONV_MAX_SIZES 4
-#define CONV_MAX_POINTS 400
 #define CONV_THRESHOLDS 4
+typedef tr_convergence_run conv_run;
 #define CONV_MAX_METHODS 4 /* naive, pt, bdpt, vcm */
 static const double conv_db[CONV_THRESHOLDS] = {25.0, 30.0, 35.0, 40.0};
-
-typedef struct conv_point {
-    uint32_t spp;
-    double seconds;       /* render time only */
-    tr_image_metrics raw; /* against the reference as it is */
-    double psnr;          /* with the reference's own MSE taken out */
-} conv_point;
-
-typedef struct conv_run {
-    int integrator;
-    uint32_t width, height;
-    conv_point pt[CONV_MAX_POINTS];
-    int n;
-} conv_run;
 
 static void convergence_help(void) {
     printf("Usage: trac0r bench convergence [SCENE] [options]\n"
@@ -118,56 +105,6 @@ static int parse_methods(cli_args *a, int m[], int *n) {
     return CLI_OK;
 }
 
-/* Mean radiance of the film into rgb (3 floats per pixel). */
-static void film_mean(const tr_film *f, float *rgb) {
-    size_t n = (size_t)f->width * f->height;
-    for (size_t i = 0; i < n; ++i) {
-        float inv = f->count[i] ? 1.0f / (float)f->count[i] : 0.0f;
-        for (int c = 0; c < 3; ++c) {
-            rgb[3 * i + c] = f->sum[3 * i + c] * inv;
-        }
-    }
-}
-
-/* Renders samples first .. first+spp-1 into a cleared film, in calls of a few samples so
- * that `bar` moves (*done counts the samples so far); a pixel adds its samples in the
- * same order either way. */
-static int render_spp(tr_device *dev, const tr_scene *s, const tr_render_config *cfg, tr_film *f,
-                      uint32_t first, uint32_t spp, progress *bar, uint64_t *done, tr_error *err) {
-    if (tr_device_clear(dev, err) != TR_OK) {
-        return TR_ERR;
-    }
-    const uint32_t chunk = 16;
-    for (uint32_t k = 0; k < spp; k += chunk) {
-        const uint32_t n = spp - k < chunk ? spp - k : chunk;
-        if (tr_device_render(dev, tr_scene_camera(s), cfg, first + k, n, NULL, NULL, err) !=
-            TR_OK) {
-            return TR_ERR;
-        }
-        *done += n;
-        progress_update(bar, *done, NULL);
-    }
-    return tr_device_read_film(dev, f, err);
-}
-
-/* Time (or spp, with use_spp) at which the run first reaches `db`: interpolated
- * linearly in PSNR against log time between the bracketing points; < 0 if never. */
-static double reach(const conv_run *r, double db, int use_spp) {
-    for (int i = 0; i < r->n; ++i) {
-        if (r->pt[i].psnr >= db) {
-            double x1 = use_spp ? r->pt[i].spp : r->pt[i].seconds;
-            if (i == 0) {
-                return x1;
-            }
-            double x0 = use_spp ? r->pt[i - 1].spp : r->pt[i - 1].seconds;
-            double p0 = r->pt[i - 1].psnr, p1 = r->pt[i].psnr;
-            double f = p1 > p0 ? (db - p0) / (p1 - p0) : 1.0;
-            return exp(log(x0) + f * (log(x1) - log(x0)));
-        }
-    }
-    return -1.0;
-}
-
 /* What the command line asked for. */
 typedef struct conv_options {
     cli_common c;
@@ -187,21 +124,11 @@ typedef struct conv_options {
 typedef struct conv_size {
     tr_scene *scene;
     size_t px;
-    float *ref, *half, *cur; /* 3 floats per pixel: the reference, its first half, a mean */
-    tr_film film;            /* the reference's read-back */
+    float *ref, *half;                      /* 3 floats per pixel: the reference, its first half */
+    tr_film film;                           /* the reference's read-back */
     cli_backend devs[CONV_MAX_METHODS + 1]; /* one per method, then the reference's */
     double ref_mse;                         /* the reference's own error (0: unknown) */
 } conv_size;
-
-/* The methods' turns at one size: each its own film, samples so far, the sample count of
- * its next recorded point, render time, and whether it is finished. */
-typedef struct conv_turns {
-    tr_film films[CONV_MAX_METHODS];
-    int nfilms;
-    uint32_t spp[CONV_MAX_METHODS], next[CONV_MAX_METHODS];
-    double elapsed[CONV_MAX_METHODS];
-    int done[CONV_MAX_METHODS];
-} conv_turns;
 
 static void conv_defaults(conv_options *o) {
     memset(o, 0, sizeof *o);
@@ -330,7 +257,6 @@ static void size_free(conv_size *z, int ndevs) {
     }
     free(z->ref);
     free(z->half);
-    free(z->cur);
     tr_film_free(&z->film);
     tr_scene_destroy(z->scene);
 }
@@ -385,9 +311,8 @@ static int size_open(cli_args *a, conv_options *o, int si, conv_size *z) {
     z->px = (size_t)w * h;
     z->ref = malloc(3 * z->px * sizeof *z->ref);
     z->half = malloc(3 * z->px * sizeof *z->half);
-    z->cur = malloc(3 * z->px * sizeof *z->cur);
     tr_error err;
-    const int buffers = z->ref && z->half && z->cur;
+    const int buffers = z->ref && z->half;
     const int film_ok = buffers && tr_film_init(&z->film, w, h, &err) == TR_OK;
     for (int k = 0; film_ok && rc == CLI_OK && k <= o->nmethods; ++k) {
         rc = cli_backend_open(a, &o->c, z->scene, &z->devs[k]);
@@ -401,17 +326,21 @@ static int size_open(cli_args *a, conv_options *o, int si, conv_size *z) {
                 buffers ? err.msg : "out of memory");
         free(z->ref);
         free(z->half);
-        free(z->cur);
         tr_scene_destroy(z->scene);
         return CLI_FAILURE;
     }
     return CLI_OK;
 }
 
-/* Renders the reference with pt in two independent halves: their mean is the reference
- * and a quarter of their difference's MSE its own error (z->ref_mse). Not through
- * tr_session: the second half is samples h1.. on a cleared film, and a session's samples
- * always start at 0 (or at a checkpoint's, whose film it keeps). */
+/* The progress bar's callback. */
+static int bar_progress(void *user, uint64_t done, uint64_t total) {
+    (void)total;
+    progress_update(user, done, NULL);
+    return 0;
+}
+
+/* Renders the reference with pt in two halves (tr_reference_render), z->ref_mse its own
+ * error. */
 static int render_reference(const conv_options *o, conv_size *z) {
     const uint32_t w = o->c.width, h = o->c.height;
     tr_render_config cfg = tr_render_config_default();
@@ -421,32 +350,19 @@ static int render_reference(const conv_options *o, conv_size *z) {
     /* The reference's seed differs from the measured runs', so its noise is
      * independent of theirs. */
     cfg.seed = o->c.seed ^ 0x7265666572656e63ULL;
-    tr_device *dev = z->devs[o->nmethods].dev;
     const double t0 = tr_time_now();
-    const uint32_t h1 = o->ref_spp / 2, h2 = o->ref_spp - h1;
     char label[96];
     snprintf(label, sizeof label, "trac0r bench convergence: %ux%u reference", w, h);
     progress bar;
     progress_begin(&bar, label, "spp", o->ref_spp, 0);
-    uint64_t done_spp = 0;
     tr_error err;
-    int ok = render_spp(dev, z->scene, &cfg, &z->film, 0, h1, &bar, &done_spp, &err) == TR_OK;
-    if (ok) {
-        film_mean(&z->film, z->half);
-        ok = render_spp(dev, z->scene, &cfg, &z->film, h1, h2, &bar, &done_spp, &err) == TR_OK;
-    }
+    const int rc =
+        tr_reference_render(z->devs[o->nmethods].dev, tr_scene_camera(z->scene), &cfg, o->ref_spp,
+                            &z->film, z->ref, z->half, &z->ref_mse, bar_progress, &bar, &err);
     progress_end(&bar);
-    if (!ok) {
+    if (rc != TR_OK) {
         fprintf(stderr, "trac0r bench convergence: %s\n", err.msg);
         return CLI_FAILURE;
-    }
-    film_mean(&z->film, z->cur);
-    /* The halves' difference has twice a half's MSE (independent noise), and their mean a
-     * quarter of the difference's: MSE_ref = MSE(h1, h2) / 4 (equal halves). Measured
-     * errors then have MSE_true + MSE_ref. */
-    z->ref_mse = tr_image_compare(z->half, z->cur, z->px).mse / 4.0;
-    for (size_t i = 0; i < 3 * z->px; ++i) {
-        z->ref[i] = ((float)h1 * z->half[i] + (float)h2 * z->cur[i]) / (float)o->ref_spp;
     }
     printf("%ux%u: reference pt %u spp in %.1f s, its own PSNR ~ %.1f dB\n", w, h, o->ref_spp,
            tr_time_now() - t0, tr_psnr(z->ref_mse));
@@ -466,105 +382,29 @@ static int size_reference(const conv_options *o, conv_size *z) {
     return CLI_OK;
 }
 
-/* The unfinished method with the least render time so far, or -1 when all are done. */
-static int next_method(const conv_turns *t, int nmethods) {
-    int mi = -1;
-    for (int k = 0; k < nmethods; ++k) {
-        if (!t->done[k] && (mi < 0 || t->elapsed[k] < t->elapsed[mi])) {
-            mi = k;
-        }
-    }
-    return mi;
-}
-
-/* Render time used against the budget of every method (a method that reaches 41 dB
- * early counts as its whole budget), in ms. */
-static uint64_t budget_used(const conv_turns *t, int nmethods, float budget) {
-    uint64_t used = 0;
-    for (int k = 0; k < nmethods; ++k) {
-        used += (uint64_t)((t->done[k] || t->elapsed[k] > budget ? budget : t->elapsed[k]) * 1e3);
-    }
-    return used;
-}
-
-/* Method mi's film as it stands, scored against the reference as r's next point; the
- * method is done past 41 dB or at its last point (`last`). */
-static int record_point(const conv_options *o, conv_size *z, conv_turns *t, int mi, int last,
-                        conv_run *r, progress *bar) {
-    tr_error err;
-    if (cli_backend_read(&z->devs[mi], &t->films[mi], &err) != TR_OK) {
-        progress_clear(bar);
-        fprintf(stderr, "trac0r bench convergence: %s\n", err.msg);
-        return CLI_FAILURE;
-    }
-    film_mean(&t->films[mi], z->cur);
-    conv_point *p = &r->pt[r->n++];
-    p->spp = t->spp[mi];
-    p->seconds = t->elapsed[mi];
-    p->raw = tr_image_compare(z->cur, z->ref, z->px);
-    const double mse = p->raw.mse - z->ref_mse;
-    p->psnr = tr_psnr(mse);
-    const uint32_t step = (uint32_t)ceil(t->next[mi] * 0.19);
-    t->next[mi] += step > 0 ? step : 1;
-    if (p->psnr > 41.0 || last) {
-        t->done[mi] = 1;
-        progress_clear(bar);
-        printf("%ux%u %-5s: %u spp in %.2f s -> PSNR %.2f dB (raw %.2f), RMSE "
-               "%.5f, relMSE %.5f\n",
-               o->c.width, o->c.height, tr_integrator_name(r->integrator), p->spp, p->seconds,
-               p->psnr, p->raw.psnr, p->raw.rmse, p->raw.relmse);
-        fflush(stdout);
-    }
-    return CLI_OK;
-}
-
-/* One 1 spp frame of method mi, recorded at geometrically spaced sample counts. */
-static int method_turn(const conv_options *o, conv_size *z, conv_turns *t, int mi, conv_run *r,
-                       progress *bar) {
-    tr_render_config cfg = tr_render_config_default();
-    cfg.threads = o->c.threads;
-    cfg.integrator = o->methods[mi];
-    cfg.max_depth = o->methods[mi] == TR_INTEGRATOR_NAIVE ? o->c.max_depth + 2 : o->c.max_depth;
-    cfg.seed = o->c.seed;
-    tr_render_stats st;
-    tr_error err;
-    if (cli_backend_frame(&z->devs[mi], z->scene, &cfg, t->spp[mi], &st, &err) != TR_OK) {
-        progress_clear(bar);
-        fprintf(stderr, "trac0r bench convergence: %s\n", err.msg);
-        return CLI_FAILURE;
-    }
-    t->elapsed[mi] += st.seconds;
-    ++t->spp[mi];
-    const int last = t->elapsed[mi] >= o->budget || r->n == CONV_MAX_POINTS - 1;
-    if (t->spp[mi] == t->next[mi] || last) {
-        return record_point(o, z, t, mi, last, r, bar);
-    }
-    return CLI_OK;
+/* A method's line once it has finished. */
+static void method_finished(void *user, const conv_run *r) {
+    progress_clear(user);
+    const tr_convergence_point *p = &r->pt[r->n - 1];
+    printf("%ux%u %-5s: %u spp in %.2f s -> PSNR %.2f dB (raw %.2f), RMSE %.5f, relMSE %.5f\n",
+           r->width, r->height, tr_integrator_name(r->integrator), p->spp, p->seconds, p->psnr,
+           p->raw.psnr, p->raw.rmse, p->raw.relmse);
+    fflush(stdout);
 }
 
 /* Every method at size z until its budget is spent or it passes 41 dB, into runs[0 ..
- * nmethods). The methods take turns, one frame at a time, the one with the least render
- * time so far next: on a machine shared with other work they see the same load, which
- * keeps their time ratio fair. (So each method is its own device stepped frame by frame,
- * not a tr_session, which renders one job to its end.) */
+ * nmethods): tr_convergence_measure, one device per method. */
 static int run_methods(const conv_options *o, conv_size *z, conv_run *runs) {
-    conv_turns t;
-    memset(&t, 0, sizeof t);
-    /* The first three methods record their first point at 1 spp; a fourth starts at 0
-     * and so records its last point alone (kept: the output stays as it was). */
-    t.next[0] = t.next[1] = t.next[2] = 1;
-    int rc = CLI_OK;
+    tr_render_config cfgs[CONV_MAX_METHODS];
+    tr_device *devs[CONV_MAX_METHODS];
     for (int mi = 0; mi < o->nmethods; ++mi) {
-        runs[mi].integrator = o->methods[mi];
-        runs[mi].width = o->c.width;
-        runs[mi].height = o->c.height;
-        tr_error err;
-        if (tr_film_init(&t.films[mi], o->c.width, o->c.height, &err) != TR_OK) {
-            fprintf(stderr, "trac0r bench convergence: %s\n", err.msg);
-            rc = CLI_FAILURE;
-            break;
-        }
-        ++t.nfilms;
+        cfgs[mi] = tr_render_config_default();
+        cfgs[mi].threads = o->c.threads;
+        cfgs[mi].integrator = o->methods[mi];
+        cfgs[mi].max_depth =
+            o->methods[mi] == TR_INTEGRATOR_NAIVE ? o->c.max_depth + 2 : o->c.max_depth;
+        cfgs[mi].seed = o->c.seed;
+        devs[mi] = z->devs[mi].dev;
     }
     char label[96];
     snprintf(label, sizeof label, "trac0r bench convergence: %ux%u methods", o->c.width,
@@ -572,19 +412,24 @@ static int run_methods(const conv_options *o, conv_size *z, conv_run *runs) {
     progress bar;
     progress_begin(&bar, label, "ms of budget", (uint64_t)(o->budget * 1e3) * (uint64_t)o->nmethods,
                    0);
-    while (rc == CLI_OK) {
-        progress_update(&bar, budget_used(&t, o->nmethods, o->budget), NULL);
-        const int mi = next_method(&t, o->nmethods);
-        if (mi < 0) {
-            break;
-        }
-        rc = method_turn(o, z, &t, mi, &runs[mi], &bar);
-    }
+    tr_convergence_desc d = {.scene = z->scene,
+                             .methods = o->nmethods,
+                             .devs = devs,
+                             .configs = cfgs,
+                             .ref = z->ref,
+                             .ref_mse = z->ref_mse,
+                             .budget = o->budget,
+                             .progress = bar_progress,
+                             .finished = method_finished,
+                             .user = &bar};
+    tr_error err;
+    const int rc = tr_convergence_measure(&d, runs, &err);
     progress_end(&bar);
-    for (int k = 0; k < t.nfilms; ++k) {
-        tr_film_free(&t.films[k]);
+    if (rc != TR_OK) {
+        fprintf(stderr, "trac0r bench convergence: %s\n", err.msg);
+        return CLI_FAILURE;
     }
-    return rc;
+    return CLI_OK;
 }
 
 /* Size si: its reference, then every method against it. */
@@ -615,7 +460,8 @@ static void print_table(const conv_run *runs, int n) {
         snprintf(size, sizeof size, "%ux%u", r->width, r->height);
         printf("%-9s %-6s", size, tr_integrator_name(r->integrator));
         for (int k = 0; k < CONV_THRESHOLDS; ++k) {
-            double t = reach(r, conv_db[k], 0), s = reach(r, conv_db[k], 1);
+            double t = tr_convergence_reach(r, conv_db[k], 0),
+                   s = tr_convergence_reach(r, conv_db[k], 1);
             char cell[64];
             if (t < 0.0) {
                 snprintf(cell, sizeof cell, "not reached");
@@ -634,7 +480,8 @@ static void print_speedup(const conv_run *rn, const conv_run *rp) {
     const char *sp = tr_integrator_name(rp->integrator);
     printf("%ux%u time %s / time %s:", rn->width, rn->height, sn, sp);
     for (int k = 0; k < CONV_THRESHOLDS; ++k) {
-        double tn = reach(rn, conv_db[k], 0), tp = reach(rp, conv_db[k], 0);
+        double tn = tr_convergence_reach(rn, conv_db[k], 0),
+               tp = tr_convergence_reach(rp, conv_db[k], 0);
         if (tn > 0.0 && tp > 0.0) {
             printf("  %.0f dB: %.1fx", conv_db[k], tn / tp);
         } else if (tp > 0.0) {
@@ -682,7 +529,7 @@ static int write_csv(const char *path, const conv_run *runs, int n) {
     for (int i = 0; i < n; ++i) {
         const conv_run *r = &runs[i];
         for (int k = 0; k < r->n; ++k) {
-            const conv_point *p = &r->pt[k];
+            const tr_convergence_point *p = &r->pt[k];
             fprintf(fp, "%s,%u,%u,%u,%.5f,%.6g,%.6g,%.4f,%.4f\n", tr_integrator_name(r->integrator),
                     r->width, r->height, p->spp, p->seconds, p->raw.rmse, p->raw.relmse,
                     p->raw.psnr, p->psnr);
@@ -743,7 +590,7 @@ static int write_outputs(const conv_options *o, const conv_run *runs) {
     if (rc != CLI_OK) {
         return rc;
     }
-    const size_t cap = 64 + (size_t)n * (CONV_MAX_POINTS * 48 + 256);
+    const size_t cap = 64 + (size_t)n * (TR_CONVERGENCE_MAX_POINTS * 48 + 256);
     char *script = malloc(cap);
     if (!script) {
         return CLI_FAILURE;

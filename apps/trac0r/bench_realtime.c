@@ -14,11 +14,9 @@
 #include "bench.h"
 #include "cli.h"
 #include "devices.h"
+#include "trac0r/measure.h"
 
-typedef struct rt_frame_stats {
-    double render_ms, temporal_ms, spatial_ms, psnr, ssim, flicker;
-    double moving_psnr; /* --animate: over the moving shape's pixels; NAN: none */
-} rt_frame_stats;
+typedef tr_frame_scores rt_frame_stats;
 
 static void realtime_help(void) {
     printf("Usage: trac0r bench realtime [SCENE] [options]\n"
@@ -106,62 +104,14 @@ static int parse_methods(cli_args *a, int on[TR_RECON_COUNT]) {
     return CLI_OK;
 }
 
-/* Frame f's camera: the scene's, swayed sideways, moved forward and turned a little; from
- * frame `cut` on (cut > 0) another view, offset and looking back towards the middle. The
- * scene camera's handedness is kept (its right vector negated when it was). */
-static int path_camera(const tr_camera *c0, float diag, uint32_t f, uint32_t frames, uint32_t cut,
-                       tr_camera *out, tr_error *err) {
-    const double t = (double)f / (double)frames;
-    const float sway = (float)sin(2.0 * 3.14159265358979 * t);
-    tr_vec3 pos = c0->pos, dir = c0->dir;
-    float side = 0.03f * diag * sway, fwd = 0.1f * diag * (float)t, yaw = 0.15f * sway, lift = 0;
-    if (cut > 0 && f >= cut) {
-        side += 0.2f * diag;
-        lift = 0.08f * diag;
-        yaw -= 0.3f;
-    }
-    for (int k = 0; k < 3; ++k) {
-        const float *r = &c0->right.x, *u = &c0->up.x, *d = &c0->dir.x;
-        (&pos.x)[k] += r[k] * side + d[k] * fwd + u[k] * lift;
-        (&dir.x)[k] = d[k] + r[k] * yaw;
-    }
-    tr_camera c;
-    if (tr_camera_make(&c, pos, dir, c0->world_up, c0->vertical_fov, c0->near_dist, c0->far_dist,
-                       c0->screen_width, c0->screen_height, err) != TR_OK) {
-        return TR_ERR;
-    }
-    /* tr_camera_make's right is up x dir; the scene's may be mirrored (handedness right). */
-    const tr_vec3 r0 = c0->right, r1 = c.right;
-    if (r0.x * r1.x + r0.y * r1.y + r0.z * r1.z < 0.0f) {
-        c.right = tr_vec3_make(-r1.x, -r1.y, -r1.z);
-    }
-    *out = c;
-    return TR_OK;
-}
-
-static double mse_of(const float *a, const float *b, size_t px) {
-    return tr_image_compare(a, b, px).mse;
-}
-
-/* The indices of the pixels whose primitive (id pass) moved into idx; returns how many. */
-static size_t shape_pixels(const uint32_t *prim, uint32_t lo, uint32_t hi, size_t px, size_t *idx) {
-    size_t n = 0;
-    for (size_t i = 0; i < px; ++i) {
-        if (prim[i] >= lo && prim[i] < hi) {
-            idx[n++] = i;
-        }
-    }
-    return n;
-}
-
 /* Method m's mean PSNR over the moving shape's pixels in frames f0 .. f1 - 1 that have
- * such pixels (NaN where a frame has none); *count: how many did. */
+ * such pixels; *count: how many did. */
 static double shape_psnr_mean(const rt_frame_stats *st, int m, uint32_t frames, uint32_t f0,
                               uint32_t f1, int *count) {
     double sum = 0.0;
     int n = 0;
     for (uint32_t f = f0; f < f1; ++f) {
-        const double v = st[(size_t)m * frames + f].moving_psnr;
+        const double v = st[(size_t)m * frames + f].region_psnr;
         if (v == v) {
             sum += v;
             ++n;
@@ -171,9 +121,8 @@ static double shape_psnr_mean(const rt_frame_stats *st, int m, uint32_t frames, 
     return n > 0 ? sum / n : 0.0;
 }
 
-/* After --animate-frames A:B, per method (reconstructed on the host): steady is the mean
- * PSNR over the shape's pixels in the (up to) 8 frames before it moved; recovered at the
- * first frame from B on within 0.5 dB of it, as after a cut. */
+/* After --animate-frames A:B, per method (reconstructed on the host): the frames from B
+ * on to return to within 0.5 dB of the PSNR over the shape's pixels before it moved. */
 static void print_shape_recovery(const rt_frame_stats *st, const int *on, uint32_t frames,
                                  uint32_t from, uint32_t until) {
     printf("moving shape stopped at frame %u, frames to return to its PSNR before it moved:",
@@ -182,19 +131,13 @@ static void print_shape_recovery(const rt_frame_stats *st, const int *on, uint32
         if (!on[m]) {
             continue;
         }
-        int n = 0;
-        const double steady = shape_psnr_mean(st, m, frames, from > 8 ? from - 8 : 0, from, &n);
-        int rec_frames = -1;
-        for (uint32_t f = until; n > 0 && f < frames; ++f) {
-            if (st[(size_t)m * frames + f].moving_psnr >= steady - 0.5) {
-                rec_frames = (int)(f - until);
-                break;
-            }
-        }
-        if (n == 0) {
+        double steady = NAN;
+        const int after =
+            tr_recovery_frames(st + (size_t)m * frames, frames, from, until, 1, 0.5, &steady);
+        if (steady != steady) {
             printf(" %s -", tr_recon_name(m));
-        } else if (rec_frames >= 0) {
-            printf(" %s %d (%.2f dB)", tr_recon_name(m), rec_frames, steady);
+        } else if (after >= 0) {
+            printf(" %s %d (%.2f dB)", tr_recon_name(m), after, steady);
         } else {
             printf(" %s never (%.2f dB)", tr_recon_name(m), steady);
         }
@@ -224,66 +167,6 @@ static int parse_window(cli_args *a, uint32_t *from, uint32_t *until) {
     *from = (uint32_t)x;
     *until = (uint32_t)y;
     return CLI_OK;
-}
-
-/* Pixels idx[0..n) of image a (3 floats each) gathered into out. */
-static void gather(const float *a, const size_t *idx, size_t n, float *out) {
-    for (size_t j = 0; j < n; ++j) {
-        for (int k = 0; k < 3; ++k) {
-            out[3 * j + k] = a[3 * idx[j] + k];
-        }
-    }
-}
-
-/* The mean of film f's samples, 3 floats per pixel, into out. */
-static void film_mean(const tr_film *f, float *out, size_t px) {
-    for (size_t i = 0; i < px; ++i) {
-        const float inv = f->count[i] ? 1.0f / (float)f->count[i] : 0.0f;
-        for (int k = 0; k < 3; ++k) {
-            out[3 * i + k] = f->sum[3 * i + k] * inv;
-        }
-    }
-}
-
-/* A reference of cam with `spp` samples of cfg into ref, rendered in two halves: the MSE
- * of the first half against the whole estimates the whole's own MSE, into *own (bench
- * convergence does the same). half is scratch of ref's size. */
-static int render_reference(cli_backend *be, const tr_camera *cam, const tr_render_config *cfg,
-                            uint32_t spp, tr_film *f, float *half, float *ref, double *own,
-                            tr_error *err) {
-    const uint32_t h1 = spp / 2, h2 = spp - h1;
-    const size_t px = (size_t)f->width * f->height;
-    if (tr_device_clear(be->dev, err) != TR_OK ||
-        tr_device_render(be->dev, cam, cfg, 0, h1, NULL, NULL, err) != TR_OK ||
-        tr_device_read_film(be->dev, f, err) != TR_OK) {
-        return TR_ERR;
-    }
-    film_mean(f, half, px);
-    if (tr_device_render(be->dev, cam, cfg, h1, h2, NULL, NULL, err) != TR_OK ||
-        tr_device_read_film(be->dev, f, err) != TR_OK) {
-        return TR_ERR;
-    }
-    film_mean(f, ref, px);
-    *own = mse_of(half, ref, px);
-    return TR_OK;
-}
-
-/* RMS over pixels of (luma(a) - luma(a_prev)) - (luma(r) - luma(r_prev)). */
-static double flicker(const float *a, const float *ap, const float *r, const float *rp, size_t px) {
-    double s = 0.0;
-    for (size_t i = 0; i < px; ++i) {
-        double d = 0.0;
-        for (int k = 0; k < 3; ++k) {
-            static const double w[3] = {0.2126, 0.7152, 0.0722};
-            const double va =
-                fmin(fmax(a[3 * i + k], 0.0), 1.0) - fmin(fmax(ap[3 * i + k], 0.0), 1.0);
-            const double vr =
-                fmin(fmax(r[3 * i + k], 0.0), 1.0) - fmin(fmax(rp[3 * i + k], 0.0), 1.0);
-            d += w[k] * (va - vr);
-        }
-        s += d * d;
-    }
-    return sqrt(s / (double)px);
 }
 
 /* PREFIX.png (gnuplot, bench_plot_png): each method's PSNR per frame (the cut marked,
@@ -376,15 +259,11 @@ typedef struct rt_run {
     int frame_sampler;     /* the frames' sampler, for the header */
     uint32_t frame_passes; /* the frames' passes, which the references keep too */
     int depth;
-    tr_film rfilm;                       /* the references' film */
-    float *ref, *half, *ref_prev, *prev; /* 3 floats per pixel (prev: per method) */
-    float *bias_ref;                     /* --bias-reference-depth's reference */
-    double bias_mse, bias_own;           /* its measures */
-    rt_frame_stats *st;                  /* per method and frame */
-    uint32_t shape_lo, shape_hi;         /* --animate: the moving shape's ids */
-    size_t *mv_idx;                      /* its pixels in the frame */
-    float *gm;                           /* gathered: an output, the reference, its half */
-    double resolve_sum_ms;               /* tr_resolve_emission over the frames */
+    tr_scorer *sc;               /* the references and the scores */
+    double bias_mse, bias_own;   /* --bias-reference-depth's measures */
+    rt_frame_stats *st;          /* per method and frame */
+    uint32_t shape_lo, shape_hi; /* --animate: the moving shape's ids */
+    double resolve_sum_ms;       /* tr_resolve_emission over the frames */
     uint64_t resolve_px;
 } rt_run;
 
@@ -496,17 +375,16 @@ static int load_scene(rt_run *r, rt_opts *o) {
     return CLI_OK;
 }
 
-/* The measures' buffers; 0 when memory runs out. */
+/* The scorer and the table's rows; CLI_OK or the status to return. */
 static int alloc_buffers(rt_run *r) {
-    const rt_opts *o = r->o;
-    const size_t px = r->px;
-    r->ref = malloc(3 * px * sizeof *r->ref);
-    r->half = malloc(3 * px * sizeof *r->half);
-    r->ref_prev = malloc(3 * px * sizeof *r->ref_prev);
-    r->bias_ref = o->bias_depth ? malloc(3 * px * sizeof *r->bias_ref) : NULL;
-    r->prev = malloc((size_t)TR_RECON_COUNT * 3 * px * sizeof *r->prev);
-    r->st = calloc((size_t)TR_RECON_COUNT * o->frames, sizeof *r->st);
-    return r->ref && r->half && r->ref_prev && r->prev && r->st && (r->bias_ref || !o->bias_depth);
+    tr_error err;
+    r->st = calloc((size_t)TR_RECON_COUNT * r->o->frames, sizeof *r->st);
+    if (!r->st ||
+        !(r->sc = tr_scorer_create(r->o->c.width, r->o->c.height, TR_RECON_COUNT, &err))) {
+        fprintf(stderr, "trac0r bench realtime: %s\n", r->st ? err.msg : "out of memory");
+        return CLI_FAILURE;
+    }
+    return CLI_OK;
 }
 
 /* The device, the real-time loop (the frames' settings) and the references' config. */
@@ -553,7 +431,7 @@ static int open_loop(rt_run *r) {
 }
 
 /* --animate: the moving shape's ids in the id pass (triangle index + 1: the last shape's
- * triangles come last) and the buffers its measures need. */
+ * triangles come last). */
 static int setup_shape(rt_run *r) {
     const rt_opts *o = r->o;
     const uint32_t ids = tr_scene_triangle_count(r->scene) + 1u;
@@ -562,14 +440,6 @@ static int setup_shape(rt_run *r) {
         const uint32_t last = tr_scene_shape_count(r->scene) - 1u;
         r->shape_hi = ids;
         r->shape_lo = ids - tr_scene_shape_triangle_count(r->scene, last);
-    }
-    /* The moving pixels' indices and, gathered, a method's output, the reference and its
-     * half. */
-    r->mv_idx = malloc(r->px * sizeof *r->mv_idx);
-    r->gm = malloc(9 * r->px * sizeof *r->gm);
-    if (!r->mv_idx || !r->gm) {
-        fprintf(stderr, "trac0r bench realtime: out of memory\n");
-        return CLI_FAILURE;
     }
     if (o->anim_from == 1 && o->anim_until == o->frames) {
         printf("animated: the scene's last shape moves every frame\n");
@@ -611,75 +481,28 @@ static void print_header(const rt_run *r) {
     }
 }
 
-/* Frame f's reference (and at frame 0 the depth limit's bias); *ref_mse gets the
- * reference's own error. */
-static int frame_reference(rt_run *r, const tr_camera *cam, uint32_t f, double *ref_mse) {
+/* Frame f's reference (and at frame 0 the depth limit's bias). */
+static int frame_reference(rt_run *r, const tr_camera *cam, uint32_t f) {
     const rt_opts *o = r->o;
     tr_error err;
-    if (render_reference(&r->be, cam, &r->rcfg, o->ref_spp, &r->rfilm, r->half, r->ref, ref_mse,
-                         &err) != TR_OK) {
+    if (tr_scorer_reference(r->sc, r->be.dev, cam, &r->rcfg, o->ref_spp, &err) != TR_OK) {
         fprintf(stderr, "trac0r bench realtime: reference of frame %u: %s\n", f, err.msg);
         return CLI_FAILURE;
     }
     if (f == 0 && o->bias_depth) {
         /* The bias of the depth limit: frame 0's reference against one at bias_depth,
-         * with another seed so that the two references' noise is independent; the
-         * expected squared difference is the bias's plus both references' own. */
+         * with another seed so that the two references' noise is independent. */
         tr_render_config bcfg = r->rcfg;
         bcfg.max_depth = (int)o->bias_depth;
         bcfg.seed = r->rcfg.seed ^ 0x6269617364657074ULL;
-        double own = 0.0;
-        if (render_reference(&r->be, cam, &bcfg, o->ref_spp, &r->rfilm, r->half, r->bias_ref, &own,
-                             &err) != TR_OK) {
+        if (tr_scorer_bias(r->sc, r->be.dev, cam, &bcfg, o->ref_spp, &r->bias_mse, &r->bias_own,
+                           &err) != TR_OK) {
             fprintf(stderr, "trac0r bench realtime: depth-%u reference of frame 0: %s\n",
                     o->bias_depth, err.msg);
             return CLI_FAILURE;
         }
-        r->bias_mse = mse_of(r->ref, r->bias_ref, r->px) - *ref_mse - own;
-        r->bias_own = *ref_mse + own;
     }
     return CLI_OK;
-}
-
-/* The moving shape's pixels (on the host, where the id pass is) into mv_idx, with the
- * references' own error over them into *own: the same for every method. */
-static size_t frame_shape(rt_run *r, double *own) {
-    const tr_gbuffer *g = tr_realtime_gbuffer(r->rt);
-    *own = 0.0;
-    if (!r->o->animate || !g) {
-        return 0;
-    }
-    const size_t px = r->px;
-    const size_t n = shape_pixels(g->prim, r->shape_lo, r->shape_hi, px, r->mv_idx);
-    gather(r->ref, r->mv_idx, n, r->gm + 3 * px);
-    gather(r->half, r->mv_idx, n, r->gm + 6 * px);
-    *own = n ? mse_of(r->gm + 6 * px, r->gm + 3 * px, n) : 0.0;
-    return n;
-}
-
-/* Method m's output of frame f against the reference: its row of measures. */
-static void measure(rt_run *r, int m, uint32_t f, const tr_realtime_result *res, double ref_mse,
-                    size_t n_mv, double own_mv) {
-    const size_t px = r->px;
-    const float *out = res->rgb;
-    rt_frame_stats *s = &r->st[(size_t)m * r->o->frames + f];
-    s->render_ms = res->render_ms;
-    s->temporal_ms = res->temporal_ms;
-    s->spatial_ms = res->spatial_ms;
-    const double mse = mse_of(out, r->ref, px) - ref_mse;
-    s->psnr = tr_psnr(mse > 1e-12 ? mse : 1e-12);
-    s->ssim = tr_ssim(out, r->ref, r->o->c.width, r->o->c.height);
-    float *pm = r->prev + (size_t)m * 3 * px;
-    s->flicker = f > 0 ? flicker(out, pm, r->ref, r->ref_prev, px) : 0.0;
-    /* With a moving shape and the frame's id pass on the host: the error over the moving
-     * primitives' pixels, the references' own error there taken out. */
-    s->moving_psnr = NAN;
-    if (n_mv > 0) {
-        gather(out, r->mv_idx, n_mv, r->gm);
-        const double mm = mse_of(r->gm, r->gm + 3 * px, n_mv) - own_mv;
-        s->moving_psnr = tr_psnr(mm > 1e-12 ? mm : 1e-12);
-    }
-    memcpy(pm, out, 3 * px * sizeof *out);
 }
 
 /* Frame f: the scene moved (--animate), its reference, the frame rendered once and
@@ -688,7 +511,7 @@ static int run_frame(rt_run *r, uint32_t f) {
     const rt_opts *o = r->o;
     tr_error err;
     tr_camera cam;
-    if (path_camera(&r->cam0, r->diag, f, o->frames, o->cut, &cam, &err) != TR_OK) {
+    if (tr_camera_path(&r->cam0, r->diag, f, o->frames, o->cut, &cam, &err) != TR_OK) {
         fprintf(stderr, "trac0r bench realtime: frame %u camera: %s\n", f, err.msg);
         return CLI_FAILURE;
     }
@@ -706,8 +529,7 @@ static int run_frame(rt_run *r, uint32_t f) {
             return rc;
         }
     }
-    double ref_mse = 0.0;
-    int rc = frame_reference(r, &cam, f, &ref_mse);
+    int rc = frame_reference(r, &cam, f);
     if (rc != CLI_OK) {
         return rc;
     }
@@ -718,8 +540,6 @@ static int run_frame(rt_run *r, uint32_t f) {
         fprintf(stderr, "trac0r bench realtime: frame %u: %s\n", f, err.msg);
         return CLI_FAILURE;
     }
-    size_t n_mv = 0;
-    double own_mv = 0.0;
     int first = 1;
     for (int m = 0; m < TR_RECON_COUNT; ++m) {
         if (!o->on[m]) {
@@ -731,15 +551,22 @@ static int run_frame(rt_run *r, uint32_t f) {
             return CLI_FAILURE;
         }
         if (first) {
-            /* The emitters' edges were resolved once for every method. */
+            /* The emitters' edges were resolved once for every method. With a moving
+             * shape and the frame's id pass on the host, its pixels are scored apart. */
             r->resolve_sum_ms += res.resolve_ms;
             r->resolve_px += res.resolved;
-            n_mv = frame_shape(r, &own_mv);
+            const tr_gbuffer *g = tr_realtime_gbuffer(r->rt);
+            if (o->animate && g) {
+                tr_scorer_region(r->sc, g->prim, r->shape_lo, r->shape_hi);
+            }
             first = 0;
         }
-        measure(r, m, f, &res, ref_mse, n_mv, own_mv);
+        rt_frame_stats *s = &r->st[(size_t)m * o->frames + f];
+        *s = tr_scorer_score(r->sc, m, res.rgb);
+        s->render_ms = res.render_ms;
+        s->temporal_ms = res.temporal_ms;
+        s->spatial_ms = res.spatial_ms;
     }
-    memcpy(r->ref_prev, r->ref, 3 * r->px * sizeof *r->ref);
     return CLI_OK;
 }
 
@@ -755,8 +582,8 @@ static void report_method(const rt_run *r, int m, FILE *csv) {
                 s->temporal_ms, s->spatial_ms, s->render_ms + s->temporal_ms + s->spatial_ms,
                 s->psnr, s->ssim, s->flicker);
         if (o->animate) { /* empty where the shape was not seen or not measured */
-            if (s->moving_psnr == s->moving_psnr) {
-                fprintf(csv, ",%.4f", s->moving_psnr);
+            if (s->region_psnr == s->region_psnr) {
+                fprintf(csv, ",%.4f", s->region_psnr);
             } else {
                 fputc(',', csv);
             }
@@ -778,21 +605,11 @@ static void report_method(const rt_run *r, int m, FILE *csv) {
         printf("\n");
         return;
     }
-    /* Steady: the mean PSNR of the (up to) 8 frames before the cut; recovered at the
-     * first frame from the cut on within 0.5 dB of it. */
-    const uint32_t k0 = cut > 8 ? cut - 8 : 0;
+    /* Recovered at the first frame from the cut on within 0.5 dB of the mean PSNR of the
+     * (up to) 8 frames before it. */
     double steady = 0.0;
-    for (uint32_t f = k0; f < cut; ++f) {
-        steady += st[(size_t)m * frames + f].psnr;
-    }
-    steady /= (double)(cut - k0);
-    int rec_frames = -1;
-    for (uint32_t f = cut; f < frames; ++f) {
-        if (st[(size_t)m * frames + f].psnr >= steady - 0.5) {
-            rec_frames = (int)(f - cut);
-            break;
-        }
-    }
+    const int rec_frames =
+        tr_recovery_frames(st + (size_t)m * frames, frames, cut, cut, 0, 0.5, &steady);
     if (rec_frames >= 0) {
         printf(" %7d\n", rec_frames);
     } else {
@@ -888,15 +705,8 @@ static void free_run(rt_run *r) {
     if (r->be.dev) {
         cli_backend_close(&r->be);
     }
-    tr_film_free(&r->rfilm);
-    free(r->ref);
-    free(r->half);
-    free(r->ref_prev);
-    free(r->bias_ref);
-    free(r->prev);
+    tr_scorer_destroy(r->sc);
     free(r->st);
-    free(r->mv_idx);
-    free(r->gm);
     tr_scene_destroy(r->scene);
 }
 
@@ -911,14 +721,7 @@ static int run_bench(cli_args *a, rt_opts *o) {
         free_run(&r);
         return rc;
     }
-    tr_error err;
-    if (!alloc_buffers(&r)) {
-        fprintf(stderr, "trac0r bench realtime: out of memory\n");
-        rc = CLI_FAILURE;
-    } else if (tr_film_init(&r.rfilm, o->c.width, o->c.height, &err) != TR_OK) {
-        fprintf(stderr, "trac0r bench realtime: %s\n", err.msg);
-        rc = CLI_FAILURE;
-    }
+    rc = alloc_buffers(&r);
     if (rc == CLI_OK) {
         rc = open_loop(&r);
     }

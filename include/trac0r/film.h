@@ -80,6 +80,9 @@ tr_vec3 tr_film_pixel(const tr_film *f, uint32_t x, uint32_t y);
  * (tr_film_variance); zeros below two samples. */
 int tr_film_pass_pixel(const tr_film *f, uint32_t pass, uint32_t x, uint32_t y, float out[3],
                        tr_error *err);
+/* The mean radiance of every pixel, 3 floats per pixel, into rgb (zeros where no sample
+ * landed). */
+void tr_film_mean(const tr_film *f, float *rgb);
 /* Adds src's samples to dst: sums and counts add, a primitive id is taken from src where
  * dst has none. The films must have one size, and src must keep every pass dst keeps.
  * Pixel by pixel this is exact where at most one of the two has samples (a render split

@@ -53,6 +53,7 @@
 #include "trac0r/error.h"
 #include "trac0r/film.h"
 #include "trac0r/image.h"
+#include "trac0r/measure.h"
 #include "trac0r/outfile.h"
 #include "trac0r/post.h"
 #include "trac0r/realtime.h"

@@ -364,3 +364,13 @@ const char *tr_pass_name(uint32_t pass) {
         return NULL;
     }
 }
+
+void tr_film_mean(const tr_film *f, float *rgb) {
+    const size_t n = (size_t)f->width * f->height;
+    for (size_t i = 0; i < n; ++i) {
+        const float inv = f->count[i] ? 1.0f / (float)f->count[i] : 0.0f;
+        for (int c = 0; c < 3; ++c) {
+            rgb[3 * i + c] = f->sum[3 * i + c] * inv;
+        }
+    }
+}

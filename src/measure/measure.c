@@ -1,0 +1,293 @@
+/* measure.c - references that know their own error, real-time frames scored against
+ * them, and integrators at equal time (measure.h). */
+#include "trac0r/measure.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "trac0r/camera.h"
+#include "trac0r/film.h"
+
+/* The samples a reference renders per device call: progress moves at least this often. */
+#define REFERENCE_CHUNK 16u
+
+/* Renders samples first .. first+count-1 of cfg in calls of REFERENCE_CHUNK; *done counts
+ * them for progress(done, total). */
+static int render_chunks(tr_device *dev, const tr_camera *cam, const tr_render_config *cfg,
+                         uint32_t first, uint32_t count, uint64_t *done, uint64_t total,
+                         tr_measure_progress_fn progress, void *user, tr_error *err) {
+    for (uint32_t k = 0; k < count; k += REFERENCE_CHUNK) {
+        const uint32_t n = count - k < REFERENCE_CHUNK ? count - k : REFERENCE_CHUNK;
+        if (tr_device_render(dev, cam, cfg, first + k, n, NULL, NULL, err) != TR_OK) {
+            return TR_ERR;
+        }
+        *done += n;
+        if (progress && progress(user, *done, total) != 0) {
+            tr_error_set(err, TR_STATUS_CANCELLED, "reference: cancelled");
+            return TR_ERR;
+        }
+    }
+    return TR_OK;
+}
+
+int tr_reference_render(tr_device *dev, const tr_camera *cam, const tr_render_config *cfg,
+                        uint32_t spp, tr_film *film, float *ref, float *half, double *own_mse,
+                        tr_measure_progress_fn progress, void *user, tr_error *err) {
+    if (spp < 2 || !film || !ref || !half || !own_mse) {
+        tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                     "reference: needs at least 2 samples and its buffers (spp %u)", spp);
+        return TR_ERR;
+    }
+    const uint32_t h1 = spp / 2;
+    const size_t px = (size_t)film->width * film->height;
+    uint64_t done = 0;
+    if (tr_device_clear(dev, err) != TR_OK ||
+        render_chunks(dev, cam, cfg, 0, h1, &done, spp, progress, user, err) != TR_OK ||
+        tr_device_read_film(dev, film, err) != TR_OK) {
+        return TR_ERR;
+    }
+    tr_film_mean(film, half);
+    if (render_chunks(dev, cam, cfg, h1, spp - h1, &done, spp, progress, user, err) != TR_OK ||
+        tr_device_read_film(dev, film, err) != TR_OK) {
+        return TR_ERR;
+    }
+    tr_film_mean(film, ref);
+    *own_mse = tr_image_compare(half, ref, px).mse;
+    return TR_OK;
+}
+
+double tr_image_flicker(const float *a, const float *a_prev, const float *r, const float *r_prev,
+                        size_t pixels) {
+    static const double luma[3] = {0.2126, 0.7152, 0.0722};
+    double s = 0.0;
+    for (size_t i = 0; i < pixels; ++i) {
+        double d = 0.0;
+        for (int k = 0; k < 3; ++k) {
+            const size_t j = 3 * i + (size_t)k;
+            const double va = fmin(fmax(a[j], 0.0), 1.0) - fmin(fmax(a_prev[j], 0.0), 1.0);
+            const double vr = fmin(fmax(r[j], 0.0), 1.0) - fmin(fmax(r_prev[j], 0.0), 1.0);
+            d += luma[k] * (va - vr);
+        }
+        s += d * d;
+    }
+    return pixels ? sqrt(s / (double)pixels) : 0.0;
+}
+
+/* ---- The scorer ------------------------------------------------------------------ */
+
+struct tr_scorer {
+    uint32_t width, height;
+    size_t px;
+    int slots;
+    tr_film film;                 /* the references' read-back */
+    float *ref, *half, *ref_prev; /* 3 floats per pixel */
+    float *prev;                  /* per slot: its previous output */
+    unsigned char *have_prev;     /* per slot: prev holds the last frame's output */
+    int have_ref;                 /* ref holds this frame's reference */
+    int have_ref_prev;            /* ref_prev holds the previous frame's reference */
+    double own;                   /* the reference's own MSE */
+    size_t *idx, nidx;            /* the region's pixels */
+    float *gathered;              /* 3 images of the region: output, reference, half */
+    double region_own;            /* the reference's own MSE over the region */
+};
+
+void tr_scorer_destroy(tr_scorer *s) {
+    if (!s) {
+        return;
+    }
+    tr_film_free(&s->film);
+    free(s->ref);
+    free(s->half);
+    free(s->ref_prev);
+    free(s->prev);
+    free(s->have_prev);
+    free(s->idx);
+    free(s->gathered);
+    free(s);
+}
+
+tr_scorer *tr_scorer_create(uint32_t width, uint32_t height, int slots, tr_error *err) {
+    if (slots < 1 || slots > 64 || tr_film_check_size(width, height, err) != TR_OK) {
+        if (slots < 1 || slots > 64) {
+            tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "scorer: %d slots (1..64)", slots);
+        }
+        return NULL;
+    }
+    tr_scorer *s = calloc(1, sizeof *s);
+    if (!s) {
+        tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "scorer: out of memory");
+        return NULL;
+    }
+    s->width = width;
+    s->height = height;
+    s->px = (size_t)width * height;
+    s->slots = slots;
+    const size_t img = 3 * s->px * sizeof(float);
+    s->ref = malloc(img);
+    s->half = malloc(img);
+    s->ref_prev = malloc(img);
+    s->prev = malloc((size_t)slots * img);
+    s->have_prev = calloc((size_t)slots, 1);
+    s->idx = malloc(s->px * sizeof *s->idx);
+    s->gathered = malloc(3 * img);
+    if (!s->ref || !s->half || !s->ref_prev || !s->prev || !s->have_prev || !s->idx ||
+        !s->gathered) {
+        tr_scorer_destroy(s);
+        tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "scorer: out of memory at %ux%u", width, height);
+        return NULL;
+    }
+    if (tr_film_init(&s->film, width, height, err) != TR_OK) {
+        tr_scorer_destroy(s);
+        return NULL;
+    }
+    return s;
+}
+
+int tr_scorer_reference(tr_scorer *s, tr_device *dev, const tr_camera *cam,
+                        const tr_render_config *cfg, uint32_t spp, tr_error *err) {
+    /* The last reference becomes the previous one; ref and ref_prev trade places. */
+    float *t = s->ref_prev;
+    s->ref_prev = s->ref;
+    s->ref = t;
+    s->nidx = 0;
+    const int had = s->have_ref;
+    s->have_ref = 0;
+    s->have_ref_prev = had;
+    if (tr_reference_render(dev, cam, cfg, spp, &s->film, s->ref, s->half, &s->own, NULL, NULL,
+                            err) != TR_OK) {
+        s->have_ref_prev = 0;
+        memset(s->have_prev, 0, (size_t)s->slots);
+        return TR_ERR;
+    }
+    s->have_ref = 1;
+    return TR_OK;
+}
+
+const float *tr_scorer_reference_rgb(const tr_scorer *s, double *own_mse) {
+    if (own_mse) {
+        *own_mse = s->own;
+    }
+    return s->ref;
+}
+
+int tr_scorer_bias(tr_scorer *s, tr_device *dev, const tr_camera *cam, const tr_render_config *cfg,
+                   uint32_t spp, double *bias_mse, double *own, tr_error *err) {
+    /* The second reference goes where the region's gathered images live (3 images):
+     * nothing there outlives a frame's scoring. */
+    float *other = s->gathered, *half = s->gathered + 3 * s->px;
+    double own2 = 0.0;
+    s->nidx = 0;
+    if (tr_reference_render(dev, cam, cfg, spp, &s->film, other, half, &own2, NULL, NULL, err) !=
+        TR_OK) {
+        return TR_ERR;
+    }
+    *bias_mse = tr_image_compare(s->ref, other, s->px).mse - s->own - own2;
+    *own = s->own + own2;
+    return TR_OK;
+}
+
+/* Pixels idx[0..n) of image a (3 floats each) into out. */
+static void gather(const float *a, const size_t *idx, size_t n, float *out) {
+    for (size_t j = 0; j < n; ++j) {
+        memcpy(out + 3 * j, a + 3 * idx[j], 3 * sizeof *out);
+    }
+}
+
+size_t tr_scorer_region(tr_scorer *s, const uint32_t *ids, uint32_t lo, uint32_t hi) {
+    s->nidx = 0;
+    s->region_own = 0.0;
+    for (size_t i = 0; ids && i < s->px; ++i) {
+        if (ids[i] >= lo && ids[i] < hi) {
+            s->idx[s->nidx++] = i;
+        }
+    }
+    if (s->nidx > 0) {
+        float *ref = s->gathered + 3 * s->px, *half = s->gathered + 6 * s->px;
+        gather(s->ref, s->idx, s->nidx, ref);
+        gather(s->half, s->idx, s->nidx, half);
+        s->region_own = tr_image_compare(half, ref, s->nidx).mse;
+    }
+    return s->nidx;
+}
+
+/* A PSNR from an MSE with the reference's own taken out, floored at 1e-12. */
+static double psnr_less(double mse, double own) {
+    const double m = mse - own;
+    return tr_psnr(m > 1e-12 ? m : 1e-12);
+}
+
+tr_frame_scores tr_scorer_score(tr_scorer *s, int slot, const float *rgb) {
+    tr_frame_scores sc;
+    memset(&sc, 0, sizeof sc);
+    if (slot < 0 || slot >= s->slots) {
+        sc.psnr = sc.ssim = sc.region_psnr = NAN;
+        return sc;
+    }
+    const size_t px = s->px;
+    sc.psnr = psnr_less(tr_image_compare(rgb, s->ref, px).mse, s->own);
+    sc.ssim = tr_ssim(rgb, s->ref, s->width, s->height);
+    float *pm = s->prev + (size_t)slot * 3 * px;
+    sc.flicker = s->have_prev[slot] && s->have_ref_prev
+                     ? tr_image_flicker(rgb, pm, s->ref, s->ref_prev, px)
+                     : 0.0;
+    sc.region_psnr = NAN;
+    if (s->nidx > 0) {
+        gather(rgb, s->idx, s->nidx, s->gathered);
+        sc.region_psnr = psnr_less(tr_image_compare(s->gathered, s->gathered + 3 * px, s->nidx).mse,
+                                   s->region_own);
+    }
+    memcpy(pm, rgb, 3 * px * sizeof *rgb);
+    s->have_prev[slot] = 1;
+    return sc;
+}
+
+int tr_recovery_frames(const tr_frame_scores *frames, uint32_t count, uint32_t before,
+                       uint32_t after, int region, double tolerance, double *steady) {
+    double sum = 0.0;
+    int n = 0;
+    for (uint32_t f = before > 8 ? before - 8 : 0; f < before && f < count; ++f) {
+        const double v = region ? frames[f].region_psnr : frames[f].psnr;
+        if (v == v) {
+            sum += v;
+            ++n;
+        }
+    }
+    *steady = n > 0 ? sum / n : NAN;
+    for (uint32_t f = after; n > 0 && f < count; ++f) {
+        if ((region ? frames[f].region_psnr : frames[f].psnr) >= *steady - tolerance) {
+            return (int)(f - after);
+        }
+    }
+    return -1;
+}
+
+int tr_camera_path(const tr_camera *c0, float diag, uint32_t f, uint32_t frames, uint32_t cut,
+                   tr_camera *out, tr_error *err) {
+    const double t = frames ? (double)f / (double)frames : 0.0;
+    const float sway = (float)sin(2.0 * 3.14159265358979 * t);
+    tr_vec3 pos = c0->pos, dir = c0->dir;
+    float side = 0.03f * diag * sway, fwd = 0.1f * diag * (float)t, yaw = 0.15f * sway, lift = 0;
+    if (cut > 0 && f >= cut) {
+        side += 0.2f * diag;
+        lift = 0.08f * diag;
+        yaw -= 0.3f;
+    }
+    for (int k = 0; k < 3; ++k) {
+        const float *r = &c0->right.x, *u = &c0->up.x, *d = &c0->dir.x;
+        (&pos.x)[k] += r[k] * side + d[k] * fwd + u[k] * lift;
+        (&dir.x)[k] = d[k] + r[k] * yaw;
+    }
+    tr_camera c;
+    if (tr_camera_make(&c, pos, dir, c0->world_up, c0->vertical_fov, c0->near_dist, c0->far_dist,
+                       c0->screen_width, c0->screen_height, err) != TR_OK) {
+        return TR_ERR;
+    }
+    /* tr_camera_make's right is up x dir; c0's may be mirrored (a right-handed scene). */
+    const tr_vec3 r0 = c0->right, r1 = c.right;
+    if (r0.x * r1.x + r0.y * r1.y + r0.z * r1.z < 0.0f) {
+        c.right = tr_vec3_make(-r1.x, -r1.y, -r1.z);
+    }
+    *out = c;
+    return TR_OK;
+}

@@ -1,0 +1,276 @@
+/* test_measure.c - measuring the renderer's error (measure.h).
+ *
+ * 1. tr_reference_render's own-error estimate: two references of independent seeds differ
+ *    by about the sum of their own MSEs (the estimate is unbiased for independent halves);
+ *    the reference is the film of all its samples (bit-identical to one render call).
+ * 2. The scorer: the reference scored against itself has the floor's PSNR, a noisy image
+ *    a finite one that rises with its samples, flicker is 0 at a slot's first frame and
+ *    for a still frame, a region counts its pixels.
+ * 3. tr_image_flicker and tr_recovery_frames on made-up values.
+ * 4. tr_convergence_measure: every method's curve grows in samples and time, the PSNR
+ *    rises, progress can cancel; tr_convergence_reach interpolates in log time.
+ * 5. tr_camera_path: frame 0 without a cut is the start; a cut moves the camera. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "check.h"
+#include "classic_box.h"
+#include "trac0r/trac0r.h"
+
+#define W 32
+#define H 24
+#define PX ((size_t)W * H)
+
+static tr_device *cpu_with(tr_scene *s) {
+    tr_error err;
+    tr_device *dev = tr_device_create("cpu", &err);
+    CHECK(dev != NULL, "%s", err.msg);
+    CHECK(tr_device_upload(dev, s, &err) == TR_OK, "%s", err.msg);
+    return dev;
+}
+
+static void test_reference(void) {
+    tr_error err;
+    tr_scene *s = classic_box(W, H, &err);
+    tr_device *dev = cpu_with(s);
+    tr_film film;
+    CHECK(tr_film_init(&film, W, H, &err) == TR_OK, "%s", err.msg);
+    float *a = malloc(3 * PX * sizeof *a), *b = malloc(3 * PX * sizeof *b);
+    float *half = malloc(3 * PX * sizeof *half);
+    tr_render_config cfg = tr_render_config_default();
+    cfg.threads = 1;
+    double own_a = 0.0, own_b = 0.0;
+    CHECK(tr_reference_render(dev, tr_scene_camera(s), &cfg, 64, &film, a, half, &own_a, NULL, NULL,
+                              &err) == TR_OK,
+          "%s", err.msg);
+    cfg.seed = 99;
+    CHECK(tr_reference_render(dev, tr_scene_camera(s), &cfg, 64, &film, b, half, &own_b, NULL, NULL,
+                              &err) == TR_OK,
+          "%s", err.msg);
+    /* E[MSE(a, b)] = own_a + own_b for independent references; over 768 pixels x 3
+     * channels the ratio's spread is a few per cent, so a factor 1.5 either way is far
+     * outside it while an estimate off by its factor 2 (half against half) is caught. */
+    const double diff = tr_image_compare(a, b, PX).mse;
+    CHECK(own_a > 0.0 && own_b > 0.0, "own %g %g", own_a, own_b);
+    CHECK(diff / (own_a + own_b) > 1.0 / 1.5 && diff / (own_a + own_b) < 1.5, "mse %g, own sum %g",
+          diff, own_a + own_b);
+    /* The reference is the whole film: one render of 64 samples gives its bits. */
+    CHECK(tr_device_clear(dev, &err) == TR_OK, "%s", err.msg);
+    CHECK(tr_device_render(dev, tr_scene_camera(s), &cfg, 0, 64, NULL, NULL, &err) == TR_OK, "%s",
+          err.msg);
+    CHECK(tr_device_read_film(dev, &film, &err) == TR_OK, "%s", err.msg);
+    tr_film_mean(&film, half);
+    CHECK(memcmp(half, b, 3 * PX * sizeof *b) == 0, "reference differs from one render");
+    /* Too few samples and missing buffers are refused. */
+    CHECK(tr_reference_render(dev, tr_scene_camera(s), &cfg, 1, &film, a, half, &own_a, NULL, NULL,
+                              &err) == TR_ERR &&
+              err.code == TR_STATUS_INVALID_ARGUMENT,
+          "spp 1 accepted");
+    free(a);
+    free(b);
+    free(half);
+    tr_film_free(&film);
+    tr_device_destroy(dev);
+    tr_scene_destroy(s);
+}
+
+static int cancel_at(void *user, uint64_t done, uint64_t total) {
+    (void)total;
+    return done >= *(uint64_t *)user;
+}
+
+static void test_scorer(void) {
+    tr_error err;
+    tr_scene *s = classic_box(W, H, &err);
+    tr_device *dev = cpu_with(s);
+    CHECK(tr_scorer_create(W, H, 0, &err) == NULL && err.code == TR_STATUS_INVALID_ARGUMENT,
+          "0 slots accepted");
+    tr_scorer *sc = tr_scorer_create(W, H, 2, &err);
+    CHECK(sc != NULL, "%s", err.msg);
+    tr_render_config cfg = tr_render_config_default();
+    cfg.threads = 1;
+    cfg.seed = 7;
+    CHECK(tr_scorer_reference(sc, dev, tr_scene_camera(s), &cfg, 64, &err) == TR_OK, "%s", err.msg);
+    double own = 0.0;
+    const float *ref = tr_scorer_reference_rgb(sc, &own);
+    float *copy = malloc(3 * PX * sizeof *copy);
+    memcpy(copy, ref, 3 * PX * sizeof *copy);
+    tr_frame_scores sr = tr_scorer_score(sc, 0, copy);
+    CHECK(sr.psnr >= 119.0 && sr.flicker == 0.0 && isnan(sr.region_psnr), "self psnr %g", sr.psnr);
+    /* Noisy images of 1 and 16 samples: finite PSNR, rising with samples. */
+    tr_film film;
+    CHECK(tr_film_init(&film, W, H, &err) == TR_OK, "%s", err.msg);
+    double psnr[2];
+    for (int k = 0; k < 2; ++k) {
+        cfg.seed = 1;
+        CHECK(tr_device_clear(dev, &err) == TR_OK, "%s", err.msg);
+        CHECK(tr_device_render(dev, tr_scene_camera(s), &cfg, 0, k ? 16 : 1, NULL, NULL, &err) ==
+                  TR_OK,
+              "%s", err.msg);
+        CHECK(tr_device_read_film(dev, &film, &err) == TR_OK, "%s", err.msg);
+        tr_film_mean(&film, copy);
+        psnr[k] = tr_scorer_score(sc, 1, copy).psnr;
+    }
+    CHECK(isfinite(psnr[0]) && psnr[1] > psnr[0] + 6.0, "psnr 1 spp %g, 16 spp %g", psnr[0],
+          psnr[1]);
+    /* The next frame, same camera and seed: the reference does not change, neither does
+     * slot 0's output, so its flicker is 0. */
+    cfg.seed = 7;
+    CHECK(tr_scorer_reference(sc, dev, tr_scene_camera(s), &cfg, 64, &err) == TR_OK, "%s", err.msg);
+    memcpy(copy, tr_scorer_reference_rgb(sc, NULL), 3 * PX * sizeof *copy);
+    CHECK(tr_scorer_score(sc, 0, copy).flicker == 0.0, "still frame flickers");
+    /* A region of the ids 1..2 of a made-up id pass: two pixels. */
+    uint32_t *ids = calloc(PX, sizeof *ids);
+    ids[5] = 1;
+    ids[17] = 2;
+    ids[40] = 3;
+    CHECK(tr_scorer_region(sc, ids, 1, 3) == 2, "region count");
+    CHECK(!isnan(tr_scorer_score(sc, 0, copy).region_psnr), "region psnr");
+    CHECK(tr_scorer_region(sc, NULL, 1, 3) == 0, "no ids, no region");
+    /* A cancelled reference fails with its status. */
+    uint64_t stop = 16;
+    CHECK(tr_reference_render(dev, tr_scene_camera(s), &cfg, 64, &film, copy, copy, &own, cancel_at,
+                              &stop, &err) == TR_ERR &&
+              err.code == TR_STATUS_CANCELLED,
+          "cancel");
+    free(ids);
+    free(copy);
+    tr_film_free(&film);
+    tr_scorer_destroy(sc);
+    tr_device_destroy(dev);
+    tr_scene_destroy(s);
+}
+
+static void test_flicker_recovery(void) {
+    /* Two pixels: the output changes by +0.2 in every channel, the reference by +0.1:
+     * flicker is the luminance of 0.1. */
+    const float a0[6] = {0.1f, 0.1f, 0.1f, 0.5f, 0.5f, 0.5f};
+    const float a1[6] = {0.3f, 0.3f, 0.3f, 0.7f, 0.7f, 0.7f};
+    const float r0[6] = {0.1f, 0.1f, 0.1f, 0.5f, 0.5f, 0.5f};
+    const float r1[6] = {0.2f, 0.2f, 0.2f, 0.6f, 0.6f, 0.6f};
+    const double f = tr_image_flicker(a1, a0, r1, r0, 2);
+    CHECK(fabs(f - 0.1) < 1e-6, "flicker %g", f);
+    CHECK(tr_image_flicker(a1, a0, a1, a0, 2) == 0.0, "same change flickers");
+    /* PSNR 30 for frames 0..9, a cut at 10 drops it to 20, back to 29.6 at 13. */
+    tr_frame_scores fr[16];
+    for (int i = 0; i < 16; ++i) {
+        fr[i].psnr = i < 10 ? 30.0 : i < 13 ? 20.0 : 29.6;
+        fr[i].region_psnr = i == 3 ? NAN : 10.0 + (i >= 12);
+    }
+    double steady = 0.0;
+    CHECK(tr_recovery_frames(fr, 16, 10, 10, 0, 0.5, &steady) == 3 && steady == 30.0, "recovery %g",
+          steady);
+    CHECK(tr_recovery_frames(fr, 16, 10, 10, 0, 0.1, &steady) == -1, "never");
+    /* The region's steady value skips the frame without one; from frame 11 on. */
+    CHECK(tr_recovery_frames(fr, 16, 8, 11, 1, 0.0, &steady) == 0 && steady == 10.0, "region");
+    CHECK(tr_recovery_frames(fr, 16, 0, 0, 0, 0.5, &steady) == -1 && isnan(steady), "no steady");
+}
+
+static int count_progress(void *user, uint64_t done, uint64_t total) {
+    int *calls = user;
+    ++*calls;
+    return done > total; /* never: used is at most total */
+}
+
+static int cancel_progress(void *user, uint64_t done, uint64_t total) {
+    (void)user;
+    (void)total;
+    return done > 0;
+}
+
+static void test_convergence(void) {
+    tr_error err;
+    tr_scene *s = classic_box(W, H, &err);
+    tr_device *devs[2] = {cpu_with(s), cpu_with(s)};
+    tr_render_config cfgs[2] = {tr_render_config_default(), tr_render_config_default()};
+    cfgs[0].integrator = TR_INTEGRATOR_NAIVE;
+    cfgs[0].threads = cfgs[1].threads = 1;
+    tr_film film;
+    CHECK(tr_film_init(&film, W, H, &err) == TR_OK, "%s", err.msg);
+    float *ref = malloc(3 * PX * sizeof *ref), *half = malloc(3 * PX * sizeof *half);
+    double own = 0.0;
+    tr_render_config rcfg = cfgs[1];
+    rcfg.seed = 1234;
+    CHECK(tr_reference_render(devs[1], tr_scene_camera(s), &rcfg, 256, &film, ref, half, &own, NULL,
+                              NULL, &err) == TR_OK,
+          "%s", err.msg);
+    int calls = 0;
+    tr_convergence_desc d = {.scene = s,
+                             .methods = 2,
+                             .devs = devs,
+                             .configs = cfgs,
+                             .ref = ref,
+                             .ref_mse = own,
+                             .budget = 0.05,
+                             .progress = count_progress,
+                             .user = &calls};
+    tr_convergence_run *runs = calloc(2, sizeof *runs);
+    CHECK(tr_convergence_measure(&d, runs, &err) == TR_OK, "%s", err.msg);
+    CHECK(calls > 0, "no progress");
+    for (int m = 0; m < 2; ++m) {
+        const tr_convergence_run *r = &runs[m];
+        CHECK(r->n >= 2 && r->integrator == cfgs[m].integrator && r->width == W,
+              "run %d: %d points", m, r->n);
+        CHECK(r->pt[0].spp == 1, "first point at %u spp", r->pt[0].spp);
+        for (int k = 1; k < r->n; ++k) {
+            CHECK(r->pt[k].spp > r->pt[k - 1].spp && r->pt[k].seconds >= r->pt[k - 1].seconds,
+                  "run %d point %d", m, k);
+        }
+        CHECK(r->pt[r->n - 1].psnr > r->pt[0].psnr + 3.0, "run %d: %g -> %g dB", m, r->pt[0].psnr,
+              r->pt[r->n - 1].psnr);
+    }
+    d.progress = cancel_progress;
+    CHECK(tr_convergence_measure(&d, runs, &err) == TR_ERR && err.code == TR_STATUS_CANCELLED,
+          "cancel");
+    d.methods = 0;
+    CHECK(tr_convergence_measure(&d, runs, &err) == TR_ERR &&
+              err.code == TR_STATUS_INVALID_ARGUMENT,
+          "0 methods");
+    /* reach: 20 dB at 1 s, 30 dB at 100 s: 25 dB halfway in log time, 10 s. */
+    memset(&runs[0], 0, sizeof runs[0]);
+    runs[0].n = 2;
+    runs[0].pt[0].seconds = 1.0;
+    runs[0].pt[0].psnr = 20.0;
+    runs[0].pt[0].spp = 1;
+    runs[0].pt[1].seconds = 100.0;
+    runs[0].pt[1].psnr = 30.0;
+    runs[0].pt[1].spp = 100;
+    CHECK(fabs(tr_convergence_reach(&runs[0], 25.0, 0) - 10.0) < 1e-9, "reach time");
+    CHECK(tr_convergence_reach(&runs[0], 15.0, 1) == 1.0, "reach at the first point");
+    CHECK(tr_convergence_reach(&runs[0], 31.0, 0) < 0.0, "never reached");
+    free(runs);
+    free(ref);
+    free(half);
+    tr_film_free(&film);
+    tr_device_destroy(devs[0]);
+    tr_device_destroy(devs[1]);
+    tr_scene_destroy(s);
+}
+
+static void test_camera_path(void) {
+    tr_error err;
+    tr_scene *s = classic_box(W, H, &err);
+    const tr_camera *c0 = tr_scene_camera(s);
+    tr_camera c;
+    CHECK(tr_camera_path(c0, 10.0f, 0, 8, 0, &c, &err) == TR_OK, "%s", err.msg);
+    CHECK(fabsf(c.pos.x - c0->pos.x) < 1e-5f && fabsf(c.pos.z - c0->pos.z) < 1e-5f, "start");
+    CHECK(c.right.x * c0->right.x + c.right.y * c0->right.y + c.right.z * c0->right.z > 0.9f,
+          "handedness");
+    tr_camera before, after;
+    CHECK(tr_camera_path(c0, 10.0f, 3, 8, 4, &before, &err) == TR_OK, "%s", err.msg);
+    CHECK(tr_camera_path(c0, 10.0f, 4, 8, 4, &after, &err) == TR_OK, "%s", err.msg);
+    const float dx = after.pos.x - before.pos.x, dy = after.pos.y - before.pos.y,
+                dz = after.pos.z - before.pos.z;
+    CHECK(sqrtf(dx * dx + dy * dy + dz * dz) > 1.5f, "the cut does not move the camera");
+    tr_scene_destroy(s);
+}
+
+int main(void) {
+    test_reference();
+    test_scorer();
+    test_flicker_recovery();
+    test_convergence();
+    test_camera_path();
+    return check_finish("test_measure");
+}
