@@ -9,7 +9,9 @@
  * 3. tr_image_flicker and tr_recovery_frames on made-up values.
  * 4. tr_convergence_measure: every method's curve grows in samples and time, the PSNR
  *    rises, progress can cancel; tr_convergence_reach interpolates in log time.
- * 5. tr_camera_path: frame 0 without a cut is the start; a cut moves the camera. */
+ * 5. tr_camera_path: frame 0 without a cut is the start; a cut moves the camera.
+ * 6. Ray sets: one primary ray per pixel, a bounce per primary hit, a shadow ray per
+ *    bounce at most; every structure finds the same hits on them. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -266,11 +268,46 @@ static void test_camera_path(void) {
     tr_scene_destroy(s);
 }
 
+static void test_ray_sets(void) {
+    tr_error err;
+    tr_scene *s = classic_box(W, H, &err);
+    CHECK(tr_scene_commit(s, TR_ACCEL_TYPE_BVH, &err) == TR_OK, "%s", err.msg);
+    tr_ray_sets *r = tr_ray_sets_create(s, 5, &err);
+    CHECK(r != NULL, "%s", err.msg);
+    const uint32_t np = tr_ray_sets_count(r, TR_RAY_PRIMARY);
+    const uint32_t nd = tr_ray_sets_count(r, TR_RAY_DIFFUSE);
+    const uint32_t ns = tr_ray_sets_count(r, TR_RAY_SHADOW);
+    CHECK(np == PX && nd > PX / 2 && nd <= np && ns > 0 && ns <= nd, "counts %u %u %u", np, nd, ns);
+    CHECK(tr_ray_sets_count(r, TR_RAY_KINDS) == 0 && tr_ray_kind_name(TR_RAY_KINDS) == NULL,
+          "kind out of range");
+    uint64_t hits[2][TR_RAY_KINDS];
+    const tr_accel_type types[2] = {TR_ACCEL_TYPE_BVH, TR_ACCEL_TYPE_FLAT};
+    for (int a = 0; a < 2; ++a) {
+        CHECK(tr_scene_commit(s, types[a], &err) == TR_OK, "%s", err.msg);
+        for (int k = 0; k < TR_RAY_KINDS; ++k) {
+            CHECK(tr_ray_sets_trace(r, s, k, 2, 2, &hits[a][k]) >= 0.0, "trace");
+        }
+    }
+    /* Most of the frame is the box; a bounce inside the box hits its walls. */
+    CHECK(hits[0][TR_RAY_PRIMARY] > np / 2 && hits[0][TR_RAY_PRIMARY] <= np,
+          "primary hits %llu of %u", (unsigned long long)hits[0][TR_RAY_PRIMARY], np);
+    for (int k = 0; k < TR_RAY_KINDS; ++k) {
+        CHECK(hits[0][k] == hits[1][k], "%s: bvh %llu, flat %llu", tr_ray_kind_name(k),
+              (unsigned long long)hits[0][k], (unsigned long long)hits[1][k]);
+    }
+    CHECK(tr_ray_sets_reps(1.0) == 1 && tr_ray_sets_reps(0.001) == 51 &&
+              tr_ray_sets_reps(0.0) == 1000,
+          "reps");
+    tr_ray_sets_destroy(r);
+    tr_scene_destroy(s);
+}
+
 int main(void) {
     test_reference();
     test_scorer();
     test_flicker_recovery();
     test_convergence();
     test_camera_path();
+    test_ray_sets();
     return check_finish("test_measure");
 }

@@ -142,6 +142,31 @@ int tr_convergence_measure(const tr_convergence_desc *d, tr_convergence_run *run
  * never. */
 double tr_convergence_reach(const tr_convergence_run *r, double db, int use_spp);
 
+/* ---- Ray throughput ------------------------------------------------------------ */
+
+/* The kinds of rays of a set: one primary ray per pixel through a jittered position
+ * (coherent), at each primary hit a cosine-weighted bounce (incoherent) and a shadow ray
+ * (any hit) towards a random point of an emitter, area-weighted. */
+enum { TR_RAY_PRIMARY, TR_RAY_DIFFUSE, TR_RAY_SHADOW, TR_RAY_KINDS };
+
+typedef struct tr_ray_sets tr_ray_sets;
+
+/* The three sets of the scene's camera, traced once with the scene's structure: every
+ * structure then traces the same rays. NULL on failure. */
+tr_ray_sets *tr_ray_sets_create(const tr_scene *scene, uint64_t seed, tr_error *err);
+void tr_ray_sets_destroy(tr_ray_sets *r);
+uint32_t tr_ray_sets_count(const tr_ray_sets *r, int kind);
+/* "primary", "diffuse", "shadow"; NULL for another kind. */
+const char *tr_ray_kind_name(int kind);
+/* Seconds to trace every ray of a set `reps` times with the scene's committed structure
+ * on `threads` threads (0: tr_default_threads); the hits of one pass into *hits, so that
+ * the work is done and structures can be cross-checked. */
+double tr_ray_sets_trace(const tr_ray_sets *r, const tr_scene *scene, int kind, int threads,
+                         int reps, uint64_t *hits);
+/* How often a timed run traces a set whose one pass took `one_pass_seconds`, so that it
+ * lasts at least 50 ms (a run of a few ms is at the mercy of the scheduler), 1..1000. */
+int tr_ray_sets_reps(double one_pass_seconds);
+
 /* ---- Camera paths --------------------------------------------------------------- */
 
 /* Frame f of `frames` on the benchmark's path from camera c0 through a scene of bounding
