@@ -145,6 +145,58 @@ int tr_session_render_tile(tr_session *s, uint32_t k, int (*cancel)(void *user),
  * session's film, into this session's film. */
 int tr_session_put_tile(tr_session *s, uint32_t k, const void *pixels, size_t size, tr_error *err);
 
+/* ---- One session shared by several processes -------------------------------------- */
+
+/* How the processes of a shared render reach each other: the library makes and reads the
+ * messages, the program carries them (MPI, sockets). Tags are 1..TR_SHARE_TAGS; a program
+ * may use higher tags of its own before and after tr_session_share. */
+#define TR_SHARE_TAGS 5
+typedef struct tr_transport {
+    int rank, size; /* this process and how many there are; rank 0 coordinates */
+    /* Sends `size` bytes to rank `to` as message kind `tag`. TR_OK or TR_ERR. */
+    int (*send)(void *user, int to, int tag, const void *data, size_t size);
+    /* The next message for this process from rank `from` (-1: any) of kind `tag` (-1:
+     * any). Without `block` it returns 0 at once when none is waiting (a blocking wait
+     * should not spin: the other ranks may share the cores). 1: *src, *tag_out, and
+     * *data (malloc'ed; the library frees it) of *size bytes. Negative on failure. */
+    int (*recv)(void *user, int from, int tag, int block, int *src, int *tag_out, void **data,
+                size_t *size);
+    void *user;
+} tr_transport;
+
+/* A shared render's settings. Zero-initialised: no checkpoints, no stop, no progress. */
+typedef struct tr_share_desc {
+    int checkpoint;             /* rank 0 writes the session's checkpoint (desc.checkpoint) */
+    double checkpoint_interval; /* every this many seconds (0: whenever it can) */
+    int (*stop)(void *user);    /* asked often: nonzero hands out no more tiles and drops
+                                   the tiles under way (a signal) */
+    /* rank 0: tiles finished of those to do, after each; may be NULL */
+    void (*progress)(void *user, uint32_t done, uint32_t total);
+    void *user;
+} tr_share_desc;
+
+/* Where a rank's time went, and what it did. */
+typedef struct tr_share_stats {
+    double render, wait, serve, pixels, total; /* seconds: rendering tiles, blocked on a
+                                                  message, answering between tiles (rank
+                                                  0), reading and moving pixels; all */
+    uint32_t tiles;                            /* tiles this rank rendered */
+    uint64_t rays;     /* rank 0: of every rank's tiles; others: their own */
+    uint32_t finished; /* rank 0: tiles whose pixels the film holds in full (a checkpoint's
+                          included) */
+} tr_share_stats;
+
+/* Renders the session's tile plan shared between the transport's ranks, each with its
+ * own session of the same render (tr_session_identity agrees: check it before). Rank 0
+ * hands the tiles out one at a time as ranks finish (each worker holds two, one near the
+ * end) and renders tiles itself, answering between the pieces of its tile; workers send
+ * their pixels in batches (at each checkpoint interval and at the end). Tiles never
+ * overlap, so rank 0's film ends bit-identical to a single process's, whatever the ranks
+ * and whichever took which tile. An error on any rank stops the hand-out; rank 0 fails with
+ * the first one ("rank N: ..."). Every rank returns once the hand-out is over. */
+int tr_session_share(tr_session *s, const tr_transport *t, const tr_share_desc *d,
+                     tr_share_stats *stats, tr_error *err);
+
 /* The error estimate adaptive sampling gives one pixel: the L1 distance between the means
  * of all N samples (full) and of the first N/2 (half), over the square root of full's sum,
  * so that the threshold reads as a relative error, looser where the image is dark (the
