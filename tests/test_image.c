@@ -104,6 +104,18 @@ static void test_roundtrip(void) {
         }
     }
     CHECK(diff == 0, "PNG round trip differs in %d pixels", diff);
+    /* tr_image_read: a PNG comes back decoded to linear, a PFM as it is. */
+    tr_image lin;
+    CHECK(tr_image_read(&lin, path_in("a.PNG"), &err) == TR_OK, "%s", err.msg);
+    for (size_t i = 0; i < 3u * 13u * 7u; ++i) {
+        diff += lin.rgb[i] != tr_srgb_to_linear(img.rgb[i]);
+    }
+    CHECK(diff == 0, "tr_image_read's PNG differs in %d values", diff);
+    tr_image_free(&lin);
+    CHECK(tr_image_read(&lin, path_in("a.pfm"), &err) == TR_OK && lin.width == 13, "%s", err.msg);
+    tr_image_free(&lin);
+    CHECK_STATUS(tr_image_read(&lin, path_in("a.bmp"), &err), err, TR_STATUS_UNSUPPORTED,
+                 "read an unknown extension");
     tr_image_free(&img);
     CHECK(files_in_dir() == 2, "%d files, expected a.pfm and a.PNG only", files_in_dir());
 

@@ -9,7 +9,8 @@
  * 3. tr_image_flicker and tr_recovery_frames on made-up values.
  * 4. tr_convergence_measure: every method's curve grows in samples and time, the PSNR
  *    rises, progress can cancel; tr_convergence_reach interpolates in log time.
- * 5. tr_camera_path: frame 0 without a cut is the start; a cut moves the camera.
+ * 5. tr_camera_path: frame 0 without a cut is the start; a cut moves the camera; the demo
+ *    animation's sway.
  * 6. Ray sets: one primary ray per pixel, a bounce per primary hit, a shadow ray per
  *    bounce at most; every structure finds the same hits on them. */
 #include <math.h>
@@ -265,6 +266,18 @@ static void test_camera_path(void) {
     const float dx = after.pos.x - before.pos.x, dy = after.pos.y - before.pos.y,
                 dz = after.pos.z - before.pos.z;
     CHECK(sqrtf(dx * dx + dy * dy + dz * dz) > 1.5f, "the cut does not move the camera");
+    /* The sway of the demo animation: frame 0 moves nothing, frame 15 a quarter of the
+     * last shape's width along x (the sine's peak). */
+    const uint32_t last = tr_scene_shape_count(s) - 1;
+    const tr_aabb b0 = tr_scene_shape_box(s, last);
+    CHECK(tr_scene_animate_sway(s, 0, &err) == TR_OK, "%s", err.msg);
+    for (uint32_t f = 1; f <= 15; ++f) {
+        CHECK(tr_scene_animate_sway(s, f, &err) == TR_OK, "%s", err.msg);
+    }
+    const tr_aabb b1 = tr_scene_shape_box(s, last);
+    CHECK_NEAR(b1.min.x - b0.min.x, 0.25 * (b0.max.x - b0.min.x), 1e-3 * (b0.max.x - b0.min.x),
+               "sway at frame 15");
+    CHECK_NEAR(b1.min.y, b0.min.y, 0.0, "sway stays in x");
     tr_scene_destroy(s);
 }
 

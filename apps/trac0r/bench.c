@@ -137,7 +137,7 @@ static int frame_open(frame_bench *b) {
            b->c.scene, b->c.width, b->c.height, tr_integrator_name(b->c.integrator),
            b->c.max_depth ? b->c.max_depth : tr_default_max_depth(b->c.integrator), b->be.name,
            tr_scene_triangle_count(b->scene), accel);
-    if (cli_backend_is_cpu(&b->be)) {
+    if (tr_device_caps(b->be.dev) & TR_DEVICE_CAP_HOST) {
         return CLI_OK;
     }
     cli_common cc = b->c;
@@ -149,7 +149,7 @@ static int frame_open(frame_bench *b) {
 static int frame_update(frame_bench *b, int f) {
     tr_error err;
     const double t0 = tr_time_now();
-    if (cli_animate(b->scene, (uint32_t)f, &err) != TR_OK ||
+    if (tr_scene_animate_sway(b->scene, (uint32_t)f, &err) != TR_OK ||
         tr_scene_update(b->scene, NULL, &err) != TR_OK) {
         return bench_failed(&b->bar, &b->a, "--animate: ", &err);
     }
@@ -161,8 +161,8 @@ static int frame_update(frame_bench *b, int f) {
     if (f > 0) {
         b->update_times[f - 1] = tr_time_now() - t0;
     }
-    return cli_backend_clear(&b->be, &err) != TR_OK ? bench_failed(&b->bar, &b->a, "", &err)
-                                                    : CLI_OK;
+    return tr_device_clear(b->be.dev, &err) != TR_OK ? bench_failed(&b->bar, &b->a, "", &err)
+                                                     : CLI_OK;
 }
 
 /* Frame f (0: the warm-up, not timed) on the device, and on the CPU beside it. */
@@ -173,7 +173,8 @@ static int frame_render(frame_bench *b, int f) {
     if (rc != CLI_OK) {
         return rc;
     }
-    if (cli_backend_frame(&b->be, b->scene, &b->cfg, (uint32_t)f, &st, &err) != TR_OK) {
+    if (tr_device_render(b->be.dev, tr_scene_camera(b->scene), &b->cfg, (uint32_t)f, 1, NULL, &st,
+                         &err) != TR_OK) {
         return bench_failed(&b->bar, &b->a, "", &err);
     }
     if (f > 0) {
@@ -181,8 +182,8 @@ static int frame_render(frame_bench *b, int f) {
         b->rays += st.rays;
         b->total += st.seconds;
     }
-    if (b->cpu.dev &&
-        cli_backend_frame(&b->cpu, b->scene, &b->cfg, (uint32_t)f, &st, &err) != TR_OK) {
+    if (b->cpu.dev && tr_device_render(b->cpu.dev, tr_scene_camera(b->scene), &b->cfg, (uint32_t)f,
+                                       1, NULL, &st, &err) != TR_OK) {
         return bench_failed(&b->bar, &b->a, "", &err);
     }
     if (b->cpu.dev && f > 0) {
@@ -412,14 +413,15 @@ static int cx_point(cx_bench *b, tr_scene *scene, int level, int k) {
     if (rc != CLI_OK) {
         return rc;
     }
-    if (cli_backend_clear(&b->be, &err) != TR_OK) {
+    if (tr_device_clear(b->be.dev, &err) != TR_OK) {
         return bench_failed(&b->bar, &b->a, "", &err);
     }
     double times[CX_MAX_FRAMES];
     int n = 0;
     for (int f = 0; f <= b->frames; ++f) {
         tr_render_stats st;
-        if (cli_backend_frame(&b->be, scene, &b->cfg, (uint32_t)f, &st, &err) != TR_OK) {
+        if (tr_device_render(b->be.dev, tr_scene_camera(scene), &b->cfg, (uint32_t)f, 1, NULL, &st,
+                             &err) != TR_OK) {
             return bench_failed(&b->bar, &b->a, "", &err);
         }
         if (st.seconds > b->limit) {

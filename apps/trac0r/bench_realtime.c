@@ -519,7 +519,7 @@ static int run_frame(rt_run *r, uint32_t f) {
         /* Outside the timed render: the scene's update is not the reconstruction's. Its
          * own frame count: 1 at the first frame it moves, 0 (no move) outside. */
         const uint32_t af = f >= o->anim_from && f < o->anim_until ? f - o->anim_from + 1 : 0;
-        if (cli_animate(r->scene, af, &err) != TR_OK ||
+        if (tr_scene_animate_sway(r->scene, af, &err) != TR_OK ||
             tr_scene_update(r->scene, NULL, &err) != TR_OK) {
             fprintf(stderr, "trac0r bench realtime: --animate: frame %u: %s\n", f, err.msg);
             return CLI_FAILURE;

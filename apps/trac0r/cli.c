@@ -432,23 +432,6 @@ int cli_recon_option(cli_args *a, tr_recon_params *p) {
     return -1;
 }
 
-static double animate_offset(double width, uint32_t frame) {
-    const double two_pi = 6.283185307179586;
-    return 0.25 * width * sin(two_pi * (double)(frame % 60u) / 60.0);
-}
-
-int cli_animate(tr_scene *s, uint32_t frame, tr_error *err) {
-    const uint32_t shapes = tr_scene_shape_count(s);
-    if (shapes == 0 || frame == 0) {
-        return TR_OK;
-    }
-    const uint32_t shape = shapes - 1;
-    const tr_aabb box = tr_scene_shape_box(s, shape);
-    const double width = box.max.x - box.min.x;
-    const double dx = animate_offset(width, frame) - animate_offset(width, frame - 1);
-    return tr_scene_move_shape(s, shape, tr_vec3_make((float)dx, 0.0f, 0.0f), err);
-}
-
 int cli_scene_is_builtin(const char *scene) {
     /* "builtin:NAME", or a bare name: scene files need a '/' or '.' in their path. */
     return strncmp(scene, "builtin:", 8) == 0 || (!strchr(scene, '/') && !strchr(scene, '.'));

@@ -101,10 +101,6 @@ int cli_load_scene(const cli_args *a, const cli_common *c, tr_scene *scene);
  * '/' or '.'; anything else is a scene file's path (write ./scene for a file without
  * an extension). */
 int cli_scene_is_builtin(const char *scene);
-/* --animate (bench frame, view): the scene's last shape sways along x, a quarter of its
- * width either way, one period per 60 frames. Moves it from its place in frame f - 1 to
- * its place in frame f (frame 0: where it was built); tr_scene_update must follow. */
-int cli_animate(tr_scene *s, uint32_t frame, tr_error *err);
 
 /* cli_load_scene that also applies a scene file's render defaults to the options the
  * command line did not give (c is updated) and returns the file's settings in *file

@@ -7,29 +7,6 @@
 
 #include "cli.h"
 #include "commands.h"
-#include "compare.h"
-
-int compare_load(const char *path, tr_image *img, tr_error *err) {
-    switch (tr_image_format_from_path(path)) {
-    case TR_IMAGE_PFM:
-        return tr_image_read_pfm(img, path, err);
-    case TR_IMAGE_EXR:
-        return tr_image_read_exr(img, path, NULL, err);
-    case TR_IMAGE_PNG: {
-        if (tr_image_read_png(img, path, err) != TR_OK) {
-            return TR_ERR;
-        }
-        size_t n = 3 * (size_t)img->width * img->height;
-        for (size_t i = 0; i < n; ++i) {
-            img->rgb[i] = tr_srgb_to_linear(img->rgb[i]);
-        }
-        return TR_OK;
-    }
-    default:
-        return tr_error_set(err, TR_STATUS_UNSUPPORTED,
-                            "%s: unknown image format (expected .pfm, .exr or .png)", path);
-    }
-}
 
 /* A perceptually ordered false-colour ramp (black, blue, magenta, orange, yellow,
  * white) for t in [0,1], returned as linear RGB for the PNG writer to encode. */
@@ -110,7 +87,7 @@ int cmd_compare(int argc, char **argv) {
     tr_image img[2];
     memset(img, 0, sizeof img);
     for (int k = 0; k < 2; ++k) {
-        if (compare_load(paths[k], &img[k], &err) != TR_OK) {
+        if (tr_image_read(&img[k], paths[k], &err) != TR_OK) {
             tr_image_free(&img[0]);
             return cli_error(&a, "%s", err.msg);
         }

@@ -87,23 +87,6 @@ int cli_backend_upload(const cli_args *a, cli_backend *be, const tr_scene *scene
     return CLI_OK;
 }
 
-int cli_backend_frame(cli_backend *be, const tr_scene *scene, const tr_render_config *cfg,
-                      uint32_t sample, tr_render_stats *stats, tr_error *err) {
-    return tr_device_render(be->dev, tr_scene_camera(scene), cfg, sample, 1, NULL, stats, err);
-}
-
-int cli_backend_read(cli_backend *be, tr_film *film, tr_error *err) {
-    return tr_device_read_film(be->dev, film, err);
-}
-
-int cli_backend_clear(cli_backend *be, tr_error *err) {
-    return tr_device_clear(be->dev, err);
-}
-
-int cli_backend_is_cpu(const cli_backend *be) {
-    return (tr_device_caps(be->dev) & TR_DEVICE_CAP_HOST) != 0u;
-}
-
 void cli_backend_close(cli_backend *be) {
     tr_device_destroy(be->dev);
     be->dev = NULL;

@@ -24,15 +24,6 @@ int cli_backend_open(const cli_args *a, const cli_common *c, const tr_scene *sce
                      cli_backend *be);
 /* Hands a new or changed scene to the device. Same statuses. */
 int cli_backend_upload(const cli_args *a, cli_backend *be, const tr_scene *scene);
-/* One sample per pixel (number `sample`) of the scene's camera into the device's film. */
-int cli_backend_frame(cli_backend *be, const tr_scene *scene, const tr_render_config *cfg,
-                      uint32_t sample, tr_render_stats *stats, tr_error *err);
-/* Copies the device's film into `film`. */
-int cli_backend_read(cli_backend *be, tr_film *film, tr_error *err);
-/* Forgets the samples of the device's film. */
-int cli_backend_clear(cli_backend *be, tr_error *err);
-/* Whether frames run on the host's CPU threads (TR_DEVICE_CAP_HOST). */
-int cli_backend_is_cpu(const cli_backend *be);
 void cli_backend_close(cli_backend *be);
 
 /* The render config the common options describe (max depth, seed, threads, integrator). */

@@ -82,13 +82,14 @@ static int render_frames(const cli_args *a, const view_options *o, const tr_scen
     tr_error err;
     const double t0 = tr_time_now();
     for (uint32_t s = 0; s < frames; ++s) {
-        if (cli_backend_frame(be, scene, &cfg, s, NULL, &err) != TR_OK) {
+        if (tr_device_render(be->dev, tr_scene_camera(scene), &cfg, s, 1, NULL, NULL, &err) !=
+            TR_OK) {
             fprintf(stderr, "trac0r %s: %s\n", a->cmd, err.msg);
             return CLI_FAILURE;
         }
     }
     /* The device's film comes back once, inside the timed span (as a displayed frame would). */
-    if (cli_backend_read(be, film, &err) != TR_OK) {
+    if (tr_device_read_film(be->dev, film, &err) != TR_OK) {
         fprintf(stderr, "trac0r %s: %s\n", a->cmd, err.msg);
         return CLI_FAILURE;
     }

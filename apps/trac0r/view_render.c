@@ -63,7 +63,7 @@ static void take_shot(view_renderer *r, uint32_t spp) {
  * shape and uploads the scene. */
 static int animate_scene(view_renderer *r, tr_error *err) {
     const double t0 = tr_time_now();
-    if (cli_animate(r->scene, (uint32_t)(r->updates + 1), err) != TR_OK ||
+    if (tr_scene_animate_sway(r->scene, (uint32_t)(r->updates + 1), err) != TR_OK ||
         tr_scene_update(r->scene, NULL, err) != TR_OK ||
         tr_device_upload(r->dev, r->scene, err) != TR_OK) {
         return TR_ERR;

@@ -33,7 +33,7 @@
 
 typedef struct view_renderer {
     tr_scene *scene; /* changed only by this thread, under mu, when animating */
-    int animate;     /* move the scene's last shape before every frame (cli_animate) */
+    int animate;     /* move the scene's last shape before every frame (tr_scene_animate_sway) */
     tr_device *dev;  /* renders there (the scene uploaded) */
     tr_render_config cfg;
     uint32_t max_spp; /* stop accumulating here (0: never stop) */

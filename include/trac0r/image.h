@@ -56,6 +56,9 @@ int tr_image_read_png(tr_image *img, const char *path, tr_error *err);
 /* Reads layer `layer`'s channels of an OpenEXR image as floats (NULL: the unnamed layer,
  * R, G, B): LAYER.R/G/B, else LAYER.X/Y/Z, else LAYER.Z in all three. Scanline images. */
 int tr_image_read_exr(tr_image *img, const char *path, const char *layer, tr_error *err);
+/* Reads an image as linear RGB by its extension: .pfm and .exr (its R, G, B) as they are,
+ * .png decoded from sRGB to linear. TR_STATUS_UNSUPPORTED for another extension. */
+int tr_image_read(tr_image *img, const char *path, tr_error *err);
 void tr_image_free(tr_image *img);
 
 #endif

@@ -120,6 +120,11 @@ uint64_t tr_scene_generation(const tr_scene *s);
  * `shape` (its triangles and its box in the flat structure) by `delta`. Areas, normals and
  * the emitter table stay valid; the committed structure is stale until tr_scene_update. */
 int tr_scene_move_shape(tr_scene *s, uint32_t shape, tr_vec3 delta, tr_error *err);
+/* The demonstration animation of `trac0r view --animate` and the benchmarks: the scene's
+ * last shape sways along x, a quarter of its width either way, one period per 60 frames.
+ * Moves it from its place in frame f - 1 to its place in frame f (frame 0: where it was
+ * built; nothing moves); tr_scene_update must follow. */
+int tr_scene_animate_sway(tr_scene *s, uint32_t frame, tr_error *err);
 /* Motion vectors for temporal reconstruction (tr_recon_frame_moving): how far each
  * primitive moved through tr_scene_move_shape since the last call, into motion[0, n) with
  * n = tr_scene_triangle_count(s) + 1, indexed as the id pass numbers primitives (triangle

@@ -318,3 +318,25 @@ int tr_image_read_png(tr_image *img, const char *path, tr_error *err) {
     free(buf);
     return TR_OK;
 }
+
+int tr_image_read(tr_image *img, const char *path, tr_error *err) {
+    switch (tr_image_format_from_path(path)) {
+    case TR_IMAGE_PFM:
+        return tr_image_read_pfm(img, path, err);
+    case TR_IMAGE_EXR:
+        return tr_image_read_exr(img, path, NULL, err);
+    case TR_IMAGE_PNG: {
+        if (tr_image_read_png(img, path, err) != TR_OK) {
+            return TR_ERR;
+        }
+        const size_t n = 3 * (size_t)img->width * img->height;
+        for (size_t i = 0; i < n; ++i) {
+            img->rgb[i] = tr_srgb_to_linear(img->rgb[i]);
+        }
+        return TR_OK;
+    }
+    default:
+        return tr_error_set(err, TR_STATUS_UNSUPPORTED,
+                            "%.200s: unknown image format (expected .pfm, .exr or .png)", path);
+    }
+}

@@ -845,3 +845,20 @@ int tr_scene_bvh_node(const tr_scene *s, uint32_t i, tr_aabb *box, uint32_t *fir
     }
     return n->count == 0;
 }
+
+static double sway_offset(double width, uint32_t frame) {
+    const double two_pi = 6.283185307179586;
+    return 0.25 * width * sin(two_pi * (double)(frame % 60u) / 60.0);
+}
+
+int tr_scene_animate_sway(tr_scene *s, uint32_t frame, tr_error *err) {
+    const uint32_t shapes = tr_scene_shape_count(s);
+    if (shapes == 0 || frame == 0) {
+        return TR_OK;
+    }
+    const uint32_t shape = shapes - 1;
+    const tr_aabb box = tr_scene_shape_box(s, shape);
+    const double width = box.max.x - box.min.x;
+    const double dx = sway_offset(width, frame) - sway_offset(width, frame - 1);
+    return tr_scene_move_shape(s, shape, tr_vec3_make((float)dx, 0.0f, 0.0f), err);
+}
