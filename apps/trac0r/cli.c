@@ -432,11 +432,6 @@ int cli_recon_option(cli_args *a, tr_recon_params *p) {
     return -1;
 }
 
-int cli_scene_is_builtin(const char *scene) {
-    /* "builtin:NAME", or a bare name: scene files need a '/' or '.' in their path. */
-    return strncmp(scene, "builtin:", 8) == 0 || (!strchr(scene, '/') && !strchr(scene, '.'));
-}
-
 /* The request over a scene file's render defaults: the options the command line gave,
  * and the command's own defaults (bench realtime's 320x240, bench's naive integrator)
  * where the file has no value; the rest stay 0, the file's. */
@@ -493,18 +488,14 @@ int cli_load_scene_file(const cli_args *a, cli_common *c, tr_scene *scene, tr_sc
         return cli_error(a, "out of memory creating the scene");
     }
     memset(file, 0, sizeof *file);
-    if (cli_scene_is_builtin(c->scene)) {
+    if (tr_scene_name_is_builtin(c->scene)) {
         return cli_load_scene(a, c, scene);
     }
+    /* A scene file, or a model file (glTF, OBJ, ...) with a scene built around it. */
     tr_error err;
-    if (tr_scene_path_is_model(c->scene)) {
-        /* A model file (glTF, OBJ, ...), with a scene built around it. */
-        tr_model_options mo = {c->up_z, c->model_scale, c->width,
-                               c->given & CLI_GIVEN_HEIGHT ? c->height : 0, c->model_camera};
-        if (tr_scene_model_load(scene, c->scene, &mo, file, &err) != TR_OK) {
-            return cli_error(a, "%s", err.msg);
-        }
-    } else if (tr_scene_file_load(scene, c->scene, NULL, file, &err) != TR_OK) {
+    const tr_model_options mo = {c->up_z, c->model_scale, c->width,
+                                 c->given & CLI_GIVEN_HEIGHT ? c->height : 0, c->model_camera};
+    if (tr_scene_load(scene, c->scene, &mo, file, &err) != TR_OK) {
         return cli_error(a, "%s", err.msg);
     }
     tr_render_settings st;
@@ -536,7 +527,7 @@ int cli_load_scene(const cli_args *a, const cli_common *c, tr_scene *scene) {
     if (!scene) {
         return cli_error(a, "out of memory creating the scene");
     }
-    if (!cli_scene_is_builtin(c->scene)) {
+    if (!tr_scene_name_is_builtin(c->scene)) {
         /* The caller's options are final here (its film has their size): the file's
          * render defaults do not apply. */
         cli_common copy = *c;
@@ -547,12 +538,9 @@ int cli_load_scene(const cli_args *a, const cli_common *c, tr_scene *scene) {
         return cli_error(a, "--width/--height: %ux%u is more than %u pixels", c->width, c->height,
                          TR_FILM_MAX_PIXELS);
     }
-    const char *name = c->scene;
-    if (strncmp(name, "builtin:", 8) == 0) {
-        name += 8;
-    }
     tr_error err;
-    if (tr_scene_builtin(scene, name, c->width, c->height, &err) != TR_OK) {
+    const tr_model_options size = {0, 1.0f, c->width, c->height, NULL};
+    if (tr_scene_load(scene, c->scene, &size, NULL, &err) != TR_OK) {
         return cli_error(a, "--scene: %s", err.msg);
     }
     if (c->light_sampling >= 0) {

@@ -97,11 +97,6 @@ int cli_recon_option(cli_args *a, tr_recon_params *p);
  * c->accel. On failure the scene is left empty: the caller still destroys it. */
 int cli_load_scene(const cli_args *a, const cli_common *c, tr_scene *scene);
 
-/* Whether a --scene value names a built-in scene: "builtin:NAME" or a bare name without
- * '/' or '.'; anything else is a scene file's path (write ./scene for a file without
- * an extension). */
-int cli_scene_is_builtin(const char *scene);
-
 /* cli_load_scene that also applies a scene file's render defaults to the options the
  * command line did not give (c is updated) and returns the file's settings in *file
  * (zeroed for a built-in scene; may be NULL). Scene file errors and a file without an

@@ -73,31 +73,9 @@ int cmd_info(int argc, char **argv) {
     if (!s) {
         return cli_error(&a, "%s", err.msg);
     }
-    int builtin = cli_scene_is_builtin(path);
-    if (builtin) {
-        const char *name = strncmp(path, "builtin:", 8) == 0 ? path + 8 : path;
-        if (tr_scene_builtin(s, name, 800, 600, &err) != TR_OK) {
-            tr_scene_destroy(s);
-            return cli_error(&a, "%s", err.msg);
-        }
-        f.shape_count = tr_scene_shape_count(s);
-        f.width = 800;
-        f.height = 600;
-        f.bounds = tr_scene_bounds(s);
-        for (uint32_t i = 0; i < tr_scene_triangle_count(s); ++i) {
-            f.emissive_triangles +=
-                tr_scene_material(s, tr_scene_triangle(s, i).material).type == TR_MATERIAL_EMITTER;
-        }
-        for (uint32_t i = 0; i < tr_scene_material_count(s); ++i) {
-            f.emitter_materials += tr_scene_material(s, i).type == TR_MATERIAL_EMITTER;
-        }
-    } else if (tr_scene_path_is_model(path)) {
-        tr_model_options mo = {mc.up_z, mc.model_scale, 0, 0, mc.model_camera};
-        if (tr_scene_model_load(s, path, &mo, &f, &err) != TR_OK) {
-            tr_scene_destroy(s);
-            return cli_error(&a, "%s", err.msg);
-        }
-    } else if (tr_scene_file_load(s, path, NULL, &f, &err) != TR_OK) {
+    const int builtin = tr_scene_name_is_builtin(path);
+    const tr_model_options mo = {mc.up_z, mc.model_scale, 0, 0, mc.model_camera};
+    if (tr_scene_load(s, path, &mo, &f, &err) != TR_OK) {
         tr_scene_destroy(s);
         return cli_error(&a, "%s", err.msg);
     }

@@ -311,7 +311,7 @@ tr_session_desc render_session_desc(const render_job *job) {
     /* --checkpoint-interval 0 means after every pass. */
     d.checkpoint_interval = job->checkpoint_interval > 0.0 ? job->checkpoint_interval : -1.0;
     d.resume = job->resume;
-    d.scene_file = cli_scene_is_builtin(job->common.scene) ? NULL : job->common.scene;
+    d.scene_file = tr_scene_name_is_builtin(job->common.scene) ? NULL : job->common.scene;
     d.denoise = job->denoise;
     return d;
 }

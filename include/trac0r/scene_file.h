@@ -158,5 +158,15 @@ int tr_scene_model_load(tr_scene *s, const char *path, const tr_model_options *o
 /* Whether a scene name is a model file for tr_scene_model_load: a path (with a '/' or a
  * '.') that is not builtin:NAME and does not end in .json. */
 int tr_scene_path_is_model(const char *path);
+/* Whether a scene name is a built-in scene: "builtin:NAME", or a bare name without a '/'
+ * or '.' (a file without an extension is written ./scene). */
+int tr_scene_name_is_builtin(const char *name);
+
+/* Loads any scene a name can give: a built-in scene (at opt's size, 800x600 where 0), a
+ * model file (tr_scene_model_load with opt) or a scene file (tr_scene_file_load). `info`
+ * (may be NULL) gets what the file says; for a built-in scene its size, shape count,
+ * bounds and emitter counts. What `trac0r`'s SCENE argument accepts. */
+int tr_scene_load(tr_scene *s, const char *name, const tr_model_options *opt, tr_scene_file *info,
+                  tr_error *err);
 
 #endif

@@ -152,3 +152,37 @@ int tr_scene_file_apply(tr_scene *s, const char *path, const tr_scene_file *file
     }
     return TR_OK;
 }
+
+int tr_scene_name_is_builtin(const char *name) {
+    return strncmp(name, "builtin:", 8) == 0 || (!strchr(name, '/') && !strchr(name, '.'));
+}
+
+int tr_scene_load(tr_scene *s, const char *name, const tr_model_options *opt, tr_scene_file *info,
+                  tr_error *err) {
+    tr_scene_file local;
+    tr_model_options defaults = {0, 1.0f, 0, 0, NULL};
+    info = info ? info : &local;
+    opt = opt ? opt : &defaults;
+    memset(info, 0, sizeof *info);
+    if (!tr_scene_name_is_builtin(name)) {
+        return tr_scene_path_is_model(name) ? tr_scene_model_load(s, name, opt, info, err)
+                                            : tr_scene_file_load(s, name, NULL, info, err);
+    }
+    const uint32_t w = opt->width ? opt->width : 800u, h = opt->height ? opt->height : 600u;
+    if (tr_scene_builtin(s, strncmp(name, "builtin:", 8) == 0 ? name + 8 : name, w, h, err) !=
+        TR_OK) {
+        return TR_ERR;
+    }
+    info->width = w;
+    info->height = h;
+    info->shape_count = tr_scene_shape_count(s);
+    info->bounds = tr_scene_bounds(s);
+    for (uint32_t i = 0; i < tr_scene_triangle_count(s); ++i) {
+        info->emissive_triangles +=
+            tr_scene_material(s, tr_scene_triangle(s, i).material).type == TR_MATERIAL_EMITTER;
+    }
+    for (uint32_t i = 0; i < tr_scene_material_count(s); ++i) {
+        info->emitter_materials += tr_scene_material(s, i).type == TR_MATERIAL_EMITTER;
+    }
+    return TR_OK;
+}
