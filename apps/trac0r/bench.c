@@ -30,34 +30,6 @@ static int bench_failed(progress *bar, const cli_args *a, const char *what, cons
     return CLI_FAILURE;
 }
 
-#define BENCH_HELP (-1) /* bench_options printed the help: exit status 0, nothing to do */
-
-/* The command line of a benchmark: the common options (those in `refused`, a NULL-ended
- * list, are rejected once parsed), -h/--help (prints `help`), and `own` for the rest,
- * which returns CLI_OK, CLI_USAGE, or -1 for an option that is not its own. */
-static int bench_options(cli_args *a, cli_common *c, const char *const *refused, void (*help)(void),
-                         int (*own)(cli_args *, void *), void *bench) {
-    while (cli_next(a)) {
-        int rc = cli_common_option(a, c);
-        for (const char *const *r = refused; rc == CLI_OK && r && *r; ++r) {
-            if (cli_is(a, *r)) {
-                return cli_error(a, "%s: not an option of this benchmark", a->opt);
-            }
-        }
-        if (rc != -1) {
-            if (rc != CLI_OK) {
-                return CLI_USAGE;
-            }
-        } else if (cli_is(a, "-h") || cli_is(a, "--help")) {
-            help();
-            return BENCH_HELP;
-        } else if ((rc = own(a, bench)) != CLI_OK) {
-            return rc < 0 ? cli_unknown(a) : CLI_USAGE;
-        }
-    }
-    return CLI_OK;
-}
-
 static void bench_frame_help(void) {
     printf("Usage: trac0r bench frame [options]\n"
            "\n"
@@ -240,9 +212,9 @@ static int bench_frame(int argc, char **argv) {
     frame_bench b = {.a = {.cmd = "bench frame", .argc = argc, .argv = argv}, .frames = 20};
     cli_common_default(&b.c);
     b.c.integrator = TR_INTEGRATOR_NAIVE; /* the thesis's frame */
-    int rc = bench_options(&b.a, &b.c, NULL, bench_frame_help, frame_option, &b);
+    int rc = cli_parse(&b.a, &b.c, NULL, bench_frame_help, frame_option, &b);
     if (rc != CLI_OK) {
-        return rc == BENCH_HELP ? CLI_OK : rc;
+        return rc == CLI_HELP ? CLI_OK : rc;
     }
     b.scene = tr_scene_create(NULL);
     if ((rc = frame_open(&b)) == CLI_OK && (rc = frame_measure(&b)) == CLI_OK) {
@@ -538,9 +510,9 @@ static int bench_complexity(int argc, char **argv) {
     cli_common_default(&b.c);
     bench_accels_all(&b.set, 1);
     static const char *const refused[] = {"--scene", "--accel", NULL};
-    int rc = bench_options(&b.a, &b.c, refused, bench_complexity_help, cx_option, &b);
+    int rc = cli_parse(&b.a, &b.c, refused, bench_complexity_help, cx_option, &b);
     if (rc != CLI_OK) {
-        return rc == BENCH_HELP ? CLI_OK : rc;
+        return rc == CLI_HELP ? CLI_OK : rc;
     }
     if ((rc = cx_open(&b)) == CLI_OK) {
         b.cfg = cli_render_config(&b.c);

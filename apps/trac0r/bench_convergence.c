@@ -152,7 +152,8 @@ static void conv_defaults(conv_options *o) {
 }
 
 /* One of the benchmark's own options: CLI_OK, CLI_USAGE, or -1 if it is none of them. */
-static int parse_own_option(cli_args *a, conv_options *o) {
+static int parse_own_option(cli_args *a, void *user) {
+    conv_options *o = user;
     if (cli_is(a, "--sizes")) {
         return parse_sizes(a, o->sw, o->sh, &o->nsizes);
     }
@@ -182,38 +183,15 @@ static int parse_own_option(cli_args *a, conv_options *o) {
     return -1;
 }
 
-/* The command line into o; *help is set when --help printed the usage. */
-static int parse_options(cli_args *a, conv_options *o, int *help) {
-    while (cli_next(a)) {
-        if (cli_is(a, "--width") || cli_is(a, "--height") || cli_is(a, "--integrator")) {
-            return cli_error(a, "%s: not an option of this benchmark (see --sizes, --methods)",
-                             a->opt);
-        }
-        int rc = cli_common_option(a, &o->c);
-        if (rc == CLI_OK) {
-            if (cli_is(a, "--max-depth") && o->c.max_depth > TR_MAX_DEPTH_LIMIT - 2) {
-                return cli_error(a, "--max-depth: expected 1..%d here (naive gets D + 2)",
-                                 TR_MAX_DEPTH_LIMIT - 2);
-            }
-            continue;
-        }
-        if (rc == CLI_USAGE) {
-            return CLI_USAGE;
-        }
-        if (cli_is(a, "-h") || cli_is(a, "--help")) {
-            convergence_help();
-            *help = 1;
-            return CLI_OK;
-        }
-        rc = parse_own_option(a, o);
-        if (rc < 0) {
-            return cli_unknown(a);
-        }
-        if (rc != CLI_OK) {
-            return CLI_USAGE;
-        }
+/* The command line into o: CLI_OK, CLI_USAGE or CLI_HELP. */
+static int parse_options(cli_args *a, conv_options *o) {
+    static const char *const refused[] = {"--width", "--height", "--integrator", NULL};
+    const int rc = cli_parse(a, &o->c, refused, convergence_help, parse_own_option, o);
+    if (rc == CLI_OK && o->c.max_depth > TR_MAX_DEPTH_LIMIT - 2) {
+        return cli_error(a, "--max-depth: expected 1..%d here (naive gets D + 2)",
+                         TR_MAX_DEPTH_LIMIT - 2);
     }
-    return CLI_OK;
+    return rc;
 }
 
 /* Before any work: the output files can be written, and a --reference is a PFM of the
@@ -612,10 +590,9 @@ int bench_convergence(int argc, char **argv) {
     cli_args a = {.cmd = "bench convergence", .argc = argc, .argv = argv, .i = 0};
     conv_options o;
     conv_defaults(&o);
-    int help = 0;
-    int rc = parse_options(&a, &o, &help);
-    if (rc != CLI_OK || help) {
-        return rc;
+    int rc = parse_options(&a, &o);
+    if (rc != CLI_OK) {
+        return rc == CLI_HELP ? CLI_OK : rc;
     }
     rc = check_outputs(&a, &o);
     if (rc != CLI_OK) {

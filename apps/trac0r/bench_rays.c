@@ -29,40 +29,33 @@ static void bench_rays_help(void) {
            "  -h, --help           show this help\n");
 }
 
+typedef struct rays_opts {
+    int runs;
+    accel_set set;
+} rays_opts;
+
+static int rays_option(cli_args *a, void *user) {
+    rays_opts *o = user;
+    if (cli_is(a, "--runs")) {
+        return cli_parse_int(a, 1, 1000, &o->runs);
+    }
+    return cli_is(a, "--accels") ? bench_parse_accels(a, &o->set) : -1;
+}
+
 int bench_rays(int argc, char **argv) {
     cli_args a = {.cmd = "bench rays", .argc = argc, .argv = argv, .i = 0};
     cli_common c;
     cli_common_default(&c);
-    int runs = 5, one_scene = 0;
-    accel_set set;
-    bench_accels_all(&set, 0);
-    while (cli_next(&a)) {
-        int rc = cli_common_option(&a, &c);
-        if (rc == CLI_OK && (cli_is(&a, "--accel") || cli_is(&a, "--integrator") ||
-                             cli_is(&a, "--max-depth") || cli_is(&a, "--device"))) {
-            return cli_error(&a, "%s: not an option of this benchmark", a.opt);
-        }
-        if (rc == CLI_OK) {
-            one_scene |= cli_is(&a, "--scene");
-            continue;
-        }
-        if (rc == CLI_USAGE) {
-            return CLI_USAGE;
-        }
-        if (cli_is(&a, "-h") || cli_is(&a, "--help")) {
-            bench_rays_help();
-            return CLI_OK;
-        } else if (cli_is(&a, "--runs")) {
-            rc = cli_parse_int(&a, 1, 1000, &runs);
-        } else if (cli_is(&a, "--accels")) {
-            rc = bench_parse_accels(&a, &set);
-        } else {
-            return cli_unknown(&a);
-        }
-        if (rc != CLI_OK) {
-            return CLI_USAGE;
-        }
+    rays_opts o = {5, {{TR_ACCEL_TYPE_FLAT}, 0}};
+    bench_accels_all(&o.set, 0);
+    static const char *const refused[] = {"--accel", "--integrator", "--max-depth", "--device",
+                                          NULL};
+    int rc = cli_parse(&a, &c, refused, bench_rays_help, rays_option, &o);
+    if (rc != CLI_OK) {
+        return rc == CLI_HELP ? CLI_OK : rc;
     }
+    const int runs = o.runs, one_scene = (c.given & CLI_GIVEN_SCENE) != 0;
+    const accel_set set = o.set;
     const char *scenes[] = {"builtin:cornell", "builtin:cornell-ico-6", "builtin:cornell-ico-8"};
     const int scene_count = one_scene ? 1 : 3;
     const int threads = c.threads ? c.threads : tr_default_threads();
@@ -74,7 +67,6 @@ int bench_rays(int argc, char **argv) {
            threads, threads == 1 ? "" : "s", runs);
     printf("%-24s %10s %-7s %10s %10s %10s %10s\n", "scene", "triangles", "accel", "build ms",
            "primary", "diffuse", "shadow");
-    int rc = CLI_OK;
     progress bar;
     progress_begin(
         &bar, "trac0r bench rays", "runs",

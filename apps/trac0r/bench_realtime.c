@@ -240,7 +240,6 @@ typedef struct rt_opts {
     int ref_sampler;                /* TR_SAMPLER_*, -1: sobol, whatever the frames' */
     int animate;                    /* --animate: the scene's last shape moves every frame */
     uint32_t anim_from, anim_until; /* it moves before frames from .. until - 1 */
-    int size_given;
     char csv_path[4096], png_path[4096];
 } rt_opts;
 
@@ -267,61 +266,53 @@ typedef struct rt_run {
     uint64_t resolve_px;
 } rt_run;
 
-/* Parses the command line into o; CLI_OK to run, else the status to return (-h: *done). */
-static int parse_options(cli_args *a, rt_opts *o, int *done) {
-    while (cli_next(a)) {
-        int rc = cli_common_option(a, &o->c);
-        if (rc == CLI_OK) {
-            o->size_given |= cli_is(a, "--width") || cli_is(a, "--height");
-            continue;
-        }
-        if (rc == CLI_USAGE) {
-            return CLI_USAGE;
-        }
-        if (cli_is(a, "-h") || cli_is(a, "--help")) {
-            realtime_help();
-            *done = 1;
-            return CLI_OK;
-        } else if (cli_is(a, "--frames")) {
-            rc = cli_parse_u32(a, 2, 100000, &o->frames);
-        } else if (cli_is(a, "--spp")) {
-            rc = cli_parse_u32(a, 1, 1024, &o->spp);
-        } else if (cli_is(a, "--reference-spp")) {
-            rc = cli_parse_u32(a, 2, 1000000, &o->ref_spp);
-        } else if (cli_is(a, "--bias-reference-depth")) {
-            rc = cli_parse_u32(a, 1, TR_MAX_DEPTH_LIMIT, &o->bias_depth);
-        } else if (cli_is(a, "--reference-sampler")) {
-            rc = cli_parse_sampler(a, &o->ref_sampler);
-        } else if ((rc = cli_recon_option(a, &o->params)) != -1) {
-            /* handled: rc is CLI_OK or CLI_USAGE */
-        } else if (cli_is(a, "--animate")) {
-            o->animate = 1;
-            rc = CLI_OK;
-        } else if (cli_is(a, "--animate-frames")) {
-            o->animate = 1;
-            rc = parse_window(a, &o->anim_from, &o->anim_until);
-        } else if (cli_is(a, "--cut")) {
-            rc = cli_parse_u32(a, 1, 100000, &o->cut);
-        } else if (cli_is(a, "--methods")) {
-            rc = parse_methods(a, o->on);
-        } else if (cli_is(a, "--out")) {
-            rc = cli_value(a);
+/* One of the benchmark's own options: CLI_OK, CLI_USAGE, or -1 if it is none of them. */
+static int own_option(cli_args *a, void *user) {
+    rt_opts *o = user;
+    int rc = -1;
+    if (cli_is(a, "--frames")) {
+        rc = cli_parse_u32(a, 2, 100000, &o->frames);
+    } else if (cli_is(a, "--spp")) {
+        rc = cli_parse_u32(a, 1, 1024, &o->spp);
+    } else if (cli_is(a, "--reference-spp")) {
+        rc = cli_parse_u32(a, 2, 1000000, &o->ref_spp);
+    } else if (cli_is(a, "--bias-reference-depth")) {
+        rc = cli_parse_u32(a, 1, TR_MAX_DEPTH_LIMIT, &o->bias_depth);
+    } else if (cli_is(a, "--reference-sampler")) {
+        rc = cli_parse_sampler(a, &o->ref_sampler);
+    } else if ((rc = cli_recon_option(a, &o->params)) != -1) {
+        /* handled: rc is CLI_OK or CLI_USAGE */
+    } else if (cli_is(a, "--animate")) {
+        o->animate = 1;
+        rc = CLI_OK;
+    } else if (cli_is(a, "--animate-frames")) {
+        o->animate = 1;
+        rc = parse_window(a, &o->anim_from, &o->anim_until);
+    } else if (cli_is(a, "--cut")) {
+        rc = cli_parse_u32(a, 1, 100000, &o->cut);
+    } else if (cli_is(a, "--methods")) {
+        rc = parse_methods(a, o->on);
+    } else if (cli_is(a, "--out")) {
+        rc = cli_value(a);
+        o->csv_path[0] = '\0';
+        if (rc == CLI_OK && (snprintf(o->csv_path, sizeof o->csv_path, "%s.csv", a->value) >=
+                                 (int)sizeof o->csv_path ||
+                             snprintf(o->png_path, sizeof o->png_path, "%s.png", a->value) >=
+                                 (int)sizeof o->png_path)) {
             o->csv_path[0] = '\0';
-            if (rc == CLI_OK && (snprintf(o->csv_path, sizeof o->csv_path, "%s.csv", a->value) >=
-                                     (int)sizeof o->csv_path ||
-                                 snprintf(o->png_path, sizeof o->png_path, "%s.png", a->value) >=
-                                     (int)sizeof o->png_path)) {
-                o->csv_path[0] = '\0';
-            }
-        } else if (a->opt[0] != '-' && a->i == 1) {
-            o->c.scene = a->opt;
-            rc = CLI_OK;
-        } else {
-            return cli_error(a, "unknown option '%s' (see 'trac0r bench realtime --help')", a->opt);
         }
-        if (rc != CLI_OK) {
-            return CLI_USAGE;
-        }
+    } else if (a->opt[0] != '-' && a->i == 1) {
+        o->c.scene = a->opt;
+        rc = CLI_OK;
+    }
+    return rc;
+}
+
+/* Parses the command line into o: CLI_OK to run, CLI_HELP, or the status to return. */
+static int parse_options(cli_args *a, rt_opts *o) {
+    const int rc = cli_parse(a, &o->c, NULL, realtime_help, own_option, o);
+    if (rc != CLI_OK) {
+        return rc;
     }
     if (o->cut >= o->frames) {
         return cli_error(a, "--cut: expected a frame before --frames (%u), got %u", o->frames,
@@ -353,7 +344,9 @@ static int load_scene(rt_run *r, rt_opts *o) {
     if (rc != CLI_OK) {
         return rc;
     }
-    if (o->size_given) { /* a scene file's size applies only where none was given */
+    if (o->c.given &
+        (CLI_GIVEN_WIDTH |
+         CLI_GIVEN_HEIGHT)) { /* a scene file's size applies only where none was given */
         o->c.width = width;
         o->c.height = height;
     }
@@ -765,10 +758,9 @@ int bench_realtime(int argc, char **argv) {
     o.anim_from = 1;
     snprintf(o.csv_path, sizeof o.csv_path, "realtime.csv");
     snprintf(o.png_path, sizeof o.png_path, "realtime.png");
-    int done = 0;
-    const int rc = parse_options(&a, &o, &done);
-    if (rc != CLI_OK || done) {
-        return rc;
+    const int rc = parse_options(&a, &o);
+    if (rc != CLI_OK) {
+        return rc == CLI_HELP ? CLI_OK : rc;
     }
     return run_bench(&a, &o);
 }

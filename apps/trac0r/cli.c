@@ -279,6 +279,7 @@ int cli_common_option(cli_args *a, cli_common *c) {
             return CLI_USAGE;
         }
         c->scene = a->value;
+        c->given |= CLI_GIVEN_SCENE;
         return CLI_OK;
     }
     if (cli_is(a, "--allow-dark")) {
@@ -402,6 +403,29 @@ const char cli_recon_help[] =
     "  --resolve-emission N emitters' edges: N x N camera rays per edge pixel, added\n"
     "                       after the filters, 0..16 (default 4; 0: the emission is\n"
     "                       filtered with the rest; pt only, CPU reconstruction only)\n";
+
+int cli_parse(cli_args *a, cli_common *c, const char *const *refused, void (*help)(void),
+              int (*own)(cli_args *, void *), void *user) {
+    while (cli_next(a)) {
+        int rc = cli_common_option(a, c);
+        for (const char *const *r = refused; rc == CLI_OK && r && *r; ++r) {
+            if (cli_is(a, *r)) {
+                return cli_error(a, "%s: not an option of this command", a->opt);
+            }
+        }
+        if (rc != -1) {
+            if (rc != CLI_OK) {
+                return CLI_USAGE;
+            }
+        } else if (cli_is(a, "-h") || cli_is(a, "--help")) {
+            help();
+            return CLI_HELP;
+        } else if ((rc = own(a, user)) != CLI_OK) {
+            return rc < 0 ? cli_unknown(a) : CLI_USAGE;
+        }
+    }
+    return CLI_OK;
+}
 
 int cli_recon_option(cli_args *a, tr_recon_params *p) {
     if (cli_is(a, "--alpha-min")) {

@@ -15,6 +15,7 @@
 #define CLI_OK 0
 #define CLI_USAGE 2   /* bad command line */
 #define CLI_FAILURE 1 /* the work itself failed (I/O, out of memory) */
+#define CLI_HELP (-1) /* cli_parse printed the help: exit 0, nothing else to do */
 
 /* Options that render, view and bench share. */
 typedef struct cli_common {
@@ -42,6 +43,7 @@ typedef struct cli_common {
 #define CLI_GIVEN_MAX_DEPTH 4u
 #define CLI_GIVEN_INTEGRATOR 8u
 #define CLI_GIVEN_ACCEL 16u
+#define CLI_GIVEN_SCENE 32u
 
 /* Cursor over argv for one subcommand. */
 typedef struct cli_args {
@@ -80,6 +82,12 @@ int cli_parse_float(cli_args *a, float lo, float hi, float *out);
 /* Handles an option of cli_common. Returns CLI_OK if handled, CLI_USAGE on a bad value,
  * and -1 if the option is not a common one. */
 int cli_common_option(cli_args *a, cli_common *c);
+/* A command's whole line: the common options (those in `refused`, a NULL-ended list, are
+ * refused once parsed), -h/--help (prints `help`), and `own` for the rest, which returns
+ * CLI_OK, CLI_USAGE, or -1 for an option that is none of its own (an unknown option).
+ * Returns CLI_OK, CLI_USAGE or CLI_HELP. */
+int cli_parse(cli_args *a, cli_common *c, const char *const *refused, void (*help)(void),
+              int (*own)(cli_args *, void *), void *user);
 
 /* A TR_SAMPLER_* by its name (--sampler, --reference-sampler) into *out, and the name of
  * one (anything but random and zsobol reads as the default, sobol). */

@@ -148,10 +148,27 @@ double render_cpu_seconds(void) {
            (double)ru.ru_stime.tv_sec + 1e-6 * (double)ru.ru_stime.tv_usec;
 }
 
-/* The extra options of render (one block, so other commands' options merge apart). */
-static int render_option(render_job *job, int *rc) {
-    cli_args *a = &job->args;
-    if (cli_is(a, "--checkpoint")) {
+/* render's own options: CLI_OK, CLI_USAGE, or -1 for none of them. */
+static int render_option(cli_args *a, void *user) {
+    render_job *job = user;
+    int rcv = -1, *rc = &rcv;
+    if (cli_is(a, "--spp")) {
+        *rc = cli_parse_u32(a, 1, 1000000, &job->spp);
+        job->spp_given = 1;
+    } else if (cli_is(a, "--stride")) {
+        *rc = cli_parse_int(a, 1, 64, &job->stride);
+    } else if (cli_is(a, "--exposure")) {
+        *rc = cli_parse_float(a, -20.0f, 20.0f, &job->exposure);
+    } else if (cli_is(a, "--passes")) {
+        *rc = parse_passes(a, &job->passes);
+    } else if (cli_is(a, "--out") || cli_is(a, "-o")) {
+        *rc = cli_value(a);
+        job->out = a->value;
+    } else if (a->opt[0] != '-' && !(job->common.given & CLI_GIVEN_SCENE)) {
+        job->common.scene = a->opt; /* positional SCENE, anywhere on the line */
+        job->common.given |= CLI_GIVEN_SCENE;
+        *rc = CLI_OK;
+    } else if (cli_is(a, "--checkpoint")) {
         *rc = cli_value(a);
         job->checkpoint = a->value;
     } else if (cli_is(a, "--checkpoint-interval")) {
@@ -182,10 +199,8 @@ static int render_option(render_job *job, int *rc) {
             *rc = cli_error(a, "%s: expected half or float, got '%s'", a->opt, a->value);
         }
         job->exr_half = *rc == CLI_OK && strcmp(a->value, "half") == 0;
-    } else {
-        return 0;
     }
-    return 1;
+    return rcv;
 }
 
 void render_job_free(render_job *job) {
@@ -207,50 +222,17 @@ int render_job_setup(render_job *job, int argc, char **argv, int *done) {
     job->spp = 16;
     job->out = "render.png";
     job->checkpoint_interval = 60.0;
-    int scene_arg = 0, stride = 1;
+    job->stride = 1;
     *done = 1;
-
-    while (cli_next(a)) {
-        int rc = cli_common_option(a, c);
-        if (rc == CLI_OK) {
-            continue;
-        }
-        if (rc == CLI_USAGE) {
-            return CLI_USAGE;
-        }
-        if (cli_is(a, "-h") || cli_is(a, "--help")) {
-            render_help();
-            return CLI_OK;
-        } else if (cli_is(a, "--spp")) {
-            rc = cli_parse_u32(a, 1, 1000000, &job->spp);
-            job->spp_given = 1;
-        } else if (cli_is(a, "--stride")) {
-            rc = cli_parse_int(a, 1, 64, &stride);
-        } else if (cli_is(a, "--exposure")) {
-            rc = cli_parse_float(a, -20.0f, 20.0f, &job->exposure);
-        } else if (cli_is(a, "--passes")) {
-            rc = parse_passes(a, &job->passes);
-        } else if (cli_is(a, "--out") || cli_is(a, "-o")) {
-            rc = cli_value(a);
-            job->out = a->value;
-        } else if (render_option(job, &rc)) {
-            /* handled */
-        } else if (a->opt[0] != '-' && !scene_arg) {
-            c->scene = a->opt; /* positional SCENE, anywhere on the line */
-            scene_arg = 1;
-            rc = CLI_OK;
-        } else {
-            return cli_unknown(a);
-        }
-        if (rc != CLI_OK) {
-            return CLI_USAGE;
-        }
+    const int rc0 = cli_parse(a, c, NULL, render_help, render_option, job);
+    if (rc0 != CLI_OK) {
+        return rc0 == CLI_HELP ? CLI_OK : rc0;
     }
-    if (job->noise_threshold > 0.0f && stride > 1) {
+    if (job->noise_threshold > 0.0f && job->stride > 1) {
         return cli_error(a,
                          "--noise-threshold: not with --stride %d (a preview traces too few "
                          "pixels to estimate their noise)",
-                         stride);
+                         job->stride);
     }
     if (job->noise_threshold > 0.0f && (job->checkpoint || job->resume)) {
         /* An adaptive render's tiles stop at different sample counts, on tests of
@@ -295,7 +277,7 @@ int render_job_setup(render_job *job, int argc, char **argv, int *done) {
     }
     job->be_open = 1;
     job->cfg = cli_render_config(c);
-    job->cfg.stride = stride;
+    job->cfg.stride = job->stride;
     job->cfg.passes = job->passes;
     *done = 0;
     return CLI_OK;

@@ -17,6 +17,7 @@ typedef struct render_job {
     tr_render_config cfg;
     uint32_t spp;
     int spp_given;
+    int stride; /* --stride */
     float exposure;
     const char *out;
     int exr_half;             /* --exr-type half */

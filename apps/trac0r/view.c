@@ -131,7 +131,8 @@ static int run_headless(const cli_args *a, const view_options *o, tr_scene *scen
 }
 
 /* One of view's own options: CLI_OK, CLI_USAGE, or -1 if it is none of them. */
-static int view_option(cli_args *a, view_options *o) {
+static int view_option(cli_args *a, void *user) {
+    view_options *o = user;
     int rc = cli_recon_option(a, &o->recon_params);
     if (rc != -1) {
         return rc;
@@ -199,8 +200,6 @@ static int view_option(cli_args *a, view_options *o) {
     return -1;
 }
 
-#define VIEW_HELP (-1) /* view_parse printed the help: exit status 0, nothing to do */
-
 static int view_parse(cli_args *a, view_options *o) {
     memset(o, 0, sizeof *o);
     cli_common_default(&o->c);
@@ -209,20 +208,7 @@ static int view_parse(cli_args *a, view_options *o) {
     o->target_fps = 60.0f;
     o->recon_params = tr_recon_params_default();
     o->shot_dir = ".";
-    while (cli_next(a)) {
-        int rc = cli_common_option(a, &o->c);
-        if (rc != -1) {
-            if (rc != CLI_OK) {
-                return CLI_USAGE;
-            }
-        } else if (cli_is(a, "-h") || cli_is(a, "--help")) {
-            view_help();
-            return VIEW_HELP;
-        } else if ((rc = view_option(a, o)) != CLI_OK) {
-            return rc < 0 ? cli_unknown(a) : CLI_USAGE;
-        }
-    }
-    return CLI_OK;
+    return cli_parse(a, &o->c, NULL, view_help, view_option, o);
 }
 
 /* Before the scene: the options agree, and the files they name can be written (the
@@ -277,7 +263,7 @@ int cmd_view(int argc, char **argv) {
     view_options o;
     int rc = view_parse(&a, &o);
     if (rc != CLI_OK) {
-        return rc == VIEW_HELP ? CLI_OK : rc;
+        return rc == CLI_HELP ? CLI_OK : rc;
     }
     const int headless = o.screenshot || o.benchmark >= 0;
     if ((rc = view_check(&a, &o, headless)) != CLI_OK) {
