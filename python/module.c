@@ -1283,7 +1283,7 @@ typedef struct render_opts {
 static int parse_render_opts(SceneObject *s, PyObject *spp, PyObject *seed, PyObject *integrator,
                              PyObject *max_depth, PyObject *device, PyObject *threads,
                              PyObject *sampler, PyObject *passes, PyObject *noise,
-                             PyObject *time_limit, int denoise, render_opts *o) {
+                             PyObject *time_limit, PyObject *stride, int denoise, render_opts *o) {
     memset(o, 0, sizeof *o);
     o->cfg = tr_render_config_default();
     o->cfg.integrator = s->integrator;
@@ -1298,7 +1298,8 @@ static int parse_render_opts(SceneObject *s, PyObject *spp, PyObject *seed, PyOb
         arg_int(threads, "threads", 0, TR_MAX_THREADS, &o->cfg.threads) < 0 ||
         arg_sampler(sampler, &o->cfg.sampler) < 0 || arg_passes(passes, &o->passes) < 0 ||
         arg_double(noise, "noise_threshold", 0.0, 1.0, &nt) < 0 ||
-        arg_double(time_limit, "time_limit", 0.0, 1e6, &tl) < 0) {
+        arg_double(time_limit, "time_limit", 0.0, 1e6, &tl) < 0 ||
+        arg_int(stride, "stride", 1, 64, &o->cfg.stride) < 0) {
         return -1;
     }
     if (integrator && integrator != Py_None && (!max_depth || max_depth == Py_None) &&
@@ -1341,14 +1342,14 @@ static PyObject *py_render(PyObject *self, PyObject *args, PyObject *kw) {
     (void)self;
     static char *kwlist[] = {"scene",      "spp",     "seed",     "integrator", "max_depth",
                              "device",     "threads", "sampler",  "passes",     "noise_threshold",
-                             "time_limit", "denoise", "progress", NULL};
+                             "time_limit", "denoise", "progress", "stride",     NULL};
     PyObject *scene_obj, *spp = NULL, *seed = NULL, *integrator = NULL, *max_depth = NULL,
                          *device = NULL, *threads = NULL, *sampler = NULL, *passes = NULL,
-                         *noise = NULL, *time_limit = NULL, *progress = NULL;
+                         *noise = NULL, *time_limit = NULL, *progress = NULL, *stride = NULL;
     int denoise = 0;
-    if (!PyArg_ParseTupleAndKeywords(args, kw, "O|$OOOOOOOOOOpO:render", kwlist, &scene_obj, &spp,
+    if (!PyArg_ParseTupleAndKeywords(args, kw, "O|$OOOOOOOOOOpOO:render", kwlist, &scene_obj, &spp,
                                      &seed, &integrator, &max_depth, &device, &threads, &sampler,
-                                     &passes, &noise, &time_limit, &denoise, &progress)) {
+                                     &passes, &noise, &time_limit, &denoise, &progress, &stride)) {
         return NULL;
     }
     SceneObject *s = scene_arg(scene_obj);
@@ -1362,7 +1363,7 @@ static PyObject *py_render(PyObject *self, PyObject *args, PyObject *kw) {
     }
     render_opts o;
     if (parse_render_opts(s, spp, seed, integrator, max_depth, device, threads, sampler, passes,
-                          noise, time_limit, denoise, &o) < 0) {
+                          noise, time_limit, stride, denoise, &o) < 0) {
         return NULL;
     }
     OwnerObject *own = owner_new();
@@ -1440,20 +1441,20 @@ static void session_dealloc(SessionObject *o) {
 static PyObject *session_new(PyTypeObject *type, PyObject *args, PyObject *kw) {
     static char *kwlist[] = {"scene",      "spp",     "seed",    "integrator", "max_depth",
                              "device",     "threads", "sampler", "passes",     "noise_threshold",
-                             "time_limit", "denoise", NULL};
+                             "time_limit", "denoise", "stride",  NULL};
     PyObject *scene_obj, *spp = NULL, *seed = NULL, *integrator = NULL, *max_depth = NULL,
                          *device = NULL, *threads = NULL, *sampler = NULL, *passes = NULL,
-                         *noise = NULL, *time_limit = NULL;
+                         *noise = NULL, *time_limit = NULL, *stride = NULL;
     int denoise = 0;
-    if (!PyArg_ParseTupleAndKeywords(args, kw, "O|$OOOOOOOOOOp:Session", kwlist, &scene_obj, &spp,
+    if (!PyArg_ParseTupleAndKeywords(args, kw, "O|$OOOOOOOOOOpO:Session", kwlist, &scene_obj, &spp,
                                      &seed, &integrator, &max_depth, &device, &threads, &sampler,
-                                     &passes, &noise, &time_limit, &denoise)) {
+                                     &passes, &noise, &time_limit, &denoise, &stride)) {
         return NULL;
     }
     SceneObject *s = scene_arg(scene_obj);
     render_opts o;
     if (!s || parse_render_opts(s, spp, seed, integrator, max_depth, device, threads, sampler,
-                                passes, noise, time_limit, denoise, &o) < 0) {
+                                passes, noise, time_limit, stride, denoise, &o) < 0) {
         return NULL;
     }
     SessionObject *self = (SessionObject *)type->tp_alloc(type, 0);

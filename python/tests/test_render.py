@@ -73,3 +73,25 @@ def test_png_matches(tmp_path, trac0r_bin):
     img = trac0r.render(scene, spp=2).image
     trac0r.write(tmp_path / "m.png", img, exposure=0.5, tonemap="filmic")
     assert np.array_equal(trac0r.read(tmp_path / "m.png"), trac0r.read(tmp_path / "c.png"))
+
+
+def test_model_file(tmp_path, trac0r_bin):
+    """A model file with the command's model options: up axis, scale, framing camera."""
+    model = "/usr/share/assimp/models/Collada/duck.dae"
+    if not os.path.exists(model):
+        pytest.skip("assimp-testmodels is not installed")
+    ref = cli_render(trac0r_bin, tmp_path / "m.pfm", model, "--up", "z", "--scale", "2",
+                     "--camera", "frame", "--width", "40", "--height", "30", "--spp", "2")
+    scene = trac0r.load(model, up="z", scale=2, camera="frame", width=40, height=30)
+    assert np.array_equal(trac0r.render(scene, spp=2).image, ref)
+    with pytest.raises(trac0r.Error):
+        trac0r.load(model, camera="no-such-camera")
+
+
+def test_stride(tmp_path, trac0r_bin):
+    ref = cli_render(trac0r_bin, tmp_path / "s.pfm", "--scene", "builtin:cornell", "--width", "48",
+                     "--height", "32", "--spp", "2", "--stride", "3")
+    scene = trac0r.load("builtin:cornell", width=48, height=32)
+    assert np.array_equal(trac0r.render(scene, spp=2, stride=3).image, ref)
+    with pytest.raises(ValueError, match="stride"):
+        trac0r.render(scene, stride=65)
