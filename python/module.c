@@ -1009,10 +1009,9 @@ static int parse_load_opts(PyObject *kw_width, PyObject *kw_height, PyObject *up
             return -1;
         }
         if (!tr_accel_available((tr_accel_type)a)) {
-            return raise_status(TR_STATUS_UNSUPPORTED, "accel: '%s' is not available in this build",
-                                o->accel)
-                       ? 0
-                       : -1;
+            raise_status(TR_STATUS_UNSUPPORTED, "accel: '%s' is not available in this build",
+                         o->accel);
+            return -1;
         }
     }
     return 0;
@@ -1107,8 +1106,10 @@ static PyObject *load_common(PyObject *name_obj, const char *path, const char *t
         return PyErr_NoMemory();
     }
     int rc;
-    Py_BEGIN_ALLOW_THREADS rc = load_into(scene, path, text, len, o, s, file, &err);
-    Py_END_ALLOW_THREADS if (rc != TR_OK) {
+    Py_BEGIN_ALLOW_THREADS;
+    rc = load_into(scene, path, text, len, o, s, file, &err);
+    Py_END_ALLOW_THREADS;
+    if (rc != TR_OK) {
         free(file);
         tr_scene_destroy(scene);
         Py_DECREF(s);
@@ -1380,7 +1381,8 @@ static PyObject *py_render(PyObject *self, PyObject *args, PyObject *kw) {
     int rc;
     const tr_film *film = NULL;
     ++s->busy;
-    Py_BEGIN_ALLOW_THREADS rc = open_session(s, &o, &ctx, &own->dev, &own->session, &err);
+    Py_BEGIN_ALLOW_THREADS;
+    rc = open_session(s, &o, &ctx, &own->dev, &own->session, &err);
     if (rc == TR_OK) {
         rc = tr_session_run(own->session, &err);
     }
@@ -1391,7 +1393,8 @@ static PyObject *py_render(PyObject *self, PyObject *args, PyObject *kw) {
     if (rc == TR_OK && !ctx.failed && denoise) {
         rc = tr_session_denoise(own->session, &own->den, &err);
     }
-    Py_END_ALLOW_THREADS-- s->busy;
+    Py_END_ALLOW_THREADS;
+    --s->busy;
     Py_XDECREF(ctx.callable);
     if (ctx.failed || rc != TR_OK) {
         Py_DECREF(own);
@@ -1467,8 +1470,10 @@ static PyObject *session_new(PyTypeObject *type, PyObject *args, PyObject *kw) {
     tr_error err;
     int rc;
     ++s->busy;
-    Py_BEGIN_ALLOW_THREADS rc = open_session(s, &o, &self->ctx, &self->dev, &self->session, &err);
-    Py_END_ALLOW_THREADS-- s->busy;
+    Py_BEGIN_ALLOW_THREADS;
+    rc = open_session(s, &o, &self->ctx, &self->dev, &self->session, &err);
+    Py_END_ALLOW_THREADS;
+    --s->busy;
     if (rc != TR_OK) {
         Py_DECREF(self);
         return raise_tr(&err);
@@ -1514,8 +1519,10 @@ static PyObject *session_run(SessionObject *o, PyObject *args, PyObject *kw) {
     int rc;
     o->running = 1;
     ++o->scene->busy;
-    Py_BEGIN_ALLOW_THREADS rc = tr_session_run(o->session, &err);
-    Py_END_ALLOW_THREADS-- o->scene->busy;
+    Py_BEGIN_ALLOW_THREADS;
+    rc = tr_session_run(o->session, &err);
+    Py_END_ALLOW_THREADS;
+    --o->scene->busy;
     o->running = 0;
     Py_CLEAR(o->ctx.callable);
     if (o->ctx.failed) {
@@ -1555,8 +1562,10 @@ static PyObject *session_result(SessionObject *o, PyObject *unused) {
         return NULL;
     }
     int rc;
-    Py_BEGIN_ALLOW_THREADS rc = film_copy(&own->film, film, &err);
-    Py_END_ALLOW_THREADS if (rc != TR_OK) {
+    Py_BEGIN_ALLOW_THREADS;
+    rc = film_copy(&own->film, film, &err);
+    Py_END_ALLOW_THREADS;
+    if (rc != TR_OK) {
         Py_DECREF(own);
         return raise_tr(&err);
     }
@@ -1728,12 +1737,14 @@ static PyObject *realtime_new(PyTypeObject *type, PyObject *args, PyObject *kw) 
     desc.keep_passes = 1; /* frame(method=...) may change the method per frame */
     int rc = TR_ERR;
     ++s->busy;
-    Py_BEGIN_ALLOW_THREADS self->dev = tr_device_create(dev_name, &err);
+    Py_BEGIN_ALLOW_THREADS;
+    self->dev = tr_device_create(dev_name, &err);
     if (self->dev && tr_device_upload(self->dev, s->scene, &err) == TR_OK) {
         self->rt = tr_realtime_create(self->dev, s->scene, &desc, &err);
         rc = self->rt ? TR_OK : TR_ERR;
     }
-    Py_END_ALLOW_THREADS-- s->busy;
+    Py_END_ALLOW_THREADS;
+    --s->busy;
     if (rc != TR_OK) {
         Py_DECREF(self);
         return raise_tr(&err);
@@ -1787,8 +1798,10 @@ static PyObject *realtime_frame(RealtimeObject *o, PyObject *args, PyObject *kw)
     int rc;
     o->running = 1;
     ++o->scene->busy;
-    Py_BEGIN_ALLOW_THREADS rc = tr_realtime_frame(o->rt, &fd, &res, &err);
-    Py_END_ALLOW_THREADS-- o->scene->busy;
+    Py_BEGIN_ALLOW_THREADS;
+    rc = tr_realtime_frame(o->rt, &fd, &res, &err);
+    Py_END_ALLOW_THREADS;
+    --o->scene->busy;
     o->running = 0;
     if (rc != TR_OK) {
         return raise_tr(&err);
@@ -2000,10 +2013,11 @@ static PyObject *py_write(PyObject *self, PyObject *args, PyObject *kw) {
     }
     tr_error err;
     int rc;
-    Py_BEGIN_ALLOW_THREADS rc = fmt == TR_IMAGE_EXR
-                                    ? tr_film_write_exr(&f, p, half, &err)
-                                    : tr_film_write_curve(&f, p, (float)ev, curve, &err);
-    Py_END_ALLOW_THREADS free(f.count);
+    Py_BEGIN_ALLOW_THREADS;
+    rc = fmt == TR_IMAGE_EXR ? tr_film_write_exr(&f, p, half, &err)
+                             : tr_film_write_curve(&f, p, (float)ev, curve, &err);
+    Py_END_ALLOW_THREADS;
+    free(f.count);
     Py_DECREF(a);
     Py_DECREF(path);
     if (rc != TR_OK) {
@@ -2038,10 +2052,12 @@ static PyObject *py_read(PyObject *self, PyObject *args, PyObject *kw) {
     tr_image img = {0};
     tr_error err;
     int rc;
-    Py_BEGIN_ALLOW_THREADS rc = fmt == TR_IMAGE_PFM   ? tr_image_read_pfm(&img, p, &err)
-                                : fmt == TR_IMAGE_PNG ? tr_image_read_png(&img, p, &err)
-                                                      : tr_image_read_exr(&img, p, layer, &err);
-    Py_END_ALLOW_THREADS Py_DECREF(path);
+    Py_BEGIN_ALLOW_THREADS;
+    rc = fmt == TR_IMAGE_PFM   ? tr_image_read_pfm(&img, p, &err)
+         : fmt == TR_IMAGE_PNG ? tr_image_read_png(&img, p, &err)
+                               : tr_image_read_exr(&img, p, layer, &err);
+    Py_END_ALLOW_THREADS;
+    Py_DECREF(path);
     if (rc != TR_OK) {
         return raise_tr(&err);
     }
@@ -2081,9 +2097,11 @@ static PyObject *py_compare(PyObject *self, PyObject *args, PyObject *kw) {
     tr_image_metrics m;
     double ssim;
     const float *pa = PyArray_DATA(a), *pb = PyArray_DATA(b);
-    Py_BEGIN_ALLOW_THREADS m = tr_image_compare(pa, pb, (size_t)w * h);
+    Py_BEGIN_ALLOW_THREADS;
+    m = tr_image_compare(pa, pb, (size_t)w * h);
     ssim = tr_ssim(pa, pb, w, h);
-    Py_END_ALLOW_THREADS Py_DECREF(a);
+    Py_END_ALLOW_THREADS;
+    Py_DECREF(a);
     Py_DECREF(b);
     if (isnan(ssim)) {
         return PyErr_NoMemory();
@@ -2130,10 +2148,10 @@ static PyObject *py_tonemap(PyObject *self, PyObject *args, PyObject *kw) {
     int rc = TR_OK;
     if (out) {
         void *dst = PyArray_DATA(out);
-        Py_BEGIN_ALLOW_THREADS rc =
-            tr_tonemap_film_curve(&f, 0, 0, f.width, f.height, (float)ev, curve, TR_PIXEL_RGB8, dst,
-                                  (size_t)f.width * 3, &err);
-        Py_END_ALLOW_THREADS
+        Py_BEGIN_ALLOW_THREADS;
+        rc = tr_tonemap_film_curve(&f, 0, 0, f.width, f.height, (float)ev, curve, TR_PIXEL_RGB8,
+                                   dst, (size_t)f.width * 3, &err);
+        Py_END_ALLOW_THREADS;
     }
     free(f.count);
     Py_DECREF(a);

@@ -3,7 +3,13 @@ the C API (libtrac0r.so from the same build, called through ctypes: device, sess
 film), each timed N times in this process, medians printed in milliseconds.
 
     PYTHONPATH=build/release/python /usr/bin/python3 python/tests/bench_overhead.py \\
-        build/release/libtrac0r.so [WIDTH HEIGHT SPP N]"""
+        build/release/libtrac0r.so [WIDTH HEIGHT SPP N]
+
+With `realtime` instead of the library's path: real-time frames at 320x240 (svgf), the wall
+time of each Realtime.frame call against the stage times the library measured inside it
+(render + temporal + spatial, what `bench realtime` reports as a frame's time).
+
+    PYTHONPATH=build/release/python /usr/bin/python3 python/tests/bench_overhead.py realtime"""
 import ctypes
 import statistics
 import sys
@@ -12,7 +18,29 @@ import time
 import trac0r
 
 
+def realtime(frames=40):
+    scene = trac0r.load("builtin:cornell", width=320, height=240)
+    with trac0r.Realtime(scene, recon="svgf", seed=1) as rt:
+        x, y, z = rt.camera["position"]
+        walls, stages = [], []
+        for f in range(frames + 3):
+            cam = {"position": (x + 0.002 * f, y, z)}
+            t0 = time.perf_counter()
+            fr = rt.frame(camera=cam)
+            wall = (time.perf_counter() - t0) * 1e3
+            if f >= 3:  # after the warm-up
+                walls.append(wall)
+                stages.append(fr.render_ms + fr.temporal_ms + fr.spatial_ms)
+    w, s = statistics.median(walls), statistics.median(stages)
+    ratio = statistics.median([a / b for a, b in zip(walls, stages)])
+    print(f"320x240 svgf, {frames} frames: Realtime.frame {w:.3f} ms, the library's stages "
+          f"{s:.3f} ms (medians), per-frame ratio {ratio:.4f}")
+
+
 def main():
+    if sys.argv[1] == "realtime":
+        realtime()
+        return
     lib = ctypes.CDLL(sys.argv[1])
     w, h, spp, n = (int(x) for x in (sys.argv[2:6] if len(sys.argv) >= 6 else (64, 64, 1, 200)))
     P = ctypes.c_void_p
