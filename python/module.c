@@ -613,7 +613,9 @@ typedef struct {
     int busy;  /* renders running now (the camera may not change) */
     uint32_t spp;
     int integrator;
-    int max_depth;
+    int max_depth;      /* resolved for `integrator` (0: its default) */
+    int depth_asked;    /* given to load() or assigned (0: none) */
+    int depth_file;     /* the file's render.max_depth (0: none) */
     PyObject *path;     /* str: the file or builtin:NAME */
     PyObject *file;     /* bytes: the file's path for checkpoints' identity, or None */
     PyObject *warnings; /* list of str */
@@ -788,6 +790,20 @@ static PyObject *scene_get_size(SceneObject *s, void *which) {
     return PyLong_FromUnsignedLong(which ? c->screen_height : c->screen_width);
 }
 
+/* The max depth a render of s with `integrator` takes, as tr_scene_file_apply resolves
+ * it: the one asked for, else the file's (cut to bdpt's limit), else the integrator's
+ * default (0). */
+static int scene_depth_for(const SceneObject *s, int integrator) {
+    if (s->depth_asked) {
+        return s->depth_asked;
+    }
+    int depth = s->depth_file;
+    if (tr_integrator_is_bidirectional(integrator) && depth > TR_MAX_DEPTH_BDPT) {
+        depth = TR_MAX_DEPTH_BDPT;
+    }
+    return depth;
+}
+
 static PyObject *scene_get_integrator(SceneObject *s, void *unused) {
     (void)unused;
     return PyUnicode_FromString(tr_integrator_name(s->integrator));
@@ -799,7 +815,11 @@ static int scene_set_integrator(SceneObject *s, PyObject *v, void *unused) {
         PyErr_SetString(PyExc_TypeError, "integrator: expected a str");
         return -1;
     }
-    return arg_integrator(v, &s->integrator);
+    if (arg_integrator(v, &s->integrator) < 0) {
+        return -1;
+    }
+    s->max_depth = scene_depth_for(s, s->integrator);
+    return 0;
 }
 
 static PyObject *scene_get_spp(SceneObject *s, void *unused) {
@@ -827,7 +847,11 @@ static int scene_set_max_depth(SceneObject *s, PyObject *v, void *unused) {
         PyErr_SetString(PyExc_TypeError, "max_depth: expected an integer");
         return -1;
     }
-    return arg_int(v, "max_depth", 1, TR_MAX_DEPTH_LIMIT, &s->max_depth);
+    if (arg_int(v, "max_depth", 1, TR_MAX_DEPTH_LIMIT, &s->max_depth) < 0) {
+        return -1;
+    }
+    s->depth_asked = s->max_depth;
+    return 0;
 }
 
 static PyObject *scene_get_triangles(SceneObject *s, void *unused) {
@@ -1042,6 +1066,8 @@ static int load_into(tr_scene *s, const char *path, const char *text, size_t len
         out->spp = TR_SESSION_SPP_DEFAULT;
         out->integrator = o->integrator >= 0 ? o->integrator : TR_INTEGRATOR_PT;
         out->max_depth = o->max_depth;
+        out->depth_asked = o->max_depth;
+        out->depth_file = 0;
         const int accel = o->accel ? tr_accel_from_name(o->accel) : TR_ACCEL_TYPE_BVH;
         return tr_scene_commit(s, (tr_accel_type)accel, err);
     }
@@ -1073,6 +1099,8 @@ static int load_into(tr_scene *s, const char *path, const char *text, size_t len
     out->spp = st.spp;
     out->integrator = st.config.integrator;
     out->max_depth = st.config.max_depth;
+    out->depth_asked = o->max_depth;
+    out->depth_file = file->has_max_depth ? file->max_depth : 0;
     if (tr_scene_commit(s, st.accel, err) != TR_OK) {
         tr_scene_clear(s);
         return TR_ERR;
@@ -1303,9 +1331,8 @@ static int parse_render_opts(SceneObject *s, PyObject *spp, PyObject *seed, PyOb
         arg_int(stride, "stride", 1, 64, &o->cfg.stride) < 0) {
         return -1;
     }
-    if (integrator && integrator != Py_None && (!max_depth || max_depth == Py_None) &&
-        o->cfg.integrator != s->integrator) {
-        o->cfg.max_depth = 0; /* the other integrator's own default */
+    if (integrator && integrator != Py_None && (!max_depth || max_depth == Py_None)) {
+        o->cfg.max_depth = scene_depth_for(s, o->cfg.integrator);
     }
     o->cfg.passes = o->passes;
     o->desc.noise_threshold = (float)nt;
@@ -1714,6 +1741,9 @@ static PyObject *realtime_new(PyTypeObject *type, PyObject *args, PyObject *kw) 
         arg_int(resolve, "resolve_emission", 0, TR_RESOLVE_EMISSION_MAX, &params.emission_samples) <
             0) {
         return NULL;
+    }
+    if (integrator && integrator != Py_None && (!max_depth || max_depth == Py_None)) {
+        cfg.max_depth = scene_depth_for(s, cfg.integrator);
     }
     tr_error err;
     if (tr_film_check_size(width, height, &err) != TR_OK ||

@@ -95,3 +95,22 @@ def test_stride(tmp_path, trac0r_bin):
     assert np.array_equal(trac0r.render(scene, spp=2, stride=3).image, ref)
     with pytest.raises(ValueError, match="stride"):
         trac0r.render(scene, stride=65)
+
+
+def test_integrator_over_the_files_depth(tmp_path, trac0r_bin, source_dir):
+    """Another integrator than the file's takes the file's max depth as the command does
+    (cut to bdpt's limit), whether given to render() or assigned to the scene."""
+    with open(os.path.join(source_dir, "scenes", "cornell-classic.json")) as f:
+        text = f.read().replace('"max_depth": 64', '"max_depth": 3')
+    path = tmp_path / "shallow.json"
+    path.write_text(text)
+    args = ["--width", "32", "--height", "24", "--spp", "2", "--integrator", "bdpt"]
+    ref = cli_render(trac0r_bin, tmp_path / "b.pfm", str(path), *args)
+    scene = trac0r.load(path, width=32, height=24)
+    assert np.array_equal(trac0r.render(scene, spp=2, integrator="bdpt").image, ref)
+    deep = os.path.join(source_dir, "scenes", "cornell-classic.json")
+    ref = cli_render(trac0r_bin, tmp_path / "d.pfm", deep, *args)
+    scene = trac0r.load(deep, width=32, height=24)
+    scene.integrator = "bdpt"
+    assert scene.max_depth == 15
+    assert np.array_equal(trac0r.render(scene, spp=2).image, ref)
