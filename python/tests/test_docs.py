@@ -23,3 +23,13 @@ def test_docs_example(code, tmp_path):
     r = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True,
                        text=True)
     assert r.returncode == 0, f"{code}\n{r.stderr}"
+
+
+def test_examples_compile():
+    """examples/python/ (run by hand: they render for tens of seconds) at least parse."""
+    folder = os.path.join(SOURCE_DIR, "examples", "python")
+    scripts = [f for f in os.listdir(folder) if f.endswith(".py")]
+    assert len(scripts) >= 2
+    for name in scripts:
+        with open(os.path.join(folder, name)) as f:
+            compile(f.read(), name, "exec")
