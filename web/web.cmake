@@ -1,0 +1,128 @@
+# web.cmake - the web build (included by CMakeLists.txt when the compiler is Emscripten's:
+# `cmake --preset web`, docs/web.md). The library's sources compiled to WebAssembly with
+# web/main.c, the C interface the page calls, into build/web/: the page (index.html,
+# app.js), the module (trac0r.js, trac0r.wasm, trac0r.worker.js), a single-threaded
+# module without SIMD for browsers without SharedArrayBuffer (trac0r-st.js, .wasm) and
+# the shipped scene files.
+#
+# Debian's Emscripten fetches no ports, so the optional dependencies stay out: no Assimp
+# (scene files load without their meshes), no OpenEXR, no libpng or libjpeg (textures
+# decode through stb_image, web/codec_web.c; nothing is written as PNG), no OpenCL, no
+# Embree, no MPI, no SDL. cJSON is replaced by web/cjson/cJSON.c, the OpenMP runtime by
+# web/omp/omp_runtime.c (a team of pthreads, which run as web workers).
+
+# Node.js runs Emscripten's JavaScript optimiser when a module links; Debian installs
+# the packages it needs (acorn) under /usr/share/nodejs, where Debian's node does not
+# always look. The link runs with that directory added to NODE_PATH.
+set(TRAC0R_WEB_NODE_PATH "$ENV{NODE_PATH}")
+if(EXISTS /usr/share/nodejs/acorn)
+  if(TRAC0R_WEB_NODE_PATH)
+    string(APPEND TRAC0R_WEB_NODE_PATH ":/usr/share/nodejs")
+  else()
+    set(TRAC0R_WEB_NODE_PATH "/usr/share/nodejs")
+  endif()
+endif()
+if(TRAC0R_WEB_NODE_PATH)
+  set(CMAKE_C_LINKER_LAUNCHER ${CMAKE_COMMAND} -E env "NODE_PATH=${TRAC0R_WEB_NODE_PATH}")
+endif()
+
+set(CMAKE_C_FLAGS_RELEASE "-O3 -DNDEBUG")
+
+# The library's sources but those that need a library Emscripten lacks (listed in
+# CMakeLists.txt; image_codec.c, mesh.c, mesh_guard.c, exr.c and image.c are replaced by
+# web/codec_web.c and web/mesh_web.c).
+set(TRAC0R_WEB_LIB_SOURCES
+  src/scene/shape.c
+  src/scene/scene.c
+  src/scene/lights.c
+  src/scene/light_tree.c
+  src/scene/builtin.c
+  src/scene/camera.c
+  src/accel/bvh.c
+  src/accel/wbvh.c
+  src/accel/wbvh_scalar.c
+  src/accel/embree.c
+  src/device/cpu.c
+  src/device/vcm.c
+  src/device/device.c
+  src/device/opencl.c
+  src/post/emission.c
+  src/film/film.c
+  src/util/infile.c
+  src/io/outfile.c
+  src/post/tonemap.c
+  src/post/metrics.c
+  src/post/filter.c
+  src/post/recon_opencl.c
+  src/realtime/realtime.c
+  src/util/error.c
+  src/util/registry.c
+  src/util/clock.c
+  src/util/threads.c
+  src/scene/material_registry.c
+  src/util/abi.c
+  src/scene/json.c
+  src/scene/texture.c
+  src/scene/envmap.c
+  src/scene/sun.c
+  src/scene/model.c
+  src/scene/render_defaults.c
+  src/session/session.c
+  src/session/checkpoint.c
+  web/cjson/cJSON.c
+  web/omp/omp_runtime.c
+  web/codec_web.c
+  web/mesh_web.c
+  web/main.c
+)
+
+# stb_image (Debian: libstb-dev) for the textures, outside Emscripten's sysroot.
+# Only its directory goes on the include path: /usr/include itself holds the host's C
+# headers, which must not shadow Emscripten's.
+find_path(TRAC0R_WEB_STB_DIR stb_image.h PATHS /usr/include /usr/local/include
+          PATH_SUFFIXES stb NO_DEFAULT_PATH NO_CMAKE_FIND_ROOT_PATH)
+if(NOT TRAC0R_WEB_STB_DIR)
+  message(FATAL_ERROR "The web build needs stb_image.h (Debian: libstb-dev)")
+endif()
+
+set(TRAC0R_WEB_EXPORTS
+  "['ccall','cwrap','UTF8ToString','stringToUTF8','lengthBytesUTF8','FS']")
+
+# One module per variant: NAME, its compile flags, its link flags.
+function(trac0r_web_module name cflags lflags)
+  add_executable(${name} ${TRAC0R_WEB_LIB_SOURCES})
+  target_include_directories(${name} PRIVATE include src web/omp web/cjson)
+  target_include_directories(${name} SYSTEM PRIVATE ${TRAC0R_WEB_STB_DIR})
+  target_compile_options(${name} PRIVATE -Wall -Wextra -Werror -Wshadow -Wstrict-prototypes
+                                         -Wmissing-prototypes -ffp-contract=off -fopenmp ${cflags})
+  target_link_options(${name} PRIVATE ${cflags} --no-entry -sMODULARIZE=1
+    -sEXPORT_NAME=createTrac0r -sENVIRONMENT=web,worker -sALLOW_MEMORY_GROWTH=1
+    -sINITIAL_MEMORY=67108864 -sMAXIMUM_MEMORY=2147483648 -sTOTAL_STACK=8388608
+    -sFORCE_FILESYSTEM=1 "-sEXPORTED_RUNTIME_METHODS=${TRAC0R_WEB_EXPORTS}" ${lflags})
+  set_target_properties(${name} PROPERTIES SUFFIX ".js" RUNTIME_OUTPUT_DIRECTORY
+                                           ${PROJECT_BINARY_DIR})
+endfunction()
+
+# Threads and 128-bit SIMD: the wide BVH's SSE traversal through Emscripten's SSE
+# intrinsics (src/accel/wbvh.c offers it where TR_WBVH_HAVE_SSE_ONLY is set).
+trac0r_web_module(trac0r "-pthread;-msimd128;-msse;-msse2"
+  "-sPTHREAD_POOL_SIZE=navigator.hardwareConcurrency;-sDEFAULT_PTHREAD_STACK_SIZE=4194304")
+target_sources(trac0r PRIVATE src/accel/wbvh_sse2.c)
+target_compile_definitions(trac0r PRIVATE TR_WBVH_HAVE_SSE_ONLY=1)
+# One thread, no SIMD: for browsers without SharedArrayBuffer (no cross-origin isolation)
+# or without WebAssembly SIMD.
+trac0r_web_module(trac0r-st "" "")
+
+# The page and the scene files beside the modules.
+file(GLOB TRAC0R_WEB_SCENES CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/scenes/*.json
+     ${PROJECT_SOURCE_DIR}/scenes/textures/*)
+set(TRAC0R_WEB_PAGE ${PROJECT_SOURCE_DIR}/web/index.html ${PROJECT_SOURCE_DIR}/web/app.js
+                    ${PROJECT_SOURCE_DIR}/web/test.html ${PROJECT_SOURCE_DIR}/web/test.js)
+add_custom_command(
+  OUTPUT ${PROJECT_BINARY_DIR}/scenes/index.json
+  COMMAND ${CMAKE_COMMAND} -DSRC=${PROJECT_SOURCE_DIR} -DDST=${PROJECT_BINARY_DIR}
+          -P ${PROJECT_SOURCE_DIR}/web/copy-assets.cmake
+  DEPENDS ${TRAC0R_WEB_SCENES} ${TRAC0R_WEB_PAGE} ${PROJECT_SOURCE_DIR}/web/copy-assets.cmake
+  COMMENT "Copying the page and the scene files"
+  VERBATIM)
+add_custom_target(trac0r_web_assets ALL DEPENDS ${PROJECT_BINARY_DIR}/scenes/index.json)
