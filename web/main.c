@@ -102,9 +102,8 @@ static void drop_scene(void) {
 }
 
 static void take_view(const tr_camera *c) {
-    const float v[10] = {c->pos.x,      c->pos.y,      c->pos.z,      c->dir.x,
-                         c->dir.y,      c->dir.z,      c->world_up.x, c->world_up.y,
-                         c->world_up.z, c->vertical_fov};
+    const float v[10] = {c->pos.x, c->pos.y,      c->pos.z,      c->dir.x,      c->dir.y,
+                         c->dir.z, c->world_up.x, c->world_up.y, c->world_up.z, c->vertical_fov};
     memcpy(web.view, v, sizeof v);
 }
 

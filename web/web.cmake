@@ -116,8 +116,7 @@ trac0r_web_module(trac0r-st "" "")
 # The page and the scene files beside the modules.
 file(GLOB TRAC0R_WEB_SCENES CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/scenes/*.json
      ${PROJECT_SOURCE_DIR}/scenes/textures/*)
-set(TRAC0R_WEB_PAGE ${PROJECT_SOURCE_DIR}/web/index.html ${PROJECT_SOURCE_DIR}/web/app.js
-                    ${PROJECT_SOURCE_DIR}/web/test.html ${PROJECT_SOURCE_DIR}/web/test.js)
+file(GLOB TRAC0R_WEB_PAGE CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/web/*.html ${PROJECT_SOURCE_DIR}/web/*.js)
 add_custom_command(
   OUTPUT ${PROJECT_BINARY_DIR}/scenes/index.json
   COMMAND ${CMAKE_COMMAND} -DSRC=${PROJECT_SOURCE_DIR} -DDST=${PROJECT_BINARY_DIR}

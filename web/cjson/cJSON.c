@@ -109,14 +109,32 @@ static char *parse_string_raw(parser *p) {
         }
         c = p->s[i + 1];
         switch (c) {
-        case 'b': *o++ = '\b'; i += 2; break;
-        case 'f': *o++ = '\f'; i += 2; break;
-        case 'n': *o++ = '\n'; i += 2; break;
-        case 'r': *o++ = '\r'; i += 2; break;
-        case 't': *o++ = '\t'; i += 2; break;
+        case 'b':
+            *o++ = '\b';
+            i += 2;
+            break;
+        case 'f':
+            *o++ = '\f';
+            i += 2;
+            break;
+        case 'n':
+            *o++ = '\n';
+            i += 2;
+            break;
+        case 'r':
+            *o++ = '\r';
+            i += 2;
+            break;
+        case 't':
+            *o++ = '\t';
+            i += 2;
+            break;
         case '"':
         case '\\':
-        case '/': *o++ = c; i += 2; break;
+        case '/':
+            *o++ = c;
+            i += 2;
+            break;
         case 'u': {
             unsigned cp, lo;
             if (end - i < 6 || !hex4(p->s + i + 2, &cp) || (cp >= 0xDC00 && cp <= 0xDFFF)) {
@@ -148,7 +166,8 @@ static char *parse_string_raw(parser *p) {
             }
             break;
         }
-        default: goto fail;
+        default:
+            goto fail;
         }
     }
     *o = '\0';
@@ -164,8 +183,7 @@ static int parse_number(parser *p, cJSON *it) {
     size_t n = 0;
     while (n + 1 < sizeof buf && p->pos + n < p->len) {
         const unsigned char c = p->s[p->pos + n];
-        if (!((c >= '0' && c <= '9') || c == '+' || c == '-' || c == '.' || c == 'e' ||
-              c == 'E')) {
+        if (!((c >= '0' && c <= '9') || c == '+' || c == '-' || c == '.' || c == 'e' || c == 'E')) {
             break;
         }
         buf[n++] = (char)c;

@@ -20,7 +20,7 @@
 #include "../web_api.h"
 
 #define TEAM_MAX 64
-#define ARGS_MAX 16
+#define ARGS_MAX 32
 #define SLOTS 8
 #define CRIT_LOCKS 31
 
@@ -84,18 +84,41 @@ typedef struct thread_state {
 static _Thread_local thread_state tl = {0, 1, 0, 0, 0, {0, 0, 0, 0, 0}, {0, 0}};
 
 static void invoke(microtask fn, int32_t *gtid, int32_t *btid, int argc, void **a) {
+    /* One case per count of pointers (the widest region of the library passes 19). */
     switch (argc) {
-    case 0: fn(gtid, btid); break;
-    case 1: fn(gtid, btid, a[0]); break;
-    case 2: fn(gtid, btid, a[0], a[1]); break;
-    case 3: fn(gtid, btid, a[0], a[1], a[2]); break;
-    case 4: fn(gtid, btid, a[0], a[1], a[2], a[3]); break;
-    case 5: fn(gtid, btid, a[0], a[1], a[2], a[3], a[4]); break;
-    case 6: fn(gtid, btid, a[0], a[1], a[2], a[3], a[4], a[5]); break;
-    case 7: fn(gtid, btid, a[0], a[1], a[2], a[3], a[4], a[5], a[6]); break;
-    case 8: fn(gtid, btid, a[0], a[1], a[2], a[3], a[4], a[5], a[6], a[7]); break;
-    case 9: fn(gtid, btid, a[0], a[1], a[2], a[3], a[4], a[5], a[6], a[7], a[8]); break;
-    case 10: fn(gtid, btid, a[0], a[1], a[2], a[3], a[4], a[5], a[6], a[7], a[8], a[9]); break;
+    case 0:
+        fn(gtid, btid);
+        break;
+    case 1:
+        fn(gtid, btid, a[0]);
+        break;
+    case 2:
+        fn(gtid, btid, a[0], a[1]);
+        break;
+    case 3:
+        fn(gtid, btid, a[0], a[1], a[2]);
+        break;
+    case 4:
+        fn(gtid, btid, a[0], a[1], a[2], a[3]);
+        break;
+    case 5:
+        fn(gtid, btid, a[0], a[1], a[2], a[3], a[4]);
+        break;
+    case 6:
+        fn(gtid, btid, a[0], a[1], a[2], a[3], a[4], a[5]);
+        break;
+    case 7:
+        fn(gtid, btid, a[0], a[1], a[2], a[3], a[4], a[5], a[6]);
+        break;
+    case 8:
+        fn(gtid, btid, a[0], a[1], a[2], a[3], a[4], a[5], a[6], a[7]);
+        break;
+    case 9:
+        fn(gtid, btid, a[0], a[1], a[2], a[3], a[4], a[5], a[6], a[7], a[8]);
+        break;
+    case 10:
+        fn(gtid, btid, a[0], a[1], a[2], a[3], a[4], a[5], a[6], a[7], a[8], a[9]);
+        break;
     case 11:
         fn(gtid, btid, a[0], a[1], a[2], a[3], a[4], a[5], a[6], a[7], a[8], a[9], a[10]);
         break;
@@ -114,10 +137,84 @@ static void invoke(microtask fn, int32_t *gtid, int32_t *btid, int argc, void **
         fn(gtid, btid, a[0], a[1], a[2], a[3], a[4], a[5], a[6], a[7], a[8], a[9], a[10], a[11],
            a[12], a[13], a[14]);
         break;
-    default:
+    case 16:
         fn(gtid, btid, a[0], a[1], a[2], a[3], a[4], a[5], a[6], a[7], a[8], a[9], a[10], a[11],
            a[12], a[13], a[14], a[15]);
         break;
+    case 17:
+        fn(gtid, btid, a[0], a[1], a[2], a[3], a[4], a[5], a[6], a[7], a[8], a[9], a[10], a[11],
+           a[12], a[13], a[14], a[15], a[16]);
+        break;
+    case 18:
+        fn(gtid, btid, a[0], a[1], a[2], a[3], a[4], a[5], a[6], a[7], a[8], a[9], a[10], a[11],
+           a[12], a[13], a[14], a[15], a[16], a[17]);
+        break;
+    case 19:
+        fn(gtid, btid, a[0], a[1], a[2], a[3], a[4], a[5], a[6], a[7], a[8], a[9], a[10], a[11],
+           a[12], a[13], a[14], a[15], a[16], a[17], a[18]);
+        break;
+    case 20:
+        fn(gtid, btid, a[0], a[1], a[2], a[3], a[4], a[5], a[6], a[7], a[8], a[9], a[10], a[11],
+           a[12], a[13], a[14], a[15], a[16], a[17], a[18], a[19]);
+        break;
+    case 21:
+        fn(gtid, btid, a[0], a[1], a[2], a[3], a[4], a[5], a[6], a[7], a[8], a[9], a[10], a[11],
+           a[12], a[13], a[14], a[15], a[16], a[17], a[18], a[19], a[20]);
+        break;
+    case 22:
+        fn(gtid, btid, a[0], a[1], a[2], a[3], a[4], a[5], a[6], a[7], a[8], a[9], a[10], a[11],
+           a[12], a[13], a[14], a[15], a[16], a[17], a[18], a[19], a[20], a[21]);
+        break;
+    case 23:
+        fn(gtid, btid, a[0], a[1], a[2], a[3], a[4], a[5], a[6], a[7], a[8], a[9], a[10], a[11],
+           a[12], a[13], a[14], a[15], a[16], a[17], a[18], a[19], a[20], a[21], a[22]);
+        break;
+    case 24:
+        fn(gtid, btid, a[0], a[1], a[2], a[3], a[4], a[5], a[6], a[7], a[8], a[9], a[10], a[11],
+           a[12], a[13], a[14], a[15], a[16], a[17], a[18], a[19], a[20], a[21], a[22], a[23]);
+        break;
+    case 25:
+        fn(gtid, btid, a[0], a[1], a[2], a[3], a[4], a[5], a[6], a[7], a[8], a[9], a[10], a[11],
+           a[12], a[13], a[14], a[15], a[16], a[17], a[18], a[19], a[20], a[21], a[22], a[23],
+           a[24]);
+        break;
+    case 26:
+        fn(gtid, btid, a[0], a[1], a[2], a[3], a[4], a[5], a[6], a[7], a[8], a[9], a[10], a[11],
+           a[12], a[13], a[14], a[15], a[16], a[17], a[18], a[19], a[20], a[21], a[22], a[23],
+           a[24], a[25]);
+        break;
+    case 27:
+        fn(gtid, btid, a[0], a[1], a[2], a[3], a[4], a[5], a[6], a[7], a[8], a[9], a[10], a[11],
+           a[12], a[13], a[14], a[15], a[16], a[17], a[18], a[19], a[20], a[21], a[22], a[23],
+           a[24], a[25], a[26]);
+        break;
+    case 28:
+        fn(gtid, btid, a[0], a[1], a[2], a[3], a[4], a[5], a[6], a[7], a[8], a[9], a[10], a[11],
+           a[12], a[13], a[14], a[15], a[16], a[17], a[18], a[19], a[20], a[21], a[22], a[23],
+           a[24], a[25], a[26], a[27]);
+        break;
+    case 29:
+        fn(gtid, btid, a[0], a[1], a[2], a[3], a[4], a[5], a[6], a[7], a[8], a[9], a[10], a[11],
+           a[12], a[13], a[14], a[15], a[16], a[17], a[18], a[19], a[20], a[21], a[22], a[23],
+           a[24], a[25], a[26], a[27], a[28]);
+        break;
+    case 30:
+        fn(gtid, btid, a[0], a[1], a[2], a[3], a[4], a[5], a[6], a[7], a[8], a[9], a[10], a[11],
+           a[12], a[13], a[14], a[15], a[16], a[17], a[18], a[19], a[20], a[21], a[22], a[23],
+           a[24], a[25], a[26], a[27], a[28], a[29]);
+        break;
+    case 31:
+        fn(gtid, btid, a[0], a[1], a[2], a[3], a[4], a[5], a[6], a[7], a[8], a[9], a[10], a[11],
+           a[12], a[13], a[14], a[15], a[16], a[17], a[18], a[19], a[20], a[21], a[22], a[23],
+           a[24], a[25], a[26], a[27], a[28], a[29], a[30]);
+        break;
+    case 32:
+        fn(gtid, btid, a[0], a[1], a[2], a[3], a[4], a[5], a[6], a[7], a[8], a[9], a[10], a[11],
+           a[12], a[13], a[14], a[15], a[16], a[17], a[18], a[19], a[20], a[21], a[22], a[23],
+           a[24], a[25], a[26], a[27], a[28], a[29], a[30], a[31]);
+        break;
+    default:
+        abort();
     }
 }
 
@@ -419,55 +516,55 @@ enum { SCHED_STATIC_CHUNKED = 33, SCHED_STATIC = 34 };
 
 /* schedule(static[, chunk]): this thread's first block [*lower, *upper] and the stride to
  * its next one, as libomp's __kmp_for_static_init computes them. */
-#define STATIC_INIT(NAME, T, UT, ST)                                                           \
-    void NAME(void *loc, int32_t gtid, int32_t sched, int32_t *plast, T *plower, T *pupper,    \
-              ST *pstride, ST incr, ST chunk);                                                 \
-    void NAME(void *loc, int32_t gtid, int32_t sched, int32_t *plast, T *plower, T *pupper,    \
-              ST *pstride, ST incr, ST chunk) {                                                \
-        (void)loc;                                                                             \
-        (void)gtid;                                                                            \
-        const UT n = (UT)tl.size, t = (UT)tl.tid;                                              \
-        const UT trip = incr > 0 ? (UT)(*pupper - *plower) / (UT)incr + 1                      \
-                                 : (UT)(*plower - *pupper) / (UT)(-incr) + 1;                  \
-        if (n <= 1) {                                                                          \
-            if (plast) {                                                                       \
-                *plast = 1;                                                                    \
-            }                                                                                  \
-            *pstride = (ST)(trip * (UT)incr);                                                  \
-            return;                                                                            \
-        }                                                                                      \
-        if (sched == SCHED_STATIC_CHUNKED && chunk > 0) {                                      \
-            const UT c = (UT)chunk;                                                            \
-            const UT span = c * (UT)incr;                                                      \
-            if (plast) {                                                                       \
-                *plast = ((trip - 1) / c) % n == t;                                            \
-            }                                                                                  \
-            *plower = (T)(*plower + (T)(t * span));                                            \
-            *pupper = (T)(*plower + (T)span - (T)incr);                                        \
-            *pstride = (ST)(span * n);                                                         \
-            return;                                                                            \
-        }                                                                                      \
-        if (trip < n) {                                                                        \
-            if (plast) {                                                                       \
-                *plast = t == trip - 1;                                                        \
-            }                                                                                  \
-            if (t < trip) {                                                                    \
-                *plower = (T)(*plower + (T)(t * (UT)incr));                                    \
-                *pupper = *plower;                                                             \
-            } else {                                                                           \
-                *plower = (T)(*pupper + (T)incr);                                              \
-            }                                                                                  \
-        } else {                                                                               \
-            const UT small = trip / n, extras = trip % n;                                      \
-            const UT first = t * small + (t < extras ? t : extras);                            \
-            const UT count = small + (t < extras ? 1 : 0);                                     \
-            if (plast) {                                                                       \
-                *plast = t == n - 1;                                                           \
-            }                                                                                  \
-            *plower = (T)(*plower + (T)(first * (UT)incr));                                    \
-            *pupper = (T)(*plower + (T)(count * (UT)incr) - (T)incr);                          \
-        }                                                                                      \
-        *pstride = (ST)(trip * (UT)incr);                                                      \
+#define STATIC_INIT(NAME, T, UT, ST)                                                               \
+    void NAME(void *loc, int32_t gtid, int32_t sched, int32_t *plast, T *plower, T *pupper,        \
+              ST *pstride, ST incr, ST chunk);                                                     \
+    void NAME(void *loc, int32_t gtid, int32_t sched, int32_t *plast, T *plower, T *pupper,        \
+              ST *pstride, ST incr, ST chunk) {                                                    \
+        (void)loc;                                                                                 \
+        (void)gtid;                                                                                \
+        const UT n = (UT)tl.size, t = (UT)tl.tid;                                                  \
+        const UT trip = incr > 0 ? (UT)(*pupper - *plower) / (UT)incr + 1                          \
+                                 : (UT)(*plower - *pupper) / (UT)(-incr) + 1;                      \
+        if (n <= 1) {                                                                              \
+            if (plast) {                                                                           \
+                *plast = 1;                                                                        \
+            }                                                                                      \
+            *pstride = (ST)(trip * (UT)incr);                                                      \
+            return;                                                                                \
+        }                                                                                          \
+        if (sched == SCHED_STATIC_CHUNKED && chunk > 0) {                                          \
+            const UT c = (UT)chunk;                                                                \
+            const UT span = c * (UT)incr;                                                          \
+            if (plast) {                                                                           \
+                *plast = ((trip - 1) / c) % n == t;                                                \
+            }                                                                                      \
+            *plower = (T)(*plower + (T)(t * span));                                                \
+            *pupper = (T)(*plower + (T)span - (T)incr);                                            \
+            *pstride = (ST)(span * n);                                                             \
+            return;                                                                                \
+        }                                                                                          \
+        if (trip < n) {                                                                            \
+            if (plast) {                                                                           \
+                *plast = t == trip - 1;                                                            \
+            }                                                                                      \
+            if (t < trip) {                                                                        \
+                *plower = (T)(*plower + (T)(t * (UT)incr));                                        \
+                *pupper = *plower;                                                                 \
+            } else {                                                                               \
+                *plower = (T)(*pupper + (T)incr);                                                  \
+            }                                                                                      \
+        } else {                                                                                   \
+            const UT small = trip / n, extras = trip % n;                                          \
+            const UT first = t * small + (t < extras ? t : extras);                                \
+            const UT count = small + (t < extras ? 1 : 0);                                         \
+            if (plast) {                                                                           \
+                *plast = t == n - 1;                                                               \
+            }                                                                                      \
+            *plower = (T)(*plower + (T)(first * (UT)incr));                                        \
+            *pupper = (T)(*plower + (T)(count * (UT)incr) - (T)incr);                              \
+        }                                                                                          \
+        *pstride = (ST)(trip * (UT)incr);                                                          \
     }
 
 STATIC_INIT(__kmpc_for_static_init_4, int32_t, uint32_t, int32_t)
@@ -524,37 +621,37 @@ static int dispatch_next(int64_t *lo, int64_t *hi, int32_t *plast) {
     return 1;
 }
 
-#define DISPATCH(SUFFIX, T, UT, ST)                                                            \
-    void __kmpc_dispatch_init_##SUFFIX(void *loc, int32_t gtid, int32_t sched, T lb, T ub,     \
-                                       ST st, ST chunk);                                       \
-    int32_t __kmpc_dispatch_next_##SUFFIX(void *loc, int32_t gtid, int32_t *plast, T *plb,     \
-                                          T *pub, ST *pst);                                    \
-    void __kmpc_dispatch_init_##SUFFIX(void *loc, int32_t gtid, int32_t sched, T lb, T ub,     \
-                                       ST st, ST chunk) {                                      \
-        (void)loc;                                                                             \
-        (void)gtid;                                                                            \
-        (void)sched;                                                                           \
-        uint64_t trip = 0;                                                                     \
-        if (st > 0 ? ub >= lb : lb >= ub) {                                                    \
-            trip = st > 0 ? (uint64_t)(UT)(ub - lb) / (uint64_t)st + 1                         \
-                          : (uint64_t)(UT)(lb - ub) / (uint64_t)(-(int64_t)st) + 1;            \
-        }                                                                                      \
-        dispatch_init((int64_t)lb, (int64_t)st, trip, (int64_t)chunk);                         \
-    }                                                                                          \
-    int32_t __kmpc_dispatch_next_##SUFFIX(void *loc, int32_t gtid, int32_t *plast, T *plb,     \
-                                          T *pub, ST *pst) {                                   \
-        (void)loc;                                                                             \
-        (void)gtid;                                                                            \
-        int64_t lo, hi;                                                                        \
-        if (!dispatch_next(&lo, &hi, plast)) {                                                 \
-            return 0;                                                                          \
-        }                                                                                      \
-        *plb = (T)lo;                                                                          \
-        *pub = (T)hi;                                                                          \
-        if (pst) {                                                                             \
-            *pst = (ST)tl.disp.st;                                                             \
-        }                                                                                      \
-        return 1;                                                                              \
+#define DISPATCH(SUFFIX, T, UT, ST)                                                                \
+    void __kmpc_dispatch_init_##SUFFIX(void *loc, int32_t gtid, int32_t sched, T lb, T ub, ST st,  \
+                                       ST chunk);                                                  \
+    int32_t __kmpc_dispatch_next_##SUFFIX(void *loc, int32_t gtid, int32_t *plast, T *plb, T *pub, \
+                                          ST *pst);                                                \
+    void __kmpc_dispatch_init_##SUFFIX(void *loc, int32_t gtid, int32_t sched, T lb, T ub, ST st,  \
+                                       ST chunk) {                                                 \
+        (void)loc;                                                                                 \
+        (void)gtid;                                                                                \
+        (void)sched;                                                                               \
+        uint64_t trip = 0;                                                                         \
+        if (st > 0 ? ub >= lb : lb >= ub) {                                                        \
+            trip = st > 0 ? (uint64_t)(UT)(ub - lb) / (uint64_t)st + 1                             \
+                          : (uint64_t)(UT)(lb - ub) / (uint64_t)(-(int64_t)st) + 1;                \
+        }                                                                                          \
+        dispatch_init((int64_t)lb, (int64_t)st, trip, (int64_t)chunk);                             \
+    }                                                                                              \
+    int32_t __kmpc_dispatch_next_##SUFFIX(void *loc, int32_t gtid, int32_t *plast, T *plb, T *pub, \
+                                          ST *pst) {                                               \
+        (void)loc;                                                                                 \
+        (void)gtid;                                                                                \
+        int64_t lo, hi;                                                                            \
+        if (!dispatch_next(&lo, &hi, plast)) {                                                     \
+            return 0;                                                                              \
+        }                                                                                          \
+        *plb = (T)lo;                                                                              \
+        *pub = (T)hi;                                                                              \
+        if (pst) {                                                                                 \
+            *pst = (ST)tl.disp.st;                                                                 \
+        }                                                                                          \
+        return 1;                                                                                  \
     }
 
 DISPATCH(4, int32_t, uint32_t, int32_t)
