@@ -44,7 +44,7 @@ if [ "$mode" = build ]; then
 fi
 
 bin=$3
-web=$4
+web=$(cd "$4" && pwd) || exit 1
 dir=$5
 kind=$6
 w=160 h=120 spp=8 seed=7
