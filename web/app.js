@@ -5,7 +5,7 @@
 // scripts/web-screenshot.
 //
 // Query: scene (a built-in name or a file in scenes/), size (WxH), method, spp,
-// orbit=1 (the camera turns by itself: the picture in motion).
+// orbit=1 (the camera sways by itself: the picture in motion).
 "use strict";
 
 const MAX_SPP = 4096;
@@ -110,7 +110,7 @@ function load() {
   notice(parts.join(" "), false);
   const v = api.view();
   const pos = [v[0], v[1], v[2]];
-  cam = { pos, dir: [v[3], v[4], v[5]], up: [v[6], v[7], v[8]], fov: v[9],
+  cam = { pos, dir: [v[3], v[4], v[5]], dir0: [v[3], v[4], v[5]], up: [v[6], v[7], v[8]], fov: v[9],
           speed: Math.max(1e-3, Math.hypot(pos[0], pos[1], pos[2])) * 0.4 };
   ui.canvas.width = w;
   ui.canvas.height = h;
@@ -148,7 +148,9 @@ function moveCamera(dt) {
     moved = true;
   }
   if (query.get("orbit") === "1") {
-    cam.dir = v3.norm(v3.rot(cam.dir, v3.norm(cam.up), 0.25 * dt));
+    // A slow sway about the view the scene gave.
+    cam.t = (cam.t || 0) + dt;
+    cam.dir = v3.norm(v3.rot(cam.dir0, v3.norm(cam.up), 0.15 * Math.sin(0.8 * cam.t)));
     moved = true;
   }
   const step = cam.speed * dt * (keys.has("shift") ? 4 : 1);

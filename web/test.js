@@ -6,7 +6,8 @@
 // Query: scene (file in scenes/, default cornell-classic.json), w, h, spp, seed, threads
 // (0: every core), ref (a PFM beside the page), frames, fw, fh (the real-time frames'
 // size), method (off, accumulate, bilateral, atrous, svgf), stills (renders of the still
-// timed, the fastest kept).
+// timed, the fastest kept), budget (the frames' budget in ms: 0, the default, keeps the
+// full resolution).
 "use strict";
 
 (async function () {
@@ -59,27 +60,31 @@
       if (api.loadFile("/scenes/" + scene, fw, fh) !== 0) throw new Error(api.error());
       const v = api.view();
       const d0 = [v[3], v[4], v[5]];
-      const sum = { render: 0, temporal: 0, spatial: 0, tonemap: 0 };
+      const sum = { render: 0, temporal: 0, spatial: 0, tonemap: 0, scale: 0 };
       let t0 = 0;
       for (let i = 0; i <= frames; ++i) {
         if (i === 1) t0 = performance.now(); // the first frame builds the loop's buffers
         const a = 0.002 * i, view = api.view();
         view[3] = d0[0] * Math.cos(a) - d0[2] * Math.sin(a);
         view[5] = d0[0] * Math.sin(a) + d0[2] * Math.cos(a);
-        if (api.frame(fw, fh, method, 1, 1, 0, 0) !== 0) throw new Error(api.error());
+        if (api.frame(fw, fh, method, 1, 1, num("budget", 0), 0) !== 0) throw new Error(api.error());
         if (i > 0) {
           const s = api.stats();
           sum.render += s.renderMs;
           sum.temporal += s.temporalMs;
           sum.spatial += s.spatialMs;
           sum.tonemap += s.tonemapMs;
+          sum.scale += s.scale;
         }
       }
       const ms = performance.now() - t0;
       out("frames", frames);
       out("frame_method", TR.METHODS[method]);
       out("fps", ((frames * 1000) / ms).toFixed(2));
-      for (const k of Object.keys(sum)) out(k + "_ms", (sum[k] / frames).toFixed(3));
+      for (const k of ["render", "temporal", "spatial", "tonemap"]) {
+        out(k + "_ms", (sum[k] / frames).toFixed(3));
+      }
+      out("mean_scale", (sum.scale / frames).toFixed(2));
     }
     out("ok", 1);
   } catch (e) {
