@@ -11,7 +11,8 @@
 #       still of the classic box at a fixed seed against the native `trac0r render` of
 #       the same settings: bit for bit, or within 45 dB PSNR (Emscripten's libm rounds
 #       some float functions otherwise than glibc; docs/web.md); then three real-time
-#       frames with SVGF.
+#       frames with SVGF; and every shipped scene file loads and renders (without its
+#       meshes: the web build has no Assimp).
 #
 # Exits 77 (CTest: skipped) where emcc or chromium is absent; scripts/install-deps
 # installs both.
@@ -80,7 +81,7 @@ done
 [ -s "$dir/port" ] || { cat "$dir/serve.err"; echo "FAIL: serve-web did not start"; exit 1; }
 port=$(cat "$dir/port")
 
-url="http://127.0.0.1:$port/test.html?w=$w&h=$h&spp=$spp&seed=$seed&threads=2&ref=native.pfm&frames=3&fw=64&fh=48"
+url="http://127.0.0.1:$port/test.html?w=$w&h=$h&spp=$spp&seed=$seed&threads=2&ref=native.pfm&frames=3&fw=64&fh=48&allscenes=1"
 "$python3" "$src/scripts/web-browser" "$url" --wait "window.testDone === true" --timeout 300 \
     --print "document.getElementById('result').textContent" >"$dir/result.txt" 2>"$dir/browser.err"
 rc=$?
@@ -96,7 +97,9 @@ expect() {
 }
 
 expect ok 1
-expect scenes "$(ls "$src"/scenes/*.json | wc -l)"
+nscenes=$(ls "$src"/scenes/*.json | wc -l)
+expect scenes "$nscenes"
+expect scenes_rendered "$nscenes"
 expect frames 3
 expect frame_method svgf
 if [ "$kind" = isolated ]; then

@@ -6,7 +6,7 @@
 // Query: scene (file in scenes/, default cornell-classic.json), w, h, spp, seed, threads
 // (0: every core), ref (a PFM beside the page), frames, fw, fh (the real-time frames'
 // size), method (off, accumulate, bilateral, atrous, svgf), stills (renders of the still
-// timed, the fastest kept), budget (the frames' budget in ms: 0, the default, keeps the
+// timed, the fastest kept), allscenes=1 (every scene file rendered once first), budget (the frames' budget in ms: 0, the default, keeps the
 // full resolution).
 "use strict";
 
@@ -33,6 +33,19 @@
     const threads = num("threads", 0);
     out("threads", api.start(threads > 0 ? threads : f.cores));
     out("info", api.info());
+
+    // Every shipped scene file loads and renders (allscenes=1): a sample per pixel at 32x24.
+    if (q.has("allscenes")) {
+      let rendered = 0;
+      for (const name of scenes) {
+        if (api.loadFile("/scenes/" + name, 32, 24) !== 0 || api.render(1, 0, 0) !== 0) {
+          out("scene_error", name + ": " + api.error());
+          continue;
+        }
+        ++rendered;
+      }
+      out("scenes_rendered", rendered);
+    }
 
     // The still.
     const scene = q.get("scene") || "cornell-classic.json";
