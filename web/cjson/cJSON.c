@@ -74,15 +74,20 @@ static int hex4(const unsigned char *h, unsigned *out) {
     return 1;
 }
 
-/* A string at p->pos (its opening quote) into a new NUL-terminated buffer. */
+/* A string at p->pos (its opening quote) into a new NUL-terminated buffer. On failure
+ * p->pos is where cJSON reports it: the byte after the opening quote (not a string, no
+ * closing quote, no memory), or the backslash of a bad escape. */
 static char *parse_string_raw(parser *p) {
+    const size_t start = p->pos;
     if (!more(p) || p->s[p->pos] != '"') {
+        p->pos = start + 1;
         return NULL;
     }
     size_t end = p->pos + 1, extra = 0;
     while (end < p->len && p->s[end] != '"') {
         if (p->s[end] == '\\') {
             if (end + 1 >= p->len) {
+                p->pos = start + 1;
                 return NULL;
             }
             ++extra;
@@ -91,15 +96,17 @@ static char *parse_string_raw(parser *p) {
         ++end;
     }
     if (end >= p->len) {
+        p->pos = start + 1;
         return NULL;
     }
     /* Escapes only shrink: the raw length bounds the output. */
     char *out = hooks.malloc_fn(end - p->pos - extra + 1);
     if (!out) {
+        p->pos = start + 1;
         return NULL;
     }
     unsigned char *o = (unsigned char *)out;
-    size_t i = p->pos + 1;
+    size_t i = p->pos + 1, esc = i;
     while (i < end) {
         unsigned char c = p->s[i];
         if (c != '\\') {
@@ -107,6 +114,7 @@ static char *parse_string_raw(parser *p) {
             ++i;
             continue;
         }
+        esc = i;
         c = p->s[i + 1];
         switch (c) {
         case 'b':
@@ -175,6 +183,7 @@ static char *parse_string_raw(parser *p) {
     return out;
 fail:
     hooks.free_fn(out);
+    p->pos = esc; /* the escape's backslash */
     return NULL;
 }
 
