@@ -100,6 +100,7 @@ expect ok 1
 nscenes=$(ls "$src"/scenes/*.json | wc -l)
 expect scenes "$nscenes"
 expect scenes_rendered "$nscenes"
+expect json_text_same 1
 expect frames 3
 expect frame_method svgf
 if [ "$kind" = isolated ]; then

@@ -52,6 +52,7 @@ TR.api = function (M) {
     info: M.cwrap("tr_web_info", s, []),
     loadBuiltin: M.cwrap("tr_web_load_builtin", n, [s, n, n]),
     loadFile: M.cwrap("tr_web_load_file", n, [s, n, n]),
+    loadJson: M.cwrap("tr_web_load_json", n, [s, s, n, n]),
     meshesSkipped: M.cwrap("tr_web_meshes_skipped", n, []),
     viewPtr: M.cwrap("tr_web_view", n, []),
     frame: M.cwrap("tr_web_frame", n, [n, n, n, n, n, n, n]),

@@ -124,15 +124,20 @@ static int finish_scene(tr_accel_type accel) {
     return 0;
 }
 
-WEB_API int tr_web_load_builtin(const char *name, int width, int height) {
+static int new_scene(void) {
     tr_error err;
     drop_scene();
     web.meshes_skipped = 0;
-    web.cfg = tr_render_config_default();
     web.scene = tr_scene_create(&err);
-    if (!web.scene) {
-        return fail("", &err);
+    return web.scene ? 0 : fail("", &err);
+}
+
+WEB_API int tr_web_load_builtin(const char *name, int width, int height) {
+    tr_error err;
+    if (new_scene() != 0) {
+        return -1;
     }
+    web.cfg = tr_render_config_default();
     if (tr_scene_builtin(web.scene, name, (uint32_t)width, (uint32_t)height, &err) != TR_OK) {
         return fail("", &err);
     }
@@ -144,38 +149,62 @@ WEB_API int tr_web_load_builtin(const char *name, int width, int height) {
  * size given, the file's integrator, depth and structure where it names them, else pt,
  * its default depth and the BVH. Meshes are not loaded (no Assimp in the web build):
  * tr_web_meshes_skipped says how many the file names. */
-WEB_API int tr_web_load_file(const char *path, int width, int height) {
+/* After tr_scene_file_load or tr_scene_file_parse filled web.scene and *file: the render
+ * request of `trac0r render FILE --width W --height H`, then commit and upload. */
+static int apply_file(const char *path, const tr_scene_file *file, int width, int height) {
     tr_error err;
-    drop_scene();
-    web.meshes_skipped = 0;
-    web.scene = tr_scene_create(&err);
-    if (!web.scene) {
-        return fail("", &err);
-    }
-    tr_scene_file file;
-    const tr_scene_file_options opt = {0, 0};
-    if (tr_scene_file_load(web.scene, path, &opt, &file, &err) != TR_OK) {
-        return fail("", &err);
-    }
-    web.meshes_skipped = file.mesh_count;
+    web.meshes_skipped = file->mesh_count;
     tr_render_request req = {0};
     req.width = (uint32_t)width;
     req.height = (uint32_t)height;
-    if (!file.has_integrator) {
+    if (!file->has_integrator) {
         req.integrator = "pt";
     }
-    if (!file.has_accel) {
+    if (!file->has_accel) {
         req.accel = "bvh";
     }
-    req.allow_dark = file.mesh_count > 0; /* the emitters may be in the meshes */
+    req.allow_dark = file->mesh_count > 0; /* the emitters may be in the meshes */
     tr_render_settings st;
-    if (tr_scene_file_apply(web.scene, path, &file, &req, &st, &err) != TR_OK) {
+    if (tr_scene_file_apply(web.scene, path, file, &req, &st, &err) != TR_OK) {
         return fail("", &err);
     }
     web.cfg = tr_render_config_default();
     web.cfg.integrator = st.config.integrator;
     web.cfg.max_depth = st.config.max_depth;
     return finish_scene(st.accel);
+}
+
+/* A scene file in Emscripten's file system (the page writes the shipped ones there,
+ * textures beside them), read as `trac0r render FILE --width W --height H` reads it: the
+ * size given, the file's integrator, depth and structure where it names them, else pt,
+ * its default depth and the BVH. Meshes are not loaded (no Assimp in the web build):
+ * tr_web_meshes_skipped says how many the file names. */
+WEB_API int tr_web_load_file(const char *path, int width, int height) {
+    tr_error err;
+    if (new_scene() != 0) {
+        return -1;
+    }
+    tr_scene_file file;
+    const tr_scene_file_options opt = {0, 0};
+    if (tr_scene_file_load(web.scene, path, &opt, &file, &err) != TR_OK) {
+        return fail("", &err);
+    }
+    return apply_file(path, &file, width, height);
+}
+
+/* The same from the text of a scene file (`name` in messages, and the directory relative
+ * paths in it start from). */
+WEB_API int tr_web_load_json(const char *name, const char *text, int width, int height) {
+    tr_error err;
+    if (new_scene() != 0) {
+        return -1;
+    }
+    tr_scene_file file;
+    const tr_scene_file_options opt = {0, 0};
+    if (tr_scene_file_parse(web.scene, name, text, strlen(text), &opt, &file, &err) != TR_OK) {
+        return fail("", &err);
+    }
+    return apply_file(name, &file, width, height);
 }
 
 WEB_API int tr_web_meshes_skipped(void) {

@@ -63,6 +63,12 @@
     const bytes = new Uint8Array(img.buffer);
     for (let i = 0; i < bytes.length; ++i) hash = Math.imul(hash ^ bytes[i], 16777619) >>> 0;
     out("image_fnv1a", hash.toString(16).padStart(8, "0"));
+    // The same still from the file's text (tr_scene_file_parse) must give the same bits.
+    const text = await (await fetch("scenes/" + scene)).text();
+    if (api.loadJson("/scenes/" + scene, text, w, h) !== 0) throw new Error(api.error());
+    if (api.render(spp, seed, threads) !== 0) throw new Error(api.error());
+    const again = new Uint8Array(api.image(w, h).buffer);
+    out("json_text_same", again.every((b, i) => b === bytes[i]) ? 1 : 0);
     if (q.has("ref")) compare(img, w, h, await (await fetch(q.get("ref"))).arrayBuffer(), out);
 
     // Real-time frames: the camera turning a little every frame (each frame a new view).

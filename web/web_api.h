@@ -11,6 +11,7 @@ int tr_web_start(int threads);
 const char *tr_web_info(void);
 int tr_web_load_builtin(const char *name, int width, int height);
 int tr_web_load_file(const char *path, int width, int height);
+int tr_web_load_json(const char *name, const char *text, int width, int height);
 int tr_web_meshes_skipped(void);
 float *tr_web_view(void);
 int tr_web_frame(int width, int height, int method, int spp, int moving, double budget_ms,
