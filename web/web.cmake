@@ -28,47 +28,22 @@ endif()
 
 set(CMAKE_C_FLAGS_RELEASE "-O3 -DNDEBUG")
 
-# The library's sources but those that need a library Emscripten lacks (listed in
-# CMakeLists.txt; image_codec.c, mesh.c, mesh_guard.c, exr.c and image.c are replaced by
-# web/codec_web.c and web/mesh_web.c).
-set(TRAC0R_WEB_LIB_SOURCES
-  src/scene/shape.c
-  src/scene/scene.c
-  src/scene/lights.c
-  src/scene/light_tree.c
-  src/scene/builtin.c
-  src/scene/camera.c
-  src/accel/bvh.c
-  src/accel/wbvh.c
-  src/accel/wbvh_scalar.c
+# The library's sources: those CMakeLists.txt lists for trac0r_lib (read from it, so that
+# a source added there is compiled here too), but the ones that need a library Emscripten
+# lacks, which web/codec_web.c and web/mesh_web.c replace (image.c and exr.c write and
+# read image files: nothing here calls them); then the always-compiled adapters and the
+# web's own files.
+file(READ ${PROJECT_SOURCE_DIR}/CMakeLists.txt _tr_top)
+string(REGEX MATCH "add_library\\(trac0r_lib STATIC([^)]*)\\)" _tr_lib "${_tr_top}")
+string(REGEX MATCHALL "src/[A-Za-z0-9_/]+\\.c" TRAC0R_WEB_LIB_SOURCES "${CMAKE_MATCH_1}")
+if(NOT TRAC0R_WEB_LIB_SOURCES)
+  message(FATAL_ERROR "web/web.cmake: no add_library(trac0r_lib STATIC ...) in CMakeLists.txt")
+endif()
+list(REMOVE_ITEM TRAC0R_WEB_LIB_SOURCES src/scene/image_codec.c src/scene/mesh.c
+     src/scene/mesh_guard.c src/io/exr.c src/io/image.c)
+list(APPEND TRAC0R_WEB_LIB_SOURCES
   src/accel/embree.c
-  src/device/cpu.c
-  src/device/vcm.c
-  src/device/device.c
   src/device/opencl.c
-  src/post/emission.c
-  src/film/film.c
-  src/util/infile.c
-  src/io/outfile.c
-  src/post/tonemap.c
-  src/post/metrics.c
-  src/post/filter.c
-  src/post/recon_opencl.c
-  src/realtime/realtime.c
-  src/util/error.c
-  src/util/registry.c
-  src/util/clock.c
-  src/util/threads.c
-  src/scene/material_registry.c
-  src/util/abi.c
-  src/scene/json.c
-  src/scene/texture.c
-  src/scene/envmap.c
-  src/scene/sun.c
-  src/scene/model.c
-  src/scene/render_defaults.c
-  src/session/session.c
-  src/session/checkpoint.c
   web/cjson/cJSON.c
   web/omp/omp_runtime.c
   web/codec_web.c
