@@ -278,8 +278,10 @@ typedef struct isa_entry {
 /* Entries this build lacks stay NULL (tr_wbvh_isa_mask never offers them). */
 static const isa_entry isa_table[TR_WBVH_ISA_COUNT] = {
     [TR_WBVH_ISA_SCALAR] = {tr_wbvh_intersect_scalar, tr_wbvh_occluded_scalar},
-#ifdef TR_WBVH_HAVE_X86
+#if defined(TR_WBVH_HAVE_X86) || defined(TR_WBVH_HAVE_SSE_ONLY)
     [TR_WBVH_ISA_SSE2] = {tr_wbvh_intersect_sse2, tr_wbvh_occluded_sse2},
+#endif
+#ifdef TR_WBVH_HAVE_X86
     [TR_WBVH_ISA_AVX2] = {tr_wbvh_intersect_avx2, tr_wbvh_occluded_avx2},
     [TR_WBVH_ISA_AVX512] = {tr_wbvh_intersect_avx512, tr_wbvh_occluded_avx512},
 #endif
@@ -312,6 +314,11 @@ int tr_wbvh_isa_from_name(const char *name) {
 
 unsigned tr_wbvh_isa_mask(void) {
     unsigned mask = 1u << TR_WBVH_ISA_SCALAR;
+#ifdef TR_WBVH_HAVE_SSE_ONLY
+    /* A target whose 128-bit vectors are always there: WebAssembly with SIMD, where
+     * Emscripten maps the SSE2 intrinsics onto them (the web build, web/CMakeLists.txt). */
+    mask |= 1u << TR_WBVH_ISA_SSE2;
+#endif
 #ifdef TR_WBVH_HAVE_X86
     /* __builtin_cpu_supports reads the CPUID bits libgcc (or compiler-rt) gathered at
      * start-up; for the AVX features it also checks that the OS saves the wide
