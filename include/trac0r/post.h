@@ -255,8 +255,8 @@ int tr_filter_atrous(const tr_gbuffer *g, const float *in, float *out, const tr_
  * around each pixel, at two window sizes chosen per pixel by an error estimate. Zero
  * fields take their defaults. */
 typedef struct tr_denoise_params {
-    int radius;       /* the large window's half-width in pixels, 1..64 (default 9) */
-    int radius_small; /* the small window's, 1..64 (default 3) */
+    int radius;       /* the large window's half-width in pixels, 1..64 (default 6) */
+    int radius_small; /* the small window's, 1..64 (default 1) */
     float firefly_k;  /* standard errors a spike keeps (default 3): larger keeps more */
 } tr_denoise_params;
 

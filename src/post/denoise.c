@@ -57,14 +57,20 @@
  * other (upper triangle) and with the targets. */
 #define DN_FF (DN_F * (DN_F + 1) / 2)
 #define DN_S (1 + DN_F + 3 + DN_FF + 3 * DN_F)
+/* The large window is taken where the smoothed squared difference of the two fits is
+ * below this times the small fit's variance. In theory 2 (the difference holds both
+ * noises); measured best at 0.5 on the shipped boxes (docs/log/2026-denoise.md), as the
+ * variance of the film's sums of squares treats the samples as independent and pt's
+ * stratified samples are more accurate than that (docs/cli.md, --passes variance). */
+#define DN_SELECT 0.5f
 /* Rows per strip: each strip starts its running sums afresh. */
 #define DN_STRIP 48
 
 tr_denoise_params tr_denoise_params_default(void) {
     tr_denoise_params p;
     memset(&p, 0, sizeof p);
-    p.radius = 9;
-    p.radius_small = 3;
+    p.radius = 6;
+    p.radius_small = 1;
     p.firefly_k = 3.0f;
     return p;
 }
@@ -509,7 +515,7 @@ int tr_denoise_film(const tr_film *film, const tr_denoise_params *params, int th
         for (long i = 0; i < (long)n; ++i) {
             /* The two fits differ by the large window's bias and the small one's noise
              * (var * leverage): the large window wins where its bias is the smaller. */
-            const int large = pl[P_E2][i] < 2.0f * pl[P_V2][i];
+            const int large = pl[P_E2][i] < DN_SELECT * pl[P_V2][i];
             for (int k = 0; k < 3; ++k) {
                 const float v = large ? fa[k][i] : fb[k][i];
                 const float a = alb[3 * i + k];
