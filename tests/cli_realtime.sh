@@ -34,8 +34,8 @@ cmp -s vfilmic.png filmic.png || fail "view and render differ through filmic"
 "$BIN" render --width 40 --height 30 --spp 3 --tonemap filmic --out filmic.pfm 2>/dev/null
 cmp -s plain.pfm filmic.pfm || fail "--tonemap filmic changed the PFM"
 
-# --denoise: the a-trous filter guided by the passes brings a 4-spp render closer to a
-# converged one (by more than 3 dB; measured 5.8 dB at 128x128).
+# --denoise: the offline denoiser guided by the passes brings a 4-spp render closer to a
+# converged one (by more than 3 dB).
 "$BIN" render "$CLASSIC" --width 64 --height 64 --spp 256 --seed 99 --out ref.pfm 2>/dev/null ||
     fail "reference render failed"
 "$BIN" render "$CLASSIC" --width 64 --height 64 --spp 4 --out noisy.pfm 2>/dev/null

@@ -26,7 +26,10 @@ static void render_help(void) {
            "\n"
            "Options:\n"
            "%s"
-           "  --spp N              samples per pixel, 1..1000000 (default 16)\n"
+           "  --spp N              samples per pixel, 1..1000000: exactly N everywhere\n"
+           "                       (default: a scene file's render.spp, else adaptive\n"
+           "                       sampling to --noise-threshold 0.01 up to 64 spp and\n"
+           "                       --denoise; 16 spp with --stride, --checkpoint or mpirun)\n"
            "  --stride K           preview mode: trace every K-th pixel in x and y and fill\n"
            "                       KxK blocks, 1..64 (default 1: every pixel)\n"
            "  --exposure EV        PNG exposure in stops, -20..20 (default 0): radiance is\n"
@@ -54,7 +57,8 @@ static void render_help(void) {
            "                       bit-identical to an uninterrupted render of --spp samples\n"
            "                       (default: the checkpoint's); the scene and options must\n"
            "                       be the checkpoint's\n"
-           "  --noise-threshold E  adaptive sampling, 0..1 (default 0: off): 8x8-pixel tiles\n"
+           "  --noise-threshold E  adaptive sampling, 0..1 (default 0.01 without --spp, else\n"
+           "                       0: off): 8x8-pixel tiles\n"
            "                       stop once their pixels' mean error estimate is below E (at\n"
            "                       16, 32, 64, ... spp: the mean of N samples against that\n"
            "                       of the first N/2, relative to the square root of the\n"
@@ -64,9 +68,13 @@ static void render_help(void) {
            "  --tonemap CURVE      PNG display curve: clamp (default) or filmic (an ACES-like\n"
            "                       fitted curve that rolls highlights off); PFM and EXR\n"
            "                       stay linear\n"
-           "  --denoise            filter the final image with the edge-avoiding a-trous\n"
-           "                       filter guided by the albedo, normal and depth passes\n"
-           "                       (docs/realtime.md); the passes are rendered for it\n"
+           "  --denoise            filter the final image with the offline denoiser: fireflies\n"
+           "                       re-weighted from the pixels' sample statistics, then a\n"
+           "                       first-order regression on the albedo, normal and depth\n"
+           "                       passes (docs/cli.md); the passes are rendered for it.\n"
+           "                       On by default when no --spp is given\n"
+           "  --no-denoise         write the image as rendered (without --spp: adaptive\n"
+           "                       sampling alone)\n"
            "  --time-limit S       stop before a pass that would end after S seconds,\n"
            "                       0..1e6 (default 0: none); the image is complete, and the\n"
            "                       same as one rendered with the spp it reached (and its\n"
@@ -190,6 +198,9 @@ static int render_option(cli_args *a, void *user) {
     } else if (cli_is(a, "--denoise")) {
         job->denoise = 1;
         *rc = CLI_OK;
+    } else if (cli_is(a, "--no-denoise")) {
+        job->no_denoise = 1;
+        *rc = CLI_OK;
     } else if (cli_is(a, "--verbose")) {
         job->verbose = 1;
         *rc = CLI_OK;
@@ -268,6 +279,7 @@ int render_job_setup(render_job *job, int argc, char **argv, int *done) {
     if (!job->spp_given && file.has_spp) {
         job->spp = file.spp;
     }
+    render_apply_defaults(job, stride, file.has_spp);
     if (tr_film_check_size(c->width, c->height, &err) != TR_OK) {
         return cli_error(a, "--width/--height: %s", err.msg);
     }
@@ -401,7 +413,10 @@ static const char *stop_note(const render_job *job, const tr_session_progress *p
         const double pixels = (double)job->common.width * job->common.height;
         const int n =
             snprintf(buf, size, "of %u%s, %.1f spp on average", p->spp,
-                     p->end == TR_SESSION_TIME_LIMIT ? ", time limit" : "",
+                     p->end == TR_SESSION_TIME_LIMIT  ? ", time limit"
+                     : p->end == TR_SESSION_CONVERGED ? ", noise threshold reached"
+                     : p->end == TR_SESSION_DONE && job->noise_threshold > 0.0f ? ", cap reached"
+                                                                                : "",
                      (double)(p->pixel_samples + (uint64_t)p->first * (uint64_t)pixels) / pixels);
         if (job->noise_threshold > 0.0f && n > 0 && (size_t)n < size) {
             snprintf(buf + n, size - (size_t)n, ", %u of %u tiles converged", p->tiles_done,

@@ -32,6 +32,8 @@ typedef struct render_job {
     float noise_threshold; /* --noise-threshold (0: off) */
     float time_limit;      /* --time-limit seconds (0: none) */
     int verbose;           /* --verbose: where the time went */
+    int no_denoise;        /* --no-denoise */
+    int auto_spp;          /* no sample count stated: adaptive to a threshold, denoised */
     double started;        /* tr_time_now() when the setup began */
 } render_job;
 
@@ -43,6 +45,16 @@ double render_cpu_seconds(void);
  * *done = 1 (help printed, or an error reported). */
 int render_job_setup(render_job *job, int argc, char **argv, int *done);
 void render_job_free(render_job *job);
+
+/* Without a stated sample count: samples up to this cap (64: a cap of 4096 kept a few
+ * tiles rendering for thousands of small passes, minutes on the box at threshold 0.1;
+ * 64 denoised measured 38.9 dB in 7 s, docs/log/2026-denoise.md), adaptively to this noise
+ * threshold (--noise-threshold when given), and denoised unless --no-denoise. */
+#define RENDER_AUTO_SPP_CAP 64u
+#define RENDER_AUTO_THRESHOLD 0.01f
+/* Turns those defaults on when the job states no sample count and may sample adaptively
+ * (every pixel traced, no checkpoint, a single process); render_job_setup calls it. */
+void render_apply_defaults(render_job *job, int stride, int file_has_spp);
 
 /* The session's settings the options describe (progress left to the caller). */
 tr_session_desc render_session_desc(const render_job *job);

@@ -246,6 +246,29 @@ int tr_filter_bilateral(const tr_gbuffer *g, const float *in, float *out, const 
 int tr_filter_atrous(const tr_gbuffer *g, const float *in, float *out, const tr_recon_params *p,
                      int threads, tr_error *err);
 
+/* The offline denoiser (src/post/denoise.c): a finished film's radiance cleaned with its
+ * feature passes. Fireflies are re-weighted from the pixels' own sample statistics (the
+ * film's TR_PASS_VARIANCE sums of squares: a spike above its neighbourhood that its
+ * samples cannot vouch for is brought back to it), the first hit's emission
+ * (TR_PASS_EMISSION) is kept apart, and the illumination (radiance / albedo) is a
+ * first-order regression on normal, depth, albedo and screen position over a window
+ * around each pixel, at two window sizes chosen per pixel by an error estimate. Zero
+ * fields take their defaults. */
+typedef struct tr_denoise_params {
+    int radius;       /* the large window's half-width in pixels, 1..64 (default 6) */
+    int radius_small; /* the small window's, 1..64 (default 1) */
+    float firefly_k;  /* standard errors a spike keeps (default 3): larger keeps more */
+} tr_denoise_params;
+
+tr_denoise_params tr_denoise_params_default(void);
+/* Denoises `film`, which must keep the albedo, normal and depth passes (the variance and
+ * emission passes are used when kept; without the variance pass every spike above its
+ * neighbourhood is taken for a firefly), into out (3 floats per pixel, the film's size),
+ * on up to `threads` OpenMP threads (0: the default); the result does not depend on the
+ * thread count. params may be NULL (the defaults). */
+int tr_denoise_film(const struct tr_film *film, const tr_denoise_params *params, int threads,
+                    float *out, tr_error *err);
+
 #ifdef __cplusplus
 }
 #endif

@@ -228,6 +228,17 @@ static tr_material map_material(import_ctx *c, const struct aiMaterial *m, tr_ma
     if (has_base) {
         diffuse = v3(clamp01(base.r), clamp01(base.g), clamp01(base.b));
     }
+    /* A file without materials gets a stand-in from Assimp: STL's is named
+     * AI_DEFAULT_MATERIAL_NAME, PLY's is unnamed with a white Kd. Their white would glow
+     * under the white sky a bare model is rendered in: the documented 0.6 grey instead
+     * (docs/scene-format.md). */
+    const int stand_in = strcmp(mname, AI_DEFAULT_MATERIAL_NAME) == 0 ||
+                         (strcmp(mname, "(unnamed)") == 0 && !has_base && kd.r == 1.0f &&
+                          kd.g == 1.0f && kd.b == 1.0f);
+    if (stand_in && aiGetMaterialTextureCount(m, aiTextureType_DIFFUSE) == 0 &&
+        aiGetMaterialTextureCount(m, aiTextureType_BASE_COLOR) == 0) {
+        diffuse = v3(0.6f, 0.6f, 0.6f);
+    }
     float e[3] = {ke.r, ke.g, ke.b};
     for (int i = 0; i < 3; ++i) {
         e[i] = isfinite(e[i]) && e[i] > 0.0f ? (e[i] > 1e7f ? 1e7f : e[i]) : 0.0f;

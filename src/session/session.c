@@ -247,7 +247,10 @@ tr_session *tr_session_create(tr_device *dev, const tr_scene *scene, const tr_re
         s->desc = *desc;
     }
     if (s->desc.denoise) {
-        s->cfg.passes |= TR_PASS_ALBEDO | TR_PASS_NORMAL | TR_PASS_DEPTH;
+        /* The denoiser's guides, the sample statistics it judges fireflies by and the
+         * emission it keeps out of the filter. */
+        s->cfg.passes |=
+            TR_PASS_ALBEDO | TR_PASS_NORMAL | TR_PASS_DEPTH | TR_PASS_VARIANCE | TR_PASS_EMISSION;
     }
     const tr_camera *cam = tr_scene_camera(scene);
     s->width = cam->screen_width;
@@ -371,16 +374,11 @@ int tr_session_denoise(tr_session *s, tr_film *out, tr_error *err) {
                             "denoising needs the albedo, normal and depth passes "
                             "(tr_session_desc.denoise)");
     }
-    tr_gbuffer g = {0};
-    const tr_recon_params p = tr_recon_params_default();
-    int rc = tr_gbuffer_init(&g, film->width, film->height, err);
-    rc = rc == TR_OK ? tr_gbuffer_from_film(&g, film, err) : rc;
-    rc = rc == TR_OK ? tr_film_init(out, film->width, film->height, err) : rc;
-    rc = rc == TR_OK ? tr_filter_atrous(&g, g.color, out->sum, &p, 0, err) : rc;
+    int rc = tr_film_init(out, film->width, film->height, err);
+    rc = rc == TR_OK ? tr_denoise_film(film, NULL, 0, out->sum, err) : rc;
     for (size_t i = 0; rc == TR_OK && i < (size_t)film->width * film->height; ++i) {
         out->count[i] = film->count[i] ? 1u : 0u;
     }
-    tr_gbuffer_free(&g);
     if (rc != TR_OK) {
         tr_film_free(out);
     }
