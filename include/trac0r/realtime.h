@@ -57,6 +57,9 @@ typedef struct tr_realtime tr_realtime;
 /* The most samples per pixel a moving frame takes under a budget, and the spacing of
  * moving frames' sample numbers. */
 #define TR_REALTIME_MAX_SPP 16
+/* The indirect clamp of real-time frames where the desc names none
+ * (tr_realtime_desc.clamp_indirect; docs/realtime.md has the measurements behind it). */
+#define TR_REALTIME_CLAMP_INDIRECT 4.0f
 /* The largest resolution divisor of a moving frame under a budget. */
 #define TR_REALTIME_MAX_SCALE 16.0f
 
@@ -90,6 +93,12 @@ typedef struct tr_realtime_desc {
      * be handed to several methods, "off" included. 0 (default): only when the frame's
      * method is not off. */
     int keep_passes;
+    /* Firefly control of real-time frames (tr_render_config.clamp_indirect and
+     * regularize; frames that accumulate at rest take the config's). clamp_indirect: 0
+     * (default): TR_REALTIME_CLAMP_INDIRECT; above 0: that luminance; below 0: no clamp.
+     * regularize: 0 (default) or 1: path regularization on; -1: off. */
+    float clamp_indirect;
+    int regularize;
 } tr_realtime_desc;
 
 /* One frame's request; zeroed fields take their defaults, only camera is required. */

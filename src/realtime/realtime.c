@@ -23,6 +23,8 @@ struct tr_realtime {
     tr_recon_params params;
     int rt_sampler;  /* TR_SAMPLER_* of real-time frames */
     int rt_roulette; /* their roulette start */
+    float rt_clamp;  /* their indirect clamp (0: none) */
+    int rt_regularize;
     uint32_t spp;
     int accumulate, animated, keep_passes;
     int on_device; /* the reconstruction runs where the film lies (an OpenCL device) */
@@ -111,6 +113,12 @@ tr_realtime *tr_realtime_create(tr_device *dev, tr_scene *scene, const tr_realti
                      d->sampler);
         return NULL;
     }
+    if (!(d->clamp_indirect <= 3.0e38f) || d->regularize < -1 || d->regularize > 1) {
+        tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                     "tr_realtime_desc: clamp_indirect %g or regularize %d out of range",
+                     (double)d->clamp_indirect, d->regularize);
+        return NULL;
+    }
     if (d->spp > TR_REALTIME_MAX_SPP * 64u) {
         tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
                      "tr_realtime_desc.spp: expected at most %u, got %u", TR_REALTIME_MAX_SPP * 64u,
@@ -131,6 +139,10 @@ tr_realtime *tr_realtime_create(tr_device *dev, tr_scene *scene, const tr_realti
     rt->params = d->recon ? *d->recon : tr_recon_params_default();
     rt->rt_sampler = d->sampler ? d->sampler - 1 : TR_SAMPLER_REALTIME;
     rt->rt_roulette = cfg.roulette_start ? cfg.roulette_start : TR_ROULETTE_START_REALTIME;
+    rt->rt_clamp = d->clamp_indirect > 0.0f    ? d->clamp_indirect
+                   : d->clamp_indirect == 0.0f ? TR_REALTIME_CLAMP_INDIRECT
+                                               : 0.0f;
+    rt->rt_regularize = d->regularize >= 0 ? 1 : 0;
     rt->spp = d->spp ? d->spp : 1u;
     rt->accumulate = d->accumulate != 0;
     rt->animated = d->animated != 0;
@@ -307,6 +319,10 @@ int tr_realtime_render(tr_realtime *rt, const tr_realtime_frame_desc *fd, tr_err
     if (rt->view_moving || rt->animated || !rt->accumulate) {
         cfg.roulette_start = rt->rt_roulette;
         cfg.sampler = rt->rt_sampler;
+        /* Fireflies a filter would spread over a region are clamped and regularized away
+         * (biased; docs/realtime.md measures by how much). */
+        cfg.clamp_indirect = rt->rt_clamp;
+        cfg.regularize = rt->rt_regularize;
     }
     const uint32_t n = rt->view_moving && fd->budget_ms > 0.0 ? rt->budget_spp : rt->spp;
     const uint32_t sample = first_sample(rt, n);
