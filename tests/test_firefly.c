@@ -145,7 +145,7 @@ static void test_clamp_and_regularize(void) {
     printf("clamp %g: worst 8x8 block bias %.2f %%, image %.2f %%\n", (double)limit, 100.0 * worst,
            100.0 * image_rel);
     /* The bounds docs/realtime.md states for this scene, with a margin. */
-    CHECK(worst < 0.16 && image_rel > -0.05, "clamp %g: block bias %.3f, image %.3f", (double)limit,
+    CHECK(worst < 0.05 && image_rel > -0.02, "clamp %g: block bias %.3f, image %.3f", (double)limit,
           worst, image_rel);
 
     /* At 4 samples per pixel (another seed) the clamped image is the closer one. */
@@ -168,7 +168,7 @@ static void test_clamp_and_regularize(void) {
     const double worst_reg = block_bias(&reg, &ref, &image_rel);
     printf("regularization: worst 8x8 block difference %.2f %%, image %.2f %%\n", 100.0 * worst_reg,
            100.0 * image_rel);
-    CHECK(worst_reg < 0.25 && fabs(image_rel) < 0.05,
+    CHECK(worst_reg < 0.15 && fabs(image_rel) < 0.02,
           "regularization: block difference %.3f, image %.3f", worst_reg, image_rel);
     tr_film_free(&reg);
     tr_film_free(&raw4);

@@ -415,7 +415,8 @@ static int parse_options(cli_args *a, rt_opts *o, int *done) {
             rc = cli_parse_u32(a, 1, TR_MAX_DEPTH_LIMIT, &o->bias_depth);
         } else if (cli_is(a, "--reference-sampler")) {
             rc = cli_parse_sampler(a, &o->ref_sampler);
-        } else if ((rc = cli_recon_option(a, &o->params)) != -1) {
+        } else if ((rc = cli_recon_option(a, &o->params)) != -1 ||
+                   (rc = cli_restir_option(a, &o->c)) != -1) {
             /* handled: rc is CLI_OK or CLI_USAGE */
         } else if (cli_is(a, "--animate")) {
             o->animate = 1;
@@ -530,6 +531,8 @@ static int open_loop(rt_run *r) {
     desc.animated = o->animate;
     desc.keep_passes = 1; /* one frame goes to every method */
     cli_realtime_firefly(&o->c, &desc.clamp_indirect, &desc.regularize);
+    desc.restir = o->c.restir;
+    desc.restir_unbiased = o->c.restir_unbiased;
     if (!(r->rt = tr_realtime_create(r->be.dev, r->scene, &desc, &err))) {
         fprintf(stderr, "trac0r bench realtime: %s\n", err.msg);
         return CLI_FAILURE;

@@ -104,6 +104,8 @@ void cli_common_default(cli_common *c) {
     c->light_sampling = -1;
     c->clamp_indirect = -1.0f;
     c->regularize = -1;
+    c->restir = TR_REALTIME_RESTIR_OFF;
+    c->restir_unbiased = 0;
     snprintf(c->device, sizeof c->device, "cpu");
 }
 
@@ -430,7 +432,30 @@ const char cli_recon_help[] =
     "  --svgf-split         SVGF filters direct and indirect light apart (CPU only)\n"
     "  --resolve-emission N emitters' edges: N x N camera rays per edge pixel, added\n"
     "                       after the filters, 0..16 (default 4; 0: the emission is\n"
-    "                       filtered with the rest; pt only, CPU reconstruction only)\n";
+    "                       filtered with the rest; pt only, CPU reconstruction only)\n"
+    "  --restir off|di      di: the direct light at the first surfaces by ReSTIR DI\n"
+    "                       (reservoir resampling reused over frames and neighbours;\n"
+    "                       pt on the CPU only; default off)\n"
+    "  --restir-unbiased    ReSTIR merges with Talbot's MIS weights, no visibility reuse\n"
+    "                       (unbiased; default: 1/M weights, biased, less noisy)\n";
+
+int cli_restir_option(cli_args *a, cli_common *c) {
+    if (cli_is(a, "--restir")) {
+        if (cli_value(a) != CLI_OK) {
+            return CLI_USAGE;
+        }
+        if (strcmp(a->value, "off") != 0 && strcmp(a->value, "di") != 0) {
+            return cli_error(a, "--restir: expected off or di, got '%s'", a->value);
+        }
+        c->restir = strcmp(a->value, "di") == 0 ? TR_REALTIME_RESTIR_DI : TR_REALTIME_RESTIR_OFF;
+        return CLI_OK;
+    }
+    if (cli_is(a, "--restir-unbiased")) {
+        c->restir_unbiased = 1;
+        return CLI_OK;
+    }
+    return -1;
+}
 
 int cli_recon_option(cli_args *a, tr_recon_params *p) {
     if (cli_is(a, "--alpha-min")) {

@@ -37,6 +37,8 @@ typedef struct cli_common {
     int light_sampling;       /* --light-sampling: TR_LIGHT_SAMPLING_*, -1 for the scene's own */
     float clamp_indirect;     /* --clamp-indirect: pt's indirect clamp, -1 for the default */
     int regularize;           /* --regularize: 1 on, 0 off, -1 for the default */
+    int restir;               /* --restir: TR_REALTIME_RESTIR_* (view, bench realtime) */
+    int restir_unbiased;      /* --restir-unbiased */
 } cli_common;
 
 #define CLI_GIVEN_WIDTH 1u
@@ -93,6 +95,9 @@ const char *cli_sampler_name(int sampler);
  * value, and -1 if the option is not one of them. */
 extern const char cli_recon_help[];
 int cli_recon_option(cli_args *a, tr_recon_params *p);
+/* --restir off|di and --restir-unbiased (view, bench realtime; listed in cli_recon_help)
+ * into c; the same return values. */
+int cli_restir_option(cli_args *a, cli_common *c);
 
 /* Builds the scene named by c->scene for c->width x c->height into `scene` (a handle
  * from tr_scene_create; NULL is reported as out of memory) and commits it with

@@ -69,7 +69,8 @@ typedef struct tr_render_config {
      * samples), 0 (default): off. tr_realtime turns both on for real-time frames. */
     float clamp_indirect;
     int regularize;
-    /* 1: pt leaves out the direct light at the first non-specular vertex that light
+    /* 1: pt leaves out the direct light at the camera ray's first surface (where it is
+     * not specular) that light
      * sampling can produce, for a stage that adds it (tr_realtime's ReSTIR DI); 0
      * (default): pt's whole estimate. */
     int no_primary_direct;

@@ -116,9 +116,9 @@ TR_FN tr_vec3 tr_pt_add(tr_vec3 radiance, tr_vec3 c, int indirect, float limit) 
 /* tr_trace_pt_rr with firefly control: contributions over indirect vertices clamped to
  * luminance clamp_indirect (0: none), and with TR_FRAME_REGULARIZE in `flags` the lobes
  * of vertices after the first non-specular one roughened (tr_bsdf_regularize). With
- * TR_FRAME_NO_PRIMARY_DIRECT the direct light at the first non-specular vertex that light
- * sampling can produce (its light samples, and emitters in the light table, the
- * environment or the sun found by its BSDF sample) is left out, for a stage that
+ * TR_FRAME_NO_PRIMARY_DIRECT the direct light at the camera ray's first surface, where that
+ * is not specular, that light sampling can produce (its light samples, and emitters in the light
+ * table, the environment or the sun found by its BSDF sample) is left out, for a stage that
  * estimates it (restir.h); the BSDF sample still finds emission no light sample can
  * (a principled material's), with weight 1 as before. With clamp 0 and no flags the
  * same numbers as without. */
@@ -143,7 +143,7 @@ TR_FN tr_vec3 tr_trace_pt_ff(const tr_scene_view *s, tr_ray ray, int max_depth, 
         if (!tr_intersect_scene(s, &ray, &hit)) {
             /* A ray leaving the scene sees the environment (BSDF strategy). */
             const int indirect = first_nd != 0 && seg > first_nd + 1;
-            const int skip = no_primary && first_nd != 0 && seg == first_nd + 1;
+            const int skip = no_primary && first_nd == 1 && seg == 2;
             if (s->env_count > 0u && !skip) {
                 tr_vec3 le = tr_env_radiance(s, ray.dir);
                 float w = prev_delta ? 1.0f : tr_mis_power(prev_pdf, tr_env_pdf(s, ray.dir));
@@ -194,7 +194,8 @@ TR_FN tr_vec3 tr_trace_pt_ff(const tr_scene_view *s, tr_ray ray, int max_depth, 
 
         /* Emission found by the BSDF strategy (or the camera). */
         tr_vec3 le = tr_emitted(&m, wo);
-        if (!tr_v3_is_zero(le) && !(no_primary && primary_direct && m.emittance > 0.0f)) {
+        if (!tr_v3_is_zero(le) &&
+            !(no_primary && primary_direct && first_nd == 1 && m.emittance > 0.0f)) {
             float w = 1.0f;
             if (!prev_delta) {
                 w = tr_mis_power(prev_pdf, tr_light_pdf_n(s, prev_p, prev_n, hit.triangle, p));
@@ -205,7 +206,7 @@ TR_FN tr_vec3 tr_trace_pt_ff(const tr_scene_view *s, tr_ray ray, int max_depth, 
         /* The light samples here: indirect light unless this is the first non-specular
          * vertex, where a stage may estimate them instead. */
         const int nee_indirect = first_nd != seg;
-        const int nee = !tr_bsdf_is_delta(&m) && !(no_primary && !nee_indirect);
+        const int nee = !tr_bsdf_is_delta(&m) && !(no_primary && seg == 1 && !nee_indirect);
         if (surface && seg == 1) {
             surface->emission = radiance; /* the first hit's emission, nothing else yet */
         }

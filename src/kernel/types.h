@@ -99,8 +99,9 @@ TR_STATIC_ASSERT(sizeof(tr_frame) == 156, "tr_frame layout");
 /* tr_frame.flags: pt roughens glossy and specular lobes after the first non-specular
  * vertex (path regularization, integrator_pt.h). */
 #define TR_FRAME_REGULARIZE 1u
-/* tr_frame.flags: pt leaves out the direct light at the first non-specular vertex (its
- * light sample and the emission its BSDF sample finds next), which a later stage adds
+/* tr_frame.flags: pt leaves out the direct light at the camera ray's first surface where that
+ * is not specular (its light samples and the emission its BSDF sample finds next), which a
+ * later stage adds
  * (ReSTIR DI, src/kernel/restir.h). */
 #define TR_FRAME_NO_PRIMARY_DIRECT 2u
 
