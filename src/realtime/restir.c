@@ -36,6 +36,7 @@ tr_restir_params tr_restir_params_default(void) {
     p.temporal_cap = 20.0f;
     p.unbiased = 0;
     p.temporal = 1;
+    p.tree = 0;
     return p;
 }
 
@@ -124,7 +125,10 @@ int tr_restir_stage_run(tr_restir_stage *st, const tr_scene *scene, const tr_cam
         return TR_ERR;
     }
     threads = threads > 0 ? threads : tr_default_threads();
-    const tr_scene_view view = tr_scene_view_of(scene);
+    tr_scene_view view = tr_scene_view_of(scene);
+    if (!p->tree) {
+        view.light_node_count = 0u; /* tr_light_sample_n then draws from the power CDF */
+    }
     const tr_scene_view *s = &view;
     const int temporal = p->temporal && st->have_prev;
     const tr_camera prev_cam = st->prev_cam;

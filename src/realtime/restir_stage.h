@@ -21,6 +21,8 @@ typedef struct tr_restir_params {
     float temporal_cap; /* the previous frame's confidence at most this times the new one's */
     int unbiased;       /* Talbot MIS, no visibility reuse (else 1/M and visibility reuse) */
     int temporal;       /* reuse the previous frame's reservoirs */
+    int tree;           /* candidates from the light tree where the scene has one (else the
+                           power CDF, cheaper: resampling weighs distance and angle) */
 } tr_restir_params;
 
 tr_restir_params tr_restir_params_default(void);
