@@ -245,4 +245,25 @@ b64=$(bias 64)
 awk -v a="$b2" -v b="$b3" -v c="$b64" 'BEGIN { exit !(a + 2 < b && b + 5 < c && c > 40) }' ||
     fail "bench realtime: depth bias $b2 / $b3 / $b64 dB at depths 2 / 3 / 64"
 
+# ReSTIR DI and the firefly control: the frames change (the options reach the library),
+# the references do not, and unknown values are usage errors (status 2).
+rt_psnr() { # CSV: the raw frames' mean PSNR
+    awk -F, '$1 == "off" { s += $7; n += 1 } END { printf "%.4f", s / n }' "$1"
+}
+"$BIN" bench realtime "$CLASSIC" --width 32 --height 24 --frames 3 --reference-spp 8 --threads 1 \
+    --methods off,accumulate --out plainff >/dev/null 2>&1 || fail "bench realtime (plain) failed"
+"$BIN" bench realtime "$CLASSIC" --width 32 --height 24 --frames 3 --reference-spp 8 --threads 1 \
+    --methods off,accumulate --restir di --out restir >/dev/null 2>restir.err ||
+    fail "bench realtime --restir di: $(cat restir.err)"
+[ "$(wc -l <restir.csv)" -eq $((1 + 2 * 3)) ] || fail "--restir di: $(wc -l <restir.csv) CSV lines"
+[ "$(rt_psnr plainff.csv)" != "$(rt_psnr restir.csv)" ] || fail "--restir di changed no frame"
+"$BIN" bench realtime "$CLASSIC" --width 32 --height 24 --frames 2 --reference-spp 8 --threads 1 \
+    --methods off --restir di --restir-unbiased --clamp-indirect 0 --regularize off --out unb \
+    >/dev/null 2>unb.err || fail "bench realtime --restir-unbiased: $(cat unb.err)"
+for bad in "--restir gi" "--regularize maybe" "--clamp-indirect -1"; do
+    # shellcheck disable=SC2086
+    "$BIN" bench realtime "$CLASSIC" --frames 2 $bad >/dev/null 2>&1
+    [ $? -eq 2 ] || fail "bench realtime $bad: not a usage error"
+done
+
 cli_end cli_realtime

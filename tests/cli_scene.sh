@@ -173,6 +173,19 @@ grep -qF "warnings:   0" info.txt || fail "cornell-thesis: $(cat info.txt)"
 "$BIN" info "$SRC/scenes/cornell-classic.json" >info.txt || fail "info cornell-classic.json failed"
 grep -qF "bounds:     (0, 0, 0) .. (556, 548.8, 559.2)" info.txt || fail "cornell-classic: $(cat info.txt)"
 grep -qF "triangles:  32 " info.txt || fail "cornell-classic: $(cat info.txt)"
+# The real-time bench's hard scenes load without warnings and render.
+"$BIN" info "$SRC/scenes/lamps-pillars.json" >info.txt || fail "info lamps-pillars.json failed"
+grep -qF "emitters:   48 materials, 96 triangles" info.txt || fail "lamps-pillars: $(cat info.txt)"
+grep -qF "warnings:   0" info.txt || fail "lamps-pillars: $(cat info.txt)"
+"$BIN" info "$SRC/scenes/window-room.json" >info.txt || fail "info window-room.json failed"
+grep -qF "sun:" info.txt || fail "window-room: $(cat info.txt)"
+grep -qF "warnings:   0" info.txt || fail "window-room: $(cat info.txt)"
+for hard in lamps-pillars window-room; do
+    "$BIN" render "$SRC/scenes/$hard.json" --width 16 --height 12 --spp 1 --out "$hard.pfm" \
+        >/dev/null 2>&1 || fail "render $hard.json failed"
+    [ -s "$hard.pfm" ] || fail "render $hard.json wrote no image"
+    rm -f "$hard.pfm"
+done
 rm -f info.txt
 
 # The scene with a model from Debian's assimp-testmodels (required: install-deps

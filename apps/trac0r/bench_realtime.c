@@ -67,6 +67,8 @@ static void realtime_help(void) {
            "                       Sobol points, zsobol with screen-space blue noise\n"
            "  --roulette-start N   as for render; the frames' default is 2, the references'\n"
            "                       always 5\n"
+           "  --clamp-indirect V, --regularize on|off   the frames' firefly control (default\n"
+           "                       4 and on; 0 and off turn them off); references never\n"
            "  --reference-sampler NAME   the references' sampler (default sobol, whatever the\n"
            "                       frames'). The two-halves estimate of a reference's own\n"
            "                       error holds for independent samples: compare samplers\n"
@@ -280,7 +282,8 @@ static int own_option(cli_args *a, void *user) {
         rc = cli_parse_u32(a, 1, TR_MAX_DEPTH_LIMIT, &o->bias_depth);
     } else if (cli_is(a, "--reference-sampler")) {
         rc = cli_parse_sampler(a, &o->ref_sampler);
-    } else if ((rc = cli_recon_option(a, &o->params)) != -1) {
+    } else if ((rc = cli_recon_option(a, &o->params)) != -1 ||
+               (rc = cli_restir_option(a, &o->c)) != -1) {
         /* handled: rc is CLI_OK or CLI_USAGE */
     } else if (cli_is(a, "--animate")) {
         o->animate = 1;
@@ -398,6 +401,9 @@ static int open_loop(rt_run *r) {
     desc.spp = o->spp;
     desc.animated = o->animate;
     desc.keep_passes = 1; /* one frame goes to every method */
+    cli_realtime_firefly(&o->c, &desc.clamp_indirect, &desc.regularize);
+    desc.restir = o->c.restir;
+    desc.restir_unbiased = o->c.restir_unbiased;
     if (!(r->rt = tr_realtime_create(r->be.dev, r->scene, &desc, &err))) {
         fprintf(stderr, "trac0r bench realtime: %s\n", err.msg);
         return CLI_FAILURE;
@@ -418,6 +424,8 @@ static int open_loop(rt_run *r) {
      * --roulette-start the frames have (both are unbiased). */
     r->rcfg.sampler = o->ref_sampler >= 0 ? o->ref_sampler : TR_SAMPLER_SOBOL;
     r->rcfg.roulette_start = TR_ROULETTE_START_PT;
+    r->rcfg.clamp_indirect = 0.0f; /* the references are unbiased */
+    r->rcfg.regularize = 0;
     /* Frames and references alike are rendered at this depth. */
     r->depth = cfg.max_depth ? cfg.max_depth : tr_default_max_depth(cfg.integrator);
     return CLI_OK;

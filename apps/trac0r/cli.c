@@ -54,7 +54,13 @@ static const char help_before[] =
     "                       (default: the scene file's render.light_sampling, else auto):\n"
     "                         auto    tree from 8 emissive triangles on, else power\n"
     "                         tree    light tree: power, distance and orientation\n"
-    "                         power   in proportion to emitted power\n";
+    "                         power   in proportion to emitted power\n"
+    "  --clamp-indirect V   pt: a contribution arriving over an indirect vertex is\n"
+    "                       clamped to luminance V, 0..1e30 (0: off; default off for\n"
+    "                       render, 4 for real-time frames; biased: docs/realtime.md)\n"
+    "  --regularize on|off  pt: glossy and specular lobes after the first non-specular\n"
+    "                       vertex are roughened, so that light samples reach caustics\n"
+    "                       (default off for render, on for real-time frames; biased)\n";
 static const char help_after[] =
     "  --device DEV         cpu (the default), opencl (OpenCL device 0) or opencl:N\n"
     "                       (device N of 'trac0r info --devices'); the device traces\n"
@@ -96,6 +102,10 @@ void cli_common_default(cli_common *c) {
     c->sampler = -1;
     c->roulette_start = 0;
     c->light_sampling = -1;
+    c->clamp_indirect = -1.0f;
+    c->regularize = -1;
+    c->restir = TR_REALTIME_RESTIR_OFF;
+    c->restir_unbiased = 0;
     snprintf(c->device, sizeof c->device, "cpu");
 }
 
@@ -372,6 +382,19 @@ int cli_common_option(cli_args *a, cli_common *c) {
     if (cli_is(a, "--roulette-start")) {
         return cli_parse_int(a, 1, TR_MAX_DEPTH_LIMIT, &c->roulette_start);
     }
+    if (cli_is(a, "--clamp-indirect")) {
+        return cli_parse_float(a, 0.0f, 1e30f, &c->clamp_indirect);
+    }
+    if (cli_is(a, "--regularize")) {
+        if (cli_value(a) != CLI_OK) {
+            return CLI_USAGE;
+        }
+        if (strcmp(a->value, "on") != 0 && strcmp(a->value, "off") != 0) {
+            return cli_error(a, "--regularize: expected on or off, got '%s'", a->value);
+        }
+        c->regularize = strcmp(a->value, "on") == 0;
+        return CLI_OK;
+    }
     if (cli_is(a, "--light-sampling")) {
         if (cli_value(a) != CLI_OK) {
             return CLI_USAGE;
@@ -388,6 +411,14 @@ int cli_common_option(cli_args *a, cli_common *c) {
     return -1;
 }
 
+void cli_realtime_firefly(const cli_common *c, float *clamp_indirect, int *regularize) {
+    /* tr_realtime_desc: 0 is the default, below 0 off. */
+    *clamp_indirect = c->clamp_indirect < 0.0f    ? 0.0f
+                      : c->clamp_indirect == 0.0f ? -1.0f
+                                                  : c->clamp_indirect;
+    *regularize = c->regularize < 0 ? 0 : c->regularize ? 1 : -1;
+}
+
 const char cli_recon_help[] =
     "  --alpha-min A        the temporal average's least weight of a new frame,\n"
     "                       0.01..1 (default 0.1)\n"
@@ -402,7 +433,30 @@ const char cli_recon_help[] =
     "  --svgf-split         SVGF filters direct and indirect light apart (CPU only)\n"
     "  --resolve-emission N emitters' edges: N x N camera rays per edge pixel, added\n"
     "                       after the filters, 0..16 (default 4; 0: the emission is\n"
-    "                       filtered with the rest; pt only, CPU reconstruction only)\n";
+    "                       filtered with the rest; pt only, CPU reconstruction only)\n"
+    "  --restir off|di      di: the direct light at the first surfaces by ReSTIR DI\n"
+    "                       (reservoir resampling reused over frames and neighbours;\n"
+    "                       pt on the CPU only; default off)\n"
+    "  --restir-unbiased    ReSTIR merges with Talbot's MIS weights, no visibility reuse\n"
+    "                       (unbiased; default: 1/M weights, biased, less noisy)\n";
+
+int cli_restir_option(cli_args *a, cli_common *c) {
+    if (cli_is(a, "--restir")) {
+        if (cli_value(a) != CLI_OK) {
+            return CLI_USAGE;
+        }
+        if (strcmp(a->value, "off") != 0 && strcmp(a->value, "di") != 0) {
+            return cli_error(a, "--restir: expected off or di, got '%s'", a->value);
+        }
+        c->restir = strcmp(a->value, "di") == 0 ? TR_REALTIME_RESTIR_DI : TR_REALTIME_RESTIR_OFF;
+        return CLI_OK;
+    }
+    if (cli_is(a, "--restir-unbiased")) {
+        c->restir_unbiased = 1;
+        return CLI_OK;
+    }
+    return -1;
+}
 
 int cli_parse(cli_args *a, cli_common *c, const char *const *refused, void (*help)(void),
               int (*own)(cli_args *, void *), void *user) {

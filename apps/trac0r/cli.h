@@ -36,6 +36,10 @@ typedef struct cli_common {
     int sampler;              /* --sampler: TR_SAMPLER_*, -1 for the command's default */
     int roulette_start;       /* --roulette-start: pt's, 0 for the command's default */
     int light_sampling;       /* --light-sampling: TR_LIGHT_SAMPLING_*, -1 for the scene's own */
+    float clamp_indirect;     /* --clamp-indirect: pt's indirect clamp, -1 for the default */
+    int regularize;           /* --regularize: 1 on, 0 off, -1 for the default */
+    int restir;               /* --restir: TR_REALTIME_RESTIR_* (view, bench realtime) */
+    int restir_unbiased;      /* --restir-unbiased */
 } cli_common;
 
 #define CLI_GIVEN_WIDTH 1u
@@ -99,6 +103,9 @@ const char *cli_sampler_name(int sampler);
  * value, and -1 if the option is not one of them. */
 extern const char cli_recon_help[];
 int cli_recon_option(cli_args *a, tr_recon_params *p);
+/* --restir off|di and --restir-unbiased (view, bench realtime; listed in cli_recon_help)
+ * into c; the same return values. */
+int cli_restir_option(cli_args *a, cli_common *c);
 
 /* Builds the scene named by c->scene for c->width x c->height into `scene` (a handle
  * from tr_scene_create; NULL is reported as out of memory) and commits it with
@@ -113,6 +120,11 @@ int cli_load_scene_file(const cli_args *a, cli_common *c, tr_scene *scene, tr_sc
 
 /* One phrase describing the scene's committed acceleration structure and its build. */
 void cli_describe_accel(char *buf, size_t n, const tr_scene *s);
+
+/* The firefly control the common options name, for a real-time loop's frames: given
+ * values into *clamp_indirect and *regularize (tr_realtime_desc's fields), defaults
+ * (zero) where not given. */
+void cli_realtime_firefly(const cli_common *c, float *clamp_indirect, int *regularize);
 
 /* The help text of the common options. */
 const char *cli_common_help(void);

@@ -41,6 +41,8 @@ tr_render_config cli_render_config(const cli_common *c) {
     cfg.integrator = c->integrator;
     cfg.sampler = c->sampler >= 0 ? c->sampler : TR_SAMPLER_SOBOL;
     cfg.roulette_start = c->roulette_start;
+    cfg.clamp_indirect = c->clamp_indirect > 0.0f ? c->clamp_indirect : 0.0f;
+    cfg.regularize = c->regularize == 1;
     return cfg;
 }
 

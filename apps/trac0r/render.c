@@ -279,7 +279,7 @@ int render_job_setup(render_job *job, int argc, char **argv, int *done) {
     if (!job->spp_given && file.has_spp) {
         job->spp = file.spp;
     }
-    render_apply_defaults(job, stride, file.has_spp);
+    render_apply_defaults(job, job->stride, file.has_spp);
     if (tr_film_check_size(c->width, c->height, &err) != TR_OK) {
         return cli_error(a, "--width/--height: %s", err.msg);
     }

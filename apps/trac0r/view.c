@@ -137,6 +137,9 @@ static int view_option(cli_args *a, void *user) {
     if (rc != -1) {
         return rc;
     }
+    if ((rc = cli_restir_option(a, &o->c)) != -1) {
+        return rc;
+    }
     const struct {
         const char *name;
         const char **value;

@@ -190,7 +190,8 @@ static void *render_main(void *arg) {
 int view_renderer_start(view_renderer *r, tr_scene *scene, int animate, tr_device *dev,
                         const tr_render_config *cfg, int motion_sampler,
                         const tr_recon_params *params, const tr_camera *cam, int stride,
-                        float exposure, int curve, uint32_t max_spp, tr_error *err) {
+                        float exposure, int curve, uint32_t max_spp, const tr_realtime_desc *rt,
+                        tr_error *err) {
     memset(r, 0, sizeof *r);
     r->scene = scene;
     r->animate = animate;
@@ -207,6 +208,9 @@ int view_renderer_start(view_renderer *r, tr_scene *scene, int animate, tr_devic
     /* At rest the film accumulates with cfg's sampler, so that F12 equals `trac0r
      * render`; moving or animated frames take motion_sampler. */
     tr_realtime_desc desc = {0};
+    if (rt) {
+        desc = *rt;
+    }
     desc.config = cfg;
     desc.recon = params;
     desc.sampler = TR_REALTIME_SAMPLER(motion_sampler);

@@ -91,11 +91,14 @@ typedef struct view_renderer {
  * animated frames take `motion_sampler` (TR_SAMPLER_*) instead of cfg's, and the
  * reconstruction `params`. With
  * `animate` the thread moves the scene's last shape before every frame (and uploads the
- * scene again to a device); readers of the scene on other threads hold mu. */
+ * scene again to a device); readers of the scene on other threads hold mu. `rt` (may be
+ * NULL) gives the real-time loop's frame-stage settings (its firefly control and later
+ * stages); its other fields are ignored. */
 int view_renderer_start(view_renderer *r, tr_scene *scene, int animate, tr_device *dev,
                         const tr_render_config *cfg, int motion_sampler,
                         const tr_recon_params *params, const tr_camera *cam, int stride,
-                        float exposure, int curve, uint32_t max_spp, tr_error *err);
+                        float exposure, int curve, uint32_t max_spp, const tr_realtime_desc *rt,
+                        tr_error *err);
 /* Asks for another view (camera, size, stride or moving): restarts accumulation if it
  * differs. `moving` says that the camera is changing: frames then hold the budget. */
 void view_renderer_set_view(view_renderer *r, const tr_camera *cam, int stride, int moving);

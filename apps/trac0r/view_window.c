@@ -274,9 +274,13 @@ static int start_rendering(view_window *vw, cli_backend *be) {
     tr_render_config cfg = cli_render_config(&o->c);
     /* Moving frames: independent numbers unless --sampler names a sampler. */
     const int motion_sampler = o->c.sampler >= 0 ? o->c.sampler : TR_SAMPLER_REALTIME;
+    tr_realtime_desc rtd = {0};
+    cli_realtime_firefly(&o->c, &rtd.clamp_indirect, &rtd.regularize);
+    rtd.restir = o->c.restir;
+    rtd.restir_unbiased = o->c.restir_unbiased;
     if (view_renderer_start(&vw->r, vw->scene, o->animate, be->dev, &cfg, motion_sampler,
                             &o->recon_params, &vw->cam, vw->st.stride, vw->st.exposure, o->curve,
-                            o->max_spp, &err) != TR_OK) {
+                            o->max_spp, &rtd, &err) != TR_OK) {
         fprintf(stderr, "trac0r view: %s\n", err.msg);
         return CLI_FAILURE;
     }

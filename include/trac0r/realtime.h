@@ -57,6 +57,9 @@ typedef struct tr_realtime tr_realtime;
 /* The most samples per pixel a moving frame takes under a budget, and the spacing of
  * moving frames' sample numbers. */
 #define TR_REALTIME_MAX_SPP 16
+/* The indirect clamp of real-time frames where the desc names none
+ * (tr_realtime_desc.clamp_indirect; docs/realtime.md has the measurements behind it). */
+#define TR_REALTIME_CLAMP_INDIRECT 4.0f
 /* The largest resolution divisor of a moving frame under a budget. */
 #define TR_REALTIME_MAX_SCALE 16.0f
 
@@ -90,7 +93,25 @@ typedef struct tr_realtime_desc {
      * be handed to several methods, "off" included. 0 (default): only when the frame's
      * method is not off. */
     int keep_passes;
+    /* Firefly control of real-time frames (tr_render_config.clamp_indirect and
+     * regularize; frames that accumulate at rest take the config's). clamp_indirect: 0
+     * (default): TR_REALTIME_CLAMP_INDIRECT; above 0: that luminance; below 0: no clamp.
+     * regularize: 0 (default) or 1: path regularization on; -1: off. */
+    float clamp_indirect;
+    int regularize;
+    /* TR_REALTIME_RESTIR_DI: the direct light at the camera rays' first surfaces comes from
+     * ReSTIR DI (spatiotemporal reservoir resampling, src/kernel/restir.h) instead of pt's
+     * light sample, on a device whose frames run on the host (the CPU; elsewhere
+     * tr_realtime_create fails with TR_STATUS_UNSUPPORTED), with pt only. 0 (default,
+     * TR_REALTIME_RESTIR_OFF): pt alone. restir_unbiased: 1 merges reservoirs with
+     * Talbot's MIS weights and no visibility reuse (unbiased); 0 (default): 1/M weights
+     * and visibility reuse (biased, cheaper, less noisy). */
+    int restir;
+    int restir_unbiased;
 } tr_realtime_desc;
+
+#define TR_REALTIME_RESTIR_OFF 0
+#define TR_REALTIME_RESTIR_DI 1
 
 /* One frame's request; zeroed fields take their defaults, only camera is required. */
 typedef struct tr_realtime_frame_desc {
@@ -126,6 +147,7 @@ typedef struct tr_realtime_result {
     double spatial_ms;  /* the spatial filter */
     double resolve_ms;  /* the emission's resolve on the host (0 elsewhere) */
     uint32_t resolved;  /* the pixels it traced */
+    double restir_ms;   /* the ReSTIR DI stage (part of render_ms; 0 without it) */
 } tr_realtime_result;
 
 /* A real-time loop rendering `scene` (uploaded to dev already) on dev, which both must

@@ -60,6 +60,20 @@ typedef struct tr_render_config {
      * TR_STATUS_CANCELLED. For interactive use: another thread decides. */
     int (*cancel)(void *user);
     void *cancel_user;
+    /* pt's firefly control, for frames a filter reconstructs (biased; off by default, so
+     * that offline renders converge to the right image). clamp_indirect: the largest
+     * luminance of a contribution arriving over an indirect vertex (light that bounced at
+     * least once after the first non-specular surface), 0 (default): no clamp. regularize:
+     * 1 roughens glossy and specular lobes after the first non-specular vertex (path
+     * regularization: caustics through glass and mirrors become reachable by light
+     * samples), 0 (default): off. tr_realtime turns both on for real-time frames. */
+    float clamp_indirect;
+    int regularize;
+    /* 1: pt leaves out the direct light at the camera ray's first surface (where it is
+     * not specular) that light
+     * sampling can produce, for a stage that adds it (tr_realtime's ReSTIR DI); 0
+     * (default): pt's whole estimate. */
+    int no_primary_direct;
 } tr_render_config;
 
 typedef struct tr_render_stats {

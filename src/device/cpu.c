@@ -27,6 +27,9 @@ tr_render_config tr_render_config_default(void) {
     c.roulette_start = 0;
     c.cancel = NULL;
     c.cancel_user = NULL;
+    c.clamp_indirect = 0.0f;
+    c.regularize = 0;
+    c.no_primary_direct = 0;
     return c;
 }
 
@@ -77,6 +80,19 @@ int tr_render_config_check(const tr_render_config *cfg, tr_error *err) {
         return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
                             "roulette start %d must be in 1..%d (0: the default, %d)",
                             cfg->roulette_start, TR_MAX_DEPTH_LIMIT, TR_ROULETTE_START_PT);
+    }
+    if (!(cfg->clamp_indirect >= 0.0f && cfg->clamp_indirect <= 3.0e38f)) {
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "indirect clamp %g must be finite and at least 0 (0: off)",
+                            (double)cfg->clamp_indirect);
+    }
+    if (cfg->regularize != 0 && cfg->regularize != 1) {
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "regularize %d must be 0 or 1",
+                            cfg->regularize);
+    }
+    if (cfg->no_primary_direct != 0 && cfg->no_primary_direct != 1) {
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "no_primary_direct %d must be 0 or 1",
+                            cfg->no_primary_direct);
     }
     if ((cfg->passes & ~TR_PASS_MASK) != 0u) {
         return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "unknown pass bits 0x%x",
@@ -130,6 +146,9 @@ int tr_frame_make(tr_frame *f, const tr_camera *cam, const tr_render_config *cfg
     f->passes = cfg->passes;
     f->sampler = (uint32_t)cfg->sampler;
     f->rr_start = cfg->roulette_start ? cfg->roulette_start : TR_ROULETTE_START_PT;
+    f->clamp_indirect = cfg->clamp_indirect;
+    f->flags = (cfg->regularize ? TR_FRAME_REGULARIZE : 0u) |
+               (cfg->no_primary_direct ? TR_FRAME_NO_PRIMARY_DIRECT : 0u);
     f->rect_x = r.x;
     f->rect_y = r.y;
     f->rect_w = r.width;

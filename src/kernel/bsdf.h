@@ -36,6 +36,9 @@
  * finite in float. */
 #define TR_GGX_MIN_ALPHA 1e-3f
 
+/* tr_bsdf_params.flags: smooth glass regularized (tr_bsdf_regularize, below). */
+#define TR_BSDF_REGULARIZED 0x80000000u
+
 typedef struct tr_scatter {
     tr_vec3 wi;     /* sampled direction (unit) */
     tr_vec3 weight; /* f |cos(wi, n)| / pdf; for delta lobes the lobe's weight */
@@ -58,7 +61,112 @@ TR_FN float tr_ggx_alpha(float roughness) {
 
 /* Whether the material scatters only into isolated directions. */
 TR_FN int tr_bsdf_is_delta(const tr_bsdf_params *m) {
-    return m->type == TR_MATERIAL_GLASS || (m->type == TR_MATERIAL_GLOSSY && m->roughness <= 0.0f);
+    return (m->type == TR_MATERIAL_GLASS && (m->flags & TR_BSDF_REGULARIZED) == 0u) ||
+           (m->type == TR_MATERIAL_GLOSSY && m->roughness <= 0.0f);
+}
+
+/* ---- Path regularization --------------------------------------------------------------
+ *
+ * A path that has met a non-specular surface can reach a small bright emitter (the sun, a
+ * small lamp) over a specular or very glossy vertex only by its BSDF sample, which
+ * finds it rarely and then with a huge weight: the fireflies of caustics seen on a diffuse
+ * floor, which no light sample can take (the specular vertex has no light strategy).
+ * Regularization trades them for bias by roughening such lobes after the first
+ * non-specular vertex, so that light sampling works there too (A. S. Kaplanyan and C.
+ * Dachsbacher, "Path Space Regularization for Holistic and Robust Light Transport",
+ * Computer Graphics Forum 32(2), Eurographics 2013: delta BSDFs mollified over a cone;
+ * J. Jendersie and T. Grosch, "Microfacet Model Regularization for Robust Light
+ * Transport", Computer Graphics Forum 38(4), EGSR 2019: the microfacet roughness raised
+ * instead). The camera's own view of mirrors and glass stays sharp: only vertices after a
+ * non-specular one are changed (tr_trace_pt_ff). The radius is fixed, not shrinking with
+ * the sample count as Kaplanyan and Dachsbacher's consistent variant does: it is meant for
+ * real-time frames, and the bias it adds is measured in docs/realtime.md. */
+
+/* Glossy (thesis roughness) and principled (glTF roughness) lobes are raised to at least
+ * these: both give GGX alpha 0.16. */
+#define TR_REG_ROUGHNESS_GLOSSY 0.3f
+#define TR_REG_ROUGHNESS_PRINCIPLED 0.4f
+/* Smooth glass becomes its two delta lobes, each spread uniformly over a cone of this
+ * half-angle's cosine (0.25 rad) around the reflected or refracted direction, with the
+ * lobe's Fresnel weight (Kaplanyan and Dachsbacher's mollifier). */
+#define TR_REG_CONE_COS 0.96891242f
+
+/* m roughened for a vertex after a non-specular one. */
+TR_FN void tr_bsdf_regularize(tr_bsdf_params *m) {
+    if (m->type == TR_MATERIAL_GLOSSY) {
+        m->roughness = tr_fmaxf(m->roughness, TR_REG_ROUGHNESS_GLOSSY);
+    } else if (m->type == TR_MATERIAL_PRINCIPLED) {
+        m->roughness = tr_fmaxf(m->roughness, TR_REG_ROUGHNESS_PRINCIPLED);
+    } else if (m->type == TR_MATERIAL_GLASS) {
+        m->flags |= TR_BSDF_REGULARIZED;
+    }
+}
+
+/* Regularized glass: the reflected direction *r, the refracted one *t (zero on total
+ * internal reflection) and the Fresnel reflectance, for light arriving along -wo. */
+TR_FN float tr_reg_glass_dirs(const tr_bsdf_params *m, tr_vec3 wo, tr_vec3 *r, tr_vec3 *t) {
+    tr_vec3 d = v3_neg(wo);
+    float cos_dn = v3_dot(d, m->ns);
+    tr_vec3 nf = cos_dn > 0.0f ? v3_neg(m->ns) : m->ns;
+    int entering = cos_dn < 0.0f;
+    float n1 = entering ? 1.0f : m->ior;
+    float n2 = entering ? m->ior : 1.0f;
+    float cos_i = tr_fabsf(cos_dn);
+    float cos_t;
+    float fr = tr_fresnel_dielectric(cos_i, n1, n2, &cos_t);
+    *r = v3_reflect(d, nf);
+    *t = v3s(0.0f);
+    if (fr < 1.0f) {
+        float eta = n1 / n2;
+        *t = v3_normalize(v3_add(v3_scale(d, eta), v3_scale(nf, eta * cos_i - cos_t)));
+    }
+    return fr;
+}
+
+/* Regularized glass: the sum of the lobes' probabilities whose cone holds wi, per unit
+ * solid angle: the pdf; the BSDF is the colour times it over |cos(wi, n)|. */
+TR_FN_NOINLINE float tr_reg_glass_density(tr_bsdf_params m, tr_vec3 wo, tr_vec3 wi) {
+    tr_vec3 r, t;
+    float fr = tr_reg_glass_dirs(&m, wo, &r, &t);
+    float p = 0.0f;
+    if (v3_dot(wi, r) >= TR_REG_CONE_COS) {
+        p += fr;
+    }
+    if (fr < 1.0f && v3_dot(wi, t) >= TR_REG_CONE_COS) {
+        p += 1.0f - fr;
+    }
+    return p / (TR_TWO_PI * (1.0f - TR_REG_CONE_COS));
+}
+
+TR_FN_NOINLINE tr_vec3 tr_reg_glass_eval(tr_bsdf_params m, tr_vec3 wo, tr_vec3 wi) {
+    float c = tr_fabsf(v3_dot(wi, m.ns));
+    if (!(c > 1e-4f)) {
+        return v3s(0.0f);
+    }
+    return v3_scale(m.color, tr_reg_glass_density(m, wo, wi) / c);
+}
+
+/* Draws a lobe by its Fresnel weight (ulobe) and a direction uniform in its cone. */
+TR_FN_NOINLINE int tr_reg_glass_sample(tr_bsdf_params m, tr_vec3 wo, float ulobe, float u1,
+                                       float u2, tr_scatter *s) {
+    tr_vec3 r, t;
+    float fr = tr_reg_glass_dirs(&m, wo, &r, &t);
+    tr_vec3 axis = ulobe < fr ? r : t;
+    float ct = 1.0f - u1 * (1.0f - TR_REG_CONE_COS);
+    float st = tr_sqrtf(tr_fmaxf(0.0f, 1.0f - ct * ct));
+    float phi = TR_TWO_PI * u2;
+    tr_vec3 a, b;
+    v3_basis(axis, &a, &b);
+    s->wi = v3_normalize(v3_add(v3_scale(axis, ct), v3_add(v3_scale(a, st * tr_cosf(phi)),
+                                                           v3_scale(b, st * tr_sinf(phi)))));
+    s->delta = 0;
+    s->pdf = tr_reg_glass_density(m, wo, s->wi);
+    if (!(s->pdf > 0.0f)) {
+        return 0;
+    }
+    /* f |cos| / pdf: the colour, however many cones hold wi. */
+    s->weight = m.color;
+    return 1;
 }
 
 /* Schlick's approximation with a coloured F0. */
@@ -176,6 +284,8 @@ TR_FN_INLINE tr_vec3 tr_bsdf_eval(const tr_bsdf_params *m, tr_vec3 wo, tr_vec3 w
         return tr_ggx_eval(m, nf, wo, wi);
     case TR_MATERIAL_PRINCIPLED:
         return tr_principled_eval_copy(*m, nf, wo, wi);
+    case TR_MATERIAL_GLASS:
+        return (m->flags & TR_BSDF_REGULARIZED) != 0u ? tr_reg_glass_eval(*m, wo, wi) : v3s(0.0f);
     default:
         return v3s(0.0f);
     }
@@ -196,6 +306,8 @@ TR_FN_INLINE float tr_bsdf_pdf(const tr_bsdf_params *m, tr_vec3 wo, tr_vec3 wi) 
         return tr_ggx_pdf(m, nf, wo, wi);
     case TR_MATERIAL_PRINCIPLED:
         return tr_principled_pdf_copy(*m, nf, wo, wi);
+    case TR_MATERIAL_GLASS:
+        return (m->flags & TR_BSDF_REGULARIZED) != 0u ? tr_reg_glass_density(*m, wo, wi) : 0.0f;
     default:
         return 0.0f;
     }
@@ -248,6 +360,9 @@ TR_FN_INLINE int tr_bsdf_sample(const tr_bsdf_params *m, tr_vec3 wo, float ulobe
         return 1;
     }
     case TR_MATERIAL_GLASS: {
+        if ((m->flags & TR_BSDF_REGULARIZED) != 0u) {
+            return tr_reg_glass_sample(*m, wo, ulobe, u1, u2, s);
+        }
         /* The lobe's probability is its Fresnel weight, so the weight is the filter. */
         s->delta = 1;
         s->weight = m->color;

@@ -94,9 +94,40 @@ TR_FN_NOINLINE tr_vec3 tr_pt_env_light(const tr_scene_view *s, const tr_sampler 
  * one, so the direct part is unbiased on its own). Everything after that (NEE at the second
  * vertex on) is indirect. It is taken as a snapshot of the running sum right after that next
  * vertex's emission, so the radiance itself is computed exactly as without the pass. */
-TR_FN tr_vec3 tr_trace_pt_rr(const tr_scene_view *s, tr_ray ray, int max_depth, int rr_start,
-                             const tr_sampler *smp, uint32_t *rays, tr_sample *surface) {
+/* Firefly control, for frames a filter reconstructs (tr_trace_pt_ff): a contribution that
+ * arrives over an indirect vertex - the light sample at any non-specular vertex after the
+ * first, and what a BSDF sample finds after the vertex that follows it - is scaled down
+ * to luminance `limit` (Rec. 709 weights) where it is above (the clamp of production
+ * renderers, Cycles' "clamp indirect"). Direct light, by either strategy, is never
+ * clamped. A biased estimate: what it takes away is measured in docs/realtime.md. */
+TR_FN tr_vec3 tr_pt_clamp(tr_vec3 c, float limit) {
+    float l = 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z;
+    return l > limit ? v3_scale(c, limit / l) : c;
+}
+
+/* radiance + c, with c clamped to `limit` where `indirect` and limit > 0. */
+TR_FN tr_vec3 tr_pt_add(tr_vec3 radiance, tr_vec3 c, int indirect, float limit) {
+    if (indirect && limit > 0.0f) {
+        c = tr_pt_clamp(c, limit);
+    }
+    return v3_add(radiance, c);
+}
+
+/* tr_trace_pt_rr with firefly control: contributions over indirect vertices clamped to
+ * luminance clamp_indirect (0: none), and with TR_FRAME_REGULARIZE in `flags` the lobes
+ * of vertices after the first non-specular one roughened (tr_bsdf_regularize). With
+ * TR_FRAME_NO_PRIMARY_DIRECT the direct light at the camera ray's first surface, where that
+ * is not specular, that light sampling can produce (its light samples, and emitters in the light
+ * table, the environment or the sun found by its BSDF sample) is left out, for a stage that
+ * estimates it (restir.h); the BSDF sample still finds emission no light sample can
+ * (a principled material's), with weight 1 as before. With clamp 0 and no flags the
+ * same numbers as without. */
+TR_FN tr_vec3 tr_trace_pt_ff(const tr_scene_view *s, tr_ray ray, int max_depth, int rr_start,
+                             float clamp_indirect, uint32_t flags, const tr_sampler *smp,
+                             uint32_t *rays, tr_sample *surface) {
     tr_vec3 radiance = v3s(0.0f);
+    int first_nd = 0; /* the segment of the first non-specular vertex (0: none yet) */
+    const int no_primary = (flags & TR_FRAME_NO_PRIMARY_DIRECT) != 0u;
     tr_vec3 throughput = v3s(1.0f);
     float prev_pdf = 0.0f;
     tr_vec3 prev_p = ray.origin;    /* the vertex the last BSDF sample left, for MIS */
@@ -111,16 +142,20 @@ TR_FN tr_vec3 tr_trace_pt_rr(const tr_scene_view *s, tr_ray ray, int max_depth, 
         *rays += 1;
         if (!tr_intersect_scene(s, &ray, &hit)) {
             /* A ray leaving the scene sees the environment (BSDF strategy). */
-            if (s->env_count > 0u) {
+            const int indirect = first_nd != 0 && seg > first_nd + 1;
+            const int skip = no_primary && first_nd == 1 && seg == 2;
+            if (s->env_count > 0u && !skip) {
                 tr_vec3 le = tr_env_radiance(s, ray.dir);
                 float w = prev_delta ? 1.0f : tr_mis_power(prev_pdf, tr_env_pdf(s, ray.dir));
-                radiance = v3_add(radiance, v3_scale(v3_mul(throughput, le), w));
+                radiance = tr_pt_add(radiance, v3_scale(v3_mul(throughput, le), w), indirect,
+                                     clamp_indirect);
             }
-            if (s->sun_count > 0u) { /* the sun, found by the BSDF strategy */
+            if (s->sun_count > 0u && !skip) { /* the sun, found by the BSDF strategy */
                 float ps = prev_delta ? 0.0f : tr_sun_pdf(s, ray.dir);
                 float w = prev_delta ? 1.0f : tr_mis_power(prev_pdf, ps);
-                radiance =
-                    v3_add(radiance, v3_scale(v3_mul(throughput, tr_sun_radiance(s, ray.dir)), w));
+                radiance = tr_pt_add(radiance,
+                                     v3_scale(v3_mul(throughput, tr_sun_radiance(s, ray.dir)), w),
+                                     indirect, clamp_indirect);
             }
             if (surface && seg == 1) {
                 surface->emission = radiance; /* all the camera ray saw */
@@ -146,16 +181,32 @@ TR_FN tr_vec3 tr_trace_pt_rr(const tr_scene_view *s, tr_ray ray, int max_depth, 
         if (surface && direct_seg > max_depth && !tr_bsdf_is_delta(&m)) {
             direct_seg = seg + 1; /* S is this vertex: the next one's emission is still direct */
         }
+        /* Whether what arrives here (emission found by the BSDF sample) is indirect light,
+         * and whether it is the first non-specular vertex's direct light. */
+        const int indirect = first_nd != 0 && seg > first_nd + 1;
+        const int primary_direct = first_nd != 0 && seg == first_nd + 1;
+        if (first_nd != 0 && (flags & TR_FRAME_REGULARIZE) != 0u) {
+            tr_bsdf_regularize(&m);
+        }
+        if (first_nd == 0 && !tr_bsdf_is_delta(&m)) {
+            first_nd = seg;
+        }
 
         /* Emission found by the BSDF strategy (or the camera). */
         tr_vec3 le = tr_emitted(&m, wo);
-        if (!tr_v3_is_zero(le)) {
+        if (!tr_v3_is_zero(le) &&
+            !(no_primary && primary_direct && first_nd == 1 && m.emittance > 0.0f)) {
             float w = 1.0f;
             if (!prev_delta) {
                 w = tr_mis_power(prev_pdf, tr_light_pdf_n(s, prev_p, prev_n, hit.triangle, p));
             }
-            radiance = v3_add(radiance, v3_scale(v3_mul(throughput, le), w));
+            radiance =
+                tr_pt_add(radiance, v3_scale(v3_mul(throughput, le), w), indirect, clamp_indirect);
         }
+        /* The light samples here: indirect light unless this is the first non-specular
+         * vertex, where a stage may estimate them instead. */
+        const int nee_indirect = first_nd != seg;
+        const int nee = !tr_bsdf_is_delta(&m) && !(no_primary && seg == 1 && !nee_indirect);
         if (surface && seg == 1) {
             surface->emission = radiance; /* the first hit's emission, nothing else yet */
         }
@@ -168,7 +219,7 @@ TR_FN tr_vec3 tr_trace_pt_rr(const tr_scene_view *s, tr_ray ray, int max_depth, 
         }
 
         /* Next-event estimation: one emitter point, one shadow ray. */
-        if (!tr_bsdf_is_delta(&m) && s->light_count > 0) {
+        if (nee && s->light_count > 0) {
             uint32_t lt;
             tr_vec3 y;
             float lu, lv, l1, l2;
@@ -191,25 +242,29 @@ TR_FN tr_vec3 tr_trace_pt_rr(const tr_scene_view *s, tr_ray ray, int max_depth, 
                     *rays += 1;
                     if (!tr_occluded_masked(s, &shadow)) { /* cut-outs let light through */
                         float w = tr_mis_power(pl, tr_bsdf_pdf(&m, wo, wi));
-                        radiance = v3_add(radiance, v3_scale(v3_mul(v3_mul(throughput, f), le_l),
-                                                             cos_i * w / pl));
+                        radiance = tr_pt_add(
+                            radiance, v3_scale(v3_mul(v3_mul(throughput, f), le_l), cos_i * w / pl),
+                            nee_indirect, clamp_indirect);
                     }
                 }
             }
         }
 
         /* Next-event estimation towards the environment, MIS against the BSDF. */
-        if (!tr_bsdf_is_delta(&m) && s->env_count > 0u) {
+        if (nee && s->env_count > 0u) {
             tr_bsdf_params mc = m; /* a copy: m's address taken would keep it in memory */
-            radiance = v3_add(radiance, tr_pt_env_light(s, smp, seg, &mc, p, wo, throughput, rays));
+            radiance =
+                tr_pt_add(radiance, tr_pt_env_light(s, smp, seg, &mc, p, wo, throughput, rays),
+                          nee_indirect, clamp_indirect);
         }
 
         /* Next-event estimation towards the sun (sun.h), MIS against the BSDF. */
-        if (!tr_bsdf_is_delta(&m) && s->sun_count > 0u) {
+        if (nee && s->sun_count > 0u) {
             float su1, su2;
             tr_sampler_2d(smp, tr_sun_dim(seg), &su1, &su2);
             radiance =
-                v3_add(radiance, v3_mul(throughput, tr_sun_nee(s, &m, wo, p, su1, su2, rays)));
+                tr_pt_add(radiance, v3_mul(throughput, tr_sun_nee(s, &m, wo, p, su1, su2, rays)),
+                          nee_indirect, clamp_indirect);
         }
 
         /* Continue with the BSDF's sample. */
@@ -247,6 +302,12 @@ TR_FN tr_vec3 tr_trace_pt_rr(const tr_scene_view *s, tr_ray ray, int max_depth, 
         surface->direct = direct_done ? direct : radiance;
     }
     return radiance;
+}
+
+/* tr_trace_pt_ff without firefly control. */
+TR_FN tr_vec3 tr_trace_pt_rr(const tr_scene_view *s, tr_ray ray, int max_depth, int rr_start,
+                             const tr_sampler *smp, uint32_t *rays, tr_sample *surface) {
+    return tr_trace_pt_ff(s, ray, max_depth, rr_start, 0.0f, 0u, smp, rays, surface);
 }
 
 /* The emission the camera ray `ray` sees at its first hit, as tr_trace_pt_rr's first

@@ -23,10 +23,12 @@
  * from the low-discrepancy sampler (sampler.h; independent numbers with `sampler`
  * TR_SAMPLER_RANDOM, screen-space blue noise with TR_SAMPLER_ZSOBOL, which addresses the
  * pixel by (x, y) instead of its index), naive from the thesis's xorshift stream. pt's
- * Russian roulette starts after rr_start segments. */
+ * Russian roulette starts after rr_start segments; its firefly control is clamp_indirect
+ * and `flags` (tr_frame's, TR_FRAME_*: tr_trace_pt_ff). */
 TR_FN void tr_render_pixel_sample_kind(const tr_scene_view *s, const tr_camera *cam, uint64_t seed,
-                                       int max_depth, int rr_start, uint32_t integrator,
-                                       uint32_t sampler, uint32_t passes, uint32_t x, uint32_t y,
+                                       int max_depth, int rr_start, float clamp_indirect,
+                                       uint32_t flags, uint32_t integrator, uint32_t sampler,
+                                       uint32_t passes, uint32_t x, uint32_t y,
                                        uint64_t pixel_index, uint32_t sample, tr_sample *out) {
     tr_sample_clear(out);
     /* The integrators record the passes' surface only for a film that keeps surface
@@ -39,7 +41,8 @@ TR_FN void tr_render_pixel_sample_kind(const tr_scene_view *s, const tr_camera *
         tr_sampler smp = tr_sampler_make_pixel(seed, pixel_index, x, y, sample, sampler);
         tr_sampler_2d(&smp, TR_DIM_CAMERA, &jx, &jy);
         tr_ray ray = tr_camera_ray(cam, (float)x, (float)y, jx, jy);
-        out->radiance = tr_trace_pt_rr(s, ray, max_depth, rr_start, &smp, &out->rays, surface);
+        out->radiance = tr_trace_pt_ff(s, ray, max_depth, rr_start, clamp_indirect, flags, &smp,
+                                       &out->rays, surface);
     } else {
         tr_rng rng;
         tr_rng_init(&rng, seed, pixel_index, (uint64_t)sample);
@@ -55,8 +58,8 @@ TR_FN void tr_render_pixel_sample(const tr_scene_view *s, const tr_camera *cam, 
                                   int max_depth, uint32_t integrator, uint32_t passes, uint32_t x,
                                   uint32_t y, uint64_t pixel_index, uint32_t sample,
                                   tr_sample *out) {
-    tr_render_pixel_sample_kind(s, cam, seed, max_depth, TR_PT_RR_START, integrator, 0u, passes, x,
-                                y, pixel_index, sample, out);
+    tr_render_pixel_sample_kind(s, cam, seed, max_depth, TR_PT_RR_START, 0.0f, 0u, integrator, 0u,
+                                passes, x, y, pixel_index, sample, out);
 }
 
 /* Sample `sample` of pixel (x, y) of frame f (tr_render_pixel_sample with f's settings). */
@@ -64,8 +67,9 @@ TR_FN void tr_render_sample(const tr_scene_view *s, const tr_frame *f, uint32_t 
                             uint32_t sample, tr_sample *out) {
     const uint64_t seed = ((uint64_t)f->seed_hi << 32) | (uint64_t)f->seed_lo;
     const uint64_t pixel = (uint64_t)y * (uint64_t)f->camera.screen_width + (uint64_t)x;
-    tr_render_pixel_sample_kind(s, &f->camera, seed, f->max_depth, f->rr_start, f->integrator,
-                                f->sampler, f->passes, x, y, pixel, sample, out);
+    tr_render_pixel_sample_kind(s, &f->camera, seed, f->max_depth, f->rr_start, f->clamp_indirect,
+                                f->flags, f->integrator, f->sampler, f->passes, x, y, pixel, sample,
+                                out);
 }
 
 /* The pixels frame f traces and the blocks they fill: the traced pixels are those of the
@@ -108,6 +112,8 @@ TR_FN_INLINE uint32_t tr_render_grid_rows_as(const tr_scene_view *s, const tr_fr
     const tr_camera cam = f->camera;
     const uint64_t seed = ((uint64_t)f->seed_hi << 32) | (uint64_t)f->seed_lo;
     const int max_depth = f->max_depth, rr_start = f->rr_start;
+    const float clamp_indirect = f->clamp_indirect;
+    const uint32_t flags = f->flags;
     const uint32_t passes = f->passes, sampler = f->sampler;
     const uint32_t first = f->sample, count = f->sample_count;
     const uint32_t k = f->stride;
@@ -126,8 +132,9 @@ TR_FN_INLINE uint32_t tr_render_grid_rows_as(const tr_scene_view *s, const tr_fr
             const uint64_t pixel = (uint64_t)y * width + (uint64_t)x;
             for (uint32_t n = 0; n < count; ++n) {
                 tr_sample smp;
-                tr_render_pixel_sample_kind(s, &cam, seed, max_depth, rr_start, integrator, sampler,
-                                            passes, x, y, pixel, first + n, &smp);
+                tr_render_pixel_sample_kind(s, &cam, seed, max_depth, rr_start, clamp_indirect,
+                                            flags, integrator, sampler, passes, x, y, pixel,
+                                            first + n, &smp);
                 rays += smp.rays;
                 tr_film_add_block(film, &smp, bx0, by0, bx1, by1);
             }

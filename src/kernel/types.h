@@ -77,7 +77,7 @@ TR_STATIC_ASSERT(sizeof(tr_light_node) == 56, "tr_light_node layout");
  * layout has no padding on any device. A frame adds samples sample .. sample+sample_count-1
  * to every pixel of the rectangle (rect_x, rect_y, rect_w, rect_h); with stride k > 1 only
  * pixels whose coordinates are multiples of k are traced and each stands for its k x k
- * block (the thesis's preview). 144 bytes. */
+ * block (the thesis's preview). 156 bytes. */
 typedef struct tr_frame {
     tr_camera camera;
     uint32_t seed_lo, seed_hi;
@@ -89,8 +89,21 @@ typedef struct tr_frame {
     uint32_t rect_x, rect_y, rect_w, rect_h;
     uint32_t sampler; /* TR_SAMPLER_*: pt's uniform numbers */
     int32_t rr_start; /* pt: Russian roulette after this many segments */
+    /* pt's firefly control (integrator_pt.h): the largest luminance of a contribution
+     * arriving over an indirect vertex (0: no clamp), and TR_FRAME_* bits. */
+    float clamp_indirect;
+    uint32_t flags;
 } tr_frame;
-TR_STATIC_ASSERT(sizeof(tr_frame) == 148, "tr_frame layout");
+TR_STATIC_ASSERT(sizeof(tr_frame) == 156, "tr_frame layout");
+
+/* tr_frame.flags: pt roughens glossy and specular lobes after the first non-specular
+ * vertex (path regularization, integrator_pt.h). */
+#define TR_FRAME_REGULARIZE 1u
+/* tr_frame.flags: pt leaves out the direct light at the camera ray's first surface where that
+ * is not specular (its light samples and the emission its BSDF sample finds next), which a
+ * later stage adds
+ * (ReSTIR DI, src/kernel/restir.h). */
+#define TR_FRAME_NO_PRIMARY_DIRECT 2u
 
 /* What one sample of one pixel gives: radiance, the intersection queries it made, and
  * the surface the passes describe (zero where the path found no non-specular surface). */

@@ -2,6 +2,7 @@
  * frame budget, each stage its own function below. */
 #include "trac0r/realtime.h"
 #include "trac0r/recon_device.h"
+#include "realtime/restir_stage.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -23,6 +24,12 @@ struct tr_realtime {
     tr_recon_params params;
     int rt_sampler;  /* TR_SAMPLER_* of real-time frames */
     int rt_roulette; /* their roulette start */
+    float rt_clamp;  /* their indirect clamp (0: none) */
+    int rt_regularize;
+    int restir; /* TR_REALTIME_RESTIR_* */
+    tr_restir_params restir_params;
+    tr_restir_stage *restir_stage;
+    double restir_ms;
     uint32_t spp;
     int accumulate, animated, keep_passes;
     int on_device; /* the reconstruction runs where the film lies (an OpenCL device) */
@@ -111,6 +118,24 @@ tr_realtime *tr_realtime_create(tr_device *dev, tr_scene *scene, const tr_realti
                      d->sampler);
         return NULL;
     }
+    if (!(d->clamp_indirect <= 3.0e38f) || d->regularize < -1 || d->regularize > 1) {
+        tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                     "tr_realtime_desc: clamp_indirect %g or regularize %d out of range",
+                     (double)d->clamp_indirect, d->regularize);
+        return NULL;
+    }
+    if (d->restir != TR_REALTIME_RESTIR_OFF && d->restir != TR_REALTIME_RESTIR_DI) {
+        tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "tr_realtime_desc.restir: unknown %d",
+                     d->restir);
+        return NULL;
+    }
+    if (d->restir != TR_REALTIME_RESTIR_OFF &&
+        ((tr_device_caps(dev) & TR_DEVICE_CAP_HOST) == 0u || cfg.integrator != TR_INTEGRATOR_PT)) {
+        tr_error_set(err, TR_STATUS_UNSUPPORTED,
+                     "ReSTIR DI needs the pt integrator on a device that renders on the host "
+                     "(the CPU)");
+        return NULL;
+    }
     if (d->spp > TR_REALTIME_MAX_SPP * 64u) {
         tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
                      "tr_realtime_desc.spp: expected at most %u, got %u", TR_REALTIME_MAX_SPP * 64u,
@@ -131,6 +156,10 @@ tr_realtime *tr_realtime_create(tr_device *dev, tr_scene *scene, const tr_realti
     rt->params = d->recon ? *d->recon : tr_recon_params_default();
     rt->rt_sampler = d->sampler ? d->sampler - 1 : TR_SAMPLER_REALTIME;
     rt->rt_roulette = cfg.roulette_start ? cfg.roulette_start : TR_ROULETTE_START_REALTIME;
+    rt->rt_clamp = d->clamp_indirect > 0.0f    ? d->clamp_indirect
+                   : d->clamp_indirect == 0.0f ? TR_REALTIME_CLAMP_INDIRECT
+                                               : 0.0f;
+    rt->rt_regularize = d->regularize >= 0 ? 1 : 0;
     rt->spp = d->spp ? d->spp : 1u;
     rt->accumulate = d->accumulate != 0;
     rt->animated = d->animated != 0;
@@ -140,6 +169,13 @@ tr_realtime *tr_realtime_create(tr_device *dev, tr_scene *scene, const tr_realti
     rt->on_device = (tr_device_caps(dev) & TR_DEVICE_CAP_HOST) == 0u;
     rt->budget_scale = 1.0f;
     rt->budget_spp = 1;
+    rt->restir = d->restir;
+    rt->restir_params = tr_restir_params_default();
+    rt->restir_params.unbiased = d->restir_unbiased != 0;
+    if (rt->restir && !(rt->restir_stage = tr_restir_stage_create(err))) {
+        free(rt);
+        return NULL;
+    }
     return rt;
 }
 
@@ -156,6 +192,7 @@ void tr_realtime_destroy(tr_realtime *rt) {
     for (int m = 0; m < TR_RECON_COUNT; ++m) {
         free_history(&rt->hist[m]);
     }
+    tr_restir_stage_destroy(rt->restir_stage);
     tr_film_free(&rt->film);
     tr_film_free(&rt->disp);
     tr_gbuffer_free(&rt->gb);
@@ -307,7 +344,15 @@ int tr_realtime_render(tr_realtime *rt, const tr_realtime_frame_desc *fd, tr_err
     if (rt->view_moving || rt->animated || !rt->accumulate) {
         cfg.roulette_start = rt->rt_roulette;
         cfg.sampler = rt->rt_sampler;
+        /* Fireflies a filter would spread over a region are clamped and regularized away
+         * (biased; docs/realtime.md measures by how much). */
+        cfg.clamp_indirect = rt->rt_clamp;
+        cfg.regularize = rt->rt_regularize;
     }
+    /* ReSTIR DI: pt leaves the direct light at the first surface to the stage below (not
+     * for a preview stride, whose traced pixels fill blocks). */
+    const int restir = rt->restir != TR_REALTIME_RESTIR_OFF && stride <= 1;
+    cfg.no_primary_direct = restir;
     const uint32_t n = rt->view_moving && fd->budget_ms > 0.0 ? rt->budget_spp : rt->spp;
     const uint32_t sample = first_sample(rt, n);
     const double t0 = tr_time_now();
@@ -328,6 +373,17 @@ int tr_realtime_render(tr_realtime *rt, const tr_realtime_frame_desc *fd, tr_err
             return TR_ERR;
         }
         rt->film_stale = 0;
+    }
+    rt->restir_ms = 0.0;
+    if (restir) {
+        const double t1 = tr_time_now();
+        if (tr_restir_stage_run(rt->restir_stage, rt->scene, &rt->rcam, &rt->restir_params,
+                                cfg.seed, sample, (uint32_t)cfg.sampler, n, rt->calls, cfg.threads,
+                                &rt->film, err) != TR_OK) {
+            rt->have_view = 0;
+            return TR_ERR;
+        }
+        rt->restir_ms = (tr_time_now() - t1) * 1e3;
     }
     rt->render_ms = (tr_time_now() - t0) * 1e3;
     rt->acc_spp += n;
@@ -440,6 +496,7 @@ static void fill_result(const tr_realtime *rt, const tr_film *film, const float 
     out->frame_spp = rt->frame_spp;
     out->method = method;
     out->render_ms = rt->render_ms;
+    out->restir_ms = rt->restir_ms;
 }
 
 int tr_realtime_reconstruct(tr_realtime *rt, int method, tr_realtime_result *out, tr_error *err) {

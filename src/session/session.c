@@ -99,6 +99,13 @@ int tr_ck_identity(tr_ck_id *id, const tr_scene *scene, const tr_render_config *
         const size_t used = strlen(id->desc);
         snprintf(id->desc + used, sizeof id->desc - used, " roulette-start=%d", rr);
     }
+    /* So does the firefly control (named only when on: older checkpoints stay valid). */
+    if (cfg->clamp_indirect > 0.0f || cfg->regularize || cfg->no_primary_direct) {
+        const size_t used = strlen(id->desc);
+        snprintf(id->desc + used, sizeof id->desc - used,
+                 " clamp-indirect=%.9g regularize=%d no-primary-direct=%d",
+                 (double)cfg->clamp_indirect, cfg->regularize, cfg->no_primary_direct);
+    }
     uint64_t h = TR_CK_FNV_OFFSET;
     const uint32_t nt = tr_scene_triangle_count(scene);
     h = fnv_u32(h, nt);

@@ -1,0 +1,45 @@
+/* restir_stage.h - ReSTIR DI as a stage of the real-time loop (realtime.c): after pt has
+ * rendered a frame without the direct light at its camera rays' first surfaces
+ * (tr_render_config.no_primary_direct), the stage estimates that light by spatiotemporal
+ * reservoir resampling (src/kernel/restir.h) and adds it to the film. CPU (host film)
+ * only. */
+#ifndef TR_REALTIME_RESTIR_STAGE_H
+#define TR_REALTIME_RESTIR_STAGE_H
+
+#include <stdint.h>
+
+#include "trac0r/camera.h"
+#include "trac0r/error.h"
+#include "trac0r/film.h"
+#include "trac0r/scene.h"
+
+/* The stage's settings. */
+typedef struct tr_restir_params {
+    int candidates;     /* RIS candidates per pixel and frame */
+    int spatial;        /* neighbours merged per pixel */
+    float radius;       /* in pixels, of the spatial neighbourhood */
+    float temporal_cap; /* the previous frame's confidence at most this times the new one's */
+    int unbiased;       /* Talbot MIS, no visibility reuse (else 1/M and visibility reuse) */
+    int temporal;       /* reuse the previous frame's reservoirs */
+    int tree;           /* candidates from the light tree where the scene has one (else the
+                           power CDF, cheaper: resampling weighs distance and angle) */
+} tr_restir_params;
+
+tr_restir_params tr_restir_params_default(void);
+
+typedef struct tr_restir_stage tr_restir_stage;
+
+tr_restir_stage *tr_restir_stage_create(tr_error *err);
+void tr_restir_stage_destroy(tr_restir_stage *st);
+/* Forgets the previous frame (a cut, a new size). */
+void tr_restir_stage_reset(tr_restir_stage *st);
+
+/* Adds `spp` times the direct light estimate at every pixel's first surface (seen
+ * through sample `sample`'s camera ray of pixel (x, y), as pt traced it with `seed` and
+ * `sampler`) to film's radiance sums (and its direct pass if kept). `frame` keys the
+ * stage's own random numbers. Bit-identical for any thread count. */
+int tr_restir_stage_run(tr_restir_stage *st, const tr_scene *scene, const tr_camera *cam,
+                        const tr_restir_params *p, uint64_t seed, uint32_t sample, uint32_t sampler,
+                        uint32_t spp, uint64_t frame, int threads, tr_film *film, tr_error *err);
+
+#endif
