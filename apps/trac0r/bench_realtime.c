@@ -359,6 +359,7 @@ typedef struct rt_opts {
     uint32_t anim_from, anim_until; /* it moves before frames from .. until - 1 */
     int size_given;
     char csv_path[4096], png_path[4096];
+    uint32_t upscale; /* --upscale: frames trace 1/upscale of the pixels (1: every one) */
 } rt_opts;
 
 /* One run: the scene, the device, the real-time loop and the measures. */
@@ -421,6 +422,8 @@ static int parse_options(cli_args *a, rt_opts *o, int *done) {
         } else if (cli_is(a, "--animate-frames")) {
             o->animate = 1;
             rc = parse_window(a, &o->anim_from, &o->anim_until);
+        } else if (cli_is(a, "--upscale")) {
+            rc = cli_parse_u32(a, 1, 16, &o->upscale);
         } else if (cli_is(a, "--cut")) {
             rc = cli_parse_u32(a, 1, 100000, &o->cut);
         } else if (cli_is(a, "--methods")) {
@@ -714,6 +717,7 @@ static int run_frame(rt_run *r, uint32_t f) {
     /* The frame itself: samples numbered by frame, so that noise changes over time. */
     tr_realtime_frame_desc fd = {0};
     fd.camera = &cam;
+    fd.upscale = (int)o->upscale;
     if (tr_realtime_render(r->rt, &fd, &err) != TR_OK) {
         fprintf(stderr, "trac0r bench realtime: frame %u: %s\n", f, err.msg);
         return CLI_FAILURE;
