@@ -75,17 +75,19 @@ int tr_upscale_positions(const tr_render_config *cfg, uint32_t width, uint32_t h
                          float *pos, tr_error *err);
 
 struct tr_scene;
-/* The first hit's emission at the output's resolution, added to out (3 floats per output
+/* The first hit's emission at the output's resolution into out (3 floats per output
  * pixel of `cam`), from a traced frame's emission pass (width x height, 3 floats per
  * pixel, TR_PASS_EMISSION): an output pixel whose traced pixel has emitting and
  * non-emitting samples among its 3 x 3 neighbours traces an n x n grid of first-hit rays
  * into the committed scene and takes their mean (as tr_resolve_emission does for a frame
- * at its own resolution); any other takes its traced pixel's emission. The upscaling
- * then carries only reflected light, and an emitter's edge stays sharp at the output's
- * resolution. n in 1..16; *resolved (may be NULL) gets the pixels traced. */
+ * at its own resolution), and so does one where `prev` (the previous call's out, or
+ * NULL) saw emission and its traced pixel sees none (an emitter smaller than the traced
+ * pixels, which their samples can miss); any other takes its traced pixel's emission.
+ * The upscaling then carries only reflected light, and an emitter's edge stays sharp at
+ * the output's resolution. n in 1..16; *resolved (may be NULL) gets the pixels traced. */
 int tr_upscale_emission(const struct tr_scene *scene, const tr_camera *cam, int n, int threads,
-                        uint32_t width, uint32_t height, const float *emission, float *out,
-                        uint32_t *resolved, tr_error *err);
+                        uint32_t width, uint32_t height, const float *emission, const float *prev,
+                        float *out, uint32_t *resolved, tr_error *err);
 
 #ifdef __cplusplus
 }

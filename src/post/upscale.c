@@ -132,8 +132,8 @@ int tr_upscale_positions(const tr_render_config *cfg, uint32_t width, uint32_t h
 }
 
 int tr_upscale_emission(const struct tr_scene *scene, const tr_camera *cam, int n, int threads,
-                        uint32_t width, uint32_t height, const float *emission, float *out,
-                        uint32_t *resolved, tr_error *err) {
+                        uint32_t width, uint32_t height, const float *emission, const float *prev,
+                        float *out, uint32_t *resolved, tr_error *err) {
     if (resolved) {
         *resolved = 0;
     }
@@ -164,17 +164,21 @@ int tr_upscale_emission(const struct tr_scene *scene, const tr_camera *cam, int 
             lx = lx < wl - 1 ? lx : wl - 1;
             ly = ly < hl - 1 ? ly : hl - 1;
             const size_t i = (size_t)y * W + x;
-            if (tr_emission_on_edge(emission, wl, hl, lx, ly)) {
+            const size_t k = (size_t)ly * wl + lx;
+            /* A small emitter can fall between the traced samples: where the previous
+             * output saw emission and the neighbourhood sees none, trace it too. */
+            const int missed = prev && tr_emission_seen(prev, (uint32_t)i) &&
+                               !tr_emission_seen(emission, (uint32_t)k);
+            if (missed || tr_emission_on_edge(emission, wl, hl, lx, ly)) {
                 const tr_vec3 e = tr_emission_resolve_pixel(&view, cam, x, y, n);
-                out[3 * i] += e.x;
-                out[3 * i + 1] += e.y;
-                out[3 * i + 2] += e.z;
+                out[3 * i] = e.x;
+                out[3 * i + 1] = e.y;
+                out[3 * i + 2] = e.z;
                 ++count;
             } else {
-                const size_t k = (size_t)ly * wl + lx;
-                out[3 * i] += emission[3 * k];
-                out[3 * i + 1] += emission[3 * k + 1];
-                out[3 * i + 2] += emission[3 * k + 2];
+                out[3 * i] = emission[3 * k];
+                out[3 * i + 1] = emission[3 * k + 1];
+                out[3 * i + 2] = emission[3 * k + 2];
             }
         }
     }

@@ -67,6 +67,10 @@ struct tr_realtime {
     size_t low_len;
     int gb_guides;        /* gb holds the last frame's passes (the device path, for upscaling) */
     uint32_t up_resolved; /* output pixels whose emission the upscaling resolved */
+    float *emis[2];       /* the emission at the output's resolution, this frame and the last */
+    size_t emis_len;
+    int emis_cur;
+    uint64_t emis_frame; /* the frame emis[emis_cur] is of (0: none) */
 };
 
 static int same_camera(const tr_camera *a, const tr_camera *b) {
@@ -179,6 +183,8 @@ void tr_realtime_destroy(tr_realtime *rt) {
     free(rt->motion);
     free(rt->pos);
     free(rt->low);
+    free(rt->emis[0]);
+    free(rt->emis[1]);
     free(rt);
 }
 
@@ -571,10 +577,32 @@ static int upscale_stage(tr_realtime *rt, rt_history *hist, int method, const tr
     }
     if (emission) {
         const double t0 = tr_time_now();
-        if (tr_upscale_emission(rt->scene, &rt->view_cam, rt->params.emission_samples,
-                                rt->cfg.threads, w, h, rt->gb.emission, rt->disp.sum,
-                                &rt->up_resolved, err) != TR_OK) {
-            return TR_ERR;
+        const size_t n3 = 3 * (size_t)W * H;
+        if (rt->emis_len != n3) {
+            free(rt->emis[0]);
+            free(rt->emis[1]);
+            rt->emis[0] = calloc(n3, sizeof(float));
+            rt->emis[1] = calloc(n3, sizeof(float));
+            rt->emis_len = rt->emis[0] && rt->emis[1] ? n3 : 0;
+            rt->emis_frame = 0;
+            if (!rt->emis_len) {
+                return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory for a frame");
+            }
+        }
+        /* Once per frame, whatever methods follow. */
+        if (rt->emis_frame != rt->rendered) {
+            const float *prev = rt->emis_frame + 1 == rt->rendered ? rt->emis[rt->emis_cur] : NULL;
+            rt->emis_cur = 1 - rt->emis_cur;
+            if (tr_upscale_emission(rt->scene, &rt->view_cam, rt->params.emission_samples,
+                                    rt->cfg.threads, w, h, rt->gb.emission, prev,
+                                    rt->emis[rt->emis_cur], &rt->up_resolved, err) != TR_OK) {
+                return TR_ERR;
+            }
+            rt->emis_frame = rt->rendered;
+        }
+        const float *e = rt->emis[rt->emis_cur];
+        for (size_t i = 0; i < n3; ++i) {
+            rt->disp.sum[i] += e[i];
         }
         hist->up.ms += (tr_time_now() - t0) * 1e3;
     }
