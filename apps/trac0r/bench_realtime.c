@@ -51,6 +51,10 @@ static void realtime_help(void) {
            "  --spp S              samples per pixel per frame, 1..1024 (default 1)\n"
            "  --reference-spp R    samples of each frame's reference, 2..1000000 (default 256)\n"
            "  --cut K              jump to another view at frame K (default: no cut)\n"
+           "  --upscale N          frames trace 1/N of the pixels (2: half, 4: a quarter) and\n"
+           "                       the output is upscaled to full size (temporal upscaling);\n"
+           "                       the same pipeline tracing every pixel runs on the same\n"
+           "                       frames, and a last table compares the two (default 1)\n"
            "  --animate            the scene's last shape moves before every frame (as view\n"
            "                       --animate), and the reconstruction is told how far each\n"
            "                       primitive moved; references see the same scene\n"
@@ -387,6 +391,11 @@ typedef struct rt_run {
     float *gm;                           /* gathered: an output, the reference, its half */
     double resolve_sum_ms;               /* tr_resolve_emission over the frames */
     uint64_t resolve_px;
+    /* --upscale: the same pipeline tracing every pixel, on the same frames. */
+    cli_backend be_full; /* its own device: one film size each */
+    tr_realtime *rt_full;
+    rt_frame_stats *st_full;
+    float *prev_full;
 } rt_run;
 
 /* Parses the command line into o; CLI_OK to run, else the status to return (-h: *done). */
@@ -450,6 +459,10 @@ static int parse_options(cli_args *a, rt_opts *o, int *done) {
     if (o->cut >= o->frames) {
         return cli_error(a, "--cut: expected a frame before --frames (%u), got %u", o->frames,
                          o->cut);
+    }
+    if (o->upscale > 1 && o->animate) {
+        /* The scene's motion goes to one real-time loop, not to two. */
+        return cli_error(a, "--upscale: not with --animate");
     }
     if (o->anim_until > o->frames) {
         return cli_error(a, "--animate-frames: expected B up to --frames (%u), got %u", o->frames,
@@ -533,6 +546,19 @@ static int open_loop(rt_run *r) {
     if (!(r->rt = tr_realtime_create(r->be.dev, r->scene, &desc, &err))) {
         fprintf(stderr, "trac0r bench realtime: %s\n", err.msg);
         return CLI_FAILURE;
+    }
+    if (o->upscale > 1) {
+        rc = cli_backend_open(r->a, &o->c, r->scene, &r->be_full);
+        if (rc != CLI_OK) {
+            return rc;
+        }
+        r->rt_full = tr_realtime_create(r->be_full.dev, r->scene, &desc, &err);
+        r->st_full = calloc((size_t)TR_RECON_COUNT * o->frames, sizeof *r->st_full);
+        r->prev_full = malloc((size_t)TR_RECON_COUNT * 3 * r->px * sizeof *r->prev_full);
+        if (!r->rt_full || !r->st_full || !r->prev_full) {
+            fprintf(stderr, "trac0r bench realtime: %s\n", r->rt_full ? "out of memory" : err.msg);
+            return CLI_FAILURE;
+        }
     }
     r->host = !tr_realtime_on_device(r->rt);
     r->frame_sampler = o->c.sampler >= 0 ? o->c.sampler : TR_SAMPLER_REALTIME;
@@ -685,6 +711,66 @@ static void measure(rt_run *r, int m, uint32_t f, const tr_realtime_result *res,
     memcpy(pm, out, 3 * px * sizeof *out);
 }
 
+/* --upscale: frame f again through the same pipeline tracing every pixel, measured
+ * into st_full (its own previous outputs for the flicker). */
+static int run_full(rt_run *r, const tr_realtime_frame_desc *fd, uint32_t f, double ref_mse) {
+    tr_error err;
+    tr_realtime_frame_desc full = *fd;
+    full.upscale = 0;
+    if (tr_realtime_render(r->rt_full, &full, &err) != TR_OK) {
+        fprintf(stderr, "trac0r bench realtime: frame %u, every pixel: %s\n", f, err.msg);
+        return CLI_FAILURE;
+    }
+    rt_frame_stats *st = r->st;
+    float *prev = r->prev;
+    r->st = r->st_full;
+    r->prev = r->prev_full;
+    int rc = CLI_OK;
+    for (int m = 0; m < TR_RECON_COUNT && rc == CLI_OK; ++m) {
+        tr_realtime_result res;
+        if (!r->o->on[m]) {
+            continue;
+        }
+        if (tr_realtime_reconstruct(r->rt_full, m, &res, &err) != TR_OK) {
+            fprintf(stderr, "trac0r bench realtime: %s, every pixel: %s\n", tr_recon_name(m),
+                    err.msg);
+            rc = CLI_FAILURE;
+        } else {
+            measure(r, m, f, &res, ref_mse, 0, 0.0);
+        }
+    }
+    r->st = st;
+    r->prev = prev;
+    return rc;
+}
+
+/* --upscale: per method the upscaled pipeline against the same one tracing every pixel. */
+static void report_full(const rt_run *r) {
+    const rt_opts *o = r->o;
+    const uint32_t frames = o->frames;
+    printf("upscaled (1/%u of the pixels traced) against the same pipeline tracing every "
+           "pixel:\n",
+           o->upscale);
+    printf("%-11s %9s %9s %9s %9s %10s\n", "method", "fps_up", "fps_full", "psnr_up", "psnr_full",
+           "difference");
+    for (int m = 0; m < TR_RECON_COUNT; ++m) {
+        if (!o->on[m]) {
+            continue;
+        }
+        double t[2] = {0, 0}, p[2] = {0, 0};
+        for (uint32_t f = 0; f < frames; ++f) {
+            const rt_frame_stats *s[2] = {&r->st[(size_t)m * frames + f],
+                                          &r->st_full[(size_t)m * frames + f]};
+            for (int k = 0; k < 2; ++k) {
+                t[k] += s[k]->render_ms + s[k]->temporal_ms + s[k]->spatial_ms;
+                p[k] += s[k]->psnr;
+            }
+        }
+        printf("%-11s %9.1f %9.1f %9.2f %9.2f %+10.2f\n", tr_recon_name(m), 1000.0 * frames / t[0],
+               1000.0 * frames / t[1], p[0] / frames, p[1] / frames, (p[0] - p[1]) / frames);
+    }
+}
+
 /* Frame f: the scene moved (--animate), its reference, the frame rendered once and
  * handed to every method. */
 static int run_frame(rt_run *r, uint32_t f) {
@@ -742,6 +828,9 @@ static int run_frame(rt_run *r, uint32_t f) {
             first = 0;
         }
         measure(r, m, f, &res, ref_mse, n_mv, own_mv);
+    }
+    if (r->rt_full && run_full(r, &fd, f, ref_mse) != CLI_OK) {
+        return CLI_FAILURE;
     }
     memcpy(r->ref_prev, r->ref, 3 * r->px * sizeof *r->ref);
     return CLI_OK;
@@ -872,6 +961,9 @@ static int report(const rt_run *r) {
         }
     }
     report_extras(r);
+    if (r->rt_full) {
+        report_full(r);
+    }
     if (fclose(csv) != 0) {
         fprintf(stderr, "trac0r bench realtime: cannot write %s\n", o->csv_path);
         return CLI_FAILURE;
@@ -889,6 +981,12 @@ static int report(const rt_run *r) {
 
 static void free_run(rt_run *r) {
     tr_realtime_destroy(r->rt); /* before the device */
+    tr_realtime_destroy(r->rt_full);
+    if (r->be_full.dev) {
+        cli_backend_close(&r->be_full);
+    }
+    free(r->st_full);
+    free(r->prev_full);
     if (r->be.dev) {
         cli_backend_close(&r->be);
     }
