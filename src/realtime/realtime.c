@@ -527,7 +527,8 @@ static int size_low(tr_realtime *rt, uint32_t w, uint32_t h, tr_error *err) {
 /* The upscaling of an upscaled frame: rt->low (the method's reconstruction of the traced
  * frame), the samples' positions and the frame's distance and id passes into the display
  * film at the view's full resolution, through the method's own output history. On a
- * device the passes are read from its film (the upscaling runs on the host). */
+ * device the passes are read from its film: the upscaling runs on the host (its operator,
+ * src/post/upscale.h, is single source, but no device kernel runs it yet). */
 static int upscale_stage(tr_realtime *rt, rt_history *hist, int method, const tr_vec3 *motion,
                          uint32_t ids, tr_error *err) {
     const uint32_t w = rt->rcam.screen_width, h = rt->rcam.screen_height;
@@ -561,7 +562,16 @@ static int upscale_stage(tr_realtime *rt, rt_history *hist, int method, const tr
      * resolved at the output's resolution after the upscaling: a lamp's edge resolved at
      * the traced resolution would be spread over the output pixels each traced pixel
      * covers, and its rim holds most of the frame's error (docs/realtime.md). */
-    const int emission = !rt->on_device && rt->gb.has_emission && rt->params.emission_samples > 0;
+    const int emission = rt->gb.has_emission && rt->params.emission_samples > 0;
+    if (emission && rt->on_device && method != TR_RECON_OFF && !rt->gb.has_resolved) {
+        /* The device added the emission it resolved at the traced resolution
+         * (tr_cl_resolve_emission); the host's resolve computes the same values from the
+         * same film, to be taken out. */
+        if (tr_resolve_emission(rt->scene, &rt->rcam, rt->params.emission_samples, rt->cfg.threads,
+                                &rt->gb, NULL, err) != TR_OK) {
+            return TR_ERR;
+        }
+    }
     if (emission) {
         const float *e = method != TR_RECON_OFF && rt->gb.has_resolved ? rt->gb.emission_resolved
                                                                        : rt->gb.emission;
