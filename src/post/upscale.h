@@ -99,12 +99,8 @@ TR_FN void tr_upscale_pixel(const tr_camera *cam, const tr_camera *prev, int x, 
     int lx = (int)(cx * sxr), ly = (int)(cy * syr);
     lx = lx < wl - 1 ? lx : wl - 1;
     ly = ly < hl - 1 ? ly : hl - 1;
-    /* The Gaussian of the spatial fallback: half a frame pixel's width. */
-    const float sigma = 0.5f / (sxr < syr ? sxr : syr);
-    const float inv2s2 = 1.0f / (2.0f * sigma * sigma);
-    float lo[3] = {1e30f, 1e30f, 1e30f}, hi[3] = {-1e30f, -1e30f, -1e30f};
-    float sum[3] = {0.0f, 0.0f, 0.0f}, sp[3] = {0.0f, 0.0f, 0.0f};
-    float n = 0.0f, spw = 0.0f, best = 1e30f, d = 0.0f;
+    float sum[3] = {0.0f, 0.0f, 0.0f};
+    float n = 0.0f, best = 1e30f, d = 0.0f;
     uint32_t id = 0u;
     for (int dy = -1; dy <= 1; ++dy) {
         const int ty = ly + dy;
@@ -117,26 +113,14 @@ TR_FN void tr_upscale_pixel(const tr_camera *cam, const tr_camera *prev, int x, 
                 continue;
             }
             const int k = ty * wl + tx;
-            const float c[3] = {col[3 * k], col[3 * k + 1], col[3 * k + 2]};
-            float yc[3];
-            tr_up_ycocg(c, yc);
-            for (int j = 0; j < 3; ++j) {
-                lo[j] = tr_fminf(lo[j], yc[j]);
-                hi[j] = tr_fmaxf(hi[j], yc[j]);
-            }
             const float px = pos[2 * k], py = pos[2 * k + 1];
             const float ex = px - cx, ey = py - cy, e2 = ex * ex + ey * ey;
             if ((int)tr_floorf(px) == x && (int)tr_floorf(py) == y) {
-                sum[0] += c[0];
-                sum[1] += c[1];
-                sum[2] += c[2];
+                sum[0] += col[3 * k];
+                sum[1] += col[3 * k + 1];
+                sum[2] += col[3 * k + 2];
                 n += 1.0f;
             }
-            const float g = tr_post_exp_neg(e2 * inv2s2);
-            sp[0] += g * c[0];
-            sp[1] += g * c[1];
-            sp[2] += g * c[2];
-            spw += g;
             if (e2 < best) {
                 best = e2;
                 d = depth[k];
@@ -191,6 +175,24 @@ TR_FN void tr_upscale_pixel(const tr_camera *cam, const tr_camera *prev, int x, 
     }
     if (have && moved >= 1e-4f) {
         /* Where the view moved: bounded by the neighbourhood's range. */
+        float lo[3] = {1e30f, 1e30f, 1e30f}, hi[3] = {-1e30f, -1e30f, -1e30f};
+        for (int dy = -1; dy <= 1; ++dy) {
+            const int ty = ly + dy;
+            for (int dx = -1; dx <= 1 && ty >= 0 && ty < hl; ++dx) {
+                const int tx = lx + dx;
+                if (tx < 0 || tx >= wl) {
+                    continue;
+                }
+                const int k = ty * wl + tx;
+                const float c[3] = {col[3 * k], col[3 * k + 1], col[3 * k + 2]};
+                float ck[3];
+                tr_up_ycocg(c, ck);
+                for (int j = 0; j < 3; ++j) {
+                    lo[j] = tr_fminf(lo[j], ck[j]);
+                    hi[j] = tr_fmaxf(hi[j], ck[j]);
+                }
+            }
+        }
         float yc[3], rgb[3];
         tr_up_ycocg(hv, yc);
         for (int j = 0; j < 3; ++j) {
@@ -221,6 +223,26 @@ TR_FN void tr_upscale_pixel(const tr_camera *cam, const tr_camera *prev, int x, 
         out[2] = hv[2];
         *out_len = len;
     } else {
+        /* The spatial fill: a Gaussian of half a frame pixel's width over the nine. */
+        const float sigma = 0.5f / (sxr < syr ? sxr : syr);
+        const float inv2s2 = 1.0f / (2.0f * sigma * sigma);
+        float sp[3] = {0.0f, 0.0f, 0.0f}, spw = 0.0f;
+        for (int dy = -1; dy <= 1; ++dy) {
+            const int ty = ly + dy;
+            for (int dx = -1; dx <= 1 && ty >= 0 && ty < hl; ++dx) {
+                const int tx = lx + dx;
+                if (tx < 0 || tx >= wl) {
+                    continue;
+                }
+                const int k = ty * wl + tx;
+                const float ex = pos[2 * k] - cx, ey = pos[2 * k + 1] - cy;
+                const float g = tr_post_exp_neg((ex * ex + ey * ey) * inv2s2);
+                sp[0] += g * col[3 * k];
+                sp[1] += g * col[3 * k + 1];
+                sp[2] += g * col[3 * k + 2];
+                spw += g;
+            }
+        }
         const float inv = spw > 0.0f ? 1.0f / spw : 0.0f;
         out[0] = sp[0] * inv;
         out[1] = sp[1] * inv;
