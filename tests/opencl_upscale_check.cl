@@ -12,7 +12,7 @@ __kernel void tr_check_upscale(tr_camera cam, tr_camera prev, int wl, int hl,
     const int x = (int)get_global_id(0), y = (int)get_global_id(1);
     const int i = y * (int)cam.screen_width + x;
     float o[3], l, d;
-    tr_upscale_pixel(&cam, &prev, x, y, wl, hl, col, pos, depth, prim, 0, 0u, hcol, hlen, hdepth,
+    tr_upscale_pixel(&cam, &prev, x, y, wl, hl, col, pos, depth, prim, 0, 0u, hcol, hlen, hdepth, 0,
                      32.0f, o, &l, &d);
     out[3 * i] = o[0];
     out[3 * i + 1] = o[1];

@@ -16,6 +16,7 @@
 #ifndef TRAC0R_UPSCALE_H
 #define TRAC0R_UPSCALE_H
 
+#include <stddef.h>
 #include <stdint.h>
 
 #include "trac0r/error.h"
@@ -36,6 +37,8 @@ typedef struct tr_upscale {
     float *count[2];    /* samples behind each pixel (capped by max_len) */
     float *depth[2];    /* the distance each pixel's point was taken at */
     double ms;          /* the last tr_upscale_frame's wall time */
+    float *box;         /* scratch: the traced frame's neighbourhood ranges */
+    size_t box_len;
 } tr_upscale;
 
 /* One traced frame: width x height pixels, planar buffers, row-major, top row first. */

@@ -45,6 +45,7 @@ void tr_upscale_free(tr_upscale *u) {
         free(u->count[k]);
         free(u->depth[k]);
     }
+    free(u->box);
     memset(u, 0, sizeof *u);
 }
 
@@ -78,13 +79,31 @@ int tr_upscale_frame(tr_upscale *u, const tr_upscale_input *in, const tr_camera 
     /* tr_vec3 is three packed floats (types.h), as the operator reads them. */
     const float *mot = motion ? &motion[0].x : NULL;
     float *oc = u->color[next], *ol = u->count[next], *od = u->depth[next];
+    /* The neighbourhoods' ranges, once per traced pixel rather than per output pixel. */
+    const int wl = (int)in->width, hl = (int)in->height;
+    if (u->box_len < 6 * (size_t)wl * hl) {
+        free(u->box);
+        u->box_len = 0;
+        if (!(u->box = malloc(6 * (size_t)wl * hl * sizeof *u->box))) {
+            return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory for a %ux%u frame",
+                                in->width, in->height);
+        }
+        u->box_len = 6 * (size_t)wl * hl;
+    }
+    float *box = u->box;
+#pragma omp parallel for num_threads(nt) schedule(static)
+    for (int y = 0; y < hl; ++y) {
+        for (int x = 0; x < wl; ++x) {
+            tr_upscale_box_pixel(in->color, wl, hl, x, y, box + 6 * ((size_t)y * wl + x));
+        }
+    }
 #pragma omp parallel for num_threads(nt) schedule(static)
     for (int y = 0; y < h; ++y) {
         for (int x = 0; x < w; ++x) {
             const size_t i = (size_t)y * w + x;
             tr_upscale_pixel(cam, &pc, x, y, (int)in->width, (int)in->height, in->color, in->pos,
                              in->depth, in->prim, mot, motion ? motion_count : 0u, hcol,
-                             u->count[prev], u->depth[prev], cap, oc + 3 * i, ol + i, od + i);
+                             u->count[prev], u->depth[prev], box, cap, oc + 3 * i, ol + i, od + i);
         }
     }
     memcpy(out, oc, 3 * (size_t)w * h * sizeof *out);

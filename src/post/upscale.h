@@ -60,22 +60,52 @@ TR_FN void tr_up_catmull_rom(float t, float w[4]) {
 TR_FN void tr_up_history_read(TR_CONST_GLOBAL float *hist, int w, int h, float qx, float qy,
                               float out[3]) {
     const float fx = qx - 0.5f, fy = qy - 0.5f;
-    const int ix = (int)tr_floorf(fx), iy = (int)tr_floorf(fy);
+    /* floor without a libm call (fx, fy >= -0.5: the position lies on the image). */
+    const int ix = (int)(fx + 1.0f) - 1, iy = (int)(fy + 1.0f) - 1;
     float wx[4], wy[4];
     tr_up_catmull_rom(fx - (float)ix, wx);
     tr_up_catmull_rom(fy - (float)iy, wy);
     out[0] = out[1] = out[2] = 0.0f;
+    const int inside = ix >= 1 && iy >= 1 && ix + 2 < w && iy + 2 < h;
     for (int j = 0; j < 4; ++j) {
         int ty = iy - 1 + j;
-        ty = ty < 0 ? 0 : ty >= h ? h - 1 : ty;
+        ty = inside ? ty : ty < 0 ? 0 : ty >= h ? h - 1 : ty;
+        float r[3] = {0.0f, 0.0f, 0.0f};
         for (int i = 0; i < 4; ++i) {
             int tx = ix - 1 + i;
-            tx = tx < 0 ? 0 : tx >= w ? w - 1 : tx;
-            const float wt = wx[i] * wy[j];
+            tx = inside ? tx : tx < 0 ? 0 : tx >= w ? w - 1 : tx;
             const int k = 3 * (ty * w + tx);
-            out[0] += wt * hist[k];
-            out[1] += wt * hist[k + 1];
-            out[2] += wt * hist[k + 2];
+            r[0] += wx[i] * hist[k];
+            r[1] += wx[i] * hist[k + 1];
+            r[2] += wx[i] * hist[k + 2];
+        }
+        out[0] += wy[j] * r[0];
+        out[1] += wy[j] * r[1];
+        out[2] += wy[j] * r[2];
+    }
+}
+
+/* The range in YCoCg of the 3 x 3 traced pixels around (x, y) of a w x h frame (colour
+ * col, 3 floats per pixel): low Y, Co, Cg then high into box[0..5]. */
+TR_FN void tr_upscale_box_pixel(TR_CONST_GLOBAL float *col, int w, int h, int x, int y,
+                                float box[6]) {
+    box[0] = box[1] = box[2] = 1e30f;
+    box[3] = box[4] = box[5] = -1e30f;
+    for (int dy = -1; dy <= 1; ++dy) {
+        const int ty = y + dy;
+        for (int dx = -1; dx <= 1 && ty >= 0 && ty < h; ++dx) {
+            const int tx = x + dx;
+            if (tx < 0 || tx >= w) {
+                continue;
+            }
+            const int k = ty * w + tx;
+            const float c[3] = {col[3 * k], col[3 * k + 1], col[3 * k + 2]};
+            float ck[3];
+            tr_up_ycocg(c, ck);
+            for (int j = 0; j < 3; ++j) {
+                box[j] = tr_fminf(box[j], ck[j]);
+                box[3 + j] = tr_fmaxf(box[3 + j], ck[j]);
+            }
         }
     }
 }
@@ -83,7 +113,9 @@ TR_FN void tr_up_history_read(TR_CONST_GLOBAL float *hist, int w, int h, float q
 /* Output pixel (x, y) of a camera `cam` (W x H) from the frame (wl x hl: colour col, 3
  * per pixel; sample positions pos in output pixels, 2 per pixel; distance along the ray
  * depth and primitive prim, 1 per pixel) and the history (hcol, hlen and hdepth of the
- * previous output, seen through `prev`; hcol NULL: none). motion: 3 floats per primitive
+ * previous output, seen through `prev`; hcol NULL: none), and the range of the 3 x 3
+ * traced pixels around each (box, tr_upscale_box_pixel, 6 floats per traced pixel; NULL:
+ * computed per output pixel). motion: 3 floats per primitive
  * id below motion_count (NULL: nothing moved). Writes the pixel's colour (3 floats), its
  * count of samples and its distance, for the next frame's history. */
 TR_FN void tr_upscale_pixel(const tr_camera *cam, const tr_camera *prev, int x, int y, int wl,
@@ -91,8 +123,8 @@ TR_FN void tr_upscale_pixel(const tr_camera *cam, const tr_camera *prev, int x, 
                             TR_CONST_GLOBAL float *depth, TR_CONST_GLOBAL uint32_t *prim,
                             TR_CONST_GLOBAL float *motion, uint32_t motion_count,
                             TR_CONST_GLOBAL float *hcol, TR_CONST_GLOBAL float *hlen,
-                            TR_CONST_GLOBAL float *hdepth, float max_len, float out[3],
-                            float *out_len, float *out_depth) {
+                            TR_CONST_GLOBAL float *hdepth, TR_CONST_GLOBAL float *box,
+                            float max_len, float out[3], float *out_len, float *out_depth) {
     const int w = (int)cam->screen_width, h = (int)cam->screen_height;
     const float cx = (float)x + 0.5f, cy = (float)y + 0.5f;
     const float sxr = (float)wl / (float)w, syr = (float)hl / (float)h;
@@ -102,20 +134,25 @@ TR_FN void tr_upscale_pixel(const tr_camera *cam, const tr_camera *prev, int x, 
     float sum[3] = {0.0f, 0.0f, 0.0f};
     float n = 0.0f, best = 1e30f, d = 0.0f;
     uint32_t id = 0u;
-    for (int dy = -1; dy <= 1; ++dy) {
-        const int ty = ly + dy;
+    /* The traced pixels whose area overlaps this pixel: the only ones whose sample can
+     * fall in it (with a margin for rounding; the test below decides). */
+    /* (Truncation is floor here: the values are at least -1e-3, and -1 is off the frame.) */
+    const int tx0 = (int)((float)x * sxr - 1e-3f);
+    const int tx1 = (int)((float)(x + 1) * sxr + 1e-3f);
+    const int ty0 = (int)((float)y * syr - 1e-3f);
+    const int ty1 = (int)((float)(y + 1) * syr + 1e-3f);
+    for (int ty = ty0; ty <= ty1; ++ty) {
         if (ty < 0 || ty >= hl) {
             continue;
         }
-        for (int dx = -1; dx <= 1; ++dx) {
-            const int tx = lx + dx;
+        for (int tx = tx0; tx <= tx1; ++tx) {
             if (tx < 0 || tx >= wl) {
                 continue;
             }
             const int k = ty * wl + tx;
             const float px = pos[2 * k], py = pos[2 * k + 1];
             const float ex = px - cx, ey = py - cy, e2 = ex * ex + ey * ey;
-            if ((int)tr_floorf(px) == x && (int)tr_floorf(py) == y) {
+            if ((int)px == x && (int)py == y) { /* positions are not negative */
                 sum[0] += col[3 * k];
                 sum[1] += col[3 * k + 1];
                 sum[2] += col[3 * k + 2];
@@ -174,29 +211,20 @@ TR_FN void tr_upscale_pixel(const tr_camera *cam, const tr_camera *prev, int x, 
         }
     }
     if (have && moved >= 1e-4f) {
-        /* Where the view moved: bounded by the neighbourhood's range. */
-        float lo[3] = {1e30f, 1e30f, 1e30f}, hi[3] = {-1e30f, -1e30f, -1e30f};
-        for (int dy = -1; dy <= 1; ++dy) {
-            const int ty = ly + dy;
-            for (int dx = -1; dx <= 1 && ty >= 0 && ty < hl; ++dx) {
-                const int tx = lx + dx;
-                if (tx < 0 || tx >= wl) {
-                    continue;
-                }
-                const int k = ty * wl + tx;
-                const float c[3] = {col[3 * k], col[3 * k + 1], col[3 * k + 2]};
-                float ck[3];
-                tr_up_ycocg(c, ck);
-                for (int j = 0; j < 3; ++j) {
-                    lo[j] = tr_fminf(lo[j], ck[j]);
-                    hi[j] = tr_fmaxf(hi[j], ck[j]);
-                }
+        /* Where the view moved: bounded by the neighbourhood's range (box: per traced
+         * pixel, tr_upscale_box_pixel; NULL: computed here). */
+        float b[6];
+        if (box) {
+            for (int j = 0; j < 6; ++j) {
+                b[j] = box[6 * (ly * wl + lx) + j];
             }
+        } else {
+            tr_upscale_box_pixel(col, wl, hl, lx, ly, b);
         }
         float yc[3], rgb[3];
         tr_up_ycocg(hv, yc);
         for (int j = 0; j < 3; ++j) {
-            yc[j] = tr_fminf(tr_fmaxf(yc[j], lo[j]), hi[j]);
+            yc[j] = tr_fminf(tr_fmaxf(yc[j], b[j]), b[3 + j]);
         }
         tr_up_rgb(yc, rgb);
         hv[0] = tr_fmaxf(rgb[0], 0.0f);
