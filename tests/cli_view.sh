@@ -150,6 +150,24 @@ region() {
               if ($1 > 200 && $2 > 200 && $3 > 200) bright++ } }
         END { printf "%.1f %.1f %.1f %d\n", r / n, g / n, b / n, bright }'
 }
+# flat PPM: the percentage of pixels, of those neither black nor white, that equal all eight
+# of their neighbours: the inside of blocks of 3x3 pixels or more, which a frame shown at a
+# third of the window's resolution or less is made of, and a path-traced frame is not.
+flat() {
+    w=$(sed -n 2p "$1" | cut -d' ' -f1)
+    hdr=$(head -n 3 "$1" | wc -c)
+    tail -c +$((hdr + 1)) "$1" | od -An -v -tu1 -w3 |
+        awk -v w="$w" '{ p[NR - 1] = $1 " " $2 " " $3 }
+        END { h = NR / w
+              for (y = 1; y < h - 1; y++) for (x = 1; x < w - 1; x++) {
+                  c = p[y * w + x]
+                  if (c == "0 0 0" || c == "255 255 255") continue
+                  n++; same = 1
+                  for (dy = -1; dy <= 1; dy++) for (dx = -1; dx <= 1; dx++)
+                      if (p[(y + dy) * w + x + dx] != c) same = 0
+                  f += same }
+              printf "%d\n", n ? 100 * f / n : 0 }'
+}
 start_viewer() {
     rm -f state.txt window.ppm
     "$BIN" view --width 160 --height 120 --threads 1 --state-file state.txt \
@@ -305,8 +323,13 @@ sleep 1
 frames1=$(state frames)
 dump hold2.ppm
 moving=$(state moving)
+scale=$(state scale)
 xdotool keyup w
 [ "$moving" = 1 ] || fail "holding W: the viewer does not say it is moving"
+# Moving frames keep the window's resolution (temporal upscaling of the traced fraction),
+# not blocks of a reduced one.
+awk -v s="$scale" 'BEGIN { exit !(s == 1) }' || fail "holding W: a frame at 1/$scale resolution"
+[ "$(flat hold2.ppm)" -lt 5 ] || fail "holding W: $(flat hold2.ppm) % of the window in blocks"
 [ "$frames1" -ge $((frames0 + 3)) ] || fail "holding W: frames went $frames0 -> $frames1 in 1 s"
 cmp -s hold1.ppm hold2.ppm && fail "holding W: the window did not change in 1 s"
 wait_for 10 '[ "$(state moving)" = 0 ] && [ "$(state generation)" = "$(state view_generation)" ]' ||

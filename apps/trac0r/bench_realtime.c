@@ -49,6 +49,10 @@ static void realtime_help(void) {
            "  --spp S              samples per pixel per frame, 1..1024 (default 1)\n"
            "  --reference-spp R    samples of each frame's reference, 2..1000000 (default 256)\n"
            "  --cut K              jump to another view at frame K (default: no cut)\n"
+           "  --upscale N          frames trace 1/N of the pixels (2: half, 4: a quarter) and\n"
+           "                       the output is upscaled to full size (temporal upscaling);\n"
+           "                       the same pipeline tracing every pixel runs on the same\n"
+           "                       frames, and a last table compares the two (default 1)\n"
            "  --animate            the scene's last shape moves before every frame (as view\n"
            "                       --animate), and the reconstruction is told how far each\n"
            "                       primitive moved; references see the same scene\n"
@@ -243,6 +247,7 @@ typedef struct rt_opts {
     int animate;                    /* --animate: the scene's last shape moves every frame */
     uint32_t anim_from, anim_until; /* it moves before frames from .. until - 1 */
     char csv_path[4096], png_path[4096];
+    uint32_t upscale; /* --upscale: frames trace 1/upscale of the pixels (1: every one) */
 } rt_opts;
 
 /* One run: the scene, the device, the real-time loop and the measures. */
@@ -266,6 +271,10 @@ typedef struct rt_run {
     uint32_t shape_lo, shape_hi; /* --animate: the moving shape's ids */
     double resolve_sum_ms;       /* tr_resolve_emission over the frames */
     uint64_t resolve_px;
+    /* --upscale: the same pipeline tracing every pixel, on the same frames. */
+    cli_backend be_full; /* its own device: one film size each */
+    tr_realtime *rt_full;
+    rt_frame_stats *st_full;
 } rt_run;
 
 /* One of the benchmark's own options: CLI_OK, CLI_USAGE, or -1 if it is none of them. */
@@ -291,6 +300,8 @@ static int own_option(cli_args *a, void *user) {
     } else if (cli_is(a, "--animate-frames")) {
         o->animate = 1;
         rc = parse_window(a, &o->anim_from, &o->anim_until);
+    } else if (cli_is(a, "--upscale")) {
+        rc = cli_parse_u32(a, 1, 16, &o->upscale);
     } else if (cli_is(a, "--cut")) {
         rc = cli_parse_u32(a, 1, 100000, &o->cut);
     } else if (cli_is(a, "--methods")) {
@@ -320,6 +331,10 @@ static int parse_options(cli_args *a, rt_opts *o) {
     if (o->cut >= o->frames) {
         return cli_error(a, "--cut: expected a frame before --frames (%u), got %u", o->frames,
                          o->cut);
+    }
+    if (o->upscale > 1 && o->animate) {
+        /* The scene's motion goes to one real-time loop, not to two. */
+        return cli_error(a, "--upscale: not with --animate");
     }
     if (o->anim_until > o->frames) {
         return cli_error(a, "--animate-frames: expected B up to --frames (%u), got %u", o->frames,
@@ -376,7 +391,7 @@ static int alloc_buffers(rt_run *r) {
     tr_error err;
     r->st = calloc((size_t)TR_RECON_COUNT * r->o->frames, sizeof *r->st);
     if (!r->st ||
-        !(r->sc = tr_scorer_create(r->o->c.width, r->o->c.height, TR_RECON_COUNT, &err))) {
+        !(r->sc = tr_scorer_create(r->o->c.width, r->o->c.height, 2 * TR_RECON_COUNT, &err))) {
         fprintf(stderr, "trac0r bench realtime: %s\n", r->st ? err.msg : "out of memory");
         return CLI_FAILURE;
     }
@@ -407,6 +422,18 @@ static int open_loop(rt_run *r) {
     if (!(r->rt = tr_realtime_create(r->be.dev, r->scene, &desc, &err))) {
         fprintf(stderr, "trac0r bench realtime: %s\n", err.msg);
         return CLI_FAILURE;
+    }
+    if (o->upscale > 1) {
+        rc = cli_backend_open(r->a, &o->c, r->scene, &r->be_full);
+        if (rc != CLI_OK) {
+            return rc;
+        }
+        r->rt_full = tr_realtime_create(r->be_full.dev, r->scene, &desc, &err);
+        r->st_full = calloc((size_t)TR_RECON_COUNT * o->frames, sizeof *r->st_full);
+        if (!r->rt_full || !r->st_full) {
+            fprintf(stderr, "trac0r bench realtime: %s\n", r->rt_full ? "out of memory" : err.msg);
+            return CLI_FAILURE;
+        }
     }
     r->host = !tr_realtime_on_device(r->rt);
     r->frame_sampler = o->c.sampler >= 0 ? o->c.sampler : TR_SAMPLER_REALTIME;
@@ -506,6 +533,62 @@ static int frame_reference(rt_run *r, const tr_camera *cam, uint32_t f) {
     return CLI_OK;
 }
 
+/* --upscale: frame f again through the same pipeline tracing every pixel, scored into
+ * st_full (the scorer's slots after the methods' own). */
+static int run_full(rt_run *r, const tr_realtime_frame_desc *fd, uint32_t f) {
+    tr_error err;
+    tr_realtime_frame_desc full = *fd;
+    full.upscale = 0;
+    if (tr_realtime_render(r->rt_full, &full, &err) != TR_OK) {
+        fprintf(stderr, "trac0r bench realtime: frame %u, every pixel: %s\n", f, err.msg);
+        return CLI_FAILURE;
+    }
+    for (int m = 0; m < TR_RECON_COUNT; ++m) {
+        tr_realtime_result res;
+        if (!r->o->on[m]) {
+            continue;
+        }
+        if (tr_realtime_reconstruct(r->rt_full, m, &res, &err) != TR_OK) {
+            fprintf(stderr, "trac0r bench realtime: %s, every pixel: %s\n", tr_recon_name(m),
+                    err.msg);
+            return CLI_FAILURE;
+        }
+        rt_frame_stats *s = &r->st_full[(size_t)m * r->o->frames + f];
+        *s = tr_scorer_score(r->sc, TR_RECON_COUNT + m, res.rgb);
+        s->render_ms = res.render_ms;
+        s->temporal_ms = res.temporal_ms;
+        s->spatial_ms = res.spatial_ms;
+    }
+    return CLI_OK;
+}
+
+/* --upscale: per method the upscaled pipeline against the same one tracing every pixel. */
+static void report_full(const rt_run *r) {
+    const rt_opts *o = r->o;
+    const uint32_t frames = o->frames;
+    printf("upscaled (1/%u of the pixels traced) against the same pipeline tracing every "
+           "pixel:\n",
+           o->upscale);
+    printf("%-11s %9s %9s %9s %9s %10s\n", "method", "fps_up", "fps_full", "psnr_up", "psnr_full",
+           "difference");
+    for (int m = 0; m < TR_RECON_COUNT; ++m) {
+        if (!o->on[m]) {
+            continue;
+        }
+        double t[2] = {0, 0}, p[2] = {0, 0};
+        for (uint32_t f = 0; f < frames; ++f) {
+            const rt_frame_stats *s[2] = {&r->st[(size_t)m * frames + f],
+                                          &r->st_full[(size_t)m * frames + f]};
+            for (int k = 0; k < 2; ++k) {
+                t[k] += s[k]->render_ms + s[k]->temporal_ms + s[k]->spatial_ms;
+                p[k] += s[k]->psnr;
+            }
+        }
+        printf("%-11s %9.1f %9.1f %9.2f %9.2f %+10.2f\n", tr_recon_name(m), 1000.0 * frames / t[0],
+               1000.0 * frames / t[1], p[0] / frames, p[1] / frames, (p[0] - p[1]) / frames);
+    }
+}
+
 /* Frame f: the scene moved (--animate), its reference, the frame rendered once and
  * handed to every method. */
 static int run_frame(rt_run *r, uint32_t f) {
@@ -537,6 +620,7 @@ static int run_frame(rt_run *r, uint32_t f) {
     /* The frame itself: samples numbered by frame, so that noise changes over time. */
     tr_realtime_frame_desc fd = {0};
     fd.camera = &cam;
+    fd.upscale = (int)o->upscale;
     if (tr_realtime_render(r->rt, &fd, &err) != TR_OK) {
         fprintf(stderr, "trac0r bench realtime: frame %u: %s\n", f, err.msg);
         return CLI_FAILURE;
@@ -567,6 +651,9 @@ static int run_frame(rt_run *r, uint32_t f) {
         s->render_ms = res.render_ms;
         s->temporal_ms = res.temporal_ms;
         s->spatial_ms = res.spatial_ms;
+    }
+    if (r->rt_full && run_full(r, &fd, f) != CLI_OK) {
+        return CLI_FAILURE;
     }
     return CLI_OK;
 }
@@ -686,6 +773,9 @@ static int report(const rt_run *r) {
         }
     }
     report_extras(r);
+    if (r->rt_full) {
+        report_full(r);
+    }
     if (fclose(csv) != 0) {
         fprintf(stderr, "trac0r bench realtime: cannot write %s\n", o->csv_path);
         return CLI_FAILURE;
@@ -703,6 +793,11 @@ static int report(const rt_run *r) {
 
 static void free_run(rt_run *r) {
     tr_realtime_destroy(r->rt); /* before the device */
+    tr_realtime_destroy(r->rt_full);
+    if (r->be_full.dev) {
+        cli_backend_close(&r->be_full);
+    }
+    free(r->st_full);
     if (r->be.dev) {
         cli_backend_close(&r->be);
     }

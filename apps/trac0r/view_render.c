@@ -216,6 +216,9 @@ int view_renderer_start(view_renderer *r, tr_scene *scene, int animate, tr_devic
     desc.sampler = TR_REALTIME_SAMPLER(motion_sampler);
     desc.accumulate = 1;
     desc.animated = animate;
+    /* Moving frames keep the window's resolution: under the budget they trace down to a
+     * quarter of the pixels and are upscaled, never shown as blocks (realtime.h). */
+    desc.budget_upscale = 1;
     if (!(r->rt = tr_realtime_create(dev, scene, &desc, err))) {
         return TR_ERR;
     }

@@ -108,6 +108,12 @@ typedef struct tr_realtime_desc {
      * and visibility reuse (biased, cheaper, less noisy). */
     int restir;
     int restir_unbiased;
+    /* 1: a moving frame under a budget keeps the output's full resolution: where the
+     * budget asks for fewer pixels it traces a fraction of them (down to a quarter, a
+     * divisor of 2 per axis) and reconstructs the rest by temporal upscaling, as a frame's
+     * `upscale` does, instead of showing a reduced resolution (blocks). 0 (default): the
+     * budget reduces the resolution. */
+    int budget_upscale;
 } tr_realtime_desc;
 
 #define TR_REALTIME_RESTIR_OFF 0
@@ -128,6 +134,12 @@ typedef struct tr_realtime_frame_desc {
      * fails with TR_STATUS_CANCELLED and starts the next one over (default NULL). */
     int (*cancel)(void *user);
     void *cancel_user;
+    /* Temporal upscaling: the frame traces 1/upscale of the output's pixels (a frame of
+     * the same view, each side divided by sqrt(upscale)) and the output is reconstructed at
+     * full resolution from it and from the output's history (upscale.h): 2 traces half
+     * the pixels, 4 a quarter; 0 or 1 (default): every pixel. 1..16. Not with a stride
+     * above 1 or a bidirectional integrator (every pixel is traced then). */
+    int upscale;
 } tr_realtime_frame_desc;
 
 /* What a frame gave; its pointers stay valid until the next call on the instance. */
@@ -148,6 +160,9 @@ typedef struct tr_realtime_result {
     double resolve_ms;  /* the emission's resolve on the host (0 elsewhere) */
     uint32_t resolved;  /* the pixels it traced */
     double restir_ms;   /* the ReSTIR DI stage (part of render_ms; 0 without it) */
+    /* The traced frame's size: width x height, or less where the frame was upscaled. */
+    uint32_t traced_width, traced_height;
+    double upscale_ms; /* the upscaling (counted into temporal_ms too); 0 without */
 } tr_realtime_result;
 
 /* A real-time loop rendering `scene` (uploaded to dev already) on dev, which both must

@@ -64,6 +64,7 @@
 #include "trac0r/scene_file.h"
 #include "trac0r/session.h"
 #include "trac0r/types.h"
+#include "trac0r/upscale.h"
 
 #define TRAC0R_VERSION "0.1.0"
 

@@ -3,6 +3,7 @@
 #include "trac0r/realtime.h"
 #include "trac0r/recon_device.h"
 #include "realtime/restir_stage.h"
+#include "trac0r/upscale.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -15,6 +16,8 @@ typedef struct rt_history {
     uint32_t width, height; /* the size it was made for (0: not made) */
     int used;               /* rec or rdev holds a history */
     uint64_t frame;         /* the rendered frame it last took */
+    tr_upscale up;          /* upscaled frames: the output's history (full resolution) */
+    uint64_t up_frame;      /* the upscaled frame it last took (0: none) */
 } rt_history;
 
 struct tr_realtime {
@@ -60,6 +63,21 @@ struct tr_realtime {
     uint32_t resolved;
     rt_history hist[TR_RECON_COUNT];
     tr_film disp; /* the reconstruction as a film of one sample per pixel */
+
+    /* Temporal upscaling (upscale.h). */
+    int budget_upscale; /* the desc's */
+    float up_div;       /* this frame's divisor per axis (1: every pixel traced) */
+    int view_upscaled;  /* the film is a traced fraction of the view, to upscale */
+    float *pos;         /* its samples' positions in output pixels, 2 per film pixel */
+    size_t pos_len;
+    float *low; /* the reconstruction of the traced frame, 3 per film pixel */
+    size_t low_len;
+    int gb_guides;        /* gb holds the last frame's passes (the device path, for upscaling) */
+    uint32_t up_resolved; /* output pixels whose emission the upscaling resolved */
+    float *emis[2];       /* the emission at the output's resolution, this frame and the last */
+    size_t emis_len;
+    int emis_cur;
+    uint64_t emis_frame; /* the frame emis[emis_cur] is of (0: none) */
 };
 
 static int same_camera(const tr_camera *a, const tr_camera *b) {
@@ -176,10 +194,13 @@ tr_realtime *tr_realtime_create(tr_device *dev, tr_scene *scene, const tr_realti
         free(rt);
         return NULL;
     }
+    rt->budget_upscale = d->budget_upscale != 0;
+    rt->up_div = 1.0f;
     return rt;
 }
 
 static void free_history(rt_history *h) {
+    tr_upscale_free(&h->up);
     tr_recon_free(&h->rec);
     tr_recon_device_destroy(h->rdev);
     memset(h, 0, sizeof *h);
@@ -197,6 +218,10 @@ void tr_realtime_destroy(tr_realtime *rt) {
     tr_film_free(&rt->disp);
     tr_gbuffer_free(&rt->gb);
     free(rt->motion);
+    free(rt->pos);
+    free(rt->low);
+    free(rt->emis[0]);
+    free(rt->emis[1]);
     free(rt);
 }
 
@@ -238,6 +263,10 @@ static int check_frame_desc(const tr_realtime *rt, const tr_realtime_frame_desc 
     if (fd->camera->screen_width == 0 || fd->camera->screen_height == 0) {
         return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "tr_realtime: the camera is empty");
     }
+    if (fd->upscale < 0 || fd->upscale > 16) {
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "tr_realtime: upscale %d must be in 0..16", fd->upscale);
+    }
     return TR_OK;
 }
 
@@ -245,7 +274,25 @@ static int check_frame_desc(const tr_realtime *rt, const tr_realtime_frame_desc 
 static int continues_view(const tr_realtime *rt, const tr_realtime_frame_desc *fd, int stride) {
     return rt->accumulate && !rt->animated && rt->have_view && !fd->restart &&
            same_camera(&rt->view_cam, fd->camera) && rt->view_stride == stride &&
-           rt->view_moving == (fd->moving != 0) && rt->view_method == fd->method;
+           rt->view_moving == (fd->moving != 0) && rt->view_method == fd->method &&
+           !rt->view_upscaled && rt->up_div <= 1.0f;
+}
+
+/* The divisor per axis of the frame fd asks for: sqrt(upscale), or under a budget with
+ * desc.budget_upscale the budget's resolution level up to 2 (a quarter of the pixels);
+ * 1 (every pixel) with a stride or a bidirectional integrator, whose samples' positions
+ * the upscaling does not know. */
+static float upscale_divisor(const tr_realtime *rt, const tr_realtime_frame_desc *fd, int stride) {
+    if (stride > 1 || tr_integrator_is_bidirectional(rt->cfg.integrator)) {
+        return 1.0f;
+    }
+    float s = fd->upscale > 1 ? sqrtf((float)fd->upscale) : 1.0f;
+    if (rt->budget_upscale && fd->moving && fd->budget_ms > 0.0 && rt->budget_scale > 1.0f) {
+        float b = tr_realtime_level(rt->budget_scale);
+        b = b < 2.0f ? b : 2.0f;
+        s = b > s ? b : s;
+    }
+    return s;
 }
 
 /* A new view: the film sized to the camera (reduced to a resolution level while moving
@@ -258,7 +305,14 @@ static int start_view(tr_realtime *rt, const tr_realtime_frame_desc *fd, int str
     rt->view_stride = stride;
     rt->view_moving = fd->moving != 0;
     rt->view_method = fd->method;
-    if (rt->view_moving && rt->budget_scale > 1.0f) {
+    rt->view_upscaled = rt->up_div > 1.0f;
+    if (rt->view_upscaled) {
+        /* A traced fraction of the view: the same camera at fewer pixels. */
+        const float s = rt->up_div;
+        const uint32_t w = (uint32_t)((float)fd->camera->screen_width / s + 0.5f);
+        const uint32_t h = (uint32_t)((float)fd->camera->screen_height / s + 0.5f);
+        (void)tr_camera_resize(&rt->rcam, w ? w : 1, h ? h : 1, err);
+    } else if (rt->view_moving && rt->budget_scale > 1.0f) {
         const float s = tr_realtime_level(rt->budget_scale);
         const uint32_t w = (uint32_t)((float)fd->camera->screen_width / s + 0.5f);
         const uint32_t h = (uint32_t)((float)fd->camera->screen_height / s + 0.5f);
@@ -328,6 +382,7 @@ int tr_realtime_render(tr_realtime *rt, const tr_realtime_frame_desc *fd, tr_err
     rt->calls += 1;
     rt->gb_frame_set = 0;
     const int stride = fd->stride ? fd->stride : rt->cfg.stride;
+    rt->up_div = upscale_divisor(rt, fd, stride);
     if (!continues_view(rt, fd, stride) && start_view(rt, fd, stride, err) != TR_OK) {
         return TR_ERR;
     }
@@ -385,6 +440,26 @@ int tr_realtime_render(tr_realtime *rt, const tr_realtime_frame_desc *fd, tr_err
         }
         rt->restir_ms = (tr_time_now() - t1) * 1e3;
     }
+    if (rt->view_upscaled) {
+        /* Where each traced pixel's samples lie in the output (the kernel's jitter). */
+        const size_t need = 2 * (size_t)rt->rcam.screen_width * rt->rcam.screen_height;
+        if (rt->pos_len < need) {
+            free(rt->pos);
+            rt->pos_len = 0;
+            if (!(rt->pos = malloc(need * sizeof *rt->pos))) {
+                rt->have_view = 0;
+                return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory for a frame");
+            }
+            rt->pos_len = need;
+        }
+        if (tr_upscale_positions(&cfg, rt->rcam.screen_width, rt->rcam.screen_height,
+                                 rt->view_cam.screen_width, rt->view_cam.screen_height, sample, n,
+                                 rt->pos, err) != TR_OK) {
+            rt->have_view = 0;
+            return TR_ERR;
+        }
+    }
+    rt->gb_guides = 0;
     rt->render_ms = (tr_time_now() - t0) * 1e3;
     rt->acc_spp += n;
     rt->frame_spp = n;
@@ -432,7 +507,13 @@ static int size_disp(tr_realtime *rt, uint32_t w, uint32_t h, tr_error *err) {
 static int prepare_history(tr_realtime *rt, int m, uint32_t w, uint32_t h, tr_error *err) {
     rt_history *hist = &rt->hist[m];
     if (hist->width != w || hist->height != h) {
+        /* The output's history of upscaled frames outlives a new traced size. */
+        const tr_upscale keep = hist->up;
+        const uint64_t keep_frame = hist->up_frame;
+        memset(&hist->up, 0, sizeof hist->up);
         free_history(hist);
+        hist->up = keep;
+        hist->up_frame = keep_frame;
         if (rt->on_device) {
             if (!(hist->rdev = tr_recon_device_create(rt->dev, w, h, err))) {
                 return TR_ERR;
@@ -484,6 +565,116 @@ static int host_frame(tr_realtime *rt, tr_error *err) {
     return TR_OK;
 }
 
+/* The traced frame's reconstruction buffer (upscaled frames), w x h. */
+static int size_low(tr_realtime *rt, uint32_t w, uint32_t h, tr_error *err) {
+    const size_t need = 3 * (size_t)w * h;
+    if (rt->low_len >= need) {
+        return TR_OK;
+    }
+    free(rt->low);
+    rt->low_len = 0;
+    if (!(rt->low = malloc(need * sizeof *rt->low))) {
+        return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory for a %ux%u frame", w, h);
+    }
+    rt->low_len = need;
+    return TR_OK;
+}
+
+/* The upscaling of an upscaled frame: rt->low (the method's reconstruction of the traced
+ * frame), the samples' positions and the frame's distance and id passes into the display
+ * film at the view's full resolution, through the method's own output history. On a
+ * device the passes are read from its film: the upscaling runs on the host (its operator,
+ * src/post/upscale.h, is single source, but no device kernel runs it yet). */
+static int upscale_stage(tr_realtime *rt, rt_history *hist, int method, const tr_vec3 *motion,
+                         uint32_t ids, tr_error *err) {
+    const uint32_t w = rt->rcam.screen_width, h = rt->rcam.screen_height;
+    const uint32_t W = rt->view_cam.screen_width, H = rt->view_cam.screen_height;
+    if (rt->on_device && !rt->gb_guides) {
+        const tr_film *film = NULL;
+        if (tr_realtime_film(rt, &film, err) != TR_OK) {
+            return TR_ERR;
+        }
+        if (rt->gb.width != w || rt->gb.height != h || !rt->gb.color) {
+            tr_gbuffer_free(&rt->gb);
+            if (tr_gbuffer_init(&rt->gb, w, h, err) != TR_OK) {
+                return TR_ERR;
+            }
+        }
+        if (tr_gbuffer_from_film(&rt->gb, film, err) != TR_OK) {
+            return TR_ERR;
+        }
+        rt->gb_guides = 1;
+    }
+    if (hist->up.width != W || hist->up.height != H) {
+        tr_upscale_free(&hist->up);
+        if (tr_upscale_init(&hist->up, W, H, err) != TR_OK) {
+            return TR_ERR;
+        }
+    } else if (hist->up_frame == 0 || hist->up_frame + 1 != rt->rendered) {
+        tr_upscale_clear(&hist->up);
+    }
+    hist->up_frame = rt->rendered;
+    /* On the host the emission the reconstruction added back is taken out again and
+     * resolved at the output's resolution after the upscaling: a lamp's edge resolved at
+     * the traced resolution would be spread over the output pixels each traced pixel
+     * covers, and its rim holds most of the frame's error (docs/realtime.md). */
+    const int emission = rt->gb.has_emission && rt->params.emission_samples > 0;
+    if (emission && rt->on_device && method != TR_RECON_OFF && !rt->gb.has_resolved) {
+        /* The device added the emission it resolved at the traced resolution
+         * (tr_cl_resolve_emission); the host's resolve computes the same values from the
+         * same film, to be taken out. */
+        if (tr_resolve_emission(rt->scene, &rt->rcam, rt->params.emission_samples, rt->cfg.threads,
+                                &rt->gb, NULL, err) != TR_OK) {
+            return TR_ERR;
+        }
+    }
+    if (emission) {
+        const float *e = method != TR_RECON_OFF && rt->gb.has_resolved ? rt->gb.emission_resolved
+                                                                       : rt->gb.emission;
+        const size_t n3 = 3 * (size_t)w * h;
+        for (size_t i = 0; i < n3; ++i) {
+            rt->low[i] -= e[i];
+        }
+    }
+    const tr_upscale_input in = {w, h, rt->low, rt->pos, rt->gb.depth, rt->gb.prim};
+    if (tr_upscale_frame(&hist->up, &in, &rt->view_cam, motion, ids, 0.0f, rt->cfg.threads,
+                         rt->disp.sum, err) != TR_OK) {
+        return TR_ERR;
+    }
+    if (emission) {
+        const double t0 = tr_time_now();
+        const size_t n3 = 3 * (size_t)W * H;
+        if (rt->emis_len != n3) {
+            free(rt->emis[0]);
+            free(rt->emis[1]);
+            rt->emis[0] = calloc(n3, sizeof(float));
+            rt->emis[1] = calloc(n3, sizeof(float));
+            rt->emis_len = rt->emis[0] && rt->emis[1] ? n3 : 0;
+            rt->emis_frame = 0;
+            if (!rt->emis_len) {
+                return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory for a frame");
+            }
+        }
+        /* Once per frame, whatever methods follow. */
+        if (rt->emis_frame != rt->rendered) {
+            const float *prev = rt->emis_frame + 1 == rt->rendered ? rt->emis[rt->emis_cur] : NULL;
+            rt->emis_cur = 1 - rt->emis_cur;
+            if (tr_upscale_emission(rt->scene, &rt->view_cam, rt->params.emission_samples,
+                                    rt->cfg.threads, w, h, rt->gb.emission, prev,
+                                    rt->emis[rt->emis_cur], &rt->up_resolved, err) != TR_OK) {
+                return TR_ERR;
+            }
+            rt->emis_frame = rt->rendered;
+        }
+        const float *e = rt->emis[rt->emis_cur];
+        for (size_t i = 0; i < n3; ++i) {
+            rt->disp.sum[i] += e[i];
+        }
+        hist->up.ms += (tr_time_now() - t0) * 1e3;
+    }
+    return TR_OK;
+}
+
 static void fill_result(const tr_realtime *rt, const tr_film *film, const float *rgb, int method,
                         tr_realtime_result *out) {
     memset(out, 0, sizeof *out);
@@ -491,12 +682,14 @@ static void fill_result(const tr_realtime *rt, const tr_film *film, const float 
     out->rgb = rgb;
     out->width = film->width;
     out->height = film->height;
-    out->scale = (float)rt->view_cam.screen_width / (float)rt->rcam.screen_width;
+    out->scale = (float)rt->view_cam.screen_width / (float)film->width;
     out->spp = rt->acc_spp;
     out->frame_spp = rt->frame_spp;
     out->method = method;
     out->render_ms = rt->render_ms;
     out->restir_ms = rt->restir_ms;
+    out->traced_width = rt->rcam.screen_width;
+    out->traced_height = rt->rcam.screen_height;
 }
 
 int tr_realtime_reconstruct(tr_realtime *rt, int method, tr_realtime_result *out, tr_error *err) {
@@ -512,30 +705,47 @@ int tr_realtime_reconstruct(tr_realtime *rt, int method, tr_realtime_result *out
         return tr_error_set(err, TR_STATUS_INVALID_OPERATION, "tr_realtime: no frame rendered");
     }
     const uint32_t w = rt->rcam.screen_width, h = rt->rcam.screen_height;
-    if (size_disp(rt, w, h, err) != TR_OK || prepare_history(rt, method, w, h, err) != TR_OK) {
+    const int up = rt->view_upscaled;
+    const uint32_t dw = up ? rt->view_cam.screen_width : w;
+    const uint32_t dh = up ? rt->view_cam.screen_height : h;
+    if (size_disp(rt, dw, dh, err) != TR_OK || prepare_history(rt, method, w, h, err) != TR_OK ||
+        (up && size_low(rt, w, h, err) != TR_OK)) {
         return TR_ERR;
     }
     rt_history *hist = &rt->hist[method];
+    /* Upscaled, the reconstruction of the traced frame goes to rt->low first. */
+    float *const dst = up ? rt->low : rt->disp.sum;
     const tr_vec3 *motion = rt->moved ? rt->motion : NULL;
     const uint32_t ids = rt->moved ? rt->motion_ids : 0u;
     double temporal = 0.0, spatial = 0.0;
     if (rt->on_device) {
-        if (tr_recon_device_frame(hist->rdev, &rt->rcam, motion, ids, method, &rt->params,
-                                  rt->disp.sum, err) != TR_OK) {
+        if (tr_recon_device_frame(hist->rdev, &rt->rcam, motion, ids, method, &rt->params, dst,
+                                  err) != TR_OK) {
             return TR_ERR;
         }
         tr_recon_device_times(hist->rdev, &temporal, &spatial);
     } else {
         if (host_frame(rt, err) != TR_OK ||
             tr_recon_frame_moving(&hist->rec, &rt->gb, &rt->rcam, motion, ids, method, &rt->params,
-                                  rt->cfg.threads, rt->disp.sum, err) != TR_OK) {
+                                  rt->cfg.threads, dst, err) != TR_OK) {
             return TR_ERR;
         }
         /* The resolve counts as part of the temporal stage; "off" does not use it. */
         temporal = hist->rec.ms_temporal + (method != TR_RECON_OFF ? rt->resolve_ms : 0.0);
         spatial = hist->rec.ms_spatial;
     }
+    double up_ms = 0.0;
+    if (up) {
+        if (upscale_stage(rt, hist, method, motion, ids, err) != TR_OK) {
+            return TR_ERR;
+        }
+        up_ms = hist->up.ms;
+        temporal += up_ms;
+    } else {
+        hist->up_frame = 0;
+    }
     fill_result(rt, &rt->disp, rt->disp.sum, method, out);
+    out->upscale_ms = up_ms;
     out->temporal_ms = temporal;
     out->spatial_ms = spatial;
     out->resolve_ms = rt->on_device ? 0.0 : rt->resolve_ms;
@@ -558,7 +768,7 @@ int tr_realtime_frame(tr_realtime *rt, const tr_realtime_frame_desc *fd, tr_real
         return TR_ERR;
     }
     const double t0 = tr_time_now();
-    if (fd->method != TR_RECON_OFF) {
+    if (fd->method != TR_RECON_OFF || rt->view_upscaled) {
         if (tr_realtime_reconstruct(rt, fd->method, out, err) != TR_OK) {
             return TR_ERR;
         }
