@@ -464,7 +464,7 @@ int cli_parse(cli_args *a, cli_common *c, const char *const *refused, void (*hel
         int rc = cli_common_option(a, c);
         for (const char *const *r = refused; rc == CLI_OK && r && *r; ++r) {
             if (cli_is(a, *r)) {
-                return cli_error(a, "%s: not an option of this command", a->opt);
+                return cli_error(a, "%s: not an option of this benchmark", a->opt);
             }
         }
         if (rc != -1) {
