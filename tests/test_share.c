@@ -169,7 +169,8 @@ static void test_shared_equals_single(void) {
         tiles += jobs[r].st.tiles;
     }
     const uint32_t count = tr_session_tile_count(jobs[0].s);
-    CHECK(tiles == count && jobs[0].st.finished == count && jobs[0].progress_done == count,
+    CHECK(tiles == count && jobs[0].st.finished == count && jobs[0].progress_done == count &&
+              jobs[0].st.failed_rank == -1,
           "tiles %u, finished %u, progress %u of %u", tiles, jobs[0].st.finished,
           jobs[0].progress_done, count);
     /* One process, the same render. */
@@ -194,8 +195,9 @@ static void test_broken_worker(void) {
     post *p = new_post(2);
     job jobs[RANKS];
     run_all(p, jobs);
-    CHECK(jobs[0].rc == TR_ERR && strstr(jobs[0].err.msg, "rank 2") != NULL, "rank 0: rc %d, %s",
-          jobs[0].rc, jobs[0].err.msg);
+    CHECK(jobs[0].rc == TR_ERR && jobs[0].err.code == TR_STATUS_DEVICE &&
+              jobs[0].st.failed_rank == 2,
+          "rank 0: rc %d, failed rank %d, %s", jobs[0].rc, jobs[0].st.failed_rank, jobs[0].err.msg);
     CHECK(jobs[2].rc == TR_ERR, "the broken rank succeeded");
     CHECK(jobs[1].rc == TR_OK, "rank 1: %s", jobs[1].err.msg);
     for (int r = 0; r < RANKS; ++r) {

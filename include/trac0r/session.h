@@ -184,6 +184,7 @@ typedef struct tr_share_stats {
     uint64_t rays;     /* rank 0: of every rank's tiles; others: their own */
     uint32_t finished; /* rank 0: tiles whose pixels the film holds in full (a checkpoint's
                           included) */
+    int failed_rank;   /* rank 0: the rank whose failure ended the share (-1: none) */
 } tr_share_stats;
 
 /* Renders the session's tile plan shared between the transport's ranks, each with its

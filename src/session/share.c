@@ -205,19 +205,26 @@ static int32_t take_tile(master *m) {
     return m->next < m->sh->count ? (int32_t)m->next++ : -1;
 }
 
-/* The first failure is the one reported; every failure stops the hand-out. */
-static void fail_err(master *m, const tr_error *e) {
+/* The first failure is the one reported (and its rank); every failure stops the
+ * hand-out. */
+static void fail_rank(master *m, int rank, const tr_error *e) {
     if (m->rc == TR_OK) {
         *m->err = *e;
+        m->sh->st->failed_rank = rank;
     }
     m->rc = TR_ERR;
     m->stopping = 1;
 }
 
+/* Rank 0's own failure. */
+static void fail_err(master *m, const tr_error *e) {
+    fail_rank(m, 0, e);
+}
+
 static void fail(master *m, int rank, const char *msg) {
     tr_error e;
     tr_error_set(&e, TR_STATUS_DEVICE, "rank %d: %s", rank, msg);
-    fail_err(m, &e);
+    fail_rank(m, rank, &e);
 }
 
 static void hand_out(master *m, int rank) {
@@ -481,6 +488,7 @@ int tr_session_share(tr_session *s, const tr_transport *t, const tr_share_desc *
     memset(&none, 0, sizeof none);
     stats = stats ? stats : &local;
     memset(stats, 0, sizeof *stats);
+    stats->failed_rank = -1;
     if (!s || !t || !t->send || !t->recv || t->size < 1 || t->rank < 0 || t->rank >= t->size) {
         return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
                             "share: needs a session and a transport with send, recv and a rank "
