@@ -117,6 +117,14 @@ int tr_frame_make(tr_frame *f, const tr_camera *cam, const tr_render_config *cfg
     if (tr_render_config_check(cfg, err) != TR_OK) {
         return TR_ERR;
     }
+    if (cam->lens_radius > 0.0f && tr_integrator_is_bidirectional(cfg->integrator)) {
+        /* Their light subpaths connect to a pinhole (integrator_bdpt.h): a lens would need
+         * its own importance and MIS densities. */
+        return tr_error_set(err, TR_STATUS_UNSUPPORTED,
+                            "%s does not support depth of field (camera.aperture_radius or "
+                            "camera.f_number above 0): use pt",
+                            tr_integrator_name(cfg->integrator));
+    }
     const uint32_t w = cam->screen_width, h = cam->screen_height;
     if (tr_film_check_size(w, h, err) != TR_OK) {
         return TR_ERR; /* the film a frame of this camera would need */

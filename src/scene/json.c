@@ -473,9 +473,52 @@ static int parse_render(jctx *c, const cJSON *r) {
     return get_bool(c, r, path, "allow_no_emitter", &in->allow_no_emitter);
 }
 
+/* The thin lens's keys of the camera (made already): aperture_radius or f_number (with
+ * sensor_height), and focus_distance, which defaults to look_at's distance along the view
+ * direction (look_dist; 0 without look_at). */
+static int parse_lens(jctx *c, const cJSON *cam, float look_dist) {
+    const char *path = "camera";
+    double radius = 0.0, fnum = 0.0, sensor = 0.024, focus = 0.0;
+    int has_radius, has_fnum, has_sensor, has_focus;
+    if (get_number(c, cam, path, "aperture_radius", 0.0, 1e30, &radius, &has_radius) != TR_OK ||
+        get_number(c, cam, path, "f_number", 0.01, 1e30, &fnum, &has_fnum) != TR_OK ||
+        get_number(c, cam, path, "sensor_height", 1e-30, 1e30, &sensor, &has_sensor) != TR_OK ||
+        get_number(c, cam, path, "focus_distance", 1e-30, 1e30, &focus, &has_focus) != TR_OK) {
+        return TR_ERR;
+    }
+    if (has_radius && has_fnum) {
+        return jerr(c, path, "expected at most one of 'aperture_radius' and 'f_number', got both");
+    }
+    if (has_sensor && !has_fnum) {
+        return jerr(c, "camera.sensor_height", "only means something with camera.f_number");
+    }
+    tr_camera *cm = &c->scene->camera;
+    if (has_fnum) {
+        radius = tr_camera_lens_radius_for(cm, (float)fnum, (float)sensor);
+    }
+    if (!(radius > 0.0) && !has_focus) {
+        return TR_OK; /* a pinhole */
+    }
+    if (!has_focus) {
+        if (!(look_dist > 0.0f)) {
+            return jerr(c, "camera.focus_distance",
+                        "missing (expected with an aperture and 'direction': the distance of "
+                        "the plane in focus, > 0)");
+        }
+        focus = look_dist;
+    }
+    /* A radius of 0 keeps the pinhole (the focus distance is kept, unused). */
+    tr_error e;
+    if (tr_camera_set_lens(cm, (float)radius, (float)focus, &e) != TR_OK) {
+        return jerr_from(c, path, &e);
+    }
+    return TR_OK;
+}
+
 static int parse_camera(jctx *c, const cJSON *cam) {
-    static const char *const keys[] = {"position", "look_at", "direction", "up",
-                                       "fov",      "near",    "far",       "handedness"};
+    static const char *const keys[] = {
+        "position", "look_at",    "direction",       "up",       "fov",           "near",
+        "far",      "handedness", "aperture_radius", "f_number", "sensor_height", "focus_distance"};
     const char *path = "camera";
     if (expect_object(c, cam, path) != TR_OK ||
         check_keys(c, cam, path, keys, sizeof keys / sizeof keys[0]) != TR_OK) {
@@ -553,7 +596,7 @@ static int parse_camera(jctx *c, const cJSON *cam) {
          * mirror image of the thesis's up x dir; the up vector stays. */
         c->scene->camera.right = v3_neg(c->scene->camera.right);
     }
-    return TR_OK;
+    return parse_lens(c, cam, has_look ? v3_dot(v3_sub(look, pos), c->scene->camera.dir) : 0.0f);
 }
 
 /* Keys every material but an emitter takes besides its type's (attrib.h's extras). */
