@@ -399,6 +399,18 @@ int main(void) {
     compare_backends(dev, &scene, 1, TR_INTEGRATOR_PT, 64, "bvh, pt");
     CHECK(tr_scene_commit(&scene, TR_ACCEL_TYPE_FLAT, &err) == TR_OK, "%s", err.msg);
     compare_backends(dev, &scene, 1, TR_INTEGRATOR_PT, 64, "flat, pt");
+    /* A thin lens (camera.h) focused on the box's centre, sampled alike by both. */
+    {
+        const tr_camera pinhole = scene.camera;
+        const tr_aabb b = tr_scene_bounds(&scene);
+        const tr_vec3 mid = v3_scale(v3_add(b.min, b.max), 0.5f);
+        const float focus = v3_dot(v3_sub(mid, pinhole.pos), pinhole.dir);
+        CHECK(tr_camera_set_lens(&scene.camera, 0.04f * (b.max.y - b.min.y), focus, &err) == TR_OK,
+              "%s", err.msg);
+        compare_backends(dev, &scene, 1, TR_INTEGRATOR_PT, 64, "flat, pt, thin lens");
+        compare_backends(dev, &scene, 1, TR_INTEGRATOR_NAIVE, 64, "flat, naive, thin lens");
+        scene.camera = pinhole;
+    }
 
     /* Film handling: a wrongly sized film, clearing, a bad config. */
     tr_film small;
