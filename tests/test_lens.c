@@ -316,6 +316,36 @@ static void scene_files(void) {
              2.0 * atan(12.0 / 50.0) * 180.0 / PI_D);
     CHECK(parse_camera(cam, &c, &err) == TR_OK, "f_number: %s", err.msg);
     CHECK_NEAR(c.lens_radius, 0.00625, 1e-7, "f_number's radius, default sensor");
+    /* bdpt and vcm: refused when the file's render defaults are applied, naming the file
+     * and the camera's key; pt takes the lens. */
+    {
+        const char *text =
+            "{\"camera\": {\"position\": [0, 0, -3], \"fov\": 40, \"look_at\": [0, 0, 0], "
+            "\"f_number\": 2},\n"
+            " \"materials\": {\"l\": {\"type\": \"emitter\", \"color\": [1, 1, 1], "
+            "\"emittance\": 1}},\n"
+            " \"shapes\": [{\"type\": \"plane\", \"material\": \"l\"}]}";
+        const char *names[3] = {"bdpt", "vcm", "pt"};
+        for (int k = 0; k < 3; ++k) {
+            tr_scene s = {0};
+            tr_scene_file info;
+            CHECK(tr_scene_file_parse(&s, "lens.json", text, strlen(text), NULL, &info, &err) ==
+                      TR_OK,
+                  "%s", err.msg);
+            tr_render_request req = {0};
+            req.integrator = names[k];
+            tr_render_settings st;
+            const int rc = tr_scene_file_apply(&s, "lens.json", &info, &req, &st, &err);
+            if (k < 2) {
+                CHECK_STATUS(rc, err, TR_STATUS_UNSUPPORTED, names[k]);
+                CHECK(strstr(err.msg, "lens.json") && strstr(err.msg, "camera."),
+                      "%s: the refusal names the file and the key: %s", names[k], err.msg);
+            } else {
+                CHECK(rc == TR_OK && tr_scene_camera(&s)->lens_radius > 0.0f, "pt: %s", err.msg);
+            }
+            tr_scene_clear(&s);
+        }
+    }
     /* Refusals: each names the key. */
     const char *bad[] = {
         "\"direction\": [0, 0, 1], \"aperture_radius\": 0.1",

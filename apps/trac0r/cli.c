@@ -543,6 +543,9 @@ static int apply_error(const cli_args *a, const cli_common *c, const tr_render_s
                        const tr_error *err) {
     switch (err->code) {
     case TR_STATUS_UNSUPPORTED:
+        if (tr_accel_available(st->accel)) {
+            return cli_error(a, "%s", err->msg); /* not the accel: the camera's lens */
+        }
         return cli_error(a, "%s (use --accel)", err->msg);
     case TR_STATUS_NOT_FOUND:
         return cli_error(a,

@@ -131,6 +131,14 @@ int tr_scene_file_apply(tr_scene *s, const char *path, const tr_scene_file *file
         return TR_ERR;
     }
     out->config.max_depth = resolve_max_depth(file, req, out->config.integrator);
+    if (tr_integrator_is_bidirectional(out->config.integrator) &&
+        tr_scene_camera(s)->lens_radius > 0.0f) {
+        /* tr_frame_make would refuse the first frame; the file is the place to say it. */
+        return tr_error_set(err, TR_STATUS_UNSUPPORTED,
+                            "%s: camera.aperture_radius: %s does not support depth of field "
+                            "(a camera with an aperture): use pt",
+                            path, tr_integrator_name(out->config.integrator));
+    }
     if (file->emissive_triangles == 0 && !file->allow_no_emitter && !req->allow_dark) {
         return tr_error_set(err, TR_STATUS_NOT_FOUND,
                             "%s: the scene has no emitter, so the image would be black (set "
