@@ -195,6 +195,13 @@ static void tr_bdpt_fold_splats(const tr_frame *f, const tr_bdpt_splat *sp, uint
 
 /* The scenes an integrator cannot render, for tr_cpu_render and tr_integrator_supports. */
 static int tr_integrator_check_view(const tr_scene_view *view, int integrator, tr_error *err) {
+    if (view->punctual_count > 0u && integrator != TR_INTEGRATOR_PT) {
+        /* Delta lights are found by next-event estimation alone: naive has none, and bdpt's
+         * and vcm's light subpaths do not start from them (punctual.h). */
+        return tr_error_set(err, TR_STATUS_UNSUPPORTED,
+                            "%s does not support point, spot or directional lights: use pt",
+                            tr_integrator_name(integrator));
+    }
     if (tr_integrator_is_bidirectional(integrator)) {
         if (view->env_count > 0u) {
             return tr_error_set(err, TR_STATUS_UNSUPPORTED,
