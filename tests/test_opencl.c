@@ -411,6 +411,40 @@ int main(void) {
         compare_backends(dev, &scene, 1, TR_INTEGRATOR_NAIVE, 64, "flat, naive, thin lens");
         scene.camera = pinhole;
     }
+    /* Point, spot and directional lights (punctual.h) in a box of its own: each sampled at
+     * every vertex, and with more of them than that, one picked by the power CDF. */
+    for (int many = 0; many < 2; ++many) {
+        tr_scene lit = {0};
+        tr_scene_init(&lit);
+        CHECK(tr_scene_builtin(&lit, "cornell", 48, 36, &err) == TR_OK, "%s", err.msg);
+        const tr_aabb b = tr_scene_bounds(&lit);
+        const tr_vec3 mid = v3_scale(v3_add(b.min, b.max), 0.5f);
+        const tr_vec3 ext = v3_sub(b.max, b.min);
+        const int n = many ? 10 : 3;
+        for (int i = 0; i < n; ++i) {
+            tr_punctual l;
+            memset(&l, 0, sizeof l);
+            l.type = (uint32_t)(i % 3);
+            l.pos = v3_add(mid, v3(ext.x * (0.1f * (float)(i % 5) - 0.2f), ext.y * 0.3f,
+                                   ext.z * (0.05f * (float)i - 0.2f)));
+            l.dir = v3(0.1f * (float)i - 0.3f, -1.0f, 0.2f);
+            l.intensity = v3(0.5f + 0.1f * (float)i, 0.4f, 0.3f);
+            l.intensity = v3_scale(
+                l.intensity, l.type == TR_PUNCTUAL_DIRECTIONAL ? 0.5f : 0.02f * ext.y * ext.y);
+            l.cos_outer = 0.7f;
+            l.cos_inner = 0.85f;
+            CHECK(tr_scene_add_punctual(&lit, &l, &err) == TR_OK, "%s", err.msg);
+        }
+        CHECK(tr_scene_commit(&lit, TR_ACCEL_TYPE_BVH, &err) == TR_OK, "%s", err.msg);
+        compare_backends(dev, &lit, 1, TR_INTEGRATOR_PT, 64,
+                         many ? "bvh, pt, ten punctual lights" : "bvh, pt, punctual lights");
+        tr_render_config naive = tr_render_config_default();
+        naive.integrator = TR_INTEGRATOR_NAIVE;
+        CHECK_STATUS(tr_device_render(dev, &lit.camera, &naive, 0, 1, NULL, NULL, &err), err,
+                     TR_STATUS_UNSUPPORTED, "naive with punctual lights on the device");
+        tr_scene_clear(&lit);
+    }
+    CHECK(tr_device_upload(dev, &scene, &err) == TR_OK, "%s", err.msg);
 
     /* Film handling: a wrongly sized film, clearing, a bad config. */
     tr_film small;
