@@ -119,6 +119,8 @@ typedef struct tr_import_light {
     tr_vec3 color;        /* Assimp's mColorDiffuse (glTF: colour x intensity) */
     float outer_cone;     /* spot lights: half-angle, radians */
     float size_x, size_y; /* area lights */
+    float inner_cone;     /* spot lights: Assimp's mAngleInnerCone, radians */
+    int gltf;             /* from a glTF file: the cones are glTF's half-angles */
 } tr_import_light;
 /* What else a model file holds: the camera asked for (camera_want, before the import:
  * its index in the file, >= 0), placed by its node and tf; how many cameras and lights
