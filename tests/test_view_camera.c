@@ -35,6 +35,17 @@ static void test_mirrored(void) {
         CHECK(fabsf(r.x - c.right.x) < 1e-6f, "mirrored %d: D moves along %g, right is %g",
               mirrored, r.x, c.right.x);
     }
+    /* A thin lens stays through the viewer's moves; a pinhole stays a pinhole. */
+    tr_camera lens = cam;
+    CHECK(tr_camera_set_lens(&lens, 12.5f, 900.0f, &err) == TR_OK, "%s", err.msg);
+    fly_camera f = fly_from_camera(&lens, 1.0f);
+    f.pos.x += 3.0f;
+    tr_camera next;
+    CHECK(fly_make(&f, 64, 48, &next) == TR_OK && next.lens_radius == 12.5f &&
+              next.focus_dist == 900.0f,
+          "the lens after a move: radius %g, focus %g", next.lens_radius, next.focus_dist);
+    f = fly_from_camera(&cam, 1.0f);
+    CHECK(fly_make(&f, 64, 48, &next) == TR_OK && next.lens_radius == 0.0f, "a pinhole stays");
 }
 
 static void test_budget(void) {

@@ -19,6 +19,8 @@ fly_camera fly_from_camera(const tr_camera *cam, float speed) {
     /* tr_camera_make's right is up x dir; a camera whose right points the other way was
      * mirrored by its scene (handedness "right"). */
     f.mirrored = v3_dot(cam->right, v3_cross(cam->up, cam->dir)) < 0.0f;
+    f.lens_radius = cam->lens_radius;
+    f.focus_dist = cam->focus_dist;
     return f;
 }
 
@@ -31,6 +33,10 @@ int fly_make(const fly_camera *f, uint32_t w, uint32_t h, tr_camera *cam) {
     }
     if (f->mirrored) {
         c.right = v3_scale(c.right, -1.0f); /* as the scene file does; up stays */
+    }
+    if (f->lens_radius > 0.0f &&
+        tr_camera_set_lens(&c, f->lens_radius, f->focus_dist, &err) != TR_OK) {
+        return TR_ERR;
     }
     *cam = c;
     return TR_OK;

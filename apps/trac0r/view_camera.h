@@ -16,6 +16,7 @@ typedef struct fly_camera {
     float vfov, near_dist, far_dist;
     float speed; /* world units per second */
     int mirrored;
+    float lens_radius, focus_dist; /* the scene camera's thin lens (0: a pinhole), kept */
 } fly_camera;
 
 /* The fly camera of a scene's camera, moving at `speed`. */

@@ -62,6 +62,27 @@ def test_camera_settable(cornell):
         cornell.camera = {"direction": (0, 0, 0)}  # the library refuses a zero direction
 
 
+def test_camera_lens(cornell):
+    # A thin lens: set through the camera dict, kept when other keys change, and 0 renders
+    # as the pinhole did.
+    before = trac0r.render(cornell, spp=1).image.copy()
+    cam = cornell.camera
+    assert cam["aperture_radius"] == 0.0
+    cornell.camera = {"aperture_radius": 0.05, "focus_distance": 2.0}
+    cornell.camera = {"fov": cam["fov"]}
+    after = cornell.camera
+    assert after["aperture_radius"] == pytest.approx(0.05)
+    assert after["focus_distance"] == pytest.approx(2.0)
+    assert not np.array_equal(before, trac0r.render(cornell, spp=1).image)
+    cornell.camera = {"aperture_radius": 0.0}
+    assert np.array_equal(before, trac0r.render(cornell, spp=1).image)
+    with pytest.raises(ValueError, match=r"camera\['aperture_radius'\]"):
+        cornell.camera = {"aperture_radius": -1.0}
+    with pytest.raises(ValueError, match=r"camera\['focus_distance'\]"):
+        cornell.camera = {"focus_distance": 0.0}
+    cornell.camera = cam
+
+
 def test_resize(cornell):
     cornell.resize(32, 16)
     assert (cornell.width, cornell.height) == (32, 16)
