@@ -6,12 +6,15 @@
  *    that D moves along is that vector.
  * 2. The budget: over budget the divisor grows (samples drop first), under budget it
  *    falls back to 1, and only at full resolution do samples grow; it stays in range.
- * 3. The default speed scales with the scene's size. */
+ * 3. The default speed scales with the scene's size.
+ * 4. A thin lens stays through moves and in the camera the viewer writes out. */
 #include "check.h"
 #include "trac0r/trac0r.h"
 #include "view_camera.h"
 
 #include <math.h>
+#include <stdio.h>
+#include <string.h>
 
 static void test_mirrored(void) {
     tr_camera cam;
@@ -46,6 +49,24 @@ static void test_mirrored(void) {
           "the lens after a move: radius %g, focus %g", next.lens_radius, next.focus_dist);
     f = fly_from_camera(&cam, 1.0f);
     CHECK(fly_make(&f, 64, 48, &next) == TR_OK && next.lens_radius == 0.0f, "a pinhole stays");
+    /* The camera the viewer writes out keeps the lens: read back by the scene parser. */
+    char json[1024], text[2048];
+    f = fly_from_camera(&lens, 1.0f);
+    CHECK(view_camera_json(&f, json, sizeof json) < (int)sizeof json, "camera json fits");
+    snprintf(text, sizeof text,
+             "{%s, \"materials\": {\"l\": {\"type\": \"emitter\", \"color\": [1, 1, 1], "
+             "\"emittance\": 1}}, \"shapes\": [{\"type\": \"plane\", \"material\": \"l\"}]}",
+             json);
+    tr_scene *s = tr_scene_create(&err);
+    CHECK(s && tr_scene_file_parse(s, "view.json", text, strlen(text), NULL, NULL, &err) == TR_OK,
+          "%s", err.msg);
+    if (s) {
+        const tr_camera *back = tr_scene_camera(s);
+        CHECK(back->lens_radius == 12.5f && back->focus_dist == 900.0f,
+              "the written camera's lens: radius %g, focus %g", back->lens_radius,
+              back->focus_dist);
+        tr_scene_destroy(s);
+    }
 }
 
 static void test_budget(void) {

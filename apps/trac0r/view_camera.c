@@ -62,7 +62,13 @@ float view_default_speed(const tr_aabb *b) {
 }
 
 int view_camera_json(const fly_camera *f, char *buf, size_t n) {
-    /* %.9g: a float's value comes back exactly when the file is read. */
+    /* %.9g: a float's value comes back exactly when the file is read. A thin lens adds its
+     * two keys before the last one. */
+    char lens[96] = "";
+    if (f->lens_radius > 0.0f) {
+        snprintf(lens, sizeof lens, "  \"aperture_radius\": %.9g,\n  \"focus_distance\": %.9g,\n",
+                 (double)f->lens_radius, (double)f->focus_dist);
+    }
     return snprintf(buf, n,
                     "\"camera\": {\n"
                     "  \"position\": [%.9g, %.9g, %.9g],\n"
@@ -71,10 +77,11 @@ int view_camera_json(const fly_camera *f, char *buf, size_t n) {
                     "  \"fov\": %.9g,\n"
                     "  \"near\": %.9g,\n"
                     "  \"far\": %.9g,\n"
+                    "%s"
                     "  \"handedness\": \"%s\"\n"
                     "}\n",
                     (double)f->pos.x, (double)f->pos.y, (double)f->pos.z, (double)f->dir.x,
                     (double)f->dir.y, (double)f->dir.z, (double)f->up.x, (double)f->up.y,
                     (double)f->up.z, (double)f->vfov, (double)f->near_dist, (double)f->far_dist,
-                    f->mirrored ? "right" : "left");
+                    lens, f->mirrored ? "right" : "left");
 }
