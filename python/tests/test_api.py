@@ -23,7 +23,8 @@ def test_load_builtin_defaults(cornell):
     assert cornell.spp == 16 and cornell.integrator == "pt" and cornell.max_depth == 64
     assert cornell.triangles > 0 and cornell.accel == "bvh"
     cam = cornell.camera
-    assert set(cam) == {"position", "direction", "up", "fov", "near", "far", "width", "height"}
+    assert set(cam) == {"position", "direction", "up", "fov", "near", "far", "width", "height",
+                        "aperture_radius", "focus_distance"}
     assert (cam["width"], cam["height"]) == (64, 48)
 
 
