@@ -34,6 +34,9 @@ static inline tr_vec3 tr_vec3_make(float x, float y, float z) {
 /* tr_material.flags bits. Emitters emit towards the side their triangle's geometric
  * normal points to, unless TWO_SIDED is set (the pt integrator; naive ignores it). */
 #define TR_MATERIAL_TWO_SIDED 1u
+/* glossy and principled: Kulla and Conty's multiple-scattering compensation of the GGX
+ * conductor lobe (src/kernel/ggx_ms.h); scene files' "multiscatter": true. */
+#define TR_MATERIAL_MULTISCATTER 2u
 
 /* 32 bytes. */
 typedef struct tr_material {

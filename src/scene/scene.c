@@ -3,6 +3,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "kernel/ggx_ms.h"
 #include "scene_internal.h"
 #include "trac0r/render.h"
 #include "trac0r/scene.h"
@@ -673,6 +674,16 @@ tr_scene_view tr_scene_view_of(const tr_scene *s) {
     v.punctual = s->punctual;
     /* Lights added since the last commit have no CDF yet: none are exposed until then. */
     v.punctual_count = s->punctual_built == s->punctual_count ? s->punctual_count : 0u;
+    /* The multiple-scattering table, for a scene with a material that asks for it. */
+    v.ggx_ms = NULL;
+    v.ggx_ms_count = 0u;
+    for (uint32_t i = 0; i < s->material_count; ++i) {
+        if ((s->materials[i].flags & TR_MATERIAL_MULTISCATTER) != 0u) {
+            v.ggx_ms = tr_ggx_ms_table();
+            v.ggx_ms_count = TR_GGX_MS_COUNT;
+            break;
+        }
+    }
 #ifdef TR_SCENE_VIEW_EMBREE
     v.embree_scene = s->embree.scene;
 #endif

@@ -160,6 +160,9 @@ int tr_scene_load_environment(tr_scene *s, const char *path, tr_vec3 color, floa
  * any length > 0) as a disc of angular diameter angle_deg (1e-3..90 degrees), giving the
  * irradiance `irradiance` (W/m^2 per channel) on a surface facing it. */
 int tr_scene_set_sun(tr_scene *s, tr_vec3 dir, float angle_deg, tr_vec3 irradiance, tr_error *err);
+/* GGX's albedo table for multiple-scattering compensation (src/kernel/ggx_ms.h):
+ * TR_GGX_MS_COUNT floats, computed on the first call (src/scene/ggx_ms.c). */
+const float *tr_ggx_ms_table(void);
 #define TR_MAX_PUNCTUAL 65536u
 /* Adds a punctual light (attrib.h): type, pos (point, spot), dir (spot, directional; any
  * length > 0), intensity, and a spot's cos_outer <= cos_inner; the other fields are
