@@ -14,58 +14,26 @@
 #include <string.h>
 
 static const char help_before[] =
-    "  --scene SCENE        scene to render: builtin:cornell (the thesis's Cornell box,\n"
-    "                       the default), builtin:cornell-mirror (its glossy objects\n"
-    "                       as perfect mirrors), builtin:cornell-diffuse (every object\n"
-    "                       white diffuse), builtin:cornell-ico-N, or a scene file\n"
-    "                       (docs/scene-format.md) whose render defaults apply to the\n"
-    "                       options not given here, or a model file in any format\n"
-    "                       Assimp reads (.glb, .gltf, .obj, .dae, .fbx, .ply, ...): a\n"
-    "                       scene is built around it (its camera, else one framing it;\n"
-    "                       its lights, else a white environment light)\n"
-    "  --up y|z             a model file's up axis (default y; z stands z-up models up)\n"
+    "  --scene SCENE        builtin:cornell (default), builtin:cornell-mirror,\n"
+    "                       builtin:cornell-diffuse, builtin:cornell-ico-N, a scene\n"
+    "                       file (.json) or a model file Assimp reads (.glb, .obj, ...)\n"
+    "  --up y|z             a model file's up axis (default y)\n"
     "  --scale S            a model file's scale, 1e-6..1e6 (default 1)\n"
-    "  --camera N|NAME|frame  a model file's camera by number or name (default its\n"
-    "                       first), or frame: one framing the model\n"
+    "  --camera N|NAME|frame  a model file's camera (default its first)\n"
     "  --allow-dark         render a scene file that has no emitter\n"
-    "  --width W            image width in pixels, 1..16384 (default 800)\n"
-    "  --height H           image height in pixels, 1..16384 (default 600);\n"
-    "                       at most 67108864 pixels in all\n"
-    "  --max-depth D        path length limit of the integrator, 1..1024 (default 64 for\n"
-    "                       pt, whose paths end by Russian roulette; 8 for naive; 15,\n"
-    "                       also their limit, for bdpt and vcm): pt, bdpt and vcm\n"
-    "                       follow at most D\n"
-    "                       segments (camera ray included); the naive integrator's\n"
-    "                       Russian roulette reaches at most D-2 surfaces\n"
-    "  --seed S             random seed, 0..2^64-1 (default 0); the same seed gives the\n"
-    "                       same image for any thread count\n"
+    "  --width W            image width, 1..16384 (default 800)\n"
+    "  --height H           image height, 1..16384 (default 600)\n"
+    "  --max-depth D        path segments at most, 1..1024 (default 64 for pt, 8 for\n"
+    "                       naive, 15 for bdpt and vcm)\n"
+    "  --seed S             random seed, 0..2^64-1 (default 0)\n"
     "  --threads T          CPU threads, 0..1024 (default 0: one per core)\n"
-    "  --sampler NAME       pt's uniform numbers (default sobol; bench realtime's frames\n"
-    "                       and the viewer's moving frames: random):\n"
-    "                         sobol   Owen-scrambled Sobol points, stratified\n"
-    "                         random  independent numbers, the cheapest\n"
-    "                         zsobol  sobol, with errors as blue noise between pixels\n"
-    "  --roulette-start N   pt's Russian roulette may end a path after N segments\n"
-    "                       (the camera ray is the first), 1..1024 (default 5, the\n"
-    "                       least error per sample; bench realtime's frames and the\n"
-    "                       viewer's moving frames: 2, where the reconstruction\n"
-    "                       hides the extra noise)\n"
-    "  --light-sampling NAME  how pt picks an emitter for next-event estimation\n"
-    "                       (default: the scene file's render.light_sampling, else auto):\n"
-    "                         auto    tree from 8 emissive triangles on, else power\n"
-    "                         tree    light tree: power, distance and orientation\n"
-    "                         power   in proportion to emitted power\n"
-    "  --clamp-indirect V   pt: a contribution arriving over an indirect vertex is\n"
-    "                       clamped to luminance V, 0..1e30 (0: off; default off for\n"
-    "                       render, 4 for real-time frames; biased: docs/realtime.md)\n"
-    "  --regularize on|off  pt: glossy and specular lobes after the first non-specular\n"
-    "                       vertex are roughened, so that light samples reach caustics\n"
-    "                       (default off for render, on for real-time frames; biased)\n";
+    "  --sampler NAME       pt's numbers: sobol (default), random or zsobol\n"
+    "  --roulette-start N   pt's Russian roulette after N segments, 1..1024 (default 5)\n"
+    "  --light-sampling NAME  pt's choice of emitter: auto (default), tree or power\n"
+    "  --clamp-indirect V   pt: clamp indirect light to luminance V (0: off; biased)\n"
+    "  --regularize on|off  pt: roughen lobes after a diffuse vertex (biased)\n";
 static const char help_after[] =
-    "  --device DEV         cpu (the default), opencl (OpenCL device 0) or opencl:N\n"
-    "                       (device N of 'trac0r info --devices'); the device traces\n"
-    "                       the flat structure or the BVH (bvh2 and embree scenes: the\n"
-    "                       binary BVH)\n";
+    "  --device DEV         cpu (default), opencl or opencl:N (trac0r info --devices)\n";
 
 void cli_integrator_list(char *buf, size_t size) {
     size_t count;
@@ -420,25 +388,16 @@ void cli_realtime_firefly(const cli_common *c, float *clamp_indirect, int *regul
 }
 
 const char cli_recon_help[] =
-    "  --alpha-min A        the temporal average's least weight of a new frame,\n"
-    "                       0.01..1 (default 0.1)\n"
-    "  --max-history L      frames of history at most, 1..1024 (default 64; 1: no\n"
-    "                       temporal accumulation)\n"
-    "  --max-history-moving L   the same where a shape moved since the previous frame\n"
-    "                       (--animate), 1..1024 (default 4: its shading follows the motion)\n"
+    "  --alpha-min A        least weight of a new frame, 0.01..1 (default 0.1)\n"
+    "  --max-history L      frames of history, 1..1024 (default 64)\n"
+    "  --max-history-moving L   the same where a shape moved, 1..1024 (default 4)\n"
     "  --svgf-iterations N  SVGF's a-trous steps, 1..8 (default 3)\n"
     "  --svgf-sigma-l S     SVGF's luminance weight, 0.1..1000 (default 8)\n"
-    "  --taa A              SVGF's temporal antialiasing, the new frame's weight,\n"
-    "                       0..1 (default 0: off)\n"
-    "  --svgf-split         SVGF filters direct and indirect light apart (CPU only)\n"
-    "  --resolve-emission N emitters' edges: N x N camera rays per edge pixel, added\n"
-    "                       after the filters, 0..16 (default 4; 0: the emission is\n"
-    "                       filtered with the rest; pt only, CPU reconstruction only)\n"
-    "  --restir off|di      di: the direct light at the first surfaces by ReSTIR DI\n"
-    "                       (reservoir resampling reused over frames and neighbours;\n"
-    "                       pt on the CPU only; default off)\n"
-    "  --restir-unbiased    ReSTIR merges with Talbot's MIS weights, no visibility reuse\n"
-    "                       (unbiased; default: 1/M weights, biased, less noisy)\n";
+    "  --taa A              SVGF's temporal antialiasing, 0..1 (default 0: off)\n"
+    "  --svgf-split         filter direct and indirect light apart (CPU only)\n"
+    "  --resolve-emission N emitters' edges traced at N x N rays, 0..16 (default 4)\n"
+    "  --restir off|di      ReSTIR DI for the first surfaces' direct light (default off)\n"
+    "  --restir-unbiased    ReSTIR with Talbot's MIS weights (default: biased 1/M)\n";
 
 int cli_restir_option(cli_args *a, cli_common *c) {
     if (cli_is(a, "--restir")) {

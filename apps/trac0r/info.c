@@ -12,27 +12,16 @@ static void info_help(void) {
     printf("Usage: trac0r info SCENE [options]\n"
            "       trac0r info --devices\n"
            "\n"
-           "Loads a scene file (docs/scene-format.md), a model file (any format Assimp\n"
-           "reads, with a scene built around it as 'trac0r render' does) or a built-in\n"
-           "scene and prints its triangle, shape, mesh, material and emitter counts, its\n"
-           "bounds, its camera and sun, each shape's or mesh part's bounds, the material\n"
-           "each maps to (type and maps), its render defaults and any warnings (a model's\n"
-           "lights and how each was mapped among them). Nothing is rendered.\n"
-           "\n"
-           "With --devices: lists the OpenCL platforms and devices found, numbered as\n"
-           "--device opencl:N takes them: name, platform, vendor, type, OpenCL version,\n"
-           "compute units and memory.\n"
+           "Describes a scene (counts, bounds, camera, materials, render defaults, warnings)\n"
+           "without rendering it, or lists the OpenCL devices as --device opencl:N numbers\n"
+           "them. Exit status 2 when the scene does not load or no OpenCL platform is found.\n"
            "\n"
            "Options:\n"
            "  --devices            list the OpenCL devices instead of describing a scene\n"
            "  --up y|z             a model file's up axis (default y)\n"
            "  --scale S            a model file's scale (default 1)\n"
            "  --camera N|NAME|frame  a model file's camera (default its first)\n"
-           "  -h, --help           show this help\n"
-           "\n"
-           "Exit status: 0 when the scene loads, 2 when it does not (one line naming the\n"
-           "file and the line:column or JSON path at fault) or, with --devices, when no\n"
-           "OpenCL platform is found.\n");
+           "  -h, --help           show this help\n");
 }
 
 int cmd_info(int argc, char **argv) {
