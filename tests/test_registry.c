@@ -113,6 +113,36 @@ static void round_trips(void) {
     CHECK(strcmp(buf, "a, b, c") == 0, "join: '%s'", buf);
     tr_names_join(buf, 4, abc, 3, NULL);
     CHECK(strlen(buf) == 3, "join truncates: '%s'", buf);
+
+    /* Lists of names: every item kept in order, none cut, bad items refused. */
+    int v[4];
+    tr_error err;
+    CHECK(tr_names_parse_list("pt,naive", tr_integrator_from_name, v, 4, "m", "integrator", NULL,
+                              &err) == 2 &&
+              v[0] == TR_INTEGRATOR_PT && v[1] == TR_INTEGRATOR_NAIVE,
+          "list of two");
+    const char *const bad[] = {"",   ",", "pt,", ",pt", "pt,,naive", "pt,nope", "pt,pt,pt,pt,pt",
+                               " pt"};
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; ++i) {
+        err.code = TR_STATUS_OK;
+        CHECK(tr_names_parse_list(bad[i], tr_integrator_from_name, v, 4, "m", "integrator", "x",
+                                  &err) == -1 &&
+                  err.code == TR_STATUS_INVALID_ARGUMENT,
+              "list '%s' accepted", bad[i]);
+    }
+    /* A list longer than any buffer is read whole: its 200th item is checked too. */
+    char longlist[1200] = "";
+    for (int i = 0; i < 200; ++i) {
+        strcat(longlist, i ? ",pt" : "pt");
+    }
+    int many[256];
+    CHECK(tr_names_parse_list(longlist, tr_integrator_from_name, many, 256, "m", "integrator", NULL,
+                              &err) == 200,
+          "long list");
+    strcat(longlist, "x");
+    CHECK(tr_names_parse_list(longlist, tr_integrator_from_name, many, 256, "m", "integrator", NULL,
+                              &err) == -1,
+          "long list with a bad last item accepted");
 }
 
 /* The JSON value a scene file gives key k in this test. */

@@ -217,33 +217,17 @@ static int bench_frame(int argc, char **argv) {
 }
 
 int bench_parse_accels(cli_args *a, accel_set *set) {
-    if (cli_value(a) != CLI_OK) {
-        return CLI_USAGE;
-    }
-    set->count = 0;
-    char buf[128];
-    snprintf(buf, sizeof buf, "%s", a->value);
-    for (char *save = NULL, *tok = strtok_r(buf, ",", &save); tok;
-         tok = strtok_r(NULL, ",", &save)) {
-        int t = tr_accel_from_name(tok);
-        if (t < 0) {
-            return cli_error(a, "%s: unknown acceleration structure '%s' in '%s'", a->opt, tok,
-                             a->value);
+    int t[sizeof set->type / sizeof set->type[0]];
+    set->count = cli_parse_list(a, tr_accel_from_name, t, (int)(sizeof t / sizeof t[0]),
+                                "acceleration structure", NULL);
+    for (int k = 0; k < set->count; ++k) {
+        if (!tr_accel_available((tr_accel_type)t[k])) {
+            return cli_error(a, "%s: '%s' is not available in this build", a->opt,
+                             tr_accel_name((tr_accel_type)t[k]));
         }
-        if (set->count == (int)(sizeof set->type / sizeof set->type[0])) {
-            return cli_error(a, "%s: more than %d structures in '%s'", a->opt,
-                             (int)(sizeof set->type / sizeof set->type[0]), a->value);
-        }
-        if (!tr_accel_available((tr_accel_type)t)) {
-            return cli_error(a, "%s: '%s' is not available in this build", a->opt, tok);
-        }
-        set->type[set->count++] = (tr_accel_type)t;
+        set->type[k] = (tr_accel_type)t[k];
     }
-    if (set->count == 0) {
-        return cli_error(a, "%s: expected a list such as 'flat,bvh,embree', got '%s'", a->opt,
-                         a->value);
-    }
-    return CLI_OK;
+    return set->count < 0 ? CLI_USAGE : CLI_OK;
 }
 
 void bench_accels_all(accel_set *set, int with_flat) {

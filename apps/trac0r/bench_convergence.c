@@ -68,27 +68,10 @@ static int parse_sizes(cli_args *a, uint32_t w[], uint32_t h[], int *n) {
 }
 
 static int parse_methods(cli_args *a, int m[], int *n) {
-    if (cli_value(a) != CLI_OK) {
-        return CLI_USAGE;
-    }
-    char buf[128];
-    snprintf(buf, sizeof buf, "%s", a->value);
-    *n = 0;
-    for (char *save = NULL, *tok = strtok_r(buf, ",", &save); tok;
-         tok = strtok_r(NULL, ",", &save)) {
-        int k = tr_integrator_from_name(tok);
-        if (k < 0 || *n == CONV_MAX_METHODS) {
-            char names[128];
-            cli_integrator_list(names, sizeof names);
-            return cli_error(a, "%s: unknown integrator '%s' in '%s' (available: %s)", a->opt, tok,
-                             a->value, names);
-        }
-        m[(*n)++] = k;
-    }
-    if (*n == 0) {
-        return cli_error(a, "%s: expected a list such as 'naive,pt'", a->opt);
-    }
-    return CLI_OK;
+    char names[128];
+    cli_integrator_list(names, sizeof names);
+    *n = cli_parse_list(a, tr_integrator_from_name, m, CONV_MAX_METHODS, "integrator", names);
+    return *n < 0 ? CLI_USAGE : CLI_OK;
 }
 
 /* What the command line asked for. */

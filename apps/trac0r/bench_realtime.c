@@ -52,29 +52,14 @@ static void realtime_help(void) {
 }
 
 static int parse_methods(cli_args *a, int on[TR_RECON_COUNT]) {
-    if (cli_value(a) != CLI_OK) {
-        return CLI_USAGE;
-    }
-    char buf[256];
-    snprintf(buf, sizeof buf, "%s", a->value);
+    int m[4 * TR_RECON_COUNT];
+    const int n = cli_parse_list(a, tr_recon_parse, m, 4 * TR_RECON_COUNT, "method",
+                                 "off, accumulate, bilateral, atrous, svgf");
     memset(on, 0, TR_RECON_COUNT * sizeof *on);
-    int any = 0;
-    for (char *save = NULL, *tok = strtok_r(buf, ",", &save); tok;
-         tok = strtok_r(NULL, ",", &save)) {
-        const int m = tr_recon_parse(tok);
-        if (m < 0) {
-            return cli_error(a,
-                             "%s: unknown method '%s' in '%s' (available: off, accumulate, "
-                             "bilateral, atrous, svgf)",
-                             a->opt, tok, a->value);
-        }
-        on[m] = 1;
-        any = 1;
+    for (int i = 0; i < n; ++i) {
+        on[m[i]] = 1;
     }
-    if (!any) {
-        return cli_error(a, "%s: expected a list such as 'off,svgf'", a->opt);
-    }
-    return CLI_OK;
+    return n < 0 ? CLI_USAGE : CLI_OK;
 }
 
 /* Method m's mean PSNR over the moving shape's pixels in frames f0 .. f1 - 1 that have

@@ -230,6 +230,19 @@ int cli_parse_float(cli_args *a, float lo, float hi, float *out) {
     return CLI_OK;
 }
 
+int cli_parse_list(cli_args *a, int (*lookup)(const char *name), int *out, int max,
+                   const char *kind, const char *available) {
+    tr_error err;
+    if (cli_value(a) != CLI_OK) {
+        return -1;
+    }
+    const int n = tr_names_parse_list(a->value, lookup, out, max, a->opt, kind, available, &err);
+    if (n < 0) {
+        cli_error(a, "%s", err.msg);
+    }
+    return n;
+}
+
 const char *cli_sampler_name(int sampler) {
     return sampler == TR_SAMPLER_RANDOM   ? "random"
            : sampler == TR_SAMPLER_ZSOBOL ? "zsobol"

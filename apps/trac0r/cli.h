@@ -82,6 +82,11 @@ int cli_parse_u32(cli_args *a, uint32_t lo, uint32_t hi, uint32_t *out);
 int cli_parse_int(cli_args *a, int lo, int hi, int *out);
 int cli_parse_u64(cli_args *a, uint64_t *out);
 int cli_parse_float(cli_args *a, float lo, float hi, float *out);
+/* The option's value as a comma-separated list of names (tr_names_parse_list): their
+ * values into out[0 .. max); the count, or -1 after a usage error naming the `kind` of item and
+ * the `available` ones. */
+int cli_parse_list(cli_args *a, int (*lookup)(const char *name), int *out, int max,
+                   const char *kind, const char *available);
 
 /* Handles an option of cli_common. Returns CLI_OK if handled, CLI_USAGE on a bad value,
  * and -1 if the option is not a common one. */

@@ -46,46 +46,30 @@ static void render_help(void) {
            cli_common_help());
 }
 
+/* --passes' names: a pass's TR_PASS_* bit, or all: every pass render writes (the direct
+ * and emission passes feed the real-time filters only). */
+static int pass_bits(const char *name) {
+    if (strcmp(name, "all") == 0) {
+        return (int)(TR_PASS_MASK & ~(TR_PASS_DIRECT | TR_PASS_EMISSION));
+    }
+    for (uint32_t k = 1; k <= TR_PASS_VARIANCE; k <<= 1) {
+        if (strcmp(tr_pass_name(k), name) == 0) {
+            return (int)k;
+        }
+    }
+    return -1;
+}
+
 /* --passes: "albedo,normal,depth,id,variance" or "all" into TR_PASS_* bits. */
 static int parse_passes(cli_args *a, uint32_t *passes) {
-    if (cli_value(a) != CLI_OK) {
-        return CLI_USAGE;
-    }
+    int bits[16];
+    const int n =
+        cli_parse_list(a, pass_bits, bits, 16, "pass", "albedo, normal, depth, id, variance, all");
     *passes = 0;
-    const char *p = a->value;
-    while (*p) {
-        size_t len = strcspn(p, ",");
-        uint32_t bit = 0;
-        if (len == 3 && strncmp(p, "all", 3) == 0) {
-            /* The direct and emission passes feed the real-time filters; render does not
-             * write them. */
-            bit = TR_PASS_MASK & ~(TR_PASS_DIRECT | TR_PASS_EMISSION);
-        }
-        for (uint32_t k = 1; k <= TR_PASS_VARIANCE && !bit; k <<= 1) {
-            const char *name = tr_pass_name(k);
-            if (strlen(name) == len && strncmp(p, name, len) == 0) {
-                bit = k;
-            }
-        }
-        if (!bit) {
-            return cli_error(a,
-                             "%s: unknown pass '%.*s' (expected albedo, normal, depth, id, "
-                             "variance or all)",
-                             a->opt, (int)len, p);
-        }
-        *passes |= bit;
-        p += len;
-        if (*p == ',') {
-            ++p;
-            if (!*p) {
-                return cli_error(a, "%s: '%s' ends with a comma", a->opt, a->value);
-            }
-        }
+    for (int i = 0; i < n; ++i) {
+        *passes |= (uint32_t)bits[i];
     }
-    if (!*passes) {
-        return cli_error(a, "%s: expected a list of passes", a->opt);
-    }
-    return CLI_OK;
+    return n < 0 ? CLI_USAGE : CLI_OK;
 }
 
 /* "dir/img.png" -> "dir/img.albedo.pfm" for pass `bit`. */

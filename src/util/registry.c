@@ -144,3 +144,41 @@ void tr_names_join(char *buf, size_t size, const char *const *names, size_t coun
         used += (size_t)n;
     }
 }
+
+int tr_names_parse_list(const char *list, int (*lookup)(const char *name), int *out, int max,
+                        const char *what, const char *kind, const char *available, tr_error *err) {
+    char name[64];
+    int n = 0;
+    const char *p = list ? list : "";
+    const char *sep = available ? " (available: " : "";
+    const char *end = available ? ")" : "";
+    available = available ? available : "";
+    do {
+        const size_t len = strcspn(p, ",");
+        int value = -1;
+        if (len > 0 && len < sizeof name) {
+            memcpy(name, p, len);
+            name[len] = '\0';
+            value = lookup(name);
+        }
+        if (len == 0) {
+            tr_error_set(
+                err, TR_STATUS_INVALID_ARGUMENT, "%s: '%.200s' %s%s%s%s", what, list ? list : "",
+                *p || p == list ? "has an empty item" : "ends with a comma", sep, available, end);
+            return -1;
+        }
+        if (value < 0) {
+            tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "%s: unknown %s '%.*s' in '%.200s'%s%s%s",
+                         what, kind, (int)(len < 64 ? len : 64), p, list, sep, available, end);
+            return -1;
+        }
+        if (n == max) {
+            tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "%s: more than %d items in '%.200s'",
+                         what, max, list);
+            return -1;
+        }
+        out[n++] = value;
+        p += len;
+    } while (*p++ == ',');
+    return n;
+}
