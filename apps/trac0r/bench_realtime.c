@@ -62,23 +62,6 @@ static int parse_methods(cli_args *a, int on[TR_RECON_COUNT]) {
     return n < 0 ? CLI_USAGE : CLI_OK;
 }
 
-/* Method m's mean PSNR over the moving shape's pixels in frames f0 .. f1 - 1 that have
- * such pixels; *count: how many did. */
-static double shape_psnr_mean(const rt_frame_stats *st, int m, uint32_t frames, uint32_t f0,
-                              uint32_t f1, int *count) {
-    double sum = 0.0;
-    int n = 0;
-    for (uint32_t f = f0; f < f1; ++f) {
-        const double v = st[(size_t)m * frames + f].region_psnr;
-        if (v == v) {
-            sum += v;
-            ++n;
-        }
-    }
-    *count = n;
-    return n > 0 ? sum / n : 0.0;
-}
-
 /* After --animate-frames A:B, per method (reconstructed on the host): the frames from B
  * on to return to within 0.5 dB of the PSNR over the shape's pixels before it moved. */
 static void print_shape_recovery(const rt_frame_stats *st, const int *on, uint32_t frames,
@@ -527,17 +510,11 @@ static void report_full(const rt_run *r) {
         if (!o->on[m]) {
             continue;
         }
-        double t[2] = {0, 0}, p[2] = {0, 0};
-        for (uint32_t f = 0; f < frames; ++f) {
-            const rt_frame_stats *s[2] = {&r->st[(size_t)m * frames + f],
-                                          &r->st_full[(size_t)m * frames + f]};
-            for (int k = 0; k < 2; ++k) {
-                t[k] += s[k]->render_ms + s[k]->temporal_ms + s[k]->spatial_ms;
-                p[k] += s[k]->psnr;
-            }
-        }
-        printf("%-11s %9.1f %9.1f %9.2f %9.2f %+10.2f\n", tr_recon_name(m), 1000.0 * frames / t[0],
-               1000.0 * frames / t[1], p[0] / frames, p[1] / frames, (p[0] - p[1]) / frames);
+        const tr_scores_summary up = tr_scores_summarize(r->st + (size_t)m * frames, 0, frames);
+        const tr_scores_summary full =
+            tr_scores_summarize(r->st_full + (size_t)m * frames, 0, frames);
+        printf("%-11s %9.1f %9.1f %9.2f %9.2f %+10.2f\n", tr_recon_name(m), up.fps, full.fps,
+               up.mean.psnr, full.mean.psnr, up.mean.psnr - full.mean.psnr);
     }
 }
 
@@ -615,7 +592,6 @@ static void report_method(const rt_run *r, int m, FILE *csv) {
     const rt_opts *o = r->o;
     const uint32_t frames = o->frames, cut = o->cut;
     const rt_frame_stats *st = r->st;
-    double sr = 0, stt = 0, ss = 0, sp = 0, sssim = 0, sfl = 0, pmin = INFINITY;
     for (uint32_t f = 0; f < frames; ++f) {
         const rt_frame_stats *s = &st[(size_t)m * frames + f];
         fprintf(csv, "%s,%u,%.4f,%.4f,%.4f,%.4f,%.4f,%.5f,%.6f", tr_recon_name(m), f, s->render_ms,
@@ -629,18 +605,12 @@ static void report_method(const rt_run *r, int m, FILE *csv) {
             }
         }
         fputc('\n', csv);
-        sr += s->render_ms;
-        stt += s->temporal_ms;
-        ss += s->spatial_ms;
-        sp += s->psnr;
-        sssim += s->ssim;
-        sfl += s->flicker;
-        pmin = fmin(pmin, s->psnr);
     }
-    const double n = (double)frames, total = (sr + stt + ss) / n;
+    const tr_scores_summary sum = tr_scores_summarize(st + (size_t)m * frames, 0, frames);
+    const tr_frame_scores *mean = &sum.mean;
     printf("%-11s %9.2f %11.2f %10.2f %9.2f %7.1f %9.2f %9.2f %7.4f %8.5f", tr_recon_name(m),
-           sr / n, stt / n, ss / n, total, 1000.0 / total, sp / n, pmin, sssim / n,
-           sfl / (n - 1.0));
+           mean->render_ms, mean->temporal_ms, mean->spatial_ms, sum.total_ms, sum.fps, mean->psnr,
+           sum.psnr_min, mean->ssim, mean->flicker);
     if (!cut) {
         printf("\n");
         return;
@@ -672,10 +642,10 @@ static void report_extras(const rt_run *r) {
             if (!o->on[m]) {
                 continue;
             }
-            int n = 0;
-            const double mean = shape_psnr_mean(r->st, m, frames, o->anim_from, o->anim_until, &n);
-            if (n > 0) {
-                printf(" %s %.2f dB", tr_recon_name(m), mean);
+            const tr_scores_summary sum =
+                tr_scores_summarize(r->st + (size_t)m * frames, o->anim_from, o->anim_until);
+            if (sum.region_frames > 0) {
+                printf(" %s %.2f dB", tr_recon_name(m), sum.mean.region_psnr);
             } else {
                 printf(" %s -", tr_recon_name(m));
             }
