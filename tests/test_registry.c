@@ -242,8 +242,29 @@ static void scene_files(void) {
           "material type names are case-sensitive");
 }
 
+/* The one-line description of the committed structure names it and its counts, and
+ * stays inside a short buffer. */
+static void describe_accel(void) {
+    tr_error err;
+    tr_scene *s = tr_scene_create(&err);
+    CHECK(s && tr_scene_builtin(s, "cornell", 8, 8, &err) == TR_OK, "builtin: %s", err.msg);
+    char buf[256], want[64];
+    CHECK(tr_scene_commit(s, TR_ACCEL_TYPE_BVH, &err) == TR_OK, "%s", err.msg);
+    tr_scene_accel_describe(s, buf, sizeof buf);
+    CHECK(strncmp(buf, "bvh (", 5) == 0 && strstr(buf, "binary nodes"), "bvh: '%s'", buf);
+    CHECK(tr_scene_commit(s, TR_ACCEL_TYPE_FLAT, &err) == TR_OK, "%s", err.msg);
+    tr_scene_accel_describe(s, buf, sizeof buf);
+    snprintf(want, sizeof want, "flat (%u shape boxes)", tr_scene_shape_count(s));
+    CHECK(strcmp(buf, want) == 0, "flat: '%s'", buf);
+    memset(buf, 'x', sizeof buf);
+    tr_scene_accel_describe(s, buf, 6);
+    CHECK(strcmp(buf, "flat ") == 0, "short buffer: '%.8s'", buf);
+    tr_scene_destroy(s);
+}
+
 int main(void) {
     round_trips();
     scene_files();
+    describe_accel();
     return check_finish("test_registry");
 }

@@ -123,9 +123,6 @@ int cli_load_scene(const cli_args *a, const cli_common *c, tr_scene *scene);
  * emitter (unless allowed) are CLI_USAGE; warnings go to stderr. */
 int cli_load_scene_file(const cli_args *a, cli_common *c, tr_scene *scene, tr_scene_file *file);
 
-/* One phrase describing the scene's committed acceleration structure and its build. */
-void cli_describe_accel(char *buf, size_t n, const tr_scene *s);
-
 /* The firefly control the common options name, for a real-time loop's frames: given
  * values into *clamp_indirect and *regularize (tr_realtime_desc's fields), defaults
  * (zero) where not given. */

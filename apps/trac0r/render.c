@@ -295,7 +295,7 @@ int render_write_outputs(const render_job *job, tr_session *s, uint32_t samples,
         return CLI_FAILURE;
     }
     char accel[160];
-    cli_describe_accel(accel, sizeof accel, job->scene);
+    tr_scene_accel_describe(job->scene, accel, sizeof accel);
     fprintf(stderr, "trac0r render: %s %ux%u, %u spp%s%s%s, %s, %s: %.2f s, %.2f Mrays/s -> %s\n",
             job->common.scene, job->common.width, job->common.height, samples, stopped ? " (" : "",
             stopped ? stopped : "", stopped ? ")" : "", job->be.name, accel, elapsed,
