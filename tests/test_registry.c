@@ -14,9 +14,11 @@
 #include "scene/scene_internal.h"
 #include "scene/material_registry.h"
 #include "trac0r/registry.h"
+#include "trac0r/scene_file.h"
 #include "trac0r/trac0r.h"
 
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 static void names_unique(const char *const *names, size_t count, const char *what) {
@@ -259,6 +261,20 @@ static void describe_accel(void) {
     memset(buf, 'x', sizeof buf);
     tr_scene_accel_describe(s, buf, 6);
     CHECK(strcmp(buf, "flat ") == 0, "short buffer: '%.8s'", buf);
+
+    /* The scene in words: its counts, the parts listed up to the limit, no render
+     * defaults for a built-in scene. */
+    tr_scene_file info;
+    memset(&info, 0, sizeof info);
+    CHECK(tr_scene_load(s, "builtin:cornell", NULL, &info, &err) == TR_OK, "%s", err.msg);
+    char *text = tr_scene_describe(s, "builtin:cornell", &info, 2);
+    snprintf(want, sizeof want, "triangles:  %u ", tr_scene_triangle_count(s));
+    CHECK(text && strstr(text, want) != NULL, "no '%s' in: %s", want, text ? text : "(null)");
+    snprintf(want, sizeof want, "part ...    %u more\n", tr_scene_shape_count(s) - 2);
+    CHECK(text && strstr(text, want) && strstr(text, "part 1 ") && !strstr(text, "part 2 ") &&
+              !strstr(text, "render:") && strstr(text, "warnings:   0\n"),
+          "parts, render line or warnings: %s", text ? text : "(null)");
+    free(text);
     tr_scene_destroy(s);
 }
 

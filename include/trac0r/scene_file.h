@@ -169,4 +169,12 @@ int tr_scene_name_is_builtin(const char *name);
 int tr_scene_load(tr_scene *s, const char *name, const tr_model_options *opt, tr_scene_file *info,
                   tr_error *err);
 
+/* What a loaded scene holds, as text (what `trac0r info` prints): its triangles, shapes,
+ * materials, emitters, bounds, camera and sun, the first `listed` parts and materials one
+ * line each, a file's render defaults (not for a built-in scene) and the warnings. `info`
+ * is what tr_scene_load gave for `name`. Returns a string to free(), NULL when out of
+ * memory. */
+char *tr_scene_describe(const tr_scene *s, const char *name, const tr_scene_file *info,
+                        uint32_t listed);
+
 #endif
