@@ -342,6 +342,19 @@ static void test_summary(void) {
               fabs(late.mean.flicker - 0.3) < 1e-12 && late.psnr_min == 34.0,
           "frames 2..3: region %u, flicker %g, worst %g", late.region_frames, late.mean.flicker,
           late.psnr_min);
+    double v[5] = {3.0, 1.0, 5.0, 2.0, 4.0};
+    CHECK(tr_median(v, 5) == 3.0 && v[0] == 1.0 && v[4] == 5.0, "median of five");
+    CHECK(tr_median(v, 4) == 2.5, "median of four");
+    /* The process's CPU time grows while it computes. */
+    const double c0 = tr_time_cpu();
+    volatile double x = 0.0;
+    const double w0 = tr_time_now();
+    while (tr_time_cpu() - c0 < 0.02 && tr_time_now() - w0 < 5.0) {
+        for (int i = 0; i < 100000; ++i) {
+            x = x + 1e-9;
+        }
+    }
+    CHECK(tr_time_cpu() > c0 && x > 0.0, "CPU time %g after %g", tr_time_cpu(), c0);
     const tr_scores_summary none = tr_scores_summarize(f, 2, 3);
     CHECK(none.region_frames == 0 && isnan(none.mean.region_psnr), "no region seen");
 }

@@ -13,16 +13,6 @@
 #include "devices.h"
 #include "trac0r/outfile.h"
 
-static int cmp_double(const void *a, const void *b) {
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
-double bench_median(double *v, int n) {
-    qsort(v, (size_t)n, sizeof *v, cmp_double);
-    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
 /* A step of a benchmark failed: clears the progress bar and says why. */
 static int bench_failed(progress *bar, const cli_args *a, const char *what, const tr_error *err) {
     progress_clear(bar);
@@ -171,13 +161,13 @@ static int frame_measure(frame_bench *b) {
 
 static void frame_report(frame_bench *b) {
     const int n = b->frames;
-    const double med = bench_median(b->times, n);
+    const double med = tr_median(b->times, n);
     printf("frames %d  median %.2f ms  min %.2f ms  max %.2f ms\n", n, med * 1e3, b->times[0] * 1e3,
            b->times[n - 1] * 1e3);
     printf("fps %.2f (median)  Mrays/s %.2f (mean)\n", 1.0 / med,
            (double)b->rays / b->total * 1e-6);
     if (b->animate) {
-        const double umed = bench_median(b->update_times, n);
+        const double umed = tr_median(b->update_times, n);
         printf("scene update per frame (%s%s): median %.3f ms  min %.3f ms  max %.3f ms; "
                "frame + update %.2f ms (%.2f fps)\n",
                tr_scene_update_kind(b->scene),
@@ -190,7 +180,7 @@ static void frame_report(frame_bench *b) {
     printf("thesis (table 3.2): 11.6 fps on a GeForce GTX 570 -> ratio %.2f\n", (1.0 / med) / 11.6);
     if (b->cpu.dev) {
         const int threads = b->cfg.threads ? b->cfg.threads : tr_default_threads();
-        const double cpu_med = bench_median(b->cpu_times, n);
+        const double cpu_med = tr_median(b->cpu_times, n);
         printf("cpu (%d thread%s, interleaved with the device's frames): median %.2f ms, "
                "fps %.2f -> device/cpu %.2f\n",
                threads, threads == 1 ? "" : "s", cpu_med * 1e3, 1.0 / cpu_med, cpu_med / med);
@@ -375,7 +365,7 @@ static int cx_point(cx_bench *b, tr_scene *scene, int level, int k) {
             times[n++] = st.seconds;
         }
     }
-    const double med = bench_median(times, n);
+    const double med = tr_median(times, n);
     b->fps[level][k] = 1.0 / med;
     progress_clear(&b->bar);
     printf("%5d %10u %-7s %10.1f %12.2f %9.3f%s\n", level, tr_scene_triangle_count(scene),

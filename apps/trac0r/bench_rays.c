@@ -104,7 +104,7 @@ int bench_rays(int argc, char **argv) {
                     progress_update(&bar, ++steps, NULL);
                 }
                 mrays[k][kind] =
-                    (double)tr_ray_sets_count(sets, kind) * reps / bench_median(times, runs) * 1e-6;
+                    (double)tr_ray_sets_count(sets, kind) * reps / tr_median(times, runs) * 1e-6;
             }
             progress_clear(&bar);
             printf("%-24s %10u %-7s %10.1f %10.2f %10.2f %10.2f\n", sc_opts.scene,

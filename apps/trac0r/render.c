@@ -3,7 +3,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/resource.h>
 #include <unistd.h>
 
 #include "cli.h"
@@ -79,15 +78,6 @@ static int pass_path(const char *out, uint32_t bit, char *buf, size_t size) {
     const size_t stem = dot && (!slash || dot > slash) ? (size_t)(dot - out) : strlen(out);
     const int n = snprintf(buf, size, "%.*s.%s.pfm", (int)stem, out, tr_pass_name(bit));
     return n < 0 || (size_t)n >= size ? -1 : 0;
-}
-
-double render_cpu_seconds(void) {
-    struct rusage ru;
-    if (getrusage(RUSAGE_SELF, &ru) != 0) {
-        return 0.0;
-    }
-    return (double)ru.ru_utime.tv_sec + 1e-6 * (double)ru.ru_utime.tv_usec +
-           (double)ru.ru_stime.tv_sec + 1e-6 * (double)ru.ru_stime.tv_usec;
 }
 
 /* render's own options: CLI_OK, CLI_USAGE, or -1 for none of them. */
@@ -405,7 +395,7 @@ static int render_local(render_job *job) {
         fprintf(stderr,
                 "trac0r render: setup %.3f s, rendering %.3f s, output %.3f s; CPU %.3f s (user "
                 "+ system)\n",
-                t0 - job->started, t1 - t0, tr_time_now() - t1, render_cpu_seconds());
+                t0 - job->started, t1 - t0, tr_time_now() - t1, tr_time_cpu());
     }
     tr_session_destroy(s);
     return rc == CLI_OK && sig ? 128 + sig : rc;

@@ -104,6 +104,10 @@ typedef struct tr_scores_summary {
     double psnr_min, total_ms, fps;
     uint32_t region_frames;
 } tr_scores_summary;
+/* The median of v[0 .. n), n >= 1 (the mean of the middle two for even n); sorts v in
+ * place, so that v[0] and v[n - 1] are then the least and the greatest. */
+double tr_median(double *v, int n);
+
 tr_scores_summary tr_scores_summarize(const tr_frame_scores *frames, uint32_t from, uint32_t until);
 
 /* ---- Integrators at equal time -------------------------------------------------- */

@@ -242,6 +242,16 @@ tr_frame_scores tr_scorer_score(tr_scorer *s, int slot, const float *rgb) {
     return sc;
 }
 
+static int cmp_double(const void *a, const void *b) {
+    const double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+double tr_median(double *v, int n) {
+    qsort(v, (size_t)n, sizeof *v, cmp_double);
+    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
 tr_scores_summary tr_scores_summarize(const tr_frame_scores *frames, uint32_t from,
                                       uint32_t until) {
     tr_scores_summary s;
