@@ -9,6 +9,10 @@ cli_begin "$1" "$2"
 
 R="render --width 8 --height 6 --spp 1 --out x.png"
 expect_usage_error "'--bogus'" $R --bogus
+# A near miss names the option meant; a built-in scene's too.
+expect_usage_error "did you mean '--width'" $R --widht 320
+expect_usage_error "did you mean '--noise-threshold'" $R --noise-treshold 0.1
+expect_usage_error "did you mean 'cornell-mirror'" $R builtin:cornell-miror
 expect_usage_error "--width: expected an integer in 1..16384, got 'abc'" $R --width abc
 expect_usage_error "--width: expected an integer in 1..16384, got '0'" $R --width 0
 expect_usage_error "got '-5'" $R --width -5

@@ -116,6 +116,17 @@ static void round_trips(void) {
     tr_names_join(buf, 4, abc, 3, NULL);
     CHECK(strlen(buf) == 3, "join truncates: '%s'", buf);
 
+    /* "Did you mean": a near miss (a typo, a swap, a letter short) finds its name; a word
+     * far from every name finds none. */
+    const char *const opts[] = {"--width", "--height", "--spp", "--noise-threshold"};
+    const char *near = tr_names_closest("--widht", opts, 4);
+    CHECK(near && strcmp(near, "--width") == 0, "--widht: %s", near ? near : "(none)");
+    near = tr_names_closest("--noise-treshold", opts, 4);
+    CHECK(near && strcmp(near, "--noise-threshold") == 0, "--noise-treshold: %s",
+          near ? near : "(none)");
+    CHECK(tr_names_closest("--zzzzzz", opts, 4) == NULL && tr_names_closest("x", opts, 0) == NULL,
+          "far words matched");
+
     /* Lists of names: every item kept in order, none cut, bad items refused. */
     int v[4];
     tr_error err;

@@ -20,19 +20,20 @@ static int bench_failed(progress *bar, const cli_args *a, const char *what, cons
     return CLI_FAILURE;
 }
 
-static void bench_frame_help(void) {
-    printf("Usage: trac0r bench frame [options]\n"
-           "\n"
-           "The thesis's frame: median frame time, FPS and Mrays/s at 1 spp per frame\n"
-           "(default: builtin:cornell, 800x600, naive, bvh). With --device opencl the same\n"
-           "frames on the CPU too, and the ratio. The full manual: man trac0r.\n"
-           "\n"
-           "Options:\n"
-           "%s"
-           "  --frames N           frames to time, 1..100000 (default 20)\n"
-           "  --animate            the scene's last shape moves before every frame\n"
-           "  -h, --help           show this help\n",
-           cli_common_help());
+static void bench_frame_help(FILE *fp) {
+    fprintf(fp,
+            "Usage: trac0r bench frame [options]\n"
+            "\n"
+            "The thesis's frame: median frame time, FPS and Mrays/s at 1 spp per frame\n"
+            "(default: builtin:cornell, 800x600, naive, bvh). With --device opencl the same\n"
+            "frames on the CPU too, and the ratio. The full manual: man trac0r.\n"
+            "\n"
+            "Options:\n"
+            "%s"
+            "  --frames N           frames to time, 1..100000 (default 20)\n"
+            "  --animate            the scene's last shape moves before every frame\n"
+            "  -h, --help           show this help\n",
+            cli_common_help());
 }
 
 /* bench frame: its options, what it renders on, and what it measures. */
@@ -235,23 +236,24 @@ double bench_build_seconds(const tr_scene *s) {
                                                      : tr_scene_bvh_build_seconds(s);
 }
 
-static void bench_complexity_help(void) {
-    printf("Usage: trac0r bench complexity [options]\n"
-           "\n"
-           "The thesis's figure 3.5: FPS against triangle count (builtin:cornell-ico-N) per\n"
-           "acceleration structure; writes PREFIX.csv and PREFIX.png. The full manual: man\n"
-           "trac0r.\n"
-           "\n"
-           "Options:\n"
-           "  --width W, --height H, --max-depth D, --seed S, --threads T, --device DEV\n"
-           "                       as for render (default 800x600)\n"
-           "  --max-level L        highest subdivision level, 0..%d (default 8)\n"
-           "  --frames N           timed frames per point, 1..1000 (default 5)\n"
-           "  --accels LIST        structures to compare (default flat,bvh,embree)\n"
-           "  --limit SECONDS      drop a structure after a slower frame (default 10)\n"
-           "  --out PREFIX         output file prefix (default complexity)\n"
-           "  -h, --help           show this help\n",
-           TR_ICOSPHERE_MAX_SUBDIVISIONS);
+static void bench_complexity_help(FILE *fp) {
+    fprintf(fp,
+            "Usage: trac0r bench complexity [options]\n"
+            "\n"
+            "The thesis's figure 3.5: FPS against triangle count (builtin:cornell-ico-N) per\n"
+            "acceleration structure; writes PREFIX.csv and PREFIX.png. The full manual: man\n"
+            "trac0r.\n"
+            "\n"
+            "Options:\n"
+            "  --width W, --height H, --max-depth D, --seed S, --threads T, --device DEV\n"
+            "                       as for render (default 800x600)\n"
+            "  --max-level L        highest subdivision level, 0..%d (default 8)\n"
+            "  --frames N           timed frames per point, 1..1000 (default 5)\n"
+            "  --accels LIST        structures to compare (default flat,bvh,embree)\n"
+            "  --limit SECONDS      drop a structure after a slower frame (default 10)\n"
+            "  --out PREFIX         output file prefix (default complexity)\n"
+            "  -h, --help           show this help\n",
+            TR_ICOSPHERE_MAX_SUBDIVISIONS);
 }
 
 #define CX_MAX_FRAMES 1000

@@ -20,24 +20,24 @@ typedef tr_convergence_run conv_run;
 #define CONV_MAX_METHODS 4 /* naive, pt, bdpt, vcm */
 static const double conv_db[CONV_THRESHOLDS] = {25.0, 30.0, 35.0, 40.0};
 
-static void convergence_help(void) {
-    printf("Usage: trac0r bench convergence [SCENE] [options]\n"
-           "\n"
-           "Error against a converged reference (its own error taken out) over time and spp\n"
-           "for each method and size; prints the time and spp to reach 25, 30, 35 and 40 dB\n"
-           "and writes PREFIX.csv and PREFIX.png. SCENE defaults to builtin:cornell-mirror.\n"
-           "The full manual: man trac0r.\n"
-           "\n"
-           "Options:\n"
-           "  --sizes LIST         image sizes (default 256x256,800x600)\n"
-           "  --methods LIST       up to four integrators (default naive,pt,bdpt)\n"
-           "  --budget SECONDS     render time per method and size, 0.1..86400 (default 30)\n"
-           "  --reference-spp N    spp of the reference, 2..1000000 (default 4096)\n"
-           "  --reference FILE     read the reference (.pfm) instead (one size only)\n"
-           "  --max-depth D        pt's path length, 1..1022 (default 8; naive gets D + 2)\n"
-           "  --seed S, --threads T, --accel NAME   as for render\n"
-           "  --out PREFIX         output file prefix (default convergence)\n"
-           "  -h, --help           show this help\n");
+static void convergence_help(FILE *fp) {
+    fprintf(fp, "Usage: trac0r bench convergence [SCENE] [options]\n"
+                "\n"
+                "Error against a converged reference (its own error taken out) over time and spp\n"
+                "for each method and size; prints the time and spp to reach 25, 30, 35 and 40 dB\n"
+                "and writes PREFIX.csv and PREFIX.png. SCENE defaults to builtin:cornell-mirror.\n"
+                "The full manual: man trac0r.\n"
+                "\n"
+                "Options:\n"
+                "  --sizes LIST         image sizes (default 256x256,800x600)\n"
+                "  --methods LIST       up to four integrators (default naive,pt,bdpt)\n"
+                "  --budget SECONDS     render time per method and size, 0.1..86400 (default 30)\n"
+                "  --reference-spp N    spp of the reference, 2..1000000 (default 4096)\n"
+                "  --reference FILE     read the reference (.pfm) instead (one size only)\n"
+                "  --max-depth D        pt's path length, 1..1022 (default 8; naive gets D + 2)\n"
+                "  --seed S, --threads T, --accel NAME   as for render\n"
+                "  --out PREFIX         output file prefix (default convergence)\n"
+                "  -h, --help           show this help\n");
 }
 
 static int parse_sizes(cli_args *a, uint32_t w[], uint32_t h[], int *n) {

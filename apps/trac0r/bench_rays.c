@@ -9,19 +9,19 @@
 #include "progress.h"
 #include "trac0r/measure.h"
 
-static void bench_rays_help(void) {
-    printf("Usage: trac0r bench rays [options]\n"
-           "\n"
-           "Mrays/s of each acceleration structure on the same primary, diffuse and shadow\n"
-           "rays, on builtin:cornell, builtin:cornell-ico-6 and builtin:cornell-ico-8; the\n"
-           "median of the runs, with build times. The full manual: man trac0r.\n"
-           "\n"
-           "Options:\n"
-           "  --width W, --height H, --seed S, --threads T   as for render (default 800x600)\n"
-           "  --scene SCENE        measure only this scene\n"
-           "  --runs N             timed passes over each ray set, 1..1000 (default 5)\n"
-           "  --accels LIST        structures to compare (default bvh,embree)\n"
-           "  -h, --help           show this help\n");
+static void bench_rays_help(FILE *fp) {
+    fprintf(fp, "Usage: trac0r bench rays [options]\n"
+                "\n"
+                "Mrays/s of each acceleration structure on the same primary, diffuse and shadow\n"
+                "rays, on builtin:cornell, builtin:cornell-ico-6 and builtin:cornell-ico-8; the\n"
+                "median of the runs, with build times. The full manual: man trac0r.\n"
+                "\n"
+                "Options:\n"
+                "  --width W, --height H, --seed S, --threads T   as for render (default 800x600)\n"
+                "  --scene SCENE        measure only this scene\n"
+                "  --runs N             timed passes over each ray set, 1..1000 (default 5)\n"
+                "  --accels LIST        structures to compare (default bvh,embree)\n"
+                "  -h, --help           show this help\n");
 }
 
 typedef struct rays_opts {

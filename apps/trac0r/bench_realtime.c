@@ -18,37 +18,38 @@
 
 typedef tr_frame_scores rt_frame_stats;
 
-static void realtime_help(void) {
-    printf("Usage: trac0r bench realtime [SCENE] [options]\n"
-           "\n"
-           "Moves the camera along a path, renders every frame once and runs each\n"
-           "reconstruction method on it; scores every output against a converged reference\n"
-           "of the same frame (PSNR with the reference's own error taken out, SSIM,\n"
-           "flicker) and times every stage. Prints a table per method and writes PREFIX.csv\n"
-           "and PREFIX.png. SCENE defaults to builtin:cornell. The full manual: man trac0r\n"
-           "(docs/cli.md, docs/realtime.md).\n"
-           "\n"
-           "Options:\n"
-           "  --width W, --height H   frame size (default 320x240)\n"
-           "  --frames N           frames along the path, 2..100000 (default 32)\n"
-           "  --spp S              samples per pixel per frame, 1..1024 (default 1)\n"
-           "  --reference-spp R    samples of each frame's reference, 2..1000000 (default 256)\n"
-           "  --cut K              jump to another view at frame K (default: no cut)\n"
-           "  --upscale N          trace 1/N of the pixels and upscale, 1..16 (default 1)\n"
-           "  --animate            the scene's last shape moves before every frame\n"
-           "  --animate-frames A:B   the same, only before frames A to B-1\n"
-           "  --bias-reference-depth D2   also measure the depth limit's bias against D2\n"
-           "  --methods LIST       of off,accumulate,bilateral,atrous,svgf (default all)\n"
-           "  --seed S, --threads T, --max-depth D, --accel NAME, --device D   as for render\n"
-           "  --sampler NAME, --light-sampling NAME   as for render (frames: random)\n"
-           "  --roulette-start N   as for render (frames: 2, references: 5)\n"
-           "  --clamp-indirect V, --regularize on|off   the frames' firefly control (4, on)\n"
-           "  --reference-sampler NAME   the references' sampler (default sobol)\n"
-           "  --out PREFIX         output file prefix (default realtime)\n"
-           "  -h, --help           show this help\n"
-           "\n"
-           "The reconstruction's settings:\n");
-    fputs(cli_recon_help, stdout);
+static void realtime_help(FILE *fp) {
+    fprintf(fp,
+            "Usage: trac0r bench realtime [SCENE] [options]\n"
+            "\n"
+            "Moves the camera along a path, renders every frame once and runs each\n"
+            "reconstruction method on it; scores every output against a converged reference\n"
+            "of the same frame (PSNR with the reference's own error taken out, SSIM,\n"
+            "flicker) and times every stage. Prints a table per method and writes PREFIX.csv\n"
+            "and PREFIX.png. SCENE defaults to builtin:cornell. The full manual: man trac0r\n"
+            "(docs/cli.md, docs/realtime.md).\n"
+            "\n"
+            "Options:\n"
+            "  --width W, --height H   frame size (default 320x240)\n"
+            "  --frames N           frames along the path, 2..100000 (default 32)\n"
+            "  --spp S              samples per pixel per frame, 1..1024 (default 1)\n"
+            "  --reference-spp R    samples of each frame's reference, 2..1000000 (default 256)\n"
+            "  --cut K              jump to another view at frame K (default: no cut)\n"
+            "  --upscale N          trace 1/N of the pixels and upscale, 1..16 (default 1)\n"
+            "  --animate            the scene's last shape moves before every frame\n"
+            "  --animate-frames A:B   the same, only before frames A to B-1\n"
+            "  --bias-reference-depth D2   also measure the depth limit's bias against D2\n"
+            "  --methods LIST       of off,accumulate,bilateral,atrous,svgf (default all)\n"
+            "  --seed S, --threads T, --max-depth D, --accel NAME, --device D   as for render\n"
+            "  --sampler NAME, --light-sampling NAME   as for render (frames: random)\n"
+            "  --roulette-start N   as for render (frames: 2, references: 5)\n"
+            "  --clamp-indirect V, --regularize on|off   the frames' firefly control (4, on)\n"
+            "  --reference-sampler NAME   the references' sampler (default sobol)\n"
+            "  --out PREFIX         output file prefix (default realtime)\n"
+            "  -h, --help           show this help\n"
+            "\n"
+            "The reconstruction's settings:\n");
+    fputs(cli_recon_help, fp);
 }
 
 static int parse_methods(cli_args *a, int on[TR_RECON_COUNT]) {

@@ -1,4 +1,5 @@
 /* cli.c - option parsing shared by the trac0r subcommands. */
+#define _POSIX_C_SOURCE 200809L
 #include "cli.h"
 #include "devices.h"
 #include "trac0r/registry.h"
@@ -123,9 +124,35 @@ int cli_error(const cli_args *a, const char *fmt, ...) {
     return CLI_USAGE;
 }
 
-int cli_unknown(const cli_args *a) {
+/* The option closest to opt among those the help text names (every "--word" in it). */
+static const char *closest_option(const char *opt, void (*help)(FILE *), char *buf, size_t n) {
+    char *text = NULL, *save = NULL;
+    size_t size = 0, count = 0;
+    FILE *fp = open_memstream(&text, &size);
+    if (!fp) {
+        return NULL;
+    }
+    help(fp);
+    fclose(fp);
+    const char *names[256];
+    for (char *w = strtok_r(text, " \t\n,:|=()[]", &save); w && count < 256;
+         w = strtok_r(NULL, " \t\n,:|=()[]", &save)) {
+        if (strncmp(w, "--", 2) == 0 && w[2] >= 'a' && w[2] <= 'z') {
+            names[count++] = w;
+        }
+    }
+    const char *near = tr_names_closest(opt, names, count);
+    snprintf(buf, n, "%s", near ? near : "");
+    free(text);
+    return near ? buf : NULL;
+}
+
+int cli_unknown(const cli_args *a, void (*help)(FILE *)) {
     if (a->opt[0] == '-' && a->opt[1] != '\0') {
-        return cli_error(a, "unknown option '%s' (see 'trac0r %s --help')", a->opt, a->cmd);
+        char buf[64];
+        const char *near = help ? closest_option(a->opt, help, buf, sizeof buf) : NULL;
+        return cli_error(a, "unknown option '%s' (%s%s%ssee 'trac0r %s --help')", a->opt,
+                         near ? "did you mean '" : "", near ? near : "", near ? "'? " : "", a->cmd);
     }
     /* Not an option at all: a second SCENE, or an argument where none is taken. */
     return cli_error(a, "unexpected argument '%s' (see 'trac0r %s --help')", a->opt, a->cmd);
@@ -430,7 +457,7 @@ int cli_restir_option(cli_args *a, cli_common *c) {
     return -1;
 }
 
-int cli_parse(cli_args *a, cli_common *c, const char *const *refused, void (*help)(void),
+int cli_parse(cli_args *a, cli_common *c, const char *const *refused, void (*help)(FILE *),
               int (*own)(cli_args *, void *), void *user) {
     while (cli_next(a)) {
         int rc = cli_common_option(a, c);
@@ -444,10 +471,10 @@ int cli_parse(cli_args *a, cli_common *c, const char *const *refused, void (*hel
                 return CLI_USAGE;
             }
         } else if (cli_is(a, "-h") || cli_is(a, "--help")) {
-            help();
+            help(stdout);
             return CLI_HELP;
         } else if ((rc = own(a, user)) != CLI_OK) {
-            return rc < 0 ? cli_unknown(a) : CLI_USAGE;
+            return rc < 0 ? cli_unknown(a, help) : CLI_USAGE;
         }
     }
     return CLI_OK;

@@ -6,6 +6,7 @@
 #define TRAC0R_CLI_H
 
 #include <stddef.h>
+#include <stdio.h>
 #include <stdint.h>
 
 #include "trac0r/registry.h"
@@ -68,8 +69,9 @@ void cli_accel_list(char *buf, size_t size);
 /* Prints "trac0r CMD: message" to stderr and returns CLI_USAGE. */
 int cli_error(const cli_args *a, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 /* The current argument is not one the command takes: "unknown option '--x'" for an
- * option, "unexpected argument 'x'" for anything else (a second SCENE). Returns CLI_USAGE. */
-int cli_unknown(const cli_args *a);
+ * option (with "did you mean" the closest option `help` prints, if one is close), and
+ * "unexpected argument 'x'" for anything else (a second SCENE). Returns CLI_USAGE. */
+int cli_unknown(const cli_args *a, void (*help)(FILE *));
 
 /* Advances to the next argument; returns 0 at the end. Splits "--opt=value". */
 int cli_next(cli_args *a);
@@ -95,7 +97,7 @@ int cli_common_option(cli_args *a, cli_common *c);
  * refused once parsed), -h/--help (prints `help`), and `own` for the rest, which returns
  * CLI_OK, CLI_USAGE, or -1 for an option that is none of its own (an unknown option).
  * Returns CLI_OK, CLI_USAGE or CLI_HELP. */
-int cli_parse(cli_args *a, cli_common *c, const char *const *refused, void (*help)(void),
+int cli_parse(cli_args *a, cli_common *c, const char *const *refused, void (*help)(FILE *),
               int (*own)(cli_args *, void *), void *user);
 
 /* A TR_SAMPLER_* by its name (--sampler, --reference-sampler) into *out, and the name of

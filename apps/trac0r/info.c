@@ -9,20 +9,20 @@
 #include "trac0r/registry.h"
 #include "trac0r/scene_file.h"
 
-static void info_help(void) {
-    printf("Usage: trac0r info SCENE [options]\n"
-           "       trac0r info --devices\n"
-           "\n"
-           "Describes a scene (counts, bounds, camera, materials, render defaults, warnings)\n"
-           "without rendering it, or lists the OpenCL devices as --device opencl:N numbers\n"
-           "them. Exit status 2 when the scene does not load or no OpenCL platform is found.\n"
-           "\n"
-           "Options:\n"
-           "  --devices            list the OpenCL devices instead of describing a scene\n"
-           "  --up y|z             a model file's up axis (default y)\n"
-           "  --scale S            a model file's scale (default 1)\n"
-           "  --camera N|NAME|frame  a model file's camera (default its first)\n"
-           "  -h, --help           show this help\n");
+static void info_help(FILE *fp) {
+    fprintf(fp, "Usage: trac0r info SCENE [options]\n"
+                "       trac0r info --devices\n"
+                "\n"
+                "Describes a scene (counts, bounds, camera, materials, render defaults, warnings)\n"
+                "without rendering it, or lists the OpenCL devices as --device opencl:N numbers\n"
+                "them. Exit status 2 when the scene does not load or no OpenCL platform is found.\n"
+                "\n"
+                "Options:\n"
+                "  --devices            list the OpenCL devices instead of describing a scene\n"
+                "  --up y|z             a model file's up axis (default y)\n"
+                "  --scale S            a model file's scale (default 1)\n"
+                "  --camera N|NAME|frame  a model file's camera (default its first)\n"
+                "  -h, --help           show this help\n");
 }
 
 int cmd_info(int argc, char **argv) {
@@ -33,7 +33,7 @@ int cmd_info(int argc, char **argv) {
     cli_common_default(&mc);
     while (cli_next(&a)) {
         if (cli_is(&a, "-h") || cli_is(&a, "--help")) {
-            info_help();
+            info_help(stdout);
             return CLI_OK;
         } else if (cli_is(&a, "--devices")) {
             devices = 1;
@@ -44,7 +44,7 @@ int cmd_info(int argc, char **argv) {
         } else if (a.opt[0] != '-' && !path) {
             path = a.opt;
         } else {
-            return cli_unknown(&a);
+            return cli_unknown(&a, info_help);
         }
     }
     if (devices && path) {

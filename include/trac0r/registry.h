@@ -46,6 +46,11 @@ const char *const *tr_accel_names(size_t *count);
 void tr_names_join(char *buf, size_t size, const char *const *names, size_t count,
                    const char *last_sep);
 
+/* The name of names[0 .. count) closest to s in edit distance (adjacent transpositions
+ * counted as one edit), if within 1 + strlen(s) / 4 edits (at most 3); NULL if none is:
+ * what a "did you mean" names. */
+const char *tr_names_closest(const char *s, const char *const *names, size_t count);
+
 /* Parses a comma-separated list of names ("naive,pt") through `lookup` (a name's value,
  * or a negative number for an unknown name) into out[0 .. max): returns how many (at
  * least 1), or -1 with err set (TR_STATUS_INVALID_ARGUMENT) when an item is unknown or

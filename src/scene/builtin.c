@@ -4,6 +4,7 @@
 
 #include "trac0r/camera.h"
 #include "scene/scene_internal.h"
+#include "trac0r/registry.h"
 #include "trac0r/scene.h"
 
 typedef struct shape_spec {
@@ -102,11 +103,14 @@ int tr_scene_builtin(tr_scene *s, const char *name, uint32_t width, uint32_t hei
                level <= TR_ICOSPHERE_MAX_SUBDIVISIONS) {
         rc = build_cornell(s, width, height, (int)level, 0, err);
     } else {
-        return tr_error_set(
-            err, TR_STATUS_NOT_FOUND,
-            "unknown built-in scene '%s' (available: cornell, cornell-mirror, cornell-diffuse, "
-            "cornell-ico-N with N = 0..%d)",
-            name, TR_ICOSPHERE_MAX_SUBDIVISIONS);
+        static const char *const names[] = {"cornell", "cornell-mirror", "cornell-diffuse",
+                                            "cornell-ico-0"};
+        const char *near = tr_names_closest(name, names, 4);
+        return tr_error_set(err, TR_STATUS_NOT_FOUND,
+                            "unknown built-in scene '%s' (%s%s%savailable: cornell, "
+                            "cornell-mirror, cornell-diffuse, cornell-ico-N with N = 0..%d)",
+                            name, near ? "did you mean '" : "", near ? near : "", near ? "'? " : "",
+                            TR_ICOSPHERE_MAX_SUBDIVISIONS);
     }
     if (rc != TR_OK) {
         tr_scene_clear(s);

@@ -120,56 +120,6 @@ static void path_index(char *out, const char *base, int i) {
     }
 }
 
-/* Edit distance with adjacent transpositions (optimal string alignment: Damerau 1964,
- * "A technique for computer detection and correction of spelling errors"), capped:
- * strings longer than 31 bytes are "far". */
-static int edit_distance(const char *a, const char *b) {
-    size_t n = strlen(a), m = strlen(b);
-    if (n > 31 || m > 31) {
-        return 99;
-    }
-    int d[32][32];
-    for (size_t i = 0; i <= n; ++i) {
-        d[i][0] = (int)i;
-    }
-    for (size_t j = 0; j <= m; ++j) {
-        d[0][j] = (int)j;
-    }
-    for (size_t i = 1; i <= n; ++i) {
-        for (size_t j = 1; j <= m; ++j) {
-            int best = d[i - 1][j - 1] + (a[i - 1] != b[j - 1]);
-            if (d[i - 1][j] + 1 < best) {
-                best = d[i - 1][j] + 1;
-            }
-            if (d[i][j - 1] + 1 < best) {
-                best = d[i][j - 1] + 1;
-            }
-            if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1] &&
-                d[i - 2][j - 2] + 1 < best) {
-                best = d[i - 2][j - 2] + 1;
-            }
-            d[i][j] = best;
-        }
-    }
-    return d[n][m];
-}
-
-/* The closest of names[] to s within a distance of 1 + len/4, or NULL. */
-static const char *closest(const char *s, const char *const *names, size_t count) {
-    const char *best = NULL;
-    int best_d = 1 + (int)strlen(s) / 4;
-    if (best_d > 3) {
-        best_d = 3;
-    }
-    for (size_t i = 0; i < count; ++i) {
-        int d = edit_distance(s, names[i]);
-        if (d <= best_d && (!best || d < edit_distance(s, best))) {
-            best = names[i];
-        }
-    }
-    return best;
-}
-
 /* A printable, shortened copy of a JSON key or string for messages. */
 static const char *shown(const char *s, char *buf, size_t n) {
     size_t j = 0;
@@ -218,7 +168,7 @@ static int check_keys(const jctx *c, const cJSON *obj, const char *path, const c
             known |= strcmp(name, allowed[i]) == 0;
         }
         if (!known) {
-            const char *near = closest(name, allowed, count);
+            const char *near = tr_names_closest(name, allowed, count);
             char list[256] = "";
             for (size_t i = 0; i < count; ++i) {
                 size_t used = strlen(list);
@@ -446,7 +396,7 @@ static int parse_render(jctx *c, const cJSON *r) {
             const char *const *names = tr_accel_names(&count);
             char buf[40], expected[128];
             tr_names_join(expected, sizeof expected, names, count, " or ");
-            const char *near = closest(s, names, count);
+            const char *near = tr_names_closest(s, names, count);
             return jerr(c, "render.accel",
                         "unknown acceleration structure '%s' (expected %s%s%s%s)",
                         shown(s, buf, sizeof buf), expected, near ? "; did you mean '" : "",
@@ -702,7 +652,7 @@ static int parse_materials(jctx *c, const cJSON *mats) {
         if (t < 0 || !tr_material_type_keys((uint32_t)t, &required, &optional)) {
             char pt[PATH_MAX_LEN], tb[40], expected[128];
             path_key(pt, p, "type");
-            const char *near = closest(type, types, ntypes);
+            const char *near = tr_names_closest(type, types, ntypes);
             size_t len = (size_t)snprintf(expected, sizeof expected, "expected ");
             tr_names_join(expected + len, sizeof expected - len, types, ntypes, " or ");
             return jerr(c, pt, "unknown material type '%s' (%s%s%s)", shown(type, tb, sizeof tb),
@@ -819,7 +769,7 @@ static int material_ref(const jctx *c, const cJSON *obj, const char *path, int r
     }
     char p[PATH_MAX_LEN], buf[48];
     path_key(p, path, "material");
-    const char *near = names ? closest(name, names, count) : NULL;
+    const char *near = names ? tr_names_closest(name, names, count) : NULL;
     int rc = jerr(c, p, "undefined material '%s'%s%s%s", shown(name, buf, sizeof buf),
                   near ? " (did you mean '" : "", near ? near : "", near ? "'?)" : "");
     free(names);
@@ -1028,7 +978,7 @@ static int parse_shapes(jctx *c, const cJSON *shapes) {
         if (t < 0) {
             char pt[PATH_MAX_LEN], buf[40];
             path_key(pt, p, "type");
-            const char *near = closest(type, types, 4);
+            const char *near = tr_names_closest(type, types, 4);
             return jerr(c, pt, "unknown shape type '%s' (%s%s%s)", shown(type, buf, sizeof buf),
                         near ? "did you mean '" : "expected plane, box, icosphere or quad",
                         near ? near : "", near ? "'?" : "");
