@@ -137,7 +137,7 @@ rm -f info.txt err.txt dark.pfm dark2.pfm
 [ "$(head -c 9 d.pfm | tail -c 6)" = "24 16
 " ] || [ "$(sed -n 2p d.pfm)" = "24 16" ] || fail "defaults.json: image is not 24x16: $(sed -n 2p d.pfm)"
 grep -qF "24x16, 2 spp" err.txt || fail "defaults.json: summary lacks '24x16, 2 spp': $(cat err.txt)"
-grep -qF "flat (" err.txt || fail "defaults.json: render.accel flat not applied: $(cat err.txt)"
+grep -qF ", flat: " err.txt || fail "defaults.json: render.accel flat not applied: $(cat err.txt)"
 "$BIN" render --width 10 --spp 1 "$GOOD/defaults.json" --accel bvh --out d.pfm 2>err.txt ||
     fail "defaults.json with overrides: $(cat err.txt)"
 grep -qF "10x16, 1 spp" err.txt || fail "defaults.json: --width/--spp did not override: $(cat err.txt)"

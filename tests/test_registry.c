@@ -263,14 +263,19 @@ static void describe_accel(void) {
     CHECK(s && tr_scene_builtin(s, "cornell", 8, 8, &err) == TR_OK, "builtin: %s", err.msg);
     char buf[256], want[64];
     CHECK(tr_scene_commit(s, TR_ACCEL_TYPE_BVH, &err) == TR_OK, "%s", err.msg);
-    tr_scene_accel_describe(s, buf, sizeof buf);
+    tr_scene_accel_describe(s, 1, buf, sizeof buf);
     CHECK(strncmp(buf, "bvh (", 5) == 0 && strstr(buf, "binary nodes"), "bvh: '%s'", buf);
+    tr_scene_accel_describe(s, 0, buf, sizeof buf);
+    CHECK(strncmp(buf, "bvh (", 5) == 0 && strstr(buf, "-wide") && !strstr(buf, "nodes"),
+          "bvh, short: '%s'", buf);
     CHECK(tr_scene_commit(s, TR_ACCEL_TYPE_FLAT, &err) == TR_OK, "%s", err.msg);
-    tr_scene_accel_describe(s, buf, sizeof buf);
+    tr_scene_accel_describe(s, 1, buf, sizeof buf);
     snprintf(want, sizeof want, "flat (%u shape boxes)", tr_scene_shape_count(s));
     CHECK(strcmp(buf, want) == 0, "flat: '%s'", buf);
+    tr_scene_accel_describe(s, 0, buf, sizeof buf);
+    CHECK(strcmp(buf, "flat") == 0, "flat, short: '%s'", buf);
     memset(buf, 'x', sizeof buf);
-    tr_scene_accel_describe(s, buf, 6);
+    tr_scene_accel_describe(s, 1, buf, 6);
     CHECK(strcmp(buf, "flat ") == 0, "short buffer: '%.8s'", buf);
 
     /* The scene in words: its counts, the parts listed up to the limit, no render

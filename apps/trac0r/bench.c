@@ -83,7 +83,7 @@ static int frame_open(frame_bench *b) {
     }
     b->cfg = cli_render_config(&b->c);
     char accel[160];
-    tr_scene_accel_describe(b->scene, accel, sizeof accel);
+    tr_scene_accel_describe(b->scene, 1, accel, sizeof accel);
     printf("bench frame: %s, %ux%u, 1 spp/frame, integrator %s, max depth %d, %s, "
            "%u triangles, accel %s\n",
            b->c.scene, b->c.width, b->c.height, tr_integrator_name(b->c.integrator),

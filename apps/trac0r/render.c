@@ -38,7 +38,7 @@ static void render_help(FILE *fp) {
             "  --denoise            filter the image with the offline denoiser\n"
             "  --no-denoise         write the image as rendered\n"
             "  --time-limit S       stop before a pass would end after S seconds, 0..1e6\n"
-            "  --verbose            after the summary, where the time went\n"
+            "  --verbose            the structure's size, and where the time went\n"
             "  -h, --help           show this help\n"
             "\n"
             "SIGINT or SIGTERM writes the image of the samples so far. Exit status: 0 done,\n"
@@ -286,7 +286,7 @@ int render_write_outputs(const render_job *job, tr_session *s, uint32_t samples,
         return CLI_FAILURE;
     }
     char accel[160];
-    tr_scene_accel_describe(job->scene, accel, sizeof accel);
+    tr_scene_accel_describe(job->scene, job->verbose, accel, sizeof accel);
     fprintf(stderr, "trac0r render: %s %ux%u, %u spp%s%s%s, %s, %s: %.2f s, %.2f Mrays/s -> %s\n",
             job->common.scene, job->common.width, job->common.height, samples, stopped ? " (" : "",
             stopped ? stopped : "", stopped ? ")" : "", job->be.name, accel, elapsed,

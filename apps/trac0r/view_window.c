@@ -617,7 +617,7 @@ static void draw(view_window *vw) {
         view_draw_bvh(ren, &vw->cam, vw->scene, vw->st.bvh_depth); /* nothing without a BVH */
     }
     char accel[160];
-    tr_scene_accel_describe(vw->scene, accel, sizeof accel);
+    tr_scene_accel_describe(vw->scene, 1, accel, sizeof accel);
     const uint32_t bvh_depth = view_bvh_depth(vw->scene);
     pthread_mutex_unlock(&vw->r.mu);
     if (vw->st.overlay) {

@@ -206,11 +206,12 @@ void tr_scene_set_camera(tr_scene *s, const tr_camera *cam);
 tr_accel_type tr_scene_accel(const tr_scene *s);
 /* Counts, depths and build times of the committed structure. */
 void tr_scene_accel_info(const tr_scene *s, tr_accel_info *info);
-/* The committed structure in one line for a summary: "bvh (8-wide avx2: N nodes, ...;
- * built in T ms, ...)", "bvh2 (...)", "embree (built in T ms)" or "flat (N shape boxes)".
- * A TRAC0R_ISA the CPU (or build) cannot honour is named as unavailable. Always
- * NUL-terminates buf (truncating when it is short). */
-void tr_scene_accel_describe(const tr_scene *s, char *buf, size_t n);
+/* The committed structure in one line for a summary: its name, and for bvh the wide
+ * traversal's width and instruction set ("bvh (8-wide avx2)"; a TRAC0R_ISA the CPU or
+ * build cannot honour is named as unavailable). With `detail` its size and build time too:
+ * "bvh (8-wide avx2: N nodes, ...; built in T ms, ...)", "bvh2 (...)", "embree (built in T
+ * ms)", "flat (N shape boxes)". Always NUL-terminates buf (truncating when it is short). */
+void tr_scene_accel_describe(const tr_scene *s, int detail, char *buf, size_t n);
 /* Node i of the committed binary BVH (bvh and bvh2; node 0 is the root, 0 nodes
  * otherwise): its box, and for an interior node the index of its first child (the
  * second follows it). Returns 1 for an interior node, 0 for a leaf, -1 for i out of

@@ -9,9 +9,10 @@
 #include "trac0r/scene.h"
 #include "trac0r/scene_file.h"
 
-void tr_scene_accel_describe(const tr_scene *s, char *buf, size_t n) {
+void tr_scene_accel_describe(const tr_scene *s, int detail, char *buf, size_t n) {
     tr_accel_info info;
     tr_scene_accel_info(s, &info);
+    char more[160] = "";
     if (info.type == TR_ACCEL_TYPE_BVH) {
         /* The traversal's ISA is chosen at run time; a TRAC0R_ISA the CPU (or build)
          * cannot honour is said here rather than silently replaced. */
@@ -20,12 +21,16 @@ void tr_scene_accel_describe(const tr_scene *s, char *buf, size_t n) {
         if (asked && *asked && strcmp(asked, info.wide_isa) != 0) {
             snprintf(note, sizeof note, ", TRAC0R_ISA=%.40s unavailable", asked);
         }
-        snprintf(buf, n,
-                 "bvh (%u-wide %s%s: %u nodes, %u leaves, depth %u, from %u binary nodes; built "
-                 "in %.1f ms, %.1f ms of it the collapse)",
-                 info.wide_width, info.wide_isa, note, info.wide_nodes, info.wide_leaves,
-                 info.wide_depth, info.bvh_nodes, tr_scene_bvh_build_seconds(s) * 1e3,
-                 info.wide_seconds * 1e3);
+        if (detail) {
+            snprintf(more, sizeof more,
+                     ": %u nodes, %u leaves, depth %u, from %u binary nodes; built in %.1f ms, "
+                     "%.1f ms of it the collapse",
+                     info.wide_nodes, info.wide_leaves, info.wide_depth, info.bvh_nodes,
+                     tr_scene_bvh_build_seconds(s) * 1e3, info.wide_seconds * 1e3);
+        }
+        snprintf(buf, n, "bvh (%u-wide %s%s%s)", info.wide_width, info.wide_isa, note, more);
+    } else if (!detail) {
+        snprintf(buf, n, "%s", tr_accel_name(info.type));
     } else if (info.type == TR_ACCEL_TYPE_BVH2) {
         snprintf(buf, n, "bvh2 (%u nodes, %u leaves, depth %u, built in %.1f ms)", info.bvh_nodes,
                  info.bvh_leaves, info.bvh_depth, info.bvh_seconds * 1e3);
