@@ -140,8 +140,18 @@ grep -qF "24x16, 2 spp" err.txt || fail "defaults.json: summary lacks '24x16, 2 
 grep -qF ", flat: " err.txt || fail "defaults.json: render.accel flat not applied: $(cat err.txt)"
 "$BIN" render --width 10 --spp 1 "$GOOD/defaults.json" --accel bvh --out d.pfm 2>err.txt ||
     fail "defaults.json with overrides: $(cat err.txt)"
-grep -qF "10x16, 1 spp" err.txt || fail "defaults.json: --width/--spp did not override: $(cat err.txt)"
+# --width alone keeps the file's 24x16 shape: 10 x 16 * 10 / 24 = 6.7 -> 7.
+grep -qF "10x7, 1 spp" err.txt || fail "defaults.json: --width/--spp did not override: $(cat err.txt)"
 grep -qF "bvh (" err.txt || fail "defaults.json: --accel did not override: $(cat err.txt)"
+"$BIN" render --height 8 --spp 1 "$GOOD/defaults.json" --out d.pfm 2>err.txt ||
+    fail "defaults.json --height 8: $(cat err.txt)"
+grep -qF "12x8, 1 spp" err.txt || fail "defaults.json: --height alone lost the aspect: $(cat err.txt)"
+"$BIN" render --width 40 --height 10 --spp 1 "$GOOD/defaults.json" --out d.pfm 2>err.txt ||
+    fail "defaults.json 40x10: $(cat err.txt)"
+grep -qF "40x10, 1 spp" err.txt || fail "defaults.json: both sides given not kept: $(cat err.txt)"
+# A built-in scene's 800x600 default keeps its shape too.
+"$BIN" render --width 40 --spp 1 --out d.pfm 2>err.txt || fail "--width 40: $(cat err.txt)"
+grep -qF "40x30, 1 spp" err.txt || fail "builtin --width alone lost the aspect: $(cat err.txt)"
 rm -f d.pfm err.txt
 
 # The thesis's scene file renders bit-identical to the built-in scene, with either integrator

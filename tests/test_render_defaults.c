@@ -58,6 +58,12 @@ static void test_zero_request(tr_scene *s) {
           "the rest of the config is not tr_render_config_default()'s");
     CHECK(tr_scene_camera(s)->screen_width == 800 && tr_scene_camera(s)->screen_height == 600,
           "camera %ux%u", tr_scene_camera(s)->screen_width, tr_scene_camera(s)->screen_height);
+    /* Without a size in the file, a width alone keeps the default's 4:3. */
+    tr_render_request wide = {0};
+    wide.width = 640;
+    rc = tr_scene_file_apply(s, "mem.json", &f, &wide, &st, &err);
+    CHECK(rc == TR_OK && st.width == 640 && st.height == 480, "width alone: %ux%u", st.width,
+          st.height);
     /* A NULL request means the same. */
     rc = tr_scene_file_apply(s, "mem.json", &f, NULL, &st, &err);
     CHECK(rc == TR_OK && st.width == 800 && st.spp == TR_SESSION_SPP_DEFAULT,
@@ -91,17 +97,29 @@ static void test_file_and_request(tr_scene *s) {
     req.accel = "bvh2";
     rc = tr_scene_file_apply(s, "mem.json", &f, &req, &st, &err);
     CHECK(rc == TR_OK, "request values: %s", err.msg);
-    CHECK(st.width == 10 && st.height == 16 && st.spp == 5, "request: %ux%u, %u spp", st.width,
+    /* The width alone: the height keeps the file's 24x16 shape (16 * 10 / 24 = 6.7). */
+    CHECK(st.width == 10 && st.height == 7 && st.spp == 5, "request: %ux%u, %u spp", st.width,
           st.height, st.spp);
     CHECK(st.config.max_depth == 7, "request: depth %d", st.config.max_depth);
     CHECK(st.accel == TR_ACCEL_TYPE_BVH2, "request: accel %s", tr_accel_name(st.accel));
     CHECK(st.config.integrator == TR_INTEGRATOR_PT, "request: integrator %d", st.config.integrator);
-    CHECK(tr_scene_camera(s)->screen_width == 10 && tr_scene_camera(s)->screen_height == 16,
+    CHECK(tr_scene_camera(s)->screen_width == 10 && tr_scene_camera(s)->screen_height == 7,
           "request: camera %ux%u", tr_scene_camera(s)->screen_width,
           tr_scene_camera(s)->screen_height);
     /* The resolved scene commits and renders. */
     rc = tr_scene_commit(s, st.accel, &err);
     CHECK(rc == TR_OK, "commit: %s", err.msg);
+
+    /* The height alone keeps the shape too; both sides are taken as given. */
+    req = (tr_render_request){0};
+    req.height = 8;
+    rc = tr_scene_file_apply(s, "mem.json", &f, &req, &st, &err);
+    CHECK(rc == TR_OK && st.width == 12 && st.height == 8, "height alone: %ux%u", st.width,
+          st.height);
+    req.width = 40;
+    rc = tr_scene_file_apply(s, "mem.json", &f, &req, &st, &err);
+    CHECK(rc == TR_OK && st.width == 40 && st.height == 8, "both sides: %ux%u", st.width,
+          st.height);
 
     req = (tr_render_request){0};
     req.light_sampling = "power";

@@ -327,13 +327,18 @@ int cli_common_option(cli_args *a, cli_common *c) {
     if (cli_is(a, "--scale")) {
         return cli_parse_float(a, 1e-6f, 1e6f, &c->model_scale);
     }
-    if (cli_is(a, "--width")) {
-        c->given |= CLI_GIVEN_WIDTH;
-        return cli_parse_u32(a, 1, TR_FILM_MAX_SIDE, &c->width);
-    }
-    if (cli_is(a, "--height")) {
-        c->given |= CLI_GIVEN_HEIGHT;
-        return cli_parse_u32(a, 1, TR_FILM_MAX_SIDE, &c->height);
+    if (cli_is(a, "--width") || cli_is(a, "--height")) {
+        /* One side alone keeps the default size's aspect (a scene file's: file_request). */
+        const int w = cli_is(a, "--width");
+        uint32_t *side = w ? &c->width : &c->height, *other = w ? &c->height : &c->width;
+        const uint32_t before = *side;
+        const int rc = cli_parse_u32(a, 1, TR_FILM_MAX_SIDE, side);
+        if (rc == CLI_OK && !(c->given & (w ? CLI_GIVEN_HEIGHT : CLI_GIVEN_WIDTH))) {
+            *other =
+                (uint32_t)fmin(fmax(round((double)*side * *other / before), 1.0), TR_FILM_MAX_SIDE);
+        }
+        c->given |= w ? CLI_GIVEN_WIDTH : CLI_GIVEN_HEIGHT;
+        return rc;
     }
     if (cli_is(a, "--max-depth")) {
         c->given |= CLI_GIVEN_MAX_DEPTH;
@@ -514,10 +519,12 @@ int cli_recon_option(cli_args *a, tr_recon_params *p) {
  * where the file has no value; the rest stay 0, the file's. */
 static tr_render_request file_request(const cli_common *c, const tr_scene_file *f) {
     tr_render_request r = {0};
-    if ((c->given & CLI_GIVEN_WIDTH) || !f->has_width) {
+    /* A side the command line gave alone leaves the other 0: it keeps the file's aspect. */
+    const uint32_t both = CLI_GIVEN_WIDTH | CLI_GIVEN_HEIGHT;
+    if ((c->given & CLI_GIVEN_WIDTH) || (!f->has_width && !(c->given & both))) {
         r.width = c->width;
     }
-    if ((c->given & CLI_GIVEN_HEIGHT) || !f->has_height) {
+    if ((c->given & CLI_GIVEN_HEIGHT) || (!f->has_height && !(c->given & both))) {
         r.height = c->height;
     }
     if ((c->given & CLI_GIVEN_MAX_DEPTH) || !f->has_max_depth) {

@@ -64,7 +64,8 @@ typedef struct tr_scene_file {
  * every field means "the file's render block, else the default": a program passes on what
  * its user gave and leaves the rest 0 or NULL. */
 typedef struct tr_render_request {
-    uint32_t width, height;     /* the image; 0: render.width / render.height, else 800 / 600 */
+    uint32_t width, height;     /* the image; 0: render.width / render.height, else 800 / 600;
+                                   one side alone: the other keeps that size's aspect */
     uint32_t spp;               /* samples per pixel; 0: render.spp, else 16 (tr_session's) */
     int max_depth;              /* 1..TR_MAX_DEPTH_LIMIT; 0: render.max_depth (at most
                                    TR_MAX_DEPTH_BDPT for bdpt and vcm), else the integrator's

@@ -8,6 +8,7 @@
 #include "trac0r/session.h"
 
 #include <stdio.h>
+#include <math.h>
 #include <string.h>
 
 #define DEFAULT_WIDTH 800u
@@ -115,6 +116,15 @@ int tr_scene_file_apply(tr_scene *s, const char *path, const tr_scene_file *file
     out->config = tr_render_config_default();
     out->width = pick_u32(req->width, file->has_width, file->width, DEFAULT_WIDTH);
     out->height = pick_u32(req->height, file->has_height, file->height, DEFAULT_HEIGHT);
+    /* One side asked for and not the other: the other keeps the image's shape (the file's
+     * size, else the default's), as resizing a picture does. */
+    const double w0 = file->has_width ? file->width : DEFAULT_WIDTH;
+    const double h0 = file->has_height ? file->height : DEFAULT_HEIGHT;
+    if (req->width && !req->height) {
+        out->height = (uint32_t)fmin(fmax(round(req->width * h0 / w0), 1.0), TR_FILM_MAX_SIDE);
+    } else if (req->height && !req->width) {
+        out->width = (uint32_t)fmin(fmax(round(req->height * w0 / h0), 1.0), TR_FILM_MAX_SIDE);
+    }
     out->spp = pick_u32(req->spp, file->has_spp, file->spp, TR_SESSION_SPP_DEFAULT);
     int light_sampling = -1;
     if (req->light_sampling) {
