@@ -1053,7 +1053,8 @@ static int load_into(tr_scene *s, const char *path, const char *text, size_t len
     memset(file, 0, sizeof *file);
     if (!text && is_builtin(path)) {
         const char *name = strncmp(path, "builtin:", 8) == 0 ? path + 8 : path;
-        const uint32_t w = o->width ? o->width : 800u, h = o->height ? o->height : 600u;
+        uint32_t w = o->width, h = o->height;
+        tr_size_fill(&w, &h, 800u, 600u);
         if (tr_film_check_size(w, h, err) != TR_OK ||
             tr_scene_builtin(s, name, w, h, err) != TR_OK) {
             return TR_ERR;

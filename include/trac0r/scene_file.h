@@ -163,7 +163,12 @@ int tr_scene_path_is_model(const char *path);
  * or '.' (a file without an extension is written ./scene). */
 int tr_scene_name_is_builtin(const char *name);
 
-/* Loads any scene a name can give: a built-in scene (at opt's size, 800x600 where 0), a
+/* An image size with the sides left 0 filled in: both 0, dw x dh; one 0, from the other
+ * with dw x dh's shape (rounded, 1..TR_FILM_MAX_SIDE), as resizing a picture keeps it. */
+void tr_size_fill(uint32_t *width, uint32_t *height, uint32_t dw, uint32_t dh);
+
+/* Loads any scene a name can give: a built-in scene (at opt's size, filled in from
+ * 800x600 by tr_size_fill where a side is 0), a
  * model file (tr_scene_model_load with opt) or a scene file (tr_scene_file_load). `info`
  * (may be NULL) gets what the file says; for a built-in scene its size, shape count,
  * bounds and emitter counts. What `trac0r`'s SCENE argument accepts. */

@@ -99,6 +99,17 @@ static int resolve_max_depth(const tr_scene_file *file, const tr_render_request 
     return depth;
 }
 
+void tr_size_fill(uint32_t *width, uint32_t *height, uint32_t dw, uint32_t dh) {
+    if (!*width && !*height) {
+        *width = dw;
+        *height = dh;
+    } else if (!*height) {
+        *height = (uint32_t)fmin(fmax(round((double)*width * dh / dw), 1.0), TR_FILM_MAX_SIDE);
+    } else if (!*width) {
+        *width = (uint32_t)fmin(fmax(round((double)*height * dw / dh), 1.0), TR_FILM_MAX_SIDE);
+    }
+}
+
 int tr_scene_file_apply(tr_scene *s, const char *path, const tr_scene_file *file,
                         const tr_render_request *req, tr_render_settings *out, tr_error *err) {
     static const tr_render_request zero;
@@ -118,12 +129,11 @@ int tr_scene_file_apply(tr_scene *s, const char *path, const tr_scene_file *file
     out->height = pick_u32(req->height, file->has_height, file->height, DEFAULT_HEIGHT);
     /* One side asked for and not the other: the other keeps the image's shape (the file's
      * size, else the default's), as resizing a picture does. */
-    const double w0 = file->has_width ? file->width : DEFAULT_WIDTH;
-    const double h0 = file->has_height ? file->height : DEFAULT_HEIGHT;
-    if (req->width && !req->height) {
-        out->height = (uint32_t)fmin(fmax(round(req->width * h0 / w0), 1.0), TR_FILM_MAX_SIDE);
-    } else if (req->height && !req->width) {
-        out->width = (uint32_t)fmin(fmax(round(req->height * w0 / h0), 1.0), TR_FILM_MAX_SIDE);
+    if (!req->width != !req->height) {
+        out->width = req->width;
+        out->height = req->height;
+        tr_size_fill(&out->width, &out->height, file->has_width ? file->width : DEFAULT_WIDTH,
+                     file->has_height ? file->height : DEFAULT_HEIGHT);
     }
     out->spp = pick_u32(req->spp, file->has_spp, file->spp, TR_SESSION_SPP_DEFAULT);
     int light_sampling = -1;
@@ -178,7 +188,8 @@ int tr_scene_load(tr_scene *s, const char *name, const tr_model_options *opt, tr
         return tr_scene_path_is_model(name) ? tr_scene_model_load(s, name, opt, info, err)
                                             : tr_scene_file_load(s, name, NULL, info, err);
     }
-    const uint32_t w = opt->width ? opt->width : 800u, h = opt->height ? opt->height : 600u;
+    uint32_t w = opt->width, h = opt->height;
+    tr_size_fill(&w, &h, DEFAULT_WIDTH, DEFAULT_HEIGHT);
     if (tr_scene_builtin(s, strncmp(name, "builtin:", 8) == 0 ? name + 8 : name, w, h, err) !=
         TR_OK) {
         return TR_ERR;
