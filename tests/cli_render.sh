@@ -13,6 +13,13 @@ expect_usage_error "'--bogus'" $R --bogus
 expect_usage_error "did you mean '--width'" $R --widht 320
 expect_usage_error "did you mean '--noise-threshold'" $R --noise-treshold 0.1
 expect_usage_error "did you mean 'cornell-mirror'" $R builtin:cornell-miror
+# A black image is written, and said to be black; a lit one draws no warning.
+"$BIN" render --width 16 --height 12 --spp 2 --exposure -20 --out dark.png 2>err.txt ||
+    fail "render --exposure -20: exit $?"
+[ -s dark.png ] && grep -q "warning: dark.png" err.txt || fail "black image not noted: $(cat err.txt)"
+"$BIN" render --width 16 --height 12 --spp 2 --out lit.png 2>err.txt || fail "render: exit $?"
+grep -q "warning" err.txt && fail "lit image noted: $(cat err.txt)"
+rm -f dark.png lit.png err.txt
 expect_usage_error "--width: expected an integer in 1..16384, got 'abc'" $R --width abc
 expect_usage_error "--width: expected an integer in 1..16384, got '0'" $R --width 0
 expect_usage_error "got '-5'" $R --width -5

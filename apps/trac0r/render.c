@@ -280,6 +280,11 @@ int render_write_outputs(const render_job *job, tr_session *s, uint32_t samples,
     } else if (rc == TR_OK) {
         rc = write_plain(job, film, job->denoise ? &den : film, &err);
     }
+    char note[400]; /* a black or white image is not left silent */
+    if (rc == TR_OK &&
+        tr_image_exposure_note(job->denoise ? &den : film, job->exposure, note, sizeof note)) {
+        fprintf(stderr, "trac0r render: warning: %s: %s\n", job->out, note);
+    }
     tr_film_free(&den);
     if (rc != TR_OK) {
         fprintf(stderr, "trac0r render: %s\n", err.msg);
