@@ -13,6 +13,14 @@ expect_usage_error "'--bogus'" $R --bogus
 expect_usage_error "did you mean '--width'" $R --widht 320
 expect_usage_error "did you mean '--noise-threshold'" $R --noise-treshold 0.1
 expect_usage_error "did you mean 'cornell-mirror'" $R builtin:cornell-miror
+# Extras for any scene: an environment, a sun and a ground; malformed ones are refused.
+"$BIN" render --width 16 --height 12 --spp 1 --env 0.2,0.3,0.5 --sun 1,2,1 --ground \
+    --out extras.png 2>err.txt && [ -s extras.png ] || fail "render with extras: $(cat err.txt)"
+rm -f extras.png err.txt
+expect_usage_error "--sun" $R --sun 0,0,0
+expect_usage_error "--sun" $R --sun 1,2
+expect_usage_error "--env" $R --env 1,-1,1
+expect_usage_error "--env" $R --env no-such-sky.hdr
 # A black image is written, and said to be black; a lit one draws no warning.
 "$BIN" render --width 16 --height 12 --spp 2 --exposure -20 --out dark.png 2>err.txt ||
     fail "render --exposure -20: exit $?"

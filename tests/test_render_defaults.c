@@ -3,10 +3,12 @@
  * defaults where neither does, bdpt's depth limit, the refusals (an unknown integrator, an
  * accel this build lacks, a scene without an emitter, too many pixels) and the camera
  * resized to the image. */
+#include <math.h>
 #include <stdio.h>
 #include <string.h>
 
 #include "check.h"
+#include "trac0r/scene_file.h"
 #include "trac0r/trac0r.h"
 
 /* A lit box seen from the front; RENDER is spliced in as the file's render block. */
@@ -258,7 +260,49 @@ static void test_no_emitter(tr_scene *s) {
     CHECK(rc == TR_OK, "render.allow_no_emitter: %s", err.msg);
 }
 
+/* Extras added to any scene: a ground is one more shape and material under the bounds,
+ * a sun points where asked with the default irradiance, a constant environment is taken;
+ * malformed values are refused and leave nothing half-added that the check sees. */
+static void test_extras(void) {
+    tr_error err;
+    tr_scene *s = tr_scene_create(&err);
+    CHECK(s && tr_scene_builtin(s, "cornell", 16, 12, &err) == TR_OK, "%s", err.msg);
+    const uint32_t shapes = tr_scene_shape_count(s), mats = tr_scene_material_count(s);
+    const tr_aabb before = tr_scene_bounds(s);
+    tr_scene_extras x = {0};
+    CHECK(tr_scene_add_extras(s, &x, &err) == TR_OK && tr_scene_shape_count(s) == shapes,
+          "a zero struct added something");
+    x.ground = 1;
+    x.sun = "0,2,0";
+    x.env = "0.1,0.2,0.3";
+    CHECK(tr_scene_add_extras(s, &x, &err) == TR_OK, "extras: %s", err.msg);
+    CHECK(tr_scene_shape_count(s) == shapes + 1 && tr_scene_material_count(s) == mats + 1,
+          "ground: %u shapes, %u materials", tr_scene_shape_count(s), tr_scene_material_count(s));
+    const tr_aabb ground = tr_scene_shape_box(s, shapes);
+    CHECK(ground.max.y <= before.min.y && ground.min.x < before.min.x &&
+              ground.max.z > before.max.z,
+          "ground not under the scene: y %g (scene from %g)", ground.max.y, before.min.y);
+    tr_vec3 dir, e;
+    float angle;
+    CHECK(tr_scene_sun(s, &dir, &angle, &e) && fabsf(dir.y - 1.0f) < 1e-6f &&
+              fabsf(e.x - TR_SCENE_EXTRAS_SUN) < 1e-3f * TR_SCENE_EXTRAS_SUN,
+          "sun: towards (%g, %g, %g), irradiance %g", dir.x, dir.y, dir.z, e.x);
+    CHECK(tr_scene_commit(s, TR_ACCEL_TYPE_BVH, &err) == TR_OK, "commit: %s", err.msg);
+    const char *bad_sun[] = {"0,0,0", "1,2", " 1,2,3", "1,2,3,4", "1,nan,3", ""};
+    for (size_t i = 0; i < sizeof bad_sun / sizeof *bad_sun; ++i) {
+        const tr_scene_extras b = {.sun = bad_sun[i]};
+        err.code = TR_STATUS_OK;
+        CHECK(tr_scene_add_extras(s, &b, &err) == TR_ERR && err.code == TR_STATUS_INVALID_ARGUMENT,
+              "sun '%s' accepted", bad_sun[i]);
+    }
+    const tr_scene_extras neg = {.env = "1,-1,1"}, missing = {.env = "no-such-sky.hdr"};
+    CHECK(tr_scene_add_extras(s, &neg, &err) == TR_ERR, "negative radiance accepted");
+    CHECK(tr_scene_add_extras(s, &missing, &err) == TR_ERR, "a missing map accepted");
+    tr_scene_destroy(s);
+}
+
 int main(void) {
+    test_extras();
     tr_scene *s = tr_scene_create(NULL);
     CHECK(s != NULL, "tr_scene_create");
     if (!s) {

@@ -22,6 +22,9 @@ static const char help_before[] =
     "  --scale S            a model file's scale, 1e-6..1e6 (default 1)\n"
     "  --camera N|NAME|frame  a model file's camera (default its first)\n"
     "  --allow-dark         render a scene file that has no emitter\n"
+    "  --env R,G,B|FILE     an environment light: a radiance, or an .hdr/.png map\n"
+    "  --sun X,Y,Z          a sun towards that direction (irradiance 3)\n"
+    "  --ground             a grey floor under the scene\n"
     "  --width W            image width, 1..16384 (default 800)\n"
     "  --height H           image height, 1..16384 (default 600)\n"
     "  --max-depth D        path segments at most, 1..1024 (default 64 for pt, 8 for\n"
@@ -300,9 +303,14 @@ int cli_common_option(cli_args *a, cli_common *c) {
         c->given |= CLI_GIVEN_SCENE;
         return CLI_OK;
     }
-    if (cli_is(a, "--allow-dark")) {
-        c->allow_dark = 1;
+    if (cli_is(a, "--allow-dark") || cli_is(a, "--ground")) {
+        *(cli_is(a, "--ground") ? &c->extras.ground : &c->allow_dark) = 1;
         return CLI_OK;
+    }
+    if (cli_is(a, "--env") || cli_is(a, "--sun")) {
+        const int rc = cli_value(a);
+        *(cli_is(a, "--env") ? &c->extras.env : &c->extras.sun) = a->value;
+        return rc;
     }
     if (cli_is(a, "--up")) {
         if (cli_value(a) != CLI_OK) {
@@ -539,7 +547,7 @@ static tr_render_request file_request(const cli_common *c, const tr_scene_file *
     if (c->light_sampling >= 0) { /* the command line over render.light_sampling */
         r.light_sampling = tr_light_sampling_name(c->light_sampling);
     }
-    r.allow_dark = c->allow_dark;
+    r.allow_dark = c->allow_dark || c->extras.env || c->extras.sun; /* lit by them */
     return r;
 }
 
@@ -581,6 +589,9 @@ int cli_load_scene_file(const cli_args *a, cli_common *c, tr_scene *scene, tr_sc
                                  c->given & CLI_GIVEN_HEIGHT ? c->height : 0, c->model_camera};
     if (tr_scene_load(scene, c->scene, &mo, file, &err) != TR_OK) {
         return cli_error(a, "%s", err.msg);
+    }
+    if (tr_scene_add_extras(scene, &c->extras, &err) != TR_OK) {
+        return cli_error(a, "--%s", err.msg);
     }
     tr_render_settings st;
     const tr_render_request req = file_request(c, file);
@@ -626,6 +637,9 @@ int cli_load_scene(const cli_args *a, const cli_common *c, tr_scene *scene) {
     const tr_model_options size = {0, 1.0f, c->width, c->height, NULL};
     if (tr_scene_load(scene, c->scene, &size, NULL, &err) != TR_OK) {
         return cli_error(a, "--scene: %s", err.msg);
+    }
+    if (tr_scene_add_extras(scene, &c->extras, &err) != TR_OK) {
+        return cli_error(a, "--%s", err.msg);
     }
     if (c->light_sampling >= 0) {
         tr_scene_set_light_sampling(scene, c->light_sampling, NULL);

@@ -30,6 +30,7 @@ typedef struct cli_common {
     unsigned given;           /* CLI_GIVEN_*: options set on the command line (a scene file's
                                  render defaults apply to the others) */
     int allow_dark;           /* --allow-dark: render a scene file without an emitter */
+    tr_scene_extras extras;   /* --env, --sun, --ground */
     char device[32];          /* --device: a tr_device name, "cpu" or "opencl:N" */
     int up_z;                 /* --up z: a model file's +z is up */
     const char *model_camera; /* --camera: a model file's camera, or "frame"; NULL: its first */

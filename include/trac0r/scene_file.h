@@ -163,6 +163,22 @@ int tr_scene_path_is_model(const char *path);
  * or '.' (a file without an extension is written ./scene). */
 int tr_scene_name_is_builtin(const char *name);
 
+/* What a user adds to any scene or model before it is committed (the command's --env,
+ * --sun and --ground): a zero struct adds nothing. */
+typedef struct tr_scene_extras {
+    const char *env;      /* "R,G,B" (a constant radiance) or an equirectangular image file
+                             (.hdr, .png, ...): replaces the scene's environment; NULL: none */
+    const char *sun;      /* "X,Y,Z": a sun towards that direction (0.53 degrees across),
+                             replacing the scene's; NULL: none */
+    float sun_irradiance; /* its irradiance per channel; 0: TR_SCENE_EXTRAS_SUN */
+    int ground;           /* nonzero: a 0.5 grey diffuse floor just under the scene's bounds,
+                             ten times their size */
+} tr_scene_extras;
+#define TR_SCENE_EXTRAS_SUN 3.0f
+/* Adds x's extras to s (before tr_scene_commit). Fails with TR_STATUS_INVALID_ARGUMENT
+ * naming "env", "sun" or "ground" and the value at fault, or the image reader's status. */
+int tr_scene_add_extras(tr_scene *s, const tr_scene_extras *x, tr_error *err);
+
 /* An image size with the sides left 0 filled in: both 0, dw x dh; one 0, from the other
  * with dw x dh's shape (rounded, 1..TR_FILM_MAX_SIDE), as resizing a picture keeps it. */
 void tr_size_fill(uint32_t *width, uint32_t *height, uint32_t dw, uint32_t dh);
