@@ -21,6 +21,12 @@ expect_usage_error "--sun" $R --sun 0,0,0
 expect_usage_error "--sun" $R --sun 1,2
 expect_usage_error "--env" $R --env 1,-1,1
 expect_usage_error "--env" $R --env no-such-sky.hdr
+# One side alone keeps the shape of the command's own default size (bench realtime's
+# 320x240 and render's 800x600 are both 4:3).
+"$BIN" bench realtime --width 64 --frames 2 --reference-spp 2 --methods off --out rt \
+    >rt.txt 2>&1 || fail "bench realtime --width 64: $(cat rt.txt)"
+grep -q "64x48" rt.txt || fail "bench realtime --width 64 is not 64x48: $(head -3 rt.txt)"
+rm -f rt.txt rt.csv rt.png
 # A black image is written, and said to be black; a lit one draws no warning.
 "$BIN" render --width 16 --height 12 --spp 2 --exposure -20 --out dark.png 2>err.txt ||
     fail "render --exposure -20: exit $?"

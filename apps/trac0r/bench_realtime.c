@@ -292,17 +292,10 @@ static int parse_options(cli_args *a, rt_opts *o) {
 
 /* Loads the scene and sets the path's camera; CLI_OK or the status to return. */
 static int load_scene(rt_run *r, rt_opts *o) {
-    const uint32_t width = o->c.width, height = o->c.height;
     r->scene = tr_scene_create(NULL);
     int rc = cli_load_scene_file(r->a, &o->c, r->scene, NULL);
     if (rc != CLI_OK) {
         return rc;
-    }
-    if (o->c.given &
-        (CLI_GIVEN_WIDTH |
-         CLI_GIVEN_HEIGHT)) { /* a scene file's size applies only where none was given */
-        o->c.width = width;
-        o->c.height = height;
     }
     /* The integrator may come from the scene file: checked once it is loaded. */
     if (tr_integrator_is_bidirectional(o->c.integrator) && o->bias_depth > TR_MAX_DEPTH_BDPT) {

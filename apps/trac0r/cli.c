@@ -336,17 +336,9 @@ int cli_common_option(cli_args *a, cli_common *c) {
         return cli_parse_float(a, 1e-6f, 1e6f, &c->model_scale);
     }
     if (cli_is(a, "--width") || cli_is(a, "--height")) {
-        /* One side alone keeps the default size's aspect (a scene file's: file_request). */
-        const int w = cli_is(a, "--width");
-        uint32_t *side = w ? &c->width : &c->height, *other = w ? &c->height : &c->width;
-        const uint32_t before = *side;
-        const int rc = cli_parse_u32(a, 1, TR_FILM_MAX_SIDE, side);
-        if (rc == CLI_OK && !(c->given & (w ? CLI_GIVEN_HEIGHT : CLI_GIVEN_WIDTH))) {
-            *other =
-                (uint32_t)fmin(fmax(round((double)*side * *other / before), 1.0), TR_FILM_MAX_SIDE);
-        }
+        const int w = cli_is(a, "--width"); /* one alone keeps the shape: tr_scene_open */
         c->given |= w ? CLI_GIVEN_WIDTH : CLI_GIVEN_HEIGHT;
-        return rc;
+        return cli_parse_u32(a, 1, TR_FILM_MAX_SIDE, w ? &c->width : &c->height);
     }
     if (cli_is(a, "--max-depth")) {
         c->given |= CLI_GIVEN_MAX_DEPTH;
@@ -472,6 +464,8 @@ int cli_restir_option(cli_args *a, cli_common *c) {
 
 int cli_parse(cli_args *a, cli_common *c, const char *const *refused, void (*help)(FILE *),
               int (*own)(cli_args *, void *), void *user) {
+    c->def_width = c->width; /* the command's own size, before the options change it */
+    c->def_height = c->height;
     while (cli_next(a)) {
         int rc = cli_common_option(a, c);
         for (const char *const *r = refused; rc == CLI_OK && r && *r; ++r) {
@@ -522,82 +516,50 @@ int cli_recon_option(cli_args *a, tr_recon_params *p) {
     return -1;
 }
 
-/* The request over a scene file's render defaults: the options the command line gave,
- * and the command's own defaults (bench realtime's 320x240, bench's naive integrator)
- * where the file has no value; the rest stay 0, the file's. */
-static tr_render_request file_request(const cli_common *c, const tr_scene_file *f) {
-    tr_render_request r = {0};
-    /* A side the command line gave alone leaves the other 0: it keeps the file's aspect. */
-    const uint32_t both = CLI_GIVEN_WIDTH | CLI_GIVEN_HEIGHT;
-    if ((c->given & CLI_GIVEN_WIDTH) || (!f->has_width && !(c->given & both))) {
-        r.width = c->width;
+/* tr_scene_open's failure in the command's words: its options named where they are the
+ * way out. Running out of memory is a failure (1); the rest are usage errors (2). */
+static int open_error(const cli_args *a, const tr_scene_file *f, const tr_error *err) {
+    if (err->code == TR_STATUS_OUT_OF_MEMORY) {
+        fprintf(stderr, "trac0r %s: %s\n", a->cmd, err->msg);
+        return CLI_FAILURE;
     }
-    if ((c->given & CLI_GIVEN_HEIGHT) || (!f->has_height && !(c->given & both))) {
-        r.height = c->height;
+    if (err->code == TR_STATUS_NOT_FOUND && f->emissive_triangles == 0 &&
+        (f->shape_count > 0 || f->mesh_count > 0)) { /* loaded, but without an emitter */
+        return cli_error(a, "%s (or pass --allow-dark)", err->msg);
     }
-    if ((c->given & CLI_GIVEN_MAX_DEPTH) || !f->has_max_depth) {
-        r.max_depth = c->max_depth; /* 0 without either: the integrator's default */
-    }
-    if ((c->given & CLI_GIVEN_INTEGRATOR) || !f->has_integrator) {
-        r.integrator = tr_integrator_name(c->integrator);
-    }
-    if ((c->given & CLI_GIVEN_ACCEL) || !f->has_accel) {
-        r.accel = tr_accel_name(c->accel);
-    }
-    if (c->light_sampling >= 0) { /* the command line over render.light_sampling */
-        r.light_sampling = tr_light_sampling_name(c->light_sampling);
-    }
-    r.allow_dark = c->allow_dark || c->extras.env || c->extras.sun; /* lit by them */
-    return r;
-}
-
-/* tr_scene_file_apply's failure in the command's words: its options named where they
- * are the way out. Every one is a usage error. */
-static int apply_error(const cli_args *a, const cli_common *c, const tr_render_settings *st,
-                       const tr_error *err) {
-    switch (err->code) {
-    case TR_STATUS_UNSUPPORTED:
-        return cli_error(a, "%s (use --accel)", err->msg);
-    case TR_STATUS_NOT_FOUND:
-        return cli_error(a,
-                         "%s: the scene has no emitter, so the image would be black (set "
-                         "render.allow_no_emitter or pass --allow-dark if that is intended)",
-                         c->scene);
-    case TR_STATUS_LIMIT:
-        return cli_error(a, "--width/--height: %ux%u is more than %u pixels", st->width, st->height,
-                         TR_FILM_MAX_PIXELS);
-    default:
-        return cli_error(a, "%s", err->msg);
-    }
+    const int option = err->code == TR_STATUS_LIMIT || strncmp(err->msg, "env", 3) == 0 ||
+                       strncmp(err->msg, "sun", 3) == 0 || strncmp(err->msg, "ground", 6) == 0;
+    return cli_error(a, "%s%s%s", option ? "--" : "", err->msg,
+                     err->code == TR_STATUS_UNSUPPORTED ? " (use --accel)" : "");
 }
 
 int cli_load_scene_file(const cli_args *a, cli_common *c, tr_scene *scene, tr_scene_file *file) {
     tr_scene_file local;
-    if (!file) {
-        file = &local;
-    }
+    file = file ? file : &local;
+    memset(file, 0, sizeof *file);
     if (!scene) {
         return cli_error(a, "out of memory creating the scene");
     }
-    memset(file, 0, sizeof *file);
-    if (tr_scene_name_is_builtin(c->scene)) {
-        return cli_load_scene(a, c, scene);
-    }
-    /* A scene file, or a model file (glTF, OBJ, ...) with a scene built around it. */
-    tr_error err;
-    const tr_model_options mo = {c->up_z, c->model_scale, c->width,
-                                 c->given & CLI_GIVEN_HEIGHT ? c->height : 0, c->model_camera};
-    if (tr_scene_load(scene, c->scene, &mo, file, &err) != TR_OK) {
-        return cli_error(a, "%s", err.msg);
-    }
-    if (tr_scene_add_extras(scene, &c->extras, &err) != TR_OK) {
-        return cli_error(a, "--%s", err.msg);
-    }
+    /* What the command line gave is asked for; the command's own defaults apply where the
+     * file has no value (bench realtime's 320x240, bench's naive integrator). */
+    tr_scene_open_desc d = {.model = {c->up_z, c->model_scale, 0, 0, c->model_camera},
+                            .extras = c->extras};
+    tr_render_request *given = &d.request, *def = &d.defaults;
+    given->width = c->given & CLI_GIVEN_WIDTH ? c->width : 0;
+    given->height = c->given & CLI_GIVEN_HEIGHT ? c->height : 0;
+    def->width = c->def_width ? c->def_width : c->width;
+    def->height = c->def_height ? c->def_height : c->height;
+    *(c->given & CLI_GIVEN_MAX_DEPTH ? &given->max_depth : &def->max_depth) = c->max_depth;
+    *(c->given & CLI_GIVEN_INTEGRATOR ? &given->integrator : &def->integrator) =
+        tr_integrator_name(c->integrator);
+    *(c->given & CLI_GIVEN_ACCEL ? &given->accel : &def->accel) = tr_accel_name(c->accel);
+    given->light_sampling =
+        c->light_sampling >= 0 ? tr_light_sampling_name(c->light_sampling) : NULL;
+    given->allow_dark = c->allow_dark;
     tr_render_settings st;
-    const tr_render_request req = file_request(c, file);
-    if (tr_scene_file_apply(scene, c->scene, file, &req, &st, &err) != TR_OK) {
-        tr_scene_clear(scene);
-        return apply_error(a, c, &st, &err);
+    tr_error err;
+    if (tr_scene_open(scene, c->scene, &d, file, &st, &err) != TR_OK) {
+        return open_error(a, file, &err);
     }
     c->width = st.width;
     c->height = st.height;
@@ -610,44 +572,13 @@ int cli_load_scene_file(const cli_args *a, cli_common *c, tr_scene *scene, tr_sc
         }
         fprintf(stderr, "trac0r %s: warning: %s: %s\n", a->cmd, c->scene, file->warnings[i]);
     }
-    if (tr_scene_commit(scene, c->accel, &err) != TR_OK) {
-        fprintf(stderr, "trac0r %s: %s\n", a->cmd, err.msg);
-        tr_scene_clear(scene);
-        return CLI_FAILURE;
-    }
     return CLI_OK;
 }
 
 int cli_load_scene(const cli_args *a, const cli_common *c, tr_scene *scene) {
-    if (!scene) {
-        return cli_error(a, "out of memory creating the scene");
-    }
-    if (!tr_scene_name_is_builtin(c->scene)) {
-        /* The caller's options are final here (its film has their size): the file's
-         * render defaults do not apply. */
-        cli_common copy = *c;
-        copy.given = ~0u;
-        return cli_load_scene_file(a, &copy, scene, NULL);
-    }
-    if ((uint64_t)c->width * c->height > TR_FILM_MAX_PIXELS) {
-        return cli_error(a, "--width/--height: %ux%u is more than %u pixels", c->width, c->height,
-                         TR_FILM_MAX_PIXELS);
-    }
-    tr_error err;
-    const tr_model_options size = {0, 1.0f, c->width, c->height, NULL};
-    if (tr_scene_load(scene, c->scene, &size, NULL, &err) != TR_OK) {
-        return cli_error(a, "--scene: %s", err.msg);
-    }
-    if (tr_scene_add_extras(scene, &c->extras, &err) != TR_OK) {
-        return cli_error(a, "--%s", err.msg);
-    }
-    if (c->light_sampling >= 0) {
-        tr_scene_set_light_sampling(scene, c->light_sampling, NULL);
-    }
-    if (tr_scene_commit(scene, c->accel, &err) != TR_OK) {
-        fprintf(stderr, "trac0r %s: %s\n", a->cmd, err.msg);
-        tr_scene_clear(scene);
-        return CLI_FAILURE;
-    }
-    return CLI_OK;
+    /* The caller's options are final here (its film has their size): a scene file's
+     * render defaults do not apply. */
+    cli_common copy = *c;
+    copy.given = ~0u;
+    return cli_load_scene_file(a, &copy, scene, NULL);
 }

@@ -27,12 +27,13 @@ typedef struct cli_common {
     int threads;
     int integrator;
     tr_accel_type accel;
-    unsigned given;           /* CLI_GIVEN_*: options set on the command line (a scene file's
-                                 render defaults apply to the others) */
-    int allow_dark;           /* --allow-dark: render a scene file without an emitter */
-    tr_scene_extras extras;   /* --env, --sun, --ground */
-    char device[32];          /* --device: a tr_device name, "cpu" or "opencl:N" */
-    int up_z;                 /* --up z: a model file's +z is up */
+    unsigned given;                 /* CLI_GIVEN_*: options set on the command line (a scene file's
+                                       render defaults apply to the others) */
+    int allow_dark;                 /* --allow-dark: render a scene file without an emitter */
+    tr_scene_extras extras;         /* --env, --sun, --ground */
+    uint32_t def_width, def_height; /* the command's size before the options (cli_parse) */
+    char device[32];                /* --device: a tr_device name, "cpu" or "opencl:N" */
+    int up_z;                       /* --up z: a model file's +z is up */
     const char *model_camera; /* --camera: a model file's camera, or "frame"; NULL: its first */
     float model_scale;        /* --scale: a model file's scale */
     int sampler;              /* --sampler: TR_SAMPLER_*, -1 for the command's default */

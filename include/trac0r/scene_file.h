@@ -179,6 +179,29 @@ typedef struct tr_scene_extras {
  * naming "env", "sun" or "ground" and the value at fault, or the image reader's status. */
 int tr_scene_add_extras(tr_scene *s, const tr_scene_extras *x, tr_error *err);
 
+/* How a program opens a scene for rendering (tr_scene_open). A zero desc opens it as its
+ * file says, with the library's defaults for the rest. */
+typedef struct tr_scene_open_desc {
+    tr_model_options model;     /* a model file's up axis, scale and camera (its width and
+                                   height are ignored: the request's are used) */
+    tr_render_request request;  /* what the user asked for: wins over the file */
+    tr_render_request defaults; /* the program's own defaults, where neither the request nor
+                                   the file gives a value (0/NULL: the library's); their
+                                   allow_dark is ignored */
+    tr_scene_extras extras;     /* added before the commit; an environment or a sun lets a
+                                   scene without emitters render */
+} tr_scene_open_desc;
+
+/* Loads what `name` names (tr_scene_load: a built-in scene, a model or a scene file),
+ * adds the extras, resolves the render settings (tr_scene_file_apply) into *out and
+ * commits the scene with out->accel: the one call between a scene's name and
+ * tr_session_create. `file` (may be NULL) gets what the file said and its warnings. On
+ * failure the scene is left empty; the status is tr_scene_load's, tr_scene_add_extras's
+ * (messages begin with "env", "sun" or "ground"), tr_scene_file_apply's or
+ * tr_scene_commit's. */
+int tr_scene_open(tr_scene *s, const char *name, const tr_scene_open_desc *d, tr_scene_file *file,
+                  tr_render_settings *out, tr_error *err);
+
 /* An image size with the sides left 0 filled in: both 0, dw x dh; one 0, from the other
  * with dw x dh's shape (rounded, 1..TR_FILM_MAX_SIDE), as resizing a picture keeps it. */
 void tr_size_fill(uint32_t *width, uint32_t *height, uint32_t dw, uint32_t dh);

@@ -207,3 +207,52 @@ int tr_scene_load(tr_scene *s, const char *name, const tr_model_options *opt, tr
     }
     return TR_OK;
 }
+
+/* The request's value where it has one, else the program's default where the file has
+ * none; 0 (the file's, else the library's) otherwise. */
+static uint32_t pick_default(uint32_t req, int file_has, uint32_t def) {
+    return req ? req : file_has ? 0u : def;
+}
+
+int tr_scene_open(tr_scene *s, const char *name, const tr_scene_open_desc *d, tr_scene_file *file,
+                  tr_render_settings *out, tr_error *err) {
+    static const tr_scene_open_desc zero;
+    tr_scene_file local;
+    d = d ? d : &zero;
+    file = file ? file : &local;
+    const tr_render_request *rq = &d->request, *df = &d->defaults;
+    /* A built-in scene is built at its final size (a model's camera takes the width, and
+     * the height where one was asked for: else its own aspect). */
+    tr_model_options mo = d->model;
+    mo.scale = mo.scale > 0.0f ? mo.scale : 1.0f;
+    mo.width = rq->width ? rq->width : rq->height ? 0 : df->width;
+    mo.height = rq->height ? rq->height : rq->width ? 0 : df->height;
+    if (tr_scene_name_is_builtin(name)) {
+        tr_size_fill(&mo.width, &mo.height, df->width ? df->width : DEFAULT_WIDTH,
+                     df->height ? df->height : DEFAULT_HEIGHT);
+    } else {
+        mo.height = rq->height;
+    }
+    if (tr_scene_load(s, name, &mo, file, err) != TR_OK) {
+        return TR_ERR;
+    }
+    tr_render_request r = *rq;
+    if (!rq->width && !rq->height) {
+        r.width = pick_default(0, file->has_width, df->width);
+        r.height = pick_default(0, file->has_height, df->height);
+    }
+    r.spp = pick_default(rq->spp, file->has_spp, df->spp);
+    r.max_depth =
+        (int)pick_default((uint32_t)rq->max_depth, file->has_max_depth, (uint32_t)df->max_depth);
+    r.integrator = rq->integrator ? rq->integrator : file->has_integrator ? NULL : df->integrator;
+    r.accel = rq->accel ? rq->accel : file->has_accel ? NULL : df->accel;
+    r.light_sampling = rq->light_sampling ? rq->light_sampling : df->light_sampling;
+    r.allow_dark = rq->allow_dark || d->extras.env || d->extras.sun;
+    if (tr_scene_add_extras(s, &d->extras, err) != TR_OK ||
+        tr_scene_file_apply(s, name, file, &r, out, err) != TR_OK ||
+        tr_scene_commit(s, out->accel, err) != TR_OK) {
+        tr_scene_clear(s);
+        return TR_ERR;
+    }
+    return TR_OK;
+}
