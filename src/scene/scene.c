@@ -863,6 +863,17 @@ void tr_scene_accel_info(const tr_scene *s, tr_accel_info *info) {
     if (s->accel == TR_ACCEL_TYPE_EMBREE) {
         info->embree_seconds = s->embree.build_seconds;
     }
+    if (s->accel == TR_ACCEL_TYPE_BVH && s->two_level) {
+        /* Instances: the top level (over the instances and the scene's own triangles). */
+        info->bvh_nodes = s->tlas.bvh.node_count;
+        info->bvh_leaves = s->tlas.bvh.leaf_count;
+        info->bvh_depth = s->tlas.bvh.depth;
+        info->bvh_seconds = s->tlas.bvh.build_seconds + s->rest_bvh.build_seconds;
+        info->wide_nodes = s->tlas.wbvh.node_count;
+        info->wide_leaves = s->tlas.wbvh.leaf_count;
+        info->wide_depth = s->tlas.wbvh.depth;
+        info->wide_seconds = s->tlas.wbvh.build_seconds + s->rest_wbvh.build_seconds;
+    }
 }
 
 uint32_t tr_scene_bvh_node_count(const tr_scene *s) {
