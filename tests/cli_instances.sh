@@ -81,5 +81,7 @@ scene empty.json '{"a": {}}' '[{"prototype": "a"}]'
 bad empty.json "prototypes.a: expected 'shapes', 'meshes' or 'instances' with triangles"
 scene zero_scale.json "$PROTOS" '[{"prototype": "ball", "scale": [1, 0, 1]}]'
 bad zero_scale.json "instances[0].scale[1]: expected a positive number"
+scene far.json "$PROTOS" '[{"prototype": "ball", "matrix": [1e7, 0, 0, 1e7, 0, 1, 0, 0, 0, 0, 1, 0]}]'
+bad far.json "instances[0]: a vertex lands at"
 
 cli_end cli_instances

@@ -1353,10 +1353,14 @@ static int parse_instances(jctx *c, const cJSON *list, int copies) {
                              (unsigned long long)(c->scene->triangle_count + n), c->budget);
         }
         tr_error e;
+        const uint32_t first = c->scene->triangle_count;
         int rc = copies ? tr_scene_add_prototype_copy(c->scene, proto, m, &e)
                         : tr_scene_add_instance(c->scene, proto, m, NULL, &e);
         if (rc != TR_OK) {
             return jerr_from(c, mat ? pm : p, &e);
+        }
+        if (check_triangles(c, p, first) != TR_OK) {
+            return TR_ERR;
         }
     }
     return TR_OK;
