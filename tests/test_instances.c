@@ -329,11 +329,31 @@ static void moves(void) {
     tr_scene_clear(&s);
 }
 
+/* The generated forest: every tree an instance of one prototype, traced in two levels. */
+static void forest(void) {
+    tr_scene s;
+    tr_error err;
+    tr_scene_init(&s);
+    CHECK(tr_scene_builtin(&s, "forest-3", 32, 24, &err) == TR_OK, "forest-3: %s", err.msg);
+    CHECK(tr_scene_instance_count(&s) == 9 && tr_scene_prototype_count(&s) == 1 &&
+              tr_scene_triangle_count(&s) == 2 + 9 * tr_scene_prototype_triangle_count(&s, 0),
+          "forest-3: %u instances, %u triangles", tr_scene_instance_count(&s),
+          tr_scene_triangle_count(&s));
+    CHECK(tr_scene_commit(&s, TR_ACCEL_TYPE_BVH, &err) == TR_OK && s.two_level, "commit: %s",
+          err.msg);
+    CHECK(tr_scene_builtin(&s, "forest-0", 32, 24, &err) == TR_ERR &&
+              tr_scene_builtin(&s, "forest-1001", 32, 24, &err) == TR_ERR &&
+              tr_scene_builtin(&s, "forest-2x", 32, 24, &err) == TR_ERR,
+          "forest sizes outside 1..1000 are refused");
+    tr_scene_clear(&s);
+}
+
 int main(void) {
     compare_renders("identity instance", 0, 1, 1);
     compare_renders("general matrices", 0, 4, 0);
     compare_brute();
     refused();
     moves();
+    forest();
     return check_finish("test_instances");
 }
