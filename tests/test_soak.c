@@ -21,6 +21,17 @@
 #define SW 64
 #define SH 48
 
+/* AddressSanitizer's allocator keeps freed blocks in per-size caches, so under it the
+ * resident set wanders by a few hundred KiB whatever the program does (its quarantine is
+ * turned off for this test: tests/CMakeLists.txt); LeakSanitizer, which that build runs
+ * at exit, is the stronger check there. A leak of one pass buffer per frame exceeds the
+ * bound either way (tens of MiB over the frames). */
+#if defined(__SANITIZE_ADDRESS__)
+#define ALLOCATOR_SLACK (1024.0 * 1024.0)
+#else
+#define ALLOCATOR_SLACK 0.0
+#endif
+
 /* Resident set in bytes (/proc/self/statm's second field, in pages). */
 static double resident_bytes(void) {
     FILE *f = fopen("/proc/self/statm", "r");
@@ -111,8 +122,8 @@ int main(void) {
            "(%+.3f %%), %d and %d file descriptors\n",
            frames, peak[0] / 1024.0, warm, mid - 1, peak[1] / 1024.0, mid, frames - 1,
            peak[0] > 0.0 ? 100.0 * (peak[1] - peak[0]) / peak[0] : 0.0, fds_warm, fds_end);
-    CHECK(peak[0] > 0.0 && peak[1] <= 1.01 * peak[0], "resident memory grew from %.0f to %.0f KiB",
-          peak[0] / 1024.0, peak[1] / 1024.0);
+    CHECK(peak[0] > 0.0 && peak[1] <= 1.01 * peak[0] + ALLOCATOR_SLACK,
+          "resident memory grew from %.0f to %.0f KiB", peak[0] / 1024.0, peak[1] / 1024.0);
     CHECK(fds_end == fds_warm, "file descriptors: %d after the warm-up, %d at the end", fds_warm,
           fds_end);
     tr_realtime_destroy(rt);
