@@ -129,6 +129,10 @@ int tr_ck_identity(tr_ck_id *id, const tr_scene *scene, const tr_render_config *
         return TR_ERR;
     }
     id->scene_hash = h;
+    id->width = cam->screen_width;
+    id->height = cam->screen_height;
+    id->passes = cfg->passes;
+    id->spp_max = TR_SESSION_SPP_MAX;
     return TR_OK;
 }
 
