@@ -2,7 +2,10 @@
  * written with a valid checksum but lying about the render (a film of another size than
  * the identity names, a pass dropped, a sample count beyond what --spp allows, a tile
  * claimed rendered whose pixels hold no samples) is refused, as are a file of the wrong
- * magic and one whose header claims more than the file holds; a true file still reads. */
+ * magic and one whose header claims more than the file holds; a true file still reads.
+ * The render's identity covers what decides the image beyond geometry and settings: the
+ * texels of textures and environment maps (a file changed between --checkpoint and
+ * --resume), the sun, and TRAC0R_VCM_RADIUS. */
 #define _POSIX_C_SOURCE 200809L
 #include <fcntl.h>
 #include <stdio.h>
@@ -11,6 +14,7 @@
 #include <unistd.h>
 
 #include "check.h"
+#include "scene/scene_internal.h"
 #include "session/checkpoint.h"
 #include "trac0r/trac0r.h"
 
@@ -51,7 +55,66 @@ static int write_read(const tr_ck_id *id, const tr_film *film, uint32_t spp, uin
     return err.code;
 }
 
+static tr_scene *cornell(void) {
+    tr_error err;
+    tr_scene *s = tr_scene_create(&err);
+    CHECK(s && tr_scene_builtin(s, "cornell", W, H, &err) == TR_OK &&
+              tr_scene_commit(s, TR_ACCEL_TYPE_BVH, &err) == TR_OK,
+          "%s", err.msg);
+    return s;
+}
+
+/* The scene hash of the cornell box with one 2x2 texture whose first texel is `t0`, an
+ * environment map whose first texel is `e0` and a sun of angle `sun` (0: none). */
+static uint64_t hash_with(uint32_t t0, float e0, float sun) {
+    tr_error err;
+    tr_scene *s = cornell();
+    const uint32_t rgba[4] = {t0, 0xff00ff00u, 0xffff0000u, 0xff0000ffu};
+    const float rgb[6] = {e0, 0.5f, 0.5f, 0.25f, 0.25f, 0.25f};
+    uint32_t index = 0;
+    CHECK(tr_scene_add_texture(s, rgba, 2, 2, 0, &index, &err) == TR_OK, "%s", err.msg);
+    CHECK(tr_scene_set_environment(s, (tr_vec3){1, 1, 1}, 1.0f, 0.0f, rgb, 2, 1, &err) == TR_OK,
+          "%s", err.msg);
+    if (sun > 0.0f) {
+        CHECK(tr_scene_set_sun(s, (tr_vec3){0, 1, 0}, sun, (tr_vec3){1, 1, 1}, &err) == TR_OK, "%s",
+              err.msg);
+    }
+    tr_render_config cfg = tr_render_config_default();
+    tr_ck_id id;
+    CHECK(tr_ck_identity(&id, s, &cfg, NULL, &err) == TR_OK, "%s", err.msg);
+    tr_scene_destroy(s);
+    return id.scene_hash;
+}
+
+static void test_identity(void) {
+    const uint64_t h = hash_with(0xffffffffu, 1.0f, 0.0f);
+    CHECK(hash_with(0xffffffffu, 1.0f, 0.0f) == h, "the identity of one scene varies");
+    CHECK(hash_with(0xfffffffeu, 1.0f, 0.0f) != h, "a texture's texel is not in the identity");
+    CHECK(hash_with(0xffffffffu, 2.0f, 0.0f) != h, "an environment map is not in the identity");
+    CHECK(hash_with(0xffffffffu, 1.0f, 0.5f) != hash_with(0xffffffffu, 1.0f, 1.0f),
+          "the sun is not in the identity");
+
+    /* TRAC0R_VCM_RADIUS changes vcm's image: a render under another radius is another. */
+    tr_error err;
+    tr_scene *s = cornell();
+    tr_render_config cfg = tr_render_config_default();
+    cfg.integrator = tr_integrator_from_name("vcm");
+    tr_ck_id a, b;
+    unsetenv("TRAC0R_VCM_RADIUS");
+    CHECK(tr_ck_identity(&a, s, &cfg, NULL, &err) == TR_OK, "%s", err.msg);
+    setenv("TRAC0R_VCM_RADIUS", "5", 1);
+    CHECK(tr_ck_identity(&b, s, &cfg, NULL, &err) == TR_OK, "%s", err.msg);
+    CHECK(strcmp(a.desc, b.desc) != 0 || a.scene_hash != b.scene_hash,
+          "TRAC0R_VCM_RADIUS is not in the identity");
+    setenv("TRAC0R_VCM_RADIUS", "nonsense", 1);
+    CHECK_STATUS(tr_ck_identity(&b, s, &cfg, NULL, &err), err, TR_STATUS_INVALID_ARGUMENT,
+                 "an unusable TRAC0R_VCM_RADIUS");
+    unsetenv("TRAC0R_VCM_RADIUS");
+    tr_scene_destroy(s);
+}
+
 int main(void) {
+    test_identity();
     snprintf(path, sizeof path, "/tmp/trac0r-test-checkpoint-%ld.ck", (long)getpid());
     tr_error err;
     tr_scene *s = tr_scene_create(&err);
