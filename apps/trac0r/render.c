@@ -326,7 +326,11 @@ int render_session_error(render_job *job, const tr_error *err) {
     if (err->code == TR_STATUS_LIMIT && job->resume) {
         return cli_error(&job->args, "--spp: %s", err->msg); /* below the checkpoint's */
     }
-    if (err->code == TR_STATUS_INVALID_ARGUMENT || err->code == TR_STATUS_PARSE) {
+    if (err->code == TR_STATUS_UNSUPPORTED) { /* the integrator and the scene's lights */
+        return cli_error(&job->args, "--integrator: %s: %s", job->common.scene, err->msg);
+    }
+    if (err->code == TR_STATUS_INVALID_ARGUMENT || err->code == TR_STATUS_PARSE ||
+        (job->resume && err->code == TR_STATUS_NOT_FOUND)) {
         return cli_error(&job->args, "%s%s", job->resume ? "--resume: " : "", err->msg);
     }
     fprintf(stderr, "trac0r render: %s%s\n", job->resume ? "--resume: " : "", err->msg);

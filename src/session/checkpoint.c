@@ -98,8 +98,13 @@ static FILE *open_regular(const char *path, uint64_t *size, tr_error *err) {
         if (fd >= 0) {
             close(fd);
         }
-        tr_error_set(err, e ? tr_status_from_errno(e) : TR_STATUS_IO, "%.200s: cannot open: %s",
-                     path, e ? strerror(e) : "not a regular file");
+        /* A name that is no file, or not a regular one, is the caller's mistake (a usage
+         * error), as opposed to a file that cannot be read. */
+        tr_error_set(err,
+                     !e           ? TR_STATUS_INVALID_ARGUMENT
+                     : e == ELOOP ? TR_STATUS_NOT_FOUND
+                                  : tr_status_from_errno(e),
+                     "%.200s: cannot open: %s", path, e ? strerror(e) : "not a regular file");
         return NULL;
     }
     *size = (uint64_t)st.st_size;

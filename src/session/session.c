@@ -323,6 +323,9 @@ tr_session *tr_session_create(tr_device *dev, const tr_scene *scene, const tr_re
     int rc = keep_strings(s, err);
     rc = rc == TR_OK ? check_desc(&s->desc, s->cfg.stride, err) : rc;
     rc = rc == TR_OK ? tr_render_config_check(&s->cfg, err) : rc;
+    /* An integrator that cannot render the scene (bdpt and vcm with a sun or an
+     * environment) is refused before any work, not on the first pass. */
+    rc = rc == TR_OK ? tr_integrator_supports(scene, s->cfg.integrator, err) : rc;
     rc = rc == TR_OK ? tr_film_init_passes(&s->film, s->width, s->height, s->cfg.passes, err) : rc;
     rc = rc == TR_OK ? make_plan(s, err) : rc;
     if (rc == TR_OK && tr_device_scene(dev) != scene) {
