@@ -28,11 +28,11 @@ SCENE="src/scene/json.c src/scene/scene.c src/scene/shape.c src/scene/camera.c
 "$CC" $FLAGS $(pkg-config --cflags libcjson) fuzz/fuzz_scene_json.c $SCENE \
     $(pkg-config --libs libcjson libpng) -ljpeg -lm -o "$OUT/fuzz_scene_json"
 # shellcheck disable=SC2046,SC2086
-"$CC" $FLAGS $(pkg-config --cflags libcjson assimp) fuzz/fuzz_mesh.c $SCENE \
+"$CC" $FLAGS -DTR_MESH_IMPORT_IN_PROCESS $(pkg-config --cflags libcjson assimp) fuzz/fuzz_mesh.c $SCENE \
     src/scene/mesh.c src/scene/mesh_guard.c \
     $(pkg-config --libs libcjson assimp libpng) -ljpeg -lm -o "$OUT/fuzz_mesh"
 # shellcheck disable=SC2046,SC2086
-"$CC" $FLAGS -DTR_FUZZ_GUARD_ONLY $(pkg-config --cflags libcjson assimp) fuzz/fuzz_mesh.c $SCENE \
+"$CC" $FLAGS -DTR_FUZZ_GUARD_ONLY -DTR_MESH_IMPORT_IN_PROCESS $(pkg-config --cflags libcjson assimp) fuzz/fuzz_mesh.c $SCENE \
     src/scene/mesh.c src/scene/mesh_guard.c \
     $(pkg-config --libs libcjson assimp libpng) -ljpeg -lm -o "$OUT/fuzz_mesh_guard"
 # shellcheck disable=SC2046,SC2086

@@ -2,10 +2,12 @@
 # Usage errors found once the scene is known still exit with status 2 and one line naming
 # the file and the option: --resume of a missing file, a directory, a FIFO (refused, not
 # waited on) or a dangling link; bdpt and vcm with a scene that has a sun or an
-# environment light.
+# environment light; a model file on which Assimp loops for ever (its import runs in a
+# child process under a CPU-time limit, here 2 s).
 # Usage: cli_statuses.sh TRAC0R_BINARY SCRATCH_DIR
 set -u
 . "$(dirname "$0")/common.sh"
+SRC=$(cd "$(dirname "$0")/.." && pwd)
 cli_begin "$1" "$2"
 
 R="render --width 8 --height 8 --spp 1 --out r.png"
@@ -39,5 +41,12 @@ for integ in bdpt vcm; do
     grep -qF -- "--integrator" err.txt || fail "$integ: the message names no option: $(cat err.txt)"
     [ -e r.png ] && fail "$integ with a sun and a sky: wrote an image"
 done
+
+cp "$SRC/tests/data/hostile/importer/ply_loop.ply" loop.ply || fail "no ply_loop.ply"
+TRAC0R_IMPORT_CPU_SECONDS=2 timeout 120 "$BIN" $R --scene loop.ply >/dev/null 2>err.txt
+rc=$?
+[ $rc -eq 2 ] || fail "a model Assimp loops on: exit $rc, expected 2: $(cat err.txt)"
+[ "$(wc -l <err.txt)" -eq 1 ] || fail "a model Assimp loops on: not one line: $(cat err.txt)"
+grep -qF "loop.ply" err.txt || fail "a model Assimp loops on: the message names no file: $(cat err.txt)"
 
 cli_end cli_statuses
