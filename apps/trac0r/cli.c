@@ -1,6 +1,7 @@
 /* cli.c - option parsing shared by the trac0r subcommands. */
 #define _POSIX_C_SOURCE 200809L
 #include "cli.h"
+#include "trac0r/parse.h"
 #include "devices.h"
 #include "trac0r/registry.h"
 #include "trac0r/scene_file.h"
@@ -200,13 +201,11 @@ static int parse_integer(cli_args *a, long long lo, long long hi, long long *out
         return CLI_USAGE;
     }
     const char *v = a->value;
-    char *end;
-    errno = 0;
-    long long x = strtoll(v, &end, 10);
-    if (*v == '\0' || *end != '\0' || errno == ERANGE || x < lo || x > hi) {
+    int64_t x = 0;
+    if (tr_parse_int64(v, lo, hi, &x) != TR_OK) { /* the shared rules: trac0r/parse.h */
         return cli_error(a, "%s: expected an integer in %lld..%lld, got '%s'", a->opt, lo, hi, v);
     }
-    *out = x;
+    *out = (long long)x;
     return CLI_OK;
 }
 
@@ -233,14 +232,10 @@ int cli_parse_u64(cli_args *a, uint64_t *out) {
         return CLI_USAGE;
     }
     const char *v = a->value;
-    char *end;
-    errno = 0;
-    unsigned long long x = strtoull(v, &end, 10);
-    if (*v < '0' || *v > '9' || *end != '\0' || errno == ERANGE) {
+    if (tr_parse_uint64(v, 0, UINT64_MAX, out) != TR_OK) {
         return cli_error(a, "%s: expected an integer in 0..%" PRIu64 ", got '%s'", a->opt,
                          UINT64_MAX, v);
     }
-    *out = (uint64_t)x;
     return CLI_OK;
 }
 
@@ -249,14 +244,10 @@ int cli_parse_float(cli_args *a, float lo, float hi, float *out) {
         return CLI_USAGE;
     }
     const char *v = a->value;
-    char *end;
-    errno = 0;
-    double x = strtod(v, &end);
-    if (*v == '\0' || *end != '\0' || errno == ERANGE || !isfinite(x) || x < lo || x > hi) {
+    if (tr_parse_float(v, lo, hi, out) != TR_OK) {
         return cli_error(a, "%s: expected a number in %g..%g, got '%s'", a->opt, (double)lo,
                          (double)hi, v);
     }
-    *out = (float)x;
     return CLI_OK;
 }
 
