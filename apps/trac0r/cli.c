@@ -59,6 +59,7 @@ void cli_accel_list(char *buf, size_t size) {
 }
 
 void cli_common_default(cli_common *c) {
+    memset(c, 0, sizeof *c); /* every field below or zero: the extras, the default size */
     c->scene = "builtin:cornell";
     c->model_scale = 1.0f;
     c->up_z = 0;
