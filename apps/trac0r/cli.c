@@ -434,9 +434,10 @@ const char cli_recon_help[] =
     "  --resolve-emission N emitters' edges: N x N camera rays per edge pixel, added\n"
     "                       after the filters, 0..16 (default 4; 0: the emission is\n"
     "                       filtered with the rest; pt only, CPU reconstruction only)\n"
-    "  --restir off|di      di: the direct light at the first surfaces by ReSTIR DI\n"
+    "  --restir off|di|di+gi  di: the direct light at the first surfaces by ReSTIR DI\n"
     "                       (reservoir resampling reused over frames and neighbours;\n"
-    "                       pt on the CPU only; default off)\n"
+    "                       pt on the CPU only; default off); di+gi: the indirect\n"
+    "                       light there too, by ReSTIR GI (path resampling)\n"
     "  --restir-unbiased    ReSTIR merges with Talbot's MIS weights, no visibility reuse\n"
     "                       (unbiased; default: 1/M weights, biased, less noisy)\n";
 
@@ -445,10 +446,13 @@ int cli_restir_option(cli_args *a, cli_common *c) {
         if (cli_value(a) != CLI_OK) {
             return CLI_USAGE;
         }
-        if (strcmp(a->value, "off") != 0 && strcmp(a->value, "di") != 0) {
-            return cli_error(a, "--restir: expected off or di, got '%s'", a->value);
+        if (strcmp(a->value, "off") != 0 && strcmp(a->value, "di") != 0 &&
+            strcmp(a->value, "di+gi") != 0) {
+            return cli_error(a, "--restir: expected off, di or di+gi, got '%s'", a->value);
         }
-        c->restir = strcmp(a->value, "di") == 0 ? TR_REALTIME_RESTIR_DI : TR_REALTIME_RESTIR_OFF;
+        c->restir = strcmp(a->value, "di") == 0      ? TR_REALTIME_RESTIR_DI
+                    : strcmp(a->value, "di+gi") == 0 ? TR_REALTIME_RESTIR_DI_GI
+                                                     : TR_REALTIME_RESTIR_OFF;
         return CLI_OK;
     }
     if (cli_is(a, "--restir-unbiased")) {
