@@ -1051,38 +1051,6 @@ static int is_builtin(const char *name) {
 static int load_into(tr_scene *s, const char *path, const char *text, size_t len,
                      const load_opts *o, SceneObject *out, tr_scene_file *file, tr_error *err) {
     memset(file, 0, sizeof *file);
-    if (!text && is_builtin(path)) {
-        const char *name = strncmp(path, "builtin:", 8) == 0 ? path + 8 : path;
-        const uint32_t w = o->width ? o->width : 800u, h = o->height ? o->height : 600u;
-        if (tr_film_check_size(w, h, err) != TR_OK ||
-            tr_scene_builtin(s, name, w, h, err) != TR_OK) {
-            return TR_ERR;
-        }
-        if (o->light_sampling &&
-            tr_scene_set_light_sampling(s, tr_light_sampling_from_name(o->light_sampling), err) !=
-                TR_OK) {
-            return TR_ERR;
-        }
-        out->spp = TR_SESSION_SPP_DEFAULT;
-        out->integrator = o->integrator >= 0 ? o->integrator : TR_INTEGRATOR_PT;
-        out->max_depth = o->max_depth;
-        out->depth_asked = o->max_depth;
-        out->depth_file = 0;
-        const int accel = o->accel ? tr_accel_from_name(o->accel) : TR_ACCEL_TYPE_BVH;
-        return tr_scene_commit(s, (tr_accel_type)accel, err);
-    }
-    int rc;
-    if (text) {
-        rc = tr_scene_file_parse(s, path, text, len, NULL, file, err);
-    } else if (tr_scene_path_is_model(path)) {
-        tr_model_options mo = {o->up_z, (float)o->scale, o->width, o->height, o->camera};
-        rc = tr_scene_model_load(s, path, &mo, file, err);
-    } else {
-        rc = tr_scene_file_load(s, path, NULL, file, err);
-    }
-    if (rc != TR_OK) {
-        return TR_ERR;
-    }
     tr_render_request req = {0};
     req.width = o->width;
     req.height = o->height;
@@ -1092,19 +1060,25 @@ static int load_into(tr_scene *s, const char *path, const char *text, size_t len
     req.light_sampling = o->light_sampling;
     req.allow_dark = o->allow_dark;
     tr_render_settings st;
-    if (tr_scene_file_apply(s, path, file, &req, &st, err) != TR_OK) {
-        tr_scene_clear(s);
-        return TR_ERR;
+    if (text) { /* a scene given as text: parsed, then resolved as tr_scene_open does */
+        if (tr_scene_file_parse(s, path, text, len, NULL, file, err) != TR_OK ||
+            tr_scene_file_apply(s, path, file, &req, &st, err) != TR_OK ||
+            tr_scene_commit(s, st.accel, err) != TR_OK) {
+            tr_scene_clear(s);
+            return TR_ERR;
+        }
+    } else {
+        tr_scene_open_desc d = {.model = {o->up_z, (float)o->scale, 0, 0, o->camera}};
+        d.request = req;
+        if (tr_scene_open(s, path, &d, file, &st, err) != TR_OK) {
+            return TR_ERR;
+        }
     }
     out->spp = st.spp;
     out->integrator = st.config.integrator;
     out->max_depth = st.config.max_depth;
     out->depth_asked = o->max_depth;
     out->depth_file = file->has_max_depth ? file->max_depth : 0;
-    if (tr_scene_commit(s, st.accel, err) != TR_OK) {
-        tr_scene_clear(s);
-        return TR_ERR;
-    }
     return TR_OK;
 }
 

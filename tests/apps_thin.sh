@@ -4,11 +4,20 @@
 # line that opens its body at column 0 to the brace that closes it), and no branch on which
 # kind of device renders (the library answers what a program needs to know: capabilities,
 # the structures a device walks, a one-line description).
-# Usage: apps_thin.sh SOURCE_DIR [MAX (default 150)]
+# A third keeps the command small as a whole: apps/trac0r's C files under LINES lines in
+# all, so that what a program needs beyond parsing, printing and drawing goes to the
+# library, where the Python module and the web page reach it too.
+# Usage: apps_thin.sh SOURCE_DIR [MAX (default 150)] [LINES (default 6500)]
 set -u
 SRC=$1
 MAX=${2:-150}
+LINES=${3:-6500}
 status=0
+total=$(cat "$SRC"/apps/trac0r/*.c "$SRC"/apps/trac0r/*.h 2>/dev/null | wc -l)
+if [ "$total" -ge "$LINES" ]; then
+    echo "apps/trac0r: $total lines of C (under $LINES wanted)"
+    status=1
+fi
 for f in "$SRC"/apps/*/*.c; do
     # A function body starts with a line ending in '{' at column 0 that is not a type or
     # data definition, and ends with the '}' at column 0 that follows it.
@@ -34,5 +43,5 @@ if [ -n "$hits" ]; then
     echo "$hits"
     status=1
 fi
-[ $status -eq 0 ] && echo "apps_thin: every function at most $MAX lines, no branch on the device kind"
+[ $status -eq 0 ] && echo "apps_thin: every function at most $MAX lines, no branch on the device kind, $total lines in apps/trac0r"
 exit $status

@@ -9,6 +9,31 @@ cli_begin "$1" "$2"
 
 R="render --width 8 --height 6 --spp 1 --out x.png"
 expect_usage_error "'--bogus'" $R --bogus
+# A near miss names the option meant; a built-in scene's too.
+expect_usage_error "did you mean '--width'" $R --widht 320
+expect_usage_error "did you mean '--noise-threshold'" $R --noise-treshold 0.1
+expect_usage_error "did you mean 'cornell-mirror'" $R builtin:cornell-miror
+# Extras for any scene: an environment, a sun and a ground; malformed ones are refused.
+"$BIN" render --width 16 --height 12 --spp 1 --env 0.2,0.3,0.5 --sun 1,2,1 --ground \
+    --out extras.png 2>err.txt && [ -s extras.png ] || fail "render with extras: $(cat err.txt)"
+rm -f extras.png err.txt
+expect_usage_error "--sun" $R --sun 0,0,0
+expect_usage_error "--sun" $R --sun 1,2
+expect_usage_error "--env" $R --env 1,-1,1
+expect_usage_error "--env" $R --env no-such-sky.hdr
+# One side alone keeps the shape of the command's own default size (bench realtime's
+# 320x240 and render's 800x600 are both 4:3).
+"$BIN" bench realtime --width 64 --frames 2 --reference-spp 2 --methods off --out rt \
+    >rt.txt 2>&1 || fail "bench realtime --width 64: $(cat rt.txt)"
+grep -q "64x48" rt.txt || fail "bench realtime --width 64 is not 64x48: $(head -3 rt.txt)"
+rm -f rt.txt rt.csv rt.png
+# A black image is written, and said to be black; a lit one draws no warning.
+"$BIN" render --width 16 --height 12 --spp 2 --exposure -20 --out dark.png 2>err.txt ||
+    fail "render --exposure -20: exit $?"
+[ -s dark.png ] && grep -q "warning: dark.png" err.txt || fail "black image not noted: $(cat err.txt)"
+"$BIN" render --width 16 --height 12 --spp 2 --out lit.png 2>err.txt || fail "render: exit $?"
+grep -q "warning" err.txt && fail "lit image noted: $(cat err.txt)"
+rm -f dark.png lit.png err.txt
 expect_usage_error "--width: expected an integer in 1..16384, got 'abc'" $R --width abc
 expect_usage_error "--width: expected an integer in 1..16384, got '0'" $R --width 0
 expect_usage_error "got '-5'" $R --width -5

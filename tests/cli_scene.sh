@@ -58,7 +58,7 @@ check not_object.json "expected a JSON object at the top level, got an array"
 check wrong_type.json ": camera.fov: expected a vertical field of view in (0, 180) degrees, got a string"
 check wrong_type_vec.json ": camera.position[1]: expected a number, got a string"
 check unknown_key.json ": camera.postion: unknown key (did you mean 'position'?)"
-check unknown_key_far.json ": zzzzzz: unknown key (expected one of: version, description, render, camera, materials, shapes, meshes, environment, sun)"
+check unknown_key_far.json ": zzzzzz: unknown key (expected one of: version, description, render, camera, materials, shapes, meshes, environment, sun, prototypes, instances)"
 check duplicate_key.json ": camera.position: duplicate key"
 check missing_field.json ": camera.position: missing (expected [x, y, z])"
 check missing_camera.json ": camera: missing (expected an object)"
@@ -137,11 +137,21 @@ rm -f info.txt err.txt dark.pfm dark2.pfm
 [ "$(head -c 9 d.pfm | tail -c 6)" = "24 16
 " ] || [ "$(sed -n 2p d.pfm)" = "24 16" ] || fail "defaults.json: image is not 24x16: $(sed -n 2p d.pfm)"
 grep -qF "24x16, 2 spp" err.txt || fail "defaults.json: summary lacks '24x16, 2 spp': $(cat err.txt)"
-grep -qF "flat (" err.txt || fail "defaults.json: render.accel flat not applied: $(cat err.txt)"
+grep -qF ", flat: " err.txt || fail "defaults.json: render.accel flat not applied: $(cat err.txt)"
 "$BIN" render --width 10 --spp 1 "$GOOD/defaults.json" --accel bvh --out d.pfm 2>err.txt ||
     fail "defaults.json with overrides: $(cat err.txt)"
-grep -qF "10x16, 1 spp" err.txt || fail "defaults.json: --width/--spp did not override: $(cat err.txt)"
+# --width alone keeps the file's 24x16 shape: 10 x 16 * 10 / 24 = 6.7 -> 7.
+grep -qF "10x7, 1 spp" err.txt || fail "defaults.json: --width/--spp did not override: $(cat err.txt)"
 grep -qF "bvh (" err.txt || fail "defaults.json: --accel did not override: $(cat err.txt)"
+"$BIN" render --height 8 --spp 1 "$GOOD/defaults.json" --out d.pfm 2>err.txt ||
+    fail "defaults.json --height 8: $(cat err.txt)"
+grep -qF "12x8, 1 spp" err.txt || fail "defaults.json: --height alone lost the aspect: $(cat err.txt)"
+"$BIN" render --width 40 --height 10 --spp 1 "$GOOD/defaults.json" --out d.pfm 2>err.txt ||
+    fail "defaults.json 40x10: $(cat err.txt)"
+grep -qF "40x10, 1 spp" err.txt || fail "defaults.json: both sides given not kept: $(cat err.txt)"
+# A built-in scene's 800x600 default keeps its shape too.
+"$BIN" render --width 40 --spp 1 --out d.pfm 2>err.txt || fail "--width 40: $(cat err.txt)"
+grep -qF "40x30, 1 spp" err.txt || fail "builtin --width alone lost the aspect: $(cat err.txt)"
 rm -f d.pfm err.txt
 
 # The thesis's scene file renders bit-identical to the built-in scene, with either integrator

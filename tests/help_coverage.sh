@@ -59,6 +59,7 @@ for cmd in $commands; do
         for b in $benchmarks; do
             grep -q -F "bench $b" man.txt || fail "'bench $b' is not in $MAN"
             grep -q -x -F "$b" offered-benchmarks.txt || fail "benchmark $b is not offered"
+            grep -q -E "bench .*[ '|]$b[|']" top.txt || fail "trac0r --help does not name benchmark $b"
             "$TRAC0R" bench "$b" --help >"bench-$b.txt" || fail "trac0r bench $b --help: exit $?"
             check_options "bench-$b.txt" "trac0r bench $b"
         done

@@ -315,8 +315,53 @@ static void test_ray_sets(void) {
     tr_scene_destroy(s);
 }
 
+/* A summary's means, worst frame, flicker over the frames that have one, region over the
+ * frames that saw it, and frame rate, on frames built by hand. */
+static void test_summary(void) {
+    tr_frame_scores f[4];
+    for (int i = 0; i < 4; ++i) {
+        f[i] = (tr_frame_scores){.render_ms = 1.0 + i,
+                                 .temporal_ms = 0.5,
+                                 .spatial_ms = 0.5,
+                                 .psnr = 30.0 + 2.0 * i,
+                                 .ssim = 0.9,
+                                 .flicker = i ? 0.3 : 0.0,
+                                 .region_psnr = i == 2 ? NAN : 20.0 + i};
+    }
+    const tr_scores_summary s = tr_scores_summarize(f, 0, 4);
+    CHECK(fabs(s.mean.render_ms - 2.5) < 1e-12 && fabs(s.total_ms - 3.5) < 1e-12 &&
+              fabs(s.fps - 1000.0 / 3.5) < 1e-9,
+          "times: render %g, total %g, fps %g", s.mean.render_ms, s.total_ms, s.fps);
+    CHECK(fabs(s.mean.psnr - 33.0) < 1e-12 && s.psnr_min == 30.0 && fabs(s.mean.ssim - 0.9) < 1e-12,
+          "psnr %g, worst %g", s.mean.psnr, s.psnr_min);
+    CHECK(fabs(s.mean.flicker - 0.3) < 1e-12, "flicker %g (frame 0 has none)", s.mean.flicker);
+    CHECK(s.region_frames == 3 && fabs(s.mean.region_psnr - (20.0 + 21.0 + 23.0) / 3.0) < 1e-12,
+          "region: %u frames, %g dB", s.region_frames, s.mean.region_psnr);
+    const tr_scores_summary late = tr_scores_summarize(f, 2, 4);
+    CHECK(late.region_frames == 1 && late.mean.region_psnr == 23.0 &&
+              fabs(late.mean.flicker - 0.3) < 1e-12 && late.psnr_min == 34.0,
+          "frames 2..3: region %u, flicker %g, worst %g", late.region_frames, late.mean.flicker,
+          late.psnr_min);
+    double v[5] = {3.0, 1.0, 5.0, 2.0, 4.0};
+    CHECK(tr_median(v, 5) == 3.0 && v[0] == 1.0 && v[4] == 5.0, "median of five");
+    CHECK(tr_median(v, 4) == 2.5, "median of four");
+    /* The process's CPU time grows while it computes. */
+    const double c0 = tr_time_cpu();
+    volatile double x = 0.0;
+    const double w0 = tr_time_now();
+    while (tr_time_cpu() - c0 < 0.02 && tr_time_now() - w0 < 5.0) {
+        for (int i = 0; i < 100000; ++i) {
+            x = x + 1e-9;
+        }
+    }
+    CHECK(tr_time_cpu() > c0 && x > 0.0, "CPU time %g after %g", tr_time_cpu(), c0);
+    const tr_scores_summary none = tr_scores_summarize(f, 2, 3);
+    CHECK(none.region_frames == 0 && isnan(none.mean.region_psnr), "no region seen");
+}
+
 int main(void) {
     test_reference();
+    test_summary();
     test_scorer();
     test_flicker_recovery();
     test_convergence();

@@ -15,7 +15,10 @@
  *    with warnings, never fail the model.
  * 2. Collada's duck (assimp-testmodels): its camera is placed by the node's translate
  *    and rotations (times the file's unit, centimetres) and its yfov; with the framing
- *    camera the model's pixels (the albedo pass) are centred in the image. */
+ *    camera the model's pixels (the albedo pass) are centred in the image.
+ * 3. A texture the model names by another machine's path and in other case
+ *    ("D:\\work\\TEX\\Checker.PNG" for textures/checker.png beside it) is found by its
+ *    file name, with a warning; one that exists nowhere is dropped. */
 #define _POSIX_C_SOURCE 200809L
 #include "check.h"
 #include "scene_util.h"
@@ -26,6 +29,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 static char dir[512];
@@ -253,6 +257,60 @@ static void test_duck(void) {
     tr_scene_clear(&s);
 }
 
+static void write_text(const char *path, const char *text) {
+    FILE *f = fopen(path, "w");
+    CHECK(f && fputs(text, f) >= 0 && fclose(f) == 0, "cannot write %s", path);
+}
+
+static void test_texture_fallback(void) {
+    char sub[600], tex[700], png[800], obj[700], mtl[700];
+    snprintf(sub, sizeof sub, "%s/fb", dir);
+    snprintf(tex, sizeof tex, "%s/textures", sub);
+    snprintf(png, sizeof png, "%s/checker.png", tex);
+    snprintf(obj, sizeof obj, "%s/m.obj", sub);
+    snprintf(mtl, sizeof mtl, "%s/m.mtl", sub);
+    CHECK(mkdir(sub, 0700) == 0 && mkdir(tex, 0700) == 0, "mkdir %s", tex);
+    tr_error err;
+    tr_film film;
+    CHECK(tr_film_init(&film, 4, 4, &err) == TR_OK, "%s", err.msg);
+    for (size_t i = 0; i < 16; ++i) {
+        film.count[i] = 1;
+        film.sum[3 * i] = film.sum[3 * i + 1] = film.sum[3 * i + 2] = (float)(i % 2);
+    }
+    CHECK(tr_film_write_png(&film, png, 0.0f, &err) == TR_OK, "%s", err.msg);
+    tr_film_free(&film);
+    write_text(obj, "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\n"
+                    "usemtl moved\nf 1/1 2/2 3/3\nusemtl gone\nf 1/1 3/3 2/2\n");
+    const char *maps[2] = {"D:\\work\\TEX\\Checker.PNG", "nowhere.png"};
+    const char *names[2] = {"moved", "gone"};
+    char text[400];
+    snprintf(text, sizeof text, "newmtl %s\nKd 1 1 1\nmap_Kd %s\nnewmtl %s\nKd 1 1 1\nmap_Kd %s\n",
+             names[0], maps[0], names[1], maps[1]);
+    write_text(mtl, text);
+    tr_scene *s = tr_scene_create(&err);
+    tr_scene_file info;
+    const tr_model_options opt = {0, 1.0f, 0, 0, NULL};
+    CHECK(s && tr_scene_model_load(s, obj, &opt, &info, &err) == TR_OK, "%s", err.msg);
+    int moved = -1, gone = -1;
+    for (uint32_t i = 0; s && i < tr_scene_material_count(s); ++i) {
+        const int base = (tr_scene_material_maps(s, i) & TR_MAP_BASE) != 0;
+        /* Materials keep the file's order after the importer's default one, if any. */
+        if (moved < 0 && base) {
+            moved = (int)i;
+        } else if (!base) {
+            gone = (int)i;
+        }
+    }
+    CHECK(moved >= 0, "the moved texture was not found by its file name");
+    CHECK(gone >= 0 && info.warning_count >= 2, "%u warnings (found, dropped)", info.warning_count);
+    tr_scene_destroy(s);
+    remove(png);
+    remove(obj);
+    remove(mtl);
+    rmdir(tex);
+    rmdir(sub);
+}
+
 int main(void) {
     const char *tmp = getenv("TMPDIR");
     snprintf(dir, sizeof dir, "%s/trac0r-test-model-XXXXXX", tmp && *tmp ? tmp : "/tmp");
@@ -263,6 +321,7 @@ int main(void) {
     test_gltf();
     test_gltf_odd_lights();
     test_duck();
+    test_texture_fallback();
     rmdir(dir);
     return check_finish("test_model");
 }

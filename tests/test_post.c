@@ -446,7 +446,39 @@ static void test_metrics_oracle(void) {
     free(ref);
 }
 
+/* A black or white image is noted; one with shapes is not; nor is a film without
+ * samples. 0.1 % of lit pixels in a black image (1 in 1000) still counts as black. */
+static void test_exposure_note(void) {
+    tr_error err;
+    tr_film f;
+    char note[400];
+    CHECK(tr_film_init(&f, 50, 40, &err) == TR_OK, "%s", err.msg);
+    const size_t px = (size_t)f.width * f.height;
+    CHECK(tr_image_exposure_note(&f, 0.0f, note, sizeof note) == 0 && note[0] == '\0',
+          "no samples: noted '%s'", note);
+    for (size_t i = 0; i < px; ++i) {
+        f.count[i] = 4;
+        for (int c = 0; c < 3; ++c) {
+            f.sum[3 * i + (size_t)c] = i < 2 ? 2.0f : 0.0f; /* two lit pixels of 2000 */
+        }
+    }
+    CHECK(tr_image_exposure_note(&f, 0.0f, note, sizeof note) == 1 && note[0] != '\0',
+          "black image not noted: '%s'", note);
+    for (size_t i = 0; i < px; ++i) {
+        for (int c = 0; c < 3; ++c) {
+            f.sum[3 * i + (size_t)c] = i % 2 ? 4.0f * 0.3f : 4.0f * 0.01f; /* shapes */
+        }
+    }
+    CHECK(tr_image_exposure_note(&f, 0.0f, note, sizeof note) == 0, "lit image noted: '%s'", note);
+    CHECK(tr_image_exposure_note(&f, 12.0f, note, sizeof note) == 2 && note[0] != '\0',
+          "overexposed image not noted: '%s'", note);
+    CHECK(tr_image_exposure_note(&f, -30.0f, note, sizeof note) == 1,
+          "underexposed image not noted: '%s'", note);
+    tr_film_free(&f);
+}
+
 int main(void) {
+    test_exposure_note();
     test_tonemap_value_classes();
     test_tonemap_sweep();
     test_tonemap_monotonic();

@@ -14,9 +14,11 @@
 #include "scene/scene_internal.h"
 #include "scene/material_registry.h"
 #include "trac0r/registry.h"
+#include "trac0r/scene_file.h"
 #include "trac0r/trac0r.h"
 
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 static void names_unique(const char *const *names, size_t count, const char *what) {
@@ -113,6 +115,47 @@ static void round_trips(void) {
     CHECK(strcmp(buf, "a, b, c") == 0, "join: '%s'", buf);
     tr_names_join(buf, 4, abc, 3, NULL);
     CHECK(strlen(buf) == 3, "join truncates: '%s'", buf);
+
+    /* "Did you mean": a near miss (a typo, a swap, a letter short) finds its name; a word
+     * far from every name finds none. */
+    const char *const opts[] = {"--width", "--height", "--spp", "--noise-threshold"};
+    const char *near = tr_names_closest("--widht", opts, 4);
+    CHECK(near && strcmp(near, "--width") == 0, "--widht: %s", near ? near : "(none)");
+    near = tr_names_closest("--noise-treshold", opts, 4);
+    CHECK(near && strcmp(near, "--noise-threshold") == 0, "--noise-treshold: %s",
+          near ? near : "(none)");
+    CHECK(tr_names_closest("--zzzzzz", opts, 4) == NULL && tr_names_closest("x", opts, 0) == NULL,
+          "far words matched");
+
+    /* Lists of names: every item kept in order, none cut, bad items refused. */
+    int v[4];
+    tr_error err;
+    CHECK(tr_names_parse_list("pt,naive", tr_integrator_from_name, v, 4, "m", "integrator", NULL,
+                              &err) == 2 &&
+              v[0] == TR_INTEGRATOR_PT && v[1] == TR_INTEGRATOR_NAIVE,
+          "list of two");
+    const char *const bad[] = {"",   ",", "pt,", ",pt", "pt,,naive", "pt,nope", "pt,pt,pt,pt,pt",
+                               " pt"};
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; ++i) {
+        err.code = TR_STATUS_OK;
+        CHECK(tr_names_parse_list(bad[i], tr_integrator_from_name, v, 4, "m", "integrator", "x",
+                                  &err) == -1 &&
+                  err.code == TR_STATUS_INVALID_ARGUMENT,
+              "list '%s' accepted", bad[i]);
+    }
+    /* A list longer than any buffer is read whole: its 200th item is checked too. */
+    char longlist[1200] = "";
+    for (int i = 0; i < 200; ++i) {
+        strcat(longlist, i ? ",pt" : "pt");
+    }
+    int many[256];
+    CHECK(tr_names_parse_list(longlist, tr_integrator_from_name, many, 256, "m", "integrator", NULL,
+                              &err) == 200,
+          "long list");
+    strcat(longlist, "x");
+    CHECK(tr_names_parse_list(longlist, tr_integrator_from_name, many, 256, "m", "integrator", NULL,
+                              &err) == -1,
+          "long list with a bad last item accepted");
 }
 
 /* The JSON value a scene file gives key k in this test. */
@@ -212,8 +255,48 @@ static void scene_files(void) {
           "material type names are case-sensitive");
 }
 
+/* The one-line description of the committed structure names it and its counts, and
+ * stays inside a short buffer. */
+static void describe_accel(void) {
+    tr_error err;
+    tr_scene *s = tr_scene_create(&err);
+    CHECK(s && tr_scene_builtin(s, "cornell", 8, 8, &err) == TR_OK, "builtin: %s", err.msg);
+    char buf[256], want[64];
+    CHECK(tr_scene_commit(s, TR_ACCEL_TYPE_BVH, &err) == TR_OK, "%s", err.msg);
+    tr_scene_accel_describe(s, 1, buf, sizeof buf);
+    CHECK(strncmp(buf, "bvh (", 5) == 0 && strstr(buf, "binary nodes"), "bvh: '%s'", buf);
+    tr_scene_accel_describe(s, 0, buf, sizeof buf);
+    CHECK(strncmp(buf, "bvh (", 5) == 0 && strstr(buf, "-wide") && !strstr(buf, "nodes"),
+          "bvh, short: '%s'", buf);
+    CHECK(tr_scene_commit(s, TR_ACCEL_TYPE_FLAT, &err) == TR_OK, "%s", err.msg);
+    tr_scene_accel_describe(s, 1, buf, sizeof buf);
+    snprintf(want, sizeof want, "flat (%u shape boxes)", tr_scene_shape_count(s));
+    CHECK(strcmp(buf, want) == 0, "flat: '%s'", buf);
+    tr_scene_accel_describe(s, 0, buf, sizeof buf);
+    CHECK(strcmp(buf, "flat") == 0, "flat, short: '%s'", buf);
+    memset(buf, 'x', sizeof buf);
+    tr_scene_accel_describe(s, 1, buf, 6);
+    CHECK(strcmp(buf, "flat ") == 0, "short buffer: '%.8s'", buf);
+
+    /* The scene in words: its counts, the parts listed up to the limit, no render
+     * defaults for a built-in scene. */
+    tr_scene_file info;
+    memset(&info, 0, sizeof info);
+    CHECK(tr_scene_load(s, "builtin:cornell", NULL, &info, &err) == TR_OK, "%s", err.msg);
+    char *text = tr_scene_describe(s, "builtin:cornell", &info, 2);
+    snprintf(want, sizeof want, "triangles:  %u ", tr_scene_triangle_count(s));
+    CHECK(text && strstr(text, want) != NULL, "no '%s' in: %s", want, text ? text : "(null)");
+    snprintf(want, sizeof want, "part ...    %u more\n", tr_scene_shape_count(s) - 2);
+    CHECK(text && strstr(text, want) && strstr(text, "part 1 ") && !strstr(text, "part 2 ") &&
+              !strstr(text, "render:") && strstr(text, "warnings:   0\n"),
+          "parts, render line or warnings: %s", text ? text : "(null)");
+    free(text);
+    tr_scene_destroy(s);
+}
+
 int main(void) {
     round_trips();
     scene_files();
+    describe_accel();
     return check_finish("test_registry");
 }

@@ -3,10 +3,12 @@
  * defaults where neither does, bdpt's depth limit, the refusals (an unknown integrator, an
  * accel this build lacks, a scene without an emitter, too many pixels) and the camera
  * resized to the image. */
+#include <math.h>
 #include <stdio.h>
 #include <string.h>
 
 #include "check.h"
+#include "trac0r/scene_file.h"
 #include "trac0r/trac0r.h"
 
 /* A lit box seen from the front; RENDER is spliced in as the file's render block. */
@@ -58,6 +60,12 @@ static void test_zero_request(tr_scene *s) {
           "the rest of the config is not tr_render_config_default()'s");
     CHECK(tr_scene_camera(s)->screen_width == 800 && tr_scene_camera(s)->screen_height == 600,
           "camera %ux%u", tr_scene_camera(s)->screen_width, tr_scene_camera(s)->screen_height);
+    /* Without a size in the file, a width alone keeps the default's 4:3. */
+    tr_render_request wide = {0};
+    wide.width = 640;
+    rc = tr_scene_file_apply(s, "mem.json", &f, &wide, &st, &err);
+    CHECK(rc == TR_OK && st.width == 640 && st.height == 480, "width alone: %ux%u", st.width,
+          st.height);
     /* A NULL request means the same. */
     rc = tr_scene_file_apply(s, "mem.json", &f, NULL, &st, &err);
     CHECK(rc == TR_OK && st.width == 800 && st.spp == TR_SESSION_SPP_DEFAULT,
@@ -91,17 +99,29 @@ static void test_file_and_request(tr_scene *s) {
     req.accel = "bvh2";
     rc = tr_scene_file_apply(s, "mem.json", &f, &req, &st, &err);
     CHECK(rc == TR_OK, "request values: %s", err.msg);
-    CHECK(st.width == 10 && st.height == 16 && st.spp == 5, "request: %ux%u, %u spp", st.width,
+    /* The width alone: the height keeps the file's 24x16 shape (16 * 10 / 24 = 6.7). */
+    CHECK(st.width == 10 && st.height == 7 && st.spp == 5, "request: %ux%u, %u spp", st.width,
           st.height, st.spp);
     CHECK(st.config.max_depth == 7, "request: depth %d", st.config.max_depth);
     CHECK(st.accel == TR_ACCEL_TYPE_BVH2, "request: accel %s", tr_accel_name(st.accel));
     CHECK(st.config.integrator == TR_INTEGRATOR_PT, "request: integrator %d", st.config.integrator);
-    CHECK(tr_scene_camera(s)->screen_width == 10 && tr_scene_camera(s)->screen_height == 16,
+    CHECK(tr_scene_camera(s)->screen_width == 10 && tr_scene_camera(s)->screen_height == 7,
           "request: camera %ux%u", tr_scene_camera(s)->screen_width,
           tr_scene_camera(s)->screen_height);
     /* The resolved scene commits and renders. */
     rc = tr_scene_commit(s, st.accel, &err);
     CHECK(rc == TR_OK, "commit: %s", err.msg);
+
+    /* The height alone keeps the shape too; both sides are taken as given. */
+    req = (tr_render_request){0};
+    req.height = 8;
+    rc = tr_scene_file_apply(s, "mem.json", &f, &req, &st, &err);
+    CHECK(rc == TR_OK && st.width == 12 && st.height == 8, "height alone: %ux%u", st.width,
+          st.height);
+    req.width = 40;
+    rc = tr_scene_file_apply(s, "mem.json", &f, &req, &st, &err);
+    CHECK(rc == TR_OK && st.width == 40 && st.height == 8, "both sides: %ux%u", st.width,
+          st.height);
 
     req = (tr_render_request){0};
     req.light_sampling = "power";
@@ -240,7 +260,89 @@ static void test_no_emitter(tr_scene *s) {
     CHECK(rc == TR_OK, "render.allow_no_emitter: %s", err.msg);
 }
 
+/* Extras added to any scene: a ground is one more shape and material under the bounds,
+ * a sun points where asked with the default irradiance, a constant environment is taken;
+ * malformed values are refused and leave nothing half-added that the check sees. */
+static void test_extras(void) {
+    tr_error err;
+    tr_scene *s = tr_scene_create(&err);
+    CHECK(s && tr_scene_builtin(s, "cornell", 16, 12, &err) == TR_OK, "%s", err.msg);
+    const uint32_t shapes = tr_scene_shape_count(s), mats = tr_scene_material_count(s);
+    const tr_aabb before = tr_scene_bounds(s);
+    tr_scene_extras x = {0};
+    CHECK(tr_scene_add_extras(s, &x, &err) == TR_OK && tr_scene_shape_count(s) == shapes,
+          "a zero struct added something");
+    x.ground = 1;
+    x.sun = "0,2,0";
+    x.env = "0.1,0.2,0.3";
+    CHECK(tr_scene_add_extras(s, &x, &err) == TR_OK, "extras: %s", err.msg);
+    CHECK(tr_scene_shape_count(s) == shapes + 1 && tr_scene_material_count(s) == mats + 1,
+          "ground: %u shapes, %u materials", tr_scene_shape_count(s), tr_scene_material_count(s));
+    const tr_aabb ground = tr_scene_shape_box(s, shapes);
+    CHECK(ground.max.y <= before.min.y && ground.min.x < before.min.x &&
+              ground.max.z > before.max.z,
+          "ground not under the scene: y %g (scene from %g)", ground.max.y, before.min.y);
+    tr_vec3 dir, e;
+    float angle;
+    CHECK(tr_scene_sun(s, &dir, &angle, &e) && fabsf(dir.y - 1.0f) < 1e-6f &&
+              fabsf(e.x - TR_SCENE_EXTRAS_SUN) < 1e-3f * TR_SCENE_EXTRAS_SUN,
+          "sun: towards (%g, %g, %g), irradiance %g", dir.x, dir.y, dir.z, e.x);
+    CHECK(tr_scene_commit(s, TR_ACCEL_TYPE_BVH, &err) == TR_OK, "commit: %s", err.msg);
+    const char *bad_sun[] = {"0,0,0", "1,2", " 1,2,3", "1,2,3,4", "1,nan,3", ""};
+    for (size_t i = 0; i < sizeof bad_sun / sizeof *bad_sun; ++i) {
+        const tr_scene_extras b = {.sun = bad_sun[i]};
+        err.code = TR_STATUS_OK;
+        CHECK(tr_scene_add_extras(s, &b, &err) == TR_ERR && err.code == TR_STATUS_INVALID_ARGUMENT,
+              "sun '%s' accepted", bad_sun[i]);
+    }
+    const tr_scene_extras neg = {.env = "1,-1,1"}, missing = {.env = "no-such-sky.hdr"};
+    CHECK(tr_scene_add_extras(s, &neg, &err) == TR_ERR, "negative radiance accepted");
+    CHECK(tr_scene_add_extras(s, &missing, &err) == TR_ERR, "a missing map accepted");
+    tr_scene_destroy(s);
+}
+
+/* tr_scene_open: a name to a committed scene and its settings; the request wins, the
+ * program's defaults fill what neither it nor the scene gives, and a failure leaves the
+ * scene empty. */
+static void test_open(void) {
+    tr_error err;
+    tr_scene *s = tr_scene_create(&err);
+    tr_render_settings st;
+    tr_scene_open_desc d = {0};
+    d.defaults.width = 320;
+    d.defaults.height = 240;
+    d.defaults.integrator = "naive";
+    CHECK(tr_scene_open(s, "builtin:cornell", &d, NULL, &st, &err) == TR_OK, "%s", err.msg);
+    CHECK(st.width == 320 && st.height == 240 && st.config.integrator == TR_INTEGRATOR_NAIVE &&
+              tr_scene_accel(s) == TR_ACCEL_TYPE_BVH && tr_scene_camera(s)->screen_width == 320,
+          "defaults: %ux%u, integrator %d", st.width, st.height, st.config.integrator);
+    d.request.width = 640;
+    d.request.integrator = "pt";
+    d.request.accel = "bvh2";
+    CHECK(tr_scene_open(s, "cornell", &d, NULL, &st, &err) == TR_OK, "%s", err.msg);
+    CHECK(st.width == 640 && st.height == 480 && st.config.integrator == TR_INTEGRATOR_PT &&
+              tr_scene_accel(s) == TR_ACCEL_TYPE_BVH2,
+          "request: %ux%u, integrator %d, accel %s", st.width, st.height, st.config.integrator,
+          tr_accel_name(tr_scene_accel(s)));
+    /* The same scene built by hand at that size: the same camera, bit for bit. */
+    tr_scene *hand = tr_scene_create(&err);
+    CHECK(hand && tr_scene_builtin(hand, "cornell", 640, 480, &err) == TR_OK, "%s", err.msg);
+    CHECK(hand && memcmp(tr_scene_camera(hand), tr_scene_camera(s), sizeof(tr_camera)) == 0,
+          "camera differs from the built-in scene's own");
+    tr_scene_destroy(hand);
+    CHECK(tr_scene_open(s, "builtin:nope", &d, NULL, &st, &err) == TR_ERR &&
+              tr_scene_triangle_count(s) == 0,
+          "an unknown scene opened, or left %u triangles", tr_scene_triangle_count(s));
+    d.extras.sun = "0,0,0";
+    CHECK(tr_scene_open(s, "cornell", &d, NULL, &st, &err) == TR_ERR &&
+              err.code == TR_STATUS_INVALID_ARGUMENT && tr_scene_triangle_count(s) == 0,
+          "a bad sun opened");
+    tr_scene_destroy(s);
+}
+
 int main(void) {
+    test_extras();
+    test_open();
     tr_scene *s = tr_scene_create(NULL);
     CHECK(s != NULL, "tr_scene_create");
     if (!s) {

@@ -1,5 +1,5 @@
-/* test_view_camera.c - the viewer's fly camera (apps/trac0r/view_camera.c) and the frame budget
- * of its moving frames (tr_realtime_budget_adapt, realtime.h).
+/* test_view_camera.c - the viewer's fly camera (tr_fly_camera, trac0r/camera.h) and the frame
+ * budget of its moving frames (tr_realtime_budget_adapt, realtime.h).
  *
  * 1. A right-handed scene's camera rebuilt after a move keeps its mirrored right vector
  *    (the viewer's old rebuild dropped it and flipped the image), and the screen's right
@@ -9,7 +9,6 @@
  * 3. The default speed scales with the scene's size. */
 #include "check.h"
 #include "trac0r/trac0r.h"
-#include "view_camera.h"
 
 #include <math.h>
 
@@ -24,14 +23,14 @@ static void test_mirrored(void) {
         if (mirrored) {
             c.right = tr_vec3_make(-c.right.x, -c.right.y, -c.right.z); /* as the scene file does */
         }
-        fly_camera f = fly_from_camera(&c, 1.0f);
+        tr_fly_camera f = tr_fly_from_camera(&c, 1.0f);
         CHECK(f.mirrored == mirrored, "mirrored %d detected as %d", mirrored, f.mirrored);
         f.pos.z += 10.0f; /* a move */
         tr_camera next;
-        CHECK(fly_make(&f, 64, 48, &next) == TR_OK, "fly_make");
+        CHECK(tr_fly_make(&f, 64, 48, &next, &err) == TR_OK, "fly_make");
         CHECK(next.right.x == c.right.x && next.up.y == c.up.y,
               "mirrored %d: right %g after a move, %g before", mirrored, next.right.x, c.right.x);
-        const tr_vec3 r = fly_right(&f);
+        const tr_vec3 r = tr_fly_right(&f);
         CHECK(fabsf(r.x - c.right.x) < 1e-6f, "mirrored %d: D moves along %g, right is %g",
               mirrored, r.x, c.right.x);
     }
@@ -64,16 +63,56 @@ static void test_budget(void) {
 
 static void test_speed(void) {
     tr_aabb small = {{0, 0, 0}, {1, 1, 1}}, big = {{0, 0, 0}, {556, 548, 559}};
-    const float a = view_default_speed(&small), b = view_default_speed(&big);
+    const float a = tr_fly_default_speed(&small), b = tr_fly_default_speed(&big);
     const float ratio = sqrtf(556.0f * 556.0f + 548.0f * 548.0f + 559.0f * 559.0f) / sqrtf(3.0f);
     CHECK(fabsf(b / a - ratio) < 0.01f * ratio, "speed %g for a unit box, %g for the classic box",
           a, b);
     tr_aabb empty = {{INFINITY, INFINITY, INFINITY}, {-INFINITY, -INFINITY, -INFINITY}};
-    CHECK(view_default_speed(&empty) == 0.5f, "empty scene: %g", view_default_speed(&empty));
+    CHECK(tr_fly_default_speed(&empty) == 0.5f, "empty scene: %g", tr_fly_default_speed(&empty));
+}
+
+static float dot3(tr_vec3 a, tr_vec3 b) {
+    return a.x * b.x + a.y * b.y + a.z * b.z;
+}
+
+/* Steering: a move covers speed x dt along the controls' normalised sum; a roll and a look
+ * keep dir and up unit and orthogonal; a positive yaw turns towards the screen's right,
+ * mirrored or not; nothing held changes nothing. */
+static void test_steer(void) {
+    tr_camera cam;
+    tr_error err;
+    CHECK(tr_camera_make(&cam, tr_vec3_make(0, 0, 0), tr_vec3_make(0, 0, 1), tr_vec3_make(0, 1, 0),
+                         40.0f, 0.1f, 100.0f, 64, 48, &err) == TR_OK,
+          "%s", err.msg);
+    for (int mirrored = 0; mirrored < 2; ++mirrored) {
+        tr_camera c = cam;
+        if (mirrored) {
+            c.right = tr_vec3_make(-c.right.x, -c.right.y, -c.right.z);
+        }
+        tr_fly_camera f = tr_fly_from_camera(&c, 2.0f);
+        CHECK(tr_fly_step(&f, 0, 0, 0, 0, 0.5f) == 0 && f.pos.z == 0.0f, "nothing held moved");
+        CHECK(tr_fly_step(&f, 1, 0, 0, 0, 0.5f) == 1 && fabsf(f.pos.z - 1.0f) < 1e-6f,
+              "forward: z %g", f.pos.z);
+        const tr_vec3 right = tr_fly_right(&f), p0 = f.pos;
+        tr_fly_step(&f, 1, 1, 0, 0, 1.0f);
+        const tr_vec3 d = tr_vec3_make(f.pos.x - p0.x, f.pos.y - p0.y, f.pos.z - p0.z);
+        CHECK(fabsf(sqrtf(dot3(d, d)) - 2.0f) < 1e-5f && dot3(d, right) > 1.4f,
+              "diagonal move: length %g, along right %g", sqrtf(dot3(d, d)), dot3(d, right));
+        tr_fly_step(&f, 0, 0, 0, 1, 0.3f);
+        tr_fly_look(&f, 0.2f, -0.1f);
+        CHECK(fabsf(dot3(f.dir, f.dir) - 1.0f) < 1e-5f && fabsf(dot3(f.up, f.up) - 1.0f) < 1e-5f &&
+                  fabsf(dot3(f.dir, f.up)) < 1e-5f,
+              "roll and look: not orthonormal");
+        const tr_vec3 r = tr_fly_right(&f), d0 = f.dir;
+        tr_fly_look(&f, 0.1f, 0.0f);
+        CHECK(dot3(f.dir, r) > dot3(d0, r) + 0.05f, "mirrored %d: yaw turned away from the right",
+              mirrored);
+    }
 }
 
 int main(void) {
     test_mirrored();
+    test_steer();
     test_budget();
     test_speed();
     return check_finish("test_view_camera");

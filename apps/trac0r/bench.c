@@ -13,16 +13,6 @@
 #include "devices.h"
 #include "trac0r/outfile.h"
 
-static int cmp_double(const void *a, const void *b) {
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
-double bench_median(double *v, int n) {
-    qsort(v, (size_t)n, sizeof *v, cmp_double);
-    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
 /* A step of a benchmark failed: clears the progress bar and says why. */
 static int bench_failed(progress *bar, const cli_args *a, const char *what, const tr_error *err) {
     progress_clear(bar);
@@ -30,30 +20,20 @@ static int bench_failed(progress *bar, const cli_args *a, const char *what, cons
     return CLI_FAILURE;
 }
 
-static void bench_frame_help(void) {
-    printf("Usage: trac0r bench frame [options]\n"
-           "\n"
-           "Renders the scene at 1 sample per pixel per frame (the thesis's frame) and\n"
-           "prints the median frame time, frames per second and Mrays/s over the frames,\n"
-           "after one warm-up frame. Defaults: the built-in Cornell box at 800x600, the\n"
-           "naive integrator, the BVH, 20 frames (the thesis measured --accel flat).\n"
-           "\n"
-           "Options:\n"
-           "%s"
-           "  --frames N           frames to time, 1..100000 (default 20)\n"
-           "  --animate            a dynamic scene: before every frame the scene's last\n"
-           "                       shape moves (sways along x) and the structure is\n"
-           "                       updated (bvh/bvh2: refit, embree: rebuild; a device gets\n"
-           "                       the scene again); the update's median is printed\n"
-           "                       apart from the frame's\n"
-           "  -h, --help           show this help\n"
-           "\n"
-           "With --device opencl every device frame is followed by the same frame on the\n"
-           "CPU, and the ratio of the two medians is printed too.\n"
-           "\n"
-           "The thesis (table 3.2) reports 11.6 FPS for this scene at 800x600 on an NVIDIA\n"
-           "GeForce GTX 570.\n",
-           cli_common_help());
+static void bench_frame_help(FILE *fp) {
+    fprintf(fp,
+            "Usage: trac0r bench frame [options]\n"
+            "\n"
+            "The thesis's frame: median frame time, FPS and Mrays/s at 1 spp per frame\n"
+            "(default: builtin:cornell, 800x600, naive, bvh). With --device opencl the same\n"
+            "frames on the CPU too, and the ratio. The full manual: man trac0r.\n"
+            "\n"
+            "Options:\n"
+            "%s"
+            "  --frames N           frames to time, 1..100000 (default 20)\n"
+            "  --animate            the scene's last shape moves before every frame\n"
+            "  -h, --help           show this help\n",
+            cli_common_help());
 }
 
 /* bench frame: its options, what it renders on, and what it measures. */
@@ -103,7 +83,7 @@ static int frame_open(frame_bench *b) {
     }
     b->cfg = cli_render_config(&b->c);
     char accel[160];
-    cli_describe_accel(accel, sizeof accel, b->scene);
+    tr_scene_accel_describe(b->scene, 1, accel, sizeof accel);
     printf("bench frame: %s, %ux%u, 1 spp/frame, integrator %s, max depth %d, %s, "
            "%u triangles, accel %s\n",
            b->c.scene, b->c.width, b->c.height, tr_integrator_name(b->c.integrator),
@@ -182,13 +162,13 @@ static int frame_measure(frame_bench *b) {
 
 static void frame_report(frame_bench *b) {
     const int n = b->frames;
-    const double med = bench_median(b->times, n);
+    const double med = tr_median(b->times, n);
     printf("frames %d  median %.2f ms  min %.2f ms  max %.2f ms\n", n, med * 1e3, b->times[0] * 1e3,
            b->times[n - 1] * 1e3);
     printf("fps %.2f (median)  Mrays/s %.2f (mean)\n", 1.0 / med,
            (double)b->rays / b->total * 1e-6);
     if (b->animate) {
-        const double umed = bench_median(b->update_times, n);
+        const double umed = tr_median(b->update_times, n);
         printf("scene update per frame (%s%s): median %.3f ms  min %.3f ms  max %.3f ms; "
                "frame + update %.2f ms (%.2f fps)\n",
                tr_scene_update_kind(b->scene),
@@ -201,7 +181,7 @@ static void frame_report(frame_bench *b) {
     printf("thesis (table 3.2): 11.6 fps on a GeForce GTX 570 -> ratio %.2f\n", (1.0 / med) / 11.6);
     if (b->cpu.dev) {
         const int threads = b->cfg.threads ? b->cfg.threads : tr_default_threads();
-        const double cpu_med = bench_median(b->cpu_times, n);
+        const double cpu_med = tr_median(b->cpu_times, n);
         printf("cpu (%d thread%s, interleaved with the device's frames): median %.2f ms, "
                "fps %.2f -> device/cpu %.2f\n",
                threads, threads == 1 ? "" : "s", cpu_med * 1e3, 1.0 / cpu_med, cpu_med / med);
@@ -228,33 +208,17 @@ static int bench_frame(int argc, char **argv) {
 }
 
 int bench_parse_accels(cli_args *a, accel_set *set) {
-    if (cli_value(a) != CLI_OK) {
-        return CLI_USAGE;
-    }
-    set->count = 0;
-    char buf[128];
-    snprintf(buf, sizeof buf, "%s", a->value);
-    for (char *save = NULL, *tok = strtok_r(buf, ",", &save); tok;
-         tok = strtok_r(NULL, ",", &save)) {
-        int t = tr_accel_from_name(tok);
-        if (t < 0) {
-            return cli_error(a, "%s: unknown acceleration structure '%s' in '%s'", a->opt, tok,
-                             a->value);
+    int t[sizeof set->type / sizeof set->type[0]];
+    set->count = cli_parse_list(a, tr_accel_from_name, t, (int)(sizeof t / sizeof t[0]),
+                                "acceleration structure", NULL);
+    for (int k = 0; k < set->count; ++k) {
+        if (!tr_accel_available((tr_accel_type)t[k])) {
+            return cli_error(a, "%s: '%s' is not available in this build", a->opt,
+                             tr_accel_name((tr_accel_type)t[k]));
         }
-        if (set->count == (int)(sizeof set->type / sizeof set->type[0])) {
-            return cli_error(a, "%s: more than %d structures in '%s'", a->opt,
-                             (int)(sizeof set->type / sizeof set->type[0]), a->value);
-        }
-        if (!tr_accel_available((tr_accel_type)t)) {
-            return cli_error(a, "%s: '%s' is not available in this build", a->opt, tok);
-        }
-        set->type[set->count++] = (tr_accel_type)t;
+        set->type[k] = (tr_accel_type)t[k];
     }
-    if (set->count == 0) {
-        return cli_error(a, "%s: expected a list such as 'flat,bvh,embree', got '%s'", a->opt,
-                         a->value);
-    }
-    return CLI_OK;
+    return set->count < 0 ? CLI_USAGE : CLI_OK;
 }
 
 void bench_accels_all(accel_set *set, int with_flat) {
@@ -272,29 +236,24 @@ double bench_build_seconds(const tr_scene *s) {
                                                      : tr_scene_bvh_build_seconds(s);
 }
 
-static void bench_complexity_help(void) {
-    printf("Usage: trac0r bench complexity [options]\n"
-           "\n"
-           "The thesis's figure 3.5: frames per second against triangle count for the Cornell\n"
-           "scene with one (glass) icosphere subdivided 0..L times (builtin:cornell-ico-N),\n"
-           "1 spp per frame, naive integrator, for each acceleration structure. A structure\n"
-           "is dropped for the higher levels once one of its frames takes longer than the\n"
-           "limit. Prints the table and writes PREFIX.csv and PREFIX.png (gnuplot).\n"
-           "\n"
-           "Options:\n"
-           "  --width W, --height H, --max-depth D, --seed S, --threads T, --device DEV\n"
-           "                       as for render (with --device opencl the structures are\n"
-           "                       flat and bvh; Embree runs on the CPU only)\n"
-           "                       (default 800x600)\n"
-           "  --max-level L        highest subdivision level, 0..%d (default 8)\n"
-           "  --frames N           timed frames per point after one warm-up, 1..1000\n"
-           "                       (default 5); the median is reported\n"
-           "  --accels LIST        structures to compare (default: flat,bvh,embree, those\n"
-           "                       this build has; bvh2 adds the binary BVH alone)\n"
-           "  --limit SECONDS      drop a structure after a frame slower than this (default 10)\n"
-           "  --out PREFIX         output file prefix (default complexity)\n"
-           "  -h, --help           show this help\n",
-           TR_ICOSPHERE_MAX_SUBDIVISIONS);
+static void bench_complexity_help(FILE *fp) {
+    fprintf(fp,
+            "Usage: trac0r bench complexity [options]\n"
+            "\n"
+            "The thesis's figure 3.5: FPS against triangle count (builtin:cornell-ico-N) per\n"
+            "acceleration structure; writes PREFIX.csv and PREFIX.png. The full manual: man\n"
+            "trac0r.\n"
+            "\n"
+            "Options:\n"
+            "  --width W, --height H, --max-depth D, --seed S, --threads T, --device DEV\n"
+            "                       as for render (default 800x600)\n"
+            "  --max-level L        highest subdivision level, 0..%d (default 8)\n"
+            "  --frames N           timed frames per point, 1..1000 (default 5)\n"
+            "  --accels LIST        structures to compare (default flat,bvh,embree)\n"
+            "  --limit SECONDS      drop a structure after a slower frame (default 10)\n"
+            "  --out PREFIX         output file prefix (default complexity)\n"
+            "  -h, --help           show this help\n",
+            TR_ICOSPHERE_MAX_SUBDIVISIONS);
 }
 
 #define CX_MAX_FRAMES 1000
@@ -408,7 +367,7 @@ static int cx_point(cx_bench *b, tr_scene *scene, int level, int k) {
             times[n++] = st.seconds;
         }
     }
-    const double med = bench_median(times, n);
+    const double med = tr_median(times, n);
     b->fps[level][k] = 1.0 / med;
     progress_clear(&b->bar);
     printf("%5d %10u %-7s %10.1f %12.2f %9.3f%s\n", level, tr_scene_triangle_count(scene),

@@ -10,8 +10,6 @@ typedef struct accel_set {
     int count;
 } accel_set;
 
-/* The median of n values (sorts them). */
-double bench_median(double *v, int n);
 /* Parses the current option's value, a list such as "bvh,embree". */
 int bench_parse_accels(cli_args *a, accel_set *set);
 /* Every structure this build has, in the order flat (if with_flat), bvh, embree. */

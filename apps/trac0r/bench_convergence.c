@@ -20,38 +20,24 @@ typedef tr_convergence_run conv_run;
 #define CONV_MAX_METHODS 4 /* naive, pt, bdpt, vcm */
 static const double conv_db[CONV_THRESHOLDS] = {25.0, 30.0, 35.0, 40.0};
 
-static void convergence_help(void) {
-    printf("Usage: trac0r bench convergence [SCENE] [options]\n"
-           "\n"
-           "Renders a converged reference with pt (two independent halves, so that the\n"
-           "reference's own error can be estimated and taken out), then for each method\n"
-           "and image size accumulates 1 spp frames and records the error against the\n"
-           "reference (trac0r compare's metrics) after geometrically spaced sample counts,\n"
-           "until the time budget is spent or the PSNR passes 41 dB. The methods take turns\n"
-           "frame by frame, so that they share whatever load the machine has. Prints the\n"
-           "time and spp each method needs to reach 25, 30, 35 and 40 dB and writes\n"
-           "PREFIX.csv and PREFIX.png (gnuplot: PSNR against time and against spp).\n"
-           "\n"
-           "SCENE defaults to builtin:cornell-mirror: the thesis's Cornell box with its glossy\n"
-           "objects as perfect mirrors, on which naive and pt converge to the same image\n"
-           "(they differ on rough glossy surfaces: naive keeps the thesis's cone lobe, pt\n"
-           "uses GGX). naive runs with max depth D + 2, pt with D, so that both estimate\n"
-           "paths of at most D segments.\n"
-           "\n"
-           "Options:\n"
-           "  --sizes LIST         image sizes, e.g. 256x256,800x600 (the default)\n"
-           "  --methods LIST       integrators to measure, up to four (default naive,pt,bdpt;\n"
-           "                       vcm may be added); one that cannot render the scene (bdpt\n"
-           "                       or vcm with an environment light or a sun) is refused\n"
-           "                       before the reference is rendered\n"
-           "  --budget SECONDS     render time per method and size, 0.1..86400 (default 30)\n"
-           "  --reference-spp N    spp of the rendered reference, 2..1000000 (default 4096)\n"
-           "  --reference FILE     read the reference (.pfm) instead (one size only; its own\n"
-           "                       error is then unknown and not taken out)\n"
-           "  --max-depth D        pt's path length, 1..1022 (default 8; naive gets D + 2)\n"
-           "  --seed S, --threads T, --accel NAME   as for render\n"
-           "  --out PREFIX         output file prefix (default convergence)\n"
-           "  -h, --help           show this help\n");
+static void convergence_help(FILE *fp) {
+    fprintf(fp, "Usage: trac0r bench convergence [SCENE] [options]\n"
+                "\n"
+                "Error against a converged reference (its own error taken out) over time and spp\n"
+                "for each method and size; prints the time and spp to reach 25, 30, 35 and 40 dB\n"
+                "and writes PREFIX.csv and PREFIX.png. SCENE defaults to builtin:cornell-mirror.\n"
+                "The full manual: man trac0r.\n"
+                "\n"
+                "Options:\n"
+                "  --sizes LIST         image sizes (default 256x256,800x600)\n"
+                "  --methods LIST       up to four integrators (default naive,pt,bdpt)\n"
+                "  --budget SECONDS     render time per method and size, 0.1..86400 (default 30)\n"
+                "  --reference-spp N    spp of the reference, 2..1000000 (default 4096)\n"
+                "  --reference FILE     read the reference (.pfm) instead (one size only)\n"
+                "  --max-depth D        pt's path length, 1..1022 (default 8; naive gets D + 2)\n"
+                "  --seed S, --threads T, --accel NAME   as for render\n"
+                "  --out PREFIX         output file prefix (default convergence)\n"
+                "  -h, --help           show this help\n");
 }
 
 static int parse_sizes(cli_args *a, uint32_t w[], uint32_t h[], int *n) {
@@ -82,27 +68,10 @@ static int parse_sizes(cli_args *a, uint32_t w[], uint32_t h[], int *n) {
 }
 
 static int parse_methods(cli_args *a, int m[], int *n) {
-    if (cli_value(a) != CLI_OK) {
-        return CLI_USAGE;
-    }
-    char buf[128];
-    snprintf(buf, sizeof buf, "%s", a->value);
-    *n = 0;
-    for (char *save = NULL, *tok = strtok_r(buf, ",", &save); tok;
-         tok = strtok_r(NULL, ",", &save)) {
-        int k = tr_integrator_from_name(tok);
-        if (k < 0 || *n == CONV_MAX_METHODS) {
-            char names[128];
-            cli_integrator_list(names, sizeof names);
-            return cli_error(a, "%s: unknown integrator '%s' in '%s' (available: %s)", a->opt, tok,
-                             a->value, names);
-        }
-        m[(*n)++] = k;
-    }
-    if (*n == 0) {
-        return cli_error(a, "%s: expected a list such as 'naive,pt'", a->opt);
-    }
-    return CLI_OK;
+    char names[128];
+    cli_integrator_list(names, sizeof names);
+    *n = cli_parse_list(a, tr_integrator_from_name, m, CONV_MAX_METHODS, "integrator", names);
+    return *n < 0 ? CLI_USAGE : CLI_OK;
 }
 
 /* What the command line asked for. */

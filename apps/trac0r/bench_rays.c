@@ -9,24 +9,19 @@
 #include "progress.h"
 #include "trac0r/measure.h"
 
-static void bench_rays_help(void) {
-    printf("Usage: trac0r bench rays [options]\n"
-           "\n"
-           "Million rays per second of each acceleration structure on the same rays: primary\n"
-           "rays (one per pixel), diffuse bounces (cosine-weighted, incoherent) and shadow\n"
-           "rays (any-hit, towards the lights), on builtin:cornell, builtin:cornell-ico-6 and\n"
-           "builtin:cornell-ico-8 (1.3 M triangles). Each figure is the median of the runs\n"
-           "(a run traces its set as often as it takes to last at least 50 ms);\n"
-           "build times are reported beside them, and the ratio bvh/embree when both run.\n"
-           "\n"
-           "Options:\n"
-           "  --width W, --height H, --seed S, --threads T   as for render (default 800x600)\n"
-           "  --scene SCENE        measure only this scene\n"
-           "  --runs N             timed passes over each ray set, 1..1000 (default 5)\n"
-           "  --accels LIST        structures to compare (default: bvh,embree, those this\n"
-           "                       build has; flat is only practical on small scenes; bvh2\n"
-           "                       is the binary BVH without its SIMD wide form)\n"
-           "  -h, --help           show this help\n");
+static void bench_rays_help(FILE *fp) {
+    fprintf(fp, "Usage: trac0r bench rays [options]\n"
+                "\n"
+                "Mrays/s of each acceleration structure on the same primary, diffuse and shadow\n"
+                "rays, on builtin:cornell, builtin:cornell-ico-6 and builtin:cornell-ico-8; the\n"
+                "median of the runs, with build times. The full manual: man trac0r.\n"
+                "\n"
+                "Options:\n"
+                "  --width W, --height H, --seed S, --threads T   as for render (default 800x600)\n"
+                "  --scene SCENE        measure only this scene\n"
+                "  --runs N             timed passes over each ray set, 1..1000 (default 5)\n"
+                "  --accels LIST        structures to compare (default bvh,embree)\n"
+                "  -h, --help           show this help\n");
 }
 
 typedef struct rays_opts {
@@ -109,7 +104,7 @@ int bench_rays(int argc, char **argv) {
                     progress_update(&bar, ++steps, NULL);
                 }
                 mrays[k][kind] =
-                    (double)tr_ray_sets_count(sets, kind) * reps / bench_median(times, runs) * 1e-6;
+                    (double)tr_ray_sets_count(sets, kind) * reps / tr_median(times, runs) * 1e-6;
             }
             progress_clear(&bar);
             printf("%-24s %10u %-7s %10.1f %10.2f %10.2f %10.2f\n", sc_opts.scene,

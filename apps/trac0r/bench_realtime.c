@@ -18,113 +18,49 @@
 
 typedef tr_frame_scores rt_frame_stats;
 
-static void realtime_help(void) {
-    printf("Usage: trac0r bench realtime [SCENE] [options]\n"
-           "\n"
-           "Moves the camera along a path through the scene (a sideways sway, a slow dolly\n"
-           "forward and a small yaw, scaled to the scene's size), renders every frame once\n"
-           "with --spp samples per pixel (with the albedo, normal, depth and id passes) and\n"
-           "runs each reconstruction method on it: off (raw), accumulate (temporal\n"
-           "accumulation with reprojection), bilateral, atrous, svgf (accumulation, then that\n"
-           "spatial filter; docs/realtime.md). Every output is compared with a converged\n"
-           "reference of the same frame, rendered in two halves so that the reference's own\n"
-           "error is taken out of the PSNR. With --cut K the camera jumps to another view at\n"
-           "frame K, and the frames each method needs to return to its PSNR before the cut\n"
-           "are reported. Frames and references are rendered at --max-depth (real-time path\n"
-           "tracers limit bounces; --bias-reference-depth measures what that costs).\n"
-           "Prints a table per method (milliseconds per stage, FPS of render +\n"
-           "reconstruction, mean and worst PSNR, SSIM, flicker) and writes PREFIX.csv (one\n"
-           "row per method and frame) and PREFIX.png (gnuplot: each method's PSNR and frame\n"
-           "time per frame). Progress goes to stderr while references render.\n"
-           "\n"
-           "Flicker: the RMS over pixels of the change of luminance from the previous frame\n"
-           "minus the reference's change, so that motion the reference has is not counted.\n"
-           "\n"
-           "SCENE defaults to builtin:cornell (as render); docs/realtime.md measures\n"
-           "scenes/cornell-classic.json and scenes/cornell-thesis.json.\n"
-           "\n"
-           "Options:\n"
-           "  --width W, --height H   frame size (default 320x240)\n"
-           "  --frames N           frames along the path, 2..100000 (default 32)\n"
-           "  --spp S              samples per pixel per frame, 1..1024 (default 1)\n"
-           "  --reference-spp R    samples of each frame's reference, 2..1000000 (default 256)\n"
-           "  --cut K              jump to another view at frame K (default: no cut)\n"
-           "  --upscale N          frames trace 1/N of the pixels (2: half, 4: a quarter) and\n"
-           "                       the output is upscaled to full size (temporal upscaling);\n"
-           "                       the same pipeline tracing every pixel runs on the same\n"
-           "                       frames, and a last table compares the two (default 1)\n"
-           "  --animate            the scene's last shape moves before every frame (as view\n"
-           "                       --animate), and the reconstruction is told how far each\n"
-           "                       primitive moved; references see the same scene\n"
-           "  --animate-frames A:B   the same, but the shape moves only before frames A to\n"
-           "                       B-1 and rests before and after; with A >= 2 and B < N the\n"
-           "                       frames each method needs after it stops to return to its\n"
-           "                       PSNR over the shape's pixels before it moved are reported\n"
-           "  --bias-reference-depth D2   also render frame 0's reference at max depth D2\n"
-           "                       (another seed) and print the PSNR of the frames' depth\n"
-           "                       (--max-depth) against it: the depth limit's bias\n"
-           "  --methods LIST       of off,accumulate,bilateral,atrous,svgf (default all)\n"
-           "  --seed S, --threads T, --max-depth D, --accel NAME, --device D   as for render\n"
-           "  --sampler NAME, --light-sampling NAME   as for render; the frames' sampler\n"
-           "                       defaults to random (independent numbers, the cheapest),\n"
-           "                       as the viewer's moving frames; sobol and zsobol give the\n"
-           "                       Sobol points, zsobol with screen-space blue noise\n"
-           "  --roulette-start N   as for render; the frames' default is 2, the references'\n"
-           "                       always 5\n"
-           "  --clamp-indirect V, --regularize on|off   the frames' firefly control (default\n"
-           "                       4 and on; 0 and off turn them off); references never\n"
-           "  --reference-sampler NAME   the references' sampler (default sobol, whatever the\n"
-           "                       frames'). The two-halves estimate of a reference's own\n"
-           "                       error holds for independent samples: compare samplers\n"
-           "                       against random references\n"
-           "  --out PREFIX         output file prefix (default realtime)\n"
-           "  -h, --help           show this help\n"
-           "\n"
-           "The reconstruction's settings:\n");
-    fputs(cli_recon_help, stdout);
+static void realtime_help(FILE *fp) {
+    fprintf(fp,
+            "Usage: trac0r bench realtime [SCENE] [options]\n"
+            "\n"
+            "Moves the camera along a path, renders every frame once and runs each\n"
+            "reconstruction method on it; scores every output against a converged reference\n"
+            "of the same frame (PSNR with the reference's own error taken out, SSIM,\n"
+            "flicker) and times every stage. Prints a table per method and writes PREFIX.csv\n"
+            "and PREFIX.png. SCENE defaults to builtin:cornell. The full manual: man trac0r\n"
+            "(docs/cli.md, docs/realtime.md).\n"
+            "\n"
+            "Options:\n"
+            "  --width W, --height H   frame size (default 320x240)\n"
+            "  --frames N           frames along the path, 2..100000 (default 32)\n"
+            "  --spp S              samples per pixel per frame, 1..1024 (default 1)\n"
+            "  --reference-spp R    samples of each frame's reference, 2..1000000 (default 256)\n"
+            "  --cut K              jump to another view at frame K (default: no cut)\n"
+            "  --upscale N          trace 1/N of the pixels and upscale, 1..16 (default 1)\n"
+            "  --animate            the scene's last shape moves before every frame\n"
+            "  --animate-frames A:B   the same, only before frames A to B-1\n"
+            "  --bias-reference-depth D2   also measure the depth limit's bias against D2\n"
+            "  --methods LIST       of off,accumulate,bilateral,atrous,svgf (default all)\n"
+            "  --seed S, --threads T, --max-depth D, --accel NAME, --device D   as for render\n"
+            "  --sampler NAME, --light-sampling NAME   as for render (frames: random)\n"
+            "  --roulette-start N   as for render (frames: 2, references: 5)\n"
+            "  --clamp-indirect V, --regularize on|off   the frames' firefly control (4, on)\n"
+            "  --reference-sampler NAME   the references' sampler (default sobol)\n"
+            "  --out PREFIX         output file prefix (default realtime)\n"
+            "  -h, --help           show this help\n"
+            "\n"
+            "The reconstruction's settings:\n");
+    fputs(cli_recon_help, fp);
 }
 
 static int parse_methods(cli_args *a, int on[TR_RECON_COUNT]) {
-    if (cli_value(a) != CLI_OK) {
-        return CLI_USAGE;
-    }
-    char buf[256];
-    snprintf(buf, sizeof buf, "%s", a->value);
+    int m[4 * TR_RECON_COUNT];
+    const int n = cli_parse_list(a, tr_recon_parse, m, 4 * TR_RECON_COUNT, "method",
+                                 "off, accumulate, bilateral, atrous, svgf");
     memset(on, 0, TR_RECON_COUNT * sizeof *on);
-    int any = 0;
-    for (char *save = NULL, *tok = strtok_r(buf, ",", &save); tok;
-         tok = strtok_r(NULL, ",", &save)) {
-        const int m = tr_recon_parse(tok);
-        if (m < 0) {
-            return cli_error(a,
-                             "%s: unknown method '%s' in '%s' (available: off, accumulate, "
-                             "bilateral, atrous, svgf)",
-                             a->opt, tok, a->value);
-        }
-        on[m] = 1;
-        any = 1;
+    for (int i = 0; i < n; ++i) {
+        on[m[i]] = 1;
     }
-    if (!any) {
-        return cli_error(a, "%s: expected a list such as 'off,svgf'", a->opt);
-    }
-    return CLI_OK;
-}
-
-/* Method m's mean PSNR over the moving shape's pixels in frames f0 .. f1 - 1 that have
- * such pixels; *count: how many did. */
-static double shape_psnr_mean(const rt_frame_stats *st, int m, uint32_t frames, uint32_t f0,
-                              uint32_t f1, int *count) {
-    double sum = 0.0;
-    int n = 0;
-    for (uint32_t f = f0; f < f1; ++f) {
-        const double v = st[(size_t)m * frames + f].region_psnr;
-        if (v == v) {
-            sum += v;
-            ++n;
-        }
-    }
-    *count = n;
-    return n > 0 ? sum / n : 0.0;
+    return n < 0 ? CLI_USAGE : CLI_OK;
 }
 
 /* After --animate-frames A:B, per method (reconstructed on the host): the frames from B
@@ -356,17 +292,10 @@ static int parse_options(cli_args *a, rt_opts *o) {
 
 /* Loads the scene and sets the path's camera; CLI_OK or the status to return. */
 static int load_scene(rt_run *r, rt_opts *o) {
-    const uint32_t width = o->c.width, height = o->c.height;
     r->scene = tr_scene_create(NULL);
     int rc = cli_load_scene_file(r->a, &o->c, r->scene, NULL);
     if (rc != CLI_OK) {
         return rc;
-    }
-    if (o->c.given &
-        (CLI_GIVEN_WIDTH |
-         CLI_GIVEN_HEIGHT)) { /* a scene file's size applies only where none was given */
-        o->c.width = width;
-        o->c.height = height;
     }
     /* The integrator may come from the scene file: checked once it is loaded. */
     if (tr_integrator_is_bidirectional(o->c.integrator) && o->bias_depth > TR_MAX_DEPTH_BDPT) {
@@ -575,17 +504,11 @@ static void report_full(const rt_run *r) {
         if (!o->on[m]) {
             continue;
         }
-        double t[2] = {0, 0}, p[2] = {0, 0};
-        for (uint32_t f = 0; f < frames; ++f) {
-            const rt_frame_stats *s[2] = {&r->st[(size_t)m * frames + f],
-                                          &r->st_full[(size_t)m * frames + f]};
-            for (int k = 0; k < 2; ++k) {
-                t[k] += s[k]->render_ms + s[k]->temporal_ms + s[k]->spatial_ms;
-                p[k] += s[k]->psnr;
-            }
-        }
-        printf("%-11s %9.1f %9.1f %9.2f %9.2f %+10.2f\n", tr_recon_name(m), 1000.0 * frames / t[0],
-               1000.0 * frames / t[1], p[0] / frames, p[1] / frames, (p[0] - p[1]) / frames);
+        const tr_scores_summary up = tr_scores_summarize(r->st + (size_t)m * frames, 0, frames);
+        const tr_scores_summary full =
+            tr_scores_summarize(r->st_full + (size_t)m * frames, 0, frames);
+        printf("%-11s %9.1f %9.1f %9.2f %9.2f %+10.2f\n", tr_recon_name(m), up.fps, full.fps,
+               up.mean.psnr, full.mean.psnr, up.mean.psnr - full.mean.psnr);
     }
 }
 
@@ -663,7 +586,6 @@ static void report_method(const rt_run *r, int m, FILE *csv) {
     const rt_opts *o = r->o;
     const uint32_t frames = o->frames, cut = o->cut;
     const rt_frame_stats *st = r->st;
-    double sr = 0, stt = 0, ss = 0, sp = 0, sssim = 0, sfl = 0, pmin = INFINITY;
     for (uint32_t f = 0; f < frames; ++f) {
         const rt_frame_stats *s = &st[(size_t)m * frames + f];
         fprintf(csv, "%s,%u,%.4f,%.4f,%.4f,%.4f,%.4f,%.5f,%.6f", tr_recon_name(m), f, s->render_ms,
@@ -677,18 +599,12 @@ static void report_method(const rt_run *r, int m, FILE *csv) {
             }
         }
         fputc('\n', csv);
-        sr += s->render_ms;
-        stt += s->temporal_ms;
-        ss += s->spatial_ms;
-        sp += s->psnr;
-        sssim += s->ssim;
-        sfl += s->flicker;
-        pmin = fmin(pmin, s->psnr);
     }
-    const double n = (double)frames, total = (sr + stt + ss) / n;
+    const tr_scores_summary sum = tr_scores_summarize(st + (size_t)m * frames, 0, frames);
+    const tr_frame_scores *mean = &sum.mean;
     printf("%-11s %9.2f %11.2f %10.2f %9.2f %7.1f %9.2f %9.2f %7.4f %8.5f", tr_recon_name(m),
-           sr / n, stt / n, ss / n, total, 1000.0 / total, sp / n, pmin, sssim / n,
-           sfl / (n - 1.0));
+           mean->render_ms, mean->temporal_ms, mean->spatial_ms, sum.total_ms, sum.fps, mean->psnr,
+           sum.psnr_min, mean->ssim, mean->flicker);
     if (!cut) {
         printf("\n");
         return;
@@ -720,10 +636,10 @@ static void report_extras(const rt_run *r) {
             if (!o->on[m]) {
                 continue;
             }
-            int n = 0;
-            const double mean = shape_psnr_mean(r->st, m, frames, o->anim_from, o->anim_until, &n);
-            if (n > 0) {
-                printf(" %s %.2f dB", tr_recon_name(m), mean);
+            const tr_scores_summary sum =
+                tr_scores_summarize(r->st + (size_t)m * frames, o->anim_from, o->anim_until);
+            if (sum.region_frames > 0) {
+                printf(" %s %.2f dB", tr_recon_name(m), sum.mean.region_psnr);
             } else {
                 printf(" %s -", tr_recon_name(m));
             }

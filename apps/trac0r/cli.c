@@ -1,4 +1,5 @@
 /* cli.c - option parsing shared by the trac0r subcommands. */
+#define _POSIX_C_SOURCE 200809L
 #include "cli.h"
 #include "devices.h"
 #include "trac0r/registry.h"
@@ -14,58 +15,29 @@
 #include <string.h>
 
 static const char help_before[] =
-    "  --scene SCENE        scene to render: builtin:cornell (the thesis's Cornell box,\n"
-    "                       the default), builtin:cornell-mirror (its glossy objects\n"
-    "                       as perfect mirrors), builtin:cornell-diffuse (every object\n"
-    "                       white diffuse), builtin:cornell-ico-N, or a scene file\n"
-    "                       (docs/scene-format.md) whose render defaults apply to the\n"
-    "                       options not given here, or a model file in any format\n"
-    "                       Assimp reads (.glb, .gltf, .obj, .dae, .fbx, .ply, ...): a\n"
-    "                       scene is built around it (its camera, else one framing it;\n"
-    "                       its lights, else a white environment light)\n"
-    "  --up y|z             a model file's up axis (default y; z stands z-up models up)\n"
+    "  --scene SCENE        builtin:cornell (default), builtin:cornell-mirror,\n"
+    "                       builtin:cornell-diffuse, builtin:cornell-ico-N, a scene\n"
+    "                       file (.json) or a model file Assimp reads (.glb, .obj, ...)\n"
+    "  --up y|z             a model file's up axis (default y)\n"
     "  --scale S            a model file's scale, 1e-6..1e6 (default 1)\n"
-    "  --camera N|NAME|frame  a model file's camera by number or name (default its\n"
-    "                       first), or frame: one framing the model\n"
+    "  --camera N|NAME|frame  a model file's camera (default its first)\n"
     "  --allow-dark         render a scene file that has no emitter\n"
-    "  --width W            image width in pixels, 1..16384 (default 800)\n"
-    "  --height H           image height in pixels, 1..16384 (default 600);\n"
-    "                       at most 67108864 pixels in all\n"
-    "  --max-depth D        path length limit of the integrator, 1..1024 (default 64 for\n"
-    "                       pt, whose paths end by Russian roulette; 8 for naive; 15,\n"
-    "                       also their limit, for bdpt and vcm): pt, bdpt and vcm\n"
-    "                       follow at most D\n"
-    "                       segments (camera ray included); the naive integrator's\n"
-    "                       Russian roulette reaches at most D-2 surfaces\n"
-    "  --seed S             random seed, 0..2^64-1 (default 0); the same seed gives the\n"
-    "                       same image for any thread count\n"
+    "  --env R,G,B|FILE     an environment light: a radiance, or an .hdr/.png map\n"
+    "  --sun X,Y,Z          a sun towards that direction (irradiance 3)\n"
+    "  --ground             a grey floor under the scene\n"
+    "  --width W            image width, 1..16384 (default 800)\n"
+    "  --height H           image height, 1..16384 (default 600)\n"
+    "  --max-depth D        path segments at most, 1..1024 (default 64 for pt, 8 for\n"
+    "                       naive, 15 for bdpt and vcm)\n"
+    "  --seed S             random seed, 0..2^64-1 (default 0)\n"
     "  --threads T          CPU threads, 0..1024 (default 0: one per core)\n"
-    "  --sampler NAME       pt's uniform numbers (default sobol; bench realtime's frames\n"
-    "                       and the viewer's moving frames: random):\n"
-    "                         sobol   Owen-scrambled Sobol points, stratified\n"
-    "                         random  independent numbers, the cheapest\n"
-    "                         zsobol  sobol, with errors as blue noise between pixels\n"
-    "  --roulette-start N   pt's Russian roulette may end a path after N segments\n"
-    "                       (the camera ray is the first), 1..1024 (default 5, the\n"
-    "                       least error per sample; bench realtime's frames and the\n"
-    "                       viewer's moving frames: 2, where the reconstruction\n"
-    "                       hides the extra noise)\n"
-    "  --light-sampling NAME  how pt picks an emitter for next-event estimation\n"
-    "                       (default: the scene file's render.light_sampling, else auto):\n"
-    "                         auto    tree from 8 emissive triangles on, else power\n"
-    "                         tree    light tree: power, distance and orientation\n"
-    "                         power   in proportion to emitted power\n"
-    "  --clamp-indirect V   pt: a contribution arriving over an indirect vertex is\n"
-    "                       clamped to luminance V, 0..1e30 (0: off; default off for\n"
-    "                       render, 4 for real-time frames; biased: docs/realtime.md)\n"
-    "  --regularize on|off  pt: glossy and specular lobes after the first non-specular\n"
-    "                       vertex are roughened, so that light samples reach caustics\n"
-    "                       (default off for render, on for real-time frames; biased)\n";
+    "  --sampler NAME       pt's numbers: sobol (default), random or zsobol\n"
+    "  --roulette-start N   pt's Russian roulette after N segments, 1..1024 (default 5)\n"
+    "  --light-sampling NAME  pt's choice of emitter: auto (default), tree or power\n"
+    "  --clamp-indirect V   pt: clamp indirect light to luminance V (0: off; biased)\n"
+    "  --regularize on|off  pt: roughen lobes after a diffuse vertex (biased)\n";
 static const char help_after[] =
-    "  --device DEV         cpu (the default), opencl (OpenCL device 0) or opencl:N\n"
-    "                       (device N of 'trac0r info --devices'); the device traces\n"
-    "                       the flat structure or the BVH (bvh2 and embree scenes: the\n"
-    "                       binary BVH)\n";
+    "  --device DEV         cpu (default), opencl or opencl:N (trac0r info --devices)\n";
 
 void cli_integrator_list(char *buf, size_t size) {
     size_t count;
@@ -155,9 +127,35 @@ int cli_error(const cli_args *a, const char *fmt, ...) {
     return CLI_USAGE;
 }
 
-int cli_unknown(const cli_args *a) {
+/* The option closest to opt among those the help text names (every "--word" in it). */
+static const char *closest_option(const char *opt, void (*help)(FILE *), char *buf, size_t n) {
+    char *text = NULL, *save = NULL;
+    size_t size = 0, count = 0;
+    FILE *fp = open_memstream(&text, &size);
+    if (!fp) {
+        return NULL;
+    }
+    help(fp);
+    fclose(fp);
+    const char *names[256];
+    for (char *w = strtok_r(text, " \t\n,:|=()[]", &save); w && count < 256;
+         w = strtok_r(NULL, " \t\n,:|=()[]", &save)) {
+        if (strncmp(w, "--", 2) == 0 && w[2] >= 'a' && w[2] <= 'z') {
+            names[count++] = w;
+        }
+    }
+    const char *near = tr_names_closest(opt, names, count);
+    snprintf(buf, n, "%s", near ? near : "");
+    free(text);
+    return near ? buf : NULL;
+}
+
+int cli_unknown(const cli_args *a, void (*help)(FILE *)) {
     if (a->opt[0] == '-' && a->opt[1] != '\0') {
-        return cli_error(a, "unknown option '%s' (see 'trac0r %s --help')", a->opt, a->cmd);
+        char buf[64];
+        const char *near = help ? closest_option(a->opt, help, buf, sizeof buf) : NULL;
+        return cli_error(a, "unknown option '%s' (%s%s%ssee 'trac0r %s --help')", a->opt,
+                         near ? "did you mean '" : "", near ? near : "", near ? "'? " : "", a->cmd);
     }
     /* Not an option at all: a second SCENE, or an argument where none is taken. */
     return cli_error(a, "unexpected argument '%s' (see 'trac0r %s --help')", a->opt, a->cmd);
@@ -262,6 +260,19 @@ int cli_parse_float(cli_args *a, float lo, float hi, float *out) {
     return CLI_OK;
 }
 
+int cli_parse_list(cli_args *a, int (*lookup)(const char *name), int *out, int max,
+                   const char *kind, const char *available) {
+    tr_error err;
+    if (cli_value(a) != CLI_OK) {
+        return -1;
+    }
+    const int n = tr_names_parse_list(a->value, lookup, out, max, a->opt, kind, available, &err);
+    if (n < 0) {
+        cli_error(a, "%s", err.msg);
+    }
+    return n;
+}
+
 const char *cli_sampler_name(int sampler) {
     return sampler == TR_SAMPLER_RANDOM   ? "random"
            : sampler == TR_SAMPLER_ZSOBOL ? "zsobol"
@@ -292,9 +303,14 @@ int cli_common_option(cli_args *a, cli_common *c) {
         c->given |= CLI_GIVEN_SCENE;
         return CLI_OK;
     }
-    if (cli_is(a, "--allow-dark")) {
-        c->allow_dark = 1;
+    if (cli_is(a, "--allow-dark") || cli_is(a, "--ground")) {
+        *(cli_is(a, "--ground") ? &c->extras.ground : &c->allow_dark) = 1;
         return CLI_OK;
+    }
+    if (cli_is(a, "--env") || cli_is(a, "--sun")) {
+        const int rc = cli_value(a);
+        *(cli_is(a, "--env") ? &c->extras.env : &c->extras.sun) = a->value;
+        return rc;
     }
     if (cli_is(a, "--up")) {
         if (cli_value(a) != CLI_OK) {
@@ -319,13 +335,10 @@ int cli_common_option(cli_args *a, cli_common *c) {
     if (cli_is(a, "--scale")) {
         return cli_parse_float(a, 1e-6f, 1e6f, &c->model_scale);
     }
-    if (cli_is(a, "--width")) {
-        c->given |= CLI_GIVEN_WIDTH;
-        return cli_parse_u32(a, 1, TR_FILM_MAX_SIDE, &c->width);
-    }
-    if (cli_is(a, "--height")) {
-        c->given |= CLI_GIVEN_HEIGHT;
-        return cli_parse_u32(a, 1, TR_FILM_MAX_SIDE, &c->height);
+    if (cli_is(a, "--width") || cli_is(a, "--height")) {
+        const int w = cli_is(a, "--width"); /* one alone keeps the shape: tr_scene_open */
+        c->given |= w ? CLI_GIVEN_WIDTH : CLI_GIVEN_HEIGHT;
+        return cli_parse_u32(a, 1, TR_FILM_MAX_SIDE, w ? &c->width : &c->height);
     }
     if (cli_is(a, "--max-depth")) {
         c->given |= CLI_GIVEN_MAX_DEPTH;
@@ -420,26 +433,17 @@ void cli_realtime_firefly(const cli_common *c, float *clamp_indirect, int *regul
 }
 
 const char cli_recon_help[] =
-    "  --alpha-min A        the temporal average's least weight of a new frame,\n"
-    "                       0.01..1 (default 0.1)\n"
-    "  --max-history L      frames of history at most, 1..1024 (default 64; 1: no\n"
-    "                       temporal accumulation)\n"
-    "  --max-history-moving L   the same where a shape moved since the previous frame\n"
-    "                       (--animate), 1..1024 (default 4: its shading follows the motion)\n"
+    "  --alpha-min A        least weight of a new frame, 0.01..1 (default 0.1)\n"
+    "  --max-history L      frames of history, 1..1024 (default 64)\n"
+    "  --max-history-moving L   the same where a shape moved, 1..1024 (default 4)\n"
     "  --svgf-iterations N  SVGF's a-trous steps, 1..8 (default 3)\n"
     "  --svgf-sigma-l S     SVGF's luminance weight, 0.1..1000 (default 8)\n"
-    "  --taa A              SVGF's temporal antialiasing, the new frame's weight,\n"
-    "                       0..1 (default 0: off)\n"
-    "  --svgf-split         SVGF filters direct and indirect light apart (CPU only)\n"
-    "  --resolve-emission N emitters' edges: N x N camera rays per edge pixel, added\n"
-    "                       after the filters, 0..16 (default 4; 0: the emission is\n"
-    "                       filtered with the rest; pt only, CPU reconstruction only)\n"
-    "  --restir off|di|di+gi  di: the direct light at the first surfaces by ReSTIR DI\n"
-    "                       (reservoir resampling reused over frames and neighbours;\n"
-    "                       pt on the CPU only; default off); di+gi: the indirect\n"
-    "                       light there too, by ReSTIR GI (path resampling)\n"
-    "  --restir-unbiased    ReSTIR merges with Talbot's MIS weights, no visibility reuse\n"
-    "                       (unbiased; default: 1/M weights, biased, less noisy)\n";
+    "  --taa A              SVGF's temporal antialiasing, 0..1 (default 0: off)\n"
+    "  --svgf-split         filter direct and indirect light apart (CPU only)\n"
+    "  --resolve-emission N emitters' edges traced at N x N rays, 0..16 (default 4)\n"
+    "  --restir off|di|di+gi  ReSTIR DI for the first surfaces' direct light, di+gi\n"
+    "                       ReSTIR GI for their indirect light too (default off)\n"
+    "  --restir-unbiased    ReSTIR with Talbot's MIS weights (default: biased 1/M)\n";
 
 int cli_restir_option(cli_args *a, cli_common *c) {
     if (cli_is(a, "--restir")) {
@@ -462,8 +466,10 @@ int cli_restir_option(cli_args *a, cli_common *c) {
     return -1;
 }
 
-int cli_parse(cli_args *a, cli_common *c, const char *const *refused, void (*help)(void),
+int cli_parse(cli_args *a, cli_common *c, const char *const *refused, void (*help)(FILE *),
               int (*own)(cli_args *, void *), void *user) {
+    c->def_width = c->width; /* the command's own size, before the options change it */
+    c->def_height = c->height;
     while (cli_next(a)) {
         int rc = cli_common_option(a, c);
         for (const char *const *r = refused; rc == CLI_OK && r && *r; ++r) {
@@ -476,10 +482,10 @@ int cli_parse(cli_args *a, cli_common *c, const char *const *refused, void (*hel
                 return CLI_USAGE;
             }
         } else if (cli_is(a, "-h") || cli_is(a, "--help")) {
-            help();
+            help(stdout);
             return CLI_HELP;
         } else if ((rc = own(a, user)) != CLI_OK) {
-            return rc < 0 ? cli_unknown(a) : CLI_USAGE;
+            return rc < 0 ? cli_unknown(a, help) : CLI_USAGE;
         }
     }
     return CLI_OK;
@@ -514,77 +520,50 @@ int cli_recon_option(cli_args *a, tr_recon_params *p) {
     return -1;
 }
 
-/* The request over a scene file's render defaults: the options the command line gave,
- * and the command's own defaults (bench realtime's 320x240, bench's naive integrator)
- * where the file has no value; the rest stay 0, the file's. */
-static tr_render_request file_request(const cli_common *c, const tr_scene_file *f) {
-    tr_render_request r = {0};
-    if ((c->given & CLI_GIVEN_WIDTH) || !f->has_width) {
-        r.width = c->width;
+/* tr_scene_open's failure in the command's words: its options named where they are the
+ * way out. Running out of memory is a failure (1); the rest are usage errors (2). */
+static int open_error(const cli_args *a, const tr_scene_file *f, const tr_error *err) {
+    if (err->code == TR_STATUS_OUT_OF_MEMORY) {
+        fprintf(stderr, "trac0r %s: %s\n", a->cmd, err->msg);
+        return CLI_FAILURE;
     }
-    if ((c->given & CLI_GIVEN_HEIGHT) || !f->has_height) {
-        r.height = c->height;
+    if (err->code == TR_STATUS_NOT_FOUND && f->emissive_triangles == 0 &&
+        (f->shape_count > 0 || f->mesh_count > 0)) { /* loaded, but without an emitter */
+        return cli_error(a, "%s (or pass --allow-dark)", err->msg);
     }
-    if ((c->given & CLI_GIVEN_MAX_DEPTH) || !f->has_max_depth) {
-        r.max_depth = c->max_depth; /* 0 without either: the integrator's default */
-    }
-    if ((c->given & CLI_GIVEN_INTEGRATOR) || !f->has_integrator) {
-        r.integrator = tr_integrator_name(c->integrator);
-    }
-    if ((c->given & CLI_GIVEN_ACCEL) || !f->has_accel) {
-        r.accel = tr_accel_name(c->accel);
-    }
-    if (c->light_sampling >= 0) { /* the command line over render.light_sampling */
-        r.light_sampling = tr_light_sampling_name(c->light_sampling);
-    }
-    r.allow_dark = c->allow_dark;
-    return r;
-}
-
-/* tr_scene_file_apply's failure in the command's words: its options named where they
- * are the way out. Every one is a usage error. */
-static int apply_error(const cli_args *a, const cli_common *c, const tr_render_settings *st,
-                       const tr_error *err) {
-    switch (err->code) {
-    case TR_STATUS_UNSUPPORTED:
-        return cli_error(a, "%s (use --accel)", err->msg);
-    case TR_STATUS_NOT_FOUND:
-        return cli_error(a,
-                         "%s: the scene has no emitter, so the image would be black (set "
-                         "render.allow_no_emitter or pass --allow-dark if that is intended)",
-                         c->scene);
-    case TR_STATUS_LIMIT:
-        return cli_error(a, "--width/--height: %ux%u is more than %u pixels", st->width, st->height,
-                         TR_FILM_MAX_PIXELS);
-    default:
-        return cli_error(a, "%s", err->msg);
-    }
+    const int option = err->code == TR_STATUS_LIMIT || strncmp(err->msg, "env", 3) == 0 ||
+                       strncmp(err->msg, "sun", 3) == 0 || strncmp(err->msg, "ground", 6) == 0;
+    return cli_error(a, "%s%s%s", option ? "--" : "", err->msg,
+                     err->code == TR_STATUS_UNSUPPORTED ? " (use --accel)" : "");
 }
 
 int cli_load_scene_file(const cli_args *a, cli_common *c, tr_scene *scene, tr_scene_file *file) {
     tr_scene_file local;
-    if (!file) {
-        file = &local;
-    }
+    file = file ? file : &local;
+    memset(file, 0, sizeof *file);
     if (!scene) {
         return cli_error(a, "out of memory creating the scene");
     }
-    memset(file, 0, sizeof *file);
-    if (tr_scene_name_is_builtin(c->scene)) {
-        return cli_load_scene(a, c, scene);
-    }
-    /* A scene file, or a model file (glTF, OBJ, ...) with a scene built around it. */
-    tr_error err;
-    const tr_model_options mo = {c->up_z, c->model_scale, c->width,
-                                 c->given & CLI_GIVEN_HEIGHT ? c->height : 0, c->model_camera};
-    if (tr_scene_load(scene, c->scene, &mo, file, &err) != TR_OK) {
-        return cli_error(a, "%s", err.msg);
-    }
+    /* What the command line gave is asked for; the command's own defaults apply where the
+     * file has no value (bench realtime's 320x240, bench's naive integrator). */
+    tr_scene_open_desc d = {.model = {c->up_z, c->model_scale, 0, 0, c->model_camera},
+                            .extras = c->extras};
+    tr_render_request *given = &d.request, *def = &d.defaults;
+    given->width = c->given & CLI_GIVEN_WIDTH ? c->width : 0;
+    given->height = c->given & CLI_GIVEN_HEIGHT ? c->height : 0;
+    def->width = c->def_width ? c->def_width : c->width;
+    def->height = c->def_height ? c->def_height : c->height;
+    *(c->given & CLI_GIVEN_MAX_DEPTH ? &given->max_depth : &def->max_depth) = c->max_depth;
+    *(c->given & CLI_GIVEN_INTEGRATOR ? &given->integrator : &def->integrator) =
+        tr_integrator_name(c->integrator);
+    *(c->given & CLI_GIVEN_ACCEL ? &given->accel : &def->accel) = tr_accel_name(c->accel);
+    given->light_sampling =
+        c->light_sampling >= 0 ? tr_light_sampling_name(c->light_sampling) : NULL;
+    given->allow_dark = c->allow_dark;
     tr_render_settings st;
-    const tr_render_request req = file_request(c, file);
-    if (tr_scene_file_apply(scene, c->scene, file, &req, &st, &err) != TR_OK) {
-        tr_scene_clear(scene);
-        return apply_error(a, c, &st, &err);
+    tr_error err;
+    if (tr_scene_open(scene, c->scene, &d, file, &st, &err) != TR_OK) {
+        return open_error(a, file, &err);
     }
     c->width = st.width;
     c->height = st.height;
@@ -597,68 +576,13 @@ int cli_load_scene_file(const cli_args *a, cli_common *c, tr_scene *scene, tr_sc
         }
         fprintf(stderr, "trac0r %s: warning: %s: %s\n", a->cmd, c->scene, file->warnings[i]);
     }
-    if (tr_scene_commit(scene, c->accel, &err) != TR_OK) {
-        fprintf(stderr, "trac0r %s: %s\n", a->cmd, err.msg);
-        tr_scene_clear(scene);
-        return CLI_FAILURE;
-    }
     return CLI_OK;
 }
 
 int cli_load_scene(const cli_args *a, const cli_common *c, tr_scene *scene) {
-    if (!scene) {
-        return cli_error(a, "out of memory creating the scene");
-    }
-    if (!tr_scene_name_is_builtin(c->scene)) {
-        /* The caller's options are final here (its film has their size): the file's
-         * render defaults do not apply. */
-        cli_common copy = *c;
-        copy.given = ~0u;
-        return cli_load_scene_file(a, &copy, scene, NULL);
-    }
-    if ((uint64_t)c->width * c->height > TR_FILM_MAX_PIXELS) {
-        return cli_error(a, "--width/--height: %ux%u is more than %u pixels", c->width, c->height,
-                         TR_FILM_MAX_PIXELS);
-    }
-    tr_error err;
-    const tr_model_options size = {0, 1.0f, c->width, c->height, NULL};
-    if (tr_scene_load(scene, c->scene, &size, NULL, &err) != TR_OK) {
-        return cli_error(a, "--scene: %s", err.msg);
-    }
-    if (c->light_sampling >= 0) {
-        tr_scene_set_light_sampling(scene, c->light_sampling, NULL);
-    }
-    if (tr_scene_commit(scene, c->accel, &err) != TR_OK) {
-        fprintf(stderr, "trac0r %s: %s\n", a->cmd, err.msg);
-        tr_scene_clear(scene);
-        return CLI_FAILURE;
-    }
-    return CLI_OK;
-}
-
-void cli_describe_accel(char *buf, size_t n, const tr_scene *s) {
-    tr_accel_info info;
-    tr_scene_accel_info(s, &info);
-    if (info.type == TR_ACCEL_TYPE_BVH) {
-        /* The traversal's ISA is chosen at run time; a TRAC0R_ISA the CPU (or build)
-         * cannot honour is said here rather than silently replaced. */
-        const char *asked = getenv("TRAC0R_ISA");
-        char note[96] = "";
-        if (asked && *asked && strcmp(asked, info.wide_isa) != 0) {
-            snprintf(note, sizeof note, ", TRAC0R_ISA=%.40s unavailable", asked);
-        }
-        snprintf(buf, n,
-                 "bvh (%u-wide %s%s: %u nodes, %u leaves, depth %u, from %u binary nodes; built "
-                 "in %.1f ms, %.1f ms of it the collapse)",
-                 info.wide_width, info.wide_isa, note, info.wide_nodes, info.wide_leaves,
-                 info.wide_depth, info.bvh_nodes, tr_scene_bvh_build_seconds(s) * 1e3,
-                 info.wide_seconds * 1e3);
-    } else if (info.type == TR_ACCEL_TYPE_BVH2) {
-        snprintf(buf, n, "bvh2 (%u nodes, %u leaves, depth %u, built in %.1f ms)", info.bvh_nodes,
-                 info.bvh_leaves, info.bvh_depth, info.bvh_seconds * 1e3);
-    } else if (info.type == TR_ACCEL_TYPE_EMBREE) {
-        snprintf(buf, n, "embree (built in %.1f ms)", info.embree_seconds * 1e3);
-    } else {
-        snprintf(buf, n, "flat (%u shape boxes)", tr_scene_shape_count(s));
-    }
+    /* The caller's options are final here (its film has their size): a scene file's
+     * render defaults do not apply. */
+    cli_common copy = *c;
+    copy.given = ~0u;
+    return cli_load_scene_file(a, &copy, scene, NULL);
 }

@@ -6,6 +6,7 @@
 #define TRAC0R_CLI_H
 
 #include <stddef.h>
+#include <stdio.h>
 #include <stdint.h>
 
 #include "trac0r/registry.h"
@@ -26,11 +27,13 @@ typedef struct cli_common {
     int threads;
     int integrator;
     tr_accel_type accel;
-    unsigned given;           /* CLI_GIVEN_*: options set on the command line (a scene file's
-                                 render defaults apply to the others) */
-    int allow_dark;           /* --allow-dark: render a scene file without an emitter */
-    char device[32];          /* --device: a tr_device name, "cpu" or "opencl:N" */
-    int up_z;                 /* --up z: a model file's +z is up */
+    unsigned given;                 /* CLI_GIVEN_*: options set on the command line (a scene file's
+                                       render defaults apply to the others) */
+    int allow_dark;                 /* --allow-dark: render a scene file without an emitter */
+    tr_scene_extras extras;         /* --env, --sun, --ground */
+    uint32_t def_width, def_height; /* the command's size before the options (cli_parse) */
+    char device[32];                /* --device: a tr_device name, "cpu" or "opencl:N" */
+    int up_z;                       /* --up z: a model file's +z is up */
     const char *model_camera; /* --camera: a model file's camera, or "frame"; NULL: its first */
     float model_scale;        /* --scale: a model file's scale */
     int sampler;              /* --sampler: TR_SAMPLER_*, -1 for the command's default */
@@ -68,8 +71,9 @@ void cli_accel_list(char *buf, size_t size);
 /* Prints "trac0r CMD: message" to stderr and returns CLI_USAGE. */
 int cli_error(const cli_args *a, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 /* The current argument is not one the command takes: "unknown option '--x'" for an
- * option, "unexpected argument 'x'" for anything else (a second SCENE). Returns CLI_USAGE. */
-int cli_unknown(const cli_args *a);
+ * option (with "did you mean" the closest option `help` prints, if one is close), and
+ * "unexpected argument 'x'" for anything else (a second SCENE). Returns CLI_USAGE. */
+int cli_unknown(const cli_args *a, void (*help)(FILE *));
 
 /* Advances to the next argument; returns 0 at the end. Splits "--opt=value". */
 int cli_next(cli_args *a);
@@ -82,6 +86,11 @@ int cli_parse_u32(cli_args *a, uint32_t lo, uint32_t hi, uint32_t *out);
 int cli_parse_int(cli_args *a, int lo, int hi, int *out);
 int cli_parse_u64(cli_args *a, uint64_t *out);
 int cli_parse_float(cli_args *a, float lo, float hi, float *out);
+/* The option's value as a comma-separated list of names (tr_names_parse_list): their
+ * values into out[0 .. max); the count, or -1 after a usage error naming the `kind` of item and
+ * the `available` ones. */
+int cli_parse_list(cli_args *a, int (*lookup)(const char *name), int *out, int max,
+                   const char *kind, const char *available);
 
 /* Handles an option of cli_common. Returns CLI_OK if handled, CLI_USAGE on a bad value,
  * and -1 if the option is not a common one. */
@@ -90,7 +99,7 @@ int cli_common_option(cli_args *a, cli_common *c);
  * refused once parsed), -h/--help (prints `help`), and `own` for the rest, which returns
  * CLI_OK, CLI_USAGE, or -1 for an option that is none of its own (an unknown option).
  * Returns CLI_OK, CLI_USAGE or CLI_HELP. */
-int cli_parse(cli_args *a, cli_common *c, const char *const *refused, void (*help)(void),
+int cli_parse(cli_args *a, cli_common *c, const char *const *refused, void (*help)(FILE *),
               int (*own)(cli_args *, void *), void *user);
 
 /* A TR_SAMPLER_* by its name (--sampler, --reference-sampler) into *out, and the name of
@@ -103,7 +112,7 @@ const char *cli_sampler_name(int sampler);
  * value, and -1 if the option is not one of them. */
 extern const char cli_recon_help[];
 int cli_recon_option(cli_args *a, tr_recon_params *p);
-/* --restir off|di and --restir-unbiased (view, bench realtime; listed in cli_recon_help)
+/* --restir off|di|di+gi and --restir-unbiased (view, bench realtime; listed in cli_recon_help)
  * into c; the same return values. */
 int cli_restir_option(cli_args *a, cli_common *c);
 
@@ -117,9 +126,6 @@ int cli_load_scene(const cli_args *a, const cli_common *c, tr_scene *scene);
  * (zeroed for a built-in scene; may be NULL). Scene file errors and a file without an
  * emitter (unless allowed) are CLI_USAGE; warnings go to stderr. */
 int cli_load_scene_file(const cli_args *a, cli_common *c, tr_scene *scene, tr_scene_file *file);
-
-/* One phrase describing the scene's committed acceleration structure and its build. */
-void cli_describe_accel(char *buf, size_t n, const tr_scene *s);
 
 /* The firefly control the common options name, for a real-time loop's frames: given
  * values into *clamp_indirect and *regularize (tr_realtime_desc's fields), defaults

@@ -27,25 +27,20 @@ static tr_vec3 false_colour(double t) {
     return tr_vec3_make(c[0], c[1], c[2]);
 }
 
-static void compare_help(void) {
-    printf("Usage: trac0r compare A B [options]\n"
-           "\n"
-           "Compares image A against the reference B (each .pfm float linear RGB, .exr (its\n"
-           "R, G, B channels), or .png, decoded from sRGB to linear) and prints, on linear "
-           "radiance clamped to [0,1]:\n"
-           "  rmse     root mean squared error over all pixels and channels\n"
-           "  relmse   relative MSE: mean of (A - B)^2 / (B^2 + %g)\n"
-           "  psnr     peak signal-to-noise ratio 10 log10(1 / MSE) in dB (inf if equal)\n"
-           "\n"
-           "Options:\n"
-           "  --error-image FILE   write a false-colour image of the per-pixel absolute error\n"
-           "                       (mean over channels; black = 0, white = the largest error,\n"
-           "                       which is printed), .png or .pfm\n"
-           "  -h, --help           show this help\n"
-           "\n"
-           "Exit status: 0 on success, 2 on a bad command line, an unreadable image or\n"
-           "images of different sizes, 1 when the error image cannot be written.\n",
-           TR_RELMSE_EPSILON);
+static void compare_help(FILE *fp) {
+    fprintf(fp,
+            "Usage: trac0r compare A B [options]\n"
+            "\n"
+            "Compares image A (.pfm, .exr or .png) against the reference B on linear radiance\n"
+            "clamped to [0,1]: rmse, relmse (mean of (A - B)^2 / (B^2 + %g)) and psnr in dB.\n"
+            "\n"
+            "Options:\n"
+            "  --error-image FILE   write the per-pixel absolute error, false-colour (.png/.pfm)\n"
+            "  -h, --help           show this help\n"
+            "\n"
+            "Exit status: 0 done, 2 bad command line, unreadable images or different sizes,\n"
+            "1 the error image could not be written.\n",
+            TR_RELMSE_EPSILON);
 }
 
 int cmd_compare(int argc, char **argv) {
@@ -55,7 +50,7 @@ int cmd_compare(int argc, char **argv) {
     const char *error_image = NULL;
     while (cli_next(&a)) {
         if (cli_is(&a, "-h") || cli_is(&a, "--help")) {
-            compare_help();
+            compare_help(stdout);
             return CLI_OK;
         }
         if (cli_is(&a, "--error-image")) {
@@ -70,7 +65,7 @@ int cmd_compare(int argc, char **argv) {
                                  error_image);
             }
         } else if (a.opt[0] == '-' && a.opt[1] != '\0') {
-            return cli_unknown(&a);
+            return cli_unknown(&a, compare_help);
         } else if (npaths < 2) {
             paths[npaths++] = a.opt;
         } else {

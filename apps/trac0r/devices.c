@@ -2,35 +2,18 @@
 #include "devices.h"
 #include "commands.h"
 
-#include <errno.h>
 #include <stdlib.h>
 #include <string.h>
 
 int cli_parse_device(cli_args *a, cli_common *c) {
+    tr_error err;
     if (cli_value(a) != CLI_OK) {
         return CLI_USAGE;
     }
-    const char *v = a->value;
-    if (strcmp(v, "cpu") == 0) {
-        snprintf(c->device, sizeof c->device, "cpu");
-        return CLI_OK;
+    if (tr_device_name_check(a->value, c->device, sizeof c->device, &err) != TR_OK) {
+        return cli_error(a, "%s: %s", a->opt, err.msg);
     }
-    if (strncmp(v, "opencl", 6) == 0 && (v[6] == '\0' || v[6] == ':')) {
-        if (v[6] == '\0') {
-            snprintf(c->device, sizeof c->device, "opencl:0");
-            return CLI_OK;
-        }
-        const char *num = v + 7;
-        char *end;
-        errno = 0;
-        long n = strtol(num, &end, 10);
-        if (*num < '0' || *num > '9' || *end != '\0' || errno == ERANGE || n > 1023) {
-            return cli_error(a, "%s: expected opencl:N with N in 0..1023, got '%s'", a->opt, v);
-        }
-        snprintf(c->device, sizeof c->device, "opencl:%ld", n);
-        return CLI_OK;
-    }
-    return cli_error(a, "%s: unknown device '%s' (expected cpu, opencl or opencl:N)", a->opt, v);
+    return CLI_OK;
 }
 
 tr_render_config cli_render_config(const cli_common *c) {

@@ -3,7 +3,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/resource.h>
 #include <unistd.h>
 
 #include "cli.h"
@@ -14,128 +13,63 @@
 #include "stop.h"
 #include "trac0r/outfile.h"
 
-static void render_help(void) {
-    printf("Usage: trac0r render [SCENE] [options]\n"
-           "\n"
-           "Renders a scene on the CPU or an OpenCL device (--device), accumulating one sample\n"
-           "per pixel per pass (on a device, in a film read back once at the end),\n"
-           "and writes the result. With no arguments it renders the thesis's Cornell box at\n"
-           "800x600 to render.png. SCENE is a built-in scene or a scene file\n"
-           "(docs/scene-format.md); a file's render defaults (size, spp, max depth,\n"
-           "integrator, accel) apply unless the command line gives them.\n"
-           "\n"
-           "Options:\n"
-           "%s"
-           "  --spp N              samples per pixel, 1..1000000: exactly N everywhere\n"
-           "                       (default: a scene file's render.spp, else adaptive\n"
-           "                       sampling to --noise-threshold 0.01 up to 64 spp and\n"
-           "                       --denoise; 16 spp with --stride, --checkpoint or mpirun)\n"
-           "  --stride K           preview mode: trace every K-th pixel in x and y and fill\n"
-           "                       KxK blocks, 1..64 (default 1: every pixel)\n"
-           "  --exposure EV        PNG exposure in stops, -20..20 (default 0): radiance is\n"
-           "                       scaled by 2^EV, clamped to [0,1] and sRGB-encoded\n"
-           "  --out FILE           output image, .png (8-bit sRGB), .pfm (float linear RGB)\n"
-           "                       or .exr (OpenEXR, linear RGB with the passes as layers)\n"
-           "                       (default render.png); written to a temporary file and\n"
-           "                       renamed, so it never exists half-written\n"
-           "  --exr-type T         EXR channel type, half or float (default float)\n"
-           "  --passes LIST        also write these passes beside the image, comma-separated:\n"
-           "                       albedo, normal, depth, id, variance (or all); each goes to\n"
-           "                       FILE-without-extension.PASS.pfm, or into the EXR as layers\n"
-           "                       albedo.RGB, normal.XYZ, depth.Z, id, variance.RGB (float:\n"
-           "                       the pixel's mean base colour, shading normal, distance\n"
-           "                       from the camera, primitive id, at the first surface that\n"
-           "                       is not a mirror or smooth glass, 0 where a sample met\n"
-           "                       none; the variance of the pixel's mean radiance per\n"
-           "                       channel, 0 below 2 samples)\n"
-           "  --checkpoint FILE    save the film and what is needed to continue to FILE\n"
-           "                       every --checkpoint-interval, on SIGINT/SIGTERM and at\n"
-           "                       the end (atomically: the last complete one survives)\n"
-           "  --checkpoint-interval S  seconds between checkpoints, 0..1e6 (default 60;\n"
-           "                       0: after every pass)\n"
-           "  --resume FILE        continue the render saved in FILE: the image is\n"
-           "                       bit-identical to an uninterrupted render of --spp samples\n"
-           "                       (default: the checkpoint's); the scene and options must\n"
-           "                       be the checkpoint's\n"
-           "  --noise-threshold E  adaptive sampling, 0..1 (default 0.01 without --spp, else\n"
-           "                       0: off): 8x8-pixel tiles\n"
-           "                       stop once their pixels' mean error estimate is below E (at\n"
-           "                       16, 32, 64, ... spp: the mean of N samples against that\n"
-           "                       of the first N/2, relative to the square root of the\n"
-           "                       pixel's value; 0.01 is a good start); --spp is the most\n"
-           "                       a pixel gets. Not with --stride, --checkpoint, --resume\n"
-           "                       or mpirun\n"
-           "  --tonemap CURVE      PNG display curve: clamp (default) or filmic (an ACES-like\n"
-           "                       fitted curve that rolls highlights off); PFM and EXR\n"
-           "                       stay linear\n"
-           "  --denoise            filter the final image with the offline denoiser: fireflies\n"
-           "                       re-weighted from the pixels' sample statistics, then a\n"
-           "                       first-order regression on the albedo, normal and depth\n"
-           "                       passes (docs/cli.md); the passes are rendered for it.\n"
-           "                       On by default when no --spp is given\n"
-           "  --no-denoise         write the image as rendered (without --spp: adaptive\n"
-           "                       sampling alone)\n"
-           "  --time-limit S       stop before a pass that would end after S seconds,\n"
-           "                       0..1e6 (default 0: none); the image is complete, and the\n"
-           "                       same as one rendered with the spp it reached (and its\n"
-           "                       checkpoint resumes to the rest). Not with mpirun\n"
-           "  --verbose            after the summary, where the time went: setting up (scene,\n"
-           "                       acceleration structure, device), rendering, and the CPU\n"
-           "                       time used (user + system); under mpirun per rank, with\n"
-           "                       the time spent waiting, on messages and on pixels\n"
-           "  -h, --help           show this help\n"
-           "\n"
-           "Progress (a bar with the ETA on a terminal, otherwise a line a second) goes to\n"
-           "stderr, then one summary line. SIGINT or SIGTERM (Ctrl-C) stops the render at the\n"
-           "end of the pass under way and writes the image of the samples so far (and the\n"
-           "checkpoint); a second signal ends it at once. Under mpirun the ranks share the\n"
-           "tiles of the image (docs/distributed.md).\n"
-           "Exit status: 0 on success, 2 on a bad command line or a checkpoint of another\n"
-           "render, 1 when rendering or writing fails, 128+N after signal N (the image of\n"
-           "the samples so far written).\n",
-           cli_common_help());
+static void render_help(FILE *fp) {
+    fprintf(fp,
+            "Usage: trac0r render [SCENE] [options]\n"
+            "\n"
+            "Renders SCENE (default builtin:cornell, the thesis's Cornell box) and writes\n"
+            "the image. A scene file's render defaults apply to the options not given.\n"
+            "The full manual: man trac0r (docs/cli.md).\n"
+            "\n"
+            "Options:\n"
+            "%s"
+            "  --spp N              samples per pixel, 1..1000000 (default: the file's, else\n"
+            "                       adaptive to 0.01 up to 64 spp, then --denoise)\n"
+            "  --stride K           preview: trace every K-th pixel, 1..64 (default 1)\n"
+            "  --exposure EV        PNG exposure in stops, -20..20 (default 0)\n"
+            "  --out FILE           .png, .pfm or .exr (default render.png)\n"
+            "  --exr-type T         EXR channel type, half or float (default float)\n"
+            "  --passes LIST        also write albedo,normal,depth,id,variance (or all)\n"
+            "  --checkpoint FILE    save the render to FILE to continue it later\n"
+            "  --checkpoint-interval S  seconds between checkpoints, 0..1e6 (default 60)\n"
+            "  --resume FILE        continue the render saved in FILE (bit-identical)\n"
+            "  --noise-threshold E  adaptive sampling per 8x8 tile, 0..1 (0: off)\n"
+            "  --tonemap CURVE      PNG display curve: clamp (default) or filmic\n"
+            "  --denoise            filter the image with the offline denoiser\n"
+            "  --no-denoise         write the image as rendered\n"
+            "  --time-limit S       stop before a pass would end after S seconds, 0..1e6\n"
+            "  --verbose            the structure's size, and where the time went\n"
+            "  -h, --help           show this help\n"
+            "\n"
+            "SIGINT or SIGTERM writes the image of the samples so far. Exit status: 0 done,\n"
+            "2 bad command line or input, 1 rendering or writing failed, 128+N signal N.\n",
+            cli_common_help());
+}
+
+/* --passes' names: a pass's TR_PASS_* bit, or all: every pass render writes (the direct
+ * and emission passes feed the real-time filters only). */
+static int pass_bits(const char *name) {
+    if (strcmp(name, "all") == 0) {
+        return (int)(TR_PASS_MASK & ~(TR_PASS_DIRECT | TR_PASS_EMISSION));
+    }
+    for (uint32_t k = 1; k <= TR_PASS_VARIANCE; k <<= 1) {
+        if (strcmp(tr_pass_name(k), name) == 0) {
+            return (int)k;
+        }
+    }
+    return -1;
 }
 
 /* --passes: "albedo,normal,depth,id,variance" or "all" into TR_PASS_* bits. */
 static int parse_passes(cli_args *a, uint32_t *passes) {
-    if (cli_value(a) != CLI_OK) {
-        return CLI_USAGE;
-    }
+    int bits[16];
+    const int n =
+        cli_parse_list(a, pass_bits, bits, 16, "pass", "albedo, normal, depth, id, variance, all");
     *passes = 0;
-    const char *p = a->value;
-    while (*p) {
-        size_t len = strcspn(p, ",");
-        uint32_t bit = 0;
-        if (len == 3 && strncmp(p, "all", 3) == 0) {
-            /* The direct and emission passes feed the real-time filters; render does not
-             * write them. */
-            bit = TR_PASS_MASK & ~(TR_PASS_DIRECT | TR_PASS_EMISSION);
-        }
-        for (uint32_t k = 1; k <= TR_PASS_VARIANCE && !bit; k <<= 1) {
-            const char *name = tr_pass_name(k);
-            if (strlen(name) == len && strncmp(p, name, len) == 0) {
-                bit = k;
-            }
-        }
-        if (!bit) {
-            return cli_error(a,
-                             "%s: unknown pass '%.*s' (expected albedo, normal, depth, id, "
-                             "variance or all)",
-                             a->opt, (int)len, p);
-        }
-        *passes |= bit;
-        p += len;
-        if (*p == ',') {
-            ++p;
-            if (!*p) {
-                return cli_error(a, "%s: '%s' ends with a comma", a->opt, a->value);
-            }
-        }
+    for (int i = 0; i < n; ++i) {
+        *passes |= (uint32_t)bits[i];
     }
-    if (!*passes) {
-        return cli_error(a, "%s: expected a list of passes", a->opt);
-    }
-    return CLI_OK;
+    return n < 0 ? CLI_USAGE : CLI_OK;
 }
 
 /* "dir/img.png" -> "dir/img.albedo.pfm" for pass `bit`. */
@@ -145,15 +79,6 @@ static int pass_path(const char *out, uint32_t bit, char *buf, size_t size) {
     const size_t stem = dot && (!slash || dot > slash) ? (size_t)(dot - out) : strlen(out);
     const int n = snprintf(buf, size, "%.*s.%s.pfm", (int)stem, out, tr_pass_name(bit));
     return n < 0 || (size_t)n >= size ? -1 : 0;
-}
-
-double render_cpu_seconds(void) {
-    struct rusage ru;
-    if (getrusage(RUSAGE_SELF, &ru) != 0) {
-        return 0.0;
-    }
-    return (double)ru.ru_utime.tv_sec + 1e-6 * (double)ru.ru_utime.tv_usec +
-           (double)ru.ru_stime.tv_sec + 1e-6 * (double)ru.ru_stime.tv_usec;
 }
 
 /* render's own options: CLI_OK, CLI_USAGE, or -1 for none of them. */
@@ -355,13 +280,18 @@ int render_write_outputs(const render_job *job, tr_session *s, uint32_t samples,
     } else if (rc == TR_OK) {
         rc = write_plain(job, film, job->denoise ? &den : film, &err);
     }
+    char note[400]; /* a black or white image is not left silent */
+    if (rc == TR_OK &&
+        tr_image_exposure_note(job->denoise ? &den : film, job->exposure, note, sizeof note)) {
+        fprintf(stderr, "trac0r render: warning: %s: %s\n", job->out, note);
+    }
     tr_film_free(&den);
     if (rc != TR_OK) {
         fprintf(stderr, "trac0r render: %s\n", err.msg);
         return CLI_FAILURE;
     }
     char accel[160];
-    cli_describe_accel(accel, sizeof accel, job->scene);
+    tr_scene_accel_describe(job->scene, job->verbose, accel, sizeof accel);
     fprintf(stderr, "trac0r render: %s %ux%u, %u spp%s%s%s, %s, %s: %.2f s, %.2f Mrays/s -> %s\n",
             job->common.scene, job->common.width, job->common.height, samples, stopped ? " (" : "",
             stopped ? stopped : "", stopped ? ")" : "", job->be.name, accel, elapsed,
@@ -471,7 +401,7 @@ static int render_local(render_job *job) {
         fprintf(stderr,
                 "trac0r render: setup %.3f s, rendering %.3f s, output %.3f s; CPU %.3f s (user "
                 "+ system)\n",
-                t0 - job->started, t1 - t0, tr_time_now() - t1, render_cpu_seconds());
+                t0 - job->started, t1 - t0, tr_time_now() - t1, tr_time_cpu());
     }
     tr_session_destroy(s);
     return rc == CLI_OK && sig ? 128 + sig : rc;

@@ -37,9 +37,6 @@ typedef struct render_job {
     double started;        /* tr_time_now() when the setup began */
 } render_job;
 
-/* user + system CPU seconds this process has used so far (all its threads). */
-double render_cpu_seconds(void);
-
 /* Parses the command line, loads the scene and opens the device. Returns CLI_OK with
  * *done = 0 when the job is ready (render_job_free releases it), or an exit status with
  * *done = 1 (help printed, or an error reported). */

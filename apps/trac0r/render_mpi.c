@@ -229,7 +229,7 @@ static int open_sessions(render_job *job, int rank, int size, tr_session **out) 
 /* --verbose: rank 0 prints where every rank's time went. Every rank sends its times (the
  * option may differ between ranks), one small message each, after the render. */
 static void report_phases(const render_job *job, int rank, int size, int rc) {
-    phase[PH_CPU] = render_cpu_seconds();
+    phase[PH_CPU] = tr_time_cpu();
     if (rank != 0) {
         MPI_Send(phase, PH_COUNT, MPI_DOUBLE, 0, TAG_PHASES, MPI_COMM_WORLD);
         return;

@@ -12,10 +12,8 @@
 #include <sys/stat.h>
 
 #include "view.h"
-#include "view_camera.h"
 #include "view_overlay.h"
 #include "view_render.h"
-#include "view_vec.h"
 #include "view_wire.h"
 #include "trac0r/outfile.h"
 
@@ -45,7 +43,7 @@ typedef struct shown_frame {
     int moving;
 } shown_frame;
 
-static int write_state(const char *path, const view_state *s, const fly_camera *f,
+static int write_state(const char *path, const view_state *s, const tr_fly_camera *f,
                        const shown_frame *sf, uint32_t w, uint32_t h, double fps, tr_error *err) {
     tr_outfile *out = tr_outfile_create(path, err);
     if (!out) {
@@ -174,7 +172,7 @@ typedef struct view_window {
     int ttf;
     view_renderer r;
     uint32_t w, h, tex_w, tex_h;
-    fly_camera fly0, fly;
+    tr_fly_camera fly0, fly;
     tr_camera cam;
     view_state st;
     uint64_t shown_seq, shown_gen, last_printed_seq, fps_frames0, frames_done, cancelled;
@@ -258,7 +256,7 @@ static int start_rendering(view_window *vw, cli_backend *be) {
     tr_error err;
     const tr_camera *scene_cam = tr_scene_camera(vw->scene);
     const tr_aabb bounds = tr_scene_bounds(vw->scene);
-    vw->fly0 = fly_from_camera(scene_cam, view_default_speed(&bounds));
+    vw->fly0 = tr_fly_from_camera(scene_cam, tr_fly_default_speed(&bounds));
     vw->fly = vw->fly0;
     /* The scene's own camera until the user moves: so that the first view's film is
      * exactly what `trac0r render` computes. */
@@ -304,7 +302,7 @@ static int start_rendering(view_window *vw, cli_backend *be) {
 /* C: the camera as scene JSON, on stdout and into the next free file. */
 static void save_camera(view_window *vw) {
     char json[1024], path[4200];
-    view_camera_json(&vw->fly, json, sizeof json);
+    tr_fly_json(&vw->fly, json, sizeof json);
     fputs(json, stdout);
     fflush(stdout);
     next_file_path(vw->o->shot_dir, "trac0r-camera", "json", path, sizeof path);
@@ -387,18 +385,6 @@ static void on_key(view_window *vw, SDL_Keycode key, int *view_changed) {
     }
 }
 
-/* Mouse-look: pitch turns about up x dir whatever the handedness (up stays up); yaw turns
- * towards the screen's right, which a mirrored camera has on the other side. */
-static void look(fly_camera *fly, int dx, int dy) {
-    const float k = 0.0025f; /* radians per pixel */
-    tr_vec3 right = v3_normalize(v3_cross(fly->up, fly->dir));
-    const float yaw = fly->mirrored ? -k : k;
-    fly->dir = view_rotate(fly->dir, fly->up, (float)dx * yaw);
-    fly->dir = view_rotate(fly->dir, right, (float)dy * k);
-    fly->up = view_rotate(fly->up, right, (float)dy * k);
-    fly_orthonormalize(fly);
-}
-
 /* One event; sets *view_changed when the view changed. */
 static void on_event(view_window *vw, const SDL_Event *ev, int *view_changed) {
     switch (ev->type) {
@@ -429,7 +415,9 @@ static void on_event(view_window *vw, const SDL_Event *ev, int *view_changed) {
         vw->mouse_x = ev->motion.x;
         vw->mouse_y = ev->motion.y;
         if (vw->st.mouselook && (ev->motion.xrel || ev->motion.yrel)) {
-            look(&vw->fly, ev->motion.xrel, ev->motion.yrel);
+            /* 0.0025 radians per pixel of mouse motion. */
+            tr_fly_look(&vw->fly, 0.0025f * (float)ev->motion.xrel,
+                        0.0025f * (float)ev->motion.yrel);
             *view_changed = 1;
         }
         break;
@@ -452,24 +440,11 @@ static void on_event(view_window *vw, const SDL_Event *ev, int *view_changed) {
 /* Held keys move and roll the camera at a rate independent of the frame rate; a changed
  * view (or the end of a movement) goes to the render thread. */
 static void steer(view_window *vw, double t_in, double dt, int view_changed) {
-    fly_camera *fly = &vw->fly;
-    const Uint8 *keys = SDL_GetKeyboardState(NULL);
-    tr_vec3 right = fly_right(fly);
-    tr_vec3 move = v3(0.0f, 0.0f, 0.0f);
-    move = v3_add(move, v3_scale(fly->dir, (float)(keys[SDL_SCANCODE_W] - keys[SDL_SCANCODE_S])));
-    move = v3_add(move, v3_scale(right, (float)(keys[SDL_SCANCODE_D] - keys[SDL_SCANCODE_A])));
-    move = v3_add(move,
-                  v3_scale(fly->up, (float)(keys[SDL_SCANCODE_SPACE] - keys[SDL_SCANCODE_LCTRL])));
-    if (v3_dot(move, move) > 0.0f) {
-        fly->pos = v3_add(fly->pos, v3_scale(v3_normalize(move), fly->speed * (float)dt));
-        view_changed = 1;
-    }
-    const int roll = keys[SDL_SCANCODE_E] - keys[SDL_SCANCODE_Q];
-    if (roll) {
-        fly->up = view_rotate(fly->up, fly->dir, (float)roll * 1.0f * (float)dt);
-        fly_orthonormalize(fly);
-        view_changed = 1;
-    }
+    const Uint8 *k = SDL_GetKeyboardState(NULL);
+    view_changed |= tr_fly_step(&vw->fly, (float)(k[SDL_SCANCODE_W] - k[SDL_SCANCODE_S]),
+                                (float)(k[SDL_SCANCODE_D] - k[SDL_SCANCODE_A]),
+                                (float)(k[SDL_SCANCODE_SPACE] - k[SDL_SCANCODE_LCTRL]),
+                                (float)(k[SDL_SCANCODE_E] - k[SDL_SCANCODE_Q]), (float)dt);
     /* Moving: a view change in the last 150 ms. The renderer then holds the frame budget;
      * the first tick without changes asks for the full-resolution view. */
     if (view_changed) {
@@ -478,7 +453,7 @@ static void steer(view_window *vw, double t_in, double dt, int view_changed) {
     const int moving = t_in - vw->last_change_t < 0.15;
     if (view_changed || moving != vw->was_moving) {
         tr_camera next;
-        if (!view_changed || fly_make(fly, vw->w, vw->h, &next) == TR_OK) {
+        if (!view_changed || tr_fly_make(&vw->fly, vw->w, vw->h, &next, NULL) == TR_OK) {
             if (view_changed) {
                 vw->cam = next;
             }
@@ -642,7 +617,7 @@ static void draw(view_window *vw) {
         view_draw_bvh(ren, &vw->cam, vw->scene, vw->st.bvh_depth); /* nothing without a BVH */
     }
     char accel[160];
-    cli_describe_accel(accel, sizeof accel, vw->scene);
+    tr_scene_accel_describe(vw->scene, 1, accel, sizeof accel);
     const uint32_t bvh_depth = view_bvh_depth(vw->scene);
     pthread_mutex_unlock(&vw->r.mu);
     if (vw->st.overlay) {

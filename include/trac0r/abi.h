@@ -14,6 +14,7 @@
 #include <stddef.h>
 
 #include "trac0r/accel.h"
+#include "trac0r/camera.h"
 #include "trac0r/error.h"
 #include "trac0r/film.h"
 #include "trac0r/image.h"
@@ -45,7 +46,11 @@
     X(RENDER_REQUEST, tr_render_request)                                                           \
     X(RENDER_SETTINGS, tr_render_settings)                                                         \
     X(SESSION_DESC, tr_session_desc)                                                               \
-    X(SESSION_PROGRESS, tr_session_progress)
+    X(SESSION_PROGRESS, tr_session_progress)                                                       \
+    X(FLY_CAMERA, tr_fly_camera)                                                                   \
+    X(MODEL_OPTIONS, tr_model_options)                                                             \
+    X(SCENE_EXTRAS, tr_scene_extras)                                                               \
+    X(SCENE_OPEN_DESC, tr_scene_open_desc)
 
 #define TR_ABI_ENUM_ENTRY(name, type) TR_ABI_##name,
 typedef enum tr_abi_type { TR_ABI_TYPES(TR_ABI_ENUM_ENTRY) TR_ABI_TYPE_COUNT } tr_abi_type;

@@ -1,7 +1,9 @@
-/* camera.h - setting up a pinhole camera (tr_camera, trac0r/types.h). */
+/* camera.h - setting up a pinhole camera (tr_camera, trac0r/types.h), and the free-flying
+ * camera a viewer steers (tr_fly_camera). */
 #ifndef TRAC0R_CAMERA_H
 #define TRAC0R_CAMERA_H
 
+#include <stddef.h>
 #include <stdint.h>
 
 #include "trac0r/types.h"
@@ -16,5 +18,38 @@ int tr_camera_make(tr_camera *cam, tr_vec3 pos, tr_vec3 dir, tr_vec3 world_up, f
 
 /* The same camera for another image size (the vertical field of view is kept). */
 int tr_camera_resize(tr_camera *cam, uint32_t width, uint32_t height, tr_error *err);
+
+/* A camera as a viewer steers it (the command's `view`; any program with a window): its
+ * position, unit direction and up (kept orthogonal), the lens, a speed in world units per
+ * second, and whether the scene's camera was mirrored. A right-handed scene's camera has
+ * its right vector negated after tr_camera_make (the scene file does that); every rebuild
+ * must negate it again, or the image flips. */
+typedef struct tr_fly_camera {
+    tr_vec3 pos, dir, up;
+    float vfov, near_dist, far_dist;
+    float speed;
+    int mirrored;
+} tr_fly_camera;
+
+/* The fly camera of `cam`, moving at `speed`. */
+tr_fly_camera tr_fly_from_camera(const tr_camera *cam, float speed);
+/* The tr_camera of f at w x h (its right negated when mirrored). */
+int tr_fly_make(const tr_fly_camera *f, uint32_t w, uint32_t h, tr_camera *cam, tr_error *err);
+/* The screen's right in world space (where a sideways move goes). */
+tr_vec3 tr_fly_right(const tr_fly_camera *f);
+/* dt seconds of the controls held: a move at f->speed along forward * dir + side * right +
+ * rise * up (each in -1..1, normalised together) and a roll of `roll` radians per second
+ * about dir. Returns 1 when the camera changed. */
+int tr_fly_step(tr_fly_camera *f, float forward, float side, float rise, float roll, float dt);
+/* Turns by `yaw` radians about up (rightwards on screen, mirrored or not) and `pitch`
+ * radians about the screen's horizontal axis (a mouse's motion times its sensitivity). */
+void tr_fly_look(tr_fly_camera *f, float yaw, float pitch);
+/* A speed for a scene whose bounds are b: a quarter of the diagonal per second, so that
+ * crossing it takes seconds whatever its units (0.5 for an empty or unbounded scene). */
+float tr_fly_default_speed(const tr_aabb *b);
+/* f as the "camera" object of a scene file (position, direction, up, fov, near, far,
+ * handedness; floats printed so that they read back exactly) into buf; returns what
+ * snprintf returns. */
+int tr_fly_json(const tr_fly_camera *f, char *buf, size_t n);
 
 #endif

@@ -55,6 +55,10 @@ int tr_device_list(const char *kind, tr_device_info *out, int max, int *count, t
  * tr_device_list("opencl", ...)). For OpenCL the kernel is compiled here; a compiler
  * failure's message holds the build log. Returns NULL with a message on failure. */
 tr_device *tr_device_create(const char *name, tr_error *err);
+/* Checks a device name without opening it (a command line's parse): TR_OK with the
+ * canonical name ("cpu", "opencl:N") in canonical[0 .. size), or TR_STATUS_NOT_FOUND with
+ * a message naming what is expected. */
+int tr_device_name_check(const char *name, char *canonical, size_t size, tr_error *err);
 void tr_device_destroy(tr_device *dev);
 const tr_device_info *tr_device_get_info(const tr_device *dev);
 /* "cpu" or "opencl" (tr_device_get_kind names it as an enum). */

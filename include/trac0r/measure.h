@@ -95,6 +95,21 @@ tr_frame_scores tr_scorer_score(tr_scorer *s, int slot, const float *rgb);
 int tr_recovery_frames(const tr_frame_scores *frames, uint32_t count, uint32_t before,
                        uint32_t after, int region, double tolerance, double *steady);
 
+/* Frames [from, until) of one output summed up: `mean` holds each field's mean (flicker
+ * over the frames that have one: a run's first frame has none; region_psnr over the
+ * frames whose region was seen, region_frames of them, NaN if none), psnr_min the worst
+ * frame, total_ms the mean render + temporal + spatial time and fps 1000 / total_ms. */
+typedef struct tr_scores_summary {
+    tr_frame_scores mean;
+    double psnr_min, total_ms, fps;
+    uint32_t region_frames;
+} tr_scores_summary;
+/* The median of v[0 .. n), n >= 1 (the mean of the middle two for even n); sorts v in
+ * place, so that v[0] and v[n - 1] are then the least and the greatest. */
+double tr_median(double *v, int n);
+
+tr_scores_summary tr_scores_summarize(const tr_frame_scores *frames, uint32_t from, uint32_t until);
+
 /* ---- Integrators at equal time -------------------------------------------------- */
 
 #define TR_CONVERGENCE_MAX_POINTS 400

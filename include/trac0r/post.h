@@ -73,6 +73,12 @@ int tr_tonemap_film_curve(const struct tr_film *film, uint32_t x, uint32_t y, ui
 int tr_tonemap_display_film(const struct tr_film *in, float exposure, int curve,
                             struct tr_film *out, tr_error *err);
 
+/* Whether `film` at `exposure` shows anything: 1 when nearly every pixel (99.9 %) displays
+ * black, 2 when nearly every pixel (99 %) is clipped white, each with a sentence in buf
+ * saying what usually causes it; 0 (buf empty) otherwise, and for a film without samples.
+ * What a program prints after a render so that a black or white image is not silent. */
+int tr_image_exposure_note(const struct tr_film *film, float exposure, char *buf, size_t n);
+
 /* ---- Image metrics ------------------------------------------------------------- */
 
 /* The epsilon of the relative MSE's denominator, ref^2 + epsilon. */

@@ -19,6 +19,7 @@
 #include "trac0r/integrator_types.h"
 #include "trac0r/material_types.h"
 #include "trac0r/accel.h"
+#include "trac0r/error.h"
 
 /* Material types: TR_MATERIAL_* <-> scene-file name ("emitter", ...). from_name returns -1
  * for an unknown name; name returns NULL for an unknown type. */
@@ -44,5 +45,20 @@ const char *const *tr_accel_names(size_t *count);
  * " or "), for messages and --help; always NUL-terminates (truncating when buf is short). */
 void tr_names_join(char *buf, size_t size, const char *const *names, size_t count,
                    const char *last_sep);
+
+/* The name of names[0 .. count) closest to s in edit distance (adjacent transpositions
+ * counted as one edit), if within 1 + strlen(s) / 4 edits (at most 3); NULL if none is:
+ * what a "did you mean" names. */
+const char *tr_names_closest(const char *s, const char *const *names, size_t count);
+
+/* Parses a comma-separated list of names ("naive,pt") through `lookup` (a name's value,
+ * or a negative number for an unknown name) into out[0 .. max): returns how many (at
+ * least 1), or -1 with err set (TR_STATUS_INVALID_ARGUMENT) when an item is unknown or
+ * empty ("a,,b", "a,"), or the list holds more than max items. Messages begin with
+ * `what` (the option or key), call an unknown item "unknown <kind>" and end with
+ * "(available: <available>)" when that is given.
+ * The list is read in place, whatever its length: nothing is cut. */
+int tr_names_parse_list(const char *list, int (*lookup)(const char *name), int *out, int max,
+                        const char *what, const char *kind, const char *available, tr_error *err);
 
 #endif

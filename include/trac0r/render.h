@@ -119,5 +119,8 @@ int tr_default_threads(void);
 
 /* Monotonic wall clock in seconds. */
 double tr_time_now(void);
+/* The CPU time the process has used, user and system, all threads, in seconds (0 where
+ * the system cannot tell). */
+double tr_time_cpu(void);
 
 #endif

@@ -146,6 +146,50 @@ double tr_scene_bvh_build_seconds(const tr_scene *s);
  * committed to TR_ACCEL_TYPE_EMBREE). */
 double tr_scene_embree_build_seconds(const tr_scene *s);
 
+/* ---- Instances ------------------------------------------------------------------
+ *
+ * A prototype is geometry stored once (object space); an instance places it with a 3x4
+ * affine matrix m (row-major, object to world: x' = m[0] x + m[1] y + m[2] z + m[3],
+ * y' from m[4..7], z' from m[8..11]). Each instance is one shape of the scene: its
+ * triangles, transformed, are the scene's triangles (shading, lights, the passes' ids and
+ * every structure but the BVH read them), while TR_ACCEL_TYPE_BVH on the CPU traces a
+ * two-level structure: a top-level wide BVH over the instances whose leaves carry the ray
+ * into each prototype's own bottom-level wide BVH, built once per prototype however many
+ * instances it has. The other structures (flat, bvh2, embree) and OpenCL devices trace the
+ * instances' transformed triangles as ordinary ones (flattened). */
+
+/* The matrix of a transform (scale, then rotation, then translation). */
+void tr_transform_matrix(const tr_transform *tf, float m[12]);
+/* Turns shapes first_shape .. tr_scene_shape_count(s) - 1 (the last added, none of them an
+ * instance) into prototype *proto: their triangles and vertex attributes leave the scene
+ * and are kept, in the coordinates they were added in, as the prototype's. */
+int tr_scene_make_prototype(tr_scene *s, uint32_t first_shape, uint32_t *proto, tr_error *err);
+/* Places prototype `proto` with matrix m as a new shape (and instance *instance, may be
+ * NULL). A matrix with a non-finite entry or a singular (or nearly singular) 3x3 part is
+ * refused with TR_STATUS_INVALID_ARGUMENT. */
+int tr_scene_add_instance(tr_scene *s, uint32_t proto, const float m[12], uint32_t *instance,
+                          tr_error *err);
+/* Appends prototype `proto` placed with m as a plain shape, not an instance (how scene
+ * files nest prototypes in prototypes). */
+int tr_scene_add_prototype_copy(tr_scene *s, uint32_t proto, const float m[12], tr_error *err);
+/* Moves instance `instance` to matrix m (checked as above): its triangles and vertex
+ * normals are transformed anew; tr_scene_update then refits the top level along the
+ * instance's path only (the bottom levels never change). tr_scene_move_shape on an
+ * instance's shape does the same with the translation added to its matrix. */
+int tr_scene_set_instance_transform(tr_scene *s, uint32_t instance, const float m[12],
+                                    tr_error *err);
+/* Instance i's matrix into m (0 when there is no instance i). */
+int tr_scene_instance_transform(const tr_scene *s, uint32_t instance, float m[12]);
+uint32_t tr_scene_prototype_count(const tr_scene *s);
+uint32_t tr_scene_instance_count(const tr_scene *s);
+/* The prototype's triangle count (0 for no such prototype). */
+uint32_t tr_scene_prototype_triangle_count(const tr_scene *s, uint32_t proto);
+/* What scene triangle `triangle` (the id pass's primitive - 1) is: 1 with *instance and
+ * *prim (its index in the prototype) when it belongs to an instance, 0 for a triangle of
+ * the scene's own (or none). */
+int tr_scene_triangle_instance(const tr_scene *s, uint32_t triangle, uint32_t *instance,
+                               uint32_t *prim);
+
 /* ---- Reading a scene ---------------------------------------------------------- */
 
 uint32_t tr_scene_triangle_count(const tr_scene *s);
@@ -206,6 +250,12 @@ void tr_scene_set_camera(tr_scene *s, const tr_camera *cam);
 tr_accel_type tr_scene_accel(const tr_scene *s);
 /* Counts, depths and build times of the committed structure. */
 void tr_scene_accel_info(const tr_scene *s, tr_accel_info *info);
+/* The committed structure in one line for a summary: its name, and for bvh the wide
+ * traversal's width and instruction set ("bvh (8-wide avx2)"; a TRAC0R_ISA the CPU or
+ * build cannot honour is named as unavailable). With `detail` its size and build time too:
+ * "bvh (8-wide avx2: N nodes, ...; built in T ms, ...)", "bvh2 (...)", "embree (built in T
+ * ms)", "flat (N shape boxes)". Always NUL-terminates buf (truncating when it is short). */
+void tr_scene_accel_describe(const tr_scene *s, int detail, char *buf, size_t n);
 /* Node i of the committed binary BVH (bvh and bvh2; node 0 is the root, 0 nodes
  * otherwise): its box, and for an interior node the index of its first child (the
  * second follows it). Returns 1 for an interior node, 0 for a leaf, -1 for i out of

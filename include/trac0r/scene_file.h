@@ -64,7 +64,8 @@ typedef struct tr_scene_file {
  * every field means "the file's render block, else the default": a program passes on what
  * its user gave and leaves the rest 0 or NULL. */
 typedef struct tr_render_request {
-    uint32_t width, height;     /* the image; 0: render.width / render.height, else 800 / 600 */
+    uint32_t width, height;     /* the image; 0: render.width / render.height, else 800 / 600;
+                                   one side alone: the other keeps that size's aspect */
     uint32_t spp;               /* samples per pixel; 0: render.spp, else 16 (tr_session's) */
     int max_depth;              /* 1..TR_MAX_DEPTH_LIMIT; 0: render.max_depth (at most
                                    TR_MAX_DEPTH_BDPT for bdpt and vcm), else the integrator's
@@ -144,9 +145,10 @@ int tr_scene_import_mesh(tr_scene *s, const char *path, const tr_transform *tf,
  * first, or the one `camera` names) if it has one, else one framing the model's bounding
  * sphere (40 degree vertical field of view, right-handed); the file's lights mapped onto
  * trac0r's (docs/scene-format.md, "Model files"; a warning names each approximated one),
- * or without any a constant white environment light of radiance 1. info (may be NULL)
+ * or without any a constant grey environment light of radiance TR_MODEL_SKY. info (may be NULL)
  * gets the counts, bounds, warnings (the import table's, naming materials and lights) and
  * render defaults (the file camera's aspect ratio when height is 0). */
+#define TR_MODEL_SKY 0.5f
 typedef struct tr_model_options {
     int up_z;
     float scale;            /* > 0 */
@@ -162,11 +164,63 @@ int tr_scene_path_is_model(const char *path);
  * or '.' (a file without an extension is written ./scene). */
 int tr_scene_name_is_builtin(const char *name);
 
-/* Loads any scene a name can give: a built-in scene (at opt's size, 800x600 where 0), a
+/* What a user adds to any scene or model before it is committed (the command's --env,
+ * --sun and --ground): a zero struct adds nothing. */
+typedef struct tr_scene_extras {
+    const char *env;      /* "R,G,B" (a constant radiance) or an equirectangular image file
+                             (.hdr, .png, ...): replaces the scene's environment; NULL: none */
+    const char *sun;      /* "X,Y,Z": a sun towards that direction (0.53 degrees across),
+                             replacing the scene's; NULL: none */
+    float sun_irradiance; /* its irradiance per channel; 0: TR_SCENE_EXTRAS_SUN */
+    int ground;           /* nonzero: a 0.5 grey diffuse floor just under the scene's bounds,
+                             ten times their size */
+} tr_scene_extras;
+#define TR_SCENE_EXTRAS_SUN 3.0f
+/* Adds x's extras to s (before tr_scene_commit). Fails with TR_STATUS_INVALID_ARGUMENT
+ * naming "env", "sun" or "ground" and the value at fault, or the image reader's status. */
+int tr_scene_add_extras(tr_scene *s, const tr_scene_extras *x, tr_error *err);
+
+/* How a program opens a scene for rendering (tr_scene_open). A zero desc opens it as its
+ * file says, with the library's defaults for the rest. */
+typedef struct tr_scene_open_desc {
+    tr_model_options model;     /* a model file's up axis, scale and camera (its width and
+                                   height are ignored: the request's are used) */
+    tr_render_request request;  /* what the user asked for: wins over the file */
+    tr_render_request defaults; /* the program's own defaults, where neither the request nor
+                                   the file gives a value (0/NULL: the library's); their
+                                   allow_dark is ignored */
+    tr_scene_extras extras;     /* added before the commit; an environment or a sun lets a
+                                   scene without emitters render */
+} tr_scene_open_desc;
+
+/* Loads what `name` names (tr_scene_load: a built-in scene, a model or a scene file),
+ * adds the extras, resolves the render settings (tr_scene_file_apply) into *out and
+ * commits the scene with out->accel: the one call between a scene's name and
+ * tr_session_create. `file` (may be NULL) gets what the file said and its warnings. On
+ * failure the scene is left empty; the status is tr_scene_load's, tr_scene_add_extras's
+ * (messages begin with "env", "sun" or "ground"), tr_scene_file_apply's or
+ * tr_scene_commit's. */
+int tr_scene_open(tr_scene *s, const char *name, const tr_scene_open_desc *d, tr_scene_file *file,
+                  tr_render_settings *out, tr_error *err);
+
+/* An image size with the sides left 0 filled in: both 0, dw x dh; one 0, from the other
+ * with dw x dh's shape (rounded, 1..TR_FILM_MAX_SIDE), as resizing a picture keeps it. */
+void tr_size_fill(uint32_t *width, uint32_t *height, uint32_t dw, uint32_t dh);
+
+/* Loads any scene a name can give: a built-in scene (at opt's size, filled in from
+ * 800x600 by tr_size_fill where a side is 0), a
  * model file (tr_scene_model_load with opt) or a scene file (tr_scene_file_load). `info`
  * (may be NULL) gets what the file says; for a built-in scene its size, shape count,
  * bounds and emitter counts. What `trac0r`'s SCENE argument accepts. */
 int tr_scene_load(tr_scene *s, const char *name, const tr_model_options *opt, tr_scene_file *info,
                   tr_error *err);
+
+/* What a loaded scene holds, as text (what `trac0r info` prints): its triangles, shapes,
+ * materials, emitters, bounds, camera and sun, the first `listed` parts and materials one
+ * line each, a file's render defaults (not for a built-in scene) and the warnings. `info`
+ * is what tr_scene_load gave for `name`. Returns a string to free(), NULL when out of
+ * memory. */
+char *tr_scene_describe(const tr_scene *s, const char *name, const tr_scene_file *info,
+                        uint32_t listed);
 
 #endif

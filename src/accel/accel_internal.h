@@ -39,6 +39,13 @@ int tr_bvh_build(tr_bvh *bvh, const tr_triangle *tris, uint32_t n, tr_error *err
 /* Recomputes every node's box from the triangles' current positions, keeping the tree:
  * for scenes whose triangles moved but did not change in number. */
 void tr_bvh_refit(tr_bvh *bvh, const tr_triangle *tris);
+/* The same build over n boxes (the top level of a two-level structure): its entries
+ * (indices, and tris[].index with zero geometry) are box numbers; empty or non-finite
+ * boxes are left out. tr_bvh_refit does not apply to it (src/accel/tlas.c refits it). */
+int tr_bvh_build_boxes(tr_bvh *bvh, const tr_aabb *boxes, uint32_t n, tr_error *err);
+/* tr_bvh_build leaving out the triangles whose skip[i] is non-zero (skip may be NULL). */
+int tr_bvh_build_skip(tr_bvh *bvh, const tr_triangle *tris, uint32_t n, const uint8_t *skip,
+                      tr_error *err);
 void tr_bvh_free(tr_bvh *bvh);
 
 /* An Embree 3 scene over a scene's triangles (src/accel/embree.c): one triangle
@@ -67,5 +74,7 @@ void tr_embree_free(tr_embree *e);
 
 /* The wide BVH the CPU traces (src/accel/wbvh.h, with its run-time ISA choice). */
 #include "accel/wbvh.h"
+
+/* The two-level structure's top level (tr_tlas) is declared there too. */
 
 #endif

@@ -398,7 +398,10 @@ static void bvh_fill_tris(tr_bvh *bvh, const tr_triangle *tris) {
     }
 }
 
-int tr_bvh_build(tr_bvh *bvh, const tr_triangle *tris, uint32_t n, tr_error *err) {
+/* The build over triangles (tris) or over boxes (boxes, tris NULL: the top level of a
+ * two-level structure, whose leaf entries are instances). */
+static int bvh_build(tr_bvh *bvh, const tr_triangle *tris, const tr_aabb *boxes, uint32_t n,
+                     const uint8_t *skip, tr_error *err) {
     double t0 = tr_time_now();
     memset(bvh, 0, sizeof *bvh);
     builder b;
@@ -419,9 +422,21 @@ int tr_bvh_build(tr_bvh *bvh, const tr_triangle *tris, uint32_t n, tr_error *err
     }
     uint32_t m = 0;
     for (uint32_t i = 0; i < n; ++i) {
+        if (boxes) {
+            /* An empty or non-finite box (an instance of nothing) can never be hit. */
+            if (!(boxes[i].min.x <= boxes[i].max.x && boxes[i].min.y <= boxes[i].max.y &&
+                  boxes[i].min.z <= boxes[i].max.z) ||
+                !v3_is_finite(boxes[i].min) || !v3_is_finite(boxes[i].max)) {
+                continue;
+            }
+            b.boxes[i] = boxes[i];
+            b.centroids[i] = v3_scale(v3_add(b.boxes[i].min, b.boxes[i].max), 0.5f);
+            b.indices[m++] = i;
+            continue;
+        }
         const tr_triangle *t = &tris[i];
-        if (!(t->area > 0.0f) || !v3_is_finite(t->v0) || !v3_is_finite(t->v1) ||
-            !v3_is_finite(t->v2)) {
+        if ((skip && skip[i]) || !(t->area > 0.0f) || !v3_is_finite(t->v0) ||
+            !v3_is_finite(t->v1) || !v3_is_finite(t->v2)) {
             continue; /* can never be hit */
         }
         b.boxes[i] = tri_box(t);
@@ -457,9 +472,29 @@ int tr_bvh_build(tr_bvh *bvh, const tr_triangle *tris, uint32_t n, tr_error *err
         return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY,
                             "out of memory building a BVH over %u triangles", n);
     }
-    bvh_fill_tris(bvh, tris);
+    if (tris) {
+        bvh_fill_tris(bvh, tris);
+    } else {
+        memset(bvh->tris, 0, (size_t)m * sizeof *bvh->tris);
+        for (uint32_t k = 0; k < m; ++k) {
+            bvh->tris[k].index = bvh->indices[k];
+        }
+    }
     bvh->build_seconds = tr_time_now() - t0;
     return TR_OK;
+}
+
+int tr_bvh_build(tr_bvh *bvh, const tr_triangle *tris, uint32_t n, tr_error *err) {
+    return bvh_build(bvh, tris, NULL, n, NULL, err);
+}
+
+int tr_bvh_build_skip(tr_bvh *bvh, const tr_triangle *tris, uint32_t n, const uint8_t *skip,
+                      tr_error *err) {
+    return bvh_build(bvh, tris, NULL, n, skip, err);
+}
+
+int tr_bvh_build_boxes(tr_bvh *bvh, const tr_aabb *boxes, uint32_t n, tr_error *err) {
+    return bvh_build(bvh, NULL, boxes, n, NULL, err);
 }
 
 void tr_bvh_refit(tr_bvh *bvh, const tr_triangle *tris) {

@@ -56,6 +56,21 @@ typedef struct tr_wbvh_leaf {
     uint32_t packet, first, count;
 } tr_wbvh_leaf;
 
+struct tr_wbvh;
+
+/* One instance as the top level of a two-level structure traces it: the ray is carried
+ * into the instance's object space by inv (world to object, a 3x4 row-major affine
+ * matrix: x' = inv[0] x + inv[1] y + inv[2] z + inv[3], ...) and traced through the
+ * bottom level `blas`, whose triangle indices tri_base shifts to the scene's. The
+ * direction is not normalised, so a hit's t is the same in both spaces. identity: inv is
+ * the identity and the world ray is used unchanged (the scene's own triangles). */
+typedef struct tr_wbvh_instance {
+    float inv[12];
+    const struct tr_wbvh *blas;
+    uint32_t tri_base;
+    uint32_t identity;
+} tr_wbvh_instance;
+
 typedef struct tr_wbvh {
     tr_wbvh_node *nodes; /* node 0 is the root; 0 nodes for an empty scene */
     uint32_t node_count;
@@ -66,8 +81,12 @@ typedef struct tr_wbvh {
      * slots at [TR_WBVH_WIDTH * i, ...), UINT32_MAX for an empty slot), and the leaves. */
     uint32_t *slot_src;
     tr_wbvh_leaf *leaves;
-    uint32_t depth;       /* deepest node, root = 0 */
-    uint32_t bvh_refits;  /* tr_bvh.refits of the tree it was collapsed from */
+    uint32_t depth;      /* deepest node, root = 0 */
+    uint32_t bvh_refits; /* tr_bvh.refits of the tree it was collapsed from */
+    /* A top level (src/accel/tlas.c): the leaf packets' index lanes name entries of this
+     * array (UINT32_MAX: an unused lane) instead of triangles; NULL for a bottom level or
+     * a one-level tree. */
+    const tr_wbvh_instance *instances;
     double build_seconds; /* the collapse alone (the binary build comes before) */
 } tr_wbvh;
 
@@ -126,5 +145,33 @@ int tr_wbvh_intersect_avx2(const tr_wbvh *w, const tr_ray *ray, tr_hit *hit);
 int tr_wbvh_occluded_avx2(const tr_wbvh *w, const tr_ray *ray);
 int tr_wbvh_intersect_avx512(const tr_wbvh *w, const tr_ray *ray, tr_hit *hit);
 int tr_wbvh_occluded_avx512(const tr_wbvh *w, const tr_ray *ray);
+
+/* The top level of a two-level structure (src/accel/tlas.c): a binary SAH BVH over the
+ * instances' world boxes, collapsed into a wide BVH whose leaves name instances
+ * (tr_wbvh.instances), each traced through its own bottom-level wide BVH. Keeps what
+ * moving one instance needs to refit only the path from its leaf to the root. */
+typedef struct tr_tlas {
+    tr_bvh bvh;             /* entries are instance numbers */
+    tr_wbvh wbvh;           /* wbvh.instances == inst */
+    tr_wbvh_instance *inst; /* count entries, owned */
+    tr_aabb *boxes;         /* each instance's world box */
+    uint32_t count;
+    uint32_t *parent;    /* per binary node, UINT32_MAX for the root */
+    uint32_t *leaf_of;   /* per instance: its binary leaf, UINT32_MAX when left out */
+    uint32_t *wide_slot; /* per binary node: TR_WBVH_WIDTH * wide node + slot, or UINT32_MAX */
+    uint32_t moves;      /* path refits since the build */
+    double build_seconds;
+} tr_tlas;
+
+/* Builds the top level over n instances (copied) with world boxes boxes[i]; overwrites *t
+ * (free a previous one first). */
+int tr_tlas_build(tr_tlas *t, const tr_wbvh_instance *inst, const tr_aabb *boxes, uint32_t n,
+                  tr_error *err);
+/* Instance i moved: takes its new inverse transform and world box and refits the binary
+ * and wide boxes on the path from its leaf to the root (O(depth)). Returns 0 when that
+ * cannot be done (the instance was left out of the tree, its box having been empty):
+ * build the top level anew then. */
+int tr_tlas_move(tr_tlas *t, uint32_t i, const float inv[12], tr_aabb box);
+void tr_tlas_free(tr_tlas *t);
 
 #endif

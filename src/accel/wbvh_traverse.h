@@ -245,6 +245,54 @@ static inline int tr_wbvh_ctz(uint32_t x) {
     return __builtin_ctz(x);
 }
 
+static inline int tr_wbvh_traverse(const tr_wbvh *w, const tr_ray *ray, tr_hit *hit, int any_hit);
+
+/* A top-level leaf: each instance's bottom level with the ray in its object space, t
+ * limited to the closest hit so far (*tmax). Out of line, so that the bottom levels'
+ * traversal below is inlined once here and the one-level loop stays as it was. */
+static __attribute__((noinline)) int tr_wbvh_leaf_instances(const tr_wbvh *w, uint32_t first,
+                                                            uint32_t packets, const tr_ray *ray,
+                                                            float *tmax, tr_hit *hit, int any_hit) {
+    int found = 0;
+    for (uint32_t k = first; k < first + packets; ++k) {
+        const tr_wbvh_tri4 *p = &w->packets[k];
+        for (int lane = 0; lane < 4; ++lane) {
+            const uint32_t id = p->index[lane];
+            if (id == UINT32_MAX) {
+                continue;
+            }
+            const tr_wbvh_instance *in = &w->instances[id];
+            tr_ray lr = *ray;
+            if (!in->identity) {
+                const float *m = in->inv;
+                const tr_vec3 o = ray->origin, d = ray->dir;
+                lr.origin.x = m[0] * o.x + m[1] * o.y + m[2] * o.z + m[3];
+                lr.origin.y = m[4] * o.x + m[5] * o.y + m[6] * o.z + m[7];
+                lr.origin.z = m[8] * o.x + m[9] * o.y + m[10] * o.z + m[11];
+                lr.dir.x = m[0] * d.x + m[1] * d.y + m[2] * d.z;
+                lr.dir.y = m[4] * d.x + m[5] * d.y + m[6] * d.z;
+                lr.dir.z = m[8] * d.x + m[9] * d.y + m[10] * d.z;
+                lr.inv_dir.x = 1.0f / lr.dir.x;
+                lr.inv_dir.y = 1.0f / lr.dir.y;
+                lr.inv_dir.z = 1.0f / lr.dir.z;
+            }
+            lr.tmax = *tmax;
+            tr_hit h;
+            if (!tr_wbvh_traverse(in->blas, &lr, &h, any_hit)) {
+                continue;
+            }
+            if (any_hit) {
+                return 1;
+            }
+            *tmax = h.t;
+            *hit = h;
+            hit->triangle = in->tri_base + h.triangle;
+            found = 1;
+        }
+    }
+    return found;
+}
+
 /* Closest hit in (ray->tmin, ray->tmax), or with any_hit set the first hit found (hit
  * is then not written).
  * Children are visited nearest entry first; the others wait on a fixed-size stack with
@@ -265,6 +313,15 @@ static inline int tr_wbvh_traverse(const tr_wbvh *w, const tr_ray *ray, tr_hit *
         if (cur & TR_WBVH_LEAF_BIT) {
             uint32_t first = cur & ((1u << TR_WBVH_LEAF_SHIFT) - 1u);
             uint32_t packets = (cur & ~TR_WBVH_LEAF_BIT) >> TR_WBVH_LEAF_SHIFT;
+            if (w->instances) {
+                if (tr_wbvh_leaf_instances(w, first, packets, ray, &tmax, hit, any_hit)) {
+                    if (any_hit) {
+                        return 1;
+                    }
+                    found = 1;
+                }
+                packets = 0;
+            }
             for (uint32_t k = first; k < first + packets; ++k) {
                 float t[4], u[4], v[4];
                 const tr_wbvh_tri4 *p = &w->packets[k];

@@ -136,15 +136,34 @@ static int opencl_index(const char *name) {
     return (int)n;
 }
 
+int tr_device_name_check(const char *name, char *canonical, size_t size, tr_error *err) {
+    const int cl_index = opencl_index(name);
+    if (strcmp(name, "cpu") == 0 || cl_index >= 0) {
+        if (canonical && size > 0) {
+            if (cl_index >= 0) {
+                snprintf(canonical, size, "opencl:%d", cl_index);
+            } else {
+                snprintf(canonical, size, "cpu");
+            }
+        }
+        return TR_OK;
+    }
+    if (strncmp(name, "opencl", 6) == 0) {
+        return tr_error_set(err, TR_STATUS_NOT_FOUND,
+                            "expected opencl:N with N in 0..1023, got '%.100s'", name);
+    }
+    return tr_error_set(err, TR_STATUS_NOT_FOUND,
+                        "unknown device '%.100s' (expected cpu, opencl or opencl:N with N in "
+                        "0..1023)",
+                        name);
+}
+
 tr_device *tr_device_create(const char *name, tr_error *err) {
     if (!name) {
         name = "cpu";
     }
     const int cl_index = opencl_index(name);
-    if (strcmp(name, "cpu") != 0 && cl_index < 0) {
-        tr_error_set(err, TR_STATUS_NOT_FOUND,
-                     "unknown device '%s' (expected cpu, opencl or opencl:N with N in 0..1023)",
-                     name);
+    if (tr_device_name_check(name, NULL, 0, err) != TR_OK) {
         return NULL;
     }
     tr_device *dev = calloc(1, sizeof *dev);

@@ -772,12 +772,15 @@ int tr_cl_upload_scene(tr_cl_context *ctx, const tr_scene *scene, tr_error *err)
     }
     /* The device walks what the host's view holds, except that a scene committed to
      * Embree (a host library) gets a BVH of its own, and bvh scenes upload the binary BVH
-     * (the wide one is host code). */
+     * (the wide one is host code). A bvh scene with instances holds the two-level
+     * structure, host code too: the device gets a binary BVH over the instances'
+     * transformed triangles (flattened), built here like Embree's. */
     tr_scene_view view = tr_scene_view_of(scene);
     tr_bvh own;
     memset(&own, 0, sizeof own);
     tr_accel_type accel = TR_ACCEL_TYPE_FLAT;
-    if (scene->accel == TR_ACCEL_TYPE_BVH || scene->accel == TR_ACCEL_TYPE_BVH2) {
+    if ((scene->accel == TR_ACCEL_TYPE_BVH && !scene->two_level) ||
+        scene->accel == TR_ACCEL_TYPE_BVH2) {
         accel = TR_ACCEL_TYPE_BVH;
     } else if (scene->accel != TR_ACCEL_TYPE_FLAT) {
         if (tr_bvh_build(&own, scene->triangles, scene->triangle_count, err) != TR_OK) {

@@ -242,6 +242,50 @@ tr_frame_scores tr_scorer_score(tr_scorer *s, int slot, const float *rgb) {
     return sc;
 }
 
+static int cmp_double(const void *a, const void *b) {
+    const double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+double tr_median(double *v, int n) {
+    qsort(v, (size_t)n, sizeof *v, cmp_double);
+    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+tr_scores_summary tr_scores_summarize(const tr_frame_scores *frames, uint32_t from,
+                                      uint32_t until) {
+    tr_scores_summary s;
+    memset(&s, 0, sizeof s);
+    s.psnr_min = INFINITY;
+    double region = 0.0;
+    for (uint32_t f = from; f < until; ++f) {
+        const tr_frame_scores *x = &frames[f];
+        s.mean.render_ms += x->render_ms;
+        s.mean.temporal_ms += x->temporal_ms;
+        s.mean.spatial_ms += x->spatial_ms;
+        s.mean.psnr += x->psnr;
+        s.mean.ssim += x->ssim;
+        s.mean.flicker += x->flicker;
+        s.psnr_min = fmin(s.psnr_min, x->psnr);
+        if (x->region_psnr == x->region_psnr) {
+            region += x->region_psnr;
+            ++s.region_frames;
+        }
+    }
+    const double n = until > from ? (double)(until - from) : 1.0;
+    const double nf = from == 0 && until > 1 ? n - 1.0 : n; /* frame 0 has no flicker */
+    s.mean.render_ms /= n;
+    s.mean.temporal_ms /= n;
+    s.mean.spatial_ms /= n;
+    s.mean.psnr /= n;
+    s.mean.ssim /= n;
+    s.mean.flicker /= nf;
+    s.mean.region_psnr = s.region_frames ? region / s.region_frames : NAN;
+    s.total_ms = s.mean.render_ms + s.mean.temporal_ms + s.mean.spatial_ms;
+    s.fps = 1000.0 / s.total_ms;
+    return s;
+}
+
 int tr_recovery_frames(const tr_frame_scores *frames, uint32_t count, uint32_t before,
                        uint32_t after, int region, double tolerance, double *steady) {
     double sum = 0.0;

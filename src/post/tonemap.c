@@ -1,6 +1,8 @@
 /* tonemap.c - the host side of the display transform: wraps the single-source
  * operator of src/post/tonemap.h for one value and for a rectangle of a film. */
 #include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "post/tonemap.h"
@@ -104,4 +106,52 @@ int tr_tonemap_film_curve(const struct tr_film *film, uint32_t x, uint32_t y, ui
         }
     }
     return TR_OK;
+}
+
+int tr_image_exposure_note(const struct tr_film *film, float exposure, char *buf, size_t n) {
+    if (n > 0) {
+        buf[0] = '\0';
+    }
+    const size_t px = (size_t)film->width * film->height;
+    float *rgb = px ? malloc(3 * px * sizeof *rgb) : NULL;
+    if (!rgb) {
+        return 0;
+    }
+    tr_film_mean(film, rgb);
+    /* Displayed black: below half an 8-bit sRGB step (1/510 encoded is about 1.2e-4
+     * linear); clipped: every channel at or above 1. */
+    const float scale = exp2f(exposure);
+    size_t black = 0, white = 0, sampled = 0;
+    double sum = 0.0;
+    for (size_t i = 0; i < px; ++i) {
+        if (film->count[i] == 0) {
+            continue;
+        }
+        const float r = rgb[3 * i] * scale, g = rgb[3 * i + 1] * scale, b = rgb[3 * i + 2] * scale;
+        ++sampled;
+        black += r < 1.2e-4f && g < 1.2e-4f && b < 1.2e-4f;
+        white += r >= 1.0f && g >= 1.0f && b >= 1.0f;
+        sum += (r + g + b) / 3.0;
+    }
+    free(rgb);
+    if (sampled == 0) {
+        return 0;
+    }
+    if (black >= sampled - sampled / 1000) {
+        snprintf(buf, n,
+                 "the image is black (mean %.3g): no light reaches the camera; it may sit "
+                 "inside geometry, or the lights may be hidden, pointed away or too weak "
+                 "(a higher exposure shows what little there is)",
+                 sum / (double)sampled);
+        return 1;
+    }
+    if (white >= sampled - sampled / 100) {
+        snprintf(buf, n,
+                 "the image is white (mean %.3g): nearly every pixel is clipped; the lights or "
+                 "the environment may be far too bright for this exposure, or the materials "
+                 "white (a lower exposure or a darker environment shows the shapes)",
+                 sum / (double)sampled);
+        return 2;
+    }
+    return 0;
 }

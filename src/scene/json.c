@@ -51,6 +51,14 @@ typedef struct jctx {
     cJSON *materials;      /* the "materials" object: names in file order = material indices */
     struct named *by_name; /* the materials sorted by name, for lookups */
     uint32_t name_count;
+    /* Prototypes (parse_prototype): the "prototypes" object, and per member (file order)
+     * its state (0 not parsed, 1 being parsed, 2 done) and prototype index (UINT32_MAX:
+     * empty, its meshes not loaded). prefix: what messages put before a path (inside a
+     * prototype, "prototypes.NAME."). */
+    const cJSON *protos;
+    uint8_t *proto_state;
+    uint32_t *proto_index;
+    const char *prefix;
 } jctx;
 
 /* "FILE: PATH: message" with a code. */
@@ -60,7 +68,8 @@ static int vjerr(const jctx *c, tr_status code, const char *path, const char *fm
     char msg[400];
     vsnprintf(msg, sizeof msg, fmt, ap);
     if (path && path[0]) {
-        return tr_error_set(c->err, code, "%.200s: %s: %s", c->file, path, msg);
+        return tr_error_set(c->err, code, "%.200s: %s%s: %s", c->file, c->prefix ? c->prefix : "",
+                            path, msg);
     }
     return tr_error_set(c->err, code, "%.200s: %s", c->file, msg);
 }
@@ -120,56 +129,6 @@ static void path_index(char *out, const char *base, int i) {
     }
 }
 
-/* Edit distance with adjacent transpositions (optimal string alignment: Damerau 1964,
- * "A technique for computer detection and correction of spelling errors"), capped:
- * strings longer than 31 bytes are "far". */
-static int edit_distance(const char *a, const char *b) {
-    size_t n = strlen(a), m = strlen(b);
-    if (n > 31 || m > 31) {
-        return 99;
-    }
-    int d[32][32];
-    for (size_t i = 0; i <= n; ++i) {
-        d[i][0] = (int)i;
-    }
-    for (size_t j = 0; j <= m; ++j) {
-        d[0][j] = (int)j;
-    }
-    for (size_t i = 1; i <= n; ++i) {
-        for (size_t j = 1; j <= m; ++j) {
-            int best = d[i - 1][j - 1] + (a[i - 1] != b[j - 1]);
-            if (d[i - 1][j] + 1 < best) {
-                best = d[i - 1][j] + 1;
-            }
-            if (d[i][j - 1] + 1 < best) {
-                best = d[i][j - 1] + 1;
-            }
-            if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1] &&
-                d[i - 2][j - 2] + 1 < best) {
-                best = d[i - 2][j - 2] + 1;
-            }
-            d[i][j] = best;
-        }
-    }
-    return d[n][m];
-}
-
-/* The closest of names[] to s within a distance of 1 + len/4, or NULL. */
-static const char *closest(const char *s, const char *const *names, size_t count) {
-    const char *best = NULL;
-    int best_d = 1 + (int)strlen(s) / 4;
-    if (best_d > 3) {
-        best_d = 3;
-    }
-    for (size_t i = 0; i < count; ++i) {
-        int d = edit_distance(s, names[i]);
-        if (d <= best_d && (!best || d < edit_distance(s, best))) {
-            best = names[i];
-        }
-    }
-    return best;
-}
-
 /* A printable, shortened copy of a JSON key or string for messages. */
 static const char *shown(const char *s, char *buf, size_t n) {
     size_t j = 0;
@@ -218,7 +177,7 @@ static int check_keys(const jctx *c, const cJSON *obj, const char *path, const c
             known |= strcmp(name, allowed[i]) == 0;
         }
         if (!known) {
-            const char *near = closest(name, allowed, count);
+            const char *near = tr_names_closest(name, allowed, count);
             char list[256] = "";
             for (size_t i = 0; i < count; ++i) {
                 size_t used = strlen(list);
@@ -446,7 +405,7 @@ static int parse_render(jctx *c, const cJSON *r) {
             const char *const *names = tr_accel_names(&count);
             char buf[40], expected[128];
             tr_names_join(expected, sizeof expected, names, count, " or ");
-            const char *near = closest(s, names, count);
+            const char *near = tr_names_closest(s, names, count);
             return jerr(c, "render.accel",
                         "unknown acceleration structure '%s' (expected %s%s%s%s)",
                         shown(s, buf, sizeof buf), expected, near ? "; did you mean '" : "",
@@ -702,7 +661,7 @@ static int parse_materials(jctx *c, const cJSON *mats) {
         if (t < 0 || !tr_material_type_keys((uint32_t)t, &required, &optional)) {
             char pt[PATH_MAX_LEN], tb[40], expected[128];
             path_key(pt, p, "type");
-            const char *near = closest(type, types, ntypes);
+            const char *near = tr_names_closest(type, types, ntypes);
             size_t len = (size_t)snprintf(expected, sizeof expected, "expected ");
             tr_names_join(expected + len, sizeof expected - len, types, ntypes, " or ");
             return jerr(c, pt, "unknown material type '%s' (%s%s%s)", shown(type, tb, sizeof tb),
@@ -819,7 +778,7 @@ static int material_ref(const jctx *c, const cJSON *obj, const char *path, int r
     }
     char p[PATH_MAX_LEN], buf[48];
     path_key(p, path, "material");
-    const char *near = names ? closest(name, names, count) : NULL;
+    const char *near = names ? tr_names_closest(name, names, count) : NULL;
     int rc = jerr(c, p, "undefined material '%s'%s%s%s", shown(name, buf, sizeof buf),
                   near ? " (did you mean '" : "", near ? near : "", near ? "'?)" : "");
     free(names);
@@ -1028,7 +987,7 @@ static int parse_shapes(jctx *c, const cJSON *shapes) {
         if (t < 0) {
             char pt[PATH_MAX_LEN], buf[40];
             path_key(pt, p, "type");
-            const char *near = closest(type, types, 4);
+            const char *near = tr_names_closest(type, types, 4);
             return jerr(c, pt, "unknown shape type '%s' (%s%s%s)", shown(type, buf, sizeof buf),
                         near ? "did you mean '" : "expected plane, box, icosphere or quad",
                         near ? near : "", near ? "'?" : "");
@@ -1185,6 +1144,214 @@ static int parse_meshes(jctx *c, const cJSON *meshes) {
     return TR_OK;
 }
 
+/* ---- Prototypes and instances --------------------------------------------------- */
+
+static int parse_instances(jctx *c, const cJSON *list, int copies);
+
+/* Parses member k of "prototypes" (its shapes, meshes and nested instances, which are
+ * placed as plain copies) into a prototype. A prototype met again while being parsed is a
+ * cycle: refused, naming the reference (`ref`, a path) that closed it. */
+static int parse_prototype(jctx *c, int k, const char *ref) {
+    static const char *const keys[] = {"description", "shapes", "meshes", "instances"};
+    const cJSON *node = c->protos->child;
+    for (int i = 0; i < k; ++i) {
+        node = node->next;
+    }
+    char buf[48];
+    if (c->proto_state[k] == 1) {
+        return jerr(c, ref, "prototype '%s' contains itself (a cycle of prototypes)",
+                    shown(node->string, buf, sizeof buf));
+    }
+    char p[PATH_MAX_LEN];
+    path_key(p, "prototypes", node->string);
+    if (expect_object(c, node, p) != TR_OK ||
+        check_keys(c, node, p, keys, sizeof keys / sizeof keys[0]) != TR_OK) {
+        return TR_ERR;
+    }
+    const char *saved_prefix = c->prefix;
+    char prefix[PATH_MAX_LEN + 1];
+    snprintf(prefix, sizeof prefix, "%s%s.", saved_prefix ? saved_prefix : "", p);
+    const uint32_t saved_shapes = c->info->shape_count, saved_meshes = c->info->mesh_count;
+    const uint32_t first_shape = c->scene->shape_count;
+    c->proto_state[k] = 1;
+    c->prefix = prefix;
+    const cJSON *shapes = cJSON_GetObjectItemCaseSensitive(node, "shapes");
+    const cJSON *meshes = cJSON_GetObjectItemCaseSensitive(node, "meshes");
+    const cJSON *inst = cJSON_GetObjectItemCaseSensitive(node, "instances");
+    int rc = TR_OK;
+    if (shapes && parse_shapes(c, shapes) != TR_OK) {
+        rc = TR_ERR;
+    } else if (meshes && parse_meshes(c, meshes) != TR_OK) {
+        rc = TR_ERR;
+    } else if (inst && parse_instances(c, inst, 1) != TR_OK) {
+        rc = TR_ERR;
+    }
+    c->prefix = saved_prefix;
+    c->info->shape_count = saved_shapes;
+    c->info->mesh_count = saved_meshes;
+    if (rc != TR_OK) {
+        return TR_ERR;
+    }
+    c->proto_index[k] = UINT32_MAX;
+    if (c->scene->shape_count == first_shape) {
+        if (c->opt->load_meshes || !meshes) {
+            return jerr(c, p, "expected 'shapes', 'meshes' or 'instances' with triangles");
+        }
+    } else {
+        tr_error e;
+        if (tr_scene_make_prototype(c->scene, first_shape, &c->proto_index[k], &e) != TR_OK) {
+            return jerr_from(c, p, &e);
+        }
+    }
+    c->proto_state[k] = 2;
+    return TR_OK;
+}
+
+/* The prototype named obj.prototype (parsed on first use); UINT32_MAX in *proto for an
+ * empty one (meshes not loaded). */
+static int prototype_ref(jctx *c, const cJSON *obj, const char *path, uint32_t *proto) {
+    const char *name;
+    if (get_string(c, obj, path, "prototype", 1, &name) != TR_OK) {
+        return TR_ERR;
+    }
+    char p[PATH_MAX_LEN], buf[48];
+    path_key(p, path, "prototype");
+    int k = 0, n = 0;
+    for (const cJSON *m = c->protos ? c->protos->child : NULL; m; m = m->next, ++n) {
+        if (strcmp(m->string, name) == 0) {
+            if (c->proto_state[n] != 2 && parse_prototype(c, n, p) != TR_OK) {
+                return TR_ERR;
+            }
+            *proto = c->proto_index[n];
+            return TR_OK;
+        }
+    }
+    const char **names = malloc((size_t)(n ? n : 1) * sizeof *names);
+    for (const cJSON *m = c->protos ? c->protos->child : NULL; names && m; m = m->next) {
+        names[k++] = m->string;
+    }
+    const char *near = names ? tr_names_closest(name, names, (size_t)k) : NULL;
+    int rc = jerr(c, p, "undefined prototype '%s'%s%s%s", shown(name, buf, sizeof buf),
+                  near ? " (did you mean '" : "", near ? near : "", near ? "'?)" : "");
+    free(names);
+    return rc;
+}
+
+/* A list of placements: instances, or (copies set: inside a prototype) plain copies. Each
+ * is a prototype and either "matrix" (12 numbers, rows of a 3x4 affine matrix) or
+ * position / orientation / scale as for shapes. */
+static int parse_instances(jctx *c, const cJSON *list, int copies) {
+    static const char *const keys[] = {"prototype",       "name",  "position", "orientation",
+                                       "orientation_rad", "scale", "matrix"};
+    if (!cJSON_IsArray(list)) {
+        return jerr(c, "instances", "expected an array, got %s", type_name(list));
+    }
+    int i = 0;
+    for (const cJSON *it = list->child; it; it = it->next, ++i) {
+        char p[PATH_MAX_LEN];
+        path_index(p, "instances", i);
+        if (expect_object(c, it, p) != TR_OK ||
+            check_keys(c, it, p, keys, sizeof keys / sizeof keys[0]) != TR_OK) {
+            return TR_ERR;
+        }
+        const char *name;
+        uint32_t proto = UINT32_MAX;
+        if (get_string(c, it, p, "name", 0, &name) != TR_OK ||
+            prototype_ref(c, it, p, &proto) != TR_OK) {
+            return TR_ERR;
+        }
+        float m[12];
+        char pm[PATH_MAX_LEN];
+        path_key(pm, p, "matrix");
+        const cJSON *mat = cJSON_GetObjectItemCaseSensitive(it, "matrix");
+        if (mat) {
+            if (cJSON_GetObjectItemCaseSensitive(it, "position") ||
+                cJSON_GetObjectItemCaseSensitive(it, "orientation") ||
+                cJSON_GetObjectItemCaseSensitive(it, "orientation_rad") ||
+                cJSON_GetObjectItemCaseSensitive(it, "scale")) {
+                return jerr(c, pm, "expected either 'matrix' or position/orientation/scale");
+            }
+            int n = 0;
+            for (const cJSON *v = cJSON_IsArray(mat) ? mat->child : NULL; v; v = v->next, ++n) {
+                if (n >= 12 || !cJSON_IsNumber(v) ||
+                    !(fabs(v->valuedouble) <= TR_SCENE_FILE_MAX_COORD)) {
+                    n = -1;
+                    break;
+                }
+                m[n] = (float)v->valuedouble;
+            }
+            if (n != 12) {
+                return jerr(c, pm,
+                            "expected 12 numbers of magnitude up to %g (the rows of a 3x4 matrix)",
+                            TR_SCENE_FILE_MAX_COORD);
+            }
+        } else {
+            tr_transform tf;
+            if (get_transform(c, it, p, &tf) != TR_OK) {
+                return TR_ERR;
+            }
+            tr_transform_matrix(&tf, m);
+        }
+        if (proto == UINT32_MAX) {
+            continue; /* meshes not loaded */
+        }
+        const uint64_t n = tr_scene_prototype_triangle_count(c->scene, proto);
+        if ((uint64_t)c->scene->triangle_count + n > c->budget) {
+            return jerr_code(c, TR_STATUS_LIMIT, p,
+                             "the scene would have %llu triangles, more than the budget of %u "
+                             "(instances count every triangle they place)",
+                             (unsigned long long)(c->scene->triangle_count + n), c->budget);
+        }
+        tr_error e;
+        const uint32_t first = c->scene->triangle_count;
+        int rc = copies ? tr_scene_add_prototype_copy(c->scene, proto, m, &e)
+                        : tr_scene_add_instance(c->scene, proto, m, NULL, &e);
+        if (rc != TR_OK) {
+            return jerr_from(c, mat ? pm : p, &e);
+        }
+        if (check_triangles(c, p, first) != TR_OK) {
+            return TR_ERR;
+        }
+    }
+    return TR_OK;
+}
+
+static int parse_placements(jctx *c, const cJSON *root) {
+    c->protos = cJSON_GetObjectItemCaseSensitive(root, "prototypes");
+    const cJSON *inst = cJSON_GetObjectItemCaseSensitive(root, "instances");
+    if (c->protos && !cJSON_IsObject(c->protos)) {
+        return jerr(c, "prototypes", "expected an object of named prototypes, got %s",
+                    type_name(c->protos));
+    }
+    const int n = cJSON_GetArraySize(c->protos);
+    c->proto_state = calloc((size_t)(n ? n : 1), 1);
+    c->proto_index = calloc((size_t)(n ? n : 1), sizeof *c->proto_index);
+    int rc = TR_OK;
+    if (!c->proto_state || !c->proto_index) {
+        rc = jerr_code(c, TR_STATUS_OUT_OF_MEMORY, NULL, "out of memory");
+    }
+    if (rc == TR_OK && inst) {
+        rc = parse_instances(c, inst, 0);
+    }
+    /* Prototypes no instance names are still checked. */
+    int k = 0;
+    for (const cJSON *m = c->protos ? c->protos->child : NULL; rc == TR_OK && m; m = m->next, ++k) {
+        if (c->proto_state[k] == 0) {
+            rc = parse_prototype(c, k, NULL);
+            char buf[48];
+            if (rc == TR_OK) {
+                warn(c, "prototypes.%s is not placed by any instance",
+                     shown(m->string, buf, sizeof buf));
+            }
+        }
+    }
+    free(c->proto_state);
+    free(c->proto_index);
+    c->proto_state = NULL;
+    c->proto_index = NULL;
+    return rc;
+}
+
 /* An upper bound of the values cJSON would create for `text`: each value but the first
  * follows a ',', '[' or '{' outside a string (an object's member is one value). */
 static uint64_t count_json_values(const char *text, size_t len) {
@@ -1333,9 +1500,9 @@ static void line_col(const char *text, size_t off, unsigned *line, unsigned *col
 }
 
 static int build(jctx *c, const cJSON *root) {
-    static const char *const keys[] = {"version", "description", "render",
-                                       "camera",  "materials",   "shapes",
-                                       "meshes",  "environment", "sun"};
+    static const char *const keys[] = {"version",   "description", "render",   "camera",
+                                       "materials", "shapes",      "meshes",   "environment",
+                                       "sun",       "prototypes",  "instances"};
     if (!cJSON_IsObject(root)) {
         return jerr(c, NULL, "expected a JSON object at the top level, got %s", type_name(root));
     }
@@ -1374,6 +1541,9 @@ static int build(jctx *c, const cJSON *root) {
     }
     const cJSON *meshes = cJSON_GetObjectItemCaseSensitive(root, "meshes");
     if (meshes && parse_meshes(c, meshes) != TR_OK) {
+        return TR_ERR;
+    }
+    if (parse_placements(c, root) != TR_OK) {
         return TR_ERR;
     }
     const cJSON *env = cJSON_GetObjectItemCaseSensitive(root, "environment");

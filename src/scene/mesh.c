@@ -11,6 +11,8 @@
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
+#include <dirent.h>
+#include <sys/stat.h>
 
 #include <assimp/GltfMaterial.h>
 #include <assimp/texture.h>
@@ -69,6 +71,63 @@ static float clamp01(float x) {
 static float max3(float a, float b, float c) {
     float m = a > b ? a : b;
     return m > c ? m : c;
+}
+
+/* A file named `name` (any case) in dir, else in its subdirectories down to `depth` more
+ * levels (hidden ones and links to directories skipped, at most *budget entries read),
+ * into out. Returns 1 when found. How a model made on another machine finds its textures:
+ * "D:/work/tex/wood.jpg" or "IMAGE1.JPG" for a file shipped as tex/wood.jpg or
+ * IMAGE1.jpg, as Blender's importers do. */
+static int find_by_name(const char *dir, const char *name, int depth, int *budget, char *out,
+                        size_t n) {
+    DIR *d = opendir(dir[0] ? dir : ".");
+    if (!d) {
+        return 0;
+    }
+    char subdirs[8][256];
+    int nsub = 0, found = 0;
+    for (struct dirent *e; !found && *budget > 0 && (e = readdir(d)) != NULL; --*budget) {
+        if (e->d_name[0] == '.') {
+            continue;
+        }
+        if (strcasecmp(e->d_name, name) == 0) {
+            found = snprintf(out, n, "%s%s%s", dir, dir[0] ? "/" : "", e->d_name) < (int)n;
+        } else if (depth > 0 && nsub < 8 && strlen(e->d_name) < sizeof subdirs[0]) {
+            char sub[4096];
+            struct stat st;
+            if (snprintf(sub, sizeof sub, "%s%s%s", dir, dir[0] ? "/" : "", e->d_name) <
+                    (int)sizeof sub &&
+                lstat(sub, &st) == 0 && S_ISDIR(st.st_mode)) {
+                snprintf(subdirs[nsub++], sizeof subdirs[0], "%s", e->d_name);
+            }
+        }
+    }
+    closedir(d);
+    for (int i = 0; !found && depth > 0 && i < nsub; ++i) {
+        char sub[4096];
+        if (snprintf(sub, sizeof sub, "%s%s%s", dir, dir[0] ? "/" : "", subdirs[i]) <
+            (int)sizeof sub) {
+            found = find_by_name(sub, name, depth - 1, budget, out, n);
+        }
+    }
+    return found;
+}
+
+/* A texture file that is not where the model says: the same name in any case beside
+ * where it was looked for, else its file name anywhere in the model's directory tree.
+ * Returns 1 with the path in out. */
+static int texture_fallback(const import_ctx *c, const char *full, char *out, size_t n) {
+    struct stat st;
+    if (stat(full, &st) == 0) {
+        return 0; /* there, but unreadable: not a naming problem */
+    }
+    const char *slash = strrchr(full, '/');
+    const char *name = slash ? slash + 1 : full;
+    char here[4096];
+    snprintf(here, sizeof here, "%.*s", slash ? (int)(slash - full) : 0, full);
+    int budget = 20000;
+    return name[0] && (find_by_name(here, name, 0, &budget, out, n) ||
+                       find_by_name(c->dir, name, 4, &budget, out, n));
 }
 
 /* Texture `type` of material m as a scene texture: embedded ("*N", or a name Assimp
@@ -150,6 +209,13 @@ static uint32_t load_texture(import_ctx *c, const struct aiMaterial *m, const ch
         rc = tr_mesh_check_confined(c->dir, full, &e);
         if (rc == TR_OK) {
             rc = tr_scene_load_texture(c->s, full, flags, &index, &e);
+        }
+        char found[4096];
+        if (rc != TR_OK && texture_fallback(c, full, found, sizeof found) &&
+            tr_mesh_check_confined(c->dir, found, &e) == TR_OK &&
+            (rc = tr_scene_load_texture(c->s, found, flags, &index, &e)) == TR_OK) {
+            import_warn(c, "material '%.60s': %s map '%.80s' not found as named; using '%.120s'",
+                        mname, what, p, found);
         }
     }
     if (rc != TR_OK) {

@@ -201,7 +201,10 @@ int tr_scene_model_load(tr_scene *s, const char *path, const tr_model_options *o
                  TR_IMPORT_MAX_LIGHTS);
         model_warn(info, msg);
     }
-    if (!lit && tr_scene_set_environment(s, v3s(1.0f), 1.0f, 0.0f, NULL, 0, 0, err) != TR_OK) {
+    /* Radiance 0.5: the sky shows light grey and a white surface under it stays below
+     * clipping at exposure 0 (at 1 both were clipped white). */
+    if (!lit &&
+        tr_scene_set_environment(s, v3s(TR_MODEL_SKY), 1.0f, 0.0f, NULL, 0, 0, err) != TR_OK) {
         tr_scene_clear(s);
         return TR_ERR;
     }

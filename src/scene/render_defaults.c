@@ -8,6 +8,7 @@
 #include "trac0r/session.h"
 
 #include <stdio.h>
+#include <math.h>
 #include <string.h>
 
 #define DEFAULT_WIDTH 800u
@@ -98,6 +99,17 @@ static int resolve_max_depth(const tr_scene_file *file, const tr_render_request 
     return depth;
 }
 
+void tr_size_fill(uint32_t *width, uint32_t *height, uint32_t dw, uint32_t dh) {
+    if (!*width && !*height) {
+        *width = dw;
+        *height = dh;
+    } else if (!*height) {
+        *height = (uint32_t)fmin(fmax(round((double)*width * dh / dw), 1.0), TR_FILM_MAX_SIDE);
+    } else if (!*width) {
+        *width = (uint32_t)fmin(fmax(round((double)*height * dw / dh), 1.0), TR_FILM_MAX_SIDE);
+    }
+}
+
 int tr_scene_file_apply(tr_scene *s, const char *path, const tr_scene_file *file,
                         const tr_render_request *req, tr_render_settings *out, tr_error *err) {
     static const tr_render_request zero;
@@ -115,6 +127,14 @@ int tr_scene_file_apply(tr_scene *s, const char *path, const tr_scene_file *file
     out->config = tr_render_config_default();
     out->width = pick_u32(req->width, file->has_width, file->width, DEFAULT_WIDTH);
     out->height = pick_u32(req->height, file->has_height, file->height, DEFAULT_HEIGHT);
+    /* One side asked for and not the other: the other keeps the image's shape (the file's
+     * size, else the default's), as resizing a picture does. */
+    if (!req->width != !req->height) {
+        out->width = req->width;
+        out->height = req->height;
+        tr_size_fill(&out->width, &out->height, file->has_width ? file->width : DEFAULT_WIDTH,
+                     file->has_height ? file->height : DEFAULT_HEIGHT);
+    }
     out->spp = pick_u32(req->spp, file->has_spp, file->spp, TR_SESSION_SPP_DEFAULT);
     int light_sampling = -1;
     if (req->light_sampling) {
@@ -168,7 +188,8 @@ int tr_scene_load(tr_scene *s, const char *name, const tr_model_options *opt, tr
         return tr_scene_path_is_model(name) ? tr_scene_model_load(s, name, opt, info, err)
                                             : tr_scene_file_load(s, name, NULL, info, err);
     }
-    const uint32_t w = opt->width ? opt->width : 800u, h = opt->height ? opt->height : 600u;
+    uint32_t w = opt->width, h = opt->height;
+    tr_size_fill(&w, &h, DEFAULT_WIDTH, DEFAULT_HEIGHT);
     if (tr_scene_builtin(s, strncmp(name, "builtin:", 8) == 0 ? name + 8 : name, w, h, err) !=
         TR_OK) {
         return TR_ERR;
@@ -183,6 +204,55 @@ int tr_scene_load(tr_scene *s, const char *name, const tr_model_options *opt, tr
     }
     for (uint32_t i = 0; i < tr_scene_material_count(s); ++i) {
         info->emitter_materials += tr_scene_material(s, i).type == TR_MATERIAL_EMITTER;
+    }
+    return TR_OK;
+}
+
+/* The request's value where it has one, else the program's default where the file has
+ * none; 0 (the file's, else the library's) otherwise. */
+static uint32_t pick_default(uint32_t req, int file_has, uint32_t def) {
+    return req ? req : file_has ? 0u : def;
+}
+
+int tr_scene_open(tr_scene *s, const char *name, const tr_scene_open_desc *d, tr_scene_file *file,
+                  tr_render_settings *out, tr_error *err) {
+    static const tr_scene_open_desc zero;
+    tr_scene_file local;
+    d = d ? d : &zero;
+    file = file ? file : &local;
+    const tr_render_request *rq = &d->request, *df = &d->defaults;
+    /* A built-in scene is built at its final size (a model's camera takes the width, and
+     * the height where one was asked for: else its own aspect). */
+    tr_model_options mo = d->model;
+    mo.scale = mo.scale > 0.0f ? mo.scale : 1.0f;
+    mo.width = rq->width ? rq->width : rq->height ? 0 : df->width;
+    mo.height = rq->height ? rq->height : rq->width ? 0 : df->height;
+    if (tr_scene_name_is_builtin(name)) {
+        tr_size_fill(&mo.width, &mo.height, df->width ? df->width : DEFAULT_WIDTH,
+                     df->height ? df->height : DEFAULT_HEIGHT);
+    } else {
+        mo.height = rq->height;
+    }
+    if (tr_scene_load(s, name, &mo, file, err) != TR_OK) {
+        return TR_ERR;
+    }
+    tr_render_request r = *rq;
+    if (!rq->width && !rq->height) {
+        r.width = pick_default(0, file->has_width, df->width);
+        r.height = pick_default(0, file->has_height, df->height);
+    }
+    r.spp = pick_default(rq->spp, file->has_spp, df->spp);
+    r.max_depth =
+        (int)pick_default((uint32_t)rq->max_depth, file->has_max_depth, (uint32_t)df->max_depth);
+    r.integrator = rq->integrator ? rq->integrator : file->has_integrator ? NULL : df->integrator;
+    r.accel = rq->accel ? rq->accel : file->has_accel ? NULL : df->accel;
+    r.light_sampling = rq->light_sampling ? rq->light_sampling : df->light_sampling;
+    r.allow_dark = rq->allow_dark || d->extras.env || d->extras.sun;
+    if (tr_scene_add_extras(s, &d->extras, err) != TR_OK ||
+        tr_scene_file_apply(s, name, file, &r, out, err) != TR_OK ||
+        tr_scene_commit(s, out->accel, err) != TR_OK) {
+        tr_scene_clear(s);
+        return TR_ERR;
     }
     return TR_OK;
 }

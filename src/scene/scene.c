@@ -78,6 +78,7 @@ void tr_scene_clear(tr_scene *s) {
     free(s->lights);
     free(s->light_cdf);
     tr_scene_free_light_tree(s);
+    tr_scene_free_instances(s);
     tr_scene_init(s);
     s->generation = generation + 1;
 }
@@ -215,6 +216,9 @@ int tr_scene_add_texture(tr_scene *s, const uint32_t *rgba, uint32_t width, uint
 void tr_scene_truncate(tr_scene *s, uint32_t triangles, uint32_t shapes, uint32_t materials) {
     s->triangle_count = triangles;
     s->shape_count = shapes;
+    while (s->instance_count > 0 && s->instances[s->instance_count - 1].shape >= shapes) {
+        s->instance_count--; /* instances among the shapes dropped go with them */
+    }
     s->material_count = materials;
     if (s->tri_verts_count > triangles) {
         s->tri_verts_count = triangles;
@@ -426,6 +430,7 @@ int tr_scene_commit(tr_scene *s, tr_accel_type accel, tr_error *err) {
     tr_bvh_free(&s->bvh);
     tr_wbvh_free(&s->wbvh);
     tr_embree_free(&s->embree);
+    tr_scene_free_two_level(s);
     s->accel = TR_ACCEL_TYPE_FLAT;
     s->committed_triangles = 0;
     s->committed = 0;
@@ -444,6 +449,16 @@ int tr_scene_commit(tr_scene *s, tr_accel_type accel, tr_error *err) {
         s->committed = 1;
         return TR_OK;
     case TR_ACCEL_TYPE_BVH:
+        if (s->instance_count > 0) {
+            /* Instances: the two-level structure (src/scene/instance.c). */
+            if (tr_scene_build_two_level(s, err) != TR_OK) {
+                return TR_ERR;
+            }
+            s->accel = accel;
+            s->committed_triangles = s->triangle_count;
+            s->committed = 1;
+            return TR_OK;
+        }
         if (tr_bvh_build(&s->bvh, s->triangles, s->triangle_count, err) != TR_OK) {
             return TR_ERR;
         }
@@ -505,6 +520,9 @@ int tr_scene_refit(tr_scene *s, tr_error *err) {
     if (s->accel != TR_ACCEL_TYPE_BVH && s->accel != TR_ACCEL_TYPE_BVH2) {
         return TR_OK;
     }
+    if (s->two_level) {
+        return tr_scene_update_two_level(s, err);
+    }
     /* Whether the wide BVH was collapsed from this tree as it stood before this refit. */
     const int wide_current = s->wbvh.nodes && s->wbvh.bvh_refits == s->bvh.refits;
     tr_bvh_refit(&s->bvh, s->triangles);
@@ -530,6 +548,17 @@ int tr_scene_move_shape(tr_scene *s, uint32_t shape, tr_vec3 delta, tr_error *er
         return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "shape %u: the offset is not finite",
                             shape);
     }
+    const uint32_t inst = tr_scene_shape_instance(s, shape);
+    if (inst != UINT32_MAX) {
+        /* An instance's shape moves with its matrix, so that the top level follows. */
+        float m[12];
+        memcpy(m, s->instances[inst].m, sizeof m);
+        m[3] += delta.x;
+        m[7] += delta.y;
+        m[11] += delta.z;
+        return tr_scene_set_instance_transform(s, inst, m, err);
+    }
+    s->rest_moved = 1;
     tr_flat_node *node = &s->shapes[shape];
     for (uint32_t i = node->first; i < node->first + node->count; ++i) {
         tr_triangle *t = &s->triangles[i];
@@ -612,6 +641,9 @@ int tr_scene_update(tr_scene *s, double *seconds, tr_error *err) {
 }
 
 double tr_scene_bvh_build_seconds(const tr_scene *s) {
+    if (s->accel == TR_ACCEL_TYPE_BVH && s->two_level) {
+        return s->rest_bvh.build_seconds + s->rest_wbvh.build_seconds + s->tlas.build_seconds;
+    }
     if (s->accel == TR_ACCEL_TYPE_BVH) {
         return s->bvh.build_seconds + s->wbvh.build_seconds;
     }
@@ -638,6 +670,9 @@ tr_scene_view tr_scene_view_of(const tr_scene *s) {
     /* The wide BVH only while it matches the binary one (tr_bvh_refit moves the binary
      * boxes; tr_scene_refit refits both). */
     v.wbvh = s->accel == TR_ACCEL_TYPE_BVH && s->wbvh.bvh_refits == s->bvh.refits ? &s->wbvh : NULL;
+    if (s->accel == TR_ACCEL_TYPE_BVH && s->two_level) {
+        v.wbvh = &s->tlas.wbvh; /* instances: the two-level structure, host only */
+    }
     v.lights = s->lights;
     v.light_cdf = s->light_cdf;
     /* A table older than the triangles could name triangles that moved: without a
@@ -827,6 +862,17 @@ void tr_scene_accel_info(const tr_scene *s, tr_accel_info *info) {
     }
     if (s->accel == TR_ACCEL_TYPE_EMBREE) {
         info->embree_seconds = s->embree.build_seconds;
+    }
+    if (s->accel == TR_ACCEL_TYPE_BVH && s->two_level) {
+        /* Instances: the top level (over the instances and the scene's own triangles). */
+        info->bvh_nodes = s->tlas.bvh.node_count;
+        info->bvh_leaves = s->tlas.bvh.leaf_count;
+        info->bvh_depth = s->tlas.bvh.depth;
+        info->bvh_seconds = s->tlas.bvh.build_seconds + s->rest_bvh.build_seconds;
+        info->wide_nodes = s->tlas.wbvh.node_count;
+        info->wide_leaves = s->tlas.wbvh.leaf_count;
+        info->wide_depth = s->tlas.wbvh.depth;
+        info->wide_seconds = s->tlas.wbvh.build_seconds + s->rest_wbvh.build_seconds;
     }
 }
 

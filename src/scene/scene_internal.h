@@ -10,6 +10,31 @@
 #include "trac0r/scene.h"
 #include "trac0r/scene_file.h"
 
+/* Geometry stored once and placed by instances (src/scene/instance.c), in object space:
+ * tris, and when it has vertex attributes idx (3 per triangle into verts, TR_NO_INDEX for
+ * none). Its bottom-level BVH is built by the first commit that needs it. */
+typedef struct tr_prototype {
+    tr_triangle *tris;
+    uint32_t tri_count;
+    tr_vertex *verts;
+    uint32_t vert_count;
+    uint32_t *idx;
+    int emissive; /* some triangle's material emits */
+    int built;
+    tr_bvh bvh;
+    tr_wbvh wbvh;
+} tr_prototype;
+
+/* One placement of a prototype: the scene's shape holding its transformed triangles, and
+ * its matrix (object to world) and inverse, 3x4 row-major. */
+typedef struct tr_instance {
+    uint32_t proto;
+    uint32_t shape;
+    uint32_t vert_base; /* its first vertex in the scene's array (when it has attributes) */
+    float m[12], inv[12];
+    int moved; /* set by tr_scene_set_instance_transform until tr_scene_update */
+} tr_instance;
+
 struct tr_scene {
     tr_material *materials;
     uint32_t material_count, material_capacity;
@@ -72,6 +97,22 @@ struct tr_scene {
     /* The sun (src/scene/sun.c): sun_count 0 or 1. */
     tr_sun sun;
     uint32_t sun_count;
+    /* Instancing (src/scene/instance.c). With instances, a TR_ACCEL_TYPE_BVH commit builds
+     * the two-level structure instead of `bvh`/`wbvh`: `rest` over the scene's own
+     * triangles (an identity instance, the top level's last entry) and `tlas` over
+     * everything; two_level says it is the committed one. rest_moved: a shape of the
+     * scene's own moved since. */
+    tr_prototype *protos;
+    uint32_t proto_count, proto_capacity;
+    tr_instance *instances;
+    uint32_t instance_count, instance_capacity;
+    tr_tlas tlas;
+    tr_bvh rest_bvh;
+    tr_wbvh rest_wbvh;
+    int two_level;
+    int rest_moved;
+    uint32_t *moved; /* instances moved since the last update, each once */
+    uint32_t moved_count, moved_capacity;
 };
 
 /* An empty scene (no allocation), for a tr_scene the caller owns (tr_scene_create does
@@ -185,6 +226,16 @@ tr_aabb tr_triangles_bounds(const tr_triangle *t, uint32_t n);
  * otherwise TR_ERR with a message saying which call is missing: every backend checks
  * this before it traces or uploads a scene. */
 int tr_scene_check_committed(const tr_scene *s, tr_error *err);
+
+/* Instancing (src/scene/instance.c): builds the two-level structure for a
+ * TR_ACCEL_TYPE_BVH commit of a scene with instances; brings it up to date after moves
+ * (tr_scene_update); frees everything instancing holds (tr_scene_clear). The instance
+ * owning shape `shape`, or UINT32_MAX. */
+int tr_scene_build_two_level(tr_scene *s, tr_error *err);
+int tr_scene_update_two_level(tr_scene *s, tr_error *err);
+void tr_scene_free_instances(tr_scene *s);
+void tr_scene_free_two_level(tr_scene *s);
+uint32_t tr_scene_shape_instance(const tr_scene *s, uint32_t shape);
 
 /* The view the kernels trace against; valid while the scene is not modified. */
 tr_scene_view tr_scene_view_of(const tr_scene *s);

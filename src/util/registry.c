@@ -144,3 +144,90 @@ void tr_names_join(char *buf, size_t size, const char *const *names, size_t coun
         used += (size_t)n;
     }
 }
+
+int tr_names_parse_list(const char *list, int (*lookup)(const char *name), int *out, int max,
+                        const char *what, const char *kind, const char *available, tr_error *err) {
+    char name[64];
+    int n = 0;
+    const char *p = list ? list : "";
+    const char *sep = available ? " (available: " : "";
+    const char *end = available ? ")" : "";
+    available = available ? available : "";
+    do {
+        const size_t len = strcspn(p, ",");
+        int value = -1;
+        if (len > 0 && len < sizeof name) {
+            memcpy(name, p, len);
+            name[len] = '\0';
+            value = lookup(name);
+        }
+        if (len == 0) {
+            tr_error_set(
+                err, TR_STATUS_INVALID_ARGUMENT, "%s: '%.200s' %s%s%s%s", what, list ? list : "",
+                *p || p == list ? "has an empty item" : "ends with a comma", sep, available, end);
+            return -1;
+        }
+        if (value < 0) {
+            tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "%s: unknown %s '%.*s' in '%.200s'%s%s%s",
+                         what, kind, (int)(len < 64 ? len : 64), p, list, sep, available, end);
+            return -1;
+        }
+        if (n == max) {
+            tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "%s: more than %d items in '%.200s'",
+                         what, max, list);
+            return -1;
+        }
+        out[n++] = value;
+        p += len;
+    } while (*p++ == ',');
+    return n;
+}
+
+/* Edit distance with adjacent transpositions (optimal string alignment: Damerau 1964,
+ * "A technique for computer detection and correction of spelling errors"), capped:
+ * strings longer than 31 bytes are "far". */
+static int edit_distance(const char *a, const char *b) {
+    size_t n = strlen(a), m = strlen(b);
+    if (n > 31 || m > 31) {
+        return 99;
+    }
+    int d[32][32];
+    for (size_t i = 0; i <= n; ++i) {
+        d[i][0] = (int)i;
+    }
+    for (size_t j = 0; j <= m; ++j) {
+        d[0][j] = (int)j;
+    }
+    for (size_t i = 1; i <= n; ++i) {
+        for (size_t j = 1; j <= m; ++j) {
+            int best = d[i - 1][j - 1] + (a[i - 1] != b[j - 1]);
+            if (d[i - 1][j] + 1 < best) {
+                best = d[i - 1][j] + 1;
+            }
+            if (d[i][j - 1] + 1 < best) {
+                best = d[i][j - 1] + 1;
+            }
+            if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1] &&
+                d[i - 2][j - 2] + 1 < best) {
+                best = d[i - 2][j - 2] + 1;
+            }
+            d[i][j] = best;
+        }
+    }
+    return d[n][m];
+}
+
+const char *tr_names_closest(const char *s, const char *const *names, size_t count) {
+    const char *best = NULL;
+    int best_d = 1 + (int)strlen(s) / 4;
+    if (best_d > 3) {
+        best_d = 3;
+    }
+    for (size_t i = 0; i < count; ++i) {
+        int d = edit_distance(s, names[i]);
+        if (d <= best_d && (!best || d < edit_distance(s, best))) {
+            best = names[i];
+        }
+    }
+    return best;
+}

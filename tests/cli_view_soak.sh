@@ -1,0 +1,81 @@
+#!/bin/sh
+# The viewer stays flat over a long run: under Xvfb, `trac0r view --animate` (the scene's
+# last shape moving every frame) with W held (the camera moving), its resident memory
+# sampled twice a second from /proc. After a warm-up of a fifth of the run, the peak of
+# the second half may not exceed the peak of the first by more than 1 %, and the process
+# holds as many file descriptors at the end as after the warm-up.
+# Usage: cli_view_soak.sh TRAC0R_BINARY SCRATCH_DIR [SECONDS (default 20)]
+set -u
+. "$(dirname "$0")/common.sh"
+cli_begin "$1" "$2"
+SECONDS_RUN=${3:-20}
+XVFB_PID=
+VIEW_PID=
+cleanup() {
+    [ -n "$VIEW_PID" ] && kill "$VIEW_PID" 2>/dev/null
+    [ -n "$XVFB_PID" ] && kill "$XVFB_PID" 2>/dev/null
+    wait 2>/dev/null
+}
+trap cleanup EXIT
+trap 'exit 1' INT TERM HUP
+for tool in Xvfb xdotool; do
+    command -v $tool >/dev/null || {
+        fail "$tool is not installed (scripts/install-deps installs it)"
+        exit 1
+    }
+done
+Xvfb -displayfd 9 -nolisten tcp -screen 0 640x480x24 9>displayfd 2>xvfb.log &
+XVFB_PID=$!
+i=0
+while [ ! -s displayfd ] && [ $i -lt 100 ]; do
+    sleep 0.1
+    i=$((i + 1))
+done
+[ -s displayfd ] || {
+    fail "Xvfb did not start: $(cat xvfb.log)"
+    exit 1
+}
+DISPLAY=:$(head -n1 displayfd)
+export DISPLAY SDL_RENDER_DRIVER=software SDL_FRAMEBUFFER_ACCELERATION=0
+unset WAYLAND_DISPLAY SDL_VIDEODRIVER
+"$BIN" view --animate --width 160 --height 120 --state-file state.txt >view.out 2>view.err &
+VIEW_PID=$!
+n=0
+while ! grep -q "^frames [1-9]" state.txt 2>/dev/null && [ $n -lt 300 ]; do
+    sleep 0.1
+    n=$((n + 1))
+done
+grep -q "^frames [1-9]" state.txt 2>/dev/null || {
+    fail "the viewer showed no frame: $(cat view.err)"
+    exit 1
+}
+xdotool search --sync --pid "$VIEW_PID" windowactivate --sync >/dev/null 2>&1
+xdotool keydown w
+rss() { awk '$1 == "VmRSS:" { print $2 }' "/proc/$VIEW_PID/status"; }
+fds() { ls "/proc/$VIEW_PID/fd" | wc -l; }
+samples=$((SECONDS_RUN * 2))
+warm=$((samples / 5))
+mid=$(((samples + warm) / 2))
+peak1=0
+peak2=0
+k=0
+while [ $k -lt $samples ]; do
+    sleep 0.5
+    kill -0 "$VIEW_PID" 2>/dev/null || break
+    r=$(rss)
+    [ $k -eq $warm ] && fds_warm=$(fds)
+    if [ $k -ge $warm ] && [ $k -lt $mid ] && [ "$r" -gt $peak1 ]; then peak1=$r; fi
+    if [ $k -ge $mid ] && [ "$r" -gt $peak2 ]; then peak2=$r; fi
+    k=$((k + 1))
+done
+xdotool keyup w
+fds_end=$(fds)
+frames=$(awk '$1 == "frames" { print $2 }' state.txt)
+echo "cli_view_soak: $frames frames in ${SECONDS_RUN} s, resident peak $peak1 KiB then $peak2 KiB, $fds_warm and $fds_end file descriptors"
+[ $k -eq $samples ] || fail "the viewer ended during the soak: $(cat view.err)"
+# SOAK_SLACK_KB: the sanitizer build's allocator wanders by that much (tests/CMakeLists.txt).
+[ "$peak1" -gt 0 ] && [ $((peak2 * 100)) -le $((peak1 * 101 + ${SOAK_SLACK_KB:-0} * 100)) ] ||
+    fail "resident memory grew from $peak1 KiB to $peak2 KiB"
+[ "$fds_warm" -eq "$fds_end" ] || fail "file descriptors: $fds_warm after the warm-up, $fds_end at the end"
+grep -q "^moving 1" state.txt || fail "the camera was not moving at the end"
+cli_end cli_view_soak
