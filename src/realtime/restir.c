@@ -89,8 +89,9 @@ void tr_restir_stage_reset(tr_restir_stage *st) {
     }
 }
 
-static int size_buffers(tr_restir_stage *st, uint32_t w, uint32_t h, tr_error *err) {
-    if (st->w == w && st->h == h && st->surf) {
+/* The buffers for a w x h frame; ReSTIR GI's only where it runs (gi). */
+static int size_buffers(tr_restir_stage *st, uint32_t w, uint32_t h, int gi, tr_error *err) {
+    if (st->w == w && st->h == h && st->surf && (!gi || st->gcur)) {
         return TR_OK;
     }
     free_buffers(st);
@@ -100,11 +101,13 @@ static int size_buffers(tr_restir_stage *st, uint32_t w, uint32_t h, tr_error *e
     st->cur = malloc(n * sizeof *st->cur);
     st->out = malloc(n * sizeof *st->out);
     st->prev = malloc(n * sizeof *st->prev);
-    st->gcur = malloc(n * sizeof *st->gcur);
-    st->gout = malloc(n * sizeof *st->gout);
-    st->gprev = malloc(n * sizeof *st->gprev);
-    if (!st->surf || !st->prev_surf || !st->cur || !st->out || !st->prev || !st->gcur ||
-        !st->gout || !st->gprev) {
+    if (gi) {
+        st->gcur = malloc(n * sizeof *st->gcur);
+        st->gout = malloc(n * sizeof *st->gout);
+        st->gprev = malloc(n * sizeof *st->gprev);
+    }
+    if (!st->surf || !st->prev_surf || !st->cur || !st->out || !st->prev ||
+        (gi && (!st->gcur || !st->gout || !st->gprev))) {
         free_buffers(st);
         return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory for the ReSTIR stage");
     }
@@ -246,7 +249,7 @@ int tr_restir_stage_run(tr_restir_stage *st, const tr_scene *scene, const tr_cam
                             "ReSTIR: a %ux%u camera for a %ux%u film", w, h, film->width,
                             film->height);
     }
-    if (size_buffers(st, w, h, err) != TR_OK) {
+    if (size_buffers(st, w, h, p->gi, err) != TR_OK) {
         return TR_ERR;
     }
     threads = threads > 0 ? threads : tr_default_threads();
