@@ -433,7 +433,8 @@ const char cli_recon_help[] =
     "  --taa A              SVGF's temporal antialiasing, 0..1 (default 0: off)\n"
     "  --svgf-split         filter direct and indirect light apart (CPU only)\n"
     "  --resolve-emission N emitters' edges traced at N x N rays, 0..16 (default 4)\n"
-    "  --restir off|di      ReSTIR DI for the first surfaces' direct light (default off)\n"
+    "  --restir off|di|di+gi  ReSTIR DI for the first surfaces' direct light, di+gi\n"
+    "                       ReSTIR GI for their indirect light too (default off)\n"
     "  --restir-unbiased    ReSTIR with Talbot's MIS weights (default: biased 1/M)\n";
 
 int cli_restir_option(cli_args *a, cli_common *c) {
@@ -441,10 +442,13 @@ int cli_restir_option(cli_args *a, cli_common *c) {
         if (cli_value(a) != CLI_OK) {
             return CLI_USAGE;
         }
-        if (strcmp(a->value, "off") != 0 && strcmp(a->value, "di") != 0) {
-            return cli_error(a, "--restir: expected off or di, got '%s'", a->value);
+        if (strcmp(a->value, "off") != 0 && strcmp(a->value, "di") != 0 &&
+            strcmp(a->value, "di+gi") != 0) {
+            return cli_error(a, "--restir: expected off, di or di+gi, got '%s'", a->value);
         }
-        c->restir = strcmp(a->value, "di") == 0 ? TR_REALTIME_RESTIR_DI : TR_REALTIME_RESTIR_OFF;
+        c->restir = strcmp(a->value, "di") == 0      ? TR_REALTIME_RESTIR_DI
+                    : strcmp(a->value, "di+gi") == 0 ? TR_REALTIME_RESTIR_DI_GI
+                                                     : TR_REALTIME_RESTIR_OFF;
         return CLI_OK;
     }
     if (cli_is(a, "--restir-unbiased")) {
