@@ -22,17 +22,17 @@ FLAGS="-std=c11 -g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recover
     -fno-omit-frame-pointer -ffp-contract=off -Wall -Wextra -Wno-unknown-pragmas -Iinclude -Isrc"
 SCENE="src/scene/json.c src/scene/scene.c src/scene/shape.c src/scene/camera.c
     src/scene/lights.c src/accel/bvh.c src/accel/wbvh.c src/accel/wbvh_scalar.c src/accel/tlas.c src/scene/instance.c
-    src/accel/embree.c src/util/error.c src/util/registry.c src/util/clock.c src/scene/material_registry.c
+    src/accel/embree.c src/util/error.c src/util/registry.c src/util/clock.c src/util/parse.c src/scene/material_registry.c
     src/util/infile.c src/scene/texture.c src/scene/image_codec.c src/scene/envmap.c src/scene/sun.c src/scene/light_tree.c"
 # shellcheck disable=SC2046,SC2086
 "$CC" $FLAGS $(pkg-config --cflags libcjson) fuzz/fuzz_scene_json.c $SCENE \
     $(pkg-config --libs libcjson libpng) -ljpeg -lm -o "$OUT/fuzz_scene_json"
 # shellcheck disable=SC2046,SC2086
-"$CC" $FLAGS $(pkg-config --cflags libcjson assimp) fuzz/fuzz_mesh.c $SCENE \
+"$CC" $FLAGS -DTR_MESH_IMPORT_IN_PROCESS $(pkg-config --cflags libcjson assimp) fuzz/fuzz_mesh.c $SCENE \
     src/scene/mesh.c src/scene/mesh_guard.c \
     $(pkg-config --libs libcjson assimp libpng) -ljpeg -lm -o "$OUT/fuzz_mesh"
 # shellcheck disable=SC2046,SC2086
-"$CC" $FLAGS -DTR_FUZZ_GUARD_ONLY $(pkg-config --cflags libcjson assimp) fuzz/fuzz_mesh.c $SCENE \
+"$CC" $FLAGS -DTR_FUZZ_GUARD_ONLY -DTR_MESH_IMPORT_IN_PROCESS $(pkg-config --cflags libcjson assimp) fuzz/fuzz_mesh.c $SCENE \
     src/scene/mesh.c src/scene/mesh_guard.c \
     $(pkg-config --libs libcjson assimp libpng) -ljpeg -lm -o "$OUT/fuzz_mesh_guard"
 # shellcheck disable=SC2046,SC2086
@@ -42,7 +42,7 @@ SCENE="src/scene/json.c src/scene/scene.c src/scene/shape.c src/scene/camera.c
 # shellcheck disable=SC2046,SC2086
 "$CC" $FLAGS fuzz/fuzz_texture.c src/scene/texture.c src/scene/image_codec.c src/scene/scene.c \
     src/scene/shape.c src/scene/lights.c src/accel/bvh.c src/accel/wbvh.c src/accel/wbvh_scalar.c src/accel/tlas.c src/scene/instance.c \
-    src/accel/embree.c src/util/error.c src/util/registry.c src/util/clock.c src/scene/material_registry.c \
+    src/accel/embree.c src/util/error.c src/util/registry.c src/util/clock.c src/util/parse.c src/scene/material_registry.c \
     src/util/infile.c src/scene/light_tree.c $(pkg-config --libs libpng) -ljpeg -lm -o "$OUT/fuzz_texture"
 # shellcheck disable=SC2046,SC2086
 "$CC" $FLAGS fuzz/fuzz_checkpoint.c src/session/checkpoint.c src/film/film.c src/io/outfile.c \

@@ -7,7 +7,8 @@
  * tile plan, where the input is long enough to hold them - so that the fuzzer gets past the
  * identity check into the tile counts, the film's arrays and the checksum. A file that reads
  * must give a film of the size its header claims, within the film limits, with tile counts
- * no larger than its spp; one that fails must leave the film empty. -rss_limit_mb catches a
+ * no larger than its spp, the film the identity names and no more samples than --spp
+ * allows; one that fails must leave the film empty. -rss_limit_mb catches a
  * size that is allocated before it is checked against the file. Built by fuzz/build.sh; run
  * by fuzz/run.sh. */
 #define _POSIX_C_SOURCE 200809L
@@ -62,6 +63,12 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
     if (desc_len < sizeof id.desc && 52 + (size_t)desc_len <= size) {
         memcpy(id.desc, data + 52, desc_len);
     }
+    /* The film and sample limit the render expects: the header's own, so that the reader
+     * goes on to the arrays (the limit on spp is the real one). */
+    id.width = word(data, size, 8 + 4 * 2);
+    id.height = word(data, size, 8 + 4 * 3);
+    id.passes = word(data, size, 8 + 4 * 4);
+    id.spp_max = 1000000u;
     const uint32_t plan_count = word(data, size, 8 + 4 * 7);
     tr_ck_tiles tiles = {word(data, size, 8 + 4 * 6), plan_count > 4096 ? 4096 : plan_count, NULL};
     tiles.samples = calloc(tiles.count ? tiles.count : 1, sizeof *tiles.samples);
@@ -80,6 +87,10 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
             if (tiles.samples[k] > spp) {
                 abort();
             }
+        }
+        if (film.width != id.width || film.height != id.height || film.passes != id.passes ||
+            spp > id.spp_max) {
+            abort();
         }
         /* Touch the last byte of every array: ASan checks the allocation's size. */
         const size_t n = (size_t)film.width * film.height;

@@ -124,7 +124,10 @@ for sig in TERM INT HUP; do
         --accels bvh --out sig >/dev/null 2>&1 &
     pid=$!
     n=0
-    while [ -z "$(find . -maxdepth 1 -name 'sig.png.tmp.*')" ] && [ "$n" -lt 200 ]; do
+    # The file being written: sig.png.tmp.XXXXXX, or where the file system has O_TMPFILE
+    # an open descriptor of an unnamed file in this directory.
+    while [ -z "$(find . -maxdepth 1 -name 'sig.png.tmp.*')" ] &&
+        ! ls -l /proc/$pid/fd 2>/dev/null | grep -qF "$PWD/#" && [ "$n" -lt 200 ]; do
         sleep 0.05
         n=$((n + 1))
     done

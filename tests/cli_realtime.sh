@@ -260,6 +260,10 @@ rt_psnr() { # CSV: the raw frames' mean PSNR
 "$BIN" bench realtime "$CLASSIC" --width 32 --height 24 --frames 2 --reference-spp 8 --threads 1 \
     --methods off --restir di --restir-unbiased --clamp-indirect 0 --regularize off --out unb \
     >/dev/null 2>unb.err || fail "bench realtime --restir-unbiased: $(cat unb.err)"
+"$BIN" bench realtime "$CLASSIC" --width 32 --height 24 --frames 3 --reference-spp 8 --threads 1 \
+    --methods off,accumulate --restir di+gi --out restirgi >/dev/null 2>restirgi.err ||
+    fail "bench realtime --restir di+gi: $(cat restirgi.err)"
+[ "$(rt_psnr restir.csv)" != "$(rt_psnr restirgi.csv)" ] || fail "--restir di+gi changed no frame"
 for bad in "--restir gi" "--regularize maybe" "--clamp-indirect -1"; do
     # shellcheck disable=SC2086
     "$BIN" bench realtime "$CLASSIC" --frames 2 $bad >/dev/null 2>&1

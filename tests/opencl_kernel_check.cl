@@ -1,11 +1,12 @@
 /* Compiled as OpenCL C 1.2 by CTest (clang -x cl -fsyntax-only) to prove that the
  * single-source kernel stays inside the subset both languages share: a kernel that
  * renders one sample per pixel into a film through the same functions the devices use.
- * ReSTIR's reservoir functions (run on the host today) are held to the same subset, so
- * that a device stage can include them. */
+ * ReSTIR's reservoir functions, DI's and GI's (run on the host today), are held to the
+ * same subset, so that a device stage can include them. */
 #include "kernel/emission.h"
 #include "kernel/kernel.h"
 #include "kernel/restir.h"
+#include "kernel/restir_gi.h"
 
 #define CHECK_ARRAY_PARAM(type, name, count) __global const type *name, uint count,
 

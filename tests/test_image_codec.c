@@ -308,7 +308,35 @@ static void test_formats(void) {
     free(sky[1]);
 }
 
+/* A BMP stored top-down (negative height in its header, as Windows writes some): its
+ * size is the height's magnitude and its first row is the top one. */
+static void test_bmp_top_down(void) {
+    unsigned char b[62] = {'B', 'M'};
+    const uint32_t size = sizeof b, off = 54, hs = 40;
+    const int32_t w = 1, h = -2;
+    const uint16_t planes = 1, bpp = 24;
+    memcpy(b + 2, &size, 4);
+    memcpy(b + 10, &off, 4);
+    memcpy(b + 14, &hs, 4);
+    memcpy(b + 18, &w, 4);
+    memcpy(b + 22, &h, 4);
+    memcpy(b + 26, &planes, 2);
+    memcpy(b + 28, &bpp, 2);
+    b[54 + 2] = 255; /* row 0 (the top): red, stored B, G, R */
+    b[58 + 0] = 255; /* row 1: blue (rows padded to 4 bytes) */
+    tr_error err;
+    int iw = 0, ih = 0;
+    CHECK(tr_codec_info(b, sizeof b, "top-down.bmp", &iw, &ih, &err) == TR_OK && iw == 1 && ih == 2,
+          "top-down BMP's size: %dx%d", iw, ih);
+    unsigned char *px = NULL;
+    CHECK(tr_codec_rgba8(b, sizeof b, "top-down.bmp", &px, &iw, &ih, &err) == TR_OK && px &&
+              px[0] == 255 && px[2] == 0 && px[4] == 0 && px[6] == 255,
+          "top-down BMP's rows");
+    free(px);
+}
+
 int main(void) {
+    test_bmp_top_down();
     test_formats();
     test_jpeg();
     test_hdr();

@@ -2,10 +2,14 @@
  * for inputs (util/infile.h): modes from the umask or the replaced file, non-regular
  * targets and inputs refused before any work, full files (RLIMIT_FSIZE) failing the
  * commit with the temporary file gone, tr_outfile_cleanup_all() removing every open
- * temporary file, and the declared-size check of model headers (mesh_guard.h). */
-#define _POSIX_C_SOURCE 200809L
+ * temporary file, and the declared-size check of model headers (mesh_guard.h). Where the
+ * file system has O_TMPFILE, a file being written has no name until its commit, so even
+ * SIGKILL leaves nothing behind; a read-only target is refused as open(2) would refuse it;
+ * two outputs naming one file are refused before any work. */
+#define _GNU_SOURCE /* O_TMPFILE, to tell whether the file system has it */
 #include <dirent.h>
 #include <errno.h>
+#include <fcntl.h>
 #include <signal.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -125,6 +129,18 @@ static void on_term(int sig) {
     raise(sig);
 }
 
+/* Whether the scratch directory's file system creates unnamed files (O_TMPFILE). */
+static int have_tmpfile(void) {
+#ifdef O_TMPFILE
+    const int fd = open(dir, O_TMPFILE | O_WRONLY | O_CLOEXEC, 0600);
+    if (fd >= 0) {
+        close(fd);
+        return 1;
+    }
+#endif
+    return 0;
+}
+
 static void test_cleanup(void) {
     int ready[2];
     CHECK(pipe(ready) == 0, "pipe");
@@ -154,12 +170,88 @@ static void test_cleanup(void) {
     char c;
     CHECK(read(ready[0], &c, 1) == 1, "the child did not get ready");
     close(ready[0]);
-    CHECK(entries() == 3, "%d temporary files before the signal, expected 3", entries());
+    const int named = have_tmpfile() ? 0 : 3;
+    CHECK(entries() == named, "%d temporary files before the signal, expected %d", entries(),
+          named);
     kill(pid, SIGTERM);
     int status = 0;
     waitpid(pid, &status, 0);
     CHECK(WIFSIGNALED(status) && WTERMSIG(status) == SIGTERM, "child status %d", status);
     CHECK(entries() == 0, "%d files left after SIGTERM", entries());
+}
+
+/* SIGKILL runs no handler: with O_TMPFILE the files being written have no name, so none
+ * is left; the target written before stays as it was. */
+static void test_kill(void) {
+    if (!have_tmpfile()) {
+        printf("test_outfile: no O_TMPFILE on this file system, SIGKILL check skipped\n");
+        return;
+    }
+    char p[512];
+    tr_error err;
+    snprintf(p, sizeof p, "%s/kept.pfm", dir);
+    CHECK(write_file(p, "old", &err) == TR_OK, "write: %s", err.msg);
+    int ready[2];
+    CHECK(pipe(ready) == 0, "pipe");
+    pid_t pid = fork();
+    if (pid == 0) {
+        tr_outfile *f = tr_outfile_create(p, &err);
+        if (!f) {
+            _exit(10);
+        }
+        fputs("partial", tr_outfile_stream(f));
+        fflush(tr_outfile_stream(f));
+        char c = 'x';
+        if (write(ready[1], &c, 1) != 1) {
+            _exit(11);
+        }
+        for (;;) {
+            pause();
+        }
+    }
+    close(ready[1]);
+    char c;
+    CHECK(read(ready[0], &c, 1) == 1, "the child did not get ready");
+    close(ready[0]);
+    kill(pid, SIGKILL);
+    int status = 0;
+    waitpid(pid, &status, 0);
+    CHECK(entries() == 1, "%d entries after SIGKILL, expected the target alone", entries());
+    FILE *fp = fopen(p, "rb");
+    char got[8] = {0};
+    CHECK(fp && fread(got, 1, sizeof got, fp) == 3 && memcmp(got, "old", 3) == 0,
+          "the target changed under a killed writer");
+    if (fp) {
+        fclose(fp);
+    }
+    unlink(p);
+}
+
+/* A target open(2) would not write (no write permission for this user) is refused, not
+ * replaced through rename(); root may write anything, as open lets it. Two outputs that
+ * name one file, by the same path or another, are refused. */
+static void test_permission_and_distinct(void) {
+    char p[512], q[512], r[512];
+    tr_error err;
+    snprintf(p, sizeof p, "%s/ro.png", dir);
+    CHECK(write_file(p, "old", &err) == TR_OK, "write: %s", err.msg);
+    chmod(p, 0444);
+    if (geteuid() != 0) {
+        CHECK_STATUS(tr_outfile_check(p, &err), err, TR_STATUS_IO, "a read-only target");
+        CHECK(tr_outfile_create(p, &err) == NULL, "a read-only target was opened");
+    }
+    chmod(p, 0644);
+    snprintf(q, sizeof q, "%s/./ro.png", dir);
+    snprintf(r, sizeof r, "%s/other.png", dir);
+    const char *same[3] = {p, NULL, q};
+    CHECK_STATUS(tr_outfile_check_distinct(same, 3, &err), err, TR_STATUS_INVALID_ARGUMENT,
+                 "one file by two paths");
+    const char *twice[2] = {r, r};
+    CHECK_STATUS(tr_outfile_check_distinct(twice, 2, &err), err, TR_STATUS_INVALID_ARGUMENT,
+                 "one new file twice");
+    const char *apart[3] = {p, r, NULL};
+    CHECK(tr_outfile_check_distinct(apart, 3, &err) == TR_OK, "two files refused: %s", err.msg);
+    unlink(p);
 }
 
 static void test_declared_sizes(void) {
@@ -200,6 +292,8 @@ int main(void) {
     test_targets();
     test_full();
     test_cleanup();
+    test_kill();
+    test_permission_and_distinct();
     test_declared_sizes();
     rmdir(dir);
     return check_finish("test_outfile");

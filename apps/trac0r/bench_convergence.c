@@ -10,6 +10,7 @@
 #include "bench.h"
 #include "progress.h"
 #include "cli.h"
+#include "trac0r/parse.h"
 #include "devices.h"
 #include "trac0r/measure.h"
 #include "trac0r/outfile.h"
@@ -45,14 +46,15 @@ static int parse_sizes(cli_args *a, uint32_t w[], uint32_t h[], int *n) {
         return CLI_USAGE;
     }
     char buf[256];
-    snprintf(buf, sizeof buf, "%s", a->value);
+    /* A list longer than the buffer is refused, not cut to fit. */
+    const int len = snprintf(buf, sizeof buf, "%s", a->value);
     *n = 0;
     for (char *save = NULL, *tok = strtok_r(buf, ",", &save); tok;
          tok = strtok_r(NULL, ",", &save)) {
-        unsigned x, y;
-        char tail;
-        if (*n == CONV_MAX_SIZES || sscanf(tok, "%ux%u%c", &x, &y, &tail) != 2 || x < 1 || y < 1 ||
-            x > TR_FILM_MAX_SIDE || y > TR_FILM_MAX_SIDE || (uint64_t)x * y > TR_FILM_MAX_PIXELS) {
+        uint32_t x, y;
+        if (len >= (int)sizeof buf || *n == CONV_MAX_SIZES ||
+            tr_parse_size(tok, TR_FILM_MAX_SIDE, &x, &y) != TR_OK ||
+            (uint64_t)x * y > TR_FILM_MAX_PIXELS) {
             return cli_error(a, "%s: expected up to %d sizes WxH such as 256x256,800x600, got '%s'",
                              a->opt, CONV_MAX_SIZES, a->value);
         }

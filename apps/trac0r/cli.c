@@ -1,6 +1,7 @@
 /* cli.c - option parsing shared by the trac0r subcommands. */
 #define _POSIX_C_SOURCE 200809L
 #include "cli.h"
+#include "trac0r/parse.h"
 #include "devices.h"
 #include "trac0r/registry.h"
 #include "trac0r/scene_file.h"
@@ -58,6 +59,7 @@ void cli_accel_list(char *buf, size_t size) {
 }
 
 void cli_common_default(cli_common *c) {
+    memset(c, 0, sizeof *c); /* every field below or zero: the extras, the default size */
     c->scene = "builtin:cornell";
     c->model_scale = 1.0f;
     c->up_z = 0;
@@ -200,13 +202,11 @@ static int parse_integer(cli_args *a, long long lo, long long hi, long long *out
         return CLI_USAGE;
     }
     const char *v = a->value;
-    char *end;
-    errno = 0;
-    long long x = strtoll(v, &end, 10);
-    if (*v == '\0' || *end != '\0' || errno == ERANGE || x < lo || x > hi) {
+    int64_t x = 0;
+    if (tr_parse_int64(v, lo, hi, &x) != TR_OK) { /* the shared rules: trac0r/parse.h */
         return cli_error(a, "%s: expected an integer in %lld..%lld, got '%s'", a->opt, lo, hi, v);
     }
-    *out = x;
+    *out = (long long)x;
     return CLI_OK;
 }
 
@@ -233,14 +233,10 @@ int cli_parse_u64(cli_args *a, uint64_t *out) {
         return CLI_USAGE;
     }
     const char *v = a->value;
-    char *end;
-    errno = 0;
-    unsigned long long x = strtoull(v, &end, 10);
-    if (*v < '0' || *v > '9' || *end != '\0' || errno == ERANGE) {
+    if (tr_parse_uint64(v, 0, UINT64_MAX, out) != TR_OK) {
         return cli_error(a, "%s: expected an integer in 0..%" PRIu64 ", got '%s'", a->opt,
                          UINT64_MAX, v);
     }
-    *out = (uint64_t)x;
     return CLI_OK;
 }
 
@@ -249,14 +245,10 @@ int cli_parse_float(cli_args *a, float lo, float hi, float *out) {
         return CLI_USAGE;
     }
     const char *v = a->value;
-    char *end;
-    errno = 0;
-    double x = strtod(v, &end);
-    if (*v == '\0' || *end != '\0' || errno == ERANGE || !isfinite(x) || x < lo || x > hi) {
+    if (tr_parse_float(v, lo, hi, out) != TR_OK) {
         return cli_error(a, "%s: expected a number in %g..%g, got '%s'", a->opt, (double)lo,
                          (double)hi, v);
     }
-    *out = (float)x;
     return CLI_OK;
 }
 
@@ -441,7 +433,8 @@ const char cli_recon_help[] =
     "  --taa A              SVGF's temporal antialiasing, 0..1 (default 0: off)\n"
     "  --svgf-split         filter direct and indirect light apart (CPU only)\n"
     "  --resolve-emission N emitters' edges traced at N x N rays, 0..16 (default 4)\n"
-    "  --restir off|di      ReSTIR DI for the first surfaces' direct light (default off)\n"
+    "  --restir off|di|di+gi  ReSTIR DI for the first surfaces' direct light, di+gi\n"
+    "                       ReSTIR GI for their indirect light too (default off)\n"
     "  --restir-unbiased    ReSTIR with Talbot's MIS weights (default: biased 1/M)\n";
 
 int cli_restir_option(cli_args *a, cli_common *c) {
@@ -449,10 +442,13 @@ int cli_restir_option(cli_args *a, cli_common *c) {
         if (cli_value(a) != CLI_OK) {
             return CLI_USAGE;
         }
-        if (strcmp(a->value, "off") != 0 && strcmp(a->value, "di") != 0) {
-            return cli_error(a, "--restir: expected off or di, got '%s'", a->value);
+        if (strcmp(a->value, "off") != 0 && strcmp(a->value, "di") != 0 &&
+            strcmp(a->value, "di+gi") != 0) {
+            return cli_error(a, "--restir: expected off, di or di+gi, got '%s'", a->value);
         }
-        c->restir = strcmp(a->value, "di") == 0 ? TR_REALTIME_RESTIR_DI : TR_REALTIME_RESTIR_OFF;
+        c->restir = strcmp(a->value, "di") == 0      ? TR_REALTIME_RESTIR_DI
+                    : strcmp(a->value, "di+gi") == 0 ? TR_REALTIME_RESTIR_DI_GI
+                                                     : TR_REALTIME_RESTIR_OFF;
         return CLI_OK;
     }
     if (cli_is(a, "--restir-unbiased")) {

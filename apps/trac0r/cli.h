@@ -112,7 +112,7 @@ const char *cli_sampler_name(int sampler);
  * value, and -1 if the option is not one of them. */
 extern const char cli_recon_help[];
 int cli_recon_option(cli_args *a, tr_recon_params *p);
-/* --restir off|di and --restir-unbiased (view, bench realtime; listed in cli_recon_help)
+/* --restir off|di|di+gi and --restir-unbiased (view, bench realtime; listed in cli_recon_help)
  * into c; the same return values. */
 int cli_restir_option(cli_args *a, cli_common *c);
 

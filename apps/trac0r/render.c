@@ -193,6 +193,18 @@ int render_job_setup(render_job *job, int argc, char **argv, int *done) {
             pass_path(job->out, bit, job->pass_paths[k], sizeof job->pass_paths[k]) != 0) {
             return cli_error(a, "--out: '%s' is too long for the pass files' names", job->out);
         }
+        /* A pass file's target is checked now too, not found a directory after rendering. */
+        if ((job->passes & bit) != 0u &&
+            tr_image_check_writable(job->pass_paths[k], &err) != TR_OK) {
+            return cli_error(a, "--passes: %s", err.msg);
+        }
+    }
+    const char *targets[7] = {job->out, job->checkpoint};
+    for (int k = 0; k < 5 && fmt != TR_IMAGE_EXR; ++k) {
+        targets[2 + k] = (job->passes & (1u << k)) != 0u ? job->pass_paths[k] : NULL;
+    }
+    if (tr_outfile_check_distinct(targets, 7, &err) != TR_OK) {
+        return cli_error(a, "--out/--checkpoint/--passes: %s", err.msg);
     }
 
     job->scene = tr_scene_create(NULL);
@@ -239,7 +251,11 @@ int render_session_error(render_job *job, const tr_error *err) {
     if (err->code == TR_STATUS_LIMIT && job->resume) {
         return cli_error(&job->args, "--spp: %s", err->msg); /* below the checkpoint's */
     }
-    if (err->code == TR_STATUS_INVALID_ARGUMENT || err->code == TR_STATUS_PARSE) {
+    if (err->code == TR_STATUS_UNSUPPORTED) { /* the integrator and the scene's lights */
+        return cli_error(&job->args, "--integrator: %s: %s", job->common.scene, err->msg);
+    }
+    if (err->code == TR_STATUS_INVALID_ARGUMENT || err->code == TR_STATUS_PARSE ||
+        (job->resume && err->code == TR_STATUS_NOT_FOUND)) {
         return cli_error(&job->args, "%s%s", job->resume ? "--resume: " : "", err->msg);
     }
     fprintf(stderr, "trac0r render: %s%s\n", job->resume ? "--resume: " : "", err->msg);
@@ -375,7 +391,6 @@ static int render_local(render_job *job) {
     const double t0 = tr_time_now();
     int rc = tr_session_run(s, &err) == TR_OK ? CLI_OK : CLI_FAILURE;
     const double t1 = tr_time_now();
-    render_stop_uninstall();
     if (rp.begun) {
         progress_end(&rp.bar);
     }
@@ -403,8 +418,13 @@ static int render_local(render_job *job) {
                 "+ system)\n",
                 t0 - job->started, t1 - t0, tr_time_now() - t1, tr_time_cpu());
     }
+    /* The handlers stay until the files are written: a signal during the writing is noted,
+     * the files are finished whole, and the status still says it came (a second one ends
+     * the process at once, its temporary files removed). */
+    const int sig_late = render_stop_signal();
+    render_stop_uninstall();
     tr_session_destroy(s);
-    return rc == CLI_OK && sig ? 128 + sig : rc;
+    return rc == CLI_OK && sig_late ? 128 + sig_late : rc;
 }
 
 int cmd_render(int argc, char **argv) {

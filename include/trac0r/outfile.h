@@ -1,8 +1,11 @@
 /* outfile.h - every file trac0r writes, written whole or not at all.
  *
- * A writer opens a temporary file next to the target (PATH.tmp.XXXXXX, so the final
- * rename() stays on one file system), writes through the stream, and commits: the stream
- * is flushed and closed with every error checked, and only then renamed onto PATH. Any
+ * A writer opens a temporary file next to the target (so the final rename() stays on one
+ * file system), writes through the stream, and commits: the stream is flushed and closed
+ * with every error checked, and only then renamed onto PATH. Where the file system has
+ * Linux's O_TMPFILE the temporary file has no name until the commit links it as
+ * PATH.tmp.XXXXXX just before the rename, so a process killed while writing (SIGKILL)
+ * leaves nothing; elsewhere it is created as PATH.tmp.XXXXXX. Any
  * failure, or an abort, removes the temporary file. Images, CSV files, plots, checkpoints
  * and the viewer's state file all go through here, so there is one place where file
  * modes, signals and full disks are handled.
@@ -11,7 +14,8 @@
  * existing target keeps its permission bits, a new one gets 0666 less the umask.
  * Targets: PATH must be a regular file or not exist; a directory, device, FIFO or socket
  * is refused when the file is opened (rename() would replace a device node, or fail only
- * after all the work).
+ * after all the work), and so is an existing file this user may not write, as open(2)
+ * would refuse it (rename() needs only the directory's permission).
  * Signals: tr_outfile_cleanup_all() removes every temporary file still open; a program's
  * fatal-signal handlers call it before dying (the trac0r command does). */
 #ifndef TRAC0R_OUTFILE_H
@@ -31,8 +35,15 @@ tr_outfile *tr_outfile_create(const char *path, tr_error *err);
  * and removed again. For commands to check their outputs before long work. */
 int tr_outfile_check(const char *path, tr_error *err);
 
-/* The stream to write to (binary mode), and the temporary file's name (for libraries that
- * want a file name or descriptor of their own). */
+/* Fails with TR_STATUS_INVALID_ARGUMENT when two of the n paths (NULL entries skipped)
+ * name one file - the same path, another path to an existing file, or one new name in one
+ * directory - so that a command refuses outputs that would overwrite each other before
+ * any work. */
+int tr_outfile_check_distinct(const char *const *paths, int n, tr_error *err);
+
+/* The stream to write to (binary mode), and a name that opens the temporary file (for
+ * libraries that want a file name or descriptor of their own: /proc/self/fd/N for an
+ * unnamed one). */
 FILE *tr_outfile_stream(tr_outfile *f);
 const char *tr_outfile_temp_path(const tr_outfile *f);
 

@@ -103,7 +103,8 @@ typedef struct tr_realtime_desc {
      * ReSTIR DI (spatiotemporal reservoir resampling, src/kernel/restir.h) instead of pt's
      * light sample, on a device whose frames run on the host (the CPU; elsewhere
      * tr_realtime_create fails with TR_STATUS_UNSUPPORTED), with pt only. 0 (default,
-     * TR_REALTIME_RESTIR_OFF): pt alone. restir_unbiased: 1 merges reservoirs with
+     * TR_REALTIME_RESTIR_OFF): pt alone. TR_REALTIME_RESTIR_DI_GI: the indirect light there
+     * too, by ReSTIR GI (src/kernel/restir_gi.h). restir_unbiased: 1 merges reservoirs with
      * Talbot's MIS weights and no visibility reuse (unbiased); 0 (default): 1/M weights
      * and visibility reuse (biased, cheaper, less noisy). */
     int restir;
@@ -118,6 +119,9 @@ typedef struct tr_realtime_desc {
 
 #define TR_REALTIME_RESTIR_OFF 0
 #define TR_REALTIME_RESTIR_DI 1
+/* ReSTIR DI and ReSTIR GI (src/kernel/restir_gi.h): the indirect light at the first
+ * surfaces by path resampling too; pt traces only up to them. */
+#define TR_REALTIME_RESTIR_DI_GI 2
 
 /* One frame's request; zeroed fields take their defaults, only camera is required. */
 typedef struct tr_realtime_frame_desc {
@@ -159,7 +163,7 @@ typedef struct tr_realtime_result {
     double spatial_ms;  /* the spatial filter */
     double resolve_ms;  /* the emission's resolve on the host (0 elsewhere) */
     uint32_t resolved;  /* the pixels it traced */
-    double restir_ms;   /* the ReSTIR DI stage (part of render_ms; 0 without it) */
+    double restir_ms;   /* the ReSTIR stage, DI and GI (part of render_ms; 0 without it) */
     /* The traced frame's size: width x height, or less where the frame was upscaled. */
     uint32_t traced_width, traced_height;
     double upscale_ms; /* the upscaling (counted into temporal_ms too); 0 without */

@@ -71,7 +71,8 @@ typedef struct tr_render_config {
     int regularize;
     /* 1: pt leaves out the direct light at the camera ray's first surface (where it is
      * not specular) that light
-     * sampling can produce, for a stage that adds it (tr_realtime's ReSTIR DI); 0
+     * sampling can produce, for a stage that adds it (tr_realtime's ReSTIR DI); 2: its
+     * indirect light there too (the path ends there; tr_realtime's ReSTIR GI adds it); 0
      * (default): pt's whole estimate. */
     int no_primary_direct;
 } tr_render_config;

@@ -55,6 +55,7 @@
 #include "trac0r/image.h"
 #include "trac0r/measure.h"
 #include "trac0r/outfile.h"
+#include "trac0r/parse.h"
 #include "trac0r/post.h"
 #include "trac0r/realtime.h"
 #include "trac0r/recon_device.h"

@@ -90,9 +90,9 @@ int tr_render_config_check(const tr_render_config *cfg, tr_error *err) {
         return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "regularize %d must be 0 or 1",
                             cfg->regularize);
     }
-    if (cfg->no_primary_direct != 0 && cfg->no_primary_direct != 1) {
-        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "no_primary_direct %d must be 0 or 1",
-                            cfg->no_primary_direct);
+    if (cfg->no_primary_direct < 0 || cfg->no_primary_direct > 2) {
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "no_primary_direct %d must be 0, 1 or 2", cfg->no_primary_direct);
     }
     if ((cfg->passes & ~TR_PASS_MASK) != 0u) {
         return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "unknown pass bits 0x%x",
@@ -156,7 +156,8 @@ int tr_frame_make(tr_frame *f, const tr_camera *cam, const tr_render_config *cfg
     f->rr_start = cfg->roulette_start ? cfg->roulette_start : TR_ROULETTE_START_PT;
     f->clamp_indirect = cfg->clamp_indirect;
     f->flags = (cfg->regularize ? TR_FRAME_REGULARIZE : 0u) |
-               (cfg->no_primary_direct ? TR_FRAME_NO_PRIMARY_DIRECT : 0u);
+               (cfg->no_primary_direct ? TR_FRAME_NO_PRIMARY_DIRECT : 0u) |
+               (cfg->no_primary_direct == 2 ? TR_FRAME_NO_PRIMARY_INDIRECT : 0u);
     f->rect_x = r.x;
     f->rect_y = r.y;
     f->rect_w = r.width;

@@ -13,6 +13,7 @@
 #include "kernel/kernel.h"
 #include "accel/accel_internal.h"
 #include "scene/scene_internal.h"
+#include "trac0r/parse.h"
 #include "trac0r/accel.h"
 
 #ifndef TRAC0R_HAVE_OPENCL
@@ -589,9 +590,8 @@ static int parse_work_group(size_t local[2], int *given, tr_error *err) {
     if (!*given || strcmp(env, "driver") == 0) {
         return TR_OK;
     }
-    unsigned w = 0, h = 0;
-    char end = 0;
-    if (sscanf(env, "%ux%u%c", &w, &h, &end) != 2 || w < 1 || h < 1 || w > 1024 || h > 1024) {
+    uint32_t w = 0, h = 0;
+    if (tr_parse_size(env, 1024, &w, &h) != TR_OK) {
         return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
                             "%s='%s' is not WxH (1..1024 each) or 'driver'", work_group_env, env);
     }

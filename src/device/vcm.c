@@ -15,6 +15,7 @@
 #include <string.h>
 
 #include "device/vcm.h"
+#include "trac0r/parse.h"
 #include "kernel/integrator_vcm.h"
 #include "kernel/kernel.h"
 
@@ -61,10 +62,8 @@ int tr_vcm_radius_pixels(float *pixels, tr_error *err) {
     if (!e || !*e) {
         return TR_OK;
     }
-    char *end = NULL;
-    errno = 0;
-    const double v = strtod(e, &end);
-    if (errno != 0 || end == e || *end != '\0' || !(v >= 0.0 && v <= 1000.0)) {
+    double v = 0.0;
+    if (tr_parse_double(e, 0.0, 1000.0, &v) != TR_OK) {
         return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
                             "TRAC0R_VCM_RADIUS=\"%s\": expected a radius in pixels, 0..1000 (0: "
                             "no merging)",

@@ -293,6 +293,26 @@ static int read_channels(exr_context_t ctxt, const char *path, exr_io *io, const
                             "%s: only scanline EXR images are read (this one is tiled or deep)",
                             path);
     }
+    /* Every channel's bytes a pixel, for checking each chunk against what its lines need;
+     * subsampled channels (stored at every 2nd pixel or line, say) are refused: this reader
+     * places one value per pixel. */
+    const exr_attr_chlist_t *list = NULL;
+    exr_compression_t comp = EXR_COMPRESSION_NONE;
+    if (exr_get_channels(ctxt, 0, &list) != EXR_ERR_SUCCESS || !list ||
+        exr_get_compression(ctxt, 0, &comp) != EXR_ERR_SUCCESS) {
+        return tr_error_set(err, TR_STATUS_PARSE, "%s: unreadable channel list", path);
+    }
+    uint64_t pixel_bytes = 0;
+    for (int c = 0; c < list->num_channels; ++c) {
+        const exr_attr_chlist_entry_t *e = &list->entries[c];
+        if (e->x_sampling != 1 || e->y_sampling != 1) {
+            return tr_error_set(err, TR_STATUS_UNSUPPORTED,
+                                "%s: channel %s is subsampled (%dx%d); only full-resolution "
+                                "channels are read",
+                                path, e->name.str, e->x_sampling, e->y_sampling);
+        }
+        pixel_bytes += e->pixel_type == EXR_PIXEL_HALF ? 2u : 4u;
+    }
     img->width = (uint32_t)w;
     img->height = (uint32_t)h;
     img->rgb = calloc((size_t)(w * h * 3), sizeof *img->rgb);
@@ -307,6 +327,28 @@ static int read_channels(exr_context_t ctxt, const char *path, exr_io *io, const
     for (int64_t y = 0; rc == EXR_ERR_SUCCESS && y < h; y += lines) {
         exr_chunk_info_t cinfo;
         rc = exr_read_scanline_chunk_info(ctxt, 0, (int)(dw.min.y + y), &cinfo);
+        /* The chunk must hold its lines whole: one whose data is short (stored, or
+         * decompressing to less) would leave pixels of memory never written. */
+        if (rc == EXR_ERR_SUCCESS) {
+            const int64_t top = cinfo.start_y < dw.min.y ? dw.min.y : cinfo.start_y;
+            const int64_t end = (int64_t)cinfo.start_y + cinfo.height;
+            const uint64_t need = (uint64_t)cinfo.width * (uint64_t)cinfo.height * pixel_bytes;
+            if (cinfo.width != w || cinfo.height < 1 || cinfo.height > lines || top >= end ||
+                end - 1 > dw.max.y || cinfo.unpacked_size != need ||
+                (comp == EXR_COMPRESSION_NONE && cinfo.packed_size != need)) {
+                free(img->rgb);
+                memset(img, 0, sizeof *img);
+                if (started) {
+                    exr_decoding_destroy(ctxt, &dec);
+                }
+                return tr_error_set(err, TR_STATUS_PARSE,
+                                    "%s: the chunk of line %lld holds %llu bytes where its %d "
+                                    "lines need %llu",
+                                    path, (long long)cinfo.start_y,
+                                    (unsigned long long)cinfo.packed_size, (int)cinfo.height,
+                                    (unsigned long long)need);
+            }
+        }
         if (rc == EXR_ERR_SUCCESS) {
             rc = started ? exr_decoding_update(ctxt, 0, &cinfo, &dec)
                          : exr_decoding_initialize(ctxt, 0, &cinfo, &dec);

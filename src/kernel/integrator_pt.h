@@ -121,7 +121,11 @@ TR_FN tr_vec3 tr_pt_add(tr_vec3 radiance, tr_vec3 c, int indirect, float limit) 
  * is not specular, that light sampling can produce (its light samples, and emitters in the light
  * table, the environment or the sun found by its BSDF sample) is left out, for a stage that
  * estimates it (restir.h); the BSDF sample still finds emission no light sample can
- * (a principled material's), with weight 1 as before. With clamp 0 and no flags the
+ * (a principled material's), with weight 1 as before. With TR_FRAME_NO_PRIMARY_INDIRECT the
+ * path ends at that surface (a stage estimates its indirect light), and with
+ * TR_FRAME_NO_FIRST_LIGHT the emission the ray finds first (an emitter of the light table,
+ * the environment, the sun) is left out: the stage's ray from the first surface then
+ * carries indirect light only. With clamp 0 and no flags the
  * same numbers as without. */
 TR_FN tr_vec3 tr_trace_pt_ff(const tr_scene_view *s, tr_ray ray, int max_depth, int rr_start,
                              float clamp_indirect, uint32_t flags, const tr_sampler *smp,
@@ -129,6 +133,7 @@ TR_FN tr_vec3 tr_trace_pt_ff(const tr_scene_view *s, tr_ray ray, int max_depth, 
     tr_vec3 radiance = v3s(0.0f);
     int first_nd = 0; /* the segment of the first non-specular vertex (0: none yet) */
     const int no_primary = (flags & TR_FRAME_NO_PRIMARY_DIRECT) != 0u;
+    const int no_first = (flags & TR_FRAME_NO_FIRST_LIGHT) != 0u;
     tr_vec3 throughput = v3s(1.0f);
     float prev_pdf = 0.0f;
     tr_vec3 prev_p = ray.origin;    /* the vertex the last BSDF sample left, for MIS */
@@ -144,7 +149,7 @@ TR_FN tr_vec3 tr_trace_pt_ff(const tr_scene_view *s, tr_ray ray, int max_depth, 
         if (!tr_intersect_scene(s, &ray, &hit)) {
             /* A ray leaving the scene sees the environment (BSDF strategy). */
             const int indirect = first_nd != 0 && seg > first_nd + 1;
-            const int skip = no_primary && first_nd == 1 && seg == 2;
+            const int skip = (no_primary && first_nd == 1 && seg == 2) || (no_first && seg == 1);
             if (s->env_count > 0u && !skip) {
                 tr_vec3 le = tr_env_radiance(s, ray.dir);
                 float w = prev_delta ? 1.0f : tr_mis_power(prev_pdf, tr_env_pdf(s, ray.dir));
@@ -196,7 +201,8 @@ TR_FN tr_vec3 tr_trace_pt_ff(const tr_scene_view *s, tr_ray ray, int max_depth, 
         /* Emission found by the BSDF strategy (or the camera). */
         tr_vec3 le = tr_emitted(&m, wo);
         if (!tr_v3_is_zero(le) &&
-            !(no_primary && primary_direct && first_nd == 1 && m.emittance > 0.0f)) {
+            !(no_primary && primary_direct && first_nd == 1 && m.emittance > 0.0f) &&
+            !(no_first && seg == 1 && m.emittance > 0.0f)) {
             float w = 1.0f;
             if (!prev_delta) {
                 w = tr_mis_power(prev_pdf, tr_light_pdf_n(s, prev_p, prev_n, hit.triangle, p));
@@ -276,6 +282,11 @@ TR_FN tr_vec3 tr_trace_pt_ff(const tr_scene_view *s, tr_ray ray, int max_depth, 
             radiance =
                 tr_pt_add(radiance, v3_mul(throughput, tr_punctual_nee(s, &m, wo, p, pu, rays)),
                           nee_indirect, clamp_indirect);
+        }
+
+        /* The indirect light at the first surface is a stage's (ReSTIR GI, restir_gi.h). */
+        if ((flags & TR_FRAME_NO_PRIMARY_INDIRECT) != 0u && seg == 1 && first_nd == 1) {
+            break;
         }
 
         /* Continue with the BSDF's sample. */

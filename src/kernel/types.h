@@ -104,6 +104,13 @@ TR_STATIC_ASSERT(sizeof(tr_frame) == 164, "tr_frame layout");
  * later stage adds
  * (ReSTIR DI, src/kernel/restir.h). */
 #define TR_FRAME_NO_PRIMARY_DIRECT 2u
+/* tr_frame.flags: pt ends the path at the camera ray's first surface where that is not
+ * specular, leaving its indirect light to a later stage (ReSTIR GI, restir_gi.h). */
+#define TR_FRAME_NO_PRIMARY_INDIRECT 4u
+/* pt leaves out the emission of the first surface its ray finds that light sampling
+ * reaches (emitters of the light table, the environment, the sun): set by ReSTIR GI's
+ * rays from the first surface, whose direct light ReSTIR DI estimates. */
+#define TR_FRAME_NO_FIRST_LIGHT 8u
 
 /* What one sample of one pixel gives: radiance, the intersection queries it made, and
  * the surface the passes describe (zero where the path found no non-specular surface). */

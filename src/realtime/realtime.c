@@ -142,7 +142,8 @@ tr_realtime *tr_realtime_create(tr_device *dev, tr_scene *scene, const tr_realti
                      (double)d->clamp_indirect, d->regularize);
         return NULL;
     }
-    if (d->restir != TR_REALTIME_RESTIR_OFF && d->restir != TR_REALTIME_RESTIR_DI) {
+    if (d->restir != TR_REALTIME_RESTIR_OFF && d->restir != TR_REALTIME_RESTIR_DI &&
+        d->restir != TR_REALTIME_RESTIR_DI_GI) {
         tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "tr_realtime_desc.restir: unknown %d",
                      d->restir);
         return NULL;
@@ -190,6 +191,8 @@ tr_realtime *tr_realtime_create(tr_device *dev, tr_scene *scene, const tr_realti
     rt->restir = d->restir;
     rt->restir_params = tr_restir_params_default();
     rt->restir_params.unbiased = d->restir_unbiased != 0;
+    rt->restir_params.gi = d->restir == TR_REALTIME_RESTIR_DI_GI;
+    rt->restir_params.gi_unbiased = d->restir_unbiased != 0;
     if (rt->restir && !(rt->restir_stage = tr_restir_stage_create(err))) {
         free(rt);
         return NULL;
@@ -407,7 +410,7 @@ int tr_realtime_render(tr_realtime *rt, const tr_realtime_frame_desc *fd, tr_err
     /* ReSTIR DI: pt leaves the direct light at the first surface to the stage below (not
      * for a preview stride, whose traced pixels fill blocks). */
     const int restir = rt->restir != TR_REALTIME_RESTIR_OFF && stride <= 1;
-    cfg.no_primary_direct = restir;
+    cfg.no_primary_direct = !restir ? 0 : rt->restir_params.gi ? 2 : 1;
     const uint32_t n = rt->view_moving && fd->budget_ms > 0.0 ? rt->budget_spp : rt->spp;
     const uint32_t sample = first_sample(rt, n);
     const double t0 = tr_time_now();
@@ -432,9 +435,14 @@ int tr_realtime_render(tr_realtime *rt, const tr_realtime_frame_desc *fd, tr_err
     rt->restir_ms = 0.0;
     if (restir) {
         const double t1 = tr_time_now();
-        if (tr_restir_stage_run(rt->restir_stage, rt->scene, &rt->rcam, &rt->restir_params,
-                                cfg.seed, sample, (uint32_t)cfg.sampler, n, rt->calls, cfg.threads,
-                                &rt->film, err) != TR_OK) {
+        tr_restir_params rp = rt->restir_params; /* ReSTIR GI's paths as this frame's */
+        rp.max_depth = cfg.max_depth ? cfg.max_depth : tr_default_max_depth(cfg.integrator);
+        rp.rr_start = cfg.roulette_start ? cfg.roulette_start : TR_ROULETTE_START_PT;
+        rp.clamp_indirect = cfg.clamp_indirect;
+        rp.regularize = cfg.regularize;
+        if (tr_restir_stage_run(rt->restir_stage, rt->scene, &rt->rcam, &rp, cfg.seed, sample,
+                                (uint32_t)cfg.sampler, n, rt->calls, cfg.threads, &rt->film,
+                                err) != TR_OK) {
             rt->have_view = 0;
             return TR_ERR;
         }

@@ -16,6 +16,7 @@
 #include <string.h>
 
 #include "kernel/restir.h"
+#include "kernel/restir_gi.h"
 #include "post/filter.h"
 #include "scene/scene_internal.h"
 #include "trac0r/render.h"
@@ -24,6 +25,7 @@ struct tr_restir_stage {
     uint32_t w, h;
     tr_restir_surface *surf, *prev_surf;
     tr_reservoir *cur, *out, *prev;
+    tr_gi_reservoir *gcur, *gout, *gprev; /* ReSTIR GI's, as cur, out, prev */
     tr_camera prev_cam;
     int have_prev;
 };
@@ -37,6 +39,16 @@ tr_restir_params tr_restir_params_default(void) {
     p.unbiased = 0;
     p.temporal = 1;
     p.tree = 0;
+    p.gi = 0;
+    p.gi_temporal = 1;
+    p.gi_unbiased = 0;
+    p.gi_spatial = 3;
+    p.gi_radius = 16.0f;
+    p.gi_temporal_cap = 20.0f;
+    p.max_depth = 8;
+    p.rr_start = 2;
+    p.clamp_indirect = 0.0f;
+    p.regularize = 0;
     return p;
 }
 
@@ -54,6 +66,10 @@ static void free_buffers(tr_restir_stage *st) {
     free(st->cur);
     free(st->out);
     free(st->prev);
+    free(st->gcur);
+    free(st->gout);
+    free(st->gprev);
+    st->gcur = st->gout = st->gprev = NULL;
     st->surf = st->prev_surf = NULL;
     st->cur = st->out = st->prev = NULL;
     st->w = st->h = 0;
@@ -73,8 +89,9 @@ void tr_restir_stage_reset(tr_restir_stage *st) {
     }
 }
 
-static int size_buffers(tr_restir_stage *st, uint32_t w, uint32_t h, tr_error *err) {
-    if (st->w == w && st->h == h && st->surf) {
+/* The buffers for a w x h frame; ReSTIR GI's only where it runs (gi). */
+static int size_buffers(tr_restir_stage *st, uint32_t w, uint32_t h, int gi, tr_error *err) {
+    if (st->w == w && st->h == h && st->surf && (!gi || st->gcur)) {
         return TR_OK;
     }
     free_buffers(st);
@@ -84,7 +101,13 @@ static int size_buffers(tr_restir_stage *st, uint32_t w, uint32_t h, tr_error *e
     st->cur = malloc(n * sizeof *st->cur);
     st->out = malloc(n * sizeof *st->out);
     st->prev = malloc(n * sizeof *st->prev);
-    if (!st->surf || !st->prev_surf || !st->cur || !st->out || !st->prev) {
+    if (gi) {
+        st->gcur = malloc(n * sizeof *st->gcur);
+        st->gout = malloc(n * sizeof *st->gout);
+        st->gprev = malloc(n * sizeof *st->gprev);
+    }
+    if (!st->surf || !st->prev_surf || !st->cur || !st->out || !st->prev ||
+        (gi && (!st->gcur || !st->gout || !st->gprev))) {
         free_buffers(st);
         return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory for the ReSTIR stage");
     }
@@ -112,6 +135,111 @@ static void pixel_rng(tr_rng *rng, uint64_t seed, size_t i, uint64_t frame, uint
     tr_rng_init(rng, seed ^ 0x72657374697264ULL, (uint64_t)i, frame * 2u + pass);
 }
 
+/* ReSTIR GI's random numbers for pixel i of frame `frame`, pass `pass`. */
+static void gi_rng(tr_rng *rng, uint64_t seed, size_t i, uint64_t frame, uint64_t pass) {
+    tr_rng_init(rng, seed ^ 0x67692d72657374ULL, (uint64_t)i, frame * 2u + pass);
+}
+
+/* ReSTIR GI (src/kernel/restir_gi.h) on the surfaces st->surf of this frame: (1) every
+ * pixel's initial sample and the temporal merge with the previous frame's reservoir at the
+ * reprojected pixel, into gcur; (2) the spatial merge of gcur's neighbours (each one's
+ * sample tested for visibility), the shading and the film's addition, into gout. As in
+ * the direct light's passes, no pixel reads what another writes in the same pass. */
+static void gi_passes(tr_restir_stage *st, const tr_scene_view *s, const tr_restir_params *p,
+                      uint64_t seed, uint32_t spp, uint64_t frame, int threads, int temporal,
+                      const tr_camera *prev_cam, tr_film *film) {
+    const uint32_t w = st->w, h = st->h;
+    const float cap = p->gi_temporal_cap > 0.0f ? p->gi_temporal_cap : 20.0f;
+    const uint32_t flags = p->regularize ? TR_FRAME_REGULARIZE : 0u;
+#pragma omp parallel for num_threads(threads) schedule(dynamic, 4)
+    for (int y = 0; y < (int)h; ++y) {
+        for (uint32_t x = 0; x < w; ++x) {
+            const size_t i = (size_t)y * w + x;
+            const tr_restir_surface *q = &st->surf[i];
+            if (!q->valid) {
+                st->gcur[i] = tr_gi_reservoir_empty();
+                continue;
+            }
+            tr_rng rng;
+            gi_rng(&rng, seed, i, frame, 0);
+            const float ulobe = tr_rng_float(&rng), u1 = tr_rng_float(&rng);
+            const float u2 = tr_rng_float(&rng);
+            const tr_sampler smp =
+                tr_sampler_make_kind(seed ^ 0x67692d70617468ULL, (uint64_t)i, (uint32_t)frame, 1u);
+            uint32_t rays = 0u;
+            tr_gi_reservoir r = tr_gi_initial(s, q, ulobe, u1, u2, &smp, p->max_depth, p->rr_start,
+                                              p->clamp_indirect, flags, &rays);
+            float px, py, dist;
+            if (temporal && tr_post_project(prev_cam, q->p, &px, &py, &dist) && px >= 0.0f &&
+                py >= 0.0f && px < (float)w && py < (float)h) {
+                const size_t j = (size_t)(uint32_t)py * w + (uint32_t)px;
+                if (similar(q, &st->prev_surf[j])) {
+                    tr_restir_surface ss[2];
+                    tr_gi_reservoir rr[2];
+                    const int vis[2] = {0, 0};
+                    ss[0] = *q;
+                    ss[1] = st->prev_surf[j];
+                    rr[0] = r;
+                    rr[1] = st->gprev[j];
+                    if (rr[1].M > cap * r.M) {
+                        rr[1].M = cap * r.M;
+                    }
+                    r = tr_gi_merge(s, ss, rr, vis, 2, p->gi_unbiased, cap + r.M, &rng);
+                }
+            }
+            st->gcur[i] = r;
+        }
+    }
+
+    const int k = p->gi_spatial < 0                         ? 0
+                  : p->gi_spatial > TR_RESTIR_MAX_MERGE - 1 ? TR_RESTIR_MAX_MERGE - 1
+                                                            : p->gi_spatial;
+#pragma omp parallel for num_threads(threads) schedule(dynamic, 4)
+    for (int y = 0; y < (int)h; ++y) {
+        for (uint32_t x = 0; x < w; ++x) {
+            const size_t i = (size_t)y * w + x;
+            const tr_restir_surface *q = &st->surf[i];
+            if (!q->valid) {
+                st->gout[i] = tr_gi_reservoir_empty();
+                continue;
+            }
+            tr_rng rng;
+            gi_rng(&rng, seed, i, frame, 1);
+            tr_restir_surface ss[TR_RESTIR_MAX_MERGE];
+            tr_gi_reservoir rr[TR_RESTIR_MAX_MERGE];
+            int vis[TR_RESTIR_MAX_MERGE];
+            ss[0] = *q;
+            rr[0] = st->gcur[i];
+            vis[0] = 0;
+            int n = 1;
+            for (int t = 0; t < k; ++t) {
+                const float a = TR_TWO_PI * tr_rng_float(&rng);
+                const float rad = p->gi_radius * tr_sqrtf(tr_rng_float(&rng));
+                const int nx = (int)x + (int)(rad * tr_cosf(a) + 0.5f);
+                const int ny = y + (int)(rad * tr_sinf(a) + 0.5f);
+                if (nx < 0 || ny < 0 || nx >= (int)w || ny >= (int)h || (nx == (int)x && ny == y)) {
+                    continue;
+                }
+                const size_t j = (size_t)ny * w + (size_t)nx;
+                if (!similar(q, &st->surf[j])) {
+                    continue;
+                }
+                ss[n] = st->surf[j];
+                rr[n] = st->gcur[j];
+                vis[n] = 1;
+                ++n;
+            }
+            tr_gi_reservoir r =
+                n > 1 ? tr_gi_merge(s, ss, rr, vis, n, p->gi_unbiased, 1e30f, &rng) : rr[0];
+            st->gout[i] = r;
+            const tr_vec3 c = v3_scale(tr_gi_shade(q, &r), (float)spp);
+            film->sum[3 * i] += c.x;
+            film->sum[3 * i + 1] += c.y;
+            film->sum[3 * i + 2] += c.z;
+        }
+    }
+}
+
 int tr_restir_stage_run(tr_restir_stage *st, const tr_scene *scene, const tr_camera *cam,
                         const tr_restir_params *p, uint64_t seed, uint32_t sample, uint32_t sampler,
                         uint32_t spp, uint64_t frame, int threads, tr_film *film, tr_error *err) {
@@ -121,11 +249,12 @@ int tr_restir_stage_run(tr_restir_stage *st, const tr_scene *scene, const tr_cam
                             "ReSTIR: a %ux%u camera for a %ux%u film", w, h, film->width,
                             film->height);
     }
-    if (size_buffers(st, w, h, err) != TR_OK) {
+    if (size_buffers(st, w, h, p->gi, err) != TR_OK) {
         return TR_ERR;
     }
     threads = threads > 0 ? threads : tr_default_threads();
     tr_scene_view view = tr_scene_view_of(scene);
+    const tr_scene_view full = view; /* ReSTIR GI's paths sample the lights as pt does */
     if (!p->tree) {
         view.light_node_count = 0u; /* tr_light_sample_n then draws from the power CDF */
     }
@@ -228,7 +357,15 @@ int tr_restir_stage_run(tr_restir_stage *st, const tr_scene *scene, const tr_cam
         }
     }
 
+    if (p->gi) {
+        gi_passes(st, &full, p, seed, spp, frame, threads, p->gi_temporal && st->have_prev,
+                  &prev_cam, film);
+    }
+
     /* The next frame reuses this one's reservoirs and surfaces. */
+    tr_gi_reservoir *g = st->gprev;
+    st->gprev = st->gout;
+    st->gout = g;
     tr_reservoir *t = st->prev;
     st->prev = st->out;
     st->out = t;

@@ -23,6 +23,18 @@ typedef struct tr_restir_params {
     int temporal;       /* reuse the previous frame's reservoirs */
     int tree;           /* candidates from the light tree where the scene has one (else the
                            power CDF, cheaper: resampling weighs distance and angle) */
+    /* ReSTIR GI (src/kernel/restir_gi.h): 1 adds the indirect light at the first surfaces
+     * too, for a pt frame rendered with no_primary_direct 2. Its paths from the sample
+     * points take the frame's depth, roulette start, indirect clamp and regularization. */
+    int gi;
+    int gi_temporal;       /* reuse the previous frame's GI reservoirs */
+    int gi_unbiased;       /* as unbiased, for GI's merges */
+    int gi_spatial;        /* neighbours merged per pixel */
+    float gi_radius;       /* in pixels */
+    float gi_temporal_cap; /* as temporal_cap */
+    int max_depth, rr_start;
+    float clamp_indirect;
+    int regularize;
 } tr_restir_params;
 
 tr_restir_params tr_restir_params_default(void);
@@ -34,9 +46,9 @@ void tr_restir_stage_destroy(tr_restir_stage *st);
 /* Forgets the previous frame (a cut, a new size). */
 void tr_restir_stage_reset(tr_restir_stage *st);
 
-/* Adds `spp` times the direct light estimate at every pixel's first surface (seen
- * through sample `sample`'s camera ray of pixel (x, y), as pt traced it with `seed` and
- * `sampler`) to film's radiance sums (and its direct pass if kept). `frame` keys the
+/* Adds `spp` times the direct light estimate (and with p->gi the indirect light's) at every pixel's
+ * first surface (seen through sample `sample`'s camera ray of pixel (x, y), as pt traced it with
+ * `seed` and `sampler`) to film's radiance sums (and its direct pass if kept). `frame` keys the
  * stage's own random numbers. Bit-identical for any thread count. */
 int tr_restir_stage_run(tr_restir_stage *st, const tr_scene *scene, const tr_camera *cam,
                         const tr_restir_params *p, uint64_t seed, uint32_t sample, uint32_t sampler,

@@ -395,6 +395,11 @@ int tr_codec_info(const unsigned char *data, size_t len, const char *name, int *
                             "HDR, TGA, BMP)",
                             name);
     }
+    /* A BMP stored top-down has a negative height in its header, which stb_image's info
+     * call passes on (its decoder takes the magnitude and reads the rows right). */
+    if (*height < 0 && *height > INT32_MIN) {
+        *height = -*height;
+    }
     return TR_OK;
 }
 

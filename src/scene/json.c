@@ -231,6 +231,31 @@ static int get_number(const jctx *c, const cJSON *obj, const char *path, const c
     return TR_OK;
 }
 
+/* A number kept as a float, in [lo, hi] compared as floats: a documented float limit such
+ * as 0.001 then accepts "0.001" (as a double it lies just below the float 0.001f). */
+static int get_float(const jctx *c, const cJSON *obj, const char *path, const char *key, float lo,
+                     float hi, float *out, int *present) {
+    int here = 1;
+    double x = 0.0;
+    if (get_number(c, obj, path, key, -HUGE_VAL, HUGE_VAL, &x, present ? &here : NULL) != TR_OK) {
+        return TR_ERR;
+    }
+    if (present) {
+        *present = here;
+    }
+    if (!here) {
+        return TR_OK;
+    }
+    const float f = (float)x;
+    if (!(f >= lo && f <= hi)) {
+        char p[PATH_MAX_LEN];
+        path_key(p, path, key);
+        return jerr(c, p, "expected a number in [%g, %g], got %g", (double)lo, (double)hi, x);
+    }
+    *out = f;
+    return TR_OK;
+}
+
 /* A whole number in [lo, hi]. */
 static int get_integer(const jctx *c, const cJSON *obj, const char *path, const char *key,
                        double lo, double hi, double *out, int *present) {
@@ -1497,9 +1522,11 @@ static int parse_sun(jctx *c, const cJSON *sun) {
         return TR_ERR;
     }
     tr_vec3 dir, e = v3s(1.0f);
-    double angle = 0.526, ev = 1.0;
+    double ev = 1.0;
+    float angle = 0.526f; /* optional: the Sun's */
+    int has_angle = 0;
     if (get_vec3(c, sun, path, "direction", 1, 0, &dir, NULL) != TR_OK ||
-        get_number(c, sun, path, "angle", TR_SUN_MIN_ANGLE, TR_SUN_MAX_ANGLE, &angle, NULL) !=
+        get_float(c, sun, path, "angle", TR_SUN_MIN_ANGLE, TR_SUN_MAX_ANGLE, &angle, &has_angle) !=
             TR_OK) {
         return TR_ERR;
     }
@@ -1521,7 +1548,7 @@ static int parse_sun(jctx *c, const cJSON *sun) {
         }
     }
     tr_error err;
-    if (tr_scene_set_sun(c->scene, dir, (float)angle, e, &err) != TR_OK) {
+    if (tr_scene_set_sun(c->scene, dir, angle, e, &err) != TR_OK) {
         return jerr_from(c, path, &err);
     }
     c->info->allow_no_emitter = 1; /* a light: the scene needs no emitter */

@@ -10,7 +10,13 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <signal.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <time.h>
+#include <unistd.h>
 
+#include "trac0r/parse.h"
 #include "util/infile.h"
 
 typedef struct guard_file guard_file;
@@ -319,7 +325,7 @@ static void one_line(char *out, size_t n, const char *msg) {
     out[j] = '\0';
 }
 
-const struct aiScene *tr_mesh_guarded_import(const char *path, unsigned int flags, tr_error *err) {
+static const struct aiScene *import_here(const char *path, unsigned int flags, tr_error *err) {
     guard *g = calloc(1, sizeof *g);
     if (!g) {
         tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "'%.200s': out of memory", path);
@@ -371,6 +377,94 @@ const struct aiScene *tr_mesh_guarded_import(const char *path, unsigned int flag
     }
     free(g);
     return ai;
+}
+
+#if defined(__unix__) && !defined(__EMSCRIPTEN__) && !defined(TR_MESH_IMPORT_IN_PROCESS)
+#define TR_MESH_TRIAL 1
+/* Seconds of CPU time an import may take (TRAC0R_IMPORT_CPU_SECONDS), and of wall time
+ * (twice that, at least 10: an import blocked on I/O spends none). */
+static unsigned trial_cpu_seconds(void) {
+    const char *e = getenv("TRAC0R_IMPORT_CPU_SECONDS");
+    uint64_t v = 0;
+    if (e && *e && tr_parse_uint64(e, 1, 86400, &v) == TR_OK) {
+        return (unsigned)v;
+    }
+    return TR_MESH_IMPORT_CPU_SECONDS;
+}
+
+/* Imports the model once in a forked child under limits on memory and CPU time, and
+ * reports how the child ended: Assimp crashes (Debian's 5.2.5 segfaults in its PLY parser)
+ * and loops for ever on inputs a fuzzer finds in seconds, and none of that may take the
+ * process down with it. The child's result is thrown away: it succeeded or failed cleanly,
+ * and the import in this process then does the same. A process that cannot fork imports
+ * in-process as before. */
+static int trial_in_child(const char *path, unsigned int flags, tr_error *err) {
+    const unsigned cpu = trial_cpu_seconds();
+    const pid_t pid = fork();
+    if (pid < 0) {
+        return TR_OK;
+    }
+    if (pid == 0) {
+        const struct rlimit cpu_limit = {cpu, cpu + 1};
+        setrlimit(RLIMIT_CPU, &cpu_limit);
+#if !defined(__SANITIZE_ADDRESS__)
+        const struct rlimit as_limit = {TR_MESH_IMPORT_MAX_MEMORY, TR_MESH_IMPORT_MAX_MEMORY};
+        setrlimit(RLIMIT_AS, &as_limit);
+#endif
+        tr_error e;
+        const struct aiScene *ai = import_here(path, flags, &e);
+        (void)ai; /* freed with the child */
+        _exit(0);
+    }
+    const double wall = 2.0 * cpu > 10.0 ? 2.0 * cpu : 10.0;
+    struct timespec t0, now, nap = {0, 2000000};
+    clock_gettime(CLOCK_MONOTONIC, &t0);
+    int status = 0;
+    for (;;) {
+        const pid_t r = waitpid(pid, &status, WNOHANG);
+        if (r == pid) {
+            break;
+        }
+        if (r < 0 && errno != EINTR) {
+            return TR_OK; /* reaped elsewhere (a SIGCHLD handler): nothing to tell */
+        }
+        clock_gettime(CLOCK_MONOTONIC, &now);
+        if ((double)(now.tv_sec - t0.tv_sec) + 1e-9 * (double)(now.tv_nsec - t0.tv_nsec) > wall) {
+            kill(pid, SIGKILL);
+            waitpid(pid, &status, 0);
+            return tr_error_set(err, TR_STATUS_LIMIT,
+                                "the importer did not finish '%.200s' within %.0f s", path, wall);
+        }
+        nanosleep(&nap, NULL);
+    }
+    if (WIFSIGNALED(status)) {
+        const int sig = WTERMSIG(status);
+        if (sig == SIGXCPU || sig == SIGKILL) {
+            return tr_error_set(err, TR_STATUS_LIMIT,
+                                "the importer ran past its CPU time limit (%u s, "
+                                "TRAC0R_IMPORT_CPU_SECONDS) on '%.200s'",
+                                cpu, path);
+        }
+        return tr_error_set(err, TR_STATUS_PARSE, "the importer crashed on '%.200s': signal %d",
+                            path, sig);
+    }
+    if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+        return tr_error_set(err, TR_STATUS_LIMIT,
+                            "the importer failed on '%.200s' (status %d: out of its memory "
+                            "limit?)",
+                            path, WIFEXITED(status) ? WEXITSTATUS(status) : -1);
+    }
+    return TR_OK;
+}
+#endif
+
+const struct aiScene *tr_mesh_guarded_import(const char *path, unsigned int flags, tr_error *err) {
+#ifdef TR_MESH_TRIAL
+    if (trial_in_child(path, flags, err) != TR_OK) {
+        return NULL;
+    }
+#endif
+    return import_here(path, flags, err);
 }
 
 int tr_mesh_check_confined(const char *model_dir, const char *file, tr_error *err) {

@@ -20,8 +20,17 @@
 
 #define TR_MESH_MAX_READ_BYTES (1ull << 30)
 
+/* The limits of the trial import in a child process (below): CPU seconds (the
+ * environment's TRAC0R_IMPORT_CPU_SECONDS, 1..86400, sets another) and address space. */
+#define TR_MESH_IMPORT_CPU_SECONDS 120u
+#define TR_MESH_IMPORT_MAX_MEMORY (16ull << 30)
+
 /* aiImportFileEx through the callbacks above. NULL with `err` set ("Assimp cannot read
- * 'PATH': ...", or the guard's own reason) when the import fails. */
+ * 'PATH': ...", or the guard's own reason) when the import fails. Where the system can
+ * fork, the import is first tried in a child process under TR_MESH_IMPORT_CPU_SECONDS of
+ * CPU time and TR_MESH_IMPORT_MAX_MEMORY of address space: a crash or hang in Assimp
+ * becomes one error naming the file ("the importer crashed on 'PATH': signal 11"), never
+ * this process's end. */
 const struct aiScene *tr_mesh_guarded_import(const char *path, unsigned int flags, tr_error *err);
 
 /* The declared-size check alone, on `size` bytes of a file's start `head` whose whole size

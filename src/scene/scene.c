@@ -6,6 +6,7 @@
 #include "kernel/ggx_ms.h"
 #include "scene_internal.h"
 #include "trac0r/render.h"
+#include "trac0r/parse.h"
 #include "trac0r/scene.h"
 #include "material_registry.h"
 #include "scene_internal.h"
@@ -70,6 +71,10 @@ void tr_scene_clear(tr_scene *s) {
     free(s->tri_verts);
     free(s->textures);
     free(s->texels);
+    for (uint32_t i = 0; i < s->texture_file_count; ++i) {
+        free(s->texture_files[i]);
+    }
+    free(s->texture_files);
     free(s->material_exts);
     free(s->env_texels);
     free(s->env_cdf);
@@ -184,6 +189,21 @@ int tr_scene_set_material_ext(tr_scene *s, uint32_t index, const tr_material_ext
     return TR_OK;
 }
 
+int tr_scene_texel_budget(uint32_t *budget, tr_error *err) {
+    *budget = TR_TEXEL_BUDGET_DEFAULT;
+    const char *e = getenv("TRAC0R_TEXEL_BUDGET");
+    uint64_t v = 0;
+    if (e && *e) {
+        if (tr_parse_uint64(e, 1, UINT32_MAX, &v) != TR_OK) {
+            return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                                "TRAC0R_TEXEL_BUDGET=\"%.40s\": expected a texel count in 1..%u", e,
+                                UINT32_MAX);
+        }
+        *budget = (uint32_t)v;
+    }
+    return TR_OK;
+}
+
 int tr_scene_add_texture(tr_scene *s, const uint32_t *rgba, uint32_t width, uint32_t height,
                          uint32_t flags, uint32_t *index, tr_error *err) {
     uint64_t n = (uint64_t)width * height;
@@ -191,8 +211,15 @@ int tr_scene_add_texture(tr_scene *s, const uint32_t *rgba, uint32_t width, uint
         return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "a texture of %ux%u texels", width,
                             height);
     }
-    if (n + s->texel_count > UINT32_MAX) {
-        return tr_error_set(err, TR_STATUS_LIMIT, "textures would exceed %u texels", UINT32_MAX);
+    uint32_t budget = 0;
+    if (tr_scene_texel_budget(&budget, err) != TR_OK) {
+        return TR_ERR;
+    }
+    if (n + s->texel_count > budget) {
+        return tr_error_set(err, TR_STATUS_LIMIT,
+                            "textures would hold %llu texels, more than the budget of %u "
+                            "(TRAC0R_TEXEL_BUDGET)",
+                            (unsigned long long)(n + s->texel_count), budget);
     }
     if (grow((void **)&s->texels, &s->texel_capacity, s->texel_count + n, sizeof *s->texels,
              "texels", err) != TR_OK ||

@@ -85,6 +85,11 @@ struct tr_scene {
     uint32_t texture_count, texture_capacity;
     uint32_t *texels;
     uint32_t texel_count, texel_capacity;
+    /* The file each texture was decoded from (tr_scene_load_texture; NULL: given as
+     * texels), so that a file named again is not decoded again: texture_file_count <=
+     * texture_count entries. */
+    char **texture_files;
+    uint32_t texture_file_count;
     tr_material_ext *material_exts;
     uint32_t material_ext_count, material_ext_capacity;
     /* The environment light (src/scene/envmap.c): env_count 0 or 1. */
@@ -144,6 +149,11 @@ int tr_scene_set_material_ext(tr_scene *s, uint32_t index, const tr_material_ext
                               tr_error *err);
 /* No textures, metallic 0, no cut-out, normal scale 1. */
 tr_material_ext tr_material_ext_default(void);
+/* The most texels a scene's textures may hold together: TRAC0R_TEXEL_BUDGET from the
+ * environment (1..2^32-1), else TR_TEXEL_BUDGET_DEFAULT (2^28: 1 GiB of RGBA8). Fails
+ * with TR_STATUS_INVALID_ARGUMENT on a malformed value. */
+#define TR_TEXEL_BUDGET_DEFAULT (1u << 28)
+int tr_scene_texel_budget(uint32_t *budget, tr_error *err);
 /* Appends a width x height RGBA8 image (row-major from the top, R in the low byte) as a
  * texture; its index in *index. */
 int tr_scene_add_texture(tr_scene *s, const uint32_t *rgba, uint32_t width, uint32_t height,

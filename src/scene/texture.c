@@ -229,14 +229,77 @@ int tr_scene_load_texture_memory(tr_scene *s, const unsigned char *data, size_t 
     return rc;
 }
 
+/* Remembers that texture `index` was decoded from `path`. */
+static int note_file(tr_scene *s, uint32_t index, const char *path, tr_error *err) {
+    if (index >= s->texture_file_count) {
+        char **grown = realloc(s->texture_files, ((size_t)index + 1) * sizeof *grown);
+        if (!grown) {
+            return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory");
+        }
+        for (uint32_t i = s->texture_file_count; i <= index; ++i) {
+            grown[i] = NULL;
+        }
+        s->texture_files = grown;
+        s->texture_file_count = index + 1;
+    }
+    const size_t n = strlen(path) + 1;
+    s->texture_files[index] = malloc(n);
+    if (!s->texture_files[index]) {
+        return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory");
+    }
+    memcpy(s->texture_files[index], path, n);
+    return TR_OK;
+}
+
 int tr_scene_load_texture(tr_scene *s, const char *path, uint32_t flags, uint32_t *index,
                           tr_error *err) {
+    /* A file named again (by sixteen materials, say) is decoded once: the same texture,
+     * or under another wrap mode a texture over the same texels. */
+    for (uint32_t i = 0; i < s->texture_file_count; ++i) {
+        if (!s->texture_files[i] || strcmp(s->texture_files[i], path) != 0) {
+            continue;
+        }
+        if (s->textures[i].flags == flags) {
+            if (index) {
+                *index = i;
+            }
+            return TR_OK;
+        }
+        for (uint32_t j = i + 1; j < s->texture_file_count; ++j) {
+            if (s->texture_files[j] && strcmp(s->texture_files[j], path) == 0 &&
+                s->textures[j].flags == flags) {
+                if (index) {
+                    *index = j;
+                }
+                return TR_OK;
+            }
+        }
+        tr_texture *grown = realloc(s->textures, ((size_t)s->texture_count + 1) * sizeof *grown);
+        if (!grown) {
+            return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory");
+        }
+        s->textures = grown;
+        s->texture_capacity = s->texture_count + 1;
+        const uint32_t k = s->texture_count;
+        s->textures[k] = s->textures[i];
+        s->textures[k].flags = flags;
+        s->texture_count++;
+        s->generation++;
+        if (index) {
+            *index = k;
+        }
+        return note_file(s, k, path, err);
+    }
     unsigned char *data;
     size_t len;
     if (tr_read_image_file(path, &data, &len, err) != TR_OK) {
         return TR_ERR;
     }
-    int rc = tr_scene_load_texture_memory(s, data, len, path, flags, index, err);
+    uint32_t k = 0;
+    int rc = tr_scene_load_texture_memory(s, data, len, path, flags, &k, err);
     free(data);
-    return rc;
+    if (rc == TR_OK && index) {
+        *index = k;
+    }
+    return rc == TR_OK ? note_file(s, k, path, err) : rc;
 }

@@ -98,8 +98,13 @@ static FILE *open_regular(const char *path, uint64_t *size, tr_error *err) {
         if (fd >= 0) {
             close(fd);
         }
-        tr_error_set(err, e ? tr_status_from_errno(e) : TR_STATUS_IO, "%.200s: cannot open: %s",
-                     path, e ? strerror(e) : "not a regular file");
+        /* A name that is no file, or not a regular one, is the caller's mistake (a usage
+         * error), as opposed to a file that cannot be read. */
+        tr_error_set(err,
+                     !e           ? TR_STATUS_INVALID_ARGUMENT
+                     : e == ELOOP ? TR_STATUS_NOT_FOUND
+                                  : tr_status_from_errno(e),
+                     "%.200s: cannot open: %s", path, e ? strerror(e) : "not a regular file");
         return NULL;
     }
     *size = (uint64_t)st.st_size;
@@ -195,6 +200,21 @@ static int read_body(hashed_reader *r, const char *path, const uint32_t head[HEA
                                 tiles->samples[k], head[5]);
         }
     }
+    /* Every pixel holds the samples of its tile (a preview's blocks fill every pixel of a
+     * tile alike): a tile claimed rendered with pixels that are not would resume with a
+     * hole, one claimed empty would add samples twice. */
+    const uint32_t side = tiles->side, nx = (film->width + side - 1) / side;
+    for (uint32_t y = 0; y < film->height; ++y) {
+        for (uint32_t x = 0; x < film->width; ++x) {
+            const uint32_t k = (y / side) * nx + x / side;
+            const uint32_t c = film->count[(size_t)y * film->width + x];
+            if (k >= tiles->count || c != tiles->samples[k]) {
+                return tr_error_set(err, TR_STATUS_PARSE,
+                                    "%s: pixel (%u, %u) holds %u samples where its tile holds %u",
+                                    path, x, y, c, k < tiles->count ? tiles->samples[k] : 0u);
+            }
+        }
+    }
     return TR_OK;
 }
 
@@ -225,8 +245,21 @@ int tr_ck_read(const char *path, const tr_ck_id *id, tr_ck_tiles *tiles, tr_film
         /* The plan follows from the size and stride, which the identity holds. */
         rc = tr_error_set(err, TR_STATUS_PARSE, "%s: bad tile plan (%u tiles of %u)", path, head[7],
                           head[6]);
+    } else if (rc == TR_OK &&
+               (head[2] != id->width || head[3] != id->height || head[4] != id->passes)) {
+        /* The description names them too, but a file can say one thing there and another
+         * in its header. */
+        rc = tr_error_set(err, TR_STATUS_PARSE,
+                          "%s: the checkpoint's film is %ux%u with passes 0x%x where its render's "
+                          "is %ux%u with passes 0x%x",
+                          path, head[2], head[3], head[4], id->width, id->height, id->passes);
     } else if (rc == TR_OK && head[5] == 0) {
         rc = tr_error_set(err, TR_STATUS_PARSE, "%s: bad sample count 0", path);
+    } else if (rc == TR_OK && head[5] > id->spp_max) {
+        rc = tr_error_set(err, TR_STATUS_LIMIT,
+                          "%s: the checkpoint asks for %u samples per pixel, more than the %u a "
+                          "render may (--spp)",
+                          path, head[5], id->spp_max);
     }
     if (rc == TR_OK) {
         rc = read_body(&r, path, head, tiles, film, err);

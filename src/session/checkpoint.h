@@ -21,6 +21,10 @@
 typedef struct tr_ck_id {
     char desc[512];      /* "size=800x600 seed=1 ..." (names the settings in errors) */
     uint64_t scene_hash; /* FNV-1a over the scene's contents and the scene file */
+    /* What the film must be: a file whose header says otherwise is refused before its
+     * film is allocated, whatever its description claims. */
+    uint32_t width, height, passes;
+    uint32_t spp_max; /* the most samples per pixel a file may name (--spp's limit) */
 } tr_ck_id;
 
 /* The identity of a render of the committed scene with cfg (stride and passes as cfg's;
@@ -46,8 +50,11 @@ int tr_ck_write(const char *path, const tr_ck_id *id, const tr_film *film, uint3
                 const tr_ck_tiles *tiles, tr_error *err);
 
 /* Reads a checkpoint of the render `id` with the tile plan `tiles` (side and count; the
- * samples are filled in) into `film` (allocated here). A damaged file is TR_STATUS_PARSE,
- * another render's TR_STATUS_INVALID_ARGUMENT. */
+ * samples are filled in) into `film` (allocated here). The file is untrusted: its header
+ * is checked first (magic, version, sizes against the file's length and against id's film)
+ * before anything is allocated, and every pixel's sample count must be its tile's. A
+ * damaged or inconsistent file is TR_STATUS_PARSE, another render's
+ * TR_STATUS_INVALID_ARGUMENT, a sample count beyond id->spp_max TR_STATUS_LIMIT. */
 int tr_ck_read(const char *path, const tr_ck_id *id, tr_ck_tiles *tiles, tr_film *film,
                uint32_t *spp, tr_error *err);
 

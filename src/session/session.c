@@ -8,6 +8,9 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "device/vcm.h"
+#include "kernel/integrator_vcm.h"
+#include "scene/scene_internal.h"
 #include "session/checkpoint.h"
 #include "trac0r/post.h"
 #include "trac0r/registry.h"
@@ -106,6 +109,18 @@ int tr_ck_identity(tr_ck_id *id, const tr_scene *scene, const tr_render_config *
                  " clamp-indirect=%.9g regularize=%d no-primary-direct=%d",
                  (double)cfg->clamp_indirect, cfg->regularize, cfg->no_primary_direct);
     }
+    /* vcm's merge radius comes from the environment (TRAC0R_VCM_RADIUS): named when it is
+     * not the default. */
+    if (cfg->integrator == TR_INTEGRATOR_VCM) {
+        float radius = 0.0f;
+        if (tr_vcm_radius_pixels(&radius, err) != TR_OK) {
+            return TR_ERR;
+        }
+        if (radius != TR_VCM_RADIUS_DEFAULT) {
+            const size_t used = strlen(id->desc);
+            snprintf(id->desc + used, sizeof id->desc - used, " vcm-radius=%.9g", (double)radius);
+        }
+    }
     uint64_t h = TR_CK_FNV_OFFSET;
     const uint32_t nt = tr_scene_triangle_count(scene);
     h = fnv_u32(h, nt);
@@ -125,10 +140,49 @@ int tr_ck_identity(tr_ck_id *id, const tr_scene *scene, const tr_render_config *
                          cam->dir.y,      cam->dir.z,       cam->world_up.x, cam->world_up.y,
                          cam->world_up.z, cam->vertical_fov};
     h = fnv_floats(h, c, 10);
+    /* What the files a scene names decode to - textures, the environment map - and the
+     * sun: a texture or map changed on disk between --checkpoint and --resume would mix two
+     * scenes in one image. Hashed only where the scene has them, so that the identity of a
+     * scene without them stays what it was. Fields one by one, leaving out the padding. */
+    if (scene->texture_count > 0) {
+        h = fnv_u32(h, scene->texture_count);
+        for (uint32_t i = 0; i < scene->texture_count; ++i) {
+            const tr_texture *t = &scene->textures[i];
+            h = fnv_u32(fnv_u32(fnv_u32(fnv_u32(h, t->offset), t->width), t->height), t->flags);
+        }
+        h = fnv_u32(h, scene->texel_count);
+        h = tr_ck_fnv(h, scene->texels, (size_t)scene->texel_count * sizeof *scene->texels);
+        h = fnv_u32(h, scene->material_ext_count);
+        for (uint32_t i = 0; i < scene->material_ext_count; ++i) {
+            const tr_material_ext *e = &scene->material_exts[i];
+            const uint32_t u[5] = {e->base_tex, e->emission_tex, e->mr_tex, e->normal_tex,
+                                   e->flags};
+            const float f[6] = {e->emission.x, e->emission.y,   e->emission.z,
+                                e->metallic,   e->alpha_cutoff, e->normal_scale};
+            h = fnv_floats(tr_ck_fnv(h, u, sizeof u), f, 6);
+        }
+    }
+    if (scene->env_count > 0) {
+        const tr_env *e = &scene->env;
+        const float f[6] = {e->color.x,  e->color.y, e->color.z,
+                            e->strength, e->rot_cos, e->rot_sin};
+        h = fnv_u32(fnv_u32(fnv_floats(h, f, 6), e->width), e->height);
+        h = fnv_floats(h, scene->env_texels, scene->env_texel_count); /* floats, 3 a texel */
+    }
+    if (scene->sun_count > 0) {
+        const tr_sun *u = &scene->sun;
+        const float f[7] = {u->dir.x,      u->dir.y,      u->dir.z,     u->one_minus_cos,
+                            u->radiance.x, u->radiance.y, u->radiance.z};
+        h = fnv_floats(h, f, 7);
+    }
     if (scene_file && hash_file(&h, scene_file, err) != TR_OK) {
         return TR_ERR;
     }
     id->scene_hash = h;
+    id->width = cam->screen_width;
+    id->height = cam->screen_height;
+    id->passes = cfg->passes;
+    id->spp_max = TR_SESSION_SPP_MAX;
     return TR_OK;
 }
 
@@ -269,6 +323,9 @@ tr_session *tr_session_create(tr_device *dev, const tr_scene *scene, const tr_re
     int rc = keep_strings(s, err);
     rc = rc == TR_OK ? check_desc(&s->desc, s->cfg.stride, err) : rc;
     rc = rc == TR_OK ? tr_render_config_check(&s->cfg, err) : rc;
+    /* An integrator that cannot render the scene (bdpt and vcm with a sun or an
+     * environment) is refused before any work, not on the first pass. */
+    rc = rc == TR_OK ? tr_integrator_supports(scene, s->cfg.integrator, err) : rc;
     rc = rc == TR_OK ? tr_film_init_passes(&s->film, s->width, s->height, s->cfg.passes, err) : rc;
     rc = rc == TR_OK ? make_plan(s, err) : rc;
     if (rc == TR_OK && tr_device_scene(dev) != scene) {
