@@ -659,10 +659,12 @@ static PyObject *vec3_tuple(tr_vec3 v) {
 }
 
 static PyObject *camera_dict(const tr_camera *c) {
-    return Py_BuildValue("{s:N,s:N,s:N,s:d,s:d,s:d,s:I,s:I}", "position", vec3_tuple(c->pos),
-                         "direction", vec3_tuple(c->dir), "up", vec3_tuple(c->world_up), "fov",
-                         (double)c->vertical_fov, "near", (double)c->near_dist, "far",
-                         (double)c->far_dist, "width", c->screen_width, "height", c->screen_height);
+    return Py_BuildValue("{s:N,s:N,s:N,s:d,s:d,s:d,s:I,s:I,s:d,s:d}", "position",
+                         vec3_tuple(c->pos), "direction", vec3_tuple(c->dir), "up",
+                         vec3_tuple(c->world_up), "fov", (double)c->vertical_fov, "near",
+                         (double)c->near_dist, "far", (double)c->far_dist, "width", c->screen_width,
+                         "height", c->screen_height, "aperture_radius", (double)c->lens_radius,
+                         "focus_distance", (double)c->focus_dist);
 }
 
 static int dict_vec3(PyObject *d, const char *key, tr_vec3 *out, int *given) {
@@ -700,8 +702,9 @@ static int camera_from_dict(PyObject *d, const tr_camera *base, tr_camera *out) 
         PyErr_Format(PyExc_TypeError, "camera: expected a dict, got %s", Py_TYPE(d)->tp_name);
         return -1;
     }
-    static const char *keys[] = {"position", "direction", "look_at", "up",    "fov",
-                                 "near",     "far",       "width",   "height"};
+    static const char *keys[] = {
+        "position", "direction",       "look_at",       "up", "fov", "near", "far", "width",
+        "height",   "aperture_radius", "focus_distance"};
     PyObject *key;
     PyObject *value;
     Py_ssize_t pos = 0;
@@ -713,7 +716,7 @@ static int camera_from_dict(PyObject *d, const tr_camera *base, tr_camera *out) 
         if (!known) {
             PyErr_Format(PyExc_ValueError,
                          "camera: unknown key %R (expected position, direction, look_at, up, "
-                         "fov, near, far, width, height)",
+                         "fov, near, far, width, height, aperture_radius, focus_distance)",
                          key);
             return -1;
         }
@@ -737,8 +740,16 @@ static int camera_from_dict(PyObject *d, const tr_camera *base, tr_camera *out) 
             0) {
         return -1;
     }
+    double lr = base->lens_radius, fdist = base->focus_dist;
+    if (arg_double(PyDict_GetItemString(d, "aperture_radius"), "camera['aperture_radius']", 0.0,
+                   1e30, &lr) < 0 ||
+        arg_double(PyDict_GetItemString(d, "focus_distance"), "camera['focus_distance']", 1e-30,
+                   1e30, &fdist) < 0) {
+        return -1;
+    }
     tr_error err;
-    if (tr_camera_make(out, p, dir, up, (float)fov, (float)nd, (float)fd, w, h, &err) != TR_OK) {
+    if (tr_camera_make(out, p, dir, up, (float)fov, (float)nd, (float)fd, w, h, &err) != TR_OK ||
+        tr_camera_set_lens(out, (float)lr, (float)fdist, &err) != TR_OK) {
         raise_tr(&err);
         return -1;
     }

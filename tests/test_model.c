@@ -8,8 +8,8 @@
  *    second, on a node turned 90 degrees about +y, by name, looks down -x from its
  *    node; a camera that does not exist is an error; "frame" frames the model. The
  *    directional light becomes the sun (towards -its direction, its colour x intensity
- *    as irradiance), the point light an emissive sphere at its node whose power is the
- *    light's 4 pi I; the lights replace the default environment, so the background
+ *    as irradiance), the point light a point light (punctual.h) at its node of
+ *    intensity colour x intensity; the lights replace the default environment, so the background
  *    renders black and the quad under the point light does not.
  *    Lights that cannot be had (black, past the emitter's limit) are dropped or adjusted
  *    with warnings, never fail the model.
@@ -107,26 +107,22 @@ static void test_gltf(void) {
               near3(se, 2.0f, 2.0f, 2.0f, 1e-3f),
           "sun towards (%g, %g, %g), irradiance %g", (double)sd.x, (double)sd.y, (double)sd.z,
           (double)se.x);
-    /* The point light: an emitter around (0, 0, 2) radiating 4 pi I. */
-    double power = 0.0;
-    tr_vec3 lo = v3s(1e30f), hi = v3s(-1e30f);
-    for (uint32_t i = 0; i < s.triangle_count; ++i) {
-        const tr_material *m = &s.materials[s.triangles[i].material];
-        if (m->type == TR_MATERIAL_EMITTER) {
-            power += 3.14159265358979 * m->emittance * m->color.x * s.triangles[i].area;
-            const tr_vec3 v[3] = {s.triangles[i].v0, s.triangles[i].v1, s.triangles[i].v2};
-            for (int k = 0; k < 3; ++k) {
-                lo = v3_min(lo, v[k]);
-                hi = v3_max(hi, v[k]);
-            }
-        }
+    /* The point light: a punctual light (punctual.h) at (0, 0, 2) of intensity colour x
+     * intensity, and no emitter. */
+    uint32_t emitters = 0;
+    for (uint32_t i = 0; i < s.material_count; ++i) {
+        emitters += s.materials[i].type == TR_MATERIAL_EMITTER;
     }
-    const tr_vec3 mid = v3_scale(v3_add(lo, hi), 0.5f);
-    CHECK(near3(mid, 0.0f, 0.0f, 2.0f, 1e-4f) && hi.z - lo.z < 0.1f, "bulb at (%g, %g, %g)",
-          (double)mid.x, (double)mid.y, (double)mid.z);
-    /* An icosphere of 320 faces has 97.3 % of its sphere's area. */
-    const double want = 4.0 * 3.14159265358979 * 4.0;
-    CHECK(fabs(power / want - 1.0) < 0.05, "bulb power %g vs 4 pi I = %g", power, want);
+    CHECK(emitters == 0 && s.punctual_count == 1, "%u emitters, %u punctual lights", emitters,
+          s.punctual_count);
+    if (s.punctual_count == 1) {
+        const tr_punctual *l = &s.punctual[0];
+        CHECK(l->type == TR_PUNCTUAL_POINT && near3(l->pos, 0.0f, 0.0f, 2.0f, 1e-4f) &&
+                  near3(l->intensity, 4.0f, 2.0f, 1.0f, 1e-5f),
+              "point light type %u at (%g, %g, %g), intensity (%g, %g, %g)", l->type,
+              (double)l->pos.x, (double)l->pos.y, (double)l->pos.z, (double)l->intensity.x,
+              (double)l->intensity.y, (double)l->intensity.z);
+    }
     CHECK(s.env_count == 0, "the file's lights replace the default environment");
     /* Rendered through the file's camera: background black, the quad lit. */
     CHECK(tr_scene_commit(&s, TR_ACCEL_TYPE_BVH, &err) == TR_OK, "%s", err.msg);
@@ -173,9 +169,8 @@ static void test_gltf(void) {
 }
 
 /* Lights that cannot be had are dropped or adjusted with a warning, and the model still
- * loads: a spot light past any emitter's radiance limit (its sphere grows, or it is
- * dropped), a black directional light (no sun; with no light left, the default
- * environment). */
+ * loads: a spot light of huge intensity is kept (a punctual light has no radiance limit),
+ * a black directional light is dropped (no sun). */
 static void test_gltf_odd_lights(void) {
     char path[600];
     write_gltf("odd.gltf",
@@ -194,8 +189,40 @@ static void test_gltf_odd_lights(void) {
     }
     CHECK(emitters <= 1 && tr_scene_sun(&s, NULL, NULL, NULL) == 0,
           "odd lights: %u emitters, no sun from a black light", emitters);
-    CHECK(emitters == 1 || s.env_count == 1, "no light left: the default environment");
+    CHECK(s.punctual_count == 1 && s.punctual[0].type == TR_PUNCTUAL_SPOT,
+          "the spot light kept as one (%u punctual lights)", s.punctual_count);
+    CHECK(s.env_count == 0, "a light left: no default environment");
     CHECK(info.warning_count >= 2, "odd lights: %u warnings", info.warning_count);
+    tr_scene_clear(&s);
+    unlink(path);
+}
+
+/* A glTF spot light keeps its cone: KHR_lights_punctual's half-angles (which Assimp's glTF
+ * importer stores as they are) become the outer and inner cones, around the node's -z. */
+static void test_gltf_spot(void) {
+    char path[600];
+    write_gltf("spot.gltf",
+               "{\"type\": \"spot\", \"intensity\": 3.0, \"spot\": {\"innerConeAngle\": 0.2, "
+               "\"outerConeAngle\": 0.5}},\n"
+               " {\"type\": \"directional\", \"intensity\": 1.0}",
+               path, sizeof path);
+    tr_scene s;
+    tr_scene_init(&s);
+    tr_error err;
+    tr_scene_file info;
+    tr_model_options opt = {0, 1.0f, 0, 0, NULL};
+    CHECK(tr_scene_model_load(&s, path, &opt, &info, &err) == TR_OK, "%s", err.msg);
+    CHECK(s.punctual_count == 1, "%u punctual lights", s.punctual_count);
+    if (s.punctual_count == 1) {
+        const tr_punctual *l = &s.punctual[0];
+        CHECK(l->type == TR_PUNCTUAL_SPOT && near3(l->pos, 0.0f, 0.0f, 2.0f, 1e-4f) &&
+                  near3(l->dir, 0.0f, 0.0f, -1.0f, 1e-5f) && l->intensity.y == 3.0f,
+              "spot type %u at (%g, %g, %g) along (%g, %g, %g)", l->type, (double)l->pos.x,
+              (double)l->pos.y, (double)l->pos.z, (double)l->dir.x, (double)l->dir.y,
+              (double)l->dir.z);
+        CHECK(fabs(l->cos_outer - cos(0.5)) < 1e-6 && fabs(l->cos_inner - cos(0.2)) < 1e-6,
+              "spot cones: cos %g and %g", (double)l->cos_outer, (double)l->cos_inner);
+    }
     tr_scene_clear(&s);
     unlink(path);
 }
@@ -320,6 +347,7 @@ int main(void) {
     }
     test_gltf();
     test_gltf_odd_lights();
+    test_gltf_spot();
     test_duck();
     test_texture_fallback();
     rmdir(dir);

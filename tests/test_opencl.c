@@ -399,6 +399,70 @@ int main(void) {
     compare_backends(dev, &scene, 1, TR_INTEGRATOR_PT, 64, "bvh, pt");
     CHECK(tr_scene_commit(&scene, TR_ACCEL_TYPE_FLAT, &err) == TR_OK, "%s", err.msg);
     compare_backends(dev, &scene, 1, TR_INTEGRATOR_PT, 64, "flat, pt");
+    /* A thin lens (camera.h) focused on the box's centre, sampled alike by both. */
+    {
+        const tr_camera pinhole = scene.camera;
+        const tr_aabb b = tr_scene_bounds(&scene);
+        const tr_vec3 mid = v3_scale(v3_add(b.min, b.max), 0.5f);
+        const float focus = v3_dot(v3_sub(mid, pinhole.pos), pinhole.dir);
+        CHECK(tr_camera_set_lens(&scene.camera, 0.04f * (b.max.y - b.min.y), focus, &err) == TR_OK,
+              "%s", err.msg);
+        compare_backends(dev, &scene, 1, TR_INTEGRATOR_PT, 64, "flat, pt, thin lens");
+        compare_backends(dev, &scene, 1, TR_INTEGRATOR_NAIVE, 64, "flat, naive, thin lens");
+        scene.camera = pinhole;
+    }
+    /* Point, spot and directional lights (punctual.h) in a box of its own: each sampled at
+     * every vertex, and with more of them than that, one picked by the power CDF. */
+    for (int many = 0; many < 2; ++many) {
+        tr_scene lit = {0};
+        tr_scene_init(&lit);
+        CHECK(tr_scene_builtin(&lit, "cornell", 48, 36, &err) == TR_OK, "%s", err.msg);
+        const tr_aabb b = tr_scene_bounds(&lit);
+        const tr_vec3 mid = v3_scale(v3_add(b.min, b.max), 0.5f);
+        const tr_vec3 ext = v3_sub(b.max, b.min);
+        const int n = many ? 10 : 3;
+        for (int i = 0; i < n; ++i) {
+            tr_punctual l;
+            memset(&l, 0, sizeof l);
+            l.type = (uint32_t)(i % 3);
+            l.pos = v3_add(mid, v3(ext.x * (0.1f * (float)(i % 5) - 0.2f), ext.y * 0.3f,
+                                   ext.z * (0.05f * (float)i - 0.2f)));
+            l.dir = v3(0.1f * (float)i - 0.3f, -1.0f, 0.2f);
+            l.intensity = v3(0.5f + 0.1f * (float)i, 0.4f, 0.3f);
+            l.intensity = v3_scale(
+                l.intensity, l.type == TR_PUNCTUAL_DIRECTIONAL ? 0.5f : 0.02f * ext.y * ext.y);
+            l.cos_outer = 0.7f;
+            l.cos_inner = 0.85f;
+            CHECK(tr_scene_add_punctual(&lit, &l, &err) == TR_OK, "%s", err.msg);
+        }
+        CHECK(tr_scene_commit(&lit, TR_ACCEL_TYPE_BVH, &err) == TR_OK, "%s", err.msg);
+        compare_backends(dev, &lit, 1, TR_INTEGRATOR_PT, 64,
+                         many ? "bvh, pt, ten punctual lights" : "bvh, pt, punctual lights");
+        tr_render_config naive = tr_render_config_default();
+        naive.integrator = TR_INTEGRATOR_NAIVE;
+        CHECK_STATUS(tr_device_render(dev, &lit.camera, &naive, 0, 1, NULL, NULL, &err), err,
+                     TR_STATUS_UNSUPPORTED, "naive with punctual lights on the device");
+        tr_scene_clear(&lit);
+    }
+    /* Multiple-scattering compensation (ggx_ms.h): the box's diffuse walls made rough
+     * conductors that ask for it, the table uploaded with the scene. */
+    {
+        tr_scene ms = {0};
+        tr_scene_init(&ms);
+        CHECK(tr_scene_builtin(&ms, "cornell", 48, 36, &err) == TR_OK, "%s", err.msg);
+        for (uint32_t i = 0; i < ms.material_count; ++i) {
+            if (ms.materials[i].type == TR_MATERIAL_DIFFUSE) {
+                ms.materials[i].type = TR_MATERIAL_GLOSSY;
+                ms.materials[i].roughness = 0.3f + 0.2f * (float)(i % 4);
+                ms.materials[i].flags |= TR_MATERIAL_MULTISCATTER;
+            }
+        }
+        CHECK(tr_scene_commit(&ms, TR_ACCEL_TYPE_BVH, &err) == TR_OK, "%s", err.msg);
+        CHECK(tr_scene_view_of(&ms).ggx_ms_count == TR_GGX_MS_COUNT, "the table is in the view");
+        compare_backends(dev, &ms, 1, TR_INTEGRATOR_PT, 64, "bvh, pt, multiscatter glossy");
+        tr_scene_clear(&ms);
+    }
+    CHECK(tr_device_upload(dev, &scene, &err) == TR_OK, "%s", err.msg);
 
     /* Film handling: a wrongly sized film, clearing, a bad config. */
     tr_film small;

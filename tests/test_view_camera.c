@@ -6,11 +6,14 @@
  *    that D moves along is that vector.
  * 2. The budget: over budget the divisor grows (samples drop first), under budget it
  *    falls back to 1, and only at full resolution do samples grow; it stays in range.
- * 3. The default speed scales with the scene's size. */
+ * 3. The default speed scales with the scene's size.
+ * 4. A thin lens stays through moves and in the camera the viewer writes out. */
 #include "check.h"
 #include "trac0r/trac0r.h"
 
 #include <math.h>
+#include <stdio.h>
+#include <string.h>
 
 static void test_mirrored(void) {
     tr_camera cam;
@@ -33,6 +36,36 @@ static void test_mirrored(void) {
         const tr_vec3 r = tr_fly_right(&f);
         CHECK(fabsf(r.x - c.right.x) < 1e-6f, "mirrored %d: D moves along %g, right is %g",
               mirrored, r.x, c.right.x);
+    }
+    /* A thin lens stays through the viewer's moves; a pinhole stays a pinhole. */
+    tr_camera lens = cam;
+    CHECK(tr_camera_set_lens(&lens, 12.5f, 900.0f, &err) == TR_OK, "%s", err.msg);
+    tr_fly_camera f = tr_fly_from_camera(&lens, 1.0f);
+    f.pos.x += 3.0f;
+    tr_camera next;
+    CHECK(tr_fly_make(&f, 64, 48, &next, &err) == TR_OK && next.lens_radius == 12.5f &&
+              next.focus_dist == 900.0f,
+          "the lens after a move: radius %g, focus %g", next.lens_radius, next.focus_dist);
+    f = tr_fly_from_camera(&cam, 1.0f);
+    CHECK(tr_fly_make(&f, 64, 48, &next, &err) == TR_OK && next.lens_radius == 0.0f,
+          "a pinhole stays");
+    /* The camera the viewer writes out keeps the lens: read back by the scene parser. */
+    char json[1024], text[2048];
+    f = tr_fly_from_camera(&lens, 1.0f);
+    CHECK(tr_fly_json(&f, json, sizeof json) < (int)sizeof json, "camera json fits");
+    snprintf(text, sizeof text,
+             "{%s, \"materials\": {\"l\": {\"type\": \"emitter\", \"color\": [1, 1, 1], "
+             "\"emittance\": 1}}, \"shapes\": [{\"type\": \"plane\", \"material\": \"l\"}]}",
+             json);
+    tr_scene *s = tr_scene_create(&err);
+    CHECK(s && tr_scene_file_parse(s, "view.json", text, strlen(text), NULL, NULL, &err) == TR_OK,
+          "%s", err.msg);
+    if (s) {
+        const tr_camera *back = tr_scene_camera(s);
+        CHECK(back->lens_radius == 12.5f && back->focus_dist == 900.0f,
+              "the written camera's lens: radius %g, focus %g", back->lens_radius,
+              back->focus_dist);
+        tr_scene_destroy(s);
     }
 }
 

@@ -1,5 +1,5 @@
-/* camera.h - setting up a pinhole camera (tr_camera, trac0r/types.h), and the free-flying
- * camera a viewer steers (tr_fly_camera). */
+/* camera.h - setting up a pinhole or thin-lens camera (tr_camera, trac0r/types.h), and the
+ * free-flying camera a viewer steers (tr_fly_camera). */
 #ifndef TRAC0R_CAMERA_H
 #define TRAC0R_CAMERA_H
 
@@ -16,8 +16,25 @@
 int tr_camera_make(tr_camera *cam, tr_vec3 pos, tr_vec3 dir, tr_vec3 world_up, float vfov_deg,
                    float near_dist, float far_dist, uint32_t width, uint32_t height, tr_error *err);
 
-/* The same camera for another image size (the vertical field of view is kept). */
+/* The same camera for another image size (the vertical field of view is kept; so are the
+ * lens and the focus). */
 int tr_camera_resize(tr_camera *cam, uint32_t width, uint32_t height, tr_error *err);
+
+/* Depth of field: a thin lens of radius lens_radius (scene units, >= 0; 0 makes the camera a
+ * pinhole again, rendering bit for bit as tr_camera_make's) focused on the plane at
+ * focus_dist (> 0) along the view direction. A point at distance z along the view direction
+ * images as a disc of diameter 2 lens_radius |1/focus_dist - 1/z| on the image plane at
+ * distance 1 (canvas units; times screen_height / canvas_height in pixels). tr_camera_make
+ * starts with radius 0 and focus distance 1. The pt and naive integrators sample the lens;
+ * bdpt and vcm refuse a camera with an aperture (TR_STATUS_UNSUPPORTED). */
+int tr_camera_set_lens(tr_camera *cam, float lens_radius, float focus_dist, tr_error *err);
+
+/* The lens radius of a camera of f-number f_number whose image plane has the height
+ * sensor_height (scene units) behind the lens: the focal length is
+ * sensor_height / (2 tan(vertical_fov / 2)) and the radius focal length / (2 f_number).
+ * (A 35 mm camera's sensor is 0.024 high in metres.) 0 where an argument is not positive
+ * and finite. */
+float tr_camera_lens_radius_for(const tr_camera *cam, float f_number, float sensor_height);
 
 /* A camera as a viewer steers it (the command's `view`; any program with a window): its
  * position, unit direction and up (kept orthogonal), the lens, a speed in world units per
@@ -29,6 +46,7 @@ typedef struct tr_fly_camera {
     float vfov, near_dist, far_dist;
     float speed;
     int mirrored;
+    float lens_radius, focus_dist; /* the scene camera's thin lens (0: a pinhole), kept */
 } tr_fly_camera;
 
 /* The fly camera of `cam`, moving at `speed`. */

@@ -20,6 +20,7 @@
 #define TR_MATERIAL_KEY_TWO_SIDED 8u
 #define TR_MATERIAL_KEY_IOR 16u
 #define TR_MATERIAL_KEY_ROUGHNESS 32u
+#define TR_MATERIAL_KEY_MULTISCATTER 64u
 
 /* clang-format off */
 #define TR_MATERIAL_TYPES(X)                                                                 \
@@ -27,8 +28,10 @@
       TR_MATERIAL_KEY_TWO_SIDED)                                                             \
     X(DIFFUSE, 2, "diffuse", TR_MATERIAL_KEY_COLOR, 0u)                                      \
     X(GLASS,   3, "glass",   TR_MATERIAL_KEY_COLOR | TR_MATERIAL_KEY_IOR, 0u)                \
-    X(GLOSSY,  4, "glossy",  TR_MATERIAL_KEY_COLOR | TR_MATERIAL_KEY_ROUGHNESS, 0u)          \
-    X(PRINCIPLED, 5, "principled", TR_MATERIAL_KEY_COLOR, TR_MATERIAL_KEY_ROUGHNESS)
+    X(GLOSSY,  4, "glossy",  TR_MATERIAL_KEY_COLOR | TR_MATERIAL_KEY_ROUGHNESS,              \
+      TR_MATERIAL_KEY_MULTISCATTER)                                                          \
+    X(PRINCIPLED, 5, "principled", TR_MATERIAL_KEY_COLOR,                                    \
+      TR_MATERIAL_KEY_ROUGHNESS | TR_MATERIAL_KEY_MULTISCATTER)
 /* clang-format on */
 
 #define TR_MATERIAL_ENUM_ROW(id, value, name, required, optional) TR_MATERIAL_##id = value,

@@ -34,6 +34,9 @@ static inline tr_vec3 tr_vec3_make(float x, float y, float z) {
 /* tr_material.flags bits. Emitters emit towards the side their triangle's geometric
  * normal points to, unless TWO_SIDED is set (the pt integrator; naive ignores it). */
 #define TR_MATERIAL_TWO_SIDED 1u
+/* glossy and principled: Kulla and Conty's multiple-scattering compensation of the GGX
+ * conductor lobe (src/kernel/ggx_ms.h); scene files' "multiscatter": true. */
+#define TR_MATERIAL_MULTISCATTER 2u
 
 /* 32 bytes. */
 typedef struct tr_material {
@@ -61,7 +64,8 @@ typedef struct tr_aabb {
     tr_vec3 max;
 } tr_aabb;
 
-/* A pinhole camera (listing 6), built by tr_camera_make (camera.h). 92 bytes. */
+/* A pinhole camera (listing 6), built by tr_camera_make (camera.h), or a thin lens with an
+ * aperture (tr_camera_set_lens). 100 bytes. */
 typedef struct tr_camera {
     tr_vec3 pos;
     tr_vec3 dir;          /* unit view direction */
@@ -76,6 +80,10 @@ typedef struct tr_camera {
     float canvas_height;
     uint32_t screen_width;
     uint32_t screen_height;
+    /* Thin lens: the lens's radius (0: a pinhole, the default) and the distance along dir
+     * of the plane in focus, in scene units. */
+    float lens_radius;
+    float focus_dist;
 } tr_camera;
 
 /* Integrators (tr_render_config.integrator): TR_INTEGRATOR_PT, TR_INTEGRATOR_NAIVE, from the

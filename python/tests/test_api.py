@@ -23,7 +23,8 @@ def test_load_builtin_defaults(cornell):
     assert cornell.spp == 16 and cornell.integrator == "pt" and cornell.max_depth == 64
     assert cornell.triangles > 0 and cornell.accel == "bvh"
     cam = cornell.camera
-    assert set(cam) == {"position", "direction", "up", "fov", "near", "far", "width", "height"}
+    assert set(cam) == {"position", "direction", "up", "fov", "near", "far", "width", "height",
+                        "aperture_radius", "focus_distance"}
     assert (cam["width"], cam["height"]) == (64, 48)
 
 
@@ -60,6 +61,27 @@ def test_camera_settable(cornell):
         cornell.camera = [1, 2, 3]
     with pytest.raises(trac0r.InvalidArgumentError):
         cornell.camera = {"direction": (0, 0, 0)}  # the library refuses a zero direction
+
+
+def test_camera_lens(cornell):
+    # A thin lens: set through the camera dict, kept when other keys change, and 0 renders
+    # as the pinhole did.
+    before = trac0r.render(cornell, spp=1).image.copy()
+    cam = cornell.camera
+    assert cam["aperture_radius"] == 0.0
+    cornell.camera = {"aperture_radius": 0.05, "focus_distance": 2.0}
+    cornell.camera = {"fov": cam["fov"]}
+    after = cornell.camera
+    assert after["aperture_radius"] == pytest.approx(0.05)
+    assert after["focus_distance"] == pytest.approx(2.0)
+    assert not np.array_equal(before, trac0r.render(cornell, spp=1).image)
+    cornell.camera = {"aperture_radius": 0.0}
+    assert np.array_equal(before, trac0r.render(cornell, spp=1).image)
+    with pytest.raises(ValueError, match=r"camera\['aperture_radius'\]"):
+        cornell.camera = {"aperture_radius": -1.0}
+    with pytest.raises(ValueError, match=r"camera\['focus_distance'\]"):
+        cornell.camera = {"focus_distance": 0.0}
+    cornell.camera = cam
 
 
 def test_resize(cornell):

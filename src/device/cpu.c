@@ -117,6 +117,14 @@ int tr_frame_make(tr_frame *f, const tr_camera *cam, const tr_render_config *cfg
     if (tr_render_config_check(cfg, err) != TR_OK) {
         return TR_ERR;
     }
+    if (cam->lens_radius > 0.0f && tr_integrator_is_bidirectional(cfg->integrator)) {
+        /* Their light subpaths connect to a pinhole (integrator_bdpt.h): a lens would need
+         * its own importance and MIS densities. */
+        return tr_error_set(err, TR_STATUS_UNSUPPORTED,
+                            "%s does not support depth of field (camera.aperture_radius or "
+                            "camera.f_number above 0): use pt",
+                            tr_integrator_name(cfg->integrator));
+    }
     const uint32_t w = cam->screen_width, h = cam->screen_height;
     if (tr_film_check_size(w, h, err) != TR_OK) {
         return TR_ERR; /* the film a frame of this camera would need */
@@ -188,6 +196,13 @@ static void tr_bdpt_fold_splats(const tr_frame *f, const tr_bdpt_splat *sp, uint
 
 /* The scenes an integrator cannot render, for tr_cpu_render and tr_integrator_supports. */
 static int tr_integrator_check_view(const tr_scene_view *view, int integrator, tr_error *err) {
+    if (view->punctual_count > 0u && integrator != TR_INTEGRATOR_PT) {
+        /* Delta lights are found by next-event estimation alone: naive has none, and bdpt's
+         * and vcm's light subpaths do not start from them (punctual.h). */
+        return tr_error_set(err, TR_STATUS_UNSUPPORTED,
+                            "%s does not support point, spot or directional lights: use pt",
+                            tr_integrator_name(integrator));
+    }
     if (tr_integrator_is_bidirectional(integrator)) {
         if (view->env_count > 0u) {
             return tr_error_set(err, TR_STATUS_UNSUPPORTED,

@@ -23,6 +23,7 @@ struct tr_device {
     tr_accel_type accel;
     tr_film film; /* CPU: the device's film */
     tr_cl_context *cl;
+    uint32_t punctual; /* the uploaded scene's punctual lights (only pt renders them) */
 };
 
 /* The processor's name from /proc/cpuinfo ("" where it cannot be read). */
@@ -256,6 +257,7 @@ int tr_device_upload(tr_device *dev, const tr_scene *scene, tr_error *err) {
     }
     dev->scene = scene;
     dev->generation = tr_scene_generation(scene);
+    dev->punctual = tr_scene_view_of(scene).punctual_count;
     return TR_OK;
 }
 
@@ -302,6 +304,12 @@ int tr_device_render(tr_device *dev, const tr_camera *cam, const tr_render_confi
         return tr_error_set(err, TR_STATUS_UNSUPPORTED,
                             "the %s integrator runs on the CPU only (device %s is OpenCL)",
                             tr_integrator_name((int)f.integrator), dev->info.name);
+    }
+    if (dev->kind == TR_DEVICE_OPENCL && dev->punctual > 0u && f.integrator != TR_INTEGRATOR_PT) {
+        /* The CPU's check (tr_integrator_supports) on the copy the device holds. */
+        return tr_error_set(err, TR_STATUS_UNSUPPORTED,
+                            "%s does not support point, spot or directional lights: use pt",
+                            tr_integrator_name((int)f.integrator));
     }
     if (dev->kind == TR_DEVICE_OPENCL) {
         if (tr_cl_render_frame(dev->cl, &f, &rays, err) != TR_OK) {

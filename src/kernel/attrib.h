@@ -90,4 +90,30 @@ typedef struct tr_sun {
 } tr_sun;
 TR_STATIC_ASSERT(sizeof(tr_sun) == 32, "tr_sun layout");
 
+/* Punctual lights (punctual.h): delta lights, found only by next-event estimation. */
+#define TR_PUNCTUAL_POINT 0u       /* intensity in every direction from pos */
+#define TR_PUNCTUAL_SPOT 1u        /* a point light limited to a cone around dir */
+#define TR_PUNCTUAL_DIRECTIONAL 2u /* parallel light travelling along dir */
+
+/* One punctual light. Point and spot: `intensity` is the radiant intensity I (W/sr, on the
+ * axis for a spot), so a surface at distance r whose normal makes the angle t with the
+ * light receives E = I cos t / r^2; a spot's intensity falls from I inside cos_inner to 0
+ * outside cos_outer (the cosines of the angles from its axis) by a smoothstep.
+ * Directional: `intensity` is the irradiance E (W/m^2) on a surface facing the light,
+ * whose light travels along dir. cdf: the lights' selection CDF (by power; the last 1).
+ * 64 bytes. */
+typedef struct tr_punctual {
+    tr_vec3 pos;
+    uint32_t type; /* TR_PUNCTUAL_* */
+    tr_vec3 dir;   /* spot: the unit axis it shines along; directional: the unit direction
+                      the light travels */
+    float cdf;
+    tr_vec3 intensity;
+    float cos_outer;
+    float cos_inner;
+    float power; /* the selection weight (punctual.c), for the tests */
+    float pad[2];
+} tr_punctual;
+TR_STATIC_ASSERT(sizeof(tr_punctual) == 64, "tr_punctual layout");
+
 #endif

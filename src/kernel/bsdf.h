@@ -25,6 +25,7 @@
 #define TR_KERNEL_BSDF_H
 
 #include "compat.h"
+#include "ggx_ms.h"
 #include "material.h"
 #include "material_eval.h"
 #include "rng.h"
@@ -212,7 +213,11 @@ TR_FN tr_vec3 tr_ggx_eval(const tr_bsdf_params *m, tr_vec3 nf, tr_vec3 wo, tr_ve
     float d = tr_ggx_d(alpha, v3_dot(h, nf));
     float g2 = 1.0f / (1.0f + tr_ggx_lambda(alpha, co) + tr_ggx_lambda(alpha, ci));
     tr_vec3 f = tr_fresnel_schlick(m->color, v3_dot(wo, h));
-    return v3_scale(f, d * g2 / (4.0f * co * ci));
+    tr_vec3 r = v3_scale(f, d * g2 / (4.0f * co * ci));
+    if ((m->flags & TR_MATERIAL_MULTISCATTER) != 0u && m->ms) {
+        r = v3_add(r, tr_ggx_ms_lobe(m->ms, alpha, m->color, co, ci));
+    }
+    return r;
 }
 
 /* Pdf of the visible-normal sampler: G1(wo) D(h) / (4 cos_o) (Heitz 2018, eq. 17 with

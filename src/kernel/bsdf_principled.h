@@ -59,6 +59,11 @@ TR_FN_NOINLINE tr_vec3 tr_principled_eval(const tr_bsdf_params *m, tr_vec3 nf, t
     float k = tr_fminf(tr_fmaxf(m->metallic, 0.0f), 1.0f);
     tr_vec3 f0 = tr_principled_f0(m);
     tr_vec3 f = tr_principled_spec(tr_principled_alpha(m->roughness), f0, nf, wo, wi, co, ci);
+    if ((m->flags & TR_MATERIAL_MULTISCATTER) != 0u && m->ms && k > 0.0f) {
+        /* The conductor's share of the layer (the dielectric one couples to the base). */
+        f = v3_add(
+            f, v3_scale(tr_ggx_ms_lobe(m->ms, tr_principled_alpha(m->roughness), f0, co, ci), k));
+    }
     float kd = (1.0f - k) * (28.0f / 23.0f) * TR_INV_PI * (1.0f - TR_PRINCIPLED_F0) *
                tr_as_factor(ci) * tr_as_factor(co);
     return v3_add(f, v3_scale(m->color, kd));

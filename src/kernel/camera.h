@@ -1,4 +1,4 @@
-/* camera.h - pinhole camera: pixel to ray (thesis section 3.1.4).
+/* camera.h - pinhole camera: pixel to ray (thesis section 3.1.4), and the thin lens.
  *
  * Screen x grows to the camera's right, screen y downwards. The camera's right is
  * world_up x dir (the thesis's convention: looking down +z with +y up, +x is on the
@@ -19,6 +19,52 @@ TR_FN tr_ray tr_camera_ray(const tr_camera *c, float x, float y, float jx, float
     float sy = (0.5f - (y + jy) / (float)c->screen_height) * c->canvas_height;
     tr_vec3 d = v3_add(c->dir, v3_add(v3_scale(c->right, sx), v3_scale(c->up, sy)));
     return tr_ray_make(c->pos, v3_normalize(d), c->near_dist, c->far_dist);
+}
+
+/* A point of the unit disc from (u1, u2) in [0,1)^2 by Shirley and Chiu's concentric map
+ * ("A Low Distortion Map Between Disk and Square", 1997): area-preserving, so uniform
+ * points stay uniform and stratified points stay stratified. */
+TR_FN void tr_concentric_disc(float u1, float u2, float *dx, float *dy) {
+    const float a = 2.0f * u1 - 1.0f, b = 2.0f * u2 - 1.0f;
+    if (a == 0.0f && b == 0.0f) {
+        *dx = 0.0f;
+        *dy = 0.0f;
+        return;
+    }
+    float r, phi;
+    if (a * a > b * b) {
+        r = a;
+        phi = (TR_PI / 4.0f) * (b / a);
+    } else {
+        r = b;
+        phi = (TR_PI / 2.0f) - (TR_PI / 4.0f) * (a / b);
+    }
+    *dx = r * tr_cosf(phi);
+    *dy = r * tr_sinf(phi);
+}
+
+/* tr_camera_ray through a thin lens: the ray leaves the lens point (lu, lv) in [0,1)^2
+ * (mapped uniformly onto the lens's disc, in the camera's right/up plane) towards the point
+ * of the plane in focus that the pinhole ray through the same screen point meets, so that
+ * the plane in focus is sharp and a point at distance z blurs into a disc of diameter
+ * 2 lens_radius |1/focus_dist - 1/z| on the image plane. A pinhole camera (lens_radius 0)
+ * returns tr_camera_ray's ray exactly. */
+TR_FN tr_ray tr_camera_ray_lens(const tr_camera *c, float x, float y, float jx, float jy, float lu,
+                                float lv) {
+    if (!(c->lens_radius > 0.0f)) {
+        return tr_camera_ray(c, x, y, jx, jy);
+    }
+    float sx = ((x + jx) / (float)c->screen_width - 0.5f) * c->canvas_width;
+    float sy = (0.5f - (y + jy) / (float)c->screen_height) * c->canvas_height;
+    /* d has unit length along dir, so focus_dist * d lies on the plane in focus. */
+    tr_vec3 d = v3_add(c->dir, v3_add(v3_scale(c->right, sx), v3_scale(c->up, sy)));
+    float dx, dy;
+    tr_concentric_disc(lu, lv, &dx, &dy);
+    tr_vec3 off =
+        v3_add(v3_scale(c->right, dx * c->lens_radius), v3_scale(c->up, dy * c->lens_radius));
+    tr_vec3 dir = v3_sub(v3_scale(d, c->focus_dist), off);
+    /* near and far stay distances along the ray, from the lens point. */
+    return tr_ray_make(v3_add(c->pos, off), v3_normalize(dir), c->near_dist, c->far_dist);
 }
 
 #endif

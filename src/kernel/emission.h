@@ -43,8 +43,17 @@ TR_FN tr_vec3 tr_emission_resolve_pixel(const tr_scene_view *s, const tr_camera 
     tr_vec3 sum = v3s(0.0f);
     for (int sy = 0; sy < n; ++sy) {
         for (int sx = 0; sx < n; ++sx) {
-            const tr_ray ray = tr_camera_ray(cam, (float)x, (float)y, ((float)sx + 0.5f) * inv_n,
-                                             ((float)sy + 0.5f) * inv_n);
+            tr_ray ray = tr_camera_ray(cam, (float)x, (float)y, ((float)sx + 0.5f) * inv_n,
+                                       ((float)sy + 0.5f) * inv_n);
+            if (cam->lens_radius > 0.0f) {
+                /* A thin lens: each cell also gets its own lens point, the cells' points
+                 * a Fibonacci lattice over the lens's square (evenly spread). */
+                const float k = (float)(sy * n + sx) + 0.5f;
+                const float lv = k * 0.61803399f;
+                ray = tr_camera_ray_lens(cam, (float)x, (float)y, ((float)sx + 0.5f) * inv_n,
+                                         ((float)sy + 0.5f) * inv_n, k * inv_n * inv_n,
+                                         lv - tr_floorf(lv));
+            }
             sum = v3_add(sum, tr_pt_first_emission(s, ray));
         }
     }

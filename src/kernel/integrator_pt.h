@@ -21,6 +21,7 @@
 #include "material_eval.h"
 #include "sampler.h"
 #include "scene_view.h"
+#include "punctual.h"
 #include "sun.h"
 #include "types.h"
 #include "vec.h"
@@ -270,6 +271,16 @@ TR_FN tr_vec3 tr_trace_pt_ff(const tr_scene_view *s, tr_ray ray, int max_depth, 
             tr_sampler_2d(smp, tr_sun_dim(seg), &su1, &su2);
             radiance =
                 tr_pt_add(radiance, v3_mul(throughput, tr_sun_nee(s, &m, wo, p, su1, su2, rays)),
+                          nee_indirect, clamp_indirect);
+        }
+
+        /* Next-event estimation towards the punctual lights (punctual.h): delta lights, which
+         * BSDF samples never find, so without MIS. At the first vertex too when a stage
+         * estimates the primary direct light (no_primary): it does not sample them. */
+        if (!tr_bsdf_is_delta(&m) && s->punctual_count > 0u) {
+            const float pu = tr_sampler_1d(smp, tr_punctual_dim(seg));
+            radiance =
+                tr_pt_add(radiance, v3_mul(throughput, tr_punctual_nee(s, &m, wo, p, pu, rays)),
                           nee_indirect, clamp_indirect);
         }
 

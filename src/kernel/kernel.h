@@ -41,6 +41,11 @@ TR_FN void tr_render_pixel_sample_kind(const tr_scene_view *s, const tr_camera *
         tr_sampler smp = tr_sampler_make_pixel(seed, pixel_index, x, y, sample, sampler);
         tr_sampler_2d(&smp, TR_DIM_CAMERA, &jx, &jy);
         tr_ray ray = tr_camera_ray(cam, (float)x, (float)y, jx, jy);
+        if (cam->lens_radius > 0.0f) {
+            float lu, lv;
+            tr_sampler_2d(&smp, TR_DIM_LENS, &lu, &lv);
+            ray = tr_camera_ray_lens(cam, (float)x, (float)y, jx, jy, lu, lv);
+        }
         out->radiance = tr_trace_pt_ff(s, ray, max_depth, rr_start, clamp_indirect, flags, &smp,
                                        &out->rays, surface);
     } else {
@@ -48,6 +53,12 @@ TR_FN void tr_render_pixel_sample_kind(const tr_scene_view *s, const tr_camera *
         tr_rng_init(&rng, seed, pixel_index, (uint64_t)sample);
         tr_sample_pixel_jitter(&rng, &jx, &jy);
         tr_ray ray = tr_camera_ray(cam, (float)x, (float)y, jx, jy);
+        if (cam->lens_radius > 0.0f) {
+            /* Drawn only with a lens: a pinhole camera's stream is unchanged. */
+            float lu, lv;
+            tr_sample_pixel_jitter(&rng, &lu, &lv);
+            ray = tr_camera_ray_lens(cam, (float)x, (float)y, jx, jy, lu, lv);
+        }
         out->radiance = tr_trace_naive(s, ray, max_depth, &rng, &out->rays, surface);
     }
     tr_sample_finish(out);

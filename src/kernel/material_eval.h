@@ -31,6 +31,9 @@ typedef struct tr_bsdf_params {
     tr_vec3 emission; /* emitted radiance of a non-emitter (principled materials) */
     float metallic;   /* principled: 0 dielectric .. 1 conductor */
     int hole;         /* an alpha cut-out: the ray passes through (tr_material_ext) */
+    /* The scene's multiple-scattering table (ggx_ms.h), or NULL: read where flags has
+     * TR_MATERIAL_MULTISCATTER. */
+    TR_CONST_GLOBAL float *ms;
 } tr_bsdf_params;
 
 /* The parameters of a material whose values do not vary over the surface, with
@@ -49,6 +52,7 @@ TR_FN tr_bsdf_params tr_material_params(const tr_material *m, tr_vec3 ng) {
     b.emission = v3s(0.0f);
     b.metallic = 0.0f;
     b.hole = 0;
+    b.ms = 0;
     return b;
 }
 
@@ -114,6 +118,7 @@ TR_FN_NOINLINE void tr_material_eval_attributes(const tr_scene_view *s, uint32_t
     tr_surface_attr a = tr_surface_attributes(s, triangle, u, v, p, ng);
     b.ns = a.ns;
     b.ps = a.ps;
+    b.ms = s->ggx_ms_count > 0u ? s->ggx_ms : 0;
     if (s->material_ext_count > 0u) {
         tr_material_apply_ext(s, mi, &a, &b);
     }
@@ -137,6 +142,7 @@ TR_FN tr_bsdf_params tr_material_eval(const tr_scene_view *s, uint32_t triangle,
     tr_material m = s->materials[mi];
     tr_bsdf_params b = tr_material_params(&m, ng);
     b.ps = p;
+    b.ms = s->ggx_ms_count > 0u ? s->ggx_ms : 0;
     return b;
 }
 

@@ -105,6 +105,11 @@ TR_FN tr_restir_surface tr_restir_primary(const tr_scene_view *s, const tr_camer
     float jx, jy;
     tr_sampler_2d(&smp, TR_DIM_CAMERA, &jx, &jy);
     tr_ray ray = tr_camera_ray(cam, (float)x, (float)y, jx, jy);
+    if (cam->lens_radius > 0.0f) {
+        float lu, lv;
+        tr_sampler_2d(&smp, TR_DIM_LENS, &lu, &lv);
+        ray = tr_camera_ray_lens(cam, (float)x, (float)y, jx, jy, lu, lv);
+    }
     for (int holes = 0;; ++holes) {
         tr_hit hit;
         if (!tr_intersect_scene(s, &ray, &hit)) {

@@ -48,6 +48,9 @@
 #define TR_DIM_ROULETTE 3u
 #define TR_DIM_ENV 4u /* environment light direction */
 #define TR_SAMPLER_PER_BOUNCE 5u
+/* The thin lens's point (camera.h): a pair of its own, far past any path's pairs, so that
+ * a pinhole camera's paths keep every number they had. */
+#define TR_DIM_LENS 0x7fff0000u
 
 typedef struct tr_sampler {
     uint32_t key;    /* hash of (seed, pixel); zsobol: of the seed and the pixel's tile */

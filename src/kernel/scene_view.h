@@ -52,7 +52,9 @@ int tr_wbvh_occluded(const struct tr_wbvh *w, const tr_ray *ray);
     X(tr_env, env, env_count)             /* 0 or 1: the environment light (envmap.h) */           \
     X(float, env_texels, env_texel_count) /* its map, RGB */                                       \
     X(float, env_cdf, env_cdf_count) /* marginal CDF (height + 1), then each row's (width + 1) */  \
-    X(tr_sun, sun, sun_count)        /* 0 or 1: the sun (sun.h) */
+    X(tr_sun, sun, sun_count)        /* 0 or 1: the sun (sun.h) */                                 \
+    X(tr_punctual, punctual, punctual_count) /* point, spot and directional lights */              \
+    X(float, ggx_ms, ggx_ms_count)           /* GGX multiple scattering (ggx_ms.h), or none */
 
 /* The scalars a view carries besides its arrays, X(type, member), uploaded to a device as
  * 32-bit words after the counts. */

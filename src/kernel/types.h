@@ -15,7 +15,7 @@
 TR_STATIC_ASSERT(sizeof(tr_material) == 32, "tr_material layout");
 TR_STATIC_ASSERT(sizeof(tr_triangle) == 68, "tr_triangle layout");
 TR_STATIC_ASSERT(sizeof(tr_aabb) == 24, "tr_aabb layout");
-TR_STATIC_ASSERT(sizeof(tr_camera) == 92, "tr_camera layout");
+TR_STATIC_ASSERT(sizeof(tr_camera) == 100, "tr_camera layout");
 
 /* One entry of the thesis's flat structure: a shape's box and its run of triangles.
  * 32 bytes. */
@@ -77,7 +77,7 @@ TR_STATIC_ASSERT(sizeof(tr_light_node) == 56, "tr_light_node layout");
  * layout has no padding on any device. A frame adds samples sample .. sample+sample_count-1
  * to every pixel of the rectangle (rect_x, rect_y, rect_w, rect_h); with stride k > 1 only
  * pixels whose coordinates are multiples of k are traced and each stands for its k x k
- * block (the thesis's preview). 156 bytes. */
+ * block (the thesis's preview). 164 bytes. */
 typedef struct tr_frame {
     tr_camera camera;
     uint32_t seed_lo, seed_hi;
@@ -94,7 +94,7 @@ typedef struct tr_frame {
     float clamp_indirect;
     uint32_t flags;
 } tr_frame;
-TR_STATIC_ASSERT(sizeof(tr_frame) == 156, "tr_frame layout");
+TR_STATIC_ASSERT(sizeof(tr_frame) == 164, "tr_frame layout");
 
 /* tr_frame.flags: pt roughens glossy and specular lobes after the first non-specular
  * vertex (path regularization, integrator_pt.h). */

@@ -332,6 +332,8 @@ int tr_camera_path(const tr_camera *c0, float diag, uint32_t f, uint32_t frames,
     if (r0.x * r1.x + r0.y * r1.y + r0.z * r1.z < 0.0f) {
         c.right = tr_vec3_make(-r1.x, -r1.y, -r1.z);
     }
+    c.lens_radius = c0->lens_radius; /* c0's thin lens, if any, moves with it */
+    c.focus_dist = c0->focus_dist;
     *out = c;
     return TR_OK;
 }

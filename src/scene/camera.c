@@ -60,6 +60,8 @@ int tr_camera_make(tr_camera *cam, tr_vec3 pos, tr_vec3 dir, tr_vec3 world_up, f
     c.far_dist = far_dist;
     c.screen_width = width;
     c.screen_height = height;
+    c.lens_radius = 0.0f;
+    c.focus_dist = 1.0f;
     if (camera_frame(&c, err) != TR_OK) {
         return TR_ERR;
     }
@@ -76,4 +78,27 @@ int tr_camera_resize(tr_camera *cam, uint32_t width, uint32_t height, tr_error *
     }
     *cam = c;
     return TR_OK;
+}
+
+int tr_camera_set_lens(tr_camera *cam, float lens_radius, float focus_dist, tr_error *err) {
+    if (!(lens_radius >= 0.0f) || !isfinite(lens_radius)) {
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "camera lens radius %g must be finite and >= 0", (double)lens_radius);
+    }
+    if (!(focus_dist > 0.0f) || !isfinite(focus_dist)) {
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "camera focus distance %g must be finite and > 0", (double)focus_dist);
+    }
+    cam->lens_radius = lens_radius;
+    cam->focus_dist = focus_dist;
+    return TR_OK;
+}
+
+float tr_camera_lens_radius_for(const tr_camera *cam, float f_number, float sensor_height) {
+    if (!(f_number > 0.0f) || !isfinite(f_number) || !(sensor_height > 0.0f) ||
+        !isfinite(sensor_height)) {
+        return 0.0f;
+    }
+    const float focal = sensor_height / (2.0f * tanf(cam->vertical_fov * (TR_PI / 180.0f) * 0.5f));
+    return focal / (2.0f * f_number);
 }

@@ -29,6 +29,8 @@ tr_fly_camera tr_fly_from_camera(const tr_camera *cam, float speed) {
     f.speed = speed;
     /* tr_camera_make's right is up x dir; one pointing the other way was mirrored. */
     f.mirrored = v3_dot(cam->right, v3_cross(cam->up, cam->dir)) < 0.0f;
+    f.lens_radius = cam->lens_radius;
+    f.focus_dist = cam->focus_dist;
     return f;
 }
 
@@ -40,6 +42,10 @@ int tr_fly_make(const tr_fly_camera *f, uint32_t w, uint32_t h, tr_camera *cam, 
     }
     if (f->mirrored) {
         c.right = v3_neg(c.right); /* as the scene file does; up stays */
+    }
+    if (f->lens_radius > 0.0f &&
+        tr_camera_set_lens(&c, f->lens_radius, f->focus_dist, err) != TR_OK) {
+        return TR_ERR;
     }
     *cam = c;
     return TR_OK;
@@ -86,7 +92,13 @@ float tr_fly_default_speed(const tr_aabb *b) {
 }
 
 int tr_fly_json(const tr_fly_camera *f, char *buf, size_t n) {
-    /* %.9g: a float's value comes back exactly when the file is read. */
+    /* %.9g: a float's value comes back exactly when the file is read. A thin lens adds its
+     * two keys before the last one. */
+    char lens[96] = "";
+    if (f->lens_radius > 0.0f) {
+        snprintf(lens, sizeof lens, "  \"aperture_radius\": %.9g,\n  \"focus_distance\": %.9g,\n",
+                 (double)f->lens_radius, (double)f->focus_dist);
+    }
     return snprintf(buf, n,
                     "\"camera\": {\n"
                     "  \"position\": [%.9g, %.9g, %.9g],\n"
@@ -95,10 +107,11 @@ int tr_fly_json(const tr_fly_camera *f, char *buf, size_t n) {
                     "  \"fov\": %.9g,\n"
                     "  \"near\": %.9g,\n"
                     "  \"far\": %.9g,\n"
+                    "%s"
                     "  \"handedness\": \"%s\"\n"
                     "}\n",
                     (double)f->pos.x, (double)f->pos.y, (double)f->pos.z, (double)f->dir.x,
                     (double)f->dir.y, (double)f->dir.z, (double)f->up.x, (double)f->up.y,
                     (double)f->up.z, (double)f->vfov, (double)f->near_dist, (double)f->far_dist,
-                    f->mirrored ? "right" : "left");
+                    lens, f->mirrored ? "right" : "left");
 }

@@ -457,9 +457,52 @@ static int parse_render(jctx *c, const cJSON *r) {
     return get_bool(c, r, path, "allow_no_emitter", &in->allow_no_emitter);
 }
 
+/* The thin lens's keys of the camera (made already): aperture_radius or f_number (with
+ * sensor_height), and focus_distance, which defaults to look_at's distance along the view
+ * direction (look_dist; 0 without look_at). */
+static int parse_lens(jctx *c, const cJSON *cam, float look_dist) {
+    const char *path = "camera";
+    double radius = 0.0, fnum = 0.0, sensor = 0.024, focus = 0.0;
+    int has_radius, has_fnum, has_sensor, has_focus;
+    if (get_number(c, cam, path, "aperture_radius", 0.0, 1e30, &radius, &has_radius) != TR_OK ||
+        get_number(c, cam, path, "f_number", 0.01, 1e30, &fnum, &has_fnum) != TR_OK ||
+        get_number(c, cam, path, "sensor_height", 1e-30, 1e30, &sensor, &has_sensor) != TR_OK ||
+        get_number(c, cam, path, "focus_distance", 1e-30, 1e30, &focus, &has_focus) != TR_OK) {
+        return TR_ERR;
+    }
+    if (has_radius && has_fnum) {
+        return jerr(c, path, "expected at most one of 'aperture_radius' and 'f_number', got both");
+    }
+    if (has_sensor && !has_fnum) {
+        return jerr(c, "camera.sensor_height", "only means something with camera.f_number");
+    }
+    tr_camera *cm = &c->scene->camera;
+    if (has_fnum) {
+        radius = tr_camera_lens_radius_for(cm, (float)fnum, (float)sensor);
+    }
+    if (!(radius > 0.0) && !has_focus) {
+        return TR_OK; /* a pinhole */
+    }
+    if (!has_focus) {
+        if (!(look_dist > 0.0f)) {
+            return jerr(c, "camera.focus_distance",
+                        "missing (expected with an aperture and 'direction': the distance of "
+                        "the plane in focus, > 0)");
+        }
+        focus = look_dist;
+    }
+    /* A radius of 0 keeps the pinhole (the focus distance is kept, unused). */
+    tr_error e;
+    if (tr_camera_set_lens(cm, (float)radius, (float)focus, &e) != TR_OK) {
+        return jerr_from(c, path, &e);
+    }
+    return TR_OK;
+}
+
 static int parse_camera(jctx *c, const cJSON *cam) {
-    static const char *const keys[] = {"position", "look_at", "direction", "up",
-                                       "fov",      "near",    "far",       "handedness"};
+    static const char *const keys[] = {
+        "position", "look_at",    "direction",       "up",       "fov",           "near",
+        "far",      "handedness", "aperture_radius", "f_number", "sensor_height", "focus_distance"};
     const char *path = "camera";
     if (expect_object(c, cam, path) != TR_OK ||
         check_keys(c, cam, path, keys, sizeof keys / sizeof keys[0]) != TR_OK) {
@@ -537,7 +580,7 @@ static int parse_camera(jctx *c, const cJSON *cam) {
          * mirror image of the thesis's up x dir; the up vector stays. */
         c->scene->camera.right = v3_neg(c->scene->camera.right);
     }
-    return TR_OK;
+    return parse_lens(c, cam, has_look ? v3_dot(v3_sub(look, pos), c->scene->camera.dir) : 0.0f);
 }
 
 /* Keys every material but an emitter takes besides its type's (attrib.h's extras). */
@@ -1512,6 +1555,100 @@ static int parse_sun(jctx *c, const cJSON *sun) {
     return TR_OK;
 }
 
+/* "lights": [{"type": "point" | "spot" | "directional", ...}]: punctual lights
+ * (src/kernel/punctual.h). Point and spot: position, intensity I (W/sr) times color; a
+ * spot's direction (the axis it shines along), cone_angle (the whole angle, degrees) and
+ * blend (the share of the cone's half-angle, from its edge, over which it fades in).
+ * Directional: direction (the way the light travels), irradiance E (W/m^2) times color. */
+static int parse_lights(jctx *c, const cJSON *lights) {
+    static const char *const point_keys[] = {"type", "name", "position", "color", "intensity"};
+    static const char *const spot_keys[] = {"type",      "name",      "position",   "color",
+                                            "intensity", "direction", "cone_angle", "blend"};
+    static const char *const dir_keys[] = {"type", "name", "direction", "color", "irradiance"};
+    if (!cJSON_IsArray(lights)) {
+        return jerr(c, "lights", "expected an array, got %s", type_name(lights));
+    }
+    int i = 0;
+    for (const cJSON *l = lights->child; l; l = l->next, ++i) {
+        char path[PATH_MAX_LEN], p[PATH_MAX_LEN];
+        path_index(path, "lights", i);
+        const char *type;
+        if (expect_object(c, l, path) != TR_OK ||
+            get_string(c, l, path, "type", 1, &type) != TR_OK) {
+            return TR_ERR;
+        }
+        tr_punctual pl;
+        memset(&pl, 0, sizeof pl);
+        const char *const *keys;
+        size_t nkeys;
+        if (strcmp(type, "point") == 0) {
+            pl.type = TR_PUNCTUAL_POINT;
+            keys = point_keys;
+            nkeys = sizeof point_keys / sizeof point_keys[0];
+        } else if (strcmp(type, "spot") == 0) {
+            pl.type = TR_PUNCTUAL_SPOT;
+            keys = spot_keys;
+            nkeys = sizeof spot_keys / sizeof spot_keys[0];
+        } else if (strcmp(type, "directional") == 0) {
+            pl.type = TR_PUNCTUAL_DIRECTIONAL;
+            keys = dir_keys;
+            nkeys = sizeof dir_keys / sizeof dir_keys[0];
+        } else {
+            char buf[40];
+            path_key(p, path, "type");
+            return jerr(c, p, "unknown light type '%s' (expected point, spot or directional)",
+                        shown(type, buf, sizeof buf));
+        }
+        const char *name;
+        if (check_keys(c, l, path, keys, nkeys) != TR_OK ||
+            get_string(c, l, path, "name", 0, &name) != TR_OK) {
+            return TR_ERR;
+        }
+        tr_vec3 color = v3s(1.0f);
+        if (cJSON_GetObjectItemCaseSensitive(l, "color") &&
+            get_color(c, l, path, "color", 1e7, &color) != TR_OK) {
+            return TR_ERR;
+        }
+        double k = 1.0;
+        if (pl.type == TR_PUNCTUAL_DIRECTIONAL) {
+            if (get_vec3(c, l, path, "direction", 1, 0, &pl.dir, NULL) != TR_OK ||
+                get_number(c, l, path, "irradiance", 0.0, 1e7, &k, &(int){0}) != TR_OK) {
+                return TR_ERR;
+            }
+        } else {
+            if (get_vec3(c, l, path, "position", 1, 0, &pl.pos, NULL) != TR_OK ||
+                get_number(c, l, path, "intensity", 0.0, 1e7, &k, &(int){0}) != TR_OK) {
+                return TR_ERR;
+            }
+        }
+        if (pl.type == TR_PUNCTUAL_SPOT) {
+            double cone = 45.0, blend = 0.15;
+            if (get_vec3(c, l, path, "direction", 1, 0, &pl.dir, NULL) != TR_OK ||
+                get_number(c, l, path, "cone_angle", 1e-3, 180.0, &cone, &(int){0}) != TR_OK ||
+                get_number(c, l, path, "blend", 0.0, 1.0, &blend, &(int){0}) != TR_OK) {
+                return TR_ERR;
+            }
+            /* The cone's half-angle h; the fade from its edge inwards over blend * h. */
+            const double h = 0.5 * cone * 3.14159265358979323846 / 180.0;
+            pl.cos_outer = (float)cos(h);
+            pl.cos_inner = (float)cos(h * (1.0 - blend));
+        }
+        if (pl.type != TR_PUNCTUAL_POINT && !(v3_length(pl.dir) > 0.0f)) {
+            path_key(p, path, "direction");
+            return jerr(c, p, "expected a non-zero vector, got [0, 0, 0]");
+        }
+        pl.intensity = v3_scale(color, (float)k);
+        tr_error err;
+        if (tr_scene_add_punctual(c->scene, &pl, &err) != TR_OK) {
+            return jerr_from(c, path, &err);
+        }
+    }
+    if (i > 0) {
+        c->info->allow_no_emitter = 1; /* lights: the scene needs no emitter */
+    }
+    return TR_OK;
+}
+
 /* Line and column (both from 1) of byte offset `off` in text. */
 static void line_col(const char *text, size_t off, unsigned *line, unsigned *col) {
     *line = 1;
@@ -1527,9 +1664,9 @@ static void line_col(const char *text, size_t off, unsigned *line, unsigned *col
 }
 
 static int build(jctx *c, const cJSON *root) {
-    static const char *const keys[] = {"version",   "description", "render",   "camera",
-                                       "materials", "shapes",      "meshes",   "environment",
-                                       "sun",       "prototypes",  "instances"};
+    static const char *const keys[] = {"version",   "description", "render",     "camera",
+                                       "materials", "shapes",      "meshes",     "environment",
+                                       "sun",       "lights",      "prototypes", "instances"};
     if (!cJSON_IsObject(root)) {
         return jerr(c, NULL, "expected a JSON object at the top level, got %s", type_name(root));
     }
@@ -1581,6 +1718,10 @@ static int build(jctx *c, const cJSON *root) {
     if (sun && parse_sun(c, sun) != TR_OK) {
         return TR_ERR;
     }
+    const cJSON *lights = cJSON_GetObjectItemCaseSensitive(root, "lights");
+    if (lights && parse_lights(c, lights) != TR_OK) {
+        return TR_ERR;
+    }
     tr_scene *s = c->scene;
     tr_scene_file *in = c->info;
     if (s->triangle_count == 0 && (c->opt->load_meshes || in->mesh_count == 0)) {
@@ -1613,7 +1754,8 @@ static int build(jctx *c, const cJSON *root) {
         }
     }
     free(used);
-    if (in->emissive_triangles == 0 && s->env_count == 0 && s->sun_count == 0) {
+    if (in->emissive_triangles == 0 && s->env_count == 0 && s->sun_count == 0 &&
+        s->punctual_count == 0) {
         warn(c, "the scene has no emitter, so its image would be black%s",
              in->allow_no_emitter ? " (allowed by render.allow_no_emitter)" : "");
     }

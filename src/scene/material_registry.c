@@ -18,6 +18,8 @@ static const tr_material_key_info keys[] = {
     {TR_MATERIAL_KEY_EMITTANCE, "emittance", TR_KEY_NUMBER, 0.0, 1e7, 1,
      offsetof(tr_material, emittance), 0u},
     {TR_MATERIAL_KEY_TWO_SIDED, "two_sided", TR_KEY_FLAG, 0.0, 0.0, 0, 0, TR_MATERIAL_TWO_SIDED},
+    {TR_MATERIAL_KEY_MULTISCATTER, "multiscatter", TR_KEY_FLAG, 0.0, 0.0, 0, 0,
+     TR_MATERIAL_MULTISCATTER},
     {TR_MATERIAL_KEY_IOR, "ior", TR_KEY_NUMBER, 1.0, 10.0, 0, offsetof(tr_material, ior), 0u},
     {TR_MATERIAL_KEY_ROUGHNESS, "roughness", TR_KEY_NUMBER, 0.0, 1.0, 0,
      offsetof(tr_material, roughness), 0u},
@@ -85,7 +87,7 @@ int tr_material_check(const tr_material *m, tr_error *err) {
         return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "material ior %g must be in [1, 10]",
                             (double)m->ior);
     }
-    if ((m->flags & ~TR_MATERIAL_TWO_SIDED) != 0u) {
+    if ((m->flags & ~(TR_MATERIAL_TWO_SIDED | TR_MATERIAL_MULTISCATTER)) != 0u) {
         return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
                             "material flags 0x%x have unknown bits", m->flags);
     }

@@ -572,6 +572,8 @@ static void place_extras(import_ctx *c, const struct aiNode *node, const struct 
         o->dir = place(c, m, l->mDirection, 0.0f);
         o->color = v3(l->mColorDiffuse.r, l->mColorDiffuse.g, l->mColorDiffuse.b);
         o->outer_cone = l->mAngleOuterCone;
+        o->inner_cone = l->mAngleInnerCone;
+        o->gltf = c->gltf;
         o->size_x = l->mSize.x;
         o->size_y = l->mSize.y;
     }

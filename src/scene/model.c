@@ -35,9 +35,25 @@ static void model_warn(void *ctx, const char *message) {
 /* Assimp's light types (aiLightSourceType), without its headers here. */
 enum { AI_DIRECTIONAL = 1, AI_POINT = 2, AI_SPOT = 3, AI_AMBIENT = 4, AI_AREA = 5 };
 
+/* A spot light's cone: Assimp's angles are the whole cone's (its documentation), except
+ * that its glTF importer stores KHR_lights_punctual's half-angles. Missing or odd angles
+ * get glTF's defaults (outer pi/4, inner 0). */
+static void model_spot_cone(const tr_import_light *l, tr_punctual *p) {
+    const float k = l->gltf ? 1.0f : 0.5f;
+    float outer = k * l->outer_cone, inner = k * l->inner_cone;
+    if (!(outer > 0.0f && outer <= 3.14159265f)) {
+        outer = 0.25f * 3.14159265f;
+    }
+    if (!(inner >= 0.0f && inner <= outer)) {
+        inner = 0.0f;
+    }
+    p->cos_outer = cosf(outer);
+    p->cos_inner = fmaxf(cosf(inner), p->cos_outer);
+}
+
 /* A light of the file onto trac0r's: directional -> the sun (the Sun's angular size),
- * point and spot -> a small emissive sphere radiating the light's intensity (W/sr) in
- * every direction, ambient -> a constant environment, area -> an emissive rectangle.
+ * point and spot -> punctual lights (punctual.h) of intensity the light's colour (W/sr),
+ * ambient -> a constant environment, area -> an emissive rectangle.
  * Returns 1 where it added a light, 0 where it warned and added none, -1 with err. */
 static int model_add_light(tr_scene *s, const tr_import_light *l, float radius, tr_scene_file *info,
                            int *have_sun, tr_error *err) {
@@ -74,7 +90,33 @@ static int model_add_light(tr_scene *s, const tr_import_light *l, float radius, 
         model_warn(info, msg);
         return 1;
     }
-    if (l->type != AI_POINT && l->type != AI_SPOT && l->type != AI_AREA) {
+    if (l->type == AI_POINT || l->type == AI_SPOT) {
+        tr_punctual p;
+        memset(&p, 0, sizeof p);
+        p.type = l->type == AI_SPOT ? TR_PUNCTUAL_SPOT : TR_PUNCTUAL_POINT;
+        p.pos = l->pos;
+        p.dir = l->dir;
+        p.intensity = c;
+        if (l->type == AI_SPOT) {
+            model_spot_cone(l, &p);
+        }
+        if (tr_scene_add_punctual(s, &p, err) != TR_OK) {
+            return -1;
+        }
+        if (l->type == AI_SPOT) {
+            snprintf(msg, sizeof msg,
+                     "spot light '%.64s': a spot light of intensity its colour, cone %.4g "
+                     "degrees, fading in over its outer %.4g",
+                     l->name, 2.0 * acos((double)p.cos_outer) * 57.29577951308232,
+                     (acos((double)p.cos_outer) - acos((double)p.cos_inner)) * 57.29577951308232);
+        } else {
+            snprintf(msg, sizeof msg, "point light '%.64s': a point light of intensity its colour",
+                     l->name);
+        }
+        model_warn(info, msg);
+        return 1;
+    }
+    if (l->type != AI_AREA) {
         snprintf(msg, sizeof msg, "light '%.64s' of unknown type %d: not imported", l->name,
                  l->type);
         model_warn(info, msg);
@@ -94,7 +136,8 @@ static int model_add_light(tr_scene *s, const tr_import_light *l, float radius, 
                  "colour",
                  l->name, (double)l->size_x, (double)l->size_y);
     } else {
-        /* Intensity I (W/sr) from a sphere of radius r: radiance I / (pi r^2) gives the
+        /* An area light without a size, as a point light of intensity I (W/sr) but with an
+         * area: from a sphere of radius r, radiance I / (pi r^2) gives the
          * same power, 4 pi I. The radius is 1 % of the model's, grown if the radiance
          * would pass the emitter's limit. */
         float r = fmaxf(0.01f * radius, sqrtf(peak / (3.14159265f * 0.99e7f)));
@@ -103,12 +146,9 @@ static int model_add_light(tr_scene *s, const tr_import_light *l, float radius, 
         d.transform.scale = v3s(r);
         emittance = peak / (3.14159265f * r * r);
         snprintf(msg, sizeof msg,
-                 "%s light '%.64s': an emissive sphere of radius %g, intensity its colour%s",
-                 l->type == AI_SPOT   ? "spot"
-                 : l->type == AI_AREA ? "area"
-                                      : "point",
-                 l->name, (double)r,
-                 l->type == AI_SPOT ? " (its cone is dropped: light in all directions)" : "");
+                 "area light '%.64s' without a size: an emissive sphere of radius %g, intensity "
+                 "its colour",
+                 l->name, (double)r);
     }
     d.transform.position = l->pos;
     uint32_t mat;

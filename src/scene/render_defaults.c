@@ -1,6 +1,7 @@
 /* render_defaults.c - a scene file's render block applied to a program's request
  * (tr_scene_file_apply): what every program that renders scene files would otherwise
  * repeat, with the same defaults and messages as the trac0r command. */
+#include "scene/scene_internal.h"
 #include "trac0r/camera.h"
 #include "trac0r/film.h"
 #include "trac0r/registry.h"
@@ -151,6 +152,21 @@ int tr_scene_file_apply(tr_scene *s, const char *path, const tr_scene_file *file
         return TR_ERR;
     }
     out->config.max_depth = resolve_max_depth(file, req, out->config.integrator);
+    if (s->punctual_count > 0u && out->config.integrator != TR_INTEGRATOR_PT) {
+        /* Delta lights are found by next-event estimation alone (punctual.h). */
+        return tr_error_set(err, TR_STATUS_UNSUPPORTED,
+                            "%s: lights: %s does not support point, spot or directional lights: "
+                            "use pt",
+                            path, tr_integrator_name(out->config.integrator));
+    }
+    if (tr_integrator_is_bidirectional(out->config.integrator) &&
+        tr_scene_camera(s)->lens_radius > 0.0f) {
+        /* tr_frame_make would refuse the first frame; the file is the place to say it. */
+        return tr_error_set(err, TR_STATUS_UNSUPPORTED,
+                            "%s: camera.aperture_radius: %s does not support depth of field "
+                            "(a camera with an aperture): use pt",
+                            path, tr_integrator_name(out->config.integrator));
+    }
     if (file->emissive_triangles == 0 && !file->allow_no_emitter && !req->allow_dark) {
         return tr_error_set(err, TR_STATUS_NOT_FOUND,
                             "%s: the scene has no emitter, so the image would be black (set "

@@ -3,6 +3,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "kernel/ggx_ms.h"
 #include "scene_internal.h"
 #include "trac0r/render.h"
 #include "trac0r/parse.h"
@@ -77,6 +78,7 @@ void tr_scene_clear(tr_scene *s) {
     free(s->material_exts);
     free(s->env_texels);
     free(s->env_cdf);
+    free(s->punctual);
     tr_bvh_free(&s->bvh);
     tr_wbvh_free(&s->wbvh);
     tr_embree_free(&s->embree);
@@ -464,6 +466,7 @@ int tr_scene_commit(tr_scene *s, tr_accel_type accel, tr_error *err) {
     if (tr_scene_build_lights(s, err) != TR_OK) {
         return TR_ERR;
     }
+    tr_scene_build_punctual(s);
     tr_scene_free_light_tree(s);
     if (tr_scene_light_tree_wanted(s) && tr_scene_build_light_tree(s, err) != TR_OK) {
         return TR_ERR;
@@ -730,6 +733,19 @@ tr_scene_view tr_scene_view_of(const tr_scene *s) {
     v.env_cdf_count = s->env_cdf_count;
     v.sun = &s->sun;
     v.sun_count = s->sun_count;
+    v.punctual = s->punctual;
+    /* Lights added since the last commit have no CDF yet: none are exposed until then. */
+    v.punctual_count = s->punctual_built == s->punctual_count ? s->punctual_count : 0u;
+    /* The multiple-scattering table, for a scene with a material that asks for it. */
+    v.ggx_ms = NULL;
+    v.ggx_ms_count = 0u;
+    for (uint32_t i = 0; i < s->material_count; ++i) {
+        if ((s->materials[i].flags & TR_MATERIAL_MULTISCATTER) != 0u) {
+            v.ggx_ms = tr_ggx_ms_table();
+            v.ggx_ms_count = TR_GGX_MS_COUNT;
+            break;
+        }
+    }
 #ifdef TR_SCENE_VIEW_EMBREE
     v.embree_scene = s->embree.scene;
 #endif

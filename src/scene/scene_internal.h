@@ -102,6 +102,10 @@ struct tr_scene {
     /* The sun (src/scene/sun.c): sun_count 0 or 1. */
     tr_sun sun;
     uint32_t sun_count;
+    /* Point, spot and directional lights (src/scene/punctual.c). */
+    tr_punctual *punctual;
+    uint32_t punctual_count, punctual_capacity;
+    uint32_t punctual_built; /* the count the CDF was built for */
     /* Instancing (src/scene/instance.c). With instances, a TR_ACCEL_TYPE_BVH commit builds
      * the two-level structure instead of `bvh`/`wbvh`: `rest` over the scene's own
      * triangles (an identity instance, the top level's last entry) and `tlas` over
@@ -166,6 +170,8 @@ typedef struct tr_import_light {
     tr_vec3 color;        /* Assimp's mColorDiffuse (glTF: colour x intensity) */
     float outer_cone;     /* spot lights: half-angle, radians */
     float size_x, size_y; /* area lights */
+    float inner_cone;     /* spot lights: Assimp's mAngleInnerCone, radians */
+    int gltf;             /* from a glTF file: the cones are glTF's half-angles */
 } tr_import_light;
 /* What else a model file holds: the camera asked for (camera_want, before the import:
  * its index in the file, >= 0), placed by its node and tf; how many cameras and lights
@@ -205,6 +211,17 @@ int tr_scene_load_environment(tr_scene *s, const char *path, tr_vec3 color, floa
  * any length > 0) as a disc of angular diameter angle_deg (1e-3..90 degrees), giving the
  * irradiance `irradiance` (W/m^2 per channel) on a surface facing it. */
 int tr_scene_set_sun(tr_scene *s, tr_vec3 dir, float angle_deg, tr_vec3 irradiance, tr_error *err);
+/* GGX's albedo table for multiple-scattering compensation (src/kernel/ggx_ms.h):
+ * TR_GGX_MS_COUNT floats, computed on the first call (src/scene/ggx_ms.c). */
+const float *tr_ggx_ms_table(void);
+#define TR_MAX_PUNCTUAL 65536u
+/* Adds a punctual light (attrib.h): type, pos (point, spot), dir (spot, directional; any
+ * length > 0), intensity, and a spot's cos_outer <= cos_inner; the other fields are
+ * ignored. */
+int tr_scene_add_punctual(tr_scene *s, const tr_punctual *light, tr_error *err);
+/* Their selection CDF by power (tr_scene_commit; a directional light's from the
+ * triangles' bounds). */
+void tr_scene_build_punctual(tr_scene *s);
 /* Restores the counts a failed import started from (everything is appended). */
 void tr_scene_truncate(tr_scene *s, uint32_t triangles, uint32_t shapes, uint32_t materials);
 

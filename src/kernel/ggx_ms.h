@@ -1,0 +1,79 @@
+/* ggx_ms.h - multiple scattering for the GGX conductor lobe (Kulla and Conty, "Revisiting
+ * Physically Based Shading at Imageworks", SIGGRAPH 2017 course).
+ *
+ * Single-scattering GGX loses the light that bounces between microfacets more than once:
+ * its directional albedo E(mu) (with a white Fresnel) falls below 1 as alpha grows. The
+ * compensation adds the lobe
+ *
+ *   f_ms = F_ms (1 - E(mu_o)) (1 - E(mu_i)) / (pi (1 - E_avg)),
+ *   E_avg = 2 int_0^1 E(mu) mu dmu,
+ *   F_ms = F_avg^2 E_avg / (1 - F_avg (1 - E_avg)),  F_avg = F0 + (1 - F0) / 21,
+ *
+ * which is reciprocal, makes a white conductor's albedo 1 at every angle (E + (1 - E) = 1)
+ * and, for a coloured one, adds the light of the bounces that each multiply it by F_avg
+ * (F_avg is Schlick's Fresnel's cosine-weighted mean). E and E_avg come from a table that
+ * the host computes when a scene first needs it (src/scene/ggx_ms.c, by integrating this
+ * kernel's own single-scattering lobe): TR_GGX_MS_N values of mu by TR_GGX_MS_N of alpha,
+ * then E_avg at each alpha, read with bilinear interpolation. A material asks for it with
+ * TR_MATERIAL_MULTISCATTER; the material stage hands the table to the BSDF
+ * (tr_bsdf_params.ms), NULL where the scene has none. */
+#ifndef TR_KERNEL_GGX_MS_H
+#define TR_KERNEL_GGX_MS_H
+
+#include "compat.h"
+#include "vec.h"
+
+#define TR_GGX_MS_N 32
+#define TR_GGX_MS_COUNT (TR_GGX_MS_N * TR_GGX_MS_N + TR_GGX_MS_N)
+
+/* The table's nodes: mu_i = max(i / (N - 1), TR_GGX_MS_MU0), alpha_j = j / (N - 1) (alpha
+ * below TR_GGX_MIN_ALPHA counts as it, bsdf.h). */
+#define TR_GGX_MS_MU0 1e-3f
+
+/* Position x in [0, 1] on an axis of N nodes: the lower node and the weight of the next. */
+TR_FN int tr_ggx_ms_cell(float x, float *w) {
+    float t = tr_fminf(tr_fmaxf(x, 0.0f), 1.0f) * (float)(TR_GGX_MS_N - 1);
+    int i = (int)t;
+    if (i > TR_GGX_MS_N - 2) {
+        i = TR_GGX_MS_N - 2;
+    }
+    *w = t - (float)i;
+    return i;
+}
+
+/* E(mu, alpha): the single-scattering lobe's directional albedo with a white Fresnel. */
+TR_FN float tr_ggx_ms_e(TR_CONST_GLOBAL float *table, float mu, float alpha) {
+    float wm, wa;
+    const int i = tr_ggx_ms_cell(mu, &wm), j = tr_ggx_ms_cell(alpha, &wa);
+    TR_CONST_GLOBAL float *r0 = table + j * TR_GGX_MS_N;
+    TR_CONST_GLOBAL float *r1 = r0 + TR_GGX_MS_N;
+    const float e0 = r0[i] + (r0[i + 1] - r0[i]) * wm;
+    const float e1 = r1[i] + (r1[i + 1] - r1[i]) * wm;
+    return e0 + (e1 - e0) * wa;
+}
+
+/* E_avg(alpha). */
+TR_FN float tr_ggx_ms_eavg(TR_CONST_GLOBAL float *table, float alpha) {
+    float wa;
+    const int j = tr_ggx_ms_cell(alpha, &wa);
+    TR_CONST_GLOBAL float *a = table + TR_GGX_MS_N * TR_GGX_MS_N;
+    return a[j] + (a[j + 1] - a[j]) * wa;
+}
+
+/* f_ms for cosines co, ci > 0 and Fresnel F0 f0. */
+TR_FN tr_vec3 tr_ggx_ms_lobe(TR_CONST_GLOBAL float *table, float alpha, tr_vec3 f0, float co,
+                             float ci) {
+    const float eavg = tr_ggx_ms_eavg(table, alpha);
+    if (!(eavg < 0.9999f)) {
+        return v3s(0.0f);
+    }
+    const float fms = (1.0f - tr_ggx_ms_e(table, co, alpha)) *
+                      (1.0f - tr_ggx_ms_e(table, ci, alpha)) / (TR_PI * (1.0f - eavg));
+    const tr_vec3 favg = v3_add(f0, v3_scale(v3_sub(v3s(1.0f), f0), 1.0f / 21.0f));
+    const tr_vec3 fm = v3(favg.x * favg.x * eavg / (1.0f - favg.x * (1.0f - eavg)),
+                          favg.y * favg.y * eavg / (1.0f - favg.y * (1.0f - eavg)),
+                          favg.z * favg.z * eavg / (1.0f - favg.z * (1.0f - eavg)));
+    return v3_scale(fm, tr_fmaxf(fms, 0.0f));
+}
+
+#endif
