@@ -66,27 +66,7 @@ grep -q "benchmark cornell-ico-1 (.* triangles) 32x24, 3 frames.* average FPS" o
     fail "benchmark output: $(cat out.txt)"
 
 # --- a real window under Xvfb --------------------------------------------------------
-for tool in Xvfb xdotool; do
-    command -v $tool >/dev/null || {
-        fail "$tool is not installed (scripts/install-deps installs it)"
-        exit 1
-    }
-done
-# -displayfd: the server picks a free display number and writes it to fd 9.
-Xvfb -displayfd 9 -nolisten tcp -screen 0 640x480x24 9>displayfd 2>xvfb.log &
-XVFB_PID=$!
-i=0
-while [ ! -s displayfd ] && [ $i -lt 100 ]; do
-    sleep 0.1
-    i=$((i + 1))
-done
-[ -s displayfd ] || {
-    fail "Xvfb did not start: $(cat xvfb.log)"
-    exit 1
-}
-DISPLAY=:$(head -n1 displayfd)
-export DISPLAY
-unset WAYLAND_DISPLAY SDL_VIDEODRIVER
+xvfb_start || exit 1
 # A display that cannot be opened (screen 7 of a one-screen server): exit 2, naming it.
 DISPLAY=$DISPLAY.7 timeout 30 "$BIN" view >out.txt 2>err.txt
 rc=$?

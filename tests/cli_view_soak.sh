@@ -18,26 +18,8 @@ cleanup() {
 }
 trap cleanup EXIT
 trap 'exit 1' INT TERM HUP
-for tool in Xvfb xdotool; do
-    command -v $tool >/dev/null || {
-        fail "$tool is not installed (scripts/install-deps installs it)"
-        exit 1
-    }
-done
-Xvfb -displayfd 9 -nolisten tcp -screen 0 640x480x24 9>displayfd 2>xvfb.log &
-XVFB_PID=$!
-i=0
-while [ ! -s displayfd ] && [ $i -lt 100 ]; do
-    sleep 0.1
-    i=$((i + 1))
-done
-[ -s displayfd ] || {
-    fail "Xvfb did not start: $(cat xvfb.log)"
-    exit 1
-}
-DISPLAY=:$(head -n1 displayfd)
-export DISPLAY SDL_RENDER_DRIVER=software SDL_FRAMEBUFFER_ACCELERATION=0
-unset WAYLAND_DISPLAY SDL_VIDEODRIVER
+xvfb_start || exit 1
+export SDL_RENDER_DRIVER=software SDL_FRAMEBUFFER_ACCELERATION=0
 "$BIN" view --animate --width 160 --height 120 --state-file state.txt >view.out 2>view.err &
 VIEW_PID=$!
 n=0

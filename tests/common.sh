@@ -46,3 +46,29 @@ cli_end() {
     fi
     echo "$1: all checks passed"
 }
+
+# xvfb_start: Xvfb on a display number it picks itself (-displayfd writes it to fd 9),
+# with xdotool at hand; sets XVFB_PID and exports DISPLAY. Returns 1 (after fail) when
+# either tool is missing or the server does not start.
+xvfb_start() {
+    for tool in Xvfb xdotool; do
+        command -v $tool >/dev/null || {
+            fail "$tool is not installed (scripts/install-deps installs it)"
+            return 1
+        }
+    done
+    Xvfb -displayfd 9 -nolisten tcp -screen 0 640x480x24 9>displayfd 2>xvfb.log &
+    XVFB_PID=$!
+    i=0
+    while [ ! -s displayfd ] && [ $i -lt 100 ]; do
+        sleep 0.1
+        i=$((i + 1))
+    done
+    [ -s displayfd ] || {
+        fail "Xvfb did not start: $(cat xvfb.log)"
+        return 1
+    }
+    DISPLAY=:$(head -n1 displayfd)
+    export DISPLAY
+    unset WAYLAND_DISPLAY SDL_VIDEODRIVER
+}
