@@ -131,6 +131,30 @@ static int similar(const tr_restir_surface *a, const tr_restir_surface *b) {
 }
 
 /* The stage's random numbers for pixel i of frame `frame`, pass `pass`. */
+/* Up to k neighbours of pixel (x, y) for a spatial merge: offsets drawn uniformly in a disc
+ * of `radius` pixels (two numbers of rng per try, whether it is taken or not), kept where
+ * they fall inside the w x h image, off the pixel itself and on a surface similar to its
+ * own. Their indices go to out; returns how many. */
+static int pick_neighbours(const tr_restir_stage *st, uint32_t x, int y, uint32_t w, uint32_t h,
+                           float radius, int k, tr_rng *rng, size_t *out) {
+    const tr_restir_surface *q = &st->surf[(size_t)y * w + x];
+    int n = 0;
+    for (int t = 0; t < k; ++t) {
+        const float a = TR_TWO_PI * tr_rng_float(rng);
+        const float rad = radius * tr_sqrtf(tr_rng_float(rng));
+        const int nx = (int)x + (int)(rad * tr_cosf(a) + 0.5f);
+        const int ny = y + (int)(rad * tr_sinf(a) + 0.5f);
+        if (nx < 0 || ny < 0 || nx >= (int)w || ny >= (int)h || (nx == (int)x && ny == y)) {
+            continue;
+        }
+        const size_t j = (size_t)ny * w + (size_t)nx;
+        if (similar(q, &st->surf[j])) {
+            out[n++] = j;
+        }
+    }
+    return n;
+}
+
 static void pixel_rng(tr_rng *rng, uint64_t seed, size_t i, uint64_t frame, uint64_t pass) {
     tr_rng_init(rng, seed ^ 0x72657374697264ULL, (uint64_t)i, frame * 2u + pass);
 }
@@ -211,23 +235,13 @@ static void gi_passes(tr_restir_stage *st, const tr_scene_view *s, const tr_rest
             ss[0] = *q;
             rr[0] = st->gcur[i];
             vis[0] = 0;
+            size_t nb[TR_RESTIR_MAX_MERGE];
+            const int m = pick_neighbours(st, x, y, w, h, p->gi_radius, k, &rng, nb);
             int n = 1;
-            for (int t = 0; t < k; ++t) {
-                const float a = TR_TWO_PI * tr_rng_float(&rng);
-                const float rad = p->gi_radius * tr_sqrtf(tr_rng_float(&rng));
-                const int nx = (int)x + (int)(rad * tr_cosf(a) + 0.5f);
-                const int ny = y + (int)(rad * tr_sinf(a) + 0.5f);
-                if (nx < 0 || ny < 0 || nx >= (int)w || ny >= (int)h || (nx == (int)x && ny == y)) {
-                    continue;
-                }
-                const size_t j = (size_t)ny * w + (size_t)nx;
-                if (!similar(q, &st->surf[j])) {
-                    continue;
-                }
-                ss[n] = st->surf[j];
-                rr[n] = st->gcur[j];
+            for (int t = 0; t < m; ++t, ++n) {
+                ss[n] = st->surf[nb[t]];
+                rr[n] = st->gcur[nb[t]];
                 vis[n] = 1;
-                ++n;
             }
             tr_gi_reservoir r =
                 n > 1 ? tr_gi_merge(s, ss, rr, vis, n, p->gi_unbiased, 1e30f, &rng) : rr[0];
@@ -325,22 +339,12 @@ int tr_restir_stage_run(tr_restir_stage *st, const tr_scene *scene, const tr_cam
             tr_reservoir rr[TR_RESTIR_MAX_MERGE];
             ss[0] = *q;
             rr[0] = st->cur[i];
+            size_t nb[TR_RESTIR_MAX_MERGE];
+            const int m = pick_neighbours(st, x, y, w, h, p->radius, k, &rng, nb);
             int n = 1;
-            for (int t = 0; t < k; ++t) {
-                const float a = TR_TWO_PI * tr_rng_float(&rng);
-                const float rad = p->radius * tr_sqrtf(tr_rng_float(&rng));
-                const int nx = (int)x + (int)(rad * tr_cosf(a) + 0.5f);
-                const int ny = y + (int)(rad * tr_sinf(a) + 0.5f);
-                if (nx < 0 || ny < 0 || nx >= (int)w || ny >= (int)h || (nx == (int)x && ny == y)) {
-                    continue;
-                }
-                const size_t j = (size_t)ny * w + (size_t)nx;
-                if (!similar(q, &st->surf[j])) {
-                    continue;
-                }
-                ss[n] = st->surf[j];
-                rr[n] = st->cur[j];
-                ++n;
+            for (int t = 0; t < m; ++t, ++n) {
+                ss[n] = st->surf[nb[t]];
+                rr[n] = st->cur[nb[t]];
             }
             tr_reservoir r =
                 n > 1 ? tr_restir_merge(s, ss, rr, n, p->unbiased, 1e30f, &rng) : rr[0];
