@@ -338,6 +338,95 @@ static void test_texture_fallback(void) {
     rmdir(sub);
 }
 
+/* Renders the framing camera's view of the model at `path` (width w, height left to the
+ * 4:3 default) and returns the object's pixel bounds in b[0..3] (x0, x1, y0, y1). */
+static void frame_bounds(const char *path, uint32_t w, tr_vec3 *view, int b[4]) {
+    tr_error err;
+    tr_scene *s = tr_scene_create(&err);
+    tr_scene_file info;
+    const tr_model_options opt = {0, 1.0f, w, 0, "frame"};
+    b[0] = b[2] = 1 << 30;
+    b[1] = b[3] = -1;
+    CHECK(s && tr_scene_model_load(s, path, &opt, &info, &err) == TR_OK, "%s", err.msg);
+    CHECK(s && tr_scene_commit(s, TR_ACCEL_TYPE_BVH, &err) == TR_OK, "%s", err.msg);
+    if (!s) {
+        return;
+    }
+    const tr_camera *c = tr_scene_camera(s);
+    *view = c->dir;
+    CHECK(c->screen_width == w && c->screen_height == w * 3 / 4, "framing camera %ux%u",
+          c->screen_width, c->screen_height);
+    tr_film film;
+    CHECK(tr_film_init_passes(&film, c->screen_width, c->screen_height, TR_PASS_ALBEDO, &err) ==
+              TR_OK,
+          "%s", err.msg);
+    tr_render_config cfg = tr_render_config_default();
+    cfg.passes = TR_PASS_ALBEDO;
+    cfg.max_depth = 1;
+    CHECK(tr_render_frame(s, c, &cfg, &film, 0, NULL, &err) == TR_OK, "%s", err.msg);
+    for (uint32_t y = 0; y < c->screen_height; ++y) {
+        for (uint32_t x = 0; x < c->screen_width; ++x) {
+            float a[3];
+            tr_film_pass_pixel(&film, TR_PASS_ALBEDO, x, y, a, &err);
+            if (a[0] + a[1] + a[2] > 0.0f) {
+                b[0] = (int)x < b[0] ? (int)x : b[0];
+                b[1] = (int)x > b[1] ? (int)x : b[1];
+                b[2] = (int)y < b[2] ? (int)y : b[2];
+                b[3] = (int)y > b[3] ? (int)y : b[3];
+            }
+        }
+    }
+    tr_film_free(&film);
+    tr_scene_destroy(s);
+}
+
+/* A model without a camera is framed across its larger silhouette and fills the frame;
+ * glTF's front (+z) is seen whatever the silhouettes. A box 0.5 wide, 1 high and 4 long
+ * in z: from the side (along x) as an OBJ, from +z as glTF. */
+static void test_framing(void) {
+    char obj[700], gltf[700];
+    snprintf(obj, sizeof obj, "%s/long.obj", dir);
+    snprintf(gltf, sizeof gltf, "%s/long.gltf", dir);
+    write_text(obj, "v -0.25 0 -2\nv 0.25 0 -2\nv 0.25 1 -2\nv -0.25 1 -2\n"
+                    "v -0.25 0 2\nv 0.25 0 2\nv 0.25 1 2\nv -0.25 1 2\n"
+                    "f 1 2 3 4\nf 8 7 6 5\nf 1 5 6 2\nf 4 3 7 8\nf 1 4 8 5\nf 2 6 7 3\n");
+    const uint32_t w = 96, h = 72;
+    tr_vec3 d;
+    int b[4];
+    frame_bounds(obj, w, &d, b);
+    CHECK(fabsf(d.x) > 2.0f * fabsf(d.z), "long OBJ seen along (%g, %g, %g), not its side",
+          (double)d.x, (double)d.y, (double)d.z);
+    /* Filling: the longer extent reaches the 5 % margin on one axis (within two pixels),
+     * and nothing touches the border. */
+    const int span_x = b[1] - b[0] + 1, span_y = b[3] - b[2] + 1;
+    CHECK(b[0] > 0 && b[1] < (int)w - 1 && b[2] > 0 && b[3] < (int)h - 1,
+          "box touches the border: x %d..%d, y %d..%d", b[0], b[1], b[2], b[3]);
+    CHECK(span_x >= (int)(0.8f * w) || span_y >= (int)(0.8f * h), "box spans %d x %d of %u x %u",
+          span_x, span_y, w, h);
+    printf("framed long box: x %d..%d, y %d..%d of %ux%u\n", b[0], b[1], b[2], b[3], w, h);
+    remove(obj);
+    /* glTF: a quad in the y-z plane, 4 long in z; its larger silhouette is along x, but
+     * the format's front is +z. */
+    write_text(
+        gltf,
+        "{\"asset\": {\"version\": \"2.0\"}, \"scene\": 0, \"scenes\": [{\"nodes\": "
+        "[0]}],\n \"nodes\": [{\"mesh\": 0}],\n \"meshes\": [{\"primitives\": "
+        "[{\"attributes\": {\"POSITION\": 0}, \"indices\": 1}]}],\n"
+        " \"accessors\": [{\"bufferView\": 0, \"componentType\": 5126, \"count\": 4, "
+        "\"type\": \"VEC3\", \"min\": [0, 0, -2], \"max\": [0, 1, 2]},\n"
+        "   {\"bufferView\": 1, \"componentType\": 5123, \"count\": 6, \"type\": "
+        "\"SCALAR\"}],\n \"bufferViews\": [{\"buffer\": 0, \"byteOffset\": 0, "
+        "\"byteLength\": 48},\n   {\"buffer\": 0, \"byteOffset\": 48, \"byteLength\": "
+        "12}],\n \"buffers\": [{\"byteLength\": 60, \"uri\": "
+        "\"data:application/octet-stream;base64,"
+        "AAAAAAAAAAAAAADAAAAAAAAAAAAAAABAAAAAAAAAgD8AAABAAAAAAAAAgD8AAADAAAABAAIAAAACAAMA\"}]}"
+        "\n");
+    frame_bounds(gltf, w, &d, b);
+    CHECK(d.z < 0.0f && fabsf(d.z) > 2.0f * fabsf(d.x), "glTF seen along (%g, %g, %g), not -z",
+          (double)d.x, (double)d.y, (double)d.z);
+    remove(gltf);
+}
+
 int main(void) {
     const char *tmp = getenv("TMPDIR");
     snprintf(dir, sizeof dir, "%s/trac0r-test-model-XXXXXX", tmp && *tmp ? tmp : "/tmp");
@@ -350,6 +439,7 @@ int main(void) {
     test_gltf_spot();
     test_duck();
     test_texture_fallback();
+    test_framing();
     rmdir(dir);
     return check_finish("test_model");
 }

@@ -4,9 +4,11 @@
 #include <stdarg.h>
 #include <stdio.h>
 #include <string.h>
+#include <strings.h>
 
 #include "scene/scene_internal.h"
 #include "trac0r/camera.h"
+#include "trac0r/scene_file.h"
 
 int tr_scene_path_is_model(const char *path) {
     size_t n = strlen(path);
@@ -164,6 +166,43 @@ static int model_add_light(tr_scene *s, const tr_import_light *l, float radius, 
     return 1;
 }
 
+/* The framing camera's direction: glTF's front faces +z (the format says so), so a glTF
+ * model is seen from +z; any other format has no convention, so the model is seen across
+ * its larger silhouette, along z or along x (a long animal from its side, not from its
+ * tail). A little from the right and above, so that the view has depth. */
+static tr_vec3 model_frame_dir(const char *path, tr_aabb b) {
+    const char *dot = strrchr(path, '.');
+    const int gltf = dot && (strcasecmp(dot, ".gltf") == 0 || strcasecmp(dot, ".glb") == 0);
+    const tr_vec3 e = v3_sub(b.max, b.min);
+    if (!gltf && e.z * e.y > 1.25f * e.x * e.y) {
+        return v3_normalize(v3(-1.0f, -0.35f, 0.45f));
+    }
+    return v3_normalize(v3(-0.45f, -0.35f, -1.0f));
+}
+
+/* The distance along -dir from the box's centre at which every corner of the box lies
+ * inside the view (vertical field of view vfov degrees, aspect w/h) with a 5 % margin:
+ * the model fills the frame, its longer side to the frame's edge. */
+static float model_frame_distance(tr_aabb b, tr_vec3 dir, tr_vec3 up, float vfov, float aspect) {
+    const tr_vec3 right = v3_normalize(v3_cross(dir, up));
+    const tr_vec3 u = v3_cross(right, dir);
+    const float tv = tanf(0.5f * vfov * 0.0174532925f) * 0.95f, th = tv * aspect;
+    const tr_vec3 c = v3_scale(v3_add(b.min, b.max), 0.5f);
+    float d = 0.0f;
+    for (int k = 0; k < 8; ++k) {
+        const tr_vec3 p = v3((k & 1) ? b.max.x : b.min.x, (k & 2) ? b.max.y : b.min.y,
+                             (k & 4) ? b.max.z : b.min.z);
+        const tr_vec3 o = v3_sub(p, c);
+        const float f = v3_dot(o, dir);
+        /* The corner is in view when |o.right| <= th (d + f) and |o.u| <= tv (d + f); the
+         * camera stays outside the box (d + f > 0 for every corner). */
+        d = fmaxf(d, fabsf(v3_dot(o, right)) / th - f);
+        d = fmaxf(d, fabsf(v3_dot(o, u)) / tv - f);
+        d = fmaxf(d, -f * 1.05f);
+    }
+    return d;
+}
+
 int tr_scene_model_load(tr_scene *s, const char *path, const tr_model_options *opt,
                         tr_scene_file *info, tr_error *err) {
     tr_scene_file local;
@@ -198,8 +237,11 @@ int tr_scene_model_load(tr_scene *s, const char *path, const tr_model_options *o
     info->mesh_triangles = st.triangles;
     info->degenerate_dropped = st.degenerate;
     info->bounds = tr_scene_bounds(s); /* the model's, before any light's shape */
-    info->width = opt->width ? opt->width : 800;
-    info->height = opt->height ? opt->height : 600;
+    /* The size the render will have (one side alone keeps 4:3), so that the framing
+     * camera fits the model to it. */
+    info->width = opt->width;
+    info->height = opt->height;
+    tr_size_fill(&info->width, &info->height, 800, 600);
     if (ex.has_camera && !frame && !opt->height && ex.cam_aspect > 0.1f && ex.cam_aspect < 10.0f) {
         /* The file camera's aspect ratio, at the width asked for. */
         info->height = (uint32_t)fmaxf(1.0f, roundf((float)info->width / ex.cam_aspect));
@@ -284,9 +326,9 @@ int tr_scene_model_load(tr_scene *s, const char *path, const tr_model_options *o
                  ex.cam_name);
         model_warn(info, msg);
     }
-    /* In front (+z), a little to the right and above, the whole bounding sphere in view. */
-    dir = v3_normalize(v3(-0.45f, -0.35f, -1.0f));
-    float dist = radius / sinf(0.5f * vfov * 0.0174532925f) * 1.05f;
+    /* In front, a little to the right and above, the whole box in view. */
+    dir = model_frame_dir(path, b);
+    float dist = model_frame_distance(b, dir, up, vfov, (float)info->width / (float)info->height);
     pos = v3_sub(centre, v3_scale(dir, dist));
     far_d = dist + 4.0f * radius;
     if (tr_camera_make(&s->camera, pos, dir, up, vfov, near_d, far_d, info->width, info->height,
