@@ -18,7 +18,12 @@
  *    camera the model's pixels (the albedo pass) are centred in the image.
  * 3. A texture the model names by another machine's path and in other case
  *    ("D:\\work\\TEX\\Checker.PNG" for textures/checker.png beside it) is found by its
- *    file name, with a warning; one that exists nowhere is dropped. */
+ *    file name, with a warning; one that exists nowhere is dropped.
+ * 4. The framing camera: a box 4 long in z is seen from its side as an OBJ (the larger
+ *    silhouette), from +z as glTF (the format's front), and fills 80 % of the image's
+ *    width or height without touching its border, the height following 4:3 when only
+ *    the width is given.
+ * 5. A file's camera or point light inside a closed cube is reported, one warning each. */
 #define _POSIX_C_SOURCE 200809L
 #include "check.h"
 #include "scene_util.h"
@@ -427,6 +432,60 @@ static void test_framing(void) {
     remove(gltf);
 }
 
+/* A closed cube (+-1, outward winding) with a camera and a point light at the given
+ * translations. */
+static void write_cube(const char *path, const char *cam, const char *lamp) {
+    char text[4096];
+    snprintf(
+        text, sizeof text,
+        "{\"asset\": {\"version\": \"2.0\"}, \"extensionsUsed\": [\"KHR_lights_punctual\"],\n"
+        " \"extensions\": {\"KHR_lights_punctual\": {\"lights\": [{\"type\": \"point\", "
+        "\"color\": [1, 1, 1], \"intensity\": 5}]}},\n"
+        " \"scene\": 0, \"scenes\": [{\"nodes\": [0, 1, 2]}],\n"
+        " \"nodes\": [{\"mesh\": 0}, {\"name\": \"eye\", \"camera\": 0, \"translation\": [%s]},\n"
+        "   {\"name\": \"lamp\", \"translation\": [%s], \"extensions\": "
+        "{\"KHR_lights_punctual\": {\"light\": 0}}}],\n"
+        " \"cameras\": [{\"type\": \"perspective\", \"perspective\": {\"yfov\": 0.7, "
+        "\"znear\": 0.01, \"zfar\": 100}}],\n"
+        " \"meshes\": [{\"primitives\": [{\"attributes\": {\"POSITION\": 0}, \"indices\": 1}]}],\n"
+        " \"accessors\": [{\"bufferView\": 0, \"componentType\": 5126, \"count\": 8, \"type\": "
+        "\"VEC3\", \"min\": [-1, -1, -1], \"max\": [1, 1, 1]},\n"
+        "   {\"bufferView\": 1, \"componentType\": 5123, \"count\": 36, \"type\": \"SCALAR\"}],\n"
+        " \"bufferViews\": [{\"buffer\": 0, \"byteOffset\": 0, \"byteLength\": 96},\n"
+        "   {\"buffer\": 0, \"byteOffset\": 96, \"byteLength\": 72}],\n"
+        " \"buffers\": [{\"byteLength\": 168, \"uri\": \"data:application/octet-stream;base64,"
+        "AACAvwAAgL8AAIC/AACAvwAAgL8AAIA/AACAvwAAgD8AAIC/AACAvwAAgD8AAIA/AACAPwAAgL8AAIC/"
+        "AACAPwAAgL8AAIA/AACAPwAAgD8AAIC/AACAPwAAgD8AAIA/AAADAAIAAAABAAMABAAGAAcABAAHAAUA"
+        "AAAEAAUAAAAFAAEAAgAHAAYAAgADAAcAAAAGAAQAAAACAAYAAQAFAAcAAQAHAAMA\"}]}\n",
+        cam, lamp);
+    write_text(path, text);
+}
+
+static uint32_t cube_warnings(const char *path, const char *cam, const char *lamp) {
+    write_cube(path, cam, lamp);
+    tr_error err;
+    tr_scene *s = tr_scene_create(&err);
+    tr_scene_file info;
+    const tr_model_options opt = {0, 1.0f, 0, 0, NULL};
+    CHECK(s && tr_scene_model_load(s, path, &opt, &info, &err) == TR_OK, "%s", err.msg);
+    tr_scene_destroy(s);
+    remove(path);
+    return info.warning_count;
+}
+
+/* A file's camera and lamp inside the model's closed geometry are each reported: the same
+ * cube gets two warnings more with both inside than with both outside, one with either. */
+static void test_enclosed(void) {
+    char path[700];
+    snprintf(path, sizeof path, "%s/cube.gltf", dir);
+    const uint32_t out = cube_warnings(path, "0, 0, 5", "0, 3, 0");
+    const uint32_t both = cube_warnings(path, "0.1, 0.2, 0.5", "0.2, 0.3, -0.4");
+    const uint32_t cam = cube_warnings(path, "0.1, 0.2, 0.5", "0, 3, 0");
+    const uint32_t lamp = cube_warnings(path, "0, 0, 5", "0.2, 0.3, -0.4");
+    CHECK(both == out + 2 && cam == out + 1 && lamp == out + 1,
+          "warnings: outside %u, both inside %u, camera %u, lamp %u", out, both, cam, lamp);
+}
+
 int main(void) {
     const char *tmp = getenv("TMPDIR");
     snprintf(dir, sizeof dir, "%s/trac0r-test-model-XXXXXX", tmp && *tmp ? tmp : "/tmp");
@@ -440,6 +499,7 @@ int main(void) {
     test_duck();
     test_texture_fallback();
     test_framing();
+    test_enclosed();
     rmdir(dir);
     return check_finish("test_model");
 }

@@ -166,6 +166,78 @@ static int model_add_light(tr_scene *s, const tr_import_light *l, float radius, 
     return 1;
 }
 
+/* Whether point p lies inside closed geometry among the first `count` triangles: every one
+ * of 32 directions (a Fibonacci sphere) meets a triangle, and at least 3 in 4 of the
+ * nearest hits see the triangle from behind (against its winding's normal). A camera or a
+ * lamp there sees or lights nothing but the inside of a mesh (Assimp's spider.fbx: its
+ * camera and lamp inside a box 15,000 units across). Brute force, Moller-Trumbore; the
+ * caller bounds the work. */
+static int model_point_enclosed(const tr_scene *s, uint32_t count, tr_vec3 p) {
+    enum { DIRS = 32 };
+    int behind = 0;
+    for (int k = 0; k < DIRS; ++k) {
+        const float z = 1.0f - (2.0f * (float)k + 1.0f) / (float)DIRS;
+        const float r = sqrtf(fmaxf(0.0f, 1.0f - z * z)), phi = 2.39996323f * (float)k;
+        const tr_vec3 d = v3(r * cosf(phi), r * sinf(phi), z);
+        float best = INFINITY;
+        int back = 0;
+        for (uint32_t i = 0; i < count; ++i) {
+            const tr_triangle *t = &s->triangles[i];
+            const tr_vec3 e1 = v3_sub(t->v1, t->v0), e2 = v3_sub(t->v2, t->v0);
+            const tr_vec3 q = v3_cross(d, e2);
+            const float det = v3_dot(e1, q);
+            if (fabsf(det) < 1e-20f) {
+                continue;
+            }
+            const float inv = 1.0f / det;
+            const tr_vec3 o = v3_sub(p, t->v0);
+            const float u = v3_dot(o, q) * inv;
+            if (u < 0.0f || u > 1.0f) {
+                continue;
+            }
+            const tr_vec3 w = v3_cross(o, e1);
+            const float v = v3_dot(d, w) * inv, dist = v3_dot(e2, w) * inv;
+            if (v < 0.0f || u + v > 1.0f || !(dist > 0.0f) || dist >= best) {
+                continue;
+            }
+            best = dist;
+            back = v3_dot(t->normal, d) > 0.0f;
+        }
+        if (best == INFINITY) {
+            return 0; /* this direction leaves the model */
+        }
+        behind += back;
+    }
+    return 4 * behind >= 3 * DIRS;
+}
+
+/* Warns about the file's camera and point or spot lights that sit inside the model's
+ * geometry. Skipped for models above 2 M triangles (32 rays by brute force each). */
+static void model_check_enclosed(const tr_scene *s, uint32_t count, const tr_import_extras *ex,
+                                 int camera, tr_scene_file *info) {
+    if (count > 2000000u) {
+        return;
+    }
+    char msg[256];
+    if (camera && model_point_enclosed(s, count, ex->cam_pos)) {
+        snprintf(msg, sizeof msg,
+                 "camera '%.64s' at (%g, %g, %g) is inside the model's geometry: it may see "
+                 "nothing but the inside of a mesh (--camera frame frames the model instead)",
+                 ex->cam_name, (double)ex->cam_pos.x, (double)ex->cam_pos.y, (double)ex->cam_pos.z);
+        model_warn(info, msg);
+    }
+    for (uint32_t i = 0; i < ex->light_count && i < 16; ++i) {
+        const tr_import_light *l = &ex->light[i];
+        if ((l->type == AI_POINT || l->type == AI_SPOT) && model_point_enclosed(s, count, l->pos)) {
+            snprintf(msg, sizeof msg,
+                     "light '%.64s' at (%g, %g, %g) is inside the model's geometry: its light "
+                     "may not get out",
+                     l->name, (double)l->pos.x, (double)l->pos.y, (double)l->pos.z);
+            model_warn(info, msg);
+        }
+    }
+}
+
 /* The framing camera's direction: glTF's front faces +z (the format says so), so a glTF
  * model is seen from +z; any other format has no convention, so the model is seen across
  * its larger silhouette, along z or along x (a long animal from its side, not from its
@@ -260,6 +332,7 @@ int tr_scene_model_load(tr_scene *s, const char *path, const tr_model_options *o
     if (!(radius > 0.0f) || !isfinite(radius)) {
         radius = 1.0f;
     }
+    model_check_enclosed(s, s->triangle_count, &ex, ex.has_camera && !frame, info);
     /* The file's lights, or the default environment. */
     int lit = 0, have_sun = 0;
     for (uint32_t i = 0; i < ex.light_count; ++i) {
