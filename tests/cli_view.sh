@@ -367,6 +367,24 @@ awk -v t="$(state rebuild_ms)" 'BEGIN { exit !(t > 0) }' || fail "--animate: reb
 cmp -s anim1.ppm anim2.ppm && fail "--animate: the window did not change"
 quit_viewer
 
+# A 640x360 window: the help (H) lies wholly inside it, and the debug view (B) covers at
+# most a third of it without overlapping the help.
+start_viewer --width 640 --height 360 --max-spp 4
+xdotool key h key b
+wait_for 10 '[ "$(state help)" = 1 ] && [ "$(state overlay)" = 1 ] &&
+    [ "$(state help_rect | cut -d" " -f3)" -gt 0 ] &&
+    [ "$(state overlay_rect | cut -d" " -f3)" -gt 0 ]' || fail "H and B: no panels drawn"
+awk -v h="$(state help_rect)" -v o="$(state overlay_rect)" 'BEGIN {
+    split(h, a, " "); split(o, b, " ")
+    inside = a[1] >= 0 && a[2] >= 0 && a[1] + a[3] <= 640 && a[2] + a[4] <= 360
+    third = b[3] * b[4] <= 640 * 360 / 3
+    apart = b[1] + b[3] <= a[1] || b[2] + b[4] <= a[2]
+    exit !(inside && third && apart) }' ||
+    fail "640x360: help at $(state help_rect), debug view at $(state overlay_rect)"
+echo "640x360: help at $(state help_rect), debug view at $(state overlay_rect)"
+[ -n "${TRAC0R_KEEP_DUMP:-}" ] && dump "$TRAC0R_KEEP_DUMP"
+quit_viewer
+
 # --device opencl (builds and machines with an OpenCL device; tests/cli_opencl.sh checks
 # that PoCL is there): the window renders on the device, a stride change clears the
 # device's film, and F12 then saves what `trac0r render --device opencl --spp 4` computes.

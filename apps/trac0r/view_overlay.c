@@ -61,7 +61,7 @@ int view_font_find(const char *override, char *path, size_t n, tr_error *err) {
     return TR_OK;
 }
 
-void view_draw_text(SDL_Renderer *ren, TTF_Font *font, int x, int y, const char *text) {
+SDL_Rect view_draw_text(SDL_Renderer *ren, TTF_Font *font, int x, int y, const char *text) {
     enum { MAX_LINES = 48 };
     char buf[4096];
     snprintf(buf, sizeof buf, "%s", text);
@@ -79,6 +79,13 @@ void view_draw_text(SDL_Renderer *ren, TTF_Font *font, int x, int y, const char 
     }
     const int skip = TTF_FontLineSkip(font);
     SDL_Rect panel = {x, y, width + 12, count * skip + 8};
+    int ww = 0, wh = 0;
+    if ((x < 0 || y < 0) && SDL_GetRendererOutputSize(ren, &ww, &wh) == 0) {
+        panel.x = x < 0 ? (ww > panel.w ? ww - panel.w : 0) : x;
+        panel.y = y < 0 ? (wh > panel.h ? wh - panel.h : 0) : y;
+    }
+    x = panel.x;
+    y = panel.y;
     SDL_SetRenderDrawBlendMode(ren, SDL_BLENDMODE_BLEND);
     SDL_SetRenderDrawColor(ren, 0, 0, 0, 170);
     SDL_RenderFillRect(ren, &panel);
@@ -96,6 +103,7 @@ void view_draw_text(SDL_Renderer *ren, TTF_Font *font, int x, int y, const char 
         }
         SDL_FreeSurface(surf);
     }
+    return panel;
 }
 
 static void draw_box(SDL_Renderer *ren, const tr_camera *cam, const tr_aabb *box) {

@@ -13,8 +13,10 @@
  * Mono as fontconfig finds it. Fails with a message saying what to install or pass. */
 int view_font_find(const char *override, char *path, size_t n, tr_error *err);
 
-/* Draws newline-separated text at (x, y) on a translucent dark panel. */
-void view_draw_text(SDL_Renderer *ren, TTF_Font *font, int x, int y, const char *text);
+/* Draws newline-separated text at (x, y) on a translucent dark panel and returns the
+ * panel; a negative x or y puts it against the right or bottom edge (never past the left
+ * or top one). */
+SDL_Rect view_draw_text(SDL_Renderer *ren, TTF_Font *font, int x, int y, const char *text);
 
 /* Draws the 12 edges of each box, projected through cam and clipped. */
 void view_draw_boxes(SDL_Renderer *ren, const tr_camera *cam, const tr_aabb *boxes, size_t n,

@@ -26,6 +26,7 @@ static void on_sigusr1(int sig) {
 
 typedef struct view_state {
     int overlay, help, bvh, timings, mouselook;
+    SDL_Rect overlay_rect, help_rect; /* where they were last drawn */
     uint32_t bvh_depth;
     int stride;
     int recon; /* tr_recon_method */
@@ -55,14 +56,17 @@ static int write_state(const char *path, const view_state *s, const tr_fly_camer
         "pos %.6f %.6f %.6f\ndir %.6f %.6f %.6f\nup %.6f %.6f %.6f\nspeed %.6f\n"
         "overlay %d\nhelp %d\nbvh %d\nbvh_depth %u\ntimings %d\nmouselook %d\nstride %d\n"
         "exposure %.2f\nfps %.3f\ndumps %llu\nshots %llu\nupdates %llu\nrebuild_ms %.3f\n"
-        "moving %d\nscale %.3f\nframe_spp %u\ncameras %llu\nmirrored %d\nrecon %s\n",
+        "moving %d\nscale %.3f\nframe_spp %u\ncameras %llu\nmirrored %d\nrecon %s\n"
+        "overlay_rect %d %d %d %d\nhelp_rect %d %d %d %d\n",
         sf->spp, (unsigned long long)sf->gen, (unsigned long long)sf->view_gen,
         (unsigned long long)sf->frames, (unsigned long long)sf->cancelled, w, h, f->pos.x, f->pos.y,
         f->pos.z, f->dir.x, f->dir.y, f->dir.z, f->up.x, f->up.y, f->up.z, f->speed, s->overlay,
         s->help, s->bvh, s->bvh_depth, s->timings, s->mouselook, s->stride, s->exposure, fps,
         (unsigned long long)s->dumps, (unsigned long long)s->shots, (unsigned long long)s->updates,
         s->rebuild_ms, sf->moving, (double)sf->scale, sf->frame_spp, (unsigned long long)s->cameras,
-        f->mirrored, tr_recon_name(s->recon));
+        f->mirrored, tr_recon_name(s->recon), s->overlay_rect.x, s->overlay_rect.y,
+        s->overlay_rect.w, s->overlay_rect.h, s->help_rect.x, s->help_rect.y, s->help_rect.w,
+        s->help_rect.h);
     return tr_outfile_commit(out, err) == TR_OK ? 0 : -1;
 }
 
@@ -107,23 +111,23 @@ static void next_file_path(const char *dir, const char *stem, const char *ext, c
 }
 
 static const char help_text[] = "trac0r view - keys\n"
-                                "W/S        forward / back\n"
-                                "A/D        left / right\n"
-                                "Space/LCtrl up / down\n"
-                                "Q/E        roll\n"
-                                "right mouse toggle mouse-look\n"
-                                "wheel      movement speed\n"
-                                "R          reset the camera\n"
-                                "C          camera as scene JSON\n"
-                                "M          reconstruction method\n"
-                                "+/-        exposure\n"
-                                "1/2/3      preview stride 1/2/4\n"
-                                "B          debug view\n"
-                                "V  [ ]     BVH boxes, depth\n"
-                                "N          timings on stdout\n"
-                                "F12        screenshot PNG\n"
-                                "H          this help\n"
-                                "Esc        quit";
+                                "W/S          forward / back\n"
+                                "A/D          left / right\n"
+                                "Space/LCtrl  up / down\n"
+                                "Q/E          roll\n"
+                                "right mouse  toggle mouse-look\n"
+                                "wheel        movement speed\n"
+                                "R            reset the camera\n"
+                                "C            camera as scene JSON\n"
+                                "M            reconstruction method\n"
+                                "+/-          exposure\n"
+                                "1/2/3        preview stride 1/2/4\n"
+                                "B            debug view\n"
+                                "V  [ ]       BVH boxes, depth\n"
+                                "N            timings on stdout\n"
+                                "F12          screenshot PNG\n"
+                                "H            this help\n"
+                                "Esc          quit";
 
 /* The render resolution for a window of w x h output pixels: the window's own, scaled
  * down (aspect kept) where it exceeds the film's limits; the texture is stretched to the
@@ -223,7 +227,8 @@ static int open_window(view_window *vw) {
         return CLI_FAILURE;
     }
     vw->ttf = 1;
-    vw->font = TTF_OpenFont(o->font_path, 14);
+    /* A smaller font in a small window, so that the help and the debug view fit it. */
+    vw->font = TTF_OpenFont(o->font_path, o->c.height < 540 ? 10 : 14);
     if (!vw->font) {
         fprintf(stderr, "trac0r view: cannot load the font %s: %s\n", o->font_path, TTF_GetError());
         return CLI_USAGE;
@@ -591,7 +596,21 @@ static void draw_overlay(view_window *vw, const char *accel, uint32_t bvh_depth)
         snprintf(line, sizeof line, " %u of %u", st->bvh_depth, bvh_depth);
         strncat(text, line, sizeof text - strlen(text) - 1);
     }
-    view_draw_text(vw->ren, vw->font, 0, 0, text);
+    if (vw->h < 540) {
+        /* A small window shows the timings alone (the first five lines). */
+        char *end = text;
+        for (int i = 0; i < 5 && end; ++i) {
+            end = strchr(end + (i > 0), '\n');
+        }
+        if (end) {
+            *end = '\0';
+        }
+    }
+    const SDL_Rect r = view_draw_text(vw->ren, vw->font, 0, 0, text);
+    if (memcmp(&r, &vw->st.overlay_rect, sizeof r) != 0) {
+        vw->st.overlay_rect = r;
+        vw->state_dirty = 1;
+    }
 }
 
 /* The frame, the wireframes, the overlay and the help; a window dump if asked. */
@@ -625,8 +644,11 @@ static void draw(view_window *vw) {
     }
     if (vw->st.help) {
         /* Bottom right, clear of the debug text in the top left. */
-        const int hx = (int)vw->w - 290, hy = (int)vw->h - 16 * TTF_FontLineSkip(vw->font) - 20;
-        view_draw_text(ren, vw->font, hx > 0 ? hx : 0, hy > 0 ? hy : 0, help_text);
+        const SDL_Rect r = view_draw_text(ren, vw->font, -1, -1, help_text);
+        if (memcmp(&r, &vw->st.help_rect, sizeof r) != 0) {
+            vw->st.help_rect = r;
+            vw->state_dirty = 1;
+        }
     }
     if (dump_requested && vw->o->dump_file) {
         tr_error err;
