@@ -52,8 +52,8 @@ if [ "$PART" = ranks ]; then
 
 fi
 
-# SIGTERM under MPI: rank 0 writes the finished tiles and the checkpoint; resuming
-# with three ranks finishes the rest.
+# SIGTERM under MPI (to mpirun, or to one worker rank): rank 0 writes the finished tiles
+# and the checkpoint; resuming with three ranks finishes the rest.
 if [ "$PART" = resume ]; then
     L="render --width 200 --height 140 --spp 400 --threads 1 --passes variance"
     "$BIN" $L --threads 0 --out long.pfm 2>/dev/null
@@ -68,6 +68,25 @@ if [ "$PART" = resume ]; then
     wait $pid
     grep -q "tiles done" err.txt || fail "SIGTERM under MPI: not stopped early: $(cat err.txt)"
     [ -s stopped.pfm ] || fail "SIGTERM under MPI: no image"
+    # SIGTERM to a worker rank alone stops the whole job as one to mpirun does: every rank
+    # exits with 128 + 15, and rank 0 writes the image of the tiles done.
+    $MPIRUN -np 2 "$BIN" $L --out wstop.pfm --checkpoint wck --checkpoint-interval 0 2>werr.txt &
+    pid=$!
+    n=0
+    while [ ! -s wck ] && [ $n -lt 1000 ]; do
+        sleep 0.02
+        n=$((n + 1))
+    done
+    worker=
+    for p in $(pgrep -f -- "--out wstop.pfm"); do
+        tr '\0' '\n' <"/proc/$p/environ" 2>/dev/null | grep -qx 'OMPI_COMM_WORLD_RANK=1' && worker=$p
+    done
+    [ -n "$worker" ] || fail "SIGTERM to a worker: rank 1's process not found"
+    kill -TERM "$worker"
+    wait $pid
+    rc=$?
+    [ $rc -eq 143 ] || fail "SIGTERM to a worker: exit $rc, expected 143: $(cat werr.txt)"
+    [ -s wstop.pfm ] || fail "SIGTERM to a worker: no image of the tiles done"
     $MPIRUN -np 3 "$BIN" $L --resume ck --out resumed.pfm 2>err.txt || fail "MPI resume: $(cat err.txt)"
     cmp -s long.pfm resumed.pfm || fail "MPI render resumed with 3 ranks differs from a single process"
     cmp -s long.variance.pfm resumed.variance.pfm ||

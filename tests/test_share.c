@@ -5,7 +5,10 @@
  *    tr_session_run, every tile was rendered by some rank, progress reached every tile.
  * 2. A transport that fails a worker's tile reports: the worker leaves with an error
  *    message, rank 0 fails naming that rank, the other worker ends well (no hang).
- * 3. Bad arguments are refused. */
+ * 3. A worker whose stop callback fires (a signal to that process alone) after its first
+ *    tile: rank 0 stops the hand-out, drops its own tile, ends well with the tiles done
+ *    and learns which rank stopped and the callback's value; no rank hangs.
+ * 4. Bad arguments are refused. */
 #include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
@@ -91,7 +94,13 @@ typedef struct job {
     int rc;
     tr_error err;
     uint32_t progress_done;
+    uint32_t stop_after; /* > 0: the stop callback returns 15 after this many tiles */
 } job;
+
+static int on_stop(void *user) {
+    const job *j = user;
+    return j->stop_after > 0 && j->st.tiles >= j->stop_after ? 15 : 0;
+}
 
 static void on_progress(void *user, uint32_t done, uint32_t total) {
     (void)total;
@@ -101,7 +110,7 @@ static void on_progress(void *user, uint32_t done, uint32_t total) {
 static void *run_rank(void *arg) {
     job *j = arg;
     const tr_transport t = {j->ctx.rank, RANKS, q_send, q_recv, &j->ctx};
-    const tr_share_desc d = {.progress = on_progress, .user = j};
+    const tr_share_desc d = {.progress = on_progress, .stop = on_stop, .user = j};
     j->rc = tr_session_share(j->s, &t, &d, &j->st, &j->err);
     return NULL;
 }
@@ -127,10 +136,11 @@ static void close_job(job *j) {
     tr_scene_destroy(j->scene);
 }
 
-static void run_all(post *p, job jobs[RANKS]) {
+static void run_all(post *p, job jobs[RANKS], int stopping_rank) {
     pthread_t th[RANKS];
     for (int r = 0; r < RANKS; ++r) {
         open_job(&jobs[r], p, r);
+        jobs[r].stop_after = r == stopping_rank ? 1 : 0;
     }
     for (int r = 0; r < RANKS; ++r) {
         pthread_create(&th[r], NULL, run_rank, &jobs[r]);
@@ -162,7 +172,7 @@ static void free_post(post *p) {
 static void test_shared_equals_single(void) {
     post *p = new_post(-1);
     job jobs[RANKS];
-    run_all(p, jobs);
+    run_all(p, jobs, -1);
     uint32_t tiles = 0;
     for (int r = 0; r < RANKS; ++r) {
         CHECK(jobs[r].rc == TR_OK, "rank %d: %s", r, jobs[r].err.msg);
@@ -194,12 +204,30 @@ static void test_shared_equals_single(void) {
 static void test_broken_worker(void) {
     post *p = new_post(2);
     job jobs[RANKS];
-    run_all(p, jobs);
+    run_all(p, jobs, -1);
     CHECK(jobs[0].rc == TR_ERR && jobs[0].err.code == TR_STATUS_DEVICE &&
               jobs[0].st.failed_rank == 2,
           "rank 0: rc %d, failed rank %d, %s", jobs[0].rc, jobs[0].st.failed_rank, jobs[0].err.msg);
     CHECK(jobs[2].rc == TR_ERR, "the broken rank succeeded");
     CHECK(jobs[1].rc == TR_OK, "rank 1: %s", jobs[1].err.msg);
+    for (int r = 0; r < RANKS; ++r) {
+        close_job(&jobs[r]);
+    }
+    free_post(p);
+}
+
+static void test_stopped_worker(void) {
+    post *p = new_post(-1);
+    job jobs[RANKS];
+    run_all(p, jobs, 2);
+    const uint32_t count = tr_session_tile_count(jobs[0].s);
+    for (int r = 0; r < RANKS; ++r) {
+        CHECK(jobs[r].rc == TR_OK, "rank %d: %s", r, jobs[r].err.msg);
+    }
+    CHECK(jobs[0].st.stop_rank == 2 && jobs[0].st.stop_code == 15 && jobs[0].st.failed_rank == -1,
+          "rank 0: stop rank %d, code %d", jobs[0].st.stop_rank, jobs[0].st.stop_code);
+    CHECK(jobs[0].st.finished >= 1 && jobs[0].st.finished < count, "%u of %u tiles finished",
+          jobs[0].st.finished, count);
     for (int r = 0; r < RANKS; ++r) {
         close_job(&jobs[r]);
     }
@@ -230,6 +258,7 @@ static void test_bad_arguments(void) {
 int main(void) {
     test_shared_equals_single();
     test_broken_worker();
+    test_stopped_worker();
     test_bad_arguments();
     return check_finish("test_share");
 }

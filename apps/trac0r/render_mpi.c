@@ -11,7 +11,9 @@
  * rank's stderr goes to a temporary file until every rank has set up, then the lowest
  * failing rank alone prints its message and every rank exits with its status. An error
  * while rendering reaches rank 0, which prints it once, and all ranks exit with status
- * 1. Rank 0 alone writes files and prints progress. */
+ * 1. A signal to any rank stops the job: rank 0 writes the tiles done, marked stopped,
+ * and every rank exits with 128 + the signal. Rank 0 alone writes files and prints
+ * progress. */
 #define _POSIX_C_SOURCE 200809L
 #include <limits.h>
 #include <math.h>
@@ -134,7 +136,7 @@ static void tiles_progress(void *user, uint32_t done, uint32_t total) {
 
 static int share_stop(void *user) {
     (void)user;
-    return render_stop_signal() != 0;
+    return render_stop_signal(); /* the signal's number reaches rank 0 */
 }
 
 /* Runs the setup on every rank with stderr captured; returns the status of the lowest
@@ -309,7 +311,9 @@ int render_mpi_main(int argc, char **argv) {
         fprintf(stderr, "trac0r render: %s\n", err.msg);
     }
     if (rank == 0 && rc == CLI_OK) {
-        const int sig = render_stop_signal();
+        /* A signal to rank 0, or to a worker alone: either stops the whole job. */
+        const int own = render_stop_signal();
+        const int sig = own ? own : (st.stop_code > 0 && st.stop_code < 65 ? st.stop_code : 0);
         tr_session_progress prog;
         tr_session_progress_get(s, &prog);
         if (job.checkpoint && tr_session_checkpoint(s, NULL, &err) != TR_OK) {
@@ -320,8 +324,8 @@ int render_mpi_main(int argc, char **argv) {
             /* An interrupted render: the finished tiles have every sample, the others
              * what the checkpoint resumed held. */
             char note[96];
-            snprintf(note, sizeof note, "stopped by signal %d: %u of %u tiles done", sig,
-                     st.finished, tr_session_tile_count(s));
+            snprintf(note, sizeof note, "stopped by signal %d to rank %d: %u of %u tiles done", sig,
+                     own ? 0 : st.stop_rank, st.finished, tr_session_tile_count(s));
             rc = render_write_outputs(&job, s, prog.spp, st.total, st.rays, sig ? note : NULL);
             if (rc == CLI_OK && sig) {
                 rc = 128 + sig;

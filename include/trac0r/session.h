@@ -169,7 +169,9 @@ typedef struct tr_share_desc {
     int checkpoint;             /* rank 0 writes the session's checkpoint (desc.checkpoint) */
     double checkpoint_interval; /* every this many seconds (0: whenever it can) */
     int (*stop)(void *user);    /* asked often: nonzero hands out no more tiles and drops
-                                   the tiles under way (a signal) */
+                                   the tiles under way (a signal); a worker's value
+                                   reaches rank 0 (tr_share_stats.stop_code), whose own
+                                   tile is dropped too */
     /* rank 0: tiles finished of those to do, after each; may be NULL */
     void (*progress)(void *user, uint32_t done, uint32_t total);
     void *user;
@@ -185,6 +187,8 @@ typedef struct tr_share_stats {
     uint32_t finished; /* rank 0: tiles whose pixels the film holds in full (a checkpoint's
                           included) */
     int failed_rank;   /* rank 0: the rank whose failure ended the share (-1: none) */
+    int stop_rank;     /* rank 0: the worker whose stop ended the share (-1: none) */
+    int stop_code;     /* and the nonzero value its tr_share_desc.stop returned */
 } tr_share_stats;
 
 /* Renders the session's tile plan shared between the transport's ranks, each with its

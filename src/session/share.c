@@ -14,7 +14,8 @@
  *   DONE      worker -> rank 0: uint64 tile index, uint64 rays
  *   DATA      worker -> rank 0: uint32 final, uint32 count, then per tile uint32 index and
  *             its pixels (tr_film_pack_rect)
- *   CANCELLED worker -> rank 0: int32 tile index (a stop dropped it)
+ *   CANCELLED worker -> rank 0: int32 tile index (a stop dropped it), int32 the stop's
+ *             value (the signal that stopped the worker)
  *   ERROR     worker -> rank 0: a message, NUL-terminated; the worker has left */
 #include "trac0r/session.h"
 
@@ -46,8 +47,9 @@ typedef struct pending {
     uint32_t n;
 } pending;
 
+/* The stop callback's value: 0, or why to stop (a signal's number). */
 static int stop_asked(const share *sh) {
-    return sh->d->stop && sh->d->stop(sh->d->user) != 0;
+    return sh->d->stop ? sh->d->stop(sh->d->user) : 0;
 }
 
 static int stop_cb(void *user) {
@@ -161,7 +163,8 @@ static int worker(share *sh, tr_error *err) {
                 sh->last_flush = tr_time_now();
             }
         } else if (err->code == TR_STATUS_CANCELLED) {
-            send_int32(sh, 0, TAG_CANCELLED, k);
+            const int32_t why[2] = {k, stop_asked(sh)};
+            sh->t->send(sh->t->user, 0, TAG_CANCELLED, why, sizeof why);
             continue; /* until rank 0 sends -1 */
         }
         if (ok != TR_OK) {
@@ -355,6 +358,14 @@ static int serve(master *m, int block) {
             hand_out(m, src);
         }
     } else if (tag == TAG_CANCELLED) {
+        /* A worker stopped (a signal to that rank alone): the whole job stops, as for
+         * rank 0's own, and rank 0 learns why. */
+        int32_t why[2] = {0, 0};
+        memcpy(why, buf, n < sizeof why ? n : sizeof why);
+        if (sh->st->stop_rank < 0 && why[1] != 0) {
+            sh->st->stop_code = why[1];
+            sh->st->stop_rank = src;
+        }
         --m->outstanding[src];
         m->stopping = 1;
         hand_out(m, src);
@@ -379,8 +390,8 @@ static int serve(master *m, int block) {
  * of rank 0's tile at most, not for all of it. */
 static int between_pieces(void *user) {
     master *m = user;
-    if (stop_asked(m->sh)) {
-        return 1;
+    if (m->stopping || stop_asked(m->sh)) {
+        return 1; /* a stop here or on a worker, or a failure, drops rank 0's tile */
     }
     if (omp_get_thread_num() == 0) {
         const double t0 = tr_time_now();
@@ -489,6 +500,7 @@ int tr_session_share(tr_session *s, const tr_transport *t, const tr_share_desc *
     stats = stats ? stats : &local;
     memset(stats, 0, sizeof *stats);
     stats->failed_rank = -1;
+    stats->stop_rank = -1;
     if (!s || !t || !t->send || !t->recv || t->size < 1 || t->rank < 0 || t->rank >= t->size) {
         return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
                             "share: needs a session and a transport with send, recv and a rank "
