@@ -87,6 +87,22 @@ if [ "$PART" = resume ]; then
     rc=$?
     [ $rc -eq 143 ] || fail "SIGTERM to a worker: exit $rc, expected 143: $(cat werr.txt)"
     [ -s wstop.pfm ] || fail "SIGTERM to a worker: no image of the tiles done"
+    # A worker that dies (SIGKILL) ends the job without an image.
+    $MPIRUN -np 2 "$BIN" $L --out wkill.pfm --checkpoint kck --checkpoint-interval 0 2>werr.txt &
+    pid=$!
+    n=0
+    while [ ! -s kck ] && [ $n -lt 1000 ]; do
+        sleep 0.02
+        n=$((n + 1))
+    done
+    for p in $(pgrep -f -- "--out wkill.pfm"); do
+        tr '\0' '\n' <"/proc/$p/environ" 2>/dev/null | grep -qx 'OMPI_COMM_WORLD_RANK=1' &&
+            kill -KILL "$p"
+    done
+    wait $pid
+    rc=$?
+    [ $rc -ne 0 ] || fail "SIGKILL to a worker: exit 0"
+    [ -e wkill.pfm ] && fail "SIGKILL to a worker: an image was passed off as complete"
     $MPIRUN -np 3 "$BIN" $L --resume ck --out resumed.pfm 2>err.txt || fail "MPI resume: $(cat err.txt)"
     cmp -s long.pfm resumed.pfm || fail "MPI render resumed with 3 ranks differs from a single process"
     cmp -s long.variance.pfm resumed.variance.pfm ||
