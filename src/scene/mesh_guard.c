@@ -1,10 +1,14 @@
 /* mesh_guard.c - Assimp's file access for trac0r: regular files, confined, sizes checked. */
-#define _XOPEN_SOURCE 700 /* realpath */
+#define _GNU_SOURCE /* realpath, pipe2 */
 #include "scene/mesh_guard.h"
 
+#include <assimp/cexport.h>
 #include <assimp/cfileio.h>
 #include <assimp/cimport.h>
+#include <assimp/scene.h>
 #include <errno.h>
+#include <fcntl.h>
+#include <poll.h>
 #include <limits.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -392,76 +396,224 @@ static unsigned trial_cpu_seconds(void) {
     return TR_MESH_IMPORT_CPU_SECONDS;
 }
 
-/* Imports the model once in a forked child under limits on memory and CPU time, and
- * reports how the child ended: Assimp crashes (Debian's 5.2.5 segfaults in its PLY parser)
- * and loops for ever on inputs a fuzzer finds in seconds, and none of that may take the
- * process down with it. The child's result is thrown away: it succeeded or failed cleanly,
- * and the import in this process then does the same. A process that cannot fork imports
- * in-process as before. */
-static int trial_in_child(const char *path, unsigned int flags, tr_error *err) {
+/* What the child sends back through its pipe: one byte, 'I' once the import has succeeded
+ * (before the export, which can fail on its own: Assimp 5.2's scene copy asserts on some
+ * glTF lights) or 'E' where it failed, then this header and `size` bytes: the scene in
+ * Assimp's own binary form ("assbin", written by aiExportSceneToBlob) where code is TR_OK,
+ * else the import's error message. size 0 with TR_OK: the scene could not be exported, so
+ * the parent imports the file itself, as it does where the child ends after the 'I'. */
+typedef struct trial_head {
+    char magic[4]; /* "TRIM" */
+    int32_t code;
+    uint64_t size;
+} trial_head;
+
+static int write_all(int fd, const void *data, size_t n) {
+    const char *p = data;
+    while (n > 0) {
+        const ssize_t w = write(fd, p, n);
+        if (w < 0 && errno == EINTR) {
+            continue;
+        }
+        if (w <= 0) {
+            return -1;
+        }
+        p += w;
+        n -= (size_t)w;
+    }
+    return 0;
+}
+
+/* Whether Assimp 5.2's assbin round trip keeps what trac0r reads of this scene. It loses
+ * the names embedded textures are found by (Collada's .zae, FBX and Half-Life MDL files
+ * name theirs) and area lights' sizes: such scenes are imported again in the parent. */
+static int assbin_keeps(const struct aiScene *ai) {
+    if (ai->mNumTextures > 0) {
+        return 0;
+    }
+    for (unsigned i = 0; i < ai->mNumLights; ++i) {
+        if (ai->mLights[i] && ai->mLights[i]->mType == aiLightSource_AREA) {
+            return 0;
+        }
+    }
+    return 1;
+}
+
+/* The child: imports under its limits and sends the result. */
+static void child_import(int fd, const char *path, unsigned int flags, unsigned cpu) {
+    const struct rlimit cpu_limit = {cpu, cpu + 1};
+    setrlimit(RLIMIT_CPU, &cpu_limit);
+#if !defined(__SANITIZE_ADDRESS__)
+    const struct rlimit as_limit = {TR_MESH_IMPORT_MAX_MEMORY, TR_MESH_IMPORT_MAX_MEMORY};
+    setrlimit(RLIMIT_AS, &as_limit);
+#endif
+    tr_error e;
+    const struct aiScene *ai = import_here(path, flags, &e);
+    trial_head h = {{'T', 'R', 'I', 'M'}, TR_OK, 0};
+    const void *body = NULL;
+    if (write_all(fd, ai ? "I" : "E", 1) != 0) {
+        _exit(3);
+    }
+    if (!ai) {
+        h.code = e.code;
+        h.size = strlen(e.msg);
+        body = e.msg;
+    } else {
+        const int null = open("/dev/null", O_WRONLY);
+        if (null >= 0) {
+            dup2(null, 2); /* an assertion's text in the export is not the user's business */
+        }
+        const struct aiExportDataBlob *b =
+            assbin_keeps(ai) ? aiExportSceneToBlob(ai, "assbin", 0) : NULL;
+        if (b && !b->next) {
+            h.size = b->size;
+            body = b->data;
+        }
+    }
+    const int ok = write_all(fd, &h, sizeof h) == 0 && write_all(fd, body, (size_t)h.size) == 0;
+    _exit(ok ? 0 : 3); /* the scene and the blob are freed with the process */
+}
+
+/* The parent's side: the child's bytes, read as they come (a pipe holds 64 KiB) until it
+ * closes the pipe and ends, within `wall` seconds and TR_MESH_IMPORT_MAX_MEMORY bytes. */
+typedef struct trial_read {
+    unsigned char *data;
+    size_t n, cap;
+    int status, eof, too_big, timed_out;
+} trial_read;
+
+static void read_child(int fd, pid_t pid, double wall, trial_read *r) {
+    struct timespec t0, now;
+    clock_gettime(CLOCK_MONOTONIC, &t0);
+    int exited = 0;
+    while (!(exited && r->eof)) {
+        if (!r->eof) {
+            struct pollfd p = {fd, POLLIN, 0};
+            if (poll(&p, 1, exited ? 0 : 5) > 0) {
+                if (r->n == r->cap) {
+                    const size_t cap = r->cap ? 2 * r->cap : 65536;
+                    unsigned char *d =
+                        cap <= TR_MESH_IMPORT_MAX_MEMORY ? realloc(r->data, cap) : NULL;
+                    if (!d) {
+                        r->too_big = 1;
+                        break;
+                    }
+                    r->data = d;
+                    r->cap = cap;
+                }
+                const ssize_t got = read(fd, r->data + r->n, r->cap - r->n);
+                if (got > 0) {
+                    r->n += (size_t)got;
+                } else if (got == 0 || errno != EINTR) {
+                    r->eof = 1;
+                }
+            } else if (exited) {
+                r->eof = 1; /* nothing left, the writer gone */
+            }
+        }
+        if (!exited) {
+            const pid_t w = waitpid(pid, &r->status, WNOHANG);
+            exited = w == pid || (w < 0 && errno != EINTR);
+        }
+        clock_gettime(CLOCK_MONOTONIC, &now);
+        if (!exited &&
+            (double)(now.tv_sec - t0.tv_sec) + 1e-9 * (double)(now.tv_nsec - t0.tv_nsec) > wall) {
+            r->timed_out = 1;
+            break;
+        }
+    }
+    if (!exited) {
+        kill(pid, SIGKILL);
+        waitpid(pid, &r->status, 0);
+    }
+}
+
+/* Imports the model in a forked child under limits on memory and CPU time: Assimp crashes
+ * (Debian's 5.2.5 segfaults in its PLY parser) and loops for ever on inputs a fuzzer finds
+ * in seconds, and none of that may take this process down. The child sends the imported
+ * scene back in Assimp's binary form, which this process reads into its own scene
+ * (aiImportFileFromMemory: a few milliseconds where the import itself took tens). *ai is
+ * NULL where the child could not export (the file is then imported here). A process that
+ * cannot fork or make a pipe imports in-process as before. */
+static int import_in_child(const char *path, unsigned int flags, const struct aiScene **ai,
+                           tr_error *err) {
+    *ai = NULL;
     const unsigned cpu = trial_cpu_seconds();
+    int fd[2];
+    if (pipe2(fd, O_CLOEXEC) != 0) {
+        return TR_OK;
+    }
     const pid_t pid = fork();
     if (pid < 0) {
+        close(fd[0]);
+        close(fd[1]);
         return TR_OK;
     }
     if (pid == 0) {
-        const struct rlimit cpu_limit = {cpu, cpu + 1};
-        setrlimit(RLIMIT_CPU, &cpu_limit);
-#if !defined(__SANITIZE_ADDRESS__)
-        const struct rlimit as_limit = {TR_MESH_IMPORT_MAX_MEMORY, TR_MESH_IMPORT_MAX_MEMORY};
-        setrlimit(RLIMIT_AS, &as_limit);
-#endif
-        tr_error e;
-        const struct aiScene *ai = import_here(path, flags, &e);
-        (void)ai; /* freed with the child */
-        _exit(0);
+        close(fd[0]);
+        child_import(fd[1], path, flags, cpu);
     }
+    close(fd[1]);
     const double wall = 2.0 * cpu > 10.0 ? 2.0 * cpu : 10.0;
-    struct timespec t0, now, nap = {0, 2000000};
-    clock_gettime(CLOCK_MONOTONIC, &t0);
-    int status = 0;
-    for (;;) {
-        const pid_t r = waitpid(pid, &status, WNOHANG);
-        if (r == pid) {
-            break;
-        }
-        if (r < 0 && errno != EINTR) {
-            return TR_OK; /* reaped elsewhere (a SIGCHLD handler): nothing to tell */
-        }
-        clock_gettime(CLOCK_MONOTONIC, &now);
-        if ((double)(now.tv_sec - t0.tv_sec) + 1e-9 * (double)(now.tv_nsec - t0.tv_nsec) > wall) {
-            kill(pid, SIGKILL);
-            waitpid(pid, &status, 0);
-            return tr_error_set(err, TR_STATUS_LIMIT,
-                                "the importer did not finish '%.200s' within %.0f s", path, wall);
-        }
-        nanosleep(&nap, NULL);
-    }
-    if (WIFSIGNALED(status)) {
-        const int sig = WTERMSIG(status);
+    trial_read r;
+    memset(&r, 0, sizeof r);
+    read_child(fd[0], pid, wall, &r);
+    close(fd[0]);
+    int rc = TR_OK;
+    trial_head h;
+    const int imported = r.n >= 1 && r.data[0] == 'I';
+    const int whole = r.n >= 1 + sizeof h && (memcpy(&h, r.data + 1, sizeof h), 1) &&
+                      memcmp(h.magic, "TRIM", 4) == 0 && h.size == r.n - 1 - sizeof h;
+    if (imported && !whole && !r.timed_out && !r.too_big) {
+        /* The import succeeded and the export ended the child: import here (*ai NULL). */
+    } else if (r.timed_out) {
+        rc = tr_error_set(err, TR_STATUS_LIMIT,
+                          "the importer did not finish '%.200s' within %.0f s", path, wall);
+    } else if (r.too_big) {
+        rc = tr_error_set(err, TR_STATUS_LIMIT, "the imported '%.200s' is larger than %llu bytes",
+                          path, (unsigned long long)TR_MESH_IMPORT_MAX_MEMORY);
+    } else if (WIFSIGNALED(r.status)) {
+        const int sig = WTERMSIG(r.status);
         if (sig == SIGXCPU || sig == SIGKILL) {
-            return tr_error_set(err, TR_STATUS_LIMIT,
-                                "the importer ran past its CPU time limit (%u s, "
-                                "TRAC0R_IMPORT_CPU_SECONDS) on '%.200s'",
-                                cpu, path);
+            rc = tr_error_set(err, TR_STATUS_LIMIT,
+                              "the importer ran past its CPU time limit (%u s, "
+                              "TRAC0R_IMPORT_CPU_SECONDS) on '%.200s'",
+                              cpu, path);
+        } else {
+            rc = tr_error_set(err, TR_STATUS_PARSE, "the importer crashed on '%.200s': signal %d",
+                              path, sig);
         }
-        return tr_error_set(err, TR_STATUS_PARSE, "the importer crashed on '%.200s': signal %d",
-                            path, sig);
+    } else if (!WIFEXITED(r.status) || WEXITSTATUS(r.status) != 0 || !whole) {
+        rc = tr_error_set(err, TR_STATUS_LIMIT,
+                          "the importer failed on '%.200s' (status %d: out of its memory "
+                          "limit?)",
+                          path, WIFEXITED(r.status) ? WEXITSTATUS(r.status) : -1);
+    } else if (h.code != TR_OK) {
+        /* The child's own message: its status is one of the library's (a bad file). */
+        const int code = h.code > 0 && h.code < 64 ? h.code : TR_STATUS_PARSE;
+        rc = tr_error_set(err, (tr_status)code, "%.*s", (int)(h.size < 400 ? h.size : 400),
+                          (const char *)r.data + 1 + sizeof h);
+    } else if (h.size > 0 && h.size <= UINT_MAX) { /* else import here */
+        *ai = aiImportFileFromMemory((const char *)r.data + 1 + sizeof h, (unsigned int)h.size, 0,
+                                     "assbin");
+        if (!*ai) {
+            rc = tr_error_set(err, TR_STATUS_PARSE,
+                              "'%.200s': the importer's result could not be read back", path);
+        }
     }
-    if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
-        return tr_error_set(err, TR_STATUS_LIMIT,
-                            "the importer failed on '%.200s' (status %d: out of its memory "
-                            "limit?)",
-                            path, WIFEXITED(status) ? WEXITSTATUS(status) : -1);
-    }
-    return TR_OK;
+    free(r.data);
+    return rc;
 }
 #endif
 
 const struct aiScene *tr_mesh_guarded_import(const char *path, unsigned int flags, tr_error *err) {
 #ifdef TR_MESH_TRIAL
-    if (trial_in_child(path, flags, err) != TR_OK) {
+    const struct aiScene *ai = NULL;
+    if (import_in_child(path, flags, &ai, err) != TR_OK) {
         return NULL;
+    }
+    if (ai) {
+        return ai;
     }
 #endif
     return import_here(path, flags, err);

@@ -27,10 +27,12 @@
 
 /* aiImportFileEx through the callbacks above. NULL with `err` set ("Assimp cannot read
  * 'PATH': ...", or the guard's own reason) when the import fails. Where the system can
- * fork, the import is first tried in a child process under TR_MESH_IMPORT_CPU_SECONDS of
- * CPU time and TR_MESH_IMPORT_MAX_MEMORY of address space: a crash or hang in Assimp
- * becomes one error naming the file ("the importer crashed on 'PATH': signal 11"), never
- * this process's end. */
+ * fork, the import runs in a child process under TR_MESH_IMPORT_CPU_SECONDS of CPU time
+ * and TR_MESH_IMPORT_MAX_MEMORY of address space, which sends the scene back through a
+ * pipe in Assimp's binary form (or, where that form would lose what trac0r reads, says
+ * the import succeeded, and it runs again here): a crash or hang in Assimp becomes one
+ * error naming the file ("the importer crashed on 'PATH': signal 11"), never this
+ * process's end. */
 const struct aiScene *tr_mesh_guarded_import(const char *path, unsigned int flags, tr_error *err);
 
 /* The declared-size check alone, on `size` bytes of a file's start `head` whose whole size
