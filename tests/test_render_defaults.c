@@ -330,13 +330,30 @@ static void test_open(void) {
     CHECK(hand && memcmp(tr_scene_camera(hand), tr_scene_camera(s), sizeof(tr_camera)) == 0,
           "camera differs from the built-in scene's own");
     tr_scene_destroy(hand);
-    CHECK(tr_scene_open(s, "builtin:nope", &d, NULL, &st, &err) == TR_ERR &&
-              tr_scene_triangle_count(s) == 0,
-          "an unknown scene opened, or left %u triangles", tr_scene_triangle_count(s));
+    /* Each failure names its stage: the load, an extra, the settings, the commit. */
+    tr_scene_file f;
+    CHECK(tr_scene_open(s, "cornell", &d, &f, &st, &err) == TR_OK && f.open_stage == 0,
+          "success: stage %u", f.open_stage);
+    CHECK(tr_scene_open(s, "builtin:nope", &d, &f, &st, &err) == TR_ERR &&
+              tr_scene_triangle_count(s) == 0 && f.open_stage == TR_SCENE_OPEN_LOAD,
+          "an unknown scene opened, or left %u triangles (stage %u)", tr_scene_triangle_count(s),
+          f.open_stage);
+    d.request.integrator = "nope";
+    CHECK(tr_scene_open(s, "cornell", &d, &f, &st, &err) == TR_ERR &&
+              f.open_stage == TR_SCENE_OPEN_SETTINGS,
+          "an unknown integrator: stage %u", f.open_stage);
+    d.request.integrator = "pt";
+    d.request.accel = "embree";
+    if (tr_scene_open(s, "cornell", &d, &f, &st, &err) == TR_ERR) { /* a build without Embree */
+        CHECK(err.code == TR_STATUS_UNSUPPORTED && f.open_stage == TR_SCENE_OPEN_COMMIT,
+              "embree refused at stage %u, status %d", f.open_stage, err.code);
+    }
+    d.request.accel = "bvh2";
     d.extras.sun = "0,0,0";
-    CHECK(tr_scene_open(s, "cornell", &d, NULL, &st, &err) == TR_ERR &&
-              err.code == TR_STATUS_INVALID_ARGUMENT && tr_scene_triangle_count(s) == 0,
-          "a bad sun opened");
+    CHECK(tr_scene_open(s, "cornell", &d, &f, &st, &err) == TR_ERR &&
+              err.code == TR_STATUS_INVALID_ARGUMENT && tr_scene_triangle_count(s) == 0 &&
+              f.open_stage == TR_SCENE_OPEN_EXTRAS,
+          "a bad sun opened (stage %u)", f.open_stage);
     tr_scene_destroy(s);
 }
 

@@ -523,13 +523,13 @@ static int open_error(const cli_args *a, const tr_scene_file *f, const tr_error 
         (f->shape_count > 0 || f->mesh_count > 0)) { /* loaded, but without an emitter */
         return cli_error(a, "%s (or pass --allow-dark)", err->msg);
     }
-    const int option = err->code == TR_STATUS_LIMIT || strncmp(err->msg, "env", 3) == 0 ||
-                       strncmp(err->msg, "sun", 3) == 0 || strncmp(err->msg, "ground", 6) == 0;
-    /* Unsupported is the accel's (its messages name it), or a scene an integrator cannot
-     * render (a lens or punctual lights with bdpt): --accel is no way out of those. */
-    return cli_error(
-        a, "%s%s%s", option ? "--" : "", err->msg,
-        err->code == TR_STATUS_UNSUPPORTED && strstr(err->msg, "accel") ? " (use --accel)" : "");
+    /* An extra's message begins with its option's name, as does a size over the limit. */
+    const int option = f->open_stage == TR_SCENE_OPEN_EXTRAS ||
+                       (f->open_stage == TR_SCENE_OPEN_SETTINGS && err->code == TR_STATUS_LIMIT);
+    return cli_error(a, "%s%s%s", option ? "--" : "", err->msg,
+                     f->open_stage == TR_SCENE_OPEN_COMMIT && err->code == TR_STATUS_UNSUPPORTED
+                         ? " (use --accel)"
+                         : "");
 }
 
 int cli_load_scene_file(const cli_args *a, cli_common *c, tr_scene *scene, tr_scene_file *file) {

@@ -58,6 +58,7 @@ typedef struct tr_scene_file {
     tr_aabb bounds;              /* of all triangles */
     uint32_t warning_count;
     char warnings[TR_SCENE_FILE_MAX_WARNINGS][256];
+    uint32_t open_stage; /* tr_scene_open: the stage that failed (TR_SCENE_OPEN_*), 0 if none */
 } tr_scene_file;
 
 /* What a program asks of a render of a scene file (tr_scene_file_apply). Zero-initialised,
@@ -193,13 +194,20 @@ typedef struct tr_scene_open_desc {
                                    scene without emitters render */
 } tr_scene_open_desc;
 
+/* tr_scene_file.open_stage: where tr_scene_open failed, so that a program can tell its
+ * user which input was at fault (the file, an extra such as --env, a setting asked for, or
+ * the acceleration structure) without reading the message. */
+#define TR_SCENE_OPEN_LOAD 1u     /* tr_scene_load: the scene or model file */
+#define TR_SCENE_OPEN_EXTRAS 2u   /* tr_scene_add_extras: "env", "sun" or "ground" */
+#define TR_SCENE_OPEN_SETTINGS 3u /* tr_scene_file_apply: the request against the file */
+#define TR_SCENE_OPEN_COMMIT 4u   /* tr_scene_commit: the acceleration structure */
 /* Loads what `name` names (tr_scene_load: a built-in scene, a model or a scene file),
  * adds the extras, resolves the render settings (tr_scene_file_apply) into *out and
  * commits the scene with out->accel: the one call between a scene's name and
  * tr_session_create. `file` (may be NULL) gets what the file said and its warnings. On
  * failure the scene is left empty; the status is tr_scene_load's, tr_scene_add_extras's
  * (messages begin with "env", "sun" or "ground"), tr_scene_file_apply's or
- * tr_scene_commit's. */
+ * tr_scene_commit's, and file->open_stage says which. */
 int tr_scene_open(tr_scene *s, const char *name, const tr_scene_open_desc *d, tr_scene_file *file,
                   tr_render_settings *out, tr_error *err);
 

@@ -250,6 +250,7 @@ int tr_scene_open(tr_scene *s, const char *name, const tr_scene_open_desc *d, tr
         mo.height = rq->height;
     }
     if (tr_scene_load(s, name, &mo, file, err) != TR_OK) {
+        file->open_stage = TR_SCENE_OPEN_LOAD;
         return TR_ERR;
     }
     tr_render_request r = *rq;
@@ -264,11 +265,17 @@ int tr_scene_open(tr_scene *s, const char *name, const tr_scene_open_desc *d, tr
     r.accel = rq->accel ? rq->accel : file->has_accel ? NULL : df->accel;
     r.light_sampling = rq->light_sampling ? rq->light_sampling : df->light_sampling;
     r.allow_dark = rq->allow_dark || d->extras.env || d->extras.sun;
-    if (tr_scene_add_extras(s, &d->extras, err) != TR_OK ||
-        tr_scene_file_apply(s, name, file, &r, out, err) != TR_OK ||
-        tr_scene_commit(s, out->accel, err) != TR_OK) {
-        tr_scene_clear(s);
-        return TR_ERR;
+    file->open_stage = TR_SCENE_OPEN_EXTRAS;
+    if (tr_scene_add_extras(s, &d->extras, err) == TR_OK) {
+        file->open_stage = TR_SCENE_OPEN_SETTINGS;
+        if (tr_scene_file_apply(s, name, file, &r, out, err) == TR_OK) {
+            file->open_stage = TR_SCENE_OPEN_COMMIT;
+            if (tr_scene_commit(s, out->accel, err) == TR_OK) {
+                file->open_stage = 0;
+                return TR_OK;
+            }
+        }
     }
-    return TR_OK;
+    tr_scene_clear(s);
+    return TR_ERR;
 }
