@@ -239,6 +239,34 @@ static void test_permission_and_distinct(void) {
     if (geteuid() != 0) {
         CHECK_STATUS(tr_outfile_check(p, &err), err, TR_STATUS_IO, "a read-only target");
         CHECK(tr_outfile_create(p, &err) == NULL, "a read-only target was opened");
+    } else {
+        /* As root (CI runs so), the same as another user: a child process that becomes
+         * `nobody` meets root's 0444 file in a directory it may write to, where rename()
+         * could replace what open() refuses. */
+        chmod(dir, 0777);
+        const pid_t pid = fork();
+        if (pid == 0) {
+            if (setgid(65534) != 0 || setuid(65534) != 0) {
+                _exit(3);
+            }
+            tr_error e;
+            /* It can read the file (0444): the refusal is for writing, not for reaching it. */
+            const int refused = access(p, R_OK) == 0 && tr_outfile_check(p, &e) == TR_ERR &&
+                                e.code == TR_STATUS_IO && tr_outfile_create(p, &e) == NULL;
+            _exit(refused ? 0 : 1);
+        }
+        int status = -1;
+        CHECK(pid > 0 && waitpid(pid, &status, 0) == pid && WIFEXITED(status) &&
+                  WEXITSTATUS(status) == 0,
+              "another user's read-only target: child status %d", status);
+        chmod(dir, 0700);
+        char got[8] = {0};
+        FILE *fp = fopen(p, "rb");
+        CHECK(fp && fread(got, 1, sizeof got, fp) == 3 && memcmp(got, "old", 3) == 0,
+              "another user's read-only target was replaced");
+        if (fp) {
+            fclose(fp);
+        }
     }
     chmod(p, 0644);
     snprintf(q, sizeof q, "%s/./ro.png", dir);
