@@ -57,50 +57,40 @@ fi
 if [ "$PART" = resume ]; then
     L="render --width 200 --height 140 --spp 400 --threads 1 --passes variance"
     "$BIN" $L --threads 0 --out long.pfm 2>/dev/null
-    $MPIRUN -np 2 "$BIN" $L --out stopped.pfm --checkpoint ck --checkpoint-interval 0 2>err.txt &
-    pid=$!
-    n=0
-    while [ ! -s ck ] && [ $n -lt 1000 ]; do
-        sleep 0.02
-        n=$((n + 1))
-    done
-    kill -TERM $pid
-    wait $pid
+    # stopped_run OUT CHECKPOINT SIGNAL WHOM: two ranks render to OUT with a checkpoint
+    # after every tile; once it exists, SIGNAL goes to mpirun (WHOM 0) or to rank 1's
+    # process alone (WHOM 1). Sets rc to mpirun's status; stderr in err.txt.
+    stopped_run() {
+        $MPIRUN -np 2 "$BIN" $L --out "$1" --checkpoint "$2" --checkpoint-interval 0 2>err.txt &
+        pid=$!
+        n=0
+        while [ ! -s "$2" ] && [ $n -lt 1000 ]; do
+            sleep 0.02
+            n=$((n + 1))
+        done
+        target=$pid
+        if [ "$4" = 1 ]; then
+            target=
+            for p in $(pgrep -f -- "--out $1"); do
+                tr '\0' '\n' <"/proc/$p/environ" 2>/dev/null |
+                    grep -qx 'OMPI_COMM_WORLD_RANK=1' && target=$p
+            done
+            [ -n "$target" ] || fail "$3 to a worker: rank 1's process not found"
+        fi
+        kill -"$3" $target
+        wait $pid
+        rc=$?
+    }
+    stopped_run stopped.pfm ck TERM 0
     grep -q "tiles done" err.txt || fail "SIGTERM under MPI: not stopped early: $(cat err.txt)"
     [ -s stopped.pfm ] || fail "SIGTERM under MPI: no image"
     # SIGTERM to a worker rank alone stops the whole job as one to mpirun does: every rank
     # exits with 128 + 15, and rank 0 writes the image of the tiles done.
-    $MPIRUN -np 2 "$BIN" $L --out wstop.pfm --checkpoint wck --checkpoint-interval 0 2>werr.txt &
-    pid=$!
-    n=0
-    while [ ! -s wck ] && [ $n -lt 1000 ]; do
-        sleep 0.02
-        n=$((n + 1))
-    done
-    worker=
-    for p in $(pgrep -f -- "--out wstop.pfm"); do
-        tr '\0' '\n' <"/proc/$p/environ" 2>/dev/null | grep -qx 'OMPI_COMM_WORLD_RANK=1' && worker=$p
-    done
-    [ -n "$worker" ] || fail "SIGTERM to a worker: rank 1's process not found"
-    kill -TERM "$worker"
-    wait $pid
-    rc=$?
-    [ $rc -eq 143 ] || fail "SIGTERM to a worker: exit $rc, expected 143: $(cat werr.txt)"
+    stopped_run wstop.pfm wck TERM 1
+    [ $rc -eq 143 ] || fail "SIGTERM to a worker: exit $rc, expected 143: $(cat err.txt)"
     [ -s wstop.pfm ] || fail "SIGTERM to a worker: no image of the tiles done"
     # A worker that dies (SIGKILL) ends the job without an image.
-    $MPIRUN -np 2 "$BIN" $L --out wkill.pfm --checkpoint kck --checkpoint-interval 0 2>werr.txt &
-    pid=$!
-    n=0
-    while [ ! -s kck ] && [ $n -lt 1000 ]; do
-        sleep 0.02
-        n=$((n + 1))
-    done
-    for p in $(pgrep -f -- "--out wkill.pfm"); do
-        tr '\0' '\n' <"/proc/$p/environ" 2>/dev/null | grep -qx 'OMPI_COMM_WORLD_RANK=1' &&
-            kill -KILL "$p"
-    done
-    wait $pid
-    rc=$?
+    stopped_run wkill.pfm kck KILL 1
     [ $rc -ne 0 ] || fail "SIGKILL to a worker: exit 0"
     [ -e wkill.pfm ] && fail "SIGKILL to a worker: an image was passed off as complete"
     $MPIRUN -np 3 "$BIN" $L --resume ck --out resumed.pfm 2>err.txt || fail "MPI resume: $(cat err.txt)"
