@@ -256,6 +256,16 @@ static void test_duck(void) {
     CHECK(info.height == 533 && fabsf(s.camera.vertical_fov - 37.8492f) < 0.05f,
           "duck camera: %u high, fov %g", info.height, (double)s.camera.vertical_fov);
 
+    /* A width alone keeps the file camera's aspect (3:2): 200 wide is 133 high. */
+    {
+        tr_scene *o = tr_scene_create(&err);
+        tr_scene_open_desc d = {0};
+        d.request.width = 200;
+        tr_render_settings st;
+        CHECK(o && tr_scene_open(o, DUCK, &d, NULL, &st, &err) == TR_OK, "%s", err.msg);
+        CHECK(st.width == 200 && st.height == 133, "duck at width 200: %ux%u", st.width, st.height);
+        tr_scene_destroy(o);
+    }
     /* The framing camera centres the model. */
     opt.camera = "frame";
     CHECK(tr_scene_model_load(&s, DUCK, &opt, &info, &err) == TR_OK, "%s", err.msg);

@@ -317,7 +317,7 @@ int tr_scene_model_load(tr_scene *s, const char *path, const tr_model_options *o
     if (ex.has_camera && !frame && !opt->height && ex.cam_aspect > 0.1f && ex.cam_aspect < 10.0f) {
         /* The file camera's aspect ratio, at the width asked for. */
         info->height = (uint32_t)fmaxf(1.0f, roundf((float)info->width / ex.cam_aspect));
-        info->has_height = 1;
+        info->has_width = info->has_height = 1; /* the aspect is the camera's */
     }
     info->spp = 16;
     info->max_depth = 8;
