@@ -9,8 +9,8 @@
  *    node; a camera that does not exist is an error; "frame" frames the model. The
  *    directional light becomes the sun (towards -its direction, its colour x intensity
  *    as irradiance), the point light a point light (punctual.h) at its node of
- *    intensity colour x intensity; the lights replace the default environment, so the background
- *    renders black and the quad under the point light does not.
+ *    intensity colour x intensity; with lights the environment is Blender's default world
+ *    (0.05 grey), which the background shows, and the quad under the point light is lit.
  *    Lights that cannot be had (black, past the emitter's limit) are dropped or adjusted
  *    with warnings, never fail the model.
  * 2. Collada's duck (assimp-testmodels): its camera is placed by the node's translate
@@ -128,8 +128,8 @@ static void test_gltf(void) {
               (double)l->pos.x, (double)l->pos.y, (double)l->pos.z, (double)l->intensity.x,
               (double)l->intensity.y, (double)l->intensity.z);
     }
-    CHECK(s.env_count == 0, "the file's lights replace the default environment");
-    /* Rendered through the file's camera: background black, the quad lit. */
+    CHECK(s.env_count == 1, "the file's lights are lit in Blender's default world");
+    /* Rendered through the file's camera: background Blender's world grey, the quad lit. */
     CHECK(tr_scene_commit(&s, TR_ACCEL_TYPE_BVH, &err) == TR_OK, "%s", err.msg);
     tr_camera c = s.camera;
     CHECK(tr_camera_resize(&c, 32, 16, &err) == TR_OK, "%s", err.msg);
@@ -141,7 +141,9 @@ static void test_gltf(void) {
         CHECK(tr_render_frame(&s, &c, &cfg, &film, k, NULL, &err) == TR_OK, "%s", err.msg);
     }
     tr_vec3 corner = tr_film_pixel(&film, 0, 0), centre = tr_film_pixel(&film, 14, 9);
-    CHECK(corner.x == 0.0f && corner.y == 0.0f && corner.z == 0.0f, "background black");
+    CHECK(corner.x == TR_MODEL_WORLD && corner.y == TR_MODEL_WORLD && corner.z == TR_MODEL_WORLD,
+          "background (%g, %g, %g), not the world's grey", (double)corner.x, (double)corner.y,
+          (double)corner.z);
     CHECK(centre.x > 0.0f && centre.x > centre.y && centre.y > centre.z,
           "the quad lit by the orange bulb: (%g, %g, %g)", (double)centre.x, (double)centre.y,
           (double)centre.z);
@@ -196,7 +198,8 @@ static void test_gltf_odd_lights(void) {
           "odd lights: %u emitters, no sun from a black light", emitters);
     CHECK(s.punctual_count == 1 && s.punctual[0].type == TR_PUNCTUAL_SPOT,
           "the spot light kept as one (%u punctual lights)", s.punctual_count);
-    CHECK(s.env_count == 0, "a light left: no default environment");
+    CHECK(s.env_count == 1 && s.env.color.x * s.env.strength == TR_MODEL_WORLD,
+          "a light left: the world's grey, not the default sky");
     CHECK(info.warning_count >= 2, "odd lights: %u warnings", info.warning_count);
     tr_scene_clear(&s);
     unlink(path);

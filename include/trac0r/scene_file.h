@@ -146,10 +146,13 @@ int tr_scene_import_mesh(tr_scene *s, const char *path, const tr_transform *tf,
  * first, or the one `camera` names) if it has one, else one framing the model's bounding
  * sphere (40 degree vertical field of view, right-handed); the file's lights mapped onto
  * trac0r's (docs/scene-format.md, "Model files"; a warning names each approximated one),
- * or without any a constant grey environment light of radiance TR_MODEL_SKY. info (may be NULL)
+ * and with them (unless one is ambient) a constant environment of radiance TR_MODEL_WORLD
+ * (Blender's default world), or without any a constant grey environment light of radiance
+ * TR_MODEL_SKY. info (may be NULL)
  * gets the counts, bounds, warnings (the import table's, naming materials and lights) and
  * render defaults (the file camera's aspect ratio when height is 0). */
 #define TR_MODEL_SKY 0.5f
+#define TR_MODEL_WORLD 0.05f
 typedef struct tr_model_options {
     int up_z;
     float scale;            /* > 0 */

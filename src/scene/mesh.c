@@ -576,6 +576,9 @@ static void place_extras(import_ctx *c, const struct aiNode *node, const struct 
         o->gltf = c->gltf;
         o->size_x = l->mSize.x;
         o->size_y = l->mSize.y;
+        o->att[0] = l->mAttenuationConstant;
+        o->att[1] = l->mAttenuationLinear;
+        o->att[2] = l->mAttenuationQuadratic;
     }
 }
 

@@ -53,12 +53,30 @@ static void model_spot_cone(const tr_import_light *l, tr_punctual *p) {
     p->cos_inner = fmaxf(cosf(inner), p->cos_outer);
 }
 
+/* The intensity (W/sr) of an inverse-square light that gives what the file's falloff
+ * 1 / (a0 + a1 d + a2 d^2) gives at distance d (the light to the model's centre, at least
+ * a tenth of its radius): colour x d^2 / (a0 + a1 d + a2 d^2). A pure inverse square
+ * (glTF: a2 = 1) keeps colour / a2 whatever the distance; a file without a falloff (all
+ * zero: Blender's files through Assimp) counts as a constant one, so that its lamp lights
+ * the model with its colour as irradiance. Returns the factor on the colour. */
+static float model_light_scale(const tr_import_light *l, tr_vec3 centre, float radius) {
+    const float a0 = fmaxf(l->att[0], 0.0f), a1 = fmaxf(l->att[1], 0.0f),
+                a2 = fmaxf(l->att[2], 0.0f);
+    if (a0 == 0.0f && a1 == 0.0f && a2 > 0.0f) {
+        return 1.0f / a2;
+    }
+    const float d = fmaxf(v3_length(v3_sub(l->pos, centre)), 0.1f * radius);
+    const float f = a0 + a1 * d + a2 * d * d;
+    const float k = d * d / (f > 0.0f ? f : 1.0f);
+    return isfinite(k) && k > 0.0f ? k : 1.0f;
+}
+
 /* A light of the file onto trac0r's: directional -> the sun (the Sun's angular size),
  * point and spot -> punctual lights (punctual.h) of intensity the light's colour (W/sr),
  * ambient -> a constant environment, area -> an emissive rectangle.
  * Returns 1 where it added a light, 0 where it warned and added none, -1 with err. */
-static int model_add_light(tr_scene *s, const tr_import_light *l, float radius, tr_scene_file *info,
-                           int *have_sun, tr_error *err) {
+static int model_add_light(tr_scene *s, const tr_import_light *l, tr_vec3 centre, float radius,
+                           tr_scene_file *info, int *have_sun, tr_error *err) {
     char msg[256];
     const tr_vec3 c = l->color;
     const float peak = fmaxf(c.x, fmaxf(c.y, c.z));
@@ -98,7 +116,8 @@ static int model_add_light(tr_scene *s, const tr_import_light *l, float radius, 
         p.type = l->type == AI_SPOT ? TR_PUNCTUAL_SPOT : TR_PUNCTUAL_POINT;
         p.pos = l->pos;
         p.dir = l->dir;
-        p.intensity = c;
+        const float k = model_light_scale(l, centre, radius);
+        p.intensity = v3_scale(c, k);
         if (l->type == AI_SPOT) {
             model_spot_cone(l, &p);
         }
@@ -107,13 +126,14 @@ static int model_add_light(tr_scene *s, const tr_import_light *l, float radius, 
         }
         if (l->type == AI_SPOT) {
             snprintf(msg, sizeof msg,
-                     "spot light '%.64s': a spot light of intensity its colour, cone %.4g "
-                     "degrees, fading in over its outer %.4g",
-                     l->name, 2.0 * acos((double)p.cos_outer) * 57.29577951308232,
+                     "spot light '%.64s': a spot light of intensity %.4g x its colour, cone "
+                     "%.4g degrees, fading in over its outer %.4g",
+                     l->name, (double)k, 2.0 * acos((double)p.cos_outer) * 57.29577951308232,
                      (acos((double)p.cos_outer) - acos((double)p.cos_inner)) * 57.29577951308232);
         } else {
-            snprintf(msg, sizeof msg, "point light '%.64s': a point light of intensity its colour",
-                     l->name);
+            snprintf(msg, sizeof msg,
+                     "point light '%.64s': a point light of intensity %.4g x its colour", l->name,
+                     (double)k);
         }
         model_warn(info, msg);
         return 1;
@@ -337,7 +357,7 @@ int tr_scene_model_load(tr_scene *s, const char *path, const tr_model_options *o
     int lit = 0, have_sun = 0;
     for (uint32_t i = 0; i < ex.light_count; ++i) {
         tr_error le;
-        int rc = model_add_light(s, &ex.light[i], radius, info, &have_sun, &le);
+        int rc = model_add_light(s, &ex.light[i], centre, radius, info, &have_sun, &le);
         if (rc < 0) {
             /* A light the file places or sizes badly (non-finite, too small to make
              * triangles) is dropped, not the model. */
@@ -356,10 +376,13 @@ int tr_scene_model_load(tr_scene *s, const char *path, const tr_model_options *o
                  TR_IMPORT_MAX_LIGHTS);
         model_warn(info, msg);
     }
-    /* Radiance 0.5: the sky shows light grey and a white surface under it stays below
-     * clipping at exposure 0 (at 1 both were clipped white). */
-    if (!lit &&
-        tr_scene_set_environment(s, v3s(TR_MODEL_SKY), 1.0f, 0.0f, NULL, 0, 0, err) != TR_OK) {
+    /* Without lights, radiance 0.5: the sky shows light grey and a white surface under it
+     * stays below clipping at exposure 0 (at 1 both were clipped white). With lights and
+     * no ambient one, Blender's default world (0.05 grey), so that what the lamps leave
+     * dark is dim rather than black, as it is when Blender imports the file. */
+    const float world = !lit ? TR_MODEL_SKY : s->env_count == 0 ? TR_MODEL_WORLD : 0.0f;
+    if (world > 0.0f &&
+        tr_scene_set_environment(s, v3s(world), 1.0f, 0.0f, NULL, 0, 0, err) != TR_OK) {
         tr_scene_clear(s);
         return TR_ERR;
     }

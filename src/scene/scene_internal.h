@@ -172,6 +172,7 @@ typedef struct tr_import_light {
     float size_x, size_y; /* area lights */
     float inner_cone;     /* spot lights: Assimp's mAngleInnerCone, radians */
     int gltf;             /* from a glTF file: the cones are glTF's half-angles */
+    float att[3];         /* Assimp's attenuation 1 / (att[0] + att[1] d + att[2] d^2) */
 } tr_import_light;
 /* What else a model file holds: the camera asked for (camera_want, before the import:
  * its index in the file, >= 0), placed by its node and tf; how many cameras and lights
