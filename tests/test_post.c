@@ -6,10 +6,13 @@
  * below and above 1, huge, infinities, NaNs of either sign and any payload) and over a
  * sweep of the whole 32-bit pattern space. The metrics are checked against values
  * worked out by hand, and against the old `trac0r compare` code as an oracle. */
+#define _POSIX_C_SOURCE 200809L
 #include <float.h>
 #include <math.h>
 #include <stdlib.h>
+#include <stdio.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "check.h"
 #include "kernel/kernel.h"
@@ -477,6 +480,36 @@ static void test_exposure_note(void) {
     tr_film_free(&f);
 }
 
+/* The error map: an exact pixel is black, the largest error white, half of it in
+ * between (orange-magenta: neither black nor white), read back from the PFM written. */
+static void test_error_map(void) {
+    const float a[9] = {0.5f, 0.5f, 0.5f, 1.0f, 1.0f, 1.0f, 0.75f, 0.75f, 0.75f};
+    const float ref[9] = {0.5f, 0.5f, 0.5f, 0.0f, 0.0f, 0.0f, 0.25f, 0.25f, 0.25f};
+    char path[512];
+    const char *tmp = getenv("TMPDIR");
+    snprintf(path, sizeof path, "%s/trac0r-test-post-%ld.pfm", tmp && *tmp ? tmp : "/tmp",
+             (long)getpid());
+    tr_error err;
+    const tr_image_metrics m = tr_image_compare(a, ref, 3);
+    CHECK(m.max_error == 1.0, "max error %g", m.max_error);
+    CHECK(tr_error_map_write(a, ref, 3, 1, m.max_error, path, &err) == TR_OK, "%s", err.msg);
+    tr_image img;
+    memset(&img, 0, sizeof img);
+    CHECK(tr_image_read(&img, path, &err) == TR_OK && img.width == 3 && img.height == 1, "%s",
+          err.msg);
+    if (img.rgb) {
+        CHECK(img.rgb[0] == 0.0f && img.rgb[1] == 0.0f && img.rgb[2] == 0.0f, "exact: not black");
+        CHECK(img.rgb[3] == 1.0f && img.rgb[4] == 1.0f && img.rgb[5] == 1.0f, "largest: not white");
+        const float *h = img.rgb + 6;
+        CHECK(h[0] > 0.05f && h[0] < 1.0f && h[2] < 1.0f, "half: (%g, %g, %g)", (double)h[0],
+              (double)h[1], (double)h[2]);
+    }
+    tr_image_free(&img);
+    remove(path);
+    CHECK(tr_error_map_write(a, ref, 3, 1, 1.0, "/nonexistent-dir/e.png", &err) == TR_ERR,
+          "an unwritable error map accepted");
+}
+
 int main(void) {
     test_exposure_note();
     test_tonemap_value_classes();
@@ -486,5 +519,6 @@ int main(void) {
     test_srgb_decode();
     test_metrics_analytic();
     test_metrics_oracle();
+    test_error_map();
     return check_finish("test_post");
 }

@@ -8,25 +8,6 @@
 #include "cli.h"
 #include "commands.h"
 
-/* A perceptually ordered false-colour ramp (black, blue, magenta, orange, yellow,
- * white) for t in [0,1], returned as linear RGB for the PNG writer to encode. */
-static tr_vec3 false_colour(double t) {
-    static const float ramp[6][3] = {{0.0f, 0.0f, 0.0f},  {0.1f, 0.1f, 0.6f}, {0.7f, 0.1f, 0.6f},
-                                     {1.0f, 0.5f, 0.05f}, {1.0f, 0.9f, 0.2f}, {1.0f, 1.0f, 1.0f}};
-    t = (t > 0.0 ? (t < 1.0 ? t : 1.0) : 0.0) * 5.0;
-    int i = (int)t;
-    if (i >= 5) {
-        i = 4;
-    }
-    float f = (float)(t - i);
-    float c[3];
-    for (int k = 0; k < 3; ++k) {
-        float s = ramp[i][k] + f * (ramp[i + 1][k] - ramp[i][k]);
-        c[k] = tr_srgb_to_linear(s);
-    }
-    return tr_vec3_make(c[0], c[1], c[2]);
-}
-
 static void compare_help(FILE *fp) {
     fprintf(fp,
             "Usage: trac0r compare A B [options]\n"
@@ -100,27 +81,12 @@ int cmd_compare(int argc, char **argv) {
            e.rmse, e.relmse, e.psnr);
     int rc = CLI_OK;
     if (error_image) {
-        tr_film f;
-        if (tr_film_init(&f, img[0].width, img[0].height, &err) != TR_OK) {
+        if (tr_error_map_write(img[0].rgb, img[1].rgb, img[0].width, img[0].height, e.max_error,
+                               error_image, &err) != TR_OK) {
             fprintf(stderr, "trac0r compare: %s\n", err.msg);
             rc = CLI_FAILURE;
         } else {
-            const double max = e.max_error;
-            for (size_t i = 0; i < pixels; ++i) {
-                const double d = tr_pixel_error(img[0].rgb + 3 * i, img[1].rgb + 3 * i);
-                tr_vec3 col = false_colour(max > 0.0 ? d / max : 0.0);
-                f.sum[3 * i] = col.x;
-                f.sum[3 * i + 1] = col.y;
-                f.sum[3 * i + 2] = col.z;
-                f.count[i] = 1;
-            }
-            if (tr_film_write(&f, error_image, 0.0f, &err) != TR_OK) {
-                fprintf(stderr, "trac0r compare: %s\n", err.msg);
-                rc = CLI_FAILURE;
-            } else {
-                printf("error image %s (white = %.6g)\n", error_image, max);
-            }
-            tr_film_free(&f);
+            printf("error image %s (white = %.6g)\n", error_image, e.max_error);
         }
     }
     tr_image_free(&img[0]);

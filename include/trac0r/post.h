@@ -111,6 +111,13 @@ double tr_ssim(const float *a, const float *ref, uint32_t width, uint32_t height
  * not above 0. */
 double tr_psnr(double mse);
 
+/* Writes the per-pixel error of `a` against `ref` (tr_pixel_error; 3 floats per pixel,
+ * width x height) to `path` (.png or .pfm, as tr_film_write) as a false-colour image:
+ * black for none, through blue, magenta, orange and yellow, to white at `max` and above
+ * (tr_image_metrics.max_error for the image's own largest). */
+int tr_error_map_write(const float *a, const float *ref, uint32_t width, uint32_t height,
+                       double max, const char *path, tr_error *err);
+
 /* ---- Real-time reconstruction --------------------------------------------------- */
 
 /* One frame's mean radiance and passes, planar, row-major, top row first. */

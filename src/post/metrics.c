@@ -3,6 +3,8 @@
 #include <math.h>
 #include <stdlib.h>
 
+#include "trac0r/film.h"
+#include "trac0r/image.h"
 #include "trac0r/post.h"
 
 /* The metrics compare displayable radiance: [0,1], with NaN as black. */
@@ -129,4 +131,34 @@ double tr_ssim(const float *a, const float *ref, uint32_t width, uint32_t height
     free(row);
     free(buf);
     return sum / (double)n;
+}
+
+/* A perceptually ordered false-colour ramp (black, blue, magenta, orange, yellow, white)
+ * for t in [0, 1], as linear RGB for the writers to encode. */
+static void false_colour(double t, float *out) {
+    static const float ramp[6][3] = {{0.0f, 0.0f, 0.0f},  {0.1f, 0.1f, 0.6f}, {0.7f, 0.1f, 0.6f},
+                                     {1.0f, 0.5f, 0.05f}, {1.0f, 0.9f, 0.2f}, {1.0f, 1.0f, 1.0f}};
+    t = (t > 0.0 ? (t < 1.0 ? t : 1.0) : 0.0) * 5.0;
+    const int i = t >= 5.0 ? 4 : (int)t;
+    const float f = (float)(t - i);
+    for (int k = 0; k < 3; ++k) {
+        out[k] = tr_srgb_to_linear(ramp[i][k] + f * (ramp[i + 1][k] - ramp[i][k]));
+    }
+}
+
+int tr_error_map_write(const float *a, const float *ref, uint32_t width, uint32_t height,
+                       double max, const char *path, tr_error *err) {
+    tr_film f;
+    if (tr_film_init(&f, width, height, err) != TR_OK) {
+        return TR_ERR;
+    }
+    const size_t pixels = (size_t)width * height;
+    for (size_t i = 0; i < pixels; ++i) {
+        const double d = tr_pixel_error(a + 3 * i, ref + 3 * i);
+        false_colour(max > 0.0 ? d / max : 0.0, f.sum + 3 * i);
+        f.count[i] = 1;
+    }
+    const int rc = tr_film_write(&f, path, 0.0f, err);
+    tr_film_free(&f);
+    return rc;
 }
