@@ -8,9 +8,11 @@
  *    is within 1 % of the lit mean of a run whose light never switched (without
  *    gradients it is more than 3 % darker at frame 19), and the error against a
  *    converged render (as displayed, clipped at 1) is within 1.1 times that run's.
- * 2. A static scene and light: gradients measured on every frame after the first, none
- *    changed, and every frame's bits are those without gradients.
- * 3. With gradients, 1 and 2 threads give the same bits, frame after frame. */
+ * 2. A static scene and light, the camera still or panning: gradients measured on every
+ *    frame after the first, none changed, and every frame's bits are those without
+ *    gradients.
+ * 3. With gradients, the light switching and the camera panning, the switches are
+ *    measured and 1 and 2 threads give the same bits, frame after frame. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -51,7 +53,8 @@ static double mse(const float *a, const float *b) {
 }
 
 /* FRAMES frames of SVGF into out (FRAMES x N floats); `mode` the light animation. */
-static void run(int gradients, int mode, int threads, float *out, int *valid, uint32_t *changed) {
+static void run(int gradients, int mode, int threads, int move_camera, float *out, int *valid,
+                uint32_t *changed) {
     tr_error err;
     tr_scene *s = box();
     tr_device *dev = tr_device_create("cpu", &err);
@@ -71,8 +74,14 @@ static void run(int gradients, int mode, int threads, float *out, int *valid, ui
                   tr_scene_update(s, NULL, &err) == TR_OK &&
                   tr_device_upload(dev, s, &err) == TR_OK,
               "%s", err.msg);
+        tr_camera cam = *tr_scene_camera(s);
+        if (move_camera) {
+            /* A slow pan (half a percent of the box a frame): the gradients follow it. */
+            const tr_aabb b = tr_scene_bounds(s);
+            cam.pos.x += 0.005f * (b.max.x - b.min.x) * (float)f;
+        }
         tr_realtime_frame_desc fd = {0};
-        fd.camera = tr_scene_camera(s);
+        fd.camera = &cam;
         fd.method = TR_RECON_SVGF;
         tr_realtime_result res;
         CHECK(tr_realtime_frame(rt, &fd, &res, &err) == TR_OK && res.rgb, "frame %u: %s", f,
@@ -116,9 +125,9 @@ static void test_switch(void) {
     float *with = malloc((size_t)FRAMES * N * sizeof(float));
     float *without = malloc((size_t)FRAMES * N * sizeof(float));
     reference(ref);
-    run(1, TR_LIGHT_ANIMATION_NONE, 0, steady, NULL, NULL);
-    run(1, TR_LIGHT_ANIMATION_SWITCH, 0, with, NULL, NULL);
-    run(0, TR_LIGHT_ANIMATION_SWITCH, 0, without, NULL, NULL);
+    run(1, TR_LIGHT_ANIMATION_NONE, 0, 0, steady, NULL, NULL);
+    run(1, TR_LIGHT_ANIMATION_SWITCH, 0, 0, with, NULL, NULL);
+    run(0, TR_LIGHT_ANIMATION_SWITCH, 0, 0, without, NULL, NULL);
     const double lit = mean_of(steady + 7u * N);
     for (int f = 0; f < FRAMES; ++f) {
         fprintf(stderr, "frame %2d: mean %.4f %.4f %.4f  mse %.3g %.3g %.3g\n", f,
@@ -154,14 +163,16 @@ static void test_static(void) {
     float *without = malloc((size_t)FRAMES * N * sizeof(float));
     int valid[FRAMES];
     uint32_t changed[FRAMES];
-    run(1, TR_LIGHT_ANIMATION_NONE, 0, with, valid, changed);
-    run(0, TR_LIGHT_ANIMATION_NONE, 0, without, NULL, NULL);
-    for (int f = 0; f < FRAMES; ++f) {
-        CHECK(valid[f] == (f > 0) && changed[f] == 0, "frame %d: valid %d, changed %u", f, valid[f],
-              changed[f]);
+    for (int move = 0; move < 2; ++move) {
+        run(1, TR_LIGHT_ANIMATION_NONE, 0, move, with, valid, changed);
+        run(0, TR_LIGHT_ANIMATION_NONE, 0, move, without, NULL, NULL);
+        for (int f = 0; f < FRAMES; ++f) {
+            CHECK(valid[f] == (f > 0) && changed[f] == 0,
+                  "camera %d, frame %d: valid %d, changed %u", move, f, valid[f], changed[f]);
+        }
+        CHECK(memcmp(with, without, (size_t)FRAMES * N * sizeof(float)) == 0,
+              "a static scene (camera moving %d): gradients change nothing", move);
     }
-    CHECK(memcmp(with, without, (size_t)FRAMES * N * sizeof(float)) == 0,
-          "a static scene: gradients change nothing");
     free(with);
     free(without);
 }
@@ -171,8 +182,8 @@ static void test_threads(void) {
     float *b = malloc((size_t)FRAMES * N * sizeof(float));
     int valid[FRAMES];
     uint32_t changed[FRAMES];
-    run(1, TR_LIGHT_ANIMATION_SWITCH, 1, a, valid, changed);
-    run(1, TR_LIGHT_ANIMATION_SWITCH, 2, b, NULL, NULL);
+    run(1, TR_LIGHT_ANIMATION_SWITCH, 1, 1, a, valid, changed);
+    run(1, TR_LIGHT_ANIMATION_SWITCH, 2, 1, b, NULL, NULL);
     CHECK(changed[8] > 0 && changed[16] > 0, "the switches are measured: %u, %u", changed[8],
           changed[16]);
     CHECK(memcmp(a, b, (size_t)FRAMES * N * sizeof(float)) == 0, "1 and 2 threads differ");

@@ -8,6 +8,7 @@
 
 #include "device/frame.h"
 #include "kernel/kernel.h"
+#include "post/filter.h"
 #include "scene/scene_internal.h"
 #include "trac0r/render.h"
 
@@ -111,12 +112,14 @@ static void filter_strata(tr_grad *g, float *v, int threads) {
     }
 }
 
-/* Whether the replay can use the previous frame: same size, camera and config. */
+/* Whether the replay can use the previous frame: same size and config (the camera may
+ * differ: the replay takes the previous one). */
 static int replayable(const tr_grad *g, const tr_camera *cam, const tr_render_config *cfg) {
-    return g->have_prev && memcmp(&g->cam, cam, sizeof *cam) == 0 && /* NOLINT */
-           g->cfg.integrator == cfg->integrator && g->cfg.stride == cfg->stride &&
-           g->cfg.seed == cfg->seed && g->cfg.max_depth == cfg->max_depth &&
-           g->cfg.sampler == cfg->sampler && g->cfg.roulette_start == cfg->roulette_start &&
+    return g->have_prev && g->cam.screen_width == cam->screen_width &&
+           g->cam.screen_height == cam->screen_height && g->cfg.integrator == cfg->integrator &&
+           g->cfg.stride == cfg->stride && g->cfg.seed == cfg->seed &&
+           g->cfg.max_depth == cfg->max_depth && g->cfg.sampler == cfg->sampler &&
+           g->cfg.roulette_start == cfg->roulette_start &&
            g->cfg.clamp_indirect == cfg->clamp_indirect && g->cfg.regularize == cfg->regularize &&
            g->cfg.no_primary_direct == cfg->no_primary_direct;
 }
@@ -185,16 +188,41 @@ int tr_grad_frame(tr_grad *g, const tr_scene *scene, const tr_film *film, const 
             filter_strata(g, g->den, threads);
         }
         /* A-SVGF's weight: alpha = alpha_min + (1 - alpha_min) lambda, lambda the
-         * normalised gradient, as a cap of 1 / alpha frames on the history. */
+         * normalised gradient, as a cap of 1 / alpha frames on the history. The gradients
+         * lie in the previous frame's screen: with the same camera a pixel reads its own
+         * stratum; after a camera move its surface point (followed back by its motion)
+         * is projected into the previous camera, as the temporal stage reprojects it. */
         const float amin = fminf(fmaxf(alpha_min, 0.0f), 1.0f);
+        const int same = memcmp(&g->cam, cam, sizeof *cam) == 0; /* NOLINT */
+        const tr_camera pc = g->cam;
 #pragma omp parallel for num_threads(threads) schedule(static)
         for (int y = 0; y < (int)h; ++y) {
             for (uint32_t x = 0; x < w; ++x) {
-                const size_t s = (size_t)(y / TR_GRAD_STRATUM) * g->sw + x / TR_GRAD_STRATUM;
-                const float d = changed > 0 ? g->den[s] : 0.0f;
+                const size_t i = (size_t)y * w + x;
+                long sx = (long)x / TR_GRAD_STRATUM, sy = (long)y / TR_GRAD_STRATUM;
+                if (!same) {
+                    sx = -1;
+                    const float dep = film->depth && film->count[i]
+                                          ? film->depth[i] / (float)film->count[i]
+                                          : 0.0f;
+                    if (dep > 0.0f && changed > 0) {
+                        tr_vec3 p = tr_post_world_point(cam, (float)x, (float)y, dep);
+                        const uint32_t id = film->prim ? film->prim[i] : 0u;
+                        if (motion && id < motion_count) {
+                            p = v3_sub(p, motion[id]);
+                        }
+                        float fx, fy, dist;
+                        if (tr_post_project(&pc, p, &fx, &fy, &dist) && fx >= 0.0f && fy >= 0.0f &&
+                            fx < (float)w && fy < (float)h) {
+                            sx = (long)fx / TR_GRAD_STRATUM;
+                            sy = (long)fy / TR_GRAD_STRATUM;
+                        }
+                    }
+                }
+                const size_t s = sx >= 0 ? (size_t)sy * g->sw + (size_t)sx : 0u;
+                const float d = changed > 0 && sx >= 0 ? g->den[s] : 0.0f;
                 const float lambda = d > 0.0f ? fminf(1.0f, g->num[s] / d) : 0.0f;
-                g->cap[(size_t)y * w + x] =
-                    lambda > 0.0f ? 1.0f / (amin + (1.0f - amin) * lambda) : FLT_MAX;
+                g->cap[i] = lambda > 0.0f ? 1.0f / (amin + (1.0f - amin) * lambda) : FLT_MAX;
             }
         }
         g->valid = 1;

@@ -43,8 +43,9 @@ void tr_grad_free(tr_grad *g);
 void tr_grad_reset(tr_grad *g);
 /* One frame: `film` holds only this frame's `count` samples from `sample` on, rendered
  * through cam with cfg (the config the device ran, its passes included) in `scene` as it
- * is now (committed). With a previous frame of the same camera, size and config, its
- * samples are replayed at one pixel per stratum (chosen by `frame`) and g->cap gets each
+ * is now (committed). With a previous frame of the same size and config (its camera may
+ * differ: the replay takes it, and each pixel reads the gradient where its surface lay in
+ * the previous frame, through the depth pass), its samples are replayed at one pixel per stratum (chosen by `frame`) and g->cap gets each
  * pixel's history cap from the filtered, normalised gradient (g->valid = 1; a pixel whose
  * shading did not change gets no cap, FLT_MAX); otherwise g->valid = 0. Then this frame
  * becomes the previous one. A stratum whose replay hits another primitive than the
