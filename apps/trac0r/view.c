@@ -213,7 +213,14 @@ static int view_parse(cli_args *a, view_options *o) {
     /* SVGF measured best in motion (docs/realtime.md); at rest it follows the film. */
     o->recon = TR_RECON_SVGF;
     o->shot_dir = ".";
-    return cli_parse(a, &o->c, NULL, view_help, view_option, o);
+    o->recon_params.gradients = -1; /* unset: decided below */
+    const int rc = cli_parse(a, &o->c, NULL, view_help, view_option, o);
+    /* Temporal gradients where the scene changes (--animate: its lights too), unless
+     * --gradients says: a still scene gains nothing from their replay (docs/realtime.md). */
+    if (o->recon_params.gradients < 0) {
+        o->recon_params.gradients = o->animate != 0;
+    }
+    return rc;
 }
 
 /* Before the scene: the options agree, and the files they name can be written (the
