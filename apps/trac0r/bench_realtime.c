@@ -38,6 +38,8 @@ static void realtime_help(FILE *fp) {
             "  --upscale N          trace 1/N of the pixels and upscale, 1..16 (default 1)\n"
             "  --animate            the scene's last shape moves before every frame\n"
             "  --animate-frames A:B   the same, only before frames A to B-1\n"
+            "  --animate-light switch|move   the lights switch (off for frames 8-15, 24-31,\n"
+            "                       ...) or move (emitters sway, the sun turns) every frame\n"
             "  --bias-reference-depth D2   also measure the depth limit's bias against D2\n"
             "  --methods LIST       of off,accumulate,bilateral,atrous,svgf (default all)\n"
             "  --seed S, --threads T, --max-depth D, --accel NAME, --device D   as for render\n"
@@ -184,6 +186,8 @@ typedef struct rt_opts {
     uint32_t anim_from, anim_until; /* it moves before frames from .. until - 1 */
     char csv_path[4096], png_path[4096];
     uint32_t upscale; /* --upscale: frames trace 1/upscale of the pixels (1: every one) */
+    /* --animate-light: TR_LIGHT_ANIMATION_* */
+    int animate_light;
 } rt_opts;
 
 /* One run: the scene, the device, the real-time loop and the measures. */
@@ -236,6 +240,14 @@ static int own_option(cli_args *a, void *user) {
     } else if (cli_is(a, "--animate-frames")) {
         o->animate = 1;
         rc = parse_window(a, &o->anim_from, &o->anim_until);
+    } else if (cli_is(a, "--animate-light")) {
+        rc = cli_value(a);
+        if (rc == CLI_OK) {
+            o->animate_light = tr_light_animation_from_name(a->value);
+            if (o->animate_light <= TR_LIGHT_ANIMATION_NONE) {
+                rc = cli_error(a, "--animate-light: expected switch or move, got '%s'", a->value);
+            }
+        }
     } else if (cli_is(a, "--upscale")) {
         rc = cli_parse_u32(a, 1, 16, &o->upscale);
     } else if (cli_is(a, "--cut")) {
@@ -268,9 +280,9 @@ static int parse_options(cli_args *a, rt_opts *o) {
         return cli_error(a, "--cut: expected a frame before --frames (%u), got %u", o->frames,
                          o->cut);
     }
-    if (o->upscale > 1 && o->animate) {
+    if (o->upscale > 1 && (o->animate || o->animate_light)) {
         /* The scene's motion goes to one real-time loop, not to two. */
-        return cli_error(a, "--upscale: not with --animate");
+        return cli_error(a, "--upscale: not with --animate or --animate-light");
     }
     if (o->anim_until > o->frames) {
         return cli_error(a, "--animate-frames: expected B up to --frames (%u), got %u", o->frames,
@@ -343,7 +355,7 @@ static int open_loop(rt_run *r) {
     desc.recon = &o->params;
     desc.sampler = o->c.sampler >= 0 ? TR_REALTIME_SAMPLER(o->c.sampler) : 0;
     desc.spp = o->spp;
-    desc.animated = o->animate;
+    desc.animated = o->animate || o->animate_light;
     desc.keep_passes = 1; /* one frame goes to every method */
     cli_realtime_firefly(&o->c, &desc.clamp_indirect, &desc.regularize);
     desc.restir = o->c.restir;
@@ -420,9 +432,10 @@ static void print_header(const rt_run *r) {
     printf("samplers: frames %s, references %s\n", cli_sampler_name(r->frame_sampler),
            cli_sampler_name(r->rcfg.sampler));
     printf("reconstruction: alpha-min %g, max-history %g, max-history-moving %g, "
-           "svgf-iterations %d, svgf-sigma-l %g, taa %g, svgf-split %s\n",
+           "svgf-iterations %d, svgf-sigma-l %g, taa %g, svgf-split %s, gradients %s\n",
            (double)p->alpha_min, (double)p->max_len, (double)p->max_len_moving, p->svgf_iterations,
-           (double)p->svgf_sigma_l, (double)p->svgf_taa_alpha, p->svgf_split ? "on" : "off");
+           (double)p->svgf_sigma_l, (double)p->svgf_taa_alpha, p->svgf_split ? "on" : "off",
+           p->gradients ? "on" : "off");
     if (!(r->frame_passes & TR_PASS_EMISSION)) {
         printf("emission: filtered with the rest (%s)\n",
                p->emission_samples == 0 ? "--resolve-emission 0"
@@ -536,6 +549,18 @@ static int run_frame(rt_run *r, uint32_t f) {
             return rc;
         }
     }
+    if (o->animate_light) {
+        /* The lights in their state of frame f, outside the timed render as above. */
+        if (tr_scene_animate_light(r->scene, f, o->animate_light, &err) != TR_OK ||
+            tr_scene_update(r->scene, NULL, &err) != TR_OK) {
+            fprintf(stderr, "trac0r bench realtime: --animate-light: frame %u: %s\n", f, err.msg);
+            return CLI_FAILURE;
+        }
+        const int rc = cli_backend_upload(r->a, &r->be, r->scene);
+        if (rc != CLI_OK) {
+            return rc;
+        }
+    }
     int rc = frame_reference(r, &cam, f);
     if (rc != CLI_OK) {
         return rc;
@@ -621,6 +646,31 @@ static void report_method(const rt_run *r, int m, FILE *csv) {
     }
 }
 
+/* --animate-light switch: per switch and method, the frames from the switch on to return
+ * to within 0.5 dB of (or above) the mean PSNR of the lit frames before it (before a switch
+ * off, the 8 frames before it; before a switch on, the 8 before the light went off). */
+static void print_switch_recovery(const rt_frame_stats *st, const int *on, uint32_t frames) {
+    const uint32_t half = TR_LIGHT_SWITCH_PERIOD / 2u;
+    for (uint32_t e = half; e < frames; e += half) {
+        const int off = !tr_light_animation_on(e);
+        printf("light switched %s at frame %u, frames to recover:", off ? "off" : "on", e);
+        for (int m = 0; m < TR_RECON_COUNT; ++m) {
+            if (!on[m]) {
+                continue;
+            }
+            double steady = 0.0;
+            const int n = tr_recovery_frames(st + (size_t)m * frames, frames, off ? e : e - half, e,
+                                             0, 0.5, &steady);
+            if (n >= 0) {
+                printf(" %s %d", tr_recon_name(m), n);
+            } else {
+                printf(" %s never", tr_recon_name(m));
+            }
+        }
+        printf("\n");
+    }
+}
+
 /* The lines after the table: the emission's resolve, the moving shape, the depth bias. */
 static void report_extras(const rt_run *r) {
     const rt_opts *o = r->o;
@@ -648,6 +698,9 @@ static void report_extras(const rt_run *r) {
         if (o->anim_from >= 2 && o->anim_until < frames) {
             print_shape_recovery(r->st, o->on, frames, o->anim_from, o->anim_until);
         }
+    }
+    if (o->animate_light == TR_LIGHT_ANIMATION_SWITCH) {
+        print_switch_recovery(r->st, o->on, frames);
     }
     if (o->bias_depth) {
         /* The depth limit's own error, which no reconstruction can take out: the frames'
@@ -742,6 +795,12 @@ static int run_bench(cli_args *a, rt_opts *o) {
     }
     if (rc == CLI_OK && o->animate) {
         rc = setup_shape(&r);
+    }
+    if (rc == CLI_OK && o->animate_light) {
+        printf("animated light: %s%s\n", tr_light_animation_name(o->animate_light),
+               o->animate_light == TR_LIGHT_ANIMATION_SWITCH
+                   ? " (the emitters are off for frames 8-15, 24-31, ...)"
+                   : " (the emitters sway along x, the sun turns, one period per 60 frames)");
     }
     const double t_start = tr_time_now();
     for (uint32_t f = 0; rc == CLI_OK && f < o->frames; ++f) {

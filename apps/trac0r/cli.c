@@ -432,6 +432,8 @@ const char cli_recon_help[] =
     "  --svgf-sigma-l S     SVGF's luminance weight, 0.1..1000 (default 8)\n"
     "  --taa A              SVGF's temporal antialiasing, 0..1 (default 0: off)\n"
     "  --svgf-split         filter direct and indirect light apart (CPU only)\n"
+    "  --gradients on|off   temporal gradients: shorten the history where the lighting\n"
+    "                       changed (A-SVGF; CPU only; default off)\n"
     "  --resolve-emission N emitters' edges traced at N x N rays, 0..16 (default 4)\n"
     "  --restir off|di|di+gi  ReSTIR DI for the first surfaces' direct light, di+gi\n"
     "                       ReSTIR GI for their indirect light too (default off)\n"
@@ -507,6 +509,16 @@ int cli_recon_option(cli_args *a, tr_recon_params *p) {
     }
     if (cli_is(a, "--svgf-split")) {
         p->svgf_split = 1;
+        return CLI_OK;
+    }
+    if (cli_is(a, "--gradients")) {
+        if (cli_value(a) != CLI_OK) {
+            return CLI_USAGE;
+        }
+        if (strcmp(a->value, "on") != 0 && strcmp(a->value, "off") != 0) {
+            return cli_error(a, "--gradients: expected on or off, got '%s'", a->value);
+        }
+        p->gradients = strcmp(a->value, "on") == 0;
         return CLI_OK;
     }
     return -1;

@@ -43,7 +43,9 @@ static void view_help(FILE *fp) {
         "  --tonemap CURVE      display curve: clamp (default) or filmic\n"
         "  --recon METHOD       off, accumulate, bilateral, atrous or svgf (default)\n"
         "  --max-spp N          stop accumulating after N samples per pixel (0: never)\n"
-        "  --animate            the scene's last shape moves before every frame\n"
+        "  --animate            the scene's last shape and the lights move every frame\n"
+        "  --animate-light switch|move|none   what --animate does to the lights (default\n"
+        "                       move); implies --animate\n"
         "  --font FILE          TrueType font of the debug view\n"
         "  --shot-dir DIR       where F12 saves trac0r-view-NNN.png (default: .)\n"
         "  --state-file FILE    rewrite FILE with the viewer's state as it changes\n"
@@ -175,8 +177,23 @@ static int view_option(cli_args *a, void *user) {
     if (cli_is(a, "--max-spp")) {
         return cli_parse_u32(a, 0, 100000000, &o->max_spp);
     }
+    /* o->animate - 1 is the lights' TR_LIGHT_ANIMATION_* (view_renderer's animate). */
     if (cli_is(a, "--animate")) {
-        o->animate = 1;
+        if (!o->animate) {
+            o->animate = 1 + TR_LIGHT_ANIMATION_MOVE;
+        }
+        return CLI_OK;
+    }
+    if (cli_is(a, "--animate-light")) {
+        if (cli_value(a) != CLI_OK) {
+            return CLI_USAGE;
+        }
+        const int mode = tr_light_animation_from_name(a->value);
+        if (mode < 0) {
+            return cli_error(a, "--animate-light: expected switch, move or none, got '%s'",
+                             a->value);
+        }
+        o->animate = 1 + mode;
         return CLI_OK;
     }
     if (a->opt[0] != '-' && a->i == 1) {
@@ -196,7 +213,14 @@ static int view_parse(cli_args *a, view_options *o) {
     /* SVGF measured best in motion (docs/realtime.md); at rest it follows the film. */
     o->recon = TR_RECON_SVGF;
     o->shot_dir = ".";
-    return cli_parse(a, &o->c, NULL, view_help, view_option, o);
+    o->recon_params.gradients = -1; /* unset: decided below */
+    const int rc = cli_parse(a, &o->c, NULL, view_help, view_option, o);
+    /* Temporal gradients where the scene changes (--animate: its lights too), unless
+     * --gradients says: a still scene gains nothing from their replay (docs/realtime.md). */
+    if (o->recon_params.gradients < 0) {
+        o->recon_params.gradients = o->animate != 0;
+    }
+    return rc;
 }
 
 /* Before the scene: the options agree, and the files they name can be written (the

@@ -60,10 +60,12 @@ static void take_shot(view_renderer *r, uint32_t spp) {
 }
 
 /* --animate, under mu (the UI thread reads the scene's boxes): moves the scene's last
- * shape and uploads the scene. */
+ * shape, animates the lights (--animate-light) and uploads the scene. */
 static int animate_scene(view_renderer *r, tr_error *err) {
     const double t0 = tr_time_now();
-    if (tr_scene_animate_sway(r->scene, (uint32_t)(r->updates + 1), err) != TR_OK ||
+    const uint32_t frame = (uint32_t)(r->updates + 1);
+    if (tr_scene_animate_sway(r->scene, frame, err) != TR_OK ||
+        tr_scene_animate_light(r->scene, frame, r->animate - 1, err) != TR_OK ||
         tr_scene_update(r->scene, NULL, err) != TR_OK ||
         tr_device_upload(r->dev, r->scene, err) != TR_OK) {
         return TR_ERR;

@@ -31,6 +31,8 @@
 #include "trac0r/realtime.h"
 #include "trac0r/trac0r.h"
 
+/* animate: nonzero moves the scene's last shape before every frame and animates the
+ * lights as TR_LIGHT_ANIMATION_(animate - 1) (tr_scene_animate_light). */
 typedef struct view_renderer {
     tr_scene *scene; /* changed only by this thread, under mu, when animating */
     int animate;     /* move the scene's last shape before every frame (tr_scene_animate_sway) */

@@ -179,6 +179,10 @@ typedef struct tr_recon_params {
     int emission_samples; /* n of tr_resolve_emission for the callers that resolve the
                              emission (bench realtime, view): n x n rays per edge pixel;
                              0: they keep the emission in the filtered frame */
+    int gradients;        /* 1: tr_realtime measures temporal gradients (A-SVGF, Schied et
+                             al. 2018: a sparse replay of the previous frame's samples in the
+                             current scene) and shortens the history where the shading
+                             changed, through tr_recon.len_cap; 0: off (docs/realtime.md) */
 } tr_recon_params;
 
 /* The defaults. A field that would divide by zero at 0 (max_len, max_len_moving, the
@@ -211,6 +215,11 @@ typedef struct tr_recon {
     int hist_split;                 /* whether the history was written split */
     int have_taa;
     double ms_temporal, ms_spatial; /* the stages' wall times in the last tr_recon_frame */
+    /* Per pixel, the most frames of history the next tr_recon_frame keeps (a cap under
+     * max_len, 1: the history is dropped), width x height floats the caller owns and
+     * sets before the call (tr_realtime's temporal gradients); NULL (after tr_recon_init):
+     * none. The host reconstruction only. */
+    const float *len_cap;
 } tr_recon;
 
 int tr_recon_init(tr_recon *r, uint32_t width, uint32_t height, tr_error *err);

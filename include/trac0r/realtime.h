@@ -167,6 +167,12 @@ typedef struct tr_realtime_result {
     /* The traced frame's size: width x height, or less where the frame was upscaled. */
     uint32_t traced_width, traced_height;
     double upscale_ms; /* the upscaling (counted into temporal_ms too); 0 without */
+    /* Temporal gradients (tr_recon_params.gradients): the replay's time (part of
+     * render_ms), whether this frame measured them (a previous frame of the same camera
+     * and settings), and the strata whose replay differed from the previous frame. */
+    double gradient_ms;
+    int gradient_valid;
+    uint32_t gradient_changed;
 } tr_realtime_result;
 
 /* A real-time loop rendering `scene` (uploaded to dev already) on dev, which both must

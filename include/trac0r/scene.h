@@ -125,6 +125,36 @@ int tr_scene_move_shape(tr_scene *s, uint32_t shape, tr_vec3 delta, tr_error *er
  * Moves it from its place in frame f - 1 to its place in frame f (frame 0: where it was
  * built; nothing moves); tr_scene_update must follow. */
 int tr_scene_animate_sway(tr_scene *s, uint32_t frame, tr_error *err);
+/* Lights that change at run time. tr_scene_set_emittance sets emitter material
+ * `material`'s emittance (0 switches it off; its colour stays): the emitter table (the
+ * power CDF next-event estimation picks emitters from) and the light tree depend on it,
+ * and tr_scene_update builds both anew, as tr_scene_commit does. Fails on an unknown
+ * material, one that is not an emitter or a negative or non-finite value; setting the
+ * value it has changes nothing (the scene stays committed). A light moves with its shape
+ * (tr_scene_move_shape; the tree is rebuilt by tr_scene_update, the CDF, by area and
+ * power, stays). tr_scene_set_sun_direction turns the sun to `dir` (towards it; any
+ * length above 0), keeping its size and irradiance; it fails where the scene has no sun.
+ * Each bumps the generation: tr_scene_update must follow before rendering. */
+int tr_scene_set_emittance(tr_scene *s, uint32_t material, float emittance, tr_error *err);
+int tr_scene_set_sun_direction(tr_scene *s, tr_vec3 dir, tr_error *err);
+/* The light animations of `trac0r bench realtime --animate-light` and `view --animate`:
+ * switch: every emitter material is on for TR_LIGHT_SWITCH_PERIOD / 2 frames and off
+ * for as many (frames 0-7 on, 8-15 off, 16-23 on, ...), at the emittance it had at the
+ * first call; move: every emitter's shape sways along x, a quarter of its width either
+ * way, and the sun turns about y by 0.3 radians either way, one period per 60 frames
+ * (frame 0: as built). tr_scene_animate_light brings the lights to their state in frame f
+ * (moves go from frame f - 1 to f, as tr_scene_animate_sway's); tr_scene_update must
+ * follow. none does nothing; an unknown mode fails. */
+#define TR_LIGHT_ANIMATION_NONE 0
+#define TR_LIGHT_ANIMATION_SWITCH 1
+#define TR_LIGHT_ANIMATION_MOVE 2
+#define TR_LIGHT_SWITCH_PERIOD 16u
+int tr_scene_animate_light(tr_scene *s, uint32_t frame, int mode, tr_error *err);
+/* Whether switch's lights are on in frame f. */
+int tr_light_animation_on(uint32_t frame);
+/* "none", "switch", "move" (NULL for anything else), and back (-1 for an unknown name). */
+const char *tr_light_animation_name(int mode);
+int tr_light_animation_from_name(const char *name);
 /* Motion vectors for temporal reconstruction (tr_recon_frame_moving): how far each
  * primitive moved through tr_scene_move_shape since the last call, into motion[0, n) with
  * n = tr_scene_triangle_count(s) + 1, indexed as the id pass numbers primitives (triangle

@@ -168,6 +168,8 @@ tr_recon_params tr_recon_params_default(void) {
      * (320x240) lower on the classic box at 1 spp and costs twice the instructions
      * (docs/realtime.md), so the sum is filtered unless asked for. */
     p.svgf_split = 0;
+    /* Temporal gradients (tr_realtime): see docs/realtime.md, "Lights that change". */
+    p.gradients = 0;
     return p;
 }
 
@@ -984,10 +986,12 @@ static void temporal_rows(const tr_recon *r, const tr_gbuffer *g, const float *c
             if (total > 0.05f) {
                 const uint32_t id = g->prim[i];
                 const tr_vec3 m = motion && id < motion_count ? motion[id] : v3s(0.0f);
+                float cap = tr_post_max_len(m, p->max_len, p->max_len_moving);
+                if (r->len_cap) {
+                    cap = tr_fminf(cap, r->len_cap[i]); /* the shading changed here */
+                }
                 tr_post_temporal_blend(cr, cg, cb, total, wt, ix, iy, w, pcol, pmom, plen,
-                                       p->alpha_min,
-                                       tr_post_max_len(m, p->max_len, p->max_len_moving),
-                                       hc + 3 * i, hm + 2 * i, hl + i);
+                                       p->alpha_min, cap, hc + 3 * i, hm + 2 * i, hl + i);
             } else {
                 const float l = tr_post_luminance(cr, cg, cb);
                 hc[3 * i] = cr;
@@ -1018,12 +1022,14 @@ static void direct_temporal(tr_recon *r, const tr_gbuffer *g, const tr_camera *c
             if (hist) {
                 const uint32_t id = g->prim[i];
                 const tr_vec3 m = motion && id < motion_count ? motion[id] : v3s(0.0f);
-                tr_post_temporal_pixel_moving(cam, pc, (uint32_t)x, (uint32_t)y, m, r->illum_d,
-                                              g->normal, g->depth, g->prim, r->hist_direct[prev],
-                                              r->hist_dmoments[prev], plen, r->hist_depth,
-                                              r->hist_normal, r->hist_prim, p->alpha_min,
-                                              tr_post_max_len(m, p->max_len, p->max_len_moving),
-                                              hd + 3 * i, hdm + 2 * i, hl + i);
+                tr_post_temporal_pixel_moving(
+                    cam, pc, (uint32_t)x, (uint32_t)y, m, r->illum_d, g->normal, g->depth, g->prim,
+                    r->hist_direct[prev], r->hist_dmoments[prev], plen, r->hist_depth,
+                    r->hist_normal, r->hist_prim, p->alpha_min,
+                    r->len_cap
+                        ? tr_fminf(tr_post_max_len(m, p->max_len, p->max_len_moving), r->len_cap[i])
+                        : tr_post_max_len(m, p->max_len, p->max_len_moving),
+                    hd + 3 * i, hdm + 2 * i, hl + i);
             } else {
                 const float ld = tr_post_luminance(r->illum_d[3 * i], r->illum_d[3 * i + 1],
                                                    r->illum_d[3 * i + 2]);

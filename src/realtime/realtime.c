@@ -2,6 +2,7 @@
  * frame budget, each stage its own function below. */
 #include "trac0r/realtime.h"
 #include "trac0r/recon_device.h"
+#include "realtime/gradient.h"
 #include "realtime/restir_stage.h"
 #include "trac0r/upscale.h"
 
@@ -78,6 +79,9 @@ struct tr_realtime {
     size_t emis_len;
     int emis_cur;
     uint64_t emis_frame; /* the frame emis[emis_cur] is of (0: none) */
+
+    /* Temporal gradients (gradient.h; tr_recon_params.gradients). */
+    tr_grad grad;
 };
 
 static int same_camera(const tr_camera *a, const tr_camera *b) {
@@ -225,6 +229,7 @@ void tr_realtime_destroy(tr_realtime *rt) {
     free(rt->low);
     free(rt->emis[0]);
     free(rt->emis[1]);
+    tr_grad_free(&rt->grad);
     free(rt);
 }
 
@@ -468,11 +473,26 @@ int tr_realtime_render(tr_realtime *rt, const tr_realtime_frame_desc *fd, tr_err
         }
     }
     rt->gb_guides = 0;
-    rt->render_ms = (tr_time_now() - t0) * 1e3;
+    /* Temporal gradients where the film holds this frame's samples alone, traced at every
+     * pixel by pt or naive on the host (the replay runs there): not with ReSTIR, whose
+     * first surfaces' light the replay would not resample, nor upscaled frames. */
+    const int grad = rt->params.gradients && !rt->on_device && !restir && stride <= 1 &&
+                     !rt->view_upscaled && rt->acc_spp == 0 &&
+                     !tr_integrator_is_bidirectional(cfg.integrator);
     rt->acc_spp += n;
     rt->frame_spp = n;
     rt->rendered += 1;
     take_motion(rt);
+    rt->grad.ms = 0.0;
+    if (!grad) {
+        tr_grad_reset(&rt->grad);
+    } else if (tr_grad_frame(&rt->grad, rt->scene, &rt->film, &rt->rcam, &cfg, sample, n, rt->calls,
+                             rt->moved ? rt->motion : NULL, rt->moved ? rt->motion_ids : 0u,
+                             rt->params.alpha_min, rt->cfg.threads, err) != TR_OK) {
+        rt->have_view = 0;
+        return TR_ERR;
+    }
+    rt->render_ms = (tr_time_now() - t0) * 1e3;
     return TR_OK;
 }
 
@@ -733,6 +753,8 @@ int tr_realtime_reconstruct(tr_realtime *rt, int method, tr_realtime_result *out
         }
         tr_recon_device_times(hist->rdev, &temporal, &spatial);
     } else {
+        /* The gradients' history caps, for this frame only. */
+        hist->rec.len_cap = rt->grad.valid ? rt->grad.cap : NULL;
         if (host_frame(rt, err) != TR_OK ||
             tr_recon_frame_moving(&hist->rec, &rt->gb, &rt->rcam, motion, ids, method, &rt->params,
                                   rt->cfg.threads, dst, err) != TR_OK) {
@@ -758,6 +780,9 @@ int tr_realtime_reconstruct(tr_realtime *rt, int method, tr_realtime_result *out
     out->spatial_ms = spatial;
     out->resolve_ms = rt->on_device ? 0.0 : rt->resolve_ms;
     out->resolved = rt->on_device ? 0u : rt->resolved;
+    out->gradient_ms = rt->grad.ms;
+    out->gradient_valid = rt->grad.valid;
+    out->gradient_changed = rt->grad.changed;
     return TR_OK;
 }
 

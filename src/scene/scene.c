@@ -64,6 +64,7 @@ void tr_scene_clear(tr_scene *s) {
      * must not take the emptied (or reloaded) scene for the one it has. */
     const uint64_t generation = s->generation;
     free(s->materials);
+    free(s->light_base);
     free(s->triangles);
     free(s->shapes);
     free(s->shape_moved);
@@ -466,6 +467,7 @@ int tr_scene_commit(tr_scene *s, tr_accel_type accel, tr_error *err) {
     if (tr_scene_build_lights(s, err) != TR_OK) {
         return TR_ERR;
     }
+    s->lights_dirty = 0;
     tr_scene_build_punctual(s);
     tr_scene_free_light_tree(s);
     if (tr_scene_light_tree_wanted(s) && tr_scene_build_light_tree(s, err) != TR_OK) {
@@ -657,8 +659,12 @@ int tr_scene_update(tr_scene *s, double *seconds, tr_error *err) {
             s->committed = 0;
         }
     }
-    /* The tree bounds where the emitters are: moved ones need it built anew. */
-    if (rc == TR_OK && s->light_node_count > 0) {
+    /* An emittance changed (tr_scene_set_emittance): the emitter table and its light
+     * tree are built anew, as tr_scene_commit builds them. */
+    if (rc == TR_OK && s->lights_dirty) {
+        rc = tr_scene_rebuild_lights(s, err);
+    } else if (rc == TR_OK && s->light_node_count > 0) {
+        /* The tree bounds where the emitters are: moved ones need it built anew. */
         rc = tr_scene_build_light_tree(s, err);
     }
     if (rc == TR_OK) {

@@ -122,6 +122,13 @@ struct tr_scene {
     int rest_moved;
     uint32_t *moved; /* instances moved since the last update, each once */
     uint32_t moved_count, moved_capacity;
+    /* Lights changed at run time (src/scene/light_change.c): lights_dirty says an
+     * emittance changed since the emitter table was built, so that tr_scene_update rebuilds
+     * it; light_base holds each material's emittance as tr_scene_animate_light first saw
+     * it (light_base_count entries, 0 before its first call). */
+    int lights_dirty;
+    float *light_base;
+    uint32_t light_base_count;
 };
 
 /* An empty scene (no allocation), for a tr_scene the caller owns (tr_scene_create does
@@ -242,6 +249,9 @@ int tr_scene_build_light_tree(tr_scene *s, tr_error *err);
 /* Whether tr_scene_commit builds the tree: as light_sampling says, for auto with at least
  * TR_LIGHT_TREE_MIN_EMITTERS emitters in the (fresh) table. */
 int tr_scene_light_tree_wanted(const tr_scene *s);
+/* The emitter table and, where wanted, its light tree built anew for the materials'
+ * emittances now (after tr_scene_set_emittance); clears lights_dirty. */
+int tr_scene_rebuild_lights(tr_scene *s, tr_error *err);
 void tr_scene_free_light_tree(tr_scene *s);
 
 /* Fills a triangle's normal, centroid and area from its vertices (normal and area are
