@@ -1,6 +1,13 @@
 /* upscale.c - the host side of temporal upscaling (include/trac0r/upscale.h): the
  * per-pixel operator of src/post/upscale.h over the output's rows, and the samples'
  * positions from the kernel's own jitter. */
+/* As in filter.c: the row loops below vectorise only when gcc may if-convert their
+ * selects, which it does not while it must keep floating-point exceptions exact. Nothing
+ * here reads the exception flags; the values are the same either way. */
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC optimize("no-trapping-math")
+#endif
+#include <math.h>
 #include <omp.h>
 #include <stdlib.h>
 #include <string.h>
@@ -53,6 +60,239 @@ void tr_upscale_clear(tr_upscale *u) {
     u->have_history = 0;
 }
 
+/* The host loop. tr_upscale_pixel per output pixel costs about 1000 instructions in
+ * scalar code; here its steps run turned round, each over a run of a row's pixels with
+ * its values in planar arrays (as filter.c runs the reconstruction's operators), so
+ * that gcc vectorises them: the samples that fell in each pixel and the nearest one, the
+ * pixel's point and its projection into the previous camera, the disocclusion test and
+ * the Catmull-Rom read. The per-frame quantities (each column's traced pixels, its
+ * camera ray's horizontal part) are computed once. Every value is computed by the same
+ * operations in the same order as the operator's, so the output is the operator's. */
+
+/* Pixels per run: the run's arrays live on the stack, in L1. */
+#define UP_RUN 64
+
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__)
+#define UP_CLONES __attribute__((target_clones("avx512f", "avx2", "default")))
+#else
+#define UP_CLONES
+#endif
+
+typedef struct up_ctx {
+    const tr_camera *cam, *prev;
+    int w, h, wl, hl, span;
+    float sxr, syr, max_len;
+    const float *col, *pos, *depth;
+    const uint32_t *prim;
+    const float *motion;
+    uint32_t motion_count;
+    const float *hcol, *hlen, *hdepth, *box;
+    /* Per output column: its traced pixels tx0 .. tx1, the one under its centre, and the
+     * horizontal part of its camera ray (cam->right times the screen offset). */
+    const int *tx0, *tx1, *lx;
+    const float *rx, *ry, *rz;
+    float *oc, *ol, *od;
+} up_ctx;
+
+typedef struct up_run {
+    float sr[UP_RUN], sg[UP_RUN], sb[UP_RUN], n[UP_RUN], best[UP_RUN], d[UP_RUN];
+    uint32_t id[UP_RUN];
+    float qx[UP_RUN], qy[UP_RUN], moved[UP_RUN], len[UP_RUN];
+    int have[UP_RUN];
+    float hr[UP_RUN], hg[UP_RUN], hb[UP_RUN];
+} up_run;
+
+static inline int up_clampi(int v, int lo, int hi) {
+    return v < lo ? lo : v > hi ? hi : v;
+}
+
+/* The samples of the run's pixels (x0 + a, y): their sum and count, and the nearest
+ * one's distance and primitive (the operator's first loop, in its order: the traced rows,
+ * then the traced columns, ascending). */
+static inline __attribute__((always_inline)) void
+up_gather(const up_ctx *restrict c, up_run *restrict r, int y, int x0, int n) {
+    const float *restrict pos = c->pos, *restrict col = c->col, *restrict depth = c->depth;
+    const uint32_t *restrict prim = c->prim;
+    const int *restrict tx0 = c->tx0 + x0, *restrict tx1 = c->tx1 + x0;
+    const int wl = c->wl, hl = c->hl;
+    const float cy = (float)y + 0.5f;
+    for (int a = 0; a < n; ++a) {
+        r->sr[a] = r->sg[a] = r->sb[a] = r->n[a] = r->d[a] = 0.0f;
+        r->best[a] = 1e30f;
+        r->id[a] = 0u;
+    }
+    const int ty0 = (int)((float)y * c->syr - 1e-3f);
+    const int ty1 = (int)((float)(y + 1) * c->syr + 1e-3f);
+    for (int ty = ty0; ty <= ty1; ++ty) {
+        if (ty < 0 || ty >= hl) {
+            continue;
+        }
+        for (int s = 0; s < c->span; ++s) {
+            for (int a = 0; a < n; ++a) {
+                const int x = x0 + a, tx = tx0[a] + s;
+                const int ok = tx <= tx1[a] && tx < wl;
+                const int k = ty * wl + (ok ? tx : 0);
+                const float px = pos[2 * k], py = pos[2 * k + 1];
+                const float ex = px - ((float)x + 0.5f), ey = py - cy, e2 = ex * ex + ey * ey;
+                const int in = ok && (int)px == x && (int)py == y;
+                r->sr[a] += in ? col[3 * k] : 0.0f;
+                r->sg[a] += in ? col[3 * k + 1] : 0.0f;
+                r->sb[a] += in ? col[3 * k + 2] : 0.0f;
+                r->n[a] += in ? 1.0f : 0.0f;
+                const int near = ok && e2 < r->best[a];
+                r->best[a] = near ? e2 : r->best[a];
+                r->d[a] = near ? depth[k] : r->d[a];
+                r->id[a] = near ? prim[k] : r->id[a];
+            }
+        }
+    }
+}
+
+/* The run's points reprojected into the previous camera and the disocclusion test (the
+ * operator's second step): where the history survives, its position (qx, qy), count and
+ * how far the pixel moved. */
+static inline __attribute__((always_inline)) void
+up_reproject(const up_ctx *restrict c, up_run *restrict r, int y, int x0, int n) {
+    const tr_camera *cam = c->cam, *pc = c->prev;
+    const float *restrict rx = c->rx + x0, *restrict ry = c->ry + x0, *restrict rz = c->rz + x0;
+    const int *restrict lxs = c->lx + x0;
+    const float *restrict motion = c->motion, *restrict depth = c->depth,
+                          *restrict hdepth = c->hdepth, *restrict hlen = c->hlen;
+    const uint32_t mc = c->motion ? c->motion_count : 0u;
+    const int w = c->w, h = c->h, wl = c->wl, hl = c->hl;
+    int ly = (int)(((float)y + 0.5f) * c->syr);
+    ly = ly < hl - 1 ? ly : hl - 1;
+    /* The vertical part of the row's camera ray (tr_post_world_point). */
+    const float sy = (0.5f - ((float)y + 0.5f) / (float)cam->screen_height) * cam->canvas_height;
+    const float ux = cam->up.x * sy, uy = cam->up.y * sy, uz = cam->up.z * sy;
+    const float cy = (float)y + 0.5f;
+    const float pw = (float)pc->screen_width, ph = (float)pc->screen_height;
+    for (int a = 0; a < n; ++a) {
+        const float d = r->d[a];
+        const float dist0 = d > 0.0f ? d : 1e6f;
+        const float bx = cam->dir.x + (rx[a] + ux), by = cam->dir.y + (ry[a] + uy),
+                    bz = cam->dir.z + (rz[a] + uz);
+        const float l = sqrtf(bx * bx + by * by + bz * bz);
+        const float il = 1.0f / l;
+        const float nx = l > 0.0f ? bx * il : bx, ny = l > 0.0f ? by * il : by,
+                    nz = l > 0.0f ? bz * il : bz;
+        float px = cam->pos.x + nx * dist0, py = cam->pos.y + ny * dist0,
+              pz = cam->pos.z + nz * dist0;
+        const uint32_t id = r->id[a];
+        const int mv = d > 0.0f && id < mc;
+        const uint32_t mi = mv ? id : 0u;
+        px = mv ? px - motion[3 * mi] : px;
+        py = mv ? py - motion[3 * mi + 1] : py;
+        pz = mv ? pz - motion[3 * mi + 2] : pz;
+        /* tr_post_project into the previous camera. */
+        const float vx = px - pc->pos.x, vy = py - pc->pos.y, vz = pz - pc->pos.z;
+        const float z = vx * pc->dir.x + vy * pc->dir.y + vz * pc->dir.z;
+        const int front = z > 1e-6f;
+        const float zs = front ? z : 1.0f;
+        const float ccx = (vx * pc->right.x + vy * pc->right.y + vz * pc->right.z) / zs;
+        const float ccy = (vx * pc->up.x + vy * pc->up.y + vz * pc->up.z) / zs;
+        const float qx = (ccx / pc->canvas_width + 0.5f) * pw;
+        const float qy = (0.5f - ccy / pc->canvas_height) * ph;
+        const float dist = sqrtf(vx * vx + vy * vy + vz * vz);
+        const int on = front && qx >= 0.0f && qy >= 0.0f && qx < (float)w && qy < (float)h;
+        const int j = on ? (int)qy * w + (int)qx : 0;
+        const float mx = qx - ((float)(x0 + a) + 0.5f), my = qy - cy;
+        r->moved[a] = mx * mx + my * my;
+        const float hd = hdepth[j], shift = d > 0.0f ? dist - d : 0.0f;
+        const int lx = lxs[a];
+        int found = 0;
+        for (int dy = -1; dy <= 1; ++dy) {
+            const int ty = ly + dy;
+            const int row_ok = ty >= 0 && ty < hl;
+            for (int dx = -1; dx <= 1; ++dx) {
+                const int tx = lx + dx;
+                const int ok = row_ok && tx >= 0 && tx < wl;
+                const float dk = depth[ok ? ty * wl + tx : 0];
+                const int same =
+                    dk > 0.0f ? hd > 0.0f && fabsf(dk + shift - hd) <= 0.05f * hd : !(hd > 0.0f);
+                found |= ok && same;
+            }
+        }
+        const float hl_j = hlen[j];
+        const int have = on && found && hl_j > 0.0f;
+        r->have[a] = have;
+        r->len[a] = have ? hl_j : 0.0f;
+        r->qx[a] = have ? qx : 0.5f;
+        r->qy[a] = have ? qy : 0.5f;
+    }
+}
+
+/* The history at the run's positions through the Catmull-Rom filter (tr_up_history_read;
+ * a tap's clamp to the image changes nothing where all sixteen lie inside). */
+static inline __attribute__((always_inline)) void up_history(const up_ctx *restrict c,
+                                                             up_run *restrict r, int n) {
+    const float *restrict hist = c->hcol;
+    const int w = c->w, h = c->h;
+    for (int a = 0; a < n; ++a) {
+        const float fx = r->qx[a] - 0.5f, fy = r->qy[a] - 0.5f;
+        const int ix = (int)(fx + 1.0f) - 1, iy = (int)(fy + 1.0f) - 1;
+        float wx[4], wy[4];
+        tr_up_catmull_rom(fx - (float)ix, wx);
+        tr_up_catmull_rom(fy - (float)iy, wy);
+        float o0 = 0.0f, o1 = 0.0f, o2 = 0.0f;
+        for (int j = 0; j < 4; ++j) {
+            const int ty = up_clampi(iy - 1 + j, 0, h - 1);
+            float r0 = 0.0f, r1 = 0.0f, r2 = 0.0f;
+            for (int i = 0; i < 4; ++i) {
+                const int tx = up_clampi(ix - 1 + i, 0, w - 1);
+                const int k = 3 * (ty * w + tx);
+                r0 += wx[i] * hist[k];
+                r1 += wx[i] * hist[k + 1];
+                r2 += wx[i] * hist[k + 2];
+            }
+            o0 += wy[j] * r0;
+            o1 += wy[j] * r1;
+            o2 += wy[j] * r2;
+        }
+        const int have = r->have[a];
+        r->hr[a] = have ? o0 : 0.0f;
+        r->hg[a] = have ? o1 : 0.0f;
+        r->hb[a] = have ? o2 : 0.0f;
+    }
+}
+
+/* Rows y0 .. y1 - 1 of the output. */
+UP_CLONES static void up_rows(const up_ctx *c, int y0, int y1) {
+    up_run r;
+    const int w = c->w, wl = c->wl, hl = c->hl;
+    for (int y = y0; y < y1; ++y) {
+        int ly = (int)(((float)y + 0.5f) * c->syr);
+        ly = ly < hl - 1 ? ly : hl - 1;
+        for (int x0 = 0; x0 < w; x0 += UP_RUN) {
+            const int n = w - x0 < UP_RUN ? w - x0 : UP_RUN;
+            up_gather(c, &r, y, x0, n);
+            if (c->hcol) {
+                up_reproject(c, &r, y, x0, n);
+                up_history(c, &r, n);
+            } else {
+                for (int a = 0; a < n; ++a) {
+                    r.have[a] = 0;
+                    r.len[a] = r.moved[a] = r.hr[a] = r.hg[a] = r.hb[a] = 0.0f;
+                }
+            }
+            for (int a = 0; a < n; ++a) {
+                const int x = x0 + a, lx = c->lx[x];
+                const size_t i = (size_t)y * w + x;
+                float hv[3] = {r.hr[a], r.hg[a], r.hb[a]};
+                const float sum[3] = {r.sr[a], r.sg[a], r.sb[a]};
+                const float *b = c->box + 6 * ((size_t)ly * wl + lx);
+                c->od[i] = r.d[a];
+                if (!tr_upscale_blend(r.have[a], r.moved[a], b, hv, r.len[a], r.n[a], sum,
+                                      c->max_len, c->oc + 3 * i, c->ol + i)) {
+                    tr_upscale_fill(x, y, wl, hl, lx, ly, c->sxr, c->syr, c->col, c->pos,
+                                    c->oc + 3 * i);
+                    c->ol[i] = 0.0f;
+                }
+            }
+        }
+    }
+}
+
 int tr_upscale_frame(tr_upscale *u, const tr_upscale_input *in, const tr_camera *cam,
                      const tr_vec3 *motion, uint32_t motion_count, float max_len, int threads,
                      float *out, tr_error *err) {
@@ -97,15 +337,65 @@ int tr_upscale_frame(tr_upscale *u, const tr_upscale_input *in, const tr_camera 
             tr_upscale_box_pixel(in->color, wl, hl, x, y, box + 6 * ((size_t)y * wl + x));
         }
     }
+    /* Per column: the traced pixels its samples can come from (the operator's bounds) and
+     * its camera ray's horizontal part (tr_post_world_point's). */
+    int *cols = malloc(3 * (size_t)w * sizeof *cols);
+    float *ray = malloc(3 * (size_t)w * sizeof *ray);
+    if (!cols || !ray) {
+        free(cols);
+        free(ray);
+        return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory for a %ux%u output",
+                            u->width, u->height);
+    }
+    up_ctx c = {0};
+    c.cam = cam;
+    c.prev = &pc;
+    c.w = w;
+    c.h = h;
+    c.wl = wl;
+    c.hl = hl;
+    c.sxr = (float)wl / (float)w;
+    c.syr = (float)hl / (float)h;
+    c.max_len = cap;
+    c.col = in->color;
+    c.pos = in->pos;
+    c.depth = in->depth;
+    c.prim = in->prim;
+    c.motion = mot;
+    c.motion_count = motion ? motion_count : 0u;
+    c.hcol = hcol;
+    c.hlen = u->count[prev];
+    c.hdepth = u->depth[prev];
+    c.box = box;
+    c.oc = oc;
+    c.ol = ol;
+    c.od = od;
+    int *tx0 = cols, *tx1 = cols + w, *lxs = cols + 2 * w;
+    float *rx = ray, *ry = ray + w, *rz = ray + 2 * w;
+    c.span = 1;
+    for (int x = 0; x < w; ++x) {
+        tx0[x] = (int)((float)x * c.sxr - 1e-3f);
+        tx1[x] = (int)((float)(x + 1) * c.sxr + 1e-3f);
+        c.span = tx1[x] - tx0[x] + 1 > c.span ? tx1[x] - tx0[x] + 1 : c.span;
+        const int lx = (int)(((float)x + 0.5f) * c.sxr);
+        lxs[x] = lx < wl - 1 ? lx : wl - 1;
+        const float sx = (((float)x + 0.5f) / (float)cam->screen_width - 0.5f) * cam->canvas_width;
+        rx[x] = cam->right.x * sx;
+        ry[x] = cam->right.y * sx;
+        rz[x] = cam->right.z * sx;
+    }
+    c.tx0 = tx0;
+    c.tx1 = tx1;
+    c.lx = lxs;
+    c.rx = rx;
+    c.ry = ry;
+    c.rz = rz;
 #pragma omp parallel for num_threads(nt) schedule(static)
     for (int y = 0; y < h; ++y) {
-        for (int x = 0; x < w; ++x) {
-            const size_t i = (size_t)y * w + x;
-            tr_upscale_pixel(cam, &pc, x, y, (int)in->width, (int)in->height, in->color, in->pos,
-                             in->depth, in->prim, mot, motion ? motion_count : 0u, hcol,
-                             u->count[prev], u->depth[prev], box, cap, oc + 3 * i, ol + i, od + i);
-        }
+        up_rows(&c, y, y + 1);
     }
+    free(cols);
+    free(ray);
     memcpy(out, oc, 3 * (size_t)w * h * sizeof *out);
     u->cur = next;
     u->prev_cam = *cam;
