@@ -86,7 +86,9 @@ typedef struct up_ctx {
     const uint32_t *prim;
     const float *motion;
     uint32_t motion_count;
-    const float *hcol, *hlen, *hdepth, *box;
+    const float *hcol, *hlen, *hdepth;
+    const float *box; /* the neighbourhoods' ranges: 6 planes (low Y, Co, Cg, high) */
+    size_t box_plane;
     /* Per output column: its traced pixels tx0 .. tx1, the one under its centre, and the
      * horizontal part of its camera ray (cam->right times the screen offset). */
     const int *tx0, *tx1, *lx;
@@ -98,8 +100,10 @@ typedef struct up_run {
     float sr[UP_RUN], sg[UP_RUN], sb[UP_RUN], n[UP_RUN], best[UP_RUN], d[UP_RUN];
     uint32_t id[UP_RUN];
     float qx[UP_RUN], qy[UP_RUN], moved[UP_RUN], len[UP_RUN];
-    int have[UP_RUN];
+    int have[UP_RUN], fill[UP_RUN], j[UP_RUN], on[UP_RUN];
+    float shift[UP_RUN];
     float hr[UP_RUN], hg[UP_RUN], hb[UP_RUN];
+    float o0[UP_RUN], o1[UP_RUN], o2[UP_RUN], ol[UP_RUN];
 } up_run;
 
 static inline int up_clampi(int v, int lo, int hi) {
@@ -130,19 +134,24 @@ up_gather(const up_ctx *restrict c, up_run *restrict r, int y, int x0, int n) {
         for (int s = 0; s < c->span; ++s) {
             for (int a = 0; a < n; ++a) {
                 const int x = x0 + a, tx = tx0[a] + s;
-                const int ok = tx <= tx1[a] && tx < wl;
-                const int k = ty * wl + (ok ? tx : 0);
+                const int ok = (tx <= tx1[a]) & (tx < wl);
+                const int k = ty * wl + (tx & -ok);
+                /* Every load unconditional (k is on the frame): the loop is one block
+                 * of selects. */
                 const float px = pos[2 * k], py = pos[2 * k + 1];
+                const float cr = col[3 * k], cg = col[3 * k + 1], cb = col[3 * k + 2];
+                const float dk = depth[k];
+                const uint32_t pk = prim[k];
                 const float ex = px - ((float)x + 0.5f), ey = py - cy, e2 = ex * ex + ey * ey;
-                const int in = ok && (int)px == x && (int)py == y;
-                r->sr[a] += in ? col[3 * k] : 0.0f;
-                r->sg[a] += in ? col[3 * k + 1] : 0.0f;
-                r->sb[a] += in ? col[3 * k + 2] : 0.0f;
+                const int in = ok & ((int)px == x) & ((int)py == y);
+                r->sr[a] += in ? cr : 0.0f;
+                r->sg[a] += in ? cg : 0.0f;
+                r->sb[a] += in ? cb : 0.0f;
                 r->n[a] += in ? 1.0f : 0.0f;
-                const int near = ok && e2 < r->best[a];
+                const int near = ok & (e2 < r->best[a]);
                 r->best[a] = near ? e2 : r->best[a];
-                r->d[a] = near ? depth[k] : r->d[a];
-                r->id[a] = near ? prim[k] : r->id[a];
+                r->d[a] = near ? dk : r->d[a];
+                r->id[a] = near ? pk : r->id[a];
             }
         }
     }
@@ -158,7 +167,7 @@ up_reproject(const up_ctx *restrict c, up_run *restrict r, int y, int x0, int n)
     const int *restrict lxs = c->lx + x0;
     const float *restrict motion = c->motion, *restrict depth = c->depth,
                           *restrict hdepth = c->hdepth, *restrict hlen = c->hlen;
-    const uint32_t mc = c->motion ? c->motion_count : 0u;
+    const uint32_t mc = c->motion_count;
     const int w = c->w, h = c->h, wl = c->wl, hl = c->hl;
     int ly = (int)(((float)y + 0.5f) * c->syr);
     ly = ly < hl - 1 ? ly : hl - 1;
@@ -179,11 +188,20 @@ up_reproject(const up_ctx *restrict c, up_run *restrict r, int y, int x0, int n)
         float px = cam->pos.x + nx * dist0, py = cam->pos.y + ny * dist0,
               pz = cam->pos.z + nz * dist0;
         const uint32_t id = r->id[a];
-        const int mv = d > 0.0f && id < mc;
-        const uint32_t mi = mv ? id : 0u;
-        px = mv ? px - motion[3 * mi] : px;
-        py = mv ? py - motion[3 * mi + 1] : py;
-        pz = mv ? pz - motion[3 * mi + 2] : pz;
+        const int mv = (d > 0.0f) & (id < mc);
+        /* (motion has an entry at 0 in any case: tr_upscale_frame points it at zeros.) */
+        /* (A mask, not a select: gcc turns a selected index into a selected pointer,
+         * which it cannot gather from.) */
+        const int mi = (int)(id & (0u - (uint32_t)mv));
+        /* The motion, or +0 (subtracting which changes nothing), by a mask of its bits:
+         * a select here becomes a masked load, which gcc does not vectorise. */
+        const uint32_t keep = mv ? 0xffffffffu : 0u;
+        const float m0 = tr_post_bits_float(tr_post_float_bits(motion[3 * mi]) & keep);
+        const float m1 = tr_post_bits_float(tr_post_float_bits(motion[3 * mi + 1]) & keep);
+        const float m2 = tr_post_bits_float(tr_post_float_bits(motion[3 * mi + 2]) & keep);
+        px = px - m0;
+        py = py - m1;
+        pz = pz - m2;
         /* tr_post_project into the previous camera. */
         const float vx = px - pc->pos.x, vy = py - pc->pos.y, vz = pz - pc->pos.z;
         const float z = vx * pc->dir.x + vy * pc->dir.y + vz * pc->dir.z;
@@ -194,31 +212,50 @@ up_reproject(const up_ctx *restrict c, up_run *restrict r, int y, int x0, int n)
         const float qx = (ccx / pc->canvas_width + 0.5f) * pw;
         const float qy = (0.5f - ccy / pc->canvas_height) * ph;
         const float dist = sqrtf(vx * vx + vy * vy + vz * vz);
-        const int on = front && qx >= 0.0f && qy >= 0.0f && qx < (float)w && qy < (float)h;
-        const int j = on ? (int)qy * w + (int)qx : 0;
+        const int on = front & (qx >= 0.0f) & (qy >= 0.0f) & (qx < (float)w) & (qy < (float)h);
+        /* (Off the image: pixel 0, by the position rather than a select of the index,
+         * which gcc would turn into a select of pointers, as for the motion above.) */
+        const float qxs = on ? qx : 0.0f, qys = on ? qy : 0.0f;
+        const int j = (int)qys * w + (int)qxs;
         const float mx = qx - ((float)(x0 + a) + 0.5f), my = qy - cy;
         r->moved[a] = mx * mx + my * my;
-        const float hd = hdepth[j], shift = d > 0.0f ? dist - d : 0.0f;
+        r->j[a] = j;
+        r->on[a] = on;
+        r->qx[a] = qx;
+        r->qy[a] = qy;
+        r->shift[a] = d > 0.0f ? dist - d : 0.0f;
+    }
+    /* Apart from the loop above, so that gcc gathers through the index rather than
+     * selecting among pointers (which it cannot vectorise). */
+    for (int a = 0; a < n; ++a) {
+        const int j = r->j[a], on = r->on[a];
+        const float hd = hdepth[j], shift = r->shift[a];
         const int lx = lxs[a];
-        int found = 0;
+        /* The tests as 1.0f / 0.0f selects: gcc does not vectorise the mix of
+         * comparison masks the integer form makes. */
+        const float hit = hd > 0.0f ? 1.0f : 0.0f, none = 1.0f - hit;
+        const float tol = 0.05f * hd;
+        float found = 0.0f;
+#pragma GCC unroll 3
         for (int dy = -1; dy <= 1; ++dy) {
             const int ty = ly + dy;
-            const int row_ok = ty >= 0 && ty < hl;
+            const int row_ok = (ty >= 0) & (ty < hl);
+#pragma GCC unroll 3
             for (int dx = -1; dx <= 1; ++dx) {
                 const int tx = lx + dx;
-                const int ok = row_ok && tx >= 0 && tx < wl;
-                const float dk = depth[ok ? ty * wl + tx : 0];
-                const int same =
-                    dk > 0.0f ? hd > 0.0f && fabsf(dk + shift - hd) <= 0.05f * hd : !(hd > 0.0f);
-                found |= ok && same;
+                const int ok = row_ok & (tx >= 0) & (tx < wl);
+                const float dk = depth[(ty * wl + tx) & -ok];
+                const float near = fabsf(dk + shift - hd) <= tol ? hit : 0.0f;
+                const float same = dk > 0.0f ? near : none;
+                found = ok ? found + same : found;
             }
         }
         const float hl_j = hlen[j];
-        const int have = on && found && hl_j > 0.0f;
+        const int have = on & (found > 0.0f) & (hl_j > 0.0f);
         r->have[a] = have;
         r->len[a] = have ? hl_j : 0.0f;
-        r->qx[a] = have ? qx : 0.5f;
-        r->qy[a] = have ? qy : 0.5f;
+        r->qx[a] = have ? r->qx[a] : 0.5f;
+        r->qy[a] = have ? r->qy[a] : 0.5f;
     }
 }
 
@@ -235,9 +272,11 @@ static inline __attribute__((always_inline)) void up_history(const up_ctx *restr
         tr_up_catmull_rom(fx - (float)ix, wx);
         tr_up_catmull_rom(fy - (float)iy, wy);
         float o0 = 0.0f, o1 = 0.0f, o2 = 0.0f;
+#pragma GCC unroll 4
         for (int j = 0; j < 4; ++j) {
             const int ty = up_clampi(iy - 1 + j, 0, h - 1);
             float r0 = 0.0f, r1 = 0.0f, r2 = 0.0f;
+#pragma GCC unroll 4
             for (int i = 0; i < 4; ++i) {
                 const int tx = up_clampi(ix - 1 + i, 0, w - 1);
                 const int k = 3 * (ty * w + tx);
@@ -253,6 +292,120 @@ static inline __attribute__((always_inline)) void up_history(const up_ctx *restr
         r->hr[a] = have ? o0 : 0.0f;
         r->hg[a] = have ? o1 : 0.0f;
         r->hb[a] = have ? o2 : 0.0f;
+    }
+}
+
+/* Rows y0 .. y1 - 1 of the neighbourhoods' ranges (tr_upscale_box_pixel) into the six
+ * planes at box (each wl * hl): the inner pixels of a row in one vectorised loop, the
+ * taps in the operator's order (the minimum and maximum as in up_blend), the two end
+ * pixels by the operator itself. */
+UP_CLONES static void up_box_rows(const float *restrict col, int wl, int hl, float *restrict box,
+                                  int y0, int y1) {
+    const size_t np = (size_t)wl * hl;
+    for (int y = y0; y < y1; ++y) {
+        float *restrict l0 = box + (size_t)y * wl, *restrict l1 = l0 + np, *restrict l2 = l1 + np,
+                        *restrict u0 = l2 + np, *restrict u1 = u0 + np, *restrict u2 = u1 + np;
+        for (int x = 1; x < wl - 1; ++x) {
+            float a0 = 1e30f, a1 = 1e30f, a2 = 1e30f, z0 = -1e30f, z1 = -1e30f, z2 = -1e30f;
+#pragma GCC unroll 3
+            for (int dy = -1; dy <= 1; ++dy) {
+                const int ty = y + dy;
+                if (ty < 0 || ty >= hl) {
+                    continue;
+                }
+#pragma GCC unroll 3
+                for (int dx = -1; dx <= 1; ++dx) {
+                    const int k = 3 * (ty * wl + x + dx);
+                    const float r = col[k], g = col[k + 1], b = col[k + 2];
+                    const float c0 = 0.25f * r + 0.5f * g + 0.25f * b;
+                    const float c1 = 0.5f * r - 0.5f * b;
+                    const float c2 = -0.25f * r + 0.5f * g - 0.25f * b;
+                    a0 = a0 < c0 ? a0 : c0;
+                    a1 = a1 < c1 ? a1 : c1;
+                    a2 = a2 < c2 ? a2 : c2;
+                    z0 = z0 > c0 ? z0 : c0;
+                    z1 = z1 > c1 ? z1 : c1;
+                    z2 = z2 > c2 ? z2 : c2;
+                }
+            }
+            l0[x] = a0;
+            l1[x] = a1;
+            l2[x] = a2;
+            u0[x] = z0;
+            u1[x] = z1;
+            u2[x] = z2;
+        }
+        for (int e = 0; e < 2; ++e) {
+            const int x = e ? wl - 1 : 0;
+            float b[6];
+            tr_upscale_box_pixel(col, wl, hl, x, y, b);
+            l0[x] = b[0];
+            l1[x] = b[1];
+            l2[x] = b[2];
+            u0[x] = b[3];
+            u1[x] = b[4];
+            u2[x] = b[5];
+        }
+    }
+}
+
+/* tr_upscale_blend over the run: the history bounded by the neighbourhood's range where
+ * the view moved, averaged with the samples; r->fill marks the pixels with neither. The
+ * minimum and maximum are the selects fminf and fmaxf compute for numbers (not NaN),
+ * which gcc vectorises (a call to fminf it does not). */
+static inline __attribute__((always_inline)) void
+up_blend(const up_ctx *restrict c, up_run *restrict r, int y, int x0, int n, int ly) {
+    const float *restrict b0 = c->box, *restrict b1 = b0 + c->box_plane,
+                          *restrict b2 = b1 + c->box_plane, *restrict b3 = b2 + c->box_plane,
+                          *restrict b4 = b3 + c->box_plane, *restrict b5 = b4 + c->box_plane;
+    const int *restrict lxs = c->lx + x0;
+    float *restrict oc = c->oc + 3 * ((size_t)y * c->w + x0);
+    float *restrict ol = c->ol + (size_t)y * c->w + x0, *restrict od =
+                                                            c->od + (size_t)y * c->w + x0;
+    const float max_len = c->max_len;
+    const int row = ly * c->wl;
+    for (int a = 0; a < n; ++a) {
+        const int have = r->have[a];
+        const int k = row + lxs[a];
+        float h0 = r->hr[a], h1 = r->hg[a], h2 = r->hb[a];
+        /* tr_up_ycocg, the clamp, tr_up_rgb and the floor at 0. */
+        const float y0 = 0.25f * h0 + 0.5f * h1 + 0.25f * h2;
+        const float y1 = 0.5f * h0 - 0.5f * h2;
+        const float y2 = -0.25f * h0 + 0.5f * h1 - 0.25f * h2;
+        const float lo0 = b0[k], lo1 = b1[k], lo2 = b2[k], hi0 = b3[k], hi1 = b4[k], hi2 = b5[k];
+        float c0 = y0 > lo0 ? y0 : lo0, c1 = y1 > lo1 ? y1 : lo1, c2 = y2 > lo2 ? y2 : lo2;
+        c0 = c0 < hi0 ? c0 : hi0;
+        c1 = c1 < hi1 ? c1 : hi1;
+        c2 = c2 < hi2 ? c2 : hi2;
+        const float g0 = c0 + c1 - c2, g1 = c0 + c2, g2 = c0 - c1 - c2;
+        const int bound = have & (r->moved[a] >= 1e-4f);
+        h0 = bound ? (g0 > 0.0f ? g0 : 0.0f) : h0;
+        h1 = bound ? (g1 > 0.0f ? g1 : 0.0f) : h1;
+        h2 = bound ? (g2 > 0.0f ? g2 : 0.0f) : h2;
+        const float ns = r->n[a], len = r->len[a];
+        const float room = max_len - ns > 0.0f ? max_len - ns : 0.0f;
+        const float keep = len < room ? len : room;
+        const float inv = 1.0f / (keep + ns);
+        const float m0 = (h0 * keep + r->sr[a]) * inv, m1 = (h1 * keep + r->sg[a]) * inv,
+                    m2 = (h2 * keep + r->sb[a]) * inv;
+        const float nz = ns > 0.0f ? ns : 1.0f;
+        const float s0 = r->sr[a] / nz, s1 = r->sg[a] / nz, s2 = r->sb[a] / nz;
+        const int some = ns > 0.0f;
+        const float v0 = have ? m0 : s0, v1 = have ? m1 : s1, v2 = have ? m2 : s2;
+        const float vl = have ? keep + ns : ns, hl = have ? len : 0.0f;
+        r->o0[a] = some ? v0 : h0;
+        r->o1[a] = some ? v1 : h1;
+        r->o2[a] = some ? v2 : h2;
+        r->ol[a] = some ? vl : hl;
+        r->fill[a] = !some & !have;
+    }
+    /* Stored apart: gcc does not vectorise the selects above into interleaved stores. */
+    for (int a = 0; a < n; ++a) {
+        oc[3 * a] = r->o0[a];
+        oc[3 * a + 1] = r->o1[a];
+        oc[3 * a + 2] = r->o2[a];
+        ol[a] = r->ol[a];
+        od[a] = r->d[a];
     }
 }
 
@@ -275,18 +428,14 @@ UP_CLONES static void up_rows(const up_ctx *c, int y0, int y1) {
                     r.len[a] = r.moved[a] = r.hr[a] = r.hg[a] = r.hb[a] = 0.0f;
                 }
             }
+            up_blend(c, &r, y, x0, n, ly);
+            /* The pixels with neither history nor a sample: the spatial fill. */
             for (int a = 0; a < n; ++a) {
-                const int x = x0 + a, lx = c->lx[x];
-                const size_t i = (size_t)y * w + x;
-                float hv[3] = {r.hr[a], r.hg[a], r.hb[a]};
-                const float sum[3] = {r.sr[a], r.sg[a], r.sb[a]};
-                const float *b = c->box + 6 * ((size_t)ly * wl + lx);
-                c->od[i] = r.d[a];
-                if (!tr_upscale_blend(r.have[a], r.moved[a], b, hv, r.len[a], r.n[a], sum,
-                                      c->max_len, c->oc + 3 * i, c->ol + i)) {
-                    tr_upscale_fill(x, y, wl, hl, lx, ly, c->sxr, c->syr, c->col, c->pos,
+                if (r.fill[a]) {
+                    const int x = x0 + a;
+                    const size_t i = (size_t)y * w + x;
+                    tr_upscale_fill(x, y, wl, hl, c->lx[x], ly, c->sxr, c->syr, c->col, c->pos,
                                     c->oc + 3 * i);
-                    c->ol[i] = 0.0f;
                 }
             }
         }
@@ -333,9 +482,7 @@ int tr_upscale_frame(tr_upscale *u, const tr_upscale_input *in, const tr_camera 
     float *box = u->box;
 #pragma omp parallel for num_threads(nt) schedule(static)
     for (int y = 0; y < hl; ++y) {
-        for (int x = 0; x < wl; ++x) {
-            tr_upscale_box_pixel(in->color, wl, hl, x, y, box + 6 * ((size_t)y * wl + x));
-        }
+        up_box_rows(in->color, wl, hl, box, y, y + 1);
     }
     /* Per column: the traced pixels its samples can come from (the operator's bounds) and
      * its camera ray's horizontal part (tr_post_world_point's). */
@@ -361,12 +508,14 @@ int tr_upscale_frame(tr_upscale *u, const tr_upscale_input *in, const tr_camera 
     c.pos = in->pos;
     c.depth = in->depth;
     c.prim = in->prim;
-    c.motion = mot;
-    c.motion_count = motion ? motion_count : 0u;
+    static const float no_motion[3] = {0.0f, 0.0f, 0.0f};
+    c.motion = mot && motion_count > 0 ? mot : no_motion;
+    c.motion_count = mot && motion_count > 0 ? motion_count : 0u;
     c.hcol = hcol;
     c.hlen = u->count[prev];
     c.hdepth = u->depth[prev];
     c.box = box;
+    c.box_plane = (size_t)wl * hl;
     c.oc = oc;
     c.ol = ol;
     c.od = od;
