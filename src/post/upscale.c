@@ -100,7 +100,8 @@ typedef struct up_run {
     float sr[UP_RUN], sg[UP_RUN], sb[UP_RUN], n[UP_RUN], best[UP_RUN], d[UP_RUN];
     uint32_t id[UP_RUN];
     float qx[UP_RUN], qy[UP_RUN], moved[UP_RUN], len[UP_RUN];
-    int have[UP_RUN], fill[UP_RUN], j[UP_RUN], on[UP_RUN];
+    int have[UP_RUN], fill[UP_RUN], j[UP_RUN], on[UP_RUN], k[UP_RUN];
+    float ok[UP_RUN];
     float shift[UP_RUN];
     float hr[UP_RUN], hg[UP_RUN], hb[UP_RUN];
     float o0[UP_RUN], o1[UP_RUN], o2[UP_RUN], ol[UP_RUN];
@@ -132,10 +133,18 @@ up_gather(const up_ctx *restrict c, up_run *restrict r, int y, int x0, int n) {
             continue;
         }
         for (int s = 0; s < c->span; ++s) {
+            /* The indices first, in a loop of their own: gcc then gathers through them
+             * (from a select of indices it makes a select of pointers, which it does not
+             * vectorise). */
             for (int a = 0; a < n; ++a) {
-                const int x = x0 + a, tx = tx0[a] + s;
+                const int tx = tx0[a] + s;
                 const int ok = (tx <= tx1[a]) & (tx < wl);
-                const int k = ty * wl + (tx & -ok);
+                r->k[a] = ty * wl + (tx & -ok);
+                r->ok[a] = ok ? 1.0f : 0.0f;
+            }
+            for (int a = 0; a < n; ++a) {
+                const int x = x0 + a, k = r->k[a];
+                const int ok = r->ok[a] > 0.0f;
                 /* Every load unconditional (k is on the frame): the loop is one block
                  * of selects. */
                 const float px = pos[2 * k], py = pos[2 * k + 1];
@@ -143,15 +152,18 @@ up_gather(const up_ctx *restrict c, up_run *restrict r, int y, int x0, int n) {
                 const float dk = depth[k];
                 const uint32_t pk = prim[k];
                 const float ex = px - ((float)x + 0.5f), ey = py - cy, e2 = ex * ex + ey * ey;
-                const int in = ok & ((int)px == x) & ((int)py == y);
-                r->sr[a] += in ? cr : 0.0f;
-                r->sg[a] += in ? cg : 0.0f;
-                r->sb[a] += in ? cb : 0.0f;
-                r->n[a] += in ? 1.0f : 0.0f;
-                const int near = ok & (e2 < r->best[a]);
+                /* Selects by masks of bits (gcc turns a select of a loaded value into a
+                 * masked load, which it does not vectorise); adding +0 changes no sum. */
+                const uint32_t in = 0u - (uint32_t)(ok & ((int)px == x) & ((int)py == y));
+                r->sr[a] += tr_post_bits_float(tr_post_float_bits(cr) & in);
+                r->sg[a] += tr_post_bits_float(tr_post_float_bits(cg) & in);
+                r->sb[a] += tr_post_bits_float(tr_post_float_bits(cb) & in);
+                r->n[a] += tr_post_bits_float(tr_post_float_bits(1.0f) & in);
+                const uint32_t near = 0u - (uint32_t)(ok & (e2 < r->best[a]));
                 r->best[a] = near ? e2 : r->best[a];
-                r->d[a] = near ? dk : r->d[a];
-                r->id[a] = near ? pk : r->id[a];
+                r->d[a] = tr_post_bits_float((tr_post_float_bits(dk) & near) |
+                                             (tr_post_float_bits(r->d[a]) & ~near));
+                r->id[a] = (pk & near) | (r->id[a] & ~near);
             }
         }
     }
