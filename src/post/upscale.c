@@ -626,6 +626,21 @@ int tr_upscale_emission(const struct tr_scene *scene, const tr_camera *cam, int 
     const float sxr = (float)wl / (float)W, syr = (float)hl / (float)H;
     const tr_scene_view view = tr_scene_view_of(scene);
     const int nt = threads > 0 ? threads : omp_get_max_threads();
+    /* Per traced pixel, once rather than per output pixel over it: whether its samples
+     * saw emission (bit 0) and whether it lies on an emitter's edge (bit 1). */
+    unsigned char *flag = malloc((size_t)wl * hl);
+    if (!flag) {
+        return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory for a %ux%u frame", width,
+                            height);
+    }
+#pragma omp parallel for num_threads(nt) schedule(static)
+    for (int y = 0; y < hl; ++y) {
+        for (int x = 0; x < wl; ++x) {
+            const size_t k = (size_t)y * wl + x;
+            flag[k] = (unsigned char)(tr_emission_seen(emission, (uint32_t)k) |
+                                      tr_emission_on_edge(emission, wl, hl, x, y) << 1);
+        }
+    }
     uint32_t count = 0;
 #pragma omp parallel for num_threads(nt) schedule(dynamic, 8) reduction(+ : count)
     for (int y = 0; y < H; ++y) {
@@ -637,9 +652,8 @@ int tr_upscale_emission(const struct tr_scene *scene, const tr_camera *cam, int 
             const size_t k = (size_t)ly * wl + lx;
             /* A small emitter can fall between the traced samples: where the previous
              * output saw emission and the neighbourhood sees none, trace it too. */
-            const int missed = prev && tr_emission_seen(prev, (uint32_t)i) &&
-                               !tr_emission_seen(emission, (uint32_t)k);
-            if (missed || tr_emission_on_edge(emission, wl, hl, lx, ly)) {
+            const int missed = prev && tr_emission_seen(prev, (uint32_t)i) && !(flag[k] & 1);
+            if (missed || (flag[k] & 2)) {
                 const tr_vec3 e = tr_emission_resolve_pixel(&view, cam, x, y, n);
                 out[3 * i] = e.x;
                 out[3 * i + 1] = e.y;
@@ -652,6 +666,7 @@ int tr_upscale_emission(const struct tr_scene *scene, const tr_camera *cam, int 
             }
         }
     }
+    free(flag);
     if (resolved) {
         *resolved = count;
     }
