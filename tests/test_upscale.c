@@ -15,7 +15,12 @@
  *    the frame is full size and says what it traced.
  * 4. The budget with budget_upscale: moving frames that no budget can hold stay at full
  *    resolution, tracing no fewer than a quarter of the pixels; without it they shrink.
- * 5. Failures: an upscale out of range, a camera of another size, NULL buffers. */
+ * 5. Failures: an upscale out of range, a camera of another size, NULL buffers.
+ * 6. The host loop (src/post/upscale.c, turned round and vectorised) gives what the
+ *    per-pixel operator (src/post/upscale.h) gives, bit for bit, on every pixel of
+ *    frames with detail, two surfaces at different distances (disocclusions), a
+ *    primitive that moves, a moving camera and the first frame's fill, at a half and a
+ *    quarter of the pixels traced; and 1 and 2 threads give the same bits. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -23,6 +28,7 @@
 #include "check.h"
 #include "classic_box.h"
 #include "kernel/camera.h"
+#include "post/upscale.h"
 #include "trac0r/trac0r.h"
 #include "trac0r/upscale.h"
 
@@ -300,11 +306,109 @@ static void test_failures(void) {
     tr_scene_destroy(s);
 }
 
+/* Test 6's frame f: the image with a near square (primitive 2, 2 units closer, moving
+ * right by `step` per frame) over the plane (primitive 1). */
+static void host_input(const tr_camera *cam, int w, int h, uint32_t f, float step, float *col,
+                       float *pos, float *depth, uint32_t *prim) {
+    synth_input(cam, w, h, f, -1.0f, col, pos, depth, prim);
+    for (int i = 0; i < w * h; ++i) {
+        const float px = pos[2 * i], py = pos[2 * i + 1];
+        const float sx = 20.0f + step * (float)f;
+        if (px >= sx && px < sx + 14.0f && py >= 12.0f && py < 30.0f) {
+            depth[i] -= 2.0f;
+            prim[i] = 2u;
+            col[3 * i] = 0.9f;
+            col[3 * i + 1] = 0.1f + 0.01f * px;
+            col[3 * i + 2] = 0.2f;
+        }
+        if (i % 37 == 5) {
+            depth[i] = 0.0f; /* nothing hit */
+            prim[i] = 0u;
+        }
+    }
+}
+
+static void test_host_equals_operator(void) {
+    const int sizes[2][2] = {{45, 34}, {W / 2, H / 2}}; /* a half, a quarter */
+    for (int z = 0; z < 2; ++z) {
+        const int w = sizes[z][0], h = sizes[z][1];
+        float *col = malloc(3u * w * h * sizeof *col), *pos = malloc(2u * w * h * sizeof *pos),
+              *depth = malloc((size_t)w * h * sizeof *depth);
+        uint32_t *prim = malloc((size_t)w * h * sizeof *prim);
+        float *out[2] = {malloc(3u * W * H * sizeof(float)), malloc(3u * W * H * sizeof(float))};
+        float *want = malloc(3u * W * H * sizeof(float)), *want_len = malloc(W * H * sizeof(float)),
+              *want_depth = malloc(W * H * sizeof(float));
+        tr_upscale u[2];
+        tr_error err;
+        for (int t = 0; t < 2; ++t) {
+            CHECK(tr_upscale_init(&u[t], W, H, &err) == TR_OK, "init: %s", err.msg);
+        }
+        long differ = 0, with_history = 0, filled = 0;
+        for (uint32_t f = 0; f < 8; ++f) {
+            /* The camera moves, then rests for two frames (the unbounded history). */
+            const float m = f < 5 ? (float)f : 4.0f;
+            const tr_camera cam = plane_camera(0.05f * m, 0.013f * m * m);
+            host_input(&cam, w, h, f, 1.5f, col, pos, depth, prim);
+            /* Primitive 2 moved 1.5 output pixels' worth since the previous frame. */
+            const tr_vec3 motion[3] = {tr_vec3_make(0.0f, 0.0f, 0.0f),
+                                       tr_vec3_make(0.0f, 0.0f, 0.0f),
+                                       tr_vec3_make(0.12f, 0.0f, 0.0f)};
+            const tr_upscale_input in = {(uint32_t)w, (uint32_t)h, col, pos, depth, prim};
+            /* The operator on the history the host loop is about to read. */
+            const tr_upscale *s = &u[0];
+            const tr_camera pc = s->have_history ? s->prev_cam : cam;
+            const float *hc = s->have_history ? s->color[s->cur] : NULL;
+            for (int y = 0; y < H; ++y) {
+                for (int x = 0; x < W; ++x) {
+                    const int i = y * W + x;
+                    tr_upscale_pixel(&cam, &pc, x, y, w, h, col, pos, depth, prim, &motion[0].x, 3u,
+                                     hc, s->count[s->cur], s->depth[s->cur], NULL,
+                                     TR_UPSCALE_MAX_LEN, want + 3 * i, want_len + i,
+                                     want_depth + i);
+                }
+            }
+            for (int t = 0; t < 2; ++t) {
+                CHECK(tr_upscale_frame(&u[t], &in, &cam, motion, 3u, 0.0f, t + 1, out[t], &err) ==
+                          TR_OK,
+                      "frame: %s", err.msg);
+            }
+            CHECK(memcmp(out[0], out[1], 3u * W * H * sizeof(float)) == 0 &&
+                      memcmp(u[0].count[u[0].cur], u[1].count[u[1].cur], W * H * sizeof(float)) ==
+                          0,
+                  "%dx%d, frame %u: 1 and 2 threads differ", w, h, f);
+            const float *ol = u[0].count[u[0].cur], *od = u[0].depth[u[0].cur];
+            for (int i = 0; i < W * H; ++i) {
+                differ += memcmp(out[0] + 3 * i, want + 3 * i, 3 * sizeof(float)) != 0 ||
+                          memcmp(ol + i, want_len + i, sizeof(float)) != 0 ||
+                          memcmp(od + i, want_depth + i, sizeof(float)) != 0;
+                with_history += hc && want_len[i] > 1.0f;
+                filled += want_len[i] == 0.0f;
+            }
+        }
+        CHECK(differ == 0, "%dx%d: %ld pixel-frames differ from the operator", w, h, differ);
+        /* The frames exercised the paths: history kept, and the fill. */
+        CHECK(with_history > W * H && filled > 0,
+              "%dx%d: %ld pixel-frames with history, %ld filled", w, h, with_history, filled);
+        for (int t = 0; t < 2; ++t) {
+            tr_upscale_free(&u[t]);
+            free(out[t]);
+        }
+        free(want);
+        free(want_len);
+        free(want_depth);
+        free(col);
+        free(pos);
+        free(depth);
+        free(prim);
+    }
+}
+
 int main(void) {
     test_converges();
     test_constant();
     test_realtime();
     test_budget();
     test_failures();
+    test_host_equals_operator();
     return check_finish("test_upscale");
 }

@@ -36,6 +36,8 @@ static void realtime_help(FILE *fp) {
             "  --reference-spp R    samples of each frame's reference, 2..1000000 (default 256)\n"
             "  --cut K              jump to another view at frame K (default: no cut)\n"
             "  --upscale N          trace 1/N of the pixels and upscale, 1..16 (default 1)\n"
+            "  --fraction F         the same as a fraction: 1/2, 1/4, 0.5, 0.25, ½, ¼ (--scale\n"
+            "                       is a model file's scale)\n"
             "  --animate            the scene's last shape moves before every frame\n"
             "  --animate-frames A:B   the same, only before frames A to B-1\n"
             "  --animate-light switch|move   the lights switch (off for frames 8-15, 24-31,\n"
@@ -52,6 +54,36 @@ static void realtime_help(FILE *fp) {
             "\n"
             "The reconstruction's settings:\n");
     fputs(cli_recon_help, fp);
+}
+
+/* --fraction F: the fraction of the pixels traced, 1/N (as "1/N", a decimal such as 0.25,
+ * or the signs ½ and ¼), into *n (1..16). */
+static int parse_fraction(cli_args *a, uint32_t *n) {
+    int rc = cli_value(a);
+    if (rc != CLI_OK) {
+        return rc;
+    }
+    const char *v = a->value;
+    double f = 0.0;
+    char *end = NULL;
+    if (strcmp(v, "\xc2\xbd") == 0) { /* ½ */
+        f = 0.5;
+    } else if (strcmp(v, "\xc2\xbc") == 0) { /* ¼ */
+        f = 0.25;
+    } else if (strncmp(v, "1/", 2) == 0) {
+        const double d = strtod(v + 2, &end);
+        f = end != v + 2 && *end == '\0' && d > 0.0 ? 1.0 / d : 0.0;
+    } else {
+        f = strtod(v, &end);
+        f = end != v && *end == '\0' ? f : 0.0;
+    }
+    const double k = f > 0.0 ? floor(1.0 / f + 0.5) : 0.0;
+    if (!(k >= 1.0 && k <= 16.0 && fabs(k * f - 1.0) < 1e-6)) {
+        return cli_error(a, "--fraction: expected 1/N for N in 1..16 (1/2, 0.25, ½, ...), got %s",
+                         v);
+    }
+    *n = (uint32_t)k;
+    return CLI_OK;
 }
 
 static int parse_methods(cli_args *a, int on[TR_RECON_COUNT]) {
@@ -250,6 +282,8 @@ static int own_option(cli_args *a, void *user) {
         }
     } else if (cli_is(a, "--upscale")) {
         rc = cli_parse_u32(a, 1, 16, &o->upscale);
+    } else if (cli_is(a, "--fraction")) {
+        rc = parse_fraction(a, &o->upscale);
     } else if (cli_is(a, "--cut")) {
         rc = cli_parse_u32(a, 1, 100000, &o->cut);
     } else if (cli_is(a, "--methods")) {

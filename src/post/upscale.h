@@ -110,6 +110,81 @@ TR_FN void tr_upscale_box_pixel(TR_CONST_GLOBAL float *col, int w, int h, int x,
     }
 }
 
+/* The spatial fill of output pixel (x, y) (traced pixel (lx, ly) under its centre, sxr
+ * and syr the traced frame's size over the output's): a Gaussian of half a frame pixel's
+ * width over the 3 x 3 traced values around it, into out. */
+TR_FN void tr_upscale_fill(int x, int y, int wl, int hl, int lx, int ly, float sxr, float syr,
+                           TR_CONST_GLOBAL float *col, TR_CONST_GLOBAL float *pos, float out[3]) {
+    const float cx = (float)x + 0.5f, cy = (float)y + 0.5f;
+    const float sigma = 0.5f / (sxr < syr ? sxr : syr);
+    const float inv2s2 = 1.0f / (2.0f * sigma * sigma);
+    float sp[3] = {0.0f, 0.0f, 0.0f}, spw = 0.0f;
+    for (int dy = -1; dy <= 1; ++dy) {
+        const int ty = ly + dy;
+        for (int dx = -1; dx <= 1 && ty >= 0 && ty < hl; ++dx) {
+            const int tx = lx + dx;
+            if (tx < 0 || tx >= wl) {
+                continue;
+            }
+            const int k = ty * wl + tx;
+            const float ex = pos[2 * k] - cx, ey = pos[2 * k + 1] - cy;
+            const float g = tr_post_exp_neg((ex * ex + ey * ey) * inv2s2);
+            sp[0] += g * col[3 * k];
+            sp[1] += g * col[3 * k + 1];
+            sp[2] += g * col[3 * k + 2];
+            spw += g;
+        }
+    }
+    const float inv = spw > 0.0f ? 1.0f / spw : 0.0f;
+    out[0] = sp[0] * inv;
+    out[1] = sp[1] * inv;
+    out[2] = sp[2] * inv;
+}
+
+/* The end of tr_upscale_pixel for a pixel with history hv (have: whether it has one; len
+ * its count; moved: how far it moved, squared, in output pixels; b: the neighbourhood's
+ * range, read only where it moved) and n new samples summing to sum: the bounded history
+ * and the samples averaged by their counts into out and *out_len. Returns 0 for a pixel
+ * with neither (the caller fills it, tr_upscale_fill). */
+TR_FN int tr_upscale_blend(int have, float moved, const float b[6], float hv[3], float len, float n,
+                           const float sum[3], float max_len, float out[3], float *out_len) {
+    if (have && moved >= 1e-4f) {
+        float yc[3], rgb[3];
+        tr_up_ycocg(hv, yc);
+        for (int j = 0; j < 3; ++j) {
+            yc[j] = tr_fminf(tr_fmaxf(yc[j], b[j]), b[3 + j]);
+        }
+        tr_up_rgb(yc, rgb);
+        hv[0] = tr_fmaxf(rgb[0], 0.0f);
+        hv[1] = tr_fmaxf(rgb[1], 0.0f);
+        hv[2] = tr_fmaxf(rgb[2], 0.0f);
+    }
+    if (n > 0.0f) {
+        if (have) {
+            const float keep = tr_fminf(len, tr_fmaxf(max_len - n, 0.0f));
+            const float inv = 1.0f / (keep + n);
+            for (int j = 0; j < 3; ++j) {
+                out[j] = (hv[j] * keep + sum[j]) * inv;
+            }
+            *out_len = keep + n;
+        } else {
+            for (int j = 0; j < 3; ++j) {
+                out[j] = sum[j] / n;
+            }
+            *out_len = n;
+        }
+        return 1;
+    }
+    if (have) {
+        out[0] = hv[0];
+        out[1] = hv[1];
+        out[2] = hv[2];
+        *out_len = len;
+        return 1;
+    }
+    return 0;
+}
+
 /* Output pixel (x, y) of a camera `cam` (W x H) from the frame (wl x hl: colour col, 3
  * per pixel; sample positions pos in output pixels, 2 per pixel; distance along the ray
  * depth and primitive prim, 1 per pixel) and the history (hcol, hlen and hdepth of the
@@ -210,10 +285,10 @@ TR_FN void tr_upscale_pixel(const tr_camera *cam, const tr_camera *prev, int x, 
             }
         }
     }
+    float b[6] = {0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f};
     if (have && moved >= 1e-4f) {
         /* Where the view moved: bounded by the neighbourhood's range (box: per traced
          * pixel, tr_upscale_box_pixel; NULL: computed here). */
-        float b[6];
         if (box) {
             for (int j = 0; j < 6; ++j) {
                 b[j] = box[6 * (ly * wl + lx) + j];
@@ -221,60 +296,9 @@ TR_FN void tr_upscale_pixel(const tr_camera *cam, const tr_camera *prev, int x, 
         } else {
             tr_upscale_box_pixel(col, wl, hl, lx, ly, b);
         }
-        float yc[3], rgb[3];
-        tr_up_ycocg(hv, yc);
-        for (int j = 0; j < 3; ++j) {
-            yc[j] = tr_fminf(tr_fmaxf(yc[j], b[j]), b[3 + j]);
-        }
-        tr_up_rgb(yc, rgb);
-        hv[0] = tr_fmaxf(rgb[0], 0.0f);
-        hv[1] = tr_fmaxf(rgb[1], 0.0f);
-        hv[2] = tr_fmaxf(rgb[2], 0.0f);
     }
-    if (n > 0.0f) {
-        if (have) {
-            const float keep = tr_fminf(len, tr_fmaxf(max_len - n, 0.0f));
-            const float inv = 1.0f / (keep + n);
-            for (int j = 0; j < 3; ++j) {
-                out[j] = (hv[j] * keep + sum[j]) * inv;
-            }
-            *out_len = keep + n;
-        } else {
-            for (int j = 0; j < 3; ++j) {
-                out[j] = sum[j] / n;
-            }
-            *out_len = n;
-        }
-    } else if (have) {
-        out[0] = hv[0];
-        out[1] = hv[1];
-        out[2] = hv[2];
-        *out_len = len;
-    } else {
-        /* The spatial fill: a Gaussian of half a frame pixel's width over the nine. */
-        const float sigma = 0.5f / (sxr < syr ? sxr : syr);
-        const float inv2s2 = 1.0f / (2.0f * sigma * sigma);
-        float sp[3] = {0.0f, 0.0f, 0.0f}, spw = 0.0f;
-        for (int dy = -1; dy <= 1; ++dy) {
-            const int ty = ly + dy;
-            for (int dx = -1; dx <= 1 && ty >= 0 && ty < hl; ++dx) {
-                const int tx = lx + dx;
-                if (tx < 0 || tx >= wl) {
-                    continue;
-                }
-                const int k = ty * wl + tx;
-                const float ex = pos[2 * k] - cx, ey = pos[2 * k + 1] - cy;
-                const float g = tr_post_exp_neg((ex * ex + ey * ey) * inv2s2);
-                sp[0] += g * col[3 * k];
-                sp[1] += g * col[3 * k + 1];
-                sp[2] += g * col[3 * k + 2];
-                spw += g;
-            }
-        }
-        const float inv = spw > 0.0f ? 1.0f / spw : 0.0f;
-        out[0] = sp[0] * inv;
-        out[1] = sp[1] * inv;
-        out[2] = sp[2] * inv;
+    if (!tr_upscale_blend(have, moved, b, hv, len, n, sum, max_len, out, out_len)) {
+        tr_upscale_fill(x, y, wl, hl, lx, ly, sxr, syr, col, pos, out);
         *out_len = 0.0f;
     }
 }
