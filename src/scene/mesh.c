@@ -239,6 +239,7 @@ static uint32_t load_texture(import_ctx *c, const struct aiMaterial *m, const ch
  *   glTF metallic-roughness (metallicFactor or roughnessFactor present) -> principled:
  *     base colour factor (Kd where missing) x base colour map, metallic and roughness
  *     factors x the metallic-roughness map, normal map, emissive factor x emissive map;
+ *     clear coat factor and roughness (KHR_materials_clearcoat);
  *     transmission factor > 0 -> glass instead (colour: base colour, ior 1.5).
  *   otherwise Ke > 0 without an emissive map -> emitter (colour Ke / max(Ke), emittance
  *     max(Ke)); illum 4, 6, 7 or 9 (refraction) -> glass (colour Kd, ior Ni, 1.5 where
@@ -370,6 +371,35 @@ static tr_material map_material(import_ctx *c, const struct aiMaterial *m, tr_ma
                 load_texture(c, m, mname, aiTextureType_DIFFUSE_ROUGHNESS, "metallic-roughness");
         }
         ext->metallic = clamp01(metal);
+        /* KHR_materials_clearcoat: the coat's weight and roughness (its maps are not read). */
+        ai_real coat = 0.0f, coat_rough = 0.0f;
+        one = 1;
+        aiGetMaterialFloatArray(m, AI_MATKEY_CLEARCOAT_FACTOR, &coat, &one);
+        one = 1;
+        aiGetMaterialFloatArray(m, AI_MATKEY_CLEARCOAT_ROUGHNESS_FACTOR, &coat_rough, &one);
+        if (isfinite(coat) && coat > 0.0f) {
+            ext->clearcoat = clamp01(coat);
+            ext->clearcoat_roughness = isfinite(coat_rough) ? clamp01(coat_rough) : 0.0f;
+        }
+        if (aiGetMaterialTextureCount(m, aiTextureType_CLEARCOAT) > 0) {
+            import_warn(c, "material '%.60s': clear coat maps dropped (the factors are used)",
+                        mname);
+        }
+        ai_real sheen_rough = 0.0f, strength = 0.0f;
+        struct aiColor4D sheen;
+        one = 1;
+        if (aiGetMaterialColor(m, AI_MATKEY_SHEEN_COLOR_FACTOR, &sheen) == AI_SUCCESS ||
+            aiGetMaterialFloatArray(m, AI_MATKEY_SHEEN_ROUGHNESS_FACTOR, &sheen_rough, &one) ==
+                AI_SUCCESS) {
+            import_warn(c, "material '%.60s': KHR_materials_sheen not rendered", mname);
+        }
+        one = 1;
+        if (aiGetMaterialFloatArray(m, AI_MATKEY_EMISSIVE_INTENSITY, &strength, &one) ==
+                AI_SUCCESS &&
+            strength != 1.0f) {
+            import_warn(c, "material '%.60s': KHR_materials_emissive_strength %g not rendered",
+                        mname, (double)strength);
+        }
         tr_material pm;
         memset(&pm, 0, sizeof pm);
         pm.type = TR_MATERIAL_PRINCIPLED;
@@ -390,7 +420,8 @@ static tr_material map_material(import_ctx *c, const struct aiMaterial *m, tr_ma
     *has_ext = ext->base_tex != TR_NO_INDEX || ext->normal_tex != TR_NO_INDEX ||
                ext->emission_tex != TR_NO_INDEX || ext->mr_tex != TR_NO_INDEX ||
                (ext->flags & TR_MATEXT_ALPHA_MASK) || ext->metallic > 0.0f ||
-               ext->emission.x > 0.0f || ext->emission.y > 0.0f || ext->emission.z > 0.0f;
+               ext->clearcoat > 0.0f || ext->emission.x > 0.0f || ext->emission.y > 0.0f ||
+               ext->emission.z > 0.0f;
     return out;
 }
 
