@@ -27,7 +27,8 @@
  * 6. glTF's clear coat (assimp-testmodels' ClearCoatTest.gltf): the six "Coated" materials
  *    become principled with the coat's weight 1 and roughness (0.03, or 1 for the
  *    roughness variations), the others have none; the coat maps the file also uses are
- *    named in warnings. */
+ *    named in warnings. Extensions a glTF file lists in extensionsUsed that trac0r does
+ *    not render are named in a warning each. */
 #define _POSIX_C_SOURCE 200809L
 #include "check.h"
 #include "scene_util.h"
@@ -293,6 +294,8 @@ static void test_duck(void) {
     tr_scene_clear(&s);
 }
 
+static void write_text(const char *path, const char *text);
+
 #define CLEARCOAT "/usr/share/assimp/models/glTF2/ClearCoat-glTF/ClearCoatTest.gltf"
 
 static void test_clearcoat(void) {
@@ -325,6 +328,37 @@ static void test_clearcoat(void) {
     /* Four coated materials use coat maps, one coating alpha blending: one warning each. */
     CHECK(info.warning_count == 5, "ClearCoatTest: %u warnings", info.warning_count);
     tr_scene_clear(&s);
+
+    /* Extensions the file lists and trac0r does not render: one warning each more than
+     * the same file without them. */
+    char path[600];
+    write_gltf("lit.gltf", lights_ok, path, sizeof path);
+    tr_scene_init(&s);
+    CHECK(tr_scene_model_load(&s, path, &opt, &info, &err) == TR_OK, "%s", err.msg);
+    const uint32_t plain = info.warning_count;
+    tr_scene_clear(&s);
+    static char text[8192];
+    snprintf(text, sizeof text, gltf_fmt, lights_ok);
+    const char *used = "[\"KHR_lights_punctual\"]";
+    char *at = strstr(text, used);
+    CHECK(at != NULL, "the test's glTF lists its extensions");
+    if (at) {
+        static char more[8400];
+        snprintf(more, sizeof more,
+                 "%.*s[\"KHR_lights_punctual\", \"KHR_materials_volume\", "
+                 "\"KHR_texture_transform\"]%s",
+                 (int)(at - text), text, at + strlen(used));
+        snprintf(path, sizeof path, "%s/ext.gltf", dir);
+        write_text(path, more);
+        tr_scene_init(&s);
+        CHECK(tr_scene_model_load(&s, path, &opt, &info, &err) == TR_OK, "%s", err.msg);
+        CHECK(info.warning_count == plain + 2, "two unrendered extensions: %u warnings, %u without",
+              info.warning_count, plain);
+        tr_scene_clear(&s);
+        unlink(path);
+    }
+    snprintf(path, sizeof path, "%s/lit.gltf", dir);
+    unlink(path);
 }
 
 static void write_text(const char *path, const char *text) {
