@@ -23,7 +23,12 @@
  *    silhouette), from +z as glTF (the format's front), and fills 80 % of the image's
  *    width or height without touching its border, the height following 4:3 when only
  *    the width is given.
- * 5. A file's camera or point light inside a closed cube is reported, one warning each. */
+ * 5. A file's camera or point light inside a closed cube is reported, one warning each.
+ * 6. glTF's clear coat (assimp-testmodels' ClearCoatTest.gltf): the six "Coated" materials
+ *    become principled with the coat's weight 1 and roughness (0.03, or 1 for the
+ *    roughness variations), the others have none; the coat maps the file also uses are
+ *    named in warnings. Extensions a glTF file lists in extensionsUsed that trac0r does
+ *    not render are named in a warning each. */
 #define _POSIX_C_SOURCE 200809L
 #include "check.h"
 #include "scene_util.h"
@@ -302,6 +307,73 @@ static void test_duck(void) {
     tr_scene_clear(&s);
 }
 
+static void write_text(const char *path, const char *text);
+
+#define CLEARCOAT "/usr/share/assimp/models/glTF2/ClearCoat-glTF/ClearCoatTest.gltf"
+
+static void test_clearcoat(void) {
+    tr_scene s;
+    tr_scene_init(&s);
+    tr_error err;
+    tr_scene_file info;
+    tr_model_options opt = {0, 1.0f, 0, 0, NULL};
+    if (tr_scene_model_load(&s, CLEARCOAT, &opt, &info, &err) != TR_OK) {
+        CHECK(0, "%s", err.msg);
+        return;
+    }
+    int coated = 0, smooth = 0, rough = 0, other = 0;
+    for (uint32_t i = 0; i < s.material_count; ++i) {
+        const int has =
+            s.material_ext_count == s.material_count && s.material_exts[i].clearcoat > 0.0f;
+        if (!has) {
+            continue;
+        }
+        coated +=
+            s.materials[i].type == TR_MATERIAL_PRINCIPLED && s.material_exts[i].clearcoat == 1.0f;
+        smooth += fabsf(s.material_exts[i].clearcoat_roughness - 0.03f) < 1e-6f;
+        rough += s.material_exts[i].clearcoat_roughness == 1.0f;
+        other += s.materials[i].type != TR_MATERIAL_PRINCIPLED;
+    }
+    CHECK(coated == 6 && smooth == 5 && rough == 1 && other == 0,
+          "ClearCoatTest: %d coated principled materials (%d smooth, %d rough, %d not principled) "
+          "of %u",
+          coated, smooth, rough, other, s.material_count);
+    /* Four coated materials use coat maps, one coating alpha blending: one warning each. */
+    CHECK(info.warning_count == 5, "ClearCoatTest: %u warnings", info.warning_count);
+    tr_scene_clear(&s);
+
+    /* Extensions the file lists and trac0r does not render: one warning each more than
+     * the same file without them. */
+    char path[600];
+    write_gltf("lit.gltf", lights_ok, path, sizeof path);
+    tr_scene_init(&s);
+    CHECK(tr_scene_model_load(&s, path, &opt, &info, &err) == TR_OK, "%s", err.msg);
+    const uint32_t plain = info.warning_count;
+    tr_scene_clear(&s);
+    static char text[8192];
+    snprintf(text, sizeof text, gltf_fmt, lights_ok);
+    const char *used = "[\"KHR_lights_punctual\"]";
+    char *at = strstr(text, used);
+    CHECK(at != NULL, "the test's glTF lists its extensions");
+    if (at) {
+        static char more[8400];
+        snprintf(more, sizeof more,
+                 "%.*s[\"KHR_lights_punctual\", \"KHR_materials_volume\", "
+                 "\"KHR_texture_transform\"]%s",
+                 (int)(at - text), text, at + strlen(used));
+        snprintf(path, sizeof path, "%s/ext.gltf", dir);
+        write_text(path, more);
+        tr_scene_init(&s);
+        CHECK(tr_scene_model_load(&s, path, &opt, &info, &err) == TR_OK, "%s", err.msg);
+        CHECK(info.warning_count == plain + 2, "two unrendered extensions: %u warnings, %u without",
+              info.warning_count, plain);
+        tr_scene_clear(&s);
+        unlink(path);
+    }
+    snprintf(path, sizeof path, "%s/lit.gltf", dir);
+    unlink(path);
+}
+
 static void write_text(const char *path, const char *text) {
     FILE *f = fopen(path, "w");
     CHECK(f && fputs(text, f) >= 0 && fclose(f) == 0, "cannot write %s", path);
@@ -510,6 +582,7 @@ int main(void) {
     test_gltf_odd_lights();
     test_gltf_spot();
     test_duck();
+    test_clearcoat();
     test_texture_fallback();
     test_framing();
     test_enclosed();

@@ -49,7 +49,7 @@ TR_STATIC_ASSERT(sizeof(tr_texture) == 16, "tr_texture layout");
 #define TR_MATEXT_ALPHA_MASK 1u /* texels with alpha below alpha_cutoff are holes */
 
 /* Per-material extras, one per material when the scene has any (material_ext_count is 0
- * or material_count). Texture indices are TR_NO_INDEX for none. 48 bytes. */
+ * or material_count). Texture indices are TR_NO_INDEX for none. 64 bytes. */
 typedef struct tr_material_ext {
     uint32_t base_tex;     /* sRGB colour (x the material's colour), alpha in a */
     uint32_t emission_tex; /* sRGB colour (x emission) */
@@ -60,9 +60,12 @@ typedef struct tr_material_ext {
     float alpha_cutoff;    /* TR_MATEXT_ALPHA_MASK: alpha below this is a hole */
     float normal_scale;    /* glTF normalTexture.scale */
     uint32_t flags;        /* TR_MATEXT_* */
-    uint32_t pad;
+    /* principled: glTF's clear coat, a second GGX layer (bsdf_principled.h); 0 for none. */
+    float clearcoat;           /* the layer's weight in [0, 1] */
+    float clearcoat_roughness; /* its roughness in [0, 1] (alpha = roughness^2) */
+    uint32_t pad[3];
 } tr_material_ext;
-TR_STATIC_ASSERT(sizeof(tr_material_ext) == 48, "tr_material_ext layout");
+TR_STATIC_ASSERT(sizeof(tr_material_ext) == 64, "tr_material_ext layout");
 
 /* The environment: radiance arriving from infinitely far along directions no surface
  * blocks, a constant colour or an equirectangular map (width x height RGB floats in

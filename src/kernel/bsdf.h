@@ -98,6 +98,7 @@ TR_FN void tr_bsdf_regularize(tr_bsdf_params *m) {
         m->roughness = tr_fmaxf(m->roughness, TR_REG_ROUGHNESS_GLOSSY);
     } else if (m->type == TR_MATERIAL_PRINCIPLED) {
         m->roughness = tr_fmaxf(m->roughness, TR_REG_ROUGHNESS_PRINCIPLED);
+        m->clearcoat_roughness = tr_fmaxf(m->clearcoat_roughness, TR_REG_ROUGHNESS_PRINCIPLED);
     } else if (m->type == TR_MATERIAL_GLASS) {
         m->flags |= TR_BSDF_REGULARIZED;
     }

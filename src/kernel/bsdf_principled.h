@@ -16,7 +16,27 @@
  * Sampling: the specular lobe (visible normals, Heitz 2018) with probability p_spec from
  * the lobes' estimated albedos, else the cosine-weighted hemisphere; the pdf is the
  * mixture's, so MIS in pt sees the one density. The sampler takes its uniform numbers
- * explicitly (ulobe, u1, u2). Included by bsdf.h after the GGX helpers it uses. */
+ * explicitly (ulobe, u1, u2). Included by bsdf.h after the GGX helpers it uses.
+ *
+ * Clear coat (glTF's KHR_materials_clearcoat; weight c = clearcoat in [0, 1], its own
+ * roughness): a second GGX layer of index 1.5 (F0 0.04, alpha = clearcoat_roughness^2)
+ * over the material above, which it attenuates by the coat's Fresnel reflectance on the
+ * way in and on the way out:
+ *
+ *   f_coated = c f_coat + (1 - c F_c(cos_o)) (1 - c F_c(cos_i)) (f_spec + f_diffuse / (1 - c
+ * F_avg)), F_c(x) = 0.04 + 0.96 (1 - x)^5,   F_avg = 0.04 + 0.96 / 21
+ *
+ * glTF's layering formula attenuates by (1 - c F_c(cos_o)) alone, which is not reciprocal;
+ * the product of both directions' factors is (bdpt and vcm trace light both ways). For the
+ * diffuse part, dividing by 1 - c F_avg (F_avg: F_c's cosine-weighted mean) gives back
+ * glTF's energy: a Lambertian base keeps exactly (1 - c F_c(cos_o)) of its albedo, the
+ * light the coat reflects back inside escaping after further bounces. The specular part,
+ * narrow around the mirror direction, keeps about (1 - c F_c(cos_o))^2. Since a smooth coat
+ * reflects exactly c F_c(cos_o) and a rough one less, the sum reflects no more than arrives
+ * (test_bsdf's white furnace, within its statistical bound). Sampling draws the coat's
+ * visible normals with probability from c F_c(cos_o) against the attenuated base's
+ * weights (at least 10 % each way), else the base as above. Without a coat (c = 0) none of
+ * this runs. */
 #ifndef TR_KERNEL_BSDF_PRINCIPLED_H
 #define TR_KERNEL_BSDF_PRINCIPLED_H
 
@@ -50,6 +70,29 @@ TR_FN tr_vec3 tr_principled_spec(float alpha, tr_vec3 f0, tr_vec3 nf, tr_vec3 wo
     return v3_scale(f, d * g2 / (4.0f * co * ci));
 }
 
+/* The clear coat's Fresnel reflectance F_c at cosine x (Schlick, F0 0.04). */
+TR_FN float tr_coat_fresnel(float x) {
+    float c = tr_fminf(tr_fmaxf(1.0f - x, 0.0f), 1.0f);
+    return TR_PRINCIPLED_F0 + (1.0f - TR_PRINCIPLED_F0) * ((c * c) * (c * c) * c);
+}
+
+TR_FN float tr_coat_weight(const tr_bsdf_params *m) {
+    return tr_fminf(tr_fmaxf(m->clearcoat, 0.0f), 1.0f);
+}
+
+/* The coated BSDF from the base's specular part spec and diffuse part diff, for co, ci > 0
+ * (the formula above). */
+TR_FN tr_vec3 tr_coat_layer(const tr_bsdf_params *m, tr_vec3 spec, tr_vec3 diff, tr_vec3 nf,
+                            tr_vec3 wo, tr_vec3 wi, float co, float ci) {
+    float c = tr_coat_weight(m);
+    float att = (1.0f - c * tr_coat_fresnel(co)) * (1.0f - c * tr_coat_fresnel(ci));
+    float fav = TR_PRINCIPLED_F0 + (1.0f - TR_PRINCIPLED_F0) * (1.0f / 21.0f);
+    tr_vec3 fc = tr_principled_spec(tr_principled_alpha(m->clearcoat_roughness),
+                                    v3s(TR_PRINCIPLED_F0), nf, wo, wi, co, ci);
+    tr_vec3 base = v3_add(v3_scale(spec, att), v3_scale(diff, att / (1.0f - c * fav)));
+    return v3_add(base, v3_scale(fc, c));
+}
+
 TR_FN_NOINLINE tr_vec3 tr_principled_eval(const tr_bsdf_params *m, tr_vec3 nf, tr_vec3 wo,
                                           tr_vec3 wi) {
     float co = v3_dot(wo, nf), ci = v3_dot(wi, nf);
@@ -66,6 +109,9 @@ TR_FN_NOINLINE tr_vec3 tr_principled_eval(const tr_bsdf_params *m, tr_vec3 nf, t
     }
     float kd = (1.0f - k) * (28.0f / 23.0f) * TR_INV_PI * (1.0f - TR_PRINCIPLED_F0) *
                tr_as_factor(ci) * tr_as_factor(co);
+    if (m->clearcoat > 0.0f) {
+        return tr_coat_layer(m, f, v3_scale(m->color, kd), nf, wo, wi, co, ci);
+    }
     return v3_add(f, v3_scale(m->color, kd));
 }
 
@@ -86,6 +132,25 @@ TR_FN float tr_principled_spec_prob(const tr_bsdf_params *m, float co) {
     return wd > 0.0f ? tr_fminf(tr_fmaxf(p, 0.1f), 0.9f) : 1.0f;
 }
 
+/* Probability of sampling the clear coat for outgoing cosine co: c F_c(co) against the
+ * attenuated base's lobe weights (those of tr_principled_spec_prob). */
+TR_FN float tr_coat_prob(const tr_bsdf_params *m, float co) {
+    float k = tr_fminf(tr_fmaxf(m->metallic, 0.0f), 1.0f);
+    tr_vec3 fs = tr_fresnel_schlick(tr_principled_f0(m), co);
+    float wb = (fs.x + fs.y + fs.z) * (1.0f / 3.0f) +
+               (1.0f - k) * (m->color.x + m->color.y + m->color.z) * (1.0f / 3.0f) *
+                   (1.0f - TR_PRINCIPLED_F0) * tr_as_factor(co);
+    float wc = tr_coat_weight(m) * tr_coat_fresnel(co);
+    wb *= 1.0f - wc;
+    if (!(wb > 0.0f)) {
+        return 1.0f;
+    }
+    if (!(wc > 0.0f)) {
+        return 0.0f;
+    }
+    return tr_fminf(tr_fmaxf(wc / (wc + wb), 0.1f), 0.9f);
+}
+
 TR_FN_NOINLINE float tr_principled_pdf(const tr_bsdf_params *m, tr_vec3 nf, tr_vec3 wo,
                                        tr_vec3 wi) {
     float co = v3_dot(wo, nf), ci = v3_dot(wi, nf);
@@ -97,7 +162,15 @@ TR_FN_NOINLINE float tr_principled_pdf(const tr_bsdf_params *m, tr_vec3 nf, tr_v
     float g1 = 1.0f / (1.0f + tr_ggx_lambda(alpha, co));
     float pspec = g1 * tr_ggx_d(alpha, v3_dot(h, nf)) / (4.0f * co);
     float ps = tr_principled_spec_prob(m, co);
-    return ps * pspec + (1.0f - ps) * ci * TR_INV_PI;
+    float p = ps * pspec + (1.0f - ps) * ci * TR_INV_PI;
+    if (m->clearcoat > 0.0f) {
+        float pc = tr_coat_prob(m, co);
+        float ac = tr_principled_alpha(m->clearcoat_roughness);
+        float g1c = 1.0f / (1.0f + tr_ggx_lambda(ac, co));
+        float pcoat = g1c * tr_ggx_d(ac, v3_dot(h, nf)) / (4.0f * co);
+        p = pc * pcoat + (1.0f - pc) * p;
+    }
+    return p;
 }
 
 /* Draws wi from uniform numbers ulobe, u1, u2 in [0, 1). Returns 0 when wi falls below
@@ -110,9 +183,20 @@ TR_FN_NOINLINE int tr_principled_sample(const tr_bsdf_params *m, tr_vec3 nf, tr_
     }
     tr_vec3 t, b;
     v3_basis(nf, &t, &b);
-    if (ulobe < tr_principled_spec_prob(m, co)) {
+    int coat = 0;
+    if (m->clearcoat > 0.0f) {
+        /* The coat first; else ulobe, stretched back over [0, 1), picks the base's lobe. */
+        float pc = tr_coat_prob(m, co);
+        if (ulobe < pc) {
+            coat = 1;
+        } else {
+            ulobe = tr_fminf((ulobe - pc) / (1.0f - pc), 0.99999994f);
+        }
+    }
+    if (coat || ulobe < tr_principled_spec_prob(m, co)) {
         tr_vec3 vl = v3(v3_dot(wo, t), v3_dot(wo, b), co);
-        tr_vec3 hl = tr_ggx_sample_vndf(tr_principled_alpha(m->roughness), vl, u1, u2);
+        float a = tr_principled_alpha(coat ? m->clearcoat_roughness : m->roughness);
+        tr_vec3 hl = tr_ggx_sample_vndf(a, vl, u1, u2);
         tr_vec3 h = v3_add(v3_add(v3_scale(t, hl.x), v3_scale(b, hl.y)), v3_scale(nf, hl.z));
         s->wi = v3_normalize(v3_reflect(v3_neg(wo), h));
     } else {

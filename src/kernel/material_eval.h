@@ -30,7 +30,9 @@ typedef struct tr_bsdf_params {
     tr_vec3 ps;       /* where rays leaving on ng's side start (tr_surface_origin) */
     tr_vec3 emission; /* emitted radiance of a non-emitter (principled materials) */
     float metallic;   /* principled: 0 dielectric .. 1 conductor */
-    int hole;         /* an alpha cut-out: the ray passes through (tr_material_ext) */
+    float clearcoat;  /* principled: the clear coat's weight, 0 for none (bsdf_principled.h) */
+    float clearcoat_roughness; /* principled: the clear coat's roughness */
+    int hole;                  /* an alpha cut-out: the ray passes through (tr_material_ext) */
     /* The scene's multiple-scattering table (ggx_ms.h), or NULL: read where flags has
      * TR_MATERIAL_MULTISCATTER. */
     TR_CONST_GLOBAL float *ms;
@@ -51,6 +53,8 @@ TR_FN tr_bsdf_params tr_material_params(const tr_material *m, tr_vec3 ng) {
     b.ps = v3s(0.0f);
     b.emission = v3s(0.0f);
     b.metallic = 0.0f;
+    b.clearcoat = 0.0f;
+    b.clearcoat_roughness = 0.0f;
     b.hole = 0;
     b.ms = 0;
     return b;
@@ -62,6 +66,8 @@ TR_FN void tr_material_apply_ext(const tr_scene_view *s, uint32_t mat, const tr_
                                  tr_bsdf_params *b) {
     tr_material_ext e = s->material_exts[mat];
     b->metallic = e.metallic;
+    b->clearcoat = e.clearcoat;
+    b->clearcoat_roughness = e.clearcoat_roughness;
     b->emission = e.emission;
     float alpha = 1.0f;
     if (e.base_tex != TR_NO_INDEX) {

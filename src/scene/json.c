@@ -590,8 +590,15 @@ static const char *const extra_keys[] = {"texture",
                                          "emission_texture",
                                          "alpha_cutoff",
                                          "metallic",
-                                         "metallic_roughness_texture"};
+                                         "metallic_roughness_texture",
+                                         "clearcoat",
+                                         "clearcoat_roughness"};
 #define EXTRA_KEY_COUNT (sizeof extra_keys / sizeof extra_keys[0])
+
+/* Extras that only the principled material takes. */
+static int principled_only(const char *key) {
+    return strcmp(key, "metallic") == 0 || strncmp(key, "clearcoat", 9) == 0;
+}
 
 /* A texture key: "file.png" or {"path": "file.png", "wrap": "repeat" | "clamp"}; loaded
  * relative to the scene file (not opened when meshes are not loaded: the fuzzer). */
@@ -658,17 +665,21 @@ static int parse_material_extras(jctx *c, const cJSON *m, const char *p, uint32_
         return TR_OK;
     }
     tr_material_ext e = tr_material_ext_default();
-    int has_cut = 0, has_metal = 0, has_em = 0;
-    double cut = 0.5, metal = 0.0;
+    int has_cut = 0, has_metal = 0, has_em = 0, has_coat = 0;
+    double cut = 0.5, metal = 0.0, coat = 0.0, coat_rough = 0.0;
     if (get_texture(c, m, p, "texture", &e.base_tex) != TR_OK ||
         get_texture(c, m, p, "normal_texture", &e.normal_tex) != TR_OK ||
         get_texture(c, m, p, "emission_texture", &e.emission_tex) != TR_OK ||
         get_texture(c, m, p, "metallic_roughness_texture", &e.mr_tex) != TR_OK ||
         get_vec3(c, m, p, "emission", 0, 0, &e.emission, &has_em) != TR_OK ||
         get_number(c, m, p, "alpha_cutoff", 0.0, 1.0, &cut, &has_cut) != TR_OK ||
-        get_number(c, m, p, "metallic", 0.0, 1.0, &metal, &has_metal) != TR_OK) {
+        get_number(c, m, p, "metallic", 0.0, 1.0, &metal, &has_metal) != TR_OK ||
+        get_number(c, m, p, "clearcoat", 0.0, 1.0, &coat, &has_coat) != TR_OK ||
+        get_number(c, m, p, "clearcoat_roughness", 0.0, 1.0, &coat_rough, &has_coat) != TR_OK) {
         return TR_ERR;
     }
+    e.clearcoat = (float)coat;
+    e.clearcoat_roughness = (float)coat_rough;
     if (has_em && (e.emission.x < 0.0f || e.emission.y < 0.0f || e.emission.z < 0.0f ||
                    e.emission.x > 1e7f || e.emission.y > 1e7f || e.emission.z > 1e7f)) {
         char pe[PATH_MAX_LEN];
@@ -749,9 +760,9 @@ static int parse_materials(jctx *c, const cJSON *mats) {
             }
         }
         /* Then the extras (textures, emission, cut-outs) every non-emitter takes;
-         * "metallic" is the principled material's alone. */
+         * "metallic" and the clear coat's keys are the principled material's alone. */
         for (size_t k = 0; t != TR_MATERIAL_EMITTER && k < EXTRA_KEY_COUNT && nallowed < 32; ++k) {
-            if (t == TR_MATERIAL_PRINCIPLED || strcmp(extra_keys[k], "metallic") != 0) {
+            if (t == TR_MATERIAL_PRINCIPLED || !principled_only(extra_keys[k])) {
                 allowed[nallowed++] = extra_keys[k];
             }
         }

@@ -15,6 +15,7 @@
 #include <sys/stat.h>
 
 #include <assimp/GltfMaterial.h>
+#include <cJSON.h>
 #include <assimp/texture.h>
 
 #include "scene/scene_internal.h"
@@ -239,6 +240,7 @@ static uint32_t load_texture(import_ctx *c, const struct aiMaterial *m, const ch
  *   glTF metallic-roughness (metallicFactor or roughnessFactor present) -> principled:
  *     base colour factor (Kd where missing) x base colour map, metallic and roughness
  *     factors x the metallic-roughness map, normal map, emissive factor x emissive map;
+ *     clear coat factor and roughness (KHR_materials_clearcoat);
  *     transmission factor > 0 -> glass instead (colour: base colour, ior 1.5).
  *   otherwise Ke > 0 without an emissive map -> emitter (colour Ke / max(Ke), emittance
  *     max(Ke)); illum 4, 6, 7 or 9 (refraction) -> glass (colour Kd, ior Ni, 1.5 where
@@ -318,6 +320,10 @@ static tr_material map_material(import_ctx *c, const struct aiMaterial *m, tr_ma
             import_warn(c, "material '%.60s': transmission %.2f taken as fully transmissive glass",
                         mname, (double)transmission);
         }
+        if (transmit && pbr && isfinite(rough) && rough > 0.0f) {
+            import_warn(c, "material '%.60s': transmission of roughness %.2f rendered smooth",
+                        mname, (double)rough);
+        }
         return tr_material_glass(diffuse, ior);
     }
     uint32_t emission_tex = load_texture(c, m, mname, aiTextureType_EMISSIVE, "emissive");
@@ -370,6 +376,35 @@ static tr_material map_material(import_ctx *c, const struct aiMaterial *m, tr_ma
                 load_texture(c, m, mname, aiTextureType_DIFFUSE_ROUGHNESS, "metallic-roughness");
         }
         ext->metallic = clamp01(metal);
+        /* KHR_materials_clearcoat: the coat's weight and roughness (its maps are not read). */
+        ai_real coat = 0.0f, coat_rough = 0.0f;
+        one = 1;
+        aiGetMaterialFloatArray(m, AI_MATKEY_CLEARCOAT_FACTOR, &coat, &one);
+        one = 1;
+        aiGetMaterialFloatArray(m, AI_MATKEY_CLEARCOAT_ROUGHNESS_FACTOR, &coat_rough, &one);
+        if (isfinite(coat) && coat > 0.0f) {
+            ext->clearcoat = clamp01(coat);
+            ext->clearcoat_roughness = isfinite(coat_rough) ? clamp01(coat_rough) : 0.0f;
+        }
+        if (aiGetMaterialTextureCount(m, aiTextureType_CLEARCOAT) > 0) {
+            import_warn(c, "material '%.60s': clear coat maps dropped (the factors are used)",
+                        mname);
+        }
+        ai_real sheen_rough = 0.0f, strength = 0.0f;
+        struct aiColor4D sheen;
+        one = 1;
+        if (aiGetMaterialColor(m, AI_MATKEY_SHEEN_COLOR_FACTOR, &sheen) == AI_SUCCESS ||
+            aiGetMaterialFloatArray(m, AI_MATKEY_SHEEN_ROUGHNESS_FACTOR, &sheen_rough, &one) ==
+                AI_SUCCESS) {
+            import_warn(c, "material '%.60s': KHR_materials_sheen not rendered", mname);
+        }
+        one = 1;
+        if (aiGetMaterialFloatArray(m, AI_MATKEY_EMISSIVE_INTENSITY, &strength, &one) ==
+                AI_SUCCESS &&
+            strength != 1.0f) {
+            import_warn(c, "material '%.60s': KHR_materials_emissive_strength %g not rendered",
+                        mname, (double)strength);
+        }
         tr_material pm;
         memset(&pm, 0, sizeof pm);
         pm.type = TR_MATERIAL_PRINCIPLED;
@@ -390,7 +425,8 @@ static tr_material map_material(import_ctx *c, const struct aiMaterial *m, tr_ma
     *has_ext = ext->base_tex != TR_NO_INDEX || ext->normal_tex != TR_NO_INDEX ||
                ext->emission_tex != TR_NO_INDEX || ext->mr_tex != TR_NO_INDEX ||
                (ext->flags & TR_MATEXT_ALPHA_MASK) || ext->metallic > 0.0f ||
-               ext->emission.x > 0.0f || ext->emission.y > 0.0f || ext->emission.z > 0.0f;
+               ext->clearcoat > 0.0f || ext->emission.x > 0.0f || ext->emission.y > 0.0f ||
+               ext->emission.z > 0.0f;
     return out;
 }
 
@@ -635,6 +671,76 @@ static int walk(import_ctx *c, const struct aiNode *node, const struct aiMatrix4
     return TR_OK;
 }
 
+/* glTF's JSON text of `path` (a .gltf file, or a .glb file's first chunk), or NULL where
+ * it cannot be had; free() it. At most GLTF_JSON_MAX bytes are read. */
+#define GLTF_JSON_MAX (64u << 20)
+static char *gltf_json(const char *path, int glb) {
+    uint64_t bytes = 0;
+    tr_error e;
+    FILE *fp = tr_infile_open(path, &bytes, &e);
+    if (!fp) {
+        return NULL;
+    }
+    uint32_t len = bytes > GLTF_JSON_MAX ? 0u : (uint32_t)bytes;
+    if (glb) {
+        /* Header: magic, version, length; then the JSON chunk's length and type. */
+        unsigned char h[20];
+        len = 0;
+        if (fread(h, 1, sizeof h, fp) == sizeof h && memcmp(h, "glTF", 4) == 0 &&
+            memcmp(h + 16, "JSON", 4) == 0) {
+            uint32_t n = (uint32_t)h[12] | (uint32_t)h[13] << 8 | (uint32_t)h[14] << 16 |
+                         (uint32_t)h[15] << 24;
+            len = n <= GLTF_JSON_MAX && (uint64_t)n + 20 <= bytes ? n : 0u;
+        }
+    }
+    char *text = len ? malloc((size_t)len + 1) : NULL;
+    if (text && fread(text, 1, len, fp) != len) {
+        free(text);
+        text = NULL;
+    }
+    if (text) {
+        text[len] = '\0';
+    }
+    fclose(fp);
+    return text;
+}
+
+/* Names in a warning each extension the glTF file lists in extensionsUsed that trac0r does
+ * not render. Assimp passes some on (their materials are warned about where they are
+ * mapped); most it drops without a word. Those rendered, or approximated with their own
+ * warning: */
+static void gltf_extension_warnings(const import_ctx *c, const char *path) {
+    static const char *const handled[] = {
+        "KHR_materials_clearcoat",    /* principled's clear coat (its maps: warned) */
+        "KHR_lights_punctual",        /* point, spot and directional lights */
+        "KHR_materials_transmission", /* glass (a factor below 1: warned) */
+        "KHR_materials_sheen",        /* warned per material */
+    };
+    const size_t plen = strlen(path);
+    char *text = gltf_json(path, plen > 4 && strcasecmp(path + plen - 4, ".glb") == 0);
+    if (!text) {
+        import_warn(c, "'%.200s': cannot read its glTF extensions to check them", path);
+        return;
+    }
+    cJSON *root = cJSON_Parse(text);
+    free(text);
+    const cJSON *used = root ? cJSON_GetObjectItemCaseSensitive(root, "extensionsUsed") : NULL;
+    const cJSON *x;
+    cJSON_ArrayForEach(x, used) {
+        if (!cJSON_IsString(x) || !x->valuestring) {
+            continue;
+        }
+        int known = 0;
+        for (size_t i = 0; i < sizeof handled / sizeof handled[0]; ++i) {
+            known |= strcmp(x->valuestring, handled[i]) == 0;
+        }
+        if (!known) {
+            import_warn(c, "glTF extension %.80s not rendered", x->valuestring);
+        }
+    }
+    cJSON_Delete(root);
+}
+
 int tr_scene_import_mesh(tr_scene *s, const char *path, const tr_transform *tf,
                          int64_t material_override, uint32_t max_triangles,
                          tr_mesh_import_stats *stats, tr_error *err) {
@@ -708,6 +814,9 @@ int tr_scene_import_mesh_ex(tr_scene *s, const char *path, const tr_transform *t
         if (slash == path) {
             snprintf(c.dir, sizeof c.dir, "/");
         }
+    }
+    if (c.gltf && c.warn) {
+        gltf_extension_warnings(&c, path);
     }
     c.material_map = malloc((ai->mNumMaterials ? ai->mNumMaterials : 1) * sizeof *c.material_map);
     int rc = TR_OK;

@@ -175,6 +175,11 @@ int tr_scene_set_material_ext(tr_scene *s, uint32_t index, const tr_material_ext
         return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
                             "material %u has a non-finite parameter", index);
     }
+    if (!(ext->clearcoat >= 0.0f && ext->clearcoat <= 1.0f) ||
+        !(ext->clearcoat_roughness >= 0.0f && ext->clearcoat_roughness <= 1.0f)) {
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "material %u: clear coat weight or roughness outside [0, 1]", index);
+    }
     if (s->material_ext_count < s->material_count) {
         if (grow((void **)&s->material_exts, &s->material_ext_capacity, s->material_count,
                  sizeof *s->material_exts, "material extras", err) != TR_OK) {

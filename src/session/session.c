@@ -160,6 +160,11 @@ int tr_ck_identity(tr_ck_id *id, const tr_scene *scene, const tr_render_config *
             const float f[6] = {e->emission.x, e->emission.y,   e->emission.z,
                                 e->metallic,   e->alpha_cutoff, e->normal_scale};
             h = fnv_floats(tr_ck_fnv(h, u, sizeof u), f, 6);
+            if (e->clearcoat > 0.0f) {
+                /* Only where set: checkpoints of scenes without a coat keep their identity. */
+                const float cc[2] = {e->clearcoat, e->clearcoat_roughness};
+                h = fnv_floats(h, cc, 2);
+            }
         }
     }
     if (scene->env_count > 0) {
