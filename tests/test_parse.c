@@ -50,5 +50,18 @@ int main(void) {
     CHECK(tr_parse_size("8x 8", 16384, &w, &h) == TR_ERR, "a blank after x");
     CHECK(tr_parse_size("0x8", 16384, &w, &h) == TR_ERR, "a zero side");
     CHECK(tr_parse_size("8x8x", 16384, &w, &h) == TR_ERR, "trailing text");
+
+    /* Fractions 1/N: four spellings of a quarter, and what is not a 1/N in range. */
+    const char *quarter[4] = {"1/4", "0.25", "\xc2\xbc", "2.5e-1"};
+    for (int i = 0; i < 4; ++i) {
+        w = 0;
+        CHECK(tr_parse_fraction(quarter[i], 16, &w) == TR_OK && w == 4, "'%s': %u", quarter[i], w);
+    }
+    CHECK(tr_parse_fraction("\xc2\xbd", 16, &w) == TR_OK && w == 2, "the half sign");
+    CHECK(tr_parse_fraction("1", 16, &w) == TR_OK && w == 1, "1");
+    const char *bad[8] = {"0.3", "1/17", "1/0", "0", "2", " 1/4", "1/4294967300", "1/-4"};
+    for (int i = 0; i < 8; ++i) {
+        CHECK(tr_parse_fraction(bad[i], 16, &w) == TR_ERR, "'%s' accepted", bad[i]);
+    }
     return check_finish("test_parse");
 }

@@ -60,30 +60,11 @@ static void realtime_help(FILE *fp) {
  * or the signs ½ and ¼), into *n (1..16). */
 static int parse_fraction(cli_args *a, uint32_t *n) {
     int rc = cli_value(a);
-    if (rc != CLI_OK) {
-        return rc;
+    if (rc == CLI_OK && tr_parse_fraction(a->value, 16, n) != TR_OK) {
+        rc = cli_error(a, "--fraction: expected 1/N for N in 1..16 (1/2, 0.25, ½, ...), got %s",
+                       a->value);
     }
-    const char *v = a->value;
-    double f = 0.0;
-    char *end = NULL;
-    if (strcmp(v, "\xc2\xbd") == 0) { /* ½ */
-        f = 0.5;
-    } else if (strcmp(v, "\xc2\xbc") == 0) { /* ¼ */
-        f = 0.25;
-    } else if (strncmp(v, "1/", 2) == 0) {
-        const double d = strtod(v + 2, &end);
-        f = end != v + 2 && *end == '\0' && d > 0.0 ? 1.0 / d : 0.0;
-    } else {
-        f = strtod(v, &end);
-        f = end != v && *end == '\0' ? f : 0.0;
-    }
-    const double k = f > 0.0 ? floor(1.0 / f + 0.5) : 0.0;
-    if (!(k >= 1.0 && k <= 16.0 && fabs(k * f - 1.0) < 1e-6)) {
-        return cli_error(a, "--fraction: expected 1/N for N in 1..16 (1/2, 0.25, ½, ...), got %s",
-                         v);
-    }
-    *n = (uint32_t)k;
-    return CLI_OK;
+    return rc;
 }
 
 static int parse_methods(cli_args *a, int on[TR_RECON_COUNT]) {

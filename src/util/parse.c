@@ -123,3 +123,26 @@ int tr_parse_size(const char *text, uint32_t max_side, uint32_t *w, uint32_t *h)
     *h = (uint32_t)y;
     return TR_OK;
 }
+
+int tr_parse_fraction(const char *text, uint32_t max_n, uint32_t *n) {
+    if (!text) {
+        return TR_ERR;
+    }
+    uint64_t k = 0;
+    double f = 0.0;
+    if (strcmp(text, "\xc2\xbd") == 0 || strcmp(text, "\xc2\xbc") == 0) { /* the signs */
+        k = text[1] == '\xbd' ? 2u : 4u;
+    } else if (strncmp(text, "1/", 2) == 0) {
+        if (tr_parse_uint64(text + 2, 1, max_n, &k) != TR_OK) {
+            return TR_ERR;
+        }
+    } else if (tr_parse_double(text, 1e-9, 1.0, &f) == TR_OK) {
+        const double r = floor(1.0 / f + 0.5);
+        k = r <= (double)max_n && fabs(r * f - 1.0) < 1e-6 ? (uint64_t)r : 0u;
+    }
+    if (k < 1 || k > max_n) {
+        return TR_ERR;
+    }
+    *n = (uint32_t)k;
+    return TR_OK;
+}
