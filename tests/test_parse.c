@@ -53,15 +53,15 @@ int main(void) {
 
     /* Fractions 1/N: four spellings of a quarter, and what is not a 1/N in range. */
     const char *quarter[4] = {"1/4", "0.25", "\xc2\xbc", "2.5e-1"};
-    for (int i = 0; i < 4; ++i) {
+    for (int q = 0; q < 4; ++q) {
         w = 0;
-        CHECK(tr_parse_fraction(quarter[i], 16, &w) == TR_OK && w == 4, "'%s': %u", quarter[i], w);
+        CHECK(tr_parse_fraction(quarter[q], 16, &w) == TR_OK && w == 4, "'%s': %u", quarter[q], w);
     }
     CHECK(tr_parse_fraction("\xc2\xbd", 16, &w) == TR_OK && w == 2, "the half sign");
     CHECK(tr_parse_fraction("1", 16, &w) == TR_OK && w == 1, "1");
     const char *bad[8] = {"0.3", "1/17", "1/0", "0", "2", " 1/4", "1/4294967300", "1/-4"};
-    for (int i = 0; i < 8; ++i) {
-        CHECK(tr_parse_fraction(bad[i], 16, &w) == TR_ERR, "'%s' accepted", bad[i]);
+    for (int q = 0; q < 8; ++q) {
+        CHECK(tr_parse_fraction(bad[q], 16, &w) == TR_ERR, "'%s' accepted", bad[q]);
     }
     return check_finish("test_parse");
 }
