@@ -10,6 +10,7 @@
 #include <string.h>
 
 #include "device/frame.h"
+#include "kernel/integrator_bdpt.h"
 #include "kernel/kernel.h"
 #include "accel/accel_internal.h"
 #include "scene/scene_internal.h"
@@ -80,6 +81,11 @@ int tr_cl_render_frame(tr_cl_context *ctx, const tr_frame *f, uint64_t *rays, tr
 }
 int tr_cl_clear_film(tr_cl_context *ctx, tr_error *err) {
     (void)ctx;
+    return tr_error_set(err, TR_STATUS_UNSUPPORTED, "%s", no_opencl);
+}
+int tr_cl_supports_integrator(const tr_cl_context *ctx, int integrator, tr_error *err) {
+    (void)ctx;
+    (void)integrator;
     return tr_error_set(err, TR_STATUS_UNSUPPORTED, "%s", no_opencl);
 }
 void tr_cl_film_size(const tr_cl_context *ctx, uint32_t *width, uint32_t *height,
@@ -209,6 +215,11 @@ struct tr_cl_context {
     cl_program program;
     cl_kernel kernel;
     cl_kernel resolve; /* tr_cl_resolve_emission */
+    /* bdpt: tr_cl_render_bdpt and tr_cl_fold_splats, NULL where the device lacks 64-bit
+     * atomics or doubles (entry.cl compiles them only with both), and the splat sums. */
+    cl_kernel bdpt, fold;
+    cl_mem splat;
+    size_t splat_bytes;
     char *build_log;
     char options[160]; /* the options the kernel was built with */
     size_t local[2];   /* the render kernel's work-group size; 0 x 0: the driver's choice */
@@ -488,6 +499,15 @@ void tr_cl_close(tr_cl_context *ctx) {
     if (ctx->resolve) {
         clReleaseKernel(ctx->resolve);
     }
+    if (ctx->bdpt) {
+        clReleaseKernel(ctx->bdpt);
+    }
+    if (ctx->fold) {
+        clReleaseKernel(ctx->fold);
+    }
+    if (ctx->splat) {
+        clReleaseMemObject(ctx->splat);
+    }
     if (ctx->resolved) {
         clReleaseMemObject(ctx->resolved);
     }
@@ -700,6 +720,13 @@ tr_cl_context *tr_cl_open_source(int index, const char *source, tr_error *err) {
         cl_fail(err, "clCreateKernel(tr_cl_resolve_emission)", rc);
         goto fail;
     }
+    /* Absent from a program built without cl_khr_int64_base_atomics or cl_khr_fp64. */
+    ctx->bdpt = clCreateKernel(ctx->program, "tr_cl_render_bdpt", &rc);
+    ctx->fold = ctx->bdpt ? clCreateKernel(ctx->program, "tr_cl_fold_splats", &rc) : NULL;
+    if (ctx->bdpt && !ctx->fold) {
+        clReleaseKernel(ctx->bdpt);
+        ctx->bdpt = NULL;
+    }
     if (check_kernel_args(ctx, err) != TR_OK ||
         check_work_group(ctx, wg_given, cpu, err) != TR_OK) {
         goto fail;
@@ -866,9 +893,9 @@ int tr_cl_upload_scene(tr_cl_context *ctx, const tr_scene *scene, tr_error *err)
             rc = cl_fail(err, "clCreateBuffer(scene_info)", crc);
         }
     }
-    /* Both kernels take the scene's arrays and scene_info first. */
-    const cl_kernel kernels[2] = {ctx->kernel, ctx->resolve};
-    for (int k = 0; k < 2; ++k) {
+    /* The kernels take the scene's arrays and scene_info first (bdpt's where built). */
+    const cl_kernel kernels[3] = {ctx->kernel, ctx->resolve, ctx->bdpt};
+    for (int k = 0; k < 3 && kernels[k]; ++k) {
         for (int i = 0; i < na && rc == TR_OK; ++i) {
             cl_int crc = clSetKernelArg(kernels[k], (cl_uint)i, sizeof(cl_mem), &ctx->arrays[i]);
             if (crc != CL_SUCCESS) {
@@ -994,11 +1021,83 @@ void tr_cl_film_size(const tr_cl_context *ctx, uint32_t *width, uint32_t *height
     *passes = ctx->passes;
 }
 
+/* bdpt's splat sums for frame f's rectangle, cleared, as the render kernel's last
+ * argument. */
+static int prepare_splats(tr_cl_context *ctx, const tr_frame *f, tr_error *err) {
+    const size_t bytes = 3u * (size_t)f->rect_w * f->rect_h * sizeof(cl_long);
+    if (bytes > ctx->info.max_alloc) {
+        return tr_error_set(err, TR_STATUS_LIMIT,
+                            "bdpt's %ux%u splat buffer (%.1f MiB) exceeds OpenCL device %d's "
+                            "largest allocation",
+                            f->rect_w, f->rect_h, mib(bytes), ctx->info.index);
+    }
+    if (bytes > ctx->splat_bytes) {
+        if (ctx->splat) {
+            clReleaseMemObject(ctx->splat);
+            ctx->splat = NULL;
+            ctx->splat_bytes = 0;
+        }
+        cl_int rc;
+        ctx->splat = clCreateBuffer(ctx->context, CL_MEM_READ_WRITE, bytes, NULL, &rc);
+        if (!ctx->splat) {
+            return cl_fail(err, "clCreateBuffer(splat)", rc);
+        }
+        ctx->splat_bytes = bytes;
+    }
+    const cl_long zero = 0;
+    cl_int rc =
+        clEnqueueFillBuffer(ctx->queue, ctx->splat, &zero, sizeof zero, 0, bytes, 0, NULL, NULL);
+    if (rc != CL_SUCCESS) {
+        return cl_fail(err, "clEnqueueFillBuffer(splat)", rc);
+    }
+    rc = clSetKernelArg(ctx->bdpt, (cl_uint)ctx->array_count + ARG_AFTER_ARRAYS, sizeof(cl_mem),
+                        &ctx->splat);
+    return rc == CL_SUCCESS ? TR_OK : cl_fail(err, "clSetKernelArg(splat)", rc);
+}
+
+/* Adds frame f's splat sums to the film (tr_cl_fold_splats) with the CPU's scale: the
+ * whole image's area over the frame's grid points, in 2^-24 units (src/device/cpu.c). */
+static int fold_splats(tr_cl_context *ctx, const tr_frame *f, uint32_t grid, tr_error *err) {
+    const cl_double scale = (double)f->camera.screen_width * (double)f->camera.screen_height /
+                            ((double)grid * TR_BDPT_SPLAT_ONE);
+    cl_int rc = clSetKernelArg(ctx->fold, 0, sizeof(cl_mem), &ctx->frame);
+    rc |= clSetKernelArg(ctx->fold, 1, sizeof(cl_mem), &ctx->splat);
+    rc |= clSetKernelArg(ctx->fold, 2, sizeof scale, &scale);
+    rc |= clSetKernelArg(ctx->fold, 3, sizeof(cl_mem), &ctx->film[FILM_SUM]);
+    if (rc != CL_SUCCESS) {
+        return cl_fail(err, "clSetKernelArg(tr_cl_fold_splats)", rc);
+    }
+    const size_t global[2] = {f->rect_w, f->rect_h};
+    rc = clEnqueueNDRangeKernel(ctx->queue, ctx->fold, 2, NULL, global, NULL, 0, NULL, NULL);
+    return rc == CL_SUCCESS ? TR_OK : cl_fail(err, "clEnqueueNDRangeKernel(tr_cl_fold_splats)", rc);
+}
+
+int tr_cl_supports_integrator(const tr_cl_context *ctx, int integrator, tr_error *err) {
+    if (integrator == TR_INTEGRATOR_VCM) {
+        /* Its photon map (src/device/vcm.c) is host code. */
+        return tr_error_set(err, TR_STATUS_UNSUPPORTED,
+                            "the vcm integrator runs on the CPU only (device %s is OpenCL)",
+                            ctx->info.name);
+    }
+    if (integrator == TR_INTEGRATOR_BDPT && !ctx->bdpt) {
+        return tr_error_set(err, TR_STATUS_UNSUPPORTED,
+                            "bdpt needs 64-bit atomics and doubles (cl_khr_int64_base_atomics, "
+                            "cl_khr_fp64), which OpenCL device %d (%s) lacks",
+                            ctx->info.index, ctx->info.name);
+    }
+    return TR_OK;
+}
+
 int tr_cl_render_frame(tr_cl_context *ctx, const tr_frame *f, uint64_t *rays_out, tr_error *err) {
     if (!ctx->have_scene) {
         return tr_error_set(err, TR_STATUS_INVALID_OPERATION,
                             "no scene uploaded to the OpenCL device");
     }
+    if (tr_cl_supports_integrator(ctx, (int)f->integrator, err) != TR_OK) {
+        return TR_ERR;
+    }
+    const int bdpt = f->integrator == TR_INTEGRATOR_BDPT;
+    cl_kernel kernel = bdpt ? ctx->bdpt : ctx->kernel;
     const uint32_t w = f->camera.screen_width, h = f->camera.screen_height;
     if ((w != ctx->width || h != ctx->height || f->passes != ctx->passes) &&
         make_film(ctx, w, h, f->passes, err) != TR_OK) {
@@ -1030,7 +1129,7 @@ int tr_cl_render_frame(tr_cl_context *ctx, const tr_frame *f, uint64_t *rays_out
                                             &ctx->film[FILM_EMISSION],
                                             &ctx->rays};
     for (int a = ARG_FRAME; a < ARG_AFTER_ARRAYS; ++a) {
-        rc = clSetKernelArg(ctx->kernel, base + (cl_uint)a, sizeof(cl_mem), bufs[a]);
+        rc = clSetKernelArg(kernel, base + (cl_uint)a, sizeof(cl_mem), bufs[a]);
         if (rc != CL_SUCCESS) {
             char call[64];
             snprintf(call, sizeof call, "clSetKernelArg(%s)", arg_names[a]);
@@ -1042,9 +1141,16 @@ int tr_cl_render_frame(tr_cl_context *ctx, const tr_frame *f, uint64_t *rays_out
     const size_t *local = ctx->local[0] ? ctx->local : NULL;
     const size_t global[2] = {local ? (nx + local[0] - 1) / local[0] * local[0] : nx,
                               local ? (ny + local[1] - 1) / local[1] * local[1] : ny};
-    rc = clEnqueueNDRangeKernel(ctx->queue, ctx->kernel, 2, NULL, global, local, 0, NULL, NULL);
+    if (bdpt && prepare_splats(ctx, f, err) != TR_OK) {
+        return TR_ERR;
+    }
+    rc = clEnqueueNDRangeKernel(ctx->queue, kernel, 2, NULL, global, local, 0, NULL, NULL);
     if (rc != CL_SUCCESS) {
         return cl_fail(err, "clEnqueueNDRangeKernel(tr_cl_render)", rc);
+    }
+    /* The in-order queue runs the fold after the frame's kernel. */
+    if (bdpt && fold_splats(ctx, f, nx * ny, err) != TR_OK) {
+        return TR_ERR;
     }
     /* The blocking read waits for the kernel: the frame is done when it returns. */
     rc = clEnqueueReadBuffer(ctx->queue, ctx->rays, CL_TRUE, 0, ny * sizeof(cl_uint),

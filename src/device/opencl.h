@@ -92,6 +92,10 @@ uint64_t tr_cl_scene_bytes(const tr_cl_context *ctx);
  * frame's passes; a frame of another size or other passes than the previous one clears
  * it. Waits for the device to finish. *rays (may be NULL) gets the queries made. */
 int tr_cl_render_frame(tr_cl_context *ctx, const tr_frame *f, uint64_t *rays, tr_error *err);
+/* TR_OK if the device runs `integrator`; else TR_STATUS_UNSUPPORTED with the reason: vcm
+ * (its photon map is host code), or bdpt on a device without cl_khr_int64_base_atomics and
+ * cl_khr_fp64 (its splats' atomic sums and their fold). tr_cl_render_frame checks it too. */
+int tr_cl_supports_integrator(const tr_cl_context *ctx, int integrator, tr_error *err);
 /* The size and passes of the device film (those of the last frame; 0 before one). */
 void tr_cl_film_size(const tr_cl_context *ctx, uint32_t *width, uint32_t *height, uint32_t *passes);
 /* Forgets every sample of the device film. */
