@@ -128,7 +128,19 @@ svgf=$(awk '$1 == "svgf" { print $7 }' rt.txt)
 awk -v a="$raw" -v b="$svgf" 'BEGIN { exit !(b > a + 1) }' ||
     fail "bench realtime --device opencl: svgf $svgf dB vs raw $raw dB"
 rm -f rt.txt rt.err rt.csv rt.png
-expect_usage_error "--device: not an option of this benchmark" bench rays --device opencl
+# bench rays on the device: both structures it walks trace the same rays with the same
+# hits (a difference prints a note), at a positive rate; Embree is refused there.
+"$BIN" bench rays --device opencl --scene builtin:cornell --width 16 --height 12 --runs 1 \
+    --accels flat,bvh >rays.txt 2>rays.err || fail "bench rays --device opencl: $(cat rays.err)"
+grep -q "on opencl:0" rays.txt || fail "bench rays does not name the device: $(cat rays.txt)"
+for accel in flat bvh; do
+    awk -v a=$accel '$3 == a && $5 > 0 && $6 > 0 && $7 > 0 { ok = 1 } END { exit !ok }' rays.txt ||
+        fail "bench rays --device opencl: no $accel row with three rates: $(cat rays.txt)"
+done
+if grep -q "note:" rays.txt; then fail "bench rays: flat and bvh hit differently: $(cat rays.txt)"; fi
+rm -f rays.txt rays.err
+expect_usage_error "--accels: embree runs on the CPU only" bench rays --device opencl \
+    --accels bvh,embree
 expect_usage_error "--accels:" bench complexity --device opencl \
     --accels bvh,embree
 

@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "bench.h"
+#include "devices.h"
 #include "progress.h"
 #include "trac0r/measure.h"
 
@@ -21,12 +22,15 @@ static void bench_rays_help(FILE *fp) {
                 "  --scene SCENE        measure only this scene\n"
                 "  --runs N             timed passes over each ray set, 1..1000 (default 5)\n"
                 "  --accels LIST        structures to compare (default bvh,embree)\n"
+                "  --device DEV         trace on this device: cpu (default) or opencl[:N]; a\n"
+                "                       device compares flat,bvh (it walks the binary BVH)\n"
                 "  -h, --help           show this help\n");
 }
 
 typedef struct rays_opts {
     int runs;
     accel_set set;
+    int accels_given;
 } rays_opts;
 
 static int rays_option(cli_args *a, void *user) {
@@ -34,32 +38,64 @@ static int rays_option(cli_args *a, void *user) {
     if (cli_is(a, "--runs")) {
         return cli_parse_int(a, 1, 1000, &o->runs);
     }
-    return cli_is(a, "--accels") ? bench_parse_accels(a, &o->set) : -1;
+    if (cli_is(a, "--accels")) {
+        o->accels_given = 1;
+        return bench_parse_accels(a, &o->set);
+    }
+    return -1;
 }
 
 int bench_rays(int argc, char **argv) {
     cli_args a = {.cmd = "bench rays", .argc = argc, .argv = argv, .i = 0};
     cli_common c;
     cli_common_default(&c);
-    rays_opts o = {5, {{TR_ACCEL_TYPE_FLAT}, 0}};
+    rays_opts o = {5, {{TR_ACCEL_TYPE_FLAT}, 0}, 0};
     bench_accels_all(&o.set, 0);
-    static const char *const refused[] = {"--accel", "--integrator", "--max-depth", "--device",
-                                          NULL};
+    static const char *const refused[] = {"--accel", "--integrator", "--max-depth", NULL};
     int rc = cli_parse(&a, &c, refused, bench_rays_help, rays_option, &o);
     if (rc != CLI_OK) {
         return rc == CLI_HELP ? CLI_OK : rc;
     }
     const int runs = o.runs, one_scene = (c.given & CLI_GIVEN_SCENE) != 0;
+    /* On a device the rays are traced there, with the structures it walks itself. */
+    cli_backend be = {0};
+    const int on_device = strcmp(c.device, "cpu") != 0;
+    if (on_device) {
+        rc = cli_backend_open(&a, &c, NULL, &be);
+        if (rc != CLI_OK) {
+            return rc;
+        }
+        for (int k = 0; k < o.set.count; ++k) {
+            if (tr_device_traces(be.dev, o.set.type[k])) {
+                continue;
+            }
+            if (o.accels_given) {
+                const int bad = cli_error(&a,
+                                          "--accels: %s runs on the CPU only; with --device %s "
+                                          "compare flat,bvh",
+                                          tr_accel_name(o.set.type[k]), tr_device_kind(be.dev));
+                cli_backend_close(&be);
+                return bad;
+            }
+            o.set.type[k--] = o.set.type[--o.set.count];
+        }
+    }
     const accel_set set = o.set;
     const char *scenes[] = {"builtin:cornell", "builtin:cornell-ico-6", "builtin:cornell-ico-8"};
     const int scene_count = one_scene ? 1 : 3;
     const int threads = c.threads ? c.threads : tr_default_threads();
     double *times = malloc((size_t)runs * sizeof *times);
     if (!times) {
+        cli_backend_close(&be);
         return cli_error(&a, "out of memory");
     }
-    printf("bench rays: %ux%u rays per set, %d thread%s, median of %d runs\n", c.width, c.height,
-           threads, threads == 1 ? "" : "s", runs);
+    if (on_device) {
+        printf("bench rays: %ux%u rays per set, on %s, median of %d runs\n", c.width, c.height,
+               be.name, runs);
+    } else {
+        printf("bench rays: %ux%u rays per set, %d thread%s, median of %d runs\n", c.width,
+               c.height, threads, threads == 1 ? "" : "s", runs);
+    }
     printf("%-24s %10s %-7s %10s %10s %10s %10s\n", "scene", "triangles", "accel", "build ms",
            "primary", "diffuse", "shadow");
     progress bar;
@@ -95,7 +131,37 @@ int bench_rays(int argc, char **argv) {
                 rc = CLI_FAILURE;
                 break;
             }
-            for (int kind = 0; kind < TR_RAY_KINDS; ++kind) {
+            if (on_device) {
+                progress_clear(&bar);
+                rc = cli_backend_upload(&a, &be, scene);
+                if (rc != CLI_OK) {
+                    break;
+                }
+            }
+            int failed = 0;
+            for (int kind = 0; kind < TR_RAY_KINDS && on_device && !failed; ++kind) {
+                double one = 0.0;
+                failed = tr_ray_sets_trace_device(sets, be.dev, kind, 1, &hits[k][kind], &one,
+                                                  &err) != TR_OK;
+                const int reps = tr_ray_sets_reps(one); /* the warm-up */
+                progress_update(&bar, ++steps, NULL);
+                for (int r = 0; r < runs && !failed; ++r) {
+                    failed = tr_ray_sets_trace_device(sets, be.dev, kind, reps, &hits[k][kind],
+                                                      &times[r], &err) != TR_OK;
+                    progress_update(&bar, ++steps, NULL);
+                }
+                if (!failed) {
+                    mrays[k][kind] = (double)tr_ray_sets_count(sets, kind) * reps /
+                                     tr_median(times, runs) * 1e-6;
+                }
+            }
+            if (failed) {
+                progress_clear(&bar);
+                fprintf(stderr, "trac0r bench rays: %s\n", err.msg);
+                rc = CLI_FAILURE;
+                break;
+            }
+            for (int kind = 0; kind < TR_RAY_KINDS && !on_device; ++kind) {
                 const int reps = tr_ray_sets_reps(
                     tr_ray_sets_trace(sets, scene, kind, threads, 1, &hits[k][kind])); /* warm-up */
                 progress_update(&bar, ++steps, NULL);
@@ -139,5 +205,6 @@ int bench_rays(int argc, char **argv) {
     }
     progress_end(&bar);
     free(times);
+    cli_backend_close(&be);
     return rc;
 }

@@ -351,6 +351,19 @@ static void copy_arrays(tr_film *dst, const tr_film *src) {
     }
 }
 
+int tr_device_trace_rays(tr_device *dev, const tr_ray *rays, uint32_t count, int shadow, int reps,
+                         uint64_t *hits, double *seconds, tr_error *err) {
+    if (dev->kind != TR_DEVICE_OPENCL) {
+        return tr_error_set(err, TR_STATUS_UNSUPPORTED,
+                            "tr_device_trace_rays: device %s is not OpenCL", dev->info.name);
+    }
+    if (!dev->scene) {
+        return tr_error_set(err, TR_STATUS_INVALID_OPERATION, "no scene uploaded to device %s",
+                            dev->info.name);
+    }
+    return tr_cl_trace_rays(dev->cl, rays, count, shadow, reps, hits, seconds, err);
+}
+
 int tr_device_read_film(tr_device *dev, tr_film *film, tr_error *err) {
     if (dev->kind == TR_DEVICE_OPENCL) {
         return tr_cl_read_film(dev->cl, film, err);

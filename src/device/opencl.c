@@ -83,6 +83,17 @@ int tr_cl_clear_film(tr_cl_context *ctx, tr_error *err) {
     (void)ctx;
     return tr_error_set(err, TR_STATUS_UNSUPPORTED, "%s", no_opencl);
 }
+int tr_cl_trace_rays(tr_cl_context *ctx, const tr_ray *rays, uint32_t count, int shadow, int reps,
+                     uint64_t *hits, double *seconds, tr_error *err) {
+    (void)ctx;
+    (void)rays;
+    (void)count;
+    (void)shadow;
+    (void)reps;
+    *hits = 0;
+    *seconds = 0.0;
+    return tr_error_set(err, TR_STATUS_UNSUPPORTED, "%s", no_opencl);
+}
 int tr_cl_supports_integrator(const tr_cl_context *ctx, int integrator, tr_error *err) {
     (void)ctx;
     (void)integrator;
@@ -218,6 +229,7 @@ struct tr_cl_context {
     /* bdpt: tr_cl_render_bdpt and tr_cl_fold_splats, NULL where the device lacks 64-bit
      * atomics or doubles (entry.cl compiles them only with both), and the splat sums. */
     cl_kernel bdpt, fold;
+    cl_kernel trace; /* tr_cl_trace_rays */
     cl_mem splat;
     size_t splat_bytes;
     char *build_log;
@@ -505,6 +517,9 @@ void tr_cl_close(tr_cl_context *ctx) {
     if (ctx->fold) {
         clReleaseKernel(ctx->fold);
     }
+    if (ctx->trace) {
+        clReleaseKernel(ctx->trace);
+    }
     if (ctx->splat) {
         clReleaseMemObject(ctx->splat);
     }
@@ -720,6 +735,11 @@ tr_cl_context *tr_cl_open_source(int index, const char *source, tr_error *err) {
         cl_fail(err, "clCreateKernel(tr_cl_resolve_emission)", rc);
         goto fail;
     }
+    ctx->trace = clCreateKernel(ctx->program, "tr_cl_trace_rays", &rc);
+    if (!ctx->trace && !source) {
+        cl_fail(err, "clCreateKernel(tr_cl_trace_rays)", rc);
+        goto fail;
+    }
     /* Absent from a program built without cl_khr_int64_base_atomics or cl_khr_fp64. */
     ctx->bdpt = clCreateKernel(ctx->program, "tr_cl_render_bdpt", &rc);
     ctx->fold = ctx->bdpt ? clCreateKernel(ctx->program, "tr_cl_fold_splats", &rc) : NULL;
@@ -894,8 +914,8 @@ int tr_cl_upload_scene(tr_cl_context *ctx, const tr_scene *scene, tr_error *err)
         }
     }
     /* The kernels take the scene's arrays and scene_info first (bdpt's where built). */
-    const cl_kernel kernels[3] = {ctx->kernel, ctx->resolve, ctx->bdpt};
-    for (int k = 0; k < 3 && kernels[k]; ++k) {
+    const cl_kernel kernels[4] = {ctx->kernel, ctx->resolve, ctx->trace, ctx->bdpt};
+    for (int k = 0; k < 4 && kernels[k]; ++k) {
         for (int i = 0; i < na && rc == TR_OK; ++i) {
             cl_int crc = clSetKernelArg(kernels[k], (cl_uint)i, sizeof(cl_mem), &ctx->arrays[i]);
             if (crc != CL_SUCCESS) {
@@ -1070,6 +1090,86 @@ static int fold_splats(tr_cl_context *ctx, const tr_frame *f, uint32_t grid, tr_
     const size_t global[2] = {f->rect_w, f->rect_h};
     rc = clEnqueueNDRangeKernel(ctx->queue, ctx->fold, 2, NULL, global, NULL, 0, NULL, NULL);
     return rc == CL_SUCCESS ? TR_OK : cl_fail(err, "clEnqueueNDRangeKernel(tr_cl_fold_splats)", rc);
+}
+
+int tr_cl_trace_rays(tr_cl_context *ctx, const tr_ray *rays, uint32_t count, int shadow, int reps,
+                     uint64_t *hits, double *seconds, tr_error *err) {
+    *hits = 0;
+    *seconds = 0.0;
+    if (!ctx->have_scene || !ctx->trace) {
+        return tr_error_set(err, TR_STATUS_INVALID_OPERATION,
+                            "no scene uploaded to the OpenCL device");
+    }
+    if (count == 0u) {
+        return TR_OK;
+    }
+    const size_t bytes = (size_t)count * sizeof *rays;
+    if (bytes > ctx->info.max_alloc) {
+        return tr_error_set(err, TR_STATUS_LIMIT,
+                            "%u rays exceed OpenCL device %d's largest "
+                            "allocation",
+                            count, ctx->info.index);
+    }
+    cl_int rc;
+    cl_mem rbuf = clCreateBuffer(ctx->context, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, bytes,
+                                 (void *)rays, &rc);
+    if (!rbuf) {
+        return cl_fail(err, "clCreateBuffer(rays)", rc);
+    }
+    cl_mem hbuf =
+        clCreateBuffer(ctx->context, CL_MEM_READ_WRITE, (size_t)count * sizeof(cl_uint), NULL, &rc);
+    uint32_t *h = malloc((size_t)count * sizeof *h);
+    int out = TR_OK;
+    if (!hbuf || !h) {
+        out = h ? cl_fail(err, "clCreateBuffer(hits)", rc)
+                : tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory for %u hits", count);
+    }
+    const cl_uint base = (cl_uint)ctx->array_count + ARG_FRAME;
+    const cl_uint n = count, sh = shadow ? 1u : 0u;
+    if (out == TR_OK) {
+        rc = clSetKernelArg(ctx->trace, base, sizeof(cl_mem), &rbuf);
+        rc |= clSetKernelArg(ctx->trace, base + 1u, sizeof n, &n);
+        rc |= clSetKernelArg(ctx->trace, base + 2u, sizeof sh, &sh);
+        rc |= clSetKernelArg(ctx->trace, base + 3u, sizeof(cl_mem), &hbuf);
+        if (rc != CL_SUCCESS) {
+            out = cl_fail(err, "clSetKernelArg(tr_cl_trace_rays)", rc);
+        }
+    }
+    /* The rays are on the device before the clock starts; the passes are queued back to
+     * back and the clock stops when the last one has finished. */
+    if (out == TR_OK && (rc = clFinish(ctx->queue)) != CL_SUCCESS) {
+        out = cl_fail(err, "clFinish", rc);
+    }
+    const size_t group = 64u;
+    const size_t global = (count + group - 1u) / group * group;
+    const size_t *local = ctx->local[0] ? &group : NULL;
+    const double t0 = tr_time_now();
+    for (int r = 0; r < reps && out == TR_OK; ++r) {
+        rc = clEnqueueNDRangeKernel(ctx->queue, ctx->trace, 1, NULL, &global, local, 0, NULL, NULL);
+        if (rc != CL_SUCCESS) {
+            out = cl_fail(err, "clEnqueueNDRangeKernel(tr_cl_trace_rays)", rc);
+        }
+    }
+    if (out == TR_OK && (rc = clFinish(ctx->queue)) != CL_SUCCESS) {
+        out = cl_fail(err, "clFinish", rc);
+    }
+    *seconds = tr_time_now() - t0;
+    if (out == TR_OK) {
+        rc = clEnqueueReadBuffer(ctx->queue, hbuf, CL_TRUE, 0, (size_t)count * sizeof *h, h, 0,
+                                 NULL, NULL);
+        if (rc != CL_SUCCESS) {
+            out = cl_fail(err, "clEnqueueReadBuffer(hits)", rc);
+        }
+        for (uint32_t i = 0; i < count && out == TR_OK; ++i) {
+            *hits += h[i];
+        }
+    }
+    free(h);
+    if (hbuf) {
+        clReleaseMemObject(hbuf);
+    }
+    clReleaseMemObject(rbuf);
+    return out;
 }
 
 int tr_cl_supports_integrator(const tr_cl_context *ctx, int integrator, tr_error *err) {

@@ -90,6 +90,29 @@ tr_cl_resolve_emission(TR_SCENE_ARRAYS(TR_CL_ARRAY_PARAM) __global const uint *s
     resolved[3u * i + 2u] = e.z;
 }
 
+/* Ray throughput (`trac0r bench rays --device opencl`, src/measure/rays.c): one work item
+ * per ray of a set, the closest hit (or, for shadow rays, any hit) with the scene's
+ * structure; hits[i] is 1 where ray i hit, for the host's cross-check of the counts. */
+__kernel void tr_cl_trace_rays(TR_SCENE_ARRAYS(TR_CL_ARRAY_PARAM) __global const uint *scene_info,
+                               __global const tr_ray *rays, uint count, uint shadow,
+                               __global uint *hits) {
+    const uint i = (uint)get_global_id(0);
+    if (i >= count) {
+        return;
+    }
+    tr_scene_view s;
+    TR_CL_SCENE_VIEW(s);
+    const tr_ray r = rays[i];
+    uint h;
+    if (shadow) {
+        h = tr_occluded_scene(&s, &r) ? 1u : 0u;
+    } else {
+        tr_hit hit;
+        h = tr_intersect_scene(&s, &r, &hit) ? 1u : 0u;
+    }
+    hits[i] = h;
+}
+
 /* bdpt on the device: tr_cl_render's arguments and work items, and the light-tracing
  * splats' fixed-point sums (integrator_bdpt.h), one 64-bit integer per colour channel and
  * pixel of the frame's rectangle, added with atom_add. Integer addition is associative, so

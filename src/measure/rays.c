@@ -5,6 +5,7 @@
 #include <omp.h>
 #include <stdlib.h>
 
+#include "device/opencl.h"
 #include "kernel/kernel.h"
 #include "scene/scene_internal.h"
 #include "trac0r/render.h"
@@ -146,6 +147,12 @@ double tr_ray_sets_trace(const tr_ray_sets *r, const tr_scene *s, int kind, int 
     }
     *hits = h;
     return tr_time_now() - t0;
+}
+
+int tr_ray_sets_trace_device(const tr_ray_sets *r, tr_device *dev, int kind, int reps,
+                             uint64_t *hits, double *seconds, tr_error *err) {
+    return tr_device_trace_rays(dev, r->rays[kind], r->count[kind], kind == TR_RAY_SHADOW, reps,
+                                hits, seconds, err);
 }
 
 int tr_ray_sets_reps(double one_pass_seconds) {
