@@ -6,6 +6,7 @@
  * one string compiled by src/device/opencl.c. */
 #pragma OPENCL FP_CONTRACT OFF
 
+#include "cwbvh.h"
 #include "emission.h"
 #include "kernel.h"
 
