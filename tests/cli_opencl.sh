@@ -128,12 +128,13 @@ svgf=$(awk '$1 == "svgf" { print $7 }' rt.txt)
 awk -v a="$raw" -v b="$svgf" 'BEGIN { exit !(b > a + 1) }' ||
     fail "bench realtime --device opencl: svgf $svgf dB vs raw $raw dB"
 rm -f rt.txt rt.err rt.csv rt.png
-# bench rays on the device: both structures it walks trace the same rays with the same
-# hits (a difference prints a note), at a positive rate; Embree is refused there.
+# bench rays on the device: both structures it walks, and the compressed wide BVH converted
+# from the binary one, trace the same rays with the same hits (a difference prints a
+# note), at a positive rate; Embree is refused there.
 "$BIN" bench rays --device opencl --scene builtin:cornell --width 16 --height 12 --runs 1 \
     --accels flat,bvh >rays.txt 2>rays.err || fail "bench rays --device opencl: $(cat rays.err)"
 grep -q "on opencl:0" rays.txt || fail "bench rays does not name the device: $(cat rays.txt)"
-for accel in flat bvh; do
+for accel in flat bvh cwbvh; do
     awk -v a=$accel '$3 == a && $5 > 0 && $6 > 0 && $7 > 0 { ok = 1 } END { exit !ok }' rays.txt ||
         fail "bench rays --device opencl: no $accel row with three rates: $(cat rays.txt)"
 done

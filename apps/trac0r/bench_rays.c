@@ -178,6 +178,45 @@ int bench_rays(int argc, char **argv) {
                    bench_build_seconds(scene) * 1e3, mrays[k][TR_RAY_PRIMARY],
                    mrays[k][TR_RAY_DIFFUSE], mrays[k][TR_RAY_SHADOW]);
             fflush(stdout);
+            /* On a device the binary BVH's row is followed by the compressed wide BVH's,
+             * converted from it, on the same rays (its hits must be the same). */
+            double wide[TR_RAY_KINDS] = {0};
+            uint64_t wide_hits[TR_RAY_KINDS] = {0};
+            for (int kind = 0;
+                 kind < TR_RAY_KINDS && on_device && !failed && set.type[k] == TR_ACCEL_TYPE_BVH;
+                 ++kind) {
+                double one = 0.0;
+                failed = tr_ray_sets_trace_device_wide(sets, be.dev, scene, kind, 1,
+                                                       &wide_hits[kind], &one, &err) != TR_OK;
+                const int reps = tr_ray_sets_reps(one);
+                for (int r = 0; r < runs && !failed; ++r) {
+                    failed =
+                        tr_ray_sets_trace_device_wide(sets, be.dev, scene, kind, reps,
+                                                      &wide_hits[kind], &times[r], &err) != TR_OK;
+                }
+                if (!failed) {
+                    wide[kind] = (double)tr_ray_sets_count(sets, kind) * reps /
+                                 tr_median(times, runs) * 1e-6;
+                }
+                if (kind + 1 == TR_RAY_KINDS && !failed) {
+                    printf("%-24s %10u %-7s %10s %10.2f %10.2f %10.2f\n", sc_opts.scene,
+                           tr_scene_triangle_count(scene), "cwbvh", "-", wide[TR_RAY_PRIMARY],
+                           wide[TR_RAY_DIFFUSE], wide[TR_RAY_SHADOW]);
+                    for (int w = 0; w < TR_RAY_KINDS; ++w) {
+                        if (wide_hits[w] != hits[k][w]) {
+                            printf("  note: %s rays: bvh hit %llu, cwbvh hit %llu\n",
+                                   tr_ray_kind_name(w), (unsigned long long)hits[k][w],
+                                   (unsigned long long)wide_hits[w]);
+                        }
+                    }
+                }
+            }
+            if (failed) {
+                progress_clear(&bar);
+                fprintf(stderr, "trac0r bench rays: %s\n", err.msg);
+                rc = CLI_FAILURE;
+                break;
+            }
             if (k > 0) {
                 for (int kind = 0; kind < TR_RAY_KINDS; ++kind) {
                     if (hits[k][kind] != hits[0][kind]) {

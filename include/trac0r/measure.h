@@ -183,6 +183,11 @@ double tr_ray_sets_trace(const tr_ray_sets *r, const tr_scene *scene, int kind, 
  * *seconds. TR_STATUS_UNSUPPORTED on the CPU device. */
 int tr_ray_sets_trace_device(const tr_ray_sets *r, tr_device *dev, int kind, int reps,
                              uint64_t *hits, double *seconds, tr_error *err);
+/* tr_ray_sets_trace_device through a compressed wide BVH converted from the scene's binary
+ * BVH (the scene committed with bvh or bvh2; src/accel/cwbvh.c) for the call. */
+int tr_ray_sets_trace_device_wide(const tr_ray_sets *r, tr_device *dev, const tr_scene *scene,
+                                  int kind, int reps, uint64_t *hits, double *seconds,
+                                  tr_error *err);
 /* How often a timed run traces a set whose one pass took `one_pass_seconds`, so that it
  * lasts at least 50 ms (a run of a few ms is at the mercy of the scheduler), 1..1000. */
 int tr_ray_sets_reps(double one_pass_seconds);

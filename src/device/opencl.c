@@ -13,6 +13,7 @@
 #include "kernel/integrator_bdpt.h"
 #include "kernel/kernel.h"
 #include "accel/accel_internal.h"
+#include "accel/cwbvh.h"
 #include "scene/scene_internal.h"
 #include "trac0r/parse.h"
 #include "trac0r/accel.h"
@@ -86,6 +87,19 @@ int tr_cl_clear_film(tr_cl_context *ctx, tr_error *err) {
 int tr_cl_trace_rays(tr_cl_context *ctx, const tr_ray *rays, uint32_t count, int shadow, int reps,
                      uint64_t *hits, double *seconds, tr_error *err) {
     (void)ctx;
+    (void)rays;
+    (void)count;
+    (void)shadow;
+    (void)reps;
+    *hits = 0;
+    *seconds = 0.0;
+    return tr_error_set(err, TR_STATUS_UNSUPPORTED, "%s", no_opencl);
+}
+int tr_cl_trace_rays_cwbvh(tr_cl_context *ctx, const struct tr_cwbvh *cw, const tr_ray *rays,
+                           uint32_t count, int shadow, int reps, uint64_t *hits, double *seconds,
+                           tr_error *err) {
+    (void)ctx;
+    (void)cw;
     (void)rays;
     (void)count;
     (void)shadow;
@@ -229,7 +243,8 @@ struct tr_cl_context {
     /* bdpt: tr_cl_render_bdpt and tr_cl_fold_splats, NULL where the device lacks 64-bit
      * atomics or doubles (entry.cl compiles them only with both), and the splat sums. */
     cl_kernel bdpt, fold;
-    cl_kernel trace; /* tr_cl_trace_rays */
+    cl_kernel trace;       /* tr_cl_trace_rays */
+    cl_kernel trace_cwbvh; /* tr_cl_trace_cwbvh */
     cl_mem splat;
     size_t splat_bytes;
     char *build_log;
@@ -520,6 +535,9 @@ void tr_cl_close(tr_cl_context *ctx) {
     if (ctx->trace) {
         clReleaseKernel(ctx->trace);
     }
+    if (ctx->trace_cwbvh) {
+        clReleaseKernel(ctx->trace_cwbvh);
+    }
     if (ctx->splat) {
         clReleaseMemObject(ctx->splat);
     }
@@ -738,6 +756,11 @@ tr_cl_context *tr_cl_open_source(int index, const char *source, tr_error *err) {
     ctx->trace = clCreateKernel(ctx->program, "tr_cl_trace_rays", &rc);
     if (!ctx->trace && !source) {
         cl_fail(err, "clCreateKernel(tr_cl_trace_rays)", rc);
+        goto fail;
+    }
+    ctx->trace_cwbvh = clCreateKernel(ctx->program, "tr_cl_trace_cwbvh", &rc);
+    if (!ctx->trace_cwbvh && !source) {
+        cl_fail(err, "clCreateKernel(tr_cl_trace_cwbvh)", rc);
         goto fail;
     }
     /* Absent from a program built without cl_khr_int64_base_atomics or cl_khr_fp64. */
@@ -1092,14 +1115,13 @@ static int fold_splats(tr_cl_context *ctx, const tr_frame *f, uint32_t grid, tr_
     return rc == CL_SUCCESS ? TR_OK : cl_fail(err, "clEnqueueNDRangeKernel(tr_cl_fold_splats)", rc);
 }
 
-int tr_cl_trace_rays(tr_cl_context *ctx, const tr_ray *rays, uint32_t count, int shadow, int reps,
-                     uint64_t *hits, double *seconds, tr_error *err) {
+/* Times `reps` passes of `kernel` over the rays; its arguments from `base` on are the rays,
+ * their count, the shadow flag and the hits (the ones before are set by the caller). */
+static int trace_timed(tr_cl_context *ctx, cl_kernel kernel, cl_uint base, const tr_ray *rays,
+                       uint32_t count, int shadow, int reps, uint64_t *hits, double *seconds,
+                       tr_error *err) {
     *hits = 0;
     *seconds = 0.0;
-    if (!ctx->have_scene || !ctx->trace) {
-        return tr_error_set(err, TR_STATUS_INVALID_OPERATION,
-                            "no scene uploaded to the OpenCL device");
-    }
     if (count == 0u) {
         return TR_OK;
     }
@@ -1124,13 +1146,12 @@ int tr_cl_trace_rays(tr_cl_context *ctx, const tr_ray *rays, uint32_t count, int
         out = h ? cl_fail(err, "clCreateBuffer(hits)", rc)
                 : tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory for %u hits", count);
     }
-    const cl_uint base = (cl_uint)ctx->array_count + ARG_FRAME;
     const cl_uint n = count, sh = shadow ? 1u : 0u;
     if (out == TR_OK) {
-        rc = clSetKernelArg(ctx->trace, base, sizeof(cl_mem), &rbuf);
-        rc |= clSetKernelArg(ctx->trace, base + 1u, sizeof n, &n);
-        rc |= clSetKernelArg(ctx->trace, base + 2u, sizeof sh, &sh);
-        rc |= clSetKernelArg(ctx->trace, base + 3u, sizeof(cl_mem), &hbuf);
+        rc = clSetKernelArg(kernel, base, sizeof(cl_mem), &rbuf);
+        rc |= clSetKernelArg(kernel, base + 1u, sizeof n, &n);
+        rc |= clSetKernelArg(kernel, base + 2u, sizeof sh, &sh);
+        rc |= clSetKernelArg(kernel, base + 3u, sizeof(cl_mem), &hbuf);
         if (rc != CL_SUCCESS) {
             out = cl_fail(err, "clSetKernelArg(tr_cl_trace_rays)", rc);
         }
@@ -1145,7 +1166,7 @@ int tr_cl_trace_rays(tr_cl_context *ctx, const tr_ray *rays, uint32_t count, int
     const size_t *local = ctx->local[0] ? &group : NULL;
     const double t0 = tr_time_now();
     for (int r = 0; r < reps && out == TR_OK; ++r) {
-        rc = clEnqueueNDRangeKernel(ctx->queue, ctx->trace, 1, NULL, &global, local, 0, NULL, NULL);
+        rc = clEnqueueNDRangeKernel(ctx->queue, kernel, 1, NULL, &global, local, 0, NULL, NULL);
         if (rc != CL_SUCCESS) {
             out = cl_fail(err, "clEnqueueNDRangeKernel(tr_cl_trace_rays)", rc);
         }
@@ -1169,6 +1190,56 @@ int tr_cl_trace_rays(tr_cl_context *ctx, const tr_ray *rays, uint32_t count, int
         clReleaseMemObject(hbuf);
     }
     clReleaseMemObject(rbuf);
+    return out;
+}
+
+int tr_cl_trace_rays(tr_cl_context *ctx, const tr_ray *rays, uint32_t count, int shadow, int reps,
+                     uint64_t *hits, double *seconds, tr_error *err) {
+    *hits = 0;
+    *seconds = 0.0;
+    if (!ctx->have_scene || !ctx->trace) {
+        return tr_error_set(err, TR_STATUS_INVALID_OPERATION,
+                            "no scene uploaded to the OpenCL device");
+    }
+    return trace_timed(ctx, ctx->trace, (cl_uint)ctx->array_count + ARG_FRAME, rays, count, shadow,
+                       reps, hits, seconds, err);
+}
+
+int tr_cl_trace_rays_cwbvh(tr_cl_context *ctx, const struct tr_cwbvh *cw, const tr_ray *rays,
+                           uint32_t count, int shadow, int reps, uint64_t *hits, double *seconds,
+                           tr_error *err) {
+    *hits = 0;
+    *seconds = 0.0;
+    if (!ctx->trace_cwbvh || cw->node_count == 0u) {
+        return tr_error_set(err, TR_STATUS_INVALID_OPERATION, "no wide BVH for the OpenCL device");
+    }
+    const size_t nb = cw->node_count * sizeof *cw->nodes, tb = cw->tri_count * sizeof *cw->tris;
+    if (nb > ctx->info.max_alloc || tb > ctx->info.max_alloc) {
+        return tr_error_set(err, TR_STATUS_LIMIT,
+                            "the wide BVH exceeds OpenCL device %d's largest allocation",
+                            ctx->info.index);
+    }
+    cl_int rc;
+    cl_mem bn =
+        clCreateBuffer(ctx->context, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, nb, cw->nodes, &rc);
+    if (!bn) {
+        return cl_fail(err, "clCreateBuffer(wide BVH nodes)", rc);
+    }
+    cl_mem bt = clCreateBuffer(ctx->context, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR,
+                               tb ? tb : sizeof *cw->tris, cw->tris, &rc);
+    if (!bt) {
+        clReleaseMemObject(bn);
+        return cl_fail(err, "clCreateBuffer(wide BVH triangles)", rc);
+    }
+    const cl_uint nc = cw->node_count;
+    rc = clSetKernelArg(ctx->trace_cwbvh, 0, sizeof bn, &bn);
+    rc |= clSetKernelArg(ctx->trace_cwbvh, 1, sizeof nc, &nc);
+    rc |= clSetKernelArg(ctx->trace_cwbvh, 2, sizeof bt, &bt);
+    int out = rc == CL_SUCCESS ? trace_timed(ctx, ctx->trace_cwbvh, 3u, rays, count, shadow, reps,
+                                             hits, seconds, err)
+                               : cl_fail(err, "clSetKernelArg(tr_cl_trace_cwbvh)", rc);
+    clReleaseMemObject(bn);
+    clReleaseMemObject(bt);
     return out;
 }
 

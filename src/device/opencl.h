@@ -106,6 +106,12 @@ int tr_cl_trace_rays(tr_cl_context *ctx, const tr_ray *rays, uint32_t count, int
  * (device.c); TR_STATUS_UNSUPPORTED on the CPU device. */
 int tr_device_trace_rays(tr_device *dev, const tr_ray *rays, uint32_t count, int shadow, int reps,
                          uint64_t *hits, double *seconds, tr_error *err);
+/* tr_cl_trace_rays through the compressed wide BVH `cw` (src/accel/cwbvh.h), uploaded for
+ * the call (before the clock starts) and released after. */
+struct tr_cwbvh;
+int tr_cl_trace_rays_cwbvh(tr_cl_context *ctx, const struct tr_cwbvh *cw, const tr_ray *rays,
+                           uint32_t count, int shadow, int reps, uint64_t *hits, double *seconds,
+                           tr_error *err);
 /* The size and passes of the device film (those of the last frame; 0 before one). */
 void tr_cl_film_size(const tr_cl_context *ctx, uint32_t *width, uint32_t *height, uint32_t *passes);
 /* Forgets every sample of the device film. */

@@ -114,6 +114,20 @@ __kernel void tr_cl_trace_rays(TR_SCENE_ARRAYS(TR_CL_ARRAY_PARAM) __global const
     hits[i] = h;
 }
 
+/* tr_cl_trace_rays through a compressed wide BVH (cwbvh.h) given as its own buffers:
+ * `bench rays --device` measures it beside the binary BVH. */
+__kernel void tr_cl_trace_cwbvh(__global const tr_cwbvh_node *cw_nodes, uint cw_node_count,
+                                __global const tr_bvh_tri *cw_tris, __global const tr_ray *rays,
+                                uint count, uint shadow, __global uint *hits) {
+    const uint i = (uint)get_global_id(0);
+    if (i >= count) {
+        return;
+    }
+    const tr_ray r = rays[i];
+    tr_hit hit;
+    hits[i] = tr_cwbvh_traverse(cw_nodes, cw_node_count, cw_tris, &r, &hit, shadow != 0u) ? 1u : 0u;
+}
+
 /* bdpt on the device: tr_cl_render's arguments and work items, and the light-tracing
  * splats' fixed-point sums (integrator_bdpt.h), one 64-bit integer per colour channel and
  * pixel of the frame's rectangle, added with atom_add. Integer addition is associative, so
@@ -126,14 +140,13 @@ __kernel void tr_cl_trace_rays(TR_SCENE_ARRAYS(TR_CL_ARRAY_PARAM) __global const
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable
 #include "integrator_bdpt.h"
 
-__kernel void
-tr_cl_render_bdpt(TR_SCENE_ARRAYS(TR_CL_ARRAY_PARAM) __global const uint *scene_info,
-                  __global const tr_frame *frame, __global float *film_sum,
-                  __global uint *film_count, __global float *film_albedo,
-                  __global float *film_normal, __global float *film_depth,
-                  __global uint *film_prim, __global float *film_sq, __global float *film_direct,
-                  __global float *film_emission, __global uint *rays_per_row,
-                  __global long *splat) {
+__kernel void tr_cl_render_bdpt(TR_SCENE_ARRAYS(TR_CL_ARRAY_PARAM) __global const uint *scene_info,
+                                __global const tr_frame *frame, __global float *film_sum,
+                                __global uint *film_count, __global float *film_albedo,
+                                __global float *film_normal, __global float *film_depth,
+                                __global uint *film_prim, __global float *film_sq,
+                                __global float *film_direct, __global float *film_emission,
+                                __global uint *rays_per_row, __global long *splat) {
     const tr_frame f = *frame;
     uint gx0, gy0, nx, ny;
     tr_frame_grid(&f, &gx0, &gy0, &nx, &ny);
