@@ -45,6 +45,49 @@ static int rays_option(cli_args *a, void *user) {
     return -1;
 }
 
+/* Opens the device and keeps the structures it walks (one named by --accels that it
+ * cannot walk is an error). */
+static int rays_device_open(cli_args *a, const cli_common *c, rays_opts *o, cli_backend *be) {
+    int rc = cli_backend_open(a, c, NULL, be);
+    for (int k = 0; k < o->set.count && rc == CLI_OK; ++k) {
+        if (tr_device_traces(be->dev, o->set.type[k])) {
+            continue;
+        }
+        if (o->accels_given) {
+            rc =
+                cli_error(a, "--accels: %s runs on the CPU only; with --device %s compare flat,bvh",
+                          tr_accel_name(o->set.type[k]), tr_device_kind(be->dev));
+            cli_backend_close(be);
+            return rc;
+        }
+        o->set.type[k--] = o->set.type[--o->set.count];
+    }
+    return rc;
+}
+
+/* On a device, the row of the compressed wide BVH converted from the binary one just
+ * measured (bvh_hits: its hits), on the same rays, and a note where the hits differ. */
+static int rays_wide_row(const tr_ray_sets *sets, tr_device *dev, const tr_scene *scene,
+                         const char *name, int runs, const uint64_t *bvh_hits, tr_error *err) {
+    double m[TR_RAY_KINDS];
+    uint64_t hits[TR_RAY_KINDS];
+    for (int kind = 0; kind < TR_RAY_KINDS; ++kind) {
+        if ((m[kind] = tr_ray_sets_mrays_device(sets, dev, scene, kind, runs, 1, &hits[kind],
+                                                err)) < 0.0) {
+            return TR_ERR;
+        }
+    }
+    printf("%-24s %10u %-7s %10s %10.2f %10.2f %10.2f\n", name, tr_scene_triangle_count(scene),
+           "cwbvh", "-", m[TR_RAY_PRIMARY], m[TR_RAY_DIFFUSE], m[TR_RAY_SHADOW]);
+    for (int kind = 0; kind < TR_RAY_KINDS; ++kind) {
+        if (hits[kind] != bvh_hits[kind]) {
+            printf("  note: %s rays: bvh hit %llu, cwbvh hit %llu\n", tr_ray_kind_name(kind),
+                   (unsigned long long)bvh_hits[kind], (unsigned long long)hits[kind]);
+        }
+    }
+    return TR_OK;
+}
+
 int bench_rays(int argc, char **argv) {
     cli_args a = {.cmd = "bench rays", .argc = argc, .argv = argv, .i = 0};
     cli_common c;
@@ -60,25 +103,8 @@ int bench_rays(int argc, char **argv) {
     /* On a device the rays are traced there, with the structures it walks itself. */
     cli_backend be = {0};
     const int on_device = strcmp(c.device, "cpu") != 0;
-    if (on_device) {
-        rc = cli_backend_open(&a, &c, NULL, &be);
-        if (rc != CLI_OK) {
-            return rc;
-        }
-        for (int k = 0; k < o.set.count; ++k) {
-            if (tr_device_traces(be.dev, o.set.type[k])) {
-                continue;
-            }
-            if (o.accels_given) {
-                const int bad = cli_error(&a,
-                                          "--accels: %s runs on the CPU only; with --device %s "
-                                          "compare flat,bvh",
-                                          tr_accel_name(o.set.type[k]), tr_device_kind(be.dev));
-                cli_backend_close(&be);
-                return bad;
-            }
-            o.set.type[k--] = o.set.type[--o.set.count];
-        }
+    if (on_device && (rc = rays_device_open(&a, &c, &o, &be)) != CLI_OK) {
+        return rc;
     }
     const accel_set set = o.set;
     const char *scenes[] = {"builtin:cornell", "builtin:cornell-ico-6", "builtin:cornell-ico-8"};
@@ -140,26 +166,11 @@ int bench_rays(int argc, char **argv) {
             }
             int failed = 0;
             for (int kind = 0; kind < TR_RAY_KINDS && on_device && !failed; ++kind) {
-                double one = 0.0;
-                failed = tr_ray_sets_trace_device(sets, be.dev, kind, 1, &hits[k][kind], &one,
-                                                  &err) != TR_OK;
-                const int reps = tr_ray_sets_reps(one); /* the warm-up */
-                progress_update(&bar, ++steps, NULL);
-                for (int r = 0; r < runs && !failed; ++r) {
-                    failed = tr_ray_sets_trace_device(sets, be.dev, kind, reps, &hits[k][kind],
-                                                      &times[r], &err) != TR_OK;
-                    progress_update(&bar, ++steps, NULL);
-                }
-                if (!failed) {
-                    mrays[k][kind] = (double)tr_ray_sets_count(sets, kind) * reps /
-                                     tr_median(times, runs) * 1e-6;
-                }
-            }
-            if (failed) {
-                progress_clear(&bar);
-                fprintf(stderr, "trac0r bench rays: %s\n", err.msg);
-                rc = CLI_FAILURE;
-                break;
+                mrays[k][kind] = tr_ray_sets_mrays_device(sets, be.dev, scene, kind, runs, 0,
+                                                          &hits[k][kind], &err);
+                failed = mrays[k][kind] < 0.0;
+                steps += (uint64_t)runs + 1u;
+                progress_update(&bar, steps, NULL);
             }
             for (int kind = 0; kind < TR_RAY_KINDS && !on_device; ++kind) {
                 const int reps = tr_ray_sets_reps(
@@ -178,39 +189,9 @@ int bench_rays(int argc, char **argv) {
                    bench_build_seconds(scene) * 1e3, mrays[k][TR_RAY_PRIMARY],
                    mrays[k][TR_RAY_DIFFUSE], mrays[k][TR_RAY_SHADOW]);
             fflush(stdout);
-            /* On a device the binary BVH's row is followed by the compressed wide BVH's,
-             * converted from it, on the same rays (its hits must be the same). */
-            double wide[TR_RAY_KINDS] = {0};
-            uint64_t wide_hits[TR_RAY_KINDS] = {0};
-            for (int kind = 0;
-                 kind < TR_RAY_KINDS && on_device && !failed && set.type[k] == TR_ACCEL_TYPE_BVH;
-                 ++kind) {
-                double one = 0.0;
-                failed = tr_ray_sets_trace_device_wide(sets, be.dev, scene, kind, 1,
-                                                       &wide_hits[kind], &one, &err) != TR_OK;
-                const int reps = tr_ray_sets_reps(one);
-                for (int r = 0; r < runs && !failed; ++r) {
-                    failed =
-                        tr_ray_sets_trace_device_wide(sets, be.dev, scene, kind, reps,
-                                                      &wide_hits[kind], &times[r], &err) != TR_OK;
-                }
-                if (!failed) {
-                    wide[kind] = (double)tr_ray_sets_count(sets, kind) * reps /
-                                 tr_median(times, runs) * 1e-6;
-                }
-                if (kind + 1 == TR_RAY_KINDS && !failed) {
-                    printf("%-24s %10u %-7s %10s %10.2f %10.2f %10.2f\n", sc_opts.scene,
-                           tr_scene_triangle_count(scene), "cwbvh", "-", wide[TR_RAY_PRIMARY],
-                           wide[TR_RAY_DIFFUSE], wide[TR_RAY_SHADOW]);
-                    for (int w = 0; w < TR_RAY_KINDS; ++w) {
-                        if (wide_hits[w] != hits[k][w]) {
-                            printf("  note: %s rays: bvh hit %llu, cwbvh hit %llu\n",
-                                   tr_ray_kind_name(w), (unsigned long long)hits[k][w],
-                                   (unsigned long long)wide_hits[w]);
-                        }
-                    }
-                }
-            }
+            failed = failed || (on_device && set.type[k] == TR_ACCEL_TYPE_BVH &&
+                                rays_wide_row(sets, be.dev, scene, sc_opts.scene, runs, hits[k],
+                                              &err) != TR_OK);
             if (failed) {
                 progress_clear(&bar);
                 fprintf(stderr, "trac0r bench rays: %s\n", err.msg);

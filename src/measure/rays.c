@@ -180,6 +180,27 @@ int tr_ray_sets_trace_device_wide(const tr_ray_sets *r, tr_device *dev, const tr
     return rc;
 }
 
+double tr_ray_sets_mrays_device(const tr_ray_sets *r, tr_device *dev, const tr_scene *scene,
+                                int kind, int runs, int wide, uint64_t *hits, tr_error *err) {
+    double *times = malloc((size_t)(runs > 0 ? runs : 1) * sizeof *times);
+    if (!times) {
+        tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory");
+        return -1.0;
+    }
+    double one = 0.0;
+    int reps = 1, rc = TR_OK;
+    for (int run = -1; run < runs && rc == TR_OK; ++run) {
+        double *t = run < 0 ? &one : &times[run]; /* run -1: the warm-up, which sets reps */
+        rc = wide ? tr_ray_sets_trace_device_wide(r, dev, scene, kind, reps, hits, t, err)
+                  : tr_ray_sets_trace_device(r, dev, kind, reps, hits, t, err);
+        reps = run < 0 ? tr_ray_sets_reps(one) : reps;
+    }
+    const double m =
+        rc == TR_OK ? (double)r->count[kind] * reps / tr_median(times, runs) * 1e-6 : -1.0;
+    free(times);
+    return m;
+}
+
 int tr_ray_sets_reps(double one_pass_seconds) {
     const double r = 0.05 / (one_pass_seconds > 1e-6 ? one_pass_seconds : 1e-6);
     return r < 1.0 ? 1 : r > 1000.0 ? 1000 : (int)r + 1;
