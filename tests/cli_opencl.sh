@@ -55,26 +55,38 @@ unset POCL_MEMORY_LIMIT
 "$BIN" render --width 8 --height 6 --spp 1 --out keep-cpu.png 2>/dev/null ||
     fail "the CPU backend fails after an OpenCL error"
 
-# bdpt is the CPU's alone (its light tracing splats with 64-bit atomics): refused on the
-# device with a failure status, and no image written.
-"$BIN" render --width 8 --height 6 --spp 1 --device opencl --integrator bdpt --out bd.png \
+# vcm is the CPU's alone (its photon map is host code): refused on the device with a
+# failure status, and no image written. bdpt refuses the sun on the device as on the CPU
+# (a usage error, before any device opens).
+"$BIN" render --width 8 --height 6 --spp 1 --device opencl --integrator vcm --out vc.png \
     >/dev/null 2>err.txt
-[ $? -eq 1 ] || fail "bdpt on OpenCL: exit status not 1: $(cat err.txt)"
-[ ! -e bd.png ] || fail "bdpt on OpenCL wrote an image"
+[ $? -eq 1 ] || fail "vcm on OpenCL: exit status not 1: $(cat err.txt)"
+[ ! -e vc.png ] || fail "vcm on OpenCL wrote an image"
+for dev in cpu opencl; do
+    "$BIN" render "$(dirname "$0")/../scenes/window-room.json" --width 8 --height 6 --spp 1 \
+        --device $dev --integrator bdpt --out bd.png >/dev/null 2>err.txt
+    [ $? -eq 2 ] || fail "bdpt with the sun on $dev: exit status not 2: $(cat err.txt)"
+    [ ! -e bd.png ] || fail "bdpt with the sun on $dev wrote an image"
+done
 rm -f err.txt
 
 # A device render and a CPU render of the same scene, seed and spp: PFM floats compared
 # value by value. Identical is what PoCL gives for this scene (docs/opencl.md); allow at
 # most 1 % of the values to differ by more than 1e-4 (relative) and the mean to move by 1 %.
-for accel in flat bvh embree; do
+# bdpt too: its light tracing's splats are 64-bit fixed-point sums on both sides (atomic
+# adds on the device), folded into the film in double precision after each frame.
+for accel in flat bvh embree bdpt-flat bdpt-bvh; do
+    int=pt
+    case $accel in bdpt-*) int=bdpt accel=${accel#bdpt-} ;; esac
     "$BIN" render --width 24 --height 18 --spp 4 --seed 7 --accel $accel --device opencl \
-        --out dev.pfm 2>err.txt || fail "--device opencl --accel $accel failed: $(cat err.txt)"
+        --integrator $int --out dev.pfm 2>err.txt ||
+        fail "--device opencl --accel $accel --integrator $int failed: $(cat err.txt)"
     grep -q "opencl:0" err.txt || fail "the summary line does not name the device: $(cat err.txt)"
     if [ $accel = embree ]; then
         grep -q "device traces a bvh" err.txt || fail "embree on the device: $(cat err.txt)"
     fi
-    "$BIN" render --width 24 --height 18 --spp 4 --seed 7 --accel $accel --out cpu.pfm \
-        2>/dev/null || fail "CPU render failed"
+    "$BIN" render --width 24 --height 18 --spp 4 --seed 7 --accel $accel --integrator $int \
+        --out cpu.pfm 2>/dev/null || fail "CPU render failed"
     od -An -v -tf4 -w4 -j 14 dev.pfm >dev.txt
     od -An -v -tf4 -w4 -j 14 cpu.pfm >cpu.txt
     verdict=$(paste dev.txt cpu.txt | awk '
@@ -88,7 +100,7 @@ for accel in flat bvh embree; do
               else print "ok " d }')
     case $verdict in
     ok*) ;;
-    *) fail "--accel $accel: OpenCL and CPU images disagree: $verdict" ;;
+    *) fail "--accel $accel --integrator $int: OpenCL and CPU images disagree: $verdict" ;;
     esac
     rm -f dev.pfm cpu.pfm dev.txt cpu.txt err.txt
 done
@@ -116,7 +128,20 @@ svgf=$(awk '$1 == "svgf" { print $7 }' rt.txt)
 awk -v a="$raw" -v b="$svgf" 'BEGIN { exit !(b > a + 1) }' ||
     fail "bench realtime --device opencl: svgf $svgf dB vs raw $raw dB"
 rm -f rt.txt rt.err rt.csv rt.png
-expect_usage_error "--device: not an option of this benchmark" bench rays --device opencl
+# bench rays on the device: both structures it walks, and the compressed wide BVH converted
+# from the binary one, trace the same rays with the same hits (a difference prints a
+# note), at a positive rate; Embree is refused there.
+"$BIN" bench rays --device opencl --scene builtin:cornell --width 16 --height 12 --runs 1 \
+    --accels flat,bvh >rays.txt 2>rays.err || fail "bench rays --device opencl: $(cat rays.err)"
+grep -q "on opencl:0" rays.txt || fail "bench rays does not name the device: $(cat rays.txt)"
+for accel in flat bvh cwbvh; do
+    awk -v a=$accel '$3 == a && $5 > 0 && $6 > 0 && $7 > 0 { ok = 1 } END { exit !ok }' rays.txt ||
+        fail "bench rays --device opencl: no $accel row with three rates: $(cat rays.txt)"
+done
+if grep -q "note:" rays.txt; then fail "bench rays: flat and bvh hit differently: $(cat rays.txt)"; fi
+rm -f rays.txt rays.err
+expect_usage_error "--accels: embree runs on the CPU only" bench rays --device opencl \
+    --accels bvh,embree
 expect_usage_error "--accels:" bench complexity --device opencl \
     --accels bvh,embree
 

@@ -178,6 +178,22 @@ const char *tr_ray_kind_name(int kind);
  * the work is done and structures can be cross-checked. */
 double tr_ray_sets_trace(const tr_ray_sets *r, const tr_scene *scene, int kind, int threads,
                          int reps, uint64_t *hits);
+/* tr_ray_sets_trace on an OpenCL device (tr_device_create("opencl:N")) holding the scene
+ * (tr_device_upload): the rays go to the device first, then `reps` passes are timed into
+ * *seconds. TR_STATUS_UNSUPPORTED on the CPU device. */
+int tr_ray_sets_trace_device(const tr_ray_sets *r, tr_device *dev, int kind, int reps,
+                             uint64_t *hits, double *seconds, tr_error *err);
+/* tr_ray_sets_trace_device through a compressed wide BVH converted from the scene's binary
+ * BVH (the scene committed with bvh or bvh2; src/accel/cwbvh.c) for the call. */
+int tr_ray_sets_trace_device_wide(const tr_ray_sets *r, tr_device *dev, const tr_scene *scene,
+                                  int kind, int reps, uint64_t *hits, double *seconds,
+                                  tr_error *err);
+/* Mrays/s of set `kind` on an OpenCL device, as bench rays reports it: a warm-up pass sets
+ * the repetitions (tr_ray_sets_reps), then the median of `runs` timed runs; through the
+ * binary BVH the device holds, or with `wide` through the compressed wide BVH. *hits: one
+ * pass's. -1 on failure (err says why). */
+double tr_ray_sets_mrays_device(const tr_ray_sets *r, tr_device *dev, const tr_scene *scene,
+                                int kind, int runs, int wide, uint64_t *hits, tr_error *err);
 /* How often a timed run traces a set whose one pass took `one_pass_seconds`, so that it
  * lasts at least 50 ms (a run of a few ms is at the mercy of the scheduler), 1..1000. */
 int tr_ray_sets_reps(double one_pass_seconds);

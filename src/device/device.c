@@ -24,6 +24,7 @@ struct tr_device {
     tr_film film; /* CPU: the device's film */
     tr_cl_context *cl;
     uint32_t punctual; /* the uploaded scene's punctual lights (only pt renders them) */
+    uint32_t env_sun;  /* its environment lights and suns (bdpt does not render them) */
 };
 
 /* The processor's name from /proc/cpuinfo ("" where it cannot be read). */
@@ -258,6 +259,7 @@ int tr_device_upload(tr_device *dev, const tr_scene *scene, tr_error *err) {
     dev->scene = scene;
     dev->generation = tr_scene_generation(scene);
     dev->punctual = tr_scene_view_of(scene).punctual_count;
+    dev->env_sun = tr_scene_view_of(scene).env_count + tr_scene_view_of(scene).sun_count;
     return TR_OK;
 }
 
@@ -299,11 +301,17 @@ int tr_device_render(tr_device *dev, const tr_camera *cam, const tr_render_confi
         return TR_ERR;
     }
     uint64_t rays = 0;
-    if (dev->kind == TR_DEVICE_OPENCL && tr_integrator_is_bidirectional((int)f.integrator)) {
-        /* bdpt's light tracing splats with 64-bit atomics the device may lack. */
+    if (dev->kind == TR_DEVICE_OPENCL &&
+        tr_cl_supports_integrator(dev->cl, (int)f.integrator, err) != TR_OK) {
+        /* vcm, or bdpt on a device without 64-bit atomics and doubles. */
+        return TR_ERR;
+    }
+    if (dev->kind == TR_DEVICE_OPENCL && dev->env_sun > 0u &&
+        tr_integrator_is_bidirectional((int)f.integrator)) {
+        /* The CPU's check (tr_integrator_supports): light subpaths start on triangles. */
         return tr_error_set(err, TR_STATUS_UNSUPPORTED,
-                            "the %s integrator runs on the CPU only (device %s is OpenCL)",
-                            tr_integrator_name((int)f.integrator), dev->info.name);
+                            "%s does not support environment lights or the sun: use pt",
+                            tr_integrator_name((int)f.integrator));
     }
     if (dev->kind == TR_DEVICE_OPENCL && dev->punctual > 0u && f.integrator != TR_INTEGRATOR_PT) {
         /* The CPU's check (tr_integrator_supports) on the copy the device holds. */
@@ -341,6 +349,19 @@ static void copy_arrays(tr_film *dst, const tr_film *src) {
             memcpy(a, tr_film_array_data(src, i), n * tr_film_array_pixel_bytes(i));
         }
     }
+}
+
+int tr_device_trace_rays(tr_device *dev, const tr_ray *rays, uint32_t count, int shadow, int reps,
+                         uint64_t *hits, double *seconds, tr_error *err) {
+    if (dev->kind != TR_DEVICE_OPENCL) {
+        return tr_error_set(err, TR_STATUS_UNSUPPORTED,
+                            "tr_device_trace_rays: device %s is not OpenCL", dev->info.name);
+    }
+    if (!dev->scene) {
+        return tr_error_set(err, TR_STATUS_INVALID_OPERATION, "no scene uploaded to device %s",
+                            dev->info.name);
+    }
+    return tr_cl_trace_rays(dev->cl, rays, count, shadow, reps, hits, seconds, err);
 }
 
 int tr_device_read_film(tr_device *dev, tr_film *film, tr_error *err) {

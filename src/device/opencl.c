@@ -10,8 +10,10 @@
 #include <string.h>
 
 #include "device/frame.h"
+#include "kernel/integrator_bdpt.h"
 #include "kernel/kernel.h"
 #include "accel/accel_internal.h"
+#include "accel/cwbvh.h"
 #include "scene/scene_internal.h"
 #include "trac0r/parse.h"
 #include "trac0r/accel.h"
@@ -80,6 +82,35 @@ int tr_cl_render_frame(tr_cl_context *ctx, const tr_frame *f, uint64_t *rays, tr
 }
 int tr_cl_clear_film(tr_cl_context *ctx, tr_error *err) {
     (void)ctx;
+    return tr_error_set(err, TR_STATUS_UNSUPPORTED, "%s", no_opencl);
+}
+int tr_cl_trace_rays(tr_cl_context *ctx, const tr_ray *rays, uint32_t count, int shadow, int reps,
+                     uint64_t *hits, double *seconds, tr_error *err) {
+    (void)ctx;
+    (void)rays;
+    (void)count;
+    (void)shadow;
+    (void)reps;
+    *hits = 0;
+    *seconds = 0.0;
+    return tr_error_set(err, TR_STATUS_UNSUPPORTED, "%s", no_opencl);
+}
+int tr_cl_trace_rays_cwbvh(tr_cl_context *ctx, const struct tr_cwbvh *cw, const tr_ray *rays,
+                           uint32_t count, int shadow, int reps, uint64_t *hits, double *seconds,
+                           tr_error *err) {
+    (void)ctx;
+    (void)cw;
+    (void)rays;
+    (void)count;
+    (void)shadow;
+    (void)reps;
+    *hits = 0;
+    *seconds = 0.0;
+    return tr_error_set(err, TR_STATUS_UNSUPPORTED, "%s", no_opencl);
+}
+int tr_cl_supports_integrator(const tr_cl_context *ctx, int integrator, tr_error *err) {
+    (void)ctx;
+    (void)integrator;
     return tr_error_set(err, TR_STATUS_UNSUPPORTED, "%s", no_opencl);
 }
 void tr_cl_film_size(const tr_cl_context *ctx, uint32_t *width, uint32_t *height,
@@ -209,6 +240,13 @@ struct tr_cl_context {
     cl_program program;
     cl_kernel kernel;
     cl_kernel resolve; /* tr_cl_resolve_emission */
+    /* bdpt: tr_cl_render_bdpt and tr_cl_fold_splats, NULL where the device lacks 64-bit
+     * atomics or doubles (entry.cl compiles them only with both), and the splat sums. */
+    cl_kernel bdpt, fold;
+    cl_kernel trace;       /* tr_cl_trace_rays */
+    cl_kernel trace_cwbvh; /* tr_cl_trace_cwbvh */
+    cl_mem splat;
+    size_t splat_bytes;
     char *build_log;
     char options[160]; /* the options the kernel was built with */
     size_t local[2];   /* the render kernel's work-group size; 0 x 0: the driver's choice */
@@ -488,6 +526,21 @@ void tr_cl_close(tr_cl_context *ctx) {
     if (ctx->resolve) {
         clReleaseKernel(ctx->resolve);
     }
+    if (ctx->bdpt) {
+        clReleaseKernel(ctx->bdpt);
+    }
+    if (ctx->fold) {
+        clReleaseKernel(ctx->fold);
+    }
+    if (ctx->trace) {
+        clReleaseKernel(ctx->trace);
+    }
+    if (ctx->trace_cwbvh) {
+        clReleaseKernel(ctx->trace_cwbvh);
+    }
+    if (ctx->splat) {
+        clReleaseMemObject(ctx->splat);
+    }
     if (ctx->resolved) {
         clReleaseMemObject(ctx->resolved);
     }
@@ -700,6 +753,23 @@ tr_cl_context *tr_cl_open_source(int index, const char *source, tr_error *err) {
         cl_fail(err, "clCreateKernel(tr_cl_resolve_emission)", rc);
         goto fail;
     }
+    ctx->trace = clCreateKernel(ctx->program, "tr_cl_trace_rays", &rc);
+    if (!ctx->trace && !source) {
+        cl_fail(err, "clCreateKernel(tr_cl_trace_rays)", rc);
+        goto fail;
+    }
+    ctx->trace_cwbvh = clCreateKernel(ctx->program, "tr_cl_trace_cwbvh", &rc);
+    if (!ctx->trace_cwbvh && !source) {
+        cl_fail(err, "clCreateKernel(tr_cl_trace_cwbvh)", rc);
+        goto fail;
+    }
+    /* Absent from a program built without cl_khr_int64_base_atomics or cl_khr_fp64. */
+    ctx->bdpt = clCreateKernel(ctx->program, "tr_cl_render_bdpt", &rc);
+    ctx->fold = ctx->bdpt ? clCreateKernel(ctx->program, "tr_cl_fold_splats", &rc) : NULL;
+    if (ctx->bdpt && !ctx->fold) {
+        clReleaseKernel(ctx->bdpt);
+        ctx->bdpt = NULL;
+    }
     if (check_kernel_args(ctx, err) != TR_OK ||
         check_work_group(ctx, wg_given, cpu, err) != TR_OK) {
         goto fail;
@@ -866,9 +936,9 @@ int tr_cl_upload_scene(tr_cl_context *ctx, const tr_scene *scene, tr_error *err)
             rc = cl_fail(err, "clCreateBuffer(scene_info)", crc);
         }
     }
-    /* Both kernels take the scene's arrays and scene_info first. */
-    const cl_kernel kernels[2] = {ctx->kernel, ctx->resolve};
-    for (int k = 0; k < 2; ++k) {
+    /* The kernels take the scene's arrays and scene_info first (bdpt's where built). */
+    const cl_kernel kernels[4] = {ctx->kernel, ctx->resolve, ctx->trace, ctx->bdpt};
+    for (int k = 0; k < 4 && kernels[k]; ++k) {
         for (int i = 0; i < na && rc == TR_OK; ++i) {
             cl_int crc = clSetKernelArg(kernels[k], (cl_uint)i, sizeof(cl_mem), &ctx->arrays[i]);
             if (crc != CL_SUCCESS) {
@@ -994,11 +1064,211 @@ void tr_cl_film_size(const tr_cl_context *ctx, uint32_t *width, uint32_t *height
     *passes = ctx->passes;
 }
 
+/* bdpt's splat sums for frame f's rectangle, cleared, as the render kernel's last
+ * argument. */
+static int prepare_splats(tr_cl_context *ctx, const tr_frame *f, tr_error *err) {
+    const size_t bytes = 3u * (size_t)f->rect_w * f->rect_h * sizeof(cl_long);
+    if (bytes > ctx->info.max_alloc) {
+        return tr_error_set(err, TR_STATUS_LIMIT,
+                            "bdpt's %ux%u splat buffer (%.1f MiB) exceeds OpenCL device %d's "
+                            "largest allocation",
+                            f->rect_w, f->rect_h, mib(bytes), ctx->info.index);
+    }
+    if (bytes > ctx->splat_bytes) {
+        if (ctx->splat) {
+            clReleaseMemObject(ctx->splat);
+            ctx->splat = NULL;
+            ctx->splat_bytes = 0;
+        }
+        cl_int rc;
+        ctx->splat = clCreateBuffer(ctx->context, CL_MEM_READ_WRITE, bytes, NULL, &rc);
+        if (!ctx->splat) {
+            return cl_fail(err, "clCreateBuffer(splat)", rc);
+        }
+        ctx->splat_bytes = bytes;
+    }
+    const cl_long zero = 0;
+    cl_int rc =
+        clEnqueueFillBuffer(ctx->queue, ctx->splat, &zero, sizeof zero, 0, bytes, 0, NULL, NULL);
+    if (rc != CL_SUCCESS) {
+        return cl_fail(err, "clEnqueueFillBuffer(splat)", rc);
+    }
+    rc = clSetKernelArg(ctx->bdpt, (cl_uint)ctx->array_count + ARG_AFTER_ARRAYS, sizeof(cl_mem),
+                        &ctx->splat);
+    return rc == CL_SUCCESS ? TR_OK : cl_fail(err, "clSetKernelArg(splat)", rc);
+}
+
+/* Adds frame f's splat sums to the film (tr_cl_fold_splats) with the CPU's scale: the
+ * whole image's area over the frame's grid points, in 2^-24 units (src/device/cpu.c). */
+static int fold_splats(tr_cl_context *ctx, const tr_frame *f, uint32_t grid, tr_error *err) {
+    const cl_double scale = (double)f->camera.screen_width * (double)f->camera.screen_height /
+                            ((double)grid * TR_BDPT_SPLAT_ONE);
+    cl_int rc = clSetKernelArg(ctx->fold, 0, sizeof(cl_mem), &ctx->frame);
+    rc |= clSetKernelArg(ctx->fold, 1, sizeof(cl_mem), &ctx->splat);
+    rc |= clSetKernelArg(ctx->fold, 2, sizeof scale, &scale);
+    rc |= clSetKernelArg(ctx->fold, 3, sizeof(cl_mem), &ctx->film[FILM_SUM]);
+    if (rc != CL_SUCCESS) {
+        return cl_fail(err, "clSetKernelArg(tr_cl_fold_splats)", rc);
+    }
+    const size_t global[2] = {f->rect_w, f->rect_h};
+    rc = clEnqueueNDRangeKernel(ctx->queue, ctx->fold, 2, NULL, global, NULL, 0, NULL, NULL);
+    return rc == CL_SUCCESS ? TR_OK : cl_fail(err, "clEnqueueNDRangeKernel(tr_cl_fold_splats)", rc);
+}
+
+/* Times `reps` passes of `kernel` over the rays; its arguments from `base` on are the rays,
+ * their count, the shadow flag and the hits (the ones before are set by the caller). */
+static int trace_timed(tr_cl_context *ctx, cl_kernel kernel, cl_uint base, const tr_ray *rays,
+                       uint32_t count, int shadow, int reps, uint64_t *hits, double *seconds,
+                       tr_error *err) {
+    *hits = 0;
+    *seconds = 0.0;
+    if (count == 0u) {
+        return TR_OK;
+    }
+    const size_t bytes = (size_t)count * sizeof *rays;
+    if (bytes > ctx->info.max_alloc) {
+        return tr_error_set(err, TR_STATUS_LIMIT,
+                            "%u rays exceed OpenCL device %d's largest "
+                            "allocation",
+                            count, ctx->info.index);
+    }
+    cl_int rc;
+    cl_mem rbuf = clCreateBuffer(ctx->context, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, bytes,
+                                 (void *)rays, &rc);
+    if (!rbuf) {
+        return cl_fail(err, "clCreateBuffer(rays)", rc);
+    }
+    cl_mem hbuf =
+        clCreateBuffer(ctx->context, CL_MEM_READ_WRITE, (size_t)count * sizeof(cl_uint), NULL, &rc);
+    uint32_t *h = malloc((size_t)count * sizeof *h);
+    int out = TR_OK;
+    if (!hbuf || !h) {
+        out = h ? cl_fail(err, "clCreateBuffer(hits)", rc)
+                : tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory for %u hits", count);
+    }
+    const cl_uint n = count, sh = shadow ? 1u : 0u;
+    if (out == TR_OK) {
+        rc = clSetKernelArg(kernel, base, sizeof(cl_mem), &rbuf);
+        rc |= clSetKernelArg(kernel, base + 1u, sizeof n, &n);
+        rc |= clSetKernelArg(kernel, base + 2u, sizeof sh, &sh);
+        rc |= clSetKernelArg(kernel, base + 3u, sizeof(cl_mem), &hbuf);
+        if (rc != CL_SUCCESS) {
+            out = cl_fail(err, "clSetKernelArg(tr_cl_trace_rays)", rc);
+        }
+    }
+    /* The rays are on the device before the clock starts; the passes are queued back to
+     * back and the clock stops when the last one has finished. */
+    if (out == TR_OK && (rc = clFinish(ctx->queue)) != CL_SUCCESS) {
+        out = cl_fail(err, "clFinish", rc);
+    }
+    const size_t group = 64u;
+    const size_t global = (count + group - 1u) / group * group;
+    const size_t *local = ctx->local[0] ? &group : NULL;
+    const double t0 = tr_time_now();
+    for (int r = 0; r < reps && out == TR_OK; ++r) {
+        rc = clEnqueueNDRangeKernel(ctx->queue, kernel, 1, NULL, &global, local, 0, NULL, NULL);
+        if (rc != CL_SUCCESS) {
+            out = cl_fail(err, "clEnqueueNDRangeKernel(tr_cl_trace_rays)", rc);
+        }
+    }
+    if (out == TR_OK && (rc = clFinish(ctx->queue)) != CL_SUCCESS) {
+        out = cl_fail(err, "clFinish", rc);
+    }
+    *seconds = tr_time_now() - t0;
+    if (out == TR_OK) {
+        rc = clEnqueueReadBuffer(ctx->queue, hbuf, CL_TRUE, 0, (size_t)count * sizeof *h, h, 0,
+                                 NULL, NULL);
+        if (rc != CL_SUCCESS) {
+            out = cl_fail(err, "clEnqueueReadBuffer(hits)", rc);
+        }
+        for (uint32_t i = 0; i < count && out == TR_OK; ++i) {
+            *hits += h[i];
+        }
+    }
+    free(h);
+    if (hbuf) {
+        clReleaseMemObject(hbuf);
+    }
+    clReleaseMemObject(rbuf);
+    return out;
+}
+
+int tr_cl_trace_rays(tr_cl_context *ctx, const tr_ray *rays, uint32_t count, int shadow, int reps,
+                     uint64_t *hits, double *seconds, tr_error *err) {
+    *hits = 0;
+    *seconds = 0.0;
+    if (!ctx->have_scene || !ctx->trace) {
+        return tr_error_set(err, TR_STATUS_INVALID_OPERATION,
+                            "no scene uploaded to the OpenCL device");
+    }
+    return trace_timed(ctx, ctx->trace, (cl_uint)ctx->array_count + ARG_FRAME, rays, count, shadow,
+                       reps, hits, seconds, err);
+}
+
+int tr_cl_trace_rays_cwbvh(tr_cl_context *ctx, const struct tr_cwbvh *cw, const tr_ray *rays,
+                           uint32_t count, int shadow, int reps, uint64_t *hits, double *seconds,
+                           tr_error *err) {
+    *hits = 0;
+    *seconds = 0.0;
+    if (!ctx->trace_cwbvh || cw->node_count == 0u) {
+        return tr_error_set(err, TR_STATUS_INVALID_OPERATION, "no wide BVH for the OpenCL device");
+    }
+    const size_t nb = cw->node_count * sizeof *cw->nodes, tb = cw->tri_count * sizeof *cw->tris;
+    if (nb > ctx->info.max_alloc || tb > ctx->info.max_alloc) {
+        return tr_error_set(err, TR_STATUS_LIMIT,
+                            "the wide BVH exceeds OpenCL device %d's largest allocation",
+                            ctx->info.index);
+    }
+    cl_int rc;
+    cl_mem bn =
+        clCreateBuffer(ctx->context, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, nb, cw->nodes, &rc);
+    if (!bn) {
+        return cl_fail(err, "clCreateBuffer(wide BVH nodes)", rc);
+    }
+    cl_mem bt = clCreateBuffer(ctx->context, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR,
+                               tb ? tb : sizeof *cw->tris, cw->tris, &rc);
+    if (!bt) {
+        clReleaseMemObject(bn);
+        return cl_fail(err, "clCreateBuffer(wide BVH triangles)", rc);
+    }
+    const cl_uint nc = cw->node_count;
+    rc = clSetKernelArg(ctx->trace_cwbvh, 0, sizeof bn, &bn);
+    rc |= clSetKernelArg(ctx->trace_cwbvh, 1, sizeof nc, &nc);
+    rc |= clSetKernelArg(ctx->trace_cwbvh, 2, sizeof bt, &bt);
+    int out = rc == CL_SUCCESS ? trace_timed(ctx, ctx->trace_cwbvh, 3u, rays, count, shadow, reps,
+                                             hits, seconds, err)
+                               : cl_fail(err, "clSetKernelArg(tr_cl_trace_cwbvh)", rc);
+    clReleaseMemObject(bn);
+    clReleaseMemObject(bt);
+    return out;
+}
+
+int tr_cl_supports_integrator(const tr_cl_context *ctx, int integrator, tr_error *err) {
+    if (integrator == TR_INTEGRATOR_VCM) {
+        /* Its photon map (src/device/vcm.c) is host code. */
+        return tr_error_set(err, TR_STATUS_UNSUPPORTED,
+                            "the vcm integrator runs on the CPU only (device %s is OpenCL)",
+                            ctx->info.name);
+    }
+    if (integrator == TR_INTEGRATOR_BDPT && !ctx->bdpt) {
+        return tr_error_set(err, TR_STATUS_UNSUPPORTED,
+                            "bdpt needs 64-bit atomics and doubles (cl_khr_int64_base_atomics, "
+                            "cl_khr_fp64), which OpenCL device %d (%s) lacks",
+                            ctx->info.index, ctx->info.name);
+    }
+    return TR_OK;
+}
+
 int tr_cl_render_frame(tr_cl_context *ctx, const tr_frame *f, uint64_t *rays_out, tr_error *err) {
     if (!ctx->have_scene) {
         return tr_error_set(err, TR_STATUS_INVALID_OPERATION,
                             "no scene uploaded to the OpenCL device");
     }
+    if (tr_cl_supports_integrator(ctx, (int)f->integrator, err) != TR_OK) {
+        return TR_ERR;
+    }
+    const int bdpt = f->integrator == TR_INTEGRATOR_BDPT;
+    cl_kernel kernel = bdpt ? ctx->bdpt : ctx->kernel;
     const uint32_t w = f->camera.screen_width, h = f->camera.screen_height;
     if ((w != ctx->width || h != ctx->height || f->passes != ctx->passes) &&
         make_film(ctx, w, h, f->passes, err) != TR_OK) {
@@ -1030,7 +1300,7 @@ int tr_cl_render_frame(tr_cl_context *ctx, const tr_frame *f, uint64_t *rays_out
                                             &ctx->film[FILM_EMISSION],
                                             &ctx->rays};
     for (int a = ARG_FRAME; a < ARG_AFTER_ARRAYS; ++a) {
-        rc = clSetKernelArg(ctx->kernel, base + (cl_uint)a, sizeof(cl_mem), bufs[a]);
+        rc = clSetKernelArg(kernel, base + (cl_uint)a, sizeof(cl_mem), bufs[a]);
         if (rc != CL_SUCCESS) {
             char call[64];
             snprintf(call, sizeof call, "clSetKernelArg(%s)", arg_names[a]);
@@ -1042,9 +1312,16 @@ int tr_cl_render_frame(tr_cl_context *ctx, const tr_frame *f, uint64_t *rays_out
     const size_t *local = ctx->local[0] ? ctx->local : NULL;
     const size_t global[2] = {local ? (nx + local[0] - 1) / local[0] * local[0] : nx,
                               local ? (ny + local[1] - 1) / local[1] * local[1] : ny};
-    rc = clEnqueueNDRangeKernel(ctx->queue, ctx->kernel, 2, NULL, global, local, 0, NULL, NULL);
+    if (bdpt && prepare_splats(ctx, f, err) != TR_OK) {
+        return TR_ERR;
+    }
+    rc = clEnqueueNDRangeKernel(ctx->queue, kernel, 2, NULL, global, local, 0, NULL, NULL);
     if (rc != CL_SUCCESS) {
         return cl_fail(err, "clEnqueueNDRangeKernel(tr_cl_render)", rc);
+    }
+    /* The in-order queue runs the fold after the frame's kernel. */
+    if (bdpt && fold_splats(ctx, f, nx * ny, err) != TR_OK) {
+        return TR_ERR;
     }
     /* The blocking read waits for the kernel: the frame is done when it returns. */
     rc = clEnqueueReadBuffer(ctx->queue, ctx->rays, CL_TRUE, 0, ny * sizeof(cl_uint),

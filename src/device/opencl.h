@@ -25,6 +25,7 @@
 #include <stdint.h>
 
 #include "kernel/types.h"
+#include "trac0r/device.h"
 #include "trac0r/error.h"
 #include "trac0r/film.h"
 #include "trac0r/render.h"
@@ -92,6 +93,25 @@ uint64_t tr_cl_scene_bytes(const tr_cl_context *ctx);
  * frame's passes; a frame of another size or other passes than the previous one clears
  * it. Waits for the device to finish. *rays (may be NULL) gets the queries made. */
 int tr_cl_render_frame(tr_cl_context *ctx, const tr_frame *f, uint64_t *rays, tr_error *err);
+/* TR_OK if the device runs `integrator`; else TR_STATUS_UNSUPPORTED with the reason: vcm
+ * (its photon map is host code), or bdpt on a device without cl_khr_int64_base_atomics and
+ * cl_khr_fp64 (its splats' atomic sums and their fold). tr_cl_render_frame checks it too. */
+int tr_cl_supports_integrator(const tr_cl_context *ctx, int integrator, tr_error *err);
+/* Traces `count` rays `reps` times with the uploaded scene's structure (closest hit, or any
+ * hit with `shadow`); *seconds: from the first pass's start to the last one's end (the rays'
+ * upload excluded), *hits: the rays of one pass that hit. */
+int tr_cl_trace_rays(tr_cl_context *ctx, const tr_ray *rays, uint32_t count, int shadow, int reps,
+                     uint64_t *hits, double *seconds, tr_error *err);
+/* tr_cl_trace_rays on an OpenCL device of the public API, with its uploaded scene
+ * (device.c); TR_STATUS_UNSUPPORTED on the CPU device. */
+int tr_device_trace_rays(tr_device *dev, const tr_ray *rays, uint32_t count, int shadow, int reps,
+                         uint64_t *hits, double *seconds, tr_error *err);
+/* tr_cl_trace_rays through the compressed wide BVH `cw` (src/accel/cwbvh.h), uploaded for
+ * the call (before the clock starts) and released after. */
+struct tr_cwbvh;
+int tr_cl_trace_rays_cwbvh(tr_cl_context *ctx, const struct tr_cwbvh *cw, const tr_ray *rays,
+                           uint32_t count, int shadow, int reps, uint64_t *hits, double *seconds,
+                           tr_error *err);
 /* The size and passes of the device film (those of the last frame; 0 before one). */
 void tr_cl_film_size(const tr_cl_context *ctx, uint32_t *width, uint32_t *height, uint32_t *passes);
 /* Forgets every sample of the device film. */

@@ -12,6 +12,7 @@
 typedef uint uint32_t;
 typedef int int32_t;
 typedef ulong uint64_t;
+typedef long int64_t;
 #define TR_FN static inline
 #define TR_FN_INLINE static inline
 #define TR_FN_NOINLINE static inline

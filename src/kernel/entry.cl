@@ -6,6 +6,7 @@
  * one string compiled by src/device/opencl.c. */
 #pragma OPENCL FP_CONTRACT OFF
 
+#include "cwbvh.h"
 #include "emission.h"
 #include "kernel.h"
 
@@ -89,3 +90,103 @@ tr_cl_resolve_emission(TR_SCENE_ARRAYS(TR_CL_ARRAY_PARAM) __global const uint *s
     resolved[3u * i + 1u] = e.y;
     resolved[3u * i + 2u] = e.z;
 }
+
+/* Ray throughput (`trac0r bench rays --device opencl`, src/measure/rays.c): one work item
+ * per ray of a set, the closest hit (or, for shadow rays, any hit) with the scene's
+ * structure; hits[i] is 1 where ray i hit, for the host's cross-check of the counts. */
+__kernel void tr_cl_trace_rays(TR_SCENE_ARRAYS(TR_CL_ARRAY_PARAM) __global const uint *scene_info,
+                               __global const tr_ray *rays, uint count, uint shadow,
+                               __global uint *hits) {
+    const uint i = (uint)get_global_id(0);
+    if (i >= count) {
+        return;
+    }
+    tr_scene_view s;
+    TR_CL_SCENE_VIEW(s);
+    const tr_ray r = rays[i];
+    uint h;
+    if (shadow) {
+        h = tr_occluded_scene(&s, &r) ? 1u : 0u;
+    } else {
+        tr_hit hit;
+        h = tr_intersect_scene(&s, &r, &hit) ? 1u : 0u;
+    }
+    hits[i] = h;
+}
+
+/* tr_cl_trace_rays through a compressed wide BVH (cwbvh.h) given as its own buffers:
+ * `bench rays --device` measures it beside the binary BVH. */
+__kernel void tr_cl_trace_cwbvh(__global const tr_cwbvh_node *cw_nodes, uint cw_node_count,
+                                __global const tr_bvh_tri *cw_tris, __global const tr_ray *rays,
+                                uint count, uint shadow, __global uint *hits) {
+    const uint i = (uint)get_global_id(0);
+    if (i >= count) {
+        return;
+    }
+    const tr_ray r = rays[i];
+    tr_hit hit;
+    hits[i] = tr_cwbvh_traverse(cw_nodes, cw_node_count, cw_tris, &r, &hit, shadow != 0u) ? 1u : 0u;
+}
+
+/* bdpt on the device: tr_cl_render's arguments and work items, and the light-tracing
+ * splats' fixed-point sums (integrator_bdpt.h), one 64-bit integer per colour channel and
+ * pixel of the frame's rectangle, added with atom_add. Integer addition is associative, so
+ * the sums are those the CPU's threads make, whatever the order. tr_cl_fold_splats then
+ * adds them to the film as the CPU's fold does (src/device/cpu.c), in double precision.
+ * Compiled only where the device has both extensions; the host finds no kernel otherwise
+ * and refuses bdpt on that device. */
+#if defined(cl_khr_int64_base_atomics) && defined(cl_khr_fp64)
+#pragma OPENCL EXTENSION cl_khr_int64_base_atomics : enable
+#pragma OPENCL EXTENSION cl_khr_fp64 : enable
+#include "integrator_bdpt.h"
+
+__kernel void tr_cl_render_bdpt(TR_SCENE_ARRAYS(TR_CL_ARRAY_PARAM) __global const uint *scene_info,
+                                __global const tr_frame *frame, __global float *film_sum,
+                                __global uint *film_count, __global float *film_albedo,
+                                __global float *film_normal, __global float *film_depth,
+                                __global uint *film_prim, __global float *film_sq,
+                                __global float *film_direct, __global float *film_emission,
+                                __global uint *rays_per_row, __global long *splat) {
+    const tr_frame f = *frame;
+    uint gx0, gy0, nx, ny;
+    tr_frame_grid(&f, &gx0, &gy0, &nx, &ny);
+    const uint gx = (uint)get_global_id(0), gy = (uint)get_global_id(1);
+    if (gx >= nx || gy >= ny) {
+        return;
+    }
+    tr_scene_view s;
+    TR_CL_SCENE_VIEW(s);
+    tr_film_view film = tr_film_view_make(film_sum, film_count, film_albedo, film_normal,
+                                          film_depth, film_prim, f.camera.screen_width, f.passes);
+    film.sq = film_sq;
+    film.direct = film_direct;
+    film.emission = film_emission;
+    tr_bdpt_splat sp;
+    sp.sum = splat;
+    sp.x0 = f.rect_x;
+    sp.y0 = f.rect_y;
+    sp.w = f.rect_w;
+    sp.h = f.rect_h;
+    const uint rays = tr_bdpt_render_grid_rows(&s, &f, &film, &sp, gx0 + gx, gy0 + gy,
+                                               gx0 + gx + 1u, gy0 + gy + 1u);
+    atomic_add(&rays_per_row[gy], rays);
+}
+
+/* Adds the splat sums to the film after the frame: pixel (x, y) of the rectangle gets
+ * (float)(sum * scale) per channel, scale = W H / (grid 2^24) as the host computed it
+ * (the frame's grid points, src/device/cpu.c's tr_bdpt_fold_splats). One work item per
+ * pixel of the rectangle. */
+__kernel void tr_cl_fold_splats(__global const tr_frame *frame, __global const long *splat,
+                                double scale, __global float *film_sum) {
+    const uint w = frame->rect_w, h = frame->rect_h;
+    const uint x = (uint)get_global_id(0), y = (uint)get_global_id(1);
+    if (x >= w || y >= h) {
+        return;
+    }
+    const size_t i = (size_t)(frame->rect_y + y) * frame->camera.screen_width + (frame->rect_x + x);
+    const size_t j = 3u * ((size_t)y * w + x);
+    for (int c = 0; c < 3; ++c) {
+        film_sum[3u * i + (size_t)c] += (float)((double)splat[j + (size_t)c] * scale);
+    }
+}
+#endif

@@ -41,8 +41,9 @@
  *
  * Limits: a subpath holds at most TR_BDPT_MAX_VERTS vertices, so the max depth is
  * TR_BDPT_MAX_DEPTH (also the default). The environment light is not a light subpath
- * origin here: scenes with one are refused by the host. The atomic 64-bit addition is the
- * host's; the OpenCL device does not run bdpt (docs/integrators.md). */
+ * origin here: scenes with one are refused by the host. On an OpenCL device the 64-bit
+ * addition is atom_add (cl_khr_int64_base_atomics) and the fold runs there in double
+ * precision (cl_khr_fp64, entry.cl); a device without both does not run bdpt. */
 #ifndef TR_KERNEL_INTEGRATOR_BDPT_H
 #define TR_KERNEL_INTEGRATOR_BDPT_H
 
@@ -110,6 +111,14 @@ typedef struct tr_bdpt_vertex {
     uint32_t kind; /* TR_BDPT_* */
     int delta;     /* its scattering was a delta lobe */
 } tr_bdpt_vertex;
+
+/* The splats' 64-bit atomic addition: the host's builtin, or OpenCL's atom_add from
+ * cl_khr_int64_base_atomics (entry.cl compiles bdpt only for devices that have it). */
+#if defined(__OPENCL_C_VERSION__) || defined(__OPENCL_VERSION__)
+#define TR_BDPT_ATOMIC_ADD(p, v) atom_add((p), (v))
+#else
+#define TR_BDPT_ATOMIC_ADD(p, v) __atomic_fetch_add((p), (v), __ATOMIC_RELAXED)
+#endif
 
 /* Where light tracing's splats go: 3 fixed-point sums per pixel of the rectangle
  * (x0, y0, w, h); splats outside it are dropped (the host scales what it keeps). */
@@ -491,9 +500,9 @@ TR_FN void tr_bdpt_splat_add(const tr_bdpt_splat *sp, float rx, float ry, tr_vec
     int64_t q0 = (int64_t)(c.x * TR_BDPT_SPLAT_ONE + 0.5f);
     int64_t q1 = (int64_t)(c.y * TR_BDPT_SPLAT_ONE + 0.5f);
     int64_t q2 = (int64_t)(c.z * TR_BDPT_SPLAT_ONE + 0.5f);
-    __atomic_fetch_add(&sp->sum[i], q0, __ATOMIC_RELAXED);
-    __atomic_fetch_add(&sp->sum[i + 1], q1, __ATOMIC_RELAXED);
-    __atomic_fetch_add(&sp->sum[i + 2], q2, __ATOMIC_RELAXED);
+    TR_BDPT_ATOMIC_ADD(&sp->sum[i], q0);
+    TR_BDPT_ATOMIC_ADD(&sp->sum[i + 1], q1);
+    TR_BDPT_ATOMIC_ADD(&sp->sum[i + 2], q2);
 }
 
 /* Selects strategies for tests: with only_t > 0 only (only_s, only_t) contributes, with

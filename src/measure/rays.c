@@ -5,6 +5,8 @@
 #include <omp.h>
 #include <stdlib.h>
 
+#include "accel/cwbvh.h"
+#include "device/opencl.h"
 #include "kernel/kernel.h"
 #include "scene/scene_internal.h"
 #include "trac0r/render.h"
@@ -146,6 +148,57 @@ double tr_ray_sets_trace(const tr_ray_sets *r, const tr_scene *s, int kind, int 
     }
     *hits = h;
     return tr_time_now() - t0;
+}
+
+int tr_ray_sets_trace_device(const tr_ray_sets *r, tr_device *dev, int kind, int reps,
+                             uint64_t *hits, double *seconds, tr_error *err) {
+    return tr_device_trace_rays(dev, r->rays[kind], r->count[kind], kind == TR_RAY_SHADOW, reps,
+                                hits, seconds, err);
+}
+
+int tr_ray_sets_trace_device_wide(const tr_ray_sets *r, tr_device *dev, const tr_scene *scene,
+                                  int kind, int reps, uint64_t *hits, double *seconds,
+                                  tr_error *err) {
+    *hits = 0;
+    *seconds = 0.0;
+    tr_cl_context *cl = tr_device_cl_context(dev);
+    if (!cl) {
+        return tr_error_set(err, TR_STATUS_UNSUPPORTED, "the wide BVH is traced on OpenCL only");
+    }
+    const tr_scene_view v = tr_scene_view_of(scene);
+    if (v.accel != TR_ACCEL_BVH) {
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "the wide BVH is converted from a scene committed with a BVH");
+    }
+    tr_cwbvh cw;
+    if (tr_cwbvh_build(&cw, v.bvh_nodes, v.bvh_node_count, v.bvh_tris, err) != TR_OK) {
+        return TR_ERR;
+    }
+    const int rc = tr_cl_trace_rays_cwbvh(cl, &cw, r->rays[kind], r->count[kind],
+                                          kind == TR_RAY_SHADOW, reps, hits, seconds, err);
+    tr_cwbvh_free(&cw);
+    return rc;
+}
+
+double tr_ray_sets_mrays_device(const tr_ray_sets *r, tr_device *dev, const tr_scene *scene,
+                                int kind, int runs, int wide, uint64_t *hits, tr_error *err) {
+    double *times = malloc((size_t)(runs > 0 ? runs : 1) * sizeof *times);
+    if (!times) {
+        tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory");
+        return -1.0;
+    }
+    double one = 0.0;
+    int reps = 1, rc = TR_OK;
+    for (int run = -1; run < runs && rc == TR_OK; ++run) {
+        double *t = run < 0 ? &one : &times[run]; /* run -1: the warm-up, which sets reps */
+        rc = wide ? tr_ray_sets_trace_device_wide(r, dev, scene, kind, reps, hits, t, err)
+                  : tr_ray_sets_trace_device(r, dev, kind, reps, hits, t, err);
+        reps = run < 0 ? tr_ray_sets_reps(one) : reps;
+    }
+    const double m =
+        rc == TR_OK ? (double)r->count[kind] * reps / tr_median(times, runs) * 1e-6 : -1.0;
+    free(times);
+    return m;
 }
 
 int tr_ray_sets_reps(double one_pass_seconds) {

@@ -1,0 +1,45 @@
+#!/bin/sh
+# scripts/gpu-measure in its --quick mode on PoCL: every part runs end to end and writes its
+# row of the one table (the figures themselves are not checked: tiny sizes on a CPU
+# device); a failing command gives a failed row and exit status 1, a bad option status 2.
+# Usage: cli_opencl_measure.sh TRAC0R_BINARY SCRATCH_DIR
+set -u
+. "$(dirname "$0")/common.sh"
+cli_begin "$1" "$2"
+script=$(dirname "$0")/../scripts/gpu-measure
+
+sh "$script" --quick --bin "$BIN" --out table.md 2>err.txt ||
+    fail "gpu-measure --quick: exit status $?: $(cat err.txt)"
+[ -s table.md.log ] || fail "gpu-measure wrote no log"
+grep -q "^| figure | command | result |" table.md || fail "no table header: $(cat table.md)"
+rows() { grep -c "^| $1" table.md; }
+[ "$(rows 'rays, builtin:')" -eq 2 ] || fail "not 2 rays rows: $(cat table.md)"
+[ "$(grep -c '^| rays.*bvh, .*cwbvh, .*primary [0-9.]*, diffuse [0-9.]*, shadow [0-9.]* Mrays/s |$' table.md)" -eq 2 ] ||
+    fail "rays rows without the bvh and cwbvh rates (or with a note): $(cat table.md)"
+[ "$(grep -c '^| thesis settings, .*[0-9] FPS (' table.md)" -eq 2 ] ||
+    fail "not 2 thesis rows with FPS: $(cat table.md)"
+grep -q '^| figure 3.5 .*FPS at 56 triangles' table.md || fail "no figure 3.5 row: $(cat table.md)"
+for int in pt bdpt; do
+    grep -q "^| $int samples/s, 32x24 .* Msamples/s" table.md ||
+        fail "no $int samples/s row: $(cat table.md)"
+done
+grep -q '^| vcm samples/s.*refused by the device' table.md || fail "vcm not refused: $(cat table.md)"
+[ "$(grep -c '^| real time, .* FPS, [0-9.]* dB mean' table.md)" -eq 10 ] ||
+    fail "not 10 real-time rows with FPS and dB: $(cat table.md)"
+if grep -q 'failed' table.md; then fail "a failed row: $(cat table.md)"; fi
+rm -f table.md table.md.log err.txt
+
+# A device that does not exist: every row of the part says failed, exit status 1.
+sh "$script" --quick --bin "$BIN" --only frame --device opencl:7 --out bad.md 2>/dev/null
+[ $? -eq 1 ] || fail "gpu-measure on a missing device: exit status not 1"
+[ "$(grep -c '^| thesis settings.*\*\*failed\*\*: .*does not exist' bad.md)" -eq 2 ] ||
+    fail "no failed rows for a missing device: $(cat bad.md)"
+rm -f bad.md bad.md.log
+# Usage errors: status 2, nothing written.
+sh "$script" --only bogus --bin "$BIN" --out u.md 2>/dev/null
+[ $? -eq 2 ] || fail "gpu-measure --only bogus: exit status not 2"
+[ ! -e u.md ] || fail "gpu-measure --only bogus wrote a table"
+sh "$script" --frobnicate 2>/dev/null
+[ $? -eq 2 ] || fail "gpu-measure --frobnicate: exit status not 2"
+
+cli_end cli_opencl_measure
