@@ -1,19 +1,18 @@
 /* bench_plot.c - the benchmarks' plots: gnuplot run with no shell, and no path in its
- * script. gnuplot reads the script on its standard input and, with `set output` and no
- * file name, writes the PNG to its standard output, which is read back here and written
- * through tr_outfile like every other file. So an output prefix with an apostrophe or
- * `system(...)` in it is never gnuplot code, and a full disk is caught by the same checks
- * as for images. */
+ * script. The script goes to a temporary file of our own naming, which gnuplot is given as
+ * its argument; with `set output` and no file name it writes the PNG to its standard
+ * output, which is the tr_outfile of the plot. So an output prefix with an apostrophe or
+ * `system(...)` in it is never gnuplot code, and the plot is written whole or not at all,
+ * like every other file. */
 #define _POSIX_C_SOURCE 200809L
 #include <errno.h>
 #include <fcntl.h>
-#include <poll.h>
-#include <signal.h>
-#include <stdarg.h>
 #include <spawn.h>
+#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -22,119 +21,41 @@
 
 extern char **environ;
 
-/* Feeds `in` to gnuplot's stdin and copies its stdout to `out` at the same time, so that
- * neither pipe can fill while the other side waits. 0 on success, else an errno value
- * (EPIPE: gnuplot stopped reading, i.e. it failed). */
-static int pump(int to, int from, const char *in, size_t n, FILE *out) {
-    size_t sent = 0;
-    char buf[65536];
-    int rc = 0;
-    for (;;) {
-        struct pollfd p[2] = {{from, POLLIN, 0}, {to, POLLOUT, 0}};
-        nfds_t np = to >= 0 ? 2 : 1;
-        if (poll(p, np, -1) < 0) {
-            if (errno == EINTR) {
-                continue;
-            }
-            return errno;
-        }
-        if (to >= 0 && (p[1].revents & (POLLOUT | POLLERR | POLLHUP))) {
-            ssize_t w = write(to, in + sent, n - sent);
-            if (w < 0 && errno != EAGAIN && errno != EINTR) {
-                rc = errno;
-                close(to);
-                to = -1;
-            } else if (w > 0) {
-                sent += (size_t)w;
-            }
-            if (to >= 0 && sent == n) {
-                close(to); /* end of script: gnuplot finishes the plot and exits */
-                to = -1;
-            }
-        }
-        if (p[0].revents & (POLLIN | POLLHUP | POLLERR)) {
-            ssize_t r = read(from, buf, sizeof buf);
-            if (r < 0 && errno == EINTR) {
-                continue;
-            }
-            if (r <= 0) {
-                if (to >= 0) {
-                    close(to);
-                }
-                return r < 0 ? errno : rc;
-            }
-            if (fwrite(buf, 1, (size_t)r, out) != (size_t)r) {
-                /* Keep draining so that gnuplot is not left blocked on a full pipe. */
-                rc = rc ? rc : (errno ? errno : EIO);
-            }
-        }
-    }
-}
-
 int bench_plot_png(const char *script, const char *png, tr_error *err) {
-    static const char head[] = "set terminal pngcairo size 900,600 noenhanced\nset output\n";
-    size_t n = strlen(head) + strlen(script) + 2;
-    char *text = malloc(n);
-    if (!text) {
-        tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "%.200s: out of memory", png);
-        return -1;
+    const char *tmp = getenv("TMPDIR");
+    char path[4096];
+    snprintf(path, sizeof path, "%s/trac0r-plot-XXXXXX", tmp && *tmp ? tmp : "/tmp");
+    const int sfd = mkstemp(path);
+    if (sfd < 0) {
+        return 0; /* no place for the script: no plot */
     }
-    snprintf(text, n, "%s%s\n", head, script);
-    tr_outfile *f = tr_outfile_create(png, err);
-    if (!f) {
-        free(text);
-        return -1;
-    }
-    int in[2] = {-1, -1}, out[2] = {-1, -1};
+    FILE *sf = fdopen(sfd, "w");
+    const int written = sf && fprintf(sf,
+                                      "set terminal pngcairo size 900,600 noenhanced\n"
+                                      "set output\n%s\n",
+                                      script) > 0;
+    const int closed = sf ? fclose(sf) == 0 : close(sfd) == 0;
+    tr_outfile *f = written && closed ? tr_outfile_create(png, err) : NULL;
+    int status = -1, spawned = 0;
     posix_spawn_file_actions_t fa;
-    int ready = pipe(in) == 0 && pipe(out) == 0 && posix_spawn_file_actions_init(&fa) == 0;
-    pid_t pid = -1;
-    int spawned = 0;
-    if (ready) {
-        posix_spawn_file_actions_adddup2(&fa, in[0], 0);
-        posix_spawn_file_actions_adddup2(&fa, out[1], 1);
+    if (f && posix_spawn_file_actions_init(&fa) == 0) {
+        posix_spawn_file_actions_adddup2(&fa, fileno(tr_outfile_stream(f)), 1);
         posix_spawn_file_actions_addopen(&fa, 2, "/dev/null", O_WRONLY, 0);
-        posix_spawn_file_actions_addclose(&fa, in[1]);
-        posix_spawn_file_actions_addclose(&fa, out[0]);
-        char *argv[] = {"gnuplot", NULL};
+        char *argv[] = {"gnuplot", path, NULL};
+        pid_t pid;
         spawned = posix_spawnp(&pid, "gnuplot", &fa, NULL, argv, environ) == 0;
         posix_spawn_file_actions_destroy(&fa);
-    }
-    if (in[0] >= 0) {
-        close(in[0]);
-    }
-    if (out[1] >= 0) {
-        close(out[1]);
-    }
-    int copy_error = 0, status = -1;
-    if (spawned) {
-        /* gnuplot dying early must fail the plot, not kill the benchmark with SIGPIPE. */
-        struct sigaction ign, old;
-        memset(&ign, 0, sizeof ign);
-        ign.sa_handler = SIG_IGN;
-        sigaction(SIGPIPE, &ign, &old);
-        fcntl(in[1], F_SETFL, fcntl(in[1], F_GETFL) | O_NONBLOCK);
-        copy_error = pump(in[1], out[0], text, strlen(text), tr_outfile_stream(f));
-        sigaction(SIGPIPE, &old, NULL);
-        while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+        while (spawned && waitpid(pid, &status, 0) < 0 && errno == EINTR) {
         }
-    } else if (in[1] >= 0) {
-        close(in[1]);
     }
-    if (out[0] >= 0) {
-        close(out[0]);
+    unlink(path);
+    if (!f) {
+        return written && closed ? -1 : 0;
     }
-    free(text);
-    const int gnuplot_ok =
-        spawned && WIFEXITED(status) && WEXITSTATUS(status) == 0 && ftell(tr_outfile_stream(f)) > 0;
-    if (copy_error && copy_error != EPIPE && gnuplot_ok) {
-        /* gnuplot did its part; writing the file here did not. */
-        tr_outfile_abort(f);
-        tr_error_set(err, TR_STATUS_IO, "%.200s: write failed: %s", png, strerror(copy_error));
-        return -1;
-    }
-    if (!gnuplot_ok || copy_error) {
-        tr_outfile_abort(f);
+    struct stat st;
+    if (!spawned || !WIFEXITED(status) || WEXITSTATUS(status) != 0 ||
+        fstat(fileno(tr_outfile_stream(f)), &st) != 0 || st.st_size == 0) {
+        tr_outfile_abort(f); /* gnuplot missing or failed: no plot, nothing written */
         return 0;
     }
     return tr_outfile_commit(f, err) == TR_OK ? 1 : -1;

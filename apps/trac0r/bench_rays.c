@@ -110,11 +110,6 @@ int bench_rays(int argc, char **argv) {
     const char *scenes[] = {"builtin:cornell", "builtin:cornell-ico-6", "builtin:cornell-ico-8"};
     const int scene_count = one_scene ? 1 : 3;
     const int threads = c.threads ? c.threads : tr_default_threads();
-    double *times = malloc((size_t)runs * sizeof *times);
-    if (!times) {
-        cli_backend_close(&be);
-        return cli_error(&a, "out of memory");
-    }
     if (on_device) {
         printf("bench rays: %ux%u rays per set, on %s, median of %d runs\n", c.width, c.height,
                be.name, runs);
@@ -165,23 +160,14 @@ int bench_rays(int argc, char **argv) {
                 }
             }
             int failed = 0;
-            for (int kind = 0; kind < TR_RAY_KINDS && on_device && !failed; ++kind) {
-                mrays[k][kind] = tr_ray_sets_mrays_device(sets, be.dev, scene, kind, runs, 0,
-                                                          &hits[k][kind], &err);
+            for (int kind = 0; kind < TR_RAY_KINDS && !failed; ++kind) {
+                mrays[k][kind] = on_device ? tr_ray_sets_mrays_device(sets, be.dev, scene, kind,
+                                                                      runs, 0, &hits[k][kind], &err)
+                                           : tr_ray_sets_mrays(sets, scene, kind, threads, runs,
+                                                               &hits[k][kind], &err);
                 failed = mrays[k][kind] < 0.0;
                 steps += (uint64_t)runs + 1u;
                 progress_update(&bar, steps, NULL);
-            }
-            for (int kind = 0; kind < TR_RAY_KINDS && !on_device; ++kind) {
-                const int reps = tr_ray_sets_reps(
-                    tr_ray_sets_trace(sets, scene, kind, threads, 1, &hits[k][kind])); /* warm-up */
-                progress_update(&bar, ++steps, NULL);
-                for (int r = 0; r < runs; ++r) {
-                    times[r] = tr_ray_sets_trace(sets, scene, kind, threads, reps, &hits[k][kind]);
-                    progress_update(&bar, ++steps, NULL);
-                }
-                mrays[k][kind] =
-                    (double)tr_ray_sets_count(sets, kind) * reps / tr_median(times, runs) * 1e-6;
             }
             progress_clear(&bar);
             printf("%-24s %10u %-7s %10.1f %10.2f %10.2f %10.2f\n", sc_opts.scene,
@@ -224,7 +210,6 @@ int bench_rays(int argc, char **argv) {
         tr_scene_destroy(scene);
     }
     progress_end(&bar);
-    free(times);
     cli_backend_close(&be);
     return rc;
 }

@@ -194,6 +194,10 @@ int tr_ray_sets_trace_device_wide(const tr_ray_sets *r, tr_device *dev, const tr
  * pass's. -1 on failure (err says why). */
 double tr_ray_sets_mrays_device(const tr_ray_sets *r, tr_device *dev, const tr_scene *scene,
                                 int kind, int runs, int wide, uint64_t *hits, tr_error *err);
+/* The same on the CPU with the scene's committed structure on `threads` threads (0:
+ * tr_default_threads): what bench rays reports. -1 on failure (err says why). */
+double tr_ray_sets_mrays(const tr_ray_sets *r, const tr_scene *scene, int kind, int threads,
+                         int runs, uint64_t *hits, tr_error *err);
 /* How often a timed run traces a set whose one pass took `one_pass_seconds`, so that it
  * lasts at least 50 ms (a run of a few ms is at the mercy of the scheduler), 1..1000. */
 int tr_ray_sets_reps(double one_pass_seconds);

@@ -201,6 +201,22 @@ double tr_ray_sets_mrays_device(const tr_ray_sets *r, tr_device *dev, const tr_s
     return m;
 }
 
+double tr_ray_sets_mrays(const tr_ray_sets *r, const tr_scene *scene, int kind, int threads,
+                         int runs, uint64_t *hits, tr_error *err) {
+    double *times = malloc((size_t)(runs > 0 ? runs : 1) * sizeof *times);
+    if (!times) {
+        tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory");
+        return -1.0;
+    }
+    const int reps = tr_ray_sets_reps(tr_ray_sets_trace(r, scene, kind, threads, 1, hits));
+    for (int run = 0; run < runs; ++run) {
+        times[run] = tr_ray_sets_trace(r, scene, kind, threads, reps, hits);
+    }
+    const double m = (double)r->count[kind] * reps / tr_median(times, runs) * 1e-6;
+    free(times);
+    return m;
+}
+
 int tr_ray_sets_reps(double one_pass_seconds) {
     const double r = 0.05 / (one_pass_seconds > 1e-6 ? one_pass_seconds : 1e-6);
     return r < 1.0 ? 1 : r > 1000.0 ? 1000 : (int)r + 1;
