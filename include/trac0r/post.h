@@ -273,9 +273,10 @@ int tr_filter_atrous(const tr_gbuffer *g, const float *in, float *out, const tr_
  * film's TR_PASS_VARIANCE sums of squares: a spike above its neighbourhood that its
  * samples cannot vouch for is brought back to it), the first hit's emission
  * (TR_PASS_EMISSION) is kept apart, and the illumination (radiance / albedo) is a
- * first-order regression on normal, depth, albedo and screen position over a window
- * around each pixel, at two window sizes chosen per pixel by an error estimate. Zero
- * fields take their defaults. */
+ * first-order regression on normal, depth and screen position over a window around each
+ * pixel, at window radii from radius_small doubling up to radius; each pixel takes the
+ * fit, or its own value, of least estimated error (Stein's unbiased risk estimate from
+ * the sums of squares). Zero fields take their defaults. */
 typedef struct tr_denoise_params {
     int radius;       /* the large window's half-width in pixels, 1..64 (default 6) */
     int radius_small; /* the small window's, 1..64 (default 1) */

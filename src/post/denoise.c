@@ -31,13 +31,19 @@
  *    A ridge term (relative and absolute) keeps features that are constant in the window
  *    out of the fit.
  *
- *    Each pixel's window fit is one estimate; the regression is run at two window sizes and
- *    each pixel takes the one with the smaller estimated error: the squared difference
- *    between the two fits above what the small window's noise explains (its variance
- *    from the film's sums of squares through the fit's leverage) decides, after a 5x5
- *    smoothing, in the manner of the SURE-based selection of Li, Wu and Chuang 2012
- *    ("SURE-based Optimization for Adaptive Sampling and Reconstruction") that NFOR also
- *    uses.
+ *    Each pixel's window fit is one estimate; the regression is run at window radii from
+ *    the small one doubling up to the large one (1, 2, 4, 6 by default), and the pixel's
+ *    own value is one more candidate. Each pixel takes the candidate of least estimated
+ *    squared error, Stein's unbiased risk estimate (SURE) |f - y|^2 - var + 2 var L for a
+ *    fit f of the noisy values y whose leverage at the pixel is L (the diagonal of the
+ *    fit's hat matrix, exact per pixel from the window's feature covariance), smoothed
+ *    over 5x5 pixels; var is the variance of the pixel's mean from the film's sums of
+ *    squares. This is the per-pixel selection among candidate filters of Li, Wu and Chuang
+ *    2012 ("SURE-based Optimization for Adaptive Sampling and Reconstruction", ACM TOG
+ *    31(6)) that NFOR also makes. The pixel's own value has risk var: where its samples
+ *    have converged (a small lamp's neighbourhood at 64 samples, a shadow edge no feature
+ *    explains) a fit must agree with them to be taken, so the filter does not make a
+ *    converged region worse.
  *
  * Every pixel's value is computed from read-only inputs in a fixed order: rows are taken in
  * strips whose boundaries do not depend on the thread count, so neither does the result. */
@@ -57,12 +63,11 @@
  * other (upper triangle) and with the targets. */
 #define DN_FF (DN_F * (DN_F + 1) / 2)
 #define DN_S (1 + DN_F + 3 + DN_FF + 3 * DN_F)
-/* The large window is taken where the smoothed squared difference of the two fits is
- * below this times the small fit's variance. In theory 2 (the difference holds both
- * noises); measured best at 0.5 on the shipped boxes (docs/log/2026-denoise.md), as the
- * variance of the film's sums of squares treats the samples as independent and pt's
- * stratified samples are more accurate than that (docs/cli.md, --passes variance). */
-#define DN_SELECT 0.5f
+/* The scale of the film's variance in the risk estimate: 1 is Stein's; measured on the
+ * shipped scenes against 0.7 and 1.5 (docs/log/2026-denoise.md): below 1 helps scenes whose
+ * stratified samples make the sums of squares overstate the noise (many-lights), above 1
+ * the glass box, and 1 keeps every scene at or above the a-trous filter. */
+#define DN_SELECT 1.0f
 /* Rows per strip: each strip starts its running sums afresh. */
 #define DN_STRIP 48
 
@@ -257,9 +262,19 @@ static void fit(const dn_img *im, size_t i, const double *s, float out[3], float
         *lev = (float)inv;
         return;
     }
-    /* The fit's mean leverage over the window, (features + 1) / n: the share of a pixel's
-     * own noise that stays in its fit. */
-    *lev = (float)((DN_F + 1) * inv);
+    /* The pixel's leverage, the weight of its own value in its fit (the diagonal of the
+     * hat matrix): (1 + d' C^-1 d) / n for the centred features d and their covariance C,
+     * from the Cholesky factor L (C = L L') as (1 + |L^-1 d|^2) / n. */
+    double z[DN_F], q = 0.0;
+    for (int r = 0; r < DN_F; ++r) {
+        double t = d[r];
+        for (int k2 = 0; k2 < r; ++k2) {
+            t -= a[r * DN_F + k2] * z[k2];
+        }
+        z[r] = t / a[r * DN_F + r];
+        q += z[r] * z[r];
+    }
+    *lev = (float)fmin((1.0 + q) * inv, 1.0);
     for (int c = 0; c < 3; ++c) {
         double v = my[c];
         for (int j = 0; j < DN_F; ++j) {
@@ -403,19 +418,19 @@ int tr_denoise_film(const tr_film *film, const tr_denoise_params *params, int th
     threads = threads > 0 ? threads : omp_get_max_threads();
     const int w = (int)film->width, h = (int)film->height;
     const size_t n = (size_t)w * h;
-    /* Planes: features, y (3), var, lum, se, two fits (3 each), leverage, error (2). */
+    /* Planes: features, y (3), var, lum, se, the chosen value (3), a candidate fit (3),
+     * its leverage, its risk, the risk smoothed, the chosen value's smoothed risk. */
     enum {
         P_Y = DN_F,
         P_VAR = DN_F + 3,
         P_LUM,
         P_SE,
-        P_A,
-        P_B = P_A + 3,
-        P_LEV = P_B + 3,
-        P_E1,
-        P_E2,
-        P_V1,
-        P_V2,
+        P_BEST,
+        P_CUR = P_BEST + 3,
+        P_LEV = P_CUR + 3,
+        P_R,
+        P_RS,
+        P_RBEST,
         P_N
     };
     float *block = malloc(sizeof(float) * n * P_N);
@@ -495,29 +510,56 @@ int tr_denoise_film(const tr_film *film, const tr_denoise_params *params, int th
         im.y[k] = pl[P_Y + k];
     }
     im.var = pl[P_VAR];
-    float *fa[3] = {pl[P_A], pl[P_A + 1], pl[P_A + 2]};
-    float *fb[3] = {pl[P_B], pl[P_B + 1], pl[P_B + 2]};
-    int rc = regress(&im, p.radius, fa, NULL, threads);
-    rc = rc == TR_OK ? regress(&im, p.radius_small, fb, pl[P_LEV], threads) : rc;
-    if (rc == TR_OK) {
-        /* The error of taking the large window over the small one: its squared difference
-         * from the small fit less the small fit's variance (var * leverage); smoothed. */
+    /* The candidates: the pixel's own value, then the fits at the window radii from the
+     * small one doubling up to the large one. Each pixel takes the candidate of least
+     * estimated risk, Stein's unbiased risk estimate (Stein 1981; used to choose among
+     * filters per pixel by Li, Wu and Chuang 2012 and by NFOR, Bitterli et al. 2016):
+     * for a fit f linear in the noisy values y with leverage L at the pixel, the expected
+     * squared error is |f - y|^2 - var + 2 var L, smoothed over a 5x5 window. The pixel's
+     * own value (L = 1) has risk var: where the samples have converged no fit can win
+     * unless it agrees with them, so a converged region is not made worse. */
+    const float vs = DN_SELECT;
+    int rc = TR_OK;
 #pragma omp parallel for num_threads(threads) schedule(static)
-        for (long i = 0; i < (long)n; ++i) {
-            const float d =
-                lum((float[3]){fa[0][i] - fb[0][i], fa[1][i] - fb[1][i], fa[2][i] - fb[2][i]});
-            pl[P_E1][i] = d * d;
-            pl[P_V1][i] = pl[P_VAR][i] * pl[P_LEV][i];
+    for (long i = 0; i < (long)n; ++i) {
+        for (int k = 0; k < 3; ++k) {
+            pl[P_BEST + k][i] = pl[P_Y + k][i];
         }
-        box_mean(w, h, pl[P_E1], pl[P_E2], 2, threads);
-        box_mean(w, h, pl[P_V1], pl[P_V2], 2, threads);
+        pl[P_R][i] = vs * pl[P_VAR][i];
+    }
+    box_mean(w, h, pl[P_R], pl[P_RBEST], 2, threads);
+    float *cur[3] = {pl[P_CUR], pl[P_CUR + 1], pl[P_CUR + 2]};
+    for (int r = p.radius_small; rc == TR_OK; r = r * 2 < p.radius ? r * 2 : p.radius) {
+        rc = regress(&im, r, cur, pl[P_LEV], threads);
+        if (rc != TR_OK) {
+            break;
+        }
 #pragma omp parallel for num_threads(threads) schedule(static)
         for (long i = 0; i < (long)n; ++i) {
-            /* The two fits differ by the large window's bias and the small one's noise
-             * (var * leverage): the large window wins where its bias is the smaller. */
-            const int large = pl[P_E2][i] < DN_SELECT * pl[P_V2][i];
+            const float d = lum((float[3]){cur[0][i] - pl[P_Y][i], cur[1][i] - pl[P_Y + 1][i],
+                                           cur[2][i] - pl[P_Y + 2][i]});
+            const float v = vs * pl[P_VAR][i];
+            pl[P_R][i] = d * d - v + 2.0f * v * pl[P_LEV][i];
+        }
+        box_mean(w, h, pl[P_R], pl[P_RS], 2, threads);
+#pragma omp parallel for num_threads(threads) schedule(static)
+        for (long i = 0; i < (long)n; ++i) {
+            if (pl[P_RS][i] < pl[P_RBEST][i]) {
+                pl[P_RBEST][i] = pl[P_RS][i];
+                for (int k = 0; k < 3; ++k) {
+                    pl[P_BEST + k][i] = cur[k][i];
+                }
+            }
+        }
+        if (r >= p.radius) {
+            break;
+        }
+    }
+    if (rc == TR_OK) {
+#pragma omp parallel for num_threads(threads) schedule(static)
+        for (long i = 0; i < (long)n; ++i) {
             for (int k = 0; k < 3; ++k) {
-                const float v = large ? fa[k][i] : fb[k][i];
+                const float v = pl[P_BEST + k][i];
                 const float a = alb[3 * i + k];
                 const float y = a > 0.01f ? v * a : v;
                 out[3 * i + k] = fmaxf(y, 0.0f) + emi[3 * i + k];
