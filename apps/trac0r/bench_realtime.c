@@ -36,6 +36,8 @@ static void realtime_help(FILE *fp) {
             "  --reference-spp R    samples of each frame's reference, 2..1000000 (default 256)\n"
             "  --cut K              jump to another view at frame K (default: no cut)\n"
             "  --upscale N          trace 1/N of the pixels and upscale, 1..16 (default 1)\n"
+            "  --psr on|off         primary surface replacement in the frames' passes (on)\n"
+            "  --region X,Y,W,H     also score the pixels of this rectangle (PSNR)\n"
             "  --animate            the scene's last shape moves before every frame\n"
             "  --animate-frames A:B   the same, only before frames A to B-1\n"
             "  --bias-reference-depth D2   also measure the depth limit's bias against D2\n"
@@ -183,7 +185,9 @@ typedef struct rt_opts {
     int animate;                    /* --animate: the scene's last shape moves every frame */
     uint32_t anim_from, anim_until; /* it moves before frames from .. until - 1 */
     char csv_path[4096], png_path[4096];
-    uint32_t upscale; /* --upscale: frames trace 1/upscale of the pixels (1: every one) */
+    uint32_t upscale;   /* --upscale: frames trace 1/upscale of the pixels (1: every one) */
+    int psr;            /* --psr: 0 on (default), -1 off */
+    uint32_t region[4]; /* --region: x, y, width, height (width 0: none) */
 } rt_opts;
 
 /* One run: the scene, the device, the real-time loop and the measures. */
@@ -207,6 +211,7 @@ typedef struct rt_run {
     uint32_t shape_lo, shape_hi; /* --animate: the moving shape's ids */
     double resolve_sum_ms;       /* tr_resolve_emission over the frames */
     uint64_t resolve_px;
+    uint32_t *region_ids; /* --region: 1 inside the rectangle, 0 outside */
     /* --upscale: the same pipeline tracing every pixel, on the same frames. */
     cli_backend be_full; /* its own device: one film size each */
     tr_realtime *rt_full;
@@ -230,6 +235,30 @@ static int own_option(cli_args *a, void *user) {
     } else if ((rc = cli_recon_option(a, &o->params)) != -1 ||
                (rc = cli_restir_option(a, &o->c)) != -1) {
         /* handled: rc is CLI_OK or CLI_USAGE */
+    } else if (cli_is(a, "--psr")) {
+        if (cli_value(a) != CLI_OK) {
+            return CLI_USAGE;
+        }
+        if ((strcmp(a->value, "on") != 0 && strcmp(a->value, "off") != 0)) {
+            return cli_error(a, "--psr: expected on or off, got '%s'", a->value);
+        }
+        o->psr = strcmp(a->value, "on") == 0 ? 0 : -1;
+        rc = CLI_OK;
+    } else if (cli_is(a, "--region")) {
+        unsigned v[4];
+        char end;
+        if (cli_value(a) != CLI_OK) {
+            return CLI_USAGE;
+        }
+        if (sscanf(a->value, "%u,%u,%u,%u%c", &v[0], &v[1], &v[2], &v[3], &end) != 4 || v[2] == 0 ||
+            v[3] == 0) {
+            return cli_error(a, "--region: expected X,Y,W,H with W and H above 0, got '%s'",
+                             a->value);
+        }
+        for (int k = 0; k < 4; ++k) {
+            o->region[k] = v[k];
+        }
+        rc = CLI_OK;
     } else if (cli_is(a, "--animate")) {
         o->animate = 1;
         rc = CLI_OK;
@@ -324,6 +353,24 @@ static int alloc_buffers(rt_run *r) {
         fprintf(stderr, "trac0r bench realtime: %s\n", r->st ? err.msg : "out of memory");
         return CLI_FAILURE;
     }
+    const uint32_t *g = r->o->region, w = r->o->c.width, h = r->o->c.height;
+    if (g[2] > 0) {
+        if (g[0] >= w || g[1] >= h || g[2] > w - g[0] || g[3] > h - g[1]) {
+            fprintf(stderr,
+                    "trac0r bench realtime: --region %u,%u,%u,%u: outside the %ux%u frame\n", g[0],
+                    g[1], g[2], g[3], w, h);
+            return CLI_USAGE;
+        }
+        if (!(r->region_ids = calloc((size_t)w * h, sizeof *r->region_ids))) {
+            fprintf(stderr, "trac0r bench realtime: out of memory\n");
+            return CLI_FAILURE;
+        }
+        for (uint32_t y = g[1]; y < g[1] + g[3]; ++y) {
+            for (uint32_t x = g[0]; x < g[0] + g[2]; ++x) {
+                r->region_ids[(size_t)y * w + x] = 1u;
+            }
+        }
+    }
     return CLI_OK;
 }
 
@@ -346,6 +393,7 @@ static int open_loop(rt_run *r) {
     desc.animated = o->animate;
     desc.keep_passes = 1; /* one frame goes to every method */
     cli_realtime_firefly(&o->c, &desc.clamp_indirect, &desc.regularize);
+    desc.psr = o->psr;
     desc.restir = o->c.restir;
     desc.restir_unbiased = o->c.restir_unbiased;
     if (!(r->rt = tr_realtime_create(r->be.dev, r->scene, &desc, &err))) {
@@ -566,6 +614,8 @@ static int run_frame(rt_run *r, uint32_t f) {
             const tr_gbuffer *g = tr_realtime_gbuffer(r->rt);
             if (o->animate && g) {
                 tr_scorer_region(r->sc, g->prim, r->shape_lo, r->shape_hi);
+            } else if (r->region_ids) {
+                tr_scorer_region(r->sc, r->region_ids, 1u, 2u);
             }
             first = 0;
         }
@@ -628,6 +678,18 @@ static void report_extras(const rt_run *r) {
     if (r->resolve_px > 0 || (r->host && (r->frame_passes & TR_PASS_EMISSION))) {
         printf("emission resolved: %.1f pixels and %.2f ms per frame (mean)\n",
                (double)r->resolve_px / frames, r->resolve_sum_ms / frames);
+    }
+    if (r->region_ids) {
+        printf("region %u,%u %ux%u, PSNR over its pixels (mean over the frames):", o->region[0],
+               o->region[1], o->region[2], o->region[3]);
+        for (int m = 0; m < TR_RECON_COUNT; ++m) {
+            if (o->on[m]) {
+                const tr_scores_summary sum =
+                    tr_scores_summarize(r->st + (size_t)m * frames, 0, frames);
+                printf(" %s %.2f dB", tr_recon_name(m), sum.mean.region_psnr);
+            }
+        }
+        printf("\n");
     }
     if (o->animate && r->host) {
         /* Ghosting of the moving shape: each method's PSNR over its pixels. */
@@ -719,6 +781,7 @@ static void free_run(rt_run *r) {
     }
     tr_scorer_destroy(r->sc);
     free(r->st);
+    free(r->region_ids);
     tr_scene_destroy(r->scene);
 }
 
