@@ -34,7 +34,9 @@
 /* The passes' surface for a camera ray `ray` whose first hit (hit, material m) is a delta
  * surface: albedo, prim and the normal (turned to face the arriving ray, then mirrored back
  * through every reflection of the chain: the normal of the reflected image) of the first
- * non-delta vertex, and as depth the length of the chain up to it. *out's other fields are
+ * non-delta vertex, and as depth the length of the chain up to it; the primitive id carries
+ * TR_PRIM_PSR_CURVED where the chain refracted or met a smooth-shaded surface. *out's other
+ * fields are
  * left alone; prim stays 0 where the chain leaves the scene or is longer than
  * TR_PSR_MAX_BOUNCES. Returns the intersection queries it made. */
 TR_FN uint32_t tr_psr_surface(const tr_scene_view *s, tr_ray ray, tr_hit hit, tr_bsdf_params m,
@@ -45,6 +47,7 @@ TR_FN uint32_t tr_psr_surface(const tr_scene_view *s, tr_ray ray, tr_hit hit, tr
     float len = 0.0f;
     int holes = 0;
     uint32_t rays = 0u;
+    uint32_t curved = 0u; /* TR_PRIM_PSR_CURVED once the chain meets a curve or refracts */
     out->prim = 0u;
     out->depth = 0.0f;
     for (int bounce = 0;;) {
@@ -60,7 +63,7 @@ TR_FN uint32_t tr_psr_surface(const tr_scene_view *s, tr_ray ray, tr_hit hit, tr
                 out->albedo = m.color;
                 out->normal = v3(v3_dot(r0, n), v3_dot(r1, n), v3_dot(r2, n));
                 out->depth = len;
-                out->prim = hit.triangle + 1u;
+                out->prim = (hit.triangle + 1u) | curved;
                 return rays;
             }
             if (bounce >= TR_PSR_MAX_BOUNCES) {
@@ -76,6 +79,11 @@ TR_FN uint32_t tr_psr_surface(const tr_scene_view *s, tr_ray ray, tr_hit hit, tr
                 r0 = v3_sub(r0, v3_scale(nf, 2.0f * v3_dot(r0, nf)));
                 r1 = v3_sub(r1, v3_scale(nf, 2.0f * v3_dot(r1, nf)));
                 r2 = v3_sub(r2, v3_scale(nf, 2.0f * v3_dot(r2, nf)));
+            } else {
+                curved = TR_PRIM_PSR_CURVED;
+            }
+            if (tr_fabsf(v3_dot(m.ns, m.ng)) < 0.9999f) {
+                curved = TR_PRIM_PSR_CURVED;
             }
             holes = 0;
             ++bounce;
