@@ -34,6 +34,8 @@ static void realtime_help(FILE *fp) {
             "  --cut K              jump to another view at frame K (default: no cut)\n"
             "  --upscale N          trace 1/N of the pixels and upscale, 1..16 (default 1)\n"
             "  --fraction F         the same as a fraction: 1/2, 1/4, 0.5, 0.25, ½, ¼\n"
+            "  --psr on|off         primary surface replacement in the frames' passes (on)\n"
+            "  --region X,Y,W,H     also score the pixels of this rectangle (PSNR)\n"
             "  --animate            the scene's last shape moves before every frame\n"
             "  --animate-frames A:B   the same, only before frames A to B-1\n"
             "  --animate-light switch|move   the lights go off and on, or move, every frame\n"
@@ -73,25 +75,21 @@ static int parse_methods(cli_args *a, int on[TR_RECON_COUNT]) {
     return n < 0 ? CLI_USAGE : CLI_OK;
 }
 
-/* After --animate-frames A:B, per method (reconstructed on the host): the frames from B
- * on to return to within 0.5 dB of the PSNR over the shape's pixels before it moved. */
-static void print_shape_recovery(const rt_frame_stats *st, const int *on, uint32_t frames,
-                                 uint32_t from, uint32_t until) {
-    printf("moving shape stopped at frame %u, frames to return to its PSNR before it moved:",
-           until);
+/* Per method, the frames from `until` on to return to within 0.5 dB of the PSNR over
+ * frames [from, until) (tr_recovery_frames; over the region's pixels with `region`: after
+ * --animate-frames A:B, the moving shape's before it moved), then a newline. */
+static void print_recovery(const rt_frame_stats *st, const int *on, uint32_t frames, uint32_t from,
+                           uint32_t until, int region) {
     for (int m = 0; m < TR_RECON_COUNT; ++m) {
-        if (!on[m]) {
-            continue;
-        }
         double steady = NAN;
-        const int after =
-            tr_recovery_frames(st + (size_t)m * frames, frames, from, until, 1, 0.5, &steady);
-        if (steady != steady) {
-            printf(" %s -", tr_recon_name(m));
-        } else if (after >= 0) {
-            printf(" %s %d (%.2f dB)", tr_recon_name(m), after, steady);
-        } else {
-            printf(" %s never (%.2f dB)", tr_recon_name(m), steady);
+        const int n = on[m] ? tr_recovery_frames(st + (size_t)m * frames, frames, from, until,
+                                                 region, 0.5, &steady)
+                            : 0;
+        if (on[m]) {
+            printf(steady != steady ? " %s -"
+                   : n >= 0         ? " %s %d"
+                                    : " %s never",
+                   tr_recon_name(m), n);
         }
     }
     printf("\n");
@@ -196,6 +194,8 @@ typedef struct rt_opts {
     uint32_t upscale; /* --upscale: frames trace 1/upscale of the pixels (1: every one) */
     /* --animate-light: TR_LIGHT_ANIMATION_* */
     int animate_light;
+    int psr;            /* --psr: 0 on (default), -1 off */
+    uint32_t region[4]; /* --region: x, y, width, height (width 0: none) */
 } rt_opts;
 
 /* One run: the scene, the device, the real-time loop and the measures. */
@@ -242,6 +242,16 @@ static int own_option(cli_args *a, void *user) {
     } else if ((rc = cli_recon_option(a, &o->params)) != -1 ||
                (rc = cli_restir_option(a, &o->c)) != -1) {
         /* handled: rc is CLI_OK or CLI_USAGE */
+    } else if (cli_is(a, "--psr")) {
+        int on = 1;
+        rc = cli_parse_on_off(a, &on);
+        o->psr = on ? 0 : -1;
+    } else if (cli_is(a, "--region")) {
+        if ((rc = cli_value(a)) == CLI_OK &&
+            tr_parse_rect(a->value, TR_FILM_MAX_SIDE, o->region) != TR_OK) {
+            rc =
+                cli_error(a, "--region: expected X,Y,W,H with W and H above 0, got '%s'", a->value);
+        }
     } else if (cli_is(a, "--animate")) {
         o->animate = 1;
         rc = CLI_OK;
@@ -346,6 +356,12 @@ static int alloc_buffers(rt_run *r) {
         fprintf(stderr, "trac0r bench realtime: %s\n", r->st ? err.msg : "out of memory");
         return CLI_FAILURE;
     }
+    const uint32_t *g = r->o->region;
+    if (g[2] > 0 && tr_scorer_region_rect(r->sc, g) == 0) {
+        fprintf(stderr, "trac0r bench realtime: --region %u,%u,%u,%u: outside the %ux%u frame\n",
+                g[0], g[1], g[2], g[3], r->o->c.width, r->o->c.height);
+        return CLI_USAGE;
+    }
     return CLI_OK;
 }
 
@@ -368,6 +384,7 @@ static int open_loop(rt_run *r) {
     desc.animated = o->animate || o->animate_light;
     desc.keep_passes = 1; /* one frame goes to every method */
     cli_realtime_firefly(&o->c, &desc.clamp_indirect, &desc.regularize);
+    desc.psr = o->psr;
     desc.restir = o->c.restir;
     desc.restir_unbiased = o->c.restir_unbiased;
     if (!(r->rt = tr_realtime_create(r->be.dev, r->scene, &desc, &err))) {
@@ -545,25 +562,15 @@ static int run_frame(rt_run *r, uint32_t f) {
         fprintf(stderr, "trac0r bench realtime: frame %u camera: %s\n", f, err.msg);
         return CLI_FAILURE;
     }
-    if (o->animate) {
-        /* Outside the timed render: the scene's update is not the reconstruction's. Its
-         * own frame count: 1 at the first frame it moves, 0 (no move) outside. */
+    if (o->animate || o->animate_light) {
+        /* Outside the timed render: the scene's update is not the reconstruction's. The
+         * shape's own frame count: 1 at the first frame it moves, 0 (no move) outside; the
+         * lights in their state of frame f. */
         const uint32_t af = f >= o->anim_from && f < o->anim_until ? f - o->anim_from + 1 : 0;
-        if (tr_scene_animate_sway(r->scene, af, &err) != TR_OK ||
+        if ((o->animate && tr_scene_animate_sway(r->scene, af, &err) != TR_OK) ||
+            (o->animate_light && tr_scene_animate_light(r->scene, f, o->animate_light, &err)) ||
             tr_scene_update(r->scene, NULL, &err) != TR_OK) {
             fprintf(stderr, "trac0r bench realtime: --animate: frame %u: %s\n", f, err.msg);
-            return CLI_FAILURE;
-        }
-        const int rc = cli_backend_upload(r->a, &r->be, r->scene);
-        if (rc != CLI_OK) {
-            return rc;
-        }
-    }
-    if (o->animate_light) {
-        /* The lights in their state of frame f, outside the timed render as above. */
-        if (tr_scene_animate_light(r->scene, f, o->animate_light, &err) != TR_OK ||
-            tr_scene_update(r->scene, NULL, &err) != TR_OK) {
-            fprintf(stderr, "trac0r bench realtime: --animate-light: frame %u: %s\n", f, err.msg);
             return CLI_FAILURE;
         }
         const int rc = cli_backend_upload(r->a, &r->be, r->scene);
@@ -601,6 +608,8 @@ static int run_frame(rt_run *r, uint32_t f) {
             const tr_gbuffer *g = tr_realtime_gbuffer(r->rt);
             if (o->animate && g) {
                 tr_scorer_region(r->sc, g->prim, r->shape_lo, r->shape_hi);
+            } else if (o->region[2] > 0) {
+                tr_scorer_region_rect(r->sc, o->region);
             }
             first = 0;
         }
@@ -664,24 +673,24 @@ static void print_switch_recovery(const rt_frame_stats *st, const int *on, uint3
     for (uint32_t e = half; e < frames; e += half) {
         const int off = !tr_light_animation_on(e);
         printf("light switched %s at frame %u, frames to recover:", off ? "off" : "on", e);
-        for (int m = 0; m < TR_RECON_COUNT; ++m) {
-            if (!on[m]) {
-                continue;
-            }
-            double steady = 0.0;
-            const int n = tr_recovery_frames(st + (size_t)m * frames, frames, off ? e : e - half, e,
-                                             0, 0.5, &steady);
-            if (n >= 0) {
-                printf(" %s %d", tr_recon_name(m), n);
-            } else {
-                printf(" %s never", tr_recon_name(m));
-            }
-        }
-        printf("\n");
+        print_recovery(st, on, frames, off ? e : e - half, e, 0);
     }
 }
 
 /* The lines after the table: the emission's resolve, the moving shape, the depth bias. */
+/* Each method's mean PSNR over the region in frames [from, until), then a newline. */
+static void print_region(const rt_run *r, uint32_t from, uint32_t until) {
+    for (int m = 0; m < TR_RECON_COUNT; ++m) {
+        if (r->o->on[m]) {
+            const tr_scores_summary sum =
+                tr_scores_summarize(r->st + (size_t)m * r->o->frames, from, until);
+            printf(sum.region_frames > 0 ? " %s %.2f dB" : " %s -", tr_recon_name(m),
+                   sum.mean.region_psnr);
+        }
+    }
+    printf("\n");
+}
+
 static void report_extras(const rt_run *r) {
     const rt_opts *o = r->o;
     const uint32_t frames = o->frames;
@@ -689,24 +698,20 @@ static void report_extras(const rt_run *r) {
         printf("emission resolved: %.1f pixels and %.2f ms per frame (mean)\n",
                (double)r->resolve_px / frames, r->resolve_sum_ms / frames);
     }
+    if (o->region[2] > 0) {
+        printf("region %u,%u %ux%u, PSNR over its pixels (mean over the frames):", o->region[0],
+               o->region[1], o->region[2], o->region[3]);
+        print_region(r, 0, frames);
+    }
     if (o->animate && r->host) {
         /* Ghosting of the moving shape: each method's PSNR over its pixels. */
         printf("moving shape, PSNR over its pixels (mean over the frames it moved):");
-        for (int m = 0; m < TR_RECON_COUNT; ++m) {
-            if (!o->on[m]) {
-                continue;
-            }
-            const tr_scores_summary sum =
-                tr_scores_summarize(r->st + (size_t)m * frames, o->anim_from, o->anim_until);
-            if (sum.region_frames > 0) {
-                printf(" %s %.2f dB", tr_recon_name(m), sum.mean.region_psnr);
-            } else {
-                printf(" %s -", tr_recon_name(m));
-            }
-        }
-        printf("\n");
+        print_region(r, o->anim_from, o->anim_until);
         if (o->anim_from >= 2 && o->anim_until < frames) {
-            print_shape_recovery(r->st, o->on, frames, o->anim_from, o->anim_until);
+            printf("moving shape stopped at frame %u, frames to return to its PSNR before it "
+                   "moved:",
+                   o->anim_until);
+            print_recovery(r->st, o->on, frames, o->anim_from, o->anim_until, 1);
         }
     }
     if (o->animate_light == TR_LIGHT_ANIMATION_SWITCH) {

@@ -196,6 +196,15 @@ int cli_value(cli_args *a) {
     return CLI_OK;
 }
 
+int cli_parse_on_off(cli_args *a, int *on) {
+    int rc = cli_value(a);
+    if (rc == CLI_OK && strcmp(a->value, "on") != 0 && strcmp(a->value, "off") != 0) {
+        rc = cli_error(a, "%s: expected on or off, got '%s'", a->opt, a->value);
+    }
+    *on = rc == CLI_OK ? strcmp(a->value, "on") == 0 : *on;
+    return rc;
+}
+
 /* Parses a whole decimal integer (no sign for unsigned ranges, no trailing text). */
 static int parse_integer(cli_args *a, long long lo, long long hi, long long *out) {
     if (cli_value(a) != CLI_OK) {
@@ -391,14 +400,7 @@ int cli_common_option(cli_args *a, cli_common *c) {
         return cli_parse_float(a, 0.0f, 1e30f, &c->clamp_indirect);
     }
     if (cli_is(a, "--regularize")) {
-        if (cli_value(a) != CLI_OK) {
-            return CLI_USAGE;
-        }
-        if (strcmp(a->value, "on") != 0 && strcmp(a->value, "off") != 0) {
-            return cli_error(a, "--regularize: expected on or off, got '%s'", a->value);
-        }
-        c->regularize = strcmp(a->value, "on") == 0;
-        return CLI_OK;
+        return cli_parse_on_off(a, &c->regularize);
     }
     if (cli_is(a, "--light-sampling")) {
         if (cli_value(a) != CLI_OK) {
@@ -486,40 +488,31 @@ int cli_parse(cli_args *a, cli_common *c, const char *const *refused, void (*hel
 }
 
 int cli_recon_option(cli_args *a, tr_recon_params *p) {
-    if (cli_is(a, "--alpha-min")) {
-        return cli_parse_float(a, 0.01f, 1.0f, &p->alpha_min);
+    /* The float settings by name, with their ranges. */
+    const struct {
+        const char *name;
+        float lo, hi, *v;
+    } f[] = {{"--alpha-min", 0.01f, 1.0f, &p->alpha_min},
+             {"--max-history", 1.0f, 1024.0f, &p->max_len},
+             {"--max-history-moving", 1.0f, 1024.0f, &p->max_len_moving},
+             {"--svgf-sigma-l", 0.1f, 1000.0f, &p->svgf_sigma_l},
+             {"--taa", 0.0f, 1.0f, &p->svgf_taa_alpha}};
+    for (size_t k = 0; k < sizeof f / sizeof f[0]; ++k) {
+        if (cli_is(a, f[k].name)) {
+            return cli_parse_float(a, f[k].lo, f[k].hi, f[k].v);
+        }
     }
-    if (cli_is(a, "--max-history")) {
-        return cli_parse_float(a, 1.0f, 1024.0f, &p->max_len);
-    }
-    if (cli_is(a, "--max-history-moving")) {
-        return cli_parse_float(a, 1.0f, 1024.0f, &p->max_len_moving);
-    }
-    if (cli_is(a, "--svgf-iterations")) {
-        return cli_parse_int(a, 1, 8, &p->svgf_iterations);
-    }
-    if (cli_is(a, "--svgf-sigma-l")) {
-        return cli_parse_float(a, 0.1f, 1000.0f, &p->svgf_sigma_l);
-    }
-    if (cli_is(a, "--taa")) {
-        return cli_parse_float(a, 0.0f, 1.0f, &p->svgf_taa_alpha);
-    }
-    if (cli_is(a, "--resolve-emission")) {
-        return cli_parse_int(a, 0, TR_RESOLVE_EMISSION_MAX, &p->emission_samples);
+    if (cli_is(a, "--svgf-iterations") || cli_is(a, "--resolve-emission")) {
+        const int it = cli_is(a, "--svgf-iterations");
+        return cli_parse_int(a, it, it ? 8 : TR_RESOLVE_EMISSION_MAX,
+                             it ? &p->svgf_iterations : &p->emission_samples);
     }
     if (cli_is(a, "--svgf-split")) {
         p->svgf_split = 1;
         return CLI_OK;
     }
     if (cli_is(a, "--gradients")) {
-        if (cli_value(a) != CLI_OK) {
-            return CLI_USAGE;
-        }
-        if (strcmp(a->value, "on") != 0 && strcmp(a->value, "off") != 0) {
-            return cli_error(a, "--gradients: expected on or off, got '%s'", a->value);
-        }
-        p->gradients = strcmp(a->value, "on") == 0;
-        return CLI_OK;
+        return cli_parse_on_off(a, &p->gradients);
     }
     return -1;
 }

@@ -81,6 +81,8 @@ int cli_next(cli_args *a);
 int cli_is(const cli_args *a, const char *name);
 /* Fetches the current option's value into a->value; CLI_USAGE when missing. */
 int cli_value(cli_args *a);
+/* An on|off value: *on 1 or 0 (else a usage error naming the option). */
+int cli_parse_on_off(cli_args *a, int *on);
 
 int cli_parse_u32(cli_args *a, uint32_t lo, uint32_t hi, uint32_t *out);
 int cli_parse_int(cli_args *a, int lo, int hi, int *out);

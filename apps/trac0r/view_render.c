@@ -241,17 +241,22 @@ int view_renderer_start(view_renderer *r, tr_scene *scene, int animate, tr_devic
     return TR_OK;
 }
 
+/* A new view (under r->mu): a new generation, a refinement under way dropped. */
+static void new_generation(view_renderer *r) {
+    r->generation += 1;
+    if (atomic_load(&r->refining)) {
+        atomic_store(&r->cancel, 1);
+    }
+    pthread_cond_signal(&r->cv);
+}
+
 void view_renderer_set_view(view_renderer *r, const tr_camera *cam, int stride, int moving) {
     pthread_mutex_lock(&r->mu);
     if (!same_view(&r->cam, cam) || r->stride != stride || r->moving != moving) {
         r->cam = *cam;
         r->stride = stride;
         r->moving = moving;
-        r->generation += 1;
-        if (atomic_load(&r->refining)) {
-            atomic_store(&r->cancel, 1);
-        }
-        pthread_cond_signal(&r->cv);
+        new_generation(r);
     }
     pthread_mutex_unlock(&r->mu);
 }
@@ -266,11 +271,7 @@ void view_renderer_set_recon(view_renderer *r, int method) {
     pthread_mutex_lock(&r->mu);
     if (r->recon != method) {
         r->recon = method;
-        r->generation += 1;
-        if (atomic_load(&r->refining)) {
-            atomic_store(&r->cancel, 1);
-        }
-        pthread_cond_signal(&r->cv);
+        new_generation(r);
     }
     pthread_mutex_unlock(&r->mu);
 }

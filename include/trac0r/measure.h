@@ -85,6 +85,9 @@ int tr_scorer_bias(tr_scorer *s, tr_device *dev, const tr_camera *cam, const tr_
 /* The region scored apart in this frame: the pixels whose id (a frame's TR_PASS_ID, the
  * primitive index + 1) lies in [lo, hi); ids NULL: none. Returns how many pixels. */
 size_t tr_scorer_region(tr_scorer *s, const uint32_t *ids, uint32_t lo, uint32_t hi);
+/* The region as a rectangle r = {x, y, width, height} of the frame's pixels; 0 (and no
+ * region) where it is empty or does not lie inside the frame. */
+size_t tr_scorer_region_rect(tr_scorer *s, const uint32_t r[4]);
 /* Slot `slot`'s output of the current frame (3 floats per pixel) against the reference. */
 tr_frame_scores tr_scorer_score(tr_scorer *s, int slot, const float *rgb);
 

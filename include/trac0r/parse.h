@@ -31,6 +31,8 @@ int tr_parse_float(const char *text, float lo, float hi, float *out);
 int tr_parse_double(const char *text, double lo, double hi, double *out);
 /* "WxH": two unsigned integers in 1..max_side each. */
 int tr_parse_size(const char *text, uint32_t max_side, uint32_t *w, uint32_t *h);
+/* "X,Y,W,H": four unsigned integers up to max each, W and H at least 1. */
+int tr_parse_rect(const char *text, uint32_t max, uint32_t out[4]);
 /* A fraction 1/N with N in 1..max_n, written "1/N", as a number ("0.25": exactly 1/N to
  * 1e-6) or as the signs "½" and "¼" (UTF-8); *n gets N. */
 int tr_parse_fraction(const char *text, uint32_t max_n, uint32_t *n);

@@ -99,6 +99,9 @@ typedef struct tr_realtime_desc {
      * regularize: 0 (default) or 1: path regularization on; -1: off. */
     float clamp_indirect;
     int regularize;
+    /* Primary surface replacement in the frames' passes (tr_render_config.psr): 0 (default)
+     * or 1: on; -1: off. */
+    int psr;
     /* TR_REALTIME_RESTIR_DI: the direct light at the camera rays' first surfaces comes from
      * ReSTIR DI (spatiotemporal reservoir resampling, src/kernel/restir.h) instead of pt's
      * light sample, on a device whose frames run on the host (the CPU; elsewhere

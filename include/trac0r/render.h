@@ -75,6 +75,13 @@ typedef struct tr_render_config {
      * indirect light there too (the path ends there; tr_realtime's ReSTIR GI adds it); 0
      * (default): pt's whole estimate. */
     int no_primary_direct;
+    /* 1: pt's passes follow a camera ray that first meets a mirror or smooth glass to the
+     * first surface behind it (primary surface replacement, src/kernel/psr.h: that
+     * surface's albedo, primitive and mirrored normal, the chain's length as depth), for a
+     * reconstruction that reprojects the reflected or refracted image where it appears;
+     * the radiance is the same. 0 (default): the path's own first non-delta surface.
+     * tr_realtime turns it on for real-time frames. */
+    int psr;
 } tr_render_config;
 
 typedef struct tr_render_stats {

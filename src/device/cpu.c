@@ -157,7 +157,8 @@ int tr_frame_make(tr_frame *f, const tr_camera *cam, const tr_render_config *cfg
     f->clamp_indirect = cfg->clamp_indirect;
     f->flags = (cfg->regularize ? TR_FRAME_REGULARIZE : 0u) |
                (cfg->no_primary_direct ? TR_FRAME_NO_PRIMARY_DIRECT : 0u) |
-               (cfg->no_primary_direct == 2 ? TR_FRAME_NO_PRIMARY_INDIRECT : 0u);
+               (cfg->no_primary_direct == 2 ? TR_FRAME_NO_PRIMARY_INDIRECT : 0u) |
+               (cfg->psr ? TR_FRAME_PSR : 0u);
     f->rect_x = r.x;
     f->rect_y = r.y;
     f->rect_w = r.width;

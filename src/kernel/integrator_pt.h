@@ -21,6 +21,7 @@
 #include "material_eval.h"
 #include "sampler.h"
 #include "scene_view.h"
+#include "psr.h"
 #include "punctual.h"
 #include "sun.h"
 #include "types.h"
@@ -143,6 +144,7 @@ TR_FN tr_vec3 tr_trace_pt_ff(const tr_scene_view *s, tr_ray ray, int max_depth, 
     int direct_seg = max_depth + 1; /* the segment whose emission ends the direct part */
     int direct_done = 0;
     tr_vec3 direct = v3s(0.0f);
+    int psr_done = 0; /* the passes' surface came from tr_psr_surface */
     for (int seg = 1; seg <= max_depth; ++seg) {
         tr_hit hit;
         *rays += 1;
@@ -181,7 +183,11 @@ TR_FN tr_vec3 tr_trace_pt_ff(const tr_scene_view *s, tr_ray ray, int max_depth, 
             ray.tmin = hit.t + 1e-5f * tr_fmaxf(1.0f, hit.t);
             continue;
         }
-        if (surface) {
+        if (surface && seg == 1 && (flags & TR_FRAME_PSR) != 0u && tr_bsdf_is_delta(&m)) {
+            *rays += tr_psr_surface(s, ray, hit, m, surface);
+            psr_done = 1;
+        }
+        if (surface && !psr_done) {
             tr_sample_surface(surface, &m, ray.dir, hit.t, hit.triangle);
         }
         if (surface && direct_seg > max_depth && !tr_bsdf_is_delta(&m)) {

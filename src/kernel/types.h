@@ -111,6 +111,15 @@ TR_STATIC_ASSERT(sizeof(tr_frame) == 164, "tr_frame layout");
  * reaches (emitters of the light table, the environment, the sun): set by ReSTIR GI's
  * rays from the first surface, whose direct light ReSTIR DI estimates. */
 #define TR_FRAME_NO_FIRST_LIGHT 8u
+/* tr_frame.flags: primary surface replacement (psr.h): where the camera ray first meets a
+ * mirror or smooth glass, the passes describe the first surface behind the delta chain,
+ * traced apart with the more probable lobe at glass. The radiance is unchanged. */
+#define TR_FRAME_PSR 16u
+/* The top bit of a primitive id in the passes (TR_PASS_PRIM) under TR_FRAME_PSR: the surface
+ * was found through a curved delta surface (smooth-shaded, its shading normal off the
+ * triangle's) or through a refraction, where the virtual position is an approximation, so
+ * that the reconstruction's consistency test is wider there (tr_post_consistent). */
+#define TR_PRIM_PSR_CURVED 0x80000000u
 
 /* What one sample of one pixel gives: radiance, the intersection queries it made, and
  * the surface the passes describe (zero where the path found no non-specular surface). */

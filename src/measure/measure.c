@@ -211,6 +211,25 @@ size_t tr_scorer_region(tr_scorer *s, const uint32_t *ids, uint32_t lo, uint32_t
     return s->nidx;
 }
 
+size_t tr_scorer_region_rect(tr_scorer *s, const uint32_t r[4]) {
+    s->nidx = 0;
+    s->region_own = 0.0;
+    if (r[2] == 0 || r[3] == 0 || r[0] >= s->width || r[1] >= s->height || r[2] > s->width - r[0] ||
+        r[3] > s->height - r[1]) {
+        return 0;
+    }
+    for (uint32_t y = r[1]; y < r[1] + r[3]; ++y) {
+        for (uint32_t x = r[0]; x < r[0] + r[2]; ++x) {
+            s->idx[s->nidx++] = (size_t)y * s->width + x;
+        }
+    }
+    float *ref = s->gathered + 3 * s->px, *half = s->gathered + 6 * s->px;
+    gather(s->ref, s->idx, s->nidx, ref);
+    gather(s->half, s->idx, s->nidx, half);
+    s->region_own = tr_image_compare(half, ref, s->nidx).mse;
+    return s->nidx;
+}
+
 /* A PSNR from an MSE with the reference's own taken out, floored at 1e-12. */
 static double psnr_less(double mse, double own) {
     const double m = mse - own;

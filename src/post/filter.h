@@ -94,6 +94,11 @@ TR_FN int tr_post_project(const tr_camera *cam, tr_vec3 p, float *out_x, float *
     return 1;
 }
 
+/* The plane test's tolerance, as a fraction of the distance, for a pixel whose passes were
+ * replaced through a curved delta surface or a refraction (TR_PRIM_PSR_CURVED, the id's top
+ * bit). */
+#define TR_POST_PSR_CURVED_TOL 0.1f
+
 /* Whether a history sample describes the same surface as the current point p (normal
  * n, primitive prim, at distance dist from the previous camera): the same primitive, a
  * facing normal, and the history's point q (its pixel's ray at its depth) on p's tangent
@@ -107,7 +112,10 @@ TR_FN int tr_post_consistent(uint32_t prim, tr_vec3 p, tr_vec3 n, float dist, ui
     if (prim != prev_prim) {
         return 0;
     }
-    if (tr_fabsf(v3_dot(v3_sub(q, p), n)) > 0.02f * dist) {
+    /* Seen through a curved mirror or glass (primary surface replacement, psr.h): the virtual
+     * point moves over its image as the camera moves, so the plane test is wider. */
+    const float tol = (prim & TR_PRIM_PSR_CURVED) != 0u ? TR_POST_PSR_CURVED_TOL : 0.02f;
+    if (tr_fabsf(v3_dot(v3_sub(q, p), n)) > tol * dist) {
         return 0;
     }
     return v3_dot(n, prev_n) > 0.9f;

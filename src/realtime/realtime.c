@@ -30,6 +30,7 @@ struct tr_realtime {
     int rt_roulette; /* their roulette start */
     float rt_clamp;  /* their indirect clamp (0: none) */
     int rt_regularize;
+    int rt_psr; /* their passes' primary surface replacement */
     int restir; /* TR_REALTIME_RESTIR_* */
     tr_restir_params restir_params;
     tr_restir_stage *restir_stage;
@@ -140,6 +141,11 @@ tr_realtime *tr_realtime_create(tr_device *dev, tr_scene *scene, const tr_realti
                      d->sampler);
         return NULL;
     }
+    if (d->psr < -1 || d->psr > 1) {
+        tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "tr_realtime_desc: psr %d out of range",
+                     d->psr);
+        return NULL;
+    }
     if (!(d->clamp_indirect <= 3.0e38f) || d->regularize < -1 || d->regularize > 1) {
         tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
                      "tr_realtime_desc: clamp_indirect %g or regularize %d out of range",
@@ -183,6 +189,7 @@ tr_realtime *tr_realtime_create(tr_device *dev, tr_scene *scene, const tr_realti
                    : d->clamp_indirect == 0.0f ? TR_REALTIME_CLAMP_INDIRECT
                                                : 0.0f;
     rt->rt_regularize = d->regularize >= 0 ? 1 : 0;
+    rt->rt_psr = d->psr >= 0 ? 1 : 0;
     rt->spp = d->spp ? d->spp : 1u;
     rt->accumulate = d->accumulate != 0;
     rt->animated = d->animated != 0;
@@ -399,6 +406,9 @@ int tr_realtime_render(tr_realtime *rt, const tr_realtime_frame_desc *fd, tr_err
     cfg.passes = rt->film.passes;
     cfg.cancel = fd->cancel;
     cfg.cancel_user = fd->cancel_user;
+    /* The passes see through mirrors and glass at rest too, so that the guides of one view
+     * stay the same whether it moves or accumulates (the radiance is the same either way). */
+    cfg.psr = rt->rt_psr;
     /* A real-time frame is reconstructed from few samples: pt's roulette starts early
      * there, which adds noise the filter hides and saves a fifth of the frame, and its
      * numbers are independent, which the reconstruction cannot tell from Sobol points and

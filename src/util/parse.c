@@ -146,3 +146,21 @@ int tr_parse_fraction(const char *text, uint32_t max_n, uint32_t *n) {
     *n = (uint32_t)k;
     return TR_OK;
 }
+
+int tr_parse_rect(const char *text, uint32_t max, uint32_t out[4]) {
+    const char *p = text;
+    uint64_t v[4];
+    for (int k = 0; k < 4; ++k) {
+        if (!p || digits(&p, &v[k]) != TR_OK || v[k] > max || *p != (k < 3 ? ',' : '\0')) {
+            return TR_ERR;
+        }
+        p += k < 3;
+    }
+    if (v[2] == 0 || v[3] == 0) {
+        return TR_ERR;
+    }
+    for (int k = 0; k < 4; ++k) {
+        out[k] = (uint32_t)v[k];
+    }
+    return TR_OK;
+}
