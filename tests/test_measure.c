@@ -131,6 +131,12 @@ static void test_scorer(void) {
     CHECK(tr_scorer_region(sc, ids, 1, 3) == 2, "region count");
     CHECK(!isnan(tr_scorer_score(sc, 0, copy).region_psnr), "region psnr");
     CHECK(tr_scorer_region(sc, NULL, 1, 3) == 0, "no ids, no region");
+    /* The same as a rectangle: its pixels, scored; one past the frame's edge is none. */
+    const uint32_t rect[4] = {1, 2, 3, 2}, past[4] = {W - 2, 0, 3, 1};
+    CHECK(tr_scorer_region_rect(sc, rect) == 6, "a 3x2 rectangle's pixels");
+    CHECK(!isnan(tr_scorer_score(sc, 0, copy).region_psnr), "rectangle's psnr");
+    CHECK(tr_scorer_region_rect(sc, past) == 0 && isnan(tr_scorer_score(sc, 0, copy).region_psnr),
+          "a rectangle past the edge scored");
     /* A cancelled reference fails with its status. */
     uint64_t stop = 16;
     CHECK(tr_reference_render(dev, tr_scene_camera(s), &cfg, 64, &film, copy, copy, &own, cancel_at,

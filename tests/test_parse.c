@@ -63,5 +63,13 @@ int main(void) {
     for (int q = 0; q < 8; ++q) {
         CHECK(tr_parse_fraction(bad[q], 16, &w) == TR_ERR, "'%s' accepted", bad[q]);
     }
+    uint32_t r[4] = {0, 0, 0, 0};
+    CHECK(tr_parse_rect("1,2,30,40", 100, r) == TR_OK && r[0] == 1 && r[1] == 2 && r[2] == 30 &&
+              r[3] == 40,
+          "1,2,30,40");
+    const char *bad_rect[6] = {"1,2,0,4", "1,2,3", "1,2,3,4,", " 1,2,3,4", "1,2,3,101", "1,-2,3,4"};
+    for (int q = 0; q < 6; ++q) {
+        CHECK(tr_parse_rect(bad_rect[q], 100, r) == TR_ERR, "'%s' accepted", bad_rect[q]);
+    }
     return check_finish("test_parse");
 }
