@@ -1,9 +1,9 @@
 /* bench_plot.c - the benchmarks' plots: gnuplot run with no shell, and no path in its
  * script. The script goes to a temporary file of our own naming, which gnuplot is given as
  * its argument; with `set output` and no file name it writes the PNG to its standard
- * output, which is the tr_outfile of the plot. So an output prefix with an apostrophe or
- * `system(...)` in it is never gnuplot code, and the plot is written whole or not at all,
- * like every other file. */
+ * output, which is read back here and written through tr_outfile like every other file.
+ * So an output prefix with an apostrophe or `system(...)` in it is never gnuplot code, and
+ * a full disk is caught by the same checks as for images. */
 #define _POSIX_C_SOURCE 200809L
 #include <errno.h>
 #include <fcntl.h>
@@ -23,40 +23,57 @@ extern char **environ;
 
 int bench_plot_png(const char *script, const char *png, tr_error *err) {
     const char *tmp = getenv("TMPDIR");
-    char path[4096];
-    snprintf(path, sizeof path, "%s/trac0r-plot-XXXXXX", tmp && *tmp ? tmp : "/tmp");
-    const int sfd = mkstemp(path);
-    if (sfd < 0) {
-        return 0; /* no place for the script: no plot */
-    }
-    FILE *sf = fdopen(sfd, "w");
-    const int written = sf && fprintf(sf,
-                                      "set terminal pngcairo size 900,600 noenhanced\n"
-                                      "set output\n%s\n",
-                                      script) > 0;
-    const int closed = sf ? fclose(sf) == 0 : close(sfd) == 0;
-    tr_outfile *f = written && closed ? tr_outfile_create(png, err) : NULL;
-    int status = -1, spawned = 0;
+    char spath[4096];
+    snprintf(spath, sizeof spath, "%s/trac0r-plot-XXXXXX", tmp && *tmp ? tmp : "/tmp");
+    const int sfd = mkstemp(spath);
+    const char head[] = "set terminal pngcairo size 900,600 noenhanced\nset output\n";
+    const int ready = sfd >= 0 && write(sfd, head, strlen(head)) == (ssize_t)strlen(head) &&
+                      write(sfd, script, strlen(script)) == (ssize_t)strlen(script);
+    tr_outfile *f = ready ? tr_outfile_create(png, err) : NULL;
+    int out[2] = {-1, -1}, status = -1, spawned = 0, copy_error = 0;
     posix_spawn_file_actions_t fa;
-    if (f && posix_spawn_file_actions_init(&fa) == 0) {
-        posix_spawn_file_actions_adddup2(&fa, fileno(tr_outfile_stream(f)), 1);
+    pid_t pid;
+    if (f && pipe(out) == 0 && posix_spawn_file_actions_init(&fa) == 0) {
+        posix_spawn_file_actions_adddup2(&fa, out[1], 1);
         posix_spawn_file_actions_addopen(&fa, 2, "/dev/null", O_WRONLY, 0);
-        char *argv[] = {"gnuplot", path, NULL};
-        pid_t pid;
+        posix_spawn_file_actions_addclose(&fa, out[0]);
+        char *argv[] = {"gnuplot", spath, NULL};
         spawned = posix_spawnp(&pid, "gnuplot", &fa, NULL, argv, environ) == 0;
         posix_spawn_file_actions_destroy(&fa);
-        while (spawned && waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+    }
+    if (out[1] >= 0) {
+        close(out[1]);
+    }
+    /* The script comes from a file, so one pipe is read to its end: no deadlock. A failed
+     * write keeps draining, so that gnuplot is not left blocked on a full pipe. */
+    char buf[65536];
+    ssize_t got;
+    while (spawned && ((got = read(out[0], buf, sizeof buf)) > 0 || (got < 0 && errno == EINTR))) {
+        if (got > 0 && fwrite(buf, 1, (size_t)got, tr_outfile_stream(f)) != (size_t)got) {
+            copy_error = copy_error ? copy_error : (errno ? errno : EIO);
         }
     }
-    unlink(path);
-    if (!f) {
-        return written && closed ? -1 : 0;
+    while (spawned && waitpid(pid, &status, 0) < 0 && errno == EINTR) {
     }
-    struct stat st;
-    if (!spawned || !WIFEXITED(status) || WEXITSTATUS(status) != 0 ||
-        fstat(fileno(tr_outfile_stream(f)), &st) != 0 || st.st_size == 0) {
-        tr_outfile_abort(f); /* gnuplot missing or failed: no plot, nothing written */
-        return 0;
+    if (out[0] >= 0) {
+        close(out[0]);
+    }
+    if (sfd >= 0) {
+        close(sfd);
+        unlink(spath);
+    }
+    const int gnuplot_ok =
+        spawned && WIFEXITED(status) && WEXITSTATUS(status) == 0 && ftell(tr_outfile_stream(f)) > 0;
+    if (f && copy_error && gnuplot_ok) { /* gnuplot did its part; writing the file did not */
+        tr_outfile_abort(f);
+        tr_error_set(err, TR_STATUS_IO, "%.200s: write failed: %s", png, strerror(copy_error));
+        return -1;
+    }
+    if (!gnuplot_ok || copy_error) {
+        if (f) {
+            tr_outfile_abort(f);
+        }
+        return ready && !f ? -1 : 0;
     }
     return tr_outfile_commit(f, err) == TR_OK ? 1 : -1;
 }

@@ -53,17 +53,6 @@ static void realtime_help(FILE *fp) {
     fputs(cli_recon_help, fp);
 }
 
-/* --fraction F: the fraction of the pixels traced, 1/N (as "1/N", a decimal such as 0.25,
- * or the signs ½ and ¼), into *n (1..16). */
-static int parse_fraction(cli_args *a, uint32_t *n) {
-    int rc = cli_value(a);
-    if (rc == CLI_OK && tr_parse_fraction(a->value, 16, n) != TR_OK) {
-        rc = cli_error(a, "--fraction: expected 1/N for N in 1..16 (1/2, 0.25, ½, ...), got %s",
-                       a->value);
-    }
-    return rc;
-}
-
 static int parse_methods(cli_args *a, int on[TR_RECON_COUNT]) {
     int m[4 * TR_RECON_COUNT];
     const int n = cli_parse_list(a, tr_recon_parse, m, 4 * TR_RECON_COUNT, "method",
@@ -268,8 +257,11 @@ static int own_option(cli_args *a, void *user) {
         }
     } else if (cli_is(a, "--upscale")) {
         rc = cli_parse_u32(a, 1, 16, &o->upscale);
-    } else if (cli_is(a, "--fraction")) {
-        rc = parse_fraction(a, &o->upscale);
+    } else if (cli_is(a, "--fraction")) { /* 1/N as "1/N", 0.25, ½ or ¼ (trac0r/parse.h) */
+        if ((rc = cli_value(a)) == CLI_OK && tr_parse_fraction(a->value, 16, &o->upscale)) {
+            rc = cli_error(a, "--fraction: expected 1/N for N in 1..16 (1/2, 0.25, ½, ...), got %s",
+                           a->value);
+        }
     } else if (cli_is(a, "--cut")) {
         rc = cli_parse_u32(a, 1, 100000, &o->cut);
     } else if (cli_is(a, "--methods")) {

@@ -207,58 +207,46 @@ int cli_parse_on_off(cli_args *a, int *on) {
 
 /* Parses a whole decimal integer (no sign for unsigned ranges, no trailing text). */
 static int parse_integer(cli_args *a, long long lo, long long hi, long long *out) {
-    if (cli_value(a) != CLI_OK) {
-        return CLI_USAGE;
-    }
-    const char *v = a->value;
+    int rc = cli_value(a);
     int64_t x = 0;
-    if (tr_parse_int64(v, lo, hi, &x) != TR_OK) { /* the shared rules: trac0r/parse.h */
-        return cli_error(a, "%s: expected an integer in %lld..%lld, got '%s'", a->opt, lo, hi, v);
+    if (rc == CLI_OK && tr_parse_int64(a->value, lo, hi, &x) != TR_OK) { /* trac0r/parse.h */
+        rc = cli_error(a, "%s: expected an integer in %lld..%lld, got '%s'", a->opt, lo, hi,
+                       a->value);
     }
-    *out = (long long)x;
-    return CLI_OK;
+    *out = rc == CLI_OK ? (long long)x : *out;
+    return rc;
 }
 
 int cli_parse_u32(cli_args *a, uint32_t lo, uint32_t hi, uint32_t *out) {
-    long long x = 0;
-    if (parse_integer(a, lo, hi, &x) != CLI_OK) {
-        return CLI_USAGE;
-    }
+    long long x = *out;
+    const int rc = parse_integer(a, lo, hi, &x);
     *out = (uint32_t)x;
-    return CLI_OK;
+    return rc;
 }
 
 int cli_parse_int(cli_args *a, int lo, int hi, int *out) {
-    long long x = 0;
-    if (parse_integer(a, lo, hi, &x) != CLI_OK) {
-        return CLI_USAGE;
-    }
+    long long x = *out;
+    const int rc = parse_integer(a, lo, hi, &x);
     *out = (int)x;
-    return CLI_OK;
+    return rc;
 }
 
 int cli_parse_u64(cli_args *a, uint64_t *out) {
-    if (cli_value(a) != CLI_OK) {
-        return CLI_USAGE;
+    int rc = cli_value(a);
+    if (rc == CLI_OK && tr_parse_uint64(a->value, 0, UINT64_MAX, out) != TR_OK) {
+        rc = cli_error(a, "%s: expected an integer in 0..%" PRIu64 ", got '%s'", a->opt, UINT64_MAX,
+                       a->value);
     }
-    const char *v = a->value;
-    if (tr_parse_uint64(v, 0, UINT64_MAX, out) != TR_OK) {
-        return cli_error(a, "%s: expected an integer in 0..%" PRIu64 ", got '%s'", a->opt,
-                         UINT64_MAX, v);
-    }
-    return CLI_OK;
+    return rc;
 }
 
 int cli_parse_float(cli_args *a, float lo, float hi, float *out) {
-    if (cli_value(a) != CLI_OK) {
-        return CLI_USAGE;
+    int rc = cli_value(a);
+    if (rc == CLI_OK && tr_parse_float(a->value, lo, hi, out) != TR_OK) {
+        rc = cli_error(a, "%s: expected a number in %g..%g, got '%s'", a->opt, (double)lo,
+                       (double)hi, a->value);
     }
-    const char *v = a->value;
-    if (tr_parse_float(v, lo, hi, out) != TR_OK) {
-        return cli_error(a, "%s: expected a number in %g..%g, got '%s'", a->opt, (double)lo,
-                         (double)hi, v);
-    }
-    return CLI_OK;
+    return rc;
 }
 
 int cli_parse_list(cli_args *a, int (*lookup)(const char *name), int *out, int max,
