@@ -45,12 +45,12 @@ void tr_grad_reset(tr_grad *g);
  * through cam with cfg (the config the device ran, its passes included) in `scene` as it
  * is now (committed). With a previous frame of the same size and config (its camera may
  * differ: the replay takes it, and each pixel reads the gradient where its surface lay in
- * the previous frame, through the depth pass), its samples are replayed at one pixel per stratum (chosen by `frame`) and g->cap gets each
- * pixel's history cap from the filtered, normalised gradient (g->valid = 1; a pixel whose
- * shading did not change gets no cap, FLT_MAX); otherwise g->valid = 0. Then this frame
- * becomes the previous one. A stratum whose replay hits another primitive than the
- * previous frame did, or one that moved (motion[prim] for prim < motion_count, as the
- * reconstruction takes it), measures nothing: its history is the geometric tests'. The
+ * the previous frame, through the depth pass), its samples are replayed at one pixel per stratum
+ * (chosen by `frame`) and g->cap gets each pixel's history cap from the filtered, normalised
+ * gradient (g->valid = 1; a pixel whose shading did not change gets no cap, FLT_MAX); otherwise
+ * g->valid = 0. Then this frame becomes the previous one. A stratum whose replay hits another
+ * primitive than the previous frame did, or one that moved (motion[prim] for prim < motion_count,
+ * as the reconstruction takes it), measures nothing: its history is the geometric tests'. The
  * result does not depend on `threads`. */
 int tr_grad_frame(tr_grad *g, const tr_scene *scene, const tr_film *film, const tr_camera *cam,
                   const tr_render_config *cfg, uint32_t sample, uint32_t count, uint32_t frame,
