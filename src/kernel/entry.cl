@@ -28,6 +28,22 @@ enum { TR_SCENE_ARRAYS(TR_CL_INFO_ENUM) TR_SCENE_SCALARS(TR_CL_SCALAR_ENUM) TR_C
     s.accel = scene_info[TR_CL_INFO_accel];                                                        \
     s.light_weight_total = as_float(scene_info[TR_CL_INFO_light_weight_total])
 
+/* The film view over the kernel's film arguments, every pass buffer in it. */
+#define TR_CL_FILM_VIEW(f)                                                                         \
+    tr_cl_film_view(film_sum, film_count, film_albedo, film_normal, film_depth, film_prim,         \
+                    film_sq, film_direct, film_emission, (f).camera.screen_width, (f).passes)
+static tr_film_view tr_cl_film_view(__global float *sum, __global uint *count,
+                                    __global float *albedo, __global float *normal,
+                                    __global float *depth, __global uint *prim, __global float *sq,
+                                    __global float *direct, __global float *emission, uint width,
+                                    uint passes) {
+    tr_film_view v = tr_film_view_make(sum, count, albedo, normal, depth, prim, width, passes);
+    v.sq = sq;
+    v.direct = direct;
+    v.emission = emission;
+    return v;
+}
+
 /* One work item per traced pixel of the frame's grid (tr_frame_grid); with a stride above
  * 1 the traced pixel's value fills its stride x stride block (preview mode). Pass buffers
  * the frame does not ask for are one-element placeholders nobody writes.
@@ -49,11 +65,7 @@ __kernel void tr_cl_render(TR_SCENE_ARRAYS(TR_CL_ARRAY_PARAM) __global const uin
     tr_scene_view s;
     TR_CL_SCENE_VIEW(s);
 
-    tr_film_view film = tr_film_view_make(film_sum, film_count, film_albedo, film_normal,
-                                          film_depth, film_prim, f.camera.screen_width, f.passes);
-    film.sq = film_sq;
-    film.direct = film_direct;
-    film.emission = film_emission;
+    tr_film_view film = TR_CL_FILM_VIEW(f);
     const uint rays =
         tr_render_grid_rows(&s, &f, &film, gx0 + gx, gy0 + gy, gx0 + gx + 1u, gy0 + gy + 1u);
     atomic_add(&rays_per_row[gy], rays);
@@ -156,11 +168,7 @@ __kernel void tr_cl_render_bdpt(TR_SCENE_ARRAYS(TR_CL_ARRAY_PARAM) __global cons
     }
     tr_scene_view s;
     TR_CL_SCENE_VIEW(s);
-    tr_film_view film = tr_film_view_make(film_sum, film_count, film_albedo, film_normal,
-                                          film_depth, film_prim, f.camera.screen_width, f.passes);
-    film.sq = film_sq;
-    film.direct = film_direct;
-    film.emission = film_emission;
+    tr_film_view film = TR_CL_FILM_VIEW(f);
     tr_bdpt_splat sp;
     sp.sum = splat;
     sp.x0 = f.rect_x;
