@@ -11,6 +11,7 @@
  *  (c) Without the keys nothing changes: "clearcoat": 0 renders bit for bit as a file
  *      without it. */
 #include "check.h"
+#include "render_film.h"
 #include "scene_util.h"
 
 #include <math.h>
@@ -45,14 +46,8 @@ static double furnace(const char *mat, double *se, tr_film *out) {
     }
     CHECK(tr_scene_commit(&s, TR_ACCEL_TYPE_BVH, &err) == TR_OK, "%s", err.msg);
     tr_film f;
-    CHECK(tr_film_init(&f, W, H, &err) == TR_OK, "%s", err.msg);
-    tr_render_config cfg = tr_render_config_default();
-    cfg.seed = 21;
-    cfg.threads = 2;
-    for (uint32_t k = 0; k < SPP; ++k) {
-        CHECK(tr_render_frame(&s, tr_scene_camera(&s), &cfg, &f, k, NULL, &err) == TR_OK, "%s",
-              err.msg);
-    }
+    const tr_render_config def = tr_render_config_default();
+    render_film(&s, W, H, def.integrator, def.max_depth, 0, 21, 0, SPP, &f);
     double s1 = 0.0, s2 = 0.0;
     for (uint32_t y = 0; y < H; ++y) {
         for (uint32_t x = 0; x < W; ++x) {

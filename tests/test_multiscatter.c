@@ -12,6 +12,7 @@
  *  (c) Without the key, images do not change: a scene that asks for nothing has no table,
  *      and "multiscatter": false renders bit for bit as a file without the key. */
 #include "check.h"
+#include "render_film.h"
 #include "scene_util.h"
 
 #include <math.h>
@@ -44,14 +45,8 @@ static double furnace(const char *mat, double depression, tr_film *film_out) {
     }
     CHECK(tr_scene_commit(&s, TR_ACCEL_TYPE_BVH, &err) == TR_OK, "%s", err.msg);
     tr_film f;
-    CHECK(tr_film_init(&f, W, H, &err) == TR_OK, "%s", err.msg);
-    tr_render_config cfg = tr_render_config_default();
-    cfg.seed = 9;
-    cfg.threads = 2;
-    for (uint32_t k = 0; k < SPP; ++k) {
-        CHECK(tr_render_frame(&s, tr_scene_camera(&s), &cfg, &f, k, NULL, &err) == TR_OK, "%s",
-              err.msg);
-    }
+    const tr_render_config def = tr_render_config_default();
+    render_film(&s, W, H, def.integrator, def.max_depth, 0, 9, 0, SPP, &f);
     double sum = 0.0;
     for (uint32_t y = 0; y < H; ++y) {
         for (uint32_t x = 0; x < W; ++x) {
