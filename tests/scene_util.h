@@ -11,6 +11,16 @@
 #include "trac0r/trac0r.h"
 
 /* Adds material m; returns its index. */
+/* Built-in scene `name` at w x h, committed with the BVH (failures recorded with CHECK). */
+static inline tr_scene *committed_builtin(const char *name, uint32_t w, uint32_t h) {
+    tr_error err;
+    tr_scene *s = tr_scene_create(&err);
+    CHECK(s && tr_scene_builtin(s, name, w, h, &err) == TR_OK &&
+              tr_scene_commit(s, TR_ACCEL_TYPE_BVH, &err) == TR_OK,
+          "%s", err.msg);
+    return s;
+}
+
 static inline uint32_t add_mat(tr_scene *s, tr_material m) {
     tr_error err;
     uint32_t i = 0;

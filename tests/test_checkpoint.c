@@ -14,6 +14,7 @@
 #include <unistd.h>
 
 #include "check.h"
+#include "scene_util.h"
 #include "scene/scene_internal.h"
 #include "session/checkpoint.h"
 #include "trac0r/trac0r.h"
@@ -56,12 +57,7 @@ static int write_read(const tr_ck_id *id, const tr_film *film, uint32_t spp, uin
 }
 
 static tr_scene *cornell(void) {
-    tr_error err;
-    tr_scene *s = tr_scene_create(&err);
-    CHECK(s && tr_scene_builtin(s, "cornell", W, H, &err) == TR_OK &&
-              tr_scene_commit(s, TR_ACCEL_TYPE_BVH, &err) == TR_OK,
-          "%s", err.msg);
-    return s;
+    return committed_builtin("cornell", W, H);
 }
 
 /* The scene hash of the cornell box with one 2x2 texture whose first texel is `t0`, an
@@ -117,10 +113,7 @@ int main(void) {
     test_identity();
     snprintf(path, sizeof path, "/tmp/trac0r-test-checkpoint-%ld.ck", (long)getpid());
     tr_error err;
-    tr_scene *s = tr_scene_create(&err);
-    CHECK(s && tr_scene_builtin(s, "cornell", W, H, &err) == TR_OK &&
-              tr_scene_commit(s, TR_ACCEL_TYPE_BVH, &err) == TR_OK,
-          "%s", err.msg);
+    tr_scene *s = cornell();
     tr_render_config cfg = tr_render_config_default();
     cfg.passes = PASSES;
     tr_ck_id id;

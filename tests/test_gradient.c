@@ -18,6 +18,7 @@
 #include <string.h>
 
 #include "check.h"
+#include "scene_util.h"
 #include "trac0r/trac0r.h"
 
 #define W 48
@@ -26,12 +27,7 @@
 #define N (3u * W * H)
 
 static tr_scene *box(void) {
-    tr_error err;
-    tr_scene *s = tr_scene_create(&err);
-    CHECK(s && tr_scene_builtin(s, "cornell", W, H, &err) == TR_OK &&
-              tr_scene_commit(s, TR_ACCEL_TYPE_BVH, &err) == TR_OK,
-          "%s", err.msg);
-    return s;
+    return committed_builtin("cornell", W, H);
 }
 
 static double mean_of(const float *a) {

@@ -9,18 +9,14 @@
 #include <unistd.h>
 
 #include "check.h"
+#include "scene_util.h"
 #include "trac0r/trac0r.h"
 
 #define W 70u
 #define H 45u
 
 static tr_scene *box(void) {
-    tr_error err;
-    tr_scene *s = tr_scene_create(&err);
-    CHECK(s && tr_scene_builtin(s, "cornell", W, H, &err) == TR_OK &&
-              tr_scene_commit(s, TR_ACCEL_TYPE_BVH, &err) == TR_OK,
-          "%s", err.msg);
-    return s;
+    return committed_builtin("cornell", W, H);
 }
 
 static tr_render_config config(uint32_t passes) {
