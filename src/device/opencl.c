@@ -1156,14 +1156,20 @@ static int trace_timed(tr_cl_context *ctx, cl_kernel kernel, cl_uint base, const
             out = cl_fail(err, "clSetKernelArg(tr_cl_trace_rays)", rc);
         }
     }
-    /* The rays are on the device before the clock starts; the passes are queued back to
-     * back and the clock stops when the last one has finished. */
-    if (out == TR_OK && (rc = clFinish(ctx->queue)) != CL_SUCCESS) {
-        out = cl_fail(err, "clFinish", rc);
-    }
     const size_t group = 64u;
     const size_t global = (count + group - 1u) / group * group;
     const size_t *local = ctx->local[0] ? &group : NULL;
+    /* Every buffer the kernel reads is on the device before the clock starts: a driver may
+     * move a buffer made from host memory at its first use (NVIDIA's does), so one untimed
+     * pass goes first. Then the passes are queued back to back and the clock stops when
+     * the last one has finished. */
+    if (out == TR_OK && (rc = clEnqueueNDRangeKernel(ctx->queue, kernel, 1, NULL, &global, local, 0,
+                                                     NULL, NULL)) != CL_SUCCESS) {
+        out = cl_fail(err, "clEnqueueNDRangeKernel(tr_cl_trace_rays)", rc);
+    }
+    if (out == TR_OK && (rc = clFinish(ctx->queue)) != CL_SUCCESS) {
+        out = cl_fail(err, "clFinish", rc);
+    }
     const double t0 = tr_time_now();
     for (int r = 0; r < reps && out == TR_OK; ++r) {
         rc = clEnqueueNDRangeKernel(ctx->queue, kernel, 1, NULL, &global, local, 0, NULL, NULL);
