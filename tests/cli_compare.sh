@@ -87,16 +87,17 @@ expect_usage_error "--reference: b.pfm is 2x1, not 16x12" bench convergence --si
     --reference b.pfm
 expect_usage_error "--budget: expected a number" bench convergence --budget 0
 expect_usage_error "--width: not an option of this benchmark" bench convergence --width 5
-# bdpt cannot render a scene with an environment light: refused before the reference is
-# rendered (exit 2, nothing written), not as a render failure after it (exit 1).
-cat >env.json <<'EOF'
+# naive cannot render a scene lit by a point light (no next-event estimation): refused
+# before the reference is rendered (exit 2, nothing written), not as a render failure
+# after it (exit 1).
+cat >point.json <<'EOF'
 {"camera": {"position": [0, 0.3, -1.2], "look_at": [0, 0.3, 0], "fov": 60},
  "materials": {"white": {"type": "diffuse", "color": [0.7, 0.7, 0.7]}},
  "shapes": [{"type": "box", "position": [0, 0, 0], "scale": [0.5, 0.5, 0.5], "material": "white"}],
- "environment": {"color": [1, 1, 1]}}
+ "lights": [{"type": "point", "position": [0, 1, -1], "intensity": 2}]}
 EOF
-expect_usage_error "bdpt" bench convergence env.json --sizes 16x12 --methods pt,bdpt \
-    --budget 0.2 --reference-spp 8 --out envconv
-rm -f env.json
+expect_usage_error "naive" bench convergence point.json --sizes 16x12 --methods pt,naive \
+    --budget 0.2 --reference-spp 8 --out pointconv
+rm -f point.json
 
 cli_end cli_compare

@@ -448,6 +448,10 @@ int main(void) {
         CHECK(tr_scene_commit(&lit, TR_ACCEL_TYPE_BVH, &err) == TR_OK, "%s", err.msg);
         compare_backends(dev, &lit, 1, TR_INTEGRATOR_PT, 64,
                          many ? "bvh, pt, ten punctual lights" : "bvh, pt, punctual lights");
+        if (!many) {
+            /* bdpt adds them along the camera subpath (tr_bdpt_infinite). */
+            compare_backends(dev, &lit, 1, TR_INTEGRATOR_BDPT, 64, "bvh, bdpt, punctual lights");
+        }
         tr_render_config naive = tr_render_config_default();
         naive.integrator = TR_INTEGRATOR_NAIVE;
         CHECK_STATUS(tr_device_render(dev, &lit.camera, &naive, 0, 1, NULL, NULL, &err), err,

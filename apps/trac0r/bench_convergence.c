@@ -230,7 +230,7 @@ static int size_scene(cli_args *a, conv_options *o, int si, conv_size *z) {
     o->c.height = o->sh[si];
     z->scene = tr_scene_create(NULL);
     int rc = cli_load_scene(a, &o->c, z->scene);
-    /* A method that cannot render the scene (bdpt with an environment light or a sun)
+    /* A method that cannot render the scene (naive with punctual lights)
      * fails here, not after the reference has been rendered. */
     for (int mi = 0; mi < o->nmethods && rc == CLI_OK; ++mi) {
         tr_error err;

@@ -110,7 +110,7 @@ int tr_render_frame(const tr_scene *scene, const tr_camera *cam, const tr_render
                     tr_film *film, uint32_t sample, tr_render_stats *stats, tr_error *err);
 
 /* Whether `integrator` (TR_INTEGRATOR_*) can render `scene`: TR_OK, or
- * TR_STATUS_UNSUPPORTED with the reason (bdpt: scenes with an environment light or a sun).
+ * TR_STATUS_UNSUPPORTED with the reason (naive: scenes with punctual lights).
  * Rendering such a pair fails the same way on its first frame; this asks before any work
  * (bench convergence, before it renders its reference). */
 int tr_integrator_supports(const tr_scene *scene, int integrator, tr_error *err);

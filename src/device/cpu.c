@@ -197,25 +197,12 @@ static void tr_bdpt_fold_splats(const tr_frame *f, const tr_bdpt_splat *sp, uint
 
 /* The scenes an integrator cannot render, for tr_cpu_render and tr_integrator_supports. */
 static int tr_integrator_check_view(const tr_scene_view *view, int integrator, tr_error *err) {
-    if (view->punctual_count > 0u && integrator != TR_INTEGRATOR_PT) {
-        /* Delta lights are found by next-event estimation alone: naive has none, and bdpt's
-         * and vcm's light subpaths do not start from them (punctual.h). */
+    if (view->punctual_count > 0u && integrator == TR_INTEGRATOR_NAIVE) {
+        /* Delta lights are found by next-event estimation alone, which naive has not (pt,
+         * bdpt and vcm sample them: punctual.h, tr_bdpt_infinite). */
         return tr_error_set(err, TR_STATUS_UNSUPPORTED,
                             "%s does not support point, spot or directional lights: use pt",
                             tr_integrator_name(integrator));
-    }
-    if (tr_integrator_is_bidirectional(integrator)) {
-        if (view->env_count > 0u) {
-            return tr_error_set(err, TR_STATUS_UNSUPPORTED,
-                                "%s does not support environment lights: use pt",
-                                tr_integrator_name(integrator));
-        }
-        if (view->sun_count > 0u) {
-            /* Light subpaths start only on emissive triangles: a sun's light would reach
-             * the image through s = 0 alone, with MIS weights that assume otherwise. */
-            return tr_error_set(err, TR_STATUS_UNSUPPORTED, "%s does not support the sun: use pt",
-                                tr_integrator_name(integrator));
-        }
     }
     return TR_OK;
 }

@@ -24,7 +24,6 @@ struct tr_device {
     tr_film film; /* CPU: the device's film */
     tr_cl_context *cl;
     uint32_t punctual; /* the uploaded scene's punctual lights (only pt renders them) */
-    uint32_t env_sun;  /* its environment lights and suns (bdpt does not render them) */
 };
 
 /* The processor's name from /proc/cpuinfo ("" where it cannot be read). */
@@ -259,7 +258,6 @@ int tr_device_upload(tr_device *dev, const tr_scene *scene, tr_error *err) {
     dev->scene = scene;
     dev->generation = tr_scene_generation(scene);
     dev->punctual = tr_scene_view_of(scene).punctual_count;
-    dev->env_sun = tr_scene_view_of(scene).env_count + tr_scene_view_of(scene).sun_count;
     return TR_OK;
 }
 
@@ -306,14 +304,8 @@ int tr_device_render(tr_device *dev, const tr_camera *cam, const tr_render_confi
         /* vcm, or bdpt on a device without 64-bit atomics and doubles. */
         return TR_ERR;
     }
-    if (dev->kind == TR_DEVICE_OPENCL && dev->env_sun > 0u &&
-        tr_integrator_is_bidirectional((int)f.integrator)) {
-        /* The CPU's check (tr_integrator_supports): light subpaths start on triangles. */
-        return tr_error_set(err, TR_STATUS_UNSUPPORTED,
-                            "%s does not support environment lights or the sun: use pt",
-                            tr_integrator_name((int)f.integrator));
-    }
-    if (dev->kind == TR_DEVICE_OPENCL && dev->punctual > 0u && f.integrator != TR_INTEGRATOR_PT) {
+    if (dev->kind == TR_DEVICE_OPENCL && dev->punctual > 0u &&
+        f.integrator == TR_INTEGRATOR_NAIVE) {
         /* The CPU's check (tr_integrator_supports) on the copy the device holds. */
         return tr_error_set(err, TR_STATUS_UNSUPPORTED,
                             "%s does not support point, spot or directional lights: use pt",

@@ -39,9 +39,18 @@
  * so the sums, and the image, do not depend on the thread count or the tile order. The
  * host folds the buffer into the film after the frame (src/device/cpu.c).
  *
+ * Lights at infinity and delta lights: light subpaths start on emissive triangles only. The
+ * environment, the sun and the punctual lights are added up along the camera subpath
+ * instead (tr_bdpt_infinite), with the two strategies pt has for them: a light sample at
+ * every camera vertex that is not specular, and, for the environment and the sun, the
+ * camera subpath leaving the scene, weighted against each other by the power heuristic
+ * (punctual lights, which no direction finds, by their light sample alone). The lights of
+ * a scene add up, so this estimator of their part and BDPT's of the emitters' part sum to
+ * an unbiased image; what it forgoes is light tracing from the sky (the sun's caustics
+ * come only from the camera side, as in pt).
+ *
  * Limits: a subpath holds at most TR_BDPT_MAX_VERTS vertices, so the max depth is
- * TR_BDPT_MAX_DEPTH (also the default). The environment light is not a light subpath
- * origin here: scenes with one are refused by the host. On an OpenCL device the 64-bit
+ * TR_BDPT_MAX_DEPTH (also the default). On an OpenCL device the 64-bit
  * addition is atom_add (cl_khr_int64_base_atomics) and the fold runs there in double
  * precision (cl_khr_fp64, entry.cl); a device without both does not run bdpt. */
 #ifndef TR_KERNEL_INTEGRATOR_BDPT_H
@@ -111,6 +120,15 @@ typedef struct tr_bdpt_vertex {
     uint32_t kind; /* TR_BDPT_* */
     int delta;     /* its scattering was a delta lobe */
 } tr_bdpt_vertex;
+
+/* Where a camera subpath left the scene: the direction of the ray that found nothing, the
+ * throughput it carries, and the solid-angle density with which the last vertex drew that
+ * direction (delta: a delta lobe or the pinhole drew it, which no light sample can). */
+typedef struct tr_bdpt_escape {
+    tr_vec3 dir, beta;
+    float pdf;
+    int delta, left;
+} tr_bdpt_escape;
 
 /* The splats' 64-bit atomic addition: the host's builtin, or OpenCL's atom_add from
  * cl_khr_int64_base_atomics (entry.cl compiles bdpt only for devices that have it). */
@@ -397,14 +415,24 @@ TR_FN float tr_bdpt_mis_weight(const tr_scene_view *s, const tr_camera *cam,
  * sampler dimensions). `surface` (camera subpaths, may be null) gets the passes' surface. */
 TR_FN void tr_bdpt_walk(const tr_scene_view *s, tr_ray ray, tr_vec3 beta, float pdf_dir,
                         tr_bdpt_vertex *v, int *count, int max_verts, int importance,
-                        const tr_sampler *smp, uint32_t *rays, tr_sample *surface) {
+                        const tr_sampler *smp, uint32_t *rays, tr_sample *surface,
+                        tr_bdpt_escape *esc) {
     int n = *count;
     int holes = 0;
     float rr_ref = v3_max_component(beta); /* roulette is played on beta relative to this */
+    float last_pdf = pdf_dir;
+    int last_delta = 1; /* the first ray: the pinhole's, or the light's emission */
     for (int seg = 1; n < max_verts; ++seg) {
         tr_hit hit;
         *rays += 1;
         if (!tr_intersect_scene(s, &ray, &hit)) {
+            if (esc) {
+                esc->dir = ray.dir;
+                esc->beta = beta;
+                esc->pdf = last_pdf;
+                esc->delta = last_delta;
+                esc->left = 1;
+            }
             break;
         }
         TR_CONST_GLOBAL tr_triangle *tri = &s->triangles[hit.triangle];
@@ -465,6 +493,8 @@ TR_FN void tr_bdpt_walk(const tr_scene_view *s, tr_ray ray, tr_vec3 beta, float 
             weight = v3_scale(weight, tr_bdpt_shading_fix(&m, cur->wo, bs.wi));
         }
         cur->delta = bs.delta;
+        last_pdf = bs.pdf;
+        last_delta = bs.delta;
         beta = v3_mul(beta, weight);
         if (tr_v3_is_zero(beta)) {
             break;
@@ -513,10 +543,12 @@ typedef struct tr_bdpt_select {
 } tr_bdpt_select;
 
 /* The camera subpath of the ray through raster point (x + jx, y + jy), (jx, jy) from the
- * sampler: cv[0] the pinhole, then up to max_depth hits. Returns the vertex count. */
+ * sampler: cv[0] the pinhole, then up to max_depth hits. Returns the vertex count; *esc
+ * says whether and how it left the scene. */
 TR_FN int tr_bdpt_camera_subpath(const tr_scene_view *s, const tr_camera *cam, float x, float y,
                                  int max_depth, const tr_sampler *smp, tr_bdpt_vertex *cv,
-                                 uint32_t *rays, tr_sample *surface) {
+                                 uint32_t *rays, tr_sample *surface, tr_bdpt_escape *esc) {
+    esc->left = 0;
     float jx, jy;
     tr_sampler_2d(smp, TR_DIM_CAMERA, &jx, &jy);
     tr_ray ray = tr_camera_ray(cam, x, y, jx, jy);
@@ -533,7 +565,7 @@ TR_FN int tr_bdpt_camera_subpath(const tr_scene_view *s, const tr_camera *cam, f
     float rx, ry, cam_pdf;
     tr_bdpt_camera_we(cam, ray.dir, &rx, &ry, &cam_pdf);
     int nc = 1;
-    tr_bdpt_walk(s, ray, v3s(1.0f), cam_pdf, cv, &nc, max_depth + 1, 0, smp, rays, surface);
+    tr_bdpt_walk(s, ray, v3s(1.0f), cam_pdf, cv, &nc, max_depth + 1, 0, smp, rays, surface, esc);
     return nc;
 }
 
@@ -587,7 +619,7 @@ TR_FN int tr_bdpt_light_subpath(const tr_scene_view *s, int max_depth, const tr_
             y0->beta = v3_scale(le, 1.0f / y0->pdf_fwd); /* Le / p(y_0) */
             tr_vec3 beta = v3_scale(le, cs / (y0->pdf_fwd * pdf_dir));
             tr_ray lr = tr_ray_make(tr_offset_origin(yp, n0), w, 0.0f, TR_INFINITY);
-            tr_bdpt_walk(s, lr, beta, pdf_dir, lv, &nl, max_depth, 1, smp, rays, 0);
+            tr_bdpt_walk(s, lr, beta, pdf_dir, lv, &nl, max_depth, 1, smp, rays, 0, 0);
             if (nl >= 2) {
                 y0->pdf_nee = tr_bdpt_nee_pdf(s, y0, &lv[1]);
             }
@@ -748,6 +780,55 @@ TR_FN tr_vec3 tr_bdpt_connect(const tr_scene_view *s, const tr_camera *cam,
     return radiance;
 }
 
+/* The environment's, the sun's and the punctual lights' part of camera subpath
+ * cv[0 .. nc-1] that left the scene as *esc says (see the top of this file): at each
+ * vertex that is not specular and can still add a segment, pt's light samples of them
+ * (the sampler dimensions pt reads at that segment, which BDPT's camera side leaves
+ * unread); where the subpath left the scene, the environment and the sun it sees, each
+ * weighted against the light sample by the power heuristic. */
+TR_FN tr_vec3 tr_bdpt_infinite(const tr_scene_view *s, const tr_bdpt_vertex *cv, int nc,
+                               const tr_bdpt_escape *esc, int max_depth, const tr_sampler *smp,
+                               uint32_t *rays) {
+    tr_vec3 radiance = v3s(0.0f);
+    if (s->env_count == 0u && s->sun_count == 0u && s->punctual_count == 0u) {
+        return radiance;
+    }
+    for (int i = 1; i < nc && i < max_depth; ++i) {
+        const tr_bdpt_vertex *v = &cv[i];
+        if (tr_bsdf_is_delta(&v->m) || v->m.type == TR_MATERIAL_EMITTER) {
+            continue;
+        }
+        if (s->env_count > 0u) {
+            radiance =
+                v3_add(radiance, tr_pt_env_light(s, smp, i, &v->m, v->p, v->wo, v->beta, rays));
+        }
+        if (s->sun_count > 0u) {
+            float su1, su2;
+            tr_sampler_2d(smp, tr_sun_dim(i), &su1, &su2);
+            radiance = v3_add(radiance,
+                              v3_mul(v->beta, tr_sun_nee(s, &v->m, v->wo, v->p, su1, su2, rays)));
+        }
+        if (s->punctual_count > 0u) {
+            const float pu = tr_sampler_1d(smp, tr_punctual_dim(i));
+            radiance =
+                v3_add(radiance, v3_mul(v->beta, tr_punctual_nee(s, &v->m, v->wo, v->p, pu, rays)));
+        }
+    }
+    if (esc->left) {
+        if (s->env_count > 0u) {
+            const float w = esc->delta ? 1.0f : tr_mis_power(esc->pdf, tr_env_pdf(s, esc->dir));
+            radiance =
+                v3_add(radiance, v3_scale(v3_mul(esc->beta, tr_env_radiance(s, esc->dir)), w));
+        }
+        if (s->sun_count > 0u) {
+            const float w = esc->delta ? 1.0f : tr_mis_power(esc->pdf, tr_sun_pdf(s, esc->dir));
+            radiance =
+                v3_add(radiance, v3_scale(v3_mul(esc->beta, tr_sun_radiance(s, esc->dir)), w));
+        }
+    }
+    return radiance;
+}
+
 /* One BDPT sample for the camera ray through raster point (x + jx, y + jy): returns what
  * the camera-side strategies (t >= 2) bring to this pixel and splats the light-tracing
  * ones (t = 1). Paths have at most max_depth segments (<= TR_BDPT_MAX_DEPTH). */
@@ -758,9 +839,12 @@ TR_FN tr_vec3 tr_trace_bdpt(const tr_scene_view *s, const tr_camera *cam, float 
         max_depth = TR_BDPT_MAX_DEPTH;
     }
     tr_bdpt_vertex cv[TR_BDPT_MAX_VERTS], lv[TR_BDPT_MAX_VERTS];
-    int nc = tr_bdpt_camera_subpath(s, cam, x, y, max_depth, smp, cv, rays, surface);
+    tr_bdpt_escape esc;
+    int nc = tr_bdpt_camera_subpath(s, cam, x, y, max_depth, smp, cv, rays, surface, &esc);
     int nl = tr_bdpt_light_subpath(s, max_depth, smp, lv, rays);
-    return tr_bdpt_connect(s, cam, cv, nc, lv, nl, max_depth, smp, sp, sel, 0.0f, rays);
+    tr_vec3 c = tr_bdpt_connect(s, cam, cv, nc, lv, nl, max_depth, smp, sp, sel, 0.0f, rays);
+    /* A test that selects one strategy (sel.only_t) wants the emitters' part alone. */
+    return sel.only_t > 0 ? c : v3_add(c, tr_bdpt_infinite(s, cv, nc, &esc, max_depth, smp, rays));
 }
 
 /* tr_render_grid_rows (kernel.h) for bdpt: grid points [gx0, gx1) x [gy0, gy1) of frame f,

@@ -234,8 +234,10 @@ TR_FN tr_vec3 tr_trace_vcm(const tr_scene_view *s, const tr_camera *cam, float x
     }
     tr_bdpt_vertex cv[TR_BDPT_MAX_VERTS];
     const tr_bdpt_select all = {0, 0};
-    int nc = tr_bdpt_camera_subpath(s, cam, x, y, max_depth, smp, cv, rays, surface);
+    tr_bdpt_escape esc;
+    int nc = tr_bdpt_camera_subpath(s, cam, x, y, max_depth, smp, cv, rays, surface, &esc);
     tr_vec3 c = tr_bdpt_connect(s, cam, cv, nc, lv, nl, max_depth, smp, sp, all, g->eta, rays);
+    c = v3_add(c, tr_bdpt_infinite(s, cv, nc, &esc, max_depth, smp, rays));
     return v3_add(c, tr_vcm_merge(cv, nc, max_depth, g));
 }
 

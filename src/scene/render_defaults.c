@@ -152,7 +152,7 @@ int tr_scene_file_apply(tr_scene *s, const char *path, const tr_scene_file *file
         return TR_ERR;
     }
     out->config.max_depth = resolve_max_depth(file, req, out->config.integrator);
-    if (s->punctual_count > 0u && out->config.integrator != TR_INTEGRATOR_PT) {
+    if (s->punctual_count > 0u && out->config.integrator == TR_INTEGRATOR_NAIVE) {
         /* Delta lights are found by next-event estimation alone (punctual.h). */
         return tr_error_set(err, TR_STATUS_UNSUPPORTED,
                             "%s: lights: %s does not support point, spot or directional lights: "
