@@ -9,6 +9,7 @@
 #include "cwbvh.h"
 #include "emission.h"
 #include "kernel.h"
+#include "restir_pass.h"
 
 /* The scene's arrays come as one __global buffer argument each, generated from the one
  * list of them (TR_SCENE_ARRAYS, scene_view.h); their element counts and then the view's
@@ -101,6 +102,55 @@ tr_cl_resolve_emission(TR_SCENE_ARRAYS(TR_CL_ARRAY_PARAM) __global const uint *s
     resolved[3u * i] = e.x;
     resolved[3u * i + 1u] = e.y;
     resolved[3u * i + 2u] = e.z;
+}
+
+/* ReSTIR DI's passes (restir_pass.h) on the device, one work item per pixel of the frame's
+ * camera: tr_cl_restir_temporal fills this frame's surfaces and first reservoirs,
+ * tr_cl_restir_spatial merges neighbours, shades and adds to the film; the host
+ * (src/device/opencl.c, tr_cl_restir_frame) swaps the buffers from frame to frame. The
+ * candidates come from the power CDF unless the frame asks for the light tree. */
+__kernel void tr_cl_restir_temporal(TR_SCENE_ARRAYS(TR_CL_ARRAY_PARAM)
+                                        __global const uint *scene_info,
+                                    __global const tr_restir_frame *frame,
+                                    __global tr_restir_surface *surf, __global tr_reservoir *cur,
+                                    __global const tr_restir_surface *prev_surf,
+                                    __global const tr_reservoir *prev) {
+    const tr_restir_frame fr = *frame;
+    const uint x = (uint)get_global_id(0), y = (uint)get_global_id(1);
+    if (x >= fr.cam.screen_width || y >= fr.cam.screen_height) {
+        return;
+    }
+    tr_scene_view s;
+    TR_CL_SCENE_VIEW(s);
+    if (!fr.tree) {
+        s.light_node_count = 0u;
+    }
+    tr_restir_pass_temporal(&s, &fr, x, y, surf, cur, prev_surf, prev);
+}
+
+__kernel void tr_cl_restir_spatial(TR_SCENE_ARRAYS(TR_CL_ARRAY_PARAM)
+                                       __global const uint *scene_info,
+                                   __global const tr_restir_frame *frame,
+                                   __global const tr_restir_surface *surf,
+                                   __global const tr_reservoir *cur, __global tr_reservoir *out,
+                                   __global float *film_sum, __global float *film_direct) {
+    const tr_restir_frame fr = *frame;
+    const uint x = (uint)get_global_id(0), y = (uint)get_global_id(1);
+    if (x >= fr.cam.screen_width || y >= fr.cam.screen_height) {
+        return;
+    }
+    tr_scene_view s;
+    TR_CL_SCENE_VIEW(s);
+    if (!fr.tree) {
+        s.light_node_count = 0u;
+    }
+    tr_restir_pass_spatial(&s, &fr, x, y, surf, cur, out, film_sum, film_direct);
+}
+
+/* The sizes of the structs the ReSTIR buffers hold, as this device lays them out. */
+__kernel void tr_cl_restir_sizes(__global uint *out) {
+    out[0] = (uint)sizeof(tr_restir_surface);
+    out[1] = (uint)sizeof(tr_reservoir);
 }
 
 /* Ray throughput (`trac0r bench rays --device opencl`, src/measure/rays.c): one work item

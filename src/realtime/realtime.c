@@ -158,11 +158,15 @@ tr_realtime *tr_realtime_create(tr_device *dev, tr_scene *scene, const tr_realti
                      d->restir);
         return NULL;
     }
-    if (d->restir != TR_REALTIME_RESTIR_OFF &&
-        ((tr_device_caps(dev) & TR_DEVICE_CAP_HOST) == 0u || cfg.integrator != TR_INTEGRATOR_PT)) {
+    /* ReSTIR DI runs where the film lies (restir_stage.h); GI on the host only. */
+    if (d->restir != TR_REALTIME_RESTIR_OFF && cfg.integrator != TR_INTEGRATOR_PT) {
+        tr_error_set(err, TR_STATUS_UNSUPPORTED, "ReSTIR DI needs the pt integrator");
+        return NULL;
+    }
+    if (d->restir == TR_REALTIME_RESTIR_DI_GI && (tr_device_caps(dev) & TR_DEVICE_CAP_HOST) == 0u) {
         tr_error_set(err, TR_STATUS_UNSUPPORTED,
-                     "ReSTIR DI needs the pt integrator on a device that renders on the host "
-                     "(the CPU)");
+                     "ReSTIR GI needs a device that renders on the host (the CPU); ReSTIR DI "
+                     "alone runs on an OpenCL device");
         return NULL;
     }
     if (d->spp > TR_REALTIME_MAX_SPP * 64u) {
@@ -455,9 +459,14 @@ int tr_realtime_render(tr_realtime *rt, const tr_realtime_frame_desc *fd, tr_err
         rp.rr_start = cfg.roulette_start ? cfg.roulette_start : TR_ROULETTE_START_PT;
         rp.clamp_indirect = cfg.clamp_indirect;
         rp.regularize = cfg.regularize;
-        if (tr_restir_stage_run(rt->restir_stage, rt->scene, &rt->rcam, &rp, cfg.seed, sample,
-                                (uint32_t)cfg.sampler, n, rt->calls, cfg.threads, &rt->film,
-                                err) != TR_OK) {
+        const int rc = rt->on_device
+                           ? tr_restir_stage_run_device(rt->restir_stage, rt->dev, &rt->rcam, &rp,
+                                                        cfg.seed, sample, (uint32_t)cfg.sampler, n,
+                                                        rt->calls, rt->film.passes, err)
+                           : tr_restir_stage_run(rt->restir_stage, rt->scene, &rt->rcam, &rp,
+                                                 cfg.seed, sample, (uint32_t)cfg.sampler, n,
+                                                 rt->calls, cfg.threads, &rt->film, err);
+        if (rc != TR_OK) {
             rt->have_view = 0;
             return TR_ERR;
         }
