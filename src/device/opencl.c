@@ -138,6 +138,18 @@ int tr_cl_restir_frame(tr_cl_context *ctx, const struct tr_restir_frame *fr, tr_
     (void)fr;
     return tr_error_set(err, TR_STATUS_UNSUPPORTED, "%s", no_opencl);
 }
+int tr_cl_upscale_emission(tr_cl_context *ctx, const tr_camera *cam, int n, uint32_t wl,
+                           uint32_t hl, void *emission, void *prev, void *out, tr_error *err) {
+    (void)ctx;
+    (void)cam;
+    (void)n;
+    (void)wl;
+    (void)hl;
+    (void)emission;
+    (void)prev;
+    (void)out;
+    return tr_error_set(err, TR_STATUS_UNSUPPORTED, "%s", no_opencl);
+}
 uint64_t tr_cl_film_reads(const tr_cl_context *ctx) {
     (void)ctx;
     return 0;
@@ -259,6 +271,7 @@ struct tr_cl_context {
      * the passes' buffers: this frame's and the last frame's surfaces, the reservoirs of
      * the first pass, of the second and of the last frame, all of rs_w x rs_h pixels. */
     cl_kernel restir_t, restir_s, restir_sizes;
+    cl_kernel up_emission; /* tr_cl_upscale_emission */
     cl_mem rs_surf[2], rs_res[3], rs_frame;
     uint32_t rs_w, rs_h;
     uint64_t film_reads; /* tr_cl_read_film calls */
@@ -569,8 +582,9 @@ void tr_cl_close(tr_cl_context *ctx) {
         clReleaseKernel(ctx->trace_cwbvh);
     }
     release_restir(ctx);
-    const cl_kernel restir_kernels[3] = {ctx->restir_t, ctx->restir_s, ctx->restir_sizes};
-    for (int i = 0; i < 3; ++i) {
+    const cl_kernel restir_kernels[4] = {ctx->restir_t, ctx->restir_s, ctx->restir_sizes,
+                                         ctx->up_emission};
+    for (int i = 0; i < 4; ++i) {
         if (restir_kernels[i]) {
             clReleaseKernel(restir_kernels[i]);
         }
@@ -801,10 +815,11 @@ tr_cl_context *tr_cl_open_source(int index, const char *source, tr_error *err) {
         goto fail;
     }
     {
-        static const char *const names[3] = {"tr_cl_restir_temporal", "tr_cl_restir_spatial",
-                                             "tr_cl_restir_sizes"};
-        cl_kernel *const ks[3] = {&ctx->restir_t, &ctx->restir_s, &ctx->restir_sizes};
-        for (int i = 0; i < 3; ++i) {
+        static const char *const names[4] = {"tr_cl_restir_temporal", "tr_cl_restir_spatial",
+                                             "tr_cl_restir_sizes", "tr_cl_upscale_emission"};
+        cl_kernel *const ks[4] = {&ctx->restir_t, &ctx->restir_s, &ctx->restir_sizes,
+                                  &ctx->up_emission};
+        for (int i = 0; i < 4; ++i) {
             *ks[i] = clCreateKernel(ctx->program, names[i], &rc);
             if (!*ks[i] && !source) {
                 cl_fail(err, names[i], rc);
@@ -986,9 +1001,9 @@ int tr_cl_upload_scene(tr_cl_context *ctx, const tr_scene *scene, tr_error *err)
         }
     }
     /* The kernels take the scene's arrays and scene_info first (bdpt's where built). */
-    const cl_kernel kernels[6] = {ctx->kernel,   ctx->resolve,  ctx->trace,
-                                  ctx->restir_t, ctx->restir_s, ctx->bdpt};
-    for (int k = 0; k < 6 && kernels[k]; ++k) {
+    const cl_kernel kernels[7] = {ctx->kernel,   ctx->resolve,     ctx->trace, ctx->restir_t,
+                                  ctx->restir_s, ctx->up_emission, ctx->bdpt};
+    for (int k = 0; k < 7 && kernels[k]; ++k) {
         for (int i = 0; i < na && rc == TR_OK; ++i) {
             cl_int crc = clSetKernelArg(kernels[k], (cl_uint)i, sizeof(cl_mem), &ctx->arrays[i]);
             if (crc != CL_SUCCESS) {
@@ -1633,6 +1648,40 @@ int tr_cl_restir_frame(tr_cl_context *ctx, const tr_restir_frame *fr, tr_error *
     ctx->rs_res[2] = ctx->rs_res[1];
     ctx->rs_res[1] = t;
     return TR_OK;
+}
+
+int tr_cl_upscale_emission(tr_cl_context *ctx, const tr_camera *cam, int n, uint32_t wl,
+                           uint32_t hl, void *emission, void *prev, void *out, tr_error *err) {
+    if (!ctx->up_emission || !ctx->have_scene) {
+        return tr_error_set(err, TR_STATUS_INVALID_OPERATION,
+                            "upscaling emission: no scene or no kernel on the OpenCL device");
+    }
+    tr_frame f;
+    memset(&f, 0, sizeof f);
+    f.camera = *cam;
+    cl_int rc =
+        clEnqueueWriteBuffer(ctx->queue, ctx->frame, CL_TRUE, 0, sizeof f, &f, 0, NULL, NULL);
+    if (rc != CL_SUCCESS) {
+        return cl_fail(err, "clEnqueueWriteBuffer(frame)", rc);
+    }
+    const cl_int iwl = (cl_int)wl, ihl = (cl_int)hl, have = prev != NULL, nn = n;
+    const cl_mem em = (cl_mem)emission, pv = (cl_mem)(prev ? prev : emission), o = (cl_mem)out;
+    const struct {
+        size_t size;
+        const void *ptr;
+    } args[8] = {{sizeof(cl_mem), &ctx->frame}, {sizeof(cl_int), &iwl},  {sizeof(cl_int), &ihl},
+                 {sizeof(cl_mem), &em},         {sizeof(cl_int), &have}, {sizeof(cl_mem), &pv},
+                 {sizeof(cl_int), &nn},         {sizeof(cl_mem), &o}};
+    const cl_uint base = (cl_uint)ctx->array_count + ARG_FRAME;
+    for (cl_uint a = 0; a < 8; ++a) {
+        rc = clSetKernelArg(ctx->up_emission, base + a, args[a].size, args[a].ptr);
+        if (rc != CL_SUCCESS) {
+            return cl_fail(err, "clSetKernelArg(tr_cl_upscale_emission)", rc);
+        }
+    }
+    const size_t global[2] = {cam->screen_width, cam->screen_height};
+    rc = clEnqueueNDRangeKernel(ctx->queue, ctx->up_emission, 2, NULL, global, NULL, 0, NULL, NULL);
+    return rc == CL_SUCCESS ? TR_OK : cl_fail(err, "clEnqueueNDRangeKernel(upscale emission)", rc);
 }
 
 #endif

@@ -133,6 +133,14 @@ int tr_cl_restir_frame(tr_cl_context *ctx, const struct tr_restir_frame *fr, tr_
  * real-time frames keep it on the device until they are shown or saved. */
 uint64_t tr_cl_film_reads(const tr_cl_context *ctx);
 
+/* tr_upscale_emission (include/trac0r/upscale.h) on the device (entry.cl's
+ * tr_cl_upscale_emission): the first hit's emission at the resolution of `cam`, the
+ * output's camera, into `out` (a cl_mem of 3 floats per output pixel) from `emission` (a
+ * cl_mem: the traced frame's mean emission, wl x hl) and `prev` (the previous output's,
+ * or NULL), n x n rays per resolved pixel; enqueued, not waited for. */
+int tr_cl_upscale_emission(tr_cl_context *ctx, const tr_camera *cam, int n, uint32_t wl,
+                           uint32_t hl, void *emission, void *prev, void *out, tr_error *err);
+
 /* Pretends the device has only `bytes` of global memory (0: its real size), for tests
  * of the out-of-memory path on devices that have plenty. */
 void tr_cl_set_memory_limit(tr_cl_context *ctx, uint64_t bytes);

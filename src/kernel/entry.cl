@@ -153,6 +153,43 @@ __kernel void tr_cl_restir_sizes(__global uint *out) {
     out[1] = (uint)sizeof(tr_reservoir);
 }
 
+/* The first hit's emission at an upscaled output's resolution (src/post/upscale.c's
+ * tr_upscale_emission, per output pixel): from the traced frame's emission (wl x hl, the
+ * mean per pixel), an output pixel whose traced pixel lies on an emitter's edge, or where
+ * the previous output (prev, when have_prev) saw emission its traced pixel does not,
+ * traces n x n first-hit rays through the output's camera (the frame's); any other takes
+ * its traced pixel's emission. One work item per output pixel. */
+__kernel void
+tr_cl_upscale_emission(TR_SCENE_ARRAYS(TR_CL_ARRAY_PARAM) __global const uint *scene_info,
+                       __global const tr_frame *frame, int wl, int hl,
+                       __global const float *emission, int have_prev, __global const float *prev,
+                       int n, __global float *out) {
+    const tr_frame f = *frame;
+    const int w = (int)f.camera.screen_width, h = (int)f.camera.screen_height;
+    const int x = (int)get_global_id(0), y = (int)get_global_id(1);
+    if (x >= w || y >= h) {
+        return;
+    }
+    const float sxr = (float)wl / (float)w, syr = (float)hl / (float)h;
+    int lx = (int)(((float)x + 0.5f) * sxr), ly = (int)(((float)y + 0.5f) * syr);
+    lx = lx < wl - 1 ? lx : wl - 1;
+    ly = ly < hl - 1 ? ly : hl - 1;
+    const uint i = (uint)(y * w + x), k = (uint)(ly * wl + lx);
+    const int seen = tr_emission_seen(emission, k);
+    const int missed = have_prev && tr_emission_seen(prev, i) && !seen;
+    tr_vec3 e;
+    if (missed || tr_emission_on_edge(emission, wl, hl, lx, ly)) {
+        tr_scene_view s;
+        TR_CL_SCENE_VIEW(s);
+        e = tr_emission_resolve_pixel(&s, &f.camera, x, y, n);
+    } else {
+        e = v3(emission[3u * k], emission[3u * k + 1u], emission[3u * k + 2u]);
+    }
+    out[3u * i] = e.x;
+    out[3u * i + 1u] = e.y;
+    out[3u * i + 2u] = e.z;
+}
+
 /* Ray throughput (`trac0r bench rays --device opencl`, src/measure/rays.c): one work item
  * per ray of a set, the closest hit (or, for shadow rays, any hit) with the scene's
  * structure; hits[i] is 1 where ray i hit, for the host's cross-check of the counts. */
