@@ -107,9 +107,9 @@ typedef struct tr_realtime_desc {
      * light sample, with pt only (else tr_realtime_create fails with
      * TR_STATUS_UNSUPPORTED), where the film lies (the CPU, or an OpenCL device's own
      * memory). 0 (default, TR_REALTIME_RESTIR_OFF): pt alone. TR_REALTIME_RESTIR_DI_GI: the
-     * indirect light there too, by ReSTIR GI (src/kernel/restir_gi.h), on the CPU only. restir_unbiased: 1 merges reservoirs with
-     * Talbot's MIS weights and no visibility reuse (unbiased); 0 (default): 1/M weights
-     * and visibility reuse (biased, cheaper, less noisy). */
+     * indirect light there too, by ReSTIR GI (src/kernel/restir_gi.h). restir_unbiased: 1
+     * merges reservoirs with Talbot's MIS weights and no visibility reuse (unbiased); 0 (default):
+     * 1/M weights and visibility reuse (biased, cheaper, less noisy). */
     int restir;
     int restir_unbiased;
     /* 1: a moving frame under a budget keeps the output's full resolution: where the

@@ -271,6 +271,8 @@ struct tr_cl_context {
      * the passes' buffers: this frame's and the last frame's surfaces, the reservoirs of
      * the first pass, of the second and of the last frame, all of rs_w x rs_h pixels. */
     cl_kernel restir_t, restir_s, restir_sizes;
+    cl_kernel gi_t, gi_s; /* ReSTIR GI's passes, and their reservoirs as rs_res' */
+    cl_mem rs_gres[3];
     cl_kernel up_emission; /* tr_cl_upscale_emission */
     cl_mem rs_surf[2], rs_res[3], rs_frame;
     uint32_t rs_w, rs_h;
@@ -532,9 +534,10 @@ int tr_cl_list_devices(tr_cl_device_info *out, int max, int *count, tr_error *er
 
 /* ReSTIR DI's buffers (tr_cl_restir_frame). */
 static void release_restir(tr_cl_context *ctx) {
-    cl_mem *const bufs[6] = {&ctx->rs_surf[0], &ctx->rs_surf[1], &ctx->rs_res[0],
-                             &ctx->rs_res[1],  &ctx->rs_res[2],  &ctx->rs_frame};
-    for (int i = 0; i < 6; ++i) {
+    cl_mem *const bufs[9] = {&ctx->rs_surf[0], &ctx->rs_surf[1], &ctx->rs_res[0],
+                             &ctx->rs_res[1],  &ctx->rs_res[2],  &ctx->rs_frame,
+                             &ctx->rs_gres[0], &ctx->rs_gres[1], &ctx->rs_gres[2]};
+    for (int i = 0; i < 9; ++i) {
         if (*bufs[i]) {
             clReleaseMemObject(*bufs[i]);
             *bufs[i] = NULL;
@@ -582,9 +585,9 @@ void tr_cl_close(tr_cl_context *ctx) {
         clReleaseKernel(ctx->trace_cwbvh);
     }
     release_restir(ctx);
-    const cl_kernel restir_kernels[4] = {ctx->restir_t, ctx->restir_s, ctx->restir_sizes,
-                                         ctx->up_emission};
-    for (int i = 0; i < 4; ++i) {
+    const cl_kernel restir_kernels[6] = {ctx->restir_t,    ctx->restir_s, ctx->restir_sizes,
+                                         ctx->up_emission, ctx->gi_t,     ctx->gi_s};
+    for (int i = 0; i < 6; ++i) {
         if (restir_kernels[i]) {
             clReleaseKernel(restir_kernels[i]);
         }
@@ -815,11 +818,12 @@ tr_cl_context *tr_cl_open_source(int index, const char *source, tr_error *err) {
         goto fail;
     }
     {
-        static const char *const names[4] = {"tr_cl_restir_temporal", "tr_cl_restir_spatial",
-                                             "tr_cl_restir_sizes", "tr_cl_upscale_emission"};
-        cl_kernel *const ks[4] = {&ctx->restir_t, &ctx->restir_s, &ctx->restir_sizes,
-                                  &ctx->up_emission};
-        for (int i = 0; i < 4; ++i) {
+        static const char *const names[6] = {"tr_cl_restir_temporal",    "tr_cl_restir_spatial",
+                                             "tr_cl_restir_sizes",       "tr_cl_upscale_emission",
+                                             "tr_cl_restir_gi_temporal", "tr_cl_restir_gi_spatial"};
+        cl_kernel *const ks[6] = {&ctx->restir_t,    &ctx->restir_s, &ctx->restir_sizes,
+                                  &ctx->up_emission, &ctx->gi_t,     &ctx->gi_s};
+        for (int i = 0; i < 6; ++i) {
             *ks[i] = clCreateKernel(ctx->program, names[i], &rc);
             if (!*ks[i] && !source) {
                 cl_fail(err, names[i], rc);
@@ -1001,9 +1005,10 @@ int tr_cl_upload_scene(tr_cl_context *ctx, const tr_scene *scene, tr_error *err)
         }
     }
     /* The kernels take the scene's arrays and scene_info first (bdpt's where built). */
-    const cl_kernel kernels[7] = {ctx->kernel,   ctx->resolve,     ctx->trace, ctx->restir_t,
-                                  ctx->restir_s, ctx->up_emission, ctx->bdpt};
-    for (int k = 0; k < 7 && kernels[k]; ++k) {
+    const cl_kernel kernels[9] = {ctx->kernel,   ctx->resolve,     ctx->trace,
+                                  ctx->restir_t, ctx->restir_s,    ctx->gi_t,
+                                  ctx->gi_s,     ctx->up_emission, ctx->bdpt};
+    for (int k = 0; k < 9 && kernels[k]; ++k) {
         for (int i = 0; i < na && rc == TR_OK; ++i) {
             cl_int crc = clSetKernelArg(kernels[k], (cl_uint)i, sizeof(cl_mem), &ctx->arrays[i]);
             if (crc != CL_SUCCESS) {
@@ -1524,7 +1529,7 @@ static int restir_buffers(tr_cl_context *ctx, uint32_t w, uint32_t h, tr_error *
     }
     release_restir(ctx);
     cl_int rc;
-    cl_uint sizes[2] = {0, 0};
+    cl_uint sizes[3] = {0, 0, 0};
     cl_mem out = clCreateBuffer(ctx->context, CL_MEM_WRITE_ONLY, sizeof sizes, NULL, &rc);
     if (!out) {
         return cl_fail(err, "clCreateBuffer(ReSTIR sizes)", rc);
@@ -1544,7 +1549,8 @@ static int restir_buffers(tr_cl_context *ctx, uint32_t w, uint32_t h, tr_error *
     }
     const size_t n = (size_t)w * h;
     const uint64_t surf = (uint64_t)n * sizes[0], res = (uint64_t)n * sizes[1];
-    const uint64_t need = 2 * surf + 3 * res;
+    const uint64_t gres = (uint64_t)n * sizes[2];
+    const uint64_t need = 2 * surf + 3 * res + 3 * gres;
     if (surf > ctx->info.max_alloc ||
         ctx->scene_bytes + film_bytes(ctx->width, ctx->height, ctx->passes) + need >
             memory_budget(ctx)) {
@@ -1563,7 +1569,10 @@ static int restir_buffers(tr_cl_context *ctx, uint32_t w, uint32_t h, tr_error *
     }
     for (int i = 0; i < 3; ++i) {
         ctx->rs_res[i] = clCreateBuffer(ctx->context, CL_MEM_READ_WRITE, (size_t)res, NULL, &rc);
-        if (!ctx->rs_res[i]) {
+        ctx->rs_gres[i] = ctx->rs_res[i] ? clCreateBuffer(ctx->context, CL_MEM_READ_WRITE,
+                                                          (size_t)gres, NULL, &rc)
+                                         : NULL;
+        if (!ctx->rs_res[i] || !ctx->rs_gres[i]) {
             release_restir(ctx);
             return cl_fail(err, "clCreateBuffer(ReSTIR reservoirs)", rc);
         }
@@ -1593,7 +1602,7 @@ static int set_args_after_scene(tr_cl_context *ctx, cl_kernel k, const cl_mem *c
 }
 
 int tr_cl_restir_frame(tr_cl_context *ctx, const tr_restir_frame *fr, tr_error *err) {
-    if (!ctx->restir_t || !ctx->restir_s || !ctx->restir_sizes) {
+    if (!ctx->restir_t || !ctx->restir_s || !ctx->restir_sizes || !ctx->gi_t || !ctx->gi_s) {
         return tr_error_set(err, TR_STATUS_UNSUPPORTED,
                             "this OpenCL program has no ReSTIR kernels");
     }
@@ -1634,6 +1643,24 @@ int tr_cl_restir_frame(tr_cl_context *ctx, const tr_restir_frame *fr, tr_error *
         rc =
             clEnqueueNDRangeKernel(ctx->queue, ctx->restir_s, 2, NULL, global, NULL, 0, NULL, NULL);
     }
+    /* ReSTIR GI after the direct light, on the same surfaces; its reservoirs as rs_res'. */
+    if (rc == CL_SUCCESS && fr->gi) {
+        const cl_mem *const gt_args[5] = {&ctx->rs_frame, &ctx->rs_surf[0], &ctx->rs_gres[0],
+                                          &ctx->rs_surf[1], &ctx->rs_gres[2]};
+        const cl_mem *const gs_args[5] = {&ctx->rs_frame, &ctx->rs_surf[0], &ctx->rs_gres[0],
+                                          &ctx->rs_gres[1], &ctx->film[FILM_SUM]};
+        if (set_args_after_scene(ctx, ctx->gi_t, gt_args, 5, "clSetKernelArg(ReSTIR GI temporal)",
+                                 err) != TR_OK ||
+            set_args_after_scene(ctx, ctx->gi_s, gs_args, 5, "clSetKernelArg(ReSTIR GI spatial)",
+                                 err) != TR_OK) {
+            return TR_ERR;
+        }
+        rc = clEnqueueNDRangeKernel(ctx->queue, ctx->gi_t, 2, NULL, global, NULL, 0, NULL, NULL);
+        if (rc == CL_SUCCESS) {
+            rc =
+                clEnqueueNDRangeKernel(ctx->queue, ctx->gi_s, 2, NULL, global, NULL, 0, NULL, NULL);
+        }
+    }
     if (rc == CL_SUCCESS) {
         rc = clFinish(ctx->queue);
     }
@@ -1647,6 +1674,9 @@ int tr_cl_restir_frame(tr_cl_context *ctx, const tr_restir_frame *fr, tr_error *
     t = ctx->rs_res[2];
     ctx->rs_res[2] = ctx->rs_res[1];
     ctx->rs_res[1] = t;
+    t = ctx->rs_gres[2];
+    ctx->rs_gres[2] = ctx->rs_gres[1];
+    ctx->rs_gres[1] = t;
     return TR_OK;
 }
 

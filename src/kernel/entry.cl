@@ -151,6 +151,43 @@ __kernel void tr_cl_restir_spatial(TR_SCENE_ARRAYS(TR_CL_ARRAY_PARAM)
 __kernel void tr_cl_restir_sizes(__global uint *out) {
     out[0] = (uint)sizeof(tr_restir_surface);
     out[1] = (uint)sizeof(tr_reservoir);
+    out[2] = (uint)sizeof(tr_gi_reservoir);
+}
+
+/* ReSTIR GI's passes (restir_pass.h) after the direct light's, as the CPU runs them: the
+ * scene view as pt sees it (the light tree kept), the surfaces the direct light's first
+ * pass found. */
+__kernel void tr_cl_restir_gi_temporal(TR_SCENE_ARRAYS(TR_CL_ARRAY_PARAM)
+                                           __global const uint *scene_info,
+                                       __global const tr_restir_frame *frame,
+                                       __global const tr_restir_surface *surf,
+                                       __global tr_gi_reservoir *gcur,
+                                       __global const tr_restir_surface *prev_surf,
+                                       __global const tr_gi_reservoir *gprev) {
+    const tr_restir_frame fr = *frame;
+    const uint x = (uint)get_global_id(0), y = (uint)get_global_id(1);
+    if (x >= fr.cam.screen_width || y >= fr.cam.screen_height) {
+        return;
+    }
+    tr_scene_view s;
+    TR_CL_SCENE_VIEW(s);
+    tr_restir_gi_pass_temporal(&s, &fr, x, y, surf, gcur, prev_surf, gprev);
+}
+
+__kernel void tr_cl_restir_gi_spatial(TR_SCENE_ARRAYS(TR_CL_ARRAY_PARAM)
+                                          __global const uint *scene_info,
+                                      __global const tr_restir_frame *frame,
+                                      __global const tr_restir_surface *surf,
+                                      __global const tr_gi_reservoir *gcur,
+                                      __global tr_gi_reservoir *gout, __global float *film_sum) {
+    const tr_restir_frame fr = *frame;
+    const uint x = (uint)get_global_id(0), y = (uint)get_global_id(1);
+    if (x >= fr.cam.screen_width || y >= fr.cam.screen_height) {
+        return;
+    }
+    tr_scene_view s;
+    TR_CL_SCENE_VIEW(s);
+    tr_restir_gi_pass_spatial(&s, &fr, x, y, surf, gcur, gout, film_sum);
 }
 
 /* The first hit's emission at an upscaled output's resolution (src/post/upscale.c's

@@ -20,6 +20,7 @@
 #include "camera.h"
 #include "compat.h"
 #include "restir.h"
+#include "restir_gi.h"
 #include "rng.h"
 #include "scene_view.h"
 #include "types.h"
@@ -43,8 +44,16 @@ typedef struct tr_restir_frame {
     int32_t direct;              /* 1: also add the light to the film's direct pass */
     int32_t tree; /* 1: candidates from the light tree (else the power CDF: the caller's view
                      then has light_node_count 0, as the device's kernels make it) */
+    /* ReSTIR GI (restir_gi.h), where gi is 1: its passes after the direct light's, with
+     * their own merges' settings (as the direct light's above) and the paths' depth,
+     * roulette start, indirect clamp and frame flags (TR_FRAME_REGULARIZE). */
+    int32_t gi, gi_temporal, gi_unbiased, gi_spatial;
+    float gi_radius, gi_temporal_cap;
+    int32_t max_depth, rr_start;
+    float clamp_indirect;
+    uint32_t flags;
 } tr_restir_frame;
-TR_STATIC_ASSERT(sizeof(tr_restir_frame) == 2 * sizeof(tr_camera) + 15 * 4,
+TR_STATIC_ASSERT(sizeof(tr_restir_frame) == 2 * sizeof(tr_camera) + 25 * 4,
                  "tr_restir_frame is unpadded 32-bit words");
 
 TR_FN uint64_t tr_restir_frame_seed(const tr_restir_frame *fr) {
@@ -204,6 +213,98 @@ TR_FN void tr_restir_pass_spatial(const tr_scene_view *s, const tr_restir_frame 
         direct[3u * i + 1u] += c.y;
         direct[3u * i + 2u] += c.z;
     }
+}
+
+/* ReSTIR GI's random numbers for pixel i of frame `frame`, pass `pass`. */
+TR_FN void tr_restir_gi_rng(tr_rng *rng, uint64_t seed, uint32_t i, uint64_t frame, uint64_t pass) {
+    tr_rng_init(rng, seed ^ (uint64_t)0x67692d72657374UL, (uint64_t)i, frame * 2u + pass);
+}
+
+/* ReSTIR GI's first pass at pixel (x, y), after the direct light's passes (surf: this
+ * frame's surfaces): the pixel's initial path sample and the merge with the previous
+ * frame's reservoir (prev_surf, gprev) at the reprojected pixel where fr->gi_temporal,
+ * into gcur. s: the scene view as pt sees it (its light tree kept). */
+TR_FN void tr_restir_gi_pass_temporal(const tr_scene_view *s, const tr_restir_frame *fr, uint32_t x,
+                                      uint32_t y, TR_CONST_GLOBAL tr_restir_surface *surf,
+                                      TR_GLOBAL tr_gi_reservoir *gcur,
+                                      TR_CONST_GLOBAL tr_restir_surface *prev_surf,
+                                      TR_CONST_GLOBAL tr_gi_reservoir *gprev) {
+    const uint32_t w = fr->cam.screen_width, h = fr->cam.screen_height;
+    const uint32_t i = y * w + x;
+    const tr_restir_surface q = tr_restir_surface_at(s, surf, i);
+    if (!q.valid) {
+        gcur[i] = tr_gi_reservoir_empty();
+        return;
+    }
+    const uint64_t seed = tr_restir_frame_seed(fr), frame = tr_restir_frame_number(fr);
+    tr_rng rng;
+    tr_restir_gi_rng(&rng, seed, i, frame, 0);
+    const float ulobe = tr_rng_float(&rng), u1 = tr_rng_float(&rng);
+    const float u2 = tr_rng_float(&rng);
+    const tr_sampler smp =
+        tr_sampler_make_kind(seed ^ (uint64_t)0x67692d70617468UL, (uint64_t)i, (uint32_t)frame, 1u);
+    uint32_t rays = 0u;
+    tr_gi_reservoir r = tr_gi_initial(s, &q, ulobe, u1, u2, &smp, fr->max_depth, fr->rr_start,
+                                      fr->clamp_indirect, fr->flags, &rays);
+    const float cap = fr->gi_temporal_cap > 0.0f ? fr->gi_temporal_cap : 20.0f;
+    float px, py, dist;
+    if (fr->gi_temporal && tr_camera_project(&fr->prev_cam, q.p, &px, &py, &dist) && px >= 0.0f &&
+        py >= 0.0f && px < (float)w && py < (float)h) {
+        const uint32_t j = (uint32_t)py * w + (uint32_t)px;
+        tr_restir_surface ss[2];
+        ss[0] = q;
+        ss[1] = tr_restir_surface_at(s, prev_surf, j);
+        if (tr_restir_similar(&ss[0], &ss[1])) {
+            tr_gi_reservoir rr[2];
+            const int vis[2] = {0, 0};
+            rr[0] = r;
+            rr[1] = gprev[j];
+            if (rr[1].M > cap * r.M) {
+                rr[1].M = cap * r.M;
+            }
+            r = tr_gi_merge(s, ss, rr, vis, 2, fr->gi_unbiased, cap + r.M, &rng);
+        }
+    }
+    gcur[i] = r;
+}
+
+/* ReSTIR GI's second pass at pixel (x, y): the spatial merge of gcur's reservoirs around it
+ * (each neighbour's sample tested for visibility), into gout, and its indirect light,
+ * times fr->spp, added to the radiance sums. */
+TR_FN void tr_restir_gi_pass_spatial(const tr_scene_view *s, const tr_restir_frame *fr, uint32_t x,
+                                     uint32_t y, TR_CONST_GLOBAL tr_restir_surface *surf,
+                                     TR_CONST_GLOBAL tr_gi_reservoir *gcur,
+                                     TR_GLOBAL tr_gi_reservoir *gout, TR_GLOBAL float *sum) {
+    const uint32_t w = fr->cam.screen_width, h = fr->cam.screen_height;
+    const uint32_t i = y * w + x;
+    tr_restir_surface ss[TR_RESTIR_MAX_MERGE];
+    ss[0] = tr_restir_surface_at(s, surf, i);
+    if (!ss[0].valid) {
+        gout[i] = tr_gi_reservoir_empty();
+        return;
+    }
+    tr_rng rng;
+    tr_restir_gi_rng(&rng, tr_restir_frame_seed(fr), i, tr_restir_frame_number(fr), 1);
+    tr_gi_reservoir rr[TR_RESTIR_MAX_MERGE];
+    int vis[TR_RESTIR_MAX_MERGE];
+    rr[0] = gcur[i];
+    vis[0] = 0;
+    uint32_t nb[TR_RESTIR_MAX_MERGE];
+    const int m = tr_restir_pick_neighbours(surf, x, (int)y, w, h, fr->gi_radius,
+                                            tr_restir_spatial_count(fr->gi_spatial), &rng, nb);
+    int n = 1;
+    for (int t = 0; t < m; ++t, ++n) {
+        ss[n] = tr_restir_surface_at(s, surf, nb[t]);
+        rr[n] = gcur[nb[t]];
+        vis[n] = 1;
+    }
+    const tr_gi_reservoir r =
+        n > 1 ? tr_gi_merge(s, ss, rr, vis, n, fr->gi_unbiased, 1e30f, &rng) : rr[0];
+    gout[i] = r;
+    const tr_vec3 c = v3_scale(tr_gi_shade(&ss[0], &r), (float)fr->spp);
+    sum[3u * i] += c.x;
+    sum[3u * i + 1u] += c.y;
+    sum[3u * i + 2u] += c.z;
 }
 
 #endif

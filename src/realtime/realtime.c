@@ -158,15 +158,9 @@ tr_realtime *tr_realtime_create(tr_device *dev, tr_scene *scene, const tr_realti
                      d->restir);
         return NULL;
     }
-    /* ReSTIR DI runs where the film lies (restir_stage.h); GI on the host only. */
+    /* ReSTIR runs where the film lies (restir_stage.h). */
     if (d->restir != TR_REALTIME_RESTIR_OFF && cfg.integrator != TR_INTEGRATOR_PT) {
         tr_error_set(err, TR_STATUS_UNSUPPORTED, "ReSTIR DI needs the pt integrator");
-        return NULL;
-    }
-    if (d->restir == TR_REALTIME_RESTIR_DI_GI && (tr_device_caps(dev) & TR_DEVICE_CAP_HOST) == 0u) {
-        tr_error_set(err, TR_STATUS_UNSUPPORTED,
-                     "ReSTIR GI needs a device that renders on the host (the CPU); ReSTIR DI "
-                     "alone runs on an OpenCL device");
         return NULL;
     }
     if (d->spp > TR_REALTIME_MAX_SPP * 64u) {

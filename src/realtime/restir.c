@@ -139,11 +139,16 @@ static void restir_frame(const tr_restir_stage *st, const tr_camera *cam, const 
     fr->temporal = p->temporal && st->have_prev;
     fr->direct = (passes & TR_PASS_DIRECT) != 0u;
     fr->tree = p->tree != 0;
-}
-
-/* ReSTIR GI's random numbers for pixel i of frame `frame`, pass `pass`. */
-static void gi_rng(tr_rng *rng, uint64_t seed, size_t i, uint64_t frame, uint64_t pass) {
-    tr_rng_init(rng, seed ^ 0x67692d72657374ULL, (uint64_t)i, frame * 2u + pass);
+    fr->gi = p->gi != 0;
+    fr->gi_temporal = p->gi_temporal && st->have_prev;
+    fr->gi_unbiased = p->gi_unbiased != 0;
+    fr->gi_spatial = p->gi_spatial;
+    fr->gi_radius = p->gi_radius;
+    fr->gi_temporal_cap = p->gi_temporal_cap;
+    fr->max_depth = p->max_depth;
+    fr->rr_start = p->rr_start;
+    fr->clamp_indirect = p->clamp_indirect;
+    fr->flags = p->regularize ? TR_FRAME_REGULARIZE : 0u;
 }
 
 /* ReSTIR GI (src/kernel/restir_gi.h) on the surfaces st->surf of this frame: (1) every
@@ -151,88 +156,21 @@ static void gi_rng(tr_rng *rng, uint64_t seed, size_t i, uint64_t frame, uint64_
  * reprojected pixel, into gcur; (2) the spatial merge of gcur's neighbours (each one's
  * sample tested for visibility), the shading and the film's addition, into gout. As in
  * the direct light's passes, no pixel reads what another writes in the same pass. */
-static void gi_passes(tr_restir_stage *st, const tr_scene_view *s, const tr_restir_params *p,
-                      uint64_t seed, uint32_t spp, uint64_t frame, int threads, int temporal,
-                      const tr_camera *prev_cam, tr_film *film) {
+static void gi_passes(tr_restir_stage *st, const tr_scene_view *s, const tr_restir_frame *fr,
+                      int threads, tr_film *film) {
     const uint32_t w = st->w, h = st->h;
-    const float cap = p->gi_temporal_cap > 0.0f ? p->gi_temporal_cap : 20.0f;
-    const uint32_t flags = p->regularize ? TR_FRAME_REGULARIZE : 0u;
 #pragma omp parallel for num_threads(threads) schedule(dynamic, 4)
     for (int y = 0; y < (int)h; ++y) {
         for (uint32_t x = 0; x < w; ++x) {
-            const size_t i = (size_t)y * w + x;
-            const tr_restir_surface *q = &st->surf[i];
-            if (!q->valid) {
-                st->gcur[i] = tr_gi_reservoir_empty();
-                continue;
-            }
-            tr_rng rng;
-            gi_rng(&rng, seed, i, frame, 0);
-            const float ulobe = tr_rng_float(&rng), u1 = tr_rng_float(&rng);
-            const float u2 = tr_rng_float(&rng);
-            const tr_sampler smp =
-                tr_sampler_make_kind(seed ^ 0x67692d70617468ULL, (uint64_t)i, (uint32_t)frame, 1u);
-            uint32_t rays = 0u;
-            tr_gi_reservoir r = tr_gi_initial(s, q, ulobe, u1, u2, &smp, p->max_depth, p->rr_start,
-                                              p->clamp_indirect, flags, &rays);
-            float px, py, dist;
-            if (temporal && tr_camera_project(prev_cam, q->p, &px, &py, &dist) && px >= 0.0f &&
-                py >= 0.0f && px < (float)w && py < (float)h) {
-                const size_t j = (size_t)(uint32_t)py * w + (uint32_t)px;
-                if (tr_restir_similar(q, &st->prev_surf[j])) {
-                    tr_restir_surface ss[2];
-                    tr_gi_reservoir rr[2];
-                    const int vis[2] = {0, 0};
-                    ss[0] = *q;
-                    ss[1] = st->prev_surf[j];
-                    rr[0] = r;
-                    rr[1] = st->gprev[j];
-                    if (rr[1].M > cap * r.M) {
-                        rr[1].M = cap * r.M;
-                    }
-                    r = tr_gi_merge(s, ss, rr, vis, 2, p->gi_unbiased, cap + r.M, &rng);
-                }
-            }
-            st->gcur[i] = r;
+            tr_restir_gi_pass_temporal(s, fr, x, (uint32_t)y, st->surf, st->gcur, st->prev_surf,
+                                       st->gprev);
         }
     }
-
-    const int k = p->gi_spatial < 0                         ? 0
-                  : p->gi_spatial > TR_RESTIR_MAX_MERGE - 1 ? TR_RESTIR_MAX_MERGE - 1
-                                                            : p->gi_spatial;
 #pragma omp parallel for num_threads(threads) schedule(dynamic, 4)
     for (int y = 0; y < (int)h; ++y) {
         for (uint32_t x = 0; x < w; ++x) {
-            const size_t i = (size_t)y * w + x;
-            const tr_restir_surface *q = &st->surf[i];
-            if (!q->valid) {
-                st->gout[i] = tr_gi_reservoir_empty();
-                continue;
-            }
-            tr_rng rng;
-            gi_rng(&rng, seed, i, frame, 1);
-            tr_restir_surface ss[TR_RESTIR_MAX_MERGE];
-            tr_gi_reservoir rr[TR_RESTIR_MAX_MERGE];
-            int vis[TR_RESTIR_MAX_MERGE];
-            ss[0] = *q;
-            rr[0] = st->gcur[i];
-            vis[0] = 0;
-            uint32_t nb[TR_RESTIR_MAX_MERGE];
-            const int m =
-                tr_restir_pick_neighbours(st->surf, x, y, w, h, p->gi_radius, k, &rng, nb);
-            int n = 1;
-            for (int t = 0; t < m; ++t, ++n) {
-                ss[n] = st->surf[nb[t]];
-                rr[n] = st->gcur[nb[t]];
-                vis[n] = 1;
-            }
-            tr_gi_reservoir r =
-                n > 1 ? tr_gi_merge(s, ss, rr, vis, n, p->gi_unbiased, 1e30f, &rng) : rr[0];
-            st->gout[i] = r;
-            const tr_vec3 c = v3_scale(tr_gi_shade(q, &r), (float)spp);
-            film->sum[3 * i] += c.x;
-            film->sum[3 * i + 1] += c.y;
-            film->sum[3 * i + 2] += c.z;
+            tr_restir_gi_pass_spatial(s, fr, x, (uint32_t)y, st->surf, st->gcur, st->gout,
+                                      film->sum);
         }
     }
 }
@@ -278,8 +216,7 @@ int tr_restir_stage_run(tr_restir_stage *st, const tr_scene *scene, const tr_cam
     }
 
     if (p->gi) {
-        gi_passes(st, &full, p, seed, spp, frame, threads, p->gi_temporal && st->have_prev,
-                  &fr.prev_cam, film);
+        gi_passes(st, &full, &fr, threads, film);
     }
 
     /* The next frame reuses this one's reservoirs and surfaces. */
@@ -302,10 +239,8 @@ int tr_restir_stage_run_device(tr_restir_stage *st, tr_device *dev, const tr_cam
                                uint32_t sampler, uint32_t spp, uint64_t frame, uint32_t passes,
                                tr_error *err) {
     tr_cl_context *cl = tr_device_cl_context(dev);
-    if (!cl || p->gi) {
-        return tr_error_set(err, TR_STATUS_UNSUPPORTED,
-                            cl ? "ReSTIR GI runs on the CPU only"
-                               : "ReSTIR on a device: not an OpenCL device");
+    if (!cl) {
+        return tr_error_set(err, TR_STATUS_UNSUPPORTED, "ReSTIR on a device: not an OpenCL device");
     }
     const uint32_t w = cam->screen_width, h = cam->screen_height;
     if (st->w != w || st->h != h || st->surf) {
