@@ -1,19 +1,23 @@
 /* test_opencl_upscale.c - tr_realtime's upscaled frames on an OpenCL device (PoCL here)
  * against the CPU's: the same classic box, the same moving camera, a quarter of the pixels
- * traced, SVGF (reconstructed on the device) and the raw frame (off), upscaled on the
- * host from the device's output and passes. The two devices trace the same samples at the
- * same positions (the samplers are stateless), so the outputs agree up to the float
- * rounding in which the devices' renders and reconstructions differ: every frame at least
- * 80 dB apart from the other (measured 132-142 dB on PoCL; a 1-spp frame and the next one
- * are about 20 dB apart), and the means within 0.5 %.
+ * traced, SVGF and the raw frame (off), reconstructed and upscaled on the device
+ * (recon.cl's tr_recon_upscale, entry.cl's tr_cl_upscale_emission) and on the host. The two
+ * devices trace the same samples at the same positions (the samplers are stateless), so
+ * the outputs agree up to the float rounding in which the devices' renders,
+ * reconstructions and upscalings differ (the host's upscaling is tr_upscale_pixel's
+ * arithmetic with its loops turned round): every frame at least 80 dB apart from the
+ * other (a 1-spp frame and the next one are about 20 dB apart), and the means within
+ * 0.5 %. The device's film is never read back: only the output is.
  *
  * Needs an OpenCL platform; it fails (not skips) when no device can be opened. */
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "check.h"
 #include "classic_box.h"
+#include "device/opencl.h"
 #include "trac0r/trac0r.h"
 
 #define W 64
@@ -42,6 +46,8 @@ int main(void) {
     const size_t n = 3u * W * H;
     float *out[2] = {malloc(n * sizeof(float)), malloc(n * sizeof(float))};
     const int methods[2] = {TR_RECON_SVGF, TR_RECON_OFF};
+    tr_cl_context *cl = dev[1] ? tr_device_cl_context(dev[1]) : NULL;
+    const uint64_t reads0 = cl ? tr_cl_film_reads(cl) : 0;
     for (int f = 0; rt[0] && rt[1] && f < 6; ++f) {
         tr_camera cam = *tr_scene_camera(s);
         cam.pos.x += 4.0f * (float)f;
@@ -63,11 +69,15 @@ int main(void) {
             }
             const double psnr = tr_image_compare(out[1], out[0], (size_t)W * H).psnr;
             const double m0 = mean_of(out[0], n), m1 = mean_of(out[1], n);
+            printf("frame %d, %s: %.2f dB apart, means %.6f and %.6f\n", f,
+                   tr_recon_name(methods[m]), psnr, m0, m1);
             CHECK(psnr >= 80.0 && fabs(m1 / m0 - 1.0) < 0.005,
                   "frame %d, %s: the devices differ by %.2f dB, means %.5f and %.5f", f,
                   tr_recon_name(methods[m]), psnr, m0, m1);
         }
     }
+    CHECK(cl && tr_cl_film_reads(cl) == reads0, "upscaled frames read the device's film %llu times",
+          cl ? (unsigned long long)(tr_cl_film_reads(cl) - reads0) : 0ull);
     for (int d = 0; d < 2; ++d) {
         tr_realtime_destroy(rt[d]);
         tr_device_destroy(dev[d]);

@@ -104,12 +104,12 @@ typedef struct tr_realtime_desc {
     int psr;
     /* TR_REALTIME_RESTIR_DI: the direct light at the camera rays' first surfaces comes from
      * ReSTIR DI (spatiotemporal reservoir resampling, src/kernel/restir.h) instead of pt's
-     * light sample, on a device whose frames run on the host (the CPU; elsewhere
-     * tr_realtime_create fails with TR_STATUS_UNSUPPORTED), with pt only. 0 (default,
-     * TR_REALTIME_RESTIR_OFF): pt alone. TR_REALTIME_RESTIR_DI_GI: the indirect light there
-     * too, by ReSTIR GI (src/kernel/restir_gi.h). restir_unbiased: 1 merges reservoirs with
-     * Talbot's MIS weights and no visibility reuse (unbiased); 0 (default): 1/M weights
-     * and visibility reuse (biased, cheaper, less noisy). */
+     * light sample, with pt only (else tr_realtime_create fails with
+     * TR_STATUS_UNSUPPORTED), where the film lies (the CPU, or an OpenCL device's own
+     * memory). 0 (default, TR_REALTIME_RESTIR_OFF): pt alone. TR_REALTIME_RESTIR_DI_GI: the
+     * indirect light there too, by ReSTIR GI (src/kernel/restir_gi.h). restir_unbiased: 1
+     * merges reservoirs with Talbot's MIS weights and no visibility reuse (unbiased); 0 (default):
+     * 1/M weights and visibility reuse (biased, cheaper, less noisy). */
     int restir;
     int restir_unbiased;
     /* 1: a moving frame under a budget keeps the output's full resolution: where the

@@ -12,6 +12,7 @@
 #include "device/frame.h"
 #include "kernel/integrator_bdpt.h"
 #include "kernel/kernel.h"
+#include "kernel/restir_pass.h"
 #include "accel/accel_internal.h"
 #include "accel/cwbvh.h"
 #include "scene/scene_internal.h"
@@ -132,6 +133,27 @@ void tr_cl_set_memory_limit(tr_cl_context *ctx, uint64_t bytes) {
     (void)ctx;
     (void)bytes;
 }
+int tr_cl_restir_frame(tr_cl_context *ctx, const struct tr_restir_frame *fr, tr_error *err) {
+    (void)ctx;
+    (void)fr;
+    return tr_error_set(err, TR_STATUS_UNSUPPORTED, "%s", no_opencl);
+}
+int tr_cl_upscale_emission(tr_cl_context *ctx, const tr_camera *cam, int n, uint32_t wl,
+                           uint32_t hl, void *emission, void *prev, void *out, tr_error *err) {
+    (void)ctx;
+    (void)cam;
+    (void)n;
+    (void)wl;
+    (void)hl;
+    (void)emission;
+    (void)prev;
+    (void)out;
+    return tr_error_set(err, TR_STATUS_UNSUPPORTED, "%s", no_opencl);
+}
+uint64_t tr_cl_film_reads(const tr_cl_context *ctx) {
+    (void)ctx;
+    return 0;
+}
 int tr_cl_get_handles(const tr_cl_context *ctx, tr_cl_handles *out, tr_error *err) {
     (void)ctx;
     memset(out, 0, sizeof *out);
@@ -245,6 +267,16 @@ struct tr_cl_context {
     cl_kernel bdpt, fold;
     cl_kernel trace;       /* tr_cl_trace_rays */
     cl_kernel trace_cwbvh; /* tr_cl_trace_cwbvh */
+    /* ReSTIR DI's passes (tr_cl_restir_frame) and the kernel that reports its structs' sizes;
+     * the passes' buffers: this frame's and the last frame's surfaces, the reservoirs of
+     * the first pass, of the second and of the last frame, all of rs_w x rs_h pixels. */
+    cl_kernel restir_t, restir_s, restir_sizes;
+    cl_kernel gi_t, gi_s; /* ReSTIR GI's passes, and their reservoirs as rs_res' */
+    cl_mem rs_gres[3];
+    cl_kernel up_emission; /* tr_cl_upscale_emission */
+    cl_mem rs_surf[2], rs_res[3], rs_frame;
+    uint32_t rs_w, rs_h;
+    uint64_t film_reads; /* tr_cl_read_film calls */
     cl_mem splat;
     size_t splat_bytes;
     char *build_log;
@@ -500,6 +532,20 @@ int tr_cl_list_devices(tr_cl_device_info *out, int max, int *count, tr_error *er
     return walk_devices(out, max, count, -1, NULL, NULL, NULL, err);
 }
 
+/* ReSTIR DI's buffers (tr_cl_restir_frame). */
+static void release_restir(tr_cl_context *ctx) {
+    cl_mem *const bufs[9] = {&ctx->rs_surf[0], &ctx->rs_surf[1], &ctx->rs_res[0],
+                             &ctx->rs_res[1],  &ctx->rs_res[2],  &ctx->rs_frame,
+                             &ctx->rs_gres[0], &ctx->rs_gres[1], &ctx->rs_gres[2]};
+    for (int i = 0; i < 9; ++i) {
+        if (*bufs[i]) {
+            clReleaseMemObject(*bufs[i]);
+            *bufs[i] = NULL;
+        }
+    }
+    ctx->rs_w = ctx->rs_h = 0;
+}
+
 void tr_cl_close(tr_cl_context *ctx) {
     if (!ctx) {
         return;
@@ -537,6 +583,14 @@ void tr_cl_close(tr_cl_context *ctx) {
     }
     if (ctx->trace_cwbvh) {
         clReleaseKernel(ctx->trace_cwbvh);
+    }
+    release_restir(ctx);
+    const cl_kernel restir_kernels[6] = {ctx->restir_t,    ctx->restir_s, ctx->restir_sizes,
+                                         ctx->up_emission, ctx->gi_t,     ctx->gi_s};
+    for (int i = 0; i < 6; ++i) {
+        if (restir_kernels[i]) {
+            clReleaseKernel(restir_kernels[i]);
+        }
     }
     if (ctx->splat) {
         clReleaseMemObject(ctx->splat);
@@ -763,6 +817,20 @@ tr_cl_context *tr_cl_open_source(int index, const char *source, tr_error *err) {
         cl_fail(err, "clCreateKernel(tr_cl_trace_cwbvh)", rc);
         goto fail;
     }
+    {
+        static const char *const names[6] = {"tr_cl_restir_temporal",    "tr_cl_restir_spatial",
+                                             "tr_cl_restir_sizes",       "tr_cl_upscale_emission",
+                                             "tr_cl_restir_gi_temporal", "tr_cl_restir_gi_spatial"};
+        cl_kernel *const ks[6] = {&ctx->restir_t,    &ctx->restir_s, &ctx->restir_sizes,
+                                  &ctx->up_emission, &ctx->gi_t,     &ctx->gi_s};
+        for (int i = 0; i < 6; ++i) {
+            *ks[i] = clCreateKernel(ctx->program, names[i], &rc);
+            if (!*ks[i] && !source) {
+                cl_fail(err, names[i], rc);
+                goto fail;
+            }
+        }
+    }
     /* Absent from a program built without cl_khr_int64_base_atomics or cl_khr_fp64. */
     ctx->bdpt = clCreateKernel(ctx->program, "tr_cl_render_bdpt", &rc);
     ctx->fold = ctx->bdpt ? clCreateKernel(ctx->program, "tr_cl_fold_splats", &rc) : NULL;
@@ -937,8 +1005,10 @@ int tr_cl_upload_scene(tr_cl_context *ctx, const tr_scene *scene, tr_error *err)
         }
     }
     /* The kernels take the scene's arrays and scene_info first (bdpt's where built). */
-    const cl_kernel kernels[4] = {ctx->kernel, ctx->resolve, ctx->trace, ctx->bdpt};
-    for (int k = 0; k < 4 && kernels[k]; ++k) {
+    const cl_kernel kernels[9] = {ctx->kernel,   ctx->resolve,     ctx->trace,
+                                  ctx->restir_t, ctx->restir_s,    ctx->gi_t,
+                                  ctx->gi_s,     ctx->up_emission, ctx->bdpt};
+    for (int k = 0; k < 9 && kernels[k]; ++k) {
         for (int i = 0; i < na && rc == TR_OK; ++i) {
             cl_int crc = clSetKernelArg(kernels[k], (cl_uint)i, sizeof(cl_mem), &ctx->arrays[i]);
             if (crc != CL_SUCCESS) {
@@ -1360,6 +1430,7 @@ int tr_cl_read_film(tr_cl_context *ctx, tr_film *film, tr_error *err) {
                             "the OpenCL film does not keep passes 0x%x",
                             film->passes & ~ctx->passes);
     }
+    ctx->film_reads += 1;
     for (int i = 0; i < FILM_BUFFERS; ++i) {
         void *dst = tr_film_array_data(film, i);
         if (!dst) {
@@ -1450,6 +1521,203 @@ int tr_cl_get_handles(const tr_cl_context *ctx, tr_cl_handles *out, tr_error *er
     out->height = ctx->height;
     out->passes = ctx->passes;
     return TR_OK;
+}
+
+uint64_t tr_cl_film_reads(const tr_cl_context *ctx) {
+    return ctx->film_reads;
+}
+
+/* ReSTIR DI's buffers for a w x h frame, their element sizes as the device compiled them
+ * (tr_cl_restir_sizes: a surface holds a pointer, whose size is the device's). */
+static int restir_buffers(tr_cl_context *ctx, uint32_t w, uint32_t h, tr_error *err) {
+    if (ctx->rs_w == w && ctx->rs_h == h && ctx->rs_frame) {
+        return TR_OK;
+    }
+    release_restir(ctx);
+    cl_int rc;
+    cl_uint sizes[3] = {0, 0, 0};
+    cl_mem out = clCreateBuffer(ctx->context, CL_MEM_WRITE_ONLY, sizeof sizes, NULL, &rc);
+    if (!out) {
+        return cl_fail(err, "clCreateBuffer(ReSTIR sizes)", rc);
+    }
+    const size_t one = 1;
+    rc = clSetKernelArg(ctx->restir_sizes, 0, sizeof(cl_mem), &out);
+    if (rc == CL_SUCCESS) {
+        rc = clEnqueueNDRangeKernel(ctx->queue, ctx->restir_sizes, 1, NULL, &one, NULL, 0, NULL,
+                                    NULL);
+    }
+    if (rc == CL_SUCCESS) {
+        rc = clEnqueueReadBuffer(ctx->queue, out, CL_TRUE, 0, sizeof sizes, sizes, 0, NULL, NULL);
+    }
+    clReleaseMemObject(out);
+    if (rc != CL_SUCCESS) {
+        return cl_fail(err, "tr_cl_restir_sizes", rc);
+    }
+    const size_t n = (size_t)w * h;
+    const uint64_t surf = (uint64_t)n * sizes[0], res = (uint64_t)n * sizes[1];
+    const uint64_t gres = (uint64_t)n * sizes[2];
+    const uint64_t need = 2 * surf + 3 * res + 3 * gres;
+    if (surf > ctx->info.max_alloc ||
+        ctx->scene_bytes + film_bytes(ctx->width, ctx->height, ctx->passes) + need >
+            memory_budget(ctx)) {
+        return tr_error_set(err, TR_STATUS_LIMIT,
+                            "ReSTIR's reservoirs for %ux%u pixels do not fit on OpenCL device %d "
+                            "(%s) next to the scene and the film (%.1f MiB more of %.1f MiB)",
+                            w, h, ctx->info.index, ctx->info.name, mib(need),
+                            mib(memory_budget(ctx)));
+    }
+    for (int i = 0; i < 2; ++i) {
+        ctx->rs_surf[i] = clCreateBuffer(ctx->context, CL_MEM_READ_WRITE, (size_t)surf, NULL, &rc);
+        if (!ctx->rs_surf[i]) {
+            release_restir(ctx);
+            return cl_fail(err, "clCreateBuffer(ReSTIR surfaces)", rc);
+        }
+    }
+    for (int i = 0; i < 3; ++i) {
+        ctx->rs_res[i] = clCreateBuffer(ctx->context, CL_MEM_READ_WRITE, (size_t)res, NULL, &rc);
+        ctx->rs_gres[i] = ctx->rs_res[i] ? clCreateBuffer(ctx->context, CL_MEM_READ_WRITE,
+                                                          (size_t)gres, NULL, &rc)
+                                         : NULL;
+        if (!ctx->rs_res[i] || !ctx->rs_gres[i]) {
+            release_restir(ctx);
+            return cl_fail(err, "clCreateBuffer(ReSTIR reservoirs)", rc);
+        }
+    }
+    ctx->rs_frame =
+        clCreateBuffer(ctx->context, CL_MEM_READ_ONLY, sizeof(tr_restir_frame), NULL, &rc);
+    if (!ctx->rs_frame) {
+        release_restir(ctx);
+        return cl_fail(err, "clCreateBuffer(ReSTIR frame)", rc);
+    }
+    ctx->rs_w = w;
+    ctx->rs_h = h;
+    return TR_OK;
+}
+
+/* Sets kernel k's arguments after the scene's (its own: `count` buffers). */
+static int set_args_after_scene(tr_cl_context *ctx, cl_kernel k, const cl_mem *const *bufs,
+                                int count, const char *what, tr_error *err) {
+    const cl_uint base = (cl_uint)ctx->array_count + ARG_FRAME;
+    for (int a = 0; a < count; ++a) {
+        const cl_int rc = clSetKernelArg(k, base + (cl_uint)a, sizeof(cl_mem), bufs[a]);
+        if (rc != CL_SUCCESS) {
+            return cl_fail(err, what, rc);
+        }
+    }
+    return TR_OK;
+}
+
+int tr_cl_restir_frame(tr_cl_context *ctx, const tr_restir_frame *fr, tr_error *err) {
+    if (!ctx->restir_t || !ctx->restir_s || !ctx->restir_sizes || !ctx->gi_t || !ctx->gi_s) {
+        return tr_error_set(err, TR_STATUS_UNSUPPORTED,
+                            "this OpenCL program has no ReSTIR kernels");
+    }
+    const uint32_t w = fr->cam.screen_width, h = fr->cam.screen_height;
+    if (!ctx->have_scene || !ctx->film[FILM_SUM] || w != ctx->width || h != ctx->height) {
+        return tr_error_set(err, TR_STATUS_INVALID_OPERATION,
+                            "ReSTIR on the OpenCL device: a %ux%u frame for a %ux%u film%s", w, h,
+                            ctx->width, ctx->height, ctx->have_scene ? "" : " and no scene");
+    }
+    if (fr->direct && (ctx->passes & TR_PASS_DIRECT) == 0u) {
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "ReSTIR on the OpenCL device: the film keeps no direct pass");
+    }
+    if (restir_buffers(ctx, w, h, err) != TR_OK) {
+        return TR_ERR;
+    }
+    cl_int rc =
+        clEnqueueWriteBuffer(ctx->queue, ctx->rs_frame, CL_TRUE, 0, sizeof *fr, fr, 0, NULL, NULL);
+    if (rc != CL_SUCCESS) {
+        return cl_fail(err, "clEnqueueWriteBuffer(ReSTIR frame)", rc);
+    }
+    /* rs_surf[0] this frame's surfaces, [1] the last frame's; rs_res[0] the first pass's
+     * reservoirs, [1] the second's, [2] the last frame's second pass's. */
+    const cl_mem *const t_args[5] = {&ctx->rs_frame, &ctx->rs_surf[0], &ctx->rs_res[0],
+                                     &ctx->rs_surf[1], &ctx->rs_res[2]};
+    const cl_mem *const s_args[6] = {&ctx->rs_frame,       &ctx->rs_surf[0],
+                                     &ctx->rs_res[0],      &ctx->rs_res[1],
+                                     &ctx->film[FILM_SUM], &ctx->film[FILM_DIRECT]};
+    if (set_args_after_scene(ctx, ctx->restir_t, t_args, 5, "clSetKernelArg(ReSTIR temporal)",
+                             err) != TR_OK ||
+        set_args_after_scene(ctx, ctx->restir_s, s_args, 6, "clSetKernelArg(ReSTIR spatial)",
+                             err) != TR_OK) {
+        return TR_ERR;
+    }
+    const size_t global[2] = {w, h};
+    rc = clEnqueueNDRangeKernel(ctx->queue, ctx->restir_t, 2, NULL, global, NULL, 0, NULL, NULL);
+    if (rc == CL_SUCCESS) {
+        rc =
+            clEnqueueNDRangeKernel(ctx->queue, ctx->restir_s, 2, NULL, global, NULL, 0, NULL, NULL);
+    }
+    /* ReSTIR GI after the direct light, on the same surfaces; its reservoirs as rs_res'. */
+    if (rc == CL_SUCCESS && fr->gi) {
+        const cl_mem *const gt_args[5] = {&ctx->rs_frame, &ctx->rs_surf[0], &ctx->rs_gres[0],
+                                          &ctx->rs_surf[1], &ctx->rs_gres[2]};
+        const cl_mem *const gs_args[5] = {&ctx->rs_frame, &ctx->rs_surf[0], &ctx->rs_gres[0],
+                                          &ctx->rs_gres[1], &ctx->film[FILM_SUM]};
+        if (set_args_after_scene(ctx, ctx->gi_t, gt_args, 5, "clSetKernelArg(ReSTIR GI temporal)",
+                                 err) != TR_OK ||
+            set_args_after_scene(ctx, ctx->gi_s, gs_args, 5, "clSetKernelArg(ReSTIR GI spatial)",
+                                 err) != TR_OK) {
+            return TR_ERR;
+        }
+        rc = clEnqueueNDRangeKernel(ctx->queue, ctx->gi_t, 2, NULL, global, NULL, 0, NULL, NULL);
+        if (rc == CL_SUCCESS) {
+            rc =
+                clEnqueueNDRangeKernel(ctx->queue, ctx->gi_s, 2, NULL, global, NULL, 0, NULL, NULL);
+        }
+    }
+    if (rc == CL_SUCCESS) {
+        rc = clFinish(ctx->queue);
+    }
+    if (rc != CL_SUCCESS) {
+        return cl_fail(err, "ReSTIR's passes", rc);
+    }
+    /* The next frame reuses this one's surfaces and final reservoirs. */
+    cl_mem t = ctx->rs_surf[0];
+    ctx->rs_surf[0] = ctx->rs_surf[1];
+    ctx->rs_surf[1] = t;
+    t = ctx->rs_res[2];
+    ctx->rs_res[2] = ctx->rs_res[1];
+    ctx->rs_res[1] = t;
+    t = ctx->rs_gres[2];
+    ctx->rs_gres[2] = ctx->rs_gres[1];
+    ctx->rs_gres[1] = t;
+    return TR_OK;
+}
+
+int tr_cl_upscale_emission(tr_cl_context *ctx, const tr_camera *cam, int n, uint32_t wl,
+                           uint32_t hl, void *emission, void *prev, void *out, tr_error *err) {
+    if (!ctx->up_emission || !ctx->have_scene) {
+        return tr_error_set(err, TR_STATUS_INVALID_OPERATION,
+                            "upscaling emission: no scene or no kernel on the OpenCL device");
+    }
+    tr_frame f;
+    memset(&f, 0, sizeof f);
+    f.camera = *cam;
+    cl_int rc =
+        clEnqueueWriteBuffer(ctx->queue, ctx->frame, CL_TRUE, 0, sizeof f, &f, 0, NULL, NULL);
+    if (rc != CL_SUCCESS) {
+        return cl_fail(err, "clEnqueueWriteBuffer(frame)", rc);
+    }
+    const cl_int iwl = (cl_int)wl, ihl = (cl_int)hl, have = prev != NULL, nn = n;
+    const cl_mem em = (cl_mem)emission, pv = (cl_mem)(prev ? prev : emission), o = (cl_mem)out;
+    const struct {
+        size_t size;
+        const void *ptr;
+    } args[8] = {{sizeof(cl_mem), &ctx->frame}, {sizeof(cl_int), &iwl},  {sizeof(cl_int), &ihl},
+                 {sizeof(cl_mem), &em},         {sizeof(cl_int), &have}, {sizeof(cl_mem), &pv},
+                 {sizeof(cl_int), &nn},         {sizeof(cl_mem), &o}};
+    const cl_uint base = (cl_uint)ctx->array_count + ARG_FRAME;
+    for (cl_uint a = 0; a < 8; ++a) {
+        rc = clSetKernelArg(ctx->up_emission, base + a, args[a].size, args[a].ptr);
+        if (rc != CL_SUCCESS) {
+            return cl_fail(err, "clSetKernelArg(tr_cl_upscale_emission)", rc);
+        }
+    }
+    const size_t global[2] = {cam->screen_width, cam->screen_height};
+    rc = clEnqueueNDRangeKernel(ctx->queue, ctx->up_emission, 2, NULL, global, NULL, 0, NULL, NULL);
+    return rc == CL_SUCCESS ? TR_OK : cl_fail(err, "clEnqueueNDRangeKernel(upscale emission)", rc);
 }
 
 #endif

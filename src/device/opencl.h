@@ -122,6 +122,25 @@ int tr_cl_read_film(tr_cl_context *ctx, tr_film *film, tr_error *err);
 /* Makes the device's film a copy of `film` (reallocated for its size and passes). */
 int tr_cl_write_film(tr_cl_context *ctx, const tr_film *film, tr_error *err);
 
+/* ReSTIR DI's two passes (src/kernel/restir_pass.h) on the device film, which must have
+ * fr->cam's size (and the direct pass where fr->direct): the light at each pixel's first
+ * surface added to the film's sums, the reservoirs and surfaces kept on the device for the
+ * next call's temporal reuse (fr->temporal: whether to use them; buffers made anew for a
+ * new size hold none). Waits for the device; reads nothing back. */
+struct tr_restir_frame;
+int tr_cl_restir_frame(tr_cl_context *ctx, const struct tr_restir_frame *fr, tr_error *err);
+/* How many times tr_cl_read_film copied the film to the host since the context opened:
+ * real-time frames keep it on the device until they are shown or saved. */
+uint64_t tr_cl_film_reads(const tr_cl_context *ctx);
+
+/* tr_upscale_emission (include/trac0r/upscale.h) on the device (entry.cl's
+ * tr_cl_upscale_emission): the first hit's emission at the resolution of `cam`, the
+ * output's camera, into `out` (a cl_mem of 3 floats per output pixel) from `emission` (a
+ * cl_mem: the traced frame's mean emission, wl x hl) and `prev` (the previous output's,
+ * or NULL), n x n rays per resolved pixel; enqueued, not waited for. */
+int tr_cl_upscale_emission(tr_cl_context *ctx, const tr_camera *cam, int n, uint32_t wl,
+                           uint32_t hl, void *emission, void *prev, void *out, tr_error *err);
+
 /* Pretends the device has only `bytes` of global memory (0: its real size), for tests
  * of the out-of-memory path on devices that have plenty. */
 void tr_cl_set_memory_limit(tr_cl_context *ctx, uint64_t bytes);

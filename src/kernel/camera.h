@@ -67,4 +67,22 @@ TR_FN tr_ray tr_camera_ray_lens(const tr_camera *c, float x, float y, float jx, 
     return tr_ray_make(v3_add(c->pos, off), v3_normalize(dir), c->near_dist, c->far_dist);
 }
 
+/* The inverse of tr_camera_ray for a pinhole: where point p lies on the screen (*x, *y in
+ * pixels, the top-left corner at 0) and its distance from the camera; 0 when p is not in
+ * front of it. The reconstruction's reprojection (src/post/filter.h, tr_post_project)
+ * does the same arithmetic; this copy is the kernel's, for ReSTIR's temporal reuse on a
+ * device (restir_pass.h). */
+TR_FN int tr_camera_project(const tr_camera *cam, tr_vec3 p, float *x, float *y, float *dist) {
+    const tr_vec3 v = v3_sub(p, cam->pos);
+    const float z = v3_dot(v, cam->dir);
+    if (!(z > 1e-6f)) {
+        return 0;
+    }
+    const float cx = v3_dot(v, cam->right) / z, cy = v3_dot(v, cam->up) / z;
+    *x = (cx / cam->canvas_width + 0.5f) * (float)cam->screen_width;
+    *y = (0.5f - cy / cam->canvas_height) * (float)cam->screen_height;
+    *dist = tr_sqrtf(v3_dot(v, v));
+    return 1;
+}
+
 #endif

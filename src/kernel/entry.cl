@@ -9,6 +9,7 @@
 #include "cwbvh.h"
 #include "emission.h"
 #include "kernel.h"
+#include "restir_pass.h"
 
 /* The scene's arrays come as one __global buffer argument each, generated from the one
  * list of them (TR_SCENE_ARRAYS, scene_view.h); their element counts and then the view's
@@ -101,6 +102,129 @@ tr_cl_resolve_emission(TR_SCENE_ARRAYS(TR_CL_ARRAY_PARAM) __global const uint *s
     resolved[3u * i] = e.x;
     resolved[3u * i + 1u] = e.y;
     resolved[3u * i + 2u] = e.z;
+}
+
+/* ReSTIR DI's passes (restir_pass.h) on the device, one work item per pixel of the frame's
+ * camera: tr_cl_restir_temporal fills this frame's surfaces and first reservoirs,
+ * tr_cl_restir_spatial merges neighbours, shades and adds to the film; the host
+ * (src/device/opencl.c, tr_cl_restir_frame) swaps the buffers from frame to frame. The
+ * candidates come from the power CDF unless the frame asks for the light tree. */
+__kernel void tr_cl_restir_temporal(TR_SCENE_ARRAYS(TR_CL_ARRAY_PARAM)
+                                        __global const uint *scene_info,
+                                    __global const tr_restir_frame *frame,
+                                    __global tr_restir_surface *surf, __global tr_reservoir *cur,
+                                    __global const tr_restir_surface *prev_surf,
+                                    __global const tr_reservoir *prev) {
+    const tr_restir_frame fr = *frame;
+    const uint x = (uint)get_global_id(0), y = (uint)get_global_id(1);
+    if (x >= fr.cam.screen_width || y >= fr.cam.screen_height) {
+        return;
+    }
+    tr_scene_view s;
+    TR_CL_SCENE_VIEW(s);
+    if (!fr.tree) {
+        s.light_node_count = 0u;
+    }
+    tr_restir_pass_temporal(&s, &fr, x, y, surf, cur, prev_surf, prev);
+}
+
+__kernel void tr_cl_restir_spatial(TR_SCENE_ARRAYS(TR_CL_ARRAY_PARAM)
+                                       __global const uint *scene_info,
+                                   __global const tr_restir_frame *frame,
+                                   __global const tr_restir_surface *surf,
+                                   __global const tr_reservoir *cur, __global tr_reservoir *out,
+                                   __global float *film_sum, __global float *film_direct) {
+    const tr_restir_frame fr = *frame;
+    const uint x = (uint)get_global_id(0), y = (uint)get_global_id(1);
+    if (x >= fr.cam.screen_width || y >= fr.cam.screen_height) {
+        return;
+    }
+    tr_scene_view s;
+    TR_CL_SCENE_VIEW(s);
+    if (!fr.tree) {
+        s.light_node_count = 0u;
+    }
+    tr_restir_pass_spatial(&s, &fr, x, y, surf, cur, out, film_sum, film_direct);
+}
+
+/* The sizes of the structs the ReSTIR buffers hold, as this device lays them out. */
+__kernel void tr_cl_restir_sizes(__global uint *out) {
+    out[0] = (uint)sizeof(tr_restir_surface);
+    out[1] = (uint)sizeof(tr_reservoir);
+    out[2] = (uint)sizeof(tr_gi_reservoir);
+}
+
+/* ReSTIR GI's passes (restir_pass.h) after the direct light's, as the CPU runs them: the
+ * scene view as pt sees it (the light tree kept), the surfaces the direct light's first
+ * pass found. */
+__kernel void tr_cl_restir_gi_temporal(TR_SCENE_ARRAYS(TR_CL_ARRAY_PARAM)
+                                           __global const uint *scene_info,
+                                       __global const tr_restir_frame *frame,
+                                       __global const tr_restir_surface *surf,
+                                       __global tr_gi_reservoir *gcur,
+                                       __global const tr_restir_surface *prev_surf,
+                                       __global const tr_gi_reservoir *gprev) {
+    const tr_restir_frame fr = *frame;
+    const uint x = (uint)get_global_id(0), y = (uint)get_global_id(1);
+    if (x >= fr.cam.screen_width || y >= fr.cam.screen_height) {
+        return;
+    }
+    tr_scene_view s;
+    TR_CL_SCENE_VIEW(s);
+    tr_restir_gi_pass_temporal(&s, &fr, x, y, surf, gcur, prev_surf, gprev);
+}
+
+__kernel void tr_cl_restir_gi_spatial(TR_SCENE_ARRAYS(TR_CL_ARRAY_PARAM)
+                                          __global const uint *scene_info,
+                                      __global const tr_restir_frame *frame,
+                                      __global const tr_restir_surface *surf,
+                                      __global const tr_gi_reservoir *gcur,
+                                      __global tr_gi_reservoir *gout, __global float *film_sum) {
+    const tr_restir_frame fr = *frame;
+    const uint x = (uint)get_global_id(0), y = (uint)get_global_id(1);
+    if (x >= fr.cam.screen_width || y >= fr.cam.screen_height) {
+        return;
+    }
+    tr_scene_view s;
+    TR_CL_SCENE_VIEW(s);
+    tr_restir_gi_pass_spatial(&s, &fr, x, y, surf, gcur, gout, film_sum);
+}
+
+/* The first hit's emission at an upscaled output's resolution (src/post/upscale.c's
+ * tr_upscale_emission, per output pixel): from the traced frame's emission (wl x hl, the
+ * mean per pixel), an output pixel whose traced pixel lies on an emitter's edge, or where
+ * the previous output (prev, when have_prev) saw emission its traced pixel does not,
+ * traces n x n first-hit rays through the output's camera (the frame's); any other takes
+ * its traced pixel's emission. One work item per output pixel. */
+__kernel void
+tr_cl_upscale_emission(TR_SCENE_ARRAYS(TR_CL_ARRAY_PARAM) __global const uint *scene_info,
+                       __global const tr_frame *frame, int wl, int hl,
+                       __global const float *emission, int have_prev, __global const float *prev,
+                       int n, __global float *out) {
+    const tr_frame f = *frame;
+    const int w = (int)f.camera.screen_width, h = (int)f.camera.screen_height;
+    const int x = (int)get_global_id(0), y = (int)get_global_id(1);
+    if (x >= w || y >= h) {
+        return;
+    }
+    const float sxr = (float)wl / (float)w, syr = (float)hl / (float)h;
+    int lx = (int)(((float)x + 0.5f) * sxr), ly = (int)(((float)y + 0.5f) * syr);
+    lx = lx < wl - 1 ? lx : wl - 1;
+    ly = ly < hl - 1 ? ly : hl - 1;
+    const uint i = (uint)(y * w + x), k = (uint)(ly * wl + lx);
+    const int seen = tr_emission_seen(emission, k);
+    const int missed = have_prev && tr_emission_seen(prev, i) && !seen;
+    tr_vec3 e;
+    if (missed || tr_emission_on_edge(emission, wl, hl, lx, ly)) {
+        tr_scene_view s;
+        TR_CL_SCENE_VIEW(s);
+        e = tr_emission_resolve_pixel(&s, &f.camera, x, y, n);
+    } else {
+        e = v3(emission[3u * k], emission[3u * k + 1u], emission[3u * k + 2u]);
+    }
+    out[3u * i] = e.x;
+    out[3u * i + 1u] = e.y;
+    out[3u * i + 2u] = e.z;
 }
 
 /* Ray throughput (`trac0r bench rays --device opencl`, src/measure/rays.c): one work item

@@ -9,6 +9,7 @@
 #pragma OPENCL FP_CONTRACT OFF
 
 #include "filter.h"
+#include "upscale.h"
 
 /* The device film's means into the frame's buffers (tr_gbuffer_from_film's arithmetic):
  * passes bit 0 albedo, 1 normal, 2 depth, 3 primitive id, 4 emission; a pass the film
@@ -191,4 +192,34 @@ __kernel void tr_recon_taa(__global const tr_camera *cams, __global const float 
     out[3 * i] = o[0];
     out[3 * i + 1] = o[1];
     out[3 * i + 2] = o[2];
+}
+
+/* Temporal upscaling (upscale.h's tr_upscale_pixel, the host's tr_upscale_frame per output
+ * pixel): the output of cams[0] (w x h, its screen) from a traced frame of wl x hl (col,
+ * its samples' positions pos, depth and prim) and the output's history seen through
+ * cams[1] (have 0: none); motion: 3 floats per primitive id below motion_count (0: none).
+ * Writes the new history: colour, sample count and distance per output pixel. */
+__kernel void tr_recon_upscale(__global const tr_camera *cams, int wl, int hl,
+                               __global const float *col, __global const float *pos,
+                               __global const float *depth, __global const uint *prim,
+                               __global const float *motion, uint motion_count, int have,
+                               __global const float *hcol, __global const float *hlen,
+                               __global const float *hdepth, float max_len, __global float *ocol,
+                               __global float *olen, __global float *odepth) {
+    const tr_camera cam = cams[0], prev = cams[1];
+    const int x = (int)get_global_id(0), y = (int)get_global_id(1);
+    if (x >= (int)cam.screen_width || y >= (int)cam.screen_height) {
+        return;
+    }
+    const int i = y * (int)cam.screen_width + x;
+    float o[3], len, d;
+    tr_upscale_pixel(&cam, &prev, x, y, wl, hl, col, pos, depth, prim,
+                     motion_count ? motion : (__global const float *)0, motion_count,
+                     have ? hcol : (__global const float *)0, hlen, hdepth,
+                     (__global const float *)0, max_len, o, &len, &d);
+    ocol[3 * i] = o[0];
+    ocol[3 * i + 1] = o[1];
+    ocol[3 * i + 2] = o[2];
+    olen[i] = len;
+    odepth[i] = d;
 }

@@ -9,10 +9,12 @@
 
 #include "device/opencl.h"
 #include "post/recon_params.h"
+#include "post/recon_upscale.h"
 #include "trac0r/film.h"
 #include "trac0r/post.h"
 #include "trac0r/recon_device.h"
 #include "trac0r/render.h"
+#include "trac0r/upscale.h"
 
 #ifdef TRAC0R_HAVE_OPENCL
 #define CL_TARGET_OPENCL_VERSION 120
@@ -31,12 +33,13 @@ enum {
     K_SVGF,
     K_TAA,
     K_ADD,
+    K_UPSCALE,
     K_COUNT
 };
 static const char *const kernel_names[K_COUNT] = {
-    "tr_recon_from_film", "tr_recon_modulate", "tr_recon_temporal",
-    "tr_recon_bilateral", "tr_recon_atrous",   "tr_recon_svgf_variance",
-    "tr_recon_svgf",      "tr_recon_taa",      "tr_recon_add"};
+    "tr_recon_from_film", "tr_recon_modulate",      "tr_recon_temporal", "tr_recon_bilateral",
+    "tr_recon_atrous",    "tr_recon_svgf_variance", "tr_recon_svgf",     "tr_recon_taa",
+    "tr_recon_add",       "tr_recon_upscale"};
 
 /* The device's buffers: the frame (as tr_gbuffer), scratch, history, the two cameras. */
 enum {
@@ -80,6 +83,15 @@ typedef struct recon_cl {
     tr_camera prev_cam;
     int have_history, cur, have_taa;
     int has_emission; /* the frame came from a film with the emission pass */
+    int result;       /* the buffer holding the last frame's reconstruction */
+    cl_mem added;     /* the emission the reconstruction added to it (NULL: none) */
+    /* Temporal upscaling (tr_recon_device_upscale): the output's history (colour, samples,
+     * distance, two of each), its first hits' emission (this frame's and the last), the
+     * output, the samples' positions and the two cameras, for up_w x up_h outputs. */
+    cl_mem up_col[2], up_len[2], up_depth[2], up_emis[2], up_out, up_pos, up_cams;
+    uint32_t up_w, up_h;
+    int up_cur, up_have, emis_cur, emis_have;
+    tr_camera up_prev;
 } recon_cl;
 #else
 typedef struct recon_cl recon_cl;
@@ -122,6 +134,21 @@ static int cl_fail(tr_error *err, const char *call, cl_int code) {
                         tr_cl_error_name(code), code);
 }
 
+/* The upscaling's buffers. */
+static void up_release(recon_cl *c) {
+    cl_mem *const m[11] = {&c->up_col[0],   &c->up_col[1],   &c->up_len[0],  &c->up_len[1],
+                           &c->up_depth[0], &c->up_depth[1], &c->up_emis[0], &c->up_emis[1],
+                           &c->up_out,      &c->up_pos,      &c->up_cams};
+    for (int i = 0; i < 11; ++i) {
+        if (*m[i]) {
+            clReleaseMemObject(*m[i]);
+            *m[i] = NULL;
+        }
+    }
+    c->up_w = c->up_h = 0;
+    c->up_have = c->emis_have = 0;
+}
+
 static void cl_state_free(recon_cl *c) {
     if (!c) {
         return;
@@ -134,6 +161,7 @@ static void cl_state_free(recon_cl *c) {
     if (c->motion) {
         clReleaseMemObject(c->motion);
     }
+    up_release(c);
     for (int i = 0; i < K_COUNT; ++i) {
         if (c->k[i]) {
             clReleaseKernel(c->k[i]);
@@ -354,6 +382,7 @@ static int cl_frame(tr_recon_device *r, const tr_camera *cam, const tr_vec3 *mot
     int rc = TR_OK;
     const double t0 = tr_time_now();
     int result = B_COLOR; /* the buffer read back */
+    c->added = NULL;
     if (method == TR_RECON_OFF) {
         c->have_history = 0;
         goto read;
@@ -460,6 +489,7 @@ static int cl_frame(tr_recon_device *r, const tr_camera *cam, const tr_vec3 *mot
     }
     if (rc == TR_OK && c->has_emission) {
         rc = RUN(c, K_ADD, w, h, err, KB(c, B_OUT), KM(emis), KF(1.0f), KI(w), KI(h));
+        c->added = emis;
     }
     /* The geometry this frame's history was seen with, for the next frame's tests. */
     rc = rc ? rc : copy(c, B_DEPTH, B_HDEPTH, n * sizeof(float), err);
@@ -472,8 +502,11 @@ static int cl_frame(tr_recon_device *r, const tr_camera *cam, const tr_vec3 *mot
     c->prev_cam = *cam;
     c->have_history = 1;
 read:;
-    const cl_int crc = clEnqueueReadBuffer(c->queue, c->b[result], CL_TRUE, 0,
-                                           3 * n * sizeof(float), out, 0, NULL, NULL);
+    c->result = result;
+    /* No `out`: the result stays on the device (tr_recon_device_upscale reads it there). */
+    const cl_int crc = out ? clEnqueueReadBuffer(c->queue, c->b[result], CL_TRUE, 0,
+                                                 3 * n * sizeof(float), out, 0, NULL, NULL)
+                           : clFinish(c->queue);
     if (crc != CL_SUCCESS) {
         return cl_fail(err, "clEnqueueReadBuffer(output)", crc);
     }
@@ -631,4 +664,154 @@ int tr_recon_device_frame(tr_recon_device *r, const tr_camera *cam, const tr_vec
     }
     r->host.ms_temporal += method != TR_RECON_OFF ? resolve_ms : 0.0;
     return TR_OK;
+}
+
+#ifdef TRAC0R_HAVE_OPENCL
+/* The upscaling's buffers for a W x H output of a wl x hl frame (made anew, the history
+ * forgotten, for another output size). */
+static int up_buffers(recon_cl *c, uint32_t W, uint32_t H, tr_error *err) {
+    if (c->up_w == W && c->up_h == H && c->up_out) {
+        return TR_OK;
+    }
+    up_release(c);
+    const size_t n = (size_t)W * H;
+    cl_mem *const m[11] = {&c->up_col[0],   &c->up_col[1],   &c->up_len[0],  &c->up_len[1],
+                           &c->up_depth[0], &c->up_depth[1], &c->up_emis[0], &c->up_emis[1],
+                           &c->up_out,      &c->up_pos,      &c->up_cams};
+    /* The positions take 2 floats per traced pixel, at most as many as the output's. */
+    const size_t bytes[11] = {3 * n * 4,
+                              3 * n * 4,
+                              n * 4,
+                              n * 4,
+                              n * 4,
+                              n * 4,
+                              3 * n * 4,
+                              3 * n * 4,
+                              3 * n * 4,
+                              2 * n * 4,
+                              2 * sizeof(tr_camera)};
+    for (int i = 0; i < 11; ++i) {
+        cl_int rc;
+        *m[i] = clCreateBuffer(c->context, CL_MEM_READ_WRITE, bytes[i], NULL, &rc);
+        if (!*m[i]) {
+            up_release(c);
+            return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY,
+                                "OpenCL upscaling: no device memory for a %ux%u output: "
+                                "clCreateBuffer failed: %s (%d)",
+                                W, H, tr_cl_error_name(rc), rc);
+        }
+    }
+    c->up_w = W;
+    c->up_h = H;
+    return TR_OK;
+}
+#endif
+
+int tr_recon_device_upscale(tr_recon_device *r, const tr_camera *cam, const tr_camera *out_cam,
+                            const float *pos, const tr_vec3 *motion, uint32_t motion_count,
+                            int method, const tr_recon_params *p, int keep, float *out, double *ms,
+                            tr_error *err) {
+    *ms = 0.0;
+    if (check_args(r, cam, method, err) != TR_OK) {
+        return TR_ERR;
+    }
+    const uint32_t W = out_cam->screen_width, H = out_cam->screen_height;
+    if (W < r->width || H < r->height || !pos || !out) {
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "upscaling: a %ux%u output of a %ux%u frame, or NULL positions or "
+                            "output",
+                            W, H, r->width, r->height);
+    }
+#ifdef TRAC0R_HAVE_OPENCL
+    if (r->cl && p->svgf_split && method == TR_RECON_SVGF) {
+        return split_unsupported(err);
+    }
+    if (r->cl) {
+        recon_cl *c = r->cl;
+        if (cl_from_film(r, err) != TR_OK ||
+            cl_frame(r, cam, motion, motion_count, method, p, NULL, err) != TR_OK ||
+            up_buffers(c, W, H, err) != TR_OK) {
+            return TR_ERR;
+        }
+        const double t0 = tr_time_now();
+        const int wl = (int)r->width, hl = (int)r->height, w = (int)W, h = (int)H;
+        const size_t nl = (size_t)wl * hl, n = (size_t)W * H;
+        if (!keep) {
+            c->up_have = 0;
+        }
+        /* As the host's upscale stage: with the emission pass (and its resolve asked for)
+         * the upscaling sees the reconstruction less the emission it added back (the
+         * frame's own for "off"), and the emission at the output's resolution comes back
+         * after it. */
+        const int emission = c->has_emission && p->emission_samples > 0;
+        cl_mem low = c->b[c->result];
+        int rc = TR_OK;
+        cl_int crc = clEnqueueWriteBuffer(c->queue, c->up_pos, CL_FALSE, 0, 2 * nl * sizeof(float),
+                                          pos, 0, NULL, NULL);
+        const tr_camera cams[2] = {*out_cam, c->up_have ? c->up_prev : *out_cam};
+        if (crc == CL_SUCCESS) {
+            crc = clEnqueueWriteBuffer(c->queue, c->up_cams, CL_TRUE, 0, sizeof cams, cams, 0, NULL,
+                                       NULL);
+        }
+        if (crc != CL_SUCCESS) {
+            return cl_fail(err, "clEnqueueWriteBuffer(upscaling)", crc);
+        }
+        if (emission) {
+            cl_mem e = c->added ? c->added : c->b[B_EMIS];
+            rc = copy(c, c->result, B_CA, 3 * nl * sizeof(float), err);
+            rc =
+                rc ? rc : RUN(c, K_ADD, wl, hl, err, KB(c, B_CA), KM(e), KF(-1.0f), KI(wl), KI(hl));
+            low = c->b[B_CA];
+        }
+        const int prev = c->up_cur, next = 1 - c->up_cur;
+        cl_mem mbuf = motion && motion_count ? c->motion : c->b[B_DEPTH];
+        const uint32_t mcount = motion && motion_count ? motion_count : 0u;
+        rc = rc ? rc
+                : RUN(c, K_UPSCALE, w, h, err, KM(c->up_cams), KI(wl), KI(hl), KM(low),
+                      KM(c->up_pos), KB(c, B_DEPTH), KB(c, B_PRIM), KM(mbuf), KU(mcount),
+                      KI(c->up_have), KM(c->up_col[prev]), KM(c->up_len[prev]),
+                      KM(c->up_depth[prev]), KF(TR_UPSCALE_MAX_LEN), KM(c->up_col[next]),
+                      KM(c->up_len[next]), KM(c->up_depth[next]));
+        cl_mem result = c->up_col[next];
+        if (rc == TR_OK && emission) {
+            tr_cl_context *ctx = tr_device_cl_context(r->dev);
+            const int ecur = 1 - c->emis_cur;
+            rc = tr_cl_upscale_emission(
+                ctx, out_cam, p->emission_samples, (uint32_t)wl, (uint32_t)hl, c->b[B_EMIS],
+                keep && c->emis_have ? c->up_emis[c->emis_cur] : NULL, c->up_emis[ecur], err);
+            if (rc == TR_OK) {
+                const cl_int k = clEnqueueCopyBuffer(c->queue, c->up_col[next], c->up_out, 0, 0,
+                                                     3 * n * sizeof(float), 0, NULL, NULL);
+                rc = k == CL_SUCCESS ? TR_OK : cl_fail(err, "clEnqueueCopyBuffer", k);
+            }
+            rc = rc ? rc
+                    : RUN(c, K_ADD, w, h, err, KM(c->up_out), KM(c->up_emis[ecur]), KF(1.0f), KI(w),
+                          KI(h));
+            c->emis_cur = ecur;
+            c->emis_have = rc == TR_OK;
+            result = c->up_out;
+        }
+        if (rc == TR_OK) {
+            crc = clEnqueueReadBuffer(c->queue, result, CL_TRUE, 0, 3 * n * sizeof(float), out, 0,
+                                      NULL, NULL);
+            rc = crc == CL_SUCCESS ? TR_OK : cl_fail(err, "clEnqueueReadBuffer(upscaled)", crc);
+        }
+        if (rc != TR_OK) {
+            c->up_have = 0;
+            return TR_ERR;
+        }
+        c->up_cur = next;
+        c->up_prev = *out_cam;
+        c->up_have = 1;
+        *ms = (tr_time_now() - t0) * 1e3;
+        return TR_OK;
+    }
+#else
+    (void)motion;
+    (void)motion_count;
+    (void)keep;
+    (void)p;
+#endif
+    return tr_error_set(err, TR_STATUS_UNSUPPORTED,
+                        "upscaling on the device: not an OpenCL device (the host upscales)");
 }

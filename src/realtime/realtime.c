@@ -3,6 +3,7 @@
 #include "trac0r/realtime.h"
 #include "trac0r/recon_device.h"
 #include "realtime/gradient.h"
+#include "post/recon_upscale.h"
 #include "realtime/restir_stage.h"
 #include "trac0r/upscale.h"
 
@@ -74,7 +75,6 @@ struct tr_realtime {
     size_t pos_len;
     float *low; /* the reconstruction of the traced frame, 3 per film pixel */
     size_t low_len;
-    int gb_guides;        /* gb holds the last frame's passes (the device path, for upscaling) */
     uint32_t up_resolved; /* output pixels whose emission the upscaling resolved */
     float *emis[2];       /* the emission at the output's resolution, this frame and the last */
     size_t emis_len;
@@ -158,11 +158,9 @@ tr_realtime *tr_realtime_create(tr_device *dev, tr_scene *scene, const tr_realti
                      d->restir);
         return NULL;
     }
-    if (d->restir != TR_REALTIME_RESTIR_OFF &&
-        ((tr_device_caps(dev) & TR_DEVICE_CAP_HOST) == 0u || cfg.integrator != TR_INTEGRATOR_PT)) {
-        tr_error_set(err, TR_STATUS_UNSUPPORTED,
-                     "ReSTIR DI needs the pt integrator on a device that renders on the host "
-                     "(the CPU)");
+    /* ReSTIR runs where the film lies (restir_stage.h). */
+    if (d->restir != TR_REALTIME_RESTIR_OFF && cfg.integrator != TR_INTEGRATOR_PT) {
+        tr_error_set(err, TR_STATUS_UNSUPPORTED, "ReSTIR DI needs the pt integrator");
         return NULL;
     }
     if (d->spp > TR_REALTIME_MAX_SPP * 64u) {
@@ -455,9 +453,14 @@ int tr_realtime_render(tr_realtime *rt, const tr_realtime_frame_desc *fd, tr_err
         rp.rr_start = cfg.roulette_start ? cfg.roulette_start : TR_ROULETTE_START_PT;
         rp.clamp_indirect = cfg.clamp_indirect;
         rp.regularize = cfg.regularize;
-        if (tr_restir_stage_run(rt->restir_stage, rt->scene, &rt->rcam, &rp, cfg.seed, sample,
-                                (uint32_t)cfg.sampler, n, rt->calls, cfg.threads, &rt->film,
-                                err) != TR_OK) {
+        const int rc = rt->on_device
+                           ? tr_restir_stage_run_device(rt->restir_stage, rt->dev, &rt->rcam, &rp,
+                                                        cfg.seed, sample, (uint32_t)cfg.sampler, n,
+                                                        rt->calls, rt->film.passes, err)
+                           : tr_restir_stage_run(rt->restir_stage, rt->scene, &rt->rcam, &rp,
+                                                 cfg.seed, sample, (uint32_t)cfg.sampler, n,
+                                                 rt->calls, cfg.threads, &rt->film, err);
+        if (rc != TR_OK) {
             rt->have_view = 0;
             return TR_ERR;
         }
@@ -482,7 +485,6 @@ int tr_realtime_render(tr_realtime *rt, const tr_realtime_frame_desc *fd, tr_err
             return TR_ERR;
         }
     }
-    rt->gb_guides = 0;
     /* Temporal gradients where the film holds this frame's samples alone, traced at every
      * pixel by pt or naive on the host (the replay runs there): not with ReSTIR, whose
      * first surfaces' light the replay would not resample, nor upscaled frames. */
@@ -618,31 +620,14 @@ static int size_low(tr_realtime *rt, uint32_t w, uint32_t h, tr_error *err) {
     return TR_OK;
 }
 
-/* The upscaling of an upscaled frame: rt->low (the method's reconstruction of the traced
- * frame), the samples' positions and the frame's distance and id passes into the display
- * film at the view's full resolution, through the method's own output history. On a
- * device the passes are read from its film: the upscaling runs on the host (its operator,
- * src/post/upscale.h, is single source, but no device kernel runs it yet). */
+/* The upscaling of an upscaled frame on the host: rt->low (the method's reconstruction of
+ * the traced frame), the samples' positions and the frame's distance and id passes into
+ * the display film at the view's full resolution, through the method's own output history.
+ * (On an OpenCL device tr_recon_device_upscale does all of it where the film lies.) */
 static int upscale_stage(tr_realtime *rt, rt_history *hist, int method, const tr_vec3 *motion,
                          uint32_t ids, tr_error *err) {
     const uint32_t w = rt->rcam.screen_width, h = rt->rcam.screen_height;
     const uint32_t W = rt->view_cam.screen_width, H = rt->view_cam.screen_height;
-    if (rt->on_device && !rt->gb_guides) {
-        const tr_film *film = NULL;
-        if (tr_realtime_film(rt, &film, err) != TR_OK) {
-            return TR_ERR;
-        }
-        if (rt->gb.width != w || rt->gb.height != h || !rt->gb.color) {
-            tr_gbuffer_free(&rt->gb);
-            if (tr_gbuffer_init(&rt->gb, w, h, err) != TR_OK) {
-                return TR_ERR;
-            }
-        }
-        if (tr_gbuffer_from_film(&rt->gb, film, err) != TR_OK) {
-            return TR_ERR;
-        }
-        rt->gb_guides = 1;
-    }
     if (hist->up.width != W || hist->up.height != H) {
         tr_upscale_free(&hist->up);
         if (tr_upscale_init(&hist->up, W, H, err) != TR_OK) {
@@ -657,15 +642,6 @@ static int upscale_stage(tr_realtime *rt, rt_history *hist, int method, const tr
      * the traced resolution would be spread over the output pixels each traced pixel
      * covers, and its rim holds most of the frame's error (docs/realtime.md). */
     const int emission = rt->gb.has_emission && rt->params.emission_samples > 0;
-    if (emission && rt->on_device && method != TR_RECON_OFF && !rt->gb.has_resolved) {
-        /* The device added the emission it resolved at the traced resolution
-         * (tr_cl_resolve_emission); the host's resolve computes the same values from the
-         * same film, to be taken out. */
-        if (tr_resolve_emission(rt->scene, &rt->rcam, rt->params.emission_samples, rt->cfg.threads,
-                                &rt->gb, NULL, err) != TR_OK) {
-            return TR_ERR;
-        }
-    }
     if (emission) {
         const float *e = method != TR_RECON_OFF && rt->gb.has_resolved ? rt->gb.emission_resolved
                                                                        : rt->gb.emission;
@@ -755,8 +731,19 @@ int tr_realtime_reconstruct(tr_realtime *rt, int method, tr_realtime_result *out
     float *const dst = up ? rt->low : rt->disp.sum;
     const tr_vec3 *motion = rt->moved ? rt->motion : NULL;
     const uint32_t ids = rt->moved ? rt->motion_ids : 0u;
-    double temporal = 0.0, spatial = 0.0;
-    if (rt->on_device) {
+    double temporal = 0.0, spatial = 0.0, up_ms = 0.0;
+    if (rt->on_device && up) {
+        /* Reconstructed and upscaled where the film lies; only the output comes back. */
+        const int keep = hist->up_frame != 0 && hist->up_frame + 1 == rt->rendered;
+        if (tr_recon_device_upscale(hist->rdev, &rt->rcam, &rt->view_cam, rt->pos, motion, ids,
+                                    method, &rt->params, keep, rt->disp.sum, &up_ms,
+                                    err) != TR_OK) {
+            return TR_ERR;
+        }
+        hist->up_frame = rt->rendered;
+        tr_recon_device_times(hist->rdev, &temporal, &spatial);
+        temporal += up_ms;
+    } else if (rt->on_device) {
         if (tr_recon_device_frame(hist->rdev, &rt->rcam, motion, ids, method, &rt->params, dst,
                                   err) != TR_OK) {
             return TR_ERR;
@@ -774,14 +761,13 @@ int tr_realtime_reconstruct(tr_realtime *rt, int method, tr_realtime_result *out
         temporal = hist->rec.ms_temporal + (method != TR_RECON_OFF ? rt->resolve_ms : 0.0);
         spatial = hist->rec.ms_spatial;
     }
-    double up_ms = 0.0;
-    if (up) {
+    if (up && !rt->on_device) {
         if (upscale_stage(rt, hist, method, motion, ids, err) != TR_OK) {
             return TR_ERR;
         }
         up_ms = hist->up.ms;
         temporal += up_ms;
-    } else {
+    } else if (!up) {
         hist->up_frame = 0;
     }
     fill_result(rt, &rt->disp, rt->disp.sum, method, out);

@@ -1,14 +1,16 @@
 /* restir_stage.h - ReSTIR DI as a stage of the real-time loop (realtime.c): after pt has
  * rendered a frame without the direct light at its camera rays' first surfaces
  * (tr_render_config.no_primary_direct), the stage estimates that light by spatiotemporal
- * reservoir resampling (src/kernel/restir.h) and adds it to the film. CPU (host film)
- * only. */
+ * reservoir resampling (src/kernel/restir.h) and adds it to the film: on the host's film
+ * (tr_restir_stage_run) or where an OpenCL device's film lies (tr_restir_stage_run_device),
+ * both by the per-pixel passes of src/kernel/restir_pass.h. */
 #ifndef TR_REALTIME_RESTIR_STAGE_H
 #define TR_REALTIME_RESTIR_STAGE_H
 
 #include <stdint.h>
 
 #include "trac0r/camera.h"
+#include "trac0r/device.h"
 #include "trac0r/error.h"
 #include "trac0r/film.h"
 #include "trac0r/scene.h"
@@ -53,5 +55,15 @@ void tr_restir_stage_reset(tr_restir_stage *st);
 int tr_restir_stage_run(tr_restir_stage *st, const tr_scene *scene, const tr_camera *cam,
                         const tr_restir_params *p, uint64_t seed, uint32_t sample, uint32_t sampler,
                         uint32_t spp, uint64_t frame, int threads, tr_film *film, tr_error *err);
+
+/* tr_restir_stage_run on an OpenCL device's film (which must have the camera's size and
+ * keep `passes`, TR_PASS_DIRECT included where it adds to that pass), ReSTIR GI included
+ * with p->gi: the reservoirs stay on the device. Other devices are refused
+ * (TR_STATUS_UNSUPPORTED). The same passes as the host's: the results agree to the
+ * device's float rounding (docs/opencl.md). */
+int tr_restir_stage_run_device(tr_restir_stage *st, tr_device *dev, const tr_camera *cam,
+                               const tr_restir_params *p, uint64_t seed, uint32_t sample,
+                               uint32_t sampler, uint32_t spp, uint64_t frame, uint32_t passes,
+                               tr_error *err);
 
 #endif
