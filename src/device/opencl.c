@@ -281,6 +281,7 @@ struct tr_cl_context {
     cl_kernel wf_generate, wf_extend, wf_shade, wf_connect, wf_accumulate;
     cl_mem wf_paths, wf_queue[2], wf_shadow, wf_counters;
     size_t wf_cap, wf_max; /* wf_max: TRAC0R_OPENCL_WAVEFRONT_PATHS, 0 when unset */
+    size_t wf_group;       /* the stages' work-group size */
     int kernel_request, kernel_env;
 };
 
@@ -1503,7 +1504,7 @@ static const char paths_env[] = "TRAC0R_OPENCL_WAVEFRONT_PATHS";
  * state each); fewer where the device allocates less per buffer. */
 #define TR_CL_WF_MAX_PATHS ((size_t)1 << 21)
 
-/* Work items per group for the stages on a GPU (the driver's choice elsewhere). */
+/* Work items per group for the stages (fewer where a kernel allows fewer). */
 #define TR_CL_WF_GROUP 64u
 
 int tr_cl_set_kernel(tr_cl_context *ctx, int kernel, tr_error *err) {
@@ -1573,6 +1574,15 @@ static int wf_open(tr_cl_context *ctx, int custom, tr_error *err) {
             char call[64];
             snprintf(call, sizeof call, "clCreateKernel(%s)", names[i]);
             return cl_fail(err, call, rc);
+        }
+    }
+    ctx->wf_group = TR_CL_WF_GROUP;
+    for (int i = 0; i < 5; ++i) {
+        size_t max = 0;
+        if (clGetKernelWorkGroupInfo(*kernels[i], ctx->device, CL_KERNEL_WORK_GROUP_SIZE,
+                                     sizeof max, &max, NULL) == CL_SUCCESS &&
+            max >= 1 && max < ctx->wf_group) {
+            ctx->wf_group = max;
         }
     }
     return TR_OK;
@@ -1659,12 +1669,12 @@ static int wf_run(tr_cl_context *ctx, cl_kernel k, const char *name, cl_uint fir
     if (items == 0) {
         return TR_OK;
     }
-    /* A GPU gets whole groups (the kernels return at once past their count). */
-    const int gpu = strcmp(ctx->info.type, "gpu") == 0;
-    const size_t local = TR_CL_WF_GROUP;
-    const size_t global = gpu ? (items + local - 1) / local * local : items;
-    cl_int rc =
-        clEnqueueNDRangeKernel(ctx->queue, k, 1, NULL, &global, gpu ? &local : NULL, 0, NULL, NULL);
+    /* Whole groups of one size (the kernels return at once past their count): the queues'
+     * lengths change from bounce to bounce, and a driver left to choose picks a group size
+     * per length; PoCL compiles the kernel anew for each (seconds each time). */
+    const size_t local = ctx->wf_group;
+    const size_t global = (items + local - 1) / local * local;
+    cl_int rc = clEnqueueNDRangeKernel(ctx->queue, k, 1, NULL, &global, &local, 0, NULL, NULL);
     if (rc != CL_SUCCESS) {
         char call[80];
         snprintf(call, sizeof call, "clEnqueueNDRangeKernel(%s)", name);
