@@ -1550,9 +1550,8 @@ static int wf_open(tr_cl_context *ctx, int custom, tr_error *err) {
     }
     const char *paths = getenv(paths_env);
     if (paths && *paths) {
-        char *end = NULL;
-        const unsigned long long v = strtoull(paths, &end, 10);
-        if (*end != '\0' || paths[0] == '-' || v < 1 || v > ((size_t)1 << 28)) {
+        int64_t v = 0;
+        if (tr_parse_int64(paths, 1, (int64_t)1 << 28, &v) != TR_OK) {
             return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
                                 "%s='%s' is not a number of paths in 1..268435456", paths_env,
                                 paths);
