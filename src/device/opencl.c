@@ -1500,8 +1500,8 @@ static const char kernel_env[] = "TRAC0R_OPENCL_KERNEL";
  * chunk size, and for the tests, whose frames are smaller than one chunk. */
 static const char paths_env[] = "TRAC0R_OPENCL_WAVEFRONT_PATHS";
 
-/* Paths in flight at most: a 1920x1080 frame's samples in one chunk (about 380 bytes of
- * state each); fewer where the device allocates less per buffer. */
+/* Paths in flight at most: a 1920x1080 frame's samples in one chunk (348 bytes of state
+ * each); fewer where the device allocates less per buffer. */
 #define TR_CL_WF_MAX_PATHS ((size_t)1 << 21)
 
 /* Work items per group for the stages (fewer where a kernel allows fewer). */
