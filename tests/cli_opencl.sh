@@ -145,4 +145,22 @@ expect_usage_error "--accels: embree runs on the CPU only" bench rays --device o
 expect_usage_error "--accels:" bench complexity --device opencl \
     --accels bvh,embree
 
+# pt as a wavefront (--cl-kernel, TRAC0R_OPENCL_KERNEL): the megakernel's image byte for byte;
+# an unknown kernel is the command line's error, in the option or the variable.
+W="render --width 21 --height 13 --spp 3 --seed 9 --device opencl"
+"$BIN" $W --cl-kernel mega --out mega.pfm 2>err.txt || fail "--cl-kernel mega: $(cat err.txt)"
+"$BIN" $W --cl-kernel wavefront --out wave.pfm 2>err.txt || fail "--cl-kernel wavefront: $(cat err.txt)"
+TRAC0R_OPENCL_KERNEL=wavefront "$BIN" $W --out env.pfm 2>err.txt ||
+    fail "TRAC0R_OPENCL_KERNEL=wavefront: $(cat err.txt)"
+cmp -s mega.pfm wave.pfm || fail "--cl-kernel wavefront: not the megakernel's image"
+cmp -s mega.pfm env.pfm || fail "TRAC0R_OPENCL_KERNEL=wavefront: not the megakernel's image"
+rm -f mega.pfm wave.pfm env.pfm err.txt
+"$BIN" bench frame --width 16 --height 12 --frames 2 --device opencl --integrator pt \
+    --cl-kernel wavefront >bench.txt 2>&1 || fail "bench frame --cl-kernel wavefront: $(cat bench.txt)"
+rm -f bench.txt
+expect_usage_error "--cl-kernel:" $R --cl-kernel fast
+TRAC0R_OPENCL_KERNEL=fast "$BIN" $W --out x.pfm 2>err.txt
+[ $? -eq 2 ] || fail "TRAC0R_OPENCL_KERNEL=fast: not exit status 2: $(cat err.txt)"
+rm -f x.pfm err.txt
+
 cli_end cli_opencl

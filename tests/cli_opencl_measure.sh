@@ -25,7 +25,7 @@ rows() { grep -c "^| $1" table.md; }
 [ "$(grep -c '^| thesis settings, .*[0-9] FPS (' table.md)" -eq 2 ] ||
     fail "not 2 thesis rows with FPS: $(cat table.md)"
 grep -q '^| figure 3.5 .*FPS at 56 triangles' table.md || fail "no figure 3.5 row: $(cat table.md)"
-for int in pt bdpt; do
+for int in pt "pt wavefront" bdpt; do
     grep -q "^| $int samples/s, 32x24 .* Msamples/s" table.md ||
         fail "no $int samples/s row: $(cat table.md)"
 done

@@ -38,7 +38,8 @@ static const char help_before[] =
     "  --clamp-indirect V   pt: clamp indirect light to luminance V (0: off; biased)\n"
     "  --regularize on|off  pt: roughen lobes after a diffuse vertex (biased)\n";
 static const char help_after[] =
-    "  --device DEV         cpu (default), opencl or opencl:N (trac0r info --devices)\n";
+    "  --device DEV         cpu (default), opencl or opencl:N (trac0r info --devices)\n"
+    "  --cl-kernel NAME     OpenCL pt: mega, wavefront or auto (default)\n";
 
 void cli_integrator_list(char *buf, size_t size) {
     size_t count;
@@ -390,18 +391,17 @@ int cli_common_option(cli_args *a, cli_common *c) {
     if (cli_is(a, "--regularize")) {
         return cli_parse_on_off(a, &c->regularize);
     }
-    if (cli_is(a, "--light-sampling")) {
-        if (cli_value(a) != CLI_OK) {
-            return CLI_USAGE;
-        }
-        c->light_sampling = tr_light_sampling_from_name(a->value);
-        if (c->light_sampling < 0) {
-            return cli_error(a,
-                             "--light-sampling: unknown light sampling '%s' (available: auto, "
-                             "tree, power)",
-                             a->value);
-        }
-        return CLI_OK;
+    if (cli_is(a, "--light-sampling") || cli_is(a, "--cl-kernel")) { /* names, as the library's */
+        const int ls = a->opt[2] == 'l', rc = cli_value(a);
+        const int k = rc != CLI_OK ? 0
+                      : ls         ? tr_light_sampling_from_name(a->value)
+                                   : tr_opencl_kernel_from_name(a->value);
+        *(ls ? &c->light_sampling : &c->cl_kernel) = k >= 0 ? k : 0;
+        return rc != CLI_OK || k >= 0
+                   ? rc
+                   : cli_error(a, "%s: unknown %s '%s' (available: %s)", a->opt,
+                               ls ? "light sampling" : "kernel", a->value,
+                               ls ? "auto, tree, power" : "mega, wavefront, auto");
     }
     return -1;
 }

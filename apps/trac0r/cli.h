@@ -43,6 +43,7 @@ typedef struct cli_common {
     int regularize;           /* --regularize: 1 on, 0 off, -1 for the default */
     int restir;               /* --restir: TR_REALTIME_RESTIR_* (view, bench realtime) */
     int restir_unbiased;      /* --restir-unbiased */
+    int cl_kernel;            /* --cl-kernel: TR_OPENCL_KERNEL_* (0: auto) */
 } cli_common;
 
 #define CLI_GIVEN_WIDTH 1u

@@ -26,6 +26,7 @@ tr_render_config cli_render_config(const cli_common *c) {
     cfg.roulette_start = c->roulette_start;
     cfg.clamp_indirect = c->clamp_indirect > 0.0f ? c->clamp_indirect : 0.0f;
     cfg.regularize = c->regularize == 1;
+    cfg.opencl_kernel = c->cl_kernel;
     return cfg;
 }
 

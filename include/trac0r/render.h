@@ -82,7 +82,23 @@ typedef struct tr_render_config {
      * the radiance is the same. 0 (default): the path's own first non-delta surface.
      * tr_realtime turns it on for real-time frames. */
     int psr;
+    /* OpenCL devices: how pt's frames run, TR_OPENCL_KERNEL_* (docs/opencl.md). AUTO
+     * (default) takes the environment variable TRAC0R_OPENCL_KERNEL (mega, wavefront or
+     * auto) and otherwise the device type's rule; the CPU ignores it. */
+    int opencl_kernel;
 } tr_render_config;
+
+/* tr_render_config.opencl_kernel. MEGA: one kernel runs every sample's whole path.
+ * WAVEFRONT: the path tracer in stages (generate, extend, shade, connect) over queues of
+ * paths on the device. Both give the same film bit for bit; integrators other than pt
+ * always run as one kernel. */
+#define TR_OPENCL_KERNEL_AUTO 0
+#define TR_OPENCL_KERNEL_MEGA 1
+#define TR_OPENCL_KERNEL_WAVEFRONT 2
+/* TR_OPENCL_KERNEL_* by its name ("auto", "mega", "wavefront"); -1 for any other. */
+int tr_opencl_kernel_from_name(const char *name);
+/* The name of a TR_OPENCL_KERNEL_* ("?" for any other value). */
+const char *tr_opencl_kernel_name(int kernel);
 
 typedef struct tr_render_stats {
     uint64_t rays;  /* intersection queries made */

@@ -30,7 +30,23 @@ tr_render_config tr_render_config_default(void) {
     c.clamp_indirect = 0.0f;
     c.regularize = 0;
     c.no_primary_direct = 0;
+    c.opencl_kernel = TR_OPENCL_KERNEL_AUTO;
     return c;
+}
+
+int tr_opencl_kernel_from_name(const char *name) {
+    static const char *const names[] = {"auto", "mega", "wavefront"};
+    for (int i = 0; name && i < 3; ++i) {
+        if (strcmp(name, names[i]) == 0) {
+            return i;
+        }
+    }
+    return -1;
+}
+
+const char *tr_opencl_kernel_name(int kernel) {
+    static const char *const names[] = {"auto", "mega", "wavefront"};
+    return kernel >= 0 && kernel < 3 ? names[kernel] : "?";
 }
 
 TR_STATIC_ASSERT(TR_MAX_DEPTH_BDPT == TR_BDPT_MAX_DEPTH, "bdpt's depth limit");

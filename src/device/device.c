@@ -312,7 +312,8 @@ int tr_device_render(tr_device *dev, const tr_camera *cam, const tr_render_confi
                             tr_integrator_name((int)f.integrator));
     }
     if (dev->kind == TR_DEVICE_OPENCL) {
-        if (tr_cl_render_frame(dev->cl, &f, &rays, err) != TR_OK) {
+        if (tr_cl_set_kernel(dev->cl, cfg->opencl_kernel, err) != TR_OK ||
+            tr_cl_render_frame(dev->cl, &f, &rays, err) != TR_OK) {
             return TR_ERR;
         }
     } else {

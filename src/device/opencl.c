@@ -11,6 +11,7 @@
 
 #include "device/frame.h"
 #include "kernel/integrator_bdpt.h"
+#include "kernel/integrator_pt_wf.h"
 #include "kernel/kernel.h"
 #include "kernel/restir_pass.h"
 #include "accel/accel_internal.h"
@@ -113,6 +114,16 @@ int tr_cl_supports_integrator(const tr_cl_context *ctx, int integrator, tr_error
     (void)ctx;
     (void)integrator;
     return tr_error_set(err, TR_STATUS_UNSUPPORTED, "%s", no_opencl);
+}
+int tr_cl_set_kernel(tr_cl_context *ctx, int kernel, tr_error *err) {
+    (void)ctx;
+    (void)kernel;
+    return tr_error_set(err, TR_STATUS_UNSUPPORTED, "%s", no_opencl);
+}
+int tr_cl_frame_kernel(const tr_cl_context *ctx, int integrator) {
+    (void)ctx;
+    (void)integrator;
+    return TR_OPENCL_KERNEL_MEGA;
 }
 void tr_cl_film_size(const tr_cl_context *ctx, uint32_t *width, uint32_t *height,
                      uint32_t *passes) {
@@ -296,7 +307,21 @@ struct tr_cl_context {
     cl_mem resolved; /* with TR_PASS_EMISSION: tr_cl_resolve_emission's output */
     uint32_t width, height, passes;
     uint32_t *rays_host;
+    /* pt's wavefront (entry.cl's tr_cl_wf_*; NULL in a program without them, see
+     * tr_cl_open_source), the paths and their queues (room for wf_cap paths), the kernel
+     * asked for (tr_cl_set_kernel) and TRAC0R_OPENCL_KERNEL's (AUTO when unset). */
+    cl_kernel wf_generate, wf_extend, wf_shade, wf_connect, wf_accumulate;
+    cl_mem wf_paths, wf_queue[2], wf_shadow, wf_counters;
+    size_t wf_cap, wf_max; /* wf_max: TRAC0R_OPENCL_WAVEFRONT_PATHS, 0 when unset */
+    size_t wf_group;       /* the stages' work-group size */
+    int kernel_request, kernel_env;
 };
+
+static int wf_open(tr_cl_context *ctx, int custom, tr_error *err);
+static void wf_release(tr_cl_context *ctx);
+static int wf_set_scene(tr_cl_context *ctx, tr_error *err);
+static int wf_render(tr_cl_context *ctx, const tr_frame *f, uint32_t ny, uint64_t *rays_out,
+                     tr_error *err);
 
 static char last_build_log[16384];
 
@@ -592,6 +617,7 @@ void tr_cl_close(tr_cl_context *ctx) {
             clReleaseKernel(restir_kernels[i]);
         }
     }
+    wf_release(ctx);
     if (ctx->splat) {
         clReleaseMemObject(ctx->splat);
     }
@@ -839,7 +865,8 @@ tr_cl_context *tr_cl_open_source(int index, const char *source, tr_error *err) {
         ctx->bdpt = NULL;
     }
     if (check_kernel_args(ctx, err) != TR_OK ||
-        check_work_group(ctx, wg_given, cpu, err) != TR_OK) {
+        check_work_group(ctx, wg_given, cpu, err) != TR_OK ||
+        wf_open(ctx, source != NULL, err) != TR_OK) {
         goto fail;
     }
     ctx->frame = clCreateBuffer(ctx->context, CL_MEM_READ_ONLY, sizeof(tr_frame), NULL, &rc);
@@ -1022,6 +1049,9 @@ int tr_cl_upload_scene(tr_cl_context *ctx, const tr_scene *scene, tr_error *err)
                 rc = cl_fail(err, "clSetKernelArg(scene_info)", crc);
             }
         }
+    }
+    if (rc == TR_OK) {
+        rc = wf_set_scene(ctx, err);
     }
     tr_bvh_free(&own);
     if (rc != TR_OK) {
@@ -1361,6 +1391,9 @@ int tr_cl_render_frame(tr_cl_context *ctx, const tr_frame *f, uint64_t *rays_out
     rc = clEnqueueWriteBuffer(ctx->queue, ctx->frame, CL_TRUE, 0, sizeof *f, f, 0, NULL, NULL);
     if (rc != CL_SUCCESS) {
         return cl_fail(err, "clEnqueueWriteBuffer(frame)", rc);
+    }
+    if (tr_cl_frame_kernel(ctx, (int)f->integrator) == TR_OPENCL_KERNEL_WAVEFRONT) {
+        return wf_render(ctx, f, ny, rays_out, err);
     }
     const cl_uint base = (cl_uint)ctx->array_count;
     const cl_mem *bufs[ARG_AFTER_ARRAYS] = {NULL,
@@ -1718,6 +1751,325 @@ int tr_cl_upscale_emission(tr_cl_context *ctx, const tr_camera *cam, int n, uint
     const size_t global[2] = {cam->screen_width, cam->screen_height};
     rc = clEnqueueNDRangeKernel(ctx->queue, ctx->up_emission, 2, NULL, global, NULL, 0, NULL, NULL);
     return rc == CL_SUCCESS ? TR_OK : cl_fail(err, "clEnqueueNDRangeKernel(upscale emission)", rc);
+}
+
+/* ---- pt as a wavefront (entry.cl's tr_cl_wf_*, src/kernel/integrator_pt_wf.h) ------- */
+
+/* The kernel TR_OPENCL_KERNEL_AUTO runs pt with, by device type (CL_DEVICE_TYPE): the one
+ * place the rule is written. Types not listed run the megakernel. */
+static const struct {
+    const char *type;
+    int kernel;
+} wf_auto_rule[] = {
+    /* Not yet measured on a GPU (docs/gpu.md says what to measure): the megakernel,
+     * measured on the H100, until the wavefront's figures are beside it. */
+    {"gpu", TR_OPENCL_KERNEL_MEGA},
+    /* PoCL: a work item per path already runs whole paths on a core; the stages only add
+     * passes over the path states in memory. */
+    {"cpu", TR_OPENCL_KERNEL_MEGA},
+};
+
+static const char kernel_env[] = "TRAC0R_OPENCL_KERNEL";
+/* The most paths in flight (default TR_CL_WF_MAX_PATHS): for measuring the wavefront's
+ * chunk size, and for the tests, whose frames are smaller than one chunk. */
+static const char paths_env[] = "TRAC0R_OPENCL_WAVEFRONT_PATHS";
+
+/* Paths in flight at most: a 1920x1080 frame's samples in one chunk (348 bytes of state
+ * each); fewer where the device allocates less per buffer. */
+#define TR_CL_WF_MAX_PATHS ((size_t)1 << 21)
+
+/* Work items per group for the stages (fewer where a kernel allows fewer). */
+#define TR_CL_WF_GROUP 64u
+
+int tr_cl_set_kernel(tr_cl_context *ctx, int kernel, tr_error *err) {
+    if (kernel < TR_OPENCL_KERNEL_AUTO || kernel > TR_OPENCL_KERNEL_WAVEFRONT) {
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "OpenCL kernel %d is none of auto (0), mega (1) and wavefront (2)",
+                            kernel);
+    }
+    if (kernel == TR_OPENCL_KERNEL_WAVEFRONT && !ctx->wf_generate) {
+        return tr_error_set(err, TR_STATUS_UNSUPPORTED,
+                            "the wavefront path tracer is not in this OpenCL program");
+    }
+    ctx->kernel_request = kernel;
+    return TR_OK;
+}
+
+int tr_cl_frame_kernel(const tr_cl_context *ctx, int integrator) {
+    if (integrator != TR_INTEGRATOR_PT || !ctx->wf_generate) {
+        return TR_OPENCL_KERNEL_MEGA;
+    }
+    if (ctx->kernel_request != TR_OPENCL_KERNEL_AUTO) {
+        return ctx->kernel_request;
+    }
+    if (ctx->kernel_env != TR_OPENCL_KERNEL_AUTO) {
+        return ctx->kernel_env;
+    }
+    for (size_t i = 0; i < sizeof wf_auto_rule / sizeof wf_auto_rule[0]; ++i) {
+        if (strcmp(ctx->info.type, wf_auto_rule[i].type) == 0) {
+            return wf_auto_rule[i].kernel;
+        }
+    }
+    return TR_OPENCL_KERNEL_MEGA;
+}
+
+/* Reads TRAC0R_OPENCL_KERNEL and creates the stages' kernels. A program of the tests' own
+ * (custom) may lack them: it runs the megakernel only. */
+static int wf_open(tr_cl_context *ctx, int custom, tr_error *err) {
+    const char *env = getenv(kernel_env);
+    ctx->kernel_env = env && *env ? tr_opencl_kernel_from_name(env) : TR_OPENCL_KERNEL_AUTO;
+    if (ctx->kernel_env < 0) {
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "%s='%s' is none of mega, wavefront and auto", kernel_env, env);
+    }
+    const char *paths = getenv(paths_env);
+    if (paths && *paths) {
+        int64_t v = 0;
+        if (tr_parse_int64(paths, 1, (int64_t)1 << 28, &v) != TR_OK) {
+            return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                                "%s='%s' is not a number of paths in 1..268435456", paths_env,
+                                paths);
+        }
+        ctx->wf_max = (size_t)v;
+    }
+    static const char *const names[5] = {"tr_cl_wf_generate", "tr_cl_wf_extend", "tr_cl_wf_shade",
+                                         "tr_cl_wf_connect", "tr_cl_wf_accumulate"};
+    cl_kernel *kernels[5] = {&ctx->wf_generate, &ctx->wf_extend, &ctx->wf_shade, &ctx->wf_connect,
+                             &ctx->wf_accumulate};
+    for (int i = 0; i < 5; ++i) {
+        cl_int rc;
+        *kernels[i] = clCreateKernel(ctx->program, names[i], &rc);
+        if (!*kernels[i]) {
+            wf_release(ctx);
+            if (custom) {
+                return TR_OK;
+            }
+            char call[64];
+            snprintf(call, sizeof call, "clCreateKernel(%s)", names[i]);
+            return cl_fail(err, call, rc);
+        }
+    }
+    ctx->wf_group = TR_CL_WF_GROUP;
+    for (int i = 0; i < 5; ++i) {
+        size_t max = 0;
+        if (clGetKernelWorkGroupInfo(*kernels[i], ctx->device, CL_KERNEL_WORK_GROUP_SIZE,
+                                     sizeof max, &max, NULL) == CL_SUCCESS &&
+            max >= 1 && max < ctx->wf_group) {
+            ctx->wf_group = max;
+        }
+    }
+    return TR_OK;
+}
+
+static void wf_release_buffers(tr_cl_context *ctx) {
+    cl_mem *bufs[5] = {&ctx->wf_paths, &ctx->wf_queue[0], &ctx->wf_queue[1], &ctx->wf_shadow,
+                       &ctx->wf_counters};
+    for (int i = 0; i < 5; ++i) {
+        if (*bufs[i]) {
+            clReleaseMemObject(*bufs[i]);
+            *bufs[i] = NULL;
+        }
+    }
+    ctx->wf_cap = 0;
+}
+
+static void wf_release(tr_cl_context *ctx) {
+    cl_kernel *kernels[5] = {&ctx->wf_generate, &ctx->wf_extend, &ctx->wf_shade, &ctx->wf_connect,
+                             &ctx->wf_accumulate};
+    for (int i = 0; i < 5; ++i) {
+        if (*kernels[i]) {
+            clReleaseKernel(*kernels[i]);
+            *kernels[i] = NULL;
+        }
+    }
+    wf_release_buffers(ctx);
+}
+
+/* The scene's arrays and scene_info as the first arguments of extend, shade and connect. */
+static int wf_set_scene(tr_cl_context *ctx, tr_error *err) {
+    const cl_kernel kernels[3] = {ctx->wf_extend, ctx->wf_shade, ctx->wf_connect};
+    const int na = ctx->array_count;
+    for (int k = 0; k < 3 && kernels[k]; ++k) {
+        for (int i = 0; i <= na; ++i) {
+            const cl_mem *m = i < na ? &ctx->arrays[i] : &ctx->scene_info;
+            cl_int rc = clSetKernelArg(kernels[k], (cl_uint)i, sizeof(cl_mem), m);
+            if (rc != CL_SUCCESS) {
+                return cl_fail(err, "clSetKernelArg(wavefront scene)", rc);
+            }
+        }
+    }
+    return TR_OK;
+}
+
+/* Room for `paths` paths and their queues. */
+static int wf_buffers(tr_cl_context *ctx, size_t paths, tr_error *err) {
+    if (ctx->wf_cap >= paths) {
+        return TR_OK;
+    }
+    wf_release_buffers(ctx);
+    const size_t sizes[5] = {paths * sizeof(tr_pt_wf_path), paths * sizeof(cl_uint),
+                             paths * sizeof(cl_uint), paths * sizeof(cl_uint), 2 * sizeof(cl_uint)};
+    cl_mem *bufs[5] = {&ctx->wf_paths, &ctx->wf_queue[0], &ctx->wf_queue[1], &ctx->wf_shadow,
+                       &ctx->wf_counters};
+    for (int i = 0; i < 5; ++i) {
+        cl_int rc;
+        *bufs[i] = clCreateBuffer(ctx->context, CL_MEM_READ_WRITE, sizes[i], NULL, &rc);
+        if (!*bufs[i]) {
+            wf_release_buffers(ctx);
+            return cl_fail(err, "clCreateBuffer(wavefront paths)", rc);
+        }
+    }
+    ctx->wf_cap = paths;
+    return TR_OK;
+}
+
+/* Sets `n` arguments of kernel k from `first` on: (size, pointer) pairs. */
+typedef struct wf_arg {
+    size_t size;
+    const void *ptr;
+} wf_arg;
+
+static int wf_run(tr_cl_context *ctx, cl_kernel k, const char *name, cl_uint first,
+                  const wf_arg *args, int n, size_t items, tr_error *err) {
+    for (int i = 0; i < n; ++i) {
+        cl_int rc = clSetKernelArg(k, first + (cl_uint)i, args[i].size, args[i].ptr);
+        if (rc != CL_SUCCESS) {
+            char call[80];
+            snprintf(call, sizeof call, "clSetKernelArg(%s)", name);
+            return cl_fail(err, call, rc);
+        }
+    }
+    if (items == 0) {
+        return TR_OK;
+    }
+    /* Whole groups of one size (the kernels return at once past their count): the queues'
+     * lengths change from bounce to bounce, and a driver left to choose picks a group size
+     * per length; PoCL compiles the kernel anew for each (seconds each time). */
+    const size_t local = ctx->wf_group;
+    const size_t global = (items + local - 1) / local * local;
+    cl_int rc = clEnqueueNDRangeKernel(ctx->queue, k, 1, NULL, &global, &local, 0, NULL, NULL);
+    if (rc != CL_SUCCESS) {
+        char call[80];
+        snprintf(call, sizeof call, "clEnqueueNDRangeKernel(%s)", name);
+        return cl_fail(err, call, rc);
+    }
+    return TR_OK;
+}
+
+/* One chunk: paths [0, g_n * k), path i being sample f->sample + s_off + i % k of grid
+ * point g0 + i / k, from the camera to the film. */
+static int wf_chunk(tr_cl_context *ctx, const tr_frame *f, cl_uint g0, cl_uint g_n, cl_uint k,
+                    cl_uint s_off, tr_error *err) {
+    const cl_uint n = g_n * k;
+    const wf_arg gen[] = {{sizeof(cl_mem), &ctx->frame},
+                          {sizeof(cl_mem), &ctx->wf_paths},
+                          {sizeof(cl_mem), &ctx->wf_queue[0]},
+                          {sizeof g0, &g0},
+                          {sizeof k, &k},
+                          {sizeof s_off, &s_off},
+                          {sizeof n, &n}};
+    if (wf_run(ctx, ctx->wf_generate, "tr_cl_wf_generate", 0, gen, 7, n, err) != TR_OK) {
+        return TR_ERR;
+    }
+    const cl_uint base = (cl_uint)ctx->array_count + 1u; /* after the scene and scene_info */
+    cl_uint count = f->max_depth >= 1 ? n : 0u;
+    int cur = 0;
+    while (count > 0u) {
+        const cl_uint zero = 0;
+        cl_int rc = clEnqueueFillBuffer(ctx->queue, ctx->wf_counters, &zero, sizeof zero, 0,
+                                        2 * sizeof zero, 0, NULL, NULL);
+        if (rc != CL_SUCCESS) {
+            return cl_fail(err, "clEnqueueFillBuffer(wavefront counters)", rc);
+        }
+        const wf_arg ext[] = {{sizeof(cl_mem), &ctx->wf_paths},
+                              {sizeof(cl_mem), &ctx->wf_queue[cur]},
+                              {sizeof count, &count}};
+        const wf_arg sh[] = {{sizeof(cl_mem), &ctx->frame},
+                             {sizeof(cl_mem), &ctx->wf_paths},
+                             {sizeof(cl_mem), &ctx->wf_queue[cur]},
+                             {sizeof count, &count},
+                             {sizeof(cl_mem), &ctx->wf_queue[1 - cur]},
+                             {sizeof(cl_mem), &ctx->wf_shadow},
+                             {sizeof(cl_mem), &ctx->wf_counters}};
+        const wf_arg con[] = {{sizeof(cl_mem), &ctx->frame},
+                              {sizeof(cl_mem), &ctx->wf_paths},
+                              {sizeof(cl_mem), &ctx->wf_shadow},
+                              {sizeof(cl_mem), &ctx->wf_counters}};
+        /* Connect runs over the shadow queue, at most `count` paths long. */
+        if (wf_run(ctx, ctx->wf_extend, "tr_cl_wf_extend", base, ext, 3, count, err) != TR_OK ||
+            wf_run(ctx, ctx->wf_shade, "tr_cl_wf_shade", base, sh, 7, count, err) != TR_OK ||
+            wf_run(ctx, ctx->wf_connect, "tr_cl_wf_connect", base, con, 4, count, err) != TR_OK) {
+            return TR_ERR;
+        }
+        rc = clEnqueueReadBuffer(ctx->queue, ctx->wf_counters, CL_TRUE, 0, sizeof count, &count, 0,
+                                 NULL, NULL);
+        if (rc != CL_SUCCESS) {
+            return cl_fail(err, "clEnqueueReadBuffer(wavefront counters)", rc);
+        }
+        cur = 1 - cur;
+    }
+    wf_arg acc[FILM_BUFFERS + 6];
+    int na = 0;
+    acc[na++] = (wf_arg){sizeof(cl_mem), &ctx->frame};
+    for (int i = 0; i < FILM_BUFFERS; ++i) {
+        acc[na++] = (wf_arg){sizeof(cl_mem), &ctx->film[i]};
+    }
+    acc[na++] = (wf_arg){sizeof(cl_mem), &ctx->rays};
+    acc[na++] = (wf_arg){sizeof(cl_mem), &ctx->wf_paths};
+    acc[na++] = (wf_arg){sizeof g0, &g0};
+    acc[na++] = (wf_arg){sizeof k, &k};
+    acc[na++] = (wf_arg){sizeof g_n, &g_n};
+    return wf_run(ctx, ctx->wf_accumulate, "tr_cl_wf_accumulate", 0, acc, na, g_n, err);
+}
+
+/* Frame f through the stages, in chunks of at most wf_cap paths: all the grid's points
+ * with as many samples as fit, or a run of points with one sample; the chunks go sample
+ * range by sample range, so every pixel receives its samples in order. */
+static int wf_render(tr_cl_context *ctx, const tr_frame *f, uint32_t ny, uint64_t *rays_out,
+                     tr_error *err) {
+    uint32_t gx0, gy0, nx, ny_grid;
+    tr_frame_grid(f, &gx0, &gy0, &nx, &ny_grid);
+    const size_t points = (size_t)nx * ny_grid, samples = f->sample_count;
+    size_t cap = ctx->wf_max ? ctx->wf_max : TR_CL_WF_MAX_PATHS;
+    const size_t fit = ctx->info.max_alloc / sizeof(tr_pt_wf_path);
+    if (fit > 0 && fit < cap) {
+        cap = fit;
+    }
+    if (points * samples < cap) {
+        cap = points * samples;
+    }
+    if (points == 0 || samples == 0) {
+        cap = 0;
+    } else if (wf_buffers(ctx, cap, err) != TR_OK) {
+        return TR_ERR;
+    }
+    const size_t k = cap == 0                  ? 0
+                     : points * samples <= cap ? samples
+                     : cap / points            ? cap / points
+                                               : 1;
+    const size_t g_step = k ? cap / k : 0;
+    for (size_t s = 0; s < samples && k; s += k) {
+        const size_t kk = samples - s < k ? samples - s : k;
+        for (size_t g = 0; g < points; g += g_step) {
+            const size_t gn = points - g < g_step ? points - g : g_step;
+            if (wf_chunk(ctx, f, (cl_uint)g, (cl_uint)gn, (cl_uint)kk, (cl_uint)s, err) != TR_OK) {
+                return TR_ERR;
+            }
+        }
+    }
+    cl_int rc = clEnqueueReadBuffer(ctx->queue, ctx->rays, CL_TRUE, 0, ny * sizeof(cl_uint),
+                                    ctx->rays_host, 0, NULL, NULL);
+    if (rc != CL_SUCCESS) {
+        return cl_fail(err, "clEnqueueReadBuffer(rays_per_row)", rc);
+    }
+    if (rays_out) {
+        uint64_t rays = 0;
+        for (uint32_t y = 0; y < ny; ++y) {
+            rays += ctx->rays_host[y];
+        }
+        *rays_out = rays;
+    }
+    return TR_OK;
 }
 
 #endif

@@ -97,6 +97,13 @@ int tr_cl_render_frame(tr_cl_context *ctx, const tr_frame *f, uint64_t *rays, tr
  * (its photon map is host code), or bdpt on a device without cl_khr_int64_base_atomics and
  * cl_khr_fp64 (its splats' atomic sums and their fold). tr_cl_render_frame checks it too. */
 int tr_cl_supports_integrator(const tr_cl_context *ctx, int integrator, tr_error *err);
+/* The kernel pt's frames run with from now on, TR_OPENCL_KERNEL_* (render.h; AUTO at
+ * first): TR_STATUS_INVALID_ARGUMENT for another value, TR_STATUS_UNSUPPORTED for the
+ * wavefront in a program without it (tr_cl_open_source). */
+int tr_cl_set_kernel(tr_cl_context *ctx, int kernel, tr_error *err);
+/* The kernel a frame of `integrator` runs with: TR_OPENCL_KERNEL_MEGA or _WAVEFRONT, AUTO
+ * resolved (TRAC0R_OPENCL_KERNEL, then the device type's rule in opencl.c). */
+int tr_cl_frame_kernel(const tr_cl_context *ctx, int integrator);
 /* Traces `count` rays `reps` times with the uploaded scene's structure (closest hit, or any
  * hit with `shadow`); *seconds: from the first pass's start to the last one's end (the rays'
  * upload excluded), *hits: the rays of one pass that hit. */

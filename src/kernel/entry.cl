@@ -8,6 +8,7 @@
 
 #include "cwbvh.h"
 #include "emission.h"
+#include "integrator_pt_wf.h"
 #include "kernel.h"
 #include "restir_pass.h"
 
@@ -262,6 +263,122 @@ __kernel void tr_cl_trace_cwbvh(__global const tr_cwbvh_node *cw_nodes, uint cw_
     const tr_ray r = rays[i];
     tr_hit hit;
     hits[i] = tr_cwbvh_traverse(cw_nodes, cw_node_count, cw_tris, &r, &hit, shadow != 0u) ? 1u : 0u;
+}
+
+/* pt as a wavefront (integrator_pt_wf.h, docs/opencl.md): the host runs a frame in
+ * chunks of paths, path i of a chunk being sample f.sample + s_off + i % k of grid point
+ * g0 + i / k; for each chunk tr_cl_wf_generate, then extend, shade and connect over the
+ * queue of live paths until none is left, then tr_cl_wf_accumulate. Queues hold path
+ * numbers; counters[0] counts the next extend queue, counters[1] the shadow queue. */
+__kernel void tr_cl_wf_generate(__global const tr_frame *frame, __global tr_pt_wf_path *paths,
+                                __global uint *queue, uint g0, uint k, uint s_off, uint n) {
+    const uint i = (uint)get_global_id(0);
+    if (i >= n) {
+        return;
+    }
+    const tr_frame f = *frame;
+    uint gx0, gy0, nx, ny, x, y, bx0, by0, bx1, by1;
+    tr_frame_grid(&f, &gx0, &gy0, &nx, &ny);
+    const uint g = g0 + i / k;
+    const uint64_t pixel =
+        tr_frame_point(&f, gx0 + g % nx, gy0 + g / nx, &x, &y, &bx0, &by0, &bx1, &by1);
+    const uint64_t seed = ((uint64_t)f.seed_hi << 32) | (uint64_t)f.seed_lo;
+    tr_pt_wf_path p;
+    tr_pt_wf_generate(&p, &f.camera, seed, f.max_depth, f.sampler, f.passes, x, y, pixel,
+                      f.sample + s_off + i % k);
+    paths[i] = p;
+    queue[i] = i;
+}
+
+/* Extend: the closest hit of every queued path's ray. */
+__kernel void tr_cl_wf_extend(TR_SCENE_ARRAYS(TR_CL_ARRAY_PARAM) __global const uint *scene_info,
+                              __global tr_pt_wf_path *paths, __global const uint *queue,
+                              uint count) {
+    const uint i = (uint)get_global_id(0);
+    if (i >= count) {
+        return;
+    }
+    tr_scene_view s;
+    TR_CL_SCENE_VIEW(s);
+    __global tr_pt_wf_path *gp = &paths[queue[i]];
+    const tr_ray r = gp->ray;
+    tr_hit hit;
+    const uint found = tr_intersect_scene(&s, &r, &hit) ? 1u : 0u;
+    gp->hit = hit;
+    gp->found = found;
+    gp->out.rays += 1u;
+}
+
+/* Shade: every queued path's vertex; live paths go to next_queue, paths with light
+ * samples to add to shadow_queue. */
+__kernel void tr_cl_wf_shade(TR_SCENE_ARRAYS(TR_CL_ARRAY_PARAM) __global const uint *scene_info,
+                             __global const tr_frame *frame, __global tr_pt_wf_path *paths,
+                             __global const uint *queue, uint count, __global uint *next_queue,
+                             __global uint *shadow_queue, __global uint *counters) {
+    const uint i = (uint)get_global_id(0);
+    if (i >= count) {
+        return;
+    }
+    tr_scene_view s;
+    TR_CL_SCENE_VIEW(s);
+    const uint idx = queue[i];
+    tr_pt_wf_path p = paths[idx];
+    const int alive = tr_pt_wf_shade(&s, &p, frame->max_depth, frame->rr_start,
+                                     frame->clamp_indirect, frame->flags);
+    paths[idx] = p;
+    if (alive) {
+        next_queue[atomic_inc(&counters[0])] = idx;
+    }
+    if (p.pending != 0u) {
+        shadow_queue[atomic_inc(&counters[1])] = idx;
+    }
+}
+
+/* Connect: the shadow queue's paths (counters[1] of them; the host launches at least that
+ * many work items). */
+__kernel void tr_cl_wf_connect(TR_SCENE_ARRAYS(TR_CL_ARRAY_PARAM) __global const uint *scene_info,
+                               __global const tr_frame *frame, __global tr_pt_wf_path *paths,
+                               __global const uint *shadow_queue, __global const uint *counters) {
+    const uint i = (uint)get_global_id(0);
+    if (i >= counters[1]) {
+        return;
+    }
+    tr_scene_view s;
+    TR_CL_SCENE_VIEW(s);
+    const uint idx = shadow_queue[i];
+    tr_pt_wf_path p = paths[idx];
+    tr_pt_wf_connect(&s, &p, frame->clamp_indirect);
+    paths[idx] = p;
+}
+
+/* Accumulate: one work item per grid point of the chunk (points g0 .. g0+n-1) adds its k
+ * finished samples to the film in sample order, as tr_render_grid_rows does. */
+__kernel void tr_cl_wf_accumulate(__global const tr_frame *frame, __global float *film_sum,
+                                  __global uint *film_count, __global float *film_albedo,
+                                  __global float *film_normal, __global float *film_depth,
+                                  __global uint *film_prim, __global float *film_sq,
+                                  __global float *film_direct, __global float *film_emission,
+                                  __global uint *rays_per_row, __global const tr_pt_wf_path *paths,
+                                  uint g0, uint k, uint n) {
+    const uint j = (uint)get_global_id(0);
+    if (j >= n) {
+        return;
+    }
+    const tr_frame f = *frame;
+    uint gx0, gy0, nx, ny, x, y, bx0, by0, bx1, by1;
+    tr_frame_grid(&f, &gx0, &gy0, &nx, &ny);
+    const uint g = g0 + j;
+    tr_frame_point(&f, gx0 + g % nx, gy0 + g / nx, &x, &y, &bx0, &by0, &bx1, &by1);
+    tr_film_view film = TR_CL_FILM_VIEW(f);
+    uint rays = 0u;
+    for (uint m = 0; m < k; ++m) {
+        const tr_pt_wf_path p = paths[j * k + m];
+        tr_sample smp;
+        tr_pt_wf_finish(&p, &smp);
+        rays += smp.rays;
+        tr_film_add_block(&film, &smp, bx0, by0, bx1, by1);
+    }
+    atomic_add(&rays_per_row[g / nx], rays);
 }
 
 /* bdpt on the device: tr_cl_render's arguments and work items, and the light-tracing

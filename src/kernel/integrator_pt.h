@@ -127,7 +127,9 @@ TR_FN tr_vec3 tr_pt_add(tr_vec3 radiance, tr_vec3 c, int indirect, float limit) 
  * TR_FRAME_NO_FIRST_LIGHT the emission the ray finds first (an emitter of the light table,
  * the environment, the sun) is left out: the stage's ray from the first surface then
  * carries indirect light only. With clamp 0 and no flags the
- * same numbers as without. */
+ * same numbers as without. integrator_pt_wf.h repeats this loop's body as the OpenCL
+ * wavefront's stages: a change here is a change there (test_opencl_wavefront compares the
+ * two films bit for bit). */
 TR_FN tr_vec3 tr_trace_pt_ff(const tr_scene_view *s, tr_ray ray, int max_depth, int rr_start,
                              float clamp_indirect, uint32_t flags, const tr_sampler *smp,
                              uint32_t *rays, tr_sample *surface) {
