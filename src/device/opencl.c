@@ -703,11 +703,10 @@ static int parse_bvh_env(tr_device_bvh *bvh, tr_error *err) {
 
 /* The rule `auto` follows, and the one place it is written: the BVH a device of this type
  * walks. Both find the same hits; which is faster is a measurement per device type
- * (docs/gpu.md). CPU devices keep the binary BVH: on PoCL pt's frames took 1.45x as long
- * with the compressed one (docs/log/2026-cwbvh-render.md), whose node decoding costs a CPU
- * more than the smaller nodes save. GPUs keep it too until one has measured both in the
- * renderer (scripts/gpu-measure's cwbvh rows): the binary BVH is what every earlier GPU
- * figure was taken with. */
+ * (docs/gpu.md). CPU devices keep the binary BVH: on PoCL pt's frames took 1.4-1.5x as
+ * long with the compressed one (docs/log/2026-cwbvh-render.md). GPUs keep it too until one
+ * has measured both in the renderer (scripts/gpu-measure's cwbvh rows): the binary BVH is
+ * what every earlier GPU figure was taken with. */
 static tr_device_bvh auto_bvh(const tr_cl_device_info *info) {
     if (strcmp(info->type, "gpu") == 0) {
         return TR_DEVICE_BVH_BVH2;
