@@ -195,12 +195,16 @@ TR_FN_TRAVERSE int tr_traverse_bvh(const tr_scene_view *s, const tr_ray *ray, tr
 }
 
 /* The compressed wide BVH (cwbvh.h) in place of the binary one: an OpenCL device walks it
- * when its upload chose it (src/device/opencl.c); host views never hold one. Out of line on
- * a device for the binary walk's reason (compat.h): one copy of its stack per work item. */
+ * when its upload chose it (src/device/opencl.c). Host views never hold one, so host builds
+ * leave the branch out and the CPU's query paths compile as they did before it. Out of line
+ * on a device for the binary walk's reason (compat.h): one copy of its stack per work item. */
+#if defined(__OPENCL_C_VERSION__) || defined(__OPENCL_VERSION__)
+#define TR_SCENE_VIEW_CWBVH 1
 TR_FN_TRAVERSE int tr_traverse_cwbvh(const tr_scene_view *s, const tr_ray *ray, tr_hit *hit,
                                      int any_hit) {
     return tr_cwbvh_traverse(s->cwbvh_nodes, s->cwbvh_node_count, s->cwbvh_tris, ray, hit, any_hit);
 }
+#endif
 
 /* Closest hit against whichever structure the view holds. */
 TR_FN int tr_intersect_scene(const tr_scene_view *s, const tr_ray *ray, tr_hit *hit) {
@@ -214,9 +218,11 @@ TR_FN int tr_intersect_scene(const tr_scene_view *s, const tr_ray *ray, tr_hit *
         return tr_wbvh_intersect(s->wbvh, ray, hit);
     }
 #endif
+#ifdef TR_SCENE_VIEW_CWBVH
     if (s->accel == TR_ACCEL_BVH && s->cwbvh_node_count > 0u) {
         return tr_traverse_cwbvh(s, ray, hit, 0);
     }
+#endif
     if (s->accel == TR_ACCEL_BVH) {
         return tr_traverse_bvh(s, ray, hit, 0);
     }
@@ -236,9 +242,11 @@ TR_FN int tr_occluded_scene(const tr_scene_view *s, const tr_ray *ray) {
         return tr_wbvh_occluded(s->wbvh, ray);
     }
 #endif
+#ifdef TR_SCENE_VIEW_CWBVH
     if (s->accel == TR_ACCEL_BVH && s->cwbvh_node_count > 0u) {
         return tr_traverse_cwbvh(s, ray, &hit, 1);
     }
+#endif
     if (s->accel == TR_ACCEL_BVH) {
         return tr_traverse_bvh(s, ray, &hit, 1);
     }
