@@ -22,11 +22,17 @@ rows() { grep -c "^| $1" table.md; }
 [ "$(rows 'rays, builtin:')" -eq 2 ] || fail "not 2 rays rows: $(cat table.md)"
 [ "$(grep -c '^| rays.*bvh, .*cwbvh, .*primary [0-9.]*, diffuse [0-9.]*, shadow [0-9.]* Mrays/s |$' table.md)" -eq 2 ] ||
     fail "rays rows without the bvh and cwbvh rates (or with a note): $(cat table.md)"
-[ "$(grep -c '^| thesis settings, .*[0-9] FPS (' table.md)" -eq 2 ] ||
-    fail "not 2 thesis rows with FPS: $(cat table.md)"
+[ "$(grep -c '^| thesis settings, .*[0-9] FPS (' table.md)" -eq 3 ] ||
+    fail "not 3 thesis rows with FPS: $(cat table.md)"
+for bvh in bvh2 cwbvh; do
+    grep -q "^| thesis settings, bvh, $bvh | .*--device-bvh $bvh\` | .*[0-9] FPS (" table.md ||
+        fail "no thesis row for $bvh: $(cat table.md)"
+    grep -q "^| pt samples/s, 32x24, $bvh | .*--device-bvh $bvh\` | .* Msamples/s" table.md ||
+        fail "no pt samples/s row for $bvh: $(cat table.md)"
+done
 grep -q '^| figure 3.5 .*FPS at 56 triangles' table.md || fail "no figure 3.5 row: $(cat table.md)"
 for int in pt "pt wavefront" bdpt; do
-    grep -q "^| $int samples/s, 32x24 .* Msamples/s" table.md ||
+    grep -q "^| $int samples/s, 32x24[ ,].* Msamples/s" table.md ||
         fail "no $int samples/s row: $(cat table.md)"
 done
 grep -q '^| vcm samples/s.*refused by the device' table.md || fail "vcm not refused: $(cat table.md)"
@@ -42,7 +48,7 @@ rm -f table.md table.md.log err.txt
 # A device that does not exist: every row of the part says failed, exit status 1.
 sh "$script" --quick --bin "$BIN" --only frame --device opencl:7 --out bad.md 2>/dev/null
 [ $? -eq 1 ] || fail "gpu-measure on a missing device: exit status not 1"
-[ "$(grep -c '^| thesis settings.*\*\*failed\*\*: .*does not exist' bad.md)" -eq 2 ] ||
+[ "$(grep -c '^| thesis settings.*\*\*failed\*\*: .*does not exist' bad.md)" -eq 3 ] ||
     fail "no failed rows for a missing device: $(cat bad.md)"
 rm -f bad.md bad.md.log
 # Usage errors: status 2, nothing written.

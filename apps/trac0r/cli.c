@@ -39,7 +39,8 @@ static const char help_before[] =
     "  --regularize on|off  pt: roughen lobes after a diffuse vertex (biased)\n";
 static const char help_after[] =
     "  --device DEV         cpu (default), opencl or opencl:N (trac0r info --devices)\n"
-    "  --cl-kernel NAME     OpenCL pt: mega, wavefront or auto (default)\n";
+    "  --cl-kernel NAME     OpenCL pt: mega, wavefront or auto (default)\n"
+    "  --device-bvh NAME    the BVH an OpenCL device walks: auto (default), bvh2, cwbvh\n";
 
 void cli_integrator_list(char *buf, size_t size) {
     size_t count;
@@ -63,24 +64,16 @@ void cli_common_default(cli_common *c) {
     memset(c, 0, sizeof *c); /* every field below or zero: the extras, the default size */
     c->scene = "builtin:cornell";
     c->model_scale = 1.0f;
-    c->up_z = 0;
-    c->model_camera = NULL;
     c->width = 800;
     c->height = 600;
     c->max_depth = TR_MAX_DEPTH_DEFAULT;
-    c->seed = 0;
-    c->threads = 0;
     c->integrator = TR_INTEGRATOR_PT;
     c->accel = TR_ACCEL_TYPE_BVH;
-    c->given = 0;
-    c->allow_dark = 0;
     c->sampler = -1;
-    c->roulette_start = 0;
     c->light_sampling = -1;
     c->clamp_indirect = -1.0f;
     c->regularize = -1;
     c->restir = TR_REALTIME_RESTIR_OFF;
-    c->restir_unbiased = 0;
     snprintf(c->device, sizeof c->device, "cpu");
 }
 
@@ -376,7 +369,7 @@ int cli_common_option(cli_args *a, cli_common *c) {
         c->accel = (tr_accel_type)accel;
         return CLI_OK;
     }
-    if (cli_is(a, "--device")) {
+    if (cli_is(a, "--device") || cli_is(a, "--device-bvh")) {
         return cli_parse_device(a, c);
     }
     if (cli_is(a, "--sampler")) {

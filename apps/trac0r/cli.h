@@ -33,6 +33,7 @@ typedef struct cli_common {
     tr_scene_extras extras;         /* --env, --sun, --ground */
     uint32_t def_width, def_height; /* the command's size before the options (cli_parse) */
     char device[32];                /* --device: a tr_device name, "cpu" or "opencl:N" */
+    int device_bvh;                 /* --device-bvh: TR_DEVICE_BVH_* (0: auto) */
     int up_z;                       /* --up z: a model file's +z is up */
     const char *model_camera; /* --camera: a model file's camera, or "frame"; NULL: its first */
     float model_scale;        /* --scale: a model file's scale */

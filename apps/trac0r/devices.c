@@ -10,6 +10,13 @@ int cli_parse_device(cli_args *a, cli_common *c) {
     if (cli_value(a) != CLI_OK) {
         return CLI_USAGE;
     }
+    if (cli_is(a, "--device-bvh")) { /* the names and their meaning: trac0r/device.h */
+        c->device_bvh = tr_device_bvh_from_name(a->value);
+        return c->device_bvh >= 0
+                   ? CLI_OK
+                   : cli_error(a, "%s: unknown BVH '%s' (expected auto, bvh2 or cwbvh)", a->opt,
+                               a->value);
+    }
     if (tr_device_name_check(a->value, c->device, sizeof c->device, &err) != TR_OK) {
         return cli_error(a, "%s: %s", a->opt, err.msg);
     }
@@ -51,16 +58,14 @@ int cli_backend_open(const cli_args *a, const cli_common *c, const tr_scene *sce
     if (!be->dev) {
         return device_error(a, &err);
     }
+    tr_device_set_bvh(be->dev, (tr_device_bvh)c->device_bvh, NULL); /* valid: parsed */
     be->threads = c->threads;
     tr_device_describe(be->dev, be->threads, be->name, sizeof be->name);
-    if (scene) {
-        int rc = cli_backend_upload(a, be, scene);
-        if (rc != CLI_OK) {
-            cli_backend_close(be);
-            return rc;
-        }
+    const int rc = scene ? cli_backend_upload(a, be, scene) : CLI_OK;
+    if (rc != CLI_OK) {
+        cli_backend_close(be);
     }
-    return CLI_OK;
+    return rc;
 }
 
 int cli_backend_upload(const cli_args *a, cli_backend *be, const tr_scene *scene) {

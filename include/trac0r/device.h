@@ -100,6 +100,29 @@ const tr_scene *tr_device_scene(const tr_device *dev);
  * OpenCL walks the binary BVH for bvh and bvh2, and a BVH of its own for a scene
  * committed to Embree (a host library). */
 tr_accel_type tr_device_accel(const tr_device *dev);
+/* Which BVH an OpenCL device walks where it walks a BVH (scenes committed with bvh or bvh2,
+ * and the BVH it builds for Embree's and instanced scenes): the binary BVH, or the
+ * compressed 8-wide BVH converted from it at upload (Ylitie, Karras and Laine 2017: 80-byte
+ * nodes of 8 quantized child boxes), which finds the same closest hits. AUTO follows one
+ * rule by device type (src/device/opencl.c). The CPU device and the flat structure take no
+ * BVH from it. */
+typedef enum tr_device_bvh {
+    TR_DEVICE_BVH_AUTO = 0,
+    TR_DEVICE_BVH_BVH2 = 1,  /* "bvh2": the binary BVH */
+    TR_DEVICE_BVH_CWBVH = 2, /* "cwbvh": the compressed wide BVH */
+} tr_device_bvh;
+/* "auto", "bvh2" or "cwbvh" -> the value; -1 for any other name. */
+int tr_device_bvh_from_name(const char *name);
+const char *tr_device_bvh_name(tr_device_bvh bvh);
+/* Sets the choice for the device's next uploads (a device opens with AUTO). AUTO takes the
+ * environment variable TRAC0R_OPENCL_BVH's name where it is set (another value than the
+ * three names fails tr_device_create with TR_STATUS_INVALID_ARGUMENT), else the rule.
+ * TR_STATUS_INVALID_ARGUMENT for a value outside the enum; the CPU accepts and ignores it. */
+int tr_device_set_bvh(tr_device *dev, tr_device_bvh bvh, tr_error *err);
+/* The BVH the device walks for the uploaded scene: TR_DEVICE_BVH_CWBVH where it walks the
+ * compressed wide BVH, otherwise TR_DEVICE_BVH_BVH2 (also the CPU, a flat scene and before
+ * an upload). */
+tr_device_bvh tr_device_get_bvh(const tr_device *dev);
 /* Bytes of device memory the uploaded scene takes (0 on the CPU: it shares the host's). */
 uint64_t tr_device_scene_bytes(const tr_device *dev);
 

@@ -228,8 +228,12 @@ void tr_device_describe(const tr_device *dev, int threads, char *out, size_t siz
         const int n = threads > 0 ? threads : tr_default_threads();
         snprintf(out, size, "cpu, %d thread%s", n, n == 1 ? "" : "s");
     } else if (dev->scene && !tr_device_traces(dev, dev->scene->accel)) {
-        snprintf(out, size, "%s (%s; %s is host-only, the device traces a %s)", dev->info.name,
-                 dev->info.model, tr_accel_name(dev->scene->accel), tr_accel_name(dev->accel));
+        snprintf(out, size, "%s (%s; %s is host-only, the device traces a %s; device bvh %s)",
+                 dev->info.name, dev->info.model, tr_accel_name(dev->scene->accel),
+                 tr_accel_name(dev->accel), tr_device_bvh_name(tr_device_get_bvh(dev)));
+    } else if (dev->scene && dev->accel == TR_ACCEL_TYPE_BVH) {
+        snprintf(out, size, "%s (%s; device bvh %s)", dev->info.name, dev->info.model,
+                 tr_device_bvh_name(tr_device_get_bvh(dev)));
     } else {
         snprintf(out, size, "%s (%s)", dev->info.name, dev->info.model);
     }
@@ -263,6 +267,37 @@ int tr_device_upload(tr_device *dev, const tr_scene *scene, tr_error *err) {
 
 tr_accel_type tr_device_accel(const tr_device *dev) {
     return dev->accel;
+}
+
+static const char *const bvh_names[] = {"auto", "bvh2", "cwbvh"};
+
+int tr_device_bvh_from_name(const char *name) {
+    for (int i = 0; name && i < (int)(sizeof bvh_names / sizeof bvh_names[0]); ++i) {
+        if (strcmp(name, bvh_names[i]) == 0) {
+            return i;
+        }
+    }
+    return -1;
+}
+
+const char *tr_device_bvh_name(tr_device_bvh bvh) {
+    return (unsigned)bvh < sizeof bvh_names / sizeof bvh_names[0] ? bvh_names[bvh] : "unknown";
+}
+
+int tr_device_set_bvh(tr_device *dev, tr_device_bvh bvh, tr_error *err) {
+    if ((unsigned)bvh > (unsigned)TR_DEVICE_BVH_CWBVH) {
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "unknown device BVH %d (expected auto, bvh2 or cwbvh)", (int)bvh);
+    }
+    if (dev->kind == TR_DEVICE_OPENCL) {
+        tr_cl_set_bvh(dev->cl, bvh);
+    }
+    return TR_OK;
+}
+
+tr_device_bvh tr_device_get_bvh(const tr_device *dev) {
+    return dev->kind == TR_DEVICE_OPENCL && dev->scene ? tr_cl_scene_bvh(dev->cl)
+                                                       : TR_DEVICE_BVH_BVH2;
 }
 
 uint64_t tr_device_scene_bytes(const tr_device *dev) {

@@ -76,6 +76,14 @@ uint64_t tr_cl_scene_bytes(const tr_cl_context *ctx) {
     (void)ctx;
     return 0;
 }
+void tr_cl_set_bvh(tr_cl_context *ctx, tr_device_bvh bvh) {
+    (void)ctx;
+    (void)bvh;
+}
+tr_device_bvh tr_cl_scene_bvh(const tr_cl_context *ctx) {
+    (void)ctx;
+    return TR_DEVICE_BVH_BVH2;
+}
 int tr_cl_render_frame(tr_cl_context *ctx, const tr_frame *f, uint64_t *rays, tr_error *err) {
     (void)ctx;
     (void)f;
@@ -301,6 +309,9 @@ struct tr_cl_context {
     cl_mem frame;
     int have_scene;
     tr_accel_type accel;
+    tr_device_bvh bvh;       /* the choice for uploads (tr_cl_set_bvh) */
+    tr_device_bvh env_bvh;   /* TRAC0R_OPENCL_BVH's, for the choice auto */
+    tr_device_bvh scene_bvh; /* the uploaded scene's: bvh2 or cwbvh */
     uint64_t scene_bytes;
     /* The film. */
     cl_mem film[FILM_BUFFERS], rays;
@@ -751,6 +762,46 @@ static int check_work_group(tr_cl_context *ctx, int given, int cpu, tr_error *er
     return TR_OK;
 }
 
+/* TRAC0R_OPENCL_BVH=auto|bvh2|cwbvh: what the choice auto means (an explicit bvh2 or cwbvh
+ * of tr_cl_set_bvh wins); a bad value fails the opening, as a bad work-group size does. */
+static const char bvh_env[] = "TRAC0R_OPENCL_BVH";
+
+static int parse_bvh_env(tr_device_bvh *bvh, tr_error *err) {
+    const char *env = getenv(bvh_env);
+    *bvh = TR_DEVICE_BVH_AUTO;
+    if (!env || !*env) {
+        return TR_OK;
+    }
+    const int b = tr_device_bvh_from_name(env);
+    if (b < 0) {
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "%s='%s' is not auto, bvh2 or cwbvh",
+                            bvh_env, env);
+    }
+    *bvh = (tr_device_bvh)b;
+    return TR_OK;
+}
+
+/* The rule `auto` follows, and the one place it is written: the BVH a device of this type
+ * walks. Both find the same hits; which is faster is a measurement per device type
+ * (docs/gpu.md). CPU devices keep the binary BVH: on PoCL pt's frames took 1.4-1.5x as
+ * long with the compressed one (docs/log/2026-cwbvh-render.md). GPUs keep it too until one
+ * has measured both in the renderer (scripts/gpu-measure's cwbvh rows): the binary BVH is
+ * what every earlier GPU figure was taken with. */
+static tr_device_bvh auto_bvh(const tr_cl_device_info *info) {
+    if (strcmp(info->type, "gpu") == 0) {
+        return TR_DEVICE_BVH_BVH2;
+    }
+    return TR_DEVICE_BVH_BVH2;
+}
+
+void tr_cl_set_bvh(tr_cl_context *ctx, tr_device_bvh bvh) {
+    ctx->bvh = bvh;
+}
+
+tr_device_bvh tr_cl_scene_bvh(const tr_cl_context *ctx) {
+    return ctx->have_scene ? ctx->scene_bvh : TR_DEVICE_BVH_BVH2;
+}
+
 tr_cl_context *tr_cl_open_source(int index, const char *source, tr_error *err) {
     last_build_log[0] = '\0';
     int count = 0;
@@ -779,7 +830,8 @@ tr_cl_context *tr_cl_open_source(int index, const char *source, tr_error *err) {
     }
     ctx->info = info;
     int wg_given = 0;
-    if (parse_work_group(ctx->local, &wg_given, err) != TR_OK) {
+    if (parse_work_group(ctx->local, &wg_given, err) != TR_OK ||
+        parse_bvh_env(&ctx->env_bvh, err) != TR_OK) {
         goto fail;
     }
     ctx->platform = plat;
@@ -958,6 +1010,22 @@ int tr_cl_upload_scene(tr_cl_context *ctx, const tr_scene *scene, tr_error *err)
         view.accel = TR_ACCEL_BVH;
         accel = TR_ACCEL_TYPE_BVH;
     }
+    /* The compressed wide BVH, where chosen, converted from the binary one the device
+     * would walk and uploaded beside it (tr_cl_trace_rays still walks the binary BVH). */
+    tr_cwbvh cw;
+    memset(&cw, 0, sizeof cw);
+    tr_device_bvh bvh = ctx->bvh != TR_DEVICE_BVH_AUTO ? ctx->bvh : ctx->env_bvh;
+    bvh = bvh != TR_DEVICE_BVH_AUTO ? bvh : auto_bvh(&ctx->info);
+    if (accel == TR_ACCEL_TYPE_BVH && bvh == TR_DEVICE_BVH_CWBVH && view.bvh_node_count > 0u) {
+        if (tr_cwbvh_build(&cw, view.bvh_nodes, view.bvh_node_count, view.bvh_tris, err) != TR_OK) {
+            tr_bvh_free(&own);
+            return TR_ERR;
+        }
+        view.cwbvh_nodes = cw.nodes;
+        view.cwbvh_node_count = cw.node_count;
+        view.cwbvh_tris = cw.tris;
+        view.cwbvh_tri_count = cw.tri_count;
+    }
     cl_array arrays[TR_CL_MAX_ARRAYS];
     const int na = scene_arrays(&view, arrays);
     int rc = TR_OK;
@@ -983,6 +1051,7 @@ int tr_cl_upload_scene(tr_cl_context *ctx, const tr_scene *scene, tr_error *err)
     }
     if (rc != TR_OK) {
         tr_bvh_free(&own);
+        tr_cwbvh_free(&cw);
         return rc;
     }
     release_scene(ctx);
@@ -1054,12 +1123,14 @@ int tr_cl_upload_scene(tr_cl_context *ctx, const tr_scene *scene, tr_error *err)
         rc = wf_set_scene(ctx, err);
     }
     tr_bvh_free(&own);
+    tr_cwbvh_free(&cw);
     if (rc != TR_OK) {
         release_scene(ctx);
         return rc;
     }
     ctx->have_scene = 1;
     ctx->accel = accel;
+    ctx->scene_bvh = view.cwbvh_node_count > 0u ? TR_DEVICE_BVH_CWBVH : TR_DEVICE_BVH_BVH2;
     return TR_OK;
 }
 

@@ -85,6 +85,11 @@ const char *tr_cl_build_options(const tr_cl_context *ctx);
 int tr_cl_upload_scene(tr_cl_context *ctx, const tr_scene *scene, tr_error *err);
 /* The structure the uploaded scene is traced through on the device (flat or bvh). */
 tr_accel_type tr_cl_scene_accel(const tr_cl_context *ctx);
+/* The BVH choice for the next uploads (trac0r/device.h's tr_device_bvh: auto takes
+ * TRAC0R_OPENCL_BVH's, read at opening, else the rule by device type), and the one the
+ * uploaded scene is walked with: TR_DEVICE_BVH_CWBVH or TR_DEVICE_BVH_BVH2 (also flat). */
+void tr_cl_set_bvh(tr_cl_context *ctx, tr_device_bvh bvh);
+tr_device_bvh tr_cl_scene_bvh(const tr_cl_context *ctx);
 /* Bytes of device memory the uploaded scene's buffers take. */
 uint64_t tr_cl_scene_bytes(const tr_cl_context *ctx);
 

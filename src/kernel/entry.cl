@@ -240,6 +240,7 @@ __kernel void tr_cl_trace_rays(TR_SCENE_ARRAYS(TR_CL_ARRAY_PARAM) __global const
     }
     tr_scene_view s;
     TR_CL_SCENE_VIEW(s);
+    s.cwbvh_node_count = 0u; /* the binary BVH's row; tr_cl_trace_cwbvh is the wide one's */
     const tr_ray r = rays[i];
     uint h;
     if (shadow) {

@@ -7,6 +7,7 @@
 
 #include "attrib.h"
 #include "compat.h"
+#include "cwbvh.h"
 #include "intersect.h"
 #include "types.h"
 
@@ -54,7 +55,9 @@ int tr_wbvh_occluded(const struct tr_wbvh *w, const tr_ray *ray);
     X(float, env_cdf, env_cdf_count) /* marginal CDF (height + 1), then each row's (width + 1) */  \
     X(tr_sun, sun, sun_count)        /* 0 or 1: the sun (sun.h) */                                 \
     X(tr_punctual, punctual, punctual_count) /* point, spot and directional lights */              \
-    X(float, ggx_ms, ggx_ms_count)           /* GGX multiple scattering (ggx_ms.h), or none */
+    X(float, ggx_ms, ggx_ms_count)           /* GGX multiple scattering (ggx_ms.h), or none */     \
+    X(tr_cwbvh_node, cwbvh_nodes, cwbvh_node_count) /* a device's compressed wide BVH, or none */  \
+    X(tr_bvh_tri, cwbvh_tris, cwbvh_tri_count)      /* its leaf triangles (cwbvh.h) */
 
 /* The scalars a view carries besides its arrays, X(type, member), uploaded to a device as
  * 32-bit words after the counts. */
@@ -191,6 +194,18 @@ TR_FN_TRAVERSE int tr_traverse_bvh(const tr_scene_view *s, const tr_ray *ray, tr
     }
 }
 
+/* The compressed wide BVH (cwbvh.h) in place of the binary one: an OpenCL device walks it
+ * when its upload chose it (src/device/opencl.c). Host views never hold one, so host builds
+ * leave the branch out and the CPU's query paths compile as they did before it. Out of line
+ * on a device for the binary walk's reason (compat.h): one copy of its stack per work item. */
+#if defined(__OPENCL_C_VERSION__) || defined(__OPENCL_VERSION__)
+#define TR_SCENE_VIEW_CWBVH 1
+TR_FN_TRAVERSE int tr_traverse_cwbvh(const tr_scene_view *s, const tr_ray *ray, tr_hit *hit,
+                                     int any_hit) {
+    return tr_cwbvh_traverse(s->cwbvh_nodes, s->cwbvh_node_count, s->cwbvh_tris, ray, hit, any_hit);
+}
+#endif
+
 /* Closest hit against whichever structure the view holds. */
 TR_FN int tr_intersect_scene(const tr_scene_view *s, const tr_ray *ray, tr_hit *hit) {
 #ifdef TR_SCENE_VIEW_EMBREE
@@ -201,6 +216,11 @@ TR_FN int tr_intersect_scene(const tr_scene_view *s, const tr_ray *ray, tr_hit *
 #ifdef TR_SCENE_VIEW_WBVH
     if (s->accel == TR_ACCEL_BVH && s->wbvh) {
         return tr_wbvh_intersect(s->wbvh, ray, hit);
+    }
+#endif
+#ifdef TR_SCENE_VIEW_CWBVH
+    if (s->accel == TR_ACCEL_BVH && s->cwbvh_node_count > 0u) {
+        return tr_traverse_cwbvh(s, ray, hit, 0);
     }
 #endif
     if (s->accel == TR_ACCEL_BVH) {
@@ -220,6 +240,11 @@ TR_FN int tr_occluded_scene(const tr_scene_view *s, const tr_ray *ray) {
 #ifdef TR_SCENE_VIEW_WBVH
     if (s->accel == TR_ACCEL_BVH && s->wbvh) {
         return tr_wbvh_occluded(s->wbvh, ray);
+    }
+#endif
+#ifdef TR_SCENE_VIEW_CWBVH
+    if (s->accel == TR_ACCEL_BVH && s->cwbvh_node_count > 0u) {
+        return tr_traverse_cwbvh(s, ray, &hit, 1);
     }
 #endif
     if (s->accel == TR_ACCEL_BVH) {

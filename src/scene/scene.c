@@ -714,6 +714,10 @@ tr_scene_view tr_scene_view_of(const tr_scene *s) {
     if (s->accel == TR_ACCEL_TYPE_BVH && s->two_level) {
         v.wbvh = &s->tlas.wbvh; /* instances: the two-level structure, host only */
     }
+    v.cwbvh_nodes = NULL; /* a device's own (src/device/opencl.c), never the host's */
+    v.cwbvh_node_count = 0u;
+    v.cwbvh_tris = NULL;
+    v.cwbvh_tri_count = 0u;
     v.lights = s->lights;
     v.light_cdf = s->light_cdf;
     /* A table older than the triangles could name triangles that moved: without a
