@@ -493,6 +493,28 @@ int main(void) {
         compare_backends(dev, &cc, 1, TR_INTEGRATOR_PT, 64, "bvh, pt, clear-coated principled");
         tr_scene_clear(&cc);
     }
+    /* Transmission (the rough dielectric boundary of bsdf_dielectric.h) with several
+     * weights, indices and roughnesses, and the volume's absorption behind back faces. */
+    {
+        tr_scene tm = {0};
+        tr_scene_init(&tm);
+        CHECK(tr_scene_builtin(&tm, "cornell", 48, 36, &err) == TR_OK, "%s", err.msg);
+        for (uint32_t i = 0; i < tm.material_count; ++i) {
+            if (tm.materials[i].type == TR_MATERIAL_DIFFUSE) {
+                tm.materials[i].type = TR_MATERIAL_PRINCIPLED;
+                tm.materials[i].roughness = 0.15f + 0.25f * (float)(i % 3);
+                tm.materials[i].ior = 1.2f + 0.15f * (float)(i % 4);
+                tr_material_ext e = tr_material_ext_default();
+                e.transmission = 0.5f + 0.25f * (float)(i % 3);
+                e.metallic = 0.2f * (float)(i % 2);
+                e.absorption = v3(0.5f, 1.0f * (float)(i % 2), 2.0f);
+                CHECK(tr_scene_set_material_ext(&tm, i, &e, &err) == TR_OK, "%s", err.msg);
+            }
+        }
+        CHECK(tr_scene_commit(&tm, TR_ACCEL_TYPE_BVH, &err) == TR_OK, "%s", err.msg);
+        compare_backends(dev, &tm, 1, TR_INTEGRATOR_PT, 64, "bvh, pt, transmissive principled");
+        tr_scene_clear(&tm);
+    }
     CHECK(tr_device_upload(dev, &scene, &err) == TR_OK, "%s", err.msg);
 
     /* Film handling: a wrongly sized film, clearing, a bad config. */
