@@ -233,6 +233,34 @@ static uint32_t load_texture(import_ctx *c, const struct aiMaterial *m, const ch
     return index;
 }
 
+/* load_texture, seen through glTF's KHR_texture_transform where the material gives one
+ * for that map. Assimp 5.2's glTF importer turns the extension's offset o, rotation r and
+ * scale s into its own aiUVTransform (rotation -r about the image centre in its flipped
+ * coordinates, with a translation that absorbs the change of origin); this undoes that
+ * to get o, r and s back. Other formats' transforms are not read. */
+static uint32_t load_texture_xf(import_ctx *c, const struct aiMaterial *m, const char *mname,
+                                enum aiTextureType type, const char *what) {
+    uint32_t index = load_texture(c, m, mname, type, what);
+    struct aiUVTransform t;
+    if (index == TR_NO_INDEX || !c->gltf ||
+        aiGetMaterialUVTransform(m, AI_MATKEY_UVTRANSFORM(type, 0), &t) != AI_SUCCESS) {
+        return index;
+    }
+    const double r = -(double)t.mRotation, sx = t.mScaling.x, sy = t.mScaling.y;
+    const double co = cos(r), sn = sin(r);
+    const double ou = t.mTranslation.x - 0.5 * sx * (1.0 - co + sn);
+    const double ov = -(t.mTranslation.y - 0.5 * sy * (sn + co - 1.0) - 1.0 + sy);
+    float xf[6];
+    tr_texture_transform_glTF(xf, (float)ou, (float)ov, (float)r, (float)sx, (float)sy);
+    tr_error e;
+    uint32_t out = index;
+    if (tr_scene_texture_transformed(c->s, index, xf, &out, &e) != TR_OK) {
+        import_warn(c, "material '%.60s': %s map's transform dropped: %s", mname, what, e.msg);
+        return index;
+    }
+    return out;
+}
+
 /* The import table: a file's material (Wavefront MTL keys, glTF's metallic-roughness, and
  * whatever Assimp maps onto the same keys for other formats) onto ours, with its extras
  * (textures, emission, cut-out) in *ext (*has_ext set when there are any):
@@ -325,16 +353,16 @@ static tr_material map_material(import_ctx *c, const struct aiMaterial *m, tr_ma
         }
         return tr_material_glass(diffuse, ior);
     }
-    uint32_t emission_tex = load_texture(c, m, mname, aiTextureType_EMISSIVE, "emissive");
+    uint32_t emission_tex = load_texture_xf(c, m, mname, aiTextureType_EMISSIVE, "emissive");
     if (emax > 0.0f && emission_tex == TR_NO_INDEX && !pbr) {
         return tr_material_emitter(v3(e[0] / emax, e[1] / emax, e[2] / emax), emax);
     }
-    ext->base_tex = load_texture(
+    ext->base_tex = load_texture_xf(
         c, m, mname, has_base ? aiTextureType_BASE_COLOR : aiTextureType_DIFFUSE, "base colour");
     if (ext->base_tex == TR_NO_INDEX) {
-        ext->base_tex = load_texture(c, m, mname, aiTextureType_DIFFUSE, "diffuse");
+        ext->base_tex = load_texture_xf(c, m, mname, aiTextureType_DIFFUSE, "diffuse");
     }
-    ext->normal_tex = load_texture(c, m, mname, aiTextureType_NORMALS, "normal");
+    ext->normal_tex = load_texture_xf(c, m, mname, aiTextureType_NORMALS, "normal");
     ext->emission_tex = emission_tex;
     ext->emission = v3(e[0], e[1], e[2]);
     if (emission_tex != TR_NO_INDEX && emax <= 0.0f) {
@@ -369,10 +397,10 @@ static tr_material map_material(import_ctx *c, const struct aiMaterial *m, tr_ma
     }
     tr_material out;
     if (pbr) {
-        ext->mr_tex = load_texture(c, m, mname, aiTextureType_UNKNOWN, "metallic-roughness");
+        ext->mr_tex = load_texture_xf(c, m, mname, aiTextureType_UNKNOWN, "metallic-roughness");
         if (ext->mr_tex == TR_NO_INDEX) {
             ext->mr_tex =
-                load_texture(c, m, mname, aiTextureType_DIFFUSE_ROUGHNESS, "metallic-roughness");
+                load_texture_xf(c, m, mname, aiTextureType_DIFFUSE_ROUGHNESS, "metallic-roughness");
         }
         ext->metallic = clamp01(metal);
         /* KHR_materials_clearcoat: the coat's weight and roughness (its maps are not read). */
@@ -737,6 +765,7 @@ static void gltf_extension_warnings(const import_ctx *c, const char *path) {
         "KHR_materials_transmission", /* principled's transmission (its map: warned) */
         "KHR_materials_ior",          /* the principled material's index */
         "KHR_materials_volume",       /* the attenuation (thickness is not needed) */
+        "KHR_texture_transform",      /* the maps' offset, rotation and scale */
         "KHR_materials_sheen",        /* warned per material */
     };
     const size_t plen = strlen(path);
