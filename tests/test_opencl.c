@@ -494,11 +494,22 @@ int main(void) {
         tr_scene_clear(&cc);
     }
     /* Transmission (the rough dielectric boundary of bsdf_dielectric.h) with several
-     * weights, indices and roughnesses, and the volume's absorption behind back faces. */
+     * weights, indices and roughnesses, the volume's absorption behind back faces, and a
+     * base map seen through a texture transform (texture.h; without vertex attributes the
+     * barycentrics are the coordinates). */
     {
         tr_scene tm = {0};
         tr_scene_init(&tm);
         CHECK(tr_scene_builtin(&tm, "cornell", 48, 36, &err) == TR_OK, "%s", err.msg);
+        uint32_t checker[16], tex = 0, moved = 0;
+        for (uint32_t k = 0; k < 16; ++k) {
+            checker[k] = ((k + k / 4) % 2 ? 0xffffffffu : 0xff402010u);
+        }
+        float xf[6];
+        tr_texture_transform_glTF(xf, 0.25f, -0.5f, 0.7f, 3.0f, 2.0f);
+        CHECK(tr_scene_add_texture(&tm, checker, 4, 4, 0u, &tex, &err) == TR_OK &&
+                  tr_scene_texture_transformed(&tm, tex, xf, &moved, &err) == TR_OK,
+              "%s", err.msg);
         for (uint32_t i = 0; i < tm.material_count; ++i) {
             if (tm.materials[i].type == TR_MATERIAL_DIFFUSE) {
                 tm.materials[i].type = TR_MATERIAL_PRINCIPLED;
@@ -508,6 +519,7 @@ int main(void) {
                 e.transmission = 0.5f + 0.25f * (float)(i % 3);
                 e.metallic = 0.2f * (float)(i % 2);
                 e.absorption = v3(0.5f, 1.0f * (float)(i % 2), 2.0f);
+                e.base_tex = i % 2 ? moved : tex;
                 CHECK(tr_scene_set_material_ext(&tm, i, &e, &err) == TR_OK, "%s", err.msg);
             }
         }
