@@ -31,9 +31,10 @@ static char dir[600];
 static void matrix(void) {
     float xf[6];
     /* offset (0.25, 0.5), rotation pi/2, scale (2, 1):
-     * u' = cos(r) 2 u - sin(r) v + 0.25 = -v + 0.25, v' = sin(r) 2 u + cos(r) v + 0.5 = 2u + 0.5 */
+     * u' = cos(r) 2 u + sin(r) v + 0.25 = v + 0.25, v' = -sin(r) 2 u + cos(r) v + 0.5 = -2u + 0.5
+     */
     tr_texture_transform_glTF(xf, 0.25f, 0.5f, 1.57079632679f, 2.0f, 1.0f);
-    const float want[6] = {0.0f, -1.0f, 0.25f, 2.0f, 0.0f, 0.5f};
+    const float want[6] = {0.0f, 1.0f, 0.25f, -2.0f, 0.0f, 0.5f};
     for (int k = 0; k < 6; ++k) {
         CHECK(fabsf(xf[k] - want[k]) < 1e-6f, "xf[%d] = %g, by hand %g", k, (double)xf[k],
               (double)want[k]);
@@ -71,8 +72,8 @@ static void lookup(void) {
               (s.textures[moved].flags & TR_TEXTURE_TRANSFORM) != 0u,
           "the transformed entry shares the texels");
     const tr_scene_view v = tr_scene_view_of(&s);
-    /* (u, v) -> (-v + 0.25, 2u + 0.5): texel centres are at (i + 0.5) / 4. */
-    const float uv[3][2] = {{0.0625f, -0.125f}, {0.1875f, -0.625f}, {0.1875f, 0.125f}};
+    /* (u, v) -> (v + 0.25, -2u + 0.5): texel centres are at (i + 0.5) / 4. */
+    const float uv[3][2] = {{-0.0625f, 0.125f}, {-0.1875f, 0.625f}, {-0.1875f, -0.125f}};
     const int texel[3][2] = {{1, 2}, {3, 3}, {0, 3}};
     for (int k = 0; k < 3; ++k) {
         float a;

@@ -229,13 +229,14 @@ int tr_scene_texel_budget(uint32_t *budget, tr_error *err) {
 
 void tr_texture_transform_glTF(float xf[6], float offset_u, float offset_v, float rotation,
                                float scale_u, float scale_v) {
-    /* T R S of KHR_texture_transform's GLSL, whose rotation matrix (column-major there) has
-     * the rows (cos, -sin) and (sin, cos). */
+    /* T R S: scale, then rotate, then offset. The rotation's rows are (cos, sin) and
+     * (-sin, cos), the direction glTF's TextureTransformTest model asks for (its arrows
+     * point at the green markers; the other sign points them at the red one). */
     const float c = cosf(rotation), sn = sinf(rotation);
     xf[0] = c * scale_u;
-    xf[1] = -sn * scale_v;
+    xf[1] = sn * scale_v;
     xf[2] = offset_u;
-    xf[3] = sn * scale_u;
+    xf[3] = -sn * scale_u;
     xf[4] = c * scale_v;
     xf[5] = offset_v;
 }
