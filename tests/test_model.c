@@ -358,8 +358,8 @@ static void test_clearcoat(void) {
     if (at) {
         static char more[8400];
         snprintf(more, sizeof more,
-                 "%.*s[\"KHR_lights_punctual\", \"KHR_materials_volume\", "
-                 "\"KHR_texture_transform\"]%s",
+                 "%.*s[\"KHR_lights_punctual\", \"KHR_materials_iridescence\", "
+                 "\"KHR_materials_anisotropy\"]%s",
                  (int)(at - text), text, at + strlen(used));
         snprintf(path, sizeof path, "%s/ext.gltf", dir);
         write_text(path, more);

@@ -31,7 +31,7 @@
     X(GLOSSY,  4, "glossy",  TR_MATERIAL_KEY_COLOR | TR_MATERIAL_KEY_ROUGHNESS,              \
       TR_MATERIAL_KEY_MULTISCATTER)                                                          \
     X(PRINCIPLED, 5, "principled", TR_MATERIAL_KEY_COLOR,                                    \
-      TR_MATERIAL_KEY_ROUGHNESS | TR_MATERIAL_KEY_MULTISCATTER)
+      TR_MATERIAL_KEY_ROUGHNESS | TR_MATERIAL_KEY_MULTISCATTER | TR_MATERIAL_KEY_IOR)
 /* clang-format on */
 
 #define TR_MATERIAL_ENUM_ROW(id, value, name, required, optional) TR_MATERIAL_##id = value,

@@ -34,22 +34,27 @@ typedef struct tr_tri_verts {
 TR_STATIC_ASSERT(sizeof(tr_tri_verts) == 12, "tr_tri_verts layout");
 
 /* tr_texture.flags */
-#define TR_TEXTURE_CLAMP 1u /* clamp coordinates to the edge (else repeat) */
+#define TR_TEXTURE_CLAMP 1u     /* clamp coordinates to the edge (else repeat) */
+#define TR_TEXTURE_TRANSFORM 2u /* transform the coordinates by xf first */
 
 /* An image in the scene's texel array: width x height RGBA8 texels (R in the low byte),
- * row-major from the top row, starting at texels[offset]. 16 bytes. */
+ * row-major from the top row, starting at texels[offset]. With TR_TEXTURE_TRANSFORM the
+ * texture coordinates (u, v) are first replaced by (xf[0] u + xf[1] v + xf[2],
+ * xf[3] u + xf[4] v + xf[5]): glTF's KHR_texture_transform, which belongs to a material's
+ * use of an image, so such a use gets an entry of its own over the same texels. 40 bytes. */
 typedef struct tr_texture {
     uint32_t offset;
     uint32_t width, height;
     uint32_t flags; /* TR_TEXTURE_* */
+    float xf[6];
 } tr_texture;
-TR_STATIC_ASSERT(sizeof(tr_texture) == 16, "tr_texture layout");
+TR_STATIC_ASSERT(sizeof(tr_texture) == 40, "tr_texture layout");
 
 /* tr_material_ext.flags */
 #define TR_MATEXT_ALPHA_MASK 1u /* texels with alpha below alpha_cutoff are holes */
 
 /* Per-material extras, one per material when the scene has any (material_ext_count is 0
- * or material_count). Texture indices are TR_NO_INDEX for none. 64 bytes. */
+ * or material_count). Texture indices are TR_NO_INDEX for none. 96 bytes. */
 typedef struct tr_material_ext {
     uint32_t base_tex;     /* sRGB colour (x the material's colour), alpha in a */
     uint32_t emission_tex; /* sRGB colour (x emission) */
@@ -63,9 +68,17 @@ typedef struct tr_material_ext {
     /* principled: glTF's clear coat, a second GGX layer (bsdf_principled.h); 0 for none. */
     float clearcoat;           /* the layer's weight in [0, 1] */
     float clearcoat_roughness; /* its roughness in [0, 1] (alpha = roughness^2) */
-    uint32_t pad[3];
+    /* principled: glTF's KHR_materials_transmission, the weight of the rough dielectric
+     * transmission lobe (bsdf_dielectric.h) in [0, 1]; 0 for none. */
+    float transmission;
+    /* KHR_materials_volume's attenuation as an absorption coefficient per unit length,
+     * -ln(attenuationColor) / attenuationDistance: light inside the object keeps
+     * exp(-absorption d) after a distance d (tr_volume_attenuation, material_eval.h).
+     * Zero for none. */
+    tr_vec3 absorption;
+    uint32_t pad[7];
 } tr_material_ext;
-TR_STATIC_ASSERT(sizeof(tr_material_ext) == 64, "tr_material_ext layout");
+TR_STATIC_ASSERT(sizeof(tr_material_ext) == 96, "tr_material_ext layout");
 
 /* The environment: radiance arriving from infinitely far along directions no surface
  * blocks, a constant colour or an equirectangular map (width x height RGB floats in

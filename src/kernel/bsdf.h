@@ -18,7 +18,9 @@
  *            alpha = tr_ggx_alpha(roughness), see docs/integrators.md.
  *   glass    smooth dielectric (delta): exact Fresnel, total internal reflection,
  *            the colour as a filter on both lobes (as the naive integrator does).
- *   principled  glTF metallic-roughness: diffuse base + GGX layer (bsdf_principled.h).
+ *   principled  glTF metallic-roughness: diffuse base + GGX layer (bsdf_principled.h),
+ *            mixed with a rough dielectric boundary where it transmits
+ *            (bsdf_dielectric.h).
  *   emitter  emits only: its BSDF is black.
  */
 #ifndef TR_KERNEL_BSDF_H
@@ -253,7 +255,9 @@ TR_FN tr_vec3 tr_ggx_sample_vndf(float alpha, tr_vec3 v, float u1, float u2) {
     return v3_normalize(v3(alpha * nh.x, alpha * nh.y, tr_fmaxf(0.0f, nh.z)));
 }
 
-/* The principled material (glTF's metallic-roughness), built on the GGX helpers above. */
+/* The rough dielectric boundary and the principled material (glTF's metallic-roughness),
+ * built on the GGX helpers above. */
+#include "bsdf_dielectric.h"
 #include "bsdf_principled.h"
 
 /* The principled functions are out of line (TR_FN_NOINLINE); these hand them copies, so
@@ -289,6 +293,9 @@ TR_FN_INLINE tr_vec3 tr_bsdf_eval(const tr_bsdf_params *m, tr_vec3 wo, tr_vec3 w
         }
         return tr_ggx_eval(m, nf, wo, wi);
     case TR_MATERIAL_PRINCIPLED:
+        if (m->transmission > 0.0f) {
+            return tr_principled_tr_eval(*m, nf, wo, wi);
+        }
         return tr_principled_eval_copy(*m, nf, wo, wi);
     case TR_MATERIAL_GLASS:
         return (m->flags & TR_BSDF_REGULARIZED) != 0u ? tr_reg_glass_eval(*m, wo, wi) : v3s(0.0f);
@@ -311,6 +318,9 @@ TR_FN_INLINE float tr_bsdf_pdf(const tr_bsdf_params *m, tr_vec3 wo, tr_vec3 wi) 
         }
         return tr_ggx_pdf(m, nf, wo, wi);
     case TR_MATERIAL_PRINCIPLED:
+        if (m->transmission > 0.0f) {
+            return tr_principled_tr_pdf(*m, nf, wo, wi);
+        }
         return tr_principled_pdf_copy(*m, nf, wo, wi);
     case TR_MATERIAL_GLASS:
         return (m->flags & TR_BSDF_REGULARIZED) != 0u ? tr_reg_glass_density(*m, wo, wi) : 0.0f;
@@ -376,6 +386,9 @@ TR_FN_INLINE int tr_bsdf_sample(const tr_bsdf_params *m, tr_vec3 wo, float ulobe
         return 1;
     }
     case TR_MATERIAL_PRINCIPLED:
+        if (m->transmission > 0.0f) {
+            return tr_principled_tr_sample(*m, nf, wo, ulobe, u1, u2, s);
+        }
         return tr_principled_sample_copy(*m, nf, wo, ulobe, u1, u2, s);
     default:
         return 0;

@@ -48,9 +48,20 @@ TR_FN float tr_principled_alpha(float roughness) {
     return tr_fmaxf(r * r, TR_GGX_MIN_ALPHA);
 }
 
+/* The dielectric F0 of the material's index of refraction (KHR_materials_ior):
+ * ((ior - 1) / (ior + 1))^2. glTF's default 1.5 and an index below 1 (parameters built
+ * by hand, whose ior is 0) give TR_PRINCIPLED_F0 itself. */
+TR_FN float tr_principled_f0d(const tr_bsdf_params *m) {
+    if (m->ior == 1.5f || !(m->ior >= 1.0f)) {
+        return TR_PRINCIPLED_F0;
+    }
+    float r = (m->ior - 1.0f) / (m->ior + 1.0f);
+    return r * r;
+}
+
 TR_FN tr_vec3 tr_principled_f0(const tr_bsdf_params *m) {
     float k = tr_fminf(tr_fmaxf(m->metallic, 0.0f), 1.0f);
-    return v3_add(v3s(TR_PRINCIPLED_F0 * (1.0f - k)), v3_scale(m->color, k));
+    return v3_add(v3s(tr_principled_f0d(m) * (1.0f - k)), v3_scale(m->color, k));
 }
 
 /* 1 - (1 - c/2)^5 */
@@ -107,7 +118,7 @@ TR_FN_NOINLINE tr_vec3 tr_principled_eval(const tr_bsdf_params *m, tr_vec3 nf, t
         f = v3_add(
             f, v3_scale(tr_ggx_ms_lobe(m->ms, tr_principled_alpha(m->roughness), f0, co, ci), k));
     }
-    float kd = (1.0f - k) * (28.0f / 23.0f) * TR_INV_PI * (1.0f - TR_PRINCIPLED_F0) *
+    float kd = (1.0f - k) * (28.0f / 23.0f) * TR_INV_PI * (1.0f - tr_principled_f0d(m)) *
                tr_as_factor(ci) * tr_as_factor(co);
     if (m->clearcoat > 0.0f) {
         return tr_coat_layer(m, f, v3_scale(m->color, kd), nf, wo, wi, co, ci);
@@ -122,7 +133,7 @@ TR_FN float tr_principled_spec_prob(const tr_bsdf_params *m, float co) {
     tr_vec3 fs = tr_fresnel_schlick(tr_principled_f0(m), co);
     float ws = (fs.x + fs.y + fs.z) * (1.0f / 3.0f);
     float wd = (1.0f - k) * (m->color.x + m->color.y + m->color.z) * (1.0f / 3.0f) *
-               (1.0f - TR_PRINCIPLED_F0) * tr_as_factor(co);
+               (1.0f - tr_principled_f0d(m)) * tr_as_factor(co);
     if (!(ws + wd > 0.0f)) {
         return 1.0f;
     }
@@ -139,7 +150,7 @@ TR_FN float tr_coat_prob(const tr_bsdf_params *m, float co) {
     tr_vec3 fs = tr_fresnel_schlick(tr_principled_f0(m), co);
     float wb = (fs.x + fs.y + fs.z) * (1.0f / 3.0f) +
                (1.0f - k) * (m->color.x + m->color.y + m->color.z) * (1.0f / 3.0f) *
-                   (1.0f - TR_PRINCIPLED_F0) * tr_as_factor(co);
+                   (1.0f - tr_principled_f0d(m)) * tr_as_factor(co);
     float wc = tr_coat_weight(m) * tr_coat_fresnel(co);
     wb *= 1.0f - wc;
     if (!(wb > 0.0f)) {
@@ -216,6 +227,69 @@ TR_FN_NOINLINE int tr_principled_sample(const tr_bsdf_params *m, tr_vec3 nf, tr_
     }
     s->delta = 0;
     s->weight = v3_scale(tr_principled_eval(m, nf, wo, s->wi), ci / s->pdf);
+    return 1;
+}
+
+/* ---- Transmission (KHR_materials_transmission, KHR_materials_ior) ----------------------
+ *
+ * glTF mixes its dielectric base between the diffuse lobe and a specular transmission
+ * lobe by the transmission factor t, under the same Fresnel-weighted reflection; at t = 1
+ * the dielectric is a rough boundary that reflects F and refracts 1 - F, Walter's
+ * (bsdf_dielectric.h). Here the whole opaque material above is mixed with that boundary:
+ *
+ *   f = (1 - w) f_opaque + w f_boundary,   w = t (1 - metallic)
+ *
+ * with the boundary's index the material's ior, its alpha roughness^2, its refraction
+ * tinted by the base colour (glTF's). A convex mix of two BSDFs that conserve energy
+ * conserves it, and the sampler picks the part by w. It equals glTF's for metallic 0 or 1;
+ * in between the conductor's share is (1 - w) metallic instead of metallic. The clear coat
+ * lies on the opaque part only. The boundary needs b->ns pointing outside, as glass. */
+
+TR_FN float tr_principled_tr_weight(const tr_bsdf_params *m) {
+    float k = tr_fminf(tr_fmaxf(m->metallic, 0.0f), 1.0f);
+    return tr_fminf(tr_fmaxf(m->transmission, 0.0f), 1.0f) * (1.0f - k);
+}
+
+TR_FN_NOINLINE tr_vec3 tr_principled_tr_eval(tr_bsdf_params m, tr_vec3 nf, tr_vec3 wo, tr_vec3 wi) {
+    float w = tr_principled_tr_weight(&m);
+    tr_vec3 fb =
+        tr_rd_eval(tr_principled_alpha(m.roughness), tr_rd_ior(m.ior), m.color, m.ns, wo, wi);
+    tr_vec3 fo = tr_principled_eval(&m, nf, wo, wi);
+    return v3_add(v3_scale(fo, 1.0f - w), v3_scale(fb, w));
+}
+
+TR_FN_NOINLINE float tr_principled_tr_pdf(tr_bsdf_params m, tr_vec3 nf, tr_vec3 wo, tr_vec3 wi) {
+    float w = tr_principled_tr_weight(&m);
+    float pb = tr_rd_pdf(tr_principled_alpha(m.roughness), tr_rd_ior(m.ior), m.ns, wo, wi);
+    float po = w < 1.0f ? tr_principled_pdf(&m, nf, wo, wi) : 0.0f;
+    return (1.0f - w) * po + w * pb;
+}
+
+/* ulobe below w picks the boundary (and, stretched over [0, 1), its reflection or
+ * refraction), else the opaque part's lobes. */
+TR_FN_NOINLINE int tr_principled_tr_sample(tr_bsdf_params m, tr_vec3 nf, tr_vec3 wo, float ulobe,
+                                           float u1, float u2, tr_scatter *s) {
+    float w = tr_principled_tr_weight(&m);
+    tr_scatter r;
+    int ok;
+    if (ulobe < w) {
+        ok = tr_rd_sample(tr_principled_alpha(m.roughness), tr_rd_ior(m.ior), m.color, m.ns, wo,
+                          tr_fminf(ulobe / w, 0.99999994f), u1, u2, &r);
+    } else {
+        ok = tr_principled_sample(&m, nf, wo, tr_fminf((ulobe - w) / (1.0f - w), 0.99999994f), u1,
+                                  u2, &r);
+    }
+    if (!ok) {
+        return 0;
+    }
+    r.pdf = tr_principled_tr_pdf(m, nf, wo, r.wi);
+    if (!(r.pdf > 0.0f)) {
+        return 0;
+    }
+    r.delta = 0;
+    r.weight =
+        v3_scale(tr_principled_tr_eval(m, nf, wo, r.wi), tr_fabsf(v3_dot(r.wi, m.ns)) / r.pdf);
+    *s = r;
     return 1;
 }
 

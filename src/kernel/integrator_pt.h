@@ -185,6 +185,10 @@ TR_FN tr_vec3 tr_trace_pt_ff(const tr_scene_view *s, tr_ray ray, int max_depth, 
             ray.tmin = hit.t + 1e-5f * tr_fmaxf(1.0f, hit.t);
             continue;
         }
+        tr_vec3 absorbed;
+        if (tr_volume_attenuation(s, hit.triangle, ray.dir, n, hit.t, &absorbed)) {
+            throughput = v3_mul(throughput, absorbed); /* the segment crossed a medium */
+        }
         if (surface && seg == 1 && (flags & TR_FRAME_PSR) != 0u && tr_bsdf_is_delta(&m)) {
             *rays += tr_psr_surface(s, ray, hit, m, surface);
             psr_done = 1;

@@ -32,6 +32,7 @@ typedef struct tr_bsdf_params {
     float metallic;   /* principled: 0 dielectric .. 1 conductor */
     float clearcoat;  /* principled: the clear coat's weight, 0 for none (bsdf_principled.h) */
     float clearcoat_roughness; /* principled: the clear coat's roughness */
+    float transmission;        /* principled: the rough dielectric boundary's weight (0: none) */
     int hole;                  /* an alpha cut-out: the ray passes through (tr_material_ext) */
     /* The scene's multiple-scattering table (ggx_ms.h), or NULL: read where flags has
      * TR_MATERIAL_MULTISCATTER. */
@@ -55,6 +56,7 @@ TR_FN tr_bsdf_params tr_material_params(const tr_material *m, tr_vec3 ng) {
     b.metallic = 0.0f;
     b.clearcoat = 0.0f;
     b.clearcoat_roughness = 0.0f;
+    b.transmission = 0.0f;
     b.hole = 0;
     b.ms = 0;
     return b;
@@ -68,6 +70,7 @@ TR_FN void tr_material_apply_ext(const tr_scene_view *s, uint32_t mat, const tr_
     b->metallic = e.metallic;
     b->clearcoat = e.clearcoat;
     b->clearcoat_roughness = e.clearcoat_roughness;
+    b->transmission = e.transmission;
     b->emission = e.emission;
     float alpha = 1.0f;
     if (e.base_tex != TR_NO_INDEX) {
@@ -150,6 +153,25 @@ TR_FN tr_bsdf_params tr_material_eval(const tr_scene_view *s, uint32_t triangle,
     b.ps = p;
     b.ms = s->ggx_ms_count > 0u ? s->ggx_ms : 0;
     return b;
+}
+
+/* Beer-Lambert absorption inside a transmissive object (glTF's KHR_materials_volume): a
+ * ray along dir that travelled distance t before it hit triangle `triangle` from behind
+ * (dir . ng > 0: from inside, for outward normals) crossed the inside of that triangle's
+ * material and keeps exp(-absorption t) of its light; *att receives that factor. Returns 0
+ * (att untouched) where nothing was absorbed: a hit from outside, or no absorption. Each
+ * object is taken as its own medium in air: an object inside another is not modelled. */
+TR_FN int tr_volume_attenuation(const tr_scene_view *s, uint32_t triangle, tr_vec3 dir, tr_vec3 ng,
+                                float t, tr_vec3 *att) {
+    if (s->material_ext_count == 0u || !(v3_dot(dir, ng) > 0.0f)) {
+        return 0;
+    }
+    tr_vec3 a = s->material_exts[s->triangles[triangle].material].absorption;
+    if (!(a.x > 0.0f || a.y > 0.0f || a.z > 0.0f)) {
+        return 0;
+    }
+    *att = v3(tr_expf(-a.x * t), tr_expf(-a.y * t), tr_expf(-a.z * t));
+    return 1;
 }
 
 /* Alpha cut-outs stop nothing: at most this many are passed through along one ray. */

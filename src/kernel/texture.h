@@ -49,12 +49,18 @@ TR_FN tr_vec3 tr_texel(const tr_scene_view *s, TR_CONST_GLOBAL tr_texture *t, ui
     return c;
 }
 
-/* Texture `tex` at (u, v) (0..1 across the image, v downwards from the top row), filtered
+/* Texture `tex` at (u, v) (0..1 across the image, v downwards from the top row; after the
+ * texture's own transform, if it has one), filtered
  * bilinearly between texel centres; colour channels sRGB-decoded before filtering when
  * srgb is set. *alpha receives the filtered alpha. */
 TR_FN tr_vec3 tr_texture_sample(const tr_scene_view *s, uint32_t tex, float u, float v, int srgb,
                                 float *alpha) {
     TR_CONST_GLOBAL tr_texture *t = &s->textures[tex];
+    if ((t->flags & TR_TEXTURE_TRANSFORM) != 0u) {
+        float tu = t->xf[0] * u + t->xf[1] * v + t->xf[2];
+        v = t->xf[3] * u + t->xf[4] * v + t->xf[5];
+        u = tu;
+    }
     int clamp = (t->flags & TR_TEXTURE_CLAMP) != 0u;
     /* Repeat: only the fraction matters, and keeping it small keeps the integer
      * conversion below exact. */

@@ -592,16 +592,41 @@ static const char *const extra_keys[] = {"texture",
                                          "metallic",
                                          "metallic_roughness_texture",
                                          "clearcoat",
-                                         "clearcoat_roughness"};
+                                         "clearcoat_roughness",
+                                         "emission_strength",
+                                         "transmission",
+                                         "attenuation_color",
+                                         "attenuation_distance"};
 #define EXTRA_KEY_COUNT (sizeof extra_keys / sizeof extra_keys[0])
 
 /* Extras that only the principled material takes. */
 static int principled_only(const char *key) {
-    return strcmp(key, "metallic") == 0 || strncmp(key, "clearcoat", 9) == 0;
+    return strcmp(key, "metallic") == 0 || strncmp(key, "clearcoat", 9) == 0 ||
+           strcmp(key, "transmission") == 0 || strncmp(key, "attenuation_", 12) == 0;
 }
 
-/* A texture key: "file.png" or {"path": "file.png", "wrap": "repeat" | "clamp"}; loaded
- * relative to the scene file (not opened when meshes are not loaded: the fuzzer). */
+/* A pair of numbers [a, b] in [-1e6, 1e6] at key (left as they are when absent). */
+static int get_pair(const jctx *c, const cJSON *obj, const char *path, const char *key,
+                    float out[2]) {
+    const cJSON *v = cJSON_GetObjectItemCaseSensitive(obj, key);
+    if (!v) {
+        return TR_OK;
+    }
+    char p[PATH_MAX_LEN];
+    path_key(p, path, key);
+    if (!cJSON_IsArray(v) || cJSON_GetArraySize(v) != 2 || !cJSON_IsNumber(v->child) ||
+        !cJSON_IsNumber(v->child->next) || !(fabs(v->child->valuedouble) <= 1e6) ||
+        !(fabs(v->child->next->valuedouble) <= 1e6)) {
+        return jerr(c, p, "expected two numbers [u, v] in [-1e+06, 1e+06]");
+    }
+    out[0] = (float)v->child->valuedouble;
+    out[1] = (float)v->child->next->valuedouble;
+    return TR_OK;
+}
+
+/* A texture key: "file.png" or {"path": "file.png", "wrap": "repeat" | "clamp", "offset":
+ * [u, v], "rotation": radians, "scale": [u, v]} (the last three KHR_texture_transform's);
+ * loaded relative to the scene file (not opened when meshes are not loaded: the fuzzer). */
 static int get_texture(jctx *c, const cJSON *m, const char *path, const char *key,
                        uint32_t *index) {
     const cJSON *v = cJSON_GetObjectItemCaseSensitive(m, key);
@@ -613,14 +638,19 @@ static int get_texture(jctx *c, const cJSON *m, const char *path, const char *ke
     path_key(p, path, key);
     const char *rel = NULL;
     uint32_t flags = 0;
+    float offset[2] = {0.0f, 0.0f}, scale[2] = {1.0f, 1.0f};
+    double rotation = 0.0;
     if (cJSON_IsString(v) && v->valuestring) {
         rel = v->valuestring;
     } else if (cJSON_IsObject(v)) {
-        static const char *const keys[] = {"path", "wrap"};
+        static const char *const keys[] = {"path", "wrap", "offset", "rotation", "scale"};
         const char *wrap = NULL;
-        if (check_keys(c, v, p, keys, 2) != TR_OK ||
+        if (check_keys(c, v, p, keys, 5) != TR_OK ||
             get_string(c, v, p, "path", 1, &rel) != TR_OK ||
-            get_string(c, v, p, "wrap", 0, &wrap) != TR_OK) {
+            get_string(c, v, p, "wrap", 0, &wrap) != TR_OK ||
+            get_pair(c, v, p, "offset", offset) != TR_OK ||
+            get_pair(c, v, p, "scale", scale) != TR_OK ||
+            get_number(c, v, p, "rotation", -1e3, 1e3, &rotation, &(int){0}) != TR_OK) {
             return TR_ERR;
         }
         if (wrap && strcmp(wrap, "clamp") == 0) {
@@ -649,6 +679,11 @@ static int get_texture(jctx *c, const cJSON *m, const char *path, const char *ke
     }
     tr_error e;
     if (tr_scene_load_texture(c->scene, full, flags, index, &e) != TR_OK) {
+        return jerr_from(c, p, &e);
+    }
+    float xf[6];
+    tr_texture_transform_glTF(xf, offset[0], offset[1], (float)rotation, scale[0], scale[1]);
+    if (tr_scene_texture_transformed(c->scene, *index, xf, index, &e) != TR_OK) {
         return jerr_from(c, p, &e);
     }
     return TR_OK;
@@ -680,6 +715,25 @@ static int parse_material_extras(jctx *c, const cJSON *m, const char *p, uint32_
     }
     e.clearcoat = (float)coat;
     e.clearcoat_roughness = (float)coat_rough;
+    /* KHR_materials_emissive_strength, _transmission and _volume's attenuation. */
+    int has_att = 0, has_dist = 0, has_strength = 0, has_tr = 0;
+    double strength = 1.0, transmission = 0.0, dist = 0.0;
+    tr_vec3 att = v3s(1.0f);
+    if (get_number(c, m, p, "emission_strength", 0.0, 1e7, &strength, &has_strength) != TR_OK ||
+        get_number(c, m, p, "transmission", 0.0, 1.0, &transmission, &has_tr) != TR_OK ||
+        get_vec3(c, m, p, "attenuation_color", 0, 1, &att, &has_att) != TR_OK ||
+        get_number(c, m, p, "attenuation_distance", 1e-6, 1e30, &dist, &has_dist) != TR_OK) {
+        return TR_ERR;
+    }
+    if (has_att && (att.x > 1.0f || att.y > 1.0f || att.z > 1.0f)) {
+        char pa[PATH_MAX_LEN];
+        path_key(pa, p, "attenuation_color");
+        return jerr(c, pa, "expected three numbers in (0, 1]");
+    }
+    e.transmission = (float)transmission;
+    if (has_dist) {
+        e.absorption = tr_volume_absorption(att, (float)dist);
+    }
     if (has_em && (e.emission.x < 0.0f || e.emission.y < 0.0f || e.emission.z < 0.0f ||
                    e.emission.x > 1e7f || e.emission.y > 1e7f || e.emission.z > 1e7f)) {
         char pe[PATH_MAX_LEN];
@@ -689,6 +743,14 @@ static int parse_material_extras(jctx *c, const cJSON *m, const char *p, uint32_
     if (cJSON_GetObjectItemCaseSensitive(m, "emission_texture") &&
         !cJSON_GetObjectItemCaseSensitive(m, "emission")) {
         e.emission = v3s(1.0f); /* the texture alone gives the radiance */
+    }
+    if (has_strength) {
+        e.emission = v3_scale(e.emission, (float)strength);
+        if (e.emission.x > 1e7f || e.emission.y > 1e7f || e.emission.z > 1e7f) {
+            char ps[PATH_MAX_LEN];
+            path_key(ps, p, "emission_strength");
+            return jerr(c, ps, "the emission times its strength exceeds 1e+07");
+        }
     }
     e.metallic = (float)metal;
     if (has_cut) {

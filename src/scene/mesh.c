@@ -233,6 +233,34 @@ static uint32_t load_texture(import_ctx *c, const struct aiMaterial *m, const ch
     return index;
 }
 
+/* load_texture, seen through glTF's KHR_texture_transform where the material gives one
+ * for that map. Assimp 5.2's glTF importer turns the extension's offset o, rotation r and
+ * scale s into its own aiUVTransform (rotation -r about the image centre in its flipped
+ * coordinates, with a translation that absorbs the change of origin); this undoes that
+ * to get o, r and s back. Other formats' transforms are not read. */
+static uint32_t load_texture_xf(import_ctx *c, const struct aiMaterial *m, const char *mname,
+                                enum aiTextureType type, const char *what) {
+    uint32_t index = load_texture(c, m, mname, type, what);
+    struct aiUVTransform t;
+    if (index == TR_NO_INDEX || !c->gltf ||
+        aiGetMaterialUVTransform(m, AI_MATKEY_UVTRANSFORM(type, 0), &t) != AI_SUCCESS) {
+        return index;
+    }
+    const double r = -(double)t.mRotation, sx = t.mScaling.x, sy = t.mScaling.y;
+    const double co = cos(r), sn = sin(r);
+    const double ou = t.mTranslation.x - 0.5 * sx * (1.0 - co + sn);
+    const double ov = -(t.mTranslation.y - 0.5 * sy * (sn + co - 1.0) - 1.0 + sy);
+    float xf[6];
+    tr_texture_transform_glTF(xf, (float)ou, (float)ov, (float)r, (float)sx, (float)sy);
+    tr_error e;
+    uint32_t out = index;
+    if (tr_scene_texture_transformed(c->s, index, xf, &out, &e) != TR_OK) {
+        import_warn(c, "material '%.60s': %s map's transform dropped: %s", mname, what, e.msg);
+        return index;
+    }
+    return out;
+}
+
 /* The import table: a file's material (Wavefront MTL keys, glTF's metallic-roughness, and
  * whatever Assimp maps onto the same keys for other formats) onto ours, with its extras
  * (textures, emission, cut-out) in *ext (*has_ext set when there are any):
@@ -240,8 +268,11 @@ static uint32_t load_texture(import_ctx *c, const struct aiMaterial *m, const ch
  *   glTF metallic-roughness (metallicFactor or roughnessFactor present) -> principled:
  *     base colour factor (Kd where missing) x base colour map, metallic and roughness
  *     factors x the metallic-roughness map, normal map, emissive factor x emissive map;
- *     clear coat factor and roughness (KHR_materials_clearcoat);
- *     transmission factor > 0 -> glass instead (colour: base colour, ior 1.5).
+ *     clear coat factor and roughness (KHR_materials_clearcoat); transmission factor
+ *     (KHR_materials_transmission) and index (KHR_materials_ior, Assimp's refracti);
+ *     the volume's attenuation (KHR_materials_volume); the emission x its strength
+ *     (KHR_materials_emissive_strength). A transmission factor without a metallic-
+ *     roughness material -> glass (colour: Kd, ior Ni or 1.5).
  *   otherwise Ke > 0 without an emissive map -> emitter (colour Ke / max(Ke), emittance
  *     max(Ke)); illum 4, 6, 7 or 9 (refraction) -> glass (colour Kd, ior Ni, 1.5 where
  *     missing or outside [1, 10]); illum 3, 5 or 8 -> glossy (colour Ks, or Kd where Ks is
@@ -314,28 +345,24 @@ static tr_material map_material(import_ctx *c, const struct aiMaterial *m, tr_ma
     float emax = max3(e[0], e[1], e[2]);
     const int refract = illum == 4 || illum == 6 || illum == 7 || illum == 9;
     const int transmit = isfinite(transmission) && transmission > 0.0f;
-    if (transmit || (refract && !pbr)) {
+    if ((transmit && !pbr) || (refract && !pbr)) {
         float ior = isfinite(ni) && ni >= 1.0f && ni <= 10.0f ? ni : 1.5f;
         if (transmit && transmission < 1.0f) {
             import_warn(c, "material '%.60s': transmission %.2f taken as fully transmissive glass",
                         mname, (double)transmission);
         }
-        if (transmit && pbr && isfinite(rough) && rough > 0.0f) {
-            import_warn(c, "material '%.60s': transmission of roughness %.2f rendered smooth",
-                        mname, (double)rough);
-        }
         return tr_material_glass(diffuse, ior);
     }
-    uint32_t emission_tex = load_texture(c, m, mname, aiTextureType_EMISSIVE, "emissive");
+    uint32_t emission_tex = load_texture_xf(c, m, mname, aiTextureType_EMISSIVE, "emissive");
     if (emax > 0.0f && emission_tex == TR_NO_INDEX && !pbr) {
         return tr_material_emitter(v3(e[0] / emax, e[1] / emax, e[2] / emax), emax);
     }
-    ext->base_tex = load_texture(
+    ext->base_tex = load_texture_xf(
         c, m, mname, has_base ? aiTextureType_BASE_COLOR : aiTextureType_DIFFUSE, "base colour");
     if (ext->base_tex == TR_NO_INDEX) {
-        ext->base_tex = load_texture(c, m, mname, aiTextureType_DIFFUSE, "diffuse");
+        ext->base_tex = load_texture_xf(c, m, mname, aiTextureType_DIFFUSE, "diffuse");
     }
-    ext->normal_tex = load_texture(c, m, mname, aiTextureType_NORMALS, "normal");
+    ext->normal_tex = load_texture_xf(c, m, mname, aiTextureType_NORMALS, "normal");
     ext->emission_tex = emission_tex;
     ext->emission = v3(e[0], e[1], e[2]);
     if (emission_tex != TR_NO_INDEX && emax <= 0.0f) {
@@ -370,10 +397,10 @@ static tr_material map_material(import_ctx *c, const struct aiMaterial *m, tr_ma
     }
     tr_material out;
     if (pbr) {
-        ext->mr_tex = load_texture(c, m, mname, aiTextureType_UNKNOWN, "metallic-roughness");
+        ext->mr_tex = load_texture_xf(c, m, mname, aiTextureType_UNKNOWN, "metallic-roughness");
         if (ext->mr_tex == TR_NO_INDEX) {
             ext->mr_tex =
-                load_texture(c, m, mname, aiTextureType_DIFFUSE_ROUGHNESS, "metallic-roughness");
+                load_texture_xf(c, m, mname, aiTextureType_DIFFUSE_ROUGHNESS, "metallic-roughness");
         }
         ext->metallic = clamp01(metal);
         /* KHR_materials_clearcoat: the coat's weight and roughness (its maps are not read). */
@@ -401,16 +428,37 @@ static tr_material map_material(import_ctx *c, const struct aiMaterial *m, tr_ma
         one = 1;
         if (aiGetMaterialFloatArray(m, AI_MATKEY_EMISSIVE_INTENSITY, &strength, &one) ==
                 AI_SUCCESS &&
-            strength != 1.0f) {
-            import_warn(c, "material '%.60s': KHR_materials_emissive_strength %g not rendered",
-                        mname, (double)strength);
+            isfinite(strength) && strength >= 0.0f && strength != 1.0f) {
+            /* KHR_materials_emissive_strength scales the emissive factor. */
+            tr_vec3 em = v3_scale(ext->emission, strength);
+            ext->emission =
+                v3(em.x < 1e7f ? em.x : 1e7f, em.y < 1e7f ? em.y : 1e7f, em.z < 1e7f ? em.z : 1e7f);
+        }
+        /* KHR_materials_transmission (its map is not read) with KHR_materials_ior, and
+         * KHR_materials_volume's attenuation (its thickness is a rasteriser's stand-in for
+         * the distance a path tracer measures, and is not needed). */
+        if (transmit) {
+            ext->transmission = clamp01(transmission);
+        }
+        if (aiGetMaterialTextureCount(m, aiTextureType_TRANSMISSION) > 0) {
+            import_warn(c, "material '%.60s': transmission and thickness maps dropped", mname);
+        }
+        ai_real att_dist = 0.0f;
+        struct aiColor4D att = {1, 1, 1, 1};
+        one = 1;
+        if (aiGetMaterialFloatArray(m, AI_MATKEY_VOLUME_ATTENUATION_DISTANCE, &att_dist, &one) ==
+                AI_SUCCESS &&
+            isfinite(att_dist) && att_dist > 0.0f &&
+            aiGetMaterialColor(m, AI_MATKEY_VOLUME_ATTENUATION_COLOR, &att) == AI_SUCCESS) {
+            ext->absorption =
+                tr_volume_absorption(v3(clamp01(att.r), clamp01(att.g), clamp01(att.b)), att_dist);
         }
         tr_material pm;
         memset(&pm, 0, sizeof pm);
         pm.type = TR_MATERIAL_PRINCIPLED;
         pm.color = diffuse;
         pm.roughness = clamp01(rough);
-        pm.ior = 1.5f;
+        pm.ior = isfinite(ni) && ni >= 1.0f && ni <= 10.0f ? ni : 1.5f;
         out = pm;
     } else if (illum == 3 || illum == 5 || illum == 8) {
         tr_vec3 spec = v3(clamp01(ks.r), clamp01(ks.g), clamp01(ks.b));
@@ -426,7 +474,8 @@ static tr_material map_material(import_ctx *c, const struct aiMaterial *m, tr_ma
                ext->emission_tex != TR_NO_INDEX || ext->mr_tex != TR_NO_INDEX ||
                (ext->flags & TR_MATEXT_ALPHA_MASK) || ext->metallic > 0.0f ||
                ext->clearcoat > 0.0f || ext->emission.x > 0.0f || ext->emission.y > 0.0f ||
-               ext->emission.z > 0.0f;
+               ext->emission.z > 0.0f || ext->transmission > 0.0f || ext->absorption.x > 0.0f ||
+               ext->absorption.y > 0.0f || ext->absorption.z > 0.0f;
     return out;
 }
 
@@ -713,7 +762,10 @@ static void gltf_extension_warnings(const import_ctx *c, const char *path) {
     static const char *const handled[] = {
         "KHR_materials_clearcoat",    /* principled's clear coat (its maps: warned) */
         "KHR_lights_punctual",        /* point, spot and directional lights */
-        "KHR_materials_transmission", /* glass (a factor below 1: warned) */
+        "KHR_materials_transmission", /* principled's transmission (its map: warned) */
+        "KHR_materials_ior",          /* the principled material's index */
+        "KHR_materials_volume",       /* the attenuation (thickness is not needed) */
+        "KHR_texture_transform",      /* the maps' offset, rotation and scale */
         "KHR_materials_sheen",        /* warned per material */
     };
     const size_t plen = strlen(path);

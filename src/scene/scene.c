@@ -156,6 +156,15 @@ tr_material_ext tr_material_ext_default(void) {
     return e;
 }
 
+tr_vec3 tr_volume_absorption(tr_vec3 color, float distance) {
+    const float c[3] = {color.x, color.y, color.z};
+    float a[3];
+    for (int k = 0; k < 3; ++k) {
+        a[k] = c[k] > 0.0f && c[k] < 1.0f && distance > 0.0f ? -logf(c[k]) / distance : 0.0f;
+    }
+    return v3(a[0], a[1], a[2]);
+}
+
 int tr_scene_set_material_ext(tr_scene *s, uint32_t index, const tr_material_ext *ext,
                               tr_error *err) {
     if (index >= s->material_count) {
@@ -179,6 +188,14 @@ int tr_scene_set_material_ext(tr_scene *s, uint32_t index, const tr_material_ext
         !(ext->clearcoat_roughness >= 0.0f && ext->clearcoat_roughness <= 1.0f)) {
         return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
                             "material %u: clear coat weight or roughness outside [0, 1]", index);
+    }
+    if (!(ext->transmission >= 0.0f && ext->transmission <= 1.0f) ||
+        !(ext->absorption.x >= 0.0f && ext->absorption.y >= 0.0f && ext->absorption.z >= 0.0f) ||
+        !v3_is_finite(ext->absorption)) {
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "material %u: transmission outside [0, 1] or a negative or "
+                            "non-finite absorption",
+                            index);
     }
     if (s->material_ext_count < s->material_count) {
         if (grow((void **)&s->material_exts, &s->material_ext_capacity, s->material_count,
@@ -207,6 +224,49 @@ int tr_scene_texel_budget(uint32_t *budget, tr_error *err) {
         }
         *budget = (uint32_t)v;
     }
+    return TR_OK;
+}
+
+void tr_texture_transform_glTF(float xf[6], float offset_u, float offset_v, float rotation,
+                               float scale_u, float scale_v) {
+    /* T R S: scale, then rotate, then offset. The rotation's rows are (cos, sin) and
+     * (-sin, cos), the direction glTF's TextureTransformTest model asks for (its arrows
+     * point at the green markers; the other sign points them at the red one). */
+    const float c = cosf(rotation), sn = sinf(rotation);
+    xf[0] = c * scale_u;
+    xf[1] = sn * scale_v;
+    xf[2] = offset_u;
+    xf[3] = -sn * scale_u;
+    xf[4] = c * scale_v;
+    xf[5] = offset_v;
+}
+
+int tr_scene_texture_transformed(tr_scene *s, uint32_t tex, const float xf[6], uint32_t *index,
+                                 tr_error *err) {
+    if (tex >= s->texture_count) {
+        return tr_error_set(err, TR_STATUS_NOT_FOUND, "texture %u of %u", tex, s->texture_count);
+    }
+    for (int k = 0; k < 6; ++k) {
+        if (!isfinite(xf[k])) {
+            return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                                "a texture transform with a non-finite entry");
+        }
+    }
+    if (xf[0] == 1.0f && xf[1] == 0.0f && xf[2] == 0.0f && xf[3] == 0.0f && xf[4] == 1.0f &&
+        xf[5] == 0.0f) {
+        *index = tex; /* the identity: the image as it is */
+        return TR_OK;
+    }
+    if (grow((void **)&s->textures, &s->texture_capacity, (uint64_t)s->texture_count + 1,
+             sizeof *s->textures, "textures", err) != TR_OK) {
+        return TR_ERR;
+    }
+    tr_texture *t = &s->textures[s->texture_count];
+    *t = s->textures[tex];
+    t->flags |= TR_TEXTURE_TRANSFORM;
+    memcpy(t->xf, xf, sizeof t->xf);
+    *index = s->texture_count++;
+    s->generation++;
     return TR_OK;
 }
 
@@ -239,6 +299,7 @@ int tr_scene_add_texture(tr_scene *s, const uint32_t *rgba, uint32_t width, uint
     t->width = width;
     t->height = height;
     t->flags = flags;
+    tr_texture_transform_glTF(t->xf, 0.0f, 0.0f, 0.0f, 1.0f, 1.0f);
     s->texel_count += (uint32_t)n;
     if (index) {
         *index = s->texture_count;

@@ -156,6 +156,16 @@ int tr_scene_set_material_ext(tr_scene *s, uint32_t index, const tr_material_ext
                               tr_error *err);
 /* No textures, metallic 0, no cut-out, normal scale 1. */
 tr_material_ext tr_material_ext_default(void);
+/* KHR_materials_volume's absorption coefficient: -ln(color) / distance per channel, the
+ * light that is left after `distance` being `color` (attrib.h). */
+tr_vec3 tr_volume_absorption(tr_vec3 color, float distance);
+/* xf (tr_texture) for KHR_texture_transform's offset, rotation (radians) and scale. */
+void tr_texture_transform_glTF(float xf[6], float offset_u, float offset_v, float rotation,
+                               float scale_u, float scale_v);
+/* Texture `tex` seen through the coordinate transform xf: a new entry over the same texels
+ * (TR_TEXTURE_TRANSFORM), or tex itself for the identity; its index in *index. */
+int tr_scene_texture_transformed(tr_scene *s, uint32_t tex, const float xf[6], uint32_t *index,
+                                 tr_error *err);
 /* The most texels a scene's textures may hold together: TRAC0R_TEXEL_BUDGET from the
  * environment (1..2^32-1), else TR_TEXEL_BUDGET_DEFAULT (2^28: 1 GiB of RGBA8). Fails
  * with TR_STATUS_INVALID_ARGUMENT on a malformed value. */

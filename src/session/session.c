@@ -149,6 +149,9 @@ int tr_ck_identity(tr_ck_id *id, const tr_scene *scene, const tr_render_config *
         for (uint32_t i = 0; i < scene->texture_count; ++i) {
             const tr_texture *t = &scene->textures[i];
             h = fnv_u32(fnv_u32(fnv_u32(fnv_u32(h, t->offset), t->width), t->height), t->flags);
+            if ((t->flags & TR_TEXTURE_TRANSFORM) != 0u) {
+                h = fnv_floats(h, t->xf, 6);
+            }
         }
         h = fnv_u32(h, scene->texel_count);
         h = tr_ck_fnv(h, scene->texels, (size_t)scene->texel_count * sizeof *scene->texels);
@@ -164,6 +167,12 @@ int tr_ck_identity(tr_ck_id *id, const tr_scene *scene, const tr_render_config *
                 /* Only where set: checkpoints of scenes without a coat keep their identity. */
                 const float cc[2] = {e->clearcoat, e->clearcoat_roughness};
                 h = fnv_floats(h, cc, 2);
+            }
+            if (e->transmission > 0.0f || e->absorption.x > 0.0f || e->absorption.y > 0.0f ||
+                e->absorption.z > 0.0f) {
+                const float tv[4] = {e->transmission, e->absorption.x, e->absorption.y,
+                                     e->absorption.z};
+                h = fnv_floats(h, tv, 4);
             }
         }
     }
