@@ -140,7 +140,8 @@ static tr_scene *from_file(const char *name, uint32_t w, uint32_t h) {
     return from_text(name, text, w, h);
 }
 
-/* An environment map, a sun, a textured principled floor, glass, gold and a point and a
+/* An environment map, a sun, a textured principled floor, glass, gold, a transmissive
+ * principled sphere that absorbs (volume attenuation), and a point and a
  * spot light: every light sample shade takes and connect adds. */
 static const char outdoor[] =
     "{\"version\": 1,"
@@ -157,6 +158,9 @@ static const char outdoor[] =
     "  \"gold\": {\"type\": \"principled\", \"color\": [1.0, 0.78, 0.34], \"roughness\": 0.25,"
     "   \"metallic\": 1},"
     "  \"glass\": {\"type\": \"glass\", \"color\": [0.95, 0.97, 1.0], \"ior\": 1.5},"
+    "  \"jade\": {\"type\": \"principled\", \"color\": [0.9, 1, 0.9], \"roughness\": 0.2,"
+    "   \"transmission\": 1, \"attenuation_color\": [0.4, 0.8, 0.5],"
+    "   \"attenuation_distance\": 0.3},"
     "  \"lamp\": {\"type\": \"emitter\", \"color\": [4, 4, 3], \"emittance\": 1}},"
     " \"shapes\": ["
     "  {\"type\": \"quad\", \"vertices\": [[-4, 0, -4], [4, 0, -4], [4, 0, 4], [-4, 0, 4]],"
@@ -165,6 +169,8 @@ static const char outdoor[] =
     "   \"position\": [-1.0, 0.45, 0.2], \"scale\": 0.45, \"material\": \"gold\"},"
     "  {\"type\": \"icosphere\", \"smooth\": true, \"subdivisions\": 2,"
     "   \"position\": [0.35, 0.3, 1.3], \"scale\": 0.3, \"material\": \"glass\"},"
+    "  {\"type\": \"icosphere\", \"smooth\": true, \"subdivisions\": 2,"
+    "   \"position\": [1.2, 0.35, 0.6], \"scale\": 0.35, \"material\": \"jade\"},"
     "  {\"type\": \"quad\", \"vertices\": [[0.5, 2, -1], [1.5, 2, -1], [1.5, 2, 0], [0.5, 2, 0]],"
     "   \"material\": \"lamp\"}]}";
 

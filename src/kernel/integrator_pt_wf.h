@@ -149,6 +149,10 @@ TR_FN int tr_pt_wf_shade(const tr_scene_view *s, tr_pt_wf_path *p, int max_depth
         p->ray.tmin = hit.t + 1e-5f * tr_fmaxf(1.0f, hit.t);
         return 1;
     }
+    tr_vec3 absorbed;
+    if (tr_volume_attenuation(s, hit.triangle, ray.dir, n, hit.t, &absorbed)) {
+        p->throughput = v3_mul(p->throughput, absorbed); /* the segment crossed a medium */
+    }
     if (surface && seg == 1 && (flags & TR_FRAME_PSR) != 0u && tr_bsdf_is_delta(&m)) {
         *rays += tr_psr_surface(s, ray, hit, m, surface);
         p->psr_done = 1;
