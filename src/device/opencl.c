@@ -227,7 +227,8 @@ enum {
     FILM_BUFFERS
 };
 /* The buffers follow the film's layout (tr_film_array_*, film.h): buffer i is array i. */
-_Static_assert(FILM_BUFFERS == TR_FILM_ARRAYS, "one OpenCL buffer per film array");
+/* The last array, the specular pass, is the CPU device's alone (device.c refuses it here). */
+_Static_assert(FILM_BUFFERS == TR_FILM_ARRAYS - 1, "one OpenCL buffer per film array");
 #define film_pass(i) tr_film_array_pass(i)
 #define film_elem(i) tr_film_array_pixel_bytes(i)
 
