@@ -415,6 +415,7 @@ const char cli_recon_help[] =
     "  --svgf-sigma-l S     SVGF's luminance weight, 0.1..1000 (default 8)\n"
     "  --taa A              SVGF's temporal antialiasing, 0..1 (default 0: off)\n"
     "  --svgf-split         filter direct and indirect light apart (CPU only)\n"
+    "  --split-specular     filter diffuse and specular light apart (CPU only)\n"
     "  --gradients on|off   temporal gradients: shorten the history where the lighting\n"
     "                       changed (A-SVGF; CPU only; default off)\n"
     "  --resolve-emission N emitters' edges traced at N x N rays, 0..16 (default 4)\n"
@@ -488,8 +489,8 @@ int cli_recon_option(cli_args *a, tr_recon_params *p) {
         return cli_parse_int(a, it, it ? 8 : TR_RESOLVE_EMISSION_MAX,
                              it ? &p->svgf_iterations : &p->emission_samples);
     }
-    if (cli_is(a, "--svgf-split")) {
-        p->svgf_split = 1;
+    if (cli_is(a, "--svgf-split") || cli_is(a, "--split-specular")) {
+        *(cli_is(a, "--svgf-split") ? &p->svgf_split : &p->svgf_specular) = 1;
         return CLI_OK;
     }
     if (cli_is(a, "--gradients")) {

@@ -46,11 +46,11 @@ static void render_help(FILE *fp) {
             cli_common_help());
 }
 
-/* --passes' names: a pass's TR_PASS_* bit, or all: every pass render writes (the direct
- * and emission passes feed the real-time filters only). */
+/* --passes' names: a pass's TR_PASS_* bit, or all: every pass render writes (the direct,
+ * emission and specular passes feed the real-time filters only). */
 static int pass_bits(const char *name) {
     if (strcmp(name, "all") == 0) {
-        return (int)(TR_PASS_MASK & ~(TR_PASS_DIRECT | TR_PASS_EMISSION));
+        return (int)(TR_PASS_ALL | TR_PASS_VARIANCE);
     }
     for (uint32_t k = 1; k <= TR_PASS_VARIANCE; k <<= 1) {
         if (strcmp(tr_pass_name(k), name) == 0) {

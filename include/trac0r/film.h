@@ -30,6 +30,7 @@ typedef struct tr_film {
     float *sq;       /* TR_PASS_VARIANCE: 3 floats per pixel, sums of squared radiance */
     float *direct;   /* TR_PASS_DIRECT: 3 floats per pixel, sums of direct radiance */
     float *emission; /* TR_PASS_EMISSION: 3 floats per pixel, sums of the first hit's emission */
+    float *specular; /* TR_PASS_SPECULAR: 8 floats per pixel (types.h), summed */
 } tr_film;
 
 /* A rectangle of pixels: columns x .. x+width-1, rows y .. y+height-1. */
@@ -39,11 +40,11 @@ typedef struct tr_rect {
 
 /* The film's layout, described once: its arrays in a fixed order - the radiance sums, the
  * counts, then one array per pass in TR_PASS_* bit order (albedo, normal, depth, id,
- * variance, direct, emission) - each kept always (pass 0) or when the film keeps its pass.
- * Everything that copies a film whole or in part (a device's read-back, checkpoints, the
+ * variance, direct, emission, specular) - each kept always (pass 0) or when the film keeps its
+ * pass. Everything that copies a film whole or in part (a device's read-back, checkpoints, the
  * tiles of a distributed render) walks this list, so a pass added to the film travels with
  * it everywhere. */
-#define TR_FILM_ARRAYS 9
+#define TR_FILM_ARRAYS 10
 /* The pass bit that keeps array i (0: always kept), and its bytes per pixel; 0 for both
  * when i is not in 0..TR_FILM_ARRAYS-1. */
 uint32_t tr_film_array_pass(int i);

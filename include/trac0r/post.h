@@ -135,6 +135,8 @@ typedef struct tr_gbuffer {
     float *emission_resolved; /* 3 per pixel: the emission resolved over each pixel's area */
     int has_resolved;         /* whether emission_resolved is set (tr_resolve_emission) */
     uint8_t *scratch;         /* 3 bytes per pixel for tr_resolve_emission, allocated once */
+    float *specular;          /* 8 per pixel: the means of TR_PASS_SPECULAR (types.h) */
+    int has_specular;         /* whether specular holds the film's specular pass */
 } tr_gbuffer;
 
 int tr_gbuffer_init(tr_gbuffer *g, uint32_t width, uint32_t height, tr_error *err);
@@ -183,6 +185,10 @@ typedef struct tr_recon_params {
                              al. 2018: a sparse replay of the previous frame's samples in the
                              current scene) and shortens the history where the shading
                              changed, through tr_recon.len_cap; 0: off (docs/realtime.md) */
+    int svgf_specular;    /* 1: SVGF filters the diffuse and the specular light apart where
+                             the frame has the specular pass, each demodulated by its own
+                             albedo, the specular history following reflections
+                             (docs/realtime.md); 0: off */
 } tr_recon_params;
 
 /* The defaults. A field that would divide by zero at 0 (max_len, max_len_moving, the
@@ -220,6 +226,14 @@ typedef struct tr_recon {
      * sets before the call (tr_realtime's temporal gradients); NULL (after tr_recon_init):
      * none. The host reconstruction only. */
     const float *len_cap;
+    /* SVGF with diffuse and specular apart (svgf_specular): then hist_color, hist_moments
+     * and hist_len hold the diffuse part and these the specular one (demodulated by the
+     * specular albedo), with its own lengths. */
+    float *hist_spec[2], *hist_smoments[2], *hist_slen[2];
+    float *illum_s;      /* scratch: this frame's demodulated specular illumination */
+    float *spec_alb;     /* scratch: this frame's specular albedo, 3 per pixel */
+    float *diffuse;      /* scratch: this frame's diffuse light (colour less emission, specular) */
+    int hist_spec_split; /* whether the history was written with the specular apart */
 } tr_recon;
 
 int tr_recon_init(tr_recon *r, uint32_t width, uint32_t height, tr_error *err);

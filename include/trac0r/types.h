@@ -116,6 +116,13 @@ typedef struct tr_camera {
  * that a lamp's edge is antialiased at 1 spp. pt and naive write it (naive's with its
  * roulette weight and without the environment, which naive does not see); bdpt does not. */
 #define TR_PASS_EMISSION 64u
-#define TR_PASS_MASK 127u /* every pass bit a film knows */
+/* Not a surface either: the light the passes' surface reflects split by lobe, 8 floats per
+ * pixel summed like radiance: the specular part (3: what its GGX layer reflects; radiance
+ * minus emission minus it is the diffuse part), the surface's specular F0 (3), its GGX alpha
+ * (1) and the distance to what a specular sample from it hit (1, 0 where none), from which
+ * the real-time reconstruction demodulates the specular part and follows reflections
+ * (docs/realtime.md). pt writes it, on the CPU device; the others do not. */
+#define TR_PASS_SPECULAR 128u
+#define TR_PASS_MASK 255u /* every pass bit a film knows */
 
 #endif

@@ -124,6 +124,11 @@ int tr_render_config_check(const tr_render_config *cfg, tr_error *err) {
                             "the emission pass needs the pt or naive integrator, not %s",
                             tr_integrator_name(cfg->integrator));
     }
+    if ((cfg->passes & TR_PASS_SPECULAR) != 0u && cfg->integrator != TR_INTEGRATOR_PT) {
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "the specular pass needs the pt integrator, not %s",
+                            tr_integrator_name(cfg->integrator));
+    }
     return TR_OK;
 }
 
@@ -174,7 +179,8 @@ int tr_frame_make(tr_frame *f, const tr_camera *cam, const tr_render_config *cfg
     f->flags = (cfg->regularize ? TR_FRAME_REGULARIZE : 0u) |
                (cfg->no_primary_direct ? TR_FRAME_NO_PRIMARY_DIRECT : 0u) |
                (cfg->no_primary_direct == 2 ? TR_FRAME_NO_PRIMARY_INDIRECT : 0u) |
-               (cfg->psr ? TR_FRAME_PSR : 0u);
+               (cfg->psr ? TR_FRAME_PSR : 0u) |
+               ((cfg->passes & TR_PASS_SPECULAR) != 0u ? TR_FRAME_SPLIT_SPECULAR : 0u);
     f->rect_x = r.x;
     f->rect_y = r.y;
     f->rect_w = r.width;
@@ -188,6 +194,7 @@ tr_film_view tr_film_view_of(tr_film *film) {
     v.sq = film->sq;
     v.direct = film->direct;
     v.emission = film->emission;
+    v.specular = film->specular;
     return v;
 }
 

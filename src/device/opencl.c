@@ -268,7 +268,8 @@ enum {
     FILM_BUFFERS
 };
 /* The buffers follow the film's layout (tr_film_array_*, film.h): buffer i is array i. */
-_Static_assert(FILM_BUFFERS == TR_FILM_ARRAYS, "one OpenCL buffer per film array");
+/* The last array, the specular pass, is the CPU device's alone (device.c refuses it here). */
+_Static_assert(FILM_BUFFERS == TR_FILM_ARRAYS - 1, "one OpenCL buffer per film array");
 #define film_pass(i) tr_film_array_pass(i)
 #define film_elem(i) tr_film_array_pixel_bytes(i)
 
@@ -1845,7 +1846,7 @@ static const char kernel_env[] = "TRAC0R_OPENCL_KERNEL";
  * chunk size, and for the tests, whose frames are smaller than one chunk. */
 static const char paths_env[] = "TRAC0R_OPENCL_WAVEFRONT_PATHS";
 
-/* Paths in flight at most: a 1920x1080 frame's samples in one chunk (348 bytes of state
+/* Paths in flight at most: a 1920x1080 frame's samples in one chunk (380 bytes of state
  * each); fewer where the device allocates less per buffer. */
 #define TR_CL_WF_MAX_PATHS ((size_t)1 << 21)
 

@@ -32,10 +32,11 @@ static const uint32_t array_pass[TR_FILM_ARRAYS] = {0u,
                                                     TR_PASS_PRIM,
                                                     TR_PASS_VARIANCE,
                                                     TR_PASS_DIRECT,
-                                                    TR_PASS_EMISSION};
+                                                    TR_PASS_EMISSION,
+                                                    TR_PASS_SPECULAR};
 static const size_t array_bytes[TR_FILM_ARRAYS] = {
     3 * sizeof(float), sizeof(uint32_t),  3 * sizeof(float), 3 * sizeof(float), sizeof(float),
-    sizeof(uint32_t),  3 * sizeof(float), 3 * sizeof(float), 3 * sizeof(float)};
+    sizeof(uint32_t),  3 * sizeof(float), 3 * sizeof(float), 3 * sizeof(float), 8 * sizeof(float)};
 
 uint32_t tr_film_array_pass(int i) {
     return i >= 0 && i < TR_FILM_ARRAYS ? array_pass[i] : 0u;
@@ -65,6 +66,8 @@ void *tr_film_array_data(const tr_film *f, int i) {
         return f->direct;
     case 8:
         return f->emission;
+    case 9:
+        return f->specular;
     default:
         return NULL;
     }
@@ -96,6 +99,9 @@ static void set_array(tr_film *f, int i, void *p) {
         break;
     case 7:
         f->direct = p;
+        break;
+    case 9:
+        f->specular = p;
         break;
     default:
         f->emission = p;
@@ -257,6 +263,12 @@ int tr_film_pass_pixel(const tr_film *f, uint32_t pass, uint32_t x, uint32_t y, 
         out[0] = f->depth[i] * inv;
         return TR_OK;
     }
+    if (pass == TR_PASS_SPECULAR) { /* its specular radiance, the first 3 of 8 */
+        for (int k = 0; k < 3; ++k) {
+            out[k] = f->specular[8 * i + (size_t)k] * inv;
+        }
+        return TR_OK;
+    }
     const float *src = pass == TR_PASS_ALBEDO     ? f->albedo
                        : pass == TR_PASS_DIRECT   ? f->direct
                        : pass == TR_PASS_EMISSION ? f->emission
@@ -300,6 +312,7 @@ int tr_film_accumulate(tr_film *dst, const tr_film *src, tr_error *err) {
     add_floats(dst->sq, src->sq, 3 * n);
     add_floats(dst->direct, src->direct, 3 * n);
     add_floats(dst->emission, src->emission, 3 * n);
+    add_floats(dst->specular, src->specular, 8 * n);
     for (size_t i = 0; i < n; ++i) {
         dst->count[i] += src->count[i];
     }
@@ -338,6 +351,7 @@ int tr_film_extract_pass(const tr_film *f, uint32_t pass, tr_film *out, tr_error
                           : pass == TR_PASS_NORMAL   ? f->normal[k]
                           : pass == TR_PASS_DIRECT   ? f->direct[k]
                           : pass == TR_PASS_EMISSION ? f->emission[k]
+                          : pass == TR_PASS_SPECULAR ? f->specular[8 * i + (size_t)c]
                                                      : f->depth[i];
         }
     }
@@ -360,6 +374,8 @@ const char *tr_pass_name(uint32_t pass) {
         return "direct";
     case TR_PASS_EMISSION:
         return "emission";
+    case TR_PASS_SPECULAR:
+        return "specular";
     default:
         return NULL;
     }

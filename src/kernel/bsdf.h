@@ -395,6 +395,57 @@ TR_FN_INLINE int tr_bsdf_sample(const tr_bsdf_params *m, tr_vec3 wo, float ulobe
     }
 }
 
+/* ---- Diffuse and specular apart (TR_PASS_SPECULAR) ------------------------------------
+ *
+ * Per channel, the share of f(wo, wi) that the specular lobes reflect (the GGX layer and
+ * the clear coat) rather than a diffuse base: 0 for diffuse, 1 for the lobes with nothing
+ * diffuse (glossy, regularized glass), f_spec / f for the principled material. Where f is
+ * zero the share is that of the lobes' kind (0 for a principled material). */
+TR_FN_NOINLINE tr_vec3 tr_principled_spec_share(tr_bsdf_params m, tr_vec3 wo, tr_vec3 wi) {
+    tr_vec3 nf = tr_bsdf_facing(m.ns, wo);
+    float co = v3_dot(wo, nf), ci = v3_dot(wi, nf);
+    if (co <= 0.0f || ci <= 0.0f) {
+        return v3s(0.0f);
+    }
+    tr_vec3 f = tr_principled_eval(&m, nf, wo, wi);
+    /* The diffuse part, as tr_principled_eval and tr_coat_layer weigh it. */
+    float k = tr_fminf(tr_fmaxf(m.metallic, 0.0f), 1.0f);
+    float kd = (1.0f - k) * (28.0f / 23.0f) * TR_INV_PI * (1.0f - TR_PRINCIPLED_F0) *
+               tr_as_factor(ci) * tr_as_factor(co);
+    if (m.clearcoat > 0.0f) {
+        float c = tr_coat_weight(&m);
+        float att = (1.0f - c * tr_coat_fresnel(co)) * (1.0f - c * tr_coat_fresnel(ci));
+        float fav = TR_PRINCIPLED_F0 + (1.0f - TR_PRINCIPLED_F0) * (1.0f / 21.0f);
+        kd *= att / (1.0f - c * fav);
+    }
+    tr_vec3 d = v3_scale(m.color, kd);
+    return v3(f.x > 0.0f ? tr_fminf(tr_fmaxf(1.0f - d.x / f.x, 0.0f), 1.0f) : 0.0f,
+              f.y > 0.0f ? tr_fminf(tr_fmaxf(1.0f - d.y / f.y, 0.0f), 1.0f) : 0.0f,
+              f.z > 0.0f ? tr_fminf(tr_fmaxf(1.0f - d.z / f.z, 0.0f), 1.0f) : 0.0f);
+}
+
+TR_FN tr_vec3 tr_bsdf_spec_share(const tr_bsdf_params *m, tr_vec3 wo, tr_vec3 wi) {
+    if (m->type == TR_MATERIAL_PRINCIPLED) {
+        return tr_principled_spec_share(*m, wo, wi);
+    }
+    return v3s(m->type == TR_MATERIAL_DIFFUSE || m->type == TR_MATERIAL_EMITTER ? 0.0f : 1.0f);
+}
+
+/* The specular lobe's Fresnel F0 and GGX alpha (for its directional albedo, which the
+ * reconstruction demodulates the specular part by); F0 0 where there is none. */
+TR_FN tr_vec3 tr_bsdf_spec_f0(const tr_bsdf_params *m, float *alpha) {
+    if (m->type == TR_MATERIAL_PRINCIPLED) {
+        *alpha = tr_principled_alpha(m->roughness);
+        return tr_principled_f0(m);
+    }
+    if (m->type == TR_MATERIAL_GLOSSY) {
+        *alpha = tr_ggx_alpha(m->roughness);
+        return m->color;
+    }
+    *alpha = 1.0f;
+    return v3s(0.0f);
+}
+
 /* Radiance a surface with parameters m emits towards w. Emitters are one-sided (the side
  * the geometric normal m->ng points to) unless TR_MATERIAL_TWO_SIDED is set. */
 TR_FN tr_vec3 tr_emitted(const tr_bsdf_params *m, tr_vec3 w) {

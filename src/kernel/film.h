@@ -42,6 +42,10 @@ TR_FN void tr_sample_clear(tr_sample *out) {
     out->radiance = v3s(0.0f);
     out->direct = v3s(0.0f);
     out->emission = v3s(0.0f);
+    out->specular = v3s(0.0f);
+    out->spec_f0 = v3s(0.0f);
+    out->spec_alpha = 0.0f;
+    out->spec_dist = 0.0f;
     out->albedo = v3s(0.0f);
     out->normal = v3s(0.0f);
     out->depth = 0.0f;
@@ -69,6 +73,7 @@ typedef struct tr_film_view {
     TR_GLOBAL float *sq;       /* TR_PASS_VARIANCE: squared radiance; set after tr_film_view_make */
     TR_GLOBAL float *direct;   /* TR_PASS_DIRECT: direct radiance; set after tr_film_view_make */
     TR_GLOBAL float *emission; /* TR_PASS_EMISSION: the same */
+    TR_GLOBAL float *specular; /* TR_PASS_SPECULAR (8 per pixel, the CPU's): the same */
     uint32_t width;
     uint32_t passes;
 } tr_film_view;
@@ -88,6 +93,7 @@ TR_FN tr_film_view tr_film_view_make(TR_GLOBAL float *sum, TR_GLOBAL uint32_t *c
     v.sq = 0;
     v.direct = 0;
     v.emission = 0;
+    v.specular = 0;
     v.width = width;
     v.passes = passes;
     return v;
@@ -148,6 +154,17 @@ TR_FN void tr_film_add_block(const tr_film_view *f, const tr_sample *smp, uint32
                 f->emission[3 * i] += smp->emission.x;
                 f->emission[3 * i + 1] += smp->emission.y;
                 f->emission[3 * i + 2] += smp->emission.z;
+            }
+            if ((f->passes & TR_PASS_SPECULAR) != 0u) {
+                TR_GLOBAL float *sp = f->specular + 8 * i;
+                sp[0] += smp->specular.x;
+                sp[1] += smp->specular.y;
+                sp[2] += smp->specular.z;
+                sp[3] += smp->spec_f0.x;
+                sp[4] += smp->spec_f0.y;
+                sp[5] += smp->spec_f0.z;
+                sp[6] += smp->spec_alpha;
+                sp[7] += smp->spec_dist;
             }
             f->count[i] += 1u;
         }

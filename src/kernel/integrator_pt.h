@@ -95,7 +95,17 @@ TR_FN_NOINLINE tr_vec3 tr_pt_env_light(const tr_scene_view *s, const tr_sampler 
  * leaves, each with its MIS weight (the two strategies' weights for the light at S sum to
  * one, so the direct part is unbiased on its own). Everything after that (NEE at the second
  * vertex on) is indirect. It is taken as a snapshot of the running sum right after that next
- * vertex's emission, so the radiance itself is computed exactly as without the pass. */
+ * vertex's emission, so the radiance itself is computed exactly as without the pass.
+ *
+ * The specular part (TR_PASS_SPECULAR, with TR_FRAME_SPLIT_SPECULAR) is the light S reflects
+ * through its specular lobes: each light sample at S weighed by tr_bsdf_spec_share at its
+ * direction (the environment's and the sun's directions drawn again from the same sampler
+ * dimensions; punctual lights, several per sample, by the share head-on), and everything
+ * found after S's BSDF sample by that sample's share. It too is taken from differences of
+ * the running sum, so the radiance is unchanged; radiance less the emission before S less
+ * the specular part is the diffuse part. The distance to the vertex after S is recorded
+ * where S's sample was mostly specular (its share's luminance above one half), for the
+ * reconstruction's virtual motion. */
 /* Firefly control, for frames a filter reconstructs (tr_trace_pt_ff): a contribution that
  * arrives over an indirect vertex - the light sample at any non-specular vertex after the
  * first, and what a BSDF sample finds after the vertex that follows it - is scaled down
@@ -147,6 +157,12 @@ TR_FN tr_vec3 tr_trace_pt_ff(const tr_scene_view *s, tr_ray ray, int max_depth, 
     int direct_done = 0;
     tr_vec3 direct = v3s(0.0f);
     int psr_done = 0; /* the passes' surface came from tr_psr_surface */
+    /* TR_FRAME_SPLIT_SPECULAR: the specular part of the light S reflects (see above). */
+    const int split = surface != 0 && (flags & TR_FRAME_SPLIT_SPECULAR) != 0u;
+    tr_vec3 spec = v3s(0.0f);
+    tr_vec3 cont_share = v3s(0.0f); /* the specular share of S's BSDF sample */
+    tr_vec3 cont_from = v3s(0.0f);  /* the radiance when S's BSDF sample was drawn */
+    int cont = 0;
     for (int seg = 1; seg <= max_depth; ++seg) {
         tr_hit hit;
         *rays += 1;
@@ -189,6 +205,10 @@ TR_FN tr_vec3 tr_trace_pt_ff(const tr_scene_view *s, tr_ray ray, int max_depth, 
         if (tr_volume_attenuation(s, hit.triangle, ray.dir, n, hit.t, &absorbed)) {
             throughput = v3_mul(throughput, absorbed); /* the segment crossed a medium */
         }
+        if (split && cont && seg == first_nd + 1 &&
+            0.2126f * cont_share.x + 0.7152f * cont_share.y + 0.0722f * cont_share.z > 0.5f) {
+            surface->spec_dist = hit.t; /* a specular sample from S: the reflection's distance */
+        }
         if (surface && seg == 1 && (flags & TR_FRAME_PSR) != 0u && tr_bsdf_is_delta(&m)) {
             *rays += tr_psr_surface(s, ray, hit, m, surface);
             psr_done = 1;
@@ -208,6 +228,10 @@ TR_FN tr_vec3 tr_trace_pt_ff(const tr_scene_view *s, tr_ray ray, int max_depth, 
         }
         if (first_nd == 0 && !tr_bsdf_is_delta(&m)) {
             first_nd = seg;
+        }
+        const int at_s = split && first_nd == seg; /* S: its light is split by lobe */
+        if (at_s) {
+            surface->spec_f0 = tr_bsdf_spec_f0(&m, &surface->spec_alpha);
         }
 
         /* Emission found by the BSDF strategy (or the camera). */
@@ -261,9 +285,14 @@ TR_FN tr_vec3 tr_trace_pt_ff(const tr_scene_view *s, tr_ray ray, int max_depth, 
                     *rays += 1;
                     if (!tr_occluded_masked(s, &shadow)) { /* cut-outs let light through */
                         float w = tr_mis_power(pl, tr_bsdf_pdf(&m, wo, wi));
+                        const tr_vec3 r0 = radiance;
                         radiance = tr_pt_add(
                             radiance, v3_scale(v3_mul(v3_mul(throughput, f), le_l), cos_i * w / pl),
                             nee_indirect, clamp_indirect);
+                        if (at_s) {
+                            spec = v3_add(
+                                spec, v3_mul(v3_sub(radiance, r0), tr_bsdf_spec_share(&m, wo, wi)));
+                        }
                     }
                 }
             }
@@ -272,18 +301,33 @@ TR_FN tr_vec3 tr_trace_pt_ff(const tr_scene_view *s, tr_ray ray, int max_depth, 
         /* Next-event estimation towards the environment, MIS against the BSDF. */
         if (nee && s->env_count > 0u) {
             tr_bsdf_params mc = m; /* a copy: m's address taken would keep it in memory */
+            const tr_vec3 r0 = radiance;
             radiance =
                 tr_pt_add(radiance, tr_pt_env_light(s, smp, seg, &mc, p, wo, throughput, rays),
                           nee_indirect, clamp_indirect);
+            if (at_s) { /* the environment's direction again: the sampler is stateless */
+                float eu1, eu2, pe;
+                tr_vec3 wi;
+                tr_sampler_2d(smp, tr_sampler_dim(seg, TR_DIM_ENV), &eu1, &eu2);
+                tr_env_sample(s, eu1, eu2, &wi, &pe);
+                spec = v3_add(spec, v3_mul(v3_sub(radiance, r0), tr_bsdf_spec_share(&m, wo, wi)));
+            }
         }
 
         /* Next-event estimation towards the sun (sun.h), MIS against the BSDF. */
         if (nee && s->sun_count > 0u) {
             float su1, su2;
             tr_sampler_2d(smp, tr_sun_dim(seg), &su1, &su2);
+            const tr_vec3 r0 = radiance;
             radiance =
                 tr_pt_add(radiance, v3_mul(throughput, tr_sun_nee(s, &m, wo, p, su1, su2, rays)),
                           nee_indirect, clamp_indirect);
+            if (at_s) {
+                float pls;
+                tr_vec3 wi;
+                tr_sun_sample(s, su1, su2, &wi, &pls);
+                spec = v3_add(spec, v3_mul(v3_sub(radiance, r0), tr_bsdf_spec_share(&m, wo, wi)));
+            }
         }
 
         /* Next-event estimation towards the punctual lights (punctual.h): delta lights, which
@@ -291,9 +335,14 @@ TR_FN tr_vec3 tr_trace_pt_ff(const tr_scene_view *s, tr_ray ray, int max_depth, 
          * estimates the primary direct light (no_primary): it does not sample them. */
         if (!tr_bsdf_is_delta(&m) && s->punctual_count > 0u) {
             const float pu = tr_sampler_1d(smp, tr_punctual_dim(seg));
+            const tr_vec3 r0 = radiance;
             radiance =
                 tr_pt_add(radiance, v3_mul(throughput, tr_punctual_nee(s, &m, wo, p, pu, rays)),
                           nee_indirect, clamp_indirect);
+            if (at_s) { /* several lights: their share taken head-on, an approximation */
+                spec = v3_add(spec, v3_mul(v3_sub(radiance, r0),
+                                           tr_bsdf_spec_share(&m, wo, tr_bsdf_facing(m.ns, wo))));
+            }
         }
 
         /* The indirect light at the first surface is a stage's (ReSTIR GI, restir_gi.h). */
@@ -315,6 +364,11 @@ TR_FN tr_vec3 tr_trace_pt_ff(const tr_scene_view *s, tr_ray ray, int max_depth, 
             break;
         }
         throughput = v3_mul(throughput, bs.weight);
+        if (at_s) { /* everything after this sample is split by its share */
+            cont_share = tr_bsdf_spec_share(&m, wo, bs.wi);
+            cont_from = radiance;
+            cont = 1;
+        }
         prev_pdf = bs.pdf;
         prev_delta = bs.delta;
         prev_p = p;
@@ -334,6 +388,12 @@ TR_FN tr_vec3 tr_trace_pt_ff(const tr_scene_view *s, tr_ray ray, int max_depth, 
     if (surface) {
         /* A path that ended before the vertex after S: all of it was direct. */
         surface->direct = direct_done ? direct : radiance;
+        if (split) {
+            if (cont) {
+                spec = v3_add(spec, v3_mul(v3_sub(radiance, cont_from), cont_share));
+            }
+            surface->specular = spec;
+        }
     }
     return radiance;
 }

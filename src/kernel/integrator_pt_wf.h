@@ -60,7 +60,7 @@ typedef struct tr_pt_wf_path {
     tr_vec3 c_light, c_env, c_sun, c_punctual;
 } tr_pt_wf_path;
 /* The host sizes the device's buffer of paths by it: no padding, on either side. */
-TR_STATIC_ASSERT(sizeof(tr_pt_wf_path) == 348, "tr_pt_wf_path layout");
+TR_STATIC_ASSERT(sizeof(tr_pt_wf_path) == 380, "tr_pt_wf_path layout");
 
 /* Generate: sample `sample` of pixel (x, y), the pixel_index-th of the image, as
  * tr_render_pixel_sample_kind starts it for pt, and the state tr_trace_pt_ff has before

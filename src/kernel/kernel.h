@@ -34,7 +34,8 @@ TR_FN void tr_render_pixel_sample_kind(const tr_scene_view *s, const tr_camera *
     /* The integrators record the passes' surface only for a film that keeps surface
      * passes or the direct part (the variance needs the radiance alone). */
     tr_sample *surface =
-        (passes & (TR_PASS_ALL | TR_PASS_DIRECT | TR_PASS_EMISSION)) != 0u ? out : 0;
+        (passes & (TR_PASS_ALL | TR_PASS_DIRECT | TR_PASS_EMISSION | TR_PASS_SPECULAR)) != 0u ? out
+                                                                                              : 0;
     float jx, jy;
     /* The host rejects unknown integrators before a frame starts. */
     if (integrator == TR_INTEGRATOR_PT) {

@@ -120,6 +120,9 @@ TR_STATIC_ASSERT(sizeof(tr_frame) == 164, "tr_frame layout");
  * triangle's) or through a refraction, where the virtual position is an approximation, so
  * that the reconstruction's consistency test is wider there (tr_post_consistent). */
 #define TR_PRIM_PSR_CURVED 0x80000000u
+/* tr_frame.flags: pt splits the light reflected at the passes' surface into its diffuse and
+ * specular parts (TR_PASS_SPECULAR, tr_trace_pt_ff). The radiance is unchanged. */
+#define TR_FRAME_SPLIT_SPECULAR 32u
 
 /* What one sample of one pixel gives: radiance, the intersection queries it made, and
  * the surface the passes describe (zero where the path found no non-specular surface). */
@@ -127,6 +130,12 @@ typedef struct tr_sample {
     tr_vec3 radiance;
     tr_vec3 direct;   /* the part of radiance that is direct light (TR_PASS_DIRECT) */
     tr_vec3 emission; /* the emission the camera ray saw at its first hit (TR_PASS_EMISSION) */
+    /* TR_PASS_SPECULAR: the specular part of radiance, the surface's specular F0 and GGX
+     * alpha, and the distance from it to the next vertex along a specular sample (0: none) */
+    tr_vec3 specular;
+    tr_vec3 spec_f0;
+    float spec_alpha;
+    float spec_dist;
     tr_vec3 albedo;
     tr_vec3 normal;
     float depth;

@@ -13,6 +13,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "post/dfg.h"
 #include "post/filter.h"
 #include "post/recon_params.h"
 #include "trac0r/film.h"
@@ -71,8 +72,9 @@ int tr_gbuffer_init(tr_gbuffer *g, uint32_t width, uint32_t height, tr_error *er
     g->emission = calloc(3 * n, sizeof *g->emission);
     g->emission_resolved = calloc(3 * n, sizeof *g->emission_resolved);
     g->scratch = calloc(3 * n, 1);
-    if (!g->color || !g->albedo || !g->normal || !g->depth || !g->prim || !g->direct ||
-        !g->emission || !g->emission_resolved || !g->scratch) {
+    g->specular = calloc(8 * n, sizeof *g->specular);
+    if (!g->specular || !g->color || !g->albedo || !g->normal || !g->depth || !g->prim ||
+        !g->direct || !g->emission || !g->emission_resolved || !g->scratch) {
         tr_gbuffer_free(g);
         return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory for a %ux%u frame", width,
                             height);
@@ -90,6 +92,7 @@ void tr_gbuffer_free(tr_gbuffer *g) {
     free(g->emission);
     free(g->emission_resolved);
     free(g->scratch);
+    free(g->specular);
     memset(g, 0, sizeof *g);
 }
 
@@ -112,7 +115,11 @@ int tr_gbuffer_from_film(tr_gbuffer *g, const struct tr_film *f, tr_error *err) 
         }
         g->depth[i] = f->depth ? f->depth[i] * inv : 0.0f;
         g->prim[i] = f->prim ? f->prim[i] : 0u;
+        for (int k = 0; k < 8 && f->specular; ++k) {
+            g->specular[8 * i + k] = f->specular[8 * i + k] * inv;
+        }
     }
+    g->has_specular = f->specular != NULL;
     g->has_direct = f->direct != NULL;
     g->has_emission = f->emission != NULL;
     g->has_resolved = 0;
@@ -170,6 +177,8 @@ tr_recon_params tr_recon_params_default(void) {
     p.svgf_split = 0;
     /* Temporal gradients (tr_realtime): see docs/realtime.md, "Lights that change". */
     p.gradients = 0;
+    /* Diffuse and specular apart: opt-in (docs/realtime.md has where it measures better). */
+    p.svgf_specular = 0;
     return p;
 }
 
@@ -191,6 +200,16 @@ int tr_recon_init(tr_recon *r, uint32_t width, uint32_t height, tr_error *err) {
         r->hist_dmoments[k] = calloc(2 * n, sizeof(float));
         bad |= !r->hist_direct[k] || !r->hist_dmoments[k];
     }
+    for (int k = 0; k < 2; ++k) {
+        r->hist_spec[k] = calloc(3 * n, sizeof(float));
+        r->hist_smoments[k] = calloc(2 * n, sizeof(float));
+        r->hist_slen[k] = calloc(n, sizeof(float));
+        bad |= !r->hist_spec[k] || !r->hist_smoments[k] || !r->hist_slen[k];
+    }
+    r->illum_s = calloc(3 * n, sizeof(float));
+    r->spec_alb = calloc(3 * n, sizeof(float));
+    r->diffuse = calloc(3 * n, sizeof(float));
+    bad |= !r->illum_s || !r->spec_alb || !r->diffuse;
     r->illum_d = calloc(3 * n, sizeof(float));
     r->reflected = calloc(3 * n, sizeof(float));
     r->reflected_d = calloc(3 * n, sizeof(float));
@@ -219,7 +238,13 @@ void tr_recon_free(tr_recon *r) {
         free(r->hist_len[k]);
         free(r->hist_direct[k]);
         free(r->hist_dmoments[k]);
+        free(r->hist_spec[k]);
+        free(r->hist_smoments[k]);
+        free(r->hist_slen[k]);
     }
+    free(r->illum_s);
+    free(r->spec_alb);
+    free(r->diffuse);
     free(r->illum_d);
     free(r->reflected);
     free(r->reflected_d);
@@ -1041,6 +1066,83 @@ static void direct_temporal(tr_recon *r, const tr_gbuffer *g, const tr_camera *c
     }
 }
 
+/* Diffuse and specular apart (tr_recon_params.svgf_specular): this frame's specular albedo
+ * (F0 A + B from the DFG table, dfg.h, at the pixel's mean F0 and alpha and the cosine
+ * between its normal and its ray; 0 where the surface has no specular lobe) into
+ * r->spec_alb, its specular light over it into r->illum_s, and the rest of its colour, the
+ * diffuse light, into r->diffuse. */
+static void spec_prepare(tr_recon *r, const tr_gbuffer *g, const tr_camera *cam, int threads) {
+    const float *dfg = tr_post_dfg_table();
+    const int w = (int)g->width, h = (int)g->height;
+#pragma omp parallel for num_threads(threads) schedule(static)
+    for (int y = 0; y < h; ++y) {
+        for (int x = 0; x < w; ++x) {
+            const size_t i = (size_t)y * w + x;
+            const float *sp = g->specular + 8 * i;
+            const tr_vec3 d = v3_sub(tr_post_world_point(cam, (float)x, (float)y, 1.0f), cam->pos);
+            const tr_vec3 n = v3(g->normal[3 * i], g->normal[3 * i + 1], g->normal[3 * i + 2]);
+            float a, b;
+            tr_post_dfg_lookup(dfg, tr_fabsf(v3_dot(n, d)), sp[6], &a, &b);
+            const int lobe = sp[3] > 0.0f || sp[4] > 0.0f || sp[5] > 0.0f;
+            for (int k = 0; k < 3; ++k) {
+                const float alb = lobe ? sp[3 + k] * a + b : 0.0f;
+                r->spec_alb[3 * i + k] = alb;
+                r->illum_s[3 * i + k] = sp[k] / tr_post_demod_factor(alb);
+                r->diffuse[3 * i + k] = g->color[3 * i + k] - sp[k];
+            }
+        }
+    }
+}
+
+/* The specular part's temporal stage (svgf_specular): r->illum_s reprojected by virtual
+ * motion (tr_post_reproject_virtual, the reflection's distance weighed by
+ * tr_post_spec_virtual) with a history cap from the roughness (tr_post_spec_max_len) into
+ * the specular histories of slot `next`, or a fresh history when hist is 0. */
+static void spec_temporal(tr_recon *r, const tr_gbuffer *g, const tr_camera *cam,
+                          const tr_camera *pc, const tr_vec3 *motion, uint32_t motion_count,
+                          int hist, int prev, int next, const tr_recon_params *p, int threads) {
+    const int w = (int)g->width, h = (int)g->height;
+    float *hs = r->hist_spec[next], *hsm = r->hist_smoments[next], *hsl = r->hist_slen[next];
+#pragma omp parallel for num_threads(threads) schedule(static)
+    for (int y = 0; y < h; ++y) {
+        for (int x = 0; x < w; ++x) {
+            const size_t i = (size_t)y * w + x;
+            const float cr = r->illum_s[3 * i], cg = r->illum_s[3 * i + 1],
+                        cb = r->illum_s[3 * i + 2];
+            float wt[4] = {0.0f, 0.0f, 0.0f, 0.0f}, total = 0.0f;
+            int x0 = 0, y0 = 0;
+            const uint32_t id = g->prim[i];
+            const tr_vec3 m = motion && id < motion_count ? motion[id] : v3s(0.0f);
+            const float alpha = g->specular[8 * i + 6];
+            if (hist) {
+                const tr_vec3 n = v3(g->normal[3 * i], g->normal[3 * i + 1], g->normal[3 * i + 2]);
+                const float virt = g->specular[8 * i + 7] * tr_post_spec_virtual(alpha);
+                total = tr_post_reproject_virtual(cam, pc, (uint32_t)x, (uint32_t)y, g->depth[i],
+                                                  virt, n, id, m, r->hist_depth, r->hist_normal,
+                                                  r->hist_prim, &x0, &y0, wt);
+            }
+            if (total > 0.05f) {
+                float cap = tr_post_max_len(m, p->max_len, p->max_len_moving);
+                if (r->len_cap) {
+                    cap = tr_fminf(cap, r->len_cap[i]);
+                }
+                tr_post_temporal_blend(cr, cg, cb, total, wt, x0, y0, w, r->hist_spec[prev],
+                                       r->hist_smoments[prev], r->hist_slen[prev], p->alpha_min,
+                                       tr_post_spec_max_len(alpha, cap), hs + 3 * i, hsm + 2 * i,
+                                       hsl + i);
+            } else {
+                const float l = tr_post_luminance(cr, cg, cb);
+                hs[3 * i] = cr;
+                hs[3 * i + 1] = cg;
+                hs[3 * i + 2] = cb;
+                hsm[2 * i] = l;
+                hsm[2 * i + 1] = l * l;
+                hsl[i] = 1.0f;
+            }
+        }
+    }
+}
+
 /* The temporal stage of tr_recon_frame (r->illum holds this frame's illumination): the
  * history of slot `prev` reprojected and blended into hc, hm, hl; this frame's points
  * into slot `next`. */
@@ -1199,13 +1301,26 @@ int tr_recon_frame_moving(tr_recon *r, const tr_gbuffer *frame, const tr_camera 
     }
     const double t0 = tr_time_now();
     /* SVGF apart: direct and indirect illumination each get a history (split_illum). */
-    const int split = method == TR_RECON_SVGF && p->svgf_split && g->has_direct;
+    /* SVGF with the diffuse and the specular light apart (spec_prepare), before the split
+     * into direct and indirect light, which it replaces. */
+    const int spec = method == TR_RECON_SVGF && p->svgf_specular && g->has_specular;
+    const int split = method == TR_RECON_SVGF && p->svgf_split && g->has_direct && !spec;
     /* With the emission pass the filters see only reflected light: an emitter's edge is
      * not spread onto its neighbours, and the emission comes back after them. */
     tr_gbuffer reflected;
     if (frame->has_emission) {
         take_out_emission(r, frame, split, &reflected, threads);
         g = &reflected;
+    }
+    tr_gbuffer diffuse;
+    if (spec) {
+        spec_prepare(r, g, cam, threads);
+        diffuse = *g;
+        diffuse.color = r->diffuse;
+        g = &diffuse;
+    }
+    if (r->hist_spec_split != spec) {
+        r->have_history = 0; /* a history kept with the other split starts over */
     }
     demodulate(g, g->color, r->illum, threads);
     if (split) {
@@ -1214,6 +1329,12 @@ int tr_recon_frame_moving(tr_recon *r, const tr_gbuffer *frame, const tr_camera 
     const int prev = r->cur, next = 1 - r->cur;
     float *hc = r->hist_color[next], *hm = r->hist_moments[next], *hl = r->hist_len[next];
     temporal_stage(r, g, cam, motion, motion_count, split, prev, next, p, threads, hc, hm, hl);
+    if (spec) {
+        const tr_camera pc = r->prev_cam;
+        spec_temporal(r, g, cam, &pc, motion, motion_count, r->have_history, prev, next, p,
+                      threads);
+    }
+    r->hist_spec_split = spec;
     r->cur = next;
     const double t1 = tr_time_now();
     r->ms_temporal = (t1 - t0) * 1e3;
@@ -1245,7 +1366,14 @@ int tr_recon_frame_moving(tr_recon *r, const tr_gbuffer *frame, const tr_camera 
         prep_guides(g, &ws, p, 1, threads);
         /* With TAA the remodulated output goes to r->illum (free by now) first. */
         float *res = p->svgf_taa_alpha > 0.0f ? r->illum : out;
-        if (split) {
+        if (spec) {
+            /* Each part steered by its own variance, remodulated by its own albedo. */
+            svgf_part(g, &ws, hc, hm, hl, p, res, 0, threads);
+            tr_gbuffer gs = *g;
+            gs.albedo = r->spec_alb;
+            svgf_part(&gs, &ws, r->hist_spec[next], r->hist_smoments[next], r->hist_slen[next], p,
+                      res, 1, threads);
+        } else if (split) {
             /* Schied et al. filter direct and indirect illumination apart, each steered by
              * its own variance, and add them after remodulation. */
             svgf_part(g, &ws, r->hist_direct[next], r->hist_dmoments[next], hl, p, res, 0, threads);

@@ -195,6 +195,86 @@ TR_FN float tr_post_reproject(const tr_camera *cam, const tr_camera *prev, uint3
                                     prev_normal, prev_prim, x0, y0, w);
 }
 
+/* ---- Specular light apart (tr_recon_params.svgf_specular) ---------------------------- */
+
+/* The specular history's reprojection by virtual motion: a reflection seen in a surface
+ * moves with the reflected point's mirror image, which lies `virt` further along the camera
+ * ray than the surface (the reflected hit's distance; for a flat mirror exactly the image).
+ * The taps are found where that virtual point, followed back by the surface's motion,
+ * projects into the previous camera, and tested as tr_post_reproject tests them, against the
+ * surface point itself (same primitive, normal, tangent plane), so that the history still
+ * belongs to this surface. Where that leaves less than 5 % of the weight (or virt is 0) it is
+ * the surface's own reprojection, tr_post_reproject_moving. Same outputs as it. */
+TR_FN float tr_post_reproject_virtual(const tr_camera *cam, const tr_camera *prev, uint32_t x,
+                                      uint32_t y, float depth, float virt, tr_vec3 n, uint32_t prim,
+                                      tr_vec3 motion, TR_CONST_GLOBAL float *prev_depth,
+                                      TR_CONST_GLOBAL float *prev_normal,
+                                      TR_CONST_GLOBAL uint32_t *prev_prim, int *x0, int *y0,
+                                      float w[4]) {
+    if (depth > 0.0f && virt > 0.0f) {
+        const tr_vec3 p = v3_sub(tr_post_world_point(cam, (float)x, (float)y, depth), motion);
+        const tr_vec3 v =
+            v3_sub(tr_post_world_point(cam, (float)x, (float)y, depth + virt), motion);
+        const tr_vec3 pd = v3_sub(p, prev->pos);
+        const float dist = tr_sqrtf(v3_dot(pd, pd));
+        float px, py, vd;
+        const int pw = (int)prev->screen_width, ph = (int)prev->screen_height;
+        if (tr_post_project(prev, v, &px, &py, &vd) && px - 0.5f > -1.0f && py - 0.5f > -1.0f &&
+            px - 0.5f < (float)pw && py - 0.5f < (float)ph) {
+            const float fx = px - 0.5f, fy = py - 0.5f;
+            const int ix = fx < 0.0f ? -1 : (int)fx, iy = fy < 0.0f ? -1 : (int)fy;
+            const float ax = fx - (float)ix, ay = fy - (float)iy;
+            float total = 0.0f;
+            for (int k = 0; k < 4; ++k) {
+                const int tx = ix + (k & 1), ty = iy + (k >> 1);
+                w[k] = 0.0f;
+                if (tx < 0 || ty < 0 || tx >= pw || ty >= ph) {
+                    continue;
+                }
+                const int i = ty * pw + tx;
+                if (!(prev_depth[i] > 0.0f)) {
+                    continue;
+                }
+                const tr_vec3 pn =
+                    v3(prev_normal[3 * i], prev_normal[3 * i + 1], prev_normal[3 * i + 2]);
+                const tr_vec3 q = tr_post_world_point(prev, (float)tx, (float)ty, prev_depth[i]);
+                if (!tr_post_consistent(prim, p, n, dist, prev_prim[i], q, pn)) {
+                    continue;
+                }
+                w[k] = ((k & 1) ? ax : 1.0f - ax) * ((k >> 1) ? ay : 1.0f - ay);
+                total += w[k];
+            }
+            if (total > 0.05f) {
+                *x0 = ix;
+                *y0 = iy;
+                return total;
+            }
+        }
+    }
+    return tr_post_reproject_moving(cam, prev, x, y, depth, n, prim, motion, prev_depth,
+                                    prev_normal, prev_prim, x0, y0, w);
+}
+
+/* How far along the reflection the virtual point is taken for GGX alpha `alpha`: the whole
+ * hit distance up to alpha 0.1 (a sharp reflection moves with its image), none from 0.5 on
+ * (a rough lobe's light is spread over many directions and moves with the surface), a
+ * smoothstep between. */
+TR_FN float tr_post_spec_virtual(float alpha) {
+    const float t = tr_fminf(tr_fmaxf((alpha - 0.1f) / 0.4f, 0.0f), 1.0f);
+    return 1.0f - t * t * (3.0f - 2.0f * t);
+}
+
+/* The specular history's length cap for GGX alpha `alpha` under the cap max_len: a sharp
+ * reflection changes with the view and keeps TR_POST_SPEC_MIN_LEN frames, a rough lobe
+ * (alpha 0.5 on) as many as the diffuse light, a smoothstep between. */
+#define TR_POST_SPEC_MIN_LEN 4.0f
+TR_FN float tr_post_spec_max_len(float alpha, float max_len) {
+    const float t = tr_fminf(tr_fmaxf((alpha - 0.05f) / 0.45f, 0.0f), 1.0f);
+    const float s = t * t * (3.0f - 2.0f * t);
+    const float lo = tr_fminf(TR_POST_SPEC_MIN_LEN, max_len);
+    return lo + (max_len - lo) * s;
+}
+
 /* The history length cap of a pixel whose surface moved by `motion` since the previous
  * frame: max_len_moving where it moved (its shading changes with the motion, and a long
  * history would lag behind it), max_len elsewhere. */

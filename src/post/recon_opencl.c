@@ -122,11 +122,12 @@ static int check_args(const tr_recon_device *r, const tr_camera *cam, int method
 
 #ifdef TRAC0R_HAVE_OPENCL
 /* The device's kernels filter the sum; direct and indirect apart (svgf_split, opt-in and
- * measured lower on the classic box) is host-only. */
+ * measured lower on the classic box) and diffuse and specular apart (svgf_specular, whose
+ * pass the CPU device alone writes) are host-only. */
 static int split_unsupported(tr_error *err) {
     return tr_error_set(err, TR_STATUS_UNSUPPORTED,
-                        "reconstruction: SVGF with direct and indirect apart (svgf_split) runs "
-                        "on the host only");
+                        "reconstruction: SVGF with direct and indirect apart (svgf_split) or "
+                        "diffuse and specular apart (svgf_specular) runs on the host only");
 }
 
 static int cl_fail(tr_error *err, const char *call, cl_int code) {
@@ -602,7 +603,7 @@ int tr_recon_device_frame_gbuffer(tr_recon_device *r, const tr_gbuffer *g, const
                             r->width, r->height);
     }
 #ifdef TRAC0R_HAVE_OPENCL
-    if (r->cl && p->svgf_split && method == TR_RECON_SVGF) {
+    if (r->cl && (p->svgf_split || p->svgf_specular) && method == TR_RECON_SVGF) {
         return split_unsupported(err);
     }
     if (r->cl) {
@@ -622,7 +623,7 @@ int tr_recon_device_frame(tr_recon_device *r, const tr_camera *cam, const tr_vec
         return TR_ERR;
     }
 #ifdef TRAC0R_HAVE_OPENCL
-    if (r->cl && p->svgf_split && method == TR_RECON_SVGF) {
+    if (r->cl && (p->svgf_split || p->svgf_specular) && method == TR_RECON_SVGF) {
         return split_unsupported(err);
     }
     if (r->cl) {

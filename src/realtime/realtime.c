@@ -256,7 +256,13 @@ uint32_t tr_realtime_passes(const tr_realtime *rt, int method) {
     const uint32_t emission =
         rt->params.emission_samples > 0 && rt->cfg.integrator == TR_INTEGRATOR_PT ? TR_PASS_EMISSION
                                                                                   : 0u;
-    return TR_PASS_ALL | direct | emission;
+    /* The specular pass where SVGF filters diffuse and specular light apart (pt on the
+     * CPU device, which alone writes it). */
+    const uint32_t specular =
+        rt->params.svgf_specular && rt->cfg.integrator == TR_INTEGRATOR_PT && !rt->on_device
+            ? TR_PASS_SPECULAR
+            : 0u;
+    return TR_PASS_ALL | direct | emission | specular;
 }
 
 /* ---- Sampling -------------------------------------------------------------------- */
