@@ -65,11 +65,13 @@ def parse_args(argv):
     else:
         argv = []
     opts = {"width": 256, "height": 256, "spp": 16, "seed": 0, "threads": 0,
-            "time_limit": 0.0, "max_bounces": 1024, "light_threshold": 0.01, "pattern": "pmj", "out": None, "scene": None}
+            "time_limit": 0.0, "max_bounces": 1024, "light_threshold": 0.01, "pattern": "pmj", "spot_model": "trac0r",
+            "out": None, "scene": None}
     numeric = {"--width": ("width", int), "--height": ("height", int), "--spp": ("spp", int),
                "--seed": ("seed", int), "--threads": ("threads", int),
                "--time-limit": ("time_limit", float), "--max-bounces": ("max_bounces", int),
-               "--light-threshold": ("light_threshold", float), "--pattern": ("pattern", str)}
+               "--light-threshold": ("light_threshold", float), "--pattern": ("pattern", str),
+               "--spot-model": ("spot_model", str)}
     i = 0
     while i < len(argv):
         a = argv[i]
@@ -106,6 +108,8 @@ def parse_args(argv):
         fail("--seed: expected 0..2147483647, got %d" % opts["seed"])
     if opts["threads"] < 0 or opts["threads"] > 1024:
         fail("--threads: expected 0 (all) .. 1024, got %d" % opts["threads"])
+    if opts["spot_model"] not in ("trac0r", "cycles"):
+        fail("--spot-model: expected trac0r or cycles, got '%s'" % opts["spot_model"])
     if opts["pattern"] not in ("pmj", "sobol"):
         fail("--pattern: expected pmj or sobol, got '%s'" % opts["pattern"])
     if not (0.0 <= opts["light_threshold"] <= 1.0):
@@ -499,7 +503,7 @@ def add_light(scene, name, kind, rgb, at=None, shine=None):
     return ld
 
 
-def build_lights(scene, lights, mirror):
+def build_lights(scene, lights, mirror, spot_model):
     """The environment, the sun and the punctual lights (the mapping in docs/cycles.md)."""
     world = bpy.data.worlds.new("tr_world")
     env = lights["environment"]
@@ -550,11 +554,65 @@ def build_lights(scene, lights, mirror):
             ld = add_light(scene, name, "SPOT", power, at=at,
                            shine=to_blender(l["direction"], mirror))
             ld.spot_size = math.radians(l["cone_angle"])
-            ld.spot_blend = l["blend"]
+            if spot_model == "cycles":
+                ld.spot_blend = l["blend"]
+            else:
+                spot_profile(ld, l["cone_angle"], l["blend"])
         ld.shadow_soft_size = 0.0
 
 
-def build(scene, mats, camera, by_mat, lights):
+def spot_profile(ld, cone_angle, blend):
+    """trac0r's spot profile on a Cycles spot. Cycles 3.4's spot (kernel/light/spot.h)
+    multiplies its strength by cos(a) (a the angle from the axis) inside the cone, and
+    fades in by smoothstep((cos a - cos h) / ((1 - cos h) blend)); trac0r's has no cos(a)
+    and fades in by smoothstep((cos a - cos h) / (cos(h (1 - blend)) - cos h)) (h the
+    half-angle). So Cycles' blend is set to 0 (a hard edge at h) and the light's emission
+    strength is trac0r's profile / cos(a), cos(a) read from the light's Normal texture
+    coordinate: the direction from the light to the point lit, in the light's own axes,
+    where the spot shines down -z."""
+    h = math.radians(cone_angle) / 2.0
+    cos_h = math.cos(h)
+    width = math.cos(h * (1.0 - blend)) - cos_h
+    ld.spot_blend = 0.0
+    ld.use_nodes = True
+    nt = ld.node_tree
+    for n in list(nt.nodes):
+        nt.nodes.remove(n)
+
+    def math_node(op, a, b=None, clamp=False):
+        m = nt.nodes.new("ShaderNodeMath")
+        m.operation = op
+        m.use_clamp = clamp
+        for k, v in ((0, a), (1, b)):
+            if v is None:
+                continue
+            if isinstance(v, float):
+                m.inputs[k].default_value = v
+            else:
+                nt.links.new(v, m.inputs[k])
+        return m.outputs["Value"]
+
+    tc = nt.nodes.new("ShaderNodeTexCoord")
+    sep = nt.nodes.new("ShaderNodeSeparateXYZ")
+    nt.links.new(tc.outputs["Normal"], sep.inputs["Vector"])
+    cos_a = math_node("MULTIPLY", sep.outputs["Z"], -1.0)
+    if width > 0.0:
+        t = math_node("DIVIDE", math_node("SUBTRACT", cos_a, cos_h), width, clamp=True)
+        # smoothstep: t^2 (3 - 2 t)
+        s = math_node("MULTIPLY", math_node("MULTIPLY", t, t),
+                      math_node("SUBTRACT", 3.0, math_node("MULTIPLY", t, 2.0)))
+    else:
+        s = math_node("GREATER_THAN", cos_a, cos_h)
+    strength = math_node("DIVIDE", s, math_node("MAXIMUM", cos_a, 1e-6))
+    em = nt.nodes.new("ShaderNodeEmission")
+    em.inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
+    nt.links.new(strength, em.inputs["Strength"])
+    out = nt.nodes.new("ShaderNodeOutputLight")
+    out.target = "CYCLES"
+    nt.links.new(em.outputs["Emission"], out.inputs["Surface"])
+
+
+def build(scene, mats, camera, by_mat, lights, spot_model):
     mirror = not camera["right_handed"]
     for obj in list(bpy.data.objects):
         bpy.data.objects.remove(obj, do_unlink=True)
@@ -572,7 +630,7 @@ def build(scene, mats, camera, by_mat, lights):
         ob = bpy.data.objects.new("tr_" + name, me)
         scene.collection.objects.link(ob)
 
-    build_lights(scene, lights, mirror)
+    build_lights(scene, lights, mirror, spot_model)
 
     pos = Vector(to_blender(camera["pos"], mirror))
     d = Vector(to_blender(camera["dir"], mirror))
@@ -728,7 +786,7 @@ def main():
     except SceneError as e:
         fail("%s: %s" % (opts["scene"], e))
     scene = bpy.context.scene
-    build(scene, mats, camera, by_mat, lights)
+    build(scene, mats, camera, by_mat, lights, opts["spot_model"])
     configure(scene, opts)
     out = os.path.abspath(opts["out"])
     pfm = out.lower().endswith(".pfm")
