@@ -7,7 +7,8 @@
 #
 #     tools/cycles/features.sh [--size 128x96] [--spp 512] [--threads 1]
 #         [--trac0r build/release/trac0r] [--blender blender] [--out cycles-features]
-#         [SCENE.json...]     (default: sky sun point spot lens under tools/cycles/test/)
+#         [SCENE.json...]     (default: the eight scenes of tools/cycles/test/ but
+#                             shapes-left.json)
 #
 # Output: OUT/NAME-{trac0r,cycles}-{1,2}.pfm, OUT/summary.txt (one block per scene, with the
 # render times). Blender is a measuring instrument only: it is no dependency of trac0r.
@@ -46,7 +47,8 @@ while [ $# -gt 0 ]; do
 done
 if [ $# -eq 0 ]; then
     set -- "$here/test/sky.json" "$here/test/sun.json" "$here/test/point.json" \
-        "$here/test/spot.json" "$here/test/lens.json"
+        "$here/test/directional.json" "$here/test/spot.json" "$here/test/lens.json" \
+        "$here/test/lens-pinhole.json" "$here/test/lens-sun.json"
 fi
 w=${size%x*}
 h=${size#*x}

@@ -15,6 +15,10 @@
                                            both renderers' noise (from their halves) taken
                                            out, and N x N-pixel block means (default 8) of
                                            the two means in units of their own noise
+    pfmtool.py side OUT.png A.pfm B.pfm [C.pfm]
+                                           the images side by side as one 8-bit sRGB PNG
+                                           (clamped to [0, 1], no tonemapping), then
+                                           (A - B) x 4 on grey 0.5 (C instead, if given)
     pfmtool.py fit CSV TARGET [REF_ERROR]  log-log interpolation of spp/time against relMSE
                                            (less the reference's own relMSE, default 0)
 
@@ -25,6 +29,7 @@ rows bottom to top. Errors name the file and exit with status 2.
 import math
 import struct
 import sys
+import zlib
 
 
 def die(msg):
@@ -223,6 +228,51 @@ def cmd_compare(args):
              num / den if den > 0 else float("nan")))
 
 
+def srgb8(v):
+    v = clamp01(v)
+    v = 12.92 * v if v <= 0.0031308 else 1.055 * v ** (1.0 / 2.4) - 0.055
+    return int(v * 255.0 + 0.5)
+
+
+def write_png(path, w, h, rows):
+    """rows: h rows top first, each bytes of w RGB triples."""
+    def chunk(kind, data):
+        return (struct.pack(">I", len(data)) + kind + data
+                + struct.pack(">I", zlib.crc32(kind + data) & 0xffffffff))
+    raw = b"".join(b"\0" + r for r in rows)
+    with open(path, "wb") as fh:
+        fh.write(b"\x89PNG\r\n\x1a\n")
+        fh.write(chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 2, 0, 0, 0)))
+        fh.write(chunk(b"IDAT", zlib.compress(raw, 9)))
+        fh.write(chunk(b"IEND", b""))
+
+
+def cmd_side(args):
+    if len(args) not in (3, 4):
+        die("side: expected OUT.png A.pfm B.pfm [C.pfm]")
+    a, b = read_pfm(args[1]), read_pfm(args[2])
+    same_size(a, b, args[1], args[2])
+    w, h = a[0], a[1]
+    if len(args) == 4:
+        c = read_pfm(args[3])
+        same_size(a, c, args[1], args[3])
+        panels = [a[2], b[2], c[2]]
+        lin = [True, True, True]
+    else:
+        diff = [0.5 + 4.0 * (x - y) for x, y in zip(a[2], b[2])]
+        panels = [a[2], b[2], diff]
+        lin = [True, True, False]
+    rows = []
+    for y in range(h - 1, -1, -1):  # PFM rows run bottom-up
+        row = bytearray()
+        for px, is_lin in zip(panels, lin):
+            vals = px[y * w * 3:(y + 1) * w * 3]
+            row.extend(srgb8(v) if is_lin else int(clamp01(v) * 255.0 + 0.5) for v in vals)
+        rows.append(bytes(row))
+    write_png(args[0], w * len(panels), h, rows)
+    print("%s: %dx%d" % (args[0], w * len(panels), h))
+
+
 def loglog_crossing(points, target):
     """points: (x, relmse) with x growing. The x where relmse crosses target, by linear
     interpolation of log relmse against log x (error ~ x^-slope between points); beyond
@@ -288,9 +338,9 @@ def cmd_fit(args):
 
 def main():
     cmds = {"mean": cmd_mean, "relmse": cmd_relmse, "halves": cmd_halves,
-            "blocks": cmd_blocks, "compare": cmd_compare, "fit": cmd_fit}
+            "blocks": cmd_blocks, "compare": cmd_compare, "side": cmd_side, "fit": cmd_fit}
     if len(sys.argv) < 2 or sys.argv[1] not in cmds:
-        die("usage: pfmtool.py mean|relmse|halves|blocks|compare|fit ... (see the file's docstring)")
+        die("usage: pfmtool.py mean|relmse|halves|blocks|compare|side|fit ... (see the file's docstring)")
     cmds[sys.argv[1]](sys.argv[2:])
 
 

@@ -4,10 +4,13 @@
         [--width 256] [--height 256] [--spp N] [--seed S] [--threads T] \
         [--time-limit SECONDS] --out OUT.exr|OUT.pfm
     for diagnosis only: [--max-bounces 1024] [--light-threshold 0.01] [--pattern pmj|sobol]
+                        [--spot-model trac0r|cycles]
 
 --max-bounces 0 is direct light only (as trac0r's --max-depth 2); --light-threshold is
 Cycles' light_sampling_threshold (its default 0.01); --pattern picks Cycles' sampler. The
 comparison keeps the defaults: 1024 bounces, where Cycles' Russian roulette ends the paths.
+--spot-model cycles gives spots Cycles' own profile (spot size and blend) instead of
+trac0r's, to show the difference between the two.
 
 Blender is a measuring instrument here, never a dependency of trac0r: nothing in the build,
 the tests or CI runs this script (docs/cycles.md says how the comparison is made).
@@ -20,8 +23,14 @@ What it maps, so that both renderers solve the same light transport problem:
     diffuse lobe is Burley's, not Lambert's) and `emitter` (Emission, radiance
     color x emittance; one-sided unless `two_sided`: Cycles 3.4's mesh emission is
     two-sided, so the strength is multiplied by 1 - Backfacing);
-  * the camera: position, look_at / direction, up, vertical fov, near / far, handedness.
-Anything else (other shapes or materials, material extras, meshes, an environment) is
+  * the camera: position, look_at / direction, up, vertical fov, near / far, handedness,
+    and the thin lens (aperture_radius or f_number with sensor_height, focus_distance) as
+    Blender's depth of field: the f-stop that gives the same radius with the lens set here;
+  * a constant `environment` (the world's Background, colour x strength), the `sun`
+    (a Sun light: angle, strength = irradiance) and punctual `lights`: point and spot
+    lights of radius 0 and power 4 pi I watts, spots with trac0r's profile (see
+    spot_profile), directional lights as Suns of angle 0.
+Anything else (other shapes or materials, material extras, meshes, an environment map) is
 refused with a message naming the field, and exit status 2, rather than rendered wrongly.
 
 trac0r's world is right-handed with y up; Blender's is right-handed with z up, so a point
@@ -34,7 +43,8 @@ Cycles settings: CPU, path tracing with light sampling and MIS (its defaults), p
 multi-jitter sampling, 1024 bounces of every kind (paths end by Cycles' own Russian
 roulette, not by depth), no clamping, no glossy filter, no denoising, no adaptive
 sampling, a 1-pixel box pixel filter (trac0r jitters uniformly in the pixel), a black
-world, Standard view transform, and the image written as linear 32-bit float.
+world unless the scene has an environment, Standard view transform, and the image written
+as linear 32-bit float.
 """
 
 import json
