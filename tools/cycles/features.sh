@@ -10,8 +10,9 @@
 #         [SCENE.json...]     (default: the eight scenes of tools/cycles/test/ but
 #                             shapes-left.json)
 #
-# Output: OUT/NAME-{trac0r,cycles}-{1,2}.pfm, OUT/summary.txt (one block per scene, with the
-# render times). Blender is a measuring instrument only: it is no dependency of trac0r.
+# Output: OUT/NAME-{trac0r,cycles}-{1,2}.pfm and their means OUT/NAME-{trac0r,cycles}.pfm,
+# OUT/NAME.png (the means side by side and their difference), OUT/summary.txt (one block per
+# scene, with the render times). Blender is a measuring instrument only: it is no dependency of trac0r.
 set -eu
 
 here=$(cd "$(dirname "$0")" && pwd)
@@ -76,5 +77,12 @@ for scene in "$@"; do
     /usr/bin/python3 "$here/pfmtool.py" compare "$out/$name-trac0r-1.pfm" \
         "$out/$name-trac0r-2.pfm" "$out/$name-cycles-1.pfm" "$out/$name-cycles-2.pfm" \
         >>"$summary"
+    # Side by side: trac0r's mean, Cycles' mean, their difference x 4 (docs/img/cycles-*.png).
+    for r in trac0r cycles; do
+        /usr/bin/python3 "$here/pfmtool.py" mean "$out/$name-$r.pfm" "$out/$name-$r-1.pfm" \
+            "$out/$name-$r-2.pfm" >/dev/null
+    done
+    /usr/bin/python3 "$here/pfmtool.py" side "$out/$name.png" "$out/$name-trac0r.pfm" \
+        "$out/$name-cycles.pfm" >/dev/null
 done
 cat "$summary"
