@@ -10,6 +10,15 @@
     pfmtool.py blocks A.pfm REF.pfm [N]    N x N-pixel block means (default 8) of A against
                                            REF, RGB mean: the largest relative deviation, the
                                            mean deviation and the fraction beyond 3 %
+    pfmtool.py compare A1 A2 B1 B2 [N]     two renderers, each as two independent halves:
+                                           the relative MSE of A's mean against B's with
+                                           both renderers' noise (from their halves) taken
+                                           out, and N x N-pixel block means (default 8) of
+                                           the two means in units of their own noise
+    pfmtool.py side OUT.png A.pfm B.pfm [C.pfm]
+                                           the images side by side as one 8-bit sRGB PNG
+                                           (clamped to [0, 1], no tonemapping), then
+                                           (A - B) x 4 on grey 0.5 (C instead, if given)
     pfmtool.py fit CSV TARGET [REF_ERROR]  log-log interpolation of spp/time against relMSE
                                            (less the reference's own relMSE, default 0)
 
@@ -20,6 +29,7 @@ rows bottom to top. Errors name the file and exit with status 2.
 import math
 import struct
 import sys
+import zlib
 
 
 def die(msg):
@@ -147,6 +157,122 @@ def cmd_blocks(args):
                                                worst[2], mean_abs, signed, over))
 
 
+def cmd_compare(args):
+    """A (two halves A1, A2) against B (B1, B2). The halves of one renderer differ by its
+    noise only, so relmse(A1, A2) / 4 is the noise of A's mean, and likewise for B; the
+    noises are independent, so relmse(mean A, mean B) less both is what A and B differ by
+    beyond their noise. Block means: d = (A - B) / B over N x N pixels and the three
+    channels; the variance of a block's mean is the sum over its values of each value's
+    variance, which the halves estimate as (x1 - x2)^2 / 4, so z = (A - B) / sigma is a
+    standard normal where the renderers agree."""
+    if len(args) not in (4, 5):
+        die("compare: expected A1.pfm A2.pfm B1.pfm B2.pfm [N]")
+    ims = [read_pfm(p) for p in args[:4]]
+    for p, im in zip(args[1:4], ims[1:]):
+        same_size(ims[0], im, args[0], p)
+    n = int(args[4]) if len(args) == 5 else 8
+    w, h = ims[0][0], ims[0][1]
+    if n <= 0 or w % n or h % n:
+        die("compare: %d does not divide %dx%d" % (n, w, h))
+    a1, a2, b1, b2 = (im[2] for im in ims)
+    am = [(x + y) / 2.0 for x, y in zip(a1, a2)]
+    bm = [(x + y) / 2.0 for x, y in zip(b1, b2)]
+    noise_a = relmse((w, h, a1), (w, h, a2)) / 4.0
+    noise_b = relmse((w, h, b1), (w, h, b2)) / 4.0
+    measured = relmse((w, h, am), (w, h, bm))
+    print("relmse %.4g noise_a %.4g noise_b %.4g beyond_noise %.4g"
+          % (measured, noise_a, noise_b, measured - noise_a - noise_b))
+    zs = []
+    # Pooled over the blocks, with each block's variance from its halves' block means
+    # ((a1 - a2)^2 / 4), which holds even where neighbouring pixels' noise is correlated.
+    num = den = pix_a = pix_b = blk_a = blk_b = 0.0
+    for by in range(h // n):
+        for bx in range(w // n):
+            sa = sb = var = da = db = va = vb = 0.0
+            for y in range(by * n, by * n + n):
+                for i in range((y * w + bx * n) * 3, (y * w + bx * n + n) * 3):
+                    sa += am[i]
+                    sb += bm[i]
+                    da += a1[i] - a2[i]
+                    db += b1[i] - b2[i]
+                    va += (a1[i] - a2[i]) ** 2 / 4.0
+                    vb += (b1[i] - b2[i]) ** 2 / 4.0
+            var = va + vb
+            num += (sa - sb) ** 2
+            den += (da * da + db * db) / 4.0
+            pix_a += va
+            pix_b += vb
+            blk_a += da * da / 4.0
+            blk_b += db * db / 4.0
+            if sb > 0.0 and var > 0.0:
+                zs.append(((sa - sb) / math.sqrt(var), sa / sb - 1.0, bx, by))
+    if not zs:
+        die("compare: no block with light and noise")
+    # Pixel noise correlated between neighbours makes a block's variance differ from the
+    # sum of its pixels': the factor, pooled over the blocks, for each renderer, and z
+    # rescaled by the pooled factor of both.
+    corr = den / (pix_a + pix_b) if pix_a + pix_b > 0 else 1.0
+    print("block variance / summed pixel variance: A %.3f B %.3f (1 for independent pixels)"
+          % (blk_a / pix_a if pix_a > 0 else float("nan"),
+             blk_b / pix_b if pix_b > 0 else float("nan")))
+    zs = [(z[0] / math.sqrt(corr),) + z[1:] for z in zs]
+    worst = max(zs, key=lambda z: abs(z[0]))
+    chi2 = sum(z[0] * z[0] for z in zs) / len(zs)
+    beyond = sum(1 for z in zs if abs(z[0]) > 3.0)
+    signed = sum(z[1] for z in zs) / len(zs)
+    print("blocks %dx%d: %d, mean z^2 %.3f, beyond 3 sigma %d (%.2f%%; 0.27%% by chance), "
+          "max |z| %.2f at block (%d, %d) (dev %+.4f), mean dev %+.4f, max |dev| %.4f; "
+          "pooled (A - B)^2 / noise %.3f"
+          % (n, n, len(zs), chi2, beyond, 100.0 * beyond / len(zs), abs(worst[0]), worst[2],
+             worst[3], worst[1], signed, max(abs(z[1]) for z in zs),
+             num / den if den > 0 else float("nan")))
+
+
+def srgb8(v):
+    v = clamp01(v)
+    v = 12.92 * v if v <= 0.0031308 else 1.055 * v ** (1.0 / 2.4) - 0.055
+    return int(v * 255.0 + 0.5)
+
+
+def write_png(path, w, h, rows):
+    """rows: h rows top first, each bytes of w RGB triples."""
+    def chunk(kind, data):
+        return (struct.pack(">I", len(data)) + kind + data
+                + struct.pack(">I", zlib.crc32(kind + data) & 0xffffffff))
+    raw = b"".join(b"\0" + r for r in rows)
+    with open(path, "wb") as fh:
+        fh.write(b"\x89PNG\r\n\x1a\n")
+        fh.write(chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 2, 0, 0, 0)))
+        fh.write(chunk(b"IDAT", zlib.compress(raw, 9)))
+        fh.write(chunk(b"IEND", b""))
+
+
+def cmd_side(args):
+    if len(args) not in (3, 4):
+        die("side: expected OUT.png A.pfm B.pfm [C.pfm]")
+    a, b = read_pfm(args[1]), read_pfm(args[2])
+    same_size(a, b, args[1], args[2])
+    w, h = a[0], a[1]
+    if len(args) == 4:
+        c = read_pfm(args[3])
+        same_size(a, c, args[1], args[3])
+        panels = [a[2], b[2], c[2]]
+        lin = [True, True, True]
+    else:
+        diff = [0.5 + 4.0 * (x - y) for x, y in zip(a[2], b[2])]
+        panels = [a[2], b[2], diff]
+        lin = [True, True, False]
+    rows = []
+    for y in range(h - 1, -1, -1):  # PFM rows run bottom-up
+        row = bytearray()
+        for px, is_lin in zip(panels, lin):
+            vals = px[y * w * 3:(y + 1) * w * 3]
+            row.extend(srgb8(v) if is_lin else int(clamp01(v) * 255.0 + 0.5) for v in vals)
+        rows.append(bytes(row))
+    write_png(args[0], w * len(panels), h, rows)
+    print("%s: %dx%d" % (args[0], w * len(panels), h))
+
+
 def loglog_crossing(points, target):
     """points: (x, relmse) with x growing. The x where relmse crosses target, by linear
     interpolation of log relmse against log x (error ~ x^-slope between points); beyond
@@ -212,9 +338,9 @@ def cmd_fit(args):
 
 def main():
     cmds = {"mean": cmd_mean, "relmse": cmd_relmse, "halves": cmd_halves,
-            "blocks": cmd_blocks, "fit": cmd_fit}
+            "blocks": cmd_blocks, "compare": cmd_compare, "side": cmd_side, "fit": cmd_fit}
     if len(sys.argv) < 2 or sys.argv[1] not in cmds:
-        die("usage: pfmtool.py mean|relmse|halves|blocks|fit ... (see the file's docstring)")
+        die("usage: pfmtool.py mean|relmse|halves|blocks|compare|side|fit ... (see the file's docstring)")
     cmds[sys.argv[1]](sys.argv[2:])
 
 

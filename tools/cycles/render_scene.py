@@ -4,10 +4,13 @@
         [--width 256] [--height 256] [--spp N] [--seed S] [--threads T] \
         [--time-limit SECONDS] --out OUT.exr|OUT.pfm
     for diagnosis only: [--max-bounces 1024] [--light-threshold 0.01] [--pattern pmj|sobol]
+                        [--spot-model trac0r|cycles]
 
 --max-bounces 0 is direct light only (as trac0r's --max-depth 2); --light-threshold is
 Cycles' light_sampling_threshold (its default 0.01); --pattern picks Cycles' sampler. The
 comparison keeps the defaults: 1024 bounces, where Cycles' Russian roulette ends the paths.
+--spot-model cycles gives spots Cycles' own profile (spot size and blend) instead of
+trac0r's, to show the difference between the two.
 
 Blender is a measuring instrument here, never a dependency of trac0r: nothing in the build,
 the tests or CI runs this script (docs/cycles.md says how the comparison is made).
@@ -20,8 +23,14 @@ What it maps, so that both renderers solve the same light transport problem:
     diffuse lobe is Burley's, not Lambert's) and `emitter` (Emission, radiance
     color x emittance; one-sided unless `two_sided`: Cycles 3.4's mesh emission is
     two-sided, so the strength is multiplied by 1 - Backfacing);
-  * the camera: position, look_at / direction, up, vertical fov, near / far, handedness.
-Anything else (other shapes or materials, material extras, meshes, an environment) is
+  * the camera: position, look_at / direction, up, vertical fov, near / far, handedness,
+    and the thin lens (aperture_radius or f_number with sensor_height, focus_distance) as
+    Blender's depth of field: the f-stop that gives the same radius with the lens set here;
+  * a constant `environment` (the world's Background, colour x strength), the `sun`
+    (a Sun light: angle, strength = irradiance) and punctual `lights`: point and spot
+    lights of radius 0 and power 4 pi I watts, spots with trac0r's profile (see
+    spot_profile), directional lights as Suns of angle 0.
+Anything else (other shapes or materials, material extras, meshes, an environment map) is
 refused with a message naming the field, and exit status 2, rather than rendered wrongly.
 
 trac0r's world is right-handed with y up; Blender's is right-handed with z up, so a point
@@ -34,7 +43,8 @@ Cycles settings: CPU, path tracing with light sampling and MIS (its defaults), p
 multi-jitter sampling, 1024 bounces of every kind (paths end by Cycles' own Russian
 roulette, not by depth), no clamping, no glossy filter, no denoising, no adaptive
 sampling, a 1-pixel box pixel filter (trac0r jitters uniformly in the pixel), a black
-world, Standard view transform, and the image written as linear 32-bit float.
+world unless the scene has an environment, Standard view transform, and the image written
+as linear 32-bit float.
 """
 
 import json
@@ -65,11 +75,13 @@ def parse_args(argv):
     else:
         argv = []
     opts = {"width": 256, "height": 256, "spp": 16, "seed": 0, "threads": 0,
-            "time_limit": 0.0, "max_bounces": 1024, "light_threshold": 0.01, "pattern": "pmj", "out": None, "scene": None}
+            "time_limit": 0.0, "max_bounces": 1024, "light_threshold": 0.01, "pattern": "pmj", "spot_model": "trac0r",
+            "out": None, "scene": None}
     numeric = {"--width": ("width", int), "--height": ("height", int), "--spp": ("spp", int),
                "--seed": ("seed", int), "--threads": ("threads", int),
                "--time-limit": ("time_limit", float), "--max-bounces": ("max_bounces", int),
-               "--light-threshold": ("light_threshold", float), "--pattern": ("pattern", str)}
+               "--light-threshold": ("light_threshold", float), "--pattern": ("pattern", str),
+               "--spot-model": ("spot_model", str)}
     i = 0
     while i < len(argv):
         a = argv[i]
@@ -106,6 +118,8 @@ def parse_args(argv):
         fail("--seed: expected 0..2147483647, got %d" % opts["seed"])
     if opts["threads"] < 0 or opts["threads"] > 1024:
         fail("--threads: expected 0 (all) .. 1024, got %d" % opts["threads"])
+    if opts["spot_model"] not in ("trac0r", "cycles"):
+        fail("--spot-model: expected trac0r or cycles, got '%s'" % opts["spot_model"])
     if opts["pattern"] not in ("pmj", "sobol"):
         fail("--pattern: expected pmj or sobol, got '%s'" % opts["pattern"])
     if not (0.0 <= opts["light_threshold"] <= 1.0):
@@ -246,6 +260,125 @@ def read_materials(mats):
     return out
 
 
+def number(obj, key, lo, hi, default, where):
+    v = obj.get(key, default)
+    if (not isinstance(v, (int, float)) or isinstance(v, bool) or not math.isfinite(v)
+            or not lo <= v <= hi):
+        raise SceneError("%s.%s: expected a number in [%g, %g], got %s"
+                         % (where, key, lo, hi, json.dumps(v)))
+    return float(v)
+
+
+def colour(obj, key, default, where):
+    c = vec3(obj.get(key, default), "%s.%s" % (where, key))
+    if not all(0.0 <= e <= 1e7 for e in c):
+        raise SceneError("%s.%s: expected three numbers in [0, 1e7]" % (where, key))
+    return c
+
+
+def direction(obj, key, where):
+    if key not in obj:
+        raise SceneError("%s.%s: required" % (where, key))
+    d = vec3(obj[key], "%s.%s" % (where, key))
+    n = math.sqrt(sum(e * e for e in d))
+    if not n > 0:
+        raise SceneError("%s.%s: expected a non-zero vector" % (where, key))
+    return [e / n for e in d]
+
+
+def read_lens(cam, fov, look_dist):
+    """trac0r's thin lens (docs/scene-format.md, Depth of field) as a radius in scene units
+    and the focus plane's distance along the view direction; (0, 0) for a pinhole."""
+    if "aperture_radius" in cam and "f_number" in cam:
+        raise SceneError("camera: expected at most one of aperture_radius and f_number")
+    if "sensor_height" in cam and "f_number" not in cam:
+        raise SceneError("camera.sensor_height: only means something with camera.f_number")
+    radius = number(cam, "aperture_radius", 0.0, 1e30, 0.0, "camera")
+    if "f_number" in cam:
+        n = number(cam, "f_number", 0.01, 1e30, 1.0, "camera")
+        sensor = number(cam, "sensor_height", 1e-30, 1e30, 0.024, "camera")
+        # The focal length of a lens whose image of height sensor_height spans the fov.
+        radius = sensor / (2.0 * math.tan(math.radians(fov) / 2.0)) / (2.0 * n)
+    if not radius > 0.0:
+        return 0.0, 0.0
+    if "focus_distance" in cam:
+        focus = number(cam, "focus_distance", 1e-30, 1e30, 1.0, "camera")
+    elif look_dist > 0.0:
+        focus = look_dist
+    else:
+        raise SceneError("camera.focus_distance: required with an aperture and 'direction'")
+    return radius, focus
+
+
+def read_environment(env):
+    """A constant environment: radiance color x strength. A map is refused."""
+    where = "environment"
+    if not isinstance(env, dict):
+        raise SceneError("%s: expected an object" % where)
+    check_keys(env, {"color", "strength", "rotation"}, where)
+    if "color" not in env:
+        raise SceneError("%s.color: required (maps are not mapped to Cycles)" % where)
+    c = colour(env, "color", [1, 1, 1], where)
+    k = number(env, "strength", 0.0, 1e7, 1.0, where)
+    # A rotation turns a constant colour into itself.
+    number(env, "rotation", -360.0, 360.0, 0.0, where)
+    return [e * k for e in c]
+
+
+def read_sun(sun):
+    where = "sun"
+    if not isinstance(sun, dict):
+        raise SceneError("%s: expected an object" % where)
+    check_keys(sun, {"direction", "angle", "irradiance"}, where)
+    d = direction(sun, "direction", where)
+    angle = number(sun, "angle", 0.001, 90.0, 0.526, where)
+    e = sun.get("irradiance", 1.0)
+    if isinstance(e, list):
+        e = colour(sun, "irradiance", None, where)
+    else:
+        e = [number(sun, "irradiance", 0.0, 1e7, 1.0, where)] * 3
+    return {"towards": d, "angle": angle, "irradiance": e}
+
+
+def read_lights(lights):
+    if not isinstance(lights, list):
+        raise SceneError("lights: expected an array")
+    out = []
+    for i, l in enumerate(lights):
+        where = "lights[%d]" % i
+        if not isinstance(l, dict):
+            raise SceneError("%s: expected an object" % where)
+        t = l.get("type")
+        if t == "point":
+            check_keys(l, {"type", "name", "position", "color", "intensity"}, where)
+        elif t == "spot":
+            check_keys(l, {"type", "name", "position", "direction", "color", "intensity",
+                           "cone_angle", "blend"}, where)
+        elif t == "directional":
+            check_keys(l, {"type", "name", "direction", "color", "irradiance"}, where)
+        else:
+            raise SceneError("%s.type: expected point, spot or directional, got %s"
+                             % (where, json.dumps(t)))
+        light = {"type": t, "color": colour(l, "color", [1, 1, 1], where)}
+        if t in ("point", "spot"):
+            if "position" not in l:
+                raise SceneError("%s.position: required" % where)
+            light["position"] = vec3(l["position"], where + ".position")
+            light["intensity"] = number(l, "intensity", 0.0, 1e7, 1.0, where)
+        if t in ("spot", "directional"):
+            light["direction"] = direction(l, "direction", where)
+        if t == "spot":
+            light["cone_angle"] = number(l, "cone_angle", 0.001, 180.0, 45.0, where)
+            if light["cone_angle"] < 1.0:
+                raise SceneError("%s.cone_angle: Blender's spot size is at least 1 degree"
+                                 % where)
+            light["blend"] = number(l, "blend", 0.0, 1.0, 0.15, where)
+        if t == "directional":
+            light["irradiance"] = number(l, "irradiance", 0.0, 1e7, 1.0, where)
+        out.append(light)
+    return out
+
+
 def read_scene(path):
     try:
         with open(path, "r", encoding="utf-8") as fh:
@@ -256,14 +389,15 @@ def read_scene(path):
         raise SceneError("%s: not JSON: %s" % (path, e))
     if not isinstance(doc, dict):
         raise SceneError("%s: expected an object at the top" % path)
-    check_keys(doc, {"version", "description", "render", "camera", "materials", "shapes"},
-               "(top level)")
+    check_keys(doc, {"version", "description", "render", "camera", "materials", "shapes",
+                     "environment", "sun", "lights"}, "(top level)")
     mats = read_materials(doc.get("materials"))
     cam = doc.get("camera")
     if not isinstance(cam, dict):
         raise SceneError("camera: missing or not an object")
     check_keys(cam, {"position", "look_at", "direction", "up", "fov", "near", "far",
-                     "handedness"}, "camera")
+                     "handedness", "aperture_radius", "f_number", "sensor_height",
+                     "focus_distance"}, "camera")
     pos = vec3(cam.get("position"), "camera.position")
     if ("look_at" in cam) == ("direction" in cam):
         raise SceneError("camera: expected exactly one of look_at and direction")
@@ -281,6 +415,8 @@ def read_scene(path):
     camera = {"pos": pos, "dir": d, "up": vec3(cam.get("up", [0, 1, 0]), "camera.up"),
               "fov": float(fov), "near": float(cam.get("near", 0.001)),
               "far": float(cam.get("far", 1e30)), "right_handed": hand == "right"}
+    look_dist = math.sqrt(sum(e * e for e in d)) if "look_at" in cam else 0.0
+    camera["lens_radius"], camera["focus"] = read_lens(cam, float(fov), look_dist)
     shapes = doc.get("shapes", [])
     if not isinstance(shapes, list) or not shapes:
         raise SceneError("shapes: expected a non-empty array")
@@ -293,7 +429,11 @@ def read_scene(path):
         if m not in mats:
             raise SceneError("%s.material: unknown material %s" % (where, json.dumps(m)))
         by_mat.setdefault(m, []).extend(shape_triangles(sh, where))
-    return mats, camera, by_mat
+    lights = {"environment": read_environment(doc["environment"]) if "environment" in doc
+              else None,
+              "sun": read_sun(doc["sun"]) if "sun" in doc else None,
+              "punctual": read_lights(doc.get("lights", []))}
+    return mats, camera, by_mat, lights
 
 
 # ---- building it in Blender -----------------------------------------------------------
@@ -341,7 +481,148 @@ def make_material(name, m):
     return mat
 
 
-def build(scene, mats, camera, by_mat):
+def aim(z):
+    """A rotation whose local +z is the unit vector z (Blender's lights shine down -z)."""
+    z = Vector(z).normalized()
+    helper = Vector((0.0, 0.0, 1.0)) if abs(z.z) < 0.9 else Vector((1.0, 0.0, 0.0))
+    x = helper.cross(z).normalized()
+    y = z.cross(x)
+    m = Matrix.Identity(4)
+    for r in range(3):
+        m[r][0], m[r][1], m[r][2] = x[r], y[r], z[r]
+    return m
+
+
+def add_light(scene, name, kind, rgb, at=None, shine=None):
+    """A Blender light of colour x energy = rgb (the colour normalised to its largest
+    channel, the rest in the energy), at a point, shining along `shine` (Blender coords)."""
+    top = max(rgb)
+    ld = bpy.data.lights.new("tr_" + name, kind)
+    ld.color = tuple(e / top for e in rgb) if top > 0 else (1.0, 1.0, 1.0)
+    ld.energy = top
+    ld.use_shadow = True
+    ld.cycles.cast_shadow = True
+    ld.cycles.use_multiple_importance_sampling = True
+    ob = bpy.data.objects.new("tr_" + name, ld)
+    m = aim([-e for e in shine]) if shine is not None else Matrix.Identity(4)
+    if at is not None:
+        for r in range(3):
+            m[r][3] = at[r]
+    ob.matrix_world = m
+    scene.collection.objects.link(ob)
+    return ld
+
+
+def build_lights(scene, lights, mirror, spot_model):
+    """The environment, the sun and the punctual lights (the mapping in docs/cycles.md)."""
+    world = bpy.data.worlds.new("tr_world")
+    env = lights["environment"]
+    if env is None or max(env) <= 0:
+        world.use_nodes = False
+        world.color = (0.0, 0.0, 0.0)
+        world.cycles.sampling_method = "NONE"
+    else:
+        # Background colour x strength is the radiance of every direction, as trac0r's
+        # constant environment; sampled as a light with MIS (Cycles' automatic map).
+        world.use_nodes = True
+        nt = world.node_tree
+        for n in list(nt.nodes):
+            nt.nodes.remove(n)
+        bg = nt.nodes.new("ShaderNodeBackground")
+        top = max(env)
+        bg.inputs["Color"].default_value = (*[e / top for e in env], 1.0)
+        bg.inputs["Strength"].default_value = top
+        out = nt.nodes.new("ShaderNodeOutputWorld")
+        out.target = "CYCLES"
+        nt.links.new(bg.outputs["Background"], out.inputs["Surface"])
+        world.cycles.sampling_method = "AUTOMATIC"
+    scene.world = world
+
+    sun = lights["sun"]
+    if sun is not None and max(sun["irradiance"]) > 0:
+        # Cycles' sun: strength is the irradiance on a surface facing it (W/m^2), angle
+        # the disc's angular diameter; it shines along its local -z, away from the sun.
+        ld = add_light(scene, "sun", "SUN", sun["irradiance"],
+                       shine=[-e for e in to_blender(sun["towards"], mirror)])
+        ld.angle = math.radians(sun["angle"])
+    for i, l in enumerate(lights["punctual"]):
+        name = "light%d" % i
+        if l["type"] == "directional":
+            ld = add_light(scene, name, "SUN", [c * l["irradiance"] for c in l["color"]],
+                           shine=to_blender(l["direction"], mirror))
+            ld.angle = 0.0
+            continue
+        # Cycles' point and spot lights have an intensity of power / (4 pi) W/sr: their
+        # kernels' eval_fac is 1 / (4 pi) per unit of strength (radius 0: a point).
+        power = [4.0 * math.pi * l["intensity"] * c for c in l["color"]]
+        at = to_blender(l["position"], mirror)
+        if max(power) <= 0:
+            continue
+        if l["type"] == "point":
+            ld = add_light(scene, name, "POINT", power, at=at)
+        else:
+            ld = add_light(scene, name, "SPOT", power, at=at,
+                           shine=to_blender(l["direction"], mirror))
+            ld.spot_size = math.radians(l["cone_angle"])
+            if spot_model == "cycles":
+                ld.spot_blend = l["blend"]
+            else:
+                spot_profile(ld, l["cone_angle"], l["blend"])
+        ld.shadow_soft_size = 0.0
+
+
+def spot_profile(ld, cone_angle, blend):
+    """trac0r's spot profile on a Cycles spot. Cycles 3.4's spot (kernel/light/spot.h)
+    multiplies its strength by cos(a) (a the angle from the axis) inside the cone, and
+    fades in by smoothstep((cos a - cos h) / ((1 - cos h) blend)); trac0r's has no cos(a)
+    and fades in by smoothstep((cos a - cos h) / (cos(h (1 - blend)) - cos h)) (h the
+    half-angle). So Cycles' blend is set to 0 (a hard edge at h) and the light's emission
+    strength is trac0r's profile / cos(a), cos(a) read from the light's Normal texture
+    coordinate: the direction from the light to the point lit, in the light's own axes,
+    where the spot shines down -z."""
+    h = math.radians(cone_angle) / 2.0
+    cos_h = math.cos(h)
+    width = math.cos(h * (1.0 - blend)) - cos_h
+    ld.spot_blend = 0.0
+    ld.use_nodes = True
+    nt = ld.node_tree
+    for n in list(nt.nodes):
+        nt.nodes.remove(n)
+
+    def math_node(op, a, b=None, clamp=False):
+        m = nt.nodes.new("ShaderNodeMath")
+        m.operation = op
+        m.use_clamp = clamp
+        for k, v in ((0, a), (1, b)):
+            if v is None:
+                continue
+            if isinstance(v, float):
+                m.inputs[k].default_value = v
+            else:
+                nt.links.new(v, m.inputs[k])
+        return m.outputs["Value"]
+
+    tc = nt.nodes.new("ShaderNodeTexCoord")
+    sep = nt.nodes.new("ShaderNodeSeparateXYZ")
+    nt.links.new(tc.outputs["Normal"], sep.inputs["Vector"])
+    cos_a = math_node("MULTIPLY", sep.outputs["Z"], -1.0)
+    if width > 0.0:
+        t = math_node("DIVIDE", math_node("SUBTRACT", cos_a, cos_h), width, clamp=True)
+        # smoothstep: t^2 (3 - 2 t)
+        s = math_node("MULTIPLY", math_node("MULTIPLY", t, t),
+                      math_node("SUBTRACT", 3.0, math_node("MULTIPLY", t, 2.0)))
+    else:
+        s = math_node("GREATER_THAN", cos_a, cos_h)
+    strength = math_node("DIVIDE", s, math_node("MAXIMUM", cos_a, 1e-6))
+    em = nt.nodes.new("ShaderNodeEmission")
+    em.inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
+    nt.links.new(strength, em.inputs["Strength"])
+    out = nt.nodes.new("ShaderNodeOutputLight")
+    out.target = "CYCLES"
+    nt.links.new(em.outputs["Emission"], out.inputs["Surface"])
+
+
+def build(scene, mats, camera, by_mat, lights, spot_model):
     mirror = not camera["right_handed"]
     for obj in list(bpy.data.objects):
         bpy.data.objects.remove(obj, do_unlink=True)
@@ -359,11 +640,7 @@ def build(scene, mats, camera, by_mat):
         ob = bpy.data.objects.new("tr_" + name, me)
         scene.collection.objects.link(ob)
 
-    world = bpy.data.worlds.new("tr_black")
-    world.use_nodes = False
-    world.color = (0.0, 0.0, 0.0)
-    world.cycles.sampling_method = "NONE"
-    scene.world = world
+    build_lights(scene, lights, mirror, spot_model)
 
     pos = Vector(to_blender(camera["pos"], mirror))
     d = Vector(to_blender(camera["dir"], mirror))
@@ -391,6 +668,18 @@ def build(scene, mats, camera, by_mat):
     # nearer than `near` to the camera (true of every scene it is meant for).
     cd.clip_start = max(camera["near"], 1e-6)
     cd.clip_end = min(camera["far"], 1e30)
+    if camera["lens_radius"] > 0:
+        # Cycles' thin lens: radius = lens (mm) * 1e-3 / (2 f-stop) in scene units, a disc
+        # (no blades), focused on the plane focus_distance along the view direction.
+        cd.dof.use_dof = True
+        cd.dof.focus_object = None
+        cd.dof.focus_distance = camera["focus"]
+        cd.dof.aperture_fstop = cd.lens * 1e-3 / (2.0 * camera["lens_radius"])
+        cd.dof.aperture_blades = 0
+        cd.dof.aperture_ratio = 1.0
+        cd.dof.aperture_rotation = 0.0
+    else:
+        cd.dof.use_dof = False
     cam = bpy.data.objects.new("tr_camera", cd)
     cam.matrix_world = m
     scene.collection.objects.link(cam)
@@ -503,11 +792,11 @@ def clock_seconds(text):
 def main():
     opts = parse_args(sys.argv)
     try:
-        mats, camera, by_mat = read_scene(opts["scene"])
+        mats, camera, by_mat, lights = read_scene(opts["scene"])
     except SceneError as e:
         fail("%s: %s" % (opts["scene"], e))
     scene = bpy.context.scene
-    build(scene, mats, camera, by_mat)
+    build(scene, mats, camera, by_mat, lights, opts["spot_model"])
     configure(scene, opts)
     out = os.path.abspath(opts["out"])
     pfm = out.lower().endswith(".pfm")
