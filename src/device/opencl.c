@@ -1489,8 +1489,16 @@ int tr_cl_render_frame(tr_cl_context *ctx, const tr_frame *f, uint64_t *rays_out
         }
     }
     /* With a work-group size the grid is rounded up to whole groups; the kernel returns
-     * at once for the work items beyond the frame's grid. */
-    const size_t *local = ctx->local[0] ? ctx->local : NULL;
+     * at once for the work items beyond the frame's grid. bdpt's work items keep two
+     * subpaths of vertices each (several KB): left to the driver, PoCL made groups so
+     * large that their private memory overflowed its thread's stack, so bdpt runs in 8x8
+     * groups wherever no size is set and the kernel allows them. */
+    size_t small[2] = {8u, 8u}, bmax = 0;
+    if (bdpt && !ctx->local[0]) {
+        clGetKernelWorkGroupInfo(kernel, ctx->device, CL_KERNEL_WORK_GROUP_SIZE, sizeof bmax, &bmax,
+                                 NULL);
+    }
+    const size_t *local = ctx->local[0] ? ctx->local : bmax >= 64u ? small : NULL;
     const size_t global[2] = {local ? (nx + local[0] - 1) / local[0] * local[0] : nx,
                               local ? (ny + local[1] - 1) / local[1] * local[1] : ny};
     if (bdpt && prepare_splats(ctx, f, err) != TR_OK) {
