@@ -170,6 +170,8 @@ tr_recon_params tr_recon_params_default(void) {
     p.svgf_split = 0;
     /* Temporal gradients (tr_realtime): see docs/realtime.md, "Lights that change". */
     p.gradients = 0;
+    /* The sample's own albedo unless asked (tr_resolve_albedo; docs/realtime.md). */
+    p.albedo_samples = 0;
     return p;
 }
 
