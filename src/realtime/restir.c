@@ -37,6 +37,7 @@ tr_restir_params tr_restir_params_default(void) {
     p.radius = 16.0f;
     p.temporal_cap = 20.0f;
     p.unbiased = 0;
+    p.visibility_reuse = 0;
     p.temporal = 1;
     p.tree = 0;
     p.gi = 0;
@@ -293,8 +294,13 @@ int tr_restir_stage_run(tr_restir_stage *st, const tr_scene *scene, const tr_cam
                 continue;
             }
             tr_reservoir r = tr_restir_initial(s, &q, candidates, &rng);
-            /* Visibility reuse (biased mode): an occluded sample is not passed on. */
-            if (!p->unbiased && r.W > 0.0f && !tr_restir_visible(s, &q, &r)) {
+            /* Visibility reuse (biased mode, when asked): an occluded sample is not passed
+             * on. Its confidence still counts in every merge that takes the reservoir, so
+             * a neighbour's merge loses the light this pixel's shadow hid from it; with the
+             * spatial output kept as the next frame's history the loss compounds (−12 % over
+             * the window room at rest), hence off by default. */
+            if (p->visibility_reuse && !p->unbiased && r.W > 0.0f &&
+                !tr_restir_visible(s, &q, &r)) {
                 r.W = 0.0f;
             }
             float px, py, dist;
