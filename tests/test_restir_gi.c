@@ -404,8 +404,8 @@ static void test_at_rest(void) {
               "the image %+.2f %% off",
               unbiased, 100.0 * mean_bias);
     }
-    /* The direct light's own biased mode (visibility reuse, 1/M) with GI without reuse,
-     * printed for docs/realtime.md: the sun's light is what its visibility reuse darkens. */
+    /* The direct light's own biased mode (1/M, no visibility reuse) with GI without reuse,
+     * printed for docs/realtime.md: the sun's light is what visibility reuse darkened. */
     tr_restir_params d = tr_restir_params_default();
     d.gi = 1;
     d.gi_temporal = 0;

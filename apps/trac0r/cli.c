@@ -419,6 +419,7 @@ const char cli_recon_help[] =
     "  --gradients on|off   temporal gradients: shorten the history where the lighting\n"
     "                       changed (A-SVGF; CPU only; default off)\n"
     "  --resolve-emission N emitters' edges traced at N x N rays, 0..16 (default 4)\n"
+    "  --resolve-albedo N   albedo's edges traced at N x N rays, 0..8 (default 0: off)\n"
     "  --restir off|di|di+gi  ReSTIR DI for the first surfaces' direct light, di+gi\n"
     "                       ReSTIR GI for their indirect light too (default off)\n"
     "  --restir-unbiased    ReSTIR with Talbot's MIS weights (default: biased 1/M)\n";
@@ -488,6 +489,9 @@ int cli_recon_option(cli_args *a, tr_recon_params *p) {
         const int it = cli_is(a, "--svgf-iterations");
         return cli_parse_int(a, it, it ? 8 : TR_RESOLVE_EMISSION_MAX,
                              it ? &p->svgf_iterations : &p->emission_samples);
+    }
+    if (cli_is(a, "--resolve-albedo")) {
+        return cli_parse_int(a, 0, TR_RESOLVE_ALBEDO_MAX, &p->albedo_samples);
     }
     if (cli_is(a, "--svgf-split") || cli_is(a, "--split-specular")) {
         *(cli_is(a, "--svgf-split") ? &p->svgf_split : &p->svgf_specular) = 1;

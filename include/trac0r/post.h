@@ -189,6 +189,9 @@ typedef struct tr_recon_params {
                              the frame has the specular pass, each demodulated by its own
                              albedo, the specular history following reflections
                              (docs/realtime.md); 0: off */
+    int albedo_samples;   /* n of tr_resolve_albedo for the callers that resolve the albedo
+                             (tr_realtime, bench realtime, view): n x n rays per pixel;
+                             0: the reconstruction multiplies by the sample's own albedo */
 } tr_recon_params;
 
 /* The defaults. A field that would divide by zero at 0 (max_len, max_len_moving, the
@@ -273,6 +276,24 @@ struct tr_scene;
  * (0: the default), whatever device rendered the frame. */
 int tr_resolve_emission(const struct tr_scene *scene, const tr_camera *cam, int n, int threads,
                         tr_gbuffer *g, uint32_t *resolved, tr_error *err);
+
+/* The largest n of tr_resolve_albedo, and the albedo difference that marks an edge. */
+#define TR_RESOLVE_ALBEDO_MAX 8
+#define TR_RESOLVE_ALBEDO_STEP 0.02f
+
+/* Resolves g's albedo over the area of the pixels where it varies: every pixel whose
+ * albedo differs from one of its 8 neighbours' by more than TR_RESOLVE_ALBEDO_STEP in a
+ * channel (a texture's or a material's edge, an outline) traces an n x n grid of camera
+ * rays through `cam` (the frame's camera, pinhole) into the committed scene and takes the
+ * mean base colour of the first surfaces they find that are not perfect mirrors or smooth
+ * glass (through those, the surface primary surface replacement records), over the rays
+ * that find one. That mean replaces the pixel's albedo in g->albedo, so that
+ * tr_recon_frame demodulates and remodulates by it: at one sample per pixel the sample's
+ * own albedo is one side of the edge or the other, which re-aliases the edge every frame.
+ * n in 1..TR_RESOLVE_ALBEDO_MAX; `resolved` (may be NULL) gets the number of pixels
+ * traced. Runs on the host on up to `threads` threads (0: the default); uses g->scratch. */
+int tr_resolve_albedo(const struct tr_scene *scene, const tr_camera *cam, int n, int threads,
+                      tr_gbuffer *g, uint32_t *resolved, tr_error *err);
 
 /* The spatial filters alone, on one image `in` (3 floats per pixel) guided by g's
  * passes (`trac0r render --denoise`): the bilateral filter on radiance, à-trous on

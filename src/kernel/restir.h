@@ -17,9 +17,9 @@
  * w_i = m_i(y_i) p_hat_q(y_i) W_i, W = sum w / p_hat_q(y). The MIS weights m_i decide the
  * bias:
  *   biased    m_i = M_i / sum M_j (Bitterli et al.'s 1/M): cheap, but a sample a
- *             neighbour could not have produced is counted as if it could, and the
- *             chosen samples' visibility is reused (an occluded sample's W set to 0), which
- *             darkens penumbrae;
+ *             neighbour could not have produced is counted as if it could; the stage can
+ *             also reuse the chosen samples' visibility (an occluded sample's W set to 0),
+ *             which darkens everything near a shadow (off by default);
  *   unbiased  m_i(y) = M_i p_hat_i(y) / sum_j M_j p_hat_j(y), the balance heuristic over
  *             the reused domains with confidence weights (Talbot's MIS, Bitterli et al.
  *             section 4.3): sums to one for every y, no visibility reuse.

@@ -9,10 +9,15 @@
  * emission they find: the pixel's coverage times the emitter's radiance, as a converged
  * image has it. Every other pixel keeps the emission of its own sample, which is exact
  * there (it covers one emitter, or none). The per-pixel arithmetic is the kernel's
- * (src/kernel/emission.h), which an OpenCL device runs as it is. */
+ * (src/kernel/emission.h), which an OpenCL device runs as it is.
+ *
+ * The albedo pass is resolved the same way where the caller asks (tr_resolve_albedo): the
+ * pixels whose albedo differs from a neighbour's take the mean base colour of an n x n
+ * grid of first hits (src/kernel/albedo.h), for the reconstruction's demodulation. */
 #include <omp.h>
 #include <string.h>
 
+#include "kernel/albedo.h"
 #include "kernel/emission.h"
 #include "scene/scene_internal.h"
 #include "trac0r/post.h"
@@ -105,6 +110,80 @@ int tr_resolve_emission(const struct tr_scene *scene, const tr_camera *cam, int 
         }
     }
     g->has_resolved = 1;
+    if (resolved) {
+        *resolved = count;
+    }
+    return TR_OK;
+}
+
+/* edge[i] = 1 where pixel i's albedo differs from a neighbour's by more than
+ * TR_RESOLVE_ALBEDO_STEP in a channel. */
+static void albedo_edges(const float *a, int w, int h, uint8_t *edge, int threads) {
+#pragma omp parallel for num_threads(threads) schedule(static)
+    for (int y = 0; y < h; ++y) {
+        for (int x = 0; x < w; ++x) {
+            const float *c = a + 3 * ((size_t)y * w + x);
+            int differs = 0;
+            for (int dy = -1; dy <= 1 && !differs; ++dy) {
+                for (int dx = -1; dx <= 1; ++dx) {
+                    const int xx = x + dx, yy = y + dy;
+                    if (xx < 0 || yy < 0 || xx >= w || yy >= h) {
+                        continue;
+                    }
+                    const float *o = a + 3 * ((size_t)yy * w + xx);
+                    if (tr_fabsf(o[0] - c[0]) > TR_RESOLVE_ALBEDO_STEP ||
+                        tr_fabsf(o[1] - c[1]) > TR_RESOLVE_ALBEDO_STEP ||
+                        tr_fabsf(o[2] - c[2]) > TR_RESOLVE_ALBEDO_STEP) {
+                        differs = 1;
+                        break;
+                    }
+                }
+            }
+            edge[(size_t)y * w + x] = (uint8_t)differs;
+        }
+    }
+}
+
+int tr_resolve_albedo(const struct tr_scene *scene, const tr_camera *cam, int n, int threads,
+                      tr_gbuffer *g, uint32_t *resolved, tr_error *err) {
+    if (resolved) {
+        *resolved = 0;
+    }
+    if (n < 1 || n > TR_RESOLVE_ALBEDO_MAX) {
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "resolving the albedo: %d x %d rays per pixel (expected 1..%d)", n, n,
+                            TR_RESOLVE_ALBEDO_MAX);
+    }
+    if (cam->screen_width != g->width || cam->screen_height != g->height) {
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "resolving the albedo: a %ux%u camera for a %ux%u frame",
+                            cam->screen_width, cam->screen_height, g->width, g->height);
+    }
+    if (!tr_scene_is_committed(scene)) {
+        return tr_error_set(err, TR_STATUS_INVALID_OPERATION,
+                            "resolving the albedo: the scene is not committed");
+    }
+    const int w = (int)g->width, h = (int)g->height;
+    threads = threads > 0 ? threads : tr_default_threads();
+    uint8_t *edge = g->scratch;
+    albedo_edges(g->albedo, w, h, edge, threads);
+    const tr_scene_view view = tr_scene_view_of(scene);
+    uint32_t count = 0;
+    /* Every pixel's test read the albedo before any is replaced; the rays read the scene. */
+#pragma omp parallel for num_threads(threads) schedule(dynamic, 4) reduction(+ : count)
+    for (int y = 0; y < h; ++y) {
+        for (int x = 0; x < w; ++x) {
+            const size_t i = (size_t)y * w + x;
+            if (!edge[i]) {
+                continue;
+            }
+            const tr_vec3 a = tr_albedo_resolve_pixel(&view, cam, x, y, n);
+            g->albedo[3 * i] = a.x;
+            g->albedo[3 * i + 1] = a.y;
+            g->albedo[3 * i + 2] = a.z;
+            ++count;
+        }
+    }
     if (resolved) {
         *resolved = count;
     }

@@ -179,6 +179,8 @@ tr_recon_params tr_recon_params_default(void) {
     p.gradients = 0;
     /* Diffuse and specular apart: opt-in (docs/realtime.md has where it measures better). */
     p.svgf_specular = 0;
+    /* The sample's own albedo unless asked (tr_resolve_albedo; docs/realtime.md). */
+    p.albedo_samples = 0;
     return p;
 }
 

@@ -607,6 +607,15 @@ static int host_frame(tr_realtime *rt, tr_error *err) {
         }
         rt->resolve_ms = (tr_time_now() - t0) * 1e3;
     }
+    if (rt->params.albedo_samples > 0 && rt->film.albedo) {
+        /* Counted with the emission's resolve: both are part of the temporal stage. */
+        const double t0 = tr_time_now();
+        if (tr_resolve_albedo(rt->scene, &rt->rcam, rt->params.albedo_samples, rt->cfg.threads,
+                              &rt->gb, NULL, err) != TR_OK) {
+            return TR_ERR;
+        }
+        rt->resolve_ms += (tr_time_now() - t0) * 1e3;
+    }
     rt->gb_frame_set = 1;
     return TR_OK;
 }

@@ -38,6 +38,7 @@ tr_restir_params tr_restir_params_default(void) {
     p.radius = 16.0f;
     p.temporal_cap = 20.0f;
     p.unbiased = 0;
+    p.visibility_reuse = 0;
     p.temporal = 1;
     p.tree = 0;
     p.gi = 0;
@@ -136,6 +137,7 @@ static void restir_frame(const tr_restir_stage *st, const tr_camera *cam, const 
     fr->radius = p->radius;
     fr->temporal_cap = p->temporal_cap;
     fr->unbiased = p->unbiased != 0;
+    fr->visibility_reuse = p->visibility_reuse != 0;
     fr->temporal = p->temporal && st->have_prev;
     fr->direct = (passes & TR_PASS_DIRECT) != 0u;
     fr->tree = p->tree != 0;

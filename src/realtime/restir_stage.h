@@ -21,10 +21,14 @@ typedef struct tr_restir_params {
     int spatial;        /* neighbours merged per pixel */
     float radius;       /* in pixels, of the spatial neighbourhood */
     float temporal_cap; /* the previous frame's confidence at most this times the new one's */
-    int unbiased;       /* Talbot MIS, no visibility reuse (else 1/M and visibility reuse) */
-    int temporal;       /* reuse the previous frame's reservoirs */
-    int tree;           /* candidates from the light tree where the scene has one (else the
-                           power CDF, cheaper: resampling weighs distance and angle) */
+    int unbiased;       /* Talbot MIS (else 1/M) */
+    /* 1: the biased mode passes a new candidate occluded at its own pixel on with W 0
+     * (Bitterli et al.'s visibility reuse). Off by default: the neighbours' reservoirs
+     * then carry their own pixels' shadows into this one's estimate (docs/realtime.md). */
+    int visibility_reuse;
+    int temporal; /* reuse the previous frame's reservoirs */
+    int tree;     /* candidates from the light tree where the scene has one (else the
+                     power CDF, cheaper: resampling weighs distance and angle) */
     /* ReSTIR GI (src/kernel/restir_gi.h): 1 adds the indirect light at the first surfaces
      * too, for a pt frame rendered with no_primary_direct 2. Its paths from the sample
      * points take the frame's depth, roulette start, indirect clamp and regularization. */
