@@ -1238,6 +1238,24 @@ void tr_cl_film_size(const tr_cl_context *ctx, uint32_t *width, uint32_t *height
 
 /* bdpt's splat sums for frame f's rectangle, cleared, as the render kernel's last
  * argument. */
+/* Reads the frame's rays per grid row back (a blocking read: the frame's kernels have
+ * finished when it returns) and sums them into *rays_out (may be null). */
+static int read_rays(tr_cl_context *ctx, uint32_t ny, uint64_t *rays_out, tr_error *err) {
+    cl_int rc = clEnqueueReadBuffer(ctx->queue, ctx->rays, CL_TRUE, 0, ny * sizeof(cl_uint),
+                                    ctx->rays_host, 0, NULL, NULL);
+    if (rc != CL_SUCCESS) {
+        return cl_fail(err, "clEnqueueReadBuffer(rays_per_row)", rc);
+    }
+    if (rays_out) {
+        uint64_t rays = 0;
+        for (uint32_t y = 0; y < ny; ++y) {
+            rays += ctx->rays_host[y];
+        }
+        *rays_out = rays;
+    }
+    return TR_OK;
+}
+
 static int prepare_splats(tr_cl_context *ctx, const tr_frame *f, tr_error *err) {
     const size_t bytes = 3u * (size_t)f->rect_w * f->rect_h * sizeof(cl_long);
     if (bytes > ctx->info.max_alloc) {
@@ -1513,19 +1531,7 @@ int tr_cl_render_frame(tr_cl_context *ctx, const tr_frame *f, uint64_t *rays_out
         return TR_ERR;
     }
     /* The blocking read waits for the kernel: the frame is done when it returns. */
-    rc = clEnqueueReadBuffer(ctx->queue, ctx->rays, CL_TRUE, 0, ny * sizeof(cl_uint),
-                             ctx->rays_host, 0, NULL, NULL);
-    if (rc != CL_SUCCESS) {
-        return cl_fail(err, "clEnqueueReadBuffer(rays_per_row)", rc);
-    }
-    if (rays_out) {
-        uint64_t rays = 0;
-        for (uint32_t y = 0; y < ny; ++y) {
-            rays += ctx->rays_host[y];
-        }
-        *rays_out = rays;
-    }
-    return TR_OK;
+    return read_rays(ctx, ny, rays_out, err);
 }
 
 int tr_cl_read_film(tr_cl_context *ctx, tr_film *film, tr_error *err) {
@@ -2137,19 +2143,7 @@ static int wf_render(tr_cl_context *ctx, const tr_frame *f, uint32_t ny, uint64_
             }
         }
     }
-    cl_int rc = clEnqueueReadBuffer(ctx->queue, ctx->rays, CL_TRUE, 0, ny * sizeof(cl_uint),
-                                    ctx->rays_host, 0, NULL, NULL);
-    if (rc != CL_SUCCESS) {
-        return cl_fail(err, "clEnqueueReadBuffer(rays_per_row)", rc);
-    }
-    if (rays_out) {
-        uint64_t rays = 0;
-        for (uint32_t y = 0; y < ny; ++y) {
-            rays += ctx->rays_host[y];
-        }
-        *rays_out = rays;
-    }
-    return TR_OK;
+    return read_rays(ctx, ny, rays_out, err);
 }
 
 #endif
