@@ -141,6 +141,9 @@ typedef struct tr_convergence_desc {
     double ref_mse;                  /* its own MSE (0: unknown) */
     double budget;                   /* render seconds per method */
     double stop_psnr;                /* a method stops past it (0: 41 dB) */
+    /* A method stops at this many samples per pixel (0: no limit); with a large budget
+     * it makes the curve independent of the machine's speed and load. */
+    uint32_t max_spp;
     /* Progress in milliseconds of budget used (a finished method counts its whole). */
     tr_measure_progress_fn progress;
     /* Called when a method finishes, with its run (NULL: none). */
@@ -151,8 +154,9 @@ typedef struct tr_convergence_desc {
 /* Renders every method one sample per pixel at a time, the one with the least render time
  * so far next (so that on a shared machine they see the same load), scoring each against
  * the reference at geometrically spaced sample counts (1, 2, 3, ... growing by ~19 %),
- * until its budget is spent, it passes stop_psnr or it has TR_CONVERGENCE_MAX_POINTS
- * points. The devices' films are cleared first. runs[0 .. methods) get the curves. */
+ * until its budget is spent, it reaches max_spp, it passes stop_psnr or it has
+ * TR_CONVERGENCE_MAX_POINTS points. The devices' films are cleared first. runs[0 .. methods) get
+ * the curves. */
 int tr_convergence_measure(const tr_convergence_desc *d, tr_convergence_run *runs, tr_error *err);
 
 /* The render time (or with use_spp the samples) at which a run first reaches `db`,

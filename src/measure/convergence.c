@@ -75,7 +75,8 @@ static int method_turn(const tr_convergence_desc *d, turns *t, int mi, tr_conver
     }
     t->elapsed[mi] += st.seconds;
     ++t->spp[mi];
-    const int last = t->elapsed[mi] >= d->budget || r->n == TR_CONVERGENCE_MAX_POINTS - 1;
+    const int last = t->elapsed[mi] >= d->budget || r->n == TR_CONVERGENCE_MAX_POINTS - 1 ||
+                     (d->max_spp > 0 && t->spp[mi] >= d->max_spp);
     if (t->spp[mi] == t->next[mi] || last) {
         return record_point(d, t, mi, last, r, err);
     }
