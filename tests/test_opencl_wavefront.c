@@ -247,6 +247,28 @@ int main(void) {
     }
     cl = tr_device_cl_context(dev);
 
+    /* The memory check counts the wavefront's paths: with room for 300 of them beside the
+     * scene and the film it renders in chunks (the same image as the megakernel's); with
+     * room for fewer than a work group of them it refuses, and the device still works. */
+    CHECK(tr_device_upload(dev, box, &err) == TR_OK, "%s", err.msg);
+    compare(dev, box, cfg, 2, NULL, "cornell, no memory limit");
+    const uint64_t held = tr_cl_scene_bytes(cl) + tr_cl_film_bytes(cl);
+    CHECK(tr_cl_film_bytes(cl) > 0, "no film after a render");
+    tr_device_set_memory_limit(dev, held + 300 * tr_cl_wavefront_path_bytes());
+    compare(dev, box, cfg, 3, NULL, "cornell, room for 300 paths");
+    tr_device_set_memory_limit(dev, held + 10 * tr_cl_wavefront_path_bytes());
+    {
+        tr_render_config small = cfg;
+        small.opencl_kernel = TR_OPENCL_KERNEL_WAVEFRONT;
+        tr_render_stats st;
+        CHECK(tr_device_render(dev, tr_scene_camera(box), &small, 0, 1, NULL, &st, &err) ==
+                      TR_ERR &&
+                  err.code == TR_STATUS_LIMIT,
+              "room for 10 paths should be refused (code %d)", (int)err.code);
+    }
+    tr_device_set_memory_limit(dev, 0);
+    compare(dev, box, cfg, 2, NULL, "cornell, the limit lifted");
+
     /* An odd mid-size image, whole, with a stride, and a rectangle of it. */
     tr_scene *odd = builtin("cornell", 37, 23);
     CHECK(tr_device_upload(dev, odd, &err) == TR_OK, "%s", err.msg);

@@ -1143,6 +1143,14 @@ uint64_t tr_cl_scene_bytes(const tr_cl_context *ctx) {
     return ctx->scene_bytes;
 }
 
+uint64_t tr_cl_film_bytes(const tr_cl_context *ctx) {
+    return ctx->width ? film_bytes(ctx->width, ctx->height, ctx->passes) : 0;
+}
+
+uint64_t tr_cl_wavefront_path_bytes(void) {
+    return sizeof(tr_pt_wf_path) + 3 * sizeof(cl_uint);
+}
+
 /* Bytes of film buffer i for the film's size (a placeholder element when not kept). */
 static size_t film_buffer_bytes(const tr_cl_context *ctx, int i) {
     if (film_pass(i) != 0u && (ctx->passes & film_pass(i)) == 0u) {
@@ -2120,6 +2128,21 @@ static int wf_render(tr_cl_context *ctx, const tr_frame *f, uint32_t ny, uint64_
     const size_t fit = ctx->info.max_alloc / sizeof(tr_pt_wf_path);
     if (fit > 0 && fit < cap) {
         cap = fit;
+    }
+    /* The paths and their three queues share the device's memory with the scene and the
+     * film (the memory check's budget): fewer paths in flight where they would not fit. */
+    const uint64_t used = ctx->scene_bytes + tr_cl_film_bytes(ctx);
+    const uint64_t left = memory_budget(ctx) > used ? memory_budget(ctx) - used : 0;
+    const uint64_t per_path = tr_cl_wavefront_path_bytes();
+    if (left / per_path < cap) {
+        cap = (size_t)(left / per_path);
+        if (cap < ctx->wf_group) {
+            return tr_error_set(err, TR_STATUS_LIMIT,
+                                "the wavefront's paths do not fit on OpenCL device %d (%s) next "
+                                "to the scene and the film (%.1f MiB left of %.1f MiB)",
+                                ctx->info.index, ctx->info.name, mib(left),
+                                mib(memory_budget(ctx)));
+        }
     }
     if (points * samples < cap) {
         cap = points * samples;

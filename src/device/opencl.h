@@ -92,6 +92,10 @@ void tr_cl_set_bvh(tr_cl_context *ctx, tr_device_bvh bvh);
 tr_device_bvh tr_cl_scene_bvh(const tr_cl_context *ctx);
 /* Bytes of device memory the uploaded scene's buffers take. */
 uint64_t tr_cl_scene_bytes(const tr_cl_context *ctx);
+/* Bytes of device memory the film's buffers take (0 before the first render), and those
+ * one path of the wavefront takes (its state and its places in the three queues). */
+uint64_t tr_cl_film_bytes(const tr_cl_context *ctx);
+uint64_t tr_cl_wavefront_path_bytes(void);
 
 /* Adds frame f's samples (tr_frame_make: a sample range over a rectangle, with its
  * stride and passes) to the device film. The film takes the camera's screen size and the

@@ -738,11 +738,12 @@ int tr_realtime_reconstruct(tr_realtime *rt, int method, tr_realtime_result *out
     const uint32_t dw = up ? rt->view_cam.screen_width : w;
     const uint32_t dh = up ? rt->view_cam.screen_height : h;
     if (size_disp(rt, dw, dh, err) != TR_OK || prepare_history(rt, method, w, h, err) != TR_OK ||
-        (up && size_low(rt, w, h, err) != TR_OK)) {
+        (up && !rt->on_device && size_low(rt, w, h, err) != TR_OK)) {
         return TR_ERR;
     }
     rt_history *hist = &rt->hist[method];
-    /* Upscaled, the reconstruction of the traced frame goes to rt->low first. */
+    /* Upscaled on the host, the reconstruction of the traced frame goes to rt->low first
+     * (a device reconstructs and upscales where its film lies: rt->low is never made). */
     float *const dst = up ? rt->low : rt->disp.sum;
     const tr_vec3 *motion = rt->moved ? rt->motion : NULL;
     const uint32_t ids = rt->moved ? rt->motion_ids : 0u;
