@@ -1,49 +1,75 @@
 /* denoise.c - the offline denoiser (tr_denoise_film, include/trac0r/post.h): a finished
- * film's radiance cleaned with the help of its feature passes, in three steps.
+ * film's radiance cleaned with the help of its feature passes, in four steps.
  *
  * 1. Outliers. A firefly is a pixel whose mean rests on one or two improbable samples.
  *    The film's sums of squares (TR_PASS_VARIANCE) say how much of a pixel's value its own
- *    samples can vouch for: a pixel that stands out of its 3x3 neighbourhood (above the
- *    second brightest neighbour plus three times the neighbourhood's typical standard
+ *    samples can vouch for: a pixel that stands out of its 5x5 neighbourhood (above the
+ *    second brightest neighbour plus three times the neighbourhood's median standard
  *    error) loses the part of its excess that is within three of its own standard errors.
  *    A single-sample spike has a standard error as large as its mean, so it is brought back
  *    to its neighbourhood; a converged highlight has a small one and keeps its value, and
- *    as samples accumulate less is taken (the estimator stays consistent). This is the
- *    per-pixel form of the re-weighting of Zirr, Hanika and Dachsbacher 2018,
- *    "Re-weighting Firefly Samples for Improved Finite-Sample Monte Carlo Estimates"
- *    (Computer Graphics Forum 37(6)), which judges a sample by how probable its magnitude
- *    is given the samples around it; done before the filter so that no spike is spread.
+ *    as samples accumulate less is taken (the estimator stays consistent). The 5x5
+ *    neighbourhood (3x3 before) leaves alone the scattered bright pixels of a caustic or a
+ *    glossy highlight that a few samples undersample: three or more of them together are
+ *    light to spread, not outliers. This is the per-pixel form of the re-weighting of Zirr,
+ *    Hanika and Dachsbacher 2018, "Re-weighting Firefly Samples for Improved Finite-Sample
+ *    Monte Carlo Estimates" (Computer Graphics Forum 37(6)), which judges a sample by how
+ *    probable its magnitude is given the samples around it; done before the filter so that
+ *    no spike is spread. The standard errors are the reflected part's: where the emission
+ *    pass is kept, the squares of the samples that met an emitter are taken out.
  *
- * 2. Demodulation. The first hit's emission (TR_PASS_EMISSION, when kept) is taken out and
- *    added back at the end, unfiltered; the rest is divided by the albedo, so that texture
- *    and material edges come back sharp when the filtered illumination is multiplied by
- *    each pixel's own albedo (as in Zwicker et al. 2015 and SVGF).
+ * 2. Demodulation. The first hit's emission (TR_PASS_EMISSION, when kept) is taken out; the
+ *    rest is divided by the albedo (held at 0.01 or above), so that texture and material
+ *    edges come back sharp when the filtered illumination is multiplied by each pixel's own
+ *    albedo (as in Zwicker et al. 2015 and SVGF).
  *
- * 3. First-order regression. Each pixel's illumination is the value at that pixel of a
- *    least-squares fit, over the (2r+1)^2 window around it, of an affine function of the
- *    features: shading normal, depth and screen position (Bitterli et al. 2016,
- *    "Nonlinearly Weighted First-Order Regression for Denoising Monte Carlo Renderings",
- *    Computer Graphics Forum 35(4), section 4; their regression with uniform weights, the
- *    local linear model of the guided filter, He et al. 2013). A depth or normal edge
- *    inside the window is a step in a regressor, so the fit follows it; a smooth gradient
- *    of light is the screen-position term. The window sums come from running column and
- *    row sums in double precision, so the cost per pixel does not grow with the window.
- *    A ridge term (relative and absolute) keeps features that are constant in the window
- *    out of the fit.
+ * 3. Candidates for the illumination, and the choice among them.
+ *    a. First-order regression. Each pixel's illumination is the value at that pixel of a
+ *       least-squares fit, over the (2r+1)^2 window around it, of an affine function of
+ *       the features: shading normal, depth and screen position (Bitterli et al. 2016,
+ *       "Nonlinearly Weighted First-Order Regression for Denoising Monte Carlo Renderings",
+ *       Computer Graphics Forum 35(4), section 4; their regression with uniform weights,
+ *       the local linear model of the guided filter, He et al. 2013). A depth or normal
+ *       edge inside the window is a step in a regressor, so the fit follows it; a smooth
+ *       gradient of light is the screen-position term. The window sums come from running
+ *       column and row sums in double precision, so the cost per pixel does not grow with
+ *       the window. A ridge term (relative and absolute) keeps features that are constant
+ *       in the window out of the fit. Run at radii from the small one doubling up to the
+ *       large one (1, 2, 4 by default); the leverage L (the diagonal of the fit's hat
+ *       matrix) is exact per pixel from the window's feature covariance.
+ *    b. Edge-stopping filter. The levels of an a-trous transform (Dammertz et al. 2010: the
+ *       5x5 B3 kernel at steps 1, 2, 4, 8) whose taps are weighted by the differences in
+ *       normal and relative depth and, weakly, in luminance against the noise expected of
+ *       it (SVGF's term, at 16 standard errors); each level's result is a candidate. Where
+ *       a window straddles small facets (a model's silhouette, a thin bar) the regression's
+ *       affine model does not hold and the weights keep the facets apart. Its leverage is
+ *       approximated by the centre tap's normalised weight, multiplied over the levels,
+ *       as Li, Wu and Chuang 2012 do for their cross-bilateral candidates; with a strong
+ *       luminance term the weights follow the noise and that approximation understates
+ *       the leverage (window-room at 64 spp: 46.0 dB with SVGF's 4 standard errors, 49.6 dB with 16).
+ *    c. The pixel's own value, leverage 1.
+ *    Each pixel takes the candidate of least estimated squared error, Stein's unbiased
+ *    risk estimate (SURE) |f - y|^2 - var + 2 var L, smoothed over 5x5 pixels, with var the
+ *    variance of the pixel's mean from the film's sums of squares. This is the per-pixel
+ *    selection among candidate filters of Li, Wu and Chuang 2012 ("SURE-based Optimization
+ *    for Adaptive Sampling and Reconstruction", ACM TOG 31(6), SIGGRAPH Asia) that NFOR also
+ *    makes. The pixel's own value has risk var: where its samples have converged (a small
+ *    lamp's neighbourhood at 64 samples, a shadow edge no feature explains) a candidate
+ *    must agree with them to be taken, so the filter does not make a converged region
+ *    worse. A pixel none of whose samples met a surface keeps its own value: it has no
+ *    reflected light, and a fit would reach past the silhouette beside it.
  *
- *    Each pixel's window fit is one estimate; the regression is run at window radii from
- *    the small one doubling up to the large one (1, 2, 4, 6 by default), and the pixel's
- *    own value is one more candidate. Each pixel takes the candidate of least estimated
- *    squared error, Stein's unbiased risk estimate (SURE) |f - y|^2 - var + 2 var L for a
- *    fit f of the noisy values y whose leverage at the pixel is L (the diagonal of the
- *    fit's hat matrix, exact per pixel from the window's feature covariance), smoothed
- *    over 5x5 pixels; var is the variance of the pixel's mean from the film's sums of
- *    squares. This is the per-pixel selection among candidate filters of Li, Wu and Chuang
- *    2012 ("SURE-based Optimization for Adaptive Sampling and Reconstruction", ACM TOG
- *    31(6)) that NFOR also makes. The pixel's own value has risk var: where its samples
- *    have converged (a small lamp's neighbourhood at 64 samples, a shadow edge no feature
- *    explains) a fit must agree with them to be taken, so the filter does not make a
- *    converged region worse.
+ * 4. Emission. The first hit's emission varies from pixel to pixel only where a pixel sees
+ *    an emitter's edge: at 16 samples a row of pixels under a lamp's edge that covers 5 %
+ *    of each has one sample on the lamp in some pixels and none in others, 1.0 or 0.05
+ *    against 0.8. Its candidates are its own value and boxes of half-width 1, 2 and 4 along
+ *    rows and along columns; each pixel takes the one of least risk, unsmoothed, with the
+ *    variance the candidate implies: samples between 0 and the brightest emission around
+ *    (3x3), L, with mean f vary by at most f (L - f) (Bhatia and Davis 2000), halved for
+ *    the stratified samples, over the pixel's count. A pixel whose samples all missed
+ *    the lamp beside it shows no spread of its own; the candidate's mean says what it
+ *    should have been. Along a straight edge a box averages pixels that see the same share
+ *    of the lamp; across it the difference makes its risk large.
  *
  * Every pixel's value is computed from read-only inputs in a fixed order: rows are taken in
  * strips whose boundaries do not depend on the thread count, so neither does the result. */
