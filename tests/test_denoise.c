@@ -10,7 +10,11 @@
  *    sample is no firefly and keeps most of its value.
  * 4. Noise falls: the error of a noisy flat image drops several times; a converged image
  *    whose light no feature explains (stripes a pixel wide) keeps its values.
- * 5. One thread and two give the same bits; a film without the guides is refused. */
+ * 5. One thread and two give the same bits; a film without the guides is refused.
+ * 6. A lamp's edge: a row of pixels of which some samples met the lamp comes back near
+ *    the share of the lamp its pixels see, the lamp's inside and the row beside the edge
+ *    keep their values; a thin bar in front of a wall keeps its own light and the wall
+ *    its own; pixels that met no surface keep their value beside a lit one. */
 #include "check.h"
 #include "trac0r/film.h"
 #include "trac0r/post.h"
@@ -289,6 +293,101 @@ static void test_threads_and_errors(void) {
     tr_film_free(&bare);
 }
 
+/* A ceiling (rows above LAMP_ROW, light 0.1) meets a lamp (rows below, emission 16 in every
+ * sample) along row LAMP_ROW, which covers 1/32 of each pixel of that row: with 16 samples
+ * every other pixel has one sample on the lamp and the rest none, the way a render's row
+ * of pixels under a lamp's edge sees it. The lamp and the ceiling lie in one plane. */
+#define LAMP_ROW 20
+static void make_lamp_film(tr_film *f) {
+    rng_state = 23u;
+    const uint32_t passes =
+        TR_PASS_ALBEDO | TR_PASS_NORMAL | TR_PASS_DEPTH | TR_PASS_VARIANCE | TR_PASS_EMISSION;
+    tr_error err;
+    CHECK(tr_film_init_passes(f, W, H, passes, &err) == TR_OK, "film: %s", err.msg);
+    for (int y = 0; y < H; ++y) {
+        for (int x = 0; x < W; ++x) {
+            const size_t i = (size_t)y * W + x;
+            f->count[i] = SPP;
+            for (uint32_t s = 0; s < SPP; ++s) {
+                const int on_lamp = y > LAMP_ROW || (y == LAMP_ROW && (x & 1) == 0 && s == 0);
+                const float e = on_lamp ? 16.0f : 0.0f;
+                const float v = on_lamp ? e : 0.1f * (1.0f + 0.2f * noise());
+                for (int c = 0; c < 3; ++c) {
+                    f->sum[3 * i + c] += v;
+                    f->sq[3 * i + c] += v * v;
+                    f->emission[3 * i + c] += e;
+                    f->albedo[3 * i + c] += 0.5f;
+                }
+                f->normal[3 * i + 1] += -1.0f;
+                f->depth[i] += 2.0f;
+            }
+        }
+    }
+}
+
+static void test_lamp_edge(void) {
+    static float out[3 * W * H];
+    tr_film f;
+    make_lamp_film(&f);
+    denoise(&f, out, 0);
+    /* The edge row: every pixel near the row's mean (0.5 of emission, 0.1 * 15/16 of
+     * ceiling on the others), where the raw pixels are 1.0 or 0.1. */
+    const double want = 0.5 + 0.1 * 15.0 / 16.0;
+    for (int x = 4; x < W - 4; ++x) {
+        const double v = out[3 * (LAMP_ROW * W + x)];
+        CHECK(fabs(v - want) <= 0.25 * want, "lamp edge pixel %d is %.3f, expected %.3f", x, v,
+              want);
+    }
+    /* The lamp's inside and the ceiling row beside the edge keep their values: no emission
+     * is spread across the edge. */
+    for (int x = 0; x < W; ++x) {
+        const double in = out[3 * ((LAMP_ROW + 2) * W + x)];
+        const double ceiling = out[3 * ((LAMP_ROW - 1) * W + x)];
+        CHECK(fabs(in - 16.0) <= 0.01 * 16.0, "lamp pixel %d is %.3f", x, in);
+        CHECK(fabs(ceiling - 0.1) <= 0.03, "ceiling pixel %d beside the edge is %.3f", x, ceiling);
+    }
+    tr_film_free(&f);
+}
+
+/* A bar 3 pixels wide at depth 1 in front of a wall at depth 3, lit differently. */
+static px thin_bar(int x, int y) {
+    px p = flat(x, y);
+    const int bar = x >= W / 2 && x < W / 2 + 3;
+    p.depth = bar ? 1.0f : 3.0f;
+    p.color[0] = p.color[1] = p.color[2] = bar ? 0.8f : 0.2f;
+    return p;
+}
+
+/* The left half met no surface (no albedo, normal or depth, black); the right is a lit
+ * wall. */
+static px silhouette(int x, int y) {
+    px p = flat(x, y);
+    if (x < W / 2) {
+        memset(&p, 0, sizeof p);
+    }
+    return p;
+}
+
+static void test_thin_and_silhouette(void) {
+    static float out[3 * W * H];
+    tr_film f;
+    make_film(&f, thin_bar, 0.5f, 29u);
+    denoise(&f, out, 0);
+    for (int x = W / 2 - 2; x < W / 2 + 5; ++x) {
+        const double want = thin_bar(x, 0).color[0];
+        CHECK(fabs(column(out, x) - want) <= 0.03 * want,
+              "thin bar: column %d mean %.4f, expected %.4f", x, column(out, x), want);
+    }
+    tr_film_free(&f);
+    make_film(&f, silhouette, 0.5f, 31u);
+    denoise(&f, out, 0);
+    for (int x = 0; x < W / 2; ++x) {
+        CHECK(column(out, x) == 0.0, "no surface: column %d mean %.4f, expected 0", x,
+              column(out, x));
+    }
+    tr_film_free(&f);
+}
+
 int main(void) {
     test_unchanged();
     test_edges();
@@ -296,5 +395,7 @@ int main(void) {
     test_noise_falls();
     test_converged_kept();
     test_threads_and_errors();
+    test_lamp_edge();
+    test_thin_and_silhouette();
     return check_finish("test_denoise");
 }

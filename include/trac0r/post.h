@@ -307,13 +307,14 @@ int tr_filter_atrous(const tr_gbuffer *g, const float *in, float *out, const tr_
  * feature passes. Fireflies are re-weighted from the pixels' own sample statistics (the
  * film's TR_PASS_VARIANCE sums of squares: a spike above its neighbourhood that its
  * samples cannot vouch for is brought back to it), the first hit's emission
- * (TR_PASS_EMISSION) is kept apart, and the illumination (radiance / albedo) is a
- * first-order regression on normal, depth and screen position over a window around each
- * pixel, at window radii from radius_small doubling up to radius; each pixel takes the
- * fit, or its own value, of least estimated error (Stein's unbiased risk estimate from
- * the sums of squares). Zero fields take their defaults. */
+ * (TR_PASS_EMISSION) is kept apart and filtered along the edges of emitters, and the
+ * illumination (radiance / albedo) is a first-order regression on normal, depth and
+ * screen position over a window around each pixel, at window radii from radius_small
+ * doubling up to radius, or an edge-stopping a-trous level; each pixel takes the
+ * candidate, or its own value, of least estimated error (Stein's unbiased risk estimate
+ * from the sums of squares). Zero fields take their defaults. */
 typedef struct tr_denoise_params {
-    int radius;       /* the large window's half-width in pixels, 1..64 (default 6) */
+    int radius;       /* the large window's half-width in pixels, 1..64 (default 4) */
     int radius_small; /* the small window's, 1..64 (default 1) */
     float firefly_k;  /* standard errors a spike keeps (default 3): larger keeps more */
 } tr_denoise_params;

@@ -1,49 +1,75 @@
 /* denoise.c - the offline denoiser (tr_denoise_film, include/trac0r/post.h): a finished
- * film's radiance cleaned with the help of its feature passes, in three steps.
+ * film's radiance cleaned with the help of its feature passes, in four steps.
  *
  * 1. Outliers. A firefly is a pixel whose mean rests on one or two improbable samples.
  *    The film's sums of squares (TR_PASS_VARIANCE) say how much of a pixel's value its own
- *    samples can vouch for: a pixel that stands out of its 3x3 neighbourhood (above the
- *    second brightest neighbour plus three times the neighbourhood's typical standard
+ *    samples can vouch for: a pixel that stands out of its 5x5 neighbourhood (above the
+ *    second brightest neighbour plus three times the neighbourhood's median standard
  *    error) loses the part of its excess that is within three of its own standard errors.
  *    A single-sample spike has a standard error as large as its mean, so it is brought back
  *    to its neighbourhood; a converged highlight has a small one and keeps its value, and
- *    as samples accumulate less is taken (the estimator stays consistent). This is the
- *    per-pixel form of the re-weighting of Zirr, Hanika and Dachsbacher 2018,
- *    "Re-weighting Firefly Samples for Improved Finite-Sample Monte Carlo Estimates"
- *    (Computer Graphics Forum 37(6)), which judges a sample by how probable its magnitude
- *    is given the samples around it; done before the filter so that no spike is spread.
+ *    as samples accumulate less is taken (the estimator stays consistent). The 5x5
+ *    neighbourhood (3x3 before) leaves alone the scattered bright pixels of a caustic or a
+ *    glossy highlight that a few samples undersample: three or more of them together are
+ *    light to spread, not outliers. This is the per-pixel form of the re-weighting of Zirr,
+ *    Hanika and Dachsbacher 2018, "Re-weighting Firefly Samples for Improved Finite-Sample
+ *    Monte Carlo Estimates" (Computer Graphics Forum 37(6)), which judges a sample by how
+ *    probable its magnitude is given the samples around it; done before the filter so that
+ *    no spike is spread. The standard errors are the reflected part's: where the emission
+ *    pass is kept, the squares of the samples that met an emitter are taken out.
  *
- * 2. Demodulation. The first hit's emission (TR_PASS_EMISSION, when kept) is taken out and
- *    added back at the end, unfiltered; the rest is divided by the albedo, so that texture
- *    and material edges come back sharp when the filtered illumination is multiplied by
- *    each pixel's own albedo (as in Zwicker et al. 2015 and SVGF).
+ * 2. Demodulation. The first hit's emission (TR_PASS_EMISSION, when kept) is taken out; the
+ *    rest is divided by the albedo (held at 0.01 or above), so that texture and material
+ *    edges come back sharp when the filtered illumination is multiplied by each pixel's own
+ *    albedo (as in Zwicker et al. 2015 and SVGF).
  *
- * 3. First-order regression. Each pixel's illumination is the value at that pixel of a
- *    least-squares fit, over the (2r+1)^2 window around it, of an affine function of the
- *    features: shading normal, depth and screen position (Bitterli et al. 2016,
- *    "Nonlinearly Weighted First-Order Regression for Denoising Monte Carlo Renderings",
- *    Computer Graphics Forum 35(4), section 4; their regression with uniform weights, the
- *    local linear model of the guided filter, He et al. 2013). A depth or normal edge
- *    inside the window is a step in a regressor, so the fit follows it; a smooth gradient
- *    of light is the screen-position term. The window sums come from running column and
- *    row sums in double precision, so the cost per pixel does not grow with the window.
- *    A ridge term (relative and absolute) keeps features that are constant in the window
- *    out of the fit.
+ * 3. Candidates for the illumination, and the choice among them.
+ *    a. First-order regression. Each pixel's illumination is the value at that pixel of a
+ *       least-squares fit, over the (2r+1)^2 window around it, of an affine function of
+ *       the features: shading normal, depth and screen position (Bitterli et al. 2016,
+ *       "Nonlinearly Weighted First-Order Regression for Denoising Monte Carlo Renderings",
+ *       Computer Graphics Forum 35(4), section 4; their regression with uniform weights,
+ *       the local linear model of the guided filter, He et al. 2013). A depth or normal
+ *       edge inside the window is a step in a regressor, so the fit follows it; a smooth
+ *       gradient of light is the screen-position term. The window sums come from running
+ *       column and row sums in double precision, so the cost per pixel does not grow with
+ *       the window. A ridge term (relative and absolute) keeps features that are constant
+ *       in the window out of the fit. Run at radii from the small one doubling up to the
+ *       large one (1, 2, 4 by default); the leverage L (the diagonal of the fit's hat
+ *       matrix) is exact per pixel from the window's feature covariance.
+ *    b. Edge-stopping filter. The levels of an a-trous transform (Dammertz et al. 2010: the
+ *       5x5 B3 kernel at steps 1, 2, 4, 8) whose taps are weighted by the differences in
+ *       normal and relative depth and, weakly, in luminance against the noise expected of
+ *       it (SVGF's term, at 16 standard errors); each level's result is a candidate. Where
+ *       a window straddles small facets (a model's silhouette, a thin bar) the regression's
+ *       affine model does not hold and the weights keep the facets apart. Its leverage is
+ *       approximated by the centre tap's normalised weight, multiplied over the levels,
+ *       as Li, Wu and Chuang 2012 do for their cross-bilateral candidates; with a strong
+ *       luminance term the weights follow the noise and that approximation understates
+ *       the leverage (window-room at 64 spp: 46.0 dB with SVGF's 4 standard errors, 49.6 dB with 16).
+ *    c. The pixel's own value, leverage 1.
+ *    Each pixel takes the candidate of least estimated squared error, Stein's unbiased
+ *    risk estimate (SURE) |f - y|^2 - var + 2 var L, smoothed over 5x5 pixels, with var the
+ *    variance of the pixel's mean from the film's sums of squares. This is the per-pixel
+ *    selection among candidate filters of Li, Wu and Chuang 2012 ("SURE-based Optimization
+ *    for Adaptive Sampling and Reconstruction", ACM TOG 31(6), SIGGRAPH Asia) that NFOR also
+ *    makes. The pixel's own value has risk var: where its samples have converged (a small
+ *    lamp's neighbourhood at 64 samples, a shadow edge no feature explains) a candidate
+ *    must agree with them to be taken, so the filter does not make a converged region
+ *    worse. A pixel none of whose samples met a surface keeps its own value: it has no
+ *    reflected light, and a fit would reach past the silhouette beside it.
  *
- *    Each pixel's window fit is one estimate; the regression is run at window radii from
- *    the small one doubling up to the large one (1, 2, 4, 6 by default), and the pixel's
- *    own value is one more candidate. Each pixel takes the candidate of least estimated
- *    squared error, Stein's unbiased risk estimate (SURE) |f - y|^2 - var + 2 var L for a
- *    fit f of the noisy values y whose leverage at the pixel is L (the diagonal of the
- *    fit's hat matrix, exact per pixel from the window's feature covariance), smoothed
- *    over 5x5 pixels; var is the variance of the pixel's mean from the film's sums of
- *    squares. This is the per-pixel selection among candidate filters of Li, Wu and Chuang
- *    2012 ("SURE-based Optimization for Adaptive Sampling and Reconstruction", ACM TOG
- *    31(6)) that NFOR also makes. The pixel's own value has risk var: where its samples
- *    have converged (a small lamp's neighbourhood at 64 samples, a shadow edge no feature
- *    explains) a fit must agree with them to be taken, so the filter does not make a
- *    converged region worse.
+ * 4. Emission. The first hit's emission varies from pixel to pixel only where a pixel sees
+ *    an emitter's edge: at 16 samples a row of pixels under a lamp's edge that covers 5 %
+ *    of each has one sample on the lamp in some pixels and none in others, 1.0 or 0.05
+ *    against 0.8. Its candidates are its own value and boxes of half-width 1, 2 and 4 along
+ *    rows and along columns; each pixel takes the one of least risk, unsmoothed, with the
+ *    variance the candidate implies: samples between 0 and the brightest emission around
+ *    (3x3), L, with mean f vary by at most f (L - f) (Bhatia and Davis 2000), halved for
+ *    the stratified samples, over the pixel's count. A pixel whose samples all missed
+ *    the lamp beside it shows no spread of its own; the candidate's mean says what it
+ *    should have been. Along a straight edge a box averages pixels that see the same share
+ *    of the lamp; across it the difference makes its risk large.
  *
  * Every pixel's value is computed from read-only inputs in a fixed order: rows are taken in
  * strips whose boundaries do not depend on the thread count, so neither does the result. */
@@ -55,6 +81,7 @@
 #include "trac0r/film.h"
 #include "trac0r/post.h"
 #include "trac0r/render.h"
+#include "filter.h"
 
 /* Regressors: normal x, y, z, depth, screen x, y. (The albedo is divided out before the
  * fit; as a regressor it only added noise on textures.) */
@@ -68,13 +95,28 @@
  * stratified samples make the sums of squares overstate the noise (many-lights), above 1
  * the glass box, and 1 keeps every scene at or above the a-trous filter. */
 #define DN_SELECT 1.0f
+/* The edge-stopping candidate's normal and relative-depth scales (the a-trous filter's
+ * defaults) and its luminance scale in standard errors (SVGF's 4), and its levels. */
+#define DN_SIGMA_N 0.3f
+#define DN_SIGMA_Z 0.05f
+#define DN_SIGMA_L 16.0f
+#define DN_LEVELS 4
+/* The smallest albedo the illumination is divided by. */
+#define DN_ALBEDO_MIN 0.01f
+/* The firefly step's neighbourhood, (2 DN_FIREFLY_R + 1)^2 pixels. */
+#define DN_FIREFLY_R 2
+/* The emission's binomial bound on its variance, scaled for stratified samples. */
+#define DN_EMIT_VAR 0.5f
+
+/* The emission's candidates: boxes along rows and along columns of these half-widths. */
+#define DN_EMIT_R 4
 /* Rows per strip: each strip starts its running sums afresh. */
 #define DN_STRIP 48
 
 tr_denoise_params tr_denoise_params_default(void) {
     tr_denoise_params p;
     memset(&p, 0, sizeof p);
-    p.radius = 6;
+    p.radius = 4;
     p.radius_small = 1;
     p.firefly_k = 3.0f;
     return p;
@@ -92,8 +134,8 @@ typedef struct dn_img {
     float *var;        /* variance of the mean of y's luminance (0 without the pass) */
 } dn_img;
 
-static void sort8(float *v) {
-    for (int i = 1; i < 8; ++i) {
+static void sortn(float *v, int n) {
+    for (int i = 1; i < n; ++i) {
         const float x = v[i];
         int j = i - 1;
         while (j >= 0 && v[j] > x) {
@@ -104,36 +146,49 @@ static void sort8(float *v) {
     }
 }
 
-/* Step 1: the firefly re-weighting, in place on col (3 floats per pixel), from the
- * luminance lm and its standard error se. */
 static long fireflies(int w, int h, float *col, const float *lm, const float *se, float k,
                       int threads) {
     long changed = 0;
+    const int fr = DN_FIREFLY_R;
 #pragma omp parallel for num_threads(threads) schedule(static) reduction(+ : changed)
     for (int y = 0; y < h; ++y) {
         for (int x = 0; x < w; ++x) {
             const size_t i = (size_t)y * w + x;
-            float nl[8], ns[8];
+            const float l = lm[i];
+            /* The brightest and second brightest neighbour inside the image. */
+            float b1 = -INFINITY, b2 = -INFINITY;
             int n = 0;
-            for (int dy = -1; dy <= 1; ++dy) {
-                for (int dx = -1; dx <= 1; ++dx) {
+            for (int dy = -fr; dy <= fr; ++dy) {
+                for (int dx = -fr; dx <= fr; ++dx) {
                     const int xx = x + dx, yy = y + dy;
                     if ((dx || dy) && xx >= 0 && yy >= 0 && xx < w && yy < h) {
-                        nl[n] = lm[(size_t)yy * w + xx];
-                        ns[n] = se[(size_t)yy * w + xx];
+                        const float v = lm[(size_t)yy * w + xx];
+                        if (v > b1) {
+                            b2 = b1;
+                            b1 = v;
+                        } else if (v > b2) {
+                            b2 = v;
+                        }
                         ++n;
                     }
                 }
             }
-            /* Border pixels: fill with the pixel's own (they cannot raise the bound). */
-            for (int m = n; m < 8; ++m) {
-                nl[m] = n ? nl[0] : lm[i];
-                ns[m] = n ? ns[0] : se[i];
+            if (n < 2 || !(l > b2)) {
+                continue; /* no firefly: most pixels stop here */
             }
-            sort8(nl);
-            sort8(ns);
-            const float bound = nl[6] + k * 0.5f * (ns[3] + ns[4]);
-            const float l = lm[i];
+            float ns[(2 * DN_FIREFLY_R + 1) * (2 * DN_FIREFLY_R + 1)];
+            n = 0;
+            for (int dy = -fr; dy <= fr; ++dy) {
+                for (int dx = -fr; dx <= fr; ++dx) {
+                    const int xx = x + dx, yy = y + dy;
+                    if ((dx || dy) && xx >= 0 && yy >= 0 && xx < w && yy < h) {
+                        ns[n++] = se[(size_t)yy * w + xx];
+                    }
+                }
+            }
+            sortn(ns, n);
+            const float med = n & 1 ? ns[n / 2] : 0.5f * (ns[n / 2 - 1] + ns[n / 2]);
+            const float bound = b2 + k * med;
             if (!(l > bound)) {
                 continue;
             }
@@ -381,20 +436,239 @@ static int regress(const dn_img *im, int r, float *const out[3], float *lev, int
 
 /* A (2*rad+1)^2 box mean of plane a into b, clipped at the borders. */
 static void box_mean(int w, int h, const float *a, float *b, int rad, int threads) {
+    /* Separable: the row sums of each row's 2 rad + 1 rows, then along the row; in double,
+     * term by term in a fixed order. */
 #pragma omp parallel for num_threads(threads) schedule(static)
     for (int y = 0; y < h; ++y) {
-        for (int x = 0; x < w; ++x) {
-            double s = 0.0;
-            int n = 0;
-            for (int yy = y - rad; yy <= y + rad; ++yy) {
-                for (int xx = x - rad; xx <= x + rad; ++xx) {
-                    if (xx >= 0 && yy >= 0 && xx < w && yy < h) {
-                        s += a[(size_t)yy * w + xx];
-                        ++n;
+        double col[4096 + 1];
+        const int y0 = y - rad > 0 ? y - rad : 0, y1 = y + rad < h - 1 ? y + rad : h - 1;
+        for (int x0 = 0; x0 < w; x0 += 4096 - 2 * 64) {
+            /* Chunks of columns with a margin of rad on either side (rad <= 64). */
+            const int xa = x0 - rad > 0 ? x0 - rad : 0;
+            const int xe = x0 + 4096 - 2 * 64 < w ? x0 + 4096 - 2 * 64 : w;
+            const int xb = xe + rad < w ? xe + rad : w;
+            for (int x = xa; x < xb; ++x) {
+                double s = 0.0;
+                for (int yy = y0; yy <= y1; ++yy) {
+                    s += a[(size_t)yy * w + x];
+                }
+                col[x - xa] = s;
+            }
+            for (int x = x0; x < xe; ++x) {
+                const int c0 = x - rad > 0 ? x - rad : 0, c1 = x + rad < w - 1 ? x + rad : w - 1;
+                double s = 0.0;
+                for (int xx = c0; xx <= c1; ++xx) {
+                    s += col[xx - xa];
+                }
+                b[(size_t)y * w + x] = (float)(s / ((double)(c1 - c0 + 1) * (y1 - y0 + 1)));
+            }
+        }
+    }
+}
+
+/* One level of the edge-stopping candidate: an a-trous step (the 5x5 B3 kernel with holes
+ * of `step` pixels, Dammertz et al. 2010) of the planes src into dst, each tap weighted by
+ * the differences in normal and relative depth (the a-trous filter's scales) and by the
+ * difference in luminance against the noise expected of it, |l_j - l_i| / (sigma_l
+ * sqrt(var_i)) as in SVGF (Schied et al. 2017); the variance of the result goes into dvar
+ * (the squared weights times the taps' variances). The weights depend on the values only
+ * through that luminance term, so the weight of the pixel's own value in its result is
+ * about the centre tap's normalised weight, as Li, Wu and Chuang 2012 take it for their
+ * cross-bilateral candidates; over the levels it is the product, kept in lev (lev_in NULL
+ * for the first level). lsrc: scratch, the luminance of src. The taps run in the outer
+ * loops and the pixels of a row in the inner one, so that it vectorises. */
+static int estop_level(const dn_img *im, const float *const src[3], const float *svar,
+                       float *const dst[3], float *dvar, const float *lev_in, float *lev_out,
+                       float *lsrc, int step, float sigma_l, int threads) {
+    const int w = im->w, h = im->h;
+    const float in2 = 1.0f / (DN_SIGMA_N * DN_SIGMA_N), iz = 1.0f / (DN_SIGMA_Z * DN_SIGMA_Z);
+    const long n = (long)w * h;
+#pragma omp parallel for num_threads(threads) schedule(static)
+    for (long i = 0; i < n; ++i) {
+        lsrc[i] = lum((float[3]){src[0][i], src[1][i], src[2][i]});
+    }
+    int failed = 0;
+#pragma omp parallel num_threads(threads) reduction(| : failed)
+    {
+        float *acc = malloc(sizeof(float) * 7 * (size_t)w);
+        if (!acc) {
+            failed = 1;
+        }
+#pragma omp for schedule(static)
+        for (int y = 0; y < h; ++y) {
+            if (!acc) {
+                continue;
+            }
+            float *restrict s0 = acc, *restrict s1 = acc + w, *restrict s2 = acc + 2 * w;
+            float *restrict sv = acc + 3 * w, *restrict sw = acc + 4 * w;
+            float *restrict icz = acc + 5 * w, *restrict il = acc + 6 * w;
+            const size_t row = (size_t)y * w;
+            for (int x = 0; x < w; ++x) {
+                const float z = im->feat[3][row + x];
+                icz[x] = 1.0f / (z > 1e-3f ? z : 1e-3f);
+                il[x] = 1.0f / (sigma_l * sqrtf(fmaxf(svar[row + x], 0.0f)) + 1e-6f);
+                s0[x] = s1[x] = s2[x] = sv[x] = sw[x] = 0.0f;
+            }
+            const float *restrict n0 = im->feat[0] + row, *restrict n1 = im->feat[1] + row,
+                                  *restrict n2 = im->feat[2] + row,
+                                  *restrict z0 = im->feat[3] + row, *restrict l0 = lsrc + row;
+            for (int ky = -2; ky <= 2; ++ky) {
+                const int ty = y + ky * step;
+                if (ty < 0 || ty >= h) {
+                    continue;
+                }
+                for (int kx = -2; kx <= 2; ++kx) {
+                    const int off = kx * step;
+                    const int xa = off < 0 ? -off : 0, xb = off > 0 ? w - off : w;
+                    const float bw = tr_post_b3(kx) * tr_post_b3(ky);
+                    const size_t tr = (size_t)ty * w + off;
+                    const float *restrict m0 = im->feat[0] + tr, *restrict m1 = im->feat[1] + tr,
+                                          *restrict m2 = im->feat[2] + tr,
+                                          *restrict mz = im->feat[3] + tr, *restrict ml = lsrc + tr;
+                    const float *restrict c0 = src[0] + tr, *restrict c1 = src[1] + tr,
+                                          *restrict c2 = src[2] + tr, *restrict cv = svar + tr;
+                    for (int x = xa; x < xb; ++x) {
+                        const float d0 = m0[x] - n0[x], d1 = m1[x] - n1[x], d2 = m2[x] - n2[x];
+                        const float dz = (mz[x] - z0[x]) * icz[x];
+                        const float dl = fabsf(ml[x] - l0[x]);
+                        const float e =
+                            (d0 * d0 + d1 * d1 + d2 * d2) * in2 + dz * dz * iz + dl * il[x];
+                        const float wt = bw * tr_post_exp_neg(e);
+                        s0[x] += wt * c0[x];
+                        s1[x] += wt * c1[x];
+                        s2[x] += wt * c2[x];
+                        sv[x] += wt * wt * cv[x];
+                        sw[x] += wt;
                     }
                 }
             }
-            b[(size_t)y * w + x] = (float)(s / n);
+            for (int x = 0; x < w; ++x) {
+                const size_t c = row + x;
+                const float inv = 1.0f / sw[x];
+                dst[0][c] = s0[x] * inv;
+                dst[1][c] = s1[x] * inv;
+                dst[2][c] = s2[x] * inv;
+                dvar[c] = sv[x] * inv * inv;
+                lev_out[c] = (lev_in ? lev_in[c] : 1.0f) * tr_post_b3(0) * tr_post_b3(0) * inv;
+            }
+        }
+        free(acc);
+    }
+    return failed ? TR_ERR : TR_OK;
+}
+
+/* Risk of the candidate cand (3 planes) with leverage lev against the pixel values y and
+ * variance var (Stein's unbiased risk estimate, smoothed over 5x5 into rs via r); where
+ * it is below the best so far (rbest), the candidate becomes the pixel's best. */
+static void consider(int w, int h, const float *const y[3], const float *var,
+                     const float *const cand[3], const float *lev, float *r, float *rs,
+                     float *rbest, float *const best[3], int threads) {
+    const long n = (long)w * h;
+#pragma omp parallel for num_threads(threads) schedule(static)
+    for (long i = 0; i < n; ++i) {
+        const float d =
+            lum((float[3]){cand[0][i] - y[0][i], cand[1][i] - y[1][i], cand[2][i] - y[2][i]});
+        const float v = DN_SELECT * var[i];
+        r[i] = d * d - v + 2.0f * v * lev[i];
+    }
+    box_mean(w, h, r, rs, 2, threads);
+#pragma omp parallel for num_threads(threads) schedule(static)
+    for (long i = 0; i < n; ++i) {
+        if (rs[i] < rbest[i]) {
+            rbest[i] = rs[i];
+            for (int k = 0; k < 3; ++k) {
+                best[k][i] = cand[k][i];
+            }
+        }
+    }
+}
+
+/* A box of half-width r along rows (dx 1, dy 0) or columns of the planes a into b. */
+static void box_line(int w, int h, const float *const a[3], float *const b[3], int r, int dx,
+                     int dy, int threads) {
+#pragma omp parallel for num_threads(threads) schedule(static)
+    for (int y = 0; y < h; ++y) {
+        for (int x = 0; x < w; ++x) {
+            float s0 = 0.0f, s1 = 0.0f, s2 = 0.0f;
+            int m = 0;
+            for (int k = -r; k <= r; ++k) {
+                const int xx = x + k * dx, yy = y + k * dy;
+                if (xx >= 0 && yy >= 0 && xx < w && yy < h) {
+                    const size_t j = (size_t)yy * w + xx;
+                    s0 += a[0][j];
+                    s1 += a[1][j];
+                    s2 += a[2][j];
+                    ++m;
+                }
+            }
+            const size_t i = (size_t)y * w + x;
+            b[0][i] = s0 / (float)m;
+            b[1][i] = s1 / (float)m;
+            b[2][i] = s2 / (float)m;
+        }
+    }
+}
+
+/* The first hit's emission is noisy only where a pixel sees an emitter's edge: some of its
+ * samples hit the lamp, some what lies beside it, and at a few samples per pixel the
+ * count of hits varies from pixel to pixel along the edge. Its candidates are the pixel's
+ * own value and boxes along rows and along columns (half-widths 1, 2, 4): along a straight
+ * edge one of them averages pixels that see the same share of the lamp, across it the
+ * difference of the values makes its risk large. Each pixel takes the one of least
+ * smoothed risk as the illumination's candidates, with the variance of the pixel's mean
+ * (its standard error se squared: where the emission varies it dominates the pixel's
+ * noise). e: the emission, 3 floats per pixel; ep, cand, best: 3 planes each; var, lev,
+ * r, rs, rbest: scratch planes. */
+static void emission_select(int w, int h, const float *e, const uint32_t *count, float *const ep[3],
+                            float *const cand[3], float *const best[3], float *top, float *r,
+                            float *rbest, int threads) {
+    const long n = (long)w * h;
+#pragma omp parallel for num_threads(threads) schedule(static)
+    for (long i = 0; i < n; ++i) {
+        for (int k = 0; k < 3; ++k) {
+            ep[k][i] = e[3 * i + k];
+            best[k][i] = e[3 * i + k];
+        }
+        r[i] = lum(e + 3 * i);
+        rbest[i] = 0.0f;
+    }
+    /* The brightest emission around each pixel (3x3), L: samples of the emission lie
+     * between 0 and about L. */
+#pragma omp parallel for num_threads(threads) schedule(static)
+    for (int y = 0; y < h; ++y) {
+        for (int x = 0; x < w; ++x) {
+            float t = 0.0f;
+            for (int yy = y > 0 ? y - 1 : 0; yy <= y + 1 && yy < h; ++yy) {
+                for (int xx = x > 0 ? x - 1 : 0; xx <= x + 1 && xx < w; ++xx) {
+                    t = fmaxf(t, r[(size_t)yy * w + xx]);
+                }
+            }
+            top[(size_t)y * w + x] = t;
+        }
+    }
+    for (int dir = 0; dir < 2; ++dir) {
+        for (int rad = 1; rad <= DN_EMIT_R; rad *= 2) {
+            box_line(w, h, (const float *const *)ep, cand, rad, dir == 0, dir == 1, threads);
+            const float l = 1.0f / (float)(2 * rad + 1);
+#pragma omp parallel for num_threads(threads) schedule(static)
+            for (long i = 0; i < n; ++i) {
+                const float f = lum((float[3]){cand[0][i], cand[1][i], cand[2][i]});
+                const float d = f - lum((float[3]){ep[0][i], ep[1][i], ep[2][i]});
+                /* The variance of the pixel's mean if the candidate is right: samples
+                 * between 0 and L of mean f vary by at most f (L - f) (Bhatia and Davis
+                 * 2000); the pixel's own count of them. A pixel none of whose samples
+                 * met the lamp beside it has no spread of its own to show. */
+                const float c = count[i] > 1u ? (float)count[i] : 1.0f;
+                const float v = DN_EMIT_VAR * fmaxf(f, 0.0f) * fmaxf(top[i] - f, 0.0f) / c;
+                /* Its risk less that of the pixel's own value (v). */
+                const float rk = d * d - 2.0f * v + 2.0f * v * l;
+                if (rk < rbest[i]) {
+                    rbest[i] = rk;
+                    for (int k = 0; k < 3; ++k) {
+                        best[k][i] = cand[k][i];
+                    }
+                }
+            }
         }
     }
 }
@@ -431,6 +705,10 @@ int tr_denoise_film(const tr_film *film, const tr_denoise_params *params, int th
         P_R,
         P_RS,
         P_RBEST,
+        P_AT,             /* the edge-stopping candidate's other level (3) */
+        P_AV0 = P_AT + 3, /* its variances, in and out */
+        P_AV1,
+        P_ALEV, /* its leverage */
         P_N
     };
     float *block = malloc(sizeof(float) * n * P_N);
@@ -466,14 +744,42 @@ int tr_denoise_film(const tr_film *film, const tr_denoise_params *params, int th
             ++dcount;
         }
         pl[P_LUM][i] = lum(col + 3 * i);
-        if (film->sq) {
-            float s = 0.0f;
-            s += 0.2126f * sqrtf(tr_film_variance(film, i, 0));
-            s += 0.7152f * sqrtf(tr_film_variance(film, i, 1));
-            s += 0.0722f * sqrtf(tr_film_variance(film, i, 2));
-            pl[P_SE][i] = s;
-        } else {
-            pl[P_SE][i] = fmaxf(pl[P_LUM][i], 0.0f); /* no pass: a spike is not vouched for */
+    }
+    /* The standard error of the reflected part. Where the first hit's emission is kept, its
+     * share of the sums of squares is taken out: a sample that meets an emitter reflects
+     * nothing there, so the squares add, sum v^2 = sum e^2 + sum r^2, and the emission's
+     * squares are about L sum e for the brightest emission around, L (3x3), the value its
+     * samples take. Without that, a pixel under a lamp's edge, whose few samples on the lamp
+     * make its radiance vary a great deal, would count as noisy reflected light and draw
+     * the fits of its neighbours towards its own. */
+#pragma omp parallel for num_threads(threads) schedule(static)
+    for (int y = 0; y < h; ++y) {
+        for (int x = 0; x < w; ++x) {
+            const size_t i = (size_t)y * w + x;
+            const uint32_t c = film->count[i];
+            if (!film->sq) {
+                pl[P_SE][i] = fmaxf(pl[P_LUM][i], 0.0f); /* no pass: a spike is not vouched for */
+                continue;
+            }
+            float se = 0.0f;
+            for (int k = 0; k < 3; ++k) {
+                double v = tr_film_variance(film, i, k);
+                if (film->emission && c > 1u) {
+                    float top = 0.0f;
+                    for (int yy = y > 0 ? y - 1 : 0; yy <= y + 1 && yy < h; ++yy) {
+                        for (int xx = x > 0 ? x - 1 : 0; xx <= x + 1 && xx < w; ++xx) {
+                            top = fmaxf(top, emi[3 * ((size_t)yy * w + xx) + k]);
+                        }
+                    }
+                    const double es = film->emission[3 * i + k];
+                    const double q = film->sq[3 * i + k] - (double)top * es;
+                    const double sr = film->sum[3 * i + k] - es;
+                    v = (q - sr * sr / c) / (double)(c - 1u) / (double)c;
+                    v = v > 0.0 ? v : 0.0;
+                }
+                se += (k == 0 ? 0.2126f : k == 1 ? 0.7152f : 0.0722f) * sqrtf((float)v);
+            }
+            pl[P_SE][i] = se;
         }
     }
     fireflies(w, h, col, pl[P_LUM], pl[P_SE], p.firefly_k, threads);
@@ -487,16 +793,20 @@ int tr_denoise_film(const tr_film *film, const tr_denoise_params *params, int th
             const float inv = c ? 1.0f / (float)c : 0.0f;
             for (int k = 0; k < 3; ++k) {
                 pl[k][i] = film->normal[3 * i + k] * inv;
-                /* Demodulate where there is an albedo to divide by. */
-                const float a = alb[3 * i + k];
-                pl[P_Y + k][i] = a > 0.01f ? col[3 * i + k] / a : col[3 * i + k];
+                /* Demodulate by the albedo, held at DN_ALBEDO_MIN or above: the same factor
+                 * in every channel and pixel divides and multiplies back, so a channel whose
+                 * albedo is nearly black is not mixed, undivided, with its neighbours'
+                 * divided values. */
+                pl[P_Y + k][i] = col[3 * i + k] / fmaxf(alb[3 * i + k], DN_ALBEDO_MIN);
             }
             pl[3][i] = film->depth[i] * inv * zscale;
             pl[4][i] = (float)x * xscale;
             pl[5][i] = (float)y * xscale;
             /* The variance of the demodulated luminance. */
-            const float la = lum(alb + 3 * i);
-            const float se = pl[P_SE][i] / (la > 0.01f ? la : 1.0f);
+            const float la = lum((float[3]){fmaxf(alb[3 * i], DN_ALBEDO_MIN),
+                                            fmaxf(alb[3 * i + 1], DN_ALBEDO_MIN),
+                                            fmaxf(alb[3 * i + 2], DN_ALBEDO_MIN)});
+            const float se = pl[P_SE][i] / la;
             pl[P_VAR][i] = se * se;
         }
     }
@@ -529,40 +839,66 @@ int tr_denoise_film(const tr_film *film, const tr_denoise_params *params, int th
     }
     box_mean(w, h, pl[P_R], pl[P_RBEST], 2, threads);
     float *cur[3] = {pl[P_CUR], pl[P_CUR + 1], pl[P_CUR + 2]};
+    float *best[3] = {pl[P_BEST], pl[P_BEST + 1], pl[P_BEST + 2]};
+    float *at[3] = {pl[P_AT], pl[P_AT + 1], pl[P_AT + 2]};
+    const float *yv[3] = {pl[P_Y], pl[P_Y + 1], pl[P_Y + 2]};
     for (int r = p.radius_small; rc == TR_OK; r = r * 2 < p.radius ? r * 2 : p.radius) {
         rc = regress(&im, r, cur, pl[P_LEV], threads);
         if (rc != TR_OK) {
             break;
         }
-#pragma omp parallel for num_threads(threads) schedule(static)
-        for (long i = 0; i < (long)n; ++i) {
-            const float d = lum((float[3]){cur[0][i] - pl[P_Y][i], cur[1][i] - pl[P_Y + 1][i],
-                                           cur[2][i] - pl[P_Y + 2][i]});
-            const float v = vs * pl[P_VAR][i];
-            pl[P_R][i] = d * d - v + 2.0f * v * pl[P_LEV][i];
-        }
-        box_mean(w, h, pl[P_R], pl[P_RS], 2, threads);
-#pragma omp parallel for num_threads(threads) schedule(static)
-        for (long i = 0; i < (long)n; ++i) {
-            if (pl[P_RS][i] < pl[P_RBEST][i]) {
-                pl[P_RBEST][i] = pl[P_RS][i];
-                for (int k = 0; k < 3; ++k) {
-                    pl[P_BEST + k][i] = cur[k][i];
-                }
-            }
-        }
+        consider(w, h, yv, pl[P_VAR], (const float *const *)cur, pl[P_LEV], pl[P_R], pl[P_RS],
+                 pl[P_RBEST], best, threads);
         if (r >= p.radius) {
             break;
+        }
+    }
+    /* The edge-stopping candidates: the a-trous levels at steps 1, 2, 4, 8, each level's
+     * result one candidate; the luminance term starts from the variance smoothed over 3x3. */
+    if (rc == TR_OK) {
+        box_mean(w, h, pl[P_VAR], pl[P_AV0], 1, threads);
+        const float *src[3] = {yv[0], yv[1], yv[2]};
+        float *sv = pl[P_AV0], *dv = pl[P_AV1];
+        for (int l = 0; l < DN_LEVELS && rc == TR_OK; ++l) {
+            float *const *dst = (l & 1) ? cur : at;
+            rc = estop_level(&im, src, sv, dst, dv, l ? pl[P_ALEV] : NULL, pl[P_ALEV], pl[P_LEV],
+                             1 << l, DN_SIGMA_L, threads);
+            if (rc != TR_OK) {
+                break;
+            }
+            consider(w, h, yv, pl[P_VAR], (const float *const *)dst, pl[P_ALEV], pl[P_R], pl[P_RS],
+                     pl[P_RBEST], best, threads);
+            for (int k = 0; k < 3; ++k) {
+                src[k] = dst[k];
+            }
+            float *t = sv;
+            sv = dv;
+            dv = t;
         }
     }
     if (rc == TR_OK) {
 #pragma omp parallel for num_threads(threads) schedule(static)
         for (long i = 0; i < (long)n; ++i) {
+            /* A pixel none of whose samples met a surface has no reflected light to clean:
+             * its value is what the samples saw, not a fit that reaches past the
+             * silhouette of the surfaces beside it. */
+            const int nohit = film->depth[i] == 0.0f;
             for (int k = 0; k < 3; ++k) {
-                const float v = pl[P_BEST + k][i];
+                const float v = nohit ? pl[P_Y + k][i] : pl[P_BEST + k][i];
                 const float a = alb[3 * i + k];
-                const float y = a > 0.01f ? v * a : v;
-                out[3 * i + k] = fmaxf(y, 0.0f) + emi[3 * i + k];
+                const float y = v * fmaxf(a, DN_ALBEDO_MIN);
+                out[3 * i + k] = fmaxf(y, 0.0f);
+            }
+        }
+        if (film->emission) {
+            float *eb[3] = {pl[P_BEST], pl[P_BEST + 1], pl[P_BEST + 2]};
+            emission_select(w, h, emi, film->count, at, cur, eb, pl[P_AV0], pl[P_R], pl[P_RBEST],
+                            threads);
+#pragma omp parallel for num_threads(threads) schedule(static)
+            for (long i = 0; i < (long)n; ++i) {
+                for (int k = 0; k < 3; ++k) {
+                    out[3 * i + k] += eb[k][i];
+                }
             }
         }
     } else {

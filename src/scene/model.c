@@ -71,6 +71,17 @@ static float model_light_scale(const tr_import_light *l, tr_vec3 centre, float r
     return isfinite(k) && k > 0.0f ? k : 1.0f;
 }
 
+/* The factor from a file light's colour to trac0r's radiometric units. glTF's lights are
+ * photometric and physically based (its renderers divide the diffuse term by pi), so the
+ * colour is taken as it is. The other formats Assimp reads describe lights of the
+ * fixed-function shading model (OpenGL's, Blender Internal's, 3ds Max's scanline): a white
+ * diffuse surface facing the light at its falloff distance shows the light's colour,
+ * albedo x colour x cos(theta), with no 1/pi; a Lambertian surface reflects 1/pi of its
+ * irradiance, so the irradiance those files mean is pi times the colour. */
+static float model_light_units(const tr_import_light *l) {
+    return l->gltf ? 1.0f : 3.14159265f;
+}
+
 /* A light of the file onto trac0r's: directional -> the sun (the Sun's angular size),
  * point and spot -> punctual lights (punctual.h) of intensity the light's colour (W/sr),
  * ambient -> a constant environment, area -> an emissive rectangle.
@@ -92,13 +103,14 @@ static int model_add_light(tr_scene *s, const tr_import_light *l, tr_vec3 centre
             model_warn(info, msg);
             return 0;
         }
-        if (tr_scene_set_sun(s, v3_neg(l->dir), 0.526f, c, err) != TR_OK) {
+        const float u = model_light_units(l);
+        if (tr_scene_set_sun(s, v3_neg(l->dir), 0.526f, v3_scale(c, u), err) != TR_OK) {
             return -1;
         }
         *have_sun = 1;
         snprintf(msg, sizeof msg,
-                 "directional light '%.64s': a sun of 0.526 degrees, irradiance its colour",
-                 l->name);
+                 "directional light '%.64s': a sun of 0.526 degrees, irradiance %.4g x its colour",
+                 l->name, (double)u);
         model_warn(info, msg);
         return 1;
     }
@@ -116,7 +128,7 @@ static int model_add_light(tr_scene *s, const tr_import_light *l, tr_vec3 centre
         p.type = l->type == AI_SPOT ? TR_PUNCTUAL_SPOT : TR_PUNCTUAL_POINT;
         p.pos = l->pos;
         p.dir = l->dir;
-        const float k = model_light_scale(l, centre, radius);
+        const float k = model_light_scale(l, centre, radius) * model_light_units(l);
         p.intensity = v3_scale(c, k);
         if (l->type == AI_SPOT) {
             model_spot_cone(l, &p);
