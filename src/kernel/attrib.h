@@ -76,7 +76,11 @@ typedef struct tr_material_ext {
      * exp(-absorption d) after a distance d (tr_volume_attenuation, material_eval.h).
      * Zero for none. */
     tr_vec3 absorption;
-    uint32_t pad[7];
+    /* principled: glTF's KHR_materials_sheen, a Charlie sheen layer over the base
+     * (bsdf_principled.h); black for none. */
+    tr_vec3 sheen_color;
+    float sheen_roughness;
+    uint32_t pad[3];
 } tr_material_ext;
 TR_STATIC_ASSERT(sizeof(tr_material_ext) == 96, "tr_material_ext layout");
 
