@@ -737,7 +737,7 @@ static int parse_material_extras(jctx *c, const cJSON *m, const char *p, uint32_
     /* KHR_materials_sheen: its colour and roughness (bsdf_principled.h). */
     int has_sheen = 0;
     double sheen_rough = 0.0;
-    if (get_vec3(c, m, p, "sheen_color", 0, 1, &e.sheen_color, &has_sheen) != TR_OK ||
+    if (get_vec3(c, m, p, "sheen_color", 0, 0, &e.sheen_color, &has_sheen) != TR_OK ||
         get_number(c, m, p, "sheen_roughness", 0.0, 1.0, &sheen_rough, &has_sheen) != TR_OK) {
         return TR_ERR;
     }
