@@ -28,6 +28,9 @@
  *      white furnace (a white sheen over a white base: albedo <= 1, equal to the uniform
  *      estimate); the sheen albedo table (ggx_ms.h) against a uniform estimate of the
  *      lobe's integral. A black sheen evaluates, weighs and samples bit for bit as none.
+ *  (h) KHR_materials_specular (specular, specular_color): (a)-(c) with a tinted, weakened
+ *      dielectric layer, with and without compensation; a white furnace (albedo <= 1,
+ *      equal to the uniform estimate); specular 1 and white evaluate as none, bit for bit.
  *
  * Fixed seeds; statistical bounds are 5 standard errors or chi2_critical (p = 1e-4). */
 #include "check.h"
@@ -567,7 +570,57 @@ static void sheen_tests(void) {
     CHECK(differ == 0, "black sheen: %d of 2000 cases differ from none", differ);
 }
 
+/* (h) */
+static void specular_tests(void) {
+    const double theta[] = {0.0, 45.0, 80.0};
+    for (int comp = 0; comp < 2; ++comp) {
+        for (int k = 0; k < 2; ++k) {
+            tr_bsdf_params p = principled(v3(0.9f, 0.6f, 0.3f), 0.4f, 0.5f * (float)k);
+            p.specular = 0.6f;
+            p.specular_color = v3(2.0f, 1.0f, 0.3f);
+            p.ms = tr_ggx_ms_table();
+            p.flags = comp ? TR_MATERIAL_MULTISCATTER : 0u;
+            for (int t = 0; t < 3; ++t) {
+                chi2_case(&p, theta[t], 1700 + (uint64_t)(10 * comp + 5 * k + t));
+            }
+            reciprocity(&p);
+            tr_bsdf_params w = principled(v3s(1.0f), 0.4f, 0.5f * (float)k);
+            w.specular = 0.6f;
+            w.specular_color = v3(2.0f, 1.0f, 0.3f);
+            w.ms = tr_ggx_ms_table();
+            w.flags = p.flags;
+            for (int t = 0; t < 3; ++t) {
+                double a, sa, u, su;
+                albedo(&w, theta[t], &a, &sa, &u, &su);
+                CHECK(a <= 1.0 + NSIGMA * sa, "specular comp %d m=%d theta %.0f: albedo %.5f > 1",
+                      comp, k, theta[t], a);
+                CHECK(fabs(a - u) <= NSIGMA * sqrt(sa * sa + su * su),
+                      "specular comp %d m=%d theta %.0f: sampled %.5f vs uniform %.5f", comp, k,
+                      theta[t], a, u);
+            }
+        }
+    }
+    /* Specular 1 and white: bit for bit none (the parameters' defaults). */
+    tr_bsdf_params p0 = principled(v3(0.9f, 0.6f, 0.3f), 0.5f, 0.3f);
+    tr_bsdf_params p1 = p0;
+    p1.specular = 1.0f;
+    p1.specular_color = v3s(1.0f);
+    CHECK(p0.specular == 1.0f && p0.specular_color.x == 1.0f && p0.specular_color.z == 1.0f,
+          "specular defaults to 1 and white");
+    tr_rng rng;
+    tr_rng_init(&rng, 12, 13, 14);
+    int differ = 0;
+    for (int k = 0; k < 2000; ++k) {
+        tr_vec3 wo = dir_of(tr_rng_float(&rng), 2.0 * PI_D * tr_rng_float(&rng));
+        tr_vec3 wi = dir_of(tr_rng_float(&rng), 2.0 * PI_D * tr_rng_float(&rng));
+        tr_vec3 f0 = tr_bsdf_eval(&p0, wo, wi), f1 = tr_bsdf_eval(&p1, wo, wi);
+        differ += memcmp(&f0, &f1, sizeof f0) != 0;
+    }
+    CHECK(differ == 0, "specular 1, white: %d of 2000 evaluations differ", differ);
+}
+
 int main(void) {
+    specular_tests();
     sheen_tests();
     principled_tests();
     clearcoat_tests();

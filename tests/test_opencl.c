@@ -500,7 +500,7 @@ int main(void) {
     }
     /* The principled material's sheen (bsdf_principled.h) over dielectric and metallic
      * bases, some under a coat, some with the energy compensation (its tables uploaded with
-     * the scene). */
+     * the scene), some with KHR_materials_specular. */
     {
         tr_scene sh = {0};
         tr_scene_init(&sh);
@@ -516,6 +516,12 @@ int main(void) {
                 e.clearcoat_roughness = 0.2f;
                 e.sheen_color = v3(0.9f, 0.5f * (float)(i % 2), 0.7f);
                 e.sheen_roughness = 0.2f + 0.25f * (float)(i % 4);
+                if (i % 3 == 0) {
+                    /* KHR_materials_specular: a weaker, tinted dielectric layer. */
+                    e.flags |= TR_MATEXT_SPECULAR;
+                    e.specular = 0.7f;
+                    e.specular_color = v3(1.5f, 1.0f, 0.5f);
+                }
                 CHECK(tr_scene_set_material_ext(&sh, i, &e, &err) == TR_OK, "%s", err.msg);
             }
         }

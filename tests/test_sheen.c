@@ -1,5 +1,6 @@
 /* test_sheen.c - the principled material's sheen (KHR_materials_sheen, bsdf_principled.h)
- * from scene files and glTF files to images; the BSDF itself is checked in test_bsdf.c.
+ * from scene files and glTF files to images, and the scene files' specular keys
+ * (KHR_materials_specular); the BSDFs themselves are checked in test_bsdf.c.
  *
  *  (a) The keys: "sheen_color" and "sheen_roughness" of a principled material reach its
  *      extras; outside [0, 1] they are refused (TR_STATUS_PARSE, the key's path named), and
@@ -11,7 +12,10 @@
  *      environment creates no energy (mean at most 1 plus five standard errors) and
  *      reflects more than the same sphere's base alone loses to the sheen's scaling (the
  *      sheen is seen: the mean differs from the sheen-less sphere's).
- *  (d) "sheen_color": [0, 0, 0] renders bit for bit as a file without the keys. */
+ *  (d) "sheen_color": [0, 0, 0] renders bit for bit as a file without the keys.
+ *  (e) "specular" and "specular_color" reach the extras (with TR_MATEXT_SPECULAR), are
+ *      refused out of range or on other types; 1 and white render bit for bit as a file
+ *      without them, another value changes the image. */
 #define _POSIX_C_SOURCE 200809L
 #include "check.h"
 #include "render_film.h"
@@ -225,7 +229,62 @@ static void white_furnace(void) {
     tr_film_free(&b);
 }
 
+/* (e) */
+static void specular(void) {
+    tr_scene s;
+    tr_error err;
+    CHECK(parse(&s,
+                "{\"type\": \"principled\", \"color\": [1, 1, 1], \"specular\": 0.5, "
+                "\"specular_color\": [2, 1, 0.25]}",
+                &err) == TR_OK,
+          "%s", err.msg);
+    CHECK(s.material_ext_count == s.material_count && s.material_count >= 1 &&
+              (s.material_exts[0].flags & TR_MATEXT_SPECULAR) != 0u &&
+              s.material_exts[0].specular == 0.5f && s.material_exts[0].specular_color.x == 2.0f &&
+              s.material_exts[0].specular_color.z == 0.25f,
+          "the specular keys reach the material's extras");
+    tr_scene_clear(&s);
+    const char *bad[] = {
+        "{\"type\": \"principled\", \"color\": [1, 1, 1], \"specular\": 1.5}",
+        "{\"type\": \"principled\", \"color\": [1, 1, 1], \"specular_color\": [11, 0, 0]}",
+        "{\"type\": \"principled\", \"color\": [1, 1, 1], \"specular_color\": [0, -1, 0]}",
+        "{\"type\": \"diffuse\", \"color\": [1, 1, 1], \"specular\": 0.5}"};
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; ++i) {
+        const int rc = parse(&s, bad[i], &err);
+        CHECK(rc != TR_OK && err.code == TR_STATUS_PARSE && strstr(err.msg, "materials.m"),
+              "refused (%s): %s", rc != TR_OK ? err.msg : "accepted", bad[i]);
+        tr_scene_clear(&s);
+    }
+    tr_film a, b, c;
+    memset(&a, 0, sizeof a);
+    memset(&b, 0, sizeof b);
+    memset(&c, 0, sizeof c);
+    double se;
+    furnace("{\"type\": \"principled\", \"color\": [0.8, 0.5, 0.2], \"roughness\": 0.3}", &se, &a);
+    furnace("{\"type\": \"principled\", \"color\": [0.8, 0.5, 0.2], \"roughness\": 0.3, "
+            "\"specular\": 1, \"specular_color\": [1, 1, 1]}",
+            &se, &b);
+    furnace("{\"type\": \"principled\", \"color\": [0.8, 0.5, 0.2], \"roughness\": 0.3, "
+            "\"specular\": 0.3}",
+            &se, &c);
+    int same = 0, other = 0;
+    for (uint32_t y = 0; y < H; ++y) {
+        for (uint32_t x = 0; x < W; ++x) {
+            tr_vec3 pa = tr_film_pixel(&a, x, y), pb = tr_film_pixel(&b, x, y);
+            tr_vec3 pc = tr_film_pixel(&c, x, y);
+            same += memcmp(&pa, &pb, sizeof pa) != 0;
+            other += memcmp(&pa, &pc, sizeof pa) != 0;
+        }
+    }
+    CHECK(same == 0, "specular 1 and white change %d pixels", same);
+    CHECK(other > 0, "specular 0.3 changes no pixel");
+    tr_film_free(&a);
+    tr_film_free(&b);
+    tr_film_free(&c);
+}
+
 int main(void) {
+    specular();
     keys();
     gltf();
     white_furnace();

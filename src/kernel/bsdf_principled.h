@@ -59,8 +59,26 @@ TR_FN float tr_principled_f0d(const tr_bsdf_params *m) {
     return r * r;
 }
 
+/* Whether the dielectric layer has glTF's KHR_materials_specular (not 1 and white). */
+TR_FN int tr_principled_has_spec(const tr_bsdf_params *m) {
+    return m->specular != 1.0f || m->specular_color.x != 1.0f || m->specular_color.y != 1.0f ||
+           m->specular_color.z != 1.0f;
+}
+
+/* The dielectric layer's F0 with KHR_materials_specular: min(F0(ior) specular_color, 1)
+ * specular (its F90 is specular). */
+TR_FN tr_vec3 tr_principled_f0d_spec(const tr_bsdf_params *m) {
+    float f = tr_principled_f0d(m), s = tr_fminf(tr_fmaxf(m->specular, 0.0f), 1.0f);
+    return v3(tr_fminf(f * m->specular_color.x, 1.0f) * s,
+              tr_fminf(f * m->specular_color.y, 1.0f) * s,
+              tr_fminf(f * m->specular_color.z, 1.0f) * s);
+}
+
 TR_FN tr_vec3 tr_principled_f0(const tr_bsdf_params *m) {
     float k = tr_fminf(tr_fmaxf(m->metallic, 0.0f), 1.0f);
+    if (tr_principled_has_spec(m)) {
+        return v3_add(v3_scale(tr_principled_f0d_spec(m), 1.0f - k), v3_scale(m->color, k));
+    }
     return v3_add(v3s(tr_principled_f0d(m) * (1.0f - k)), v3_scale(m->color, k));
 }
 
@@ -180,6 +198,46 @@ TR_FN tr_vec3 tr_sheen_eval(const tr_bsdf_params *m, tr_vec3 nf, tr_vec3 wo, tr_
     return v3_scale(m->sheen_color, tr_sheen_lobe(m->sheen_roughness, lo, li, co, ci));
 }
 
+/* KHR_materials_specular: the GGX layer with Schlick's Fresnel from F0 to F90 =
+ * mix(specular, 1, metallic), and the diffuse part's factor per channel (the energy
+ * compensation's coupling with the layer's albedo F0 (E - E_5) + F90 E_5, else Ashikhmin
+ * and Shirley's with 1 - F0). */
+TR_FN tr_vec3 tr_principled_spec_f90(const tr_bsdf_params *m, tr_vec3 f0, tr_vec3 nf, tr_vec3 wo,
+                                     tr_vec3 wi, float co, float ci) {
+    float alpha = tr_principled_alpha(m->roughness);
+    float k = tr_fminf(tr_fmaxf(m->metallic, 0.0f), 1.0f);
+    float f90 = tr_fminf(tr_fmaxf(m->specular, 0.0f), 1.0f) * (1.0f - k) + k;
+    tr_vec3 h = v3_normalize(v3_add(wo, wi));
+    float d = tr_ggx_d(alpha, v3_dot(h, nf));
+    float g2 = 1.0f / (1.0f + tr_ggx_lambda(alpha, co) + tr_ggx_lambda(alpha, ci));
+    float x = tr_fminf(tr_fmaxf(1.0f - v3_dot(wo, h), 0.0f), 1.0f);
+    float x5 = (x * x) * (x * x) * x;
+    tr_vec3 f = v3_add(f0, v3_scale(v3_sub(v3s(f90), f0), x5));
+    return v3_scale(f, d * g2 / (4.0f * co * ci));
+}
+
+TR_FN float tr_spec_layer_e(const tr_bsdf_params *m, float mu, float a, float f0, float f90) {
+    float e = tr_ggx_ms_e(m->ms, mu, a), e5 = tr_ggx_ms_e(m->ms + TR_GGX_MS_E5, mu, a);
+    return f0 * (e - e5) + f90 * e5;
+}
+
+TR_FN float tr_spec_layer_eavg(const tr_bsdf_params *m, float a, float f0, float f90) {
+    float e = tr_ggx_ms_eavg(m->ms, a), e5 = tr_ggx_ms_eavg(m->ms + TR_GGX_MS_E5, a);
+    return f0 * (e - e5) + f90 * e5;
+}
+
+TR_FN float tr_spec_kd(const tr_bsdf_params *m, float f0, float co, float ci) {
+    float k = tr_fminf(tr_fmaxf(m->metallic, 0.0f), 1.0f);
+    if (tr_principled_comp(m)) {
+        float a = tr_principled_alpha(m->roughness);
+        float s = tr_fminf(tr_fmaxf(m->specular, 0.0f), 1.0f);
+        return (1.0f - k) * TR_INV_PI * (1.0f - tr_spec_layer_e(m, co, a, f0, s)) *
+               (1.0f - tr_spec_layer_e(m, ci, a, f0, s)) / (1.0f - tr_spec_layer_eavg(m, a, f0, s));
+    }
+    return (1.0f - k) * (28.0f / 23.0f) * TR_INV_PI * (1.0f - f0) * tr_as_factor(ci) *
+           tr_as_factor(co);
+}
+
 /* The clear coat's Fresnel reflectance F_c at cosine x (Schlick, F0 0.04). */
 TR_FN float tr_coat_fresnel(float x) {
     float c = tr_fminf(tr_fmaxf(1.0f - x, 0.0f), 1.0f);
@@ -240,7 +298,10 @@ TR_FN_NOINLINE tr_vec3 tr_principled_eval(const tr_bsdf_params *m, tr_vec3 nf, t
     }
     float k = tr_fminf(tr_fmaxf(m->metallic, 0.0f), 1.0f);
     tr_vec3 f0 = tr_principled_f0(m);
-    tr_vec3 f = tr_principled_spec(tr_principled_alpha(m->roughness), f0, nf, wo, wi, co, ci);
+    int spec = tr_principled_has_spec(m);
+    tr_vec3 f = spec
+                    ? tr_principled_spec_f90(m, f0, nf, wo, wi, co, ci)
+                    : tr_principled_spec(tr_principled_alpha(m->roughness), f0, nf, wo, wi, co, ci);
     tr_vec3 fms = v3s(0.0f);
     if ((m->flags & TR_MATERIAL_MULTISCATTER) != 0u && m->ms && k > 0.0f) {
         /* The conductor's share of the layer (the dielectric one couples to the base). */
@@ -249,8 +310,10 @@ TR_FN_NOINLINE tr_vec3 tr_principled_eval(const tr_bsdf_params *m, tr_vec3 nf, t
             f = v3_add(f, fms);
         }
     }
-    float kd;
-    if (tr_principled_comp(m)) {
+    float kd = 0.0f;
+    if (spec) {
+        /* Per channel: the layer's F0 may be tinted (set below). */
+    } else if (tr_principled_comp(m)) {
         float a = tr_principled_alpha(m->roughness), f0d = tr_principled_f0d(m);
         kd = (1.0f - k) * TR_INV_PI * (1.0f - tr_ggx_ms_layer_e(m->ms, co, a, f0d)) *
              (1.0f - tr_ggx_ms_layer_e(m->ms, ci, a, f0d)) /
@@ -260,6 +323,11 @@ TR_FN_NOINLINE tr_vec3 tr_principled_eval(const tr_bsdf_params *m, tr_vec3 nf, t
              tr_as_factor(ci) * tr_as_factor(co);
     }
     tr_vec3 diff = v3_scale(m->color, kd);
+    if (spec) {
+        tr_vec3 fd = tr_principled_f0d_spec(m);
+        diff = v3_mul(m->color, v3(tr_spec_kd(m, fd.x, co, ci), tr_spec_kd(m, fd.y, co, ci),
+                                   tr_spec_kd(m, fd.z, co, ci)));
+    }
     if (tr_sheen_weight(m) > 0.0f) {
         /* The sheen over the base, which it scales by glTF's albedo scaling. */
         float sc = tr_fminf(1.0f - tr_sheen_albedo(m, co), 1.0f - tr_sheen_albedo(m, ci));

@@ -196,6 +196,15 @@ int tr_scene_set_material_ext(tr_scene *s, uint32_t index, const tr_material_ext
         return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
                             "material %u: sheen colour or roughness outside [0, 1]", index);
     }
+    if ((ext->flags & TR_MATEXT_SPECULAR) != 0u &&
+        (!(ext->specular >= 0.0f && ext->specular <= 1.0f) ||
+         !(ext->specular_color.x >= 0.0f && ext->specular_color.x <= 10.0f) ||
+         !(ext->specular_color.y >= 0.0f && ext->specular_color.y <= 10.0f) ||
+         !(ext->specular_color.z >= 0.0f && ext->specular_color.z <= 10.0f))) {
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "material %u: specular outside [0, 1] or its colour outside [0, 10]",
+                            index);
+    }
     if (!(ext->transmission >= 0.0f && ext->transmission <= 1.0f) ||
         !(ext->absorption.x >= 0.0f && ext->absorption.y >= 0.0f && ext->absorption.z >= 0.0f) ||
         !v3_is_finite(ext->absorption)) {
