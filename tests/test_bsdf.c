@@ -23,6 +23,14 @@
  *      over a white dielectric keeps within 0.03 of the uncoated albedo at normal
  *      incidence, over a white conductor at least 90 % of it, and a smooth coat over black reflects
  * its Fresnel's F0, 0.04); weight 0 evaluates, weighs and samples bit for bit as no coat.
+ *  (g) The principled material's sheen (Charlie, KHR_materials_sheen): (a)-(c) over
+ *      dielectric and metallic bases, with and without a coat and energy compensation; a
+ *      white furnace (a white sheen over a white base: albedo <= 1, equal to the uniform
+ *      estimate); the sheen albedo table (ggx_ms.h) against a uniform estimate of the
+ *      lobe's integral. A black sheen evaluates, weighs and samples bit for bit as none.
+ *  (h) KHR_materials_specular (specular, specular_color): (a)-(c) with a tinted, weakened
+ *      dielectric layer, with and without compensation; a white furnace (albedo <= 1,
+ *      equal to the uniform estimate); specular 1 and white evaluate as none, bit for bit.
  *
  * Fixed seeds; statistical bounds are 5 standard errors or chi2_critical (p = 1e-4). */
 #include "check.h"
@@ -458,7 +466,162 @@ static void clearcoat_tests(void) {
     CHECK(differ == 0, "clear coat weight 0: %d of 2000 cases differ from no coat", differ);
 }
 
+/* (g) */
+static tr_bsdf_params sheened(tr_vec3 color, float roughness, float metallic, tr_vec3 sheen,
+                              float sheen_roughness) {
+    tr_bsdf_params p = principled(color, roughness, metallic);
+    p.sheen_color = sheen;
+    p.sheen_roughness = sheen_roughness;
+    p.ms = tr_ggx_ms_table();
+    return p;
+}
+
+static void sheen_tests(void) {
+    const float sr[] = {0.3f, 0.8f};
+    const double theta[] = {0.0, 45.0, 80.0};
+    for (int r = 0; r < 2; ++r) {
+        for (int k = 0; k < 2; ++k) {
+            tr_bsdf_params p =
+                sheened(v3(0.9f, 0.6f, 0.3f), 0.5f, (float)k, v3(0.8f, 0.6f, 0.9f), sr[r]);
+            if (r == 1) {
+                /* Under a coat, with the energy compensation. */
+                p.clearcoat = 0.7f;
+                p.clearcoat_roughness = 0.2f;
+                p.flags |= TR_MATERIAL_MULTISCATTER;
+            }
+            for (int t = 0; t < 3; ++t) {
+                chi2_case(&p, theta[t], 1300 + (uint64_t)(100 * r + 10 * k + t));
+            }
+            reciprocity(&p);
+        }
+    }
+    for (int r = 0; r < 2; ++r) {
+        for (int k = 0; k < 2; ++k) {
+            for (int comp = 0; comp < 2; ++comp) {
+                tr_bsdf_params p = sheened(v3s(1.0f), 0.6f, (float)k, v3s(1.0f), sr[r]);
+                p.flags = comp ? TR_MATERIAL_MULTISCATTER : 0u;
+                for (int t = 0; t < 3; ++t) {
+                    double a, sa, u, su;
+                    albedo(&p, theta[t], &a, &sa, &u, &su);
+                    printf("white sheen r=%.1f over white m=%d (compensation %d) at %.0f deg: "
+                           "albedo %.5f\n",
+                           (double)sr[r], k, comp, theta[t], a);
+                    CHECK(a <= 1.0 + NSIGMA * sa,
+                          "sheen r=%.1f m=%d comp %d theta %.0f: albedo %.5f > 1", (double)sr[r], k,
+                          comp, theta[t], a);
+                    CHECK(fabs(a - u) <= NSIGMA * sqrt(sa * sa + su * su),
+                          "sheen r=%.1f m=%d comp %d theta %.0f: sampled %.5f vs uniform %.5f",
+                          (double)sr[r], k, comp, theta[t], a, u);
+                }
+            }
+        }
+    }
+    /* The table: E_sh(mu, r) against a uniform-hemisphere estimate of the lobe's albedo
+     * (within 1 % of it, 0.001 and the estimate's 5 standard errors: the table is bilinear
+     * between nodes 1/31 apart, and at low roughness the albedo is a few thousandths that
+     * change fast with r). */
+    const float rr[] = {0.1f, 0.3f, 0.6f, 1.0f};
+    const float mus[] = {0.15f, 0.5f, 0.9f};
+    const float *tab = tr_ggx_ms_table();
+    for (int r = 0; r < 4; ++r) {
+        for (int i = 0; i < 3; ++i) {
+            const float mu = mus[i];
+            const tr_vec3 wo = v3(sqrtf(1.0f - mu * mu), 0.0f, mu);
+            tr_rng rng;
+            tr_rng_init(&rng, 31, (uint64_t)r, (uint64_t)i);
+            const int N = 400000;
+            double s1 = 0.0, s2 = 0.0;
+            for (int k = 0; k < N; ++k) {
+                const tr_vec3 d = dir_of(tr_rng_float(&rng), 2.0 * PI_D * tr_rng_float(&rng));
+                const double v =
+                    d.z > 0.0f ? tr_sheen_lobe(rr[r], wo, d, mu, d.z) * d.z * 2.0 * PI_D : 0.0;
+                s1 += v;
+                s2 += v * v;
+            }
+            const double e = s1 / N, se = sqrt(fmax(0.0, s2 / N - e * e) / N);
+            const double t = tr_ggx_ms_e(tab + TR_GGX_MS_SHEEN, mu, rr[r]);
+            CHECK(fabs(t - e) <= 0.01 * e + 0.001 + NSIGMA * se,
+                  "sheen albedo table r=%.1f mu=%.2f: %.5f vs estimate %.5f +- %.5f", (double)rr[r],
+                  (double)mu, t, e, se);
+        }
+    }
+    /* A black sheen: bit for bit none, whatever its roughness. */
+    tr_bsdf_params p0 = principled(v3(0.9f, 0.6f, 0.3f), 0.5f, 0.3f);
+    tr_bsdf_params p1 = p0;
+    p1.sheen_roughness = 0.4f;
+    p1.ms = tab;
+    tr_rng rng;
+    tr_rng_init(&rng, 8, 9, 10);
+    int differ = 0;
+    for (int k = 0; k < 2000; ++k) {
+        tr_vec3 wo = dir_of(tr_rng_float(&rng), 2.0 * PI_D * tr_rng_float(&rng));
+        tr_vec3 wi = dir_of(tr_rng_float(&rng), 2.0 * PI_D * tr_rng_float(&rng));
+        tr_vec3 f0 = tr_bsdf_eval(&p0, wo, wi), f1 = tr_bsdf_eval(&p1, wo, wi);
+        float q0 = tr_bsdf_pdf(&p0, wo, wi), q1 = tr_bsdf_pdf(&p1, wo, wi);
+        float ul = tr_rng_float(&rng), u1 = tr_rng_float(&rng), u2 = tr_rng_float(&rng);
+        tr_scatter s0, s1;
+        memset(&s0, 0, sizeof s0);
+        memset(&s1, 0, sizeof s1);
+        int k0 = tr_bsdf_sample(&p0, wo, ul, u1, u2, &s0);
+        int k1 = tr_bsdf_sample(&p1, wo, ul, u1, u2, &s1);
+        differ += memcmp(&f0, &f1, sizeof f0) != 0 || memcmp(&q0, &q1, sizeof q0) != 0 ||
+                  k0 != k1 || memcmp(&s0, &s1, sizeof s0) != 0;
+    }
+    CHECK(differ == 0, "black sheen: %d of 2000 cases differ from none", differ);
+}
+
+/* (h) */
+static void specular_tests(void) {
+    const double theta[] = {0.0, 45.0, 80.0};
+    for (int comp = 0; comp < 2; ++comp) {
+        for (int k = 0; k < 2; ++k) {
+            tr_bsdf_params p = principled(v3(0.9f, 0.6f, 0.3f), 0.4f, 0.5f * (float)k);
+            p.specular = 0.6f;
+            p.specular_color = v3(2.0f, 1.0f, 0.3f);
+            p.ms = tr_ggx_ms_table();
+            p.flags = comp ? TR_MATERIAL_MULTISCATTER : 0u;
+            for (int t = 0; t < 3; ++t) {
+                chi2_case(&p, theta[t], 1700 + (uint64_t)(10 * comp + 5 * k + t));
+            }
+            reciprocity(&p);
+            tr_bsdf_params w = principled(v3s(1.0f), 0.4f, 0.5f * (float)k);
+            w.specular = 0.6f;
+            w.specular_color = v3(2.0f, 1.0f, 0.3f);
+            w.ms = tr_ggx_ms_table();
+            w.flags = p.flags;
+            for (int t = 0; t < 3; ++t) {
+                double a, sa, u, su;
+                albedo(&w, theta[t], &a, &sa, &u, &su);
+                CHECK(a <= 1.0 + NSIGMA * sa, "specular comp %d m=%d theta %.0f: albedo %.5f > 1",
+                      comp, k, theta[t], a);
+                CHECK(fabs(a - u) <= NSIGMA * sqrt(sa * sa + su * su),
+                      "specular comp %d m=%d theta %.0f: sampled %.5f vs uniform %.5f", comp, k,
+                      theta[t], a, u);
+            }
+        }
+    }
+    /* Specular 1 and white: bit for bit none (the parameters' defaults). */
+    tr_bsdf_params p0 = principled(v3(0.9f, 0.6f, 0.3f), 0.5f, 0.3f);
+    tr_bsdf_params p1 = p0;
+    p1.specular = 1.0f;
+    p1.specular_color = v3s(1.0f);
+    CHECK(p0.specular == 1.0f && p0.specular_color.x == 1.0f && p0.specular_color.z == 1.0f,
+          "specular defaults to 1 and white");
+    tr_rng rng;
+    tr_rng_init(&rng, 12, 13, 14);
+    int differ = 0;
+    for (int k = 0; k < 2000; ++k) {
+        tr_vec3 wo = dir_of(tr_rng_float(&rng), 2.0 * PI_D * tr_rng_float(&rng));
+        tr_vec3 wi = dir_of(tr_rng_float(&rng), 2.0 * PI_D * tr_rng_float(&rng));
+        tr_vec3 f0 = tr_bsdf_eval(&p0, wo, wi), f1 = tr_bsdf_eval(&p1, wo, wi);
+        differ += memcmp(&f0, &f1, sizeof f0) != 0;
+    }
+    CHECK(differ == 0, "specular 1, white: %d of 2000 evaluations differ", differ);
+}
+
 int main(void) {
+    specular_tests();
+    sheen_tests();
     principled_tests();
     clearcoat_tests();
     tr_bsdf_params diffuse = mat(TR_MATERIAL_DIFFUSE, v3(0.8f, 0.5f, 0.3f), 0.0f, 1.0f);

@@ -2,12 +2,25 @@
  *
  *  (a) Circle of confusion: a small emissive sphere on the axis, off the plane in focus,
  *      images as a uniform disc whose diameter the thin-lens formula gives,
- *      2 A |1/F - 1/z| on the image plane at distance 1. The disc's radius R follows from
- *      the image's second moment about its centroid: a uniform disc of radius R has
- *      <r^2> = R^2 / 2; the sphere's own image (a disc of radius rho) adds rho^2 / 2 and a
- *      pixel's box adds 1/6 px^2. The measured diameter must be within 2 % of the formula,
- *      for a sphere behind and one in front of the plane in focus, with pt and naive; in
- *      focus the image is the sphere's alone.
+ *      2 A |1/F - 1/z| on the image plane at distance 1.
+ *
+ *      The formula: a thin lens of focal length f and aperture radius A focused at
+ *      distance F has its sensor at v_F behind it, 1/f = 1/F + 1/v_F; a point at distance
+ *      z comes to a focus at v_z, 1/f = 1/z + 1/v_z. Its rays fill the cone from the
+ *      aperture's disc to that focus, which the sensor cuts in a disc of diameter
+ *      c = 2 A |v_F - v_z| / v_z (similar triangles). Seen from the lens's centre, the
+ *      sensor at v_F maps to an image plane at distance 1 by 1 / v_F:
+ *      c / v_F = 2 A |1/v_z - 1/v_F| = 2 A |(1/f - 1/z) - (1/f - 1/F)| = 2 A |1/F - 1/z|,
+ *      in which f has gone: trac0r's camera (image plane at distance 1, the lens's rays
+ *      aimed at the pinhole ray's point on the plane in focus, camera.h) is that lens.
+ *
+ *      Two measurements of the disc's radius R: the image's second moment about its
+ *      centroid (a uniform disc of radius R has <r^2> = R^2 / 2; the sphere's own image, a
+ *      disc of radius rho, adds rho^2 / 2 and a pixel's box 1/6 px^2), and its flux over
+ *      its plateau (the disc spreads the sphere's flux evenly: inside, where the sphere's
+ *      whole blur overlaps, every pixel holds flux / (pi R^2), whatever rho). Both must be
+ *      within 2 % of the formula's diameter, for a sphere behind and one in front of the
+ *      plane in focus, with pt and naive; in focus the image is the sphere's alone.
  *  (b) A radius of 0 renders bit for bit as a camera that never had a lens, whatever the
  *      focus distance, with pt and naive.
  *  (c) Lens rays: every ray through a pixel point meets the pinhole ray's point on the
@@ -55,6 +68,41 @@ static double image_second_moment(const tr_film *f) {
         }
     }
     return m2 / s0;
+}
+
+/* The diameter of a uniform disc image, 2 sqrt(flux / (pi plateau)), in px: the plateau
+ * is the mean of the pixels within radius `inner` of the centroid. */
+static double flux_diameter(const tr_film *f, double inner) {
+    double s0 = 0.0, sx = 0.0, sy = 0.0;
+    for (uint32_t y = 0; y < f->height; ++y) {
+        for (uint32_t x = 0; x < f->width; ++x) {
+            tr_vec3 p = tr_film_pixel(f, x, y);
+            double v = (double)p.x + p.y + p.z;
+            s0 += v;
+            sx += v * (x + 0.5);
+            sy += v * (y + 0.5);
+        }
+    }
+    if (!(s0 > 0.0)) {
+        return -1.0;
+    }
+    const double cx = sx / s0, cy = sy / s0;
+    double in = 0.0;
+    int n = 0;
+    for (uint32_t y = 0; y < f->height; ++y) {
+        for (uint32_t x = 0; x < f->width; ++x) {
+            const double dx = x + 0.5 - cx, dy = y + 0.5 - cy;
+            if (dx * dx + dy * dy <= inner * inner) {
+                tr_vec3 p = tr_film_pixel(f, x, y);
+                in += (double)p.x + p.y + p.z;
+                ++n;
+            }
+        }
+    }
+    if (n == 0 || !(in > 0.0)) {
+        return -1.0;
+    }
+    return 2.0 * sqrt(s0 / (in / n) / PI_D);
 }
 
 /* A scene of one emissive sphere of radius rs at distance z on the axis of a camera at the
@@ -127,6 +175,11 @@ static void circle_of_confusion(void) {
             CHECK(fabs(got_d - expect_d) <= 0.02 * expect_d,
                   "case %zu: circle of confusion %.3f px across, thin lens says %.3f", i, got_d,
                   expect_d);
+            const double flat_d = flux_diameter(&f, 0.5 * (expect_d / 2.0 - rho));
+            printf("  by flux over plateau: %.3f px\n", flat_d);
+            CHECK(fabs(flat_d - expect_d) <= 0.02 * expect_d,
+                  "case %zu: flux over plateau gives %.3f px across, thin lens says %.3f", i,
+                  flat_d, expect_d);
         } else {
             printf("in focus %zu: second moment %.4f px^2, the sphere's %.4f\n", i, m2,
                    rho * rho / 2.0 + 1.0 / 6.0);

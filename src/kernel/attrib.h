@@ -52,9 +52,10 @@ TR_STATIC_ASSERT(sizeof(tr_texture) == 40, "tr_texture layout");
 
 /* tr_material_ext.flags */
 #define TR_MATEXT_ALPHA_MASK 1u /* texels with alpha below alpha_cutoff are holes */
+#define TR_MATEXT_SPECULAR 2u   /* specular and specular_color are set (else 1 and white) */
 
 /* Per-material extras, one per material when the scene has any (material_ext_count is 0
- * or material_count). Texture indices are TR_NO_INDEX for none. 96 bytes. */
+ * or material_count). Texture indices are TR_NO_INDEX for none. 112 bytes. */
 typedef struct tr_material_ext {
     uint32_t base_tex;     /* sRGB colour (x the material's colour), alpha in a */
     uint32_t emission_tex; /* sRGB colour (x emission) */
@@ -76,9 +77,17 @@ typedef struct tr_material_ext {
      * exp(-absorption d) after a distance d (tr_volume_attenuation, material_eval.h).
      * Zero for none. */
     tr_vec3 absorption;
-    uint32_t pad[7];
+    /* principled: glTF's KHR_materials_sheen, a Charlie sheen layer over the base
+     * (bsdf_principled.h); black for none. */
+    tr_vec3 sheen_color;
+    float sheen_roughness;
+    /* principled, with TR_MATEXT_SPECULAR: glTF's KHR_materials_specular, the dielectric
+     * layer's F0 min(F0(ior) specular_color, 1) specular and its F90 specular. */
+    float specular;
+    tr_vec3 specular_color;
+    uint32_t pad[3];
 } tr_material_ext;
-TR_STATIC_ASSERT(sizeof(tr_material_ext) == 96, "tr_material_ext layout");
+TR_STATIC_ASSERT(sizeof(tr_material_ext) == 112, "tr_material_ext layout");
 
 /* The environment: radiance arriving from infinitely far along directions no surface
  * blocks, a constant colour or an equirectangular map (width x height RGB floats in

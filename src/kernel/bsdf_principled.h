@@ -59,8 +59,26 @@ TR_FN float tr_principled_f0d(const tr_bsdf_params *m) {
     return r * r;
 }
 
+/* Whether the dielectric layer has glTF's KHR_materials_specular (not 1 and white). */
+TR_FN int tr_principled_has_spec(const tr_bsdf_params *m) {
+    return m->specular != 1.0f || m->specular_color.x != 1.0f || m->specular_color.y != 1.0f ||
+           m->specular_color.z != 1.0f;
+}
+
+/* The dielectric layer's F0 with KHR_materials_specular: min(F0(ior) specular_color, 1)
+ * specular (its F90 is specular). */
+TR_FN tr_vec3 tr_principled_f0d_spec(const tr_bsdf_params *m) {
+    float f = tr_principled_f0d(m), s = tr_fminf(tr_fmaxf(m->specular, 0.0f), 1.0f);
+    return v3(tr_fminf(f * m->specular_color.x, 1.0f) * s,
+              tr_fminf(f * m->specular_color.y, 1.0f) * s,
+              tr_fminf(f * m->specular_color.z, 1.0f) * s);
+}
+
 TR_FN tr_vec3 tr_principled_f0(const tr_bsdf_params *m) {
     float k = tr_fminf(tr_fmaxf(m->metallic, 0.0f), 1.0f);
+    if (tr_principled_has_spec(m)) {
+        return v3_add(v3_scale(tr_principled_f0d_spec(m), 1.0f - k), v3_scale(m->color, k));
+    }
     return v3_add(v3s(tr_principled_f0d(m) * (1.0f - k)), v3_scale(m->color, k));
 }
 
@@ -81,6 +99,145 @@ TR_FN tr_vec3 tr_principled_spec(float alpha, tr_vec3 f0, tr_vec3 nf, tr_vec3 wo
     return v3_scale(f, d * g2 / (4.0f * co * ci));
 }
 
+/* ---- Energy compensation (with "multiscatter": TR_MATERIAL_MULTISCATTER and the table)
+ *
+ * Kulla and Conty's coupling of a diffuse base to the dielectric layer above it ("Revisiting
+ * Physically Based Shading at Imageworks", SIGGRAPH 2017 course): the base receives what
+ * the layer does not reflect, 1 - E_l(cos), on the way in and on the way out,
+ *
+ *   f_diffuse = (1 - metallic) base (1 - E_l(cos_o)) (1 - E_l(cos_i)) / (pi (1 - E_l,avg))
+ *
+ * E_l the GGX layer's directional albedo with the dielectric F0 (ggx_ms.h's tables:
+ * F0 E + (1 - F0) E_5) and E_l,avg its cosine-weighted mean, so that a white base reflects
+ * E_l(cos_o) + (1 - E_l(cos_o)) = 1 of a furnace at every angle. It replaces Ashikhmin and
+ * Shirley's coupling, whose white dielectric keeps 0.81 to 0.87 of a furnace. Under a clear
+ * coat of weight c, the coat's albedo E_c = c (0.04 E + 0.96 E_5) (at its own alpha) takes
+ * the place of F_c, and each part of the base is attenuated by what the coat lets through
+ * both ways, divided by what the coat sends back down to that part again:
+ *
+ *   part (1 - E_c(cos_o)) (1 - E_c(cos_i)) / sqrt(N(cos_o) N(cos_i)),  N(x) = 1 - <E_c>(x)
+ *
+ * <E_c>(x) the coat's albedo averaged over the directions the part reflects light arriving
+ * at x to: for the diffuse part its cosine lobe weighted by 1 - E_l, for the conductor's
+ * multiple scattering by 1 - E (both constant in x, TR_COAT_QUAD points), for the
+ * single-scattering lobe the lobe itself (ggx_ms.h's last table, by x, the lobe's alpha
+ * and the coat's). A white mirror under a coat then reflects E_c + (1 - E_c) = 1, a white
+ * Lambertian base E_c + (1 - E_c) as well; the white furnace table is in
+ * docs/integrators.md (tests/test_furnace_principled.c). Without the flag nothing of this
+ * runs (same bits as before). */
+#define TR_COAT_QUAD 16
+TR_FN int tr_principled_comp(const tr_bsdf_params *m) {
+    return (m->flags & TR_MATERIAL_MULTISCATTER) != 0u && m->ms;
+}
+
+/* ---- Sheen (glTF's KHR_materials_sheen) ---------------------------------------------
+ *
+ * Estevez and Kulla's Charlie sheen ("Production Friendly Microfacet Sheen BRDF", 2017)
+ * with the glTF extension's visibility:
+ *
+ *   f_sheen = sheen_color D(h) / ((1 + L(cos_o) + L(cos_i)) 4 cos_o cos_i),
+ *   D(h) = (2 + 1/a) sin(theta_h)^(1/a) / (2 pi),   a = r^2 (r the sheen roughness),
+ *
+ * L Estevez and Kulla's fitted Lambda (their curve l(x) and its coefficients, mixed by
+ * (1 - a)^2). The layer sits on the base (under a clear coat) and scales it by glTF's
+ * albedo scaling, min(1 - s E_sh(cos_o), 1 - s E_sh(cos_i)), s = max(sheen_color), E_sh
+ * the lobe's albedo with a white colour (ggx_ms.h's third table, computed by the host
+ * from this lobe), so the sum reflects no more than arrives. r below TR_SHEEN_MIN_R counts
+ * as it (the lobe becomes a grazing spike no table resolves). Sampled as a lobe of its own
+ * (cosine-weighted) with probability s E_sh(cos_o), clamped to [0.1, 0.9]. */
+#define TR_SHEEN_MIN_R 0.07f
+
+TR_FN float tr_sheen_l(float x, float a) {
+    float t = (1.0f - a) * (1.0f - a);
+    float ca = 21.5473f + (25.3245f - 21.5473f) * t;
+    float cb = 3.82987f + (3.32435f - 3.82987f) * t;
+    float cc = 0.19823f + (0.16801f - 0.19823f) * t;
+    float cd = -1.97760f + (-1.27393f + 1.97760f) * t;
+    float ce = -4.32054f + (-4.85967f + 4.32054f) * t;
+    return ca / (1.0f + cb * tr_powf(x, cc)) + cd * x + ce;
+}
+
+TR_FN float tr_sheen_lambda(float c, float a) {
+    return c < 0.5f ? tr_expf(tr_sheen_l(c, a))
+                    : tr_expf(2.0f * tr_sheen_l(0.5f, a) - tr_sheen_l(1.0f - c, a));
+}
+
+/* The lobe with a white colour for roughness r, wo and wi above the normal +z of their
+ * frame (co, ci their cosines > 0). */
+TR_FN float tr_sheen_lobe(float r, tr_vec3 wo, tr_vec3 wi, float co, float ci) {
+    float rr = tr_fminf(tr_fmaxf(r, TR_SHEEN_MIN_R), 1.0f);
+    float a = rr * rr;
+    tr_vec3 h = v3_normalize(v3_add(wo, wi));
+    float sin2 = tr_fmaxf(0.0f, 1.0f - h.z * h.z);
+    float d = (2.0f + 1.0f / a) * tr_powf(sin2, 0.5f / a) * (0.5f * TR_INV_PI);
+    float v = 1.0f / ((1.0f + tr_sheen_lambda(co, a) + tr_sheen_lambda(ci, a)) * 4.0f * co * ci);
+    return d * v;
+}
+
+TR_FN float tr_sheen_weight(const tr_bsdf_params *m) {
+    return tr_fmaxf(tr_fmaxf(m->sheen_color.x, m->sheen_color.y), m->sheen_color.z);
+}
+
+/* s E_sh(cos) (0 without the table). */
+TR_FN float tr_sheen_albedo(const tr_bsdf_params *m, float c) {
+    if (!m->ms) {
+        return 0.0f;
+    }
+    return tr_sheen_weight(m) *
+           tr_ggx_ms_e(m->ms + TR_GGX_MS_SHEEN, c,
+                       tr_fminf(tr_fmaxf(m->sheen_roughness, TR_SHEEN_MIN_R), 1.0f));
+}
+
+/* The sheen lobe in the frame of nf (wo, wi on its side). */
+TR_FN tr_vec3 tr_sheen_eval(const tr_bsdf_params *m, tr_vec3 nf, tr_vec3 wo, tr_vec3 wi, float co,
+                            float ci) {
+    tr_vec3 t, b;
+    v3_basis(nf, &t, &b);
+    tr_vec3 lo = v3(v3_dot(wo, t), v3_dot(wo, b), co);
+    tr_vec3 li = v3(v3_dot(wi, t), v3_dot(wi, b), ci);
+    return v3_scale(m->sheen_color, tr_sheen_lobe(m->sheen_roughness, lo, li, co, ci));
+}
+
+/* KHR_materials_specular: the GGX layer with Schlick's Fresnel from F0 to F90 =
+ * mix(specular, 1, metallic), and the diffuse part's factor per channel (the energy
+ * compensation's coupling with the layer's albedo F0 (E - E_5) + F90 E_5, else Ashikhmin
+ * and Shirley's with 1 - F0). */
+TR_FN tr_vec3 tr_principled_spec_f90(const tr_bsdf_params *m, tr_vec3 f0, tr_vec3 nf, tr_vec3 wo,
+                                     tr_vec3 wi, float co, float ci) {
+    float alpha = tr_principled_alpha(m->roughness);
+    float k = tr_fminf(tr_fmaxf(m->metallic, 0.0f), 1.0f);
+    float f90 = tr_fminf(tr_fmaxf(m->specular, 0.0f), 1.0f) * (1.0f - k) + k;
+    tr_vec3 h = v3_normalize(v3_add(wo, wi));
+    float d = tr_ggx_d(alpha, v3_dot(h, nf));
+    float g2 = 1.0f / (1.0f + tr_ggx_lambda(alpha, co) + tr_ggx_lambda(alpha, ci));
+    float x = tr_fminf(tr_fmaxf(1.0f - v3_dot(wo, h), 0.0f), 1.0f);
+    float x5 = (x * x) * (x * x) * x;
+    tr_vec3 f = v3_add(f0, v3_scale(v3_sub(v3s(f90), f0), x5));
+    return v3_scale(f, d * g2 / (4.0f * co * ci));
+}
+
+TR_FN float tr_spec_layer_e(const tr_bsdf_params *m, float mu, float a, float f0, float f90) {
+    float e = tr_ggx_ms_e(m->ms, mu, a), e5 = tr_ggx_ms_e(m->ms + TR_GGX_MS_E5, mu, a);
+    return f0 * (e - e5) + f90 * e5;
+}
+
+TR_FN float tr_spec_layer_eavg(const tr_bsdf_params *m, float a, float f0, float f90) {
+    float e = tr_ggx_ms_eavg(m->ms, a), e5 = tr_ggx_ms_eavg(m->ms + TR_GGX_MS_E5, a);
+    return f0 * (e - e5) + f90 * e5;
+}
+
+TR_FN float tr_spec_kd(const tr_bsdf_params *m, float f0, float co, float ci) {
+    float k = tr_fminf(tr_fmaxf(m->metallic, 0.0f), 1.0f);
+    if (tr_principled_comp(m)) {
+        float a = tr_principled_alpha(m->roughness);
+        float s = tr_fminf(tr_fmaxf(m->specular, 0.0f), 1.0f);
+        return (1.0f - k) * TR_INV_PI * (1.0f - tr_spec_layer_e(m, co, a, f0, s)) *
+               (1.0f - tr_spec_layer_e(m, ci, a, f0, s)) / (1.0f - tr_spec_layer_eavg(m, a, f0, s));
+    }
+    return (1.0f - k) * (28.0f / 23.0f) * TR_INV_PI * (1.0f - f0) * tr_as_factor(ci) *
+           tr_as_factor(co);
+}
+
 /* The clear coat's Fresnel reflectance F_c at cosine x (Schlick, F0 0.04). */
 TR_FN float tr_coat_fresnel(float x) {
     float c = tr_fminf(tr_fmaxf(1.0f - x, 0.0f), 1.0f);
@@ -93,13 +250,42 @@ TR_FN float tr_coat_weight(const tr_bsdf_params *m) {
 
 /* The coated BSDF from the base's specular part spec and diffuse part diff, for co, ci > 0
  * (the formula above). */
-TR_FN tr_vec3 tr_coat_layer(const tr_bsdf_params *m, tr_vec3 spec, tr_vec3 diff, tr_vec3 nf,
-                            tr_vec3 wo, tr_vec3 wi, float co, float ci) {
+TR_FN tr_vec3 tr_coat_layer(const tr_bsdf_params *m, tr_vec3 spec, tr_vec3 ms, tr_vec3 diff,
+                            tr_vec3 nf, tr_vec3 wo, tr_vec3 wi, float co, float ci) {
     float c = tr_coat_weight(m);
     float att = (1.0f - c * tr_coat_fresnel(co)) * (1.0f - c * tr_coat_fresnel(ci));
     float fav = TR_PRINCIPLED_F0 + (1.0f - TR_PRINCIPLED_F0) * (1.0f / 21.0f);
     tr_vec3 fc = tr_principled_spec(tr_principled_alpha(m->clearcoat_roughness),
                                     v3s(TR_PRINCIPLED_F0), nf, wo, wi, co, ci);
+    if (tr_principled_comp(m)) {
+        float ac = tr_principled_alpha(m->clearcoat_roughness);
+        float eo = c * tr_ggx_ms_layer_e(m->ms, co, ac, TR_PRINCIPLED_F0);
+        float ei = c * tr_ggx_ms_layer_e(m->ms, ci, ac, TR_PRINCIPLED_F0);
+        att = (1.0f - eo) * (1.0f - ei);
+        /* <E_c> over the broad parts' directions: the diffuse part's cosine lobe weighted
+         * by 1 - E_l, the conductor's multiple scattering by 1 - E (midpoint rule in
+         * cos^2, the measure of 2 cos dcos). */
+        float a = tr_principled_alpha(m->roughness), f0d = tr_principled_f0d(m);
+        float nd = 0.0f, dd = 0.0f, nm = 0.0f, dm = 0.0f;
+        for (int q = 0; q < TR_COAT_QUAD; ++q) {
+            float mu = tr_sqrtf(((float)q + 0.5f) * (1.0f / (float)TR_COAT_QUAD));
+            float ec = c * tr_ggx_ms_layer_e(m->ms, mu, ac, TR_PRINCIPLED_F0);
+            float wd = 1.0f - tr_ggx_ms_layer_e(m->ms, mu, a, f0d);
+            float wm = 1.0f - tr_ggx_ms_e(m->ms, mu, a);
+            nd += wd * ec;
+            dd += wd;
+            nm += wm * ec;
+            dm += wm;
+        }
+        float ea = c * tr_ggx_ms_layer_eavg(m->ms, ac, TR_PRINCIPLED_F0);
+        float ed = dd > 0.0f ? nd / dd : ea, em = dm > 0.0f ? nm / dm : ea;
+        /* The single-scattering lobe's N at both ends. */
+        float nsq = (1.0f - c * tr_ggx_ms_coat_e(m->ms, co, a, ac)) *
+                    (1.0f - c * tr_ggx_ms_coat_e(m->ms, ci, a, ac));
+        tr_vec3 r = v3_add(v3_scale(spec, nsq > 0.0f ? att / tr_sqrtf(nsq) : 0.0f),
+                           v3_scale(diff, att / (1.0f - ed)));
+        return v3_add(v3_add(r, v3_scale(ms, att / (1.0f - em))), v3_scale(fc, c));
+    }
     tr_vec3 base = v3_add(v3_scale(spec, att), v3_scale(diff, att / (1.0f - c * fav)));
     return v3_add(base, v3_scale(fc, c));
 }
@@ -112,18 +298,55 @@ TR_FN_NOINLINE tr_vec3 tr_principled_eval(const tr_bsdf_params *m, tr_vec3 nf, t
     }
     float k = tr_fminf(tr_fmaxf(m->metallic, 0.0f), 1.0f);
     tr_vec3 f0 = tr_principled_f0(m);
-    tr_vec3 f = tr_principled_spec(tr_principled_alpha(m->roughness), f0, nf, wo, wi, co, ci);
+    int spec = tr_principled_has_spec(m);
+    tr_vec3 f = spec
+                    ? tr_principled_spec_f90(m, f0, nf, wo, wi, co, ci)
+                    : tr_principled_spec(tr_principled_alpha(m->roughness), f0, nf, wo, wi, co, ci);
+    tr_vec3 fms = v3s(0.0f);
     if ((m->flags & TR_MATERIAL_MULTISCATTER) != 0u && m->ms && k > 0.0f) {
         /* The conductor's share of the layer (the dielectric one couples to the base). */
-        f = v3_add(
-            f, v3_scale(tr_ggx_ms_lobe(m->ms, tr_principled_alpha(m->roughness), f0, co, ci), k));
+        fms = v3_scale(tr_ggx_ms_lobe(m->ms, tr_principled_alpha(m->roughness), f0, co, ci), k);
+        if (!(m->clearcoat > 0.0f)) {
+            f = v3_add(f, fms);
+        }
     }
-    float kd = (1.0f - k) * (28.0f / 23.0f) * TR_INV_PI * (1.0f - tr_principled_f0d(m)) *
-               tr_as_factor(ci) * tr_as_factor(co);
+    float kd = 0.0f;
+    if (spec) {
+        /* Per channel: the layer's F0 may be tinted (set below). */
+    } else if (tr_principled_comp(m)) {
+        float a = tr_principled_alpha(m->roughness), f0d = tr_principled_f0d(m);
+        kd = (1.0f - k) * TR_INV_PI * (1.0f - tr_ggx_ms_layer_e(m->ms, co, a, f0d)) *
+             (1.0f - tr_ggx_ms_layer_e(m->ms, ci, a, f0d)) /
+             (1.0f - tr_ggx_ms_layer_eavg(m->ms, a, f0d));
+    } else {
+        kd = (1.0f - k) * (28.0f / 23.0f) * TR_INV_PI * (1.0f - tr_principled_f0d(m)) *
+             tr_as_factor(ci) * tr_as_factor(co);
+    }
+    tr_vec3 diff = v3_scale(m->color, kd);
+    if (spec) {
+        tr_vec3 fd = tr_principled_f0d_spec(m);
+        diff = v3_mul(m->color, v3(tr_spec_kd(m, fd.x, co, ci), tr_spec_kd(m, fd.y, co, ci),
+                                   tr_spec_kd(m, fd.z, co, ci)));
+    }
+    if (tr_sheen_weight(m) > 0.0f) {
+        /* The sheen over the base, which it scales by glTF's albedo scaling. */
+        float sc = tr_fminf(1.0f - tr_sheen_albedo(m, co), 1.0f - tr_sheen_albedo(m, ci));
+        f = v3_scale(f, sc);
+        fms = v3_scale(fms, sc);
+        diff = v3_add(v3_scale(diff, sc), tr_sheen_eval(m, nf, wo, wi, co, ci));
+    }
     if (m->clearcoat > 0.0f) {
-        return tr_coat_layer(m, f, v3_scale(m->color, kd), nf, wo, wi, co, ci);
+        return tr_coat_layer(m, f, fms, diff, nf, wo, wi, co, ci);
     }
-    return v3_add(f, v3_scale(m->color, kd));
+    return v3_add(f, diff);
+}
+
+/* Probability of sampling the sheen's lobe for outgoing cosine co (0 without a sheen). */
+TR_FN float tr_sheen_prob(const tr_bsdf_params *m, float co) {
+    if (!(tr_sheen_weight(m) > 0.0f)) {
+        return 0.0f;
+    }
+    return tr_fminf(tr_fmaxf(tr_sheen_albedo(m, co), 0.1f), 0.9f);
 }
 
 /* Probability of sampling the specular lobe for outgoing cosine co: its Fresnel weight at
@@ -174,6 +397,10 @@ TR_FN_NOINLINE float tr_principled_pdf(const tr_bsdf_params *m, tr_vec3 nf, tr_v
     float pspec = g1 * tr_ggx_d(alpha, v3_dot(h, nf)) / (4.0f * co);
     float ps = tr_principled_spec_prob(m, co);
     float p = ps * pspec + (1.0f - ps) * ci * TR_INV_PI;
+    if (tr_sheen_weight(m) > 0.0f) {
+        float psh = tr_sheen_prob(m, co);
+        p = psh * ci * TR_INV_PI + (1.0f - psh) * p;
+    }
     if (m->clearcoat > 0.0f) {
         float pc = tr_coat_prob(m, co);
         float ac = tr_principled_alpha(m->clearcoat_roughness);
@@ -204,7 +431,17 @@ TR_FN_NOINLINE int tr_principled_sample(const tr_bsdf_params *m, tr_vec3 nf, tr_
             ulobe = tr_fminf((ulobe - pc) / (1.0f - pc), 0.99999994f);
         }
     }
-    if (coat || ulobe < tr_principled_spec_prob(m, co)) {
+    int sheen = 0;
+    if (!coat && tr_sheen_weight(m) > 0.0f) {
+        /* The sheen next, its cosine lobe; else ulobe, stretched again, picks the base's. */
+        float psh = tr_sheen_prob(m, co);
+        if (ulobe < psh) {
+            sheen = 1;
+        } else {
+            ulobe = tr_fminf((ulobe - psh) / (1.0f - psh), 0.99999994f);
+        }
+    }
+    if (!sheen && (coat || ulobe < tr_principled_spec_prob(m, co))) {
         tr_vec3 vl = v3(v3_dot(wo, t), v3_dot(wo, b), co);
         float a = tr_principled_alpha(coat ? m->clearcoat_roughness : m->roughness);
         tr_vec3 hl = tr_ggx_sample_vndf(a, vl, u1, u2);

@@ -24,24 +24,40 @@
 #include "vec.h"
 
 #define TR_GGX_MS_N 32
-#define TR_GGX_MS_COUNT (TR_GGX_MS_N * TR_GGX_MS_N + TR_GGX_MS_N)
+/* The table's parts, one after the other: E with a white Fresnel (N x N) and its E_avg
+ * (N); the part of E weighted by Schlick's (1 - wo.h)^5 (N x N: the layer's albedo with F0
+ * f0 is f0 E + (1 - f0) E_5, Schlick's term being linear in F0) and its average (N); the
+ * Charlie sheen lobe's albedo (N x N, bsdf_principled.h), by mu and sheen roughness. */
+#define TR_GGX_MS_E5 (TR_GGX_MS_N * TR_GGX_MS_N + TR_GGX_MS_N)
+#define TR_GGX_MS_SHEEN (2 * TR_GGX_MS_E5)
+#define TR_GGX_MS_COAT (TR_GGX_MS_SHEEN + TR_GGX_MS_N * TR_GGX_MS_N)
+/* Last, the clear coat's albedo (F0 0.04) averaged over the directions a GGX lobe under it
+ * reflects light arriving at mu to: TR_GGX_MS_NA values of the lobe's alpha by
+ * TR_GGX_MS_NA of the coat's alpha by TR_GGX_MS_N of mu (bsdf_principled.h). */
+#define TR_GGX_MS_NA 16
+#define TR_GGX_MS_COUNT (TR_GGX_MS_COAT + TR_GGX_MS_NA * TR_GGX_MS_NA * TR_GGX_MS_N)
 
 /* The table's nodes: mu_i = max(i / (N - 1), TR_GGX_MS_MU0), alpha_j = j / (N - 1) (alpha
  * below TR_GGX_MIN_ALPHA counts as it, bsdf.h). */
 #define TR_GGX_MS_MU0 1e-3f
 
-/* Position x in [0, 1] on an axis of N nodes: the lower node and the weight of the next. */
-TR_FN int tr_ggx_ms_cell(float x, float *w) {
-    float t = tr_fminf(tr_fmaxf(x, 0.0f), 1.0f) * (float)(TR_GGX_MS_N - 1);
+/* Position x in [0, 1] on an axis of n nodes: the lower node and the weight of the next. */
+TR_FN int tr_ggx_ms_cell_n(float x, int n, float *w) {
+    float t = tr_fminf(tr_fmaxf(x, 0.0f), 1.0f) * (float)(n - 1);
     int i = (int)t;
-    if (i > TR_GGX_MS_N - 2) {
-        i = TR_GGX_MS_N - 2;
+    if (i > n - 2) {
+        i = n - 2;
     }
     *w = t - (float)i;
     return i;
 }
 
-/* E(mu, alpha): the single-scattering lobe's directional albedo with a white Fresnel. */
+TR_FN int tr_ggx_ms_cell(float x, float *w) {
+    return tr_ggx_ms_cell_n(x, TR_GGX_MS_N, w);
+}
+
+/* E(mu, alpha): the single-scattering lobe's directional albedo with a white Fresnel (the
+ * table's first part; the other N x N parts read the same way from their offsets). */
 TR_FN float tr_ggx_ms_e(TR_CONST_GLOBAL float *table, float mu, float alpha) {
     float wm, wa;
     const int i = tr_ggx_ms_cell(mu, &wm), j = tr_ggx_ms_cell(alpha, &wa);
@@ -58,6 +74,36 @@ TR_FN float tr_ggx_ms_eavg(TR_CONST_GLOBAL float *table, float alpha) {
     const int j = tr_ggx_ms_cell(alpha, &wa);
     TR_CONST_GLOBAL float *a = table + TR_GGX_MS_N * TR_GGX_MS_N;
     return a[j] + (a[j + 1] - a[j]) * wa;
+}
+
+/* The single-scattering GGX layer's directional albedo with Schlick's Fresnel of F0 f0
+ * (scalar): f0 E + (1 - f0) E_5. */
+TR_FN float tr_ggx_ms_layer_e(TR_CONST_GLOBAL float *table, float mu, float alpha, float f0) {
+    return f0 * tr_ggx_ms_e(table, mu, alpha) +
+           (1.0f - f0) * tr_ggx_ms_e(table + TR_GGX_MS_E5, mu, alpha);
+}
+
+/* Its cosine-weighted average over mu. */
+TR_FN float tr_ggx_ms_layer_eavg(TR_CONST_GLOBAL float *table, float alpha, float f0) {
+    return f0 * tr_ggx_ms_eavg(table, alpha) +
+           (1.0f - f0) * tr_ggx_ms_eavg(table + TR_GGX_MS_E5, alpha);
+}
+
+/* The coat's albedo averaged over the lobe of alpha ab's directions from mu, under a coat
+ * of alpha ac (the table's last part, trilinear). */
+TR_FN float tr_ggx_ms_coat_e(TR_CONST_GLOBAL float *table, float mu, float ab, float ac) {
+    float wm, wb, wc;
+    const int i = tr_ggx_ms_cell(mu, &wm);
+    const int jb = tr_ggx_ms_cell_n(ab, TR_GGX_MS_NA, &wb);
+    const int jc = tr_ggx_ms_cell_n(ac, TR_GGX_MS_NA, &wc);
+    float v[4];
+    for (int q = 0; q < 4; ++q) {
+        TR_CONST_GLOBAL float *r =
+            table + TR_GGX_MS_COAT + ((jb + (q >> 1)) * TR_GGX_MS_NA + jc + (q & 1)) * TR_GGX_MS_N;
+        v[q] = r[i] + (r[i + 1] - r[i]) * wm;
+    }
+    const float b0 = v[0] + (v[1] - v[0]) * wc, b1 = v[2] + (v[3] - v[2]) * wc;
+    return b0 + (b1 - b0) * wb;
 }
 
 /* f_ms for cosines co, ci > 0 and Fresnel F0 f0. */

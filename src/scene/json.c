@@ -596,13 +596,18 @@ static const char *const extra_keys[] = {"texture",
                                          "emission_strength",
                                          "transmission",
                                          "attenuation_color",
-                                         "attenuation_distance"};
+                                         "attenuation_distance",
+                                         "sheen_color",
+                                         "sheen_roughness",
+                                         "specular",
+                                         "specular_color"};
 #define EXTRA_KEY_COUNT (sizeof extra_keys / sizeof extra_keys[0])
 
 /* Extras that only the principled material takes. */
 static int principled_only(const char *key) {
     return strcmp(key, "metallic") == 0 || strncmp(key, "clearcoat", 9) == 0 ||
-           strcmp(key, "transmission") == 0 || strncmp(key, "attenuation_", 12) == 0;
+           strcmp(key, "transmission") == 0 || strncmp(key, "attenuation_", 12) == 0 ||
+           strncmp(key, "sheen_", 6) == 0 || strncmp(key, "specular", 8) == 0;
 }
 
 /* A pair of numbers [a, b] in [-1e6, 1e6] at key (left as they are when absent). */
@@ -731,6 +736,39 @@ static int parse_material_extras(jctx *c, const cJSON *m, const char *p, uint32_
         return jerr(c, pa, "expected three numbers in (0, 1]");
     }
     e.transmission = (float)transmission;
+    /* KHR_materials_sheen: its colour and roughness (bsdf_principled.h). */
+    int has_sheen = 0;
+    double sheen_rough = 0.0;
+    if (get_vec3(c, m, p, "sheen_color", 0, 0, &e.sheen_color, &has_sheen) != TR_OK ||
+        get_number(c, m, p, "sheen_roughness", 0.0, 1.0, &sheen_rough, &has_sheen) != TR_OK) {
+        return TR_ERR;
+    }
+    e.sheen_roughness = (float)sheen_rough;
+    if (e.sheen_color.x < 0.0f || e.sheen_color.y < 0.0f || e.sheen_color.z < 0.0f ||
+        e.sheen_color.x > 1.0f || e.sheen_color.y > 1.0f || e.sheen_color.z > 1.0f) {
+        char ps[PATH_MAX_LEN];
+        path_key(ps, p, "sheen_color");
+        return jerr(c, ps, "expected three numbers in [0, 1]");
+    }
+    /* KHR_materials_specular: the dielectric layer's F0 scale and tint. */
+    int has_spec = 0, has_spec_col = 0;
+    double specular = 1.0;
+    tr_vec3 spec_col = v3s(1.0f);
+    if (get_number(c, m, p, "specular", 0.0, 1.0, &specular, &has_spec) != TR_OK ||
+        get_vec3(c, m, p, "specular_color", 0, 0, &spec_col, &has_spec_col) != TR_OK) {
+        return TR_ERR;
+    }
+    if (has_spec_col && !(spec_col.x >= 0.0f && spec_col.y >= 0.0f && spec_col.z >= 0.0f &&
+                          spec_col.x <= 10.0f && spec_col.y <= 10.0f && spec_col.z <= 10.0f)) {
+        char ps[PATH_MAX_LEN];
+        path_key(ps, p, "specular_color");
+        return jerr(c, ps, "expected three numbers in [0, 10]");
+    }
+    if (has_spec || has_spec_col) {
+        e.flags |= TR_MATEXT_SPECULAR;
+        e.specular = (float)specular;
+        e.specular_color = spec_col;
+    }
     if (has_dist) {
         e.absorption = tr_volume_absorption(att, (float)dist);
     }

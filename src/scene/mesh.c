@@ -271,7 +271,8 @@ static uint32_t load_texture_xf(import_ctx *c, const struct aiMaterial *m, const
  *     clear coat factor and roughness (KHR_materials_clearcoat); transmission factor
  *     (KHR_materials_transmission) and index (KHR_materials_ior, Assimp's refracti);
  *     the volume's attenuation (KHR_materials_volume); the emission x its strength
- *     (KHR_materials_emissive_strength). A transmission factor without a metallic-
+ *     (KHR_materials_emissive_strength); the sheen's colour and roughness
+ *     (KHR_materials_sheen). A transmission factor without a metallic-
  *     roughness material -> glass (colour: Kd, ior Ni or 1.5).
  *   otherwise Ke > 0 without an emissive map -> emitter (colour Ke / max(Ke), emittance
  *     max(Ke)); illum 4, 6, 7 or 9 (refraction) -> glass (colour Kd, ior Ni, 1.5 where
@@ -417,13 +418,21 @@ static tr_material map_material(import_ctx *c, const struct aiMaterial *m, tr_ma
             import_warn(c, "material '%.60s': clear coat maps dropped (the factors are used)",
                         mname);
         }
+        /* KHR_materials_sheen: the sheen's colour and roughness (its maps are not read). */
         ai_real sheen_rough = 0.0f, strength = 0.0f;
-        struct aiColor4D sheen;
+        struct aiColor4D sheen = {0, 0, 0, 1};
         one = 1;
-        if (aiGetMaterialColor(m, AI_MATKEY_SHEEN_COLOR_FACTOR, &sheen) == AI_SUCCESS ||
-            aiGetMaterialFloatArray(m, AI_MATKEY_SHEEN_ROUGHNESS_FACTOR, &sheen_rough, &one) ==
-                AI_SUCCESS) {
-            import_warn(c, "material '%.60s': KHR_materials_sheen not rendered", mname);
+        if (aiGetMaterialColor(m, AI_MATKEY_SHEEN_COLOR_FACTOR, &sheen) == AI_SUCCESS &&
+            isfinite(sheen.r) && isfinite(sheen.g) && isfinite(sheen.b)) {
+            ext->sheen_color = v3(clamp01(sheen.r), clamp01(sheen.g), clamp01(sheen.b));
+            if (aiGetMaterialFloatArray(m, AI_MATKEY_SHEEN_ROUGHNESS_FACTOR, &sheen_rough, &one) ==
+                    AI_SUCCESS &&
+                isfinite(sheen_rough)) {
+                ext->sheen_roughness = clamp01(sheen_rough);
+            }
+        }
+        if (aiGetMaterialTextureCount(m, aiTextureType_SHEEN) > 0) {
+            import_warn(c, "material '%.60s': sheen maps dropped (the factors are used)", mname);
         }
         one = 1;
         if (aiGetMaterialFloatArray(m, AI_MATKEY_EMISSIVE_INTENSITY, &strength, &one) ==
@@ -475,7 +484,8 @@ static tr_material map_material(import_ctx *c, const struct aiMaterial *m, tr_ma
                (ext->flags & TR_MATEXT_ALPHA_MASK) || ext->metallic > 0.0f ||
                ext->clearcoat > 0.0f || ext->emission.x > 0.0f || ext->emission.y > 0.0f ||
                ext->emission.z > 0.0f || ext->transmission > 0.0f || ext->absorption.x > 0.0f ||
-               ext->absorption.y > 0.0f || ext->absorption.z > 0.0f;
+               ext->absorption.y > 0.0f || ext->absorption.z > 0.0f || ext->sheen_color.x > 0.0f ||
+               ext->sheen_color.y > 0.0f || ext->sheen_color.z > 0.0f;
     return out;
 }
 
@@ -766,7 +776,7 @@ static void gltf_extension_warnings(const import_ctx *c, const char *path) {
         "KHR_materials_ior",          /* the principled material's index */
         "KHR_materials_volume",       /* the attenuation (thickness is not needed) */
         "KHR_texture_transform",      /* the maps' offset, rotation and scale */
-        "KHR_materials_sheen",        /* warned per material */
+        "KHR_materials_sheen",        /* principled's sheen (its maps: warned) */
     };
     const size_t plen = strlen(path);
     char *text = gltf_json(path, plen > 4 && strcasecmp(path + plen - 4, ".glb") == 0);

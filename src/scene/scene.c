@@ -189,6 +189,22 @@ int tr_scene_set_material_ext(tr_scene *s, uint32_t index, const tr_material_ext
         return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
                             "material %u: clear coat weight or roughness outside [0, 1]", index);
     }
+    if (!(ext->sheen_color.x >= 0.0f && ext->sheen_color.x <= 1.0f) ||
+        !(ext->sheen_color.y >= 0.0f && ext->sheen_color.y <= 1.0f) ||
+        !(ext->sheen_color.z >= 0.0f && ext->sheen_color.z <= 1.0f) ||
+        !(ext->sheen_roughness >= 0.0f && ext->sheen_roughness <= 1.0f)) {
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "material %u: sheen colour or roughness outside [0, 1]", index);
+    }
+    if ((ext->flags & TR_MATEXT_SPECULAR) != 0u &&
+        (!(ext->specular >= 0.0f && ext->specular <= 1.0f) ||
+         !(ext->specular_color.x >= 0.0f && ext->specular_color.x <= 10.0f) ||
+         !(ext->specular_color.y >= 0.0f && ext->specular_color.y <= 10.0f) ||
+         !(ext->specular_color.z >= 0.0f && ext->specular_color.z <= 10.0f))) {
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "material %u: specular outside [0, 1] or its colour outside [0, 10]",
+                            index);
+    }
     if (!(ext->transmission >= 0.0f && ext->transmission <= 1.0f) ||
         !(ext->absorption.x >= 0.0f && ext->absorption.y >= 0.0f && ext->absorption.z >= 0.0f) ||
         !v3_is_finite(ext->absorption)) {
@@ -816,7 +832,11 @@ tr_scene_view tr_scene_view_of(const tr_scene *s) {
     v.ggx_ms = NULL;
     v.ggx_ms_count = 0u;
     for (uint32_t i = 0; i < s->material_count; ++i) {
-        if ((s->materials[i].flags & TR_MATERIAL_MULTISCATTER) != 0u) {
+        /* A sheen reads its albedo from the same table (bsdf_principled.h). */
+        const int sheen = i < s->material_ext_count && (s->material_exts[i].sheen_color.x > 0.0f ||
+                                                        s->material_exts[i].sheen_color.y > 0.0f ||
+                                                        s->material_exts[i].sheen_color.z > 0.0f);
+        if ((s->materials[i].flags & TR_MATERIAL_MULTISCATTER) != 0u || sheen) {
             v.ggx_ms = tr_ggx_ms_table();
             v.ggx_ms_count = TR_GGX_MS_COUNT;
             break;

@@ -168,6 +168,16 @@ int tr_ck_identity(tr_ck_id *id, const tr_scene *scene, const tr_render_config *
                 const float cc[2] = {e->clearcoat, e->clearcoat_roughness};
                 h = fnv_floats(h, cc, 2);
             }
+            if ((e->flags & TR_MATEXT_SPECULAR) != 0u) {
+                const float sp[4] = {e->specular, e->specular_color.x, e->specular_color.y,
+                                     e->specular_color.z};
+                h = fnv_floats(h, sp, 4);
+            }
+            if (e->sheen_color.x > 0.0f || e->sheen_color.y > 0.0f || e->sheen_color.z > 0.0f) {
+                const float sh[4] = {e->sheen_color.x, e->sheen_color.y, e->sheen_color.z,
+                                     e->sheen_roughness};
+                h = fnv_floats(h, sh, 4);
+            }
             if (e->transmission > 0.0f || e->absorption.x > 0.0f || e->absorption.y > 0.0f ||
                 e->absorption.z > 0.0f) {
                 const float tv[4] = {e->transmission, e->absorption.x, e->absorption.y,

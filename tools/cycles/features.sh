@@ -7,8 +7,11 @@
 #
 #     tools/cycles/features.sh [--size 128x96] [--spp 512] [--threads 1]
 #         [--trac0r build/release/trac0r] [--blender blender] [--out cycles-features]
-#         [SCENE.json...]     (default: the eight scenes of tools/cycles/test/ but
-#                             shapes-left.json)
+#         [--set lights|principled]
+#         [SCENE.json...]     (default: --set lights, the eight scenes of lights, cameras
+#                             and the environment in tools/cycles/test/ but
+#                             shapes-left.json; --set principled: the five principled
+#                             spheres, principled-*.json)
 #
 # Output: OUT/NAME-{trac0r,cycles}-{1,2}.pfm and their means OUT/NAME-{trac0r,cycles}.pfm,
 # OUT/NAME.png (the means side by side and their difference), OUT/summary.txt (one block per
@@ -22,6 +25,7 @@ threads=1
 trac0r=build/release/trac0r
 blender=blender
 out=cycles-features
+set=lights
 
 die() {
     echo "features.sh: $*" >&2
@@ -30,7 +34,7 @@ die() {
 
 while [ $# -gt 0 ]; do
     case $1 in
-    --size | --spp | --threads | --trac0r | --blender | --out)
+    --size | --spp | --threads | --trac0r | --blender | --out | --set)
         [ $# -ge 2 ] || die "$1 needs a value"
         case $1 in
         --size) size=$2 ;;
@@ -39,6 +43,7 @@ while [ $# -gt 0 ]; do
         --trac0r) trac0r=$2 ;;
         --blender) blender=$2 ;;
         --out) out=$2 ;;
+        --set) set=$2 ;;
         esac
         shift 2
         ;;
@@ -46,7 +51,12 @@ while [ $# -gt 0 ]; do
     *) break ;;
     esac
 done
-if [ $# -eq 0 ]; then
+if [ $# -eq 0 ] && [ "$set" = principled ]; then
+    set -- "$here/test/principled-metal-rough.json" "$here/test/principled-metal-smooth.json" \
+        "$here/test/principled-plastic.json" "$here/test/principled-clearcoat.json" \
+        "$here/test/principled-sheen.json"
+elif [ $# -eq 0 ]; then
+    [ "$set" = lights ] || die "--set: expected lights or principled, got '$set'"
     set -- "$here/test/sky.json" "$here/test/sun.json" "$here/test/point.json" \
         "$here/test/directional.json" "$here/test/spot.json" "$here/test/lens.json" \
         "$here/test/lens-pinhole.json" "$here/test/lens-sun.json"

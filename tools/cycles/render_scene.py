@@ -19,8 +19,12 @@ What it maps, so that both renderers solve the same light transport problem:
   * shapes `quad`, `plane`, `box` (with position / orientation(_rad) / scale), as the
     triangles trac0r makes of them (a quad is (v0 v1 v2) and (v0 v2 v3): the classic box's
     walls are not planar, so the diagonal matters), in the scene's own units;
+  * shapes `icosphere` (trac0r's own triangles, subdivided the same way; `smooth` with
+    trac0r's corner normals as custom normals);
   * materials `diffuse` (Diffuse BSDF, roughness 0: Lambert; not the Principled BSDF, whose
-    diffuse lobe is Burley's, not Lambert's) and `emitter` (Emission, radiance
+    diffuse lobe is Burley's, not Lambert's), `principled` (the Principled BSDF of Blender
+    3.4, Disney's model: another material, compared in docs/cycles.md, "The principled
+    material") and `emitter` (Emission, radiance
     color x emittance; one-sided unless `two_sided`: Cycles 3.4's mesh emission is
     two-sided, so the strength is multiplied by 1 - Backfacing);
   * the camera: position, look_at / direction, up, vertical fov, near / far, handedness,
@@ -186,6 +190,23 @@ def shape_transform(sh, where):
     return apply
 
 
+def shape_normal_transform(sh, where):
+    """Normals under the shape's transform: rotate(n / scale), normalized (shape.c)."""
+    if "orientation_rad" in sh:
+        ang = vec3(sh["orientation_rad"], where + ".orientation_rad")
+    else:
+        ang = [math.radians(e) for e in vec3(sh.get("orientation", [0, 0, 0]),
+                                             where + ".orientation")]
+    sc = sh.get("scale", 1)
+    sc = [float(sc)] * 3 if isinstance(sc, (int, float)) else vec3(sc, where + ".scale")
+
+    def apply(n):
+        m = rotate_xyz([n[0] / sc[0], n[1] / sc[1], n[2] / sc[2]], ang)
+        k = math.sqrt(sum(e * e for e in m))
+        return [e / k for e in m]
+    return apply
+
+
 def unit_box_triangles():
     """The unit cube [-0.5, 0.5]^3, two triangles a face, fronts outward."""
     tris = []
@@ -206,9 +227,39 @@ def unit_box_triangles():
     return tris
 
 
+def icosphere_triangles(levels):
+    """trac0r's icosphere (src/scene/shape.c, gen_icosphere): the unit icosahedron with
+    the same vertices and faces, each triangle split in four `levels` times, the new
+    vertices normalized onto the unit sphere, in the same order."""
+    g = 1.6180339887498949
+    v = [(-1, g, 0), (1, g, 0), (-1, -g, 0), (1, -g, 0), (0, -1, g), (0, 1, g), (0, -1, -g),
+         (0, 1, -g), (g, 0, -1), (g, 0, 1), (-g, 0, -1), (-g, 0, 1)]
+
+    def unit(p):
+        n = math.sqrt(sum(e * e for e in p))
+        return [e / n for e in p]
+    v = [unit(p) for p in v]
+    f = [(0, 11, 5), (0, 5, 1), (0, 1, 7), (0, 7, 10), (0, 10, 11), (1, 5, 9), (5, 11, 4),
+         (11, 10, 2), (10, 7, 6), (7, 1, 8), (3, 9, 4), (3, 4, 2), (3, 2, 6), (3, 6, 8),
+         (3, 8, 9), (4, 9, 5), (2, 4, 11), (6, 2, 10), (8, 6, 7), (9, 8, 1)]
+    tris = [(v[a], v[b], v[c]) for a, b, c in f]
+    for _ in range(levels):
+        nxt = []
+        for a, b, c in tris:
+            ab = unit([a[k] + b[k] for k in range(3)])
+            bc = unit([b[k] + c[k] for k in range(3)])
+            ca = unit([c[k] + a[k] for k in range(3)])
+            nxt += [(a, ab, ca), (ab, b, bc), (ca, bc, c), (ab, bc, ca)]
+        tris = nxt
+    return tris
+
+
 def shape_triangles(sh, where):
+    """The shape's triangles in world coordinates, and for a smooth icosphere the normal
+    at each corner (trac0r's: the sphere's own, through the inverse transpose), else None."""
     t = sh.get("type")
     common = {"type", "name", "position", "orientation", "orientation_rad", "scale", "material"}
+    normals = None
     if t == "quad":
         check_keys(sh, common | {"vertices"}, where)
         vs = sh.get("vertices")
@@ -224,11 +275,26 @@ def shape_triangles(sh, where):
     elif t == "box":
         check_keys(sh, common, where)
         local = unit_box_triangles()
+    elif t == "icosphere":
+        check_keys(sh, common | {"subdivisions", "smooth"}, where)
+        sub = sh.get("subdivisions", 2)
+        if not isinstance(sub, int) or isinstance(sub, bool) or not 0 <= sub <= 7:
+            raise SceneError("%s.subdivisions: expected an integer in [0, 7]" % where)
+        smooth = sh.get("smooth", False)
+        if not isinstance(smooth, bool):
+            raise SceneError("%s.smooth: expected true or false" % where)
+        local = icosphere_triangles(sub)
+        if smooth:
+            normals = local
     else:
         raise SceneError("%s.type: '%s' is not mapped to Cycles by this script "
-                         "(it maps quad, plane, box)" % (where, t))
+                         "(it maps quad, plane, box, icosphere)" % (where, t))
     f = shape_transform(sh, where)
-    return [tuple(f(p) for p in tri) for tri in local]
+    tris = [tuple(f(p) for p in tri) for tri in local]
+    if normals is not None:
+        g = shape_normal_transform(sh, where)
+        normals = [tuple(g(n) for n in tri) for tri in normals]
+    return tris, normals
 
 
 def read_materials(mats):
@@ -254,9 +320,30 @@ def read_materials(mats):
             if not isinstance(two, bool):
                 raise SceneError("%s.two_sided: expected true or false" % where)
             out[name] = {"type": t, "color": col, "emittance": float(e), "two_sided": two}
+        elif t == "principled":
+            check_keys(m, {"type", "color", "roughness", "metallic", "multiscatter", "ior",
+                           "clearcoat", "clearcoat_roughness", "sheen_color",
+                           "sheen_roughness"}, where)
+            pm = {"type": t, "color": vec3(m.get("color"), where + ".color"),
+                  "roughness": number(m, "roughness", 0, 1, 1, where),
+                  "metallic": number(m, "metallic", 0, 1, 0, where),
+                  "ior": number(m, "ior", 1, 10, 1.5, where),
+                  "clearcoat": number(m, "clearcoat", 0, 1, 0, where),
+                  "clearcoat_roughness": number(m, "clearcoat_roughness", 0, 1, 0, where),
+                  "sheen_roughness": number(m, "sheen_roughness", 0, 1, 0, where),
+                  "multiscatter": m.get("multiscatter", False)}
+            if not isinstance(pm["multiscatter"], bool):
+                raise SceneError("%s.multiscatter: expected true or false" % where)
+            sheen = vec3(m.get("sheen_color", [0, 0, 0]), where + ".sheen_color")
+            if max(sheen) - min(sheen) > 0:
+                raise SceneError("%s.sheen_color: the Principled BSDF's sheen is white or "
+                                 "tinted towards the base colour; only a grey sheen is mapped"
+                                 % where)
+            pm["sheen"] = sheen[0]
+            out[name] = pm
         else:
             raise SceneError("%s.type: '%s' is not mapped to Cycles by this script "
-                             "(it maps diffuse, emitter)" % (where, t))
+                             "(it maps diffuse, emitter, principled)" % (where, t))
     return out
 
 
@@ -428,7 +515,9 @@ def read_scene(path):
         m = sh.get("material")
         if m not in mats:
             raise SceneError("%s.material: unknown material %s" % (where, json.dumps(m)))
-        by_mat.setdefault(m, []).extend(shape_triangles(sh, where))
+        tris, normals = shape_triangles(sh, where)
+        by_mat.setdefault(m, []).extend(
+            zip(tris, normals if normals is not None else [None] * len(tris)))
     lights = {"environment": read_environment(doc["environment"]) if "environment" in doc
               else None,
               "sun": read_sun(doc["sun"]) if "sun" in doc else None,
@@ -458,6 +547,28 @@ def make_material(name, m):
         bsdf.inputs["Color"].default_value = (*m["color"], 1.0)
         bsdf.inputs["Roughness"].default_value = 0.0
         nt.links.new(bsdf.outputs["BSDF"], out.inputs["Surface"])
+    elif m["type"] == "principled":
+        # Blender 3.4's Principled BSDF (v1, Disney's model); docs/cycles.md lists where it
+        # and trac0r's glTF material differ.
+        bsdf = nt.nodes.new("ShaderNodeBsdfPrincipled")
+        bsdf.distribution = "MULTI_GGX" if m["multiscatter"] else "GGX"
+        i = bsdf.inputs
+        i["Base Color"].default_value = (*m["color"], 1.0)
+        i["Metallic"].default_value = m["metallic"]
+        i["Roughness"].default_value = m["roughness"]
+        # Specular s gives the dielectric F0 = 0.08 s: glTF's ((ior - 1) / (ior + 1))^2.
+        f0 = ((m["ior"] - 1.0) / (m["ior"] + 1.0)) ** 2
+        i["Specular"].default_value = f0 / 0.08
+        i["Specular Tint"].default_value = 0.0
+        i["IOR"].default_value = m["ior"]
+        i["Clearcoat"].default_value = m["clearcoat"]
+        i["Clearcoat Roughness"].default_value = m["clearcoat_roughness"]
+        i["Sheen"].default_value = m["sheen"]
+        i["Sheen Tint"].default_value = 0.0
+        for k in ("Subsurface", "Transmission", "Anisotropic"):
+            i[k].default_value = 0.0
+        nt.links.new(bsdf.outputs["BSDF"], out.inputs["Surface"])
+        return mat
     else:
         em = nt.nodes.new("ShaderNodeEmission")
         em.inputs["Color"].default_value = (*m["color"], 1.0)
@@ -627,15 +738,31 @@ def build(scene, mats, camera, by_mat, lights, spot_model):
     for obj in list(bpy.data.objects):
         bpy.data.objects.remove(obj, do_unlink=True)
     for name, tris in by_mat.items():
-        verts, faces = [], []
-        for tri in tris:
+        verts, faces, vnormals = [], [], []
+        smooth = any(n is not None for _, n in tris)
+        for tri, nrm in tris:
             base = len(verts)
             verts.extend(to_blender(p, mirror) for p in tri)
             # A mirror turns the winding round; re-wind to keep the front where it was.
             faces.append((base, base + 2, base + 1) if mirror else (base, base + 1, base + 2))
+            if smooth:
+                if nrm is None:
+                    a, b, c = (Vector(to_blender(p, mirror)) for p in tri)
+                    fn = (b - a).cross(c - a) * (-1.0 if mirror else 1.0)
+                    nrm = [None] * 3
+                    vnormals.extend([tuple(fn.normalized())] * 3)
+                else:
+                    vnormals.extend(to_blender(n, mirror) for n in nrm)
         me = bpy.data.meshes.new("tr_" + name)
         me.from_pydata(verts, [], faces)
         me.validate()
+        if smooth:
+            # A smooth icosphere's corner normals, trac0r's own (no vertex is shared, so
+            # they are set per vertex as custom normals).
+            me.use_auto_smooth = True
+            for poly in me.polygons:
+                poly.use_smooth = True
+            me.normals_split_custom_set_from_vertices(vnormals)
         me.materials.append(make_material(name, mats[name]))
         ob = bpy.data.objects.new("tr_" + name, me)
         scene.collection.objects.link(ob)
