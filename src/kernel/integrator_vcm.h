@@ -116,6 +116,9 @@ TR_FN void tr_vcm_light_sums(const tr_bdpt_vertex *lv, int i, float *a, float *b
     float d2;
     const tr_vec3 w = tr_bdpt_dir(q->p, y->p, &d2);
     *g = d2 > 0.0f ? tr_fabsf(v3_dot(w, q->m.ng)) / d2 : 0.0f;
+    if (q->kind == TR_BDPT_INFINITE) {
+        *g = 1.0f; /* a direction: the camera vertex's density for it is a solid angle's */
+    }
     /* c: strategy 1 draws lv[0] by next-event estimation (tr_bdpt_mis_weight_vm). */
     float c = 0.0f;
     if (lv[0].pdf_fwd > 0.0f && (i == 1 || !lv[1].delta)) {
@@ -237,6 +240,9 @@ TR_FN tr_vec3 tr_trace_vcm(const tr_scene_view *s, const tr_camera *cam, float x
     tr_bdpt_escape esc;
     int nc = tr_bdpt_camera_subpath(s, cam, x, y, max_depth, smp, cv, rays, surface, &esc);
     tr_vec3 c = tr_bdpt_connect(s, cam, cv, nc, lv, nl, max_depth, smp, sp, all, g->eta, rays);
+    if (tr_bdpt_sky_on(s)) {
+        c = v3_add(c, tr_bdpt_sky_camera(s, cam, cv, nc, &esc, max_depth, smp, g->eta, rays));
+    }
     c = v3_add(c, tr_bdpt_infinite(s, cv, nc, &esc, max_depth, smp, rays));
     return v3_add(c, tr_vcm_merge(cv, nc, max_depth, g));
 }
