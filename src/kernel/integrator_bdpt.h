@@ -39,15 +39,17 @@
  * so the sums, and the image, do not depend on the thread count or the tile order. The
  * host folds the buffer into the film after the frame (src/device/cpu.c).
  *
- * Lights at infinity and delta lights: light subpaths start on emissive triangles only. The
- * environment, the sun and the punctual lights are added up along the camera subpath
- * instead (tr_bdpt_infinite), with the two strategies pt has for them: a light sample at
- * every camera vertex that is not specular, and, for the environment and the sun, the
- * camera subpath leaving the scene, weighted against each other by the power heuristic
- * (punctual lights, which no direction finds, by their light sample alone). The lights of
- * a scene add up, so this estimator of their part and BDPT's of the emitters' part sum to
- * an unbiased image; what it forgoes is light tracing from the sky (the sun's caustics
- * come only from the camera side, as in pt).
+ * Lights at infinity: in a scene with an environment or a sun, light subpaths start from
+ * them too, chosen by power beside the emitter table (tr_bdpt_light_probs_of): a direction
+ * by the light's own sampler and an origin on a disc that covers the scene's bounding
+ * sphere (tr_bdpt_sky_subpath; pbrt-v3's InfiniteAreaLight::Sample_Le). The path's first
+ * vertex is then a direction (TR_BDPT_INFINITE), whose densities are solid-angle ones, and
+ * the camera side's strategies for these lights, pt's light sample at each vertex (s = 1)
+ * and the escape into the sky (s = 0), are weighed with the others by the same MIS
+ * (tr_bdpt_sky_camera). Punctual lights (delta) stay outside: they are added along the
+ * camera subpath with pt's light sample (tr_bdpt_infinite), an estimator of their part
+ * that adds to BDPT's of the rest. A scene without an environment and a sun draws the
+ * random numbers it drew before and renders the same bits.
  *
  * Limits: a subpath holds at most TR_BDPT_MAX_VERTS vertices, so the max depth is
  * TR_BDPT_MAX_DEPTH (also the default). On an OpenCL device the 64-bit
@@ -744,8 +746,9 @@ TR_FN int tr_bdpt_sky_subpath(const tr_scene_view *s, int max_depth, const tr_sa
 
 /* The light subpath: a point by area from the emitter table, a cosine-weighted direction
  * on its emitting side (either, for two-sided emitters), then up to max_depth - 1 hits
- * (a light subpath of s vertices serves paths of at least s segments). Returns the vertex
- * count (0 without emitters). */
+ * (a light subpath of s vertices serves paths of at least s segments); or, with the
+ * probability of their power, one from the environment or the sun (tr_bdpt_sky_subpath).
+ * Returns the vertex count (0 without lights). */
 TR_FN int tr_bdpt_light_subpath(const tr_scene_view *s, int max_depth, const tr_sampler *smp,
                                 tr_bdpt_vertex *lv, uint32_t *rays) {
     int nl = 0;
@@ -965,12 +968,13 @@ TR_FN tr_vec3 tr_bdpt_connect(const tr_scene_view *s, const tr_camera *cam,
     return radiance;
 }
 
-/* The environment's, the sun's and the punctual lights' part of camera subpath
- * cv[0 .. nc-1] that left the scene as *esc says (see the top of this file): at each
- * vertex that is not specular and can still add a segment, pt's light samples of them
- * (the sampler dimensions pt reads at that segment, which BDPT's camera side leaves
- * unread); where the subpath left the scene, the environment and the sun it sees, each
- * weighted against the light sample by the power heuristic. */
+/* The punctual lights' part of camera subpath cv[0 .. nc-1] that left the scene as *esc
+ * says (see the top of this file), and the environment's and the sun's where no light
+ * subpath starts from them (a scene without triangles, tr_bdpt_sky_on): at each vertex
+ * that is not specular and can still add a segment, pt's light samples of them (the
+ * sampler dimensions pt reads at that segment, which BDPT's camera side leaves unread);
+ * where the subpath left the scene, the environment and the sun it sees, each weighted
+ * against the light sample by the power heuristic. */
 TR_FN tr_vec3 tr_bdpt_infinite(const tr_scene_view *s, const tr_bdpt_vertex *cv, int nc,
                                const tr_bdpt_escape *esc, int max_depth, const tr_sampler *smp,
                                uint32_t *rays) {
