@@ -73,7 +73,24 @@ typedef struct tr_vcm_grid {
     float radius2;               /* r^2 */
     float eta;                   /* N pi r^2 (0: no merging) */
     float norm;                  /* 1 / (N pi r^2) */
+    uint32_t facing;             /* merge only light vertices on surfaces facing as x's */
 } tr_vcm_grid;
+
+/* With light subpaths from the environment and the sun, light vertices also lie on the
+ * outer faces of a closed room's walls, which no emitter inside reaches: a merge near a
+ * corner or through a wall without thickness would carry that outside light in. So in
+ * such scenes (tr_bdpt_sky_on; the grid's `facing`) a light vertex y is merged with camera
+ * vertex x only where their geometric normals, each turned towards its own incoming
+ * direction, agree to within 60 degrees: on one smooth surface they always do once r is
+ * small, so the estimate still converges. Scenes without a sky keep every merge, and
+ * their images. */
+#define TR_VCM_FACING_COS 0.5f
+
+TR_FN int tr_vcm_facing(const tr_bdpt_vertex *x, const tr_bdpt_vertex *y) {
+    const float sx = v3_dot(x->wo, x->m.ng) < 0.0f ? -1.0f : 1.0f;
+    const float sy = v3_dot(y->wo, y->m.ng) < 0.0f ? -1.0f : 1.0f;
+    return sx * sy * v3_dot(x->m.ng, y->m.ng) > TR_VCM_FACING_COS;
+}
 
 /* The bucket of grid cell (ix, iy, iz). */
 TR_FN uint32_t tr_vcm_cell_hash(int32_t ix, int32_t iy, int32_t iz, uint32_t mask) {
@@ -202,7 +219,7 @@ TR_FN tr_vec3 tr_vcm_merge(const tr_bdpt_vertex *cv, int nc, int max_depth, cons
                 }
                 const tr_bdpt_vertex *y = &en.path[en.index];
                 const int sv = (int)en.index + 1; /* light vertices up to y */
-                if ((sv - 1) + (t - 1) > max_depth) {
+                if ((sv - 1) + (t - 1) > max_depth || (g->facing && !tr_vcm_facing(pt, y))) {
                     continue;
                 }
                 const float den = tr_fabsf(v3_dot(y->wo, pt->m.ng));
