@@ -27,7 +27,10 @@
  *      depend on the thread count; a malformed TRAC0R_VCM_RADIUS is refused.
  *  (h) vcm agrees with bdpt (region means within 5 standard errors) on a floor lit only
  *      through a mirror, where merges carry much of the image (scaling the merges by 1.2
- *      fails this) and the smooth irradiance keeps the radius's bias small. */
+ *      fails this) and the smooth irradiance keeps the radius's bias small.
+ *  (i) where light subpaths start from the sky, a merge at a ceiling's corner takes a
+ *      light vertex on the ceiling and not one on the wall's outer face (tr_vcm_facing),
+ *      and vcm agrees with bdpt looking into a corner of window-room.json. */
 #define _DEFAULT_SOURCE
 #include "check.h"
 #include "scene_util.h"
