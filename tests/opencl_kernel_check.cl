@@ -21,6 +21,7 @@ __kernel void tr_check_render(TR_SCENE_ARRAYS(CHECK_ARRAY_PARAM) uint accel,
     TR_SCENE_ARRAYS(CHECK_VIEW)
     s.accel = accel;
     s.light_weight_total = light_weight_total;
+    s.sky_cx = s.sky_cy = s.sky_cz = s.sky_radius = 0.0f; /* no light subpaths from the sky */
     const tr_film_view film =
         tr_film_view_make(sum, count, albedo, normal, depth, prim, f.camera.screen_width, f.passes);
     uint gx0, gy0, nx, ny;

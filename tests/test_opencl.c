@@ -410,6 +410,22 @@ int main(void) {
     CHECK(tr_scene_commit(&scene, TR_ACCEL_TYPE_BVH, &err) == TR_OK, "%s", err.msg);
     compare_backends(dev, &scene, 1, TR_INTEGRATOR_BDPT, 32, "bvh, bdpt");
     CHECK(tr_scene_commit(&scene, TR_ACCEL_TYPE_FLAT, &err) == TR_OK, "%s", err.msg);
+    /* bdpt's light subpaths from a sky and a sun, seen through the box's open front: the
+     * scene's bounding sphere travels with the scene's scalars. */
+    {
+        tr_scene sky = {0};
+        tr_scene_init(&sky);
+        CHECK(tr_scene_builtin(&sky, "cornell", 48, 36, &err) == TR_OK, "%s", err.msg);
+        CHECK(tr_scene_set_environment(&sky, v3(0.6f, 0.8f, 1.0f), 1.5f, 0.0f, NULL, 0, 0, &err) ==
+                  TR_OK,
+              "%s", err.msg);
+        CHECK(tr_scene_set_sun(&sky, v3(0.2f, 0.5f, -1.0f), 2.0f, v3(5.0f, 4.5f, 4.0f), &err) ==
+                  TR_OK,
+              "%s", err.msg);
+        CHECK(tr_scene_commit(&sky, TR_ACCEL_TYPE_BVH, &err) == TR_OK, "%s", err.msg);
+        compare_backends(dev, &sky, 1, TR_INTEGRATOR_BDPT, 32, "bvh, bdpt, sky and sun");
+        tr_scene_clear(&sky);
+    }
     /* A thin lens (camera.h) focused on the box's centre, sampled alike by both. */
     {
         const tr_camera pinhole = scene.camera;

@@ -28,7 +28,11 @@ enum { TR_SCENE_ARRAYS(TR_CL_INFO_ENUM) TR_SCENE_SCALARS(TR_CL_SCALAR_ENUM) TR_C
 #define TR_CL_SCENE_VIEW(s)                                                                        \
     TR_SCENE_ARRAYS(TR_CL_VIEW_ARRAY)                                                              \
     s.accel = scene_info[TR_CL_INFO_accel];                                                        \
-    s.light_weight_total = as_float(scene_info[TR_CL_INFO_light_weight_total])
+    s.light_weight_total = as_float(scene_info[TR_CL_INFO_light_weight_total]);                    \
+    s.sky_cx = as_float(scene_info[TR_CL_INFO_sky_cx]);                                            \
+    s.sky_cy = as_float(scene_info[TR_CL_INFO_sky_cy]);                                            \
+    s.sky_cz = as_float(scene_info[TR_CL_INFO_sky_cz]);                                            \
+    s.sky_radius = as_float(scene_info[TR_CL_INFO_sky_radius])
 
 /* The film view over the kernel's film arguments, every pass buffer in it. */
 #define TR_CL_FILM_VIEW(f)                                                                         \

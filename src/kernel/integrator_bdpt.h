@@ -39,15 +39,17 @@
  * so the sums, and the image, do not depend on the thread count or the tile order. The
  * host folds the buffer into the film after the frame (src/device/cpu.c).
  *
- * Lights at infinity and delta lights: light subpaths start on emissive triangles only. The
- * environment, the sun and the punctual lights are added up along the camera subpath
- * instead (tr_bdpt_infinite), with the two strategies pt has for them: a light sample at
- * every camera vertex that is not specular, and, for the environment and the sun, the
- * camera subpath leaving the scene, weighted against each other by the power heuristic
- * (punctual lights, which no direction finds, by their light sample alone). The lights of
- * a scene add up, so this estimator of their part and BDPT's of the emitters' part sum to
- * an unbiased image; what it forgoes is light tracing from the sky (the sun's caustics
- * come only from the camera side, as in pt).
+ * Lights at infinity: in a scene with an environment or a sun, light subpaths start from
+ * them too, chosen by power beside the emitter table (tr_bdpt_light_probs_of): a direction
+ * by the light's own sampler and an origin on a disc that covers the scene's bounding
+ * sphere (tr_bdpt_sky_subpath; pbrt-v3's InfiniteAreaLight::Sample_Le). The path's first
+ * vertex is then a direction (TR_BDPT_INFINITE), whose densities are solid-angle ones, and
+ * the camera side's strategies for these lights, pt's light sample at each vertex (s = 1)
+ * and the escape into the sky (s = 0), are weighed with the others by the same MIS
+ * (tr_bdpt_sky_camera). Punctual lights (delta) stay outside: they are added along the
+ * camera subpath with pt's light sample (tr_bdpt_infinite), an estimator of their part
+ * that adds to BDPT's of the rest. A scene without an environment and a sun draws the
+ * random numbers it drew before and renders the same bits.
  *
  * Limits: a subpath holds at most TR_BDPT_MAX_VERTS vertices, so the max depth is
  * TR_BDPT_MAX_DEPTH (also the default). On an OpenCL device the 64-bit
@@ -106,6 +108,13 @@ TR_FN uint32_t tr_bdpt_light_dim(int seg, uint32_t what) {
 #define TR_BDPT_CAMERA 0u
 #define TR_BDPT_LIGHT 1u /* the origin of a light subpath, or the s = 1 light sample */
 #define TR_BDPT_SURFACE 2u
+/* A light at infinity (the environment or the sun): a direction, not a point. wo is the
+ * unit direction from the scene towards it, tri which of them it is (TR_BDPT_SKY_*), and
+ * its "area" densities are solid-angle densities of that direction (pbrt-v3's infinite
+ * light vertices). */
+#define TR_BDPT_INFINITE 3u
+#define TR_BDPT_SKY_ENV 0u
+#define TR_BDPT_SKY_SUN 1u
 
 typedef struct tr_bdpt_vertex {
     tr_bsdf_params m; /* surfaces and light points: the material stage's output */
@@ -116,6 +125,8 @@ typedef struct tr_bdpt_vertex {
     float pdf_rev; /* area density of this vertex, drawn from the other side */
     float pdf_nee; /* light vertices: area density of next-event estimation choosing this
                     * point from the next vertex of the path (tr_bdpt_nee_pdf) */
+    float pdf_pos; /* TR_BDPT_INFINITE: the density 1 / (pi R^2) of a subpath's origin on
+                    * the disc that covers the scene (read for no other kind) */
     uint32_t tri;
     uint32_t kind; /* TR_BDPT_* */
     int delta;     /* its scattering was a delta lobe */
@@ -169,6 +180,82 @@ TR_FN float tr_bdpt_camera_we(const tr_camera *c, tr_vec3 w, float *rx, float *r
     return *pdf_dir;
 }
 
+/* Light subpaths from the environment and the sun (pbrt-v3's InfiniteAreaLight::Sample_Le,
+ * Pharr, Jakob and Humphreys, 3rd ed., 16.1.2 and 16.3): a direction by the light's own
+ * sampler (the sun's cone, the environment map's CDF, the constant environment uniformly),
+ * then an origin uniform on the disc of radius R perpendicular to it whose centre lies R
+ * from the centre of the scene's bounding sphere towards the light (area density
+ * 1 / (pi R^2)); the ray runs parallel to the direction, through the sphere. A subpath's
+ * light is chosen by power among the emitter table (its total weight, power / pi) and
+ * these lights, whose weight is the power they send through the disc over pi: R^2 times
+ * their radiance integrated over directions (RGB means). */
+typedef struct tr_bdpt_light_probs {
+    float emitters, env, sun;
+} tr_bdpt_light_probs;
+
+/* The radiance of the environment or the sun integrated over directions (RGB mean). */
+TR_FN float tr_bdpt_sky_integral(const tr_scene_view *s, uint32_t which) {
+    if (which == TR_BDPT_SKY_SUN) {
+        TR_CONST_GLOBAL tr_sun *sun = &s->sun[0];
+        const float l = (sun->radiance.x + sun->radiance.y + sun->radiance.z) * (1.0f / 3.0f);
+        return l * TR_TWO_PI * sun->one_minus_cos;
+    }
+    TR_CONST_GLOBAL tr_env *e = &s->env[0];
+    const float c = (e->color.x + e->color.y + e->color.z) * (1.0f / 3.0f) * e->strength;
+    if (e->width == 0u) {
+        return c * 4.0f * TR_PI;
+    }
+    /* The map's texels are weighted by luminance x sin t (envmap.h): their sum times the
+     * texels' extent in (t, p) approximates the integral. */
+    return c * e->weight_sum * (2.0f * TR_PI * TR_PI) / ((float)e->width * (float)e->height);
+}
+
+/* The probabilities of a light subpath's origin; returns whether the environment or the
+ * sun can start one (else the emitters' probability is 1 and they are added along the
+ * camera subpath only, tr_bdpt_infinite). */
+TR_FN int tr_bdpt_light_probs_of(const tr_scene_view *s, tr_bdpt_light_probs *lp) {
+    lp->emitters = 1.0f;
+    lp->env = 0.0f;
+    lp->sun = 0.0f;
+    if (s->env_count + s->sun_count == 0u || !(s->sky_radius > 0.0f)) {
+        return 0;
+    }
+    const float r2 = s->sky_radius * s->sky_radius;
+    const float we =
+        s->env_count > 0u ? tr_fmaxf(r2 * tr_bdpt_sky_integral(s, TR_BDPT_SKY_ENV), 0.0f) : 0.0f;
+    const float ws =
+        s->sun_count > 0u ? tr_fmaxf(r2 * tr_bdpt_sky_integral(s, TR_BDPT_SKY_SUN), 0.0f) : 0.0f;
+    const float wl = s->light_count > 0u ? tr_fmaxf(s->light_weight_total, 0.0f) : 0.0f;
+    const float total = we + ws + wl;
+    if (!(we + ws > 0.0f) || !(total < TR_INFINITY)) {
+        return 0;
+    }
+    lp->emitters = wl / total;
+    lp->env = we / total;
+    lp->sun = ws / total;
+    return 1;
+}
+
+/* Whether light subpaths start from the environment and the sun. */
+TR_FN int tr_bdpt_sky_on(const tr_scene_view *s) {
+    tr_bdpt_light_probs lp;
+    return tr_bdpt_light_probs_of(s, &lp);
+}
+
+/* The solid-angle density of light `which` (TR_BDPT_SKY_*) drawing the unit direction w
+ * towards it, and its radiance from there. */
+TR_FN float tr_bdpt_sky_pdf(const tr_scene_view *s, uint32_t which, tr_vec3 w) {
+    return which == TR_BDPT_SKY_SUN ? tr_sun_pdf(s, w) : tr_env_pdf(s, w);
+}
+TR_FN tr_vec3 tr_bdpt_sky_radiance(const tr_scene_view *s, uint32_t which, tr_vec3 w) {
+    return which == TR_BDPT_SKY_SUN ? tr_sun_radiance(s, w) : tr_env_radiance(s, w);
+}
+
+/* The density 1 / (pi R^2) of a point on the disc light subpaths from infinity start on. */
+TR_FN float tr_bdpt_disc_pdf(const tr_scene_view *s) {
+    return 1.0f / (TR_PI * s->sky_radius * s->sky_radius);
+}
+
 /* Solid-angle density of an emitter at y (cosine-weighted about its normal on the side
  * chosen, each side with probability 1/2 when two-sided) emitting towards unit w. */
 TR_FN float tr_bdpt_emit_pdf(const tr_bdpt_vertex *y, tr_vec3 w) {
@@ -182,9 +269,16 @@ TR_FN float tr_bdpt_emit_pdf(const tr_bdpt_vertex *y, tr_vec3 w) {
 /* Area density of choosing y as a light subpath's origin: 0 for surfaces that emit but are
  * not in the emitter table (glTF emission). */
 TR_FN float tr_bdpt_origin_pdf(const tr_scene_view *s, const tr_bdpt_vertex *y) {
+    tr_bdpt_light_probs lp;
+    const int sky = tr_bdpt_light_probs_of(s, &lp);
+    if (y->kind == TR_BDPT_INFINITE) {
+        return y->tri == TR_BDPT_SKY_SUN ? lp.sun * tr_sun_pdf(s, y->wo)
+                                         : lp.env * tr_env_pdf(s, y->wo);
+    }
     TR_CONST_GLOBAL tr_triangle *tri = &s->triangles[y->tri];
     tr_material m = s->materials[tri->material];
-    return tr_light_pdf_area(s, &m, tri->area);
+    const float pdf = tr_light_pdf_area(s, &m, tri->area);
+    return sky ? pdf * lp.emitters : pdf;
 }
 
 /* Solid-angle density at `next` converted to area density there. */
@@ -209,6 +303,11 @@ TR_FN float tr_bdpt_pdf_dir(const tr_camera *cam, const tr_bdpt_vertex *cur, int
     if (!(d2 > 0.0f)) {
         return 0.0f;
     }
+    if (cur->kind == TR_BDPT_INFINITE) {
+        /* Parallel rays from the disc: the area density at next is the disc's times the
+         * cosine there (w is -cur->wo, d2 is 1); the pinhole is never hit. */
+        return next->kind == TR_BDPT_CAMERA ? 0.0f : cur->pdf_pos * tr_fabsf(v3_dot(w, next->m.ng));
+    }
     float pdf;
     if (cur->kind == TR_BDPT_CAMERA) {
         float rx, ry;
@@ -217,6 +316,9 @@ TR_FN float tr_bdpt_pdf_dir(const tr_camera *cam, const tr_bdpt_vertex *cur, int
         pdf = tr_bdpt_emit_pdf(cur, w);
     } else {
         pdf = tr_bsdf_pdf(&cur->m, wp, w);
+    }
+    if (next->kind == TR_BDPT_INFINITE) {
+        return pdf; /* a direction: its density is the solid-angle one */
     }
     if (next->kind == TR_BDPT_CAMERA) {
         return pdf / d2;
@@ -232,13 +334,28 @@ TR_FN tr_vec3 tr_bdpt_dir(tr_vec3 a, tr_vec3 b, float *d2) {
     return *d2 > 0.0f ? v3_scale(d, 1.0f / tr_sqrtf(*d2)) : v3s(0.0f);
 }
 
+/* tr_bdpt_dir between vertices: towards a light at infinity (or away from one) its
+ * direction, with a squared distance of 1 (the densities tr_bdpt_pdf_dir gives there are
+ * not converted by distance). */
+TR_FN tr_vec3 tr_bdpt_vdir(const tr_bdpt_vertex *a, const tr_bdpt_vertex *b, float *d2) {
+    if (b->kind == TR_BDPT_INFINITE) {
+        *d2 = 1.0f;
+        return b->wo;
+    }
+    if (a->kind == TR_BDPT_INFINITE) {
+        *d2 = 1.0f;
+        return v3_neg(a->wo);
+    }
+    return tr_bdpt_dir(a->p, b->p, d2);
+}
+
 /* Area density with which vertex `cur`, reached from `prev` (null for the pinhole and
  * light origins), draws `next`. */
 TR_FN float tr_bdpt_pdf(const tr_camera *cam, const tr_bdpt_vertex *cur, const tr_bdpt_vertex *prev,
                         const tr_bdpt_vertex *next) {
     float d2, dp2 = 0.0f;
-    tr_vec3 w = tr_bdpt_dir(cur->p, next->p, &d2);
-    tr_vec3 wp = prev ? tr_bdpt_dir(cur->p, prev->p, &dp2) : v3s(0.0f);
+    tr_vec3 w = tr_bdpt_vdir(cur, next, &d2);
+    tr_vec3 wp = prev ? tr_bdpt_vdir(cur, prev, &dp2) : v3s(0.0f);
     return tr_bdpt_pdf_dir(cam, cur, prev != 0, wp, w, d2, next);
 }
 
@@ -254,6 +371,9 @@ TR_FN float tr_bdpt_shading_fix(const tr_bsdf_params *m, tr_vec3 wo, tr_vec3 wi)
  * point of light vertex y. */
 TR_FN float tr_bdpt_nee_pdf(const tr_scene_view *s, const tr_bdpt_vertex *y,
                             const tr_bdpt_vertex *x) {
+    if (y->kind == TR_BDPT_INFINITE) {
+        return tr_bdpt_sky_pdf(s, y->tri, y->wo); /* pt's light sample of it, from anywhere */
+    }
     tr_vec3 d = v3_sub(y->p, x->p);
     float d2 = v3_dot(d, d);
     if (!(d2 > 0.0f)) {
@@ -326,9 +446,9 @@ TR_FN float tr_bdpt_mis_weight_vm(const tr_scene_view *s, const tr_camera *cam,
         /* Three directions serve the four densities: the connection's (qs to pt) and
          * those from each end to its own subpath's previous vertex. */
         float de2, da2 = 0.0f, db2 = 0.0f;
-        const tr_vec3 w = tr_bdpt_dir(qs->p, pt->p, &de2);
-        const tr_vec3 wa = qs_prev ? tr_bdpt_dir(qs->p, qs_prev->p, &da2) : v3s(0.0f);
-        const tr_vec3 wb = pt_prev ? tr_bdpt_dir(pt->p, pt_prev->p, &db2) : v3s(0.0f);
+        const tr_vec3 w = tr_bdpt_vdir(qs, pt, &de2);
+        const tr_vec3 wa = qs_prev ? tr_bdpt_vdir(qs, qs_prev, &da2) : v3s(0.0f);
+        const tr_vec3 wb = pt_prev ? tr_bdpt_vdir(pt, pt_prev, &db2) : v3s(0.0f);
         pc[ns - 1] = tr_bdpt_pdf_dir(cam, pt, pt_prev != 0, wb, v3_neg(w), de2, qs);
         if (qs_prev) {
             pc[ns - 2] = qs_delta ? 0.0f : tr_bdpt_pdf_dir(cam, qs, 1, w, wa, da2, qs_prev);
@@ -339,7 +459,9 @@ TR_FN float tr_bdpt_mis_weight_vm(const tr_scene_view *s, const tr_camera *cam,
         }
     } else {
         pl[0] = tr_bdpt_origin_pdf(s, pt);
-        if (pt_prev) {
+        if (pt_prev && pt->kind == TR_BDPT_INFINITE) {
+            pl[1] = tr_bdpt_pdf(cam, pt, 0, pt_prev); /* the disc's density, projected */
+        } else if (pt_prev) {
             pl[1] = tr_bdpt_to_area(tr_bdpt_emit_pdf(pt, v3_normalize(v3_sub(pt_prev->p, pt->p))),
                                     pt->p, pt_prev);
         }
@@ -465,7 +587,7 @@ TR_FN void tr_bdpt_walk(const tr_scene_view *s, tr_ray ray, tr_vec3 beta, float 
             tr_bdpt_vertex *pp = &v[n - 2];
             cur->pdf_fwd = prev->delta ? 0.0f : tr_bdpt_pdf(0, prev, pp, cur);
             pp->pdf_rev = prev->delta ? 0.0f : tr_bdpt_pdf(0, prev, cur, pp);
-        } else if (prev->kind == TR_BDPT_LIGHT) {
+        } else if (prev->kind == TR_BDPT_LIGHT || prev->kind == TR_BDPT_INFINITE) {
             cur->pdf_fwd = tr_bdpt_pdf(0, prev, 0, cur);
         } else {
             cur->pdf_fwd = tr_bdpt_to_area(pdf_dir, prev->p, cur);
@@ -569,17 +691,83 @@ TR_FN int tr_bdpt_camera_subpath(const tr_scene_view *s, const tr_camera *cam, f
     return nc;
 }
 
+/* A light subpath from the environment or the sun (light chosen by u1 of the origin pair,
+ * below lp->env + lp->sun): a direction by the light's sampler, an origin on the disc
+ * that covers the scene (see tr_bdpt_light_probs), then up to max_depth - 1 hits. lv[0]
+ * is the light's TR_BDPT_INFINITE vertex; returns the vertex count (0 where the light
+ * draws no direction). */
+TR_FN int tr_bdpt_sky_subpath(const tr_scene_view *s, int max_depth, const tr_sampler *smp,
+                              const tr_bdpt_light_probs *lp, tr_bdpt_vertex *lv, uint32_t *rays) {
+    float u1, u2, d1, d2;
+    tr_sampler_2d(smp, TR_BDPT_DIM_LIGHT_ORIGIN, &u1, &u2);
+    tr_sampler_2d(smp, TR_BDPT_DIM_LIGHT_DIR, &d1, &d2);
+    const uint32_t which = u1 < lp->sun ? TR_BDPT_SKY_SUN : TR_BDPT_SKY_ENV;
+    const float lo = which == TR_BDPT_SKY_SUN ? 0.0f : lp->sun;
+    const float share = which == TR_BDPT_SKY_SUN ? lp->sun : lp->env;
+    if (!(share > 0.0f)) {
+        return 0;
+    }
+    u1 = tr_fminf(tr_fmaxf((u1 - lo) / share, 0.0f), 0.99999994f);
+    tr_vec3 wl;
+    float pdf_dir;
+    const tr_vec3 le = which == TR_BDPT_SKY_SUN ? tr_sun_sample(s, d1, d2, &wl, &pdf_dir)
+                                                : tr_env_sample(s, d1, d2, &wl, &pdf_dir);
+    if (!(pdf_dir > 0.0f) || tr_v3_is_zero(le)) {
+        return 0;
+    }
+    /* The origin: uniform on the disc (pbrt 3rd ed. 13.6.2's polar mapping). */
+    const float R = s->sky_radius;
+    tr_vec3 ta, tb;
+    v3_basis(wl, &ta, &tb);
+    const float rr = R * tr_sqrtf(u1), phi = TR_TWO_PI * u2;
+    const tr_vec3 centre = v3(s->sky_cx, s->sky_cy, s->sky_cz);
+    const tr_vec3 o = v3_add(v3_madd(centre, wl, R), v3_add(v3_scale(ta, rr * tr_cosf(phi)),
+                                                            v3_scale(tb, rr * tr_sinf(phi))));
+    tr_bdpt_vertex *y0 = &lv[0];
+    y0->p = o;
+    y0->wo = wl;
+    y0->tri = which;
+    y0->kind = TR_BDPT_INFINITE;
+    y0->delta = 0;
+    y0->pdf_pos = tr_bdpt_disc_pdf(s);
+    y0->pdf_fwd = share * pdf_dir;
+    y0->pdf_rev = 0.0f;
+    y0->pdf_nee = pdf_dir;
+    y0->beta = v3_scale(le, 1.0f / y0->pdf_fwd);
+    y0->m.ng = wl; /* no surface: read by nothing, set for tidiness */
+    y0->m.ns = wl;
+    int nl = 1;
+    /* Le cos / (p_light p_dir p_disc), with cos = 1 on the disc. */
+    const tr_vec3 beta = v3_scale(le, 1.0f / (y0->pdf_fwd * y0->pdf_pos));
+    tr_ray lr = tr_ray_make(o, v3_neg(wl), 0.0f, TR_INFINITY);
+    tr_bdpt_walk(s, lr, beta, pdf_dir, lv, &nl, max_depth, 1, smp, rays, 0, 0);
+    return nl;
+}
+
 /* The light subpath: a point by area from the emitter table, a cosine-weighted direction
  * on its emitting side (either, for two-sided emitters), then up to max_depth - 1 hits
- * (a light subpath of s vertices serves paths of at least s segments). Returns the vertex
- * count (0 without emitters). */
+ * (a light subpath of s vertices serves paths of at least s segments); or, with the
+ * probability of their power, one from the environment or the sun (tr_bdpt_sky_subpath).
+ * Returns the vertex count (0 without lights). */
 TR_FN int tr_bdpt_light_subpath(const tr_scene_view *s, int max_depth, const tr_sampler *smp,
                                 tr_bdpt_vertex *lv, uint32_t *rays) {
     int nl = 0;
+    tr_bdpt_light_probs lp;
+    const int sky = tr_bdpt_light_probs_of(s, &lp);
+    if (sky && max_depth >= 2) {
+        float u1, u2;
+        tr_sampler_2d(smp, TR_BDPT_DIM_LIGHT_ORIGIN, &u1, &u2);
+        if (u1 < lp.env + lp.sun || !(lp.emitters > 0.0f)) {
+            return tr_bdpt_sky_subpath(s, max_depth, smp, &lp, lv, rays);
+        }
+    }
     if (s->light_count > 0u && max_depth >= 2) {
         float u1, u2, d1, d2;
         tr_sampler_2d(smp, TR_BDPT_DIM_LIGHT_ORIGIN, &u1, &u2);
         tr_sampler_2d(smp, TR_BDPT_DIM_LIGHT_DIR, &d1, &d2);
+        if (sky) { /* the emitters' share of u1, back to [0, 1) */
+            u1 = tr_fminf(tr_fmaxf((u1 - (lp.env + lp.sun)) / lp.emitters, 0.0f), 0.99999994f);
+        }
         uint32_t k = tr_light_pick(s, u1);
         float lo = k > 0u ? s->light_cdf[k - 1u] : 0.0f, hi = s->light_cdf[k];
         u1 = hi > lo ? tr_fminf(tr_fmaxf((u1 - lo) / (hi - lo), 0.0f), 0.99999994f) : u1;
@@ -780,17 +968,22 @@ TR_FN tr_vec3 tr_bdpt_connect(const tr_scene_view *s, const tr_camera *cam,
     return radiance;
 }
 
-/* The environment's, the sun's and the punctual lights' part of camera subpath
- * cv[0 .. nc-1] that left the scene as *esc says (see the top of this file): at each
- * vertex that is not specular and can still add a segment, pt's light samples of them
- * (the sampler dimensions pt reads at that segment, which BDPT's camera side leaves
- * unread); where the subpath left the scene, the environment and the sun it sees, each
- * weighted against the light sample by the power heuristic. */
+/* The punctual lights' part of camera subpath cv[0 .. nc-1] that left the scene as *esc
+ * says (see the top of this file), and the environment's and the sun's where no light
+ * subpath starts from them (a scene without triangles, tr_bdpt_sky_on): at each vertex
+ * that is not specular and can still add a segment, pt's light samples of them (the
+ * sampler dimensions pt reads at that segment, which BDPT's camera side leaves unread);
+ * where the subpath left the scene, the environment and the sun it sees, each weighted
+ * against the light sample by the power heuristic. */
 TR_FN tr_vec3 tr_bdpt_infinite(const tr_scene_view *s, const tr_bdpt_vertex *cv, int nc,
                                const tr_bdpt_escape *esc, int max_depth, const tr_sampler *smp,
                                uint32_t *rays) {
     tr_vec3 radiance = v3s(0.0f);
-    if (s->env_count == 0u && s->sun_count == 0u && s->punctual_count == 0u) {
+    /* With light subpaths from the environment and the sun, tr_bdpt_sky_camera has their
+     * camera-side strategies, weighed with the rest; the punctual lights stay here. */
+    const uint32_t env_count = tr_bdpt_sky_on(s) ? 0u : s->env_count;
+    const uint32_t sun_count = tr_bdpt_sky_on(s) ? 0u : s->sun_count;
+    if (env_count == 0u && sun_count == 0u && s->punctual_count == 0u) {
         return radiance;
     }
     for (int i = 1; i < nc && i < max_depth; ++i) {
@@ -798,11 +991,11 @@ TR_FN tr_vec3 tr_bdpt_infinite(const tr_scene_view *s, const tr_bdpt_vertex *cv,
         if (tr_bsdf_is_delta(&v->m) || v->m.type == TR_MATERIAL_EMITTER) {
             continue;
         }
-        if (s->env_count > 0u) {
+        if (env_count > 0u) {
             radiance =
                 v3_add(radiance, tr_pt_env_light(s, smp, i, &v->m, v->p, v->wo, v->beta, rays));
         }
-        if (s->sun_count > 0u) {
+        if (sun_count > 0u) {
             float su1, su2;
             tr_sampler_2d(smp, tr_sun_dim(i), &su1, &su2);
             radiance = v3_add(radiance,
@@ -815,15 +1008,109 @@ TR_FN tr_vec3 tr_bdpt_infinite(const tr_scene_view *s, const tr_bdpt_vertex *cv,
         }
     }
     if (esc->left) {
-        if (s->env_count > 0u) {
+        if (env_count > 0u) {
             const float w = esc->delta ? 1.0f : tr_mis_power(esc->pdf, tr_env_pdf(s, esc->dir));
             radiance =
                 v3_add(radiance, v3_scale(v3_mul(esc->beta, tr_env_radiance(s, esc->dir)), w));
         }
-        if (s->sun_count > 0u) {
+        if (sun_count > 0u) {
             const float w = esc->delta ? 1.0f : tr_mis_power(esc->pdf, tr_sun_pdf(s, esc->dir));
             radiance =
                 v3_add(radiance, v3_scale(v3_mul(esc->beta, tr_sun_radiance(s, esc->dir)), w));
+        }
+    }
+    return radiance;
+}
+
+/* The camera-side strategies of paths from the environment and the sun, where light
+ * subpaths start from them too (tr_bdpt_sky_on): at each camera vertex z_{t-1} that is
+ * not specular, pt's light sample of each (strategy s = 1, the sampler dimensions pt
+ * reads at that segment), and where the camera subpath left the scene, what it sees of
+ * each (s = 0, cv[nc] then holds the light's vertex). Every one is weighed by
+ * tr_bdpt_mis_weight_vm against all the strategies of its path: with eta > 0 the merges
+ * among them. */
+TR_FN tr_vec3 tr_bdpt_sky_camera(const tr_scene_view *s, const tr_camera *cam, tr_bdpt_vertex *cv,
+                                 int nc, const tr_bdpt_escape *esc, int max_depth,
+                                 const tr_sampler *smp, float eta, uint32_t *rays) {
+    tr_vec3 radiance = v3s(0.0f);
+    tr_bdpt_light_probs lp;
+    if (!tr_bdpt_light_probs_of(s, &lp)) {
+        return radiance;
+    }
+    const float disc = tr_bdpt_disc_pdf(s);
+    for (int t = 2; t <= nc && t <= max_depth; ++t) {
+        const tr_bdpt_vertex *pt = &cv[t - 1];
+        if (tr_bsdf_is_delta(&pt->m) || pt->m.type == TR_MATERIAL_EMITTER) {
+            continue;
+        }
+        for (uint32_t which = TR_BDPT_SKY_ENV; which <= TR_BDPT_SKY_SUN; ++which) {
+            if ((which == TR_BDPT_SKY_SUN ? s->sun_count : s->env_count) == 0u) {
+                continue;
+            }
+            float u1, u2, pdf_dir;
+            tr_vec3 wi;
+            tr_sampler_2d(smp,
+                          which == TR_BDPT_SKY_SUN ? tr_sun_dim(t - 1)
+                                                   : tr_sampler_dim(t - 1, TR_DIM_ENV),
+                          &u1, &u2);
+            const tr_vec3 le = which == TR_BDPT_SKY_SUN ? tr_sun_sample(s, u1, u2, &wi, &pdf_dir)
+                                                        : tr_env_sample(s, u1, u2, &wi, &pdf_dir);
+            const tr_vec3 f = pdf_dir > 0.0f ? tr_bsdf_eval(&pt->m, pt->wo, wi) : v3s(0.0f);
+            if (tr_v3_is_zero(le) || tr_v3_is_zero(f)) {
+                continue;
+            }
+            tr_ray sh = tr_ray_make(tr_surface_origin(&pt->m, pt->p, wi), wi, 0.0f, TR_INFINITY);
+            *rays += 1;
+            if (tr_occluded_masked(s, &sh)) {
+                continue;
+            }
+            tr_bdpt_vertex nee;
+            nee.p = pt->p;
+            nee.wo = wi;
+            nee.tri = which;
+            nee.kind = TR_BDPT_INFINITE;
+            nee.delta = 0;
+            nee.beta = v3s(0.0f);
+            nee.pdf_pos = disc;
+            nee.pdf_fwd = (which == TR_BDPT_SKY_SUN ? lp.sun : lp.env) * pdf_dir;
+            nee.pdf_rev = 0.0f;
+            nee.pdf_nee = pdf_dir;
+            nee.m.ng = wi;
+            nee.m.ns = wi;
+            const float w = tr_bdpt_mis_weight_vm(s, cam, &nee, 1, &nee, cv, t, eta, 0);
+            const tr_vec3 c = v3_mul(v3_mul(pt->beta, f), le);
+            radiance = v3_add(radiance, v3_scale(c, tr_fabsf(v3_dot(wi, pt->m.ns)) * w / pdf_dir));
+        }
+    }
+    if (esc->left) {
+        if (nc < 2) { /* the pinhole sees the sky: no other strategy makes this path */
+            const tr_vec3 le = v3_add(s->env_count > 0u ? tr_env_radiance(s, esc->dir) : v3s(0.0f),
+                                      s->sun_count > 0u ? tr_sun_radiance(s, esc->dir) : v3s(0.0f));
+            return v3_add(radiance, v3_mul(esc->beta, le));
+        }
+        tr_bdpt_vertex *z = &cv[nc]; /* free: the walk stops short of the last vertex to escape */
+        z->p = cv[nc - 1].p;
+        z->wo = esc->dir;
+        z->beta = esc->beta;
+        z->kind = TR_BDPT_INFINITE;
+        z->delta = 0;
+        z->pdf_pos = disc;
+        z->pdf_rev = 0.0f;
+        z->pdf_nee = 0.0f;
+        z->m.ng = esc->dir;
+        z->m.ns = esc->dir;
+        z->pdf_fwd = cv[nc - 1].delta ? 0.0f : tr_bdpt_pdf(cam, &cv[nc - 1], &cv[nc - 2], z);
+        for (uint32_t which = TR_BDPT_SKY_ENV; which <= TR_BDPT_SKY_SUN; ++which) {
+            if ((which == TR_BDPT_SKY_SUN ? s->sun_count : s->env_count) == 0u) {
+                continue;
+            }
+            const tr_vec3 le = tr_bdpt_sky_radiance(s, which, esc->dir);
+            if (tr_v3_is_zero(le)) {
+                continue;
+            }
+            z->tri = which;
+            const float w = tr_bdpt_mis_weight_vm(s, cam, cv, 0, 0, cv, nc + 1, eta, 0);
+            radiance = v3_add(radiance, v3_scale(v3_mul(esc->beta, le), w));
         }
     }
     return radiance;
@@ -844,7 +1131,13 @@ TR_FN tr_vec3 tr_trace_bdpt(const tr_scene_view *s, const tr_camera *cam, float 
     int nl = tr_bdpt_light_subpath(s, max_depth, smp, lv, rays);
     tr_vec3 c = tr_bdpt_connect(s, cam, cv, nc, lv, nl, max_depth, smp, sp, sel, 0.0f, rays);
     /* A test that selects one strategy (sel.only_t) wants the emitters' part alone. */
-    return sel.only_t > 0 ? c : v3_add(c, tr_bdpt_infinite(s, cv, nc, &esc, max_depth, smp, rays));
+    if (sel.only_t > 0) {
+        return c;
+    }
+    if (tr_bdpt_sky_on(s)) {
+        c = v3_add(c, tr_bdpt_sky_camera(s, cam, cv, nc, &esc, max_depth, smp, 0.0f, rays));
+    }
+    return v3_add(c, tr_bdpt_infinite(s, cv, nc, &esc, max_depth, smp, rays));
 }
 
 /* tr_render_grid_rows (kernel.h) for bdpt: grid points [gx0, gx1) x [gy0, gy1) of frame f,

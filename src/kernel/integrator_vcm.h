@@ -73,7 +73,24 @@ typedef struct tr_vcm_grid {
     float radius2;               /* r^2 */
     float eta;                   /* N pi r^2 (0: no merging) */
     float norm;                  /* 1 / (N pi r^2) */
+    uint32_t facing;             /* merge only light vertices on surfaces facing as x's */
 } tr_vcm_grid;
+
+/* With light subpaths from the environment and the sun, light vertices also lie on the
+ * outer faces of a closed room's walls, which no emitter inside reaches: a merge near a
+ * corner or through a wall without thickness would carry that outside light in. So in
+ * such scenes (tr_bdpt_sky_on; the grid's `facing`) a light vertex y is merged with camera
+ * vertex x only where their geometric normals, each turned towards its own incoming
+ * direction, agree to within 60 degrees: on one smooth surface they always do once r is
+ * small, so the estimate still converges. Scenes without a sky keep every merge, and
+ * their images. */
+#define TR_VCM_FACING_COS 0.5f
+
+TR_FN int tr_vcm_facing(const tr_bdpt_vertex *x, const tr_bdpt_vertex *y) {
+    const float sx = v3_dot(x->wo, x->m.ng) < 0.0f ? -1.0f : 1.0f;
+    const float sy = v3_dot(y->wo, y->m.ng) < 0.0f ? -1.0f : 1.0f;
+    return sx * sy * v3_dot(x->m.ng, y->m.ng) > TR_VCM_FACING_COS;
+}
 
 /* The bucket of grid cell (ix, iy, iz). */
 TR_FN uint32_t tr_vcm_cell_hash(int32_t ix, int32_t iy, int32_t iz, uint32_t mask) {
@@ -116,6 +133,9 @@ TR_FN void tr_vcm_light_sums(const tr_bdpt_vertex *lv, int i, float *a, float *b
     float d2;
     const tr_vec3 w = tr_bdpt_dir(q->p, y->p, &d2);
     *g = d2 > 0.0f ? tr_fabsf(v3_dot(w, q->m.ng)) / d2 : 0.0f;
+    if (q->kind == TR_BDPT_INFINITE) {
+        *g = 1.0f; /* a direction: the camera vertex's density for it is a solid angle's */
+    }
     /* c: strategy 1 draws lv[0] by next-event estimation (tr_bdpt_mis_weight_vm). */
     float c = 0.0f;
     if (lv[0].pdf_fwd > 0.0f && (i == 1 || !lv[1].delta)) {
@@ -199,7 +219,7 @@ TR_FN tr_vec3 tr_vcm_merge(const tr_bdpt_vertex *cv, int nc, int max_depth, cons
                 }
                 const tr_bdpt_vertex *y = &en.path[en.index];
                 const int sv = (int)en.index + 1; /* light vertices up to y */
-                if ((sv - 1) + (t - 1) > max_depth) {
+                if ((sv - 1) + (t - 1) > max_depth || (g->facing && !tr_vcm_facing(pt, y))) {
                     continue;
                 }
                 const float den = tr_fabsf(v3_dot(y->wo, pt->m.ng));
@@ -237,6 +257,9 @@ TR_FN tr_vec3 tr_trace_vcm(const tr_scene_view *s, const tr_camera *cam, float x
     tr_bdpt_escape esc;
     int nc = tr_bdpt_camera_subpath(s, cam, x, y, max_depth, smp, cv, rays, surface, &esc);
     tr_vec3 c = tr_bdpt_connect(s, cam, cv, nc, lv, nl, max_depth, smp, sp, all, g->eta, rays);
+    if (tr_bdpt_sky_on(s)) {
+        c = v3_add(c, tr_bdpt_sky_camera(s, cam, cv, nc, &esc, max_depth, smp, g->eta, rays));
+    }
     c = v3_add(c, tr_bdpt_infinite(s, cv, nc, &esc, max_depth, smp, rays));
     return v3_add(c, tr_vcm_merge(cv, nc, max_depth, g));
 }

@@ -63,7 +63,11 @@ int tr_wbvh_occluded(const struct tr_wbvh *w, const tr_ray *ray);
  * 32-bit words after the counts. */
 #define TR_SCENE_SCALARS(X)                                                                        \
     X(uint32_t, accel)           /* TR_ACCEL_*: which structure tr_intersect_scene walks */        \
-    X(float, light_weight_total) /* sum of the emitters' weights (tr_light_weight) */
+    X(float, light_weight_total) /* sum of the emitters' weights (tr_light_weight) */              \
+    X(float, sky_cx)             /* the scene's bounding sphere, which light subpaths from */      \
+    X(float, sky_cy)             /* the environment and the sun cross (integrator_bdpt.h); */      \
+    X(float, sky_cz)             /* radius 0: none (no triangles) */                               \
+    X(float, sky_radius)
 
 #define TR_SCENE_VIEW_ARRAY_MEMBER(type, name, count) TR_CONST_GLOBAL type *name;
 #define TR_SCENE_VIEW_COUNT_MEMBER(type, name, count) uint32_t count;

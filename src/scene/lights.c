@@ -1,11 +1,31 @@
 /* lights.c - the emitter table next-event estimation samples from. */
+#include <math.h>
 #include <stdlib.h>
 
 #include "kernel/light.h"
 #include "scene/scene_internal.h"
 #include "trac0r/scene.h"
 
+void tr_scene_sky_bounds(tr_scene *s) {
+    s->sky_center[0] = s->sky_center[1] = s->sky_center[2] = 0.0f;
+    s->sky_radius = 0.0f;
+    if (s->triangle_count == 0) {
+        return;
+    }
+    const tr_aabb b = tr_triangles_bounds(s->triangles, s->triangle_count);
+    const float h[3] = {0.5f * (b.max.x - b.min.x), 0.5f * (b.max.y - b.min.y),
+                        0.5f * (b.max.z - b.min.z)};
+    s->sky_center[0] = b.min.x + h[0];
+    s->sky_center[1] = b.min.y + h[1];
+    s->sky_center[2] = b.min.z + h[2];
+    /* A little more than half the diagonal: the disc the subpaths start on stays clear
+     * of the box's corners after rounding. */
+    const float r = sqrtf(h[0] * h[0] + h[1] * h[1] + h[2] * h[2]);
+    s->sky_radius = isfinite(r) && r > 0.0f ? r * 1.001f + 1e-4f : 0.0f;
+}
+
 int tr_scene_build_lights(tr_scene *s, tr_error *err) {
+    tr_scene_sky_bounds(s);
     free(s->lights);
     free(s->light_cdf);
     s->lights = NULL;

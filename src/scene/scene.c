@@ -750,6 +750,9 @@ int tr_scene_update(tr_scene *s, double *seconds, tr_error *err) {
         rc = tr_scene_build_light_tree(s, err);
     }
     if (rc == TR_OK) {
+        if (s->env_count + s->sun_count > 0u) {
+            tr_scene_sky_bounds(s); /* shapes moved: the sky's light subpaths cover them */
+        }
         s->committed_generation = s->generation;
     }
     if (seconds) {
@@ -802,6 +805,10 @@ tr_scene_view tr_scene_view_of(const tr_scene *s) {
     v.light_count = s->light_triangles == s->triangle_count ? s->light_count : 0;
     v.light_cdf_count = v.light_count;
     v.light_weight_total = s->light_weight_total;
+    v.sky_cx = s->sky_center[0];
+    v.sky_cy = s->sky_center[1];
+    v.sky_cz = s->sky_center[2];
+    v.sky_radius = s->sky_radius;
     v.light_nodes = s->light_nodes;
     v.light_node_count = v.light_count > 0 ? s->light_node_count : 0;
     v.light_leaf = s->light_leaf;

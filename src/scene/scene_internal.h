@@ -66,6 +66,8 @@ struct tr_scene {
     uint32_t light_count;
     float light_weight_total;
     uint32_t light_triangles; /* triangle count when the table was built */
+    /* The triangles' bounding sphere (tr_scene_sky_bounds). */
+    float sky_center[3], sky_radius;
     /* The light tree over the table (src/scene/light_tree.c; kernel/light_tree.h), built
      * by tr_scene_commit when light_sampling asks for it: 2 light_count - 1 nodes and
      * each emitter's leaf; light_node_count 0 for none. */
@@ -252,6 +254,10 @@ int tr_scene_refit(tr_scene *s, tr_error *err);
 /* Rebuilds the emitter table (tr_scene_commit calls it): every triangle of positive
  * area whose material has emittance > 0, weighted by tr_light_weight. */
 int tr_scene_build_lights(tr_scene *s, tr_error *err);
+/* The triangles' bounding sphere, which light subpaths from the environment and the sun
+ * start outside of (kernel/integrator_bdpt.h); tr_scene_build_lights and tr_scene_update
+ * call it. */
+void tr_scene_sky_bounds(tr_scene *s);
 
 /* Builds the light tree over the emitter table (after tr_scene_build_lights), replacing
  * any; tr_scene_free_light_tree drops it. */
