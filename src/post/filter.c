@@ -160,14 +160,20 @@ tr_recon_params tr_recon_params_default(void) {
     p.atrous_sigma_z = 0.05f;
     p.atrous_sigma_a = 0.1f;
     /* Schied et al.'s values are sigma_l 4, sigma_n 128, sigma_z 1 and 5 iterations with
-     * TAA after them. On the classic box at 1 spp (docs/realtime.md, "Choosing SVGF's
-     * parameters") sigma_l 8 and 3 iterations measured better, and TAA
-     * (alpha 0.1 or 0.3) worse, so it is off unless asked for. */
-    p.svgf_sigma_l = 8.0f;
+     * TAA after them, and the first iteration's output fed back as the next history. On
+     * the classic box at 1 spp 3 iterations measured better, and TAA (alpha 0.1 or 0.3)
+     * worse, so it is off unless asked for. The feedback is off: each frame's history is
+     * then the previous one blurred once more by a 5x5 level, so over the ~10 frames an
+     * EMA of weight 0.1 remembers the blur compounds (shadow and sun-patch edges, the
+     * indirect light's detail), and the error grew with the history's length; without it,
+     * and with the paper's sigma_l 4 instead of 8, SVGF measured better on all six bench
+     * scenes, by 0.1 dB (glass box) to 2.6 dB (window room) (docs/realtime.md, "The hard
+     * scenes"). */
+    p.svgf_sigma_l = 4.0f;
     p.svgf_iterations = 3;
     p.svgf_sigma_n = 128.0f;
     p.svgf_sigma_z = 1.0f;
-    p.svgf_feedback = 1;
+    p.svgf_feedback = 0;
     /* 4 x 4 rays per pixel on an emitter's edge: coverage to 1/16 at most 16 rays a pixel. */
     p.emission_samples = 4;
     p.svgf_taa_alpha = 0.0f;
@@ -181,6 +187,12 @@ tr_recon_params tr_recon_params_default(void) {
     p.svgf_specular = 0;
     /* The sample's own albedo unless asked (tr_resolve_albedo; docs/realtime.md). */
     p.albedo_samples = 0;
+    /* SVGF's history remembers less than the other methods' (the paper's 0.2): the
+     * reprojection resamples the history bilinearly every frame, a blur that compounds
+     * with the history's age, and after SVGF's spatial filter that blur costs more than
+     * the noise a longer history removes (docs/realtime.md, "The hard scenes"). Without
+     * the spatial filter the longer history is better, so alpha_min stays 0.1. */
+    p.svgf_alpha_min = 0.2f;
     return p;
 }
 
@@ -866,7 +878,8 @@ TR_POST_CLONES static void svgf_variance_rows(const post_ws *ws, const float *lu
                     var[c] = tr_fmaxf(moments[2 * c + 1] - m * m, 0.0f);
                 } else {
                     const float m = a1[a] / aw[a];
-                    var[c] = tr_fmaxf(a2[a] / aw[a] - m * m, 0.0f) * (4.0f / len[c]);
+                    var[c] =
+                        tr_fmaxf(a2[a] / aw[a] - m * m, 0.0f) * (TR_POST_SVGF_SHORT_BOOST / len[c]);
                 }
             }
         }
@@ -1278,7 +1291,7 @@ int tr_recon_frame_moving(tr_recon *r, const tr_gbuffer *frame, const tr_camera 
                           const tr_vec3 *motion, uint32_t motion_count, int method,
                           const tr_recon_params *p, int threads, float *out, tr_error *err) {
     const tr_gbuffer *g = frame;
-    const tr_recon_params resolved = tr_recon_params_resolve(p);
+    const tr_recon_params resolved = tr_recon_params_for(p, method);
     p = &resolved;
     if (check_frame(r->width, r->height, g, err) != TR_OK) {
         return TR_ERR;
