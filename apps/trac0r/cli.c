@@ -408,7 +408,7 @@ void cli_realtime_firefly(const cli_common *c, float *clamp_indirect, int *regul
 }
 
 const char cli_recon_help[] =
-    "  --[svgf-]alpha-min A  least weight of a new frame, 0.01..1 (0.1; SVGF 0.2)\n"
+    "  --alpha-min A, --svgf-alpha-min A   a new frame's least weight (0.1; SVGF 0.2)\n"
     "  --max-history L      frames of history, 1..1024 (default 64)\n"
     "  --max-history-moving L   the same where a shape moved, 1..1024 (default 4)\n"
     "  --svgf-iterations N  SVGF's a-trous steps, 1..8 (default 3)\n"
