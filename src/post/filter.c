@@ -1085,7 +1085,12 @@ static void direct_temporal(tr_recon *r, const tr_gbuffer *g, const tr_camera *c
  * (F0 A + B from the DFG table, dfg.h, at the pixel's mean F0 and alpha and the cosine
  * between its normal and its ray; 0 where the surface has no specular lobe) into
  * r->spec_alb, its specular light over it into r->illum_s, and the rest of its colour, the
- * diffuse light, into r->diffuse. */
+ * diffuse light, into r->diffuse. A pixel whose passes primary surface replacement took
+ * through a refraction or a curved mirror (TR_PRIM_PSR_CURVED) keeps all its light in the
+ * diffuse part: the DFG lookup and the virtual motion both take the camera's ray, which
+ * after a refraction is not the ray that reached the replaced surface, and split there
+ * the glass sphere of scenes/window-room.json filled with bright speckles (measured:
+ * docs/realtime.md, "Diffuse and specular apart"). */
 static void spec_prepare(tr_recon *r, const tr_gbuffer *g, const tr_camera *cam, int threads) {
     const float *dfg = tr_post_dfg_table();
     const int w = (int)g->width, h = (int)g->height;
@@ -1099,11 +1104,13 @@ static void spec_prepare(tr_recon *r, const tr_gbuffer *g, const tr_camera *cam,
             float a, b;
             tr_post_dfg_lookup(dfg, tr_fabsf(v3_dot(n, d)), sp[6], &a, &b);
             const int lobe = sp[3] > 0.0f || sp[4] > 0.0f || sp[5] > 0.0f;
+            const int apart = (g->prim[i] & TR_PRIM_PSR_CURVED) == 0u;
             for (int k = 0; k < 3; ++k) {
-                const float alb = lobe ? sp[3 + k] * a + b : 0.0f;
+                const float alb = lobe && apart ? sp[3 + k] * a + b : 0.0f;
+                const float spec = apart ? sp[k] : 0.0f;
                 r->spec_alb[3 * i + k] = alb;
-                r->illum_s[3 * i + k] = sp[k] / tr_post_demod_factor(alb);
-                r->diffuse[3 * i + k] = g->color[3 * i + k] - sp[k];
+                r->illum_s[3 * i + k] = spec / tr_post_demod_factor(alb);
+                r->diffuse[3 * i + k] = g->color[3 * i + k] - spec;
             }
         }
     }
