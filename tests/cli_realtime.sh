@@ -151,7 +151,7 @@ col() { awk -F, -v m="$2" '$1 == m { printf "%s ", $7 }' "rp$1.csv"; }
 rp 0
 rp 1 --max-history 1 --resolve-emission 0
 rp 4 --max-history 1
-rp 2 --svgf-iterations 1 --svgf-sigma-l 4 --taa 0.5
+rp 2 --svgf-iterations 1 --svgf-sigma-l 8 --taa 0.5
 rp 3 --alpha-min 0.5
 [ "$(col 1 off)" = "$(col 1 accumulate)" ] ||
     fail "--max-history 1: accumulate '$(col 1 accumulate)' is not the raw '$(col 1 off)'"
@@ -159,14 +159,14 @@ rp 3 --alpha-min 0.5
 [ "$(col 0 bilateral)" = "$(col 2 bilateral)" ] || fail "SVGF's settings changed bilateral"
 [ "$(col 0 svgf)" != "$(col 2 svgf)" ] || fail "SVGF's settings changed nothing"
 [ "$(col 0 accumulate)" != "$(col 3 accumulate)" ] || fail "--alpha-min 0.5 changed nothing"
-grep -q "svgf-iterations 3, svgf-sigma-l 8, taa 0," rp0.txt || fail "defaults not named"
+grep -q "svgf-iterations 3, svgf-sigma-l 4, taa 0," rp0.txt || fail "defaults not named"
 [ "$(col 4 off)" = "$(col 1 off)" ] || fail "--resolve-emission changed the raw frame"
 mean() { awk -F, -v m="$2" '$1 == m { s += $7; n++ } END { printf "%.4f", s / n }' "rp$1.csv"; }
 awk -v a="$(mean 4 accumulate)" -v r="$(mean 4 off)" 'BEGIN { exit !(a > r + 0.1) }' ||
     fail "resolved emission: accumulate $(mean 4 accumulate) dB not above raw $(mean 4 off) dB"
 grep -q "4 x 4" rp0.txt || fail "the emission's resolution not named"
 grep -q "4 x 4" rp1.txt && fail "--resolve-emission 0 still names a resolution"
-grep -q "svgf-iterations 1, svgf-sigma-l 4, taa 0.5," rp2.txt || fail "settings not named"
+grep -q "svgf-iterations 1, svgf-sigma-l 8, taa 0.5," rp2.txt || fail "settings not named"
 
 # --animate: the thesis box's last shape (a sphere) moves before every frame but the
 # first, so frame 0 is the static run's to the digit and later frames differ; the moving

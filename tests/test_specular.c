@@ -379,6 +379,23 @@ static void test_converges(void) {
     CHECK(e[1] < 0.5 * eraw, "split: MSE %g, not below half of one raw frame's %g", e[1], eraw);
     /* The specular history is really used: it differs from the unsplit output. */
     CHECK(memcmp(out[0], out[1], n3 * sizeof(float)) != 0, "the split changed nothing");
+    /* Pixels whose passes primary surface replacement took through a refraction or a
+     * curved mirror keep all their light in the diffuse part: with every pixel marked so,
+     * the split filters the frame as the unsplit filter does. */
+    for (size_t i = 0; i < n3 / 3; ++i) {
+        g.prim[i] |= TR_PRIM_PSR_CURVED;
+    }
+    double worst = 0.0;
+    for (int m = 0; m < 2; ++m) {
+        tr_recon_free(&r[m]);
+        CHECK(tr_recon_init(&r[m], W, H, &err) == TR_OK, "%s", err.msg);
+        CHECK(tr_recon_frame(&r[m], &g, &cam, TR_RECON_SVGF, &p[m], 2, out[m], &err) == TR_OK, "%s",
+              err.msg);
+    }
+    for (size_t k = 0; k < n3; ++k) {
+        worst = fmax(worst, fabs((double)out[1][k] - out[0][k]) / fmax(1.0, fabs(out[0][k])));
+    }
+    CHECK(worst < 1e-4, "replaced through a curve: the split differs by %g", worst);
     for (int m = 0; m < 2; ++m) {
         tr_recon_free(&r[m]);
         free(out[m]);

@@ -450,11 +450,11 @@ static void print_header(const rt_run *r) {
     }
     printf("samplers: frames %s, references %s\n", cli_sampler_name(r->frame_sampler),
            cli_sampler_name(r->rcfg.sampler));
-    printf("reconstruction: alpha-min %g, max-history %g, max-history-moving %g, "
+    printf("reconstruction: alpha-min %g (svgf %g), max-history %g, max-history-moving %g, "
            "svgf-iterations %d, svgf-sigma-l %g, taa %g, svgf-split %s, gradients %s\n",
-           (double)p->alpha_min, (double)p->max_len, (double)p->max_len_moving, p->svgf_iterations,
-           (double)p->svgf_sigma_l, (double)p->svgf_taa_alpha, p->svgf_split ? "on" : "off",
-           p->gradients ? "on" : "off");
+           (double)p->alpha_min, (double)p->svgf_alpha_min, (double)p->max_len,
+           (double)p->max_len_moving, p->svgf_iterations, (double)p->svgf_sigma_l,
+           (double)p->svgf_taa_alpha, p->svgf_split ? "on" : "off", p->gradients ? "on" : "off");
     if (!(r->frame_passes & TR_PASS_EMISSION)) {
         printf("emission: filtered with the rest (%s)\n",
                p->emission_samples == 0 ? "--resolve-emission 0"

@@ -408,11 +408,11 @@ void cli_realtime_firefly(const cli_common *c, float *clamp_indirect, int *regul
 }
 
 const char cli_recon_help[] =
-    "  --alpha-min A        least weight of a new frame, 0.01..1 (default 0.1)\n"
+    "  --alpha-min A, --svgf-alpha-min A   a new frame's least weight (0.1; SVGF 0.2)\n"
     "  --max-history L      frames of history, 1..1024 (default 64)\n"
     "  --max-history-moving L   the same where a shape moved, 1..1024 (default 4)\n"
     "  --svgf-iterations N  SVGF's a-trous steps, 1..8 (default 3)\n"
-    "  --svgf-sigma-l S     SVGF's luminance weight, 0.1..1000 (default 8)\n"
+    "  --svgf-sigma-l S     SVGF's luminance weight, 0.1..1000 (default 4)\n"
     "  --taa A              SVGF's temporal antialiasing, 0..1 (default 0: off)\n"
     "  --svgf-split         filter direct and indirect light apart (CPU only)\n"
     "  --split-specular     filter diffuse and specular light apart (CPU only)\n"
@@ -476,6 +476,7 @@ int cli_recon_option(cli_args *a, tr_recon_params *p) {
         const char *name;
         float lo, hi, *v;
     } f[] = {{"--alpha-min", 0.01f, 1.0f, &p->alpha_min},
+             {"--svgf-alpha-min", 0.01f, 1.0f, &p->svgf_alpha_min},
              {"--max-history", 1.0f, 1024.0f, &p->max_len},
              {"--max-history-moving", 1.0f, 1024.0f, &p->max_len_moving},
              {"--svgf-sigma-l", 0.1f, 1000.0f, &p->svgf_sigma_l},

@@ -192,12 +192,15 @@ typedef struct tr_recon_params {
     int albedo_samples;   /* n of tr_resolve_albedo for the callers that resolve the albedo
                              (tr_realtime, bench realtime, view): n x n rays per pixel;
                              0: the reconstruction multiplies by the sample's own albedo */
+    float svgf_alpha_min; /* alpha_min for SVGF's temporal stage (the other methods keep
+                             alpha_min); 0: alpha_min */
 } tr_recon_params;
 
 /* The defaults. A field that would divide by zero at 0 (max_len, max_len_moving, the
  * bilateral and à-trous sigmas) takes its default when 0; the others are used as given,
  * so a zero-initialised tr_recon_params differs from the defaults in alpha_min,
- * bilateral_radius, the iteration counts, svgf_feedback and emission_samples. */
+ * bilateral_radius, the iteration counts, svgf_feedback, emission_samples and
+ * svgf_alpha_min. */
 tr_recon_params tr_recon_params_default(void);
 
 /* The reconstruction's state between frames (history and scratch buffers): the caller

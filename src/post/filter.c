@@ -160,14 +160,20 @@ tr_recon_params tr_recon_params_default(void) {
     p.atrous_sigma_z = 0.05f;
     p.atrous_sigma_a = 0.1f;
     /* Schied et al.'s values are sigma_l 4, sigma_n 128, sigma_z 1 and 5 iterations with
-     * TAA after them. On the classic box at 1 spp (docs/realtime.md, "Choosing SVGF's
-     * parameters") sigma_l 8 and 3 iterations measured better, and TAA
-     * (alpha 0.1 or 0.3) worse, so it is off unless asked for. */
-    p.svgf_sigma_l = 8.0f;
+     * TAA after them, and the first iteration's output fed back as the next history. On
+     * the classic box at 1 spp 3 iterations measured better, and TAA (alpha 0.1 or 0.3)
+     * worse, so it is off unless asked for. The feedback is off: each frame's history is
+     * then the previous one blurred once more by a 5x5 level, so over the ~10 frames an
+     * EMA of weight 0.1 remembers the blur compounds (shadow and sun-patch edges, the
+     * indirect light's detail), and the error grew with the history's length; without it,
+     * and with the paper's sigma_l 4 instead of 8, SVGF measured better on all six bench
+     * scenes, by 0.1 dB (glass box) to 2.6 dB (window room) (docs/realtime.md, "The hard
+     * scenes"). */
+    p.svgf_sigma_l = 4.0f;
     p.svgf_iterations = 3;
     p.svgf_sigma_n = 128.0f;
     p.svgf_sigma_z = 1.0f;
-    p.svgf_feedback = 1;
+    p.svgf_feedback = 0;
     /* 4 x 4 rays per pixel on an emitter's edge: coverage to 1/16 at most 16 rays a pixel. */
     p.emission_samples = 4;
     p.svgf_taa_alpha = 0.0f;
@@ -181,6 +187,12 @@ tr_recon_params tr_recon_params_default(void) {
     p.svgf_specular = 0;
     /* The sample's own albedo unless asked (tr_resolve_albedo; docs/realtime.md). */
     p.albedo_samples = 0;
+    /* SVGF's history remembers less than the other methods' (the paper's 0.2): the
+     * reprojection resamples the history bilinearly every frame, a blur that compounds
+     * with the history's age, and after SVGF's spatial filter that blur costs more than
+     * the noise a longer history removes (docs/realtime.md, "The hard scenes"). Without
+     * the spatial filter the longer history is better, so alpha_min stays 0.1. */
+    p.svgf_alpha_min = 0.2f;
     return p;
 }
 
@@ -866,7 +878,8 @@ TR_POST_CLONES static void svgf_variance_rows(const post_ws *ws, const float *lu
                     var[c] = tr_fmaxf(moments[2 * c + 1] - m * m, 0.0f);
                 } else {
                     const float m = a1[a] / aw[a];
-                    var[c] = tr_fmaxf(a2[a] / aw[a] - m * m, 0.0f) * (4.0f / len[c]);
+                    var[c] =
+                        tr_fmaxf(a2[a] / aw[a] - m * m, 0.0f) * (TR_POST_SVGF_SHORT_BOOST / len[c]);
                 }
             }
         }
@@ -1072,7 +1085,12 @@ static void direct_temporal(tr_recon *r, const tr_gbuffer *g, const tr_camera *c
  * (F0 A + B from the DFG table, dfg.h, at the pixel's mean F0 and alpha and the cosine
  * between its normal and its ray; 0 where the surface has no specular lobe) into
  * r->spec_alb, its specular light over it into r->illum_s, and the rest of its colour, the
- * diffuse light, into r->diffuse. */
+ * diffuse light, into r->diffuse. A pixel whose passes primary surface replacement took
+ * through a refraction or a curved mirror (TR_PRIM_PSR_CURVED) keeps all its light in the
+ * diffuse part: the DFG lookup and the virtual motion both take the camera's ray, which
+ * after a refraction is not the ray that reached the replaced surface, and split there
+ * the glass sphere of scenes/window-room.json filled with bright speckles (measured:
+ * docs/realtime.md, "Diffuse and specular apart"). */
 static void spec_prepare(tr_recon *r, const tr_gbuffer *g, const tr_camera *cam, int threads) {
     const float *dfg = tr_post_dfg_table();
     const int w = (int)g->width, h = (int)g->height;
@@ -1086,11 +1104,13 @@ static void spec_prepare(tr_recon *r, const tr_gbuffer *g, const tr_camera *cam,
             float a, b;
             tr_post_dfg_lookup(dfg, tr_fabsf(v3_dot(n, d)), sp[6], &a, &b);
             const int lobe = sp[3] > 0.0f || sp[4] > 0.0f || sp[5] > 0.0f;
+            const int apart = (g->prim[i] & TR_PRIM_PSR_CURVED) == 0u;
             for (int k = 0; k < 3; ++k) {
-                const float alb = lobe ? sp[3 + k] * a + b : 0.0f;
+                const float alb = lobe && apart ? sp[3 + k] * a + b : 0.0f;
+                const float spec = apart ? sp[k] : 0.0f;
                 r->spec_alb[3 * i + k] = alb;
-                r->illum_s[3 * i + k] = sp[k] / tr_post_demod_factor(alb);
-                r->diffuse[3 * i + k] = g->color[3 * i + k] - sp[k];
+                r->illum_s[3 * i + k] = spec / tr_post_demod_factor(alb);
+                r->diffuse[3 * i + k] = g->color[3 * i + k] - spec;
             }
         }
     }
@@ -1278,7 +1298,7 @@ int tr_recon_frame_moving(tr_recon *r, const tr_gbuffer *frame, const tr_camera 
                           const tr_vec3 *motion, uint32_t motion_count, int method,
                           const tr_recon_params *p, int threads, float *out, tr_error *err) {
     const tr_gbuffer *g = frame;
-    const tr_recon_params resolved = tr_recon_params_resolve(p);
+    const tr_recon_params resolved = tr_recon_params_for(p, method);
     p = &resolved;
     if (check_frame(r->width, r->height, g, err) != TR_OK) {
         return TR_ERR;

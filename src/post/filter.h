@@ -536,11 +536,18 @@ TR_FN float tr_post_svgf_kz(TR_CONST_GLOBAL float *depth, int w, int h, int x, i
     return 1.0f / (sigma_z * grad + 1e-6f);
 }
 
+/* The boost of a short history's spatial variance estimate: TR_POST_SVGF_SHORT_BOOST /
+ * length. It was 4 with sigma_l 8 and the first level fed back; with sigma_l 4 and no
+ * feedback (tr_recon_params_default) 16 keeps the luminance weight of a one-frame history
+ * what it was (4 sqrt(16) = 8 sqrt(4)), so that the frames after a cut or a disocclusion,
+ * which no longer receive a filtered history, are filtered as strongly as before. */
+#define TR_POST_SVGF_SHORT_BOOST 16.0f
+
 /* SVGF's variance of pixel (x, y)'s luminance (Schied et al. 2017, section 4.2): from
  * the temporal moments once 4 frames of history exist, before that from the 5x5
  * neighbourhood's moments (the paper takes 7x7 on the same condition), restricted to
  * taps whose normal is within ~25 degrees so that it stays on one surface, and boosted
- * by 4 / length as the paper does, since so few frames are less to trust. */
+ * by TR_POST_SVGF_SHORT_BOOST / length, since so few frames are less to trust. */
 TR_FN float tr_post_svgf_variance_pixel(TR_CONST_GLOBAL float *illum,
                                         TR_CONST_GLOBAL float *moments, TR_CONST_GLOBAL float *len,
                                         TR_CONST_GLOBAL float *normal, int w, int h, int x, int y) {
@@ -567,7 +574,7 @@ TR_FN float tr_post_svgf_variance_pixel(TR_CONST_GLOBAL float *illum,
         }
     }
     const float m = s1 / sw;
-    return tr_fmaxf(s2 / sw - m * m, 0.0f) * (4.0f / len[c]);
+    return tr_fmaxf(s2 / sw - m * m, 0.0f) * (TR_POST_SVGF_SHORT_BOOST / len[c]);
 }
 
 /* The variance of pixel (x, y) through SVGF's 3x3 Gaussian prefilter (taps 1, 1/2, 1/4,

@@ -367,7 +367,7 @@ static int cl_motion(recon_cl *c, const tr_vec3 *motion, uint32_t count, tr_erro
 static int cl_frame(tr_recon_device *r, const tr_camera *cam, const tr_vec3 *motion,
                     uint32_t motion_count, int method, const tr_recon_params *p, float *out,
                     tr_error *err) {
-    const tr_recon_params resolved = tr_recon_params_resolve(p);
+    const tr_recon_params resolved = tr_recon_params_for(p, method);
     p = &resolved;
     recon_cl *c = r->cl;
     if (!motion) {

@@ -27,4 +27,14 @@ static inline tr_recon_params tr_recon_params_resolve(const tr_recon_params *p) 
     return r;
 }
 
+/* The parameters one method's frame uses: resolved, and SVGF's own alpha_min where it
+ * has one. */
+static inline tr_recon_params tr_recon_params_for(const tr_recon_params *p, int method) {
+    tr_recon_params r = tr_recon_params_resolve(p);
+    if (method == TR_RECON_SVGF && r.svgf_alpha_min > 0.0f) {
+        r.alpha_min = r.svgf_alpha_min;
+    }
+    return r;
+}
+
 #endif
