@@ -385,6 +385,26 @@ echo "640x360: help at $(state help_rect), debug view at $(state overlay_rect)"
 [ -n "${TRAC0R_KEEP_DUMP:-}" ] && dump "$TRAC0R_KEEP_DUMP"
 quit_viewer
 
+# F: a thin lens focuses on the surface under the mouse. A wall 5 units down the view, a
+# lens focused at 1: after F over the wall the camera's focus distance is the wall's.
+cat >lens.json <<'JSON'
+{"camera": {"position": [0, 0, 0], "direction": [0, 0, -1], "fov": 40,
+            "aperture_radius": 0.05, "focus_distance": 1},
+ "materials": {"wall": {"type": "diffuse", "color": [0.7, 0.7, 0.7]},
+               "lamp": {"type": "emitter", "color": [1, 1, 1], "emittance": 4}},
+ "shapes": [{"type": "quad", "vertices": [[-9, -9, -5], [9, -9, -5], [9, 9, -5], [-9, 9, -5]],
+             "material": "wall"},
+            {"type": "quad", "vertices": [[-1, 3, -1], [1, 3, -1], [1, 3, -3], [-1, 3, -3]],
+             "material": "lamp"}]}
+JSON
+start_viewer --scene lens.json --max-spp 2
+awk -v f="$(state focus)" 'BEGIN { exit !(f > 0.999 && f < 1.001) }' || fail "lens: focus $(state focus), not 1"
+gen0=$(state view_generation)
+xdotool mousemove --window "$WID" 80 60 key f
+wait_for 10 '[ "$(state view_generation)" -gt "$gen0" ]' || fail "F did not change the view"
+awk -v f="$(state focus)" 'BEGIN { exit !(f > 4.99 && f < 5.01) }' || fail "F: focus $(state focus), not 5"
+quit_viewer
+
 # --device opencl (builds and machines with an OpenCL device; tests/cli_opencl.sh checks
 # that PoCL is there): the window renders on the device, a stride change clears the
 # device's film, and F12 then saves what `trac0r render --device opencl --spp 4` computes.

@@ -29,7 +29,11 @@
  *  (d) Argument checks: negative, NaN or infinite radius, a focus distance <= 0; the
  *      f-number's radius; bdpt and vcm refuse a camera with an aperture.
  *  (e) Scene files: aperture_radius, f_number (with sensor_height), focus_distance and
- *      its default (look_at's distance along the view), and the refusals. */
+ *      its default (look_at's distance along the view), and the refusals.
+ *  (f) Focusing on a screen point (tr_scene_focus_distance, the viewer's F key): the
+ *      distance along the view to a sphere under the point, against the ray-sphere
+ *      intersection worked out here (within the icosphere's faceting); 0 off the sphere,
+ *      off the screen and for an uncommitted scene. */
 #include "check.h"
 #include "scene_util.h"
 
@@ -419,7 +423,42 @@ static void scene_files(void) {
     }
 }
 
+/* (f) */
+static void focus_on_point(void) {
+    tr_scene scene = {0}, *s = &scene;
+    sphere_scene(s, 1.0, 10.0);
+    tr_camera cam;
+    make_camera(&cam);
+    const float pts[3][2] = {{W / 2.0f, H / 2.0f},
+                             {W / 2.0f + 2.5f, H / 2.0f - 1.5f},
+                             {W / 2.0f - 3.25f, H / 2.0f + 2.75f}};
+    for (int i = 0; i < 3; ++i) {
+        /* The pinhole ray through the point, and where it meets the unit sphere at z = 10. */
+        const double sx = (pts[i][0] / W - 0.5) * cam.canvas_width;
+        const double sy = (0.5 - pts[i][1] / H) * cam.canvas_height;
+        const double dx = cam.right.x * sx + cam.up.x * sy, dy = cam.right.y * sx + cam.up.y * sy;
+        const double dz = 1.0 + cam.right.z * sx + cam.up.z * sy;
+        const double n = sqrt(dx * dx + dy * dy + dz * dz);
+        const double b = 10.0 * dz / n, disc = b * b - 99.0; /* |t d - c|^2 = 1, |c| = 10 */
+        const double want = (b - sqrt(disc)) * dz / n;
+        float got = 0.0f;
+        CHECK(disc > 0.0 && tr_scene_focus_distance(s, &cam, pts[i][0], pts[i][1], &got) == 1 &&
+                  fabs(got - want) < 0.01,
+              "point %d: focus distance %g, the sphere at %g", i, got, want);
+    }
+    float d = -1.0f;
+    CHECK(tr_scene_focus_distance(s, &cam, 1.5f, 1.5f, &d) == 0 && d == -1.0f, "off the sphere");
+    CHECK(tr_scene_focus_distance(s, &cam, -1.0f, 3.0f, &d) == 0 &&
+              tr_scene_focus_distance(s, &cam, (float)W, 3.0f, &d) == 0 &&
+              tr_scene_focus_distance(s, &cam, NAN, 3.0f, &d) == 0 && d == -1.0f,
+          "off the screen");
+    add_mat(s, tr_material_emitter(v3s(1.0f), 1.0f)); /* an edit: no longer committed */
+    CHECK(tr_scene_focus_distance(s, &cam, W / 2.0f, H / 2.0f, &d) == 0, "uncommitted scene");
+    tr_scene_clear(s);
+}
+
 int main(void) {
+    focus_on_point();
     lens_rays();
     arguments();
     scene_files();

@@ -57,7 +57,7 @@ static int write_state(const char *path, const view_state *s, const tr_fly_camer
         "overlay %d\nhelp %d\nbvh %d\nbvh_depth %u\ntimings %d\nmouselook %d\nstride %d\n"
         "exposure %.2f\nfps %.3f\ndumps %llu\nshots %llu\nupdates %llu\nrebuild_ms %.3f\n"
         "moving %d\nscale %.3f\nframe_spp %u\ncameras %llu\nmirrored %d\nrecon %s\n"
-        "overlay_rect %d %d %d %d\nhelp_rect %d %d %d %d\n",
+        "overlay_rect %d %d %d %d\nhelp_rect %d %d %d %d\nfocus %.6f\n",
         sf->spp, (unsigned long long)sf->gen, (unsigned long long)sf->view_gen,
         (unsigned long long)sf->frames, (unsigned long long)sf->cancelled, w, h, f->pos.x, f->pos.y,
         f->pos.z, f->dir.x, f->dir.y, f->dir.z, f->up.x, f->up.y, f->up.z, f->speed, s->overlay,
@@ -66,7 +66,7 @@ static int write_state(const char *path, const view_state *s, const tr_fly_camer
         s->rebuild_ms, sf->moving, (double)sf->scale, sf->frame_spp, (unsigned long long)s->cameras,
         f->mirrored, tr_recon_name(s->recon), s->overlay_rect.x, s->overlay_rect.y,
         s->overlay_rect.w, s->overlay_rect.h, s->help_rect.x, s->help_rect.y, s->help_rect.w,
-        s->help_rect.h);
+        s->help_rect.h, f->focus_dist);
     return tr_outfile_commit(out, err) == TR_OK ? 0 : -1;
 }
 
@@ -77,25 +77,20 @@ static int dump_window(SDL_Renderer *ren, const char *path, tr_error *err) {
         tr_error_set(err, TR_STATUS_DEVICE, "%s: no window size: %s", path, SDL_GetError());
         return -1;
     }
-    uint8_t *px = malloc((size_t)w * h * 3);
-    if (!px) {
+    char head[40]; /* the file: this header, then the pixels */
+    const size_t hn = (size_t)snprintf(head, sizeof head, "P6\n%d %d\n255\n", w, h);
+    uint8_t *file = malloc(hn + (size_t)w * h * 3);
+    if (!file) {
         tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "%s: out of memory", path);
         return -1;
     }
-    if (SDL_RenderReadPixels(ren, NULL, SDL_PIXELFORMAT_RGB24, px, w * 3) != 0) {
-        tr_error_set(err, TR_STATUS_DEVICE, "%s: cannot read the window: %s", path, SDL_GetError());
-        free(px);
-        return -1;
-    }
-    tr_outfile *out = tr_outfile_create(path, err);
-    if (!out) {
-        free(px);
-        return -1;
-    }
-    fprintf(tr_outfile_stream(out), "P6\n%d %d\n255\n", w, h);
-    fwrite(px, 3, (size_t)w * h, tr_outfile_stream(out)); /* checked by the commit */
-    free(px);
-    return tr_outfile_commit(out, err) == TR_OK ? 0 : -1;
+    memcpy(file, head, hn);
+    int rc = SDL_RenderReadPixels(ren, NULL, SDL_PIXELFORMAT_RGB24, file + hn, w * 3) != 0
+                 ? tr_error_set(err, TR_STATUS_DEVICE, "%s: cannot read the window: %s", path,
+                                SDL_GetError())
+                 : tr_outfile_write(path, file, hn + (size_t)w * h * 3, err);
+    free(file);
+    return rc == TR_OK ? 0 : -1;
 }
 
 /* The first free STEM-NNN.EXT in dir. */
@@ -119,6 +114,7 @@ static const char help_text[] = "trac0r view - keys\n"
                                 "wheel        movement speed\n"
                                 "R            reset the camera\n"
                                 "C            camera as scene JSON\n"
+                                "F            focus on the point under the mouse\n"
                                 "M            reconstruction method\n"
                                 "+/-          exposure\n"
                                 "1/2/3        preview stride 1/2/4\n"
@@ -312,11 +308,7 @@ static void save_camera(view_window *vw) {
     fflush(stdout);
     next_file_path(vw->o->shot_dir, "trac0r-camera", "json", path, sizeof path);
     tr_error cerr;
-    tr_outfile *cf = tr_outfile_create(path, &cerr);
-    if (cf) {
-        fputs(json, tr_outfile_stream(cf)); /* checked by the commit */
-    }
-    if (!cf || tr_outfile_commit(cf, &cerr) != TR_OK) {
+    if (tr_outfile_write(path, json, strlen(json), &cerr) != TR_OK) {
         fprintf(stderr, "trac0r view: %s\n", cerr.msg);
     } else {
         printf("trac0r view: saved %s\n", path);
@@ -378,6 +370,13 @@ static void on_key(view_window *vw, SDL_Keycode key, int *view_changed) {
         break;
     case SDLK_c:
         save_camera(vw);
+        break;
+    case SDLK_f: /* a lens focuses on the surface under the mouse (r.mu: --animate moves it) */
+        pthread_mutex_lock(&vw->r.mu);
+        *view_changed |= vw->fly.lens_radius > 0.0f &&
+                         tr_scene_focus_distance(vw->scene, &vw->cam, (float)vw->mouse_x + 0.5f,
+                                                 (float)vw->mouse_y + 0.5f, &vw->fly.focus_dist);
+        pthread_mutex_unlock(&vw->r.mu);
         break;
     case SDLK_F12: {
         char path[4200];

@@ -54,6 +54,10 @@ int tr_outfile_commit(tr_outfile *f, tr_error *err);
 /* Removes the temporary file and frees `f` (NULL is fine). The target is untouched. */
 void tr_outfile_abort(tr_outfile *f);
 
+/* `len` bytes of `data` as the whole of `path`, through a temporary file as above: the
+ * target holds all of them or is untouched. TR_OK or TR_ERR with `err` set. */
+int tr_outfile_write(const char *path, const void *data, size_t len, tr_error *err);
+
 /* Unlinks the temporary file of every tr_outfile still open, from any thread. Safe to call
  * from a signal handler (it calls unlink() alone); the streams stay open and a later
  * commit of one of them fails. */

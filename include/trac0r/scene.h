@@ -275,6 +275,13 @@ int tr_scene_sun(const tr_scene *s, tr_vec3 *dir, float *angle_deg, tr_vec3 *irr
 /* The camera rays start from; set by tr_scene_builtin and tr_scene_file_load. */
 const tr_camera *tr_scene_camera(const tr_scene *s);
 void tr_scene_set_camera(tr_scene *s, const tr_camera *cam);
+/* The distance along cam's view direction to the first surface under the screen point
+ * (x, y) (in pixels from the top-left corner, 0 <= x < width, 0 <= y < height): the
+ * focus distance (tr_camera_set_lens) that makes that point sharp, as a viewer's "focus
+ * on the point under the cursor" needs. Returns 1 and sets *dist, or 0 when the pinhole
+ * ray through the point meets nothing, the point lies off the screen or the scene is not
+ * committed. */
+int tr_scene_focus_distance(const tr_scene *s, const tr_camera *cam, float x, float y, float *dist);
 
 /* The committed acceleration structure (TR_ACCEL_TYPE_FLAT before any commit). */
 tr_accel_type tr_scene_accel(const tr_scene *s);

@@ -258,6 +258,15 @@ int tr_outfile_check(const char *path, tr_error *err) {
     return TR_OK;
 }
 
+int tr_outfile_write(const char *path, const void *data, size_t len, tr_error *err) {
+    tr_outfile *f = tr_outfile_create(path, err);
+    if (!f) {
+        return TR_ERR;
+    }
+    fwrite(data, 1, len, tr_outfile_stream(f)); /* a short write fails the commit's flush */
+    return tr_outfile_commit(f, err);
+}
+
 FILE *tr_outfile_stream(tr_outfile *f) {
     return f->fp;
 }
