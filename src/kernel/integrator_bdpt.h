@@ -46,10 +46,13 @@
  * vertex is then a direction (TR_BDPT_INFINITE), whose densities are solid-angle ones, and
  * the camera side's strategies for these lights, pt's light sample at each vertex (s = 1)
  * and the escape into the sky (s = 0), are weighed with the others by the same MIS
- * (tr_bdpt_sky_camera). Punctual lights (delta) stay outside: they are added along the
- * camera subpath with pt's light sample (tr_bdpt_infinite), an estimator of their part
- * that adds to BDPT's of the rest. A scene without an environment and a sun draws the
- * random numbers it drew before and renders the same bits.
+ * (tr_bdpt_sky_camera). Punctual lights join the same choice by power
+ * (tr_bdpt_punctual_subpath): a point or spot light's subpath starts at its position
+ * (TR_BDPT_PUNCTUAL, delta in position), a directional light's on the disc as the sun's
+ * (TR_BDPT_DIRECTIONAL, delta in direction); no strategy hits them, so strategy s = 0 is
+ * left out of their paths' MIS sums, and pt's light sample of them is strategy s = 1
+ * (tr_bdpt_punctual_camera). A scene without an environment, a sun and punctual lights
+ * draws the random numbers it drew before and renders the same bits.
  *
  * Limits: a subpath holds at most TR_BDPT_MAX_VERTS vertices, so the max depth is
  * TR_BDPT_MAX_DEPTH (also the default). On an OpenCL device the 64-bit
@@ -904,8 +907,8 @@ TR_FN int tr_bdpt_punctual_subpath(const tr_scene_view *s, int max_depth, const 
 /* The light subpath: a point by area from the emitter table, a cosine-weighted direction
  * on its emitting side (either, for two-sided emitters), then up to max_depth - 1 hits
  * (a light subpath of s vertices serves paths of at least s segments); or, with the
- * probability of their power, one from the environment or the sun (tr_bdpt_sky_subpath).
- * Returns the vertex count (0 without lights). */
+ * probability of their power, one from the environment or the sun (tr_bdpt_sky_subpath)
+ * or a punctual light (tr_bdpt_punctual_subpath). Returns the vertex count (0 without lights). */
 TR_FN int tr_bdpt_light_subpath(const tr_scene_view *s, int max_depth, const tr_sampler *smp,
                                 tr_bdpt_vertex *lv, uint32_t *rays) {
     int nl = 0;
@@ -1132,9 +1135,9 @@ TR_FN tr_vec3 tr_bdpt_connect(const tr_scene_view *s, const tr_camera *cam,
     return radiance;
 }
 
-/* The punctual lights' part of camera subpath cv[0 .. nc-1] that left the scene as *esc
- * says (see the top of this file), and the environment's and the sun's where no light
- * subpath starts from them (a scene without triangles, tr_bdpt_sky_on): at each vertex
+/* The punctual lights', the environment's and the sun's part of camera subpath
+ * cv[0 .. nc-1] that left the scene as *esc says, where no light subpath starts from them
+ * (a scene without triangles, tr_bdpt_sky_on, tr_bdpt_punctual_on): at each vertex
  * that is not specular and can still add a segment, pt's light samples of them (the
  * sampler dimensions pt reads at that segment, which BDPT's camera side leaves unread);
  * where the subpath left the scene, the environment and the sun it sees, each weighted
