@@ -18,6 +18,12 @@
  *  (a') as (a) in an open room under an environment map and the sun, with an area lamp:
  *      light subpaths from all three, and camera subpaths closed at infinity (the
  *      escape into the sky or the sun, s = 0), every strategy among the sums.
+ *  (a'') as (a) and (a') with a point light, a spot and a directional light added: light
+ *      subpaths from them too, strategy 0 (hitting a delta light) left out of the sums.
+ *  (j) bdpt and vcm agree with pt per region on the diffuse Cornell box under a point
+ *      light, a spot and a directional light (each beside the lamp), and under a spot
+ *      whose caustic through the glass sphere pt cannot find, bdpt finds more light than
+ *      pt and vcm agrees with bdpt.
  *  vcm (src/kernel/integrator_vcm.h):
  *  (f) with merges among the strategies (eta > 0) the weights of (a)'s paths, the merge
  *      at the camera subpath's first non-delta vertex included, still sum to one; the
