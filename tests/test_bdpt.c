@@ -989,7 +989,7 @@ static void punctual_agree(void) {
         const tr_aabb b = tr_triangles_bounds(s.triangles, s.triangle_count);
         const tr_vec3 c = v3_scale(v3_add(b.min, b.max), 0.5f), e = v3_sub(b.max, b.min);
         static region_stats dark, pt, bd, vc;
-        const int depth = 5, frames = 160;
+        const int depth = 5, frames = kind == 3 ? 160 : 48;
         CHECK(run(&s, &cam, TR_INTEGRATOR_PT, depth, frames, 0xa4ULL, &dark, &err) == TR_OK, "%s",
               err.msg);
         tr_punctual l;
