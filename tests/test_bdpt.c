@@ -18,6 +18,12 @@
  *  (a') as (a) in an open room under an environment map and the sun, with an area lamp:
  *      light subpaths from all three, and camera subpaths closed at infinity (the
  *      escape into the sky or the sun, s = 0), every strategy among the sums.
+ *  (a'') as (a) and (a') with a point light, a spot and a directional light added: light
+ *      subpaths from them too, strategy 0 (hitting a delta light) left out of the sums.
+ *  (j) bdpt and vcm agree with pt per region on the diffuse Cornell box under a point
+ *      light, a spot and a directional light (each beside the lamp), and under a spot
+ *      whose caustic through the glass sphere pt cannot find, bdpt finds more light than
+ *      pt and vcm agrees with bdpt.
  *  vcm (src/kernel/integrator_vcm.h):
  *  (f) with merges among the strategies (eta > 0) the weights of (a)'s paths, the merge
  *      at the camera subpath's first non-delta vertex included, still sum to one; the
@@ -50,6 +56,31 @@
 #define PI_D 3.14159265358979323846
 #define NSIGMA 5.0
 
+/* Adds a point light, a spot and a directional light to the scene being built (the MIS
+ * sums over paths from punctual lights) where set. */
+static int g_punctual;
+
+static void add_punctual_lights(tr_scene *s) {
+    tr_error err;
+    tr_punctual l[3];
+    memset(l, 0, sizeof l);
+    l[0].type = TR_PUNCTUAL_POINT;
+    l[0].pos = v3(0.2f, 0.6f, -0.3f);
+    l[0].intensity = v3(2.0f, 1.8f, 1.5f);
+    l[1].type = TR_PUNCTUAL_SPOT;
+    l[1].pos = v3(-0.6f, 0.8f, 0.6f);
+    l[1].dir = v3(0.3f, -1.0f, -0.2f);
+    l[1].intensity = v3(4.0f, 4.0f, 3.0f);
+    l[1].cos_outer = 0.7f;
+    l[1].cos_inner = 0.85f;
+    l[2].type = TR_PUNCTUAL_DIRECTIONAL;
+    l[2].dir = v3(0.3f, -1.0f, 0.5f);
+    l[2].intensity = v3(1.5f, 1.5f, 1.4f);
+    for (int i = 0; i < 3; ++i) {
+        CHECK(tr_scene_add_punctual(s, &l[i], &err) == TR_OK, "punctual light: %s", err.msg);
+    }
+}
+
 /* A closed diffuse box [-1,1]^3 with a red block, a smooth-shaded diffuse sphere, a GGX
  * sphere, a two-sided and a one-sided lamp (facing down); `specular` adds a glass sphere
  * and a mirror. */
@@ -78,6 +109,9 @@ static void build_box(tr_scene *s, int specular, uint32_t w, uint32_t h) {
         add_shape(s, TR_SHAPE_PLANE, mirror, v3(0.0f, 0.0f, 0.98f), v3((float)PI_D / 2.0f, 0, 0),
                   v3(1.2f, 1, 1.2f));
     }
+    if (g_punctual) {
+        add_punctual_lights(s);
+    }
     CHECK(tr_camera_make(&s->camera, v3(0.0f, 0.0f, -0.95f), v3(0.0f, -0.1f, 1.0f),
                          v3(0.0f, 1.0f, 0.0f), 80.0f, 0.001f, 100.0f, w, h, &err) == TR_OK,
           "camera: %s", err.msg);
@@ -92,8 +126,8 @@ static int vtx_delta(const tr_bdpt_vertex *v) {
 
 /* Whether the integrator tries strategy k (light vertices) on path P of n vertices. */
 static int strategy_used(const tr_bdpt_vertex *P, int n, int k) {
-    if (k >= n || (k == 1 && n == 2)) {
-        return 0;
+    if (k >= n || (k == 1 && n == 2) || (k == 0 && tr_bdpt_delta_light(&P[0]))) {
+        return 0; /* ... and no camera subpath hits a delta light */
     }
     if (vtx_delta(&P[k]) || (k >= 1 && vtx_delta(&P[k - 1]))) {
         return 0;
@@ -109,8 +143,10 @@ static float rebuilt_weight_vm(const tr_scene_view *v, const tr_camera *cam,
     tr_bdpt_vertex L[2 * TR_BDPT_MAX_VERTS], C[2 * TR_BDPT_MAX_VERTS], PL[2 * TR_BDPT_MAX_VERTS];
     for (int i = 0; i < n; ++i) {
         PL[i] = P[i];
-        PL[i].kind = i == 0 ? (P[0].kind == TR_BDPT_INFINITE ? TR_BDPT_INFINITE : TR_BDPT_LIGHT)
-                            : (i == n - 1 ? TR_BDPT_CAMERA : TR_BDPT_SURFACE);
+        PL[i].kind =
+            i == 0 ? (P[0].kind == TR_BDPT_INFINITE || tr_bdpt_delta_light(&P[0]) ? P[0].kind
+                                                                                  : TR_BDPT_LIGHT)
+                   : (i == n - 1 ? TR_BDPT_CAMERA : TR_BDPT_SURFACE);
         PL[i].delta = vtx_delta(&PL[i]);
     }
     /* Light side densities of P[i] (drawn from P[i-1]) and camera side (from P[i+1]). */
@@ -133,7 +169,7 @@ static float rebuilt_weight_vm(const tr_scene_view *v, const tr_camera *cam,
     for (int j = 0; j < n - k; ++j) {
         int i = n - 1 - j;
         C[j] = PL[i];
-        if (i == 0 && PL[0].kind != TR_BDPT_INFINITE) {
+        if (i == 0 && PL[0].kind == TR_BDPT_LIGHT) {
             C[j].kind = TR_BDPT_SURFACE; /* the camera subpath found the emitter */
         }
         C[j].pdf_fwd = fc[i];
@@ -145,10 +181,10 @@ static float rebuilt_weight_vm(const tr_scene_view *v, const tr_camera *cam,
             lv_out[i] = PL[i];
             lv_out[i].pdf_fwd = fl[i];
             lv_out[i].pdf_rev = fc[i];
-            lv_out[i].wo = i == 0 ? PL[0].wo
-                                  : (PL[i - 1].kind == TR_BDPT_INFINITE
-                                         ? PL[i - 1].wo
-                                         : v3_normalize(v3_sub(PL[i - 1].p, PL[i].p)));
+            lv_out[i].wo =
+                i == 0 ? PL[0].wo
+                       : (tr_bdpt_far(&PL[i - 1]) ? PL[i - 1].wo
+                                                  : v3_normalize(v3_sub(PL[i - 1].p, PL[i].p)));
         }
         lv_out[0].pdf_nee = tr_bdpt_nee_pdf(v, &PL[0], &PL[1]);
         lv_out[k].beta = v3s(1.0f);
@@ -218,6 +254,9 @@ static void build_sky_room(tr_scene *s, uint32_t w, uint32_t h) {
           "environment: %s", err.msg);
     CHECK(tr_scene_set_sun(s, v3(-0.4f, 1.0f, -0.6f), 3.0f, v3(4.0f, 3.8f, 3.4f), &err) == TR_OK,
           "sun: %s", err.msg);
+    if (g_punctual) {
+        add_punctual_lights(s);
+    }
     CHECK(tr_camera_make(&s->camera, v3(0.0f, 0.2f, -2.5f), v3(0.0f, -0.2f, 1.0f),
                          v3(0.0f, 1.0f, 0.0f), 70.0f, 0.001f, 100.0f, w, h, &err) == TR_OK,
           "camera: %s", err.msg);
@@ -231,12 +270,29 @@ static void mis_sum_sky(void) {
     tr_scene_clear(&s);
 }
 
+/* The same sums where light subpaths start from a point light, a spot and a directional
+ * light too: in the box (beside its lamps) and in the sky room (beside the sky, the sun
+ * and the lamp). Strategy 0 cannot make their paths; the camera side's light sample of
+ * them (s = 1) and the connections and merges of their subpaths share the weight. */
+static void mis_sum_punctual(void) {
+    tr_scene s = {0};
+    g_punctual = 1;
+    build_box(&s, 1, 8, 8);
+    mis_paths(&s, "box and punctual lights", 0);
+    tr_scene_clear(&s);
+    build_sky_room(&s, 8, 8);
+    mis_paths(&s, "sky room and punctual lights", 1);
+    tr_scene_clear(&s);
+    g_punctual = 0;
+}
+
 static void mis_paths(tr_scene *sp, const char *what, int sky) {
     tr_scene_view v = tr_scene_view_of(sp);
     const tr_camera *cam = &sp->camera;
     const int depth = 8;
     int paths = 0, bad = 0, bookkeeping_bad = 0, with_delta = 0;
     int merged = 0, bad_vm = 0, fast_bad = 0, sky_paths = 0, closed = 0;
+    int punct_paths = 0, dir_paths = 0;
     double worst = 0.0, worst_vm = 0.0;
     for (uint32_t k = 0; k < 3000; ++k) {
         tr_sampler smp = tr_sampler_make(77, k % 64u, k);
@@ -247,6 +303,8 @@ static void mis_paths(tr_scene *sp, const char *what, int sky) {
                                         &smp, cv, &rays, NULL, &esc);
         int nl = tr_bdpt_light_subpath(&v, depth, &smp, lv, &rays);
         sky_paths += nl >= 2 && lv[0].kind == TR_BDPT_INFINITE;
+        punct_paths += nl >= 2 && tr_bdpt_delta_light(&lv[0]);
+        dir_paths += nl >= 2 && lv[0].kind == TR_BDPT_DIRECTIONAL;
         if (sky && nc >= 2) {
             /* Camera subpaths closed at infinity: every prefix, the environment in a
              * direction from the sampler or the sun's centre. */
@@ -368,11 +426,14 @@ static void mis_paths(tr_scene *sp, const char *what, int sky) {
     CHECK(!sky || (sky_paths > 300 && closed > 1000),
           "%s: %d light subpaths from the sky, %d camera subpaths closed at infinity", what,
           sky_paths, closed);
+    CHECK(!g_punctual || (punct_paths > 150 && dir_paths > 50),
+          "%s: %d light subpaths from punctual lights (%d directional)", what, punct_paths,
+          dir_paths);
     CHECK(bookkeeping_bad == 0, "%d of %d paths: the walks' densities give another weight",
           bookkeeping_bad, paths);
     printf("MIS (%s): %d paths (%d through delta vertices, %d light subpaths from the sky, %d "
-           "closed at infinity), worst |sum - 1| = %.2e\n",
-           what, paths, with_delta, sky_paths, closed, worst);
+           "from punctual lights, %d closed at infinity), worst |sum - 1| = %.2e\n",
+           what, paths, with_delta, sky_paths, punct_paths, closed, worst);
     CHECK(merged > 2000 && bad_vm == 0,
           "MIS with merges: %d of %d paths (%d with a merge) do not sum to 1 (worst %.2e)", bad_vm,
           paths, merged, worst_vm);
@@ -907,6 +968,85 @@ static void lamp_and_sky(void) {
     tr_scene_clear(&s);
 }
 
+/* Punctual lights: the diffuse Cornell box lit by a point light, a spot, or a directional
+ * light through its open front, beside its lamp, one at a time. bdpt's and vcm's
+ * estimates (light subpaths from the punctual light, weighed with the camera side's light
+ * sample of it) agree with pt's (the light sample alone) per region, and the light adds
+ * light. With kind 3, the box with its glass sphere under the spot: pt cannot find
+ * the caustic (a delta light seen through glass), bdpt and vcm do and agree. */
+static void punctual_agree(void) {
+    static const char *names[4] = {"point", "spot", "directional", "spot (caustic)"};
+    for (uint32_t kind = 0; kind < 4; ++kind) {
+        tr_error err;
+        tr_scene s = {0};
+        tr_scene_init(&s);
+        CHECK(tr_scene_builtin(&s, kind == 3 ? "cornell" : "cornell-diffuse", RW, RH, &err) ==
+                  TR_OK,
+              "%s", err.msg);
+        CHECK(tr_scene_commit(&s, TR_ACCEL_TYPE_BVH, &err) == TR_OK, "%s", err.msg);
+        tr_camera cam = *tr_scene_camera(&s);
+        CHECK(tr_camera_resize(&cam, RW, RH, &err) == TR_OK, "%s", err.msg);
+        const tr_aabb b = tr_triangles_bounds(s.triangles, s.triangle_count);
+        const tr_vec3 c = v3_scale(v3_add(b.min, b.max), 0.5f), e = v3_sub(b.max, b.min);
+        static region_stats dark, pt, bd, vc;
+        const int depth = 5, frames = kind == 3 ? 160 : 48;
+        CHECK(run(&s, &cam, TR_INTEGRATOR_PT, depth, frames, 0xa4ULL, &dark, &err) == TR_OK, "%s",
+              err.msg);
+        tr_punctual l;
+        memset(&l, 0, sizeof l);
+        l.type = kind == 0 ? TR_PUNCTUAL_POINT
+                           : (kind != 2 ? TR_PUNCTUAL_SPOT : TR_PUNCTUAL_DIRECTIONAL);
+        /* Below the ceiling, a little off-centre; the spot aims at the floor's near half. */
+        l.pos = v3_add(c, v3(0.15f * e.x, 0.3f * e.y, -0.1f * e.z));
+        l.dir = kind & 1u ? v3(0.1f, -1.0f, -0.4f) : v3(0.2f, -0.5f, 1.0f);
+        const float lamp = (kind == 2 ? 30.0f : 0.8f * v3_dot(e, e)) * (kind & 1u ? 6.0f : 1.0f);
+        l.intensity = v3(lamp, 0.9f * lamp, 0.8f * lamp);
+        l.cos_outer = 0.8f;
+        l.cos_inner = 0.9f;
+        CHECK(tr_scene_add_punctual(&s, &l, &err) == TR_OK, "%s", err.msg);
+        CHECK(tr_scene_commit(&s, TR_ACCEL_TYPE_BVH, &err) == TR_OK, "%s", err.msg);
+        tr_scene_view v = tr_scene_view_of(&s);
+        CHECK(tr_bdpt_punctual_on(&v), "%s light: no light subpaths start from it", names[kind]);
+        CHECK(run(&s, &cam, TR_INTEGRATOR_PT, depth, frames, 0xa5ULL, &pt, &err) == TR_OK, "pt: %s",
+              err.msg);
+        CHECK(run(&s, &cam, TR_INTEGRATOR_BDPT, depth, frames, 0xb5ULL, &bd, &err) == TR_OK,
+              "bdpt: %s", err.msg);
+        setenv("TRAC0R_VCM_RADIUS", "0.5", 1);
+        CHECK(run(&s, &cam, TR_INTEGRATOR_VCM, depth, frames, 0xc5ULL, &vc, &err) == TR_OK,
+              "vcm: %s", err.msg);
+        unsetenv("TRAC0R_VCM_RADIUS");
+        double add = 0.0, se = 0.0;
+        for (int r = 0; r < NR; ++r) {
+            add += pt.mean[r][1] - dark.mean[r][1];
+            se += pt.se[r][1] * pt.se[r][1] + dark.se[r][1] * dark.se[r][1];
+        }
+        CHECK(add > 5.0 * sqrt(se), "the %s light adds %g (standard error %g): not seen",
+              names[kind], add, sqrt(se));
+        char what[64];
+        if (kind == 3) {
+            double more = 0.0, se2 = 0.0;
+            for (int r = 0; r < NR; ++r) {
+                more += bd.mean[r][2] - pt.mean[r][2];
+                se2 += bd.se[r][2] * bd.se[r][2] + pt.se[r][2] * pt.se[r][2];
+            }
+            CHECK(more > 5.0 * sqrt(se2), "bdpt finds %g more than pt (standard error %g)", more,
+                  sqrt(se2));
+            snprintf(what, sizeof what, "%s light, vcm vs bdpt", names[kind]);
+            printf("%s light: bdpt finds %.3f more than pt (%.1f sigma); vcm %.2f sigma from "
+                   "bdpt\n",
+                   names[kind], more, more / sqrt(se2), compare_regions(what, &bd, &vc));
+            tr_scene_clear(&s);
+            continue;
+        }
+        snprintf(what, sizeof what, "%s light, bdpt", names[kind]);
+        const double zb = compare_regions(what, &pt, &bd);
+        snprintf(what, sizeof what, "%s light, vcm", names[kind]);
+        const double zv = compare_regions(what, &pt, &vc);
+        printf("%s light: bdpt %.2f sigma, vcm %.2f sigma from pt\n", names[kind], zb, zv);
+        tr_scene_clear(&s);
+    }
+}
+
 /* Merges across a corner. A camera vertex x on a ceiling (facing down) at a wall's corner,
  * a light vertex y from the sky within r of it on the wall's outer face, reached from
  * below and outside (so that the ceiling's BSDF would take it), and a light vertex z on
@@ -1015,6 +1155,8 @@ int main(void) {
     lamp_and_sky();
     mis_sum();
     mis_sum_sky();
+    mis_sum_punctual();
+    punctual_agree();
     light_tracing();
     strategies();
     determinism(TR_INTEGRATOR_BDPT);

@@ -11,8 +11,10 @@
  *      smoothstep between, as the scene file's cone_angle and blend define the cones.
  *  (c) The CDF's steps are the lights' powers' shares.
  *  (d) Scene files: the keys and their refusals (file and key named), and naive refused
- *      for a scene with such lights when the file is applied, and by the renderer itself
- *      (bdpt and vcm sample them along the camera subpath). */
+ *      for a scene with such lights when the file is applied, and by the renderer itself;
+ *      bdpt and vcm (light subpaths from the lights, weighed with the camera side's light
+ *      sample of them) agree with pt over the image. */
+#define _DEFAULT_SOURCE /* setenv */
 #include "check.h"
 #include "scene_util.h"
 
@@ -127,17 +129,6 @@ static void plane_under(const tr_punctual *lights, int n, const char *what) {
     tr_scene_clear(&s);
 }
 
-/* a and b agree within relative tolerance tol in every channel. */
-static int near_rel(tr_vec3 a, tr_vec3 b, double tol) {
-    const float x[3] = {a.x, a.y, a.z}, y[3] = {b.x, b.y, b.z};
-    for (int c = 0; c < 3; ++c) {
-        if (!(fabs((double)x[c] - (double)y[c]) <= tol * fabs((double)y[c]) + 1e-12)) {
-            return 0;
-        }
-    }
-    return 1;
-}
-
 static void renders(void) {
     const tr_punctual point =
         light(TR_PUNCTUAL_POINT, v3(0.3f, 1.0f, -0.2f), v3s(0.0f), 2.0f, 0, 0);
@@ -247,15 +238,20 @@ static void falloff_and_cdf(void) {
           "%s", err.msg);
     const int integrators[4] = {TR_INTEGRATOR_NAIVE, TR_INTEGRATOR_BDPT, TR_INTEGRATOR_VCM,
                                 TR_INTEGRATOR_PT};
-    /* With no emitter, bdpt's and vcm's light subpaths are empty and the lights are
-     * sampled along the camera subpath with pt's random numbers and estimator: pt's image,
-     * up to the rounding of products taken in another order. */
+    /* Light subpaths start from the lights (a plane lit directly: light tracing and the
+     * light sample share the weight), so bdpt's and vcm's images are other estimates of
+     * pt's: their sums over the image and frames agree with pt's within 2 %. */
     static tr_vec3 img[4][64];
+    double sums[4] = {0.0, 0.0, 0.0, 0.0};
+    /* Merges of a quarter pixel: the default radius, 3 pixels of this 8-pixel image,
+     * would lose the light its merges miss beyond the plane's edges. */
+    setenv("TRAC0R_VCM_RADIUS", "0.25", 1);
     for (int k = 0; k < 4; ++k) {
         tr_render_config cfg = tr_render_config_default();
         cfg.integrator = integrators[k];
         cfg.threads = 1;
         cfg.max_depth = 5;
+        tr_film_clear(&f);
         const int rc = tr_render_frame(&s, &cam, &cfg, &f, 0, NULL, &err);
         if (k < 1) { /* naive has no next-event estimation */
             CHECK_STATUS(rc, err, TR_STATUS_UNSUPPORTED, tr_integrator_name(integrators[k]));
@@ -264,20 +260,26 @@ static void falloff_and_cdf(void) {
             continue;
         }
         CHECK(rc == TR_OK, "%s: %s", tr_integrator_name(integrators[k]), err.msg);
-        for (uint32_t i = 0; i < 64u; ++i) {
-            img[k][i] = tr_film_pixel(&f, i % 8u, i / 8u);
+        for (uint32_t fr = 1; fr <= 64u && rc == TR_OK; ++fr) {
+            for (uint32_t i = 0; i < 64u; ++i) {
+                img[k][i] = tr_film_pixel(&f, i % 8u, i / 8u);
+                sums[k] += (double)img[k][i].x + img[k][i].y + img[k][i].z;
+            }
+            if (fr < 64u) {
+                tr_film_clear(&f);
+                CHECK(tr_render_frame(&s, &cam, &cfg, &f, fr, NULL, &err) == TR_OK, "%s: %s",
+                      tr_integrator_name(integrators[k]), err.msg);
+            }
         }
     }
-    double lit = 0.0;
-    int differ = 0;
-    for (uint32_t i = 0; i < 64u; ++i) {
-        lit += img[3][i].x;
-        for (int k = 1; k < 3; ++k) {
-            differ += !near_rel(img[k][i], img[3][i], 1e-5);
-        }
+    unsetenv("TRAC0R_VCM_RADIUS");
+    for (int k = 1; k < 3; ++k) {
+        CHECK(sums[3] > 0.0 && fabs(sums[k] - sums[3]) <= 0.02 * sums[3],
+              "%s against pt: image sum %g, pt's %g", tr_integrator_name(integrators[k]), sums[k],
+              sums[3]);
+        printf("%s against pt: image sums %g, %g\n", tr_integrator_name(integrators[k]), sums[k],
+               sums[3]);
     }
-    CHECK(differ == 0 && lit > 0.0, "bdpt and vcm against pt: %d pixels differ (pt's sum %g)",
-          differ, lit);
     tr_film_free(&f);
     tr_scene_clear(&s);
 }

@@ -14,7 +14,10 @@
  * 4. Scene files: a sun with a zero direction, a negative or too large angle, a negative
  *    irradiance or an unknown key is refused with a parse error and no sun; a good one
  *    sets the disc so that radiance x pi sin^2 t is the irradiance; that scene's image by
- *    bdpt and vcm (light subpaths from the sun among their strategies) agrees with pt's. */
+ *    bdpt and vcm (light subpaths from the sun among their strategies) agrees with pt's.
+ * 5. The sun's limit, a directional light (src/kernel/punctual.h) of irradiance E from 60
+ *    degrees: the plane renders albedo / pi x E x cos 60 with pt, and with bdpt and vcm,
+ *    whose light subpaths start from it on the disc that covers the scene as the sun's. */
 #define _DEFAULT_SOURCE
 #include "check.h"
 #include "scene_util.h"
@@ -296,10 +299,43 @@ static void test_scene_file(void) {
     tr_scene_clear(&s);
 }
 
+static void test_directional(void) {
+    const float albedo = 0.6f;
+    const tr_vec3 e = v3(1.0f, 2.0f, 3.0f);
+    tr_error err;
+    tr_scene s;
+    tr_scene_init(&s);
+    uint32_t m = add_mat(&s, tr_material_diffuse(v3s(albedo)));
+    add_shape(&s, TR_SHAPE_PLANE, m, v3s(0.0f), v3s(0.0f), v3(4.0f, 1.0f, 4.0f));
+    tr_punctual l;
+    memset(&l, 0, sizeof l);
+    l.type = TR_PUNCTUAL_DIRECTIONAL;
+    l.dir = v3(-sinf(1.04719755f), -cosf(1.04719755f), 0.0f); /* the way the light travels */
+    l.intensity = e;
+    CHECK(tr_scene_add_punctual(&s, &l, &err) == TR_OK, "%s", err.msg);
+    CHECK(tr_scene_commit(&s, TR_ACCEL_TYPE_BVH, &err) == TR_OK, "%s", err.msg);
+    const int integ[3] = {TR_INTEGRATOR_PT, TR_INTEGRATOR_BDPT, TR_INTEGRATOR_VCM};
+    for (int k = 0; k < 3; ++k) {
+        for (int c = 0; c < 3; c += 2) {
+            const double ec = c == 0 ? e.x : e.z;
+            const double want = albedo / PI_D * ec * 0.5;
+            double mean, se;
+            render_mean(&s, integ[k], 16, 16, c, &mean, &se);
+            CHECK(fabs(mean - want) <= 5.0 * se + 1e-3 * want,
+                  "directional light, %s channel %d: %.5f vs %.5f (se %.2g)",
+                  tr_integrator_name(integ[k]), c, mean, want, se);
+            printf("directional light, %s channel %d: %.5f vs analytic %.5f (se %.2g)\n",
+                   tr_integrator_name(integ[k]), c, mean, want, se);
+        }
+    }
+    tr_scene_clear(&s);
+}
+
 int main(void) {
     test_sampling();
     test_analytic();
     test_mis();
     test_scene_file();
+    test_directional();
     return check_finish("test_sun");
 }

@@ -222,7 +222,7 @@ static void tr_bdpt_fold_splats(const tr_frame *f, const tr_bdpt_splat *sp, uint
 static int tr_integrator_check_view(const tr_scene_view *view, int integrator, tr_error *err) {
     if (view->punctual_count > 0u && integrator == TR_INTEGRATOR_NAIVE) {
         /* Delta lights are found by next-event estimation alone, which naive has not (pt,
-         * bdpt and vcm sample them: punctual.h, tr_bdpt_infinite). */
+         * bdpt and vcm sample them: punctual.h, tr_bdpt_punctual_camera). */
         return tr_error_set(err, TR_STATUS_UNSUPPORTED,
                             "%s does not support point, spot or directional lights: use pt",
                             tr_integrator_name(integrator));

@@ -23,7 +23,7 @@ struct tr_device {
     tr_accel_type accel;
     tr_film film; /* CPU: the device's film */
     tr_cl_context *cl;
-    uint32_t punctual; /* the uploaded scene's punctual lights (only pt renders them) */
+    uint32_t punctual; /* the uploaded scene's punctual lights (naive cannot render them) */
 };
 
 /* The processor's name from /proc/cpuinfo ("" where it cannot be read). */

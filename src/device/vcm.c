@@ -369,7 +369,7 @@ int tr_vcm_render(const tr_scene_view *view, const tr_frame *f, const tr_film_vi
             g.radius2 = r * r;
             g.eta = (float)points * area;
             g.norm = 1.0f / g.eta;
-            g.facing = tr_bdpt_sky_on(view) ? 1u : 0u; /* integrator_vcm.h: tr_vcm_facing */
+            g.facing = tr_bdpt_outside_on(view) ? 1u : 0u; /* integrator_vcm.h: tr_vcm_facing */
             if (!vcm_build_grid(&g, &tl, sc, tile_count, path_len, path_at)) {
                 failed = 1;
             }

@@ -46,10 +46,13 @@
  * vertex is then a direction (TR_BDPT_INFINITE), whose densities are solid-angle ones, and
  * the camera side's strategies for these lights, pt's light sample at each vertex (s = 1)
  * and the escape into the sky (s = 0), are weighed with the others by the same MIS
- * (tr_bdpt_sky_camera). Punctual lights (delta) stay outside: they are added along the
- * camera subpath with pt's light sample (tr_bdpt_infinite), an estimator of their part
- * that adds to BDPT's of the rest. A scene without an environment and a sun draws the
- * random numbers it drew before and renders the same bits.
+ * (tr_bdpt_sky_camera). Punctual lights join the same choice by power
+ * (tr_bdpt_punctual_subpath): a point or spot light's subpath starts at its position
+ * (TR_BDPT_PUNCTUAL, delta in position), a directional light's on the disc as the sun's
+ * (TR_BDPT_DIRECTIONAL, delta in direction); no strategy hits them, so strategy s = 0 is
+ * left out of their paths' MIS sums, and pt's light sample of them is strategy s = 1
+ * (tr_bdpt_punctual_camera). A scene without an environment, a sun and punctual lights
+ * draws the random numbers it drew before and renders the same bits.
  *
  * Limits: a subpath holds at most TR_BDPT_MAX_VERTS vertices, so the max depth is
  * TR_BDPT_MAX_DEPTH (also the default). On an OpenCL device the 64-bit
@@ -67,6 +70,7 @@
 #include "light.h"
 #include "material.h"
 #include "material_eval.h"
+#include "punctual.h"
 #include "sampler.h"
 #include "sampling.h"
 #include "scene_view.h"
@@ -115,6 +119,13 @@ TR_FN uint32_t tr_bdpt_light_dim(int seg, uint32_t what) {
 #define TR_BDPT_INFINITE 3u
 #define TR_BDPT_SKY_ENV 0u
 #define TR_BDPT_SKY_SUN 1u
+/* A point or spot light (delta in position): p its position, tri its index among the
+ * punctual lights, m.ng its axis, cone the cosine that bounds the directions its
+ * subpaths take (-1 for a point light) and pdf_pos their solid-angle density inside. */
+#define TR_BDPT_PUNCTUAL 4u
+/* A directional light (delta in direction): wo the unit direction towards it, tri its
+ * index, pdf_pos the density of the disc its subpaths start on (as TR_BDPT_INFINITE). */
+#define TR_BDPT_DIRECTIONAL 5u
 
 typedef struct tr_bdpt_vertex {
     tr_bsdf_params m; /* surfaces and light points: the material stage's output */
@@ -125,8 +136,10 @@ typedef struct tr_bdpt_vertex {
     float pdf_rev; /* area density of this vertex, drawn from the other side */
     float pdf_nee; /* light vertices: area density of next-event estimation choosing this
                     * point from the next vertex of the path (tr_bdpt_nee_pdf) */
-    float pdf_pos; /* TR_BDPT_INFINITE: the density 1 / (pi R^2) of a subpath's origin on
-                    * the disc that covers the scene (read for no other kind) */
+    float pdf_pos; /* TR_BDPT_INFINITE, TR_BDPT_DIRECTIONAL: the density 1 / (pi R^2) of a
+                    * subpath's origin on the disc that covers the scene; TR_BDPT_PUNCTUAL:
+                    * its directions' density (read for no other kind) */
+    float cone;    /* TR_BDPT_PUNCTUAL: the cosine bounding its directions */
     uint32_t tri;
     uint32_t kind; /* TR_BDPT_* */
     int delta;     /* its scattering was a delta lobe */
@@ -190,7 +203,7 @@ TR_FN float tr_bdpt_camera_we(const tr_camera *c, tr_vec3 w, float *rx, float *r
  * these lights, whose weight is the power they send through the disc over pi: R^2 times
  * their radiance integrated over directions (RGB means). */
 typedef struct tr_bdpt_light_probs {
-    float emitters, env, sun;
+    float emitters, env, sun, punct;
 } tr_bdpt_light_probs;
 
 /* The radiance of the environment or the sun integrated over directions (RGB mean). */
@@ -210,15 +223,22 @@ TR_FN float tr_bdpt_sky_integral(const tr_scene_view *s, uint32_t which) {
     return c * e->weight_sum * (2.0f * TR_PI * TR_PI) / ((float)e->width * (float)e->height);
 }
 
-/* The probabilities of a light subpath's origin; returns whether the environment or the
- * sun can start one (else the emitters' probability is 1 and they are added along the
- * camera subpath only, tr_bdpt_infinite). */
+/* The probabilities of a light subpath's origin; returns whether the environment, the
+ * sun or the punctual lights can start one (else the emitters' probability is 1 and the
+ * others are added along the camera subpath only, tr_bdpt_infinite). The punctual lights
+ * weigh their power over pi (src/scene/punctual.c: 4 pi I for a point, the cone's for a
+ * spot, pi R^2 E for a directional light) and are picked among by its CDF. */
 TR_FN int tr_bdpt_light_probs_of(const tr_scene_view *s, tr_bdpt_light_probs *lp) {
     lp->emitters = 1.0f;
     lp->env = 0.0f;
     lp->sun = 0.0f;
-    if (s->env_count + s->sun_count == 0u || !(s->sky_radius > 0.0f)) {
+    lp->punct = 0.0f;
+    if (s->env_count + s->sun_count + s->punctual_count == 0u || !(s->sky_radius > 0.0f)) {
         return 0;
+    }
+    float wp = 0.0f;
+    for (uint32_t i = 0; i < s->punctual_count; ++i) {
+        wp += tr_fmaxf(s->punctual[i].power, 0.0f) * TR_INV_PI;
     }
     const float r2 = s->sky_radius * s->sky_radius;
     const float we =
@@ -226,20 +246,65 @@ TR_FN int tr_bdpt_light_probs_of(const tr_scene_view *s, tr_bdpt_light_probs *lp
     const float ws =
         s->sun_count > 0u ? tr_fmaxf(r2 * tr_bdpt_sky_integral(s, TR_BDPT_SKY_SUN), 0.0f) : 0.0f;
     const float wl = s->light_count > 0u ? tr_fmaxf(s->light_weight_total, 0.0f) : 0.0f;
-    const float total = we + ws + wl;
-    if (!(we + ws > 0.0f) || !(total < TR_INFINITY)) {
+    const float total = we + ws + wl + wp;
+    if (!(we + ws + wp > 0.0f) || !(total < TR_INFINITY)) {
         return 0;
     }
     lp->emitters = wl / total;
     lp->env = we / total;
     lp->sun = ws / total;
+    lp->punct = wp / total;
     return 1;
 }
 
 /* Whether light subpaths start from the environment and the sun. */
 TR_FN int tr_bdpt_sky_on(const tr_scene_view *s) {
     tr_bdpt_light_probs lp;
-    return tr_bdpt_light_probs_of(s, &lp);
+    return tr_bdpt_light_probs_of(s, &lp) && lp.env + lp.sun > 0.0f;
+}
+
+/* Whether light subpaths start from the punctual lights. */
+TR_FN int tr_bdpt_punctual_on(const tr_scene_view *s) {
+    tr_bdpt_light_probs lp;
+    return tr_bdpt_light_probs_of(s, &lp) && lp.punct > 0.0f;
+}
+
+/* Whether a light subpath may start outside the scene (the environment, the sun or a
+ * directional light): vcm then merges only on surfaces that face alike (tr_vcm_facing). */
+TR_FN int tr_bdpt_outside_on(const tr_scene_view *s) {
+    if (tr_bdpt_sky_on(s)) {
+        return 1;
+    }
+    if (!tr_bdpt_punctual_on(s)) {
+        return 0;
+    }
+    for (uint32_t i = 0; i < s->punctual_count; ++i) {
+        if (s->punctual[i].type == TR_PUNCTUAL_DIRECTIONAL) {
+            return 1;
+        }
+    }
+    return 0;
+}
+
+/* Whether vertex v is a light at infinity: a direction, not a point. */
+TR_FN int tr_bdpt_far(const tr_bdpt_vertex *v) {
+    return v->kind == TR_BDPT_INFINITE || v->kind == TR_BDPT_DIRECTIONAL;
+}
+
+/* Whether vertex v is a delta light (no strategy can hit it). */
+TR_FN int tr_bdpt_delta_light(const tr_bdpt_vertex *v) {
+    return v->kind == TR_BDPT_PUNCTUAL || v->kind == TR_BDPT_DIRECTIONAL;
+}
+
+/* The probability of the punctual lights' CDF picking light k. */
+TR_FN float tr_bdpt_punctual_prob(const tr_scene_view *s, uint32_t k) {
+    return s->punctual[k].cdf - (k > 0u ? s->punctual[k - 1u].cdf : 0.0f);
+}
+
+/* The probability with which pt's light sample (tr_punctual_nee) takes light k: 1 where
+ * it takes every light, else the CDF's. */
+TR_FN float tr_bdpt_punctual_sel(const tr_scene_view *s, uint32_t k) {
+    return s->punctual_count <= TR_PUNCTUAL_ALL ? 1.0f : tr_bdpt_punctual_prob(s, k);
 }
 
 /* The solid-angle density of light `which` (TR_BDPT_SKY_*) drawing the unit direction w
@@ -271,6 +336,9 @@ TR_FN float tr_bdpt_emit_pdf(const tr_bdpt_vertex *y, tr_vec3 w) {
 TR_FN float tr_bdpt_origin_pdf(const tr_scene_view *s, const tr_bdpt_vertex *y) {
     tr_bdpt_light_probs lp;
     const int sky = tr_bdpt_light_probs_of(s, &lp);
+    if (tr_bdpt_delta_light(y)) {
+        return lp.punct * tr_bdpt_punctual_prob(s, y->tri); /* times a delta */
+    }
     if (y->kind == TR_BDPT_INFINITE) {
         return y->tri == TR_BDPT_SKY_SUN ? lp.sun * tr_sun_pdf(s, y->wo)
                                          : lp.env * tr_env_pdf(s, y->wo);
@@ -303,7 +371,10 @@ TR_FN float tr_bdpt_pdf_dir(const tr_camera *cam, const tr_bdpt_vertex *cur, int
     if (!(d2 > 0.0f)) {
         return 0.0f;
     }
-    if (cur->kind == TR_BDPT_INFINITE) {
+    if (tr_bdpt_delta_light(next)) {
+        return 0.0f; /* no strategy hits a delta light */
+    }
+    if (tr_bdpt_far(cur)) {
         /* Parallel rays from the disc: the area density at next is the disc's times the
          * cosine there (w is -cur->wo, d2 is 1); the pinhole is never hit. */
         return next->kind == TR_BDPT_CAMERA ? 0.0f : cur->pdf_pos * tr_fabsf(v3_dot(w, next->m.ng));
@@ -312,6 +383,8 @@ TR_FN float tr_bdpt_pdf_dir(const tr_camera *cam, const tr_bdpt_vertex *cur, int
     if (cur->kind == TR_BDPT_CAMERA) {
         float rx, ry;
         tr_bdpt_camera_we(cam, w, &rx, &ry, &pdf);
+    } else if (cur->kind == TR_BDPT_PUNCTUAL) {
+        pdf = v3_dot(w, cur->m.ng) >= cur->cone ? cur->pdf_pos : 0.0f;
     } else if (cur->kind == TR_BDPT_LIGHT || !has_prev) {
         pdf = tr_bdpt_emit_pdf(cur, w);
     } else {
@@ -338,11 +411,11 @@ TR_FN tr_vec3 tr_bdpt_dir(tr_vec3 a, tr_vec3 b, float *d2) {
  * direction, with a squared distance of 1 (the densities tr_bdpt_pdf_dir gives there are
  * not converted by distance). */
 TR_FN tr_vec3 tr_bdpt_vdir(const tr_bdpt_vertex *a, const tr_bdpt_vertex *b, float *d2) {
-    if (b->kind == TR_BDPT_INFINITE) {
+    if (tr_bdpt_far(b)) {
         *d2 = 1.0f;
         return b->wo;
     }
-    if (a->kind == TR_BDPT_INFINITE) {
+    if (tr_bdpt_far(a)) {
         *d2 = 1.0f;
         return v3_neg(a->wo);
     }
@@ -371,6 +444,9 @@ TR_FN float tr_bdpt_shading_fix(const tr_bsdf_params *m, tr_vec3 wo, tr_vec3 wi)
  * point of light vertex y. */
 TR_FN float tr_bdpt_nee_pdf(const tr_scene_view *s, const tr_bdpt_vertex *y,
                             const tr_bdpt_vertex *x) {
+    if (tr_bdpt_delta_light(y)) {
+        return tr_bdpt_punctual_sel(s, y->tri); /* times the delta light subpaths share */
+    }
     if (y->kind == TR_BDPT_INFINITE) {
         return tr_bdpt_sky_pdf(s, y->tri, y->wo); /* pt's light sample of it, from anywhere */
     }
@@ -480,6 +556,8 @@ TR_FN float tr_bdpt_mis_weight_vm(const tr_scene_view *s, const tr_camera *cam,
      * density is the light vertex's own (computed once per subpath or sample) except for
      * s = 0, where y_0 is a camera vertex. */
     const int light_ok = pl[0] > 0.0f; /* y_0 is a point light subpaths can start on */
+    /* A delta light: strategy 0 (the camera subpath hitting it) cannot make the path. */
+    const int delta_light = ns >= 1 && tr_bdpt_delta_light(y0);
     float c = 0.0f;
     if (light_ok && !dl[1]) {
         /* Vertex 1 of the path: a light vertex, or for s = 0 and s = 1 a camera one. */
@@ -501,7 +579,7 @@ TR_FN float tr_bdpt_mis_weight_vm(const tr_scene_view *s, const tr_camera *cam,
     float sum = 0.0f;
     for (int k = 0; k < n; ++k) {
         int ok = (k == 0 || !dl[k - 1]) && !dl[k];
-        ok = ok && (k == 0 || light_ok) && !(k == 1 && n == 2);
+        ok = ok && (k == 0 || light_ok) && !(k == 1 && n == 2) && !(k == 0 && delta_light);
         if (ok || (k == ns && !merge)) {
             sum += r[k] * r[k];
         }
@@ -587,7 +665,7 @@ TR_FN void tr_bdpt_walk(const tr_scene_view *s, tr_ray ray, tr_vec3 beta, float 
             tr_bdpt_vertex *pp = &v[n - 2];
             cur->pdf_fwd = prev->delta ? 0.0f : tr_bdpt_pdf(0, prev, pp, cur);
             pp->pdf_rev = prev->delta ? 0.0f : tr_bdpt_pdf(0, prev, cur, pp);
-        } else if (prev->kind == TR_BDPT_LIGHT || prev->kind == TR_BDPT_INFINITE) {
+        } else if (prev->kind != TR_BDPT_CAMERA) {
             cur->pdf_fwd = tr_bdpt_pdf(0, prev, 0, cur);
         } else {
             cur->pdf_fwd = tr_bdpt_to_area(pdf_dir, prev->p, cur);
@@ -744,11 +822,93 @@ TR_FN int tr_bdpt_sky_subpath(const tr_scene_view *s, int max_depth, const tr_sa
     return nl;
 }
 
+/* The punctual light subpath's vertex y_0 for light k, picked with probability
+ * lp->punct * prob (see tr_bdpt_vertex's kinds); p: a subpath's origin on the scene's disc
+ * (directional lights; the light's position otherwise). */
+TR_FN void tr_bdpt_punctual_vertex(const tr_scene_view *s, uint32_t k, float pick, tr_vec3 p,
+                                   tr_bdpt_vertex *y) {
+    TR_CONST_GLOBAL tr_punctual *l = &s->punctual[k];
+    const int dir = l->type == TR_PUNCTUAL_DIRECTIONAL;
+    y->kind = dir ? TR_BDPT_DIRECTIONAL : TR_BDPT_PUNCTUAL;
+    y->tri = k;
+    y->p = dir ? p : l->pos;
+    y->wo = dir ? v3_neg(l->dir) : v3s(0.0f);
+    y->m.ng = l->dir;
+    y->m.ns = l->dir;
+    y->cone = l->type == TR_PUNCTUAL_SPOT ? l->cos_outer : -1.0f;
+    y->pdf_pos = dir ? tr_bdpt_disc_pdf(s) : 1.0f / (TR_TWO_PI * (1.0f - y->cone));
+    y->delta = 0;
+    y->pdf_fwd = pick;
+    y->pdf_rev = 0.0f;
+    y->pdf_nee = tr_bdpt_punctual_sel(s, k);
+    y->beta = v3s(0.0f);
+}
+
+/* A light subpath from a punctual light (u1 of the origin pair in the lights' share
+ * [lp->env + lp->sun, + lp->punct)), picked by the lights' power CDF: from a point light's
+ * position a direction uniform on the sphere, from a spot's uniform in its outer cone
+ * (its falloff a weight), from a directional light its direction from an origin on the
+ * disc that covers the scene (as tr_bdpt_sky_subpath's); then up to max_depth - 1 hits. */
+TR_FN int tr_bdpt_punctual_subpath(const tr_scene_view *s, int max_depth, const tr_sampler *smp,
+                                   const tr_bdpt_light_probs *lp, tr_bdpt_vertex *lv,
+                                   uint32_t *rays) {
+    float u1, u2, d1, d2, prob;
+    tr_sampler_2d(smp, TR_BDPT_DIM_LIGHT_ORIGIN, &u1, &u2);
+    tr_sampler_2d(smp, TR_BDPT_DIM_LIGHT_DIR, &d1, &d2);
+    u1 = tr_fminf(tr_fmaxf((u1 - (lp->env + lp->sun)) / lp->punct, 0.0f), 0.99999994f);
+    const uint32_t k = tr_punctual_pick(s, u1, &prob);
+    TR_CONST_GLOBAL tr_punctual *l = &s->punctual[k];
+    if (!(prob > 0.0f) || tr_punctual_black(l->intensity)) {
+        return 0;
+    }
+    tr_bdpt_vertex *y0 = &lv[0];
+    tr_vec3 beta, o, w;
+    float pdf_dir;
+    if (l->type == TR_PUNCTUAL_DIRECTIONAL) {
+        const float R = s->sky_radius;
+        tr_vec3 ta, tb;
+        const tr_vec3 wl = v3_neg(l->dir);
+        v3_basis(wl, &ta, &tb);
+        const float rr = R * tr_sqrtf(d1), phi = TR_TWO_PI * d2;
+        const tr_vec3 centre = v3(s->sky_cx, s->sky_cy, s->sky_cz);
+        o = v3_add(v3_madd(centre, wl, R),
+                   v3_add(v3_scale(ta, rr * tr_cosf(phi)), v3_scale(tb, rr * tr_sinf(phi))));
+        w = l->dir;
+        tr_bdpt_punctual_vertex(s, k, lp->punct * prob, o, y0);
+        pdf_dir = 1.0f; /* read by nothing: the first hit's density comes from y_0 */
+        beta = v3_scale(l->intensity, 1.0f / (y0->pdf_fwd * y0->pdf_pos)); /* E / p */
+    } else {
+        o = l->pos;
+        tr_bdpt_punctual_vertex(s, k, lp->punct * prob, o, y0);
+        /* Uniform in the cone about the axis down to cos = y0->cone (the sphere for -1). */
+        const float ct = 1.0f - d1 * (1.0f - y0->cone);
+        const float st = tr_sqrtf(tr_fmaxf(0.0f, 1.0f - ct * ct));
+        tr_vec3 ta, tb;
+        v3_basis(l->dir, &ta, &tb);
+        const float phi = TR_TWO_PI * d2;
+        w = v3_add(v3_scale(l->dir, ct),
+                   v3_add(v3_scale(ta, st * tr_cosf(phi)), v3_scale(tb, st * tr_sinf(phi))));
+        w = v3_normalize(w);
+        pdf_dir = y0->pdf_pos;
+        const float fall =
+            l->type == TR_PUNCTUAL_SPOT ? tr_punctual_spot_falloff(l, v3_dot(w, l->dir)) : 1.0f;
+        beta = v3_scale(l->intensity, fall / (y0->pdf_fwd * pdf_dir)); /* I / p */
+    }
+    y0->beta = v3_scale(l->intensity, 1.0f / y0->pdf_fwd);
+    if (tr_v3_is_zero(beta)) {
+        return 1;
+    }
+    int nl = 1;
+    tr_ray lr = tr_ray_make(o, w, 0.0f, TR_INFINITY);
+    tr_bdpt_walk(s, lr, beta, pdf_dir, lv, &nl, max_depth, 1, smp, rays, 0, 0);
+    return nl;
+}
+
 /* The light subpath: a point by area from the emitter table, a cosine-weighted direction
  * on its emitting side (either, for two-sided emitters), then up to max_depth - 1 hits
  * (a light subpath of s vertices serves paths of at least s segments); or, with the
- * probability of their power, one from the environment or the sun (tr_bdpt_sky_subpath).
- * Returns the vertex count (0 without lights). */
+ * probability of their power, one from the environment or the sun (tr_bdpt_sky_subpath)
+ * or a punctual light (tr_bdpt_punctual_subpath). Returns the vertex count (0 without lights). */
 TR_FN int tr_bdpt_light_subpath(const tr_scene_view *s, int max_depth, const tr_sampler *smp,
                                 tr_bdpt_vertex *lv, uint32_t *rays) {
     int nl = 0;
@@ -757,7 +917,13 @@ TR_FN int tr_bdpt_light_subpath(const tr_scene_view *s, int max_depth, const tr_
     if (sky && max_depth >= 2) {
         float u1, u2;
         tr_sampler_2d(smp, TR_BDPT_DIM_LIGHT_ORIGIN, &u1, &u2);
-        if (u1 < lp.env + lp.sun || !(lp.emitters > 0.0f)) {
+        if (u1 < lp.env + lp.sun) {
+            return tr_bdpt_sky_subpath(s, max_depth, smp, &lp, lv, rays);
+        }
+        if (lp.punct > 0.0f && (u1 < lp.env + lp.sun + lp.punct || !(lp.emitters > 0.0f))) {
+            return tr_bdpt_punctual_subpath(s, max_depth, smp, &lp, lv, rays);
+        }
+        if (!(lp.emitters > 0.0f)) {
             return tr_bdpt_sky_subpath(s, max_depth, smp, &lp, lv, rays);
         }
     }
@@ -766,7 +932,8 @@ TR_FN int tr_bdpt_light_subpath(const tr_scene_view *s, int max_depth, const tr_
         tr_sampler_2d(smp, TR_BDPT_DIM_LIGHT_ORIGIN, &u1, &u2);
         tr_sampler_2d(smp, TR_BDPT_DIM_LIGHT_DIR, &d1, &d2);
         if (sky) { /* the emitters' share of u1, back to [0, 1) */
-            u1 = tr_fminf(tr_fmaxf((u1 - (lp.env + lp.sun)) / lp.emitters, 0.0f), 0.99999994f);
+            u1 = tr_fminf(tr_fmaxf((u1 - (lp.env + lp.sun + lp.punct)) / lp.emitters, 0.0f),
+                          0.99999994f);
         }
         uint32_t k = tr_light_pick(s, u1);
         float lo = k > 0u ? s->light_cdf[k - 1u] : 0.0f, hi = s->light_cdf[k];
@@ -968,9 +1135,9 @@ TR_FN tr_vec3 tr_bdpt_connect(const tr_scene_view *s, const tr_camera *cam,
     return radiance;
 }
 
-/* The punctual lights' part of camera subpath cv[0 .. nc-1] that left the scene as *esc
- * says (see the top of this file), and the environment's and the sun's where no light
- * subpath starts from them (a scene without triangles, tr_bdpt_sky_on): at each vertex
+/* The punctual lights', the environment's and the sun's part of camera subpath
+ * cv[0 .. nc-1] that left the scene as *esc says, where no light subpath starts from them
+ * (a scene without triangles, tr_bdpt_sky_on, tr_bdpt_punctual_on): at each vertex
  * that is not specular and can still add a segment, pt's light samples of them (the
  * sampler dimensions pt reads at that segment, which BDPT's camera side leaves unread);
  * where the subpath left the scene, the environment and the sun it sees, each weighted
@@ -983,7 +1150,9 @@ TR_FN tr_vec3 tr_bdpt_infinite(const tr_scene_view *s, const tr_bdpt_vertex *cv,
      * camera-side strategies, weighed with the rest; the punctual lights stay here. */
     const uint32_t env_count = tr_bdpt_sky_on(s) ? 0u : s->env_count;
     const uint32_t sun_count = tr_bdpt_sky_on(s) ? 0u : s->sun_count;
-    if (env_count == 0u && sun_count == 0u && s->punctual_count == 0u) {
+    /* Likewise tr_bdpt_punctual_camera for the punctual lights. */
+    const uint32_t punctual_count = tr_bdpt_punctual_on(s) ? 0u : s->punctual_count;
+    if (env_count == 0u && sun_count == 0u && punctual_count == 0u) {
         return radiance;
     }
     for (int i = 1; i < nc && i < max_depth; ++i) {
@@ -1001,7 +1170,7 @@ TR_FN tr_vec3 tr_bdpt_infinite(const tr_scene_view *s, const tr_bdpt_vertex *cv,
             radiance = v3_add(radiance,
                               v3_mul(v->beta, tr_sun_nee(s, &v->m, v->wo, v->p, su1, su2, rays)));
         }
-        if (s->punctual_count > 0u) {
+        if (punctual_count > 0u) {
             const float pu = tr_sampler_1d(smp, tr_punctual_dim(i));
             radiance =
                 v3_add(radiance, v3_mul(v->beta, tr_punctual_nee(s, &v->m, v->wo, v->p, pu, rays)));
@@ -1116,6 +1285,45 @@ TR_FN tr_vec3 tr_bdpt_sky_camera(const tr_scene_view *s, const tr_camera *cam, t
     return radiance;
 }
 
+/* The camera-side strategy of paths from the punctual lights, where light subpaths start
+ * from them too (tr_bdpt_punctual_on): at each camera vertex z_{t-1} that is not specular,
+ * pt's light sample of them (tr_punctual_nee's choice: every light, or one by the CDF with
+ * the sampler dimension pt reads at that segment), strategy s = 1 of tr_bdpt_mis_weight_vm,
+ * weighed against the light subpaths' connections (and with eta > 0 merges). */
+TR_FN tr_vec3 tr_bdpt_punctual_camera(const tr_scene_view *s, const tr_camera *cam,
+                                      const tr_bdpt_vertex *cv, int nc, int max_depth,
+                                      const tr_sampler *smp, float eta, uint32_t *rays) {
+    tr_vec3 radiance = v3s(0.0f);
+    tr_bdpt_light_probs lp;
+    if (!tr_bdpt_light_probs_of(s, &lp) || !(lp.punct > 0.0f)) {
+        return radiance;
+    }
+    for (int t = 2; t <= nc && t <= max_depth; ++t) {
+        const tr_bdpt_vertex *pt = &cv[t - 1];
+        if (tr_bsdf_is_delta(&pt->m) || pt->m.type == TR_MATERIAL_EMITTER) {
+            continue;
+        }
+        uint32_t k0 = 0u, k1 = s->punctual_count;
+        if (s->punctual_count > TR_PUNCTUAL_ALL) {
+            float prob;
+            k0 = tr_punctual_pick(s, tr_sampler_1d(smp, tr_punctual_dim(t - 1)), &prob);
+            k1 = k0 + 1u;
+        }
+        for (uint32_t k = k0; k < k1; ++k) {
+            const float sel = tr_bdpt_punctual_sel(s, k);
+            const tr_vec3 c = tr_punctual_one(s, &s->punctual[k], sel, &pt->m, pt->wo, pt->p, rays);
+            if (tr_v3_is_zero(c)) {
+                continue;
+            }
+            tr_bdpt_vertex nee;
+            tr_bdpt_punctual_vertex(s, k, lp.punct * tr_bdpt_punctual_prob(s, k), pt->p, &nee);
+            const float w = tr_bdpt_mis_weight_vm(s, cam, &nee, 1, &nee, cv, t, eta, 0);
+            radiance = v3_add(radiance, v3_scale(v3_mul(pt->beta, c), w));
+        }
+    }
+    return radiance;
+}
+
 /* One BDPT sample for the camera ray through raster point (x + jx, y + jy): returns what
  * the camera-side strategies (t >= 2) bring to this pixel and splats the light-tracing
  * ones (t = 1). Paths have at most max_depth segments (<= TR_BDPT_MAX_DEPTH). */
@@ -1136,6 +1344,9 @@ TR_FN tr_vec3 tr_trace_bdpt(const tr_scene_view *s, const tr_camera *cam, float 
     }
     if (tr_bdpt_sky_on(s)) {
         c = v3_add(c, tr_bdpt_sky_camera(s, cam, cv, nc, &esc, max_depth, smp, 0.0f, rays));
+    }
+    if (tr_bdpt_punctual_on(s)) {
+        c = v3_add(c, tr_bdpt_punctual_camera(s, cam, cv, nc, max_depth, smp, 0.0f, rays));
     }
     return v3_add(c, tr_bdpt_infinite(s, cv, nc, &esc, max_depth, smp, rays));
 }

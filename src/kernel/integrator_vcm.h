@@ -144,7 +144,9 @@ TR_FN void tr_vcm_light_sums(const tr_bdpt_vertex *lv, int i, float *a, float *b
     float prod = 1.0f / tr_bdpt_remap0(q->pdf_fwd); /* r_k / pc[i-1], from k = i-1 down */
     float sum = 0.0f;
     for (int k = i - 1; k >= 0; --k) {
-        const int ok = (k == 0 || !lv[k - 1].delta) && !lv[k].delta;
+        /* Strategy 0 hits lv[0]: not a delta light. */
+        const int ok = (k == 0 || !lv[k - 1].delta) && !lv[k].delta &&
+                       !(k == 0 && tr_bdpt_delta_light(&lv[0]));
         const float rk = k == 1 ? prod * c : prod;
         sum += ok ? rk * rk : 0.0f;
         if (k > 0) {
@@ -259,6 +261,9 @@ TR_FN tr_vec3 tr_trace_vcm(const tr_scene_view *s, const tr_camera *cam, float x
     tr_vec3 c = tr_bdpt_connect(s, cam, cv, nc, lv, nl, max_depth, smp, sp, all, g->eta, rays);
     if (tr_bdpt_sky_on(s)) {
         c = v3_add(c, tr_bdpt_sky_camera(s, cam, cv, nc, &esc, max_depth, smp, g->eta, rays));
+    }
+    if (tr_bdpt_punctual_on(s)) {
+        c = v3_add(c, tr_bdpt_punctual_camera(s, cam, cv, nc, max_depth, smp, g->eta, rays));
     }
     c = v3_add(c, tr_bdpt_infinite(s, cv, nc, &esc, max_depth, smp, rays));
     return v3_add(c, tr_vcm_merge(cv, nc, max_depth, g));

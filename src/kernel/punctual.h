@@ -6,8 +6,9 @@
  * each at every vertex; with more, one light is picked per vertex by the lights' power CDF
  * (src/scene/punctual.c), one shadow ray is traced towards it, and its contribution is
  * divided by the pick's probability. Naive path tracing, which has no
- * next-event estimation, cannot see them; bdpt and vcm do not start light subpaths from
- * them: the host refuses those integrators for a scene with punctual lights. */
+ * next-event estimation, cannot see them (the host refuses it for a scene with punctual
+ * lights); bdpt and vcm also start light subpaths from them and weigh this light sample
+ * as one of their strategies (integrator_bdpt.h). */
 #ifndef TR_KERNEL_PUNCTUAL_H
 #define TR_KERNEL_PUNCTUAL_H
 
