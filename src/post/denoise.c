@@ -46,7 +46,8 @@
  *       approximated by the centre tap's normalised weight, multiplied over the levels,
  *       as Li, Wu and Chuang 2012 do for their cross-bilateral candidates; with a strong
  *       luminance term the weights follow the noise and that approximation understates
- *       the leverage (window-room at 64 spp: 46.0 dB with SVGF's 4 standard errors, 49.6 dB with 16).
+ *       the leverage (window-room at 64 spp: 46.0 dB with SVGF's 4 standard errors,
+ *       49.6 dB with 16).
  *    c. The pixel's own value, leverage 1.
  *    Each pixel takes the candidate of least estimated squared error, Stein's unbiased
  *    risk estimate (SURE) |f - y|^2 - var + 2 var L, smoothed over 5x5 pixels, with var the
