@@ -467,11 +467,15 @@ static void clearcoat_tests(void) {
 }
 
 /* (g) */
+/* The sheen lives in the material's extras, which *e holds for as long as the result is
+ * used. */
 static tr_bsdf_params sheened(tr_vec3 color, float roughness, float metallic, tr_vec3 sheen,
-                              float sheen_roughness) {
+                              float sheen_roughness, tr_material_ext *e) {
     tr_bsdf_params p = principled(color, roughness, metallic);
-    p.sheen_color = sheen;
-    p.sheen_roughness = sheen_roughness;
+    memset(e, 0, sizeof *e);
+    e->sheen_color = sheen;
+    e->sheen_roughness = sheen_roughness;
+    p.ext = e;
     p.ms = tr_ggx_ms_table();
     return p;
 }
@@ -481,8 +485,9 @@ static void sheen_tests(void) {
     const double theta[] = {0.0, 45.0, 80.0};
     for (int r = 0; r < 2; ++r) {
         for (int k = 0; k < 2; ++k) {
+            tr_material_ext e;
             tr_bsdf_params p =
-                sheened(v3(0.9f, 0.6f, 0.3f), 0.5f, (float)k, v3(0.8f, 0.6f, 0.9f), sr[r]);
+                sheened(v3(0.9f, 0.6f, 0.3f), 0.5f, (float)k, v3(0.8f, 0.6f, 0.9f), sr[r], &e);
             if (r == 1) {
                 /* Under a coat, with the energy compensation. */
                 p.clearcoat = 0.7f;
@@ -498,7 +503,8 @@ static void sheen_tests(void) {
     for (int r = 0; r < 2; ++r) {
         for (int k = 0; k < 2; ++k) {
             for (int comp = 0; comp < 2; ++comp) {
-                tr_bsdf_params p = sheened(v3s(1.0f), 0.6f, (float)k, v3s(1.0f), sr[r]);
+                tr_material_ext e;
+                tr_bsdf_params p = sheened(v3s(1.0f), 0.6f, (float)k, v3s(1.0f), sr[r], &e);
                 p.flags = comp ? TR_MATERIAL_MULTISCATTER : 0u;
                 for (int t = 0; t < 3; ++t) {
                     double a, sa, u, su;
@@ -548,7 +554,10 @@ static void sheen_tests(void) {
     /* A black sheen: bit for bit none, whatever its roughness. */
     tr_bsdf_params p0 = principled(v3(0.9f, 0.6f, 0.3f), 0.5f, 0.3f);
     tr_bsdf_params p1 = p0;
-    p1.sheen_roughness = 0.4f;
+    tr_material_ext e1;
+    memset(&e1, 0, sizeof e1);
+    e1.sheen_roughness = 0.4f;
+    p1.ext = &e1;
     p1.ms = tab;
     tr_rng rng;
     tr_rng_init(&rng, 8, 9, 10);
@@ -575,9 +584,13 @@ static void specular_tests(void) {
     const double theta[] = {0.0, 45.0, 80.0};
     for (int comp = 0; comp < 2; ++comp) {
         for (int k = 0; k < 2; ++k) {
+            tr_material_ext e;
+            memset(&e, 0, sizeof e);
+            e.flags = TR_MATEXT_SPECULAR;
+            e.specular = 0.6f;
+            e.specular_color = v3(2.0f, 1.0f, 0.3f);
             tr_bsdf_params p = principled(v3(0.9f, 0.6f, 0.3f), 0.4f, 0.5f * (float)k);
-            p.specular = 0.6f;
-            p.specular_color = v3(2.0f, 1.0f, 0.3f);
+            p.ext = &e;
             p.ms = tr_ggx_ms_table();
             p.flags = comp ? TR_MATERIAL_MULTISCATTER : 0u;
             for (int t = 0; t < 3; ++t) {
@@ -585,8 +598,7 @@ static void specular_tests(void) {
             }
             reciprocity(&p);
             tr_bsdf_params w = principled(v3s(1.0f), 0.4f, 0.5f * (float)k);
-            w.specular = 0.6f;
-            w.specular_color = v3(2.0f, 1.0f, 0.3f);
+            w.ext = &e;
             w.ms = tr_ggx_ms_table();
             w.flags = p.flags;
             for (int t = 0; t < 3; ++t) {
@@ -603,9 +615,15 @@ static void specular_tests(void) {
     /* Specular 1 and white: bit for bit none (the parameters' defaults). */
     tr_bsdf_params p0 = principled(v3(0.9f, 0.6f, 0.3f), 0.5f, 0.3f);
     tr_bsdf_params p1 = p0;
-    p1.specular = 1.0f;
-    p1.specular_color = v3s(1.0f);
-    CHECK(p0.specular == 1.0f && p0.specular_color.x == 1.0f && p0.specular_color.z == 1.0f,
+    tr_material_ext e1;
+    memset(&e1, 0, sizeof e1);
+    e1.flags = TR_MATEXT_SPECULAR;
+    e1.specular = 1.0f;
+    e1.specular_color = v3s(1.0f);
+    p1.ext = &e1;
+    CHECK(p0.ext == NULL && tr_principled_specular(&p0) == 1.0f &&
+              tr_principled_specular_color(&p0).x == 1.0f &&
+              tr_principled_specular_color(&p0).z == 1.0f,
           "specular defaults to 1 and white");
     tr_rng rng;
     tr_rng_init(&rng, 12, 13, 14);

@@ -100,8 +100,12 @@ int main(void) {
     }
     for (int r = 0; r <= 10; r += 5) {
         tr_bsdf_params b = white((float)r / 10.0f, 0.0f, 0, 1);
-        b.specular = 0.5f;
-        b.specular_color = v3(2.0f, 1.0f, 0.25f);
+        tr_material_ext e;
+        memset(&e, 0, sizeof e);
+        e.flags = TR_MATEXT_SPECULAR;
+        e.specular = 0.5f;
+        e.specular_color = v3(2.0f, 1.0f, 0.25f);
+        b.ext = &e;
         double se;
         const double v = sphere(&b, 200000, (uint64_t)(5000 + r), &se);
         printf("specular 0.5, colour (2, 1, 0.25), roughness %.1f: %.4f +- %.4f\n", r / 10.0, v,

@@ -59,19 +59,34 @@ TR_FN float tr_principled_f0d(const tr_bsdf_params *m) {
     return r * r;
 }
 
+/* glTF's KHR_materials_specular from the material's extras: the dielectric layer's F90
+ * and F0 scale (1 without) and its F0 tint (white without). */
+TR_FN float tr_principled_specular(const tr_bsdf_params *m) {
+    return m->ext && (m->ext->flags & TR_MATEXT_SPECULAR) != 0u ? m->ext->specular : 1.0f;
+}
+
+TR_FN tr_vec3 tr_principled_specular_color(const tr_bsdf_params *m) {
+    return m->ext && (m->ext->flags & TR_MATEXT_SPECULAR) != 0u ? m->ext->specular_color
+                                                                : v3s(1.0f);
+}
+
 /* Whether the dielectric layer has glTF's KHR_materials_specular (not 1 and white). */
 TR_FN int tr_principled_has_spec(const tr_bsdf_params *m) {
-    return m->specular != 1.0f || m->specular_color.x != 1.0f || m->specular_color.y != 1.0f ||
-           m->specular_color.z != 1.0f;
+    if (!m->ext || (m->ext->flags & TR_MATEXT_SPECULAR) == 0u) {
+        return 0;
+    }
+    tr_vec3 c = m->ext->specular_color;
+    return m->ext->specular != 1.0f || c.x != 1.0f || c.y != 1.0f || c.z != 1.0f;
 }
 
 /* The dielectric layer's F0 with KHR_materials_specular: min(F0(ior) specular_color, 1)
  * specular (its F90 is specular). */
 TR_FN tr_vec3 tr_principled_f0d_spec(const tr_bsdf_params *m) {
-    float f = tr_principled_f0d(m), s = tr_fminf(tr_fmaxf(m->specular, 0.0f), 1.0f);
-    return v3(tr_fminf(f * m->specular_color.x, 1.0f) * s,
-              tr_fminf(f * m->specular_color.y, 1.0f) * s,
-              tr_fminf(f * m->specular_color.z, 1.0f) * s);
+    float f = tr_principled_f0d(m);
+    float s = tr_fminf(tr_fmaxf(tr_principled_specular(m), 0.0f), 1.0f);
+    tr_vec3 c = tr_principled_specular_color(m);
+    return v3(tr_fminf(f * c.x, 1.0f) * s, tr_fminf(f * c.y, 1.0f) * s,
+              tr_fminf(f * c.z, 1.0f) * s);
 }
 
 TR_FN tr_vec3 tr_principled_f0(const tr_bsdf_params *m) {
@@ -174,8 +189,18 @@ TR_FN float tr_sheen_lobe(float r, tr_vec3 wo, tr_vec3 wi, float co, float ci) {
     return d * v;
 }
 
+/* The sheen's colour (black without: no extras) and roughness, from the extras. */
+TR_FN tr_vec3 tr_sheen_color(const tr_bsdf_params *m) {
+    return m->ext ? m->ext->sheen_color : v3s(0.0f);
+}
+
+TR_FN float tr_sheen_roughness(const tr_bsdf_params *m) {
+    return m->ext ? m->ext->sheen_roughness : 0.0f;
+}
+
 TR_FN float tr_sheen_weight(const tr_bsdf_params *m) {
-    return tr_fmaxf(tr_fmaxf(m->sheen_color.x, m->sheen_color.y), m->sheen_color.z);
+    tr_vec3 c = tr_sheen_color(m);
+    return tr_fmaxf(tr_fmaxf(c.x, c.y), c.z);
 }
 
 /* s E_sh(cos) (0 without the table). */
@@ -185,7 +210,7 @@ TR_FN float tr_sheen_albedo(const tr_bsdf_params *m, float c) {
     }
     return tr_sheen_weight(m) *
            tr_ggx_ms_e(m->ms + TR_GGX_MS_SHEEN, c,
-                       tr_fminf(tr_fmaxf(m->sheen_roughness, TR_SHEEN_MIN_R), 1.0f));
+                       tr_fminf(tr_fmaxf(tr_sheen_roughness(m), TR_SHEEN_MIN_R), 1.0f));
 }
 
 /* The sheen lobe in the frame of nf (wo, wi on its side). */
@@ -195,7 +220,7 @@ TR_FN tr_vec3 tr_sheen_eval(const tr_bsdf_params *m, tr_vec3 nf, tr_vec3 wo, tr_
     v3_basis(nf, &t, &b);
     tr_vec3 lo = v3(v3_dot(wo, t), v3_dot(wo, b), co);
     tr_vec3 li = v3(v3_dot(wi, t), v3_dot(wi, b), ci);
-    return v3_scale(m->sheen_color, tr_sheen_lobe(m->sheen_roughness, lo, li, co, ci));
+    return v3_scale(tr_sheen_color(m), tr_sheen_lobe(tr_sheen_roughness(m), lo, li, co, ci));
 }
 
 /* KHR_materials_specular: the GGX layer with Schlick's Fresnel from F0 to F90 =
@@ -206,7 +231,7 @@ TR_FN tr_vec3 tr_principled_spec_f90(const tr_bsdf_params *m, tr_vec3 f0, tr_vec
                                      tr_vec3 wi, float co, float ci) {
     float alpha = tr_principled_alpha(m->roughness);
     float k = tr_fminf(tr_fmaxf(m->metallic, 0.0f), 1.0f);
-    float f90 = tr_fminf(tr_fmaxf(m->specular, 0.0f), 1.0f) * (1.0f - k) + k;
+    float f90 = tr_fminf(tr_fmaxf(tr_principled_specular(m), 0.0f), 1.0f) * (1.0f - k) + k;
     tr_vec3 h = v3_normalize(v3_add(wo, wi));
     float d = tr_ggx_d(alpha, v3_dot(h, nf));
     float g2 = 1.0f / (1.0f + tr_ggx_lambda(alpha, co) + tr_ggx_lambda(alpha, ci));
@@ -230,7 +255,7 @@ TR_FN float tr_spec_kd(const tr_bsdf_params *m, float f0, float co, float ci) {
     float k = tr_fminf(tr_fmaxf(m->metallic, 0.0f), 1.0f);
     if (tr_principled_comp(m)) {
         float a = tr_principled_alpha(m->roughness);
-        float s = tr_fminf(tr_fmaxf(m->specular, 0.0f), 1.0f);
+        float s = tr_fminf(tr_fmaxf(tr_principled_specular(m), 0.0f), 1.0f);
         return (1.0f - k) * TR_INV_PI * (1.0f - tr_spec_layer_e(m, co, a, f0, s)) *
                (1.0f - tr_spec_layer_e(m, ci, a, f0, s)) / (1.0f - tr_spec_layer_eavg(m, a, f0, s));
     }
