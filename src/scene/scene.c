@@ -4,6 +4,7 @@
 #include <string.h>
 
 #include "kernel/ggx_ms.h"
+#include "kernel/punctual.h"
 #include "scene_internal.h"
 #include "trac0r/render.h"
 #include "trac0r/parse.h"
@@ -810,9 +811,12 @@ tr_scene_view tr_scene_view_of(const tr_scene *s) {
     v.sky_cz = s->sky_center[2];
     v.sky_radius = s->sky_radius;
     v.light_nodes = s->light_nodes;
-    v.light_node_count = v.light_count > 0 ? s->light_node_count : 0;
+    /* A tree over a stale table is left out; one over punctual lights alone is not. */
+    v.light_node_count = v.light_count > 0 || (s->light_count == 0 && s->light_tree_punctual > 0u)
+                             ? s->light_node_count
+                             : 0;
     v.light_leaf = s->light_leaf;
-    v.light_leaf_count = v.light_node_count > 0 ? v.light_count : 0;
+    v.light_leaf_count = v.light_node_count > 0 ? v.light_count + s->light_tree_punctual : 0;
     v.vertices = s->vertices;
     v.vertex_count = s->vertex_count;
     v.tri_verts = s->tri_verts;
@@ -867,7 +871,21 @@ uint32_t tr_scene_shape_count(const tr_scene *s) {
     return s->shape_count;
 }
 
+int tr_scene_light_tree_punctual(const tr_scene *s) {
+    if (s->light_sampling == TR_LIGHT_SAMPLING_POWER) {
+        return 0;
+    }
+    uint32_t n = 0;
+    for (uint32_t i = 0; i < s->punctual_count; ++i) {
+        n += s->punctual[i].type != TR_PUNCTUAL_DIRECTIONAL;
+    }
+    return n > TR_PUNCTUAL_ALL;
+}
+
 int tr_scene_light_tree_wanted(const tr_scene *s) {
+    if (tr_scene_light_tree_punctual(s)) {
+        return 1;
+    }
     if (s->light_sampling == TR_LIGHT_SAMPLING_AUTO) {
         return s->light_count >= TR_LIGHT_TREE_MIN_EMITTERS;
     }
@@ -887,8 +905,9 @@ int tr_scene_set_light_sampling(tr_scene *s, int mode, tr_error *err) {
 }
 
 int tr_scene_light_sampling(const tr_scene *s) {
-    return tr_scene_light_count(s) > 0 && s->light_node_count > 0 ? TR_LIGHT_SAMPLING_TREE
-                                                                  : TR_LIGHT_SAMPLING_POWER;
+    return (tr_scene_light_count(s) > 0 || s->light_tree_punctual > 0u) && s->light_node_count > 0
+               ? TR_LIGHT_SAMPLING_TREE
+               : TR_LIGHT_SAMPLING_POWER;
 }
 
 const char *tr_light_sampling_name(int mode) {
