@@ -439,15 +439,17 @@ int main(void) {
         scene.camera = pinhole;
     }
     /* Point, spot and directional lights (punctual.h) in a box of its own: each sampled at
-     * every vertex, and with more of them than that, one picked by the power CDF. */
-    for (int many = 0; many < 2; ++many) {
+     * every vertex, and with more of them than that, one picked by the power CDF; with
+     * more than 8 point and spot lights (24 lights), those picked through the light tree
+     * beside the box's lamp (light_tree.h). */
+    for (int many = 0; many < 3; ++many) {
         tr_scene lit = {0};
         tr_scene_init(&lit);
         CHECK(tr_scene_builtin(&lit, "cornell", 48, 36, &err) == TR_OK, "%s", err.msg);
         const tr_aabb b = tr_scene_bounds(&lit);
         const tr_vec3 mid = v3_scale(v3_add(b.min, b.max), 0.5f);
         const tr_vec3 ext = v3_sub(b.max, b.min);
-        const int n = many ? 10 : 3;
+        const int n = many == 2 ? 24 : many ? 10 : 3;
         for (int i = 0; i < n; ++i) {
             tr_punctual l;
             memset(&l, 0, sizeof l);
@@ -464,7 +466,13 @@ int main(void) {
         }
         CHECK(tr_scene_commit(&lit, TR_ACCEL_TYPE_BVH, &err) == TR_OK, "%s", err.msg);
         compare_backends(dev, &lit, 1, TR_INTEGRATOR_PT, 64,
-                         many ? "bvh, pt, ten punctual lights" : "bvh, pt, punctual lights");
+                         many == 2 ? "bvh, pt, punctual lights in the light tree"
+                         : many    ? "bvh, pt, ten punctual lights"
+                                   : "bvh, pt, punctual lights");
+        if (many == 2) {
+            CHECK(tr_scene_view_of(&lit).light_leaf_count > tr_scene_view_of(&lit).light_count,
+                  "24 punctual lights are not in the light tree");
+        }
         if (!many) {
             /* bdpt adds them along the camera subpath (tr_bdpt_infinite). */
             compare_backends(dev, &lit, 1, TR_INTEGRATOR_BDPT, 64, "bvh, bdpt, punctual lights");

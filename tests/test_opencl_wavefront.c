@@ -6,7 +6,8 @@
  * a mistake can make the two differ.
  *
  * Cases: the thesis's box (glass, glossy) and the measured classic box; a scene with an
- * environment map, a sun, a textured principled floor and point and spot lights; depth
+ * environment map, a sun, a textured principled floor and point and spot lights; many
+ * point and spot lights in the light tree (scenes/many-punctual.json); depth
  * limits, roulette from the first segment, the passes, the real-time flags (clamp,
  * regularization, primary surface replacement, ReSTIR's cuts); an odd 37x23 image with a
  * stride and a rectangle; frames split into chunks of a few paths
@@ -296,6 +297,17 @@ int main(void) {
     compare(dev, out, cfg, 8, NULL, "sky, sun, ..., max depth 3, passes");
     cfg = tr_render_config_default();
     tr_scene_destroy(out);
+
+    /* 62 point and spot lights in the light tree beside two lamps, two directional ones;
+     * without the primary direct light, pt's own walk of the tree for them at the first
+     * vertex. */
+    tr_scene *many = from_file("many-punctual.json", 40, 30);
+    CHECK(tr_device_upload(dev, many, &err) == TR_OK, "%s", err.msg);
+    compare(dev, many, cfg, 8, NULL, "many punctual lights 40x30");
+    cfg.no_primary_direct = 1;
+    compare(dev, many, cfg, 4, NULL, "many punctual lights, no primary direct");
+    cfg = tr_render_config_default();
+    tr_scene_destroy(many);
 
     /* The choice. naive always runs as one kernel; auto follows the rule (the
      * megakernel on every device type until a GPU has measured both) unless

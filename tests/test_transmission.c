@@ -25,7 +25,10 @@
  *      (TR_STATUS_PARSE), and a diffuse material refuses the principled-only ones.
  *  (f) glTF import: a glTF written here with KHR_materials_transmission, _ior, _volume
  *      becomes a principled material with that transmission, index and absorption, and no
- *      warning names those extensions. */
+ *      warning names those extensions.
+ *  (g) glTF's transmissionTexture: imported as the transmission map (no warning, the
+ *      thickness map beside it neither), whose red channel multiplies the factor in the
+ *      kernel's material extras; the scene-file key "transmission_texture" reads one too. */
 #define _POSIX_C_SOURCE 200809L
 #include "check.h"
 #include "kernel/kernel.h"
@@ -431,6 +434,111 @@ static void gltf_import(const char *dir) {
     unlink(path);
 }
 
+/* (g) */
+static void gltf_transmission_map(const char *dir) {
+    /* The triangle of (f), its material's transmission 0.8 times a map, and the volume's
+     * thickness map (not needed: no warning either); the map a 2x2 PNG of RGBA (64, 200,
+     * 10, 255) in a data URI, so that red (0.251) and not green or alpha must be read. */
+    static const char *gltf =
+        "{\"asset\": {\"version\": \"2.0\"},\n"
+        " \"extensionsUsed\": [\"KHR_materials_transmission\", \"KHR_materials_volume\"],\n"
+        " \"buffers\": [{\"byteLength\": 60, \"uri\": \"data:application/octet-stream;base64,"
+        "AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAAAAAAAAAAAAAAAIA/AAAAAAAAAAAAAIA/\"}],\n"
+        " \"bufferViews\": [{\"buffer\": 0, \"byteOffset\": 0, \"byteLength\": 36},\n"
+        "                 {\"buffer\": 0, \"byteOffset\": 36, \"byteLength\": 24}],\n"
+        " \"accessors\": [{\"bufferView\": 0, \"componentType\": 5126, \"count\": 3, \"type\": "
+        "\"VEC3\", \"min\": [0, 0, 0], \"max\": [1, 1, 0]},\n"
+        "               {\"bufferView\": 1, \"componentType\": 5126, \"count\": 3, \"type\": "
+        "\"VEC2\"}],\n"
+        " \"images\": [{\"uri\": \"data:image/png;base64,"
+        "iVBORw0KGgoAAAANSUhEUgAAAAIAAAACCAYAAABytg0kAAAAEUlEQVR4nGNwOMH1H4QZYAwAR3gIRdn56ZMAAAAASU"
+        "VORK5CYII="
+        "\"}],\n"
+        " \"textures\": [{\"source\": 0}],\n"
+        " \"materials\": [{\"name\": \"frosted\", \"pbrMetallicRoughness\": {\"baseColorFactor\": "
+        "[1, 1, 1, 1], \"roughnessFactor\": 0.3, \"metallicFactor\": 0},\n"
+        "   \"extensions\": {\"KHR_materials_transmission\": {\"transmissionFactor\": 0.8, "
+        "\"transmissionTexture\": {\"index\": 0}},\n"
+        "                  \"KHR_materials_volume\": {\"thicknessFactor\": 0.1, "
+        "\"thicknessTexture\": {\"index\": 0}}}}],\n"
+        " \"meshes\": [{\"primitives\": [{\"attributes\": {\"POSITION\": 0, \"TEXCOORD_0\": 1}, "
+        "\"material\": 0}]}],\n"
+        " \"nodes\": [{\"mesh\": 0}], \"scenes\": [{\"nodes\": [0]}], \"scene\": 0}\n";
+    char path[700];
+    snprintf(path, sizeof path, "%s/frosted.gltf", dir);
+    FILE *f = fopen(path, "w");
+    CHECK(f && fputs(gltf, f) >= 0 && fclose(f) == 0, "cannot write %s", path);
+    tr_scene s;
+    tr_scene_init(&s);
+    tr_scene_file info;
+    tr_error err;
+    const tr_model_options opt = {0, 1.0f, 0, 0, NULL};
+    CHECK(tr_scene_model_load(&s, path, &opt, &info, &err) == TR_OK, "%s", err.msg);
+    CHECK(info.warning_count == 0, "%u warnings for a transmission map (first: %s)",
+          info.warning_count, info.warning_count ? info.warnings[0] : "");
+    CHECK(tr_scene_commit(&s, TR_ACCEL_TYPE_BVH, &err) == TR_OK, "%s", err.msg);
+    tr_scene_view v = tr_scene_view_of(&s);
+    int found = 0;
+    for (uint32_t i = 0; i < s.material_count && v.material_ext_count == s.material_count; ++i) {
+        const tr_material_ext *e = &s.material_exts[i];
+        if (e->transmission <= 0.0f) {
+            continue;
+        }
+        found = 1;
+        CHECK(e->transmission == 0.8f && e->transmission_tex != TR_NO_INDEX &&
+                  (tr_scene_material_maps(&s, i) & TR_MAP_TRANSMISSION) != 0u,
+              "glTF frosted: transmission %g, map %u", (double)e->transmission,
+              e->transmission_tex);
+        /* The kernel's material extras: the factor times the map's red, at any point. */
+        tr_bsdf_params b;
+        memset(&b, 0, sizeof b);
+        b.type = TR_MATERIAL_PRINCIPLED;
+        b.color = v3s(1.0f);
+        b.roughness = 0.3f;
+        tr_surface_attr a;
+        memset(&a, 0, sizeof a);
+        a.ns = v3(0.0f, 0.0f, 1.0f);
+        a.tu = 0.3f;
+        a.tv = 0.6f;
+        tr_material_apply_ext(&v, i, &a, &b);
+        CHECK(fabsf(b.transmission - 0.8f * 64.0f / 255.0f) < 1e-3f,
+              "transmission with its map %g, expected %g", (double)b.transmission,
+              0.8 * 64.0 / 255.0);
+    }
+    CHECK(found, "no transmissive material imported from %s", path);
+    tr_scene_clear(&s);
+    unlink(path);
+
+    /* The scene file's key, with the same image as a file. */
+    static const unsigned char png[74] = {
+        0x89, 0x50, 0x4e, 0x47, 0x0d, 0x0a, 0x1a, 0x0a, 0x00, 0x00, 0x00, 0x0d, 0x49, 0x48, 0x44,
+        0x52, 0x00, 0x00, 0x00, 0x02, 0x00, 0x00, 0x00, 0x02, 0x08, 0x06, 0x00, 0x00, 0x00, 0x72,
+        0xb6, 0x0d, 0x24, 0x00, 0x00, 0x00, 0x11, 0x49, 0x44, 0x41, 0x54, 0x78, 0x9c, 0x63, 0x70,
+        0x38, 0xc1, 0xf5, 0x1f, 0x84, 0x19, 0x60, 0x0c, 0x00, 0x47, 0x78, 0x08, 0x45, 0xd9, 0xf9,
+        0xe9, 0x93, 0x00, 0x00, 0x00, 0x00, 0x49, 0x45, 0x4e, 0x44, 0xae, 0x42, 0x60, 0x82};
+    char png_path[700], json_path[700];
+    snprintf(png_path, sizeof png_path, "%s/red.png", dir);
+    snprintf(json_path, sizeof json_path, "%s/slab.json", dir);
+    f = fopen(png_path, "wb");
+    CHECK(f && fwrite(png, 1, sizeof png, f) == sizeof png && fclose(f) == 0, "cannot write %s",
+          png_path);
+    static const char text[] =
+        "{\"camera\": {\"position\": [0, 0, 5], \"direction\": [0, 0, -1], \"fov\": 4},\n"
+        " \"materials\": {\"m\": {\"type\": \"principled\", \"color\": [1, 1, 1],"
+        " \"transmission\": 0.5, \"transmission_texture\": \"red.png\"}},\n"
+        " \"shapes\": [{\"type\": \"box\", \"material\": \"m\"}],\n"
+        " \"environment\": {\"color\": [1, 1, 1]}}";
+    tr_scene_init(&s);
+    CHECK(tr_scene_file_parse(&s, json_path, text, strlen(text), NULL, NULL, &err) == TR_OK,
+          "transmission_texture: %s", err.msg);
+    CHECK(s.material_ext_count == s.material_count && s.material_count >= 1 &&
+              s.material_exts[0].transmission == 0.5f &&
+              s.material_exts[0].transmission_tex != TR_NO_INDEX,
+          "the key transmission_texture made no transmission map");
+    tr_scene_clear(&s);
+    unlink(png_path);
+}
+
 int main(void) {
     const float rough[] = {0.4f, 0.7f, 1.0f};
     const double thetas[] = {10.0, 50.0, 70.0, 120.0, 175.0};
@@ -460,6 +568,7 @@ int main(void) {
         CHECK(0, "mkdtemp");
     } else {
         gltf_import(dir);
+        gltf_transmission_map(dir);
         rmdir(dir);
     }
     return check_finish("test_transmission");

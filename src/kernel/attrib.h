@@ -85,7 +85,10 @@ typedef struct tr_material_ext {
      * layer's F0 min(F0(ior) specular_color, 1) specular and its F90 specular. */
     float specular;
     tr_vec3 specular_color;
-    uint32_t pad[3];
+    /* principled: glTF's transmissionTexture, linear, its red channel multiplying
+     * `transmission`; TR_NO_INDEX for none. */
+    uint32_t transmission_tex;
+    uint32_t pad[2];
 } tr_material_ext;
 TR_STATIC_ASSERT(sizeof(tr_material_ext) == 112, "tr_material_ext layout");
 

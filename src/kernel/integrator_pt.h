@@ -261,13 +261,20 @@ TR_FN tr_vec3 tr_trace_pt_ff(const tr_scene_view *s, tr_ray ray, int max_depth, 
             break;
         }
 
+        /* A point or spot light the tree's walk reached (light_tree.h): lit with the other
+         * punctual lights below. */
+        tr_vec3 punct_tree = v3s(0.0f);
         /* Next-event estimation: one emitter point, one shadow ray. */
-        if (nee && s->light_count > 0) {
-            uint32_t lt;
+        if (nee && (s->light_count > 0 || s->light_node_count > 0u)) {
+            uint32_t lt, pk; /* pk, pp: a punctual light the tree reached */
             tr_vec3 y;
             float lu, lv, l1, l2;
             tr_sampler_2d(smp, tr_sampler_dim(seg, TR_DIM_LIGHT), &l1, &l2);
-            float pl = tr_light_sample_n(s, p, m.ns, l1, l2, &lt, &y, &lu, &lv);
+            float pp;
+            float pl = tr_light_sample_np(s, p, m.ns, l1, l2, &lt, &y, &lu, &lv, &pk, &pp);
+            if (pp > 0.0f) {
+                punct_tree = tr_punctual_one(s, &s->punctual[pk], pp, &m, wo, p, rays);
+            }
             TR_CONST_GLOBAL tr_triangle *ltri = &s->triangles[lt];
             tr_vec3 d = v3_sub(y, p);
             float dist = v3_length(d);
@@ -336,9 +343,11 @@ TR_FN tr_vec3 tr_trace_pt_ff(const tr_scene_view *s, tr_ray ray, int max_depth, 
         if (!tr_bsdf_is_delta(&m) && s->punctual_count > 0u) {
             const float pu = tr_sampler_1d(smp, tr_punctual_dim(seg));
             const tr_vec3 r0 = radiance;
-            radiance =
-                tr_pt_add(radiance, v3_mul(throughput, tr_punctual_nee(s, &m, wo, p, pu, rays)),
-                          nee_indirect, clamp_indirect);
+            radiance = tr_pt_add(
+                radiance,
+                v3_mul(throughput,
+                       v3_add(tr_punctual_nee_pt(s, &m, wo, p, pu, !nee, rays), punct_tree)),
+                nee_indirect, clamp_indirect);
             if (at_s) { /* several lights: their share taken head-on, an approximation */
                 spec = v3_add(spec, v3_mul(v3_sub(radiance, r0),
                                            tr_bsdf_spec_share(&m, wo, tr_bsdf_facing(m.ns, wo))));

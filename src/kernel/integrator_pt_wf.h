@@ -201,13 +201,20 @@ TR_FN int tr_pt_wf_shade(const tr_scene_view *s, tr_pt_wf_path *p, int max_depth
         return 0;
     }
 
+    /* A point or spot light the tree's walk reached (light_tree.h): lit with the other
+     * punctual lights below. */
+    tr_vec3 punct_tree = v3s(0.0f);
     /* Next-event estimation: one emitter point; its shadow ray is connect's. */
-    if (nee && s->light_count > 0) {
-        uint32_t lt;
+    if (nee && (s->light_count > 0 || s->light_node_count > 0u)) {
+        uint32_t lt, pk; /* pk, pp: a punctual light the tree reached */
         tr_vec3 y;
         float lu, lv, l1, l2;
         tr_sampler_2d(&smp, tr_sampler_dim(seg, TR_DIM_LIGHT), &l1, &l2);
-        float pl = tr_light_sample_n(s, pos, m.ns, l1, l2, &lt, &y, &lu, &lv);
+        float pp;
+        float pl = tr_light_sample_np(s, pos, m.ns, l1, l2, &lt, &y, &lu, &lv, &pk, &pp);
+        if (pp > 0.0f) {
+            punct_tree = tr_punctual_one(s, &s->punctual[pk], pp, &m, wo, pos, rays);
+        }
         TR_CONST_GLOBAL tr_triangle *ltri = &s->triangles[lt];
         tr_vec3 d = v3_sub(y, pos);
         float dist = v3_length(d);
@@ -241,7 +248,8 @@ TR_FN int tr_pt_wf_shade(const tr_scene_view *s, tr_pt_wf_path *p, int max_depth
     }
     if (!tr_bsdf_is_delta(&m) && s->punctual_count > 0u) {
         const float pu = tr_sampler_1d(&smp, tr_punctual_dim(seg));
-        p->c_punctual = v3_mul(throughput, tr_punctual_nee(s, &m, wo, pos, pu, rays));
+        p->c_punctual = v3_mul(
+            throughput, v3_add(tr_punctual_nee_pt(s, &m, wo, pos, pu, !nee, rays), punct_tree));
         p->pending |= TR_PT_WF_PUNCTUAL;
     }
 

@@ -125,7 +125,8 @@ TR_FN float tr_light_select_prob(const tr_scene_view *s, const tr_material *m, f
  * otherwise. */
 TR_FN float tr_light_select_pdf_n(const tr_scene_view *s, tr_vec3 p, tr_vec3 nr, uint32_t t) {
     if (s->light_node_count > 0u) {
-        return tr_light_tree_prob(s, p, nr, tr_light_index_of(s, t));
+        const uint32_t k = tr_light_index_of(s, t); /* light_count for no emitter */
+        return k < s->light_count ? tr_light_tree_prob(s, p, nr, k) : 0.0f;
     }
     TR_CONST_GLOBAL tr_triangle *tri = &s->triangles[t];
     tr_material m = s->materials[tri->material];
@@ -183,14 +184,23 @@ TR_FN float tr_light_pdf(const tr_scene_view *s, tr_vec3 p, uint32_t t, tr_vec3 
  * emitter would get an unstratified share). *tri_index the triangle, *y the point, *u and *v its
  * barycentrics of the triangle's second and third vertex (as tr_hit's, for the material stage);
  * returns the solid-angle density of the choice seen from p (tr_light_pdf), 0 when the scene has no
- * emitters or the sample failed. */
-TR_FN float tr_light_sample_n(const tr_scene_view *s, tr_vec3 p, tr_vec3 nr, float u1, float u2,
-                              uint32_t *tri_index, tr_vec3 *y, float *u, float *v) {
+ * emitters or the sample failed.
+ *
+ * Where the light tree also holds punctual lights (light_tree.h) and the walk ends at one,
+ * its index into s->punctual goes to *punct and the walk's probability to *punct_prob,
+ * and the function returns 0 (no point on an emitter); *punct_prob is 0 otherwise.
+ * tr_light_sample_n is this without them: a caller that does not light with the punctual
+ * lights it reaches (bdpt's connection, ReSTIR's candidates) finds nothing there. */
+TR_FN float tr_light_sample_np(const tr_scene_view *s, tr_vec3 p, tr_vec3 nr, float u1, float u2,
+                               uint32_t *tri_index, tr_vec3 *y, float *u, float *v, uint32_t *punct,
+                               float *punct_prob) {
     *tri_index = 0u;
     *y = v3s(0.0f);
     *u = 0.0f;
     *v = 0.0f;
-    if (s->light_count == 0) {
+    *punct = 0u;
+    *punct_prob = 0.0f;
+    if (s->light_count == 0 && s->light_node_count == 0u) {
         return 0.0f;
     }
     uint32_t k;
@@ -198,6 +208,11 @@ TR_FN float tr_light_sample_n(const tr_scene_view *s, tr_vec3 p, tr_vec3 nr, flo
     if (s->light_node_count > 0u) {
         k = tr_light_tree_pick(s, p, nr, &u1, &sel);
         if (!(sel > 0.0f)) {
+            return 0.0f;
+        }
+        if (k >= s->light_count) { /* a point or spot light's leaf */
+            *punct = k - s->light_count;
+            *punct_prob = sel;
             return 0.0f;
         }
     } else {
@@ -270,6 +285,13 @@ TR_FN float tr_light_sample_n(const tr_scene_view *s, tr_vec3 p, tr_vec3 nr, flo
         }
     }
     return omega > 0.0f ? sel / omega : tr_light_pdf_by_area(tri, sel, p, *y);
+}
+
+TR_FN float tr_light_sample_n(const tr_scene_view *s, tr_vec3 p, tr_vec3 nr, float u1, float u2,
+                              uint32_t *tri_index, tr_vec3 *y, float *u, float *v) {
+    uint32_t punct;
+    float punct_prob;
+    return tr_light_sample_np(s, p, nr, u1, u2, tri_index, y, u, v, &punct, &punct_prob);
 }
 
 /* tr_light_sample_n without a receiver normal. */

@@ -13,7 +13,13 @@
  * tr_light_tree_prob finds again from the leaf up for MIS.
  *
  * The receiver's normal nr (the shading normal; zero where the caller has none) bounds the
- * cosine at the receiver as well, on both sides of the surface. */
+ * cosine at the receiver as well, on both sides of the surface.
+ *
+ * Where the scene has many point and spot lights (src/scene/light_tree.c), the tree holds
+ * them too, as leaves light_count + their index into s->punctual: a point of power I with
+ * every orientation (a point light) or its outer cone and nothing beyond (a spot), so that
+ * one walk chooses among emitters and punctual lights alike (as pbrt-v4's
+ * BVHLightSampler does). light_leaf_count is then light_count + punctual_count. */
 #ifndef TR_KERNEL_LIGHT_TREE_H
 #define TR_KERNEL_LIGHT_TREE_H
 
@@ -73,7 +79,8 @@ TR_FN float tr_light_importance(TR_CONST_GLOBAL tr_light_node *n, tr_vec3 p, tr_
             cos_r = tr_fmaxf(cos_i * cos_b + sin_i * sin_b, 0.0f);
         }
     }
-    return n->power * cos_p * cos_r / tr_fmaxf(d2, r2);
+    /* The floor keeps a point light's leaf (r = 0) finite at its own position. */
+    return n->power * cos_p * cos_r / tr_fmaxf(tr_fmaxf(d2, r2), 1e-30f);
 }
 
 /* The branch weights where neither child's bound admits light at p (the parent's looser

@@ -15,6 +15,7 @@
 #include "attrib.h"
 #include "bsdf.h"
 #include "compat.h"
+#include "light_tree.h"
 #include "material.h"
 #include "material_eval.h"
 #include "scene_view.h"
@@ -139,6 +140,41 @@ TR_FN tr_vec3 tr_punctual_nee(const tr_scene_view *s, const tr_bsdf_params *m, t
     float prob;
     const uint32_t k = tr_punctual_pick(s, u, &prob);
     return tr_punctual_one(s, &s->punctual[k], prob, m, wo, p, rays);
+}
+
+/* Whether the light tree holds the point and spot lights (light_tree.h): then pt's
+ * next-event estimation reaches them through the tree, beside the emitters, and
+ * tr_punctual_nee_pt lights with the directional ones only. */
+TR_FN int tr_punctual_in_tree(const tr_scene_view *s) {
+    return s->light_leaf_count > s->light_count;
+}
+
+/* pt's next-event estimation of the punctual lights the light tree does not hold: all of
+ * them, as tr_punctual_nee, where the tree holds none; else the directional lights, a
+ * shadow ray to each at every vertex (as the sun has; no box bounds them), and, where
+ * `walk` is set (the first vertex when a stage estimates the emitters' direct light
+ * there and pt draws no tree sample of its own), the point or spot light a walk of the
+ * tree with u reaches (nothing where it reaches an emitter), over its probability. */
+TR_FN tr_vec3 tr_punctual_nee_pt(const tr_scene_view *s, const tr_bsdf_params *m, tr_vec3 wo,
+                                 tr_vec3 p, float u, int walk, uint32_t *rays) {
+    if (!tr_punctual_in_tree(s)) {
+        return tr_punctual_nee(s, m, wo, p, u, rays);
+    }
+    tr_vec3 sum = v3s(0.0f);
+    for (uint32_t i = 0; i < s->punctual_count; ++i) {
+        if (s->punctual[i].type == TR_PUNCTUAL_DIRECTIONAL) {
+            sum = v3_add(sum, tr_punctual_one(s, &s->punctual[i], 1.0f, m, wo, p, rays));
+        }
+    }
+    if (walk) {
+        float prob;
+        const uint32_t k = tr_light_tree_pick(s, p, m->ns, &u, &prob);
+        if (prob > 0.0f && k >= s->light_count) {
+            sum = v3_add(
+                sum, tr_punctual_one(s, &s->punctual[k - s->light_count], prob, m, wo, p, rays));
+        }
+    }
+    return sum;
 }
 
 #endif

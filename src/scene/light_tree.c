@@ -53,6 +53,11 @@ typedef struct builder {
     tr_light_node *nodes;
     uint32_t *leaf;
     uint32_t next; /* the next free node */
+    /* The least extent saoh_cost gives a box's side: 0 over emitters alone; with point
+     * and spot lights, whose boxes have no size (and those of points in a row or a plane
+     * no area), a thousandth of the root's longest side, so that the cost still sees
+     * how far apart they are instead of peeling single lights off at cost 0. */
+    double min_extent;
 } builder;
 
 static double dot3(const double *a, const double *b) {
@@ -140,10 +145,10 @@ static bounds bounds_union(const bounds *a, const bounds *b) {
 }
 
 /* The SAOH cost of a node with bounds b, split along `axis`. */
-static double saoh_cost(const bounds *b, int axis) {
+static double saoh_cost(const bounds *b, int axis, double min_extent) {
     double ext[3], emax = 0.0;
     for (int i = 0; i < 3; ++i) {
-        ext[i] = fmax(b->hi[i] - b->lo[i], 0.0);
+        ext[i] = fmax(b->hi[i] - b->lo[i], min_extent);
         emax = fmax(emax, ext[i]);
     }
     double area = 2.0 * (ext[0] * ext[1] + ext[1] * ext[2] + ext[2] * ext[0]);
@@ -241,7 +246,8 @@ static void build(builder *bd, uint32_t node, uint32_t parent, uint32_t lo, uint
                 if (bd->keys[i].key == bd->keys[i - 1].key) {
                     continue; /* equal centroids stay on one side */
                 }
-                double c = saoh_cost(&bd->prefix[i - 1], axis) + saoh_cost(&bd->suffix[i], axis);
+                double c = saoh_cost(&bd->prefix[i - 1], axis, bd->min_extent) +
+                           saoh_cost(&bd->suffix[i], axis, bd->min_extent);
                 if (c < best) {
                     best = c;
                     best_axis = axis;
@@ -277,26 +283,63 @@ void tr_scene_free_light_tree(tr_scene *s) {
     s->light_nodes = NULL;
     s->light_leaf = NULL;
     s->light_node_count = 0;
+    s->light_tree_punctual = 0;
+}
+
+/* The bounds of a point or spot light as a leaf of the tree: a point (the box of no
+ * size) of power I, the mean of its intensity's channels, which is what an emitter's
+ * weight is along its normal (radiance times area), so that both are weighed alike by
+ * the distance. A point light sends it every way (theta_o = pi); a spot within its outer
+ * cone, and nothing beyond (theta_e: a hair above 0, so that the kernel's strict test
+ * cos theta' > cos theta_e still admits the cone's inside, where theta' = 0). */
+static void punctual_bounds(const tr_punctual *l, bounds *b) {
+    const double pos[3] = {l->pos.x, l->pos.y, l->pos.z};
+    for (int i = 0; i < 3; ++i) {
+        b->lo[i] = pos[i];
+        b->hi[i] = pos[i];
+    }
+    b->power = ((double)l->intensity.x + l->intensity.y + l->intensity.z) / 3.0;
+    b->c.axis[0] = l->dir.x;
+    b->c.axis[1] = l->dir.y;
+    b->c.axis[2] = l->dir.z;
+    normalize3(b->c.axis);
+    if (l->type == TR_PUNCTUAL_SPOT) {
+        b->c.theta_o = acos(fmin(fmax((double)l->cos_outer, -1.0), 1.0));
+        b->c.theta_e = 1e-3;
+    } else {
+        b->c.theta_o = PI_D;
+        b->c.theta_e = 0.5 * PI_D;
+    }
+    b->c.empty = 0;
 }
 
 int tr_scene_build_light_tree(tr_scene *s, tr_error *err) {
     tr_scene_free_light_tree(s);
-    const uint32_t n = s->light_count;
+    /* Leaves: the emitters 0..light_count-1, then, where the tree holds them, the point
+     * and spot lights as light_count + their index into s->punctual (directional lights,
+     * which no box bounds, keep a slot but no leaf: they are sampled at every vertex, as
+     * the sun is). n counts the leaves, slots the leaf table's entries. */
+    const uint32_t punct = tr_scene_light_tree_punctual(s) ? s->punctual_count : 0u;
+    const uint32_t slots = s->light_count + punct;
+    uint32_t n = s->light_count;
+    for (uint32_t j = 0; j < punct; ++j) {
+        n += s->punctual[j].type != TR_PUNCTUAL_DIRECTIONAL;
+    }
     if (n == 0) {
         return TR_OK;
     }
     builder bd;
     memset(&bd, 0, sizeof bd);
-    bounds *prim = malloc((size_t)n * sizeof *prim);
+    bounds *prim = malloc((size_t)slots * sizeof *prim);
     bd.order = malloc((size_t)n * sizeof *bd.order);
     bd.keys = malloc((size_t)n * sizeof *bd.keys);
     bd.prefix = malloc((size_t)n * sizeof *bd.prefix);
     bd.suffix = malloc((size_t)n * sizeof *bd.suffix);
     bd.nodes = calloc(2 * (size_t)n - 1, sizeof *bd.nodes);
-    bd.leaf = malloc((size_t)n * sizeof *bd.leaf);
+    bd.leaf = calloc(slots, sizeof *bd.leaf);
     int ok = prim && bd.order && bd.keys && bd.prefix && bd.suffix && bd.nodes && bd.leaf;
     if (ok) {
-        for (uint32_t k = 0; k < n; ++k) {
+        for (uint32_t k = 0; k < s->light_count; ++k) {
             const tr_triangle *t = &s->triangles[s->lights[k]];
             const tr_material *m = &s->materials[t->material];
             bounds *b = &prim[k];
@@ -316,7 +359,23 @@ int tr_scene_build_light_tree(tr_scene *s, tr_error *err) {
             b->c.empty = 0;
             bd.order[k] = k;
         }
+        uint32_t k = s->light_count;
+        for (uint32_t j = 0; j < punct; ++j) {
+            if (s->punctual[j].type != TR_PUNCTUAL_DIRECTIONAL) {
+                punctual_bounds(&s->punctual[j], &prim[s->light_count + j]);
+                bd.order[k++] = s->light_count + j;
+            }
+        }
         bd.prim = prim;
+        if (punct > 0u) {
+            bounds all = bounds_empty();
+            for (uint32_t i = 0; i < n; ++i) {
+                all = bounds_union(&all, &prim[bd.order[i]]);
+            }
+            for (int i = 0; i < 3; ++i) {
+                bd.min_extent = fmax(bd.min_extent, 1e-3 * (all.hi[i] - all.lo[i]));
+            }
+        }
         bd.next = 1;
         build(&bd, 0, 0, 0, n, 0);
     }
@@ -334,5 +393,6 @@ int tr_scene_build_light_tree(tr_scene *s, tr_error *err) {
     s->light_nodes = bd.nodes;
     s->light_leaf = bd.leaf;
     s->light_node_count = 2 * n - 1;
+    s->light_tree_punctual = punct;
     return TR_OK;
 }

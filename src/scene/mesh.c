@@ -443,14 +443,15 @@ static tr_material map_material(import_ctx *c, const struct aiMaterial *m, tr_ma
             ext->emission =
                 v3(em.x < 1e7f ? em.x : 1e7f, em.y < 1e7f ? em.y : 1e7f, em.z < 1e7f ? em.z : 1e7f);
         }
-        /* KHR_materials_transmission (its map is not read) with KHR_materials_ior, and
-         * KHR_materials_volume's attenuation (its thickness is a rasteriser's stand-in for
-         * the distance a path tracer measures, and is not needed). */
+        /* KHR_materials_transmission with its map (Assimp 5.1 on: aiTextureType_TRANSMISSION,
+         * index 0; the red channel times the factor) and KHR_materials_ior, and
+         * KHR_materials_volume's attenuation. Its thickness, factor and map (the same type,
+         * index 1), is a rasteriser's stand-in for the distance a path tracer measures, and
+         * is not needed. */
         if (transmit) {
             ext->transmission = clamp01(transmission);
-        }
-        if (aiGetMaterialTextureCount(m, aiTextureType_TRANSMISSION) > 0) {
-            import_warn(c, "material '%.60s': transmission and thickness maps dropped", mname);
+            ext->transmission_tex =
+                load_texture_xf(c, m, mname, aiTextureType_TRANSMISSION, "transmission");
         }
         ai_real att_dist = 0.0f;
         struct aiColor4D att = {1, 1, 1, 1};
@@ -481,11 +482,11 @@ static tr_material map_material(import_ctx *c, const struct aiMaterial *m, tr_ma
     }
     *has_ext = ext->base_tex != TR_NO_INDEX || ext->normal_tex != TR_NO_INDEX ||
                ext->emission_tex != TR_NO_INDEX || ext->mr_tex != TR_NO_INDEX ||
-               (ext->flags & TR_MATEXT_ALPHA_MASK) || ext->metallic > 0.0f ||
-               ext->clearcoat > 0.0f || ext->emission.x > 0.0f || ext->emission.y > 0.0f ||
-               ext->emission.z > 0.0f || ext->transmission > 0.0f || ext->absorption.x > 0.0f ||
-               ext->absorption.y > 0.0f || ext->absorption.z > 0.0f || ext->sheen_color.x > 0.0f ||
-               ext->sheen_color.y > 0.0f || ext->sheen_color.z > 0.0f;
+               ext->transmission_tex != TR_NO_INDEX || (ext->flags & TR_MATEXT_ALPHA_MASK) ||
+               ext->metallic > 0.0f || ext->clearcoat > 0.0f || ext->emission.x > 0.0f ||
+               ext->emission.y > 0.0f || ext->emission.z > 0.0f || ext->transmission > 0.0f ||
+               ext->absorption.x > 0.0f || ext->absorption.y > 0.0f || ext->absorption.z > 0.0f ||
+               ext->sheen_color.x > 0.0f || ext->sheen_color.y > 0.0f || ext->sheen_color.z > 0.0f;
     return out;
 }
 
@@ -772,7 +773,7 @@ static void gltf_extension_warnings(const import_ctx *c, const char *path) {
     static const char *const handled[] = {
         "KHR_materials_clearcoat",    /* principled's clear coat (its maps: warned) */
         "KHR_lights_punctual",        /* point, spot and directional lights */
-        "KHR_materials_transmission", /* principled's transmission (its map: warned) */
+        "KHR_materials_transmission", /* principled's transmission and its map */
         "KHR_materials_ior",          /* the principled material's index */
         "KHR_materials_volume",       /* the attenuation (thickness is not needed) */
         "KHR_texture_transform",      /* the maps' offset, rotation and scale */

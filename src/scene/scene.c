@@ -4,6 +4,7 @@
 #include <string.h>
 
 #include "kernel/ggx_ms.h"
+#include "kernel/punctual.h"
 #include "scene_internal.h"
 #include "trac0r/render.h"
 #include "trac0r/parse.h"
@@ -150,7 +151,7 @@ static int grow(void **arr, uint32_t *cap, uint64_t need, size_t elem, const cha
 tr_material_ext tr_material_ext_default(void) {
     tr_material_ext e;
     memset(&e, 0, sizeof e);
-    e.base_tex = e.emission_tex = e.mr_tex = e.normal_tex = TR_NO_INDEX;
+    e.base_tex = e.emission_tex = e.mr_tex = e.normal_tex = e.transmission_tex = TR_NO_INDEX;
     e.alpha_cutoff = 0.5f;
     e.normal_scale = 1.0f;
     return e;
@@ -171,8 +172,9 @@ int tr_scene_set_material_ext(tr_scene *s, uint32_t index, const tr_material_ext
         return tr_error_set(err, TR_STATUS_NOT_FOUND, "material %u of %u", index,
                             s->material_count);
     }
-    const uint32_t tex[4] = {ext->base_tex, ext->emission_tex, ext->mr_tex, ext->normal_tex};
-    for (int k = 0; k < 4; ++k) {
+    const uint32_t tex[5] = {ext->base_tex, ext->emission_tex, ext->mr_tex, ext->normal_tex,
+                             ext->transmission_tex};
+    for (int k = 0; k < 5; ++k) {
         if (tex[k] != TR_NO_INDEX && tex[k] >= s->texture_count) {
             return tr_error_set(err, TR_STATUS_NOT_FOUND,
                                 "material %u refers to texture %u, but the scene has %u", index,
@@ -810,9 +812,12 @@ tr_scene_view tr_scene_view_of(const tr_scene *s) {
     v.sky_cz = s->sky_center[2];
     v.sky_radius = s->sky_radius;
     v.light_nodes = s->light_nodes;
-    v.light_node_count = v.light_count > 0 ? s->light_node_count : 0;
+    /* A tree over a stale table is left out; one over punctual lights alone is not. */
+    v.light_node_count = v.light_count > 0 || (s->light_count == 0 && s->light_tree_punctual > 0u)
+                             ? s->light_node_count
+                             : 0;
     v.light_leaf = s->light_leaf;
-    v.light_leaf_count = v.light_node_count > 0 ? v.light_count : 0;
+    v.light_leaf_count = v.light_node_count > 0 ? v.light_count + s->light_tree_punctual : 0;
     v.vertices = s->vertices;
     v.vertex_count = s->vertex_count;
     v.tri_verts = s->tri_verts;
@@ -867,7 +872,21 @@ uint32_t tr_scene_shape_count(const tr_scene *s) {
     return s->shape_count;
 }
 
+int tr_scene_light_tree_punctual(const tr_scene *s) {
+    if (s->light_sampling == TR_LIGHT_SAMPLING_POWER) {
+        return 0;
+    }
+    uint32_t n = 0;
+    for (uint32_t i = 0; i < s->punctual_count; ++i) {
+        n += s->punctual[i].type != TR_PUNCTUAL_DIRECTIONAL;
+    }
+    return n > TR_PUNCTUAL_ALL;
+}
+
 int tr_scene_light_tree_wanted(const tr_scene *s) {
+    if (tr_scene_light_tree_punctual(s)) {
+        return 1;
+    }
     if (s->light_sampling == TR_LIGHT_SAMPLING_AUTO) {
         return s->light_count >= TR_LIGHT_TREE_MIN_EMITTERS;
     }
@@ -887,8 +906,9 @@ int tr_scene_set_light_sampling(tr_scene *s, int mode, tr_error *err) {
 }
 
 int tr_scene_light_sampling(const tr_scene *s) {
-    return tr_scene_light_count(s) > 0 && s->light_node_count > 0 ? TR_LIGHT_SAMPLING_TREE
-                                                                  : TR_LIGHT_SAMPLING_POWER;
+    return (tr_scene_light_count(s) > 0 || s->light_tree_punctual > 0u) && s->light_node_count > 0
+               ? TR_LIGHT_SAMPLING_TREE
+               : TR_LIGHT_SAMPLING_POWER;
 }
 
 const char *tr_light_sampling_name(int mode) {
@@ -966,7 +986,8 @@ uint32_t tr_scene_material_maps(const tr_scene *s, uint32_t i) {
            (e->emission_tex != TR_NO_INDEX ? TR_MAP_EMISSION : 0u) |
            (e->mr_tex != TR_NO_INDEX ? TR_MAP_METALLIC_ROUGHNESS : 0u) |
            (e->normal_tex != TR_NO_INDEX ? TR_MAP_NORMAL : 0u) |
-           ((e->flags & TR_MATEXT_ALPHA_MASK) ? TR_MAP_CUTOUT : 0u);
+           ((e->flags & TR_MATEXT_ALPHA_MASK) ? TR_MAP_CUTOUT : 0u) |
+           (e->transmission_tex != TR_NO_INDEX ? TR_MAP_TRANSMISSION : 0u);
 }
 
 uint32_t tr_scene_shape_triangle_count(const tr_scene *s, uint32_t shape) {

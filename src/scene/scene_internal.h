@@ -74,6 +74,9 @@ struct tr_scene {
     tr_light_node *light_nodes;
     uint32_t *light_leaf;
     uint32_t light_node_count;
+    /* The punctual slots of light_leaf, after the emitters': punctual_count when the tree
+     * also holds the point and spot lights (tr_scene_light_tree_punctual), 0 otherwise. */
+    uint32_t light_tree_punctual;
     int light_sampling; /* TR_LIGHT_SAMPLING_*, what the next commit builds */
     /* Vertex attributes (kernel/attrib.h): triangles 0..tri_verts_count-1 name three
      * entries of `vertices` each (v[0] == TR_NO_INDEX: none); triangles beyond have none. */
@@ -265,6 +268,10 @@ int tr_scene_build_light_tree(tr_scene *s, tr_error *err);
 /* Whether tr_scene_commit builds the tree: as light_sampling says, for auto with at least
  * TR_LIGHT_TREE_MIN_EMITTERS emitters in the (fresh) table. */
 int tr_scene_light_tree_wanted(const tr_scene *s);
+/* Whether that tree also holds the point and spot lights: unless light_sampling is power,
+ * when there are more of them than TR_PUNCTUAL_ALL (fewer are each sampled at every
+ * vertex, without selection noise). */
+int tr_scene_light_tree_punctual(const tr_scene *s);
 /* The emitter table and, where wanted, its light tree built anew for the materials'
  * emittances now (after tr_scene_set_emittance); clears lights_dirty. */
 int tr_scene_rebuild_lights(tr_scene *s, tr_error *err);
