@@ -19,6 +19,8 @@ sh "$script" --quick --bin "$BIN" --scenes "$PWD/scenes" --out table.md 2>err.tx
 [ -s table.md.log ] || fail "gpu-measure wrote no log"
 grep -q "^| figure | command | result |" table.md || fail "no table header: $(cat table.md)"
 rows() { grep -c "^| $1" table.md; }
+[ "$(grep -c '^| program build, .* | [0-9.]* s (the whole command) |$' table.md)" -eq 3 ] ||
+    fail "not 3 program build rows with times: $(cat table.md)"
 [ "$(rows 'rays, builtin:')" -eq 2 ] || fail "not 2 rays rows: $(cat table.md)"
 [ "$(grep -c '^| rays.*bvh, .*cwbvh, .*primary [0-9.]*, diffuse [0-9.]*, shadow [0-9.]* Mrays/s |$' table.md)" -eq 2 ] ||
     fail "rays rows without the bvh and cwbvh rates (or with a note): $(cat table.md)"
@@ -36,14 +38,22 @@ for int in pt "pt wavefront" bdpt; do
         fail "no $int samples/s row: $(cat table.md)"
 done
 grep -q '^| vcm samples/s.*refused by the device' table.md || fail "vcm not refused: $(cat table.md)"
-# Five scenes at two sizes, and ReSTIR DI on the device (every pixel, a quarter of them) at
+# Six scenes at two sizes, and ReSTIR DI on the device (every pixel, a quarter of them) at
 # the first size.
-[ "$(grep -c '^| real time, .* FPS, [0-9.]* dB mean' table.md)" -eq 20 ] ||
-    fail "not 20 real-time rows with FPS and dB: $(cat table.md)"
-[ "$(grep -c '^| real time, .*, 32x24, --restir di .* FPS, [0-9.]* dB mean' table.md)" -eq 10 ] ||
-    fail "not 10 ReSTIR DI rows with FPS and dB: $(cat table.md)"
+[ "$(grep -c '^| real time, .* FPS, [0-9.]* dB mean' table.md)" -eq 24 ] ||
+    fail "not 24 real-time rows with FPS and dB: $(cat table.md)"
+[ "$(grep -c '^| real time, .*, 32x24, --restir di .* FPS, [0-9.]* dB mean' table.md)" -eq 12 ] ||
+    fail "not 12 ReSTIR DI rows with FPS and dB: $(cat table.md)"
 if grep -q 'failed' table.md; then fail "a failed row: $(cat table.md)"; fi
 rm -f table.md table.md.log err.txt
+
+# --no-variants: the real-time part's six scenes at one size, without the ReSTIR rows.
+sh "$script" --quick --bin "$BIN" --scenes "$PWD/scenes" --only realtime --sizes 16x12 \
+    --no-variants --out nv.md 2>err.txt || fail "gpu-measure --no-variants: exit status $?"
+[ "$(grep -c '^| real time, .*, 16x12 | .* FPS, [0-9.]* dB mean' nv.md)" -eq 6 ] ||
+    fail "--no-variants: not 6 real-time rows: $(cat nv.md)"
+if grep -q 'restir' nv.md; then fail "--no-variants: a ReSTIR row: $(cat nv.md)"; fi
+rm -f nv.md nv.md.log err.txt
 
 # A device that does not exist: every row of the part says failed, exit status 1.
 sh "$script" --quick --bin "$BIN" --only frame --device opencl:7 --out bad.md 2>/dev/null

@@ -118,7 +118,7 @@ int tr_cl_trace_rays_cwbvh(tr_cl_context *ctx, const struct tr_cwbvh *cw, const 
     *seconds = 0.0;
     return tr_error_set(err, TR_STATUS_UNSUPPORTED, "%s", no_opencl);
 }
-int tr_cl_supports_integrator(const tr_cl_context *ctx, int integrator, tr_error *err) {
+int tr_cl_supports_integrator(tr_cl_context *ctx, int integrator, tr_error *err) {
     (void)ctx;
     (void)integrator;
     return tr_error_set(err, TR_STATUS_UNSUPPORTED, "%s", no_opencl);
@@ -209,6 +209,16 @@ extern const size_t tr_cl_kernel_source_length;
  * docs/gpu.md), and their images differ from the host's in the last bits anyway through
  * the device's exp, pow, sin and cos (docs/opencl.md). */
 static const char build_options[] = "-cl-std=CL1.2 -cl-kernel-arg-info -DTR_OPENCL_DEVICE=1";
+
+/* The programs the kernel source is built as (entry.cl's TR_CL_PART): each is compiled
+ * only when first needed, since a GPU driver takes minutes over the whole source. */
+enum {
+    TR_CL_PART_FRAME = 1, /* the megakernel, emission and ray kernels: built at the opening */
+    TR_CL_PART_RESTIR,    /* ReSTIR DI's and GI's passes */
+    TR_CL_PART_WAVEFRONT, /* pt's wavefront stages */
+    TR_CL_PART_BDPT,      /* bdpt and its splats' fold */
+    TR_CL_PARTS
+};
 static const char build_option_rounded[] = " -cl-fp32-correctly-rounded-divide-sqrt";
 
 #define TR_CL_MAX_ARRAYS 24
@@ -279,7 +289,13 @@ struct tr_cl_context {
     cl_device_id device;
     cl_context context;
     cl_command_queue queue;
+    /* The kernel source's programs (entry.cl's TR_CL_PART): program, the frame's, built
+     * when the context opens; parts[TR_CL_PART_*] each built the first time one of its
+     * kernels is needed (need_part). A program of the tests' own (custom) is program
+     * alone, with every kernel it has made at the opening. */
     cl_program program;
+    cl_program parts[TR_CL_PARTS];
+    int custom;
     cl_kernel kernel;
     cl_kernel resolve; /* tr_cl_resolve_emission */
     /* bdpt: tr_cl_render_bdpt and tr_cl_fold_splats, NULL where the device lacks 64-bit
@@ -329,7 +345,8 @@ struct tr_cl_context {
     int kernel_request, kernel_env;
 };
 
-static int wf_open(tr_cl_context *ctx, int custom, tr_error *err);
+static int wf_open(tr_cl_context *ctx, tr_error *err);
+static int wf_create(tr_cl_context *ctx, cl_program prog, int custom, tr_error *err);
 static void wf_release(tr_cl_context *ctx);
 static int wf_set_scene(tr_cl_context *ctx, tr_error *err);
 static int wf_render(tr_cl_context *ctx, const tr_frame *f, uint32_t ny, uint64_t *rays_out,
@@ -639,6 +656,11 @@ void tr_cl_close(tr_cl_context *ctx) {
     if (ctx->program) {
         clReleaseProgram(ctx->program);
     }
+    for (int i = 0; i < TR_CL_PARTS; ++i) {
+        if (ctx->parts[i]) {
+            clReleaseProgram(ctx->parts[i]);
+        }
+    }
     if (ctx->queue) {
         clReleaseCommandQueue(ctx->queue);
     }
@@ -803,6 +825,132 @@ tr_device_bvh tr_cl_scene_bvh(const tr_cl_context *ctx) {
     return ctx->have_scene ? ctx->scene_bvh : TR_DEVICE_BVH_BVH2;
 }
 
+/* Builds part `part` of the kernel source (TR_CL_PART_*), or with part 0 the program
+ * `source` (a test's own, every kernel it has), with the context's options, into *out.
+ * The frame's program keeps its log as the context's build log; every build's log is the
+ * last one (tr_cl_last_build_log). */
+static int build_part(tr_cl_context *ctx, const char *source, int part, cl_program *out,
+                      tr_error *err) {
+    const char *src = source ? source : tr_cl_kernel_source;
+    const size_t len = source ? strlen(source) : tr_cl_kernel_source_length;
+    cl_int rc;
+    cl_program prog = clCreateProgramWithSource(ctx->context, 1, &src, &len, &rc);
+    if (!prog) {
+        return cl_fail(err, "clCreateProgramWithSource", rc);
+    }
+    /* TRAC0R_OPENCL_INLINE=1: the functions kept out of line on devices inlined (compat.h's
+     * TR_FN_NOINLINE), to measure both; the choice is in every part's options. */
+    const char *inl = getenv("TRAC0R_OPENCL_INLINE");
+    char part_option[32] = "";
+    if (part) {
+        snprintf(part_option, sizeof part_option, " -DTR_CL_PART=%d", part);
+    }
+    char options[sizeof ctx->options + 64];
+    snprintf(options, sizeof options, "%s%s%s", ctx->options,
+             inl && strcmp(inl, "1") == 0 ? " -DTR_CL_INLINE_ALL=1" : "", part_option);
+    rc = clBuildProgram(prog, 1, &ctx->device, options, NULL, NULL);
+    char *log = read_build_log(prog, ctx->device);
+    if (!log) {
+        clReleaseProgram(prog);
+        return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY,
+                            "out of memory reading the OpenCL build log");
+    }
+    snprintf(last_build_log, sizeof last_build_log, "%s", log);
+    if (rc != CL_SUCCESS) {
+        tr_error_set(err, TR_STATUS_DEVICE,
+                     "OpenCL: clBuildProgram failed on %s (part %d of the kernel): %s (%d); "
+                     "build log: %s",
+                     ctx->info.name, part, tr_cl_error_name(rc), rc, log);
+        free(log);
+        clReleaseProgram(prog);
+        return TR_ERR;
+    }
+    if (part <= TR_CL_PART_FRAME) {
+        free(ctx->build_log);
+        ctx->build_log = log;
+    } else {
+        free(log);
+    }
+    *out = prog;
+    return TR_OK;
+}
+
+/* ReSTIR's kernels from program prog; in a program of the tests' own (custom) they may be
+ * missing. */
+static int create_restir(tr_cl_context *ctx, cl_program prog, int custom, tr_error *err) {
+    static const char *const names[5] = {"tr_cl_restir_temporal", "tr_cl_restir_spatial",
+                                         "tr_cl_restir_sizes", "tr_cl_restir_gi_temporal",
+                                         "tr_cl_restir_gi_spatial"};
+    cl_kernel *const ks[5] = {&ctx->restir_t, &ctx->restir_s, &ctx->restir_sizes, &ctx->gi_t,
+                              &ctx->gi_s};
+    for (int i = 0; i < 5; ++i) {
+        cl_int rc;
+        *ks[i] = clCreateKernel(prog, names[i], &rc);
+        if (!*ks[i] && !custom) {
+            return cl_fail(err, names[i], rc);
+        }
+    }
+    return TR_OK;
+}
+
+/* bdpt's kernels from prog: absent from a program built without cl_khr_int64_base_atomics
+ * or cl_khr_fp64. */
+static void create_bdpt(tr_cl_context *ctx, cl_program prog) {
+    cl_int rc;
+    ctx->bdpt = clCreateKernel(prog, "tr_cl_render_bdpt", &rc);
+    ctx->fold = ctx->bdpt ? clCreateKernel(prog, "tr_cl_fold_splats", &rc) : NULL;
+    if (ctx->bdpt && !ctx->fold) {
+        clReleaseKernel(ctx->bdpt);
+        ctx->bdpt = NULL;
+    }
+}
+
+/* The scene's arrays and scene_info as kernel k's first arguments. */
+static int set_scene_args(tr_cl_context *ctx, cl_kernel k, tr_error *err) {
+    const int na = ctx->array_count;
+    for (int i = 0; i < na; ++i) {
+        cl_int crc = clSetKernelArg(k, (cl_uint)i, sizeof(cl_mem), &ctx->arrays[i]);
+        if (crc != CL_SUCCESS) {
+            return cl_fail(err, "clSetKernelArg(scene array)", crc);
+        }
+    }
+    cl_int crc =
+        clSetKernelArg(k, (cl_uint)(na + ARG_SCENE_INFO), sizeof(cl_mem), &ctx->scene_info);
+    return crc == CL_SUCCESS ? TR_OK : cl_fail(err, "clSetKernelArg(scene_info)", crc);
+}
+
+/* Builds part `part` of the kernel source and makes its kernels, with the uploaded
+ * scene's arguments, unless that is done (or the program is a test's own). */
+static int need_part(tr_cl_context *ctx, int part, tr_error *err) {
+    if (ctx->custom || ctx->parts[part]) {
+        return TR_OK;
+    }
+    cl_program prog = NULL;
+    if (build_part(ctx, NULL, part, &prog, err) != TR_OK) {
+        return TR_ERR;
+    }
+    ctx->parts[part] = prog;
+    int rc = TR_OK;
+    if (part == TR_CL_PART_RESTIR) {
+        rc = create_restir(ctx, prog, 0, err);
+        const cl_kernel ks[4] = {ctx->restir_t, ctx->restir_s, ctx->gi_t, ctx->gi_s};
+        for (int i = 0; i < 4 && rc == TR_OK && ctx->have_scene; ++i) {
+            rc = set_scene_args(ctx, ks[i], err);
+        }
+    } else if (part == TR_CL_PART_WAVEFRONT) {
+        rc = wf_create(ctx, prog, 0, err);
+        if (rc == TR_OK && ctx->have_scene) {
+            rc = wf_set_scene(ctx, err);
+        }
+    } else if (part == TR_CL_PART_BDPT) {
+        create_bdpt(ctx, prog);
+        if (ctx->bdpt && ctx->have_scene) {
+            rc = set_scene_args(ctx, ctx->bdpt, err);
+        }
+    }
+    return rc;
+}
+
 tr_cl_context *tr_cl_open_source(int index, const char *source, tr_error *err) {
     last_build_log[0] = '\0';
     int count = 0;
@@ -849,13 +997,6 @@ tr_cl_context *tr_cl_open_source(int index, const char *source, tr_error *err) {
         cl_fail(err, "clCreateCommandQueue", rc);
         goto fail;
     }
-    const char *src = source ? source : tr_cl_kernel_source;
-    const size_t len = source ? strlen(source) : tr_cl_kernel_source_length;
-    ctx->program = clCreateProgramWithSource(ctx->context, 1, &src, &len, &rc);
-    if (!ctx->program) {
-        cl_fail(err, "clCreateProgramWithSource", rc);
-        goto fail;
-    }
     cl_device_fp_config fp = 0;
     clGetDeviceInfo(dev, CL_DEVICE_SINGLE_FP_CONFIG, sizeof fp, &fp, NULL);
     cl_device_type type = 0;
@@ -863,17 +1004,8 @@ tr_cl_context *tr_cl_open_source(int index, const char *source, tr_error *err) {
     const int cpu = (type & CL_DEVICE_TYPE_CPU) != 0;
     snprintf(ctx->options, sizeof ctx->options, "%s%s", build_options,
              cpu && (fp & CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT) ? build_option_rounded : "");
-    rc = clBuildProgram(ctx->program, 1, &dev, ctx->options, NULL, NULL);
-    ctx->build_log = read_build_log(ctx->program, dev);
-    if (!ctx->build_log) {
-        tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory reading the OpenCL build log");
-        goto fail;
-    }
-    snprintf(last_build_log, sizeof last_build_log, "%s", ctx->build_log);
-    if (rc != CL_SUCCESS) {
-        tr_error_set(err, TR_STATUS_DEVICE,
-                     "OpenCL: clBuildProgram failed on %s: %s (%d); build log: %s", ctx->info.name,
-                     tr_cl_error_name(rc), rc, ctx->build_log);
+    ctx->custom = source != NULL;
+    if (build_part(ctx, source, ctx->custom ? 0 : TR_CL_PART_FRAME, &ctx->program, err) != TR_OK) {
         goto fail;
     }
     ctx->kernel = clCreateKernel(ctx->program, "tr_cl_render", &rc);
@@ -896,31 +1028,23 @@ tr_cl_context *tr_cl_open_source(int index, const char *source, tr_error *err) {
         cl_fail(err, "clCreateKernel(tr_cl_trace_cwbvh)", rc);
         goto fail;
     }
-    {
-        static const char *const names[6] = {"tr_cl_restir_temporal",    "tr_cl_restir_spatial",
-                                             "tr_cl_restir_sizes",       "tr_cl_upscale_emission",
-                                             "tr_cl_restir_gi_temporal", "tr_cl_restir_gi_spatial"};
-        cl_kernel *const ks[6] = {&ctx->restir_t,    &ctx->restir_s, &ctx->restir_sizes,
-                                  &ctx->up_emission, &ctx->gi_t,     &ctx->gi_s};
-        for (int i = 0; i < 6; ++i) {
-            *ks[i] = clCreateKernel(ctx->program, names[i], &rc);
-            if (!*ks[i] && !source) {
-                cl_fail(err, names[i], rc);
-                goto fail;
-            }
-        }
-    }
-    /* Absent from a program built without cl_khr_int64_base_atomics or cl_khr_fp64. */
-    ctx->bdpt = clCreateKernel(ctx->program, "tr_cl_render_bdpt", &rc);
-    ctx->fold = ctx->bdpt ? clCreateKernel(ctx->program, "tr_cl_fold_splats", &rc) : NULL;
-    if (ctx->bdpt && !ctx->fold) {
-        clReleaseKernel(ctx->bdpt);
-        ctx->bdpt = NULL;
+    ctx->up_emission = clCreateKernel(ctx->program, "tr_cl_upscale_emission", &rc);
+    if (!ctx->up_emission && !source) {
+        cl_fail(err, "clCreateKernel(tr_cl_upscale_emission)", rc);
+        goto fail;
     }
     if (check_kernel_args(ctx, err) != TR_OK ||
-        check_work_group(ctx, wg_given, cpu, err) != TR_OK ||
-        wf_open(ctx, source != NULL, err) != TR_OK) {
+        check_work_group(ctx, wg_given, cpu, err) != TR_OK || wf_open(ctx, err) != TR_OK) {
         goto fail;
+    }
+    /* A program of the tests' own has whatever kernels it has now; the kernel source's
+     * other parts wait until they are needed. */
+    if (source && (create_restir(ctx, ctx->program, 1, err) != TR_OK ||
+                   wf_create(ctx, ctx->program, 1, err) != TR_OK)) {
+        goto fail;
+    }
+    if (source) {
+        create_bdpt(ctx, ctx->program);
     }
     ctx->frame = clCreateBuffer(ctx->context, CL_MEM_READ_ONLY, sizeof(tr_frame), NULL, &rc);
     if (!ctx->frame) {
@@ -1101,23 +1225,14 @@ int tr_cl_upload_scene(tr_cl_context *ctx, const tr_scene *scene, tr_error *err)
             rc = cl_fail(err, "clCreateBuffer(scene_info)", crc);
         }
     }
-    /* The kernels take the scene's arrays and scene_info first (bdpt's where built). */
+    /* The kernels take the scene's arrays and scene_info first (those of the parts built
+     * so far: need_part gives the others theirs). */
     const cl_kernel kernels[9] = {ctx->kernel,   ctx->resolve,     ctx->trace,
                                   ctx->restir_t, ctx->restir_s,    ctx->gi_t,
                                   ctx->gi_s,     ctx->up_emission, ctx->bdpt};
-    for (int k = 0; k < 9 && kernels[k]; ++k) {
-        for (int i = 0; i < na && rc == TR_OK; ++i) {
-            cl_int crc = clSetKernelArg(kernels[k], (cl_uint)i, sizeof(cl_mem), &ctx->arrays[i]);
-            if (crc != CL_SUCCESS) {
-                rc = cl_fail(err, "clSetKernelArg(scene array)", crc);
-            }
-        }
-        if (rc == TR_OK) {
-            cl_int crc = clSetKernelArg(kernels[k], (cl_uint)(na + ARG_SCENE_INFO), sizeof(cl_mem),
-                                        &ctx->scene_info);
-            if (crc != CL_SUCCESS) {
-                rc = cl_fail(err, "clSetKernelArg(scene_info)", crc);
-            }
+    for (int k = 0; k < 9 && rc == TR_OK; ++k) {
+        if (kernels[k]) {
+            rc = set_scene_args(ctx, kernels[k], err);
         }
     }
     if (rc == TR_OK) {
@@ -1447,12 +1562,15 @@ int tr_cl_trace_rays_cwbvh(tr_cl_context *ctx, const struct tr_cwbvh *cw, const 
     return out;
 }
 
-int tr_cl_supports_integrator(const tr_cl_context *ctx, int integrator, tr_error *err) {
+int tr_cl_supports_integrator(tr_cl_context *ctx, int integrator, tr_error *err) {
     if (integrator == TR_INTEGRATOR_VCM) {
         /* Its photon map (src/device/vcm.c) is host code. */
         return tr_error_set(err, TR_STATUS_UNSUPPORTED,
                             "the vcm integrator runs on the CPU only (device %s is OpenCL)",
                             ctx->info.name);
+    }
+    if (integrator == TR_INTEGRATOR_BDPT && need_part(ctx, TR_CL_PART_BDPT, err) != TR_OK) {
+        return TR_ERR;
     }
     if (integrator == TR_INTEGRATOR_BDPT && !ctx->bdpt) {
         return tr_error_set(err, TR_STATUS_UNSUPPORTED,
@@ -1491,6 +1609,9 @@ int tr_cl_render_frame(tr_cl_context *ctx, const tr_frame *f, uint64_t *rays_out
         return cl_fail(err, "clEnqueueWriteBuffer(frame)", rc);
     }
     if (tr_cl_frame_kernel(ctx, (int)f->integrator) == TR_OPENCL_KERNEL_WAVEFRONT) {
+        if (need_part(ctx, TR_CL_PART_WAVEFRONT, err) != TR_OK) {
+            return TR_ERR;
+        }
         return wf_render(ctx, f, ny, rays_out, err);
     }
     const cl_uint base = (cl_uint)ctx->array_count;
@@ -1735,6 +1856,9 @@ static int set_args_after_scene(tr_cl_context *ctx, cl_kernel k, const cl_mem *c
 }
 
 int tr_cl_restir_frame(tr_cl_context *ctx, const tr_restir_frame *fr, tr_error *err) {
+    if (need_part(ctx, TR_CL_PART_RESTIR, err) != TR_OK) {
+        return TR_ERR;
+    }
     if (!ctx->restir_t || !ctx->restir_s || !ctx->restir_sizes || !ctx->gi_t || !ctx->gi_s) {
         return tr_error_set(err, TR_STATUS_UNSUPPORTED,
                             "this OpenCL program has no ReSTIR kernels");
@@ -1881,6 +2005,10 @@ int tr_cl_set_kernel(tr_cl_context *ctx, int kernel, tr_error *err) {
                             "OpenCL kernel %d is none of auto (0), mega (1) and wavefront (2)",
                             kernel);
     }
+    if (kernel == TR_OPENCL_KERNEL_WAVEFRONT &&
+        need_part(ctx, TR_CL_PART_WAVEFRONT, err) != TR_OK) {
+        return TR_ERR;
+    }
     if (kernel == TR_OPENCL_KERNEL_WAVEFRONT && !ctx->wf_generate) {
         return tr_error_set(err, TR_STATUS_UNSUPPORTED,
                             "the wavefront path tracer is not in this OpenCL program");
@@ -1890,7 +2018,8 @@ int tr_cl_set_kernel(tr_cl_context *ctx, int kernel, tr_error *err) {
 }
 
 int tr_cl_frame_kernel(const tr_cl_context *ctx, int integrator) {
-    if (integrator != TR_INTEGRATOR_PT || !ctx->wf_generate) {
+    /* The kernel source's wavefront is built when first run (need_part). */
+    if (integrator != TR_INTEGRATOR_PT || (ctx->custom && !ctx->wf_generate)) {
         return TR_OPENCL_KERNEL_MEGA;
     }
     if (ctx->kernel_request != TR_OPENCL_KERNEL_AUTO) {
@@ -1907,9 +2036,8 @@ int tr_cl_frame_kernel(const tr_cl_context *ctx, int integrator) {
     return TR_OPENCL_KERNEL_MEGA;
 }
 
-/* Reads TRAC0R_OPENCL_KERNEL and creates the stages' kernels. A program of the tests' own
- * (custom) may lack them: it runs the megakernel only. */
-static int wf_open(tr_cl_context *ctx, int custom, tr_error *err) {
+/* Reads TRAC0R_OPENCL_KERNEL and TRAC0R_OPENCL_WAVEFRONT_PATHS. */
+static int wf_open(tr_cl_context *ctx, tr_error *err) {
     const char *env = getenv(kernel_env);
     ctx->kernel_env = env && *env ? tr_opencl_kernel_from_name(env) : TR_OPENCL_KERNEL_AUTO;
     if (ctx->kernel_env < 0) {
@@ -1926,13 +2054,19 @@ static int wf_open(tr_cl_context *ctx, int custom, tr_error *err) {
         }
         ctx->wf_max = (size_t)v;
     }
+    return TR_OK;
+}
+
+/* Creates the stages' kernels from prog. A program of the tests' own (custom) may lack
+ * them: it runs the megakernel only. */
+static int wf_create(tr_cl_context *ctx, cl_program prog, int custom, tr_error *err) {
     static const char *const names[5] = {"tr_cl_wf_generate", "tr_cl_wf_extend", "tr_cl_wf_shade",
                                          "tr_cl_wf_connect", "tr_cl_wf_accumulate"};
     cl_kernel *kernels[5] = {&ctx->wf_generate, &ctx->wf_extend, &ctx->wf_shade, &ctx->wf_connect,
                              &ctx->wf_accumulate};
     for (int i = 0; i < 5; ++i) {
         cl_int rc;
-        *kernels[i] = clCreateKernel(ctx->program, names[i], &rc);
+        *kernels[i] = clCreateKernel(prog, names[i], &rc);
         if (!*kernels[i]) {
             wf_release(ctx);
             if (custom) {

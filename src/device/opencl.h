@@ -105,7 +105,7 @@ int tr_cl_render_frame(tr_cl_context *ctx, const tr_frame *f, uint64_t *rays, tr
 /* TR_OK if the device runs `integrator`; else TR_STATUS_UNSUPPORTED with the reason: vcm
  * (its photon map is host code), or bdpt on a device without cl_khr_int64_base_atomics and
  * cl_khr_fp64 (its splats' atomic sums and their fold). tr_cl_render_frame checks it too. */
-int tr_cl_supports_integrator(const tr_cl_context *ctx, int integrator, tr_error *err);
+int tr_cl_supports_integrator(tr_cl_context *ctx, int integrator, tr_error *err);
 /* The kernel pt's frames run with from now on, TR_OPENCL_KERNEL_* (render.h; AUTO at
  * first): TR_STATUS_INVALID_ARGUMENT for another value, TR_STATUS_UNSUPPORTED for the
  * wavefront in a program without it (tr_cl_open_source). */

@@ -15,7 +15,18 @@ typedef ulong uint64_t;
 typedef long int64_t;
 #define TR_FN static inline
 #define TR_FN_INLINE static inline
+/* Out of line on a device too, as on the host: the material stage and the principled
+ * BSDF's lobes, inlined at each of their call sites (every light's next-event estimate in
+ * pt and its wavefront, ReSTIR's passes), made the frame's program about 3x as long (a
+ * proxy, clang's PTX with a GPU driver's eager inlining fed to ptxas: 143,637 lines and
+ * 39 s against 51,937 lines and 11 s), and a GPU driver compiles it for every process.
+ * TR_CL_INLINE_ALL (TRAC0R_OPENCL_INLINE=1, src/device/opencl.c) inlines them again,
+ * to measure what the calls cost at run time. */
+#ifdef TR_CL_INLINE_ALL
 #define TR_FN_NOINLINE static inline
+#else
+#define TR_FN_NOINLINE static __attribute__((noinline, unused))
+#endif
 /* The BVH walk is one real function on a device: inlined, each of its call sites (camera
  * and bounce rays, shadow rays of the lights, the environment and the sun, cut-outs)
  * kept a 512-byte stack of its own in private memory, 2 KB per work item in all. Out of

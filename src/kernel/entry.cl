@@ -12,6 +12,19 @@
 #include "kernel.h"
 #include "restir_pass.h"
 
+/* The host builds the kernels below as four programs, each the first time it is needed
+ * (src/device/opencl.c): the frame's (TR_CL_PART 1: the megakernel, the emission and ray
+ * kernels), ReSTIR's passes (2), pt's wavefront stages (3) and bdpt's (4). With every
+ * function inlined, the whole source came to about 440,000 lines of PTX, about 9x the
+ * kernel of four days earlier, so that a GPU driver compiling it for every process spent
+ * minutes before the first frame; most runs need one part. A program built without
+ * TR_CL_PART (the tests' own sources) holds them all. */
+#ifdef TR_CL_PART
+#define TR_CL_HAS(part) (TR_CL_PART == (part))
+#else
+#define TR_CL_HAS(part) 1
+#endif
+
 /* The scene's arrays come as one __global buffer argument each, generated from the one
  * list of them (TR_SCENE_ARRAYS, scene_view.h); their element counts and then the view's
  * scalars, as 32-bit words, are the scene_info argument. src/device/opencl.c builds its
@@ -50,6 +63,7 @@ static tr_film_view tr_cl_film_view(__global float *sum, __global uint *count,
     return v;
 }
 
+#if TR_CL_HAS(1)
 /* One work item per traced pixel of the frame's grid (tr_frame_grid); with a stride above
  * 1 the traced pixel's value fills its stride x stride block (preview mode). Pass buffers
  * the frame does not ask for are one-element placeholders nobody writes.
@@ -109,6 +123,9 @@ tr_cl_resolve_emission(TR_SCENE_ARRAYS(TR_CL_ARRAY_PARAM) __global const uint *s
     resolved[3u * i + 2u] = e.z;
 }
 
+#endif
+
+#if TR_CL_HAS(2)
 /* ReSTIR DI's passes (restir_pass.h) on the device, one work item per pixel of the frame's
  * camera: tr_cl_restir_temporal fills this frame's surfaces and first reservoirs,
  * tr_cl_restir_spatial merges neighbours, shades and adds to the film; the host
@@ -195,6 +212,9 @@ __kernel void tr_cl_restir_gi_spatial(TR_SCENE_ARRAYS(TR_CL_ARRAY_PARAM)
     tr_restir_gi_pass_spatial(&s, &fr, x, y, surf, gcur, gout, film_sum);
 }
 
+#endif
+
+#if TR_CL_HAS(1)
 /* The first hit's emission at an upscaled output's resolution (src/post/upscale.c's
  * tr_upscale_emission, per output pixel): from the traced frame's emission (wl x hl, the
  * mean per pixel), an output pixel whose traced pixel lies on an emitter's edge, or where
@@ -270,6 +290,9 @@ __kernel void tr_cl_trace_cwbvh(__global const tr_cwbvh_node *cw_nodes, uint cw_
     hits[i] = tr_cwbvh_traverse(cw_nodes, cw_node_count, cw_tris, &r, &hit, shadow != 0u) ? 1u : 0u;
 }
 
+#endif
+
+#if TR_CL_HAS(3)
 /* pt as a wavefront (integrator_pt_wf.h, docs/opencl.md): the host runs a frame in
  * chunks of paths, path i of a chunk being sample f.sample + s_off + i % k of grid point
  * g0 + i / k; for each chunk tr_cl_wf_generate, then extend, shade and connect over the
@@ -386,6 +409,9 @@ __kernel void tr_cl_wf_accumulate(__global const tr_frame *frame, __global float
     atomic_add(&rays_per_row[g / nx], rays);
 }
 
+#endif
+
+#if TR_CL_HAS(4)
 /* bdpt on the device: tr_cl_render's arguments and work items, and the light-tracing
  * splats' fixed-point sums (integrator_bdpt.h), one 64-bit integer per colour channel and
  * pixel of the frame's rectangle, added with atom_add. Integer addition is associative, so
@@ -443,4 +469,5 @@ __kernel void tr_cl_fold_splats(__global const tr_frame *frame, __global const l
         film_sum[3u * i + (size_t)c] += (float)((double)splat[j + (size_t)c] * scale);
     }
 }
+#endif
 #endif
