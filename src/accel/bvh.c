@@ -46,11 +46,28 @@ static tr_aabb tri_box(const tr_triangle *t) {
     return b;
 }
 
+/* A triangle (or box) as the builder moves it: its box and its index in 32 bytes. The
+ * partitions move these records themselves rather than indices to them, so every pass over
+ * a node's entries reads one contiguous run of memory instead of gathering from arrays
+ * indexed by triangle. */
+typedef struct ref {
+    tr_vec3 min;
+    uint32_t index;
+    tr_vec3 max;
+    uint32_t pad;
+} ref;
+
+static tr_aabb ref_box(const ref *r) {
+    tr_aabb b = {r->min, r->max};
+    return b;
+}
+
+static tr_vec3 ref_centroid(const ref *r) {
+    return v3_scale(v3_add(r->min, r->max), 0.5f);
+}
+
 typedef struct builder {
-    const tr_triangle *tris;
-    tr_aabb *boxes;     /* per triangle */
-    tr_vec3 *centroids; /* per triangle */
-    uint32_t *indices;
+    ref *refs; /* in the order the partitions leave them: leaf order at the end */
     tr_bvh_node *nodes;
     uint32_t node_count;
 } builder;
@@ -77,9 +94,9 @@ static int bin_index(float c, float lo, float scale, int nb) {
 static void bin_range(const builder *b, uint32_t first, uint32_t end, const float lo[3],
                       const float scale[3], int nb, bin bins[3][BINS]) {
     for (uint32_t k = first; k < end; ++k) {
-        uint32_t t = b->indices[k];
-        const tr_vec3 c = b->centroids[t];
-        const tr_aabb box = b->boxes[t];
+        const ref *r = &b->refs[k];
+        const tr_vec3 c = ref_centroid(r);
+        const tr_aabb box = ref_box(r);
         const int ix = bin_index(c.x, lo[0], scale[0], nb);
         const int iy = bin_index(c.y, lo[1], scale[1], nb);
         const int iz = bin_index(c.z, lo[2], scale[2], nb);
@@ -107,7 +124,7 @@ static void bins_clear(bin bins[3][BINS], int nb) {
  * threads, each into bins of its own, merged after: box unions and counts do not depend
  * on the order, so neither does the tree. */
 static float find_split(const builder *b, uint32_t first, uint32_t count, tr_aabb cbox,
-                        float node_area, int nb, int *best_axis, int *best_bin) {
+                        float node_area, int nb, int *best_axis, int *best_bin, tr_aabb child[2]) {
     float best = INFINITY;
     float lo[3], scale[3];
     int active[3], any = 0;
@@ -179,6 +196,15 @@ static float find_split(const builder *b, uint32_t first, uint32_t count, tr_aab
             }
         }
     }
+    if (best < INFINITY) {
+        /* The children's boxes are the unions of their bins' boxes: the same minima and
+         * maxima as a pass over their triangles would find, without that pass. */
+        child[0] = child[1] = box_empty();
+        for (int i = 0; i < nb; ++i) {
+            const int side = i > *best_bin;
+            child[side] = box_union(child[side], bins[*best_axis][i].box);
+        }
+    }
     return best;
 }
 
@@ -186,20 +212,21 @@ static float find_split(const builder *b, uint32_t first, uint32_t count, tr_aab
  * (quickselect; keys are centroids). */
 static void select_median(builder *b, uint32_t first, uint32_t count, int axis, uint32_t k) {
     uint32_t lo = first, hi = first + count - 1, target = first + k;
+    ref *refs = b->refs;
     while (lo < hi) {
-        float pivot = axis_of(b->centroids[b->indices[(lo + hi) / 2]], axis);
+        float pivot = axis_of(ref_centroid(&refs[(lo + hi) / 2]), axis);
         uint32_t i = lo, j = hi;
         while (i <= j) {
-            while (axis_of(b->centroids[b->indices[i]], axis) < pivot) {
+            while (axis_of(ref_centroid(&refs[i]), axis) < pivot) {
                 ++i;
             }
-            while (axis_of(b->centroids[b->indices[j]], axis) > pivot) {
+            while (axis_of(ref_centroid(&refs[j]), axis) > pivot) {
                 --j;
             }
             if (i <= j) {
-                uint32_t t = b->indices[i];
-                b->indices[i] = b->indices[j];
-                b->indices[j] = t;
+                ref t = refs[i];
+                refs[i] = refs[j];
+                refs[j] = t;
                 ++i;
                 if (j == 0) {
                     break;
@@ -217,26 +244,29 @@ static void select_median(builder *b, uint32_t first, uint32_t count, int axis, 
     }
 }
 
+/* A node to build: its entries refs[first, first + count), their bounds (box) and their
+ * centroids' bounds (cbox), both found by its parent's split. */
 typedef struct task {
     uint32_t node, first, count, depth;
+    tr_aabb box, cbox;
 } task;
 
-/* Sets the node's box and decides its split: returns how many of its triangles go to
- * the left child (the indices are partitioned accordingly), or 0 for a leaf. */
-static uint32_t split_node(builder *b, const task *t, tr_bvh_node *node) {
+/* The bounds of refs[first, first + count) and of their centroids: by all threads, merged,
+ * for a big run (min and max do not depend on the order). */
+static void range_bounds(const builder *b, uint32_t first, uint32_t count, tr_aabb *box_out,
+                         tr_aabb *cbox_out) {
     tr_aabb box = box_empty(), cbox = box_empty();
-    if (t->count >= PARALLEL_NODE_MIN) {
-        /* Bounds by all threads, merged (min and max do not depend on the order). */
+    if (count >= PARALLEL_NODE_MIN) {
 #pragma omp parallel num_threads(tr_default_threads())
         {
             tr_aabb lbox = box_empty(), lcbox = box_empty();
-            const int64_t end = (int64_t)t->first + t->count;
+            const int64_t end = (int64_t)first + count;
 #pragma omp for schedule(static) nowait
-            for (int64_t k = t->first; k < end; ++k) {
-                uint32_t i = b->indices[k];
-                lbox = box_union(lbox, b->boxes[i]);
-                lcbox.min = v3_min(lcbox.min, b->centroids[i]);
-                lcbox.max = v3_max(lcbox.max, b->centroids[i]);
+            for (int64_t k = first; k < end; ++k) {
+                const tr_vec3 c = ref_centroid(&b->refs[k]);
+                lbox = box_union(lbox, ref_box(&b->refs[k]));
+                lcbox.min = v3_min(lcbox.min, c);
+                lcbox.max = v3_max(lcbox.max, c);
             }
 #pragma omp critical
             {
@@ -245,13 +275,22 @@ static uint32_t split_node(builder *b, const task *t, tr_bvh_node *node) {
             }
         }
     } else {
-        for (uint32_t k = t->first; k < t->first + t->count; ++k) {
-            uint32_t i = b->indices[k];
-            box = box_union(box, b->boxes[i]);
-            cbox.min = v3_min(cbox.min, b->centroids[i]);
-            cbox.max = v3_max(cbox.max, b->centroids[i]);
+        for (uint32_t k = first; k < first + count; ++k) {
+            const tr_vec3 c = ref_centroid(&b->refs[k]);
+            box = box_union(box, ref_box(&b->refs[k]));
+            cbox.min = v3_min(cbox.min, c);
+            cbox.max = v3_max(cbox.max, c);
         }
     }
+    *box_out = box;
+    *cbox_out = cbox;
+}
+
+/* Sets the node's box and decides its split: returns how many of its triangles go to
+ * the left child (the refs are partitioned accordingly, and the children's tasks get
+ * their bounds), or 0 for a leaf. */
+static uint32_t split_node(builder *b, const task *t, tr_bvh_node *node, task child[2]) {
+    const tr_aabb box = t->box, cbox = t->cbox;
     node->box = box;
     node->left_first = t->first;
     node->count = t->count;
@@ -260,28 +299,42 @@ static uint32_t split_node(builder *b, const task *t, tr_bvh_node *node) {
     }
     int axis = 0, split_bin = 0;
     float cost = INFINITY;
+    tr_aabb child_box[2];
     /* Fewer bins than triangles only cost time: small nodes get one per triangle (at
      * least 4); most nodes are small, and the bins' set-up and sweeps dominate there. */
     const int nbins = t->count >= BINS ? BINS : t->count < 4 ? 4 : (int)t->count;
     if (t->depth < SAH_DEPTH) {
-        cost = find_split(b, t->first, t->count, cbox, box_area(box), nbins, &axis, &split_bin);
+        cost = find_split(b, t->first, t->count, cbox, box_area(box), nbins, &axis, &split_bin,
+                          child_box);
     }
     if (cost < INFINITY && (cost < (float)t->count || t->count > MAX_LEAF)) {
-        /* Partition by the chosen bin plane, binning exactly as find_split did. */
+        /* Partition by the chosen bin plane, binning exactly as find_split did; the
+         * centroids' bounds of each side are gathered on the way. */
         float lo = axis_of(cbox.min, axis);
         float scale = (float)nbins / (axis_of(cbox.max, axis) - lo);
+        tr_aabb cl = box_empty(), cr = box_empty();
+        ref *refs = b->refs;
         uint32_t i = t->first, j = t->first + t->count;
         while (i < j) {
-            int bi = (int)((axis_of(b->centroids[b->indices[i]], axis) - lo) * scale);
+            const tr_vec3 c = ref_centroid(&refs[i]);
+            int bi = (int)((axis_of(c, axis) - lo) * scale);
             bi = bi < 0 ? 0 : bi >= nbins ? nbins - 1 : bi;
             if (bi <= split_bin) {
+                cl.min = v3_min(cl.min, c);
+                cl.max = v3_max(cl.max, c);
                 ++i;
             } else {
-                uint32_t x = b->indices[i];
-                b->indices[i] = b->indices[--j];
-                b->indices[j] = x;
+                cr.min = v3_min(cr.min, c);
+                cr.max = v3_max(cr.max, c);
+                ref x = refs[i];
+                refs[i] = refs[--j];
+                refs[j] = x;
             }
         }
+        child[0].box = child_box[0];
+        child[0].cbox = cl;
+        child[1].box = child_box[1];
+        child[1].cbox = cr;
         return i - t->first;
     }
     if (t->count > MAX_LEAF) {
@@ -289,8 +342,11 @@ static uint32_t split_node(builder *b, const task *t, tr_bvh_node *node) {
          * the median of its widest centroid axis, which bounds the depth. */
         tr_vec3 d = v3_sub(cbox.max, cbox.min);
         axis = d.x >= d.y && d.x >= d.z ? 0 : d.y >= d.z ? 1 : 2;
-        select_median(b, t->first, t->count, axis, t->count / 2);
-        return t->count / 2;
+        const uint32_t half = t->count / 2;
+        select_median(b, t->first, t->count, axis, half);
+        range_bounds(b, t->first, half, &child[0].box, &child[0].cbox);
+        range_bounds(b, t->first + half, t->count - half, &child[1].box, &child[1].cbox);
+        return half;
     }
     return 0;
 }
@@ -316,7 +372,8 @@ static uint32_t build_nodes(builder *b, task root, tr_bvh_node *nodes, uint32_t 
             continue;
         }
         tr_bvh_node *node = &nodes[t.node];
-        uint32_t left = split_node(b, &t, node);
+        task child[2];
+        uint32_t left = split_node(b, &t, node, child);
         if (left == 0) {
             leaves++;
             *deepest = t.depth > *deepest ? t.depth : *deepest;
@@ -326,8 +383,16 @@ static uint32_t build_nodes(builder *b, task root, tr_bvh_node *nodes, uint32_t 
         *node_count += 2;
         node->left_first = l;
         node->count = 0;
-        stack[top++] = (task){l + 1, t.first + left, t.count - left, t.depth + 1};
-        stack[top++] = (task){l, t.first, left, t.depth + 1};
+        child[1].node = l + 1;
+        child[1].first = t.first + left;
+        child[1].count = t.count - left;
+        child[1].depth = t.depth + 1;
+        child[0].node = l;
+        child[0].first = t.first;
+        child[0].count = left;
+        child[0].depth = t.depth + 1;
+        stack[top++] = child[1];
+        stack[top++] = child[0];
     }
     return leaves;
 }
@@ -342,7 +407,8 @@ enum {
  * each into its own array, appended in a fixed order. The result does not depend on the
  * thread count, so neither does any image rendered through it. */
 static int build_tree(builder *b, uint32_t n, uint32_t *leaves_out, uint32_t *depth_out) {
-    task root = {0, 0, n, 0};
+    task root = {.node = 0, .first = 0, .count = n, .depth = 0};
+    range_bounds(b, 0, n, &root.box, &root.cbox);
     task cut[1u << CUT_DEPTH];
     uint32_t cuts = 0, count = 0, deepest = 0;
     int parallel = n >= PARALLEL_MIN;
@@ -406,22 +472,20 @@ static int bvh_build(tr_bvh *bvh, const tr_triangle *tris, const tr_aabb *boxes,
     memset(bvh, 0, sizeof *bvh);
     builder b;
     memset(&b, 0, sizeof b);
-    b.tris = tris;
-    b.boxes = malloc((size_t)(n ? n : 1) * sizeof *b.boxes);
-    b.centroids = malloc((size_t)(n ? n : 1) * sizeof *b.centroids);
-    b.indices = malloc((size_t)(n ? n : 1) * sizeof *b.indices);
+    b.refs = malloc((size_t)(n ? n : 1) * sizeof *b.refs);
+    uint32_t *indices = malloc((size_t)(n ? n : 1) * sizeof *indices);
     /* A binary tree over m leaves of >= 1 triangle has at most 2m - 1 nodes. */
     b.nodes = malloc((size_t)(2 * (uint64_t)(n ? n : 1)) * sizeof *b.nodes);
-    if (!b.boxes || !b.centroids || !b.indices || !b.nodes) {
-        free(b.boxes);
-        free(b.centroids);
-        free(b.indices);
+    if (!b.refs || !indices || !b.nodes) {
+        free(b.refs);
+        free(indices);
         free(b.nodes);
         return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY,
                             "out of memory building a BVH over %u triangles", n);
     }
     uint32_t m = 0;
     for (uint32_t i = 0; i < n; ++i) {
+        tr_aabb box;
         if (boxes) {
             /* An empty or non-finite box (an instance of nothing) can never be hit. */
             if (!(boxes[i].min.x <= boxes[i].max.x && boxes[i].min.y <= boxes[i].max.y &&
@@ -429,33 +493,32 @@ static int bvh_build(tr_bvh *bvh, const tr_triangle *tris, const tr_aabb *boxes,
                 !v3_is_finite(boxes[i].min) || !v3_is_finite(boxes[i].max)) {
                 continue;
             }
-            b.boxes[i] = boxes[i];
-            b.centroids[i] = v3_scale(v3_add(b.boxes[i].min, b.boxes[i].max), 0.5f);
-            b.indices[m++] = i;
-            continue;
+            box = boxes[i];
+        } else {
+            const tr_triangle *t = &tris[i];
+            if ((skip && skip[i]) || !(t->area > 0.0f) || !v3_is_finite(t->v0) ||
+                !v3_is_finite(t->v1) || !v3_is_finite(t->v2)) {
+                continue; /* can never be hit */
+            }
+            box = tri_box(t);
         }
-        const tr_triangle *t = &tris[i];
-        if ((skip && skip[i]) || !(t->area > 0.0f) || !v3_is_finite(t->v0) ||
-            !v3_is_finite(t->v1) || !v3_is_finite(t->v2)) {
-            continue; /* can never be hit */
-        }
-        b.boxes[i] = tri_box(t);
-        b.centroids[i] = v3_scale(v3_add(b.boxes[i].min, b.boxes[i].max), 0.5f);
-        b.indices[m++] = i;
+        b.refs[m++] = (ref){box.min, i, box.max, 0};
     }
     uint32_t leaves = 0, depth = 0;
     int rc = m > 0 ? build_tree(&b, m, &leaves, &depth) : TR_OK;
-    free(b.boxes);
-    free(b.centroids);
+    for (uint32_t k = 0; k < m && rc == TR_OK; ++k) {
+        indices[k] = b.refs[k].index;
+    }
+    free(b.refs);
     if (rc != TR_OK) {
         free(b.nodes);
-        free(b.indices);
+        free(indices);
         return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY,
                             "out of memory building a BVH over %u triangles", n);
     }
     bvh->nodes = b.nodes;
     bvh->node_count = m > 0 ? b.node_count : 0;
-    bvh->indices = b.indices;
+    bvh->indices = indices;
     bvh->index_count = m;
     bvh->leaf_count = leaves;
     bvh->depth = depth;
