@@ -560,7 +560,9 @@ static int build_tree(builder *b, uint32_t n, uint32_t *leaves_out, uint32_t *de
 
 /* The leaf-order triangle copy the traversal reads. */
 static void bvh_fill_tris(tr_bvh *bvh, const tr_triangle *tris) {
-    for (uint32_t k = 0; k < bvh->index_count; ++k) {
+    const int64_t n = bvh->index_count;
+#pragma omp parallel for num_threads(tr_default_threads()) schedule(static) if (n >= PARALLEL_MIN)
+    for (int64_t k = 0; k < n; ++k) {
         const tr_triangle *t = &tris[bvh->indices[k]];
         bvh->tris[k].v0 = t->v0;
         bvh->tris[k].e1 = v3_sub(t->v1, t->v0);
@@ -589,30 +591,42 @@ static int bvh_build(tr_bvh *bvh, const tr_triangle *tris, const tr_aabb *boxes,
         return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY,
                             "out of memory building a BVH over %u triangles", n);
     }
-    uint32_t m = 0;
-    for (uint32_t i = 0; i < n; ++i) {
+    /* Every entry's record in its own slot, by all threads; those that can never be hit
+     * marked (pad = 1) and squeezed out after, in order, where there are any. */
+    int64_t bad = 0;
+#pragma omp parallel for num_threads(tr_default_threads()) schedule(static)                        \
+    reduction(+ : bad) if (n >= PARALLEL_MIN)
+    for (int64_t k = 0; k < (int64_t)n; ++k) {
+        const uint32_t i = (uint32_t)k;
         tr_aabb box;
+        int hit = 1;
         if (boxes) {
             /* An empty or non-finite box (an instance of nothing) can never be hit. */
-            if (!(boxes[i].min.x <= boxes[i].max.x && boxes[i].min.y <= boxes[i].max.y &&
-                  boxes[i].min.z <= boxes[i].max.z) ||
-                !v3_is_finite(boxes[i].min) || !v3_is_finite(boxes[i].max)) {
-                continue;
-            }
             box = boxes[i];
+            hit = box.min.x <= box.max.x && box.min.y <= box.max.y && box.min.z <= box.max.z &&
+                  v3_is_finite(box.min) && v3_is_finite(box.max);
         } else {
             const tr_triangle *t = &tris[i];
-            if ((skip && skip[i]) || !(t->area > 0.0f) || !v3_is_finite(t->v0) ||
-                !v3_is_finite(t->v1) || !v3_is_finite(t->v2)) {
-                continue; /* can never be hit */
-            }
             box = tri_box(t);
+            hit = !(skip && skip[i]) && t->area > 0.0f && v3_is_finite(t->v0) &&
+                  v3_is_finite(t->v1) && v3_is_finite(t->v2);
         }
-        b.refs[m++] = (ref){box.min, i, box.max, 0};
+        b.refs[i] = (ref){box.min, i, box.max, hit ? 0u : 1u};
+        bad += !hit;
+    }
+    uint32_t m = n;
+    if (bad > 0) {
+        m = 0;
+        for (uint32_t i = 0; i < n; ++i) {
+            if (b.refs[i].pad == 0) {
+                b.refs[m++] = b.refs[i];
+            }
+        }
     }
     uint32_t leaves = 0, depth = 0;
     int rc = m > 0 ? build_tree(&b, m, &leaves, &depth) : TR_OK;
-    for (uint32_t k = 0; k < m && rc == TR_OK; ++k) {
+#pragma omp parallel for num_threads(tr_default_threads()) schedule(static) if (m >= PARALLEL_MIN)
+    for (int64_t k = 0; k < (int64_t)m; ++k) {
         indices[k] = b.refs[k].index;
     }
     free(b.refs);
