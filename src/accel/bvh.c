@@ -165,6 +165,49 @@ static void bin_range(const builder *b, uint32_t first, uint32_t end, const floa
 }
 #endif
 
+/* The box a sweep over the bins grows: with SSE2 two rows of four floats, unions and the
+ * extent one operation each, the area from the extent as box_area computes it. */
+#if defined(__SSE2__)
+typedef struct sweep {
+    __m128 min, max;
+} sweep;
+
+static sweep sweep_start(void) {
+    sweep w = {_mm_set1_ps(INFINITY), _mm_set1_ps(-INFINITY)};
+    return w;
+}
+
+static sweep sweep_add(sweep w, const bin_set *bins, int axis, int i) {
+    w.min = _mm_min_ps(w.min, _mm_load_ps(bins->min[axis][i]));
+    w.max = _mm_max_ps(w.max, _mm_load_ps(bins->max[axis][i]));
+    return w;
+}
+
+static float sweep_area(sweep w) {
+    const __m128 d = _mm_sub_ps(w.max, w.min);
+    const float dx = _mm_cvtss_f32(d), dy = _mm_cvtss_f32(_mm_shuffle_ps(d, d, 1));
+    const float dz = _mm_cvtss_f32(_mm_shuffle_ps(d, d, 2));
+    if (!(dx >= 0.0f && dy >= 0.0f && dz >= 0.0f)) {
+        return 0.0f; /* empty */
+    }
+    return 2.0f * (dx * dy + dy * dz + dz * dx);
+}
+#else
+typedef tr_aabb sweep;
+
+static sweep sweep_start(void) {
+    return box_empty();
+}
+
+static sweep sweep_add(sweep w, const bin_set *bins, int axis, int i) {
+    return box_union(w, bin_box(bins, axis, i));
+}
+
+static float sweep_area(sweep w) {
+    return box_area(w);
+}
+#endif
+
 static void bins_clear(bin_set *bins, int nb) {
     for (int axis = 0; axis < 3; ++axis) {
         for (int i = 0; i < nb; ++i) {
@@ -231,23 +274,23 @@ static float find_split(const builder *b, uint32_t first, uint32_t count, tr_aab
         }
         /* Sweep from the right, then from the left, evaluating each of the nb-1 planes. */
         float right_cost[BINS];
-        tr_aabb acc = box_empty();
+        sweep acc = sweep_start();
         uint32_t n = 0;
         for (int i = nb - 1; i > 0; --i) {
-            acc = box_union(acc, bin_box(&bins, axis, i));
+            acc = sweep_add(acc, &bins, axis, i);
             n += bins.count[axis][i];
-            right_cost[i] = box_area(acc) * (float)n;
+            right_cost[i] = sweep_area(acc) * (float)n;
         }
-        acc = box_empty();
+        acc = sweep_start();
         n = 0;
         for (int i = 0; i < nb - 1; ++i) {
-            acc = box_union(acc, bin_box(&bins, axis, i));
+            acc = sweep_add(acc, &bins, axis, i);
             n += bins.count[axis][i];
             if (n == 0 || n == count) {
                 continue;
             }
             float cost =
-                TRAVERSAL_COST + (box_area(acc) * (float)n + right_cost[i + 1]) / node_area;
+                TRAVERSAL_COST + (sweep_area(acc) * (float)n + right_cost[i + 1]) / node_area;
             if (cost < best) {
                 best = cost;
                 *best_axis = axis;
