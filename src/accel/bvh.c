@@ -672,7 +672,14 @@ static int bvh_build(tr_bvh *bvh, const tr_triangle *tris, const tr_aabb *boxes,
     for (int64_t k = 0; k < (int64_t)m; ++k) {
         indices[k] = b.refs[k].index;
     }
-    free(b.refs);
+    /* The records' memory, its pages already mapped, becomes the leaf-order triangle copy
+     * (a large block grows in place or by remapping, without copying). */
+    tr_bvh_tri *leaf_tris =
+        rc == TR_OK ? realloc(b.refs, (size_t)(m ? m : 1) * sizeof *leaf_tris) : NULL;
+    if (!leaf_tris) {
+        free(b.refs);
+        rc = TR_ERR;
+    }
     if (rc != TR_OK) {
         free(b.nodes);
         free(indices);
@@ -692,12 +699,7 @@ static int bvh_build(tr_bvh *bvh, const tr_triangle *tris, const tr_aabb *boxes,
     if (shrunk) {
         bvh->nodes = shrunk;
     }
-    bvh->tris = malloc((size_t)(m ? m : 1) * sizeof *bvh->tris);
-    if (!bvh->tris) {
-        tr_bvh_free(bvh);
-        return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY,
-                            "out of memory building a BVH over %u triangles", n);
-    }
+    bvh->tris = leaf_tris;
     if (tris) {
         bvh_fill_tris(bvh, tris);
     } else {
