@@ -1298,9 +1298,70 @@ static void test_parallel_build_deterministic(void) {
     tr_scene_clear(&s);
 }
 
+/* Triangles that can never be hit are marked by all threads and squeezed out before the
+ * build, and the parallel build puts its subtrees in regions of the node array: a big
+ * mesh with such triangles interleaved (zero area, NaN) must give node for node the tree
+ * of the same mesh without them, its entries naming the same triangles by their indices
+ * in the longer array, on one thread and on two. */
+static void test_build_skips_in_parallel(void) {
+    tr_error err;
+    tr_scene s = {0};
+    tr_scene_init(&s);
+    uint32_t m;
+    CHECK(tr_scene_add_material(&s, tr_material_diffuse(v3s(0.5f)), &m, &err) == TR_OK, "%s",
+          err.msg);
+    tr_shape_desc d = tr_shape_desc_default(TR_SHAPE_ICOSPHERE);
+    d.subdivisions = 6;
+    CHECK(tr_scene_add_shape(&s, &d, &err) == TR_OK, "%s", err.msg);
+    const uint32_t n = s.triangle_count;
+    tr_triangle *mixed = malloc((size_t)(2 * n) * sizeof *mixed);
+    uint32_t *where = malloc((size_t)n * sizeof *where);
+    uint32_t total = 0;
+    for (uint32_t i = 0; i < n; ++i) {
+        if (i % 5 == 1) {
+            tr_triangle flat = s.triangles[i];
+            flat.v1 = flat.v2 = flat.v0;
+            flat.area = 0.0f;
+            mixed[total++] = flat;
+        }
+        if (i % 7 == 3) {
+            tr_triangle bad = s.triangles[i];
+            bad.v2.y = NAN;
+            mixed[total++] = bad;
+        }
+        where[i] = total;
+        mixed[total++] = s.triangles[i];
+    }
+    for (int threads = 1; threads <= 2; ++threads) {
+        omp_set_num_threads(threads);
+        tr_bvh clean, dirty;
+        CHECK(tr_bvh_build(&clean, s.triangles, n, &err) == TR_OK, "%s", err.msg);
+        CHECK(tr_bvh_build(&dirty, mixed, total, &err) == TR_OK, "%s", err.msg);
+        CHECK(dirty.skipped == total - n && dirty.index_count == n && clean.index_count == n,
+              "%d threads: %u of %u triangles skipped, %u entries", threads, dirty.skipped, total,
+              dirty.index_count);
+        CHECK(dirty.node_count == clean.node_count &&
+                  memcmp(dirty.nodes, clean.nodes, clean.node_count * sizeof *clean.nodes) == 0,
+              "%d threads: the nodes differ with unhittable triangles interleaved", threads);
+        uint32_t wrong = 0;
+        for (uint32_t k = 0; k < n && dirty.index_count == n; ++k) {
+            wrong += dirty.indices[k] != where[clean.indices[k]] ||
+                     dirty.tris[k].index != dirty.indices[k] ||
+                     memcmp(&dirty.tris[k].v0, &clean.tris[k].v0, 3 * sizeof(tr_vec3)) != 0;
+        }
+        CHECK(wrong == 0, "%d threads: %u entries name other triangles", threads, wrong);
+        tr_bvh_free(&clean);
+        tr_bvh_free(&dirty);
+    }
+    free(mixed);
+    free(where);
+    tr_scene_clear(&s);
+}
+
 int main(void) {
     double t0 = tr_time_now();
     test_parallel_build_deterministic();
+    test_build_skips_in_parallel();
     test_meshes();
     test_stress();
     test_degenerate();

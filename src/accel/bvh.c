@@ -2,6 +2,10 @@
 #include <stdlib.h>
 #include <string.h>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include "accel/accel_internal.h"
 #include "trac0r/accel.h"
 #include "trac0r/render.h"
@@ -46,19 +50,55 @@ static tr_aabb tri_box(const tr_triangle *t) {
     return b;
 }
 
+/* A triangle (or box) as the builder moves it: its box and its index in 32 bytes. The
+ * partitions move these records themselves rather than indices to them, so every pass over
+ * a node's entries reads one contiguous run of memory instead of gathering from arrays
+ * indexed by triangle. */
+typedef struct ref {
+    tr_vec3 min;
+    uint32_t index;
+    tr_vec3 max;
+    uint32_t pad;
+} ref;
+
+static tr_aabb ref_box(const ref *r) {
+    tr_aabb b = {r->min, r->max};
+    return b;
+}
+
+static tr_vec3 ref_centroid(const ref *r) {
+    return v3_scale(v3_add(r->min, r->max), 0.5f);
+}
+
 typedef struct builder {
-    const tr_triangle *tris;
-    tr_aabb *boxes;     /* per triangle */
-    tr_vec3 *centroids; /* per triangle */
-    uint32_t *indices;
+    ref *refs; /* in the order the partitions leave them: leaf order at the end */
     tr_bvh_node *nodes;
     uint32_t node_count;
 } builder;
 
-typedef struct bin {
-    tr_aabb box;
-    uint32_t count;
-} bin;
+/* The bins of one node on all three axes: each bin's box as two rows of four floats (the
+ * fourth unused), so that the SSE2 binning loads and stores them whole, and its count. */
+typedef struct bin_set {
+    _Alignas(16) float min[3][BINS][4];
+    _Alignas(16) float max[3][BINS][4];
+    uint32_t count[3][BINS];
+} bin_set;
+
+static tr_aabb bin_box(const bin_set *s, int axis, int i) {
+    const float *lo = s->min[axis][i], *hi = s->max[axis][i];
+    tr_aabb b = {v3(lo[0], lo[1], lo[2]), v3(hi[0], hi[1], hi[2])};
+    return b;
+}
+
+static void bin_set_box(bin_set *s, int axis, int i, tr_aabb b) {
+    float *lo = s->min[axis][i], *hi = s->max[axis][i];
+    lo[0] = b.min.x;
+    lo[1] = b.min.y;
+    lo[2] = b.min.z;
+    hi[0] = b.max.x;
+    hi[1] = b.max.y;
+    hi[2] = b.max.z;
+}
 
 enum {
     /* Nodes with at least this many triangles are bounded and binned by all threads (the
@@ -66,48 +106,126 @@ enum {
     PARALLEL_NODE_MIN = 1u << 16,
 };
 
+#if !defined(__SSE2__)
 static int bin_index(float c, float lo, float scale, int nb) {
     int i = (int)((c - lo) * scale);
     return i < 0 ? 0 : i >= nb ? nb - 1 : i;
 }
+#endif
 
-/* Bins indices[first, end) on all three axes into bins[axis][]; an axis that is not
- * active has lo = scale = 0 here (every triangle lands in bin 0, which is ignored), so
- * the loop has no branches on the axis. */
+/* Bins refs[first, end) on all three axes into bins[axis][]; an axis that is not active
+ * has lo = scale = 0 here (every triangle lands in bin 0, which is ignored), so the loop
+ * has no branches on the axis. */
+#if defined(__SSE2__)
+/* With SSE2 (every x86-64 CPU) a record's box is two 128-bit loads, its centroid and its
+ * three bin indices one operation each, and a bin's box two: the same operations as the
+ * scalar code below, lane by lane (minps and maxps pick as tr_fminf and tr_fmaxf do for
+ * operands that are not NaN; boxes never are), so the bins and the tree are the same. The
+ * fourth lane (the record's index) is cleared on loading: read as a float, an index is a
+ * denormal number, which would slow every operation on it by a microcode assist. */
 static void bin_range(const builder *b, uint32_t first, uint32_t end, const float lo[3],
-                      const float scale[3], int nb, bin bins[3][BINS]) {
+                      const float scale[3], int nb, bin_set *bins) {
+    const __m128 vlo = _mm_setr_ps(lo[0], lo[1], lo[2], 0.0f);
+    const __m128 vscale = _mm_setr_ps(scale[0], scale[1], scale[2], 0.0f);
+    const __m128 half = _mm_set1_ps(0.5f);
+    const __m128i zero = _mm_setzero_si128(), last = _mm_set1_epi32(nb - 1);
+    const __m128 xyz = _mm_castsi128_ps(_mm_setr_epi32(-1, -1, -1, 0));
     for (uint32_t k = first; k < end; ++k) {
-        uint32_t t = b->indices[k];
-        const tr_vec3 c = b->centroids[t];
-        const tr_aabb box = b->boxes[t];
-        const int ix = bin_index(c.x, lo[0], scale[0], nb);
-        const int iy = bin_index(c.y, lo[1], scale[1], nb);
-        const int iz = bin_index(c.z, lo[2], scale[2], nb);
-        bins[0][ix].box = box_union(bins[0][ix].box, box);
-        bins[0][ix].count++;
-        bins[1][iy].box = box_union(bins[1][iy].box, box);
-        bins[1][iy].count++;
-        bins[2][iz].box = box_union(bins[2][iz].box, box);
-        bins[2][iz].count++;
-    }
-}
-
-static void bins_clear(bin bins[3][BINS], int nb) {
-    for (int axis = 0; axis < 3; ++axis) {
-        for (int i = 0; i < nb; ++i) {
-            bins[axis][i].box = box_empty();
-            bins[axis][i].count = 0;
+        const __m128 mn = _mm_and_ps(_mm_loadu_ps(&b->refs[k].min.x), xyz);
+        const __m128 mx = _mm_and_ps(_mm_loadu_ps(&b->refs[k].max.x), xyz);
+        const __m128 c = _mm_mul_ps(_mm_add_ps(mn, mx), half);
+        __m128i bi = _mm_cvttps_epi32(_mm_mul_ps(_mm_sub_ps(c, vlo), vscale));
+        bi = _mm_andnot_si128(_mm_cmplt_epi32(bi, zero), bi);
+        const __m128i over = _mm_cmpgt_epi32(bi, last);
+        bi = _mm_or_si128(_mm_and_si128(over, last), _mm_andnot_si128(over, bi));
+        const int at[3] = {_mm_cvtsi128_si32(bi), _mm_cvtsi128_si32(_mm_shuffle_epi32(bi, 1)),
+                           _mm_cvtsi128_si32(_mm_shuffle_epi32(bi, 2))};
+        for (int axis = 0; axis < 3; ++axis) {
+            float *lo4 = bins->min[axis][at[axis]], *hi4 = bins->max[axis][at[axis]];
+            _mm_store_ps(lo4, _mm_min_ps(_mm_load_ps(lo4), mn));
+            _mm_store_ps(hi4, _mm_max_ps(_mm_load_ps(hi4), mx));
+            bins->count[axis][at[axis]]++;
         }
     }
 }
+#else
+static void bin_range(const builder *b, uint32_t first, uint32_t end, const float lo[3],
+                      const float scale[3], int nb, bin_set *bins) {
+    for (uint32_t k = first; k < end; ++k) {
+        const ref *r = &b->refs[k];
+        const tr_vec3 c = ref_centroid(r);
+        const tr_aabb box = ref_box(r);
+        const int at[3] = {bin_index(c.x, lo[0], scale[0], nb), bin_index(c.y, lo[1], scale[1], nb),
+                           bin_index(c.z, lo[2], scale[2], nb)};
+        for (int axis = 0; axis < 3; ++axis) {
+            bin_set_box(bins, axis, at[axis], box_union(bin_box(bins, axis, at[axis]), box));
+            bins->count[axis][at[axis]]++;
+        }
+    }
+}
+#endif
 
+/* The box a sweep over the bins grows: with SSE2 two rows of four floats, unions and the
+ * extent one operation each, the area from the extent as box_area computes it. */
+#if defined(__SSE2__)
+typedef struct sweep {
+    __m128 min, max;
+} sweep;
+
+static sweep sweep_start(void) {
+    sweep w = {_mm_set1_ps(INFINITY), _mm_set1_ps(-INFINITY)};
+    return w;
+}
+
+static sweep sweep_add(sweep w, const bin_set *bins, int axis, int i) {
+    w.min = _mm_min_ps(w.min, _mm_load_ps(bins->min[axis][i]));
+    w.max = _mm_max_ps(w.max, _mm_load_ps(bins->max[axis][i]));
+    return w;
+}
+
+static float sweep_area(sweep w) {
+    const __m128 d = _mm_sub_ps(w.max, w.min);
+    const float dx = _mm_cvtss_f32(d), dy = _mm_cvtss_f32(_mm_shuffle_ps(d, d, 1));
+    const float dz = _mm_cvtss_f32(_mm_shuffle_ps(d, d, 2));
+    if (!(dx >= 0.0f && dy >= 0.0f && dz >= 0.0f)) {
+        return 0.0f; /* empty */
+    }
+    return 2.0f * (dx * dy + dy * dz + dz * dx);
+}
+#else
+typedef tr_aabb sweep;
+
+static sweep sweep_start(void) {
+    return box_empty();
+}
+
+static sweep sweep_add(sweep w, const bin_set *bins, int axis, int i) {
+    return box_union(w, bin_box(bins, axis, i));
+}
+
+static float sweep_area(sweep w) {
+    return box_area(w);
+}
+#endif
+
+static void bins_clear(bin_set *bins, int nb) {
+    for (int axis = 0; axis < 3; ++axis) {
+        for (int i = 0; i < nb; ++i) {
+            for (int l = 0; l < 4; ++l) {
+                bins->min[axis][i][l] = INFINITY;
+                bins->max[axis][i][l] = -INFINITY;
+            }
+            bins->count[axis][i] = 0;
+        }
+    }
+}
 /* The best SAH split of indices[first, first+count): returns its cost (relative to
  * testing all triangles in one leaf, in units of triangle tests) and sets the axis and
  * the bin boundary; INFINITY when no axis has any extent. Big nodes are binned by all
  * threads, each into bins of its own, merged after: box unions and counts do not depend
  * on the order, so neither does the tree. */
 static float find_split(const builder *b, uint32_t first, uint32_t count, tr_aabb cbox,
-                        float node_area, int nb, int *best_axis, int *best_bin) {
+                        float node_area, int nb, int *best_axis, int *best_bin, tr_aabb child[2]) {
     float best = INFINITY;
     float lo[3], scale[3];
     int active[3], any = 0;
@@ -125,29 +243,30 @@ static float find_split(const builder *b, uint32_t first, uint32_t count, tr_aab
     if (!any) {
         return INFINITY;
     }
-    bin bins[3][BINS];
-    bins_clear(bins, nb);
+    bin_set bins;
+    bins_clear(&bins, nb);
     if (count >= PARALLEL_NODE_MIN) {
 #pragma omp parallel num_threads(tr_default_threads())
         {
-            bin local[3][BINS];
-            bins_clear(local, nb);
+            bin_set local;
+            bins_clear(&local, nb);
             const int64_t end = (int64_t)first + count;
 #pragma omp for schedule(static) nowait
             for (int64_t k = first; k < end; k += 4096) {
                 uint32_t stop = (uint32_t)(k + 4096 < end ? k + 4096 : end);
-                bin_range(b, (uint32_t)k, stop, lo, scale, nb, local);
+                bin_range(b, (uint32_t)k, stop, lo, scale, nb, &local);
             }
 #pragma omp critical
             for (int axis = 0; axis < 3; ++axis) {
                 for (int i = 0; i < nb; ++i) {
-                    bins[axis][i].box = box_union(bins[axis][i].box, local[axis][i].box);
-                    bins[axis][i].count += local[axis][i].count;
+                    bin_set_box(&bins, axis, i,
+                                box_union(bin_box(&bins, axis, i), bin_box(&local, axis, i)));
+                    bins.count[axis][i] += local.count[axis][i];
                 }
             }
         }
     } else {
-        bin_range(b, first, first + count, lo, scale, nb, bins);
+        bin_range(b, first, first + count, lo, scale, nb, &bins);
     }
     for (int axis = 0; axis < 3; ++axis) {
         if (!active[axis]) {
@@ -155,28 +274,37 @@ static float find_split(const builder *b, uint32_t first, uint32_t count, tr_aab
         }
         /* Sweep from the right, then from the left, evaluating each of the nb-1 planes. */
         float right_cost[BINS];
-        tr_aabb acc = box_empty();
+        sweep acc = sweep_start();
         uint32_t n = 0;
         for (int i = nb - 1; i > 0; --i) {
-            acc = box_union(acc, bins[axis][i].box);
-            n += bins[axis][i].count;
-            right_cost[i] = box_area(acc) * (float)n;
+            acc = sweep_add(acc, &bins, axis, i);
+            n += bins.count[axis][i];
+            right_cost[i] = sweep_area(acc) * (float)n;
         }
-        acc = box_empty();
+        acc = sweep_start();
         n = 0;
         for (int i = 0; i < nb - 1; ++i) {
-            acc = box_union(acc, bins[axis][i].box);
-            n += bins[axis][i].count;
+            acc = sweep_add(acc, &bins, axis, i);
+            n += bins.count[axis][i];
             if (n == 0 || n == count) {
                 continue;
             }
             float cost =
-                TRAVERSAL_COST + (box_area(acc) * (float)n + right_cost[i + 1]) / node_area;
+                TRAVERSAL_COST + (sweep_area(acc) * (float)n + right_cost[i + 1]) / node_area;
             if (cost < best) {
                 best = cost;
                 *best_axis = axis;
                 *best_bin = i;
             }
+        }
+    }
+    if (best < INFINITY) {
+        /* The children's boxes are the unions of their bins' boxes: the same minima and
+         * maxima as a pass over their triangles would find, without that pass. */
+        child[0] = child[1] = box_empty();
+        for (int i = 0; i < nb; ++i) {
+            const int side = i > *best_bin;
+            child[side] = box_union(child[side], bin_box(&bins, *best_axis, i));
         }
     }
     return best;
@@ -186,20 +314,21 @@ static float find_split(const builder *b, uint32_t first, uint32_t count, tr_aab
  * (quickselect; keys are centroids). */
 static void select_median(builder *b, uint32_t first, uint32_t count, int axis, uint32_t k) {
     uint32_t lo = first, hi = first + count - 1, target = first + k;
+    ref *refs = b->refs;
     while (lo < hi) {
-        float pivot = axis_of(b->centroids[b->indices[(lo + hi) / 2]], axis);
+        float pivot = axis_of(ref_centroid(&refs[(lo + hi) / 2]), axis);
         uint32_t i = lo, j = hi;
         while (i <= j) {
-            while (axis_of(b->centroids[b->indices[i]], axis) < pivot) {
+            while (axis_of(ref_centroid(&refs[i]), axis) < pivot) {
                 ++i;
             }
-            while (axis_of(b->centroids[b->indices[j]], axis) > pivot) {
+            while (axis_of(ref_centroid(&refs[j]), axis) > pivot) {
                 --j;
             }
             if (i <= j) {
-                uint32_t t = b->indices[i];
-                b->indices[i] = b->indices[j];
-                b->indices[j] = t;
+                ref t = refs[i];
+                refs[i] = refs[j];
+                refs[j] = t;
                 ++i;
                 if (j == 0) {
                     break;
@@ -217,26 +346,98 @@ static void select_median(builder *b, uint32_t first, uint32_t count, int axis, 
     }
 }
 
+/* Partitions refs[i, j) by the chosen bin plane on `axis`, binning exactly as find_split
+ * did: the entries of bins up to split_bin first. Returns where the right side starts and
+ * sets both sides' centroid bounds, gathered on the way. */
+#if defined(__SSE2__)
+/* The same moves as the scalar code below, without its branch on the side, which a
+ * processor cannot predict: every step swaps the entry at i with the one at i (left) or at
+ * j - 1 (right), and both sides' bounds take the centroid or an infinity that leaves them
+ * as they are (minps and maxps keep their first operand there, as tr_fminf does). */
+static uint32_t partition(ref *refs, uint32_t i, uint32_t j, int axis, float lo, float scale,
+                          int nb, int split_bin, tr_aabb *cl_out, tr_aabb *cr_out) {
+    const __m128 xyz = _mm_castsi128_ps(_mm_setr_epi32(-1, -1, -1, 0));
+    const __m128 half = _mm_set1_ps(0.5f), inf = _mm_set1_ps(INFINITY);
+    const __m128 ninf = _mm_set1_ps(-INFINITY);
+    __m128 lmin = inf, lmax = ninf, rmin = inf, rmax = ninf;
+    while (i < j) {
+        const float *mn = &refs[i].min.x, *mx = &refs[i].max.x;
+        int bi = (int)(((mn[axis] + mx[axis]) * 0.5f - lo) * scale);
+        bi = bi < 0 ? 0 : bi >= nb ? nb - 1 : bi;
+        const uint32_t right = bi > split_bin;
+        const __m128 a0 = _mm_loadu_ps(mn), a1 = _mm_loadu_ps(mx);
+        const __m128 c = _mm_mul_ps(_mm_add_ps(_mm_and_ps(a0, xyz), _mm_and_ps(a1, xyz)), half);
+        const __m128 r = _mm_castsi128_ps(_mm_set1_epi32(-(int)right));
+        lmin = _mm_min_ps(lmin, _mm_or_ps(_mm_and_ps(r, inf), _mm_andnot_ps(r, c)));
+        lmax = _mm_max_ps(lmax, _mm_or_ps(_mm_and_ps(r, ninf), _mm_andnot_ps(r, c)));
+        rmin = _mm_min_ps(rmin, _mm_or_ps(_mm_andnot_ps(r, inf), _mm_and_ps(r, c)));
+        rmax = _mm_max_ps(rmax, _mm_or_ps(_mm_andnot_ps(r, ninf), _mm_and_ps(r, c)));
+        const uint32_t other = right ? j - 1 : i;
+        float *omn = &refs[other].min.x, *omx = &refs[other].max.x;
+        const __m128 b0 = _mm_loadu_ps(omn), b1 = _mm_loadu_ps(omx);
+        _mm_storeu_ps(omn, a0);
+        _mm_storeu_ps(omx, a1);
+        _mm_storeu_ps(&refs[i].min.x, b0);
+        _mm_storeu_ps(&refs[i].max.x, b1);
+        j -= right;
+        i += 1 - right;
+    }
+    float v[4][4];
+    _mm_storeu_ps(v[0], lmin);
+    _mm_storeu_ps(v[1], lmax);
+    _mm_storeu_ps(v[2], rmin);
+    _mm_storeu_ps(v[3], rmax);
+    *cl_out = (tr_aabb){v3(v[0][0], v[0][1], v[0][2]), v3(v[1][0], v[1][1], v[1][2])};
+    *cr_out = (tr_aabb){v3(v[2][0], v[2][1], v[2][2]), v3(v[3][0], v[3][1], v[3][2])};
+    return i;
+}
+#else
+static uint32_t partition(ref *refs, uint32_t i, uint32_t j, int axis, float lo, float scale,
+                          int nb, int split_bin, tr_aabb *cl_out, tr_aabb *cr_out) {
+    tr_aabb cl = box_empty(), cr = box_empty();
+    while (i < j) {
+        const tr_vec3 c = ref_centroid(&refs[i]);
+        if (bin_index(axis_of(c, axis), lo, scale, nb) <= split_bin) {
+            cl.min = v3_min(cl.min, c);
+            cl.max = v3_max(cl.max, c);
+            ++i;
+        } else {
+            cr.min = v3_min(cr.min, c);
+            cr.max = v3_max(cr.max, c);
+            ref x = refs[i];
+            refs[i] = refs[--j];
+            refs[j] = x;
+        }
+    }
+    *cl_out = cl;
+    *cr_out = cr;
+    return i;
+}
+#endif
+
+/* A node to build: its entries refs[first, first + count), their bounds (box) and their
+ * centroids' bounds (cbox), both found by its parent's split. */
 typedef struct task {
     uint32_t node, first, count, depth;
+    tr_aabb box, cbox;
 } task;
 
-/* Sets the node's box and decides its split: returns how many of its triangles go to
- * the left child (the indices are partitioned accordingly), or 0 for a leaf. */
-static uint32_t split_node(builder *b, const task *t, tr_bvh_node *node) {
+/* The bounds of refs[first, first + count) and of their centroids: by all threads, merged,
+ * for a big run (min and max do not depend on the order). */
+static void range_bounds(const builder *b, uint32_t first, uint32_t count, tr_aabb *box_out,
+                         tr_aabb *cbox_out) {
     tr_aabb box = box_empty(), cbox = box_empty();
-    if (t->count >= PARALLEL_NODE_MIN) {
-        /* Bounds by all threads, merged (min and max do not depend on the order). */
+    if (count >= PARALLEL_NODE_MIN) {
 #pragma omp parallel num_threads(tr_default_threads())
         {
             tr_aabb lbox = box_empty(), lcbox = box_empty();
-            const int64_t end = (int64_t)t->first + t->count;
+            const int64_t end = (int64_t)first + count;
 #pragma omp for schedule(static) nowait
-            for (int64_t k = t->first; k < end; ++k) {
-                uint32_t i = b->indices[k];
-                lbox = box_union(lbox, b->boxes[i]);
-                lcbox.min = v3_min(lcbox.min, b->centroids[i]);
-                lcbox.max = v3_max(lcbox.max, b->centroids[i]);
+            for (int64_t k = first; k < end; ++k) {
+                const tr_vec3 c = ref_centroid(&b->refs[k]);
+                lbox = box_union(lbox, ref_box(&b->refs[k]));
+                lcbox.min = v3_min(lcbox.min, c);
+                lcbox.max = v3_max(lcbox.max, c);
             }
 #pragma omp critical
             {
@@ -245,13 +446,22 @@ static uint32_t split_node(builder *b, const task *t, tr_bvh_node *node) {
             }
         }
     } else {
-        for (uint32_t k = t->first; k < t->first + t->count; ++k) {
-            uint32_t i = b->indices[k];
-            box = box_union(box, b->boxes[i]);
-            cbox.min = v3_min(cbox.min, b->centroids[i]);
-            cbox.max = v3_max(cbox.max, b->centroids[i]);
+        for (uint32_t k = first; k < first + count; ++k) {
+            const tr_vec3 c = ref_centroid(&b->refs[k]);
+            box = box_union(box, ref_box(&b->refs[k]));
+            cbox.min = v3_min(cbox.min, c);
+            cbox.max = v3_max(cbox.max, c);
         }
     }
+    *box_out = box;
+    *cbox_out = cbox;
+}
+
+/* Sets the node's box and decides its split: returns how many of its triangles go to
+ * the left child (the refs are partitioned accordingly, and the children's tasks get
+ * their bounds), or 0 for a leaf. */
+static uint32_t split_node(builder *b, const task *t, tr_bvh_node *node, task child[2]) {
+    const tr_aabb box = t->box, cbox = t->cbox;
     node->box = box;
     node->left_first = t->first;
     node->count = t->count;
@@ -260,37 +470,33 @@ static uint32_t split_node(builder *b, const task *t, tr_bvh_node *node) {
     }
     int axis = 0, split_bin = 0;
     float cost = INFINITY;
+    tr_aabb child_box[2];
     /* Fewer bins than triangles only cost time: small nodes get one per triangle (at
      * least 4); most nodes are small, and the bins' set-up and sweeps dominate there. */
     const int nbins = t->count >= BINS ? BINS : t->count < 4 ? 4 : (int)t->count;
     if (t->depth < SAH_DEPTH) {
-        cost = find_split(b, t->first, t->count, cbox, box_area(box), nbins, &axis, &split_bin);
+        cost = find_split(b, t->first, t->count, cbox, box_area(box), nbins, &axis, &split_bin,
+                          child_box);
     }
     if (cost < INFINITY && (cost < (float)t->count || t->count > MAX_LEAF)) {
-        /* Partition by the chosen bin plane, binning exactly as find_split did. */
-        float lo = axis_of(cbox.min, axis);
-        float scale = (float)nbins / (axis_of(cbox.max, axis) - lo);
-        uint32_t i = t->first, j = t->first + t->count;
-        while (i < j) {
-            int bi = (int)((axis_of(b->centroids[b->indices[i]], axis) - lo) * scale);
-            bi = bi < 0 ? 0 : bi >= nbins ? nbins - 1 : bi;
-            if (bi <= split_bin) {
-                ++i;
-            } else {
-                uint32_t x = b->indices[i];
-                b->indices[i] = b->indices[--j];
-                b->indices[j] = x;
-            }
-        }
-        return i - t->first;
+        const float lo = axis_of(cbox.min, axis);
+        const float scale = (float)nbins / (axis_of(cbox.max, axis) - lo);
+        const uint32_t left = partition(b->refs, t->first, t->first + t->count, axis, lo, scale,
+                                        nbins, split_bin, &child[0].cbox, &child[1].cbox);
+        child[0].box = child_box[0];
+        child[1].box = child_box[1];
+        return left - t->first;
     }
     if (t->count > MAX_LEAF) {
         /* No useful SAH split (coincident centroids, or too deep): halve the node at
          * the median of its widest centroid axis, which bounds the depth. */
         tr_vec3 d = v3_sub(cbox.max, cbox.min);
         axis = d.x >= d.y && d.x >= d.z ? 0 : d.y >= d.z ? 1 : 2;
-        select_median(b, t->first, t->count, axis, t->count / 2);
-        return t->count / 2;
+        const uint32_t half = t->count / 2;
+        select_median(b, t->first, t->count, axis, half);
+        range_bounds(b, t->first, half, &child[0].box, &child[0].cbox);
+        range_bounds(b, t->first + half, t->count - half, &child[1].box, &child[1].cbox);
+        return half;
     }
     return 0;
 }
@@ -316,7 +522,8 @@ static uint32_t build_nodes(builder *b, task root, tr_bvh_node *nodes, uint32_t 
             continue;
         }
         tr_bvh_node *node = &nodes[t.node];
-        uint32_t left = split_node(b, &t, node);
+        task child[2];
+        uint32_t left = split_node(b, &t, node, child);
         if (left == 0) {
             leaves++;
             *deepest = t.depth > *deepest ? t.depth : *deepest;
@@ -326,15 +533,24 @@ static uint32_t build_nodes(builder *b, task root, tr_bvh_node *nodes, uint32_t 
         *node_count += 2;
         node->left_first = l;
         node->count = 0;
-        stack[top++] = (task){l + 1, t.first + left, t.count - left, t.depth + 1};
-        stack[top++] = (task){l, t.first, left, t.depth + 1};
+        child[1].node = l + 1;
+        child[1].first = t.first + left;
+        child[1].count = t.count - left;
+        child[1].depth = t.depth + 1;
+        child[0].node = l;
+        child[0].first = t.first;
+        child[0].count = left;
+        child[0].depth = t.depth + 1;
+        stack[top++] = child[1];
+        stack[top++] = child[0];
     }
     return leaves;
 }
 
 enum {
     PARALLEL_MIN = PARALLEL_NODE_MIN, /* fewer triangles than this build on one thread */
-    CUT_DEPTH = 4, /* the top levels are built serially, up to 16 subtrees after */
+    CUT_DEPTH = 4,               /* the top levels are built serially, up to 16 subtrees after */
+    TOP_NODES = 2u << CUT_DEPTH, /* more than the top levels' nodes */
 };
 
 /* Builds the tree over indices[0, n) into b->nodes. Large trees are built in two
@@ -342,33 +558,34 @@ enum {
  * each into its own array, appended in a fixed order. The result does not depend on the
  * thread count, so neither does any image rendered through it. */
 static int build_tree(builder *b, uint32_t n, uint32_t *leaves_out, uint32_t *depth_out) {
-    task root = {0, 0, n, 0};
+    task root = {.node = 0, .first = 0, .count = n, .depth = 0};
+    range_bounds(b, 0, n, &root.box, &root.cbox);
     task cut[1u << CUT_DEPTH];
     uint32_t cuts = 0, count = 0, deepest = 0;
     int parallel = n >= PARALLEL_MIN;
     uint32_t leaves =
         build_nodes(b, root, b->nodes, &count, CUT_DEPTH, parallel ? cut : NULL, &cuts, &deepest);
-    tr_bvh_node *sub[1u << CUT_DEPTH] = {0};
     uint32_t sub_count[1u << CUT_DEPTH] = {0}, sub_leaves[1u << CUT_DEPTH] = {0};
     uint32_t sub_depth[1u << CUT_DEPTH] = {0};
-    int failed = 0;
-#pragma omp parallel for num_threads(tr_default_threads()) schedule(dynamic, 1)                    \
-    reduction(|                                                                                    \
-              : failed) if (cuts > 1)
+    /* Each subtree is built in the node array itself, in a region of its own: the one at
+     * TOP_NODES + 2 * first, room for the 2 * count - 1 nodes a subtree over refs[first,
+     * first + count) can have. The cut nodes are recorded in order of their runs of refs
+     * (depth first, left first), which do not overlap. */
+#pragma omp parallel for num_threads(tr_default_threads()) schedule(dynamic, 1) if (cuts > 1)
     for (int k = 0; k < (int)cuts; ++k) {
-        sub[k] = malloc((size_t)(2 * (uint64_t)cut[k].count) * sizeof *sub[k]);
-        if (!sub[k]) {
-            failed = 1;
-            continue;
-        }
-        sub_leaves[k] = build_nodes(b, cut[k], sub[k], &sub_count[k], 0, NULL, NULL, &sub_depth[k]);
+        tr_bvh_node *region = b->nodes + TOP_NODES + 2 * (size_t)cut[k].first;
+        sub_leaves[k] = build_nodes(b, cut[k], region, &sub_count[k], 0, NULL, NULL, &sub_depth[k]);
     }
-    for (uint32_t k = 0; k < cuts && !failed; ++k) {
-        /* The subtree's root takes the reserved slot; the rest goes to the end, with
-         * child links moved from local index c >= 1 to count + c - 1. */
+    for (uint32_t k = 0; k < cuts; ++k) {
+        /* The subtree's root takes the reserved slot; the rest moves down to the end of
+         * the array so far, with child links moved from local index c >= 1 to
+         * count + c - 1. That end lies at or below the region (the subtrees before it
+         * had at most twice as many nodes as refs, and the top fewer than TOP_NODES), so
+         * copying forward never overwrites a node not yet copied. */
+        const tr_bvh_node *region = b->nodes + TOP_NODES + 2 * (size_t)cut[k].first;
         uint32_t offset = count - 1;
         for (uint32_t i = 0; i < sub_count[k]; ++i) {
-            tr_bvh_node nd = sub[k][i];
+            tr_bvh_node nd = region[i];
             if (nd.count == 0) {
                 nd.left_first += offset;
             }
@@ -378,18 +595,17 @@ static int build_tree(builder *b, uint32_t n, uint32_t *leaves_out, uint32_t *de
         leaves += sub_leaves[k];
         deepest = sub_depth[k] > deepest ? sub_depth[k] : deepest;
     }
-    for (uint32_t k = 0; k < cuts; ++k) {
-        free(sub[k]);
-    }
     b->node_count = count;
     *leaves_out = leaves;
     *depth_out = deepest;
-    return failed ? TR_ERR : TR_OK;
+    return TR_OK;
 }
 
 /* The leaf-order triangle copy the traversal reads. */
 static void bvh_fill_tris(tr_bvh *bvh, const tr_triangle *tris) {
-    for (uint32_t k = 0; k < bvh->index_count; ++k) {
+    const int64_t n = bvh->index_count;
+#pragma omp parallel for num_threads(tr_default_threads()) schedule(static) if (n >= PARALLEL_MIN)
+    for (int64_t k = 0; k < n; ++k) {
         const tr_triangle *t = &tris[bvh->indices[k]];
         bvh->tris[k].v0 = t->v0;
         bvh->tris[k].e1 = v3_sub(t->v1, t->v0);
@@ -406,56 +622,73 @@ static int bvh_build(tr_bvh *bvh, const tr_triangle *tris, const tr_aabb *boxes,
     memset(bvh, 0, sizeof *bvh);
     builder b;
     memset(&b, 0, sizeof b);
-    b.tris = tris;
-    b.boxes = malloc((size_t)(n ? n : 1) * sizeof *b.boxes);
-    b.centroids = malloc((size_t)(n ? n : 1) * sizeof *b.centroids);
-    b.indices = malloc((size_t)(n ? n : 1) * sizeof *b.indices);
-    /* A binary tree over m leaves of >= 1 triangle has at most 2m - 1 nodes. */
-    b.nodes = malloc((size_t)(2 * (uint64_t)(n ? n : 1)) * sizeof *b.nodes);
-    if (!b.boxes || !b.centroids || !b.indices || !b.nodes) {
-        free(b.boxes);
-        free(b.centroids);
-        free(b.indices);
+    b.refs = malloc((size_t)(n ? n : 1) * sizeof *b.refs);
+    uint32_t *indices = malloc((size_t)(n ? n : 1) * sizeof *indices);
+    /* A binary tree over m leaves of >= 1 triangle has at most 2m - 1 nodes; the
+     * parallel build leaves room for the top levels before its subtrees' regions. */
+    b.nodes = malloc((size_t)(2 * (uint64_t)n + TOP_NODES) * sizeof *b.nodes);
+    if (!b.refs || !indices || !b.nodes) {
+        free(b.refs);
+        free(indices);
         free(b.nodes);
         return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY,
                             "out of memory building a BVH over %u triangles", n);
     }
-    uint32_t m = 0;
-    for (uint32_t i = 0; i < n; ++i) {
+    /* Every entry's record in its own slot, by all threads; those that can never be hit
+     * marked (pad = 1) and squeezed out after, in order, where there are any. */
+    int64_t bad = 0;
+#pragma omp parallel for num_threads(tr_default_threads()) schedule(static)                        \
+    reduction(+ : bad) if (n >= PARALLEL_MIN)
+    for (int64_t k = 0; k < (int64_t)n; ++k) {
+        const uint32_t i = (uint32_t)k;
+        tr_aabb box;
+        int hit = 1;
         if (boxes) {
             /* An empty or non-finite box (an instance of nothing) can never be hit. */
-            if (!(boxes[i].min.x <= boxes[i].max.x && boxes[i].min.y <= boxes[i].max.y &&
-                  boxes[i].min.z <= boxes[i].max.z) ||
-                !v3_is_finite(boxes[i].min) || !v3_is_finite(boxes[i].max)) {
-                continue;
+            box = boxes[i];
+            hit = box.min.x <= box.max.x && box.min.y <= box.max.y && box.min.z <= box.max.z &&
+                  v3_is_finite(box.min) && v3_is_finite(box.max);
+        } else {
+            const tr_triangle *t = &tris[i];
+            box = tri_box(t);
+            hit = !(skip && skip[i]) && t->area > 0.0f && v3_is_finite(t->v0) &&
+                  v3_is_finite(t->v1) && v3_is_finite(t->v2);
+        }
+        b.refs[i] = (ref){box.min, i, box.max, hit ? 0u : 1u};
+        bad += !hit;
+    }
+    uint32_t m = n;
+    if (bad > 0) {
+        m = 0;
+        for (uint32_t i = 0; i < n; ++i) {
+            if (b.refs[i].pad == 0) {
+                b.refs[m++] = b.refs[i];
             }
-            b.boxes[i] = boxes[i];
-            b.centroids[i] = v3_scale(v3_add(b.boxes[i].min, b.boxes[i].max), 0.5f);
-            b.indices[m++] = i;
-            continue;
         }
-        const tr_triangle *t = &tris[i];
-        if ((skip && skip[i]) || !(t->area > 0.0f) || !v3_is_finite(t->v0) ||
-            !v3_is_finite(t->v1) || !v3_is_finite(t->v2)) {
-            continue; /* can never be hit */
-        }
-        b.boxes[i] = tri_box(t);
-        b.centroids[i] = v3_scale(v3_add(b.boxes[i].min, b.boxes[i].max), 0.5f);
-        b.indices[m++] = i;
     }
     uint32_t leaves = 0, depth = 0;
     int rc = m > 0 ? build_tree(&b, m, &leaves, &depth) : TR_OK;
-    free(b.boxes);
-    free(b.centroids);
+#pragma omp parallel for num_threads(tr_default_threads()) schedule(static) if (m >= PARALLEL_MIN)
+    for (int64_t k = 0; k < (int64_t)m; ++k) {
+        indices[k] = b.refs[k].index;
+    }
+    /* The records' memory, its pages already mapped, becomes the leaf-order triangle copy
+     * (a large block grows in place or by remapping, without copying). */
+    tr_bvh_tri *leaf_tris =
+        rc == TR_OK ? realloc(b.refs, (size_t)(m ? m : 1) * sizeof *leaf_tris) : NULL;
+    if (!leaf_tris) {
+        free(b.refs);
+        rc = TR_ERR;
+    }
     if (rc != TR_OK) {
         free(b.nodes);
-        free(b.indices);
+        free(indices);
         return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY,
                             "out of memory building a BVH over %u triangles", n);
     }
     bvh->nodes = b.nodes;
     bvh->node_count = m > 0 ? b.node_count : 0;
-    bvh->indices = b.indices;
+    bvh->indices = indices;
     bvh->index_count = m;
     bvh->leaf_count = leaves;
     bvh->depth = depth;
@@ -466,12 +699,7 @@ static int bvh_build(tr_bvh *bvh, const tr_triangle *tris, const tr_aabb *boxes,
     if (shrunk) {
         bvh->nodes = shrunk;
     }
-    bvh->tris = malloc((size_t)(m ? m : 1) * sizeof *bvh->tris);
-    if (!bvh->tris) {
-        tr_bvh_free(bvh);
-        return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY,
-                            "out of memory building a BVH over %u triangles", n);
-    }
+    bvh->tris = leaf_tris;
     if (tris) {
         bvh_fill_tris(bvh, tris);
     } else {
