@@ -44,7 +44,7 @@ void tr_fresh_reset(tr_fresh *f);
  * size or where its surface, followed back by its primitive's motion (motion[prim] for
  * prim < motion_count; NULL: none, as tr_recon_frame_moving takes it), reprojects onto
  * less than the temporal stage's 5 % of consistent previous pixels (tr_post_reproject_moving,
- * the very test the reconstruction makes).
+ * the very test the reconstruction makes). The temporal gradients' caps are not counted.
  * Pixels that hit nothing keep no history either and are left out (the sky's emission is
  * exact at one sample). Returns TR_OK, or TR_ERR out of memory. */
 int tr_fresh_mask(tr_fresh *f, const tr_film *film, const tr_camera *cam, const tr_vec3 *motion,

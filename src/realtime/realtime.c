@@ -400,18 +400,17 @@ static void take_motion(tr_realtime *rt) {
 }
 
 /* The frame's pixels without history traced again, with tr_recon_params.fresh_spp
- * samples in all (fresh.h): after the frame's own n samples are in rt->film, on the host,
- * for real-time frames traced at every pixel by the frame's config. Not with ReSTIR
- * (its stage shades the frame's own samples) nor with temporal gradients (their replay
- * takes the frame's samples alone). Otherwise the previous frame is forgotten, so that
- * the next frame the extra samples apply to starts from no history. */
+ * samples in all (fresh.h): when rt->film holds the frame's own n samples alone, on the
+ * host, for real-time frames traced at every pixel by the frame's config (after the
+ * temporal gradients, whose replay compares the frame's own samples). Not with ReSTIR
+ * (its stage shades the frame's own samples). Otherwise the previous frame is forgotten,
+ * so that the next frame the extra samples apply to starts from no history. */
 static int fresh_samples(tr_realtime *rt, const tr_render_config *cfg, uint32_t n, int restir,
                          int stride, tr_error *err) {
     const int spp = rt->params.fresh_spp;
     const int on = spp > (int)n && !rt->on_device && !restir && stride <= 1 && !rt->view_upscaled &&
-                   rt->acc_spp == 0 && !rt->params.gradients &&
-                   (rt->view_moving || rt->animated || !rt->accumulate) && rt->film.depth &&
-                   rt->film.normal && rt->film.prim &&
+                   rt->acc_spp == n && (rt->view_moving || rt->animated || !rt->accumulate) &&
+                   rt->film.depth && rt->film.normal && rt->film.prim &&
                    !tr_integrator_is_bidirectional(rt->cfg.integrator);
     if (!on) {
         tr_fresh_reset(&rt->fresh);
@@ -491,11 +490,7 @@ int tr_realtime_render(tr_realtime *rt, const tr_realtime_frame_desc *fd, tr_err
         }
         rt->film_stale = 0;
     }
-    take_motion(rt); /* the extra samples' test follows moving shapes back */
-    if (fresh_samples(rt, &cfg, n, restir, stride, err) != TR_OK) {
-        rt->have_view = 0;
-        return TR_ERR;
-    }
+    take_motion(rt);
     rt->restir_ms = 0.0;
     if (restir) {
         const double t1 = tr_time_now();
@@ -551,6 +546,11 @@ int tr_realtime_render(tr_realtime *rt, const tr_realtime_frame_desc *fd, tr_err
     } else if (tr_grad_frame(&rt->grad, rt->scene, &rt->film, &rt->rcam, &cfg, sample, n, rt->calls,
                              rt->moved ? rt->motion : NULL, rt->moved ? rt->motion_ids : 0u,
                              rt->params.alpha_min, rt->cfg.threads, err) != TR_OK) {
+        rt->have_view = 0;
+        return TR_ERR;
+    }
+    /* After the gradients, whose replay compares the frame's own samples. */
+    if (fresh_samples(rt, &cfg, n, restir, stride, err) != TR_OK) {
         rt->have_view = 0;
         return TR_ERR;
     }
