@@ -1,5 +1,4 @@
-/* fresh.c - the pixels without history and the rectangles that trace them again
- * (fresh.h). */
+/* fresh.c - the pixels without history and their extra samples (fresh.h). */
 #include "realtime/fresh.h"
 
 #include <stdlib.h>

@@ -6,8 +6,9 @@
  * cut - are the worst ones (docs/realtime.md, "The hard scenes"), and extra samples spent
  * on those pixels only (adaptive sampling by the temporal filter's own rejection test:
  * the reprojection of Nehab et al., "Accelerating Real-Time Shading with Reverse
- * Reprojection Caching", GH 2007, as src/post/filter.h implements it) buy most where the
- * error is largest, for a small share of the frames' time. Internal to src/realtime. */
+ * Reprojection Caching", GH 2007, as src/post/filter.h implements it) go where the error
+ * is largest: the first frame and a cut cost more, the other frames little more
+ * (docs/log/2026-realtime.md has the times). Internal to src/realtime. */
 #ifndef TRAC0R_REALTIME_FRESH_H
 #define TRAC0R_REALTIME_FRESH_H
 
