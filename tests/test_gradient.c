@@ -59,6 +59,11 @@ static void run(int gradients, int mode, int threads, int move_camera, float *ou
     cfg.threads = threads;
     tr_recon_params rp = tr_recon_params_default();
     rp.gradients = gradients;
+    /* The histories the gradients keep or drop, compared with a steady run's, without the
+     * extra samples for pixels without history: the steady run's first frame would get
+     * them, the pixels whose history a switch drops would not (they are found by the
+     * reprojection, not by the gradients). */
+    rp.fresh_spp = 0;
     tr_realtime_desc desc = {0};
     desc.config = &cfg;
     desc.recon = &rp;

@@ -420,6 +420,7 @@ const char cli_recon_help[] =
     "                       changed (A-SVGF; CPU only; default off)\n"
     "  --resolve-emission N emitters' edges traced at N x N rays, 0..16 (default 4)\n"
     "  --resolve-albedo N   albedo's edges traced at N x N rays, 0..8 (default 0: off)\n"
+    "  --fresh-spp N        pixels without history traced at N spp in all (CPU; 4)\n"
     "  --restir off|di|di+gi  ReSTIR DI for the first surfaces' direct light, di+gi\n"
     "                       ReSTIR GI for their indirect light too (default off)\n"
     "  --restir-unbiased    ReSTIR with Talbot's MIS weights (default: biased 1/M)\n";
@@ -471,28 +472,26 @@ int cli_parse(cli_args *a, cli_common *c, const char *const *refused, void (*hel
 }
 
 int cli_recon_option(cli_args *a, tr_recon_params *p) {
-    /* The float settings by name, with their ranges. */
+    /* The float and int (iv) settings by name, with their ranges. */
     const struct {
         const char *name;
         float lo, hi, *v;
-    } f[] = {{"--alpha-min", 0.01f, 1.0f, &p->alpha_min},
-             {"--svgf-alpha-min", 0.01f, 1.0f, &p->svgf_alpha_min},
-             {"--max-history", 1.0f, 1024.0f, &p->max_len},
-             {"--max-history-moving", 1.0f, 1024.0f, &p->max_len_moving},
-             {"--svgf-sigma-l", 0.1f, 1000.0f, &p->svgf_sigma_l},
-             {"--taa", 0.0f, 1.0f, &p->svgf_taa_alpha}};
+        int *iv;
+    } f[] = {{"--alpha-min", 0.01f, 1.0f, &p->alpha_min, NULL},
+             {"--svgf-alpha-min", 0.01f, 1.0f, &p->svgf_alpha_min, NULL},
+             {"--max-history", 1.0f, 1024.0f, &p->max_len, NULL},
+             {"--max-history-moving", 1.0f, 1024.0f, &p->max_len_moving, NULL},
+             {"--svgf-sigma-l", 0.1f, 1000.0f, &p->svgf_sigma_l, NULL},
+             {"--taa", 0.0f, 1.0f, &p->svgf_taa_alpha, NULL},
+             {"--svgf-iterations", 1, 8, NULL, &p->svgf_iterations},
+             {"--resolve-emission", 0, TR_RESOLVE_EMISSION_MAX, NULL, &p->emission_samples},
+             {"--resolve-albedo", 0, TR_RESOLVE_ALBEDO_MAX, NULL, &p->albedo_samples},
+             {"--fresh-spp", 0, 64, NULL, &p->fresh_spp}};
     for (size_t k = 0; k < sizeof f / sizeof f[0]; ++k) {
         if (cli_is(a, f[k].name)) {
-            return cli_parse_float(a, f[k].lo, f[k].hi, f[k].v);
+            return f[k].v ? cli_parse_float(a, f[k].lo, f[k].hi, f[k].v)
+                          : cli_parse_int(a, (int)f[k].lo, (int)f[k].hi, f[k].iv);
         }
-    }
-    if (cli_is(a, "--svgf-iterations") || cli_is(a, "--resolve-emission")) {
-        const int it = cli_is(a, "--svgf-iterations");
-        return cli_parse_int(a, it, it ? 8 : TR_RESOLVE_EMISSION_MAX,
-                             it ? &p->svgf_iterations : &p->emission_samples);
-    }
-    if (cli_is(a, "--resolve-albedo")) {
-        return cli_parse_int(a, 0, TR_RESOLVE_ALBEDO_MAX, &p->albedo_samples);
     }
     if (cli_is(a, "--svgf-split") || cli_is(a, "--split-specular")) {
         *(cli_is(a, "--svgf-split") ? &p->svgf_split : &p->svgf_specular) = 1;

@@ -194,13 +194,17 @@ typedef struct tr_recon_params {
                              0: the reconstruction multiplies by the sample's own albedo */
     float svgf_alpha_min; /* alpha_min for SVGF's temporal stage (the other methods keep
                              alpha_min); 0: alpha_min */
+    int fresh_spp;        /* tr_realtime on the host: the samples per pixel in all of the
+                             pixels without history (the first frame, a cut, a
+                             disocclusion), traced again after the frame's own; at most the
+                             frame's samples: none (docs/realtime.md) */
 } tr_recon_params;
 
 /* The defaults. A field that would divide by zero at 0 (max_len, max_len_moving, the
  * bilateral and à-trous sigmas) takes its default when 0; the others are used as given,
  * so a zero-initialised tr_recon_params differs from the defaults in alpha_min,
- * bilateral_radius, the iteration counts, svgf_feedback, emission_samples and
- * svgf_alpha_min. */
+ * bilateral_radius, the iteration counts, svgf_feedback, emission_samples,
+ * svgf_alpha_min and fresh_spp. */
 tr_recon_params tr_recon_params_default(void);
 
 /* The reconstruction's state between frames (history and scratch buffers): the caller

@@ -2,6 +2,7 @@
  * frame budget, each stage its own function below. */
 #include "trac0r/realtime.h"
 #include "trac0r/recon_device.h"
+#include "realtime/fresh.h"
 #include "realtime/gradient.h"
 #include "post/recon_upscale.h"
 #include "realtime/restir_stage.h"
@@ -83,6 +84,9 @@ struct tr_realtime {
 
     /* Temporal gradients (gradient.h; tr_recon_params.gradients). */
     tr_grad grad;
+    /* The pixels without history and their extra samples (fresh.h;
+     * tr_recon_params.fresh_spp). */
+    tr_fresh fresh;
 };
 
 static int same_camera(const tr_camera *a, const tr_camera *b) {
@@ -235,6 +239,7 @@ void tr_realtime_destroy(tr_realtime *rt) {
     free(rt->emis[0]);
     free(rt->emis[1]);
     tr_grad_free(&rt->grad);
+    tr_fresh_free(&rt->fresh);
     free(rt);
 }
 
@@ -394,6 +399,40 @@ static void take_motion(tr_realtime *rt) {
     }
 }
 
+/* The frame's pixels without history traced again, with tr_recon_params.fresh_spp
+ * samples in all (fresh.h): when rt->film holds the frame's own n samples alone, on the
+ * host, for real-time frames traced at every pixel by the frame's config (after the
+ * temporal gradients, whose replay compares the frame's own samples). Not with ReSTIR
+ * (its stage shades the frame's own samples). Otherwise the previous frame is forgotten,
+ * so that the next frame the extra samples apply to starts from no history. */
+static int fresh_samples(tr_realtime *rt, const tr_render_config *cfg, uint32_t n, int restir,
+                         int stride, tr_error *err) {
+    const int spp = rt->params.fresh_spp;
+    const int on = spp > (int)n && !rt->on_device && !restir && stride <= 1 && !rt->view_upscaled &&
+                   rt->acc_spp == n && (rt->view_moving || rt->animated || !rt->accumulate) &&
+                   rt->film.depth && rt->film.normal && rt->film.prim &&
+                   !tr_integrator_is_bidirectional(rt->cfg.integrator);
+    if (!on) {
+        tr_fresh_reset(&rt->fresh);
+        return TR_OK;
+    }
+    tr_fresh *f = &rt->fresh;
+    if (tr_fresh_mask(f, &rt->film, &rt->rcam, rt->moved ? rt->motion : NULL,
+                      rt->moved ? rt->motion_ids : 0u, rt->cfg.threads, err) != TR_OK) {
+        return TR_ERR;
+    }
+    if (f->fresh > 0) {
+        const uint32_t extra = (uint32_t)spp - n;
+        /* Numbers apart from every frame's own, by frame (fresh.h). */
+        const uint32_t sample = TR_FRESH_SAMPLE_BASE + ((rt->calls - 1u) & 0xfffffu) * extra;
+        if (tr_fresh_trace(f, rt->scene, &rt->rcam, cfg, sample, extra, rt->cfg.threads, &rt->film,
+                           err) != TR_OK) {
+            return TR_ERR;
+        }
+    }
+    return tr_fresh_remember(f, &rt->film, &rt->rcam, err);
+}
+
 int tr_realtime_render(tr_realtime *rt, const tr_realtime_frame_desc *fd, tr_error *err) {
     if (check_frame_desc(rt, fd, err) != TR_OK) {
         return TR_ERR;
@@ -451,6 +490,7 @@ int tr_realtime_render(tr_realtime *rt, const tr_realtime_frame_desc *fd, tr_err
         }
         rt->film_stale = 0;
     }
+    take_motion(rt);
     rt->restir_ms = 0.0;
     if (restir) {
         const double t1 = tr_time_now();
@@ -500,13 +540,17 @@ int tr_realtime_render(tr_realtime *rt, const tr_realtime_frame_desc *fd, tr_err
     rt->acc_spp += n;
     rt->frame_spp = n;
     rt->rendered += 1;
-    take_motion(rt);
     rt->grad.ms = 0.0;
     if (!grad) {
         tr_grad_reset(&rt->grad);
     } else if (tr_grad_frame(&rt->grad, rt->scene, &rt->film, &rt->rcam, &cfg, sample, n, rt->calls,
                              rt->moved ? rt->motion : NULL, rt->moved ? rt->motion_ids : 0u,
                              rt->params.alpha_min, rt->cfg.threads, err) != TR_OK) {
+        rt->have_view = 0;
+        return TR_ERR;
+    }
+    /* After the gradients, whose replay compares the frame's own samples. */
+    if (fresh_samples(rt, &cfg, n, restir, stride, err) != TR_OK) {
         rt->have_view = 0;
         return TR_ERR;
     }
