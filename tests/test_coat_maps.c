@@ -8,8 +8,8 @@
  *      (both linear). The coat's normal map beside them is still dropped: one warning.
  *  (b) the scene-file keys "clearcoat_texture" and "clearcoat_roughness_texture" read the
  *      two maps on a principled material; on a diffuse one they are refused (a parse
- *      error naming the file and the key); a material without a coat keeps its factors
- *      when the maps are absent. */
+ *      error naming the file and the key); a coat without maps keeps its factors in the
+ *      material stage. */
 #define _POSIX_C_SOURCE 200809L
 #include "check.h"
 #include "kernel/kernel.h"
