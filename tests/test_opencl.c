@@ -522,6 +522,35 @@ int main(void) {
         compare_backends(dev, &cc, 1, TR_INTEGRATOR_PT, 64, "bvh, pt, clear-coated principled");
         tr_scene_clear(&cc);
     }
+    /* The clear coat's maps (glTF's clearcoatTexture, red, and clearcoatRoughnessTexture,
+     * green, times the factors): a texture whose red and green run against each other,
+     * one map or both on each wall. */
+    {
+        tr_scene cm = {0};
+        tr_scene_init(&cm);
+        CHECK(tr_scene_builtin(&cm, "cornell", 48, 36, &err) == TR_OK, "%s", err.msg);
+        uint32_t rg[16], tex = 0;
+        for (uint32_t k = 0; k < 16; ++k) {
+            const uint32_t r = 17u * k, g = 255u - 17u * ((k * 7u) % 16u);
+            rg[k] = 0xff000000u | (g << 8) | r;
+        }
+        CHECK(tr_scene_add_texture(&cm, rg, 4, 4, 0u, &tex, &err) == TR_OK, "%s", err.msg);
+        for (uint32_t i = 0; i < cm.material_count; ++i) {
+            if (cm.materials[i].type == TR_MATERIAL_DIFFUSE) {
+                cm.materials[i].type = TR_MATERIAL_PRINCIPLED;
+                cm.materials[i].roughness = 0.5f;
+                tr_material_ext e = tr_material_ext_default();
+                e.clearcoat = 1.0f;
+                e.clearcoat_roughness = 0.6f;
+                e.clearcoat_tex = i % 3 != 1 ? tex : TR_NO_INDEX;
+                e.clearcoat_rough_tex = i % 3 != 0 ? tex : TR_NO_INDEX;
+                CHECK(tr_scene_set_material_ext(&cm, i, &e, &err) == TR_OK, "%s", err.msg);
+            }
+        }
+        CHECK(tr_scene_commit(&cm, TR_ACCEL_TYPE_BVH, &err) == TR_OK, "%s", err.msg);
+        compare_backends(dev, &cm, 1, TR_INTEGRATOR_PT, 64, "bvh, pt, clear coat maps");
+        tr_scene_clear(&cm);
+    }
     /* The principled material's sheen (bsdf_principled.h) over dielectric and metallic
      * bases, some under a coat, some with the energy compensation (its tables uploaded with
      * the scene), some with KHR_materials_specular. */

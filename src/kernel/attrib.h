@@ -88,7 +88,11 @@ typedef struct tr_material_ext {
     /* principled: glTF's transmissionTexture, linear, its red channel multiplying
      * `transmission`; TR_NO_INDEX for none. */
     uint32_t transmission_tex;
-    uint32_t pad[2];
+    /* principled: glTF's clearcoatTexture (linear, its red channel multiplying
+     * `clearcoat`) and clearcoatRoughnessTexture (linear, its green channel multiplying
+     * `clearcoat_roughness`); TR_NO_INDEX for none. */
+    uint32_t clearcoat_tex;
+    uint32_t clearcoat_rough_tex;
 } tr_material_ext;
 TR_STATIC_ASSERT(sizeof(tr_material_ext) == 112, "tr_material_ext layout");
 

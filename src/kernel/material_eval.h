@@ -101,6 +101,17 @@ TR_FN void tr_material_apply_ext(const tr_scene_view *s, uint32_t mat, const tr_
         /* glTF: the transmission in red, linear, times the factor. */
         b->transmission *= tr_texture_sample(s, e.transmission_tex, a->tu, a->tv, 0, &unused).x;
     }
+    if (b->clearcoat > 0.0f) {
+        /* glTF: the coat's weight in its map's red, its roughness in its own map's green,
+         * both linear, times the factors. */
+        if (e.clearcoat_tex != TR_NO_INDEX) {
+            b->clearcoat *= tr_texture_sample(s, e.clearcoat_tex, a->tu, a->tv, 0, &unused).x;
+        }
+        if (e.clearcoat_rough_tex != TR_NO_INDEX) {
+            b->clearcoat_roughness *=
+                tr_texture_sample(s, e.clearcoat_rough_tex, a->tu, a->tv, 0, &unused).y;
+        }
+    }
     if (e.normal_tex != TR_NO_INDEX && v3_dot(a->dpdu, a->dpdu) > 0.0f) {
         tr_vec3 t = tr_texture_sample(s, e.normal_tex, a->tu, a->tv, 0, &unused);
         tr_vec3 k = v3(2.0f * t.x - 1.0f, 2.0f * t.y - 1.0f, 2.0f * t.z - 1.0f);

@@ -593,6 +593,8 @@ static const char *const extra_keys[] = {"texture",
                                          "metallic_roughness_texture",
                                          "clearcoat",
                                          "clearcoat_roughness",
+                                         "clearcoat_texture",
+                                         "clearcoat_roughness_texture",
                                          "emission_strength",
                                          "transmission",
                                          "transmission_texture",
@@ -713,6 +715,8 @@ static int parse_material_extras(jctx *c, const cJSON *m, const char *p, uint32_
         get_texture(c, m, p, "emission_texture", &e.emission_tex) != TR_OK ||
         get_texture(c, m, p, "metallic_roughness_texture", &e.mr_tex) != TR_OK ||
         get_texture(c, m, p, "transmission_texture", &e.transmission_tex) != TR_OK ||
+        get_texture(c, m, p, "clearcoat_texture", &e.clearcoat_tex) != TR_OK ||
+        get_texture(c, m, p, "clearcoat_roughness_texture", &e.clearcoat_rough_tex) != TR_OK ||
         get_vec3(c, m, p, "emission", 0, 0, &e.emission, &has_em) != TR_OK ||
         get_number(c, m, p, "alpha_cutoff", 0.0, 1.0, &cut, &has_cut) != TR_OK ||
         get_number(c, m, p, "metallic", 0.0, 1.0, &metal, &has_metal) != TR_OK ||
@@ -1096,9 +1100,11 @@ static int parse_quad(jctx *c, const cJSON *sh, const char *p, const cJSON *vert
         c->scene->material_ext_count == c->scene->material_count && c->scene->material_ext_count > 0
             ? &c->scene->material_exts[mat]
             : NULL;
-    const int textured = ext && (ext->base_tex != TR_NO_INDEX || ext->emission_tex != TR_NO_INDEX ||
-                                 ext->mr_tex != TR_NO_INDEX || ext->normal_tex != TR_NO_INDEX ||
-                                 ext->transmission_tex != TR_NO_INDEX);
+    const int textured =
+        ext && (ext->base_tex != TR_NO_INDEX || ext->emission_tex != TR_NO_INDEX ||
+                ext->mr_tex != TR_NO_INDEX || ext->normal_tex != TR_NO_INDEX ||
+                ext->transmission_tex != TR_NO_INDEX || ext->clearcoat_tex != TR_NO_INDEX ||
+                ext->clearcoat_rough_tex != TR_NO_INDEX);
     uint32_t first = c->scene->triangle_count, dropped = 0;
     tr_error e;
     if (tr_scene_add_mesh_uv(c->scene, pos, 4, idx, 2, NULL, textured ? uv : NULL, (uint32_t)mat,

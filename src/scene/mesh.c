@@ -131,14 +131,15 @@ static int texture_fallback(const import_ctx *c, const char *full, char *out, si
                        find_by_name(c->dir, name, 4, &budget, out, n));
 }
 
-/* Texture `type` of material m as a scene texture: embedded ("*N", or a name Assimp
- * matches to an embedded texture) or a file beside the model. A texture that cannot be
- * read is a warning naming the material, and the material goes without it. */
+/* Texture `type`, index `slot`, of material m as a scene texture: embedded ("*N", or a
+ * name Assimp matches to an embedded texture) or a file beside the model. A texture that
+ * cannot be read is a warning naming the material, and the material goes without it. */
 static uint32_t load_texture(import_ctx *c, const struct aiMaterial *m, const char *mname,
-                             enum aiTextureType type, const char *what) {
+                             enum aiTextureType type, unsigned int slot, const char *what) {
     struct aiString path;
     enum aiTextureMapMode mode[2] = {aiTextureMapMode_Wrap, aiTextureMapMode_Wrap};
-    if (aiGetMaterialTexture(m, type, 0, &path, NULL, NULL, NULL, NULL, mode, NULL) != AI_SUCCESS ||
+    if (aiGetMaterialTexture(m, type, slot, &path, NULL, NULL, NULL, NULL, mode, NULL) !=
+            AI_SUCCESS ||
         path.length == 0) {
         return TR_NO_INDEX;
     }
@@ -238,12 +239,12 @@ static uint32_t load_texture(import_ctx *c, const struct aiMaterial *m, const ch
  * scale s into its own aiUVTransform (rotation -r about the image centre in its flipped
  * coordinates, with a translation that absorbs the change of origin); this undoes that
  * to get o, r and s back. Other formats' transforms are not read. */
-static uint32_t load_texture_xf(import_ctx *c, const struct aiMaterial *m, const char *mname,
-                                enum aiTextureType type, const char *what) {
-    uint32_t index = load_texture(c, m, mname, type, what);
+static uint32_t load_texture_xf_at(import_ctx *c, const struct aiMaterial *m, const char *mname,
+                                   enum aiTextureType type, unsigned int slot, const char *what) {
+    uint32_t index = load_texture(c, m, mname, type, slot, what);
     struct aiUVTransform t;
     if (index == TR_NO_INDEX || !c->gltf ||
-        aiGetMaterialUVTransform(m, AI_MATKEY_UVTRANSFORM(type, 0), &t) != AI_SUCCESS) {
+        aiGetMaterialUVTransform(m, AI_MATKEY_UVTRANSFORM(type, slot), &t) != AI_SUCCESS) {
         return index;
     }
     const double r = -(double)t.mRotation, sx = t.mScaling.x, sy = t.mScaling.y;
@@ -261,6 +262,12 @@ static uint32_t load_texture_xf(import_ctx *c, const struct aiMaterial *m, const
     return out;
 }
 
+/* load_texture_xf_at for the first texture of that type. */
+static uint32_t load_texture_xf(import_ctx *c, const struct aiMaterial *m, const char *mname,
+                                enum aiTextureType type, const char *what) {
+    return load_texture_xf_at(c, m, mname, type, 0, what);
+}
+
 /* The import table: a file's material (Wavefront MTL keys, glTF's metallic-roughness, and
  * whatever Assimp maps onto the same keys for other formats) onto ours, with its extras
  * (textures, emission, cut-out) in *ext (*has_ext set when there are any):
@@ -268,8 +275,9 @@ static uint32_t load_texture_xf(import_ctx *c, const struct aiMaterial *m, const
  *   glTF metallic-roughness (metallicFactor or roughnessFactor present) -> principled:
  *     base colour factor (Kd where missing) x base colour map, metallic and roughness
  *     factors x the metallic-roughness map, normal map, emissive factor x emissive map;
- *     clear coat factor and roughness (KHR_materials_clearcoat); transmission factor
- *     (KHR_materials_transmission) and index (KHR_materials_ior, Assimp's refracti);
+ *     clear coat factor and roughness x their maps (KHR_materials_clearcoat);
+ *     transmission factor x its map (KHR_materials_transmission) and index
+ *     (KHR_materials_ior, Assimp's refracti);
  *     the volume's attenuation (KHR_materials_volume); the emission x its strength
  *     (KHR_materials_emissive_strength); the sheen's colour and roughness
  *     (KHR_materials_sheen). A transmission factor without a metallic-
@@ -404,7 +412,9 @@ static tr_material map_material(import_ctx *c, const struct aiMaterial *m, tr_ma
                 load_texture_xf(c, m, mname, aiTextureType_DIFFUSE_ROUGHNESS, "metallic-roughness");
         }
         ext->metallic = clamp01(metal);
-        /* KHR_materials_clearcoat: the coat's weight and roughness (its maps are not read). */
+        /* KHR_materials_clearcoat: the coat's weight and roughness, each times its map
+         * (Assimp 5.1 on: aiTextureType_CLEARCOAT, index 0 the weight in red, index 1 the
+         * roughness in green). The coat's own normal map (index 2) is not read. */
         ai_real coat = 0.0f, coat_rough = 0.0f;
         one = 1;
         aiGetMaterialFloatArray(m, AI_MATKEY_CLEARCOAT_FACTOR, &coat, &one);
@@ -413,9 +423,15 @@ static tr_material map_material(import_ctx *c, const struct aiMaterial *m, tr_ma
         if (isfinite(coat) && coat > 0.0f) {
             ext->clearcoat = clamp01(coat);
             ext->clearcoat_roughness = isfinite(coat_rough) ? clamp01(coat_rough) : 0.0f;
+            ext->clearcoat_tex =
+                load_texture_xf_at(c, m, mname, aiTextureType_CLEARCOAT, 0, "clear coat");
+            ext->clearcoat_rough_tex =
+                load_texture_xf_at(c, m, mname, aiTextureType_CLEARCOAT, 1, "clear coat roughness");
         }
-        if (aiGetMaterialTextureCount(m, aiTextureType_CLEARCOAT) > 0) {
-            import_warn(c, "material '%.60s': clear coat maps dropped (the factors are used)",
+        struct aiString coat_normal;
+        if (aiGetMaterialTexture(m, aiTextureType_CLEARCOAT, 2, &coat_normal, NULL, NULL, NULL,
+                                 NULL, NULL, NULL) == AI_SUCCESS) {
+            import_warn(c, "material '%.60s': clear coat normal map dropped (not supported)",
                         mname);
         }
         /* KHR_materials_sheen: the sheen's colour and roughness (its maps are not read). */
@@ -771,7 +787,7 @@ static char *gltf_json(const char *path, int glb) {
  * warning: */
 static void gltf_extension_warnings(const import_ctx *c, const char *path) {
     static const char *const handled[] = {
-        "KHR_materials_clearcoat",    /* principled's clear coat (its maps: warned) */
+        "KHR_materials_clearcoat",    /* the clear coat and its maps (its normal map: warned) */
         "KHR_lights_punctual",        /* point, spot and directional lights */
         "KHR_materials_transmission", /* principled's transmission and its map */
         "KHR_materials_ior",          /* the principled material's index */

@@ -168,6 +168,11 @@ int tr_ck_identity(tr_ck_id *id, const tr_scene *scene, const tr_render_config *
                 const float cc[2] = {e->clearcoat, e->clearcoat_roughness};
                 h = fnv_floats(h, cc, 2);
             }
+            if (e->clearcoat_tex != TR_NO_INDEX || e->clearcoat_rough_tex != TR_NO_INDEX) {
+                /* The coat's maps, likewise only where there are any. */
+                const uint32_t cm[2] = {e->clearcoat_tex, e->clearcoat_rough_tex};
+                h = tr_ck_fnv(h, cm, sizeof cm);
+            }
             if ((e->flags & TR_MATEXT_SPECULAR) != 0u) {
                 const float sp[4] = {e->specular, e->specular_color.x, e->specular_color.y,
                                      e->specular_color.z};
