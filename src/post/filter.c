@@ -196,7 +196,7 @@ tr_recon_params tr_recon_params_default(void) {
     /* The pixels without history traced at 4 samples in all (tr_realtime): measured better
      * on all six bench scenes, by 0.2 to 0.8 dB mean and 0.4 to 2.2 dB worst frame
      * (docs/realtime.md, "The hard scenes"). */
-    p.fresh_spp = 4;
+    p.fresh_spp = 0; /* off: on the hard scenes it costs 25-45 % of a frame (docs/realtime.md) */
     return p;
 }
 
