@@ -121,6 +121,29 @@ TR_FN int tr_post_consistent(uint32_t prim, tr_vec3 p, tr_vec3 n, float dist, ui
     return v3_dot(n, prev_n) > 0.9f;
 }
 
+/* Where the point p falls in the previous frame's camera prev: the top-left pixel (ix, iy)
+ * of its bilinear footprint, the fractions (ax, ay) towards the next pixels, and its
+ * distance from prev's eye; 0 where it lies behind prev or a pixel or more outside its
+ * frame. tr_post_reproject_moving's first step, and src/realtime/fresh.c's. */
+TR_FN int tr_post_footprint(const tr_camera *prev, tr_vec3 p, int *ix, int *iy, float *ax,
+                            float *ay, float *dist) {
+    float px, py;
+    if (!tr_post_project(prev, p, &px, &py, dist)) {
+        return 0;
+    }
+    const float fx = px - 0.5f, fy = py - 0.5f;
+    if (!(fx > -1.0f && fy > -1.0f && fx < (float)prev->screen_width &&
+          fy < (float)prev->screen_height)) {
+        return 0;
+    }
+    /* floor, for fx, fy > -1 (compat.h has no floor of its own). */
+    *ix = fx < 0.0f ? -1 : (int)fx;
+    *iy = fy < 0.0f ? -1 : (int)fy;
+    *ax = fx - (float)*ix;
+    *ay = fy - (float)*iy;
+    return 1;
+}
+
 /* The reprojection of pixel (x, y) of the current frame (camera cam, its depth, normal
  * and primitive) into the previous frame (camera prev, its depth, normal and primitive
  * buffers): the bilinear weights of the four previous pixels around the reprojected
@@ -150,18 +173,11 @@ TR_FN float tr_post_reproject_moving(const tr_camera *cam, const tr_camera *prev
         return 0.0f; /* nothing hit: no point to follow */
     }
     const tr_vec3 p = v3_sub(tr_post_world_point(cam, (float)x, (float)y, depth), motion);
-    float px, py, dist;
-    if (!tr_post_project(prev, p, &px, &py, &dist)) {
+    int ix, iy;
+    float ax, ay, dist;
+    if (!tr_post_footprint(prev, p, &ix, &iy, &ax, &ay, &dist)) {
         return 0.0f;
     }
-    const float fx = px - 0.5f, fy = py - 0.5f;
-    if (!(fx > -1.0f && fy > -1.0f && fx < (float)prev->screen_width &&
-          fy < (float)prev->screen_height)) {
-        return 0.0f;
-    }
-    /* floor, for fx, fy > -1 (compat.h has no floor of its own). */
-    const int ix = fx < 0.0f ? -1 : (int)fx, iy = fy < 0.0f ? -1 : (int)fy;
-    const float ax = fx - (float)ix, ay = fy - (float)iy;
     *x0 = ix;
     *y0 = iy;
     const int pw = (int)prev->screen_width, ph = (int)prev->screen_height;

@@ -61,17 +61,11 @@ static void pixel_passes(const tr_film *film, size_t i, float *depth, tr_vec3 *n
  * on the same operands, so the same number, without recomputing four rays per pixel. */
 static float reproject_total(const tr_fresh *f, tr_vec3 p, tr_vec3 n, uint32_t prim) {
     const tr_camera *prev = &f->cam;
-    float px, py, dist;
-    if (!tr_post_project(prev, p, &px, &py, &dist)) {
+    int ix, iy;
+    float ax, ay, dist;
+    if (!tr_post_footprint(prev, p, &ix, &iy, &ax, &ay, &dist)) {
         return 0.0f;
     }
-    const float fx = px - 0.5f, fy = py - 0.5f;
-    if (!(fx > -1.0f && fy > -1.0f && fx < (float)prev->screen_width &&
-          fy < (float)prev->screen_height)) {
-        return 0.0f;
-    }
-    const int ix = fx < 0.0f ? -1 : (int)fx, iy = fy < 0.0f ? -1 : (int)fy;
-    const float ax = fx - (float)ix, ay = fy - (float)iy;
     const int pw = (int)prev->screen_width, ph = (int)prev->screen_height;
     float total = 0.0f;
     for (int k = 0; k < 4; ++k) {
