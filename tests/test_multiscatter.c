@@ -9,8 +9,11 @@
  *      (principled at roughness 1: below 0.9).
  *  (b) The table: E lies in (0, 1] and at normal incidence falls with alpha; E_avg is E's
  *      cosine-weighted mean; the lobe is reciprocal.
- *  (c) Without the key, images do not change: a scene that asks for nothing has no table,
- *      and "multiscatter": false renders bit for bit as a file without the key. */
+ *  (c) The defaults: glossy without the key renders bit for bit as with "multiscatter":
+ *      false (the thesis's material keeps its images), and a scene that asks for nothing
+ *      has no table; principled without the key renders bit for bit as with true, and a
+ *      principled material imported from a glTF file has the flag. */
+#define _POSIX_C_SOURCE 200809L
 #include "check.h"
 #include "render_film.h"
 #include "scene_util.h"
@@ -19,6 +22,7 @@
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 enum { W = 64, H = 32, SPP = 64 };
 
@@ -84,7 +88,7 @@ static void white_furnace(void) {
     }
     /* Single scattering alone loses light where compensation matters. */
     const double ss = furnace("{\"type\": \"principled\", \"metallic\": 1, \"color\": [1, 1, 1], "
-                              "\"roughness\": 1}",
+                              "\"roughness\": 1, \"multiscatter\": false}",
                               40.0, NULL);
     printf("principled, roughness 1, single scattering: %.5f\n", ss);
     CHECK(ss < 0.9, "single scattering at roughness 1 renders %.5f: the test would not notice", ss);
@@ -147,11 +151,77 @@ static void unchanged(void) {
     const tr_scene_view v = tr_scene_view_of(&s);
     CHECK(v.ggx_ms_count == 0 && v.ggx_ms == NULL, "a scene without the key has no table");
     tr_scene_clear(&s);
+
+    /* principled: compensated unless told otherwise. */
+    const char *pm = "{\"type\": \"principled\", \"color\": [0.9, 0.8, 0.7], \"metallic\": 0.5, "
+                     "\"roughness\": 0.8%s}";
+    char m0[256], m1[256], m2[256];
+    snprintf(m0, sizeof m0, pm, "");
+    snprintf(m1, sizeof m1, pm, ", \"multiscatter\": true");
+    snprintf(m2, sizeof m2, pm, ", \"multiscatter\": false");
+    tr_film c;
+    const double e0 = furnace(m0, 40.0, &a), e1 = furnace(m1, 40.0, &b), e2 = furnace(m2, 40.0, &c);
+    CHECK(e0 == e1 && memcmp(a.sum, b.sum, 3u * W * H * sizeof(float)) == 0,
+          "principled without the key is not the compensated material");
+    CHECK(e2 < e0, "\"multiscatter\": false does not turn compensation off (%.5f vs %.5f)", e2, e0);
+    tr_film_free(&a);
+    tr_film_free(&b);
+    tr_film_free(&c);
+}
+
+/* A glTF file's material (every imported material is principled) is compensated. */
+static void imported(void) {
+    char dir[] = "/tmp/trac0r-ms-XXXXXX";
+    if (!mkdtemp(dir)) {
+        CHECK(0, "mkdtemp");
+        return;
+    }
+    char path[700];
+    snprintf(path, sizeof path, "%s/tri.gltf", dir);
+    FILE *f = fopen(path, "w");
+    CHECK(f != NULL, "cannot write %s", path);
+    if (!f) {
+        return;
+    }
+    /* One triangle (three VEC3 positions, base64) with a rough metal. */
+    fprintf(f, "{\"asset\": {\"version\": \"2.0\"},\n"
+               " \"buffers\": [{\"byteLength\": 36, \"uri\": "
+               "\"data:application/octet-stream;base64,"
+               "AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAA\"}],\n"
+               " \"bufferViews\": [{\"buffer\": 0, \"byteOffset\": 0, \"byteLength\": 36}],\n"
+               " \"accessors\": [{\"bufferView\": 0, \"componentType\": 5126, \"count\": 3, "
+               "\"type\": \"VEC3\", \"min\": [0, 0, 0], \"max\": [1, 1, 0]}],\n"
+               " \"materials\": [{\"name\": \"metal\", \"pbrMetallicRoughness\": "
+               "{\"baseColorFactor\": [1, 1, 1, 1], \"roughnessFactor\": 0.9, "
+               "\"metallicFactor\": 1}}],\n"
+               " \"meshes\": [{\"primitives\": [{\"attributes\": {\"POSITION\": 0}, "
+               "\"material\": 0}]}],\n"
+               " \"nodes\": [{\"mesh\": 0}], \"scenes\": [{\"nodes\": [0]}], \"scene\": 0}\n");
+    CHECK(fclose(f) == 0, "cannot write %s", path);
+    tr_scene s;
+    tr_scene_init(&s);
+    tr_scene_file info;
+    tr_error err;
+    const tr_model_options opt = {0, 1.0f, 0, 0, NULL};
+    CHECK(tr_scene_model_load(&s, path, &opt, &info, &err) == TR_OK, "%s", err.msg);
+    int principled = 0;
+    for (uint32_t i = 0; i < s.material_count; ++i) {
+        if (s.materials[i].type == TR_MATERIAL_PRINCIPLED) {
+            ++principled;
+            CHECK((s.materials[i].flags & TR_MATERIAL_MULTISCATTER) != 0u,
+                  "imported material %u is not compensated (flags %u)", i, s.materials[i].flags);
+        }
+    }
+    CHECK(principled == 1, "%d principled materials imported from %s", principled, path);
+    tr_scene_clear(&s);
+    unlink(path);
+    rmdir(dir);
 }
 
 int main(void) {
     table();
     unchanged();
+    imported();
     white_furnace();
     return check_finish("test_multiscatter");
 }

@@ -5,6 +5,7 @@
 
 #include "kernel/bsdf.h"
 #include "scene/scene_internal.h"
+#include "trac0r/render.h"
 
 /* Stratified samples per integral: K x K jittered-free cell centres of the visible-normal
  * sampler's square. */
@@ -42,6 +43,9 @@ static double albedo(double mu, float alpha, double *e5) {
 
 /* The first two N x N tables and their averages. */
 static void ms_build_albedos(void) {
+    /* Each row is its own integrals, written to its own entries: the same numbers for any
+     * thread count. */
+#pragma omp parallel for schedule(dynamic) num_threads(tr_default_threads())
     for (int j = 0; j < TR_GGX_MS_N; ++j) {
         const float alpha = fmaxf((float)j / (TR_GGX_MS_N - 1), TR_GGX_MIN_ALPHA);
         double e5;
@@ -107,6 +111,7 @@ static double coat_over_lobe(double mu, float ab, float ac) {
 
 static void ms_build(void) {
     ms_build_albedos();
+#pragma omp parallel for schedule(dynamic) num_threads(tr_default_threads())
     for (int j = 0; j < TR_GGX_MS_N; ++j) {
         const float r = (float)j / (TR_GGX_MS_N - 1);
         for (int i = 0; i < TR_GGX_MS_N; ++i) {
@@ -114,6 +119,8 @@ static void ms_build(void) {
             ms_table[TR_GGX_MS_SHEEN + j * TR_GGX_MS_N + i] = (float)sheen_albedo(mu, r);
         }
     }
+    /* The coat's part reads the albedos above, complete by now. */
+#pragma omp parallel for schedule(dynamic) num_threads(tr_default_threads())
     for (int jb = 0; jb < TR_GGX_MS_NA; ++jb) {
         const float ab = fmaxf((float)jb / (TR_GGX_MS_NA - 1), TR_GGX_MIN_ALPHA);
         for (int jc = 0; jc < TR_GGX_MS_NA; ++jc) {

@@ -889,11 +889,12 @@ static int parse_materials(jctx *c, const cJSON *mats) {
                 }
                 memcpy((char *)&mat + ki->offset, &color, sizeof color);
             } else if (ki->kind == TR_KEY_FLAG) {
-                int on = 0;
+                /* Absent: the type's default (tr_material_default); false clears it. */
+                int on = (mat.flags & ki->flag) != 0u;
                 if (get_bool(c, m, p, ki->name, &on) != TR_OK) {
                     return TR_ERR;
                 }
-                mat.flags |= on ? ki->flag : 0u;
+                mat.flags = on ? mat.flags | ki->flag : mat.flags & ~ki->flag;
             } else {
                 double x;
                 if (get_number(c, m, p, ki->name, ki->lo, ki->hi, &x,

@@ -49,9 +49,12 @@ tr_material tr_material_default(uint32_t type) {
     m.type = type;
     m.ior = 1.0f;
     if (type == TR_MATERIAL_PRINCIPLED) {
-        /* A dielectric layer of index 1.5 (F0 = 0.04, glTF's) and glTF's default roughness. */
+        /* A dielectric layer of index 1.5 (F0 = 0.04, glTF's) and glTF's default roughness,
+         * with multiple-scattering compensation (energy-conserving: a white sphere keeps a
+         * white furnace's radiance at every roughness; docs/integrators.md). */
         m.ior = 1.5f;
         m.roughness = 1.0f;
+        m.flags = TR_MATERIAL_MULTISCATTER;
     }
     return m;
 }

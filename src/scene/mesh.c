@@ -22,6 +22,7 @@
 #include "scene/texture.h"
 #include "trac0r/scene_file.h"
 #include "util/infile.h"
+#include "scene/material_registry.h"
 #include "scene/mesh_guard.h"
 
 /* Node hierarchies deeper than this are refused (a hostile file could recurse forever). */
@@ -479,9 +480,7 @@ static tr_material map_material(import_ctx *c, const struct aiMaterial *m, tr_ma
             ext->absorption =
                 tr_volume_absorption(v3(clamp01(att.r), clamp01(att.g), clamp01(att.b)), att_dist);
         }
-        tr_material pm;
-        memset(&pm, 0, sizeof pm);
-        pm.type = TR_MATERIAL_PRINCIPLED;
+        tr_material pm = tr_material_default(TR_MATERIAL_PRINCIPLED);
         pm.color = diffuse;
         pm.roughness = clamp01(rough);
         pm.ior = isfinite(ni) && ni >= 1.0f && ni <= 10.0f ? ni : 1.5f;

@@ -331,7 +331,7 @@ def read_materials(mats):
                   "clearcoat": number(m, "clearcoat", 0, 1, 0, where),
                   "clearcoat_roughness": number(m, "clearcoat_roughness", 0, 1, 0, where),
                   "sheen_roughness": number(m, "sheen_roughness", 0, 1, 0, where),
-                  "multiscatter": m.get("multiscatter", False)}
+                  "multiscatter": m.get("multiscatter", True)}
             if not isinstance(pm["multiscatter"], bool):
                 raise SceneError("%s.multiscatter: expected true or false" % where)
             sheen = vec3(m.get("sheen_color", [0, 0, 0]), where + ".sheen_color")
