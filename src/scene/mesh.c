@@ -50,6 +50,10 @@ typedef struct import_ctx {
     uint32_t tex_cached;
     tr_import_extras *extras; /* the file's first camera, when asked for */
     int gltf;                 /* a .gltf or .glb file (their cameras' conventions) */
+    /* With extras->instance_shared: how many times the node graph places each of the
+     * file's meshes, and the prototype each shared one became (+1; 0: not yet; UINT32_MAX:
+     * none, nothing but degenerate faces). */
+    uint32_t *placements, *proto;
 } import_ctx;
 
 static void import_warn(const import_ctx *c, const char *fmt, ...)
@@ -718,6 +722,89 @@ int tr_model_find_camera(const char *path, const char *name, int *index, tr_erro
     return rc;
 }
 
+/* Counts how many times the node graph under `node` places each mesh (bounded depth, as
+ * walk). */
+static void count_placements(import_ctx *c, const struct aiNode *node, int depth) {
+    if (depth > NODE_DEPTH_LIMIT) {
+        return;
+    }
+    for (unsigned int i = 0; i < node->mNumMeshes; ++i) {
+        if (node->mMeshes[i] < c->ai->mNumMeshes && c->placements[node->mMeshes[i]] < UINT32_MAX) {
+            c->placements[node->mMeshes[i]]++;
+        }
+    }
+    for (unsigned int i = 0; i < node->mNumChildren; ++i) {
+        count_placements(c, node->mChildren[i], depth + 1);
+    }
+}
+
+/* Places shared mesh `mi` with node matrix m as an instance of its prototype (made at its
+ * first placement from the mesh in its own coordinates): the matrix is the import's
+ * transform after m, and the image is the flattened one's up to float rounding (the
+ * matrices are composed once instead of applied one after the other). A placement the
+ * instance refuses (a singular node matrix) is added flattened, as without instancing,
+ * which drops its degenerate faces. */
+static int place_shared(import_ctx *c, unsigned int mi, const struct aiMatrix4x4 *m) {
+    const struct aiMesh *mesh = c->ai->mMeshes[mi];
+    tr_mesh_import_stats *st = c->st;
+    if (c->proto[mi] == 0u) {
+        const uint32_t first = c->s->shape_count, parts = st->parts, tris = st->triangles;
+        const tr_transform *tf = c->tf;
+        const struct aiMatrix4x4 id = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+        c->tf = NULL;
+        const int rc = add_ai_mesh(c, mesh, &id);
+        c->tf = tf;
+        if (rc != TR_OK) {
+            return TR_ERR;
+        }
+        /* Counted below, once per placement. */
+        st->parts = parts;
+        st->triangles = tris;
+        uint32_t p = UINT32_MAX;
+        if (c->s->shape_count > first &&
+            tr_scene_make_prototype(c->s, first, &p, c->err) != TR_OK) {
+            return TR_ERR;
+        }
+        c->proto[mi] = p == UINT32_MAX ? UINT32_MAX : p + 1u;
+    }
+    if (c->proto[mi] == UINT32_MAX) {
+        return add_ai_mesh(c, mesh, m); /* degenerate faces only: dropped and counted */
+    }
+    const uint32_t proto = c->proto[mi] - 1u;
+    const uint32_t n = tr_scene_prototype_triangle_count(c->s, proto);
+    if ((uint64_t)c->s->triangle_count - c->start_triangles + n > c->max_triangles) {
+        return tr_error_set(c->err, TR_STATUS_LIMIT,
+                            "more than %u triangles (the scene's triangle budget)",
+                            c->max_triangles);
+    }
+    float t[12] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0};
+    if (c->tf) {
+        tr_transform_matrix(c->tf, t);
+    }
+    const float a[12] = {m->a1, m->a2, m->a3, m->a4, m->b1, m->b2,
+                         m->b3, m->b4, m->c1, m->c2, m->c3, m->c4};
+    float w[12];
+    for (int r = 0; r < 3; ++r) {
+        for (int k = 0; k < 4; ++k) {
+            w[4 * r + k] = t[4 * r] * a[k] + t[4 * r + 1] * a[4 + k] + t[4 * r + 2] * a[8 + k] +
+                           (k == 3 ? t[4 * r + 3] : 0.0f);
+        }
+    }
+    tr_error e;
+    if (tr_scene_add_instance(c->s, proto, w, NULL, &e) != TR_OK) {
+        if (e.code != TR_STATUS_INVALID_ARGUMENT) {
+            if (c->err) {
+                *c->err = e;
+            }
+            return TR_ERR;
+        }
+        return add_ai_mesh(c, mesh, m);
+    }
+    st->parts++;
+    st->triangles += n;
+    return TR_OK;
+}
+
 static int walk(import_ctx *c, const struct aiNode *node, const struct aiMatrix4x4 *parent,
                 int depth) {
     if (depth > NODE_DEPTH_LIMIT) {
@@ -734,7 +821,10 @@ static int walk(import_ctx *c, const struct aiNode *node, const struct aiMatrix4
             return tr_error_set(c->err, TR_STATUS_PARSE, "a node refers to mesh %u of %u",
                                 node->mMeshes[i], c->ai->mNumMeshes);
         }
-        if (add_ai_mesh(c, c->ai->mMeshes[node->mMeshes[i]], &m) != TR_OK) {
+        const unsigned int mi = node->mMeshes[i];
+        if (c->placements && c->placements[mi] >= 2u
+                ? place_shared(c, mi, &m) != TR_OK
+                : add_ai_mesh(c, c->ai->mMeshes[mi], &m) != TR_OK) {
             return TR_ERR;
         }
     }
@@ -880,8 +970,10 @@ int tr_scene_import_mesh_ex(tr_scene *s, const char *path, const tr_transform *t
              (plen > 4 && strcasecmp(path + plen - 4, ".glb") == 0);
     if (extras) {
         const int want = extras->camera_want;
+        const uint64_t instance_min = extras->instance_min;
         memset(extras, 0, sizeof *extras);
         extras->camera_want = want;
+        extras->instance_min = instance_min;
         extras->lights = ai->mNumLights;
         extras->cameras = ai->mNumCameras;
     }
@@ -904,8 +996,28 @@ int tr_scene_import_mesh_ex(tr_scene *s, const char *path, const tr_transform *t
         for (unsigned int i = 0; i < ai->mNumMaterials; ++i) {
             c.material_map[i] = -1;
         }
+        if (extras && extras->instance_min > 0u && ai->mNumMeshes > 0) {
+            c.placements = calloc(ai->mNumMeshes, sizeof *c.placements);
+            c.proto = calloc(ai->mNumMeshes, sizeof *c.proto);
+            uint64_t shared = 0;
+            if (c.placements && c.proto) {
+                count_placements(&c, ai->mRootNode, 0);
+                for (unsigned int i = 0; i < ai->mNumMeshes; ++i) {
+                    shared += c.placements[i] >= 2u
+                                  ? (uint64_t)c.placements[i] * ai->mMeshes[i]->mNumFaces
+                                  : 0u;
+                }
+            }
+            if (shared < extras->instance_min) {
+                free(c.placements);
+                free(c.proto);
+                c.placements = c.proto = NULL; /* flattened */
+            }
+        }
         struct aiMatrix4x4 id = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
         rc = walk(&c, ai->mRootNode, &id, 0);
+        free(c.placements);
+        free(c.proto);
     }
     if (rc != TR_OK && err && !strstr(err->msg, path)) {
         char msg[sizeof err->msg];

@@ -327,6 +327,7 @@ int tr_scene_model_load(tr_scene *s, const char *path, const tr_model_options *o
     tr_mesh_import_stats st;
     tr_import_extras ex;
     memset(&ex, 0, sizeof ex);
+    ex.instance_min = TR_IMPORT_INSTANCE_MIN;
     if (opt->camera && !frame &&
         tr_model_find_camera(path, opt->camera, &ex.camera_want, err) != TR_OK) {
         return TR_ERR;

@@ -201,6 +201,10 @@ typedef struct tr_import_light {
  * it has; its lights (the first TR_IMPORT_MAX_LIGHTS). */
 typedef struct tr_import_extras {
     int camera_want;
+    /* Set by the caller (kept by the import); 0: off. When the meshes the file's node
+     * graph places more than once make at least this many triangles placed, each becomes
+     * one prototype with an instance per placement (mesh.c). */
+    uint64_t instance_min;
     int has_camera;
     char cam_name[64];
     tr_vec3 cam_pos, cam_dir, cam_up;
@@ -214,6 +218,11 @@ typedef struct tr_import_extras {
 /* The index of the camera called `name` in model file `path`, or of camera number `name`
  * (digits); -1 (with err) when there is none such. */
 int tr_model_find_camera(const char *path, const char *name, int *index, tr_error *err);
+/* A model file's shared meshes are instanced from this many placed triangles on: below,
+ * one flattened structure traces faster than two levels (on 2CylinderEngine.glb, 58 K
+ * triangles in 100 placements of 19 meshes, 17 % fewer rays per second instanced), and
+ * the memory instancing saves is small. */
+#define TR_IMPORT_INSTANCE_MIN (1u << 20)
 int tr_scene_import_mesh_ex(tr_scene *s, const char *path, const tr_transform *tf,
                             int64_t material_override, uint32_t max_triangles,
                             tr_mesh_import_stats *stats, tr_import_warn_fn warn, void *warn_ctx,
