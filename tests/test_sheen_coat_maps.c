@@ -301,7 +301,7 @@ static int reciprocal(const tr_bsdf_params *m, uint64_t seed) {
  * f cos; counts samples whose weight is not eval cos / pdf. */
 static void albedo(const tr_bsdf_params *m, tr_vec3 wo, uint64_t seed, double *sampled,
                    double *se_sampled, double *uniform, double *se_uniform, int *inconsistent) {
-    const int N = 300000;
+    const int N = 200000;
     tr_rng rng;
     tr_rng_init(&rng, 4321, seed, 7);
     double s1 = 0.0, s2 = 0.0, u1 = 0.0, u2 = 0.0;
