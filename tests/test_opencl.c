@@ -583,6 +583,62 @@ int main(void) {
         compare_backends(dev, &sh, 1, TR_INTEGRATOR_PT, 64, "bvh, pt, principled with a sheen");
         tr_scene_clear(&sh);
     }
+    /* The sheen's maps (colour, sRGB, and roughness in alpha) and the clear coat's own
+     * normal map (material_eval.h, bsdf_principled.h) on a quad with texture coordinates
+     * in front of the back wall, with and without the energy compensation. */
+    {
+        tr_scene sm = {0};
+        tr_scene_init(&sm);
+        CHECK(tr_scene_builtin(&sm, "cornell", 48, 36, &err) == TR_OK, "%s", err.msg);
+        uint32_t col[16], nrm[16], ctex = 0, ntex = 0;
+        for (uint32_t k = 0; k < 16; ++k) {
+            const uint32_t r = 17u * k, g = 255u - 17u * ((k * 7u) % 16u), a = 40u + 13u * k;
+            col[k] = (a << 24) | ((r ^ g) << 16) | (g << 8) | r;
+            /* Tangent-space normals tilted up to about 40 degrees, every way. */
+            const uint32_t nx = 68u + 40u * (k % 4u), ny = 68u + 40u * (k / 4u);
+            nrm[k] = 0xff000000u | (230u << 16) | (ny << 8) | nx;
+        }
+        CHECK(tr_scene_add_texture(&sm, col, 4, 4, 0u, &ctex, &err) == TR_OK &&
+                  tr_scene_add_texture(&sm, nrm, 4, 4, 0u, &ntex, &err) == TR_OK,
+              "%s", err.msg);
+        const float pos[12] = {0.45f,  0.0f, 0.45f, -0.45f, 0.0f, 0.45f,
+                               -0.45f, 0.8f, 0.45f, 0.45f,  0.8f, 0.45f};
+        const float uv[8] = {0, 1, 1, 1, 1, 0, 0, 0};
+        const uint32_t idx[6] = {0, 1, 2, 0, 2, 3};
+        const tr_transform tf = {{0, 0, 0}, {0, 0, 0}, {1, 1, 1}};
+        for (uint32_t q = 0; q < 2; ++q) {
+            tr_material pm;
+            memset(&pm, 0, sizeof pm);
+            pm.type = TR_MATERIAL_PRINCIPLED;
+            pm.color = v3(0.7f, 0.4f, 0.2f);
+            pm.roughness = 0.5f;
+            pm.ior = 1.5f;
+            pm.flags = q ? TR_MATERIAL_MULTISCATTER : 0u;
+            uint32_t mi = 0, dropped = 0;
+            CHECK(tr_scene_add_material(&sm, pm, &mi, &err) == TR_OK, "%s", err.msg);
+            tr_material_ext e = tr_material_ext_default();
+            e.metallic = 0.3f * (float)q;
+            e.sheen_color = v3(0.9f, 0.7f, 0.8f);
+            e.sheen_roughness = 0.6f;
+            e.sheen_color_tex = ctex;
+            e.sheen_rough_tex = ctex;
+            e.clearcoat = 0.8f;
+            e.clearcoat_roughness = 0.15f + 0.3f * (float)q;
+            e.clearcoat_normal_tex = ntex;
+            e.clearcoat_normal_scale = 1.0f - 0.4f * (float)q;
+            CHECK(tr_scene_set_material_ext(&sm, mi, &e, &err) == TR_OK, "%s", err.msg);
+            float p2[12];
+            for (int k = 0; k < 12; ++k) {
+                p2[k] = pos[k] * (q ? 0.5f : 1.0f) + (q && k % 3 == 2 ? -0.3f : 0.0f);
+            }
+            CHECK(tr_scene_add_mesh_uv(&sm, p2, 4, idx, 2, NULL, uv, mi, &tf, &dropped, &err) ==
+                      TR_OK,
+                  "%s", err.msg);
+        }
+        CHECK(tr_scene_commit(&sm, TR_ACCEL_TYPE_BVH, &err) == TR_OK, "%s", err.msg);
+        compare_backends(dev, &sm, 1, TR_INTEGRATOR_PT, 64, "bvh, pt, sheen and coat normal maps");
+        tr_scene_clear(&sm);
+    }
     /* Transmission (the rough dielectric boundary of bsdf_dielectric.h) with several
      * weights, indices and roughnesses, the volume's absorption behind back faces, and a
      * base map seen through a texture transform (texture.h; without vertex attributes the

@@ -264,6 +264,9 @@ int tr_scene_triangle_normals(const tr_scene *s, uint32_t i, tr_vec3 out[3]);
 #define TR_MAP_TRANSMISSION 32u         /* principled: the transmission's (its red channel) */
 #define TR_MAP_CLEARCOAT 64u            /* principled: the clear coat's weight (its red channel) */
 #define TR_MAP_CLEARCOAT_ROUGHNESS 128u /* principled: the coat's roughness (its green) */
+#define TR_MAP_SHEEN_COLOR 256u         /* principled: the sheen's colour (sRGB) */
+#define TR_MAP_SHEEN_ROUGHNESS 512u     /* principled: the sheen's roughness (its alpha) */
+#define TR_MAP_CLEARCOAT_NORMAL 1024u   /* principled: the clear coat's own normal map */
 uint32_t tr_scene_material_maps(const tr_scene *s, uint32_t i);
 /* Triangles of shape i (a shape, or one part of an imported mesh); 0 out of range. */
 uint32_t tr_scene_shape_triangle_count(const tr_scene *s, uint32_t shape);

@@ -55,7 +55,7 @@ TR_STATIC_ASSERT(sizeof(tr_texture) == 40, "tr_texture layout");
 #define TR_MATEXT_SPECULAR 2u   /* specular and specular_color are set (else 1 and white) */
 
 /* Per-material extras, one per material when the scene has any (material_ext_count is 0
- * or material_count). Texture indices are TR_NO_INDEX for none. 112 bytes. */
+ * or material_count). Texture indices are TR_NO_INDEX for none. 128 bytes. */
 typedef struct tr_material_ext {
     uint32_t base_tex;     /* sRGB colour (x the material's colour), alpha in a */
     uint32_t emission_tex; /* sRGB colour (x emission) */
@@ -93,8 +93,17 @@ typedef struct tr_material_ext {
      * `clearcoat_roughness`); TR_NO_INDEX for none. */
     uint32_t clearcoat_tex;
     uint32_t clearcoat_rough_tex;
+    /* principled: glTF's sheenColorTexture (sRGB, its colour multiplying `sheen_color`) and
+     * sheenRoughnessTexture (linear, its alpha multiplying `sheen_roughness`), and the
+     * clear coat's own normal map, clearcoatNormalTexture (tangent space, linear, its x
+     * and y scaled by clearcoat_normal_scale as normalTexture's by normal_scale);
+     * TR_NO_INDEX for none. */
+    uint32_t sheen_color_tex;
+    uint32_t sheen_rough_tex;
+    uint32_t clearcoat_normal_tex;
+    float clearcoat_normal_scale;
 } tr_material_ext;
-TR_STATIC_ASSERT(sizeof(tr_material_ext) == 112, "tr_material_ext layout");
+TR_STATIC_ASSERT(sizeof(tr_material_ext) == 128, "tr_material_ext layout");
 
 /* The environment: radiance arriving from infinitely far along directions no surface
  * blocks, a constant colour or an equirectangular map (width x height RGB floats in

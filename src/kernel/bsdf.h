@@ -414,7 +414,14 @@ TR_FN_NOINLINE tr_vec3 tr_principled_spec_share(tr_bsdf_params m, tr_vec3 wo, tr
                tr_as_factor(ci) * tr_as_factor(co);
     if (m.clearcoat > 0.0f) {
         float c = tr_coat_weight(&m);
-        float att = (1.0f - c * tr_coat_fresnel(co)) * (1.0f - c * tr_coat_fresnel(ci));
+        float xo = co, xi = ci;
+        if (m.coat_n != 0u) {
+            /* The coat's Fresnel at its own normal's cosines (tr_coat_layer_tilted). */
+            tr_vec3 nc = tr_coat_normal(&m, nf);
+            xo = tr_fmaxf(v3_dot(wo, nc), 0.0f);
+            xi = tr_fmaxf(v3_dot(wi, nc), 0.0f);
+        }
+        float att = (1.0f - c * tr_coat_fresnel(xo)) * (1.0f - c * tr_coat_fresnel(xi));
         float fav = TR_PRINCIPLED_F0 + (1.0f - TR_PRINCIPLED_F0) * (1.0f / 21.0f);
         kd *= att / (1.0f - c * fav);
     }

@@ -189,13 +189,26 @@ TR_FN float tr_sheen_lobe(float r, tr_vec3 wo, tr_vec3 wi, float co, float ci) {
     return d * v;
 }
 
-/* The sheen's colour (black without: no extras) and roughness, from the extras. */
+/* The sheen's colour (black without: no extras) and roughness, from the extras, times
+ * their maps at this hit (material_eval.h's sheen_rg, sheen_ba; 0 for none). */
 TR_FN tr_vec3 tr_sheen_color(const tr_bsdf_params *m) {
-    return m->ext ? m->ext->sheen_color : v3s(0.0f);
+    if (!m->ext) {
+        return v3s(0.0f);
+    }
+    tr_vec3 c = m->ext->sheen_color;
+    if ((m->sheen_rg | (m->sheen_ba & 65535u)) != 0u) {
+        c = v3_mul(c, v3(tr_unpack_map16(m->sheen_rg), tr_unpack_map16(m->sheen_rg >> 16),
+                         tr_unpack_map16(m->sheen_ba)));
+    }
+    return c;
 }
 
 TR_FN float tr_sheen_roughness(const tr_bsdf_params *m) {
-    return m->ext ? m->ext->sheen_roughness : 0.0f;
+    if (!m->ext) {
+        return 0.0f;
+    }
+    float r = m->ext->sheen_roughness;
+    return (m->sheen_ba >> 16) != 0u ? r * tr_unpack_map16(m->sheen_ba >> 16) : r;
 }
 
 TR_FN float tr_sheen_weight(const tr_bsdf_params *m) {
@@ -273,10 +286,75 @@ TR_FN float tr_coat_weight(const tr_bsdf_params *m) {
     return tr_fminf(tr_fmaxf(m->clearcoat, 0.0f), 1.0f);
 }
 
+/* ---- The clear coat's own normal (glTF's clearcoatNormalTexture; coat_n not 0) ----------
+ *
+ * The coat's lobe, its Fresnel factors and (with the energy compensation) its albedos
+ * take their cosines from the coat's normal n_c (on nf's side), the base's from nf. A
+ * direction below the coat's horizon finds a coat that reflects nothing its way and lets
+ * 1 - c through (F_c at cosine 0 is 1). The coat's lobe, defined with n_c's cosines, is
+ * weighed by min(1, cos_c,i / cos_i) min(1, cos_c,o / cos_o): symmetric in the two
+ * directions, and with it the lobe integrated against nf's cosine reflects no more than
+ * against n_c's, so that the coat still sends back at most c F_c(cos_c,o) and the base
+ * keeps the share that passes it. With coat_n 0 (no map) none of this runs. */
+
+/* The coat's normal on nf's side. */
+TR_FN tr_vec3 tr_coat_normal(const tr_bsdf_params *m, tr_vec3 nf) {
+    tr_vec3 n = tr_unpack_oct(m->coat_n);
+    return v3_dot(nf, m->ns) < 0.0f ? v3_neg(n) : n;
+}
+
+TR_FN_NOINLINE tr_vec3 tr_coat_layer_tilted(const tr_bsdf_params *m, tr_vec3 spec, tr_vec3 ms,
+                                            tr_vec3 diff, tr_vec3 nf, tr_vec3 wo, tr_vec3 wi,
+                                            float co, float ci) {
+    tr_vec3 nc = tr_coat_normal(m, nf);
+    float xo = v3_dot(wo, nc), xi = v3_dot(wi, nc);
+    float c = tr_coat_weight(m), ac = tr_principled_alpha(m->clearcoat_roughness);
+    tr_vec3 fc = v3s(0.0f);
+    if (xo > 0.0f && xi > 0.0f) {
+        float g = tr_fminf(1.0f, xo / co) * tr_fminf(1.0f, xi / ci);
+        fc = v3_scale(tr_principled_spec(ac, v3s(TR_PRINCIPLED_F0), nc, wo, wi, xo, xi), c * g);
+    }
+    xo = tr_fmaxf(xo, 0.0f);
+    xi = tr_fmaxf(xi, 0.0f);
+    if (tr_principled_comp(m)) {
+        /* As tr_coat_layer's compensation, the coat's albedos at its own cosines. */
+        float eo = xo > 0.0f ? c * tr_ggx_ms_layer_e(m->ms, xo, ac, TR_PRINCIPLED_F0) : c;
+        float ei = xi > 0.0f ? c * tr_ggx_ms_layer_e(m->ms, xi, ac, TR_PRINCIPLED_F0) : c;
+        float att = (1.0f - eo) * (1.0f - ei);
+        float a = tr_principled_alpha(m->roughness), f0d = tr_principled_f0d(m);
+        float nd = 0.0f, dd = 0.0f, nm = 0.0f, dm = 0.0f;
+        for (int q = 0; q < TR_COAT_QUAD; ++q) {
+            float mu = tr_sqrtf(((float)q + 0.5f) * (1.0f / (float)TR_COAT_QUAD));
+            float ec = c * tr_ggx_ms_layer_e(m->ms, mu, ac, TR_PRINCIPLED_F0);
+            float wd = 1.0f - tr_ggx_ms_layer_e(m->ms, mu, a, f0d);
+            float wm = 1.0f - tr_ggx_ms_e(m->ms, mu, a);
+            nd += wd * ec;
+            dd += wd;
+            nm += wm * ec;
+            dm += wm;
+        }
+        float ea = c * tr_ggx_ms_layer_eavg(m->ms, ac, TR_PRINCIPLED_F0);
+        float ed = dd > 0.0f ? nd / dd : ea, em = dm > 0.0f ? nm / dm : ea;
+        float no = xo > 0.0f ? 1.0f - c * tr_ggx_ms_coat_e(m->ms, xo, a, ac) : 1.0f - c;
+        float ni = xi > 0.0f ? 1.0f - c * tr_ggx_ms_coat_e(m->ms, xi, a, ac) : 1.0f - c;
+        float nsq = no * ni;
+        tr_vec3 r = v3_add(v3_scale(spec, nsq > 0.0f ? att / tr_sqrtf(nsq) : 0.0f),
+                           v3_scale(diff, att / (1.0f - ed)));
+        return v3_add(v3_add(r, v3_scale(ms, att / (1.0f - em))), fc);
+    }
+    float att = (1.0f - c * tr_coat_fresnel(xo)) * (1.0f - c * tr_coat_fresnel(xi));
+    float fav = TR_PRINCIPLED_F0 + (1.0f - TR_PRINCIPLED_F0) * (1.0f / 21.0f);
+    tr_vec3 base = v3_add(v3_scale(spec, att), v3_scale(diff, att / (1.0f - c * fav)));
+    return v3_add(base, fc);
+}
+
 /* The coated BSDF from the base's specular part spec and diffuse part diff, for co, ci > 0
  * (the formula above). */
 TR_FN tr_vec3 tr_coat_layer(const tr_bsdf_params *m, tr_vec3 spec, tr_vec3 ms, tr_vec3 diff,
                             tr_vec3 nf, tr_vec3 wo, tr_vec3 wi, float co, float ci) {
+    if (m->coat_n != 0u) {
+        return tr_coat_layer_tilted(m, spec, ms, diff, nf, wo, wi, co, ci);
+    }
     float c = tr_coat_weight(m);
     float att = (1.0f - c * tr_coat_fresnel(co)) * (1.0f - c * tr_coat_fresnel(ci));
     float fav = TR_PRINCIPLED_F0 + (1.0f - TR_PRINCIPLED_F0) * (1.0f / 21.0f);
@@ -393,13 +471,13 @@ TR_FN float tr_principled_spec_prob(const tr_bsdf_params *m, float co) {
 
 /* Probability of sampling the clear coat for outgoing cosine co: c F_c(co) against the
  * attenuated base's lobe weights (those of tr_principled_spec_prob). */
-TR_FN float tr_coat_prob(const tr_bsdf_params *m, float co) {
+TR_FN float tr_coat_prob_at(const tr_bsdf_params *m, float co, float xo) {
     float k = tr_fminf(tr_fmaxf(m->metallic, 0.0f), 1.0f);
     tr_vec3 fs = tr_fresnel_schlick(tr_principled_f0(m), co);
     float wb = (fs.x + fs.y + fs.z) * (1.0f / 3.0f) +
                (1.0f - k) * (m->color.x + m->color.y + m->color.z) * (1.0f / 3.0f) *
                    (1.0f - tr_principled_f0d(m)) * tr_as_factor(co);
-    float wc = tr_coat_weight(m) * tr_coat_fresnel(co);
+    float wc = tr_coat_weight(m) * tr_coat_fresnel(xo);
     wb *= 1.0f - wc;
     if (!(wb > 0.0f)) {
         return 1.0f;
@@ -408,6 +486,16 @@ TR_FN float tr_coat_prob(const tr_bsdf_params *m, float co) {
         return 0.0f;
     }
     return tr_fminf(tr_fmaxf(wc / (wc + wb), 0.1f), 0.9f);
+}
+
+TR_FN float tr_coat_prob(const tr_bsdf_params *m, float co) {
+    return tr_coat_prob_at(m, co, co);
+}
+
+/* With the coat's own normal nc: its cosine xo of wo picks the coat (never below its
+ * horizon, where its visible normals cannot be drawn). */
+TR_FN float tr_coat_prob_tilted(const tr_bsdf_params *m, float co, float xo) {
+    return xo > 0.0f ? tr_coat_prob_at(m, co, xo) : 0.0f;
 }
 
 TR_FN_NOINLINE float tr_principled_pdf(const tr_bsdf_params *m, tr_vec3 nf, tr_vec3 wo,
@@ -426,7 +514,19 @@ TR_FN_NOINLINE float tr_principled_pdf(const tr_bsdf_params *m, tr_vec3 nf, tr_v
         float psh = tr_sheen_prob(m, co);
         p = psh * ci * TR_INV_PI + (1.0f - psh) * p;
     }
-    if (m->clearcoat > 0.0f) {
+    if (m->clearcoat > 0.0f && m->coat_n != 0u) {
+        /* The coat's visible normals around its own normal. */
+        tr_vec3 nc = tr_coat_normal(m, nf);
+        float xo = v3_dot(wo, nc);
+        float pc = tr_coat_prob_tilted(m, co, xo);
+        float pcoat = 0.0f;
+        if (pc > 0.0f) {
+            float ac = tr_principled_alpha(m->clearcoat_roughness);
+            float g1c = 1.0f / (1.0f + tr_ggx_lambda(ac, xo));
+            pcoat = g1c * tr_ggx_d(ac, v3_dot(h, nc)) / (4.0f * xo);
+        }
+        p = pc * pcoat + (1.0f - pc) * p;
+    } else if (m->clearcoat > 0.0f) {
         float pc = tr_coat_prob(m, co);
         float ac = tr_principled_alpha(m->clearcoat_roughness);
         float g1c = 1.0f / (1.0f + tr_ggx_lambda(ac, co));
@@ -449,7 +549,8 @@ TR_FN_NOINLINE int tr_principled_sample(const tr_bsdf_params *m, tr_vec3 nf, tr_
     int coat = 0;
     if (m->clearcoat > 0.0f) {
         /* The coat first; else ulobe, stretched back over [0, 1), picks the base's lobe. */
-        float pc = tr_coat_prob(m, co);
+        float pc = m->coat_n != 0u ? tr_coat_prob_tilted(m, co, v3_dot(wo, tr_coat_normal(m, nf)))
+                                   : tr_coat_prob(m, co);
         if (ulobe < pc) {
             coat = 1;
         } else {
@@ -466,7 +567,15 @@ TR_FN_NOINLINE int tr_principled_sample(const tr_bsdf_params *m, tr_vec3 nf, tr_
             ulobe = tr_fminf((ulobe - psh) / (1.0f - psh), 0.99999994f);
         }
     }
-    if (!sheen && (coat || ulobe < tr_principled_spec_prob(m, co))) {
+    if (coat && m->coat_n != 0u) {
+        /* The coat's visible normals in its own normal's frame. */
+        tr_vec3 nc = tr_coat_normal(m, nf), tc, bc;
+        v3_basis(nc, &tc, &bc);
+        tr_vec3 vl = v3(v3_dot(wo, tc), v3_dot(wo, bc), v3_dot(wo, nc));
+        tr_vec3 hl = tr_ggx_sample_vndf(tr_principled_alpha(m->clearcoat_roughness), vl, u1, u2);
+        tr_vec3 h = v3_add(v3_add(v3_scale(tc, hl.x), v3_scale(bc, hl.y)), v3_scale(nc, hl.z));
+        s->wi = v3_normalize(v3_reflect(v3_neg(wo), h));
+    } else if (!sheen && (coat || ulobe < tr_principled_spec_prob(m, co))) {
         tr_vec3 vl = v3(v3_dot(wo, t), v3_dot(wo, b), co);
         float a = tr_principled_alpha(coat ? m->clearcoat_roughness : m->roughness);
         tr_vec3 hl = tr_ggx_sample_vndf(a, vl, u1, u2);

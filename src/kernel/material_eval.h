@@ -17,6 +17,50 @@
 #include "types.h"
 #include "vec.h"
 
+/* Per-hit values of principled's sheen and clear coat normal maps travel in
+ * tr_bsdf_params packed into 32-bit words, 0 meaning none (below). A map's value v in
+ * [0, 1] is kept as 65535 (1 - v) in 16 bits, so that 0 is the factor 1: a word of zeros is
+ * the material's constants unchanged. */
+TR_FN uint32_t tr_pack_map16(float v) {
+    float q = (1.0f - tr_fminf(tr_fmaxf(v, 0.0f), 1.0f)) * 65535.0f + 0.5f;
+    return (uint32_t)q;
+}
+
+TR_FN float tr_unpack_map16(uint32_t q) {
+    return (float)(65535u - (q & 65535u)) / 65535.0f;
+}
+
+/* A unit normal in 32 bits: its octahedral map (Meyer et al., "On Floating-Point Normal
+ * Vectors", 2010), 16 bits a coordinate; never 0, which means none. */
+TR_FN uint32_t tr_pack_oct(tr_vec3 n) {
+    float l = tr_fabsf(n.x) + tr_fabsf(n.y) + tr_fabsf(n.z);
+    float px = n.x / l, py = n.y / l;
+    if (n.z < 0.0f) {
+        float qx = (1.0f - tr_fabsf(py)) * (px >= 0.0f ? 1.0f : -1.0f);
+        float qy = (1.0f - tr_fabsf(px)) * (py >= 0.0f ? 1.0f : -1.0f);
+        px = qx;
+        py = qy;
+    }
+    uint32_t ux = (uint32_t)((tr_fminf(tr_fmaxf(px, -1.0f), 1.0f) * 0.5f + 0.5f) * 65535.0f + 0.5f);
+    uint32_t uy = (uint32_t)((tr_fminf(tr_fmaxf(py, -1.0f), 1.0f) * 0.5f + 0.5f) * 65535.0f + 0.5f);
+    uint32_t w = ux | (uy << 16);
+    /* (0, 0) and (65535, 65535) both are -z. */
+    return w != 0u ? w : 0xffffffffu;
+}
+
+TR_FN tr_vec3 tr_unpack_oct(uint32_t w) {
+    float px = (float)(w & 65535u) / 65535.0f * 2.0f - 1.0f;
+    float py = (float)(w >> 16) / 65535.0f * 2.0f - 1.0f;
+    tr_vec3 n = v3(px, py, 1.0f - tr_fabsf(px) - tr_fabsf(py));
+    if (n.z < 0.0f) {
+        n.x = (1.0f - tr_fabsf(py)) * (px >= 0.0f ? 1.0f : -1.0f);
+        n.y = (1.0f - tr_fabsf(px)) * (py >= 0.0f ? 1.0f : -1.0f);
+    }
+    /* (Not v3_normalize: one more caller made the compiler keep that out of line on the
+     * camera's path.) */
+    return v3_scale(n, 1.0f / tr_sqrtf(v3_dot(n, n)));
+}
+
 /* The BSDF's inputs at one surface point. */
 typedef struct tr_bsdf_params {
     uint32_t type;    /* TR_MATERIAL_* */
@@ -34,6 +78,12 @@ typedef struct tr_bsdf_params {
     float clearcoat_roughness; /* principled: the clear coat's roughness */
     float transmission;        /* principled: the rough dielectric boundary's weight (0: none) */
     int hole;                  /* an alpha cut-out: the ray passes through (tr_material_ext) */
+    /* principled's maps at this hit, packed (tr_pack_map16, tr_pack_oct), 0 for none: three
+     * words where seven floats would be (see ext below; the first fills what was padding
+     * before the pointers). The sheen colour map's red and green, its blue and the sheen
+     * roughness map's alpha, each multiplying the extras' factor; the clear coat's shading
+     * normal from its own normal map (the coat otherwise shares ns). */
+    uint32_t sheen_rg, sheen_ba, coat_n;
     /* The scene's multiple-scattering table (ggx_ms.h), or NULL: read where flags has
      * TR_MATERIAL_MULTISCATTER. */
     TR_CONST_GLOBAL float *ms;
@@ -63,13 +113,47 @@ TR_FN tr_bsdf_params tr_material_params(const tr_material *m, tr_vec3 ng) {
     b.clearcoat_roughness = 0.0f;
     b.transmission = 0.0f;
     b.hole = 0;
+    b.sheen_rg = 0u;
+    b.sheen_ba = 0u;
+    b.coat_n = 0u;
     b.ms = 0;
     b.ext = 0;
     return b;
 }
 
+/* The normal that tangent-space normal map `tex` (linear; x and y scaled by `scale`) gives
+ * at a's texture coordinates around the unit normal n, in the frame of a->dpdu, a->dpdv;
+ * returns 0 (*out untouched) where that frame or the result is degenerate. */
+TR_FN int tr_normal_map(const tr_scene_view *s, uint32_t tex, float scale, const tr_surface_attr *a,
+                        tr_vec3 n, tr_vec3 *out) {
+    float unused;
+    tr_vec3 t = tr_texture_sample(s, tex, a->tu, a->tv, 0, &unused);
+    tr_vec3 k = v3(2.0f * t.x - 1.0f, 2.0f * t.y - 1.0f, 2.0f * t.z - 1.0f);
+    /* Gram-Schmidt: a tangent frame around the interpolated normal. glTF's +Y is up in
+     * the image, against our v (downwards): the bitangent is -dp/dv. */
+    tr_vec3 tu = v3_sub(a->dpdu, v3_scale(n, v3_dot(n, a->dpdu)));
+    float lt = v3_dot(tu, tu);
+    if (!(lt > 0.0f)) {
+        return 0;
+    }
+    tu = v3_scale(tu, 1.0f / tr_sqrtf(lt));
+    tr_vec3 bt = v3_cross(n, tu);
+    if (v3_dot(bt, a->dpdv) > 0.0f) {
+        bt = v3_neg(bt);
+    }
+    tr_vec3 m =
+        v3_add(v3_add(v3_scale(tu, k.x * scale), v3_scale(bt, k.y * scale)), v3_scale(n, k.z));
+    float lm = v3_dot(m, m);
+    if (!(lm > 0.0f && lm < TR_INFINITY)) {
+        return 0;
+    }
+    *out = v3_scale(m, 1.0f / tr_sqrtf(lm));
+    return 1;
+}
+
 /* The extras of material `mat` at texture coordinates (tu, tv) (texture.h): textures
- * multiply the material's factors, a normal map tilts b->ns in the frame of dpdu, dpdv. */
+ * multiply the material's factors, a normal map tilts b->ns in the frame of dpdu, dpdv
+ * (the clear coat's own map, a->ns into b->coat_n). */
 TR_FN void tr_material_apply_ext(const tr_scene_view *s, uint32_t mat, const tr_surface_attr *a,
                                  tr_bsdf_params *b) {
     tr_material_ext e = s->material_exts[mat];
@@ -112,28 +196,30 @@ TR_FN void tr_material_apply_ext(const tr_scene_view *s, uint32_t mat, const tr_
                 tr_texture_sample(s, e.clearcoat_rough_tex, a->tu, a->tv, 0, &unused).y;
         }
     }
-    if (e.normal_tex != TR_NO_INDEX && v3_dot(a->dpdu, a->dpdu) > 0.0f) {
-        tr_vec3 t = tr_texture_sample(s, e.normal_tex, a->tu, a->tv, 0, &unused);
-        tr_vec3 k = v3(2.0f * t.x - 1.0f, 2.0f * t.y - 1.0f, 2.0f * t.z - 1.0f);
-        /* Gram-Schmidt: a tangent frame around the interpolated normal. glTF's +Y is up in
-         * the image, against our v (downwards): the bitangent is -dp/dv. */
-        tr_vec3 n = b->ns;
-        tr_vec3 tu = v3_sub(a->dpdu, v3_scale(n, v3_dot(n, a->dpdu)));
-        float lt = v3_dot(tu, tu);
-        if (lt > 0.0f) {
-            tu = v3_scale(tu, 1.0f / tr_sqrtf(lt));
-            tr_vec3 bt = v3_cross(n, tu);
-            if (v3_dot(bt, a->dpdv) > 0.0f) {
-                bt = v3_neg(bt);
-            }
-            tr_vec3 m = v3_add(
-                v3_add(v3_scale(tu, k.x * e.normal_scale), v3_scale(bt, k.y * e.normal_scale)),
-                v3_scale(n, k.z));
-            float lm = v3_dot(m, m);
-            if (lm > 0.0f && lm < TR_INFINITY) {
-                b->ns = v3_scale(m, 1.0f / tr_sqrtf(lm));
-            }
+    if (b->clearcoat > 0.0f && e.clearcoat_normal_tex != TR_NO_INDEX &&
+        v3_dot(a->dpdu, a->dpdu) > 0.0f) {
+        /* glTF: the coat's normal map tilts the interpolated normal, not the base's map. */
+        tr_vec3 nc;
+        if (tr_normal_map(s, e.clearcoat_normal_tex, e.clearcoat_normal_scale, a, a->ns, &nc)) {
+            b->coat_n = tr_pack_oct(nc);
         }
+    }
+    if (e.normal_tex != TR_NO_INDEX && v3_dot(a->dpdu, a->dpdu) > 0.0f) {
+        tr_normal_map(s, e.normal_tex, e.normal_scale, a, b->ns, &b->ns);
+    }
+    if (e.sheen_color_tex != TR_NO_INDEX || e.sheen_rough_tex != TR_NO_INDEX) {
+        /* glTF: the sheen colour map's RGB (sRGB) and the roughness map's alpha (linear),
+         * times the factors (bsdf_principled.h's tr_sheen_color, tr_sheen_roughness). */
+        tr_vec3 sc = v3s(1.0f);
+        float sa = 1.0f;
+        if (e.sheen_color_tex != TR_NO_INDEX) {
+            sc = tr_texture_sample(s, e.sheen_color_tex, a->tu, a->tv, 1, &unused);
+        }
+        if (e.sheen_rough_tex != TR_NO_INDEX) {
+            tr_texture_sample(s, e.sheen_rough_tex, a->tu, a->tv, 0, &sa);
+        }
+        b->sheen_rg = tr_pack_map16(sc.x) | (tr_pack_map16(sc.y) << 16);
+        b->sheen_ba = tr_pack_map16(sc.z) | (tr_pack_map16(sa) << 16);
     }
 }
 

@@ -102,7 +102,7 @@ char *tr_scene_describe(const tr_scene *s, const char *name, const tr_scene_file
     for (uint32_t i = 0; i < tr_scene_material_count(s) && i < shown_max; ++i) {
         tr_material m = tr_scene_material(s, i);
         uint32_t maps = tr_scene_material_maps(s, i);
-        fprintf(out, "material %-3u %s, colour (%.3g, %.3g, %.3g)%s%s%s%s%s%s%s%s%s\n", i,
+        fprintf(out, "material %-3u %s, colour (%.3g, %.3g, %.3g)%s%s%s%s%s%s%s%s%s%s%s%s\n", i,
                 tr_material_type_name(m.type) ? tr_material_type_name(m.type) : "?",
                 (double)m.color.x, (double)m.color.y, (double)m.color.z, maps ? ", maps:" : "",
                 maps & TR_MAP_BASE ? " base" : "",
@@ -111,7 +111,10 @@ char *tr_scene_describe(const tr_scene *s, const char *name, const tr_scene_file
                 maps & TR_MAP_CUTOUT ? " cut-out" : "",
                 maps & TR_MAP_TRANSMISSION ? " transmission" : "",
                 maps & TR_MAP_CLEARCOAT ? " clearcoat" : "",
-                maps & TR_MAP_CLEARCOAT_ROUGHNESS ? " clearcoat-roughness" : "");
+                maps & TR_MAP_CLEARCOAT_ROUGHNESS ? " clearcoat-roughness" : "",
+                maps & TR_MAP_CLEARCOAT_NORMAL ? " clearcoat-normal" : "",
+                maps & TR_MAP_SHEEN_COLOR ? " sheen-colour" : "",
+                maps & TR_MAP_SHEEN_ROUGHNESS ? " sheen-roughness" : "");
     }
     if (!tr_scene_name_is_builtin(name)) {
         fprintf(out, "render:     %ux%u%s, %u spp%s, max depth %d%s, integrator %s%s, accel %s%s\n",

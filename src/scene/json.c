@@ -595,6 +595,8 @@ static const char *const extra_keys[] = {"texture",
                                          "clearcoat_roughness",
                                          "clearcoat_texture",
                                          "clearcoat_roughness_texture",
+                                         "clearcoat_normal_texture",
+                                         "clearcoat_normal_scale",
                                          "emission_strength",
                                          "transmission",
                                          "transmission_texture",
@@ -602,6 +604,8 @@ static const char *const extra_keys[] = {"texture",
                                          "attenuation_distance",
                                          "sheen_color",
                                          "sheen_roughness",
+                                         "sheen_color_texture",
+                                         "sheen_roughness_texture",
                                          "specular",
                                          "specular_color"};
 #define EXTRA_KEY_COUNT (sizeof extra_keys / sizeof extra_keys[0])
@@ -717,6 +721,9 @@ static int parse_material_extras(jctx *c, const cJSON *m, const char *p, uint32_
         get_texture(c, m, p, "transmission_texture", &e.transmission_tex) != TR_OK ||
         get_texture(c, m, p, "clearcoat_texture", &e.clearcoat_tex) != TR_OK ||
         get_texture(c, m, p, "clearcoat_roughness_texture", &e.clearcoat_rough_tex) != TR_OK ||
+        get_texture(c, m, p, "clearcoat_normal_texture", &e.clearcoat_normal_tex) != TR_OK ||
+        get_texture(c, m, p, "sheen_color_texture", &e.sheen_color_tex) != TR_OK ||
+        get_texture(c, m, p, "sheen_roughness_texture", &e.sheen_rough_tex) != TR_OK ||
         get_vec3(c, m, p, "emission", 0, 0, &e.emission, &has_em) != TR_OK ||
         get_number(c, m, p, "alpha_cutoff", 0.0, 1.0, &cut, &has_cut) != TR_OK ||
         get_number(c, m, p, "metallic", 0.0, 1.0, &metal, &has_metal) != TR_OK ||
@@ -726,6 +733,12 @@ static int parse_material_extras(jctx *c, const cJSON *m, const char *p, uint32_
     }
     e.clearcoat = (float)coat;
     e.clearcoat_roughness = (float)coat_rough;
+    double coat_nscale = 1.0;
+    if (get_number(c, m, p, "clearcoat_normal_scale", 0.0, 10.0, &coat_nscale, &(int){0}) !=
+        TR_OK) {
+        return TR_ERR;
+    }
+    e.clearcoat_normal_scale = (float)coat_nscale;
     /* KHR_materials_emissive_strength, _transmission and _volume's attenuation. */
     int has_att = 0, has_dist = 0, has_strength = 0, has_tr = 0;
     double strength = 1.0, transmission = 0.0, dist = 0.0;
@@ -854,9 +867,9 @@ static int parse_materials(jctx *c, const cJSON *mats) {
         }
         /* The keys this type takes, from the registry: "type", then each key of its masks
          * (a name two keys share, such as "color", once). */
-        const char *allowed[32] = {"type"};
+        const char *allowed[48] = {"type"};
         size_t nallowed = 1;
-        for (size_t k = 0; k < nkeys && nallowed < 32; ++k) {
+        for (size_t k = 0; k < nkeys && nallowed < 48; ++k) {
             int dup = 0;
             for (size_t i = 0; i < nallowed; ++i) {
                 dup |= strcmp(allowed[i], keys[k].name) == 0;
@@ -867,7 +880,7 @@ static int parse_materials(jctx *c, const cJSON *mats) {
         }
         /* Then the extras (textures, emission, cut-outs) every non-emitter takes;
          * "metallic" and the clear coat's keys are the principled material's alone. */
-        for (size_t k = 0; t != TR_MATERIAL_EMITTER && k < EXTRA_KEY_COUNT && nallowed < 32; ++k) {
+        for (size_t k = 0; t != TR_MATERIAL_EMITTER && k < EXTRA_KEY_COUNT && nallowed < 48; ++k) {
             if (t == TR_MATERIAL_PRINCIPLED || !principled_only(extra_keys[k])) {
                 allowed[nallowed++] = extra_keys[k];
             }
@@ -1105,7 +1118,8 @@ static int parse_quad(jctx *c, const cJSON *sh, const char *p, const cJSON *vert
         ext && (ext->base_tex != TR_NO_INDEX || ext->emission_tex != TR_NO_INDEX ||
                 ext->mr_tex != TR_NO_INDEX || ext->normal_tex != TR_NO_INDEX ||
                 ext->transmission_tex != TR_NO_INDEX || ext->clearcoat_tex != TR_NO_INDEX ||
-                ext->clearcoat_rough_tex != TR_NO_INDEX);
+                ext->clearcoat_rough_tex != TR_NO_INDEX || ext->sheen_color_tex != TR_NO_INDEX ||
+                ext->sheen_rough_tex != TR_NO_INDEX || ext->clearcoat_normal_tex != TR_NO_INDEX);
     uint32_t first = c->scene->triangle_count, dropped = 0;
     tr_error e;
     if (tr_scene_add_mesh_uv(c->scene, pos, 4, idx, 2, NULL, textured ? uv : NULL, (uint32_t)mat,

@@ -280,12 +280,13 @@ static uint32_t load_texture_xf(import_ctx *c, const struct aiMaterial *m, const
  *   glTF metallic-roughness (metallicFactor or roughnessFactor present) -> principled:
  *     base colour factor (Kd where missing) x base colour map, metallic and roughness
  *     factors x the metallic-roughness map, normal map, emissive factor x emissive map;
- *     clear coat factor and roughness x their maps (KHR_materials_clearcoat);
+ *     clear coat factor and roughness x their maps, and the coat's normal map
+ *     (KHR_materials_clearcoat);
  *     transmission factor x its map (KHR_materials_transmission) and index
  *     (KHR_materials_ior, Assimp's refracti);
  *     the volume's attenuation (KHR_materials_volume); the emission x its strength
- *     (KHR_materials_emissive_strength); the sheen's colour and roughness
- *     (KHR_materials_sheen). A transmission factor without a metallic-
+ *     (KHR_materials_emissive_strength); the sheen's colour and roughness x their
+ *     maps (KHR_materials_sheen). A transmission factor without a metallic-
  *     roughness material -> glass (colour: Kd, ior Ni or 1.5).
  *   otherwise Ke > 0 without an emissive map -> emitter (colour Ke / max(Ke), emittance
  *     max(Ke)); illum 4, 6, 7 or 9 (refraction) -> glass (colour Kd, ior Ni, 1.5 where
@@ -419,7 +420,7 @@ static tr_material map_material(import_ctx *c, const struct aiMaterial *m, tr_ma
         ext->metallic = clamp01(metal);
         /* KHR_materials_clearcoat: the coat's weight and roughness, each times its map
          * (Assimp 5.1 on: aiTextureType_CLEARCOAT, index 0 the weight in red, index 1 the
-         * roughness in green). The coat's own normal map (index 2) is not read. */
+         * roughness in green), and the coat's own normal map (index 2) with its scale. */
         ai_real coat = 0.0f, coat_rough = 0.0f;
         one = 1;
         aiGetMaterialFloatArray(m, AI_MATKEY_CLEARCOAT_FACTOR, &coat, &one);
@@ -432,14 +433,20 @@ static tr_material map_material(import_ctx *c, const struct aiMaterial *m, tr_ma
                 load_texture_xf_at(c, m, mname, aiTextureType_CLEARCOAT, 0, "clear coat");
             ext->clearcoat_rough_tex =
                 load_texture_xf_at(c, m, mname, aiTextureType_CLEARCOAT, 1, "clear coat roughness");
+            ext->clearcoat_normal_tex =
+                load_texture_xf_at(c, m, mname, aiTextureType_CLEARCOAT, 2, "clear coat normal");
+            ai_real nscale = 1.0f;
+            one = 1;
+            if (ext->clearcoat_normal_tex != TR_NO_INDEX &&
+                aiGetMaterialFloatArray(m, AI_MATKEY_GLTF_TEXTURE_SCALE(aiTextureType_CLEARCOAT, 2),
+                                        &nscale, &one) == AI_SUCCESS &&
+                isfinite(nscale)) {
+                ext->clearcoat_normal_scale = nscale;
+            }
         }
-        struct aiString coat_normal;
-        if (aiGetMaterialTexture(m, aiTextureType_CLEARCOAT, 2, &coat_normal, NULL, NULL, NULL,
-                                 NULL, NULL, NULL) == AI_SUCCESS) {
-            import_warn(c, "material '%.60s': clear coat normal map dropped (not supported)",
-                        mname);
-        }
-        /* KHR_materials_sheen: the sheen's colour and roughness (its maps are not read). */
+        /* KHR_materials_sheen: the sheen's colour and roughness, times their maps (Assimp
+         * 5.1 on: aiTextureType_SHEEN, index 0 the colour (sRGB), index 1 the roughness in
+         * its alpha; Assimp passes them only with a colour factor that is not black). */
         ai_real sheen_rough = 0.0f, strength = 0.0f;
         struct aiColor4D sheen = {0, 0, 0, 1};
         one = 1;
@@ -452,8 +459,11 @@ static tr_material map_material(import_ctx *c, const struct aiMaterial *m, tr_ma
                 ext->sheen_roughness = clamp01(sheen_rough);
             }
         }
-        if (aiGetMaterialTextureCount(m, aiTextureType_SHEEN) > 0) {
-            import_warn(c, "material '%.60s': sheen maps dropped (the factors are used)", mname);
+        if (max3(ext->sheen_color.x, ext->sheen_color.y, ext->sheen_color.z) > 0.0f) {
+            ext->sheen_color_tex =
+                load_texture_xf_at(c, m, mname, aiTextureType_SHEEN, 0, "sheen colour");
+            ext->sheen_rough_tex =
+                load_texture_xf_at(c, m, mname, aiTextureType_SHEEN, 1, "sheen roughness");
         }
         one = 1;
         if (aiGetMaterialFloatArray(m, AI_MATKEY_EMISSIVE_INTENSITY, &strength, &one) ==
@@ -876,13 +886,13 @@ static char *gltf_json(const char *path, int glb) {
  * warning: */
 static void gltf_extension_warnings(const import_ctx *c, const char *path) {
     static const char *const handled[] = {
-        "KHR_materials_clearcoat",    /* the clear coat and its maps (its normal map: warned) */
+        "KHR_materials_clearcoat",    /* the clear coat and its three maps */
         "KHR_lights_punctual",        /* point, spot and directional lights */
         "KHR_materials_transmission", /* principled's transmission and its map */
         "KHR_materials_ior",          /* the principled material's index */
         "KHR_materials_volume",       /* the attenuation (thickness is not needed) */
         "KHR_texture_transform",      /* the maps' offset, rotation and scale */
-        "KHR_materials_sheen",        /* principled's sheen (its maps: warned) */
+        "KHR_materials_sheen",        /* principled's sheen and its two maps */
     };
     const size_t plen = strlen(path);
     char *text = gltf_json(path, plen > 4 && strcasecmp(path + plen - 4, ".glb") == 0);

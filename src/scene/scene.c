@@ -153,6 +153,8 @@ tr_material_ext tr_material_ext_default(void) {
     memset(&e, 0, sizeof e);
     e.base_tex = e.emission_tex = e.mr_tex = e.normal_tex = e.transmission_tex = TR_NO_INDEX;
     e.clearcoat_tex = e.clearcoat_rough_tex = TR_NO_INDEX;
+    e.sheen_color_tex = e.sheen_rough_tex = e.clearcoat_normal_tex = TR_NO_INDEX;
+    e.clearcoat_normal_scale = 1.0f;
     e.alpha_cutoff = 0.5f;
     e.normal_scale = 1.0f;
     return e;
@@ -173,10 +175,17 @@ int tr_scene_set_material_ext(tr_scene *s, uint32_t index, const tr_material_ext
         return tr_error_set(err, TR_STATUS_NOT_FOUND, "material %u of %u", index,
                             s->material_count);
     }
-    const uint32_t tex[7] = {ext->base_tex,           ext->emission_tex,     ext->mr_tex,
-                             ext->normal_tex,         ext->transmission_tex, ext->clearcoat_tex,
-                             ext->clearcoat_rough_tex};
-    for (int k = 0; k < 7; ++k) {
+    const uint32_t tex[10] = {ext->base_tex,
+                              ext->emission_tex,
+                              ext->mr_tex,
+                              ext->normal_tex,
+                              ext->transmission_tex,
+                              ext->clearcoat_tex,
+                              ext->clearcoat_rough_tex,
+                              ext->sheen_color_tex,
+                              ext->sheen_rough_tex,
+                              ext->clearcoat_normal_tex};
+    for (int k = 0; k < 10; ++k) {
         if (tex[k] != TR_NO_INDEX && tex[k] >= s->texture_count) {
             return tr_error_set(err, TR_STATUS_NOT_FOUND,
                                 "material %u refers to texture %u, but the scene has %u", index,
@@ -184,7 +193,7 @@ int tr_scene_set_material_ext(tr_scene *s, uint32_t index, const tr_material_ext
         }
     }
     if (!v3_is_finite(ext->emission) || !isfinite(ext->metallic) || !isfinite(ext->alpha_cutoff) ||
-        !isfinite(ext->normal_scale)) {
+        !isfinite(ext->normal_scale) || !isfinite(ext->clearcoat_normal_scale)) {
         return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
                             "material %u has a non-finite parameter", index);
     }
@@ -991,7 +1000,10 @@ uint32_t tr_scene_material_maps(const tr_scene *s, uint32_t i) {
            ((e->flags & TR_MATEXT_ALPHA_MASK) ? TR_MAP_CUTOUT : 0u) |
            (e->transmission_tex != TR_NO_INDEX ? TR_MAP_TRANSMISSION : 0u) |
            (e->clearcoat_tex != TR_NO_INDEX ? TR_MAP_CLEARCOAT : 0u) |
-           (e->clearcoat_rough_tex != TR_NO_INDEX ? TR_MAP_CLEARCOAT_ROUGHNESS : 0u);
+           (e->clearcoat_rough_tex != TR_NO_INDEX ? TR_MAP_CLEARCOAT_ROUGHNESS : 0u) |
+           (e->sheen_color_tex != TR_NO_INDEX ? TR_MAP_SHEEN_COLOR : 0u) |
+           (e->sheen_rough_tex != TR_NO_INDEX ? TR_MAP_SHEEN_ROUGHNESS : 0u) |
+           (e->clearcoat_normal_tex != TR_NO_INDEX ? TR_MAP_CLEARCOAT_NORMAL : 0u);
 }
 
 uint32_t tr_scene_shape_triangle_count(const tr_scene *s, uint32_t shape) {

@@ -173,6 +173,13 @@ int tr_ck_identity(tr_ck_id *id, const tr_scene *scene, const tr_render_config *
                 const uint32_t cm[2] = {e->clearcoat_tex, e->clearcoat_rough_tex};
                 h = tr_ck_fnv(h, cm, sizeof cm);
             }
+            if (e->sheen_color_tex != TR_NO_INDEX || e->sheen_rough_tex != TR_NO_INDEX ||
+                e->clearcoat_normal_tex != TR_NO_INDEX) {
+                /* The sheen's maps and the coat's normal map, likewise. */
+                const uint32_t sm[3] = {e->sheen_color_tex, e->sheen_rough_tex,
+                                        e->clearcoat_normal_tex};
+                h = fnv_floats(tr_ck_fnv(h, sm, sizeof sm), &e->clearcoat_normal_scale, 1);
+            }
             if ((e->flags & TR_MATEXT_SPECULAR) != 0u) {
                 const float sp[4] = {e->specular, e->specular_color.x, e->specular_color.y,
                                      e->specular_color.z};
