@@ -108,7 +108,7 @@
 #define DN_FIREFLY_R 2
 /* A pixel whose energy rests on this many samples or fewer ((sum of the luminances)^2 / (sum
  * of their squares)) is judged against its neighbours' median, not the second brightest. */
-#define DN_SPARSE_NEFF 1.5f
+#define DN_SPARSE_NEFF 2.0f
 /* The spread of the outliers' energy: the count of outlier pixels its window must hold,
  * the largest half-width, the growth of the relative-depth tolerance with the distance (in
  * DN_SIGMA_Z per pixel), the weight of the difference of the denoised luminance, and the
