@@ -1,22 +1,32 @@
 /* denoise.c - the offline denoiser (tr_denoise_film, include/trac0r/post.h): a finished
  * film's radiance cleaned with the help of its feature passes, in four steps.
  *
- * 1. Outliers. A firefly is a pixel whose mean rests on one or two improbable samples.
- *    The film's sums of squares (TR_PASS_VARIANCE) say how much of a pixel's value its own
- *    samples can vouch for: a pixel that stands out of its 5x5 neighbourhood (above the
- *    second brightest neighbour plus three times the neighbourhood's median standard
- *    error) loses the part of its excess that is within three of its own standard errors.
- *    A single-sample spike has a standard error as large as its mean, so it is brought back
- *    to its neighbourhood; a converged highlight has a small one and keeps its value, and
- *    as samples accumulate less is taken (the estimator stays consistent). The 5x5
- *    neighbourhood (3x3 before) leaves alone the scattered bright pixels of a caustic or a
- *    glossy highlight that a few samples undersample: three or more of them together are
- *    light to spread, not outliers. This is the per-pixel form of the re-weighting of Zirr,
- *    Hanika and Dachsbacher 2018, "Re-weighting Firefly Samples for Improved Finite-Sample
- *    Monte Carlo Estimates" (Computer Graphics Forum 37(6)), which judges a sample by how
- *    probable its magnitude is given the samples around it; done before the filter so that
- *    no spike is spread. The standard errors are the reflected part's: where the emission
- *    pass is kept, the squares of the samples that met an emitter are taken out.
+ * 1. Outliers, and their energy spread. A firefly is a pixel whose mean rests on one or two
+ *    improbable samples. The film's sums of squares (TR_PASS_VARIANCE) say how much of a
+ *    pixel's value its own samples can vouch for: a pixel that stands out of its 5x5
+ *    neighbourhood (above the second brightest neighbour plus three times the
+ *    neighbourhood's median standard error) gives up the part of its excess that is within
+ *    three of its own standard errors. A single-sample spike has a standard error as large
+ *    as its mean, so it is brought back to its neighbourhood; a converged highlight has a
+ *    small one and keeps its value, and as samples accumulate less is taken. A pixel whose
+ *    energy rests on two samples or fewer ((sum of the luminances)^2 / (sum of their
+ *    squares) <= 2) is judged against its neighbours' median instead of the second
+ *    brightest, so that the pixels of an undersampled caustic or glossy highlight, each
+ *    with one bright sample and a few of them together, are taken too: left to the filters
+ *    below, a few bright pixels become bright squares. What is taken is not dropped: it is
+ *    spread, after the filters, over the pixels around that show the same surface (normal,
+ *    depth, and the denoised luminance), with weights normalised per source so that the
+ *    total energy is kept, over a window that holds DN_SPREAD_K outlier pixels and a
+ *    Gaussian shaped by their second moments (see spread()). A sparse caustic becomes a
+ *    smooth patch of the right energy instead of a few bright pixels, or none. This is an
+ *    energy-preserving variant of the re-weighting of Zirr, Hanika and Dachsbacher 2018,
+ *    "Re-weighting Firefly Samples for Improved Finite-Sample Monte Carlo Estimates"
+ *    (Computer Graphics Forum 37(6)), which judges samples by how probable their magnitude
+ *    is given the samples around them and re-weights the improbable ones; here the
+ *    judgement is per pixel, from the sums the film keeps, so a render needs no extra
+ *    buffers. The standard errors are the reflected part's: where the emission pass is
+ *    kept, the squares of the samples that met an emitter are taken out. A pixel that met
+ *    no surface loses its spike as before (there is no surface to spread it over).
  *
  * 2. Demodulation. The first hit's emission (TR_PASS_EMISSION, when kept) is taken out; the
  *    rest is divided by the albedo (held at 0.01 or above), so that texture and material
