@@ -5,16 +5,21 @@
  *    (within 1 %), noiseless and noisy.
  * 2. Steps in depth, in the normal and in the albedo stay sharp: the columns on either side
  *    of the step keep their own side's value.
- * 3. A planted firefly (one sample of 60 among 16 of 0.5) is removed and its
- *    neighbourhood is neither darkened nor brightened; a pixel that is bright in every
- *    sample is no firefly and keeps most of its value.
+ * 3. A planted firefly (one sample of 60 among 16 of 0.5) is removed (its energy spread
+ *    thin over the surface around it) and its neighbourhood is neither darkened nor
+ *    brightened; a pixel that is bright in every sample is no firefly and keeps most of its
+ *    value.
  * 4. Noise falls: the error of a noisy flat image drops several times; a converged image
  *    whose light no feature explains (stripes a pixel wide) keeps its values.
  * 5. One thread and two give the same bits; a film without the guides is refused.
  * 6. A lamp's edge: a row of pixels of which some samples met the lamp comes back near
  *    the share of the lamp its pixels see, the lamp's inside and the row beside the edge
  *    keep their values; a thin bar in front of a wall keeps its own light and the wall
- *    its own; pixels that met no surface keep their value beside a lit one. */
+ *    its own; pixels that met no surface keep their value beside a lit one.
+ * 7. A sparse cluster of bright samples (an undersampled caustic: every third pixel of a
+ *    disc along rows and columns has one sample of 40 among 16 of 0.4) keeps its energy
+ *    within 5 % and comes out as a patch whose peak is a fraction of the planted pixels';
+ *    the same with one thread and two. */
 #include "check.h"
 #include "trac0r/film.h"
 #include "trac0r/post.h"
@@ -388,6 +393,66 @@ static void test_thin_and_silhouette(void) {
     tr_film_free(&f);
 }
 
+/* Pixels of the disc of radius CLUSTER_R around (CLUSTER_X, CLUSTER_Y) whose coordinates are
+ * both multiples of 3 hold one sample of CLUSTER_V in every channel in place of one of their
+ * own: each is brighter than all of its 5x5 neighbours, as the few pixels of an undersampled
+ * caustic that have a sample of it. */
+#define CLUSTER_X 32
+#define CLUSTER_Y 24
+#define CLUSTER_R 9
+#define CLUSTER_V 40.0f
+
+static int in_cluster(int x, int y) {
+    const int dx = x - CLUSTER_X, dy = y - CLUSTER_Y;
+    return dx * dx + dy * dy <= CLUSTER_R * CLUSTER_R && x % 3 == 0 && y % 3 == 0;
+}
+
+static void test_sparse_cluster(void) {
+    static float out[3 * W * H], two[3 * W * H];
+    tr_film f;
+    make_film(&f, flat, 0.2f, 21u);
+    const px p = flat(0, 0);
+    double planted = 0.0, peak_in = 0.0;
+    int count = 0;
+    for (int y = 0; y < H; ++y) {
+        for (int x = 0; x < W; ++x) {
+            if (!in_cluster(x, y)) {
+                continue;
+            }
+            const size_t i = (size_t)y * W + x;
+            for (int c = 0; c < 3; ++c) {
+                const float v = f.sum[3 * i + c] / SPP;
+                f.sum[3 * i + c] += CLUSTER_V - v;
+                f.sq[3 * i + c] += CLUSTER_V * CLUSTER_V - v * v;
+            }
+            planted += f.sum[3 * i] / SPP - p.color[0];
+            peak_in = fmax(peak_in, f.sum[3 * i] / SPP);
+            ++count;
+        }
+    }
+    CHECK(count > 20, "the cluster has %d pixels", count);
+    denoise(&f, out, 1);
+    /* The energy above the surroundings, over the image, against the cluster's pixels'. */
+    double excess = 0.0, peak = 0.0;
+    int lit = 0;
+    for (int y = 0; y < H; ++y) {
+        for (int x = 0; x < W; ++x) {
+            const float v = out[3 * (y * W + x)];
+            excess += v - p.color[0];
+            peak = fmax(peak, v);
+            lit += v > p.color[0] + 0.1;
+        }
+    }
+    CHECK(fabs(excess - planted) <= 0.05 * planted,
+          "the cluster's energy after denoising is %.3f, planted %.3f", excess, planted);
+    CHECK(peak < 0.5 * peak_in, "the cluster's peak is %.3f, the planted pixels %.3f", peak,
+          peak_in);
+    CHECK(lit > 2 * count, "%d pixels are lit by the cluster, planted %d", lit, count);
+    denoise(&f, two, 2);
+    CHECK(memcmp(out, two, sizeof out) == 0, "the cluster: 1 and 2 threads differ");
+    tr_film_free(&f);
+}
+
 int main(void) {
     test_unchanged();
     test_edges();
@@ -397,5 +462,6 @@ int main(void) {
     test_threads_and_errors();
     test_lamp_edge();
     test_thin_and_silhouette();
+    test_sparse_cluster();
     return check_finish("test_denoise");
 }

@@ -4,13 +4,14 @@
  *     denoise_eval SCENE WIDTH HEIGHT REF_SPP CACHE_DIR SPP [SPP ...]
  *
  * Renders SCENE (a scene file, or builtin:NAME) at REF_SPP with seed 7777 as the
- * reference (kept in CACHE_DIR, reused when present), then for each SPP with seed 1 on
- * two threads: the raw image, tr_filter_atrous with the real-time defaults (what
- * `render --denoise` wrote before the offline denoiser) and tr_denoise_film. Prints the
- * PSNR of each against the reference on values clamped to [0, 1] (as `trac0r compare`),
- * the same with the reference's own noise taken out (estimated from the raw images: with two
- * or more SPP the raw squared error is fitted as a / spp + r, and a / REF_SPP is the
- * reference's; the film's own variance pass overstates it, as pt's samples are stratified), the
+ * reference (kept in CACHE_DIR, reused when present), then for each SPP with seed 1 (or
+ * the environment's DENOISE_EVAL_SEED, to check a setting on other films; the films of
+ * other seeds are cached under their own names) on two threads: the raw image, tr_filter_atrous
+ * with the real-time defaults (what `render --denoise` wrote before the offline denoiser) and
+ * tr_denoise_film. Prints the PSNR of each against the reference on values clamped to [0, 1] (as
+ * `trac0r compare`), the same with the reference's own noise taken out (estimated from the raw
+ * images: with two or more SPP the raw squared error is fitted as a / spp + r, and a / REF_SPP is
+ * the reference's; the film's own variance pass overstates it, as pt's samples are stratified), the
  * denoiser's CPU and wall time, and where the denoiser's squared error lies: pixels that saw
  * emission at their first hit, pixels next to a depth or normal edge, and the rest (share of the
  * total and the same split for à-trous). Uses the public API only. */
@@ -146,13 +147,21 @@ static int get_ref(const char *scene, uint32_t w, uint32_t h, uint32_t spp, cons
     return TR_OK;
 }
 
-/* The film of scene at spp with seed 1, rendered once and kept in dir. */
+/* The film of scene at spp with seed 1 (or DENOISE_EVAL_SEED), rendered once and kept in
+ * dir. */
 static int film_cached(const char *scene, uint32_t w, uint32_t h, uint32_t spp, const char *dir,
                        tr_film *f) {
     char path[1024];
     const char *base = strrchr(scene, '/');
     base = base ? base + 1 : scene;
-    snprintf(path, sizeof path, "%s/%s-%ux%u-%u.film", dir, base, w, h, spp);
+    const char *se = getenv("DENOISE_EVAL_SEED");
+    const uint64_t seed = se && atoi(se) > 1 ? (uint64_t)atoi(se) : 1u;
+    if (seed == 1u) {
+        snprintf(path, sizeof path, "%s/%s-%ux%u-%u.film", dir, base, w, h, spp);
+    } else {
+        snprintf(path, sizeof path, "%s/%s-%ux%u-%u-s%u.film", dir, base, w, h, spp,
+                 (unsigned)seed);
+    }
     const size_t n = (size_t)w * h;
     tr_error err;
     const uint32_t passes =
@@ -176,7 +185,7 @@ static int film_cached(const char *scene, uint32_t w, uint32_t h, uint32_t spp, 
         }
         tr_film_free(f);
     }
-    if (render(scene, w, h, spp, 1, f) != TR_OK) {
+    if (render(scene, w, h, spp, seed, f) != TR_OK) {
         return TR_ERR;
     }
     fp = fopen(path, "wb");

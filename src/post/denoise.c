@@ -1,22 +1,32 @@
 /* denoise.c - the offline denoiser (tr_denoise_film, include/trac0r/post.h): a finished
  * film's radiance cleaned with the help of its feature passes, in four steps.
  *
- * 1. Outliers. A firefly is a pixel whose mean rests on one or two improbable samples.
- *    The film's sums of squares (TR_PASS_VARIANCE) say how much of a pixel's value its own
- *    samples can vouch for: a pixel that stands out of its 5x5 neighbourhood (above the
- *    second brightest neighbour plus three times the neighbourhood's median standard
- *    error) loses the part of its excess that is within three of its own standard errors.
- *    A single-sample spike has a standard error as large as its mean, so it is brought back
- *    to its neighbourhood; a converged highlight has a small one and keeps its value, and
- *    as samples accumulate less is taken (the estimator stays consistent). The 5x5
- *    neighbourhood (3x3 before) leaves alone the scattered bright pixels of a caustic or a
- *    glossy highlight that a few samples undersample: three or more of them together are
- *    light to spread, not outliers. This is the per-pixel form of the re-weighting of Zirr,
- *    Hanika and Dachsbacher 2018, "Re-weighting Firefly Samples for Improved Finite-Sample
- *    Monte Carlo Estimates" (Computer Graphics Forum 37(6)), which judges a sample by how
- *    probable its magnitude is given the samples around it; done before the filter so that
- *    no spike is spread. The standard errors are the reflected part's: where the emission
- *    pass is kept, the squares of the samples that met an emitter are taken out.
+ * 1. Outliers, and their energy spread. A firefly is a pixel whose mean rests on one or two
+ *    improbable samples. The film's sums of squares (TR_PASS_VARIANCE) say how much of a
+ *    pixel's value its own samples can vouch for: a pixel that stands out of its 5x5
+ *    neighbourhood (above the second brightest neighbour plus three times the
+ *    neighbourhood's median standard error) gives up the part of its excess that is within
+ *    three of its own standard errors. A single-sample spike has a standard error as large
+ *    as its mean, so it is brought back to its neighbourhood; a converged highlight has a
+ *    small one and keeps its value, and as samples accumulate less is taken. A pixel whose
+ *    energy rests on two samples or fewer ((sum of the luminances)^2 / (sum of their
+ *    squares) <= 2) is judged against its neighbours' median instead of the second
+ *    brightest, so that the pixels of an undersampled caustic or glossy highlight, each
+ *    with one bright sample and a few of them together, are taken too: left to the filters
+ *    below, a few bright pixels become bright squares. What is taken is not dropped: it is
+ *    spread, after the filters, over the pixels around that show the same surface (normal,
+ *    depth, and the denoised luminance), with weights normalised per source so that the
+ *    total energy is kept, over a window that holds DN_SPREAD_K outlier pixels and a
+ *    Gaussian shaped by their second moments (see spread()). A sparse caustic becomes a
+ *    smooth patch of the right energy instead of a few bright pixels, or none. This is an
+ *    energy-preserving variant of the re-weighting of Zirr, Hanika and Dachsbacher 2018,
+ *    "Re-weighting Firefly Samples for Improved Finite-Sample Monte Carlo Estimates"
+ *    (Computer Graphics Forum 37(6)), which judges samples by how probable their magnitude
+ *    is given the samples around them and re-weights the improbable ones; here the
+ *    judgement is per pixel, from the sums the film keeps, so a render needs no extra
+ *    buffers. The standard errors are the reflected part's: where the emission pass is
+ *    kept, the squares of the samples that met an emitter are taken out. A pixel that met
+ *    no surface loses its spike as before (there is no surface to spread it over).
  *
  * 2. Demodulation. The first hit's emission (TR_PASS_EMISSION, when kept) is taken out; the
  *    rest is divided by the albedo (held at 0.01 or above), so that texture and material
@@ -106,6 +116,19 @@
 #define DN_ALBEDO_MIN 0.01f
 /* The firefly step's neighbourhood, (2 DN_FIREFLY_R + 1)^2 pixels. */
 #define DN_FIREFLY_R 2
+/* A pixel whose energy rests on this many samples or fewer ((sum of the luminances)^2 / (sum
+ * of their squares)) is judged against its neighbours' median, not the second brightest. */
+#define DN_SPARSE_NEFF 2.0f
+/* The spread of the outliers' energy: the count of outlier pixels its window must hold,
+ * the largest half-width, the growth of the relative-depth tolerance with the distance (in
+ * DN_SIGMA_Z per pixel), the weight of the difference of the denoised luminance, and the
+ * scale of the outliers' second moments (3/4: for outliers spread evenly over a window of
+ * half-width r, a Gaussian of standard deviation r / 2). */
+#define DN_SPREAD_K 12
+#define DN_SPREAD_RMAX 32
+#define DN_SPREAD_ZS 0.1f
+#define DN_SPREAD_IB 16.0f
+#define DN_SPREAD_MOMENTS 0.75
 /* The emission's binomial bound on its variance, scaled for stratified samples. */
 #define DN_EMIT_VAR 0.5f
 
@@ -147,8 +170,13 @@ static void sortn(float *v, int n) {
     }
 }
 
-static long fireflies(int w, int h, float *col, const float *lm, const float *se, float k,
-                      int threads) {
+/* Step 1: the firefly step. lm, se: each pixel's luminance and standard error; neff: the
+ * number of samples that carry its energy, (sum of the luminances)^2 / (sum of their
+ * squares), INFINITY where not known (NULL: none known). The part taken from a pixel that
+ * met a surface (depth > 0) is kept in ex (3 per pixel), to be spread; from one that met
+ * none it is dropped. */
+static long fireflies(int w, int h, float *col, const float *lm, const float *se, const float *neff,
+                      const float *depth, float k, float *ex, int threads) {
     long changed = 0;
     const int fr = DN_FIREFLY_R;
 #pragma omp parallel for num_threads(threads) schedule(static) reduction(+ : changed)
@@ -156,9 +184,12 @@ static long fireflies(int w, int h, float *col, const float *lm, const float *se
         for (int x = 0; x < w; ++x) {
             const size_t i = (size_t)y * w + x;
             const float l = lm[i];
+            /* An outlier of a cluster: its energy rests on one sample or two. */
+            const int sparse = neff && neff[i] <= DN_SPARSE_NEFF;
             /* The brightest and second brightest neighbour inside the image. */
             float b1 = -INFINITY, b2 = -INFINITY;
             int n = 0;
+            float ns[(2 * DN_FIREFLY_R + 1) * (2 * DN_FIREFLY_R + 1)];
             for (int dy = -fr; dy <= fr; ++dy) {
                 for (int dx = -fr; dx <= fr; ++dx) {
                     const int xx = x + dx, yy = y + dy;
@@ -170,14 +201,25 @@ static long fireflies(int w, int h, float *col, const float *lm, const float *se
                         } else if (v > b2) {
                             b2 = v;
                         }
-                        ++n;
+                        ns[n++] = v;
                     }
                 }
             }
-            if (n < 2 || !(l > b2)) {
+            if (n < 2 || !(l > (sparse ? -INFINITY : b2))) {
                 continue; /* no firefly: most pixels stop here */
             }
-            float ns[(2 * DN_FIREFLY_R + 1) * (2 * DN_FIREFLY_R + 1)];
+            /* The level the pixel is judged against: the second brightest neighbour, or
+             * for a pixel whose energy rests on one or two samples the neighbours'
+             * median, so that a cluster of them (a caustic, a glossy highlight that the
+             * samples undersample) is taken too. */
+            float level = b2;
+            if (sparse) {
+                sortn(ns, n);
+                level = ns[n / 2];
+                if (!(l > level)) {
+                    continue;
+                }
+            }
             n = 0;
             for (int dy = -fr; dy <= fr; ++dy) {
                 for (int dx = -fr; dx <= fr; ++dx) {
@@ -189,16 +231,20 @@ static long fireflies(int w, int h, float *col, const float *lm, const float *se
             }
             sortn(ns, n);
             const float med = n & 1 ? ns[n / 2] : 0.5f * (ns[n / 2 - 1] + ns[n / 2]);
-            const float bound = b2 + k * med;
+            const float bound = level + k * med;
             if (!(l > bound)) {
                 continue;
             }
             const float take = fminf(l - bound, k * se[i]);
             if (take > 0.0f) {
                 const float s = (l - take) / l;
-                col[3 * i] *= s;
-                col[3 * i + 1] *= s;
-                col[3 * i + 2] *= s;
+                for (int c = 0; c < 3; ++c) {
+                    const float v = col[3 * i + c];
+                    col[3 * i + c] = v * s;
+                    if (depth[i] > 0.0f) {
+                        ex[3 * i + c] = v - v * s;
+                    }
+                }
                 ++changed;
             }
         }
@@ -467,6 +513,162 @@ static void box_mean(int w, int h, const float *a, float *b, int rad, int thread
     }
 }
 
+/* The weight of receiver j in the spread of source i's outlier energy: a Gaussian of
+ * standard deviation half the radius in the image plane, times the agreement of the
+ * surface (normal, and relative depth with a tolerance that grows with the distance, as
+ * a floor in perspective changes depth along it). 0 for a pixel that met no surface. */
+/* The weight of receiver j in the spread of source i's outlier energy: a Gaussian of the
+ * offset (dx, dy) with inverse covariance ic (xx, xy, yy) times the agreement of the surface:
+ * normal, relative depth with a tolerance that grows with the distance (a floor in
+ * perspective changes depth along it), and the denoised luminance without the outliers
+ * (base), which keeps the energy of a caustic on a floor out of the floor seen through the
+ * glass beside it. 0 for a pixel that met no surface. */
+static float spread_weight(const dn_img *im, const float *base, size_t i, size_t j, int dx, int dy,
+                           const float *ic) {
+    const float zj = im->feat[3][j];
+    if (!(zj > 0.0f)) {
+        return 0.0f;
+    }
+    const float d0 = im->feat[0][j] - im->feat[0][i], d1 = im->feat[1][j] - im->feat[1][i],
+                d2 = im->feat[2][j] - im->feat[2][i];
+    const float zi = im->feat[3][i];
+    const float fx = (float)dx, fy = (float)dy;
+    const float dist = sqrtf(fx * fx + fy * fy);
+    const float dz = (zj - zi) / (zi * DN_SIGMA_Z * fmaxf(1.0f, dist * DN_SPREAD_ZS));
+    const float db = (base[j] - base[i]) / (fabsf(base[i]) + fabsf(base[j]) + 1e-4f);
+    const float q = 0.5f * (ic[0] * fx * fx + 2.0f * ic[1] * fx * fy + ic[2] * fy * fy);
+    return tr_post_exp_neg(q + (d0 * d0 + d1 * d1 + d2 * d2) * (1.0f / (DN_SIGMA_N * DN_SIGMA_N)) +
+                           dz * dz + db * db * DN_SPREAD_IB);
+}
+
+/* Step 1's second half: the energy the firefly step took (ex, 3 per pixel) is spread over
+ * the pixels around that show the same surface and added into out (3 per pixel), each
+ * source's weights normalised to 1, so the total is kept: a sparse caustic becomes a
+ * smooth patch of its energy instead of a few bright pixels or none. This is the simple,
+ * energy-preserving counterpart of Zirr, Hanika and Dachsbacher 2018 ("Re-Weighting Firefly
+ * Samples for Improved Finite-Sample Monte Carlo Estimates", Computer Graphics Forum 37(6)),
+ * who keep such samples in cascades by brightness and weigh each cascade by its agreement
+ * with the neighbourhood's. The window's half-width is the smallest of 2, 4, ..., 32 that
+ * holds DN_SPREAD_K outlier pixels (a k-nearest-neighbour bandwidth: sparse samples spread
+ * over the area that holds enough of them to say how bright it is on average), and the
+ * Gaussian follows the second moments of the outliers' offsets in it, so that an elongated
+ * glossy highlight stays elongated. base: the denoised luminance; flag, cnt, rad, wsum:
+ * scratch planes. Each receiver adds its sources in a fixed order, in strips of rows, so the
+ * result does not depend on the thread count. */
+static int spread(const dn_img *im, const float *ex, const float *base, float *flag, float *cnt,
+                  float *rad, float *wsum, float *out, int threads) {
+    const int w = im->w, h = im->h;
+    const long n = (long)w * h;
+    long ns = 0;
+    for (long i = 0; i < n; ++i) {
+        const int on = lum(ex + 3 * i) > 0.0f;
+        flag[i] = on ? 1.0f : 0.0f;
+        rad[i] = 0.0f;
+        ns += on;
+    }
+    if (ns == 0) {
+        return TR_OK;
+    }
+    long *src = malloc(sizeof(long) * (size_t)ns);
+    float *kic = malloc(sizeof(float) * 3 * (size_t)ns);
+    if (!src || !kic) {
+        free(src);
+        free(kic);
+        return TR_ERR;
+    }
+    ns = 0;
+    for (long i = 0; i < n; ++i) {
+        if (flag[i] > 0.0f) {
+            src[ns++] = i;
+        }
+    }
+    for (int r = 2; r <= DN_SPREAD_RMAX; r *= 2) {
+        box_mean(w, h, flag, cnt, r, threads);
+        for (long s = 0; s < ns; ++s) {
+            const long i = src[s];
+            const int x = (int)(i % w), y = (int)(i / w);
+            const int ax = (x + r < w - 1 ? x + r : w - 1) - (x - r > 0 ? x - r : 0) + 1;
+            const int ay = (y + r < h - 1 ? y + r : h - 1) - (y - r > 0 ? y - r : 0) + 1;
+            if (rad[i] == 0.0f &&
+                (cnt[i] * (float)(ax * ay) >= DN_SPREAD_K - 0.5f || r * 2 > DN_SPREAD_RMAX)) {
+                rad[i] = (float)r;
+            }
+        }
+    }
+#pragma omp parallel for num_threads(threads) schedule(dynamic, 64)
+    for (long s = 0; s < ns; ++s) {
+        const long i = src[s];
+        const int x = (int)(i % w), y = (int)(i / w), r = (int)rad[i];
+        const int xa = x - r > 0 ? x - r : 0, xb = x + r < w - 1 ? x + r : w - 1;
+        const int ya = y - r > 0 ? y - r : 0, yb = y + r < h - 1 ? y + r : h - 1;
+        /* The second moments of the outliers' offsets in the window (the source's among
+         * them), with those of DN_SPREAD_K - m outliers spread evenly over it where it holds
+         * only m < DN_SPREAD_K (a lone firefly spreads over the whole window), scaled, and
+         * half a pixel's variance. */
+        double m = 0.0, sxx = 0.0, sxy = 0.0, syy = 0.0;
+        for (int yy = ya; yy <= yb; ++yy) {
+            for (int xx = xa; xx <= xb; ++xx) {
+                if (flag[(size_t)yy * w + xx] > 0.0f) {
+                    const double dx = xx - x, dy = yy - y;
+                    m += 1.0;
+                    sxx += dx * dx;
+                    sxy += dx * dy;
+                    syy += dy * dy;
+                }
+            }
+        }
+        if (m < DN_SPREAD_K) {
+            const double u = (DN_SPREAD_K - m) * (double)r * (r + 1) / 3.0;
+            sxx += u;
+            syy += u;
+            m = DN_SPREAD_K;
+        }
+        const double a = DN_SPREAD_MOMENTS * sxx / m + 0.5, b = DN_SPREAD_MOMENTS * sxy / m,
+                     c = DN_SPREAD_MOMENTS * syy / m + 0.5;
+        const double det = a * c - b * b;
+        float *ic = kic + 3 * s;
+        ic[0] = (float)(c / det);
+        ic[1] = (float)(-b / det);
+        ic[2] = (float)(a / det);
+        double t = 0.0;
+        for (int yy = ya; yy <= yb; ++yy) {
+            for (int xx = xa; xx <= xb; ++xx) {
+                t += spread_weight(im, base, (size_t)i, (size_t)yy * w + xx, xx - x, yy - y, ic);
+            }
+        }
+        wsum[i] = (float)t;
+    }
+    const int strips = (h + DN_STRIP - 1) / DN_STRIP;
+#pragma omp parallel for num_threads(threads) schedule(dynamic, 1)
+    for (int st = 0; st < strips; ++st) {
+        const int y0 = st * DN_STRIP, y1 = y0 + DN_STRIP < h ? y0 + DN_STRIP : h;
+        for (long s = 0; s < ns; ++s) {
+            const long i = src[s];
+            const int x = (int)(i % w), y = (int)(i / w), r = (int)rad[i];
+            if (y + r < y0 || y - r >= y1 || !(wsum[i] > 0.0f)) {
+                continue;
+            }
+            const float *ic = kic + 3 * s;
+            const float inv = 1.0f / wsum[i];
+            const float e0 = ex[3 * i] * inv, e1 = ex[3 * i + 1] * inv, e2 = ex[3 * i + 2] * inv;
+            const int ya = y - r > y0 ? y - r : y0, yb = y + r < y1 - 1 ? y + r : y1 - 1;
+            const int xa = x - r > 0 ? x - r : 0, xb = x + r < w - 1 ? x + r : w - 1;
+            for (int yy = ya; yy <= yb; ++yy) {
+                for (int xx = xa; xx <= xb; ++xx) {
+                    const size_t j = (size_t)yy * w + xx;
+                    const float wt = spread_weight(im, base, (size_t)i, j, xx - x, yy - y, ic);
+                    out[3 * j] += wt * e0;
+                    out[3 * j + 1] += wt * e1;
+                    out[3 * j + 2] += wt * e2;
+                }
+            }
+        }
+    }
+    free(src);
+    free(kic);
+    return TR_OK;
+}
+
 /* One level of the edge-stopping candidate: an a-trous step (the 5x5 B3 kernel with holes
  * of `step` pixels, Dammertz et al. 2010) of the planes src into dst, each tap weighted by
  * the differences in normal and relative depth (the a-trous filter's scales) and by the
@@ -716,11 +918,13 @@ int tr_denoise_film(const tr_film *film, const tr_denoise_params *params, int th
     float *col = malloc(sizeof(float) * 3 * n);
     float *alb = malloc(sizeof(float) * 3 * n);
     float *emi = malloc(sizeof(float) * 3 * n);
-    if (!block || !col || !alb || !emi) {
+    float *ex = calloc(3 * n, sizeof(float)); /* the outliers' energy, step 1 */
+    if (!block || !col || !alb || !emi || !ex) {
         free(block);
         free(col);
         free(alb);
         free(emi);
+        free(ex);
         return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory denoising %dx%d", w, h);
     }
     float *pl[P_N];
@@ -783,7 +987,27 @@ int tr_denoise_film(const tr_film *film, const tr_denoise_params *params, int th
             pl[P_SE][i] = se;
         }
     }
-    fireflies(w, h, col, pl[P_LUM], pl[P_SE], p.firefly_k, threads);
+    /* How many samples carry each pixel's energy (luminance-weighted sums of the channels'
+     * sums and squares): 1 for a pixel whose value rests on one sample. Unknown without the
+     * variance pass and where the first hit's emission is part of the sums. */
+    float *neff = pl[P_R];
+#pragma omp parallel for num_threads(threads) schedule(static)
+    for (long i = 0; i < (long)n; ++i) {
+        neff[i] = INFINITY;
+        if (film->sq && film->count[i] > 0u) {
+            double sl = 0.0, ql = 0.0, e = 0.0;
+            for (int k = 0; k < 3; ++k) {
+                const double wc = k == 0 ? 0.2126 : k == 1 ? 0.7152 : 0.0722;
+                sl += wc * film->sum[3 * i + k];
+                ql += wc * film->sq[3 * i + k];
+                e += film->emission ? film->emission[3 * i + k] : 0.0;
+            }
+            if (e == 0.0 && ql > 0.0) {
+                neff[i] = (float)(sl * sl / ql);
+            }
+        }
+    }
+    fireflies(w, h, col, pl[P_LUM], pl[P_SE], neff, film->depth, p.firefly_k, ex, threads);
     const float zscale = dcount ? (float)(dcount / dsum) : 1.0f;
     const float xscale = 1.0f / (float)(p.radius > 0 ? p.radius : 1);
 #pragma omp parallel for num_threads(threads) schedule(static)
@@ -891,6 +1115,15 @@ int tr_denoise_film(const tr_film *film, const tr_denoise_params *params, int th
                 out[3 * i + k] = fmaxf(y, 0.0f);
             }
         }
+        /* The outliers' energy, spread over their surfaces. */
+        float *base = pl[P_AV0];
+#pragma omp parallel for num_threads(threads) schedule(static)
+        for (long i = 0; i < (long)n; ++i) {
+            base[i] = lum(out + 3 * i);
+        }
+        rc = spread(&im, ex, base, pl[P_LEV], pl[P_RS], pl[P_AV1], pl[P_ALEV], out, threads);
+    }
+    if (rc == TR_OK) {
         if (film->emission) {
             float *eb[3] = {pl[P_BEST], pl[P_BEST + 1], pl[P_BEST + 2]};
             emission_select(w, h, emi, film->count, at, cur, eb, pl[P_AV0], pl[P_R], pl[P_RBEST],
@@ -909,5 +1142,6 @@ int tr_denoise_film(const tr_film *film, const tr_denoise_params *params, int th
     free(col);
     free(alb);
     free(emi);
+    free(ex);
     return rc;
 }
