@@ -6,8 +6,10 @@
  *      extras; outside [0, 1] they are refused (TR_STATUS_PARSE, the key's path named), and
  *      other material types refuse them. A scene with a sheen carries the albedo table.
  *  (b) glTF: a material with KHR_materials_sheen imports its colour and roughness factors
- *      with no warning about it; KHR_materials_specular, which Assimp 5.2 does not pass on,
- *      keeps its "not rendered" warning.
+ *      with no warning about it; KHR_materials_specular and KHR_materials_emissive_strength,
+ *      which Assimp 5.2 does not pass on, are read from the file's JSON: the factors reach
+ *      the extras (the colour clamped to the scene key's [0, 10]) with no warning naming
+ *      either extension, and the specular map alone is warned about as dropped.
  *  (c) White furnace: a white principled sphere with a white sheen under a uniform white
  *      environment creates no energy (mean at most 1 plus five standard errors) and
  *      reflects more than the same sphere's base alone loses to the sheen's scaling (the
@@ -114,9 +116,9 @@ static void keys(void) {
  * extension as well). */
 static const char gltf_fmt[] =
     "{\"asset\": {\"version\": \"2.0\"}, \"extensionsUsed\": [\"KHR_materials_sheen\"%s],\n"
-    " \"scene\": 0, \"scenes\": [{\"nodes\": [0]}], \"nodes\": [{\"mesh\": 0}],\n"
+    " \"scene\": 0, \"scenes\": [{\"nodes\": [0]}], \"nodes\": [{\"mesh\": 0}],%s\n"
     " \"materials\": [{\"name\": \"velvet\", \"pbrMetallicRoughness\": {\"baseColorFactor\": "
-    "[0.5, 0.5, 0.5, 1], \"metallicFactor\": 0, \"roughnessFactor\": 0.8},\n"
+    "[0.5, 0.5, 0.5, 1], \"metallicFactor\": 0, \"roughnessFactor\": 0.8},%s\n"
     "   \"extensions\": {\"KHR_materials_sheen\": {\"sheenColorFactor\": [0.75, 0.5, 0.25], "
     "\"sheenRoughnessFactor\": 0.625}%s}}],\n"
     " \"meshes\": [{\"primitives\": [{\"attributes\": {\"POSITION\": 0}, \"material\": 0}]}],\n"
@@ -129,8 +131,22 @@ static const char gltf_fmt[] =
 static int load_gltf(const char *dir, int specular, tr_scene *s, tr_scene_file *info) {
     char path[600], text[4096];
     snprintf(path, sizeof path, "%s/sheen%d.gltf", dir, specular);
-    snprintf(text, sizeof text, gltf_fmt, specular ? ", \"KHR_materials_specular\"" : "",
-             specular ? ", \"KHR_materials_specular\": {\"specularFactor\": 0.5}" : "");
+    /* A 2x2 PNG as the specular map (only its presence matters). */
+    static const char png[] = "iVBORw0KGgoAAAANSUhEUgAAAAIAAAACCAYAAABytg0kAAAAEUlEQVR4nGNwOMH1H"
+                              "4QZYAwAR3gIRdn56ZMAAAAASUVORK5CYII=";
+    char images[256];
+    snprintf(images, sizeof images,
+             " \"textures\": [{\"source\": 0}], \"images\": [{\"uri\": "
+             "\"data:image/png;base64,%s\"}],",
+             png);
+    snprintf(text, sizeof text, gltf_fmt,
+             specular ? ", \"KHR_materials_specular\", \"KHR_materials_emissive_strength\"" : "",
+             specular ? images : "", specular ? " \"emissiveFactor\": [0.5, 0.25, 0.125]," : "",
+             specular
+                 ? ", \"KHR_materials_specular\": {\"specularFactor\": 0.5, "
+                   "\"specularColorFactor\": [2, 1, 12], \"specularTexture\": {\"index\": 0}}, "
+                   "\"KHR_materials_emissive_strength\": {\"emissiveStrength\": 4}"
+                 : "");
     FILE *f = fopen(path, "w");
     CHECK(f && fputs(text, f) >= 0 && fclose(f) == 0, "writing %s", path);
     tr_error err;
@@ -170,13 +186,25 @@ static void gltf(void) {
         const uint32_t plain = info.warning_count;
         tr_scene_clear(&s);
         if (load_gltf(dir, 1, &s, &info) == TR_OK) {
-            int spec_warned = 0;
-            for (uint32_t w = 0; w < info.warning_count; ++w) {
-                spec_warned += strstr(info.warnings[w], "KHR_materials_specular") != NULL;
+            int read = 0;
+            for (uint32_t i = 0; i < s.material_count && i < s.material_ext_count; ++i) {
+                const tr_material_ext *e = &s.material_exts[i];
+                read += (e->flags & TR_MATEXT_SPECULAR) != 0u && e->specular == 0.5f &&
+                        e->specular_color.x == 2.0f && e->specular_color.y == 1.0f &&
+                        e->specular_color.z == 10.0f && e->emission.x == 2.0f &&
+                        e->emission.y == 1.0f && e->emission.z == 0.5f;
             }
-            CHECK(spec_warned == 1 && info.warning_count == plain + 1,
-                  "KHR_materials_specular: %d warnings name it, %u in all (%u without)",
-                  spec_warned, info.warning_count, plain);
+            CHECK(read == 1, "the specular and emissive-strength factors reach no material");
+            int ext_warned = 0, map_warned = 0;
+            for (uint32_t w = 0; w < info.warning_count; ++w) {
+                printf("warning: %s\n", info.warnings[w]);
+                ext_warned += strstr(info.warnings[w], "not rendered") != NULL;
+                map_warned += strstr(info.warnings[w], "KHR_materials_specular") != NULL &&
+                              strstr(info.warnings[w], "dropped") != NULL;
+            }
+            CHECK(ext_warned == 0 && map_warned == 1 && info.warning_count == plain + 1,
+                  "%d extensions not rendered, %d specular map warnings, %u in all (%u without)",
+                  ext_warned, map_warned, info.warning_count, plain);
             tr_scene_clear(&s);
         }
     }

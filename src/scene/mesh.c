@@ -54,6 +54,9 @@ typedef struct import_ctx {
      * file's meshes, and the prototype each shared one became (+1; 0: not yet; UINT32_MAX:
      * none, nothing but degenerate faces). */
     uint32_t *placements, *proto;
+    /* A glTF file's own JSON (NULL for other formats, or where it cannot be read): the
+     * extensions Assimp 5.2 does not pass on are read from it (gltf_material_json). */
+    cJSON *gltf_root;
 } import_ctx;
 
 static void import_warn(const import_ctx *c, const char *fmt, ...)
@@ -286,7 +289,8 @@ static uint32_t load_texture_xf(import_ctx *c, const struct aiMaterial *m, const
  *     (KHR_materials_ior, Assimp's refracti);
  *     the volume's attenuation (KHR_materials_volume); the emission x its strength
  *     (KHR_materials_emissive_strength); the sheen's colour and roughness x their
- *     maps (KHR_materials_sheen). A transmission factor without a metallic-
+ *     maps (KHR_materials_sheen); the dielectric layer's specular factor and colour
+ *     (KHR_materials_specular, from the file's JSON: gltf_material_json). A transmission factor without a metallic-
  *     roughness material -> glass (colour: Kd, ior Ni or 1.5).
  *   otherwise Ke > 0 without an emissive map -> emitter (colour Ke / max(Ke), emittance
  *     max(Ke)); illum 4, 6, 7 or 9 (refraction) -> glass (colour Kd, ior Ni, 1.5 where
@@ -298,8 +302,67 @@ static uint32_t load_texture_xf(import_ctx *c, const struct aiMaterial *m, const
  *   Maps we do not use (specular, bump/height, opacity, ambient, shininess, displacement,
  *     light, reflection) are dropped with a warning naming the material.
  * Colours other than Ke and the emission are clamped to [0, 1]. */
-static tr_material map_material(import_ctx *c, const struct aiMaterial *m, tr_material_ext *ext,
-                                int *has_ext) {
+/* The number at `key` of object o, or `fallback` where there is none (or not a finite
+ * number). */
+static double json_number(const cJSON *o, const char *key, double fallback) {
+    const cJSON *v = o ? cJSON_GetObjectItemCaseSensitive(o, key) : NULL;
+    return cJSON_IsNumber(v) && isfinite(v->valuedouble) ? v->valuedouble : fallback;
+}
+
+/* glTF material `index`'s extension `name` (an object), or NULL. Assimp 5.2 keeps the
+ * file's materials in their order (and appends its default one after them), so an Assimp
+ * material index below the file's count is the file's. */
+static const cJSON *gltf_material_ext(const import_ctx *c, unsigned int index, const char *name) {
+    const cJSON *mats =
+        c->gltf_root ? cJSON_GetObjectItemCaseSensitive(c->gltf_root, "materials") : NULL;
+    const cJSON *m = cJSON_IsArray(mats) ? cJSON_GetArrayItem(mats, (int)index) : NULL;
+    const cJSON *exts = m ? cJSON_GetObjectItemCaseSensitive(m, "extensions") : NULL;
+    const cJSON *e = exts ? cJSON_GetObjectItemCaseSensitive(exts, name) : NULL;
+    return cJSON_IsObject(e) ? e : NULL;
+}
+
+/* The glTF extensions Assimp 5.2 reads but does not pass on, from the file's own JSON:
+ * KHR_materials_emissive_strength (the emission's multiplier) and KHR_materials_specular
+ * (the dielectric layer's F0 scale and tint; its two maps are not read, a warning says
+ * so). Values out of the extension's range are clamped to it as the others are. */
+static void gltf_material_json(import_ctx *c, unsigned int index, const char *mname,
+                               int assimp_strength, tr_material_ext *ext) {
+    const cJSON *es = gltf_material_ext(c, index, "KHR_materials_emissive_strength");
+    const double strength = json_number(es, "emissiveStrength", 1.0);
+    if (es && !assimp_strength && strength >= 0.0 && strength != 1.0) {
+        const tr_vec3 em = v3_scale(ext->emission, (float)strength);
+        ext->emission =
+            v3(em.x < 1e7f ? em.x : 1e7f, em.y < 1e7f ? em.y : 1e7f, em.z < 1e7f ? em.z : 1e7f);
+    }
+    const cJSON *sp = gltf_material_ext(c, index, "KHR_materials_specular");
+    if (!sp) {
+        return;
+    }
+    const double f = json_number(sp, "specularFactor", 1.0);
+    tr_vec3 col = v3s(1.0f);
+    const cJSON *cf = cJSON_GetObjectItemCaseSensitive(sp, "specularColorFactor");
+    if (cJSON_IsArray(cf) && cJSON_GetArraySize(cf) == 3) {
+        float k[3];
+        for (int i = 0; i < 3; ++i) {
+            const cJSON *x = cJSON_GetArrayItem(cf, i);
+            const double v = cJSON_IsNumber(x) && isfinite(x->valuedouble) ? x->valuedouble : 1.0;
+            k[i] = (float)(v < 0.0 ? 0.0 : v > 10.0 ? 10.0 : v);
+        }
+        col = v3(k[0], k[1], k[2]);
+    }
+    ext->flags |= TR_MATEXT_SPECULAR;
+    ext->specular = (float)(f < 0.0 ? 0.0 : f > 1.0 ? 1.0 : f);
+    ext->specular_color = col;
+    if (cJSON_GetObjectItemCaseSensitive(sp, "specularTexture") ||
+        cJSON_GetObjectItemCaseSensitive(sp, "specularColorTexture")) {
+        import_warn(
+            c, "material '%.60s': KHR_materials_specular's maps dropped (the factors are used)",
+            mname);
+    }
+}
+
+static tr_material map_material(import_ctx *c, unsigned int index, const struct aiMaterial *m,
+                                tr_material_ext *ext, int *has_ext) {
     struct aiColor4D kd = {0.6f, 0.6f, 0.6f, 1.0f}, ks = {0, 0, 0, 1}, ke = {0, 0, 0, 1};
     struct aiColor4D base = {0, 0, 0, 0};
     aiGetMaterialColor(m, AI_MATKEY_COLOR_DIFFUSE, &kd);
@@ -466,14 +529,15 @@ static tr_material map_material(import_ctx *c, const struct aiMaterial *m, tr_ma
                 load_texture_xf_at(c, m, mname, aiTextureType_SHEEN, 1, "sheen roughness");
         }
         one = 1;
-        if (aiGetMaterialFloatArray(m, AI_MATKEY_EMISSIVE_INTENSITY, &strength, &one) ==
-                AI_SUCCESS &&
-            isfinite(strength) && strength >= 0.0f && strength != 1.0f) {
+        const int assimp_strength =
+            aiGetMaterialFloatArray(m, AI_MATKEY_EMISSIVE_INTENSITY, &strength, &one) == AI_SUCCESS;
+        if (assimp_strength && isfinite(strength) && strength >= 0.0f && strength != 1.0f) {
             /* KHR_materials_emissive_strength scales the emissive factor. */
             tr_vec3 em = v3_scale(ext->emission, strength);
             ext->emission =
                 v3(em.x < 1e7f ? em.x : 1e7f, em.y < 1e7f ? em.y : 1e7f, em.z < 1e7f ? em.z : 1e7f);
         }
+        gltf_material_json(c, index, mname, assimp_strength, ext);
         /* KHR_materials_transmission with its map (Assimp 5.1 on: aiTextureType_TRANSMISSION,
          * index 0; the red channel times the factor) and KHR_materials_ior, and
          * KHR_materials_volume's attenuation. Its thickness, factor and map (the same type,
@@ -515,7 +579,8 @@ static tr_material map_material(import_ctx *c, const struct aiMaterial *m, tr_ma
                ext->metallic > 0.0f || ext->clearcoat > 0.0f || ext->emission.x > 0.0f ||
                ext->emission.y > 0.0f || ext->emission.z > 0.0f || ext->transmission > 0.0f ||
                ext->absorption.x > 0.0f || ext->absorption.y > 0.0f || ext->absorption.z > 0.0f ||
-               ext->sheen_color.x > 0.0f || ext->sheen_color.y > 0.0f || ext->sheen_color.z > 0.0f;
+               ext->sheen_color.x > 0.0f || ext->sheen_color.y > 0.0f ||
+               ext->sheen_color.z > 0.0f || (ext->flags & TR_MATEXT_SPECULAR);
     return out;
 }
 
@@ -532,7 +597,7 @@ static int material_of(import_ctx *c, unsigned int index, uint32_t *out) {
         uint32_t m;
         tr_material_ext ext;
         int has_ext;
-        tr_material mat = map_material(c, c->ai->mMaterials[index], &ext, &has_ext);
+        tr_material mat = map_material(c, index, c->ai->mMaterials[index], &ext, &has_ext);
         if (tr_scene_add_material(c->s, mat, &m, c->err) != TR_OK ||
             (has_ext && tr_scene_set_material_ext(c->s, m, &ext, c->err) != TR_OK)) {
             return TR_ERR;
@@ -886,23 +951,22 @@ static char *gltf_json(const char *path, int glb) {
  * warning: */
 static void gltf_extension_warnings(const import_ctx *c, const char *path) {
     static const char *const handled[] = {
-        "KHR_materials_clearcoat",    /* the clear coat and its three maps */
-        "KHR_lights_punctual",        /* point, spot and directional lights */
-        "KHR_materials_transmission", /* principled's transmission and its map */
-        "KHR_materials_ior",          /* the principled material's index */
-        "KHR_materials_volume",       /* the attenuation (thickness is not needed) */
-        "KHR_texture_transform",      /* the maps' offset, rotation and scale */
-        "KHR_materials_sheen",        /* principled's sheen and its two maps */
+        "KHR_materials_clearcoat",         /* the clear coat and its three maps */
+        "KHR_lights_punctual",             /* point, spot and directional lights */
+        "KHR_materials_transmission",      /* principled's transmission and its map */
+        "KHR_materials_ior",               /* the principled material's index */
+        "KHR_materials_volume",            /* the attenuation (thickness is not needed) */
+        "KHR_texture_transform",           /* the maps' offset, rotation and scale */
+        "KHR_materials_sheen",             /* principled's sheen and its two maps */
+        "KHR_materials_emissive_strength", /* from the file's JSON (gltf_material_json) */
+        "KHR_materials_specular",          /* from the file's JSON, its maps warned */
     };
-    const size_t plen = strlen(path);
-    char *text = gltf_json(path, plen > 4 && strcasecmp(path + plen - 4, ".glb") == 0);
-    if (!text) {
+    const cJSON *root = c->gltf_root;
+    if (!root) {
         import_warn(c, "'%.200s': cannot read its glTF extensions to check them", path);
         return;
     }
-    cJSON *root = cJSON_Parse(text);
-    free(text);
-    const cJSON *used = root ? cJSON_GetObjectItemCaseSensitive(root, "extensionsUsed") : NULL;
+    const cJSON *used = cJSON_GetObjectItemCaseSensitive(root, "extensionsUsed");
     const cJSON *x;
     cJSON_ArrayForEach(x, used) {
         if (!cJSON_IsString(x) || !x->valuestring) {
@@ -916,7 +980,6 @@ static void gltf_extension_warnings(const import_ctx *c, const char *path) {
             import_warn(c, "glTF extension %.80s not rendered", x->valuestring);
         }
     }
-    cJSON_Delete(root);
 }
 
 int tr_scene_import_mesh(tr_scene *s, const char *path, const tr_transform *tf,
@@ -995,8 +1058,13 @@ int tr_scene_import_mesh_ex(tr_scene *s, const char *path, const tr_transform *t
             snprintf(c.dir, sizeof c.dir, "/");
         }
     }
-    if (c.gltf && c.warn) {
-        gltf_extension_warnings(&c, path);
+    if (c.gltf) {
+        char *text = gltf_json(path, plen > 4 && strcasecmp(path + plen - 4, ".glb") == 0);
+        c.gltf_root = text ? cJSON_Parse(text) : NULL;
+        free(text);
+        if (c.warn) {
+            gltf_extension_warnings(&c, path);
+        }
     }
     c.material_map = malloc((ai->mNumMaterials ? ai->mNumMaterials : 1) * sizeof *c.material_map);
     int rc = TR_OK;
@@ -1044,6 +1112,7 @@ int tr_scene_import_mesh_ex(tr_scene *s, const char *path, const tr_transform *t
         tr_scene_truncate(s, t0, s0, m0);
     }
     free(c.material_map);
+    cJSON_Delete(c.gltf_root);
     aiReleaseImport(ai);
     return rc;
 }
