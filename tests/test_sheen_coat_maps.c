@@ -154,6 +154,23 @@ static void check_stage(tr_scene *s, double scale, const char *what) {
     CHECK(memcmp(&b0, &b, sizeof b) == 0, "%s: the coat's map changed more than the coat", what);
     CHECK(b.ns.x == 0.0f && b.ns.y == 0.0f && b.ns.z == 1.0f, "%s: base normal (%g, %g, %g)", what,
           (double)b.ns.x, (double)b.ns.y, (double)b.ns.z);
+    /* The same map as the base's normal map and none of the coat's own: the base tilts,
+     * the coat keeps the interpolated normal (glTF: a coat without its map is not
+     * normal-mapped). */
+    const uint32_t base_keep = e->normal_tex;
+    const float scale_keep = e->normal_scale;
+    e->normal_tex = keep;
+    e->normal_scale = 1.0f;
+    e->clearcoat_normal_tex = TR_NO_INDEX;
+    tr_bsdf_params b1 = stage(s);
+    e->normal_tex = base_keep;
+    e->normal_scale = scale_keep;
+    e->clearcoat_normal_tex = keep;
+    const tr_vec3 n1 = tr_unpack_oct(b1.coat_n);
+    CHECK(b1.ns.z < 0.999f && b1.coat_n != 0u && fabs(n1.x) < 1e-4 && fabs(n1.y) < 1e-4 &&
+              fabs(n1.z - 1.0) < 1e-4,
+          "%s: base normal map only: base (%g, %g, %g), coat (%g, %g, %g)", what, (double)b1.ns.x,
+          (double)b1.ns.y, (double)b1.ns.z, (double)n1.x, (double)n1.y, (double)n1.z);
 }
 
 /* (a) */

@@ -82,7 +82,8 @@ typedef struct tr_bsdf_params {
      * words where seven floats would be (see ext below; the first fills what was padding
      * before the pointers). The sheen colour map's red and green, its blue and the sheen
      * roughness map's alpha, each multiplying the extras' factor; the clear coat's shading
-     * normal from its own normal map (the coat otherwise shares ns). */
+     * normal from its own normal map, or the interpolated normal where only the base is
+     * normal-mapped (with neither map the coat shares ns). */
     uint32_t sheen_rg, sheen_ba, coat_n;
     /* The scene's multiple-scattering table (ggx_ms.h), or NULL: read where flags has
      * TR_MATERIAL_MULTISCATTER. */
@@ -206,6 +207,11 @@ TR_FN void tr_material_apply_ext(const tr_scene_view *s, uint32_t mat, const tr_
     }
     if (e.normal_tex != TR_NO_INDEX && v3_dot(a->dpdu, a->dpdu) > 0.0f) {
         tr_normal_map(s, e.normal_tex, e.normal_scale, a, b->ns, &b->ns);
+        if (b->clearcoat > 0.0f && b->coat_n == 0u) {
+            /* glTF: without its own map the coat is not normal-mapped, even where the
+             * base is: it keeps the interpolated normal. */
+            b->coat_n = tr_pack_oct(a->ns);
+        }
     }
     if (e.sheen_color_tex != TR_NO_INDEX || e.sheen_rough_tex != TR_NO_INDEX) {
         /* glTF: the sheen colour map's RGB (sRGB) and the roughness map's alpha (linear),
