@@ -222,7 +222,12 @@ int tr_scene_triangle_instance(const tr_scene *s, uint32_t triangle, uint32_t *i
 
 /* ---- Reading a scene ---------------------------------------------------------- */
 
+/* Triangles the scene places: the ids rays can hit run from 0 to this count - 1. */
 uint32_t tr_scene_triangle_count(const tr_scene *s);
+/* Of those, the ones stored one by one (ids 0 ..): the rest are placed by instances kept
+ * unflattened for the CPU's two-level `bvh` (tr_scene_add_instance), stored once per
+ * prototype, none of them an emitter. Equal to tr_scene_triangle_count without them. */
+uint32_t tr_scene_stored_triangle_count(const tr_scene *s);
 uint32_t tr_scene_material_count(const tr_scene *s);
 /* Shapes and meshes added: the boxes of the thesis's flat structure. */
 uint32_t tr_scene_shape_count(const tr_scene *s);
