@@ -23,9 +23,16 @@
  * 4. Ids: a kept id names its instance and primitive (tr_scene_triangle_instance), and
  *    the flattened scene's triangle for that instance and primitive is the one the id
  *    reads.
- * 5. Moving a kept instance and tr_scene_update trace what a new commit traces. */
+ * 5. Moving a kept instance and tr_scene_update trace what a new commit traces.
+ * 6. A scene file's triangle budget counts stored triangles: kept placements beyond it
+ *    load, placements of an emitting prototype beyond it are refused (TR_STATUS_LIMIT),
+ *    and a kept placement with a vertex beyond the coordinate bound is refused as a
+ *    copy's is. */
+#define _POSIX_C_SOURCE 200809L /* mkstemp */
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "check.h"
 #include "kernel/kernel.h"
@@ -287,10 +294,79 @@ static void refit(void) {
     tr_scene_clear(&s);
 }
 
+/* Loads JSON text `text` (written to a temporary file) with a budget of `budget`
+ * triangles; returns the status (TR_OK or the error's) and the placed triangle count. */
+static int load_json(const char *text, uint32_t budget, uint32_t *placed) {
+    const char *tmp = getenv("TMPDIR");
+    char path[512];
+    snprintf(path, sizeof path, "%s/trac0r-kept-XXXXXX", tmp && *tmp ? tmp : "/tmp");
+    const int fd = mkstemp(path);
+    CHECK(fd >= 0, "temporary file");
+    if (fd < 0) {
+        return -1;
+    }
+    const size_t n = strlen(text);
+    CHECK(write(fd, text, n) == (ssize_t)n, "write the scene");
+    close(fd);
+    tr_scene s;
+    tr_scene_init(&s);
+    tr_error err;
+    tr_scene_file_options opt = {1, budget};
+    const int rc = tr_scene_file_load(&s, path, &opt, NULL, &err);
+    const int status = rc == TR_OK ? TR_OK : (int)err.code;
+    *placed = tr_scene_triangle_count(&s);
+    tr_scene_clear(&s);
+    unlink(path);
+    return status;
+}
+
+static void budget(void) {
+    /* A 12-triangle box placed 40 times: 480 placed triangles, 12 + 2 stored. */
+    char text[8192];
+    int len =
+        snprintf(text, sizeof text,
+                 "{\"camera\": {\"position\": [0, 2, -5], \"look_at\": [0, 0, 0], \"fov\": 40},"
+                 " \"materials\": {\"w\": {\"type\": \"diffuse\", \"color\": [0.5, 0.5, 0.5]},"
+                 " \"l\": {\"type\": \"emitter\", \"color\": [1, 1, 1], \"emittance\": 4}},"
+                 " \"shapes\": [{\"type\": \"plane\", \"material\": \"w\"}],"
+                 " \"prototypes\": {\"b\": {\"shapes\": [{\"type\": \"box\", \"material\": "
+                 "\"%s\"}]}}, \"instances\": [",
+                 "w");
+    for (int i = 0; i < 40; ++i) {
+        len += snprintf(text + len, sizeof text - (size_t)len,
+                        "%s{\"prototype\": \"b\", \"position\": [%d, 0, 0]}", i ? ", " : "", i);
+    }
+    snprintf(text + len, sizeof text - (size_t)len, "]}");
+    uint32_t placed = 0;
+    CHECK(load_json(text, 100, &placed) == TR_OK && placed == 2 + 40 * 12,
+          "kept placements beyond the budget load (%u placed)", placed);
+    /* The same with an emitting box: each placement is stored, and the budget stops it. */
+    char *l = strstr(text, "\"material\": \"w\"}]}}");
+    CHECK(l != NULL, "the prototype's material");
+    if (l) {
+        l[13] = 'l';
+    }
+    CHECK(load_json(text, 100, &placed) == TR_STATUS_LIMIT, "emitting placements count");
+    if (l) {
+        l[13] = 'w';
+    }
+    /* A placement stretching the box past the coordinate bound: refused as a copy is (a
+     * fault of the file's content: TR_STATUS_PARSE). */
+    char *q = strstr(text, "{\"prototype\": \"b\", \"position\": [39, 0, 0]}");
+    CHECK(q != NULL, "the last placement");
+    if (q) {
+        snprintf(q, sizeof text - (size_t)(q - text),
+                 "{\"prototype\": \"b\", \"matrix\": [1e7, 0, 0, 1e7, 0, 1, 0, 0, 0, 0, 1, 0]}]}");
+    }
+    CHECK(load_json(text, 0, &placed) == TR_STATUS_PARSE,
+          "a kept placement beyond the coordinate bound is refused");
+}
+
 int main(void) {
     storage_and_flattening();
     same_bits(TR_INTEGRATOR_PT, "pt");
     same_bits(TR_INTEGRATOR_BDPT, "bdpt");
     refit();
+    budget();
     return check_finish("test_instances_kept");
 }

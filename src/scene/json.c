@@ -1515,7 +1515,8 @@ static int parse_instances(jctx *c, const cJSON *list, int copies) {
         if (!kept && (uint64_t)c->scene->triangle_count + n > c->budget) {
             return jerr_code(c, TR_STATUS_LIMIT, p,
                              "the scene would have %llu triangles, more than the budget of %u "
-                             "(instances count every triangle they place)",
+                             "(instances of a prototype with an emitter store every triangle they "
+                             "place)",
                              (unsigned long long)(c->scene->triangle_count + n), c->budget);
         }
         tr_error e;
