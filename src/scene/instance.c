@@ -645,8 +645,19 @@ int tr_scene_update_two_level(tr_scene *s, tr_error *err) {
 
 /* ---- Kept instances read by id (the kernel's tr_view_* on the host) ---------------- */
 
+/* The instance each thread found last: a hit is read several times (its triangle,
+ * material, vertices), and the search is skipped while the hint's range holds the id.
+ * The hint is checked against the scene it is used on, so it is never wrong, only
+ * sometimes useless. */
+static _Thread_local uint32_t kept_hint;
+
 static const tr_instance *kept_of(const tr_scene *s, uint32_t id, uint32_t *local) {
-    const uint32_t i = kept_instance(s, id);
+    uint32_t i = kept_hint;
+    if (!(i < s->instance_count && !s->instances[i].flat && s->inst_first[i] <= id &&
+          id - s->inst_first[i] < s->protos[s->instances[i].proto].tri_count)) {
+        i = kept_instance(s, id);
+        kept_hint = i;
+    }
     *local = id - s->inst_first[i];
     return &s->instances[i];
 }
