@@ -3,8 +3,10 @@
  * A prototype with vertex normals, texture coordinates, a base colour map and a normal
  * map (a smooth icosphere and a textured quad) is placed by non-identity matrices (a
  * rotation with a non-uniform scale, a mirror, a shear) between shapes of the scene's own
- * (a floor, a lamp, a mesh with normals and UVs added after the instances), and a lamp
- * prototype is placed once (an emitting prototype: flattened when placed). Checked:
+ * (a floor, a box, a mesh with normals and UVs added after the instances); a box without
+ * vertex attributes is placed twice (its triangles fall where the flattened scene pads
+ * vertex indices with "none" for the later mesh), and a lamp prototype is placed once (an
+ * emitting prototype: flattened when placed). Checked:
  * 1. The kept instances store no triangle: the scene stores its own shapes and the lamp
  *    instance's triangles only, and the kept ids read the triangles and vertex normals
  *    the flattened scene stores, bit for bit.
@@ -113,6 +115,11 @@ static void build(tr_scene *s, int copies) {
     /* Prototype 1: an emitting square (placed flattened either way). */
     add_shape(s, TR_SHAPE_PLANE, lamp, v3s(0.0f), v3(3.14159265f, 0.0f, 0.0f), v3s(0.6f));
     CHECK(tr_scene_make_prototype(s, 0, &bulb, &err) == TR_OK, "lamp prototype: %s", err.msg);
+    /* Prototype 2: a box without vertex attributes (flattened, its triangles fall in the
+     * range that a later shape with attributes pads with "none"). */
+    uint32_t crate = 9;
+    add_shape(s, TR_SHAPE_BOX, white, v3(0.0f, 0.2f, 0.0f), v3s(0.0f), v3s(0.4f));
+    CHECK(tr_scene_make_prototype(s, 0, &crate, &err) == TR_OK, "box prototype: %s", err.msg);
     add_shape(s, TR_SHAPE_PLANE, white, v3s(0.0f), v3s(0.0f), v3(8.0f, 1.0f, 8.0f));
     for (int k = 0; k < 6; ++k) {
         float m[12];
@@ -120,6 +127,15 @@ static void build(tr_scene *s, int copies) {
         const int rc = copies ? tr_scene_add_prototype_copy(s, tree, m, &err)
                               : tr_scene_add_instance(s, tree, m, NULL, &err);
         CHECK(rc == TR_OK, "placement %d: %s", k, err.msg);
+        if (k == 1 || k == 4) {
+            float mb[12];
+            placement(k + 1, mb);
+            mb[3] -= 1.3f;
+            mb[11] += 0.6f;
+            const int rb = copies ? tr_scene_add_prototype_copy(s, crate, mb, &err)
+                                  : tr_scene_add_instance(s, crate, mb, NULL, &err);
+            CHECK(rb == TR_OK, "box: %s", err.msg);
+        }
         if (k == 2) {
             const float up[12] = {1, 0, 0, 0.2f, 0, 1, 0, 3.0f, 0, 0, 1, 0.1f};
             CHECK(tr_scene_add_instance(s, bulb, up, NULL, &err) == TR_OK, "lamp: %s", err.msg);
@@ -146,10 +162,13 @@ static void storage_and_flattening(void) {
     build(&k, 0);
     build(&c, 1);
     const uint32_t proto_tris = tr_scene_prototype_triangle_count(&k, 0);
-    CHECK(k.two_level && tr_scene_has_kept_instances(&k) && k.placed_count == 6ull * proto_tris,
+    const uint32_t box_tris = tr_scene_prototype_triangle_count(&k, 2);
+    CHECK(k.two_level && tr_scene_has_kept_instances(&k) &&
+              k.placed_count == 6ull * proto_tris + 2ull * box_tris,
           "six kept instances (%llu placed triangles)", (unsigned long long)k.placed_count);
     CHECK(tr_scene_triangle_count(&k) == c.triangle_count &&
-              tr_scene_stored_triangle_count(&k) == c.triangle_count - 6u * proto_tris,
+              tr_scene_stored_triangle_count(&k) ==
+                  c.triangle_count - 6u * proto_tris - 2u * box_tris,
           "%u placed, %u stored vs %u flattened", tr_scene_triangle_count(&k), k.triangle_count,
           c.triangle_count);
     /* A kept id's triangle and normals are those of the same (instance, primitive) in the
@@ -170,7 +189,7 @@ static void storage_and_flattening(void) {
         bad += memcmp(&t, &c.triangles[flat_id], sizeof t) != 0 || hk != hc ||
                memcmp(nk, nc, sizeof nk) != 0 || k.instances[inst].flat;
     }
-    CHECK(named == 6u * proto_tris && bad == 0,
+    CHECK(named == 6u * proto_tris + 2u * box_tris && bad == 0,
           "%u kept ids named, %u differ from the flattened triangles", named, bad);
     /* The kept scene's shapes are the flattened one's but for where their ids start. */
     CHECK(k.shape_count == c.shape_count, "%u vs %u shapes", k.shape_count, c.shape_count);
@@ -193,8 +212,8 @@ static void storage_and_flattening(void) {
     }
     CHECK(shape_diff == 0, "%u shapes differ once flattened", shape_diff);
     uint32_t inst = 0, prim = 0;
-    const uint32_t lamp_first = k.shapes[k.instances[3].shape].first;
-    CHECK(tr_scene_triangle_instance(&k, lamp_first + 1, &inst, &prim) && inst == 3 && prim == 1,
+    const uint32_t lamp_first = k.shapes[k.instances[4].shape].first;
+    CHECK(tr_scene_triangle_instance(&k, lamp_first + 1, &inst, &prim) && inst == 4 && prim == 1,
           "a flattened instance's id names it (%u, %u)", inst, prim);
     tr_scene_clear(&k);
     tr_scene_clear(&c);
