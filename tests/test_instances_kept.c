@@ -26,7 +26,9 @@
  *    the flattened scene's triangle for that instance and primitive is the one the id
  *    reads.
  * 5. Moving a kept instance and tr_scene_update trace what a new commit traces.
- * 6. A scene file's triangle budget counts stored triangles: kept placements beyond it
+ * 6. A kept prototype whose emitter material is switched on (tr_scene_set_emittance,
+ *    then tr_scene_update) is flattened so that the emitter table names its triangles.
+ * 7. A scene file's triangle budget counts stored triangles: kept placements beyond it
  *    load, placements of an emitting prototype beyond it are refused (TR_STATUS_LIMIT),
  *    and a kept placement with a vertex beyond the coordinate bound is refused as a
  *    copy's is. */
@@ -381,11 +383,38 @@ static void budget(void) {
           "a kept placement beyond the coordinate bound is refused");
 }
 
+static void switched_on(void) {
+    tr_scene s;
+    tr_error err;
+    build(&s, 0);
+    const uint32_t lights = tr_scene_light_count(&s);
+    /* A dark lamp prototype (emittance 0: kept), switched on after the commit. */
+    const uint32_t dark = add_mat(&s, tr_material_emitter(v3(1.0f, 0.9f, 0.8f), 0.0f));
+    add_shape(&s, TR_SHAPE_PLANE, dark, v3s(0.0f), v3(3.14159265f, 0.0f, 0.0f), v3s(0.3f));
+    uint32_t proto = 0;
+    const float up[12] = {1, 0, 0, -1.0f, 0, 1, 0, 2.5f, 0, 0, 1, 0.0f};
+    CHECK(tr_scene_make_prototype(&s, tr_scene_shape_count(&s) - 1, &proto, &err) == TR_OK &&
+              tr_scene_add_instance(&s, proto, up, NULL, &err) == TR_OK &&
+              tr_scene_commit(&s, TR_ACCEL_TYPE_BVH, &err) == TR_OK,
+          "dark lamp: %s", err.msg);
+    const uint32_t stored = tr_scene_stored_triangle_count(&s);
+    CHECK(tr_scene_light_count(&s) == lights && tr_scene_has_kept_instances(&s),
+          "the dark lamp is kept (%u emitters)", tr_scene_light_count(&s));
+    CHECK(tr_scene_set_emittance(&s, dark, 6.0f, &err) == TR_OK &&
+              tr_scene_update(&s, NULL, &err) == TR_OK && tr_scene_is_committed(&s),
+          "switch on: %s", err.msg);
+    CHECK(!tr_scene_has_kept_instances(&s) && tr_scene_stored_triangle_count(&s) > stored &&
+              tr_scene_light_count(&s) == lights + 2 && s.two_level,
+          "switched on: flattened, %u emitters (%u before)", tr_scene_light_count(&s), lights);
+    tr_scene_clear(&s);
+}
+
 int main(void) {
     storage_and_flattening();
     same_bits(TR_INTEGRATOR_PT, "pt");
     same_bits(TR_INTEGRATOR_BDPT, "bdpt");
     refit();
+    switched_on();
     budget();
     return check_finish("test_instances_kept");
 }

@@ -748,6 +748,14 @@ int tr_scene_update(tr_scene *s, double *seconds, tr_error *err) {
         rc = tr_error_set(err, TR_STATUS_STALE_SCENE,
                           "the scene changed beyond moved shapes since it was committed "
                           "(or was never committed): commit it again");
+    } else if (s->lights_dirty && tr_scene_has_kept_instances(s) && tr_scene_kept_emit(s)) {
+        /* A kept prototype's material came to emit: the emitter table names stored
+         * triangles, so the instances are flattened and the scene committed anew. */
+        rc = tr_scene_commit(s, s->accel, err);
+        if (seconds) {
+            *seconds = tr_time_now() - t0;
+        }
+        return rc;
     } else if (s->accel == TR_ACCEL_TYPE_BVH || s->accel == TR_ACCEL_TYPE_BVH2) {
         rc = tr_scene_refit(s, err);
     } else if (s->accel == TR_ACCEL_TYPE_EMBREE) {
