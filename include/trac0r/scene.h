@@ -180,13 +180,18 @@ double tr_scene_embree_build_seconds(const tr_scene *s);
  *
  * A prototype is geometry stored once (object space); an instance places it with a 3x4
  * affine matrix m (row-major, object to world: x' = m[0] x + m[1] y + m[2] z + m[3],
- * y' from m[4..7], z' from m[8..11]). Each instance is one shape of the scene: its
- * triangles, transformed, are the scene's triangles (shading, lights, the passes' ids and
- * every structure but the BVH read them), while TR_ACCEL_TYPE_BVH on the CPU traces a
+ * y' from m[4..7], z' from m[8..11]). Each instance is one shape of the scene whose
+ * triangles are its prototype's, transformed: they count in tr_scene_triangle_count, have
+ * ids (after the stored triangles, tr_scene_stored_triangle_count) and read as placed
+ * (tr_scene_triangle), but are not stored: the instance keeps a matrix and a box, and
+ * shading places a hit triangle through it. TR_ACCEL_TYPE_BVH on the CPU traces a
  * two-level structure: a top-level wide BVH over the instances whose leaves carry the ray
  * into each prototype's own bottom-level wide BVH, built once per prototype however many
- * instances it has. The other structures (flat, bvh2, embree) and OpenCL devices trace the
- * instances' transformed triangles as ordinary ones (flattened). */
+ * instances it has. The other structures (flat, bvh2, embree) and OpenCL devices trace
+ * stored triangles only: committing to one of them, or uploading to such a device,
+ * flattens the instances first (stores their transformed triangles in the order they were
+ * added), and the scene stays flattened. A prototype with an emitting material is stored
+ * transformed per instance from the start (the emitter table names stored triangles). */
 
 /* The matrix of a transform (scale, then rotation, then translation). */
 void tr_transform_matrix(const tr_transform *tf, float m[12]);
@@ -203,7 +208,7 @@ int tr_scene_add_instance(tr_scene *s, uint32_t proto, const float m[12], uint32
  * files nest prototypes in prototypes). */
 int tr_scene_add_prototype_copy(tr_scene *s, uint32_t proto, const float m[12], tr_error *err);
 /* Moves instance `instance` to matrix m (checked as above): its triangles and vertex
- * normals are transformed anew; tr_scene_update then refits the top level along the
+ * normals are placed anew (rewritten where stored); tr_scene_update then refits the top level along the
  * instance's path only (the bottom levels never change). tr_scene_move_shape on an
  * instance's shape does the same with the translation added to its matrix. */
 int tr_scene_set_instance_transform(tr_scene *s, uint32_t instance, const float m[12],
@@ -222,7 +227,12 @@ int tr_scene_triangle_instance(const tr_scene *s, uint32_t triangle, uint32_t *i
 
 /* ---- Reading a scene ---------------------------------------------------------- */
 
+/* Triangles the scene places: the ids rays can hit run from 0 to this count - 1. */
 uint32_t tr_scene_triangle_count(const tr_scene *s);
+/* Of those, the ones stored one by one (ids 0 ..): the rest are placed by instances kept
+ * unflattened for the CPU's two-level `bvh` (tr_scene_add_instance), stored once per
+ * prototype, none of them an emitter. Equal to tr_scene_triangle_count without them. */
+uint32_t tr_scene_stored_triangle_count(const tr_scene *s);
 uint32_t tr_scene_material_count(const tr_scene *s);
 /* Shapes and meshes added: the boxes of the thesis's flat structure. */
 uint32_t tr_scene_shape_count(const tr_scene *s);

@@ -1112,6 +1112,13 @@ int tr_cl_upload_scene(tr_cl_context *ctx, const tr_scene *scene, tr_error *err)
     if (tr_scene_check_committed(scene, err) != TR_OK) {
         return TR_ERR;
     }
+    /* Kept instances (placed, not stored: the CPU's two levels alone trace them) are
+     * flattened here, once, and the scene committed again to its structure: the same
+     * scene, now in the arrays the device reads (tr_scene_flatten_committed). */
+    if (tr_scene_has_kept_instances(scene) &&
+        tr_scene_flatten_committed((tr_scene *)scene, err) != TR_OK) {
+        return TR_ERR;
+    }
     /* The device walks what the host's view holds, except that a scene committed to
      * Embree (a host library) gets a BVH of its own, and bvh scenes upload the binary BVH
      * (the wide one is host code). A bvh scene with instances holds the two-level

@@ -29,7 +29,8 @@ TR_FN int tr_first_albedo(const tr_scene_view *s, tr_ray ray, tr_vec3 *albedo) {
         if (!tr_intersect_scene(s, &ray, &hit)) {
             return 0;
         }
-        TR_CONST_GLOBAL tr_triangle *tri = &s->triangles[hit.triangle];
+        tr_triangle tri_tmp;
+        TR_CONST_GLOBAL tr_triangle *tri = tr_view_triangle(s, hit.triangle, &tri_tmp);
         const tr_vec3 p = v3_madd(ray.origin, ray.dir, hit.t);
         const tr_bsdf_params m =
             tr_material_eval(s, hit.triangle, hit.u, hit.v, p, tri->normal, ray.dir);

@@ -477,8 +477,8 @@ TR_FN tr_vec3 tr_emitted(const tr_bsdf_params *m, tr_vec3 w) {
  * material alone, never building the whole tr_bsdf_params in memory. */
 TR_FN tr_vec3 tr_emitted_at(const tr_scene_view *s, uint32_t triangle, float u, float v, tr_vec3 p,
                             tr_vec3 ng, tr_vec3 w) {
-    uint32_t mi = s->triangles[triangle].material;
-    if (triangle < s->tri_verts_count || s->material_ext_count > 0u) {
+    uint32_t mi = tr_view_material(s, triangle);
+    if (tr_view_has_verts(s, triangle) || s->material_ext_count > 0u) {
         tr_bsdf_params t;
         tr_material_eval_attributes(s, triangle, mi, u, v, p, ng, &t);
         return tr_emitted(&t, w);

@@ -343,7 +343,8 @@ TR_FN float tr_bdpt_origin_pdf(const tr_scene_view *s, const tr_bdpt_vertex *y) 
         return y->tri == TR_BDPT_SKY_SUN ? lp.sun * tr_sun_pdf(s, y->wo)
                                          : lp.env * tr_env_pdf(s, y->wo);
     }
-    TR_CONST_GLOBAL tr_triangle *tri = &s->triangles[y->tri];
+    tr_triangle tri_tmp;
+    TR_CONST_GLOBAL tr_triangle *tri = tr_view_triangle(s, y->tri, &tri_tmp);
     tr_material m = s->materials[tri->material];
     const float pdf = tr_light_pdf_area(s, &m, tri->area);
     return sky ? pdf * lp.emitters : pdf;
@@ -635,7 +636,8 @@ TR_FN void tr_bdpt_walk(const tr_scene_view *s, tr_ray ray, tr_vec3 beta, float 
             }
             break;
         }
-        TR_CONST_GLOBAL tr_triangle *tri = &s->triangles[hit.triangle];
+        tr_triangle tri_tmp;
+        TR_CONST_GLOBAL tr_triangle *tri = tr_view_triangle(s, hit.triangle, &tri_tmp);
         tr_vec3 p = v3_madd(ray.origin, ray.dir, hit.t);
         tr_bsdf_params m = tr_material_eval(s, hit.triangle, hit.u, hit.v, p, tri->normal, ray.dir);
         if (m.hole && holes < TR_MAX_HOLES) {
@@ -939,7 +941,8 @@ TR_FN int tr_bdpt_light_subpath(const tr_scene_view *s, int max_depth, const tr_
         float lo = k > 0u ? s->light_cdf[k - 1u] : 0.0f, hi = s->light_cdf[k];
         u1 = hi > lo ? tr_fminf(tr_fmaxf((u1 - lo) / (hi - lo), 0.0f), 0.99999994f) : u1;
         uint32_t t = s->lights[k];
-        TR_CONST_GLOBAL tr_triangle *tri = &s->triangles[t];
+        tr_triangle tri_tmp;
+        TR_CONST_GLOBAL tr_triangle *tri = tr_view_triangle(s, t, &tri_tmp);
         float su = tr_sqrtf(u1);
         float b1 = u2 * su, b2 = su - b1; /* uniform on the triangle (pbrt 3rd ed. 13.6.5) */
         tr_vec3 yp = v3_add(v3_add(v3_scale(tri->v0, 1.0f - b1 - b2), v3_scale(tri->v1, b1)),
@@ -1055,7 +1058,8 @@ TR_FN tr_vec3 tr_bdpt_connect(const tr_scene_view *s, const tr_camera *cam,
                 float lu, lvv, l1, l2;
                 tr_sampler_2d(smp, tr_sampler_dim(t - 1, TR_DIM_LIGHT), &l1, &l2);
                 float pl = tr_light_sample(s, pt->p, l1, l2, &lt, &yl, &lu, &lvv);
-                TR_CONST_GLOBAL tr_triangle *ltri = &s->triangles[lt];
+                tr_triangle ltri_tmp;
+                TR_CONST_GLOBAL tr_triangle *ltri = tr_view_triangle(s, lt, &ltri_tmp);
                 tr_vec3 d = v3_sub(yl, pt->p);
                 float dist = v3_length(d);
                 if (!(pl > 0.0f) || !(dist > 0.0f)) {

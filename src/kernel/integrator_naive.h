@@ -57,7 +57,8 @@ TR_FN tr_vec3 tr_trace_naive(const tr_scene_view *s, tr_ray ray, int max_depth, 
             }
             break;
         }
-        TR_CONST_GLOBAL tr_triangle *tri = &s->triangles[hit.triangle];
+        tr_triangle tri_tmp;
+        TR_CONST_GLOBAL tr_triangle *tri = tr_view_triangle(s, hit.triangle, &tri_tmp);
         tr_vec3 p_hit = v3_madd(ray.origin, ray.dir, hit.t);
         tr_bsdf_params m =
             tr_material_eval(s, hit.triangle, hit.u, hit.v, p_hit, tri->normal, ray.dir);

@@ -188,7 +188,8 @@ TR_FN tr_vec3 tr_trace_pt_ff(const tr_scene_view *s, tr_ray ray, int max_depth, 
             }
             break;
         }
-        TR_CONST_GLOBAL tr_triangle *tri = &s->triangles[hit.triangle];
+        tr_triangle tri_tmp;
+        TR_CONST_GLOBAL tr_triangle *tri = tr_view_triangle(s, hit.triangle, &tri_tmp);
         tr_vec3 n = tri->normal;
         tr_vec3 wo = v3_neg(ray.dir);
         tr_vec3 p = v3_madd(ray.origin, ray.dir, hit.t);
@@ -275,7 +276,8 @@ TR_FN tr_vec3 tr_trace_pt_ff(const tr_scene_view *s, tr_ray ray, int max_depth, 
             if (pp > 0.0f) {
                 punct_tree = tr_punctual_one(s, &s->punctual[pk], pp, &m, wo, p, rays);
             }
-            TR_CONST_GLOBAL tr_triangle *ltri = &s->triangles[lt];
+            tr_triangle ltri_tmp;
+            TR_CONST_GLOBAL tr_triangle *ltri = tr_view_triangle(s, lt, &ltri_tmp);
             tr_vec3 d = v3_sub(y, p);
             float dist = v3_length(d);
             if (pl > 0.0f && dist > 0.0f) {
@@ -430,7 +432,8 @@ TR_FN tr_vec3 tr_pt_first_emission(const tr_scene_view *s, tr_ray ray) {
             }
             return le;
         }
-        TR_CONST_GLOBAL tr_triangle *tri = &s->triangles[hit.triangle];
+        tr_triangle tri_tmp;
+        TR_CONST_GLOBAL tr_triangle *tri = tr_view_triangle(s, hit.triangle, &tri_tmp);
         tr_vec3 p = v3_madd(ray.origin, ray.dir, hit.t);
         tr_bsdf_params m = tr_material_eval(s, hit.triangle, hit.u, hit.v, p, tri->normal, ray.dir);
         if (!(m.hole && holes < TR_MAX_HOLES)) {

@@ -137,7 +137,8 @@ TR_FN int tr_pt_wf_shade(const tr_scene_view *s, tr_pt_wf_path *p, int max_depth
         }
         return 0;
     }
-    TR_CONST_GLOBAL tr_triangle *tri = &s->triangles[hit.triangle];
+    tr_triangle tri_tmp;
+    TR_CONST_GLOBAL tr_triangle *tri = tr_view_triangle(s, hit.triangle, &tri_tmp);
     tr_vec3 n = tri->normal;
     tr_vec3 wo = v3_neg(ray.dir);
     tr_vec3 pos = v3_madd(ray.origin, ray.dir, hit.t);
@@ -215,7 +216,8 @@ TR_FN int tr_pt_wf_shade(const tr_scene_view *s, tr_pt_wf_path *p, int max_depth
         if (pp > 0.0f) {
             punct_tree = tr_punctual_one(s, &s->punctual[pk], pp, &m, wo, pos, rays);
         }
-        TR_CONST_GLOBAL tr_triangle *ltri = &s->triangles[lt];
+        tr_triangle ltri_tmp;
+        TR_CONST_GLOBAL tr_triangle *ltri = tr_view_triangle(s, lt, &ltri_tmp);
         tr_vec3 d = v3_sub(y, pos);
         float dist = v3_length(d);
         if (pl > 0.0f && dist > 0.0f) {

@@ -128,7 +128,8 @@ TR_FN float tr_light_select_pdf_n(const tr_scene_view *s, tr_vec3 p, tr_vec3 nr,
         const uint32_t k = tr_light_index_of(s, t); /* light_count for no emitter */
         return k < s->light_count ? tr_light_tree_prob(s, p, nr, k) : 0.0f;
     }
-    TR_CONST_GLOBAL tr_triangle *tri = &s->triangles[t];
+    tr_triangle tri_tmp;
+    TR_CONST_GLOBAL tr_triangle *tri = tr_view_triangle(s, t, &tri_tmp);
     tr_material m = s->materials[tri->material];
     return tr_light_select_prob(s, &m, tri->area);
 }
@@ -157,7 +158,8 @@ TR_FN float tr_light_pdf_by_area(TR_CONST_GLOBAL tr_triangle *tri, float sel, tr
  * sampled by solid angle, the area density times r^2 / |cos theta_light| otherwise.
  * Both MIS strategies use it, so their weights sum to one. */
 TR_FN float tr_light_pdf_n(const tr_scene_view *s, tr_vec3 p, tr_vec3 nr, uint32_t t, tr_vec3 y) {
-    TR_CONST_GLOBAL tr_triangle *tri = &s->triangles[t];
+    tr_triangle tri_tmp;
+    TR_CONST_GLOBAL tr_triangle *tri = tr_view_triangle(s, t, &tri_tmp);
     float sel = tr_light_select_pdf_n(s, p, nr, t);
     if (!(sel > 0.0f)) {
         return 0.0f;
@@ -221,7 +223,8 @@ TR_FN float tr_light_sample_np(const tr_scene_view *s, tr_vec3 p, tr_vec3 nr, fl
         u1 = hi > lo ? tr_fminf(tr_fmaxf((u1 - lo) / (hi - lo), 0.0f), 0.99999994f) : u1;
     }
     uint32_t t = s->lights[k];
-    TR_CONST_GLOBAL tr_triangle *tri = &s->triangles[t];
+    tr_triangle tri_tmp;
+    TR_CONST_GLOBAL tr_triangle *tri = tr_view_triangle(s, t, &tri_tmp);
     *tri_index = t;
     tr_vec3 a, b, c;
     float ca = 0.0f, sa = 0.0f;

@@ -254,8 +254,8 @@ TR_FN_NOINLINE void tr_material_eval_attributes(const tr_scene_view *s, uint32_t
 TR_FN tr_bsdf_params tr_material_eval(const tr_scene_view *s, uint32_t triangle, float u, float v,
                                       tr_vec3 p, tr_vec3 ng, tr_vec3 dir) {
     (void)dir;
-    uint32_t mi = s->triangles[triangle].material;
-    if (triangle < s->tri_verts_count || s->material_ext_count > 0u) {
+    uint32_t mi = tr_view_material(s, triangle);
+    if (tr_view_has_verts(s, triangle) || s->material_ext_count > 0u) {
         /* Through a temporary: a result written straight into the caller's struct would
          * take its address, and keep it in memory on the path without attributes too. */
         tr_bsdf_params t;
@@ -280,7 +280,7 @@ TR_FN int tr_volume_attenuation(const tr_scene_view *s, uint32_t triangle, tr_ve
     if (s->material_ext_count == 0u || !(v3_dot(dir, ng) > 0.0f)) {
         return 0;
     }
-    tr_vec3 a = s->material_exts[s->triangles[triangle].material].absorption;
+    tr_vec3 a = s->material_exts[tr_view_material(s, triangle)].absorption;
     if (!(a.x > 0.0f || a.y > 0.0f || a.z > 0.0f)) {
         return 0;
     }
@@ -296,11 +296,12 @@ TR_FN int tr_hit_is_hole(const tr_scene_view *s, const tr_ray *ray, const tr_hit
     if (s->material_ext_count == 0u) {
         return 0;
     }
-    uint32_t mi = s->triangles[hit->triangle].material;
+    uint32_t mi = tr_view_material(s, hit->triangle);
     if ((s->material_exts[mi].flags & TR_MATEXT_ALPHA_MASK) == 0u) {
         return 0;
     }
-    TR_CONST_GLOBAL tr_triangle *tri = &s->triangles[hit->triangle];
+    tr_triangle tri_tmp;
+    TR_CONST_GLOBAL tr_triangle *tri = tr_view_triangle(s, hit->triangle, &tri_tmp);
     tr_vec3 p = v3_madd(ray->origin, ray->dir, hit->t);
     tr_bsdf_params b = tr_material_eval(s, hit->triangle, hit->u, hit->v, p, tri->normal, ray->dir);
     return b.hole;

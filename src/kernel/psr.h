@@ -93,7 +93,8 @@ TR_FN uint32_t tr_psr_surface(const tr_scene_view *s, tr_ray ray, tr_hit hit, tr
         if (!tr_intersect_scene(s, &ray, &hit)) {
             return rays;
         }
-        TR_CONST_GLOBAL tr_triangle *tri = &s->triangles[hit.triangle];
+        tr_triangle tri_tmp;
+        TR_CONST_GLOBAL tr_triangle *tri = tr_view_triangle(s, hit.triangle, &tri_tmp);
         const tr_vec3 q = v3_madd(ray.origin, ray.dir, hit.t);
         m = tr_material_eval(s, hit.triangle, hit.u, hit.v, q, tri->normal, ray.dir);
     }

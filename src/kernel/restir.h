@@ -115,7 +115,8 @@ TR_FN tr_restir_surface tr_restir_primary(const tr_scene_view *s, const tr_camer
         if (!tr_intersect_scene(s, &ray, &hit)) {
             return out;
         }
-        TR_CONST_GLOBAL tr_triangle *tri = &s->triangles[hit.triangle];
+        tr_triangle tri_tmp;
+        TR_CONST_GLOBAL tr_triangle *tri = tr_view_triangle(s, hit.triangle, &tri_tmp);
         tr_vec3 p = v3_madd(ray.origin, ray.dir, hit.t);
         tr_bsdf_params m = tr_material_eval(s, hit.triangle, hit.u, hit.v, p, tri->normal, ray.dir);
         if (m.hole && holes < TR_MAX_HOLES) {
@@ -152,7 +153,8 @@ TR_FN tr_vec3 tr_restir_contribution(const tr_scene_view *s, const tr_restir_sur
             le = s->sun_count > 0u ? tr_sun_radiance(s, r->y) : v3s(0.0f);
         }
     } else {
-        TR_CONST_GLOBAL tr_triangle *tri = &s->triangles[r->light];
+        tr_triangle tri_tmp;
+        TR_CONST_GLOBAL tr_triangle *tri = tr_view_triangle(s, r->light, &tri_tmp);
         tr_vec3 d = v3_sub(r->y, q->p);
         float d2 = v3_dot(d, d);
         if (!(d2 > 0.0f)) {
@@ -229,7 +231,8 @@ TR_FN float tr_restir_candidate(const tr_scene_view *s, const tr_restir_surface 
         if (!(pl > 0.0f) || !(d2 > 0.0f)) {
             return 0.0f;
         }
-        float cos_y = tr_fabsf(v3_dot(s->triangles[t].normal, d)) / tr_sqrtf(d2);
+        tr_triangle lt_tmp;
+        float cos_y = tr_fabsf(v3_dot(tr_view_triangle(s, t, &lt_tmp)->normal, d)) / tr_sqrtf(d2);
         if (!(cos_y > 0.0f)) {
             return 0.0f;
         }

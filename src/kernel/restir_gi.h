@@ -157,14 +157,15 @@ TR_FN tr_gi_reservoir tr_gi_initial(const tr_scene_view *s, const tr_restir_surf
     tr_hit hit;
     tr_bsdf_params ms;
     tr_vec3 xs;
+    tr_triangle hit_tmp;
     for (int holes = 0;; ++holes) {
         *rays += 1u;
         if (!tr_intersect_scene(s, &probe, &hit)) {
             return r; /* the environment and the sun: direct light, ReSTIR DI's */
         }
         xs = v3_madd(probe.origin, probe.dir, hit.t);
-        ms = tr_material_eval(s, hit.triangle, hit.u, hit.v, xs, s->triangles[hit.triangle].normal,
-                              probe.dir);
+        ms = tr_material_eval(s, hit.triangle, hit.u, hit.v, xs,
+                              tr_view_triangle(s, hit.triangle, &hit_tmp)->normal, probe.dir);
         if (!(ms.hole && holes < TR_MAX_HOLES)) {
             break;
         }
@@ -177,7 +178,7 @@ TR_FN tr_gi_reservoir tr_gi_initial(const tr_scene_view *s, const tr_restir_surf
         return r;
     }
     r.xs = xs;
-    r.ns = s->triangles[hit.triangle].normal;
+    r.ns = tr_view_triangle(s, hit.triangle, &hit_tmp)->normal;
     r.lo = lo;
     r.valid = 1u;
     r.reusable = !tr_bsdf_is_delta(&ms) && ms.type != TR_MATERIAL_EMITTER;

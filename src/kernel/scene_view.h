@@ -29,6 +29,16 @@ int tr_embree_occluded(const void *scene, const tr_ray *ray);
 struct tr_wbvh;
 int tr_wbvh_intersect(const struct tr_wbvh *w, const tr_ray *ray, tr_hit *hit);
 int tr_wbvh_occluded(const struct tr_wbvh *w, const tr_ray *ray);
+/* Kept instances (src/scene/instance.c): triangle ids from the view's triangle_count on
+ * name a triangle of an instance whose prototype's triangles are stored once, in its own
+ * space. These place it as flattening does (the same functions, so the same floats):
+ * its triangle into *tmp, its material, whether it has vertex attributes, and its three
+ * vertices (normals through the inverse transpose). */
+struct tr_scene;
+const tr_triangle *tr_inst_triangle(const struct tr_scene *s, uint32_t id, tr_triangle *tmp);
+uint32_t tr_inst_material(const struct tr_scene *s, uint32_t id);
+int tr_inst_has_verts(const struct tr_scene *s, uint32_t id);
+int tr_inst_vertices(const struct tr_scene *s, uint32_t id, tr_vertex x[3]);
 #endif
 
 /* Every array a kernel reads, declared once: X(element type, member, count member).
@@ -86,9 +96,64 @@ typedef struct tr_scene_view {
     const void *embree_scene; /* RTCScene, for TR_ACCEL_EMBREE */
 #endif
 #ifdef TR_SCENE_VIEW_WBVH
-    const struct tr_wbvh *wbvh; /* TR_ACCEL_BVH: the wide BVH, or NULL for the binary one */
+    const struct tr_wbvh *wbvh;  /* TR_ACCEL_BVH: the wide BVH, or NULL for the binary one */
+    const struct tr_scene *kept; /* the scene, when it holds kept instances; else NULL */
 #endif
 } tr_scene_view;
+
+/* Every read of a triangle by id goes through these, so that ids of kept instances
+ * (host only; past triangle_count) read their placed triangle: the triangle (written to
+ * *tmp when placed, else a pointer into the array), its material, whether it has vertex
+ * attributes (the `triangle < tri_verts_count` test), and its vertices (0: none). */
+#ifdef TR_SCENE_VIEW_WBVH
+TR_FN const tr_triangle *tr_view_triangle(const tr_scene_view *s, uint32_t t, tr_triangle *tmp) {
+    return t < s->triangle_count ? &s->triangles[t] : tr_inst_triangle(s->kept, t, tmp);
+}
+TR_FN uint32_t tr_view_material(const tr_scene_view *s, uint32_t t) {
+    return t < s->triangle_count ? s->triangles[t].material : tr_inst_material(s->kept, t);
+}
+TR_FN int tr_view_has_verts(const tr_scene_view *s, uint32_t t) {
+    return t < s->tri_verts_count || (t >= s->triangle_count && tr_inst_has_verts(s->kept, t));
+}
+#else
+TR_FN TR_CONST_GLOBAL tr_triangle *tr_view_triangle(const tr_scene_view *s, uint32_t t,
+                                                    tr_triangle *tmp) {
+    (void)tmp;
+    return &s->triangles[t];
+}
+TR_FN uint32_t tr_view_material(const tr_scene_view *s, uint32_t t) {
+    return s->triangles[t].material;
+}
+TR_FN int tr_view_has_verts(const tr_scene_view *s, uint32_t t) {
+    return t < s->tri_verts_count;
+}
+#endif
+TR_FN int tr_view_vertices(const tr_scene_view *s, uint32_t t, tr_vertex *x0, tr_vertex *x1,
+                           tr_vertex *x2) {
+#ifdef TR_SCENE_VIEW_WBVH
+    if (t >= s->triangle_count) {
+        tr_vertex x[3];
+        if (!tr_inst_vertices(s->kept, t, x)) {
+            return 0;
+        }
+        *x0 = x[0];
+        *x1 = x[1];
+        *x2 = x[2];
+        return 1;
+    }
+#endif
+    if (t >= s->tri_verts_count) {
+        return 0;
+    }
+    tr_tri_verts tv = s->tri_verts[t];
+    if (tv.v[0] == TR_NO_INDEX) {
+        return 0;
+    }
+    *x0 = s->vertices[tv.v[0]];
+    *x1 = s->vertices[tv.v[1]];
+    *x2 = s->vertices[tv.v[2]];
+    return 1;
+}
 
 /* The thesis's flat structure (listing 18): test every shape's box, and the triangles
  * of each box the ray meets. Returns 1 and fills *hit for the closest hit in

@@ -107,15 +107,12 @@ TR_FN tr_surface_attr tr_surface_attributes(const tr_scene_view *s, uint32_t tri
     a.tv = v;
     a.dpdu = v3s(0.0f);
     a.dpdv = v3s(0.0f);
-    if (triangle >= s->tri_verts_count) {
+    tr_vertex x0, x1, x2;
+    if (!tr_view_vertices(s, triangle, &x0, &x1, &x2)) {
         return a;
     }
-    tr_tri_verts tv = s->tri_verts[triangle];
-    if (tv.v[0] == TR_NO_INDEX) {
-        return a;
-    }
-    TR_CONST_GLOBAL tr_triangle *tri = &s->triangles[triangle];
-    tr_vertex x0 = s->vertices[tv.v[0]], x1 = s->vertices[tv.v[1]], x2 = s->vertices[tv.v[2]];
+    tr_triangle tri_tmp;
+    TR_CONST_GLOBAL tr_triangle *tri = tr_view_triangle(s, triangle, &tri_tmp);
     float w = 1.0f - u - v;
     a.tu = x0.u * w + x1.u * u + x2.u * v;
     a.tv = x0.v * w + x1.v * u + x2.v * v;

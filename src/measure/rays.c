@@ -24,7 +24,7 @@ typedef struct emitters {
 } emitters;
 
 static int collect_emitters(const tr_scene *s, emitters *e) {
-    const uint32_t n = tr_scene_triangle_count(s);
+    const uint32_t n = tr_scene_stored_triangle_count(s); /* kept instances never emit */
     e->tri = malloc((size_t)(n ? n : 1) * sizeof *e->tri);
     e->cdf = malloc((size_t)(n ? n : 1) * sizeof *e->cdf);
     e->count = 0;

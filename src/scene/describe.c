@@ -5,6 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "scene/scene_internal.h"
 #include "trac0r/registry.h"
 #include "trac0r/scene.h"
 #include "trac0r/scene_file.h"
@@ -78,10 +79,11 @@ char *tr_scene_describe(const tr_scene *s, const char *name, const tr_scene_file
                 (double)sun_e.x, (double)sun_e.y, (double)sun_e.z);
     }
     uint32_t with_normals = 0;
-    for (uint32_t i = 0; i < tr_scene_triangle_count(s); ++i) {
+    for (uint32_t i = 0; i < tr_scene_stored_triangle_count(s); ++i) {
         tr_vec3 n[3];
         with_normals += (uint32_t)tr_scene_triangle_normals(s, i, n);
     }
+    with_normals += tr_scene_kept_normals(s);
     fprintf(out, "normals:    %u triangles with vertex normals\n", with_normals);
     /* Per shape or mesh part: its triangles, its material and its bounds. */
     const uint32_t shown_max = listed, ns = tr_scene_shape_count(s);

@@ -104,14 +104,20 @@ static tr_vec3 xform_normal(const float m[12], const float inv[12], tr_vec3 n) {
     return v3_scale(r, (det < 0.0f ? -1.0f : 1.0f) / len);
 }
 
+/* Triangle i of prototype p placed with m: what flattening stores and what a kept
+ * instance's id reads (tr_inst_triangle), one function for both. */
+static void place_one(const tr_prototype *p, uint32_t i, const float m[12], tr_triangle *out) {
+    tr_triangle t = p->tris[i];
+    t.v0 = xform_point(m, t.v0);
+    t.v1 = xform_point(m, t.v1);
+    t.v2 = xform_point(m, t.v2);
+    tr_triangle_finish(&t);
+    *out = t;
+}
+
 static void place_tris(const tr_prototype *p, const float m[12], tr_triangle *out) {
     for (uint32_t i = 0; i < p->tri_count; ++i) {
-        tr_triangle t = p->tris[i];
-        t.v0 = xform_point(m, t.v0);
-        t.v1 = xform_point(m, t.v1);
-        t.v2 = xform_point(m, t.v2);
-        tr_triangle_finish(&t);
-        out[i] = t;
+        place_one(p, i, m, &out[i]);
     }
 }
 
@@ -121,6 +127,59 @@ static void place_verts(const tr_prototype *p, const float m[12], const float in
         out[i] = p->verts[i];
         out[i].normal = xform_normal(m, inv, p->verts[i].normal);
     }
+}
+
+/* Whether any of a prototype's triangles has a material that emits (a positive emittance:
+ * what puts a triangle in the emitter table, src/scene/lights.c). */
+static int proto_emits(const tr_scene *s, const tr_prototype *p) {
+    for (uint32_t i = 0; i < p->tri_count; ++i) {
+        const uint32_t mi = p->tris[i].material;
+        if (mi < s->material_count && s->materials[mi].emittance > 0.0f) {
+            return 1;
+        }
+    }
+    return 0;
+}
+
+static int cmp_vec3(const void *a, const void *b) {
+    return memcmp(a, b, sizeof(tr_vec3));
+}
+
+/* The prototype's distinct vertex positions (bit for bit), for its instances' boxes. */
+static int proto_points(tr_prototype *p) {
+    const size_t n = (size_t)p->tri_count * 3;
+    p->pts = malloc((n ? n : 1) * sizeof *p->pts);
+    if (!p->pts) {
+        return TR_ERR;
+    }
+    for (uint32_t i = 0; i < p->tri_count; ++i) {
+        p->pts[3 * (size_t)i] = p->tris[i].v0;
+        p->pts[3 * (size_t)i + 1] = p->tris[i].v1;
+        p->pts[3 * (size_t)i + 2] = p->tris[i].v2;
+    }
+    qsort(p->pts, n, sizeof *p->pts, cmp_vec3);
+    size_t k = 0;
+    for (size_t i = 0; i < n; ++i) {
+        if (k == 0 || memcmp(&p->pts[k - 1], &p->pts[i], sizeof *p->pts) != 0) {
+            p->pts[k++] = p->pts[i];
+        }
+    }
+    p->pt_count = (uint32_t)k;
+    tr_vec3 *shrunk = realloc(p->pts, (k ? k : 1) * sizeof *p->pts);
+    p->pts = shrunk ? shrunk : p->pts;
+    return TR_OK;
+}
+
+/* The world box of prototype p placed with m: its points transformed, the box its
+ * transformed triangles have (the same points, the same float operations). */
+static tr_aabb placed_box(const tr_prototype *p, const float m[12]) {
+    tr_aabb b = {v3s(INFINITY), v3s(-INFINITY)};
+    for (uint32_t i = 0; i < p->pt_count; ++i) {
+        const tr_vec3 q = xform_point(m, p->pts[i]);
+        b.min = v3_min(b.min, q);
+        b.max = v3_max(b.max, q);
+    }
+    return b;
 }
 
 uint32_t tr_scene_prototype_count(const tr_scene *s) {
@@ -157,22 +216,50 @@ uint32_t tr_scene_shape_instance(const tr_scene *s, uint32_t shape) {
     return lo < s->instance_count && s->instances[lo].shape == shape ? lo : UINT32_MAX;
 }
 
-int tr_scene_triangle_instance(const tr_scene *s, uint32_t triangle, uint32_t *instance,
-                               uint32_t *prim) {
+/* The instance of kept id `id` (past the stored triangles): the last whose first id is at
+ * most id (a flattened instance repeats the next kept one's first, so never wins). */
+static uint32_t kept_instance(const tr_scene *s, uint32_t id) {
     uint32_t lo = 0, hi = s->instance_count;
-    while (lo < hi) { /* the first instance starting beyond the triangle */
+    while (lo < hi) {
         uint32_t mid = lo + (hi - lo) / 2;
-        if (s->shapes[s->instances[mid].shape].first <= triangle) {
+        if (s->inst_first[mid] <= id) {
             lo = mid + 1;
         } else {
             hi = mid;
         }
     }
-    if (lo == 0) {
+    return lo - 1;
+}
+
+int tr_scene_triangle_instance(const tr_scene *s, uint32_t triangle, uint32_t *instance,
+                               uint32_t *prim) {
+    if (triangle >= s->triangle_count) {
+        if (s->placed_count == 0 || triangle - s->triangle_count >= s->placed_count) {
+            return 0;
+        }
+        const uint32_t i = kept_instance(s, triangle);
+        *instance = i;
+        *prim = triangle - s->inst_first[i];
+        return 1;
+    }
+    /* Flattened instances hold their triangles in the arrays, in order; `at` (the stored
+     * count when each instance was added) ascends over all of them, and a kept one
+     * stores nothing, so the last instance starting at or before the triangle is the
+     * only one that can hold it. */
+    uint32_t lo = 0, hi = s->instance_count;
+    while (lo < hi) {
+        uint32_t mid = lo + (hi - lo) / 2;
+        if (s->instances[mid].at <= triangle) {
+            lo = mid + 1;
+        } else {
+            hi = mid;
+        }
+    }
+    if (lo == 0 || !s->instances[lo - 1].flat) {
         return 0;
     }
     const tr_flat_node *sh = &s->shapes[s->instances[lo - 1].shape];
-    if (triangle >= sh->first + sh->count) {
+    if (triangle < sh->first || triangle >= sh->first + sh->count) {
         return 0;
     }
     *instance = lo - 1;
@@ -221,9 +308,12 @@ int tr_scene_make_prototype(tr_scene *s, uint32_t first_shape, uint32_t *proto, 
         return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory storing a prototype");
     }
     memcpy(p.tris, s->triangles + t0, (size_t)n * sizeof *p.tris);
-    for (uint32_t i = 0; i < n; ++i) {
-        const tr_material *mt = &s->materials[p.tris[i].material];
-        p.emissive |= mt->type == TR_MATERIAL_EMITTER && mt->emittance > 0.0f;
+    p.emissive = proto_emits(s, &p);
+    if (proto_points(&p) != TR_OK) {
+        free(p.tris);
+        free(p.verts);
+        free(p.idx);
+        return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory storing a prototype");
     }
     if (attrs) {
         memcpy(p.verts, s->vertices + vmin, (size_t)p.vert_count * sizeof *p.verts);
@@ -283,6 +373,17 @@ int tr_scene_add_prototype_copy(tr_scene *s, uint32_t proto, const float m[12], 
     return append_placed(s, &s->protos[proto], m, inv, err);
 }
 
+/* Room for one more entry in the shapes arrays (what tr_scene_append_shape_attr grows). */
+static int grow_shape(tr_scene *s, tr_error *err) {
+    if (grow((void **)&s->shapes, &s->shape_capacity, (uint64_t)s->shape_count + 1,
+             sizeof *s->shapes, err) != TR_OK ||
+        grow((void **)&s->shape_moved, &s->shape_moved_capacity, (uint64_t)s->shape_count + 1,
+             sizeof *s->shape_moved, err) != TR_OK) {
+        return TR_ERR;
+    }
+    return TR_OK;
+}
+
 int tr_scene_add_instance(tr_scene *s, uint32_t proto, const float m[12], uint32_t *instance,
                           tr_error *err) {
     float inv[12];
@@ -292,17 +393,46 @@ int tr_scene_add_instance(tr_scene *s, uint32_t proto, const float m[12], uint32
     }
     if (invert(m, inv, "instance", s->instance_count, err) != TR_OK ||
         grow((void **)&s->instances, &s->instance_capacity, (uint64_t)s->instance_count + 1,
-             sizeof *s->instances, err) != TR_OK) {
+             sizeof *s->instances, err) != TR_OK ||
+        grow((void **)&s->inst_first, &s->inst_first_capacity, (uint64_t)s->instance_count + 1,
+             sizeof *s->inst_first, err) != TR_OK) {
         return TR_ERR;
     }
+    const tr_prototype *p = &s->protos[proto];
     tr_instance in;
     memset(&in, 0, sizeof in);
     in.proto = proto;
     in.vert_base = s->vertex_count;
+    in.at = s->triangle_count;
     memcpy(in.m, m, sizeof in.m);
     memcpy(in.inv, inv, sizeof in.inv);
-    if (append_placed(s, &s->protos[proto], m, inv, err) != TR_OK) {
-        return TR_ERR;
+    const uint64_t total = (uint64_t)s->triangle_count + s->placed_count;
+    if (p->emissive) {
+        /* Emitting prototypes are flattened: the emitter table names stored triangles. */
+        if (append_placed(s, p, m, inv, err) != TR_OK) {
+            return TR_ERR;
+        }
+        in.flat = 1;
+        s->inst_first[s->instance_count] = (uint32_t)(total + p->tri_count);
+    } else {
+        /* Kept: a shape of ids past the stored triangles, and its world box. */
+        if (total + p->tri_count > TR_SCENE_MAX_TRIANGLES) {
+            return tr_error_set(err, TR_STATUS_LIMIT,
+                                "scene would exceed %u triangles (placed by instances or "
+                                "stored)",
+                                TR_SCENE_MAX_TRIANGLES);
+        }
+        if (grow_shape(s, err) != TR_OK) {
+            return TR_ERR;
+        }
+        s->shape_moved[s->shape_count] = v3s(0.0f);
+        tr_flat_node *node = &s->shapes[s->shape_count++];
+        node->box = placed_box(p, m);
+        node->first = (uint32_t)total;
+        node->count = p->tri_count;
+        s->inst_first[s->instance_count] = (uint32_t)total;
+        s->placed_count += p->tri_count;
+        s->generation++;
     }
     in.shape = s->shape_count - 1;
     s->instances[s->instance_count] = in;
@@ -311,6 +441,34 @@ int tr_scene_add_instance(tr_scene *s, uint32_t proto, const float m[12], uint32
     }
     s->instance_count++;
     return TR_OK;
+}
+
+void tr_scene_instance_ids(tr_scene *s) {
+    uint64_t base = s->triangle_count;
+    for (uint32_t i = 0; i < s->instance_count; ++i) {
+        const tr_instance *in = &s->instances[i];
+        s->inst_first[i] = (uint32_t)base;
+        if (!in->flat) {
+            s->shapes[in->shape].first = (uint32_t)base;
+            base += s->shapes[in->shape].count;
+        }
+    }
+}
+
+int tr_scene_has_kept_instances(const tr_scene *s) {
+    return s->placed_count > 0;
+}
+
+tr_aabb tr_scene_all_bounds(const tr_scene *s) {
+    tr_aabb b = tr_triangles_bounds(s->triangles, s->triangle_count);
+    for (uint32_t i = 0; s->placed_count > 0 && i < s->instance_count; ++i) {
+        if (!s->instances[i].flat) {
+            const tr_aabb c = s->shapes[s->instances[i].shape].box;
+            b.min = v3_min(b.min, c.min);
+            b.max = v3_max(b.max, c.max);
+        }
+    }
+    return b;
 }
 
 int tr_scene_set_instance_transform(tr_scene *s, uint32_t instance, const float m[12],
@@ -331,11 +489,15 @@ int tr_scene_set_instance_transform(tr_scene *s, uint32_t instance, const float 
     }
     const tr_prototype *p = &s->protos[in->proto];
     tr_flat_node *sh = &s->shapes[in->shape];
-    place_tris(p, m, s->triangles + sh->first);
-    if (p->idx) {
-        place_verts(p, m, inv, s->vertices + in->vert_base);
+    if (in->flat) {
+        place_tris(p, m, s->triangles + sh->first);
+        if (p->idx) {
+            place_verts(p, m, inv, s->vertices + in->vert_base);
+        }
+        sh->box = tr_triangles_bounds(s->triangles + sh->first, sh->count);
+    } else {
+        sh->box = placed_box(p, m); /* nothing stored to rewrite */
     }
-    sh->box = tr_triangles_bounds(s->triangles + sh->first, sh->count);
     /* Motion vectors follow the translation (a rotation's motion is not a vector). */
     s->shape_moved[in->shape] =
         v3_add(s->shape_moved[in->shape], v3(m[3] - in->m[3], m[7] - in->m[7], m[11] - in->m[11]));
@@ -368,12 +530,17 @@ void tr_scene_free_instances(tr_scene *s) {
         free(p->tris);
         free(p->verts);
         free(p->idx);
+        free(p->pts);
         tr_bvh_free(&p->bvh);
         tr_wbvh_free(&p->wbvh);
     }
     free(s->protos);
     free(s->instances);
     free(s->moved);
+    free(s->inst_first);
+    s->inst_first = NULL;
+    s->inst_first_capacity = 0;
+    s->placed_count = 0;
     s->protos = NULL;
     s->instances = NULL;
     s->moved = NULL;
@@ -415,7 +582,9 @@ int tr_scene_build_two_level(tr_scene *s, tr_error *err) {
     for (uint32_t i = 0; rc == TR_OK && i < n; ++i) {
         const tr_instance *in = &s->instances[i];
         const tr_flat_node *sh = &s->shapes[in->shape];
-        memset(skip + sh->first, 1, sh->count);
+        if (in->flat) {
+            memset(skip + sh->first, 1, sh->count);
+        }
         memcpy(inst[i].inv, in->inv, sizeof in->inv);
         inst[i].blas = &s->protos[in->proto].wbvh;
         inst[i].tri_base = sh->first;
@@ -472,4 +641,286 @@ int tr_scene_update_two_level(tr_scene *s, tr_error *err) {
         return tr_scene_build_two_level(s, err);
     }
     return TR_OK;
+}
+
+/* ---- Kept instances read by id (the kernel's tr_view_* on the host) ---------------- */
+
+/* The instance each thread found last: a hit is read several times (its triangle,
+ * material, vertices), and the search is skipped while the hint's range holds the id.
+ * The hint is checked against the scene it is used on, so it is never wrong, only
+ * sometimes useless. */
+static _Thread_local uint32_t kept_hint;
+
+static const tr_instance *kept_of(const tr_scene *s, uint32_t id, uint32_t *local) {
+    uint32_t i = kept_hint;
+    if (!(i < s->instance_count && !s->instances[i].flat && s->inst_first[i] <= id &&
+          id - s->inst_first[i] < s->protos[s->instances[i].proto].tri_count)) {
+        i = kept_instance(s, id);
+        kept_hint = i;
+    }
+    *local = id - s->inst_first[i];
+    return &s->instances[i];
+}
+
+const tr_triangle *tr_inst_triangle(const tr_scene *s, uint32_t id, tr_triangle *tmp) {
+    uint32_t l;
+    const tr_instance *in = kept_of(s, id, &l);
+    place_one(&s->protos[in->proto], l, in->m, tmp);
+    return tmp;
+}
+
+uint32_t tr_inst_material(const tr_scene *s, uint32_t id) {
+    uint32_t l;
+    const tr_instance *in = kept_of(s, id, &l);
+    return s->protos[in->proto].tris[l].material;
+}
+
+int tr_inst_has_verts(const tr_scene *s, uint32_t id) {
+    uint32_t l;
+    const tr_instance *in = kept_of(s, id, &l);
+    return s->protos[in->proto].idx != NULL;
+}
+
+/* As tr_scene_append_shape_attr indexes an instance's vertices: an index past the
+ * prototype's vertices is none, and a triangle missing its second or third has none. */
+static int proto_tri_verts(const tr_prototype *p, uint32_t l, uint32_t v[3]) {
+    for (int k = 0; k < 3; ++k) {
+        const uint32_t j = p->idx[3 * (size_t)l + (uint32_t)k];
+        v[k] = j < p->vert_count ? j : TR_NO_INDEX;
+    }
+    return v[0] != TR_NO_INDEX && v[1] != TR_NO_INDEX && v[2] != TR_NO_INDEX;
+}
+
+int tr_inst_vertices(const tr_scene *s, uint32_t id, tr_vertex x[3]) {
+    uint32_t l, v[3];
+    const tr_instance *in = kept_of(s, id, &l);
+    const tr_prototype *p = &s->protos[in->proto];
+    if (!p->idx || !proto_tri_verts(p, l, v)) {
+        return 0;
+    }
+    for (int k = 0; k < 3; ++k) {
+        x[k] = p->verts[v[k]];
+        x[k].normal = xform_normal(in->m, in->inv, p->verts[v[k]].normal);
+    }
+    return 1;
+}
+
+/* ---- Flattening kept instances --------------------------------------------------- */
+
+/* Where stored vertex v goes once the kept instances' vertices are put in: after those
+ * of every kept instance added when the stored count was at most v. bases[0..n) are
+ * their vert_base values (ascending), before[k] the vertices of the first k. */
+static uint32_t moved_vertex(uint32_t v, const uint32_t *bases, const uint64_t *before,
+                             uint32_t n) {
+    uint32_t lo = 0, hi = n;
+    while (lo < hi) {
+        uint32_t mid = lo + (hi - lo) / 2;
+        if (bases[mid] <= v) {
+            lo = mid + 1;
+        } else {
+            hi = mid;
+        }
+    }
+    return (uint32_t)(v + before[lo]);
+}
+
+int tr_scene_flatten(tr_scene *s, tr_error *err) {
+    if (s->placed_count == 0) {
+        return TR_OK;
+    }
+    const uint64_t nt = (uint64_t)s->triangle_count + s->placed_count;
+    uint64_t nv = s->vertex_count;
+    uint32_t na = 0;
+    for (uint32_t i = 0; i < s->instance_count; ++i) {
+        const tr_instance *in = &s->instances[i];
+        if (!in->flat && s->protos[in->proto].idx) {
+            nv += s->protos[in->proto].vert_count;
+            na++;
+        }
+    }
+    if (nv >= TR_NO_INDEX) {
+        return tr_error_set(err, TR_STATUS_LIMIT,
+                            "flattening the instances would exceed %u vertices", TR_NO_INDEX - 1u);
+    }
+    tr_triangle *tris = malloc((size_t)nt * sizeof *tris);
+    tr_tri_verts *tv = malloc((size_t)nt * sizeof *tv);
+    tr_vertex *verts = malloc((size_t)(nv ? nv : 1) * sizeof *verts);
+    uint32_t *bases = malloc((size_t)(na ? na : 1) * sizeof *bases);
+    uint32_t *new_base = malloc((size_t)(na ? na : 1) * sizeof *new_base);
+    uint64_t *before = malloc(((size_t)na + 1) * sizeof *before);
+    if (!tris || !tv || !verts || !bases || !new_base || !before) {
+        free(tris);
+        free(tv);
+        free(verts);
+        free(bases);
+        free(new_base);
+        free(before);
+        return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY,
+                            "out of memory flattening %llu placed triangles",
+                            (unsigned long long)s->placed_count);
+    }
+    /* Vertices in the order of their addition: stored runs between kept instances'. */
+    uint64_t w = 0;
+    uint32_t sv = 0, k = 0;
+    before[0] = 0;
+    for (uint32_t i = 0; i < s->instance_count; ++i) {
+        const tr_instance *in = &s->instances[i];
+        const tr_prototype *p = &s->protos[in->proto];
+        if (in->flat || !p->idx) {
+            continue;
+        }
+        const uint32_t vb = in->vert_base < s->vertex_count ? in->vert_base : s->vertex_count;
+        if (vb > sv) {
+            memcpy(verts + w, s->vertices + sv, (size_t)(vb - sv) * sizeof *verts);
+            w += vb - sv;
+            sv = vb;
+        }
+        new_base[k] = (uint32_t)w;
+        place_verts(p, in->m, in->inv, verts + w);
+        w += p->vert_count;
+        bases[k] = in->vert_base;
+        before[k + 1] = before[k] + p->vert_count;
+        k++;
+    }
+    if (s->vertex_count > sv) {
+        memcpy(verts + w, s->vertices + sv, (size_t)(s->vertex_count - sv) * sizeof *verts);
+    }
+    /* Triangles and their vertex indices, shape by shape. */
+    uint64_t ft = 0, tvc = 0;
+    uint32_t j = 0;
+    k = 0;
+    for (uint32_t sh = 0; sh < s->shape_count; ++sh) {
+        while (j < s->instance_count && s->instances[j].shape < sh) {
+            ++j;
+        }
+        tr_instance *in =
+            j < s->instance_count && s->instances[j].shape == sh ? &s->instances[j] : NULL;
+        tr_flat_node *node = &s->shapes[sh];
+        if (in && !in->flat) {
+            const tr_prototype *p = &s->protos[in->proto];
+            place_tris(p, in->m, tris + ft);
+            for (uint32_t l = 0; l < node->count; ++l) {
+                tr_tri_verts *t = &tv[ft + l];
+                uint32_t v[3];
+                t->v[0] = t->v[1] = t->v[2] = TR_NO_INDEX;
+                if (p->idx) {
+                    proto_tri_verts(p, l, v);
+                    for (int c = 0; c < 3; ++c) {
+                        t->v[c] = v[c] == TR_NO_INDEX ? TR_NO_INDEX : new_base[k] + v[c];
+                    }
+                    if (t->v[1] == TR_NO_INDEX || t->v[2] == TR_NO_INDEX) {
+                        t->v[0] = TR_NO_INDEX;
+                    }
+                }
+            }
+            if (p->idx) {
+                tvc = ft + node->count;
+                in->vert_base = new_base[k++];
+            } else {
+                in->vert_base = moved_vertex(in->vert_base, bases, before, k);
+            }
+        } else {
+            memcpy(tris + ft, s->triangles + node->first, (size_t)node->count * sizeof *tris);
+            for (uint32_t l = 0; l < node->count; ++l) {
+                const uint32_t st = node->first + l;
+                tr_tri_verts *t = &tv[ft + l];
+                t->v[0] = t->v[1] = t->v[2] = TR_NO_INDEX;
+                if (st < s->tri_verts_count) {
+                    for (int c = 0; c < 3; ++c) {
+                        const uint32_t v = s->tri_verts[st].v[c];
+                        t->v[c] = v == TR_NO_INDEX ? v : moved_vertex(v, bases, before, na);
+                    }
+                }
+            }
+            if (node->count > 0 && node->first + node->count <= s->tri_verts_count) {
+                tvc = ft + node->count > tvc ? ft + node->count : tvc;
+            }
+            if (in) {
+                in->vert_base = moved_vertex(in->vert_base, bases, before, na);
+            }
+        }
+        if (in) {
+            in->flat = 1;
+            in->at = (uint32_t)ft;
+        }
+        node->first = (uint32_t)ft;
+        ft += node->count;
+    }
+    free(bases);
+    free(new_base);
+    free(before);
+    free(s->triangles);
+    free(s->vertices);
+    free(s->tri_verts);
+    s->triangles = tris;
+    s->triangle_count = s->triangle_capacity = (uint32_t)nt;
+    s->vertices = verts;
+    s->vertex_count = (uint32_t)nv;
+    s->vertex_capacity = (uint32_t)(nv ? nv : 1);
+    s->tri_verts = tv;
+    s->tri_verts_count = (uint32_t)tvc;
+    s->tri_verts_capacity = (uint32_t)nt;
+    s->placed_count = 0;
+    tr_scene_free_two_level(s);
+    tr_scene_instance_ids(s);
+    return TR_OK;
+}
+
+int tr_scene_kept_emit(const tr_scene *s) {
+    for (uint32_t i = 0; i < s->proto_count; ++i) {
+        if (!proto_emits(s, &s->protos[i])) {
+            continue;
+        }
+        for (uint32_t k = 0; k < s->instance_count; ++k) {
+            if (!s->instances[k].flat && s->instances[k].proto == i) {
+                return 1;
+            }
+        }
+    }
+    return 0;
+}
+
+/* Prototype p's triangles with a nonzero vertex normal (what an instance's placement
+ * keeps: the inverse transpose of an invertible matrix sends no normal to zero). */
+static uint64_t proto_normals(const tr_prototype *p) {
+    uint64_t n = 0;
+    for (uint32_t l = 0; p->idx && l < p->tri_count; ++l) {
+        uint32_t v[3];
+        if (!proto_tri_verts(p, l, v)) {
+            continue;
+        }
+        int has = 0;
+        for (int k = 0; k < 3; ++k) {
+            const tr_vec3 q = p->verts[v[k]].normal;
+            has |= q.x != 0.0f || q.y != 0.0f || q.z != 0.0f;
+        }
+        n += (uint64_t)has;
+    }
+    return n;
+}
+
+uint32_t tr_scene_kept_normals(const tr_scene *s) {
+    uint64_t n = 0;
+    for (uint32_t k = 0; s->placed_count > 0 && k < s->proto_count; ++k) {
+        uint64_t placements = 0;
+        for (uint32_t i = 0; i < s->instance_count; ++i) {
+            placements += !s->instances[i].flat && s->instances[i].proto == k;
+        }
+        if (placements > 0) {
+            n += placements * proto_normals(&s->protos[k]);
+        }
+    }
+    return (uint32_t)n;
+}
+
+int tr_scene_flatten_committed(tr_scene *s, tr_error *err) {
+    if (!tr_scene_has_kept_instances(s)) {
+        return TR_OK;
+    }
+    const int current = tr_scene_is_committed(s);
+    const tr_accel_type accel = s->accel;
+    if (tr_scene_flatten(s, err) != TR_OK) {
+        return TR_ERR;
+    }
+    return current ? tr_scene_commit(s, accel, err) : TR_OK;
 }

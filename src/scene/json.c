@@ -1053,6 +1053,30 @@ static int check_triangles(const jctx *c, const char *path, uint32_t first) {
     return TR_OK;
 }
 
+/* check_triangles for the triangles a kept instance places, ids first_id on. */
+static int check_placed(const jctx *c, const char *path, uint32_t first_id) {
+    const float bound = (float)TR_SCENE_FILE_MAX_COORD;
+    const uint32_t end = tr_scene_triangle_count(c->scene);
+    for (uint32_t i = first_id; i < end; ++i) {
+        const tr_triangle t = tr_scene_triangle(c->scene, i);
+        const tr_vec3 v[3] = {t.v0, t.v1, t.v2};
+        for (int k = 0; k < 3; ++k) {
+            if (!v3_is_finite(v[k]) || fabsf(v[k].x) > bound || fabsf(v[k].y) > bound ||
+                fabsf(v[k].z) > bound) {
+                return jerr(c, path, "a vertex lands at (%g, %g, %g), outside the bound |x| <= %g",
+                            (double)v[k].x, (double)v[k].y, (double)v[k].z,
+                            TR_SCENE_FILE_MAX_COORD);
+            }
+        }
+        if (!(t.area > 0.0f)) {
+            char p[PATH_MAX_LEN];
+            path_key(p, path, "scale");
+            return jerr(c, p, "too small: triangle %u has zero area", i - first_id);
+        }
+    }
+    return TR_OK;
+}
+
 /* A quad: four corners, two triangles (v0 v1 v2) and (v0 v2 v3), facing the side that
  * (v1 - v0) x (v2 - v0) points to; the shape transform applies to the corners. */
 static int parse_quad(jctx *c, const cJSON *sh, const char *p, const cJSON *verts) {
@@ -1499,20 +1523,31 @@ static int parse_instances(jctx *c, const cJSON *list, int copies) {
             continue; /* meshes not loaded */
         }
         const uint64_t n = tr_scene_prototype_triangle_count(c->scene, proto);
-        if ((uint64_t)c->scene->triangle_count + n > c->budget) {
+        /* A kept instance (tr_scene_add_instance without an emitting prototype) stores
+         * nothing per triangle: its triangles count against the id space's limit there,
+         * not against the budget of stored ones. */
+        const int kept = !copies && !c->scene->protos[proto].emissive;
+        if (!kept && (uint64_t)c->scene->triangle_count + n > c->budget) {
             return jerr_code(c, TR_STATUS_LIMIT, p,
                              "the scene would have %llu triangles, more than the budget of %u "
-                             "(instances count every triangle they place)",
+                             "(instances of a prototype with an emitter store every triangle they "
+                             "place)",
                              (unsigned long long)(c->scene->triangle_count + n), c->budget);
         }
         tr_error e;
         const uint32_t first = c->scene->triangle_count;
+        const uint32_t first_id = tr_scene_triangle_count(c->scene);
         int rc = copies ? tr_scene_add_prototype_copy(c->scene, proto, m, &e)
                         : tr_scene_add_instance(c->scene, proto, m, NULL, &e);
         if (rc != TR_OK) {
             return jerr_from(c, mat ? pm : p, &e);
         }
-        if (check_triangles(c, p, first) != TR_OK) {
+        if (c->scene->triangle_count == first) {
+            /* Kept: its placed triangles, read by id, pass the same checks. */
+            if (check_placed(c, p, first_id) != TR_OK) {
+                return TR_ERR;
+            }
+        } else if (check_triangles(c, p, first) != TR_OK) {
             return TR_ERR;
         }
     }

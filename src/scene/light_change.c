@@ -112,7 +112,7 @@ static int emitter_shape(const tr_scene *s, uint32_t shape) {
     if (node->count == 0) {
         return 0;
     }
-    const uint32_t m = s->triangles[node->first].material;
+    const uint32_t m = tr_scene_triangle(s, node->first).material; /* a kept instance too */
     return m < s->material_count && s->materials[m].type == TR_MATERIAL_EMITTER &&
            (m < s->light_base_count ? s->light_base[m] : s->materials[m].emittance) > 0.0f;
 }

@@ -9,10 +9,10 @@
 void tr_scene_sky_bounds(tr_scene *s) {
     s->sky_center[0] = s->sky_center[1] = s->sky_center[2] = 0.0f;
     s->sky_radius = 0.0f;
-    if (s->triangle_count == 0) {
+    if (s->triangle_count == 0 && !tr_scene_has_kept_instances(s)) {
         return;
     }
-    const tr_aabb b = tr_triangles_bounds(s->triangles, s->triangle_count);
+    const tr_aabb b = tr_scene_all_bounds(s);
     const float h[3] = {0.5f * (b.max.x - b.min.x), 0.5f * (b.max.y - b.min.y),
                         0.5f * (b.max.z - b.min.z)};
     s->sky_center[0] = b.min.x + h[0];

@@ -214,7 +214,8 @@ int tr_scene_load(tr_scene *s, const char *name, const tr_model_options *opt, tr
     info->height = h;
     info->shape_count = tr_scene_shape_count(s);
     info->bounds = tr_scene_bounds(s);
-    for (uint32_t i = 0; i < tr_scene_triangle_count(s); ++i) {
+    /* Kept instances' triangles (past the stored ones) never emit. */
+    for (uint32_t i = 0; i < tr_scene_stored_triangle_count(s); ++i) {
         info->emissive_triangles +=
             tr_scene_material(s, tr_scene_triangle(s, i).material).type == TR_MATERIAL_EMITTER;
     }

@@ -343,6 +343,10 @@ void tr_scene_truncate(tr_scene *s, uint32_t triangles, uint32_t shapes, uint32_
     s->shape_count = shapes;
     while (s->instance_count > 0 && s->instances[s->instance_count - 1].shape >= shapes) {
         s->instance_count--; /* instances among the shapes dropped go with them */
+        const tr_instance *in = &s->instances[s->instance_count];
+        if (!in->flat) {
+            s->placed_count -= s->protos[in->proto].tri_count;
+        }
     }
     s->material_count = materials;
     if (s->tri_verts_count > triangles) {
@@ -384,9 +388,9 @@ int tr_scene_append_shape(tr_scene *s, const tr_triangle *tris, uint32_t n, cons
 int tr_scene_append_shape_attr(tr_scene *s, const tr_triangle *tris, uint32_t n,
                                const tr_vertex *verts, uint32_t nv, const uint32_t *idx,
                                tr_error *err) {
-    if ((uint64_t)s->triangle_count + n > UINT32_MAX / 2) {
+    if ((uint64_t)s->triangle_count + s->placed_count + n > TR_SCENE_MAX_TRIANGLES) {
         return tr_error_set(err, TR_STATUS_LIMIT, "scene would exceed %u triangles",
-                            UINT32_MAX / 2);
+                            TR_SCENE_MAX_TRIANGLES);
     }
     if (verts && (uint64_t)s->vertex_count + nv >= TR_NO_INDEX) {
         return tr_error_set(err, TR_STATUS_LIMIT, "scene would exceed %u vertices",
@@ -463,7 +467,7 @@ int tr_scene_add_mesh_uv(tr_scene *s, const float *positions, uint32_t vertex_co
                             "mesh refers to material %u, but the scene has %u materials", material,
                             s->material_count);
     }
-    if ((uint64_t)s->triangle_count + triangle_count > UINT32_MAX / 2) {
+    if ((uint64_t)s->triangle_count + s->placed_count + triangle_count > TR_SCENE_MAX_TRIANGLES) {
         return tr_error_set(err, TR_STATUS_LIMIT, "scene would exceed %u triangles",
                             UINT32_MAX / 2);
     }
@@ -559,6 +563,15 @@ int tr_scene_commit(tr_scene *s, tr_accel_type accel, tr_error *err) {
     s->accel = TR_ACCEL_TYPE_FLAT;
     s->committed_triangles = 0;
     s->committed = 0;
+    /* Kept instances are traced by the CPU's two levels alone: any other structure gets
+     * them flattened here, as does a scene whose kept prototypes now emit (a material's
+     * emittance changed), since the emitter table names stored triangles. */
+    if (tr_scene_has_kept_instances(s) && (accel != TR_ACCEL_TYPE_BVH || tr_scene_kept_emit(s)) &&
+        tr_scene_flatten(s, err) != TR_OK) {
+        return TR_ERR;
+    }
+    tr_scene_instance_ids(s);
+    const uint32_t total = tr_scene_triangle_count(s);
     if (tr_scene_build_lights(s, err) != TR_OK) {
         return TR_ERR;
     }
@@ -572,7 +585,7 @@ int tr_scene_commit(tr_scene *s, tr_accel_type accel, tr_error *err) {
     s->committed_generation = s->generation;
     switch (accel) {
     case TR_ACCEL_TYPE_FLAT:
-        s->committed_triangles = s->triangle_count;
+        s->committed_triangles = total;
         s->committed = 1;
         return TR_OK;
     case TR_ACCEL_TYPE_BVH:
@@ -582,7 +595,7 @@ int tr_scene_commit(tr_scene *s, tr_accel_type accel, tr_error *err) {
                 return TR_ERR;
             }
             s->accel = accel;
-            s->committed_triangles = s->triangle_count;
+            s->committed_triangles = total;
             s->committed = 1;
             return TR_OK;
         }
@@ -595,7 +608,7 @@ int tr_scene_commit(tr_scene *s, tr_accel_type accel, tr_error *err) {
             return TR_ERR;
         }
         s->accel = accel;
-        s->committed_triangles = s->triangle_count;
+        s->committed_triangles = total;
         s->committed = 1;
         return TR_OK;
     case TR_ACCEL_TYPE_BVH2:
@@ -603,7 +616,7 @@ int tr_scene_commit(tr_scene *s, tr_accel_type accel, tr_error *err) {
             return TR_ERR;
         }
         s->accel = accel;
-        s->committed_triangles = s->triangle_count;
+        s->committed_triangles = total;
         s->committed = 1;
         return TR_OK;
     case TR_ACCEL_TYPE_EMBREE:
@@ -611,7 +624,7 @@ int tr_scene_commit(tr_scene *s, tr_accel_type accel, tr_error *err) {
             return TR_ERR;
         }
         s->accel = accel;
-        s->committed_triangles = s->triangle_count;
+        s->committed_triangles = total;
         s->committed = 1;
         return TR_OK;
     }
@@ -701,10 +714,11 @@ int tr_scene_move_shape(tr_scene *s, uint32_t shape, tr_vec3 delta, tr_error *er
 }
 
 int tr_scene_take_motion(tr_scene *s, tr_vec3 *motion, uint32_t n, int *moved, tr_error *err) {
-    if (n != s->triangle_count + 1u) {
+    const uint32_t nt = tr_scene_triangle_count(s);
+    if (n != nt + 1u) {
         return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
-                            "motion table of %u entries for %u triangles (needs %u)", n,
-                            s->triangle_count, s->triangle_count + 1u);
+                            "motion table of %u entries for %u triangles (needs %u)", n, nt,
+                            nt + 1u);
     }
     int any = 0;
     motion[0] = v3s(0.0f); /* id 0: nothing hit */
@@ -739,10 +753,18 @@ int tr_scene_update(tr_scene *s, double *seconds, tr_error *err) {
     int rc = TR_OK;
     /* Moves keep every count; anything else since the commit (shapes or meshes added, the
      * scene emptied or reloaded) needs tr_scene_commit. */
-    if (!s->committed || s->committed_triangles != s->triangle_count) {
+    if (!s->committed || s->committed_triangles != tr_scene_triangle_count(s)) {
         rc = tr_error_set(err, TR_STATUS_STALE_SCENE,
                           "the scene changed beyond moved shapes since it was committed "
                           "(or was never committed): commit it again");
+    } else if (s->lights_dirty && tr_scene_has_kept_instances(s) && tr_scene_kept_emit(s)) {
+        /* A kept prototype's material came to emit: the emitter table names stored
+         * triangles, so the instances are flattened and the scene committed anew. */
+        rc = tr_scene_commit(s, s->accel, err);
+        if (seconds) {
+            *seconds = tr_time_now() - t0;
+        }
+        return rc;
     } else if (s->accel == TR_ACCEL_TYPE_BVH || s->accel == TR_ACCEL_TYPE_BVH2) {
         rc = tr_scene_refit(s, err);
     } else if (s->accel == TR_ACCEL_TYPE_EMBREE) {
@@ -807,6 +829,7 @@ tr_scene_view tr_scene_view_of(const tr_scene *s) {
     if (s->accel == TR_ACCEL_TYPE_BVH && s->two_level) {
         v.wbvh = &s->tlas.wbvh; /* instances: the two-level structure, host only */
     }
+    v.kept = tr_scene_has_kept_instances(s) ? s : NULL;
     v.cwbvh_nodes = NULL; /* a device's own (src/device/opencl.c), never the host's */
     v.cwbvh_node_count = 0u;
     v.cwbvh_tris = NULL;
@@ -872,6 +895,10 @@ tr_scene_view tr_scene_view_of(const tr_scene *s) {
 }
 
 uint32_t tr_scene_triangle_count(const tr_scene *s) {
+    return (uint32_t)(s->triangle_count + s->placed_count);
+}
+
+uint32_t tr_scene_stored_triangle_count(const tr_scene *s) {
     return s->triangle_count;
 }
 
@@ -954,6 +981,9 @@ tr_triangle tr_scene_triangle(const tr_scene *s, uint32_t i) {
         return s->triangles[i];
     }
     memset(&t, 0, sizeof t);
+    if (i - s->triangle_count < s->placed_count) {
+        tr_inst_triangle(s, i, &t);
+    }
     return t;
 }
 
@@ -977,6 +1007,18 @@ tr_aabb tr_scene_shape_box(const tr_scene *s, uint32_t shape) {
 
 int tr_scene_triangle_normals(const tr_scene *s, uint32_t i, tr_vec3 out[3]) {
     memset(out, 0, 3 * sizeof *out);
+    if (i >= s->triangle_count && i - s->triangle_count < s->placed_count) {
+        tr_vertex x[3];
+        if (!tr_inst_vertices(s, i, x)) {
+            return 0;
+        }
+        int has = 0;
+        for (int k = 0; k < 3; ++k) {
+            out[k] = x[k].normal;
+            has |= out[k].x != 0.0f || out[k].y != 0.0f || out[k].z != 0.0f;
+        }
+        return has;
+    }
     if (i >= s->tri_verts_count || i >= s->triangle_count || s->tri_verts[i].v[0] == TR_NO_INDEX) {
         return 0;
     }
@@ -1011,7 +1053,7 @@ uint32_t tr_scene_shape_triangle_count(const tr_scene *s, uint32_t shape) {
 }
 
 tr_aabb tr_scene_bounds(const tr_scene *s) {
-    return tr_triangles_bounds(s->triangles, s->triangle_count);
+    return tr_scene_all_bounds(s);
 }
 
 const tr_camera *tr_scene_camera(const tr_scene *s) {

@@ -10,6 +10,10 @@
 #include "trac0r/scene.h"
 #include "trac0r/scene_file.h"
 
+/* The most triangles a scene holds, stored or placed by kept instances together: ids
+ * (and id + 1 in the primitive pass) stay far inside 32 bits. */
+#define TR_SCENE_MAX_TRIANGLES (UINT32_MAX / 2)
+
 /* Geometry stored once and placed by instances (src/scene/instance.c), in object space:
  * tris, and when it has vertex attributes idx (3 per triangle into verts, TR_NO_INDEX for
  * none). Its bottom-level BVH is built by the first commit that needs it. */
@@ -19,20 +23,30 @@ typedef struct tr_prototype {
     tr_vertex *verts;
     uint32_t vert_count;
     uint32_t *idx;
+    /* Its distinct vertex positions: an instance's world box is theirs transformed, the
+     * same box as its transformed triangles' (tr_triangles_bounds reads the vertices). */
+    tr_vec3 *pts;
+    uint32_t pt_count;
     int emissive; /* some triangle's material emits */
     int built;
     tr_bvh bvh;
     tr_wbvh wbvh;
 } tr_prototype;
 
-/* One placement of a prototype: the scene's shape holding its transformed triangles, and
- * its matrix (object to world) and inverse, 3x4 row-major. */
+/* One placement of a prototype: its shape, and its matrix (object to world) and inverse,
+ * 3x4 row-major. A flattened instance (flat set) holds its transformed triangles in the
+ * scene's arrays at its shape's `first`, and vert_base is its first vertex there. A kept
+ * one (flat 0) stores nothing per triangle: its shape's `first` is the first of its ids,
+ * which lie past the stored triangles (tr_scene_instance_ids), and vert_base is the
+ * stored vertex count when it was added (where flattening puts its vertices). */
 typedef struct tr_instance {
     uint32_t proto;
     uint32_t shape;
-    uint32_t vert_base; /* its first vertex in the scene's array (when it has attributes) */
+    uint32_t vert_base;
+    uint32_t at; /* the stored triangle count when it was added */
     float m[12], inv[12];
     int moved; /* set by tr_scene_set_instance_transform until tr_scene_update */
+    int flat;
 } tr_instance;
 
 struct tr_scene {
@@ -127,6 +141,13 @@ struct tr_scene {
     int rest_moved;
     uint32_t *moved; /* instances moved since the last update, each once */
     uint32_t moved_count, moved_capacity;
+    /* Kept instances (src/scene/instance.c): placed_count triangles placed but not stored,
+     * and per instance the first of its ids (inst_first, instance_count entries, in
+     * ascending order; a flattened instance repeats the next kept one's), which the kernel
+     * searches to name a hit's instance (tr_inst_triangle). */
+    uint64_t placed_count;
+    uint32_t *inst_first;
+    uint32_t inst_first_capacity;
     /* Lights changed at run time (src/scene/light_change.c): lights_dirty says an
      * emittance changed since the emitter table was built, so that tr_scene_update rebuilds
      * it; light_base holds each material's emittance as tr_scene_animate_light first saw
@@ -305,6 +326,25 @@ int tr_scene_build_two_level(tr_scene *s, tr_error *err);
 int tr_scene_update_two_level(tr_scene *s, tr_error *err);
 void tr_scene_free_instances(tr_scene *s);
 void tr_scene_free_two_level(tr_scene *s);
+/* Kept instances: assigns their ids after the stored triangles (each commit does, as
+ * shapes added after them move the stored count); writes them into the scene's arrays
+ * exactly as flattening each at its addition would have (the same triangles, vertices,
+ * order and ids), for the structures and devices that trace stored triangles only. */
+void tr_scene_instance_ids(tr_scene *s);
+int tr_scene_flatten(tr_scene *s, tr_error *err);
+/* tr_scene_flatten, then the commit the scene had (same structure, same generation):
+ * for a device that reads stored triangles only, given a scene committed with kept
+ * instances. */
+int tr_scene_flatten_committed(tr_scene *s, tr_error *err);
+/* Whether the scene holds kept instances (placed triangles not stored). */
+int tr_scene_has_kept_instances(const tr_scene *s);
+/* How many of the kept instances' triangles have vertex normals (trac0r info's count,
+ * a prototype's once per placement). */
+uint32_t tr_scene_kept_normals(const tr_scene *s);
+/* Whether a kept instance places a prototype with an emitting material. */
+int tr_scene_kept_emit(const tr_scene *s);
+/* The box of the stored triangles and of every kept instance. */
+tr_aabb tr_scene_all_bounds(const tr_scene *s);
 uint32_t tr_scene_shape_instance(const tr_scene *s, uint32_t shape);
 
 /* The view the kernels trace against; valid while the scene is not modified. */

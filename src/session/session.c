@@ -123,11 +123,23 @@ int tr_ck_identity(tr_ck_id *id, const tr_scene *scene, const tr_render_config *
     }
     uint64_t h = TR_CK_FNV_OFFSET;
     const uint32_t nt = tr_scene_triangle_count(scene);
+    const uint32_t stored = tr_scene_stored_triangle_count(scene);
     h = fnv_u32(h, nt);
-    for (uint32_t i = 0; i < nt; ++i) {
+    for (uint32_t i = 0; i < stored; ++i) {
         const tr_triangle t = tr_scene_triangle(scene, i);
         const float v[9] = {t.v0.x, t.v0.y, t.v0.z, t.v1.x, t.v1.y, t.v1.z, t.v2.x, t.v2.y, t.v2.z};
         h = fnv_u32(fnv_floats(h, v, 9), t.material);
+    }
+    if (stored < nt) {
+        /* Kept instances: their prototypes' triangles once, and every placement. */
+        for (uint32_t k = 0; k < tr_scene_prototype_count(scene); ++k) {
+            h = fnv_u32(h, tr_scene_prototype_triangle_count(scene, k));
+        }
+        for (uint32_t i = 0; i < tr_scene_instance_count(scene); ++i) {
+            float m[12];
+            tr_scene_instance_transform(scene, i, m);
+            h = fnv_floats(h, m, 12);
+        }
     }
     const uint32_t nm = tr_scene_material_count(scene);
     h = fnv_u32(h, nm);
