@@ -394,6 +394,14 @@ static void forest(void) {
               tr_scene_builtin(&s, "forest-2x", 32, 24, &err) == TR_ERR,
           "forest sizes outside 1..1000 are refused");
     tr_scene_clear(&s);
+    /* Lit by its sun and sky, it needs no emitter (nor --allow-dark) to be rendered. */
+    tr_scene_file info;
+    tr_scene_init(&s);
+    CHECK(tr_scene_load(&s, "builtin:forest-2", NULL, &info, &err) == TR_OK, "%s", err.msg);
+    CHECK(info.emissive_triangles == 0 && info.allow_no_emitter,
+          "forest-2: %u emissive triangles, allow_no_emitter %d", info.emissive_triangles,
+          info.allow_no_emitter);
+    tr_scene_clear(&s);
 }
 
 int main(void) {

@@ -222,6 +222,9 @@ int tr_scene_load(tr_scene *s, const char *name, const tr_model_options *opt, tr
     for (uint32_t i = 0; i < tr_scene_material_count(s); ++i) {
         info->emitter_materials += tr_scene_material(s, i).type == TR_MATERIAL_EMITTER;
     }
+    /* A sky, a sun or a point light lights a scene without emitters (the forest), as a
+     * scene file's do. */
+    info->allow_no_emitter = s->env_count > 0u || s->sun_count > 0u || s->punctual_count > 0u;
     return TR_OK;
 }
 
