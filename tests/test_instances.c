@@ -15,8 +15,8 @@
  * 2. The two-level traversal (every ISA the CPU has) agrees with a brute-force test of
  *    every world triangle on random rays: the same triangle, or a hit at the same
  *    distance within float tolerance (a ray through an edge shared by two triangles).
- *    The structures that trace the instances flattened (bvh2, flat, Embree) agree with
- *    brute force too.
+ *    The structures that trace the instances flattened (bvh2, flat, and Embree over the
+ *    scene the bvh2 commit flattened) agree with brute force too.
  * 3. Ids: tr_scene_triangle_instance names the instance and the primitive of a triangle.
  * 4. Bad matrices (singular, NaN, infinite) and bad references are refused with
  *    TR_STATUS_INVALID_ARGUMENT / TR_STATUS_NOT_FOUND.
@@ -251,7 +251,8 @@ static void compare_brute(void) {
     tr_scene_clear(&s);
 }
 
-/* The structures that trace the instances flattened (bvh2, flat, Embree where built)
+/* The structures that trace the instances flattened (bvh2, flat, and Embree where built,
+ * which gets the scene bvh2 flattened: its own instancing is test_instances_kept's)
  * against brute force: the same triangles, so the same closest hits but for ties. */
 static void compare_flattened(void) {
     tr_scene s;

@@ -31,8 +31,14 @@
  * 7. A scene file's triangle budget counts stored triangles: kept placements beyond it
  *    load, placements of an emitting prototype beyond it are refused (TR_STATUS_LIMIT),
  *    and a kept placement with a vertex beyond the coordinate bound is refused as a
- *    copy's is. */
+ *    copy's is.
+ * 8. Where Embree is built in, a commit to it keeps the instances too (Embree's own
+ *    instancing; the stored triangle count is unchanged), and its hits on random rays,
+ *    its occlusion answers and its pt render agree with the two-level bvh's within the
+ *    tolerances stated at EMB_T_TOL and EMB_MEAN_TOL below, also after a kept instance,
+ *    the flattened lamp and a shape of the scene's own moved (tr_scene_update). */
 #define _POSIX_C_SOURCE 200809L /* mkstemp */
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -409,6 +415,186 @@ static void switched_on(void) {
     tr_scene_clear(&s);
 }
 
+#ifdef TRAC0R_HAVE_EMBREE
+/* ---- Embree's own instancing ---------------------------------------------------------
+ *
+ * A commit to TR_ACCEL_TYPE_EMBREE keeps the instances (a scene per prototype, an
+ * instance geometry each) and reports the ids the two-level bvh reports. Embree's
+ * ray-triangle test and its inverse of each matrix (float, from the matrix) are its own,
+ * so a hit's distance agrees with the bvh's within EMB_T_TOL (relative, against
+ * max(1, t)); a ray through an edge or a silhouette may be decided the other way by one
+ * of the two (EMB_EDGE_FRACTION of the rays at most). */
+#define EMB_RAYS 20000u
+#define EMB_T_TOL 1e-4f
+#define EMB_EDGE_FRACTION 0.001
+/* Renders: the image means agree within EMB_MEAN_TOL (relative), and at most
+ * EMB_PIXEL_FRACTION of the pixels differ by more than EMB_PIXEL_TOL (relative, any
+ * channel) or name another primitive (a path that took the other side of an edge). */
+#define EMB_MEAN_TOL 0.005
+#define EMB_PIXEL_TOL 1e-3
+#define EMB_PIXEL_FRACTION 0.02
+
+/* Random rays: from in front of the scene at points of `aim` (the placements' region when
+ * NULL), a quarter of them in a random direction, a fifth with a finite end (for the
+ * occlusion query). Compares embree (scene e) with the two-level bvh (scene b); returns
+ * the rays that hit ids [lo, hi) in both. */
+static uint32_t embree_rays(const char *what, const tr_scene *b, const tr_scene *e,
+                            const tr_aabb *aim, uint32_t lo, uint32_t hi, uint64_t seed) {
+    const tr_scene_view vb = tr_scene_view_of(b), ve = tr_scene_view_of(e);
+    CHECK(vb.accel == TR_ACCEL_BVH && ve.accel == TR_ACCEL_EMBREE && ve.kept == e &&
+              ve.embree_first != NULL,
+          "%s: the views trace the two levels and Embree's instances", what);
+    const tr_aabb region = {v3(-1.5f, 0.0f, -1.0f), v3(1.5f, 1.2f, 1.0f)};
+    const tr_aabb box = aim ? *aim : region;
+    const uint32_t stored = tr_scene_stored_triangle_count(e), total = tr_scene_triangle_count(e);
+    tr_rng r;
+    tr_rng_init(&r, seed, 0, 0);
+    uint32_t hits = 0, kept = 0, watched = 0, edge = 0, far = 0, occ = 0, occ_bad = 0, range = 0;
+    for (uint32_t i = 0; i < EMB_RAYS; ++i) {
+        const tr_vec3 o = v3(tr_rng_range(&r, -3.0f, 3.0f), tr_rng_range(&r, 0.2f, 3.0f), 3.5f);
+        const tr_vec3 t =
+            v3(tr_rng_range(&r, box.min.x, box.max.x), tr_rng_range(&r, box.min.y, box.max.y),
+               tr_rng_range(&r, box.min.z, box.max.z));
+        tr_vec3 d = v3_normalize(v3_sub(t, o));
+        if (i % 4 == 3) {
+            d = v3_normalize(v3(tr_rng_range(&r, -1.0f, 1.0f), tr_rng_range(&r, -1.0f, 0.3f),
+                                tr_rng_range(&r, -1.0f, 0.2f)));
+        }
+        const float tmax = i % 5 == 4 ? tr_rng_range(&r, 1.0f, 6.0f) : TR_INFINITY;
+        const tr_ray ray = tr_ray_make(o, d, 0.0f, tmax);
+        tr_hit hb, he;
+        memset(&hb, 0, sizeof hb);
+        memset(&he, 0, sizeof he);
+        const int fb = tr_intersect_scene(&vb, &ray, &hb);
+        const int fe = tr_intersect_scene(&ve, &ray, &he);
+        const int ob = tr_occluded_scene(&vb, &ray), oe = tr_occluded_scene(&ve, &ray);
+        occ += ob;
+        occ_bad += ob != oe;
+        hits += fb;
+        if (fb != fe) {
+            edge++;
+            continue;
+        }
+        if (!fb) {
+            continue;
+        }
+        range += he.triangle >= total;
+        kept += hb.triangle >= stored;
+        /* A different triangle at the same distance is a ray through a shared edge. */
+        if (he.triangle != hb.triangle) {
+            edge++;
+        }
+        far += fabsf(he.t - hb.t) > EMB_T_TOL * fmaxf(1.0f, hb.t);
+        watched += he.triangle == hb.triangle && hb.triangle >= lo && hb.triangle < hi;
+    }
+    printf("%s: %u of %u rays hit (%u on kept instances), %u decided otherwise at an edge, "
+           "%u occluded (%u answered otherwise)\n",
+           what, hits, EMB_RAYS, kept, edge, occ, occ_bad);
+    CHECK(hits > EMB_RAYS / 2 && kept > EMB_RAYS / 10, "%s: %u rays hit, %u on kept instances",
+          what, hits, kept);
+    CHECK(range == 0 && far == 0, "%s: %u ids past the placed triangles, %u distances differ", what,
+          range, far);
+    CHECK(edge <= EMB_EDGE_FRACTION * EMB_RAYS && occ_bad <= EMB_EDGE_FRACTION * EMB_RAYS,
+          "%s: %u hits and %u occlusion answers differ from the bvh's", what, edge, occ_bad);
+    return watched;
+}
+
+/* The scene of build() committed to Embree: kept, not flattened. */
+static void build_embree(tr_scene *e) {
+    tr_error err;
+    build(e, 0);
+    const uint32_t stored = tr_scene_stored_triangle_count(e);
+    const uint32_t placed = tr_scene_triangle_count(e);
+    CHECK(tr_scene_commit(e, TR_ACCEL_TYPE_EMBREE, &err) == TR_OK, "embree commit: %s", err.msg);
+    CHECK(tr_scene_is_committed(e) && tr_scene_accel(e) == TR_ACCEL_TYPE_EMBREE &&
+              tr_scene_has_kept_instances(e) && tr_scene_stored_triangle_count(e) == stored &&
+              tr_scene_triangle_count(e) == placed && e->embree.instance_count == e->instance_count,
+          "embree keeps the instances (%u stored, was %u)", tr_scene_stored_triangle_count(e),
+          stored);
+}
+
+static void embree_hits(void) {
+    tr_scene b, e;
+    build(&b, 0);
+    build_embree(&e);
+    embree_rays("embree rays", &b, &e, NULL, 0, 0, 5);
+    tr_scene_clear(&b);
+    tr_scene_clear(&e);
+}
+
+static void embree_render(int integ, const char *name) {
+    tr_scene b, e;
+    build(&b, 0);
+    build_embree(&e);
+    tr_film fb, fe;
+    memset(&fb, 0, sizeof fb);
+    memset(&fe, 0, sizeof fe);
+    render_film(&b, W, H, integ, 5, TR_PASS_PRIM, 11, 0, 4, &fb);
+    render_film(&e, W, H, integ, 5, TR_PASS_PRIM, 11, 0, 4, &fe);
+    double sb = 0.0, se = 0.0;
+    uint32_t differ = 0, id_diff = 0, kept_seen = 0;
+    for (uint32_t i = 0; fb.sum && fe.sum && fb.prim && fe.prim && i < W * H; ++i) {
+        int beyond = 0;
+        for (int c = 0; c < 3; ++c) {
+            const double x = fb.sum[3 * i + c], y = fe.sum[3 * i + c];
+            sb += x;
+            se += y;
+            beyond |= fabs(x - y) > EMB_PIXEL_TOL * fmax(fmax(fabs(x), fabs(y)), 1e-6);
+        }
+        differ += (uint32_t)beyond;
+        id_diff += fb.prim[i] != fe.prim[i];
+        kept_seen += fe.prim[i] > e.triangle_count;
+    }
+    printf("embree %s: mean %.6g vs bvh %.6g, %u pixels differ beyond %.0e, %u name another "
+           "primitive, %u on kept instances\n",
+           name, se / (W * H * 3.0), sb / (W * H * 3.0), differ, EMB_PIXEL_TOL, id_diff, kept_seen);
+    CHECK(kept_seen > W * H / 20, "embree %s: %u pixels on kept instances", name, kept_seen);
+    CHECK(fabs(se - sb) <= EMB_MEAN_TOL * sb, "embree %s: mean %.6g vs %.6g", name, se, sb);
+    CHECK(differ <= EMB_PIXEL_FRACTION * W * H && id_diff <= EMB_PIXEL_FRACTION * W * H,
+          "embree %s: %u pixels differ, %u name another primitive", name, differ, id_diff);
+    tr_film_free(&fb);
+    tr_film_free(&fe);
+    tr_scene_clear(&b);
+    tr_scene_clear(&e);
+}
+
+/* Moves a kept instance, the flattened lamp instance and a shape of the scene's own in
+ * both scenes; tr_scene_update keeps Embree's instances and traces what the bvh traces. */
+static void embree_moves(void) {
+    tr_scene b, e;
+    tr_error err;
+    build(&b, 0);
+    build_embree(&e);
+    const uint32_t stored = tr_scene_stored_triangle_count(&e);
+    tr_scene *both[2] = {&b, &e};
+    for (int k = 0; k < 2; ++k) {
+        tr_scene *s = both[k];
+        float m[12];
+        placement(4, m);
+        m[3] -= 0.6f;
+        m[7] += 0.2f;
+        const float up[12] = {1, 0, 0, -0.4f, 0, 1, 0, 2.8f, 0, 0, 1, 0.3f};
+        const uint32_t box_shape = s->instances[4].shape + 1; /* added after the lamp */
+        CHECK(tr_scene_set_instance_transform(s, 1, m, &err) == TR_OK &&
+                  tr_scene_set_instance_transform(s, 4, up, &err) == TR_OK &&
+                  tr_scene_move_shape(s, box_shape, v3(-0.3f, 0.0f, 0.4f), &err) == TR_OK &&
+                  tr_scene_update(s, NULL, &err) == TR_OK,
+              "moves: %s", err.msg);
+    }
+    CHECK(tr_scene_is_committed(&e) && tr_scene_accel(&e) == TR_ACCEL_TYPE_EMBREE &&
+              tr_scene_has_kept_instances(&e) && tr_scene_stored_triangle_count(&e) == stored,
+          "embree's update keeps the instances");
+    const tr_aabb moved = e.shapes[e.instances[1].shape].box;
+    const uint32_t first = e.inst_first[1];
+    const uint32_t seen = embree_rays("embree rays after moves", &b, &e, &moved, first,
+                                      first + tr_scene_prototype_triangle_count(&e, 0), 9);
+    CHECK(seen > EMB_RAYS / 10, "the moved instance is hit where the bvh hits it (%u rays)", seen);
+    embree_rays("embree rays after moves, the whole scene", &b, &e, NULL, 0, 0, 10);
+    tr_scene_clear(&b);
+    tr_scene_clear(&e);
+}
+#endif
+
 int main(void) {
     storage_and_flattening();
     same_bits(TR_INTEGRATOR_PT, "pt");
@@ -416,5 +602,12 @@ int main(void) {
     refit();
     switched_on();
     budget();
+#ifdef TRAC0R_HAVE_EMBREE
+    if (tr_accel_available(TR_ACCEL_TYPE_EMBREE)) {
+        embree_hits();
+        embree_render(TR_INTEGRATOR_PT, "pt");
+        embree_moves();
+    }
+#endif
     return check_finish("test_instances_kept");
 }

@@ -1,13 +1,14 @@
 /* bench_instances.c - what moving one instance costs per frame, against the instance
  * count (docs/log/ records the runs).
  *
- *     bench_instances [N ...]     (default 10000 100000 1000000)
+ *     bench_instances [--accel bvh|embree] [N ...]     (default 10000 100000 1000000)
  *
  * For each N: a floor and a lamp of the scene's own and N instances of a prototype (a
- * two-triangle square) on a grid, committed to the BVH (two levels); then FRAMES frames
- * each move one instance (a different one per frame, tr_scene_set_instance_transform) and
- * bring the structure up to date (tr_scene_update: the top level refitted along that
- * instance's path). Prints the commit's time, the median and the largest frame, the same
+ * two-triangle square) on a grid, committed to the BVH (two levels) or to Embree (its own
+ * instancing); then FRAMES frames each move one instance (a different one per frame,
+ * tr_scene_set_instance_transform) and bring the structure up to date (tr_scene_update:
+ * the top level refitted along that instance's path, or Embree's top scene committed
+ * again). Prints the commit's time, the median and the largest frame, the same
  * for a frame that moves the instance and commits anew (the full rebuild a one-level BVH
  * would need), and the process's peak RSS. Uses the public API only. */
 #include <math.h>
@@ -19,6 +20,8 @@
 
 #define FRAMES 101
 #define REBUILDS 5
+
+static tr_accel_type accel = TR_ACCEL_TYPE_BVH;
 
 static int cmp_double(const void *a, const void *b) {
     const double x = *(const double *)a, y = *(const double *)b;
@@ -79,7 +82,7 @@ static int run(uint32_t n) {
         }
     }
     double t0 = tr_time_now();
-    if (tr_scene_commit(s, TR_ACCEL_TYPE_BVH, &err) != TR_OK) {
+    if (tr_scene_commit(s, accel, &err) != TR_OK) {
         fprintf(stderr, "bench_instances: %s\n", err.msg);
         return 1;
     }
@@ -93,8 +96,7 @@ static int run(uint32_t n) {
         t0 = tr_time_now();
         int rc = tr_scene_set_instance_transform(s, i, m, &err);
         if (rc == TR_OK) {
-            rc = f < FRAMES ? tr_scene_update(s, NULL, &err)
-                            : tr_scene_commit(s, TR_ACCEL_TYPE_BVH, &err);
+            rc = f < FRAMES ? tr_scene_update(s, NULL, &err) : tr_scene_commit(s, accel, &err);
         }
         const double dt = tr_time_now() - t0;
         if (rc != TR_OK) {
@@ -109,23 +111,33 @@ static int run(uint32_t n) {
     }
     qsort(frame, FRAMES, sizeof frame[0], cmp_double);
     qsort(rebuild, REBUILDS, sizeof rebuild[0], cmp_double);
-    printf("%8u instances, %9u triangles: commit %8.1f ms; move one + update: median %.4f ms, "
+    printf("%s: %8u instances, %9u triangles: commit %8.1f ms; move one + update: median %.4f ms, "
            "max %.4f ms; move one + commit: median %.1f ms; peak RSS %ld MiB\n",
-           n, tr_scene_triangle_count(s), 1e3 * commit, 1e3 * frame[FRAMES / 2],
-           1e3 * frame[FRAMES - 1], 1e3 * rebuild[REBUILDS / 2], peak_rss_kib() / 1024);
+           tr_accel_name(accel), n, tr_scene_triangle_count(s), 1e3 * commit,
+           1e3 * frame[FRAMES / 2], 1e3 * frame[FRAMES - 1], 1e3 * rebuild[REBUILDS / 2],
+           peak_rss_kib() / 1024);
     tr_scene_destroy(s);
     return 0;
 }
 
 int main(int argc, char **argv) {
     static const uint32_t def[] = {10000, 100000, 1000000};
-    int rc = 0;
-    if (argc < 2) {
+    int rc = 0, first = 1;
+    if (argc > 2 && strcmp(argv[1], "--accel") == 0) {
+        const int a = tr_accel_from_name(argv[2]);
+        if (a < 0 || !tr_accel_available((tr_accel_type)a)) {
+            fprintf(stderr, "bench_instances: no acceleration structure '%s' here\n", argv[2]);
+            return 2;
+        }
+        accel = (tr_accel_type)a;
+        first = 3;
+    }
+    if (argc <= first) {
         for (size_t k = 0; k < sizeof def / sizeof def[0]; ++k) {
             rc |= run(def[k]);
         }
     }
-    for (int a = 1; a < argc; ++a) {
+    for (int a = first; a < argc; ++a) {
         long n = strtol(argv[a], NULL, 10);
         if (n < 1 || n > 100000000) {
             fprintf(stderr, "bench_instances: expected an instance count, got '%s'\n", argv[a]);

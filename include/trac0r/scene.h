@@ -163,7 +163,8 @@ int tr_light_animation_from_name(const char *name);
 int tr_scene_take_motion(tr_scene *s, tr_vec3 *motion, uint32_t n, int *moved, tr_error *err);
 /* Brings the committed structure up to date after shapes moved and records the scene's
  * generation as committed: a BVH is refitted (boxes of the same trees, binary and wide),
- * Embree's scene rebuilt, the flat structure needs nothing. Fails when anything but moves
+ * Embree's scene rebuilt (with kept instances: its top scene, over the instances' new
+ * matrices), the flat structure needs nothing. Fails when anything but moves
  * happened since the commit (shapes or meshes added, the scene reloaded): that needs
  * tr_scene_commit. *seconds (may be NULL) gets the time taken. */
 int tr_scene_update(tr_scene *s, double *seconds, tr_error *err);
@@ -187,7 +188,9 @@ double tr_scene_embree_build_seconds(const tr_scene *s);
  * shading places a hit triangle through it. TR_ACCEL_TYPE_BVH on the CPU traces a
  * two-level structure: a top-level wide BVH over the instances whose leaves carry the ray
  * into each prototype's own bottom-level wide BVH, built once per prototype however many
- * instances it has. The other structures (flat, bvh2, embree) and OpenCL devices trace
+ * instances it has. TR_ACCEL_TYPE_EMBREE traces them through Embree's own instancing (a
+ * scene per prototype, an instance geometry per instance), with the same ids. The other
+ * structures (flat, bvh2) and OpenCL devices trace
  * stored triangles only: committing to one of them, or uploading to such a device,
  * flattens the instances first (stores their transformed triangles in the order they were
  * added), and the scene stays flattened. A prototype with an emitting material is stored
@@ -208,8 +211,9 @@ int tr_scene_add_instance(tr_scene *s, uint32_t proto, const float m[12], uint32
  * files nest prototypes in prototypes). */
 int tr_scene_add_prototype_copy(tr_scene *s, uint32_t proto, const float m[12], tr_error *err);
 /* Moves instance `instance` to matrix m (checked as above): its triangles and vertex
- * normals are placed anew (rewritten where stored); tr_scene_update then refits the top level along the
- * instance's path only (the bottom levels never change). tr_scene_move_shape on an
+ * normals are placed anew (rewritten where stored); tr_scene_update then refits the top level along
+ * the instance's path only (the bottom levels never change), or, committed to Embree, gives Embree
+ * the new matrix and rebuilds its top scene (not the prototypes'). tr_scene_move_shape on an
  * instance's shape does the same with the translation added to its matrix. */
 int tr_scene_set_instance_transform(tr_scene *s, uint32_t instance, const float m[12],
                                     tr_error *err);
@@ -230,7 +234,7 @@ int tr_scene_triangle_instance(const tr_scene *s, uint32_t triangle, uint32_t *i
 /* Triangles the scene places: the ids rays can hit run from 0 to this count - 1. */
 uint32_t tr_scene_triangle_count(const tr_scene *s);
 /* Of those, the ones stored one by one (ids 0 ..): the rest are placed by instances kept
- * unflattened for the CPU's two-level `bvh` (tr_scene_add_instance), stored once per
+ * unflattened for the CPU's two-level `bvh` and Embree (tr_scene_add_instance), stored once per
  * prototype, none of them an emitter. Equal to tr_scene_triangle_count without them. */
 uint32_t tr_scene_stored_triangle_count(const tr_scene *s);
 uint32_t tr_scene_material_count(const tr_scene *s);

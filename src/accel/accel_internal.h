@@ -49,27 +49,55 @@ int tr_bvh_build_skip(tr_bvh *bvh, const tr_triangle *tris, uint32_t n, const ui
 void tr_bvh_free(tr_bvh *bvh);
 
 /* An Embree 3 scene over a scene's triangles (src/accel/embree.c): one triangle
- * geometry holding every triangle in the scene's order, so that Embree's primID is the
- * index into the scene's triangle array. The handles are opaque so that this header
- * does not need Embree's. Each tr_embree owns its own RTCDevice (creating one costs
- * well under a millisecond next to the build). */
-struct tr_embree_state; /* device, scene and the device's error message */
+ * geometry holding every stored triangle in the scene's order, so that Embree's primID is
+ * the index into the scene's triangle array, and, for kept instances, one instance
+ * geometry each (Embree's own instancing) of a scene per prototype. The handles are
+ * opaque so that this header does not need Embree's. Each tr_embree owns its own
+ * RTCDevice (creating one costs well under a millisecond next to the build). */
+struct tr_embree_state; /* device, scenes and the device's error message */
 typedef struct tr_embree {
     struct tr_embree_state *state; /* NULL when nothing is built */
     const void *scene;             /* the RTCScene rays are traced through, or NULL */
-    uint32_t triangle_count;       /* triangles handed to Embree */
+    const uint32_t *first;         /* per geometry of `scene` (1 + instance index), the id a
+                                      hit on its primitive 0 reports; NULL: no instances */
+    uint32_t triangle_count;       /* stored triangles handed to Embree */
+    uint32_t instance_count;       /* instances handed to Embree (traced or not) */
     double build_seconds;          /* device creation, vertex copy and rtcCommitScene; the
                                       first build in a process also starts Embree's threads
                                       (a few ms) */
 } tr_embree;
 
+/* A prototype's triangles in its own space, and one placement of a prototype: m is its
+ * 3x4 row-major matrix (object to world), first the id its primitive 0 reports. An
+ * instance whose proto is past the prototypes is not traced (its triangles are stored). */
+typedef struct tr_embree_proto {
+    const tr_triangle *tris;
+    uint32_t count;
+} tr_embree_proto;
+typedef struct tr_embree_instance {
+    const float *m;
+    uint32_t proto;
+    uint32_t first;
+} tr_embree_instance;
+
 /* Builds an Embree scene over n triangles into *e, which it overwrites (free a previous
  * one first). Fails with a message, leaving *e zeroed, when this build of trac0r has no
  * Embree (tr_accel_available(TR_ACCEL_TYPE_EMBREE) == 0) or when Embree reports an
  * error. Degenerate triangles are handed over too (Embree never hits them). The Embree
- * scene holds a copy of the vertices: moving triangles needs a new build. */
+ * scene holds a copy of the vertices. */
 int tr_embree_build(tr_embree *e, const tr_triangle *tris, uint32_t n, tr_error *err);
-/* Releases the Embree scene and device; safe on a zeroed or already freed tr_embree. */
+/* The same with inst_count instances of the prototypes: instance k is the top scene's
+ * geometry k + 1, and a prototype's scene is built once, for its first instance. */
+int tr_embree_build_instanced(tr_embree *e, const tr_triangle *tris, uint32_t n,
+                              const tr_embree_proto *protos, uint32_t proto_count,
+                              const tr_embree_instance *inst, uint32_t inst_count, tr_error *err);
+/* Moves traced instance k to matrix m, or rewrites the stored triangles' positions (n as
+ * built); either takes effect at tr_embree_commit, which rebuilds the top scene only (a
+ * prototype's scene stays as it is). */
+int tr_embree_set_transform(tr_embree *e, uint32_t k, const float m[12], tr_error *err);
+int tr_embree_set_triangles(tr_embree *e, const tr_triangle *tris, uint32_t n, tr_error *err);
+int tr_embree_commit(tr_embree *e, tr_error *err);
+/* Releases the Embree scenes and device; safe on a zeroed or already freed tr_embree. */
 void tr_embree_free(tr_embree *e);
 
 /* The wide BVH the CPU traces (src/accel/wbvh.h, with its run-time ISA choice). */

@@ -17,8 +17,9 @@
 #if !defined(__OPENCL_C_VERSION__) && !defined(__OPENCL_VERSION__) && defined(TRAC0R_HAVE_EMBREE)
 #define TR_SCENE_VIEW_EMBREE 1
 /* Closest hit / any hit in (ray->tmin, ray->tmax) through an RTCScene built by
- * tr_embree_build (src/accel/embree.c), with the flat structure's conventions. */
-int tr_embree_intersect(const void *scene, const tr_ray *ray, tr_hit *hit);
+ * tr_embree_build (src/accel/embree.c), with the flat structure's conventions; `first`
+ * turns a hit through an instance into its id (tr_embree.first, NULL without instances). */
+int tr_embree_intersect(const void *scene, const uint32_t *first, const tr_ray *ray, tr_hit *hit);
 int tr_embree_occluded(const void *scene, const tr_ray *ray);
 #endif
 
@@ -93,7 +94,8 @@ typedef struct tr_scene_view {
     TR_SCENE_ARRAYS(TR_SCENE_VIEW_COUNT_MEMBER)
     TR_SCENE_SCALARS(TR_SCENE_VIEW_SCALAR_MEMBER)
 #ifdef TR_SCENE_VIEW_EMBREE
-    const void *embree_scene; /* RTCScene, for TR_ACCEL_EMBREE */
+    const void *embree_scene;     /* RTCScene, for TR_ACCEL_EMBREE */
+    const uint32_t *embree_first; /* its instances' first ids (tr_embree.first), or NULL */
 #endif
 #ifdef TR_SCENE_VIEW_WBVH
     const struct tr_wbvh *wbvh;  /* TR_ACCEL_BVH: the wide BVH, or NULL for the binary one */
@@ -279,7 +281,7 @@ TR_FN_TRAVERSE int tr_traverse_cwbvh(const tr_scene_view *s, const tr_ray *ray, 
 TR_FN int tr_intersect_scene(const tr_scene_view *s, const tr_ray *ray, tr_hit *hit) {
 #ifdef TR_SCENE_VIEW_EMBREE
     if (s->accel == TR_ACCEL_EMBREE) {
-        return tr_embree_intersect(s->embree_scene, ray, hit);
+        return tr_embree_intersect(s->embree_scene, s->embree_first, ray, hit);
     }
 #endif
 #ifdef TR_SCENE_VIEW_WBVH

@@ -643,6 +643,63 @@ int tr_scene_update_two_level(tr_scene *s, tr_error *err) {
     return TR_OK;
 }
 
+/* ---- Kept instances through Embree's instancing -------------------------------------- */
+
+int tr_scene_build_embree(tr_scene *s, tr_error *err) {
+    const uint32_t n = s->instance_count;
+    tr_embree_proto *protos =
+        malloc((size_t)(s->proto_count ? s->proto_count : 1) * sizeof *protos);
+    tr_embree_instance *inst = malloc((size_t)(n ? n : 1) * sizeof *inst);
+    if (!protos || !inst) {
+        free(protos);
+        free(inst);
+        return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY,
+                            "out of memory handing %u instances to Embree", n);
+    }
+    for (uint32_t i = 0; i < s->proto_count; ++i) {
+        protos[i].tris = s->protos[i].tris;
+        protos[i].count = s->protos[i].tri_count;
+    }
+    for (uint32_t i = 0; i < n; ++i) {
+        const tr_instance *in = &s->instances[i];
+        inst[i].m = in->m;
+        /* A flattened instance's triangles are among the stored ones. */
+        inst[i].proto = in->flat ? UINT32_MAX : in->proto;
+        inst[i].first = s->inst_first[i];
+    }
+    const int rc = tr_embree_build_instanced(&s->embree, s->triangles, s->triangle_count, protos,
+                                             s->proto_count, inst, n, err);
+    free(protos);
+    free(inst);
+    return rc;
+}
+
+int tr_scene_update_embree(tr_scene *s, tr_error *err) {
+    int stored = s->rest_moved, lights = 0, rc = TR_OK;
+    for (uint32_t k = 0; k < s->moved_count; ++k) {
+        tr_instance *in = &s->instances[s->moved[k]];
+        if (in->flat) {
+            stored = 1; /* its triangles were rewritten in the scene's arrays */
+        } else if (rc == TR_OK) {
+            rc = tr_embree_set_transform(&s->embree, s->moved[k], in->m, err);
+        }
+        lights |= s->protos[in->proto].emissive;
+        in->moved = 0;
+    }
+    s->moved_count = 0;
+    s->rest_moved = 0;
+    if (rc == TR_OK && stored) {
+        rc = tr_embree_set_triangles(&s->embree, s->triangles, s->triangle_count, err);
+    }
+    if (rc == TR_OK) {
+        rc = tr_embree_commit(&s->embree, err);
+    }
+    if (rc == TR_OK && lights) {
+        rc = tr_scene_build_lights(s, err);
+    }
+    return rc;
+}
+
 /* ---- Kept instances read by id (the kernel's tr_view_* on the host) ---------------- */
 
 /* The instance each thread found last: a hit is read several times (its triangle,

@@ -563,10 +563,12 @@ int tr_scene_commit(tr_scene *s, tr_accel_type accel, tr_error *err) {
     s->accel = TR_ACCEL_TYPE_FLAT;
     s->committed_triangles = 0;
     s->committed = 0;
-    /* Kept instances are traced by the CPU's two levels alone: any other structure gets
-     * them flattened here, as does a scene whose kept prototypes now emit (a material's
-     * emittance changed), since the emitter table names stored triangles. */
-    if (tr_scene_has_kept_instances(s) && (accel != TR_ACCEL_TYPE_BVH || tr_scene_kept_emit(s)) &&
+    /* Kept instances are traced by the CPU's two levels and by Embree's instancing: any
+     * other structure gets them flattened here, as does a scene whose kept prototypes now
+     * emit (a material's emittance changed), since the emitter table names stored
+     * triangles. */
+    const int traces_instances = accel == TR_ACCEL_TYPE_BVH || accel == TR_ACCEL_TYPE_EMBREE;
+    if (tr_scene_has_kept_instances(s) && (!traces_instances || tr_scene_kept_emit(s)) &&
         tr_scene_flatten(s, err) != TR_OK) {
         return TR_ERR;
     }
@@ -620,7 +622,10 @@ int tr_scene_commit(tr_scene *s, tr_accel_type accel, tr_error *err) {
         s->committed = 1;
         return TR_OK;
     case TR_ACCEL_TYPE_EMBREE:
-        if (tr_embree_build(&s->embree, s->triangles, s->triangle_count, err) != TR_OK) {
+        /* Kept instances through Embree's instancing (src/scene/instance.c). */
+        if ((tr_scene_has_kept_instances(s)
+                 ? tr_scene_build_embree(s, err)
+                 : tr_embree_build(&s->embree, s->triangles, s->triangle_count, err)) != TR_OK) {
             return TR_ERR;
         }
         s->accel = accel;
@@ -767,6 +772,15 @@ int tr_scene_update(tr_scene *s, double *seconds, tr_error *err) {
         return rc;
     } else if (s->accel == TR_ACCEL_TYPE_BVH || s->accel == TR_ACCEL_TYPE_BVH2) {
         rc = tr_scene_refit(s, err);
+    } else if (s->accel == TR_ACCEL_TYPE_EMBREE && s->embree.first) {
+        /* Kept instances: new matrices and the top scene committed again. */
+        rc = tr_scene_update_embree(s, err);
+        if (rc != TR_OK) {
+            tr_embree_free(&s->embree);
+            s->accel = TR_ACCEL_TYPE_FLAT; /* as a failed commit leaves it */
+            s->committed_triangles = 0;
+            s->committed = 0;
+        }
     } else if (s->accel == TR_ACCEL_TYPE_EMBREE) {
         tr_embree_free(&s->embree);
         rc = tr_embree_build(&s->embree, s->triangles, s->triangle_count, err);
@@ -890,6 +904,7 @@ tr_scene_view tr_scene_view_of(const tr_scene *s) {
     }
 #ifdef TR_SCENE_VIEW_EMBREE
     v.embree_scene = s->embree.scene;
+    v.embree_first = s->embree.first;
 #endif
     return v;
 }

@@ -324,6 +324,12 @@ int tr_scene_check_committed(const tr_scene *s, tr_error *err);
  * owning shape `shape`, or UINT32_MAX. */
 int tr_scene_build_two_level(tr_scene *s, tr_error *err);
 int tr_scene_update_two_level(tr_scene *s, tr_error *err);
+/* A TR_ACCEL_TYPE_EMBREE commit with kept instances: the stored triangles, a scene per
+ * placed prototype and an instance geometry per kept instance (tr_embree_build_instanced);
+ * the update after moves gives Embree the moved instances' matrices (and the stored
+ * triangles when any of them moved) and commits the top scene again. */
+int tr_scene_build_embree(tr_scene *s, tr_error *err);
+int tr_scene_update_embree(tr_scene *s, tr_error *err);
 void tr_scene_free_instances(tr_scene *s);
 void tr_scene_free_two_level(tr_scene *s);
 /* Kept instances: assigns their ids after the stored triangles (each commit does, as
