@@ -297,6 +297,29 @@ TR_FN float tr_coat_weight(const tr_bsdf_params *m) {
  * against n_c's, so that the coat still sends back at most c F_c(cos_c,o) and the base
  * keeps the share that passes it. With coat_n 0 (no map) none of this runs. */
 
+/* The coat's albedo <E_c> (weight c, alpha ac) over the directions the base's broad parts
+ * scatter into, for the compensation of tr_coat_layer and tr_coat_layer_tilted: into *ed
+ * the diffuse part's (its cosine lobe weighted by 1 - E_l), into *em the conductor's
+ * multiple scattering's (weighted by 1 - E); the midpoint rule in cos^2, the measure of
+ * 2 cos dcos. */
+TR_FN void tr_coat_broad_albedos(const tr_bsdf_params *m, float c, float ac, float *ed, float *em) {
+    float a = tr_principled_alpha(m->roughness), f0d = tr_principled_f0d(m);
+    float nd = 0.0f, dd = 0.0f, nm = 0.0f, dm = 0.0f;
+    for (int q = 0; q < TR_COAT_QUAD; ++q) {
+        float mu = tr_sqrtf(((float)q + 0.5f) * (1.0f / (float)TR_COAT_QUAD));
+        float ec = c * tr_ggx_ms_layer_e(m->ms, mu, ac, TR_PRINCIPLED_F0);
+        float wd = 1.0f - tr_ggx_ms_layer_e(m->ms, mu, a, f0d);
+        float wm = 1.0f - tr_ggx_ms_e(m->ms, mu, a);
+        nd += wd * ec;
+        dd += wd;
+        nm += wm * ec;
+        dm += wm;
+    }
+    float ea = c * tr_ggx_ms_layer_eavg(m->ms, ac, TR_PRINCIPLED_F0);
+    *ed = dd > 0.0f ? nd / dd : ea;
+    *em = dm > 0.0f ? nm / dm : ea;
+}
+
 /* The coat's normal on nf's side. */
 TR_FN tr_vec3 tr_coat_normal(const tr_bsdf_params *m, tr_vec3 nf) {
     tr_vec3 n = tr_unpack_oct(m->coat_n);
@@ -321,20 +344,8 @@ TR_FN_NOINLINE tr_vec3 tr_coat_layer_tilted(const tr_bsdf_params *m, tr_vec3 spe
         float eo = xo > 0.0f ? c * tr_ggx_ms_layer_e(m->ms, xo, ac, TR_PRINCIPLED_F0) : c;
         float ei = xi > 0.0f ? c * tr_ggx_ms_layer_e(m->ms, xi, ac, TR_PRINCIPLED_F0) : c;
         float att = (1.0f - eo) * (1.0f - ei);
-        float a = tr_principled_alpha(m->roughness), f0d = tr_principled_f0d(m);
-        float nd = 0.0f, dd = 0.0f, nm = 0.0f, dm = 0.0f;
-        for (int q = 0; q < TR_COAT_QUAD; ++q) {
-            float mu = tr_sqrtf(((float)q + 0.5f) * (1.0f / (float)TR_COAT_QUAD));
-            float ec = c * tr_ggx_ms_layer_e(m->ms, mu, ac, TR_PRINCIPLED_F0);
-            float wd = 1.0f - tr_ggx_ms_layer_e(m->ms, mu, a, f0d);
-            float wm = 1.0f - tr_ggx_ms_e(m->ms, mu, a);
-            nd += wd * ec;
-            dd += wd;
-            nm += wm * ec;
-            dm += wm;
-        }
-        float ea = c * tr_ggx_ms_layer_eavg(m->ms, ac, TR_PRINCIPLED_F0);
-        float ed = dd > 0.0f ? nd / dd : ea, em = dm > 0.0f ? nm / dm : ea;
+        float a = tr_principled_alpha(m->roughness), ed, em;
+        tr_coat_broad_albedos(m, c, ac, &ed, &em);
         float no = xo > 0.0f ? 1.0f - c * tr_ggx_ms_coat_e(m->ms, xo, a, ac) : 1.0f - c;
         float ni = xi > 0.0f ? 1.0f - c * tr_ggx_ms_coat_e(m->ms, xi, a, ac) : 1.0f - c;
         float nsq = no * ni;
@@ -365,23 +376,8 @@ TR_FN tr_vec3 tr_coat_layer(const tr_bsdf_params *m, tr_vec3 spec, tr_vec3 ms, t
         float eo = c * tr_ggx_ms_layer_e(m->ms, co, ac, TR_PRINCIPLED_F0);
         float ei = c * tr_ggx_ms_layer_e(m->ms, ci, ac, TR_PRINCIPLED_F0);
         att = (1.0f - eo) * (1.0f - ei);
-        /* <E_c> over the broad parts' directions: the diffuse part's cosine lobe weighted
-         * by 1 - E_l, the conductor's multiple scattering by 1 - E (midpoint rule in
-         * cos^2, the measure of 2 cos dcos). */
-        float a = tr_principled_alpha(m->roughness), f0d = tr_principled_f0d(m);
-        float nd = 0.0f, dd = 0.0f, nm = 0.0f, dm = 0.0f;
-        for (int q = 0; q < TR_COAT_QUAD; ++q) {
-            float mu = tr_sqrtf(((float)q + 0.5f) * (1.0f / (float)TR_COAT_QUAD));
-            float ec = c * tr_ggx_ms_layer_e(m->ms, mu, ac, TR_PRINCIPLED_F0);
-            float wd = 1.0f - tr_ggx_ms_layer_e(m->ms, mu, a, f0d);
-            float wm = 1.0f - tr_ggx_ms_e(m->ms, mu, a);
-            nd += wd * ec;
-            dd += wd;
-            nm += wm * ec;
-            dm += wm;
-        }
-        float ea = c * tr_ggx_ms_layer_eavg(m->ms, ac, TR_PRINCIPLED_F0);
-        float ed = dd > 0.0f ? nd / dd : ea, em = dm > 0.0f ? nm / dm : ea;
+        float a = tr_principled_alpha(m->roughness), ed, em;
+        tr_coat_broad_albedos(m, c, ac, &ed, &em);
         /* The single-scattering lobe's N at both ends. */
         float nsq = (1.0f - c * tr_ggx_ms_coat_e(m->ms, co, a, ac)) *
                     (1.0f - c * tr_ggx_ms_coat_e(m->ms, ci, a, ac));

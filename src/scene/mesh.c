@@ -290,18 +290,16 @@ static uint32_t load_texture_xf(import_ctx *c, const struct aiMaterial *m, const
  *     the volume's attenuation (KHR_materials_volume); the emission x its strength
  *     (KHR_materials_emissive_strength); the sheen's colour and roughness x their
  *     maps (KHR_materials_sheen); the dielectric layer's specular factor and colour
- *     (KHR_materials_specular, from the file's JSON: gltf_material_json). A transmission factor without a metallic-
- *     roughness material -> glass (colour: Kd, ior Ni or 1.5).
- *   otherwise Ke > 0 without an emissive map -> emitter (colour Ke / max(Ke), emittance
- *     max(Ke)); illum 4, 6, 7 or 9 (refraction) -> glass (colour Kd, ior Ni, 1.5 where
- *     missing or outside [1, 10]); illum 3, 5 or 8 -> glossy (colour Ks, or Kd where Ks is
- *     black, roughness sqrt(2 / (Ns + 2))); otherwise diffuse, colour Kd x diffuse map.
- *   Opacity below 1 alone is not glass: glTF's alphaMode MASK cuts out below its
- *     alphaCutoff, BLEND and MTL's d < 1 cut out below 0.5 where the base map has alpha
- *     and are otherwise opaque (a warning says so).
- *   Maps we do not use (specular, bump/height, opacity, ambient, shininess, displacement,
- *     light, reflection) are dropped with a warning naming the material.
- * Colours other than Ke and the emission are clamped to [0, 1]. */
+ *     (KHR_materials_specular, from the file's JSON: gltf_material_json). A transmission factor
+ * without a metallic- roughness material -> glass (colour: Kd, ior Ni or 1.5). otherwise Ke > 0
+ * without an emissive map -> emitter (colour Ke / max(Ke), emittance max(Ke)); illum 4, 6, 7 or 9
+ * (refraction) -> glass (colour Kd, ior Ni, 1.5 where missing or outside [1, 10]); illum 3, 5 or 8
+ * -> glossy (colour Ks, or Kd where Ks is black, roughness sqrt(2 / (Ns + 2))); otherwise diffuse,
+ * colour Kd x diffuse map. Opacity below 1 alone is not glass: glTF's alphaMode MASK cuts out below
+ * its alphaCutoff, BLEND and MTL's d < 1 cut out below 0.5 where the base map has alpha and are
+ * otherwise opaque (a warning says so). Maps we do not use (specular, bump/height, opacity,
+ * ambient, shininess, displacement, light, reflection) are dropped with a warning naming the
+ * material. Colours other than Ke and the emission are clamped to [0, 1]. */
 /* The number at `key` of object o, or `fallback` where there is none (or not a finite
  * number). */
 static double json_number(const cJSON *o, const char *key, double fallback) {
