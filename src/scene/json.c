@@ -1029,25 +1029,32 @@ static int get_transform(const jctx *c, const cJSON *obj, const char *path, tr_t
     return TR_OK;
 }
 
-/* Triangles first..count-1 must be non-degenerate and within the coordinate bound. */
+/* Triangle t, number k of what path placed, must be non-degenerate and within the
+ * coordinate bound. */
+static int check_triangle(const jctx *c, const char *path, const tr_triangle *t, uint32_t k) {
+    const float bound = (float)TR_SCENE_FILE_MAX_COORD;
+    const tr_vec3 v[3] = {t->v0, t->v1, t->v2};
+    for (int j = 0; j < 3; ++j) {
+        if (!v3_is_finite(v[j]) || fabsf(v[j].x) > bound || fabsf(v[j].y) > bound ||
+            fabsf(v[j].z) > bound) {
+            return jerr(c, path, "a vertex lands at (%g, %g, %g), outside the bound |x| <= %g",
+                        (double)v[j].x, (double)v[j].y, (double)v[j].z, TR_SCENE_FILE_MAX_COORD);
+        }
+    }
+    if (!(t->area > 0.0f)) {
+        char p[PATH_MAX_LEN];
+        path_key(p, path, "scale");
+        return jerr(c, p, "too small: triangle %u has zero area", k);
+    }
+    return TR_OK;
+}
+
+/* Stored triangles first..count-1, as check_triangle. */
 static int check_triangles(const jctx *c, const char *path, uint32_t first) {
     const tr_scene *s = c->scene;
-    const float bound = (float)TR_SCENE_FILE_MAX_COORD;
     for (uint32_t i = first; i < s->triangle_count; ++i) {
-        const tr_triangle *t = &s->triangles[i];
-        const tr_vec3 v[3] = {t->v0, t->v1, t->v2};
-        for (int k = 0; k < 3; ++k) {
-            if (!v3_is_finite(v[k]) || fabsf(v[k].x) > bound || fabsf(v[k].y) > bound ||
-                fabsf(v[k].z) > bound) {
-                return jerr(c, path, "a vertex lands at (%g, %g, %g), outside the bound |x| <= %g",
-                            (double)v[k].x, (double)v[k].y, (double)v[k].z,
-                            TR_SCENE_FILE_MAX_COORD);
-            }
-        }
-        if (!(t->area > 0.0f)) {
-            char p[PATH_MAX_LEN];
-            path_key(p, path, "scale");
-            return jerr(c, p, "too small: triangle %u has zero area", i - first);
+        if (check_triangle(c, path, &s->triangles[i], i - first) != TR_OK) {
+            return TR_ERR;
         }
     }
     return TR_OK;
@@ -1055,23 +1062,11 @@ static int check_triangles(const jctx *c, const char *path, uint32_t first) {
 
 /* check_triangles for the triangles a kept instance places, ids first_id on. */
 static int check_placed(const jctx *c, const char *path, uint32_t first_id) {
-    const float bound = (float)TR_SCENE_FILE_MAX_COORD;
     const uint32_t end = tr_scene_triangle_count(c->scene);
     for (uint32_t i = first_id; i < end; ++i) {
         const tr_triangle t = tr_scene_triangle(c->scene, i);
-        const tr_vec3 v[3] = {t.v0, t.v1, t.v2};
-        for (int k = 0; k < 3; ++k) {
-            if (!v3_is_finite(v[k]) || fabsf(v[k].x) > bound || fabsf(v[k].y) > bound ||
-                fabsf(v[k].z) > bound) {
-                return jerr(c, path, "a vertex lands at (%g, %g, %g), outside the bound |x| <= %g",
-                            (double)v[k].x, (double)v[k].y, (double)v[k].z,
-                            TR_SCENE_FILE_MAX_COORD);
-            }
-        }
-        if (!(t.area > 0.0f)) {
-            char p[PATH_MAX_LEN];
-            path_key(p, path, "scale");
-            return jerr(c, p, "too small: triangle %u has zero area", i - first_id);
+        if (check_triangle(c, path, &t, i - first_id) != TR_OK) {
+            return TR_ERR;
         }
     }
     return TR_OK;
