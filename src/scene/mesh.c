@@ -319,7 +319,7 @@ static const cJSON *gltf_material_ext(const import_ctx *c, unsigned int index, c
     return cJSON_IsObject(e) ? e : NULL;
 }
 
-/* The glTF extensions Assimp 5.2 reads but does not pass on, from the file's own JSON:
+/* The glTF extensions Assimp 5.2 does not pass on, read from the file's own JSON:
  * KHR_materials_emissive_strength (the emission's multiplier) and KHR_materials_specular
  * (the dielectric layer's F0 scale and tint; its two maps are not read, a warning says
  * so). Values out of the extension's range are clamped to it as the others are. */
