@@ -38,6 +38,7 @@
 #include "scene/scene_internal.h"
 #include "kernel/bsdf.h"
 #include "kernel/kernel.h"
+#include "bsdf_util.h"
 
 #include <math.h>
 #include <stdint.h>
@@ -57,11 +58,6 @@ static tr_bsdf_params mat(uint32_t type, tr_vec3 color, float roughness, float i
     m.roughness = roughness;
     m.ior = ior;
     return tr_material_params(&m, v3(0.0f, 0.0f, 1.0f));
-}
-
-static tr_vec3 dir_of(double cos_t, double phi) {
-    double s = sqrt(fmax(0.0, 1.0 - cos_t * cos_t));
-    return v3((float)(s * cos(phi)), (float)(s * sin(phi)), (float)cos_t);
 }
 
 enum { NC = 16, NP = 24, SUB = 24 };
@@ -161,20 +157,8 @@ static void chi2_case(const tr_bsdf_params *m, double theta_o_deg, uint64_t seed
 
 /* (c) */
 static void reciprocity(const tr_bsdf_params *m) {
-    tr_rng rng;
-    tr_rng_init(&rng, 77, 3, 4);
-    int bad = 0, nonzero = 0;
-    for (int k = 0; k < 20000; ++k) {
-        tr_vec3 a = dir_of(tr_rng_float(&rng), 2.0 * PI_D * tr_rng_float(&rng));
-        tr_vec3 b = dir_of(tr_rng_float(&rng), 2.0 * PI_D * tr_rng_float(&rng));
-        tr_vec3 fab = tr_bsdf_eval(m, a, b), fba = tr_bsdf_eval(m, b, a);
-        nonzero += fab.x > 0.0f;
-        float scale = fmaxf(fab.x, 1e-6f);
-        if (!(fabsf(fab.x - fba.x) <= 1e-3f * scale && fabsf(fab.y - fba.y) <= 1e-3f * scale &&
-              fabsf(fab.z - fba.z) <= 1e-3f * scale)) {
-            ++bad;
-        }
-    }
+    int nonzero;
+    const int bad = bsdf_not_reciprocal(m, 77, &nonzero);
     CHECK(bad == 0 && nonzero > 10000, "type %u r=%.2f: %d of 20000 pairs not reciprocal (%d > 0)",
           m->type, (double)m->roughness, bad, nonzero);
 }
@@ -384,29 +368,6 @@ static void principled_tests(void) {
 }
 
 /* (f) */
-/* Of 2000 random (wo, wi, lobe numbers) from seed, how many give p0 and p1 a different
- * value, pdf or sample, bit for bit. */
-static int bsdf_differences(const tr_bsdf_params *p0, const tr_bsdf_params *p1, uint64_t seed) {
-    tr_rng rng;
-    tr_rng_init(&rng, seed, seed + 1, seed + 2);
-    int differ = 0;
-    for (int k = 0; k < 2000; ++k) {
-        tr_vec3 wo = dir_of(tr_rng_float(&rng), 2.0 * PI_D * tr_rng_float(&rng));
-        tr_vec3 wi = dir_of(tr_rng_float(&rng), 2.0 * PI_D * tr_rng_float(&rng));
-        tr_vec3 f0 = tr_bsdf_eval(p0, wo, wi), f1 = tr_bsdf_eval(p1, wo, wi);
-        float q0 = tr_bsdf_pdf(p0, wo, wi), q1 = tr_bsdf_pdf(p1, wo, wi);
-        float ul = tr_rng_float(&rng), u1 = tr_rng_float(&rng), u2 = tr_rng_float(&rng);
-        tr_scatter s0, s1;
-        memset(&s0, 0, sizeof s0);
-        memset(&s1, 0, sizeof s1);
-        int k0 = tr_bsdf_sample(p0, wo, ul, u1, u2, &s0);
-        int k1 = tr_bsdf_sample(p1, wo, ul, u1, u2, &s1);
-        differ += memcmp(&f0, &f1, sizeof f0) != 0 || memcmp(&q0, &q1, sizeof q0) != 0 ||
-                  k0 != k1 || memcmp(&s0, &s1, sizeof s0) != 0;
-    }
-    return differ;
-}
-
 static void clearcoat_tests(void) {
     const float base_rough[] = {0.44f, 0.8f};
     const float coat_rough[] = {0.3f, 0.7f};

@@ -13,6 +13,7 @@
  *      material stage. */
 #define _POSIX_C_SOURCE 200809L
 #include "check.h"
+#include "model_util.h"
 #include "kernel/kernel.h"
 #include "scene/scene_internal.h"
 
@@ -92,11 +93,9 @@ static void gltf_coat_maps(const char *dir) {
     for (int normal = 0; normal < 2; ++normal) {
         CHECK(write_gltf(path, normal), "cannot write %s", path);
         tr_scene s;
-        tr_scene_init(&s);
         tr_scene_file info;
         tr_error err;
-        const tr_model_options opt = {0, 1.0f, 0, 0, NULL};
-        CHECK(tr_scene_model_load(&s, path, &opt, &info, &err) == TR_OK, "%s", err.msg);
+        load_model_file(&s, path, &info);
         /* The weight and roughness maps are read, and the coat's normal map too. */
         CHECK(info.warning_count == 0, "%u warnings with%s a coat normal map", info.warning_count,
               normal ? "" : "out");
@@ -153,23 +152,9 @@ static void scene_file_keys(const char *dir) {
     static const char *const b64[2] = {PNG_A, PNG_B};
     /* The PNGs as files: decoded from base64 here. */
     for (int k = 0; k < 2; ++k) {
-        unsigned char png[128];
-        size_t n = 0;
-        uint32_t acc = 0;
-        int bits = 0;
-        for (const char *q = b64[k]; *q && *q != '='; ++q) {
-            const char *alpha = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-            acc = (acc << 6) | (uint32_t)(strchr(alpha, *q) - alpha);
-            bits += 6;
-            if (bits >= 8) {
-                bits -= 8;
-                png[n++] = (unsigned char)(acc >> bits);
-            }
-        }
         char path[700];
         snprintf(path, sizeof path, "%s/%s", dir, names[k]);
-        FILE *f = fopen(path, "wb");
-        CHECK(f && fwrite(png, 1, n, f) == n && fclose(f) == 0, "cannot write %s", path);
+        CHECK(write_base64_file(path, b64[k]), "cannot write %s", path);
     }
     tr_scene s;
     tr_error err;

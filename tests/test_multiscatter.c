@@ -15,6 +15,7 @@
  *      principled material imported from a glTF file has the flag. */
 #define _POSIX_C_SOURCE 200809L
 #include "check.h"
+#include "model_util.h"
 #include "render_film.h"
 #include "scene_util.h"
 
@@ -199,11 +200,8 @@ static void imported(void) {
                " \"nodes\": [{\"mesh\": 0}], \"scenes\": [{\"nodes\": [0]}], \"scene\": 0}\n");
     CHECK(fclose(f) == 0, "cannot write %s", path);
     tr_scene s;
-    tr_scene_init(&s);
     tr_scene_file info;
-    tr_error err;
-    const tr_model_options opt = {0, 1.0f, 0, 0, NULL};
-    CHECK(tr_scene_model_load(&s, path, &opt, &info, &err) == TR_OK, "%s", err.msg);
+    load_model_file(&s, path, &info);
     int principled = 0;
     for (uint32_t i = 0; i < s.material_count; ++i) {
         if (s.materials[i].type == TR_MATERIAL_PRINCIPLED) {

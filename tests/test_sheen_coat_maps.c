@@ -22,7 +22,9 @@
  *
  * Fixed seeds; statistical bounds are 5 standard errors. */
 #define _POSIX_C_SOURCE 200809L
+#include "bsdf_util.h"
 #include "check.h"
+#include "model_util.h"
 #include "kernel/kernel.h"
 #include "scene/scene_internal.h"
 
@@ -179,11 +181,8 @@ static void gltf_maps(const char *dir) {
     snprintf(path, sizeof path, "%s/velvet.gltf", dir);
     CHECK(write_gltf(path), "cannot write %s", path);
     tr_scene s;
-    tr_scene_init(&s);
     tr_scene_file info;
-    tr_error err;
-    const tr_model_options opt = {0, 1.0f, 0, 0, NULL};
-    CHECK(tr_scene_model_load(&s, path, &opt, &info, &err) == TR_OK, "%s", err.msg);
+    load_model_file(&s, path, &info);
     CHECK(info.warning_count == 0, "%u warnings", info.warning_count);
     for (uint32_t k = 0; k < info.warning_count; ++k) {
         printf("warning: %s\n", info.warnings[k]);
@@ -215,23 +214,9 @@ static void scene_file_keys(const char *dir) {
     static const char *const names[3] = {"s.png", "r.png", "n.png"};
     static const char *const b64[3] = {PNG_S, PNG_R, PNG_N};
     for (int k = 0; k < 3; ++k) {
-        unsigned char png[128];
-        size_t n = 0;
-        uint32_t acc = 0;
-        int bits = 0;
-        for (const char *q = b64[k]; *q && *q != '='; ++q) {
-            const char *alpha = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-            acc = (acc << 6) | (uint32_t)(strchr(alpha, *q) - alpha);
-            bits += 6;
-            if (bits >= 8) {
-                bits -= 8;
-                png[n++] = (unsigned char)(acc >> bits);
-            }
-        }
         char path[700];
         snprintf(path, sizeof path, "%s/%s", dir, names[k]);
-        FILE *f = fopen(path, "wb");
-        CHECK(f && fwrite(png, 1, n, f) == n && fclose(f) == 0, "cannot write %s", path);
+        CHECK(write_base64_file(path, b64[k]), "cannot write %s", path);
     }
     tr_scene s;
     tr_error err;
@@ -270,11 +255,6 @@ static void scene_file_keys(const char *dir) {
 
 /* ---- (c) the BSDF ------------------------------------------------------------------- */
 
-static tr_vec3 dir_of(double cos_t, double phi) {
-    double s = sqrt(fmax(0.0, 1.0 - cos_t * cos_t));
-    return v3((float)(s * cos(phi)), (float)(s * sin(phi)), (float)cos_t);
-}
-
 /* A principled material on the plane z = 0 (normal +z) under a coat of weight c and
  * roughness rc whose normal is tilted by `tilt` degrees towards +x (0: none). */
 static tr_bsdf_params coated(tr_vec3 color, float roughness, float metallic, float c, float rc,
@@ -296,22 +276,10 @@ static tr_bsdf_params coated(tr_vec3 color, float roughness, float metallic, flo
     return b;
 }
 
+/* Reciprocal within 1e-3 on 20000 random pairs, with f > 0 on most of them. */
 static int reciprocal(const tr_bsdf_params *m, uint64_t seed) {
-    tr_rng rng;
-    tr_rng_init(&rng, seed, 3, 4);
-    int bad = 0, nonzero = 0;
-    for (int k = 0; k < 20000; ++k) {
-        tr_vec3 a = dir_of(tr_rng_float(&rng), 2.0 * PI_D * tr_rng_float(&rng));
-        tr_vec3 b = dir_of(tr_rng_float(&rng), 2.0 * PI_D * tr_rng_float(&rng));
-        tr_vec3 fab = tr_bsdf_eval(m, a, b), fba = tr_bsdf_eval(m, b, a);
-        nonzero += fab.x > 0.0f;
-        float scale = fmaxf(fab.x, 1e-6f);
-        if (!(fabsf(fab.x - fba.x) <= 1e-3f * scale && fabsf(fab.y - fba.y) <= 1e-3f * scale &&
-              fabsf(fab.z - fba.z) <= 1e-3f * scale)) {
-            ++bad;
-        }
-    }
-    return bad == 0 && nonzero > 10000;
+    int nonzero;
+    return bsdf_not_reciprocal(m, seed, &nonzero) == 0 && nonzero > 10000;
 }
 
 /* Albedo towards wo by the sampler (mean weight) and by uniform hemisphere sampling of
@@ -345,29 +313,6 @@ static void albedo(const tr_bsdf_params *m, tr_vec3 wo, uint64_t seed, double *s
     *se_sampled = sqrt(fmax(0.0, s2 / N - *sampled * *sampled) / N);
     *uniform = u1 / N;
     *se_uniform = sqrt(fmax(0.0, u2 / N - *uniform * *uniform) / N);
-}
-
-/* Of 2000 random (wo, wi, lobe numbers), how many give p0 and p1 a different value, pdf or
- * sample, bit for bit. */
-static int differences(const tr_bsdf_params *p0, const tr_bsdf_params *p1, uint64_t seed) {
-    tr_rng rng;
-    tr_rng_init(&rng, seed, seed + 1, seed + 2);
-    int differ = 0;
-    for (int k = 0; k < 2000; ++k) {
-        tr_vec3 wo = dir_of(tr_rng_float(&rng), 2.0 * PI_D * tr_rng_float(&rng));
-        tr_vec3 wi = dir_of(tr_rng_float(&rng), 2.0 * PI_D * tr_rng_float(&rng));
-        tr_vec3 f0 = tr_bsdf_eval(p0, wo, wi), f1 = tr_bsdf_eval(p1, wo, wi);
-        float q0 = tr_bsdf_pdf(p0, wo, wi), q1 = tr_bsdf_pdf(p1, wo, wi);
-        float ul = tr_rng_float(&rng), u1 = tr_rng_float(&rng), u2 = tr_rng_float(&rng);
-        tr_scatter s0, s1;
-        memset(&s0, 0, sizeof s0);
-        memset(&s1, 0, sizeof s1);
-        int k0 = tr_bsdf_sample(p0, wo, ul, u1, u2, &s0);
-        int k1 = tr_bsdf_sample(p1, wo, ul, u1, u2, &s1);
-        differ += memcmp(&f0, &f1, sizeof f0) != 0 || memcmp(&q0, &q1, sizeof q0) != 0 ||
-                  k0 != k1 || memcmp(&s0, &s1, sizeof s0) != 0;
-    }
-    return differ;
 }
 
 static void bsdf_tests(void) {
@@ -445,12 +390,12 @@ static void bsdf_tests(void) {
               near, drawn);
         tr_bsdf_params g0 = coated(v3s(0.9f), 0.2f, 1.0f, 0.0f, 0.0f, 0.0);
         tr_bsdf_params g1 = coated(v3s(0.9f), 0.2f, 1.0f, 0.0f, 0.0f, tc);
-        CHECK(differences(&g0, &g1, 3) == 0, "without a coat its normal changed the base");
+        CHECK(bsdf_differences(&g0, &g1, 3) == 0, "without a coat its normal changed the base");
     }
     /* Weight 0 with a tilted normal: none, bit for bit. */
     tr_bsdf_params p0 = coated(v3(0.9f, 0.6f, 0.3f), 0.5f, 0.3f, 0.0f, 0.3f, 0.0);
     tr_bsdf_params p1 = coated(v3(0.9f, 0.6f, 0.3f), 0.5f, 0.3f, 0.0f, 0.3f, 20.0);
-    CHECK(differences(&p0, &p1, 5) == 0, "a coat of weight 0 with a normal differs from none");
+    CHECK(bsdf_differences(&p0, &p1, 5) == 0, "a coat of weight 0 with a normal differs from none");
 
     /* Sheen maps: all 1 is the factors bit for bit; black turns the sheen off bit for bit;
      * in between, the factors times the packed values. */
@@ -464,14 +409,14 @@ static void bsdf_tests(void) {
     tr_bsdf_params s1 = s0;
     s1.sheen_rg = tr_pack_map16(1.0f) | (tr_pack_map16(1.0f) << 16);
     s1.sheen_ba = tr_pack_map16(1.0f) | (tr_pack_map16(1.0f) << 16);
-    CHECK(s1.sheen_rg == 0u && s1.sheen_ba == 0u && differences(&s0, &s1, 6) == 0,
+    CHECK(s1.sheen_rg == 0u && s1.sheen_ba == 0u && bsdf_differences(&s0, &s1, 6) == 0,
           "sheen maps of value 1 differ from none");
     tr_bsdf_params none = s0;
     none.ext = NULL;
     tr_bsdf_params black = s0;
     black.sheen_rg = tr_pack_map16(0.0f) | (tr_pack_map16(0.0f) << 16);
     black.sheen_ba = tr_pack_map16(0.0f) | (tr_pack_map16(0.7f) << 16);
-    CHECK(tr_sheen_weight(&black) == 0.0f && differences(&none, &black, 7) == 0,
+    CHECK(tr_sheen_weight(&black) == 0.0f && bsdf_differences(&none, &black, 7) == 0,
           "a black sheen map leaves a sheen");
     tr_bsdf_params half = s0;
     half.sheen_rg = tr_pack_map16(0.25f) | (tr_pack_map16(0.5f) << 16);

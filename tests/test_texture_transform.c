@@ -14,6 +14,7 @@
  *      form of the transform and back), and no warning names the extension. */
 #define _POSIX_C_SOURCE 200809L
 #include "check.h"
+#include "model_util.h"
 #include "kernel/kernel.h"
 #include "scene/scene_internal.h"
 #include "trac0r/trac0r.h"
@@ -180,11 +181,8 @@ static void gltf_import(void) {
     FILE *f = fopen(path, "w");
     CHECK(f && fputs(gltf, f) >= 0 && fclose(f) == 0, "cannot write %s", path);
     tr_scene s;
-    tr_scene_init(&s);
     tr_scene_file info;
-    tr_error err;
-    const tr_model_options opt = {0, 1.0f, 0, 0, NULL};
-    CHECK(tr_scene_model_load(&s, path, &opt, &info, &err) == TR_OK, "%s", err.msg);
+    load_model_file(&s, path, &info);
     float want[6];
     tr_texture_transform_glTF(want, 0.25f, 0.5f, 0.3f, 2.0f, 3.0f);
     int found = 0;

@@ -31,6 +31,7 @@
  *      kernel's material extras; the scene-file key "transmission_texture" reads one too. */
 #define _POSIX_C_SOURCE 200809L
 #include "check.h"
+#include "model_util.h"
 #include "kernel/kernel.h"
 #include "scene/scene_internal.h"
 #include "kernel/bsdf.h"
@@ -405,11 +406,8 @@ static void gltf_import(const char *dir) {
     FILE *f = fopen(path, "w");
     CHECK(f && fputs(gltf, f) >= 0 && fclose(f) == 0, "cannot write %s", path);
     tr_scene s;
-    tr_scene_init(&s);
     tr_scene_file info;
-    tr_error err;
-    const tr_model_options opt = {0, 1.0f, 0, 0, NULL};
-    CHECK(tr_scene_model_load(&s, path, &opt, &info, &err) == TR_OK, "%s", err.msg);
+    load_model_file(&s, path, &info);
     int found = 0;
     for (uint32_t i = 0; i < s.material_count && s.material_ext_count == s.material_count; ++i) {
         const tr_material_ext *e = &s.material_exts[i];
@@ -469,11 +467,9 @@ static void gltf_transmission_map(const char *dir) {
     FILE *f = fopen(path, "w");
     CHECK(f && fputs(gltf, f) >= 0 && fclose(f) == 0, "cannot write %s", path);
     tr_scene s;
-    tr_scene_init(&s);
     tr_scene_file info;
     tr_error err;
-    const tr_model_options opt = {0, 1.0f, 0, 0, NULL};
-    CHECK(tr_scene_model_load(&s, path, &opt, &info, &err) == TR_OK, "%s", err.msg);
+    load_model_file(&s, path, &info);
     CHECK(info.warning_count == 0, "%u warnings for a transmission map (first: %s)",
           info.warning_count, info.warning_count ? info.warnings[0] : "");
     CHECK(tr_scene_commit(&s, TR_ACCEL_TYPE_BVH, &err) == TR_OK, "%s", err.msg);
