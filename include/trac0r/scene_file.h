@@ -102,8 +102,9 @@ typedef struct tr_render_settings {
  *     TR_STATUS_INVALID_ARGUMENT;
  *   - an acceleration structure this build lacks (embree without Embree), the file's
  *     ("FILE: render.accel: ...") or the request's: TR_STATUS_UNSUPPORTED;
- *   - a scene without an emitter, unless render.allow_no_emitter or req->allow_dark:
- *     TR_STATUS_NOT_FOUND (the image would be black);
+ *   - a scene without an emitter, an environment, a sun or a punctual light, unless
+ *     render.allow_no_emitter or req->allow_dark: TR_STATUS_NOT_FOUND (the image would
+ *     be black);
  *   - an image of more than TR_FILM_MAX_PIXELS pixels: TR_STATUS_LIMIT;
  *   - a camera that cannot take the size: tr_camera_resize's status.
  * On failure out still holds the image size and spp, resolved first (the size a

@@ -167,7 +167,10 @@ int tr_scene_file_apply(tr_scene *s, const char *path, const tr_scene_file *file
                             "(a camera with an aperture): use pt",
                             path, tr_integrator_name(out->config.integrator));
     }
-    if (file->emissive_triangles == 0 && !file->allow_no_emitter && !req->allow_dark) {
+    /* A sky, a sun or a point, spot or directional light lights a scene without emitters,
+     * whichever loader made it. */
+    const int lit = s->env_count > 0u || s->sun_count > 0u || s->punctual_count > 0u;
+    if (file->emissive_triangles == 0 && !lit && !file->allow_no_emitter && !req->allow_dark) {
         return tr_error_set(err, TR_STATUS_NOT_FOUND,
                             "%s: the scene has no emitter, so the image would be black (set "
                             "render.allow_no_emitter if that is intended)",
@@ -222,9 +225,6 @@ int tr_scene_load(tr_scene *s, const char *name, const tr_model_options *opt, tr
     for (uint32_t i = 0; i < tr_scene_material_count(s); ++i) {
         info->emitter_materials += tr_scene_material(s, i).type == TR_MATERIAL_EMITTER;
     }
-    /* A sky, a sun or a point light lights a scene without emitters (the forest), as a
-     * scene file's do. */
-    info->allow_no_emitter = s->env_count > 0u || s->sun_count > 0u || s->punctual_count > 0u;
     return TR_OK;
 }
 
