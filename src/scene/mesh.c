@@ -353,9 +353,10 @@ static void gltf_material_json(import_ctx *c, unsigned int index, const char *mn
     ext->specular_color = col;
     if (cJSON_GetObjectItemCaseSensitive(sp, "specularTexture") ||
         cJSON_GetObjectItemCaseSensitive(sp, "specularColorTexture")) {
-        import_warn(
-            c, "material '%.60s': KHR_materials_specular's maps dropped (the factors are used)",
-            mname);
+        import_warn(c,
+                    "material '%.60s': KHR_materials_specular's specularTexture and "
+                    "specularColorTexture are not read (its factors are used)",
+                    mname);
     }
 }
 
