@@ -37,12 +37,14 @@ extern "C" {
  * the work (it fails with TR_STATUS_CANCELLED). */
 typedef int (*tr_measure_progress_fn)(void *user, uint64_t done, uint64_t total);
 
-/* A reference image of `cam`: samples 0 .. spp-1 of cfg rendered on dev into its cleared
- * film (16 samples per call, so that `progress` moves; a pixel adds them in the same order
- * as in one call). ref gets the mean radiance, half (scratch of the same size) the first
- * spp/2 samples' mean, *own_mse the reference's own MSE (the first half's MSE against the
- * whole). film is scratch of the camera's size; ref and half hold 3 floats per pixel.
- * spp >= 2. */
+/* A reference image of `cam` rendered on dev into its cleared film in two independent
+ * halves: samples 0 .. spp/2-1 of cfg, then samples 0 .. spp-spp/2-1 of cfg under another
+ * seed (cfg.seed + 0x9e3779b97f4a7c15), an independent scrambling (16 samples per call, so
+ * that `progress` moves). ref gets the mean radiance of all spp samples, half (scratch of
+ * the same size) the first half's mean, *own_mse an unbiased estimate of the reference's
+ * own MSE (from the first half's MSE against the whole; halves of one Sobol sequence would
+ * overstate it). film is scratch of the camera's size; ref and half hold 3 floats per
+ * pixel. spp >= 2. */
 int tr_reference_render(tr_device *dev, const tr_camera *cam, const tr_render_config *cfg,
                         uint32_t spp, tr_film *film, float *ref, float *half, double *own_mse,
                         tr_measure_progress_fn progress, void *user, tr_error *err);

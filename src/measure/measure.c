@@ -31,6 +31,10 @@ static int render_chunks(tr_device *dev, const tr_camera *cam, const tr_render_c
     return TR_OK;
 }
 
+/* The second half of a reference is scrambled by a seed of its own, this far from the first
+ * half's. */
+#define REFERENCE_SECOND_SEED 0x9e3779b97f4a7c15ull
+
 int tr_reference_render(tr_device *dev, const tr_camera *cam, const tr_render_config *cfg,
                         uint32_t spp, tr_film *film, float *ref, float *half, double *own_mse,
                         tr_measure_progress_fn progress, void *user, tr_error *err) {
@@ -39,8 +43,18 @@ int tr_reference_render(tr_device *dev, const tr_camera *cam, const tr_render_co
                      "reference: needs at least 2 samples and its buffers (spp %u)", spp);
         return TR_ERR;
     }
-    const uint32_t h1 = spp / 2;
+    /* Two independent estimates A (h1 samples) and B (h2 samples), so that the first
+     * half's distance to the whole measures the whole's own error. Samples 0..h1-1 and
+     * h1..spp-1 of one Sobol sequence are not independent: together they are better
+     * stratified than either, and the distance overstated the whole's error (2.3 times on
+     * a scene of many small lamps at 32 samples). B therefore takes samples 0..h2-1 again
+     * under another seed, an independent scrambling of the same points. Then
+     * ref = (h1 A + h2 B) / spp and E[(A - ref)^2] = (h2 / h1) var(ref), hence the factor
+     * h1 / h2 below (1 for an even spp). */
+    const uint32_t h1 = spp / 2, h2 = spp - h1;
     const size_t px = (size_t)film->width * film->height;
+    tr_render_config second = *cfg;
+    second.seed = cfg->seed + REFERENCE_SECOND_SEED;
     uint64_t done = 0;
     if (tr_device_clear(dev, err) != TR_OK ||
         render_chunks(dev, cam, cfg, 0, h1, &done, spp, progress, user, err) != TR_OK ||
@@ -48,12 +62,12 @@ int tr_reference_render(tr_device *dev, const tr_camera *cam, const tr_render_co
         return TR_ERR;
     }
     tr_film_mean(film, half);
-    if (render_chunks(dev, cam, cfg, h1, spp - h1, &done, spp, progress, user, err) != TR_OK ||
+    if (render_chunks(dev, cam, &second, 0, h2, &done, spp, progress, user, err) != TR_OK ||
         tr_device_read_film(dev, film, err) != TR_OK) {
         return TR_ERR;
     }
     tr_film_mean(film, ref);
-    *own_mse = tr_image_compare(half, ref, px).mse;
+    *own_mse = tr_image_compare(half, ref, px).mse * (double)h1 / (double)h2;
     return TR_OK;
 }
 
