@@ -3,7 +3,8 @@
  * 1. tr_reference_render's own-error estimate: two references of independent seeds differ
  *    by about the sum of their own MSEs, for every sampler (the halves are independent
  *    scramblings); the reference is the film of both halves' samples.
- * 2. The scorer: the reference scored against itself has the floor's PSNR, a noisy image
+ * 2. The scorer: the reference scored against itself has the floor's PSNR (10 dB above its
+ *    own), the error left after the reference's own is what is scored, a noisy image
  *    a finite one that rises with its samples, flicker is 0 at a slot's first frame and
  *    for a still frame, a region counts its pixels.
  * 3. tr_image_flicker and tr_recovery_frames on made-up values.
@@ -146,7 +147,17 @@ static void test_scorer(void) {
     float *copy = malloc(3 * PX * sizeof *copy);
     memcpy(copy, ref, 3 * PX * sizeof *copy);
     tr_frame_scores sr = tr_scorer_score(sc, 0, copy);
-    CHECK(sr.psnr >= 119.0 && sr.flicker == 0.0 && isnan(sr.region_psnr), "self psnr %g", sr.psnr);
+    /* The reference against itself is as good as it can tell: 10 dB above its own PSNR. */
+    CHECK(own > 0.0 && fabs(sr.psnr - (tr_psnr(own) + 10.0)) < 1e-9 && sr.flicker == 0.0 &&
+              isnan(sr.region_psnr),
+          "self psnr %g, own %g", sr.psnr, own);
+    /* The error left after the reference's own is scored; below a tenth of the reference's
+     * own, the floor; with no own error known, the MSE as measured. */
+    CHECK(fabs(tr_psnr_less_reference(3e-4, 1e-4) - tr_psnr(2e-4)) < 1e-12, "less own");
+    CHECK(fabs(tr_psnr_less_reference(1.05e-4, 1e-4) - tr_psnr(1e-5)) < 1e-12, "floor");
+    CHECK(fabs(tr_psnr_less_reference(1e-4, 0.0) - 40.0) < 1e-9 &&
+              fabs(tr_psnr_less_reference(0.0, 0.0) - 120.0) < 1e-9,
+          "no own");
     /* Noisy images of 1 and 16 samples: finite PSNR, rising with samples. */
     tr_film film;
     CHECK(tr_film_init(&film, W, H, &err) == TR_OK, "%s", err.msg);

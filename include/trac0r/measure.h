@@ -37,6 +37,16 @@ extern "C" {
  * the work (it fails with TR_STATUS_CANCELLED). */
 typedef int (*tr_measure_progress_fn)(void *user, uint64_t done, uint64_t total);
 
+/* The PSNR of an image whose MSE against a reference is `mse`, with the reference's own MSE
+ * `own` taken out (measured = true + the reference's, the noises being independent). What
+ * is left can only be told apart from the estimate's own error down to a tenth of `own`:
+ * the estimate spreads by several per cent on images where a few bright paths carry the
+ * error. Below that the image is as good as the reference can tell, and its score is
+ * that floor's: at most 10 dB above the reference's own PSNR, never the MSE's 1e-12
+ * (120 dB). own <= 0: nothing is taken out (floor 1e-12). */
+#define TR_REFERENCE_RESOLUTION 0.1
+double tr_psnr_less_reference(double mse, double own);
+
 /* A reference image of `cam` rendered on dev into its cleared film in two independent
  * halves: samples 0 .. spp/2-1 of cfg, then samples 0 .. spp-spp/2-1 of cfg under another
  * seed (cfg.seed + 0x9e3779b97f4a7c15), an independent scrambling (16 samples per call, so

@@ -53,7 +53,8 @@ static int record_point(const tr_convergence_desc *d, turns *t, int mi, int last
     p->spp = t->spp[mi];
     p->seconds = t->elapsed[mi];
     p->raw = tr_image_compare(t->cur, d->ref, t->px);
-    p->psnr = tr_psnr(p->raw.mse - d->ref_mse);
+    p->psnr =
+        d->ref_mse > 0.0 ? tr_psnr_less_reference(p->raw.mse, d->ref_mse) : tr_psnr(p->raw.mse);
     const uint32_t step = (uint32_t)ceil(t->next[mi] * 0.19);
     t->next[mi] += step > 0 ? step : 1;
     if (p->psnr > (d->stop_psnr > 0.0 ? d->stop_psnr : 41.0) || last) {

@@ -244,10 +244,10 @@ size_t tr_scorer_region_rect(tr_scorer *s, const uint32_t r[4]) {
     return s->nidx;
 }
 
-/* A PSNR from an MSE with the reference's own taken out, floored at 1e-12. */
-static double psnr_less(double mse, double own) {
+double tr_psnr_less_reference(double mse, double own) {
     const double m = mse - own;
-    return tr_psnr(m > 1e-12 ? m : 1e-12);
+    const double floor = own > 0.0 ? TR_REFERENCE_RESOLUTION * own : 1e-12;
+    return tr_psnr(m > floor ? m : floor > 1e-12 ? floor : 1e-12);
 }
 
 tr_frame_scores tr_scorer_score(tr_scorer *s, int slot, const float *rgb) {
@@ -258,7 +258,7 @@ tr_frame_scores tr_scorer_score(tr_scorer *s, int slot, const float *rgb) {
         return sc;
     }
     const size_t px = s->px;
-    sc.psnr = psnr_less(tr_image_compare(rgb, s->ref, px).mse, s->own);
+    sc.psnr = tr_psnr_less_reference(tr_image_compare(rgb, s->ref, px).mse, s->own);
     sc.ssim = tr_ssim(rgb, s->ref, s->width, s->height);
     float *pm = s->prev + (size_t)slot * 3 * px;
     sc.flicker = s->have_prev[slot] && s->have_ref_prev
@@ -267,8 +267,8 @@ tr_frame_scores tr_scorer_score(tr_scorer *s, int slot, const float *rgb) {
     sc.region_psnr = NAN;
     if (s->nidx > 0) {
         gather(rgb, s->idx, s->nidx, s->gathered);
-        sc.region_psnr = psnr_less(tr_image_compare(s->gathered, s->gathered + 3 * px, s->nidx).mse,
-                                   s->region_own);
+        sc.region_psnr = tr_psnr_less_reference(
+            tr_image_compare(s->gathered, s->gathered + 3 * px, s->nidx).mse, s->region_own);
     }
     memcpy(pm, rgb, 3 * px * sizeof *rgb);
     s->have_prev[slot] = 1;
