@@ -323,7 +323,10 @@ static void refit(void) {
 
 /* Loads JSON text `text` (written to a temporary file) with a budget of `budget`
  * triangles; returns the status (TR_OK or the error's) and the placed triangle count. */
-static int load_json(const char *text, uint32_t budget, uint32_t *placed) {
+/* Loads scene-file text with a triangle budget; *placed gets the placed triangles and
+ * *info (may be NULL) what the file said. The status, or TR_OK. */
+static int load_json_info(const char *text, uint32_t budget, uint32_t *placed,
+                          tr_scene_file *info) {
     const char *tmp = getenv("TMPDIR");
     char path[512];
     snprintf(path, sizeof path, "%s/trac0r-kept-XXXXXX", tmp && *tmp ? tmp : "/tmp");
@@ -339,12 +342,57 @@ static int load_json(const char *text, uint32_t budget, uint32_t *placed) {
     tr_scene_init(&s);
     tr_error err;
     tr_scene_file_options opt = {1, budget};
-    const int rc = tr_scene_file_load(&s, path, &opt, NULL, &err);
+    const int rc = tr_scene_file_load(&s, path, &opt, info, &err);
     const int status = rc == TR_OK ? TR_OK : (int)err.code;
     *placed = tr_scene_triangle_count(&s);
     tr_scene_clear(&s);
     unlink(path);
     return status;
+}
+
+static int load_json(const char *text, uint32_t budget, uint32_t *placed) {
+    return load_json_info(text, budget, placed, NULL);
+}
+
+/* A scene of kept instances alone: it loads (its placed triangles count as the scene's),
+ * its material counts as used, and its bounds are the placements'. Placements are checked
+ * as a whole where their prototype's box and the transform show every placed triangle
+ * within the bound and of non-zero area; those that may not be are still refused. */
+static void instances_only(void) {
+    char text[65536];
+    int len = snprintf(text, sizeof text,
+                       "{\"camera\": {\"position\": [0, 2, -5], \"look_at\": [0, 0, 0], "
+                       "\"fov\": 40}, \"environment\": {\"color\": [1, 1, 1]},"
+                       " \"materials\": {\"w\": {\"type\": \"diffuse\", \"color\": [0.5, 0.5, "
+                       "0.5]}}, \"prototypes\": {\"b\": {\"shapes\": [{\"type\": \"box\", "
+                       "\"material\": \"w\"}]}}, \"instances\": [");
+    for (int i = 0; i < 40; ++i) {
+        /* Rotated, stretched and sheared placements, all valid. */
+        len += snprintf(text + len, sizeof text - (size_t)len,
+                        "%s{\"prototype\": \"b\", \"matrix\": [%g, %g, 0, %d, 0, %g, 0, 0, %g, "
+                        "0, %g, 0]}",
+                        i ? ", " : "", 1.0 + 0.1 * i, 0.05 * i, i, 0.5 + 0.01 * i, -0.02 * i,
+                        2.0 - 0.03 * i);
+    }
+    char *tail = text + len;
+    snprintf(tail, sizeof text - (size_t)len, "]}");
+    tr_scene_file info;
+    uint32_t placed = 0;
+    CHECK(load_json_info(text, 0, &placed, &info) == TR_OK && placed == 40 * 12,
+          "instances alone load (%u placed)", placed);
+    CHECK(info.warning_count == 0, "%u warnings", info.warning_count);
+    CHECK(info.bounds.min.x < 0.0f && info.bounds.max.x > 39.0f && info.bounds.max.y > 0.0f,
+          "bounds x %g..%g", (double)info.bounds.min.x, (double)info.bounds.max.x);
+    /* A placement so small that its triangles' areas are below what a float holds. */
+    snprintf(tail, sizeof text - (size_t)len,
+             ", {\"prototype\": \"b\", \"position\": [1, 0, 0], \"scale\": 1e-22}]}");
+    CHECK(load_json(text, 0, &placed) == TR_STATUS_PARSE, "a vanishing placement is refused");
+    /* Past the bound by a corner only: the whole-box test cannot show it, each triangle is
+     * read, and the one beyond is found. */
+    snprintf(tail, sizeof text - (size_t)len,
+             ", {\"prototype\": \"b\", \"position\": [%.9g, 0, 0]}]}",
+             TR_SCENE_FILE_MAX_COORD - 0.25);
+    CHECK(load_json(text, 0, &placed) == TR_STATUS_PARSE, "a corner past the bound is refused");
 }
 
 static void budget(void) {
@@ -602,6 +650,7 @@ int main(void) {
     refit();
     switched_on();
     budget();
+    instances_only();
 #ifdef TRAC0R_HAVE_EMBREE
     if (tr_accel_available(TR_ACCEL_TYPE_EMBREE)) {
         embree_hits();

@@ -59,6 +59,10 @@ typedef struct jctx {
     uint8_t *proto_state;
     uint32_t *proto_index;
     const char *prefix;
+    /* Per scene prototype (its index), what checking its kept placements needs, measured
+     * once (proto_shape): NULL until the first kept placement. */
+    struct proto_shape *shapes;
+    uint32_t shape_count;
 } jctx;
 
 /* "FILE: PATH: message" with a code. */
@@ -1060,8 +1064,102 @@ static int check_triangles(const jctx *c, const char *path, uint32_t first) {
     return TR_OK;
 }
 
-/* check_triangles for the triangles a kept instance places, ids first_id on. */
-static int check_placed(const jctx *c, const char *path, uint32_t first_id) {
+/* What decides whether a prototype's placements can pass check_triangle without reading
+ * each placed triangle: its points' box (prototype coordinates), its smallest triangle area
+ * and the smallest sine of the angle at a triangle's first corner. */
+typedef struct proto_shape {
+    int measured;
+    tr_vec3 lo, hi;
+    double min_area, min_sin;
+} proto_shape;
+
+static void measure_proto(const tr_prototype *pr, proto_shape *ps) {
+    ps->measured = 1;
+    ps->lo = v3s(INFINITY);
+    ps->hi = v3s(-INFINITY);
+    for (uint32_t i = 0; i < pr->pt_count; ++i) {
+        ps->lo = v3_min(ps->lo, pr->pts[i]);
+        ps->hi = v3_max(ps->hi, pr->pts[i]);
+    }
+    ps->min_area = pr->tri_count ? INFINITY : 0.0;
+    ps->min_sin = ps->min_area;
+    for (uint32_t i = 0; i < pr->tri_count; ++i) {
+        const tr_triangle *t = &pr->tris[i];
+        const double a[3] = {(double)t->v1.x - t->v0.x, (double)t->v1.y - t->v0.y,
+                             (double)t->v1.z - t->v0.z};
+        const double b[3] = {(double)t->v2.x - t->v0.x, (double)t->v2.y - t->v0.y,
+                             (double)t->v2.z - t->v0.z};
+        const double x = a[1] * b[2] - a[2] * b[1], y = a[2] * b[0] - a[0] * b[2],
+                     z = a[0] * b[1] - a[1] * b[0];
+        const double cross = sqrt(x * x + y * y + z * z);
+        const double la = sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+        const double lb = sqrt(b[0] * b[0] + b[1] * b[1] + b[2] * b[2]);
+        ps->min_area = fmin(ps->min_area, 0.5 * cross);
+        ps->min_sin = fmin(ps->min_sin, la > 0.0 && lb > 0.0 ? cross / (la * lb) : 0.0);
+    }
+}
+
+/* Whether every triangle a placement m (3x4, rows) of a prototype measured as ps places
+ * passes check_triangle, shown without placing them; 0: maybe not (then each is read).
+ *   - The bound: the prototype's box, its eight corners placed, inside the bound, holds
+ *     every placed vertex (an affine map keeps points inside the hull of the box's image).
+ *   - The area: a parallelogram's area grows by at least the square of the map's smallest
+ *     singular value, σ_min >= |det| / |M|_F² (as σ_max <= |M|_F and the product of the
+ *     three is |det|), and the sine of a corner's angle by at least 1 / cond², cond² <=
+ *     |M|_F² / σ_min². Far above float rounding on both counts (an area above 1e-30, a sine
+ *     above 1e-5 where rounding is 1e-7), the area check_triangle computes is positive. */
+static int placed_surely_valid(const proto_shape *ps, const float m[12]) {
+    const double bound = TR_SCENE_FILE_MAX_COORD;
+    for (int k = 0; k < 8; ++k) {
+        const double p[3] = {(k & 1) ? ps->hi.x : ps->lo.x, (k & 2) ? ps->hi.y : ps->lo.y,
+                             (k & 4) ? ps->hi.z : ps->lo.z};
+        for (int r = 0; r < 3; ++r) {
+            const double w = (double)m[4 * r] * p[0] + (double)m[4 * r + 1] * p[1] +
+                             (double)m[4 * r + 2] * p[2] + (double)m[4 * r + 3];
+            if (!(fabs(w) <= bound * (1.0 - 1e-6))) {
+                return 0;
+            }
+        }
+    }
+    const double det = (double)m[0] * ((double)m[5] * m[10] - (double)m[6] * m[9]) -
+                       (double)m[1] * ((double)m[4] * m[10] - (double)m[6] * m[8]) +
+                       (double)m[2] * ((double)m[4] * m[9] - (double)m[5] * m[8]);
+    double f2 = 0.0;
+    for (int r = 0; r < 3; ++r) {
+        for (int k = 0; k < 3; ++k) {
+            f2 += (double)m[4 * r + k] * m[4 * r + k];
+        }
+    }
+    if (!(fabs(det) > 0.0) || !(f2 > 0.0) || !isfinite(f2)) {
+        return 0;
+    }
+    const double smin = fabs(det) / f2, cond2 = f2 / (smin * smin);
+    return ps->min_area * smin * smin > 1e-30 && ps->min_sin / cond2 > 1e-5;
+}
+
+/* check_triangles for the triangles kept instance `inst` places, ids first_id on: shown
+ * for all of them at once where placed_surely_valid can, else read one by one. */
+static int check_placed(jctx *c, const char *path, uint32_t inst, uint32_t first_id) {
+    const tr_instance *in = &c->scene->instances[inst];
+    if (in->proto >= c->shape_count) {
+        const uint32_t n =
+            c->scene->proto_count > in->proto ? c->scene->proto_count : in->proto + 1;
+        proto_shape *grown = realloc(c->shapes, (size_t)n * sizeof *grown);
+        if (grown) {
+            memset(grown + c->shape_count, 0, (size_t)(n - c->shape_count) * sizeof *grown);
+            c->shapes = grown;
+            c->shape_count = n;
+        }
+    }
+    if (in->proto < c->shape_count) {
+        proto_shape *ps = &c->shapes[in->proto];
+        if (!ps->measured) {
+            measure_proto(&c->scene->protos[in->proto], ps);
+        }
+        if (placed_surely_valid(ps, in->m)) {
+            return TR_OK;
+        }
+    }
     const uint32_t end = tr_scene_triangle_count(c->scene);
     for (uint32_t i = first_id; i < end; ++i) {
         const tr_triangle t = tr_scene_triangle(c->scene, i);
@@ -1538,8 +1636,8 @@ static int parse_instances(jctx *c, const cJSON *list, int copies) {
             return jerr_from(c, mat ? pm : p, &e);
         }
         if (c->scene->triangle_count == first) {
-            /* Kept: its placed triangles, read by id, pass the same checks. */
-            if (check_placed(c, p, first_id) != TR_OK) {
+            /* Kept: its placed triangles pass the same checks. */
+            if (check_placed(c, p, c->scene->instance_count - 1, first_id) != TR_OK) {
                 return TR_ERR;
             }
         } else if (check_triangles(c, p, first) != TR_OK) {
@@ -1580,8 +1678,11 @@ static int parse_placements(jctx *c, const cJSON *root) {
     }
     free(c->proto_state);
     free(c->proto_index);
+    free(c->shapes);
     c->proto_state = NULL;
     c->proto_index = NULL;
+    c->shapes = NULL;
+    c->shape_count = 0;
     return rc;
 }
 
@@ -1889,7 +1990,8 @@ static int build(jctx *c, const cJSON *root) {
     }
     tr_scene *s = c->scene;
     tr_scene_file *in = c->info;
-    if (s->triangle_count == 0 && (c->opt->load_meshes || in->mesh_count == 0)) {
+    /* Placed triangles count: a scene may be made of kept instances alone. */
+    if (tr_scene_triangle_count(s) == 0 && (c->opt->load_meshes || in->mesh_count == 0)) {
         return jerr(c, NULL, "the scene has no triangles (expected 'shapes' or 'meshes')");
     }
     /* Counts, bounds and warnings. */
@@ -1900,7 +2002,22 @@ static int build(jctx *c, const cJSON *root) {
     for (uint32_t i = 0; i < s->triangle_count; ++i) {
         used[s->triangles[i].material]++;
     }
-    in->bounds = tr_triangles_bounds(s->triangles, s->triangle_count);
+    /* A kept instance's triangles are its prototype's, placed: counted per prototype. */
+    uint32_t *placements = calloc(s->proto_count ? s->proto_count : 1, sizeof *placements);
+    if (!placements) {
+        free(used);
+        return jerr_code(c, TR_STATUS_OUT_OF_MEMORY, NULL, "out of memory");
+    }
+    for (uint32_t i = 0; i < s->instance_count; ++i) {
+        placements[s->instances[i].proto] += !s->instances[i].flat;
+    }
+    for (uint32_t p = 0; p < s->proto_count; ++p) {
+        for (uint32_t k = 0; placements[p] && k < s->protos[p].tri_count; ++k) {
+            used[s->protos[p].tris[k].material] += placements[p];
+        }
+    }
+    free(placements);
+    in->bounds = tr_scene_all_bounds(s);
     uint32_t mi = 0;
     for (const cJSON *m = c->materials->child; m && mi < s->material_count; m = m->next, ++mi) {
         char buf[48];
