@@ -104,6 +104,7 @@ struct tr_scorer {
     size_t *idx, nidx;            /* the region's pixels */
     float *gathered;              /* 3 images of the region: output, reference, half */
     double region_own;            /* the reference's own MSE over the region */
+    double half_scale;            /* tr_reference_render's factor h1 / h2 on the halves' MSE */
 };
 
 void tr_scorer_destroy(tr_scorer *s) {
@@ -174,6 +175,7 @@ int tr_scorer_reference(tr_scorer *s, tr_device *dev, const tr_camera *cam,
         memset(s->have_prev, 0, (size_t)s->slots);
         return TR_ERR;
     }
+    s->half_scale = (double)(spp / 2) / (double)(spp - spp / 2);
     s->have_ref = 1;
     return TR_OK;
 }
@@ -220,7 +222,7 @@ size_t tr_scorer_region(tr_scorer *s, const uint32_t *ids, uint32_t lo, uint32_t
         float *ref = s->gathered + 3 * s->px, *half = s->gathered + 6 * s->px;
         gather(s->ref, s->idx, s->nidx, ref);
         gather(s->half, s->idx, s->nidx, half);
-        s->region_own = tr_image_compare(half, ref, s->nidx).mse;
+        s->region_own = tr_image_compare(half, ref, s->nidx).mse * s->half_scale;
     }
     return s->nidx;
 }
@@ -240,7 +242,7 @@ size_t tr_scorer_region_rect(tr_scorer *s, const uint32_t r[4]) {
     float *ref = s->gathered + 3 * s->px, *half = s->gathered + 6 * s->px;
     gather(s->ref, s->idx, s->nidx, ref);
     gather(s->half, s->idx, s->nidx, half);
-    s->region_own = tr_image_compare(half, ref, s->nidx).mse;
+    s->region_own = tr_image_compare(half, ref, s->nidx).mse * s->half_scale;
     return s->nidx;
 }
 
