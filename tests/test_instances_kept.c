@@ -322,9 +322,8 @@ static void refit(void) {
 }
 
 /* Loads JSON text `text` (written to a temporary file) with a budget of `budget`
- * triangles; returns the status (TR_OK or the error's) and the placed triangle count. */
-/* Loads scene-file text with a triangle budget; *placed gets the placed triangles and
- * *info (may be NULL) what the file said. The status, or TR_OK. */
+ * triangles; returns the status (TR_OK or the error's), the placed triangle count and in
+ * *info (may be NULL) what the file said. */
 static int load_json_info(const char *text, uint32_t budget, uint32_t *placed,
                           tr_scene_file *info) {
     const char *tmp = getenv("TMPDIR");
