@@ -1,5 +1,5 @@
 /* bsdf_util.h - what the BSDF tests share: directions on the unit sphere, reciprocity over
- * random pairs, and a bit-for-bit comparison of two parameter sets. */
+ * random pairs, a bit-for-bit comparison of two parameter sets, and albedo estimates. */
 #ifndef TR_TEST_BSDF_UTIL_H
 #define TR_TEST_BSDF_UTIL_H
 
@@ -61,6 +61,42 @@ static inline int bsdf_differences(const tr_bsdf_params *p0, const tr_bsdf_param
                   k0 != k1 || memcmp(&s0, &s1, sizeof s0) != 0;
     }
     return differ;
+}
+
+/* The albedo towards wo from n draws of rng: the sampler's mean weight (red channel) and a
+ * uniform-hemisphere estimate of f cos, each with its standard error. With `inconsistent`
+ * (may be NULL) it counts the samples whose pdf or weight is not tr_bsdf_pdf's or
+ * eval cos / pdf within 1e-4, or that claim a delta lobe. Each sample draws five numbers. */
+static inline void bsdf_albedo(const tr_bsdf_params *m, tr_vec3 wo, int n, tr_rng *rng,
+                               double *sampled, double *se_sampled, double *uniform,
+                               double *se_uniform, int *inconsistent) {
+    double s1 = 0.0, s2 = 0.0, u1 = 0.0, u2 = 0.0;
+    if (inconsistent) {
+        *inconsistent = 0;
+    }
+    for (int k = 0; k < n; ++k) {
+        tr_scatter s;
+        double w = 0.0;
+        if (tr_bsdf_sample(m, wo, tr_rng_float(rng), tr_rng_float(rng), tr_rng_float(rng), &s)) {
+            w = s.weight.x;
+            if (inconsistent) {
+                const float pdf = tr_bsdf_pdf(m, wo, s.wi);
+                const float ww = tr_bsdf_eval(m, wo, s.wi).x * s.wi.z / pdf;
+                *inconsistent += s.delta || !(fabsf(pdf - s.pdf) <= 1e-4f * pdf) ||
+                                 !(fabsf(ww - s.weight.x) <= 1e-4f * fmaxf(1.0f, ww));
+            }
+        }
+        s1 += w;
+        s2 += w * w;
+        const tr_vec3 d = dir_of(tr_rng_float(rng), 2.0 * BSDF_PI * tr_rng_float(rng));
+        const double v = tr_bsdf_eval(m, wo, d).x * d.z * 2.0 * BSDF_PI;
+        u1 += v;
+        u2 += v * v;
+    }
+    *sampled = s1 / n;
+    *se_sampled = sqrt(fmax(0.0, s2 / n - *sampled * *sampled) / n);
+    *uniform = u1 / n;
+    *se_uniform = sqrt(fmax(0.0, u2 / n - *uniform * *uniform) / n);
 }
 
 #endif

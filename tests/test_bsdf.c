@@ -168,27 +168,9 @@ static void albedo(const tr_bsdf_params *m, double theta_o_deg, double *sampled,
                    double *uniform, double *se_uniform) {
     const double to = theta_o_deg * PI_D / 180.0;
     const tr_vec3 wo = v3((float)sin(to), 0.0f, (float)cos(to));
-    const int N = 400000;
     tr_rng rng;
     tr_rng_init(&rng, 1234, (uint64_t)theta_o_deg, (uint64_t)(m->roughness * 100.0f));
-    double s1 = 0.0, s2 = 0.0, u1 = 0.0, u2 = 0.0;
-    for (int k = 0; k < N; ++k) {
-        tr_scatter s;
-        double w =
-            tr_bsdf_sample(m, wo, tr_rng_float(&rng), tr_rng_float(&rng), tr_rng_float(&rng), &s)
-                ? s.weight.x
-                : 0.0;
-        s1 += w;
-        s2 += w * w;
-        tr_vec3 d = dir_of(tr_rng_float(&rng), 2.0 * PI_D * tr_rng_float(&rng));
-        double v = tr_bsdf_eval(m, wo, d).x * d.z * 2.0 * PI_D;
-        u1 += v;
-        u2 += v * v;
-    }
-    *sampled = s1 / N;
-    *se_sampled = sqrt(fmax(0.0, s2 / N - *sampled * *sampled) / N);
-    *uniform = u1 / N;
-    *se_uniform = sqrt(fmax(0.0, u2 / N - *uniform * *uniform) / N);
+    bsdf_albedo(m, wo, 400000, &rng, sampled, se_sampled, uniform, se_uniform, NULL);
 }
 
 static void furnace(void) {

@@ -286,33 +286,9 @@ static int reciprocal(const tr_bsdf_params *m, uint64_t seed) {
  * f cos; counts samples whose weight is not eval cos / pdf. */
 static void albedo(const tr_bsdf_params *m, tr_vec3 wo, uint64_t seed, double *sampled,
                    double *se_sampled, double *uniform, double *se_uniform, int *inconsistent) {
-    const int N = 200000;
     tr_rng rng;
     tr_rng_init(&rng, 4321, seed, 7);
-    double s1 = 0.0, s2 = 0.0, u1 = 0.0, u2 = 0.0;
-    *inconsistent = 0;
-    for (int k = 0; k < N; ++k) {
-        tr_scatter s;
-        double w = 0.0;
-        if (tr_bsdf_sample(m, wo, tr_rng_float(&rng), tr_rng_float(&rng), tr_rng_float(&rng), &s)) {
-            w = s.weight.x;
-            float pdf = tr_bsdf_pdf(m, wo, s.wi);
-            tr_vec3 f = tr_bsdf_eval(m, wo, s.wi);
-            float ww = f.x * s.wi.z / pdf;
-            *inconsistent += s.delta || !(fabsf(pdf - s.pdf) <= 1e-4f * pdf) ||
-                             !(fabsf(ww - s.weight.x) <= 1e-4f * fmaxf(1.0f, ww));
-        }
-        s1 += w;
-        s2 += w * w;
-        tr_vec3 d = dir_of(tr_rng_float(&rng), 2.0 * PI_D * tr_rng_float(&rng));
-        double v = tr_bsdf_eval(m, wo, d).x * d.z * 2.0 * PI_D;
-        u1 += v;
-        u2 += v * v;
-    }
-    *sampled = s1 / N;
-    *se_sampled = sqrt(fmax(0.0, s2 / N - *sampled * *sampled) / N);
-    *uniform = u1 / N;
-    *se_uniform = sqrt(fmax(0.0, u2 / N - *uniform * *uniform) / N);
+    bsdf_albedo(m, wo, 200000, &rng, sampled, se_sampled, uniform, se_uniform, inconsistent);
 }
 
 static void bsdf_tests(void) {
