@@ -131,19 +131,11 @@ static void gltf_coat_maps(const char *dir) {
     unlink(path);
 }
 
-/* Parses a one-material scene file at dir/coat.json. */
+/* Parses a one-material scene file at dir/coat.json: the quad [-1, 1]^2. */
 static int parse(tr_scene *s, const char *dir, const char *material, tr_error *err) {
-    char path[700], text[1024];
+    char path[700];
     snprintf(path, sizeof path, "%s/coat.json", dir);
-    snprintf(text, sizeof text,
-             "{\"camera\": {\"position\": [0, 0, 5], \"direction\": [0, 0, -1], \"fov\": 4},\n"
-             " \"materials\": {\"m\": %s},\n"
-             " \"shapes\": [{\"type\": \"quad\", \"vertices\": [[-1, -1, 0], [1, -1, 0], "
-             "[1, 1, 0], [-1, 1, 0]], \"material\": \"m\"}],\n"
-             " \"environment\": {\"color\": [1, 1, 1]}}",
-             material);
-    tr_scene_init(s);
-    return tr_scene_file_parse(s, path, text, strlen(text), NULL, NULL, err);
+    return parse_material_quad(s, path, material, -1.0, 1.0, err);
 }
 
 /* (b) */
@@ -151,11 +143,7 @@ static void scene_file_keys(const char *dir) {
     static const char *const names[2] = {"a.png", "b.png"};
     static const char *const b64[2] = {PNG_A, PNG_B};
     /* The PNGs as files: decoded from base64 here. */
-    for (int k = 0; k < 2; ++k) {
-        char path[700];
-        snprintf(path, sizeof path, "%s/%s", dir, names[k]);
-        CHECK(write_base64_file(path, b64[k]), "cannot write %s", path);
-    }
+    write_base64_files(dir, names, b64, 2, 0);
     tr_scene s;
     tr_error err;
     CHECK(parse(&s, dir,
@@ -194,23 +182,11 @@ static void scene_file_keys(const char *dir) {
     tr_scene_clear(&s);
 
     /* The principled material's keys alone. */
-    static const char *const keys[2] = {"clearcoat_texture", "clearcoat_roughness_texture"};
-    for (int k = 0; k < 2; ++k) {
-        char material[256];
-        snprintf(material, sizeof material,
-                 "{\"type\": \"diffuse\", \"color\": [1, 1, 1], \"%s\": \"a.png\"}", keys[k]);
-        int rc = parse(&s, dir, material, &err);
-        CHECK_STATUS(rc, err, TR_STATUS_PARSE, keys[k]);
-        CHECK(rc != TR_OK && strstr(err.msg, "coat.json") && strstr(err.msg, keys[k]),
-              "the refusal of %s on a diffuse material names neither file nor key: %s", keys[k],
-              rc != TR_OK ? err.msg : "accepted");
-        tr_scene_clear(&s);
-    }
-    for (int k = 0; k < 2; ++k) {
-        char path[700];
-        snprintf(path, sizeof path, "%s/%s", dir, names[k]);
-        unlink(path);
-    }
+    char path[700];
+    snprintf(path, sizeof path, "%s/coat.json", dir);
+    check_key_refused(path, "coat.json", "clearcoat_texture", "\"a.png\"");
+    check_key_refused(path, "coat.json", "clearcoat_roughness_texture", "\"a.png\"");
+    write_base64_files(dir, names, b64, 2, 1);
 }
 
 int main(void) {

@@ -192,32 +192,19 @@ static void gltf_maps(const char *dir) {
     unlink(path);
 }
 
-/* Parses a one-material scene file at dir/maps.json: a unit quad in the plane z = 0 seen
- * from +z, its corners (0, 0), (1, 0), (1, 1), (0, 1) at texture coordinates (0, 0),
- * (1, 0), (1, 1), (0, 1). */
+/* Parses a one-material scene file at dir/maps.json: the unit quad [0, 1]^2, its corners at
+ * the texture coordinates of the same numbers. */
 static int parse(tr_scene *s, const char *dir, const char *material, tr_error *err) {
-    char path[700], text[1024];
+    char path[700];
     snprintf(path, sizeof path, "%s/maps.json", dir);
-    snprintf(text, sizeof text,
-             "{\"camera\": {\"position\": [0.5, 0.5, 5], \"direction\": [0, 0, -1], \"fov\": 4},\n"
-             " \"materials\": {\"m\": %s},\n"
-             " \"shapes\": [{\"type\": \"quad\", \"vertices\": [[0, 0, 0], [1, 0, 0], "
-             "[1, 1, 0], [0, 1, 0]], \"material\": \"m\"}],\n"
-             " \"environment\": {\"color\": [1, 1, 1]}}",
-             material);
-    tr_scene_init(s);
-    return tr_scene_file_parse(s, path, text, strlen(text), NULL, NULL, err);
+    return parse_material_quad(s, path, material, 0.0, 1.0, err);
 }
 
 /* (b) */
 static void scene_file_keys(const char *dir) {
     static const char *const names[3] = {"s.png", "r.png", "n.png"};
     static const char *const b64[3] = {PNG_S, PNG_R, PNG_N};
-    for (int k = 0; k < 3; ++k) {
-        char path[700];
-        snprintf(path, sizeof path, "%s/%s", dir, names[k]);
-        CHECK(write_base64_file(path, b64[k]), "cannot write %s", path);
-    }
+    write_base64_files(dir, names, b64, 3, 0);
     tr_scene s;
     tr_error err;
     CHECK(parse(&s, dir,
@@ -234,23 +221,12 @@ static void scene_file_keys(const char *dir) {
     /* The principled material's keys alone. */
     static const char *const keys[4] = {"sheen_color_texture", "sheen_roughness_texture",
                                         "clearcoat_normal_texture", "clearcoat_normal_scale"};
+    char path[700];
+    snprintf(path, sizeof path, "%s/maps.json", dir);
     for (int k = 0; k < 4; ++k) {
-        char material[256];
-        snprintf(material, sizeof material,
-                 "{\"type\": \"diffuse\", \"color\": [1, 1, 1], \"%s\": %s}", keys[k],
-                 k == 3 ? "0.5" : "\"s.png\"");
-        int rc = parse(&s, dir, material, &err);
-        CHECK_STATUS(rc, err, TR_STATUS_PARSE, keys[k]);
-        CHECK(rc != TR_OK && strstr(err.msg, "maps.json") && strstr(err.msg, keys[k]),
-              "the refusal of %s on a diffuse material names neither file nor key: %s", keys[k],
-              rc != TR_OK ? err.msg : "accepted");
-        tr_scene_clear(&s);
+        check_key_refused(path, "maps.json", keys[k], k == 3 ? "0.5" : "\"s.png\"");
     }
-    for (int k = 0; k < 3; ++k) {
-        char path[700];
-        snprintf(path, sizeof path, "%s/%s", dir, names[k]);
-        unlink(path);
-    }
+    write_base64_files(dir, names, b64, 3, 1);
 }
 
 /* ---- (c) the BSDF ------------------------------------------------------------------- */
