@@ -13,6 +13,26 @@
 #include <string.h>
 #include <unistd.h>
 
+/* A glTF file's one triangle (0, 0, 0), (1, 0, 0), (0, 1, 0) with texture coordinates
+ * (0, 0), (1, 0), (0, 1): its buffer, views and accessors (POSITION 0, TEXCOORD_0 1), and
+ * after the materials its mesh (material 0), node and scene, closing the file. Members of
+ * the top-level object, each line ending in ",\n" but the scene's. */
+#define GLTF_TRIANGLE_GEOMETRY                                                                     \
+    " \"buffers\": [{\"byteLength\": 60, \"uri\": "                                                \
+    "\"data:application/octet-stream;base64,"                                                      \
+    "AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAAAAAAAAAAAAAAAIA/"                             \
+    "AAAAAAAAAAAAAIA/\"}],\n"                                                                      \
+    " \"bufferViews\": [{\"buffer\": 0, \"byteOffset\": 0, \"byteLength\": 36},\n"                 \
+    "                 {\"buffer\": 0, \"byteOffset\": 36, \"byteLength\": 24}],\n"                 \
+    " \"accessors\": [{\"bufferView\": 0, \"componentType\": 5126, \"count\": 3, "                 \
+    "\"type\": \"VEC3\", \"min\": [0, 0, 0], \"max\": [1, 1, 0]},\n"                               \
+    "               {\"bufferView\": 1, \"componentType\": 5126, \"count\": 3, "                   \
+    "\"type\": \"VEC2\"}],\n"
+#define GLTF_TRIANGLE_SCENE                                                                        \
+    " \"meshes\": [{\"primitives\": [{\"attributes\": {\"POSITION\": 0, "                          \
+    "\"TEXCOORD_0\": 1}, \"material\": 0}]}],\n"                                                   \
+    " \"nodes\": [{\"mesh\": 0}], \"scenes\": [{\"nodes\": [0]}], \"scene\": 0}\n"
+
 /* Writes the bytes base64 text b64 encodes (at most 4096) to path; 0 on failure. */
 static inline int write_base64_file(const char *path, const char *b64) {
     static const char alpha[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";

@@ -42,17 +42,7 @@ static int write_gltf(const char *path, int normal) {
     }
     fprintf(f,
             "{\"asset\": {\"version\": \"2.0\"},\n"
-            " \"extensionsUsed\": [\"KHR_materials_clearcoat\"],\n"
-            " \"buffers\": [{\"byteLength\": 60, \"uri\": "
-            "\"data:application/octet-stream;base64,"
-            "AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAAAAAAAAAAAAAAAIA/"
-            "AAAAAAAAAAAAAIA/\"}],\n"
-            " \"bufferViews\": [{\"buffer\": 0, \"byteOffset\": 0, \"byteLength\": 36},\n"
-            "                 {\"buffer\": 0, \"byteOffset\": 36, \"byteLength\": 24}],\n"
-            " \"accessors\": [{\"bufferView\": 0, \"componentType\": 5126, \"count\": 3, "
-            "\"type\": \"VEC3\", \"min\": [0, 0, 0], \"max\": [1, 1, 0]},\n"
-            "               {\"bufferView\": 1, \"componentType\": 5126, \"count\": 3, "
-            "\"type\": \"VEC2\"}],\n"
+            " \"extensionsUsed\": [\"KHR_materials_clearcoat\"],\n" GLTF_TRIANGLE_GEOMETRY
             " \"images\": [{\"uri\": \"data:image/png;base64," PNG_A "\"},\n"
             "            {\"uri\": \"data:image/png;base64," PNG_B "\"}],\n"
             " \"textures\": [{\"source\": 0}, {\"source\": 1}],\n"
@@ -61,10 +51,7 @@ static int write_gltf(const char *path, int normal) {
             "\"metallicFactor\": 0},\n"
             "   \"extensions\": {\"KHR_materials_clearcoat\": {\"clearcoatFactor\": 0.9, "
             "\"clearcoatRoughnessFactor\": 0.7, \"clearcoatTexture\": {\"index\": 0}, "
-            "\"clearcoatRoughnessTexture\": {\"index\": 1}%s}}}],\n"
-            " \"meshes\": [{\"primitives\": [{\"attributes\": {\"POSITION\": 0, "
-            "\"TEXCOORD_0\": 1}, \"material\": 0}]}],\n"
-            " \"nodes\": [{\"mesh\": 0}], \"scenes\": [{\"nodes\": [0]}], \"scene\": 0}\n",
+            "\"clearcoatRoughnessTexture\": {\"index\": 1}%s}}}],\n" GLTF_TRIANGLE_SCENE,
             normal ? ", \"clearcoatNormalTexture\": {\"index\": 0}" : "");
     return fclose(f) == 0;
 }

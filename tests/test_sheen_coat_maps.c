@@ -74,35 +74,23 @@ static int write_gltf(const char *path) {
     if (!f) {
         return 0;
     }
-    fprintf(f,
-            "{\"asset\": {\"version\": \"2.0\"},\n"
-            " \"extensionsUsed\": [\"KHR_materials_clearcoat\", \"KHR_materials_sheen\"],\n"
-            " \"buffers\": [{\"byteLength\": 60, \"uri\": "
-            "\"data:application/octet-stream;base64,"
-            "AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAAAAAAAAAAAAAAAIA/"
-            "AAAAAAAAAAAAAIA/\"}],\n"
-            " \"bufferViews\": [{\"buffer\": 0, \"byteOffset\": 0, \"byteLength\": 36},\n"
-            "                 {\"buffer\": 0, \"byteOffset\": 36, \"byteLength\": 24}],\n"
-            " \"accessors\": [{\"bufferView\": 0, \"componentType\": 5126, \"count\": 3, "
-            "\"type\": \"VEC3\", \"min\": [0, 0, 0], \"max\": [1, 1, 0]},\n"
-            "               {\"bufferView\": 1, \"componentType\": 5126, \"count\": 3, "
-            "\"type\": \"VEC2\"}],\n"
-            " \"images\": [{\"uri\": \"data:image/png;base64," PNG_S "\"},\n"
-            "            {\"uri\": \"data:image/png;base64," PNG_R "\"},\n"
-            "            {\"uri\": \"data:image/png;base64," PNG_N "\"}],\n"
-            " \"textures\": [{\"source\": 0}, {\"source\": 1}, {\"source\": 2}],\n"
-            " \"materials\": [{\"name\": \"velvet\", \"pbrMetallicRoughness\": "
-            "{\"baseColorFactor\": [0.2, 0.3, 0.8, 1], \"roughnessFactor\": 0.5, "
-            "\"metallicFactor\": 0},\n"
-            "   \"extensions\": {\"KHR_materials_sheen\": {\"sheenColorFactor\": [0.8, 0.6, 0.4], "
-            "\"sheenRoughnessFactor\": 0.5, \"sheenColorTexture\": {\"index\": 0}, "
-            "\"sheenRoughnessTexture\": {\"index\": 1}},\n"
-            "     \"KHR_materials_clearcoat\": {\"clearcoatFactor\": 1, "
-            "\"clearcoatRoughnessFactor\": 0.2, "
-            "\"clearcoatNormalTexture\": {\"index\": 2, \"scale\": 0.5}}}}],\n"
-            " \"meshes\": [{\"primitives\": [{\"attributes\": {\"POSITION\": 0, "
-            "\"TEXCOORD_0\": 1}, \"material\": 0}]}],\n"
-            " \"nodes\": [{\"mesh\": 0}], \"scenes\": [{\"nodes\": [0]}], \"scene\": 0}\n");
+    fprintf(
+        f, "{\"asset\": {\"version\": \"2.0\"},\n"
+           " \"extensionsUsed\": [\"KHR_materials_clearcoat\", "
+           "\"KHR_materials_sheen\"],\n" GLTF_TRIANGLE_GEOMETRY
+           " \"images\": [{\"uri\": \"data:image/png;base64," PNG_S "\"},\n"
+           "            {\"uri\": \"data:image/png;base64," PNG_R "\"},\n"
+           "            {\"uri\": \"data:image/png;base64," PNG_N "\"}],\n"
+           " \"textures\": [{\"source\": 0}, {\"source\": 1}, {\"source\": 2}],\n"
+           " \"materials\": [{\"name\": \"velvet\", \"pbrMetallicRoughness\": "
+           "{\"baseColorFactor\": [0.2, 0.3, 0.8, 1], \"roughnessFactor\": 0.5, "
+           "\"metallicFactor\": 0},\n"
+           "   \"extensions\": {\"KHR_materials_sheen\": {\"sheenColorFactor\": [0.8, 0.6, 0.4], "
+           "\"sheenRoughnessFactor\": 0.5, \"sheenColorTexture\": {\"index\": 0}, "
+           "\"sheenRoughnessTexture\": {\"index\": 1}},\n"
+           "     \"KHR_materials_clearcoat\": {\"clearcoatFactor\": 1, "
+           "\"clearcoatRoughnessFactor\": 0.2, "
+           "\"clearcoatNormalTexture\": {\"index\": 2, \"scale\": 0.5}}}}],\n" GLTF_TRIANGLE_SCENE);
     return fclose(f) == 0;
 }
 
