@@ -274,9 +274,10 @@ int tr_recon_frame_moving(tr_recon *r, const tr_gbuffer *g, const tr_camera *cam
 struct tr_scene;
 /* Resolves g's emission (the first hit's, TR_PASS_EMISSION) over each pixel's area where
  * it matters: every pixel next to an edge between pixels whose sample saw emission and
- * pixels whose sample did not traces an n x n grid of camera rays through `cam` (the
- * frame's camera) into the committed scene and takes the mean emission they see at their
- * first hit; other pixels keep their own. The result goes to g->emission_resolved and
+ * pixels whose sample did not traces n x n camera rays through `cam` (the frame's camera),
+ * spread over the pixel as a Hammersley set (a (0, 2)-net where n x n is a power of two),
+ * into the committed scene and takes the mean emission they see at their first hit; other
+ * pixels keep their own. The result goes to g->emission_resolved and
  * g->has_resolved is set, so that tr_recon_frame adds it after filtering: a lamp's edge
  * antialiased at one sample per pixel. n in 1..TR_RESOLVE_EMISSION_MAX; `resolved` (may
  * be NULL) gets the number of pixels traced. Runs on the host on up to `threads` threads

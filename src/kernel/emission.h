@@ -34,28 +34,31 @@ TR_FN int tr_emission_on_edge(TR_GLOBAL const float *e, int w, int h, int x, int
     return 0;
 }
 
-/* The mean emission seen at the first hit by n x n camera rays through the centres of an
- * n x n grid of cells over pixel (x, y) (tr_pt_first_emission): the pixel's coverage by
- * each emitter times its radiance. */
+/* The mean emission seen at the first hit by n x n camera rays over pixel (x, y)
+ * (tr_pt_first_emission): the pixel's coverage by each emitter times its radiance. The rays
+ * pass through the n^2 points of a Hammersley set (tr_hammersley_point), not an n x n grid:
+ * a bright lamp's rim is mostly near-straight edges, and a pixel a lamp covers by a sliver
+ * thinner than a grid row (1/n) but thicker than the lamp's 1/radiance shows the lamp's
+ * colour at full brightness in a converged image, where the grid's rays all miss it. */
 TR_FN tr_vec3 tr_emission_resolve_pixel(const tr_scene_view *s, const tr_camera *cam, int x, int y,
                                         int n) {
     const float inv_n = 1.0f / (float)n;
+    const uint32_t count = (uint32_t)(n * n);
     tr_vec3 sum = v3s(0.0f);
-    for (int sy = 0; sy < n; ++sy) {
-        for (int sx = 0; sx < n; ++sx) {
-            tr_ray ray = tr_camera_ray(cam, (float)x, (float)y, ((float)sx + 0.5f) * inv_n,
-                                       ((float)sy + 0.5f) * inv_n);
-            if (cam->lens_radius > 0.0f) {
-                /* A thin lens: each cell also gets its own lens point, the cells' points
-                 * a Fibonacci lattice over the lens's square (evenly spread). */
-                const float k = (float)(sy * n + sx) + 0.5f;
-                const float lv = k * 0.61803399f;
-                ray = tr_camera_ray_lens(cam, (float)x, (float)y, ((float)sx + 0.5f) * inv_n,
-                                         ((float)sy + 0.5f) * inv_n, k * inv_n * inv_n,
-                                         lv - tr_floorf(lv));
-            }
-            sum = v3_add(sum, tr_pt_first_emission(s, ray));
+    for (uint32_t k = 0; k < count; ++k) {
+        float u, v;
+        tr_hammersley_point(k, count, &u, &v);
+        tr_ray ray = tr_camera_ray(cam, (float)x, (float)y, u, v);
+        if (cam->lens_radius > 0.0f) {
+            /* A thin lens: each ray also gets its own lens point, the points the R2
+             * sequence over the lens's square (Roberts 2018: k times the inverse powers of
+             * the plastic number, modulo 1), evenly spread and unrelated to (u, v). */
+            const float kk = (float)k;
+            const float lu = 0.5f + kk * 0.75487767f, lv = 0.5f + kk * 0.56984029f;
+            ray = tr_camera_ray_lens(cam, (float)x, (float)y, u, v, lu - tr_floorf(lu),
+                                     lv - tr_floorf(lv));
         }
+        sum = v3_add(sum, tr_pt_first_emission(s, ray));
     }
     return v3_scale(sum, inv_n * inv_n);
 }
