@@ -11,12 +11,17 @@
  *    pixel's own triangle, and all but the pixels at the image's edge keep history. (Without
  *    the replacement the passes hold the floor's own normal, facing up, which part 1 would
  *    reject.)
- * 3. Pixels that see the floor directly have the same passes either way. */
+ * 3. Pixels that see the floor directly have the same passes either way.
+ * 4. The albedo: a mirror's pixels take the floor's own; through a glass slab seen head-on
+ *    (two faces, each refracting with probability 1 - F, F = 0.04 at index 1.5) the wall's
+ *    albedo a is taken at the share of the light that passed both faces, k a + 1 - k with
+ *    k = 0.96^2 (the reflected share is not the wall's light). */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "check.h"
+#include "trac0r/scene_file.h"
 #include "post/filter.h"
 #include "post/recon_params.h"
 #include "trac0r/trac0r.h"
@@ -135,6 +140,50 @@ static void reproject_mirror(const tr_camera *cam, const tr_camera *pcam, const 
     }
 }
 
+/* Part 4's glass: a wall of albedo (0.2, 0.5, 0.8) at z = 3 behind a glass slab (faces at
+ * z = 1 and 1.1), seen head-on from z = -1 through a 10-degree field of view: every ray
+ * meets both faces within 4 degrees of the normal, where F is 0.04 to 1e-4. */
+static void test_glass_albedo(void) {
+    tr_error err;
+    const char *text =
+        "{\"render\": {\"width\": 64, \"height\": 48},\n"
+        " \"camera\": {\"position\": [0, 0, -1], \"direction\": [0, 0, 1], \"fov\": 10},\n"
+        " \"materials\": {\"wall\": {\"type\": \"diffuse\", \"color\": [0.2, 0.5, 0.8]},\n"
+        "   \"glass\": {\"type\": \"glass\", \"color\": [1, 1, 1], \"ior\": 1.5}},\n"
+        " \"shapes\": [\n"
+        "  {\"type\": \"quad\", \"vertices\": [[-5, -5, 3], [-5, 5, 3], [5, 5, 3], [5, -5, 3]],"
+        " \"material\": \"wall\"},\n"
+        "  {\"type\": \"quad\", \"vertices\": [[-2, -2, 1], [-2, 2, 1], [2, 2, 1], [2, -2, 1]],"
+        " \"material\": \"glass\"},\n"
+        "  {\"type\": \"quad\", \"vertices\": [[-2, -2, 1.1], [2, -2, 1.1], [2, 2, 1.1], "
+        "[-2, 2, 1.1]], \"material\": \"glass\"}],\n"
+        " \"environment\": {\"color\": [1, 1, 1]}}";
+    tr_scene *s = tr_scene_create(&err);
+    CHECK(s && tr_scene_file_parse(s, "slab.json", text, strlen(text), NULL, NULL, &err) == TR_OK &&
+              tr_scene_commit(s, TR_ACCEL_TYPE_BVH, &err) == TR_OK,
+          "the slab scene: %s", err.msg);
+    if (!s) {
+        return;
+    }
+    tr_gbuffer g;
+    frame(s, tr_scene_camera(s), 1, &g);
+    const float a[3] = {0.2f, 0.5f, 0.8f}, k = 0.96f * 0.96f;
+    int through = 0, bad = 0;
+    for (size_t i = 0; i < (size_t)W * H; ++i) {
+        if ((g.prim[i] & TR_PRIM_PSR_CURVED) == 0u) {
+            continue;
+        }
+        ++through;
+        for (int c = 0; c < 3; ++c) {
+            bad += fabsf(g.albedo[3 * i + c] - (k * a[c] + 1.0f - k)) > 1e-3f;
+        }
+    }
+    CHECK(through == W * H, "%d of %d pixels seen through the slab", through, W * H);
+    CHECK(bad == 0, "%d albedo channels through the slab are not k a + 1 - k", bad);
+    tr_gbuffer_free(&g);
+    tr_scene_destroy(s);
+}
+
 int main(void) {
     uint32_t lo, hi;
     tr_scene *s = mirror_scene(&lo, &hi);
@@ -160,6 +209,10 @@ int main(void) {
             continue;
         }
         ++mirrored;
+        CHECK(g1.albedo[3 * i] == 0.6f && g1.albedo[3 * i + 1] == 0.5f &&
+                  g1.albedo[3 * i + 2] == 0.4f,
+              "pixel %zu: a mirror's albedo (%g, %g, %g) is not the floor's", i,
+              (double)g1.albedo[3 * i], (double)g1.albedo[3 * i + 1], (double)g1.albedo[3 * i + 2]);
         const tr_vec3 real = unmirror(v);
         CHECK(fabsf(real.y) < 0.02f * g1.depth[i], "pixel %zu: the mirrored point's height %g", i,
               (double)real.y);
@@ -215,5 +268,6 @@ int main(void) {
     tr_gbuffer_free(&o0);
     tr_gbuffer_free(&o1);
     tr_scene_destroy(s);
-    return 0;
+    test_glass_albedo();
+    return check_finish("test_psr");
 }

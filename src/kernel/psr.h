@@ -16,7 +16,15 @@
  * the reflected and the refracted surface make the temporal stage throw the history away at
  * every jump. With the guides fixed, the history averages both lobes' light over frames,
  * which is what the pixel's value is. It costs the chain's rays again, on the pixels that see
- * a delta surface first only. */
+ * a delta surface first only.
+ *
+ * The albedo is the surface's own only where the chain keeps all of the pixel's light (a
+ * mirror). At glass the other lobe's light - the sky reflected by a sphere whose refraction
+ * the chain follows - is not modulated by that surface at all, and demodulating it by a dark
+ * surface's albedo inflates it (then the filters average it with its neighbours and multiply
+ * the dark albedo back: black speckles). So the albedo is k a + (1 - k), k the product of the
+ * chain's lobe probabilities (1 - F or F per glass vertex): the followed lobes' share of the
+ * light modulated by a, the rest taken as unmodulated. */
 #ifndef TR_KERNEL_PSR_H
 #define TR_KERNEL_PSR_H
 
@@ -32,7 +40,7 @@
 #define TR_PSR_MAX_BOUNCES 4
 
 /* The passes' surface for a camera ray `ray` whose first hit (hit, material m) is a delta
- * surface: albedo, prim and the normal (turned to face the arriving ray, then mirrored back
+ * surface: albedo (a k + 1 - k: above), prim and the normal (turned to face the arriving ray, then mirrored back
  * through every reflection of the chain: the normal of the reflected image) of the first
  * non-delta vertex, and as depth the length of the chain up to it; the primitive id carries
  * TR_PRIM_PSR_CURVED where the chain refracted or met a smooth-shaded surface. *out's other
@@ -48,6 +56,7 @@ TR_FN uint32_t tr_psr_surface(const tr_scene_view *s, tr_ray ray, tr_hit hit, tr
     int holes = 0;
     uint32_t rays = 0u;
     uint32_t curved = 0u; /* TR_PRIM_PSR_CURVED once the chain meets a curve or refracts */
+    float kept = 1.0f;
     out->prim = 0u;
     out->depth = 0.0f;
     for (int bounce = 0;;) {
@@ -60,7 +69,7 @@ TR_FN uint32_t tr_psr_surface(const tr_scene_view *s, tr_ray ray, tr_hit hit, tr
             len += hit.t;
             if (!tr_bsdf_is_delta(&m)) {
                 const tr_vec3 n = v3_dot(m.ns, ray.dir) > 0.0f ? v3_neg(m.ns) : m.ns;
-                out->albedo = m.color;
+                out->albedo = v3_add(v3_scale(m.color, kept), v3s(1.0f - kept));
                 out->normal = v3(v3_dot(r0, n), v3_dot(r1, n), v3_dot(r2, n));
                 out->depth = len;
                 out->prim = (hit.triangle + 1u) | curved;
@@ -74,6 +83,7 @@ TR_FN uint32_t tr_psr_surface(const tr_scene_view *s, tr_ray ray, tr_hit hit, tr
             if (!tr_bsdf_sample(&m, wo, 0.5f, 0.5f, 0.5f, &bs)) {
                 return rays;
             }
+            kept *= bs.delta ? bs.pdf : 1.0f;
             const tr_vec3 nf = tr_bsdf_facing(m.ns, wo);
             if (v3_dot(bs.wi, nf) > 0.0f) { /* reflected: mirror the frame about nf */
                 r0 = v3_sub(r0, v3_scale(nf, 2.0f * v3_dot(r0, nf)));
