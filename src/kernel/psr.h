@@ -39,14 +39,30 @@
 /* Delta vertices followed before the chain gives up (the pixel then has no surface). */
 #define TR_PSR_MAX_BOUNCES 4
 
+/* Where the chain finds no surface (it leaves the scene - the sky a glass sphere's rim
+ * reflects -, or ends after TR_PSR_MAX_BOUNCES delta vertices), the passes describe the
+ * first delta surface itself: its primitive (marked TR_PRIM_PSR_CURVED: what it shows moves
+ * over it as the camera moves), its normal facing the camera, its distance, albedo 1 (its
+ * light is no surface's). Without a surface such a pixel kept no history and took no
+ * neighbour's light: its one sample, often black, stood alone. */
+TR_FN void tr_psr_keep_first(tr_sample *out, uint32_t first_prim, tr_vec3 n, float t) {
+    if (first_prim == 0u) {
+        return;
+    }
+    out->albedo = v3s(1.0f);
+    out->normal = n;
+    out->depth = t;
+    out->prim = first_prim | TR_PRIM_PSR_CURVED;
+}
+
 /* The passes' surface for a camera ray `ray` whose first hit (hit, material m) is a delta
  * surface: albedo (a k + 1 - k: above), prim and the normal (turned to face the arriving ray, then mirrored back
  * through every reflection of the chain: the normal of the reflected image) of the first
  * non-delta vertex, and as depth the length of the chain up to it; the primitive id carries
  * TR_PRIM_PSR_CURVED where the chain refracted or met a smooth-shaded surface. *out's other
- * fields are
- * left alone; prim stays 0 where the chain leaves the scene or is longer than
- * TR_PSR_MAX_BOUNCES. Returns the intersection queries it made. */
+ * fields are left alone; where the chain leaves the scene or is longer than
+ * TR_PSR_MAX_BOUNCES, the first delta surface's (tr_psr_keep_first). Returns the
+ * intersection queries it made. */
 TR_FN uint32_t tr_psr_surface(const tr_scene_view *s, tr_ray ray, tr_hit hit, tr_bsdf_params m,
                               tr_sample *out) {
     /* The rows of the product of the reflections met so far (Householder matrices
@@ -57,6 +73,9 @@ TR_FN uint32_t tr_psr_surface(const tr_scene_view *s, tr_ray ray, tr_hit hit, tr
     uint32_t rays = 0u;
     uint32_t curved = 0u; /* TR_PRIM_PSR_CURVED once the chain meets a curve or refracts */
     float kept = 1.0f;
+    uint32_t first_prim = 0u;
+    tr_vec3 first_n = v3s(0.0f);
+    float first_t = 0.0f;
     out->prim = 0u;
     out->depth = 0.0f;
     for (int bounce = 0;;) {
@@ -67,6 +86,12 @@ TR_FN uint32_t tr_psr_surface(const tr_scene_view *s, tr_ray ray, tr_hit hit, tr
         } else {
             const tr_vec3 p = v3_madd(ray.origin, ray.dir, hit.t);
             len += hit.t;
+            if (bounce == 0) {
+                /* The first delta surface: the passes' surface where the chain finds none. */
+                first_prim = hit.triangle + 1u;
+                first_n = v3_dot(m.ns, ray.dir) > 0.0f ? v3_neg(m.ns) : m.ns;
+                first_t = len;
+            }
             if (!tr_bsdf_is_delta(&m)) {
                 const tr_vec3 n = v3_dot(m.ns, ray.dir) > 0.0f ? v3_neg(m.ns) : m.ns;
                 out->albedo = v3_add(v3_scale(m.color, kept), v3s(1.0f - kept));
@@ -76,11 +101,13 @@ TR_FN uint32_t tr_psr_surface(const tr_scene_view *s, tr_ray ray, tr_hit hit, tr
                 return rays;
             }
             if (bounce >= TR_PSR_MAX_BOUNCES) {
+                tr_psr_keep_first(out, first_prim, first_n, first_t);
                 return rays;
             }
             tr_scatter bs;
             const tr_vec3 wo = v3_neg(ray.dir);
             if (!tr_bsdf_sample(&m, wo, 0.5f, 0.5f, 0.5f, &bs)) {
+                tr_psr_keep_first(out, first_prim, first_n, first_t);
                 return rays;
             }
             kept *= bs.delta ? bs.pdf : 1.0f;
@@ -101,6 +128,7 @@ TR_FN uint32_t tr_psr_surface(const tr_scene_view *s, tr_ray ray, tr_hit hit, tr
         }
         ++rays;
         if (!tr_intersect_scene(s, &ray, &hit)) {
+            tr_psr_keep_first(out, first_prim, first_n, first_t);
             return rays;
         }
         tr_triangle tri_tmp;
