@@ -36,7 +36,8 @@
 #include "types.h"
 #include "vec.h"
 
-/* Delta vertices followed before the chain gives up (the pixel then has no surface). */
+/* Delta vertices followed before the chain gives up (the pixel then takes the first delta
+ * surface's passes: tr_psr_keep_first). */
 #define TR_PSR_MAX_BOUNCES 4
 
 /* Where the chain finds no surface (it leaves the scene - the sky a glass sphere's rim
@@ -56,12 +57,12 @@ TR_FN void tr_psr_keep_first(tr_sample *out, uint32_t first_prim, tr_vec3 n, flo
 }
 
 /* The passes' surface for a camera ray `ray` whose first hit (hit, material m) is a delta
- * surface: albedo (a k + 1 - k: above), prim and the normal (turned to face the arriving ray, then mirrored back
- * through every reflection of the chain: the normal of the reflected image) of the first
- * non-delta vertex, and as depth the length of the chain up to it; the primitive id carries
- * TR_PRIM_PSR_CURVED where the chain refracted or met a smooth-shaded surface. *out's other
- * fields are left alone; where the chain leaves the scene or is longer than
- * TR_PSR_MAX_BOUNCES, the first delta surface's (tr_psr_keep_first). Returns the
+ * surface: albedo (k a + 1 - k: above), prim and the normal (turned to face the arriving
+ * ray, then mirrored back through every reflection of the chain: the normal of the reflected
+ * image) of the first non-delta vertex, and as depth the length of the chain up to it; the
+ * primitive id carries TR_PRIM_PSR_CURVED where the chain refracted or met a smooth-shaded
+ * surface. *out's other fields are left alone; where the chain leaves the scene or is longer
+ * than TR_PSR_MAX_BOUNCES, the first delta surface's (tr_psr_keep_first). Returns the
  * intersection queries it made. */
 TR_FN uint32_t tr_psr_surface(const tr_scene_view *s, tr_ray ray, tr_hit hit, tr_bsdf_params m,
                               tr_sample *out) {
