@@ -276,8 +276,9 @@ struct tr_scene;
  * it matters: every pixel next to an edge between pixels whose sample saw emission and
  * pixels whose sample did not traces n x n camera rays through `cam` (the frame's camera),
  * spread over the pixel as a Hammersley set (a (0, 2)-net where n x n is a power of two),
- * into the committed scene and takes the mean emission they see at their first hit; other
- * pixels keep their own. The result goes to g->emission_resolved and
+ * into the committed scene and takes the mean emission they see at their first hit (where
+ * exactly one of them sees any, the mean of 4 n x n rays instead: a thin sliver of a bright
+ * lamp); other pixels keep their own. The result goes to g->emission_resolved and
  * g->has_resolved is set, so that tr_recon_frame adds it after filtering: a lamp's edge
  * antialiased at one sample per pixel. n in 1..TR_RESOLVE_EMISSION_MAX; `resolved` (may
  * be NULL) gets the number of pixels traced. Runs on the host on up to `threads` threads

@@ -34,33 +34,54 @@ TR_FN int tr_emission_on_edge(TR_GLOBAL const float *e, int w, int h, int x, int
     return 0;
 }
 
-/* The mean emission seen at the first hit by n x n camera rays over pixel (x, y)
- * (tr_pt_first_emission): the pixel's coverage by each emitter times its radiance. The rays
- * pass through the n^2 points of a Hammersley set (tr_hammersley_point), not an n x n grid:
- * a bright lamp's rim is mostly near-straight edges, and a pixel a lamp covers by a sliver
- * thinner than a grid row (1/n) but thicker than the lamp's 1/radiance shows the lamp's
- * colour at full brightness in a converged image, where the grid's rays all miss it. */
-TR_FN tr_vec3 tr_emission_resolve_pixel(const tr_scene_view *s, const tr_camera *cam, int x, int y,
-                                        int n) {
-    const float inv_n = 1.0f / (float)n;
-    const uint32_t count = (uint32_t)(n * n);
+/* The sum of the emission seen at the first hit (tr_pt_first_emission) by the `count` camera
+ * rays through the points of a Hammersley set over pixel (x, y) (tr_hammersley_point), and
+ * in *hits how many of them saw any. With a thin lens each ray also gets its own lens
+ * point, the points the R2 sequence over the lens's square (Roberts 2018: k times the
+ * inverse powers of the plastic number, modulo 1), evenly spread and unrelated to the
+ * pixel's points. */
+TR_FN tr_vec3 tr_emission_rays(const tr_scene_view *s, const tr_camera *cam, int x, int y,
+                               uint32_t count, uint32_t *hits) {
     tr_vec3 sum = v3s(0.0f);
+    *hits = 0u;
     for (uint32_t k = 0; k < count; ++k) {
         float u, v;
         tr_hammersley_point(k, count, &u, &v);
         tr_ray ray = tr_camera_ray(cam, (float)x, (float)y, u, v);
         if (cam->lens_radius > 0.0f) {
-            /* A thin lens: each ray also gets its own lens point, the points the R2
-             * sequence over the lens's square (Roberts 2018: k times the inverse powers of
-             * the plastic number, modulo 1), evenly spread and unrelated to (u, v). */
             const float kk = (float)k;
             const float lu = 0.5f + kk * 0.75487767f, lv = 0.5f + kk * 0.56984029f;
             ray = tr_camera_ray_lens(cam, (float)x, (float)y, u, v, lu - tr_floorf(lu),
                                      lv - tr_floorf(lv));
         }
-        sum = v3_add(sum, tr_pt_first_emission(s, ray));
+        const tr_vec3 e = tr_pt_first_emission(s, ray);
+        *hits += (e.x > 0.0f || e.y > 0.0f || e.z > 0.0f) ? 1u : 0u;
+        sum = v3_add(sum, e);
     }
-    return v3_scale(sum, inv_n * inv_n);
+    return sum;
+}
+
+/* The mean emission seen at the first hit by n x n camera rays over pixel (x, y): the
+ * pixel's coverage by each emitter times its radiance. The rays pass through the n^2
+ * points of a Hammersley set, not an n x n grid: a bright lamp's rim is mostly near-straight
+ * edges, and a pixel a lamp covers by a sliver thinner than a grid row (1/n) but thicker
+ * than the lamp's 1/radiance shows the lamp's colour at full brightness in a converged
+ * image, where the grid's rays all miss it. Where exactly one ray of the n^2 sees emission
+ * the coverage lies between 1/(2 n^2) and 3/(2 n^2) along a straight edge, and that one
+ * ray shows it as 1/n^2: for a lamp brighter than n^2 times the display's white, full
+ * white instead of a fraction of it (a lamp seen almost edge-on covers whole rows of
+ * pixels so). There (n above 1) the pixel is traced again with 4 n^2 rays, whose mean it
+ * takes. */
+TR_FN tr_vec3 tr_emission_resolve_pixel(const tr_scene_view *s, const tr_camera *cam, int x, int y,
+                                        int n) {
+    const uint32_t count = (uint32_t)(n * n);
+    uint32_t hits;
+    const tr_vec3 sum = tr_emission_rays(s, cam, x, y, count, &hits);
+    if (hits == 1u && count > 1u) {
+        const tr_vec3 more = tr_emission_rays(s, cam, x, y, 4u * count, &hits);
+        return v3_scale(more, 1.0f / (float)(4u * count));
+    }
+    return v3_scale(sum, 1.0f / (float)count);
 }
 
 #endif
