@@ -87,16 +87,18 @@ TR_FN uint32_t tr_psr_surface(const tr_scene_view *s, tr_ray ray, tr_hit hit, tr
         } else {
             const tr_vec3 p = v3_madd(ray.origin, ray.dir, hit.t);
             len += hit.t;
+            /* The normal on the side the ray arrives from. */
+            const tr_vec3 wo = v3_neg(ray.dir);
+            const tr_vec3 nf = tr_bsdf_facing(m.ns, wo);
             if (bounce == 0) {
                 /* The first delta surface: the passes' surface where the chain finds none. */
                 first_prim = hit.triangle + 1u;
-                first_n = v3_dot(m.ns, ray.dir) > 0.0f ? v3_neg(m.ns) : m.ns;
+                first_n = nf;
                 first_t = len;
             }
             if (!tr_bsdf_is_delta(&m)) {
-                const tr_vec3 n = v3_dot(m.ns, ray.dir) > 0.0f ? v3_neg(m.ns) : m.ns;
                 out->albedo = v3_add(v3_scale(m.color, kept), v3s(1.0f - kept));
-                out->normal = v3(v3_dot(r0, n), v3_dot(r1, n), v3_dot(r2, n));
+                out->normal = v3(v3_dot(r0, nf), v3_dot(r1, nf), v3_dot(r2, nf));
                 out->depth = len;
                 out->prim = (hit.triangle + 1u) | curved;
                 return rays;
@@ -106,13 +108,11 @@ TR_FN uint32_t tr_psr_surface(const tr_scene_view *s, tr_ray ray, tr_hit hit, tr
                 return rays;
             }
             tr_scatter bs;
-            const tr_vec3 wo = v3_neg(ray.dir);
             if (!tr_bsdf_sample(&m, wo, 0.5f, 0.5f, 0.5f, &bs)) {
                 tr_psr_keep_first(out, first_prim, first_n, first_t);
                 return rays;
             }
             kept *= bs.delta ? bs.pdf : 1.0f;
-            const tr_vec3 nf = tr_bsdf_facing(m.ns, wo);
             if (v3_dot(bs.wi, nf) > 0.0f) { /* reflected: mirror the frame about nf */
                 r0 = v3_sub(r0, v3_scale(nf, 2.0f * v3_dot(r0, nf)));
                 r1 = v3_sub(r1, v3_scale(nf, 2.0f * v3_dot(r1, nf)));

@@ -101,18 +101,6 @@ TR_FN uint32_t tr_owen_scramble(uint32_t x, uint32_t seed) {
     return tr_reverse_bits32(tr_lk_permute(tr_reverse_bits32(x), seed));
 }
 
-/* Point k of a Hammersley set of `count` points over the unit square, each in its stratum's
- * centre: u = (k + 1/2) / count, v = the radical inverse of k in base 2 plus half of 1/count.
- * Where count is a power of two the set is a (0, m, 2)-net (Niederreiter 1992): every
- * elementary interval of area 1/count holds exactly one point, so a straight edge that
- * crosses a pixel along or across its rows is found to 1/count of its coverage, where an
- * n x n grid of the same count finds it only to 1/n. The points do not depend on any seed. */
-TR_FN void tr_hammersley_point(uint32_t k, uint32_t count, float *u, float *v) {
-    const float inv = 1.0f / (float)count;
-    *u = ((float)k + 0.5f) * inv;
-    *v = (float)(tr_reverse_bits32(k) >> 8) * (1.0f / 16777216.0f) + 0.5f * inv;
-}
-
 /* Sobol's dimension 1 for index i, bit-reversed (the fraction's first binary digit in
  * bit 0). Its generator column k is (1 + z)^k, z one digit further down: the value is
  * I(1 + z) for the index polynomial I(z) = sum_k i_k z^k, a Taylor shift by one over
@@ -136,6 +124,18 @@ TR_FN uint32_t tr_sobol1(uint32_t i) {
 /* [0,1) from the top 24 bits: every value exactly representable, never 1. */
 TR_FN float tr_u32_to_unit(uint32_t x) {
     return (float)(x >> 8) * (1.0f / 16777216.0f);
+}
+
+/* Point k of a Hammersley set of `count` points over the unit square, each in its stratum's
+ * centre: u = (k + 1/2) / count, v = the radical inverse of k in base 2 plus half of 1/count.
+ * Where count is a power of two the set is a (0, m, 2)-net (Niederreiter 1992): every
+ * elementary interval of area 1/count holds exactly one point, so a straight edge that
+ * crosses a pixel along or across its rows is found to 1/count of its coverage, where an
+ * n x n grid of the same count finds it only to 1/n. The points do not depend on any seed. */
+TR_FN void tr_hammersley_point(uint32_t k, uint32_t count, float *u, float *v) {
+    const float inv = 1.0f / (float)count;
+    *u = ((float)k + 0.5f) * inv;
+    *v = tr_u32_to_unit(tr_reverse_bits32(k)) + 0.5f * inv;
 }
 
 TR_FN tr_sampler tr_sampler_make(uint64_t seed, uint64_t pixel, uint32_t index) {
