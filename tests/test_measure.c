@@ -14,8 +14,13 @@
  * 5. tr_camera_path: frame 0 without a cut is the start; a cut moves the camera; the demo
  *    animation's sway.
  * 6. Ray sets: one primary ray per pixel, a bounce per primary hit, a shadow ray per
- *    bounce at most; every structure finds the same hits on them. */
+ *    bounce at most; every structure finds the same hits on them.
+ * 7. tr_ssim against the paper's definition summed directly over each pixel's 11x11
+ *    window (no separation, no bands), on images narrower and shorter than the window
+ *    and on one of several bands; 1 for an image against itself; the same bits for 1
+ *    and 2 threads. */
 #include <math.h>
+#include <omp.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -428,7 +433,90 @@ static void test_summary(void) {
     CHECK(none.region_frames == 0 && isnan(none.mean.region_psnr), "no region seen");
 }
 
+/* SSIM straight from Wang et al. 2004's definition: per pixel, the 11x11 Gaussian window
+ * (sigma 1.5) over the pixels inside the image, its weights renormalised. */
+static double ssim_direct(const float *a, const float *b, int w, int h) {
+    double sum = 0.0;
+    for (int y = 0; y < h; ++y) {
+        for (int x = 0; x < w; ++x) {
+            double m[5] = {0.0, 0.0, 0.0, 0.0, 0.0}, wsum = 0.0;
+            for (int dy = -5; dy <= 5; ++dy) {
+                for (int dx = -5; dx <= 5; ++dx) {
+                    const int yy = y + dy, xx = x + dx;
+                    if (yy < 0 || yy >= h || xx < 0 || xx >= w) {
+                        continue;
+                    }
+                    const double g = exp(-(double)(dx * dx + dy * dy) / (2.0 * 1.5 * 1.5));
+                    double l[2];
+                    const float *p[2] = {a + 3 * ((size_t)yy * w + xx),
+                                         b + 3 * ((size_t)yy * w + xx)};
+                    for (int k = 0; k < 2; ++k) {
+                        double c[3];
+                        for (int j = 0; j < 3; ++j) {
+                            c[j] = p[k][j] != p[k][j] ? 0.0 : fmin(fmax(p[k][j], 0.0), 1.0);
+                        }
+                        l[k] = 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2];
+                    }
+                    m[0] += g * l[0];
+                    m[1] += g * l[1];
+                    m[2] += g * l[0] * l[0];
+                    m[3] += g * l[1] * l[1];
+                    m[4] += g * l[0] * l[1];
+                    wsum += g;
+                }
+            }
+            for (int k = 0; k < 5; ++k) {
+                m[k] /= wsum;
+            }
+            const double vx = m[2] - m[0] * m[0], vy = m[3] - m[1] * m[1], cxy = m[4] - m[0] * m[1];
+            const double c1 = 1e-4, c2 = 9e-4;
+            sum += (2.0 * m[0] * m[1] + c1) * (2.0 * cxy + c2) /
+                   ((m[0] * m[0] + m[1] * m[1] + c1) * (vx + vy + c2));
+        }
+    }
+    return sum / ((double)w * h);
+}
+
+static void test_ssim(void) {
+    /* (w, h): a pixel, narrower and shorter than the window, one band, several bands with
+     * threads (over 65536 pixels) and a last band cut short. */
+    static const int sizes[][2] = {{1, 1}, {7, 3}, {4, 40}, {40, 23}, {300, 233}};
+    uint32_t state = 12345u;
+    for (size_t t = 0; t < sizeof sizes / sizeof sizes[0]; ++t) {
+        const int w = sizes[t][0], h = sizes[t][1];
+        const size_t n = 3 * (size_t)w * h;
+        float *a = malloc(n * sizeof *a), *b = malloc(n * sizeof *b);
+        CHECK(a && b, "out of memory");
+        for (size_t i = 0; i < n; ++i) {
+            /* A ramp with noise, partly outside [0, 1], and a NaN: the clamp is tested. */
+            state = state * 1664525u + 1013904223u;
+            const float u = (float)(state >> 8) / 16777216.0f;
+            a[i] = (float)(i % (3 * (size_t)w)) / (float)(3 * w) + 0.4f * u - 0.1f;
+            b[i] = 0.8f * a[i] + 0.3f * (float)((state >> 4) & 0xff) / 255.0f;
+        }
+        a[n / 2] = NAN;
+        const double got = tr_ssim(a, b, (uint32_t)w, (uint32_t)h);
+        const double want = ssim_direct(a, b, w, h);
+        CHECK(fabs(got - want) < 1e-12, "%dx%d: ssim %.15f, direct %.15f", w, h, got, want);
+        CHECK(want > 0.05 && want < 0.95, "%dx%d: the images neither alike nor unrelated: %g", w, h,
+              want);
+        const double self = tr_ssim(b, b, (uint32_t)w, (uint32_t)h);
+        CHECK(fabs(self - 1.0) < 1e-12, "%dx%d: ssim against itself %.15f", w, h, self);
+        if (w * h >= 65536) {
+            omp_set_num_threads(1);
+            const double one = tr_ssim(a, b, (uint32_t)w, (uint32_t)h);
+            omp_set_num_threads(2);
+            const double two = tr_ssim(a, b, (uint32_t)w, (uint32_t)h);
+            CHECK(one == two && one == got, "threads: %.17g (1) %.17g (2) %.17g", one, two, got);
+        }
+        free(a);
+        free(b);
+    }
+    CHECK(isnan(tr_ssim(NULL, NULL, 0, 5)), "an empty image has no SSIM");
+}
+
 int main(void) {
+    test_ssim();
     test_reference();
     test_summary();
     test_scorer();

@@ -56,81 +56,125 @@ static double clamped_luma(const float *rgb) {
 /* Wang, Bovik, Sheikh and Simoncelli, "Image Quality Assessment: From Error Visibility to
  * Structural Similarity", IEEE TIP 13(4), 2004: local means, variances and covariance
  * under an 11x11 Gaussian window (sigma 1.5, cut at the border and renormalised), the
- * SSIM index per pixel with C1 = (0.01 L)^2, C2 = (0.03 L)^2 for L = 1, averaged. */
+ * SSIM index per pixel with C1 = (0.01 L)^2, C2 = (0.03 L)^2 for L = 1, averaged.
+ *
+ * The image is taken in bands of rows, each band by one thread: the five moments (x, y,
+ * x^2, y^2, xy) of the band's rows and of the 5 rows either side are blurred along the
+ * rows into the thread's buffer, then down the columns, and each row's SSIM sum is kept.
+ * The rows' sums are added in row order, so the result does not depend on the number of
+ * threads. At 3840x2160 this is what lets `bench realtime` score a 4K frame in a fraction
+ * of a second; one pass per moment over the whole image took seconds. */
+enum { SSIM_R = 5, SSIM_BAND = 32 };
+
+/* The moments of row `r` blurred along the row into out (5 doubles per pixel). lx, ly:
+ * width doubles each, the row's luminances; wc[c]: 1 / the window's weight at column c. */
+static void ssim_row(const float *a, const float *ref, uint32_t width, uint32_t r, const double *g,
+                     const double *wc, double *lx, double *ly, double *out) {
+    const float *pa = a + (size_t)3 * width * r, *pr = ref + (size_t)3 * width * r;
+    for (uint32_t c = 0; c < width; ++c) {
+        lx[c] = clamped_luma(pa + 3 * c);
+        ly[c] = clamped_luma(pr + 3 * c);
+    }
+    for (uint32_t c = 0; c < width; ++c) {
+        const long lo = (long)c - SSIM_R < 0 ? -(long)c : -SSIM_R;
+        const long hi = (long)c + SSIM_R >= (long)width ? (long)width - 1 - (long)c : SSIM_R;
+        double m[5] = {0.0, 0.0, 0.0, 0.0, 0.0};
+        for (long d = lo; d <= hi; ++d) {
+            const double w = g[d + SSIM_R], x = lx[(long)c + d], y = ly[(long)c + d];
+            m[0] += w * x;
+            m[1] += w * y;
+            m[2] += w * x * x;
+            m[3] += w * y * y;
+            m[4] += w * x * y;
+        }
+        for (int k = 0; k < 5; ++k) {
+            out[5 * (size_t)c + (size_t)k] = m[k] * wc[c];
+        }
+    }
+}
+
 double tr_ssim(const float *a, const float *ref, uint32_t width, uint32_t height) {
     const size_t n = (size_t)width * height;
-    double *buf = malloc(7 * n * sizeof *buf);
-    if (!buf || n == 0) {
-        free(buf);
+    if (n == 0) {
         return NAN;
     }
-    double *x = buf, *y = buf + n, *mom[5];
-    for (int k = 0; k < 5; ++k) {
-        mom[k] = buf + (2 + k) * n;
+    double g[2 * SSIM_R + 1];
+    for (int k = -SSIM_R; k <= SSIM_R; ++k) {
+        g[k + SSIM_R] = exp(-(double)(k * k) / (2.0 * 1.5 * 1.5));
     }
-    for (size_t i = 0; i < n; ++i) {
-        x[i] = clamped_luma(a + 3 * i);
-        y[i] = clamped_luma(ref + 3 * i);
-    }
-    double g[11];
-    for (int k = -5; k <= 5; ++k) {
-        g[k + 5] = exp(-(double)(k * k) / (2.0 * 1.5 * 1.5));
-    }
-    /* mom: E[x], E[y], E[x^2], E[y^2], E[xy], blurred separably: rows into `row`, then
-     * columns into mom[k]. */
-    double *row = malloc(n * sizeof *row);
-    if (!row) {
-        free(buf);
+    /* wn[c]: 1 / the window's weight along a row at column c, cut at the border. */
+    double *wn = malloc(width * sizeof *wn), *rowsum = malloc(height * sizeof *rowsum);
+    if (!wn || !rowsum) {
+        free(wn);
+        free(rowsum);
         return NAN;
     }
-    for (int k = 0; k < 5; ++k) {
-        for (uint32_t r = 0; r < height; ++r) {
-            for (uint32_t c = 0; c < width; ++c) {
-                double s = 0.0, w = 0.0;
-                for (int d = -5; d <= 5; ++d) {
-                    const long cc = (long)c + d;
-                    if (cc < 0 || cc >= (long)width) {
-                        continue;
-                    }
-                    const size_t i = (size_t)r * width + (size_t)cc;
-                    const double v = k == 0   ? x[i]
-                                     : k == 1 ? y[i]
-                                     : k == 2 ? x[i] * x[i]
-                                     : k == 3 ? y[i] * y[i]
-                                              : x[i] * y[i];
-                    s += g[d + 5] * v;
-                    w += g[d + 5];
-                }
-                row[(size_t)r * width + c] = s / w;
-            }
+    for (uint32_t c = 0; c < width; ++c) {
+        double w = 0.0;
+        for (int d = -SSIM_R; d <= SSIM_R; ++d) {
+            w += (long)c + d >= 0 && (long)c + d < (long)width ? g[d + SSIM_R] : 0.0;
         }
-        for (uint32_t r = 0; r < height; ++r) {
-            for (uint32_t c = 0; c < width; ++c) {
-                double s = 0.0, w = 0.0;
-                for (int d = -5; d <= 5; ++d) {
-                    const long rr = (long)r + d;
-                    if (rr < 0 || rr >= (long)height) {
-                        continue;
-                    }
-                    s += g[d + 5] * row[(size_t)rr * width + c];
-                    w += g[d + 5];
-                }
-                mom[k][(size_t)r * width + c] = s / w;
-            }
-        }
+        wn[c] = 1.0 / w;
     }
+    int failed = 0;
+    const uint32_t bands = (height + SSIM_BAND - 1) / SSIM_BAND;
     const double c1 = 0.01 * 0.01, c2 = 0.03 * 0.03;
-    double sum = 0.0;
-    for (size_t i = 0; i < n; ++i) {
-        const double mx = mom[0][i], my = mom[1][i];
-        const double vx = mom[2][i] - mx * mx, vy = mom[3][i] - my * my;
-        const double cxy = mom[4][i] - mx * my;
-        sum +=
-            ((2.0 * mx * my + c1) * (2.0 * cxy + c2)) / ((mx * mx + my * my + c1) * (vx + vy + c2));
+#pragma omp parallel if (n >= 65536) reduction(| : failed)
+    {
+        const size_t rows = SSIM_BAND + 2 * SSIM_R;
+        double *hm = malloc((rows * 5 + 2) * width * sizeof *hm);
+        failed |= !hm;
+#pragma omp for schedule(dynamic)
+        for (uint32_t b = 0; b < bands; ++b) {
+            if (!hm) {
+                continue;
+            }
+            const uint32_t r0 = b * SSIM_BAND,
+                           r1 = r0 + SSIM_BAND < height ? r0 + SSIM_BAND : height;
+            const uint32_t h0 = r0 >= SSIM_R ? r0 - SSIM_R : 0;
+            const uint32_t h1 = r1 + SSIM_R < height ? r1 + SSIM_R : height;
+            double *lx = hm + rows * 5 * width, *ly = lx + width;
+            for (uint32_t r = h0; r < h1; ++r) {
+                ssim_row(a, ref, width, r, g, wn, lx, ly, hm + (size_t)(r - h0) * 5 * width);
+            }
+            for (uint32_t r = r0; r < r1; ++r) {
+                /* The column window of row r, cut at the image's top and bottom, in
+                 * rows of the band's buffer. The border weight is the row's own. */
+                const uint32_t lo = r >= SSIM_R ? r - SSIM_R : 0;
+                const uint32_t hi = r + SSIM_R < height ? r + SSIM_R : height - 1;
+                double wr = 0.0;
+                for (uint32_t q = lo; q <= hi; ++q) {
+                    wr += g[(long)q - (long)r + SSIM_R];
+                }
+                wr = 1.0 / wr;
+                double sum = 0.0;
+                for (uint32_t c = 0; c < width; ++c) {
+                    double m[5] = {0.0, 0.0, 0.0, 0.0, 0.0};
+                    for (uint32_t q = lo; q <= hi; ++q) {
+                        const double w = g[(long)q - (long)r + SSIM_R];
+                        const double *v = hm + (size_t)(q - h0) * 5 * width + 5 * (size_t)c;
+                        for (int k = 0; k < 5; ++k) {
+                            m[k] += w * v[k];
+                        }
+                    }
+                    const double mx = m[0] * wr, my = m[1] * wr;
+                    const double vx = m[2] * wr - mx * mx, vy = m[3] * wr - my * my;
+                    const double cxy = m[4] * wr - mx * my;
+                    sum += ((2.0 * mx * my + c1) * (2.0 * cxy + c2)) /
+                           ((mx * mx + my * my + c1) * (vx + vy + c2));
+                }
+                rowsum[r] = sum;
+            }
+        }
+        free(hm);
     }
-    free(row);
-    free(buf);
-    return sum / (double)n;
+    double sum = 0.0;
+    for (uint32_t r = 0; !failed && r < height; ++r) {
+        sum += rowsum[r];
+    }
+    free(wn);
+    free(rowsum);
+    return failed ? NAN : sum / (double)n;
 }
 
 /* A perceptually ordered false-colour ramp (black, blue, magenta, orange, yellow, white)
