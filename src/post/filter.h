@@ -441,10 +441,26 @@ TR_FN void tr_post_taa_pixel(const tr_camera *cam, const tr_camera *prev, int x,
 
 /* Demodulation (Dammertz et al. 2010, section 4; Schied et al. 2017, section 4.1): the
  * filters smooth illumination = radiance / albedo, so that texture and material edges
- * survive, and multiply the albedo back after. An albedo channel near zero keeps the
- * radiance as it is (the factor 1). */
+ * survive, and multiply the albedo back after.
+ *
+ * An albedo channel below TR_POST_ALBEDO_FLOOR counts as the floor, for two reasons.
+ * - The base colour predicts a pixel's light only where the diffuse lobe dominates. A
+ *   dielectric's specular lobe reflects, averaged over a cosine-weighted hemisphere, about
+ *   9 % of light whatever its base colour (Fresnel's reflectance for index 1.5 integrated
+ *   so: 0.0918). Where a channel's base colour is darker than that (the red plastic's
+ *   green and blue, a dark texture), the pixel's light in that channel is mostly specular,
+ *   and dividing it by the base colour only magnifies the specular noise that the filter
+ *   then spreads.
+ * - The factor must not jump. It used to be the albedo above 10^-3 and 1 below: a pixel
+ *   whose blue channel was 10^-4 took its neighbours' illumination, divided by their
+ *   0.02, undivided, and showed it as saturated blue (a dark spider's legs under a blue
+ *   sky).
+ * Measured on the standard bench (docs/realtime.md): the textured demo gains about 1 dB;
+ * scenes whose albedos all lie above the floor are unchanged. */
+#define TR_POST_ALBEDO_FLOOR 0.09f
+
 TR_FN float tr_post_demod_factor(float albedo) {
-    return albedo > 1e-3f ? albedo : 1.0f;
+    return albedo > TR_POST_ALBEDO_FLOOR ? albedo : TR_POST_ALBEDO_FLOOR;
 }
 
 /* The thesis's baseline: a bilateral filter (Tomasi and Manduchi, "Bilateral Filtering
