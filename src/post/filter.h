@@ -456,7 +456,7 @@ TR_FN void tr_post_taa_pixel(const tr_camera *cam, const tr_camera *prev, int x,
  *   0.02, undivided, and showed it as saturated blue (a dark spider's legs under a blue
  *   sky).
  * Measured on the standard bench (docs/realtime.md): the textured demo gains about 1 dB;
- * scenes whose albedos all lie above the floor are unchanged. */
+ * the other shipped real-time scenes move by 0.01 dB at most. */
 #define TR_POST_ALBEDO_FLOOR 0.09f
 
 TR_FN float tr_post_demod_factor(float albedo) {
