@@ -16,13 +16,17 @@
  *    one at 4 x 4 rays, what a (0, 4, 2)-net of 16 points guarantees for such an edge
  *    (an n x n grid guarantees only 1/8, and misses a sliver thinner than that); a sliver
  *    that one ray of the 16 finds (coverage 3/64 .. 5/64) is traced again at 64 rays and
- *    resolved to 1/128.
+ *    resolved to 1/128. The same edge in front of an environment of half its radiance
+ *    (a step between two emitters) is resolved to 1/32 of the step too; a smooth ramp of
+ *    emission is no edge, a step of 30 % is, and the host's mask traces the pixels the
+ *    per-pixel test names.
  * 3. The reconstruction: a frame whose colour is a constant plus an emission pass comes
  *    out as the constant (filtered) plus the emission added back, for every method, and
  *    with has_resolved set the resolved emission is what is added. Without the pass SVGF
  *    spreads the same bright pixels onto their neighbours. */
 #include "check.h"
 #include "classic_box.h"
+#include "kernel/emission.h"
 #include "render_film.h"
 #include "synth_frame.h"
 #include "trac0r/post.h"
@@ -165,18 +169,23 @@ static void test_resolve(const tr_scene *s) {
 }
 
 /* A lamp of radiance 1 filling the half plane y < 0 (rows = 1) or x < 0 (rows = 0) of z = 0,
- * seen head-on from z = 5 by a W x H camera; returns the committed scene or NULL. */
-static tr_scene *edge_scene(int rows, tr_error *err) {
-    char text[800];
+ * seen head-on from z = 5 by a W x H camera, in front of a constant environment of
+ * radiance bg (none at 0); returns the committed scene or NULL. */
+static tr_scene *edge_scene(int rows, float bg, tr_error *err) {
+    char text[900], env[100] = "";
+    if (bg > 0.0f) {
+        snprintf(env, sizeof env, " \"environment\": {\"color\": [%g, %g, %g]},\n", (double)bg,
+                 (double)bg, (double)bg);
+    }
     const double lo = -50.0, hi = 50.0, ex = rows ? hi : 0.0, ey = rows ? 0.0 : hi;
     snprintf(text, sizeof text,
-             "{\"render\": {\"width\": %d, \"height\": %d},\n"
+             "{\"render\": {\"width\": %d, \"height\": %d},\n%s"
              " \"camera\": {\"position\": [0, 0, 5], \"direction\": [0, 0, -1], \"fov\": 30},\n"
              " \"materials\": {\"lamp\": {\"type\": \"emitter\", \"color\": [1, 1, 1], "
              "\"emittance\": 1}},\n"
              " \"shapes\": [{\"type\": \"quad\", \"vertices\": [[%g, %g, 0], [%g, %g, 0], "
              "[%g, %g, 0], [%g, %g, 0]], \"material\": \"lamp\"}]}",
-             W, H, lo, lo, ex, lo, ex, ey, lo, ey);
+             W, H, env, lo, lo, ex, lo, ex, ey, lo, ey);
     tr_scene *s = tr_scene_create(err);
     if (!s) {
         return NULL;
@@ -192,10 +201,12 @@ static tr_scene *edge_scene(int rows, tr_error *err) {
 /* The lamp's edge at 1/64 steps across pixel row (or column) 20: the camera is moved so
  * that the edge's screen coordinate is 20 + f, the frame's emission pass marks the edge,
  * and the resolved coverage of row 20's pixels must be 1 - f (the lamp lies beyond the
- * edge, at larger screen coordinates) within 1/32. */
-static void test_resolve_edge(int rows) {
+ * edge, at larger screen coordinates) within 1/32. In front of an environment of radiance
+ * bg the edge is a step between two emitters (tr_emission_step), resolved the same way:
+ * the pixels must hold bg + (1 - bg)(1 - f). */
+static void test_resolve_edge(int rows, float bg) {
     tr_error err;
-    tr_scene *s = edge_scene(rows, &err);
+    tr_scene *s = edge_scene(rows, bg, &err);
     CHECK(s != NULL, "the edge scene: %s", err.msg);
     if (!s) {
         return;
@@ -238,12 +249,13 @@ static void test_resolve_edge(int rows) {
         for (int k = 2; k < across - 2; ++k) {
             const int x = rows ? k : 20, y = rows ? 20 : k;
             const float got = g.emission_resolved[3 * ((size_t)y * W + x)];
-            const float e = fabsf(got - (1.0f - f));
+            const float e = fabsf(got - (bg + (1.0f - bg) * (1.0f - f))) / (1.0f - bg);
             worst = fmaxf(worst, e);
             bad += e > 1.0f / 32.0f + 1e-3f;
             /* Coverage 3/64 .. 5/64: one of the 16 rays sees the lamp, and the pixel is
-             * traced again with 64, whose strata resolve it to 1/128. */
-            fine_bad += step >= 59 && step <= 61 && e > 1.0f / 128.0f + 1e-3f;
+             * traced again with 64, whose strata resolve it to 1/128. (Before an
+             * environment every ray sees emission, so no pixel is one ray's.) */
+            fine_bad += bg == 0.0f && step >= 59 && step <= 61 && e > 1.0f / 128.0f + 1e-3f;
             /* One pixel further on lies wholly on the lamp. */
             const int x2 = rows ? x : x + 1, y2 = rows ? y + 1 : y;
             lit += g.emission_resolved[3 * ((size_t)y2 * W + x2)] == 1.0f;
@@ -252,10 +264,52 @@ static void test_resolve_edge(int rows) {
         tr_film_free(&film);
     }
     CHECK(lit == 63 * ((rows ? W : H) - 4), "%d pixels past the edge wholly lit", lit);
-    CHECK(bad == 0, "%s edge: %d pixels' coverage off by more than 1/32 (worst %.4f)",
-          rows ? "a row's" : "a column's", bad, (double)worst);
+    CHECK(bad == 0, "%s edge before %g: %d pixels' coverage off by more than 1/32 (worst %.4f)",
+          rows ? "a row's" : "a column's", (double)bg, bad, (double)worst);
     CHECK(fine_bad == 0, "%s edge: %d thin slivers' coverage off by more than 1/128",
           rows ? "a row's" : "a column's", fine_bad);
+    tr_scene_destroy(s);
+}
+
+/* Which pixels an emission pass puts on an edge: a ramp whose luminance changes by 2 % a
+ * column has none; a step of 30 % between columns 9 and 10 puts those two columns there
+ * and no other; tr_resolve_emission's own mask traces exactly the pixels that
+ * tr_emission_on_edge names. */
+static void test_steps(void) {
+    tr_error err;
+    tr_scene *s = edge_scene(1, 0.0f, &err);
+    CHECK(s != NULL, "the edge scene: %s", err.msg);
+    if (!s) {
+        return;
+    }
+    tr_gbuffer g;
+    CHECK(tr_gbuffer_init(&g, W, H, &err) == TR_OK, "%s", err.msg);
+    for (int step = 0; step < 2; ++step) {
+        for (int y = 0; y < H; ++y) {
+            for (int x = 0; x < W; ++x) {
+                const float v = step ? (x < 10 ? 1.0f : 0.7f) : powf(1.02f, (float)x);
+                for (int k = 0; k < 3; ++k) {
+                    g.emission[3 * ((size_t)y * W + x) + k] = v * (k == 2 ? 0.5f : 1.0f);
+                }
+            }
+        }
+        g.has_emission = 1;
+        uint32_t traced = 0, want = 0, wrong = 0;
+        for (int y = 0; y < H; ++y) {
+            for (int x = 0; x < W; ++x) {
+                const int on = tr_emission_on_edge(g.emission, W, H, x, y);
+                want += (uint32_t)on;
+                wrong += on != (step && (x == 9 || x == 10));
+            }
+        }
+        CHECK(wrong == 0, "%s: %u pixels wrongly on an edge or off one", step ? "step" : "ramp",
+              wrong);
+        CHECK(tr_resolve_emission(s, tr_scene_camera(s), 2, 2, &g, &traced, &err) == TR_OK, "%s",
+              err.msg);
+        CHECK(traced == want, "%s: traced %u pixels, %u on an edge", step ? "step" : "ramp", traced,
+              want);
+    }
+    tr_gbuffer_free(&g);
     tr_scene_destroy(s);
 }
 
@@ -337,8 +391,11 @@ int main(void) {
         test_resolve(s);
         tr_scene_destroy(s);
     }
-    test_resolve_edge(1);
-    test_resolve_edge(0);
+    test_resolve_edge(1, 0.0f);
+    test_resolve_edge(0, 0.0f);
+    test_resolve_edge(1, 0.5f);
+    test_resolve_edge(0, 0.5f);
+    test_steps();
     test_recon();
     return check_finish("test_emission");
 }

@@ -18,15 +18,37 @@ TR_FN int tr_emission_seen(TR_GLOBAL const float *e, uint32_t i) {
     return e[3u * i] > 0.0f || e[3u * i + 1u] > 0.0f || e[3u * i + 2u] > 0.0f;
 }
 
+/* Two emitting pixels whose luminances differ by more than this share of the larger are
+ * on a step in the emission too: an environment's horizon, the sun's disc against the
+ * sky, one lamp in front of a brighter one. At one sample a pixel across such a step shows
+ * one side or the other, and its light is not filtered (emission is kept out of the
+ * filters), so without the resolve it stays one sample's worth of noise in every frame.
+ * A quarter: a smooth sky's neighbouring pixels differ by a few percent. */
+#define TR_EMISSION_STEP 0.25f
+
+/* Whether pixels i and j, both of which saw emission, lie across a step
+ * (TR_EMISSION_STEP). */
+TR_FN int tr_emission_step(TR_GLOBAL const float *e, uint32_t i, uint32_t j) {
+    const float li = 0.2126f * e[3u * i] + 0.7152f * e[3u * i + 1u] + 0.0722f * e[3u * i + 2u];
+    const float lj = 0.2126f * e[3u * j] + 0.7152f * e[3u * j + 1u] + 0.0722f * e[3u * j + 2u];
+    return tr_fabsf(li - lj) > TR_EMISSION_STEP * tr_fmaxf(li, lj);
+}
+
 /* Whether a pixel of the 3 x 3 block around (x, y), clipped to the w x h image, differs
- * from (x, y) in tr_emission_seen: the pixels next to an emitter's edge, on both sides. */
+ * from (x, y) in tr_emission_seen, or both saw emission across a step
+ * (tr_emission_step): the pixels next to an emitter's edge, on both sides. */
 TR_FN int tr_emission_on_edge(TR_GLOBAL const float *e, int w, int h, int x, int y) {
-    const int c = tr_emission_seen(e, (uint32_t)(y * w + x));
+    const uint32_t i = (uint32_t)(y * w + x);
+    const int c = tr_emission_seen(e, i);
     for (int dy = -1; dy <= 1; ++dy) {
         for (int dx = -1; dx <= 1; ++dx) {
             const int xx = x + dx, yy = y + dy;
-            if (xx >= 0 && yy >= 0 && xx < w && yy < h &&
-                tr_emission_seen(e, (uint32_t)(yy * w + xx)) != c) {
+            if (xx < 0 || yy < 0 || xx >= w || yy >= h) {
+                continue;
+            }
+            const uint32_t j = (uint32_t)(yy * w + xx);
+            const int cj = tr_emission_seen(e, j);
+            if (cj != c || (c && tr_emission_step(e, i, j))) {
                 return 1;
             }
         }

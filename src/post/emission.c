@@ -4,11 +4,12 @@
  * At one sample per pixel a pixel on a lamp's edge sees either the lamp or the ceiling, so
  * the lamp is drawn a fraction of a pixel too small or too large and its edge flickers from
  * frame to frame; the history cannot fix that, because it is kept per surface. Here the
- * pixels next to an edge between emitting and non-emitting first hits trace a grid of n x n
- * camera rays each, which see only the first hit (no shading, no path), and average the
- * emission they find: the pixel's coverage times the emitter's radiance, as a converged
- * image has it. Every other pixel keeps the emission of its own sample, which is exact
- * there (it covers one emitter, or none). The per-pixel arithmetic is the kernel's
+ * pixels next to an edge between emitting and non-emitting first hits, or across a step
+ * between two emitters (tr_emission_step: an environment's horizon), trace n x n camera
+ * rays each, which see only the first hit (no shading, no path), and average the emission
+ * they find: the pixel's coverage times the emitter's radiance, as a converged image has
+ * it. Every other pixel keeps the emission of its own sample, which is exact there (it
+ * covers one emitter, or a smooth part of one, or none). The per-pixel arithmetic is the kernel's
  * (src/kernel/emission.h), which an OpenCL device runs as it is.
  *
  * The albedo pass is resolved the same way where the caller asks (tr_resolve_albedo): the
@@ -26,7 +27,8 @@
 /* edge[i] = tr_emission_on_edge(e, w, h, x, y) for every pixel, computed with the loops
  * turned round (the count of emitting pixels in each clipped 3 x 3 block, from
  * horizontal then vertical sums of a 0/1 mask) so that it costs a few passes over bytes
- * instead of nine tests per pixel. */
+ * instead of nine tests per pixel; only a pixel whose whole block saw emission compares
+ * its neighbours' luminances (tr_emission_step). */
 static void edge_mask(const float *e, int w, int h, uint8_t *seen, uint8_t *hsum, uint8_t *edge,
                       int threads) {
     const long n = (long)w * h;
@@ -57,6 +59,17 @@ static void edge_mask(const float *e, int w, int h, uint8_t *seen, uint8_t *hsum
                 const int k = (y > 0 ? up[x] : 0) + mid[x] + (y + 1 < h ? dn[x] : 0);
                 /* A block that is all one kind holds 0 emitting pixels or all of them. */
                 out[x] = (uint8_t)(m[x] ? k < rows * cols : k > 0);
+                /* All of them: the emission may still step between neighbours. */
+                for (int dy = -1; m[x] && !out[x] && dy <= 1; ++dy) {
+                    for (int dx = -1; dx <= 1; ++dx) {
+                        const int xx = x + dx, yy = y + dy;
+                        if (xx >= 0 && yy >= 0 && xx < w && yy < h &&
+                            tr_emission_step(e, (uint32_t)(y * w + x), (uint32_t)(yy * w + xx))) {
+                            out[x] = 1;
+                            break;
+                        }
+                    }
+                }
             }
         }
     }
