@@ -9,8 +9,8 @@
  * rays each, which see only the first hit (no shading, no path), and average the emission
  * they find: the pixel's coverage times the emitter's radiance, as a converged image has
  * it. Every other pixel keeps the emission of its own sample, which is exact there (it
- * covers one emitter, or a smooth part of one, or none). The per-pixel arithmetic is the kernel's
- * (src/kernel/emission.h), which an OpenCL device runs as it is.
+ * covers one emitter, or a smooth part of one, or none). The per-pixel arithmetic is the
+ * kernel's (src/kernel/emission.h), which an OpenCL device runs as it is.
  *
  * The albedo pass is resolved the same way where the caller asks (tr_resolve_albedo): the
  * pixels whose albedo differs from a neighbour's take the mean base colour of an n x n
