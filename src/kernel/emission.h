@@ -29,8 +29,8 @@ TR_FN int tr_emission_seen(TR_GLOBAL const float *e, uint32_t i) {
 /* Whether pixels i and j, both of which saw emission, lie across a step
  * (TR_EMISSION_STEP). */
 TR_FN int tr_emission_step(TR_GLOBAL const float *e, uint32_t i, uint32_t j) {
-    const float li = 0.2126f * e[3u * i] + 0.7152f * e[3u * i + 1u] + 0.0722f * e[3u * i + 2u];
-    const float lj = 0.2126f * e[3u * j] + 0.7152f * e[3u * j + 1u] + 0.0722f * e[3u * j + 2u];
+    const float li = tr_env_luminance(v3(e[3u * i], e[3u * i + 1u], e[3u * i + 2u]));
+    const float lj = tr_env_luminance(v3(e[3u * j], e[3u * j + 1u], e[3u * j + 2u]));
     return tr_fabsf(li - lj) > TR_EMISSION_STEP * tr_fmaxf(li, lj);
 }
 

@@ -71,28 +71,6 @@ int tr_reference_render(tr_device *dev, const tr_camera *cam, const tr_render_co
     return TR_OK;
 }
 
-/* v clamped to [0, 1], NaN as 0: fmin(fmax(v, 0), 1) without its calls into libm. */
-static double unit_clamp(double v) {
-    return v > 0.0 ? (v < 1.0 ? v : 1.0) : 0.0;
-}
-
-double tr_image_flicker(const float *a, const float *a_prev, const float *r, const float *r_prev,
-                        size_t pixels) {
-    static const double luma[3] = {0.2126, 0.7152, 0.0722};
-    double s = 0.0;
-    for (size_t i = 0; i < pixels; ++i) {
-        double d = 0.0;
-        for (int k = 0; k < 3; ++k) {
-            const size_t j = 3 * i + (size_t)k;
-            const double va = unit_clamp(a[j]) - unit_clamp(a_prev[j]);
-            const double vr = unit_clamp(r[j]) - unit_clamp(r_prev[j]);
-            d += luma[k] * (va - vr);
-        }
-        s += d * d;
-    }
-    return pixels ? sqrt(s / (double)pixels) : 0.0;
-}
-
 /* ---- The scorer ------------------------------------------------------------------ */
 
 struct tr_scorer {

@@ -60,15 +60,8 @@ static void edge_mask(const float *e, int w, int h, uint8_t *seen, uint8_t *hsum
                 /* A block that is all one kind holds 0 emitting pixels or all of them. */
                 out[x] = (uint8_t)(m[x] ? k < rows * cols : k > 0);
                 /* All of them: the emission may still step between neighbours. */
-                for (int dy = -1; m[x] && !out[x] && dy <= 1; ++dy) {
-                    for (int dx = -1; dx <= 1; ++dx) {
-                        const int xx = x + dx, yy = y + dy;
-                        if (xx >= 0 && yy >= 0 && xx < w && yy < h &&
-                            tr_emission_step(e, (uint32_t)(y * w + x), (uint32_t)(yy * w + xx))) {
-                            out[x] = 1;
-                            break;
-                        }
-                    }
+                if (m[x] && !out[x]) {
+                    out[x] = (uint8_t)tr_emission_on_edge(e, w, h, x, y);
                 }
             }
         }

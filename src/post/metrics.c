@@ -5,6 +5,7 @@
 
 #include "trac0r/film.h"
 #include "trac0r/image.h"
+#include "trac0r/measure.h"
 #include "trac0r/post.h"
 
 /* The metrics compare displayable radiance: [0,1], with NaN as black. */
@@ -46,6 +47,24 @@ tr_image_metrics tr_image_compare(const float *a, const float *ref, size_t pixel
     m.psnr = tr_psnr(m.mse);
     m.max_error = max;
     return m;
+}
+
+/* measure.h; kept beside tr_image_compare, whose clamp it shares. */
+double tr_image_flicker(const float *a, const float *a_prev, const float *r, const float *r_prev,
+                        size_t pixels) {
+    static const double luma[3] = {0.2126, 0.7152, 0.0722};
+    double s = 0.0;
+    for (size_t i = 0; i < pixels; ++i) {
+        double d = 0.0;
+        for (int k = 0; k < 3; ++k) {
+            const size_t j = 3 * i + (size_t)k;
+            const double va = clamp01(a[j]) - clamp01(a_prev[j]);
+            const double vr = clamp01(r[j]) - clamp01(r_prev[j]);
+            d += luma[k] * (va - vr);
+        }
+        s += d * d;
+    }
+    return pixels ? sqrt(s / (double)pixels) : 0.0;
 }
 
 /* Luminance of a clamped pixel: SSIM is taken on one channel, as usual for colour. */
