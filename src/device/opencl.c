@@ -324,6 +324,7 @@ struct tr_cl_context {
     cl_mem arrays[TR_CL_MAX_ARRAYS];
     cl_mem scene_info;
     cl_mem frame;
+    tr_frame frame_host; /* what the frame buffer is written from, without waiting */
     int have_scene;
     tr_accel_type accel;
     tr_device_bvh bvh;       /* the choice for uploads (tr_cl_set_bvh) */
@@ -1588,7 +1589,7 @@ int tr_cl_supports_integrator(tr_cl_context *ctx, int integrator, tr_error *err)
     return TR_OK;
 }
 
-int tr_cl_render_frame(tr_cl_context *ctx, const tr_frame *f, uint64_t *rays_out, tr_error *err) {
+static int render_frame(tr_cl_context *ctx, const tr_frame *f, uint64_t *rays_out, tr_error *err) {
     if (!ctx->have_scene) {
         return tr_error_set(err, TR_STATUS_INVALID_OPERATION,
                             "no scene uploaded to the OpenCL device");
@@ -1611,7 +1612,12 @@ int tr_cl_render_frame(tr_cl_context *ctx, const tr_frame *f, uint64_t *rays_out
     if (rc != CL_SUCCESS) {
         return cl_fail(err, "clEnqueueFillBuffer(rays_per_row)", rc);
     }
-    rc = clEnqueueWriteBuffer(ctx->queue, ctx->frame, CL_TRUE, 0, sizeof *f, f, 0, NULL, NULL);
+    /* The write does not wait: the in-order queue runs it before the frame's kernel, and
+     * the frame's last read (or clFinish on a failure) waits for both, so the copy it reads
+     * stays as it is until then. One round trip to the device fewer per frame. */
+    ctx->frame_host = *f;
+    rc = clEnqueueWriteBuffer(ctx->queue, ctx->frame, CL_FALSE, 0, sizeof *f, &ctx->frame_host, 0,
+                              NULL, NULL);
     if (rc != CL_SUCCESS) {
         return cl_fail(err, "clEnqueueWriteBuffer(frame)", rc);
     }
@@ -1668,6 +1674,14 @@ int tr_cl_render_frame(tr_cl_context *ctx, const tr_frame *f, uint64_t *rays_out
     }
     /* The blocking read waits for the kernel: the frame is done when it returns. */
     return read_rays(ctx, ny, rays_out, err);
+}
+
+int tr_cl_render_frame(tr_cl_context *ctx, const tr_frame *f, uint64_t *rays_out, tr_error *err) {
+    if (render_frame(ctx, f, rays_out, err) != TR_OK) {
+        clFinish(ctx->queue); /* nothing queued may still read the frame's copy */
+        return TR_ERR;
+    }
+    return TR_OK;
 }
 
 int tr_cl_read_film(tr_cl_context *ctx, tr_film *film, tr_error *err) {
