@@ -157,6 +157,10 @@ int tr_cl_restir_frame(tr_cl_context *ctx, const struct tr_restir_frame *fr, tr_
     (void)fr;
     return tr_error_set(err, TR_STATUS_UNSUPPORTED, "%s", no_opencl);
 }
+int tr_cl_prepare_restir(tr_cl_context *ctx, tr_error *err) {
+    (void)ctx;
+    return tr_error_set(err, TR_STATUS_UNSUPPORTED, "%s", no_opencl);
+}
 int tr_cl_upscale_emission(tr_cl_context *ctx, const tr_camera *cam, int n, uint32_t wl,
                            uint32_t hl, void *emission, void *prev, void *out, tr_error *err) {
     (void)ctx;
@@ -1874,6 +1878,10 @@ static int set_args_after_scene(tr_cl_context *ctx, cl_kernel k, const cl_mem *c
         }
     }
     return TR_OK;
+}
+
+int tr_cl_prepare_restir(tr_cl_context *ctx, tr_error *err) {
+    return need_part(ctx, TR_CL_PART_RESTIR, err);
 }
 
 int tr_cl_restir_frame(tr_cl_context *ctx, const tr_restir_frame *fr, tr_error *err) {

@@ -145,6 +145,9 @@ int tr_cl_write_film(tr_cl_context *ctx, const tr_film *film, tr_error *err);
  * new size hold none). Waits for the device; reads nothing back. */
 struct tr_restir_frame;
 int tr_cl_restir_frame(tr_cl_context *ctx, const struct tr_restir_frame *fr, tr_error *err);
+/* Builds ReSTIR's passes now (else the first tr_cl_restir_frame does): a real-time session
+ * that will run them builds them when it is made, not inside its first frame's time. */
+int tr_cl_prepare_restir(tr_cl_context *ctx, tr_error *err);
 /* How many times tr_cl_read_film copied the film to the host since the context opened:
  * real-time frames keep it on the device until they are shown or saved. */
 uint64_t tr_cl_film_reads(const tr_cl_context *ctx);

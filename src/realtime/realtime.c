@@ -210,6 +210,13 @@ tr_realtime *tr_realtime_create(tr_device *dev, tr_scene *scene, const tr_realti
         free(rt);
         return NULL;
     }
+    /* A driver may take many seconds to build ReSTIR's program (33 s on an H100 without
+     * its cache): built here, the session's first frame does not carry it. */
+    if (rt->restir && rt->on_device && tr_restir_stage_prepare_device(dev, err) != TR_OK) {
+        tr_restir_stage_destroy(rt->restir_stage);
+        free(rt);
+        return NULL;
+    }
     rt->budget_upscale = d->budget_upscale != 0;
     rt->up_div = 1.0f;
     return rt;

@@ -236,6 +236,14 @@ int tr_restir_stage_run(tr_restir_stage *st, const tr_scene *scene, const tr_cam
     return TR_OK;
 }
 
+int tr_restir_stage_prepare_device(tr_device *dev, tr_error *err) {
+    tr_cl_context *cl = tr_device_cl_context(dev);
+    if (!cl) {
+        return tr_error_set(err, TR_STATUS_UNSUPPORTED, "ReSTIR on a device: not an OpenCL device");
+    }
+    return tr_cl_prepare_restir(cl, err);
+}
+
 int tr_restir_stage_run_device(tr_restir_stage *st, tr_device *dev, const tr_camera *cam,
                                const tr_restir_params *p, uint64_t seed, uint32_t sample,
                                uint32_t sampler, uint32_t spp, uint64_t frame, uint32_t passes,

@@ -60,6 +60,11 @@ int tr_restir_stage_run(tr_restir_stage *st, const tr_scene *scene, const tr_cam
                         const tr_restir_params *p, uint64_t seed, uint32_t sample, uint32_t sampler,
                         uint32_t spp, uint64_t frame, int threads, tr_film *film, tr_error *err);
 
+/* Builds the passes tr_restir_stage_run_device runs on `dev` (an OpenCL device), which its
+ * first run would otherwise build: a driver may take tens of seconds without its cache.
+ * Other devices are refused (TR_STATUS_UNSUPPORTED). */
+int tr_restir_stage_prepare_device(tr_device *dev, tr_error *err);
+
 /* tr_restir_stage_run on an OpenCL device's film (which must have the camera's size and
  * keep `passes`, TR_PASS_DIRECT included where it adds to that pass), ReSTIR GI included
  * with p->gi: the reservoirs stay on the device. Other devices are refused
