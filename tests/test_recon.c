@@ -12,9 +12,11 @@
  * 3. After a camera cut the error returns within 8 frames to that of a history started
  *    fresh on the new view: no ghost of the old one survives.
  * 4. The result does not depend on the thread count.
- * 5. The filmic display curve rises strictly below white, and its display film gives the
+ * 5. The albedo history converges to a pixel's mean albedo where each frame's sample
+ *    alternates; without it the output flips with each frame's own albedo.
+ * 6. The filmic display curve rises strictly below white, and its display film gives the
  *    direct tonemap's bytes.
- * 6. SSIM is 1 for an image with itself, falls with noise and is symmetric. */
+ * 7. SSIM is 1 for an image with itself, falls with noise and is symmetric. */
 #include "check.h"
 #include "synth_frame.h"
 #include "classic_box.h"
@@ -501,6 +503,58 @@ static void test_cut(void) {
     tr_scene_destroy(s);
 }
 
+/* The albedo history (albedo_alpha): a static view whose albedo alternates between 0.2
+ * and 0.8 from frame to frame, as a pixel on a texture's edge does under jitter, under
+ * unit illumination (colour = albedo). Off, SVGF multiplies by each frame's sample, so
+ * its output flips between 0.2 and 0.8; with the history at weight a = 0.35 the
+ * output settles between the two-frame fixed points (0.8 + 0.2 (1 - a)) / (2 - a) =
+ * 0.5636 and 0.4364, within 0.07 of the pixel's mean 0.5. */
+static void test_albedo_history(void) {
+    tr_error err;
+    tr_scene *s = cornell(&err);
+    const tr_camera cam = *tr_scene_camera(s);
+    tr_gbuffer g;
+    CHECK(tr_gbuffer_init(&g, W, H, &err) == TR_OK, "%s", err.msg);
+    render_g(s, &cam, 0, 1, &g);
+    g.has_emission = g.has_direct = g.has_specular = 0;
+    float *out = malloc(3 * W * H * sizeof *out);
+    for (int on = 0; on < 2; ++on) {
+        tr_recon_params p = tr_recon_params_default();
+        p.albedo_alpha = on ? 0.35f : 0.0f;
+        tr_recon r;
+        CHECK(tr_recon_init(&r, W, H, &err) == TR_OK, "%s", err.msg);
+        int far = 0, kept = 0, total = 0;
+        for (int f = 0; f < 24; ++f) {
+            const float a = (f & 1) ? 0.8f : 0.2f;
+            for (int i = 0; i < 3 * W * H; ++i) {
+                g.albedo[i] = a;
+                g.color[i] = a;
+            }
+            CHECK(tr_recon_frame(&r, &g, &cam, TR_RECON_SVGF, &p, 2, out, &err) == TR_OK, "%s",
+                  err.msg);
+            for (int i = 0; f >= 20 && i < W * H; ++i) {
+                if (!(g.depth[i] > 0.0f)) {
+                    continue; /* no surface: nothing to reproject */
+                }
+                total += 1;
+                far += fabsf(out[3 * i] - 0.5f) > 0.07f;
+                kept += fabsf(out[3 * i] - a) < 0.01f * a;
+            }
+        }
+        if (on) {
+            CHECK(total > W * H && far == 0,
+                  "albedo history: %d of %d pixels more than 0.07 from the mean", far, total);
+        } else {
+            CHECK(total > W * H && kept == total,
+                  "no albedo history: %d of %d pixels at the frame's own albedo", kept, total);
+        }
+        tr_recon_free(&r);
+    }
+    free(out);
+    tr_gbuffer_free(&g);
+    tr_scene_destroy(s);
+}
+
 /* The filmic curve: 0 stays black, it rises strictly until it reaches white, and a
  * display film written at exposure 0 holds exactly the bytes of the direct tonemap. */
 static void test_filmic(void) {
@@ -592,6 +646,7 @@ int main(void) {
     test_reprojection();
     test_temporal_host();
     test_cut();
+    test_albedo_history();
     test_filmic();
     test_ssim();
     test_errors();

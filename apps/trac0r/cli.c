@@ -420,6 +420,7 @@ const char cli_recon_help[] =
     "                       changed (A-SVGF; CPU only; default off)\n"
     "  --resolve-emission N emitters' edges traced at N x N rays, 0..16 (default 4)\n"
     "  --resolve-albedo N   albedo's edges traced at N x N rays, 0..8 (default 0: off)\n"
+    "  --albedo-alpha A     SVGF's albedo history, frame weight 0..1 (0: off; CPU only)\n"
     "  --fresh-spp N        pixels without history traced at N spp in all (CPU; 0: off)\n"
     "  --restir off|di|di+gi  ReSTIR DI for the first surfaces' direct light, di+gi\n"
     "                       ReSTIR GI for their indirect light too (default off)\n"
@@ -479,6 +480,7 @@ int cli_recon_option(cli_args *a, tr_recon_params *p) {
         int *iv;
     } f[] = {{"--alpha-min", 0.01f, 1.0f, &p->alpha_min, NULL},
              {"--svgf-alpha-min", 0.01f, 1.0f, &p->svgf_alpha_min, NULL},
+             {"--albedo-alpha", 0.0f, 1.0f, &p->albedo_alpha, NULL},
              {"--max-history", 1.0f, 1024.0f, &p->max_len, NULL},
              {"--max-history-moving", 1.0f, 1024.0f, &p->max_len_moving, NULL},
              {"--svgf-sigma-l", 0.1f, 1000.0f, &p->svgf_sigma_l, NULL},

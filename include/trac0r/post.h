@@ -192,6 +192,13 @@ typedef struct tr_recon_params {
     int albedo_samples;   /* n of tr_resolve_albedo for the callers that resolve the albedo
                              (tr_realtime, bench realtime, view): n x n rays per pixel;
                              0: the reconstruction multiplies by the sample's own albedo */
+    float albedo_alpha;   /* SVGF multiplies the filtered illumination back by an albedo
+                             kept through the temporal stage's reprojection, this frame's
+                             weighing albedo_alpha (or 1 / the history's length when
+                             larger): each frame's jittered sample falls on another side
+                             of a texture's edge, and the history converges to the pixel's
+                             mean. 0: this frame's sample (the default). The host's
+                             reconstruction only (docs/realtime.md) */
     float svgf_alpha_min; /* alpha_min for SVGF's temporal stage (the other methods keep
                              alpha_min); 0: alpha_min */
     int fresh_spp;        /* tr_realtime on the host: the samples per pixel in all of the
@@ -215,6 +222,8 @@ typedef struct tr_recon {
     tr_camera prev_cam;
     int cur;                /* which of the two history buffers is the newest */
     float *hist_color[2];   /* demodulated illumination, 3 per pixel */
+    float *hist_albedo[2];  /* albedo_alpha's albedo history, 3 per pixel */
+    int have_albedo;        /* hist_albedo[cur] holds the last frame's (albedo_alpha > 0) */
     float *hist_moments[2]; /* luminance mean and mean square, 2 per pixel */
     float *hist_len[2];     /* frames of history */
     float *temporal;        /* the host temporal stage's planes: points, projection */

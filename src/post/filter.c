@@ -187,6 +187,7 @@ tr_recon_params tr_recon_params_default(void) {
     p.svgf_specular = 0;
     /* The sample's own albedo unless asked (tr_resolve_albedo; docs/realtime.md). */
     p.albedo_samples = 0;
+    p.albedo_alpha = 0.0f;
     /* SVGF's history remembers less than the other methods' (the paper's 0.2): the
      * reprojection resamples the history bilinearly every frame, a blur that compounds
      * with the history's age, and after SVGF's spatial filter that blur costs more than
@@ -211,6 +212,7 @@ int tr_recon_init(tr_recon *r, uint32_t width, uint32_t height, tr_error *err) {
     int bad = 0;
     for (int k = 0; k < 2; ++k) {
         r->hist_color[k] = calloc(3 * n, sizeof(float));
+        r->hist_albedo[k] = calloc(3 * n, sizeof(float));
         r->hist_moments[k] = calloc(2 * n, sizeof(float));
         r->hist_len[k] = calloc(n, sizeof(float));
         bad |= !r->hist_color[k] || !r->hist_moments[k] || !r->hist_len[k];
@@ -252,6 +254,7 @@ int tr_recon_init(tr_recon *r, uint32_t width, uint32_t height, tr_error *err) {
 void tr_recon_free(tr_recon *r) {
     for (int k = 0; k < 2; ++k) {
         free(r->hist_color[k]);
+        free(r->hist_albedo[k]);
         free(r->hist_moments[k]);
         free(r->hist_len[k]);
         free(r->hist_direct[k]);
@@ -985,6 +988,25 @@ static void temporal_moved_rows(const float *const pt[3], const uint32_t *prim,
  * from the points (followed back by their motion, if any) and projection of
  * temporal_points_rows, temporal_moved_rows and temporal_project_rows, and the previous
  * frame's points pq. */
+/* Pixel i's albedo history (albedo_alpha): the previous history `prev` read at the
+ * colour's reprojection taps (weights wt of sum total at ix, iy), blended with this
+ * frame's albedo at weight a; without a previous history (prev NULL) or a tap, this
+ * frame's albedo. */
+static void albedo_blend(const float *prev, const float *cur, const float wt[4], float total,
+                         int ix, int iy, int w, float a, int i, float *out) {
+    for (int c = 0; c < 3; ++c) {
+        float s = 0.0f;
+        if (prev) {
+            for (int k = 0; k < 4; ++k) {
+                if (wt[k] > 0.0f) {
+                    s += wt[k] * prev[3 * ((iy + (k >> 1)) * w + ix + (k & 1)) + c];
+                }
+            }
+        }
+        out[3 * i + c] = prev ? (1.0f - a) * (s / total) + a * cur[3 * i + c] : cur[3 * i + c];
+    }
+}
+
 static void temporal_rows(const tr_recon *r, const tr_gbuffer *g, const float *const pt[3],
                           const float *const pq[3], const float *fxs, const float *fys,
                           const float *dists, const tr_vec3 *motion, uint32_t motion_count,
@@ -992,6 +1014,7 @@ static void temporal_rows(const tr_recon *r, const tr_gbuffer *g, const float *c
                           const tr_recon_params *p, float *hc, float *hm, float *hl, int y0,
                           int y1) {
     const int w = (int)g->width, h = (int)g->height;
+    float *const na = p->albedo_alpha > 0.0f ? r->hist_albedo[1 - r->cur] : NULL;
     for (int y = y0; y < y1; ++y) {
         for (int x = 0; x < w; ++x) {
             const int i = y * w + x;
@@ -1036,7 +1059,14 @@ static void temporal_rows(const tr_recon *r, const tr_gbuffer *g, const float *c
                 }
                 tr_post_temporal_blend(cr, cg, cb, total, wt, ix, iy, w, pcol, pmom, plen,
                                        p->alpha_min, cap, hc + 3 * i, hm + 2 * i, hl + i);
+                if (na) {
+                    albedo_blend(r->have_albedo ? r->hist_albedo[r->cur] : NULL, g->albedo, wt,
+                                 total, ix, iy, w, tr_fmaxf(1.0f / hl[i], p->albedo_alpha), i, na);
+                }
             } else {
+                if (na) {
+                    albedo_blend(NULL, g->albedo, wt, total, ix, iy, w, 1.0f, i, na);
+                }
                 const float l = tr_post_luminance(cr, cg, cb);
                 hc[3 * i] = cr;
                 hc[3 * i + 1] = cg;
@@ -1362,6 +1392,7 @@ int tr_recon_frame_moving(tr_recon *r, const tr_gbuffer *frame, const tr_camera 
     }
     r->hist_spec_split = spec;
     r->cur = next;
+    r->have_albedo = p->albedo_alpha > 0.0f;
     const double t1 = tr_time_now();
     r->ms_temporal = (t1 - t0) * 1e3;
 
@@ -1390,11 +1421,17 @@ int tr_recon_frame_moving(tr_recon *r, const tr_gbuffer *frame, const tr_camera 
         from_planes(g, (const float *const *)c3, out, 1, threads);
     } else {
         prep_guides(g, &ws, p, 1, threads);
+        /* The sum's (or the diffuse part's) remodulation by the albedo history. */
+        tr_gbuffer gav = *g;
+        if (p->albedo_alpha > 0.0f) {
+            gav.albedo = r->hist_albedo[r->cur];
+        }
+        const tr_gbuffer *ga = &gav;
         /* With TAA the remodulated output goes to r->illum (free by now) first. */
         float *res = p->svgf_taa_alpha > 0.0f ? r->illum : out;
         if (spec) {
             /* Each part steered by its own variance, remodulated by its own albedo. */
-            svgf_part(g, &ws, hc, hm, hl, p, res, 0, threads);
+            svgf_part(ga, &ws, hc, hm, hl, p, res, 0, threads);
             tr_gbuffer gs = *g;
             gs.albedo = r->spec_alb;
             svgf_part(&gs, &ws, r->hist_spec[next], r->hist_smoments[next], r->hist_slen[next], p,
@@ -1402,10 +1439,11 @@ int tr_recon_frame_moving(tr_recon *r, const tr_gbuffer *frame, const tr_camera 
         } else if (split) {
             /* Schied et al. filter direct and indirect illumination apart, each steered by
              * its own variance, and add them after remodulation. */
-            svgf_part(g, &ws, r->hist_direct[next], r->hist_dmoments[next], hl, p, res, 0, threads);
-            svgf_part(g, &ws, hc, hm, hl, p, res, 1, threads);
+            svgf_part(ga, &ws, r->hist_direct[next], r->hist_dmoments[next], hl, p, res, 0,
+                      threads);
+            svgf_part(ga, &ws, hc, hm, hl, p, res, 1, threads);
         } else {
-            svgf_part(g, &ws, hc, hm, hl, p, res, 0, threads);
+            svgf_part(ga, &ws, hc, hm, hl, p, res, 0, threads);
         }
         if (p->svgf_taa_alpha > 0.0f) {
             /* Schied et al.'s last stage: temporal antialiasing of the remodulated
