@@ -22,6 +22,8 @@
  * 4. A frame or camera of another size and an unknown method fail with a message.
  * 5. Per-primitive motion (a sphere moving in front of a wall, tests/motion_scene.h):
  *    host and device agree with the motion table as in 1.
+ * 6. SVGF's albedo history (albedo_alpha) agrees as in 1 on frames whose albedo
+ *    alternates from frame to frame.
  *
  * Needs an OpenCL platform; it fails (not skips) when no device can be opened. */
 #include <math.h>
@@ -299,6 +301,22 @@ int main(void) {
     film_on_device(cl, s, cams);
     moving(cl);
     cpu_device(s, cams);
+
+    /* The albedo history: the same views with each frame's albedo alternating between 0.2
+     * and 0.8 under unit light (colour = albedo), as on a texture's edge under jitter. A
+     * device that multiplied by the frame's own albedo would differ from the host's
+     * history by 0.2 and more. */
+    for (int k = 0; k < FRAMES; ++k) {
+        for (int i = 0; i < 3 * W * H; ++i) {
+            g[k].albedo[i] = g[k].color[i] = (k & 1) ? 0.8f : 0.2f;
+        }
+        g[k].has_emission = g[k].has_direct = g[k].has_specular = 0;
+    }
+    p = tr_recon_params_default();
+    p.albedo_alpha = 0.35f;
+    agree(cl, g, cams, TR_RECON_SVGF, &p, "svgf+albedo");
+    p.svgf_taa_alpha = 0.3f;
+    agree(cl, g, cams, TR_RECON_SVGF, &p, "svgf+albedo+taa");
 
     for (int k = 0; k < FRAMES; ++k) {
         tr_gbuffer_free(&g[k]);

@@ -197,8 +197,8 @@ typedef struct tr_recon_params {
                              weighing albedo_alpha (or 1 / the history's length when
                              larger): each frame's jittered sample falls on another side
                              of a texture's edge, and the history converges to the pixel's
-                             mean. 0: this frame's sample (the default). The host's
-                             reconstruction only (docs/realtime.md) */
+                             mean. 0: this frame's sample (the default). The host's and
+                             an OpenCL device's reconstruction (docs/realtime.md) */
     float svgf_alpha_min; /* alpha_min for SVGF's temporal stage (the other methods keep
                              alpha_min); 0: alpha_min */
     int fresh_spp;        /* tr_realtime on the host: the samples per pixel in all of the

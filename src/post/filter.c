@@ -988,25 +988,6 @@ static void temporal_moved_rows(const float *const pt[3], const uint32_t *prim,
  * from the points (followed back by their motion, if any) and projection of
  * temporal_points_rows, temporal_moved_rows and temporal_project_rows, and the previous
  * frame's points pq. */
-/* Pixel i's albedo history (albedo_alpha): the previous history `prev` read at the
- * colour's reprojection taps (weights wt of sum total at ix, iy), blended with this
- * frame's albedo at weight a; without a previous history (prev NULL) or a tap, this
- * frame's albedo. */
-static void albedo_blend(const float *prev, const float *cur, const float wt[4], float total,
-                         int ix, int iy, int w, float a, int i, float *out) {
-    for (int c = 0; c < 3; ++c) {
-        float s = 0.0f;
-        if (prev) {
-            for (int k = 0; k < 4; ++k) {
-                if (wt[k] > 0.0f) {
-                    s += wt[k] * prev[3 * ((iy + (k >> 1)) * w + ix + (k & 1)) + c];
-                }
-            }
-        }
-        out[3 * i + c] = prev ? (1.0f - a) * (s / total) + a * cur[3 * i + c] : cur[3 * i + c];
-    }
-}
-
 static void temporal_rows(const tr_recon *r, const tr_gbuffer *g, const float *const pt[3],
                           const float *const pq[3], const float *fxs, const float *fys,
                           const float *dists, const tr_vec3 *motion, uint32_t motion_count,
@@ -1059,13 +1040,16 @@ static void temporal_rows(const tr_recon *r, const tr_gbuffer *g, const float *c
                 }
                 tr_post_temporal_blend(cr, cg, cb, total, wt, ix, iy, w, pcol, pmom, plen,
                                        p->alpha_min, cap, hc + 3 * i, hm + 2 * i, hl + i);
-                if (na) {
-                    albedo_blend(r->have_albedo ? r->hist_albedo[r->cur] : NULL, g->albedo, wt,
-                                 total, ix, iy, w, tr_fmaxf(1.0f / hl[i], p->albedo_alpha), i, na);
+                if (na && r->have_albedo) {
+                    tr_post_albedo_blend(g->albedo + 3 * i, total, wt, ix, iy, w,
+                                         r->hist_albedo[r->cur],
+                                         tr_fmaxf(1.0f / hl[i], p->albedo_alpha), na + 3 * i);
+                } else if (na) {
+                    memcpy(na + 3 * i, g->albedo + 3 * i, 3 * sizeof *na);
                 }
             } else {
                 if (na) {
-                    albedo_blend(NULL, g->albedo, wt, total, ix, iy, w, 1.0f, i, na);
+                    memcpy(na + 3 * i, g->albedo + 3 * i, 3 * sizeof *na);
                 }
                 const float l = tr_post_luminance(cr, cg, cb);
                 hc[3 * i] = cr;

@@ -333,6 +333,28 @@ TR_FN void tr_post_temporal_blend(float r, float g, float b, float total, const 
     *out_len = len;
 }
 
+/* The albedo history of one pixel (tr_recon_params.albedo_alpha) where
+ * tr_post_temporal_blend blended its colour with the weights w (of sum total) at x0, y0
+ * of a previous frame pw pixels wide: the previous albedo history interpolated the same
+ * way, then the pixel's albedo this frame (cur, 3 floats) blended in at weight a. */
+TR_FN void tr_post_albedo_blend(TR_CONST_GLOBAL float *cur, float total, const float w[4], int x0,
+                                int y0, int pw, TR_CONST_GLOBAL float *prev, float a,
+                                float out[3]) {
+    float h[3] = {0.0f, 0.0f, 0.0f};
+    for (int k = 0; k < 4; ++k) {
+        if (w[k] > 0.0f) {
+            const int j = (y0 + (k >> 1)) * pw + x0 + (k & 1);
+            const float wk = w[k] / total;
+            h[0] += wk * prev[3 * j];
+            h[1] += wk * prev[3 * j + 1];
+            h[2] += wk * prev[3 * j + 2];
+        }
+    }
+    out[0] = h[0] + a * (cur[0] - h[0]);
+    out[1] = h[1] + a * (cur[1] - h[1]);
+    out[2] = h[2] + a * (cur[2] - h[2]);
+}
+
 /* Temporal accumulation of pixel (x, y) (Schied et al. 2017, section 4.1): the
  * history (colour, luminance moments and length of the previous frame) reprojected by
  * tr_post_reproject's bilinear weights, blended with the new sample by an exponential

@@ -111,6 +111,49 @@ __kernel void tr_recon_temporal(__global const tr_camera *cams, __global const f
     out_len[i] = len;
 }
 
+/* The albedo history (tr_recon_params.albedo_alpha; filter.c's temporal stage): where
+ * the colour's history survives (tr_post_reproject_moving's taps) the previous albedo
+ * history read at the same taps and blended with this frame's at weight
+ * max(alpha, 1 / the history's new length); elsewhere, or without a history
+ * (have_history 0), this frame's albedo. */
+__kernel void tr_recon_albedo(__global const tr_camera *cams, __global const float *albedo,
+                              __global const float *normal, __global const float *depth,
+                              __global const uint *prim, __global const float *prev_albedo,
+                              __global const float *prev_depth, __global const float *prev_normal,
+                              __global const uint *prev_prim, __global const float *motion,
+                              uint motion_count, int have_history, float alpha,
+                              __global const float *len, __global float *out) {
+    const tr_camera cam = cams[0], prev = cams[1];
+    const uint x = (uint)get_global_id(0), y = (uint)get_global_id(1);
+    if (x >= cam.screen_width || y >= cam.screen_height) {
+        return;
+    }
+    const uint i = y * cam.screen_width + x;
+    float total = 0.0f, w[4];
+    int x0 = 0, y0 = 0;
+    if (have_history) {
+        const uint id = prim[i];
+        const tr_vec3 mv = id < motion_count
+                               ? v3(motion[3 * id], motion[3 * id + 1], motion[3 * id + 2])
+                               : v3s(0.0f);
+        const tr_vec3 n = v3(normal[3 * i], normal[3 * i + 1], normal[3 * i + 2]);
+        total = tr_post_reproject_moving(&cam, &prev, x, y, depth[i], n, id, mv, prev_depth,
+                                         prev_normal, prev_prim, &x0, &y0, w);
+    }
+    if (!(total > 0.05f)) {
+        out[3 * i] = albedo[3 * i];
+        out[3 * i + 1] = albedo[3 * i + 1];
+        out[3 * i + 2] = albedo[3 * i + 2];
+        return;
+    }
+    float a[3];
+    tr_post_albedo_blend(albedo + 3 * i, total, w, x0, y0, (int)prev.screen_width, prev_albedo,
+                         tr_fmaxf(alpha, 1.0f / len[i]), a);
+    out[3 * i] = a[0];
+    out[3 * i + 1] = a[1];
+    out[3 * i + 2] = a[2];
+}
+
 __kernel void tr_recon_bilateral(__global const float *in, int w, int h, int radius, float sigma_s,
                                  float sigma_r, __global float *out) {
     const int x = (int)get_global_id(0), y = (int)get_global_id(1);

@@ -34,12 +34,13 @@ enum {
     K_TAA,
     K_ADD,
     K_UPSCALE,
+    K_ALBEDO,
     K_COUNT
 };
 static const char *const kernel_names[K_COUNT] = {
     "tr_recon_from_film", "tr_recon_modulate",      "tr_recon_temporal", "tr_recon_bilateral",
     "tr_recon_atrous",    "tr_recon_svgf_variance", "tr_recon_svgf",     "tr_recon_taa",
-    "tr_recon_add",       "tr_recon_upscale"};
+    "tr_recon_add",       "tr_recon_upscale",       "tr_recon_albedo"};
 
 /* The device's buffers: the frame (as tr_gbuffer), scratch, history, the two cameras. */
 enum {
@@ -65,12 +66,14 @@ enum {
     B_OUT,
     B_TAA,  /* SVGF's last output */
     B_EMIS, /* the frame's own emission (TR_PASS_EMISSION) */
+    B_HA0,  /* the albedo history (albedo_alpha), two */
+    B_HA1,
     B_CAMS,
     B_COUNT
 };
 /* Floats (or uints) per pixel of each buffer; 0: the cameras. */
-static const int buffer_elems[B_COUNT] = {3, 3, 3, 1, 1, 3, 3, 3, 2, 2, 1, 1,
-                                          1, 3, 1, 3, 3, 1, 1, 3, 3, 3, 0};
+static const int buffer_elems[B_COUNT] = {3, 3, 3, 1, 1, 3, 3, 3, 2, 2, 1, 1, 1,
+                                          3, 1, 3, 3, 1, 1, 3, 3, 3, 3, 3, 0};
 
 typedef struct recon_cl {
     cl_context context;
@@ -82,6 +85,7 @@ typedef struct recon_cl {
     size_t motion_cap;
     tr_camera prev_cam;
     int have_history, cur, have_taa;
+    int have_albedo;  /* B_HA0 + cur holds the last frame's albedo history */
     int has_emission; /* the frame came from a film with the emission pass */
     int result;       /* the buffer holding the last frame's reconstruction */
     cl_mem added;     /* the emission the reconstruction added to it (NULL: none) */
@@ -423,9 +427,18 @@ static int cl_frame(tr_recon_device *r, const tr_camera *cam, const tr_vec3 *mot
                   KB(c, B_HL0 + prev), KB(c, B_HDEPTH), KB(c, B_HNORMAL), KB(c, B_HPRIM), KM(mbuf),
                   KU(motion_count), KI(c->have_history), KF(p->alpha_min), KF(p->max_len),
                   KF(p->max_len_moving), KB(c, hc), KB(c, hm), KB(c, hl));
+    /* SVGF's albedo history (albedo_alpha), where the host's temporal stage keeps it. */
+    const int ha = p->albedo_alpha > 0.0f ? B_HA0 + next : B_ALBEDO;
+    if (rc == TR_OK && ha != B_ALBEDO) {
+        rc = RUN(c, K_ALBEDO, w, h, err, KB(c, B_CAMS), KB(c, B_ALBEDO), KB(c, B_NORMAL),
+                 KB(c, B_DEPTH), KB(c, B_PRIM), KB(c, B_HA0 + prev), KB(c, B_HDEPTH),
+                 KB(c, B_HNORMAL), KB(c, B_HPRIM), KM(mbuf), KU(motion_count),
+                 KI(c->have_history && c->have_albedo), KF(p->albedo_alpha), KB(c, hl), KB(c, ha));
+    }
     if (rc != TR_OK || (rc = finish(c, err)) != TR_OK) {
         return rc;
     }
+    c->have_albedo = ha != B_ALBEDO;
     c->cur = next;
     const double t1 = tr_time_now();
     r->ms_temporal = (t1 - t0) * 1e3;
@@ -475,7 +488,7 @@ static int cl_frame(tr_recon_device *r, const tr_camera *cam, const tr_vec3 *mot
         if (rc == TR_OK && p->svgf_taa_alpha > 0.0f) {
             /* The remodulated output (B_ILLUM is free by now) through temporal
              * antialiasing against the last frame's output. */
-            rc = RUN(c, K_MODULATE, w, h, err, KB(c, src), KB(c, B_ALBEDO), KI(1), KI(w), KI(h),
+            rc = RUN(c, K_MODULATE, w, h, err, KB(c, src), KB(c, ha), KI(1), KI(w), KI(h),
                      KB(c, B_ILLUM));
             rc = rc ? rc
                     : RUN(c, K_TAA, w, h, err, KB(c, B_CAMS), KB(c, B_ILLUM), KB(c, B_NORMAL),
@@ -484,7 +497,7 @@ static int cl_frame(tr_recon_device *r, const tr_camera *cam, const tr_vec3 *mot
             rc = rc ? rc : copy(c, B_OUT, B_TAA, 3 * n * sizeof(float), err);
             c->have_taa = rc == TR_OK;
         } else if (rc == TR_OK) {
-            rc = RUN(c, K_MODULATE, w, h, err, KB(c, src), KB(c, B_ALBEDO), KI(1), KI(w), KI(h),
+            rc = RUN(c, K_MODULATE, w, h, err, KB(c, src), KB(c, ha), KI(1), KI(w), KI(h),
                      KB(c, B_OUT));
         }
     }
