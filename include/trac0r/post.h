@@ -197,7 +197,7 @@ typedef struct tr_recon_params {
                              weighing albedo_alpha (or 1 / the history's length when
                              larger): each frame's jittered sample falls on another side
                              of a texture's edge, and the history converges to the pixel's
-                             mean. 0: this frame's sample (the default). The host's and
+                             mean. 0: this frame's sample; default 0.35. The host's and
                              an OpenCL device's reconstruction (docs/realtime.md) */
     float svgf_alpha_min; /* alpha_min for SVGF's temporal stage (the other methods keep
                              alpha_min); 0: alpha_min */
@@ -211,7 +211,7 @@ typedef struct tr_recon_params {
  * bilateral and à-trous sigmas) takes its default when 0; the others are used as given,
  * so a zero-initialised tr_recon_params differs from the defaults in alpha_min,
  * bilateral_radius, the iteration counts, svgf_feedback, emission_samples,
- * svgf_alpha_min and fresh_spp. */
+ * svgf_alpha_min, albedo_alpha and fresh_spp. */
 tr_recon_params tr_recon_params_default(void);
 
 /* The reconstruction's state between frames (history and scratch buffers): the caller

@@ -187,7 +187,7 @@ tr_recon_params tr_recon_params_default(void) {
     p.svgf_specular = 0;
     /* The sample's own albedo unless asked (tr_resolve_albedo; docs/realtime.md). */
     p.albedo_samples = 0;
-    p.albedo_alpha = 0.0f;
+    p.albedo_alpha = 0.35f; /* texture edges average over the frames (docs/realtime.md) */
     /* SVGF's history remembers less than the other methods' (the paper's 0.2): the
      * reprojection resamples the history bilinearly every frame, a blur that compounds
      * with the history's age, and after SVGF's spatial filter that blur costs more than
