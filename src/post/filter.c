@@ -215,7 +215,7 @@ int tr_recon_init(tr_recon *r, uint32_t width, uint32_t height, tr_error *err) {
         r->hist_albedo[k] = calloc(3 * n, sizeof(float));
         r->hist_moments[k] = calloc(2 * n, sizeof(float));
         r->hist_len[k] = calloc(n, sizeof(float));
-        bad |= !r->hist_color[k] || !r->hist_moments[k] || !r->hist_len[k];
+        bad |= !r->hist_color[k] || !r->hist_albedo[k] || !r->hist_moments[k] || !r->hist_len[k];
         r->hist_direct[k] = calloc(3 * n, sizeof(float));
         r->hist_dmoments[k] = calloc(2 * n, sizeof(float));
         bad |= !r->hist_direct[k] || !r->hist_dmoments[k];
