@@ -299,6 +299,22 @@ TR_FN float tr_post_max_len(tr_vec3 motion, float max_len, float max_len_moving)
     return moved ? tr_fminf(max_len, max_len_moving) : max_len;
 }
 
+/* A previous frame's three channels per pixel (`prev`, pw pixels wide) read at
+ * reprojection taps: the weights w (of sum total) at x0, y0, normalised. */
+TR_FN void tr_post_taps3(TR_CONST_GLOBAL float *prev, float total, const float w[4], int x0, int y0,
+                         int pw, float out[3]) {
+    out[0] = out[1] = out[2] = 0.0f;
+    for (int k = 0; k < 4; ++k) {
+        if (w[k] > 0.0f) {
+            const int j = (y0 + (k >> 1)) * pw + x0 + (k & 1);
+            const float wk = w[k] / total;
+            out[0] += wk * prev[3 * j];
+            out[1] += wk * prev[3 * j + 1];
+            out[2] += wk * prev[3 * j + 2];
+        }
+    }
+}
+
 /* The blend of tr_post_temporal_pixel for a pixel whose reprojection kept weights w
  * (sum total > 0.05) on the previous pixels from (x0, y0) (tr_post_reproject's taps, pw
  * pixels a row): the history interpolated by the normalised weights, then the
@@ -310,14 +326,12 @@ TR_FN void tr_post_temporal_blend(float r, float g, float b, float total, const 
                                   TR_CONST_GLOBAL float *prev_len, float alpha_min, float max_len,
                                   float out_color[3], float out_moments[2], float *out_len) {
     const float l = tr_post_luminance(r, g, b);
-    float hc[3] = {0.0f, 0.0f, 0.0f}, hm[2] = {0.0f, 0.0f}, hl = 0.0f;
+    float hc[3], hm[2] = {0.0f, 0.0f}, hl = 0.0f;
+    tr_post_taps3(prev_color, total, w, x0, y0, pw, hc);
     for (int k = 0; k < 4; ++k) {
         if (w[k] > 0.0f) {
             const int j = (y0 + (k >> 1)) * pw + x0 + (k & 1);
             const float wk = w[k] / total;
-            hc[0] += wk * prev_color[3 * j];
-            hc[1] += wk * prev_color[3 * j + 1];
-            hc[2] += wk * prev_color[3 * j + 2];
             hm[0] += wk * prev_moments[2 * j];
             hm[1] += wk * prev_moments[2 * j + 1];
             hl += wk * prev_len[j];
@@ -340,16 +354,8 @@ TR_FN void tr_post_temporal_blend(float r, float g, float b, float total, const 
 TR_FN void tr_post_albedo_blend(TR_CONST_GLOBAL float *cur, float total, const float w[4], int x0,
                                 int y0, int pw, TR_CONST_GLOBAL float *prev, float a,
                                 float out[3]) {
-    float h[3] = {0.0f, 0.0f, 0.0f};
-    for (int k = 0; k < 4; ++k) {
-        if (w[k] > 0.0f) {
-            const int j = (y0 + (k >> 1)) * pw + x0 + (k & 1);
-            const float wk = w[k] / total;
-            h[0] += wk * prev[3 * j];
-            h[1] += wk * prev[3 * j + 1];
-            h[2] += wk * prev[3 * j + 2];
-        }
-    }
+    float h[3];
+    tr_post_taps3(prev, total, w, x0, y0, pw, h);
     out[0] = h[0] + a * (cur[0] - h[0]);
     out[1] = h[1] + a * (cur[1] - h[1]);
     out[2] = h[2] + a * (cur[2] - h[2]);
@@ -362,7 +368,39 @@ TR_FN void tr_post_albedo_blend(TR_CONST_GLOBAL float *cur, float total, const f
  * uniformly until it is long enough to become an EMA. No surviving history: the sample
  * alone, length 1. Writes colour, moments (mean luminance and mean squared luminance)
  * and the new length. `motion`: the surface's own movement since the previous frame
- * (tr_post_reproject_moving); tr_post_temporal_pixel is this with none. */
+ * (tr_post_reproject_moving); tr_post_temporal_pixel is this with none.
+ * tr_post_temporal_pixel_taps also gives the surviving taps (w, x0, y0) and returns their
+ * sum, 0 where no history survives; tr_post_temporal_pixel_moving keeps them to itself. */
+TR_FN float tr_post_temporal_pixel_taps(
+    const tr_camera *cam, const tr_camera *prev, uint32_t x, uint32_t y, tr_vec3 motion,
+    TR_CONST_GLOBAL float *color, TR_CONST_GLOBAL float *normal, TR_CONST_GLOBAL float *depth,
+    TR_CONST_GLOBAL uint32_t *prim, TR_CONST_GLOBAL float *prev_color,
+    TR_CONST_GLOBAL float *prev_moments, TR_CONST_GLOBAL float *prev_len,
+    TR_CONST_GLOBAL float *prev_depth, TR_CONST_GLOBAL float *prev_normal,
+    TR_CONST_GLOBAL uint32_t *prev_prim, float alpha_min, float max_len, float out_color[3],
+    float out_moments[2], float *out_len, float w[4], int *x0, int *y0) {
+    const int i = (int)(y * cam->screen_width + x);
+    const float r = color[3 * i], g = color[3 * i + 1], b = color[3 * i + 2];
+    const float l = tr_post_luminance(r, g, b);
+    const tr_vec3 n = v3(normal[3 * i], normal[3 * i + 1], normal[3 * i + 2]);
+    const float total = tr_post_reproject_moving(cam, prev, x, y, depth[i], n, prim[i], motion,
+                                                 prev_depth, prev_normal, prev_prim, x0, y0, w);
+    /* A sliver of a tap (a pixel at a silhouette) is not enough history to trust. */
+    if (!(total > 0.05f)) {
+        out_color[0] = r;
+        out_color[1] = g;
+        out_color[2] = b;
+        out_moments[0] = l;
+        out_moments[1] = l * l;
+        *out_len = 1.0f;
+        return 0.0f;
+    }
+    tr_post_temporal_blend(r, g, b, total, w, *x0, *y0, (int)prev->screen_width, prev_color,
+                           prev_moments, prev_len, alpha_min, max_len, out_color, out_moments,
+                           out_len);
+    return total;
+}
+
 TR_FN void
 tr_post_temporal_pixel_moving(const tr_camera *cam, const tr_camera *prev, uint32_t x, uint32_t y,
                               tr_vec3 motion, TR_CONST_GLOBAL float *color,
@@ -372,27 +410,11 @@ tr_post_temporal_pixel_moving(const tr_camera *cam, const tr_camera *prev, uint3
                               TR_CONST_GLOBAL float *prev_depth, TR_CONST_GLOBAL float *prev_normal,
                               TR_CONST_GLOBAL uint32_t *prev_prim, float alpha_min, float max_len,
                               float out_color[3], float out_moments[2], float *out_len) {
-    const int i = (int)(y * cam->screen_width + x);
-    const float r = color[3 * i], g = color[3 * i + 1], b = color[3 * i + 2];
-    const float l = tr_post_luminance(r, g, b);
-    const tr_vec3 n = v3(normal[3 * i], normal[3 * i + 1], normal[3 * i + 2]);
     float w[4];
     int x0, y0;
-    const float total = tr_post_reproject_moving(cam, prev, x, y, depth[i], n, prim[i], motion,
-                                                 prev_depth, prev_normal, prev_prim, &x0, &y0, w);
-    /* A sliver of a tap (a pixel at a silhouette) is not enough history to trust. */
-    if (!(total > 0.05f)) {
-        out_color[0] = r;
-        out_color[1] = g;
-        out_color[2] = b;
-        out_moments[0] = l;
-        out_moments[1] = l * l;
-        *out_len = 1.0f;
-        return;
-    }
-    tr_post_temporal_blend(r, g, b, total, w, x0, y0, (int)prev->screen_width, prev_color,
-                           prev_moments, prev_len, alpha_min, max_len, out_color, out_moments,
-                           out_len);
+    tr_post_temporal_pixel_taps(cam, prev, x, y, motion, color, normal, depth, prim, prev_color,
+                                prev_moments, prev_len, prev_depth, prev_normal, prev_prim,
+                                alpha_min, max_len, out_color, out_moments, out_len, w, &x0, &y0);
 }
 
 TR_FN void

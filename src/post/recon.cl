@@ -66,10 +66,14 @@ __kernel void tr_recon_modulate(__global const float *in, __global const float *
     }
 }
 
-/* Temporal accumulation (tr_post_temporal_pixel_moving) through cams[0] (this frame) and
+/* Temporal accumulation (tr_post_temporal_pixel_taps) through cams[0] (this frame) and
  * cams[1] (the previous one); without history (have_history 0) each pixel starts over
  * with its own sample, length 1. motion: 3 floats per primitive id below motion_count,
- * its movement since the previous frame (tr_recon_frame_moving). */
+ * its movement since the previous frame (tr_recon_frame_moving). With albedo_alpha > 0
+ * the albedo history too (filter.c's temporal stage): where the colour's history
+ * survives, prev_albedo read at the same taps and blended with this frame's albedo at
+ * weight max(albedo_alpha, 1 / the new length) (tr_post_albedo_blend), elsewhere or
+ * without one (have_albedo 0) this frame's albedo, into out_albedo. */
 __kernel void tr_recon_temporal(__global const tr_camera *cams, __global const float *illum,
                                 __global const float *normal, __global const float *depth,
                                 __global const uint *prim, __global const float *prev_color,
@@ -78,80 +82,51 @@ __kernel void tr_recon_temporal(__global const tr_camera *cams, __global const f
                                 __global const uint *prev_prim, __global const float *motion,
                                 uint motion_count, int have_history, float alpha_min, float max_len,
                                 float max_len_moving, __global float *out_color,
-                                __global float *out_moments, __global float *out_len) {
+                                __global float *out_moments, __global float *out_len,
+                                __global const float *albedo, __global const float *prev_albedo,
+                                int have_albedo, float albedo_alpha, __global float *out_albedo) {
     const tr_camera cam = cams[0], prev = cams[1];
     const uint x = (uint)get_global_id(0), y = (uint)get_global_id(1);
     if (x >= cam.screen_width || y >= cam.screen_height) {
         return;
     }
     const uint i = y * cam.screen_width + x;
+    float c[3], m[2], len, w[4], total = 0.0f;
+    int x0 = 0, y0 = 0;
     if (!have_history) {
         const float l = tr_post_luminance(illum[3 * i], illum[3 * i + 1], illum[3 * i + 2]);
-        out_color[3 * i] = illum[3 * i];
-        out_color[3 * i + 1] = illum[3 * i + 1];
-        out_color[3 * i + 2] = illum[3 * i + 2];
-        out_moments[2 * i] = l;
-        out_moments[2 * i + 1] = l * l;
-        out_len[i] = 1.0f;
-        return;
+        c[0] = illum[3 * i];
+        c[1] = illum[3 * i + 1];
+        c[2] = illum[3 * i + 2];
+        m[0] = l;
+        m[1] = l * l;
+        len = 1.0f;
+    } else {
+        const uint id = prim[i];
+        const tr_vec3 mv = id < motion_count
+                               ? v3(motion[3 * id], motion[3 * id + 1], motion[3 * id + 2])
+                               : v3s(0.0f);
+        total = tr_post_temporal_pixel_taps(
+            &cam, &prev, x, y, mv, illum, normal, depth, prim, prev_color, prev_moments, prev_len,
+            prev_depth, prev_normal, prev_prim, alpha_min,
+            tr_post_max_len(mv, max_len, max_len_moving), c, m, &len, w, &x0, &y0);
     }
-    const uint id = prim[i];
-    const tr_vec3 mv =
-        id < motion_count ? v3(motion[3 * id], motion[3 * id + 1], motion[3 * id + 2]) : v3s(0.0f);
-    float c[3], m[2], len;
-    tr_post_temporal_pixel_moving(&cam, &prev, x, y, mv, illum, normal, depth, prim, prev_color,
-                                  prev_moments, prev_len, prev_depth, prev_normal, prev_prim,
-                                  alpha_min, tr_post_max_len(mv, max_len, max_len_moving), c, m,
-                                  &len);
     out_color[3 * i] = c[0];
     out_color[3 * i + 1] = c[1];
     out_color[3 * i + 2] = c[2];
     out_moments[2 * i] = m[0];
     out_moments[2 * i + 1] = m[1];
     out_len[i] = len;
-}
-
-/* The albedo history (tr_recon_params.albedo_alpha; filter.c's temporal stage): where
- * the colour's history survives (tr_post_reproject_moving's taps) the previous albedo
- * history read at the same taps and blended with this frame's at weight
- * max(alpha, 1 / the history's new length); elsewhere, or without a history
- * (have_history 0), this frame's albedo. */
-__kernel void tr_recon_albedo(__global const tr_camera *cams, __global const float *albedo,
-                              __global const float *normal, __global const float *depth,
-                              __global const uint *prim, __global const float *prev_albedo,
-                              __global const float *prev_depth, __global const float *prev_normal,
-                              __global const uint *prev_prim, __global const float *motion,
-                              uint motion_count, int have_history, float alpha,
-                              __global const float *len, __global float *out) {
-    const tr_camera cam = cams[0], prev = cams[1];
-    const uint x = (uint)get_global_id(0), y = (uint)get_global_id(1);
-    if (x >= cam.screen_width || y >= cam.screen_height) {
-        return;
+    if (albedo_alpha > 0.0f) {
+        float a[3] = {albedo[3 * i], albedo[3 * i + 1], albedo[3 * i + 2]};
+        if (total > 0.0f && have_albedo) {
+            tr_post_albedo_blend(albedo + 3 * i, total, w, x0, y0, (int)prev.screen_width,
+                                 prev_albedo, tr_fmaxf(albedo_alpha, 1.0f / len), a);
+        }
+        out_albedo[3 * i] = a[0];
+        out_albedo[3 * i + 1] = a[1];
+        out_albedo[3 * i + 2] = a[2];
     }
-    const uint i = y * cam.screen_width + x;
-    float total = 0.0f, w[4];
-    int x0 = 0, y0 = 0;
-    if (have_history) {
-        const uint id = prim[i];
-        const tr_vec3 mv = id < motion_count
-                               ? v3(motion[3 * id], motion[3 * id + 1], motion[3 * id + 2])
-                               : v3s(0.0f);
-        const tr_vec3 n = v3(normal[3 * i], normal[3 * i + 1], normal[3 * i + 2]);
-        total = tr_post_reproject_moving(&cam, &prev, x, y, depth[i], n, id, mv, prev_depth,
-                                         prev_normal, prev_prim, &x0, &y0, w);
-    }
-    if (!(total > 0.05f)) {
-        out[3 * i] = albedo[3 * i];
-        out[3 * i + 1] = albedo[3 * i + 1];
-        out[3 * i + 2] = albedo[3 * i + 2];
-        return;
-    }
-    float a[3];
-    tr_post_albedo_blend(albedo + 3 * i, total, w, x0, y0, (int)prev.screen_width, prev_albedo,
-                         tr_fmaxf(alpha, 1.0f / len[i]), a);
-    out[3 * i] = a[0];
-    out[3 * i + 1] = a[1];
-    out[3 * i + 2] = a[2];
 }
 
 __kernel void tr_recon_bilateral(__global const float *in, int w, int h, int radius, float sigma_s,

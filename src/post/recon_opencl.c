@@ -34,13 +34,12 @@ enum {
     K_TAA,
     K_ADD,
     K_UPSCALE,
-    K_ALBEDO,
     K_COUNT
 };
 static const char *const kernel_names[K_COUNT] = {
     "tr_recon_from_film", "tr_recon_modulate",      "tr_recon_temporal", "tr_recon_bilateral",
     "tr_recon_atrous",    "tr_recon_svgf_variance", "tr_recon_svgf",     "tr_recon_taa",
-    "tr_recon_add",       "tr_recon_upscale",       "tr_recon_albedo"};
+    "tr_recon_add",       "tr_recon_upscale"};
 
 /* The device's buffers: the frame (as tr_gbuffer), scratch, history, the two cameras. */
 enum {
@@ -421,20 +420,16 @@ static int cl_frame(tr_recon_device *r, const tr_camera *cam, const tr_vec3 *mot
     rc = rc ? rc
             : RUN(c, K_MODULATE, w, h, err, KB(c, B_COLOR), KB(c, B_ALBEDO), KI(0), KI(w), KI(h),
                   KB(c, B_ILLUM));
-    rc = rc ? rc
-            : RUN(c, K_TEMPORAL, w, h, err, KB(c, B_CAMS), KB(c, B_ILLUM), KB(c, B_NORMAL),
-                  KB(c, B_DEPTH), KB(c, B_PRIM), KB(c, B_HC0 + prev), KB(c, B_HM0 + prev),
-                  KB(c, B_HL0 + prev), KB(c, B_HDEPTH), KB(c, B_HNORMAL), KB(c, B_HPRIM), KM(mbuf),
-                  KU(motion_count), KI(c->have_history), KF(p->alpha_min), KF(p->max_len),
-                  KF(p->max_len_moving), KB(c, hc), KB(c, hm), KB(c, hl));
     /* SVGF's albedo history (albedo_alpha), where the host's temporal stage keeps it. */
     const int ha = p->albedo_alpha > 0.0f ? B_HA0 + next : B_ALBEDO;
-    if (rc == TR_OK && ha != B_ALBEDO) {
-        rc = RUN(c, K_ALBEDO, w, h, err, KB(c, B_CAMS), KB(c, B_ALBEDO), KB(c, B_NORMAL),
-                 KB(c, B_DEPTH), KB(c, B_PRIM), KB(c, B_HA0 + prev), KB(c, B_HDEPTH),
-                 KB(c, B_HNORMAL), KB(c, B_HPRIM), KM(mbuf), KU(motion_count),
-                 KI(c->have_history && c->have_albedo), KF(p->albedo_alpha), KB(c, hl), KB(c, ha));
-    }
+    rc =
+        rc ? rc
+           : RUN(c, K_TEMPORAL, w, h, err, KB(c, B_CAMS), KB(c, B_ILLUM), KB(c, B_NORMAL),
+                 KB(c, B_DEPTH), KB(c, B_PRIM), KB(c, B_HC0 + prev), KB(c, B_HM0 + prev),
+                 KB(c, B_HL0 + prev), KB(c, B_HDEPTH), KB(c, B_HNORMAL), KB(c, B_HPRIM), KM(mbuf),
+                 KU(motion_count), KI(c->have_history), KF(p->alpha_min), KF(p->max_len),
+                 KF(p->max_len_moving), KB(c, hc), KB(c, hm), KB(c, hl), KB(c, B_ALBEDO),
+                 KB(c, B_HA0 + prev), KI(c->have_albedo), KF(p->albedo_alpha), KB(c, B_HA0 + next));
     if (rc != TR_OK || (rc = finish(c, err)) != TR_OK) {
         return rc;
     }
