@@ -93,7 +93,7 @@ typedef struct tr_camera {
 /* Passes a film can keep beside radiance (tr_render_config.passes, tr_film.passes): what a
  * denoiser needs, taken at the first surface of each camera path that is not a mirror or
  * smooth glass (their bounces are followed, as denoisers expect). */
-#define TR_PASS_ALBEDO 1u /* base colour of the surface, linear RGB */
+#define TR_PASS_ALBEDO 1u /* the surface's albedo towards the camera, linear RGB */
 #define TR_PASS_NORMAL 2u /* unit shading normal, world space, facing the arriving ray */
 #define TR_PASS_DEPTH 4u  /* distance travelled from the camera to the surface */
 #define TR_PASS_PRIM 8u   /* index of the triangle hit, plus one (0: none) */

@@ -20,9 +20,10 @@
 #include "vec.h"
 
 /* The albedo the passes record for the camera ray `ray` (tr_sample_surface, or through a
- * perfect mirror or smooth glass tr_psr_surface's surface): cut-outs passed, the base
- * colour of the first surface that is not a delta one. Returns 0 where the ray finds no
- * such surface (it leaves the scene, or the delta chain gives up), 1 otherwise. */
+ * perfect mirror or smooth glass tr_psr_surface's surface): cut-outs passed, the albedo
+ * (tr_bsdf_guide_albedo) of the first surface that is not a delta one. Returns 0 where the
+ * ray finds no such surface (it leaves the scene, or the delta chain gives up), 1
+ * otherwise. */
 TR_FN int tr_first_albedo(const tr_scene_view *s, tr_ray ray, tr_vec3 *albedo) {
     for (int holes = 0;; ++holes) {
         tr_hit hit;
@@ -39,7 +40,7 @@ TR_FN int tr_first_albedo(const tr_scene_view *s, tr_ray ray, tr_vec3 *albedo) {
             continue;
         }
         if (!tr_bsdf_is_delta(&m)) {
-            *albedo = m.color;
+            *albedo = tr_bsdf_guide_albedo(&m, ray.dir);
             return 1;
         }
         tr_sample chain;

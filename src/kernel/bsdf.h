@@ -453,6 +453,64 @@ TR_FN tr_vec3 tr_bsdf_spec_f0(const tr_bsdf_params *m, float *alpha) {
     return v3s(0.0f);
 }
 
+/* The albedo the passes record for a surface seen from direction wo (either way round):
+ * the share of uniform light it reflects towards wo, which the reconstruction divides a
+ * pixel's light by and multiplies the filtered light back with, and a denoiser's albedo
+ * guide. For a diffuse surface that is its colour. With a GGX layer it is the layer's
+ * directional albedo, F0 (E - E5) + F90 E5 from the multiple-scattering table's E(mu,
+ * alpha) and E5 parts (and the conductor's compensation lobe's (1 - E) F_ms, Kulla and
+ * Conty 2017), plus a principled base's colour weighed as tr_principled_eval weighs it:
+ * (1 - metallic)(1 - E_layer) with the energy compensation, (1 - metallic)(1 - F0) times
+ * Ashikhmin and Shirley's factor without it (whose integral over the other direction is
+ * 23/28, which the BRDF's 28/23 cancels). Without the table the layer's albedo is Karis's
+ * analytic fit ("Physically Based Shading on Mobile", 2014, after Lazarov 2013). The sheen,
+ * the clear coat and a transmissive base are left out, and the other materials keep their
+ * colour. Why: a glossy floor's reflected light is white whatever its texture's colour;
+ * divided by the base colour alone, a blue tile's red channel made its filtered light red,
+ * and the white tiles' beside it. */
+TR_FN tr_vec3 tr_bsdf_guide_albedo(const tr_bsdf_params *m, tr_vec3 wo) {
+    const int principled = m->type == TR_MATERIAL_PRINCIPLED && !(m->transmission > 0.0f);
+    if (!principled && (m->type != TR_MATERIAL_GLOSSY || !(m->roughness > 0.0f))) {
+        return m->color;
+    }
+    const float mu = tr_fminf(tr_fabsf(v3_dot(m->ns, wo)), 1.0f);
+    const float r = tr_fminf(tr_fmaxf(m->roughness, 0.0f), 1.0f);
+    const float alpha = principled ? tr_principled_alpha(r) : tr_ggx_alpha(r);
+    float e, e5; /* the single-scattering lobe's albedo with F = 1, and Schlick's (1 - x)^5 share */
+    if (m->ms) {
+        e = tr_ggx_ms_e(m->ms, mu, alpha);
+        e5 = tr_ggx_ms_e(m->ms + TR_GGX_MS_E5, mu, alpha);
+    } else {
+        /* Karis's fit F0 A + B: with c0 = 1 - r, c1 = 0.0425 - 0.0275 r and t = min(c0^2,
+         * 2^(-9.28 mu)) c0 + c1, A = 1.04 (1 - t) - 0.572 r, B = 1.04 t - 0.04 + 0.022 r;
+         * so e = A + B and e5 = B. */
+        const float c0 = 1.0f - r;
+        const float t = tr_fminf(c0 * c0, tr_expf(-6.4324f * mu)) * c0 + 0.0425f - 0.0275f * r;
+        e5 = tr_fminf(tr_fmaxf(1.04f * t - 0.04f + 0.022f * r, 0.0f), 1.0f);
+        e = tr_fminf(tr_fmaxf(1.04f * (1.0f - t) - 0.572f * r, 0.0f) + e5, 1.0f);
+    }
+    if (!principled) {
+        /* The glossy material: one GGX lobe, Schlick's Fresnel from its colour to 1. */
+        return v3_add(v3_scale(m->color, e - e5), v3s(e5));
+    }
+    const float k = tr_fminf(tr_fmaxf(m->metallic, 0.0f), 1.0f);
+    const float sp = tr_fminf(tr_fmaxf(tr_principled_specular(m), 0.0f), 1.0f);
+    const tr_vec3 f0 = tr_principled_f0(m);
+    tr_vec3 layer = v3_add(v3_scale(f0, e - e5), v3s((sp * (1.0f - k) + k) * e5));
+    if ((m->flags & TR_MATERIAL_MULTISCATTER) != 0u && m->ms && k > 0.0f) {
+        const float eavg = tr_ggx_ms_eavg(m->ms, alpha);
+        const tr_vec3 favg = v3_add(f0, v3_scale(v3_sub(v3s(1.0f), f0), 1.0f / 21.0f));
+        const float w = eavg < 0.9999f ? k * (1.0f - e) : 0.0f;
+        layer = v3_add(layer, v3(w * favg.x * favg.x * eavg / (1.0f - favg.x * (1.0f - eavg)),
+                                 w * favg.y * favg.y * eavg / (1.0f - favg.y * (1.0f - eavg)),
+                                 w * favg.z * favg.z * eavg / (1.0f - favg.z * (1.0f - eavg))));
+    }
+    const float f0d = tr_principled_f0d(m);
+    const float base =
+        tr_principled_comp(m) ? 1.0f - sp * (f0d * (e - e5) + e5) : (1.0f - f0d) * tr_as_factor(mu);
+    return v3_add(v3_scale(m->color, (1.0f - k) * tr_fmaxf(base, 0.0f)), layer);
+}
+
 /* Radiance a surface with parameters m emits towards w. Emitters are one-sided (the side
  * the geometric normal m->ng points to) unless TR_MATERIAL_TWO_SIDED is set. */
 TR_FN tr_vec3 tr_emitted(const tr_bsdf_params *m, tr_vec3 w) {

@@ -20,7 +20,7 @@
 /* Called at every hit of a path until it has recorded the surface the passes describe:
  * the first one that is not a perfect mirror or smooth glass. Adds the segment's length
  * `t` to the distance travelled from the camera (kept in out->depth meanwhile), and at
- * that surface records its albedo (base colour) and shading normal, turned to face the
+ * that surface records its albedo (tr_bsdf_guide_albedo) and shading normal, turned to face the
  * arriving direction `dir`. Only films that keep passes pay for it: the integrators are
  * handed a null `out` otherwise. */
 TR_FN void tr_sample_surface(tr_sample *out, const tr_bsdf_params *m, tr_vec3 dir, float t,
@@ -32,7 +32,7 @@ TR_FN void tr_sample_surface(tr_sample *out, const tr_bsdf_params *m, tr_vec3 di
     if (tr_bsdf_is_delta(m)) {
         return;
     }
-    out->albedo = m->color;
+    out->albedo = tr_bsdf_guide_albedo(m, dir);
     out->normal = v3_dot(m->ns, dir) > 0.0f ? v3_neg(m->ns) : m->ns;
     out->prim = triangle + 1u;
 }

@@ -97,7 +97,8 @@ TR_FN uint32_t tr_psr_surface(const tr_scene_view *s, tr_ray ray, tr_hit hit, tr
                 first_t = len;
             }
             if (!tr_bsdf_is_delta(&m)) {
-                out->albedo = v3_add(v3_scale(m.color, kept), v3s(1.0f - kept));
+                out->albedo =
+                    v3_add(v3_scale(tr_bsdf_guide_albedo(&m, wo), kept), v3s(1.0f - kept));
                 out->normal = v3(v3_dot(r0, nf), v3_dot(r1, nf), v3_dot(r2, nf));
                 out->depth = len;
                 out->prim = (hit.triangle + 1u) | curved;
