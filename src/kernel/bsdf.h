@@ -498,12 +498,11 @@ TR_FN tr_vec3 tr_bsdf_guide_albedo(const tr_bsdf_params *m, tr_vec3 wo) {
     const tr_vec3 f0 = tr_principled_f0(m);
     tr_vec3 layer = v3_add(v3_scale(f0, e - e5), v3s((sp * (1.0f - k) + k) * e5));
     if ((m->flags & TR_MATERIAL_MULTISCATTER) != 0u && m->ms && k > 0.0f) {
+        /* tr_ggx_ms_lobe's albedo, the conductor's share of it */
         const float eavg = tr_ggx_ms_eavg(m->ms, alpha);
-        const tr_vec3 favg = v3_add(f0, v3_scale(v3_sub(v3s(1.0f), f0), 1.0f / 21.0f));
-        const float w = eavg < 0.9999f ? k * (1.0f - e) : 0.0f;
-        layer = v3_add(layer, v3(w * favg.x * favg.x * eavg / (1.0f - favg.x * (1.0f - eavg)),
-                                 w * favg.y * favg.y * eavg / (1.0f - favg.y * (1.0f - eavg)),
-                                 w * favg.z * favg.z * eavg / (1.0f - favg.z * (1.0f - eavg))));
+        if (eavg < 0.9999f) {
+            layer = v3_add(layer, v3_scale(tr_ggx_ms_fm(f0, eavg), k * (1.0f - e)));
+        }
     }
     const float f0d = tr_principled_f0d(m);
     const float base =

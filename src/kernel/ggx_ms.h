@@ -106,7 +106,16 @@ TR_FN float tr_ggx_ms_coat_e(TR_CONST_GLOBAL float *table, float mu, float ab, f
     return b0 + (b1 - b0) * wb;
 }
 
-/* f_ms for cosines co, ci > 0 and Fresnel F0 f0. */
+/* The compensation lobe's colour F_ms for Fresnel F0 f0 and E_avg eavg (Kulla and Conty
+ * 2017): F_avg^2 E_avg / (1 - F_avg (1 - E_avg)), F_avg Schlick's cosine-weighted mean. */
+TR_FN tr_vec3 tr_ggx_ms_fm(tr_vec3 f0, float eavg) {
+    const tr_vec3 favg = v3_add(f0, v3_scale(v3_sub(v3s(1.0f), f0), 1.0f / 21.0f));
+    return v3(favg.x * favg.x * eavg / (1.0f - favg.x * (1.0f - eavg)),
+              favg.y * favg.y * eavg / (1.0f - favg.y * (1.0f - eavg)),
+              favg.z * favg.z * eavg / (1.0f - favg.z * (1.0f - eavg)));
+}
+
+/* f_ms for cosines co, ci > 0 and Fresnel F0 f0. Its albedo towards co is F_ms (1 - E(co)). */
 TR_FN tr_vec3 tr_ggx_ms_lobe(TR_CONST_GLOBAL float *table, float alpha, tr_vec3 f0, float co,
                              float ci) {
     const float eavg = tr_ggx_ms_eavg(table, alpha);
@@ -115,11 +124,7 @@ TR_FN tr_vec3 tr_ggx_ms_lobe(TR_CONST_GLOBAL float *table, float alpha, tr_vec3 
     }
     const float fms = (1.0f - tr_ggx_ms_e(table, co, alpha)) *
                       (1.0f - tr_ggx_ms_e(table, ci, alpha)) / (TR_PI * (1.0f - eavg));
-    const tr_vec3 favg = v3_add(f0, v3_scale(v3_sub(v3s(1.0f), f0), 1.0f / 21.0f));
-    const tr_vec3 fm = v3(favg.x * favg.x * eavg / (1.0f - favg.x * (1.0f - eavg)),
-                          favg.y * favg.y * eavg / (1.0f - favg.y * (1.0f - eavg)),
-                          favg.z * favg.z * eavg / (1.0f - favg.z * (1.0f - eavg)));
-    return v3_scale(fm, tr_fmaxf(fms, 0.0f));
+    return v3_scale(tr_ggx_ms_fm(f0, eavg), tr_fmaxf(fms, 0.0f));
 }
 
 #endif
