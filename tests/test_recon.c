@@ -16,7 +16,11 @@
  *    alternates; without it the output flips with each frame's own albedo.
  * 6. The filmic display curve rises strictly below white, and its display film gives the
  *    direct tonemap's bytes.
- * 7. SSIM is 1 for an image with itself, falls with noise and is symmetric. */
+ * 7. SSIM is 1 for an image with itself, falls with noise and is symmetric.
+ * 8. A cancel (tr_recon.cancel) stops the spatial filter after its first iteration with
+ *    TR_STATUS_CANCELLED, and keeps the history: the next frame equals, bit for bit, that
+ *    of a reconstruction whose frame was not cancelled; a cancel that never fires changes
+ *    nothing. */
 #include "check.h"
 #include "synth_frame.h"
 #include "classic_box.h"
@@ -640,7 +644,79 @@ static void test_errors(void) {
     tr_recon_free(&r);
 }
 
+/* tr_recon.cancel's callback: counts its calls, fires from call number *user on (0: never). */
+static int cancel_calls;
+static int cancel_at(void *user) {
+    cancel_calls += 1;
+    const int at = *(const int *)user;
+    return at > 0 && cancel_calls >= at;
+}
+
+static void test_cancel(void) {
+    tr_error err;
+    tr_scene *s = cornell(&err);
+    const tr_camera a = *tr_scene_camera(s);
+    const tr_camera path[3] = {
+        a, like(&a, tr_vec3_make(a.pos.x + 20.0f, a.pos.y + 12.0f, a.pos.z), a.dir),
+        like(&a, tr_vec3_make(a.pos.x + 30.0f, a.pos.y + 10.0f, a.pos.z + 20.0f), a.dir)};
+    tr_gbuffer g[3];
+    for (int f = 0; f < 3; ++f) {
+        CHECK(tr_gbuffer_init(&g[f], W, H, &err) == TR_OK, "%s", err.msg);
+        render_g(s, &path[f], 5 * (uint32_t)f, 1, &g[f]);
+    }
+    const int methods[2] = {TR_RECON_SVGF, TR_RECON_ATROUS};
+    float *ref = malloc(3 * W * H * sizeof *ref), *out = malloc(3 * W * H * sizeof *out);
+    for (int m = 0; m < 2; ++m) {
+        tr_recon_params p = tr_recon_params_default();
+        p.svgf_taa_alpha = 0.0f; /* TAA's history is the one a cancel drops */
+        const int iterations =
+            methods[m] == TR_RECON_SVGF ? p.svgf_iterations : p.atrous_iterations;
+        CHECK(iterations >= 2, "method %d: %d iterations", methods[m], iterations);
+        /* The reference: three frames, none cancelled. */
+        tr_recon r;
+        CHECK(tr_recon_init(&r, W, H, &err) == TR_OK, "%s", err.msg);
+        for (int f = 0; f < 3; ++f) {
+            CHECK(tr_recon_frame(&r, &g[f], &path[f], methods[m], &p, 2, ref, &err) == TR_OK, "%s",
+                  err.msg);
+        }
+        tr_recon_free(&r);
+        /* The middle frame cancelled at the first question; a hook that never fires on the
+         * others. */
+        CHECK(tr_recon_init(&r, W, H, &err) == TR_OK, "%s", err.msg);
+        int never = 0, first = 1;
+        r.cancel = cancel_at;
+        r.cancel_user = &never;
+        cancel_calls = 0;
+        CHECK(tr_recon_frame(&r, &g[0], &path[0], methods[m], &p, 2, out, &err) == TR_OK, "%s",
+              err.msg);
+        CHECK(cancel_calls >= iterations - 1, "method %d: asked %d times over %d iterations",
+              methods[m], cancel_calls, iterations);
+        cancel_calls = 0;
+        r.cancel_user = &first;
+        err.code = TR_STATUS_OK;
+        const int rc = tr_recon_frame(&r, &g[1], &path[1], methods[m], &p, 2, out, &err);
+        CHECK(rc == TR_ERR && err.code == TR_STATUS_CANCELLED, "method %d: cancel gave %d (%d)",
+              methods[m], rc, (int)err.code);
+        CHECK(cancel_calls >= 1, "method %d: the cancel was never asked", methods[m]);
+        r.cancel_user = &never;
+        CHECK(tr_recon_frame(&r, &g[2], &path[2], methods[m], &p, 2, out, &err) == TR_OK, "%s",
+              err.msg);
+        /* The history (SVGF's first iteration fed back into it) is the same either way. */
+        CHECK(memcmp(out, ref, 3 * W * H * sizeof *out) == 0,
+              "method %d: the frame after a cancelled one differs from the uncancelled run's",
+              methods[m]);
+        tr_recon_free(&r);
+    }
+    free(ref);
+    free(out);
+    for (int f = 0; f < 3; ++f) {
+        tr_gbuffer_free(&g[f]);
+    }
+    tr_scene_destroy(s);
+}
+
 int main(void) {
+    test_cancel();
     test_filters();
     test_operators();
     test_reprojection();

@@ -245,6 +245,12 @@ typedef struct tr_recon {
      * sets before the call (tr_realtime's temporal gradients); NULL (after tr_recon_init):
      * none. The host reconstruction only. */
     const float *len_cap;
+    /* Asked between the spatial filters' iterations, set by the caller before a call like
+     * len_cap (NULL after tr_recon_init: never): nonzero stops the frame, which then fails
+     * with TR_STATUS_CANCELLED, its output unfinished, its history kept. The host
+     * reconstruction only. */
+    int (*cancel)(void *user);
+    void *cancel_user;
     /* SVGF with diffuse and specular apart (svgf_specular): then hist_color, hist_moments
      * and hist_len hold the diffuse part and these the specular one (demodulated by the
      * specular albedo), with its own lengths. */

@@ -137,8 +137,9 @@ typedef struct tr_realtime_frame_desc {
                                 budget (default 0) */
     int stride;              /* tr_render_config.stride; 0 (default): the config's */
     int restart;             /* 1: start the film over even for the same view (default 0) */
-    /* Asked before each CPU tile and after the render: nonzero stops the frame, which
-     * fails with TR_STATUS_CANCELLED and starts the next one over (default NULL). */
+    /* Asked before each CPU tile, after the render and between the host reconstruction's
+     * stages and spatial iterations: nonzero stops the frame, which fails with
+     * TR_STATUS_CANCELLED and starts the next one over (default NULL). */
     int (*cancel)(void *user);
     void *cancel_user;
     /* Temporal upscaling: the frame traces 1/upscale of the output's pixels (a frame of

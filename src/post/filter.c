@@ -53,6 +53,9 @@ enum { TP_FX = 6, TP_FY = 7, TP_DIST = 8, TP_PLANES = 9 };
 typedef struct post_ws {
     int w, h;
     float *p[WS_PLANES];
+    /* Asked between the filters' iterations (tr_recon.cancel): nonzero ends them early. */
+    int (*cancel)(void *user);
+    void *cancel_user;
 } post_ws;
 
 int tr_gbuffer_init(tr_gbuffer *g, uint32_t width, uint32_t height, tr_error *err) {
@@ -317,9 +320,16 @@ static int check_frame(uint32_t w, uint32_t h, const tr_gbuffer *g, tr_error *er
 static void ws_bind(post_ws *ws, float *block, int w, int h) {
     ws->w = w;
     ws->h = h;
+    ws->cancel = NULL;
+    ws->cancel_user = NULL;
     for (int k = 0; k < WS_PLANES; ++k) {
         ws->p[k] = block + (size_t)k * w * h;
     }
+}
+
+/* Whether the caller asked to stop (post_ws.cancel). */
+static int ws_cancelled(const post_ws *ws) {
+    return ws->cancel && ws->cancel(ws->cancel_user);
 }
 
 static int imax(int a, int b) {
@@ -593,7 +603,7 @@ static void atrous_planes(const post_ws *ws, const float *depth, const float *co
  * returned (WS_CA or WS_CB); sigma_c halves each step as in the paper. */
 static int atrous(const post_ws *ws, const float *depth, const tr_recon_params *p, int threads) {
     int src = WS_CA, dst = WS_CB;
-    for (int it = 0; it < p->atrous_iterations; ++it) {
+    for (int it = 0; it < p->atrous_iterations && !(it > 0 && ws_cancelled(ws)); ++it) {
         const float *const s3[3] = {ws->p[src], ws->p[src + 1], ws->p[src + 2]};
         float *const d3[3] = {ws->p[dst], ws->p[dst + 1], ws->p[dst + 2]};
         atrous_planes(ws, depth, s3, d3, 1 << it, p->atrous_sigma_c / (float)(1 << it), p, threads);
@@ -748,7 +758,7 @@ static int svgf(const post_ws *ws, const float *depth, const tr_recon_params *p,
                 int threads) {
     int src = WS_CA, dst = WS_CB, ls = WS_LA, ld = WS_LB, vs = WS_VA, vd = WS_VB;
     const long n = (long)ws->w * ws->h;
-    for (int it = 0; it < p->svgf_iterations; ++it) {
+    for (int it = 0; it < p->svgf_iterations && !(it > 0 && ws_cancelled(ws)); ++it) {
         const float *const s3[3] = {ws->p[src], ws->p[src + 1], ws->p[src + 2]};
         float *const d3[3] = {ws->p[dst], ws->p[dst + 1], ws->p[dst + 2]};
         svgf_kl(ws, ws->p[vs], p->svgf_sigma_l, threads);
@@ -1279,6 +1289,16 @@ static void keep_geometry(tr_recon *r, const tr_gbuffer *g, const tr_camera *cam
     r->have_history = 1;
 }
 
+/* The caller stopped the spatial stage (tr_recon.cancel): out is left unfinished, and the
+ * history, whose temporal stage ran, is kept with this frame's geometry, so that the next
+ * frame reprojects it as if this one had been shown (only TAA's history starts over). */
+static int spatial_cancelled(tr_recon *r, const tr_gbuffer *g, const tr_camera *cam, double t1,
+                             tr_error *err) {
+    keep_geometry(r, g, cam);
+    r->ms_spatial = (tr_time_now() - t1) * 1e3;
+    return tr_error_set(err, TR_STATUS_CANCELLED, "reconstruction cancelled");
+}
+
 int tr_recon_frame(tr_recon *r, const tr_gbuffer *g, const tr_camera *cam, int method,
                    const tr_recon_params *p, int threads, float *out, tr_error *err) {
     return tr_recon_frame_moving(r, g, cam, NULL, 0, method, p, threads, out, err);
@@ -1393,6 +1413,8 @@ int tr_recon_frame_moving(tr_recon *r, const tr_gbuffer *frame, const tr_camera 
     }
     post_ws ws;
     ws_bind(&ws, r->soa, w, h);
+    ws.cancel = r->cancel;
+    ws.cancel_user = r->cancel_user;
     float *c3[3];
     planes_of(&ws, WS_CA, c3);
     if (method == TR_RECON_BILATERAL) {
@@ -1402,6 +1424,9 @@ int tr_recon_frame_moving(tr_recon *r, const tr_gbuffer *frame, const tr_camera 
         to_planes(g, hc, c3, 0, threads);
         prep_guides(g, &ws, p, 0, threads);
         planes_of(&ws, atrous(&ws, g->depth, p, threads), c3);
+        if (ws_cancelled(&ws)) {
+            return spatial_cancelled(r, g, cam, t1, err);
+        }
         from_planes(g, (const float *const *)c3, out, 1, threads);
     } else {
         prep_guides(g, &ws, p, 1, threads);
@@ -1428,6 +1453,9 @@ int tr_recon_frame_moving(tr_recon *r, const tr_gbuffer *frame, const tr_camera 
             svgf_part(ga, &ws, hc, hm, hl, p, res, 1, threads);
         } else {
             svgf_part(ga, &ws, hc, hm, hl, p, res, 0, threads);
+        }
+        if (ws_cancelled(&ws)) {
+            return spatial_cancelled(r, g, cam, t1, err);
         }
         if (p->svgf_taa_alpha > 0.0f) {
             /* Schied et al.'s last stage: temporal antialiasing of the remodulated

@@ -26,6 +26,9 @@ typedef struct rt_history {
 struct tr_realtime {
     tr_device *dev;
     tr_scene *scene;
+    /* tr_realtime_frame's cancel, for its reconstruction (NULL outside a frame). */
+    int (*cancel)(void *user);
+    void *cancel_user;
     tr_render_config cfg;
     tr_recon_params params;
     int rt_sampler;  /* TR_SAMPLER_* of real-time frames */
@@ -819,6 +822,8 @@ int tr_realtime_reconstruct(tr_realtime *rt, int method, tr_realtime_result *out
     } else {
         /* The gradients' history caps, for this frame only. */
         hist->rec.len_cap = rt->grad.valid ? rt->grad.cap : NULL;
+        hist->rec.cancel = rt->cancel;
+        hist->rec.cancel_user = rt->cancel_user;
         if (host_frame(rt, err) != TR_OK ||
             tr_recon_frame_moving(&hist->rec, &rt->gb, &rt->rcam, motion, ids, method, &rt->params,
                                   rt->cfg.threads, dst, err) != TR_OK) {
@@ -865,7 +870,21 @@ int tr_realtime_frame(tr_realtime *rt, const tr_realtime_frame_desc *fd, tr_real
     }
     const double t0 = tr_time_now();
     if (fd->method != TR_RECON_OFF || rt->view_upscaled) {
-        if (tr_realtime_reconstruct(rt, fd->method, out, err) != TR_OK) {
+        /* Stopped between stages and between the spatial filter's iterations (on the
+         * host), so that a viewer closed mid-frame does not wait for the frame's end. */
+        if (fd->cancel && fd->cancel(fd->cancel_user)) {
+            rt->have_view = 0;
+            return tr_error_set(err, TR_STATUS_CANCELLED, "frame cancelled");
+        }
+        rt->cancel = fd->cancel;
+        rt->cancel_user = fd->cancel_user;
+        const int rc = tr_realtime_reconstruct(rt, fd->method, out, err);
+        rt->cancel = NULL;
+        rt->cancel_user = NULL;
+        if (rc != TR_OK) {
+            if (err && err->code == TR_STATUS_CANCELLED) {
+                rt->have_view = 0;
+            }
             return TR_ERR;
         }
     } else {
