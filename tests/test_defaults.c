@@ -151,6 +151,7 @@ static void test_recon_params(const tr_scene *s) {
     zero.svgf_feedback = def.svgf_feedback;
     zero.svgf_alpha_min = def.svgf_alpha_min;
     zero.albedo_alpha = def.albedo_alpha;
+    zero.upscale_albedo = def.upscale_albedo;
     zero.emission_samples = def.emission_samples;
     zero.svgf_taa_alpha = def.svgf_taa_alpha;
     zero.svgf_split = def.svgf_split;

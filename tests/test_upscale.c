@@ -11,11 +11,14 @@
  *    included), and the result does not depend on the thread count.
  * 3. tr_realtime on the classic box: a static view upscaled from a quarter of the pixels
  *    converges (PSNR against a converged render rising by several dB) and keeps the
- *    energy: its mean brightness within 1 % of the same pipeline's tracing every pixel;
+ *    energy: its mean brightness within 1 % of the same pipeline's tracing every pixel
+ *    (an emitter's radiance, which the passes record as its albedo, must not multiply
+ *    light spread onto it), with the light upscaled apart from the albedo and without;
  *    the frame is full size and says what it traced.
  * 4. The budget with budget_upscale: moving frames that no budget can hold stay at full
  *    resolution, tracing no fewer than a quarter of the pixels; without it they shrink.
- * 5. Failures: an upscale out of range, a camera of another size, NULL buffers.
+ * 5. Failures: an upscale out of range, a camera of another size, NULL buffers, an
+ *    albedo image of a scene not committed.
  * 6. The host loop (src/post/upscale.c, turned round and vectorised) gives what the
  *    per-pixel operator (src/post/upscale.h) gives, bit for bit, on every pixel of
  *    frames with detail, two surfaces at different distances (disocclusions), a
@@ -197,10 +200,16 @@ static void test_realtime(void) {
             refc[3 * i + k] = ref.sum[3 * i + k] / (float)ref.count[i];
         }
     }
-    /* The same pipeline tracing every pixel (upscale 1) and a quarter of them (4). */
-    double psnr4 = 0.0, psnr = 0.0, mean[2] = {0.0, 0.0};
-    for (int v = 0; v < 2; ++v) {
-        tr_realtime *rt = tr_realtime_create(dev, s, NULL, &err);
+    /* The same pipeline tracing every pixel (upscale 1) and a quarter of them (4); then a
+     * quarter again with the colour upscaled instead of the light apart from the albedo
+     * (upscale_albedo 0). */
+    double psnr4 = 0.0, psnr = 0.0, mean[3] = {0.0, 0.0, 0.0};
+    for (int v = 0; v < 3; ++v) {
+        tr_recon_params rp = tr_recon_params_default();
+        rp.upscale_albedo = v < 2;
+        tr_realtime_desc desc = {0};
+        desc.recon = &rp;
+        tr_realtime *rt = tr_realtime_create(dev, s, &desc, &err);
         CHECK(rt != NULL, "create: %s", err.msg);
         for (int f = 0; rt && f < 128; ++f) {
             tr_realtime_frame_desc fd = {0};
@@ -218,7 +227,7 @@ static void test_realtime(void) {
             if (!res.rgb) {
                 break;
             }
-            if (v) {
+            if (v == 1) {
                 psnr = tr_image_compare(res.rgb, refc, (size_t)W * H).psnr;
                 psnr4 = f == 3 ? psnr : psnr4;
             }
@@ -231,6 +240,8 @@ static void test_realtime(void) {
           psnr);
     CHECK(fabs(mean[1] / mean[0] - 1.0) < 0.01,
           "energy: mean %.5f upscaled, %.5f tracing every pixel", mean[1], mean[0]);
+    CHECK(fabs(mean[2] / mean[0] - 1.0) < 0.01,
+          "energy: mean %.5f upscaling the colour, %.5f tracing every pixel", mean[2], mean[0]);
     tr_device_destroy(dev);
     tr_film_free(&ref);
     free(refc);
@@ -301,6 +312,13 @@ static void test_failures(void) {
     CHECK_STATUS(tr_upscale_frame(&u, &none, &other, NULL, 0, 0.0f, 1, out, &err), err,
                  TR_STATUS_INVALID_ARGUMENT, "no colour");
     tr_upscale_free(&u);
+    /* The output's albedo image: NULL buffers, and a scene not committed. */
+    CHECK_STATUS(tr_albedo_image(s, &other, 1, NULL, &err), err, TR_STATUS_INVALID_ARGUMENT,
+                 "an albedo image into NULL");
+    tr_scene *empty = tr_scene_create(&err);
+    CHECK_STATUS(tr_albedo_image(empty, &other, 1, out, &err), err, TR_STATUS_INVALID_OPERATION,
+                 "an albedo image of a scene not committed");
+    tr_scene_destroy(empty);
     tr_realtime_destroy(rt);
     tr_device_destroy(dev);
     tr_scene_destroy(s);

@@ -201,6 +201,14 @@ typedef struct tr_recon_params {
                              an OpenCL device's reconstruction (docs/realtime.md) */
     float svgf_alpha_min; /* alpha_min for SVGF's temporal stage (the other methods keep
                              alpha_min); 0: alpha_min */
+    int upscale_albedo;   /* tr_realtime's upscaled frames: 1 (default): the light is
+                             upscaled apart from the albedo - the traced frame's
+                             reconstruction divided by the albedo it was multiplied by,
+                             upscaled, then multiplied by the albedo of a first-hit ray
+                             through each output pixel's centre (tr_albedo_image), so that
+                             textures and material edges are sharp at the output's
+                             resolution; 0: the remodulated colour is upscaled
+                             (docs/realtime.md) */
     int fresh_spp;        /* tr_realtime on the host: the samples per pixel in all of the
                              pixels without history (the first frame, a cut, a
                              disocclusion), traced again after the frame's own; at most the
@@ -211,7 +219,7 @@ typedef struct tr_recon_params {
  * bilateral and à-trous sigmas) takes its default when 0; the others are used as given,
  * so a zero-initialised tr_recon_params differs from the defaults in alpha_min,
  * bilateral_radius, the iteration counts, svgf_feedback, emission_samples,
- * svgf_alpha_min, albedo_alpha and fresh_spp. */
+ * svgf_alpha_min, albedo_alpha, upscale_albedo and fresh_spp. */
 tr_recon_params tr_recon_params_default(void);
 
 /* The reconstruction's state between frames (history and scratch buffers): the caller
@@ -318,6 +326,13 @@ int tr_resolve_emission(const struct tr_scene *scene, const tr_camera *cam, int 
  * traced. Runs on the host on up to `threads` threads (0: the default); uses g->scratch. */
 int tr_resolve_albedo(const struct tr_scene *scene, const tr_camera *cam, int n, int threads,
                       tr_gbuffer *g, uint32_t *resolved, tr_error *err);
+/* The albedo the reconstruction multiplies by (the kernel's tr_first_albedo: a glossy
+ * surface's directional albedo) of one first-hit ray through the centre of every pixel of
+ * cam, 3 floats per pixel into out (0 where the ray hits nothing), on up to `threads`
+ * threads (0: the default), into the committed scene. For the output of an upscaled frame
+ * (tr_recon_params.upscale_albedo). */
+int tr_albedo_image(const struct tr_scene *scene, const tr_camera *cam, int threads, float *out,
+                    tr_error *err);
 
 /* The spatial filters alone, on one image `in` (3 floats per pixel) guided by g's
  * passes (`trac0r render --denoise`): the bilateral filter on radiance, à-trous on

@@ -14,7 +14,8 @@
  *
  * The albedo pass is resolved the same way where the caller asks (tr_resolve_albedo): the
  * pixels whose albedo differs from a neighbour's take the mean base colour of an n x n
- * grid of first hits (src/kernel/albedo.h), for the reconstruction's demodulation. */
+ * grid of first hits (src/kernel/albedo.h), for the reconstruction's demodulation; and
+ * tr_albedo_image traces one such ray through every pixel of an upscaled frame's output. */
 #include <omp.h>
 #include <string.h>
 
@@ -192,6 +193,31 @@ int tr_resolve_albedo(const struct tr_scene *scene, const tr_camera *cam, int n,
     }
     if (resolved) {
         *resolved = count;
+    }
+    return TR_OK;
+}
+
+int tr_albedo_image(const struct tr_scene *scene, const tr_camera *cam, int threads, float *out,
+                    tr_error *err) {
+    if (!scene || !cam || !out) {
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "the albedo image: NULL argument");
+    }
+    if (!tr_scene_is_committed(scene)) {
+        return tr_error_set(err, TR_STATUS_INVALID_OPERATION,
+                            "the albedo image: the scene is not committed");
+    }
+    const int w = (int)cam->screen_width, h = (int)cam->screen_height;
+    threads = threads > 0 ? threads : tr_default_threads();
+    const tr_scene_view view = tr_scene_view_of(scene);
+#pragma omp parallel for num_threads(threads) schedule(dynamic, 4)
+    for (int y = 0; y < h; ++y) {
+        for (int x = 0; x < w; ++x) {
+            const size_t i = (size_t)y * w + x;
+            const tr_vec3 a = tr_albedo_resolve_pixel(&view, cam, x, y, 1);
+            out[3 * i] = a.x;
+            out[3 * i + 1] = a.y;
+            out[3 * i + 2] = a.z;
+        }
     }
     return TR_OK;
 }

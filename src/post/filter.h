@@ -507,6 +507,19 @@ TR_FN float tr_post_demod_factor(float albedo) {
     return albedo > TR_POST_ALBEDO_FLOOR ? albedo : TR_POST_ALBEDO_FLOOR;
 }
 
+/* The factor an upscaled frame's light is divided by (the traced frame's albedo) and
+ * multiplied by (the output's) when tr_recon_params.upscale_albedo keeps it apart: the
+ * albedo itself between 0.01 and 1. Nothing is filtered between the two, so a low floor
+ * keeps the ratio exact where the two albedos agree (0.09: 0.15 dB worse on the textured
+ * demo at a quarter of the pixels, docs/realtime.md); the cap keeps an emitter's
+ * "albedo" (its radiance) from multiplying light spread onto it from its neighbours. */
+#define TR_POST_UPSCALE_ALBEDO_FLOOR 0.01f
+TR_FN float tr_post_upscale_factor(float albedo) {
+    return albedo > 1.0f                           ? 1.0f
+           : albedo > TR_POST_UPSCALE_ALBEDO_FLOOR ? albedo
+                                                   : TR_POST_UPSCALE_ALBEDO_FLOOR;
+}
+
 /* The thesis's baseline: a bilateral filter (Tomasi and Manduchi, "Bilateral Filtering
  * for Gray and Color Images", ICCV 1998) of pixel (x, y) of the w x h colour image `in`
  * into out[0..2]: Gaussian weights in distance (sigma_s pixels) and in colour

@@ -52,7 +52,9 @@ __kernel void tr_recon_add(__global float *dst, __global const float *src, float
     }
 }
 
-/* Demodulation (remod 0: in / albedo factor) or remodulation (remod 1: in * factor). */
+/* Demodulation (remod 0: in / albedo factor) or remodulation (remod 1: in * factor); 2 and
+ * 3 the same with the upscaling's factor (tr_post_upscale_factor), 3 giving 0 where the
+ * albedo is 0. */
 __kernel void tr_recon_modulate(__global const float *in, __global const float *albedo, int remod,
                                 int w, int h, __global float *out) {
     const int x = (int)get_global_id(0), y = (int)get_global_id(1);
@@ -61,8 +63,13 @@ __kernel void tr_recon_modulate(__global const float *in, __global const float *
     }
     const int i = y * w + x;
     for (int k = 0; k < 3; ++k) {
-        const float a = tr_post_demod_factor(albedo[3 * i + k]);
-        out[3 * i + k] = remod ? in[3 * i + k] * a : in[3 * i + k] / a;
+        const float raw = albedo[3 * i + k];
+        const float a = remod < 2 ? tr_post_demod_factor(raw) : tr_post_upscale_factor(raw);
+        /* remod 3: an albedo of 0 (no surface) reflects nothing, whatever light the
+         * upscaling spread there. */
+        out[3 * i + k] = remod == 0 || remod == 2   ? in[3 * i + k] / a
+                         : remod == 1 || raw > 0.0f ? in[3 * i + k] * a
+                                                    : 0.0f;
     }
 }
 

@@ -87,11 +87,12 @@ typedef struct recon_cl {
     int have_albedo;  /* B_HA0 + cur holds the last frame's albedo history */
     int has_emission; /* the frame came from a film with the emission pass */
     int result;       /* the buffer holding the last frame's reconstruction */
+    int modulated;    /* the albedo buffer it was multiplied by */
     cl_mem added;     /* the emission the reconstruction added to it (NULL: none) */
     /* Temporal upscaling (tr_recon_device_upscale): the output's history (colour, samples,
      * distance, two of each), its first hits' emission (this frame's and the last), the
      * output, the samples' positions and the two cameras, for up_w x up_h outputs. */
-    cl_mem up_col[2], up_len[2], up_depth[2], up_emis[2], up_out, up_pos, up_cams;
+    cl_mem up_col[2], up_len[2], up_depth[2], up_emis[2], up_out, up_pos, up_cams, up_alb;
     uint32_t up_w, up_h;
     int up_cur, up_have, emis_cur, emis_have;
     tr_camera up_prev;
@@ -140,10 +141,10 @@ static int cl_fail(tr_error *err, const char *call, cl_int code) {
 
 /* The upscaling's buffers. */
 static void up_release(recon_cl *c) {
-    cl_mem *const m[11] = {&c->up_col[0],   &c->up_col[1],   &c->up_len[0],  &c->up_len[1],
+    cl_mem *const m[12] = {&c->up_col[0],   &c->up_col[1],   &c->up_len[0],  &c->up_len[1],
                            &c->up_depth[0], &c->up_depth[1], &c->up_emis[0], &c->up_emis[1],
-                           &c->up_out,      &c->up_pos,      &c->up_cams};
-    for (int i = 0; i < 11; ++i) {
+                           &c->up_out,      &c->up_pos,      &c->up_cams,    &c->up_alb};
+    for (int i = 0; i < 12; ++i) {
         if (*m[i]) {
             clReleaseMemObject(*m[i]);
             *m[i] = NULL;
@@ -387,6 +388,7 @@ static int cl_frame(tr_recon_device *r, const tr_camera *cam, const tr_vec3 *mot
     const double t0 = tr_time_now();
     int result = B_COLOR; /* the buffer read back */
     c->added = NULL;
+    c->modulated = B_ALBEDO;
     if (method == TR_RECON_OFF) {
         c->have_history = 0;
         goto read;
@@ -434,6 +436,7 @@ static int cl_frame(tr_recon_device *r, const tr_camera *cam, const tr_vec3 *mot
         return rc;
     }
     c->have_albedo = ha != B_ALBEDO;
+    c->modulated = method == TR_RECON_SVGF ? ha : B_ALBEDO;
     c->cur = next;
     const double t1 = tr_time_now();
     r->ms_temporal = (t1 - t0) * 1e3;
@@ -684,11 +687,11 @@ static int up_buffers(recon_cl *c, uint32_t W, uint32_t H, tr_error *err) {
     }
     up_release(c);
     const size_t n = (size_t)W * H;
-    cl_mem *const m[11] = {&c->up_col[0],   &c->up_col[1],   &c->up_len[0],  &c->up_len[1],
+    cl_mem *const m[12] = {&c->up_col[0],   &c->up_col[1],   &c->up_len[0],  &c->up_len[1],
                            &c->up_depth[0], &c->up_depth[1], &c->up_emis[0], &c->up_emis[1],
-                           &c->up_out,      &c->up_pos,      &c->up_cams};
+                           &c->up_out,      &c->up_pos,      &c->up_cams,    &c->up_alb};
     /* The positions take 2 floats per traced pixel, at most as many as the output's. */
-    const size_t bytes[11] = {3 * n * 4,
+    const size_t bytes[12] = {3 * n * 4,
                               3 * n * 4,
                               n * 4,
                               n * 4,
@@ -698,8 +701,9 @@ static int up_buffers(recon_cl *c, uint32_t W, uint32_t H, tr_error *err) {
                               3 * n * 4,
                               3 * n * 4,
                               2 * n * 4,
-                              2 * sizeof(tr_camera)};
-    for (int i = 0; i < 11; ++i) {
+                              2 * sizeof(tr_camera),
+                              3 * n * 4};
+    for (int i = 0; i < 12; ++i) {
         cl_int rc;
         *m[i] = clCreateBuffer(c->context, CL_MEM_READ_WRITE, bytes[i], NULL, &rc);
         if (!*m[i]) {
@@ -717,9 +721,9 @@ static int up_buffers(recon_cl *c, uint32_t W, uint32_t H, tr_error *err) {
 #endif
 
 int tr_recon_device_upscale(tr_recon_device *r, const tr_camera *cam, const tr_camera *out_cam,
-                            const float *pos, const tr_vec3 *motion, uint32_t motion_count,
-                            int method, const tr_recon_params *p, int keep, float *out, double *ms,
-                            tr_error *err) {
+                            const float *pos, const float *albedo, const tr_vec3 *motion,
+                            uint32_t motion_count, int method, const tr_recon_params *p, int keep,
+                            float *out, double *ms, tr_error *err) {
     *ms = 0.0;
     if (check_args(r, cam, method, err) != TR_OK) {
         return TR_ERR;
@@ -765,12 +769,24 @@ int tr_recon_device_upscale(tr_recon_device *r, const tr_camera *cam, const tr_c
         if (crc != CL_SUCCESS) {
             return cl_fail(err, "clEnqueueWriteBuffer(upscaling)", crc);
         }
+        if (emission || albedo) {
+            rc = copy(c, c->result, B_CA, 3 * nl * sizeof(float), err);
+            low = c->b[B_CA];
+        }
         if (emission) {
             cl_mem e = c->added ? c->added : c->b[B_EMIS];
-            rc = copy(c, c->result, B_CA, 3 * nl * sizeof(float), err);
             rc =
                 rc ? rc : RUN(c, K_ADD, wl, hl, err, KB(c, B_CA), KM(e), KF(-1.0f), KI(wl), KI(hl));
-            low = c->b[B_CA];
+        }
+        if (albedo) {
+            /* The light apart from the albedo, as the host's upscale stage: divided by the
+             * albedo the reconstruction multiplied by, multiplied by the output's after. */
+            crc = clEnqueueWriteBuffer(c->queue, c->up_alb, CL_FALSE, 0, 3 * n * sizeof(float),
+                                       albedo, 0, NULL, NULL);
+            rc = rc                  ? rc
+                 : crc != CL_SUCCESS ? cl_fail(err, "clEnqueueWriteBuffer(albedo)", crc)
+                                     : RUN(c, K_MODULATE, wl, hl, err, KB(c, B_CA),
+                                           KB(c, c->modulated), KI(2), KI(wl), KI(hl), KB(c, B_CA));
         }
         const int prev = c->up_cur, next = 1 - c->up_cur;
         cl_mem mbuf = motion && motion_count ? c->motion : c->b[B_DEPTH];
@@ -782,13 +798,18 @@ int tr_recon_device_upscale(tr_recon_device *r, const tr_camera *cam, const tr_c
                       KM(c->up_depth[prev]), KF(TR_UPSCALE_MAX_LEN), KM(c->up_col[next]),
                       KM(c->up_len[next]), KM(c->up_depth[next]));
         cl_mem result = c->up_col[next];
+        if (rc == TR_OK && albedo) {
+            rc = RUN(c, K_MODULATE, w, h, err, KM(c->up_col[next]), KM(c->up_alb), KI(3), KI(w),
+                     KI(h), KM(c->up_out));
+            result = c->up_out;
+        }
         if (rc == TR_OK && emission) {
             tr_cl_context *ctx = tr_device_cl_context(r->dev);
             const int ecur = 1 - c->emis_cur;
             rc = tr_cl_upscale_emission(
                 ctx, out_cam, p->emission_samples, (uint32_t)wl, (uint32_t)hl, c->b[B_EMIS],
                 keep && c->emis_have ? c->up_emis[c->emis_cur] : NULL, c->up_emis[ecur], err);
-            if (rc == TR_OK) {
+            if (rc == TR_OK && !albedo) {
                 const cl_int k = clEnqueueCopyBuffer(c->queue, c->up_col[next], c->up_out, 0, 0,
                                                      3 * n * sizeof(float), 0, NULL, NULL);
                 rc = k == CL_SUCCESS ? TR_OK : cl_fail(err, "clEnqueueCopyBuffer", k);
@@ -816,6 +837,7 @@ int tr_recon_device_upscale(tr_recon_device *r, const tr_camera *cam, const tr_c
         return TR_OK;
     }
 #else
+    (void)albedo;
     (void)motion;
     (void)motion_count;
     (void)keep;

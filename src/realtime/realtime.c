@@ -4,6 +4,7 @@
 #include "trac0r/recon_device.h"
 #include "realtime/fresh.h"
 #include "realtime/gradient.h"
+#include "post/filter.h"
 #include "post/recon_upscale.h"
 #include "realtime/restir_stage.h"
 #include "trac0r/upscale.h"
@@ -84,6 +85,9 @@ struct tr_realtime {
     size_t emis_len;
     int emis_cur;
     uint64_t emis_frame; /* the frame emis[emis_cur] is of (0: none) */
+    float *alb;          /* the albedo at the output's resolution (tr_albedo_image) */
+    size_t alb_len;
+    uint64_t alb_frame; /* the frame alb is of (0: none) */
 
     /* Temporal gradients (gradient.h; tr_recon_params.gradients). */
     tr_grad grad;
@@ -248,6 +252,7 @@ void tr_realtime_destroy(tr_realtime *rt) {
     free(rt->low);
     free(rt->emis[0]);
     free(rt->emis[1]);
+    free(rt->alb);
     tr_grad_free(&rt->grad);
     tr_fresh_free(&rt->fresh);
     free(rt);
@@ -689,6 +694,28 @@ static int size_low(tr_realtime *rt, uint32_t w, uint32_t h, tr_error *err) {
     return TR_OK;
 }
 
+/* The albedo at the output's resolution into rt->alb (tr_albedo_image), once per frame
+ * whatever methods follow. */
+static int output_albedo(tr_realtime *rt, tr_error *err) {
+    const size_t n3 = 3 * (size_t)rt->view_cam.screen_width * rt->view_cam.screen_height;
+    if (rt->alb_len != n3) {
+        free(rt->alb);
+        rt->alb_len = 0;
+        rt->alb_frame = 0;
+        if (!(rt->alb = malloc(n3 * sizeof *rt->alb))) {
+            return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory for a frame");
+        }
+        rt->alb_len = n3;
+    }
+    if (rt->alb_frame != rt->rendered) {
+        if (tr_albedo_image(rt->scene, &rt->view_cam, rt->cfg.threads, rt->alb, err) != TR_OK) {
+            return TR_ERR;
+        }
+        rt->alb_frame = rt->rendered;
+    }
+    return TR_OK;
+}
+
 /* The upscaling of an upscaled frame on the host: rt->low (the method's reconstruction of
  * the traced frame), the samples' positions and the frame's distance and id passes into
  * the display film at the view's full resolution, through the method's own output history.
@@ -719,10 +746,36 @@ static int upscale_stage(tr_realtime *rt, rt_history *hist, int method, const tr
             rt->low[i] -= e[i];
         }
     }
+    /* The light apart from the albedo (tr_recon_params.upscale_albedo): the reconstruction
+     * divided by the albedo it multiplied by (SVGF's albedo history, else the frame's), and
+     * the upscaled light multiplied by the output's own albedo after. */
+    const int apart = rt->params.upscale_albedo;
+    if (apart) {
+        const float *a = method == TR_RECON_SVGF && hist->rec.have_albedo
+                             ? hist->rec.hist_albedo[hist->rec.cur]
+                             : rt->gb.albedo;
+        const size_t n3 = 3 * (size_t)w * h;
+        for (size_t i = 0; i < n3; ++i) {
+            rt->low[i] /= tr_post_upscale_factor(a[i]);
+        }
+    }
     const tr_upscale_input in = {w, h, rt->low, rt->pos, rt->gb.depth, rt->gb.prim};
     if (tr_upscale_frame(&hist->up, &in, &rt->view_cam, motion, ids, 0.0f, rt->cfg.threads,
                          rt->disp.sum, err) != TR_OK) {
         return TR_ERR;
+    }
+    if (apart) {
+        const double t0 = tr_time_now();
+        if (output_albedo(rt, err) != TR_OK) {
+            return TR_ERR;
+        }
+        const size_t n3 = 3 * (size_t)W * H;
+        for (size_t i = 0; i < n3; ++i) {
+            /* No surface (albedo 0) reflects nothing, whatever light was spread there. */
+            rt->disp.sum[i] =
+                rt->alb[i] > 0.0f ? rt->disp.sum[i] * tr_post_upscale_factor(rt->alb[i]) : 0.0f;
+        }
+        hist->up.ms += (tr_time_now() - t0) * 1e3;
     }
     if (emission) {
         const double t0 = tr_time_now();
@@ -805,11 +858,17 @@ int tr_realtime_reconstruct(tr_realtime *rt, int method, tr_realtime_result *out
     if (rt->on_device && up) {
         /* Reconstructed and upscaled where the film lies; only the output comes back. */
         const int keep = hist->up_frame != 0 && hist->up_frame + 1 == rt->rendered;
-        if (tr_recon_device_upscale(hist->rdev, &rt->rcam, &rt->view_cam, rt->pos, motion, ids,
-                                    method, &rt->params, keep, rt->disp.sum, &up_ms,
-                                    err) != TR_OK) {
+        const double t0 = tr_time_now();
+        if (rt->params.upscale_albedo && output_albedo(rt, err) != TR_OK) {
             return TR_ERR;
         }
+        const double alb_ms = (tr_time_now() - t0) * 1e3;
+        if (tr_recon_device_upscale(hist->rdev, &rt->rcam, &rt->view_cam, rt->pos,
+                                    rt->params.upscale_albedo ? rt->alb : NULL, motion, ids, method,
+                                    &rt->params, keep, rt->disp.sum, &up_ms, err) != TR_OK) {
+            return TR_ERR;
+        }
+        up_ms += alb_ms;
         hist->up_frame = rt->rendered;
         tr_recon_device_times(hist->rdev, &temporal, &spatial);
         temporal += up_ms;
