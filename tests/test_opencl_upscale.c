@@ -7,7 +7,10 @@
  * reconstructions and upscalings differ (the host's upscaling is tr_upscale_pixel's
  * arithmetic with its loops turned round): every frame at least 80 dB apart from the
  * other (a 1-spp frame and the next one are about 20 dB apart), and the means within
- * 0.5 %. The device's film is never read back: only the output is.
+ * 0.5 %; with the frame's passes kept (the light upscaled apart from the albedo, the
+ * output's albedo made on the host from the frame's albedo pass) and without (the raw
+ * frame's film keeps none). The device's film is never read back: only the output is (and
+ * the frame's albedo, for the output's).
  *
  * Needs an OpenCL platform; it fails (not skips) when no device can be opened. */
 #include <math.h>
@@ -31,22 +34,22 @@ static double mean_of(const float *a, size_t n) {
     return s / (double)n;
 }
 
-int main(void) {
+/* The comparison with the frame's passes kept (the light upscaled apart from the albedo)
+ * or not (the raw frame's film keeps none). */
+static void compare(tr_scene *s, tr_device *dev[2], int keep_passes) {
     tr_error err;
-    tr_scene *s = classic_box(W, H, &err);
-    tr_device *dev[2] = {tr_device_create("cpu", &err), tr_device_create("opencl:0", &err)};
-    CHECK(dev[0] && dev[1], "devices: %s", err.msg);
     tr_realtime *rt[2] = {NULL, NULL};
-    for (int d = 0; d < 2 && dev[d]; ++d) {
-        CHECK(tr_device_upload(dev[d], s, &err) == TR_OK, "upload: %s", err.msg);
-        rt[d] = tr_realtime_create(dev[d], s, NULL, &err);
+    tr_realtime_desc desc = {0};
+    desc.keep_passes = keep_passes;
+    for (int d = 0; d < 2; ++d) {
+        rt[d] = tr_realtime_create(dev[d], s, &desc, &err);
         CHECK(rt[d] != NULL, "create: %s", err.msg);
     }
     CHECK(!rt[1] || tr_realtime_on_device(rt[1]), "the OpenCL device reconstructs on the device");
     const size_t n = 3u * W * H;
     float *out[2] = {malloc(n * sizeof(float)), malloc(n * sizeof(float))};
     const int methods[2] = {TR_RECON_SVGF, TR_RECON_OFF};
-    tr_cl_context *cl = dev[1] ? tr_device_cl_context(dev[1]) : NULL;
+    tr_cl_context *cl = tr_device_cl_context(dev[1]);
     const uint64_t reads0 = cl ? tr_cl_film_reads(cl) : 0;
     for (int f = 0; rt[0] && rt[1] && f < 6; ++f) {
         tr_camera cam = *tr_scene_camera(s);
@@ -69,19 +72,34 @@ int main(void) {
             }
             const double psnr = tr_image_compare(out[1], out[0], (size_t)W * H).psnr;
             const double m0 = mean_of(out[0], n), m1 = mean_of(out[1], n);
-            printf("frame %d, %s: %.2f dB apart, means %.6f and %.6f\n", f,
+            printf("passes %d, frame %d, %s: %.2f dB apart, means %.6f and %.6f\n", keep_passes, f,
                    tr_recon_name(methods[m]), psnr, m0, m1);
             CHECK(psnr >= 80.0 && fabs(m1 / m0 - 1.0) < 0.005,
-                  "frame %d, %s: the devices differ by %.2f dB, means %.5f and %.5f", f,
-                  tr_recon_name(methods[m]), psnr, m0, m1);
+                  "passes %d, frame %d, %s: the devices differ by %.2f dB, means %.5f and %.5f",
+                  keep_passes, f, tr_recon_name(methods[m]), psnr, m0, m1);
         }
     }
     CHECK(cl && tr_cl_film_reads(cl) == reads0, "upscaled frames read the device's film %llu times",
           cl ? (unsigned long long)(tr_cl_film_reads(cl) - reads0) : 0ull);
     for (int d = 0; d < 2; ++d) {
         tr_realtime_destroy(rt[d]);
-        tr_device_destroy(dev[d]);
         free(out[d]);
+    }
+}
+
+int main(void) {
+    tr_error err;
+    tr_scene *s = classic_box(W, H, &err);
+    tr_device *dev[2] = {tr_device_create("cpu", &err), tr_device_create("opencl:0", &err)};
+    CHECK(dev[0] && dev[1], "devices: %s", err.msg);
+    for (int d = 0; d < 2 && dev[d]; ++d) {
+        CHECK(tr_device_upload(dev[d], s, &err) == TR_OK, "upload: %s", err.msg);
+    }
+    for (int keep = 0; keep < 2 && dev[0] && dev[1]; ++keep) {
+        compare(s, dev, keep);
+    }
+    for (int d = 0; d < 2; ++d) {
+        tr_device_destroy(dev[d]);
     }
     tr_scene_destroy(s);
     return check_finish("test_opencl_upscale");

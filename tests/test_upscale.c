@@ -13,7 +13,8 @@
  *    converges (PSNR against a converged render rising by several dB) and keeps the
  *    energy: its mean brightness within 1 % of the same pipeline's tracing every pixel
  *    (an emitter's radiance, which the passes record as its albedo, must not multiply
- *    light spread onto it), with the light upscaled apart from the albedo and without;
+ *    light spread onto it), with the light upscaled apart from the albedo and without,
+ *    and for the raw frame, which has no albedo pass to take the light apart by;
  *    the frame is full size and says what it traced.
  * 4. The budget with budget_upscale: moving frames that no budget can hold stay at full
  *    resolution, tracing no fewer than a quarter of the pixels; without it they shrink.
@@ -23,7 +24,12 @@
  *    per-pixel operator (src/post/upscale.h) gives, bit for bit, on every pixel of
  *    frames with detail, two surfaces at different distances (disocclusions), a
  *    primitive that moves, a moving camera and the first frame's fill, at a half and a
- *    quarter of the pixels traced; and 1 and 2 threads give the same bits. */
+ *    quarter of the pixels traced; and 1 and 2 threads give the same bits.
+ * 7. The output's albedo from the traced frame's (tr_upscale_albedo) on the classic box at
+ *    twice a frame's resolution: it traces at most half of the output's pixels, and at
+ *    most 1 % of them differ from tracing every pixel (tr_albedo_image) by more than
+ *    twice the step; given the right previous output, none differs by more than the step;
+ *    1 and 2 threads give the same bits; NULL buffers and a scene not committed fail. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -202,11 +208,12 @@ static void test_realtime(void) {
     }
     /* The same pipeline tracing every pixel (upscale 1) and a quarter of them (4); then a
      * quarter again with the colour upscaled instead of the light apart from the albedo
-     * (upscale_albedo 0). */
-    double psnr4 = 0.0, psnr = 0.0, mean[3] = {0.0, 0.0, 0.0};
-    for (int v = 0; v < 3; ++v) {
+     * (upscale_albedo 0); then the raw frame (off), which keeps no albedo pass to take the
+     * light apart by, upscaled with upscale_albedo on. */
+    double psnr4 = 0.0, psnr = 0.0, mean[4] = {0.0, 0.0, 0.0, 0.0};
+    for (int v = 0; v < 4; ++v) {
         tr_recon_params rp = tr_recon_params_default();
-        rp.upscale_albedo = v < 2;
+        rp.upscale_albedo = v != 2;
         tr_realtime_desc desc = {0};
         desc.recon = &rp;
         tr_realtime *rt = tr_realtime_create(dev, s, &desc, &err);
@@ -214,7 +221,7 @@ static void test_realtime(void) {
         for (int f = 0; rt && f < 128; ++f) {
             tr_realtime_frame_desc fd = {0};
             fd.camera = tr_scene_camera(s);
-            fd.method = TR_RECON_ACCUMULATE;
+            fd.method = v == 3 ? TR_RECON_OFF : TR_RECON_ACCUMULATE;
             fd.upscale = v ? 4 : 1;
             tr_realtime_result res;
             CHECK(tr_realtime_frame(rt, &fd, &res, &err) == TR_OK, "frame %d: %s", f, err.msg);
@@ -242,6 +249,9 @@ static void test_realtime(void) {
           "energy: mean %.5f upscaled, %.5f tracing every pixel", mean[1], mean[0]);
     CHECK(fabs(mean[2] / mean[0] - 1.0) < 0.01,
           "energy: mean %.5f upscaling the colour, %.5f tracing every pixel", mean[2], mean[0]);
+    CHECK(fabs(mean[3] / mean[0] - 1.0) < 0.01,
+          "energy: mean %.5f of the raw frame upscaled, %.5f tracing every pixel", mean[3],
+          mean[0]);
     tr_device_destroy(dev);
     tr_film_free(&ref);
     free(refc);
@@ -421,6 +431,79 @@ static void test_host_equals_operator(void) {
     }
 }
 
+/* Whether two albedos differ by more than `k` steps (TR_UPSCALE_ALBEDO_ABS, _REL). */
+static int albedo_off(const float *a, const float *b, float k) {
+    for (int c = 0; c < 3; ++c) {
+        const float m = fmaxf(a[c], b[c]);
+        if (fabsf(a[c] - b[c]) > k * (TR_UPSCALE_ALBEDO_ABS + TR_UPSCALE_ALBEDO_REL * m)) {
+            return 1;
+        }
+    }
+    return 0;
+}
+
+static void test_albedo(void) {
+    enum { OW = 2 * W, OH = 2 * H };
+    tr_error err;
+    tr_scene *s = classic_box(W, H, &err);
+    CHECK(s != NULL, "scene: %s", err.msg);
+    tr_camera out_cam = *tr_scene_camera(s);
+    CHECK(tr_camera_resize(&out_cam, OW, OH, &err) == TR_OK, "%s", err.msg);
+    const size_t n = (size_t)OW * OH;
+    float *low = malloc(3u * W * H * sizeof *low);
+    float *full = malloc(3 * n * sizeof *full);
+    float *a1 = malloc(3 * n * sizeof *a1);
+    float *a2 = malloc(3 * n * sizeof *a2);
+    CHECK(low && full && a1 && a2, "out of memory");
+    if (!low || !full || !a1 || !a2) {
+        free(low);
+        free(full);
+        free(a1);
+        free(a2);
+        tr_scene_destroy(s);
+        return;
+    }
+    /* The frame's albedo: one ray through each of its pixels' centres. */
+    CHECK(tr_albedo_image(s, tr_scene_camera(s), 2, low, &err) == TR_OK, "low: %s", err.msg);
+    CHECK(tr_albedo_image(s, &out_cam, 2, full, &err) == TR_OK, "full: %s", err.msg);
+    uint32_t traced1 = 0, traced2 = 0;
+    CHECK(tr_upscale_albedo(s, &out_cam, 1, W, H, low, NULL, a1, &traced1, &err) == TR_OK &&
+              tr_upscale_albedo(s, &out_cam, 2, W, H, low, NULL, a2, &traced2, &err) == TR_OK,
+          "sparse: %s", err.msg);
+    CHECK(traced1 == traced2 && memcmp(a1, a2, 3 * n * sizeof *a1) == 0,
+          "1 and 2 threads: %u and %u traced, or other bits", traced1, traced2);
+    CHECK(traced1 > 0 && traced1 <= n / 2, "traced %u of %zu output pixels", traced1, n);
+    size_t off = 0;
+    for (size_t i = 0; i < n; ++i) {
+        off += (size_t)albedo_off(a1 + 3 * i, full + 3 * i, 2.0f);
+    }
+    CHECK(off <= n / 100, "%zu of %zu pixels off by more than twice the step", off, n);
+    /* With the right previous output every pixel is within the step of it. */
+    memcpy(a2, full, 3 * n * sizeof *a2);
+    CHECK(tr_upscale_albedo(s, &out_cam, 2, W, H, low, a2, a2, &traced2, &err) == TR_OK,
+          "with prev: %s", err.msg);
+    size_t off_prev = 0;
+    for (size_t i = 0; i < n; ++i) {
+        off_prev += (size_t)albedo_off(a2 + 3 * i, full + 3 * i, 1.0f);
+    }
+    CHECK(off_prev == 0 && traced2 >= traced1,
+          "with the previous output: %zu pixels off, %u traced (%u without)", off_prev, traced2,
+          traced1);
+    CHECK_STATUS(tr_upscale_albedo(s, &out_cam, 1, W, H, NULL, NULL, a1, NULL, &err), err,
+                 TR_STATUS_INVALID_ARGUMENT, "no traced albedo");
+    CHECK_STATUS(tr_upscale_albedo(s, &out_cam, 1, OW + 1, H, low, NULL, a1, NULL, &err), err,
+                 TR_STATUS_INVALID_ARGUMENT, "a frame wider than the output");
+    tr_scene *empty = tr_scene_create(&err);
+    CHECK_STATUS(tr_upscale_albedo(empty, &out_cam, 1, W, H, low, NULL, a1, NULL, &err), err,
+                 TR_STATUS_INVALID_OPERATION, "a scene not committed");
+    tr_scene_destroy(empty);
+    free(low);
+    free(full);
+    free(a1);
+    free(a2);
+    tr_scene_destroy(s);
+}
+
 int main(void) {
     test_converges();
     test_constant();
@@ -428,5 +511,6 @@ int main(void) {
     test_budget();
     test_failures();
     test_host_equals_operator();
+    test_albedo();
     return check_finish("test_upscale");
 }

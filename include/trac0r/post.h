@@ -204,11 +204,12 @@ typedef struct tr_recon_params {
     int upscale_albedo;   /* tr_realtime's upscaled frames: 1 (default): the light is
                              upscaled apart from the albedo - the traced frame's
                              reconstruction divided by the albedo it was multiplied by,
-                             upscaled, then multiplied by the albedo of a first-hit ray
-                             through each output pixel's centre (tr_albedo_image), so that
-                             textures and material edges are sharp at the output's
-                             resolution; 0: the remodulated colour is upscaled
-                             (docs/realtime.md) */
+                             upscaled, then multiplied by the output's albedo
+                             (tr_upscale_albedo: the frame's interpolated where it is flat,
+                             a first-hit ray through the output pixel's centre elsewhere),
+                             so that textures and material edges are sharp at the output's
+                             resolution; 0, or a frame without an albedo pass: the
+                             remodulated colour is upscaled (docs/realtime.md) */
     int fresh_spp;        /* tr_realtime on the host: the samples per pixel in all of the
                              pixels without history (the first frame, a cut, a
                              disocclusion), traced again after the frame's own; at most the

@@ -92,6 +92,25 @@ int tr_upscale_emission(const struct tr_scene *scene, const tr_camera *cam, int 
                         uint32_t width, uint32_t height, const float *emission, const float *prev,
                         float *out, uint32_t *resolved, tr_error *err);
 
+/* Two albedos differ for tr_upscale_albedo where a channel's difference exceeds
+ * TR_UPSCALE_ALBEDO_ABS + TR_UPSCALE_ALBEDO_REL times the larger of the two. */
+#define TR_UPSCALE_ALBEDO_ABS 0.004f
+#define TR_UPSCALE_ALBEDO_REL 0.04f
+
+/* The passes' albedo at the output's resolution into out (3 floats per output pixel of
+ * `cam`), as tr_albedo_image (post.h) traces it, but tracing only where the traced frame's
+ * albedo (width x height, 3 floats per pixel, the frame's albedo pass) does not already
+ * give it: an output pixel whose traced pixel's 3 x 3 neighbours' albedos all agree with
+ * it (TR_UPSCALE_ALBEDO_ABS, _REL) takes the bilinear interpolation of the traced albedo at
+ * its centre, unless `prev` (the previous call's out, or NULL; it may be out itself)
+ * differs from that there (a detail narrower than the traced pixels, which their samples
+ * can miss); any other traces one first-hit ray through its centre. *traced (may be NULL)
+ * gets the pixels traced. Up to `threads` threads (0: the default); the result does not
+ * depend on their number. */
+int tr_upscale_albedo(const struct tr_scene *scene, const tr_camera *cam, int threads,
+                      uint32_t width, uint32_t height, const float *albedo, const float *prev,
+                      float *out, uint32_t *traced, tr_error *err);
+
 #ifdef __cplusplus
 }
 #endif

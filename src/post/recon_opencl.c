@@ -720,10 +720,37 @@ static int up_buffers(recon_cl *c, uint32_t W, uint32_t H, tr_error *err) {
 }
 #endif
 
+#ifdef TRAC0R_HAVE_OPENCL
+/* The output's albedo into c->up_alb: the frame's albedo pass (nl pixels) read back, the
+ * output's (n pixels) made from it by the caller's fn on the host and uploaded. */
+static int up_albedo(recon_cl *c, tr_recon_albedo_fn fn, void *user, size_t nl, size_t n,
+                     tr_error *err) {
+    float *low = malloc(3 * nl * sizeof *low);
+    if (!low) {
+        return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory for a frame's albedo");
+    }
+    cl_int crc = clEnqueueReadBuffer(c->queue, c->b[B_ALBEDO], CL_TRUE, 0, 3 * nl * sizeof(float),
+                                     low, 0, NULL, NULL);
+    if (crc != CL_SUCCESS) {
+        free(low);
+        return cl_fail(err, "clEnqueueReadBuffer(albedo)", crc);
+    }
+    const float *alb = fn(user, low, err);
+    free(low);
+    if (!alb) {
+        return TR_ERR;
+    }
+    crc = clEnqueueWriteBuffer(c->queue, c->up_alb, CL_TRUE, 0, 3 * n * sizeof(float), alb, 0, NULL,
+                               NULL);
+    return crc == CL_SUCCESS ? TR_OK : cl_fail(err, "clEnqueueWriteBuffer(albedo)", crc);
+}
+#endif
+
 int tr_recon_device_upscale(tr_recon_device *r, const tr_camera *cam, const tr_camera *out_cam,
-                            const float *pos, const float *albedo, const tr_vec3 *motion,
-                            uint32_t motion_count, int method, const tr_recon_params *p, int keep,
-                            float *out, double *ms, tr_error *err) {
+                            const float *pos, tr_recon_albedo_fn albedo, void *albedo_user,
+                            const tr_vec3 *motion, uint32_t motion_count, int method,
+                            const tr_recon_params *p, int keep, float *out, double *ms,
+                            tr_error *err) {
     *ms = 0.0;
     if (check_args(r, cam, method, err) != TR_OK) {
         return TR_ERR;
@@ -781,12 +808,10 @@ int tr_recon_device_upscale(tr_recon_device *r, const tr_camera *cam, const tr_c
         if (albedo) {
             /* The light apart from the albedo, as the host's upscale stage: divided by the
              * albedo the reconstruction multiplied by, multiplied by the output's after. */
-            crc = clEnqueueWriteBuffer(c->queue, c->up_alb, CL_FALSE, 0, 3 * n * sizeof(float),
-                                       albedo, 0, NULL, NULL);
-            rc = rc                  ? rc
-                 : crc != CL_SUCCESS ? cl_fail(err, "clEnqueueWriteBuffer(albedo)", crc)
-                                     : RUN(c, K_MODULATE, wl, hl, err, KB(c, B_CA),
-                                           KB(c, c->modulated), KI(2), KI(wl), KI(hl), KB(c, B_CA));
+            rc = rc ? rc : up_albedo(c, albedo, albedo_user, nl, n, err);
+            rc = rc ? rc
+                    : RUN(c, K_MODULATE, wl, hl, err, KB(c, B_CA), KB(c, c->modulated), KI(2),
+                          KI(wl), KI(hl), KB(c, B_CA));
         }
         const int prev = c->up_cur, next = 1 - c->up_cur;
         cl_mem mbuf = motion && motion_count ? c->motion : c->b[B_DEPTH];
@@ -838,6 +863,7 @@ int tr_recon_device_upscale(tr_recon_device *r, const tr_camera *cam, const tr_c
     }
 #else
     (void)albedo;
+    (void)albedo_user;
     (void)motion;
     (void)motion_count;
     (void)keep;

@@ -12,6 +12,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "../kernel/albedo.h"
 #include "../kernel/emission.h"
 #include "../kernel/rng.h"
 #include "../kernel/sampler.h"
@@ -669,6 +670,115 @@ int tr_upscale_emission(const struct tr_scene *scene, const tr_camera *cam, int 
     free(flag);
     if (resolved) {
         *resolved = count;
+    }
+    return TR_OK;
+}
+
+/* Whether albedos a and b differ for tr_upscale_albedo (upscale.h). */
+static int albedo_differs(const float *a, const float *b) {
+    for (int c = 0; c < 3; ++c) {
+        const float m = a[c] > b[c] ? a[c] : b[c];
+        if (fabsf(a[c] - b[c]) > TR_UPSCALE_ALBEDO_ABS + TR_UPSCALE_ALBEDO_REL * m) {
+            return 1;
+        }
+    }
+    return 0;
+}
+
+int tr_upscale_albedo(const struct tr_scene *scene, const tr_camera *cam, int threads,
+                      uint32_t width, uint32_t height, const float *albedo, const float *prev,
+                      float *out, uint32_t *traced, tr_error *err) {
+    if (traced) {
+        *traced = 0;
+    }
+    if (!scene || !cam || !albedo || !out || width == 0 || height == 0 ||
+        width > cam->screen_width || height > cam->screen_height) {
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "tr_upscale_albedo: empty frame or NULL argument");
+    }
+    if (!tr_scene_is_committed(scene)) {
+        return tr_error_set(err, TR_STATUS_INVALID_OPERATION,
+                            "tr_upscale_albedo: the scene is not committed");
+    }
+    const int W = (int)cam->screen_width, H = (int)cam->screen_height;
+    const int wl = (int)width, hl = (int)height;
+    const float sxr = (float)wl / (float)W, syr = (float)hl / (float)H;
+    const tr_scene_view view = tr_scene_view_of(scene);
+    const int nt = threads > 0 ? threads : omp_get_max_threads();
+    /* Per traced pixel, once rather than per output pixel over it: whether its 3 x 3
+     * neighbourhood (clipped to the frame) is flat. */
+    unsigned char *flat = malloc((size_t)wl * hl);
+    if (!flat) {
+        return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory for a %ux%u frame", width,
+                            height);
+    }
+#pragma omp parallel for num_threads(nt) schedule(static)
+    for (int y = 0; y < hl; ++y) {
+        for (int x = 0; x < wl; ++x) {
+            const float *c = albedo + 3 * ((size_t)y * wl + x);
+            int f = 1;
+            for (int dy = -1; dy <= 1 && f; ++dy) {
+                for (int dx = -1; dx <= 1; ++dx) {
+                    const int xx = x + dx, yy = y + dy;
+                    if (xx >= 0 && yy >= 0 && xx < wl && yy < hl &&
+                        albedo_differs(c, albedo + 3 * ((size_t)yy * wl + xx))) {
+                        f = 0;
+                        break;
+                    }
+                }
+            }
+            flat[(size_t)y * wl + x] = (unsigned char)f;
+        }
+    }
+    uint32_t count = 0;
+#pragma omp parallel for num_threads(nt) schedule(dynamic, 8) reduction(+ : count)
+    for (int y = 0; y < H; ++y) {
+        for (int x = 0; x < W; ++x) {
+            const float fx = ((float)x + 0.5f) * sxr, fy = ((float)y + 0.5f) * syr;
+            int lx = (int)fx, ly = (int)fy;
+            lx = lx < wl - 1 ? lx : wl - 1;
+            ly = ly < hl - 1 ? ly : hl - 1;
+            const size_t i = (size_t)y * W + x;
+            int trace = !flat[(size_t)ly * wl + lx];
+            float v[3] = {0.0f, 0.0f, 0.0f};
+            if (!trace) {
+                /* Bilinear between the traced pixels' centres: its four taps lie in the
+                 * flat 3 x 3 block around (lx, ly). */
+                float gx = fx - 0.5f, gy = fy - 0.5f;
+                gx = gx > 0.0f ? gx : 0.0f;
+                gy = gy > 0.0f ? gy : 0.0f;
+                int x0 = (int)gx, y0 = (int)gy;
+                x0 = x0 < wl - 1 ? x0 : wl - 1;
+                y0 = y0 < hl - 1 ? y0 : hl - 1;
+                const int x1 = x0 + 1 < wl ? x0 + 1 : x0, y1 = y0 + 1 < hl ? y0 + 1 : y0;
+                const float tx = gx - (float)x0 < 1.0f ? gx - (float)x0 : 1.0f;
+                const float ty = gy - (float)y0 < 1.0f ? gy - (float)y0 : 1.0f;
+                const float *a00 = albedo + 3 * ((size_t)y0 * wl + x0);
+                const float *a10 = albedo + 3 * ((size_t)y0 * wl + x1);
+                const float *a01 = albedo + 3 * ((size_t)y1 * wl + x0);
+                const float *a11 = albedo + 3 * ((size_t)y1 * wl + x1);
+                for (int c = 0; c < 3; ++c) {
+                    const float top = a00[c] + (a10[c] - a00[c]) * tx;
+                    const float bottom = a01[c] + (a11[c] - a01[c]) * tx;
+                    v[c] = top + (bottom - top) * ty;
+                }
+                trace = prev && albedo_differs(prev + 3 * i, v);
+            }
+            if (trace) {
+                const tr_vec3 a = tr_albedo_resolve_pixel(&view, cam, x, y, 1);
+                v[0] = a.x;
+                v[1] = a.y;
+                v[2] = a.z;
+                ++count;
+            }
+            out[3 * i] = v[0];
+            out[3 * i + 1] = v[1];
+            out[3 * i + 2] = v[2];
+        }
+    }
+    free(flat);
+    if (traced) {
+        *traced = count;
     }
     return TR_OK;
 }
