@@ -209,7 +209,8 @@ int tr_realtime_film(tr_realtime *rt, const tr_film **film, tr_error *err);
 const tr_gbuffer *tr_realtime_gbuffer(const tr_realtime *rt);
 /* 1 when the reconstruction runs on the device where the film lies, 0 on the host. */
 int tr_realtime_on_device(const tr_realtime *rt);
-/* The TR_PASS_* the film keeps for `method`. */
+/* The TR_PASS_* the film keeps for `method` (for an upscaled frame: those of "accumulate"
+ * also for "off", whose upscaling uses them). */
 uint32_t tr_realtime_passes(const tr_realtime *rt, int method);
 
 /* The budget's step: after a frame that took frame_ms of budget_ms at resolution divisor

@@ -263,8 +263,12 @@ int tr_realtime_on_device(const tr_realtime *rt) {
     return rt ? rt->on_device : 0;
 }
 
-uint32_t tr_realtime_passes(const tr_realtime *rt, int method) {
-    if (!rt || (method == TR_RECON_OFF && !rt->keep_passes)) {
+/* The passes of a frame reconstructed with `method`, upscaled or not: the raw frame keeps
+ * none unless asked, or upscaled (the upscaling reprojects through the distance and
+ * primitive passes, and takes the light apart from the albedo pass: without them a moving
+ * view's raw frames ghosted, and an albedo of 1 stood for the pass). */
+static uint32_t frame_passes(const tr_realtime *rt, int method, int upscaled) {
+    if (!rt || (method == TR_RECON_OFF && !rt->keep_passes && !upscaled)) {
         return 0u;
     }
     /* The direct pass where SVGF filters direct and indirect light apart (not bdpt). */
@@ -284,6 +288,10 @@ uint32_t tr_realtime_passes(const tr_realtime *rt, int method) {
             ? TR_PASS_SPECULAR
             : 0u;
     return TR_PASS_ALL | direct | emission | specular;
+}
+
+uint32_t tr_realtime_passes(const tr_realtime *rt, int method) {
+    return frame_passes(rt, method, 0);
 }
 
 /* ---- Sampling -------------------------------------------------------------------- */
@@ -360,7 +368,7 @@ static int start_view(tr_realtime *rt, const tr_realtime_frame_desc *fd, int str
         (void)tr_camera_resize(&rt->rcam, w ? w : 1, h ? h : 1, err);
     }
     const uint32_t w = rt->rcam.screen_width, h = rt->rcam.screen_height;
-    const uint32_t passes = tr_realtime_passes(rt, fd->method);
+    const uint32_t passes = frame_passes(rt, fd->method, rt->view_upscaled);
     if (rt->film.sum && rt->film.width == w && rt->film.height == h && rt->film.passes == passes) {
         tr_film_clear(&rt->film);
     } else {
