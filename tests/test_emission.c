@@ -23,7 +23,13 @@
  * 3. The reconstruction: a frame whose colour is a constant plus an emission pass comes
  *    out as the constant (filtered) plus the emission added back, for every method, and
  *    with has_resolved set the resolved emission is what is added. Without the pass SVGF
- *    spreads the same bright pixels onto their neighbours. */
+ *    spreads the same bright pixels onto their neighbours.
+ * 4. An upscaled output's missed emitters (tr_emission_missed): in the previous output a
+ *    lamp of 3 x 3 pixels and a strip one pixel high count as missed where the samples
+ *    (4 output pixels apart) saw none, inside and on their edges; the sky above a
+ *    horizon, at its edge, its corners and the image's border, does not (it reaches 4
+ *    pixels in both axes: had it still been there a sample would have seen it); a pixel
+ *    that saw no emission never counts. */
 #include "check.h"
 #include "classic_box.h"
 #include "kernel/emission.h"
@@ -383,6 +389,44 @@ static void test_recon(void) {
     tr_gbuffer_free(&g);
 }
 
+static void test_missed(void) {
+    enum { MW = 32, MH = 24, D = 4 };
+    float *prev = calloc(3u * MW * MH, sizeof *prev);
+    CHECK(prev != NULL, "out of memory");
+    if (!prev) {
+        return;
+    }
+    /* The sky: rows 0..7, every column; a lamp at (20..22, 14..16); a strip along row 19
+     * from column 4 to 27. */
+    for (int y = 0; y < MH; ++y) {
+        for (int x = 0; x < MW; ++x) {
+            const int sky = y < 8;
+            const int lamp = x >= 20 && x <= 22 && y >= 14 && y <= 16;
+            const int strip = y == 19 && x >= 4 && x <= 27;
+            if (sky || lamp || strip) {
+                prev[3 * (y * MW + x)] = 1.0f;
+                prev[3 * (y * MW + x) + 1] = 0.5f;
+            }
+        }
+    }
+    const int small[][2] = {{21, 15}, {20, 14}, {22, 16}, {4, 19}, {15, 19}, {27, 19}};
+    for (size_t k = 0; k < sizeof small / sizeof small[0]; ++k) {
+        CHECK(tr_emission_missed(prev, MW, MH, small[k][0], small[k][1], D, D),
+              "a small emitter at (%d, %d) does not count as missed", small[k][0], small[k][1]);
+    }
+    const int large[][2] = {{10, 3}, {10, 7}, {0, 7}, {31, 7}, {0, 0}, {31, 0}, {16, 0}};
+    for (size_t k = 0; k < sizeof large / sizeof large[0]; ++k) {
+        CHECK(!tr_emission_missed(prev, MW, MH, large[k][0], large[k][1], D, D),
+              "the sky at (%d, %d) counts as missed", large[k][0], large[k][1]);
+    }
+    const int none[][2] = {{10, 8}, {19, 15}, {3, 19}, {10, 12}};
+    for (size_t k = 0; k < sizeof none / sizeof none[0]; ++k) {
+        CHECK(!tr_emission_missed(prev, MW, MH, none[k][0], none[k][1], D, D),
+              "(%d, %d), which saw no emission, counts as missed", none[k][0], none[k][1]);
+    }
+    free(prev);
+}
+
 int main(void) {
     tr_error err;
     tr_scene *s = classic_box(W, H, &err);
@@ -397,5 +441,6 @@ int main(void) {
     test_resolve_edge(0, 0.5f);
     test_steps();
     test_recon();
+    test_missed();
     return check_finish("test_emission");
 }

@@ -84,8 +84,9 @@ struct tr_scene;
  * non-emitting samples among its 3 x 3 neighbours traces an n x n grid of first-hit rays
  * into the committed scene and takes their mean (as tr_resolve_emission does for a frame
  * at its own resolution), and so does one where `prev` (the previous call's out, or
- * NULL) saw emission and its traced pixel sees none (an emitter smaller than the traced
- * pixels, which their samples can miss); any other takes its traced pixel's emission.
+ * NULL) saw emission and its traced pixel sees none, of an emitter small enough for the
+ * samples to miss (one that does not reach two traced pixels away in both axes; a larger
+ * one that none of them saw has moved away); any other takes its traced pixel's emission.
  * The upscaling then carries only reflected light, and an emitter's edge stays sharp at
  * the output's resolution. n in 1..16; *resolved (may be NULL) gets the pixels traced. */
 int tr_upscale_emission(const struct tr_scene *scene, const tr_camera *cam, int n, int threads,

@@ -18,6 +18,27 @@ TR_FN int tr_emission_seen(TR_GLOBAL const float *e, uint32_t i) {
     return e[3u * i] > 0.0f || e[3u * i + 1u] > 0.0f || e[3u * i + 2u] > 0.0f;
 }
 
+/* Whether the emission an upscaled frame's previous output `prev` (w x h) saw at (x, y)
+ * belongs to an emitter this frame's samples can miss, where none of them saw it: one
+ * that does not also reach dx output pixels away along x (either way) and dy along y.
+ * The samples lie at most two traced pixels apart (dx, dy: two traced pixels in output
+ * pixels), so an emitter that reaches that far in both axes from (x, y) and were still
+ * there would hold one of them: where none saw it, it moved away (the sky behind a
+ * silhouette, as the camera turns). A small lamp or a thin strip does not reach that far
+ * in both axes: where it lay between the samples, its emission is traced instead of lost.
+ * Outside the image counts as reached (the sky goes on past the frame's edge). */
+TR_FN int tr_emission_missed(TR_GLOBAL const float *prev, int w, int h, int x, int y, int dx,
+                             int dy) {
+    if (!tr_emission_seen(prev, (uint32_t)(y * w + x))) {
+        return 0;
+    }
+    const int l = x - dx < 0 || tr_emission_seen(prev, (uint32_t)(y * w + x - dx));
+    const int r = x + dx >= w || tr_emission_seen(prev, (uint32_t)(y * w + x + dx));
+    const int u = y - dy < 0 || tr_emission_seen(prev, (uint32_t)((y - dy) * w + x));
+    const int d = y + dy >= h || tr_emission_seen(prev, (uint32_t)((y + dy) * w + x));
+    return !((l || r) && (u || d));
+}
+
 /* Two emitting pixels whose luminances differ by more than this share of the larger are
  * on a step in the emission too: an environment's horizon, the sun's disc against the
  * sky, one lamp in front of a brighter one. At one sample a pixel across such a step shows

@@ -218,9 +218,10 @@ __kernel void tr_cl_restir_gi_spatial(TR_SCENE_ARRAYS(TR_CL_ARRAY_PARAM)
 /* The first hit's emission at an upscaled output's resolution (src/post/upscale.c's
  * tr_upscale_emission, per output pixel): from the traced frame's emission (wl x hl, the
  * mean per pixel), an output pixel whose traced pixel lies on an emitter's edge, or where
- * the previous output (prev, when have_prev) saw emission its traced pixel does not,
- * traces n x n first-hit rays through the output's camera (the frame's); any other takes
- * its traced pixel's emission. One work item per output pixel. */
+ * the previous output (prev, when have_prev) saw an emitter small enough to lie between
+ * the samples (tr_emission_missed) and its traced pixel sees none, traces n x n first-hit
+ * rays through the output's camera (the frame's); any other takes its traced pixel's
+ * emission. One work item per output pixel. */
 __kernel void
 tr_cl_upscale_emission(TR_SCENE_ARRAYS(TR_CL_ARRAY_PARAM) __global const uint *scene_info,
                        __global const tr_frame *frame, int wl, int hl,
@@ -238,7 +239,8 @@ tr_cl_upscale_emission(TR_SCENE_ARRAYS(TR_CL_ARRAY_PARAM) __global const uint *s
     ly = ly < hl - 1 ? ly : hl - 1;
     const uint i = (uint)(y * w + x), k = (uint)(ly * wl + lx);
     const int seen = tr_emission_seen(emission, k);
-    const int missed = have_prev && tr_emission_seen(prev, i) && !seen;
+    const int dx = (int)ceil(2.0f / sxr), dy = (int)ceil(2.0f / syr);
+    const int missed = have_prev && !seen && tr_emission_missed(prev, w, h, x, y, dx, dy);
     tr_vec3 e;
     if (missed || tr_emission_on_edge(emission, wl, hl, lx, ly)) {
         tr_scene_view s;

@@ -625,6 +625,8 @@ int tr_upscale_emission(const struct tr_scene *scene, const tr_camera *cam, int 
     const int W = (int)cam->screen_width, H = (int)cam->screen_height;
     const int wl = (int)width, hl = (int)height;
     const float sxr = (float)wl / (float)W, syr = (float)hl / (float)H;
+    /* Two traced pixels in output pixels (tr_emission_missed). */
+    const int dx = (int)ceilf(2.0f / sxr), dy = (int)ceilf(2.0f / syr);
     const tr_scene_view view = tr_scene_view_of(scene);
     const int nt = threads > 0 ? threads : omp_get_max_threads();
     /* Per traced pixel, once rather than per output pixel over it: whether its samples
@@ -652,8 +654,9 @@ int tr_upscale_emission(const struct tr_scene *scene, const tr_camera *cam, int 
             const size_t i = (size_t)y * W + x;
             const size_t k = (size_t)ly * wl + lx;
             /* A small emitter can fall between the traced samples: where the previous
-             * output saw emission and the neighbourhood sees none, trace it too. */
-            const int missed = prev && tr_emission_seen(prev, (uint32_t)i) && !(flag[k] & 1);
+             * output saw one and the traced pixel sees none, trace it too. */
+            const int missed =
+                prev && !(flag[k] & 1) && tr_emission_missed(prev, W, H, x, y, dx, dy);
             if (missed || (flag[k] & 2)) {
                 const tr_vec3 e = tr_emission_resolve_pixel(&view, cam, x, y, n);
                 out[3 * i] = e.x;
