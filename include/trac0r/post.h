@@ -208,8 +208,8 @@ typedef struct tr_recon_params {
                              (tr_upscale_albedo: the frame's interpolated where it is flat,
                              a first-hit ray through the output pixel's centre elsewhere),
                              so that textures and material edges are sharp at the output's
-                             resolution; 0, or a frame without an albedo pass: the
-                             remodulated colour is upscaled (docs/realtime.md) */
+                             resolution; 0: the remodulated colour is upscaled
+                             (docs/realtime.md) */
     int fresh_spp;        /* tr_realtime on the host: the samples per pixel in all of the
                              pixels without history (the first frame, a cut, a
                              disocclusion), traced again after the frame's own; at most the
@@ -330,8 +330,9 @@ int tr_resolve_albedo(const struct tr_scene *scene, const tr_camera *cam, int n,
 /* The albedo the reconstruction multiplies by (the kernel's tr_first_albedo: a glossy
  * surface's directional albedo) of one first-hit ray through the centre of every pixel of
  * cam, 3 floats per pixel into out (0 where the ray hits nothing), on up to `threads`
- * threads (0: the default), into the committed scene. For the output of an upscaled frame
- * (tr_recon_params.upscale_albedo). */
+ * threads (0: the default), into the committed scene. tr_upscale_albedo (upscale.h) traces
+ * the same rays for an upscaled frame's output only where the frame's own albedo does not
+ * give it; this traces them all (its reference in the tests). */
 int tr_albedo_image(const struct tr_scene *scene, const tr_camera *cam, int threads, float *out,
                     tr_error *err);
 

@@ -15,7 +15,7 @@
  * The albedo pass is resolved the same way where the caller asks (tr_resolve_albedo): the
  * pixels whose albedo differs from a neighbour's take the mean base colour of an n x n
  * grid of first hits (src/kernel/albedo.h), for the reconstruction's demodulation; and
- * tr_albedo_image traces one such ray through every pixel of an upscaled frame's output. */
+ * tr_albedo_image traces one such ray through every pixel of a camera. */
 #include <omp.h>
 #include <string.h>
 

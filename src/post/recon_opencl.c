@@ -93,6 +93,8 @@ typedef struct recon_cl {
      * distance, two of each), its first hits' emission (this frame's and the last), the
      * output, the samples' positions and the two cameras, for up_w x up_h outputs. */
     cl_mem up_col[2], up_len[2], up_depth[2], up_emis[2], up_out, up_pos, up_cams, up_alb;
+    float *up_low; /* the frame's albedo pass read back (upscale_albedo), up_low_len floats */
+    size_t up_low_len;
     uint32_t up_w, up_h;
     int up_cur, up_have, emis_cur, emis_have;
     tr_camera up_prev;
@@ -167,6 +169,7 @@ static void cl_state_free(recon_cl *c) {
         clReleaseMemObject(c->motion);
     }
     up_release(c);
+    free(c->up_low);
     for (int i = 0; i < K_COUNT; ++i) {
         if (c->k[i]) {
             clReleaseKernel(c->k[i]);
@@ -721,22 +724,25 @@ static int up_buffers(recon_cl *c, uint32_t W, uint32_t H, tr_error *err) {
 #endif
 
 #ifdef TRAC0R_HAVE_OPENCL
-/* The output's albedo into c->up_alb: the frame's albedo pass (nl pixels) read back, the
- * output's (n pixels) made from it by the caller's fn on the host and uploaded. */
+/* The output's albedo into c->up_alb: the frame's albedo pass (nl pixels) read back into a
+ * host buffer kept between frames, the output's (n pixels) made from it by the caller's fn
+ * on the host and uploaded. */
 static int up_albedo(recon_cl *c, tr_recon_albedo_fn fn, void *user, size_t nl, size_t n,
                      tr_error *err) {
-    float *low = malloc(3 * nl * sizeof *low);
-    if (!low) {
-        return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory for a frame's albedo");
+    if (c->up_low_len != 3 * nl) {
+        free(c->up_low);
+        c->up_low_len = 0;
+        if (!(c->up_low = malloc(3 * nl * sizeof *c->up_low))) {
+            return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory for a frame's albedo");
+        }
+        c->up_low_len = 3 * nl;
     }
     cl_int crc = clEnqueueReadBuffer(c->queue, c->b[B_ALBEDO], CL_TRUE, 0, 3 * nl * sizeof(float),
-                                     low, 0, NULL, NULL);
+                                     c->up_low, 0, NULL, NULL);
     if (crc != CL_SUCCESS) {
-        free(low);
         return cl_fail(err, "clEnqueueReadBuffer(albedo)", crc);
     }
-    const float *alb = fn(user, low, err);
-    free(low);
+    const float *alb = fn(user, c->up_low, err);
     if (!alb) {
         return TR_ERR;
     }

@@ -602,25 +602,37 @@ int tr_upscale_positions(const tr_render_config *cfg, uint32_t width, uint32_t h
     return TR_OK;
 }
 
+/* The checks tr_upscale_emission and tr_upscale_albedo share (function `fn`): a traced
+ * frame of width x height no larger than cam's output, its pass `in` and `out` given, and
+ * a committed scene to trace. */
+static int output_trace_args(const char *fn, const struct tr_scene *scene, const tr_camera *cam,
+                             uint32_t width, uint32_t height, const float *in, const float *out,
+                             tr_error *err) {
+    if (!scene || !cam || !in || !out || width == 0 || height == 0 || width > cam->screen_width ||
+        height > cam->screen_height) {
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT, "%s: empty frame or NULL argument",
+                            fn);
+    }
+    if (!tr_scene_is_committed(scene)) {
+        return tr_error_set(err, TR_STATUS_INVALID_OPERATION, "%s: the scene is not committed", fn);
+    }
+    return TR_OK;
+}
+
 int tr_upscale_emission(const struct tr_scene *scene, const tr_camera *cam, int n, int threads,
                         uint32_t width, uint32_t height, const float *emission, const float *prev,
                         float *out, uint32_t *resolved, tr_error *err) {
     if (resolved) {
         *resolved = 0;
     }
-    if (!scene || !cam || !emission || !out || width == 0 || height == 0 ||
-        width > cam->screen_width || height > cam->screen_height) {
-        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
-                            "tr_upscale_emission: empty frame or NULL argument");
-    }
     if (n < 1 || n > TR_RESOLVE_EMISSION_MAX) {
         return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
                             "tr_upscale_emission: %d x %d rays per pixel (expected 1..%d)", n, n,
                             TR_RESOLVE_EMISSION_MAX);
     }
-    if (!tr_scene_is_committed(scene)) {
-        return tr_error_set(err, TR_STATUS_INVALID_OPERATION,
-                            "tr_upscale_emission: the scene is not committed");
+    if (output_trace_args("tr_upscale_emission", scene, cam, width, height, emission, out, err) !=
+        TR_OK) {
+        return TR_ERR;
     }
     const int W = (int)cam->screen_width, H = (int)cam->screen_height;
     const int wl = (int)width, hl = (int)height;
@@ -694,14 +706,9 @@ int tr_upscale_albedo(const struct tr_scene *scene, const tr_camera *cam, int th
     if (traced) {
         *traced = 0;
     }
-    if (!scene || !cam || !albedo || !out || width == 0 || height == 0 ||
-        width > cam->screen_width || height > cam->screen_height) {
-        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
-                            "tr_upscale_albedo: empty frame or NULL argument");
-    }
-    if (!tr_scene_is_committed(scene)) {
-        return tr_error_set(err, TR_STATUS_INVALID_OPERATION,
-                            "tr_upscale_albedo: the scene is not committed");
+    if (output_trace_args("tr_upscale_albedo", scene, cam, width, height, albedo, out, err) !=
+        TR_OK) {
+        return TR_ERR;
     }
     const int W = (int)cam->screen_width, H = (int)cam->screen_height;
     const int wl = (int)width, hl = (int)height;
