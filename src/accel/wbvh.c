@@ -10,6 +10,7 @@
 #include "accel/accel_internal.h"
 #include "trac0r/accel.h"
 #include "trac0r/render.h"
+#include "util/bigmem.h"
 
 enum {
     LEAF_MERGE = 4, /* binary subtrees of at most this many triangles become one packet */
@@ -174,8 +175,8 @@ int tr_wbvh_build(tr_wbvh *w, const tr_bvh *bvh, tr_error *err) {
     memset(&c, 0, sizeof c);
     c.bvh = bvh;
     c.w = w;
-    c.sub_first = malloc((size_t)bvh->node_count * sizeof *c.sub_first);
-    c.sub_count = malloc((size_t)bvh->node_count * sizeof *c.sub_count);
+    c.sub_first = tr_bigmem_malloc((size_t)bvh->node_count * sizeof *c.sub_first);
+    c.sub_count = tr_bigmem_malloc((size_t)bvh->node_count * sizeof *c.sub_count);
     /* Worst cases, allocated once (pages never written are never backed by memory): every
      * wide node opens at least one binary interior node (the root may be a lone leaf),
      * and every wide leaf is a binary leaf of at most 8 triangles (two packets) or a
@@ -183,10 +184,10 @@ int tr_wbvh_build(tr_wbvh *w, const tr_bvh *bvh, tr_error *err) {
     c.node_cap = bvh->leaf_count;
     c.leaf_cap = bvh->leaf_count;
     c.packet_cap = 2 * bvh->leaf_count;
-    w->nodes = aligned_alloc(64, round64((size_t)c.node_cap * sizeof *w->nodes));
-    w->packets = aligned_alloc(64, round64((size_t)c.packet_cap * sizeof *w->packets));
-    w->leaves = malloc((size_t)c.leaf_cap * sizeof *w->leaves);
-    w->slot_src = malloc((size_t)c.node_cap * TR_WBVH_WIDTH * sizeof *w->slot_src);
+    w->nodes = tr_bigmem_aligned(64, round64((size_t)c.node_cap * sizeof *w->nodes));
+    w->packets = tr_bigmem_aligned(64, round64((size_t)c.packet_cap * sizeof *w->packets));
+    w->leaves = tr_bigmem_malloc((size_t)c.leaf_cap * sizeof *w->leaves);
+    w->slot_src = tr_bigmem_malloc((size_t)c.node_cap * TR_WBVH_WIDTH * sizeof *w->slot_src);
     if (!c.sub_first || !c.sub_count || !w->nodes || !w->packets || !w->leaves || !w->slot_src) {
         c.failed = 1;
     }

@@ -11,6 +11,7 @@
 #include "trac0r/scene.h"
 #include "material_registry.h"
 #include "scene_internal.h"
+#include "util/bigmem.h"
 
 tr_material tr_material_emitter(tr_vec3 color, float emittance) {
     tr_material m = tr_material_default(TR_MATERIAL_EMITTER);
@@ -143,6 +144,8 @@ static int grow(void **arr, uint32_t *cap, uint64_t need, size_t elem, const cha
         return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory storing %llu %s",
                             (unsigned long long)need, what);
     }
+    /* The part not yet written on huge pages, for a big scene's arrays (bigmem.h). */
+    tr_bigmem_advise(grown, (size_t)c * elem);
     *arr = grown;
     *cap = (uint32_t)c;
     return TR_OK;
