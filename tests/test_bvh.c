@@ -1298,6 +1298,96 @@ static void test_parallel_build_deterministic(void) {
     tr_scene_clear(&s);
 }
 
+static int cmp_u32(const void *a, const void *b) {
+    const uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
+    return (x > y) - (x < y);
+}
+
+/* tr_bvh_build_wide stops splitting at TR_WBVH_LEAF_MERGE triangles, where the collapse
+ * merges a subtree into one leaf anyway: the wide BVH collapsed from it must have the same
+ * nodes bit for bit and the same leaves (packets, runs and the triangles in each run, in
+ * any order) as the one collapsed from tr_bvh_build's tree, and its binary tree must split
+ * no node of that size. An icosphere large enough for the parallel phase, and a soup of
+ * random triangles whose small nodes the SAH splits unevenly. */
+static void check_wide_build(const char *name, const tr_triangle *tris, uint32_t n) {
+    tr_error err;
+    tr_bvh full, cut;
+    tr_wbvh wa, wb;
+    CHECK(tr_bvh_build(&full, tris, n, &err) == TR_OK, "%s", err.msg);
+    CHECK(tr_bvh_build_wide(&cut, tris, n, NULL, &err) == TR_OK, "%s", err.msg);
+    CHECK(tr_wbvh_build(&wa, &full, &err) == TR_OK, "%s", err.msg);
+    CHECK(tr_wbvh_build(&wb, &cut, &err) == TR_OK, "%s", err.msg);
+    check_structure(name, &cut, tris, n);
+    uint32_t small_split = 0;
+    for (uint32_t i = 0; i < cut.node_count; ++i) {
+        const tr_bvh_node *nd = &cut.nodes[i];
+        if (nd->count == 0) {
+            const tr_bvh_node *l = &cut.nodes[nd->left_first], *r = &cut.nodes[nd->left_first + 1];
+            /* Both children leaves: the node held their two runs. */
+            small_split +=
+                l->count > 0 && r->count > 0 && l->count + r->count <= TR_WBVH_LEAF_MERGE;
+        }
+    }
+    CHECK(small_split == 0, "%s: %u nodes of at most %u triangles split", name, small_split,
+          TR_WBVH_LEAF_MERGE);
+    CHECK(cut.node_count < full.node_count, "%s: %u binary nodes, no fewer than %u", name,
+          cut.node_count, full.node_count);
+    CHECK(wa.node_count == wb.node_count && wa.leaf_count == wb.leaf_count &&
+              wa.packet_count == wb.packet_count,
+          "%s: wide trees of %u/%u nodes, %u/%u leaves, %u/%u packets", name, wa.node_count,
+          wb.node_count, wa.leaf_count, wb.leaf_count, wa.packet_count, wb.packet_count);
+    if (wa.node_count == wb.node_count && wa.leaf_count == wb.leaf_count) {
+        CHECK(memcmp(wa.nodes, wb.nodes, (size_t)wa.node_count * sizeof *wa.nodes) == 0,
+              "%s: the wide nodes differ", name);
+        uint32_t differ = 0;
+        for (uint32_t i = 0; i < wa.leaf_count; ++i) {
+            const tr_wbvh_leaf *a = &wa.leaves[i], *b = &wb.leaves[i];
+            if (a->packet != b->packet || a->first != b->first || a->count != b->count) {
+                ++differ;
+                continue;
+            }
+            uint32_t ia[8 * TR_WBVH_LEAF_MAX_PACKETS], ib[8 * TR_WBVH_LEAF_MAX_PACKETS];
+            const uint32_t c = a->count < 8 * TR_WBVH_LEAF_MAX_PACKETS ? a->count : 0;
+            for (uint32_t k = 0; k < c; ++k) {
+                ia[k] = full.indices[a->first + k];
+                ib[k] = cut.indices[b->first + k];
+            }
+            qsort(ia, c, sizeof *ia, cmp_u32);
+            qsort(ib, c, sizeof *ib, cmp_u32);
+            differ += memcmp(ia, ib, c * sizeof *ia) != 0;
+        }
+        CHECK(differ == 0, "%s: %u of %u wide leaves hold other triangles", name, differ,
+              wa.leaf_count);
+    }
+    tr_wbvh_free(&wa);
+    tr_wbvh_free(&wb);
+    tr_bvh_free(&full);
+    tr_bvh_free(&cut);
+}
+
+static void test_wide_build(void) {
+    tr_error err;
+    tr_scene s = {0};
+    tr_scene_init(&s);
+    uint32_t m;
+    CHECK(tr_scene_add_material(&s, tr_material_diffuse(v3s(0.5f)), &m, &err) == TR_OK, "%s",
+          err.msg);
+    tr_shape_desc d = tr_shape_desc_default(TR_SHAPE_ICOSPHERE);
+    d.subdivisions = 6;
+    CHECK(tr_scene_add_shape(&s, &d, &err) == TR_OK, "%s", err.msg);
+    check_wide_build("icosphere 6", s.triangles, s.triangle_count);
+    tr_scene_clear(&s);
+    tr_rng r;
+    tr_rng_init(&r, 77, 1, 0);
+    uint32_t n = 0;
+    tr_triangle *soup = make_soup(&r, &n);
+    for (uint32_t i = 0; i < n; ++i) {
+        tr_triangle_finish(&soup[i]);
+    }
+    check_wide_build("soup", soup, n);
+    free(soup);
+}
+
 /* Triangles that can never be hit are marked by all threads and squeezed out before the
  * build, and the parallel build puts its subtrees in regions of the node array: a big
  * mesh with such triangles interleaved (zero area, NaN) must give node for node the tree
@@ -1362,6 +1452,7 @@ int main(void) {
     double t0 = tr_time_now();
     test_parallel_build_deterministic();
     test_build_skips_in_parallel();
+    test_wide_build();
     test_meshes();
     test_stress();
     test_degenerate();

@@ -14,7 +14,7 @@
 enum {
     BINS = 16,       /* SAH bins per axis (nodes of fewer triangles use one per triangle) */
     MAX_LEAF = 8,    /* a node this small may become a leaf when the SAH says so */
-    FORCED_LEAF = 2, /* a node this small always becomes a leaf */
+    FORCED_LEAF = 2, /* a node this small always becomes a leaf (for the wide BVH: below) */
     SAH_DEPTH = 32,  /* below this depth, split at the object median to bound depth */
 };
 /* Relative cost of visiting an interior node versus testing one triangle. */
@@ -75,6 +75,7 @@ typedef struct builder {
     ref *refs; /* in the order the partitions leave them: leaf order at the end */
     tr_bvh_node *nodes;
     uint32_t node_count;
+    uint32_t forced_leaf; /* a node of at most this many entries becomes a leaf */
 } builder;
 
 /* The bins of one node on all three axes: each bin's box as two rows of four floats (the
@@ -466,7 +467,7 @@ static uint32_t split_node(builder *b, const task *t, tr_bvh_node *node, task ch
     node->box = box;
     node->left_first = t->first;
     node->count = t->count;
-    if (t->count <= FORCED_LEAF) {
+    if (t->count <= b->forced_leaf) {
         return 0;
     }
     int axis = 0, split_bin = 0;
@@ -618,11 +619,12 @@ static void bvh_fill_tris(tr_bvh *bvh, const tr_triangle *tris) {
 /* The build over triangles (tris) or over boxes (boxes, tris NULL: the top level of a
  * two-level structure, whose leaf entries are instances). */
 static int bvh_build(tr_bvh *bvh, const tr_triangle *tris, const tr_aabb *boxes, uint32_t n,
-                     const uint8_t *skip, tr_error *err) {
+                     const uint8_t *skip, uint32_t forced_leaf, tr_error *err) {
     double t0 = tr_time_now();
     memset(bvh, 0, sizeof *bvh);
     builder b;
     memset(&b, 0, sizeof b);
+    b.forced_leaf = forced_leaf;
     /* The big arrays on huge pages (bigmem.h): their first writes' page faults took a third
      * to a half of a big build's time. */
     b.refs = tr_bigmem_malloc((size_t)(n ? n : 1) * sizeof *b.refs);
@@ -718,16 +720,16 @@ static int bvh_build(tr_bvh *bvh, const tr_triangle *tris, const tr_aabb *boxes,
 }
 
 int tr_bvh_build(tr_bvh *bvh, const tr_triangle *tris, uint32_t n, tr_error *err) {
-    return bvh_build(bvh, tris, NULL, n, NULL, err);
+    return bvh_build(bvh, tris, NULL, n, NULL, FORCED_LEAF, err);
 }
 
-int tr_bvh_build_skip(tr_bvh *bvh, const tr_triangle *tris, uint32_t n, const uint8_t *skip,
+int tr_bvh_build_wide(tr_bvh *bvh, const tr_triangle *tris, uint32_t n, const uint8_t *skip,
                       tr_error *err) {
-    return bvh_build(bvh, tris, NULL, n, skip, err);
+    return bvh_build(bvh, tris, NULL, n, skip, TR_WBVH_LEAF_MERGE, err);
 }
 
 int tr_bvh_build_boxes(tr_bvh *bvh, const tr_aabb *boxes, uint32_t n, tr_error *err) {
-    return bvh_build(bvh, NULL, boxes, n, NULL, err);
+    return bvh_build(bvh, NULL, boxes, n, NULL, FORCED_LEAF, err);
 }
 
 void tr_bvh_refit(tr_bvh *bvh, const tr_triangle *tris) {

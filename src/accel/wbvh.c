@@ -12,10 +12,6 @@
 #include "trac0r/render.h"
 #include "util/bigmem.h"
 
-enum {
-    LEAF_MERGE = 4, /* binary subtrees of at most this many triangles become one packet */
-};
-
 _Static_assert(TR_BVH_STACK_SIZE < 1 << 8, "recursion depth of the collapse");
 
 typedef struct collapser {
@@ -35,7 +31,7 @@ static float box_area(tr_aabb b) {
 /* Whether binary node i becomes a leaf of the wide tree: a binary leaf, or a subtree
  * small enough for one packet. */
 static int is_wide_leaf(const collapser *c, uint32_t i) {
-    return c->bvh->nodes[i].count > 0 || c->sub_count[i] <= LEAF_MERGE;
+    return c->bvh->nodes[i].count > 0 || c->sub_count[i] <= TR_WBVH_LEAF_MERGE;
 }
 
 static uint32_t emit_leaf(collapser *c, uint32_t first, uint32_t count) {
@@ -212,7 +208,7 @@ int tr_wbvh_build(tr_wbvh *w, const tr_bvh *bvh, tr_error *err) {
     }
     if (!c.failed) {
         uint32_t slots[TR_WBVH_WIDTH] = {0};
-        if (bvh->nodes[0].count > 0 || c.sub_count[0] <= LEAF_MERGE) {
+        if (bvh->nodes[0].count > 0 || c.sub_count[0] <= TR_WBVH_LEAF_MERGE) {
             emit_node(&c, slots, 1, 0); /* the root is one leaf: a node holding it */
         } else {
             slots[0] = bvh->nodes[0].left_first;

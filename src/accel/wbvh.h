@@ -24,6 +24,8 @@
 #define TR_WBVH_LEAF_BIT 0x80000000u /* child entry: leaf, with packet count and start */
 #define TR_WBVH_LEAF_SHIFT 27        /* packet count in bits 27..30 */
 #define TR_WBVH_LEAF_MAX_PACKETS 15u
+/* Binary subtrees of at most this many triangles become one leaf packet. */
+#define TR_WBVH_LEAF_MERGE 4u
 #define TR_WBVH_EMPTY TR_WBVH_LEAF_BIT /* an unused child slot: a leaf of no packets */
 
 /* One node: the boxes of its children as bounds[2 * axis + side][child] (side 0 the

@@ -561,7 +561,7 @@ int tr_scene_build_two_level(tr_scene *s, tr_error *err) {
         if (p->built) {
             continue;
         }
-        if (tr_bvh_build(&p->bvh, p->tris, p->tri_count, err) != TR_OK) {
+        if (tr_bvh_build_wide(&p->bvh, p->tris, p->tri_count, NULL, err) != TR_OK) {
             return TR_ERR;
         }
         if (tr_wbvh_build(&p->wbvh, &p->bvh, err) != TR_OK) {
@@ -592,7 +592,7 @@ int tr_scene_build_two_level(tr_scene *s, tr_error *err) {
         boxes[i] = sh->box;
     }
     if (rc == TR_OK) {
-        rc = tr_bvh_build_skip(&s->rest_bvh, s->triangles, s->triangle_count, skip, err);
+        rc = tr_bvh_build_wide(&s->rest_bvh, s->triangles, s->triangle_count, skip, err);
     }
     if (rc == TR_OK) {
         rc = tr_wbvh_build(&s->rest_wbvh, &s->rest_bvh, err);

@@ -604,7 +604,7 @@ int tr_scene_commit(tr_scene *s, tr_accel_type accel, tr_error *err) {
             s->committed = 1;
             return TR_OK;
         }
-        if (tr_bvh_build(&s->bvh, s->triangles, s->triangle_count, err) != TR_OK) {
+        if (tr_bvh_build_wide(&s->bvh, s->triangles, s->triangle_count, NULL, err) != TR_OK) {
             return TR_ERR;
         }
         /* The CPU traverses the wide BVH collapsed from the binary one. */
