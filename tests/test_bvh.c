@@ -1271,19 +1271,26 @@ static void test_render(void) {
     tr_scene_clear(&s);
 }
 
+/* A scene holding one icosphere of level 6 (81 920 triangles): large enough for the
+ * builder's parallel phase. */
+static void icosphere_scene(tr_scene *s) {
+    tr_error err;
+    tr_scene_init(s);
+    uint32_t m;
+    CHECK(tr_scene_add_material(s, tr_material_diffuse(v3s(0.5f)), &m, &err) == TR_OK, "%s",
+          err.msg);
+    tr_shape_desc d = tr_shape_desc_default(TR_SHAPE_ICOSPHERE);
+    d.subdivisions = 6;
+    CHECK(tr_scene_add_shape(s, &d, &err) == TR_OK, "%s", err.msg);
+}
+
 /* The parallel build must give the same arrays whatever the thread count, or images
  * could differ where two triangles tie. Level 6 (81 920 triangles) is large enough for
  * the builder's parallel phase. */
 static void test_parallel_build_deterministic(void) {
     tr_error err;
     tr_scene s = {0};
-    tr_scene_init(&s);
-    uint32_t m;
-    CHECK(tr_scene_add_material(&s, tr_material_diffuse(v3s(0.5f)), &m, &err) == TR_OK, "%s",
-          err.msg);
-    tr_shape_desc d = tr_shape_desc_default(TR_SHAPE_ICOSPHERE);
-    d.subdivisions = 6;
-    CHECK(tr_scene_add_shape(&s, &d, &err) == TR_OK, "%s", err.msg);
+    icosphere_scene(&s);
     tr_bvh one, two;
     omp_set_num_threads(1);
     CHECK(tr_bvh_build(&one, s.triangles, s.triangle_count, &err) == TR_OK, "%s", err.msg);
@@ -1366,15 +1373,8 @@ static void check_wide_build(const char *name, const tr_triangle *tris, uint32_t
 }
 
 static void test_wide_build(void) {
-    tr_error err;
     tr_scene s = {0};
-    tr_scene_init(&s);
-    uint32_t m;
-    CHECK(tr_scene_add_material(&s, tr_material_diffuse(v3s(0.5f)), &m, &err) == TR_OK, "%s",
-          err.msg);
-    tr_shape_desc d = tr_shape_desc_default(TR_SHAPE_ICOSPHERE);
-    d.subdivisions = 6;
-    CHECK(tr_scene_add_shape(&s, &d, &err) == TR_OK, "%s", err.msg);
+    icosphere_scene(&s);
     check_wide_build("icosphere 6", s.triangles, s.triangle_count);
     tr_scene_clear(&s);
     tr_rng r;
@@ -1396,13 +1396,7 @@ static void test_wide_build(void) {
 static void test_build_skips_in_parallel(void) {
     tr_error err;
     tr_scene s = {0};
-    tr_scene_init(&s);
-    uint32_t m;
-    CHECK(tr_scene_add_material(&s, tr_material_diffuse(v3s(0.5f)), &m, &err) == TR_OK, "%s",
-          err.msg);
-    tr_shape_desc d = tr_shape_desc_default(TR_SHAPE_ICOSPHERE);
-    d.subdivisions = 6;
-    CHECK(tr_scene_add_shape(&s, &d, &err) == TR_OK, "%s", err.msg);
+    icosphere_scene(&s);
     const uint32_t n = s.triangle_count;
     tr_triangle *mixed = malloc((size_t)(2 * n) * sizeof *mixed);
     uint32_t *where = malloc((size_t)n * sizeof *where);
