@@ -22,7 +22,7 @@ FLAGS="-std=c11 -g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recover
     -fno-omit-frame-pointer -ffp-contract=off -Wall -Wextra -Wno-unknown-pragmas -Iinclude -Isrc"
 SCENE="src/scene/json.c src/scene/scene.c src/scene/shape.c src/scene/camera.c
     src/scene/lights.c src/scene/light_change.c src/accel/bvh.c src/accel/wbvh.c src/accel/wbvh_scalar.c src/accel/tlas.c src/scene/instance.c src/scene/punctual.c src/scene/ggx_ms.c
-    src/accel/embree.c src/util/error.c src/util/registry.c src/util/clock.c src/util/parse.c src/scene/material_registry.c
+    src/accel/embree.c src/util/error.c src/util/registry.c src/util/clock.c src/util/parse.c src/util/bigmem.c src/scene/material_registry.c
     src/util/infile.c src/scene/texture.c src/scene/image_codec.c src/scene/envmap.c src/scene/sun.c src/scene/light_tree.c"
 # shellcheck disable=SC2046,SC2086
 "$CC" $FLAGS $(pkg-config --cflags libcjson) fuzz/fuzz_scene_json.c $SCENE \
@@ -42,7 +42,7 @@ SCENE="src/scene/json.c src/scene/scene.c src/scene/shape.c src/scene/camera.c
 # shellcheck disable=SC2046,SC2086
 "$CC" $FLAGS fuzz/fuzz_texture.c src/scene/texture.c src/scene/image_codec.c src/scene/scene.c \
     src/scene/shape.c src/scene/lights.c src/scene/light_change.c src/accel/bvh.c src/accel/wbvh.c src/accel/wbvh_scalar.c src/accel/tlas.c src/scene/instance.c src/scene/punctual.c src/scene/ggx_ms.c \
-    src/accel/embree.c src/util/error.c src/util/registry.c src/util/clock.c src/util/parse.c src/scene/material_registry.c \
+    src/accel/embree.c src/util/error.c src/util/registry.c src/util/clock.c src/util/parse.c src/util/bigmem.c src/scene/material_registry.c \
     src/util/infile.c src/scene/light_tree.c src/scene/sun.c $(pkg-config --libs libpng) -ljpeg -lm -o "$OUT/fuzz_texture"
 # shellcheck disable=SC2046,SC2086
 "$CC" $FLAGS fuzz/fuzz_checkpoint.c src/session/checkpoint.c src/film/film.c src/io/outfile.c \
