@@ -1353,8 +1353,13 @@ static void check_wide_build(const char *name, const tr_triangle *tris, uint32_t
                 ++differ;
                 continue;
             }
-            uint32_t ia[8 * TR_WBVH_LEAF_MAX_PACKETS], ib[8 * TR_WBVH_LEAF_MAX_PACKETS];
-            const uint32_t c = a->count < 8 * TR_WBVH_LEAF_MAX_PACKETS ? a->count : 0;
+            /* A leaf holds at most its packets' four lanes each. */
+            uint32_t ia[4 * TR_WBVH_LEAF_MAX_PACKETS], ib[4 * TR_WBVH_LEAF_MAX_PACKETS];
+            const uint32_t c = a->count;
+            if (c > 4 * TR_WBVH_LEAF_MAX_PACKETS) {
+                ++differ;
+                continue;
+            }
             for (uint32_t k = 0; k < c; ++k) {
                 ia[k] = full.indices[a->first + k];
                 ib[k] = cut.indices[b->first + k];
