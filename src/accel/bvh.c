@@ -505,11 +505,9 @@ static uint32_t split_node(builder *b, const task *t, tr_bvh_node *node, task ch
 
 /* Builds the subtree of `root` into nodes[], root first, children always after their
  * parent; sets *node_count, raises *deepest to the deepest leaf's depth and returns the
- * number of leaves. With `cut` non-NULL, nodes
- * at depth cut_depth are not built but recorded in cut[] (their slot is reserved), to
- * be built separately. */
+ * number of leaves. */
 static uint32_t build_nodes(builder *b, task root, tr_bvh_node *nodes, uint32_t *node_count,
-                            uint32_t cut_depth, task *cut, uint32_t *cut_count, uint32_t *deepest) {
+                            uint32_t *deepest) {
     /* Depth-first with the left child popped first: at most one pending sibling per
      * level, and the depth is below TR_BVH_STACK_SIZE. */
     task stack[2 * TR_BVH_STACK_SIZE + 2];
@@ -519,10 +517,6 @@ static uint32_t build_nodes(builder *b, task root, tr_bvh_node *nodes, uint32_t 
     stack[top++] = root;
     while (top > 0) {
         task t = stack[--top];
-        if (cut && t.depth == cut_depth) {
-            cut[(*cut_count)++] = t;
-            continue;
-        }
         tr_bvh_node *node = &nodes[t.node];
         task child[2];
         uint32_t left = split_node(b, &t, node, child);
@@ -550,52 +544,157 @@ static uint32_t build_nodes(builder *b, task root, tr_bvh_node *nodes, uint32_t 
 }
 
 enum {
-    PARALLEL_MIN = PARALLEL_NODE_MIN, /* fewer triangles than this build on one thread */
-    CUT_DEPTH = 4,               /* the top levels are built serially, up to 16 subtrees after */
-    TOP_NODES = 2u << CUT_DEPTH, /* more than the top levels' nodes */
+    PARALLEL_MIN = PARALLEL_NODE_MIN,   /* fewer triangles than this build on one thread */
+    CUT_DEPTH = 4,                      /* the subtrees below this depth build independently */
+    TOP_NODES = 2u << CUT_DEPTH,        /* more than the top levels' nodes */
+    TOP_PLACES = (2u << CUT_DEPTH) - 1, /* the top levels and the cut, by place (below) */
 };
 
-/* Builds the tree over indices[0, n) into b->nodes. Large trees are built in two
- * phases: the top CUT_DEPTH levels serially, then the subtrees below them in parallel,
- * each into its own array, appended in a fixed order. The result does not depend on the
- * thread count, so neither does any image rendered through it. */
+/* A node of the top levels of a parallel build, or a subtree's root at the cut depth,
+ * kept by its place in a complete binary tree (the children of place h at 2h + 1 and
+ * 2h + 2) while the threads build them, and numbered after (number_top). */
+typedef struct top_node {
+    task t;
+    tr_bvh_node node;
+    enum { TOP_UNUSED, TOP_LEAF, TOP_INNER, TOP_CUT } kind;
+    uint32_t sub_count, sub_leaves, sub_depth; /* a subtree's (TOP_CUT) */
+} top_node;
+
+/* The region of the node array a subtree over refs[first, first + count) is built in: at
+ * TOP_NODES + 2 * first, room for the 2 * count - 1 nodes it can have. Subtrees' runs of
+ * refs do not overlap, so neither do their regions. */
+static tr_bvh_node *subtree_region(const builder *b, uint32_t first) {
+    return b->nodes + TOP_NODES + 2 * (size_t)first;
+}
+
+/* Splits node t's run into its children's tasks (split_node has set their bounds). */
+static void child_tasks(const task *t, uint32_t left, task child[2]) {
+    child[0].first = t->first;
+    child[0].count = left;
+    child[1].first = t->first + left;
+    child[1].count = t->count - left;
+    child[0].depth = child[1].depth = t->depth + 1;
+}
+
+/* Builds the node at place h and everything below it: at the cut depth a subtree in its
+ * region, above it a split, with the left child handed to another thread (an OpenMP task)
+ * and the right one built on. Which thread builds what changes nothing: each split
+ * depends on its node's refs alone, and each node writes only its own place, run of refs
+ * and region. */
+static void build_top(builder *b, top_node *top, uint32_t h, task t) {
+    top_node *tn = &top[h];
+    tn->t = t;
+    if (t.depth == CUT_DEPTH) {
+        tn->kind = TOP_CUT;
+        tn->sub_leaves =
+            build_nodes(b, t, subtree_region(b, t.first), &tn->sub_count, &tn->sub_depth);
+        return;
+    }
+    task child[2];
+    const uint32_t left = split_node(b, &t, &tn->node, child);
+    if (left == 0) {
+        tn->kind = TOP_LEAF;
+        return;
+    }
+    tn->kind = TOP_INNER;
+    child_tasks(&t, left, child);
+    const task c0 = child[0];
+#pragma omp task default(none) firstprivate(b, top, h, c0)
+    build_top(b, top, 2 * h + 1, c0);
+    build_top(b, top, 2 * h + 2, child[1]);
+}
+
+/* Numbers the top levels as build_nodes does (depth first, left child first, a node's
+ * children numbered when it is visited), writes their nodes, and lists the cut's subtrees
+ * in that order (their runs of refs ascending): their places in cut_place[] and the index
+ * each one's root takes in cut_node[]. Returns the number of nodes numbered. */
+static uint32_t number_top(builder *b, const top_node *top, uint32_t *cut_place, uint32_t *cut_node,
+                           uint32_t *cuts, uint32_t *leaves, uint32_t *deepest) {
+    uint32_t place[CUT_DEPTH + 2], index[CUT_DEPTH + 2]; /* one pending sibling per level */
+    uint32_t sp = 0, count = 1;
+    place[sp] = 0;
+    index[sp++] = 0;
+    while (sp > 0) {
+        --sp;
+        const uint32_t h = place[sp], i = index[sp];
+        const top_node *tn = &top[h];
+        if (tn->kind == TOP_CUT) {
+            cut_place[*cuts] = h;
+            cut_node[(*cuts)++] = i;
+            continue;
+        }
+        b->nodes[i] = tn->node;
+        if (tn->kind == TOP_LEAF) {
+            ++*leaves;
+            *deepest = tn->t.depth > *deepest ? tn->t.depth : *deepest;
+            continue;
+        }
+        b->nodes[i].left_first = count;
+        b->nodes[i].count = 0;
+        place[sp] = 2 * h + 2;
+        index[sp++] = count + 1;
+        place[sp] = 2 * h + 1;
+        index[sp++] = count;
+        count += 2;
+    }
+    return count;
+}
+
+/* Builds the tree over refs[0, n) into b->nodes. A large tree is built by all threads:
+ * its root split with all of them binning, then the nodes below it as OpenMP tasks down
+ * to depth CUT_DEPTH, and under that up to 16 subtrees, each in a region of the node
+ * array of its own (subtree_region); the top is numbered and the subtrees moved into
+ * place after, in a fixed order. The result is the serial build's node for node, whatever
+ * the thread count, so no image rendered through it depends on that count. */
 static int build_tree(builder *b, uint32_t n, uint32_t *leaves_out, uint32_t *depth_out) {
     task root = {.node = 0, .first = 0, .count = n, .depth = 0};
     range_bounds(b, 0, n, &root.box, &root.cbox);
-    task cut[1u << CUT_DEPTH];
-    uint32_t cuts = 0, count = 0, deepest = 0;
-    int parallel = n >= PARALLEL_MIN;
-    uint32_t leaves =
-        build_nodes(b, root, b->nodes, &count, CUT_DEPTH, parallel ? cut : NULL, &cuts, &deepest);
-    uint32_t sub_count[1u << CUT_DEPTH] = {0}, sub_leaves[1u << CUT_DEPTH] = {0};
-    uint32_t sub_depth[1u << CUT_DEPTH] = {0};
-    /* Each subtree is built in the node array itself, in a region of its own: the one at
-     * TOP_NODES + 2 * first, room for the 2 * count - 1 nodes a subtree over refs[first,
-     * first + count) can have. The cut nodes are recorded in order of their runs of refs
-     * (depth first, left first), which do not overlap. */
-#pragma omp parallel for num_threads(tr_default_threads()) schedule(dynamic, 1) if (cuts > 1)
-    for (int k = 0; k < (int)cuts; ++k) {
-        tr_bvh_node *region = b->nodes + TOP_NODES + 2 * (size_t)cut[k].first;
-        sub_leaves[k] = build_nodes(b, cut[k], region, &sub_count[k], 0, NULL, NULL, &sub_depth[k]);
+    uint32_t count = 0, leaves = 0, deepest = 0;
+    if (n < PARALLEL_MIN) {
+        leaves = build_nodes(b, root, b->nodes, &count, &deepest);
+        b->node_count = count;
+        *leaves_out = leaves;
+        *depth_out = deepest;
+        return TR_OK;
     }
+    top_node top[TOP_PLACES];
+    memset(top, 0, sizeof top);
+    top[0].t = root;
+    task child[2];
+    const uint32_t left = split_node(b, &root, &top[0].node, child);
+    top[0].kind = left == 0 ? TOP_LEAF : TOP_INNER;
+    if (left > 0) {
+        child_tasks(&root, left, child);
+#pragma omp parallel num_threads(tr_default_threads())
+#pragma omp single
+        {
+            const task c0 = child[0];
+#pragma omp task default(none) firstprivate(b, c0) shared(top)
+            build_top(b, top, 1, c0);
+            build_top(b, top, 2, child[1]);
+        }
+    }
+    uint32_t cut_place[1u << CUT_DEPTH], cut_node[1u << CUT_DEPTH], cuts = 0;
+    count = number_top(b, top, cut_place, cut_node, &cuts, &leaves, &deepest);
     for (uint32_t k = 0; k < cuts; ++k) {
-        /* The subtree's root takes the reserved slot; the rest moves down to the end of
-         * the array so far, with child links moved from local index c >= 1 to
+        /* The subtree's root takes the slot its parent gave it; the rest moves down to the
+         * end of the array so far, with child links moved from local index c >= 1 to
          * count + c - 1. That end lies at or below the region (the subtrees before it
          * had at most twice as many nodes as refs, and the top fewer than TOP_NODES), so
          * copying forward never overwrites a node not yet copied. */
-        const tr_bvh_node *region = b->nodes + TOP_NODES + 2 * (size_t)cut[k].first;
-        uint32_t offset = count - 1;
-        for (uint32_t i = 0; i < sub_count[k]; ++i) {
+        const top_node *tn = &top[cut_place[k]];
+        const tr_bvh_node *region = subtree_region(b, tn->t.first);
+        const uint32_t offset = count - 1;
+        for (uint32_t i = 0; i < tn->sub_count; ++i) {
             tr_bvh_node nd = region[i];
             if (nd.count == 0) {
                 nd.left_first += offset;
             }
-            b->nodes[i == 0 ? cut[k].node : offset + i] = nd;
+            b->nodes[i == 0 ? cut_node[k] : offset + i] = nd;
         }
-        count += sub_count[k] - 1;
-        leaves += sub_leaves[k];
-        deepest = sub_depth[k] > deepest ? sub_depth[k] : deepest;
+        count += tn->sub_count - 1;
+        leaves += tn->sub_leaves;
+        deepest = tn->sub_depth > deepest ? tn->sub_depth : deepest;
     }
     b->node_count = count;
     *leaves_out = leaves;
