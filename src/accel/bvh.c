@@ -725,8 +725,13 @@ static int bvh_build(tr_bvh *bvh, const tr_triangle *tris, const tr_aabb *boxes,
     memset(&b, 0, sizeof b);
     b.forced_leaf = forced_leaf;
     /* The big arrays on huge pages (bigmem.h): their first writes' page faults took a third
-     * to a half of a big build's time. */
-    b.refs = tr_bigmem_malloc((size_t)(n ? n : 1) * sizeof *b.refs);
+     * to a half of a big build's time. The records' block is sized for the leaf-order
+     * triangle copy too, which takes it over when the records are done with: memory
+     * written for the first time costs most (on a virtual machine whose host takes freed
+     * memory back, about 1.2 ms per MiB against 0.07 ms for memory just freed; measured
+     * in docs/log/2026-benchmarks.md), and this is 32 bytes per triangle of it. */
+    const size_t per_ref = sizeof(ref) > sizeof(tr_bvh_tri) ? sizeof(ref) : sizeof(tr_bvh_tri);
+    b.refs = tr_bigmem_malloc((size_t)(n ? n : 1) * per_ref);
     uint32_t *indices = tr_bigmem_malloc((size_t)(n ? n : 1) * sizeof *indices);
     /* A binary tree over m leaves of >= 1 triangle has at most 2m - 1 nodes; the
      * parallel build leaves room for the top levels before its subtrees' regions. */
@@ -776,17 +781,17 @@ static int bvh_build(tr_bvh *bvh, const tr_triangle *tris, const tr_aabb *boxes,
     for (int64_t k = 0; k < (int64_t)m; ++k) {
         indices[k] = b.refs[k].index;
     }
-    /* The leaf-order triangle copy in an array of its own on huge pages. Growing the
-     * records' array into it (realloc) was meant to reuse their mapped pages, but the grown
-     * block came back on small pages: 12 800 page faults and 177 ms of a 1.3 M-triangle
-     * build, against 540 faults and 19 ms now. */
-    tr_bvh_tri *leaf_tris =
-        rc == TR_OK ? tr_bigmem_malloc((size_t)(m ? m : 1) * sizeof *leaf_tris) : NULL;
-    free(b.refs);
-    if (!leaf_tris) {
-        rc = TR_ERR;
+    /* The leaf-order triangle copy takes over the records' block, whose pages are mapped
+     * already (growing the records' array with realloc instead came back on small pages:
+     * 12 800 page faults and 177 ms of a 1.3 M-triangle build). Entries squeezed out are
+     * given back; shrinking a block does not move it. */
+    tr_bvh_tri *leaf_tris = (tr_bvh_tri *)(void *)b.refs;
+    if (m < n) {
+        void *smaller = realloc(b.refs, (size_t)(m ? m : 1) * per_ref);
+        leaf_tris = smaller ? smaller : leaf_tris;
     }
     if (rc != TR_OK) {
+        free(leaf_tris);
         free(b.nodes);
         free(indices);
         return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY,
