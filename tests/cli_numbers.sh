@@ -20,6 +20,9 @@ expect_usage_error "--methods" bench convergence --methods "$long" --budget 0
 # A documented minimum is accepted: the error names the option after it.
 expect_usage_error "--sizes" bench convergence --budget 0.1 --sizes 0x0
 expect_usage_error "--frames" bench realtime --svgf-sigma-l 0.1 --frames 0
+expect_usage_error "--builds" bench complexity --builds 0
+expect_usage_error "--builds" bench complexity --builds 101
+expect_usage_error "--frames" bench complexity --builds 100 --frames 0
 
 if "$BIN" render --device opencl --width 8 --height 8 --spp 1 --out wg.png >/dev/null 2>&1; then
     TRAC0R_OPENCL_WORK_GROUP=4294967304x1 "$BIN" render --device opencl --width 8 --height 8 \
