@@ -1271,16 +1271,16 @@ static void test_render(void) {
     tr_scene_clear(&s);
 }
 
-/* A scene holding one icosphere of level 6 (81 920 triangles): large enough for the
- * builder's parallel phase. */
-static void icosphere_scene(tr_scene *s) {
+/* A scene holding one icosphere of the given level (6: 81 920 triangles, large enough for
+ * the builder's parallel phase; 7: 327 680, for the collapse's too). */
+static void icosphere_scene(tr_scene *s, uint32_t level) {
     tr_error err;
     tr_scene_init(s);
     uint32_t m;
     CHECK(tr_scene_add_material(s, tr_material_diffuse(v3s(0.5f)), &m, &err) == TR_OK, "%s",
           err.msg);
     tr_shape_desc d = tr_shape_desc_default(TR_SHAPE_ICOSPHERE);
-    d.subdivisions = 6;
+    d.subdivisions = level;
     CHECK(tr_scene_add_shape(s, &d, &err) == TR_OK, "%s", err.msg);
 }
 
@@ -1290,7 +1290,7 @@ static void icosphere_scene(tr_scene *s) {
 static void test_parallel_build_deterministic(void) {
     tr_error err;
     tr_scene s = {0};
-    icosphere_scene(&s);
+    icosphere_scene(&s, 6);
     tr_bvh one, two;
     omp_set_num_threads(1);
     CHECK(tr_bvh_build(&one, s.triangles, s.triangle_count, &err) == TR_OK, "%s", err.msg);
@@ -1325,6 +1325,8 @@ static void check_wide_build(const char *name, const tr_triangle *tris, uint32_t
     CHECK(tr_wbvh_build(&wa, &full, &err) == TR_OK, "%s", err.msg);
     CHECK(tr_wbvh_build(&wb, &cut, &err) == TR_OK, "%s", err.msg);
     check_structure(name, &cut, tris, n);
+    check_wide_structure(name, &wa, &full, tris, n);
+    check_wide_structure(name, &wb, &cut, tris, n);
     uint32_t small_split = 0;
     for (uint32_t i = 0; i < cut.node_count; ++i) {
         const tr_bvh_node *nd = &cut.nodes[i];
@@ -1379,8 +1381,11 @@ static void check_wide_build(const char *name, const tr_triangle *tris, uint32_t
 
 static void test_wide_build(void) {
     tr_scene s = {0};
-    icosphere_scene(&s);
+    icosphere_scene(&s, 6);
     check_wide_build("icosphere 6", s.triangles, s.triangle_count);
+    tr_scene_clear(&s);
+    icosphere_scene(&s, 7); /* over 2^17 binary nodes: the collapse's runs by all threads */
+    check_wide_build("icosphere 7", s.triangles, s.triangle_count);
     tr_scene_clear(&s);
     tr_rng r;
     tr_rng_init(&r, 77, 1, 0);
@@ -1401,7 +1406,7 @@ static void test_wide_build(void) {
 static void test_build_skips_in_parallel(void) {
     tr_error err;
     tr_scene s = {0};
-    icosphere_scene(&s);
+    icosphere_scene(&s, 6);
     const uint32_t n = s.triangle_count;
     tr_triangle *mixed = malloc((size_t)(2 * n) * sizeof *mixed);
     uint32_t *where = malloc((size_t)n * sizeof *where);

@@ -34,6 +34,84 @@ static int is_wide_leaf(const collapser *c, uint32_t i) {
     return c->bvh->nodes[i].count > 0 || c->sub_count[i] <= TR_WBVH_LEAF_MERGE;
 }
 
+/* Node i's subtree's run of leaf triangles from its children's runs (sub_runs). */
+static void sub_join(collapser *c, uint32_t i) {
+    const tr_bvh_node *n = &c->bvh->nodes[i];
+    if (n->count > 0) {
+        c->sub_first[i] = n->left_first;
+        c->sub_count[i] = n->count;
+        return;
+    }
+    const uint32_t l = n->left_first, r = l + 1;
+    c->sub_first[i] = c->sub_first[l] < c->sub_first[r] ? c->sub_first[l] : c->sub_first[r];
+    c->sub_count[i] = c->sub_count[l] + c->sub_count[r];
+    /* A subtree whose run were not contiguous could not be merged into one leaf; mark it
+     * too big to merge. */
+    if (c->sub_first[l] + c->sub_count[l] != c->sub_first[r] &&
+        c->sub_first[r] + c->sub_count[r] != c->sub_first[l]) {
+        c->sub_count[i] = UINT32_MAX / 2;
+    }
+}
+
+/* The runs of node i's subtree, children before parents. */
+static void sub_walk(collapser *c, uint32_t i) {
+    const tr_bvh_node *n = &c->bvh->nodes[i];
+    if (n->count == 0) {
+        sub_walk(c, n->left_first);
+        sub_walk(c, n->left_first + 1);
+    }
+    sub_join(c, i);
+}
+
+enum {
+    SUB_PARALLEL_MIN = 1u << 17, /* binary nodes: fewer take one thread */
+    SUB_CUT_DEPTH = 4,           /* a big tree's subtrees below this depth, shared out */
+};
+
+/* Lists the nodes at depth SUB_CUT_DEPTH below node i, and the leaves above it. */
+static void sub_cut(const collapser *c, uint32_t i, uint32_t depth, uint32_t *cut, uint32_t *cuts) {
+    const tr_bvh_node *n = &c->bvh->nodes[i];
+    if (depth == SUB_CUT_DEPTH || n->count > 0) {
+        cut[(*cuts)++] = i;
+        return;
+    }
+    sub_cut(c, n->left_first, depth + 1, cut, cuts);
+    sub_cut(c, n->left_first + 1, depth + 1, cut, cuts);
+}
+
+/* Joins the nodes above the cut (sub_cut), whose subtrees are done, bottom up. */
+static void sub_top(collapser *c, uint32_t i, uint32_t depth) {
+    const tr_bvh_node *n = &c->bvh->nodes[i];
+    if (depth == SUB_CUT_DEPTH || n->count > 0) {
+        return;
+    }
+    sub_top(c, n->left_first, depth + 1);
+    sub_top(c, n->left_first + 1, depth + 1);
+    sub_join(c, i);
+}
+
+/* Every binary node's run of leaf triangles (sub_first, sub_count), which is contiguous
+ * (the builder partitions its parent's run). A big tree's subtrees below SUB_CUT_DEPTH are
+ * walked by all threads; the nodes above them after, on one. The runs do not depend on
+ * who computes them. */
+static void sub_runs(collapser *c) {
+    const tr_bvh *bvh = c->bvh;
+    if (bvh->node_count < SUB_PARALLEL_MIN) {
+        /* Children come after their parents: one backward pass. */
+        for (uint32_t i = bvh->node_count; i-- > 0;) {
+            sub_join(c, i);
+        }
+        return;
+    }
+    uint32_t cut[1u << SUB_CUT_DEPTH], cuts = 0;
+    sub_cut(c, 0, 0, cut, &cuts);
+#pragma omp parallel for num_threads(tr_default_threads()) schedule(dynamic, 1)
+    for (int k = 0; k < (int)cuts; ++k) {
+        sub_walk(c, cut[k]);
+    }
+    sub_top(c, 0, 0);
+}
+
 static uint32_t emit_leaf(collapser *c, uint32_t first, uint32_t count) {
     tr_wbvh *w = c->w;
     uint32_t packets = (count + 3) / 4;
@@ -187,24 +265,8 @@ int tr_wbvh_build(tr_wbvh *w, const tr_bvh *bvh, tr_error *err) {
     if (!c.sub_first || !c.sub_count || !w->nodes || !w->packets || !w->leaves || !w->slot_src) {
         c.failed = 1;
     }
-    /* Children come after their parents: one backward pass gives every subtree's run of
-     * triangles, which is contiguous (the builder partitions its parent's run). */
-    for (uint32_t i = bvh->node_count; i-- > 0 && !c.failed;) {
-        const tr_bvh_node *n = &bvh->nodes[i];
-        if (n->count > 0) {
-            c.sub_first[i] = n->left_first;
-            c.sub_count[i] = n->count;
-        } else {
-            uint32_t l = n->left_first, r = l + 1;
-            c.sub_first[i] = c.sub_first[l] < c.sub_first[r] ? c.sub_first[l] : c.sub_first[r];
-            c.sub_count[i] = c.sub_count[l] + c.sub_count[r];
-            /* A subtree whose run were not contiguous could not be merged into one leaf;
-             * mark it too big to merge. */
-            if (c.sub_first[l] + c.sub_count[l] != c.sub_first[r] &&
-                c.sub_first[r] + c.sub_count[r] != c.sub_first[l]) {
-                c.sub_count[i] = UINT32_MAX / 2;
-            }
-        }
+    if (!c.failed) {
+        sub_runs(&c);
     }
     if (!c.failed) {
         uint32_t slots[TR_WBVH_WIDTH] = {0};
