@@ -184,6 +184,16 @@ static uint32_t emit_node(collapser *c, uint32_t *slots, int count, uint32_t dep
         leaf[count] = is_wide_leaf(c, l + 1);
         ++count;
     }
+    /* The slots' children are read when the recursion opens them: ask for them now (the
+     * binary nodes of a big tree are far apart; their loads were most of the time here). */
+    for (int i = 0; i < count; ++i) {
+        if (!leaf[i]) {
+            const uint32_t l = bn[slots[i]].left_first;
+            __builtin_prefetch(&bn[l]);
+            __builtin_prefetch(&bn[l + 1]);
+            __builtin_prefetch(&c->sub_count[l]);
+        }
+    }
     tr_wbvh *w = c->w;
     if (w->node_count == c->node_cap) {
         c->failed = 1;
