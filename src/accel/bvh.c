@@ -167,46 +167,130 @@ static void bin_range(const builder *b, uint32_t first, uint32_t end, const floa
 }
 #endif
 
-/* The box a sweep over the bins grows: with SSE2 two rows of four floats, unions and the
- * extent one operation each, the area from the extent as box_area computes it. */
+/* The best of the nb - 1 planes between bins on each active axis (SAH cost relative to
+ * one leaf of all `count` entries, in units of triangle tests, INFINITY if none splits
+ * them); sets its axis and the last bin on its left. Each axis is swept from the right,
+ * keeping each plane's right-hand area times count, then from the left, each plane's
+ * cost TRAVERSAL_COST + (left area * left count + right area * right count) / node_area.
+ * A tie goes to the lower axis, then to the plane further left. */
 #if defined(__SSE2__)
-typedef struct sweep {
-    __m128 min, max;
-} sweep;
-
-static sweep sweep_start(void) {
-    sweep w = {_mm_set1_ps(INFINITY), _mm_set1_ps(-INFINITY)};
-    return w;
+/* The three axes' sweeps at once, one lane each: the boxes grown (one register per axis,
+ * as bins store them) turned into one register per dimension, so that the three areas,
+ * costs and comparisons are one operation each. Lane by lane these are the scalar code's
+ * operations in its order (no contraction into fused multiply-adds: -ffp-contract=off), so
+ * the costs are the same bits and the same plane wins. */
+static __m128 sweep_areas(const __m128 mn[3], const __m128 mx[3]) {
+    __m128 d0 = _mm_sub_ps(mx[0], mn[0]), d1 = _mm_sub_ps(mx[1], mn[1]);
+    __m128 d2 = _mm_sub_ps(mx[2], mn[2]), d3 = _mm_setzero_ps();
+    _MM_TRANSPOSE4_PS(d0, d1, d2, d3); /* now d0: every axis's box's x extent, d1: y, d2: z */
+    const __m128 zero = _mm_setzero_ps();
+    const __m128 full = _mm_and_ps(_mm_and_ps(_mm_cmpge_ps(d0, zero), _mm_cmpge_ps(d1, zero)),
+                                   _mm_cmpge_ps(d2, zero));
+    const __m128 sum =
+        _mm_add_ps(_mm_add_ps(_mm_mul_ps(d0, d1), _mm_mul_ps(d1, d2)), _mm_mul_ps(d2, d0));
+    /* An empty box (a negative or NaN extent) has area 0, as box_area gives it. */
+    return _mm_and_ps(full, _mm_mul_ps(_mm_set1_ps(2.0f), sum));
 }
 
-static sweep sweep_add(sweep w, const bin_set *bins, int axis, int i) {
-    w.min = _mm_min_ps(w.min, _mm_load_ps(bins->min[axis][i]));
-    w.max = _mm_max_ps(w.max, _mm_load_ps(bins->max[axis][i]));
-    return w;
+static __m128i bin_counts(const bin_set *bins, int i) {
+    return _mm_setr_epi32((int)bins->count[0][i], (int)bins->count[1][i], (int)bins->count[2][i],
+                          0);
 }
 
-static float sweep_area(sweep w) {
-    const __m128 d = _mm_sub_ps(w.max, w.min);
-    const float dx = _mm_cvtss_f32(d), dy = _mm_cvtss_f32(_mm_shuffle_ps(d, d, 1));
-    const float dz = _mm_cvtss_f32(_mm_shuffle_ps(d, d, 2));
-    if (!(dx >= 0.0f && dy >= 0.0f && dz >= 0.0f)) {
-        return 0.0f; /* empty */
+static float sweep_planes(const bin_set *bins, int nb, uint32_t count, float node_area,
+                          const int active[3], int *best_axis, int *best_bin) {
+    __m128 right_cost[BINS];
+    __m128 mn[3], mx[3];
+    for (int a = 0; a < 3; ++a) {
+        mn[a] = _mm_set1_ps(INFINITY);
+        mx[a] = _mm_set1_ps(-INFINITY);
     }
-    return 2.0f * (dx * dy + dy * dz + dz * dx);
+    __m128i n = _mm_setzero_si128();
+    for (int i = nb - 1; i > 0; --i) {
+        for (int a = 0; a < 3; ++a) {
+            mn[a] = _mm_min_ps(mn[a], _mm_load_ps(bins->min[a][i]));
+            mx[a] = _mm_max_ps(mx[a], _mm_load_ps(bins->max[a][i]));
+        }
+        n = _mm_add_epi32(n, bin_counts(bins, i));
+        right_cost[i] = _mm_mul_ps(sweep_areas(mn, mx), _mm_cvtepi32_ps(n));
+    }
+    for (int a = 0; a < 3; ++a) {
+        mn[a] = _mm_set1_ps(INFINITY);
+        mx[a] = _mm_set1_ps(-INFINITY);
+    }
+    n = _mm_setzero_si128();
+    const __m128i all = _mm_set1_epi32((int)count), none = _mm_setzero_si128();
+    const __m128i on = _mm_setr_epi32(-active[0], -active[1], -active[2], 0);
+    const __m128 trav = _mm_set1_ps(TRAVERSAL_COST), area = _mm_set1_ps(node_area);
+    __m128 best = _mm_set1_ps(INFINITY);
+    __m128i best_at = _mm_set1_epi32(-1);
+    for (int i = 0; i < nb - 1; ++i) {
+        for (int a = 0; a < 3; ++a) {
+            mn[a] = _mm_min_ps(mn[a], _mm_load_ps(bins->min[a][i]));
+            mx[a] = _mm_max_ps(mx[a], _mm_load_ps(bins->max[a][i]));
+        }
+        n = _mm_add_epi32(n, bin_counts(bins, i));
+        const __m128 cost = _mm_add_ps(
+            trav, _mm_div_ps(_mm_add_ps(_mm_mul_ps(sweep_areas(mn, mx), _mm_cvtepi32_ps(n)),
+                                        right_cost[i + 1]),
+                             area));
+        /* A plane with every entry on one side splits nothing. */
+        const __m128i splits =
+            _mm_andnot_si128(_mm_or_si128(_mm_cmpeq_epi32(n, none), _mm_cmpeq_epi32(n, all)), on);
+        const __m128i better = _mm_and_si128(splits, _mm_castps_si128(_mm_cmplt_ps(cost, best)));
+        best = _mm_or_ps(_mm_and_ps(_mm_castsi128_ps(better), cost),
+                         _mm_andnot_ps(_mm_castsi128_ps(better), best));
+        best_at = _mm_or_si128(_mm_and_si128(better, _mm_set1_epi32(i)),
+                               _mm_andnot_si128(better, best_at));
+    }
+    float lane[4];
+    int at[4];
+    _mm_storeu_ps(lane, best);
+    _mm_storeu_si128((__m128i *)(void *)at, best_at);
+    float result = INFINITY;
+    for (int a = 0; a < 3; ++a) {
+        if (lane[a] < result) {
+            result = lane[a];
+            *best_axis = a;
+            *best_bin = at[a];
+        }
+    }
+    return result;
 }
 #else
-typedef tr_aabb sweep;
-
-static sweep sweep_start(void) {
-    return box_empty();
-}
-
-static sweep sweep_add(sweep w, const bin_set *bins, int axis, int i) {
-    return box_union(w, bin_box(bins, axis, i));
-}
-
-static float sweep_area(sweep w) {
-    return box_area(w);
+static float sweep_planes(const bin_set *bins, int nb, uint32_t count, float node_area,
+                          const int active[3], int *best_axis, int *best_bin) {
+    float best = INFINITY;
+    for (int axis = 0; axis < 3; ++axis) {
+        if (!active[axis]) {
+            continue;
+        }
+        float right_cost[BINS];
+        tr_aabb acc = box_empty();
+        uint32_t n = 0;
+        for (int i = nb - 1; i > 0; --i) {
+            acc = box_union(acc, bin_box(bins, axis, i));
+            n += bins->count[axis][i];
+            right_cost[i] = box_area(acc) * (float)n;
+        }
+        acc = box_empty();
+        n = 0;
+        for (int i = 0; i < nb - 1; ++i) {
+            acc = box_union(acc, bin_box(bins, axis, i));
+            n += bins->count[axis][i];
+            if (n == 0 || n == count) {
+                continue;
+            }
+            float cost =
+                TRAVERSAL_COST + (box_area(acc) * (float)n + right_cost[i + 1]) / node_area;
+            if (cost < best) {
+                best = cost;
+                *best_axis = axis;
+                *best_bin = i;
+            }
+        }
+    }
+    return best;
 }
 #endif
 
@@ -270,36 +354,7 @@ static float find_split(const builder *b, uint32_t first, uint32_t count, tr_aab
     } else {
         bin_range(b, first, first + count, lo, scale, nb, &bins);
     }
-    for (int axis = 0; axis < 3; ++axis) {
-        if (!active[axis]) {
-            continue;
-        }
-        /* Sweep from the right, then from the left, evaluating each of the nb-1 planes. */
-        float right_cost[BINS];
-        sweep acc = sweep_start();
-        uint32_t n = 0;
-        for (int i = nb - 1; i > 0; --i) {
-            acc = sweep_add(acc, &bins, axis, i);
-            n += bins.count[axis][i];
-            right_cost[i] = sweep_area(acc) * (float)n;
-        }
-        acc = sweep_start();
-        n = 0;
-        for (int i = 0; i < nb - 1; ++i) {
-            acc = sweep_add(acc, &bins, axis, i);
-            n += bins.count[axis][i];
-            if (n == 0 || n == count) {
-                continue;
-            }
-            float cost =
-                TRAVERSAL_COST + (sweep_area(acc) * (float)n + right_cost[i + 1]) / node_area;
-            if (cost < best) {
-                best = cost;
-                *best_axis = axis;
-                *best_bin = i;
-            }
-        }
-    }
+    best = sweep_planes(&bins, nb, count, node_area, active, best_axis, best_bin);
     if (best < INFINITY) {
         /* The children's boxes are the unions of their bins' boxes: the same minima and
          * maxima as a pass over their triangles would find, without that pass. */
