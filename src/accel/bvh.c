@@ -611,7 +611,7 @@ enum {
 typedef struct top_node {
     task t;
     tr_bvh_node node;
-    enum { TOP_UNUSED, TOP_LEAF, TOP_INNER, TOP_CUT } kind;
+    enum { TOP_UNUSED, TOP_PENDING, TOP_LEAF, TOP_INNER, TOP_CUT } kind;
     uint32_t sub_count, sub_leaves, sub_depth; /* a subtree's (TOP_CUT) */
 } top_node;
 
@@ -631,14 +631,13 @@ static void child_tasks(const task *t, uint32_t left, task child[2]) {
     child[0].depth = child[1].depth = t->depth + 1;
 }
 
-/* Builds the node at place h and everything below it: at the cut depth a subtree in its
- * region, above it a split, with the left child handed to another thread (an OpenMP task)
- * and the right one built on. Which thread builds what changes nothing: each split
- * depends on its node's refs alone, and each node writes only its own place, run of refs
- * and region. */
-static void build_top(builder *b, top_node *top, uint32_t h, task t) {
+/* Builds the node at place h, whose task is set: at the cut depth a subtree in its region,
+ * above it a split, which sets its children's places' tasks. Each node writes only its own
+ * place, run of refs and region, and its split depends on its refs alone, so which thread
+ * builds which node changes nothing. */
+static void build_top(builder *b, top_node *top, uint32_t h) {
     top_node *tn = &top[h];
-    tn->t = t;
+    const task t = tn->t;
     if (t.depth == CUT_DEPTH) {
         tn->kind = TOP_CUT;
         tn->sub_leaves =
@@ -653,10 +652,9 @@ static void build_top(builder *b, top_node *top, uint32_t h, task t) {
     }
     tn->kind = TOP_INNER;
     child_tasks(&t, left, child);
-    const task c0 = child[0];
-#pragma omp task default(none) firstprivate(b, top, h, c0)
-    build_top(b, top, 2 * h + 1, c0);
-    build_top(b, top, 2 * h + 2, child[1]);
+    top[2 * h + 1].t = child[0];
+    top[2 * h + 2].t = child[1];
+    top[2 * h + 1].kind = top[2 * h + 2].kind = TOP_PENDING;
 }
 
 /* Numbers the top levels as build_nodes does (depth first, left child first, a node's
@@ -696,11 +694,13 @@ static uint32_t number_top(builder *b, const top_node *top, uint32_t *cut_place,
 }
 
 /* Builds the tree over refs[0, n) into b->nodes. A large tree is built by all threads:
- * its root split with all of them binning, then the nodes below it as OpenMP tasks down
- * to depth CUT_DEPTH, and under that up to 16 subtrees, each in a region of the node
- * array of its own (subtree_region); the top is numbered and the subtrees moved into
- * place after, in a fixed order. The result is the serial build's node for node, whatever
- * the thread count, so no image rendered through it depends on that count. */
+ * its root split with all of them binning, then level by level the nodes below it, each
+ * level's shared out one node per thread at a time, down to depth CUT_DEPTH, whose up to
+ * 16 nodes are built as whole subtrees, each in a region of the node array of its own
+ * (subtree_region); the top is numbered and the subtrees moved into place after, in a
+ * fixed order. (Level by level with parallel loops rather than OpenMP tasks: the web
+ * build's OpenMP runtime, web/omp, has no tasks.) The result is the serial build's node for node,
+ * whatever the thread count, so no image rendered through it depends on that count. */
 static int build_tree(builder *b, uint32_t n, uint32_t *leaves_out, uint32_t *depth_out) {
     task root = {.node = 0, .first = 0, .count = n, .depth = 0};
     range_bounds(b, 0, n, &root.box, &root.cbox);
@@ -715,18 +715,18 @@ static int build_tree(builder *b, uint32_t n, uint32_t *leaves_out, uint32_t *de
     top_node top[TOP_PLACES];
     memset(top, 0, sizeof top);
     top[0].t = root;
-    task child[2];
-    const uint32_t left = split_node(b, &root, &top[0].node, child);
-    top[0].kind = left == 0 ? TOP_LEAF : TOP_INNER;
-    if (left > 0) {
-        child_tasks(&root, left, child);
-#pragma omp parallel num_threads(tr_default_threads())
-#pragma omp single
-        {
-            const task c0 = child[0];
-#pragma omp task default(none) firstprivate(b, c0) shared(top)
-            build_top(b, top, 1, c0);
-            build_top(b, top, 2, child[1]);
+    build_top(b, top, 0); /* all threads bin the root (find_split) */
+    for (uint32_t depth = 1; depth <= CUT_DEPTH; ++depth) {
+        /* The level's nodes, split (or, at the cut, built) one per thread at a time. */
+        uint32_t level[1u << CUT_DEPTH], nodes = 0;
+        for (uint32_t h = (1u << depth) - 1; h < (2u << depth) - 1; ++h) {
+            if (top[h].kind == TOP_PENDING) {
+                level[nodes++] = h;
+            }
+        }
+#pragma omp parallel for num_threads(tr_default_threads()) schedule(dynamic, 1) if (nodes > 1)
+        for (int k = 0; k < (int)nodes; ++k) {
+            build_top(b, top, level[k]);
         }
     }
     uint32_t cut_place[1u << CUT_DEPTH], cut_node[1u << CUT_DEPTH], cuts = 0;
