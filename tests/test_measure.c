@@ -389,6 +389,32 @@ static void test_ray_sets(void) {
     tr_scene_destroy(s);
 }
 
+/* tr_measure_builds: a time for each structure timed (the flat structure builds nothing:
+ * 0), 0 for one skipped, the scene left committed with the last structure committed (the
+ * rounds rotate: with two structures and three builds the last round starts with the
+ * first), and bad counts refused before any commit. */
+static void test_measure_builds(void) {
+    tr_error err;
+    tr_scene *s = classic_box(W, H, &err);
+    const tr_accel_type types[3] = {TR_ACCEL_TYPE_BVH, TR_ACCEL_TYPE_FLAT, TR_ACCEL_TYPE_BVH2};
+    double ms[3] = {-1.0, -1.0, -1.0};
+    CHECK(tr_measure_builds(s, types, NULL, 2, 3, ms, &err) == TR_OK, "%s", err.msg);
+    CHECK(ms[0] > 0.0 && ms[1] == 0.0 && ms[2] == -1.0, "ms %g %g %g", ms[0], ms[1], ms[2]);
+    CHECK(tr_scene_accel(s) == TR_ACCEL_TYPE_FLAT, "committed with %d", (int)tr_scene_accel(s));
+    const int skip[3] = {0, 1, 0};
+    CHECK(tr_measure_builds(s, types, skip, 3, 2, ms, &err) == TR_OK, "%s", err.msg);
+    CHECK(ms[0] > 0.0 && ms[1] == 0.0 && ms[2] > 0.0, "ms %g %g %g", ms[0], ms[1], ms[2]);
+    CHECK(tr_scene_accel(s) == TR_ACCEL_TYPE_BVH, "committed with %d", (int)tr_scene_accel(s));
+    CHECK(tr_measure_builds(s, types, NULL, 0, 3, ms, &err) == TR_ERR &&
+              err.code == TR_STATUS_INVALID_ARGUMENT,
+          "no structures");
+    CHECK(tr_measure_builds(s, types, NULL, 2, TR_MEASURE_MAX_BUILDS + 1, ms, &err) == TR_ERR &&
+              err.code == TR_STATUS_INVALID_ARGUMENT,
+          "too many builds");
+    CHECK(tr_measure_builds(s, types, NULL, 2, 0, ms, &err) == TR_ERR, "no builds");
+    tr_scene_destroy(s);
+}
+
 /* A summary's means, worst frame, flicker over the frames that have one, region over the
  * frames that saw it, and frame rate, on frames built by hand. */
 static void test_summary(void) {
@@ -524,5 +550,6 @@ int main(void) {
     test_convergence();
     test_camera_path();
     test_ray_sets();
+    test_measure_builds();
     return check_finish("test_measure");
 }

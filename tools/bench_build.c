@@ -38,8 +38,7 @@ static int commit(tr_scene *s, const char *scene, int index, int c, tr_accel_typ
     const double wall = tr_time_now() - t0;
     getrusage(RUSAGE_THREAD, &m1);
     getrusage(RUSAGE_SELF, &r1);
-    const double build = accel == TR_ACCEL_TYPE_EMBREE ? tr_scene_embree_build_seconds(s)
-                                                       : tr_scene_bvh_build_seconds(s);
+    const double build = tr_scene_build_seconds(s);
     printf("%-14s %-6s %5d %6d %9.1f %9.1f %9.1f %9.1f %9.1f %9ld\n", scene, tr_accel_name(accel),
            index, c, 1e3 * build, 1e3 * wall, 1e3 * (seconds(r1.ru_utime) - seconds(r0.ru_utime)),
            1e3 * (seconds(r1.ru_stime) - seconds(r0.ru_stime)),

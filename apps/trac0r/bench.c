@@ -231,13 +231,6 @@ void bench_accels_all(accel_set *set, int with_flat) {
     }
 }
 
-double bench_build_seconds(const tr_scene *s) {
-    return tr_scene_accel(s) == TR_ACCEL_TYPE_EMBREE ? tr_scene_embree_build_seconds(s)
-                                                     : tr_scene_bvh_build_seconds(s);
-}
-
-#define CX_MAX_BUILDS 100
-
 static void bench_complexity_help(FILE *fp) {
     fprintf(fp,
             "Usage: trac0r bench complexity [options]\n"
@@ -251,13 +244,12 @@ static void bench_complexity_help(FILE *fp) {
             "                       as for render (default 800x600)\n"
             "  --max-level L        highest subdivision level, 0..%d (default 8)\n"
             "  --frames N           timed frames per point, 1..1000 (default 5)\n"
-            "  --builds N           timed builds per point, 1..%d, the median reported\n"
-            "                       (default 3; after one untimed build of each structure)\n"
+            "  --builds N           timed builds per point, 1..%d, median shown (default 3)\n"
             "  --accels LIST        structures to compare (default flat,bvh,embree)\n"
             "  --limit SECONDS      drop a structure after a slower frame (default 10)\n"
             "  --out PREFIX         output file prefix (default complexity)\n"
             "  -h, --help           show this help\n",
-            TR_ICOSPHERE_MAX_SUBDIVISIONS, CX_MAX_BUILDS);
+            TR_ICOSPHERE_MAX_SUBDIVISIONS, TR_MEASURE_MAX_BUILDS);
 }
 
 #define CX_MAX_FRAMES 1000
@@ -285,11 +277,10 @@ typedef struct cx_bench {
 /* One of bench complexity's own options: CLI_OK, CLI_USAGE, or -1 if it is none of them. */
 static int cx_option(cli_args *a, void *bench) {
     cx_bench *b = bench;
-    if (cli_is(a, "--frames")) {
-        return cli_parse_int(a, 1, CX_MAX_FRAMES, &b->frames);
-    }
-    if (cli_is(a, "--builds")) {
-        return cli_parse_int(a, 1, CX_MAX_BUILDS, &b->builds);
+    if (cli_is(a, "--frames") || cli_is(a, "--builds")) {
+        const int frames = cli_is(a, "--frames");
+        return cli_parse_int(a, 1, frames ? CX_MAX_FRAMES : TR_MEASURE_MAX_BUILDS,
+                             frames ? &b->frames : &b->builds);
     }
     if (cli_is(a, "--max-level")) {
         return cli_parse_int(a, 0, TR_ICOSPHERE_MAX_SUBDIVISIONS, &b->max_level);
@@ -339,39 +330,8 @@ static int cx_open(cx_bench *b) {
     return rc;
 }
 
-/* Each structure's build time at one level: the median of b->builds commits, made in
- * rounds after one untimed round, each round starting with the next structure. A build
- * that writes memory for the first time pays for its pages (on a virtual machine whose
- * host takes freed memory back, about 1.2 ms per MiB against 0.07 ms for memory another
- * build just freed), so timing each structure's first commit of a fresh scene in a fixed
- * order charged the first structure for what the others then reused: 1.3 M triangles
- * built in 532 ms against Embree's 375 ms in one order, 391 against 530 in the other. */
-static int cx_builds(cx_bench *b, tr_scene *scene, int level) {
-    double ms[4][CX_MAX_BUILDS];
-    int n[4] = {0};
-    for (int r = -1; r < b->builds; ++r) {
-        for (int j = 0; j < b->set.count; ++j) {
-            const int k = (j + (r > 0 ? r : 0)) % b->set.count;
-            if (b->dropped[k]) {
-                continue;
-            }
-            tr_error err;
-            if (tr_scene_commit(scene, b->set.type[k], &err) != TR_OK) {
-                return bench_failed(&b->bar, &b->a, "", &err);
-            }
-            if (r >= 0) {
-                ms[k][n[k]++] = bench_build_seconds(scene) * 1e3;
-            }
-        }
-    }
-    for (int k = 0; k < b->set.count; ++k) {
-        b->build_ms[level][k] = n[k] > 0 ? tr_median(ms[k], n[k]) : 0.0;
-    }
-    return CLI_OK;
-}
-
 /* One point: the scene committed with structure k, timed over a warm-up frame and
- * b->frames more, and its row of the table (with its build time from cx_builds). */
+ * b->frames more, and its row of the table (its build time: tr_measure_builds). */
 static int cx_point(cx_bench *b, tr_scene *scene, int level, int k) {
     tr_error err;
     if (tr_scene_commit(scene, b->set.type[k], &err) != TR_OK) {
@@ -430,7 +390,10 @@ static int cx_measure(cx_bench *b) {
             rc = bench_failed(&b->bar, &b->a, "", &err);
         } else {
             b->tris[level] = tr_scene_triangle_count(scene);
-            rc = cx_builds(b, scene, level);
+            rc = tr_measure_builds(scene, b->set.type, b->dropped, b->set.count, b->builds,
+                                   b->build_ms[level], &err) != TR_OK
+                     ? bench_failed(&b->bar, &b->a, "", &err)
+                     : CLI_OK;
         }
         for (int k = 0; k < b->set.count && rc == CLI_OK; ++k) {
             rc = b->dropped[k] ? CLI_OK : cx_point(b, scene, level, k);

@@ -14,8 +14,6 @@ typedef struct accel_set {
 int bench_parse_accels(cli_args *a, accel_set *set);
 /* Every structure this build has, in the order flat (if with_flat), bvh, embree. */
 void bench_accels_all(accel_set *set, int with_flat);
-/* The build time of the scene's committed structure (0 for flat). */
-double bench_build_seconds(const tr_scene *s);
 /* Runs a gnuplot script (no file names in it: the PNG comes back on gnuplot's standard
  * output) and writes the plot to `png` through tr_outfile. 1: written; 0: gnuplot is
  * missing or failed (no plot, nothing written); -1: the file could not be written (`err`

@@ -172,7 +172,7 @@ int bench_rays(int argc, char **argv) {
             progress_clear(&bar);
             printf("%-24s %10u %-7s %10.1f %10.2f %10.2f %10.2f\n", sc_opts.scene,
                    tr_scene_triangle_count(scene), tr_accel_name(set.type[k]),
-                   bench_build_seconds(scene) * 1e3, mrays[k][TR_RAY_PRIMARY],
+                   tr_scene_build_seconds(scene) * 1e3, mrays[k][TR_RAY_PRIMARY],
                    mrays[k][TR_RAY_DIFFUSE], mrays[k][TR_RAY_SHADOW]);
             fflush(stdout);
             failed = failed || (on_device && set.type[k] == TR_ACCEL_TYPE_BVH &&

@@ -178,6 +178,22 @@ double tr_convergence_reach(const tr_convergence_run *r, double db, int use_spp)
 
 /* ---- Ray throughput ------------------------------------------------------------ */
 
+/* Most builds tr_measure_builds times per structure, and most structures it compares. */
+#define TR_MEASURE_MAX_BUILDS 100
+#define TR_MEASURE_MAX_ACCELS 8
+
+/* Each structure's build time for one scene, in milliseconds (tr_scene_build_seconds): the
+ * median of `builds` commits with accels[k] into ms[k], 0 where skip (may be NULL) has
+ * skip[k] set. The commits are made in rounds after one untimed round, each round
+ * starting with the next structure, so that no structure is always the one whose memory
+ * is written for the first time while the next one reuses what it freed (memory written
+ * for the first time can cost 20 times as much as memory just freed: docs/benchmarks.md).
+ * The scene stays committed with the last structure committed. TR_STATUS_INVALID_ARGUMENT
+ * for a count outside 1..TR_MEASURE_MAX_ACCELS or builds outside 1..TR_MEASURE_MAX_BUILDS;
+ * a commit's failure as tr_scene_commit reports it. */
+int tr_measure_builds(tr_scene *scene, const tr_accel_type *accels, const int *skip, int count,
+                      int builds, double *ms, tr_error *err);
+
 /* The kinds of rays of a set: one primary ray per pixel through a jittered position
  * (coherent), at each primary hit a cosine-weighted bounce (incoherent) and a shadow ray
  * (any hit) towards a random point of an emitter, area-weighted. */

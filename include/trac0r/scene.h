@@ -176,6 +176,9 @@ double tr_scene_bvh_build_seconds(const tr_scene *s);
 /* Seconds tr_scene_commit took to build the Embree scene (0 unless the scene is
  * committed to TR_ACCEL_TYPE_EMBREE). */
 double tr_scene_embree_build_seconds(const tr_scene *s);
+/* Seconds tr_scene_commit took to build the scene's structure, whichever it is: the one
+ * of the two above that applies (0 for the flat structure). */
+double tr_scene_build_seconds(const tr_scene *s);
 
 /* ---- Instances ------------------------------------------------------------------
  *

@@ -270,6 +270,38 @@ double tr_median(double *v, int n) {
     return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
+int tr_measure_builds(tr_scene *scene, const tr_accel_type *accels, const int *skip, int count,
+                      int builds, double *ms, tr_error *err) {
+    if (!scene || !accels || !ms || count < 1 || count > TR_MEASURE_MAX_ACCELS || builds < 1 ||
+        builds > TR_MEASURE_MAX_BUILDS) {
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "tr_measure_builds: %d structures and %d builds (1..%d and 1..%d)",
+                            count, builds, TR_MEASURE_MAX_ACCELS, TR_MEASURE_MAX_BUILDS);
+    }
+    double t[TR_MEASURE_MAX_ACCELS][TR_MEASURE_MAX_BUILDS];
+    int n[TR_MEASURE_MAX_ACCELS] = {0};
+    for (int r = -1; r < builds; ++r) {
+        for (int j = 0; j < count; ++j) {
+            const int k = (j + (r > 0 ? r : 0)) % count;
+            if (skip && skip[k]) {
+                continue;
+            }
+            if (tr_scene_commit(scene, accels[k], err) != TR_OK) {
+                return TR_ERR;
+            }
+            if (r >= 0) {
+                t[k][n[k]++] =
+                    1e3 * (accels[k] == TR_ACCEL_TYPE_EMBREE ? tr_scene_embree_build_seconds(scene)
+                                                             : tr_scene_bvh_build_seconds(scene));
+            }
+        }
+    }
+    for (int k = 0; k < count; ++k) {
+        ms[k] = n[k] > 0 ? tr_median(t[k], n[k]) : 0.0;
+    }
+    return TR_OK;
+}
+
 tr_scores_summary tr_scores_summarize(const tr_frame_scores *frames, uint32_t from,
                                       uint32_t until) {
     tr_scores_summary s;

@@ -823,6 +823,11 @@ double tr_scene_bvh_build_seconds(const tr_scene *s) {
     return s->accel == TR_ACCEL_TYPE_BVH2 ? s->bvh.build_seconds : 0.0;
 }
 
+double tr_scene_build_seconds(const tr_scene *s) {
+    return s->accel == TR_ACCEL_TYPE_EMBREE ? tr_scene_embree_build_seconds(s)
+                                            : tr_scene_bvh_build_seconds(s);
+}
+
 double tr_scene_embree_build_seconds(const tr_scene *s) {
     return s->accel == TR_ACCEL_TYPE_EMBREE ? s->embree.build_seconds : 0.0;
 }
