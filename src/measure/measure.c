@@ -290,9 +290,7 @@ int tr_measure_builds(tr_scene *scene, const tr_accel_type *accels, const int *s
                 return TR_ERR;
             }
             if (r >= 0) {
-                t[k][n[k]++] =
-                    1e3 * (accels[k] == TR_ACCEL_TYPE_EMBREE ? tr_scene_embree_build_seconds(scene)
-                                                             : tr_scene_bvh_build_seconds(scene));
+                t[k][n[k]++] = 1e3 * tr_scene_build_seconds(scene);
             }
         }
     }
