@@ -400,8 +400,8 @@ static void mis_paths(tr_scene *sp, const char *what, int sky) {
                     C[0].kind = TR_BDPT_CAMERA;
                     float a, b, g;
                     tr_vcm_light_sums(ly, mv, &a, &b, &g);
-                    const float wf =
-                        tr_vcm_merge_weight(&C[n - mv - 1], n - mv, ly, mv, a, b, g, eta);
+                    const float wf = tr_vcm_merge_weight(&C[n - mv - 1], n - mv, ly[mv].wo,
+                                                         ly[mv].pdf_fwd, a, b, g, eta);
                     fast_bad += !(fabsf(wf - wm) <= 1e-3f * fmaxf(wm, 1e-3f));
                 }
                 const double dev_vm = fabs(sum_vm - 1.0);
@@ -1089,10 +1089,9 @@ static void vcm_facing(void) {
         l[1].kind = TR_BDPT_SURFACE;
         l[1].pdf_fwd = 0.05f * fabsf(v3_dot(dir[k], normal[k]));
         l[1].pdf_rev = 0.3f;
-        entries[k].p = where[k];
-        entries[k].index = 1u;
-        entries[k].path = l;
-        tr_vcm_light_sums(l, 1, &entries[k].a, &entries[k].b, &entries[k].g);
+        float a, b, g;
+        tr_vcm_light_sums(l, 1, &a, &b, &g);
+        entries[k] = tr_vcm_entry_of(l, 1, a, b, g);
     }
     const uint32_t first[2] = {0u, 2u};
     tr_vcm_grid g;

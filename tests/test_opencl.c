@@ -409,6 +409,12 @@ int main(void) {
     compare_backends(dev, &scene, 1, TR_INTEGRATOR_BDPT, 32, "flat, bdpt");
     CHECK(tr_scene_commit(&scene, TR_ACCEL_TYPE_BVH, &err) == TR_OK, "%s", err.msg);
     compare_backends(dev, &scene, 1, TR_INTEGRATOR_BDPT, 32, "bvh, bdpt");
+    /* vcm: the light pass's entries ordered into the CPU's buckets, the camera pass tracing
+     * each light subpath again. Every fifth point first: the full frame after it has five
+     * times the light vertices the device made room for, so its light pass runs again with
+     * more room (opencl.c, vcm_light_pass). */
+    compare_backends(dev, &scene, 5, TR_INTEGRATOR_VCM, 8, "bvh, vcm, stride 5");
+    compare_backends(dev, &scene, 1, TR_INTEGRATOR_VCM, 16, "bvh, vcm");
     CHECK(tr_scene_commit(&scene, TR_ACCEL_TYPE_FLAT, &err) == TR_OK, "%s", err.msg);
     /* bdpt's light subpaths from a sky and a sun, seen through the box's open front: the
      * scene's bounding sphere travels with the scene's scalars. */
@@ -424,6 +430,8 @@ int main(void) {
               "%s", err.msg);
         CHECK(tr_scene_commit(&sky, TR_ACCEL_TYPE_BVH, &err) == TR_OK, "%s", err.msg);
         compare_backends(dev, &sky, 1, TR_INTEGRATOR_BDPT, 32, "bvh, bdpt, sky and sun");
+        /* Light from outside: merges only between surfaces that face alike. */
+        compare_backends(dev, &sky, 1, TR_INTEGRATOR_VCM, 16, "bvh, vcm, sky and sun");
         tr_scene_clear(&sky);
     }
     /* A thin lens (camera.h) focused on the box's centre, sampled alike by both. */

@@ -336,7 +336,7 @@ int tr_device_render(tr_device *dev, const tr_camera *cam, const tr_render_confi
     uint64_t rays = 0;
     if (dev->kind == TR_DEVICE_OPENCL &&
         tr_cl_supports_integrator(dev->cl, (int)f.integrator, err) != TR_OK) {
-        /* vcm, or bdpt on a device without 64-bit atomics and doubles. */
+        /* bdpt or vcm on a device without 64-bit atomics and doubles. */
         return TR_ERR;
     }
     if (dev->kind == TR_DEVICE_OPENCL && dev->punctual > 0u &&
@@ -353,6 +353,7 @@ int tr_device_render(tr_device *dev, const tr_camera *cam, const tr_render_confi
                             "the specular pass is the CPU device's: render on the cpu device");
     }
     if (dev->kind == TR_DEVICE_OPENCL) {
+        tr_cl_set_tile(dev->cl, cfg->tile);
         if (tr_cl_set_kernel(dev->cl, cfg->opencl_kernel, err) != TR_OK ||
             tr_cl_render_frame(dev->cl, &f, &rays, err) != TR_OK) {
             return TR_ERR;

@@ -10,6 +10,7 @@
 #include <string.h>
 
 #include "device/frame.h"
+#include "device/vcm.h"
 #include "kernel/integrator_bdpt.h"
 #include "kernel/integrator_pt_wf.h"
 #include "kernel/kernel.h"
@@ -19,6 +20,7 @@
 #include "scene/scene_internal.h"
 #include "trac0r/parse.h"
 #include "trac0r/accel.h"
+#include "trac0r/registry.h"
 
 #ifndef TRAC0R_HAVE_OPENCL
 
@@ -133,6 +135,10 @@ int tr_cl_frame_kernel(const tr_cl_context *ctx, int integrator) {
     (void)integrator;
     return TR_OPENCL_KERNEL_MEGA;
 }
+void tr_cl_set_tile(tr_cl_context *ctx, uint32_t tile) {
+    (void)ctx;
+    (void)tile;
+}
 void tr_cl_film_size(const tr_cl_context *ctx, uint32_t *width, uint32_t *height,
                      uint32_t *passes) {
     (void)ctx;
@@ -220,7 +226,7 @@ enum {
     TR_CL_PART_FRAME = 1, /* the megakernel, emission and ray kernels: built at the opening */
     TR_CL_PART_RESTIR,    /* ReSTIR DI's and GI's passes */
     TR_CL_PART_WAVEFRONT, /* pt's wavefront stages */
-    TR_CL_PART_BDPT,      /* bdpt and its splats' fold */
+    TR_CL_PART_BDPT,      /* bdpt, vcm and their splats' fold */
     TR_CL_PARTS
 };
 static const char build_option_rounded[] = " -cl-fp32-correctly-rounded-divide-sqrt";
@@ -348,9 +354,25 @@ struct tr_cl_context {
     size_t wf_cap, wf_max; /* wf_max: TRAC0R_OPENCL_WAVEFRONT_PATHS, 0 when unset */
     size_t wf_group;       /* the stages' work-group size */
     int kernel_request, kernel_env;
+    /* vcm (vcm_render): its kernels (with bdpt's, NULL where those are), the uploaded
+     * scene's bounds and whether light comes from outside (for the merge radius and the
+     * facing test, as the CPU takes them), the CPU's tile side (the buckets' order) and
+     * the buffers of one sample's grid, each with its size in elements. */
+    cl_kernel vcm_light, vcm_gather, vcm_render;
+    tr_aabb vcm_box;
+    int vcm_outside;
+    uint32_t vcm_tile;
+    cl_mem vcm_params, vcm_counter;
+    cl_mem vcm_entries, vcm_hash, vcm_sorted; /* vcm_room entries */
+    cl_mem vcm_first, vcm_count;              /* vcm_points grid points */
+    cl_mem vcm_cells, vcm_order;              /* vcm_cell_room + 1 offsets, vcm_room */
+    size_t vcm_room, vcm_points, vcm_cell_room;
+    uint32_t *vcm_host; /* the host's copies: first, count, hash, cells, fill, order */
+    size_t vcm_host_words;
 };
 
 static int wf_open(tr_cl_context *ctx, tr_error *err);
+static void vcm_release(tr_cl_context *ctx);
 static int wf_create(tr_cl_context *ctx, cl_program prog, int custom, tr_error *err);
 static void wf_release(tr_cl_context *ctx);
 static int wf_set_scene(tr_cl_context *ctx, tr_error *err);
@@ -637,6 +659,7 @@ void tr_cl_close(tr_cl_context *ctx) {
     if (ctx->fold) {
         clReleaseKernel(ctx->fold);
     }
+    vcm_release(ctx);
     if (ctx->trace) {
         clReleaseKernel(ctx->trace);
     }
@@ -908,6 +931,11 @@ static void create_bdpt(tr_cl_context *ctx, cl_program prog) {
         clReleaseKernel(ctx->bdpt);
         ctx->bdpt = NULL;
     }
+    if (ctx->bdpt) {
+        ctx->vcm_light = clCreateKernel(prog, "tr_cl_vcm_light", &rc);
+        ctx->vcm_gather = clCreateKernel(prog, "tr_cl_vcm_gather", &rc);
+        ctx->vcm_render = clCreateKernel(prog, "tr_cl_render_vcm", &rc);
+    }
 }
 
 /* The scene's arrays and scene_info as kernel k's first arguments. */
@@ -949,8 +977,11 @@ static int need_part(tr_cl_context *ctx, int part, tr_error *err) {
         }
     } else if (part == TR_CL_PART_BDPT) {
         create_bdpt(ctx, prog);
-        if (ctx->bdpt && ctx->have_scene) {
-            rc = set_scene_args(ctx, ctx->bdpt, err);
+        const cl_kernel ks[3] = {ctx->bdpt, ctx->vcm_light, ctx->vcm_render};
+        for (int i = 0; i < 3 && rc == TR_OK && ctx->have_scene; ++i) {
+            if (ks[i]) {
+                rc = set_scene_args(ctx, ks[i], err);
+            }
         }
     }
     return rc;
@@ -1239,10 +1270,10 @@ int tr_cl_upload_scene(tr_cl_context *ctx, const tr_scene *scene, tr_error *err)
     }
     /* The kernels take the scene's arrays and scene_info first (those of the parts built
      * so far: need_part gives the others theirs). */
-    const cl_kernel kernels[9] = {ctx->kernel,   ctx->resolve,     ctx->trace,
-                                  ctx->restir_t, ctx->restir_s,    ctx->gi_t,
-                                  ctx->gi_s,     ctx->up_emission, ctx->bdpt};
-    for (int k = 0; k < 9 && rc == TR_OK; ++k) {
+    const cl_kernel kernels[11] = {ctx->kernel,   ctx->resolve,   ctx->trace,     ctx->restir_t,
+                                   ctx->restir_s, ctx->gi_t,      ctx->gi_s,      ctx->up_emission,
+                                   ctx->bdpt,     ctx->vcm_light, ctx->vcm_render};
+    for (int k = 0; k < 11 && rc == TR_OK; ++k) {
         if (kernels[k]) {
             rc = set_scene_args(ctx, kernels[k], err);
         }
@@ -1258,6 +1289,8 @@ int tr_cl_upload_scene(tr_cl_context *ctx, const tr_scene *scene, tr_error *err)
     }
     ctx->have_scene = 1;
     ctx->accel = accel;
+    ctx->vcm_box = tr_vcm_scene_box(&view);
+    ctx->vcm_outside = tr_bdpt_outside_on(&view);
     ctx->scene_bvh = view.cwbvh_node_count > 0u ? TR_DEVICE_BVH_CWBVH : TR_DEVICE_BVH_BVH2;
     return TR_OK;
 }
@@ -1391,13 +1424,14 @@ static int read_rays(tr_cl_context *ctx, uint32_t ny, uint64_t *rays_out, tr_err
     return TR_OK;
 }
 
-static int prepare_splats(tr_cl_context *ctx, const tr_frame *f, tr_error *err) {
+static int prepare_splats(tr_cl_context *ctx, const tr_frame *f, cl_kernel kernel, tr_error *err) {
     const size_t bytes = 3u * (size_t)f->rect_w * f->rect_h * sizeof(cl_long);
     if (bytes > ctx->info.max_alloc) {
         return tr_error_set(err, TR_STATUS_LIMIT,
-                            "bdpt's %ux%u splat buffer (%.1f MiB) exceeds OpenCL device %d's "
+                            "%s's %ux%u splat buffer (%.1f MiB) exceeds OpenCL device %d's "
                             "largest allocation",
-                            f->rect_w, f->rect_h, mib(bytes), ctx->info.index);
+                            tr_integrator_name((int)f->integrator), f->rect_w, f->rect_h,
+                            mib(bytes), ctx->info.index);
     }
     if (bytes > ctx->splat_bytes) {
         if (ctx->splat) {
@@ -1418,7 +1452,7 @@ static int prepare_splats(tr_cl_context *ctx, const tr_frame *f, tr_error *err) 
     if (rc != CL_SUCCESS) {
         return cl_fail(err, "clEnqueueFillBuffer(splat)", rc);
     }
-    rc = clSetKernelArg(ctx->bdpt, (cl_uint)ctx->array_count + ARG_AFTER_ARRAYS, sizeof(cl_mem),
+    rc = clSetKernelArg(kernel, (cl_uint)ctx->array_count + ARG_AFTER_ARRAYS, sizeof(cl_mem),
                         &ctx->splat);
     return rc == CL_SUCCESS ? TR_OK : cl_fail(err, "clSetKernelArg(splat)", rc);
 }
@@ -1438,6 +1472,281 @@ static int fold_splats(tr_cl_context *ctx, const tr_frame *f, uint32_t grid, tr_
     const size_t global[2] = {f->rect_w, f->rect_h};
     rc = clEnqueueNDRangeKernel(ctx->queue, ctx->fold, 2, NULL, global, NULL, 0, NULL, NULL);
     return rc == CL_SUCCESS ? TR_OK : cl_fail(err, "clEnqueueNDRangeKernel(tr_cl_fold_splats)", rc);
+}
+
+/* ---- vcm ----------------------------------------------------------------------------
+ *
+ * Each sample of a vcm frame is, as on the CPU (src/device/vcm.c), a light pass and a
+ * camera pass with the grid of the light vertices between them. The light pass
+ * (tr_cl_vcm_light) writes each grid point's mergeable vertices as one block of entries
+ * wherever an atomic counter puts it, with their buckets' hashes. The host reads the
+ * blocks' places and the hashes back (4 bytes an entry, 8 a point; the entries
+ * themselves stay on the device), orders the entries bucket by bucket in the CPU's order
+ * (tr_vcm_bucket_order: tiles, rows, each subpath's vertices in turn), and sends the
+ * buckets' offsets and that order; tr_cl_vcm_gather puts the entries in it, and the
+ * camera pass (tr_cl_render_vcm) traces each pixel's light subpath again for the
+ * connections and merges with the grid. So each pixel sums the same merges in the same
+ * order as on the CPU. */
+
+static void vcm_release_buffers(tr_cl_context *ctx) {
+    cl_mem *const bufs[9] = {&ctx->vcm_params, &ctx->vcm_counter, &ctx->vcm_entries,
+                             &ctx->vcm_hash,   &ctx->vcm_sorted,  &ctx->vcm_first,
+                             &ctx->vcm_count,  &ctx->vcm_cells,   &ctx->vcm_order};
+    for (int i = 0; i < 9; ++i) {
+        if (*bufs[i]) {
+            clReleaseMemObject(*bufs[i]);
+            *bufs[i] = NULL;
+        }
+    }
+    ctx->vcm_room = ctx->vcm_points = ctx->vcm_cell_room = 0;
+    free(ctx->vcm_host);
+    ctx->vcm_host = NULL;
+    ctx->vcm_host_words = 0;
+}
+
+static void vcm_release(tr_cl_context *ctx) {
+    const cl_kernel ks[3] = {ctx->vcm_light, ctx->vcm_gather, ctx->vcm_render};
+    for (int i = 0; i < 3; ++i) {
+        if (ks[i]) {
+            clReleaseKernel(ks[i]);
+        }
+    }
+    ctx->vcm_light = ctx->vcm_gather = ctx->vcm_render = NULL;
+    vcm_release_buffers(ctx);
+}
+
+void tr_cl_set_tile(tr_cl_context *ctx, uint32_t tile) {
+    ctx->vcm_tile = tile;
+}
+
+/* *b with room for `count` elements of `elem` bytes (at least one), made anew (contents
+ * lost) when *have is less. */
+static int vcm_buffer(tr_cl_context *ctx, cl_mem *b, size_t *have, size_t count, size_t elem,
+                      const char *what, tr_error *err) {
+    count = count ? count : 1u;
+    if (*b && *have >= count) {
+        return TR_OK;
+    }
+    if (count > ctx->info.max_alloc / elem) {
+        return tr_error_set(err, TR_STATUS_LIMIT,
+                            "vcm's %s (%.1f MiB) exceeds OpenCL device %d's largest allocation",
+                            what, mib(count * elem), ctx->info.index);
+    }
+    if (*b) {
+        clReleaseMemObject(*b);
+        *b = NULL;
+        *have = 0;
+    }
+    cl_int rc;
+    *b = clCreateBuffer(ctx->context, CL_MEM_READ_WRITE, count * elem, NULL, &rc);
+    if (!*b) {
+        char call[80];
+        snprintf(call, sizeof call, "clCreateBuffer(vcm %s)", what);
+        return cl_fail(err, call, rc);
+    }
+    *have = count;
+    return TR_OK;
+}
+
+/* The host's arrays for `points` grid points, `entries` entries and `cells` buckets. */
+static uint32_t *vcm_host(tr_cl_context *ctx, size_t points, size_t entries, size_t cells,
+                          tr_error *err) {
+    const size_t words = 2u * points + 2u * entries + 2u * cells + 1u;
+    if (words > ctx->vcm_host_words) {
+        uint32_t *p = realloc(ctx->vcm_host, words * sizeof *p);
+        if (!p) {
+            tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory for vcm's grid (%.1f MiB)",
+                         mib(words * sizeof *p));
+            return NULL;
+        }
+        ctx->vcm_host = p;
+        ctx->vcm_host_words = words;
+    }
+    return ctx->vcm_host;
+}
+
+/* Runs kernel k over the frame's grid points (global, local as render_frame chose). */
+static int vcm_run(tr_cl_context *ctx, cl_kernel k, const size_t global[2], const size_t *local,
+                   const char *name, tr_error *err) {
+    cl_int rc = clEnqueueNDRangeKernel(ctx->queue, k, 2, NULL, global, local, 0, NULL, NULL);
+    if (rc != CL_SUCCESS) {
+        char call[80];
+        snprintf(call, sizeof call, "clEnqueueNDRangeKernel(%s)", name);
+        return cl_fail(err, call, rc);
+    }
+    return TR_OK;
+}
+
+/* Room for `want` entries (at least one) in the entries' buffers: made anew, all four,
+ * when they hold fewer. */
+static int vcm_make_room(tr_cl_context *ctx, size_t want, tr_error *err) {
+    if (ctx->vcm_entries && ctx->vcm_room >= want) {
+        return TR_OK;
+    }
+    cl_mem *const bufs[4] = {&ctx->vcm_entries, &ctx->vcm_hash, &ctx->vcm_sorted, &ctx->vcm_order};
+    const size_t elem[4] = {sizeof(tr_vcm_entry), sizeof(cl_uint), sizeof(tr_vcm_entry),
+                            sizeof(cl_uint)};
+    static const char *const what[4] = {"light vertices", "hashes", "sorted light vertices",
+                                        "order"};
+    ctx->vcm_room = 0;
+    for (int i = 0; i < 4; ++i) {
+        size_t have = 0;
+        if (*bufs[i]) {
+            clReleaseMemObject(*bufs[i]);
+            *bufs[i] = NULL;
+        }
+        if (vcm_buffer(ctx, bufs[i], &have, want, elem[i], what[i], err) != TR_OK) {
+            return TR_ERR;
+        }
+    }
+    ctx->vcm_room = want ? want : 1u;
+    return TR_OK;
+}
+
+/* One sample's light pass: the entries, their hashes and the points' blocks on the device,
+ * room made until they fit; *total gets the entries' number. */
+static int vcm_light_pass(tr_cl_context *ctx, const size_t global[2], const size_t *local,
+                          uint32_t *total, tr_error *err) {
+    for (;;) {
+        const cl_uint zero = 0, room = (cl_uint)ctx->vcm_room;
+        cl_int rc = clEnqueueWriteBuffer(ctx->queue, ctx->vcm_counter, CL_TRUE, 0, sizeof zero,
+                                         &zero, 0, NULL, NULL);
+        const cl_uint base = (cl_uint)ctx->array_count + ARG_FRAME;
+        const cl_mem args[8] = {ctx->frame, ctx->vcm_params,  ctx->vcm_entries, ctx->vcm_hash,
+                                NULL,       ctx->vcm_counter, ctx->vcm_first,   ctx->vcm_count};
+        for (cl_uint i = 0; i < 8 && rc == CL_SUCCESS; ++i) {
+            rc = i == 4 ? clSetKernelArg(ctx->vcm_light, base + i, sizeof room, &room)
+                        : clSetKernelArg(ctx->vcm_light, base + i, sizeof(cl_mem), &args[i]);
+        }
+        if (rc != CL_SUCCESS) {
+            return cl_fail(err, "clSetKernelArg(tr_cl_vcm_light)", rc);
+        }
+        if (vcm_run(ctx, ctx->vcm_light, global, local, "tr_cl_vcm_light", err) != TR_OK) {
+            return TR_ERR;
+        }
+        cl_uint n = 0;
+        rc = clEnqueueReadBuffer(ctx->queue, ctx->vcm_counter, CL_TRUE, 0, sizeof n, &n, 0, NULL,
+                                 NULL);
+        if (rc != CL_SUCCESS) {
+            return cl_fail(err, "clEnqueueReadBuffer(vcm counter)", rc);
+        }
+        if (n <= ctx->vcm_room) {
+            *total = n;
+            return TR_OK;
+        }
+        /* Too many for the room: the pass again (the same subpaths) with a quarter more. */
+        if (vcm_make_room(ctx, (size_t)n + n / 4u, err) != TR_OK) {
+            return TR_ERR;
+        }
+    }
+}
+
+/* The grid of the light pass's `total` entries: ordered on the host, gathered on the
+ * device; sets p->cell_mask and writes p. */
+static int vcm_grid(tr_cl_context *ctx, tr_vcm_params *p, uint32_t nx, uint32_t ny, uint32_t total,
+                    tr_error *err) {
+    const size_t points = (size_t)nx * ny;
+    const uint32_t cells = tr_vcm_cells(total);
+    p->cell_mask = cells - 1u;
+    uint32_t *host = vcm_host(ctx, points, total, cells, err);
+    if (!host || vcm_buffer(ctx, &ctx->vcm_cells, &ctx->vcm_cell_room, (size_t)cells + 1u,
+                            sizeof(cl_uint), "buckets", err) != TR_OK) {
+        return TR_ERR;
+    }
+    uint32_t *first = host, *count = first + points, *hash = count + points;
+    uint32_t *cell_first = hash + total, *fill = cell_first + cells + 1u, *order = fill + cells;
+    cl_int rc = clEnqueueReadBuffer(ctx->queue, ctx->vcm_first, CL_TRUE, 0, points * sizeof *first,
+                                    first, 0, NULL, NULL);
+    rc |= clEnqueueReadBuffer(ctx->queue, ctx->vcm_count, CL_TRUE, 0, points * sizeof *count, count,
+                              0, NULL, NULL);
+    if (total > 0u) {
+        rc |= clEnqueueReadBuffer(ctx->queue, ctx->vcm_hash, CL_TRUE, 0, total * sizeof *hash, hash,
+                                  0, NULL, NULL);
+    }
+    if (rc != CL_SUCCESS) {
+        return cl_fail(err, "clEnqueueReadBuffer(vcm blocks)", rc);
+    }
+    tr_vcm_bucket_order(nx, ny, ctx->vcm_tile, first, count, hash, cells, cell_first, fill, order);
+    rc = clEnqueueWriteBuffer(ctx->queue, ctx->vcm_cells, CL_TRUE, 0,
+                              ((size_t)cells + 1u) * sizeof *cell_first, cell_first, 0, NULL, NULL);
+    rc |=
+        clEnqueueWriteBuffer(ctx->queue, ctx->vcm_params, CL_TRUE, 0, sizeof *p, p, 0, NULL, NULL);
+    if (total > 0u) {
+        rc |= clEnqueueWriteBuffer(ctx->queue, ctx->vcm_order, CL_TRUE, 0, total * sizeof *order,
+                                   order, 0, NULL, NULL);
+    }
+    if (rc != CL_SUCCESS) {
+        return cl_fail(err, "clEnqueueWriteBuffer(vcm grid)", rc);
+    }
+    if (total == 0u) {
+        return TR_OK;
+    }
+    const cl_uint n = total;
+    rc = clSetKernelArg(ctx->vcm_gather, 0, sizeof(cl_mem), &ctx->vcm_entries);
+    rc |= clSetKernelArg(ctx->vcm_gather, 1, sizeof(cl_mem), &ctx->vcm_order);
+    rc |= clSetKernelArg(ctx->vcm_gather, 2, sizeof n, &n);
+    rc |= clSetKernelArg(ctx->vcm_gather, 3, sizeof(cl_mem), &ctx->vcm_sorted);
+    if (rc != CL_SUCCESS) {
+        return cl_fail(err, "clSetKernelArg(tr_cl_vcm_gather)", rc);
+    }
+    const size_t global = total;
+    rc = clEnqueueNDRangeKernel(ctx->queue, ctx->vcm_gather, 1, NULL, &global, NULL, 0, NULL, NULL);
+    return rc == CL_SUCCESS ? TR_OK : cl_fail(err, "clEnqueueNDRangeKernel(tr_cl_vcm_gather)", rc);
+}
+
+/* Frame f's samples with vcm: per sample the light pass, the grid and the camera pass
+ * (whose other arguments render_frame has set), over the nx x ny grid points in
+ * global/local. */
+static int vcm_frame(tr_cl_context *ctx, const tr_frame *f, uint32_t nx, uint32_t ny,
+                     const size_t global[2], const size_t *local, tr_error *err) {
+    float pixels;
+    if (tr_vcm_radius_pixels(&pixels, err) != TR_OK) {
+        return TR_ERR;
+    }
+    const size_t points = (size_t)nx * ny;
+    size_t one = ctx->vcm_params ? 1u : 0u, have_count = ctx->vcm_points;
+    if (vcm_buffer(ctx, &ctx->vcm_params, &one, 1u, sizeof(tr_vcm_params), "parameters", err) !=
+            TR_OK ||
+        vcm_buffer(ctx, &ctx->vcm_counter, &one, 1u, sizeof(cl_uint), "counter", err) != TR_OK ||
+        /* About three mergeable vertices a point on the shipped scenes: room for four. */
+        vcm_make_room(ctx, ctx->vcm_room ? ctx->vcm_room : 4u * points, err) != TR_OK ||
+        vcm_buffer(ctx, &ctx->vcm_count, &have_count, points, sizeof(cl_uint), "blocks", err) !=
+            TR_OK ||
+        vcm_buffer(ctx, &ctx->vcm_first, &ctx->vcm_points, points, sizeof(cl_uint), "blocks",
+                   err) != TR_OK) {
+        return TR_ERR;
+    }
+    for (uint32_t n = 0; n < f->sample_count; ++n) {
+        tr_vcm_params p;
+        const int merge = tr_vcm_params_make(&ctx->vcm_box, &f->camera, pixels, f->sample + n,
+                                             points, ctx->vcm_outside, &p);
+        uint32_t total = 0;
+        if (merge) {
+            cl_int rc = clEnqueueWriteBuffer(ctx->queue, ctx->vcm_params, CL_TRUE, 0, sizeof p, &p,
+                                             0, NULL, NULL);
+            if (rc != CL_SUCCESS) {
+                return cl_fail(err, "clEnqueueWriteBuffer(vcm parameters)", rc);
+            }
+            if (vcm_light_pass(ctx, global, local, &total, err) != TR_OK) {
+                return TR_ERR;
+            }
+        }
+        /* Without merging the grid is one empty bucket (eta 0: tr_vcm_merge reads none). */
+        if (vcm_grid(ctx, &p, nx, ny, total, err) != TR_OK) {
+            return TR_ERR;
+        }
+        const cl_uint base = (cl_uint)ctx->array_count + ARG_AFTER_ARRAYS + 1u;
+        cl_int rc = clSetKernelArg(ctx->vcm_render, base, sizeof(cl_mem), &ctx->vcm_params);
+        rc |= clSetKernelArg(ctx->vcm_render, base + 1u, sizeof(cl_mem), &ctx->vcm_cells);
+        rc |= clSetKernelArg(ctx->vcm_render, base + 2u, sizeof(cl_mem), &ctx->vcm_sorted);
+        if (rc != CL_SUCCESS) {
+            return cl_fail(err, "clSetKernelArg(tr_cl_render_vcm)", rc);
+        }
+        if (vcm_run(ctx, ctx->vcm_render, global, local, "tr_cl_render_vcm", err) != TR_OK) {
+            return TR_ERR;
+        }
+    }
+    return TR_OK;
 }
 
 /* Times `reps` passes of `kernel` over the rays; its arguments from `base` on are the rays,
@@ -1575,20 +1884,18 @@ int tr_cl_trace_rays_cwbvh(tr_cl_context *ctx, const struct tr_cwbvh *cw, const 
 }
 
 int tr_cl_supports_integrator(tr_cl_context *ctx, int integrator, tr_error *err) {
-    if (integrator == TR_INTEGRATOR_VCM) {
-        /* Its photon map (src/device/vcm.c) is host code. */
-        return tr_error_set(err, TR_STATUS_UNSUPPORTED,
-                            "the vcm integrator runs on the CPU only (device %s is OpenCL)",
-                            ctx->info.name);
+    if (!tr_integrator_is_bidirectional(integrator)) {
+        return TR_OK;
     }
-    if (integrator == TR_INTEGRATOR_BDPT && need_part(ctx, TR_CL_PART_BDPT, err) != TR_OK) {
+    if (need_part(ctx, TR_CL_PART_BDPT, err) != TR_OK) {
         return TR_ERR;
     }
-    if (integrator == TR_INTEGRATOR_BDPT && !ctx->bdpt) {
+    const cl_kernel k = integrator == TR_INTEGRATOR_VCM ? ctx->vcm_render : ctx->bdpt;
+    if (!k) {
         return tr_error_set(err, TR_STATUS_UNSUPPORTED,
-                            "bdpt needs 64-bit atomics and doubles (cl_khr_int64_base_atomics, "
+                            "%s needs 64-bit atomics and doubles (cl_khr_int64_base_atomics, "
                             "cl_khr_fp64), which OpenCL device %d (%s) lacks",
-                            ctx->info.index, ctx->info.name);
+                            tr_integrator_name(integrator), ctx->info.index, ctx->info.name);
     }
     return TR_OK;
 }
@@ -1601,8 +1908,9 @@ static int render_frame(tr_cl_context *ctx, const tr_frame *f, uint64_t *rays_ou
     if (tr_cl_supports_integrator(ctx, (int)f->integrator, err) != TR_OK) {
         return TR_ERR;
     }
-    const int bdpt = f->integrator == TR_INTEGRATOR_BDPT;
-    cl_kernel kernel = bdpt ? ctx->bdpt : ctx->kernel;
+    const int vcm = f->integrator == TR_INTEGRATOR_VCM;
+    const int bdpt = f->integrator == TR_INTEGRATOR_BDPT || vcm; /* splats and 8x8 groups */
+    cl_kernel kernel = vcm ? ctx->vcm_render : bdpt ? ctx->bdpt : ctx->kernel;
     const uint32_t w = f->camera.screen_width, h = f->camera.screen_height;
     if ((w != ctx->width || h != ctx->height || f->passes != ctx->passes) &&
         make_film(ctx, w, h, f->passes, err) != TR_OK) {
@@ -1665,12 +1973,18 @@ static int render_frame(tr_cl_context *ctx, const tr_frame *f, uint64_t *rays_ou
     const size_t *local = ctx->local[0] ? ctx->local : bmax >= 64u ? small : NULL;
     const size_t global[2] = {local ? (nx + local[0] - 1) / local[0] * local[0] : nx,
                               local ? (ny + local[1] - 1) / local[1] * local[1] : ny};
-    if (bdpt && prepare_splats(ctx, f, err) != TR_OK) {
+    if (bdpt && prepare_splats(ctx, f, kernel, err) != TR_OK) {
         return TR_ERR;
     }
-    rc = clEnqueueNDRangeKernel(ctx->queue, kernel, 2, NULL, global, local, 0, NULL, NULL);
-    if (rc != CL_SUCCESS) {
-        return cl_fail(err, "clEnqueueNDRangeKernel(tr_cl_render)", rc);
+    if (vcm) {
+        if (vcm_frame(ctx, f, nx, ny, global, local, err) != TR_OK) {
+            return TR_ERR;
+        }
+    } else {
+        rc = clEnqueueNDRangeKernel(ctx->queue, kernel, 2, NULL, global, local, 0, NULL, NULL);
+        if (rc != CL_SUCCESS) {
+            return cl_fail(err, "clEnqueueNDRangeKernel(tr_cl_render)", rc);
+        }
     }
     /* The in-order queue runs the fold after the frame's kernel. */
     if (bdpt && fold_splats(ctx, f, nx * ny, err) != TR_OK) {

@@ -102,10 +102,14 @@ uint64_t tr_cl_wavefront_path_bytes(void);
  * frame's passes; a frame of another size or other passes than the previous one clears
  * it. Waits for the device to finish. *rays (may be NULL) gets the queries made. */
 int tr_cl_render_frame(tr_cl_context *ctx, const tr_frame *f, uint64_t *rays, tr_error *err);
-/* TR_OK if the device runs `integrator`; else TR_STATUS_UNSUPPORTED with the reason: vcm
- * (its photon map is host code), or bdpt on a device without cl_khr_int64_base_atomics and
- * cl_khr_fp64 (its splats' atomic sums and their fold). tr_cl_render_frame checks it too. */
+/* TR_OK if the device runs `integrator`; else TR_STATUS_UNSUPPORTED with the reason: bdpt
+ * or vcm on a device without cl_khr_int64_base_atomics and cl_khr_fp64 (their splats'
+ * atomic sums and their fold). tr_cl_render_frame checks it too. */
 int tr_cl_supports_integrator(tr_cl_context *ctx, int integrator, tr_error *err);
+/* The CPU device's tile side for the frames to come (render.h's tr_render_config.tile, 0
+ * for the default): vcm's buckets list the light vertices in the CPU's tile order, so that
+ * each pixel sums its merges as the CPU does. */
+void tr_cl_set_tile(tr_cl_context *ctx, uint32_t tile);
 /* The kernel pt's frames run with from now on, TR_OPENCL_KERNEL_* (render.h; AUTO at
  * first): TR_STATUS_INVALID_ARGUMENT for another value, TR_STATUS_UNSUPPORTED for the
  * wavefront in a program without it (tr_cl_open_source). */

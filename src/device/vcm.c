@@ -200,11 +200,7 @@ static int vcm_build_grid(tr_vcm_grid *g, const vcm_tiling *tl, vcm_scratch *sc,
     const vcm_tile *tiles = sc->tiles;
     size_t merge = 0;
     VCM_FOR_EACH_MERGEABLE((void)sums; ++merge;)
-    /* Four buckets a vertex: fewer cells share one. */
-    uint32_t cells = 1u;
-    while (cells < 4u * merge && cells < (1u << 30)) {
-        cells *= 2u;
-    }
+    const uint32_t cells = tr_vcm_cells(merge);
     g->cell_mask = cells - 1u;
     const size_t n = merge ? merge : 1u;
     uint32_t *cell_first = vcm_buf_get(&sc->cell_first, ((size_t)cells + 1u) * sizeof(uint32_t));
@@ -219,14 +215,9 @@ static int vcm_build_grid(tr_vcm_grid *g, const vcm_tiling *tl, vcm_scratch *sc,
     /* The entries in vertex order with their buckets, then scattered bucket by bucket. */
     size_t k = 0;
     VCM_FOR_EACH_MERGEABLE({
-        tr_vcm_entry *e = &unsorted[k];
-        e->p = path[j].p;
-        e->path = path;
-        e->index = j;
-        e->a = sums[3u * j];
-        e->b = sums[3u * j + 1u];
-        e->g = sums[3u * j + 2u];
-        const tr_vec3 c = v3_scale(v3_sub(e->p, g->origin), g->inv_cell);
+        unsorted[k] =
+            tr_vcm_entry_of(path, (int)j, sums[3u * j], sums[3u * j + 1u], sums[3u * j + 2u]);
+        const tr_vec3 c = v3_scale(v3_sub(unsorted[k].p, g->origin), g->inv_cell);
         bucket[k] = tr_vcm_cell_hash(tr_vcm_cell_of(c.x), tr_vcm_cell_of(c.y), tr_vcm_cell_of(c.z),
                                      g->cell_mask);
         cell_first[bucket[k] + 1u] += 1u;
@@ -241,6 +232,86 @@ static int vcm_build_grid(tr_vcm_grid *g, const vcm_tiling *tl, vcm_scratch *sc,
     }
     g->cell_first = cell_first;
     g->entries = entries;
+    return 1;
+}
+
+uint32_t tr_vcm_cells(size_t total) {
+    /* Four buckets a vertex: fewer cells share one. */
+    uint32_t cells = 1u;
+    while (cells < 4u * total && cells < (1u << 30)) {
+        cells *= 2u;
+    }
+    return cells;
+}
+
+void tr_vcm_bucket_order(uint32_t nx, uint32_t ny, uint32_t tile, const uint32_t *first,
+                         const uint32_t *count, const uint32_t *hash, uint32_t cells,
+                         uint32_t *cell_first, uint32_t *fill, uint32_t *order) {
+    const uint32_t mask = cells - 1u;
+    const uint32_t side = tile ? tile : 16u;
+    vcm_tiling tl = {0u, 0u, nx, ny, side, (nx + side - 1u) / side, (ny + side - 1u) / side};
+    const uint32_t tile_count = tl.tiles_x * tl.tiles_y;
+    memset(cell_first, 0, ((size_t)cells + 1u) * sizeof *cell_first);
+    for (int pass = 0; pass < 2; ++pass) {
+        if (pass == 1) {
+            for (uint32_t c = 0; c < cells; ++c) {
+                cell_first[c + 1u] += cell_first[c];
+            }
+            memcpy(fill, cell_first, (size_t)cells * sizeof *fill);
+        }
+        for (uint32_t ti = 0; ti < tile_count; ++ti) {
+            uint32_t x0, y0, x1, y1;
+            vcm_tile_rect(&tl, ti, &x0, &y0, &x1, &y1);
+            for (uint32_t gy = y0; gy < y1; ++gy) {
+                for (uint32_t gx = x0; gx < x1; ++gx) {
+                    const size_t pi = vcm_point_index(&tl, gx, gy);
+                    for (uint32_t e = first[pi]; e < first[pi] + count[pi]; ++e) {
+                        const uint32_t b = hash[e] & mask;
+                        if (pass == 0) {
+                            cell_first[b + 1u] += 1u;
+                        } else {
+                            order[fill[b]++] = e;
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
+tr_aabb tr_vcm_scene_box(const tr_scene_view *view) {
+    tr_aabb box = {{0.0f, 0.0f, 0.0f}, {0.0f, 0.0f, 0.0f}};
+    for (uint32_t i = 0; i < view->flat_node_count; ++i) {
+        const tr_aabb b = view->flat_nodes[i].box;
+        box.min = i ? v3_min(box.min, b.min) : b.min;
+        box.max = i ? v3_max(box.max, b.max) : b.max;
+    }
+    return box;
+}
+
+int tr_vcm_params_make(const tr_aabb *box, const tr_camera *cam, float pixels, uint32_t sample,
+                       size_t points, int outside, tr_vcm_params *p) {
+    memset(p, 0, sizeof *p);
+    p->sample = sample;
+    /* A pixel's footprint at the distance of the scene's centre, or at half the scene's
+     * diagonal where the camera is nearer the centre than that (inside the scene). */
+    const tr_vec3 centre = v3_scale(v3_add(box->min, box->max), 0.5f);
+    const float dist =
+        fmaxf(v3_length(v3_sub(centre, cam->pos)), 0.5f * v3_length(v3_sub(box->max, box->min)));
+    const float footprint =
+        dist * cam->canvas_width / (float)(cam->screen_width ? cam->screen_width : 1u);
+    /* The merge radius of this sample. */
+    const float r = pixels * footprint * powf((float)sample + 1.0f, 0.5f * (TR_VCM_ALPHA - 1.0f));
+    if (!(r > 0.0f) || points == 0) {
+        return 0;
+    }
+    const float area = (float)TR_PI * r * r;
+    p->origin = box->min;
+    p->inv_cell = 0.5f / r;
+    p->radius2 = r * r;
+    p->eta = (float)points * area;
+    p->norm = 1.0f / p->eta;
+    p->facing = outside ? 1u : 0u; /* integrator_vcm.h: tr_vcm_facing */
     return 1;
 }
 
@@ -278,21 +349,7 @@ int tr_vcm_render(const tr_scene_view *view, const tr_frame *f, const tr_film_vi
     const tr_camera cam = f->camera;
     const uint64_t seed = ((uint64_t)f->seed_hi << 32) | (uint64_t)f->seed_lo;
     const int max_depth = f->max_depth > TR_BDPT_MAX_DEPTH ? TR_BDPT_MAX_DEPTH : f->max_depth;
-    /* The scene's bounds: the union of its shapes' boxes (the flat structure's nodes),
-     * not a pass over every triangle each frame. */
-    tr_aabb box = {{0.0f, 0.0f, 0.0f}, {0.0f, 0.0f, 0.0f}};
-    for (uint32_t i = 0; i < view->flat_node_count; ++i) {
-        const tr_aabb b = view->flat_nodes[i].box;
-        box.min = i ? v3_min(box.min, b.min) : b.min;
-        box.max = i ? v3_max(box.max, b.max) : b.max;
-    }
-    /* A pixel's footprint at the distance of the scene's centre, or at half the scene's
-     * diagonal where the camera is nearer the centre than that (inside the scene). */
-    const tr_vec3 centre = v3_scale(v3_add(box.min, box.max), 0.5f);
-    const float dist =
-        fmaxf(v3_length(v3_sub(centre, cam.pos)), 0.5f * v3_length(v3_sub(box.max, box.min)));
-    const float footprint =
-        dist * cam.canvas_width / (float)(cam.screen_width ? cam.screen_width : 1u);
+    const tr_aabb box = tr_vcm_scene_box(view);
     uint64_t rays = 0;
     int cancelled = 0, failed = 0;
 
@@ -357,19 +414,11 @@ int tr_vcm_render(const tr_scene_view *view, const tr_frame *f, const tr_film_vi
         if (failed) {
             break;
         }
-        /* The merge radius of this sample. */
-        const float r =
-            pixels * footprint * powf((float)sample + 1.0f, 0.5f * (TR_VCM_ALPHA - 1.0f));
+        tr_vcm_params p;
         tr_vcm_grid g;
         memset(&g, 0, sizeof g);
-        if (r > 0.0f && points > 0) {
-            const float area = (float)TR_PI * r * r;
-            g.origin = box.min;
-            g.inv_cell = 0.5f / r;
-            g.radius2 = r * r;
-            g.eta = (float)points * area;
-            g.norm = 1.0f / g.eta;
-            g.facing = tr_bdpt_outside_on(view) ? 1u : 0u; /* integrator_vcm.h: tr_vcm_facing */
+        if (tr_vcm_params_make(&box, &cam, pixels, sample, points, tr_bdpt_outside_on(view), &p)) {
+            g = tr_vcm_grid_of(&p, NULL, NULL);
             if (!vcm_build_grid(&g, &tl, sc, tile_count, path_len, path_at)) {
                 failed = 1;
             }

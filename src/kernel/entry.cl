@@ -14,10 +14,10 @@
 
 /* The host builds the kernels below as four programs, each the first time it is needed
  * (src/device/opencl.c): the frame's (TR_CL_PART 1: the megakernel, the emission and ray
- * kernels), ReSTIR's passes (2), pt's wavefront stages (3) and bdpt's (4). With every
- * function inlined, the whole source came to about 440,000 lines of PTX, about 9x the
- * kernel of four days earlier, so that a GPU driver compiling it for every process spent
- * minutes before the first frame; most runs need one part. A program built without
+ * kernels), ReSTIR's passes (2), pt's wavefront stages (3) and bdpt's and vcm's (4). With
+ * every function inlined, the whole source came to about 440,000 lines of PTX, about 9x
+ * the kernel of four days earlier, so that a GPU driver compiling it for every process
+ * spent minutes before the first frame; most runs need one part. A program built without
  * TR_CL_PART (the tests' own sources) holds them all. */
 #ifdef TR_CL_PART
 #define TR_CL_HAS(part) (TR_CL_PART == (part))
@@ -425,6 +425,7 @@ __kernel void tr_cl_wf_accumulate(__global const tr_frame *frame, __global float
 #pragma OPENCL EXTENSION cl_khr_int64_base_atomics : enable
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable
 #include "integrator_bdpt.h"
+#include "integrator_vcm.h"
 
 __kernel void tr_cl_render_bdpt(TR_SCENE_ARRAYS(TR_CL_ARRAY_PARAM) __global const uint *scene_info,
                                 __global const tr_frame *frame, __global float *film_sum,
@@ -451,6 +452,78 @@ __kernel void tr_cl_render_bdpt(TR_SCENE_ARRAYS(TR_CL_ARRAY_PARAM) __global cons
     sp.h = f.rect_h;
     const uint rays = tr_bdpt_render_grid_rows(&s, &f, &film, &sp, gx0 + gx, gy0 + gy,
                                                gx0 + gx + 1u, gy0 + gy + 1u);
+    atomic_add(&rays_per_row[gy], rays);
+}
+
+/* vcm's first pass for one sample (integrator_vcm.h, tr_vcm_device_light): one work item
+ * per grid point traces its light subpath and writes its mergeable vertices as one block
+ * of entries, reserved with an atomic addition on *counter, with their buckets' full
+ * hashes; point_first and point_count say where each point's block lies. Where the
+ * entries do not fit in `room`, the counter still says how many there are. */
+__kernel void tr_cl_vcm_light(TR_SCENE_ARRAYS(TR_CL_ARRAY_PARAM) __global const uint *scene_info,
+                              __global const tr_frame *frame, __global const tr_vcm_params *params,
+                              __global tr_vcm_entry *entries, __global uint *hash, uint room,
+                              __global uint *counter, __global uint *point_first,
+                              __global uint *point_count) {
+    const tr_frame f = *frame;
+    uint gx0, gy0, nx, ny;
+    tr_frame_grid(&f, &gx0, &gy0, &nx, &ny);
+    const uint gx = (uint)get_global_id(0), gy = (uint)get_global_id(1);
+    if (gx >= nx || gy >= ny) {
+        return;
+    }
+    tr_scene_view s;
+    TR_CL_SCENE_VIEW(s);
+    const tr_vcm_params p = *params;
+    uint first;
+    const uint n =
+        tr_vcm_device_light(&s, &f, &p, gx0 + gx, gy0 + gy, entries, hash, counter, room, &first);
+    point_first[gy * nx + gx] = first;
+    point_count[gy * nx + gx] = n;
+}
+
+/* The entries in bucket order: sorted[k] = entries[order[k]] (the order the host made,
+ * tr_vcm_bucket_order). One work item per entry. */
+__kernel void tr_cl_vcm_gather(__global const tr_vcm_entry *entries, __global const uint *order,
+                               uint count, __global tr_vcm_entry *sorted) {
+    const uint k = (uint)get_global_id(0);
+    if (k < count) {
+        sorted[k] = entries[order[k]];
+    }
+}
+
+/* vcm's second pass for one sample: tr_cl_render_bdpt's arguments and work items, then the
+ * sample's grid (its scalars, the buckets' offsets and the sorted entries). */
+__kernel void tr_cl_render_vcm(TR_SCENE_ARRAYS(TR_CL_ARRAY_PARAM) __global const uint *scene_info,
+                               __global const tr_frame *frame, __global float *film_sum,
+                               __global uint *film_count, __global float *film_albedo,
+                               __global float *film_normal, __global float *film_depth,
+                               __global uint *film_prim, __global float *film_sq,
+                               __global float *film_direct, __global float *film_emission,
+                               __global uint *rays_per_row, __global long *splat,
+                               __global const tr_vcm_params *params,
+                               __global const uint *cell_first,
+                               __global const tr_vcm_entry *sorted) {
+    const tr_frame f = *frame;
+    uint gx0, gy0, nx, ny;
+    tr_frame_grid(&f, &gx0, &gy0, &nx, &ny);
+    const uint gx = (uint)get_global_id(0), gy = (uint)get_global_id(1);
+    if (gx >= nx || gy >= ny) {
+        return;
+    }
+    tr_scene_view s;
+    TR_CL_SCENE_VIEW(s);
+    tr_film_view film = TR_CL_FILM_VIEW(f);
+    tr_bdpt_splat sp;
+    sp.sum = splat;
+    sp.x0 = f.rect_x;
+    sp.y0 = f.rect_y;
+    sp.w = f.rect_w;
+    sp.h = f.rect_h;
+    const tr_vcm_params p = *params;
+    const tr_vcm_grid g = tr_vcm_grid_of(&p, cell_first, sorted);
+    const uint rays =
+        tr_vcm_device_camera(&s, &f, &film, &sp, &g, p.sample, gx0 + gx, gy0 + gy);
     atomic_add(&rays_per_row[gy], rays);
 }
 
