@@ -66,6 +66,15 @@ unset POCL_MEMORY_LIMIT
 psnr=$("$BIN" compare vc-cl.pfm vc-cpu.pfm | awk '/^psnr/ { print $2 }')
 awk -v p="$psnr" 'BEGIN { exit !(p == "inf" || p + 0 >= 80) }' ||
     fail "vcm: OpenCL and CPU images only $psnr dB apart"
+# The same with the kernel built as for a device without 64-bit atomics and doubles: the
+# splats as 32-bit pairs, folded on the host; the same image bits as with them.
+TRAC0R_OPENCL_DISABLE_EXT=cl_khr_int64_base_atomics,cl_khr_fp64 "$BIN" render --width 32 \
+    --height 24 --spp 4 --device opencl --integrator vcm --out vc-fb.pfm >/dev/null 2>err.txt ||
+    fail "vcm without the extensions: $(cat err.txt)"
+cmp -s vc-fb.pfm vc-cl.pfm || fail "vcm without the extensions: another image"
+rm -f err.txt
+TRAC0R_OPENCL_DISABLE_EXT=cl_khr_fp16 expect_usage_error "TRAC0R_OPENCL_DISABLE_EXT" render \
+    --device opencl --integrator bdpt --out x.png
 # bdpt's work groups: left to the driver, PoCL's overflowed its stack at 64x48 (a crash).
 "$BIN" render --width 64 --height 48 --spp 2 --device opencl --integrator bdpt --out bd64.pfm \
     >/dev/null 2>err.txt

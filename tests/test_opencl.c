@@ -762,6 +762,43 @@ int main(void) {
     tr_film_free(&wgot);
     tr_scene_clear(&odd);
 
+    /* bdpt and vcm as on a device without cl_khr_int64_base_atomics and cl_khr_fp64: the
+     * splat sums as pairs of 32-bit words added with 32-bit atomics, folded on the host;
+     * the films as the CPU's, as with the extensions. */
+    {
+        int emulated = 1, host_fold = 1;
+        CHECK(tr_cl_splat_paths(tr_device_cl_context(dev), &emulated, &host_fold, &err) == TR_OK,
+              "%s", err.msg);
+        CHECK(!emulated && !host_fold, "PoCL has both extensions: emulated %d, host fold %d",
+              emulated, host_fold);
+        setenv("TRAC0R_OPENCL_DISABLE_EXT", "cl_khr_int64_base_atomics,cl_khr_fp64", 1);
+        tr_device *fb = tr_device_create("opencl:0", &err);
+        CHECK(fb != NULL, "tr_device_create without the extensions: %s", err.msg);
+        if (fb) {
+            CHECK(tr_cl_splat_paths(tr_device_cl_context(fb), &emulated, &host_fold, &err) == TR_OK,
+                  "%s", err.msg);
+            CHECK(emulated && host_fold, "without the extensions: emulated %d, host fold %d",
+                  emulated, host_fold);
+            CHECK(tr_scene_commit(&scene, TR_ACCEL_TYPE_BVH, &err) == TR_OK, "%s", err.msg);
+            compare_backends(fb, &scene, 1, TR_INTEGRATOR_BDPT, 16,
+                             "bvh, bdpt, 32-bit atomics, host fold");
+            compare_backends(fb, &scene, 1, TR_INTEGRATOR_VCM, 16,
+                             "bvh, vcm, 32-bit atomics, host fold");
+            tr_device_destroy(fb);
+        }
+        /* Only those two names. */
+        const char *bad_ext[3] = {"cl_khr_fp16", "cl_khr_fp64,", "cl_khr_fp64 "};
+        for (int k = 0; k < 3; ++k) {
+            setenv("TRAC0R_OPENCL_DISABLE_EXT", bad_ext[k], 1);
+            tr_device *no = tr_device_create("opencl:0", &err);
+            CHECK_STATUS(no ? TR_OK : TR_ERR, err, TR_STATUS_INVALID_ARGUMENT, bad_ext[k]);
+            if (no) {
+                tr_device_destroy(no);
+            }
+        }
+        unsetenv("TRAC0R_OPENCL_DISABLE_EXT");
+    }
+
     tr_scene_clear(&big);
     tr_film_free(&small);
     tr_film_free(&film);

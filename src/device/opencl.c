@@ -139,6 +139,11 @@ void tr_cl_set_tile(tr_cl_context *ctx, uint32_t tile) {
     (void)ctx;
     (void)tile;
 }
+int tr_cl_splat_paths(tr_cl_context *ctx, int *emulated, int *host_fold, tr_error *err) {
+    (void)ctx;
+    *emulated = *host_fold = 0;
+    return tr_error_set(err, TR_STATUS_UNSUPPORTED, "%s", no_opencl);
+}
 void tr_cl_film_size(const tr_cl_context *ctx, uint32_t *width, uint32_t *height,
                      uint32_t *passes) {
     (void)ctx;
@@ -308,9 +313,10 @@ struct tr_cl_context {
     int custom;
     cl_kernel kernel;
     cl_kernel resolve; /* tr_cl_resolve_emission */
-    /* bdpt: tr_cl_render_bdpt and tr_cl_fold_splats, NULL where the device lacks 64-bit
-     * atomics or doubles (entry.cl compiles them only with both), and the splat sums. */
+    /* bdpt: tr_cl_render_bdpt and tr_cl_fold_splats (NULL where the device has no doubles:
+     * the host folds), and whether the splat sums are 32-bit pairs (create_bdpt). */
     cl_kernel bdpt, fold;
+    int splat_emulated;
     cl_kernel trace;       /* tr_cl_trace_rays */
     cl_kernel trace_cwbvh; /* tr_cl_trace_cwbvh */
     /* ReSTIR DI's passes (tr_cl_restir_frame) and the kernel that reports its structs' sizes;
@@ -857,6 +863,58 @@ tr_device_bvh tr_cl_scene_bvh(const tr_cl_context *ctx) {
  * `source` (a test's own, every kernel it has), with the context's options, into *out.
  * The frame's program keeps its log as the context's build log; every build's log is the
  * last one (tr_cl_last_build_log). */
+/* TRAC0R_OPENCL_DISABLE_EXT: a comma-separated list of cl_khr_int64_base_atomics and
+ * cl_khr_fp64, extensions the kernel is then built as if the device lacked (bdpt's and
+ * vcm's fallbacks, entry.cl, run on any device: the tests use it). Unset or empty: none. */
+static int disabled_extensions(int *no_atomics, int *no_fp64, tr_error *err) {
+    *no_atomics = *no_fp64 = 0;
+    const char *e = getenv("TRAC0R_OPENCL_DISABLE_EXT");
+    if (!e || !*e) {
+        return TR_OK;
+    }
+    for (const char *p = e;;) {
+        const char *end = strchr(p, ',');
+        const size_t n = end ? (size_t)(end - p) : strlen(p);
+        if (n == strlen("cl_khr_int64_base_atomics") &&
+            strncmp(p, "cl_khr_int64_base_atomics", n) == 0) {
+            *no_atomics = 1;
+        } else if (n == strlen("cl_khr_fp64") && strncmp(p, "cl_khr_fp64", n) == 0) {
+            *no_fp64 = 1;
+        } else {
+            return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                                "TRAC0R_OPENCL_DISABLE_EXT=\"%s\": expected a comma-separated "
+                                "list of cl_khr_int64_base_atomics and cl_khr_fp64",
+                                e);
+        }
+        if (!end) {
+            return TR_OK;
+        }
+        p = end + 1; /* an empty name after it is refused */
+    }
+}
+
+/* Whether the device lists extension `name` (CL_DEVICE_EXTENSIONS). */
+static int device_has_extension(cl_device_id dev, const char *name) {
+    size_t n = 0;
+    if (clGetDeviceInfo(dev, CL_DEVICE_EXTENSIONS, 0, NULL, &n) != CL_SUCCESS || n == 0) {
+        return 0;
+    }
+    char *list = malloc(n + 1u);
+    if (!list || clGetDeviceInfo(dev, CL_DEVICE_EXTENSIONS, n, list, NULL) != CL_SUCCESS) {
+        free(list);
+        return 0;
+    }
+    list[n] = '\0';
+    const size_t len = strlen(name);
+    int found = 0;
+    for (const char *p = list; (p = strstr(p, name)) != NULL; p += len) {
+        const int starts = p == list || p[-1] == ' ';
+        found |= starts && (p[len] == ' ' || p[len] == '\0');
+    }
+    free(list);
+    return found;
+}
+
 static int build_part(tr_cl_context *ctx, const char *source, int part, cl_program *out,
                       tr_error *err) {
     const char *src = source ? source : tr_cl_kernel_source;
@@ -873,9 +931,15 @@ static int build_part(tr_cl_context *ctx, const char *source, int part, cl_progr
     if (part) {
         snprintf(part_option, sizeof part_option, " -DTR_CL_PART=%d", part);
     }
-    char options[sizeof ctx->options + 64];
-    snprintf(options, sizeof options, "%s%s%s", ctx->options,
-             inl && strcmp(inl, "1") == 0 ? " -DTR_CL_INLINE_ALL=1" : "", part_option);
+    int no_atomics = 0, no_fp64 = 0;
+    if (disabled_extensions(&no_atomics, &no_fp64, err) != TR_OK) {
+        clReleaseProgram(prog);
+        return TR_ERR;
+    }
+    char options[sizeof ctx->options + 128];
+    snprintf(options, sizeof options, "%s%s%s%s%s", ctx->options,
+             inl && strcmp(inl, "1") == 0 ? " -DTR_CL_INLINE_ALL=1" : "", part_option,
+             no_atomics ? " -DTR_CL_NO_INT64_ATOMICS=1" : "", no_fp64 ? " -DTR_CL_NO_FP64=1" : "");
     rc = clBuildProgram(prog, 1, &ctx->device, options, NULL, NULL);
     char *log = read_build_log(prog, ctx->device);
     if (!log) {
@@ -921,16 +985,27 @@ static int create_restir(tr_cl_context *ctx, cl_program prog, int custom, tr_err
     return TR_OK;
 }
 
-/* bdpt's kernels from prog: absent from a program built without cl_khr_int64_base_atomics
- * or cl_khr_fp64. */
+/* bdpt's and vcm's kernels from prog (absent from a test's own program without them), and
+ * how their splats are summed and folded: the fold kernel is absent from a program built
+ * without cl_khr_fp64 (the host folds then), and without cl_khr_int64_base_atomics the
+ * sums are two 32-bit words each, low first, which the host reads as its 64-bit integers
+ * only on a little-endian device (elsewhere bdpt and vcm are refused). */
 static void create_bdpt(tr_cl_context *ctx, cl_program prog) {
     cl_int rc;
+    int no_atomics = 0, no_fp64 = 0;
+    tr_error ignored;
+    if (disabled_extensions(&no_atomics, &no_fp64, &ignored) != TR_OK) {
+        return; /* build_part has refused the value already */
+    }
+    ctx->splat_emulated =
+        no_atomics || !device_has_extension(ctx->device, "cl_khr_int64_base_atomics");
+    cl_bool little = CL_TRUE;
+    clGetDeviceInfo(ctx->device, CL_DEVICE_ENDIAN_LITTLE, sizeof little, &little, NULL);
+    if (ctx->splat_emulated && !little) {
+        return;
+    }
     ctx->bdpt = clCreateKernel(prog, "tr_cl_render_bdpt", &rc);
     ctx->fold = ctx->bdpt ? clCreateKernel(prog, "tr_cl_fold_splats", &rc) : NULL;
-    if (ctx->bdpt && !ctx->fold) {
-        clReleaseKernel(ctx->bdpt);
-        ctx->bdpt = NULL;
-    }
     if (ctx->bdpt) {
         ctx->vcm_light = clCreateKernel(prog, "tr_cl_vcm_light", &rc);
         ctx->vcm_gather = clCreateKernel(prog, "tr_cl_vcm_gather", &rc);
@@ -1457,11 +1532,51 @@ static int prepare_splats(tr_cl_context *ctx, const tr_frame *f, cl_kernel kerne
     return rc == CL_SUCCESS ? TR_OK : cl_fail(err, "clSetKernelArg(splat)", rc);
 }
 
-/* Adds frame f's splat sums to the film (tr_cl_fold_splats) with the CPU's scale: the
- * whole image's area over the frame's grid points, in 2^-24 units (src/device/cpu.c). */
+/* fold_splats on the host, for a device without doubles: the sums and the rectangle's rows
+ * of the film read back, added to as the CPU adds (src/device/cpu.c), written back. */
+static int fold_splats_host(tr_cl_context *ctx, const tr_frame *f, double scale, tr_error *err) {
+    const size_t sums = 3u * (size_t)f->rect_w * f->rect_h;
+    const size_t row = 3u * (size_t)f->camera.screen_width, rows = f->rect_h;
+    cl_long *q = malloc(sums * sizeof *q);
+    float *film = malloc(row * rows * sizeof *film);
+    cl_int rc = CL_SUCCESS;
+    if (q && film) {
+        const size_t at = (size_t)f->rect_y * row * sizeof *film;
+        rc = clEnqueueReadBuffer(ctx->queue, ctx->splat, CL_TRUE, 0, sums * sizeof *q, q, 0, NULL,
+                                 NULL);
+        rc |= clEnqueueReadBuffer(ctx->queue, ctx->film[FILM_SUM], CL_TRUE, at,
+                                  row * rows * sizeof *film, film, 0, NULL, NULL);
+        for (size_t y = 0; y < rows && rc == CL_SUCCESS; ++y) {
+            for (size_t x = 0; x < f->rect_w; ++x) {
+                for (size_t c = 0; c < 3; ++c) {
+                    film[y * row + 3u * (f->rect_x + x) + c] +=
+                        (float)((double)q[3u * (y * f->rect_w + x) + c] * scale);
+                }
+            }
+        }
+        if (rc == CL_SUCCESS) {
+            rc = clEnqueueWriteBuffer(ctx->queue, ctx->film[FILM_SUM], CL_TRUE, at,
+                                      row * rows * sizeof *film, film, 0, NULL, NULL);
+        }
+    }
+    free(q);
+    free(film);
+    if (!q || !film) {
+        return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY, "out of memory folding %s's splats",
+                            tr_integrator_name((int)f->integrator));
+    }
+    return rc == CL_SUCCESS ? TR_OK : cl_fail(err, "folding the splats on the host", rc);
+}
+
+/* Adds frame f's splat sums to the film (tr_cl_fold_splats, or on the host) with the CPU's
+ * scale: the whole image's area over the frame's grid points, in 2^-24 units
+ * (src/device/cpu.c). */
 static int fold_splats(tr_cl_context *ctx, const tr_frame *f, uint32_t grid, tr_error *err) {
     const cl_double scale = (double)f->camera.screen_width * (double)f->camera.screen_height /
                             ((double)grid * TR_BDPT_SPLAT_ONE);
+    if (!ctx->fold) {
+        return fold_splats_host(ctx, f, scale, err);
+    }
     cl_int rc = clSetKernelArg(ctx->fold, 0, sizeof(cl_mem), &ctx->frame);
     rc |= clSetKernelArg(ctx->fold, 1, sizeof(cl_mem), &ctx->splat);
     rc |= clSetKernelArg(ctx->fold, 2, sizeof scale, &scale);
@@ -1517,6 +1632,15 @@ static void vcm_release(tr_cl_context *ctx) {
 
 void tr_cl_set_tile(tr_cl_context *ctx, uint32_t tile) {
     ctx->vcm_tile = tile;
+}
+
+int tr_cl_splat_paths(tr_cl_context *ctx, int *emulated, int *host_fold, tr_error *err) {
+    if (need_part(ctx, TR_CL_PART_BDPT, err) != TR_OK) {
+        return TR_ERR;
+    }
+    *emulated = ctx->splat_emulated;
+    *host_fold = ctx->bdpt && !ctx->fold;
+    return TR_OK;
 }
 
 /* *b with room for `count` elements of `elem` bytes (at least one), made anew (contents
@@ -1892,9 +2016,10 @@ int tr_cl_supports_integrator(tr_cl_context *ctx, int integrator, tr_error *err)
     }
     const cl_kernel k = integrator == TR_INTEGRATOR_VCM ? ctx->vcm_render : ctx->bdpt;
     if (!k) {
+        /* A big-endian device without 64-bit atomics (create_bdpt), or a test's own
+         * program without the kernels. */
         return tr_error_set(err, TR_STATUS_UNSUPPORTED,
-                            "%s needs 64-bit atomics and doubles (cl_khr_int64_base_atomics, "
-                            "cl_khr_fp64), which OpenCL device %d (%s) lacks",
+                            "%s's kernels are not available on OpenCL device %d (%s)",
                             tr_integrator_name(integrator), ctx->info.index, ctx->info.name);
     }
     return TR_OK;

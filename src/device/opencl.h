@@ -103,9 +103,15 @@ uint64_t tr_cl_wavefront_path_bytes(void);
  * it. Waits for the device to finish. *rays (may be NULL) gets the queries made. */
 int tr_cl_render_frame(tr_cl_context *ctx, const tr_frame *f, uint64_t *rays, tr_error *err);
 /* TR_OK if the device runs `integrator`; else TR_STATUS_UNSUPPORTED with the reason: bdpt
- * or vcm on a device without cl_khr_int64_base_atomics and cl_khr_fp64 (their splats'
- * atomic sums and their fold). tr_cl_render_frame checks it too. */
+ * or vcm on a big-endian device without cl_khr_int64_base_atomics (their splats' sums as
+ * 32-bit pairs), or in a test's own program without their kernels. tr_cl_render_frame
+ * checks it too. */
 int tr_cl_supports_integrator(tr_cl_context *ctx, int integrator, tr_error *err);
+/* How bdpt's and vcm's splats are summed and folded on this device (building their kernels
+ * first): *emulated when as two 32-bit atomic additions (no cl_khr_int64_base_atomics, or
+ * TRAC0R_OPENCL_DISABLE_EXT names it), *host_fold when the host folds them into the film
+ * (no cl_khr_fp64, or named likewise). */
+int tr_cl_splat_paths(tr_cl_context *ctx, int *emulated, int *host_fold, tr_error *err);
 /* The CPU device's tile side for the frames to come (render.h's tr_render_config.tile, 0
  * for the default): vcm's buckets list the light vertices in the CPU's tile order, so that
  * each pixel sums its merges as the CPU does. */

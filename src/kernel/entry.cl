@@ -414,16 +414,20 @@ __kernel void tr_cl_wf_accumulate(__global const tr_frame *frame, __global float
 #endif
 
 #if TR_CL_HAS(4)
-/* bdpt on the device: tr_cl_render's arguments and work items, and the light-tracing
- * splats' fixed-point sums (integrator_bdpt.h), one 64-bit integer per colour channel and
- * pixel of the frame's rectangle, added with atom_add. Integer addition is associative, so
- * the sums are those the CPU's threads make, whatever the order. tr_cl_fold_splats then
- * adds them to the film as the CPU's fold does (src/device/cpu.c), in double precision.
- * Compiled only where the device has both extensions; the host finds no kernel otherwise
- * and refuses bdpt on that device. */
-#if defined(cl_khr_int64_base_atomics) && defined(cl_khr_fp64)
+/* bdpt and vcm on the device: tr_cl_render's arguments and work items, and the
+ * light-tracing splats' fixed-point sums (integrator_bdpt.h), one 64-bit integer per colour
+ * channel and pixel of the frame's rectangle, added with atom_add where the device has
+ * cl_khr_int64_base_atomics, else with two 32-bit atomic additions that leave the same
+ * sum (tr_bdpt_atomic_add64). Integer addition is associative, so the sums are those the
+ * CPU's threads make, whatever the order. tr_cl_fold_splats then adds them to the film as
+ * the CPU's fold does (src/device/cpu.c), in double precision, where the device has
+ * cl_khr_fp64; elsewhere the host folds them. TR_CL_NO_INT64_ATOMICS and TR_CL_NO_FP64
+ * (TRAC0R_OPENCL_DISABLE_EXT, src/device/opencl.c) take those paths on any device. */
+#if defined(cl_khr_int64_base_atomics) && !defined(TR_CL_NO_INT64_ATOMICS)
 #pragma OPENCL EXTENSION cl_khr_int64_base_atomics : enable
-#pragma OPENCL EXTENSION cl_khr_fp64 : enable
+#else
+#define TR_BDPT_ATOM64_EMULATED 1
+#endif
 #include "integrator_bdpt.h"
 #include "integrator_vcm.h"
 
@@ -527,6 +531,8 @@ __kernel void tr_cl_render_vcm(TR_SCENE_ARRAYS(TR_CL_ARRAY_PARAM) __global const
     atomic_add(&rays_per_row[gy], rays);
 }
 
+#if defined(cl_khr_fp64) && !defined(TR_CL_NO_FP64)
+#pragma OPENCL EXTENSION cl_khr_fp64 : enable
 /* Adds the splat sums to the film after the frame: pixel (x, y) of the rectangle gets
  * (float)(sum * scale) per channel, scale = W H / (grid 2^24) as the host computed it
  * (the frame's grid points, src/device/cpu.c's tr_bdpt_fold_splats). One work item per

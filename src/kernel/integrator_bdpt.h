@@ -56,8 +56,9 @@
  *
  * Limits: a subpath holds at most TR_BDPT_MAX_VERTS vertices, so the max depth is
  * TR_BDPT_MAX_DEPTH (also the default). On an OpenCL device the 64-bit
- * addition is atom_add (cl_khr_int64_base_atomics) and the fold runs there in double
- * precision (cl_khr_fp64, entry.cl); a device without both does not run bdpt. */
+ * addition is atom_add (cl_khr_int64_base_atomics), or two 32-bit atomic additions where
+ * the device lacks it (tr_bdpt_atomic_add64), and the fold runs there in double precision
+ * (cl_khr_fp64, entry.cl), or on the host where the device has no doubles. */
 #ifndef TR_KERNEL_INTEGRATOR_BDPT_H
 #define TR_KERNEL_INTEGRATOR_BDPT_H
 
@@ -155,8 +156,28 @@ typedef struct tr_bdpt_escape {
 } tr_bdpt_escape;
 
 /* The splats' 64-bit atomic addition: the host's builtin, or OpenCL's atom_add from
- * cl_khr_int64_base_atomics (entry.cl compiles bdpt only for devices that have it). */
-#if defined(__OPENCL_C_VERSION__) || defined(__OPENCL_VERSION__)
+ * cl_khr_int64_base_atomics, or on a device without that extension (entry.cl defines
+ * TR_BDPT_ATOM64_EMULATED) two of OpenCL's core 32-bit atomic_add on the sum's halves. */
+#if (defined(__OPENCL_C_VERSION__) || defined(__OPENCL_VERSION__)) &&                              \
+    defined(TR_BDPT_ATOM64_EMULATED)
+/* The sum as two 32-bit words, the low one first (the device's own 64-bit integer on a
+ * little-endian device, which the host asks for before it uses this: src/device/opencl.c).
+ * The low word takes the low half and returns what it held; where that addition wrapped,
+ * the high word takes the carry with the high half. Each addition wraps the low word at
+ * most once and each wrap is seen by the one work item that made it, so after the kernel
+ * the pair holds the exact 64-bit sum, whatever the order, as atom_add leaves it. */
+TR_FN void tr_bdpt_atomic_add64(TR_GLOBAL int64_t *p, int64_t v) {
+    TR_GLOBAL uint32_t *w = (TR_GLOBAL uint32_t *)p;
+    const uint32_t lo = (uint32_t)((uint64_t)v & 0xffffffffu);
+    const uint32_t hi = (uint32_t)((uint64_t)v >> 32);
+    const uint32_t old = atomic_add(&w[0], lo);
+    const uint32_t carry = (uint32_t)(old + lo < old) + hi;
+    if (carry != 0u) {
+        atomic_add(&w[1], carry);
+    }
+}
+#define TR_BDPT_ATOMIC_ADD(p, v) tr_bdpt_atomic_add64((p), (v))
+#elif defined(__OPENCL_C_VERSION__) || defined(__OPENCL_VERSION__)
 #define TR_BDPT_ATOMIC_ADD(p, v) atom_add((p), (v))
 #else
 #define TR_BDPT_ATOMIC_ADD(p, v) __atomic_fetch_add((p), (v), __ATOMIC_RELAXED)
