@@ -7,17 +7,10 @@
  * low word, and every sum must equal the exact 64-bit sum the host computes. The kernel
  * source is the backend's, built as for a device without the extension. Fails, does not
  * skip, without a device. */
-#define CL_TARGET_OPENCL_VERSION 120
-#include <CL/cl.h>
 #include <stdint.h>
 #include <stdio.h>
-#include <stdlib.h>
-#include <string.h>
 
-#include "check.h"
-
-extern const char tr_cl_kernel_source[];
-extern const size_t tr_cl_kernel_source_length;
+#include "cl_test.h"
 
 enum { N = 1 << 16, SUMS = 7 };
 
@@ -28,43 +21,21 @@ static const char test_kernel[] =
     "}\n";
 
 int main(void) {
-    cl_platform_id plat;
     cl_device_id dev;
-    cl_uint np = 0, nd = 0;
-    CHECK(clGetPlatformIDs(1, &plat, &np) == CL_SUCCESS && np > 0, "no OpenCL platform");
-    CHECK(clGetDeviceIDs(plat, CL_DEVICE_TYPE_ALL, 1, &dev, &nd) == CL_SUCCESS && nd > 0,
-          "no OpenCL device");
-    if (np == 0 || nd == 0) {
+    cl_context ctx;
+    cl_command_queue q;
+    if (!cl_test_open(&dev, &ctx, &q)) {
+        return check_finish("test_opencl_atom64");
+    }
+    /* bdpt's part of the backend's source, as src/device/opencl.c builds it for a device
+     * without 64-bit atomics (TRAC0R_OPENCL_DISABLE_EXT=cl_khr_int64_base_atomics). */
+    cl_program prog = cl_test_program(ctx, dev, test_kernel,
+                                      "-cl-std=CL1.2 -DTR_OPENCL_DEVICE=1 -DTR_CL_PART=4 "
+                                      "-DTR_CL_NO_INT64_ATOMICS=1");
+    if (!prog) {
         return check_finish("test_opencl_atom64");
     }
     cl_int rc;
-    cl_context ctx = clCreateContext(NULL, 1, &dev, NULL, NULL, &rc);
-    CHECK(rc == CL_SUCCESS, "clCreateContext: %d", rc);
-    cl_command_queue q = clCreateCommandQueue(ctx, dev, 0, &rc);
-    CHECK(rc == CL_SUCCESS, "clCreateCommandQueue: %d", rc);
-    const size_t len = tr_cl_kernel_source_length + sizeof test_kernel;
-    char *src = malloc(len);
-    CHECK(src != NULL, "out of memory");
-    if (!src) {
-        return check_finish("test_opencl_atom64");
-    }
-    memcpy(src, tr_cl_kernel_source, tr_cl_kernel_source_length);
-    memcpy(src + tr_cl_kernel_source_length, test_kernel, sizeof test_kernel);
-    const char *srcs[1] = {src};
-    cl_program prog = clCreateProgramWithSource(ctx, 1, srcs, NULL, &rc);
-    CHECK(rc == CL_SUCCESS, "clCreateProgramWithSource: %d", rc);
-    /* bdpt's part of the backend's source, as src/device/opencl.c builds it for a device
-     * without 64-bit atomics (TRAC0R_OPENCL_DISABLE_EXT=cl_khr_int64_base_atomics). */
-    rc = clBuildProgram(prog, 1, &dev,
-                        "-cl-std=CL1.2 -DTR_OPENCL_DEVICE=1 -DTR_CL_PART=4 "
-                        "-DTR_CL_NO_INT64_ATOMICS=1",
-                        NULL, NULL);
-    if (rc != CL_SUCCESS) {
-        static char log[1 << 16];
-        clGetProgramBuildInfo(prog, dev, CL_PROGRAM_BUILD_LOG, sizeof log - 1, log, NULL);
-        CHECK(0, "clBuildProgram: %d: %s", rc, log);
-        return check_finish("test_opencl_atom64");
-    }
     cl_kernel k = clCreateKernel(prog, "tr_test_add64", &rc);
     CHECK(rc == CL_SUCCESS, "clCreateKernel: %d", rc);
 
@@ -112,6 +83,5 @@ int main(void) {
     clReleaseCommandQueue(q);
     clReleaseContext(ctx);
     free(values);
-    free(src);
     return check_finish("test_opencl_atom64");
 }

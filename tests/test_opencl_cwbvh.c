@@ -4,19 +4,15 @@
  * queries. A closest hit must have the same distance bit for bit; the same triangle too,
  * except where two triangles are hit at exactly that distance (a shared edge), where the
  * order of the tests decides. Fails, does not skip, without a device. */
-#define CL_TARGET_OPENCL_VERSION 120
-#include <CL/cl.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "accel/cwbvh.h"
 #include "check.h"
+#include "cl_test.h"
 #include "kernel/kernel.h"
 #include "scene/scene_internal.h"
 #include "trac0r/scene.h"
-
-extern const char tr_cl_kernel_source[];
-extern const size_t tr_cl_kernel_source_length;
 
 enum { N = 20000 };
 #define SHADOW_TMAX 1.5f
@@ -162,38 +158,20 @@ static void check_scene(cl_context ctx, cl_command_queue q, cl_kernel k, const c
 }
 
 int main(void) {
-    cl_platform_id plat;
     cl_device_id dev;
-    cl_uint np = 0, nd = 0;
-    CHECK(clGetPlatformIDs(1, &plat, &np) == CL_SUCCESS && np > 0, "no OpenCL platform");
-    CHECK(clGetDeviceIDs(plat, CL_DEVICE_TYPE_ALL, 1, &dev, &nd) == CL_SUCCESS && nd > 0,
-          "no OpenCL device");
-    if (np == 0 || nd == 0) {
+    cl_context ctx;
+    cl_command_queue q;
+    if (!cl_test_open(&dev, &ctx, &q)) {
+        return check_finish("test_opencl_cwbvh");
+    }
+    /* The backend's options on a CPU device: the host's correctly rounded division. */
+    cl_program prog = cl_test_program(
+        ctx, dev, test_kernel,
+        "-cl-std=CL1.2 -DTR_OPENCL_DEVICE=1 -cl-fp32-correctly-rounded-divide-sqrt");
+    if (!prog) {
         return check_finish("test_opencl_cwbvh");
     }
     cl_int rc;
-    cl_context ctx = clCreateContext(NULL, 1, &dev, NULL, NULL, &rc);
-    CHECK(rc == CL_SUCCESS, "clCreateContext: %d", rc);
-    cl_command_queue q = clCreateCommandQueue(ctx, dev, 0, &rc);
-    CHECK(rc == CL_SUCCESS, "clCreateCommandQueue: %d", rc);
-    const size_t len = tr_cl_kernel_source_length + sizeof test_kernel;
-    char *src = malloc(len);
-    CHECK(src != NULL, "out of memory");
-    memcpy(src, tr_cl_kernel_source, tr_cl_kernel_source_length);
-    memcpy(src + tr_cl_kernel_source_length, test_kernel, sizeof test_kernel);
-    const char *srcs[1] = {src};
-    cl_program prog = clCreateProgramWithSource(ctx, 1, srcs, NULL, &rc);
-    CHECK(rc == CL_SUCCESS, "clCreateProgramWithSource: %d", rc);
-    /* The backend's options on a CPU device: the host's correctly rounded division. */
-    rc = clBuildProgram(prog, 1, &dev,
-                        "-cl-std=CL1.2 -DTR_OPENCL_DEVICE=1 -cl-fp32-correctly-rounded-divide-sqrt",
-                        NULL, NULL);
-    if (rc != CL_SUCCESS) {
-        static char log[1 << 16];
-        clGetProgramBuildInfo(prog, dev, CL_PROGRAM_BUILD_LOG, sizeof log - 1, log, NULL);
-        CHECK(0, "clBuildProgram: %d: %s", rc, log);
-        return check_finish("test_opencl_cwbvh");
-    }
     cl_kernel k = clCreateKernel(prog, "tr_test_cwbvh", &rc);
     CHECK(rc == CL_SUCCESS, "clCreateKernel: %d", rc);
     check_scene(ctx, q, k, "cornell");
@@ -202,6 +180,5 @@ int main(void) {
     clReleaseProgram(prog);
     clReleaseCommandQueue(q);
     clReleaseContext(ctx);
-    free(src);
     return check_finish("test_opencl_cwbvh");
 }

@@ -12,17 +12,13 @@
  * differ in the last bits of shading where the device's transcendental functions round
  * differently (docs/opencl.md; test_opencl bounds that). Fails, does not skip, without a
  * device, as test_opencl does. */
-#define CL_TARGET_OPENCL_VERSION 120
-#include <CL/cl.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "check.h"
+#include "cl_test.h"
 #include "kernel/kernel.h"
 #include "trac0r/render.h"
-
-extern const char tr_cl_kernel_source[];
-extern const size_t tr_cl_kernel_source_length;
 
 enum { N = 3 * 4096, WORDS = 3 + 8, DRAWS = 8 };
 
@@ -69,16 +65,10 @@ static void host_points(const uint32_t *a, uint32_t *o) {
 }
 
 int main(void) {
-    cl_platform_id platform;
-    cl_uint np = 0, nd = 0;
     cl_device_id dev;
-    CHECK(clGetPlatformIDs(1, &platform, &np) == CL_SUCCESS && np >= 1, "no OpenCL platform");
-    if (np < 1) {
-        return check_finish("test_opencl_sampler");
-    }
-    CHECK(clGetDeviceIDs(platform, CL_DEVICE_TYPE_ALL, 1, &dev, &nd) == CL_SUCCESS && nd >= 1,
-          "no OpenCL device");
-    if (nd < 1) {
+    cl_context ctx;
+    cl_command_queue q;
+    if (!cl_test_open(&dev, &ctx, &q)) {
         return check_finish("test_opencl_sampler");
     }
     /* Addresses: seeds over all 64 bits, pixels of a 1920-wide image and beyond the
@@ -100,27 +90,12 @@ int main(void) {
     CHECK(TR_SAMPLER_SOBOL == 0 && TR_SAMPLER_RANDOM == 1 && TR_SAMPLER_ZSOBOL == 2,
           "the kinds' numbers");
 
-    cl_int rc;
-    cl_context ctx = clCreateContext(NULL, 1, &dev, NULL, NULL, &rc);
-    CHECK(rc == CL_SUCCESS, "clCreateContext: %d", rc);
-    cl_command_queue q = clCreateCommandQueue(ctx, dev, 0, &rc);
-    CHECK(rc == CL_SUCCESS, "clCreateCommandQueue: %d", rc);
-    const size_t len = tr_cl_kernel_source_length + sizeof test_kernel;
-    char *src = malloc(len);
-    CHECK(src != NULL, "out of memory");
-    memcpy(src, tr_cl_kernel_source, tr_cl_kernel_source_length);
-    memcpy(src + tr_cl_kernel_source_length, test_kernel, sizeof test_kernel);
-    const char *srcs[1] = {src};
-    cl_program prog = clCreateProgramWithSource(ctx, 1, srcs, NULL, &rc);
-    CHECK(rc == CL_SUCCESS, "clCreateProgramWithSource: %d", rc);
     /* The backend's options (src/device/opencl.c, without the argument info it reads). */
-    rc = clBuildProgram(prog, 1, &dev, "-cl-std=CL1.2 -DTR_OPENCL_DEVICE=1", NULL, NULL);
-    if (rc != CL_SUCCESS) {
-        static char log[1 << 16];
-        clGetProgramBuildInfo(prog, dev, CL_PROGRAM_BUILD_LOG, sizeof log - 1, log, NULL);
-        CHECK(0, "clBuildProgram: %d: %s", rc, log);
+    cl_program prog = cl_test_program(ctx, dev, test_kernel, "-cl-std=CL1.2 -DTR_OPENCL_DEVICE=1");
+    if (!prog) {
         return check_finish("test_opencl_sampler");
     }
+    cl_int rc;
     cl_kernel k = clCreateKernel(prog, "tr_test_sampler_points", &rc);
     CHECK(rc == CL_SUCCESS, "clCreateKernel: %d", rc);
     cl_mem in =
@@ -160,6 +135,5 @@ int main(void) {
     clReleaseProgram(prog);
     clReleaseCommandQueue(q);
     clReleaseContext(ctx);
-    free(src);
     return check_finish("test_opencl_sampler");
 }

@@ -431,13 +431,28 @@ __kernel void tr_cl_wf_accumulate(__global const tr_frame *frame, __global float
 #include "integrator_bdpt.h"
 #include "integrator_vcm.h"
 
-__kernel void tr_cl_render_bdpt(TR_SCENE_ARRAYS(TR_CL_ARRAY_PARAM) __global const uint *scene_info,
-                                __global const tr_frame *frame, __global float *film_sum,
-                                __global uint *film_count, __global float *film_albedo,
-                                __global float *film_normal, __global float *film_depth,
-                                __global uint *film_prim, __global float *film_sq,
-                                __global float *film_direct, __global float *film_emission,
-                                __global uint *rays_per_row, __global long *splat) {
+/* tr_cl_render's arguments after the scene's, and the splat sums: what tr_cl_render_bdpt and
+ * tr_cl_render_vcm take first. */
+#define TR_CL_BIDIR_PARAMS                                                                         \
+    TR_SCENE_ARRAYS(TR_CL_ARRAY_PARAM)                                                             \
+    __global const uint *scene_info, __global const tr_frame *frame, __global float *film_sum,     \
+        __global uint *film_count, __global float *film_albedo, __global float *film_normal,       \
+        __global float *film_depth, __global uint *film_prim, __global float *film_sq,             \
+        __global float *film_direct, __global float *film_emission, __global uint *rays_per_row,   \
+        __global long *splat
+
+/* The splat sums of frame f's rectangle. */
+static tr_bdpt_splat tr_cl_splat(const tr_frame *f, __global long *splat) {
+    tr_bdpt_splat sp;
+    sp.sum = splat;
+    sp.x0 = f->rect_x;
+    sp.y0 = f->rect_y;
+    sp.w = f->rect_w;
+    sp.h = f->rect_h;
+    return sp;
+}
+
+__kernel void tr_cl_render_bdpt(TR_CL_BIDIR_PARAMS) {
     const tr_frame f = *frame;
     uint gx0, gy0, nx, ny;
     tr_frame_grid(&f, &gx0, &gy0, &nx, &ny);
@@ -448,12 +463,7 @@ __kernel void tr_cl_render_bdpt(TR_SCENE_ARRAYS(TR_CL_ARRAY_PARAM) __global cons
     tr_scene_view s;
     TR_CL_SCENE_VIEW(s);
     tr_film_view film = TR_CL_FILM_VIEW(f);
-    tr_bdpt_splat sp;
-    sp.sum = splat;
-    sp.x0 = f.rect_x;
-    sp.y0 = f.rect_y;
-    sp.w = f.rect_w;
-    sp.h = f.rect_h;
+    const tr_bdpt_splat sp = tr_cl_splat(&f, splat);
     const uint rays = tr_bdpt_render_grid_rows(&s, &f, &film, &sp, gx0 + gx, gy0 + gy,
                                                gx0 + gx + 1u, gy0 + gy + 1u);
     atomic_add(&rays_per_row[gy], rays);
@@ -498,14 +508,7 @@ __kernel void tr_cl_vcm_gather(__global const tr_vcm_entry *entries, __global co
 
 /* vcm's second pass for one sample: tr_cl_render_bdpt's arguments and work items, then the
  * sample's grid (its scalars, the buckets' offsets and the sorted entries). */
-__kernel void tr_cl_render_vcm(TR_SCENE_ARRAYS(TR_CL_ARRAY_PARAM) __global const uint *scene_info,
-                               __global const tr_frame *frame, __global float *film_sum,
-                               __global uint *film_count, __global float *film_albedo,
-                               __global float *film_normal, __global float *film_depth,
-                               __global uint *film_prim, __global float *film_sq,
-                               __global float *film_direct, __global float *film_emission,
-                               __global uint *rays_per_row, __global long *splat,
-                               __global const tr_vcm_params *params,
+__kernel void tr_cl_render_vcm(TR_CL_BIDIR_PARAMS, __global const tr_vcm_params *params,
                                __global const uint *cell_first,
                                __global const tr_vcm_entry *sorted) {
     const tr_frame f = *frame;
@@ -518,12 +521,7 @@ __kernel void tr_cl_render_vcm(TR_SCENE_ARRAYS(TR_CL_ARRAY_PARAM) __global const
     tr_scene_view s;
     TR_CL_SCENE_VIEW(s);
     tr_film_view film = TR_CL_FILM_VIEW(f);
-    tr_bdpt_splat sp;
-    sp.sum = splat;
-    sp.x0 = f.rect_x;
-    sp.y0 = f.rect_y;
-    sp.w = f.rect_w;
-    sp.h = f.rect_h;
+    const tr_bdpt_splat sp = tr_cl_splat(&f, splat);
     const tr_vcm_params p = *params;
     const tr_vcm_grid g = tr_vcm_grid_of(&p, cell_first, sorted);
     const uint rays =
