@@ -23,7 +23,8 @@
  *    silhouette), from +z as glTF (the format's front), and fills 80 % of the image's
  *    width or height without touching its border, the height following 4:3 when only
  *    the width is given.
- * 5. A file's camera or point light inside a closed cube is reported, one warning each.
+ * 5. A file's camera or point light inside a closed cube is reported, one warning each; the
+ *    enclosed camera gives way to the framing one unless it is asked for by name.
  * 6. glTF's clear coat (assimp-testmodels' ClearCoatTest.gltf): the six "Coated" materials
  *    become principled with the coat's weight 1 and roughness (0.03, or 1 for the
  *    roughness variations), the others have none; the coat maps the file also uses are
@@ -554,16 +555,26 @@ static void write_cube(const char *path, const char *cam, const char *lamp) {
     write_text(path, text);
 }
 
-static uint32_t cube_warnings(const char *path, const char *cam, const char *lamp) {
+/* The warnings of the cube with its camera and lamp at cam and lamp, the camera given as
+ * `which` (NULL: the file's first); *pos gets where the scene's camera ended up. */
+static uint32_t cube_warnings_at(const char *path, const char *cam, const char *lamp,
+                                 const char *which, tr_vec3 *pos) {
     write_cube(path, cam, lamp);
     tr_error err;
     tr_scene *s = tr_scene_create(&err);
     tr_scene_file info;
-    const tr_model_options opt = {0, 1.0f, 0, 0, NULL};
+    memset(&info, 0, sizeof info);
+    const tr_model_options opt = {0, 1.0f, 0, 0, which};
     CHECK(s && tr_scene_model_load(s, path, &opt, &info, &err) == TR_OK, "%s", err.msg);
+    *pos = s ? tr_scene_camera(s)->pos : v3s(0.0f);
     tr_scene_destroy(s);
     remove(path);
     return info.warning_count;
+}
+
+static uint32_t cube_warnings(const char *path, const char *cam, const char *lamp) {
+    tr_vec3 pos;
+    return cube_warnings_at(path, cam, lamp, NULL, &pos);
 }
 
 /* A file's camera and lamp inside the model's closed geometry are each reported: the same
@@ -577,6 +588,20 @@ static void test_enclosed(void) {
     const uint32_t lamp = cube_warnings(path, "0, 0, 5", "0.2, 0.3, -0.4");
     CHECK(both == out + 2 && cam == out + 1 && lamp == out + 1,
           "warnings: outside %u, both inside %u, camera %u, lamp %u", out, both, cam, lamp);
+    /* The enclosed camera is replaced by the framing one (outside the cube) unless it is
+     * asked for by name; one outside is kept. */
+    tr_vec3 p;
+    cube_warnings_at(path, "0.1, 0.2, 0.5", "0, 3, 0", NULL, &p);
+    CHECK(fmaxf(fabsf(p.x), fmaxf(fabsf(p.y), fabsf(p.z))) > 1.5f,
+          "the enclosed camera was kept: (%g, %g, %g)", (double)p.x, (double)p.y, (double)p.z);
+    const uint32_t named = cube_warnings_at(path, "0.1, 0.2, 0.5", "0, 3, 0", "eye", &p);
+    CHECK(named == cam && fabsf(p.x - 0.1f) < 1e-4f && fabsf(p.y - 0.2f) < 1e-4f &&
+              fabsf(p.z - 0.5f) < 1e-4f,
+          "the camera named 'eye' is at (%g, %g, %g), %u warnings", (double)p.x, (double)p.y,
+          (double)p.z, named);
+    cube_warnings_at(path, "0, 0, 5", "0, 3, 0", NULL, &p);
+    CHECK(fabsf(p.z - 5.0f) < 1e-4f, "the camera outside moved to (%g, %g, %g)", (double)p.x,
+          (double)p.y, (double)p.z);
 }
 
 int main(void) {

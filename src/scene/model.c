@@ -243,21 +243,44 @@ static int model_point_enclosed(const tr_scene *s, uint32_t count, tr_vec3 p) {
     return 4 * behind >= 3 * DIRS;
 }
 
-/* Warns about the file's camera and point or spot lights that sit inside the model's
- * geometry. Skipped for models above 2 M triangles (32 rays by brute force each). */
-static void model_check_enclosed(const tr_scene *s, uint32_t count, const tr_import_extras *ex,
-                                 int camera, tr_scene_file *info) {
-    if (count > 2000000u) {
-        return;
+/* Whether the enclosure checks run: models above 2 M triangles are skipped (32 rays by
+ * brute force per point). */
+#define MODEL_ENCLOSED_MAX 2000000u
+
+/* Whether the file's camera sits inside the model's geometry (seeing the backs of faces
+ * all round). Then it is reported, and where the camera was not asked for by name the
+ * model is framed instead (returns 1): such a camera shows nothing of what the file is
+ * meant to show (FBX/spider.fbx's sits inside a mesh 15,000 units across and renders
+ * white), while a room seen from inside sees the fronts of its walls and is kept. */
+static int model_camera_enclosed(const tr_scene *s, uint32_t count, const tr_import_extras *ex,
+                                 int named, tr_scene_file *info) {
+    if (count > MODEL_ENCLOSED_MAX || !model_point_enclosed(s, count, ex->cam_pos)) {
+        return 0;
     }
     char msg[256];
-    if (camera && model_point_enclosed(s, count, ex->cam_pos)) {
+    if (named) {
         snprintf(msg, sizeof msg,
                  "camera '%.64s' at (%g, %g, %g) is inside the model's geometry: it may see "
                  "nothing but the inside of a mesh (--camera frame frames the model instead)",
                  ex->cam_name, (double)ex->cam_pos.x, (double)ex->cam_pos.y, (double)ex->cam_pos.z);
-        model_warn(info, msg);
+    } else {
+        snprintf(msg, sizeof msg,
+                 "camera '%.40s' at (%.6g, %.6g, %.6g) is inside the model's geometry: the "
+                 "model is framed instead (--camera '%.40s' renders from it)",
+                 ex->cam_name, (double)ex->cam_pos.x, (double)ex->cam_pos.y, (double)ex->cam_pos.z,
+                 ex->cam_name);
     }
+    model_warn(info, msg);
+    return !named;
+}
+
+/* Warns about the file's point or spot lights that sit inside the model's geometry. */
+static void model_check_enclosed(const tr_scene *s, uint32_t count, const tr_import_extras *ex,
+                                 tr_scene_file *info) {
+    if (count > MODEL_ENCLOSED_MAX) {
+        return;
+    }
+    char msg[256];
     for (uint32_t i = 0; i < ex->light_count && i < 16; ++i) {
         const tr_import_light *l = &ex->light[i];
         if ((l->type == AI_POINT || l->type == AI_SPOT) && model_point_enclosed(s, count, l->pos)) {
@@ -323,7 +346,7 @@ int tr_scene_model_load(tr_scene *s, const char *path, const tr_model_options *o
     if (opt->up_z) {
         tf.orientation = v3(-1.57079632679489662f, 0.0f, 0.0f); /* +z to +y */
     }
-    const int frame = opt->camera && strcmp(opt->camera, "frame") == 0;
+    int frame = opt->camera && strcmp(opt->camera, "frame") == 0;
     tr_mesh_import_stats st;
     tr_import_extras ex;
     memset(&ex, 0, sizeof ex);
@@ -342,6 +365,10 @@ int tr_scene_model_load(tr_scene *s, const char *path, const tr_model_options *o
     info->mesh_triangles = st.triangles;
     info->degenerate_dropped = st.degenerate;
     info->bounds = tr_scene_bounds(s); /* the model's, before any light's shape */
+    if (ex.has_camera && !frame &&
+        model_camera_enclosed(s, s->triangle_count, &ex, opt->camera != NULL, info)) {
+        frame = 1;
+    }
     /* The size the render will have (one side alone keeps 4:3), so that the framing
      * camera fits the model to it. */
     info->width = opt->width;
@@ -365,7 +392,7 @@ int tr_scene_model_load(tr_scene *s, const char *path, const tr_model_options *o
     if (!(radius > 0.0f) || !isfinite(radius)) {
         radius = 1.0f;
     }
-    model_check_enclosed(s, s->triangle_count, &ex, ex.has_camera && !frame, info);
+    model_check_enclosed(s, s->triangle_count, &ex, info);
     /* The file's lights, or the default environment. */
     int lit = 0, have_sun = 0;
     for (uint32_t i = 0; i < ex.light_count; ++i) {
