@@ -66,6 +66,14 @@ unset POCL_MEMORY_LIMIT
 psnr=$("$BIN" compare vc-cl.pfm vc-cpu.pfm | awk '/^psnr/ { print $2 }')
 awk -v p="$psnr" 'BEGIN { exit !(p == "inf" || p + 0 >= 80) }' ||
     fail "vcm: OpenCL and CPU images only $psnr dB apart"
+# Merging off (radius 0): no light pass, the grid one empty bucket; still the CPU's image.
+TRAC0R_VCM_RADIUS=0 "$BIN" render --width 32 --height 24 --spp 2 --device opencl --integrator vcm \
+    --out vc0-cl.pfm >/dev/null 2>err.txt || fail "vcm, radius 0, on OpenCL: $(cat err.txt)"
+TRAC0R_VCM_RADIUS=0 "$BIN" render --width 32 --height 24 --spp 2 --integrator vcm \
+    --out vc0-cpu.pfm >/dev/null 2>&1 || fail "vcm, radius 0, on the CPU failed"
+psnr=$("$BIN" compare vc0-cl.pfm vc0-cpu.pfm | awk '/^psnr/ { print $2 }')
+awk -v p="$psnr" 'BEGIN { exit !(p == "inf" || p + 0 >= 80) }' ||
+    fail "vcm, radius 0: OpenCL and CPU images only $psnr dB apart"
 # The same with the kernel built as for a device without 64-bit atomics and doubles: the
 # splats as 32-bit pairs, folded on the host; the same image bits as with them.
 TRAC0R_OPENCL_DISABLE_EXT=cl_khr_int64_base_atomics,cl_khr_fp64 "$BIN" render --width 32 \

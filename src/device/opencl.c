@@ -859,10 +859,6 @@ tr_device_bvh tr_cl_scene_bvh(const tr_cl_context *ctx) {
     return ctx->have_scene ? ctx->scene_bvh : TR_DEVICE_BVH_BVH2;
 }
 
-/* Builds part `part` of the kernel source (TR_CL_PART_*), or with part 0 the program
- * `source` (a test's own, every kernel it has), with the context's options, into *out.
- * The frame's program keeps its log as the context's build log; every build's log is the
- * last one (tr_cl_last_build_log). */
 /* TRAC0R_OPENCL_DISABLE_EXT: a comma-separated list of cl_khr_int64_base_atomics and
  * cl_khr_fp64, extensions the kernel is then built as if the device lacked (bdpt's and
  * vcm's fallbacks, entry.cl, run on any device: the tests use it). Unset or empty: none. */
@@ -915,6 +911,10 @@ static int device_has_extension(cl_device_id dev, const char *name) {
     return found;
 }
 
+/* Builds part `part` of the kernel source (TR_CL_PART_*), or with part 0 the program
+ * `source` (a test's own, every kernel it has), with the context's options, into *out.
+ * The frame's program keeps its log as the context's build log; every build's log is the
+ * last one (tr_cl_last_build_log). */
 static int build_part(tr_cl_context *ctx, const char *source, int part, cl_program *out,
                       tr_error *err) {
     const char *src = source ? source : tr_cl_kernel_source;
@@ -1779,18 +1779,24 @@ static int vcm_grid(tr_cl_context *ctx, tr_vcm_params *p, uint32_t nx, uint32_t 
     }
     uint32_t *first = host, *count = first + points, *hash = count + points;
     uint32_t *cell_first = hash + total, *fill = cell_first + cells + 1u, *order = fill + cells;
-    cl_int rc = clEnqueueReadBuffer(ctx->queue, ctx->vcm_first, CL_TRUE, 0, points * sizeof *first,
-                                    first, 0, NULL, NULL);
-    rc |= clEnqueueReadBuffer(ctx->queue, ctx->vcm_count, CL_TRUE, 0, points * sizeof *count, count,
-                              0, NULL, NULL);
-    if (total > 0u) {
+    cl_int rc = CL_SUCCESS;
+    if (total == 0u) {
+        /* No entries (or no light pass: merging off), one empty bucket; the blocks may not
+         * have been written this frame. */
+        memset(cell_first, 0, ((size_t)cells + 1u) * sizeof *cell_first);
+    } else {
+        rc = clEnqueueReadBuffer(ctx->queue, ctx->vcm_first, CL_TRUE, 0, points * sizeof *first,
+                                 first, 0, NULL, NULL);
+        rc |= clEnqueueReadBuffer(ctx->queue, ctx->vcm_count, CL_TRUE, 0, points * sizeof *count,
+                                  count, 0, NULL, NULL);
         rc |= clEnqueueReadBuffer(ctx->queue, ctx->vcm_hash, CL_TRUE, 0, total * sizeof *hash, hash,
                                   0, NULL, NULL);
+        if (rc != CL_SUCCESS) {
+            return cl_fail(err, "clEnqueueReadBuffer(vcm blocks)", rc);
+        }
+        tr_vcm_bucket_order(nx, ny, ctx->vcm_tile, first, count, hash, cells, cell_first, fill,
+                            order);
     }
-    if (rc != CL_SUCCESS) {
-        return cl_fail(err, "clEnqueueReadBuffer(vcm blocks)", rc);
-    }
-    tr_vcm_bucket_order(nx, ny, ctx->vcm_tile, first, count, hash, cells, cell_first, fill, order);
     rc = clEnqueueWriteBuffer(ctx->queue, ctx->vcm_cells, CL_TRUE, 0,
                               ((size_t)cells + 1u) * sizeof *cell_first, cell_first, 0, NULL, NULL);
     rc |=
