@@ -29,7 +29,11 @@
  *    become principled with the coat's weight 1 and roughness (0.03, or 1 for the
  *    roughness variations), the others have none; the coat maps the file also uses are
  *    named in warnings. Extensions a glTF file lists in extensionsUsed that trac0r does
- *    not render are named in a warning each. */
+ *    not render are named in a warning each.
+ * 7. A Silo .sib file written here (a triangle, a material with a texture, a spot light):
+ *    Assimp's reader drops the last character of its strings and passes the light's target
+ *    point as its direction; the texture is found by the name with one more character
+ *    (with a warning) and the spot light points from its position to its target. */
 #define _POSIX_C_SOURCE 200809L
 #include "check.h"
 #include "scene_util.h"
@@ -604,6 +608,145 @@ static void test_enclosed(void) {
           (double)p.y, (double)p.z);
 }
 
+/* A growing byte buffer for a .sib file: little-endian numbers, tags as written. */
+typedef struct sib_buf {
+    unsigned char b[2048];
+    size_t n;
+} sib_buf;
+
+static void sib_bytes(sib_buf *s, const void *p, size_t k) {
+    if (s->n + k <= sizeof s->b) {
+        memcpy(s->b + s->n, p, k);
+    }
+    s->n += k;
+}
+static void sib_u32(sib_buf *s, uint32_t v) {
+    const unsigned char b[4] = {(unsigned char)v, (unsigned char)(v >> 8), (unsigned char)(v >> 16),
+                                (unsigned char)(v >> 24)};
+    sib_bytes(s, b, 4);
+}
+static void sib_f32(sib_buf *s, float f) {
+    uint32_t v;
+    memcpy(&v, &f, 4);
+    sib_u32(s, v);
+}
+/* A chunk: its tag, then its body's size, then the body. */
+static void sib_chunk(sib_buf *s, const char *tag, const sib_buf *body) {
+    sib_bytes(s, tag, 4);
+    sib_u32(s, (uint32_t)body->n);
+    sib_bytes(s, body->b, body->n);
+}
+/* A string as Silo writes it: UTF-16LE, with no terminator. */
+static void sib_string(sib_buf *s, const char *text) {
+    for (const char *c = text; *c; ++c) {
+        const unsigned char w[2] = {(unsigned char)*c, 0};
+        sib_bytes(s, w, 2);
+    }
+}
+
+static void test_sib(void) {
+    char sub[600], png[700], path[700];
+    snprintf(sub, sizeof sub, "%s/sib", dir);
+    snprintf(png, sizeof png, "%s/wood.png", sub);
+    snprintf(path, sizeof path, "%s/m.sib", sub);
+    CHECK(mkdir(sub, 0700) == 0, "mkdir %s", sub);
+    tr_error err;
+    tr_film film;
+    CHECK(tr_film_init(&film, 2, 2, &err) == TR_OK, "%s", err.msg);
+    for (size_t i = 0; i < 4; ++i) {
+        film.count[i] = 1;
+        film.sum[3 * i] = film.sum[3 * i + 1] = film.sum[3 * i + 2] = 0.5f;
+    }
+    CHECK(tr_film_write_png(&film, png, 0.0f, &err) == TR_OK, "%s", err.msg);
+    tr_film_free(&film);
+
+    sib_buf file = {.n = 0}, body = {.n = 0}, part = {.n = 0};
+    sib_u32(&body, 1u); /* version */
+    sib_chunk(&file, "HEAD", &body);
+    /* The material: four colours of four floats, shininess, name, texture. */
+    body.n = 0;
+    for (int k = 0; k < 16; ++k) {
+        sib_f32(&body, k < 3 ? 0.8f : k == 3 ? 1.0f : 0.0f);
+    }
+    sib_u32(&body, 10u);
+    sib_u32(&body, 2u * 4u);
+    sib_string(&body, "Wood");
+    sib_u32(&body, 2u * 8u);
+    sib_string(&body, "wood.png");
+    sib_chunk(&file, "MATR", &body);
+    /* The shape: three vertices, one face, the face's material the file's first. */
+    sib_buf shape = {.n = 0};
+    part.n = 0;
+    const float v[9] = {-1, 0, -1, 1, 0, -1, 0, 0, 1};
+    for (int k = 0; k < 9; ++k) {
+        sib_f32(&part, v[k]);
+    }
+    sib_chunk(&shape, "VRTS", &part);
+    part.n = 0;
+    sib_u32(&part, 3u);
+    for (uint32_t k = 0; k < 3; ++k) {
+        sib_u32(&part, k);
+    }
+    sib_chunk(&shape, "FACS", &part);
+    part.n = 0;
+    sib_u32(&part, 0u);
+    sib_u32(&part, 0u);
+    sib_chunk(&shape, "FAMA", &part);
+    part.n = 0;
+    sib_string(&part, "Tri");
+    sib_chunk(&shape, "SNAM", &part);
+    sib_chunk(&file, "SHAP", &shape);
+    /* A spot light at (0, 2, 0) whose target is (1, 0, 0). */
+    sib_buf light = {.n = 0};
+    part.n = 0;
+    sib_u32(&part, 1u); /* spot */
+    const float pos_target[6] = {0, 2, 0, 1, 0, 0};
+    for (int k = 0; k < 6; ++k) {
+        sib_f32(&part, pos_target[k]);
+    }
+    for (int k = 0; k < 12; ++k) {
+        sib_f32(&part, 1.0f); /* diffuse, ambient and specular colours, four floats each */
+    }
+    sib_f32(&part, 1.0f);  /* spot exponent */
+    sib_f32(&part, 30.0f); /* cutoff, degrees */
+    sib_f32(&part, 1.0f);  /* constant, linear, quadratic attenuation */
+    sib_f32(&part, 0.0f);
+    sib_f32(&part, 0.0f);
+    sib_chunk(&light, "LNFO", &part);
+    part.n = 0;
+    sib_string(&part, "Lamp");
+    sib_chunk(&light, "SNAM", &part);
+    sib_chunk(&file, "LGHT", &light);
+    CHECK(file.n <= sizeof file.b, "the .sib file is %zu bytes", file.n);
+    FILE *f = fopen(path, "wb");
+    CHECK(f && fwrite(file.b, 1, file.n, f) == file.n && fclose(f) == 0, "writing %s", path);
+
+    tr_scene s;
+    tr_scene_init(&s);
+    tr_scene_file info;
+    const tr_model_options opt = {0, 1.0f, 0, 0, NULL};
+    CHECK(tr_scene_model_load(&s, path, &opt, &info, &err) == TR_OK, "%s", err.msg);
+    int textured = 0;
+    for (uint32_t i = 0; i < tr_scene_material_count(&s); ++i) {
+        textured |= (tr_scene_material_maps(&s, i) & TR_MAP_BASE) != 0;
+    }
+    CHECK(textured, "the texture named 'wood.png' (read as 'wood.pn') was not found");
+    CHECK(s.punctual_count == 1, "%u punctual lights", s.punctual_count);
+    if (s.punctual_count == 1) {
+        const tr_punctual *l = &s.punctual[0];
+        const float r = 1.0f / sqrtf(5.0f);
+        CHECK(l->type == TR_PUNCTUAL_SPOT && near3(l->pos, 0.0f, 2.0f, 0.0f, 1e-5f) &&
+                  near3(l->dir, r, -2.0f * r, 0.0f, 1e-5f),
+              "spot type %u at (%g, %g, %g) along (%g, %g, %g)", l->type, (double)l->pos.x,
+              (double)l->pos.y, (double)l->pos.z, (double)l->dir.x, (double)l->dir.y,
+              (double)l->dir.z);
+    }
+    tr_scene_clear(&s);
+    remove(png);
+    remove(path);
+    rmdir(sub);
+}
+
 int main(void) {
     const char *tmp = getenv("TMPDIR");
     snprintf(dir, sizeof dir, "%s/trac0r-test-model-XXXXXX", tmp && *tmp ? tmp : "/tmp");
@@ -619,6 +762,7 @@ int main(void) {
     test_texture_fallback();
     test_framing();
     test_enclosed();
+    test_sib();
     rmdir(dir);
     return check_finish("test_model");
 }

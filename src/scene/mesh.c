@@ -50,6 +50,13 @@ typedef struct import_ctx {
     uint32_t tex_cached;
     tr_import_extras *extras; /* the file's first camera, when asked for */
     int gltf;                 /* a .gltf or .glb file (their cameras' conventions) */
+    /* A Silo .sib file. Assimp's reader of them (5.2, and its source since) drops the
+     * last character of every string the file holds (it overwrites it with the end of
+     * string it expects there: 'This Way Up.pn' for 'This Way Up.png') and passes each
+     * light's target point on as its direction (heffalump.sib: the spot light's "direction"
+     * has its position's z to the last digit, and taken as a direction it points away from
+     * the model, taken as a target at it). */
+    int sib;
     /* With extras->instance_shared: how many times the node graph places each of the
      * file's meshes, and the prototype each shared one became (+1; 0: not yet; UINT32_MAX:
      * none, nothing but degenerate faces). */
@@ -122,9 +129,29 @@ static int find_by_name(const char *dir, const char *name, int depth, int *budge
     return found;
 }
 
+/* The one file in dir whose name is `name` (any case) and one more character, into out.
+ * Returns 1 when there is exactly one. */
+static int find_one_longer(const char *dir, const char *name, char *out, size_t n) {
+    DIR *d = opendir(dir[0] ? dir : ".");
+    if (!d) {
+        return 0;
+    }
+    const size_t len = strlen(name);
+    int found = 0;
+    for (struct dirent *e; (e = readdir(d)) != NULL;) {
+        if (e->d_name[0] != '.' && strlen(e->d_name) == len + 1 &&
+            strncasecmp(e->d_name, name, len) == 0) {
+            found += snprintf(out, n, "%s%s%s", dir, dir[0] ? "/" : "", e->d_name) < (int)n;
+        }
+    }
+    closedir(d);
+    return found == 1;
+}
+
 /* A texture file that is not where the model says: the same name in any case beside
- * where it was looked for, else its file name anywhere in the model's directory tree.
- * Returns 1 with the path in out. */
+ * where it was looked for, else its file name anywhere in the model's directory tree;
+ * for a .sib file, whose names lose their last character on the way (import_ctx.sib),
+ * the one file beside it whose name has one more. Returns 1 with the path in out. */
 static int texture_fallback(const import_ctx *c, const char *full, char *out, size_t n) {
     struct stat st;
     if (stat(full, &st) == 0) {
@@ -136,7 +163,8 @@ static int texture_fallback(const import_ctx *c, const char *full, char *out, si
     snprintf(here, sizeof here, "%.*s", slash ? (int)(slash - full) : 0, full);
     int budget = 20000;
     return name[0] && (find_by_name(here, name, 0, &budget, out, n) ||
-                       find_by_name(c->dir, name, 4, &budget, out, n));
+                       find_by_name(c->dir, name, 4, &budget, out, n) ||
+                       (c->sib && find_one_longer(here, name, out, n)));
 }
 
 /* Texture `type`, index `slot`, of material m as a scene texture: embedded ("*N", or a
@@ -758,7 +786,13 @@ static void place_extras(import_ctx *c, const struct aiNode *node, const struct 
         o->type = (int)l->mType;
         snprintf(o->name, sizeof o->name, "%.63s", l->mName.data);
         o->pos = place(c, m, l->mPosition, 1.0f);
-        o->dir = place(c, m, l->mDirection, 0.0f);
+        struct aiVector3D dir = l->mDirection;
+        if (c->sib) { /* the light's target (import_ctx.sib) */
+            dir.x -= l->mPosition.x;
+            dir.y -= l->mPosition.y;
+            dir.z -= l->mPosition.z;
+        }
+        o->dir = place(c, m, dir, 0.0f);
         o->color = v3(l->mColorDiffuse.r, l->mColorDiffuse.g, l->mColorDiffuse.b);
         o->outer_cone = l->mAngleOuterCone;
         o->inner_cone = l->mAngleInnerCone;
@@ -1040,6 +1074,7 @@ int tr_scene_import_mesh_ex(tr_scene *s, const char *path, const tr_transform *t
     const size_t plen = strlen(path);
     c.gltf = (plen > 5 && strcasecmp(path + plen - 5, ".gltf") == 0) ||
              (plen > 4 && strcasecmp(path + plen - 4, ".glb") == 0);
+    c.sib = plen > 4 && strcasecmp(path + plen - 4, ".sib") == 0;
     if (extras) {
         const int want = extras->camera_want;
         const uint64_t instance_min = extras->instance_min;
