@@ -24,6 +24,9 @@
  *    host and device agree with the motion table as in 1.
  * 6. SVGF's albedo history (albedo_alpha) agrees as in 1 on frames whose albedo
  *    alternates from frame to frame.
+ * 7. SVGF with direct and indirect light apart (svgf_split) agrees as in 1 (with TAA too)
+ *    and as in 2 on the device's film with its direct and emission passes; the split
+ *    changes the host's output by far more than the bound, so both sides do split.
  *
  * Needs an OpenCL platform; it fails (not skips) when no device can be opened. */
 #include <math.h>
@@ -63,9 +66,10 @@ static tr_camera camera_at(const tr_camera *a, int k) {
 static void render_g(const tr_scene *s, const tr_camera *cam, uint32_t sample, tr_gbuffer *g) {
     tr_film f;
     tr_error err;
-    CHECK(tr_film_init_passes(&f, W, H, TR_PASS_ALL, &err) == TR_OK, "%s", err.msg);
+    CHECK(tr_film_init_passes(&f, W, H, TR_PASS_ALL | TR_PASS_DIRECT, &err) == TR_OK, "%s",
+          err.msg);
     tr_render_config cfg = tr_render_config_default();
-    cfg.passes = TR_PASS_ALL;
+    cfg.passes = TR_PASS_ALL | TR_PASS_DIRECT;
     cfg.threads = 2;
     CHECK(tr_render_frame(s, cam, &cfg, &f, sample, NULL, &err) == TR_OK, "%s", err.msg);
     CHECK(tr_gbuffer_init(g, W, H, &err) == TR_OK, "%s", err.msg);
@@ -121,12 +125,37 @@ static void agree(tr_device *cl, const tr_gbuffer *g, const tr_camera *cams, int
     tr_recon_free(&host);
 }
 
+/* Section 7: on the host, SVGF with direct and indirect apart (p) and without differ by
+ * far more than the bound, by the last frame: the split is not a no-op. */
+static void split_changes(const tr_gbuffer *g, const tr_camera *cams, const tr_recon_params *p) {
+    tr_error err;
+    tr_recon split, sum;
+    CHECK(tr_recon_init(&split, W, H, &err) == TR_OK && tr_recon_init(&sum, W, H, &err) == TR_OK,
+          "%s", err.msg);
+    const tr_recon_params q = tr_recon_params_default();
+    float *a = malloc(3 * W * H * sizeof *a), *b = malloc(3 * W * H * sizeof *b);
+    CHECK(a && b, "out of memory");
+    for (int k = 0; k < FRAMES; ++k) {
+        CHECK(g[k].has_direct, "frame %d has no direct pass", k);
+        CHECK(tr_recon_frame(&split, &g[k], &cams[k], TR_RECON_SVGF, p, 2, a, &err) == TR_OK &&
+                  tr_recon_frame(&sum, &g[k], &cams[k], TR_RECON_SVGF, &q, 2, b, &err) == TR_OK,
+              "%s", err.msg);
+    }
+    const double d = worst_rel(a, b, 3 * W * H);
+    CHECK(d > 100.0 * bound, "the split changed SVGF's output by only %.3g", d);
+    printf("  the split changes SVGF's output by %.3g\n", d);
+    free(a);
+    free(b);
+    tr_recon_free(&split);
+    tr_recon_free(&sum);
+}
+
 /* Frames 0..frames-1 rendered on device d (spp samples each, from sample spp*k) and
  * reconstructed by SVGF through `dev` on the device's own film, and, read back, through
  * the host's tr_recon_frame with `threads`: every frame's output must agree within
  * `tol` relative (0: bit for bit). */
 static void film_frames(tr_device *d, tr_recon_device *dev, const tr_camera *cams, int frames,
-                        uint32_t spp, int threads, double tol, const tr_scene *emission,
+                        uint32_t spp, int threads, double tol, const tr_scene *emission, int split,
                         const char *label) {
     tr_error err;
     tr_recon host;
@@ -134,13 +163,17 @@ static void film_frames(tr_device *d, tr_recon_device *dev, const tr_camera *cam
     tr_film f;
     /* With `emission` (the scene) the film keeps the emission pass and both sides resolve
      * it (the device in tr_recon_device_frame, the host by tr_resolve_emission). */
-    const uint32_t passes = TR_PASS_ALL | (emission ? TR_PASS_EMISSION : 0u);
+    /* With split the film keeps the direct pass and SVGF filters direct and indirect light
+     * apart. */
+    const uint32_t passes =
+        TR_PASS_ALL | (emission ? TR_PASS_EMISSION : 0u) | (split ? TR_PASS_DIRECT : 0u);
     CHECK(tr_recon_init(&host, W, H, &err) == TR_OK, "%s", err.msg);
     CHECK(tr_gbuffer_init(&g, W, H, &err) == TR_OK, "%s", err.msg);
     CHECK(tr_film_init_passes(&f, W, H, passes, &err) == TR_OK, "%s", err.msg);
     tr_render_config cfg = tr_render_config_default();
     cfg.passes = passes;
-    const tr_recon_params p = tr_recon_params_default();
+    tr_recon_params p = tr_recon_params_default();
+    p.svgf_split = split;
     float *a = malloc(3 * W * H * sizeof *a), *b = malloc(3 * W * H * sizeof *b);
     CHECK(a && b, "out of memory");
     for (int k = 0; k < frames; ++k) {
@@ -180,11 +213,14 @@ static void film_on_device(tr_device *cl, const tr_scene *s, const tr_camera *ca
     tr_recon_device *dev = tr_recon_device_create(cl, W, H, &err);
     CHECK(dev, "%s", err.msg);
     /* Two samples, so that the film's means divide by a count above 1. */
-    film_frames(cl, dev, cams, FRAMES, 2, 2, bound, NULL, "film on the device");
+    film_frames(cl, dev, cams, FRAMES, 2, 2, bound, NULL, 0, "film on the device");
     /* The emission pass, resolved on the device as on the host (tr_cl_resolve_emission
      * against tr_resolve_emission: the same per-pixel code, src/kernel/emission.h). */
     tr_recon_device_clear(dev);
-    film_frames(cl, dev, cams, FRAMES, 1, 2, bound, s, "emission resolved on the device");
+    film_frames(cl, dev, cams, FRAMES, 1, 2, bound, s, 0, "emission resolved on the device");
+    /* Section 7: direct and indirect apart on the device's film, the emission taken out of
+     * both (a history kept without the split starts over). */
+    film_frames(cl, dev, cams, FRAMES, 1, 2, bound, s, 1, "split on the device's film");
     double ms_t, ms_s;
     tr_recon_device_times(dev, &ms_t, &ms_s);
     CHECK(ms_t >= 0.0 && ms_s >= 0.0, "negative stage times %g %g", ms_t, ms_s);
@@ -216,9 +252,9 @@ static void cpu_device(const tr_scene *s, const tr_camera *cams) {
     CHECK(cpu && tr_device_upload(cpu, s, &err) == TR_OK, "%s", err.msg);
     tr_recon_device *dev = tr_recon_device_create(cpu, W, H, &err);
     CHECK(dev && !tr_recon_device_on_device(dev), "%s", err.msg);
-    film_frames(cpu, dev, cams, 2, 1, 0, 0.0, NULL, "cpu device");
+    film_frames(cpu, dev, cams, 2, 1, 0, 0.0, NULL, 0, "cpu device");
     tr_recon_device_clear(dev);
-    film_frames(cpu, dev, cams, 2, 1, 0, 0.0, s, "cpu device, emission resolved");
+    film_frames(cpu, dev, cams, 2, 1, 0, 0.0, s, 0, "cpu device, emission resolved");
     tr_recon_device_destroy(dev);
     tr_device_destroy(cpu);
 }
@@ -297,6 +333,14 @@ int main(void) {
     p = tr_recon_params_default();
     p.svgf_feedback = 0;
     agree(cl, g, cams, TR_RECON_SVGF, &p, "svgf-nofb");
+
+    /* Section 7: direct and indirect apart. */
+    p = tr_recon_params_default();
+    p.svgf_split = 1;
+    split_changes(g, cams, &p);
+    agree(cl, g, cams, TR_RECON_SVGF, &p, "svgf-split");
+    p.svgf_taa_alpha = 0.3f;
+    agree(cl, g, cams, TR_RECON_SVGF, &p, "svgf-split+taa");
 
     film_on_device(cl, s, cams);
     moving(cl);

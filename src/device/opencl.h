@@ -185,6 +185,7 @@ typedef struct tr_cl_handles {
     const char *options;
     void *film[6];
     void *emission; /* the film's emission pass (a placeholder when not kept) */
+    void *direct;   /* the film's direct pass (a placeholder when not kept) */
     void *resolved; /* tr_cl_resolve_emission's output; NULL without the emission pass */
     uint32_t width, height, passes;
 } tr_cl_handles;

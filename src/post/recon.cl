@@ -12,15 +12,17 @@
 #include "upscale.h"
 
 /* The device film's means into the frame's buffers (tr_gbuffer_from_film's arithmetic):
- * passes bit 0 albedo, 1 normal, 2 depth, 3 primitive id, 4 emission; a pass the film
- * lacks reads as albedo 1, normal, depth, id and emission 0. */
+ * passes bit 0 albedo, 1 normal, 2 depth, 3 primitive id, 4 emission, 5 direct light; a
+ * pass the film lacks reads as albedo 1, normal, depth, id and emission 0 (the direct
+ * pass is then not written). */
 __kernel void tr_recon_from_film(__global const float *sum, __global const uint *count,
                                  __global const float *albedo_sum, __global const float *normal_sum,
                                  __global const float *depth_sum, __global const uint *prim_in,
-                                 __global const float *emission_sum, uint passes, int w, int h,
+                                 __global const float *emission_sum,
+                                 __global const float *direct_sum, uint passes, int w, int h,
                                  __global float *color, __global float *albedo,
                                  __global float *normal, __global float *depth, __global uint *prim,
-                                 __global float *emission) {
+                                 __global float *emission, __global float *direct) {
     const int x = (int)get_global_id(0), y = (int)get_global_id(1);
     if (x >= w || y >= h) {
         return;
@@ -33,6 +35,9 @@ __kernel void tr_recon_from_film(__global const float *sum, __global const uint 
         albedo[3 * i + k] = (passes & 1u) ? albedo_sum[3 * i + k] * inv : 1.0f;
         normal[3 * i + k] = (passes & 2u) ? normal_sum[3 * i + k] * inv : 0.0f;
         emission[3 * i + k] = (passes & 16u) ? emission_sum[3 * i + k] * inv : 0.0f;
+        if (passes & 32u) {
+            direct[3 * i + k] = direct_sum[3 * i + k] * inv;
+        }
     }
     depth[i] = (passes & 4u) ? depth_sum[i] * inv : 0.0f;
     prim[i] = (passes & 8u) ? prim_in[i] : 0u;

@@ -70,6 +70,8 @@ enum {
     B_CAMS,
     B_COUNT
 };
+enum { SP_DIRECT = 0, SP_ILLUM, SP_HD0, SP_HD1, SP_HDM0, SP_HDM1, SP_COUNT };
+static const int split_elems[SP_COUNT] = {3, 3, 3, 3, 2, 2};
 /* Floats (or uints) per pixel of each buffer; 0: the cameras. */
 static const int buffer_elems[B_COUNT] = {3, 3, 3, 1, 1, 3, 3, 3, 2, 2, 1, 1, 1,
                                           3, 1, 3, 3, 1, 1, 3, 3, 3, 3, 3, 0};
@@ -87,8 +89,14 @@ typedef struct recon_cl {
     int have_albedo;  /* B_HA0 + cur holds the last frame's albedo history */
     int has_emission; /* the frame came from a film with the emission pass */
     int result;       /* the buffer holding the last frame's reconstruction */
-    int modulated;    /* the albedo buffer it was multiplied by */
-    cl_mem added;     /* the emission the reconstruction added to it (NULL: none) */
+    /* Direct and indirect light apart (svgf_split): the frame's direct pass, its
+     * demodulated light and the direct histories (colour, moments; two of each), made when
+     * a frame first has the pass. The history's lengths are the sum's. */
+    cl_mem sp[SP_COUNT];
+    int has_direct; /* the frame in the buffers has its direct pass in sp[SP_DIRECT] */
+    int hist_split; /* the history was kept with direct and indirect apart */
+    int modulated;  /* the albedo buffer it was multiplied by */
+    cl_mem added;   /* the emission the reconstruction added to it (NULL: none) */
     /* Temporal upscaling (tr_recon_device_upscale): the output's history (colour, samples,
      * distance, two of each), its first hits' emission (this frame's and the last), the
      * output, the samples' positions and the two cameras, for up_w x up_h outputs. */
@@ -127,13 +135,12 @@ static int check_args(const tr_recon_device *r, const tr_camera *cam, int method
 }
 
 #ifdef TRAC0R_HAVE_OPENCL
-/* The device's kernels filter the sum; direct and indirect apart (svgf_split, opt-in and
- * measured lower on the classic box) and diffuse and specular apart (svgf_specular, whose
- * pass the CPU device alone writes) are host-only. */
-static int split_unsupported(tr_error *err) {
+/* Diffuse and specular apart (svgf_specular) needs the specular pass, which the CPU device
+ * alone writes: host-only. */
+static int specular_unsupported(tr_error *err) {
     return tr_error_set(err, TR_STATUS_UNSUPPORTED,
-                        "reconstruction: SVGF with direct and indirect apart (svgf_split) or "
-                        "diffuse and specular apart (svgf_specular) runs on the host only");
+                        "reconstruction: SVGF with diffuse and specular apart (svgf_specular) "
+                        "runs on the host only");
 }
 
 static int cl_fail(tr_error *err, const char *call, cl_int code) {
@@ -167,6 +174,11 @@ static void cl_state_free(recon_cl *c) {
     }
     if (c->motion) {
         clReleaseMemObject(c->motion);
+    }
+    for (int i = 0; i < SP_COUNT; ++i) {
+        if (c->sp[i]) {
+            clReleaseMemObject(c->sp[i]);
+        }
     }
     up_release(c);
     free(c->up_low);
@@ -280,15 +292,68 @@ static int run(recon_cl *c, int k, int w, int h, int n, const karg *a, tr_error 
 #define RUN(c, k, w, h, err, ...)                                                                  \
     run(c, k, w, h, (int)(sizeof((karg[]){__VA_ARGS__}) / sizeof(karg)), (karg[]){__VA_ARGS__}, err)
 
-static int copy(recon_cl *c, int from, int to, size_t bytes, tr_error *err) {
-    const cl_int rc =
-        clEnqueueCopyBuffer(c->queue, c->b[from], c->b[to], 0, 0, bytes, 0, NULL, NULL);
+static int copy_mem(recon_cl *c, cl_mem from, cl_mem to, size_t bytes, tr_error *err) {
+    const cl_int rc = clEnqueueCopyBuffer(c->queue, from, to, 0, 0, bytes, 0, NULL, NULL);
     return rc == CL_SUCCESS ? TR_OK : cl_fail(err, "clEnqueueCopyBuffer", rc);
+}
+
+static int copy(recon_cl *c, int from, int to, size_t bytes, tr_error *err) {
+    return copy_mem(c, c->b[from], c->b[to], bytes, err);
+}
+
+/* SVGF on one illumination history `hist` (moments `mom`, lengths b[hl]), as the host's
+ * svgf_part: the variance, the iterations (the first one's output fed back into hist
+ * with svgf_feedback), remodulated by b[ha] into b[res], or added to it when add. */
+static int svgf_part(recon_cl *c, int w, int h, cl_mem hist, cl_mem mom, int hl,
+                     const tr_recon_params *p, int ha, int res, int add, tr_error *err) {
+    const size_t n = (size_t)w * h;
+    int rc = RUN(c, K_SVGF_VARIANCE, w, h, err, KM(hist), KM(mom), KB(c, hl), KB(c, B_NORMAL),
+                 KI(w), KI(h), KB(c, B_VA));
+    cl_mem src = hist;
+    int dst = B_CA, vs = B_VA, vd = B_VB;
+    for (int it = 0; rc == TR_OK && it < p->svgf_iterations; ++it) {
+        rc = RUN(c, K_SVGF, w, h, err, KM(src), KB(c, vs), KB(c, B_NORMAL), KB(c, B_DEPTH), KI(w),
+                 KI(h), KI(1 << it), KF(p->svgf_sigma_l), KF(p->svgf_sigma_n), KF(p->svgf_sigma_z),
+                 KB(c, dst), KB(c, vd));
+        /* Schied et al. feed the first iteration's output back as the history. */
+        if (rc == TR_OK && it == 0 && p->svgf_feedback) {
+            rc = copy_mem(c, c->b[dst], hist, 3 * n * sizeof(float), err);
+        }
+        src = c->b[dst];
+        dst = dst == B_CA ? B_CB : B_CA; /* now the one src is not */
+        const int t = vs;
+        vs = vd;
+        vd = t;
+    }
+    if (rc != TR_OK) {
+        return rc;
+    }
+    if (!add) {
+        return RUN(c, K_MODULATE, w, h, err, KM(src), KB(c, ha), KI(1), KI(w), KI(h), KB(c, res));
+    }
+    rc = RUN(c, K_MODULATE, w, h, err, KM(src), KB(c, ha), KI(1), KI(w), KI(h), KB(c, dst));
+    return rc ? rc : RUN(c, K_ADD, w, h, err, KB(c, res), KB(c, dst), KF(1.0f), KI(w), KI(h));
 }
 
 static int finish(recon_cl *c, tr_error *err) {
     const cl_int rc = clFinish(c->queue);
     return rc == CL_SUCCESS ? TR_OK : cl_fail(err, "clFinish", rc);
+}
+
+/* The split's buffers (recon_cl.sp), made once. */
+static int split_buffers(recon_cl *c, size_t n, tr_error *err) {
+    for (int i = 0; i < SP_COUNT; ++i) {
+        if (c->sp[i]) {
+            continue;
+        }
+        cl_int rc;
+        c->sp[i] = clCreateBuffer(c->context, CL_MEM_READ_WRITE,
+                                  n * (size_t)split_elems[i] * sizeof(float), NULL, &rc);
+        if (!c->sp[i]) {
+            return cl_fail(err, "clCreateBuffer(direct light)", rc);
+        }
+    }
+    return TR_OK;
 }
 
 /* The device's film into the frame's buffers. */
@@ -305,18 +370,26 @@ static int cl_from_film(tr_recon_device *r, tr_error *err) {
     const cl_uint passes =
         ((h.passes & TR_PASS_ALBEDO) ? 1u : 0u) | ((h.passes & TR_PASS_NORMAL) ? 2u : 0u) |
         ((h.passes & TR_PASS_DEPTH) ? 4u : 0u) | ((h.passes & TR_PASS_PRIM) ? 8u : 0u) |
-        ((h.passes & TR_PASS_EMISSION) ? 16u : 0u);
-    cl_mem f[7];
+        ((h.passes & TR_PASS_EMISSION) ? 16u : 0u) | ((h.passes & TR_PASS_DIRECT) ? 32u : 0u);
+    cl_mem f[8];
     for (int i = 0; i < 6; ++i) {
         f[i] = (cl_mem)h.film[i];
     }
     f[6] = (cl_mem)h.emission;
+    f[7] = (cl_mem)h.direct;
     recon_cl *c = r->cl;
     c->has_emission = (h.passes & TR_PASS_EMISSION) != 0u;
+    c->has_direct = (h.passes & TR_PASS_DIRECT) != 0u;
     const int w = (int)r->width, ht = (int)r->height;
+    if (c->has_direct && split_buffers(c, (size_t)w * ht, err) != TR_OK) {
+        return TR_ERR;
+    }
+    /* Without the pass nothing is written to its buffer: any one stands in. */
+    const cl_mem direct = c->has_direct ? c->sp[SP_DIRECT] : c->b[B_ILLUM];
     return RUN(c, K_FROM_FILM, w, ht, err, KM(f[0]), KM(f[1]), KM(f[2]), KM(f[3]), KM(f[4]),
-               KM(f[5]), KM(f[6]), KU(passes), KI(w), KI(ht), KB(c, B_COLOR), KB(c, B_ALBEDO),
-               KB(c, B_NORMAL), KB(c, B_DEPTH), KB(c, B_PRIM), KB(c, B_EMIS));
+               KM(f[5]), KM(f[6]), KM(f[7]), KU(passes), KI(w), KI(ht), KB(c, B_COLOR),
+               KB(c, B_ALBEDO), KB(c, B_NORMAL), KB(c, B_DEPTH), KB(c, B_PRIM), KB(c, B_EMIS),
+               KM(direct));
 }
 
 static int cl_upload(tr_recon_device *r, const tr_gbuffer *g, tr_error *err) {
@@ -326,6 +399,18 @@ static int cl_upload(tr_recon_device *r, const tr_gbuffer *g, tr_error *err) {
     for (int i = 0; i < 5; ++i) {
         const cl_int rc = clEnqueueWriteBuffer(r->cl->queue, r->cl->b[B_COLOR + i], CL_FALSE, 0,
                                                bytes[i], src[i], 0, NULL, NULL);
+        if (rc != CL_SUCCESS) {
+            return cl_fail(err, "clEnqueueWriteBuffer", rc);
+        }
+    }
+    /* The direct pass where the frame has it (for svgf_split). */
+    r->cl->has_direct = g->has_direct;
+    if (g->has_direct) {
+        if (split_buffers(r->cl, n, err) != TR_OK) {
+            return TR_ERR;
+        }
+        const cl_int rc = clEnqueueWriteBuffer(r->cl->queue, r->cl->sp[SP_DIRECT], CL_FALSE, 0,
+                                               3 * n * 4, g->direct, 0, NULL, NULL);
         if (rc != CL_SUCCESS) {
             return cl_fail(err, "clEnqueueWriteBuffer", rc);
         }
@@ -406,6 +491,10 @@ static int cl_frame(tr_recon_device *r, const tr_camera *cam, const tr_vec3 *mot
     }
     const int prev = c->cur, next = 1 - c->cur;
     const int hc = B_HC0 + next, hm = B_HM0 + next, hl = B_HL0 + next;
+    /* SVGF with direct and indirect light apart (Schied et al.'s split; the host's
+     * split_illum and direct_temporal): a history kept with the other split starts over. */
+    const int split = method == TR_RECON_SVGF && p->svgf_split && c->has_direct;
+    const int hist = c->have_history && c->hist_split == split;
     /* With the emission pass the filters see the colour less the first hit's emission,
      * and the emission comes back after them: resolved over the pixels' area on the
      * device (tr_cl_resolve_emission) where asked for, else the frame's own. */
@@ -421,10 +510,22 @@ static int cl_frame(tr_recon_device *r, const tr_camera *cam, const tr_vec3 *mot
             emis = (cl_mem)hd.resolved;
         }
         rc = RUN(c, K_ADD, w, h, err, KB(c, B_COLOR), KB(c, B_EMIS), KF(-1.0f), KI(w), KI(h));
+        if (rc == TR_OK && split) {
+            rc = RUN(c, K_ADD, w, h, err, KM(c->sp[SP_DIRECT]), KB(c, B_EMIS), KF(-1.0f), KI(w),
+                     KI(h));
+        }
     }
     rc = rc ? rc
             : RUN(c, K_MODULATE, w, h, err, KB(c, B_COLOR), KB(c, B_ALBEDO), KI(0), KI(w), KI(h),
                   KB(c, B_ILLUM));
+    if (rc == TR_OK && split) {
+        /* The direct part demodulated, and the rest of the light the indirect part. */
+        rc = RUN(c, K_MODULATE, w, h, err, KM(c->sp[SP_DIRECT]), KB(c, B_ALBEDO), KI(0), KI(w),
+                 KI(h), KM(c->sp[SP_ILLUM]));
+        rc = rc ? rc
+                : RUN(c, K_ADD, w, h, err, KB(c, B_ILLUM), KM(c->sp[SP_ILLUM]), KF(-1.0f), KI(w),
+                      KI(h));
+    }
     /* SVGF's albedo history (albedo_alpha), where the host's temporal stage keeps it. */
     const int ha = p->albedo_alpha > 0.0f ? B_HA0 + next : B_ALBEDO;
     rc =
@@ -432,9 +533,21 @@ static int cl_frame(tr_recon_device *r, const tr_camera *cam, const tr_vec3 *mot
            : RUN(c, K_TEMPORAL, w, h, err, KB(c, B_CAMS), KB(c, B_ILLUM), KB(c, B_NORMAL),
                  KB(c, B_DEPTH), KB(c, B_PRIM), KB(c, B_HC0 + prev), KB(c, B_HM0 + prev),
                  KB(c, B_HL0 + prev), KB(c, B_HDEPTH), KB(c, B_HNORMAL), KB(c, B_HPRIM), KM(mbuf),
-                 KU(motion_count), KI(c->have_history), KF(p->alpha_min), KF(p->max_len),
+                 KU(motion_count), KI(hist), KF(p->alpha_min), KF(p->max_len),
                  KF(p->max_len_moving), KB(c, hc), KB(c, hm), KB(c, hl), KB(c, B_ALBEDO),
                  KB(c, B_HA0 + prev), KI(c->have_albedo), KF(p->albedo_alpha), KB(c, B_HA0 + next));
+    if (rc == TR_OK && split) {
+        /* The direct part through the same taps: the lengths it writes are the sum's. No
+         * albedo history here (albedo_alpha 0): the sum's call kept it. */
+        rc =
+            RUN(c, K_TEMPORAL, w, h, err, KB(c, B_CAMS), KM(c->sp[SP_ILLUM]), KB(c, B_NORMAL),
+                KB(c, B_DEPTH), KB(c, B_PRIM), KM(c->sp[SP_HD0 + prev]), KM(c->sp[SP_HDM0 + prev]),
+                KB(c, B_HL0 + prev), KB(c, B_HDEPTH), KB(c, B_HNORMAL), KB(c, B_HPRIM), KM(mbuf),
+                KU(motion_count), KI(hist), KF(p->alpha_min), KF(p->max_len), KF(p->max_len_moving),
+                KM(c->sp[SP_HD0 + next]), KM(c->sp[SP_HDM0 + next]), KB(c, hl), KB(c, B_ALBEDO),
+                KB(c, B_HA0 + prev), KI(0), KF(0.0f), KB(c, B_HA0 + next));
+    }
+    c->hist_split = split;
     if (rc != TR_OK || (rc = finish(c, err)) != TR_OK) {
         return rc;
     }
@@ -469,37 +582,24 @@ static int cl_frame(tr_recon_device *r, const tr_camera *cam, const tr_vec3 *mot
                 : RUN(c, K_MODULATE, w, h, err, KB(c, src), KB(c, B_ALBEDO), KI(1), KI(w), KI(h),
                       KB(c, B_OUT));
     } else {
-        rc = RUN(c, K_SVGF_VARIANCE, w, h, err, KB(c, hc), KB(c, hm), KB(c, hl), KB(c, B_NORMAL),
-                 KI(w), KI(h), KB(c, B_VA));
-        int src = hc, dst = B_CA, vs = B_VA, vd = B_VB;
-        for (int it = 0; rc == TR_OK && it < p->svgf_iterations; ++it) {
-            rc = RUN(c, K_SVGF, w, h, err, KB(c, src), KB(c, vs), KB(c, B_NORMAL), KB(c, B_DEPTH),
-                     KI(w), KI(h), KI(1 << it), KF(p->svgf_sigma_l), KF(p->svgf_sigma_n),
-                     KF(p->svgf_sigma_z), KB(c, dst), KB(c, vd));
-            /* Schied et al. feed the first iteration's output back as the history. */
-            if (rc == TR_OK && it == 0 && p->svgf_feedback) {
-                rc = copy(c, dst, hc, 3 * n * sizeof(float), err);
-            }
-            src = dst;
-            dst = dst == B_CA ? B_CB : B_CA;
-            const int t = vs;
-            vs = vd;
-            vd = t;
+        /* With TAA the remodulated output goes to B_ILLUM (free by now) first. */
+        const int res = p->svgf_taa_alpha > 0.0f ? B_ILLUM : B_OUT;
+        if (split) {
+            /* Schied et al. filter direct and indirect illumination apart, each steered by
+             * its own variance, and add them after remodulation. */
+            rc = svgf_part(c, w, h, c->sp[SP_HD0 + next], c->sp[SP_HDM0 + next], hl, p, ha, res, 0,
+                           err);
+            rc = rc ? rc : svgf_part(c, w, h, c->b[hc], c->b[hm], hl, p, ha, res, 1, err);
+        } else {
+            rc = svgf_part(c, w, h, c->b[hc], c->b[hm], hl, p, ha, res, 0, err);
         }
         if (rc == TR_OK && p->svgf_taa_alpha > 0.0f) {
-            /* The remodulated output (B_ILLUM is free by now) through temporal
-             * antialiasing against the last frame's output. */
-            rc = RUN(c, K_MODULATE, w, h, err, KB(c, src), KB(c, ha), KI(1), KI(w), KI(h),
-                     KB(c, B_ILLUM));
-            rc = rc ? rc
-                    : RUN(c, K_TAA, w, h, err, KB(c, B_CAMS), KB(c, B_ILLUM), KB(c, B_NORMAL),
-                          KB(c, B_DEPTH), KB(c, B_PRIM), KB(c, B_TAA), KI(had_taa), KB(c, B_HDEPTH),
-                          KB(c, B_HNORMAL), KB(c, B_HPRIM), KF(p->svgf_taa_alpha), KB(c, B_OUT));
+            /* Temporal antialiasing of the remodulated output against the last frame's. */
+            rc = RUN(c, K_TAA, w, h, err, KB(c, B_CAMS), KB(c, B_ILLUM), KB(c, B_NORMAL),
+                     KB(c, B_DEPTH), KB(c, B_PRIM), KB(c, B_TAA), KI(had_taa), KB(c, B_HDEPTH),
+                     KB(c, B_HNORMAL), KB(c, B_HPRIM), KF(p->svgf_taa_alpha), KB(c, B_OUT));
             rc = rc ? rc : copy(c, B_OUT, B_TAA, 3 * n * sizeof(float), err);
             c->have_taa = rc == TR_OK;
-        } else if (rc == TR_OK) {
-            rc = RUN(c, K_MODULATE, w, h, err, KB(c, src), KB(c, ha), KI(1), KI(w), KI(h),
-                     KB(c, B_OUT));
         }
     }
     if (rc == TR_OK && c->has_emission) {
@@ -617,8 +717,8 @@ int tr_recon_device_frame_gbuffer(tr_recon_device *r, const tr_gbuffer *g, const
                             r->width, r->height);
     }
 #ifdef TRAC0R_HAVE_OPENCL
-    if (r->cl && (p->svgf_split || p->svgf_specular) && method == TR_RECON_SVGF) {
-        return split_unsupported(err);
+    if (r->cl && p->svgf_specular && method == TR_RECON_SVGF) {
+        return specular_unsupported(err);
     }
     if (r->cl) {
         if (cl_upload(r, g, err) != TR_OK) {
@@ -637,8 +737,8 @@ int tr_recon_device_frame(tr_recon_device *r, const tr_camera *cam, const tr_vec
         return TR_ERR;
     }
 #ifdef TRAC0R_HAVE_OPENCL
-    if (r->cl && (p->svgf_split || p->svgf_specular) && method == TR_RECON_SVGF) {
-        return split_unsupported(err);
+    if (r->cl && p->svgf_specular && method == TR_RECON_SVGF) {
+        return specular_unsupported(err);
     }
     if (r->cl) {
         if (cl_from_film(r, err) != TR_OK) {
@@ -769,9 +869,6 @@ int tr_recon_device_upscale(tr_recon_device *r, const tr_camera *cam, const tr_c
                             W, H, r->width, r->height);
     }
 #ifdef TRAC0R_HAVE_OPENCL
-    if (r->cl && p->svgf_split && method == TR_RECON_SVGF) {
-        return split_unsupported(err);
-    }
     if (r->cl) {
         recon_cl *c = r->cl;
         if (cl_from_film(r, err) != TR_OK ||
