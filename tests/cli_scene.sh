@@ -205,6 +205,13 @@ MODELS=/usr/share/assimp/models
 [ -f "$MODELS/PLY/Wuson.ply" ] || fail "$MODELS/PLY/Wuson.ply missing (install assimp-testmodels)"
 mkdir wuson
 cp "$SRC/scenes/cornell-wuson.json" wuson/
+# Without the link: status 2, and the way out names the directory the link belongs in
+# (not --allow-dark: the scene is not dark, its model is missing).
+"$BIN" render wuson/cornell-wuson.json --width 8 --height 6 --spp 1 --out nolink.png 2>err.txt
+rc=$?
+[ $rc -eq 2 ] && grep -qF "/usr/share/assimp/models wuson/assimp-models" err.txt &&
+    ! grep -qF -- "--allow-dark" err.txt && [ ! -e nolink.png ] ||
+    fail "cornell-wuson.json without the link: status $rc: $(cat err.txt)"
 ln -s "$MODELS" wuson/assimp-models
 "$BIN" info wuson/cornell-wuson.json >info.txt 2>&1 || fail "info cornell-wuson.json: $(cat info.txt)"
 grep -qF "triangles:  3744 (3732 from 1 mesh file in 1 part" info.txt || fail "cornell-wuson: $(cat info.txt)"
