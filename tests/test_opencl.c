@@ -151,9 +151,19 @@ static int region_failures(const tr_film *a, const tr_film *b, const tr_film *r1
  * films: filled by the same kernel code (src/kernel/film.h), so they agree exactly except where a
  * path took another turn through the device's last-bit float differences, as radiance does (at most
  * 1 % of the pixels); the primitive ids, discrete, must agree on nearly every pixel. */
+/* The values of the specular pass (8 per pixel) the last compare_passes found nonzero. */
+static size_t last_specular_nonzero;
+
 static void compare_passes(const tr_film *cpu, const tr_film *dev, const char *what) {
     const size_t n = (size_t)cpu->width * cpu->height;
-    size_t far[6] = {0, 0, 0, 0, 0, 0}, nonzero = 0;
+    size_t far[7] = {0, 0, 0, 0, 0, 0, 0}, nonzero = 0;
+    last_specular_nonzero = 0;
+    CHECK(!cpu->specular == !dev->specular, "%s: one film has the specular pass", what);
+    for (size_t i = 0; cpu->specular && dev->specular && i < 8 * n; ++i) {
+        const double a = cpu->specular[i], b = dev->specular[i];
+        far[6] += fabs(a - b) > 1e-4 * fmax(1.0, fmax(fabs(a), fabs(b)));
+        last_specular_nonzero += a != 0.0;
+    }
     for (size_t i = 0; i < n; ++i) {
         for (int c = 0; c < 3; ++c) {
             const float pa[5] = {cpu->albedo[3 * i + c], cpu->normal[3 * i + c],
@@ -176,14 +186,16 @@ static void compare_passes(const tr_film *cpu, const tr_film *dev, const char *w
      * before their first hit: a fifth of the pixels with a surface is a safe floor. */
     CHECK(nonzero * 5 > n, "%s: only %zu of %zu pixels have a surface in the passes", what, nonzero,
           n);
-    const char *names[6] = {"albedo", "normal", "depth", "variance", "primitive id", "direct"};
-    for (int p = 0; p < 6; ++p) {
-        CHECK(far[p] * 100 <= 3 * n, "%s: %zu of %zu values of the %s pass differ", what, far[p],
-              3 * n, names[p]);
+    const char *names[7] = {"albedo",       "normal", "depth",   "variance",
+                            "primitive id", "direct", "specular"};
+    for (int p = 0; p < 7; ++p) {
+        const size_t values = p == 6 ? 8 * n : 3 * n;
+        CHECK(far[p] * 100 <= 3 * values, "%s: %zu of %zu values of the %s pass differ", what,
+              far[p], values, names[p]);
     }
-    printf("%s: passes differ in %zu/%zu/%zu/%zu/%zu/%zu values "
-           "(albedo/normal/depth/variance/id/direct)\n",
-           what, far[0], far[1], far[2], far[3], far[4], far[5]);
+    printf("%s: passes differ in %zu/%zu/%zu/%zu/%zu/%zu/%zu values "
+           "(albedo/normal/depth/variance/id/direct/specular; %zu specular values nonzero)\n",
+           what, far[0], far[1], far[2], far[3], far[4], far[5], far[6], last_specular_nonzero);
 }
 
 /* Renders `spp` samples of `scene` on the CPU and on the device and compares. */
@@ -192,11 +204,13 @@ static void compare_backends(tr_device *cl, tr_scene *scene, int stride, int int
     tr_error err;
     const uint32_t w = scene->camera.screen_width, h = scene->camera.screen_height;
     tr_film cpu, dev, r1, r2;
-    /* bdpt keeps no direct or emission pass (tr_render_config_check refuses them). */
+    /* bdpt keeps no direct or emission pass (tr_render_config_check refuses them), and only
+     * pt the specular pass. */
     const uint32_t mask =
         tr_integrator_is_bidirectional(integrator)
             ? TR_PASS_MASK & ~(uint32_t)(TR_PASS_DIRECT | TR_PASS_EMISSION | TR_PASS_SPECULAR)
-            : TR_PASS_MASK & ~(uint32_t)TR_PASS_SPECULAR; /* the CPU's */
+        : integrator == TR_INTEGRATOR_PT ? TR_PASS_MASK
+                                         : TR_PASS_MASK & ~(uint32_t)TR_PASS_SPECULAR;
     CHECK(tr_film_init_passes(&cpu, w, h, mask, &err) == TR_OK, "%s", err.msg);
     CHECK(tr_film_init_passes(&dev, w, h, mask, &err) == TR_OK, "%s", err.msg);
     CHECK(tr_film_init(&r1, w, h, &err) == TR_OK, "%s", err.msg);
@@ -507,6 +521,10 @@ int main(void) {
         CHECK(tr_scene_commit(&ms, TR_ACCEL_TYPE_BVH, &err) == TR_OK, "%s", err.msg);
         CHECK(tr_scene_view_of(&ms).ggx_ms_count == TR_GGX_MS_COUNT, "the table is in the view");
         compare_backends(dev, &ms, 1, TR_INTEGRATOR_PT, 64, "bvh, pt, multiscatter glossy");
+        /* The glossy walls' specular pass is written on both sides, not zero on both. */
+        CHECK(last_specular_nonzero * 4 >
+                  8 * (size_t)ms.camera.screen_width * ms.camera.screen_height,
+              "multiscatter glossy: only %zu specular values nonzero", last_specular_nonzero);
         tr_scene_clear(&ms);
     }
     /* The principled material's clear coat (bsdf_principled.h): the box's diffuse walls made

@@ -346,12 +346,6 @@ int tr_device_render(tr_device *dev, const tr_camera *cam, const tr_render_confi
                             "%s does not support point, spot or directional lights: use pt",
                             tr_integrator_name((int)f.integrator));
     }
-    if (dev->kind == TR_DEVICE_OPENCL && (f.passes & TR_PASS_SPECULAR) != 0u) {
-        /* The split pass is written by the CPU's kernel only (its film array has no OpenCL
-         * buffer). */
-        return tr_error_set(err, TR_STATUS_UNSUPPORTED,
-                            "the specular pass is the CPU device's: render on the cpu device");
-    }
     if (dev->kind == TR_DEVICE_OPENCL) {
         tr_cl_set_tile(dev->cl, cfg->tile);
         if (tr_cl_set_kernel(dev->cl, cfg->opencl_kernel, err) != TR_OK ||

@@ -271,12 +271,14 @@ enum {
     ARG_FILM_SQ,
     ARG_FILM_DIRECT,
     ARG_FILM_EMISSION,
+    ARG_FILM_SPECULAR,
     ARG_RAYS,
     ARG_AFTER_ARRAYS
 };
 static const char *const arg_names[ARG_AFTER_ARRAYS] = {
-    "scene_info", "frame",     "film_sum", "film_count",  "film_albedo",   "film_normal",
-    "film_depth", "film_prim", "film_sq",  "film_direct", "film_emission", "rays_per_row"};
+    "scene_info",    "frame",         "film_sum",    "film_count", "film_albedo",
+    "film_normal",   "film_depth",    "film_prim",   "film_sq",    "film_direct",
+    "film_emission", "film_specular", "rays_per_row"};
 
 /* The film's buffers on the device: radiance sum and count, then the passes in TR_PASS_*
  * bit order; a pass not kept has a one-element placeholder. */
@@ -290,11 +292,11 @@ enum {
     FILM_SQ,
     FILM_DIRECT,
     FILM_EMISSION,
+    FILM_SPECULAR,
     FILM_BUFFERS
 };
 /* The buffers follow the film's layout (tr_film_array_*, film.h): buffer i is array i. */
-/* The last array, the specular pass, is the CPU device's alone (device.c refuses it here). */
-_Static_assert(FILM_BUFFERS == TR_FILM_ARRAYS - 1, "one OpenCL buffer per film array");
+_Static_assert(FILM_BUFFERS == TR_FILM_ARRAYS, "one OpenCL buffer per film array");
 #define film_pass(i) tr_film_array_pass(i)
 #define film_elem(i) tr_film_array_pixel_bytes(i)
 
@@ -2064,7 +2066,10 @@ static int render_frame(tr_cl_context *ctx, const tr_frame *f, uint64_t *rays_ou
     if (rc != CL_SUCCESS) {
         return cl_fail(err, "clEnqueueWriteBuffer(frame)", rc);
     }
-    if (tr_cl_frame_kernel(ctx, (int)f->integrator) == TR_OPENCL_KERNEL_WAVEFRONT) {
+    /* The wavefront does not take the light apart into its specular part: a frame with
+     * the specular pass runs the megakernel. */
+    if (tr_cl_frame_kernel(ctx, (int)f->integrator) == TR_OPENCL_KERNEL_WAVEFRONT &&
+        (f->passes & TR_PASS_SPECULAR) == 0u) {
         if (need_part(ctx, TR_CL_PART_WAVEFRONT, err) != TR_OK) {
             return TR_ERR;
         }
@@ -2082,6 +2087,7 @@ static int render_frame(tr_cl_context *ctx, const tr_frame *f, uint64_t *rays_ou
                                             &ctx->film[FILM_SQ],
                                             &ctx->film[FILM_DIRECT],
                                             &ctx->film[FILM_EMISSION],
+                                            &ctx->film[FILM_SPECULAR],
                                             &ctx->rays};
     for (int a = ARG_FRAME; a < ARG_AFTER_ARRAYS; ++a) {
         rc = clSetKernelArg(kernel, base + (cl_uint)a, sizeof(cl_mem), bufs[a]);

@@ -50,16 +50,18 @@ enum { TR_SCENE_ARRAYS(TR_CL_INFO_ENUM) TR_SCENE_SCALARS(TR_CL_SCALAR_ENUM) TR_C
 /* The film view over the kernel's film arguments, every pass buffer in it. */
 #define TR_CL_FILM_VIEW(f)                                                                         \
     tr_cl_film_view(film_sum, film_count, film_albedo, film_normal, film_depth, film_prim,         \
-                    film_sq, film_direct, film_emission, (f).camera.screen_width, (f).passes)
+                    film_sq, film_direct, film_emission, film_specular, (f).camera.screen_width,   \
+                    (f).passes)
 static tr_film_view tr_cl_film_view(__global float *sum, __global uint *count,
                                     __global float *albedo, __global float *normal,
                                     __global float *depth, __global uint *prim, __global float *sq,
-                                    __global float *direct, __global float *emission, uint width,
-                                    uint passes) {
+                                    __global float *direct, __global float *emission,
+                                    __global float *specular, uint width, uint passes) {
     tr_film_view v = tr_film_view_make(sum, count, albedo, normal, depth, prim, width, passes);
     v.sq = sq;
     v.direct = direct;
     v.emission = emission;
+    v.specular = specular;
     return v;
 }
 
@@ -74,7 +76,7 @@ __kernel void tr_cl_render(TR_SCENE_ARRAYS(TR_CL_ARRAY_PARAM) __global const uin
                            __global float *film_normal, __global float *film_depth,
                            __global uint *film_prim, __global float *film_sq,
                            __global float *film_direct, __global float *film_emission,
-                           __global uint *rays_per_row) {
+                           __global float *film_specular, __global uint *rays_per_row) {
     const tr_frame f = *frame;
     uint gx0, gy0, nx, ny;
     tr_frame_grid(&f, &gx0, &gy0, &nx, &ny);
@@ -388,7 +390,8 @@ __kernel void tr_cl_wf_accumulate(__global const tr_frame *frame, __global float
                                   __global float *film_normal, __global float *film_depth,
                                   __global uint *film_prim, __global float *film_sq,
                                   __global float *film_direct, __global float *film_emission,
-                                  __global uint *rays_per_row, __global const tr_pt_wf_path *paths,
+                                  __global float *film_specular, __global uint *rays_per_row,
+                                  __global const tr_pt_wf_path *paths,
                                   uint g0, uint k, uint n) {
     const uint j = (uint)get_global_id(0);
     if (j >= n) {
@@ -438,8 +441,8 @@ __kernel void tr_cl_wf_accumulate(__global const tr_frame *frame, __global float
     __global const uint *scene_info, __global const tr_frame *frame, __global float *film_sum,     \
         __global uint *film_count, __global float *film_albedo, __global float *film_normal,       \
         __global float *film_depth, __global uint *film_prim, __global float *film_sq,             \
-        __global float *film_direct, __global float *film_emission, __global uint *rays_per_row,   \
-        __global long *splat
+        __global float *film_direct, __global float *film_emission,                                \
+        __global float *film_specular, __global uint *rays_per_row, __global long *splat
 
 /* The splat sums of frame f's rectangle. */
 static tr_bdpt_splat tr_cl_splat(const tr_frame *f, __global long *splat) {
