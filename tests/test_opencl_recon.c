@@ -27,9 +27,12 @@
  * 7. SVGF with direct and indirect light apart (svgf_split) agrees as in 1 (with TAA too)
  *    and as in 2 on the device's film with its direct and emission passes; the split
  *    changes the host's output by far more than the bound, so both sides do split.
+ * 8. The same for diffuse and specular light apart (svgf_specular) on the box with glossy
+ *    walls (roughness 0.3), the specular pass written by the device's own kernel in 2.
  *
  * Needs an OpenCL platform; it fails (not skips) when no device can be opened. */
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -63,13 +66,50 @@ static tr_camera camera_at(const tr_camera *a, int k) {
     return b;
 }
 
+/* The classic box with its diffuse walls glossy (GGX, roughness 0.3): light for the
+ * specular split. */
+static tr_scene *glossy_box(tr_error *err) {
+    const char *path = TR_SOURCE_DIR "/scenes/cornell-classic.json";
+    FILE *f = fopen(path, "rb");
+    char *text = calloc(1, 1u << 16), *out = calloc(1, 1u << 17);
+    CHECK(f && text && out, "reading %s", path);
+    const size_t len = f && text ? fread(text, 1, (1u << 16) - 1, f) : 0;
+    if (f) {
+        fclose(f);
+    }
+    static const char from[] = "\"type\": \"diffuse\"",
+                      to[] = "\"type\": \"glossy\", \"roughness\": 0.3";
+    size_t n = 0, swapped = 0;
+    for (const char *p = text; text && out && *p;) {
+        if (strncmp(p, from, sizeof from - 1) == 0) {
+            memcpy(out + n, to, sizeof to - 1);
+            n += sizeof to - 1;
+            p += sizeof from - 1;
+            ++swapped;
+        } else {
+            out[n++] = *p++;
+        }
+    }
+    CHECK(len > 0 && swapped >= 3, "%zu diffuse materials made glossy", swapped);
+    tr_scene *s = tr_scene_create(err);
+    CHECK(s && tr_scene_file_parse(s, path, out, n, NULL, NULL, err) == TR_OK, "glossy box: %s",
+          err->msg);
+    free(text);
+    free(out);
+    tr_camera cam = *tr_scene_camera(s);
+    CHECK(tr_camera_resize(&cam, W, H, err) == TR_OK, "%s", err->msg);
+    tr_scene_set_camera(s, &cam);
+    CHECK(tr_scene_commit(s, TR_ACCEL_TYPE_BVH, err) == TR_OK, "commit: %s", err->msg);
+    return s;
+}
+
 static void render_g(const tr_scene *s, const tr_camera *cam, uint32_t sample, tr_gbuffer *g) {
     tr_film f;
     tr_error err;
-    CHECK(tr_film_init_passes(&f, W, H, TR_PASS_ALL | TR_PASS_DIRECT, &err) == TR_OK, "%s",
-          err.msg);
+    const uint32_t passes = TR_PASS_ALL | TR_PASS_DIRECT | TR_PASS_SPECULAR;
+    CHECK(tr_film_init_passes(&f, W, H, passes, &err) == TR_OK, "%s", err.msg);
     tr_render_config cfg = tr_render_config_default();
-    cfg.passes = TR_PASS_ALL | TR_PASS_DIRECT;
+    cfg.passes = passes;
     cfg.threads = 2;
     CHECK(tr_render_frame(s, cam, &cfg, &f, sample, NULL, &err) == TR_OK, "%s", err.msg);
     CHECK(tr_gbuffer_init(g, W, H, &err) == TR_OK, "%s", err.msg);
@@ -125,8 +165,8 @@ static void agree(tr_device *cl, const tr_gbuffer *g, const tr_camera *cams, int
     tr_recon_free(&host);
 }
 
-/* Section 7: on the host, SVGF with direct and indirect apart (p) and without differ by
- * far more than the bound, by the last frame: the split is not a no-op. */
+/* Sections 7 and 8: on the host, SVGF with a split (p) and without differ by far more
+ * than the bound, by the last frame: the split is not a no-op. */
 static void split_changes(const tr_gbuffer *g, const tr_camera *cams, const tr_recon_params *p) {
     tr_error err;
     tr_recon split, sum;
@@ -136,7 +176,7 @@ static void split_changes(const tr_gbuffer *g, const tr_camera *cams, const tr_r
     float *a = malloc(3 * W * H * sizeof *a), *b = malloc(3 * W * H * sizeof *b);
     CHECK(a && b, "out of memory");
     for (int k = 0; k < FRAMES; ++k) {
-        CHECK(g[k].has_direct, "frame %d has no direct pass", k);
+        CHECK(g[k].has_direct && g[k].has_specular, "frame %d lacks a pass", k);
         CHECK(tr_recon_frame(&split, &g[k], &cams[k], TR_RECON_SVGF, p, 2, a, &err) == TR_OK &&
                   tr_recon_frame(&sum, &g[k], &cams[k], TR_RECON_SVGF, &q, 2, b, &err) == TR_OK,
               "%s", err.msg);
@@ -155,7 +195,7 @@ static void split_changes(const tr_gbuffer *g, const tr_camera *cams, const tr_r
  * the host's tr_recon_frame with `threads`: every frame's output must agree within
  * `tol` relative (0: bit for bit). */
 static void film_frames(tr_device *d, tr_recon_device *dev, const tr_camera *cams, int frames,
-                        uint32_t spp, int threads, double tol, const tr_scene *emission, int split,
+                        uint32_t spp, int threads, double tol, const tr_scene *emission, int apart,
                         const char *label) {
     tr_error err;
     tr_recon host;
@@ -163,17 +203,19 @@ static void film_frames(tr_device *d, tr_recon_device *dev, const tr_camera *cam
     tr_film f;
     /* With `emission` (the scene) the film keeps the emission pass and both sides resolve
      * it (the device in tr_recon_device_frame, the host by tr_resolve_emission). */
-    /* With split the film keeps the direct pass and SVGF filters direct and indirect light
-     * apart. */
-    const uint32_t passes =
-        TR_PASS_ALL | (emission ? TR_PASS_EMISSION : 0u) | (split ? TR_PASS_DIRECT : 0u);
+    /* apart 1: the film keeps the direct pass and SVGF filters direct and indirect light
+     * apart; 2: the specular pass, diffuse and specular light apart. */
+    const uint32_t passes = TR_PASS_ALL | (emission ? TR_PASS_EMISSION : 0u) |
+                            (apart == 1 ? TR_PASS_DIRECT : 0u) |
+                            (apart == 2 ? TR_PASS_SPECULAR : 0u);
     CHECK(tr_recon_init(&host, W, H, &err) == TR_OK, "%s", err.msg);
     CHECK(tr_gbuffer_init(&g, W, H, &err) == TR_OK, "%s", err.msg);
     CHECK(tr_film_init_passes(&f, W, H, passes, &err) == TR_OK, "%s", err.msg);
     tr_render_config cfg = tr_render_config_default();
     cfg.passes = passes;
     tr_recon_params p = tr_recon_params_default();
-    p.svgf_split = split;
+    p.svgf_split = apart == 1;
+    p.svgf_specular = apart == 2;
     float *a = malloc(3 * W * H * sizeof *a), *b = malloc(3 * W * H * sizeof *b);
     CHECK(a && b, "out of memory");
     for (int k = 0; k < frames; ++k) {
@@ -221,6 +263,15 @@ static void film_on_device(tr_device *cl, const tr_scene *s, const tr_camera *ca
     /* Section 7: direct and indirect apart on the device's film, the emission taken out of
      * both (a history kept without the split starts over). */
     film_frames(cl, dev, cams, FRAMES, 1, 2, bound, s, 1, "split on the device's film");
+    /* Section 8: diffuse and specular apart, the specular pass the device's, on the glossy
+     * box. */
+    tr_scene *glossy = glossy_box(&err);
+    CHECK(tr_device_upload(cl, glossy, &err) == TR_OK, "%s", err.msg);
+    tr_recon_device_clear(dev);
+    film_frames(cl, dev, cams, FRAMES, 1, 2, bound, glossy, 2,
+                "specular apart on the device's film");
+    tr_scene_destroy(glossy);
+    CHECK(tr_device_upload(cl, s, &err) == TR_OK, "%s", err.msg);
     double ms_t, ms_s;
     tr_recon_device_times(dev, &ms_t, &ms_s);
     CHECK(ms_t >= 0.0 && ms_s >= 0.0, "negative stage times %g %g", ms_t, ms_s);
@@ -341,6 +392,24 @@ int main(void) {
     agree(cl, g, cams, TR_RECON_SVGF, &p, "svgf-split");
     p.svgf_taa_alpha = 0.3f;
     agree(cl, g, cams, TR_RECON_SVGF, &p, "svgf-split+taa");
+    /* Section 8: diffuse and specular apart, on the glossy box. */
+    {
+        tr_scene *glossy = glossy_box(&err);
+        tr_gbuffer gg[FRAMES];
+        for (int k = 0; k < FRAMES; ++k) {
+            render_g(glossy, &cams[k], (uint32_t)k, &gg[k]);
+        }
+        p = tr_recon_params_default();
+        p.svgf_specular = 1;
+        split_changes(gg, cams, &p);
+        agree(cl, gg, cams, TR_RECON_SVGF, &p, "svgf-specular");
+        p.svgf_taa_alpha = 0.3f;
+        agree(cl, gg, cams, TR_RECON_SVGF, &p, "svgf-specular+taa");
+        for (int k = 0; k < FRAMES; ++k) {
+            tr_gbuffer_free(&gg[k]);
+        }
+        tr_scene_destroy(glossy);
+    }
 
     film_on_device(cl, s, cams);
     moving(cl);

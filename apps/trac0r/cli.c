@@ -415,7 +415,7 @@ const char cli_recon_help[] =
     "  --svgf-sigma-l S     SVGF's luminance weight, 0.1..1000 (default 4)\n"
     "  --taa A              SVGF's temporal antialiasing, 0..1 (default 0: off)\n"
     "  --svgf-split         filter direct and indirect light apart\n"
-    "  --split-specular     filter diffuse and specular light apart (CPU only)\n"
+    "  --split-specular     filter diffuse and specular light apart (pt only)\n"
     "  --gradients on|off   temporal gradients: shorten the history where the lighting\n"
     "                       changed (A-SVGF; CPU only; default off)\n"
     "  --resolve-emission N emitters' edges traced at N x N rays, 0..16 (default 4)\n"

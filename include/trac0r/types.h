@@ -121,7 +121,7 @@ typedef struct tr_camera {
  * minus emission minus it is the diffuse part), the surface's specular F0 (3), its GGX alpha
  * (1) and the distance to what a specular sample from it hit (1, 0 where none), from which
  * the real-time reconstruction demodulates the specular part and follows reflections
- * (docs/realtime.md). pt writes it, on the CPU device; the others do not. */
+ * (docs/realtime.md). pt writes it, on the CPU and on OpenCL devices; the others do not. */
 #define TR_PASS_SPECULAR 128u
 #define TR_PASS_MASK 255u /* every pass bit a film knows */
 

@@ -2241,6 +2241,7 @@ int tr_cl_get_handles(const tr_cl_context *ctx, tr_cl_handles *out, tr_error *er
     }
     out->emission = ctx->film[FILM_EMISSION];
     out->direct = ctx->film[FILM_DIRECT];
+    out->specular = ctx->film[FILM_SPECULAR];
     out->resolved = ctx->resolved;
     out->width = ctx->width;
     out->height = ctx->height;

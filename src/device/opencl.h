@@ -186,6 +186,7 @@ typedef struct tr_cl_handles {
     void *film[6];
     void *emission; /* the film's emission pass (a placeholder when not kept) */
     void *direct;   /* the film's direct pass (a placeholder when not kept) */
+    void *specular; /* the film's specular pass (a placeholder when not kept) */
     void *resolved; /* tr_cl_resolve_emission's output; NULL without the emission pass */
     uint32_t width, height, passes;
 } tr_cl_handles;

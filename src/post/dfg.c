@@ -57,24 +57,6 @@ const float *tr_post_dfg_table(void) {
     return dfg_table;
 }
 
-/* Position x in [0, 1] on the axis: the lower node and the next one's weight. */
-static int dfg_cell(float x, float *w) {
-    const float t = tr_fminf(tr_fmaxf(x, 0.0f), 1.0f) * (float)(TR_DFG_N - 1);
-    int i = (int)t;
-    if (i > TR_DFG_N - 2) {
-        i = TR_DFG_N - 2;
-    }
-    *w = t - (float)i;
-    return i;
-}
-
 void tr_post_dfg_lookup(const float *table, float mu, float alpha, float *a, float *b) {
-    float wm, wa;
-    const int i = dfg_cell(mu, &wm), j = dfg_cell(alpha, &wa);
-    for (int c = 0; c < 2; ++c) {
-        const float *r0 = table + 2 * (j * TR_DFG_N) + c, *r1 = r0 + 2 * TR_DFG_N;
-        const float e0 = r0[2 * i] + (r0[2 * i + 2] - r0[2 * i]) * wm;
-        const float e1 = r1[2 * i] + (r1[2 * i + 2] - r1[2 * i]) * wm;
-        *(c == 0 ? a : b) = e0 + (e1 - e0) * wa;
-    }
+    tr_post_dfg_at(table, mu, alpha, a, b);
 }

@@ -18,8 +18,7 @@
 #define TR_POST_DFG_H
 
 #include "kernel/types.h"
-
-#define TR_DFG_N 32
+#include "post/filter.h" /* TR_DFG_N and the lookup's arithmetic (tr_post_dfg_at) */
 #define TR_DFG_SAMPLES 64
 
 /* The table: A at [2 (j N + i)], B at [2 (j N + i) + 1]; computed on the first call, then

@@ -759,4 +759,37 @@ TR_FN void tr_post_svgf_pixel(TR_CONST_GLOBAL float *in, TR_CONST_GLOBAL float *
     *out_var = sv / (sw * sw);
 }
 
+/* The GGX lobe's pre-integrated albedo table's lookup (dfg.h: A at [2 (j N + i)], B at
+ * [2 (j N + i) + 1] over TR_DFG_N x TR_DFG_N nodes of mu and alpha): A and B at (mu,
+ * alpha), bilinear between the nodes, clamped to the table. Here so that a device reads
+ * the host's table with the host's arithmetic. */
+#define TR_DFG_N 32
+
+/* Position x in [0, 1] on the table's axis: the lower node and the next one's weight. */
+TR_FN int tr_post_dfg_cell(float x, float *w) {
+    const float t = tr_fminf(tr_fmaxf(x, 0.0f), 1.0f) * (float)(TR_DFG_N - 1);
+    int i = (int)t;
+    if (i > TR_DFG_N - 2) {
+        i = TR_DFG_N - 2;
+    }
+    *w = t - (float)i;
+    return i;
+}
+
+TR_FN void tr_post_dfg_at(TR_CONST_GLOBAL float *table, float mu, float alpha, float *a, float *b) {
+    float wm, wa;
+    const int i = tr_post_dfg_cell(mu, &wm), j = tr_post_dfg_cell(alpha, &wa);
+    for (int c = 0; c < 2; ++c) {
+        TR_CONST_GLOBAL float *r0 = table + 2 * (j * TR_DFG_N) + c;
+        TR_CONST_GLOBAL float *r1 = r0 + 2 * TR_DFG_N;
+        const float e0 = r0[2 * i] + (r0[2 * i + 2] - r0[2 * i]) * wm;
+        const float e1 = r1[2 * i] + (r1[2 * i + 2] - r1[2 * i]) * wm;
+        if (c == 0) {
+            *a = e0 + (e1 - e0) * wa;
+        } else {
+            *b = e0 + (e1 - e0) * wa;
+        }
+    }
+}
+
 #endif

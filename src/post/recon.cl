@@ -12,17 +12,19 @@
 #include "upscale.h"
 
 /* The device film's means into the frame's buffers (tr_gbuffer_from_film's arithmetic):
- * passes bit 0 albedo, 1 normal, 2 depth, 3 primitive id, 4 emission, 5 direct light; a
- * pass the film lacks reads as albedo 1, normal, depth, id and emission 0 (the direct
- * pass is then not written). */
+ * passes bit 0 albedo, 1 normal, 2 depth, 3 primitive id, 4 emission, 5 direct light, 6
+ * the specular split (8 floats); a pass the film lacks reads as albedo 1, normal, depth,
+ * id and emission 0 (the direct and specular ones are then not written). */
 __kernel void tr_recon_from_film(__global const float *sum, __global const uint *count,
                                  __global const float *albedo_sum, __global const float *normal_sum,
                                  __global const float *depth_sum, __global const uint *prim_in,
                                  __global const float *emission_sum,
-                                 __global const float *direct_sum, uint passes, int w, int h,
+                                 __global const float *direct_sum,
+                                 __global const float *specular_sum, uint passes, int w, int h,
                                  __global float *color, __global float *albedo,
                                  __global float *normal, __global float *depth, __global uint *prim,
-                                 __global float *emission, __global float *direct) {
+                                 __global float *emission, __global float *direct,
+                                 __global float *specular) {
     const int x = (int)get_global_id(0), y = (int)get_global_id(1);
     if (x >= w || y >= h) {
         return;
@@ -37,6 +39,11 @@ __kernel void tr_recon_from_film(__global const float *sum, __global const uint 
         emission[3 * i + k] = (passes & 16u) ? emission_sum[3 * i + k] * inv : 0.0f;
         if (passes & 32u) {
             direct[3 * i + k] = direct_sum[3 * i + k] * inv;
+        }
+    }
+    if (passes & 64u) {
+        for (int k = 0; k < 8; ++k) {
+            specular[8 * i + k] = specular_sum[8 * i + k] * inv;
         }
     }
     depth[i] = (passes & 4u) ? depth_sum[i] * inv : 0.0f;
@@ -75,6 +82,96 @@ __kernel void tr_recon_modulate(__global const float *in, __global const float *
         out[3 * i + k] = remod == 0 || remod == 2   ? in[3 * i + k] / a
                          : remod == 1 || raw > 0.0f ? in[3 * i + k] * a
                                                     : 0.0f;
+    }
+}
+
+/* Diffuse and specular apart (svgf_specular), filter.c's spec_prepare: the pixel's
+ * specular albedo F0 A + B (the DFG table `dfg` at its mean F0 and alpha and the cosine
+ * between its normal and the camera ray of cams[0]; 0 where it has no specular lobe) into
+ * spec_alb, its specular light over it into illum_s, the rest of its colour (the diffuse
+ * light) into diffuse. A pixel replaced through a refraction or a curved mirror
+ * (TR_PRIM_PSR_CURVED) keeps all its light in the diffuse part. */
+__kernel void tr_recon_spec_prepare(__global const tr_camera *cams, __global const float *color,
+                                    __global const float *normal, __global const uint *prim,
+                                    __global const float *specular, __global const float *dfg,
+                                    __global float *spec_alb, __global float *illum_s,
+                                    __global float *diffuse) {
+    const tr_camera cam = cams[0];
+    const uint x = (uint)get_global_id(0), y = (uint)get_global_id(1);
+    if (x >= cam.screen_width || y >= cam.screen_height) {
+        return;
+    }
+    const uint i = y * cam.screen_width + x;
+    __global const float *sp = specular + 8 * i;
+    const tr_vec3 d = v3_sub(tr_post_world_point(&cam, (float)x, (float)y, 1.0f), cam.pos);
+    const tr_vec3 n = v3(normal[3 * i], normal[3 * i + 1], normal[3 * i + 2]);
+    float a, b;
+    tr_post_dfg_at(dfg, tr_fabsf(v3_dot(n, d)), sp[6], &a, &b);
+    const int lobe = sp[3] > 0.0f || sp[4] > 0.0f || sp[5] > 0.0f;
+    const int apart = (prim[i] & TR_PRIM_PSR_CURVED) == 0u;
+    for (int k = 0; k < 3; ++k) {
+        const float alb = lobe && apart ? sp[3 + k] * a + b : 0.0f;
+        const float spec = apart ? sp[k] : 0.0f;
+        spec_alb[3 * i + k] = alb;
+        illum_s[3 * i + k] = spec / tr_post_demod_factor(alb);
+        diffuse[3 * i + k] = color[3 * i + k] - spec;
+    }
+}
+
+/* The specular part's temporal stage, filter.c's spec_temporal: illum_s reprojected by
+ * virtual motion (the reflection's distance weighed by the roughness) with a history cap
+ * from the roughness, or a fresh history where fewer than 5 % of the taps' weight survive
+ * or without history. */
+__kernel void tr_recon_spec_temporal(
+    __global const tr_camera *cams, __global const float *illum_s, __global const float *normal,
+    __global const float *depth, __global const uint *prim, __global const float *specular,
+    __global const float *prev_color, __global const float *prev_moments,
+    __global const float *prev_len, __global const float *prev_depth,
+    __global const float *prev_normal, __global const uint *prev_prim,
+    __global const float *motion, uint motion_count, int have_history, float alpha_min,
+    float max_len, float max_len_moving, __global float *out_color, __global float *out_moments,
+    __global float *out_len) {
+    const tr_camera cam = cams[0], prev = cams[1];
+    const uint x = (uint)get_global_id(0), y = (uint)get_global_id(1);
+    const int w = (int)cam.screen_width;
+    if (x >= cam.screen_width || y >= cam.screen_height) {
+        return;
+    }
+    const uint i = y * cam.screen_width + x;
+    const float cr = illum_s[3 * i], cg = illum_s[3 * i + 1], cb = illum_s[3 * i + 2];
+    float wt[4] = {0.0f, 0.0f, 0.0f, 0.0f}, total = 0.0f;
+    int x0 = 0, y0 = 0;
+    const uint id = prim[i];
+    const tr_vec3 m =
+        id < motion_count ? v3(motion[3 * id], motion[3 * id + 1], motion[3 * id + 2]) : v3s(0.0f);
+    const float alpha = specular[8 * i + 6];
+    if (have_history) {
+        const tr_vec3 n = v3(normal[3 * i], normal[3 * i + 1], normal[3 * i + 2]);
+        const float virt = specular[8 * i + 7] * tr_post_spec_virtual(alpha);
+        total = tr_post_reproject_virtual(&cam, &prev, x, y, depth[i], virt, n, id, m, prev_depth,
+                                          prev_normal, prev_prim, &x0, &y0, wt);
+    }
+    if (total > 0.05f) {
+        float c[3], mo[2], len;
+        tr_post_temporal_blend(cr, cg, cb, total, wt, x0, y0, w, prev_color, prev_moments,
+                               prev_len, alpha_min,
+                               tr_post_spec_max_len(alpha,
+                                                    tr_post_max_len(m, max_len, max_len_moving)),
+                               c, mo, &len);
+        out_color[3 * i] = c[0];
+        out_color[3 * i + 1] = c[1];
+        out_color[3 * i + 2] = c[2];
+        out_moments[2 * i] = mo[0];
+        out_moments[2 * i + 1] = mo[1];
+        out_len[i] = len;
+    } else {
+        const float l = tr_post_luminance(cr, cg, cb);
+        out_color[3 * i] = cr;
+        out_color[3 * i + 1] = cg;
+        out_color[3 * i + 2] = cb;
+        out_moments[2 * i] = l;
+        out_moments[2 * i + 1] = l * l;
+        out_len[i] = 1.0f;
     }
 }
 

@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "device/opencl.h"
+#include "post/dfg.h"
 #include "post/recon_params.h"
 #include "post/recon_upscale.h"
 #include "trac0r/film.h"
@@ -34,12 +35,15 @@ enum {
     K_TAA,
     K_ADD,
     K_UPSCALE,
+    K_SPEC_PREPARE,
+    K_SPEC_TEMPORAL,
     K_COUNT
 };
 static const char *const kernel_names[K_COUNT] = {
-    "tr_recon_from_film", "tr_recon_modulate",      "tr_recon_temporal", "tr_recon_bilateral",
-    "tr_recon_atrous",    "tr_recon_svgf_variance", "tr_recon_svgf",     "tr_recon_taa",
-    "tr_recon_add",       "tr_recon_upscale"};
+    "tr_recon_from_film", "tr_recon_modulate",     "tr_recon_temporal",
+    "tr_recon_bilateral", "tr_recon_atrous",       "tr_recon_svgf_variance",
+    "tr_recon_svgf",      "tr_recon_taa",          "tr_recon_add",
+    "tr_recon_upscale",   "tr_recon_spec_prepare", "tr_recon_spec_temporal"};
 
 /* The device's buffers: the frame (as tr_gbuffer), scratch, history, the two cameras. */
 enum {
@@ -72,6 +76,24 @@ enum {
 };
 enum { SP_DIRECT = 0, SP_ILLUM, SP_HD0, SP_HD1, SP_HDM0, SP_HDM1, SP_COUNT };
 static const int split_elems[SP_COUNT] = {3, 3, 3, 3, 2, 2};
+/* Diffuse and specular apart (svgf_specular): the frame's specular pass (8 floats), its
+ * specular albedo, specular light and diffuse colour, the specular histories (colour,
+ * moments, lengths; two of each) and the DFG table (dfg.h). */
+enum {
+    SS_PASS = 0,
+    SS_ALBEDO,
+    SS_ILLUM,
+    SS_DIFFUSE,
+    SS_HS0,
+    SS_HS1,
+    SS_HSM0,
+    SS_HSM1,
+    SS_HSL0,
+    SS_HSL1,
+    SS_DFG,
+    SS_COUNT
+};
+static const int spec_elems[SS_COUNT] = {8, 3, 3, 3, 3, 3, 2, 2, 1, 1, 0};
 /* Floats (or uints) per pixel of each buffer; 0: the cameras. */
 static const int buffer_elems[B_COUNT] = {3, 3, 3, 1, 1, 3, 3, 3, 2, 2, 1, 1, 1,
                                           3, 1, 3, 3, 1, 1, 3, 3, 3, 3, 3, 0};
@@ -93,10 +115,13 @@ typedef struct recon_cl {
      * demodulated light and the direct histories (colour, moments; two of each), made when
      * a frame first has the pass. The history's lengths are the sum's. */
     cl_mem sp[SP_COUNT];
-    int has_direct; /* the frame in the buffers has its direct pass in sp[SP_DIRECT] */
-    int hist_split; /* the history was kept with direct and indirect apart */
-    int modulated;  /* the albedo buffer it was multiplied by */
-    cl_mem added;   /* the emission the reconstruction added to it (NULL: none) */
+    int has_direct;      /* the frame in the buffers has its direct pass in sp[SP_DIRECT] */
+    int hist_split;      /* the history was kept with direct and indirect apart */
+    cl_mem ss[SS_COUNT]; /* made when a frame first has the specular pass */
+    int has_specular;    /* the frame in the buffers has its specular pass in ss[SS_PASS] */
+    int hist_spec;       /* the history was kept with diffuse and specular apart */
+    int modulated;       /* the albedo buffer it was multiplied by */
+    cl_mem added;        /* the emission the reconstruction added to it (NULL: none) */
     /* Temporal upscaling (tr_recon_device_upscale): the output's history (colour, samples,
      * distance, two of each), its first hits' emission (this frame's and the last), the
      * output, the samples' positions and the two cameras, for up_w x up_h outputs. */
@@ -135,14 +160,6 @@ static int check_args(const tr_recon_device *r, const tr_camera *cam, int method
 }
 
 #ifdef TRAC0R_HAVE_OPENCL
-/* Diffuse and specular apart (svgf_specular) needs the specular pass, which the CPU device
- * alone writes: host-only. */
-static int specular_unsupported(tr_error *err) {
-    return tr_error_set(err, TR_STATUS_UNSUPPORTED,
-                        "reconstruction: SVGF with diffuse and specular apart (svgf_specular) "
-                        "runs on the host only");
-}
-
 static int cl_fail(tr_error *err, const char *call, cl_int code) {
     return tr_error_set(err, TR_STATUS_DEVICE, "OpenCL reconstruction: %s failed: %s (%d)", call,
                         tr_cl_error_name(code), code);
@@ -178,6 +195,11 @@ static void cl_state_free(recon_cl *c) {
     for (int i = 0; i < SP_COUNT; ++i) {
         if (c->sp[i]) {
             clReleaseMemObject(c->sp[i]);
+        }
+    }
+    for (int i = 0; i < SS_COUNT; ++i) {
+        if (c->ss[i]) {
+            clReleaseMemObject(c->ss[i]);
         }
     }
     up_release(c);
@@ -301,14 +323,14 @@ static int copy(recon_cl *c, int from, int to, size_t bytes, tr_error *err) {
     return copy_mem(c, c->b[from], c->b[to], bytes, err);
 }
 
-/* SVGF on one illumination history `hist` (moments `mom`, lengths b[hl]), as the host's
+/* SVGF on one illumination history `hist` (moments `mom`, lengths `len`), as the host's
  * svgf_part: the variance, the iterations (the first one's output fed back into hist
- * with svgf_feedback), remodulated by b[ha] into b[res], or added to it when add. */
-static int svgf_part(recon_cl *c, int w, int h, cl_mem hist, cl_mem mom, int hl,
-                     const tr_recon_params *p, int ha, int res, int add, tr_error *err) {
+ * with svgf_feedback), remodulated by `albedo` into b[res], or added to it when add. */
+static int svgf_part(recon_cl *c, int w, int h, cl_mem hist, cl_mem mom, cl_mem len,
+                     const tr_recon_params *p, cl_mem albedo, int res, int add, tr_error *err) {
     const size_t n = (size_t)w * h;
-    int rc = RUN(c, K_SVGF_VARIANCE, w, h, err, KM(hist), KM(mom), KB(c, hl), KB(c, B_NORMAL),
-                 KI(w), KI(h), KB(c, B_VA));
+    int rc = RUN(c, K_SVGF_VARIANCE, w, h, err, KM(hist), KM(mom), KM(len), KB(c, B_NORMAL), KI(w),
+                 KI(h), KB(c, B_VA));
     cl_mem src = hist;
     int dst = B_CA, vs = B_VA, vd = B_VB;
     for (int it = 0; rc == TR_OK && it < p->svgf_iterations; ++it) {
@@ -329,9 +351,9 @@ static int svgf_part(recon_cl *c, int w, int h, cl_mem hist, cl_mem mom, int hl,
         return rc;
     }
     if (!add) {
-        return RUN(c, K_MODULATE, w, h, err, KM(src), KB(c, ha), KI(1), KI(w), KI(h), KB(c, res));
+        return RUN(c, K_MODULATE, w, h, err, KM(src), KM(albedo), KI(1), KI(w), KI(h), KB(c, res));
     }
-    rc = RUN(c, K_MODULATE, w, h, err, KM(src), KB(c, ha), KI(1), KI(w), KI(h), KB(c, dst));
+    rc = RUN(c, K_MODULATE, w, h, err, KM(src), KM(albedo), KI(1), KI(w), KI(h), KB(c, dst));
     return rc ? rc : RUN(c, K_ADD, w, h, err, KB(c, res), KB(c, dst), KF(1.0f), KI(w), KI(h));
 }
 
@@ -356,6 +378,32 @@ static int split_buffers(recon_cl *c, size_t n, tr_error *err) {
     return TR_OK;
 }
 
+/* The specular split's buffers (recon_cl.ss), made once; the DFG table uploaded with them. */
+static int spec_buffers(recon_cl *c, size_t n, tr_error *err) {
+    for (int i = 0; i < SS_COUNT; ++i) {
+        if (c->ss[i]) {
+            continue;
+        }
+        const size_t bytes = i == SS_DFG ? 2 * TR_DFG_N * TR_DFG_N * sizeof(float)
+                                         : n * (size_t)spec_elems[i] * sizeof(float);
+        cl_int rc;
+        c->ss[i] = clCreateBuffer(c->context, CL_MEM_READ_WRITE, bytes, NULL, &rc);
+        if (!c->ss[i]) {
+            return cl_fail(err, "clCreateBuffer(specular light)", rc);
+        }
+        if (i == SS_DFG) {
+            rc = clEnqueueWriteBuffer(c->queue, c->ss[i], CL_TRUE, 0, bytes, tr_post_dfg_table(), 0,
+                                      NULL, NULL);
+            if (rc != CL_SUCCESS) {
+                clReleaseMemObject(c->ss[i]);
+                c->ss[i] = NULL;
+                return cl_fail(err, "clEnqueueWriteBuffer(DFG table)", rc);
+            }
+        }
+    }
+    return TR_OK;
+}
+
 /* The device's film into the frame's buffers. */
 static int cl_from_film(tr_recon_device *r, tr_error *err) {
     tr_cl_handles h;
@@ -370,26 +418,31 @@ static int cl_from_film(tr_recon_device *r, tr_error *err) {
     const cl_uint passes =
         ((h.passes & TR_PASS_ALBEDO) ? 1u : 0u) | ((h.passes & TR_PASS_NORMAL) ? 2u : 0u) |
         ((h.passes & TR_PASS_DEPTH) ? 4u : 0u) | ((h.passes & TR_PASS_PRIM) ? 8u : 0u) |
-        ((h.passes & TR_PASS_EMISSION) ? 16u : 0u) | ((h.passes & TR_PASS_DIRECT) ? 32u : 0u);
-    cl_mem f[8];
+        ((h.passes & TR_PASS_EMISSION) ? 16u : 0u) | ((h.passes & TR_PASS_DIRECT) ? 32u : 0u) |
+        ((h.passes & TR_PASS_SPECULAR) ? 64u : 0u);
+    cl_mem f[9];
     for (int i = 0; i < 6; ++i) {
         f[i] = (cl_mem)h.film[i];
     }
     f[6] = (cl_mem)h.emission;
     f[7] = (cl_mem)h.direct;
+    f[8] = (cl_mem)h.specular;
     recon_cl *c = r->cl;
     c->has_emission = (h.passes & TR_PASS_EMISSION) != 0u;
     c->has_direct = (h.passes & TR_PASS_DIRECT) != 0u;
+    c->has_specular = (h.passes & TR_PASS_SPECULAR) != 0u;
     const int w = (int)r->width, ht = (int)r->height;
-    if (c->has_direct && split_buffers(c, (size_t)w * ht, err) != TR_OK) {
+    if ((c->has_direct && split_buffers(c, (size_t)w * ht, err) != TR_OK) ||
+        (c->has_specular && spec_buffers(c, (size_t)w * ht, err) != TR_OK)) {
         return TR_ERR;
     }
-    /* Without the pass nothing is written to its buffer: any one stands in. */
+    /* Without a pass nothing is written to its buffer: any one stands in. */
     const cl_mem direct = c->has_direct ? c->sp[SP_DIRECT] : c->b[B_ILLUM];
+    const cl_mem specular = c->has_specular ? c->ss[SS_PASS] : c->b[B_ILLUM];
     return RUN(c, K_FROM_FILM, w, ht, err, KM(f[0]), KM(f[1]), KM(f[2]), KM(f[3]), KM(f[4]),
-               KM(f[5]), KM(f[6]), KM(f[7]), KU(passes), KI(w), KI(ht), KB(c, B_COLOR),
+               KM(f[5]), KM(f[6]), KM(f[7]), KM(f[8]), KU(passes), KI(w), KI(ht), KB(c, B_COLOR),
                KB(c, B_ALBEDO), KB(c, B_NORMAL), KB(c, B_DEPTH), KB(c, B_PRIM), KB(c, B_EMIS),
-               KM(direct));
+               KM(direct), KM(specular));
 }
 
 static int cl_upload(tr_recon_device *r, const tr_gbuffer *g, tr_error *err) {
@@ -411,6 +464,18 @@ static int cl_upload(tr_recon_device *r, const tr_gbuffer *g, tr_error *err) {
         }
         const cl_int rc = clEnqueueWriteBuffer(r->cl->queue, r->cl->sp[SP_DIRECT], CL_FALSE, 0,
                                                3 * n * 4, g->direct, 0, NULL, NULL);
+        if (rc != CL_SUCCESS) {
+            return cl_fail(err, "clEnqueueWriteBuffer", rc);
+        }
+    }
+    /* The specular pass where the frame has it (for svgf_specular). */
+    r->cl->has_specular = g->has_specular;
+    if (g->has_specular) {
+        if (spec_buffers(r->cl, n, err) != TR_OK) {
+            return TR_ERR;
+        }
+        const cl_int rc = clEnqueueWriteBuffer(r->cl->queue, r->cl->ss[SS_PASS], CL_FALSE, 0,
+                                               8 * n * 4, g->specular, 0, NULL, NULL);
         if (rc != CL_SUCCESS) {
             return cl_fail(err, "clEnqueueWriteBuffer", rc);
         }
@@ -491,9 +556,15 @@ static int cl_frame(tr_recon_device *r, const tr_camera *cam, const tr_vec3 *mot
     }
     const int prev = c->cur, next = 1 - c->cur;
     const int hc = B_HC0 + next, hm = B_HM0 + next, hl = B_HL0 + next;
-    /* SVGF with direct and indirect light apart (Schied et al.'s split; the host's
-     * split_illum and direct_temporal): a history kept with the other split starts over. */
-    const int split = method == TR_RECON_SVGF && p->svgf_split && c->has_direct;
+    /* SVGF with diffuse and specular light apart (the host's spec_prepare and
+     * spec_temporal), which replaces direct and indirect apart (Schied et al.'s split; the
+     * host's split_illum and direct_temporal); a history kept with another split starts
+     * over. */
+    const int spec = method == TR_RECON_SVGF && p->svgf_specular && c->has_specular;
+    const int split = method == TR_RECON_SVGF && p->svgf_split && c->has_direct && !spec;
+    if (c->hist_spec != spec) {
+        c->have_history = 0;
+    }
     const int hist = c->have_history && c->hist_split == split;
     /* With the emission pass the filters see the colour less the first hit's emission,
      * and the emission comes back after them: resolved over the pixels' area on the
@@ -515,9 +586,15 @@ static int cl_frame(tr_recon_device *r, const tr_camera *cam, const tr_vec3 *mot
                      KI(h));
         }
     }
+    if (rc == TR_OK && spec) {
+        /* The specular part apart: its albedo, its light over it, the diffuse colour. */
+        rc = RUN(c, K_SPEC_PREPARE, w, h, err, KB(c, B_CAMS), KB(c, B_COLOR), KB(c, B_NORMAL),
+                 KB(c, B_PRIM), KM(c->ss[SS_PASS]), KM(c->ss[SS_DFG]), KM(c->ss[SS_ALBEDO]),
+                 KM(c->ss[SS_ILLUM]), KM(c->ss[SS_DIFFUSE]));
+    }
     rc = rc ? rc
-            : RUN(c, K_MODULATE, w, h, err, KB(c, B_COLOR), KB(c, B_ALBEDO), KI(0), KI(w), KI(h),
-                  KB(c, B_ILLUM));
+            : RUN(c, K_MODULATE, w, h, err, spec ? KM(c->ss[SS_DIFFUSE]) : KB(c, B_COLOR),
+                  KB(c, B_ALBEDO), KI(0), KI(w), KI(h), KB(c, B_ILLUM));
     if (rc == TR_OK && split) {
         /* The direct part demodulated, and the rest of the light the indirect part. */
         rc = RUN(c, K_MODULATE, w, h, err, KM(c->sp[SP_DIRECT]), KB(c, B_ALBEDO), KI(0), KI(w),
@@ -547,7 +624,16 @@ static int cl_frame(tr_recon_device *r, const tr_camera *cam, const tr_vec3 *mot
                 KM(c->sp[SP_HD0 + next]), KM(c->sp[SP_HDM0 + next]), KB(c, hl), KB(c, B_ALBEDO),
                 KB(c, B_HA0 + prev), KI(0), KF(0.0f), KB(c, B_HA0 + next));
     }
+    if (rc == TR_OK && spec) {
+        rc = RUN(c, K_SPEC_TEMPORAL, w, h, err, KB(c, B_CAMS), KM(c->ss[SS_ILLUM]), KB(c, B_NORMAL),
+                 KB(c, B_DEPTH), KB(c, B_PRIM), KM(c->ss[SS_PASS]), KM(c->ss[SS_HS0 + prev]),
+                 KM(c->ss[SS_HSM0 + prev]), KM(c->ss[SS_HSL0 + prev]), KB(c, B_HDEPTH),
+                 KB(c, B_HNORMAL), KB(c, B_HPRIM), KM(mbuf), KU(motion_count), KI(c->have_history),
+                 KF(p->alpha_min), KF(p->max_len), KF(p->max_len_moving), KM(c->ss[SS_HS0 + next]),
+                 KM(c->ss[SS_HSM0 + next]), KM(c->ss[SS_HSL0 + next]));
+    }
     c->hist_split = split;
+    c->hist_spec = spec;
     if (rc != TR_OK || (rc = finish(c, err)) != TR_OK) {
         return rc;
     }
@@ -584,14 +670,21 @@ static int cl_frame(tr_recon_device *r, const tr_camera *cam, const tr_vec3 *mot
     } else {
         /* With TAA the remodulated output goes to B_ILLUM (free by now) first. */
         const int res = p->svgf_taa_alpha > 0.0f ? B_ILLUM : B_OUT;
-        if (split) {
+        if (spec) {
+            /* Each part steered by its own variance, remodulated by its own albedo. */
+            rc = svgf_part(c, w, h, c->b[hc], c->b[hm], c->b[hl], p, c->b[ha], res, 0, err);
+            rc = rc ? rc
+                    : svgf_part(c, w, h, c->ss[SS_HS0 + next], c->ss[SS_HSM0 + next],
+                                c->ss[SS_HSL0 + next], p, c->ss[SS_ALBEDO], res, 1, err);
+        } else if (split) {
             /* Schied et al. filter direct and indirect illumination apart, each steered by
              * its own variance, and add them after remodulation. */
-            rc = svgf_part(c, w, h, c->sp[SP_HD0 + next], c->sp[SP_HDM0 + next], hl, p, ha, res, 0,
-                           err);
-            rc = rc ? rc : svgf_part(c, w, h, c->b[hc], c->b[hm], hl, p, ha, res, 1, err);
+            rc = svgf_part(c, w, h, c->sp[SP_HD0 + next], c->sp[SP_HDM0 + next], c->b[hl], p,
+                           c->b[ha], res, 0, err);
+            rc = rc ? rc
+                    : svgf_part(c, w, h, c->b[hc], c->b[hm], c->b[hl], p, c->b[ha], res, 1, err);
         } else {
-            rc = svgf_part(c, w, h, c->b[hc], c->b[hm], hl, p, ha, res, 0, err);
+            rc = svgf_part(c, w, h, c->b[hc], c->b[hm], c->b[hl], p, c->b[ha], res, 0, err);
         }
         if (rc == TR_OK && p->svgf_taa_alpha > 0.0f) {
             /* Temporal antialiasing of the remodulated output against the last frame's. */
@@ -717,9 +810,6 @@ int tr_recon_device_frame_gbuffer(tr_recon_device *r, const tr_gbuffer *g, const
                             r->width, r->height);
     }
 #ifdef TRAC0R_HAVE_OPENCL
-    if (r->cl && p->svgf_specular && method == TR_RECON_SVGF) {
-        return specular_unsupported(err);
-    }
     if (r->cl) {
         if (cl_upload(r, g, err) != TR_OK) {
             return TR_ERR;
@@ -737,9 +827,6 @@ int tr_recon_device_frame(tr_recon_device *r, const tr_camera *cam, const tr_vec
         return TR_ERR;
     }
 #ifdef TRAC0R_HAVE_OPENCL
-    if (r->cl && p->svgf_specular && method == TR_RECON_SVGF) {
-        return specular_unsupported(err);
-    }
     if (r->cl) {
         if (cl_from_film(r, err) != TR_OK) {
             return TR_ERR;

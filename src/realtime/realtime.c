@@ -281,12 +281,9 @@ static uint32_t frame_passes(const tr_realtime *rt, int method, int upscaled) {
     const uint32_t emission =
         rt->params.emission_samples > 0 && rt->cfg.integrator == TR_INTEGRATOR_PT ? TR_PASS_EMISSION
                                                                                   : 0u;
-    /* The specular pass where SVGF filters diffuse and specular light apart (pt on the
-     * CPU device, which alone writes it). */
+    /* The specular pass where SVGF filters diffuse and specular light apart (pt only). */
     const uint32_t specular =
-        rt->params.svgf_specular && rt->cfg.integrator == TR_INTEGRATOR_PT && !rt->on_device
-            ? TR_PASS_SPECULAR
-            : 0u;
+        rt->params.svgf_specular && rt->cfg.integrator == TR_INTEGRATOR_PT ? TR_PASS_SPECULAR : 0u;
     return TR_PASS_ALL | direct | emission | specular;
 }
 
