@@ -513,23 +513,8 @@ static int open_error(const cli_args *a, const tr_scene_file *f, const tr_error 
         return CLI_FAILURE;
     }
     if (err->code == TR_STATUS_NOT_FOUND && f->open_stage == TR_SCENE_OPEN_SETTINGS &&
-        f->emissive_triangles == 0 &&
-        (f->shape_count > 0 || f->mesh_count > 0)) { /* loaded, but without an emitter */
+        f->emissive_triangles == 0) { /* loaded, but without an emitter */
         return cli_error(a, "%s (or pass --allow-dark)", err->msg);
-    }
-    /* The shipped scenes reach Debian's Assimp test models through a link beside them. */
-    const char *models = strstr(err->msg, "assimp-models/");
-    if (f->open_stage == TR_SCENE_OPEN_LOAD && models && strstr(err->msg, "cannot open '")) {
-        /* The directory the link belongs in: the unopened path's, up to the link. */
-        const char *start = models;
-        while (start > err->msg && start[-1] != '\'') {
-            --start;
-        }
-        const int len = (int)(models - start);
-        return cli_error(a,
-                         "%s (the scene reads Debian's assimp-testmodels through a link beside "
-                         "it: ln -s /usr/share/assimp/models %.*sassimp-models)",
-                         err->msg, len, start);
     }
     /* An extra's message begins with its option's name, as does a size over the limit. */
     const int option = f->open_stage == TR_SCENE_OPEN_EXTRAS ||

@@ -1040,8 +1040,18 @@ int tr_scene_import_mesh_ex(tr_scene *s, const char *path, const tr_transform *t
     FILE *fp = tr_infile_open(path, &bytes, &open_err);
     if (!fp) {
         const size_t skip = strnlen(path, 200) + strlen(": cannot open: ");
-        return tr_error_set(err, open_err.code, "cannot open '%.200s': %s", path,
-                            strlen(open_err.msg) > skip ? open_err.msg + skip : open_err.msg);
+        /* The shipped scenes reach Debian's Assimp test models through a link beside them
+         * (scenes/assimp-models, not in the repository): say which link is missing. */
+        const char *link = strstr(path, "assimp-models/");
+        return tr_error_set(
+            err, open_err.code, "cannot open '%.200s': %s%s%.*s%s", path,
+            strlen(open_err.msg) > skip ? open_err.msg + skip : open_err.msg,
+            link && open_err.code == TR_STATUS_NOT_FOUND
+                ? " (the scene reads Debian's assimp-testmodels through a link: ln -s "
+                  "/usr/share/assimp/models "
+                : "",
+            link && open_err.code == TR_STATUS_NOT_FOUND ? (int)(link - path) : 0, path,
+            link && open_err.code == TR_STATUS_NOT_FOUND ? "assimp-models)" : "");
     }
     fclose(fp);
     if (bytes == 0) {
