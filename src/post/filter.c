@@ -1129,20 +1129,10 @@ static void spec_prepare(tr_recon *r, const tr_gbuffer *g, const tr_camera *cam,
     for (int y = 0; y < h; ++y) {
         for (int x = 0; x < w; ++x) {
             const size_t i = (size_t)y * w + x;
-            const float *sp = g->specular + 8 * i;
-            const tr_vec3 d = v3_sub(tr_post_world_point(cam, (float)x, (float)y, 1.0f), cam->pos);
             const tr_vec3 n = v3(g->normal[3 * i], g->normal[3 * i + 1], g->normal[3 * i + 2]);
-            float a, b;
-            tr_post_dfg_lookup(dfg, tr_fabsf(v3_dot(n, d)), sp[6], &a, &b);
-            const int lobe = sp[3] > 0.0f || sp[4] > 0.0f || sp[5] > 0.0f;
-            const int apart = (g->prim[i] & TR_PRIM_PSR_CURVED) == 0u;
-            for (int k = 0; k < 3; ++k) {
-                const float alb = lobe && apart ? sp[3 + k] * a + b : 0.0f;
-                const float spec = apart ? sp[k] : 0.0f;
-                r->spec_alb[3 * i + k] = alb;
-                r->illum_s[3 * i + k] = spec / tr_post_demod_factor(alb);
-                r->diffuse[3 * i + k] = g->color[3 * i + k] - spec;
-            }
+            tr_post_spec_split_pixel(cam, (uint32_t)x, (uint32_t)y, n, g->prim[i],
+                                     g->specular + 8 * i, dfg, g->color + 3 * i,
+                                     r->spec_alb + 3 * i, r->illum_s + 3 * i, r->diffuse + 3 * i);
         }
     }
 }
@@ -1160,38 +1150,18 @@ static void spec_temporal(tr_recon *r, const tr_gbuffer *g, const tr_camera *cam
     for (int y = 0; y < h; ++y) {
         for (int x = 0; x < w; ++x) {
             const size_t i = (size_t)y * w + x;
-            const float cr = r->illum_s[3 * i], cg = r->illum_s[3 * i + 1],
-                        cb = r->illum_s[3 * i + 2];
-            float wt[4] = {0.0f, 0.0f, 0.0f, 0.0f}, total = 0.0f;
-            int x0 = 0, y0 = 0;
             const uint32_t id = g->prim[i];
             const tr_vec3 m = motion && id < motion_count ? motion[id] : v3s(0.0f);
-            const float alpha = g->specular[8 * i + 6];
-            if (hist) {
-                const tr_vec3 n = v3(g->normal[3 * i], g->normal[3 * i + 1], g->normal[3 * i + 2]);
-                const float virt = g->specular[8 * i + 7] * tr_post_spec_virtual(alpha);
-                total = tr_post_reproject_virtual(cam, pc, (uint32_t)x, (uint32_t)y, g->depth[i],
-                                                  virt, n, id, m, r->hist_depth, r->hist_normal,
-                                                  r->hist_prim, &x0, &y0, wt);
+            const tr_vec3 n = v3(g->normal[3 * i], g->normal[3 * i + 1], g->normal[3 * i + 2]);
+            float cap = tr_post_max_len(m, p->max_len, p->max_len_moving);
+            if (r->len_cap) {
+                cap = tr_fminf(cap, r->len_cap[i]);
             }
-            if (total > 0.05f) {
-                float cap = tr_post_max_len(m, p->max_len, p->max_len_moving);
-                if (r->len_cap) {
-                    cap = tr_fminf(cap, r->len_cap[i]);
-                }
-                tr_post_temporal_blend(cr, cg, cb, total, wt, x0, y0, w, r->hist_spec[prev],
-                                       r->hist_smoments[prev], r->hist_slen[prev], p->alpha_min,
-                                       tr_post_spec_max_len(alpha, cap), hs + 3 * i, hsm + 2 * i,
-                                       hsl + i);
-            } else {
-                const float l = tr_post_luminance(cr, cg, cb);
-                hs[3 * i] = cr;
-                hs[3 * i + 1] = cg;
-                hs[3 * i + 2] = cb;
-                hsm[2 * i] = l;
-                hsm[2 * i + 1] = l * l;
-                hsl[i] = 1.0f;
-            }
+            tr_post_spec_temporal_pixel(
+                cam, pc, (uint32_t)x, (uint32_t)y, w, r->illum_s + 3 * i, n, g->depth[i], id, m,
+                g->specular[8 * i + 6], g->specular[8 * i + 7], hist, r->hist_spec[prev],
+                r->hist_smoments[prev], r->hist_slen[prev], r->hist_depth, r->hist_normal,
+                r->hist_prim, p->alpha_min, cap, hs + 3 * i, hsm + 2 * i, hsl + i);
         }
     }
 }

@@ -792,4 +792,62 @@ TR_FN void tr_post_dfg_at(TR_CONST_GLOBAL float *table, float mu, float alpha, f
     }
 }
 
+/* Diffuse and specular apart (svgf_specular) at pixel (x, y) of cam: from its specular
+ * pass sp (8 floats: the specular light, F0, GGX alpha, the reflection's distance), its
+ * normal n, primitive id and colour (3 floats), the specular albedo F0 A + B (the DFG table
+ * at its mean F0 and alpha and the cosine between n and the camera ray; 0 where it has no
+ * specular lobe) into alb, its specular light over it into illum, the rest of its colour
+ * (the diffuse light) into diffuse. A pixel replaced through a refraction or a curved
+ * mirror (TR_PRIM_PSR_CURVED) keeps all its light in the diffuse part. */
+TR_FN void tr_post_spec_split_pixel(const tr_camera *cam, uint32_t x, uint32_t y, tr_vec3 n,
+                                    uint32_t prim, TR_CONST_GLOBAL float *sp,
+                                    TR_CONST_GLOBAL float *dfg, TR_CONST_GLOBAL float *color,
+                                    float alb[3], float illum[3], float diffuse[3]) {
+    const tr_vec3 d = v3_sub(tr_post_world_point(cam, (float)x, (float)y, 1.0f), cam->pos);
+    float a, b;
+    tr_post_dfg_at(dfg, tr_fabsf(v3_dot(n, d)), sp[6], &a, &b);
+    const int lobe = sp[3] > 0.0f || sp[4] > 0.0f || sp[5] > 0.0f;
+    const int apart = (prim & TR_PRIM_PSR_CURVED) == 0u;
+    for (int k = 0; k < 3; ++k) {
+        alb[k] = lobe && apart ? sp[3 + k] * a + b : 0.0f;
+        const float spec = apart ? sp[k] : 0.0f;
+        illum[k] = spec / tr_post_demod_factor(alb[k]);
+        diffuse[k] = color[k] - spec;
+    }
+}
+
+/* The specular part's temporal stage at pixel (x, y) (w pixels a row) of cam: its light c
+ * reprojected into prev by virtual motion (tr_post_reproject_virtual, the reflection's
+ * distance `dist` weighed by tr_post_spec_virtual(alpha)) and blended with the history
+ * under the cap `cap` lowered by the roughness (tr_post_spec_max_len); where fewer than
+ * 5 % of the taps' weight survive, or without history, a fresh history of c. */
+TR_FN void tr_post_spec_temporal_pixel(
+    const tr_camera *cam, const tr_camera *prev, uint32_t x, uint32_t y, int w, const float c[3],
+    tr_vec3 n, float depth, uint32_t id, tr_vec3 m, float alpha, float dist, int have_history,
+    TR_CONST_GLOBAL float *prev_color, TR_CONST_GLOBAL float *prev_moments,
+    TR_CONST_GLOBAL float *prev_len, TR_CONST_GLOBAL float *prev_depth,
+    TR_CONST_GLOBAL float *prev_normal, TR_CONST_GLOBAL uint32_t *prev_prim, float alpha_min,
+    float cap, float out_color[3], float out_moments[2], float *out_len) {
+    float wt[4] = {0.0f, 0.0f, 0.0f, 0.0f}, total = 0.0f;
+    int x0 = 0, y0 = 0;
+    if (have_history) {
+        total =
+            tr_post_reproject_virtual(cam, prev, x, y, depth, dist * tr_post_spec_virtual(alpha), n,
+                                      id, m, prev_depth, prev_normal, prev_prim, &x0, &y0, wt);
+    }
+    if (total > 0.05f) {
+        tr_post_temporal_blend(c[0], c[1], c[2], total, wt, x0, y0, w, prev_color, prev_moments,
+                               prev_len, alpha_min, tr_post_spec_max_len(alpha, cap), out_color,
+                               out_moments, out_len);
+    } else {
+        const float l = tr_post_luminance(c[0], c[1], c[2]);
+        out_color[0] = c[0];
+        out_color[1] = c[1];
+        out_color[2] = c[2];
+        out_moments[0] = l;
+        out_moments[1] = l * l;
+        *out_len = 1.0f;
+    }
+}
+
 #endif

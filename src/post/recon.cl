@@ -15,16 +15,13 @@
  * passes bit 0 albedo, 1 normal, 2 depth, 3 primitive id, 4 emission, 5 direct light, 6
  * the specular split (8 floats); a pass the film lacks reads as albedo 1, normal, depth,
  * id and emission 0 (the direct and specular ones are then not written). */
-__kernel void tr_recon_from_film(__global const float *sum, __global const uint *count,
-                                 __global const float *albedo_sum, __global const float *normal_sum,
-                                 __global const float *depth_sum, __global const uint *prim_in,
-                                 __global const float *emission_sum,
-                                 __global const float *direct_sum,
-                                 __global const float *specular_sum, uint passes, int w, int h,
-                                 __global float *color, __global float *albedo,
-                                 __global float *normal, __global float *depth, __global uint *prim,
-                                 __global float *emission, __global float *direct,
-                                 __global float *specular) {
+__kernel void tr_recon_from_film(
+    __global const float *sum, __global const uint *count, __global const float *albedo_sum,
+    __global const float *normal_sum, __global const float *depth_sum, __global const uint *prim_in,
+    __global const float *emission_sum, __global const float *direct_sum,
+    __global const float *specular_sum, uint passes, int w, int h, __global float *color,
+    __global float *albedo, __global float *normal, __global float *depth, __global uint *prim,
+    __global float *emission, __global float *direct, __global float *specular) {
     const int x = (int)get_global_id(0), y = (int)get_global_id(1);
     if (x >= w || y >= h) {
         return;
@@ -102,19 +99,14 @@ __kernel void tr_recon_spec_prepare(__global const tr_camera *cams, __global con
         return;
     }
     const uint i = y * cam.screen_width + x;
-    __global const float *sp = specular + 8 * i;
-    const tr_vec3 d = v3_sub(tr_post_world_point(&cam, (float)x, (float)y, 1.0f), cam.pos);
     const tr_vec3 n = v3(normal[3 * i], normal[3 * i + 1], normal[3 * i + 2]);
-    float a, b;
-    tr_post_dfg_at(dfg, tr_fabsf(v3_dot(n, d)), sp[6], &a, &b);
-    const int lobe = sp[3] > 0.0f || sp[4] > 0.0f || sp[5] > 0.0f;
-    const int apart = (prim[i] & TR_PRIM_PSR_CURVED) == 0u;
+    float alb[3], ill[3], dif[3];
+    tr_post_spec_split_pixel(&cam, x, y, n, prim[i], specular + 8 * i, dfg, color + 3 * i, alb, ill,
+                             dif);
     for (int k = 0; k < 3; ++k) {
-        const float alb = lobe && apart ? sp[3 + k] * a + b : 0.0f;
-        const float spec = apart ? sp[k] : 0.0f;
-        spec_alb[3 * i + k] = alb;
-        illum_s[3 * i + k] = spec / tr_post_demod_factor(alb);
-        diffuse[3 * i + k] = color[3 * i + k] - spec;
+        spec_alb[3 * i + k] = alb[k];
+        illum_s[3 * i + k] = ill[k];
+        diffuse[3 * i + k] = dif[k];
     }
 }
 
@@ -127,10 +119,9 @@ __kernel void tr_recon_spec_temporal(
     __global const float *depth, __global const uint *prim, __global const float *specular,
     __global const float *prev_color, __global const float *prev_moments,
     __global const float *prev_len, __global const float *prev_depth,
-    __global const float *prev_normal, __global const uint *prev_prim,
-    __global const float *motion, uint motion_count, int have_history, float alpha_min,
-    float max_len, float max_len_moving, __global float *out_color, __global float *out_moments,
-    __global float *out_len) {
+    __global const float *prev_normal, __global const uint *prev_prim, __global const float *motion,
+    uint motion_count, int have_history, float alpha_min, float max_len, float max_len_moving,
+    __global float *out_color, __global float *out_moments, __global float *out_len) {
     const tr_camera cam = cams[0], prev = cams[1];
     const uint x = (uint)get_global_id(0), y = (uint)get_global_id(1);
     const int w = (int)cam.screen_width;
@@ -138,41 +129,22 @@ __kernel void tr_recon_spec_temporal(
         return;
     }
     const uint i = y * cam.screen_width + x;
-    const float cr = illum_s[3 * i], cg = illum_s[3 * i + 1], cb = illum_s[3 * i + 2];
-    float wt[4] = {0.0f, 0.0f, 0.0f, 0.0f}, total = 0.0f;
-    int x0 = 0, y0 = 0;
+    const float c[3] = {illum_s[3 * i], illum_s[3 * i + 1], illum_s[3 * i + 2]};
     const uint id = prim[i];
     const tr_vec3 m =
         id < motion_count ? v3(motion[3 * id], motion[3 * id + 1], motion[3 * id + 2]) : v3s(0.0f);
-    const float alpha = specular[8 * i + 6];
-    if (have_history) {
-        const tr_vec3 n = v3(normal[3 * i], normal[3 * i + 1], normal[3 * i + 2]);
-        const float virt = specular[8 * i + 7] * tr_post_spec_virtual(alpha);
-        total = tr_post_reproject_virtual(&cam, &prev, x, y, depth[i], virt, n, id, m, prev_depth,
-                                          prev_normal, prev_prim, &x0, &y0, wt);
-    }
-    if (total > 0.05f) {
-        float c[3], mo[2], len;
-        tr_post_temporal_blend(cr, cg, cb, total, wt, x0, y0, w, prev_color, prev_moments,
-                               prev_len, alpha_min,
-                               tr_post_spec_max_len(alpha,
-                                                    tr_post_max_len(m, max_len, max_len_moving)),
-                               c, mo, &len);
-        out_color[3 * i] = c[0];
-        out_color[3 * i + 1] = c[1];
-        out_color[3 * i + 2] = c[2];
-        out_moments[2 * i] = mo[0];
-        out_moments[2 * i + 1] = mo[1];
-        out_len[i] = len;
-    } else {
-        const float l = tr_post_luminance(cr, cg, cb);
-        out_color[3 * i] = cr;
-        out_color[3 * i + 1] = cg;
-        out_color[3 * i + 2] = cb;
-        out_moments[2 * i] = l;
-        out_moments[2 * i + 1] = l * l;
-        out_len[i] = 1.0f;
-    }
+    const tr_vec3 n = v3(normal[3 * i], normal[3 * i + 1], normal[3 * i + 2]);
+    float oc[3], om[2], ol;
+    tr_post_spec_temporal_pixel(&cam, &prev, x, y, w, c, n, depth[i], id, m, specular[8 * i + 6],
+                                specular[8 * i + 7], have_history, prev_color, prev_moments,
+                                prev_len, prev_depth, prev_normal, prev_prim, alpha_min,
+                                tr_post_max_len(m, max_len, max_len_moving), oc, om, &ol);
+    out_color[3 * i] = oc[0];
+    out_color[3 * i + 1] = oc[1];
+    out_color[3 * i + 2] = oc[2];
+    out_moments[2 * i] = om[0];
+    out_moments[2 * i + 1] = om[1];
+    out_len[i] = ol;
 }
 
 /* Temporal accumulation (tr_post_temporal_pixel_taps) through cams[0] (this frame) and
