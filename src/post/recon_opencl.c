@@ -447,35 +447,30 @@ static int cl_from_film(tr_recon_device *r, tr_error *err) {
 
 static int cl_upload(tr_recon_device *r, const tr_gbuffer *g, tr_error *err) {
     const size_t n = (size_t)r->width * r->height;
-    const void *src[5] = {g->color, g->albedo, g->normal, g->depth, g->prim};
-    const size_t bytes[5] = {3 * n * 4, 3 * n * 4, 3 * n * 4, n * 4, n * 4};
-    for (int i = 0; i < 5; ++i) {
-        const cl_int rc = clEnqueueWriteBuffer(r->cl->queue, r->cl->b[B_COLOR + i], CL_FALSE, 0,
-                                               bytes[i], src[i], 0, NULL, NULL);
-        if (rc != CL_SUCCESS) {
-            return cl_fail(err, "clEnqueueWriteBuffer", rc);
-        }
+    recon_cl *c = r->cl;
+    c->has_direct = g->has_direct;     /* for svgf_split */
+    c->has_specular = g->has_specular; /* for svgf_specular */
+    if ((g->has_direct && split_buffers(c, n, err) != TR_OK) ||
+        (g->has_specular && spec_buffers(c, n, err) != TR_OK)) {
+        return TR_ERR;
     }
-    /* The direct pass where the frame has it (for svgf_split). */
-    r->cl->has_direct = g->has_direct;
-    if (g->has_direct) {
-        if (split_buffers(r->cl, n, err) != TR_OK) {
-            return TR_ERR;
+    /* The frame's buffers, then its direct and specular passes where it has them. */
+    const cl_mem dst[7] = {c->b[B_COLOR],
+                           c->b[B_ALBEDO],
+                           c->b[B_NORMAL],
+                           c->b[B_DEPTH],
+                           c->b[B_PRIM],
+                           g->has_direct ? c->sp[SP_DIRECT] : NULL,
+                           g->has_specular ? c->ss[SS_PASS] : NULL};
+    const void *src[7] = {g->color, g->albedo, g->normal,  g->depth,
+                          g->prim,  g->direct, g->specular};
+    const size_t bytes[7] = {3 * n * 4, 3 * n * 4, 3 * n * 4, n * 4, n * 4, 3 * n * 4, 8 * n * 4};
+    for (int i = 0; i < 7; ++i) {
+        if (!dst[i]) {
+            continue;
         }
-        const cl_int rc = clEnqueueWriteBuffer(r->cl->queue, r->cl->sp[SP_DIRECT], CL_FALSE, 0,
-                                               3 * n * 4, g->direct, 0, NULL, NULL);
-        if (rc != CL_SUCCESS) {
-            return cl_fail(err, "clEnqueueWriteBuffer", rc);
-        }
-    }
-    /* The specular pass where the frame has it (for svgf_specular). */
-    r->cl->has_specular = g->has_specular;
-    if (g->has_specular) {
-        if (spec_buffers(r->cl, n, err) != TR_OK) {
-            return TR_ERR;
-        }
-        const cl_int rc = clEnqueueWriteBuffer(r->cl->queue, r->cl->ss[SS_PASS], CL_FALSE, 0,
-                                               8 * n * 4, g->specular, 0, NULL, NULL);
+        const cl_int rc =
+            clEnqueueWriteBuffer(c->queue, dst[i], CL_FALSE, 0, bytes[i], src[i], 0, NULL, NULL);
         if (rc != CL_SUCCESS) {
             return cl_fail(err, "clEnqueueWriteBuffer", rc);
         }

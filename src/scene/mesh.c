@@ -129,16 +129,16 @@ static int find_by_name(const char *dir, const char *name, int depth, int *budge
     return found;
 }
 
-/* The one file in dir whose name is `name` (any case) and one more character, into out.
- * Returns 1 when there is exactly one. */
-static int find_one_longer(const char *dir, const char *name, char *out, size_t n) {
+/* The one file in dir whose name is `name` (any case) and one more character, into out
+ * (at most *budget entries read, as find_by_name). Returns 1 when there is exactly one. */
+static int find_one_longer(const char *dir, const char *name, int *budget, char *out, size_t n) {
     DIR *d = opendir(dir[0] ? dir : ".");
     if (!d) {
         return 0;
     }
     const size_t len = strlen(name);
     int found = 0;
-    for (struct dirent *e; (e = readdir(d)) != NULL;) {
+    for (struct dirent *e; *budget > 0 && (e = readdir(d)) != NULL; --*budget) {
         if (e->d_name[0] != '.' && strlen(e->d_name) == len + 1 &&
             strncasecmp(e->d_name, name, len) == 0) {
             found += snprintf(out, n, "%s%s%s", dir, dir[0] ? "/" : "", e->d_name) < (int)n;
@@ -164,7 +164,7 @@ static int texture_fallback(const import_ctx *c, const char *full, char *out, si
     int budget = 20000;
     return name[0] && (find_by_name(here, name, 0, &budget, out, n) ||
                        find_by_name(c->dir, name, 4, &budget, out, n) ||
-                       (c->sib && find_one_longer(here, name, out, n)));
+                       (c->sib && find_one_longer(here, name, &budget, out, n)));
 }
 
 /* Texture `type`, index `slot`, of material m as a scene texture: embedded ("*N", or a
