@@ -13,30 +13,7 @@
  *    gradients.
  * 3. With gradients, the light switching and the camera panning, the switches are
  *    measured and 1 and 2 threads give the same bits, frame after frame. */
-#include <math.h>
-#include <stdlib.h>
-#include <string.h>
-
-#include "check.h"
-#include "scene_util.h"
-#include "trac0r/trac0r.h"
-
-#define W 48
-#define H 36
-#define FRAMES 24
-#define N (3u * W * H)
-
-static tr_scene *box(void) {
-    return committed_builtin("cornell", W, H);
-}
-
-static double mean_of(const float *a) {
-    double sum = 0.0;
-    for (uint32_t i = 0; i < N; ++i) {
-        sum += a[i];
-    }
-    return sum / N;
-}
+#include "gradient_run.h"
 
 static double mse(const float *a, const float *b) {
     double sum = 0.0;
@@ -48,56 +25,10 @@ static double mse(const float *a, const float *b) {
     return sum / N;
 }
 
-/* FRAMES frames of SVGF into out (FRAMES x N floats); `mode` the light animation. */
+/* On the CPU. */
 static void run(int gradients, int mode, int threads, int move_camera, float *out, int *valid,
                 uint32_t *changed) {
-    tr_error err;
-    tr_scene *s = box();
-    tr_device *dev = tr_device_create("cpu", &err);
-    CHECK(dev && tr_device_upload(dev, s, &err) == TR_OK, "%s", err.msg);
-    tr_render_config cfg = tr_render_config_default();
-    cfg.threads = threads;
-    tr_recon_params rp = tr_recon_params_default();
-    rp.gradients = gradients;
-    /* The histories the gradients keep or drop, compared with a steady run's, without the
-     * extra samples for pixels without history: the steady run's first frame would get
-     * them, the pixels whose history a switch drops would not (they are found by the
-     * reprojection, not by the gradients). */
-    rp.fresh_spp = 0;
-    tr_realtime_desc desc = {0};
-    desc.config = &cfg;
-    desc.recon = &rp;
-    desc.animated = 1;
-    tr_realtime *rt = tr_realtime_create(dev, s, &desc, &err);
-    CHECK(rt != NULL, "%s", err.msg);
-    for (uint32_t f = 0; f < FRAMES && rt; ++f) {
-        CHECK(tr_scene_animate_light(s, f, mode, &err) == TR_OK &&
-                  tr_scene_update(s, NULL, &err) == TR_OK &&
-                  tr_device_upload(dev, s, &err) == TR_OK,
-              "%s", err.msg);
-        tr_camera cam = *tr_scene_camera(s);
-        if (move_camera) {
-            /* A slow pan (half a percent of the box a frame): the gradients follow it. */
-            const tr_aabb b = tr_scene_bounds(s);
-            cam.pos.x += 0.005f * (b.max.x - b.min.x) * (float)f;
-        }
-        tr_realtime_frame_desc fd = {0};
-        fd.camera = &cam;
-        fd.method = TR_RECON_SVGF;
-        tr_realtime_result res;
-        CHECK(tr_realtime_frame(rt, &fd, &res, &err) == TR_OK && res.rgb, "frame %u: %s", f,
-              err.msg);
-        if (res.rgb) {
-            memcpy(out + (size_t)f * N, res.rgb, N * sizeof(float));
-        }
-        if (valid) {
-            valid[f] = res.gradient_valid;
-            changed[f] = res.gradient_changed;
-        }
-    }
-    tr_realtime_destroy(rt);
-    tr_device_destroy(dev);
-    tr_scene_destroy(s);
+    run_on("cpu", gradients, mode, threads, move_camera, out, valid, changed, NULL);
 }
 
 /* The lit box converged: 256 samples per pixel. */
@@ -160,22 +91,7 @@ static void test_switch(void) {
 }
 
 static void test_static(void) {
-    float *with = malloc((size_t)FRAMES * N * sizeof(float));
-    float *without = malloc((size_t)FRAMES * N * sizeof(float));
-    int valid[FRAMES];
-    uint32_t changed[FRAMES];
-    for (int move = 0; move < 2; ++move) {
-        run(1, TR_LIGHT_ANIMATION_NONE, 0, move, with, valid, changed);
-        run(0, TR_LIGHT_ANIMATION_NONE, 0, move, without, NULL, NULL);
-        for (int f = 0; f < FRAMES; ++f) {
-            CHECK(valid[f] == (f > 0) && changed[f] == 0,
-                  "camera %d, frame %d: valid %d, changed %u", move, f, valid[f], changed[f]);
-        }
-        CHECK(memcmp(with, without, (size_t)FRAMES * N * sizeof(float)) == 0,
-              "a static scene (camera moving %d): gradients change nothing", move);
-    }
-    free(with);
-    free(without);
+    check_static("cpu");
 }
 
 static void test_threads(void) {

@@ -118,7 +118,7 @@ static void reproject_mirror(const tr_camera *cam, const tr_camera *pcam, const 
     for (uint32_t y = 0; y < H; ++y) {
         for (uint32_t x = 0; x < W; ++x) {
             const size_t i = (size_t)y * W + x;
-            const tr_vec3 v = tr_post_world_point(cam, (float)x, (float)y, cur->depth[i]);
+            const tr_vec3 v = tr_camera_point_at(cam, (float)x, (float)y, cur->depth[i]);
             if (!(cur->prim[i] >= lo && cur->prim[i] < hi) || !behind_mirror(v)) {
                 continue;
             }
@@ -191,7 +191,7 @@ static void test_glass_albedo(int wall) {
              * face, to the difference between the sample's jittered ray and the centre's
              * (under 5e-4 here). */
             const uint32_t x = (uint32_t)(i % W), y = (uint32_t)(i / W);
-            const tr_vec3 p = tr_post_world_point(cam, (float)x, (float)y, g.depth[i]);
+            const tr_vec3 p = tr_camera_point_at(cam, (float)x, (float)y, g.depth[i]);
             front += fabsf(p.z - 1.0f) < 1e-3f && g.normal[3 * i + 2] < -0.999f;
         }
     }
@@ -223,7 +223,7 @@ int main(void) {
     int mirrored = 0;
     for (size_t i = 0; i < (size_t)W * H; ++i) {
         const uint32_t x = (uint32_t)(i % W), y = (uint32_t)(i / W);
-        const tr_vec3 v = tr_post_world_point(&c1, (float)x, (float)y, g1.depth[i]);
+        const tr_vec3 v = tr_camera_point_at(&c1, (float)x, (float)y, g1.depth[i]);
         if (!(g1.prim[i] >= lo && g1.prim[i] < hi) || !behind_mirror(v)) {
             continue;
         }
@@ -258,7 +258,7 @@ int main(void) {
     reproject_mirror(&c1, &c0, &o1, &o0, lo, hi, &seen_off, &kept_off, &wrong_off);
     for (size_t i = 0; i < (size_t)W * H; ++i) {
         const uint32_t x = (uint32_t)(i % W), y = (uint32_t)(i / W);
-        const tr_vec3 v = tr_post_world_point(&c1, (float)x, (float)y, o1.depth[i]);
+        const tr_vec3 v = tr_camera_point_at(&c1, (float)x, (float)y, o1.depth[i]);
         if (o1.prim[i] >= lo && o1.prim[i] < hi && behind_mirror(v)) {
             unmirrored += fabsf(o1.normal[3 * i + 1] - 1.0f) < 1e-3f;
         }
@@ -269,7 +269,7 @@ int main(void) {
     /* 3: what the camera sees directly is the same either way. */
     for (size_t i = 0; i < (size_t)W * H; ++i) {
         const uint32_t x = (uint32_t)(i % W), y = (uint32_t)(i / W);
-        const tr_vec3 v = tr_post_world_point(&c1, (float)x, (float)y, g1.depth[i]);
+        const tr_vec3 v = tr_camera_point_at(&c1, (float)x, (float)y, g1.depth[i]);
         if (!(mirror_side(v) > 0.05f) || g1.prim[i] == 0u) {
             continue;
         }

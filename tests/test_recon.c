@@ -351,9 +351,10 @@ static void test_reprojection(void) {
             survived += total > 0.0f;
             /* Independently of the taps: where does the point land in A, and is A's
              * surface there nearer than the point (it hid the point)? */
-            const tr_vec3 p = tr_post_world_point(&b, (float)x, (float)y, gb.depth[i]);
+            const tr_vec3 p = tr_camera_point_at(&b, (float)x, (float)y, gb.depth[i]);
             float px, py, dist;
-            if (tr_post_project(&a, p, &px, &py, &dist) && px >= 0 && py >= 0 && px < W && py < H) {
+            if (tr_camera_project(&a, p, &px, &py, &dist) && px >= 0 && py >= 0 && px < W &&
+                py < H) {
                 const size_t j = (size_t)py * W + (size_t)px;
                 if (ga.depth[j] > 0.0f && ga.depth[j] < 0.9f * dist) {
                     ++occluded;

@@ -417,7 +417,7 @@ const char cli_recon_help[] =
     "  --svgf-split         filter direct and indirect light apart\n"
     "  --split-specular     filter diffuse and specular light apart (pt only)\n"
     "  --gradients on|off   temporal gradients: shorten the history where the lighting\n"
-    "                       changed (A-SVGF; CPU only; default off)\n"
+    "                       changed (A-SVGF; default off)\n"
     "  --resolve-emission N emitters' edges traced at N x N rays, 0..16 (default 4)\n"
     "  --resolve-albedo N   albedo's edges traced at N x N rays, 0..8 (default 0: off)\n"
     "  --albedo-alpha A     SVGF's albedo history, frame weight 0..1 (0.35; 0: off)\n"

@@ -14,6 +14,7 @@
 #include "kernel/integrator_bdpt.h"
 #include "kernel/integrator_pt_wf.h"
 #include "kernel/kernel.h"
+#include "kernel/grad_pixel.h"
 #include "kernel/restir_pass.h"
 #include "accel/accel_internal.h"
 #include "accel/cwbvh.h"
@@ -199,6 +200,22 @@ int tr_cl_resolve_emission(tr_cl_context *ctx, const tr_camera *cam, int n, tr_e
     (void)n;
     return tr_error_set(err, TR_STATUS_UNSUPPORTED, "%s", no_opencl);
 }
+int tr_cl_grad_frame(tr_cl_context *ctx, const tr_frame *prev, uint32_t sample, uint32_t count,
+                     const tr_camera *cam, int same, uint32_t frame, const tr_vec3 *motion,
+                     uint32_t motion_count, float amin, uint32_t *changed, tr_error *err) {
+    (void)ctx;
+    (void)prev;
+    (void)sample;
+    (void)count;
+    (void)cam;
+    (void)same;
+    (void)frame;
+    (void)motion;
+    (void)motion_count;
+    (void)amin;
+    *changed = 0;
+    return tr_error_set(err, TR_STATUS_UNSUPPORTED, "%s", no_opencl);
+}
 const char *tr_cl_error_name(int code) {
     (void)code;
     return "CL_UNKNOWN_ERROR";
@@ -328,6 +345,16 @@ struct tr_cl_context {
     cl_kernel gi_t, gi_s; /* ReSTIR GI's passes, and their reservoirs as rs_res' */
     cl_mem rs_gres[3];
     cl_kernel up_emission; /* tr_cl_upscale_emission */
+    /* The temporal gradients (tr_cl_grad_frame): the kernels, the previous frame's luminance
+     * and first primitive and this frame's caps (grad_w x grad_h pixels), the strata's
+     * num and den (two each, for the à-trous steps), the changed count, the replayed
+     * frame's settings and the motion (room for grad_motion_cap ids); grad_valid: the caps
+     * are this film's. */
+    cl_kernel grad_replay, grad_atrous, grad_finish;
+    cl_mem grad_lum, grad_prim, grad_cap, grad_num[2], grad_den[2], grad_changed, grad_frame;
+    cl_mem grad_cams, grad_motion;
+    uint32_t grad_w, grad_h, grad_motion_cap;
+    int grad_valid;
     cl_mem rs_surf[2], rs_res[3], rs_frame;
     uint32_t rs_w, rs_h;
     uint64_t film_reads; /* tr_cl_read_film calls */
@@ -635,6 +662,26 @@ static void release_restir(tr_cl_context *ctx) {
     ctx->rs_w = ctx->rs_h = 0;
 }
 
+/* The temporal gradients' buffers (tr_cl_grad_frame). */
+static void release_grad(tr_cl_context *ctx) {
+    cl_mem *const bufs[10] = {&ctx->grad_lum,    &ctx->grad_prim,    &ctx->grad_cap,
+                              &ctx->grad_num[0], &ctx->grad_num[1],  &ctx->grad_den[0],
+                              &ctx->grad_den[1], &ctx->grad_changed, &ctx->grad_frame,
+                              &ctx->grad_cams};
+    for (int i = 0; i < 10; ++i) {
+        if (*bufs[i]) {
+            clReleaseMemObject(*bufs[i]);
+            *bufs[i] = NULL;
+        }
+    }
+    if (ctx->grad_motion) {
+        clReleaseMemObject(ctx->grad_motion);
+        ctx->grad_motion = NULL;
+    }
+    ctx->grad_w = ctx->grad_h = ctx->grad_motion_cap = 0;
+    ctx->grad_valid = 0;
+}
+
 void tr_cl_close(tr_cl_context *ctx) {
     if (!ctx) {
         return;
@@ -673,6 +720,13 @@ void tr_cl_close(tr_cl_context *ctx) {
     }
     if (ctx->trace_cwbvh) {
         clReleaseKernel(ctx->trace_cwbvh);
+    }
+    release_grad(ctx);
+    const cl_kernel grad_kernels[3] = {ctx->grad_replay, ctx->grad_atrous, ctx->grad_finish};
+    for (int i = 0; i < 3; ++i) {
+        if (grad_kernels[i]) {
+            clReleaseKernel(grad_kernels[i]);
+        }
     }
     release_restir(ctx);
     const cl_kernel restir_kernels[6] = {ctx->restir_t,    ctx->restir_s, ctx->restir_sizes,
@@ -1146,6 +1200,18 @@ tr_cl_context *tr_cl_open_source(int index, const char *source, tr_error *err) {
         cl_fail(err, "clCreateKernel(tr_cl_upscale_emission)", rc);
         goto fail;
     }
+    {
+        static const char *const names[3] = {"tr_cl_grad_replay", "tr_cl_grad_atrous",
+                                             "tr_cl_grad_finish"};
+        cl_kernel *const ks[3] = {&ctx->grad_replay, &ctx->grad_atrous, &ctx->grad_finish};
+        for (int i = 0; i < 3; ++i) {
+            *ks[i] = clCreateKernel(ctx->program, names[i], &rc);
+            if (!*ks[i] && !source) {
+                cl_fail(err, names[i], rc);
+                goto fail;
+            }
+        }
+    }
     if (check_kernel_args(ctx, err) != TR_OK ||
         check_work_group(ctx, wg_given, cpu, err) != TR_OK || wf_open(ctx, err) != TR_OK) {
         goto fail;
@@ -1347,10 +1413,11 @@ int tr_cl_upload_scene(tr_cl_context *ctx, const tr_scene *scene, tr_error *err)
     }
     /* The kernels take the scene's arrays and scene_info first (those of the parts built
      * so far: need_part gives the others theirs). */
-    const cl_kernel kernels[11] = {ctx->kernel,   ctx->resolve,   ctx->trace,     ctx->restir_t,
-                                   ctx->restir_s, ctx->gi_t,      ctx->gi_s,      ctx->up_emission,
-                                   ctx->bdpt,     ctx->vcm_light, ctx->vcm_render};
-    for (int k = 0; k < 11 && rc == TR_OK; ++k) {
+    const cl_kernel kernels[12] = {ctx->kernel,    ctx->resolve,     ctx->trace,
+                                   ctx->restir_t,  ctx->restir_s,    ctx->gi_t,
+                                   ctx->gi_s,      ctx->up_emission, ctx->bdpt,
+                                   ctx->vcm_light, ctx->vcm_render,  ctx->grad_replay};
+    for (int k = 0; k < 12 && rc == TR_OK; ++k) {
         if (kernels[k]) {
             rc = set_scene_args(ctx, kernels[k], err);
         }
@@ -1397,6 +1464,7 @@ static size_t film_buffer_bytes(const tr_cl_context *ctx, int i) {
 }
 
 int tr_cl_clear_film(tr_cl_context *ctx, tr_error *err) {
+    ctx->grad_valid = 0; /* the caps describe the samples that were there */
     if (!ctx->film[FILM_SUM]) {
         return TR_OK;
     }
@@ -2034,6 +2102,7 @@ int tr_cl_supports_integrator(tr_cl_context *ctx, int integrator, tr_error *err)
 }
 
 static int render_frame(tr_cl_context *ctx, const tr_frame *f, uint64_t *rays_out, tr_error *err) {
+    ctx->grad_valid = 0; /* the caps were the last frame's */
     if (!ctx->have_scene) {
         return tr_error_set(err, TR_STATUS_INVALID_OPERATION,
                             "no scene uploaded to the OpenCL device");
@@ -2170,6 +2239,7 @@ int tr_cl_read_film(tr_cl_context *ctx, tr_film *film, tr_error *err) {
 }
 
 int tr_cl_write_film(tr_cl_context *ctx, const tr_film *film, tr_error *err) {
+    ctx->grad_valid = 0; /* the caps describe the samples that were there */
     if ((!ctx->film[FILM_SUM] || film->width != ctx->width || film->height != ctx->height ||
          film->passes != ctx->passes) &&
         make_film(ctx, film->width, film->height, film->passes, err) != TR_OK) {
@@ -2243,6 +2313,7 @@ int tr_cl_get_handles(const tr_cl_context *ctx, tr_cl_handles *out, tr_error *er
     out->direct = ctx->film[FILM_DIRECT];
     out->specular = ctx->film[FILM_SPECULAR];
     out->resolved = ctx->resolved;
+    out->grad_cap = ctx->grad_valid ? ctx->grad_cap : NULL;
     out->width = ctx->width;
     out->height = ctx->height;
     out->passes = ctx->passes;
@@ -2451,6 +2522,218 @@ int tr_cl_upscale_emission(tr_cl_context *ctx, const tr_camera *cam, int n, uint
     const size_t global[2] = {cam->screen_width, cam->screen_height};
     rc = clEnqueueNDRangeKernel(ctx->queue, ctx->up_emission, 2, NULL, global, NULL, 0, NULL, NULL);
     return rc == CL_SUCCESS ? TR_OK : cl_fail(err, "clEnqueueNDRangeKernel(upscale emission)", rc);
+}
+
+/* ---- the temporal gradients (entry.cl's tr_cl_grad_*) ------------------------- */
+
+/* One kernel argument: its size and where its value lies. */
+typedef struct cl_arg_ref {
+    size_t size;
+    const void *ptr;
+} cl_arg_ref;
+
+/* Sets kernel k's arguments base .. base+count-1 from args. */
+static int set_arg_list(cl_kernel k, cl_uint base, const cl_arg_ref *args, int count,
+                        const char *what, tr_error *err) {
+    for (int a = 0; a < count; ++a) {
+        const cl_int rc = clSetKernelArg(k, base + (cl_uint)a, args[a].size, args[a].ptr);
+        if (rc != CL_SUCCESS) {
+            return cl_fail(err, what, rc);
+        }
+    }
+    return TR_OK;
+}
+
+/* The gradients' buffers for a w x h film and room for motion_count motion ids. */
+static int grad_buffers(tr_cl_context *ctx, uint32_t w, uint32_t h, uint32_t motion_count,
+                        tr_error *err) {
+    cl_int rc = CL_SUCCESS;
+    if (ctx->grad_w != w || ctx->grad_h != h || !ctx->grad_cams) {
+        release_grad(ctx);
+        const size_t n = (size_t)w * h;
+        const size_t ns = (size_t)((w + TR_GRAD_STRATUM - 1) / TR_GRAD_STRATUM) *
+                          ((h + TR_GRAD_STRATUM - 1) / TR_GRAD_STRATUM);
+        const struct {
+            cl_mem *mem;
+            size_t bytes;
+        } bufs[10] = {
+            {&ctx->grad_lum, n * sizeof(float)},     {&ctx->grad_prim, n * sizeof(cl_uint)},
+            {&ctx->grad_cap, n * sizeof(float)},     {&ctx->grad_num[0], ns * sizeof(float)},
+            {&ctx->grad_num[1], ns * sizeof(float)}, {&ctx->grad_den[0], ns * sizeof(float)},
+            {&ctx->grad_den[1], ns * sizeof(float)}, {&ctx->grad_changed, sizeof(cl_uint)},
+            {&ctx->grad_frame, sizeof(tr_frame)},    {&ctx->grad_cams, 2 * sizeof(tr_camera)}};
+        for (int i = 0; i < 10; ++i) {
+            *bufs[i].mem =
+                clCreateBuffer(ctx->context, CL_MEM_READ_WRITE, bufs[i].bytes, NULL, &rc);
+            if (!*bufs[i].mem) {
+                release_grad(ctx);
+                return cl_fail(err, "clCreateBuffer(temporal gradients)", rc);
+            }
+        }
+        ctx->grad_w = w;
+        ctx->grad_h = h;
+    }
+    const uint32_t need = motion_count > 0u ? motion_count : 1u;
+    if (!ctx->grad_motion || ctx->grad_motion_cap < need) {
+        if (ctx->grad_motion) {
+            clReleaseMemObject(ctx->grad_motion);
+        }
+        ctx->grad_motion_cap = 0;
+        ctx->grad_motion = clCreateBuffer(ctx->context, CL_MEM_READ_ONLY,
+                                          (size_t)need * 3 * sizeof(float), NULL, &rc);
+        if (!ctx->grad_motion) {
+            return cl_fail(err, "clCreateBuffer(temporal gradients' motion)", rc);
+        }
+        ctx->grad_motion_cap = need;
+    }
+    return TR_OK;
+}
+
+int tr_cl_grad_frame(tr_cl_context *ctx, const tr_frame *prev, uint32_t sample, uint32_t count,
+                     const tr_camera *cam, int same, uint32_t frame, const tr_vec3 *motion,
+                     uint32_t motion_count, float amin, uint32_t *changed, tr_error *err) {
+    *changed = 0;
+    ctx->grad_valid = 0;
+    const uint32_t w = cam->screen_width, h = cam->screen_height;
+    if (!ctx->grad_replay || !ctx->grad_atrous || !ctx->grad_finish || !ctx->have_scene) {
+        return tr_error_set(err, TR_STATUS_INVALID_OPERATION,
+                            "temporal gradients: no scene or no kernel on the OpenCL device");
+    }
+    if (!ctx->film[FILM_SUM] || w != ctx->width || h != ctx->height) {
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "temporal gradients: the camera's %ux%u is not the film's %ux%u", w, h,
+                            ctx->width, ctx->height);
+    }
+    if (prev && (prev->camera.screen_width != w || prev->camera.screen_height != h)) {
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "temporal gradients: the previous frame is not %ux%u", w, h);
+    }
+    if (!motion) {
+        motion_count = 0;
+    }
+    if (grad_buffers(ctx, w, h, motion_count, err) != TR_OK) {
+        return TR_ERR;
+    }
+    const cl_uint sw = (w + TR_GRAD_STRATUM - 1) / TR_GRAD_STRATUM;
+    const cl_uint sh = (h + TR_GRAD_STRATUM - 1) / TR_GRAD_STRATUM;
+    const cl_int has_prim = (ctx->passes & TR_PASS_PRIM) != 0u;
+    const cl_int has_depth = (ctx->passes & TR_PASS_DEPTH) != 0u;
+    const cl_uint mc = motion_count;
+    const tr_camera cams[2] = {*cam, prev ? prev->camera : *cam};
+    cl_int rc = clEnqueueWriteBuffer(ctx->queue, ctx->grad_cams, CL_TRUE, 0, sizeof cams, cams, 0,
+                                     NULL, NULL);
+    if (rc == CL_SUCCESS && mc > 0u) {
+        rc = clEnqueueWriteBuffer(ctx->queue, ctx->grad_motion, CL_TRUE, 0,
+                                  (size_t)mc * 3 * sizeof(float), motion, 0, NULL, NULL);
+    }
+    if (rc != CL_SUCCESS) {
+        return cl_fail(err, "clEnqueueWriteBuffer(temporal gradients)", rc);
+    }
+    cl_uint nchanged = 0;
+    if (prev) {
+        const cl_uint zero = 0, fno = frame, smp = sample, cnt = count, cw = w, ch = h;
+        rc = clEnqueueWriteBuffer(ctx->queue, ctx->grad_frame, CL_TRUE, 0, sizeof *prev, prev, 0,
+                                  NULL, NULL);
+        if (rc == CL_SUCCESS) {
+            rc = clEnqueueWriteBuffer(ctx->queue, ctx->grad_changed, CL_TRUE, 0, sizeof zero, &zero,
+                                      0, NULL, NULL);
+        }
+        if (rc != CL_SUCCESS) {
+            return cl_fail(err, "clEnqueueWriteBuffer(temporal gradients)", rc);
+        }
+        const cl_arg_ref args[16] = {{sizeof(cl_mem), &ctx->grad_frame},
+                                     {sizeof(cl_uint), &cw},
+                                     {sizeof(cl_uint), &ch},
+                                     {sizeof(cl_uint), &sw},
+                                     {sizeof(cl_uint), &sh},
+                                     {sizeof(cl_uint), &fno},
+                                     {sizeof(cl_uint), &smp},
+                                     {sizeof(cl_uint), &cnt},
+                                     {sizeof(cl_mem), &ctx->grad_lum},
+                                     {sizeof(cl_mem), &ctx->grad_prim},
+                                     {sizeof(cl_int), &has_prim},
+                                     {sizeof(cl_mem), &ctx->grad_motion},
+                                     {sizeof(cl_uint), &mc},
+                                     {sizeof(cl_mem), &ctx->grad_num[0]},
+                                     {sizeof(cl_mem), &ctx->grad_den[0]},
+                                     {sizeof(cl_mem), &ctx->grad_changed}};
+        if (set_arg_list(ctx->grad_replay, (cl_uint)ctx->array_count + ARG_FRAME, args, 16,
+                         "clSetKernelArg(tr_cl_grad_replay)", err) != TR_OK) {
+            return TR_ERR;
+        }
+        const size_t global[2] = {sw, sh};
+        rc = clEnqueueNDRangeKernel(ctx->queue, ctx->grad_replay, 2, NULL, global, NULL, 0, NULL,
+                                    NULL);
+        if (rc == CL_SUCCESS) {
+            rc = clEnqueueReadBuffer(ctx->queue, ctx->grad_changed, CL_TRUE, 0, sizeof nchanged,
+                                     &nchanged, 0, NULL, NULL);
+        }
+        if (rc != CL_SUCCESS) {
+            return cl_fail(err, "the gradients' replay", rc);
+        }
+        /* Spread over the strata (1, 2, 4 apart), the result back in [0]. */
+        for (int step = 1; nchanged > 0u && step < (1 << TR_GRAD_ATROUS_STEPS); step *= 2) {
+            const cl_int isw = (cl_int)sw, ish = (cl_int)sh, st = step;
+            const cl_arg_ref a[7] = {{sizeof(cl_mem), &ctx->grad_num[0]},
+                                     {sizeof(cl_mem), &ctx->grad_den[0]},
+                                     {sizeof(cl_int), &isw},
+                                     {sizeof(cl_int), &ish},
+                                     {sizeof(cl_int), &st},
+                                     {sizeof(cl_mem), &ctx->grad_num[1]},
+                                     {sizeof(cl_mem), &ctx->grad_den[1]}};
+            if (set_arg_list(ctx->grad_atrous, 0, a, 7, "clSetKernelArg(tr_cl_grad_atrous)", err) !=
+                TR_OK) {
+                return TR_ERR;
+            }
+            rc = clEnqueueNDRangeKernel(ctx->queue, ctx->grad_atrous, 2, NULL, global, NULL, 0,
+                                        NULL, NULL);
+            if (rc != CL_SUCCESS) {
+                return cl_fail(err, "clEnqueueNDRangeKernel(tr_cl_grad_atrous)", rc);
+            }
+            cl_mem t = ctx->grad_num[0];
+            ctx->grad_num[0] = ctx->grad_num[1];
+            ctx->grad_num[1] = t;
+            t = ctx->grad_den[0];
+            ctx->grad_den[0] = ctx->grad_den[1];
+            ctx->grad_den[1] = t;
+        }
+    }
+    const cl_int isame = same != 0, replayed = prev != NULL, ich = nchanged > 0u;
+    const float am = amin;
+    const cl_arg_ref f[19] = {{sizeof(cl_mem), &ctx->grad_cams},
+                              {sizeof(cl_int), &isame},
+                              {sizeof(cl_int), &replayed},
+                              {sizeof(cl_int), &ich},
+                              {sizeof(cl_uint), &sw},
+                              {sizeof(cl_mem), &ctx->film[FILM_SUM]},
+                              {sizeof(cl_mem), &ctx->film[FILM_COUNT]},
+                              {sizeof(cl_mem), &ctx->film[FILM_DEPTH]},
+                              {sizeof(cl_mem), &ctx->film[FILM_PRIM]},
+                              {sizeof(cl_int), &has_depth},
+                              {sizeof(cl_int), &has_prim},
+                              {sizeof(cl_mem), &ctx->grad_motion},
+                              {sizeof(cl_uint), &mc},
+                              {sizeof(cl_mem), &ctx->grad_num[0]},
+                              {sizeof(cl_mem), &ctx->grad_den[0]},
+                              {sizeof(float), &am},
+                              {sizeof(cl_mem), &ctx->grad_cap},
+                              {sizeof(cl_mem), &ctx->grad_lum},
+                              {sizeof(cl_mem), &ctx->grad_prim}};
+    if (set_arg_list(ctx->grad_finish, 0, f, 19, "clSetKernelArg(tr_cl_grad_finish)", err) !=
+        TR_OK) {
+        return TR_ERR;
+    }
+    const size_t global[2] = {w, h};
+    rc = clEnqueueNDRangeKernel(ctx->queue, ctx->grad_finish, 2, NULL, global, NULL, 0, NULL, NULL);
+    if (rc == CL_SUCCESS) {
+        rc = clFinish(ctx->queue);
+    }
+    if (rc != CL_SUCCESS) {
+        return cl_fail(err, "the gradients' caps", rc);
+    }
+    *changed = nchanged;
+    ctx->grad_valid = prev != NULL;
+    return TR_OK;
 }
 
 /* ---- pt as a wavefront (entry.cl's tr_cl_wf_*, src/kernel/integrator_pt_wf.h) ------- */

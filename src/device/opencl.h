@@ -170,6 +170,20 @@ uint64_t tr_cl_film_reads(const tr_cl_context *ctx);
 int tr_cl_upscale_emission(tr_cl_context *ctx, const tr_camera *cam, int n, uint32_t wl,
                            uint32_t hl, void *emission, void *prev, void *out, tr_error *err);
 
+/* The temporal gradients of a real-time frame where its film lies (src/realtime/gradient.h
+ * on the device: entry.cl's tr_cl_grad_*, grad_pixel.h's steps). With `prev` (the
+ * previous frame's settings and camera, of this film's size) one pixel per stratum
+ * replays its samples sample .. sample+count-1 and the film's pixels get history caps,
+ * which tr_cl_get_handles then hands out as grad_cap until the next frame is rendered;
+ * without, nothing is measured. Either way the film's means become the next call's
+ * previous frame. cam: the camera the film was rendered with; same: whether it equals
+ * prev's; frame: picks the strata's pixels; motion, motion_count: as the reconstruction
+ * takes them (NULL, 0: none); amin: alpha_min. *changed gets the strata whose shading
+ * changed. Waits for the device. */
+int tr_cl_grad_frame(tr_cl_context *ctx, const tr_frame *prev, uint32_t sample, uint32_t count,
+                     const tr_camera *cam, int same, uint32_t frame, const tr_vec3 *motion,
+                     uint32_t motion_count, float amin, uint32_t *changed, tr_error *err);
+
 /* Pretends the device has only `bytes` of global memory (0: its real size), for tests
  * of the out-of-memory path on devices that have plenty. */
 void tr_cl_set_memory_limit(tr_cl_context *ctx, uint64_t bytes);
@@ -188,6 +202,7 @@ typedef struct tr_cl_handles {
     void *direct;   /* the film's direct pass (a placeholder when not kept) */
     void *specular; /* the film's specular pass (a placeholder when not kept) */
     void *resolved; /* tr_cl_resolve_emission's output; NULL without the emission pass */
+    void *grad_cap; /* this frame's history caps (tr_cl_grad_frame), 1 float a pixel; or NULL */
     uint32_t width, height, passes;
 } tr_cl_handles;
 /* Resolves the film's emission pass over each pixel's area (tr_cl_resolve_emission in

@@ -67,11 +67,22 @@ TR_FN tr_ray tr_camera_ray_lens(const tr_camera *c, float x, float y, float jx, 
     return tr_ray_make(v3_add(c->pos, off), v3_normalize(dir), c->near_dist, c->far_dist);
 }
 
-/* The inverse of tr_camera_ray for a pinhole: where point p lies on the screen (*x, *y in
- * pixels, the top-left corner at 0) and its distance from the camera; 0 when p is not in
- * front of it. The reconstruction's reprojection (src/post/filter.h, tr_post_project)
- * does the same arithmetic; this copy is the kernel's, for ReSTIR's temporal reuse on a
- * device (restir_pass.h). */
+/* The world point seen through the centre of pixel (x, y) of `cam` at distance `depth`
+ * along the ray (the depth pass's definition; the ray as tr_camera_ray makes it for a
+ * pinhole). */
+TR_FN tr_vec3 tr_camera_point_at(const tr_camera *cam, float x, float y, float depth) {
+    const float sx = ((x + 0.5f) / (float)cam->screen_width - 0.5f) * cam->canvas_width;
+    const float sy = (0.5f - (y + 0.5f) / (float)cam->screen_height) * cam->canvas_height;
+    const tr_vec3 d =
+        v3_normalize(v3_add(cam->dir, v3_add(v3_scale(cam->right, sx), v3_scale(cam->up, sy))));
+    return v3_add(cam->pos, v3_scale(d, depth));
+}
+
+/* The inverse of tr_camera_point_at: where point p lies on the screen (*x, *y in pixels,
+ * the top-left corner at 0, pixel centres at k + 0.5) and its distance from the camera;
+ * 0 when p lies behind the camera's plane. The reconstruction's reprojection
+ * (src/post/filter.h), ReSTIR's temporal reuse (restir_pass.h) and the temporal
+ * gradients (grad_pixel.h) all project with it. */
 TR_FN int tr_camera_project(const tr_camera *cam, tr_vec3 p, float *x, float *y, float *dist) {
     const tr_vec3 v = v3_sub(p, cam->pos);
     const float z = v3_dot(v, cam->dir);

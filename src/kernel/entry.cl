@@ -8,6 +8,7 @@
 
 #include "cwbvh.h"
 #include "emission.h"
+#include "grad_pixel.h"
 #include "integrator_pt_wf.h"
 #include "kernel.h"
 #include "restir_pass.h"
@@ -125,6 +126,77 @@ tr_cl_resolve_emission(TR_SCENE_ARRAYS(TR_CL_ARRAY_PARAM) __global const uint *s
     resolved[3u * i + 2u] = e.z;
 }
 
+/* The temporal gradients (grad_pixel.h) where the film lies, as src/realtime/gradient.c
+ * computes them on the host; src/device/opencl.c's tr_cl_grad_frame runs the three.
+ * tr_cl_grad_replay: one work item per stratum (sw x sh of them), replaying samples
+ * sample .. sample+count-1 of the previous frame `frame` at the stratum's pixel of the
+ * w x h image into num and den; counts the changed strata in *changed. */
+__kernel void tr_cl_grad_replay(TR_SCENE_ARRAYS(TR_CL_ARRAY_PARAM) __global const uint *scene_info,
+                                __global const tr_frame *frame, uint w, uint h, uint sw, uint sh,
+                                uint frame_no, uint sample, uint count,
+                                __global const float *prev_lum, __global const uint *prev_prim,
+                                int has_prim, __global const float *motion, uint motion_count,
+                                __global float *num, __global float *den, __global uint *changed) {
+    const uint sx = (uint)get_global_id(0), sy = (uint)get_global_id(1);
+    if (sx >= sw || sy >= sh) {
+        return;
+    }
+    tr_scene_view s;
+    TR_CL_SCENE_VIEW(s);
+    const tr_frame f = *frame;
+    uint x, y;
+    tr_grad_stratum_pixel(sw, w, h, sx, sy, frame_no, &x, &y);
+    const uint i = y * w + x, k = sy * sw + sx;
+    float n, d;
+    if (tr_grad_replay_stratum(&s, &f, x, y, sample, count, prev_lum[i], prev_prim[i], has_prim,
+                               motion_count ? motion : 0, motion_count, &n, &d)) {
+        atomic_inc(changed);
+    }
+    num[k] = n;
+    den[k] = d;
+}
+
+/* One à-trous step (tr_grad_atrous_at) of num and den over the sw x sh strata. */
+__kernel void tr_cl_grad_atrous(__global const float *num, __global const float *den, int sw,
+                                int sh, int step, __global float *num_out,
+                                __global float *den_out) {
+    const int x = (int)get_global_id(0), y = (int)get_global_id(1);
+    if (x >= sw || y >= sh) {
+        return;
+    }
+    num_out[y * sw + x] = tr_grad_atrous_at(num, sw, sh, x, y, step);
+    den_out[y * sw + x] = tr_grad_atrous_at(den, sw, sh, x, y, step);
+}
+
+/* One work item per pixel of cams[0]'s screen: with `replayed`, its history cap from the
+ * filtered strata (tr_grad_cap_pixel, cams[1] the previous camera) into cap; then this
+ * frame's mean luminance and first primitive into prev_lum and prev_prim, for the next
+ * frame's replay. has_depth, has_prim: whether the film keeps those passes. */
+__kernel void tr_cl_grad_finish(__global const tr_camera *cams, int same, int replayed, int changed,
+                                uint sw, __global const float *film_sum,
+                                __global const uint *film_count, __global const float *film_depth,
+                                __global const uint *film_prim, int has_depth, int has_prim,
+                                __global const float *motion, uint motion_count,
+                                __global const float *num, __global const float *den, float amin,
+                                __global float *cap, __global float *prev_lum,
+                                __global uint *prev_prim) {
+    const tr_camera cam = cams[0], pc = cams[1];
+    const uint x = (uint)get_global_id(0), y = (uint)get_global_id(1);
+    if (x >= cam.screen_width || y >= cam.screen_height) {
+        return;
+    }
+    const uint i = y * cam.screen_width + x;
+    const uint c = film_count[i];
+    const uint id = has_prim ? film_prim[i] : 0u;
+    if (replayed) {
+        const float dep = has_depth && c ? film_depth[i] / (float)c : 0.0f;
+        cap[i] = tr_grad_cap_pixel(&cam, &pc, same, x, y, dep, id, motion_count ? motion : 0,
+                                   motion_count, changed, num, den, sw, amin);
+    }
+    prev_lum[i] = tr_grad_mean_luminance(film_sum + 3u * i, c);
+    prev_prim[i] = id;
+}
+
 #endif
 
 #if TR_CL_HAS(2)
@@ -224,11 +296,11 @@ __kernel void tr_cl_restir_gi_spatial(TR_SCENE_ARRAYS(TR_CL_ARRAY_PARAM)
  * the samples (tr_emission_missed) and its traced pixel sees none, traces n x n first-hit
  * rays through the output's camera (the frame's); any other takes its traced pixel's
  * emission. One work item per output pixel. */
-__kernel void
-tr_cl_upscale_emission(TR_SCENE_ARRAYS(TR_CL_ARRAY_PARAM) __global const uint *scene_info,
-                       __global const tr_frame *frame, int wl, int hl,
-                       __global const float *emission, int have_prev, __global const float *prev,
-                       int n, __global float *out) {
+__kernel void tr_cl_upscale_emission(TR_SCENE_ARRAYS(TR_CL_ARRAY_PARAM)
+                                         __global const uint *scene_info,
+                                     __global const tr_frame *frame, int wl, int hl,
+                                     __global const float *emission, int have_prev,
+                                     __global const float *prev, int n, __global float *out) {
     const tr_frame f = *frame;
     const int w = (int)f.camera.screen_width, h = (int)f.camera.screen_height;
     const int x = (int)get_global_id(0), y = (int)get_global_id(1);
@@ -391,8 +463,7 @@ __kernel void tr_cl_wf_accumulate(__global const tr_frame *frame, __global float
                                   __global uint *film_prim, __global float *film_sq,
                                   __global float *film_direct, __global float *film_emission,
                                   __global float *film_specular, __global uint *rays_per_row,
-                                  __global const tr_pt_wf_path *paths,
-                                  uint g0, uint k, uint n) {
+                                  __global const tr_pt_wf_path *paths, uint g0, uint k, uint n) {
     const uint j = (uint)get_global_id(0);
     if (j >= n) {
         return;
@@ -441,8 +512,8 @@ __kernel void tr_cl_wf_accumulate(__global const tr_frame *frame, __global float
     __global const uint *scene_info, __global const tr_frame *frame, __global float *film_sum,     \
         __global uint *film_count, __global float *film_albedo, __global float *film_normal,       \
         __global float *film_depth, __global uint *film_prim, __global float *film_sq,             \
-        __global float *film_direct, __global float *film_emission,                                \
-        __global float *film_specular, __global uint *rays_per_row, __global long *splat
+        __global float *film_direct, __global float *film_emission, __global float *film_specular, \
+        __global uint *rays_per_row, __global long *splat
 
 /* The splat sums of frame f's rectangle. */
 static tr_bdpt_splat tr_cl_splat(const tr_frame *f, __global long *splat) {
@@ -527,8 +598,7 @@ __kernel void tr_cl_render_vcm(TR_CL_BIDIR_PARAMS, __global const tr_vcm_params 
     const tr_bdpt_splat sp = tr_cl_splat(&f, splat);
     const tr_vcm_params p = *params;
     const tr_vcm_grid g = tr_vcm_grid_of(&p, cell_first, sorted);
-    const uint rays =
-        tr_vcm_device_camera(&s, &f, &film, &sp, &g, p.sample, gx0 + gx, gy0 + gy);
+    const uint rays = tr_vcm_device_camera(&s, &f, &film, &sp, &g, p.sample, gx0 + gx, gy0 + gy);
     atomic_add(&rays_per_row[gy], rays);
 }
 

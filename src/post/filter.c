@@ -921,12 +921,12 @@ static void svgf_variance(const post_ws *ws, const float *lum, const float *mome
  * camera rays a pixel, in scalar, branching code. The host instead computes every
  * frame's points once, in a loop gcc vectorises, and keeps them: the next frame's taps
  * read them instead of recomputing them (the same operations on the same operands as
- * tr_post_world_point, so the same bits). The projection into the previous camera is
+ * tr_camera_point_at, so the same bits). The projection into the previous camera is
  * vectorised along with them. What is left per pixel - the taps' tests
  * (tr_post_consistent) and the blend (tr_post_temporal_blend) - are the operator's own
  * functions, in its order; test_recon checks the host against tr_post_temporal_pixel. */
 
-/* Rows [y0, y1): each pixel's surface point (tr_post_world_point at its depth) into
+/* Rows [y0, y1): each pixel's surface point (tr_camera_point_at at its depth) into
  * pt's planes. Branch-free, so that gcc vectorises it (as the next one). */
 TR_POST_CLONES static void temporal_points_rows(const tr_camera *cam, const float *depth,
                                                 float *const pt[3], int y0, int y1) {
@@ -937,7 +937,7 @@ TR_POST_CLONES static void temporal_points_rows(const tr_camera *cam, const floa
     for (int y = y0; y < y1; ++y) {
         for (int x = 0; x < w; ++x) {
             const int i = y * w + x;
-            const tr_vec3 p = tr_post_world_point(&c, (float)x, (float)y, dep[i]);
+            const tr_vec3 p = tr_camera_point_at(&c, (float)x, (float)y, dep[i]);
             px[i] = p.x;
             py[i] = p.y;
             pz[i] = p.z;
@@ -946,7 +946,7 @@ TR_POST_CLONES static void temporal_points_rows(const tr_camera *cam, const floa
 }
 
 /* Rows [y0, y1) of points pt (at depths depth) projected into the previous camera pc:
- * tr_post_project's position less 0.5 (fx, fy; fx -2 where tr_post_reproject stops
+ * tr_camera_project's position less 0.5 (fx, fy; fx -2 where tr_post_reproject stops
  * early: nothing hit, behind the camera or off screen) and the distance. */
 TR_POST_CLONES static void temporal_project_rows(const tr_camera *pc, int w,
                                                  const float *restrict dep,
@@ -964,7 +964,7 @@ TR_POST_CLONES static void temporal_project_rows(const tr_camera *pc, int w,
     for (int y = y0; y < y1; ++y) {
         for (int x = 0; x < w; ++x) {
             const int i = y * w + x;
-            /* tr_post_project's arithmetic, in its order, its test folded into the flag. */
+            /* tr_camera_project's arithmetic, in its order, its test folded into the flag. */
             const float vx = px[i] - ox, vy = py[i] - oy, vz = pz[i] - oz;
             const float z = vx * dx + vy * dy + vz * dz;
             const float cx = (vx * rx + vy * ry + vz * rz) / z;

@@ -14,6 +14,7 @@
 #ifndef TR_POST_FILTER_H
 #define TR_POST_FILTER_H
 
+#include "../kernel/camera.h"
 #include "../kernel/compat.h"
 #include "../kernel/types.h"
 #include "../kernel/vec.h"
@@ -67,33 +68,6 @@ TR_FN float tr_post_luminance(float r, float g, float b) {
     return 0.2126f * r + 0.7152f * g + 0.0722f * b;
 }
 
-/* The world point seen through the centre of pixel (x, y) of `cam` at distance `depth`
- * along the ray (the depth pass's definition; the ray as src/kernel/camera.h makes it). */
-TR_FN tr_vec3 tr_post_world_point(const tr_camera *cam, float x, float y, float depth) {
-    const float sx = ((x + 0.5f) / (float)cam->screen_width - 0.5f) * cam->canvas_width;
-    const float sy = (0.5f - (y + 0.5f) / (float)cam->screen_height) * cam->canvas_height;
-    const tr_vec3 d =
-        v3_normalize(v3_add(cam->dir, v3_add(v3_scale(cam->right, sx), v3_scale(cam->up, sy))));
-    return v3_add(cam->pos, v3_scale(d, depth));
-}
-
-/* Projects world point p into `cam`: the continuous screen position (pixel centres at
- * k + 0.5) in out_xy and the distance from the camera in *dist; returns 0 when p lies
- * behind the camera's plane. */
-TR_FN int tr_post_project(const tr_camera *cam, tr_vec3 p, float *out_x, float *out_y,
-                          float *dist) {
-    const tr_vec3 v = v3_sub(p, cam->pos);
-    const float z = v3_dot(v, cam->dir);
-    if (!(z > 1e-6f)) {
-        return 0;
-    }
-    const float cx = v3_dot(v, cam->right) / z, cy = v3_dot(v, cam->up) / z;
-    *out_x = (cx / cam->canvas_width + 0.5f) * (float)cam->screen_width;
-    *out_y = (0.5f - cy / cam->canvas_height) * (float)cam->screen_height;
-    *dist = tr_sqrtf(v3_dot(v, v));
-    return 1;
-}
-
 /* The plane test's tolerance, as a fraction of the distance, for a pixel whose passes were
  * replaced through a curved delta surface or a refraction (TR_PRIM_PSR_CURVED, the id's top
  * bit). */
@@ -128,7 +102,7 @@ TR_FN int tr_post_consistent(uint32_t prim, tr_vec3 p, tr_vec3 n, float dist, ui
 TR_FN int tr_post_footprint(const tr_camera *prev, tr_vec3 p, int *ix, int *iy, float *ax,
                             float *ay, float *dist) {
     float px, py;
-    if (!tr_post_project(prev, p, &px, &py, dist)) {
+    if (!tr_camera_project(prev, p, &px, &py, dist)) {
         return 0;
     }
     const float fx = px - 0.5f, fy = py - 0.5f;
@@ -172,7 +146,7 @@ TR_FN float tr_post_reproject_moving(const tr_camera *cam, const tr_camera *prev
     if (!(depth > 0.0f)) {
         return 0.0f; /* nothing hit: no point to follow */
     }
-    const tr_vec3 p = v3_sub(tr_post_world_point(cam, (float)x, (float)y, depth), motion);
+    const tr_vec3 p = v3_sub(tr_camera_point_at(cam, (float)x, (float)y, depth), motion);
     int ix, iy;
     float ax, ay, dist;
     if (!tr_post_footprint(prev, p, &ix, &iy, &ax, &ay, &dist)) {
@@ -192,7 +166,7 @@ TR_FN float tr_post_reproject_moving(const tr_camera *cam, const tr_camera *prev
             continue;
         }
         const tr_vec3 pn = v3(prev_normal[3 * i], prev_normal[3 * i + 1], prev_normal[3 * i + 2]);
-        const tr_vec3 q = tr_post_world_point(prev, (float)tx, (float)ty, prev_depth[i]);
+        const tr_vec3 q = tr_camera_point_at(prev, (float)tx, (float)ty, prev_depth[i]);
         if (!tr_post_consistent(prim, p, n, dist, prev_prim[i], q, pn)) {
             continue;
         }
@@ -228,14 +202,13 @@ TR_FN float tr_post_reproject_virtual(const tr_camera *cam, const tr_camera *pre
                                       TR_CONST_GLOBAL uint32_t *prev_prim, int *x0, int *y0,
                                       float w[4]) {
     if (depth > 0.0f && virt > 0.0f) {
-        const tr_vec3 p = v3_sub(tr_post_world_point(cam, (float)x, (float)y, depth), motion);
-        const tr_vec3 v =
-            v3_sub(tr_post_world_point(cam, (float)x, (float)y, depth + virt), motion);
+        const tr_vec3 p = v3_sub(tr_camera_point_at(cam, (float)x, (float)y, depth), motion);
+        const tr_vec3 v = v3_sub(tr_camera_point_at(cam, (float)x, (float)y, depth + virt), motion);
         const tr_vec3 pd = v3_sub(p, prev->pos);
         const float dist = tr_sqrtf(v3_dot(pd, pd));
         float px, py, vd;
         const int pw = (int)prev->screen_width, ph = (int)prev->screen_height;
-        if (tr_post_project(prev, v, &px, &py, &vd) && px - 0.5f > -1.0f && py - 0.5f > -1.0f &&
+        if (tr_camera_project(prev, v, &px, &py, &vd) && px - 0.5f > -1.0f && py - 0.5f > -1.0f &&
             px - 0.5f < (float)pw && py - 0.5f < (float)ph) {
             const float fx = px - 0.5f, fy = py - 0.5f;
             const int ix = fx < 0.0f ? -1 : (int)fx, iy = fy < 0.0f ? -1 : (int)fy;
@@ -253,7 +226,7 @@ TR_FN float tr_post_reproject_virtual(const tr_camera *cam, const tr_camera *pre
                 }
                 const tr_vec3 pn =
                     v3(prev_normal[3 * i], prev_normal[3 * i + 1], prev_normal[3 * i + 2]);
-                const tr_vec3 q = tr_post_world_point(prev, (float)tx, (float)ty, prev_depth[i]);
+                const tr_vec3 q = tr_camera_point_at(prev, (float)tx, (float)ty, prev_depth[i]);
                 if (!tr_post_consistent(prim, p, n, dist, prev_prim[i], q, pn)) {
                     continue;
                 }
@@ -803,7 +776,7 @@ TR_FN void tr_post_spec_split_pixel(const tr_camera *cam, uint32_t x, uint32_t y
                                     uint32_t prim, TR_CONST_GLOBAL float *sp,
                                     TR_CONST_GLOBAL float *dfg, TR_CONST_GLOBAL float *color,
                                     float alb[3], float illum[3], float diffuse[3]) {
-    const tr_vec3 d = v3_sub(tr_post_world_point(cam, (float)x, (float)y, 1.0f), cam->pos);
+    const tr_vec3 d = v3_sub(tr_camera_point_at(cam, (float)x, (float)y, 1.0f), cam->pos);
     float a, b;
     tr_post_dfg_at(dfg, tr_fabsf(v3_dot(n, d)), sp[6], &a, &b);
     const int lobe = sp[3] > 0.0f || sp[4] > 0.0f || sp[5] > 0.0f;

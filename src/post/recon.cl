@@ -110,6 +110,14 @@ __kernel void tr_recon_spec_prepare(__global const tr_camera *cams, __global con
     }
 }
 
+/* A pixel's history cap: tr_post_max_len's, lowered to the temporal gradients' len_cap[i]
+ * where the shading changed (have_cap: the frame has them; the host's tr_recon.len_cap). */
+static float tr_recon_cap(tr_vec3 m, float max_len, float max_len_moving,
+                          __global const float *len_cap, int have_cap, uint i) {
+    const float cap = tr_post_max_len(m, max_len, max_len_moving);
+    return have_cap ? tr_fminf(cap, len_cap[i]) : cap;
+}
+
 /* The specular part's temporal stage, filter.c's spec_temporal: illum_s reprojected by
  * virtual motion (the reflection's distance weighed by the roughness) with a history cap
  * from the roughness, or a fresh history where fewer than 5 % of the taps' weight survive
@@ -121,7 +129,8 @@ __kernel void tr_recon_spec_temporal(
     __global const float *prev_len, __global const float *prev_depth,
     __global const float *prev_normal, __global const uint *prev_prim, __global const float *motion,
     uint motion_count, int have_history, float alpha_min, float max_len, float max_len_moving,
-    __global float *out_color, __global float *out_moments, __global float *out_len) {
+    __global float *out_color, __global float *out_moments, __global float *out_len,
+    __global const float *len_cap, int have_cap) {
     const tr_camera cam = cams[0], prev = cams[1];
     const uint x = (uint)get_global_id(0), y = (uint)get_global_id(1);
     const int w = (int)cam.screen_width;
@@ -135,10 +144,10 @@ __kernel void tr_recon_spec_temporal(
         id < motion_count ? v3(motion[3 * id], motion[3 * id + 1], motion[3 * id + 2]) : v3s(0.0f);
     const tr_vec3 n = v3(normal[3 * i], normal[3 * i + 1], normal[3 * i + 2]);
     float oc[3], om[2], ol;
-    tr_post_spec_temporal_pixel(&cam, &prev, x, y, w, c, n, depth[i], id, m, specular[8 * i + 6],
-                                specular[8 * i + 7], have_history, prev_color, prev_moments,
-                                prev_len, prev_depth, prev_normal, prev_prim, alpha_min,
-                                tr_post_max_len(m, max_len, max_len_moving), oc, om, &ol);
+    tr_post_spec_temporal_pixel(
+        &cam, &prev, x, y, w, c, n, depth[i], id, m, specular[8 * i + 6], specular[8 * i + 7],
+        have_history, prev_color, prev_moments, prev_len, prev_depth, prev_normal, prev_prim,
+        alpha_min, tr_recon_cap(m, max_len, max_len_moving, len_cap, have_cap, i), oc, om, &ol);
     out_color[3 * i] = oc[0];
     out_color[3 * i + 1] = oc[1];
     out_color[3 * i + 2] = oc[2];
@@ -165,7 +174,8 @@ __kernel void tr_recon_temporal(__global const tr_camera *cams, __global const f
                                 float max_len_moving, __global float *out_color,
                                 __global float *out_moments, __global float *out_len,
                                 __global const float *albedo, __global const float *prev_albedo,
-                                int have_albedo, float albedo_alpha, __global float *out_albedo) {
+                                int have_albedo, float albedo_alpha, __global float *out_albedo,
+                                __global const float *len_cap, int have_cap) {
     const tr_camera cam = cams[0], prev = cams[1];
     const uint x = (uint)get_global_id(0), y = (uint)get_global_id(1);
     if (x >= cam.screen_width || y >= cam.screen_height) {
@@ -190,7 +200,8 @@ __kernel void tr_recon_temporal(__global const tr_camera *cams, __global const f
         total = tr_post_temporal_pixel_taps(
             &cam, &prev, x, y, mv, illum, normal, depth, prim, prev_color, prev_moments, prev_len,
             prev_depth, prev_normal, prev_prim, alpha_min,
-            tr_post_max_len(mv, max_len, max_len_moving), c, m, &len, w, &x0, &y0);
+            tr_recon_cap(mv, max_len, max_len_moving, len_cap, have_cap, i), c, m, &len, w, &x0,
+            &y0);
     }
     out_color[3 * i] = c[0];
     out_color[3 * i + 1] = c[1];

@@ -119,6 +119,7 @@ typedef struct recon_cl {
     int hist_split;      /* the history was kept with direct and indirect apart */
     cl_mem ss[SS_COUNT]; /* made when a frame first has the specular pass */
     int has_specular;    /* the frame in the buffers has its specular pass in ss[SS_PASS] */
+    cl_mem len_cap;      /* the temporal gradients' history caps of the frame, or NULL */
     int hist_spec;       /* the history was kept with diffuse and specular apart */
     int modulated;       /* the albedo buffer it was multiplied by */
     cl_mem added;        /* the emission the reconstruction added to it (NULL: none) */
@@ -431,6 +432,7 @@ static int cl_from_film(tr_recon_device *r, tr_error *err) {
     c->has_emission = (h.passes & TR_PASS_EMISSION) != 0u;
     c->has_direct = (h.passes & TR_PASS_DIRECT) != 0u;
     c->has_specular = (h.passes & TR_PASS_SPECULAR) != 0u;
+    c->len_cap = (cl_mem)h.grad_cap;
     const int w = (int)r->width, ht = (int)r->height;
     if ((c->has_direct && split_buffers(c, (size_t)w * ht, err) != TR_OK) ||
         (c->has_specular && spec_buffers(c, (size_t)w * ht, err) != TR_OK)) {
@@ -450,6 +452,7 @@ static int cl_upload(tr_recon_device *r, const tr_gbuffer *g, tr_error *err) {
     recon_cl *c = r->cl;
     c->has_direct = g->has_direct;     /* for svgf_split */
     c->has_specular = g->has_specular; /* for svgf_specular */
+    c->len_cap = NULL;                 /* the host's frame brings no gradients */
     if ((g->has_direct && split_buffers(c, n, err) != TR_OK) ||
         (g->has_specular && spec_buffers(c, n, err) != TR_OK)) {
         return TR_ERR;
@@ -600,14 +603,17 @@ static int cl_frame(tr_recon_device *r, const tr_camera *cam, const tr_vec3 *mot
     }
     /* SVGF's albedo history (albedo_alpha), where the host's temporal stage keeps it. */
     const int ha = p->albedo_alpha > 0.0f ? B_HA0 + next : B_ALBEDO;
-    rc =
-        rc ? rc
-           : RUN(c, K_TEMPORAL, w, h, err, KB(c, B_CAMS), KB(c, B_ILLUM), KB(c, B_NORMAL),
-                 KB(c, B_DEPTH), KB(c, B_PRIM), KB(c, B_HC0 + prev), KB(c, B_HM0 + prev),
-                 KB(c, B_HL0 + prev), KB(c, B_HDEPTH), KB(c, B_HNORMAL), KB(c, B_HPRIM), KM(mbuf),
-                 KU(motion_count), KI(hist), KF(p->alpha_min), KF(p->max_len),
-                 KF(p->max_len_moving), KB(c, hc), KB(c, hm), KB(c, hl), KB(c, B_ALBEDO),
-                 KB(c, B_HA0 + prev), KI(c->have_albedo), KF(p->albedo_alpha), KB(c, B_HA0 + next));
+    /* The temporal gradients' caps, where the device measured them for this frame. */
+    const cl_mem cap = c->len_cap ? c->len_cap : c->b[B_DEPTH];
+    const int have_cap = c->len_cap != NULL;
+    rc = rc ? rc
+            : RUN(c, K_TEMPORAL, w, h, err, KB(c, B_CAMS), KB(c, B_ILLUM), KB(c, B_NORMAL),
+                  KB(c, B_DEPTH), KB(c, B_PRIM), KB(c, B_HC0 + prev), KB(c, B_HM0 + prev),
+                  KB(c, B_HL0 + prev), KB(c, B_HDEPTH), KB(c, B_HNORMAL), KB(c, B_HPRIM), KM(mbuf),
+                  KU(motion_count), KI(hist), KF(p->alpha_min), KF(p->max_len),
+                  KF(p->max_len_moving), KB(c, hc), KB(c, hm), KB(c, hl), KB(c, B_ALBEDO),
+                  KB(c, B_HA0 + prev), KI(c->have_albedo), KF(p->albedo_alpha), KB(c, B_HA0 + next),
+                  KM(cap), KI(have_cap));
     if (rc == TR_OK && split) {
         /* The direct part through the same taps: the lengths it writes are the sum's. No
          * albedo history here (albedo_alpha 0): the sum's call kept it. */
@@ -617,7 +623,7 @@ static int cl_frame(tr_recon_device *r, const tr_camera *cam, const tr_vec3 *mot
                 KB(c, B_HL0 + prev), KB(c, B_HDEPTH), KB(c, B_HNORMAL), KB(c, B_HPRIM), KM(mbuf),
                 KU(motion_count), KI(hist), KF(p->alpha_min), KF(p->max_len), KF(p->max_len_moving),
                 KM(c->sp[SP_HD0 + next]), KM(c->sp[SP_HDM0 + next]), KB(c, hl), KB(c, B_ALBEDO),
-                KB(c, B_HA0 + prev), KI(0), KF(0.0f), KB(c, B_HA0 + next));
+                KB(c, B_HA0 + prev), KI(0), KF(0.0f), KB(c, B_HA0 + next), KM(cap), KI(have_cap));
     }
     if (rc == TR_OK && spec) {
         rc = RUN(c, K_SPEC_TEMPORAL, w, h, err, KB(c, B_CAMS), KM(c->ss[SS_ILLUM]), KB(c, B_NORMAL),
@@ -625,7 +631,7 @@ static int cl_frame(tr_recon_device *r, const tr_camera *cam, const tr_vec3 *mot
                  KM(c->ss[SS_HSM0 + prev]), KM(c->ss[SS_HSL0 + prev]), KB(c, B_HDEPTH),
                  KB(c, B_HNORMAL), KB(c, B_HPRIM), KM(mbuf), KU(motion_count), KI(c->have_history),
                  KF(p->alpha_min), KF(p->max_len), KF(p->max_len_moving), KM(c->ss[SS_HS0 + next]),
-                 KM(c->ss[SS_HSM0 + next]), KM(c->ss[SS_HSL0 + next]));
+                 KM(c->ss[SS_HSM0 + next]), KM(c->ss[SS_HSL0 + next]), KM(cap), KI(have_cap));
     }
     c->hist_split = split;
     c->hist_spec = spec;

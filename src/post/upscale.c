@@ -184,7 +184,7 @@ up_reproject(const up_ctx *restrict c, up_run *restrict r, int y, int x0, int n)
     const int w = c->w, h = c->h, wl = c->wl, hl = c->hl;
     int ly = (int)(((float)y + 0.5f) * c->syr);
     ly = ly < hl - 1 ? ly : hl - 1;
-    /* The vertical part of the row's camera ray (tr_post_world_point). */
+    /* The vertical part of the row's camera ray (tr_camera_point_at). */
     const float sy = (0.5f - ((float)y + 0.5f) / (float)cam->screen_height) * cam->canvas_height;
     const float ux = cam->up.x * sy, uy = cam->up.y * sy, uz = cam->up.z * sy;
     const float cy = (float)y + 0.5f;
@@ -215,7 +215,7 @@ up_reproject(const up_ctx *restrict c, up_run *restrict r, int y, int x0, int n)
         px = px - m0;
         py = py - m1;
         pz = pz - m2;
-        /* tr_post_project into the previous camera. */
+        /* tr_camera_project into the previous camera. */
         const float vx = px - pc->pos.x, vy = py - pc->pos.y, vz = pz - pc->pos.z;
         const float z = vx * pc->dir.x + vy * pc->dir.y + vz * pc->dir.z;
         const int front = z > 1e-6f;
@@ -498,7 +498,7 @@ int tr_upscale_frame(tr_upscale *u, const tr_upscale_input *in, const tr_camera 
         up_box_rows(in->color, wl, hl, box, y, y + 1);
     }
     /* Per column: the traced pixels its samples can come from (the operator's bounds) and
-     * its camera ray's horizontal part (tr_post_world_point's). */
+     * its camera ray's horizontal part (tr_camera_point_at's). */
     int *cols = malloc(3 * (size_t)w * sizeof *cols);
     float *ray = malloc(3 * (size_t)w * sizeof *ray);
     if (!cols || !ray) {

@@ -247,12 +247,12 @@ TR_FN void tr_upscale_pixel(const tr_camera *cam, const tr_camera *prev, int x, 
     int have = 0;
     float hv[3] = {0.0f, 0.0f, 0.0f}, len = 0.0f, moved = 0.0f;
     if (hcol) {
-        tr_vec3 p = tr_post_world_point(cam, (float)x, (float)y, d > 0.0f ? d : 1e6f);
+        tr_vec3 p = tr_camera_point_at(cam, (float)x, (float)y, d > 0.0f ? d : 1e6f);
         if (motion && d > 0.0f && id < motion_count) {
             p = v3_sub(p, v3(motion[3 * id], motion[3 * id + 1], motion[3 * id + 2]));
         }
         float qx, qy, dist;
-        if (tr_post_project(prev, p, &qx, &qy, &dist) && qx >= 0.0f && qy >= 0.0f &&
+        if (tr_camera_project(prev, p, &qx, &qy, &dist) && qx >= 0.0f && qy >= 0.0f &&
             qx < (float)w && qy < (float)h) {
             const int nx = (int)qx, ny = (int)qy, j = ny * w + nx;
             const float mx = qx - cx, my = qy - cy;

@@ -56,7 +56,7 @@ static void pixel_passes(const tr_film *film, size_t i, float *depth, tr_vec3 *n
 }
 
 /* tr_post_reproject's total weight for the point p of pixel (x, y) (normal n, primitive
- * prim), the previous frame's points taken from f->point (tr_post_world_point of each
+ * prim), the previous frame's points taken from f->point (tr_camera_point_at of each
  * previous pixel at its depth, computed once in tr_fresh_remember): the same operations
  * on the same operands, so the same number, without recomputing four rays per pixel. */
 static float reproject_total(const tr_fresh *f, tr_vec3 p, tr_vec3 n, uint32_t prim) {
@@ -110,7 +110,7 @@ int tr_fresh_mask(tr_fresh *f, const tr_film *film, const tr_camera *cam, const 
             int lost = 0;
             if (depth > 0.0f) {
                 /* The point the temporal stage reprojects, kept for tr_fresh_remember. */
-                const tr_vec3 p = tr_post_world_point(cam, (float)x, (float)y, depth);
+                const tr_vec3 p = tr_camera_point_at(cam, (float)x, (float)y, depth);
                 f->cur[3 * i] = p.x;
                 f->cur[3 * i + 1] = p.y;
                 f->cur[3 * i + 2] = p.z;
@@ -166,7 +166,7 @@ int tr_fresh_remember(tr_fresh *f, const tr_film *film, const tr_camera *cam, tr
         f->normal[3 * i + 2] = nn.z;
         if (f->mask[i] && f->depth[i] > 0.0f) {
             /* Traced again: its depth is the mean of more samples now. */
-            const tr_vec3 p = tr_post_world_point(cam, (float)(i % w), (float)(i / w), f->depth[i]);
+            const tr_vec3 p = tr_camera_point_at(cam, (float)(i % w), (float)(i / w), f->depth[i]);
             f->cur[3 * i] = p.x;
             f->cur[3 * i + 1] = p.y;
             f->cur[3 * i + 2] = p.z;

@@ -29,7 +29,7 @@ typedef struct tr_fresh {
     uint32_t width, height;
     float *depth, *normal; /* the previous frame's passes (means), 1 and 3 per pixel */
     uint32_t *prim;
-    float *point;   /* its pixels' surface points (tr_post_world_point), 3 per pixel */
+    float *point;   /* its pixels' surface points (tr_camera_point_at), 3 per pixel */
     float *cur;     /* this frame's, 3 per pixel */
     tr_camera cam;  /* its camera */
     int have_prev;  /* depth, normal, prim and cam hold the previous frame */

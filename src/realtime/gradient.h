@@ -10,16 +10,12 @@
 
 #include <stdint.h>
 
+#include "kernel/grad_pixel.h"
 #include "trac0r/camera.h"
 #include "trac0r/error.h"
 #include "trac0r/film.h"
 #include "trac0r/render.h"
 #include "trac0r/scene.h"
-
-/* The stratum's side in pixels: one pixel in 9 is replayed. */
-#define TR_GRAD_STRATUM 3
-/* The à-trous steps that spread the strata's gradients (1, 2, 4 strata apart). */
-#define TR_GRAD_ATROUS_STEPS 3
 
 typedef struct tr_grad {
     uint32_t width, height; /* the frames' size (0: none yet) */
@@ -56,5 +52,16 @@ int tr_grad_frame(tr_grad *g, const tr_scene *scene, const tr_film *film, const 
                   const tr_render_config *cfg, uint32_t sample, uint32_t count, uint32_t frame,
                   const tr_vec3 *motion, uint32_t motion_count, float alpha_min, int threads,
                   tr_error *err);
+
+/* tr_grad_frame where the film lies: the device's film (an OpenCL device; rendered
+ * through cam with cfg) measured by the device's kernels (src/device/opencl.h,
+ * tr_cl_grad_frame), which keep the previous frame and hand the caps to the device's
+ * reconstruction of this film. g keeps the settings and the counts (valid, changed,
+ * replayed, ms); its per-pixel arrays stay empty. */
+struct tr_device;
+int tr_grad_frame_device(tr_grad *g, struct tr_device *dev, const tr_camera *cam,
+                         const tr_render_config *cfg, uint32_t sample, uint32_t count,
+                         uint32_t frame, const tr_vec3 *motion, uint32_t motion_count,
+                         float alpha_min, tr_error *err);
 
 #endif

@@ -553,17 +553,23 @@ int tr_realtime_render(tr_realtime *rt, const tr_realtime_frame_desc *fd, tr_err
         }
     }
     /* Temporal gradients where the film holds this frame's samples alone, traced at every
-     * pixel by pt or naive on the host (the replay runs there): not with ReSTIR, whose
+     * pixel by pt or naive (the replay runs where the film lies): not with ReSTIR, whose
      * first surfaces' light the replay would not resample, nor upscaled frames. */
-    const int grad = rt->params.gradients && !rt->on_device && !restir && stride <= 1 &&
-                     !rt->view_upscaled && rt->acc_spp == 0 &&
-                     !tr_integrator_is_bidirectional(cfg.integrator);
+    const int grad = rt->params.gradients && !restir && stride <= 1 && !rt->view_upscaled &&
+                     rt->acc_spp == 0 && !tr_integrator_is_bidirectional(cfg.integrator);
     rt->acc_spp += n;
     rt->frame_spp = n;
     rt->rendered += 1;
     rt->grad.ms = 0.0;
     if (!grad) {
         tr_grad_reset(&rt->grad);
+    } else if (rt->on_device) {
+        if (tr_grad_frame_device(&rt->grad, rt->dev, &rt->rcam, &cfg, sample, n, rt->calls,
+                                 rt->moved ? rt->motion : NULL, rt->moved ? rt->motion_ids : 0u,
+                                 rt->params.alpha_min, err) != TR_OK) {
+            rt->have_view = 0;
+            return TR_ERR;
+        }
     } else if (tr_grad_frame(&rt->grad, rt->scene, &rt->film, &rt->rcam, &cfg, sample, n, rt->calls,
                              rt->moved ? rt->motion : NULL, rt->moved ? rt->motion_ids : 0u,
                              rt->params.alpha_min, rt->cfg.threads, err) != TR_OK) {
