@@ -421,7 +421,7 @@ const char cli_recon_help[] =
     "  --resolve-emission N emitters' edges traced at N x N rays, 0..16 (default 4)\n"
     "  --resolve-albedo N   albedo's edges traced at N x N rays, 0..8 (default 0: off)\n"
     "  --albedo-alpha A     SVGF's albedo history, frame weight 0..1 (0.35; 0: off)\n"
-    "  --fresh-spp N        pixels without history traced at N spp in all (CPU; 0: off)\n"
+    "  --fresh-spp N        pixels without history traced at N spp in all (0: off)\n"
     "  --restir off|di|di+gi  ReSTIR DI for the first surfaces' direct light, di+gi\n"
     "                       ReSTIR GI for their indirect light too (default off)\n"
     "  --restir-unbiased    ReSTIR with Talbot's MIS weights (default: biased 1/M)\n";

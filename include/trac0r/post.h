@@ -210,8 +210,8 @@ typedef struct tr_recon_params {
                              so that textures and material edges are sharp at the output's
                              resolution; 0: the remodulated colour is upscaled
                              (docs/realtime.md) */
-    int fresh_spp;        /* tr_realtime on the host: the samples per pixel in all of the
-                             pixels without history (the first frame, a cut, a
+    int fresh_spp;        /* tr_realtime, where the film lies: the samples per pixel in all
+                             of the pixels without history (the first frame, a cut, a
                              disocclusion), traced again after the frame's own; at most the
                              frame's samples: none (docs/realtime.md) */
 } tr_recon_params;

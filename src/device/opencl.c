@@ -216,6 +216,18 @@ int tr_cl_grad_frame(tr_cl_context *ctx, const tr_frame *prev, uint32_t sample, 
     *changed = 0;
     return tr_error_set(err, TR_STATUS_UNSUPPORTED, "%s", no_opencl);
 }
+int tr_cl_fresh_frame(tr_cl_context *ctx, const tr_camera *prev, const tr_camera *cam,
+                      const tr_vec3 *motion, uint32_t motion_count, const tr_frame *extra,
+                      uint32_t *fresh, tr_error *err) {
+    (void)ctx;
+    (void)prev;
+    (void)cam;
+    (void)motion;
+    (void)motion_count;
+    (void)extra;
+    *fresh = 0;
+    return tr_error_set(err, TR_STATUS_UNSUPPORTED, "%s", no_opencl);
+}
 const char *tr_cl_error_name(int code) {
     (void)code;
     return "CL_UNKNOWN_ERROR";
@@ -355,6 +367,12 @@ struct tr_cl_context {
     cl_mem grad_cams, grad_motion;
     uint32_t grad_w, grad_h, grad_motion_cap;
     int grad_valid;
+    /* The fresh samples (tr_cl_fresh_frame): the kernels, the previous frame's mean depth,
+     * normal, primitive and surface points, this frame's points, the mask and its count,
+     * of fresh_w x fresh_h pixels. */
+    cl_kernel render_masked, fresh_mask, fresh_remember;
+    cl_mem fr_depth, fr_normal, fr_prim, fr_point, fr_cur, fr_mask, fr_count;
+    uint32_t fresh_w, fresh_h;
     cl_mem rs_surf[2], rs_res[3], rs_frame;
     uint32_t rs_w, rs_h;
     uint64_t film_reads; /* tr_cl_read_film calls */
@@ -662,6 +680,19 @@ static void release_restir(tr_cl_context *ctx) {
     ctx->rs_w = ctx->rs_h = 0;
 }
 
+/* The fresh samples' buffers (tr_cl_fresh_frame). */
+static void release_fresh(tr_cl_context *ctx) {
+    cl_mem *const bufs[7] = {&ctx->fr_depth, &ctx->fr_normal, &ctx->fr_prim, &ctx->fr_point,
+                             &ctx->fr_cur,   &ctx->fr_mask,   &ctx->fr_count};
+    for (int i = 0; i < 7; ++i) {
+        if (*bufs[i]) {
+            clReleaseMemObject(*bufs[i]);
+            *bufs[i] = NULL;
+        }
+    }
+    ctx->fresh_w = ctx->fresh_h = 0;
+}
+
 /* The temporal gradients' buffers (tr_cl_grad_frame). */
 static void release_grad(tr_cl_context *ctx) {
     cl_mem *const bufs[10] = {&ctx->grad_lum,    &ctx->grad_prim,    &ctx->grad_cap,
@@ -722,8 +753,10 @@ void tr_cl_close(tr_cl_context *ctx) {
         clReleaseKernel(ctx->trace_cwbvh);
     }
     release_grad(ctx);
-    const cl_kernel grad_kernels[3] = {ctx->grad_replay, ctx->grad_atrous, ctx->grad_finish};
-    for (int i = 0; i < 3; ++i) {
+    release_fresh(ctx);
+    const cl_kernel grad_kernels[6] = {ctx->grad_replay,   ctx->grad_atrous, ctx->grad_finish,
+                                       ctx->render_masked, ctx->fresh_mask,  ctx->fresh_remember};
+    for (int i = 0; i < 6; ++i) {
         if (grad_kernels[i]) {
             clReleaseKernel(grad_kernels[i]);
         }
@@ -1201,10 +1234,14 @@ tr_cl_context *tr_cl_open_source(int index, const char *source, tr_error *err) {
         goto fail;
     }
     {
-        static const char *const names[3] = {"tr_cl_grad_replay", "tr_cl_grad_atrous",
-                                             "tr_cl_grad_finish"};
-        cl_kernel *const ks[3] = {&ctx->grad_replay, &ctx->grad_atrous, &ctx->grad_finish};
-        for (int i = 0; i < 3; ++i) {
+        /* The real-time loop's stages where the film lies: the temporal gradients and the
+         * fresh samples. */
+        static const char *const names[6] = {"tr_cl_grad_replay", "tr_cl_grad_atrous",
+                                             "tr_cl_grad_finish", "tr_cl_render_masked",
+                                             "tr_cl_fresh_mask",  "tr_cl_fresh_remember"};
+        cl_kernel *const ks[6] = {&ctx->grad_replay,   &ctx->grad_atrous, &ctx->grad_finish,
+                                  &ctx->render_masked, &ctx->fresh_mask,  &ctx->fresh_remember};
+        for (int i = 0; i < 6; ++i) {
             *ks[i] = clCreateKernel(ctx->program, names[i], &rc);
             if (!*ks[i] && !source) {
                 cl_fail(err, names[i], rc);
@@ -1413,11 +1450,11 @@ int tr_cl_upload_scene(tr_cl_context *ctx, const tr_scene *scene, tr_error *err)
     }
     /* The kernels take the scene's arrays and scene_info first (those of the parts built
      * so far: need_part gives the others theirs). */
-    const cl_kernel kernels[12] = {ctx->kernel,    ctx->resolve,     ctx->trace,
-                                   ctx->restir_t,  ctx->restir_s,    ctx->gi_t,
-                                   ctx->gi_s,      ctx->up_emission, ctx->bdpt,
-                                   ctx->vcm_light, ctx->vcm_render,  ctx->grad_replay};
-    for (int k = 0; k < 12 && rc == TR_OK; ++k) {
+    const cl_kernel kernels[13] = {
+        ctx->kernel,     ctx->resolve,     ctx->trace,        ctx->restir_t, ctx->restir_s,
+        ctx->gi_t,       ctx->gi_s,        ctx->up_emission,  ctx->bdpt,     ctx->vcm_light,
+        ctx->vcm_render, ctx->grad_replay, ctx->render_masked};
+    for (int k = 0; k < 13 && rc == TR_OK; ++k) {
         if (kernels[k]) {
             rc = set_scene_args(ctx, kernels[k], err);
         }
@@ -2101,6 +2138,34 @@ int tr_cl_supports_integrator(tr_cl_context *ctx, int integrator, tr_error *err)
     return TR_OK;
 }
 
+/* The frame, film and rays_per_row arguments of tr_cl_render (or a kernel that takes the
+ * same ones after the scene's). */
+static int set_film_args(tr_cl_context *ctx, cl_kernel kernel, tr_error *err) {
+    const cl_uint base = (cl_uint)ctx->array_count;
+    const cl_mem *bufs[ARG_AFTER_ARRAYS] = {NULL,
+                                            &ctx->frame,
+                                            &ctx->film[FILM_SUM],
+                                            &ctx->film[FILM_COUNT],
+                                            &ctx->film[FILM_ALBEDO],
+                                            &ctx->film[FILM_NORMAL],
+                                            &ctx->film[FILM_DEPTH],
+                                            &ctx->film[FILM_PRIM],
+                                            &ctx->film[FILM_SQ],
+                                            &ctx->film[FILM_DIRECT],
+                                            &ctx->film[FILM_EMISSION],
+                                            &ctx->film[FILM_SPECULAR],
+                                            &ctx->rays};
+    for (int a = ARG_FRAME; a < ARG_AFTER_ARRAYS; ++a) {
+        const cl_int rc = clSetKernelArg(kernel, base + (cl_uint)a, sizeof(cl_mem), bufs[a]);
+        if (rc != CL_SUCCESS) {
+            char call[64];
+            snprintf(call, sizeof call, "clSetKernelArg(%s)", arg_names[a]);
+            return cl_fail(err, call, rc);
+        }
+    }
+    return TR_OK;
+}
+
 static int render_frame(tr_cl_context *ctx, const tr_frame *f, uint64_t *rays_out, tr_error *err) {
     ctx->grad_valid = 0; /* the caps were the last frame's */
     if (!ctx->have_scene) {
@@ -2144,27 +2209,8 @@ static int render_frame(tr_cl_context *ctx, const tr_frame *f, uint64_t *rays_ou
         }
         return wf_render(ctx, f, ny, rays_out, err);
     }
-    const cl_uint base = (cl_uint)ctx->array_count;
-    const cl_mem *bufs[ARG_AFTER_ARRAYS] = {NULL,
-                                            &ctx->frame,
-                                            &ctx->film[FILM_SUM],
-                                            &ctx->film[FILM_COUNT],
-                                            &ctx->film[FILM_ALBEDO],
-                                            &ctx->film[FILM_NORMAL],
-                                            &ctx->film[FILM_DEPTH],
-                                            &ctx->film[FILM_PRIM],
-                                            &ctx->film[FILM_SQ],
-                                            &ctx->film[FILM_DIRECT],
-                                            &ctx->film[FILM_EMISSION],
-                                            &ctx->film[FILM_SPECULAR],
-                                            &ctx->rays};
-    for (int a = ARG_FRAME; a < ARG_AFTER_ARRAYS; ++a) {
-        rc = clSetKernelArg(kernel, base + (cl_uint)a, sizeof(cl_mem), bufs[a]);
-        if (rc != CL_SUCCESS) {
-            char call[64];
-            snprintf(call, sizeof call, "clSetKernelArg(%s)", arg_names[a]);
-            return cl_fail(err, call, rc);
-        }
+    if (set_film_args(ctx, kernel, err) != TR_OK) {
+        return TR_ERR;
     }
     /* With a work-group size the grid is rounded up to whole groups; the kernel returns
      * at once for the work items beyond the frame's grid. bdpt's work items keep two
@@ -2733,6 +2779,165 @@ int tr_cl_grad_frame(tr_cl_context *ctx, const tr_frame *prev, uint32_t sample, 
     }
     *changed = nchanged;
     ctx->grad_valid = prev != NULL;
+    return TR_OK;
+}
+
+/* ---- the fresh samples (entry.cl's tr_cl_fresh_*, tr_cl_render_masked) ----------- */
+
+/* The fresh samples' buffers for a w x h film. */
+static int fresh_buffers(tr_cl_context *ctx, uint32_t w, uint32_t h, tr_error *err) {
+    if (ctx->fresh_w == w && ctx->fresh_h == h && ctx->fr_count) {
+        return TR_OK;
+    }
+    release_fresh(ctx);
+    const size_t n = (size_t)w * h;
+    const struct {
+        cl_mem *mem;
+        size_t bytes;
+    } bufs[7] = {{&ctx->fr_depth, n * sizeof(float)},   {&ctx->fr_normal, 3 * n * sizeof(float)},
+                 {&ctx->fr_prim, n * sizeof(cl_uint)},  {&ctx->fr_point, 3 * n * sizeof(float)},
+                 {&ctx->fr_cur, 3 * n * sizeof(float)}, {&ctx->fr_mask, n},
+                 {&ctx->fr_count, sizeof(cl_uint)}};
+    for (int i = 0; i < 7; ++i) {
+        cl_int rc;
+        *bufs[i].mem = clCreateBuffer(ctx->context, CL_MEM_READ_WRITE, bufs[i].bytes, NULL, &rc);
+        if (!*bufs[i].mem) {
+            release_fresh(ctx);
+            return cl_fail(err, "clCreateBuffer(fresh samples)", rc);
+        }
+    }
+    ctx->fresh_w = w;
+    ctx->fresh_h = h;
+    return TR_OK;
+}
+
+/* tr_cl_render_masked over frame f (stride 1, the film's size) with the mask. */
+static int render_masked(tr_cl_context *ctx, const tr_frame *f, tr_error *err) {
+    cl_int rc =
+        clEnqueueWriteBuffer(ctx->queue, ctx->frame, CL_TRUE, 0, sizeof *f, f, 0, NULL, NULL);
+    if (rc != CL_SUCCESS) {
+        return cl_fail(err, "clEnqueueWriteBuffer(frame)", rc);
+    }
+    if (set_film_args(ctx, ctx->render_masked, err) != TR_OK) {
+        return TR_ERR;
+    }
+    rc = clSetKernelArg(ctx->render_masked, (cl_uint)ctx->array_count + ARG_AFTER_ARRAYS,
+                        sizeof(cl_mem), &ctx->fr_mask);
+    if (rc != CL_SUCCESS) {
+        return cl_fail(err, "clSetKernelArg(tr_cl_render_masked)", rc);
+    }
+    const size_t global[2] = {f->camera.screen_width, f->camera.screen_height};
+    rc = clEnqueueNDRangeKernel(ctx->queue, ctx->render_masked, 2, NULL, global, NULL, 0, NULL,
+                                NULL);
+    return rc == CL_SUCCESS ? TR_OK
+                            : cl_fail(err, "clEnqueueNDRangeKernel(tr_cl_render_masked)", rc);
+}
+
+int tr_cl_fresh_frame(tr_cl_context *ctx, const tr_camera *prev, const tr_camera *cam,
+                      const tr_vec3 *motion, uint32_t motion_count, const tr_frame *extra,
+                      uint32_t *fresh, tr_error *err) {
+    *fresh = 0;
+    const uint32_t w = cam->screen_width, h = cam->screen_height;
+    if (!ctx->render_masked || !ctx->fresh_mask || !ctx->fresh_remember || !ctx->have_scene) {
+        return tr_error_set(err, TR_STATUS_INVALID_OPERATION,
+                            "fresh samples: no scene or no kernel on the OpenCL device");
+    }
+    const uint32_t need = TR_PASS_DEPTH | TR_PASS_NORMAL | TR_PASS_PRIM;
+    if (!ctx->film[FILM_SUM] || w != ctx->width || h != ctx->height ||
+        (ctx->passes & need) != need) {
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "fresh samples: the film (%ux%u) is not the camera's %ux%u or lacks "
+                            "the depth, normal and id passes",
+                            ctx->width, ctx->height, w, h);
+    }
+    if (extra && (extra->camera.screen_width != w || extra->camera.screen_height != h ||
+                  extra->stride != 1u || extra->integrator == TR_INTEGRATOR_BDPT ||
+                  extra->integrator == TR_INTEGRATOR_VCM)) {
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "fresh samples: the extra samples' frame must be the film's size, "
+                            "stride 1, pt or naive");
+    }
+    if (!motion) {
+        motion_count = 0;
+    }
+    /* The gradients' camera and motion buffers serve here too (sized for the film). */
+    if (fresh_buffers(ctx, w, h, err) != TR_OK ||
+        grad_buffers(ctx, w, h, motion_count, err) != TR_OK) {
+        return TR_ERR;
+    }
+    const int have_prev = prev && prev->screen_width == w && prev->screen_height == h;
+    const tr_camera cams[2] = {*cam, have_prev ? *prev : *cam};
+    const cl_uint zero = 0, mc = motion_count;
+    cl_int rc = clEnqueueWriteBuffer(ctx->queue, ctx->grad_cams, CL_TRUE, 0, sizeof cams, cams, 0,
+                                     NULL, NULL);
+    if (rc == CL_SUCCESS && mc > 0u) {
+        rc = clEnqueueWriteBuffer(ctx->queue, ctx->grad_motion, CL_TRUE, 0,
+                                  (size_t)mc * 3 * sizeof(float), motion, 0, NULL, NULL);
+    }
+    if (rc == CL_SUCCESS) {
+        rc = clEnqueueWriteBuffer(ctx->queue, ctx->fr_count, CL_TRUE, 0, sizeof zero, &zero, 0,
+                                  NULL, NULL);
+    }
+    if (rc != CL_SUCCESS) {
+        return cl_fail(err, "clEnqueueWriteBuffer(fresh samples)", rc);
+    }
+    const cl_int hp = have_prev;
+    const cl_arg_ref m[15] = {{sizeof(cl_mem), &ctx->grad_cams},
+                              {sizeof(cl_int), &hp},
+                              {sizeof(cl_mem), &ctx->film[FILM_COUNT]},
+                              {sizeof(cl_mem), &ctx->film[FILM_DEPTH]},
+                              {sizeof(cl_mem), &ctx->film[FILM_NORMAL]},
+                              {sizeof(cl_mem), &ctx->film[FILM_PRIM]},
+                              {sizeof(cl_mem), &ctx->fr_depth},
+                              {sizeof(cl_mem), &ctx->fr_normal},
+                              {sizeof(cl_mem), &ctx->fr_prim},
+                              {sizeof(cl_mem), &ctx->fr_point},
+                              {sizeof(cl_mem), &ctx->grad_motion},
+                              {sizeof(cl_uint), &mc},
+                              {sizeof(cl_mem), &ctx->fr_cur},
+                              {sizeof(cl_mem), &ctx->fr_mask},
+                              {sizeof(cl_mem), &ctx->fr_count}};
+    if (set_arg_list(ctx->fresh_mask, 0, m, 15, "clSetKernelArg(tr_cl_fresh_mask)", err) != TR_OK) {
+        return TR_ERR;
+    }
+    const size_t global[2] = {w, h};
+    rc = clEnqueueNDRangeKernel(ctx->queue, ctx->fresh_mask, 2, NULL, global, NULL, 0, NULL, NULL);
+    cl_uint count = 0;
+    if (rc == CL_SUCCESS) {
+        rc = clEnqueueReadBuffer(ctx->queue, ctx->fr_count, CL_TRUE, 0, sizeof count, &count, 0,
+                                 NULL, NULL);
+    }
+    if (rc != CL_SUCCESS) {
+        return cl_fail(err, "the fresh samples' mask", rc);
+    }
+    if (count > 0u && extra && render_masked(ctx, extra, err) != TR_OK) {
+        clFinish(ctx->queue);
+        return TR_ERR;
+    }
+    const cl_arg_ref r[10] = {
+        {sizeof(cl_mem), &ctx->grad_cams},        {sizeof(cl_mem), &ctx->film[FILM_COUNT]},
+        {sizeof(cl_mem), &ctx->film[FILM_DEPTH]}, {sizeof(cl_mem), &ctx->film[FILM_NORMAL]},
+        {sizeof(cl_mem), &ctx->film[FILM_PRIM]},  {sizeof(cl_mem), &ctx->fr_mask},
+        {sizeof(cl_mem), &ctx->fr_cur},           {sizeof(cl_mem), &ctx->fr_depth},
+        {sizeof(cl_mem), &ctx->fr_normal},        {sizeof(cl_mem), &ctx->fr_prim}};
+    if (set_arg_list(ctx->fresh_remember, 0, r, 10, "clSetKernelArg(tr_cl_fresh_remember)", err) !=
+        TR_OK) {
+        clFinish(ctx->queue);
+        return TR_ERR;
+    }
+    rc = clEnqueueNDRangeKernel(ctx->queue, ctx->fresh_remember, 2, NULL, global, NULL, 0, NULL,
+                                NULL);
+    if (rc == CL_SUCCESS) {
+        rc = clFinish(ctx->queue);
+    }
+    if (rc != CL_SUCCESS) {
+        return cl_fail(err, "the fresh samples' frame", rc);
+    }
+    /* This frame's points are the next call's previous ones. */
+    cl_mem t = ctx->fr_point;
+    ctx->fr_point = ctx->fr_cur;
+    ctx->fr_cur = t;
+    *fresh = count;
     return TR_OK;
 }
 

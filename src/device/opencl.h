@@ -184,6 +184,18 @@ int tr_cl_grad_frame(tr_cl_context *ctx, const tr_frame *prev, uint32_t sample, 
                      const tr_camera *cam, int same, uint32_t frame, const tr_vec3 *motion,
                      uint32_t motion_count, float amin, uint32_t *changed, tr_error *err);
 
+/* The real-time loop's fresh samples where the film lies (src/realtime/fresh.h on the
+ * device: entry.cl's tr_cl_fresh_mask, tr_cl_render_masked, tr_cl_fresh_remember). The
+ * film (rendered through cam, with the depth, normal and id passes) gets its mask of
+ * pixels without history against the previous call's frame (prev: its camera; NULL or
+ * another size: none, every pixel that hit a surface is fresh), extra's samples added at
+ * those pixels (extra NULL: none; stride 1, pt or naive, the film's size), and becomes
+ * the next call's previous frame. motion, motion_count: as the reconstruction takes them.
+ * *fresh gets the masked pixels. Waits for the device. */
+int tr_cl_fresh_frame(tr_cl_context *ctx, const tr_camera *prev, const tr_camera *cam,
+                      const tr_vec3 *motion, uint32_t motion_count, const tr_frame *extra,
+                      uint32_t *fresh, tr_error *err);
+
 /* Pretends the device has only `bytes` of global memory (0: its real size), for tests
  * of the out-of-memory path on devices that have plenty. */
 void tr_cl_set_memory_limit(tr_cl_context *ctx, uint64_t bytes);

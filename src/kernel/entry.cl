@@ -9,6 +9,7 @@
 #include "cwbvh.h"
 #include "emission.h"
 #include "grad_pixel.h"
+#include "reproject.h"
 #include "integrator_pt_wf.h"
 #include "kernel.h"
 #include "restir_pass.h"
@@ -92,6 +93,101 @@ __kernel void tr_cl_render(TR_SCENE_ARRAYS(TR_CL_ARRAY_PARAM) __global const uin
     const uint rays =
         tr_render_grid_rows(&s, &f, &film, gx0 + gx, gy0 + gy, gx0 + gx + 1u, gy0 + gy + 1u);
     atomic_add(&rays_per_row[gy], rays);
+}
+
+/* tr_cl_render for the pixels whose mask byte is set (the real-time loop's fresh samples:
+ * tr_cl_fresh_frame); a frame of stride 1 over the whole image, one work item per pixel. */
+__kernel void tr_cl_render_masked(TR_SCENE_ARRAYS(TR_CL_ARRAY_PARAM)
+                                      __global const uint *scene_info,
+                                  __global const tr_frame *frame, __global float *film_sum,
+                                  __global uint *film_count, __global float *film_albedo,
+                                  __global float *film_normal, __global float *film_depth,
+                                  __global uint *film_prim, __global float *film_sq,
+                                  __global float *film_direct, __global float *film_emission,
+                                  __global float *film_specular, __global uint *rays_per_row,
+                                  __global const uchar *mask) {
+    const tr_frame f = *frame;
+    const uint x = (uint)get_global_id(0), y = (uint)get_global_id(1);
+    if (x >= f.camera.screen_width || y >= f.camera.screen_height ||
+        !mask[y * f.camera.screen_width + x]) {
+        return;
+    }
+    tr_scene_view s;
+    TR_CL_SCENE_VIEW(s);
+    tr_film_view film = TR_CL_FILM_VIEW(f);
+    atomic_add(&rays_per_row[y], tr_render_grid_rows(&s, &f, &film, x, y, x + 1u, y + 1u));
+}
+
+/* The real-time loop's fresh samples (src/realtime/fresh.h) where the film lies, one work
+ * item per pixel of cams[0] (this frame; cams[1] the previous one): mask[i] = 1 where the
+ * pixel hit a surface and has no history (tr_reproject_lost against the previous frame's
+ * passes and points), its surface point into cur_point; *fresh counts the masked pixels. */
+__kernel void tr_cl_fresh_mask(__global const tr_camera *cams, int have_prev,
+                               __global const uint *film_count, __global const float *film_depth,
+                               __global const float *film_normal, __global const uint *film_prim,
+                               __global const float *prev_depth, __global const float *prev_normal,
+                               __global const uint *prev_prim, __global const float *prev_point,
+                               __global const float *motion, uint motion_count,
+                               __global float *cur_point, __global uchar *mask,
+                               __global uint *fresh) {
+    const tr_camera cam = cams[0], prev = cams[1];
+    const uint x = (uint)get_global_id(0), y = (uint)get_global_id(1);
+    if (x >= cam.screen_width || y >= cam.screen_height) {
+        return;
+    }
+    const uint i = y * cam.screen_width + x;
+    const uint c = film_count[i];
+    const float inv = c ? 1.0f / (float)c : 0.0f;
+    const float depth = film_depth[i] * inv;
+    const tr_vec3 n = v3(film_normal[3u * i] * inv, film_normal[3u * i + 1u] * inv,
+                         film_normal[3u * i + 2u] * inv);
+    const uint prim = film_prim[i];
+    const tr_vec3 m = prim < motion_count
+                          ? v3(motion[3u * prim], motion[3u * prim + 1u], motion[3u * prim + 2u])
+                          : v3s(0.0f);
+    tr_vec3 p = v3s(0.0f);
+    const int lost = tr_reproject_lost(&cam, &prev, have_prev, x, y, depth, n, prim, m, prev_depth,
+                                       prev_normal, prev_prim, prev_point, &p);
+    if (depth > 0.0f) {
+        cur_point[3u * i] = p.x;
+        cur_point[3u * i + 1u] = p.y;
+        cur_point[3u * i + 2u] = p.z;
+    }
+    mask[i] = (uchar)lost;
+    if (lost) {
+        atomic_inc(fresh);
+    }
+}
+
+/* This frame's passes as the previous frame's for the next tr_cl_fresh_mask (one work item
+ * per pixel of cams[0]): the means of depth, normal and primitive, and the surface point of
+ * each masked pixel again at its new mean depth. */
+__kernel void tr_cl_fresh_remember(__global const tr_camera *cams, __global const uint *film_count,
+                                   __global const float *film_depth,
+                                   __global const float *film_normal,
+                                   __global const uint *film_prim, __global const uchar *mask,
+                                   __global float *cur_point, __global float *prev_depth,
+                                   __global float *prev_normal, __global uint *prev_prim) {
+    const tr_camera cam = cams[0];
+    const uint x = (uint)get_global_id(0), y = (uint)get_global_id(1);
+    if (x >= cam.screen_width || y >= cam.screen_height) {
+        return;
+    }
+    const uint i = y * cam.screen_width + x;
+    const uint c = film_count[i];
+    const float inv = c ? 1.0f / (float)c : 0.0f;
+    const float depth = film_depth[i] * inv;
+    prev_depth[i] = depth;
+    prev_normal[3u * i] = film_normal[3u * i] * inv;
+    prev_normal[3u * i + 1u] = film_normal[3u * i + 1u] * inv;
+    prev_normal[3u * i + 2u] = film_normal[3u * i + 2u] * inv;
+    prev_prim[i] = film_prim[i];
+    if (mask[i] && depth > 0.0f) {
+        const tr_vec3 p = tr_camera_point_at(&cam, (float)x, (float)y, depth);
+        cur_point[3u * i] = p.x;
+        cur_point[3u * i + 1u] = p.y;
+        cur_point[3u * i + 2u] = p.z;
+    }
 }
 
 /* The film's emission (TR_PASS_EMISSION) resolved over each pixel's area, as the host's

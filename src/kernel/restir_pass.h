@@ -86,7 +86,7 @@ TR_FN tr_restir_surface tr_restir_surface_at(const tr_scene_view *s,
 /* Whether surface b (a neighbour's, or the previous frame's) is similar enough to a for
  * their samples to be reused: the same material, normals within ~25 degrees and b's
  * point on a's tangent plane within 2 % of a's distance (the reconstruction's test,
- * tr_post_consistent, with the material in place of the primitive). */
+ * tr_reproject_consistent, with the material in place of the primitive). */
 TR_FN int tr_restir_similar(const tr_restir_surface *a, const tr_restir_surface *b) {
     if (!a->valid || !b->valid || a->material != b->material) {
         return 0;

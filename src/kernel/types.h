@@ -118,7 +118,7 @@ TR_STATIC_ASSERT(sizeof(tr_frame) == 164, "tr_frame layout");
 /* The top bit of a primitive id in the passes (TR_PASS_PRIM) under TR_FRAME_PSR: the surface
  * was found through a curved delta surface (smooth-shaded, its shading normal off the
  * triangle's) or through a refraction, where the virtual position is an approximation, so
- * that the reconstruction's consistency test is wider there (tr_post_consistent). */
+ * that the reconstruction's consistency test is wider there (tr_reproject_consistent). */
 #define TR_PRIM_PSR_CURVED 0x80000000u
 /* tr_frame.flags: pt splits the light reflected at the passes' surface into its diffuse and
  * specular parts (TR_PASS_SPECULAR, tr_trace_pt_ff). The radiance is unchanged. */

@@ -923,7 +923,7 @@ static void svgf_variance(const post_ws *ws, const float *lum, const float *mome
  * read them instead of recomputing them (the same operations on the same operands as
  * tr_camera_point_at, so the same bits). The projection into the previous camera is
  * vectorised along with them. What is left per pixel - the taps' tests
- * (tr_post_consistent) and the blend (tr_post_temporal_blend) - are the operator's own
+ * (tr_reproject_consistent) and the blend (tr_post_temporal_blend) - are the operator's own
  * functions, in its order; test_recon checks the host against tr_post_temporal_pixel. */
 
 /* Rows [y0, y1): each pixel's surface point (tr_camera_point_at at its depth) into
@@ -1036,7 +1036,7 @@ static void temporal_rows(const tr_recon *r, const tr_gbuffer *g, const float *c
                     const tr_vec3 pn = v3(r->hist_normal[3 * j], r->hist_normal[3 * j + 1],
                                           r->hist_normal[3 * j + 2]);
                     const tr_vec3 q = v3(pq[0][j], pq[1][j], pq[2][j]);
-                    if (!tr_post_consistent(g->prim[i], pp, n, dists[i], r->hist_prim[j], q, pn)) {
+                    if (!tr_reproject_consistent(g->prim[i], pp, n, dists[i], r->hist_prim[j], q, pn)) {
                         continue;
                     }
                     const float bw = ((k & 1) ? ax : 1.0f - ax) * ((k >> 1) ? ay : 1.0f - ay);

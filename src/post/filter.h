@@ -16,6 +16,7 @@
 
 #include "../kernel/camera.h"
 #include "../kernel/compat.h"
+#include "../kernel/reproject.h"
 #include "../kernel/types.h"
 #include "../kernel/vec.h"
 
@@ -68,60 +69,10 @@ TR_FN float tr_post_luminance(float r, float g, float b) {
     return 0.2126f * r + 0.7152f * g + 0.0722f * b;
 }
 
-/* The plane test's tolerance, as a fraction of the distance, for a pixel whose passes were
- * replaced through a curved delta surface or a refraction (TR_PRIM_PSR_CURVED, the id's top
- * bit). */
-#define TR_POST_PSR_CURVED_TOL 0.1f
-
-/* Whether a history sample describes the same surface as the current point p (normal
- * n, primitive prim, at distance dist from the previous camera): the same primitive, a
- * facing normal, and the history's point q (its pixel's ray at its depth) on p's tangent
- * plane within 2 % of the distance. A plane test rather than a depth test, because on a
- * surface seen at a grazing angle depth changes a lot from one pixel to the next while
- * the plane does not. Disocclusions fail here: where the previous camera saw another
- * surface in front of p, q lies off p's plane (or on another primitive). */
-TR_FN int tr_post_consistent(uint32_t prim, tr_vec3 p, tr_vec3 n, float dist, uint32_t prev_prim,
-                             tr_vec3 q, tr_vec3 prev_n) {
-    /* Id 0 on a surface: a shape that is not a triangle; then the geometry decides. */
-    if (prim != prev_prim) {
-        return 0;
-    }
-    /* Seen through a curved mirror or glass (primary surface replacement, psr.h): the virtual
-     * point moves over its image as the camera moves, so the plane test is wider. */
-    const float tol = (prim & TR_PRIM_PSR_CURVED) != 0u ? TR_POST_PSR_CURVED_TOL : 0.02f;
-    if (tr_fabsf(v3_dot(v3_sub(q, p), n)) > tol * dist) {
-        return 0;
-    }
-    return v3_dot(n, prev_n) > 0.9f;
-}
-
-/* Where the point p falls in the previous frame's camera prev: the top-left pixel (ix, iy)
- * of its bilinear footprint, the fractions (ax, ay) towards the next pixels, and its
- * distance from prev's eye; 0 where it lies behind prev or a pixel or more outside its
- * frame. tr_post_reproject_moving's first step, and src/realtime/fresh.c's. */
-TR_FN int tr_post_footprint(const tr_camera *prev, tr_vec3 p, int *ix, int *iy, float *ax,
-                            float *ay, float *dist) {
-    float px, py;
-    if (!tr_camera_project(prev, p, &px, &py, dist)) {
-        return 0;
-    }
-    const float fx = px - 0.5f, fy = py - 0.5f;
-    if (!(fx > -1.0f && fy > -1.0f && fx < (float)prev->screen_width &&
-          fy < (float)prev->screen_height)) {
-        return 0;
-    }
-    /* floor, for fx, fy > -1 (compat.h has no floor of its own). */
-    *ix = fx < 0.0f ? -1 : (int)fx;
-    *iy = fy < 0.0f ? -1 : (int)fy;
-    *ax = fx - (float)*ix;
-    *ay = fy - (float)*iy;
-    return 1;
-}
-
 /* The reprojection of pixel (x, y) of the current frame (camera cam, its depth, normal
  * and primitive) into the previous frame (camera prev, its depth, normal and primitive
  * buffers): the bilinear weights of the four previous pixels around the reprojected
- * position, zero for a tap that is off screen or fails tr_post_consistent, in w[0..3]
+ * position, zero for a tap that is off screen or fails tr_reproject_consistent, in w[0..3]
  * for the taps (x0, y0), (x0+1, y0), (x0, y0+1), (x0+1, y0+1); *x0, *y0 receive the
  * top-left tap. Returns the sum of the weights (0: no history survives).
  *
@@ -149,7 +100,7 @@ TR_FN float tr_post_reproject_moving(const tr_camera *cam, const tr_camera *prev
     const tr_vec3 p = v3_sub(tr_camera_point_at(cam, (float)x, (float)y, depth), motion);
     int ix, iy;
     float ax, ay, dist;
-    if (!tr_post_footprint(prev, p, &ix, &iy, &ax, &ay, &dist)) {
+    if (!tr_reproject_footprint(prev, p, &ix, &iy, &ax, &ay, &dist)) {
         return 0.0f;
     }
     *x0 = ix;
@@ -167,7 +118,7 @@ TR_FN float tr_post_reproject_moving(const tr_camera *cam, const tr_camera *prev
         }
         const tr_vec3 pn = v3(prev_normal[3 * i], prev_normal[3 * i + 1], prev_normal[3 * i + 2]);
         const tr_vec3 q = tr_camera_point_at(prev, (float)tx, (float)ty, prev_depth[i]);
-        if (!tr_post_consistent(prim, p, n, dist, prev_prim[i], q, pn)) {
+        if (!tr_reproject_consistent(prim, p, n, dist, prev_prim[i], q, pn)) {
             continue;
         }
         const float bw = ((k & 1) ? ax : 1.0f - ax) * ((k >> 1) ? ay : 1.0f - ay);
@@ -227,7 +178,7 @@ TR_FN float tr_post_reproject_virtual(const tr_camera *cam, const tr_camera *pre
                 const tr_vec3 pn =
                     v3(prev_normal[3 * i], prev_normal[3 * i + 1], prev_normal[3 * i + 2]);
                 const tr_vec3 q = tr_camera_point_at(prev, (float)tx, (float)ty, prev_depth[i]);
-                if (!tr_post_consistent(prim, p, n, dist, prev_prim[i], q, pn)) {
+                if (!tr_reproject_consistent(prim, p, n, dist, prev_prim[i], q, pn)) {
                     continue;
                 }
                 w[k] = ((k & 1) ? ax : 1.0f - ax) * ((k >> 1) ? ay : 1.0f - ay);

@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "device/frame.h"
+#include "device/opencl.h"
 #include "kernel/kernel.h"
 #include "post/filter.h"
 #include "scene/scene_internal.h"
@@ -55,39 +56,6 @@ static void pixel_passes(const tr_film *film, size_t i, float *depth, tr_vec3 *n
     *prim = film->prim[i];
 }
 
-/* tr_post_reproject's total weight for the point p of pixel (x, y) (normal n, primitive
- * prim), the previous frame's points taken from f->point (tr_camera_point_at of each
- * previous pixel at its depth, computed once in tr_fresh_remember): the same operations
- * on the same operands, so the same number, without recomputing four rays per pixel. */
-static float reproject_total(const tr_fresh *f, tr_vec3 p, tr_vec3 n, uint32_t prim) {
-    const tr_camera *prev = &f->cam;
-    int ix, iy;
-    float ax, ay, dist;
-    if (!tr_post_footprint(prev, p, &ix, &iy, &ax, &ay, &dist)) {
-        return 0.0f;
-    }
-    const int pw = (int)prev->screen_width, ph = (int)prev->screen_height;
-    float total = 0.0f;
-    for (int k = 0; k < 4; ++k) {
-        const int tx = ix + (k & 1), ty = iy + (k >> 1);
-        if (tx < 0 || ty < 0 || tx >= pw || ty >= ph) {
-            continue;
-        }
-        const size_t i = (size_t)ty * (size_t)pw + (size_t)tx;
-        if (!(f->depth[i] > 0.0f) || f->prim[i] != prim) {
-            continue; /* tr_post_consistent's first test, before any arithmetic */
-        }
-        const tr_vec3 pn =
-            tr_vec3_make(f->normal[3 * i], f->normal[3 * i + 1], f->normal[3 * i + 2]);
-        const tr_vec3 q = tr_vec3_make(f->point[3 * i], f->point[3 * i + 1], f->point[3 * i + 2]);
-        if (!tr_post_consistent(prim, p, n, dist, f->prim[i], q, pn)) {
-            continue;
-        }
-        total += ((k & 1) ? ax : 1.0f - ax) * ((k >> 1) ? ay : 1.0f - ay);
-    }
-    return total;
-}
-
 int tr_fresh_mask(tr_fresh *f, const tr_film *film, const tr_camera *cam, const tr_vec3 *motion,
                   uint32_t motion_count, int threads, tr_error *err) {
     const uint32_t w = film->width, h = film->height;
@@ -107,17 +75,16 @@ int tr_fresh_mask(tr_fresh *f, const tr_film *film, const tr_camera *cam, const 
             tr_vec3 n;
             uint32_t prim;
             pixel_passes(film, i, &depth, &n, &prim);
-            int lost = 0;
+            const tr_vec3 m = motion && prim < motion_count ? motion[prim] : v3s(0.0f);
+            tr_vec3 p = v3s(0.0f);
+            const int lost =
+                tr_reproject_lost(cam, &f->cam, prev, (uint32_t)x, (uint32_t)y, depth, n, prim, m,
+                                  f->depth, f->normal, f->prim, f->point, &p);
             if (depth > 0.0f) {
                 /* The point the temporal stage reprojects, kept for tr_fresh_remember. */
-                const tr_vec3 p = tr_camera_point_at(cam, (float)x, (float)y, depth);
                 f->cur[3 * i] = p.x;
                 f->cur[3 * i + 1] = p.y;
                 f->cur[3 * i + 2] = p.z;
-                /* Followed back by its primitive's motion, and the temporal stage's own
-                 * threshold (tr_post_temporal_pixel_moving). */
-                const tr_vec3 m = motion && prim < motion_count ? motion[prim] : v3s(0.0f);
-                lost = !prev || !(reproject_total(f, v3_sub(p, m), n, prim) > 0.05f);
             }
             f->mask[i] = (uint8_t)lost;
             fresh += (uint32_t)lost;
@@ -175,6 +142,30 @@ int tr_fresh_remember(tr_fresh *f, const tr_film *film, const tr_camera *cam, tr
     float *t = f->point;
     f->point = f->cur;
     f->cur = t;
+    f->cam = *cam;
+    f->have_prev = 1;
+    return TR_OK;
+}
+
+int tr_fresh_frame_device(tr_fresh *f, struct tr_device *dev, const tr_camera *cam,
+                          const tr_render_config *cfg, uint32_t sample, uint32_t count,
+                          const tr_vec3 *motion, uint32_t motion_count, tr_error *err) {
+    tr_cl_context *cl = tr_device_cl_context(dev);
+    if (!cl) {
+        return tr_error_set(err, TR_STATUS_INVALID_ARGUMENT,
+                            "fresh samples on the device: not an OpenCL device");
+    }
+    tr_frame fr;
+    if (count > 0u && tr_frame_make(&fr, cam, cfg, sample, count, NULL, err) != TR_OK) {
+        return TR_ERR;
+    }
+    uint32_t fresh = 0;
+    if (tr_cl_fresh_frame(cl, f->have_prev ? &f->cam : NULL, cam, motion, motion_count,
+                          count > 0u ? &fr : NULL, &fresh, err) != TR_OK) {
+        f->have_prev = 0;
+        return TR_ERR;
+    }
+    f->fresh = fresh;
     f->cam = *cam;
     f->have_prev = 1;
     return TR_OK;

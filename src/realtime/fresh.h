@@ -61,4 +61,13 @@ int tr_fresh_trace(const tr_fresh *f, const tr_scene *scene, const tr_camera *ca
 /* Keeps `film`'s passes and cam as the previous frame for the next tr_fresh_mask. */
 int tr_fresh_remember(tr_fresh *f, const tr_film *film, const tr_camera *cam, tr_error *err);
 
+/* The three steps above where an OpenCL device's film lies (src/device/opencl.h,
+ * tr_cl_fresh_frame): the mask, samples sample .. sample + count - 1 at its pixels through
+ * cam with cfg (count 0: none), and this frame kept on the device for the next call.
+ * f keeps the camera and the count of fresh pixels; its arrays stay empty. */
+struct tr_device;
+int tr_fresh_frame_device(tr_fresh *f, struct tr_device *dev, const tr_camera *cam,
+                          const tr_render_config *cfg, uint32_t sample, uint32_t count,
+                          const tr_vec3 *motion, uint32_t motion_count, tr_error *err);
+
 #endif

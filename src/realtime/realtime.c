@@ -421,15 +421,15 @@ static void take_motion(tr_realtime *rt) {
 }
 
 /* The frame's pixels without history traced again, with tr_recon_params.fresh_spp
- * samples in all (fresh.h): when rt->film holds the frame's own n samples alone, on the
- * host, for real-time frames traced at every pixel by the frame's config (after the
+ * samples in all (fresh.h): when the film holds the frame's own n samples alone, where it
+ * lies, for real-time frames traced at every pixel by the frame's config (after the
  * temporal gradients, whose replay compares the frame's own samples). Not with ReSTIR
  * (its stage shades the frame's own samples). Otherwise the previous frame is forgotten,
  * so that the next frame the extra samples apply to starts from no history. */
 static int fresh_samples(tr_realtime *rt, const tr_render_config *cfg, uint32_t n, int restir,
                          int stride, tr_error *err) {
     const int spp = rt->params.fresh_spp;
-    const int on = spp > (int)n && !rt->on_device && !restir && stride <= 1 && !rt->view_upscaled &&
+    const int on = spp > (int)n && !restir && stride <= 1 && !rt->view_upscaled &&
                    rt->acc_spp == n && (rt->view_moving || rt->animated || !rt->accumulate) &&
                    rt->film.depth && rt->film.normal && rt->film.prim &&
                    !tr_integrator_is_bidirectional(rt->cfg.integrator);
@@ -438,14 +438,20 @@ static int fresh_samples(tr_realtime *rt, const tr_render_config *cfg, uint32_t 
         return TR_OK;
     }
     tr_fresh *f = &rt->fresh;
+    const uint32_t extra = (uint32_t)spp - n;
+    /* Numbers apart from every frame's own, by frame (fresh.h). */
+    const uint32_t sample = TR_FRESH_SAMPLE_BASE + ((rt->calls - 1u) & 0xfffffu) * extra;
+    if (rt->on_device) {
+        /* Where the film lies: mask, samples and memory in one call. */
+        return tr_fresh_frame_device(f, rt->dev, &rt->rcam, cfg, sample, extra,
+                                     rt->moved ? rt->motion : NULL, rt->moved ? rt->motion_ids : 0u,
+                                     err);
+    }
     if (tr_fresh_mask(f, &rt->film, &rt->rcam, rt->moved ? rt->motion : NULL,
                       rt->moved ? rt->motion_ids : 0u, rt->cfg.threads, err) != TR_OK) {
         return TR_ERR;
     }
     if (f->fresh > 0) {
-        const uint32_t extra = (uint32_t)spp - n;
-        /* Numbers apart from every frame's own, by frame (fresh.h). */
-        const uint32_t sample = TR_FRESH_SAMPLE_BASE + ((rt->calls - 1u) & 0xfffffu) * extra;
         if (tr_fresh_trace(f, rt->scene, &rt->rcam, cfg, sample, extra, rt->cfg.threads, &rt->film,
                            err) != TR_OK) {
             return TR_ERR;
