@@ -18,37 +18,12 @@
 
 #include "check.h"
 #include "classic_box.h"
+#include "fresh_run.h"
 #include "trac0r/trac0r.h"
 
 #define W 64
 #define H 48
 #define FRESH 4
-
-static tr_realtime *make(tr_device *dev, tr_scene *s, int fresh) {
-    tr_error err;
-    CHECK(tr_device_upload(dev, s, &err) == TR_OK, "%s", err.msg);
-    tr_render_config cfg = tr_render_config_default();
-    tr_recon_params p = tr_recon_params_default();
-    p.fresh_spp = fresh;
-    tr_realtime_desc desc = {0};
-    desc.config = &cfg;
-    desc.recon = &p;
-    tr_realtime *rt = tr_realtime_create(dev, s, &desc, &err);
-    CHECK(rt != NULL, "create: %s", err.msg);
-    return rt;
-}
-
-/* Renders a frame through cam and returns its film. */
-static const tr_film *frame(tr_realtime *rt, const tr_camera *cam) {
-    tr_error err;
-    tr_realtime_frame_desc fd = {0};
-    fd.camera = cam;
-    fd.method = TR_RECON_SVGF;
-    CHECK(tr_realtime_render(rt, &fd, &err) == TR_OK, "render: %s", err.msg);
-    const tr_film *f = NULL;
-    CHECK(tr_realtime_film(rt, &f, &err) == TR_OK && f, "film: %s", err.msg);
-    return f;
-}
 
 static tr_device *device(const char *name) {
     tr_error err;
@@ -62,9 +37,9 @@ int main(void) {
     tr_scene *s = classic_box(W, H, &err);
     CHECK(s != NULL, "%s", err.msg);
     tr_device *dc = device("cpu"), *dd = device("opencl:0"), *dp = device("opencl:0");
-    tr_realtime *host = make(dc, s, FRESH);
-    tr_realtime *dev = make(dd, s, FRESH);
-    tr_realtime *plain = make(dp, s, 0);
+    tr_realtime *host = make(dc, s, FRESH, 0);
+    tr_realtime *dev = make(dd, s, FRESH, 0);
+    tr_realtime *plain = make(dp, s, 0, 0);
     const size_t n = (size_t)W * H;
 
     tr_camera cam0 = *tr_scene_camera(s); /* as test_fresh: nearer the box's opening */

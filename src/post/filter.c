@@ -1036,7 +1036,8 @@ static void temporal_rows(const tr_recon *r, const tr_gbuffer *g, const float *c
                     const tr_vec3 pn = v3(r->hist_normal[3 * j], r->hist_normal[3 * j + 1],
                                           r->hist_normal[3 * j + 2]);
                     const tr_vec3 q = v3(pq[0][j], pq[1][j], pq[2][j]);
-                    if (!tr_reproject_consistent(g->prim[i], pp, n, dists[i], r->hist_prim[j], q, pn)) {
+                    if (!tr_reproject_consistent(g->prim[i], pp, n, dists[i], r->hist_prim[j], q,
+                                                 pn)) {
                         continue;
                     }
                     const float bw = ((k & 1) ? ax : 1.0f - ax) * ((k >> 1) ? ay : 1.0f - ay);
