@@ -16,6 +16,7 @@
 
 #include "camera.h"
 #include "compat.h"
+#include "envmap.h"
 #include "kernel.h"
 #include "types.h"
 #include "vec.h"
@@ -27,7 +28,7 @@ TR_FN float tr_grad_mean_luminance(TR_CONST_GLOBAL float *sum, uint32_t count) {
         return 0.0f;
     }
     const float c = (float)count;
-    return 0.2126f * (sum[0] / c) + 0.7152f * (sum[1] / c) + 0.0722f * (sum[2] / c);
+    return tr_env_luminance(v3(sum[0] / c, sum[1] / c, sum[2] / c));
 }
 
 /* The stratum's side in pixels: one pixel in 9 is replayed. */
@@ -36,11 +37,6 @@ TR_FN float tr_grad_mean_luminance(TR_CONST_GLOBAL float *sum, uint32_t count) {
 #define TR_GRAD_ATROUS_STEPS 3
 /* The cap of a pixel whose shading did not change: none (the largest float). */
 #define TR_GRAD_NO_CAP 3.40282347e+38f
-
-/* Rec. 709 luminance of linear RGB. */
-TR_FN float tr_grad_luminance(float r, float g, float b) {
-    return 0.2126f * r + 0.7152f * g + 0.0722f * b;
-}
 
 /* The pixel of stratum (sx, sy) (sw strata per row) replayed in frame `frame` of a w x h
  * image: one of its 3x3 by a hash, so that every pixel is measured now and then; clipped
@@ -86,7 +82,7 @@ TR_FN int tr_grad_replay_stratum(const tr_scene_view *s, const tr_frame *prev, u
     }
     /* The film's mean, as the previous frame's luminance was taken. */
     const float c = (float)count;
-    const float lr = tr_grad_luminance(s0 / c, s1 / c, s2 / c);
+    const float lr = tr_env_luminance(v3(s0 / c, s1 / c, s2 / c));
     int moved = 0;
     if (has_prim) {
         moved = prim != prev_prim;
