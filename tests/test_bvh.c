@@ -23,6 +23,7 @@
 #include "kernel/kernel.h"
 #include "scene/scene_internal.h"
 #include "trac0r/trac0r.h"
+#include "util/bigmem.h"
 
 /* Rays per mesh for the main comparisons (the brief asks for at least 100 000) and
  * for the stress meshes, whose flat traversal is a brute-force loop. */
@@ -1305,6 +1306,88 @@ static void test_parallel_build_deterministic(void) {
     tr_scene_clear(&s);
 }
 
+/* Blocks of bigmem's cache: a freed big block is kept and handed out again for a request it
+ * holds (where the build keeps them), and a tree built in kept blocks, filled with another
+ * byte first, is the one built in fresh memory, binary and wide. */
+static void test_kept_blocks(void) {
+    tr_bigmem_trim();
+    CHECK(tr_bigmem_kept() == 0, "%zu bytes kept after a trim", tr_bigmem_kept());
+    const size_t big = (size_t)8 << 20;
+    void *a = tr_bigmem_malloc(big);
+    CHECK(a != NULL, "no block of %zu bytes", big);
+    tr_bigmem_free(a);
+    if (tr_bigmem_keeps()) {
+        CHECK(tr_bigmem_kept() >= big, "a freed block of %zu bytes not kept (%zu)", big,
+              tr_bigmem_kept());
+        void *b = tr_bigmem_malloc(big / 2);
+        CHECK(b == a, "a request for half the kept block did not get it");
+        tr_bigmem_free(b);
+        void *c = tr_bigmem_malloc(2 * big);
+        CHECK(c != a && tr_bigmem_kept() >= big, "a request larger than the kept block took it");
+        tr_bigmem_free(c);
+        void *small = malloc(1024);
+        const size_t before = tr_bigmem_kept();
+        tr_bigmem_free(small);
+        CHECK(tr_bigmem_kept() == before, "a small block was kept");
+        tr_bigmem_trim();
+        CHECK(tr_bigmem_kept() == 0, "%zu bytes kept after a trim", tr_bigmem_kept());
+    } else {
+        CHECK(tr_bigmem_kept() == 0, "a build that keeps no blocks kept %zu bytes",
+              tr_bigmem_kept());
+    }
+    tr_bigmem_free(NULL);
+
+    tr_error err;
+    tr_scene s = {0};
+    icosphere_scene(&s, 7); /* 327 680 triangles: its big arrays are over TR_BIGMEM_MIN */
+    tr_bvh fresh, again;
+    tr_wbvh wfresh, wagain;
+    CHECK(tr_bvh_build_wide(&fresh, s.triangles, s.triangle_count, NULL, &err) == TR_OK, "%s",
+          err.msg);
+    CHECK(tr_wbvh_build(&wfresh, &fresh, &err) == TR_OK, "%s", err.msg);
+    /* A second tree in blocks given back by a first, filled with 0xA5 in between. */
+    tr_bvh first;
+    tr_wbvh wfirst;
+    CHECK(tr_bvh_build_wide(&first, s.triangles, s.triangle_count, NULL, &err) == TR_OK, "%s",
+          err.msg);
+    CHECK(tr_wbvh_build(&wfirst, &first, &err) == TR_OK, "%s", err.msg);
+    tr_wbvh_free(&wfirst);
+    tr_bvh_free(&first);
+    const size_t kept = tr_bigmem_kept();
+    if (tr_bigmem_keeps()) {
+        CHECK(kept > 0, "a freed tree over %u triangles left nothing kept", s.triangle_count);
+    }
+    tr_bigmem_fill_kept(0xA5);
+    CHECK(tr_bvh_build_wide(&again, s.triangles, s.triangle_count, NULL, &err) == TR_OK, "%s",
+          err.msg);
+    CHECK(tr_wbvh_build(&wagain, &again, &err) == TR_OK, "%s", err.msg);
+    if (tr_bigmem_keeps()) {
+        CHECK(tr_bigmem_kept() < kept, "the rebuild took no kept block (%zu bytes kept)", kept);
+    }
+    CHECK(again.node_count == fresh.node_count && again.index_count == fresh.index_count &&
+              memcmp(again.nodes, fresh.nodes, fresh.node_count * sizeof *fresh.nodes) == 0 &&
+              memcmp(again.indices, fresh.indices, fresh.index_count * sizeof *fresh.indices) ==
+                  0 &&
+              memcmp(again.tris, fresh.tris, fresh.index_count * sizeof *fresh.tris) == 0,
+          "the binary BVH built in kept blocks differs");
+    CHECK(
+        wagain.node_count == wfresh.node_count && wagain.packet_count == wfresh.packet_count &&
+            wagain.leaf_count == wfresh.leaf_count &&
+            memcmp(wagain.nodes, wfresh.nodes, wfresh.node_count * sizeof *wfresh.nodes) == 0 &&
+            memcmp(wagain.packets, wfresh.packets, wfresh.packet_count * sizeof *wfresh.packets) ==
+                0 &&
+            memcmp(wagain.leaves, wfresh.leaves, wfresh.leaf_count * sizeof *wfresh.leaves) == 0 &&
+            memcmp(wagain.slot_src, wfresh.slot_src,
+                   (size_t)TR_WBVH_WIDTH * wfresh.node_count * sizeof *wfresh.slot_src) == 0,
+        "the wide BVH built in kept blocks differs");
+    tr_wbvh_free(&wagain);
+    tr_bvh_free(&again);
+    tr_wbvh_free(&wfresh);
+    tr_bvh_free(&fresh);
+    tr_bigmem_trim();
+    tr_scene_clear(&s);
+}
+
 static int cmp_u32(const void *a, const void *b) {
     const uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
     return (x > y) - (x < y);
@@ -1455,6 +1538,7 @@ static void test_build_skips_in_parallel(void) {
 int main(void) {
     double t0 = tr_time_now();
     test_parallel_build_deterministic();
+    test_kept_blocks();
     test_build_skips_in_parallel();
     test_wide_build();
     test_meshes();

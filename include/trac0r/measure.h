@@ -184,10 +184,11 @@ double tr_convergence_reach(const tr_convergence_run *r, double db, int use_spp)
 
 /* Each structure's build time for one scene, in milliseconds (tr_scene_build_seconds): the
  * median of `builds` commits with accels[k] into ms[k], 0 where skip (may be NULL) has
- * skip[k] set. The commits are made in rounds after one untimed round, each round
- * starting with the next structure, so that no structure is always the one whose memory
- * is written for the first time while the next one reuses what it freed (memory written
- * for the first time can cost 20 times as much as memory just freed: docs/benchmarks.md).
+ * skip[k] set. Each structure in turn is committed once untimed and then `builds` times in a
+ * row, as the frames of an animation rebuild it: each build then runs in the memory its
+ * builder kept from the build before (this library's kept blocks, Embree's allocator), not
+ * in memory written for the first time, which can cost 20 times as much as memory just
+ * freed (docs/benchmarks.md), and not in what another structure freed.
  * The scene stays committed with the last structure committed. TR_STATUS_INVALID_ARGUMENT
  * for a count outside 1..TR_MEASURE_MAX_ACCELS or builds outside 1..TR_MEASURE_MAX_BUILDS;
  * a commit's failure as tr_scene_commit reports it. */

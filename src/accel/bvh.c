@@ -76,6 +76,7 @@ typedef struct builder {
     tr_bvh_node *nodes;
     uint32_t node_count;
     uint32_t forced_leaf; /* a node of at most this many entries becomes a leaf */
+    int nodes_exact;      /* nodes is no larger than the tree (else the worst case's size) */
 } builder;
 
 /* The bins of one node on all three axes: each bin's box as two rows of four floats (the
@@ -731,25 +732,55 @@ static int build_tree(builder *b, uint32_t n, uint32_t *leaves_out, uint32_t *de
     }
     uint32_t cut_place[1u << CUT_DEPTH], cut_node[1u << CUT_DEPTH], cuts = 0;
     count = number_top(b, top, cut_place, cut_node, &cuts, &leaves, &deepest);
+    /* The tree's exact size: the top's nodes and each subtree's but its root, which the
+     * top numbered. */
+    uint32_t total = count;
     for (uint32_t k = 0; k < cuts; ++k) {
-        /* The subtree's root takes the slot its parent gave it; the rest moves down to the
-         * end of the array so far, with child links moved from local index c >= 1 to
-         * count + c - 1. That end lies at or below the region (the subtrees before it
-         * had at most twice as many nodes as refs, and the top fewer than TOP_NODES), so
-         * copying forward never overwrites a node not yet copied. */
+        total += top[cut_place[k]].sub_count - 1;
+    }
+    /* The nodes go into an array of that size where a kept block holds them (a rebuild),
+     * and the worst-case array the subtrees were built in goes back whole to the kept
+     * blocks, for the next build to take: shrunk in place, it would be too small for that.
+     * Otherwise (a first build) the nodes are moved down in the worst-case array, which
+     * bvh_build shrinks after: that writes no memory new to the process. */
+    tr_bvh_node *out = tr_bigmem_take((size_t)total * sizeof *out);
+    const int in_place = out == NULL;
+    if (in_place) {
+        out = b->nodes;
+    } else {
+        memcpy(out, b->nodes, (size_t)count * sizeof *out);
+    }
+    /* Each subtree's root takes the slot its parent gave it; the rest follows the nodes so
+     * far, with child links moved from local index c >= 1 to count + c - 1. In place, that
+     * end lies at or below the subtree's region (the subtrees before it had at most twice
+     * as many nodes as refs, and the top fewer than TOP_NODES), so copying forward, one
+     * subtree after the other, never overwrites a node not yet copied; into another array
+     * the subtrees are independent, and all threads share them out. */
+    uint32_t offset[1u << CUT_DEPTH];
+    for (uint32_t k = 0; k < cuts; ++k) {
         const top_node *tn = &top[cut_place[k]];
-        const tr_bvh_node *region = subtree_region(b, tn->t.first);
-        const uint32_t offset = count - 1;
-        for (uint32_t i = 0; i < tn->sub_count; ++i) {
-            tr_bvh_node nd = region[i];
-            if (nd.count == 0) {
-                nd.left_first += offset;
-            }
-            b->nodes[i == 0 ? cut_node[k] : offset + i] = nd;
-        }
+        offset[k] = count - 1;
         count += tn->sub_count - 1;
         leaves += tn->sub_leaves;
         deepest = tn->sub_depth > deepest ? tn->sub_depth : deepest;
+    }
+#pragma omp parallel for num_threads(tr_default_threads()) schedule(dynamic, 1) if (!in_place)
+    for (int k = 0; k < (int)cuts; ++k) {
+        const top_node *tn = &top[cut_place[k]];
+        const tr_bvh_node *region = subtree_region(b, tn->t.first);
+        const uint32_t off = offset[k];
+        for (uint32_t i = 0; i < tn->sub_count; ++i) {
+            tr_bvh_node nd = region[i];
+            if (nd.count == 0) {
+                nd.left_first += off;
+            }
+            out[i == 0 ? cut_node[k] : off + i] = nd;
+        }
+    }
+    if (!in_place) {
+        tr_bigmem_free(b->nodes);
+        b->nodes = out;
+        b->nodes_exact = 1;
     }
     b->node_count = count;
     *leaves_out = leaves;
@@ -792,9 +823,9 @@ static int bvh_build(tr_bvh *bvh, const tr_triangle *tris, const tr_aabb *boxes,
      * parallel build leaves room for the top levels before its subtrees' regions. */
     b.nodes = tr_bigmem_malloc((size_t)(2 * (uint64_t)n + TOP_NODES) * sizeof *b.nodes);
     if (!b.refs || !indices || !b.nodes) {
-        free(b.refs);
-        free(indices);
-        free(b.nodes);
+        tr_bigmem_free(b.refs);
+        tr_bigmem_free(indices);
+        tr_bigmem_free(b.nodes);
         return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY,
                             "out of memory building a BVH over %u triangles", n);
     }
@@ -846,9 +877,9 @@ static int bvh_build(tr_bvh *bvh, const tr_triangle *tris, const tr_aabb *boxes,
         leaf_tris = smaller ? smaller : leaf_tris;
     }
     if (rc != TR_OK) {
-        free(leaf_tris);
-        free(b.nodes);
-        free(indices);
+        tr_bigmem_free(leaf_tris);
+        tr_bigmem_free(b.nodes);
+        tr_bigmem_free(indices);
         return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY,
                             "out of memory building a BVH over %u triangles", n);
     }
@@ -860,10 +891,12 @@ static int bvh_build(tr_bvh *bvh, const tr_triangle *tris, const tr_aabb *boxes,
     bvh->depth = depth;
     bvh->skipped = n - m;
     /* Give back what the worst-case allocation did not use. */
-    tr_bvh_node *shrunk =
-        realloc(bvh->nodes, (size_t)(bvh->node_count ? bvh->node_count : 1) * sizeof *bvh->nodes);
-    if (shrunk) {
-        bvh->nodes = shrunk;
+    if (!b.nodes_exact) {
+        tr_bvh_node *shrunk = realloc(bvh->nodes, (size_t)(bvh->node_count ? bvh->node_count : 1) *
+                                                      sizeof *bvh->nodes);
+        if (shrunk) {
+            bvh->nodes = shrunk;
+        }
     }
     bvh->tris = leaf_tris;
     if (tris) {
@@ -929,8 +962,8 @@ void tr_bvh_refit(tr_bvh *bvh, const tr_triangle *tris) {
 }
 
 void tr_bvh_free(tr_bvh *bvh) {
-    free(bvh->nodes);
-    free(bvh->indices);
-    free(bvh->tris);
+    tr_bigmem_free(bvh->nodes);
+    tr_bigmem_free(bvh->indices);
+    tr_bigmem_free(bvh->tris);
     memset(bvh, 0, sizeof *bvh);
 }

@@ -240,10 +240,10 @@ static size_t round64(size_t bytes) {
 }
 
 void tr_wbvh_free(tr_wbvh *w) {
-    free(w->nodes);
-    free(w->packets);
-    free(w->slot_src);
-    free(w->leaves);
+    tr_bigmem_free(w->nodes);
+    tr_bigmem_free(w->packets);
+    tr_bigmem_free(w->slot_src);
+    tr_bigmem_free(w->leaves);
     memset(w, 0, sizeof *w);
 }
 
@@ -296,8 +296,8 @@ int tr_wbvh_build(tr_wbvh *w, const tr_bvh *bvh, tr_error *err) {
             fill_leaf(bvh, w->packets, &w->leaves[i]);
         }
     }
-    free(c.sub_first);
-    free(c.sub_count);
+    tr_bigmem_free(c.sub_first);
+    tr_bigmem_free(c.sub_count);
     if (c.failed) {
         tr_wbvh_free(w);
         return tr_error_set(err, TR_STATUS_OUT_OF_MEMORY,

@@ -280,12 +280,11 @@ int tr_measure_builds(tr_scene *scene, const tr_accel_type *accels, const int *s
     }
     double t[TR_MEASURE_MAX_ACCELS][TR_MEASURE_MAX_BUILDS];
     int n[TR_MEASURE_MAX_ACCELS] = {0};
-    for (int r = -1; r < builds; ++r) {
-        for (int j = 0; j < count; ++j) {
-            const int k = (j + (r > 0 ? r : 0)) % count;
-            if (skip && skip[k]) {
-                continue;
-            }
+    for (int k = 0; k < count; ++k) {
+        if (skip && skip[k]) {
+            continue;
+        }
+        for (int r = -1; r < builds; ++r) {
             if (tr_scene_commit(scene, accels[k], err) != TR_OK) {
                 return TR_ERR;
             }

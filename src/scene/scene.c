@@ -58,6 +58,8 @@ void tr_scene_destroy(tr_scene *s) {
     if (s) {
         tr_scene_clear(s);
         free(s);
+        /* The blocks its structures gave back were kept for its next build (bigmem.h). */
+        tr_bigmem_trim();
     }
 }
 
@@ -563,6 +565,11 @@ int tr_scene_commit(tr_scene *s, tr_accel_type accel, tr_error *err) {
     tr_wbvh_free(&s->wbvh);
     tr_embree_free(&s->embree);
     tr_scene_free_two_level(s);
+    if (accel != TR_ACCEL_TYPE_BVH && accel != TR_ACCEL_TYPE_BVH2) {
+        /* The blocks the structures just freed were kept for the next build of one of
+         * this library's own (bigmem.h); another builder's memory must not wait on them. */
+        tr_bigmem_trim();
+    }
     s->accel = TR_ACCEL_TYPE_FLAT;
     s->committed_triangles = 0;
     s->committed = 0;
