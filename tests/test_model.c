@@ -24,7 +24,8 @@
  *    width or height without touching its border, the height following 4:3 when only
  *    the width is given.
  * 5. A file's camera or point light inside a closed cube is reported, one warning each; the
- *    enclosed camera gives way to the framing one unless it is asked for by name.
+ *    enclosed camera gives way to the framing one unless it is asked for by name; a model
+ *    whose only light is enclosed gets the default sky.
  * 6. glTF's clear coat (assimp-testmodels' ClearCoatTest.gltf): the six "Coated" materials
  *    become principled with the coat's weight 1 and roughness (0.03, or 1 for the
  *    roughness variations), the others have none; the coat maps the file also uses are
@@ -559,6 +560,9 @@ static void write_cube(const char *path, const char *cam, const char *lamp) {
     write_text(path, text);
 }
 
+/* The environment's radiance of the last cube loaded by cube_warnings_at. */
+static float cube_world;
+
 /* The warnings of the cube with its camera and lamp at cam and lamp, the camera given as
  * `which` (NULL: the file's first); *pos gets where the scene's camera ended up. */
 static uint32_t cube_warnings_at(const char *path, const char *cam, const char *lamp,
@@ -571,6 +575,7 @@ static uint32_t cube_warnings_at(const char *path, const char *cam, const char *
     const tr_model_options opt = {0, 1.0f, 0, 0, which};
     CHECK(s && tr_scene_model_load(s, path, &opt, &info, &err) == TR_OK, "%s", err.msg);
     *pos = s ? tr_scene_camera(s)->pos : v3s(0.0f);
+    cube_world = s && s->env_count == 1 ? s->env.color.x * s->env.strength : 0.0f;
     tr_scene_destroy(s);
     remove(path);
     return info.warning_count;
@@ -582,28 +587,36 @@ static uint32_t cube_warnings(const char *path, const char *cam, const char *lam
 }
 
 /* A file's camera and lamp inside the model's closed geometry are each reported: the same
- * cube gets two warnings more with both inside than with both outside, one with either. */
+ * cube gets one warning more with its camera inside than with both outside, and two with
+ * its lamp inside: the lamp, and that every light of the file is inside geometry, so that
+ * the model gets the default sky (its radiance, where the lamp outside leaves Blender's dim
+ * world). */
 static void test_enclosed(void) {
     char path[700];
     snprintf(path, sizeof path, "%s/cube.gltf", dir);
-    const uint32_t out = cube_warnings(path, "0, 0, 5", "0, 3, 0");
+    const uint32_t out = cube_warnings(path, "0, 0, 5", "0, 3, 3");
+    const float world_out = cube_world;
     const uint32_t both = cube_warnings(path, "0.1, 0.2, 0.5", "0.2, 0.3, -0.4");
-    const uint32_t cam = cube_warnings(path, "0.1, 0.2, 0.5", "0, 3, 0");
+    const uint32_t cam = cube_warnings(path, "0.1, 0.2, 0.5", "0, 3, 3");
     const uint32_t lamp = cube_warnings(path, "0, 0, 5", "0.2, 0.3, -0.4");
-    CHECK(both == out + 2 && cam == out + 1 && lamp == out + 1,
+    const float world_in = cube_world;
+    CHECK(both == out + 3 && cam == out + 1 && lamp == out + 2,
           "warnings: outside %u, both inside %u, camera %u, lamp %u", out, both, cam, lamp);
+    CHECK(world_out == TR_MODEL_WORLD && world_in == TR_MODEL_SKY,
+          "environment %g with the lamp outside the cube, %g with it inside", (double)world_out,
+          (double)world_in);
     /* The enclosed camera is replaced by the framing one (outside the cube) unless it is
      * asked for by name; one outside is kept. */
     tr_vec3 p;
-    cube_warnings_at(path, "0.1, 0.2, 0.5", "0, 3, 0", NULL, &p);
+    cube_warnings_at(path, "0.1, 0.2, 0.5", "0, 3, 3", NULL, &p);
     CHECK(fmaxf(fabsf(p.x), fmaxf(fabsf(p.y), fabsf(p.z))) > 1.5f,
           "the enclosed camera was kept: (%g, %g, %g)", (double)p.x, (double)p.y, (double)p.z);
-    const uint32_t named = cube_warnings_at(path, "0.1, 0.2, 0.5", "0, 3, 0", "eye", &p);
+    const uint32_t named = cube_warnings_at(path, "0.1, 0.2, 0.5", "0, 3, 3", "eye", &p);
     CHECK(named == cam && fabsf(p.x - 0.1f) < 1e-4f && fabsf(p.y - 0.2f) < 1e-4f &&
               fabsf(p.z - 0.5f) < 1e-4f,
           "the camera named 'eye' is at (%g, %g, %g), %u warnings", (double)p.x, (double)p.y,
           (double)p.z, named);
-    cube_warnings_at(path, "0, 0, 5", "0, 3, 0", NULL, &p);
+    cube_warnings_at(path, "0, 0, 5", "0, 3, 3", NULL, &p);
     CHECK(fabsf(p.z - 5.0f) < 1e-4f, "the camera outside moved to (%g, %g, %g)", (double)p.x,
           (double)p.y, (double)p.z);
 }

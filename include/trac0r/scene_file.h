@@ -29,7 +29,7 @@
 /* ... and so are files with more JSON values (numbers, strings, arrays, objects) than
  * this: each costs memory while the file is parsed. */
 #define TR_SCENE_FILE_MAX_VALUES (1u << 21)
-#define TR_SCENE_FILE_MAX_WARNINGS 8
+#define TR_SCENE_FILE_MAX_WARNINGS 16
 
 typedef struct tr_scene_file_options {
     /* 0: meshes are validated as JSON but their files are not opened (the fuzzer). */
@@ -148,8 +148,9 @@ int tr_scene_import_mesh(tr_scene *s, const char *path, const tr_transform *tf,
  * sphere (40 degree vertical field of view, right-handed); the file's lights mapped onto
  * trac0r's (docs/scene-format.md, "Model files"; a warning names each approximated one),
  * and with them (unless one is ambient) a constant environment of radiance TR_MODEL_WORLD
- * (Blender's default world), or without any a constant grey environment light of radiance
- * TR_MODEL_SKY. info (may be NULL)
+ * (Blender's default world), or without any (or where every one is a point or spot light
+ * inside the model's closed geometry, lighting nothing outside it) a constant grey
+ * environment light of radiance TR_MODEL_SKY. info (may be NULL)
  * gets the counts, bounds, warnings (the import table's, naming materials and lights) and
  * render defaults (the file camera's aspect ratio when height is 0). */
 #define TR_MODEL_SKY 0.5f

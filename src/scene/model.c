@@ -274,9 +274,10 @@ static int model_camera_enclosed(const tr_scene *s, uint32_t count, const tr_imp
     return !named;
 }
 
-/* Warns about the file's point or spot lights that sit inside the model's geometry. */
+/* Warns about the file's point or spot lights that sit inside the model's geometry (the
+ * first 16 are checked) and marks them in enclosed[]. */
 static void model_check_enclosed(const tr_scene *s, uint32_t count, const tr_import_extras *ex,
-                                 tr_scene_file *info) {
+                                 uint8_t *enclosed, tr_scene_file *info) {
     if (count > MODEL_ENCLOSED_MAX) {
         return;
     }
@@ -284,6 +285,7 @@ static void model_check_enclosed(const tr_scene *s, uint32_t count, const tr_imp
     for (uint32_t i = 0; i < ex->light_count && i < 16; ++i) {
         const tr_import_light *l = &ex->light[i];
         if ((l->type == AI_POINT || l->type == AI_SPOT) && model_point_enclosed(s, count, l->pos)) {
+            enclosed[i] = 1;
             snprintf(msg, sizeof msg,
                      "light '%.64s' at (%g, %g, %g) is inside the model's geometry: its light "
                      "may not get out",
@@ -392,9 +394,12 @@ int tr_scene_model_load(tr_scene *s, const char *path, const tr_model_options *o
     if (!(radius > 0.0f) || !isfinite(radius)) {
         radius = 1.0f;
     }
-    model_check_enclosed(s, s->triangle_count, &ex, info);
-    /* The file's lights, or the default environment. */
-    int lit = 0, have_sun = 0;
+    uint8_t enclosed[TR_IMPORT_MAX_LIGHTS] = {0};
+    model_check_enclosed(s, s->triangle_count, &ex, enclosed, info);
+    /* The file's lights, or the default environment. A light inside the model's geometry
+     * (inside a solid: it sees the backs of faces all round) lights nothing outside it, so
+     * it does not count as lighting the model. */
+    int lit = 0, have_sun = 0, shut_in = 0;
     for (uint32_t i = 0; i < ex.light_count; ++i) {
         tr_error le;
         int rc = model_add_light(s, &ex.light[i], centre, radius, info, &have_sun, &le);
@@ -407,7 +412,12 @@ int tr_scene_model_load(tr_scene *s, const char *path, const tr_model_options *o
             model_warn(info, msg);
             continue;
         }
-        lit += rc;
+        lit += enclosed[i] ? 0 : rc;
+        shut_in += enclosed[i] ? rc : 0;
+    }
+    if (!lit && shut_in) {
+        model_warn(info, "every light of the file is inside the model's geometry: the model is "
+                         "lit by the default environment too (--env sets another)");
     }
     if (ex.lights > ex.light_count) {
         char msg[96];
