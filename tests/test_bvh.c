@@ -1325,6 +1325,17 @@ static void test_kept_blocks(void) {
         void *c = tr_bigmem_malloc(2 * big);
         CHECK(c != a && tr_bigmem_kept() >= big, "a request larger than the kept block took it");
         tr_bigmem_free(c);
+        /* A block is handed out for at least a quarter of its size, not less. */
+        tr_bigmem_trim();
+        void *e = tr_bigmem_malloc(4 * big);
+        tr_bigmem_free(e);
+        void *d = tr_bigmem_malloc(big / 2 + 1);
+        CHECK(d != e && tr_bigmem_kept() >= 4 * big,
+              "a request for an eighth of a kept block took it");
+        free(d);
+        d = tr_bigmem_malloc(big + big / 2);
+        CHECK(d == e, "a request for over a quarter of the kept block did not get it");
+        tr_bigmem_free(d);
         void *small = malloc(1024);
         const size_t before = tr_bigmem_kept();
         tr_bigmem_free(small);

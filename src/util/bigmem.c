@@ -65,8 +65,9 @@ static void cache_unlock(void) {
     atomic_flag_clear_explicit(&cache.lock, memory_order_release);
 }
 
-/* The smallest kept block of at least `bytes`, aligned to `align`, taken out of the
- * cache; NULL when none fits. */
+/* The smallest kept block of at least `bytes` and at most four times that, aligned to
+ * `align`, taken out of the cache; NULL when none fits. (Far larger blocks are left for
+ * the requests they were kept for, and a small array does not hold a huge block.) */
 static void *cache_take(size_t align, size_t bytes) {
     if (bytes < TR_BIGMEM_MIN) {
         return NULL;
@@ -74,7 +75,8 @@ static void *cache_take(size_t align, size_t bytes) {
     cache_lock();
     int best = -1;
     for (int i = 0; i < CACHE_SLOTS; ++i) {
-        if (cache.block[i] && cache.size[i] >= bytes && (uintptr_t)cache.block[i] % align == 0 &&
+        if (cache.block[i] && cache.size[i] >= bytes && cache.size[i] / 4 <= bytes &&
+            (uintptr_t)cache.block[i] % align == 0 &&
             (best < 0 || cache.size[i] < cache.size[best])) {
             best = i;
         }

@@ -28,8 +28,9 @@
  * otherwise, and when the kernel declines. Call it before the array is first written. */
 void tr_bigmem_advise(void *p, size_t bytes);
 
-/* A kept block of at least `bytes` where there is one, else malloc(bytes) advised as above
- * (NULL when malloc fails). Its contents are undefined, as malloc's are. */
+/* A kept block of at least `bytes` (and at most four times that) where there is one, else
+ * malloc(bytes) advised as above (NULL when malloc fails). Its contents are undefined, as malloc's
+ * are. */
 void *tr_bigmem_malloc(size_t bytes);
 
 /* A kept block of at least `bytes`, or NULL where none is kept: for a caller that has a way
