@@ -62,19 +62,26 @@ TR_FN int tr_reproject_footprint(const tr_camera *prev, tr_vec3 p, int *ix, int 
     return 1;
 }
 
-/* The total bilinear weight of the previous pixels around point p (normal n, primitive
- * prim) that pass tr_reproject_consistent, the previous frame (camera prev) given as its
- * pixels' mean depth, normal and primitive and their surface points (tr_camera_point_at at
- * that depth, 3 floats each): the reconstruction's temporal stage keeps a history where it
- * exceeds 0.05 (tr_post_temporal_pixel_moving). */
-TR_FN float tr_reproject_total(const tr_camera *prev, tr_vec3 p, tr_vec3 n, uint32_t prim,
-                               TR_CONST_GLOBAL float *depth, TR_CONST_GLOBAL float *normal,
-                               TR_CONST_GLOBAL uint32_t *prims, TR_CONST_GLOBAL float *point) {
+/* The bilinear weights of the previous pixels around point p (normal n, primitive prim)
+ * that pass tr_reproject_consistent, the previous frame (camera prev) given as its pixels'
+ * mean depth, normal and primitive, and their surface points (tr_camera_point_at at that
+ * depth, 3 floats each) where point is not null (else they are found here): zero for a
+ * tap off screen or not consistent, in w[0..3] for the taps (x0, y0), (x0+1, y0), (x0,
+ * y0+1), (x0+1, y0+1). *x0, *y0 receive the top-left tap. Returns the sum of the weights
+ * (0: no history survives). */
+TR_FN float tr_reproject_weights(const tr_camera *prev, tr_vec3 p, tr_vec3 n, uint32_t prim,
+                                 TR_CONST_GLOBAL float *depth, TR_CONST_GLOBAL float *normal,
+                                 TR_CONST_GLOBAL uint32_t *prims, TR_CONST_GLOBAL float *point,
+                                 int *x0, int *y0, float w[4]) {
+    w[0] = w[1] = w[2] = w[3] = 0.0f;
+    *x0 = *y0 = 0;
     int ix, iy;
     float ax, ay, dist;
     if (!tr_reproject_footprint(prev, p, &ix, &iy, &ax, &ay, &dist)) {
         return 0.0f;
     }
+    *x0 = ix;
+    *y0 = iy;
     const int pw = (int)prev->screen_width, ph = (int)prev->screen_height;
     float total = 0.0f;
     for (int k = 0; k < 4; ++k) {
@@ -87,13 +94,26 @@ TR_FN float tr_reproject_total(const tr_camera *prev, tr_vec3 p, tr_vec3 n, uint
             continue; /* tr_reproject_consistent's first test, before any arithmetic */
         }
         const tr_vec3 pn = v3(normal[3u * i], normal[3u * i + 1u], normal[3u * i + 2u]);
-        const tr_vec3 q = v3(point[3u * i], point[3u * i + 1u], point[3u * i + 2u]);
+        const tr_vec3 q = point ? v3(point[3u * i], point[3u * i + 1u], point[3u * i + 2u])
+                                : tr_camera_point_at(prev, (float)tx, (float)ty, depth[i]);
         if (!tr_reproject_consistent(prim, p, n, dist, prims[i], q, pn)) {
             continue;
         }
-        total += ((k & 1) ? ax : 1.0f - ax) * ((k >> 1) ? ay : 1.0f - ay);
+        const float bw = ((k & 1) ? ax : 1.0f - ax) * ((k >> 1) ? ay : 1.0f - ay);
+        w[k] = bw;
+        total += bw;
     }
     return total;
+}
+
+/* The total of tr_reproject_weights: the reconstruction's temporal stage keeps a history
+ * where it exceeds 0.05 (tr_post_temporal_pixel_moving). */
+TR_FN float tr_reproject_total(const tr_camera *prev, tr_vec3 p, tr_vec3 n, uint32_t prim,
+                               TR_CONST_GLOBAL float *depth, TR_CONST_GLOBAL float *normal,
+                               TR_CONST_GLOBAL uint32_t *prims, TR_CONST_GLOBAL float *point) {
+    int x0, y0;
+    float w[4];
+    return tr_reproject_weights(prev, p, n, prim, depth, normal, prims, point, &x0, &y0, w);
 }
 
 /* Pixel (x, y) of a frame through cam (its mean depth, normal and primitive) has no

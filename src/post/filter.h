@@ -98,34 +98,7 @@ TR_FN float tr_post_reproject_moving(const tr_camera *cam, const tr_camera *prev
         return 0.0f; /* nothing hit: no point to follow */
     }
     const tr_vec3 p = v3_sub(tr_camera_point_at(cam, (float)x, (float)y, depth), motion);
-    int ix, iy;
-    float ax, ay, dist;
-    if (!tr_reproject_footprint(prev, p, &ix, &iy, &ax, &ay, &dist)) {
-        return 0.0f;
-    }
-    *x0 = ix;
-    *y0 = iy;
-    const int pw = (int)prev->screen_width, ph = (int)prev->screen_height;
-    float total = 0.0f;
-    for (int k = 0; k < 4; ++k) {
-        const int tx = ix + (k & 1), ty = iy + (k >> 1);
-        if (tx < 0 || ty < 0 || tx >= pw || ty >= ph) {
-            continue;
-        }
-        const int i = ty * pw + tx;
-        if (!(prev_depth[i] > 0.0f)) {
-            continue;
-        }
-        const tr_vec3 pn = v3(prev_normal[3 * i], prev_normal[3 * i + 1], prev_normal[3 * i + 2]);
-        const tr_vec3 q = tr_camera_point_at(prev, (float)tx, (float)ty, prev_depth[i]);
-        if (!tr_reproject_consistent(prim, p, n, dist, prev_prim[i], q, pn)) {
-            continue;
-        }
-        const float bw = ((k & 1) ? ax : 1.0f - ax) * ((k >> 1) ? ay : 1.0f - ay);
-        w[k] = bw;
-        total += bw;
-    }
-    return total;
+    return tr_reproject_weights(prev, p, n, prim, prev_depth, prev_normal, prev_prim, 0, x0, y0, w);
 }
 
 TR_FN float tr_post_reproject(const tr_camera *cam, const tr_camera *prev, uint32_t x, uint32_t y,
