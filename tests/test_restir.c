@@ -11,10 +11,14 @@
  *    reservoirs) and from the reference's two halves. The firefly control is off for
  *    these frames, so that ReSTIR's own bias is what is measured. The biased mode's
  *    difference is printed (docs/realtime.md records it).
- * 4. At rest the biased mode's mean over the sunlit window room is within 5 % of pt's. */
+ * 4. At rest the biased mode's mean over the sunlit window room is within 5 % of pt's.
+ * 5. A merge that takes the targets its reservoirs hold (tr_restir_merge's `known`) chooses
+ *    the same sample with the same weights as one that evaluates every target again, and the
+ *    contribution it hands to the shading is the one the shading would evaluate. */
 #include "check.h"
 #include "classic_box.h"
 #include "kernel/restir.h"
+#include "scene/scene_internal.h"
 #include "trac0r/scene_file.h"
 #include "trac0r/trac0r.h"
 
@@ -22,6 +26,16 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+
+static int same3(tr_vec3 a, tr_vec3 b) {
+    return a.x == b.x && a.y == b.y && a.z == b.z;
+}
+
+/* Two reservoirs the same bits (before W is this file's width). */
+static int same_reservoir(const tr_reservoir *a, const tr_reservoir *b) {
+    return a->light == b->light && a->W == b->W && a->M == b->M && a->ph == b->ph &&
+           same3(a->y, b->y);
+}
 
 #define W 32
 #define H 24
@@ -63,6 +77,74 @@ static void test_mis_weights(void) {
         }
     }
     CHECK(bad == 0, "%d MIS weight sets of 20000 do not sum to one", bad);
+}
+
+/* 5: on the lamps scene (its power CDF's candidates, as the stage draws them by default),
+ * reservoirs of pixels and their neighbours merged with and without the held targets. */
+static void test_known_targets(const tr_scene *sc) {
+    tr_scene_view v = tr_scene_view_of(sc);
+    v.light_node_count = 0u;
+    const tr_camera cam = *tr_scene_camera(sc);
+    tr_rng pick;
+    tr_rng_init(&pick, 11, 0, 0);
+    int merges = 0, bad = 0, chose_other = 0;
+    for (int trial = 0; trial < 800; ++trial) {
+        tr_restir_surface ss[4];
+        tr_reservoir rr[4];
+        int n = 0;
+        for (int t = 0; t < 4; ++t) {
+            const uint32_t x = (uint32_t)(tr_rng_float(&pick) * W) % W;
+            const uint32_t y = (uint32_t)(tr_rng_float(&pick) * H) % H;
+            const tr_restir_surface q = tr_restir_primary(&v, &cam, 5, y * W + x, x, y, 0, 0);
+            if (!q.valid) {
+                continue;
+            }
+            tr_rng rng;
+            tr_rng_init(&rng, 21, (uint64_t)trial, (uint64_t)t);
+            ss[n] = q;
+            rr[n] = tr_restir_initial(&v, &q, 4, &rng);
+            /* Some reservoirs stand for several frames, as after the temporal merge. */
+            rr[n].M = 1.0f + (float)(t * 3);
+            ++n;
+        }
+        if (n < 2) {
+            continue;
+        }
+        for (int unbiased = 0; unbiased < 2; ++unbiased) {
+            for (int known = TR_RESTIR_KNOWN_OWN; known <= TR_RESTIR_KNOWN_ALL; ++known) {
+                tr_rng a, b;
+                tr_rng_init(&a, 31, (uint64_t)trial, 0);
+                b = a;
+                tr_vec3 c = v3s(-1.0f);
+                int c_known = -1;
+                const tr_reservoir m0 =
+                    tr_restir_merge(&v, ss, rr, n, unbiased, 1e30f, 0, &a, 0, 0);
+                const tr_reservoir m1 =
+                    tr_restir_merge(&v, ss, rr, n, unbiased, 1e30f, known, &b, &c, &c_known);
+                ++merges;
+                if (!same_reservoir(&m0, &m1)) {
+                    ++bad;
+                    continue;
+                }
+                if (m1.light != TR_RESTIR_NONE && m1.ph > 0.0f) { /* ph is 0 where W is */
+                    /* The held target is the one evaluated again. */
+                    if (m1.ph != tr_restir_target(&v, &ss[0], &m1)) {
+                        ++bad;
+                    }
+                    const tr_vec3 a0 = tr_restir_shade(&v, &ss[0], &m1);
+                    const tr_vec3 a1 = tr_restir_shade_known(&v, &ss[0], &m1, c, c_known);
+                    if (!same3(a0, a1)) {
+                        ++bad;
+                    }
+                    chose_other += c_known;
+                }
+            }
+        }
+    }
+    CHECK(merges > 1000 && chose_other > 50, "too few merges (%d) or neighbours chosen (%d)",
+          merges, chose_other);
+    printf("held targets: %d merges, %d chose a neighbour's sample\n", merges, chose_other);
+    CHECK(bad == 0, "%d of %d merges differ with the held targets", bad, merges);
 }
 
 /* Frames 0..frames-1 of a static view through tr_realtime with ReSTIR DI: the sum of the
@@ -229,6 +311,7 @@ int main(void) {
     CHECK(tr_camera_resize(&cam, W, H, &err) == TR_OK, "%s", err.msg);
     tr_scene_set_camera(lamps, &cam);
     CHECK(tr_scene_commit(lamps, TR_ACCEL_TYPE_BVH, &err) == TR_OK, "%s", err.msg);
+    test_known_targets(lamps);
     at_rest(lamps, "lamps and pillars", 1, &fails, NULL);
     CHECK(fails == 0, "lamps and pillars: %d regions beyond 5 sigma", fails);
     tr_scene_destroy(lamps);

@@ -147,6 +147,7 @@ static tr_restir_surface flat_surface(tr_vec3 p, tr_vec3 n, tr_vec3 eye) {
     q.m.type = TR_MATERIAL_DIFFUSE;
     q.m.color = v3s(0.5f);
     q.m.ns = n;
+    q.n = n;
     q.m.ng = n;
     q.m.ps = p;
     q.p = p;

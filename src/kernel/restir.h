@@ -58,12 +58,16 @@
  * finds it: valid when it is a non-specular, non-emitting surface, where pt (with
  * TR_FRAME_NO_PRIMARY_DIRECT) leaves its direct light to the stage. */
 typedef struct tr_restir_surface {
-    tr_bsdf_params m;
-    tr_vec3 p;  /* the hit point */
-    tr_vec3 wo; /* towards the camera */
-    float dist; /* from the camera */
+    /* What the spatial reuse's test of a neighbour reads (tr_restir_similar) comes first,
+     * so that a neighbour it turns down costs one cache line, not the three the whole
+     * surface spans: the point, the shading normal (m.ns again), the material. */
+    tr_vec3 p; /* the hit point */
+    tr_vec3 n; /* m.ns */
     uint32_t material;
     uint32_t valid;
+    float dist; /* from the camera */
+    tr_vec3 wo; /* towards the camera */
+    tr_bsdf_params m;
 } tr_restir_surface;
 
 /* One light sample and its weights. */
@@ -73,6 +77,9 @@ typedef struct tr_reservoir {
     float u, v;     /* the point's barycentrics (the material stage's) */
     float W;        /* unbiased contribution weight */
     float M;        /* confidence: the candidates' frames it stands for */
+    float ph;       /* the target p_hat of y at the surface of the pixel that holds the
+                       reservoir (0 where empty): a merge in the same frame takes it
+                       instead of evaluating the BSDF again */
 } tr_reservoir;
 
 TR_FN tr_reservoir tr_reservoir_empty(void) {
@@ -83,6 +90,7 @@ TR_FN tr_reservoir tr_reservoir_empty(void) {
     r.v = 0.0f;
     r.W = 0.0f;
     r.M = 0.0f;
+    r.ph = 0.0f;
     return r;
 }
 
@@ -98,6 +106,7 @@ TR_FN tr_restir_surface tr_restir_primary(const tr_scene_view *s, const tr_camer
     tr_restir_surface out;
     out.valid = 0u;
     out.p = v3s(0.0f);
+    out.n = v3s(0.0f);
     out.wo = v3s(0.0f);
     out.dist = 0.0f;
     out.material = 0u;
@@ -125,6 +134,7 @@ TR_FN tr_restir_surface tr_restir_primary(const tr_scene_view *s, const tr_camer
         }
         out.m = m;
         out.p = p;
+        out.n = m.ns;
         out.wo = v3_neg(ray.dir);
         out.dist = hit.t;
         out.material = tri->material;
@@ -280,7 +290,7 @@ TR_FN int tr_reservoir_update(tr_reservoir *r, float *wsum, const tr_reservoir *
 TR_FN tr_reservoir tr_restir_initial(const tr_scene_view *s, const tr_restir_surface *q, int count,
                                      tr_rng *rng) {
     tr_reservoir r = tr_reservoir_empty();
-    float wsum = 0.0f;
+    float wsum = 0.0f, ph_sel = 0.0f;
     for (int i = 0; i < count; ++i) {
         float us = tr_rng_float(rng), u1 = tr_rng_float(rng), u2 = tr_rng_float(rng);
         float ur = tr_rng_float(rng);
@@ -289,12 +299,15 @@ TR_FN tr_reservoir tr_restir_initial(const tr_scene_view *s, const tr_restir_sur
         if (!(pdf > 0.0f)) {
             continue;
         }
-        (void)tr_reservoir_update(&r, &wsum, &c, tr_restir_target(s, q, &c) / pdf, ur);
+        const float ph = tr_restir_target(s, q, &c);
+        if (tr_reservoir_update(&r, &wsum, &c, ph / pdf, ur)) {
+            ph_sel = ph;
+        }
     }
     r.M = 1.0f;
     if (r.light != TR_RESTIR_NONE) {
-        float ph = tr_restir_target(s, q, &r);
-        r.W = ph > 0.0f ? wsum / ((float)count * ph) : 0.0f;
+        r.W = ph_sel > 0.0f ? wsum / ((float)count * ph_sel) : 0.0f;
+        r.ph = ph_sel;
     }
     return r;
 }
@@ -313,12 +326,22 @@ TR_FN void tr_restir_mis(const float *M, const float *ph, int n, int unbiased, f
     }
 }
 
+/* What a merge may take from the reservoirs instead of evaluating the target again
+ * (tr_restir_merge's `known`): r[0].ph is r[0]'s target at surf[0]; each r[j].ph is its
+ * target at surf[j]. Only within one frame: the previous frame's value was taken with
+ * that frame's lights. */
+#define TR_RESTIR_KNOWN_OWN 1
+#define TR_RESTIR_KNOWN_ALL 2
+
 /* Merges reservoirs r[0..n) (r[0] the pixel's own, at surface surf[0]; r[j] found at
  * surf[j]) at surf[0] by generalized RIS with tr_restir_mis's weights, the random numbers
- * from rng; the result's confidence is the sum, at most m_cap. */
+ * from rng; the result's confidence is the sum, at most m_cap, its ph the chosen sample's
+ * target at surf[0]. `known` (TR_RESTIR_KNOWN_*) says which targets the reservoirs
+ * already hold. Where c is not NULL and the chosen sample's unshadowed contribution at
+ * surf[0] was evaluated, it goes to *c and the function sets *c_known to 1 (else 0). */
 TR_FN tr_reservoir tr_restir_merge(const tr_scene_view *s, const tr_restir_surface *surf,
                                    const tr_reservoir *r, int n, int unbiased, float m_cap,
-                                   tr_rng *rng) {
+                                   int known, tr_rng *rng, tr_vec3 *c, int *c_known) {
     tr_reservoir out = tr_reservoir_empty();
     float wsum = 0.0f, mtot = 0.0f;
     float M[TR_RESTIR_MAX_MERGE], ph[TR_RESTIR_MAX_MERGE], mw[TR_RESTIR_MAX_MERGE];
@@ -328,42 +351,76 @@ TR_FN tr_reservoir tr_restir_merge(const tr_scene_view *s, const tr_restir_surfa
         mtot += r[j].M;
     }
     float ph_sel = 0.0f;
+    int sel_known = 0;
+    tr_vec3 c_sel = v3s(0.0f);
     for (int i = 0; i < n; ++i) {
         const float u = tr_rng_float(rng);
         if (r[i].light == TR_RESTIR_NONE || !(r[i].W > 0.0f)) {
             continue;
         }
-        const float ph_q = tr_restir_target(s, &surf[0], &r[i]);
+        tr_vec3 ci = v3s(0.0f);
+        int ci_known = 0;
+        float ph_q;
+        if (i == 0 && (known & (TR_RESTIR_KNOWN_OWN | TR_RESTIR_KNOWN_ALL))) {
+            ph_q = r[0].ph;
+        } else {
+            tr_vec3 wi;
+            float len;
+            ci = tr_restir_contribution(s, &surf[0], &r[i], &wi, &len);
+            ci_known = 1;
+            ph_q = tr_restir_luminance(ci);
+        }
         if (!(ph_q > 0.0f)) {
             continue;
         }
         for (int j = 0; j < n; ++j) {
-            ph[j] = !unbiased ? 0.0f : j == 0 ? ph_q : tr_restir_target(s, &surf[j], &r[i]);
+            ph[j] = !unbiased ? 0.0f
+                    : j == 0  ? ph_q
+                    : j == i && (known & TR_RESTIR_KNOWN_ALL)
+                        ? r[i].ph
+                        : tr_restir_target(s, &surf[j], &r[i]);
         }
         tr_restir_mis(M, ph, n, unbiased, mw);
         const float w = mw[i] * ph_q * r[i].W;
         if (tr_reservoir_update(&out, &wsum, &r[i], w, u)) {
             ph_sel = ph_q;
+            sel_known = ci_known;
+            c_sel = ci;
         }
     }
     out.M = mtot < m_cap ? mtot : m_cap;
     out.W = ph_sel > 0.0f && out.light != TR_RESTIR_NONE ? wsum / ph_sel : 0.0f;
+    out.ph = out.W > 0.0f ? ph_sel : 0.0f;
+    if (c) {
+        *c = c_sel;
+        *c_known = sel_known && out.W > 0.0f;
+    }
     return out;
+}
+
+/* The direct light at q from reservoir r: f L G V W. Where c_known, c is r's unshadowed
+ * contribution at q (tr_restir_contribution's value, which a merge found), not evaluated
+ * again. */
+TR_FN tr_vec3 tr_restir_shade_known(const tr_scene_view *s, const tr_restir_surface *q,
+                                    const tr_reservoir *r, tr_vec3 c, int c_known) {
+    if (!q->valid || r->light == TR_RESTIR_NONE || !(r->W > 0.0f)) {
+        return v3s(0.0f);
+    }
+    if (!c_known) {
+        tr_vec3 wi;
+        float len;
+        c = tr_restir_contribution(s, q, r, &wi, &len);
+    }
+    if (tr_restir_luminance(c) <= 0.0f || !tr_restir_visible(s, q, r)) {
+        return v3s(0.0f);
+    }
+    return v3_scale(c, r->W);
 }
 
 /* The direct light at q from reservoir r: f L G V W. */
 TR_FN tr_vec3 tr_restir_shade(const tr_scene_view *s, const tr_restir_surface *q,
                               const tr_reservoir *r) {
-    if (!q->valid || r->light == TR_RESTIR_NONE || !(r->W > 0.0f)) {
-        return v3s(0.0f);
-    }
-    tr_vec3 wi;
-    float len;
-    tr_vec3 c = tr_restir_contribution(s, q, r, &wi, &len);
-    if (tr_restir_luminance(c) <= 0.0f || !tr_restir_visible(s, q, r)) {
-        return v3s(0.0f);
-    }
-    return v3_scale(c, r->W);
+    return tr_restir_shade_known(s, q, r, v3s(0.0f), 0);
 }
 
 #endif

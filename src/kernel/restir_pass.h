@@ -91,10 +91,10 @@ TR_FN int tr_restir_similar(const tr_restir_surface *a, const tr_restir_surface 
     if (!a->valid || !b->valid || a->material != b->material) {
         return 0;
     }
-    if (v3_dot(a->m.ns, b->m.ns) <= 0.9f) {
+    if (v3_dot(a->n, b->n) <= 0.9f) {
         return 0;
     }
-    return tr_fabsf(v3_dot(v3_sub(b->p, a->p), a->m.ns)) <= 0.02f * a->dist;
+    return tr_fabsf(v3_dot(v3_sub(b->p, a->p), a->n)) <= 0.02f * a->dist;
 }
 
 /* Up to k neighbours of pixel (x, y) for a spatial merge: offsets drawn uniformly in a disc
@@ -174,7 +174,8 @@ TR_FN void tr_restir_pass_temporal(const tr_scene_view *s, const tr_restir_frame
             if (rr[1].M > mcap) {
                 rr[1].M = mcap;
             }
-            r = tr_restir_merge(s, ss, rr, 2, fr->unbiased, cap + r.M, &rng);
+            r = tr_restir_merge(s, ss, rr, 2, fr->unbiased, cap + r.M, TR_RESTIR_KNOWN_OWN, &rng, 0,
+                                0);
         }
     }
     cur[i] = r;
@@ -204,12 +205,21 @@ TR_FN void tr_restir_pass_spatial(const tr_scene_view *s, const tr_restir_frame 
                                             tr_restir_spatial_count(fr->spatial), &rng, nb);
     int n = 1;
     for (int t = 0; t < m; ++t, ++n) {
-        ss[n] = tr_restir_surface_at(s, surf, nb[t]);
+        /* The biased merge evaluates targets at this pixel's surface only. */
+        if (fr->unbiased) {
+            ss[n] = tr_restir_surface_at(s, surf, nb[t]);
+        }
         rr[n] = cur[nb[t]];
     }
-    const tr_reservoir r = n > 1 ? tr_restir_merge(s, ss, rr, n, fr->unbiased, 1e30f, &rng) : rr[0];
+    /* All of these reservoirs were made in this frame, each at its own pixel's surface: the
+     * merge takes their targets there as they hold them. */
+    tr_vec3 cs = v3s(0.0f);
+    int cs_known = 0;
+    const tr_reservoir r = n > 1 ? tr_restir_merge(s, ss, rr, n, fr->unbiased, 1e30f,
+                                                   TR_RESTIR_KNOWN_ALL, &rng, &cs, &cs_known)
+                                 : rr[0];
     out[i] = r;
-    const tr_vec3 c = v3_scale(tr_restir_shade(s, &ss[0], &r), (float)fr->spp);
+    const tr_vec3 c = v3_scale(tr_restir_shade_known(s, &ss[0], &r, cs, cs_known), (float)fr->spp);
     sum[3u * i] += c.x;
     sum[3u * i + 1u] += c.y;
     sum[3u * i + 2u] += c.z;
