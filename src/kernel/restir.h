@@ -231,6 +231,34 @@ TR_FN float tr_restir_candidate(const tr_scene_view *s, const tr_restir_surface 
     uint32_t pick = (uint32_t)(us * (float)k);
     pick = pick < k ? pick : k - 1u;
     const float share = 1.0f / (float)k;
+    if (pick < nl && s->light_node_count == 0u) {
+        /* From the power CDF, a point uniform on the emitter's area: its density is in the
+         * area measure already. Cheaper than pt's sampling by solid angle (Arvo's
+         * spherical triangles: a few hundred instructions with their sines and arc
+         * tangent), whose better spread over a large nearby emitter the resampling by
+         * the target makes up for. */
+        const uint32_t li = tr_light_pick(s, u1);
+        const float lo = li > 0u ? s->light_cdf[li - 1u] : 0.0f, hi = s->light_cdf[li];
+        const float uu =
+            hi > lo ? tr_fminf(tr_fmaxf((u1 - lo) / (hi - lo), 0.0f), 0.99999994f) : u1;
+        const uint32_t t = s->lights[li];
+        tr_triangle lt_tmp;
+        TR_CONST_GLOBAL tr_triangle *tri = tr_view_triangle(s, t, &lt_tmp);
+        /* The pick's probability is its interval of the CDF. */
+        const float sel = hi - lo;
+        if (!(sel > 0.0f) || !(tri->area > 0.0f)) {
+            return 0.0f;
+        }
+        /* b0 = 1 - sqrt(uu), b1 = u2 sqrt(uu), as tr_light_sample_np's area branch. */
+        const float su = tr_sqrtf(uu);
+        const float b1 = u2 * su, b2 = 1.0f - (1.0f - su) - b1;
+        c->y = v3_add(v3_add(v3_scale(tri->v0, 1.0f - b1 - b2), v3_scale(tri->v1, b1)),
+                      v3_scale(tri->v2, b2));
+        c->light = t;
+        c->u = b1;
+        c->v = b2;
+        return share * sel / tri->area;
+    }
     if (pick < nl) {
         uint32_t t;
         tr_vec3 y;
