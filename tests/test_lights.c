@@ -19,7 +19,10 @@
  *      (chi-square; see pdf_chi_square).
  *  (g) The switch to area sampling for far triangles (tr_light_far) happens at four
  *      bounding radii from the centroid, in every direction, and there the density
- *      light sampling reports is the area density. */
+ *      light sampling reports is the area density.
+ *  (h) The pick's branch-free binary search returns what a linear scan returns (the
+ *      first entry above u, the last where none is) for CDFs of 1 to 70 entries with
+ *      repeated values and for u on, between and beyond the entries. */
 #include "check.h"
 #include "scene_util.h"
 #include "kernel/kernel.h"
@@ -428,7 +431,57 @@ static void far_switch(void) {
     tr_scene_clear(&s);
 }
 
+/* (h) */
+static void pick_scan(void) {
+    enum { N = 70 };
+    float cdf[N];
+    tr_scene_view v;
+    memset(&v, 0, sizeof v);
+    v.light_cdf = cdf;
+    tr_rng rng;
+    tr_rng_init(&rng, 8, 0, 0);
+    int bad = 0, tried = 0;
+    for (uint32_t n = 1; n <= N; ++n) {
+        for (int trial = 0; trial < 20; ++trial) {
+            float acc = 0.0f;
+            for (uint32_t k = 0; k < n; ++k) {
+                /* A fifth of the steps empty: runs of equal entries. */
+                acc += tr_rng_float(&rng) < 0.2f ? 0.0f : tr_rng_float(&rng);
+                cdf[k] = acc;
+            }
+            for (uint32_t k = 0; k < n; ++k) {
+                cdf[k] = acc > 0.0f ? cdf[k] / acc : 1.0f;
+            }
+            v.light_count = n;
+            for (int t = 0; t < 3 * (int)n + 20; ++t) {
+                float u;
+                const int kind = t % 4;
+                if (kind == 0) {
+                    u = cdf[(uint32_t)(tr_rng_float(&rng) * (float)n) % n]; /* on an entry */
+                } else if (kind == 3 && t % 8 == 3) {
+                    u = t % 16 == 3 ? 1.0f : 0.0f;
+                } else {
+                    u = tr_rng_float(&rng);
+                }
+                uint32_t want = n - 1u;
+                for (uint32_t k = 0; k < n; ++k) {
+                    if (cdf[k] > u) {
+                        want = k;
+                        break;
+                    }
+                }
+                ++tried;
+                if (tr_light_pick(&v, u) != want) {
+                    ++bad;
+                }
+            }
+        }
+    }
+    CHECK(bad == 0, "%d of %d picks differ from the linear scan", bad, tried);
+}
+
 int main(void) {
+    pick_scan();
     table();
     builtin_lamp();
     irradiance();
