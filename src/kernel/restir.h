@@ -3,8 +3,9 @@
  *
  * Resampled importance sampling (J. Talbot, D. Cline and P. Egbert, "Importance
  * Resampling for Global Illumination", EGSR 2005) draws M candidate light samples from
- * cheap source distributions (the light tree or power CDF, the environment map, the sun:
- * the very samplers pt's next-event estimation uses) and keeps one in proportion to a
+ * cheap source distributions (the light tree or the power CDF with a point uniform on the
+ * emitter's area, the environment map, the sun: pt's next-event samplers, but for the
+ * spherical triangles) and keeps one in proportion to a
  * target function p_hat (the unshadowed contribution's luminance), with an unbiased
  * contribution weight W, so that f L G V W estimates the direct light. Spatiotemporal
  * reservoir resampling (B. Bitterli, C. Wyman, M. Pharr, P. Shirley, A. Lefohn and W.
