@@ -131,8 +131,8 @@ static void test_known_targets(const tr_scene *sc) {
                     if (m1.ph != tr_restir_target(&v, &ss[0], &m1)) {
                         ++bad;
                     }
-                    const tr_vec3 a0 = tr_restir_shade(&v, &ss[0], &m1);
-                    const tr_vec3 a1 = tr_restir_shade_known(&v, &ss[0], &m1, c, c_known);
+                    const tr_vec3 a0 = tr_restir_shade(&v, &ss[0], &m1, v3s(0.0f), 0);
+                    const tr_vec3 a1 = tr_restir_shade(&v, &ss[0], &m1, c, c_known);
                     if (!same3(a0, a1)) {
                         ++bad;
                     }

@@ -958,10 +958,8 @@ TR_FN int tr_bdpt_light_subpath(const tr_scene_view *s, int max_depth, const tr_
             u1 = tr_fminf(tr_fmaxf((u1 - (lp.env + lp.sun + lp.punct)) / lp.emitters, 0.0f),
                           0.99999994f);
         }
-        uint32_t k = tr_light_pick(s, u1);
-        float lo = k > 0u ? s->light_cdf[k - 1u] : 0.0f, hi = s->light_cdf[k];
-        u1 = hi > lo ? tr_fminf(tr_fmaxf((u1 - lo) / (hi - lo), 0.0f), 0.99999994f) : u1;
-        uint32_t t = s->lights[k];
+        float interval;
+        uint32_t t = s->lights[tr_light_pick_rescale(s, &u1, &interval)];
         tr_triangle tri_tmp;
         TR_CONST_GLOBAL tr_triangle *tri = tr_view_triangle(s, t, &tri_tmp);
         float su = tr_sqrtf(u1);

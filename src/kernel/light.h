@@ -44,6 +44,30 @@ TR_FN uint32_t tr_light_pick(const tr_scene_view *s, float u) {
     return lo;
 }
 
+/* tr_light_pick, with u rescaled in place to its position inside the picked entry's CDF
+ * interval (kept in [0, 1)) and the interval's width, the pick's probability, in *prob:
+ * the same number then picks the point on the emitter, keeping the pair's stratification
+ * (tr_light_sample_np). */
+TR_FN uint32_t tr_light_pick_rescale(const tr_scene_view *s, float *u, float *prob) {
+    const uint32_t k = tr_light_pick(s, *u);
+    const float lo = k > 0u ? s->light_cdf[k - 1u] : 0.0f, hi = s->light_cdf[k];
+    *u = hi > lo ? tr_fminf(tr_fmaxf((*u - lo) / (hi - lo), 0.0f), 0.99999994f) : *u;
+    *prob = hi - lo;
+    return k;
+}
+
+/* A point uniform on triangle tri's area from (u1, u2): b0 = 1 - sqrt(u1), b1 = u2 sqrt(u1)
+ * (Pharr et al., Physically Based Rendering, 3rd ed., section 13.6.5); its barycentrics of
+ * the second and third vertex into *b1, *b2. */
+TR_FN tr_vec3 tr_light_area_point(TR_CONST_GLOBAL tr_triangle *tri, float u1, float u2, float *b1,
+                                  float *b2) {
+    const float su = tr_sqrtf(u1);
+    *b1 = u2 * su;
+    *b2 = 1.0f - (1.0f - su) - *b1;
+    return v3_add(v3_add(v3_scale(tri->v0, 1.0f - *b1 - *b2), v3_scale(tri->v1, *b1)),
+                  v3_scale(tri->v2, *b2));
+}
+
 /* Area density (per unit area) of sampling a point on triangle `tri` (material m)
  * through tr_light_sample. */
 TR_FN float tr_light_pdf_area(const tr_scene_view *s, const tr_material *m, float area) {
@@ -221,9 +245,8 @@ TR_FN float tr_light_sample_np(const tr_scene_view *s, tr_vec3 p, tr_vec3 nr, fl
             return 0.0f;
         }
     } else {
-        k = tr_light_pick(s, u1);
-        float lo = k > 0u ? s->light_cdf[k - 1u] : 0.0f, hi = s->light_cdf[k];
-        u1 = hi > lo ? tr_fminf(tr_fmaxf((u1 - lo) / (hi - lo), 0.0f), 0.99999994f) : u1;
+        float interval;
+        k = tr_light_pick_rescale(s, &u1, &interval);
     }
     uint32_t t = s->lights[k];
     tr_triangle tri_tmp;
@@ -270,15 +293,11 @@ TR_FN float tr_light_sample_np(const tr_scene_view *s, tr_vec3 p, tr_vec3 nr, fl
         tr_vec3 qv = v3_cross(tv, e1);
         b1 = tr_fminf(tr_fmaxf(v3_dot(tv, pv) / det, 0.0f), 1.0f);
         b2 = tr_fminf(tr_fmaxf(v3_dot(w, qv) / det, 0.0f), 1.0f - b1);
+        *y = v3_add(v3_add(v3_scale(tri->v0, 1.0f - b1 - b2), v3_scale(tri->v1, b1)),
+                    v3_scale(tri->v2, b2));
     } else {
-        /* Uniform on the triangle: b0 = 1 - sqrt(u1), b1 = u2 sqrt(u1) (Pharr et al.,
-         * Physically Based Rendering, 3rd ed., section 13.6.5). */
-        float su = tr_sqrtf(u1);
-        b1 = u2 * su;
-        b2 = 1.0f - (1.0f - su) - b1;
+        *y = tr_light_area_point(tri, u1, u2, &b1, &b2);
     }
-    *y = v3_add(v3_add(v3_scale(tri->v0, 1.0f - b1 - b2), v3_scale(tri->v1, b1)),
-                v3_scale(tri->v2, b2));
     *u = b1;
     *v = b2;
     /* tr_light_pdf's value, without finding the spherical triangle or walking the tree

@@ -238,26 +238,15 @@ TR_FN float tr_restir_candidate(const tr_scene_view *s, const tr_restir_surface 
          * spherical triangles: a few hundred instructions with their sines and arc
          * tangent), whose better spread over a large nearby emitter the resampling by
          * the target makes up for. */
-        const uint32_t li = tr_light_pick(s, u1);
-        const float lo = li > 0u ? s->light_cdf[li - 1u] : 0.0f, hi = s->light_cdf[li];
-        const float uu =
-            hi > lo ? tr_fminf(tr_fmaxf((u1 - lo) / (hi - lo), 0.0f), 0.99999994f) : u1;
-        const uint32_t t = s->lights[li];
+        float uu = u1, sel;
+        const uint32_t t = s->lights[tr_light_pick_rescale(s, &uu, &sel)];
         tr_triangle lt_tmp;
         TR_CONST_GLOBAL tr_triangle *tri = tr_view_triangle(s, t, &lt_tmp);
-        /* The pick's probability is its interval of the CDF. */
-        const float sel = hi - lo;
         if (!(sel > 0.0f) || !(tri->area > 0.0f)) {
             return 0.0f;
         }
-        /* b0 = 1 - sqrt(uu), b1 = u2 sqrt(uu), as tr_light_sample_np's area branch. */
-        const float su = tr_sqrtf(uu);
-        const float b1 = u2 * su, b2 = 1.0f - (1.0f - su) - b1;
-        c->y = v3_add(v3_add(v3_scale(tri->v0, 1.0f - b1 - b2), v3_scale(tri->v1, b1)),
-                      v3_scale(tri->v2, b2));
+        c->y = tr_light_area_point(tri, uu, u2, &c->u, &c->v);
         c->light = t;
-        c->u = b1;
-        c->v = b2;
         return share * sel / tri->area;
     }
     if (pick < nl) {
@@ -430,8 +419,8 @@ TR_FN tr_reservoir tr_restir_merge(const tr_scene_view *s, const tr_restir_surfa
 /* The direct light at q from reservoir r: f L G V W. Where c_known, c is r's unshadowed
  * contribution at q (tr_restir_contribution's value, which a merge found), not evaluated
  * again. */
-TR_FN tr_vec3 tr_restir_shade_known(const tr_scene_view *s, const tr_restir_surface *q,
-                                    const tr_reservoir *r, tr_vec3 c, int c_known) {
+TR_FN tr_vec3 tr_restir_shade(const tr_scene_view *s, const tr_restir_surface *q,
+                              const tr_reservoir *r, tr_vec3 c, int c_known) {
     if (!q->valid || r->light == TR_RESTIR_NONE || !(r->W > 0.0f)) {
         return v3s(0.0f);
     }
@@ -444,12 +433,6 @@ TR_FN tr_vec3 tr_restir_shade_known(const tr_scene_view *s, const tr_restir_surf
         return v3s(0.0f);
     }
     return v3_scale(c, r->W);
-}
-
-/* The direct light at q from reservoir r: f L G V W. */
-TR_FN tr_vec3 tr_restir_shade(const tr_scene_view *s, const tr_restir_surface *q,
-                              const tr_reservoir *r) {
-    return tr_restir_shade_known(s, q, r, v3s(0.0f), 0);
 }
 
 #endif

@@ -219,7 +219,7 @@ TR_FN void tr_restir_pass_spatial(const tr_scene_view *s, const tr_restir_frame 
                                                    TR_RESTIR_KNOWN_ALL, &rng, &cs, &cs_known)
                                  : rr[0];
     out[i] = r;
-    const tr_vec3 c = v3_scale(tr_restir_shade_known(s, &ss[0], &r, cs, cs_known), (float)fr->spp);
+    const tr_vec3 c = v3_scale(tr_restir_shade(s, &ss[0], &r, cs, cs_known), (float)fr->spp);
     sum[3u * i] += c.x;
     sum[3u * i + 1u] += c.y;
     sum[3u * i + 2u] += c.z;
