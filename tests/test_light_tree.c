@@ -72,10 +72,11 @@ static void build(tr_scene *s, int mode, int down_only, uint32_t w, uint32_t h) 
     CHECK(tr_scene_commit(s, TR_ACCEL_TYPE_BVH, &err) == TR_OK, "commit: %s", err.msg);
 }
 
-static int inside(tr_aabb b, tr_vec3 p) {
-    const float e = 1e-5f;
-    return p.x >= b.min.x - e && p.y >= b.min.y - e && p.z >= b.min.z - e && p.x <= b.max.x + e &&
-           p.y <= b.max.y + e && p.z <= b.max.z + e;
+/* Whether p lies in the node's bounding sphere (the sphere around its box, which is all
+ * the walk reads of the box). */
+static int inside(const tr_light_node *n, tr_vec3 p) {
+    const tr_vec3 d = v3_sub(p, n->centre);
+    return v3_dot(d, d) <= n->r2 * (1.0f + 1e-5f) + 1e-10f;
 }
 
 /* (a) */
@@ -107,8 +108,9 @@ static void structure(const tr_scene *s) {
         /* Every node from the leaf up bounds this emitter. */
         for (uint32_t nd = v.light_leaf[k];; nd = v.light_nodes[nd].parent) {
             const tr_light_node *node = &v.light_nodes[nd];
-            bad_box +=
-                !inside(node->box, t->v0) || !inside(node->box, t->v1) || !inside(node->box, t->v2);
+            bad_box += !inside(node, t->v0) || !inside(node, t->v1) || !inside(node, t->v2);
+            bad_cone += !(node->sin_o >= 0.0f && fabsf(node->sin_o * node->sin_o +
+                                                       node->cos_o * node->cos_o - 1.0f) <= 1e-6f);
             if (m->flags & TR_MATERIAL_TWO_SIDED) {
                 bad_cone += !(node->cos_o <= -0.9999f);
             } else {
@@ -295,7 +297,7 @@ static void modes(void) {
     CHECK(tr_scene_update(&s, NULL, &err) == TR_OK, "update: %s", err.msg);
     tr_scene_view v = tr_scene_view_of(&s);
     const tr_triangle *moved = &s.triangles[s.shapes[last].first];
-    CHECK(v.light_node_count > 0 && inside(v.light_nodes[0].box, moved->v0),
+    CHECK(v.light_node_count > 0 && inside(&v.light_nodes[0], moved->v0),
           "the root's box does not hold the moved lamp");
     structure(&s);
     tr_scene_clear(&s);

@@ -90,10 +90,10 @@ static void build(tr_scene *s, int mode, uint32_t w, uint32_t h) {
     CHECK(tr_scene_commit(s, TR_ACCEL_TYPE_BVH, &err) == TR_OK, "commit: %s", err.msg);
 }
 
-static int inside(tr_aabb b, tr_vec3 p) {
-    const float e = 1e-5f;
-    return p.x >= b.min.x - e && p.y >= b.min.y - e && p.z >= b.min.z - e && p.x <= b.max.x + e &&
-           p.y <= b.max.y + e && p.z <= b.max.z + e;
+/* Whether p lies in the node's bounding sphere (the sphere around its box). */
+static int inside(const tr_light_node *n, tr_vec3 p) {
+    const tr_vec3 d = v3_sub(p, n->centre);
+    return v3_dot(d, d) <= n->r2 * (1.0f + 1e-5f) + 1e-10f;
 }
 
 /* (a) */
@@ -125,7 +125,7 @@ static void structure(const tr_scene *s) {
         }
         for (uint32_t nd = v.light_leaf[ne + j];; nd = v.light_nodes[nd].parent) {
             const tr_light_node *node = &v.light_nodes[nd];
-            bad_box += !inside(node->box, l->pos);
+            bad_box += !inside(node, l->pos);
             if (l->type == TR_PUNCTUAL_POINT) {
                 bad_cone += !(node->cos_o <= -0.9999f);
             } else {

@@ -43,15 +43,13 @@ TR_FN float tr_light_importance(TR_CONST_GLOBAL tr_light_node *n, tr_vec3 p, tr_
     if (!(n->power > 0.0f)) {
         return 0.0f;
     }
-    tr_vec3 c = v3_scale(v3_add(n->box.min, n->box.max), 0.5f);
-    tr_vec3 hd = v3_scale(v3_sub(n->box.max, n->box.min), 0.5f);
-    tr_vec3 d = v3_sub(p, c);
-    float d2 = v3_dot(d, d), r2 = v3_dot(hd, hd);
+    tr_vec3 d = v3_sub(p, n->centre);
+    float d2 = v3_dot(d, d), r2 = n->r2;
     float cos_p = 1.0f;
     if (d2 > r2) {
         float cos_w = tr_fminf(tr_fmaxf(v3_dot(n->axis, d) / tr_sqrtf(d2), -1.0f), 1.0f);
         float sin_w = tr_sqrtf(tr_fmaxf(0.0f, 1.0f - cos_w * cos_w));
-        float cos_o = n->cos_o, sin_o = tr_sqrtf(tr_fmaxf(0.0f, 1.0f - cos_o * cos_o));
+        float cos_o = n->cos_o, sin_o = n->sin_o;
         float sin2_b = r2 / d2;
         float cos_b = tr_sqrtf(tr_fmaxf(0.0f, 1.0f - sin2_b)), sin_b = tr_sqrtf(sin2_b);
         if (cos_w < cos_o) { /* theta_w > theta_o: theta_1 = theta_w - theta_o */
