@@ -45,13 +45,15 @@ TR_FN float tr_light_importance(TR_CONST_GLOBAL tr_light_node *n, tr_vec3 p, tr_
     }
     tr_vec3 d = v3_sub(p, n->centre);
     float d2 = v3_dot(d, d), r2 = n->r2;
-    float cos_p = 1.0f;
+    float cos_p = 1.0f, cos_r = 1.0f;
     if (d2 > r2) {
-        float cos_w = tr_fminf(tr_fmaxf(v3_dot(n->axis, d) / tr_sqrtf(d2), -1.0f), 1.0f);
+        /* One square root and one division for the distance; the rest multiplies. */
+        float inv_d = 1.0f / tr_sqrtf(d2);
+        float sin_b = tr_fminf(n->r * inv_d, 1.0f);
+        float cos_b = tr_sqrtf(tr_fmaxf(0.0f, 1.0f - sin_b * sin_b));
+        float cos_w = tr_fminf(tr_fmaxf(v3_dot(n->axis, d) * inv_d, -1.0f), 1.0f);
         float sin_w = tr_sqrtf(tr_fmaxf(0.0f, 1.0f - cos_w * cos_w));
         float cos_o = n->cos_o, sin_o = n->sin_o;
-        float sin2_b = r2 / d2;
-        float cos_b = tr_sqrtf(tr_fmaxf(0.0f, 1.0f - sin2_b)), sin_b = tr_sqrtf(sin2_b);
         if (cos_w < cos_o) { /* theta_w > theta_o: theta_1 = theta_w - theta_o */
             float cos_1 = cos_w * cos_o + sin_w * sin_o;
             float sin_1 = sin_w * cos_o - cos_w * sin_o;
@@ -59,23 +61,23 @@ TR_FN float tr_light_importance(TR_CONST_GLOBAL tr_light_node *n, tr_vec3 p, tr_
                 cos_p = cos_1 * cos_b + sin_1 * sin_b;
             }
         }
-    }
-    if (!(cos_p > n->cos_e)) {
-        return 0.0f;
-    }
-    /* The receiver's side, as pbrt-v4's LightBounds::Importance has it: light arrives at
-     * an angle theta_i from the normal nr, at least max(0, theta_i - theta_b) from any
-     * point of the node, and is weighed by its cosine; |cos|, so that a transmitting
-     * surface's other side counts too. Skipped without a normal (nr zero) or inside. */
-    float cos_r = 1.0f;
-    if (d2 > r2 && !(nr.x == 0.0f && nr.y == 0.0f && nr.z == 0.0f)) {
-        float cos_i = tr_fminf(tr_fabsf(v3_dot(nr, d)) / tr_sqrtf(d2), 1.0f);
-        float sin_i = tr_sqrtf(tr_fmaxf(0.0f, 1.0f - cos_i * cos_i));
-        float sin2_b = r2 / d2;
-        float cos_b = tr_sqrtf(tr_fmaxf(0.0f, 1.0f - sin2_b)), sin_b = tr_sqrtf(sin2_b);
-        if (cos_i < cos_b) { /* theta_i > theta_b */
-            cos_r = tr_fmaxf(cos_i * cos_b + sin_i * sin_b, 0.0f);
+        if (!(cos_p > n->cos_e)) {
+            return 0.0f;
         }
+        /* The receiver's side, as pbrt-v4's LightBounds::Importance has it: light arrives
+         * at an angle theta_i from the normal nr, at least max(0, theta_i - theta_b) from
+         * any point of the node, and is weighed by its cosine; |cos|, so that a
+         * transmitting surface's other side counts too. Skipped without a normal (nr zero)
+         * or inside. */
+        if (!(nr.x == 0.0f && nr.y == 0.0f && nr.z == 0.0f)) {
+            float cos_i = tr_fminf(tr_fabsf(v3_dot(nr, d)) * inv_d, 1.0f);
+            float sin_i = tr_sqrtf(tr_fmaxf(0.0f, 1.0f - cos_i * cos_i));
+            if (cos_i < cos_b) { /* theta_i > theta_b */
+                cos_r = tr_fmaxf(cos_i * cos_b + sin_i * sin_b, 0.0f);
+            }
+        }
+    } else if (!(cos_p > n->cos_e)) {
+        return 0.0f;
     }
     /* The floor keeps a point light's leaf (r = 0) finite at its own position. */
     return n->power * cos_p * cos_r / tr_fmaxf(tr_fmaxf(d2, r2), 1e-30f);

@@ -52,23 +52,23 @@ TR_STATIC_ASSERT(sizeof(tr_bvh_tri) == 40, "tr_bvh_tri layout");
 
 /* A node of the light tree (src/scene/light_tree.c, kernel/light_tree.h) over the emissive
  * triangles, after Conty Estevez and Kulla 2018: the sphere around the box of the emitters
- * below (its centre and squared radius: what the importance reads of the box, so that a
+ * below (its centre, radius and squared radius: what the importance reads of the box, so that a
  * pick does not work them out again at every node it weighs), their total power, and a
  * cone bounding their normals (axis, cos_o and sin_o) beyond which they emit at most
  * theta_e further (cos_e: 0 for one-sided triangles). Interior nodes have their two
  * children at child and child + 1; a leaf (child has TR_LIGHT_LEAF set) holds one emitter,
  * child & ~TR_LIGHT_LEAF indexing the scene's light table. parent is the parent node's
- * index (the root's is 0). 52 bytes. */
+ * index (the root's is 0). 56 bytes. */
 typedef struct tr_light_node {
     tr_vec3 centre; /* (box.min + box.max) / 2 */
-    float r2;       /* the squared half-diagonal of the box */
+    float r, r2;    /* the half-diagonal of the box, and its square */
     tr_vec3 axis;
     float cos_o, sin_o, cos_e;
     float power;
     uint32_t child;
     uint32_t parent;
 } tr_light_node;
-TR_STATIC_ASSERT(sizeof(tr_light_node) == 52, "tr_light_node layout");
+TR_STATIC_ASSERT(sizeof(tr_light_node) == 56, "tr_light_node layout");
 #define TR_LIGHT_LEAF 0x80000000u
 
 /* The BVH's depth never exceeds this (the builder switches to median splits well before),

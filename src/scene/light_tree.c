@@ -179,12 +179,14 @@ static void sort_axis(builder *bd, uint32_t lo, uint32_t hi, int axis) {
 }
 
 static void store_node(tr_light_node *n, const bounds *b, uint32_t parent) {
-    /* The box in float, then its centre and half-diagonal in float arithmetic. */
+    /* The box in float, then its centre and half-diagonal (the radius of the sphere around
+     * it) in float arithmetic. */
     const tr_vec3 lo = v3((float)b->lo[0], (float)b->lo[1], (float)b->lo[2]);
     const tr_vec3 hi = v3((float)b->hi[0], (float)b->hi[1], (float)b->hi[2]);
     const tr_vec3 hd = v3_scale(v3_sub(hi, lo), 0.5f);
     n->centre = v3_scale(v3_add(lo, hi), 0.5f);
     n->r2 = v3_dot(hd, hd);
+    n->r = sqrtf(n->r2);
     n->axis = v3((float)b->c.axis[0], (float)b->c.axis[1], (float)b->c.axis[2]);
     /* A little wider than built, so that rounding the axis to float never narrows the
      * cone past an emitter's normal. */
