@@ -194,6 +194,19 @@ TR_FN float tr_restir_target(const tr_scene_view *s, const tr_restir_surface *q,
     return tr_restir_luminance(tr_restir_contribution(s, q, r, &wi, &len));
 }
 
+/* The surface as the targets see it: its BSDF without the multiple-scattering
+ * compensation (the tables of ggx_ms.h, about a third of a principled evaluation's
+ * instructions). RIS is unbiased with any target that is positive wherever the integrand
+ * is (J. Talbot, D. Cline and P. Egbert, "Importance Resampling for Global Illumination",
+ * EGSR 2005), and the compensation only scales lobes that are positive without it; every
+ * merge of a frame uses this one, and the shading evaluates the exact BSDF. Returns 1
+ * where the BSDF changed (the surface had the tables). */
+TR_FN int tr_restir_target_surface(tr_restir_surface *q) {
+    const int had = q->m.ms != 0;
+    q->m.ms = 0;
+    return had;
+}
+
 /* Whether nothing blocks the light of r's sample from q (pt's shadow ray). */
 TR_FN int tr_restir_visible(const tr_scene_view *s, const tr_restir_surface *q,
                             const tr_reservoir *r) {
