@@ -962,10 +962,8 @@ TR_FN int tr_bdpt_light_subpath(const tr_scene_view *s, int max_depth, const tr_
         uint32_t t = s->lights[tr_light_pick_rescale(s, &u1, &interval)];
         tr_triangle tri_tmp;
         TR_CONST_GLOBAL tr_triangle *tri = tr_view_triangle(s, t, &tri_tmp);
-        float su = tr_sqrtf(u1);
-        float b1 = u2 * su, b2 = su - b1; /* uniform on the triangle (pbrt 3rd ed. 13.6.5) */
-        tr_vec3 yp = v3_add(v3_add(v3_scale(tri->v0, 1.0f - b1 - b2), v3_scale(tri->v1, b1)),
-                            v3_scale(tri->v2, b2));
+        float b1, b2;
+        const tr_vec3 yp = tr_light_area_point(tri, u1, u2, &b1, &b2);
         tr_bdpt_vertex *y0 = &lv[0];
         y0->m = tr_material_eval(s, t, b1, b2, yp, tri->normal, tri->normal);
         y0->p = yp;

@@ -56,6 +56,12 @@ TR_FN uint32_t tr_light_pick_rescale(const tr_scene_view *s, float *u, float *pr
     return k;
 }
 
+/* The point of triangle tri at barycentrics b1, b2 of its second and third vertex. */
+TR_FN tr_vec3 tr_light_triangle_at(TR_CONST_GLOBAL tr_triangle *tri, float b1, float b2) {
+    return v3_add(v3_add(v3_scale(tri->v0, 1.0f - b1 - b2), v3_scale(tri->v1, b1)),
+                  v3_scale(tri->v2, b2));
+}
+
 /* A point uniform on triangle tri's area from (u1, u2): b0 = 1 - sqrt(u1), b1 = u2 sqrt(u1)
  * (Pharr et al., Physically Based Rendering, 3rd ed., section 13.6.5); its barycentrics of
  * the second and third vertex into *b1, *b2. */
@@ -64,8 +70,7 @@ TR_FN tr_vec3 tr_light_area_point(TR_CONST_GLOBAL tr_triangle *tri, float u1, fl
     const float su = tr_sqrtf(u1);
     *b1 = u2 * su;
     *b2 = 1.0f - (1.0f - su) - *b1;
-    return v3_add(v3_add(v3_scale(tri->v0, 1.0f - *b1 - *b2), v3_scale(tri->v1, *b1)),
-                  v3_scale(tri->v2, *b2));
+    return tr_light_triangle_at(tri, *b1, *b2);
 }
 
 /* Area density (per unit area) of sampling a point on triangle `tri` (material m)
@@ -293,8 +298,7 @@ TR_FN float tr_light_sample_np(const tr_scene_view *s, tr_vec3 p, tr_vec3 nr, fl
         tr_vec3 qv = v3_cross(tv, e1);
         b1 = tr_fminf(tr_fmaxf(v3_dot(tv, pv) / det, 0.0f), 1.0f);
         b2 = tr_fminf(tr_fmaxf(v3_dot(w, qv) / det, 0.0f), 1.0f - b1);
-        *y = v3_add(v3_add(v3_scale(tri->v0, 1.0f - b1 - b2), v3_scale(tri->v1, b1)),
-                    v3_scale(tri->v2, b2));
+        *y = tr_light_triangle_at(tri, b1, b2);
     } else {
         *y = tr_light_area_point(tri, u1, u2, &b1, &b2);
     }

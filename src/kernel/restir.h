@@ -199,12 +199,9 @@ TR_FN float tr_restir_target(const tr_scene_view *s, const tr_restir_surface *q,
  * instructions). RIS is unbiased with any target that is positive wherever the integrand
  * is (J. Talbot, D. Cline and P. Egbert, "Importance Resampling for Global Illumination",
  * EGSR 2005), and the compensation only scales lobes that are positive without it; every
- * merge of a frame uses this one, and the shading evaluates the exact BSDF. Returns 1
- * where the BSDF changed (the surface had the tables). */
-TR_FN int tr_restir_target_surface(tr_restir_surface *q) {
-    const int had = q->m.ms != 0;
+ * merge of a frame uses this one, and the shading evaluates the exact BSDF. */
+TR_FN void tr_restir_target_surface(tr_restir_surface *q) {
     q->m.ms = 0;
-    return had;
 }
 
 /* Whether nothing blocks the light of r's sample from q (pt's shadow ray). */

@@ -145,7 +145,7 @@ TR_FN void tr_restir_pass_temporal(const tr_scene_view *s, const tr_restir_frame
     tr_restir_surface q =
         tr_restir_primary(s, &fr->cam, seed, (uint64_t)i, x, y, fr->sample, fr->sampler);
     surf[i] = q;
-    (void)tr_restir_target_surface(&q);
+    tr_restir_target_surface(&q);
     if (!q.valid) {
         cur[i] = tr_reservoir_empty();
         return;
@@ -167,7 +167,7 @@ TR_FN void tr_restir_pass_temporal(const tr_scene_view *s, const tr_restir_frame
         tr_restir_surface ss[2];
         ss[0] = q;
         ss[1] = tr_restir_surface_at(s, prev_surf, j);
-        (void)tr_restir_target_surface(&ss[1]);
+        tr_restir_target_surface(&ss[1]);
         if (tr_restir_similar(&ss[0], &ss[1])) {
             tr_reservoir rr[2];
             rr[0] = r;
@@ -198,9 +198,9 @@ TR_FN void tr_restir_pass_spatial(const tr_scene_view *s, const tr_restir_frame 
         out[i] = tr_reservoir_empty();
         return;
     }
-    /* The merge sees the targets' surfaces; the shading the exact one, q. */
-    const tr_restir_surface q = ss[0];
-    const int approx = tr_restir_target_surface(&ss[0]);
+    /* The merge sees the targets' surfaces; the shading the exact one (its tables back). */
+    TR_CONST_GLOBAL float *const ms = ss[0].m.ms;
+    tr_restir_target_surface(&ss[0]);
     tr_rng rng;
     tr_restir_pixel_rng(&rng, tr_restir_frame_seed(fr), i, tr_restir_frame_number(fr), 1);
     tr_reservoir rr[TR_RESTIR_MAX_MERGE];
@@ -213,7 +213,7 @@ TR_FN void tr_restir_pass_spatial(const tr_scene_view *s, const tr_restir_frame 
         /* The biased merge evaluates targets at this pixel's surface only. */
         if (fr->unbiased) {
             ss[n] = tr_restir_surface_at(s, surf, nb[t]);
-            (void)tr_restir_target_surface(&ss[n]);
+            tr_restir_target_surface(&ss[n]);
         }
         rr[n] = cur[nb[t]];
     }
@@ -226,7 +226,8 @@ TR_FN void tr_restir_pass_spatial(const tr_scene_view *s, const tr_restir_frame 
                                  : rr[0];
     out[i] = r;
     /* The merge's contribution was the target's: the exact one where the BSDF differs. */
-    const tr_vec3 c = v3_scale(tr_restir_shade(s, &q, &r, cs, cs_known && !approx), (float)fr->spp);
+    ss[0].m.ms = ms;
+    const tr_vec3 c = v3_scale(tr_restir_shade(s, &ss[0], &r, cs, cs_known && !ms), (float)fr->spp);
     sum[3u * i] += c.x;
     sum[3u * i + 1u] += c.y;
     sum[3u * i + 2u] += c.z;
